@@ -40,8 +40,8 @@ from jswim.swimmers.models import SwimmerModel, make_model
 #: Rates of change an action may carry.
 ROCS = (-1, 0, 1)
 
-#: RK4 substeps used to build the step table (error ~1e-15 relative, see tests).
-TABLE_SUBSTEPS = 1024
+#: Chebyshev degree used to build the step table (error ~1e-15 relative, see tests).
+TABLE_DEGREE = 32
 
 
 @functools.partial(
@@ -246,7 +246,7 @@ def step_table(model: SwimmerModel) -> tuple[np.ndarray, np.ndarray]:
         d1 = d0 + rate * model.duration
 
         def one(a: Array, r: Array, b: Array) -> Array:
-            pose = integrate_stroke(model, a, r, model.duration, n_sub=TABLE_SUBSTEPS)
+            pose = integrate_stroke(model, a, r, model.duration, n_sub=TABLE_DEGREE)
             disp = centroid(model, b, pose) - centroid(model, a, jnp.zeros(3))
             return jnp.concatenate([disp, pose[2:]])
 

@@ -1,16 +1,27 @@
-"""General stroke integrator: RK4 along a straight path in shape space.
+"""General stroke integrators along a straight path in shape space.
 
 The env applies steps from a precomputed table (see :mod:`jswim.env`); this module is the ground
 truth that builds the table and handles strokes that do not follow it (any start shape, any rates,
 any duration). The pose is the reference point ``(x, y)`` and orientation ``theta``; in the lab
 frame ``d/dt (x, y) = R(theta) (u, v)`` and ``d theta / dt = omega`` with ``(u, v, omega)`` the
 model's body-frame velocity.
+
+Two methods:
+
+* ``"chebyshev"`` (default): the body-frame velocities depend on the shape only, so the ODE is
+  two nested quadratures: ``theta(t)`` is the integral of ``omega``, then the position is the
+  integral of ``R(theta) (u, v)``. Both are done spectrally on Chebyshev-Lobatto nodes; degree 16
+  (17 velocity evaluations) reaches ~1e-14 relative per cycle for the paper's swimmers.
+* ``"rk4"``: classical fixed-step Runge-Kutta, kept as an independent reference.
 """
 
 from __future__ import annotations
 
+import functools
+
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from jswim.swimmers.models import SwimmerModel
@@ -23,13 +34,29 @@ def pose_rate(model: SwimmerModel, d: Array, d_dot: Array, theta: Array) -> Arra
     return jnp.stack([c * u - s * v, s * u + c * v, omega])
 
 
+@functools.lru_cache(maxsize=8)
+def chebyshev_rule(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Chebyshev-Lobatto nodes on [0, 1] and the matrix of running integrals ``int_0^{s_i}``.
+
+    ``S @ f(s)`` approximates the antiderivative of ``f`` at every node with spectral accuracy
+    (exact for polynomials of degree <= ``n``).
+    """
+    x = -np.cos(np.pi * np.arange(n + 1) / n)  # ascending on [-1, 1]
+    cheb = np.polynomial.chebyshev
+    basis = cheb.chebvander(x, n)  # (nodes, coefficients)
+    integ = np.stack([cheb.chebval(x, cheb.chebint(np.eye(n + 1)[k], lbnd=-1)) for k in range(n + 1)], axis=1)
+    running = integ @ np.linalg.inv(basis) / 2.0  # map [-1, 1] -> [0, 1]
+    return (x + 1.0) / 2.0, running
+
+
 def integrate_stroke(
     model: SwimmerModel,
     d0: Array,
     d_dot: Array,
     duration: Array | float,
     pose0: Array | None = None,
-    n_sub: int = 64,
+    n_sub: int = 16,
+    method: str = "chebyshev",
 ) -> Array:
     """Pose after moving the shape from ``d0`` at constant rate ``d_dot`` for ``duration``.
 
@@ -44,8 +71,10 @@ def integrate_stroke(
     pose0 : Array, shape (3,), optional
         Start pose ``(x, y, theta)`` of the reference point (default: origin, theta = 0).
     n_sub : int
-        RK4 substeps. The error falls as ``n_sub**-4``; 64 gives about 1e-11 relative per step
-        for the paper's swimmers (see tests).
+        Chebyshev: polynomial degree (``n_sub + 1`` velocity evaluations; 16 gives ~1e-14).
+        RK4: substeps (error ~ ``n_sub**-4``; 96 gives ~3e-10 per cycle).
+    method : str
+        ``"chebyshev"`` or ``"rk4"``.
 
     Returns
     -------
@@ -55,7 +84,19 @@ def integrate_stroke(
     d0 = jnp.asarray(d0)
     d_dot = jnp.asarray(d_dot, d0.dtype)
     pose = jnp.zeros(3, d0.dtype) if pose0 is None else jnp.asarray(pose0, d0.dtype)
-    h = jnp.asarray(duration, d0.dtype) / n_sub
+    duration = jnp.asarray(duration, d0.dtype)
+    if method == "chebyshev":
+        nodes, running = chebyshev_rule(n_sub)
+        t = jnp.asarray(nodes, d0.dtype) * duration
+        w = jax.vmap(lambda tk: model.body_velocity(d0 + d_dot * tk, d_dot))(t)  # (nodes, 3)
+        s_mat = jnp.asarray(running, d0.dtype) * duration
+        theta = pose[2] + s_mat @ w[:, 2]
+        c, s = jnp.cos(theta), jnp.sin(theta)
+        vx, vy = c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1]
+        return jnp.stack([pose[0] + s_mat[-1] @ vx, pose[1] + s_mat[-1] @ vy, theta[-1]])
+    if method != "rk4":
+        raise ValueError(f"method must be 'chebyshev' or 'rk4', got {method!r}")
+    h = duration / n_sub
 
     def rate(t: Array, p: Array) -> Array:
         return pose_rate(model, d0 + d_dot * t, d_dot, p[2])

@@ -1,0 +1,453 @@
+"""Async client for OpenAI-compatible chat-completions servers, over httpx.
+
+One :class:`LLMClient` serves a whole study: many requests in flight at once (bounded by a
+semaphore), retries with exponential backoff and jitter on transient failures (connection errors,
+timeouts, 408, 409, 429, 5xx, unreadable bodies), ``Retry-After`` honoured, a disk cache and
+in-flight de-duplication for deterministic (temperature 0) requests, and usage/cost per call.
+
+The API key is read from an environment variable whose *name* is a setting; the key itself is
+only ever put in the ``Authorization`` header, never in logs, cache keys, results or errors.
+
+Example
+-------
+>>> async def main():
+...     async with LLMClient(ClientSettings(base_url="http://127.0.0.1:8080/v1", model="local")) as c:
+...         r = await c.chat([{"role": "user", "content": "Say [1, 1]"}], replies=["[1, 1]"])
+...         return r.text
+"""
+
+from __future__ import annotations
+
+import asyncio
+import email.utils
+import ipaddress
+import os
+import random
+import time
+from dataclasses import dataclass, field, replace
+from typing import Any, Mapping, Sequence
+from urllib.parse import urlsplit, urlunsplit
+
+import httpx
+
+from jswim.llm import constrain
+from jswim.llm.cache import ResponseCache, request_key
+from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError
+from jswim.llm.usage import PriceTable, Usage
+
+#: HTTP statuses worth retrying: timeout, conflict, rate limit (5xx are added in code).
+RETRY_STATUSES = frozenset({408, 409, 429})
+
+
+@dataclass(frozen=True)
+class ClientSettings:
+    """Connection and request settings.
+
+    Attributes
+    ----------
+    base_url : str
+        Server root including the API prefix, e.g. ``https://api.openai.com/v1``.
+    model : str
+        Model name sent with each request (also keys the cache and the price table).
+    api_key_env : str
+        Name of the environment variable holding the API key (unset: no ``Authorization``).
+    timeout_s : float
+        Per-attempt timeout (connect, read, write, pool).
+    max_concurrency : int
+        Requests in flight at once.
+    max_retries : int
+        Retries after the first attempt before giving up.
+    backoff_base_s, backoff_max_s : float
+        Backoff before retry ``k`` is ``min(max, base * 2**k)`` scaled by a jitter in [0.5, 1].
+    max_retry_after_s : float
+        Longest ``Retry-After`` wait honoured (longer ones are shortened to this).
+    temperature : float
+        Sampling temperature (0, the paper's setting, makes requests cacheable).
+    max_tokens : int or None
+        Reply length limit.
+    seed : int or None
+        Sent when given (some servers use it for sampling at temperature > 0).
+    constrain : {"auto", "grammar", "json_schema", "none"}
+        Constrained decoding; see :mod:`jswim.llm.constrain`.
+    server_kind : {"generic", "llamacpp", "openai"}
+        What serves ``base_url``; only resolves ``constrain="auto"``.
+    cache_dir : str or None
+        Directory of the response cache; ``None`` disables it.
+    prices : mapping or None
+        USD per 1M tokens by model name; ``None`` uses :data:`jswim.llm.usage.DEFAULT_PRICES`.
+    """
+
+    base_url: str = "https://api.openai.com/v1"
+    model: str = "gpt-4"
+    api_key_env: str = "OPENAI_API_KEY"
+    timeout_s: float = 60.0
+    max_concurrency: int = 16
+    max_retries: int = 4
+    backoff_base_s: float = 0.5
+    backoff_max_s: float = 30.0
+    max_retry_after_s: float = 120.0
+    temperature: float = 0.0
+    max_tokens: int | None = 32
+    seed: int | None = None
+    constrain: str = "auto"
+    server_kind: str = "generic"
+    cache_dir: str | None = None
+    prices: Mapping[str, tuple[float, float]] | None = field(default=None, compare=False)
+
+    def __post_init__(self) -> None:
+        if self.constrain not in constrain.MODES:
+            raise ValueError(f"constrain must be one of {constrain.MODES}, got {self.constrain!r}")
+        if self.server_kind not in constrain.SERVER_KINDS:
+            raise ValueError(f"server_kind must be one of {constrain.SERVER_KINDS}, got {self.server_kind!r}")
+        if self.max_concurrency < 1 or self.max_retries < 0 or self.timeout_s <= 0:
+            raise ValueError("need max_concurrency >= 1, max_retries >= 0 and timeout_s > 0")
+
+    def metadata(self) -> dict[str, Any]:
+        """Settings worth recording with a run (no secrets: only the key's variable name)."""
+        return {
+            "base_url": safe_url(self.base_url),
+            "model": self.model,
+            "temperature": self.temperature,
+            "max_tokens": self.max_tokens,
+            "seed": self.seed,
+            "constrain": self.constrain,
+            "server_kind": self.server_kind,
+            "max_retries": self.max_retries,
+        }
+
+
+@dataclass(frozen=True)
+class ChatResult:
+    """One chat completion.
+
+    Attributes
+    ----------
+    text : str
+        The reply (unwrapped from JSON in ``json_schema`` mode).
+    usage : Usage
+        Tokens reported by the server for the call that produced the reply.
+    latency_s : float
+        Wall time of this call, including retries and waits.
+    cache_hit : bool
+        Served from the disk cache.
+    shared : bool
+        Shared the answer of an identical request already in flight.
+    retries : int
+        Retries this call needed (0 for cache hits and shared calls).
+    cost_usd : float
+        Price of the producing call (0 for free or unknown models).
+    constraint : str
+        Constrained-decoding mode used: ``"grammar"``, ``"json_schema"`` or ``"none"``.
+    finish_reason : str or None
+        As reported by the server.
+    raw : str
+        The message content before unwrapping.
+    """
+
+    text: str
+    usage: Usage
+    latency_s: float
+    cache_hit: bool
+    shared: bool
+    retries: int
+    cost_usd: float
+    constraint: str
+    finish_reason: str | None = None
+    raw: str = ""
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "text": self.text,
+            "prompt_tokens": self.usage.prompt_tokens,
+            "completion_tokens": self.usage.completion_tokens,
+            "latency_s": round(self.latency_s, 6),
+            "cache_hit": self.cache_hit,
+            "shared": self.shared,
+            "retries": self.retries,
+            "cost_usd": self.cost_usd,
+            "constraint": self.constraint,
+            "finish_reason": self.finish_reason,
+        }
+
+
+def safe_url(url: str) -> str:
+    """``url`` without user info, query or fragment (safe to print)."""
+    parts = urlsplit(url)
+    host = parts.hostname or ""
+    if parts.port:
+        host = f"{host}:{parts.port}"
+    return urlunsplit((parts.scheme, host, parts.path.rstrip("/"), "", ""))
+
+
+def _is_loopback(url: str) -> bool:
+    host = urlsplit(url).hostname or ""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def parse_retry_after(headers: httpx.Headers, now: float | None = None) -> float | None:
+    """Seconds to wait from ``retry-after-ms``, or ``Retry-After`` (seconds or an HTTP date)."""
+    ms = headers.get("retry-after-ms")
+    if ms:
+        try:
+            return max(0.0, float(ms) / 1000.0)
+        except ValueError:
+            pass
+    value = headers.get("retry-after")
+    if not value:
+        return None
+    try:
+        return max(0.0, float(value))
+    except ValueError:
+        pass
+    try:
+        when = email.utils.parsedate_to_datetime(value)
+    except (TypeError, ValueError, IndexError):
+        return None
+    now = time.time() if now is None else now
+    return max(0.0, when.timestamp() - now)
+
+
+class _Failure(Exception):
+    """A retryable attempt failure (internal)."""
+
+    def __init__(self, what: str, retry_after: float | None = None, bad_body: bool = False) -> None:
+        super().__init__(what)
+        self.what = what
+        self.retry_after = retry_after
+        self.bad_body = bad_body
+
+
+class LLMClient:
+    """Async chat-completions client; use as ``async with LLMClient(settings) as client``.
+
+    The client binds to the running event loop on first use; create one per ``asyncio.run``.
+    """
+
+    def __init__(self, settings: ClientSettings, *, rng: random.Random | None = None) -> None:
+        self.settings = settings
+        self._key = os.environ.get(settings.api_key_env) or None
+        self._url = settings.base_url.rstrip("/") + "/chat/completions"
+        self._where = safe_url(settings.base_url)
+        self._prices = PriceTable(settings.prices)
+        self._cache = ResponseCache(settings.cache_dir) if settings.cache_dir else None
+        self._rng = rng or random.Random()
+        self._inflight: dict[str, asyncio.Future] = {}
+        self._sem: asyncio.Semaphore | None = None
+        self._http: httpx.AsyncClient | None = None
+        self.n_requests = 0  # HTTP attempts made
+
+    def __repr__(self) -> str:  # never show the key
+        return f"LLMClient(base_url={self._where!r}, model={self.settings.model!r})"
+
+    # -- lifecycle ---------------------------------------------------------------------------
+
+    async def __aenter__(self) -> "LLMClient":
+        self._open()
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.aclose()
+
+    def _open(self) -> None:
+        if self._http is None:
+            s = self.settings
+            self._sem = asyncio.Semaphore(s.max_concurrency)
+            self._http = httpx.AsyncClient(
+                timeout=httpx.Timeout(s.timeout_s),
+                limits=httpx.Limits(max_connections=s.max_concurrency, max_keepalive_connections=s.max_concurrency),
+                # Proxy variables must not divert loopback traffic (the embedded server).
+                trust_env=not _is_loopback(s.base_url),
+            )
+
+    async def aclose(self) -> None:
+        if self._http is not None:
+            await self._http.aclose()
+            self._http = None
+        if self._cache is not None:
+            self._cache.close()
+            self._cache = None
+
+    # -- requests ----------------------------------------------------------------------------
+
+    def build_payload(
+        self,
+        messages: Sequence[Mapping[str, str]],
+        *,
+        replies: Sequence[str] | None = None,
+        temperature: float | None = None,
+        max_tokens: int | None = None,
+        seed: int | None = None,
+        constrain_mode: str | None = None,
+    ) -> tuple[dict[str, Any], str]:
+        """Request body and the resolved constraint mode."""
+        s = self.settings
+        payload: dict[str, Any] = {
+            "model": s.model,
+            "messages": [dict(m) for m in messages],
+            "temperature": s.temperature if temperature is None else temperature,
+        }
+        mt = s.max_tokens if max_tokens is None else max_tokens
+        if mt is not None:
+            payload["max_tokens"] = mt
+        sd = s.seed if seed is None else seed
+        if sd is not None:
+            payload["seed"] = sd
+        mode = constrain.resolve_mode(constrain_mode or s.constrain, s.server_kind, bool(replies))
+        constrain.apply(payload, mode, replies)
+        return payload, mode
+
+    async def chat(
+        self,
+        messages: Sequence[Mapping[str, str]],
+        *,
+        replies: Sequence[str] | None = None,
+        temperature: float | None = None,
+        max_tokens: int | None = None,
+        seed: int | None = None,
+        constrain_mode: str | None = None,
+        use_cache: bool = True,
+    ) -> ChatResult:
+        """Send one chat completion and return its result.
+
+        Parameters
+        ----------
+        messages : sequence of mapping
+            OpenAI chat messages.
+        replies : sequence of str, optional
+            The valid replies; used for constrained decoding (grammar or JSON schema).
+        temperature, max_tokens, seed, constrain_mode : optional
+            Override the settings for this call.
+        use_cache : bool
+            Allow the disk cache and in-flight sharing (only deterministic requests use them).
+
+        Raises
+        ------
+        LLMServerError
+            The server stayed unreachable or kept failing through every retry.
+        LLMRequestError
+            The server rejected the request (e.g. 400, 401, 404).
+        LLMResponseError
+            The server kept sending bodies that are not chat completions.
+        """
+        self._open()
+        payload, mode = self.build_payload(
+            messages, replies=replies, temperature=temperature, max_tokens=max_tokens, seed=seed,
+            constrain_mode=constrain_mode,
+        )
+        t0 = time.perf_counter()
+        deterministic = use_cache and payload["temperature"] == 0
+        if not deterministic:
+            return await self._send(payload, mode, t0)
+        key = request_key(payload)
+        if self._cache is not None:
+            hit = self._cache.get(key)
+            if hit is not None:
+                return self._from_cache(hit, mode, time.perf_counter() - t0)
+        pending = self._inflight.get(key)
+        if pending is not None:
+            res = await asyncio.shield(pending)
+            return replace(res, shared=True, retries=0, latency_s=time.perf_counter() - t0)
+        fut = asyncio.get_running_loop().create_future()
+        self._inflight[key] = fut
+        try:
+            res = await self._send(payload, mode, t0)
+        except BaseException as exc:
+            fut.set_exception(exc if isinstance(exc, Exception) else LLMServerError("request cancelled"))
+            fut.exception()  # mark retrieved: nobody may be waiting
+            raise
+        else:
+            fut.set_result(res)
+            if self._cache is not None:
+                self._cache.put(key, self._to_cache(res))
+            return res
+        finally:
+            self._inflight.pop(key, None)
+
+    def _to_cache(self, res: ChatResult) -> dict[str, Any]:
+        u = res.usage
+        return {
+            "raw": res.raw,
+            "finish_reason": res.finish_reason,
+            "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens],
+        }
+
+    def _from_cache(self, value: dict[str, Any], mode: str, latency: float) -> ChatResult:
+        usage = Usage(*value["usage"])
+        raw = value["raw"]
+        return ChatResult(
+            text=constrain.reply_text(mode, raw), usage=usage, latency_s=latency, cache_hit=True,
+            shared=False, retries=0, cost_usd=self._prices.cost(self.settings.model, usage),
+            constraint=mode, finish_reason=value.get("finish_reason"), raw=raw,
+        )
+
+    def _scrub(self, text: str) -> str:
+        return text.replace(self._key, "***") if self._key else text
+
+    def _headers(self) -> dict[str, str]:
+        return {"Authorization": f"Bearer {self._key}"} if self._key else {}
+
+    def _backoff(self, retry: int) -> float:
+        s = self.settings
+        return min(s.backoff_max_s, s.backoff_base_s * 2.0**retry) * (0.5 + 0.5 * self._rng.random())
+
+    async def _send(self, payload: dict[str, Any], mode: str, t0: float) -> ChatResult:
+        s = self.settings
+        assert self._http is not None and self._sem is not None
+        retries = 0
+        while True:
+            try:
+                async with self._sem:
+                    self.n_requests += 1
+                    return self._attempt_result(
+                        await self._attempt(payload), mode, t0, retries
+                    )
+            except _Failure as fail:
+                if retries >= s.max_retries:
+                    msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts"
+                    raise (LLMResponseError if fail.bad_body else LLMServerError)(self._scrub(msg)) from None
+                wait = self._backoff(retries)
+                if fail.retry_after is not None:
+                    wait = min(fail.retry_after, s.max_retry_after_s)
+                retries += 1
+                await asyncio.sleep(wait)
+
+    async def _attempt(self, payload: dict[str, Any]) -> dict[str, Any]:
+        s = self.settings
+        try:
+            resp = await self._http.post(self._url, json=payload, headers=self._headers())
+        except httpx.TimeoutException:
+            raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)") from None
+        except httpx.TransportError as exc:
+            raise _Failure(f"connection failed ({type(exc).__name__}: {self._scrub(str(exc)) or 'no detail'})") from None
+        status = resp.status_code
+        if status in RETRY_STATUSES or status >= 500:
+            raise _Failure(f"HTTP {status}", retry_after=parse_retry_after(resp.headers))
+        if status != 200:
+            detail = " ".join(resp.text.split())[:200]
+            hint = f"; check the API key in ${s.api_key_env}" if status in (401, 403) else ""
+            raise LLMRequestError(
+                self._scrub(f"{self._where}: HTTP {status} for model {s.model!r}: {detail}{hint}"), status
+            )
+        try:
+            body = resp.json()
+            choice = body["choices"][0]
+            content = choice["message"]["content"]
+            if not isinstance(content, str):
+                raise TypeError("content is not text")
+        except (ValueError, KeyError, IndexError, TypeError):
+            raise _Failure("the response is not a chat completion (malformed body)", bad_body=True) from None
+        return {"raw": content, "finish_reason": choice.get("finish_reason"), "usage": body.get("usage")}
+
+    def _attempt_result(self, got: dict[str, Any], mode: str, t0: float, retries: int) -> ChatResult:
+        usage = Usage.from_response(got["usage"])
+        return ChatResult(
+            text=constrain.reply_text(mode, got["raw"]), usage=usage, latency_s=time.perf_counter() - t0,
+            cache_hit=False, shared=False, retries=retries,
+            cost_usd=self._prices.cost(self.settings.model, usage), constraint=mode,
+            finish_reason=got["finish_reason"], raw=got["raw"],
+        )

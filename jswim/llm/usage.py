@@ -1,0 +1,115 @@
+"""Token usage and cost accounting.
+
+Prices are USD per million tokens, ``(prompt, completion)``, looked up by model name: an exact
+match first, then the longest known prefix (so ``gpt-4o-2024-08-06`` finds ``gpt-4o``). They are
+list prices at the time of writing and change often: pass your own table for real budgets.
+Models not in the table (local GGUF files, self-hosted servers) cost 0.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Mapping
+
+#: USD per 1M tokens (prompt, completion). Check the provider's price page before trusting it.
+DEFAULT_PRICES: dict[str, tuple[float, float]] = {
+    "gpt-4": (30.0, 60.0),  # the paper's model
+    "gpt-4-32k": (60.0, 120.0),
+    "gpt-4-turbo": (10.0, 30.0),
+    "gpt-4o": (2.5, 10.0),
+    "gpt-4o-mini": (0.15, 0.6),
+    "gpt-4.1": (2.0, 8.0),
+    "gpt-4.1-mini": (0.4, 1.6),
+    "gpt-4.1-nano": (0.1, 0.4),
+    "gpt-3.5-turbo": (0.5, 1.5),
+}
+
+
+@dataclass(frozen=True)
+class Usage:
+    """Tokens of one call, from the response's ``usage`` field."""
+
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    cached_tokens: int = 0  # prompt tokens the server served from its prefix cache, if reported
+
+    @property
+    def total_tokens(self) -> int:
+        return self.prompt_tokens + self.completion_tokens
+
+    @classmethod
+    def from_response(cls, usage: Mapping | None) -> "Usage":
+        """Read an OpenAI-style ``usage`` object (missing fields count as 0)."""
+        if not isinstance(usage, Mapping):
+            return cls()
+        details = usage.get("prompt_tokens_details") or {}
+        cached = details.get("cached_tokens", 0) if isinstance(details, Mapping) else 0
+        return cls(
+            int(usage.get("prompt_tokens") or 0),
+            int(usage.get("completion_tokens") or 0),
+            int(cached or 0),
+        )
+
+
+class PriceTable:
+    """Model name -> USD per 1M tokens ``(prompt, completion)``."""
+
+    def __init__(self, prices: Mapping[str, tuple[float, float]] | None = None) -> None:
+        self.prices = dict(DEFAULT_PRICES if prices is None else prices)
+
+    def lookup(self, model: str) -> tuple[float, float]:
+        """Price of ``model``: exact name, else longest matching prefix, else free."""
+        if model in self.prices:
+            return self.prices[model]
+        best = max((k for k in self.prices if model.startswith(k)), key=len, default=None)
+        return self.prices[best] if best else (0.0, 0.0)
+
+    def cost(self, model: str, usage: Usage) -> float:
+        """USD for one call."""
+        p_in, p_out = self.lookup(model)
+        return (usage.prompt_tokens * p_in + usage.completion_tokens * p_out) / 1e6
+
+
+@dataclass
+class UsageTotals:
+    """Sums over many calls (a run, a study). Only billed calls add tokens and cost.
+
+    A call is billed when it reached the server: disk-cache hits and calls that shared an
+    identical in-flight request are counted in ``calls`` but add nothing else.
+    """
+
+    calls: int = 0
+    billed_calls: int = 0
+    cache_hits: int = 0
+    shared: int = 0
+    retries: int = 0
+    prompt_tokens: int = 0
+    completion_tokens: int = 0
+    cost_usd: float = 0.0
+    latency_s: float = 0.0
+
+    def add(self, result: "object") -> None:
+        """Add one :class:`jswim.llm.client.ChatResult`."""
+        self.calls += 1
+        self.retries += result.retries
+        self.latency_s += result.latency_s
+        if result.cache_hit:
+            self.cache_hits += 1
+        elif result.shared:
+            self.shared += 1
+        else:
+            self.billed_calls += 1
+            self.prompt_tokens += result.usage.prompt_tokens
+            self.completion_tokens += result.usage.completion_tokens
+            self.cost_usd += result.cost_usd
+
+    def merge(self, others: Iterable["UsageTotals"]) -> "UsageTotals":
+        """Sum of ``self`` and ``others`` (e.g. runs into a study), as a new object."""
+        out = UsageTotals(**vars(self))
+        for o in others:
+            for k, v in vars(o).items():
+                setattr(out, k, getattr(out, k) + v)
+        return out
+
+    def as_dict(self) -> dict[str, float]:
+        return dict(vars(self))

@@ -1,0 +1,563 @@
+"""The paper's five-sentence prompt, history records, number encoding and reply parsing.
+
+Text only: this module never imports JAX, so the LLM layer stays light and testable.
+
+The prompt has five one-sentence parts, named as in the paper:
+
+S1 objective, S2 constraints on the DOFs, S3 the last ``n_ht`` history records, S4 a reminder that
+actions have long-term consequences, S5 the answer format and the allowed set. Any subset can be
+dropped with a sentence mask (the paper's ablation).
+
+Order. The default layout is ``S1 S2 S4 S5`` then ``S3``: every fixed sentence comes before the
+history, which changes at every step, so a server with prefix (prompt) caching reuses the fixed
+part. The paper lists S1..S5 in numeric order; :data:`PAPER_LAYOUT` gives that order and a
+template file can set any other.
+
+Template placeholders
+---------------------
+A :class:`PromptTemplate` has a ``layout``, five sentence templates and a ``record`` template,
+all Python format strings (write literal braces as ``{{`` and ``}}``). The layout may use
+``{S1}`` .. ``{S5}`` (the rendered sentences; a masked sentence renders empty) and every
+variable below; sentences may use the variables too.
+
+=================  ============================================================================
+``{direction}``    ``+x`` or ``-x``
+``{dofs}``         DOF names joined as prose, ``D1 and D2``
+``{dof_names}``    DOF names joined by commas, ``D1, D2``
+``{n_dof}``        number of DOFs
+``{dof_ranges}``   ``D1 and D2 each stay in [-1.047, 1.047]`` (per DOF when ranges differ)
+``{dof_choices}``  ``1 or 2``
+``{roc_choices}``  ``-1, 0 or 1``
+``{allowed}``      the allowed replies, ``[1, -1], [1, 0], ...``
+``{n_ht}``         the history length setting
+``{n_records}``    the number of records shown (<= ``n_ht``; fewer right after a start or clear)
+``{history}``      the records, one per line (``none yet`` when empty)
+``{current}``      the current DOF values and X, ``(D1, D2) = (1.047, 1.047), X = 2500``
+=================  ============================================================================
+
+The ``record`` template formats one history line with ``{step}``, ``{dofs_before}``,
+``{action}``, ``{dofs_after}``, ``{x_before}``, ``{x_after}`` and ``{stuck}`` (``" (stuck)"``
+when the move pushed a DOF past its limit, else empty).
+
+A template file (:meth:`PromptTemplate.from_file`) is plain text. Without section headers the
+whole file is the layout. With headers, lines ``[layout]``, ``[S1]`` .. ``[S5]`` and ``[record]``
+start sections; sections left out keep their defaults. Leading/trailing blank lines of a section
+are dropped.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field, replace
+from decimal import ROUND_DOWN, Decimal
+from pathlib import Path
+from typing import Iterable, NamedTuple, Sequence
+
+from jswim.errors import ConfigError
+
+#: Sentence names, in the paper's order.
+SENTENCES = ("S1", "S2", "S3", "S4", "S5")
+
+#: Every fixed sentence before the changing history: the prefix-cache friendly order (default).
+CACHE_LAYOUT = "{S1} {S2} {S4} {S5}\n{S3}"
+
+#: The paper's numeric order S1..S5 (the history sits in the middle).
+PAPER_LAYOUT = "{S1} {S2}\n{S3}\n{S4} {S5}"
+
+DEFAULT_SENTENCES = {
+    "S1": "Find the sequence of ROCs of DOFs {dofs} giving the fastest long-term movement "
+    "in the {direction} direction.",
+    "S2": "Only one DOF changes at a time, and {dof_ranges}.",
+    "S3": "Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, "
+    "X before -> after):\n{history}",
+    "S4": "Keep in mind that an action can have long-term consequences.",
+    "S5": "Reply with the next action as [changed DOF, ROC], one of {allowed}.",
+}
+
+DEFAULT_RECORD = "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}{stuck}"
+
+#: Allowed-set modes: every (dof, roc) pair (paper) or only the moves that change the shape.
+ALLOWED_MODES = ("all", "shape-changing")
+
+
+class Action(NamedTuple):
+    """One action: the changed DOF (1-based) and its rate of change."""
+
+    dof: int
+    roc: int
+
+    def text(self) -> str:
+        """The reply form, ``[dof, roc]``."""
+        return f"[{self.dof}, {self.roc}]"
+
+
+class PositionBelowMinimumError(ValueError):
+    """X fell below ``X_min``, so it cannot be sent as a non-negative integer.
+
+    The run stops and reports it; lower ``x_min`` to go on.
+    """
+
+    def __init__(self, x: float, x_min: float) -> None:
+        super().__init__(f"position X = {x:.4f} is below x_min = {x_min}; lower x_min")
+        self.x = x
+        self.x_min = x_min
+
+
+# ---------------------------------------------------------------------------------------------
+# Numbers
+
+
+def _decimal(value: float) -> Decimal:
+    # repr gives the shortest exact-looking form, so 1.001 stays 1.001 (not 1.000999...).
+    return Decimal(repr(float(value)))
+
+
+def encode_position(x: float, x_min: float = -2.5) -> int:
+    """``(X/a)_LLM = (X/a - X_min/a) * 1000`` as a non-negative integer.
+
+    ``X`` is truncated (toward zero, not rounded) to three decimals first, as in the paper.
+
+    Raises
+    ------
+    PositionBelowMinimumError
+        When ``x < x_min``.
+    """
+    if not math.isfinite(x):
+        raise ValueError(f"position X must be finite, got {x!r}")
+    if x < x_min:
+        raise PositionBelowMinimumError(x, x_min)
+    x3 = _decimal(x).quantize(Decimal("0.001"), rounding=ROUND_DOWN)
+    shifted = (x3 - _decimal(x_min)) * 1000
+    # x3 may truncate up to just below x_min (e.g. -2.5004 -> -2.500 is fine, never below).
+    return max(0, int(shifted.to_integral_value(rounding=ROUND_DOWN)))
+
+
+def format_dof(value: float, decimals: int) -> str:
+    """A DOF value rounded to ``decimals`` (angles: 3, sphere arms: 0), without ``-0``."""
+    r = round(float(value), decimals) + 0.0  # + 0.0 turns -0.0 into 0.0
+    return f"{r:.{decimals}f}"
+
+
+def _join_prose(items: Sequence[str], last: str = "and") -> str:
+    if len(items) <= 1:
+        return "".join(items)
+    return ", ".join(items[:-1]) + f" {last} " + items[-1]
+
+
+# ---------------------------------------------------------------------------------------------
+# Swimmer description (text side)
+
+
+@dataclass(frozen=True)
+class SwimmerText:
+    """What the prompt needs to know about a swimmer.
+
+    Attributes
+    ----------
+    n_dof : int
+        Number of DOFs, named D1..Dn.
+    lo, hi : float or tuple of float
+        DOF range, shared by all DOFs or one value per DOF.
+    dof_decimals : int
+        Decimals of DOF values in text (angles 3, NG arm lengths 0).
+    rocs : tuple of int
+        ROCs an action may carry: ``(-1, 0, 1)`` (paper), ``(-1, 1)`` for 4-DOF swimmers.
+    """
+
+    n_dof: int
+    lo: float | tuple[float, ...]
+    hi: float | tuple[float, ...]
+    dof_decimals: int = 3
+    rocs: tuple[int, ...] = (-1, 0, 1)
+
+    def __post_init__(self) -> None:
+        if self.n_dof < 1:
+            raise ConfigError(f"n_dof must be >= 1, got {self.n_dof}")
+        if not self.rocs or any(r not in (-1, 0, 1) for r in self.rocs):
+            raise ConfigError(f"rocs must be a non-empty subset of (-1, 0, 1), got {self.rocs}")
+        object.__setattr__(self, "rocs", tuple(sorted(set(self.rocs))))
+
+    def bounds(self, k: int) -> tuple[float, float]:
+        """``(lo, hi)`` of DOF ``k`` (1-based)."""
+        lo = self.lo[k - 1] if isinstance(self.lo, tuple) else self.lo
+        hi = self.hi[k - 1] if isinstance(self.hi, tuple) else self.hi
+        return float(lo), float(hi)
+
+    @property
+    def names(self) -> list[str]:
+        return [f"D{k}" for k in range(1, self.n_dof + 1)]
+
+
+def allowed_actions(
+    swimmer: SwimmerText, mode: str = "all", dof_values: Sequence[float] | None = None
+) -> list[Action]:
+    """The actions a reply may name, in (dof, roc) order.
+
+    Parameters
+    ----------
+    swimmer : SwimmerText
+        DOF count, ranges and ROC set.
+    mode : {"all", "shape-changing"}
+        ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
+        that change the shape from ``dof_values``: ROC +1 below ``hi``, ROC -1 above ``lo``.
+    dof_values : sequence of float, optional
+        Current DOF values; required for ``"shape-changing"``.
+    """
+    if mode not in ALLOWED_MODES:
+        raise ConfigError(f"allowed must be one of {ALLOWED_MODES}, got {mode!r}")
+    pairs = [Action(k, r) for k in range(1, swimmer.n_dof + 1) for r in swimmer.rocs]
+    if mode == "all":
+        return pairs
+    if dof_values is None or len(dof_values) != swimmer.n_dof:
+        raise ValueError("allowed='shape-changing' needs the current value of every DOF")
+    out = []
+    for a in pairs:
+        lo, hi = swimmer.bounds(a.dof)
+        v = float(dof_values[a.dof - 1])
+        tol = 1e-9 * max(1.0, abs(hi - lo))
+        if (a.roc == 1 and v < hi - tol) or (a.roc == -1 and v > lo + tol):
+            out.append(a)
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# History
+
+
+@dataclass(frozen=True)
+class HistoryRecord:
+    """One executed step, as shown to the model.
+
+    Positions are the raw centroid ``X/a``; they are encoded as integers when rendered.
+    """
+
+    step: int
+    dofs_before: tuple[float, ...]
+    dofs_after: tuple[float, ...]
+    action: Action
+    x_before: float
+    x_after: float
+    stuck: bool = False
+
+    @property
+    def dx(self) -> float:
+        return self.x_after - self.x_before
+
+
+@dataclass(frozen=True)
+class ClearingRule:
+    """The paper's history clearing scheme.
+
+    After each step, once at least ``min_steps`` steps have run in total and ``window`` steps have
+    run since the last clear, the history is erased if the displacement in the target direction
+    summed over the last ``window`` steps is below ``threshold``. The records are then rebuilt
+    from the following steps. Counting only steps since the last clear keeps one bad stretch from
+    clearing again at every step.
+    """
+
+    min_steps: int = 5
+    window: int = 4
+    threshold: float = 0.01
+    enabled: bool = True
+
+    def should_clear(self, n_steps: int, progress_since_clear: Sequence[float]) -> bool:
+        """Whether to clear now.
+
+        Parameters
+        ----------
+        n_steps : int
+            Steps executed so far in the run (including the one just taken).
+        progress_since_clear : sequence of float
+            ``direction * dX`` of each step since the last clear (or the start), oldest first.
+        """
+        if not self.enabled or n_steps < self.min_steps or len(progress_since_clear) < self.window:
+            return False
+        return math.fsum(progress_since_clear[-self.window :]) < self.threshold
+
+
+@dataclass
+class History:
+    """Records since the last clear, plus the progress the clearing rule looks at."""
+
+    rule: ClearingRule = field(default_factory=ClearingRule)
+    records: list[HistoryRecord] = field(default_factory=list)
+    progress: list[float] = field(default_factory=list)
+    n_steps: int = 0
+    n_clears: int = 0
+
+    def add(self, record: HistoryRecord, progress: float) -> bool:
+        """Append a step; clear if the rule says so. Returns whether it cleared."""
+        self.records.append(record)
+        self.progress.append(float(progress))
+        self.n_steps += 1
+        if self.rule.should_clear(self.n_steps, self.progress):
+            self.records.clear()
+            self.progress.clear()
+            self.n_clears += 1
+            return True
+        return False
+
+    def last(self, n: int) -> list[HistoryRecord]:
+        """The last ``n`` records (all when fewer)."""
+        return self.records[-n:] if n > 0 else []
+
+
+# ---------------------------------------------------------------------------------------------
+# Templates
+
+
+@dataclass(frozen=True)
+class PromptTemplate:
+    """Layout, sentence and record templates (see the module docstring for placeholders)."""
+
+    layout: str = CACHE_LAYOUT
+    sentences: tuple[tuple[str, str], ...] = tuple(DEFAULT_SENTENCES.items())
+    record: str = DEFAULT_RECORD
+
+    def sentence(self, name: str) -> str:
+        return dict(self.sentences)[name]
+
+    def with_sentences(self, **texts: str) -> "PromptTemplate":
+        """A copy with some sentences replaced, e.g. ``with_sentences(S4="...")``."""
+        bad = set(texts) - set(SENTENCES)
+        if bad:
+            raise ConfigError(f"unknown sentence names {sorted(bad)}; use {SENTENCES}")
+        merged = dict(self.sentences) | texts
+        return replace(self, sentences=tuple((k, merged[k]) for k in SENTENCES))
+
+    @classmethod
+    def from_text(cls, text: str) -> "PromptTemplate":
+        """Parse template text (whole layout, or ``[layout]``/``[S1]``../``[record]`` sections)."""
+        header = re.compile(r"^\[(layout|record|S[1-5])\]\s*$", re.MULTILINE)
+        if not header.search(text):
+            return cls(layout=text.strip("\n"))
+        parts = header.split(text)
+        if parts[0].strip():
+            raise ConfigError("template text before the first [section] header")
+        sections: dict[str, str] = {}
+        for name, body in zip(parts[1::2], parts[2::2]):
+            if name in sections:
+                raise ConfigError(f"template section [{name}] appears twice")
+            sections[name] = body.strip("\n")
+        tpl = cls()
+        tpl = tpl.with_sentences(**{k: v for k, v in sections.items() if k in SENTENCES})
+        return replace(
+            tpl, layout=sections.get("layout", tpl.layout), record=sections.get("record", tpl.record)
+        )
+
+    @classmethod
+    def from_file(cls, path: str | Path) -> "PromptTemplate":
+        """Read a template file (see the module docstring for its format)."""
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except OSError as exc:
+            raise ConfigError(f"cannot read prompt template {path}: {exc.strerror}") from None
+        return cls.from_text(text)
+
+
+DEFAULT_TEMPLATE = PromptTemplate()
+
+
+def _fill(template: str, values: dict[str, str], what: str) -> str:
+    try:
+        return template.format_map(values)
+    except KeyError as exc:
+        raise ConfigError(
+            f"unknown placeholder {{{exc.args[0]}}} in the {what} template; known: "
+            + ", ".join(sorted(values))
+        ) from None
+    except (ValueError, IndexError) as exc:
+        raise ConfigError(f"bad {what} template ({exc}); write literal braces as {{{{ }}}}") from None
+
+
+def _tidy(text: str) -> str:
+    # Masked sentences leave doubled spaces and empty lines behind; remove them.
+    lines = [re.sub(r"[ \t]{2,}", " ", ln).strip() for ln in text.split("\n")]
+    out: list[str] = []
+    for ln in lines:
+        if ln or (out and out[-1]):
+            out.append(ln)
+    return "\n".join(out).strip("\n")
+
+
+def normalize_mask(mask: Iterable[str] | Sequence[bool] | None) -> frozenset[str]:
+    """Sentence names to drop, from names (``{"S4"}``) or five keep-flags (``(1, 1, 1, 0, 1)``)."""
+    if mask is None:
+        return frozenset()
+    items = list(mask)
+    if items and all(isinstance(v, (bool, int)) and not isinstance(v, str) for v in items):
+        if len(items) != len(SENTENCES):
+            raise ConfigError(f"a keep-mask needs {len(SENTENCES)} flags (S1..S5), got {len(items)}")
+        return frozenset(n for n, keep in zip(SENTENCES, items) if not keep)
+    names = frozenset(str(v).upper() for v in items)
+    bad = names - set(SENTENCES)
+    if bad:
+        raise ConfigError(f"unknown sentence names {sorted(bad)} in the mask; use {SENTENCES}")
+    return names
+
+
+@dataclass(frozen=True)
+class PromptConfig:
+    """Prompt knobs (the paper's values are the defaults, ``n_ht`` aside, which it tunes).
+
+    Attributes
+    ----------
+    n_ht : int
+        History records shown.
+    x_min : float
+        Lower bound of X for the integer encoding.
+    drop : frozenset of str
+        Sentences to leave out (see :func:`normalize_mask`).
+    allowed : {"all", "shape-changing"}
+        Which actions S5 (and constrained decoding) offers.
+    template : PromptTemplate
+        The text.
+    system : str, optional
+        A system message; the paper uses none.
+    """
+
+    n_ht: int = 3
+    x_min: float = -2.5
+    drop: frozenset[str] = frozenset()
+    allowed: str = "all"
+    template: PromptTemplate = DEFAULT_TEMPLATE
+    system: str | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "drop", normalize_mask(self.drop))
+        if self.n_ht < 0:
+            raise ConfigError(f"n_ht must be >= 0, got {self.n_ht}")
+        if self.allowed not in ALLOWED_MODES:
+            raise ConfigError(f"allowed must be one of {ALLOWED_MODES}, got {self.allowed!r}")
+
+
+def _dof_ranges(sw: SwimmerText) -> str:
+    d = sw.dof_decimals
+    spans = [sw.bounds(k) for k in range(1, sw.n_dof + 1)]
+    text = [f"[{format_dof(lo, d)}, {format_dof(hi, d)}]" for lo, hi in spans]
+    if len(set(text)) == 1:
+        verb = "each stay in" if sw.n_dof > 1 else "stays in"
+        return f"{_join_prose(sw.names)} {verb} {text[0]}"
+    return _join_prose([f"{n} stays in {t}" for n, t in zip(sw.names, text)])
+
+
+def render_record(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> str:
+    """One history line."""
+    d = sw.dof_decimals
+    values = {
+        "step": str(rec.step),
+        "dofs_before": ", ".join(format_dof(v, d) for v in rec.dofs_before),
+        "dofs_after": ", ".join(format_dof(v, d) for v in rec.dofs_after),
+        "action": rec.action.text(),
+        "x_before": str(encode_position(rec.x_before, cfg.x_min)),
+        "x_after": str(encode_position(rec.x_after, cfg.x_min)),
+        "stuck": " (stuck)" if rec.stuck else "",
+    }
+    return _fill(cfg.template.record, values, "record")
+
+
+def render_prompt(
+    sw: SwimmerText,
+    cfg: PromptConfig,
+    direction: int,
+    records: Sequence[HistoryRecord],
+    dof_values: Sequence[float],
+    x: float = 0.0,
+) -> str:
+    """The prompt text for the next decision.
+
+    Parameters
+    ----------
+    sw : SwimmerText
+        The swimmer.
+    cfg : PromptConfig
+        Knobs and template.
+    direction : {+1, -1}
+        Target direction.
+    records : sequence of HistoryRecord
+        Records since the last clear; the last ``cfg.n_ht`` are shown.
+    dof_values : sequence of float
+        Current DOF values (for the allowed set and ``{current}``).
+    x : float
+        Current X (for ``{current}``).
+
+    Raises
+    ------
+    PositionBelowMinimumError
+        When a position to show lies below ``cfg.x_min``.
+    """
+    if direction not in (1, -1):
+        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    shown = list(records[-cfg.n_ht :]) if cfg.n_ht > 0 else []
+    allowed = allowed_actions(sw, cfg.allowed, dof_values)
+    d = sw.dof_decimals
+    values = {
+        "direction": "+x" if direction == 1 else "-x",
+        "dofs": _join_prose(sw.names),
+        "dof_names": ", ".join(sw.names),
+        "n_dof": str(sw.n_dof),
+        "dof_ranges": _dof_ranges(sw),
+        "dof_choices": _join_prose([str(k) for k in range(1, sw.n_dof + 1)], "or"),
+        "roc_choices": _join_prose([str(r) for r in sw.rocs], "or"),
+        "allowed": ", ".join(a.text() for a in allowed),
+        "n_ht": str(cfg.n_ht),
+        "n_records": str(len(shown)),
+        "history": "\n".join(render_record(r, sw, cfg) for r in shown) or "none yet",
+        "current": f"({', '.join(sw.names)}) = ({', '.join(format_dof(v, d) for v in dof_values)}),"
+        f" X = {encode_position(x, cfg.x_min)}",
+    }
+    for name in SENTENCES:
+        text = "" if name in cfg.drop else _fill(cfg.template.sentence(name), values, name)
+        values[name] = text
+    return _tidy(_fill(cfg.template.layout, values, "layout"))
+
+
+def build_messages(prompt: str, system: str | None = None) -> list[dict[str, str]]:
+    """Chat messages: one user message, preceded by a system message only when given."""
+    msgs = [{"role": "system", "content": system}] if system else []
+    msgs.append({"role": "user", "content": prompt})
+    return msgs
+
+
+# ---------------------------------------------------------------------------------------------
+# Replies
+
+_MINUS = str.maketrans({"\u2212": "-", "\u2013": "-", "\u2014": "-", "\uff0d": "-"})
+_INT = r"([+-]?\s*\d+)"
+_PATTERNS = (
+    # [1, -1]  (2,1)  [D1, -1]  {1, 1}
+    re.compile(r"[\[\(\{]\s*(?:D\s*)?" + _INT + r"\s*[,;]\s*(?:ROC\s*[:=]?\s*)?" + _INT + r"\s*[\]\)\}]", re.I),
+    # DOF 1, ROC -1 / DOF=2 and ROC=+1 / dof: 1 roc: 0
+    re.compile(r"\bDOF\s*[:=]?\s*(?:D\s*)?" + _INT + r"\W{0,4}(?:and\s+)?ROC\s*[:=]?\s*" + _INT, re.I),
+)
+
+
+def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | None:
+    """The action named in a free-text reply, or ``None``.
+
+    Accepts ``[1, -1]``, ``[1,-1]``, ``(2, 1)``, ``[D1, -1]``, ``DOF 1, ROC -1``, with code
+    fences, JSON wrappers (``{"action": "[1, -1]"}``) or prose around them. Candidates are taken
+    in order of appearance and the first one in ``allowed`` wins: models usually state the answer
+    first and explain after, and a constrained reply contains exactly one candidate anyway.
+
+    Parameters
+    ----------
+    text : str
+        The model's reply.
+    allowed : sequence of Action, optional
+        Valid actions; ``None`` accepts any pair.
+    """
+    if not text:
+        return None
+    text = text.translate(_MINUS)
+    found: list[tuple[int, Action]] = []
+    for pat in _PATTERNS:
+        for m in pat.finditer(text):
+            dof, roc = (int(g.replace(" ", "")) for g in m.groups())
+            found.append((m.start(), Action(dof, roc)))
+    ok = set(allowed) if allowed is not None else None
+    for _, act in sorted(found, key=lambda t: t[0]):
+        if ok is None or act in ok:
+            return act
+    return None
