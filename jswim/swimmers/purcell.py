@@ -11,9 +11,9 @@ import jax.numpy as jnp
 from jax import Array
 
 
-def delta(d1: Array, d2: Array) -> Array:
+def delta(d1: Array, d2: Array, xp=jnp) -> Array:
     """The denominator ``Delta`` of the paper's closed form (positive for all shapes)."""
-    c = jnp.cos
+    c = xp.cos
     return 3.0 * (
         136 * c(d1) + 14 * c(2 * d1) - 8 * c(d1 - d2) - c(2 * (d1 - d2)) - 4 * c(2 * d1 - d2)
         + 14 * c(2 * d2) + 56 * c(d1 + d2) + 136 * c(d2) + 3 * c(2 * (d1 + d2))
@@ -44,7 +44,7 @@ def _phase_sum(f, d1: Array, d2: Array, dc: Array, d1_dot: Array, d2_dot: Array)
     return d1_dot * a1 + d2_dot * a2
 
 
-def velocity(d: Array, d_dot: Array, dc: Array | float = 0.0) -> Array:
+def velocity(d: Array, d_dot: Array, dc: Array | float = 0.0, xp=jnp) -> Array:
     """Middle-link velocity ``(u, v, dc_dot)`` of Purcell's swimmer in the lab frame.
 
     Parameters
@@ -55,6 +55,8 @@ def velocity(d: Array, d_dot: Array, dc: Array | float = 0.0) -> Array:
         Their rates of change.
     dc : float
         Orientation of the middle link.
+    xp : module
+        Array namespace (``jax.numpy`` by default; ``numpy`` serves plain-Python references).
 
     Returns
     -------
@@ -63,10 +65,10 @@ def velocity(d: Array, d_dot: Array, dc: Array | float = 0.0) -> Array:
     """
     d1, d2 = d[0], d[1]
     r1, r2 = d_dot[0], d_dot[1]
-    den = delta(d1, d2)
-    u = _phase_sum(jnp.sin, d1, d2, dc, r1, r2) / (2.0 * den)
-    v = -_phase_sum(jnp.cos, d1, d2, dc, r1, r2) / (2.0 * den)
-    c = jnp.cos
+    den = delta(d1, d2, xp)
+    u = _phase_sum(xp.sin, d1, d2, dc, r1, r2) / (2.0 * den)
+    v = -_phase_sum(xp.cos, d1, d2, dc, r1, r2) / (2.0 * den)
+    c = xp.cos
     w1 = (
         102 * c(d1) + 2 * c(2 * d1) - 6 * c(d1 - d2) - 4 * c(2 * d2) + 42 * c(d1 + d2)
         + 2 * c(2 * (d1 + d2)) + 9 * c(d1 + 2 * d2) - 3 * c(d1 - 2 * d2) + 108
@@ -76,4 +78,4 @@ def velocity(d: Array, d_dot: Array, dc: Array | float = 0.0) -> Array:
         - 42 * c(d1 + d2) - 2 * c(2 * (d1 + d2)) - 9 * c(2 * d1 + d2) - 108
     )
     dc_dot = 2.0 * (r1 * w1 + r2 * w2) / den
-    return jnp.stack([u, v, dc_dot])
+    return xp.stack([u, v, dc_dot])

@@ -1,0 +1,388 @@
+"""Gait detection: the one success criterion shared by the LLM runs and the Q-learning baseline.
+
+A run has *learned to swim* from step ``s`` when its executed actions from ``s`` to the end of the
+run repeat one *qualifying cycle*, at least ``n_cycles`` (3) times in a row. A cycle of period
+``p`` qualifies when
+
+- every one of its ``p`` moves changes the shape (no ROC 0, no move pushed against a limit),
+- it brings the shape back to where it started (a closed loop in DOF space), and
+- every complete period of the segment moves the swimmer, exactly and without noise, by at least
+  ``min_fraction`` (1/2) of the best displacement per step any closed cycle of length
+  ``<= max_period`` achieves in the target direction.
+
+For the two-DOF swimmers of the paper the only qualifying cycle is the four-step square gait run
+in the target direction, the paper's "signature cycle": a two-step cycle is reciprocal and goes
+nowhere (scallop theorem), and the square gait run backwards goes the wrong way. The paper's
+success criterion for a task ("three consecutive cycles of its signature gaits within 50 steps,
+without subsequent failures") is then ``success``: the segment starts early enough that three
+cycles are complete by step ``horizon`` (50), and lasts to the end of the run.
+
+Displacements are composed from :func:`jswim.env.step_table` in float64 by replaying the run's
+actions from its initial shape, orientation 0 and the origin, exactly as :func:`jswim.env.step`
+does without noise. A cycle is therefore measured from the orientation the swimmer actually has
+when the cycle starts (for Purcell's swimmer the orientation is a function of the shape, so the
+square gait from a start with a bent link goes at ``cos(0.6) = 0.83`` of the best speed; it still
+qualifies). The best cycle is measured from orientation 0 at its start corner.
+
+This is post-processing in NumPy, vectorised over runs; judging 10,000 runs of 200 steps takes a
+few tens of milliseconds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from jswim.env import EnvParams, decode_action, step_table
+from jswim.errors import ConfigError
+from jswim.swimmers.models import SwimmerModel
+
+#: Displacements within this relative margin of the threshold count as reaching it (float64
+#: composition of the same table entries in a different order differs in the last bits).
+_REL_TOL = 1e-9
+
+#: Largest number of (DOF sequence, start corner) pairs :func:`best_cycles` will enumerate.
+_MAX_WALKS = 4_000_000
+
+
+@dataclasses.dataclass(frozen=True)
+class Cycle:
+    """A closed cycle of shape-changing moves.
+
+    Attributes
+    ----------
+    actions : tuple of int
+        Action indices (see :func:`jswim.env.encode_action`), one per step.
+    start : tuple of int
+        DOF levels (0 = lo, 1 = hi) the cycle starts from.
+    displacement : float
+        Displacement per period in the target direction, starting from orientation 0.
+    rotation : float
+        Net change of orientation per period (0 for the paper's swimmers).
+    """
+
+    actions: tuple[int, ...]
+    start: tuple[int, ...]
+    displacement: float
+    rotation: float
+
+    @property
+    def period(self) -> int:
+        return len(self.actions)
+
+    @property
+    def per_step(self) -> float:
+        """Displacement per step in the target direction."""
+        return self.displacement / self.period
+
+    @property
+    def moves(self) -> tuple[tuple[int, int], ...]:
+        """The cycle as ``(dof, roc)`` pairs, ``dof`` 1-based as in the prompt."""
+        return tuple(decode_action(a) for a in self.actions)
+
+
+class GaitReport(NamedTuple):
+    """Verdict on a batch of runs (leading axis: runs).
+
+    Attributes
+    ----------
+    learned : bool (B,)
+        The run ends in at least ``n_cycles`` repetitions of a qualifying cycle.
+    steps_to_learn : int (B,)
+        Steps before that final stroke starts (its first step is step ``steps_to_learn + 1``,
+        1-based), or -1 when not learned.
+    success : bool (B,)
+        ``learned`` and the first ``n_cycles`` cycles are complete by step ``horizon``.
+    period : int (B,)
+        Period of the detected cycle (0 when not learned).
+    cycle : int (B, max_period)
+        The detected cycle's actions from its first step, padded with -1.
+    per_step : float (B,)
+        Exact displacement per step of the cycle in the target direction (NaN when not learned).
+    fraction : float (B,)
+        ``per_step`` over the best cycle's displacement per step.
+    """
+
+    learned: np.ndarray
+    steps_to_learn: np.ndarray
+    success: np.ndarray
+    period: np.ndarray
+    cycle: np.ndarray
+    per_step: np.ndarray
+    fraction: np.ndarray
+
+
+def default_max_period(n_dof: int) -> int:
+    """Longest cycle considered: ``2**n_dof``, the longest cycle visiting each corner once.
+
+    Without rotation a closed walk's displacement is the sum over the simple cycles it decomposes
+    into, so no longer walk beats the best simple cycle per step; for two DOFs this is the square
+    gait's 4.
+    """
+    return 2**n_dof
+
+
+@functools.lru_cache(maxsize=64)
+def best_cycles(model: SwimmerModel, direction: int = 1, max_len: int | None = None) -> tuple[Cycle, ...]:
+    """Every closed cycle of shape-changing moves up to ``max_len`` steps, best first.
+
+    Parameters
+    ----------
+    model : SwimmerModel
+        The swimmer (``params.model``).
+    direction : int
+        +1 or -1: the target direction the displacement is measured in.
+    max_len : int, optional
+        Longest period (default :func:`default_max_period`).
+
+    Returns
+    -------
+    tuple of Cycle
+        One entry per cycle up to cyclic shifts, each shown from the shift that goes furthest from
+        orientation 0; repetitions of a shorter cycle are left out. Ranked by displacement per
+        step, then by shorter period.
+
+    Examples
+    --------
+    >>> from jswim.env import make_params
+    >>> best = best_cycles(make_params("ng").model, +1)[0]
+    >>> best.period, round(best.displacement, 6)
+    (4, 0.156265)
+    """
+    n = model.n_dof
+    max_len = default_max_period(n) if max_len is None else int(max_len)
+    if direction not in (1, -1):
+        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    if max_len < 1:
+        raise ConfigError(f"max_len must be >= 1, got {max_len}")
+    if sum(n**length for length in range(2, max_len + 1, 2)) * 2**n > _MAX_WALKS:
+        raise ConfigError(f"too many walks to enumerate for {n} DOFs up to length {max_len}; lower max_len")
+    table = step_table(model)[0].astype(np.float64)
+    found: list[Cycle] = []
+    for length in range(2, max_len + 1, 2):  # a closed walk flips every DOF an even number of times
+        seqs = np.array(list(itertools.product(range(n), repeat=length)), np.int64).reshape(-1, length)
+        seqs = seqs[_closed(seqs, n) & _primitive(seqs, n)]
+        if not seqs.size:
+            continue
+        # Every (start corner, DOF sequence); a cycle is the class of its cyclic shifts, keyed by
+        # the smallest code of (corner, sequence) over the shifts.
+        c0 = np.repeat(np.arange(2**n), seqs.shape[0])
+        seq = np.tile(seqs, (2**n, 1))
+        corners, disp, rot = _walk(table, seq, c0)
+        weights = n ** np.arange(length - 1, -1, -1)
+        codes = [corners[:, k] * n**length + np.roll(seq, -k, axis=1) @ weights for k in range(length)]
+        key = np.min(np.stack(codes, 1), axis=1)
+        value = direction * disp
+        order = np.lexsort((-value, key))  # per class, the shift that goes furthest comes first
+        first = order[np.r_[True, key[order][1:] != key[order][:-1]]]
+        for row in first:
+            levels = (int(c0[row]) >> np.arange(n)) & 1
+            start = tuple(int(v) for v in levels)
+            actions = []
+            for k in seq[row]:
+                actions.append(int(k) * 3 + (1 if levels[k] == 0 else -1) + 1)
+                levels[k] ^= 1
+            found.append(Cycle(tuple(actions), start, float(value[row]), float(rot[row])))
+    return tuple(sorted(found, key=lambda c: (-c.per_step, c.period, c.actions)))
+
+
+def best_per_step(model: SwimmerModel, direction: int = 1, max_len: int | None = None) -> float:
+    """Best displacement per step in the target direction over closed cycles up to ``max_len``."""
+    return best_cycles(model, direction, max_len)[0].per_step
+
+
+def _closed(seqs: np.ndarray, n: int) -> np.ndarray:
+    """DOF sequences that flip every DOF an even number of times (closed loops)."""
+    return np.all(np.stack([(seqs == k).sum(1) % 2 == 0 for k in range(n)]), axis=0)
+
+
+def _primitive(seqs: np.ndarray, n: int) -> np.ndarray:
+    """Closed DOF sequences that are not a closed block repeated (e.g. the square gait twice)."""
+    length = seqs.shape[1]
+    keep = np.ones(seqs.shape[0], bool)
+    for q in range(1, length):
+        if length % q == 0:
+            repeats = np.all(seqs == np.roll(seqs, q, axis=1), axis=1)
+            keep &= ~(repeats & _closed(seqs[:, :q], n))
+    return keep
+
+
+def _walk(table: np.ndarray, seqs: np.ndarray, c0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Corners before each step, x displacement and rotation of DOF sequences from corners ``c0``."""
+    m, length = seqs.shape
+    corner = np.asarray(c0, np.int64).copy()
+    x = np.zeros(m)
+    theta = np.zeros(m)
+    corners = np.empty((m, length), np.int64)
+    for t in range(length):
+        corners[:, t] = corner
+        inc = table[corner, seqs[:, t]]
+        x += np.cos(theta) * inc[:, 0] - np.sin(theta) * inc[:, 1]
+        theta += inc[:, 2]
+        corner = corner ^ (1 << seqs[:, t])
+    return corners, x, theta
+
+
+class Replay(NamedTuple):
+    """Noiseless replay of executed actions, time-major (leading axes: steps, then runs)."""
+
+    corner: np.ndarray  # int (T + 1, B): corner index before each step, then the final one
+    moved: np.ndarray  # bool (T, B): the step changed the shape
+    x: np.ndarray  # float64 (T + 1, B): exact centroid x before each step, then the final one
+
+
+def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Replay:
+    """Replay action indices without noise from ``levels0``, orientation 0 and the origin.
+
+    Parameters
+    ----------
+    actions : int array (T, B)
+        Executed action indices, time-major.
+    model : SwimmerModel
+        The swimmer.
+    levels0 : int array (B, n_dof)
+        Initial DOF levels (0 = lo, 1 = hi).
+    """
+    steps, b = actions.shape
+    n = model.n_dof
+    a = actions.astype(np.intp)
+    dof = (np.arange(3 * n, dtype=np.int8) // 3)[a]
+    roc = (np.arange(3 * n, dtype=np.int8) % 3 - 1)[a]
+    itype = np.int16 if steps < 16_000 else np.int32
+    stamp = 2 * np.arange(1, steps + 1, dtype=itype)[:, None]  # 2 (t + 1): room for one bit
+    # A DOF's level is set by the last nonzero ROC applied to it (a stuck move leaves it where it
+    # already is), so levels follow from a running maximum of time stamps that carry the ROC's
+    # sign in their lowest bit: no loop over steps.
+    corner = np.zeros((steps + 1, b), np.int32)
+    level = np.zeros((steps, b), np.int8)  # level of the moved DOF before each step
+    for k in range(n):
+        touched = (dof == k) & (roc != 0)
+        last = np.maximum.accumulate(touched * (stamp + (roc > 0)), axis=0)
+        lk = np.empty((steps + 1, b), np.int8)
+        lk[0] = levels0[:, k]
+        lk[1:] = np.where(last > 0, last & 1, lk[0])
+        corner[1:] += lk[1:].astype(np.int32) << k
+        corner[0] += lk[0].astype(np.int32) << k
+        level = np.where(dof == k, lk[:-1], level)
+    moved = roc == 1 - 2 * level  # +1 from lo or -1 from hi
+    idx = np.where(moved, corner[:-1] * n + dof, 2**n * n)  # still -> an all-zero row
+    table = np.concatenate([step_table(model)[0].astype(np.float64).reshape(-1, 3), np.zeros((1, 3))])
+    x = np.zeros((steps + 1, b))
+    if model.planar:
+        # Orientation before each step as a unit complex number: a running product of the
+        # steps' rotations is cheaper than cos and sin of a running sum.
+        turn = np.exp(1j * table[:, 2])[idx]
+        heading = np.empty((steps, b), np.complex128)
+        heading[0] = 1.0
+        np.cumprod(turn[:-1], axis=0, out=heading[1:])
+        dx = (heading * (table[:, 0] + 1j * table[:, 1])[idx]).real
+        np.cumsum(dx, axis=0, out=x[1:])
+    else:
+        np.cumsum(table[idx, 0], axis=0, out=x[1:])
+    return Replay(corner, moved, x)
+
+
+def _last_true(mask: np.ndarray) -> np.ndarray:
+    """Index along axis 0 of the last True per column, -1 where none (time-major arrays)."""
+    itype = np.int16 if mask.shape[0] < 32_000 else np.int32
+    idx = np.arange(1, mask.shape[0] + 1, dtype=itype)[:, None]
+    return (mask * idx).max(axis=0, initial=0).astype(np.int64) - 1
+
+
+def judge(
+    actions: Any,
+    params: EnvParams,
+    *,
+    levels0: Any = None,
+    horizon: int = 50,
+    n_cycles: int = 3,
+    min_fraction: float = 0.5,
+    max_period: int | None = None,
+) -> GaitReport:
+    """Find, per run, the final stroke and whether it is a qualifying cycle (see module docs).
+
+    Parameters
+    ----------
+    actions : int array-like (T,) or (B, T)
+        Executed action indices, one run per row.
+    params : EnvParams
+        The runs' environment; ``direction`` (scalar or (B,)) and ``init`` (``(n_dof,)`` or
+        ``(B, n_dof)``) may be batched. Noise plays no part: the judge measures exact
+        displacements.
+    levels0 : int array-like (n_dof,) or (B, n_dof), optional
+        Actual initial levels; required when ``params.init`` asks for a random start.
+    horizon : int
+        Steps within which ``n_cycles`` cycles must be complete for ``success`` (paper: 50).
+    n_cycles : int
+        Consecutive cycles required (paper: 3).
+    min_fraction : float
+        Fraction of the best cycle's displacement per step a cycle must reach.
+    max_period : int, optional
+        Longest cycle considered (default :func:`default_max_period`).
+
+    Returns
+    -------
+    GaitReport
+        Arrays over runs (a 1-D ``actions`` is treated as one run).
+    """
+    model = params.model
+    n = model.n_dof
+    max_period = default_max_period(n) if max_period is None else int(max_period)
+    if n_cycles < 1 or max_period < 1 or not min_fraction > 0:
+        raise ConfigError("n_cycles and max_period must be >= 1 and min_fraction > 0")
+    a = np.asarray(actions)
+    if a.ndim == 1:
+        a = a[None]
+    if a.ndim != 2 or not np.issubdtype(a.dtype, np.integer):
+        raise ConfigError("actions must be integer action indices of shape (T,) or (runs, T)")
+    if a.size and (a.min() < 0 or a.max() >= 3 * n):
+        raise ConfigError(f"action indices must lie in [0, {3 * n}) for a {n}-DOF swimmer")
+    b, steps = a.shape
+    init = np.asarray(params.init if levels0 is None else levels0).astype(np.int64)
+    init = np.broadcast_to(init, (b, n))
+    if np.any(init < 0):
+        raise ConfigError("params.init asks for a random start: pass the actual levels0 to judge")
+    direction = np.broadcast_to(np.sign(np.asarray(params.direction, np.float64)), (b,))
+    best = np.where(direction > 0, best_per_step(model, 1, max_period), best_per_step(model, -1, max_period))
+    threshold = min_fraction * best - _REL_TOL * np.abs(best)
+    at = np.ascontiguousarray(a.T)  # time-major: reductions along time run over contiguous rows
+    rp = replay(at, model, init)
+
+    # A qualifying stroke starts after the last step that did not change the shape.
+    s_move = _last_true(~rp.moved) + 1
+    rows = np.arange(b)
+    out_s = np.full(b, steps + 1, np.int64)
+    out_p = np.zeros(b, np.int64)
+    out_disp = np.full(b, np.nan)  # displacement per step of the stroke's first period
+    for p in range(1, min(max_period, steps // n_cycles) + 1):
+        # Start of the trailing segment that repeats with period p.
+        s = np.maximum(_last_true(at[:-p] != at[p:]) + 1, s_move)
+        ok = steps - s >= n_cycles * p
+        sc = np.minimum(s, steps - p)
+        ok &= rp.corner[sc + p, rows] == rp.corner[sc, rows]  # closed loop
+        # Every complete period of the segment must go far enough: per residue class of the
+        # period's start mod p, the last period that falls short must start before s.
+        short = direction * (rp.x[p:] - rp.x[:-p]) < threshold * p  # (steps - p + 1, B)
+        last_short = np.stack([_last_true(short[r::p]) * p + r for r in range(p)], axis=1)
+        last_short = np.where(last_short < 0, -1, last_short)
+        ok &= last_short[rows, s % p] < s
+        first = direction * (rp.x[sc + p, rows] - rp.x[sc, rows]) / p
+        better = ok & (s < out_s)
+        out_s = np.where(better, s, out_s)
+        out_p = np.where(better, p, out_p)
+        out_disp = np.where(better, first, out_disp)
+
+    learned = out_p > 0
+    steps_to_learn = np.where(learned, out_s, -1)
+    success = learned & (out_s + n_cycles * out_p <= horizon)
+    cycle = np.full((b, max_period), -1, np.int64)
+    for p in np.unique(out_p[learned]):
+        sel = np.flatnonzero(out_p == p)
+        idx = out_s[sel, None] + np.arange(p)[None]
+        cycle[sel, :p] = a[sel[:, None], idx]
+    per_step = np.where(learned, out_disp, np.nan)
+    return GaitReport(learned, steps_to_learn, success, out_p, cycle, per_step, per_step / best)

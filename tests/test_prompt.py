@@ -1,0 +1,275 @@
+"""The text-only prompt layer: sentences, history, number encoding, clearing, reply parsing."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import pytest
+
+from jswim.errors import ConfigError
+from jswim.prompt import (
+    CACHE_LAYOUT,
+    DEFAULT_SENTENCES,
+    PAPER_LAYOUT,
+    SENTENCES,
+    Action,
+    ClearingRule,
+    History,
+    HistoryRecord,
+    PositionBelowMinimumError,
+    PromptConfig,
+    PromptTemplate,
+    SwimmerText,
+    allowed_actions,
+    build_messages,
+    encode_position,
+    format_dof,
+    normalize_mask,
+    parse_reply,
+    render_prompt,
+)
+
+PURCELL = SwimmerText(2, -math.pi / 3, math.pi / 3, dof_decimals=3)
+NG = SwimmerText(2, 6.0, 10.0, dof_decimals=0)
+HI = (math.pi / 3, math.pi / 3)
+
+# A phrase unique to each default sentence.
+MARKERS = {
+    "S1": "fastest long-term movement",
+    "S2": "Only one DOF changes at a time",
+    "S3": "Latest records",
+    "S4": "long-term consequences",
+    "S5": "Reply with the next action",
+}
+
+
+def rec(step: int, x0: float = 0.0, x1: float = 0.01, action: Action = Action(1, -1), stuck: bool = False) -> HistoryRecord:
+    return HistoryRecord(step, HI, (-math.pi / 3, math.pi / 3), action, x0, x1, stuck)
+
+
+def test_prompt_layer_never_imports_jax():
+    import subprocess
+
+    code = "import sys, jswim.prompt, jswim.llm, jswim.llm.local; assert 'jax' not in sys.modules, 'jax imported'"
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(__import__("pathlib").Path(__file__).parents[1]))
+
+
+def test_full_prompt_contents():
+    text = render_prompt(PURCELL, PromptConfig(), +1, [rec(1)], HI)
+    for phrase in MARKERS.values():
+        assert phrase in text
+    assert "+x direction" in text
+    assert "D1 and D2 each stay in [-1.047, 1.047]" in text
+    assert "[1, -1], [1, 0], [1, 1], [2, -1], [2, 0], [2, 1]" in text
+    assert "1: (1.047, 1.047) [1, -1] -> (-1.047, 1.047), X 2500 -> 2510" in text
+    assert "  " not in text
+
+
+@pytest.mark.parametrize("name", SENTENCES)
+def test_each_sentence_can_be_removed(name):
+    text = render_prompt(PURCELL, PromptConfig(drop={name}), -1, [rec(1)], HI)
+    assert MARKERS[name] not in text
+    for other, phrase in MARKERS.items():
+        if other != name:
+            assert phrase in text
+    assert "  " not in text and not text.startswith(("\n", " ")) and "\n\n" not in text
+    if name == "S3":
+        assert "2500 -> 2510" not in text
+
+
+def test_sentence_masks():
+    assert normalize_mask((True, True, False, True, False)) == {"S3", "S5"}
+    assert normalize_mask(["s4"]) == {"S4"}
+    assert normalize_mask(None) == frozenset()
+    with pytest.raises(ConfigError):
+        normalize_mask(["S6"])
+    with pytest.raises(ConfigError):
+        normalize_mask((True, False))
+    everything = render_prompt(PURCELL, PromptConfig(drop=SENTENCES), 1, [rec(1)], HI)
+    assert everything == ""
+
+
+def test_history_window_shows_last_n_ht():
+    records = [rec(k, 0.01 * (k - 1), 0.01 * k) for k in range(1, 11)]
+    text = render_prompt(PURCELL, PromptConfig(n_ht=3), 1, records, HI)
+    lines = [ln for ln in text.splitlines() if "->" in ln and ln[0].isdigit()]
+    assert [ln.split(":")[0] for ln in lines] == ["8", "9", "10"]
+    empty = render_prompt(PURCELL, PromptConfig(n_ht=3), 1, [], HI)
+    assert "none yet" in empty
+    none = render_prompt(PURCELL, PromptConfig(n_ht=0), 1, records, HI)
+    assert "none yet" in none
+
+
+def test_cache_friendly_order_keeps_fixed_text_first():
+    cfg = PromptConfig(n_ht=2)
+    a = render_prompt(PURCELL, cfg, 1, [rec(1)], HI)
+    b = render_prompt(PURCELL, cfg, 1, [rec(1), rec(2, 0.01, 0.03)], HI)
+    history_at = a.index("\n1: ")
+    assert a[:history_at] == b[:history_at]  # everything before the history is shared
+    for name in ("S1", "S2", "S4", "S5"):
+        assert a.index(MARKERS[name]) < history_at
+    assert PromptConfig().template.layout == CACHE_LAYOUT
+
+
+def test_paper_layout_order():
+    cfg = PromptConfig(template=PromptTemplate(layout=PAPER_LAYOUT))
+    text = render_prompt(PURCELL, cfg, 1, [rec(1)], HI)
+    pos = [text.index(MARKERS[n]) for n in SENTENCES]
+    assert pos == sorted(pos)
+    assert text.index("X 2500 -> 2510") < text.index(MARKERS["S4"])
+
+
+def test_ng_ranges_and_integer_lengths():
+    r = HistoryRecord(3, (10.0, 6.0), (6.0, 6.0), Action(1, -1), 0.1, 0.25, False)
+    text = render_prompt(NG, PromptConfig(), 1, [r], (6.0, 6.0))
+    assert "each stay in [6, 10]" in text
+    assert "3: (10, 6) [1, -1] -> (6, 6), X 2600 -> 2750" in text
+
+
+def test_any_number_of_dofs_and_roc_sets():
+    four = SwimmerText(4, 6.0, 10.0, 0, rocs=(-1, 1))
+    text = render_prompt(four, PromptConfig(), 1, [], (10.0,) * 4)
+    assert "DOFs D1, D2, D3 and D4" in text
+    assert "[1, -1], [1, 1], [2, -1], [2, 1], [3, -1], [3, 1], [4, -1], [4, 1]." in text
+    assert "[1, 0]" not in text
+    one = SwimmerText(1, 0.0, 1.0, 1)
+    assert "D1 stays in [0.0, 1.0]" in render_prompt(one, PromptConfig(), 1, [], (0.0,))
+    uneven = SwimmerText(2, (0.0, 1.0), (2.0, 3.0), 0)
+    assert "D1 stays in [0, 2] and D2 stays in [1, 3]" in render_prompt(uneven, PromptConfig(), 1, [], (0.0, 1.0))
+
+
+def test_shape_changing_allowed_set():
+    lo, hi = -math.pi / 3, math.pi / 3
+    assert allowed_actions(PURCELL, "shape-changing", (hi, lo)) == [Action(1, -1), Action(2, 1)]
+    assert allowed_actions(PURCELL, "shape-changing", (lo, lo)) == [Action(1, 1), Action(2, 1)]
+    assert len(allowed_actions(PURCELL)) == 6
+    text = render_prompt(PURCELL, PromptConfig(allowed="shape-changing"), 1, [], (hi, hi))
+    assert "one of [1, -1], [2, -1]." in text
+    with pytest.raises(ValueError):
+        allowed_actions(PURCELL, "shape-changing")
+    with pytest.raises(ConfigError):
+        PromptConfig(allowed="some")
+
+
+@pytest.mark.parametrize(
+    "x, x_min, expected",
+    [
+        (0.0, -2.5, 2500),
+        (0.0129, -2.5, 2512),  # truncated, not rounded
+        (0.0129999, -2.5, 2512),
+        (1.001, -2.5, 3501),  # no float artefact (1.001 * 1000 = 1000.99999...)
+        (-0.0005, -2.5, 2500),  # truncation is toward zero
+        (-1.2345, -2.5, 1266),
+        (-2.5, -2.5, 0),
+        (0.4, -1.0, 1400),
+    ],
+)
+def test_position_encoding(x, x_min, expected):
+    assert encode_position(x, x_min) == expected
+
+
+def test_position_below_minimum_raises():
+    with pytest.raises(PositionBelowMinimumError) as err:
+        encode_position(-2.6)
+    assert err.value.x == -2.6 and err.value.x_min == -2.5
+    with pytest.raises(PositionBelowMinimumError):
+        render_prompt(PURCELL, PromptConfig(), -1, [rec(1, -2.4, -2.51)], HI)
+    text = render_prompt(PURCELL, PromptConfig(x_min=-5.0), -1, [rec(1, -2.4, -2.51)], HI)
+    assert "X 2600 -> 2490" in text
+
+
+def test_dof_formatting():
+    assert format_dof(math.pi / 3, 3) == "1.047"
+    assert format_dof(-math.pi / 3, 3) == "-1.047"
+    assert format_dof(-1e-9, 3) == "0.000"
+    assert format_dof(9.6, 0) == "10"
+
+
+def test_clearing_rule():
+    rule = ClearingRule()  # after 5 steps, last 4 below 0.01
+    assert not rule.should_clear(4, [0.0] * 4)  # too early
+    assert rule.should_clear(5, [0.0] * 5)
+    assert not rule.should_clear(5, [0.0, 0.0, 0.0, 0.01, 0.0])  # sum 0.01 is not below
+    assert rule.should_clear(6, [0.5, 0.004, 0.003, -0.002, 0.004])
+    assert not rule.should_clear(9, [0.0] * 3)  # fewer than window steps since the last clear
+    assert not ClearingRule(enabled=False).should_clear(10, [0.0] * 10)
+    assert ClearingRule(min_steps=2, window=2, threshold=0.1).should_clear(2, [0.05, 0.04])
+
+
+def test_history_clears_and_rebuilds():
+    h = History()
+    cleared = [h.add(rec(k), 0.0) for k in range(1, 13)]
+    # Clears at step 5, then needs 4 fresh steps: 9, then 13 would be next.
+    assert [k for k, c in enumerate(cleared, 1) if c] == [5, 9]
+    assert h.n_clears == 2 and len(h.records) == 3 and h.records[0].step == 10
+    h2 = History()
+    for k in range(1, 13):
+        h2.add(rec(k), 0.05)
+    assert h2.n_clears == 0 and [r.step for r in h2.last(3)] == [10, 11, 12]
+
+
+@pytest.mark.parametrize(
+    "reply, expected",
+    [
+        ("[1, -1]", Action(1, -1)),
+        ("[1,-1]", Action(1, -1)),
+        ("[ 2 , 1 ]", Action(2, 1)),
+        ("(2, 1)", Action(2, 1)),
+        ("DOF 1, ROC -1", Action(1, -1)),
+        ("dof=2 and roc=+1", Action(2, 1)),
+        ("```json\n[2, 0]\n```", Action(2, 0)),
+        ('{"action": "[1, 0]"}', Action(1, 0)),
+        ("Next: [D2, -1].", Action(2, -1)),
+        ("[2, \u22121]", Action(2, -1)),  # unicode minus
+        ("The answer is [2, 1]. Previously [1, -1] failed.", Action(2, 1)),  # first valid wins
+        ("[3, 1] is impossible, so [1, 1]", Action(1, 1)),  # invalid candidates are skipped
+        ("[1, 2] then (2, -1)", Action(2, -1)),
+        ("I would move the first joint down.", None),
+        ("", None),
+        ("[3, 1]", None),
+    ],
+)
+def test_parse_reply(reply, expected):
+    assert parse_reply(reply, allowed_actions(PURCELL)) == expected
+
+
+def test_parse_reply_respects_allowed_set():
+    lo, hi = -math.pi / 3, math.pi / 3
+    allowed = allowed_actions(PURCELL, "shape-changing", (hi, hi))
+    assert parse_reply("[1, 1]", allowed) is None
+    assert parse_reply("[1, 1] or [2, -1]", allowed) == Action(2, -1)
+    assert parse_reply("[7, 9]") == Action(7, 9)  # no allowed set: any pair
+
+
+def test_template_from_text_and_file(tmp_path):
+    whole = PromptTemplate.from_text("Go {direction}. {S5}\n{history}\n")
+    text = render_prompt(PURCELL, PromptConfig(template=whole), -1, [rec(1)], HI)
+    assert text.startswith("Go -x. Reply with the next action")
+    assert text.endswith("X 2500 -> 2510")
+
+    f = tmp_path / "t.txt"
+    f.write_text("[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S3}\n")
+    tpl = PromptTemplate.from_file(f)
+    assert tpl.sentence("S1") == DEFAULT_SENTENCES["S1"]
+    text = render_prompt(PURCELL, PromptConfig(template=tpl), 1, [rec(2, stuck=True)], HI)
+    assert text.splitlines()[0] == "Think ahead."
+    assert text.endswith("#2 [1, -1] 2510 (stuck)")
+
+    with pytest.raises(ConfigError, match="nope"):
+        render_prompt(PURCELL, PromptConfig(template=PromptTemplate(layout="{nope}")), 1, [], HI)
+    with pytest.raises(ConfigError):
+        PromptTemplate.from_text("junk\n[S1]\nx")
+    with pytest.raises(ConfigError):
+        PromptTemplate.from_file(tmp_path / "missing.txt")
+    assert "{x}" in render_prompt(PURCELL, PromptConfig(template=PromptTemplate(layout="{{x}} {S4}")), 1, [], HI)
+
+
+def test_current_state_placeholder():
+    tpl = PromptTemplate(layout="{current}")
+    assert render_prompt(PURCELL, PromptConfig(template=tpl), 1, [], HI, x=0.1234) == "(D1, D2) = (1.047, 1.047), X = 2623"
+
+
+def test_build_messages():
+    assert build_messages("hi") == [{"role": "user", "content": "hi"}]
+    assert build_messages("hi", "sys") == [{"role": "system", "content": "sys"}, {"role": "user", "content": "hi"}]
