@@ -1,0 +1,414 @@
+"""Tabular Q-learning baseline, trained online on one swimmer, thousands of learners at once.
+
+The learner sees what the LLM sees and nothing more: the state is the DOF configuration (a corner
+of the DOF cube, ``2**n_dof`` states), an action is a ``(DOF, ROC)`` pair from the environment's
+action set, and the reward of a step is its displacement in the target direction (noisy when
+``zeta > 0``). There are no episodes: one learner is one swimmer that keeps swimming, exactly like
+one LLM run, so "steps to learn" means the same thing for both and is judged by the same code,
+:func:`jswim.gait.judge`.
+
+The update is Q-learning written as an optax problem: the Q-table is the parameter, the loss is
+half the squared TD error of the visited entry with the bootstrapped target held fixed,
+
+    L(Q) = 1/2 (r + gamma max_a' Q(s', a') - Q(s, a))^2,   target under stop_gradient,
+
+and ``optax.sgd`` with learning rate ``alpha`` turns its gradient into the textbook update
+``Q(s, a) += alpha * TD error``. Learning-rate and exploration schedules are optax schedules
+evaluated at the step count. A whole run is one ``lax.scan``; :func:`train_batch` vmaps it over
+keys and environment parameters (noise level, direction, initial configuration), so one jitted
+call trains e.g. 10,000 learners.
+
+Example::
+
+    import jax
+    from jswim.env import make_params
+    from jswim.agents.qlearning import QConfig, train_batch, batch_params, evaluate
+
+    params = batch_params(make_params("ng", direction=-1), 1000)
+    run = train_batch(jax.random.split(jax.random.PRNGKey(0), 1000), params, QConfig())
+    report = evaluate(run, params)   # steps to learn, success, ... per learner
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import functools
+from typing import Any, Callable, NamedTuple, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from jax import Array
+
+from jswim.env import EnvParams, make_params, reset, step
+from jswim.errors import ConfigError
+from jswim.gait import GaitReport, judge
+
+#: Action sets a learner may be offered (see :class:`QConfig`).
+ACTION_SETS = ("all", "shape-changing")
+
+#: Exploration rate: 1 at the start (nothing is known, so every action is worth a try), decaying
+#: by 10 % a step towards 0, so that about 10 exploratory steps are taken in all, most of them in
+#: the first 20 steps, and the learner then shows the policy it has learned.
+DEFAULT_EPSILON: optax.Schedule = optax.exponential_decay(1.0, transition_steps=1, decay_rate=0.9)
+
+
+@dataclasses.dataclass(frozen=True)
+class QConfig:
+    """Hyperparameters of a Q-learner (static: one compilation per distinct config).
+
+    Attributes
+    ----------
+    steps : int
+        Steps per run (200). Long enough to measure a slow learner well past the paper's
+        50-step horizon and to test that a learned stroke lasts ("no later failure").
+    learning_rate : float or optax schedule
+        ``alpha`` (0.5 constant). Without noise a table entry is exact after one update at
+        ``alpha = 1``; 0.5 keeps most of that speed while averaging the noise of ``zeta > 0``
+        (each update halves the weight of the old estimate).
+    discount : float
+        ``gamma`` (0.9). A move's worth depends on the moves that follow: for NG's swimmer two of
+        the four strokes of the +x cycle move it backwards, and the cycle is the optimal policy
+        only for ``gamma > 0.74`` (computed exactly from the step table); 0.9 clears that with a
+        margin while keeping the horizon (``1 / (1 - gamma)`` = 10 steps) short enough for
+        values to settle within tens of steps.
+    epsilon : float or optax schedule
+        Probability of a uniformly random action from the offered set (default
+        :data:`DEFAULT_EPSILON`). It must decay to 0: the success criterion asks for the stroke
+        to continue to the end of the run, and a learner that keeps exploring breaks it.
+    q_init : float
+        Initial value of every table entry (0). Positive values (above any return, ~0.5 here)
+        make an untrained action look good, so even a greedy learner tries everything once.
+    action_set : str
+        ``"all"``: the ``3 n_dof`` ``(DOF, ROC)`` pairs, as offered to the LLM (holds and moves
+        against a limit included; they do nothing). ``"shape-changing"``: only the ``n_dof``
+        moves that change the shape from the current state.
+    tie_break : str
+        How the greedy choice splits equal Q values: ``"random"`` (uniformly among the maxima,
+        the default) or ``"first"`` (lowest index, like ``argmax``; it makes a learner that
+        starts from equal values repeat a useless action forever, kept to show that failure).
+    """
+
+    steps: int = 200
+    learning_rate: float | optax.Schedule = 0.5
+    discount: float = 0.9
+    epsilon: float | optax.Schedule = DEFAULT_EPSILON
+    q_init: float = 0.0
+    action_set: str = "all"
+    tie_break: str = "random"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.steps, int) or self.steps < 1:
+            raise ConfigError(f"steps must be a positive integer, got {self.steps!r}")
+        if not 0.0 <= self.discount < 1.0:
+            raise ConfigError(f"discount must lie in [0, 1) (the task never ends), got {self.discount!r}")
+        if self.action_set not in ACTION_SETS:
+            raise ConfigError(f"action_set must be one of {ACTION_SETS}, got {self.action_set!r}")
+        if self.tie_break not in ("random", "first"):
+            raise ConfigError(f"tie_break must be 'random' or 'first', got {self.tie_break!r}")
+        for name in ("learning_rate", "epsilon"):
+            value = getattr(self, name)
+            if not callable(value) and not (isinstance(value, (int, float)) and value >= 0):
+                raise ConfigError(f"{name} must be a number >= 0 or an optax schedule, got {value!r}")
+
+    def replace(self, **changes: Any) -> "QConfig":
+        """A copy with some fields changed."""
+        return dataclasses.replace(self, **changes)
+
+
+class QRun(NamedTuple):
+    """What training recorded, per learner (leading batch axis from :func:`train_batch`).
+
+    Attributes
+    ----------
+    actions : int32 (steps,)
+        Executed action indices.
+    x : float (steps,)
+        Centroid x after each step (noisy when ``zeta > 0``), the X of the paper.
+    reward : float (steps,)
+        Reward of each step, ``direction * dx``.
+    explored : bool (steps,)
+        The step's action was drawn at random (it may coincide with the greedy one).
+    q : float (2**n_dof, 3 n_dof)
+        Final Q-table, rows indexed by corner ``sum_k level_k 2**k``.
+    levels0 : int32 (n_dof,)
+        Initial DOF levels (drawn by :func:`jswim.env.reset` for a random start).
+    """
+
+    actions: Array
+    x: Array
+    reward: Array
+    explored: Array
+    q: Array
+    levels0: Array
+
+
+def _schedule(value: float | optax.Schedule) -> optax.Schedule:
+    return value if callable(value) else optax.constant_schedule(float(value))
+
+
+def _corner(levels: Array) -> Array:
+    return jnp.sum(levels * (2 ** jnp.arange(levels.shape[-1], dtype=jnp.int32)), axis=-1)
+
+
+def offered(levels: Array, n_dof: int, action_set: str) -> Array:
+    """Boolean mask of the actions offered in configuration ``levels``."""
+    if action_set == "all":
+        return jnp.ones((3 * n_dof,), bool)
+    roc = jnp.arange(3 * n_dof) % 3 - 1
+    level = levels[jnp.arange(3 * n_dof) // 3]
+    return roc == 1 - 2 * level  # +1 from lo, -1 from hi
+
+
+def _pick(mask: Array, u: Array) -> Array:
+    """Index of a uniformly chosen True entry of ``mask`` (``u`` uniform in [0, 1))."""
+    count = jnp.sum(mask)
+    k = jnp.minimum(jnp.floor(u * count).astype(jnp.int32), count - 1)
+    return jnp.argmax(mask & (jnp.cumsum(mask) - 1 == k))
+
+
+def _greedy_set(q_row: Array, mask: Array, tie_break: str) -> Array:
+    """Offered actions whose value equals the best offered value (or the first of them)."""
+    best = jnp.max(jnp.where(mask, q_row, -jnp.inf))
+    ties = mask & (q_row == best)
+    if tie_break == "first":
+        ties = jnp.arange(q_row.shape[0]) == jnp.argmax(ties)
+    return ties
+
+
+def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
+    n = params.model.n_dof
+    dtype = jnp.result_type(float)
+    k_reset, k_agent, k_env = jax.random.split(key, 3)
+    state = reset(k_reset, params)
+    q = jnp.full((2**n, 3 * n), config.q_init, dtype)
+    opt = optax.sgd(_schedule(config.learning_rate))
+    epsilon = _schedule(config.epsilon)
+    gamma = config.discount
+
+    def body(carry, inp):
+        state, q, opt_state = carry
+        t, u, k = inp
+        s = _corner(state.levels)
+        mask = offered(state.levels, n, config.action_set)
+        explore = u[0] < epsilon(t)
+        candidates = jnp.where(explore, mask, _greedy_set(q[s], mask, config.tie_break))
+        action = _pick(candidates, u[1])
+        new, info = step(k, state, action, params)
+        s2, mask2 = _corner(new.levels), offered(new.levels, n, config.action_set)
+
+        def td_loss(q: Array) -> Array:
+            future = jnp.max(jnp.where(mask2, jax.lax.stop_gradient(q[s2]), -jnp.inf))
+            return 0.5 * (info.progress + gamma * future - q[s, action]) ** 2
+
+        updates, opt_state = opt.update(jax.grad(td_loss)(q), opt_state, q)
+        q = optax.apply_updates(q, updates)
+        return (new, q, opt_state), (action, new.x, info.progress, explore)
+
+    steps = config.steps
+    inputs = (jnp.arange(steps), jax.random.uniform(k_agent, (steps, 2), dtype), jax.random.split(k_env, steps))
+    (_, q, _), (actions, x, reward, explored) = jax.lax.scan(body, (state, q, opt.init(q)), inputs)
+    return QRun(actions, x, reward, explored, q, state.levels)
+
+
+@functools.partial(jax.jit, static_argnames="config")
+def train(key: Array, params: EnvParams, config: QConfig = QConfig()) -> QRun:
+    """Train one Q-learner online for ``config.steps`` steps.
+
+    Parameters
+    ----------
+    key : PRNG key
+        All randomness of the run: initial configuration (if random), exploration, tie-breaks
+        and the environment's noise.
+    params : EnvParams
+        The environment (unbatched leaves).
+    config : QConfig
+        Hyperparameters (static).
+
+    Returns
+    -------
+    QRun
+        Per-step actions, X, rewards and exploration flags; final Q-table; initial levels.
+    """
+    return _train_one(key, params, config)
+
+
+@functools.partial(jax.jit, static_argnames="config")
+def _train_batch(keys: Array, params: EnvParams, config: QConfig) -> QRun:
+    return jax.vmap(lambda k, p: _train_one(k, p, config))(keys, params)
+
+
+def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig()) -> QRun:
+    """Train independent learners, one per key, in one jitted, vmapped call.
+
+    Parameters
+    ----------
+    keys : PRNG keys, shape (B, ...)
+        One key per learner; learner ``i`` matches ``train(keys[i], params_i, config)``.
+    params : EnvParams
+        Environment; each of ``zeta``, ``direction``, ``init`` is either unbatched (shared) or
+        has a leading axis of size B (see :func:`batch_params`).
+    config : QConfig
+        Hyperparameters shared by all learners (static).
+
+    Returns
+    -------
+    QRun
+        Fields with a leading axis of size B.
+    """
+    return _train_batch(keys, batch_params(params, keys.shape[0]), config)
+
+
+def batch_params(params: EnvParams, size: int, **changes: Any) -> EnvParams:
+    """Broadcast the data leaves of ``params`` (after ``changes``) to a leading axis of ``size``.
+
+    ``changes`` may give per-learner values, e.g. ``zeta=np.linspace(0, 3, size)``.
+    """
+    n = params.model.n_dof
+    fields = {"zeta": params.zeta, "direction": params.direction, "init": params.init, **changes}
+    dtype = jnp.result_type(float)
+    return params.replace(
+        zeta=jnp.broadcast_to(jnp.asarray(fields["zeta"], dtype), (size,)),
+        direction=jnp.broadcast_to(jnp.asarray(fields["direction"], dtype), (size,)),
+        init=jnp.broadcast_to(jnp.asarray(fields["init"], jnp.int32), (size, n)),
+    )
+
+
+def evaluate(run: QRun, params: EnvParams, *, horizon: int = 50, **judge_kwargs: Any) -> GaitReport:
+    """Judge training runs with the shared success criterion, :func:`jswim.gait.judge`."""
+    return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), horizon=horizon, **judge_kwargs)
+
+
+def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "all", key: Array | int = 0) -> Array:
+    """Actions of the greedy policy of a Q-table, run on a fresh swimmer (no learning).
+
+    Ties are broken at random from ``key``. Returns action indices, shape ``(steps,)``.
+    """
+    key = jax.random.PRNGKey(key) if isinstance(key, int) else key
+    n = params.model.n_dof
+    k_reset, k_run = jax.random.split(key)
+
+    def body(state, inp):
+        u, k = inp
+        mask = offered(state.levels, n, action_set)
+        action = _pick(_greedy_set(q[_corner(state.levels)], mask, "random"), u)
+        state, _ = step(k, state, action, params)
+        return state, action
+
+    inputs = (jax.random.uniform(k_run, (steps,)), jax.random.split(k_run, steps))
+    return jax.lax.scan(body, reset(k_reset, params), inputs)[1]
+
+
+# ---------------------------------------------------------------------------------------------
+# Studies: distributions over seeds
+
+
+class Summary(NamedTuple):
+    """Steps-to-learn distribution and success of one group of learners."""
+
+    swimmer: str
+    direction: int
+    zeta: float
+    action_set: str
+    n: int
+    learned: float  # fraction that end in the qualifying stroke (within the run)
+    success: float  # fraction meeting the paper's criterion (3 cycles within `horizon` steps)
+    q25: float  # quartiles of steps to learn over all learners; never-learned counts as +inf
+    median: float
+    q75: float
+    mean_x_horizon: float  # mean displacement in the target direction after `horizon` steps
+    mean_x_end: float  # ... and at the end of the run
+
+
+def summarize(
+    run: QRun, params: EnvParams, report: GaitReport, *, swimmer: str, action_set: str, horizon: int = 50
+) -> list[Summary]:
+    """One :class:`Summary` per (direction, zeta) group of a batched run."""
+    direction = np.broadcast_to(np.asarray(params.direction), report.learned.shape)
+    zeta = np.broadcast_to(np.asarray(params.zeta), report.learned.shape)
+    x = np.asarray(run.x)
+    h = min(horizon, x.shape[1]) - 1
+    rows = []
+    for d, z in sorted(set(zip(direction.tolist(), zeta.tolist())), key=lambda g: (-g[0], g[1])):
+        sel = (direction == d) & (zeta == z)
+        stl = np.where(report.learned[sel], report.steps_to_learn[sel], np.inf).astype(float)
+        q25, q50, q75 = np.quantile(stl, [0.25, 0.5, 0.75], method="inverted_cdf")
+        rows.append(
+            Summary(
+                swimmer, int(d), float(z), action_set, int(sel.sum()),
+                float(report.learned[sel].mean()), float(report.success[sel].mean()),
+                float(q25), float(q50), float(q75),
+                float(np.mean(d * x[sel, h])), float(np.mean(d * x[sel, -1])),
+            )
+        )
+    return rows
+
+
+def study(
+    config: QConfig = QConfig(),
+    *,
+    swimmers: Sequence[str] = ("purcell", "ng"),
+    directions: Sequence[int] = (1, -1),
+    zetas: Sequence[float] = (0.0,),
+    n_seeds: int = 1000,
+    init: Sequence[int] | str | None = None,
+    seed: int = 0,
+    horizon: int = 50,
+) -> list[Summary]:
+    """Train ``n_seeds`` learners per (swimmer, direction, zeta) and summarise each group.
+
+    One batched call per swimmer covers every direction and noise level.
+    """
+    rows: list[Summary] = []
+    key = jax.random.PRNGKey(seed)
+    for swimmer in swimmers:
+        base = make_params(swimmer, init=init)
+        grid = [(d, z) for d in directions for z in zetas]
+        d_arr = np.repeat([g[0] for g in grid], n_seeds).astype(float)
+        z_arr = np.repeat([g[1] for g in grid], n_seeds).astype(float)
+        params = batch_params(base, d_arr.size, direction=d_arr, zeta=z_arr)
+        key, sub = jax.random.split(key)
+        run = train_batch(jax.random.split(sub, d_arr.size), params, config)
+        report = evaluate(run, params, horizon=horizon)
+        rows += summarize(run, params, report, swimmer=swimmer, action_set=config.action_set, horizon=horizon)
+    return rows
+
+
+def format_table(rows: Sequence[Summary]) -> str:
+    """Plain-text table of summaries."""
+
+    def num(v: float) -> str:
+        return "never" if not np.isfinite(v) else f"{v:g}"
+
+    head = f"{'swimmer':8} {'dir':>3} {'zeta':>4} {'actions':14} {'n':>6} {'learned':>7} {'success':>7} " \
+           f"{'q25':>5} {'median':>6} {'q75':>5} {'X@50':>7} {'X@end':>7}"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(
+            f"{r.swimmer:8} {'+x' if r.direction > 0 else '-x':>3} {r.zeta:4g} {r.action_set:14} {r.n:6d} "
+            f"{r.learned:7.3f} {r.success:7.3f} {num(r.q25):>5} {num(r.median):>6} {num(r.q75):>5} "
+            f"{r.mean_x_horizon:7.3f} {r.mean_x_end:7.3f}"
+        )
+    return "\n".join(lines)
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """``python -m jswim.agents.qlearning``: print the steps-to-learn table."""
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", type=int, default=1000, help="learners per group")
+    ap.add_argument("--action-set", choices=ACTION_SETS + ("both",), default="both")
+    ap.add_argument("--zeta", type=float, nargs="+", default=[0.0])
+    ap.add_argument("--init", default=None, help="initial configuration, e.g. '++' or 'random'")
+    ap.add_argument("--seed", type=int, default=0)
+    args = ap.parse_args(argv)
+    sets = ACTION_SETS if args.action_set == "both" else (args.action_set,)
+    rows = []
+    for action_set in sets:
+        rows += study(QConfig(action_set=action_set), zetas=args.zeta, n_seeds=args.seeds, init=args.init, seed=args.seed)
+    print(format_table(rows))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,257 @@
+"""Study results on disk: one folder per study, resumable, written atomically.
+
+Layout of a study folder::
+
+    metadata.json        study name, parameters, seed, backend, prompt template, versions, status
+    runs.jsonl           one line per finished run (the durable record, appended and fsynced)
+    runs.parquet         tidy table of runs (rebuilt from runs.jsonl; also runs.csv)
+    trajectories.parquet per-step rows: run_id, step, x, action, progress, stuck
+    transcripts/RUN.jsonl  the LLM transcript of each LLM run
+    usage.json           tokens and cost per run and in total
+    figures/             PNG and PDF figures
+
+A run is "done" once its line is in ``runs.jsonl``. Running a study again on the same folder skips
+the done runs; a run that was interrupted is started again from scratch (its transcript is
+rewritten), so no row is lost or duplicated. Every other file is derived from ``runs.jsonl`` and
+rewritten whole through a temporary file and ``os.replace``, so a kill never leaves half a file.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+from jswim.errors import ConfigError
+
+RUNS = "runs.jsonl"
+META = "metadata.json"
+
+
+def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
+    """Write ``data`` to ``path`` so that readers see the old or the new file, never a part."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    raw = data.encode() if isinstance(data, str) else data
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(raw)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def write_json(path: str | os.PathLike, obj: Any) -> None:
+    """Atomically write ``obj`` as indented JSON."""
+    atomic_write(path, json.dumps(obj, indent=2, sort_keys=True, default=_jsonable) + "\n")
+
+
+def _jsonable(obj: Any) -> Any:
+    try:
+        import numpy as np
+
+        if isinstance(obj, np.generic):
+            return obj.item()
+        if isinstance(obj, np.ndarray):
+            return obj.tolist()
+    except ImportError:  # pragma: no cover
+        pass
+    if isinstance(obj, (set, frozenset, tuple)):
+        return list(obj)
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+class StudyStore:
+    """A study's output folder.
+
+    Parameters
+    ----------
+    folder : path
+        Created if missing. An existing folder must hold the same study with the same parameters
+        (``identity``), otherwise :class:`ConfigError` says what differs.
+    study : str
+        Study name, e.g. ``"noise"``.
+    identity : mapping
+        Everything that defines the study's runs (grid, seed, backend, model, prompt template).
+        Stored in ``metadata.json`` and compared on resume.
+    extra : mapping, optional
+        More metadata that may change between sessions (versions, host); not compared.
+    """
+
+    def __init__(
+        self,
+        folder: str | os.PathLike,
+        study: str,
+        identity: Mapping[str, Any],
+        extra: Mapping[str, Any] | None = None,
+    ) -> None:
+        self.folder = Path(folder)
+        self.study = study
+        self.identity = json.loads(json.dumps(dict(identity), sort_keys=True, default=_jsonable))
+        meta_path = self.folder / META
+        if self.folder.exists() and not self.folder.is_dir():
+            raise ConfigError(f"--out {self.folder} is a file, not a folder; choose another path")
+        if meta_path.exists():
+            try:
+                meta = json.loads(meta_path.read_text())
+            except (OSError, json.JSONDecodeError) as exc:
+                raise ConfigError(f"{meta_path} is unreadable ({exc}); use a new --out folder") from None
+            if meta.get("study") != study:
+                raise ConfigError(
+                    f"{self.folder} holds a '{meta.get('study')}' study, not '{study}'; "
+                    "use a new --out folder"
+                )
+            if meta.get("identity") != self.identity:
+                diff = sorted(
+                    k for k in set(meta.get("identity", {})) | set(self.identity)
+                    if meta.get("identity", {}).get(k) != self.identity.get(k)
+                )
+                raise ConfigError(
+                    f"{self.folder} holds a '{study}' study with different settings "
+                    f"({', '.join(diff)}); use a new --out folder or the same settings to resume"
+                )
+            self.meta = meta
+        elif self.folder.exists() and any(p.name != "figures" for p in self.folder.iterdir()):
+            raise ConfigError(
+                f"{self.folder} is not empty and is not a jswim study folder; choose another --out"
+            )
+        else:
+            self.meta = {"study": study, "identity": self.identity, "status": "running"}
+        self.meta.update(dict(extra or {}))
+        self.meta["status"] = "running"
+        write_json(meta_path, self.meta)
+
+    # -- runs -------------------------------------------------------------------------------
+
+    def load_runs(self) -> list[dict[str, Any]]:
+        """Finished runs, first record per ``run_id``; a torn last line (a kill) is dropped."""
+        return read_runs(self.folder)
+
+    def done_ids(self) -> set[str]:
+        """Run ids already finished."""
+        return {r["run_id"] for r in self.load_runs()}
+
+    def add_runs(self, rows: Iterable[Mapping[str, Any]]) -> None:
+        """Append finished runs durably (one write and fsync for the batch)."""
+        lines = "".join(json.dumps(dict(r), sort_keys=True, default=_jsonable) + "\n" for r in rows)
+        if not lines:
+            return
+        path = self.folder / RUNS
+        _repair_tail(path)
+        with open(path, "a", encoding="utf-8") as fh:
+            fh.write(lines)
+            fh.flush()
+            os.fsync(fh.fileno())
+
+    def transcript_path(self, run_id: str) -> Path:
+        """Where the LLM transcript of ``run_id`` goes."""
+        path = self.folder / "transcripts" / f"{run_id}.jsonl"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        return path
+
+    # -- derived files ----------------------------------------------------------------------
+
+    def finalize(self, status: str = "complete", summary: Mapping[str, Any] | None = None) -> None:
+        """Rewrite the derived tables from ``runs.jsonl`` and record the status."""
+        runs = self.load_runs()
+        write_tables(self.folder, runs)
+        self.meta["status"] = status
+        self.meta["n_runs"] = len(runs)
+        if summary is not None:
+            self.meta["summary"] = dict(summary)
+        write_json(self.folder / META, self.meta)
+
+
+def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
+    """Finished runs of a study folder (see :class:`StudyStore`)."""
+    path = Path(folder) / RUNS
+    if not path.exists():
+        return []
+    seen: set[str] = set()
+    out = []
+    for line in path.read_text(encoding="utf-8").splitlines():
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a torn final line from a kill; the run simply counts as not done
+        if row.get("run_id") in seen:
+            continue
+        seen.add(row["run_id"])
+        out.append(row)
+    return out
+
+
+def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
+    """The study's ``metadata.json``; :class:`ConfigError` if the folder is not a study."""
+    path = Path(folder) / META
+    if not path.exists():
+        raise ConfigError(f"{folder} is not a jswim study folder (no {META})")
+    return json.loads(path.read_text())
+
+
+def _repair_tail(path: Path) -> None:
+    """Cut a torn last line (no newline) left by a kill, so appends start on a fresh line."""
+    if not path.exists() or path.stat().st_size == 0:
+        return
+    with open(path, "rb+") as fh:
+        fh.seek(-1, os.SEEK_END)
+        if fh.read(1) == b"\n":
+            return
+        data = path.read_bytes()
+        fh.truncate(data.rfind(b"\n") + 1)
+
+
+SCALAR_TYPES = (str, int, float, bool, type(None))
+
+
+def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
+    """Write ``runs.parquet``/``runs.csv`` (scalar columns) and ``trajectories.parquet``.
+
+    Per-step lists in a run row (keys ``x``, ``actions``, ``progress``, ``stuck``) become the long
+    trajectory table; every other scalar key is a column of the runs table.
+    """
+    folder = Path(folder)
+    cols: list[str] = []
+    for r in runs:
+        for k, v in r.items():
+            if isinstance(v, SCALAR_TYPES) and k not in cols:
+                cols.append(k)
+    table_rows = [{k: r.get(k) for k in cols} for r in runs]
+    buf = io.StringIO()
+    writer = csv.DictWriter(buf, fieldnames=cols)
+    writer.writeheader()
+    writer.writerows(table_rows)
+    atomic_write(folder / "runs.csv", buf.getvalue())
+    traj = []
+    for r in runs:
+        xs = r.get("x") or []
+        for i, x in enumerate(xs):
+            traj.append({
+                "run_id": r["run_id"], "step": i + 1, "x": x,
+                "action": _at(r.get("actions"), i), "progress": _at(r.get("progress"), i),
+                "stuck": _at(r.get("stuck"), i),
+            })
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:  # pragma: no cover - pyarrow is a dependency; CSV still lands
+        return
+    for name, rows in (("runs.parquet", table_rows), ("trajectories.parquet", traj)):
+        sink = pa.BufferOutputStream()
+        pq.write_table(pa.Table.from_pylist(rows) if rows else pa.table({}), sink)
+        atomic_write(folder / name, sink.getvalue().to_pybytes())
+
+
+def _at(seq: Any, i: int) -> Any:
+    if isinstance(seq, list) and i < len(seq):
+        v = seq[i]
+        return json.dumps(v) if isinstance(v, (list, dict)) else v
+    return None
