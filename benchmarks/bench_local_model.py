@@ -22,7 +22,15 @@ import time
 import httpx
 
 from jswim.llm import LLMClient, LocalServer
-from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText, allowed_actions, build_messages, render_prompt
+from jswim.prompt import (
+    Action,
+    HistoryRecord,
+    PromptConfig,
+    SwimmerText,
+    allowed_actions,
+    build_messages,
+    render_prompt,
+)
 
 LO, HI = -math.pi / 3, math.pi / 3
 SWIMMER = SwimmerText(2, LO, HI, dof_decimals=3)

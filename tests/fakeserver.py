@@ -1,7 +1,9 @@
 """A fake OpenAI-compatible chat-completions server for tests and benchmarks.
 
-Real HTTP on 127.0.0.1 (a threading ``http.server``), so the client's whole network path runs.
-Replies are scripted, latency can be added, and faults injected:
+Real HTTP/1.1 with keep-alive on 127.0.0.1, served by an asyncio event loop on a background
+thread, so the client's whole network path runs and hundreds of requests can wait out their
+latency at once without a thread each. Replies are scripted, latency can be added, and faults
+injected:
 
 >>> with FakeServer(reply=lambda body: "[1, -1]", latency=0.01) as srv:   # doctest: +SKIP
 ...     srv.add_faults(Fault.rate_limit("0.05"), Fault.server_error(), None, Fault.drop())
@@ -10,18 +12,20 @@ Replies are scripted, latency can be added, and faults injected:
 Faults queued with :meth:`FakeServer.add_faults` apply to the next requests in arrival order
 (``None`` = answer normally). A ``reply`` callable may also return a :class:`Fault` to fail
 requests by content. Independent of jswim, so benchmarks can import it too; run it standalone
-with ``python -m tests.fakeserver --latency 0.1``.
+with ``python -m tests.fakeserver --latency 0.1`` (it prints its base URL).
 """
 
 from __future__ import annotations
 
 import argparse
+import asyncio
 import json
 import threading
 import time
+import zlib
 from collections import deque
 from dataclasses import dataclass
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from http import HTTPStatus
 from typing import Any, Callable, Iterable
 
 
@@ -64,6 +68,15 @@ class Fault:
 
 Reply = Callable[[dict[str, Any]], "str | Fault"]
 
+#: Moves of the two-DOF square gait; :func:`hash_reply` picks among them.
+GAIT_MOVES = ("[1, -1]", "[2, -1]", "[1, 1]", "[2, 1]")
+
+
+def hash_reply(body: dict[str, Any]) -> str:
+    """A deterministic, prompt-dependent valid two-DOF move (varied, so runs wander)."""
+    last = str(body.get("messages", [{}])[-1].get("content", ""))
+    return GAIT_MOVES[zlib.crc32(last.encode()) % len(GAIT_MOVES)]
+
 
 def count_words(text: str) -> int:
     """Crude token count used for the fake ``usage`` field."""
@@ -81,6 +94,19 @@ class FakeServer:
         Seconds added before every answer.
     faults : iterable of Fault or None, optional
         Initial fault queue.
+
+    Attributes
+    ----------
+    n_requests : int
+        Chat requests received (faulty ones included).
+    n_answered : int
+        Chat requests answered with a completion.
+    requests : list of dict
+        Bodies of the chat requests, in arrival order.
+    auth_headers : list of str or None
+        Their ``Authorization`` headers.
+    max_in_flight : int
+        Most chat requests being handled at once.
     """
 
     def __init__(self, reply: Reply | None = None, latency: float = 0.0, faults: Iterable[Fault | None] = ()) -> None:
@@ -88,31 +114,48 @@ class FakeServer:
         self.latency = latency
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self.requests: list[dict[str, Any]] = []  # bodies of chat requests, in arrival order
+        self.requests: list[dict[str, Any]] = []
         self.auth_headers: list[str | None] = []
-        self.n_requests = 0  # chat requests received (faulty ones included)
-        self.n_answered = 0  # chat requests answered with a completion
+        self.n_requests = 0
+        self.n_answered = 0
         self.in_flight = 0
-        self.max_in_flight = 0  # most chat requests handled at once
-        self._httpd: ThreadingHTTPServer | None = None
+        self.max_in_flight = 0
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
+        self._port: int | None = None
 
     # -- lifecycle ---------------------------------------------------------------------------
 
     def start(self) -> "FakeServer":
-        handler = type("Handler", (_Handler,), {"fake": self})
-        self._httpd = _QuietServer(("127.0.0.1", 0), handler)
-        self._thread = threading.Thread(target=self._httpd.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
+        ready = threading.Event()
+        self._thread = threading.Thread(target=self._serve, args=(ready,), daemon=True, name="fakeserver")
         self._thread.start()
+        if not ready.wait(10) or self._port is None:
+            raise RuntimeError("fake server did not start")
         return self
 
+    def _serve(self, ready: threading.Event) -> None:
+        loop = asyncio.new_event_loop()
+        asyncio.set_event_loop(loop)
+        self._loop = loop
+        server = loop.run_until_complete(asyncio.start_server(self._connection, "127.0.0.1", 0, backlog=1024))
+        self._port = server.sockets[0].getsockname()[1]
+        ready.set()
+        try:
+            loop.run_forever()
+        finally:
+            server.close()
+            tasks = asyncio.all_tasks(loop)
+            for t in tasks:  # handlers sleeping in latency or delay faults
+                t.cancel()
+            loop.run_until_complete(asyncio.gather(*tasks, return_exceptions=True))
+            loop.close()
+
     def stop(self) -> None:
-        self._stop.set()  # wake handlers sleeping in latency or delay faults
-        if self._httpd is not None:
-            self._httpd.shutdown()
-            self._httpd.server_close()
-            self._httpd = None
+        if self._loop is not None and self._thread is not None:
+            self._loop.call_soon_threadsafe(self._loop.stop)
+            self._thread.join(10)
+            self._loop = self._thread = None
 
     def __enter__(self) -> "FakeServer":
         return self.start()
@@ -122,8 +165,8 @@ class FakeServer:
 
     @property
     def port(self) -> int:
-        assert self._httpd is not None, "server not started"
-        return self._httpd.server_address[1]
+        assert self._port is not None, "server not started"
+        return self._port
 
     @property
     def url(self) -> str:
@@ -142,14 +185,8 @@ class FakeServer:
             self.auth_headers.clear()
             self.n_requests = self.n_answered = self.max_in_flight = 0
 
-    def _next_fault(self, body: dict[str, Any], auth: str | None) -> Fault | None:
-        with self._lock:
-            self.n_requests += 1
-            self.requests.append(body)
-            self.auth_headers.append(auth)
-            return self._faults.popleft() if self._faults else None
-
     def completion(self, body: dict[str, Any], text: str) -> dict[str, Any]:
+        """The chat.completion object answering ``body`` with ``text``."""
         prompt = sum(count_words(str(m.get("content", ""))) for m in body.get("messages", []))
         done = count_words(text)
         return {
@@ -161,95 +198,100 @@ class FakeServer:
             "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done},
         }
 
+    # -- HTTP --------------------------------------------------------------------------------
 
-class _QuietServer(ThreadingHTTPServer):
-    daemon_threads = True  # never join handlers stuck in a delay fault
-    request_queue_size = 256  # a benchmark opens many connections at once
+    async def _connection(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        try:
+            while True:
+                head = await reader.readuntil(b"\r\n\r\n")
+                lines = head.decode("latin-1").split("\r\n")
+                method, path = lines[0].split(" ")[:2]
+                headers = {}
+                for line in lines[1:]:
+                    key, sep, value = line.partition(":")
+                    if sep:
+                        headers[key.strip().lower()] = value.strip()
+                size = int(headers.get("content-length") or 0)
+                raw = await reader.readexactly(size) if size else b""
+                keep = await self._dispatch(method, path.rstrip("/"), headers, raw, writer)
+                if not keep or headers.get("connection", "").lower() == "close":
+                    break
+        except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, ConnectionError, ValueError):
+            pass  # the client went away or sent garbage
+        finally:
+            writer.close()
 
-    def handle_error(self, request: Any, client_address: Any) -> None:
-        pass  # clients that gave up (timeouts) make writes fail; that is expected here
+    @staticmethod
+    async def _send(
+        writer: asyncio.StreamWriter, status: int, payload: bytes, extra: dict[str, str] | None = None
+    ) -> bool:
+        head = [f"HTTP/1.1 {status} {HTTPStatus(status).phrase}", "Content-Type: application/json",
+                f"Content-Length: {len(payload)}"]
+        head += [f"{k}: {v}" for k, v in (extra or {}).items()]
+        writer.write(("\r\n".join(head) + "\r\n\r\n").encode("latin-1") + payload)
+        await writer.drain()
+        return True
 
-
-class _Handler(BaseHTTPRequestHandler):
-    protocol_version = "HTTP/1.1"  # keep-alive, as real servers
-    fake: FakeServer
-
-    def log_message(self, format: str, *args: Any) -> None:  # quiet
-        pass
-
-    def _send(self, status: int, payload: bytes, headers: dict[str, str] | None = None) -> None:
-        self.send_response(status)
-        self.send_header("Content-Type", "application/json")
-        self.send_header("Content-Length", str(len(payload)))
-        for k, v in (headers or {}).items():
-            self.send_header(k, v)
-        self.end_headers()
-        self.wfile.write(payload)
-
-    def do_GET(self) -> None:
-        if self.path.rstrip("/") in ("/health", "/v1/health"):
-            self._send(200, b'{"status":"ok"}')
-        elif self.path.rstrip("/") == "/v1/models":
-            self._send(200, b'{"object":"list","data":[{"id":"fake","object":"model"}]}')
-        else:
-            self._send(404, b'{"error":"not found"}')
-
-    def do_POST(self) -> None:
-        fake = self.fake
-        raw = self.rfile.read(int(self.headers.get("Content-Length") or 0))
-        if self.path.rstrip("/") != "/v1/chat/completions":
-            self._send(404, b'{"error":"not found"}')
-            return
+    async def _dispatch(
+        self, method: str, path: str, headers: dict[str, str], raw: bytes, writer: asyncio.StreamWriter
+    ) -> bool:
+        if method == "GET" and path in ("/health", "/v1/health"):
+            return await self._send(writer, 200, b'{"status":"ok"}')
+        if method == "GET" and path == "/v1/models":
+            return await self._send(writer, 200, b'{"object":"list","data":[{"id":"fake","object":"model"}]}')
+        if method != "POST" or path != "/v1/chat/completions":
+            return await self._send(writer, 404, b'{"error":{"message":"not found"}}')
         try:
             body = json.loads(raw)
         except ValueError:
-            self._send(400, b'{"error":{"message":"request body is not JSON"}}')
-            return
-        fault = fake._next_fault(body, self.headers.get("Authorization"))
-        with fake._lock:
-            fake.in_flight += 1
-            fake.max_in_flight = max(fake.max_in_flight, fake.in_flight)
+            return await self._send(writer, 400, b'{"error":{"message":"request body is not JSON"}}')
+        with self._lock:
+            self.n_requests += 1
+            self.requests.append(body)
+            self.auth_headers.append(headers.get("authorization"))
+            fault = self._faults.popleft() if self._faults else None
+            self.in_flight += 1
+            self.max_in_flight = max(self.max_in_flight, self.in_flight)
         try:
-            self._answer(fake, body, fault)
+            return await self._answer(body, fault, writer)
         finally:
-            with fake._lock:
-                fake.in_flight -= 1
+            with self._lock:
+                self.in_flight -= 1
 
-    def _answer(self, fake: FakeServer, body: dict[str, Any], fault: Fault | None) -> None:
+    async def _answer(self, body: dict[str, Any], fault: Fault | None, writer: asyncio.StreamWriter) -> bool:
         text: str | Fault | None = None
         if fault is None:
-            text = fake.reply(body)
+            text = self.reply(body)
             if isinstance(text, Fault):
                 fault, text = text, None
-        if fake.latency and fake._stop.wait(fake.latency):
-            return
+        if self.latency:
+            await asyncio.sleep(self.latency)
         if fault is not None:
             if fault.kind == "drop":
-                self.close_connection = True
-                return
+                return False  # close without a response
             if fault.kind == "status":
                 extra = {"Retry-After": fault.retry_after} if fault.retry_after is not None else {}
                 err = json.dumps({"error": {"message": fault.message}}).encode()
-                self._send(fault.status, err, extra)
-                return
+                return await self._send(writer, fault.status, err, extra)
             if fault.kind == "malformed":
-                self._send(200, b'{"choices": [ {"message": ')
-                return
+                return await self._send(writer, 200, b'{"choices": [ {"message": ')
             if fault.kind == "delay":
-                if fake._stop.wait(fault.seconds):
-                    return
-                text = fake.reply(body)
-                text = text if isinstance(text, str) else ""
-        with fake._lock:
-            fake.n_answered += 1
-        self._send(200, json.dumps(fake.completion(body, text or "")).encode())
+                await asyncio.sleep(fault.seconds)
+                got = self.reply(body)
+                text = got if isinstance(got, str) else ""
+        with self._lock:
+            self.n_answered += 1
+        return await self._send(writer, 200, json.dumps(self.completion(body, text or "")).encode())
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description="Fake chat-completions server answering '[1, 1]'.")
-    ap.add_argument("--latency", type=float, default=0.0)
+    ap = argparse.ArgumentParser(description="Fake chat-completions server; prints its base URL.")
+    ap.add_argument("--latency", type=float, default=0.0, help="seconds added to every answer")
+    ap.add_argument("--reply", choices=("fixed", "hash"), default="hash",
+                    help="'[1, 1]' always, or a prompt-dependent square-gait move (default)")
     args = ap.parse_args()
-    with FakeServer(latency=args.latency) as srv:
+    reply = hash_reply if args.reply == "hash" else None
+    with FakeServer(reply=reply, latency=args.latency) as srv:
         print(srv.url, flush=True)
         try:
             while True:

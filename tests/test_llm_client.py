@@ -305,3 +305,20 @@ def test_constraint_helpers():
 
 def test_safe_url():
     assert safe_url("https://user:pw@example.com:8443/v1/?token=x") == "https://example.com:8443/v1"
+
+
+def test_cancelled_owner_does_not_hang_sharers():
+    with FakeServer(latency=0.5) as srv:
+
+        async def scenario():
+            async with LLMClient(settings(srv)) as c:
+                owner = asyncio.ensure_future(c.chat(MSG))
+                await asyncio.sleep(0.05)
+                sharer = asyncio.ensure_future(c.chat(MSG))
+                await asyncio.sleep(0.05)
+                owner.cancel()
+                return await asyncio.wait_for(asyncio.gather(owner, sharer, return_exceptions=True), 2.0)
+
+        owner, sharer = run(scenario())
+        assert isinstance(owner, asyncio.CancelledError)
+        assert isinstance(sharer, LLMServerError) and "cancelled" in str(sharer)

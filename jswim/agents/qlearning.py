@@ -42,7 +42,7 @@ import numpy as np
 import optax
 from jax import Array
 
-from jswim.env import EnvParams, make_params, reset, step
+from jswim.env import EnvParams, advance, make_params, reset
 from jswim.errors import ConfigError
 from jswim.gait import GaitReport, judge
 
@@ -149,8 +149,16 @@ def _schedule(value: float | optax.Schedule) -> optax.Schedule:
     return value if callable(value) else optax.constant_schedule(float(value))
 
 
-def _corner(levels: Array) -> Array:
-    return jnp.sum(levels * (2 ** jnp.arange(levels.shape[-1], dtype=jnp.int32)), axis=-1)
+def _corner_onehot(levels: Array) -> Array:
+    """One-hot vector of the corner ``sum_k level_k 2**k`` (cheaper than a gather under vmap)."""
+    n = levels.shape[-1]
+    corner = jnp.sum(levels * (2 ** jnp.arange(n, dtype=jnp.int32)), axis=-1)
+    return (jnp.arange(2**n, dtype=jnp.int32) == corner).astype(jnp.result_type(float))
+
+
+def _row(q: Array, onehot: Array) -> Array:
+    """Row of ``q`` selected by a one-hot vector (a tiny matmul would become a slow batched dot)."""
+    return jnp.sum(onehot[:, None] * q, axis=0)
 
 
 def offered(levels: Array, n_dof: int, action_set: str) -> Array:
@@ -158,15 +166,15 @@ def offered(levels: Array, n_dof: int, action_set: str) -> Array:
     if action_set == "all":
         return jnp.ones((3 * n_dof,), bool)
     roc = jnp.arange(3 * n_dof) % 3 - 1
-    level = levels[jnp.arange(3 * n_dof) // 3]
+    level = jnp.repeat(levels, 3, total_repeat_length=3 * n_dof)
     return roc == 1 - 2 * level  # +1 from lo, -1 from hi
 
 
 def _pick(mask: Array, u: Array) -> Array:
     """Index of a uniformly chosen True entry of ``mask`` (``u`` uniform in [0, 1))."""
-    count = jnp.sum(mask)
+    count = jnp.sum(mask, dtype=jnp.int32)
     k = jnp.minimum(jnp.floor(u * count).astype(jnp.int32), count - 1)
-    return jnp.argmax(mask & (jnp.cumsum(mask) - 1 == k))
+    return jnp.argmax(mask & (jnp.cumsum(mask, dtype=jnp.int32) - 1 == k))
 
 
 def _greedy_set(q_row: Array, mask: Array, tie_break: str) -> Array:
@@ -178,39 +186,52 @@ def _greedy_set(q_row: Array, mask: Array, tie_break: str) -> Array:
     return ties
 
 
+def _act(q_row: Array, mask: Array, epsilon: Array, u: Array, tie_break: str) -> tuple[Array, Array]:
+    """Epsilon-greedy choice from one uniform ``u``: explore when ``u < epsilon``.
+
+    Conditioned on the coin, ``u / epsilon`` and ``(u - epsilon) / (1 - epsilon)`` are again
+    uniform on [0, 1), so one random number per step picks both the branch and the action.
+    """
+    explore = u < epsilon
+    v = jnp.where(explore, u / jnp.maximum(epsilon, 1e-30), (u - epsilon) / jnp.maximum(1.0 - epsilon, 1e-30))
+    candidates = jnp.where(explore, mask, _greedy_set(q_row, mask, tie_break))
+    return _pick(candidates, jnp.clip(v, 0.0, 1.0)), explore
+
+
 def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
     n = params.model.n_dof
     dtype = jnp.result_type(float)
-    k_reset, k_agent, k_env = jax.random.split(key, 3)
+    k_reset, k_run = jax.random.split(key)
     state = reset(k_reset, params)
     q = jnp.full((2**n, 3 * n), config.q_init, dtype)
     opt = optax.sgd(_schedule(config.learning_rate))
     epsilon = _schedule(config.epsilon)
     gamma = config.discount
+    actions = jnp.arange(3 * n, dtype=jnp.int32)
 
     def body(carry, inp):
         state, q, opt_state = carry
-        t, u, k = inp
-        s = _corner(state.levels)
+        t, u = inp
+        s = _corner_onehot(state.levels)
         mask = offered(state.levels, n, config.action_set)
-        explore = u[0] < epsilon(t)
-        candidates = jnp.where(explore, mask, _greedy_set(q[s], mask, config.tie_break))
-        action = _pick(candidates, u[1])
-        new, info = step(k, state, action, params)
-        s2, mask2 = _corner(new.levels), offered(new.levels, n, config.action_set)
+        action, explore = _act(_row(q, s), mask, epsilon(t), u[0], config.tie_break)
+        new, info = advance(state, action, 2.0 * u[1] - 1.0, params)
+        s2, mask2 = _corner_onehot(new.levels), offered(new.levels, n, config.action_set)
+        visited = s[:, None] * (actions == action)[None, :]  # one-hot (s, a): no gather/scatter
 
         def td_loss(q: Array) -> Array:
-            future = jnp.max(jnp.where(mask2, jax.lax.stop_gradient(q[s2]), -jnp.inf))
-            return 0.5 * (info.progress + gamma * future - q[s, action]) ** 2
+            future = jnp.max(jnp.where(mask2, jax.lax.stop_gradient(_row(q, s2)), -jnp.inf))
+            return 0.5 * (info.progress + gamma * future - jnp.sum(visited * q)) ** 2
 
         updates, opt_state = opt.update(jax.grad(td_loss)(q), opt_state, q)
         q = optax.apply_updates(q, updates)
         return (new, q, opt_state), (action, new.x, info.progress, explore)
 
     steps = config.steps
-    inputs = (jnp.arange(steps), jax.random.uniform(k_agent, (steps, 2), dtype), jax.random.split(k_env, steps))
-    (_, q, _), (actions, x, reward, explored) = jax.lax.scan(body, (state, q, opt.init(q)), inputs)
-    return QRun(actions, x, reward, explored, q, state.levels)
+    # One draw for the whole run: column 0 drives the agent, column 1 is the env's noise Y.
+    inputs = (jnp.arange(steps), jax.random.uniform(k_run, (steps, 2), dtype))
+    (_, q, _), (acts, x, reward, explored) = jax.lax.scan(body, (state, q, opt.init(q)), inputs)
+    return QRun(acts, x, reward, explored, q, state.levels)
 
 
 @functools.partial(jax.jit, static_argnames="config")
@@ -290,15 +311,13 @@ def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "a
     n = params.model.n_dof
     k_reset, k_run = jax.random.split(key)
 
-    def body(state, inp):
-        u, k = inp
+    def body(state, u):
         mask = offered(state.levels, n, action_set)
-        action = _pick(_greedy_set(q[_corner(state.levels)], mask, "random"), u)
-        state, _ = step(k, state, action, params)
+        action = _pick(_greedy_set(_row(q, _corner_onehot(state.levels)), mask, "random"), u[0])
+        state, _ = advance(state, action, 2.0 * u[1] - 1.0, params)
         return state, action
 
-    inputs = (jax.random.uniform(k_run, (steps,)), jax.random.split(k_run, steps))
-    return jax.lax.scan(body, reset(k_reset, params), inputs)[1]
+    return jax.lax.scan(body, reset(k_reset, params), jax.random.uniform(k_run, (steps, 2)))[1]
 
 
 # ---------------------------------------------------------------------------------------------

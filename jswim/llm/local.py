@@ -149,7 +149,9 @@ class LocalServer:
             except httpx.HTTPError as exc:
                 last = type(exc).__name__
             time.sleep(0.05)
-        raise LocalModelError(f"local server at {self._address} not healthy after {self.startup_timeout_s:g} s ({last})")
+        raise LocalModelError(
+            f"local server at {self._address} not healthy after {self.startup_timeout_s:g} s ({last})"
+        )
 
     def stop(self) -> None:
         """Shut the server down (idempotent); waits for its threads to finish."""

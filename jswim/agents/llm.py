@@ -1,0 +1,526 @@
+"""The LLM agent: prompt -> chat client -> parse -> env step, for a batch of independent runs.
+
+Runs advance in lockstep rounds. In a round every active run renders its prompt and all the
+requests go out together (``asyncio.gather`` over one :class:`jswim.llm.LLMClient`, which bounds
+how many are in flight); then one jitted, vmapped :func:`jswim.env.step` per swimmer model moves
+every swimmer of that model at once. Finished runs drop out of the LLM round; they stay in the
+fixed-size env batch with a no-op action so the compiled step is reused. Optionally the runs are
+dealt into several cohorts that each step in lockstep on their own (``cohorts``), which hides
+this process's per-request CPU time behind the other cohorts' waiting.
+
+A reply without a valid action is retried ``parse_retries`` times with a short corrective
+follow-up message (a new request, so temperature-0 caching does not replay the bad reply); if
+it still fails, the step executes the no-op ``[1, 0]`` and counts as a failed step. The executed
+step, failed or not, enters the history shown to the model.
+
+Randomness: run ``i`` draws its initial configuration (when random) and its noise from
+``PRNGKey(seed_i)`` alone, with the step key folded in from the step index, so a run's physics
+does not depend on which other runs share its batch.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import dataclasses
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Iterable, Sequence, TextIO
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jswim import env
+from jswim.errors import ConfigError
+from jswim.llm.client import ClientSettings, LLMClient
+from jswim.llm.errors import LLMError, LLMServerError
+from jswim.llm.usage import UsageTotals
+from jswim.prompt import (
+    DEFAULT_TEMPLATE,
+    Action,
+    ClearingRule,
+    History,
+    HistoryRecord,
+    PositionBelowMinimumError,
+    PromptConfig,
+    PromptTemplate,
+    SwimmerText,
+    allowed_actions,
+    build_messages,
+    encode_position,
+    normalize_mask,
+    parse_reply,
+    render_prompt,
+)
+
+#: Executed when the model gives no valid action: hold still.
+NO_OP = Action(1, 0)
+
+DEFAULT_RETRY_PROMPT = "That reply names no valid action. Answer only with one of {allowed}."
+
+
+@dataclass(frozen=True)
+class LLMRunSpec:
+    """One run: a swimmer, a task and the prompt knobs that may differ between runs.
+
+    Attributes
+    ----------
+    swimmer : str
+        ``"purcell"``, ``"ng"``, ... (see :func:`jswim.env.make_params`).
+    swimmer_options : tuple of (str, value)
+        Model options, e.g. ``(("d_max", math.pi / 4),)``.
+    direction : {+1, -1}
+        Target direction.
+    init : tuple of int, str or None
+        Initial DOF levels (see :func:`jswim.env.parse_init`); ``None``: all at ``hi``.
+    zeta : float
+        Noise level.
+    seed : int
+        Seed of the run's noise and random initial configuration.
+    n_steps : int
+        Steps to run.
+    n_ht : int or None
+        History records in the prompt; ``None``: the swimmer's default.
+    drop : frozenset of str
+        Sentences left out of the prompt.
+    rocs : tuple of int or None
+        ROCs offered; ``None``: the swimmer's default.
+    run_id : str or None
+        Name of the run (transcript file name); default from the fields above.
+    """
+
+    swimmer: str = "purcell"
+    swimmer_options: tuple[tuple[str, Any], ...] = ()
+    direction: int = 1
+    init: tuple[int, ...] | str | None = None
+    zeta: float = 0.0
+    seed: int = 0
+    n_steps: int = 50
+    n_ht: int | None = None
+    drop: frozenset[str] = frozenset()
+    rocs: tuple[int, ...] | None = None
+    run_id: str | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "drop", normalize_mask(self.drop))
+        if self.n_steps < 1:
+            raise ConfigError(f"n_steps must be >= 1, got {self.n_steps}")
+
+    def label(self) -> str:
+        """``run_id``, or a readable name built from the fields."""
+        if self.run_id:
+            return self.run_id
+        if isinstance(self.init, tuple):
+            init = "".join("+" if v == 1 else "-" if v == 0 else "?" for v in self.init)
+        else:
+            init = self.init or "default"
+        parts = [self.swimmer, "px" if self.direction > 0 else "mx", f"init{init}", f"z{self.zeta:g}", f"s{self.seed}"]
+        if self.n_ht is not None:
+            parts.append(f"nht{self.n_ht}")
+        if self.drop:
+            parts.append("drop" + "".join(sorted(self.drop)))
+        return "-".join(parts)
+
+
+@dataclass(frozen=True)
+class LLMAgentConfig:
+    """Study-wide agent settings (the paper's values are the defaults).
+
+    Attributes
+    ----------
+    allowed : {"all", "shape-changing"}
+        Actions offered in S5 and by constrained decoding.
+    x_min : float
+        Lower bound of X for the integer position encoding.
+    template : PromptTemplate
+        Prompt text.
+    system : str or None
+        Optional system message (the paper uses none).
+    clearing : ClearingRule
+        History clearing scheme.
+    parse_retries : int
+        Extra requests after a reply without a valid action.
+    retry_prompt : str
+        Follow-up message of such a retry (``{allowed}`` is filled in).
+    share_identical : bool
+        Let temperature-0 requests use the disk cache and share identical in-flight requests.
+    """
+
+    allowed: str = "all"
+    x_min: float = -2.5
+    template: PromptTemplate = DEFAULT_TEMPLATE
+    system: str | None = None
+    clearing: ClearingRule = ClearingRule()
+    parse_retries: int = 2
+    retry_prompt: str = DEFAULT_RETRY_PROMPT
+    share_identical: bool = True
+
+    def metadata(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        t = self.template
+        d["template"] = {"layout": t.layout, "sentences": dict(t.sentences), "record": t.record}
+        return d
+
+
+@dataclass
+class RunResult:
+    """Outcome of one run (per-step lists hold the state after each executed step)."""
+
+    run_id: str
+    spec: LLMRunSpec
+    n_ht: int
+    rocs: tuple[int, ...]
+    status: str = "running"  # "done", "below_x_min" or "llm_error"
+    error: str | None = None
+    levels0: list[int] = field(default_factory=list)
+    x: list[float] = field(default_factory=list)
+    actions: list[int] = field(default_factory=list)  # env action indices
+    progress: list[float] = field(default_factory=list)
+    stuck: list[bool] = field(default_factory=list)
+    failed_steps: int = 0
+    parse_retries: int = 0
+    n_clears: int = 0
+    usage: UsageTotals = field(default_factory=UsageTotals)
+    transcript: list[dict[str, Any]] | None = None  # in memory when no transcript folder is given
+
+    @property
+    def steps(self) -> int:
+        return len(self.x)
+
+    def as_row(self) -> dict[str, Any]:
+        """A flat record for :meth:`jswim.results.StudyStore.add_runs`."""
+        s = self.spec
+        u = self.usage
+        return {
+            "run_id": self.run_id, "agent": "llm", "swimmer": s.swimmer, "direction": s.direction,
+            "init": "".join(map(str, self.levels0)), "zeta": s.zeta, "seed": s.seed, "n_ht": self.n_ht,
+            "drop": ",".join(sorted(s.drop)), "status": self.status, "error": self.error,
+            "steps": self.steps, "final_x": self.x[-1] if self.x else 0.0,
+            "failed_steps": self.failed_steps, "parse_retries": self.parse_retries,
+            "http_retries": u.retries, "n_clears": self.n_clears, "calls": u.calls,
+            "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
+            "completion_tokens": u.completion_tokens, "cost_usd": u.cost_usd,
+            "levels0": self.levels0, "x": self.x, "actions": self.actions, "progress": self.progress,
+            "stuck": self.stuck,
+        }
+
+
+@dataclass
+class _Run:
+    """Mutable per-run state of the driver."""
+
+    result: RunResult
+    text: SwimmerText
+    prompt: PromptConfig
+    history: History
+    dofs: np.ndarray
+    x: float = 0.0
+    active: bool = True
+    sink: TextIO | None = None
+
+    def log(self, record: dict[str, Any]) -> None:
+        if self.sink is not None:
+            self.sink.write(json.dumps(record, default=_jsonable) + "\n")
+        elif self.result.transcript is not None:
+            self.result.transcript.append(record)
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, (frozenset, set)):
+        return sorted(obj)
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return str(obj)
+
+
+@jax.jit
+def _advance(base_keys: jax.Array, states: env.EnvState, actions: jax.Array, params: env.EnvParams):
+    keys = jax.vmap(jax.random.fold_in)(base_keys, states.t)
+    new, info = jax.vmap(env.step)(keys, states, actions, params)
+    return new, info, jax.vmap(env.dof_values)(new, params)
+
+
+@jax.jit
+def _start(reset_keys: jax.Array, params: env.EnvParams):
+    states = jax.vmap(env.reset)(reset_keys, params)
+    return states, jax.vmap(env.dof_values)(states, params)
+
+
+class _Group:
+    """Runs sharing one swimmer model: one batched env state, stepped in one call."""
+
+    def __init__(self, members: list[int], params: list[env.EnvParams], seeds: list[int]) -> None:
+        self.members = members
+        dtype = jnp.result_type(float)
+        self.params = params[0].replace(
+            zeta=jnp.asarray([p.zeta for p in params], dtype),
+            direction=jnp.asarray([p.direction for p in params], dtype),
+            init=jnp.asarray(np.stack([np.asarray(p.init) for p in params]), jnp.int32),
+        )
+        keys = jnp.stack([jax.random.PRNGKey(s) for s in seeds])
+        split = jax.vmap(jax.random.split)(keys)
+        self.reset_keys, self.step_keys = split[:, 0], split[:, 1]
+        self.states, dofs = _start(self.reset_keys, self.params)
+        self.dofs = np.asarray(dofs, np.float64)
+        self.levels0 = np.asarray(self.states.levels)
+
+    def step(self, actions: np.ndarray) -> dict[str, np.ndarray]:
+        self.states, info, dofs = _advance(self.step_keys, self.states, jnp.asarray(actions, jnp.int32), self.params)
+        out = jax.device_get(
+            {"x": info.x, "progress": info.progress, "stuck": info.stuck, "moved": info.moved, "dofs": dofs}
+        )
+        return {k: np.asarray(v) for k, v in out.items()}
+
+
+class LLMDriver:
+    """Runs a batch of :class:`LLMRunSpec` against one client (use :func:`run_batch`).
+
+    With ``cohorts = K > 1`` the runs are dealt into K cohorts that each advance in lockstep on
+    their own (one vectorised step per cohort and round). A round costs the server latency plus
+    this process's CPU time for every request of the round, sent before and handled after the
+    wait; with K cohorts that CPU time of one cohort overlaps the others' waiting. Results do
+    not depend on K (each run's randomness is its own).
+    """
+
+    def __init__(
+        self,
+        specs: Sequence[LLMRunSpec],
+        client: LLMClient,
+        config: LLMAgentConfig = LLMAgentConfig(),
+        transcript_dir: str | Path | None = None,
+        cohorts: int = 1,
+    ) -> None:
+        if not specs:
+            raise ConfigError("no runs given")
+        if cohorts < 1:
+            raise ConfigError(f"cohorts must be >= 1, got {cohorts}")
+        self.client = client
+        self.config = config
+        self.transcript_dir = Path(transcript_dir) if transcript_dir is not None else None
+        ids = [s.label() for s in specs]
+        dupes = sorted({i for i in ids if ids.count(i) > 1})
+        if dupes:
+            raise ConfigError(f"duplicate run ids {dupes[:3]}; give the runs distinct seeds or run_id")
+        params = [
+            env.make_params(s.swimmer, zeta=s.zeta, direction=s.direction, init=s.init, **dict(s.swimmer_options))
+            for s in specs
+        ]
+        # Cohort k holds runs k, k + K, ...; inside a cohort, one env batch per swimmer model.
+        self.cohorts: list[list[_Group]] = []
+        for k in range(min(cohorts, len(specs))):
+            by_model: dict[Any, list[int]] = {}
+            for i in range(k, len(specs), cohorts):
+                by_model.setdefault(params[i].model, []).append(i)
+            self.cohorts.append(
+                [_Group(idx, [params[i] for i in idx], [specs[i].seed for i in idx]) for idx in by_model.values()]
+            )
+        self.runs: list[_Run] = [None] * len(specs)  # type: ignore[list-item]
+        for g in (g for groups in self.cohorts for g in groups):
+            for j, i in enumerate(g.members):
+                self.runs[i] = self._make_run(specs[i], ids[i], params[i], g.dofs[j], g.levels0[j])
+
+    def _make_run(
+        self, spec: LLMRunSpec, run_id: str, params: env.EnvParams, dofs: np.ndarray, levels0: np.ndarray
+    ) -> _Run:
+        model = params.model
+        n_ht = spec.n_ht if spec.n_ht is not None else model.default_n_ht(spec.direction)
+        rocs = spec.rocs if spec.rocs is not None else model.default_rocs
+        text = SwimmerText(model.n_dof, model.lo, model.hi, model.dof_decimals, tuple(rocs))
+        cfg = self.config
+        prompt = PromptConfig(
+            n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, allowed=cfg.allowed, template=cfg.template, system=cfg.system
+        )
+        result = RunResult(run_id, spec, n_ht, text.rocs, levels0=[int(v) for v in levels0],
+                           transcript=None if self.transcript_dir else [])
+        run = _Run(result, text, prompt, History(cfg.clearing), np.array(dofs, np.float64))
+        if self.transcript_dir is not None:
+            self.transcript_dir.mkdir(parents=True, exist_ok=True)
+            run.sink = open(self.transcript_dir / f"{run_id}.jsonl", "w", encoding="utf-8")
+        run.log({
+            "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
+            "levels0": result.levels0, "agent": cfg.metadata(), "client": self.client.settings.metadata(),
+        })
+        return run
+
+    # -- one decision ------------------------------------------------------------------------
+
+    async def _decide(self, run: _Run) -> tuple[Action, bool, dict[str, Any]]:
+        cfg = self.config
+        hist = run.history.records
+        prompt = render_prompt(run.text, run.prompt, run.result.spec.direction, hist, run.dofs, run.x)
+        allowed = allowed_actions(run.text, cfg.allowed, run.dofs)
+        replies = [a.text() for a in allowed]
+        messages = build_messages(prompt, cfg.system)
+        attempts = []
+        action = None
+        for k in range(cfg.parse_retries + 1):
+            res = await self.client.chat(messages, replies=replies, use_cache=cfg.share_identical)
+            run.result.usage.add(res)
+            action = parse_reply(res.text, allowed)
+            attempts.append({**res.as_dict(), "parsed": list(action) if action else None})
+            if action is not None:
+                break
+            if k < cfg.parse_retries:
+                run.result.parse_retries += 1
+                messages = messages + [
+                    {"role": "assistant", "content": res.text},
+                    {"role": "user", "content": cfg.retry_prompt.format(allowed=", ".join(replies))},
+                ]
+        failed = action is None
+        return (NO_OP if failed else action), failed, {"prompt": prompt, "attempts": attempts}
+
+    # -- the loop ----------------------------------------------------------------------------
+
+    async def run(self) -> list[RunResult]:
+        """Advance every run to its end; returns the results in input order.
+
+        Raises
+        ------
+        LLMServerError
+            The server stayed down (transcripts so far are written and closed first).
+        """
+        tasks = [asyncio.ensure_future(self._cohort(groups)) for groups in self.cohorts]
+        try:
+            done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_EXCEPTION)
+            for t in pending:  # a cohort failed: stop the others too
+                t.cancel()
+            await asyncio.gather(*pending, return_exceptions=True)
+            for t in done:
+                if t.exception() is not None:
+                    raise t.exception()
+        finally:
+            for run in self.runs:
+                if run.active:
+                    run.result.status = "aborted"
+                self._close(run)
+        return [r.result for r in self.runs]
+
+    async def _cohort(self, groups: list[_Group]) -> None:
+        members = [i for g in groups for i in g.members]
+        while any(self.runs[i].active for i in members):
+            await self._round(groups)
+
+    async def _round(self, groups: list[_Group]) -> None:
+        active = [i for g in groups for i in g.members if self.runs[i].active]
+        outcomes = await asyncio.gather(*[self._decide(self.runs[i]) for i in active], return_exceptions=True)
+        decided: dict[int, tuple[Action, bool, dict[str, Any]]] = {}
+        down: LLMServerError | None = None
+        for i, out in zip(active, outcomes):
+            run = self.runs[i]
+            if isinstance(out, LLMServerError):
+                down = down or out
+            elif isinstance(out, LLMError):
+                self._finish(run, "llm_error", str(out))
+            elif isinstance(out, PositionBelowMinimumError):  # can only come from a bad x_min
+                self._finish(run, "below_x_min", str(out))
+            elif isinstance(out, BaseException):
+                raise out
+            else:
+                decided[i] = out
+        if down is not None:
+            raise down
+        noop = env.encode_action(*NO_OP)
+        for g in groups:
+            if not any(i in decided for i in g.members):
+                continue
+            acts = np.array([env.encode_action(*decided[i][0]) if i in decided else noop for i in g.members], np.int32)
+            out = g.step(acts)
+            for j, i in enumerate(g.members):
+                if i in decided:
+                    self._record(self.runs[i], decided[i], acts[j], {k: v[j] for k, v in out.items()})
+
+    def _record(
+        self, run: _Run, decision: tuple[Action, bool, dict[str, Any]], index: int, out: dict[str, Any]
+    ) -> None:
+        action, failed, log = decision
+        res = run.result
+        x_before, x_after = run.x, float(out["x"])
+        rec = HistoryRecord(res.steps + 1, tuple(run.dofs), tuple(float(v) for v in out["dofs"]), action,
+                            x_before, x_after, bool(out["stuck"]))
+        cleared = run.history.add(rec, float(out["progress"]))
+        run.dofs = np.asarray(out["dofs"], np.float64)
+        run.x = x_after
+        res.x.append(x_after)
+        res.actions.append(int(index))
+        res.progress.append(float(out["progress"]))
+        res.stuck.append(bool(out["stuck"]))
+        res.failed_steps += failed
+        res.n_clears = run.history.n_clears
+        run.log({
+            "type": "step", "step": rec.step, **log, "action": list(action), "failed": failed,
+            "x_before": x_before, "x_after": x_after, "progress": float(out["progress"]), "stuck": rec.stuck,
+            "dofs_after": list(rec.dofs_after), "cleared": cleared, "n_clears": run.history.n_clears,
+        })
+        try:
+            encode_position(x_after, run.prompt.x_min)
+        except PositionBelowMinimumError as exc:
+            self._finish(run, "below_x_min", str(exc))
+            return
+        if res.steps >= res.spec.n_steps:
+            self._finish(run, "done")
+
+    def _finish(self, run: _Run, status: str, error: str | None = None) -> None:
+        run.active = False
+        run.result.status = status
+        run.result.error = error
+
+    def _close(self, run: _Run) -> None:
+        res = run.result
+        run.log({"type": "end", "status": res.status, "error": res.error, "steps": res.steps,
+                 "failed_steps": res.failed_steps, "parse_retries": res.parse_retries, "n_clears": res.n_clears,
+                 "usage": res.usage.as_dict()})
+        if run.sink is not None:
+            run.sink.close()
+            run.sink = None
+
+
+async def run_batch_async(
+    specs: Sequence[LLMRunSpec],
+    client: LLMClient,
+    config: LLMAgentConfig = LLMAgentConfig(),
+    transcript_dir: str | Path | None = None,
+    cohorts: int = 1,
+) -> list[RunResult]:
+    """Run a batch with an open client (see :class:`LLMDriver`)."""
+    return await LLMDriver(specs, client, config, transcript_dir, cohorts).run()
+
+
+def run_batch(
+    specs: Iterable[LLMRunSpec],
+    settings: ClientSettings | None = None,
+    config: LLMAgentConfig = LLMAgentConfig(),
+    transcript_dir: str | Path | None = None,
+    cohorts: int = 1,
+    **local_options: Any,
+) -> list[RunResult]:
+    """Run a batch of LLM runs to completion (blocking).
+
+    Parameters
+    ----------
+    specs : iterable of LLMRunSpec
+        The runs.
+    settings : ClientSettings, optional
+        Server to use; ``None`` starts the embedded local model for the duration of the call
+        (``local_options`` go to :class:`jswim.llm.local.LocalServer`).
+    config : LLMAgentConfig
+        Agent settings shared by the runs.
+    transcript_dir : str or Path, optional
+        Folder for one ``<run_id>.jsonl`` transcript per run; ``None`` keeps transcripts in
+        memory (``RunResult.transcript``).
+    cohorts : int
+        Split the runs into this many cohorts that advance in lockstep independently (see
+        :class:`LLMDriver`); 1 (default) moves every swimmer in one step per round.
+    """
+    specs = list(specs)
+
+    async def go(s: ClientSettings) -> list[RunResult]:
+        async with LLMClient(s) as client:
+            return await run_batch_async(specs, client, config, transcript_dir, cohorts)
+
+    if settings is not None:
+        return asyncio.run(go(settings))
+    from jswim.llm.local import LocalServer
+
+    with LocalServer(**local_options) as srv:
+        return asyncio.run(go(srv.client_settings()))

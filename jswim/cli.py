@@ -1,0 +1,340 @@
+"""The ``jswim`` command.
+
+``jswim swim``           the main job: LLM-driven swimmers next to Q-learning and random learners
+``jswim study NAME``     one of the paper's studies (curves, history, noise, ablation, inits)
+``jswim qlearn``         the Q-learning baseline's steps-to-learn distributions
+``jswim gaits SWIMMER``  closed stroke cycles ranked by displacement per step
+``jswim plot FOLDER``    redraw a study folder's figures
+
+A user mistake ends with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+from jswim.errors import ConfigError
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports mistakes in one line with exit status 2 (its own default too)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _floats(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+
+
+def _ints(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
+
+
+def _direction(text: str) -> tuple[int, ...]:
+    table = {"+x": (1,), "-x": (-1,), "both": (1, -1), "+1": (1,), "-1": (-1,), "1": (1,)}
+    if text not in table:
+        raise argparse.ArgumentTypeError(f"direction must be +x, -x or both, got {text!r}")
+    return table[text]
+
+
+def _swimmers(text: str) -> tuple[str, ...]:
+    names = ("purcell", "ng", "nlink", "nsphere")
+    out = ("purcell", "ng") if text == "both" else tuple(v.strip().lower() for v in text.split(","))
+    for v in out:
+        if v not in names:
+            raise argparse.ArgumentTypeError(f"unknown swimmer {v!r}; choose purcell, ng, both (or nlink, nsphere)")
+    return out
+
+
+def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
+    g = p.add_argument_group("runs")
+    g.add_argument("--swimmer", type=_swimmers, default=None, metavar="NAME",
+                   help="purcell, ng or both (default: purcell for swim, both for studies)")
+    g.add_argument("--direction", type=_direction, default=None, metavar="DIR",
+                   help="target direction: +x, -x or both (default: the study's)")
+    g.add_argument("--steps", type=int, default=50, help="steps per run (default 50, the paper's horizon)")
+    g.add_argument("--runs", type=int, default=None,
+                   help="LLM runs per setting (default: 4 for swim, the study's otherwise)")
+    g.add_argument("--q-runs", type=int, default=None,
+                   help="Q-learning and random-policy runs per setting (default 100)")
+    g.add_argument("--n-ht", type=int, default=None,
+                   help="history records in the prompt (default: per swimmer, 4 Purcell, 3/6 NG for +x/-x)")
+    g.add_argument("--noise", type=float, default=0.0, metavar="ZETA",
+                   help="noise level zeta: each step's displacement becomes dX(1 + zeta Y), Y~U[-1,1] (default 0)")
+    g.add_argument("--init", default=None, choices=("paper", "cycle", "random", "++", "+-", "-+", "--"),
+                   help="initial configuration: paper = (+,+), cycle = repeats go through all four, "
+                        "random, or a sign pair (default: paper for swim/curves/history, cycle otherwise)")
+    g.add_argument("--allowed", default="all", choices=("all", "shape-changing"),
+                   help="actions offered in S5 and by constrained decoding: all (the paper's) or only the "
+                        "moves that change the shape (default all)")
+    g.add_argument("--seed", type=int, default=0, help="seed of the study (noise, random starts, learners)")
+    g.add_argument("--prompt-file", default=None, metavar="FILE",
+                   help="replace the prompt template with this file (see jswim.prompt for placeholders)")
+    if study:
+        g.add_argument("--zetas", type=_floats, default=None, metavar="Z1,Z2,...",
+                       help="noise grid of the noise study (default 0,0.5,1,1.5,2,2.5,3)")
+        g.add_argument("--n-hts", type=_ints, default=None, metavar="N1,N2,...",
+                       help="history lengths of the history study (default 1..8)")
+    b = p.add_argument_group("LLM backend (default: the embedded SmolLM2-135M model, offline)")
+    b.add_argument("--base-url", default=None, help="an OpenAI-compatible server, e.g. http://localhost:8080/v1")
+    b.add_argument("--model", default=None, help="model name on that server (required with --base-url)")
+    b.add_argument("--gguf", default=None, metavar="FILE", help="another GGUF model for the embedded server")
+    b.add_argument("--api-key-env", default="OPENAI_API_KEY", metavar="VAR",
+                   help="environment variable that holds the API key (default OPENAI_API_KEY; never stored)")
+    b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "none"),
+                   help="constrained decoding (auto: grammar for the embedded/llama.cpp server)")
+    b.add_argument("--temperature", type=float, default=0.0, help="sampling temperature (paper: 0)")
+    b.add_argument("--parallel", type=int, default=4, help="decoding slots of the embedded server (default 4)")
+    b.add_argument("--concurrency", type=int, default=16, help="requests in flight at once (default 16)")
+    b.add_argument("--cache-dir", default=None, metavar="DIR", help="persistent response cache (temperature 0)")
+    p.add_argument("--out", default=None, metavar="FOLDER",
+                   help="output folder (default jswim-out/<study>-<hash of the settings>; rerun to resume)")
+    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from jswim.studies import STUDIES
+
+    ap = _Parser(prog="jswim", description="A large language model teaches model microswimmers to swim, "
+                 "measured against Q-learning and a random policy.",
+                 epilog="Every command takes --help. Results land in a study folder that a rerun resumes.")
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub.required = True
+    p = sub.add_parser("swim", help="the main job: LLM runs next to Q-learning and random learners",
+                       description="Drive swimmers with the LLM for a few short runs next to Q-learning and "
+                                   "random-policy learners; print a summary table and write a figure.")
+    _add_run_options(p, study=False)
+    p = sub.add_parser("study", help="run one of the paper's studies",
+                       description="Run a study grid (resumable). curves: Fig. 2; history: the n_ht sweep "
+                                   "(Fig. 3); noise: mean X/a and success vs zeta (Fig. 4); ablation: S1..S5 "
+                                   "removed (Fig. 5); inits: the four initial configurations.")
+    p.add_argument("name", choices=[s for s in STUDIES if s != "swim"], metavar="NAME",
+                   help="curves, history, noise, ablation or inits")
+    _add_run_options(p, study=True)
+    p = sub.add_parser("qlearn", help="Q-learning steps-to-learn distributions",
+                       description="Train many independent Q-learners on-device and summarise steps-to-learn.")
+    p.add_argument("--swimmer", type=_swimmers, default=("purcell", "ng"), metavar="NAME")
+    p.add_argument("--direction", type=_direction, default=(1, -1), metavar="DIR")
+    p.add_argument("--seeds", type=int, default=1000, help="learners per setting (default 1000)")
+    p.add_argument("--steps", type=int, default=200, help="training steps per learner (default 200)")
+    p.add_argument("--noise", type=float, default=0.0, metavar="ZETA")
+    p.add_argument("--action-set", default="both", choices=("all", "shape-changing", "both"))
+    p.add_argument("--seed", type=int, default=0)
+    p = sub.add_parser("gaits", help="closed stroke cycles ranked by displacement per step",
+                       description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
+                                   "each exactly and rank them by displacement per step.")
+    p.add_argument("swimmer", choices=("purcell", "ng", "nlink", "nsphere"))
+    p.add_argument("--n", type=int, default=None, help="links/spheres of nlink/nsphere (default 4)")
+    p.add_argument("--direction", type=_direction, default=(1,), metavar="DIR")
+    p.add_argument("--max-len", type=int, default=None, help="longest cycle (default 2**n_dof)")
+    p.add_argument("--top", type=int, default=8, help="cycles shown (default 8)")
+    p.add_argument("--out", default=None, metavar="FOLDER", help="also write a figure of the best cycles here")
+    p = sub.add_parser("plot", help="redraw the figures of a study folder")
+    p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
+    return ap
+
+
+# -- commands -----------------------------------------------------------------------------------
+
+
+def _backend(args: argparse.Namespace):
+    from jswim.studies import Backend
+
+    if args.base_url is None and args.model is not None:
+        raise ConfigError("--model names a model on a server; give --base-url too (or --gguf for a local file)")
+    if args.base_url is not None and args.model is None:
+        raise ConfigError("--base-url needs --model (the model name on that server)")
+    if args.gguf is not None and not Path(args.gguf).is_file():
+        raise ConfigError(f"--gguf {args.gguf}: no such file")
+    if not 0.0 <= args.temperature <= 2.0:
+        raise ConfigError(f"--temperature must lie in [0, 2], got {args.temperature}")
+    if args.parallel < 1 or args.concurrency < 1:
+        raise ConfigError("--parallel and --concurrency must be >= 1")
+    return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=args.api_key_env,
+                   constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
+                   concurrency=args.concurrency, cache_dir=args.cache_dir)
+
+
+def _options(args: argparse.Namespace, study: str):
+    from jswim.studies import StudyOptions
+
+    if args.prompt_file is not None and not Path(args.prompt_file).is_file():
+        raise ConfigError(f"--prompt-file {args.prompt_file}: no such file")
+    if not (math.isfinite(args.noise) and args.noise >= 0):
+        raise ConfigError(f"--noise must be >= 0, got {args.noise}")
+    kw: dict[str, Any] = dict(
+        swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,
+        n_ht=args.n_ht, zeta=args.noise, init=args.init, seed=args.seed, allowed=args.allowed,
+        prompt_file=args.prompt_file,
+    )
+    if getattr(args, "zetas", None):
+        kw["zetas"] = args.zetas
+    if getattr(args, "n_hts", None):
+        kw["n_hts"] = args.n_hts
+    return StudyOptions(**kw)
+
+
+def _progress():
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    return Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
+                    TextColumn("{task.fields[info]}"), TimeElapsedColumn(), transient=False)
+
+
+def _run(study: str, args: argparse.Namespace) -> int:
+    from jswim.studies import default_folder, run_study
+
+    options = _options(args, study)
+    backend = _backend(args)
+    out = Path(args.out) if args.out else default_folder(study, options, backend)
+    with _progress() as bar:
+        task = bar.add_task("runs", total=None, info="")
+
+        def tick(phase: str, done: int, total: int, info: str = "") -> None:
+            label = {"llm": "LLM runs", "qlearning": "Q-learning", "random": "random policy"}.get(phase, "runs")
+            bar.update(task, completed=done, total=total, description=label, info=info)
+
+        try:
+            result = run_study(study, options, backend, out, progress=tick, figures=not args.no_figures)
+        except KeyboardInterrupt:
+            bar.stop()
+            print(f"interrupted; finished runs are kept in {out}. Run the same command to resume.", file=sys.stderr)
+            return 130
+    _print_summary(result.summary, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
+    print(f"results: {result.folder}")
+    for f in result.figures:
+        if f.suffix == ".png":
+            print(f"figure:  {f}")
+    return 0
+
+
+def _fmt(v: Any, spec: str = ".3f") -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return format(v, spec) if isinstance(v, float) else str(v)
+
+
+def _print_summary(summary: Sequence[dict[str, Any]], title: str) -> None:
+    from rich.console import Console
+    from rich.table import Table
+
+    t = Table(title=title, title_justify="left")
+    for col in ("agent", "swimmer", "dir", "group", "n", "success p [95% CI]", "mean X/a [95% CI]",
+                "steps to learn (q25/med/q75)", "tokens/step"):
+        t.add_column(col, justify="right" if col not in ("agent", "swimmer", "group") else "left")
+    for s in summary:
+        t.add_row(
+            s["agent"], s["swimmer"], "+x" if s["direction"] > 0 else "-x", s["group"] or "", str(s["n"]),
+            f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')}, {_fmt(s['success_hi'], '.2f')}]",
+            f"{s['mean_x']:+.3f} [{_fmt(s['mean_x_lo'], '+.3f')}, {_fmt(s['mean_x_hi'], '+.3f')}]",
+            "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75")),
+            _fmt(s["tokens_per_step"], ".0f"),
+        )
+    Console().print(t)
+
+
+def _qlearn(args: argparse.Namespace) -> int:
+    from jswim.agents import qlearning
+
+    if args.seeds < 1 or args.steps < 1:
+        raise ConfigError("--seeds and --steps must be >= 1")
+    sets = ("all", "shape-changing") if args.action_set == "both" else (args.action_set,)
+    for action_set in sets:
+        t0 = time.perf_counter()
+        rows = qlearning.study(qlearning.QConfig(steps=args.steps, action_set=action_set), swimmers=args.swimmer,
+                               directions=args.direction, zetas=(args.noise,), n_seeds=args.seeds, seed=args.seed)
+        print(qlearning.format_table(rows))
+        print(f"({action_set}: {time.perf_counter() - t0:.1f} s including compilation)\n")
+    return 0
+
+
+def _gaits(args: argparse.Namespace) -> int:
+    from jswim import gait
+    from jswim.swimmers.models import make_model
+
+    kw = {}
+    if args.n is not None:
+        if args.swimmer not in ("nlink", "nsphere"):
+            raise ConfigError("--n applies to nlink and nsphere only")
+        kw["n_links" if args.swimmer == "nlink" else "n_spheres"] = args.n
+    model = make_model(args.swimmer, **kw)
+    if model.n_dof > 5 and args.max_len is None:
+        raise ConfigError("more than 5 DOFs: give --max-len to bound the enumeration")
+    for d in args.direction:
+        cycles = gait.best_cycles(model, d, args.max_len)
+        print(f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}: {len(cycles)} closed cycles; best first")
+        print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9}  start  moves (DOF, ROC)")
+        for i, c in enumerate(cycles[: args.top]):
+            start = "".join("+" if v else "-" for v in c.start)
+            moves = " ".join(f"[{dof}, {roc}]" for dof, roc in c.moves)
+            print(f"{i + 1:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f}  {start:5}  {moves}")
+        if args.out:
+            from jswim import plots
+
+            paths = plots.save(plots.gaits_figure(model, cycles), args.out, f"gaits-{args.swimmer}-{'px' if d > 0 else 'mx'}")
+            print(f"figure: {paths[0]}")
+        print()
+    return 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from jswim.results import read_metadata, read_runs
+    from jswim.studies import draw_figures
+
+    meta = read_metadata(args.folder)
+    rows = read_runs(args.folder)
+    if not rows:
+        raise ConfigError(f"{args.folder} has no finished runs yet")
+    for f in draw_figures(meta["study"], rows, Path(args.folder) / "figures"):
+        print(f"figure: {f}")
+    return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``jswim`` command; returns the exit status."""
+    args = build_parser().parse_args(argv)
+    from jswim.llm.errors import LLMError
+
+    try:
+        if args.command == "swim":
+            return _run("swim", args)
+        if args.command == "study":
+            return _run(args.name, args)
+        if args.command == "qlearn":
+            return _qlearn(args)
+        if args.command == "gaits":
+            return _gaits(args)
+        return _plot(args)
+    except ConfigError as exc:
+        print(f"jswim: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except LLMError as exc:
+        print(f"jswim: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+def run() -> None:
+    """Console-script wrapper."""
+    sys.exit(main())
+
+
+if __name__ == "__main__":
+    run()

@@ -1,0 +1,51 @@
+"""Small statistics for study summaries: proportions and means with confidence intervals."""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+
+def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, float]:
+    """Wilson score interval of a proportion (95% by default); ``(nan, nan)`` when ``n == 0``.
+
+    Unlike the normal approximation it stays inside [0, 1] and is sensible at p = 0 or 1, which
+    is where small LLM studies (10 runs per level) often land.
+    """
+    if n <= 0:
+        return (math.nan, math.nan)
+    p = successes / n
+    den = 1.0 + z * z / n
+    centre = (p + z * z / (2 * n)) / den
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
+    return (max(0.0, centre - half), min(1.0, centre + half))
+
+
+def mean_interval(
+    values: Sequence[float], level: float = 0.95, n_boot: int = 2000, seed: int = 0
+) -> tuple[float, float, float]:
+    """Mean and a percentile-bootstrap interval (approximate; exact for no small sample).
+
+    Returns ``(mean, lo, hi)``; with fewer than two finite values the interval is the mean itself.
+    """
+    x = np.asarray([v for v in values if v is not None and math.isfinite(v)], float)
+    if x.size == 0:
+        return (math.nan, math.nan, math.nan)
+    m = float(x.mean())
+    if x.size < 2:
+        return (m, m, m)
+    rng = np.random.default_rng(seed)
+    boots = x[rng.integers(0, x.size, (n_boot, x.size))].mean(axis=1)
+    a = (1 - level) / 2
+    return (m, float(np.quantile(boots, a)), float(np.quantile(boots, 1 - a)))
+
+
+def quartiles(values: Sequence[float]) -> tuple[float, float, float]:
+    """25th, 50th and 75th percentiles of the finite values (nan if none)."""
+    x = np.asarray([v for v in values if v is not None and math.isfinite(v)], float)
+    if x.size == 0:
+        return (math.nan, math.nan, math.nan)
+    q = np.quantile(x, [0.25, 0.5, 0.75])
+    return (float(q[0]), float(q[1]), float(q[2]))

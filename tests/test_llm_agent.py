@@ -1,0 +1,143 @@
+"""The LLM agent driving batches of swimmers against the fake server."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from jswim.agents.llm import NO_OP, LLMAgentConfig, LLMRunSpec, run_batch
+from jswim.env import encode_action
+from jswim.llm import ClientSettings
+from jswim.llm.errors import LLMServerError
+from tests.fakeserver import Fault, FakeServer, hash_reply
+
+
+def settings(srv: FakeServer, **kw) -> ClientSettings:
+    return ClientSettings(base_url=srv.url, model="fake", backoff_base_s=0.001, backoff_max_s=0.01, timeout_s=5.0, **kw)
+
+
+def scripted(body):
+    """Purcell +x: always [1, -1]. Purcell -x: junk, then [2, 1] when corrected. NG: never valid."""
+    msgs = body["messages"]
+    prompt = msgs[0]["content"]
+    if "[6, 10]" in prompt:
+        return "I would rather not say."
+    if "-x direction" in prompt:
+        return "[2, 1]" if len(msgs) > 1 else "Let me think about the physics first."
+    return "[1, -1]"
+
+
+def test_batch_counts_retries_failures_and_clears(tmp_path):
+    specs = [
+        LLMRunSpec("purcell", direction=1, n_steps=6, n_ht=2),
+        LLMRunSpec("purcell", direction=-1, n_steps=6, n_ht=2),
+        LLMRunSpec("ng", n_steps=6),
+    ]
+    with FakeServer(reply=scripted, latency=0.02, faults=[Fault.server_error(500), Fault.rate_limit("0")]) as srv:
+        results = run_batch(specs, settings(srv), LLMAgentConfig(parse_retries=2), transcript_dir=tmp_path)
+        n_requests, max_in_flight = srv.n_requests, srv.max_in_flight
+    a, b, ng = results
+    assert [r.status for r in results] == ["done"] * 3 and all(r.steps == 6 for r in results)
+    # Run a: valid at once; the first move changes the shape, then [1, -1] pushes past the limit.
+    assert (a.failed_steps, a.parse_retries, a.usage.calls) == (0, 0, 6)
+    assert a.actions == [encode_action(1, -1)] * 6 and a.stuck == [False] + [True] * 5
+    # Run b: every step needs one corrective retry.
+    assert (b.failed_steps, b.parse_retries, b.usage.calls) == (0, 6, 12)
+    # NG: never a valid action -> three calls per step, then the no-op.
+    assert (ng.failed_steps, ng.parse_retries, ng.usage.calls) == (6, 12, 18)
+    assert ng.actions == [encode_action(*NO_OP)] * 6 and ng.x == [0.0] * 6
+    # The two injected faults were retried, each once.
+    assert sum(r.usage.retries for r in results) == 2
+    assert n_requests == 6 + 12 + 18 + 2
+    assert max_in_flight == 3  # one request per run in flight per round, all at once
+    # No progress in steps 2..5 -> the history is cleared after step 5 in every run.
+    assert [r.n_clears for r in results] == [1, 1, 1]
+
+    lines = [json.loads(s) for s in (tmp_path / f"{b.run_id}.jsonl").read_text().splitlines()]
+    assert [ln["type"] for ln in lines] == ["meta"] + ["step"] * 6 + ["end"]
+    meta, first, end = lines[0], lines[1], lines[-1]
+    assert meta["n_ht"] == 2 and meta["client"]["model"] == "fake" and "-x" in first["prompt"]
+    assert [att["parsed"] for att in first["attempts"]] == [None, [2, 1]]
+    assert first["attempts"][0]["text"].startswith("Let me think")
+    assert {"prompt_tokens", "latency_s", "cache_hit", "retries"} <= set(first["attempts"][0])
+    assert [ln["cleared"] for ln in lines[1:-1]] == [False] * 4 + [True, False]
+    assert end["status"] == "done" and end["parse_retries"] == 6
+    step6 = lines[6]["prompt"]  # the history was erased after step 5 and starts again
+    assert "none yet" in step6
+
+    row = a.as_row()
+    assert row["run_id"] == a.run_id and row["steps"] == 6 and len(row["x"]) == 6 and row["init"] == "11"
+
+
+def test_in_memory_transcript_and_history_window():
+    with FakeServer(reply=hash_reply) as srv:
+        (res,) = run_batch([LLMRunSpec(n_steps=5, n_ht=2, zeta=0.3, seed=7)], settings(srv))
+    steps = [t for t in res.transcript if t["type"] == "step"]
+    assert len(steps) == 5
+    # The prompt of step 4 shows records 2 and 3 (n_ht = 2), unless a clear intervened.
+    shown = [ln.split(":")[0] for ln in steps[3]["prompt"].splitlines() if ln[:1].isdigit()]
+    assert shown == ["2", "3"]
+    assert steps[3]["x_before"] == pytest.approx(steps[2]["x_after"])
+
+
+def test_runs_are_reproducible_and_independent_of_the_batch():
+    one = LLMRunSpec(n_steps=8, zeta=1.0, seed=3)
+    with FakeServer(reply=hash_reply) as srv:
+        (alone,) = run_batch([one], settings(srv))
+        batch = run_batch([LLMRunSpec(n_steps=8, zeta=1.0, seed=s) for s in (1, 2, 3)], settings(srv))
+    assert np.allclose(alone.x, batch[2].x) and alone.actions == batch[2].actions
+    assert not np.allclose(batch[0].x, batch[1].x)
+
+
+def test_cohorts_give_the_same_results():
+    specs = [LLMRunSpec(n_steps=6, zeta=0.5, seed=s) for s in range(5)] + [LLMRunSpec("ng", n_steps=4)]
+    with FakeServer(reply=hash_reply, latency=0.01) as srv:
+        one = run_batch(specs, settings(srv))
+        three = run_batch(specs, settings(srv), cohorts=3)
+    assert [r.run_id for r in one] == [r.run_id for r in three]
+    for a, b in zip(one, three):
+        assert a.actions == b.actions and np.allclose(a.x, b.x) and a.status == b.status == "done"
+
+
+def test_position_below_x_min_ends_the_run():
+    with FakeServer(reply=lambda body: "[1, -1]") as srv:  # from (+, +) this moves toward -x
+        (res,) = run_batch([LLMRunSpec(n_steps=5)], settings(srv), LLMAgentConfig(x_min=-0.001))
+    assert res.status == "below_x_min" and res.steps == 1 and "x_min" in res.error
+    assert res.transcript[-1]["status"] == "below_x_min"
+
+
+@pytest.mark.parametrize("cohorts", [1, 2])
+def test_server_down_raises_and_closes_transcripts(tmp_path, cohorts):
+    with FakeServer(faults=[None] * 2 + [Fault.server_error(503)] * 50) as srv:
+        with pytest.raises(LLMServerError, match="503"):
+            run_batch([LLMRunSpec(n_steps=5, seed=s) for s in (0, 1)], settings(srv, max_retries=2),
+                      LLMAgentConfig(share_identical=False), transcript_dir=tmp_path, cohorts=cohorts)
+    for f in tmp_path.iterdir():
+        lines = [json.loads(s) for s in f.read_text().splitlines()]
+        assert lines[-1]["type"] == "end" and lines[-1]["status"] == "aborted" and lines[-1]["steps"] == 1
+
+
+def test_shape_changing_set_reaches_the_grammar():
+    with FakeServer(reply=lambda body: "[1, -1]") as srv:
+        run_batch([LLMRunSpec(n_steps=2)], settings(srv, server_kind="llamacpp"), LLMAgentConfig(allowed="shape-changing"))
+        grammars = [r["grammar"] for r in srv.requests]
+    assert grammars[0] == 'root ::= "[1, -1]" | "[2, -1]"'  # from (+, +)
+    assert grammars[1] == 'root ::= "[1, 1]" | "[2, -1]"'  # after D1 went to lo
+
+
+def test_identical_runs_share_requests():
+    with FakeServer(reply=hash_reply, latency=0.05) as srv:
+        specs = [LLMRunSpec(n_steps=3, run_id=f"r{k}") for k in range(4)]  # same task, no noise
+        results = run_batch(specs, settings(srv))
+        assert srv.n_requests == 3  # one request per round, shared by the four runs
+    assert all(r.x == results[0].x for r in results)
+    assert sum(r.usage.shared for r in results) == 9
+
+
+def test_duplicate_run_ids_are_rejected():
+    from jswim.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="duplicate"):
+        run_batch([LLMRunSpec(), LLMRunSpec()], ClientSettings(base_url="http://127.0.0.1:9/v1"))
