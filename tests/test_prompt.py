@@ -235,7 +235,7 @@ def test_parse_reply(reply, expected):
 
 
 def test_parse_reply_respects_allowed_set():
-    lo, hi = -math.pi / 3, math.pi / 3
+    _lo, hi = -math.pi / 3, math.pi / 3
     allowed = allowed_actions(PURCELL, "shape-changing", (hi, hi))
     assert parse_reply("[1, 1]", allowed) is None
     assert parse_reply("[1, 1] or [2, -1]", allowed) == Action(2, -1)

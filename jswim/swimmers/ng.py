@@ -6,7 +6,6 @@ and time such that an arm changing at ``|ROC| = 1`` has ``|d_dot| = 1``.
 
 from __future__ import annotations
 
-import jax.numpy as jnp
 from jax import Array
 
 
