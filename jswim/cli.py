@@ -104,6 +104,8 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     p.add_argument("--out", default=None, metavar="FOLDER",
                    help="output folder (default jswim-out/<study>-<hash of the settings>; rerun to resume)")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument("--chunk", type=int, default=64, metavar="N",
+                   help="LLM runs advanced together; each finished chunk is saved at once (default 64)")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -179,7 +181,7 @@ def _options(args: argparse.Namespace, study: str):
     kw: dict[str, Any] = dict(
         swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,
         n_ht=args.n_ht, zeta=args.noise, init=args.init, seed=args.seed, allowed=args.allowed,
-        prompt_file=args.prompt_file,
+        prompt_file=args.prompt_file, chunk=args.chunk,
     )
     if getattr(args, "zetas", None):
         kw["zetas"] = args.zetas
@@ -229,22 +231,29 @@ def _fmt(v: Any, spec: str = ".3f") -> str:
 
 
 def _print_summary(summary: Sequence[dict[str, Any]], title: str) -> None:
+    from rich import box
     from rich.console import Console
     from rich.table import Table
 
-    t = Table(title=title, title_justify="left")
-    for col in ("agent", "swimmer", "dir", "group", "n", "success p [95% CI]", "mean X/a [95% CI]",
-                "steps to learn (q25/med/q75)", "tokens/step"):
-        t.add_column(col, justify="right" if col not in ("agent", "swimmer", "group") else "left")
+    groups = any(s["group"] for s in summary)
+    t = Table(title=title, title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False)
+    cols = ["agent", "swimmer", "dir"] + (["group"] if groups else []) + [
+        "n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "fail", "tok/step"]
+    for col in cols:
+        t.add_column(col, justify="left" if col in ("agent", "swimmer", "group") else "right", no_wrap=True)
     for s in summary:
         t.add_row(
-            s["agent"], s["swimmer"], "+x" if s["direction"] > 0 else "-x", s["group"] or "", str(s["n"]),
-            f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')}, {_fmt(s['success_hi'], '.2f')}]",
-            f"{s['mean_x']:+.3f} [{_fmt(s['mean_x_lo'], '+.3f')}, {_fmt(s['mean_x_hi'], '+.3f')}]",
+            s["agent"], s["swimmer"], "+x" if s["direction"] > 0 else "-x", *([s["group"]] if groups else []),
+            str(s["n"]),
+            f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')},{_fmt(s['success_hi'], '.2f')}]",
+            f"{s['mean_x']:+.3f} [{_fmt(s['mean_x_lo'], '+.2f')},{_fmt(s['mean_x_hi'], '+.2f')}]",
             "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75")),
+            str(s["failed_steps"]) if s["agent"] == "llm" else "-",
             _fmt(s["tokens_per_step"], ".0f"),
         )
-    Console().print(t)
+    Console(width=max(120, Console().width)).print(t)
+    print("X/a end: displacement in the target direction after the last step; learn: steps before the "
+          "stroke that met the success criterion; fail: LLM steps without a valid action.")
 
 
 def _qlearn(args: argparse.Namespace) -> int:

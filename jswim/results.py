@@ -224,6 +224,8 @@ def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
         for k, v in r.items():
             if isinstance(v, SCALAR_TYPES) and k not in cols:
                 cols.append(k)
+    lead = [k for k in ("run_id", "agent", "swimmer", "direction", "group") if k in cols]
+    cols = lead + [k for k in cols if k not in lead]
     table_rows = [{k: r.get(k) for k in cols} for r in runs]
     buf = io.StringIO()
     writer = csv.DictWriter(buf, fieldnames=cols)

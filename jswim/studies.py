@@ -116,6 +116,23 @@ class Backend:
         return dataclasses.replace(s, **changes) if changes else s
 
 
+def check_server(base_url: str, timeout_s: float = 5.0) -> None:
+    """Raise :class:`LLMServerError` at once when nothing answers at ``base_url``.
+
+    Any HTTP answer counts (even 401 or 404): only an unreachable host or port is an error here.
+    """
+    import httpx
+
+    from jswim.llm.errors import LLMServerError
+
+    try:
+        httpx.get(base_url.rstrip("/") + "/models", timeout=timeout_s)
+    except httpx.HTTPError as exc:
+        raise LLMServerError(
+            f"cannot reach {_safe_url(base_url)} ({type(exc).__name__}); check --base-url or start the server"
+        ) from None
+
+
 def _safe_url(url: str | None) -> str | None:
     from jswim.llm.client import safe_url
 
@@ -361,7 +378,8 @@ def default_folder(study: str, o: StudyOptions, backend: Backend | None, root: s
     return Path(root) / f"{study}-{digest.hexdigest()[:8]}"
 
 
-ProgressFn = Callable[[str, int, int], None]
+#: ``progress(phase, runs_done, runs_total, info)``; ``info`` is a short status text.
+ProgressFn = Callable[[str, int, int, str], None]
 
 
 def run_study(
@@ -402,15 +420,17 @@ def run_study(
     })
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
+    if backend is not None and not backend.local and any(p.agent == "llm" for p in todo):
+        check_server(backend.base_url)  # fail before the baselines, not after
     total = len(plans)
     finished = total - len(todo)
-    tick = progress or (lambda phase, d, t: None)
-    tick("resume" if finished else "start", finished, total)
+    tick = progress or (lambda phase, d, t, info="": None)
+    tick("resume" if finished else "start", finished, total, f"{finished} runs already done" if finished else "")
 
     for (agent, _sw, _allowed), group in _groups([p for p in todo if p.agent != "llm"], "agent", "swimmer", "allowed").items():
         store.add_runs(_run_baselines(group, options.horizon))
         finished += len(group)
-        tick(agent, finished, total)
+        tick(agent, finished, total, "")
 
     llm_plans = [p for p in todo if p.agent == "llm"]
     if llm_plans:
@@ -436,6 +456,16 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
         return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
                           n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id)
 
+    steps_total = sum(p.steps for p in plans)
+    steps_done = 0
+    t_start = time.perf_counter()
+
+    def on_round(n: int) -> None:
+        nonlocal steps_done
+        steps_done += n
+        rate = steps_done / max(time.perf_counter() - t_start, 1e-9)
+        tick("llm", finished, total, f"LLM steps {steps_done}/{steps_total} ({rate:.1f}/s)")
+
     async def go(settings: Any) -> int:
         nonlocal finished
         async with LLMClient(settings) as client:
@@ -444,7 +474,7 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                 for i in range(0, len(group), o.chunk):
                     chunk = group[i: i + o.chunk]
                     results = await run_batch_async([spec(p) for p in chunk], client, cfg,
-                                                    transcript_dir=store.folder / "transcripts")
+                                                    transcript_dir=store.folder / "transcripts", on_round=on_round)
                     rows = []
                     by_swimmer = _groups(chunk, "swimmer")
                     res_by_id = {r.run_id: r for r in results}
@@ -459,7 +489,7 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                         rows += _judge_rows(members, acts, xs, lv, o.horizon, extra)
                     store.add_runs(rows)
                     finished += len(chunk)
-                    tick("llm", finished, total)
+                    tick("llm", finished, total, f"LLM steps {steps_done}/{steps_total}")
         return finished
 
     if backend.local:

@@ -25,7 +25,7 @@ import dataclasses
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterable, Sequence, TextIO
+from typing import Any, Callable, Iterable, Sequence, TextIO
 
 import jax
 import jax.numpy as jnp
@@ -290,7 +290,9 @@ class LLMDriver:
         config: LLMAgentConfig = LLMAgentConfig(),
         transcript_dir: str | Path | None = None,
         cohorts: int = 1,
+        on_round: Callable[[int], None] | None = None,
     ) -> None:
+        self.on_round = on_round  # called with the number of runs that stepped, for progress bars
         if not specs:
             raise ConfigError("no runs given")
         if cohorts < 1:
@@ -429,6 +431,8 @@ class LLMDriver:
             for j, i in enumerate(g.members):
                 if i in decided:
                     self._record(self.runs[i], decided[i], acts[j], {k: v[j] for k, v in out.items()})
+        if self.on_round is not None:
+            self.on_round(len(decided))
 
     def _record(
         self, run: _Run, decision: tuple[Action, bool, dict[str, Any]], index: int, out: dict[str, Any]
@@ -481,9 +485,10 @@ async def run_batch_async(
     config: LLMAgentConfig = LLMAgentConfig(),
     transcript_dir: str | Path | None = None,
     cohorts: int = 1,
+    on_round: Callable[[int], None] | None = None,
 ) -> list[RunResult]:
     """Run a batch with an open client (see :class:`LLMDriver`)."""
-    return await LLMDriver(specs, client, config, transcript_dir, cohorts).run()
+    return await LLMDriver(specs, client, config, transcript_dir, cohorts, on_round).run()
 
 
 def run_batch(
