@@ -86,15 +86,17 @@ def draw_cycle(ax: Any, model: SwimmerModel, start: Sequence[int], moves: Sequen
         if roc:
             levels[dof - 1] = 1 if roc > 0 else 0
         shapes.append(list(levels))
-    span = 4.0 if model.planar else model.hi * model.n_dof + 6
-    scale = 1.0
+    span = 4.0 if model.planar else model.hi * model.n_dof + 4
+    label_y = -2.2 if model.planar else -2.6
     for i, lv in enumerate(shapes):
         d = [model.lo + (model.hi - model.lo) * v for v in lv]
-        draw_shape(ax, model, d, origin=(i * span, 0.0), scale=scale, color="C0" if i == 0 else "k")
+        draw_shape(ax, model, d, origin=(i * span, 0.0), color="C0" if i == 0 else "k")
         if i < len(moves):
             dof, roc = moves[i]
-            ax.annotate(f"D{dof} {'+' if roc > 0 else '-' if roc < 0 else '0'}", (i * span + span / 2, -1.8),
-                        ha="center", fontsize=7, color="0.3")
+            # The move between two sketches, in the prompt's [DOF, ROC] notation.
+            ax.annotate(f"[{dof}, {roc}]", (i * span + span / 2, label_y), ha="center", fontsize=7, color="0.3")
+    ax.set_xlim(-span / 2, (len(shapes) - 0.5) * span)
+    ax.set_ylim(label_y - 0.8, 2.0)
     ax.set_aspect("equal")
     ax.axis("off")
     if title:
@@ -237,7 +239,7 @@ def bars_figure(rows: Sequence[dict], key: str, order: Sequence[str] | None = No
 def gaits_figure(model: SwimmerModel, cycles: Sequence[Any], top: int = 4) -> Figure:
     """The best closed stroke cycles of a swimmer, with their displacement per step."""
     shown = list(cycles)[:top]
-    fig, axes = plt.subplots(len(shown), 1, figsize=(7, 1.3 * len(shown) + 0.4), squeeze=False)
+    fig, axes = plt.subplots(len(shown), 1, figsize=(8, 1.1 * len(shown) + 0.5), squeeze=False)
     for ax, cyc in zip(axes[:, 0], shown):
         draw_cycle(ax, model, cyc.start, cyc.moves,
                    title=f"period {cyc.period}: X/a per step = {cyc.per_step:+.5f}")

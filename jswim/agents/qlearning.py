@@ -211,6 +211,10 @@ def _act(q_row: Array, mask: Array, epsilon: Array, u: Array, tie_break: str) ->
     return _pick(candidates, v), explore
 
 
+def _barrier(x: Any) -> Any:
+    return jax.lax.optimization_barrier(x)
+
+
 def _uniforms(key: Array, shape: tuple[int, ...], dtype: Any) -> Array:
     # The non-partitionable threefry uses both words of each hash: half the cost on CPU, and
     # still the same numbers whether or not the call is vmapped.
@@ -235,15 +239,19 @@ def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
         t, u = inp
         s = _corner(state.levels)
         mask = offered(state.levels, n, config.action_set)
-        action, explore = _act(_row(q, s), mask, epsilon(t), u[0], config.tie_break)
+        # Barriers keep XLA from recomputing a learner's scalars once per table entry or DOF
+        # (it would fuse them into every element of the consumers).
+        action, explore = _barrier(_act(_row(q, s), mask, epsilon(t), u[0], config.tie_break))
         new, info = advance(state, action, 2.0 * u[1] - 1.0, params)
         s2, mask2 = _corner(new.levels), offered(new.levels, n, config.action_set)
+        # Bootstrapped target, held fixed (stop_gradient) as in Q-learning's semi-gradient.
+        future = jnp.max(jnp.where(mask2, _row(q, s2), -jnp.inf))
+        target = _barrier(jax.lax.stop_gradient(info.progress + gamma * future))
         visited = ((corners == s)[:, None] & (actions == action)[None, :]).astype(dtype)
 
         def td_loss(q: Array) -> Array:
             # One-hot selection of Q(s, a) keeps the gradient dense and scatter-free.
-            future = jnp.max(jnp.where(mask2, jax.lax.stop_gradient(_row(q, s2)), -jnp.inf))
-            return 0.5 * (info.progress + gamma * future - jnp.sum(visited * q)) ** 2
+            return 0.5 * (target - jnp.sum(visited * q)) ** 2
 
         updates, opt_state = opt.update(jax.grad(td_loss)(q), opt_state, q)
         q = optax.apply_updates(q, updates)
