@@ -1,6 +1,5 @@
 """Four-link and four-sphere swimmers (three DOFs): gaits, symmetry, and the N = 3 limits."""
 
-import jax
 import numpy as np
 import pytest
 
