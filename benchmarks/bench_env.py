@@ -158,6 +158,16 @@ def main() -> None:
                 continue
             steps = 10 if b >= 10_000 else 50
             report("integrator", "float64", b, steps, best_time(integrator_runner(params64, b, steps), key, repeat=2))
+    # The four-DOF swimmers (four links, four spheres) on the same paths, at the largest batch.
+    b4 = batches[-1]
+    for sw in ("nlink", "nsphere"):
+        p4 = env.make_params(sw, zeta=args.zeta)
+        report(f"{sw}4 table/batch", "float32", b4, args.steps, best_time(table_runner(p4, b4, args.steps, False), key))
+    with jax.enable_x64(True):
+        for sw in ("nlink", "nsphere"):
+            p4 = env.make_params(sw, zeta=args.zeta)
+            b = min(b4, 10_000)
+            report(f"{sw}4 integrator", "float64", b, 10, best_time(integrator_runner(p4, b, 10), key, repeat=2))
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(dict(reference_steps_per_s=ref_rate, rows=rows), fh, indent=2)

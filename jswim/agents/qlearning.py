@@ -211,15 +211,19 @@ def _act(q_row: Array, mask: Array, epsilon: Array, u: Array, tie_break: str) ->
     return _pick(candidates, v), explore
 
 
-def _barrier(x: Any) -> Any:
-    return jax.lax.optimization_barrier(x)
-
-
 def _uniforms(key: Array, shape: tuple[int, ...], dtype: Any) -> Array:
     # The non-partitionable threefry uses both words of each hash: half the cost on CPU, and
     # still the same numbers whether or not the call is vmapped.
     with jax.threefry_partitionable(False):
         return jax.random.uniform(key, shape, dtype)
+
+
+class _Pending(NamedTuple):
+    """A step's TD update, waiting to be applied: ``Q(s, a)`` towards ``target``."""
+
+    corner: Array
+    action: Array
+    target: Array  # r + gamma max_a' Q(s', a'), from the table the step acted on
 
 
 def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
@@ -234,33 +238,42 @@ def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
     actions = jnp.arange(3 * n, dtype=jnp.int32)
     corners = jnp.arange(2**n, dtype=jnp.int32)
 
-    def body(carry, inp):
-        state, q, opt_state = carry
-        t, u = inp
+    def act(state, q, t, u):
+        """Choose, step the swimmer, and form the TD target from the current table."""
         s = _corner(state.levels)
-        mask = offered(state.levels, n, config.action_set)
-        # Barriers keep XLA from recomputing a learner's scalars once per table entry or DOF
-        # (it would fuse them into every element of the consumers).
-        action, explore = _barrier(_act(_row(q, s), mask, epsilon(t), u[0], config.tie_break))
+        action, explore = _act(_row(q, s), offered(state.levels, n, config.action_set), epsilon(t), u[0], config.tie_break)
         new, info = advance(state, action, 2.0 * u[1] - 1.0, params)
-        s2, mask2 = _corner(new.levels), offered(new.levels, n, config.action_set)
-        # Bootstrapped target, held fixed (stop_gradient) as in Q-learning's semi-gradient.
-        future = jnp.max(jnp.where(mask2, _row(q, s2), -jnp.inf))
-        target = _barrier(jax.lax.stop_gradient(info.progress + gamma * future))
-        visited = ((corners == s)[:, None] & (actions == action)[None, :]).astype(dtype)
+        future = jnp.max(jnp.where(offered(new.levels, n, config.action_set), _row(q, _corner(new.levels)), -jnp.inf))
+        return new, _Pending(s, action, info.progress + gamma * future), (action, new.x, info.progress, explore)
+
+    def learn(q, opt_state, pending):
+        """One optax step on the squared TD error, the target held fixed (semi-gradient)."""
+        visited = ((corners == pending.corner)[:, None] & (actions == pending.action)[None, :]).astype(dtype)
 
         def td_loss(q: Array) -> Array:
             # One-hot selection of Q(s, a) keeps the gradient dense and scatter-free.
-            return 0.5 * (target - jnp.sum(visited * q)) ** 2
+            return 0.5 * (jax.lax.stop_gradient(pending.target) - jnp.sum(visited * q)) ** 2
 
         updates, opt_state = opt.update(jax.grad(td_loss)(q), opt_state, q)
-        q = optax.apply_updates(q, updates)
-        return (new, q, opt_state), (action, new.x, info.progress, explore)
+        return optax.apply_updates(q, updates), opt_state
+
+    # Step t's update is applied at the top of step t + 1, before anything reads the table
+    # again: the same algorithm, but the target reaches the update as a loop-carried value, so
+    # XLA computes it once per learner instead of once per table entry.
+    def body(carry, inp):
+        state, q, opt_state, pending = carry
+        q, opt_state = learn(q, opt_state, pending)
+        state, pending, out = act(state, q, *inp)
+        return (state, q, opt_state, pending), out
 
     steps = config.steps
     # One draw for the whole run: column 0 drives the agent, column 1 is the env's noise Y.
-    inputs = (jnp.arange(steps), _uniforms(k_run, (steps, 2), dtype))
-    (_, q, _), (acts, x, reward, explored) = jax.lax.scan(body, (state, q, opt.init(q)), inputs)
+    u = _uniforms(k_run, (steps, 2), dtype)
+    first, pending, out0 = act(state, q, jnp.zeros((), jnp.int32), u[0])
+    carry = (first, q, opt.init(q), pending)
+    (_, q, opt_state, pending), outs = jax.lax.scan(body, carry, (jnp.arange(1, steps), u[1:]))
+    q, _ = learn(q, opt_state, pending)
+    acts, x, reward, explored = (jnp.concatenate([a[None], b]) for a, b in zip(out0, outs))
     return QRun(acts, x, reward, explored, q, state.levels)
 
 
@@ -354,12 +367,14 @@ def evaluate(run: QRun, params: EnvParams, *, horizon: int = 50, **judge_kwargs:
     return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), horizon=horizon, **judge_kwargs)
 
 
-def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "all", key: Array | int = 0) -> Array:
-    """Actions of the greedy policy of a Q-table, run on a fresh swimmer (no learning).
+@functools.partial(jax.jit, static_argnames=("steps", "action_set"))
+def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "all", key: Array | None = None) -> Array:
+    """Actions of the greedy policy of a Q-table on a fresh, noiseless-or-not swimmer (no learning).
 
-    Ties are broken at random from ``key``. Returns action indices, shape ``(steps,)``.
+    Ties are broken at random from ``key`` (default ``PRNGKey(0)``). Returns action indices,
+    shape ``(steps,)``; vmap it over tables and params for a batch.
     """
-    key = jax.random.PRNGKey(key) if isinstance(key, int) else key
+    key = jax.random.PRNGKey(0) if key is None else key
     n = params.model.n_dof
     k_reset, k_run = jax.random.split(key)
 
