@@ -81,6 +81,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     g.add_argument("--allowed", default="all", choices=("all", "shape-changing"),
                    help="actions offered in S5 and by constrained decoding: all (the paper's) or only the "
                         "moves that change the shape (default all)")
+    g.add_argument("--variant", default=None, metavar="NAME[,NAME...]",
+                   help="LLM protocol variant (jswim.agents.llm.VARIANTS; default: the study's, paper for the "
+                        "paper's studies); the competence study takes a comma-separated list to compare")
     g.add_argument("--seed", type=int, default=0, help="seed of the study (noise, random starts, learners)")
     g.add_argument("--prompt-file", default=None, metavar="FILE",
                    help="replace the prompt template with this file (see jswim.prompt for placeholders)")
@@ -123,9 +126,10 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("study", help="run one of the paper's studies",
                        description="Run a study grid (resumable). curves: Fig. 2; history: the n_ht sweep "
                                    "(Fig. 3); noise: mean X/a and success vs zeta (Fig. 4); ablation: S1..S5 "
-                                   "removed (Fig. 5); inits: the four initial configurations.")
+                                   "removed (Fig. 5); inits: the four initial configurations; competence: "
+                                   "every protocol variant next to random and Q-learning baselines.")
     p.add_argument("name", choices=[s for s in STUDIES if s != "swim"], metavar="NAME",
-                   help="curves, history, noise, ablation or inits")
+                   help="curves, history, noise, ablation, inits or competence")
     _add_run_options(p, study=True)
     p = sub.add_parser("qlearn", help="Q-learning steps-to-learn distributions",
                        description="Train many independent Q-learners on-device and summarise steps-to-learn.")
@@ -187,6 +191,13 @@ def _options(args: argparse.Namespace, study: str):
         kw["zetas"] = args.zetas
     if getattr(args, "n_hts", None):
         kw["n_hts"] = args.n_hts
+    names = tuple(v.strip() for v in (args.variant or "").split(",") if v.strip())
+    if study == "competence" and names:
+        kw["variants"] = names
+    elif len(names) > 1:
+        raise ConfigError("--variant takes one name here (a list only for the competence study)")
+    elif names:
+        kw["variant"] = names[0]
     return StudyOptions(**kw)
 
 

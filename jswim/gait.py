@@ -17,6 +17,12 @@ success criterion for a task ("three consecutive cycles of its signature gaits w
 without subsequent failures") is then ``success``: the segment starts early enough that three
 cycles are complete by step ``horizon`` (50), and lasts to the end of the run.
 
+``steps_to_learn`` is the number of steps before that final stroke starts: the start of the
+longest trailing segment that repeats with the cycle's period, moved past the last step that did
+not change the shape. Where several periods qualify, the earliest start wins (then the shorter
+period). Cycles are considered up to ``max_period = 2**n_dof`` steps, the longest cycle that
+visits each corner of the DOF cube once (see :func:`default_max_period`).
+
 Displacements are composed from :func:`jswim.env.step_table` in float64 by replaying the run's
 actions from its initial shape, orientation 0 and the origin, exactly as :func:`jswim.env.step`
 does without noise. A cycle is therefore measured from the orientation the swimmer actually has
@@ -24,8 +30,8 @@ when the cycle starts (for Purcell's swimmer the orientation is a function of th
 square gait from a start with a bent link goes at ``cos(0.6) = 0.83`` of the best speed; it still
 qualifies). The best cycle is measured from orientation 0 at its start corner.
 
-This is post-processing in NumPy, vectorised over runs; judging 10,000 runs of 200 steps takes a
-few tens of milliseconds.
+This is post-processing in NumPy, vectorised over runs (a Python loop runs over candidate periods
+only); judging 10,000 runs of 200 steps takes about 0.1-0.2 s on two cores.
 """
 
 from __future__ import annotations
@@ -102,7 +108,8 @@ class GaitReport(NamedTuple):
     cycle : int (B, max_period)
         The detected cycle's actions from its first step, padded with -1.
     per_step : float (B,)
-        Exact displacement per step of the cycle in the target direction (NaN when not learned).
+        Exact displacement per step, in the target direction, of the stroke's first period (NaN
+        when not learned).
     fraction : float (B,)
         ``per_step`` over the best cycle's displacement per step.
     """

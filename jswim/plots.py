@@ -185,12 +185,13 @@ def _rate_and_mean(ax: Any, labels: Sequence[str], groups: Sequence[Sequence[dic
         k = sum(bool(r["success"]) for r in g)
         lo, hi = wilson_interval(k, len(g))
         ps.append(k / len(g) if g else math.nan)
-        plo.append(ps[-1] - lo)
-        phi.append(hi - ps[-1])
+        # Error bars must not be negative: at p = 0 or a constant sample, rounding can make them -1e-17.
+        plo.append(max(0.0, ps[-1] - lo))
+        phi.append(max(0.0, hi - ps[-1]))
         m, a, b = mean_interval([r["signed_final_x"] for r in g])
         ms.append(m)
-        mlo.append(m - a)
-        mhi.append(b - m)
+        mlo.append(max(0.0, m - a))
+        mhi.append(max(0.0, b - m))
     ax2 = ax.twinx()
     if bar:
         w = 0.38
@@ -232,6 +233,42 @@ def bars_figure(rows: Sequence[dict], key: str, order: Sequence[str] | None = No
         labels = [k for k in (order or list(by)) if k in by]
         _rate_and_mean(ax, labels, [by[k] for k in labels], range(len(labels)), key, bar=True)
         ax.set_title(f"{sw} {title}".strip(), fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def competence_figure(rows: Sequence[dict], order: Sequence[str]) -> Figure:
+    """Success rate p and mean X/a per LLM variant and per baseline, one row of panels per swimmer.
+
+    Rows carry an ``entry`` label (a variant name, or ``"agent (allowed set)"`` for baselines);
+    ``order`` lists the entries top to bottom. Horizontal bars keep long variant names readable,
+    and the dotted line marks the random baseline on the same allowed set as the paper (all).
+    """
+    panels = _group(rows, "swimmer")
+    n = max(1, len(order))
+    fig, axes = plt.subplots(len(panels), 2, figsize=(10, 0.32 * n * len(panels) + 1.2), squeeze=False)
+    for (ax_p, ax_x), ((sw,), group) in zip(axes, panels.items()):
+        by = {k[0]: g for k, g in _group(group, "entry").items()}
+        labels = [k for k in order if k in by]
+        y = np.arange(len(labels))[::-1]
+        colors = [AGENT_STYLE.get(by[k][0]["agent"], {}).get("color", "C0") for k in labels]
+        for j, k in enumerate(labels):
+            g = by[k]
+            hits = sum(bool(r["success"]) for r in g)
+            lo, hi = wilson_interval(hits, len(g))
+            p = hits / len(g)
+            ax_p.errorbar(p, y[j], xerr=[[max(0.0, p - lo)], [max(0.0, hi - p)]], fmt="o", color=colors[j], capsize=3)
+            m, a, b = mean_interval([r["signed_final_x"] for r in g])
+            ax_x.errorbar(m, y[j], xerr=[[max(0.0, m - a)], [max(0.0, b - m)]], fmt="s", color=colors[j], capsize=3)
+        if "random (all)" in by:
+            ax_x.axvline(float(np.mean([r["signed_final_x"] for r in by["random (all)"]])), color="0.5", ls=":", lw=1)
+        for ax in (ax_p, ax_x):
+            ax.set_yticks(y, [f"{k} (n={len(by[k])})" for k in labels], fontsize=7)
+            ax.grid(axis="x", alpha=0.3)
+        ax_p.set_xlim(-0.05, 1.05)
+        ax_x.axvline(0, color="0.8", lw=0.8)
+        ax_p.set_title(f"{sw}: success rate p (95% Wilson CI)", fontsize=9)
+        ax_x.set_title(f"{sw}: mean X/a after the last step (95% bootstrap CI)", fontsize=9)
     fig.tight_layout()
     return fig
 

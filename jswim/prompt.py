@@ -10,8 +10,11 @@ dropped with a sentence mask (the paper's ablation).
 
 Order. The default layout is ``S1 S2 S4 S5`` then ``S3``: every fixed sentence comes before the
 history, which changes at every step, so a server with prefix (prompt) caching reuses the fixed
-part. The paper lists S1..S5 in numeric order; :data:`PAPER_LAYOUT` gives that order and a
-template file can set any other.
+part. When S5 itself changes from step to step (the shape-changing allowed set, shuffled options)
+or the summary sentence is on, the default layout becomes :data:`CACHE_LAYOUT_LATE`, ``S1 S2 S4``
+then ``S3``, the summary and ``S5``: fixed text first, per-step text last. The paper lists S1..S5
+in numeric order; :data:`PAPER_LAYOUT` gives that order and a template file can set any other
+(a layout set by hand is always used as given).
 
 Template placeholders
 ---------------------
@@ -33,7 +36,16 @@ variable below; sentences may use the variables too.
 ``{n_records}``    the number of records shown (<= ``n_ht``; fewer right after a start or clear)
 ``{history}``      the records, one per line (``none yet`` when empty)
 ``{current}``      the current DOF values and X, ``(D1, D2) = (1.047, 1.047), X = 2500``
+``{summary}``      the observed-progress sentence (empty unless the summary variant is on; see
+                   :func:`render_summary`)
 =================  ============================================================================
+
+The summary sentence. With ``PromptConfig.summary`` on, one extra sentence reports, for each
+action offered now, the mean displacement it produced so far from the current shape (observed
+data of this run only, noise included, kept across history clears). Numbers follow the paper's
+rule for X: integers in thousandths of ``a``, no minus sign (the direction is a word). A layout
+without ``{summary}`` gets the sentence right before the history (S3), which keeps every fixed
+sentence in front for prefix caching; the paper's prompt is unchanged when the summary is off.
 
 The ``record`` template formats one history line with ``{step}``, ``{dofs_before}``,
 ``{action}``, ``{dofs_after}``, ``{x_before}``, ``{x_after}`` and ``{stuck}`` (``" (stuck)"``
@@ -49,6 +61,7 @@ from __future__ import annotations
 
 import math
 import re
+import string
 from dataclasses import dataclass, field, replace
 from decimal import ROUND_DOWN, Decimal
 from pathlib import Path
@@ -61,6 +74,9 @@ SENTENCES = ("S1", "S2", "S3", "S4", "S5")
 
 #: Every fixed sentence before the changing history: the prefix-cache friendly order (default).
 CACHE_LAYOUT = "{S1} {S2} {S4} {S5}\n{S3}"
+
+#: What the default layout becomes when S5 or the summary change at every step: per-step text last.
+CACHE_LAYOUT_LATE = "{S1} {S2} {S4}\n{S3}\n{summary}\n{S5}"
 
 #: The paper's numeric order S1..S5 (the history sits in the middle).
 PAPER_LAYOUT = "{S1} {S2}\n{S3}\n{S4} {S5}"
@@ -304,6 +320,69 @@ class History:
 
 
 # ---------------------------------------------------------------------------------------------
+# Observed-progress summary (a variant; off in the paper's protocol)
+
+#: The summary sentence; ``{shape}`` is the current DOF values, ``{moves}`` the items below.
+SUMMARY_SENTENCE = "Observed so far from the current shape ({dof_names}) = ({shape}): {moves}."
+SUMMARY_TRIED = "{action} moved X {amount} {way} {direction} on average in {count} {tries}"
+SUMMARY_STILL = "{action} left X unchanged in {count} {tries}"
+SUMMARY_UNTRIED = "{action} not tried yet"
+
+
+def shape_key(sw: SwimmerText, dof_values: Sequence[float]) -> tuple[str, ...]:
+    """The shape as the prompt shows it (DOF values at the prompt's precision)."""
+    return tuple(format_dof(v, sw.dof_decimals) for v in dof_values)
+
+
+@dataclass
+class MoveStats:
+    """Observed progress of every (shape, action) pair of one run so far.
+
+    Only what the run executed and saw (noise included) goes in; nothing is predicted.
+    """
+
+    totals: dict[tuple[tuple[str, ...], Action], tuple[float, int]] = field(default_factory=dict)
+
+    def add(self, shape: tuple[str, ...], action: Action, progress: float) -> None:
+        """Count one executed step; ``progress`` is its displacement in the target direction."""
+        total, count = self.totals.get((shape, action), (0.0, 0))
+        self.totals[(shape, action)] = (total + float(progress), count + 1)
+
+    def mean(self, shape: tuple[str, ...], action: Action) -> tuple[float, int] | None:
+        """``(mean progress, count)``, or ``None`` when the pair was never tried."""
+        got = self.totals.get((shape, action))
+        return None if got is None else (got[0] / got[1], got[1])
+
+
+def render_summary(
+    sw: SwimmerText, stats: MoveStats, dof_values: Sequence[float], options: Sequence[Action], direction: int
+) -> str:
+    """The summary sentence for the actions in ``options`` (in that order) from the current shape.
+
+    Mean progress is rounded to whole thousandths of ``a`` (the unit of X in the prompt) and said
+    as a distance toward or away from the target direction, so no number is negative.
+    """
+    shape = shape_key(sw, dof_values)
+    target = "+x" if direction == 1 else "-x"
+    items = []
+    for a in options:
+        got = stats.mean(shape, a)
+        if got is None:
+            items.append(SUMMARY_UNTRIED.format(action=a.text()))
+            continue
+        mean, count = got
+        amount = round(abs(mean) * 1000)
+        tries = "try" if count == 1 else "tries"
+        if amount == 0:
+            items.append(SUMMARY_STILL.format(action=a.text(), count=count, tries=tries))
+        else:
+            way = "toward" if mean > 0 else "away from"
+            items.append(SUMMARY_TRIED.format(action=a.text(), amount=amount, way=way, direction=target,
+                                              count=count, tries=tries))
+    return SUMMARY_SENTENCE.format(dof_names=", ".join(sw.names), shape=", ".join(shape), moves="; ".join(items))
+
+
+# ---------------------------------------------------------------------------------------------
 # Templates
 
 
@@ -415,6 +494,11 @@ class PromptConfig:
         The text.
     system : str, optional
         A system message; the paper uses none.
+    summary : bool
+        Add the observed-progress sentence (:func:`render_summary`); off in the paper.
+    shuffle : bool
+        S5 lists the options in an order that changes per step (set by the caller through
+        ``options``); only moves S5 behind the history in the default layout.
     """
 
     n_ht: int = 3
@@ -423,6 +507,8 @@ class PromptConfig:
     allowed: str = "all"
     template: PromptTemplate = DEFAULT_TEMPLATE
     system: str | None = None
+    summary: bool = False
+    shuffle: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drop", normalize_mask(self.drop))
@@ -430,6 +516,15 @@ class PromptConfig:
             raise ConfigError(f"n_ht must be >= 0, got {self.n_ht}")
         if self.allowed not in ALLOWED_MODES:
             raise ConfigError(f"allowed must be one of {ALLOWED_MODES}, got {self.allowed!r}")
+
+    @property
+    def layout(self) -> str:
+        """The layout used: the template's, or :data:`CACHE_LAYOUT_LATE` in place of the default
+        :data:`CACHE_LAYOUT` when S5 or the summary change from step to step."""
+        layout = self.template.layout
+        if layout == CACHE_LAYOUT and (self.allowed != "all" or self.shuffle or self.summary):
+            return CACHE_LAYOUT_LATE
+        return layout
 
 
 def _dof_ranges(sw: SwimmerText) -> str:
@@ -464,6 +559,9 @@ def render_prompt(
     records: Sequence[HistoryRecord],
     dof_values: Sequence[float],
     x: float = 0.0,
+    *,
+    options: Sequence[Action] | None = None,
+    summary: str = "",
 ) -> str:
     """The prompt text for the next decision.
 
@@ -481,6 +579,11 @@ def render_prompt(
         Current DOF values (for the allowed set and ``{current}``).
     x : float
         Current X (for ``{current}``).
+    options : sequence of Action, optional
+        The allowed actions in the order S5 lists them (the shuffle variant reorders them);
+        default :func:`allowed_actions` in (dof, roc) order.
+    summary : str
+        The summary sentence (:func:`render_summary`), or empty.
 
     Raises
     ------
@@ -490,7 +593,7 @@ def render_prompt(
     if direction not in (1, -1):
         raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
     shown = list(records[-cfg.n_ht :]) if cfg.n_ht > 0 else []
-    allowed = allowed_actions(sw, cfg.allowed, dof_values)
+    allowed = list(options) if options is not None else allowed_actions(sw, cfg.allowed, dof_values)
     d = sw.dof_decimals
     values = {
         "direction": "+x" if direction == 1 else "-x",
@@ -506,11 +609,27 @@ def render_prompt(
         "history": "\n".join(render_record(r, sw, cfg) for r in shown) or "none yet",
         "current": f"({', '.join(sw.names)}) = ({', '.join(format_dof(v, d) for v in dof_values)}),"
         f" X = {encode_position(x, cfg.x_min)}",
+        "summary": summary,
     }
     for name in SENTENCES:
         text = "" if name in cfg.drop else _fill(cfg.template.sentence(name), values, name)
         values[name] = text
-    return _tidy(_fill(cfg.template.layout, values, "layout"))
+    layout = cfg.layout
+    if summary and "summary" not in _fields(layout):
+        # No slot in the layout: the sentence goes right before the history (or last without it).
+        if values["S3"]:
+            values["S3"] = summary + "\n" + values["S3"]
+        else:
+            layout = layout + "\n{summary}"
+    return _tidy(_fill(layout, values, "layout"))
+
+
+def _fields(template: str) -> set[str]:
+    """Placeholder names used by a format string (escaped braces are not placeholders)."""
+    try:
+        return {name for _, name, _, _ in string.Formatter().parse(template) if name}
+    except ValueError:
+        return set()  # malformed: _fill reports it
 
 
 def build_messages(prompt: str, system: str | None = None) -> list[dict[str, str]]:

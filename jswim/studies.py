@@ -15,6 +15,8 @@ Studies (``jswim study NAME``):
 ``ablation`` the full prompt and the prompt without each of S1..S5 (Fig. 5)
 ``inits``    all four initial configurations, both directions
 ``swim``     the main job: a few LLM runs next to Q-learning and random learners
+``competence`` every protocol variant (:data:`jswim.agents.llm.VARIANTS`) next to random and
+             Q-learning baselines on both allowed sets: how much of the swimming is the model's
 """
 
 from __future__ import annotations
@@ -39,10 +41,20 @@ from jswim.prompt import SENTENCES, PromptTemplate
 from jswim.results import StudyStore, read_runs
 from jswim.stats import mean_interval, quartiles, wilson_interval
 
-STUDIES = ("curves", "history", "noise", "ablation", "inits", "swim")
+STUDIES = ("curves", "history", "noise", "ablation", "inits", "swim", "competence")
 AGENTS = ("llm", "qlearning", "random")
 DEFAULT_ZETAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
 INIT_CHOICES = ("paper", "cycle", "random", "++", "+-", "-+", "--")
+
+#: Protocol variant of the swim study's LLM runs; the paper studies always use "paper". Chosen
+#: from the measured competence study (README): on the embedded SmolLM2-135M no variant beat the
+#: random baseline (0 successes in 140 runs; the model moves D1 in >= 87% of steps under every
+#: variant), so none earns the switch and the paper's protocol stays the default.
+SWIM_VARIANT = "paper"
+
+#: Variants the competence study runs by default (each next to the same baselines).
+COMPETENCE_VARIANTS = ("paper", "summary", "shuffle", "shape-changing", "shape-changing+summary",
+                       "shape-changing+shuffle", "shape-changing+temperature")
 
 
 @dataclass(frozen=True)
@@ -159,6 +171,8 @@ class StudyOptions:
     prompt_file: str | None = None
     chunk: int = 64
     agents: tuple[str, ...] = AGENTS
+    variant: str | None = None  # LLM protocol variant; None: the study's (SWIM_VARIANT or "paper")
+    variants: tuple[str, ...] | None = None  # competence: the variants to compare (None: all default)
 
     def __post_init__(self) -> None:
         if self.steps < 1 or self.steps > 10_000:
@@ -178,6 +192,14 @@ class StudyOptions:
             raise ConfigError(f"noise levels must be >= 0, got {bad[0]}")
         if self.chunk < 1:
             raise ConfigError("--chunk must be >= 1")
+        from jswim.agents.llm import variant_allowed
+
+        for name in ([self.variant] if self.variant else []) + list(self.variants or ()):
+            variant_allowed(name)  # raises for an unknown name
+
+    def llm_variant(self, study: str) -> str:
+        """The protocol variant of the study's LLM runs (outside the competence study)."""
+        return self.variant or (SWIM_VARIANT if study == "swim" else "paper")
 
 
 @dataclass(frozen=True)
@@ -196,6 +218,7 @@ class Plan:
     drop: frozenset[str] = frozenset()
     allowed: str = "all"
     group: str = ""
+    variant: str = "paper"  # LLM protocol variant (jswim.agents.llm.VARIANTS); "" for baselines
 
 
 # -- study grids --------------------------------------------------------------------------------
@@ -218,6 +241,9 @@ def _init_label(init: tuple[int, ...] | str) -> str:
 
 def build(study: str, o: StudyOptions) -> list[Plan]:
     """The runs of ``study`` for options ``o``."""
+    from jswim.agents.llm import variant_allowed
+    from jswim.prompt import ALLOWED_MODES
+
     if study not in STUDIES:
         raise ConfigError(f"unknown study {study!r}; choose one of {', '.join(STUDIES)}")
     swimmers = o.swimmers or (("purcell",) if study == "swim" else ("purcell", "ng"))
@@ -225,19 +251,29 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
         if sw not in ("purcell", "ng", "nlink", "nsphere"):
             raise ConfigError(f"unknown swimmer {sw!r}; choose purcell, ng, nlink or nsphere")
     plans: list[Plan] = []
+    # Outside the competence study every LLM run uses one variant; its allowed set (if it sets
+    # one) applies to the baselines too, so they are offered what the model is offered.
+    variant = o.llm_variant(study)
+    allowed_default = variant_allowed(variant, o.allowed)
 
     def add(agent: str, sw: str, direction: int, init_choice: str, k: int, zeta: float, group: str,
-            n_ht: int | None = None, drop: frozenset[str] = frozenset()) -> None:
+            n_ht: int | None = None, drop: frozenset[str] = frozenset(), variant: str = variant,
+            allowed: str | None = None) -> None:
         init = _inits(init_choice, k)
         seed = o.seed * 1_000_003 + len(plans)
+        allowed = allowed or (variant_allowed(variant, o.allowed) if agent == "llm" else allowed_default)
         parts = [agent, sw, "px" if direction > 0 else "mx", f"i{_init_label(init)}", f"z{zeta:g}"]
         if n_ht is not None:
             parts.append(f"h{n_ht}")
         if drop:
             parts.append("no" + "".join(sorted(drop)))
+        if agent == "llm" and variant != "paper":
+            parts.append(variant)
+        elif agent != "llm" and allowed != o.allowed:
+            parts.append(allowed)
         parts.append(f"r{k}")
         plans.append(Plan("-".join(parts), agent, sw, direction, init, float(zeta), seed, o.steps,
-                          n_ht, frozenset(drop), o.allowed, group))
+                          n_ht, frozenset(drop), allowed, group, variant if agent == "llm" else ""))
 
     def with_baselines(sw: str, direction: int, init_choice: str, zeta: float, group: str, runs: int,
                        q_runs: int, **kw: Any) -> None:
@@ -279,6 +315,21 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     group = "full" if not drop else f"-{next(iter(drop))}"
                     for k in range(o.runs if o.runs is not None else 10):
                         add("llm", sw, d, init, k, o.zeta, group, n_ht=o.n_ht, drop=drop)
+    elif study == "competence":
+        runs = o.runs if o.runs is not None else 10
+        q_runs = o.q_runs if o.q_runs is not None else 100
+        init = o.init or "cycle"
+        for sw in swimmers:
+            for d in dirs or (1,):
+                if "llm" in o.agents:
+                    for name in o.variants or COMPETENCE_VARIANTS:
+                        for k in range(runs):
+                            add("llm", sw, d, init, k, o.zeta, name, n_ht=o.n_ht, variant=name)
+                for agent in ("random", "qlearning"):
+                    if agent in o.agents:
+                        for allowed in ALLOWED_MODES:
+                            for k in range(q_runs):
+                                add(agent, sw, d, init, k, o.zeta, allowed, allowed=allowed)
     elif study == "inits":
         for sw in swimmers:
             for d in dirs or (1, -1):
@@ -309,6 +360,7 @@ def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, leve
             "run_id": p.run_id, "agent": p.agent, "swimmer": p.swimmer, "direction": p.direction,
             "init": "".join("+" if v else "-" for v in levels0[i]), "zeta": p.zeta, "seed": p.seed,
             "n_ht": p.n_ht, "drop": ",".join(sorted(p.drop)), "allowed": p.allowed, "group": p.group,
+            "variant": p.variant,
             "steps": len(x), "final_x": x[-1] if x else 0.0,
             "signed_final_x": p.direction * (x[-1] if x else 0.0),
             "success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
@@ -357,12 +409,18 @@ class StudyResult:
     summary: list[dict[str, Any]]
     figures: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
+    llm_speed: dict[str, float] = field(default_factory=dict)  # calls, billed calls, wall s, calls/s
 
 
 def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, Any]:
     """Everything that defines a study's runs (compared when a folder is resumed)."""
     opts = dataclasses.asdict(o)
     opts.pop("chunk")
+    for name in ("variant", "variants"):  # left out when unset, so older folders keep their identity
+        if opts[name] is None:
+            opts.pop(name)
+    if study == "swim" and o.variant is None and SWIM_VARIANT != "paper":
+        opts["variant"] = SWIM_VARIANT
     template = PromptTemplate.from_file(o.prompt_file) if o.prompt_file else PromptTemplate()
     tpl = json.dumps(dataclasses.asdict(template), sort_keys=True)
     return {
@@ -410,6 +468,10 @@ def run_study(
     t0 = time.perf_counter()
     plans = build(study, options)
     ident = identity(study, options, backend)
+    if study == "competence":  # the variants' switches define the runs too
+        from jswim.agents.llm import VARIANTS
+
+        ident["variants"] = {v: VARIANTS[v] for v in options.variants or COMPETENCE_VARIANTS}
     folder = Path(out) if out is not None else default_folder(study, options, backend)
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
     store = StudyStore(folder, study, ident, extra={
@@ -417,6 +479,8 @@ def run_study(
         "prompt_template": dataclasses.asdict(template or PromptTemplate()),
         "success_criterion": "3 consecutive qualifying cycles within the horizon, no later failure (jswim.gait.judge)",
         "horizon": options.horizon,
+        "llm_variants": list(options.variants or COMPETENCE_VARIANTS) if study == "competence"
+        else [options.llm_variant(study)],
     })
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
@@ -433,23 +497,32 @@ def run_study(
         tick(agent, finished, total, "")
 
     llm_plans = [p for p in todo if p.agent == "llm"]
+    speed: dict[str, float] = {}
     if llm_plans:
         if backend is None:
             raise ConfigError("this study has LLM runs; give a backend")
-        finished = _run_llm(llm_plans, options, backend, store, template, tick, finished, total)
+        finished = _run_llm(llm_plans, options, backend, store, template, tick, finished, total, speed)
 
     rows = read_runs(folder)
     summary = summarize(rows)
-    store.finalize("complete", {"groups": summary})
+    # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
+    speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
+    store.finalize("complete", {"groups": summary, **({"llm_speed": speed} if speed else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
-    return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0)
+    return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed)
 
 
 def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
-             template: PromptTemplate | None, tick: ProgressFn, finished: int, total: int) -> int:
+             template: PromptTemplate | None, tick: ProgressFn, finished: int, total: int,
+             speed: dict[str, float] | None = None) -> int:
+    """Run the LLM plans, one lockstep batch per (variant, allowed) group and chunk.
+
+    ``speed`` (filled in) gets the calls made, the calls the server answered, the wall time and
+    calls per second of this session's LLM work.
+    """
     import asyncio
 
-    from jswim.agents.llm import LLMAgentConfig, LLMRunSpec, run_batch_async
+    from jswim.agents.llm import LLMRunSpec, run_batch_async, variant_config
     from jswim.llm.client import LLMClient
 
     def spec(p: Plan) -> LLMRunSpec:
@@ -459,6 +532,7 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     steps_total = sum(p.steps for p in plans)
     steps_done = 0
     t_start = time.perf_counter()
+    calls = {"calls": 0, "billed_calls": 0}
 
     def on_round(n: int) -> None:
         nonlocal steps_done
@@ -469,12 +543,15 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     async def go(settings: Any) -> int:
         nonlocal finished
         async with LLMClient(settings) as client:
-            for (allowed,), group in _groups(plans, "allowed").items():
-                cfg = LLMAgentConfig(allowed=allowed, **({"template": template} if template else {}))
+            for (variant, allowed), group in _groups(plans, "variant", "allowed").items():
+                cfg = variant_config(variant, allowed=allowed, **({"template": template} if template else {}))
                 for i in range(0, len(group), o.chunk):
                     chunk = group[i: i + o.chunk]
                     results = await run_batch_async([spec(p) for p in chunk], client, cfg,
                                                     transcript_dir=store.folder / "transcripts", on_round=on_round)
+                    for r in results:
+                        calls["calls"] += r.usage.calls
+                        calls["billed_calls"] += r.usage.billed_calls
                     rows = []
                     by_swimmer = _groups(chunk, "swimmer")
                     res_by_id = {r.run_id: r for r in results}
@@ -492,12 +569,19 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                     tick("llm", finished, total, f"LLM steps {steps_done}/{steps_total}")
         return finished
 
-    if backend.local:
-        from jswim.llm.local import LocalServer
+    try:
+        if backend.local:
+            from jswim.llm.local import LocalServer
 
-        with LocalServer(backend.gguf, n_parallel=backend.n_parallel) as srv:
-            return asyncio.run(go(backend.client_settings(srv.client_settings().base_url)))
-    return asyncio.run(go(backend.client_settings()))
+            with LocalServer(backend.gguf, n_parallel=backend.n_parallel) as srv:
+                t_start = time.perf_counter()  # the model's loading time is not LLM work
+                return asyncio.run(go(backend.client_settings(srv.client_settings().base_url)))
+        return asyncio.run(go(backend.client_settings()))
+    finally:
+        if speed is not None:
+            wall = time.perf_counter() - t_start
+            speed.update(calls, wall_s=wall, calls_per_s=calls["calls"] / wall if wall > 0 else 0.0,
+                         billed_calls_per_s=calls["billed_calls"] / wall if wall > 0 else 0.0)
 
 
 # -- summaries and figures ----------------------------------------------------------------------
@@ -505,7 +589,12 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
 
 def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, swimmer, direction, group): success rate with 95% Wilson CI, mean X/a in the
-    target direction with a bootstrap CI, steps-to-learn quartiles, tokens per step."""
+    target direction with a bootstrap CI, steps-to-learn quartiles, tokens per step.
+
+    ``tokens_per_step`` counts what the model read and wrote per decision (shared and cached calls
+    included) where rows record it. ``distinct`` is the number of different runs (start and
+    actions): at temperature 0 without noise, runs from the same start are identical copies, so
+    the intervals of such groups rest on fewer independent runs than ``n``."""
     out = []
     keys = ("agent", "swimmer", "direction", "group")
     grouped: dict[tuple, list[dict]] = {}
@@ -518,13 +607,17 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         stl = [r["steps_to_learn"] for r in g if r.get("steps_to_learn") is not None]
         q = quartiles(stl)
         steps = sum(r["steps"] for r in g) or 1
-        tokens = sum((r.get("prompt_tokens") or 0) + (r.get("completion_tokens") or 0) for r in g)
+        tokens = sum(r["tokens_seen"] if r.get("tokens_seen") is not None
+                     else (r.get("prompt_tokens") or 0) + (r.get("completion_tokens") or 0) for r in g)
+        distinct = len({(r.get("init"), json.dumps(r.get("actions"))) for r in g})
         out.append({
-            **dict(zip(keys, key)), "n": len(g), "success_rate": k / len(g), "success_lo": lo, "success_hi": hi,
+            **dict(zip(keys, key)), "n": len(g), "distinct": distinct,
+            "success_rate": k / len(g), "success_lo": lo, "success_hi": hi,
             "mean_x": m, "mean_x_lo": mlo, "mean_x_hi": mhi,
             "steps_to_learn_q25": q[0], "steps_to_learn_median": q[1], "steps_to_learn_q75": q[2],
             "learned": len(stl), "tokens_per_step": tokens / steps if tokens else None,
             "failed_steps": sum(r.get("failed_steps") or 0 for r in g),
+            "parse_retries": sum(r.get("parse_retries") or 0 for r in g),
             "cost_usd": sum(r.get("cost_usd") or 0.0 for r in g),
         })
     return out
@@ -563,4 +656,12 @@ def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path)
         paths += plots.save(plots.bars_figure(rows, "group", order, "(sentence removed)"), folder, "ablation")
     elif study == "inits":
         paths += plots.save(plots.bars_figure(rows, "group", None, "(initial configuration)"), folder, "inits")
+    elif study == "competence":
+        # One entry per LLM variant, then one per baseline (agent, allowed set).
+        entries = [{**r, "entry": r["group"] if r["agent"] == "llm" else f"{r['agent']} ({r['group']})"} for r in rows]
+        from jswim.agents.llm import VARIANTS
+
+        order = [v for v in VARIANTS if any(e["entry"] == v for e in entries)]
+        order += sorted({e["entry"] for e in entries} - set(order))
+        paths += plots.save(plots.competence_figure(entries, order), folder, "competence")
     return paths

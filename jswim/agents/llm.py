@@ -8,6 +8,14 @@ fixed-size env batch with a no-op action so the compiled step is reused. Optiona
 dealt into several cohorts that each step in lockstep on their own (``cohorts``), which hides
 this process's per-request CPU time behind the other cohorts' waiting.
 
+Variants of the paper's protocol (all off by default, each a field of :class:`LLMAgentConfig`
+recorded in every transcript and result row): the allowed set (every action, or only the moves
+that change the shape), the observed-progress summary sentence, the order of the options in S5
+shuffled per step (exposes position bias), and a per-request temperature with a seed derived
+from the run's seed, the step and the attempt (reproducible sampling; never cached). None of them
+chooses for the model: the model always has every allowed option (at least two), and nothing is
+ranked or pruned by observed value.
+
 A reply without a valid action is retried ``parse_retries`` times with a short corrective
 follow-up message (a new request, so temperature-0 caching does not replay the bad reply); if
 it still fails, the step executes the no-op ``[1, 0]`` and counts as a failed step. The executed
@@ -22,7 +30,9 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import hashlib
 import json
+import random
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence, TextIO
@@ -42,6 +52,7 @@ from jswim.prompt import (
     ClearingRule,
     History,
     HistoryRecord,
+    MoveStats,
     PositionBelowMinimumError,
     PromptConfig,
     PromptTemplate,
@@ -52,6 +63,8 @@ from jswim.prompt import (
     normalize_mask,
     parse_reply,
     render_prompt,
+    render_summary,
+    shape_key,
 )
 
 #: Executed when the model gives no valid action: hold still.
@@ -145,6 +158,16 @@ class LLMAgentConfig:
         Follow-up message of such a retry (``{allowed}`` is filled in).
     share_identical : bool
         Let temperature-0 requests use the disk cache and share identical in-flight requests.
+    summary : bool
+        Add the observed-progress sentence (:func:`jswim.prompt.render_summary`).
+    shuffle : bool
+        List the allowed actions in S5 in a new random order at every step (seeded by the run's
+        seed and the step); the grammar is unchanged.
+    temperature : float or None
+        Sampling temperature of every request; ``None`` keeps the client's (paper: 0). Above 0
+        each request carries a seed derived from the run's seed, step and attempt.
+    variant : str
+        Name of this combination of knobs (a label for tables; ``"paper"`` = the paper's).
     """
 
     allowed: str = "all"
@@ -155,12 +178,63 @@ class LLMAgentConfig:
     parse_retries: int = 2
     retry_prompt: str = DEFAULT_RETRY_PROMPT
     share_identical: bool = True
+    summary: bool = False
+    shuffle: bool = False
+    temperature: float | None = None
+    variant: str = "paper"
+
+    def __post_init__(self) -> None:
+        if self.temperature is not None and not 0.0 <= self.temperature <= 2.0:
+            raise ConfigError(f"temperature must lie in [0, 2], got {self.temperature}")
+
+    def knobs(self, client_temperature: float) -> dict[str, Any]:
+        """The variant switches as flat values (result rows, summaries)."""
+        t = self.temperature if self.temperature is not None else client_temperature
+        return {"variant": self.variant, "allowed": self.allowed, "summary": self.summary,
+                "shuffle": self.shuffle, "temperature": float(t)}
 
     def metadata(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
         t = self.template
         d["template"] = {"layout": t.layout, "sentences": dict(t.sentences), "record": t.record}
         return d
+
+
+#: Named protocol variants: the :class:`LLMAgentConfig` fields each one sets ("paper" sets none).
+#: Every switch is honest in the sense of the project: the model always sees every allowed
+#: option (at least two), nothing is ranked or pruned by observed value, and the summary reports
+#: observed data only.
+VARIANTS: dict[str, dict[str, Any]] = {
+    "paper": {},
+    "shape-changing": {"allowed": "shape-changing"},
+    "summary": {"summary": True},
+    "shape-changing+summary": {"allowed": "shape-changing", "summary": True},
+    "shuffle": {"shuffle": True},
+    "shape-changing+shuffle": {"allowed": "shape-changing", "shuffle": True},
+    "temperature": {"temperature": 0.7},
+    "shape-changing+temperature": {"allowed": "shape-changing", "temperature": 0.7},
+    "shape-changing+summary+temperature": {"allowed": "shape-changing", "summary": True, "temperature": 0.7},
+}
+
+
+def variant_config(name: str, **fields: Any) -> LLMAgentConfig:
+    """The agent config of variant ``name``: ``fields`` first, then the variant's switches.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown name.
+    """
+    if name not in VARIANTS:
+        raise ConfigError(f"unknown variant {name!r}; choose one of {', '.join(VARIANTS)}")
+    return LLMAgentConfig(**{**fields, **VARIANTS[name], "variant": name})
+
+
+def variant_allowed(name: str, default: str = "all") -> str:
+    """The allowed set variant ``name`` uses (``default`` when it leaves it alone)."""
+    if name not in VARIANTS:
+        raise ConfigError(f"unknown variant {name!r}; choose one of {', '.join(VARIANTS)}")
+    return VARIANTS[name].get("allowed", default)
 
 
 @dataclass
@@ -182,7 +256,9 @@ class RunResult:
     parse_retries: int = 0
     n_clears: int = 0
     usage: UsageTotals = field(default_factory=UsageTotals)
+    tokens_seen: int = 0  # prompt + reply tokens of every call, shared or cached ones included
     transcript: list[dict[str, Any]] | None = None  # in memory when no transcript folder is given
+    knobs: dict[str, Any] = field(default_factory=dict)  # the variant switches (LLMAgentConfig.knobs)
 
     @property
     def steps(self) -> int:
@@ -200,9 +276,10 @@ class RunResult:
             "failed_steps": self.failed_steps, "parse_retries": self.parse_retries,
             "http_retries": u.retries, "n_clears": self.n_clears, "calls": u.calls,
             "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
-            "completion_tokens": u.completion_tokens, "cost_usd": u.cost_usd,
+            "completion_tokens": u.completion_tokens, "cached_tokens": u.cached_tokens, "cost_usd": u.cost_usd,
+            "tokens_seen": self.tokens_seen,
             "levels0": self.levels0, "x": self.x, "actions": self.actions, "progress": self.progress,
-            "stuck": self.stuck,
+            "stuck": self.stuck, **self.knobs,
         }
 
 
@@ -218,12 +295,19 @@ class _Run:
     x: float = 0.0
     active: bool = True
     sink: TextIO | None = None
+    stats: MoveStats = field(default_factory=MoveStats)
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
             self.sink.write(json.dumps(record, default=_jsonable) + "\n")
         elif self.result.transcript is not None:
             self.result.transcript.append(record)
+
+
+def derived_seed(*parts: Any) -> int:
+    """A 31-bit seed from ``parts`` (run seed, step, purpose...): stable across runs and machines."""
+    digest = hashlib.blake2b(repr(parts).encode(), digest_size=8).digest()
+    return int.from_bytes(digest, "little") & 0x7FFFFFFF
 
 
 def _jsonable(obj: Any) -> Any:
@@ -331,10 +415,12 @@ class LLMDriver:
         text = SwimmerText(model.n_dof, model.lo, model.hi, model.dof_decimals, tuple(rocs))
         cfg = self.config
         prompt = PromptConfig(
-            n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, allowed=cfg.allowed, template=cfg.template, system=cfg.system
+            n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, allowed=cfg.allowed, template=cfg.template, system=cfg.system,
+            summary=cfg.summary, shuffle=cfg.shuffle,
         )
         result = RunResult(run_id, spec, n_ht, text.rocs, levels0=[int(v) for v in levels0],
-                           transcript=None if self.transcript_dir else [])
+                           transcript=None if self.transcript_dir else [],
+                           knobs=cfg.knobs(self.client.settings.temperature))
         run = _Run(result, text, prompt, History(cfg.clearing), np.array(dofs, np.float64))
         if self.transcript_dir is not None:
             self.transcript_dir.mkdir(parents=True, exist_ok=True)
@@ -349,28 +435,41 @@ class LLMDriver:
 
     async def _decide(self, run: _Run) -> tuple[Action, bool, dict[str, Any]]:
         cfg = self.config
+        spec = run.result.spec
+        step = run.result.steps + 1
         hist = run.history.records
-        prompt = render_prompt(run.text, run.prompt, run.result.spec.direction, hist, run.dofs, run.x)
         allowed = allowed_actions(run.text, cfg.allowed, run.dofs)
-        replies = [a.text() for a in allowed]
+        options = list(allowed)
+        if cfg.shuffle:  # same set, new order; seeded per run and step so a run replays exactly
+            random.Random(derived_seed(spec.seed, step, "shuffle")).shuffle(options)
+        summary = render_summary(run.text, run.stats, run.dofs, options, spec.direction) if cfg.summary else ""
+        prompt = render_prompt(run.text, run.prompt, spec.direction, hist, run.dofs, run.x,
+                               options=options, summary=summary)
+        replies = [a.text() for a in allowed]  # the grammar keeps one order: only the text is shuffled
         messages = build_messages(prompt, cfg.system)
+        temperature = cfg.temperature if cfg.temperature is not None else self.client.settings.temperature
         attempts = []
         action = None
         for k in range(cfg.parse_retries + 1):
-            res = await self.client.chat(messages, replies=replies, use_cache=cfg.share_identical)
+            # Sampling: a seed per run, step and attempt, so runs differ and each replays.
+            seed = derived_seed(spec.seed, step, k, "sample") if temperature > 0 else None
+            res = await self.client.chat(messages, replies=replies, temperature=cfg.temperature, seed=seed,
+                                         use_cache=cfg.share_identical)
             run.result.usage.add(res)
+            run.result.tokens_seen += res.usage.total_tokens
             action = parse_reply(res.text, allowed)
-            attempts.append({**res.as_dict(), "parsed": list(action) if action else None})
+            attempts.append({**res.as_dict(), "seed": seed, "parsed": list(action) if action else None})
             if action is not None:
                 break
             if k < cfg.parse_retries:
                 run.result.parse_retries += 1
                 messages = messages + [
                     {"role": "assistant", "content": res.text},
-                    {"role": "user", "content": cfg.retry_prompt.format(allowed=", ".join(replies))},
+                    {"role": "user", "content": cfg.retry_prompt.format(allowed=", ".join(a.text() for a in options))},
                 ]
         failed = action is None
-        return (NO_OP if failed else action), failed, {"prompt": prompt, "attempts": attempts}
+        log = {"prompt": prompt, "attempts": attempts, "options": [list(a) for a in options]}
+        return (NO_OP if failed else action), failed, log
 
     # -- the loop ----------------------------------------------------------------------------
 
@@ -442,6 +541,7 @@ class LLMDriver:
         x_before, x_after = run.x, float(out["x"])
         rec = HistoryRecord(res.steps + 1, tuple(run.dofs), tuple(float(v) for v in out["dofs"]), action,
                             x_before, x_after, bool(out["stuck"]))
+        run.stats.add(shape_key(run.text, rec.dofs_before), action, float(out["progress"]))
         cleared = run.history.add(rec, float(out["progress"]))
         run.dofs = np.asarray(out["dofs"], np.float64)
         run.x = x_after

@@ -85,6 +85,7 @@ class UsageTotals:
     retries: int = 0
     prompt_tokens: int = 0
     completion_tokens: int = 0
+    cached_tokens: int = 0  # of the prompt tokens, those the server took from its prefix cache
     cost_usd: float = 0.0
     latency_s: float = 0.0
 
@@ -101,6 +102,7 @@ class UsageTotals:
             self.billed_calls += 1
             self.prompt_tokens += result.usage.prompt_tokens
             self.completion_tokens += result.usage.completion_tokens
+            self.cached_tokens += result.usage.cached_tokens
             self.cost_usd += result.cost_usd
 
     def merge(self, others: Iterable["UsageTotals"]) -> "UsageTotals":
