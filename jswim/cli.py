@@ -102,6 +102,8 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                    help="constrained decoding (auto: grammar for the embedded/llama.cpp server)")
     b.add_argument("--temperature", type=float, default=0.0, help="sampling temperature (paper: 0)")
     b.add_argument("--parallel", type=int, default=4, help="decoding slots of the embedded server (default 4)")
+    b.add_argument("--threads", type=int, default=None, metavar="N",
+                   help="CPU threads of the embedded server (default: one per core; fewer on a busy machine)")
     b.add_argument("--concurrency", type=int, default=16, help="requests in flight at once (default 16)")
     b.add_argument("--cache-dir", default=None, metavar="DIR", help="persistent response cache (temperature 0)")
     p.add_argument("--out", default=None, metavar="FOLDER",
@@ -170,9 +172,11 @@ def _backend(args: argparse.Namespace):
         raise ConfigError(f"--temperature must lie in [0, 2], got {args.temperature}")
     if args.parallel < 1 or args.concurrency < 1:
         raise ConfigError("--parallel and --concurrency must be >= 1")
+    if args.threads is not None and args.threads < 1:
+        raise ConfigError(f"--threads must be >= 1, got {args.threads}")
     return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=args.api_key_env,
                    constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
-                   concurrency=args.concurrency, cache_dir=args.cache_dir)
+                   n_threads=args.threads, concurrency=args.concurrency, cache_dir=args.cache_dir)
 
 
 def _options(args: argparse.Namespace, study: str):
@@ -327,6 +331,9 @@ def _plot(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jswim`` command; returns the exit status."""
     args = build_parser().parse_args(argv)
+    import matplotlib
+
+    matplotlib.use("Agg")  # the command only writes figure files; never open a window
     from jswim.llm.errors import LLMError
 
     try:

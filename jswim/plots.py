@@ -14,15 +14,12 @@ from collections import defaultdict
 from pathlib import Path
 from typing import Any, Iterable, Sequence
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")  # files only; notebooks still show figures inline
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from matplotlib.figure import Figure  # noqa: E402
-
-from jswim.stats import mean_interval, wilson_interval  # noqa: E402
-from jswim.swimmers.models import SwimmerModel  # noqa: E402
+from jswim.stats import mean_interval, wilson_interval
+from jswim.swimmers.models import SwimmerModel
 
 AGENT_STYLE = {
     "llm": dict(color="C0", ls="-", label="LLM"),

@@ -78,6 +78,9 @@ class Backend:
         Sampling temperature (paper: 0).
     n_parallel : int
         Decoding slots of the embedded server.
+    n_threads : int or None
+        CPU threads of the embedded server (``None``: llama.cpp's choice, one per core). On a
+        machine busy with other work, fewer threads than cores keep decoding steady.
     concurrency : int
         Requests in flight at once.
     cache_dir : str or None
@@ -91,6 +94,7 @@ class Backend:
     constrain: str = "auto"
     temperature: float = 0.0
     n_parallel: int = 4
+    n_threads: int | None = None
     concurrency: int = 16
     cache_dir: str | None = None
 
@@ -520,10 +524,10 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     ``speed`` (filled in) gets the calls made, the calls the server answered, the wall time and
     calls per second of this session's LLM work.
     """
-    import asyncio
 
     from jswim.agents.llm import LLMRunSpec, run_batch_async, variant_config
     from jswim.llm.client import LLMClient
+    from jswim.llm.sync import run_sync
 
     def spec(p: Plan) -> LLMRunSpec:
         return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
@@ -573,10 +577,10 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
         if backend.local:
             from jswim.llm.local import LocalServer
 
-            with LocalServer(backend.gguf, n_parallel=backend.n_parallel) as srv:
+            with LocalServer(backend.gguf, n_parallel=backend.n_parallel, n_threads=backend.n_threads) as srv:
                 t_start = time.perf_counter()  # the model's loading time is not LLM work
-                return asyncio.run(go(backend.client_settings(srv.client_settings().base_url)))
-        return asyncio.run(go(backend.client_settings()))
+                return run_sync(go(backend.client_settings(srv.client_settings().base_url)))
+        return run_sync(go(backend.client_settings()))
     finally:
         if speed is not None:
             wall = time.perf_counter() - t_start

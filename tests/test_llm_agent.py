@@ -141,3 +141,18 @@ def test_duplicate_run_ids_are_rejected():
 
     with pytest.raises(ConfigError, match="duplicate"):
         run_batch([LLMRunSpec(), LLMRunSpec()], ClientSettings(base_url="http://127.0.0.1:9/v1"))
+
+
+def test_blocking_call_works_inside_a_running_event_loop():
+    # Jupyter runs an event loop in the main thread; run_batch must not fail there.
+    import asyncio
+
+    spec = LLMRunSpec(n_steps=4, seed=5)
+    with FakeServer(reply=hash_reply) as srv:
+        (outside,) = run_batch([spec], settings(srv))
+
+        async def inside():
+            return run_batch([spec], settings(srv))
+
+        (within,) = asyncio.run(inside())
+    assert within.actions == outside.actions and np.allclose(within.x, outside.x)

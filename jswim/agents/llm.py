@@ -45,6 +45,7 @@ from jswim import env
 from jswim.errors import ConfigError
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.errors import LLMError, LLMServerError
+from jswim.llm.sync import run_sync
 from jswim.llm.usage import UsageTotals
 from jswim.prompt import (
     DEFAULT_TEMPLATE,
@@ -624,8 +625,8 @@ def run_batch(
             return await run_batch_async(specs, client, config, transcript_dir, cohorts)
 
     if settings is not None:
-        return asyncio.run(go(settings))
+        return run_sync(go(settings))
     from jswim.llm.local import LocalServer
 
     with LocalServer(**local_options) as srv:
-        return asyncio.run(go(srv.client_settings()))
+        return run_sync(go(srv.client_settings()))

@@ -1,0 +1,25 @@
+"""Run a coroutine to completion from synchronous code, also where an event loop already runs."""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+from typing import Any, Coroutine, TypeVar
+
+T = TypeVar("T")
+
+
+def run_sync(coro: Coroutine[Any, Any, T]) -> T:
+    """Run ``coro`` to completion and return its result.
+
+    Outside an event loop this is :func:`asyncio.run`. Inside one (Jupyter, IPython, an async
+    application) ``asyncio.run`` refuses to start a second loop in the same thread, so the
+    coroutine gets its own loop in a worker thread and this call blocks until it is done. An
+    httpx client is bound to the loop it was opened on, so ``coro`` must open its own client.
+    """
+    try:
+        asyncio.get_running_loop()
+    except RuntimeError:
+        return asyncio.run(coro)
+    with concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="jswim-loop") as pool:
+        return pool.submit(asyncio.run, coro).result()
