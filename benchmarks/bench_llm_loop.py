@@ -9,7 +9,7 @@ prompt, parsing; printed below), because every request of the round is built bef
 and handled after it. ``--cohorts K`` splits the runs into K independently stepping cohorts so
 one cohort's CPU work overlaps the others' waiting.
 
-Run from the repository root: ``python -m benchmarks.bench_llm_loop [--runs 64 --steps 50
+Run from the repository root: ``python benchmarks/bench_llm_loop.py [--runs 64 --steps 50
 --latency 0.1]``. By default the server runs in its own process, as a real one would; ``--inprocess``
 puts it on a thread of this process (then it competes for the GIL).
 """
@@ -21,10 +21,14 @@ import asyncio
 import subprocess
 import sys
 import time
+from pathlib import Path
 
-from jswim.agents.llm import LLMAgentConfig, LLMRunSpec, run_batch_async
-from jswim.llm import ClientSettings, LLMClient
-from tests.fakeserver import FakeServer, hash_reply
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # the fake server lives in tests/
+
+from jswim.agents.llm import LLMAgentConfig, LLMRunSpec, run_batch_async  # noqa: E402
+from jswim.llm import ClientSettings, LLMClient  # noqa: E402
+from tests.fakeserver import FakeServer, hash_reply  # noqa: E402
 
 
 def specs(runs: int, steps: int, swimmer: str) -> list[LLMRunSpec]:
@@ -59,7 +63,7 @@ def main() -> None:
         url, stop = srv.url, srv.stop
     else:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "tests.fakeserver", "--latency", str(L)], stdout=subprocess.PIPE, text=True
+            [sys.executable, "-m", "tests.fakeserver", "--latency", str(L)], stdout=subprocess.PIPE, text=True, cwd=ROOT
         )
         url = proc.stdout.readline().strip()
         stop = proc.terminate

@@ -132,11 +132,11 @@ def _plot_mean(ax: Any, rows: Sequence[dict], signed: bool = False, **style: Any
 
 
 def curves_figure(rows: Sequence[dict], models: dict[str, SwimmerModel],
-                  cycles: dict[str, tuple[Sequence[int], Sequence[tuple[int, int]]]] | None = None) -> Figure:
+                  cycles: dict[str, tuple] | None = None) -> Figure:
     """X/a against step n for each agent, one column per swimmer (paper Fig. 2).
 
-    ``cycles`` maps a swimmer name to ``(start levels, moves)`` of the stroke cycle to sketch under
-    its curves (e.g. the one the LLM learned).
+    ``cycles`` maps a swimmer name to ``(start levels, moves)`` or ``(start levels, moves, agent)``
+    of the stroke cycle to sketch under its curves (e.g. the one the LLM learned).
     """
     swimmers = sorted({r["swimmer"] for r in rows})
     fig, axes = plt.subplots(2, len(swimmers), figsize=(5.2 * len(swimmers), 5.2), squeeze=False,
@@ -151,8 +151,9 @@ def curves_figure(rows: Sequence[dict], models: dict[str, SwimmerModel],
         ax.set_title(models[sw].label if sw in models else sw)
         ax.legend(fontsize=8)
         if cycles and sw in cycles and sw in models:
-            start, moves = cycles[sw]
-            draw_cycle(axes[1, j], models[sw], start, moves, title="learned stroke cycle")
+            start, moves, *who = cycles[sw]
+            by = f" by {AGENT_STYLE.get(who[0], dict(label=who[0]))['label']}" if who else ""
+            draw_cycle(axes[1, j], models[sw], start, moves, title=f"stroke cycle learned{by}")
         else:
             axes[1, j].axis("off")
     fig.tight_layout()

@@ -649,7 +649,7 @@ def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path)
                 for dof, roc in [tuple(a) for a in r["actions"]][:s]:
                     if roc:
                         levels[dof - 1] = 1 if roc > 0 else 0
-                cycles[sw] = (levels, acts)
+                cycles[sw] = (levels, acts, r["agent"])
         paths += plots.save(plots.curves_figure(rows, models, cycles), folder, study)
     elif study == "history":
         paths += plots.save(plots.history_figure(rows), folder, "history")
