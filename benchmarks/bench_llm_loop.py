@@ -53,7 +53,8 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=50, help="S, steps per run")
     ap.add_argument("--latency", type=float, default=0.1, help="L, seconds per server answer")
     ap.add_argument("--swimmer", default="purcell")
-    ap.add_argument("--cohorts", type=int, default=1, help="independent lockstep cohorts (1 = one env step per round)")
+    ap.add_argument("--cohorts", type=int, default=8,
+                    help="independent lockstep cohorts (default 8; 1 = one env step per round)")
     ap.add_argument("--inprocess", action="store_true", help="serve from a thread of this process")
     args = ap.parse_args()
     R, S, L = args.runs, args.steps, args.latency

@@ -105,6 +105,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--threads", type=int, default=None, metavar="N",
                    help="CPU threads of the embedded server (default: one per core; fewer on a busy machine)")
     b.add_argument("--concurrency", type=int, default=16, help="requests in flight at once (default 16)")
+    b.add_argument("--cohorts", type=int, default=1, metavar="K",
+                   help="advance the LLM runs in K independent lockstep cohorts (default 1; results do not "
+                        "change; more helps against a fast server with many runs)")
     b.add_argument("--cache-dir", default=None, metavar="DIR", help="persistent response cache (temperature 0)")
     p.add_argument("--out", default=None, metavar="FOLDER",
                    help="output folder (default jswim-out/<study>-<hash of the settings>; rerun to resume)")
@@ -172,11 +175,14 @@ def _backend(args: argparse.Namespace):
         raise ConfigError(f"--temperature must lie in [0, 2], got {args.temperature}")
     if args.parallel < 1 or args.concurrency < 1:
         raise ConfigError("--parallel and --concurrency must be >= 1")
+    if args.cohorts < 1:
+        raise ConfigError(f"--cohorts must be >= 1, got {args.cohorts}")
     if args.threads is not None and args.threads < 1:
         raise ConfigError(f"--threads must be >= 1, got {args.threads}")
     return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=args.api_key_env,
                    constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
-                   n_threads=args.threads, concurrency=args.concurrency, cache_dir=args.cache_dir)
+                   n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
+                   cache_dir=args.cache_dir)
 
 
 def _options(args: argparse.Namespace, study: str):

@@ -83,6 +83,11 @@ class Backend:
         machine busy with other work, fewer threads than cores keep decoding steady.
     concurrency : int
         Requests in flight at once.
+    cohorts : int
+        Lockstep cohorts of a chunk of LLM runs (:func:`jswim.agents.llm.run_batch_async`); the
+        results do not depend on it. More than 1 overlaps this process's per-request CPU work with
+        other cohorts' waiting, which pays against a fast server with many distinct runs; 1 keeps
+        identical temperature-0 requests of different runs in flight together, so they are sent once.
     cache_dir : str or None
         Response cache (temperature 0 only).
     """
@@ -96,6 +101,7 @@ class Backend:
     n_parallel: int = 4
     n_threads: int | None = None
     concurrency: int = 16
+    cohorts: int = 1
     cache_dir: str | None = None
 
     @property
@@ -552,7 +558,8 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                 for i in range(0, len(group), o.chunk):
                     chunk = group[i: i + o.chunk]
                     results = await run_batch_async([spec(p) for p in chunk], client, cfg,
-                                                    transcript_dir=store.folder / "transcripts", on_round=on_round)
+                                                    transcript_dir=store.folder / "transcripts", on_round=on_round,
+                                                    cohorts=min(backend.cohorts, len(chunk)))
                     for r in results:
                         calls["calls"] += r.usage.calls
                         calls["billed_calls"] += r.usage.billed_calls

@@ -118,6 +118,7 @@ class FakeServer:
         self.auth_headers: list[str | None] = []
         self.n_requests = 0
         self.n_answered = 0
+        self.n_connections = 0  # TCP connections accepted (keep-alive reuse shows here)
         self.in_flight = 0
         self.max_in_flight = 0
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -201,6 +202,7 @@ class FakeServer:
     # -- HTTP --------------------------------------------------------------------------------
 
     async def _connection(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        self.n_connections += 1
         try:
             while True:
                 head = await reader.readuntil(b"\r\n\r\n")

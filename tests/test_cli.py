@@ -94,6 +94,8 @@ def test_error_paths_exit_2_with_one_line(server, tmp_path, capsys):
         (["swim", "--prompt-file", str(tmp_path / "none.txt")], "--prompt-file"),
         (["swim", "--base-url", "http://127.0.0.1:9/v1", "--model", "x", "--out", str(tmp_path / "u")], "cannot reach"),
         (["swim", "--model", "gpt-4"], "--base-url"),
+        (["swim", "--cohorts", "0"], "--cohorts"),
+        (["swim", "--threads", "0"], "--threads"),
         (["study", "nosuch"], "invalid choice"),
         (["plot", str(tmp_path)], "not a jswim study folder"),
     ]

@@ -322,3 +322,45 @@ def test_cancelled_owner_does_not_hang_sharers():
         owner, sharer = run(scenario())
         assert isinstance(owner, asyncio.CancelledError)
         assert isinstance(sharer, LLMServerError) and "cancelled" in str(sharer)
+
+
+# -- transports ---------------------------------------------------------------------------------
+
+
+def test_loopback_http_gets_the_asyncio_transport():
+    from jswim.llm.transport import LoopbackTransport
+
+    def transport(s):
+        return LLMClient(s)._http_client()._transport
+
+    assert isinstance(transport(settings("http://127.0.0.1:8080/v1")), LoopbackTransport)
+    assert isinstance(transport(settings("http://localhost:8080/v1")), LoopbackTransport)
+    assert not isinstance(transport(settings("http://127.0.0.1:8080/v1", fast_transport=False)), LoopbackTransport)
+    assert not isinstance(transport(settings("https://api.openai.com/v1")), LoopbackTransport)
+    assert not isinstance(transport(settings("http://10.1.2.3:8000/v1")), LoopbackTransport)
+
+
+@pytest.mark.parametrize("fast", [True, False], ids=["asyncio", "httpx-default"])
+def test_both_transports_recover_from_the_same_faults(server, fast):
+    server.add_faults(Fault.server_error(500), Fault.drop(), Fault.malformed(), Fault.delay(3.0), Fault.rate_limit())
+    res = run(one_call(settings(server, max_retries=5, timeout_s=0.5, fast_transport=fast)))
+    assert res.text == "[2, 1]" and res.retries == 5 and server.n_answered == 1
+
+
+@pytest.mark.parametrize("fast", [True, False], ids=["asyncio", "httpx-default"])
+def test_both_transports_keep_the_connection_alive(server, fast):
+    async def calls():
+        async with LLMClient(settings(server, max_concurrency=1, fast_transport=fast)) as c:
+            return [(await c.chat(MSG, use_cache=False)).text for _ in range(5)]
+
+    assert run(calls()) == ["[2, 1]"] * 5
+    assert server.n_requests == 5 and server.n_connections == 1
+
+
+@pytest.mark.parametrize("fast", [True, False], ids=["asyncio", "httpx-default"])
+def test_both_transports_report_a_dead_server(fast):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(LLMServerError, match="connection failed"):
+        run(one_call(settings(f"http://127.0.0.1:{port}/v1", max_retries=1, fast_transport=fast)))

@@ -34,6 +34,7 @@ import httpx
 from jswim.llm import constrain
 from jswim.llm.cache import ResponseCache, request_key
 from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError
+from jswim.llm.transport import LoopbackTransport
 from jswim.llm.usage import PriceTable, Usage
 
 #: HTTP statuses worth retrying: timeout, conflict, rate limit (5xx are added in code).
@@ -76,6 +77,9 @@ class ClientSettings:
         Directory of the response cache; ``None`` disables it.
     prices : mapping or None
         USD per 1M tokens by model name; ``None`` uses :data:`jswim.llm.usage.DEFAULT_PRICES`.
+    fast_transport : bool
+        For ``http://`` servers on loopback, use :class:`jswim.llm.transport.LoopbackTransport`
+        (asyncio streams) instead of httpx's default transport (anyio). Default True.
     """
 
     base_url: str = "https://api.openai.com/v1"
@@ -94,6 +98,7 @@ class ClientSettings:
     server_kind: str = "generic"
     cache_dir: str | None = None
     prices: Mapping[str, tuple[float, float]] | None = field(default=None, compare=False)
+    fast_transport: bool = field(default=True, compare=False)
 
     def __post_init__(self) -> None:
         if self.constrain not in constrain.MODES:
@@ -283,12 +288,18 @@ class LLMClient:
             # Built once and shared: httpx builds a context per client even for plain http, and
             # loading the CA files takes ~15 ms, which for 64 slots was a second of every study.
             self._ssl = httpx.create_ssl_context()
+        limits = httpx.Limits(max_connections=1, max_keepalive_connections=1)
+        loopback = _is_loopback(s.base_url)
+        # Plain http on this machine: asyncio streams instead of anyio's (see transport.py);
+        # about 8% less wall time per lockstep round against a fast server.
+        fast = loopback and s.base_url.startswith("http://") and s.fast_transport
         return httpx.AsyncClient(
             timeout=httpx.Timeout(s.timeout_s),
-            limits=httpx.Limits(max_connections=1, max_keepalive_connections=1),
+            limits=limits,
             verify=self._ssl,
+            transport=LoopbackTransport(limits) if fast else None,
             # Proxy variables must not divert loopback traffic (the embedded server).
-            trust_env=not _is_loopback(s.base_url),
+            trust_env=not loopback,
         )
 
     async def aclose(self) -> None:
