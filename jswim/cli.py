@@ -214,8 +214,9 @@ def _options(args: argparse.Namespace, study: str):
 def _progress():
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
-    return Progress(TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(),
-                    TextColumn("{task.fields[info]}"), TimeElapsedColumn(), transient=False)
+    # A short bar leaves room for the LLM status (steps, requests in flight, tokens, cache hits).
+    return Progress(TextColumn("[bold]{task.description}"), BarColumn(bar_width=20), MofNCompleteColumn(),
+                    TimeElapsedColumn(), TextColumn("{task.fields[info]}"), transient=False)
 
 
 def _run(study: str, args: argparse.Namespace) -> int:
@@ -228,7 +229,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
         task = bar.add_task("runs", total=None, info="")
 
         def tick(phase: str, done: int, total: int, info: str = "") -> None:
-            label = {"llm": "LLM runs", "qlearning": "Q-learning", "random": "random policy"}.get(phase, "runs")
+            label = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning",
+                     "random": "random policy"}.get(phase, "runs")
             bar.update(task, completed=done, total=total, description=label, info=info)
 
         try:

@@ -471,7 +471,9 @@ def run_study(
     out : path, optional
         Study folder (default :func:`default_folder`). Finished runs found there are kept.
     progress : callable, optional
-        ``progress(phase, done, total)`` after each finished batch of runs.
+        ``progress(phase, done, total, info)`` (:data:`ProgressFn`): after each finished batch of
+        runs and each LLM round (phase ``"llm"``), and every 0.5 s while LLM requests are out
+        (phase ``"llm-live"``: steps done, requests in flight, tokens, cache hits, shared calls).
     figures : bool
         Also draw the study's figures into ``out/figures``.
     """
@@ -531,6 +533,8 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     calls per second of this session's LLM work.
     """
 
+    import asyncio
+
     from jswim.agents.llm import LLMRunSpec, run_batch_async, variant_config
     from jswim.llm.client import LLMClient
     from jswim.llm.sync import run_sync
@@ -544,41 +548,65 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     t_start = time.perf_counter()
     calls = {"calls": 0, "billed_calls": 0}
 
+    live: list[LLMClient] = []  # the open client, for its running counts
+
+    def report(phase: str = "llm") -> None:
+        rate = steps_done / max(time.perf_counter() - t_start, 1e-9)
+        info = f"steps {steps_done}/{steps_total} {rate:.1f}/s"
+        if live:
+            c = live[0].counts
+            info += f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · {c.cache_hits} cached · {c.shared} shared"
+        tick(phase, finished, total, info)
+
     def on_round(n: int) -> None:
         nonlocal steps_done
         steps_done += n
-        rate = steps_done / max(time.perf_counter() - t_start, 1e-9)
-        tick("llm", finished, total, f"LLM steps {steps_done}/{steps_total} ({rate:.1f}/s)")
+        report()
+
+    async def keep_reporting() -> None:
+        # Rounds of a slow model take seconds; show the requests in flight meanwhile.
+        while True:
+            await asyncio.sleep(0.5)
+            report("llm-live")
 
     async def go(settings: Any) -> int:
-        nonlocal finished
         async with LLMClient(settings) as client:
-            for (variant, allowed), group in _groups(plans, "variant", "allowed").items():
-                cfg = variant_config(variant, allowed=allowed, **({"template": template} if template else {}))
-                for i in range(0, len(group), o.chunk):
-                    chunk = group[i: i + o.chunk]
-                    results = await run_batch_async([spec(p) for p in chunk], client, cfg,
-                                                    transcript_dir=store.folder / "transcripts", on_round=on_round,
-                                                    cohorts=min(backend.cohorts, len(chunk)))
-                    for r in results:
-                        calls["calls"] += r.usage.calls
-                        calls["billed_calls"] += r.usage.billed_calls
-                    rows = []
-                    by_swimmer = _groups(chunk, "swimmer")
-                    res_by_id = {r.run_id: r for r in results}
-                    for (_sw,), members in by_swimmer.items():
-                        res = [res_by_id[p.run_id] for p in members]
-                        steps = max(len(r.x) for r in res)
-                        acts = np.array([r.actions + [1] * (steps - len(r.actions)) for r in res], np.int64)
-                        xs = np.array([r.x + [r.x[-1] if r.x else 0.0] * (steps - len(r.x)) for r in res])
-                        lv = np.array([r.levels0 for r in res], np.int64)
-                        extra = [{k: v for k, v in r.as_row().items()
-                                  if k not in ("x", "actions", "progress", "stuck", "levels0")} for r in res]
-                        rows += _judge_rows(members, acts, xs, lv, o.horizon, extra)
-                    store.add_runs(rows)
-                    finished += len(chunk)
-                    tick("llm", finished, total, f"LLM steps {steps_done}/{steps_total}")
+            live.append(client)
+            reporter = asyncio.ensure_future(keep_reporting())
+            try:
+                await _llm_chunks(client)
+            finally:
+                reporter.cancel()
+                await asyncio.gather(reporter, return_exceptions=True)
         return finished
+
+    async def _llm_chunks(client: Any) -> None:
+        nonlocal finished
+        for (variant, allowed), group in _groups(plans, "variant", "allowed").items():
+            cfg = variant_config(variant, allowed=allowed, **({"template": template} if template else {}))
+            for i in range(0, len(group), o.chunk):
+                chunk = group[i: i + o.chunk]
+                results = await run_batch_async([spec(p) for p in chunk], client, cfg,
+                                                transcript_dir=store.folder / "transcripts", on_round=on_round,
+                                                cohorts=min(backend.cohorts, len(chunk)))
+                for r in results:
+                    calls["calls"] += r.usage.calls
+                    calls["billed_calls"] += r.usage.billed_calls
+                rows = []
+                by_swimmer = _groups(chunk, "swimmer")
+                res_by_id = {r.run_id: r for r in results}
+                for (_sw,), members in by_swimmer.items():
+                    res = [res_by_id[p.run_id] for p in members]
+                    steps = max(len(r.x) for r in res)
+                    acts = np.array([r.actions + [1] * (steps - len(r.actions)) for r in res], np.int64)
+                    xs = np.array([r.x + [r.x[-1] if r.x else 0.0] * (steps - len(r.x)) for r in res])
+                    lv = np.array([r.levels0 for r in res], np.int64)
+                    extra = [{k: v for k, v in r.as_row().items()
+                              if k not in ("x", "actions", "progress", "stuck", "levels0")} for r in res]
+                    rows += _judge_rows(members, acts, xs, lv, o.horizon, extra)
+                store.add_runs(rows)
+                finished += len(chunk)
+                tick("llm", finished, total, f"steps {steps_done}/{steps_total}")
 
     try:
         if backend.local:

@@ -488,9 +488,10 @@ class LLMDriver:
             for t in pending:  # a cohort failed: stop the others too
                 t.cancel()
             await asyncio.gather(*pending, return_exceptions=True)
-            for t in done:
-                if t.exception() is not None:
-                    raise t.exception()
+            # Read every finished cohort's exception (an unread one is logged at exit), raise the first.
+            errors = [t.exception() for t in done if not t.cancelled() and t.exception() is not None]
+            if errors:
+                raise errors[0]
         finally:
             for run in self.runs:
                 if run.active:

@@ -237,6 +237,17 @@ class _Slot:
         self.http: httpx.AsyncClient | None = None
 
 
+@dataclass
+class LiveCounts:
+    """Running totals of one client, for progress displays."""
+
+    in_flight: int = 0  # HTTP requests sent and not yet answered
+    answered: int = 0  # calls the server answered
+    tokens: int = 0  # prompt + completion tokens the server reported
+    cache_hits: int = 0  # calls answered from the disk cache
+    shared: int = 0  # calls that waited on an identical request already in flight
+
+
 class LLMClient:
     """Async chat-completions client; use as ``async with LLMClient(settings) as client``.
 
@@ -256,6 +267,7 @@ class LLMClient:
         self._all_slots: list[_Slot] = []
         self._ssl: ssl.SSLContext | None = None
         self.n_requests = 0  # HTTP attempts made
+        self.counts = LiveCounts()
 
     def __repr__(self) -> str:  # never show the key
         return f"LLMClient(base_url={self._where!r}, model={self.settings.model!r})"
@@ -386,9 +398,11 @@ class LLMClient:
         if self._cache is not None:
             hit = self._cache.get(key)
             if hit is not None:
+                self.counts.cache_hits += 1
                 return self._from_cache(hit, mode, time.perf_counter() - t0)
         pending = self._inflight.get(key)
         if pending is not None:
+            self.counts.shared += 1
             res = await asyncio.shield(pending)
             return replace(res, shared=True, retries=0, latency_s=time.perf_counter() - t0)
         fut = asyncio.get_running_loop().create_future()
@@ -447,7 +461,15 @@ class LLMClient:
                 if slot.http is None:
                     slot.http = self._http_client()
                 self.n_requests += 1
-                return self._attempt_result(await self._attempt(slot.http, payload), mode, t0, retries)
+                self.counts.in_flight += 1
+                try:
+                    got = await self._attempt(slot.http, payload)
+                finally:
+                    self.counts.in_flight -= 1
+                res = self._attempt_result(got, mode, t0, retries)
+                self.counts.answered += 1
+                self.counts.tokens += res.usage.prompt_tokens + res.usage.completion_tokens
+                return res
             except _Failure as fail:
                 if retries >= s.max_retries:
                     msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts"
