@@ -309,11 +309,14 @@ def _gaits(args: argparse.Namespace) -> int:
     for d in args.direction:
         cycles = gait.best_cycles(model, d, args.max_len)
         print(f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}: {len(cycles)} closed cycles; best first")
-        print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9}  start  moves (DOF, ROC)")
+        print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9} simple"
+              "  start  moves (DOF, ROC)")
         for i, c in enumerate(cycles[: args.top]):
             start = "".join("+" if v else "-" for v in c.start)
             moves = " ".join(f"[{dof}, {roc}]" for dof, roc in c.moves)
-            print(f"{i + 1:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f}  {start:5}  {moves}")
+            print(f"{i + 1:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f} "
+                  f"{'yes' if c.simple else 'no':>6}  {start:5}  {moves}")
+        print("simple: no shape visited twice per period; the others add detours that go back and forth")
         if args.out:
             from jswim import plots
 

@@ -90,6 +90,20 @@ class Cycle:
         """The cycle as ``(dof, roc)`` pairs, ``dof`` 1-based as in the prompt."""
         return tuple(decode_action(a) for a in self.actions)
 
+    @property
+    def simple(self) -> bool:
+        """No shape is visited twice within a period.
+
+        A cycle that is not simple is a simple one with detours (e.g. a DOF moved out and straight
+        back): without net rotation the detours add steps but no displacement.
+        """
+        levels = list(self.start)
+        seen = {tuple(levels)}
+        for dof, roc in self.moves:
+            levels[dof - 1] = 1 if roc > 0 else 0
+            seen.add(tuple(levels))
+        return len(seen) == self.period
+
 
 class GaitReport(NamedTuple):
     """Verdict on a batch of runs (leading axis: runs).

@@ -37,6 +37,18 @@ def test_reciprocal_stroke_goes_nowhere(swimmer, dof):
     assert abs(float(r.x[0])) > 1e-4  # each half-stroke does move the body
 
 
+@pytest.mark.parametrize("swimmer", ["nlink", "nsphere"])
+def test_detours_add_steps_but_no_displacement(swimmer):
+    # Without net rotation a closed walk's displacement is the sum over the simple cycles it
+    # decomposes into; a back-and-forth detour is a reciprocal stroke and contributes nothing.
+    cycles = gait.best_cycles(env.make_params(swimmer).model, 1)
+    best = cycles[0]
+    assert best.simple
+    detoured = [c for c in cycles if not c.simple and c.period == best.period + 2]
+    # The best cycle with one detour inserted: the same displacement per period to 1e-9.
+    assert any(abs(c.displacement - best.displacement) < 1e-9 for c in detoured)
+
+
 def test_three_link_case_equals_purcell_and_three_sphere_cycle_equals_ng():
     purcell = env.step_table(env.make_params("purcell").model)[0]
     three = env.step_table(env.make_params("nlink", n_links=3, d_max=np.pi / 3).model)[0]
