@@ -30,7 +30,7 @@ import numpy as np
 
 from jswim.agents import qlearning
 from jswim.agents.qlearning import QConfig, batch_params, train_batch
-from jswim.env import EnvParams, make_params, step_table
+from jswim.env import EnvParams, make_params, step_table, uniforms
 
 
 def numpy_train(u: np.ndarray, params: EnvParams, config: QConfig) -> dict[str, np.ndarray]:
@@ -123,7 +123,7 @@ def jax_uniforms(keys: jax.Array, steps: int) -> np.ndarray:
     """The uniforms :func:`train_batch` draws for these keys, time-major (steps, B, 2)."""
     dtype = jnp.result_type(float)
     runs = jax.vmap(lambda k: jax.random.split(k)[1])(keys)
-    u = jax.vmap(lambda k: qlearning._uniforms(k, (steps, 2), dtype))(runs)
+    u = jax.vmap(lambda k: uniforms(k, (steps, 2), dtype))(runs)
     return np.asarray(jnp.swapaxes(u, 0, 1))
 
 

@@ -532,7 +532,6 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     ``speed`` (filled in) gets the calls made, the calls the server answered, the wall time and
     calls per second of this session's LLM work.
     """
-
     import asyncio
 
     from jswim.agents.llm import LLMRunSpec, run_batch_async, variant_config
@@ -606,7 +605,7 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                     rows += _judge_rows(members, acts, xs, lv, o.horizon, extra)
                 store.add_runs(rows)
                 finished += len(chunk)
-                tick("llm", finished, total, f"steps {steps_done}/{steps_total}")
+                report()
 
     try:
         if backend.local:

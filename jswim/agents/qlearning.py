@@ -41,7 +41,7 @@ import numpy as np
 import optax
 from jax import Array
 
-from jswim.env import EnvParams, advance, make_params, reset
+from jswim.env import EnvParams, advance, make_params, reset, uniforms
 from jswim.errors import ConfigError
 from jswim.gait import GaitReport, judge
 
@@ -227,13 +227,6 @@ def _act(q_row: Array, mask: Array, epsilon: Array, u: Array, tie_break: str) ->
     return _pick(candidates, v), explore
 
 
-def _uniforms(key: Array, shape: tuple[int, ...], dtype: Any) -> Array:
-    # The non-partitionable threefry uses both words of each hash: half the cost on CPU, and
-    # still the same numbers whether or not the call is vmapped.
-    with jax.threefry_partitionable(False):
-        return jax.random.uniform(key, shape, dtype)
-
-
 @jax.custom_vjp
 def _entry(q: Array, corner: Array, action: Array) -> Array:
     """``q[corner, action]`` (0 for corner -1); its gradient is a one-hot table.
@@ -310,7 +303,7 @@ def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
 
     steps = config.steps
     # One draw for the whole run: column 0 drives the agent, column 1 is the env's noise Y.
-    inputs = (jnp.arange(steps), _uniforms(k_run, (steps, 2), dtype))
+    inputs = (jnp.arange(steps), uniforms(k_run, (steps, 2), dtype))
     nothing = _Pending(jnp.int32(-1), jnp.int32(0), jnp.zeros((), dtype))
     carry = (state, q, opt.init(q), nothing)
     (_, q, opt_state, pending), (acts, x, explored) = jax.lax.scan(body, carry, inputs)

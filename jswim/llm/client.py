@@ -242,7 +242,6 @@ class LiveCounts:
     """Running totals of one client, for progress displays."""
 
     in_flight: int = 0  # HTTP requests sent and not yet answered
-    answered: int = 0  # calls the server answered
     tokens: int = 0  # prompt + completion tokens the server reported
     cache_hits: int = 0  # calls answered from the disk cache
     shared: int = 0  # calls that waited on an identical request already in flight
@@ -467,7 +466,6 @@ class LLMClient:
                 finally:
                     self.counts.in_flight -= 1
                 res = self._attempt_result(got, mode, t0, retries)
-                self.counts.answered += 1
                 self.counts.tokens += res.usage.prompt_tokens + res.usage.completion_tokens
                 return res
             except _Failure as fail:
