@@ -188,11 +188,14 @@ class LLMAgentConfig:
         if self.temperature is not None and not 0.0 <= self.temperature <= 2.0:
             raise ConfigError(f"temperature must lie in [0, 2], got {self.temperature}")
 
+    def sampling_temperature(self, client_temperature: float) -> float:
+        """The temperature requests go out with: this config's, else the client's."""
+        return self.temperature if self.temperature is not None else client_temperature
+
     def knobs(self, client_temperature: float) -> dict[str, Any]:
         """The variant switches as flat values (result rows, summaries)."""
-        t = self.temperature if self.temperature is not None else client_temperature
         return {"variant": self.variant, "allowed": self.allowed, "summary": self.summary,
-                "shuffle": self.shuffle, "temperature": float(t)}
+                "shuffle": self.shuffle, "temperature": float(self.sampling_temperature(client_temperature))}
 
     def metadata(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -226,16 +229,18 @@ def variant_config(name: str, **fields: Any) -> LLMAgentConfig:
     ConfigError
         For an unknown name.
     """
-    if name not in VARIANTS:
-        raise ConfigError(f"unknown variant {name!r}; choose one of {', '.join(VARIANTS)}")
-    return LLMAgentConfig(**{**fields, **VARIANTS[name], "variant": name})
+    return LLMAgentConfig(**{**fields, **_switches(name), "variant": name})
 
 
 def variant_allowed(name: str, default: str = "all") -> str:
     """The allowed set variant ``name`` uses (``default`` when it leaves it alone)."""
+    return _switches(name).get("allowed", default)
+
+
+def _switches(name: str) -> dict[str, Any]:
     if name not in VARIANTS:
         raise ConfigError(f"unknown variant {name!r}; choose one of {', '.join(VARIANTS)}")
-    return VARIANTS[name].get("allowed", default)
+    return VARIANTS[name]
 
 
 @dataclass
@@ -448,7 +453,7 @@ class LLMDriver:
                                options=options, summary=summary)
         replies = [a.text() for a in allowed]  # the grammar keeps one order: only the text is shuffled
         messages = build_messages(prompt, cfg.system)
-        temperature = cfg.temperature if cfg.temperature is not None else self.client.settings.temperature
+        temperature = cfg.sampling_temperature(self.client.settings.temperature)
         attempts = []
         action = None
         for k in range(cfg.parse_retries + 1):
