@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from jswim.errors import ConfigError
+from jswim.prompt import ALLOWED_MODES
 
 EXIT_USAGE = 2
 
@@ -78,7 +79,7 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     g.add_argument("--init", default=None, choices=("paper", "cycle", "random", "++", "+-", "-+", "--"),
                    help="initial configuration: paper = (+,+), cycle = repeats go through all four, "
                         "random, or a sign pair (default: paper for swim/curves/history, cycle otherwise)")
-    g.add_argument("--allowed", default="all", choices=("all", "shape-changing"),
+    g.add_argument("--allowed", default="all", choices=ALLOWED_MODES,
                    help="actions offered in S5 and by constrained decoding: all (the paper's) or only the "
                         "moves that change the shape (default all)")
     g.add_argument("--variant", default=None, metavar="NAME[,NAME...]",
@@ -143,7 +144,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=1000, help="learners per setting (default 1000)")
     p.add_argument("--steps", type=int, default=200, help="training steps per learner (default 200)")
     p.add_argument("--noise", type=float, default=0.0, metavar="ZETA")
-    p.add_argument("--action-set", default="both", choices=("all", "shape-changing", "both"))
+    p.add_argument("--action-set", default="both", choices=(*ALLOWED_MODES, "both"))
     p.add_argument("--seed", type=int, default=0)
     p = sub.add_parser("gaits", help="closed stroke cycles ranked by displacement per step",
                        description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
@@ -284,7 +285,7 @@ def _qlearn(args: argparse.Namespace) -> int:
 
     if args.seeds < 1 or args.steps < 1:
         raise ConfigError("--seeds and --steps must be >= 1")
-    sets = ("all", "shape-changing") if args.action_set == "both" else (args.action_set,)
+    sets = ALLOWED_MODES if args.action_set == "both" else (args.action_set,)
     for action_set in sets:
         t0 = time.perf_counter()
         rows = qlearning.study(qlearning.QConfig(steps=args.steps, action_set=action_set), swimmers=args.swimmer,

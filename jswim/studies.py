@@ -37,7 +37,7 @@ import numpy as np
 from jswim import __version__, env
 from jswim.errors import ConfigError
 from jswim.gait import judge
-from jswim.prompt import SENTENCES, PromptTemplate
+from jswim.prompt import ALLOWED_MODES, SENTENCES, PromptTemplate
 from jswim.results import StudyStore, read_runs
 from jswim.stats import mean_interval, quartiles, wilson_interval
 
@@ -195,7 +195,7 @@ class StudyOptions:
             raise ConfigError(f"--n-ht must be between 0 and 100, got {self.n_ht}")
         if self.init is not None and self.init not in INIT_CHOICES:
             raise ConfigError(f"--init must be one of {', '.join(INIT_CHOICES)}, got {self.init!r}")
-        if self.allowed not in ("all", "shape-changing"):
+        if self.allowed not in ALLOWED_MODES:
             raise ConfigError(f"--allowed must be 'all' or 'shape-changing', got {self.allowed!r}")
         bad = [z for z in (self.zeta, *self.zetas) if not (math.isfinite(z) and z >= 0)]
         if bad:

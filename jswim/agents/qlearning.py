@@ -44,9 +44,10 @@ from jax import Array
 from jswim.env import EnvParams, advance, make_params, reset, uniforms
 from jswim.errors import ConfigError
 from jswim.gait import GaitReport, judge
+from jswim.prompt import ALLOWED_MODES
 
-#: Action sets a learner may be offered (see :class:`QConfig`).
-ACTION_SETS = ("all", "shape-changing")
+#: Action sets a learner may be offered (see :class:`QConfig`): the LLM's allowed-set modes.
+ACTION_SETS = ALLOWED_MODES
 
 #: Exploration rate ``0.8**t``: 1 at the start (nothing is known yet), below 1 % after 21 steps,
 #: about 5 random steps in all. It has to reach 0: success means the stroke lasts to the end of

@@ -14,8 +14,9 @@ from jax import Array
 
 from jswim.agents.qlearning import offered, _pick
 from jswim.env import EnvParams, advance, reset
+from jswim.prompt import ALLOWED_MODES
 
-ALLOWED = ("all", "shape-changing")
+ALLOWED = ALLOWED_MODES
 
 
 class RandomRun(NamedTuple):
