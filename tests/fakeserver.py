@@ -11,15 +11,23 @@ injected:
 
 Faults queued with :meth:`FakeServer.add_faults` apply to the next requests in arrival order
 (``None`` = answer normally). A ``reply`` callable may also return a :class:`Fault` to fail
-requests by content. Independent of jswim, so benchmarks can import it too; run it standalone
-with ``python -m tests.fakeserver --latency 0.1`` (it prints its base URL).
+requests by content. ``latency`` may also be a callable of the request body, e.g.
+:func:`lognormal_latency`: heavy-tailed delays drawn per request from a hash of its messages,
+so each (run, step) of a study gets its own reproducible delay and a benchmark can recompute
+every delay from the prompts it sent. ``tokens`` counts usage (default: words) and ``headers``
+adds response headers (rate-limit headers, for instance). Independent of jswim, so benchmarks
+can import it too; run it standalone with ``python -m tests.fakeserver --latency 0.1`` (it
+prints its base URL).
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import hashlib
 import json
+import math
+import random
 import threading
 import time
 import zlib
@@ -83,6 +91,29 @@ def count_words(text: str) -> int:
     return len(text.split())
 
 
+Latency = Callable[[dict[str, Any]], float]
+
+
+def request_digest(body: dict[str, Any]) -> bytes:
+    """Digest of a request's messages (what identifies a run's step)."""
+    text = json.dumps(body.get("messages", []), sort_keys=True, ensure_ascii=False)
+    return hashlib.blake2b(text.encode(), digest_size=16).digest()
+
+
+def lognormal_latency(median: float, sigma: float, seed: int = 0) -> Latency:
+    """Delays ``median * exp(sigma * N(0, 1))``, the normal draw seeded by ``seed`` and the messages.
+
+    The same request always gets the same delay, so the delays of a study are fixed by its
+    prompts: with noisy runs every (run, step) sends its own prompt and gets its own draw.
+    """
+
+    def delay(body: dict[str, Any]) -> float:
+        rng = random.Random(int.from_bytes(request_digest(body), "little") ^ seed)
+        return median * math.exp(sigma * rng.gauss(0.0, 1.0))
+
+    return delay
+
+
 class FakeServer:
     """Scripted chat-completions server on a free loopback port.
 
@@ -90,8 +121,12 @@ class FakeServer:
     ----------
     reply : callable, optional
         Request body -> reply text (or a :class:`Fault`); default always ``"[1, 1]"``.
-    latency : float
-        Seconds added before every answer.
+    latency : float or callable
+        Seconds added before every answer, or request body -> seconds (:func:`lognormal_latency`).
+    tokens : callable, optional
+        Text -> token count for the ``usage`` field (default :func:`count_words`).
+    headers : callable, optional
+        Request body -> extra headers of a completion (e.g. ``x-ratelimit-remaining-requests``).
     faults : iterable of Fault or None, optional
         Initial fault queue.
 
@@ -109,9 +144,16 @@ class FakeServer:
         Most chat requests being handled at once.
     """
 
-    def __init__(self, reply: Reply | None = None, latency: float = 0.0, faults: Iterable[Fault | None] = ()) -> None:
+    def __init__(
+        self, reply: Reply | None = None, latency: float | Latency = 0.0, faults: Iterable[Fault | None] = (),
+        tokens: Callable[[str], int] = count_words,
+        headers: Callable[[dict[str, Any]], dict[str, str]] | None = None,
+    ) -> None:
         self.reply: Reply = reply or (lambda body: "[1, 1]")
         self.latency = latency
+        self.tokens = tokens
+        self.headers = headers
+        self.arrivals: list[float] = []  # time.monotonic() of each chat request's arrival
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
         self.requests: list[dict[str, Any]] = []
@@ -184,12 +226,13 @@ class FakeServer:
         with self._lock:
             self.requests.clear()
             self.auth_headers.clear()
+            self.arrivals.clear()
             self.n_requests = self.n_answered = self.max_in_flight = 0
 
     def completion(self, body: dict[str, Any], text: str) -> dict[str, Any]:
         """The chat.completion object answering ``body`` with ``text``."""
-        prompt = sum(count_words(str(m.get("content", ""))) for m in body.get("messages", []))
-        done = count_words(text)
+        prompt = sum(self.tokens(str(m.get("content", ""))) for m in body.get("messages", []))
+        done = self.tokens(text)
         return {
             "id": f"fake-{self.n_requests}",
             "object": "chat.completion",
@@ -250,6 +293,7 @@ class FakeServer:
         with self._lock:
             self.n_requests += 1
             self.requests.append(body)
+            self.arrivals.append(time.monotonic())
             self.auth_headers.append(headers.get("authorization"))
             fault = self._faults.popleft() if self._faults else None
             self.in_flight += 1
@@ -266,8 +310,9 @@ class FakeServer:
             text = self.reply(body)
             if isinstance(text, Fault):
                 fault, text = text, None
-        if self.latency:
-            await asyncio.sleep(self.latency)
+        delay = self.latency(body) if callable(self.latency) else self.latency
+        if delay:
+            await asyncio.sleep(delay)
         if fault is not None:
             if fault.kind == "drop":
                 return False  # close without a response
@@ -283,17 +328,22 @@ class FakeServer:
                 text = got if isinstance(got, str) else ""
         with self._lock:
             self.n_answered += 1
-        return await self._send(writer, 200, json.dumps(self.completion(body, text or "")).encode())
+        extra = self.headers(body) if self.headers is not None else None
+        return await self._send(writer, 200, json.dumps(self.completion(body, text or "")).encode(), extra)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description="Fake chat-completions server; prints its base URL.")
     ap.add_argument("--latency", type=float, default=0.0, help="seconds added to every answer")
+    ap.add_argument("--lognormal", type=float, nargs=2, default=None, metavar=("MEDIAN", "SIGMA"),
+                    help="heavy-tailed latency per request instead (see lognormal_latency)")
+    ap.add_argument("--latency-seed", type=int, default=0, help="seed of the lognormal delays")
     ap.add_argument("--reply", choices=("fixed", "hash"), default="hash",
                     help="'[1, 1]' always, or a prompt-dependent square-gait move (default)")
     args = ap.parse_args()
     reply = hash_reply if args.reply == "hash" else None
-    with FakeServer(reply=reply, latency=args.latency) as srv:
+    latency = lognormal_latency(*args.lognormal, seed=args.latency_seed) if args.lognormal else args.latency
+    with FakeServer(reply=reply, latency=latency) as srv:
         print(srv.url, flush=True)
         try:
             while True:

@@ -32,8 +32,11 @@ from urllib.parse import urlsplit, urlunsplit
 import httpx
 
 from jswim.llm import constrain
+from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
 from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError
+from jswim.llm.pacing import Pacer
+from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
 from jswim.llm.usage import PriceTable, Usage
 
@@ -245,15 +248,24 @@ class LiveCounts:
     tokens: int = 0  # prompt + completion tokens the server reported
     cache_hits: int = 0  # calls answered from the disk cache
     shared: int = 0  # calls that waited on an identical request already in flight
+    cost_usd: float = 0.0  # what the answered calls cost
 
 
 class LLMClient:
     """Async chat-completions client; use as ``async with LLMClient(settings) as client``.
 
     The client binds to the running event loop on first use; create one per ``asyncio.run``.
+    ``pacer`` (:class:`jswim.llm.pacing.Pacer`) holds requests back to rate limits; ``budget``
+    (:class:`jswim.llm.budget.Budget`) reserves each request's cost bound before it goes out and
+    raises :class:`jswim.llm.budget.BudgetExhausted` past the cap.
     """
 
-    def __init__(self, settings: ClientSettings, *, rng: random.Random | None = None) -> None:
+    def __init__(
+        self, settings: ClientSettings, *, rng: random.Random | None = None, pacer: Pacer | None = None,
+        budget: Budget | None = None,
+    ) -> None:
+        self.pacer = pacer
+        self.budget = budget
         self.settings = settings
         self._key = os.environ.get(settings.api_key_env) or None
         self._url = settings.base_url.rstrip("/") + "/chat/completions"
@@ -454,19 +466,32 @@ class LLMClient:
         slots = self._slots
         assert slots is not None
         retries = 0
+        tokens = estimate_prompt_tokens(payload["messages"]) + int(payload.get("max_tokens") or 0)
         while True:
+            if self.pacer is not None:
+                await self.pacer.wait(tokens)
             slot = await slots.get()
+            held = 0.0
             try:
+                if self.budget is not None:  # reserved while in flight, settled by the answer
+                    held = self.budget.reserve(call_bound(payload, self._prices, s.model))
                 if slot.http is None:
                     slot.http = self._http_client()
                 self.n_requests += 1
                 self.counts.in_flight += 1
                 try:
                     got = await self._attempt(slot.http, payload)
+                except BaseException:
+                    if self.budget is not None:
+                        self.budget.release(held)
+                    raise
                 finally:
                     self.counts.in_flight -= 1
                 res = self._attempt_result(got, mode, t0, retries)
+                if self.budget is not None:
+                    self.budget.settle(held, res.cost_usd)
                 self.counts.tokens += res.usage.prompt_tokens + res.usage.completion_tokens
+                self.counts.cost_usd += res.cost_usd
                 return res
             except _Failure as fail:
                 if retries >= s.max_retries:
@@ -489,6 +514,8 @@ class LLMClient:
         except httpx.TransportError as exc:
             detail = self._scrub(str(exc)) or "no detail"
             raise _Failure(f"connection failed ({type(exc).__name__}: {detail})") from None
+        if self.pacer is not None:
+            self.pacer.observe(resp.headers)
         status = resp.status_code
         if status in RETRY_STATUSES or status >= 500:
             raise _Failure(f"HTTP {status}", retry_after=parse_retry_after(resp.headers))

@@ -11,6 +11,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Iterable, Mapping
 
+#: When :data:`DEFAULT_PRICES` was read off the providers' list prices (standard tier, no batch
+#: or cached-input discounts). Printed with every estimate.
+PRICES_AS_OF = "2025-04"
+
 #: USD per 1M tokens (prompt, completion). Check the provider's price page before trusting it.
 DEFAULT_PRICES: dict[str, tuple[float, float]] = {
     "gpt-4": (30.0, 60.0),  # the paper's model

@@ -1,0 +1,93 @@
+"""A spending cap for a study: calls reserve their worst cost before they go out.
+
+A study run with ``--max-cost USD`` holds one :class:`Budget`. Before each request reaches the
+server, the client reserves that call's bound (estimated prompt tokens at the prompt price plus
+``max_tokens`` at the completion price, :func:`call_bound`); when the answer comes back the
+reservation is replaced by what the call cost. A reservation that would take spent plus reserved
+past the cap is refused with :class:`BudgetExhausted`, and from then on every reservation is
+refused (the stop is clean: no run starts a new call after the first refusal, and calls already
+in flight finish). So a study never spends more than the cap plus what the estimate of the
+calls in flight fell short by.
+
+``spent_usd`` starts at what earlier sessions of the same study already paid, so the cap is on
+the study, and the same command with a higher cap goes on where the last one stopped.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+from jswim.llm.errors import LLMError
+from jswim.llm.tokens import estimate_prompt_tokens
+from jswim.llm.usage import PriceTable
+
+
+class BudgetExhausted(LLMError):
+    """The next call would take the study past its ``--max-cost`` cap."""
+
+
+def call_bound(payload: Mapping[str, Any], prices: PriceTable, model: str, default_max_tokens: int = 256) -> float:
+    """USD bound of one request: estimated prompt tokens plus ``max_tokens`` of completion."""
+    p_in, p_out = prices.lookup(model)
+    prompt = estimate_prompt_tokens(payload.get("messages") or [])
+    completion = payload.get("max_tokens") or payload.get("max_completion_tokens") or default_max_tokens
+    return (prompt * p_in + int(completion) * p_out) / 1e6
+
+
+class Budget:
+    """Spent and reserved USD against a cap.
+
+    Parameters
+    ----------
+    cap_usd : float or None
+        The cap (``None``: no cap; reservations are still tracked).
+    spent_usd : float
+        Already spent (earlier sessions).
+
+    Raises
+    ------
+    ValueError
+        For a negative or non-finite cap.
+    """
+
+    def __init__(self, cap_usd: float | None, spent_usd: float = 0.0) -> None:
+        if cap_usd is not None and not (math.isfinite(cap_usd) and cap_usd >= 0):
+            raise ValueError(f"the cost cap must be a number >= 0, got {cap_usd}")
+        self.cap_usd = cap_usd
+        self.spent_usd = float(spent_usd)
+        self.reserved_usd = 0.0
+        self.exhausted = False  # set by the first refusal; every later reservation is refused
+
+    @property
+    def remaining_usd(self) -> float | None:
+        """Cap minus spent minus reserved (``None`` without a cap)."""
+        if self.cap_usd is None:
+            return None
+        return self.cap_usd - self.spent_usd - self.reserved_usd
+
+    def reserve(self, usd: float) -> float:
+        """Reserve ``usd`` for a call about to go out; returns the amount to settle later.
+
+        Raises
+        ------
+        BudgetExhausted
+            When the cap would be passed (or was reached before).
+        """
+        if self.cap_usd is not None and (self.exhausted or self.spent_usd + self.reserved_usd + usd > self.cap_usd):
+            self.exhausted = True
+            raise BudgetExhausted(
+                f"stopped at the cost cap: ${self.spent_usd:.4f} spent, ${self.reserved_usd:.4f} in flight, "
+                f"cap ${self.cap_usd:.4f}; rerun with a higher --max-cost to continue"
+            )
+        self.reserved_usd += usd
+        return usd
+
+    def settle(self, reserved: float, actual_usd: float) -> None:
+        """Replace a reservation by the call's actual cost."""
+        self.reserved_usd = max(0.0, self.reserved_usd - reserved)
+        self.spent_usd += actual_usd
+
+    def release(self, reserved: float) -> None:
+        """Drop a reservation whose call was not billed (failed attempt)."""
+        self.reserved_usd = max(0.0, self.reserved_usd - reserved)
