@@ -1,0 +1,162 @@
+"""Tables and progress for a terminal or a log file; nothing is ever cut.
+
+A table is aligned plain text with every cell whole (never ``0…`` for ``0.5``). On a terminal
+narrower than the table its columns wrap into blocks that repeat the label columns; anywhere else
+(a pipe, ``> log.txt``, CI) it is as wide as its widest cells. Progress is a rich bar on a
+terminal and, elsewhere, one dated line per update at most every ``interval`` seconds instead of
+a redrawn bar.
+"""
+
+from __future__ import annotations
+
+import shutil
+import sys
+import time
+from dataclasses import dataclass
+from typing import IO, Any, Sequence
+
+
+@dataclass(frozen=True)
+class Column:
+    """A table column: its header, and whether it holds numbers (right-aligned) or a label.
+
+    The leading label columns of a table identify its rows; they are repeated when a wide table
+    wraps into blocks.
+    """
+
+    header: str
+    numeric: bool = True
+
+    @property
+    def justify(self) -> str:
+        return "right" if self.numeric else "left"
+
+
+def is_terminal(file: IO[str] | None = None) -> bool:
+    """Whether ``file`` (default stdout) is an interactive terminal."""
+    f = file or sys.stdout
+    try:
+        return bool(f.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+def plain_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title: str | None = None,
+                width: int | None = None) -> str:
+    """The table as aligned text, every cell whole.
+
+    With a ``width`` (a terminal's) that the table exceeds, the columns are wrapped into blocks
+    one under the other, each block repeating the leading label columns, the way a wide
+    DataFrame is printed; without one (a log file) the table is as wide as its cells.
+    """
+    cells = [[c.header for c in columns]] + [[str(v) for v in row] for row in rows]
+    widths = [max(len(r[j]) for r in cells) for j in range(len(columns))]
+    n_keys = next((j for j, c in enumerate(columns) if c.numeric), len(columns))
+    blocks = [list(range(len(columns)))]
+    if width is not None and sum(widths) + 2 * (len(widths) - 1) > width and n_keys < len(columns):
+        key_w = sum(widths[:n_keys]) + 2 * n_keys
+        blocks, current, used = [], [], key_w
+        for j in range(n_keys, len(columns)):
+            if current and used + widths[j] > width:
+                blocks.append(list(range(n_keys)) + current)
+                current, used = [], key_w
+            current.append(j)
+            used += widths[j] + 2
+        blocks.append(list(range(n_keys)) + current)
+
+    def line(row: Sequence[str], cols: Sequence[int]) -> str:
+        parts = [row[j].rjust(widths[j]) if columns[j].numeric else row[j].ljust(widths[j]) for j in cols]
+        return "  ".join(parts).rstrip()
+
+    out = [title] if title else []
+    for b, cols in enumerate(blocks):
+        if b:
+            out.append("")
+        out += [line(cells[0], cols), "  ".join("-" * widths[j] for j in cols)]
+        out += [line(r, cols) for r in cells[1:]]
+    return "\n".join(out)
+
+
+def print_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title: str | None = None,
+                file: IO[str] | None = None) -> None:
+    """Print :func:`plain_table`, wrapped to the terminal's width on a terminal, whole elsewhere."""
+    f = file or sys.stdout
+    width = shutil.get_terminal_size().columns if is_terminal(f) else None
+    print(plain_table(columns, rows, title, width), file=f)
+
+
+def format_duration(seconds: float) -> str:
+    """``"42s"``, ``"3m05s"``, ``"1h02m"``."""
+    s = int(round(max(0.0, seconds)))
+    if s < 60:
+        return f"{s}s"
+    if s < 3600:
+        return f"{s // 60}m{s % 60:02d}s"
+    return f"{s // 3600}h{(s % 3600) // 60:02d}m"
+
+
+def eta(elapsed_s: float, fraction: float) -> str | None:
+    """Time left if the rest goes as fast as the ``fraction`` done in ``elapsed_s``; ``None`` before any."""
+    if fraction <= 0 or elapsed_s <= 0:
+        return None
+    return format_duration(elapsed_s * (1 - min(fraction, 1.0)) / fraction)
+
+
+class Progress:
+    """Progress of a long job: a rich bar on a terminal, dated log lines elsewhere.
+
+    Use as a context manager and call :meth:`update` as often as you like; in a log it prints a
+    line when the phase changes, when the job ends, and otherwise at most every ``interval``
+    seconds. ``info`` (e.g. the study's step count and ETA) is printed as given.
+
+    Parameters
+    ----------
+    file : text stream, optional
+        Where progress goes (default stderr, so a table on stdout stays clean).
+    interval : float
+        Seconds between log lines within a phase (not on a terminal).
+    """
+
+    def __init__(self, file: IO[str] | None = None, interval: float = 10.0) -> None:
+        self.file = file or sys.stderr
+        self.interval = interval
+        self.terminal = is_terminal(self.file)
+        self._t0 = time.monotonic()
+        self._last: tuple[str, float] | None = None
+        self._bar: Any = None
+        self._task: Any = None
+
+    def __enter__(self) -> "Progress":
+        if self.terminal:
+            from rich.console import Console
+            from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
+            from rich.progress import Progress as Bar
+
+            # A short bar leaves room for the status text (steps, ETA, requests in flight).
+            self._bar = Bar(TextColumn("[bold]{task.description}"), BarColumn(bar_width=20), MofNCompleteColumn(),
+                            TimeElapsedColumn(), TextColumn("{task.fields[info]}"), console=Console(file=self.file))
+            self._bar.__enter__()
+            self._task = self._bar.add_task("runs", total=None, info="")
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self._bar is not None:
+            self._bar.__exit__(*exc)
+            self._bar = None
+
+    def stop(self) -> None:
+        """End the bar early (before printing an interruption message)."""
+        self.__exit__(None, None, None)
+
+    def update(self, label: str, done: int, total: int, info: str = "", final: bool = False) -> None:
+        """Show ``label`` with ``done`` of ``total`` and ``info``."""
+        if self._bar is not None:
+            self._bar.update(self._task, completed=done, total=total, description=label, info=info)
+            return
+        now = time.monotonic()
+        if not final and self._last is not None and self._last[0] == label and now - self._last[1] < self.interval:
+            return
+        self._last = (label, now)
+        pct = f" ({100 * done / total:.0f}%)" if total else ""
+        text = f"[{format_duration(now - self._t0):>6}] {label}: {done}/{total} runs{pct}"
+        print(text + (f" · {info}" if info else ""), file=self.file, flush=True)

@@ -1,0 +1,243 @@
+"""Reading finished studies back: the summary table, ``jswim show`` and ``jswim compare``.
+
+Everything here only reads a study folder (``metadata.json`` and ``runs.jsonl``), so it works
+on an interrupted study and on a read-only folder. Tables come back as columns and rows for
+:func:`jswim.console.print_table` (or as text), so no number or label is ever cut.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from jswim.console import Column, plain_table
+from jswim.errors import ConfigError
+from jswim.results import read_metadata, read_runs
+
+SETTING = ("agent", "swimmer", "direction", "group")
+
+SUMMARY_NOTE = ("X/a end: mean displacement in the target direction after the last step; learn: steps before the "
+                "stroke that met the success criterion (runs that learned it); fail: LLM steps without a valid action.")
+
+
+def _fmt(v: Any, spec: str = ".3f") -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return format(v, spec) if isinstance(v, float) else str(v)
+
+
+def _dir(d: Any) -> str:
+    return "+x" if (d or 1) > 0 else "-x"
+
+
+def _p_cell(s: Mapping[str, Any]) -> str:
+    return f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')},{_fmt(s['success_hi'], '.2f')}]"
+
+
+def _x_cell(s: Mapping[str, Any]) -> str:
+    return f"{_fmt(s['mean_x'], '+.3f')} [{_fmt(s['mean_x_lo'], '+.2f')},{_fmt(s['mean_x_hi'], '+.2f')}]"
+
+
+def _learn_cell(s: Mapping[str, Any]) -> str:
+    q = "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75"))
+    return q if s.get("learned") else "-"
+
+
+def _cost_cell(v: Any) -> str:
+    return "-" if not v else f"{v:.4f}" if v < 1 else f"{v:.2f}"
+
+
+def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()) -> list[Mapping[str, Any]]:
+    """Summary rows in reading order: agent (LLM first), Purcell before NG, +x before -x, and the
+    groups in the order the study's grid ran them (the order of ``rows``; zeta 0.5 before 1)."""
+    from jswim.plots import AGENT_ORDER, SWIMMER_ORDER
+
+    first: dict[Any, int] = {}
+    for i, r in enumerate(rows):
+        first.setdefault(r.get("group"), i)
+
+    def key(s: Mapping[str, Any]) -> tuple:
+        a, sw = s.get("agent"), s.get("swimmer")
+        return (AGENT_ORDER.index(a) if a in AGENT_ORDER else len(AGENT_ORDER), str(a),
+                SWIMMER_ORDER.index(sw) if sw in SWIMMER_ORDER else len(SWIMMER_ORDER), str(sw),
+                -(s.get("direction") or 1), first.get(s.get("group"), len(first)), str(s.get("group")))
+
+    return sorted(summary, key=key)
+
+
+def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], list[list[str]]]:
+    """Columns and rows of a study's summary (one row per agent, swimmer, direction and group).
+
+    ``summary`` is what :func:`jswim.studies.summarize` returns. Groups and cost appear only
+    when some row has them.
+    """
+    groups = any(s.get("group") for s in summary)
+    cost = any(s.get("cost_usd") for s in summary)
+    cols = [Column("agent", False), Column("swimmer", False), Column("dir", False)]
+    cols += [Column("group", False)] if groups else []
+    cols += [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "fail",
+                                 "tok/step")]
+    cols += [Column("cost $")] if cost else []
+    rows = []
+    for s in summary:
+        row = [str(s["agent"]), str(s["swimmer"]), _dir(s["direction"])] + ([str(s.get("group") or "")] if groups else [])
+        row += [str(s["n"]), _p_cell(s), _x_cell(s), _learn_cell(s),
+                str(s["failed_steps"]) if s["agent"] == "llm" else "-", _fmt(s.get("tokens_per_step"), ".0f")]
+        row += [_cost_cell(s.get("cost_usd"))] if cost else []
+        rows.append(row)
+    return cols, rows
+
+
+class StudyFolder:
+    """A study folder read once: metadata, finished runs and their summary (read-only)."""
+
+    def __init__(self, folder: str | Path) -> None:
+        from jswim.studies import summarize  # the studies layer's summary; imported late to keep this module light
+
+        self.folder = Path(folder)
+        if not self.folder.is_dir():
+            raise ConfigError(f"{folder}: no such folder")
+        self.meta = read_metadata(self.folder)
+        self.rows = read_runs(self.folder)
+        self.summary = order_summary(summarize(self.rows), self.rows)
+
+    @property
+    def study(self) -> str:
+        return str(self.meta.get("study", "?"))
+
+    @property
+    def planned(self) -> int | None:
+        n = self.meta.get("n_planned")
+        return int(n) if isinstance(n, int) else None
+
+    @property
+    def finished(self) -> bool:
+        return self.meta.get("status") == "complete" and (self.planned is None or len(self.rows) >= self.planned)
+
+    def status_text(self) -> str:
+        """``complete`` or ``UNFINISHED: k of N runs done (status)``."""
+        if self.finished:
+            return "complete"
+        of = f" of {self.planned}" if self.planned else ""
+        return f"UNFINISHED: {len(self.rows)}{of} runs done (status {self.meta.get('status', 'unknown')})"
+
+    def model_text(self) -> str:
+        b = (self.meta.get("identity") or {}).get("backend")
+        if not b:
+            return "no LLM runs"
+        where = "embedded" if b.get("kind") == "embedded" else (b.get("base_url") or "remote")
+        return f"{b.get('model')} ({where}), temperature {_fmt(b.get('temperature'), 'g')}, constrain {b.get('constrain')}"
+
+    def label(self) -> str:
+        """Short name for a comparison: the folder name and the model."""
+        b = (self.meta.get("identity") or {}).get("backend") or {}
+        return f"{self.folder.name} ({b.get('model') or 'no LLM'})"
+
+    def usage(self) -> dict[str, float]:
+        """LLM calls, tokens and cost over the finished runs."""
+        llm = [r for r in self.rows if r.get("agent") == "llm"]
+        return {
+            "calls": sum(r.get("calls") or 0 for r in llm),
+            "prompt_tokens": sum(r.get("prompt_tokens") or 0 for r in llm),
+            "completion_tokens": sum(r.get("completion_tokens") or 0 for r in llm),
+            "cost_usd": sum(r.get("cost_usd") or 0.0 for r in llm),
+        }
+
+    def figures(self) -> list[Path]:
+        fig_dir = self.folder / "figures"
+        return sorted(fig_dir.glob("*.png")) + sorted(fig_dir.glob("*.pdf")) if fig_dir.is_dir() else []
+
+
+def _settings_text(options: Mapping[str, Any]) -> str:
+    keep = ("swimmers", "directions", "runs", "q_runs", "steps", "n_ht", "zeta", "zetas", "n_hts", "init", "allowed",
+            "variant", "variants", "seed")
+    parts = []
+    for k in keep:
+        v = options.get(k)
+        if v is None:
+            continue
+        if isinstance(v, list):
+            v = ",".join(_fmt(x, "g") if isinstance(x, float) else str(x) for x in v)
+        parts.append(f"{k.replace('_', '-')} {v}")
+    return "; ".join(parts)
+
+
+def show_text(folder: str | Path) -> str:
+    """What ``jswim show FOLDER`` prints: status, model, settings, usage, summary table, figures."""
+    s = StudyFolder(folder)
+    agents = Counter(r.get("agent") for r in s.rows)
+    u = s.usage()
+    lines = [f"study {s.study} in {s.folder}: {s.status_text()}", f"model: {s.model_text()}"]
+    opts = (s.meta.get("identity") or {}).get("options") or {}
+    if opts:
+        lines.append(f"settings: {_settings_text(opts)}")
+    lines.append(f"runs: {len(s.rows)} (" + ", ".join(f"{a} {n}" for a, n in sorted(agents.items())) + ")")
+    if agents.get("llm"):
+        lines.append(f"LLM usage: {u['calls']:,} calls, {u['prompt_tokens']:,} prompt + {u['completion_tokens']:,} "
+                     f"completion tokens, cost ${u['cost_usd']:.4f} (estimate from the price table)")
+    speed = (s.meta.get("summary") or {}).get("llm_speed") or {}
+    if speed.get("wall_s"):
+        lines.append(f"LLM wall time: {speed['wall_s']:.1f} s ({speed.get('calls_per_s', 0):.2f} calls/s)")
+    lines.append("")
+    if s.summary:
+        cols, rows = summary_table(s.summary)
+        lines += [plain_table(cols, rows), SUMMARY_NOTE]
+    else:
+        lines.append("no finished runs yet")
+    lines.append("")
+    figs = s.figures()
+    if figs:
+        lines.append("figures:")
+        lines += [f"  {f}" for f in figs]
+    else:
+        lines.append(f"no figures yet; draw them with: jswim plot {s.folder}")
+    return "\n".join(lines)
+
+
+def compare_table(folders: Sequence[str | Path]) -> tuple[list[StudyFolder], list[Column], list[list[str]], int]:
+    """Studies side by side, per setting (agent, swimmer, direction, group) present in all of them.
+
+    Returns the studies, the table's columns and rows (for each setting one row per study, in the
+    order given) and how many settings were left out because some study lacks them.
+    """
+    if len(folders) < 2:
+        raise ConfigError("compare needs at least two study folders")
+    studies = [StudyFolder(f) for f in folders]
+    keyed = [{tuple(s.get(k) for k in SETTING): s for s in st.summary} for st in studies]
+    common = set(keyed[0])
+    for k in keyed[1:]:
+        common &= set(k)
+    every = set().union(*keyed)
+    order = [tuple(s.get(k) for k in SETTING) for s in studies[0].summary if tuple(s.get(k) for k in SETTING) in common]
+    groups = any(key[3] for key in order)
+    cols = [Column("agent", False), Column("swimmer", False), Column("dir", False)]
+    cols += [Column("group", False)] if groups else []
+    cols += [Column("study", False)] + [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]",
+                                                            "learn median", "tok/step", "cost $")]
+    rows = []
+    for key in order:
+        for i, k in enumerate(keyed):
+            s = k[key]
+            row = [str(key[0]), str(key[1]), _dir(key[2])] + ([str(key[3] or "")] if groups else [])
+            row += [f"[{i + 1}]", str(s["n"]), _p_cell(s), _x_cell(s),
+                    _fmt(s["steps_to_learn_median"], "g") if s.get("learned") else "-",
+                    _fmt(s.get("tokens_per_step"), ".0f"), _cost_cell(s.get("cost_usd"))]
+            rows.append(row)
+    return studies, cols, rows, len(every - common)
+
+
+def compare_text(folders: Sequence[str | Path], width: int | None = None) -> str:
+    """What ``jswim compare FOLDER...`` prints."""
+    studies, cols, rows, left_out = compare_table(folders)
+    lines = [f"[{i + 1}] {s.label()}: study {s.study}, {s.status_text()}, {len(s.rows)} runs"
+             for i, s in enumerate(studies)]
+    lines.append("")
+    if rows:
+        lines.append(plain_table(cols, rows, width=width))
+    else:
+        lines.append("no setting (agent, swimmer, direction, group) is present in every study")
+    if left_out:
+        lines.append(f"{left_out} setting(s) not present in every study are left out")
+    return "\n".join(lines)

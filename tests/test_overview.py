@@ -1,0 +1,117 @@
+"""Reading studies back: tables that never cut a cell, show and compare (read-only)."""
+
+from __future__ import annotations
+
+import io
+import json
+
+import pytest
+
+from jswim import console, overview
+from jswim.errors import ConfigError
+from jswim.studies import Backend, StudyOptions, run_study
+from tests.fakeserver import FakeServer, hash_reply
+
+COLS = [console.Column("agent", False), console.Column("group", False), console.Column("n"),
+        console.Column("success p [95% CI]"), console.Column("X/a end [95% CI]")]
+ROWS = [["qlearning", "zeta=0", "10", "1.00 [0.72,1.00]", "+1.491 [+1.43,+1.56]"],
+        ["qlearning", "zeta=0.5", "10", "0.90 [0.60,0.98]", "+1.200 [+1.10,+1.30]"]]
+
+
+def test_plain_table_keeps_every_cell_whole():
+    text = console.plain_table(COLS, ROWS, "noise")
+    for row in ROWS:
+        for cell in row:
+            assert cell in text
+    assert "zeta=0.5" in text and "\u2026" not in text
+
+
+def test_narrow_terminal_wraps_columns_into_blocks_and_cuts_nothing():
+    text = console.plain_table(COLS, ROWS, width=50)
+    assert max(len(line) for line in text.splitlines()) <= 50
+    for row in ROWS:
+        for cell in row:
+            assert cell in text
+    # the label columns are repeated in every block
+    assert text.count("zeta=0.5") == 2 and text.count("agent") == 2
+
+
+def test_print_table_to_a_log_is_plain_text_at_full_width():
+    buf = io.StringIO()  # not a terminal
+    wide = ROWS + [["qlearning", "a-very-long-group-label-" * 6, "10", "0.10 [0.00,0.40]", "+0.001 [-0.01,+0.01]"]]
+    console.print_table(COLS, wide, "t", file=buf)
+    assert "a-very-long-group-label-" * 6 in buf.getvalue()
+    assert "\x1b[" not in buf.getvalue()  # no terminal escapes in a log
+
+
+def test_progress_in_a_log_is_one_line_per_update_with_the_info():
+    buf = io.StringIO()
+    with console.Progress(file=buf, interval=3600) as p:
+        p.update("Q-learning", 10, 40, "")
+        p.update("Q-learning", 11, 40, "")  # within the interval: not printed
+        p.update("LLM runs", 10, 40, "steps 100/1500 · ETA 2m10s")
+        p.update("LLM runs", 40, 40, "", final=True)
+    lines = buf.getvalue().splitlines()
+    assert len(lines) == 3 and "\r" not in buf.getvalue()
+    assert lines[0].endswith("Q-learning: 10/40 runs (25%)")
+    assert "ETA 2m10s" in lines[1] and "40/40 runs (100%)" in lines[2]
+
+
+def test_eta_and_durations():
+    assert console.eta(30.0, 0.25) == "1m30s"
+    assert console.eta(0.0, 0.0) is None
+    assert console.format_duration(3725) == "1h02m"
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    root = tmp_path_factory.mktemp("studies")
+    with FakeServer(reply=hash_reply, latency=0.001) as srv:
+        backend = Backend(base_url=srv.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")
+        opts = StudyOptions(swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3)
+        run_study("swim", opts, backend, root / "a", figures=False)
+        run_study("swim", StudyOptions(swimmers=("purcell",), directions=(1,), steps=8, runs=2, q_runs=3, seed=1),
+                  backend, root / "b", figures=False)
+    return root / "a", root / "b"
+
+
+def _snapshot(folder):
+    return sorted((str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in folder.rglob("*"))
+
+
+def test_show_prints_status_table_and_cost_without_writing(folders, capsys):
+    a, _ = folders
+    before = _snapshot(a)
+    text = overview.show_text(a)
+    assert _snapshot(a) == before
+    assert text.startswith(f"study swim in {a}: complete")
+    assert "model: fake" in text and "LLM usage:" in text and "cost $" in text
+    assert "no figures yet" in text  # figures=False
+    for agent in ("llm", "qlearning", "random"):
+        assert f"\n{agent}" in text
+
+
+def test_show_marks_an_unfinished_study(folders, tmp_path):
+    a, _ = folders
+    part = tmp_path / "part"
+    part.mkdir()
+    meta = json.loads((a / "metadata.json").read_text())
+    meta.update(status="running", n_planned=28)
+    (part / "metadata.json").write_text(json.dumps(meta))
+    (part / "runs.jsonl").write_text("".join(line + "\n" for line in (a / "runs.jsonl").read_text().splitlines()[:5]))
+    assert "UNFINISHED: 5 of 28 runs done (status running)" in overview.show_text(part)
+
+
+def test_compare_lists_settings_present_in_all(folders):
+    a, b = folders
+    text = overview.compare_text([a, b])
+    assert text.splitlines()[0].startswith("[1] a (fake): study swim, complete")
+    body = [line for line in text.splitlines() if line.startswith(("llm", "qlearning", "random"))]
+    # b has Purcell toward +x only: 3 settings in common, one row per study each
+    assert len(body) == 3 * 2
+    assert all(" purcell " in line and " +x " in line for line in body)
+    assert "9 setting(s) not present in every study are left out" in text
+    with pytest.raises(ConfigError, match="at least two"):
+        overview.compare_table([a])
+    with pytest.raises(ConfigError, match="not a jswim study folder"):
+        overview.compare_table([a, a.parent])
