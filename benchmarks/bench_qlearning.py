@@ -28,7 +28,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jswim.actions import ACTION_SETS
 from jswim.agents import qlearning
+from jswim.agents.defaults import default_rocs
 from jswim.agents.qlearning import QConfig, batch_params, train_batch
 from jswim.env import EnvParams, make_params, step_table, uniforms
 
@@ -67,7 +69,7 @@ def numpy_train(u: np.ndarray, params: EnvParams, config: QConfig) -> dict[str, 
     dof_of = np.arange(n_actions) // 3
     kth = qlearning._kth_true_table(n_actions)
     bit = (1 << np.arange(n_actions))[:, None]
-    rocs = np.isin(np.arange(n_actions) % 3 - 1, params.model.default_rocs)[:, None]
+    rocs = np.isin(np.arange(n_actions) % 3 - 1, default_rocs(params.model))[:, None]
     q = np.full((2**n, n_actions, b), config.q_init, dtype)  # (corner, action, learner)
     cols = np.arange(n_actions)[:, None]
     rows = np.arange(b)
@@ -142,7 +144,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--swimmer", default="purcell")
     ap.add_argument("--zeta", type=float, default=0.5)
-    ap.add_argument("--action-set", default="all", choices=qlearning.ACTION_SETS)
+    ap.add_argument("--action-set", default="all", choices=ACTION_SETS)
     ap.add_argument("--batches", type=int, nargs="+", default=[1, 10, 100, 1_000, 10_000])
     ap.add_argument("--json", help="also write the results here")
     args = ap.parse_args()

@@ -18,8 +18,8 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
-from jswim.errors import ConfigError
-from jswim.prompt import ALLOWED_MODES
+from jswim.actions import ACTION_SETS
+from jswim.errors import ConfigError, JswimError
 
 EXIT_USAGE = 2
 
@@ -79,11 +79,11 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     g.add_argument("--init", default=None, choices=("paper", "cycle", "random", "++", "+-", "-+", "--"),
                    help="initial configuration: paper = (+,+), cycle = repeats go through all four, "
                         "random, or a sign pair (default: paper for swim/curves/history, cycle otherwise)")
-    g.add_argument("--allowed", default="all", choices=ALLOWED_MODES,
+    g.add_argument("--action-set", "--allowed", dest="action_set", default="all", choices=ACTION_SETS,
                    help="actions offered in S5 and by constrained decoding: all (the paper's) or only the "
-                        "moves that change the shape (default all)")
+                        "moves that change the shape (default all; --allowed is the old name)")
     g.add_argument("--variant", default=None, metavar="NAME[,NAME...]",
-                   help="LLM protocol variant (jswim.agents.llm.VARIANTS; default: the study's, paper for the "
+                   help="LLM protocol variant (jswim.agents.variants.VARIANTS; default: the study's, paper for the "
                         "paper's studies); the competence study takes a comma-separated list to compare")
     g.add_argument("--seed", type=int, default=0, help="seed of the study (noise, random starts, learners)")
     g.add_argument("--prompt-file", default=None, metavar="FILE",
@@ -118,7 +118,7 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from jswim.studies import STUDIES
+    from jswim.studies.grids import STUDIES  # lazy: the grids load JAX, so only when a parser is built
 
     ap = _Parser(prog="jswim", description="A large language model teaches model microswimmers to swim, "
                  "measured against Q-learning and a random policy.",
@@ -144,7 +144,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seeds", type=int, default=1000, help="learners per setting (default 1000)")
     p.add_argument("--steps", type=int, default=200, help="training steps per learner (default 200)")
     p.add_argument("--noise", type=float, default=0.0, metavar="ZETA")
-    p.add_argument("--action-set", default="both", choices=(*ALLOWED_MODES, "both"))
+    p.add_argument("--action-set", default="both", choices=(*ACTION_SETS, "both"))
     p.add_argument("--seed", type=int, default=0)
     p = sub.add_parser("gaits", help="closed stroke cycles ranked by displacement per step",
                        description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
@@ -164,22 +164,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _backend(args: argparse.Namespace):
-    from jswim.studies import Backend
+    from jswim.llm.backend import Backend  # lazy: JAX and httpx load only for commands that run
 
-    if args.base_url is None and args.model is not None:
-        raise ConfigError("--model names a model on a server; give --base-url too (or --gguf for a local file)")
-    if args.base_url is not None and args.model is None:
-        raise ConfigError("--base-url needs --model (the model name on that server)")
-    if args.gguf is not None and not Path(args.gguf).is_file():
-        raise ConfigError(f"--gguf {args.gguf}: no such file")
-    if not 0.0 <= args.temperature <= 2.0:
-        raise ConfigError(f"--temperature must lie in [0, 2], got {args.temperature}")
-    if args.parallel < 1 or args.concurrency < 1:
-        raise ConfigError("--parallel and --concurrency must be >= 1")
-    if args.cohorts < 1:
-        raise ConfigError(f"--cohorts must be >= 1, got {args.cohorts}")
-    if args.threads is not None and args.threads < 1:
-        raise ConfigError(f"--threads must be >= 1, got {args.threads}")
     return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=args.api_key_env,
                    constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
                    n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
@@ -187,15 +173,13 @@ def _backend(args: argparse.Namespace):
 
 
 def _options(args: argparse.Namespace, study: str):
-    from jswim.studies import StudyOptions
+    from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
 
     if args.prompt_file is not None and not Path(args.prompt_file).is_file():
         raise ConfigError(f"--prompt-file {args.prompt_file}: no such file")
-    if not (math.isfinite(args.noise) and args.noise >= 0):
-        raise ConfigError(f"--noise must be >= 0, got {args.noise}")
     kw: dict[str, Any] = dict(
         swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,
-        n_ht=args.n_ht, zeta=args.noise, init=args.init, seed=args.seed, allowed=args.allowed,
+        n_ht=args.n_ht, zeta=args.noise, init=args.init, seed=args.seed, action_set=args.action_set,
         prompt_file=args.prompt_file, chunk=args.chunk,
     )
     if getattr(args, "zetas", None):
@@ -213,6 +197,7 @@ def _options(args: argparse.Namespace, study: str):
 
 
 def _progress():
+    # lazy: rich only when something runs
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     # A short bar leaves room for the LLM status (steps, requests in flight, tokens, cache hits).
@@ -221,7 +206,7 @@ def _progress():
 
 
 def _run(study: str, args: argparse.Namespace) -> int:
-    from jswim.studies import default_folder, run_study
+    from jswim.studies import default_folder, run_study  # lazy: JAX loads only for commands that run
 
     options = _options(args, study)
     backend = _backend(args)
@@ -255,14 +240,14 @@ def _fmt(v: Any, spec: str = ".3f") -> str:
 
 
 def _print_summary(summary: Sequence[dict[str, Any]], title: str) -> None:
-    from rich import box
+    from rich import box  # lazy: rich only when something runs
     from rich.console import Console
     from rich.table import Table
 
     groups = any(s["group"] for s in summary)
     t = Table(title=title, title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False)
     cols = ["agent", "swimmer", "dir"] + (["group"] if groups else []) + [
-        "n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "fail", "tok/step"]
+        "n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "learned", "fail", "tok/step"]
     for col in cols:
         t.add_column(col, justify="left" if col in ("agent", "swimmer", "group") else "right", no_wrap=True)
     for s in summary:
@@ -272,31 +257,34 @@ def _print_summary(summary: Sequence[dict[str, Any]], title: str) -> None:
             f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')},{_fmt(s['success_hi'], '.2f')}]",
             f"{s['mean_x']:+.3f} [{_fmt(s['mean_x_lo'], '+.2f')},{_fmt(s['mean_x_hi'], '+.2f')}]",
             "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75")),
+            f"{s['learned']} of {s['n']}",
             str(s["failed_steps"]) if s["agent"] == "llm" else "-",
             _fmt(s["tokens_per_step"], ".0f"),
         )
-    Console(width=max(120, Console().width)).print(t)
+    Console(width=max(140, Console().width)).print(t)
     print("X/a end: displacement in the target direction after the last step; learn: steps before the "
-          "stroke that met the success criterion; fail: LLM steps without a valid action.")
+          "final qualifying stroke, quartiles over the runs that learned (learned: how many did); "
+          "fail: LLM steps without a valid action.")
 
 
 def _qlearn(args: argparse.Namespace) -> int:
-    from jswim.agents import qlearning
+    from jswim.agents.qlearning import QConfig  # lazy: JAX loads only for commands that run
+    from jswim.studies import qlearn
 
     if args.seeds < 1 or args.steps < 1:
         raise ConfigError("--seeds and --steps must be >= 1")
-    sets = ALLOWED_MODES if args.action_set == "both" else (args.action_set,)
+    sets = ACTION_SETS if args.action_set == "both" else (args.action_set,)
     for action_set in sets:
         t0 = time.perf_counter()
-        rows = qlearning.study(qlearning.QConfig(steps=args.steps, action_set=action_set), swimmers=args.swimmer,
-                               directions=args.direction, zetas=(args.noise,), n_seeds=args.seeds, seed=args.seed)
-        print(qlearning.format_table(rows))
+        rows = qlearn.study(QConfig(steps=args.steps, action_set=action_set), swimmers=args.swimmer,
+                            directions=args.direction, zetas=(args.noise,), n_seeds=args.seeds, seed=args.seed)
+        print(qlearn.format_table(rows))
         print(f"({action_set}: {time.perf_counter() - t0:.1f} s including compilation)\n")
     return 0
 
 
 def _gaits(args: argparse.Namespace) -> int:
-    from jswim import gait
+    from jswim import gait  # lazy: JAX loads only for commands that run
     from jswim.swimmers.models import make_model
 
     kw = {}
@@ -319,7 +307,7 @@ def _gaits(args: argparse.Namespace) -> int:
                   f"{'yes' if c.simple else 'no':>6}  {start:5}  {moves}")
         print("simple: no shape visited twice per period; the others add detours that go back and forth")
         if args.out:
-            from jswim import plots
+            from jswim import plots  # lazy: matplotlib only when a figure is asked for
 
             paths = plots.save(plots.gaits_figure(model, cycles), args.out, f"gaits-{args.swimmer}-{'px' if d > 0 else 'mx'}")
             print(f"figure: {paths[0]}")
@@ -328,8 +316,8 @@ def _gaits(args: argparse.Namespace) -> int:
 
 
 def _plot(args: argparse.Namespace) -> int:
-    from jswim.results import read_metadata, read_runs
-    from jswim.studies import draw_figures
+    from jswim.results import read_metadata, read_runs  # lazy: JAX loads only for commands that run
+    from jswim.studies.report import draw_figures
 
     meta = read_metadata(args.folder)
     rows = read_runs(args.folder)
@@ -343,11 +331,9 @@ def _plot(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jswim`` command; returns the exit status."""
     args = build_parser().parse_args(argv)
-    import matplotlib
+    import matplotlib  # lazy: only once the arguments parsed (fast usage errors)
 
     matplotlib.use("Agg")  # the command only writes figure files; never open a window
-    from jswim.llm.errors import LLMError
-
     try:
         if args.command == "swim":
             return _run("swim", args)
@@ -358,10 +344,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "gaits":
             return _gaits(args)
         return _plot(args)
-    except ConfigError as exc:
-        print(f"jswim: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
-    except LLMError as exc:
+    except JswimError as exc:  # every user or server mistake (jswim.errors); anything else is a bug
         print(f"jswim: error: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:

@@ -1,5 +1,71 @@
-"""Exceptions that describe a user mistake (the CLI turns them into a one-line message)."""
+"""Every error a user can cause, under one root, :class:`JswimError`.
+
+Catch ``JswimError`` to handle all of them (the ``jswim`` command does, once, and turns each into
+one line on stderr with exit status 2). Each message is one line, names what to change and never
+contains an API key. The tree::
+
+    JswimError
+    +-- ConfigError (also ValueError)      a parameter, option or input file has a bad value
+    |   +-- PositionBelowMinimumError       X fell below x_min, so the prompt cannot encode it
+    +-- LLMError (also RuntimeError)       the LLM server or the embedded model failed
+    |   +-- LLMServerError                  unreachable, or kept failing (network, timeouts, 429, 5xx)
+    |   +-- LLMRequestError                 the server rejected the request (4xx; retrying won't help)
+    |   +-- LLMResponseError                the server answered, but not with a usable completion
+    |   +-- LocalModelError                 the embedded model cannot start (package or file missing)
+    +-- ResultFolderError (also ValueError) a study folder is unusable: another study, other
+                                            settings, not a study folder, unreadable
+
+``ConfigError`` and ``ResultFolderError`` subclass :class:`ValueError` and ``LLMError``
+:class:`RuntimeError`, as they did before the root existed, so older ``except`` clauses still work.
+"""
+
+from __future__ import annotations
 
 
-class ConfigError(ValueError):
+class JswimError(Exception):
+    """Root of every error a user of jswim can cause (see the module docstring for the tree)."""
+
+
+class ConfigError(JswimError, ValueError):
     """A parameter has a bad value; the message names the parameter and what to change."""
+
+
+class PositionBelowMinimumError(ConfigError):
+    """X fell below ``X_min``, so it cannot be sent as a non-negative integer.
+
+    An LLM run stops and reports it; lower ``x_min`` to go on.
+    """
+
+    def __init__(self, x: float, x_min: float) -> None:
+        super().__init__(f"position X = {x:.4f} is below x_min = {x_min}; lower x_min")
+        self.x = x
+        self.x_min = x_min
+
+
+class LLMError(JswimError, RuntimeError):
+    """Base class of LLM-layer failures."""
+
+
+class LLMServerError(LLMError):
+    """The server could not be reached or kept failing (network, timeouts, 429, 5xx)."""
+
+
+class LLMRequestError(LLMError):
+    """The server rejected the request (4xx other than 408/409/429): retrying will not help."""
+
+    def __init__(self, message: str, status: int) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+class LLMResponseError(LLMError):
+    """The server answered, but not with a usable chat completion (bad JSON, no choices)."""
+
+
+class LocalModelError(LLMError):
+    """The embedded local model cannot be started (missing package or model file)."""
+
+
+class ResultFolderError(JswimError, ValueError):
+    """A study folder cannot be used: it holds another study or other settings, is not a study
+    folder, or cannot be read. The message says which and what to do."""

@@ -15,7 +15,8 @@ in the target direction, the paper's "signature cycle": a two-step cycle is reci
 nowhere (scallop theorem), and the square gait run backwards goes the wrong way. The paper's
 success criterion for a task ("three consecutive cycles of its signature gaits within 50 steps,
 without subsequent failures") is then ``success``: the segment starts early enough that three
-cycles are complete by step ``horizon`` (50), and lasts to the end of the run.
+cycles are complete by step ``horizon`` (50), and lasts to the end of the run. These numbers
+have one owner, :class:`Criterion`.
 
 ``steps_to_learn`` is the number of steps before that final stroke starts: the start of the
 longest trailing segment that repeats with the cycle's period, moved past the last step that did
@@ -103,6 +104,49 @@ class Cycle:
             levels[dof - 1] = 1 if roc > 0 else 0
             seen.add(tuple(levels))
         return len(seen) == self.period
+
+
+@dataclasses.dataclass(frozen=True)
+class Criterion:
+    """The success criterion's numbers; the one place they are written (paper's values default).
+
+    Attributes
+    ----------
+    horizon : int
+        Steps within which ``n_cycles`` cycles must be complete for ``success`` (paper: 50).
+    n_cycles : int
+        Consecutive repetitions of the qualifying cycle required (paper: 3).
+    min_fraction : float
+        Fraction of the best closed cycle's displacement per step that a cycle must reach to
+        qualify (the speed threshold; 1/2).
+    max_period : int or None
+        Longest cycle considered; ``None``: :func:`default_max_period` of the swimmer.
+
+    Raises
+    ------
+    ConfigError
+        For ``horizon``, ``n_cycles`` or ``max_period`` below 1, or ``min_fraction <= 0``.
+    """
+
+    horizon: int = 50
+    n_cycles: int = 3
+    min_fraction: float = 0.5
+    max_period: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.horizon < 1 or self.n_cycles < 1 or (self.max_period is not None and self.max_period < 1):
+            raise ConfigError("horizon, n_cycles and max_period must be >= 1")
+        if not self.min_fraction > 0:
+            raise ConfigError(f"min_fraction must be > 0, got {self.min_fraction}")
+
+    def describe(self) -> str:
+        """One line for run metadata."""
+        return (f"{self.n_cycles} consecutive qualifying cycles (>= {self.min_fraction:g} of the best cycle's "
+                f"speed) within {self.horizon} steps, no later failure (jswim.gait.judge)")
+
+
+#: The paper's criterion.
+PAPER = Criterion()
 
 
 class GaitReport(NamedTuple):
@@ -319,10 +363,7 @@ def judge(
     params: EnvParams,
     *,
     levels0: Any = None,
-    horizon: int = 50,
-    n_cycles: int = 3,
-    min_fraction: float = 0.5,
-    max_period: int | None = None,
+    criterion: Criterion = PAPER,
 ) -> GaitReport:
     """Find, per run, the final stroke and whether it is a qualifying cycle (see module docs).
 
@@ -336,25 +377,24 @@ def judge(
         displacements.
     levels0 : int array-like (n_dof,) or (B, n_dof), optional
         Actual initial levels; required when ``params.init`` asks for a random start.
-    horizon : int
-        Steps within which ``n_cycles`` cycles must be complete for ``success`` (paper: 50).
-    n_cycles : int
-        Consecutive cycles required (paper: 3).
-    min_fraction : float
-        Fraction of the best cycle's displacement per step a cycle must reach.
-    max_period : int, optional
-        Longest cycle considered (default :func:`default_max_period`).
+    criterion : Criterion
+        Horizon, cycle count and speed threshold (default: the paper's, :data:`PAPER`).
 
     Returns
     -------
     GaitReport
         Arrays over runs (a 1-D ``actions`` is treated as one run).
+
+    Raises
+    ------
+    ConfigError
+        For actions that are not valid indices, or a random start without ``levels0``.
     """
     model = params.model
     n = model.n_dof
-    max_period = default_max_period(n) if max_period is None else int(max_period)
-    if n_cycles < 1 or max_period < 1 or not min_fraction > 0:
-        raise ConfigError("n_cycles and max_period must be >= 1 and min_fraction > 0")
+    c = criterion
+    max_period = default_max_period(n) if c.max_period is None else int(c.max_period)
+    n_cycles, min_fraction, horizon = c.n_cycles, c.min_fraction, c.horizon
     a = np.asarray(actions)
     if a.ndim == 1:
         a = a[None]

@@ -24,6 +24,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from jswim.errors import ConfigError
 from jswim.swimmers.models import SwimmerModel
 
 
@@ -95,7 +96,7 @@ def integrate_stroke(
         vx, vy = c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1]
         return jnp.stack([pose[0] + s_mat[-1] @ vx, pose[1] + s_mat[-1] @ vy, theta[-1]])
     if method != "rk4":
-        raise ValueError(f"method must be 'chebyshev' or 'rk4', got {method!r}")
+        raise ConfigError(f"method must be 'chebyshev' or 'rk4', got {method!r}")
     h = duration / n_sub
 
     def rate(t: Array, p: Array) -> Array:

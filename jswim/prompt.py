@@ -37,7 +37,7 @@ variable below; sentences may use the variables too.
 ``{history}``      the records, one per line (``none yet`` when empty)
 ``{current}``      the current DOF values and X, ``(D1, D2) = (1.047, 1.047), X = 2500``
 ``{summary}``      the observed-progress sentence (empty unless the summary variant is on; see
-                   :func:`render_summary`)
+                   :func:`jswim.agents.memory.render_summary`)
 =================  ============================================================================
 
 The summary sentence. With ``PromptConfig.summary`` on, one extra sentence reports, for each
@@ -62,12 +62,13 @@ from __future__ import annotations
 import math
 import re
 import string
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from decimal import ROUND_DOWN, Decimal
 from pathlib import Path
 from typing import Iterable, NamedTuple, Sequence
 
-from jswim.errors import ConfigError
+from jswim.actions import check_action_set
+from jswim.errors import ConfigError, PositionBelowMinimumError
 
 #: Sentence names, in the paper's order.
 SENTENCES = ("S1", "S2", "S3", "S4", "S5")
@@ -93,10 +94,6 @@ DEFAULT_SENTENCES = {
 
 DEFAULT_RECORD = "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}{stuck}"
 
-#: Allowed-set modes: every (dof, roc) pair (paper) or only the moves that change the shape.
-ALLOWED_MODES = ("all", "shape-changing")
-
-
 class Action(NamedTuple):
     """One action: the changed DOF (1-based) and its rate of change."""
 
@@ -106,18 +103,6 @@ class Action(NamedTuple):
     def text(self) -> str:
         """The reply form, ``[dof, roc]``."""
         return f"[{self.dof}, {self.roc}]"
-
-
-class PositionBelowMinimumError(ValueError):
-    """X fell below ``X_min``, so it cannot be sent as a non-negative integer.
-
-    The run stops and reports it; lower ``x_min`` to go on.
-    """
-
-    def __init__(self, x: float, x_min: float) -> None:
-        super().__init__(f"position X = {x:.4f} is below x_min = {x_min}; lower x_min")
-        self.x = x
-        self.x_min = x_min
 
 
 # ---------------------------------------------------------------------------------------------
@@ -206,7 +191,7 @@ class SwimmerText:
 
 
 def allowed_actions(
-    swimmer: SwimmerText, mode: str = "all", dof_values: Sequence[float] | None = None
+    swimmer: SwimmerText, action_set: str = "all", dof_values: Sequence[float] | None = None
 ) -> list[Action]:
     """The actions a reply may name, in (dof, roc) order.
 
@@ -214,19 +199,18 @@ def allowed_actions(
     ----------
     swimmer : SwimmerText
         DOF count, ranges and ROC set.
-    mode : {"all", "shape-changing"}
-        ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
+    action_set : {"all", "shape-changing"}
+        One of :data:`jswim.actions.ACTION_SETS`. ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
         that change the shape from ``dof_values``: ROC +1 below ``hi``, ROC -1 above ``lo``.
     dof_values : sequence of float, optional
         Current DOF values; required for ``"shape-changing"``.
     """
-    if mode not in ALLOWED_MODES:
-        raise ConfigError(f"allowed must be one of {ALLOWED_MODES}, got {mode!r}")
+    check_action_set(action_set)
     pairs = [Action(k, r) for k in range(1, swimmer.n_dof + 1) for r in swimmer.rocs]
-    if mode == "all":
+    if action_set == "all":
         return pairs
     if dof_values is None or len(dof_values) != swimmer.n_dof:
-        raise ValueError("allowed='shape-changing' needs the current value of every DOF")
+        raise ConfigError("action_set='shape-changing' needs the current value of every DOF")
     out = []
     for a in pairs:
         lo, hi = swimmer.bounds(a.dof)
@@ -259,127 +243,6 @@ class HistoryRecord:
     @property
     def dx(self) -> float:
         return self.x_after - self.x_before
-
-
-@dataclass(frozen=True)
-class ClearingRule:
-    """The paper's history clearing scheme.
-
-    After each step, once at least ``min_steps`` steps have run in total and ``window`` steps have
-    run since the last clear, the history is erased if the displacement in the target direction
-    summed over the last ``window`` steps is below ``threshold``. The records are then rebuilt
-    from the following steps. Counting only steps since the last clear keeps one bad stretch from
-    clearing again at every step.
-    """
-
-    min_steps: int = 5
-    window: int = 4
-    threshold: float = 0.01
-    enabled: bool = True
-
-    def should_clear(self, n_steps: int, progress_since_clear: Sequence[float]) -> bool:
-        """Whether to clear now.
-
-        Parameters
-        ----------
-        n_steps : int
-            Steps executed so far in the run (including the one just taken).
-        progress_since_clear : sequence of float
-            ``direction * dX`` of each step since the last clear (or the start), oldest first.
-        """
-        if not self.enabled or n_steps < self.min_steps or len(progress_since_clear) < self.window:
-            return False
-        return math.fsum(progress_since_clear[-self.window :]) < self.threshold
-
-
-@dataclass
-class History:
-    """Records since the last clear, plus the progress the clearing rule looks at."""
-
-    rule: ClearingRule = field(default_factory=ClearingRule)
-    records: list[HistoryRecord] = field(default_factory=list)
-    progress: list[float] = field(default_factory=list)
-    n_steps: int = 0
-    n_clears: int = 0
-
-    def add(self, record: HistoryRecord, progress: float) -> bool:
-        """Append a step; clear if the rule says so. Returns whether it cleared."""
-        self.records.append(record)
-        self.progress.append(float(progress))
-        self.n_steps += 1
-        if self.rule.should_clear(self.n_steps, self.progress):
-            self.records.clear()
-            self.progress.clear()
-            self.n_clears += 1
-            return True
-        return False
-
-    def last(self, n: int) -> list[HistoryRecord]:
-        """The last ``n`` records (all when fewer)."""
-        return self.records[-n:] if n > 0 else []
-
-
-# ---------------------------------------------------------------------------------------------
-# Observed-progress summary (a variant; off in the paper's protocol)
-
-#: The summary sentence; ``{shape}`` is the current DOF values, ``{moves}`` the items below.
-SUMMARY_SENTENCE = "Observed so far from the current shape ({dof_names}) = ({shape}): {moves}."
-SUMMARY_TRIED = "{action} moved X {amount} {way} {direction} on average in {count} {tries}"
-SUMMARY_STILL = "{action} left X unchanged in {count} {tries}"
-SUMMARY_UNTRIED = "{action} not tried yet"
-
-
-def shape_key(sw: SwimmerText, dof_values: Sequence[float]) -> tuple[str, ...]:
-    """The shape as the prompt shows it (DOF values at the prompt's precision)."""
-    return tuple(format_dof(v, sw.dof_decimals) for v in dof_values)
-
-
-@dataclass
-class MoveStats:
-    """Observed progress of every (shape, action) pair of one run so far.
-
-    Only what the run executed and saw (noise included) goes in; nothing is predicted.
-    """
-
-    totals: dict[tuple[tuple[str, ...], Action], tuple[float, int]] = field(default_factory=dict)
-
-    def add(self, shape: tuple[str, ...], action: Action, progress: float) -> None:
-        """Count one executed step; ``progress`` is its displacement in the target direction."""
-        total, count = self.totals.get((shape, action), (0.0, 0))
-        self.totals[(shape, action)] = (total + float(progress), count + 1)
-
-    def mean(self, shape: tuple[str, ...], action: Action) -> tuple[float, int] | None:
-        """``(mean progress, count)``, or ``None`` when the pair was never tried."""
-        got = self.totals.get((shape, action))
-        return None if got is None else (got[0] / got[1], got[1])
-
-
-def render_summary(
-    sw: SwimmerText, stats: MoveStats, dof_values: Sequence[float], options: Sequence[Action], direction: int
-) -> str:
-    """The summary sentence for the actions in ``options`` (in that order) from the current shape.
-
-    Mean progress is rounded to whole thousandths of ``a`` (the unit of X in the prompt) and said
-    as a distance toward or away from the target direction, so no number is negative.
-    """
-    shape = shape_key(sw, dof_values)
-    target = "+x" if direction == 1 else "-x"
-    items = []
-    for a in options:
-        got = stats.mean(shape, a)
-        if got is None:
-            items.append(SUMMARY_UNTRIED.format(action=a.text()))
-            continue
-        mean, count = got
-        amount = round(abs(mean) * 1000)
-        tries = "try" if count == 1 else "tries"
-        if amount == 0:
-            items.append(SUMMARY_STILL.format(action=a.text(), count=count, tries=tries))
-        else:
-            way = "toward" if mean > 0 else "away from"
-            items.append(SUMMARY_TRIED.format(action=a.text(), amount=amount, way=way, direction=target,
-                                              count=count, tries=tries))
-    return SUMMARY_SENTENCE.format(dof_names=", ".join(sw.names), shape=", ".join(shape), moves="; ".join(items))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -488,14 +351,14 @@ class PromptConfig:
         Lower bound of X for the integer encoding.
     drop : frozenset of str
         Sentences to leave out (see :func:`normalize_mask`).
-    allowed : {"all", "shape-changing"}
-        Which actions S5 (and constrained decoding) offers.
+    action_set : {"all", "shape-changing"}
+        Which actions S5 (and constrained decoding) offers (:data:`jswim.actions.ACTION_SETS`).
     template : PromptTemplate
         The text.
     system : str, optional
         A system message; the paper uses none.
     summary : bool
-        Add the observed-progress sentence (:func:`render_summary`); off in the paper.
+        Add the observed-progress sentence (:func:`jswim.agents.memory.render_summary`); off in the paper.
     shuffle : bool
         S5 lists the options in an order that changes per step (set by the caller through
         ``options``); only moves S5 behind the history in the default layout.
@@ -504,7 +367,7 @@ class PromptConfig:
     n_ht: int = 3
     x_min: float = -2.5
     drop: frozenset[str] = frozenset()
-    allowed: str = "all"
+    action_set: str = "all"
     template: PromptTemplate = DEFAULT_TEMPLATE
     system: str | None = None
     summary: bool = False
@@ -514,15 +377,14 @@ class PromptConfig:
         object.__setattr__(self, "drop", normalize_mask(self.drop))
         if self.n_ht < 0:
             raise ConfigError(f"n_ht must be >= 0, got {self.n_ht}")
-        if self.allowed not in ALLOWED_MODES:
-            raise ConfigError(f"allowed must be one of {ALLOWED_MODES}, got {self.allowed!r}")
+        check_action_set(self.action_set)
 
     @property
     def layout(self) -> str:
         """The layout used: the template's, or :data:`CACHE_LAYOUT_LATE` in place of the default
         :data:`CACHE_LAYOUT` when S5 or the summary change from step to step."""
         layout = self.template.layout
-        if layout == CACHE_LAYOUT and (self.allowed != "all" or self.shuffle or self.summary):
+        if layout == CACHE_LAYOUT and (self.action_set != "all" or self.shuffle or self.summary):
             return CACHE_LAYOUT_LATE
         return layout
 
@@ -583,7 +445,7 @@ def render_prompt(
         The allowed actions in the order S5 lists them (the shuffle variant reorders them);
         default :func:`allowed_actions` in (dof, roc) order.
     summary : str
-        The summary sentence (:func:`render_summary`), or empty.
+        The summary sentence (:func:`jswim.agents.memory.render_summary`), or empty.
 
     Raises
     ------
@@ -593,7 +455,7 @@ def render_prompt(
     if direction not in (1, -1):
         raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
     shown = list(records[-cfg.n_ht :]) if cfg.n_ht > 0 else []
-    allowed = list(options) if options is not None else allowed_actions(sw, cfg.allowed, dof_values)
+    allowed = list(options) if options is not None else allowed_actions(sw, cfg.action_set, dof_values)
     d = sw.dof_decimals
     values = {
         "direction": "+x" if direction == 1 else "-x",

@@ -26,10 +26,40 @@ import tempfile
 from pathlib import Path
 from typing import Any, Iterable, Mapping
 
-from jswim.errors import ConfigError
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from jswim.errors import ResultFolderError
 
 RUNS = "runs.jsonl"
 META = "metadata.json"
+
+#: Fields renamed since folders were first written: old name -> new name. Folders keep what they
+#: were written with; readers translate (:func:`upgrade_names`), so an old folder still resumes,
+#: summarises and plots.
+RENAMED = {"allowed": "action_set"}
+
+
+def upgrade_names(obj: Any) -> Any:
+    """``obj`` (rows, metadata, an identity; nested dicts and lists) with old field names renamed
+    to new ones (:data:`RENAMED`)."""
+    if isinstance(obj, dict):
+        return {RENAMED.get(k, k): upgrade_names(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [upgrade_names(v) for v in obj]
+    return obj
+
+
+def legacy_names(obj: Any) -> Any:
+    """The inverse of :func:`upgrade_names` (for hashes that must stay what they were)."""
+    back = {new: old for old, new in RENAMED.items()}
+    if isinstance(obj, dict):
+        return {back.get(k, k): legacy_names(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [legacy_names(v) for v in obj]
+    return obj
 
 
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
@@ -55,15 +85,10 @@ def write_json(path: str | os.PathLike, obj: Any) -> None:
 
 
 def _jsonable(obj: Any) -> Any:
-    try:
-        import numpy as np
-
-        if isinstance(obj, np.generic):
-            return obj.item()
-        if isinstance(obj, np.ndarray):
-            return obj.tolist()
-    except ImportError:  # pragma: no cover
-        pass
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
     if isinstance(obj, (set, frozenset, tuple)):
         return list(obj)
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
@@ -76,7 +101,8 @@ class StudyStore:
     ----------
     folder : path
         Created if missing. An existing folder must hold the same study with the same parameters
-        (``identity``), otherwise :class:`ConfigError` says what differs.
+        (``identity``, compared after :func:`upgrade_names`), otherwise
+        :class:`~jswim.errors.ResultFolderError` says what differs.
     study : str
         Study name, e.g. ``"noise"``.
     identity : mapping
@@ -98,29 +124,28 @@ class StudyStore:
         self.identity = json.loads(json.dumps(dict(identity), sort_keys=True, default=_jsonable))
         meta_path = self.folder / META
         if self.folder.exists() and not self.folder.is_dir():
-            raise ConfigError(f"--out {self.folder} is a file, not a folder; choose another path")
+            raise ResultFolderError(f"--out {self.folder} is a file, not a folder; choose another path")
         if meta_path.exists():
             try:
                 meta = json.loads(meta_path.read_text())
             except (OSError, json.JSONDecodeError) as exc:
-                raise ConfigError(f"{meta_path} is unreadable ({exc}); use a new --out folder") from None
+                raise ResultFolderError(f"{meta_path} is unreadable ({exc}); use a new --out folder") from None
             if meta.get("study") != study:
-                raise ConfigError(
+                raise ResultFolderError(
                     f"{self.folder} holds a '{meta.get('study')}' study, not '{study}'; "
                     "use a new --out folder"
                 )
-            if meta.get("identity") != self.identity:
-                diff = sorted(
-                    k for k in set(meta.get("identity", {})) | set(self.identity)
-                    if meta.get("identity", {}).get(k) != self.identity.get(k)
-                )
-                raise ConfigError(
+            old = upgrade_names(meta.get("identity", {}))
+            if old != self.identity:
+                diff = sorted(k for k in set(old) | set(self.identity) if old.get(k) != self.identity.get(k))
+                raise ResultFolderError(
                     f"{self.folder} holds a '{study}' study with different settings "
                     f"({', '.join(diff)}); use a new --out folder or the same settings to resume"
                 )
             self.meta = meta
+            self.meta["identity"] = self.identity  # rewritten under today's names
         elif self.folder.exists() and any(p.name != "figures" for p in self.folder.iterdir()):
-            raise ConfigError(
+            raise ResultFolderError(
                 f"{self.folder} is not empty and is not a jswim study folder; choose another --out"
             )
         else:
@@ -171,7 +196,8 @@ class StudyStore:
 
 
 def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
-    """Finished runs of a study folder (see :class:`StudyStore`)."""
+    """Finished runs of a study folder (see :class:`StudyStore`), fields under today's names
+    (:func:`upgrade_names`)."""
     path = Path(folder) / RUNS
     if not path.exists():
         return []
@@ -185,16 +211,36 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
         if row.get("run_id") in seen:
             continue
         seen.add(row["run_id"])
-        out.append(row)
+        out.append(upgrade_names(row))
     return out
 
 
+def load(folder: str | os.PathLike) -> pd.DataFrame:
+    """The finished runs of a study folder as a DataFrame, one row per run.
+
+    Columns are the run fields (``run_id``, ``agent``, ``swimmer``, ``direction``, ``group``,
+    ``success``, ``steps_to_learn``, ``signed_final_x``, ...); per-step lists (``x``,
+    ``actions``, ``progress``) stay as list-valued columns.
+
+    Raises
+    ------
+    ResultFolderError
+        When ``folder`` is not a study folder.
+    """
+    read_metadata(folder)  # a clear error for a folder that is not a study
+    return pd.DataFrame(read_runs(folder))
+
+
 def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
-    """The study's ``metadata.json``; :class:`ConfigError` if the folder is not a study."""
+    """The study's ``metadata.json`` (fields under today's names); :class:`ResultFolderError` if
+    the folder is not a study."""
     path = Path(folder) / META
     if not path.exists():
-        raise ConfigError(f"{folder} is not a jswim study folder (no {META})")
-    return json.loads(path.read_text())
+        raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
+    try:
+        return upgrade_names(json.loads(path.read_text()))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise ResultFolderError(f"{path} is unreadable ({exc})") from None
 
 
 def _repair_tail(path: Path) -> None:
@@ -241,11 +287,6 @@ def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
                 "action": _at(r.get("actions"), i), "progress": _at(r.get("progress"), i),
                 "stuck": _at(r.get("stuck"), i),
             })
-    try:
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-    except ImportError:  # pragma: no cover - pyarrow is a dependency; CSV still lands
-        return
     for name, rows in (("runs.parquet", table_rows), ("trajectories.parquet", traj)):
         sink = pa.BufferOutputStream()
         pq.write_table(pa.Table.from_pylist(rows) if rows else pa.table({}), sink)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import NamedTuple, Sequence
 
 import numpy as np
 
@@ -49,3 +49,35 @@ def quartiles(values: Sequence[float]) -> tuple[float, float, float]:
         return (math.nan, math.nan, math.nan)
     q = np.quantile(x, [0.25, 0.5, 0.75])
     return (float(q[0]), float(q[1]), float(q[2]))
+
+
+class LearnStats(NamedTuple):
+    """Steps to learn over a group of runs: the one definition every table uses.
+
+    Runs that never learned are not numbers of steps: they are counted (``n - learned``), never
+    turned into +inf and never silently dropped. The quartiles are over the runs that learned
+    (NaN when none did), so a table reads "median 16 [13-18], 97 of 100 learned".
+    """
+
+    n: int  # runs in the group
+    learned: int  # runs that learned (ended in the qualifying stroke)
+    q25: float
+    median: float
+    q75: float
+
+    def label(self) -> str:
+        """``"16 [13-18], 97 of 100 learned"`` (``"0 of 4 learned"`` when none did)."""
+        head = "" if self.learned == 0 else f"{_num(self.median)} [{_num(self.q25)}-{_num(self.q75)}], "
+        return f"{head}{self.learned} of {self.n} learned"
+
+
+def learn_stats(steps_to_learn: Sequence[float | None]) -> LearnStats:
+    """:class:`LearnStats` of one group; ``None`` (or a negative value, the judge's -1, or a
+    non-finite one) marks a run that never learned."""
+    done = [float(v) for v in steps_to_learn if v is not None and math.isfinite(v) and v >= 0]
+    q = quartiles(done)
+    return LearnStats(len(steps_to_learn), len(done), *q)
+
+
+def _num(v: float) -> str:
+    return f"{v:g}"

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from jswim import env, gait
+from jswim.agents.defaults import default_n_ht, default_rocs
 from jswim.agents.llm import LLMAgentConfig, LLMRunSpec, run_batch
 from jswim.llm import ClientSettings
 from jswim.swimmers import ng
@@ -13,7 +14,7 @@ from tests.fakeserver import FakeServer
 @pytest.mark.parametrize("swimmer", ["nlink", "nsphere"])
 def test_best_cycle_swims_and_its_reverse_swims_back(swimmer):
     model = env.make_params(swimmer).model
-    assert model.n_dof == 3 and model.default_rocs == (-1, 1) and model.default_n_ht() == 20
+    assert model.n_dof == 3 and default_rocs(model) == (-1, 1) and default_n_ht(model) == 20
     best = gait.best_cycles(model, 1)[0]
     assert best.per_step > 0.03 and abs(best.rotation) < 1e-12
     moves = list(best.moves)

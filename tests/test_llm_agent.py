@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import json
+import math
+import re
 
 import numpy as np
 import pytest
 
-from jswim.agents.llm import NO_OP, LLMAgentConfig, LLMRunSpec, run_batch
+from jswim.agents.llm import run_batch
+from jswim.agents.variants import NO_OP, VARIANTS, LLMAgentConfig, LLMRunSpec, variant_config
 from jswim.env import encode_action
+from jswim.errors import ConfigError
+from jswim.studies import COMPETENCE_VARIANTS, StudyOptions
 from jswim.llm import ClientSettings
 from jswim.llm.errors import LLMServerError
 from tests.fakeserver import Fault, FakeServer, hash_reply
@@ -16,6 +21,18 @@ from tests.fakeserver import Fault, FakeServer, hash_reply
 
 def settings(srv: FakeServer, **kw) -> ClientSettings:
     return ClientSettings(base_url=srv.url, model="fake", backoff_base_s=0.001, backoff_max_s=0.01, timeout_s=5.0, **kw)
+
+
+HI = math.pi / 3
+
+
+def steps_of(result) -> list[dict]:
+    return [t for t in result.transcript if t["type"] == "step"]
+
+
+def s5_options(prompt: str) -> list[str]:
+    line = next(ln for ln in prompt.splitlines() if "Reply with the next action" in ln)
+    return re.findall(r"\[\d, -?\d\]", line.split("one of", 1)[1])
 
 
 def scripted(body):
@@ -121,7 +138,7 @@ def test_server_down_raises_and_closes_transcripts(tmp_path, cohorts):
 
 def test_shape_changing_set_reaches_the_grammar():
     with FakeServer(reply=lambda body: "[1, -1]") as srv:
-        run_batch([LLMRunSpec(n_steps=2)], settings(srv, server_kind="llamacpp"), LLMAgentConfig(allowed="shape-changing"))
+        run_batch([LLMRunSpec(n_steps=2)], settings(srv, server_kind="llamacpp"), LLMAgentConfig(action_set="shape-changing"))
         grammars = [r["grammar"] for r in srv.requests]
     assert grammars[0] == 'root ::= "[1, -1]" | "[2, -1]"'  # from (+, +)
     assert grammars[1] == 'root ::= "[1, 1]" | "[2, -1]"'  # after D1 went to lo
@@ -156,3 +173,99 @@ def test_blocking_call_works_inside_a_running_event_loop():
 
         (within,) = asyncio.run(inside())
     assert within.actions == outside.actions and np.allclose(within.x, outside.x)
+
+
+# -- protocol variants ---------------------------------------------------------------------------
+
+
+def test_summary_variant_shows_the_run_s_own_observed_means():
+    with FakeServer(reply=hash_reply) as srv:
+        (res,) = run_batch([LLMRunSpec(n_steps=12, zeta=0.5, seed=3)], settings(srv), variant_config("summary"))
+    steps = steps_of(res)
+    stats: dict[tuple, list[float]] = {}
+    for k, st in enumerate(steps):
+        dofs = (HI, HI) if k == 0 else tuple(steps[k - 1]["dofs_after"])
+        here = tuple(f"{v:.3f}" for v in dofs)
+        line = next(ln for ln in st["prompt"].splitlines() if ln.startswith("Observed so far"))
+        for a in st["options"]:
+            seen = stats.get((here, tuple(a)))
+            if seen is None:
+                assert f"[{a[0]}, {a[1]}] not tried yet" in line
+            else:
+                mean = sum(seen) / len(seen)
+                amount = round(abs(mean) * 1000)
+                if amount:
+                    way = "toward" if mean > 0 else "away from"
+                    assert f"[{a[0]}, {a[1]}] moved X {amount} {way} +x on average in {len(seen)}" in line
+                else:
+                    assert f"[{a[0]}, {a[1]}] left X unchanged in {len(seen)}" in line
+        stats.setdefault((here, tuple(st["action"])), []).append(st["progress"])  # noisy, as observed
+    assert any(len(v) > 1 for v in stats.values())  # the test saw repeated pairs
+
+
+def test_shuffle_changes_the_order_not_the_set_and_replays():
+    spec = LLMRunSpec(n_steps=10, seed=11)
+    cfg = variant_config("shuffle")
+    with FakeServer(reply=hash_reply) as srv:
+        (a,) = run_batch([spec], settings(srv), cfg)
+        (b,) = run_batch([spec], settings(srv), cfg)
+        bodies = list(srv.requests)
+        (plain,) = run_batch([spec], settings(srv), LLMAgentConfig())
+    orders = [tuple(s5_options(st["prompt"])) for st in steps_of(a)]
+    canonical = ("[1, -1]", "[1, 0]", "[1, 1]", "[2, -1]", "[2, 0]", "[2, 1]")
+    assert all(sorted(o) == sorted(canonical) for o in orders)
+    assert len(set(orders)) > 3 and orders != [canonical] * len(orders)
+    assert [tuple(map(tuple, st["options"])) for st in steps_of(a)] == [
+        tuple(tuple(int(v) for v in re.findall(r"-?\d", o)) for o in order) for order in orders]
+    assert orders == [tuple(s5_options(st["prompt"])) for st in steps_of(b)]  # seeded by run and step
+    assert all(tuple(s5_options(st["prompt"])) == canonical for st in steps_of(plain))
+    # The grammar is not shuffled: only the text is.
+    grammars = {body.get("grammar") for body in bodies}
+    assert len(grammars) == 1
+
+
+def test_temperature_requests_carry_per_run_seeds_and_are_never_cached(tmp_path):
+    specs = [LLMRunSpec(n_steps=5, seed=1), LLMRunSpec(n_steps=5, seed=2)]
+    cfg = variant_config("temperature")
+    with FakeServer(reply=lambda body: "[1, 1]") as srv:
+        first = run_batch(specs, settings(srv, cache_dir=str(tmp_path)), cfg)
+        bodies = list(srv.requests)
+        srv.reset_counts()
+        again = run_batch(specs, settings(srv, cache_dir=str(tmp_path)), cfg)
+        assert srv.n_requests == 10  # everything asked again: nothing came from the cache
+        bodies_again = list(srv.requests)
+    assert all(body["temperature"] == 0.7 for body in bodies)
+    assert sum(r.usage.cache_hits + r.usage.shared for r in first + again) == 0
+    seeds = [[at["seed"] for st in steps_of(r) for at in st["attempts"]] for r in first]
+    assert all(len(set(s)) == 5 for s in seeds) and not set(seeds[0]) & set(seeds[1])  # per step, per run
+    assert sorted(b["seed"] for b in bodies) == sorted(seeds[0] + seeds[1])
+    assert sorted(b["seed"] for b in bodies_again) == sorted(b["seed"] for b in bodies)  # reproducible
+    assert {r.as_row()["temperature"] for r in first} == {0.7}
+    # At temperature 0 no seed is sent and identical requests are shared.
+    with FakeServer(reply=lambda body: "[1, 1]") as srv:
+        zero = run_batch(specs, settings(srv), variant_config("paper"))
+        assert all("seed" not in b for b in srv.requests) and srv.n_requests == 5
+    assert sum(r.usage.shared for r in zero) == 5
+
+
+def test_variant_is_recorded_in_rows_and_transcripts():
+    with FakeServer(reply=hash_reply) as srv:
+        (res,) = run_batch([LLMRunSpec(n_steps=3)], settings(srv), variant_config("shape-changing+summary"))
+    row = res.as_row()
+    assert (row["variant"], row["action_set"], row["summary"], row["shuffle"], row["temperature"]) == (
+        "shape-changing+summary", "shape-changing", True, False, 0.0)
+    assert row["tokens_seen"] > 0
+    meta = res.transcript[0]
+    assert meta["agent"]["variant"] == "shape-changing+summary" and meta["agent"]["summary"] is True
+    # Two options per step for a two-DOF swimmer: never fewer, so the model always chooses.
+    assert all(len(st["options"]) == 2 for st in steps_of(res))
+
+
+def test_variant_registry_is_checked():
+    with pytest.raises(ConfigError, match="unknown variant"):
+        variant_config("oracle")
+    with pytest.raises(ConfigError, match="unknown variant"):
+        StudyOptions(variant="oracle")
+    with pytest.raises(ConfigError, match="temperature"):
+        LLMAgentConfig(temperature=3.0)
+    assert set(COMPETENCE_VARIANTS) <= set(VARIANTS) and VARIANTS["paper"] == {}

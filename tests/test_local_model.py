@@ -52,14 +52,14 @@ def test_embedded_model_constrained_replies():
     cases = [  # (config, direction, records, current DOF values)
         (PromptConfig(n_ht=2), 1, [], (hi, hi)),
         (PromptConfig(n_ht=2), -1, [rec], (lo, hi)),
-        (PromptConfig(n_ht=2, allowed="shape-changing"), 1, [rec], (lo, hi)),
+        (PromptConfig(n_ht=2, action_set="shape-changing"), 1, [rec], (lo, hi)),
     ]
 
     async def ask(srv):
         async with LLMClient(srv.client_settings(max_tokens=12)) as client:
             jobs = []
             for cfg, direction, records, dofs in cases:
-                allowed = allowed_actions(sw, cfg.allowed, dofs)
+                allowed = allowed_actions(sw, cfg.action_set, dofs)
                 prompt = render_prompt(sw, cfg, direction, records, dofs)
                 jobs.append(client.chat(build_messages(prompt), replies=[a.text() for a in allowed]))
             return await asyncio.gather(*jobs)
@@ -69,7 +69,7 @@ def test_embedded_model_constrained_replies():
         results = asyncio.run(ask(srv))
     assert not srv.running
     for (cfg, _, _, dofs), res in zip(cases, results):
-        allowed = allowed_actions(sw, cfg.allowed, dofs)
+        allowed = allowed_actions(sw, cfg.action_set, dofs)
         assert res.constraint == "grammar"
         assert parse_reply(res.text, allowed) in allowed, res.text
         assert res.usage.prompt_tokens > 50

@@ -7,17 +7,14 @@ import sys
 
 import pytest
 
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, PositionBelowMinimumError
 from jswim.prompt import (
     CACHE_LAYOUT,
     DEFAULT_SENTENCES,
     PAPER_LAYOUT,
     SENTENCES,
     Action,
-    ClearingRule,
-    History,
     HistoryRecord,
-    PositionBelowMinimumError,
     PromptConfig,
     PromptTemplate,
     SwimmerText,
@@ -144,12 +141,12 @@ def test_shape_changing_allowed_set():
     assert allowed_actions(PURCELL, "shape-changing", (hi, lo)) == [Action(1, -1), Action(2, 1)]
     assert allowed_actions(PURCELL, "shape-changing", (lo, lo)) == [Action(1, 1), Action(2, 1)]
     assert len(allowed_actions(PURCELL)) == 6
-    text = render_prompt(PURCELL, PromptConfig(allowed="shape-changing"), 1, [], (hi, hi))
+    text = render_prompt(PURCELL, PromptConfig(action_set="shape-changing"), 1, [], (hi, hi))
     assert "one of [1, -1], [2, -1]." in text
     with pytest.raises(ValueError):
         allowed_actions(PURCELL, "shape-changing")
     with pytest.raises(ConfigError):
-        PromptConfig(allowed="some")
+        PromptConfig(action_set="some")
 
 
 @pytest.mark.parametrize(
@@ -184,29 +181,6 @@ def test_dof_formatting():
     assert format_dof(-math.pi / 3, 3) == "-1.047"
     assert format_dof(-1e-9, 3) == "0.000"
     assert format_dof(9.6, 0) == "10"
-
-
-def test_clearing_rule():
-    rule = ClearingRule()  # after 5 steps, last 4 below 0.01
-    assert not rule.should_clear(4, [0.0] * 4)  # too early
-    assert rule.should_clear(5, [0.0] * 5)
-    assert not rule.should_clear(5, [0.0, 0.0, 0.0, 0.01, 0.0])  # sum 0.01 is not below
-    assert rule.should_clear(6, [0.5, 0.004, 0.003, -0.002, 0.004])
-    assert not rule.should_clear(9, [0.0] * 3)  # fewer than window steps since the last clear
-    assert not ClearingRule(enabled=False).should_clear(10, [0.0] * 10)
-    assert ClearingRule(min_steps=2, window=2, threshold=0.1).should_clear(2, [0.05, 0.04])
-
-
-def test_history_clears_and_rebuilds():
-    h = History()
-    cleared = [h.add(rec(k), 0.0) for k in range(1, 13)]
-    # Clears at step 5, then needs 4 fresh steps: 9, then 13 would be next.
-    assert [k for k, c in enumerate(cleared, 1) if c] == [5, 9]
-    assert h.n_clears == 2 and len(h.records) == 3 and h.records[0].step == 10
-    h2 = History()
-    for k in range(1, 13):
-        h2.add(rec(k), 0.05)
-    assert h2.n_clears == 0 and [r.step for r in h2.last(3)] == [10, 11, 12]
 
 
 @pytest.mark.parametrize(
@@ -273,3 +247,20 @@ def test_current_state_placeholder():
 def test_build_messages():
     assert build_messages("hi") == [{"role": "user", "content": "hi"}]
     assert build_messages("hi", "sys") == [{"role": "system", "content": "sys"}, {"role": "user", "content": "hi"}]
+
+
+def test_per_step_text_goes_last_and_the_paper_prompt_is_unchanged():
+    lo, hi = -math.pi / 3, math.pi / 3
+    rec = HistoryRecord(1, (hi, hi), (lo, hi), Action(1, -1), 0.0, 0.01)
+    paper = render_prompt(PURCELL, PromptConfig(), 1, [rec], (lo, hi))
+    assert PromptConfig().layout == CACHE_LAYOUT and paper.index("Reply with") < paper.index("1: (")
+    for cfg in (PromptConfig(action_set="shape-changing"), PromptConfig(shuffle=True), PromptConfig(summary=True)):
+        text = render_prompt(PURCELL, cfg, 1, [rec], (lo, hi), summary="Observed so far: x." if cfg.summary else "")
+        lines = text.splitlines()
+        assert lines[-1].startswith("Reply with the next action"), text  # S5 last: per-step text
+        if cfg.summary:
+            assert lines[-2] == "Observed so far: x." and lines[-3].startswith("1: (")
+    # A hand-made layout is used as given; without a {summary} slot the sentence precedes S3.
+    cfg = PromptConfig(summary=True, template=PromptTemplate(layout=PAPER_LAYOUT))
+    text = render_prompt(PURCELL, cfg, 1, [rec], (lo, hi), summary="Observed so far: x.")
+    assert text.index("Observed so far") < text.index("Latest records") < text.index("Reply with")

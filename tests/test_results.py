@@ -1,12 +1,15 @@
 """Study folders: atomic files, torn-line recovery, identity checks."""
 
 import json
+import math
 
 import pytest
 
-from jswim.errors import ConfigError
-from jswim.results import StudyStore, atomic_write, read_runs
-from jswim.stats import mean_interval, wilson_interval
+import pandas as pd
+
+from jswim.errors import JswimError, ResultFolderError
+from jswim.results import StudyStore, atomic_write, legacy_names, load, read_metadata, read_runs, upgrade_names
+from jswim.stats import learn_stats, mean_interval, wilson_interval
 
 
 def test_torn_last_line_is_dropped_and_repaired(tmp_path):
@@ -25,13 +28,13 @@ def test_torn_last_line_is_dropped_and_repaired(tmp_path):
 
 def test_identity_mismatch_and_foreign_folders_are_refused(tmp_path):
     StudyStore(tmp_path / "s", "noise", {"zetas": [0, 1]})
-    with pytest.raises(ConfigError, match="zetas"):
+    with pytest.raises(ResultFolderError, match="zetas"):
         StudyStore(tmp_path / "s", "noise", {"zetas": [0, 2]})
-    with pytest.raises(ConfigError, match="'noise' study"):
+    with pytest.raises(ResultFolderError, match="'noise' study"):
         StudyStore(tmp_path / "s", "ablation", {"zetas": [0, 1]})
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "notes.txt").write_text("mine")
-    with pytest.raises(ConfigError, match="not empty"):
+    with pytest.raises(ResultFolderError, match="not empty"):
         StudyStore(tmp_path / "other", "noise", {})
     StudyStore(tmp_path / "s", "noise", {"zetas": [0, 1]})  # same settings: resumes
 
@@ -67,3 +70,46 @@ def test_mean_interval_covers_the_mean():
     m, lo, hi = mean_interval([1.0, 2.0, 3.0, 4.0])
     assert m == 2.5 and lo < m < hi
     assert mean_interval([7.0]) == (7.0, 7.0, 7.0)
+
+
+def test_folder_written_with_old_field_names_resumes_and_reads_under_new_names(tmp_path):
+    # A folder from before the rename allowed -> action_set: identity, rows and metadata.
+    folder = tmp_path / "old"
+    folder.mkdir()
+    meta = {"study": "swim", "status": "complete",
+            "identity": {"study": "swim", "options": {"allowed": "all", "steps": 6}, "seed": 0}}
+    (folder / "metadata.json").write_text(json.dumps(meta))
+    (folder / "runs.jsonl").write_text(json.dumps({"run_id": "a", "allowed": "shape-changing"}) + "\n")
+    new_identity = {"study": "swim", "options": {"action_set": "all", "steps": 6}, "seed": 0}
+    store = StudyStore(folder, "swim", new_identity)  # resumes: same settings under new names
+    assert store.done_ids() == {"a"}
+    assert read_runs(folder)[0]["action_set"] == "shape-changing" and "allowed" not in read_runs(folder)[0]
+    assert read_metadata(folder)["identity"] == new_identity
+    with pytest.raises(ResultFolderError, match="options"):  # a real difference is still refused
+        StudyStore(folder, "swim", {**new_identity, "options": {"action_set": "shape-changing", "steps": 6}})
+
+
+def test_name_translation_round_trips():
+    old = {"options": {"allowed": "all"}, "rows": [{"allowed": "x", "k": 1}]}
+    assert upgrade_names(old) == {"options": {"action_set": "all"}, "rows": [{"action_set": "x", "k": 1}]}
+    assert legacy_names(upgrade_names(old)) == old
+
+
+def test_load_returns_the_runs_as_a_dataframe(tmp_path):
+    store = StudyStore(tmp_path / "s", "curves", {})
+    store.add_runs([{"run_id": "a", "agent": "llm", "success": True}, {"run_id": "b", "agent": "random", "success": False}])
+    df = load(tmp_path / "s")
+    assert isinstance(df, pd.DataFrame) and list(df["run_id"]) == ["a", "b"] and df["success"].sum() == 1
+    with pytest.raises(JswimError, match="not a jswim study folder"):
+        load(tmp_path)
+
+
+def test_learn_stats_counts_never_learned_runs_instead_of_inventing_steps():
+    # 3 of 5 learned at 4, 10 and 40 steps: the median is over those (10), not over 5 values
+    # with two +inf (which would give 40) nor a silent 3-row median with no count.
+    ls = learn_stats([4, None, 10, -1, 40])
+    assert (ls.n, ls.learned, ls.median) == (5, 3, 10.0)
+    assert ls.q25 == 7.0 and ls.q75 == 25.0  # linear interpolation between 4, 10, 40
+    assert ls.label() == "10 [7-25], 3 of 5 learned"
+    none = learn_stats([None, None])
+    assert none.learned == 0 and math.isnan(none.median) and none.label() == "0 of 2 learned"

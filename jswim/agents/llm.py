@@ -8,13 +8,10 @@ fixed-size env batch with a no-op action so the compiled step is reused. Optiona
 dealt into several cohorts that each step in lockstep on their own (``cohorts``), which hides
 this process's per-request CPU time behind the other cohorts' waiting.
 
-Variants of the paper's protocol (all off by default, each a field of :class:`LLMAgentConfig`
-recorded in every transcript and result row): the allowed set (every action, or only the moves
-that change the shape), the observed-progress summary sentence, the order of the options in S5
-shuffled per step (exposes position bias), and a per-request temperature with a seed derived
-from the run's seed, the step and the attempt (reproducible sampling; never cached). None of them
-chooses for the model: the model always has every allowed option (at least two), and nothing is
-ranked or pruned by observed value.
+The protocol itself (prompt in, action or follow-up out) is pure and lives in
+:mod:`jswim.agents.protocol`; the run spec, the agent settings and the named variants in
+:mod:`jswim.agents.variants`; the history and its clearing rule in :mod:`jswim.agents.memory`.
+This module does the I/O: requests, env steps, transcripts.
 
 A reply without a valid action is retried ``parse_retries`` times with a short corrective
 follow-up message (a new request, so temperature-0 caching does not replay the bad reply); if
@@ -30,9 +27,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
-import hashlib
 import json
-import random
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence, TextIO
@@ -42,205 +37,15 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim import env
-from jswim.errors import ConfigError
+from jswim.agents import protocol
+from jswim.agents.memory import History, MoveStats, shape_key
+from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
+from jswim.errors import ConfigError, LLMError, LLMServerError, PositionBelowMinimumError
 from jswim.llm.client import ClientSettings, LLMClient
-from jswim.llm.errors import LLMError, LLMServerError
+from jswim.llm.local import LocalServer
 from jswim.llm.sync import run_sync
 from jswim.llm.usage import UsageTotals
-from jswim.prompt import (
-    DEFAULT_TEMPLATE,
-    Action,
-    ClearingRule,
-    History,
-    HistoryRecord,
-    MoveStats,
-    PositionBelowMinimumError,
-    PromptConfig,
-    PromptTemplate,
-    SwimmerText,
-    allowed_actions,
-    build_messages,
-    encode_position,
-    normalize_mask,
-    parse_reply,
-    render_prompt,
-    render_summary,
-    shape_key,
-)
-
-#: Executed when the model gives no valid action: hold still.
-NO_OP = Action(1, 0)
-
-DEFAULT_RETRY_PROMPT = "That reply names no valid action. Answer only with one of {allowed}."
-
-
-@dataclass(frozen=True)
-class LLMRunSpec:
-    """One run: a swimmer, a task and the prompt knobs that may differ between runs.
-
-    Attributes
-    ----------
-    swimmer : str
-        ``"purcell"``, ``"ng"``, ... (see :func:`jswim.env.make_params`).
-    swimmer_options : tuple of (str, value)
-        Model options, e.g. ``(("d_max", math.pi / 4),)``.
-    direction : {+1, -1}
-        Target direction.
-    init : tuple of int, str or None
-        Initial DOF levels (see :func:`jswim.env.parse_init`); ``None``: all at ``hi``.
-    zeta : float
-        Noise level.
-    seed : int
-        Seed of the run's noise and random initial configuration.
-    n_steps : int
-        Steps to run.
-    n_ht : int or None
-        History records in the prompt; ``None``: the swimmer's default.
-    drop : frozenset of str
-        Sentences left out of the prompt.
-    rocs : tuple of int or None
-        ROCs offered; ``None``: the swimmer's default.
-    run_id : str or None
-        Name of the run (transcript file name); default from the fields above.
-    """
-
-    swimmer: str = "purcell"
-    swimmer_options: tuple[tuple[str, Any], ...] = ()
-    direction: int = 1
-    init: tuple[int, ...] | str | None = None
-    zeta: float = 0.0
-    seed: int = 0
-    n_steps: int = 50
-    n_ht: int | None = None
-    drop: frozenset[str] = frozenset()
-    rocs: tuple[int, ...] | None = None
-    run_id: str | None = None
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "drop", normalize_mask(self.drop))
-        if self.n_steps < 1:
-            raise ConfigError(f"n_steps must be >= 1, got {self.n_steps}")
-
-    def label(self) -> str:
-        """``run_id``, or a readable name built from the fields."""
-        if self.run_id:
-            return self.run_id
-        if isinstance(self.init, tuple):
-            init = "".join("+" if v == 1 else "-" if v == 0 else "?" for v in self.init)
-        else:
-            init = self.init or "default"
-        parts = [self.swimmer, "px" if self.direction > 0 else "mx", f"init{init}", f"z{self.zeta:g}", f"s{self.seed}"]
-        if self.n_ht is not None:
-            parts.append(f"nht{self.n_ht}")
-        if self.drop:
-            parts.append("drop" + "".join(sorted(self.drop)))
-        return "-".join(parts)
-
-
-@dataclass(frozen=True)
-class LLMAgentConfig:
-    """Study-wide agent settings (the paper's values are the defaults).
-
-    Attributes
-    ----------
-    allowed : {"all", "shape-changing"}
-        Actions offered in S5 and by constrained decoding.
-    x_min : float
-        Lower bound of X for the integer position encoding.
-    template : PromptTemplate
-        Prompt text.
-    system : str or None
-        Optional system message (the paper uses none).
-    clearing : ClearingRule
-        History clearing scheme.
-    parse_retries : int
-        Extra requests after a reply without a valid action.
-    retry_prompt : str
-        Follow-up message of such a retry (``{allowed}`` is filled in).
-    share_identical : bool
-        Let temperature-0 requests use the disk cache and share identical in-flight requests.
-    summary : bool
-        Add the observed-progress sentence (:func:`jswim.prompt.render_summary`).
-    shuffle : bool
-        List the allowed actions in S5 in a new random order at every step (seeded by the run's
-        seed and the step); the grammar is unchanged.
-    temperature : float or None
-        Sampling temperature of every request; ``None`` keeps the client's (paper: 0). Above 0
-        each request carries a seed derived from the run's seed, step and attempt.
-    variant : str
-        Name of this combination of knobs (a label for tables; ``"paper"`` = the paper's).
-    """
-
-    allowed: str = "all"
-    x_min: float = -2.5
-    template: PromptTemplate = DEFAULT_TEMPLATE
-    system: str | None = None
-    clearing: ClearingRule = ClearingRule()
-    parse_retries: int = 2
-    retry_prompt: str = DEFAULT_RETRY_PROMPT
-    share_identical: bool = True
-    summary: bool = False
-    shuffle: bool = False
-    temperature: float | None = None
-    variant: str = "paper"
-
-    def __post_init__(self) -> None:
-        if self.temperature is not None and not 0.0 <= self.temperature <= 2.0:
-            raise ConfigError(f"temperature must lie in [0, 2], got {self.temperature}")
-
-    def sampling_temperature(self, client_temperature: float) -> float:
-        """The temperature requests go out with: this config's, else the client's."""
-        return self.temperature if self.temperature is not None else client_temperature
-
-    def knobs(self, client_temperature: float) -> dict[str, Any]:
-        """The variant switches as flat values (result rows, summaries)."""
-        return {"variant": self.variant, "allowed": self.allowed, "summary": self.summary,
-                "shuffle": self.shuffle, "temperature": float(self.sampling_temperature(client_temperature))}
-
-    def metadata(self) -> dict[str, Any]:
-        d = dataclasses.asdict(self)
-        t = self.template
-        d["template"] = {"layout": t.layout, "sentences": dict(t.sentences), "record": t.record}
-        return d
-
-
-#: Named protocol variants: the :class:`LLMAgentConfig` fields each one sets ("paper" sets none).
-#: Every switch is honest in the sense of the project: the model always sees every allowed
-#: option (at least two), nothing is ranked or pruned by observed value, and the summary reports
-#: observed data only.
-VARIANTS: dict[str, dict[str, Any]] = {
-    "paper": {},
-    "shape-changing": {"allowed": "shape-changing"},
-    "summary": {"summary": True},
-    "shape-changing+summary": {"allowed": "shape-changing", "summary": True},
-    "shuffle": {"shuffle": True},
-    "shape-changing+shuffle": {"allowed": "shape-changing", "shuffle": True},
-    "temperature": {"temperature": 0.7},
-    "shape-changing+temperature": {"allowed": "shape-changing", "temperature": 0.7},
-    "shape-changing+summary+temperature": {"allowed": "shape-changing", "summary": True, "temperature": 0.7},
-}
-
-
-def variant_config(name: str, **fields: Any) -> LLMAgentConfig:
-    """The agent config of variant ``name``: ``fields`` first, then the variant's switches.
-
-    Raises
-    ------
-    ConfigError
-        For an unknown name.
-    """
-    return LLMAgentConfig(**{**fields, **_switches(name), "variant": name})
-
-
-def variant_allowed(name: str, default: str = "all") -> str:
-    """The allowed set variant ``name`` uses (``default`` when it leaves it alone)."""
-    return _switches(name).get("allowed", default)
-
-
-def _switches(name: str) -> dict[str, Any]:
-    if name not in VARIANTS:
-        raise ConfigError(f"unknown variant {name!r}; choose one of {', '.join(VARIANTS)}")
-    return VARIANTS[name]
+from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText, encode_position
 
 
 @dataclass
@@ -308,12 +113,6 @@ class _Run:
             self.sink.write(json.dumps(record, default=_jsonable) + "\n")
         elif self.result.transcript is not None:
             self.result.transcript.append(record)
-
-
-def derived_seed(*parts: Any) -> int:
-    """A 31-bit seed from ``parts`` (run seed, step, purpose...): stable across runs and machines."""
-    digest = hashlib.blake2b(repr(parts).encode(), digest_size=8).digest()
-    return int.from_bytes(digest, "little") & 0x7FFFFFFF
 
 
 def _jsonable(obj: Any) -> Any:
@@ -415,15 +214,8 @@ class LLMDriver:
     def _make_run(
         self, spec: LLMRunSpec, run_id: str, params: env.EnvParams, dofs: np.ndarray, levels0: np.ndarray
     ) -> _Run:
-        model = params.model
-        n_ht = spec.n_ht if spec.n_ht is not None else model.default_n_ht(spec.direction)
-        rocs = spec.rocs if spec.rocs is not None else model.default_rocs
-        text = SwimmerText(model.n_dof, model.lo, model.hi, model.dof_decimals, tuple(rocs))
+        n_ht, text, prompt = protocol.setup(spec, params.model, self.config)
         cfg = self.config
-        prompt = PromptConfig(
-            n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, allowed=cfg.allowed, template=cfg.template, system=cfg.system,
-            summary=cfg.summary, shuffle=cfg.shuffle,
-        )
         result = RunResult(run_id, spec, n_ht, text.rocs, levels0=[int(v) for v in levels0],
                            transcript=None if self.transcript_dir else [],
                            knobs=cfg.knobs(self.client.settings.temperature))
@@ -443,38 +235,27 @@ class LLMDriver:
         cfg = self.config
         spec = run.result.spec
         step = run.result.steps + 1
-        hist = run.history.records
-        allowed = allowed_actions(run.text, cfg.allowed, run.dofs)
-        options = list(allowed)
-        if cfg.shuffle:  # same set, new order; seeded per run and step so a run replays exactly
-            random.Random(derived_seed(spec.seed, step, "shuffle")).shuffle(options)
-        summary = render_summary(run.text, run.stats, run.dofs, options, spec.direction) if cfg.summary else ""
-        prompt = render_prompt(run.text, run.prompt, spec.direction, hist, run.dofs, run.x,
-                               options=options, summary=summary)
-        replies = [a.text() for a in allowed]  # the grammar keeps one order: only the text is shuffled
-        messages = build_messages(prompt, cfg.system)
+        req = protocol.request(cfg, run.text, run.prompt, direction=spec.direction, seed=spec.seed, step=step,
+                               records=run.history.records, dofs=run.dofs, x=run.x, stats=run.stats)
         temperature = cfg.sampling_temperature(self.client.settings.temperature)
+        messages = req.messages
         attempts = []
         action = None
         for k in range(cfg.parse_retries + 1):
-            # Sampling: a seed per run, step and attempt, so runs differ and each replays.
-            seed = derived_seed(spec.seed, step, k, "sample") if temperature > 0 else None
-            res = await self.client.chat(messages, replies=replies, temperature=cfg.temperature, seed=seed,
+            seed = protocol.sample_seed(spec.seed, step, k, temperature)
+            res = await self.client.chat(messages, replies=req.replies, temperature=cfg.temperature, seed=seed,
                                          use_cache=cfg.share_identical)
             run.result.usage.add(res)
             run.result.tokens_seen += res.usage.total_tokens
-            action = parse_reply(res.text, allowed)
+            reply = protocol.read_reply(req, messages, res.text, k, cfg)
+            action = reply.action
             attempts.append({**res.as_dict(), "seed": seed, "parsed": list(action) if action else None})
-            if action is not None:
+            if action is not None or reply.follow_up is None:
                 break
-            if k < cfg.parse_retries:
-                run.result.parse_retries += 1
-                messages = messages + [
-                    {"role": "assistant", "content": res.text},
-                    {"role": "user", "content": cfg.retry_prompt.format(allowed=", ".join(a.text() for a in options))},
-                ]
+            run.result.parse_retries += 1
+            messages = reply.follow_up
         failed = action is None
-        log = {"prompt": prompt, "attempts": attempts, "options": [list(a) for a in options]}
+        log = {"prompt": req.prompt, "attempts": attempts, "options": [list(a) for a in req.options]}
         return (NO_OP if failed else action), failed, log
 
     # -- the loop ----------------------------------------------------------------------------
@@ -632,7 +413,5 @@ def run_batch(
 
     if settings is not None:
         return run_sync(go(settings))
-    from jswim.llm.local import LocalServer
-
     with LocalServer(**local_options) as srv:
         return run_sync(go(srv.client_settings()))

@@ -41,13 +41,11 @@ import numpy as np
 import optax
 from jax import Array
 
+from jswim.actions import check_action_set
+from jswim.agents.defaults import default_rocs
 from jswim.env import EnvParams, advance, make_params, reset, uniforms
 from jswim.errors import ConfigError
-from jswim.gait import GaitReport, judge
-from jswim.prompt import ALLOWED_MODES
-
-#: Action sets a learner may be offered (see :class:`QConfig`): the LLM's allowed-set modes.
-ACTION_SETS = ALLOWED_MODES
+from jswim.gait import PAPER, Criterion, GaitReport, judge
 
 #: Exploration rate ``0.8**t``: 1 at the start (nothing is known yet), below 1 % after 21 steps,
 #: about 5 random steps in all. It has to reach 0: success means the stroke lasts to the end of
@@ -115,8 +113,7 @@ class QConfig:
             raise ConfigError(f"steps must be a positive integer, got {self.steps!r}")
         if not 0.0 <= self.discount < 1.0:
             raise ConfigError(f"discount must lie in [0, 1) (the task never ends), got {self.discount!r}")
-        if self.action_set not in ACTION_SETS:
-            raise ConfigError(f"action_set must be one of {ACTION_SETS}, got {self.action_set!r}")
+        check_action_set(self.action_set)
         if self.tie_break not in ("random", "first"):
             raise ConfigError(f"tie_break must be 'random' or 'first', got {self.tie_break!r}")
         for name in ("learning_rate", "epsilon"):
@@ -176,12 +173,16 @@ def offered(levels: Array, n_dof: int, action_set: str) -> Array:
     return roc == 1 - 2 * level  # +1 from lo, -1 from hi
 
 
+def offered_mask(levels: Array, model: Any, action_set: str, rocs: tuple[int, ...] | None = None) -> Array:
+    """:func:`offered`, restricted to the ROCs offered (default: the swimmer's,
+    :func:`jswim.agents.defaults.default_rocs`: all three for two DOFs, +-1 for more)."""
+    rocs = default_rocs(model) if rocs is None else rocs
+    roc_ok = jnp.zeros(3, bool).at[jnp.asarray(rocs) + 1].set(True)
+    return offered(levels, model.n_dof, action_set) & jnp.tile(roc_ok, model.n_dof)
+
+
 def _offered(levels: Array, params: EnvParams, action_set: str) -> Array:
-    """:func:`offered`, restricted to the ROCs the LLM is offered for this swimmer (all three for
-    two DOFs, +-1 for more; ``SwimmerModel.default_rocs``)."""
-    model = params.model
-    rocs = jnp.zeros(3, bool).at[jnp.asarray(model.default_rocs) + 1].set(True)
-    return offered(levels, model.n_dof, action_set) & jnp.tile(rocs, model.n_dof)
+    return offered_mask(levels, params.model, action_set)
 
 
 @functools.lru_cache(maxsize=8)
@@ -397,9 +398,9 @@ def batch_params(params: EnvParams, size: int, **changes: Any) -> EnvParams:
     )
 
 
-def evaluate(run: QRun, params: EnvParams, *, horizon: int = 50, **judge_kwargs: Any) -> GaitReport:
+def evaluate(run: QRun, params: EnvParams, *, criterion: Criterion = PAPER) -> GaitReport:
     """Judge training runs with the shared success criterion, :func:`jswim.gait.judge`."""
-    return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), horizon=horizon, **judge_kwargs)
+    return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), criterion=criterion)
 
 
 @functools.partial(jax.jit, static_argnames=("steps", "action_set"))
@@ -419,118 +420,3 @@ def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "a
         return state, action
 
     return jax.lax.scan(body, reset(k_reset, params), jax.random.uniform(k_run, (steps, 2)))[1]
-
-
-# ---------------------------------------------------------------------------------------------
-# Studies: distributions over seeds
-
-
-class Summary(NamedTuple):
-    """Steps-to-learn distribution and success of one group of learners."""
-
-    swimmer: str
-    direction: int
-    zeta: float
-    action_set: str
-    n: int
-    learned: float  # fraction that end in the qualifying stroke (within the run)
-    success: float  # fraction meeting the paper's criterion (3 cycles within `horizon` steps)
-    q25: float  # quartiles of steps to learn over all learners; never-learned counts as +inf
-    median: float
-    q75: float
-    mean_x_horizon: float  # mean displacement in the target direction after `horizon` steps
-    mean_x_end: float  # ... and at the end of the run
-
-
-def summarize(
-    run: QRun, params: EnvParams, report: GaitReport, *, swimmer: str, action_set: str, horizon: int = 50
-) -> list[Summary]:
-    """One :class:`Summary` per (direction, zeta) group of a batched run.
-
-    Quartiles of steps-to-learn are taken over all learners of a group, a learner that never
-    learned counting as +inf, so a quartile reads "never" once more than a quarter fail.
-    """
-    direction = np.broadcast_to(np.asarray(params.direction), report.learned.shape)
-    zeta = np.broadcast_to(np.asarray(params.zeta), report.learned.shape)
-    x = np.asarray(run.x)
-    h = min(horizon, x.shape[1]) - 1
-    rows = []
-    for d, z in sorted(set(zip(direction.tolist(), zeta.tolist())), key=lambda g: (-g[0], g[1])):
-        sel = (direction == d) & (zeta == z)
-        stl = np.where(report.learned[sel], report.steps_to_learn[sel], np.inf).astype(float)
-        q25, q50, q75 = np.quantile(stl, [0.25, 0.5, 0.75], method="inverted_cdf")
-        rows.append(
-            Summary(
-                swimmer, int(d), float(z), action_set, int(sel.sum()),
-                float(report.learned[sel].mean()), float(report.success[sel].mean()),
-                float(q25), float(q50), float(q75),
-                float(np.mean(d * x[sel, h])), float(np.mean(d * x[sel, -1])),
-            )
-        )
-    return rows
-
-
-def study(
-    config: QConfig = QConfig(),
-    *,
-    swimmers: Sequence[str] = ("purcell", "ng"),
-    directions: Sequence[int] = (1, -1),
-    zetas: Sequence[float] = (0.0,),
-    n_seeds: int = 1000,
-    init: Sequence[int] | str | None = None,
-    seed: int = 0,
-    horizon: int = 50,
-) -> list[Summary]:
-    """Train ``n_seeds`` learners per (swimmer, direction, zeta) and summarise each group.
-
-    Parameters
-    ----------
-    config : QConfig
-        Hyperparameters shared by every learner.
-    swimmers, directions, zetas : sequences
-        The grid; one batched call per swimmer covers all its directions and noise levels.
-    n_seeds : int
-        Learners per group.
-    init : sequence of int or str, optional
-        Initial configuration (default (+, +)); ``"random"`` draws one per learner.
-    seed : int
-        Seed of the whole study.
-    horizon : int
-        Horizon of the paper's success criterion (50).
-
-    Returns
-    -------
-    list of Summary
-        One row per (swimmer, direction, zeta).
-    """
-    rows: list[Summary] = []
-    key = jax.random.PRNGKey(seed)
-    for swimmer in swimmers:
-        base = make_params(swimmer, init=init)
-        grid = [(d, z) for d in directions for z in zetas]
-        d_arr = np.repeat([g[0] for g in grid], n_seeds).astype(float)
-        z_arr = np.repeat([g[1] for g in grid], n_seeds).astype(float)
-        params = batch_params(base, d_arr.size, direction=d_arr, zeta=z_arr)
-        key, sub = jax.random.split(key)
-        run = train_batch(jax.random.split(sub, d_arr.size), params, config)
-        report = evaluate(run, params, horizon=horizon)
-        rows += summarize(run, params, report, swimmer=swimmer, action_set=config.action_set, horizon=horizon)
-    return rows
-
-
-def format_table(rows: Sequence[Summary]) -> str:
-    """Plain-text table of summaries."""
-
-    def num(v: float) -> str:
-        return "never" if not np.isfinite(v) else f"{v:g}"
-
-    head = f"{'swimmer':8} {'dir':>3} {'zeta':>4} {'actions':14} {'n':>6} {'learned':>7} {'success':>7} " \
-           f"{'q25':>5} {'median':>6} {'q75':>5} {'X@50':>7} {'X@end':>7}"
-    lines = [head, "-" * len(head)]
-    for r in rows:
-        lines.append(
-            f"{r.swimmer:8} {'+x' if r.direction > 0 else '-x':>3} {r.zeta:4g} {r.action_set:14} {r.n:6d} "
-            f"{r.learned:7.3f} {r.success:7.3f} {num(r.q25):>5} {num(r.median):>6} {num(r.q75):>5} "
-            f"{r.mean_x_horizon:7.3f} {r.mean_x_end:7.3f}"
-        )
-    return "\n".join(lines)

@@ -31,6 +31,7 @@ from urllib.parse import urlsplit, urlunsplit
 
 import httpx
 
+from jswim.errors import ConfigError
 from jswim.llm import constrain
 from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
@@ -39,6 +40,19 @@ from jswim.llm.pacing import Pacer
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
 from jswim.llm.usage import PriceTable, Usage
+
+def check_temperature(value: float) -> float:
+    """``value`` if it is a sampling temperature in [0, 2] (the OpenAI API's range).
+
+    Raises
+    ------
+    ConfigError
+        Otherwise.
+    """
+    if not 0.0 <= value <= 2.0:  # also rejects NaN
+        raise ConfigError(f"temperature must lie in [0, 2], got {value}")
+    return value
+
 
 #: HTTP statuses worth retrying: timeout, conflict, rate limit (5xx are added in code).
 RETRY_STATUSES = frozenset({408, 409, 429})
@@ -105,11 +119,12 @@ class ClientSettings:
 
     def __post_init__(self) -> None:
         if self.constrain not in constrain.MODES:
-            raise ValueError(f"constrain must be one of {constrain.MODES}, got {self.constrain!r}")
+            raise ConfigError(f"constrain must be one of {constrain.MODES}, got {self.constrain!r}")
         if self.server_kind not in constrain.SERVER_KINDS:
-            raise ValueError(f"server_kind must be one of {constrain.SERVER_KINDS}, got {self.server_kind!r}")
+            raise ConfigError(f"server_kind must be one of {constrain.SERVER_KINDS}, got {self.server_kind!r}")
         if self.max_concurrency < 1 or self.max_retries < 0 or self.timeout_s <= 0:
-            raise ValueError("need max_concurrency >= 1, max_retries >= 0 and timeout_s > 0")
+            raise ConfigError("need max_concurrency >= 1, max_retries >= 0 and timeout_s > 0")
+        check_temperature(self.temperature)
 
     def metadata(self) -> dict[str, Any]:
         """Settings worth recording with a run (no secrets: only the key's variable name)."""

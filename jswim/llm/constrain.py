@@ -14,6 +14,8 @@ from __future__ import annotations
 import json
 from typing import Any, Sequence
 
+from jswim.errors import ConfigError
+
 MODES = ("auto", "grammar", "json_schema", "none")
 
 #: Server kinds the client knows; only used to resolve ``"auto"``.
@@ -23,7 +25,7 @@ SERVER_KINDS = ("generic", "llamacpp", "openai")
 def resolve_mode(mode: str, server_kind: str, has_replies: bool = True) -> str:
     """The concrete mode (never ``"auto"``); ``"none"`` when there is nothing to constrain to."""
     if mode not in MODES:
-        raise ValueError(f"constrain must be one of {MODES}, got {mode!r}")
+        raise ConfigError(f"constrain must be one of {MODES}, got {mode!r}")
     if not has_replies:
         return "none"
     if mode == "auto":
@@ -38,7 +40,7 @@ def _gbnf_literal(text: str) -> str:
 def gbnf(replies: Sequence[str]) -> str:
     """A GBNF grammar admitting exactly the given replies, e.g. ``root ::= "[1, -1]" | "[1, 0]"``."""
     if not replies:
-        raise ValueError("a grammar needs at least one reply")
+        raise ConfigError("a grammar needs at least one reply")
     return "root ::= " + " | ".join(_gbnf_literal(r) for r in replies)
 
 

@@ -111,7 +111,7 @@ class LocalServer:
         if self._server is not None:
             return self
         try:
-            import xllamacpp
+            import xllamacpp  # lazy: a native library, loaded only when a server starts
         except ImportError:
             raise LocalModelError("the embedded model needs xllamacpp; install with: pip install xllamacpp") from None
         path = self.model_path or default_model_path()
@@ -184,7 +184,11 @@ class LocalServer:
         return path.stem
 
     def client_settings(self, **overrides: Any) -> ClientSettings:
-        """Client settings for this server: grammar-constrained, one request per slot in flight."""
+        """Client settings for this server: grammar-constrained, one request per slot in flight.
+
+        The one place the embedded server's settings are made (:class:`jswim.llm.backend.Backend`
+        passes its knobs in as ``overrides``), so every caller sends the same model name and
+        retries, and the cache keys agree."""
         kw: dict[str, Any] = dict(
             base_url=self.base_url,
             model=self.model_name,

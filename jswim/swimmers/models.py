@@ -49,30 +49,6 @@ class SwimmerModel:
         return self.kind in ("purcell", "nlink")
 
     @property
-    def dof_decimals(self) -> int:
-        """Decimals used when DOF values are shown as text: angles 3, sphere arms 0."""
-        return 3 if self.planar else 0
-
-    @property
-    def default_rocs(self) -> tuple[int, ...]:
-        """ROCs offered to an agent: the paper's {-1, 0, 1} for two DOFs, {-1, 1} for more
-        (the published four-DOF setting)."""
-        return (-1, 0, 1) if self.n_dof == 2 else (-1, 1)
-
-    def default_n_ht(self, direction: int = 1) -> int:
-        """History length used by default.
-
-        The paper picks n_ht = 3 (+x) and 6 (-x) for NG's swimmer and reports that n_ht = 1 works
-        for Purcell's only by coincidence; 4 (one stroke cycle) is used for Purcell here. The
-        published four-DOF setting uses 20.
-        """
-        if self.n_dof > 2:
-            return 20
-        if self.kind in ("ng", "nsphere"):
-            return 3 if direction > 0 else 6
-        return 4
-
-    @property
     def duration(self) -> float:
         """Dimensionless duration of one step at ``|ROC| = 1``."""
         return self.hi - self.lo

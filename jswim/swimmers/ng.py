@@ -6,6 +6,8 @@ and time such that an arm changing at ``|ROC| = 1`` has ``|d_dot| = 1``.
 
 from __future__ import annotations
 
+import math
+
 from jax import Array
 
 
@@ -25,8 +27,6 @@ def arm_move_displacement(d1a: float, d1b: float, d2a: float, d2b: float) -> flo
     Exactly one of the two arms may change (``d1a -> d1b`` with ``d2a == d2b``, or the reverse).
     Integrating the velocity along the straight path gives logarithms and ratios only.
     """
-    import math
-
     if d2a == d2b:
         d2 = d2a
         return (-math.log((d1b + d2) / (d1a + d2)) + 2.0 * (d1b - d1a) / d2) / 6.0
@@ -38,8 +38,6 @@ def arm_move_displacement(d1a: float, d1b: float, d2a: float, d2b: float) -> flo
 
 def square_cycle_displacement(d_min: float, d_max: float) -> float:
     """Net displacement of the square gait (d1 up, d2 up, d1 down, d2 down) per cycle."""
-    import math
-
     m, big = d_min, d_max
     dl = big - m
     return (2.0 * dl**2 / (m * big) - math.log(1.0 + dl**2 / (4.0 * m * big))) / 3.0

@@ -1,0 +1,165 @@
+"""The paper's protocol as pure functions: no client, no event loop, no environment.
+
+One decision of one run is two calls:
+
+- :func:`request`: run state and history in, the prompt, the chat messages and the offered
+  actions out;
+- :func:`read_reply`: a reply in, the action it names out, or the follow-up messages of a retry,
+  or nothing (give up: the driver executes :data:`~jswim.agents.variants.NO_OP` and counts a
+  failed step).
+
+:func:`setup` fixes what a run keeps for its whole length (n_ht, the swimmer's text, the prompt
+knobs). The driver (:mod:`jswim.agents.llm`) does the I/O around these: it sends the messages,
+steps the swimmers and records the history (:mod:`jswim.agents.memory`).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import random
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+from jswim.agents.defaults import default_n_ht, swimmer_text
+from jswim.agents.memory import MoveStats, render_summary
+from jswim.agents.variants import LLMAgentConfig, LLMRunSpec
+from jswim.prompt import (
+    Action,
+    HistoryRecord,
+    PromptConfig,
+    SwimmerText,
+    allowed_actions,
+    build_messages,
+    parse_reply,
+    render_prompt,
+)
+from jswim.swimmers.models import SwimmerModel
+
+
+def derived_seed(*parts: Any) -> int:
+    """A 31-bit seed from ``parts`` (run seed, step, purpose...): stable across runs and machines."""
+    digest = hashlib.blake2b(repr(parts).encode(), digest_size=8).digest()
+    return int.from_bytes(digest, "little") & 0x7FFFFFFF
+
+
+def setup(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig) -> tuple[int, SwimmerText, PromptConfig]:
+    """What a run keeps from start to end: ``(n_ht, swimmer text, prompt knobs)``.
+
+    ``n_ht`` and the ROC set come from the spec, else from the swimmer's agent defaults
+    (:mod:`jswim.agents.defaults`).
+    """
+    n_ht = spec.n_ht if spec.n_ht is not None else default_n_ht(model, spec.direction)
+    text = swimmer_text(model, spec.rocs)
+    prompt = PromptConfig(n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, action_set=cfg.action_set,
+                          template=cfg.template, system=cfg.system, summary=cfg.summary, shuffle=cfg.shuffle)
+    return n_ht, text, prompt
+
+
+@dataclass(frozen=True)
+class Request:
+    """One decision's request.
+
+    Attributes
+    ----------
+    prompt : str
+        The user message's text.
+    messages : list of dict
+        Chat messages of the first attempt.
+    allowed : list of Action
+        Valid replies in (DOF, ROC) order: the grammar's order and what parsing accepts.
+    options : list of Action
+        The same actions in the order S5 lists them (shuffled by the ``shuffle`` variant).
+    """
+
+    prompt: str
+    messages: list[dict[str, str]]
+    allowed: list[Action]
+    options: list[Action]
+
+    @property
+    def replies(self) -> list[str]:
+        """The allowed replies as text, for constrained decoding (never shuffled)."""
+        return [a.text() for a in self.allowed]
+
+
+def request(
+    cfg: LLMAgentConfig,
+    text: SwimmerText,
+    prompt: PromptConfig,
+    *,
+    direction: int,
+    seed: int,
+    step: int,
+    records: Sequence[HistoryRecord],
+    dofs: Sequence[float],
+    x: float,
+    stats: MoveStats,
+) -> Request:
+    """The request of decision ``step`` (1-based) of a run.
+
+    Parameters
+    ----------
+    cfg : LLMAgentConfig
+        Agent settings (variant switches).
+    text, prompt : SwimmerText, PromptConfig
+        From :func:`setup`.
+    direction : {+1, -1}
+        Target direction.
+    seed : int
+        The run's seed (orders the shuffled options; the same run replays exactly).
+    records : sequence of HistoryRecord
+        History since the last clear (:class:`jswim.agents.memory.History`).
+    dofs : sequence of float
+        Current DOF values.
+    x : float
+        Current X.
+    stats : MoveStats
+        Observed progress so far (read only by the summary variant).
+
+    Raises
+    ------
+    PositionBelowMinimumError
+        When a position to show lies below ``cfg.x_min``.
+    """
+    allowed = allowed_actions(text, cfg.action_set, dofs)
+    options = list(allowed)
+    if cfg.shuffle:  # same set, new order; seeded per run and step so a run replays exactly
+        random.Random(derived_seed(seed, step, "shuffle")).shuffle(options)
+    summary = render_summary(text, stats, dofs, options, direction) if cfg.summary else ""
+    body = render_prompt(text, prompt, direction, records, dofs, x, options=options, summary=summary)
+    return Request(body, build_messages(body, cfg.system), allowed, options)
+
+
+def sample_seed(run_seed: int, step: int, attempt: int, temperature: float) -> int | None:
+    """Seed of a sampled request (``None`` at temperature 0): one per run, step and attempt, so
+    runs differ and each replays."""
+    return derived_seed(run_seed, step, attempt, "sample") if temperature > 0 else None
+
+
+@dataclass(frozen=True)
+class Reply:
+    """What a reply means: an ``action``, or the ``follow_up`` messages of a retry, or neither
+    (retries used up: the step fails)."""
+
+    action: Action | None
+    follow_up: list[dict[str, str]] | None = None
+
+
+def read_reply(
+    req: Request, messages: Sequence[dict[str, str]], reply: str, attempt: int, cfg: LLMAgentConfig
+) -> Reply:
+    """Read the reply to ``messages`` (attempt ``attempt``, 0-based) of request ``req``.
+
+    A reply without a valid action gets a short corrective follow-up (a new request, so
+    temperature-0 caching does not replay the bad reply) while ``attempt < cfg.parse_retries``.
+    """
+    action = parse_reply(reply, req.allowed)
+    if action is not None:
+        return Reply(action)
+    if attempt >= cfg.parse_retries:
+        return Reply(None)
+    offered = ", ".join(a.text() for a in req.options)
+    return Reply(None, list(messages) + [
+        {"role": "assistant", "content": reply},
+        {"role": "user", "content": cfg.retry_prompt.format(allowed=offered)},
+    ])

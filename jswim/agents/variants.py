@@ -1,0 +1,242 @@
+"""What defines an LLM run: its spec and id, the agent's settings, and the named protocol variants.
+
+Variants of the paper's protocol (all off by default, each a field of :class:`LLMAgentConfig`
+recorded in every transcript and result row): the action set (every action, or only the moves
+that change the shape), the observed-progress summary sentence, the order of the options in S5
+shuffled per step (exposes position bias), and a per-request temperature with a seed derived
+from the run's seed, the step and the attempt (reproducible sampling; never cached). None of them
+chooses for the model: the model always has every allowed option (at least two), and nothing is
+ranked or pruned by observed value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, Iterable
+
+from jswim.actions import check_action_set
+from jswim.agents.memory import ClearingRule
+from jswim.errors import ConfigError
+from jswim.llm.client import check_temperature
+from jswim.prompt import DEFAULT_TEMPLATE, Action, PromptTemplate, normalize_mask
+
+
+def init_label(init: tuple[int, ...] | str | None) -> str:
+    """An initial configuration as text: levels as signs (``"+-"``; ``"?"`` for a random DOF),
+    ``"random"`` as is, ``None`` (every DOF at hi) as ``"default"``."""
+    if init is None:
+        return "default"
+    if isinstance(init, str):
+        return init
+    return "".join("+" if v == 1 else "-" if v == 0 else "?" for v in init)
+
+
+def run_id(
+    agent: str,
+    swimmer: str,
+    direction: int,
+    init: tuple[int, ...] | str | None,
+    zeta: float,
+    *,
+    n_ht: int | None = None,
+    drop: Iterable[str] = (),
+    tag: str = "",
+    repeat: int | None = None,
+    seed: int | None = None,
+) -> str:
+    """The one builder of run ids (study folders' rows and transcript file names).
+
+    ``llm-purcell-px-i++-z0-h4-noS4-shape-changing-r0``: agent, swimmer, target direction,
+    initial configuration, noise level, then only what is set: n_ht, the dropped sentences, a
+    ``tag`` (a variant or an action set), the repeat ``r`` and the seed ``s``. Study folders
+    store these ids, so the format is part of a folder's identity: change it only with a
+    reader for the old one.
+    """
+    parts = [agent, swimmer, "px" if direction > 0 else "mx", f"i{init_label(init)}", f"z{zeta:g}"]
+    if n_ht is not None:
+        parts.append(f"h{n_ht}")
+    drop = sorted(drop)
+    if drop:
+        parts.append("no" + "".join(drop))
+    if tag:
+        parts.append(tag)
+    if repeat is not None:
+        parts.append(f"r{repeat}")
+    if seed is not None:
+        parts.append(f"s{seed}")
+    return "-".join(parts)
+
+
+#: Executed when the model gives no valid action: hold still.
+NO_OP = Action(1, 0)
+
+DEFAULT_RETRY_PROMPT = "That reply names no valid action. Answer only with one of {allowed}."
+
+
+@dataclass(frozen=True)
+class LLMRunSpec:
+    """One run: a swimmer, a task and the prompt knobs that may differ between runs.
+
+    Attributes
+    ----------
+    swimmer : str
+        ``"purcell"``, ``"ng"``, ... (see :func:`jswim.env.make_params`).
+    swimmer_options : tuple of (str, value)
+        Model options, e.g. ``(("d_max", math.pi / 4),)``.
+    direction : {+1, -1}
+        Target direction.
+    init : tuple of int, str or None
+        Initial DOF levels (see :func:`jswim.env.parse_init`); ``None``: all at ``hi``.
+    zeta : float
+        Noise level.
+    seed : int
+        Seed of the run's noise and random initial configuration.
+    n_steps : int
+        Steps to run.
+    n_ht : int or None
+        History records in the prompt; ``None``: the swimmer's default.
+    drop : frozenset of str
+        Sentences left out of the prompt.
+    rocs : tuple of int or None
+        ROCs offered; ``None``: the swimmer's default.
+    run_id : str or None
+        Name of the run (transcript file name); default from the fields above.
+    """
+
+    swimmer: str = "purcell"
+    swimmer_options: tuple[tuple[str, Any], ...] = ()
+    direction: int = 1
+    init: tuple[int, ...] | str | None = None
+    zeta: float = 0.0
+    seed: int = 0
+    n_steps: int = 50
+    n_ht: int | None = None
+    drop: frozenset[str] = frozenset()
+    rocs: tuple[int, ...] | None = None
+    run_id: str | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "drop", normalize_mask(self.drop))
+        if self.n_steps < 1:
+            raise ConfigError(f"n_steps must be >= 1, got {self.n_steps}")
+
+    def label(self) -> str:
+        """``run_id``, or one built from the fields by :func:`run_id` (seed in place of a repeat)."""
+        if self.run_id:
+            return self.run_id
+        return run_id("llm", self.swimmer, self.direction, self.init, self.zeta, n_ht=self.n_ht,
+                      drop=self.drop, seed=self.seed)
+
+
+@dataclass(frozen=True)
+class LLMAgentConfig:
+    """Study-wide agent settings (the paper's values are the defaults).
+
+    Attributes
+    ----------
+    action_set : {"all", "shape-changing"}
+        Actions offered in S5 and by constrained decoding (:data:`jswim.actions.ACTION_SETS`).
+    x_min : float
+        Lower bound of X for the integer position encoding.
+    template : PromptTemplate
+        Prompt text.
+    system : str or None
+        Optional system message (the paper uses none).
+    clearing : ClearingRule
+        History clearing scheme.
+    parse_retries : int
+        Extra requests after a reply without a valid action.
+    retry_prompt : str
+        Follow-up message of such a retry (``{allowed}`` is filled in).
+    share_identical : bool
+        Let temperature-0 requests use the disk cache and share identical in-flight requests.
+    summary : bool
+        Add the observed-progress sentence (:func:`jswim.prompt.render_summary`).
+    shuffle : bool
+        List the allowed actions in S5 in a new random order at every step (seeded by the run's
+        seed and the step); the grammar is unchanged.
+    temperature : float or None
+        Sampling temperature of every request; ``None`` keeps the client's (paper: 0). Above 0
+        each request carries a seed derived from the run's seed, step and attempt.
+    variant : str
+        Name of this combination of knobs (a label for tables; ``"paper"`` = the paper's).
+    """
+
+    action_set: str = "all"
+    x_min: float = -2.5
+    template: PromptTemplate = DEFAULT_TEMPLATE
+    system: str | None = None
+    clearing: ClearingRule = ClearingRule()
+    parse_retries: int = 2
+    retry_prompt: str = DEFAULT_RETRY_PROMPT
+    share_identical: bool = True
+    summary: bool = False
+    shuffle: bool = False
+    temperature: float | None = None
+    variant: str = "paper"
+
+    def __post_init__(self) -> None:
+        check_action_set(self.action_set)
+        if self.temperature is not None:
+            check_temperature(self.temperature)
+
+    def sampling_temperature(self, client_temperature: float) -> float:
+        """The temperature requests go out with: this config's, else the client's."""
+        return self.temperature if self.temperature is not None else client_temperature
+
+    def knobs(self, client_temperature: float) -> dict[str, Any]:
+        """The variant switches as flat values (result rows, summaries)."""
+        return {"variant": self.variant, "action_set": self.action_set, "summary": self.summary,
+                "shuffle": self.shuffle, "temperature": float(self.sampling_temperature(client_temperature))}
+
+    def metadata(self) -> dict[str, Any]:
+        d = dataclasses.asdict(self)
+        t = self.template
+        d["template"] = {"layout": t.layout, "sentences": dict(t.sentences), "record": t.record}
+        return d
+
+
+#: Named protocol variants: the :class:`LLMAgentConfig` fields each one sets ("paper" sets none).
+#: Every switch is honest in the sense of the project: the model always sees every allowed
+#: option (at least two), nothing is ranked or pruned by observed value, and the summary reports
+#: observed data only.
+VARIANTS: dict[str, dict[str, Any]] = {
+    "paper": {},
+    "shape-changing": {"action_set": "shape-changing"},
+    "summary": {"summary": True},
+    "shape-changing+summary": {"action_set": "shape-changing", "summary": True},
+    "shuffle": {"shuffle": True},
+    "shape-changing+shuffle": {"action_set": "shape-changing", "shuffle": True},
+    "temperature": {"temperature": 0.7},
+    "shape-changing+temperature": {"action_set": "shape-changing", "temperature": 0.7},
+    "shape-changing+summary+temperature": {"action_set": "shape-changing", "summary": True, "temperature": 0.7},
+}
+
+
+def variant_config(name: str, **fields: Any) -> LLMAgentConfig:
+    """The agent config of variant ``name``: ``fields`` first, then the variant's switches.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown name.
+    """
+    return LLMAgentConfig(**{**fields, **_switches(name), "variant": name})
+
+
+def variant_action_set(name: str, default: str = "all") -> str:
+    """The action set variant ``name`` uses (``default`` when it leaves it alone).
+
+    Raises
+    ------
+    ConfigError
+        For an unknown name.
+    """
+    return _switches(name).get("action_set", default)
+
+
+def _switches(name: str) -> dict[str, Any]:
+    if name not in VARIANTS:
+        raise ConfigError(f"unknown variant {name!r}; choose one of {', '.join(VARIANTS)}")
+    return VARIANTS[name]

@@ -1,0 +1,143 @@
+"""Where LLM requests go: a remote OpenAI-compatible server or the embedded model.
+
+:class:`Backend` is the one description of a backend that studies and the command line pass
+around, validated once here. It builds the client's settings itself; for the embedded model it
+asks the running server (:meth:`jswim.llm.local.LocalServer.client_settings`, the one place those
+settings are made), so ``jswim swim``, ``jswim study`` and :func:`jswim.agents.llm.run_batch`
+send identical requests (same model name, retries and backoff, hence the same cache keys).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+from jswim.errors import ConfigError, LLMServerError
+from jswim.llm.client import ClientSettings, check_temperature, safe_url
+from jswim.llm.constrain import MODES
+from jswim.llm.local import LocalServer, default_model_path
+
+
+@dataclass(frozen=True)
+class Backend:
+    """Where LLM requests go.
+
+    Attributes
+    ----------
+    base_url : str or None
+        An OpenAI-compatible server (``.../v1``); ``None`` starts the embedded local model.
+    model : str or None
+        Model name for a remote server (required with ``base_url``).
+    gguf : str or None
+        GGUF file for the embedded server (default: the packaged SmolLM2-135M-Instruct).
+    api_key_env : str
+        Environment variable holding the API key (its value is never stored).
+    constrain : str
+        Constrained decoding: ``auto`` (grammar for llama.cpp, none otherwise), ``grammar``,
+        ``json_schema`` or ``none``.
+    temperature : float
+        Sampling temperature (paper: 0).
+    n_parallel : int
+        Decoding slots of the embedded server.
+    n_threads : int or None
+        CPU threads of the embedded server (``None``: llama.cpp's choice, one per core). On a
+        machine busy with other work, fewer threads than cores keep decoding steady.
+    concurrency : int
+        Requests in flight at once.
+    cohorts : int
+        Lockstep cohorts of a chunk of LLM runs (:func:`jswim.agents.llm.run_batch_async`); the
+        results do not depend on it. More than 1 overlaps this process's per-request CPU work with
+        other cohorts' waiting, which pays against a fast server with many distinct runs; 1 keeps
+        identical temperature-0 requests of different runs in flight together, so they are sent once.
+    cache_dir : str or None
+        Response cache (temperature 0 only).
+
+    Raises
+    ------
+    ConfigError
+        For a model without a server or a server without a model, a missing GGUF file, an
+        unknown ``constrain`` mode, a temperature outside [0, 2] or a count below 1.
+    """
+
+    base_url: str | None = None
+    model: str | None = None
+    gguf: str | None = None
+    api_key_env: str = "OPENAI_API_KEY"
+    constrain: str = "auto"
+    temperature: float = 0.0
+    n_parallel: int = 4
+    n_threads: int | None = None
+    concurrency: int = 16
+    cohorts: int = 1
+    cache_dir: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.base_url is None and self.model is not None:
+            raise ConfigError("--model names a model on a server; give --base-url too (or --gguf for a local file)")
+        if self.base_url is not None and self.model is None:
+            raise ConfigError("--base-url needs --model (the model name on that server)")
+        if self.gguf is not None and not Path(self.gguf).is_file():
+            raise ConfigError(f"--gguf {self.gguf}: no such file")
+        if self.constrain not in MODES:
+            raise ConfigError(f"constrain must be one of {', '.join(MODES)}, got {self.constrain!r}")
+        check_temperature(self.temperature)
+        if self.n_parallel < 1 or self.concurrency < 1:
+            raise ConfigError("--parallel and --concurrency must be >= 1")
+        if self.cohorts < 1:
+            raise ConfigError(f"--cohorts must be >= 1, got {self.cohorts}")
+        if self.n_threads is not None and self.n_threads < 1:
+            raise ConfigError(f"--threads must be >= 1, got {self.n_threads}")
+
+    @property
+    def local(self) -> bool:
+        return self.base_url is None
+
+    def describe(self) -> dict[str, Any]:
+        """What defines the backend's answers (recorded in the study's identity)."""
+        if self.local:
+            name = (Path(self.gguf) if self.gguf else default_model_path()).name
+        else:
+            name = self.model
+        return {"kind": "embedded" if self.local else "remote",
+                "base_url": None if self.local else safe_url(self.base_url),
+                "model": name, "constrain": self.constrain, "temperature": self.temperature}
+
+    def server(self) -> LocalServer:
+        """The embedded server of this backend (not started; use it as a context manager)."""
+        if not self.local:
+            raise ConfigError("a remote backend has no embedded server")
+        return LocalServer(self.gguf, n_parallel=self.n_parallel, n_threads=self.n_threads)
+
+    def client_settings(self, server: LocalServer | None = None, **changes: Any) -> ClientSettings:
+        """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``."""
+        common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir)
+        if self.local:
+            if server is None:
+                raise ConfigError("the embedded backend needs its running server (Backend.server())")
+            s = server.client_settings(max_concurrency=max(self.concurrency, self.n_parallel), **common)
+        else:
+            s = ClientSettings(base_url=self.base_url, model=self.model, api_key_env=self.api_key_env,
+                               max_concurrency=self.concurrency, **common)
+        return dataclasses.replace(s, **changes) if changes else s
+
+    def check(self, timeout_s: float = 5.0) -> None:
+        """For a remote backend, :func:`check_server`; nothing to check for the embedded one."""
+        if not self.local:
+            check_server(self.base_url, timeout_s)
+
+
+def check_server(base_url: str, timeout_s: float = 5.0) -> None:
+    """Raise :class:`LLMServerError` at once when nothing answers at ``base_url``.
+
+    Any HTTP answer counts (even 401 or 404): only an unreachable host or port is an error here.
+    """
+    try:
+        httpx.get(base_url.rstrip("/") + "/models", timeout=timeout_s)
+    except httpx.HTTPError as exc:
+        raise LLMServerError(
+            f"cannot reach {safe_url(base_url)} ({type(exc).__name__}); check --base-url or start the server"
+        ) from None

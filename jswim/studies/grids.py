@@ -1,0 +1,242 @@
+"""Study grids: each study's defaults and axes as one table (:data:`SPECS`), and :func:`build`,
+which turns a study and its options into the list of runs (:class:`Plan`).
+
+A study runs, per swimmer and target direction, a list of *cells* (one group of a table or
+figure: a noise level, an n_ht, a dropped sentence, ...); a cell runs some agents, each
+``runs`` (LLM) or ``q_runs`` (baselines) times. The order of the plans is part of a study's
+identity: a run's seed is ``seed * 1_000_003 + its index``, so cells and agents are laid out in
+the order the studies have always used.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+from jswim.actions import ACTION_SETS, check_action_set
+from jswim.agents.variants import VARIANTS, init_label, run_id, variant_action_set
+from jswim.env import all_inits
+from jswim.errors import ConfigError
+from jswim.gait import PAPER
+from jswim.prompt import SENTENCES
+from jswim.swimmers.models import SWIMMERS
+
+AGENTS = ("llm", "qlearning", "random")
+DEFAULT_ZETAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
+INIT_CHOICES = ("paper", "cycle", "random", "++", "+-", "-+", "--")
+
+#: Protocol variant of the swim study's LLM runs; the paper studies always use "paper". Chosen
+#: from the measured competence study (README): on the embedded SmolLM2-135M no variant beat the
+#: random baseline (0 successes in 140 runs; the model moves D1 in >= 87% of steps under every
+#: variant), so none earns the switch and the paper's protocol stays the default.
+SWIM_VARIANT = "paper"
+
+#: Variants the competence study runs by default (each next to the same baselines).
+COMPETENCE_VARIANTS = ("paper", "summary", "shuffle", "shape-changing", "shape-changing+summary",
+                       "shape-changing+shuffle", "shape-changing+temperature")
+
+
+@dataclass(frozen=True)
+class StudyOptions:
+    """Knobs of a study; ``None`` means the study's own default (:data:`SPECS`).
+
+    Raises
+    ------
+    ConfigError
+        For a value out of range or an unknown name (the message names the command-line option).
+    """
+
+    swimmers: tuple[str, ...] | None = None
+    directions: tuple[int, ...] | None = None
+    runs: int | None = None  # LLM runs per setting
+    q_runs: int | None = None  # Q-learning and random runs per setting
+    steps: int = 50
+    horizon: int = PAPER.horizon  # of the success criterion (jswim.gait.Criterion)
+    n_ht: int | None = None
+    n_hts: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 7, 8)
+    zeta: float = 0.0
+    zetas: tuple[float, ...] = DEFAULT_ZETAS
+    init: str | None = None
+    seed: int = 0
+    action_set: str = "all"
+    prompt_file: str | None = None
+    chunk: int = 64
+    agents: tuple[str, ...] = AGENTS
+    variant: str | None = None  # LLM protocol variant; None: the study's (SWIM_VARIANT or "paper")
+    variants: tuple[str, ...] | None = None  # competence: the variants to compare (None: all default)
+
+    def __post_init__(self) -> None:
+        if self.steps < 1 or self.steps > 10_000:
+            raise ConfigError(f"--steps must be between 1 and 10000, got {self.steps}")
+        for name in ("runs", "q_runs"):
+            v = getattr(self, name)
+            if v is not None and (v < 0 or v > 100_000):
+                raise ConfigError(f"--{name.replace('_', '-')} must be between 0 and 100000, got {v}")
+        if self.n_ht is not None and not 0 <= self.n_ht <= 100:
+            raise ConfigError(f"--n-ht must be between 0 and 100, got {self.n_ht}")
+        if self.init is not None and self.init not in INIT_CHOICES:
+            raise ConfigError(f"--init must be one of {', '.join(INIT_CHOICES)}, got {self.init!r}")
+        check_action_set(self.action_set)
+        bad = [z for z in (self.zeta, *self.zetas) if not (math.isfinite(z) and z >= 0)]
+        if bad:
+            raise ConfigError(f"--noise (zeta) must be >= 0, got {bad[0]}")
+        if self.chunk < 1:
+            raise ConfigError("--chunk must be >= 1")
+        for sw in self.swimmers or ():
+            if sw not in SWIMMERS:
+                raise ConfigError(f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS)}")
+        for name in ([self.variant] if self.variant else []) + list(self.variants or ()):
+            variant_action_set(name)  # raises for an unknown name
+
+    def llm_variant(self, study: str) -> str:
+        """The protocol variant of the study's LLM runs (outside the competence study)."""
+        return self.variant or (SWIM_VARIANT if study == "swim" else "paper")
+
+
+@dataclass(frozen=True)
+class Plan:
+    """One run of a study."""
+
+    run_id: str
+    agent: str
+    swimmer: str
+    direction: int
+    init: tuple[int, ...] | str
+    zeta: float
+    seed: int
+    steps: int
+    n_ht: int | None = None
+    drop: frozenset[str] = frozenset()
+    action_set: str = "all"
+    group: str = ""
+    variant: str = "paper"  # LLM protocol variant (jswim.agents.variants.VARIANTS); "" for baselines
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One group of a study: the agents it runs (in this order) and what differs from the
+    study's defaults (``zeta``, ``n_ht``, ``drop``, ``init``, ``variant``, ``action_set``)."""
+
+    group: str
+    agents: tuple[str, ...]
+    zeta: float | None = None  # None: the options' zeta
+    n_ht: int | None = None  # LLM runs only
+    drop: frozenset[str] = frozenset()
+    init: str | None = None  # None: the study's init choice
+    variant: str | None = None  # LLM runs only; None: the options' variant
+    action_set: str | None = None  # baselines only; None: the LLM variant's action set
+
+
+WITH_BASELINES = ("llm", "qlearning", "random")
+
+
+def _single(o: StudyOptions) -> list[Cell]:
+    return [Cell("", WITH_BASELINES, n_ht=o.n_ht)]
+
+
+def _noise(o: StudyOptions) -> list[Cell]:
+    return [Cell(f"zeta={z:g}", WITH_BASELINES, zeta=z, n_ht=o.n_ht) for z in o.zetas]
+
+
+def _history(o: StudyOptions) -> list[Cell]:
+    return [Cell(f"n_ht={h}", ("llm",), n_ht=h) for h in o.n_hts]
+
+
+def _ablation(o: StudyOptions) -> list[Cell]:
+    drops = [frozenset()] + [frozenset({s}) for s in SENTENCES]
+    return [Cell("full" if not d else f"-{next(iter(d))}", ("llm",), n_ht=o.n_ht, drop=d) for d in drops]
+
+
+def _inits(o: StudyOptions) -> list[Cell]:
+    return [Cell(f"init {init_label(i)}", ("llm",), n_ht=o.n_ht, init=init_label(i)) for i in all_inits(2)]
+
+
+def _competence(o: StudyOptions) -> list[Cell]:
+    llm = [Cell(v, ("llm",), n_ht=o.n_ht, variant=v) for v in o.variants or COMPETENCE_VARIANTS]
+    return llm + [Cell(s, (agent,), action_set=s) for agent in ("random", "qlearning") for s in ACTION_SETS]
+
+
+@dataclass(frozen=True)
+class StudySpec:
+    """A study's defaults and its cells (what ``None`` in :class:`StudyOptions` resolves to)."""
+
+    cells: Callable[[StudyOptions], list[Cell]]
+    runs: int  # LLM runs per cell
+    init: str = "cycle"
+    swimmers: tuple[str, ...] = ("purcell", "ng")
+    directions: tuple[int, ...] = (1,)
+    q_runs: int = 100  # baseline runs per cell
+    figure: str = ""  # the figure jswim.studies.report draws
+
+
+#: Every study (``jswim study NAME``; ``swim`` is ``jswim swim``), its defaults in one place.
+SPECS: dict[str, StudySpec] = {
+    # X/a against step n: LLM, Q-learning and random policy, both swimmers (Fig. 2)
+    "curves": StudySpec(_single, runs=1, init="paper", figure="curves"),
+    # the n_ht sweep, both directions, both swimmers (Fig. 3)
+    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1), figure="history"),
+    # mean X/a and success rate p against zeta (Fig. 4)
+    "noise": StudySpec(_noise, runs=10, figure="noise"),
+    # the full prompt and the prompt without each of S1..S5 (Fig. 5)
+    "ablation": StudySpec(_ablation, runs=10, figure="ablation"),
+    # all four initial configurations, both directions
+    "inits": StudySpec(_inits, runs=1, directions=(1, -1), figure="inits"),
+    # the main job: a few LLM runs next to Q-learning and random learners
+    "swim": StudySpec(_single, runs=4, init="paper", swimmers=("purcell",), figure="curves"),
+    # every protocol variant next to random and Q-learning baselines on both action sets
+    "competence": StudySpec(_competence, runs=10, figure="competence"),
+}
+
+STUDIES = tuple(SPECS)
+
+
+def initial(choice: str, k: int) -> tuple[int, ...] | str:
+    """Initial configuration of repeat ``k`` (``cycle`` goes through the four corners)."""
+    if choice == "paper":
+        return (1, 1)
+    if choice == "cycle":
+        return all_inits(2)[k % 4]
+    if choice == "random":
+        return "random"
+    return tuple(1 if ch == "+" else 0 for ch in choice)
+
+
+def build(study: str, o: StudyOptions) -> list[Plan]:
+    """The runs of ``study`` for options ``o``, in a fixed order (seeds follow it).
+
+    Raises
+    ------
+    ConfigError
+        For an unknown study.
+    """
+    if study not in SPECS:
+        raise ConfigError(f"unknown study {study!r}; choose one of {', '.join(STUDIES)}")
+    spec = SPECS[study]
+    # Outside the competence study every LLM run uses one variant; its action set (if it sets
+    # one) applies to the baselines too, so they are offered what the model is offered.
+    variant = o.llm_variant(study)
+    baseline_set = variant_action_set(variant, o.action_set)
+    runs = {"llm": spec.runs if o.runs is None else o.runs}
+    runs["qlearning"] = runs["random"] = spec.q_runs if o.q_runs is None else o.q_runs
+    plans: list[Plan] = []
+    for sw in o.swimmers or spec.swimmers:
+        for d in o.directions or spec.directions:
+            for cell in spec.cells(o):
+                for agent in (a for a in cell.agents if a in o.agents):
+                    llm = agent == "llm"
+                    v = (cell.variant or variant) if llm else ""
+                    action_set = variant_action_set(v, o.action_set) if llm else (cell.action_set or baseline_set)
+                    # The run id names what differs from the study's own setting.
+                    tag = (v if v != "paper" else "") if llm else (action_set if action_set != o.action_set else "")
+                    zeta = float(o.zeta if cell.zeta is None else cell.zeta)
+                    n_ht = cell.n_ht if llm else None
+                    drop = cell.drop if llm else frozenset()
+                    for k in range(runs[agent]):
+                        init = initial(cell.init or o.init or spec.init, k)
+                        rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tag, repeat=k)
+                        plans.append(Plan(rid, agent, sw, d, init, zeta, o.seed * 1_000_003 + len(plans), o.steps,
+                                          n_ht, drop, action_set, cell.group, v))
+    ids = [p.run_id for p in plans]
+    assert len(set(ids)) == len(ids), "run ids must be unique"
+    return plans
