@@ -12,6 +12,7 @@ contains an API key. The tree::
     |   +-- LLMRequestError                 the server rejected the request (4xx; retrying won't help)
     |   +-- LLMResponseError                the server answered, but not with a usable completion
     |   +-- LocalModelError                 the embedded model cannot start (package or file missing)
+    |   +-- BudgetExhausted                 the cost cap is reached (jswim.llm.budget)
     +-- ResultFolderError (also ValueError) a study folder is unusable: another study, other
                                             settings, not a study folder, unreadable
 

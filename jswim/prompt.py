@@ -125,7 +125,7 @@ def encode_position(x: float, x_min: float = -2.5) -> int:
         When ``x < x_min``.
     """
     if not math.isfinite(x):
-        raise ValueError(f"position X must be finite, got {x!r}")
+        raise ConfigError(f"position X must be finite, got {x!r}")
     if x < x_min:
         raise PositionBelowMinimumError(x, x_min)
     x3 = _decimal(x).quantize(Decimal("0.001"), rounding=ROUND_DOWN)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping
 
-from jswim.llm.errors import LLMError
+from jswim.errors import ConfigError, LLMError
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.usage import PriceTable
 
@@ -47,13 +47,13 @@ class Budget:
 
     Raises
     ------
-    ValueError
+    ConfigError
         For a negative or non-finite cap.
     """
 
     def __init__(self, cap_usd: float | None, spent_usd: float = 0.0) -> None:
         if cap_usd is not None and not (math.isfinite(cap_usd) and cap_usd >= 0):
-            raise ValueError(f"the cost cap must be a number >= 0, got {cap_usd}")
+            raise ConfigError(f"the cost cap must be a number >= 0, got {cap_usd}")
         self.cap_usd = cap_usd
         self.spent_usd = float(spent_usd)
         self.reserved_usd = 0.0

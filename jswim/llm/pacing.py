@@ -27,6 +27,8 @@ from typing import Callable, Mapping
 
 from aiolimiter import AsyncLimiter
 
+from jswim.errors import ConfigError
+
 _DURATION = re.compile(r"(\d+(?:\.\d+)?)(ms|h|m|s)")
 
 
@@ -93,7 +95,7 @@ class Pacer:
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
         if rpm is not None and rpm <= 0 or tpm is not None and tpm <= 0:
-            raise ValueError("rpm and tpm must be > 0")
+            raise ConfigError("rpm and tpm must be > 0")
         self.rpm, self.tpm = rpm, tpm
         self._requests = AsyncLimiter(1, 60.0 / rpm) if rpm else None
         self._tokens = AsyncLimiter(tpm / 6.0, 10.0) if tpm else None
