@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from jswim.console import Column, plain_table
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, ResultFolderError
 from jswim.results import read_metadata, read_runs
 
 SETTING = ("agent", "swimmer", "direction", "group")
@@ -98,7 +98,7 @@ class StudyFolder:
 
         self.folder = Path(folder)
         if not self.folder.is_dir():
-            raise ConfigError(f"{folder}: no such folder")
+            raise ResultFolderError(f"{folder}: no such folder")
         self.meta = read_metadata(self.folder)
         self.rows = read_runs(self.folder)
         self.summary = order_summary(summarize(self.rows), self.rows)
@@ -151,7 +151,7 @@ class StudyFolder:
 
 
 def _settings_text(options: Mapping[str, Any]) -> str:
-    keep = ("swimmers", "directions", "runs", "q_runs", "steps", "n_ht", "zeta", "zetas", "n_hts", "init", "allowed",
+    keep = ("swimmers", "directions", "runs", "q_runs", "steps", "n_ht", "zeta", "zetas", "n_hts", "init", "action_set",
             "variant", "variants", "seed")
     parts = []
     for k in keep:

@@ -31,6 +31,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from jswim.agents.variants import VARIANTS
 from jswim.stats import mean_interval, wilson_interval
 from jswim.swimmers.models import SwimmerModel, make_model
 
@@ -203,7 +204,7 @@ def _signature_path(swimmer: str, direction: int, init: tuple[int, ...], steps: 
     ``None`` when the best cycle does not pass through ``init`` (then no run from there can
     follow it from step 0).
     """
-    from jswim import env, gait
+    from jswim import env, gait  # lazy: JAX only when a reference line is drawn (jswim.overview imports plots)
 
     model = make_model(swimmer)
     cyc = gait.best_cycles(model, direction)[0]
@@ -599,10 +600,10 @@ def inits_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> 
 def competence_figure(rows: Sequence[Mapping[str, Any]], order: Sequence[str], note: str | None = None) -> Figure:
     """Success rate p and mean target-direction X/a per LLM variant and per baseline.
 
-    Rows carry an ``entry`` label (a variant name, or ``"agent (allowed set)"`` for baselines);
+    Rows carry an ``entry`` label (a variant name, or ``"agent (action set)"`` for baselines);
     ``order`` lists the entries top to bottom. One pair of panels per swimmer and target
     direction; horizontal intervals keep long variant names readable, and the dotted line marks
-    the random baseline on the paper's allowed set (all).
+    the random baseline on the paper's action set (all).
     """
     keys = panel_keys(rows)
     n = max(1, len(order))
@@ -669,9 +670,7 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
     if study == "inits":
         return {"inits": inits_figure(rows, note=note)}
     if study == "competence":
-        from jswim.agents.llm import VARIANTS
-
-        # One entry per LLM variant, then one per baseline (agent, allowed set).
+        # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [{**r, "entry": r["group"] if r["agent"] == "llm" else f"{r['agent']} ({r['group']})"} for r in rows]
         order = [v for v in VARIANTS if any(e["entry"] == v for e in entries)]
         order += sorted({e["entry"] for e in entries} - set(order))

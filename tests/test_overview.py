@@ -8,7 +8,7 @@ import json
 import pytest
 
 from jswim import console, overview
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, ResultFolderError
 from jswim.studies import Backend, StudyOptions, run_study
 from tests.fakeserver import FakeServer, hash_reply
 
@@ -113,5 +113,5 @@ def test_compare_lists_settings_present_in_all(folders):
     assert "9 setting(s) not present in every study are left out" in text
     with pytest.raises(ConfigError, match="at least two"):
         overview.compare_table([a])
-    with pytest.raises(ConfigError, match="not a jswim study folder"):
+    with pytest.raises(ResultFolderError, match="not a jswim study folder"):
         overview.compare_table([a, a.parent])

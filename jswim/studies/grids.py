@@ -167,25 +167,24 @@ class StudySpec:
     swimmers: tuple[str, ...] = ("purcell", "ng")
     directions: tuple[int, ...] = (1,)
     q_runs: int = 100  # baseline runs per cell
-    figure: str = ""  # the figure jswim.studies.report draws
 
 
 #: Every study (``jswim study NAME``; ``swim`` is ``jswim swim``), its defaults in one place.
 SPECS: dict[str, StudySpec] = {
     # X/a against step n: LLM, Q-learning and random policy, both swimmers (Fig. 2)
-    "curves": StudySpec(_single, runs=1, init="paper", figure="curves"),
+    "curves": StudySpec(_single, runs=1, init="paper"),
     # the n_ht sweep, both directions, both swimmers (Fig. 3)
-    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1), figure="history"),
+    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1)),
     # mean X/a and success rate p against zeta (Fig. 4)
-    "noise": StudySpec(_noise, runs=10, figure="noise"),
+    "noise": StudySpec(_noise, runs=10),
     # the full prompt and the prompt without each of S1..S5 (Fig. 5)
-    "ablation": StudySpec(_ablation, runs=10, figure="ablation"),
+    "ablation": StudySpec(_ablation, runs=10),
     # all four initial configurations, both directions
-    "inits": StudySpec(_inits, runs=1, directions=(1, -1), figure="inits"),
+    "inits": StudySpec(_inits, runs=1, directions=(1, -1)),
     # the main job: a few LLM runs next to Q-learning and random learners
-    "swim": StudySpec(_single, runs=4, init="paper", swimmers=("purcell",), figure="curves"),
+    "swim": StudySpec(_single, runs=4, init="paper", swimmers=("purcell",)),
     # every protocol variant next to random and Q-learning baselines on both action sets
-    "competence": StudySpec(_competence, runs=10, figure="competence"),
+    "competence": StudySpec(_competence, runs=10),
 }
 
 STUDIES = tuple(SPECS)

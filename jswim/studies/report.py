@@ -7,11 +7,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from jswim import plots
-from jswim.agents.variants import VARIANTS
-from jswim.prompt import SENTENCES
 from jswim.stats import learn_stats, mean_interval, wilson_interval
-from jswim.studies.grids import SPECS
-from jswim.swimmers.models import make_model
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -50,41 +46,13 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
-def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path) -> list[Path]:
-    """The study's figures as PNG and PDF in ``folder``."""
-    if not rows:
-        return []
-    kind = SPECS[study].figure if study in SPECS else study
-    models = {sw: make_model(sw) for sw in {r["swimmer"] for r in rows}}
+def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path,
+                 note: str | None = None) -> list[Path]:
+    """The study's figures (:func:`jswim.plots.study_figures`) as PNG and PDF in ``folder``.
+
+    ``note`` (see :func:`jswim.plots.unfinished_note`) is written across each figure.
+    """
     paths: list[Path] = []
-    if kind == "curves":
-        cycles = {}
-        for sw in models:
-            ok = [r for r in rows if r["swimmer"] == sw and r["success"]]
-            ok.sort(key=lambda r: ({"llm": 0, "qlearning": 1}.get(r["agent"], 2), r["steps_to_learn"]))
-            if ok:
-                r = ok[0]
-                s = r["steps_to_learn"]
-                acts = [tuple(a) for a in r["actions"]][s: s + r["period"]]
-                levels = [1 if ch == "+" else 0 for ch in r["init"]]
-                for dof, roc in [tuple(a) for a in r["actions"]][:s]:
-                    if roc:
-                        levels[dof - 1] = 1 if roc > 0 else 0
-                cycles[sw] = (levels, acts, r["agent"])
-        paths += plots.save(plots.curves_figure(rows, models, cycles), folder, study)  # swim.png or curves.png
-    elif kind == "history":
-        paths += plots.save(plots.history_figure(rows), folder, "history")
-    elif kind == "noise":
-        paths += plots.save(plots.noise_figure(rows), folder, "noise")
-    elif kind == "ablation":
-        order = ["full"] + [f"-{s}" for s in SENTENCES]
-        paths += plots.save(plots.bars_figure(rows, "group", order, "(sentence removed)"), folder, "ablation")
-    elif kind == "inits":
-        paths += plots.save(plots.bars_figure(rows, "group", None, "(initial configuration)"), folder, "inits")
-    elif kind == "competence":
-        # One entry per LLM variant, then one per baseline (agent, allowed set).
-        entries = [{**r, "entry": r["group"] if r["agent"] == "llm" else f"{r['agent']} ({r['group']})"} for r in rows]
-        order = [v for v in VARIANTS if any(e["entry"] == v for e in entries)]
-        order += sorted({e["entry"] for e in entries} - set(order))
-        paths += plots.save(plots.competence_figure(entries, order), folder, "competence")
+    for name, fig in plots.study_figures(study, rows, note=note).items():
+        paths += plots.save(fig, folder, name)
     return paths
