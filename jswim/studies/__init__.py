@@ -18,25 +18,31 @@ Studies (``jswim study NAME``):
                Q-learning baselines on both action sets: how much of the swimming is the model's
 """
 
-from jswim.llm.backend import Backend, check_server
-from jswim.studies.grids import (
-    AGENTS,
-    COMPETENCE_VARIANTS,
-    DEFAULT_ZETAS,
-    INIT_CHOICES,
-    SPECS,
-    STUDIES,
-    SWIM_VARIANT,
-    Plan,
-    StudyOptions,
-    StudySpec,
-    build,
-)
-from jswim.studies.report import draw_figures, summarize
-from jswim.studies.run import ProgressFn, StudyResult, default_folder, identity, run_study
+from __future__ import annotations
 
-__all__ = [
-    "AGENTS", "Backend", "COMPETENCE_VARIANTS", "DEFAULT_ZETAS", "INIT_CHOICES", "Plan", "ProgressFn", "SPECS",
-    "STUDIES", "SWIM_VARIANT", "StudyOptions", "StudyResult", "StudySpec", "build", "check_server",
-    "default_folder", "draw_figures", "identity", "run_study", "summarize",
-]
+import importlib
+from typing import Any
+
+#: Public name -> the submodule that owns it, imported on first access (PEP 562), so that
+#: ``jswim.studies.grids`` (all the command line needs to build its parser) loads alone.
+_EXPORTS = {
+    **dict.fromkeys(("AGENTS", "COMPETENCE_VARIANTS", "DEFAULT_ZETAS", "INIT_CHOICES", "SPECS", "STUDIES",
+                     "SWIM_VARIANT", "Plan", "StudyOptions", "StudySpec", "build"), "jswim.studies.grids"),
+    **dict.fromkeys(("draw_figures", "summarize"), "jswim.studies.report"),
+    **dict.fromkeys(("ProgressFn", "StudyResult", "default_folder", "identity", "run_study"), "jswim.studies.run"),
+    **dict.fromkeys(("Backend", "check_server"), "jswim.llm.backend"),
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(_EXPORTS[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'jswim.studies' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))
