@@ -128,7 +128,7 @@ class Progress:
 
     def __enter__(self) -> "Progress":
         if self.terminal:
-            from rich.console import Console
+            from rich.console import Console  # lazy: rich only when writing to a terminal
             from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
             from rich.progress import Progress as Bar
 

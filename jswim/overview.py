@@ -52,7 +52,7 @@ def _cost_cell(v: Any) -> str:
 def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()) -> list[Mapping[str, Any]]:
     """Summary rows in reading order: agent (LLM first), Purcell before NG, +x before -x, and the
     groups in the order the study's grid ran them (the order of ``rows``; zeta 0.5 before 1)."""
-    from jswim.plots import AGENT_ORDER, SWIMMER_ORDER
+    from jswim.plots import AGENT_ORDER, SWIMMER_ORDER  # lazy: plots loads matplotlib; only two constants needed
 
     first: dict[Any, int] = {}
     for i, r in enumerate(rows):
