@@ -11,7 +11,8 @@ Where to start
   gait cycle), or the functional environment ``make_params``, ``reset``, ``step``,
   ``step_batch`` (:mod:`jswim.env`).
 - Run a study: ``jswim.run_study("swim")`` (the ``jswim swim`` job; options in
-  :class:`jswim.studies.StudyOptions`), then ``jswim.load(folder)`` for its runs as a DataFrame.
+  :class:`jswim.studies.StudyOptions`), then ``jswim.load(folder)`` for its runs and trajectories as
+  pandas DataFrames.
 - The command line: ``jswim --help``. The architecture map: ``docs/design.md``.
 
 The names above load on first use, so ``import jswim`` stays light (JAX loads with them).

@@ -5,7 +5,7 @@ Layout of a study folder::
     metadata.json        study name, parameters, seed, backend, prompt template, versions, status
     runs.jsonl           one line per finished run (the durable record, appended and fsynced)
     runs.parquet         tidy table of runs (rebuilt from runs.jsonl; also runs.csv)
-    trajectories.parquet per-step rows: run_id, step, x, action, progress, stuck
+    trajectories.parquet per-step rows: run_id, step, x, y, orientation, action, progress, stuck
     transcripts/RUN.jsonl  the LLM transcript of each LLM run
     usage.json           tokens and cost per run and in total
     figures/             PNG and PDF figures
@@ -14,6 +14,8 @@ A run is "done" once its line is in ``runs.jsonl``. Running a study again on the
 the done runs; a run that was interrupted is started again from scratch (its transcript is
 rewritten), so no row is lost or duplicated. Every other file is derived from ``runs.jsonl`` and
 rewritten whole through a temporary file and ``os.replace``, so a kill never leaves half a file.
+
+:func:`load` reads a folder (finished or not, read-only) into pandas DataFrames.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import io
 import json
 import os
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
@@ -217,24 +220,6 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     return out
 
 
-def load(folder: str | os.PathLike) -> "pd.DataFrame":
-    """The finished runs of a study folder as a DataFrame, one row per run.
-
-    Columns are the run fields (``run_id``, ``agent``, ``swimmer``, ``direction``, ``group``,
-    ``success``, ``steps_to_learn``, ``signed_final_x``, ...); per-step lists (``x``,
-    ``actions``, ``progress``) stay as list-valued columns.
-
-    Raises
-    ------
-    ResultFolderError
-        When ``folder`` is not a study folder.
-    """
-    import pandas as pd  # lazy: ~0.4 s of import that only load() needs, not every study run
-
-    read_metadata(folder)  # a clear error for a folder that is not a study
-    return pd.DataFrame(read_runs(folder))
-
-
 def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     """The study's ``metadata.json`` (fields under today's names); :class:`ResultFolderError` if
     the folder is not a study."""
@@ -265,8 +250,9 @@ SCALAR_TYPES = (str, int, float, bool, type(None))
 def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
     """Write ``runs.parquet``/``runs.csv`` (scalar columns) and ``trajectories.parquet``.
 
-    Per-step lists in a run row (keys ``x``, ``actions``, ``progress``, ``stuck``) become the long
-    trajectory table; every other scalar key is a column of the runs table.
+    Per-step lists in a run row (keys ``x``, ``y``, ``orientation``, ``actions``, ``progress``,
+    ``stuck``) become the long trajectory table; every other scalar key is a column of the runs
+    table.
     """
     folder = Path(folder)
     cols: list[str] = []
@@ -288,6 +274,7 @@ def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
         for i, x in enumerate(xs):
             traj.append({
                 "run_id": r["run_id"], "step": i + 1, "x": x,
+                "y": _at(r.get("y"), i), "orientation": _at(r.get("orientation"), i),
                 "action": _at(r.get("actions"), i), "progress": _at(r.get("progress"), i),
                 "stuck": _at(r.get("stuck"), i),
             })
@@ -302,3 +289,113 @@ def _at(seq: Any, i: int) -> Any:
         v = seq[i]
         return json.dumps(v) if isinstance(v, (list, dict)) else v
     return None
+
+
+# -- reading a study into pandas ----------------------------------------------------------------
+
+#: Run columns repeated on every trajectory row, so one table answers "X/a of the LLM runs toward -x".
+TRAJECTORY_KEYS = ("run_id", "agent", "swimmer", "direction", "group", "zeta", "n_ht", "init", "variant")
+
+
+@dataclass
+class Study:
+    """A study folder read into pandas (see :func:`load`).
+
+    Attributes
+    ----------
+    folder : Path
+    metadata : dict
+        ``metadata.json``: study name, identity (settings), status, versions, summary.
+    runs : pandas.DataFrame
+        One row per finished run: every scalar field of its ``runs.jsonl`` record (``agent``,
+        ``swimmer``, ``direction``, ``group``, ``zeta``, ``success``, ``steps_to_learn``,
+        ``signed_final_x``, tokens, cost, ...).
+    trajectories : pandas.DataFrame
+        One row per run and step ``n = 1 .. steps`` (the state after the step; X = 0 at n = 0):
+        the run's keys (:data:`TRAJECTORY_KEYS`), ``x`` and ``y`` (centroid, in ``a``),
+        ``orientation`` (rad; NaN in folders written before it was recorded), ``target_x``
+        (``direction * x``: displacement in the target direction), ``dof`` and ``roc`` (the
+        action), ``progress`` (that step's target-direction displacement) and ``stuck``.
+    """
+
+    folder: Path
+    metadata: dict[str, Any]
+    runs: "pd.DataFrame"
+    trajectories: "pd.DataFrame"
+
+    @property
+    def name(self) -> str:
+        """The study's name (``noise``, ``swim``, ...)."""
+        return str(self.metadata.get("study", ""))
+
+    @property
+    def status(self) -> str:
+        """``complete``, ``running`` (or interrupted), as recorded in ``metadata.json``."""
+        return str(self.metadata.get("status", "unknown"))
+
+
+def load(folder: str | os.PathLike) -> Study:
+    """Read a study folder into pandas DataFrames, without writing anything to it.
+
+    Works on finished, interrupted and read-only folders: the runs come from ``runs.jsonl``, the
+    durable record, not from the derived tables.
+
+    Parameters
+    ----------
+    folder : path
+        A folder written by ``jswim swim`` / ``jswim study`` / :func:`jswim.studies.run_study`.
+
+    Returns
+    -------
+    Study
+        ``.runs`` (one row per run), ``.trajectories`` (one row per run and step, with ``x``,
+        ``y``, ``orientation``), ``.metadata``.
+
+    Raises
+    ------
+    ResultFolderError
+        ``folder`` is not a study folder, or its metadata is unreadable.
+
+    Examples
+    --------
+    >>> s = jswim.load("jswim-out/noise-1a2b3c4d")                    # doctest: +SKIP
+    >>> s.runs.groupby(["swimmer", "agent", "zeta"]).success.mean()  # doctest: +SKIP
+    """
+    import pandas as pd  # lazy: ~0.4 s of import that only load() needs, not every study run
+
+    folder = Path(folder)
+    meta = read_metadata(folder)
+    rows = read_runs(folder)
+    scalar = [{k: v for k, v in r.items() if isinstance(v, SCALAR_TYPES)} for r in rows]
+    runs = pd.DataFrame(scalar)
+    lead = [k for k in ("run_id", "agent", "swimmer", "direction", "group") if k in runs.columns]
+    runs = runs[lead + [c for c in runs.columns if c not in lead]] if len(runs.columns) else runs
+    traj: dict[str, list[Any]] = {k: [] for k in (*TRAJECTORY_KEYS, "step", "x", "y", "orientation", "target_x",
+                                                  "dof", "roc", "progress", "stuck")}
+    nan = float("nan")
+    for r in rows:
+        xs = r.get("x") or []
+        n = len(xs)
+        direction = r.get("direction", 1) or 1
+        for k in TRAJECTORY_KEYS:
+            traj[k] += [r.get(k)] * n
+        traj["step"] += list(range(1, n + 1))
+        traj["x"] += [float(v) for v in xs]
+        traj["target_x"] += [direction * float(v) for v in xs]
+        for k in ("y", "orientation", "progress"):
+            vals = r.get(k)
+            traj[k] += [float(vals[i]) if isinstance(vals, list) and i < len(vals) and vals[i] is not None else nan
+                        for i in range(n)]
+        acts = r.get("actions") or []
+        traj["dof"] += [int(acts[i][0]) if i < len(acts) else None for i in range(n)]
+        traj["roc"] += [int(acts[i][1]) if i < len(acts) else None for i in range(n)]
+        stuck = r.get("stuck")
+        traj["stuck"] += [bool(stuck[i]) if isinstance(stuck, list) and i < len(stuck) else None for i in range(n)]
+    trajectories = pd.DataFrame(traj)
+    # Nullable dtypes: "not recorded" stays missing instead of turning a column into objects.
+    for table, cols in ((trajectories, ("dof", "roc", "n_ht")), (runs, ("n_ht", "steps_to_learn"))):
+        for k in cols:
+            if k in table.columns:
+                table[k] = pd.array([None if v is None or v != v else int(v) for v in table[k]], dtype="Int64")
+    trajectories["stuck"] = trajectories["stuck"].astype("boolean")
+    return Study(folder, meta, runs, trajectories)

@@ -98,7 +98,7 @@ def test_name_translation_round_trips():
 def test_load_returns_the_runs_as_a_dataframe(tmp_path):
     store = StudyStore(tmp_path / "s", "curves", {})
     store.add_runs([{"run_id": "a", "agent": "llm", "success": True}, {"run_id": "b", "agent": "random", "success": False}])
-    df = load(tmp_path / "s")
+    df = load(tmp_path / "s").runs
     assert isinstance(df, pd.DataFrame) and list(df["run_id"]) == ["a", "b"] and df["success"].sum() == 1
     with pytest.raises(JswimError, match="not a jswim study folder"):
         load(tmp_path)

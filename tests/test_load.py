@@ -1,0 +1,47 @@
+"""jswim.load: a study folder as pandas DataFrames (runs; trajectories with x, y, orientation)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jswim.results import load, read_runs
+from jswim.studies import Backend, StudyOptions, run_study
+from tests.fakeserver import FakeServer, hash_reply
+
+
+@pytest.fixture(scope="module")
+def folders(tmp_path_factory):
+    root = tmp_path_factory.mktemp("load")
+    with FakeServer(reply=hash_reply, latency=0.001) as srv:
+        backend = Backend(base_url=srv.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")
+        opts = StudyOptions(swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3)
+        run_study("swim", opts, backend, root / "a", figures=False)
+    return (root / "a",)
+
+
+def _snapshot(folder):
+    return sorted((str(p), p.stat().st_mtime_ns, p.stat().st_size) for p in folder.rglob("*"))
+
+
+def test_load_returns_runs_and_trajectories(folders):
+    (a,) = folders
+    before = _snapshot(a)
+    s = load(a)
+    assert _snapshot(a) == before  # read-only
+    runs = read_runs(a)
+    assert len(s.runs) == len(runs) == 4 * (1 + 3 + 3) and s.name == "swim" and s.status == "complete"
+    assert {"run_id", "agent", "swimmer", "direction", "success", "signed_final_x"} <= set(s.runs.columns)
+    t = s.trajectories
+    assert len(t) == len(runs) * 8
+    assert {"x", "y", "orientation", "target_x", "dof", "roc", "step"} <= set(t.columns)
+    one = runs[0]
+    rows = t[t.run_id == one["run_id"]].sort_values("step")
+    assert rows.step.tolist() == list(range(1, 9))
+    assert np.allclose(rows.x, one["x"]) and np.allclose(rows.target_x, one["direction"] * np.asarray(one["x"]))
+    assert rows.dof.tolist() == [a[0] for a in one["actions"]]
+    # the final target-direction displacement of every run matches its summary field
+    last = t[t.step == 8].set_index("run_id").target_x
+    assert np.allclose(last.loc[s.runs.run_id].to_numpy(), s.runs.signed_final_x.to_numpy())
+
+
