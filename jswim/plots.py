@@ -623,15 +623,17 @@ def competence_figure(rows: Sequence[Mapping[str, Any]], order: Sequence[str], n
                           color=style["color"], capsize=2, elinewidth=0.8)
         if "random (all)" in by:
             ax_x.axvline(float(np.mean([r["signed_final_x"] for r in by["random (all)"]])), color="0.5", ls=":", lw=0.8)
+        ax_p.set_yticks(y, [f"{k} (n={len(by[k])})" for k in labels], fontsize=6)
+        ax_x.set_yticks(y, [""] * len(labels))  # the entries are named once, on the left
+        ax_x.set_ylim(ax_p.get_ylim())
         for ax in (ax_p, ax_x):
-            ax.set_yticks(y, [f"{k} (n={len(by[k])})" for k in labels], fontsize=6)
             ax.grid(axis="x", alpha=0.3, lw=0.5)
         ax_p.set_xlim(-0.05, 1.05)
         ax_x.axvline(0, color="0.8", lw=0.6)
         ax_p.set_title(f"{_panel_title(sw, d)}: success rate p", fontsize=7)
         ax_x.set_title(f"{_panel_title(sw, d)}: mean {_disp_label(d)}", fontsize=7)
         ax_p.set_xlabel("p (95% Wilson CI)")
-        ax_x.set_xlabel(f"{_disp_label(d)} after the last step (95% bootstrap CI)")
+        ax_x.set_xlabel(f"mean {_disp_label(d)} after the last step (95% bootstrap CI)")
     _mark_unfinished(fig, note)
     return fig
 
