@@ -60,6 +60,8 @@ class RunResult:
     error: str | None = None
     levels0: list[int] = field(default_factory=list)
     x: list[float] = field(default_factory=list)
+    y: list[float] = field(default_factory=list)  # centroid y
+    orientation: list[float] = field(default_factory=list)  # rad, of the reference link
     actions: list[int] = field(default_factory=list)  # env action indices
     progress: list[float] = field(default_factory=list)
     stuck: list[bool] = field(default_factory=list)
@@ -89,7 +91,8 @@ class RunResult:
             "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
             "completion_tokens": u.completion_tokens, "cached_tokens": u.cached_tokens, "cost_usd": u.cost_usd,
             "tokens_seen": self.tokens_seen,
-            "levels0": self.levels0, "x": self.x, "actions": self.actions, "progress": self.progress,
+            "levels0": self.levels0, "x": self.x, "y": self.y, "orientation": self.orientation,
+            "actions": self.actions, "progress": self.progress,
             "stuck": self.stuck, **self.knobs,
         }
 
@@ -157,7 +160,8 @@ class _Group:
     def step(self, actions: np.ndarray) -> dict[str, np.ndarray]:
         self.states, info, dofs = _advance(self.step_keys, self.states, jnp.asarray(actions, jnp.int32), self.params)
         out = jax.device_get(
-            {"x": info.x, "progress": info.progress, "stuck": info.stuck, "moved": info.moved, "dofs": dofs}
+            {"x": info.x, "y": self.states.y, "orientation": self.states.theta, "progress": info.progress,
+             "stuck": info.stuck, "moved": info.moved, "dofs": dofs}
         )
         return {k: np.asarray(v) for k, v in out.items()}
 
@@ -334,6 +338,8 @@ class LLMDriver:
         run.dofs = np.asarray(out["dofs"], np.float64)
         run.x = x_after
         res.x.append(x_after)
+        res.y.append(float(out["y"]))
+        res.orientation.append(float(out["orientation"]))
         res.actions.append(int(index))
         res.progress.append(float(out["progress"]))
         res.stuck.append(bool(out["stuck"]))

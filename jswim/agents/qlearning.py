@@ -142,6 +142,10 @@ class QRun(NamedTuple):
         Final Q-table, rows indexed by corner ``sum_k level_k 2**k``.
     levels0 : int32 (n_dof,)
         Initial DOF levels (drawn by :func:`jswim.env.reset` for a random start).
+    y, orientation : float (steps,) or None
+        Centroid y and orientation (rad, of the reference link) after each step, when asked for
+        (``pose=True``; the study folders' trajectories); ``None`` otherwise, which keeps the
+        training loop's memory traffic to what learning needs.
     """
 
     actions: Array
@@ -149,6 +153,8 @@ class QRun(NamedTuple):
     explored: Array
     q: Array
     levels0: Array
+    y: Array
+    orientation: Array
 
 
 def _schedule(value: float | optax.Schedule) -> optax.Schedule:
@@ -261,7 +267,7 @@ class _Pending(NamedTuple):
     target: Array  # r + gamma max_a' Q(s', a'), from the table the step acted on
 
 
-def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
+def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = False) -> QRun:
     n = params.model.n_dof
     dtype = jnp.result_type(float)
     k_reset, k_run = jax.random.split(key)
@@ -282,7 +288,8 @@ def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
         new, info = advance(state, action, 2.0 * u[1] - 1.0, params)
         mask2 = _offered(new.levels, params, config.action_set)
         future = jnp.max(jnp.where(mask2, _row(q, _corner(new.levels)), -jnp.inf))
-        return new, _Pending(s, action, info.progress + gamma * future), (action.astype(jnp.int8), new.x, explore)
+        out = (action.astype(jnp.int8), new.x, explore) + ((new.y, new.theta) if pose else (None, None))
+        return new, _Pending(s, action, info.progress + gamma * future), out
 
     def learn(q, opt_state, pending):
         """One optax step on the squared TD error, the target held fixed (semi-gradient)."""
@@ -308,9 +315,9 @@ def _train_one(key: Array, params: EnvParams, config: QConfig) -> QRun:
     inputs = (jnp.arange(steps), uniforms(k_run, (steps, 2), dtype))
     nothing = _Pending(jnp.int32(-1), jnp.int32(0), jnp.zeros((), dtype))
     carry = (state, q, opt.init(q), nothing)
-    (_, q, opt_state, pending), (acts, x, explored) = jax.lax.scan(body, carry, inputs)
+    (_, q, opt_state, pending), (acts, x, explored, y, theta) = jax.lax.scan(body, carry, inputs)
     q, _ = learn(q, opt_state, pending)
-    return QRun(acts, x, explored, q, state.levels)
+    return QRun(acts, x, explored, q, state.levels, y, theta)
 
 
 @functools.lru_cache(maxsize=1)
@@ -331,7 +338,7 @@ def _compiler_options() -> dict[str, str] | None:
     return options
 
 
-def train(key: Array, params: EnvParams, config: QConfig = QConfig()) -> QRun:
+def train(key: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool = False) -> QRun:
     """Train one Q-learner online for ``config.steps`` steps.
 
     Parameters
@@ -343,16 +350,18 @@ def train(key: Array, params: EnvParams, config: QConfig = QConfig()) -> QRun:
         The environment (unbatched leaves).
     config : QConfig
         Hyperparameters (static).
+    pose : bool
+        Also record the centroid y and the orientation after each step.
 
     Returns
     -------
     QRun
         Per-step actions, X and exploration flags; final Q-table; initial levels.
     """
-    return _jitted("one")(key, params, config)
+    return _jitted("one")(key, params, config, pose)
 
 
-def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig()) -> QRun:
+def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool = False) -> QRun:
     """Train independent learners, one per key, in one jitted, vmapped call.
 
     Parameters
@@ -364,23 +373,25 @@ def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig()) -> 
         has a leading axis of size B (see :func:`batch_params`).
     config : QConfig
         Hyperparameters shared by all learners (static).
+    pose : bool
+        Also record the centroid y and the orientation after each step (static).
 
     Returns
     -------
     QRun
         Fields with a leading axis of size B.
     """
-    return _jitted("batch")(keys, batch_params(params, keys.shape[0]), config)
+    return _jitted("batch")(keys, batch_params(params, keys.shape[0]), config, pose)
 
 
-def _batch(keys: Array, params: EnvParams, config: QConfig) -> QRun:
-    return jax.vmap(lambda k, p: _train_one(k, p, config))(keys, params)
+def _batch(keys: Array, params: EnvParams, config: QConfig, pose: bool = False) -> QRun:
+    return jax.vmap(lambda k, p: _train_one(k, p, config, pose))(keys, params)
 
 
 @functools.lru_cache(maxsize=2)
 def _jitted(kind: str) -> Callable[..., QRun]:
     fn = _train_one if kind == "one" else _batch
-    return jax.jit(fn, static_argnames="config", compiler_options=_compiler_options())
+    return jax.jit(fn, static_argnames=("config", "pose"), compiler_options=_compiler_options())
 
 
 def batch_params(params: EnvParams, size: int, **changes: Any) -> EnvParams:

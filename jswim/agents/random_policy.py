@@ -19,11 +19,14 @@ from jswim.env import EnvParams, advance, reset
 
 
 class RandomRun(NamedTuple):
-    """Per-run record (leading batch axis): executed actions, X after each step, start levels."""
+    """Per-run record (leading batch axis): executed actions, X after each step, start levels, and
+    the centroid y and orientation (rad) after each step."""
 
     actions: Array
     x: Array
     levels0: Array
+    y: Array
+    orientation: Array
 
 
 def _one(key: Array, params: EnvParams, steps: int, action_set: str, rocs: tuple[int, ...]) -> RandomRun:
@@ -34,10 +37,10 @@ def _one(key: Array, params: EnvParams, steps: int, action_set: str, rocs: tuple
         mask = offered_mask(state.levels, params.model, action_set, rocs)
         action = _pick(mask, u[0])
         state, _ = advance(state, action, 2.0 * u[1] - 1.0, params)
-        return state, (action, state.x)
+        return state, (action, state.x, state.y, state.theta)
 
-    _, (acts, xs) = jax.lax.scan(body, state0, jax.random.uniform(k_run, (steps, 2)))
-    return RandomRun(acts, xs, state0.levels)
+    _, (acts, xs, ys, thetas) = jax.lax.scan(body, state0, jax.random.uniform(k_run, (steps, 2)))
+    return RandomRun(acts, xs, state0.levels, ys, thetas)
 
 
 def run_batch(

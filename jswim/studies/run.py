@@ -27,6 +27,7 @@ from jswim import __version__, env
 from jswim.agents import qlearning, random_policy
 from jswim.agents.llm import run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
+from jswim.console import eta
 from jswim.errors import ConfigError
 from jswim.gait import Criterion, judge
 from jswim.llm.backend import Backend
@@ -42,8 +43,12 @@ from jswim.studies.report import draw_figures, summarize
 
 
 def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, levels0: np.ndarray,
-                horizon: int, extra: Sequence[dict[str, Any]] | None = None) -> list[dict[str, Any]]:
-    """Rows for a batch of runs of one swimmer, judged by the shared success criterion."""
+                horizon: int, extra: Sequence[dict[str, Any]] | None = None,
+                pose: tuple[np.ndarray, np.ndarray] | None = None) -> list[dict[str, Any]]:
+    """Rows for a batch of runs of one swimmer, judged by the shared success criterion.
+
+    ``pose`` gives the centroid y and the orientation after each step, shape ``(runs, steps)``
+    each, for the trajectories (LLM runs bring theirs in ``extra``)."""
     p0 = plans[0]
     params = env.make_params(p0.swimmer)
     params = params.replace(direction=np.array([p.direction for p in plans], float))
@@ -65,6 +70,9 @@ def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, leve
             "x": x, "actions": [list(env.decode_action(int(a))) for a in actions[i]],
             "progress": [float(v) for v in prog], "status": "done",
         }
+        if pose is not None:
+            row["y"] = [float(v) for v in pose[0][i]]
+            row["orientation"] = [float(v) for v in pose[1][i]]
         if extra is not None:
             row.update({k: v for k, v in extra[i].items() if k not in row})
         rows.append(row)
@@ -81,10 +89,11 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     keys = jax.vmap(jax.random.PRNGKey)(np.array([p.seed for p in plans], np.uint32))
     if p0.agent == "qlearning":
         cfg = qlearning.QConfig(steps=p0.steps, action_set=p0.action_set)
-        run = qlearning.train_batch(keys, params, cfg)
+        run = qlearning.train_batch(keys, params, cfg, pose=True)
     else:
         run = random_policy.run_batch(keys, params, p0.steps, p0.action_set)
-    return _judge_rows(plans, np.asarray(run.actions), np.asarray(run.x), np.asarray(run.levels0), horizon)
+    return _judge_rows(plans, np.asarray(run.actions), np.asarray(run.x), np.asarray(run.levels0), horizon,
+                       pose=(np.asarray(run.y), np.asarray(run.orientation)))
 
 
 def _groups(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
@@ -167,6 +176,9 @@ def run_study(
     """
     t0 = time.perf_counter()
     plans = build(study, options)
+    if not plans:
+        raise ConfigError(f"these settings give the {study} study no runs at all (--runs 0 and --q-runs 0?); "
+                          "nothing to do")
     ident = identity(study, options, backend)
     if study == "competence":  # the variants' switches define the runs too
         ident["variants"] = {v: VARIANTS[v] for v in options.variants or COMPETENCE_VARIANTS}
@@ -179,6 +191,7 @@ def run_study(
         "horizon": options.horizon,
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS) if study == "competence"
         else [options.llm_variant(study)],
+        "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
     })
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
@@ -230,8 +243,12 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     live: list[LLMClient] = []  # the open client, for its running counts
 
     def report(phase: str = "llm") -> None:
-        rate = steps_done / max(time.perf_counter() - t_start, 1e-9)
+        elapsed = time.perf_counter() - t_start
+        rate = steps_done / max(elapsed, 1e-9)
         info = f"steps {steps_done}/{steps_total} {rate:.1f}/s"
+        left = eta(elapsed, steps_done / steps_total if steps_total else 0.0)
+        if left is not None and steps_done < steps_total:
+            info += f" · ETA {left}"
         if live:
             c = live[0].counts
             info += f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · {c.cache_hits} cached · {c.shared} shared"
