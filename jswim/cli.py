@@ -5,6 +5,8 @@
 ``jswim qlearn``         the Q-learning baseline's steps-to-learn distributions
 ``jswim gaits SWIMMER``  closed stroke cycles ranked by displacement per step
 ``jswim plot FOLDER``    redraw a study folder's figures
+``jswim show FOLDER``    a study folder's status, settings, cost, summary table and figures (read-only)
+``jswim compare F1 F2..`` studies side by side, per setting present in all (read-only)
 
 A user mistake ends with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
 """
@@ -74,8 +76,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                    help="Q-learning and random-policy runs per setting (default 100)")
     g.add_argument("--n-ht", type=int, default=None,
                    help="history records in the prompt (default: per swimmer, 4 Purcell, 3/6 NG for +x/-x)")
-    g.add_argument("--noise", type=float, default=0.0, metavar="ZETA",
-                   help="noise level zeta: each step's displacement becomes dX(1 + zeta Y), Y~U[-1,1] (default 0)")
+    g.add_argument("--noise", type=float, default=None, metavar="ZETA",
+                   help="noise level zeta: each step's displacement becomes dX(1 + zeta Y), Y~U[-1,1] (default 0; "
+                        "the noise study sweeps --zetas instead)")
     g.add_argument("--init", default=None, choices=("paper", "cycle", "random", "++", "+-", "-+", "--"),
                    help="initial configuration: paper = (+,+), cycle = repeats go through all four, "
                         "random, or a sign pair (default: paper for swim/curves/history, cycle otherwise)")
@@ -139,24 +142,52 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_options(p, study=True)
     p = sub.add_parser("qlearn", help="Q-learning steps-to-learn distributions",
                        description="Train many independent Q-learners on-device and summarise steps-to-learn.")
-    p.add_argument("--swimmer", type=_swimmers, default=("purcell", "ng"), metavar="NAME")
-    p.add_argument("--direction", type=_direction, default=(1, -1), metavar="DIR")
+    p.add_argument("--swimmer", type=_swimmers, default=("purcell", "ng"), metavar="NAME",
+                   help="purcell, ng, both, or a comma-separated list (default both)")
+    p.add_argument("--direction", type=_direction, default=(1, -1), metavar="DIR",
+                   help="target direction: +x, -x or both (default both)")
     p.add_argument("--seeds", type=int, default=1000, help="learners per setting (default 1000)")
     p.add_argument("--steps", type=int, default=200, help="training steps per learner (default 200)")
-    p.add_argument("--noise", type=float, default=0.0, metavar="ZETA")
-    p.add_argument("--action-set", default="both", choices=(*ACTION_SETS, "both"))
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--noise", type=float, default=0.0, metavar="ZETA",
+                   help="noise level zeta >= 0 of the environment (default 0)")
+    p.add_argument("--action-set", default="both", choices=(*ACTION_SETS, "both"),
+                   help="actions the learner may take: all six (the paper's), only the shape-changing moves, "
+                        "or both in turn (default both)")
+    p.add_argument("--learning-rate", type=float, default=None, metavar="ALPHA",
+                   help="learning rate alpha in (0, 1] (default 1.0, exact for the noiseless swimmer; smaller "
+                        "under noise), the start value when --lr-decay is given")
+    p.add_argument("--lr-decay", type=float, default=None, metavar="FACTOR",
+                   help="exponential learning-rate schedule: alpha_t = max(ALPHA * FACTOR**t, --lr-min), "
+                        "FACTOR in (0, 1] (default: constant alpha)")
+    p.add_argument("--lr-min", type=float, default=0.0, metavar="ALPHA_MIN",
+                   help="floor of the decaying learning rate (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the learners (default 0)")
     p = sub.add_parser("gaits", help="closed stroke cycles ranked by displacement per step",
                        description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
                                    "each exactly and rank them by displacement per step.")
-    p.add_argument("swimmer", choices=("purcell", "ng", "nlink", "nsphere"))
+    p.add_argument("swimmer", choices=("purcell", "ng", "nlink", "nsphere"),
+                   help="purcell, ng, nlink (N links) or nsphere (N spheres)")
     p.add_argument("--n", type=int, default=None, help="links/spheres of nlink/nsphere (default 4)")
-    p.add_argument("--direction", type=_direction, default=(1,), metavar="DIR")
+    p.add_argument("--direction", type=_direction, default=(1,), metavar="DIR",
+                   help="rank by displacement toward +x, -x or both (default +x)")
     p.add_argument("--max-len", type=int, default=None, help="longest cycle (default 2**n_dof)")
     p.add_argument("--top", type=int, default=8, help="cycles shown (default 8)")
     p.add_argument("--out", default=None, metavar="FOLDER", help="also write a figure of the best cycles here")
-    p = sub.add_parser("plot", help="redraw the figures of a study folder")
+    p = sub.add_parser("plot", help="redraw the figures of a study folder",
+                       description="Redraw a study folder's figures into FOLDER/figures (an unfinished study's "
+                                   "figures say so).")
     p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
+    p = sub.add_parser("show", help="a study folder: status, settings, cost, summary table, figures",
+                       description="Print what a study folder holds: complete or how many runs are done, the "
+                                   "model and settings, LLM usage and cost, the summary table and the figures. "
+                                   "Only reads, so it works on interrupted and read-only folders.")
+    p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
+    p = sub.add_parser("compare", help="studies side by side (e.g. two models on the same grid)",
+                       description="For every setting (agent, swimmer, direction, group) present in all the "
+                                   "given study folders: success rate p with its 95%% Wilson interval, mean X/a "
+                                   "with a bootstrap interval, median steps to learn, tokens per step and cost, "
+                                   "one row per study. Only reads.")
+    p.add_argument("folders", nargs="+", metavar="FOLDER", help="two or more study folders")
     return ap
 
 
@@ -177,10 +208,11 @@ def _options(args: argparse.Namespace, study: str):
 
     if args.prompt_file is not None and not Path(args.prompt_file).is_file():
         raise ConfigError(f"--prompt-file {args.prompt_file}: no such file")
+    _refuse_ignored(study, args)
     kw: dict[str, Any] = dict(
         swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,
-        n_ht=args.n_ht, zeta=args.noise, init=args.init, seed=args.seed, action_set=args.action_set,
-        prompt_file=args.prompt_file, chunk=args.chunk,
+        n_ht=args.n_ht, zeta=0.0 if args.noise is None else args.noise, init=args.init, seed=args.seed,
+        action_set=args.action_set, prompt_file=args.prompt_file, chunk=args.chunk,
     )
     if getattr(args, "zetas", None):
         kw["zetas"] = args.zetas
@@ -196,28 +228,42 @@ def _options(args: argparse.Namespace, study: str):
     return StudyOptions(**kw)
 
 
-def _progress():
-    # lazy: rich only when something runs
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+#: Study options that some studies have no use for: StudyOptions field -> command-line option.
+_STUDY_OPTIONS = {"zetas": "--zetas", "n_hts": "--n-hts", "zeta": "--noise", "n_ht": "--n-ht", "q_runs": "--q-runs",
+                  "init": "--init"}
 
-    # A short bar leaves room for the LLM status (steps, requests in flight, tokens, cache hits).
-    return Progress(TextColumn("[bold]{task.description}"), BarColumn(bar_width=20), MofNCompleteColumn(),
-                    TimeElapsedColumn(), TextColumn("{task.fields[info]}"), transient=False)
+
+def _refuse_ignored(study: str, args: argparse.Namespace) -> None:
+    """An option the study would drop silently is a mistake: say so (exit 2) instead of running."""
+    from jswim.studies.grids import ignored_options  # lazy: the grids load JAX
+
+    given = [field for field, dest in (("zetas", "zetas"), ("n_hts", "n_hts"), ("zeta", "noise"), ("n_ht", "n_ht"),
+                                       ("q_runs", "q_runs"), ("init", "init"))
+             if getattr(args, dest, None) is not None]
+    for field, why in ignored_options(study, given).items():
+        raise ConfigError(f"the {study} study has no use for {_STUDY_OPTIONS[field]} ({why}); leave it out")
+
+
+def _warn(message: str) -> None:
+    print(f"jswim: warning: {message}", file=sys.stderr)
 
 
 def _run(study: str, args: argparse.Namespace) -> int:
-    from jswim.studies import default_folder, run_study  # lazy: JAX loads only for commands that run
+    from jswim.console import Progress  # lazy: JAX loads only for commands that run
+    from jswim.studies import default_folder, run_study
+    from jswim.studies.grids import short_steps_warning
 
     options = _options(args, study)
     backend = _backend(args)
     out = Path(args.out) if args.out else default_folder(study, options, backend)
-    with _progress() as bar:
-        task = bar.add_task("runs", total=None, info="")
+    if (text := short_steps_warning(options)) is not None:
+        _warn(text)
+    labels = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning", "random": "random policy",
+              "start": "start", "resume": "resume"}
+    with Progress() as bar:
 
         def tick(phase: str, done: int, total: int, info: str = "") -> None:
-            label = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning",
-                     "random": "random policy"}.get(phase, "runs")
-            bar.update(task, completed=done, total=total, description=label, info=info)
+            bar.update(labels.get(phase, "runs"), done, total, info)
 
         try:
             result = run_study(study, options, backend, out, progress=tick, figures=not args.no_figures)
@@ -225,7 +271,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
             bar.stop()
             print(f"interrupted; finished runs are kept in {out}. Run the same command to resume.", file=sys.stderr)
             return 130
-    _print_summary(result.summary, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
+        bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
+    _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
     print(f"results: {result.folder}")
     for f in result.figures:
         if f.suffix == ".png":
@@ -233,38 +280,13 @@ def _run(study: str, args: argparse.Namespace) -> int:
     return 0
 
 
-def _fmt(v: Any, spec: str = ".3f") -> str:
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "-"
-    return format(v, spec) if isinstance(v, float) else str(v)
+def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], title: str) -> None:
+    from jswim.console import print_table  # lazy: only when something ran
+    from jswim.overview import SUMMARY_NOTE, order_summary, summary_table
 
-
-def _print_summary(summary: Sequence[dict[str, Any]], title: str) -> None:
-    from rich import box  # lazy: rich only when something runs
-    from rich.console import Console
-    from rich.table import Table
-
-    groups = any(s["group"] for s in summary)
-    t = Table(title=title, title_justify="left", box=box.SIMPLE_HEAD, pad_edge=False)
-    cols = ["agent", "swimmer", "dir"] + (["group"] if groups else []) + [
-        "n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "learned", "fail", "tok/step"]
-    for col in cols:
-        t.add_column(col, justify="left" if col in ("agent", "swimmer", "group") else "right", no_wrap=True)
-    for s in summary:
-        t.add_row(
-            s["agent"], s["swimmer"], "+x" if s["direction"] > 0 else "-x", *([s["group"]] if groups else []),
-            str(s["n"]),
-            f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')},{_fmt(s['success_hi'], '.2f')}]",
-            f"{s['mean_x']:+.3f} [{_fmt(s['mean_x_lo'], '+.2f')},{_fmt(s['mean_x_hi'], '+.2f')}]",
-            "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75")),
-            f"{s['learned']} of {s['n']}",
-            str(s["failed_steps"]) if s["agent"] == "llm" else "-",
-            _fmt(s["tokens_per_step"], ".0f"),
-        )
-    Console(width=max(140, Console().width)).print(t)
-    print("X/a end: displacement in the target direction after the last step; learn: steps before the "
-          "final qualifying stroke, quartiles over the runs that learned (learned: how many did); "
-          "fail: LLM steps without a valid action.")
+    cols, cells = summary_table(order_summary(summary, rows))
+    print_table(cols, cells, title)
+    print(SUMMARY_NOTE)
 
 
 def _qlearn(args: argparse.Namespace) -> int:
@@ -273,14 +295,39 @@ def _qlearn(args: argparse.Namespace) -> int:
 
     if args.seeds < 1 or args.steps < 1:
         raise ConfigError("--seeds and --steps must be >= 1")
+    if not (math.isfinite(args.noise) and args.noise >= 0):
+        raise ConfigError(f"--noise (zeta) must be >= 0, got {args.noise}")
+    rate = _learning_rate(args)
     sets = ACTION_SETS if args.action_set == "both" else (args.action_set,)
     for action_set in sets:
         t0 = time.perf_counter()
-        rows = qlearn.study(QConfig(steps=args.steps, action_set=action_set), swimmers=args.swimmer,
-                            directions=args.direction, zetas=(args.noise,), n_seeds=args.seeds, seed=args.seed)
+        cfg = QConfig(steps=args.steps, action_set=action_set, **({"learning_rate": rate} if rate is not None else {}))
+        rows = qlearn.study(cfg, swimmers=args.swimmer, directions=args.direction, zetas=(args.noise,),
+                            n_seeds=args.seeds, seed=args.seed)
         print(qlearn.format_table(rows))
         print(f"({action_set}: {time.perf_counter() - t0:.1f} s including compilation)\n")
     return 0
+
+
+def _learning_rate(args: argparse.Namespace) -> Any:
+    """``--learning-rate`` / ``--lr-decay`` / ``--lr-min`` as a number or an optax schedule (``None``:
+    QConfig's default)."""
+    alpha = args.learning_rate
+    if alpha is not None and not (math.isfinite(alpha) and 0 < alpha <= 1):
+        raise ConfigError(f"--learning-rate must lie in (0, 1], got {alpha}")
+    if args.lr_decay is None:
+        if args.lr_min:
+            raise ConfigError("--lr-min is the floor of a decaying rate; give --lr-decay too")
+        return alpha
+    import optax  # lazy: only for a schedule
+
+    start = 1.0 if alpha is None else alpha
+    if not (math.isfinite(args.lr_decay) and 0 < args.lr_decay <= 1):
+        raise ConfigError(f"--lr-decay must lie in (0, 1], got {args.lr_decay}")
+    if not (math.isfinite(args.lr_min) and 0 <= args.lr_min <= start):
+        raise ConfigError(f"--lr-min must lie in [0, {start:g}] (the start rate), got {args.lr_min}")
+    return optax.exponential_decay(start, transition_steps=1, decay_rate=args.lr_decay,
+                                   end_value=args.lr_min or None)
 
 
 def _gaits(args: argparse.Namespace) -> int:
@@ -316,15 +363,37 @@ def _gaits(args: argparse.Namespace) -> int:
 
 
 def _plot(args: argparse.Namespace) -> int:
-    from jswim.results import read_metadata, read_runs  # lazy: JAX loads only for commands that run
+    from jswim.overview import StudyFolder  # lazy: JAX loads only for commands that run
+    from jswim.plots import unfinished_note
     from jswim.studies.report import draw_figures
 
-    meta = read_metadata(args.folder)
-    rows = read_runs(args.folder)
-    if not rows:
+    study = StudyFolder(args.folder)
+    if not study.rows:
         raise ConfigError(f"{args.folder} has no finished runs yet")
-    for f in draw_figures(meta["study"], rows, Path(args.folder) / "figures"):
+    note = unfinished_note(study.meta.get("status"), len(study.rows), study.planned)
+    try:
+        paths = draw_figures(study.study, study.rows, Path(args.folder) / "figures", note=note)
+    except OSError as exc:
+        raise ConfigError(f"cannot write the figures into {Path(args.folder) / 'figures'} ({exc.strerror or exc}); "
+                          "jswim show FOLDER reads a read-only folder") from None
+    for f in paths:
         print(f"figure: {f}")
+    return 0
+
+
+def _show(args: argparse.Namespace) -> int:
+    from jswim.console import terminal_width  # lazy: JAX loads only for commands that run
+    from jswim.overview import show_text
+
+    print(show_text(args.folder, width=terminal_width()))
+    return 0
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from jswim.console import terminal_width  # lazy: JAX loads only for commands that run
+    from jswim.overview import compare_text
+
+    print(compare_text(args.folders, width=terminal_width()))
     return 0
 
 
@@ -343,6 +412,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _qlearn(args)
         if args.command == "gaits":
             return _gaits(args)
+        if args.command == "show":
+            return _show(args)
+        if args.command == "compare":
+            return _compare(args)
         return _plot(args)
     except JswimError as exc:  # every user or server mistake (jswim.errors); anything else is a bug
         print(f"jswim: error: {exc}", file=sys.stderr)

@@ -41,6 +41,11 @@ def is_terminal(file: IO[str] | None = None) -> bool:
         return False
 
 
+def terminal_width(file: IO[str] | None = None) -> int | None:
+    """The terminal's width in columns, or ``None`` when ``file`` (default stdout) is not a terminal."""
+    return shutil.get_terminal_size().columns if is_terminal(file) else None
+
+
 def plain_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title: str | None = None,
                 width: int | None = None) -> str:
     """The table as aligned text, every cell whole.
@@ -81,8 +86,7 @@ def print_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title:
                 file: IO[str] | None = None) -> None:
     """Print :func:`plain_table`, wrapped to the terminal's width on a terminal, whole elsewhere."""
     f = file or sys.stdout
-    width = shutil.get_terminal_size().columns if is_terminal(f) else None
-    print(plain_table(columns, rows, title, width), file=f)
+    print(plain_table(columns, rows, title, terminal_width(f)), file=f)
 
 
 def format_duration(seconds: float) -> str:

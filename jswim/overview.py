@@ -19,7 +19,8 @@ from jswim.results import read_metadata, read_runs
 SETTING = ("agent", "swimmer", "direction", "group")
 
 SUMMARY_NOTE = ("X/a end: mean displacement in the target direction after the last step; learn: steps before the "
-                "stroke that met the success criterion (runs that learned it); fail: LLM steps without a valid action.")
+                "final qualifying stroke, quartiles over the runs that learned (learned: how many did); fail: LLM "
+                "steps without a valid action.")
 
 
 def _fmt(v: Any, spec: str = ".3f") -> str:
@@ -77,13 +78,13 @@ def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], l
     cost = any(s.get("cost_usd") for s in summary)
     cols = [Column("agent", False), Column("swimmer", False), Column("dir", False)]
     cols += [Column("group", False)] if groups else []
-    cols += [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "fail",
-                                 "tok/step")]
+    cols += [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "learned",
+                                 "fail", "tok/step")]
     cols += [Column("cost $")] if cost else []
     rows = []
     for s in summary:
         row = [str(s["agent"]), str(s["swimmer"]), _dir(s["direction"])] + ([str(s.get("group") or "")] if groups else [])
-        row += [str(s["n"]), _p_cell(s), _x_cell(s), _learn_cell(s),
+        row += [str(s["n"]), _p_cell(s), _x_cell(s), _learn_cell(s), f"{s.get('learned') or 0} of {s['n']}",
                 str(s["failed_steps"]) if s["agent"] == "llm" else "-", _fmt(s.get("tokens_per_step"), ".0f")]
         row += [_cost_cell(s.get("cost_usd"))] if cost else []
         rows.append(row)
@@ -164,7 +165,7 @@ def _settings_text(options: Mapping[str, Any]) -> str:
     return "; ".join(parts)
 
 
-def show_text(folder: str | Path) -> str:
+def show_text(folder: str | Path, width: int | None = None) -> str:
     """What ``jswim show FOLDER`` prints: status, model, settings, usage, summary table, figures."""
     s = StudyFolder(folder)
     agents = Counter(r.get("agent") for r in s.rows)
@@ -183,7 +184,7 @@ def show_text(folder: str | Path) -> str:
     lines.append("")
     if s.summary:
         cols, rows = summary_table(s.summary)
-        lines += [plain_table(cols, rows), SUMMARY_NOTE]
+        lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
     else:
         lines.append("no finished runs yet")
     lines.append("")

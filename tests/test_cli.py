@@ -119,7 +119,7 @@ def test_output_folder_of_another_study_is_refused(server, tmp_path, capsys):
     out = tmp_path / "f"
     assert cli.main(["study", "curves", "--swimmer", "purcell", "--runs", "1", *FAST, "--out", str(out),
                      *backend_args(server)]) == 0
-    rc = cli.main(["study", "ablation", "--swimmer", "purcell", "--runs", "1", *FAST, "--out", str(out),
+    rc = cli.main(["study", "ablation", "--swimmer", "purcell", "--runs", "1", "--steps", "8", "--out", str(out),
                    *backend_args(server)])
     assert rc == 2
     assert "holds a 'curves' study" in capsys.readouterr().err

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Iterable
 
 from jswim.actions import ACTION_SETS, check_action_set
 from jswim.agents.variants import VARIANTS, init_label, run_id, variant_action_set
@@ -167,6 +167,19 @@ class StudySpec:
     swimmers: tuple[str, ...] = ("purcell", "ng")
     directions: tuple[int, ...] = (1,)
     q_runs: int = 100  # baseline runs per cell
+    ignores: tuple[str, ...] = ("zetas", "n_hts")  # StudyOptions fields the study has no use for (IGNORED)
+
+
+#: Why a study may have no use for an option (:class:`StudyOptions` field -> reason); the
+#: command line refuses such an option instead of dropping it silently.
+IGNORED = {
+    "zetas": "only the noise study sweeps zeta; give one level with --noise",
+    "n_hts": "only the history study sweeps n_ht; give one value with --n-ht",
+    "zeta": "it sweeps zeta over --zetas",
+    "n_ht": "it sweeps n_ht over --n-hts",
+    "q_runs": "it has no Q-learning or random-policy runs",
+    "init": "it runs each of the four initial configurations",
+}
 
 
 #: Every study (``jswim study NAME``; ``swim`` is ``jswim swim``), its defaults in one place.
@@ -174,13 +187,13 @@ SPECS: dict[str, StudySpec] = {
     # X/a against step n: LLM, Q-learning and random policy, both swimmers (Fig. 2)
     "curves": StudySpec(_single, runs=1, init="paper"),
     # the n_ht sweep, both directions, both swimmers (Fig. 3)
-    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1)),
+    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1), ignores=("zetas", "n_ht", "q_runs")),
     # mean X/a and success rate p against zeta (Fig. 4)
-    "noise": StudySpec(_noise, runs=10),
+    "noise": StudySpec(_noise, runs=10, ignores=("zeta", "n_hts")),
     # the full prompt and the prompt without each of S1..S5 (Fig. 5)
-    "ablation": StudySpec(_ablation, runs=10),
+    "ablation": StudySpec(_ablation, runs=10, ignores=("zetas", "n_hts", "q_runs")),
     # all four initial configurations, both directions
-    "inits": StudySpec(_inits, runs=1, directions=(1, -1)),
+    "inits": StudySpec(_inits, runs=1, directions=(1, -1), ignores=("zetas", "n_hts", "q_runs", "init")),
     # the main job: a few LLM runs next to Q-learning and random learners
     "swim": StudySpec(_single, runs=4, init="paper", swimmers=("purcell",)),
     # every protocol variant next to random and Q-learning baselines on both action sets
@@ -188,6 +201,31 @@ SPECS: dict[str, StudySpec] = {
 }
 
 STUDIES = tuple(SPECS)
+
+
+def ignored_options(study: str, given: Iterable[str]) -> dict[str, str]:
+    """The options in ``given`` (:class:`StudyOptions` field names) that ``study`` has no use for,
+    each with the reason (:data:`IGNORED`)."""
+    spec = SPECS.get(study)
+    return {k: IGNORED[k] for k in given if spec is not None and k in spec.ignores}
+
+
+#: Shortest closed stroke that moves a swimmer: two DOFs, each out and back (a non-reciprocal
+#: cycle needs at least two DOFs, so at least four moves; the scallop theorem).
+MIN_PERIOD = 4
+
+
+def short_steps_warning(o: StudyOptions) -> str | None:
+    """A warning when runs are too short for any of them to meet the success criterion.
+
+    Success needs ``n_cycles`` consecutive cycles of at least :data:`MIN_PERIOD` steps each within
+    the horizon (:class:`jswim.gait.Criterion`), so a run of fewer steps fails whatever it does.
+    """
+    need = PAPER.n_cycles * MIN_PERIOD
+    if o.steps < need:
+        return (f"--steps {o.steps} is shorter than {PAPER.n_cycles} stroke cycles of at least {MIN_PERIOD} steps "
+                f"({need} steps): no run can meet the success criterion, so every success rate will be 0")
+    return None
 
 
 def initial(choice: str, k: int) -> tuple[int, ...] | str:
