@@ -363,8 +363,6 @@ def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, Swimme
     swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
     dirs = _order({k[1] for k in keys}, (1, -1))
     cycles = dict(cycles or {})
-    if any(isinstance(k, str) for k in cycles):  # keyed by swimmer only (older callers): each panel's own
-        cycles = learned_cycles(rows)
     sketch = {sw: any((sw, d) in cycles for d in dirs) for sw in swimmers}
     heights = [h for sw in swimmers for h in ([2.1, 0.65] if sketch[sw] else [2.1])]
     n_agents = len({r["agent"] for r in rows})
@@ -572,12 +570,6 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
 def noise_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     """Success rate p and mean X/a against the noise level zeta (paper Fig. 4)."""
     return grid_figure(rows, "zeta", xlabel="noise level \u03b6", numeric=True, note=note)
-
-
-def bars_figure(rows: Sequence[Mapping[str, Any]], key: str, order: Sequence[str] | None = None, title: str = "",
-                note: str | None = None) -> Figure:
-    """Success rate p and mean X/a per value of ``key`` (kept for callers; see :func:`grid_figure`)."""
-    return grid_figure(rows, key, order=order, xlabel=title.strip("() ") or key, note=note)
 
 
 def ablation_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
