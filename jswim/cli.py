@@ -75,7 +75,7 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     g.add_argument("--q-runs", type=int, default=None,
                    help="Q-learning and random-policy runs per setting (default 100)")
     g.add_argument("--n-ht", type=int, default=None,
-                   help="history records in the prompt (default: per swimmer, 4 Purcell, 3/6 NG for +x/-x)")
+                   help="history records in the prompt (default: per swimmer, 3 Purcell, 3/6 NG for +x/-x, 20 four-DOF)")
     g.add_argument("--noise", type=float, default=None, metavar="ZETA",
                    help="noise level zeta: each step's displacement becomes dX(1 + zeta Y), Y~U[-1,1] (default 0; "
                         "the noise study sweeps --zetas instead)")

@@ -260,15 +260,50 @@ def _corner_index(levels: Array) -> Array:
     return jnp.sum(levels * (2 ** jnp.arange(levels.shape[-1], dtype=jnp.int32)), axis=-1, dtype=jnp.int32)
 
 
+def start_orientation(model: SwimmerModel, levels: Any, xp: Any = jnp) -> Any:
+    """Orientation of the reference (middle) link at the start, for start levels ``levels``.
+
+    Purcell's swimmer (and every two-hinge swimmer) starts with its middle link along +x, the
+    authors' start. Longer chains start symmetric about x: the mean link direction along +x
+    (the authors' four-link start, all hinges at +2pi/9, has links at -pi/3, -pi/9, pi/9, pi/3),
+    so the reference link sits at minus the mean of the link angles measured from it. Sphere
+    swimmers have no orientation (0).
+
+    Parameters
+    ----------
+    model : SwimmerModel
+        The swimmer (static).
+    levels : int array (..., n_dof)
+        Start levels (0 = lo, 1 = hi).
+    xp : module
+        ``jax.numpy`` (default) or ``numpy``.
+
+    Returns
+    -------
+    array (...)
+        Radians.
+    """
+    levels = xp.asarray(levels)
+    if not model.planar or model.n_dof <= 2:
+        return xp.zeros(levels.shape[:-1])
+    d = model.lo + (model.hi - model.lo) * levels
+    zeros = xp.zeros(levels.shape[:-1] + (1,))
+    cum = xp.concatenate([zeros, xp.cumsum(d, axis=-1)], axis=-1)  # link angles + const
+    m = model.n_dof // 2  # the reference link, (N - 1) // 2 for N = n_dof + 1 links
+    return -(xp.mean(cum, axis=-1) - cum[..., m])
+
+
 def reset(key: Array, params: EnvParams) -> EnvState:
-    """Start state: centroid at the origin, orientation 0, DOFs at ``params.init``."""
+    """Start state: centroid at the origin, DOFs at ``params.init``, orientation
+    :func:`start_orientation` (0 except for chains of more than three links)."""
     n = params.model.n_dof
     init = jnp.asarray(params.init, jnp.int32)
     coin = jax.random.bernoulli(key, 0.5, (n,)).astype(jnp.int32)
     levels = jnp.where(init < 0, coin, init)
     dtype = jnp.result_type(float)
     zero = jnp.zeros((), dtype)
-    return EnvState(levels, zero, zero, zero, jnp.array([1.0, 0.0], dtype), jnp.zeros((), jnp.int32))
+    theta = jnp.asarray(start_orientation(params.model, levels), dtype)
+    return EnvState(levels, zero, zero, theta, jnp.stack([jnp.cos(theta), jnp.sin(theta)]), jnp.zeros((), jnp.int32))
 
 
 def step(key: Array, state: EnvState, action: Array, params: EnvParams) -> tuple[EnvState, StepInfo]:

@@ -25,8 +25,8 @@ period). Cycles are considered up to ``max_period = 2**n_dof`` steps, the longes
 visits each corner of the DOF cube once (see :func:`default_max_period`).
 
 Displacements are composed from :func:`jswim.env.step_table` in float64 by replaying the run's
-actions from its initial shape, orientation 0 and the origin, exactly as :func:`jswim.env.step`
-does without noise. A cycle is therefore measured from the orientation the swimmer actually has
+actions from its initial shape, start orientation (:func:`jswim.env.start_orientation`) and the
+origin, exactly as :func:`jswim.env.step` does without noise. A cycle is therefore measured from the orientation the swimmer actually has
 when the cycle starts (for Purcell's swimmer the orientation is a function of the shape, so the
 square gait from a start with a bent link goes at ``cos(0.6) = 0.83`` of the best speed; it still
 qualifies). The best cycle is measured from orientation 0 at its start corner.
@@ -44,7 +44,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from jswim.env import EnvParams, decode_action, step_table
+from jswim.env import EnvParams, decode_action, start_orientation, step_table
 from jswim.errors import ConfigError
 from jswim.swimmers.models import SwimmerModel
 
@@ -301,7 +301,8 @@ class Replay(NamedTuple):
 
 
 def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Replay:
-    """Replay action indices without noise from ``levels0``, orientation 0 and the origin.
+    """Replay action indices without noise from ``levels0``, its start orientation
+    (:func:`jswim.env.start_orientation`) and the origin.
 
     Parameters
     ----------
@@ -342,7 +343,7 @@ def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Rep
         # steps' rotations is cheaper than cos and sin of a running sum.
         turn = np.exp(1j * table[:, 2])[idx]
         heading = np.empty((steps, b), np.complex128)
-        heading[0] = 1.0
+        heading[0] = np.exp(1j * start_orientation(model, np.asarray(levels0), np))
         np.cumprod(turn[:-1], axis=0, out=heading[1:])
         dx = (heading * (table[:, 0] + 1j * table[:, 1])[idx]).real
         np.cumsum(dx, axis=0, out=x[1:])

@@ -8,13 +8,14 @@ S1 objective, S2 constraints on the DOFs, S3 the last ``n_ht`` history records, 
 actions have long-term consequences, S5 the answer format and the allowed set. Any subset can be
 dropped with a sentence mask (the paper's ablation).
 
-Order. The default layout is ``S1 S2 S4 S5`` then ``S3``: every fixed sentence comes before the
-history, which changes at every step, so a server with prefix (prompt) caching reuses the fixed
-part. When S5 itself changes from step to step (the shape-changing allowed set, shuffled options)
-or the summary sentence is on, the default layout becomes :data:`CACHE_LAYOUT_LATE`, ``S1 S2 S4``
-then ``S3``, the summary and ``S5``: fixed text first, per-step text last. The paper lists S1..S5
-in numeric order; :data:`PAPER_LAYOUT` gives that order and a template file can set any other
-(a layout set by hand is always used as given).
+Order. The default layout is the paper's and the authors' code's: S1 S2 S3 S4 S5 in one user
+message, the history third, so the answer instruction is the last thing the model reads
+(:data:`PAPER_LAYOUT`). ``order="cache"`` (:class:`PromptConfig`; the ``cache-order`` variant)
+puts every fixed sentence first, ``S1 S2 S4 S5`` then ``S3`` (:data:`CACHE_LAYOUT`), so a server
+with prefix (prompt) caching reuses the fixed part; when S5 itself changes from step to step
+(the shape-changing action set, shuffled options) or the summary sentence is on, that order
+becomes :data:`CACHE_LAYOUT_LATE`, ``S1 S2 S4`` then ``S3``, the summary and ``S5``. A
+template file can set any other layout (a layout set by hand is always used as given).
 
 Template placeholders
 ---------------------
@@ -25,6 +26,7 @@ variable below; sentences may use the variables too.
 
 =================  ============================================================================
 ``{direction}``    ``+x`` or ``-x``
+``{direction_words}`` ``positive x`` or ``negative x``
 ``{dofs}``         DOF names joined as prose, ``D1 and D2``
 ``{dof_names}``    DOF names joined by commas, ``D1, D2``
 ``{n_dof}``        number of DOFs
@@ -32,6 +34,9 @@ variable below; sentences may use the variables too.
 ``{dof_choices}``  ``1 or 2``
 ``{roc_choices}``  ``-1, 0 or 1``
 ``{allowed}``      the allowed replies, ``[1, -1], [1, 0], ...``
+``{choices}``      S5's choices: with every action offered in (DOF, ROC) order, the DOF and
+                   ROC choices separately (``the changed DOF 1 or 2 and the ROC -1, 0 or 1``,
+                   as the authors' code); otherwise the allowed replies (``one of [1, -1], ...``)
 ``{n_ht}``         the history length setting
 ``{n_records}``    the number of records shown (<= ``n_ht``; fewer right after a start or clear)
 ``{history}``      the records, one per line (``none yet`` when empty)
@@ -47,9 +52,10 @@ rule for X: integers in thousandths of ``a``, no minus sign (the direction is a 
 without ``{summary}`` gets the sentence right before the history (S3), which keeps every fixed
 sentence in front for prefix caching; the paper's prompt is unchanged when the summary is off.
 
-The ``record`` template formats one history line with ``{step}``, ``{dofs_before}``,
-``{action}``, ``{dofs_after}``, ``{x_before}``, ``{x_after}`` and ``{stuck}`` (``" (stuck)"``
-when the move pushed a DOF past its limit, else empty).
+The ``record`` template formats one history line with ``{step}`` (the record's index since the
+last clear, from 1), ``{dofs_before}``, ``{action}``, ``{dofs_after}``, ``{x_before}``,
+``{x_after}`` and ``{stuck}`` (``yes`` when ``|dX| <`` :data:`STUCK_DX`, holds and moves past a
+limit included, else ``no``: every record carries the flag, as in the authors' code).
 
 A template file (:meth:`PromptTemplate.from_file`) is plain text. Without section headers the
 whole file is the layout. With headers, lines ``[layout]``, ``[S1]`` .. ``[S5]`` and ``[record]``
@@ -68,31 +74,40 @@ from pathlib import Path
 from typing import Iterable, NamedTuple, Sequence
 
 from jswim.actions import check_action_set
-from jswim.errors import ConfigError, PositionBelowMinimumError
+from jswim.errors import ConfigError
 
 #: Sentence names, in the paper's order.
 SENTENCES = ("S1", "S2", "S3", "S4", "S5")
 
-#: Every fixed sentence before the changing history: the prefix-cache friendly order (default).
-CACHE_LAYOUT = "{S1} {S2} {S4} {S5}\n{S3}"
-
-#: What the default layout becomes when S5 or the summary change at every step: per-step text last.
-CACHE_LAYOUT_LATE = "{S1} {S2} {S4}\n{S3}\n{summary}\n{S5}"
-
-#: The paper's numeric order S1..S5 (the history sits in the middle).
+#: The paper's and the authors' order S1..S5, the history third and the answer instruction last (default).
 PAPER_LAYOUT = "{S1} {S2}\n{S3}\n{S4} {S5}"
 
+#: Every fixed sentence before the changing history: the prefix-cache friendly order (``order="cache"``).
+CACHE_LAYOUT = "{S1} {S2} {S4} {S5}\n{S3}"
+
+#: What the cache order becomes when S5 or the summary change at every step: per-step text last.
+CACHE_LAYOUT_LATE = "{S1} {S2} {S4}\n{S3}\n{summary}\n{S5}"
+
+#: Prompt orders (:attr:`PromptConfig.order`).
+ORDERS = ("paper", "cache")
+
+#: A record whose |dX| (in units of a) is below this is flagged stuck (the authors' code).
+STUCK_DX = 1e-6
+
+#: The system message of the authors' code: a single space (the paper uses no system prompt).
+PAPER_SYSTEM = " "
+
 DEFAULT_SENTENCES = {
-    "S1": "Find the sequence of ROCs of DOFs {dofs} giving the fastest long-term movement "
-    "in the {direction} direction.",
+    "S1": "Find the sequence of rates of change (ROC) of the degrees of freedom (DOF) {dofs} that gives "
+    "the fastest long-term movement in the {direction_words} direction.",
     "S2": "Only one DOF changes at a time, and {dof_ranges}.",
     "S3": "Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, "
-    "X before -> after):\n{history}",
+    "X before -> after, stuck):\n{history}",
     "S4": "Keep in mind that an action can have long-term consequences.",
-    "S5": "Reply with the next action as [changed DOF, ROC], one of {allowed}.",
+    "S5": "Reply with the next action as [changed DOF, ROC], {choices}.",
 }
 
-DEFAULT_RECORD = "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}{stuck}"
+DEFAULT_RECORD = "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}, stuck {stuck}"
 
 class Action(NamedTuple):
     """One action: the changed DOF (1-based) and its rate of change."""
@@ -115,23 +130,23 @@ def _decimal(value: float) -> Decimal:
 
 
 def encode_position(x: float, x_min: float = -2.5) -> int:
-    """``(X/a)_LLM = (X/a - X_min/a) * 1000`` as a non-negative integer.
+    """``(X/a)_LLM = (X/a - X_min/a) * 1000`` as an integer.
 
     ``X`` is truncated (toward zero, not rounded) to three decimals first, as in the paper.
+    ``X_min`` is chosen so that values stay positive; a position below it gives a negative
+    number, which is sent as it is (the authors' code does the same; a run is never stopped
+    for it; the driver warns once and records the step).
 
     Raises
     ------
-    PositionBelowMinimumError
-        When ``x < x_min``.
+    ConfigError
+        When ``x`` is not finite.
     """
     if not math.isfinite(x):
         raise ConfigError(f"position X must be finite, got {x!r}")
-    if x < x_min:
-        raise PositionBelowMinimumError(x, x_min)
     x3 = _decimal(x).quantize(Decimal("0.001"), rounding=ROUND_DOWN)
     shifted = (x3 - _decimal(x_min)) * 1000
-    # x3 may truncate up to just below x_min (e.g. -2.5004 -> -2.500 is fine, never below).
-    return max(0, int(shifted.to_integral_value(rounding=ROUND_DOWN)))
+    return int(shifted.to_integral_value(rounding=ROUND_DOWN))
 
 
 def format_dof(value: float, decimals: int) -> str:
@@ -229,7 +244,10 @@ def allowed_actions(
 class HistoryRecord:
     """One executed step, as shown to the model.
 
-    Positions are the raw centroid ``X/a``; they are encoded as integers when rendered.
+    ``step`` is the record's index as the model sees it (from 1 after each clear; set by
+    :meth:`jswim.agents.memory.History.add`). Positions are the raw centroid ``X/a``; they are
+    encoded as integers when rendered. ``stuck`` is the environment's flag (the move pushed a DOF
+    past its limit); the rendered flag is also on when ``|dX| <`` :data:`STUCK_DX` (holds).
     """
 
     step: int
@@ -253,7 +271,7 @@ class HistoryRecord:
 class PromptTemplate:
     """Layout, sentence and record templates (see the module docstring for placeholders)."""
 
-    layout: str = CACHE_LAYOUT
+    layout: str = PAPER_LAYOUT
     sentences: tuple[tuple[str, str], ...] = tuple(DEFAULT_SENTENCES.items())
     record: str = DEFAULT_RECORD
 
@@ -316,11 +334,7 @@ def _fill(template: str, values: dict[str, str], what: str) -> str:
 def _tidy(text: str) -> str:
     # Masked sentences leave doubled spaces and empty lines behind; remove them.
     lines = [re.sub(r"[ \t]{2,}", " ", ln).strip() for ln in text.split("\n")]
-    out: list[str] = []
-    for ln in lines:
-        if ln or (out and out[-1]):
-            out.append(ln)
-    return "\n".join(out).strip("\n")
+    return "\n".join(ln for ln in lines if ln)
 
 
 def normalize_mask(mask: Iterable[str] | Sequence[bool] | None) -> frozenset[str]:
@@ -356,12 +370,15 @@ class PromptConfig:
     template : PromptTemplate
         The text.
     system : str, optional
-        A system message; the paper uses none.
+        A system message (the authors' code sends a single space, :data:`PAPER_SYSTEM`).
     summary : bool
         Add the observed-progress sentence (:func:`jswim.agents.memory.render_summary`); off in the paper.
     shuffle : bool
         S5 lists the options in an order that changes per step (set by the caller through
-        ``options``); only moves S5 behind the history in the default layout.
+        ``options``); in the cache order, moves S5 behind the history.
+    order : {"paper", "cache"}
+        Sentence order when the template keeps the default layout: the paper's S1..S5 (history
+        third), or every fixed sentence first for prefix caching (:data:`ORDERS`).
     """
 
     n_ht: int = 3
@@ -372,18 +389,24 @@ class PromptConfig:
     system: str | None = None
     summary: bool = False
     shuffle: bool = False
+    order: str = "paper"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drop", normalize_mask(self.drop))
+        if self.order not in ORDERS:
+            raise ConfigError(f"order must be one of {', '.join(ORDERS)}, got {self.order!r}")
         if self.n_ht < 0:
             raise ConfigError(f"n_ht must be >= 0, got {self.n_ht}")
         check_action_set(self.action_set)
 
     @property
     def layout(self) -> str:
-        """The layout used: the template's, or :data:`CACHE_LAYOUT_LATE` in place of the default
-        :data:`CACHE_LAYOUT` when S5 or the summary change from step to step."""
+        """The layout used: the template's; with ``order="cache"`` and the default layout,
+        :data:`CACHE_LAYOUT`, or :data:`CACHE_LAYOUT_LATE` when S5 or the summary change from
+        step to step."""
         layout = self.template.layout
+        if self.order == "cache" and layout == PAPER_LAYOUT:
+            layout = CACHE_LAYOUT
         if layout == CACHE_LAYOUT and (self.action_set != "all" or self.shuffle or self.summary):
             return CACHE_LAYOUT_LATE
         return layout
@@ -409,7 +432,7 @@ def render_record(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> str
         "action": rec.action.text(),
         "x_before": str(encode_position(rec.x_before, cfg.x_min)),
         "x_after": str(encode_position(rec.x_after, cfg.x_min)),
-        "stuck": " (stuck)" if rec.stuck else "",
+        "stuck": "yes" if rec.stuck or abs(rec.dx) < STUCK_DX else "no",
     }
     return _fill(cfg.template.record, values, "record")
 
@@ -447,10 +470,6 @@ def render_prompt(
     summary : str
         The summary sentence (:func:`jswim.agents.memory.render_summary`), or empty.
 
-    Raises
-    ------
-    PositionBelowMinimumError
-        When a position to show lies below ``cfg.x_min``.
     """
     if direction not in (1, -1):
         raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
@@ -459,6 +478,7 @@ def render_prompt(
     d = sw.dof_decimals
     values = {
         "direction": "+x" if direction == 1 else "-x",
+        "direction_words": "positive x" if direction == 1 else "negative x",
         "dofs": _join_prose(sw.names),
         "dof_names": ", ".join(sw.names),
         "n_dof": str(sw.n_dof),
@@ -466,6 +486,7 @@ def render_prompt(
         "dof_choices": _join_prose([str(k) for k in range(1, sw.n_dof + 1)], "or"),
         "roc_choices": _join_prose([str(r) for r in sw.rocs], "or"),
         "allowed": ", ".join(a.text() for a in allowed),
+        "choices": _choices(sw, allowed),
         "n_ht": str(cfg.n_ht),
         "n_records": str(len(shown)),
         "history": "\n".join(render_record(r, sw, cfg) for r in shown) or "none yet",
@@ -484,6 +505,16 @@ def render_prompt(
         else:
             layout = layout + "\n{summary}"
     return _tidy(_fill(layout, values, "layout"))
+
+
+def _choices(sw: SwimmerText, allowed: Sequence[Action]) -> str:
+    """S5's choices: DOF and ROC choices separately when every action is offered in (DOF, ROC)
+    order (the authors' code), else the allowed replies listed."""
+    if list(allowed) == allowed_actions(sw, "all"):
+        dofs = _join_prose([str(k) for k in range(1, sw.n_dof + 1)], "or")
+        rocs = _join_prose([str(r) for r in sw.rocs], "or")
+        return f"the changed DOF {dofs} and the ROC {rocs}"
+    return "one of " + ", ".join(a.text() for a in allowed)
 
 
 def _fields(template: str) -> set[str]:

@@ -37,11 +37,11 @@ def s5_options(prompt: str) -> list[str]:
 
 def scripted(body):
     """Purcell +x: always [1, -1]. Purcell -x: junk, then [2, 1] when corrected. NG: never valid."""
-    msgs = body["messages"]
+    msgs = [m for m in body["messages"] if m["role"] != "system"]
     prompt = msgs[0]["content"]
     if "[6, 10]" in prompt:
         return "I would rather not say."
-    if "-x direction" in prompt:
+    if "negative x direction" in prompt:
         return "[2, 1]" if len(msgs) > 1 else "Let me think about the physics first."
     return "[1, -1]"
 
@@ -69,20 +69,21 @@ def test_batch_counts_retries_failures_and_clears(tmp_path):
     assert sum(r.usage.retries for r in results) == 2
     assert n_requests == 6 + 12 + 18 + 2
     assert max_in_flight == 3  # one request per run in flight per round, all at once
-    # No progress in steps 2..5 -> the history is cleared after step 5 in every run.
+    # No progress from step 2 -> the history is cleared at step 6 in every run (fidelity.md: from
+    # step 6 with >= 6 records, the last 4 displacements below 0.01).
     assert [r.n_clears for r in results] == [1, 1, 1]
 
     lines = [json.loads(s) for s in (tmp_path / f"{b.run_id}.jsonl").read_text().splitlines()]
     assert [ln["type"] for ln in lines] == ["meta"] + ["step"] * 6 + ["end"]
     meta, first, end = lines[0], lines[1], lines[-1]
-    assert meta["n_ht"] == 2 and meta["client"]["model"] == "fake" and "-x" in first["prompt"]
+    assert meta["n_ht"] == 2 and meta["client"]["model"] == "fake" and "negative x" in first["prompt"]
     assert [att["parsed"] for att in first["attempts"]] == [None, [2, 1]]
     assert first["attempts"][0]["text"].startswith("Let me think")
     assert {"prompt_tokens", "latency_s", "cache_hit", "retries"} <= set(first["attempts"][0])
-    assert [ln["cleared"] for ln in lines[1:-1]] == [False] * 4 + [True, False]
+    assert [ln["cleared"] for ln in lines[1:-1]] == [False] * 5 + [True]
     assert end["status"] == "done" and end["parse_retries"] == 6
-    step6 = lines[6]["prompt"]  # the history was erased after step 5 and starts again
-    assert "none yet" in step6
+    shown = [ln.split(":")[0] for ln in lines[6]["prompt"].splitlines() if ln[:1].isdigit()]
+    assert shown == ["4", "5"]  # n_ht = 2 before the clear
 
     row = a.as_row()
     assert row["run_id"] == a.run_id and row["steps"] == 6 and len(row["x"]) == 6 and row["init"] == "11"
@@ -118,11 +119,15 @@ def test_cohorts_give_the_same_results():
         assert a.actions == b.actions and np.allclose(a.x, b.x) and a.status == b.status == "done"
 
 
-def test_position_below_x_min_ends_the_run():
+def test_position_below_x_min_never_ends_the_run():
+    # fidelity.md: a value below X_min is sent as a negative number; runs are never stopped for it.
     with FakeServer(reply=lambda body: "[1, -1]") as srv:  # from (+, +) this moves toward -x
-        (res,) = run_batch([LLMRunSpec(n_steps=5)], settings(srv), LLMAgentConfig(x_min=-0.001))
-    assert res.status == "below_x_min" and res.steps == 1 and "x_min" in res.error
-    assert res.transcript[-1]["status"] == "below_x_min"
+        with pytest.warns(UserWarning, match="x_min"):
+            (res,) = run_batch([LLMRunSpec(n_steps=5)], settings(srv), LLMAgentConfig(x_min=-0.001))
+        second = srv.requests[1]["messages"][-1]["content"]
+    assert res.status == "done" and res.steps == 5 and res.below_x_min == 1
+    assert res.x[0] < -0.001 and res.as_row()["below_x_min"] == 1
+    assert re.search(r"X 1 -> -\d+, stuck no", second)  # (X - X_min) * 1000 < 0, sent as it is
 
 
 @pytest.mark.parametrize("cohorts", [1, 2])
@@ -144,13 +149,27 @@ def test_shape_changing_set_reaches_the_grammar():
     assert grammars[1] == 'root ::= "[1, 1]" | "[2, -1]"'  # after D1 went to lo
 
 
-def test_identical_runs_share_requests():
+def test_runs_are_independent_unless_sharing_is_asked_for(tmp_path):
+    specs = [LLMRunSpec(n_steps=3, run_id=f"r{k}") for k in range(4)]  # same task, no noise
+    # Default (the paper's independent repeats): every run makes its own calls.
     with FakeServer(reply=hash_reply, latency=0.05) as srv:
-        specs = [LLMRunSpec(n_steps=3, run_id=f"r{k}") for k in range(4)]  # same task, no noise
-        results = run_batch(specs, settings(srv))
-        assert srv.n_requests == 3  # one request per round, shared by the four runs
-    assert all(r.x == results[0].x for r in results)
-    assert sum(r.usage.shared for r in results) == 9
+        results = run_batch(specs, settings(srv, cache_dir=str(tmp_path)))
+        assert srv.n_requests == 12
+        assert sum(r.usage.shared + r.usage.cache_hits for r in results) == 0
+        # A rerun (resume) is answered from each run's own cached calls ...
+        srv.reset_counts()
+        again = run_batch(specs, settings(srv, cache_dir=str(tmp_path)))
+        assert srv.n_requests == 0 and sum(r.usage.cache_hits for r in again) == 12
+        # ... but a new run is never answered with another run's reply.
+        run_batch([LLMRunSpec(n_steps=3, run_id="r9")], settings(srv, cache_dir=str(tmp_path)))
+        assert srv.n_requests == 3
+    assert all(r.as_row()["share_identical"] is False for r in results)
+    # Sharing on (a cost saving): one request per round, the four runs are copies.
+    with FakeServer(reply=hash_reply, latency=0.05) as srv:
+        shared = run_batch(specs, settings(srv), LLMAgentConfig(share_identical=True))
+        assert srv.n_requests == 3
+    assert all(r.x == shared[0].x for r in shared)
+    assert sum(r.usage.shared for r in shared) == 9 and shared[0].as_row()["share_identical"] is True
 
 
 def test_duplicate_run_ids_are_rejected():
@@ -218,7 +237,7 @@ def test_shuffle_changes_the_order_not_the_set_and_replays():
     assert [tuple(map(tuple, st["options"])) for st in steps_of(a)] == [
         tuple(tuple(int(v) for v in re.findall(r"-?\d", o)) for o in order) for order in orders]
     assert orders == [tuple(s5_options(st["prompt"])) for st in steps_of(b)]  # seeded by run and step
-    assert all(tuple(s5_options(st["prompt"])) == canonical for st in steps_of(plain))
+    assert all("the changed DOF 1 or 2 and the ROC -1, 0 or 1." in st["prompt"] for st in steps_of(plain))
     # The grammar is not shuffled: only the text is.
     grammars = {body.get("grammar") for body in bodies}
     assert len(grammars) == 1
@@ -241,11 +260,11 @@ def test_temperature_requests_carry_per_run_seeds_and_are_never_cached(tmp_path)
     assert sorted(b["seed"] for b in bodies) == sorted(seeds[0] + seeds[1])
     assert sorted(b["seed"] for b in bodies_again) == sorted(b["seed"] for b in bodies)  # reproducible
     assert {r.as_row()["temperature"] for r in first} == {0.7}
-    # At temperature 0 no seed is sent and identical requests are shared.
+    # At temperature 0 no seed is sent, and identical requests of the two runs are still sent apart.
     with FakeServer(reply=lambda body: "[1, 1]") as srv:
         zero = run_batch(specs, settings(srv), variant_config("paper"))
-        assert all("seed" not in b for b in srv.requests) and srv.n_requests == 5
-    assert sum(r.usage.shared for r in zero) == 5
+        assert all("seed" not in b for b in srv.requests) and srv.n_requests == 10
+    assert sum(r.usage.shared for r in zero) == 0
 
 
 def test_variant_is_recorded_in_rows_and_transcripts():

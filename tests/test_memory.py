@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import math
 
+from jswim.agents.defaults import default_clearing
 from jswim.agents.memory import ClearingRule, History, MoveStats, render_summary, shape_key
 from jswim.prompt import Action, HistoryRecord, SwimmerText
+from jswim.swimmers.models import make_model
 
 LO, HI = -math.pi / 3, math.pi / 3
 PURCELL = SwimmerText(2, LO, HI, dof_decimals=3)
@@ -15,24 +17,49 @@ def rec(step: int) -> HistoryRecord:
     return HistoryRecord(step, (HI, HI), (LO, HI), Action(1, -1), 0.0, 0.0)
 
 
-def test_clearing_rule():
-    rule = ClearingRule()  # after 5 steps, last 4 below 0.01
-    assert not rule.should_clear(4, [0.0] * 4)  # too early
-    assert rule.should_clear(5, [0.0] * 5)
-    assert not rule.should_clear(5, [0.0, 0.0, 0.0, 0.01, 0.0])  # sum 0.01 is not below
-    assert rule.should_clear(6, [0.5, 0.004, 0.003, -0.002, 0.004])
-    assert not rule.should_clear(9, [0.0] * 3)  # fewer than window steps since the last clear
-    assert not ClearingRule(enabled=False).should_clear(10, [0.0] * 10)
-    assert ClearingRule(min_steps=2, window=2, threshold=0.1).should_clear(2, [0.05, 0.04])
+def test_clearing_rule_three_dof_follows_the_authors_code():
+    # fidelity.md: only from step 6 with >= 6 records since the last clear; the last 4
+    # displacements summed, rounded to 3 decimals, < 0.01 toward +x (> -0.01 toward -x).
+    for name in ("purcell", "ng"):
+        rule = default_clearing(make_model(name))
+        assert (rule.min_steps, rule.min_records, rule.window, rule.threshold, rule.decimals) == (6, 6, 4, 0.01, 3)
+    rule = default_clearing(make_model("purcell"))
+    assert not rule.should_clear(5, 5, [0.0] * 5)  # step 5: too early
+    assert rule.should_clear(6, 6, [0.0] * 6)
+    assert not rule.should_clear(12, 5, [0.0] * 12)  # only 5 records since the last clear
+    # Only the last 4 count: a big early step does not keep the history.
+    assert rule.should_clear(6, 6, [0.5, 0.5, 0.002, 0.002, 0.002, 0.002])
+    # Rounded to 3 decimals first: 0.0096 -> 0.010 is not below 0.01; 0.0094 -> 0.009 is.
+    assert not rule.should_clear(6, 6, [0.0, 0.0, 0.0024, 0.0024, 0.0024, 0.0024])
+    assert rule.should_clear(6, 6, [0.0, 0.0, 0.00235, 0.00235, 0.00235, 0.00235])
+    # Toward -x the rule sees direction * dX: dX summing to -0.0096 rounds to -0.010, not > -0.01.
+    assert not rule.should_clear(6, 6, [-(-0.0024)] * 6)
+    assert not ClearingRule(enabled=False).should_clear(10, 10, [0.0] * 10)
 
 
-def test_history_clears_and_rebuilds():
-    h = History()
-    cleared = [h.add(rec(k), 0.0) for k in range(1, 13)]
-    # Clears at step 5, then needs 4 fresh steps: 9, then 13 would be next.
-    assert [k for k, c in enumerate(cleared, 1) if c] == [5, 9]
-    assert h.n_clears == 2 and len(h.records) == 3 and h.records[0].step == 10
-    h2 = History()
+def test_clearing_rule_four_dof_per_swimmer():
+    link = default_clearing(make_model("nlink"))  # last 40 steps, 0.05, no rounding
+    sphere = default_clearing(make_model("nsphere"))  # last 5 steps, 0.05, rounded
+    assert (link.window, link.threshold, link.decimals, link.min_records) == (40, 0.05, None, 6)
+    assert (sphere.window, sphere.threshold, sphere.decimals, sphere.min_records) == (5, 0.05, 3, 6)
+    assert link.should_clear(6, 6, [0.008] * 6)  # 0.048 over the 6 steps there are
+    assert not link.should_clear(6, 6, [0.01] * 6)  # 0.06
+    # The window is the run's last 40 steps, reaching back past a clear (as the code's).
+    assert link.should_clear(46, 6, [0.05] + [0.0] * 45)  # step 1 has left the window
+    assert not link.should_clear(40, 6, [0.05] + [0.0] * 39)  # 0.05 is not below
+    assert not link.should_clear(12, 6, [0.01] * 6 + [0.0] * 6)  # the 6 steps before the clear count
+    assert sphere.should_clear(6, 6, [1.0] + [0.0098] * 5)  # the last 5 only: 0.049
+    assert not sphere.should_clear(6, 6, [0.0] + [0.01] * 5)  # 0.05 is not below
+
+
+def test_history_clears_rebuilds_and_renumbers():
+    h = History(default_clearing(make_model("purcell")))
+    cleared = [h.add(rec(k), 0.0) for k in range(1, 15)]
+    # Stuck from the start: clears at step 6, then after 6 fresh records at step 12.
+    assert [k for k, c in enumerate(cleared, 1) if c] == [6, 12]
+    # The record index restarts at 1 after each clear (the authors' code).
+    assert h.n_clears == 2 and [r.step for r in h.records] == [1, 2]
+    h2 = History(default_clearing(make_model("purcell")))
     for k in range(1, 13):
         h2.add(rec(k), 0.05)
     assert h2.n_clears == 0 and [r.step for r in h2.last(3)] == [10, 11, 12]

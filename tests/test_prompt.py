@@ -7,7 +7,7 @@ import sys
 
 import pytest
 
-from jswim.errors import ConfigError, PositionBelowMinimumError
+from jswim.errors import ConfigError
 from jswim.prompt import (
     CACHE_LAYOUT,
     DEFAULT_SENTENCES,
@@ -56,11 +56,36 @@ def test_full_prompt_contents():
     text = render_prompt(PURCELL, PromptConfig(), +1, [rec(1)], HI)
     for phrase in MARKERS.values():
         assert phrase in text
-    assert "+x direction" in text
+    # fidelity.md: S1 spells out the aliases once and names the direction in words.
+    assert text.count("rates of change (ROC)") == 1 and text.count("degrees of freedom (DOF)") == 1
+    assert "positive x direction" in text
     assert "D1 and D2 each stay in [-1.047, 1.047]" in text
-    assert "[1, -1], [1, 0], [1, 1], [2, -1], [2, 0], [2, 1]" in text
-    assert "1: (1.047, 1.047) [1, -1] -> (-1.047, 1.047), X 2500 -> 2510" in text
+    # S5: the answer format, then DOF choices and ROC choices given separately.
+    assert "[changed DOF, ROC], the changed DOF 1 or 2 and the ROC -1, 0 or 1." in text
+    # Every record carries the stuck flag.
+    assert "1: (1.047, 1.047) [1, -1] -> (-1.047, 1.047), X 2500 -> 2510, stuck no" in text
     assert "  " not in text
+
+
+def test_paper_order_is_the_default():
+    # fidelity.md: one user message, S1 S2 S3 S4 S5 in that order, the history third, so the
+    # answer instruction is the last thing the model reads.
+    text = render_prompt(PURCELL, PromptConfig(), 1, [rec(1)], HI)
+    pos = [text.index(MARKERS[n]) for n in SENTENCES]
+    assert pos == sorted(pos)
+    assert text.index("X 2500 -> 2510") < text.index(MARKERS["S4"])
+    assert text.rstrip().endswith("the ROC -1, 0 or 1.")
+    assert PromptConfig().template.layout == PAPER_LAYOUT
+
+
+def test_stuck_flag_on_every_record_holds_included():
+    # fidelity.md: stuck = |dX| < 1e-6, so a hold (ROC 0) is stuck too.
+    hold = HistoryRecord(1, HI, HI, Action(2, 0), 0.2, 0.2)
+    tiny = HistoryRecord(2, HI, HI, Action(1, -1), 0.2, 0.2 + 5e-7)
+    moved = HistoryRecord(3, HI, HI, Action(1, -1), 0.2, 0.2 + 2e-6)
+    text = render_prompt(PURCELL, PromptConfig(), 1, [hold, tiny, moved], HI)
+    flags = [ln.rsplit("stuck ", 1)[1] for ln in text.splitlines() if ln[:2] in ("1:", "2:", "3:")]
+    assert flags == ["yes", "yes", "no"]
 
 
 @pytest.mark.parametrize("name", SENTENCES)
@@ -99,22 +124,16 @@ def test_history_window_shows_last_n_ht():
 
 
 def test_cache_friendly_order_keeps_fixed_text_first():
-    cfg = PromptConfig(n_ht=2)
+    cfg = PromptConfig(n_ht=2, order="cache")
     a = render_prompt(PURCELL, cfg, 1, [rec(1)], HI)
     b = render_prompt(PURCELL, cfg, 1, [rec(1), rec(2, 0.01, 0.03)], HI)
     history_at = a.index("\n1: ")
     assert a[:history_at] == b[:history_at]  # everything before the history is shared
     for name in ("S1", "S2", "S4", "S5"):
         assert a.index(MARKERS[name]) < history_at
-    assert PromptConfig().template.layout == CACHE_LAYOUT
-
-
-def test_paper_layout_order():
-    cfg = PromptConfig(template=PromptTemplate(layout=PAPER_LAYOUT))
-    text = render_prompt(PURCELL, cfg, 1, [rec(1)], HI)
-    pos = [text.index(MARKERS[n]) for n in SENTENCES]
-    assert pos == sorted(pos)
-    assert text.index("X 2500 -> 2510") < text.index(MARKERS["S4"])
+    assert cfg.layout == CACHE_LAYOUT
+    with pytest.raises(ConfigError):
+        PromptConfig(order="fast")
 
 
 def test_ng_ranges_and_integer_lengths():
@@ -127,8 +146,8 @@ def test_ng_ranges_and_integer_lengths():
 def test_any_number_of_dofs_and_roc_sets():
     four = SwimmerText(4, 6.0, 10.0, 0, rocs=(-1, 1))
     text = render_prompt(four, PromptConfig(), 1, [], (10.0,) * 4)
-    assert "DOFs D1, D2, D3 and D4" in text
-    assert "[1, -1], [1, 1], [2, -1], [2, 1], [3, -1], [3, 1], [4, -1], [4, 1]." in text
+    assert "(DOF) D1, D2, D3 and D4" in text
+    assert "the changed DOF 1, 2, 3 or 4 and the ROC -1 or 1." in text
     assert "[1, 0]" not in text
     one = SwimmerText(1, 0.0, 1.0, 1)
     assert "D1 stays in [0.0, 1.0]" in render_prompt(one, PromptConfig(), 1, [], (0.0,))
@@ -166,12 +185,12 @@ def test_position_encoding(x, x_min, expected):
     assert encode_position(x, x_min) == expected
 
 
-def test_position_below_minimum_raises():
-    with pytest.raises(PositionBelowMinimumError) as err:
-        encode_position(-2.6)
-    assert err.value.x == -2.6 and err.value.x_min == -2.5
-    with pytest.raises(PositionBelowMinimumError):
-        render_prompt(PURCELL, PromptConfig(), -1, [rec(1, -2.4, -2.51)], HI)
+def test_position_below_minimum_is_sent_as_a_negative_number():
+    # fidelity.md: a value below X_min is sent as a negative number; runs are never stopped for it.
+    assert encode_position(-2.6) == -100
+    assert encode_position(-2.5129) == -12  # truncated toward zero: -2.512
+    text = render_prompt(PURCELL, PromptConfig(), -1, [rec(1, -2.4, -2.51)], HI)
+    assert "X 100 -> -10" in text
     text = render_prompt(PURCELL, PromptConfig(x_min=-5.0), -1, [rec(1, -2.4, -2.51)], HI)
     assert "X 2600 -> 2490" in text
 
@@ -220,7 +239,7 @@ def test_template_from_text_and_file(tmp_path):
     whole = PromptTemplate.from_text("Go {direction}. {S5}\n{history}\n")
     text = render_prompt(PURCELL, PromptConfig(template=whole), -1, [rec(1)], HI)
     assert text.startswith("Go -x. Reply with the next action")
-    assert text.endswith("X 2500 -> 2510")
+    assert text.endswith("X 2500 -> 2510, stuck no")
 
     f = tmp_path / "t.txt"
     f.write_text("[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S3}\n")
@@ -228,7 +247,7 @@ def test_template_from_text_and_file(tmp_path):
     assert tpl.sentence("S1") == DEFAULT_SENTENCES["S1"]
     text = render_prompt(PURCELL, PromptConfig(template=tpl), 1, [rec(2, stuck=True)], HI)
     assert text.splitlines()[0] == "Think ahead."
-    assert text.endswith("#2 [1, -1] 2510 (stuck)")
+    assert text.endswith("#2 [1, -1] 2510yes")
 
     with pytest.raises(ConfigError, match="nope"):
         render_prompt(PURCELL, PromptConfig(template=PromptTemplate(layout="{nope}")), 1, [], HI)
@@ -252,15 +271,16 @@ def test_build_messages():
 def test_per_step_text_goes_last_and_the_paper_prompt_is_unchanged():
     lo, hi = -math.pi / 3, math.pi / 3
     rec = HistoryRecord(1, (hi, hi), (lo, hi), Action(1, -1), 0.0, 0.01)
-    paper = render_prompt(PURCELL, PromptConfig(), 1, [rec], (lo, hi))
-    assert PromptConfig().layout == CACHE_LAYOUT and paper.index("Reply with") < paper.index("1: (")
-    for cfg in (PromptConfig(action_set="shape-changing"), PromptConfig(shuffle=True), PromptConfig(summary=True)):
+    cache = render_prompt(PURCELL, PromptConfig(order="cache"), 1, [rec], (lo, hi))
+    assert PromptConfig(order="cache").layout == CACHE_LAYOUT and cache.index("Reply with") < cache.index("1: (")
+    for cfg in (PromptConfig(action_set="shape-changing", order="cache"), PromptConfig(shuffle=True, order="cache"),
+                PromptConfig(summary=True, order="cache")):
         text = render_prompt(PURCELL, cfg, 1, [rec], (lo, hi), summary="Observed so far: x." if cfg.summary else "")
         lines = text.splitlines()
         assert lines[-1].startswith("Reply with the next action"), text  # S5 last: per-step text
         if cfg.summary:
             assert lines[-2] == "Observed so far: x." and lines[-3].startswith("1: (")
-    # A hand-made layout is used as given; without a {summary} slot the sentence precedes S3.
-    cfg = PromptConfig(summary=True, template=PromptTemplate(layout=PAPER_LAYOUT))
+    # The paper's layout (the default) has no {summary} slot: the sentence precedes S3.
+    cfg = PromptConfig(summary=True)
     text = render_prompt(PURCELL, cfg, 1, [rec], (lo, hi), summary="Observed so far: x.")
     assert text.index("Observed so far") < text.index("Latest records") < text.index("Reply with")

@@ -9,7 +9,6 @@ import pytest
 from jswim.agents import protocol
 from jswim.agents.memory import MoveStats
 from jswim.agents.variants import LLMAgentConfig, LLMRunSpec, variant_config
-from jswim.errors import PositionBelowMinimumError
 from jswim.prompt import Action, HistoryRecord
 from jswim.swimmers.models import make_model
 
@@ -26,7 +25,8 @@ def first_request(cfg: LLMAgentConfig, spec: LLMRunSpec = LLMRunSpec(), step: in
 
 def test_setup_takes_the_swimmer_s_agent_defaults_unless_the_spec_sets_them():
     cfg = LLMAgentConfig()
-    assert protocol.setup(LLMRunSpec("purcell"), make_model("purcell"), cfg)[0] == 4
+    assert protocol.setup(LLMRunSpec("purcell"), make_model("purcell"), cfg)[0] == 3  # the authors' default
+    assert protocol.setup(LLMRunSpec("ng"), make_model("ng"), cfg)[0] == 3  # paper: NG +x
     assert protocol.setup(LLMRunSpec("ng", direction=-1), make_model("ng"), cfg)[0] == 6  # paper: NG -x
     n_ht, text, prompt = protocol.setup(LLMRunSpec("nlink", n_ht=2), make_model("nlink"), cfg)
     assert n_ht == prompt.n_ht == 2 and text.rocs == (-1, 1) and text.n_dof == 3
@@ -35,7 +35,8 @@ def test_setup_takes_the_swimmer_s_agent_defaults_unless_the_spec_sets_them():
 
 def test_request_is_one_user_message_offering_every_action():
     req = first_request(LLMAgentConfig())
-    assert req.messages == [{"role": "user", "content": req.prompt}]
+    # fidelity.md: a system message holding a single space, then one user message.
+    assert req.messages == [{"role": "system", "content": " "}, {"role": "user", "content": req.prompt}]
     assert req.allowed == req.options == ALL
     assert req.replies == ["[1, -1]", "[1, 0]", "[1, 1]", "[2, -1]", "[2, 0]", "[2, 1]"]
     assert "Reply with the next action" in req.prompt and "none yet" in req.prompt
@@ -69,9 +70,9 @@ def test_read_reply_gives_an_action_a_follow_up_or_up():
     req = first_request(cfg)
     assert protocol.read_reply(req, req.messages, "Sure: [2, 1].", 0, cfg) == protocol.Reply(Action(2, 1))
     retry = protocol.read_reply(req, req.messages, "I am not sure.", 0, cfg)
-    assert retry.action is None and retry.follow_up[:1] == req.messages
-    assert retry.follow_up[1] == {"role": "assistant", "content": "I am not sure."}
-    assert retry.follow_up[2]["role"] == "user" and "[1, -1], [1, 0]" in retry.follow_up[2]["content"]
+    assert retry.action is None and retry.follow_up[:2] == req.messages
+    assert retry.follow_up[2] == {"role": "assistant", "content": "I am not sure."}
+    assert retry.follow_up[3]["role"] == "user" and "[1, -1], [1, 0]" in retry.follow_up[3]["content"]
     assert protocol.read_reply(req, retry.follow_up, "still no", 1, cfg) == protocol.Reply(None)  # retries used up
     # A pair outside the offered set is not an action.
     sc = first_request(variant_config("shape-changing"), dofs=(HI, LO))
@@ -85,6 +86,18 @@ def test_sampling_seeds_exist_only_above_temperature_zero_and_differ_per_attempt
     assert protocol.sample_seed(1, 3, 0, 0.7) == protocol.sample_seed(1, 3, 0, 0.2)  # stable
 
 
-def test_a_position_below_x_min_cannot_be_sent():
-    with pytest.raises(PositionBelowMinimumError):
-        first_request(LLMAgentConfig(x_min=-0.5), x=-0.6)
+def test_max_tokens_per_swimmer_raised_only_for_a_constrained_format():
+    # fidelity.md: max_tokens 10 (three-DOF), 20 (four-DOF); no constrained decoding.
+    cfg = LLMAgentConfig()
+    assert protocol.max_tokens(cfg, make_model("purcell")) == 10
+    assert protocol.max_tokens(cfg, make_model("ng")) == 10
+    assert protocol.max_tokens(cfg, make_model("nlink")) == 20
+    assert protocol.max_tokens(cfg, make_model("nsphere")) == 20
+    assert protocol.max_tokens(cfg, make_model("purcell"), "json_schema") > 10  # {"action": "[1, -1]"}
+    assert protocol.max_tokens(LLMAgentConfig(max_tokens=50), make_model("purcell")) == 50
+
+
+def test_the_paper_protocol_shares_nothing_between_runs_by_default():
+    cfg = LLMAgentConfig()
+    assert cfg.share_identical is False and cfg.system == " " and cfg.order == "paper"
+    assert protocol.clearing_rule(cfg, make_model("nlink")).window == 40

@@ -28,6 +28,7 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import json
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence, TextIO
@@ -41,11 +42,18 @@ from jswim.agents import protocol
 from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
 from jswim.errors import ConfigError, LLMError, LLMServerError, PositionBelowMinimumError
+from jswim.llm import constrain
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.local import LocalServer
 from jswim.llm.sync import run_sync
 from jswim.llm.usage import UsageTotals
 from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText, encode_position
+
+
+#: Shown once (Python's default warning filter) when a position falls below x_min.
+BELOW_X_MIN_WARNING = ("a swimmer's X fell below x_min = {x_min:g}: the prompt shows that position as a negative "
+                       "number, as the authors' code does, and the run goes on (the step is recorded in "
+                       "below_x_min; a lower --x-min keeps positions positive)")
 
 
 @dataclass
@@ -72,6 +80,7 @@ class RunResult:
     tokens_seen: int = 0  # prompt + reply tokens of every call, shared or cached ones included
     transcript: list[dict[str, Any]] | None = None  # in memory when no transcript folder is given
     knobs: dict[str, Any] = field(default_factory=dict)  # the variant switches (LLMAgentConfig.knobs)
+    below_x_min: int | None = None  # first step whose X fell below x_min (sent as a negative number)
 
     @property
     def steps(self) -> int:
@@ -93,7 +102,7 @@ class RunResult:
             "tokens_seen": self.tokens_seen,
             "levels0": self.levels0, "x": self.x, "y": self.y, "orientation": self.orientation,
             "actions": self.actions, "progress": self.progress,
-            "stuck": self.stuck, **self.knobs,
+            "stuck": self.stuck, "below_x_min": self.below_x_min, **self.knobs,
         }
 
 
@@ -110,6 +119,7 @@ class _Run:
     active: bool = True
     sink: TextIO | None = None
     stats: MoveStats = field(default_factory=MoveStats)
+    max_tokens: int | None = None
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
@@ -223,7 +233,11 @@ class LLMDriver:
         result = RunResult(run_id, spec, n_ht, text.rocs, levels0=[int(v) for v in levels0],
                            transcript=None if self.transcript_dir else [],
                            knobs=cfg.knobs(self.client.settings.temperature))
-        run = _Run(result, text, prompt, History(cfg.clearing), np.array(dofs, np.float64))
+        run = _Run(result, text, prompt, History(protocol.clearing_rule(cfg, params.model)), np.array(dofs, np.float64))
+        settings = self.client.settings
+        constraint = constrain.resolve_mode(settings.constrain, settings.server_kind)
+        run.max_tokens = protocol.max_tokens(cfg, params.model, constraint)
+        result.knobs.update(constraint=constraint, max_tokens=run.max_tokens)
         if self.transcript_dir is not None:
             self.transcript_dir.mkdir(parents=True, exist_ok=True)
             run.sink = open(self.transcript_dir / f"{run_id}.jsonl", "w", encoding="utf-8")
@@ -247,8 +261,11 @@ class LLMDriver:
         action = None
         for k in range(cfg.parse_retries + 1):
             seed = protocol.sample_seed(spec.seed, step, k, temperature)
+            # Not sharing: the cache key carries the run, step and attempt, so only this very
+            # call's earlier reply (a resume) can answer it, never another run's.
+            scope = None if cfg.share_identical else f"{run.result.run_id}/{step}/{k}"
             res = await self.client.chat(messages, replies=req.replies, temperature=cfg.temperature, seed=seed,
-                                         use_cache=cfg.share_identical)
+                                         max_tokens=run.max_tokens, cache_scope=scope)
             run.result.usage.add(res)
             run.result.tokens_seen += res.usage.total_tokens
             reply = protocol.read_reply(req, messages, res.text, k, cfg)
@@ -350,11 +367,10 @@ class LLMDriver:
             "x_before": x_before, "x_after": x_after, "progress": float(out["progress"]), "stuck": rec.stuck,
             "dofs_after": list(rec.dofs_after), "cleared": cleared, "n_clears": run.history.n_clears,
         })
-        try:
-            encode_position(x_after, run.prompt.x_min)
-        except PositionBelowMinimumError as exc:
-            self._finish(run, "below_x_min", str(exc))
-            return
+        if x_after < run.prompt.x_min and res.below_x_min is None:
+            # Sent as a negative number, as the authors' code does; the run goes on.
+            res.below_x_min = res.steps
+            warnings.warn(BELOW_X_MIN_WARNING.format(x_min=run.prompt.x_min), stacklevel=2)
         if res.steps >= res.spec.n_steps:
             self._finish(run, "done")
 

@@ -8,61 +8,113 @@ module decides which records the model still sees.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Sequence
 
+from jswim.errors import ConfigError
 from jswim.prompt import Action, HistoryRecord, SwimmerText, format_dof
 
 
 @dataclass(frozen=True)
 class ClearingRule:
-    """The paper's history clearing scheme.
+    """The history clearing scheme (paper: "when the swimmer's displacement within the last few
+    steps falls below a threshold, such as 0.01, we erase ... the entire record"; the numbers
+    are the authors' code's, per swimmer, in :func:`jswim.agents.defaults.default_clearing`).
 
-    After each step, once at least ``min_steps`` steps have run in total and ``window`` steps have
-    run since the last clear, the history is erased if the displacement in the target direction
-    summed over the last ``window`` steps is below ``threshold``. The records are then rebuilt
-    from the following steps. Counting only steps since the last clear keeps one bad stretch from
-    clearing again at every step.
+    After each step the history is erased when all of these hold:
+
+    - at least ``min_steps`` steps have run in the run;
+    - at least ``min_records`` records were added since the last clear (or the start);
+    - the displacement in the target direction summed over the run's last ``window`` steps
+      (all of them when fewer; the window may reach back past a clear, as in the code),
+      rounded to ``decimals`` when given, is below ``threshold``.
+
+    Summing ``direction * dX`` and comparing with ``threshold`` is the code's two tests in one:
+    ``sum dX < 0.01`` toward +x, ``sum dX > -0.01`` toward -x (rounding is symmetric).
+    Counting records since the last clear keeps one bad stretch from clearing at every step.
+
+    Attributes
+    ----------
+    min_steps : int
+        Steps that must have run before any clear (the code: from step 6).
+    min_records : int
+        Records since the last clear before another clear (6).
+    window : int
+        Steps summed (three-DOF 4, four-link 40, four-sphere 5).
+    threshold : float
+        In units of ``a`` (three-DOF 0.01, four-DOF 0.05).
+    decimals : int or None
+        Round the sum to this many decimals before comparing (three-DOF and four-sphere: 3);
+        ``None``: no rounding (four-link).
+    enabled : bool
+        ``False`` never clears.
     """
 
-    min_steps: int = 5
+    min_steps: int = 6
+    min_records: int = 6
     window: int = 4
     threshold: float = 0.01
+    decimals: int | None = 3
     enabled: bool = True
 
-    def should_clear(self, n_steps: int, progress_since_clear: Sequence[float]) -> bool:
+    def __post_init__(self) -> None:
+        if self.window < 1 or self.min_records < 0 or self.min_steps < 0:
+            raise ConfigError(f"a clearing rule needs window >= 1, min_records >= 0 and min_steps >= 0, got {self}")
+
+    def should_clear(self, n_steps: int, n_records: int, progress: Sequence[float]) -> bool:
         """Whether to clear now.
 
         Parameters
         ----------
         n_steps : int
             Steps executed so far in the run (including the one just taken).
-        progress_since_clear : sequence of float
-            ``direction * dX`` of each step since the last clear (or the start), oldest first.
+        n_records : int
+            Records added since the last clear (or the start), the one just taken included.
+        progress : sequence of float
+            ``direction * dX`` of the run's steps so far (at least its last ``window``), oldest first.
         """
-        if not self.enabled or n_steps < self.min_steps or len(progress_since_clear) < self.window:
+        if not self.enabled or n_steps < self.min_steps or n_records < self.min_records:
             return False
-        return math.fsum(progress_since_clear[-self.window :]) < self.threshold
+        total = math.fsum(progress[-self.window :])
+        if self.decimals is not None:
+            total = round(total, self.decimals)
+        return total < self.threshold
+
+    def describe(self) -> str:
+        """One line for metadata and tables."""
+        if not self.enabled:
+            return "never"
+        rounding = f", rounded to {self.decimals} decimals," if self.decimals is not None else ""
+        return (f"from step {self.min_steps}, with >= {self.min_records} records since the last clear: clear "
+                f"when the last {self.window} displacements toward the target sum{rounding} to < {self.threshold:g}")
+
+
+#: Never clears.
+NO_CLEARING = ClearingRule(enabled=False)
 
 
 @dataclass
 class History:
-    """Records since the last clear, plus the progress the clearing rule looks at."""
+    """Records since the last clear, plus the run's progress the clearing rule looks at.
+
+    Records are numbered as the model sees them: the index restarts at 1 after each clear
+    (the authors' code), whatever step of the run they come from.
+    """
 
     rule: ClearingRule = field(default_factory=ClearingRule)
     records: list[HistoryRecord] = field(default_factory=list)
-    progress: list[float] = field(default_factory=list)
+    progress: list[float] = field(default_factory=list)  # the run's, every step (never cleared)
     n_steps: int = 0
     n_clears: int = 0
 
     def add(self, record: HistoryRecord, progress: float) -> bool:
-        """Append a step; clear if the rule says so. Returns whether it cleared."""
-        self.records.append(record)
+        """Append a step (renumbered as the next record since the last clear); clear if the rule
+        says so. Returns whether it cleared."""
+        self.records.append(replace(record, step=len(self.records) + 1))
         self.progress.append(float(progress))
         self.n_steps += 1
-        if self.rule.should_clear(self.n_steps, self.progress):
+        if self.rule.should_clear(self.n_steps, len(self.records), self.progress):
             self.records.clear()
-            self.progress.clear()
             self.n_clears += 1
             return True
         return False

@@ -20,8 +20,8 @@ import random
 from dataclasses import dataclass
 from typing import Any, Sequence
 
-from jswim.agents.defaults import default_n_ht, swimmer_text
-from jswim.agents.memory import MoveStats, render_summary
+from jswim.agents.defaults import default_clearing, default_max_tokens, default_n_ht, swimmer_text
+from jswim.agents.memory import ClearingRule, MoveStats, render_summary
 from jswim.agents.variants import LLMAgentConfig, LLMRunSpec
 from jswim.prompt import (
     Action,
@@ -51,8 +51,27 @@ def setup(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig) -> tuple[i
     n_ht = spec.n_ht if spec.n_ht is not None else default_n_ht(model, spec.direction)
     text = swimmer_text(model, spec.rocs)
     prompt = PromptConfig(n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, action_set=cfg.action_set,
-                          template=cfg.template, system=cfg.system, summary=cfg.summary, shuffle=cfg.shuffle)
+                          template=cfg.template, system=cfg.system, summary=cfg.summary, shuffle=cfg.shuffle,
+                          order=cfg.order)
     return n_ht, text, prompt
+
+
+def clearing_rule(cfg: LLMAgentConfig, model: SwimmerModel) -> ClearingRule:
+    """The run's clearing rule: the config's, else the swimmer's (:func:`default_clearing`)."""
+    return cfg.clearing if cfg.clearing is not None else default_clearing(model)
+
+
+#: Tokens a constrained reply needs: ``[1, -1]`` takes up to ~6 tokens, the JSON-schema form
+#: ``{"action": "[1, -1]"}`` up to ~12; the limit is raised to this where the format needs it.
+CONSTRAINED_MIN_TOKENS = {"grammar": 10, "json_schema": 24}
+
+
+def max_tokens(cfg: LLMAgentConfig, model: SwimmerModel, constraint: str = "none") -> int:
+    """Reply length limit of a request: the config's, else the swimmer's (10 two DOFs, 20 more,
+    the authors' code); raised to :data:`CONSTRAINED_MIN_TOKENS` where a constrained format
+    (``constraint``, the resolved mode) needs more."""
+    base = cfg.max_tokens if cfg.max_tokens is not None else default_max_tokens(model)
+    return max(base, CONSTRAINED_MIN_TOKENS.get(constraint, 0))
 
 
 @dataclass(frozen=True)
@@ -116,10 +135,6 @@ def request(
     stats : MoveStats
         Observed progress so far (read only by the summary variant).
 
-    Raises
-    ------
-    PositionBelowMinimumError
-        When a position to show lies below ``cfg.x_min``.
     """
     allowed = allowed_actions(text, cfg.action_set, dofs)
     options = list(allowed)

@@ -19,7 +19,7 @@ from jswim.actions import check_action_set
 from jswim.agents.memory import ClearingRule
 from jswim.errors import ConfigError
 from jswim.llm.client import check_temperature
-from jswim.prompt import DEFAULT_TEMPLATE, Action, PromptTemplate, normalize_mask
+from jswim.prompt import DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, normalize_mask
 
 
 def init_label(init: tuple[int, ...] | str | None) -> str:
@@ -142,15 +142,20 @@ class LLMAgentConfig:
     template : PromptTemplate
         Prompt text.
     system : str or None
-        Optional system message (the paper uses none).
-    clearing : ClearingRule
-        History clearing scheme.
+        System message: a single space as in the authors' code (the paper names none); ``None``
+        sends none.
+    clearing : ClearingRule or None
+        History clearing scheme; ``None``: the swimmer's, as in the authors' code
+        (:func:`jswim.agents.defaults.default_clearing`).
     parse_retries : int
         Extra requests after a reply without a valid action.
     retry_prompt : str
         Follow-up message of such a retry (``{allowed}`` is filled in).
     share_identical : bool
-        Let temperature-0 requests use the disk cache and share identical in-flight requests.
+        Off (the paper's independent repeats): every run makes its own calls, and the response
+        cache only answers a run with its own earlier reply to the same step (resume). On (a
+        cost saving): identical temperature-0 requests of different runs are sent once and
+        shared, and the cache answers any run; runs from one start are then copies of one run.
     summary : bool
         Add the observed-progress sentence (:func:`jswim.prompt.render_summary`).
     shuffle : bool
@@ -159,6 +164,12 @@ class LLMAgentConfig:
     temperature : float or None
         Sampling temperature of every request; ``None`` keeps the client's (paper: 0). Above 0
         each request carries a seed derived from the run's seed, step and attempt.
+    order : {"paper", "cache"}
+        Sentence order: the paper's S1..S5, or the prefix-cache friendly one
+        (:class:`jswim.prompt.PromptConfig`).
+    max_tokens : int or None
+        Reply length limit; ``None``: the swimmer's (10 for two DOFs, 20 for more, the authors'
+        code), raised where a constrained format needs more (:func:`jswim.agents.protocol.max_tokens`).
     variant : str
         Name of this combination of knobs (a label for tables; ``"paper"`` = the paper's).
     """
@@ -166,18 +177,24 @@ class LLMAgentConfig:
     action_set: str = "all"
     x_min: float = -2.5
     template: PromptTemplate = DEFAULT_TEMPLATE
-    system: str | None = None
-    clearing: ClearingRule = ClearingRule()
+    system: str | None = PAPER_SYSTEM
+    clearing: ClearingRule | None = None
     parse_retries: int = 2
     retry_prompt: str = DEFAULT_RETRY_PROMPT
-    share_identical: bool = True
+    share_identical: bool = False
     summary: bool = False
     shuffle: bool = False
     temperature: float | None = None
+    order: str = "paper"
+    max_tokens: int | None = None
     variant: str = "paper"
 
     def __post_init__(self) -> None:
         check_action_set(self.action_set)
+        if self.order not in ORDERS:
+            raise ConfigError(f"order must be one of {', '.join(ORDERS)}, got {self.order!r}")
+        if self.max_tokens is not None and not 1 <= self.max_tokens <= 100_000:
+            raise ConfigError(f"--max-tokens must be between 1 and 100000, got {self.max_tokens}")
         if self.temperature is not None:
             check_temperature(self.temperature)
 
@@ -188,7 +205,8 @@ class LLMAgentConfig:
     def knobs(self, client_temperature: float) -> dict[str, Any]:
         """The variant switches as flat values (result rows, summaries)."""
         return {"variant": self.variant, "action_set": self.action_set, "summary": self.summary,
-                "shuffle": self.shuffle, "temperature": float(self.sampling_temperature(client_temperature))}
+                "shuffle": self.shuffle, "temperature": float(self.sampling_temperature(client_temperature)),
+                "order": self.order, "share_identical": self.share_identical}
 
     def metadata(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -203,6 +221,7 @@ class LLMAgentConfig:
 #: observed data only.
 VARIANTS: dict[str, dict[str, Any]] = {
     "paper": {},
+    "cache-order": {"order": "cache"},
     "shape-changing": {"action_set": "shape-changing"},
     "summary": {"summary": True},
     "shape-changing+summary": {"action_set": "shape-changing", "summary": True},

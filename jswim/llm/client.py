@@ -388,6 +388,7 @@ class LLMClient:
         seed: int | None = None,
         constrain_mode: str | None = None,
         use_cache: bool = True,
+        cache_scope: str | None = None,
     ) -> ChatResult:
         """Send one chat completion and return its result.
 
@@ -401,6 +402,10 @@ class LLMClient:
             Override the settings for this call.
         use_cache : bool
             Allow the disk cache and in-flight sharing (only deterministic requests use them).
+        cache_scope : str, optional
+            Part of the cache key besides the request: a call with a scope is only ever answered
+            by an earlier call with the same scope and request (never shared with other scopes),
+            e.g. ``"<run id>/<step>/<attempt>"`` so a run resumes from its own replies only.
 
         Raises
         ------
@@ -420,7 +425,7 @@ class LLMClient:
         deterministic = use_cache and payload["temperature"] == 0
         if not deterministic:
             return await self._send(payload, mode, t0)
-        key = request_key(payload)
+        key = request_key(payload if cache_scope is None else {**payload, "jswim_cache_scope": cache_scope})
         if self._cache is not None:
             hit = self._cache.get(key)
             if hit is not None:

@@ -15,12 +15,13 @@ from dataclasses import dataclass
 from typing import Callable, Iterable
 
 from jswim.actions import ACTION_SETS, check_action_set
+from jswim.agents.defaults import paper_init
 from jswim.agents.variants import VARIANTS, init_label, run_id, variant_action_set
 from jswim.env import all_inits
 from jswim.errors import ConfigError
 from jswim.gait import PAPER
 from jswim.prompt import SENTENCES
-from jswim.swimmers.models import SWIMMERS
+from jswim.swimmers.models import SWIMMERS, make_model
 
 AGENTS = ("llm", "qlearning", "random")
 DEFAULT_ZETAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
@@ -228,14 +229,30 @@ def short_steps_warning(o: StudyOptions) -> str | None:
     return None
 
 
-def initial(choice: str, k: int) -> tuple[int, ...] | str:
-    """Initial configuration of repeat ``k`` (``cycle`` goes through the four corners)."""
+def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | str:
+    """Initial configuration of repeat ``k`` of ``swimmer`` (default model options).
+
+    ``paper``: the authors' start (:func:`jswim.agents.defaults.paper_init`: Purcell (+, +),
+    NG (10, 6), four-sphere (6, 10, 10), four-link every hinge at +2pi/9); ``cycle`` goes
+    through every corner of the DOF cube; ``random``; or a sign string (``"+-"``), one sign
+    per DOF.
+
+    Raises
+    ------
+    ConfigError
+        A sign string whose length is not the swimmer's number of DOFs.
+    """
+    model = make_model(swimmer)
     if choice == "paper":
-        return (1, 1)
+        return paper_init(model)
     if choice == "cycle":
-        return all_inits(2)[k % 4]
+        corners = all_inits(model.n_dof)
+        return corners[k % len(corners)]
     if choice == "random":
         return "random"
+    if len(choice) != model.n_dof or set(choice) - {"+", "-"}:
+        raise ConfigError(f"--init {choice}: {swimmer} has {model.n_dof} DOFs; give one sign per DOF, "
+                          "or paper, cycle or random")
     return tuple(1 if ch == "+" else 0 for ch in choice)
 
 
@@ -270,7 +287,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     n_ht = cell.n_ht if llm else None
                     drop = cell.drop if llm else frozenset()
                     for k in range(runs[agent]):
-                        init = initial(cell.init or o.init or spec.init, k)
+                        init = initial(cell.init or o.init or spec.init, k, sw)
                         rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tag, repeat=k)
                         plans.append(Plan(rid, agent, sw, d, init, zeta, o.seed * 1_000_003 + len(plans), o.steps,
                                           n_ht, drop, action_set, cell.group, v))
