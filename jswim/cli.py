@@ -80,8 +80,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                    help="noise level zeta: each step's displacement becomes dX(1 + zeta Y), Y~U[-1,1] (default 0; "
                         "the noise study sweeps --zetas instead)")
     g.add_argument("--init", default=None, choices=("paper", "cycle", "random", "++", "+-", "-+", "--"),
-                   help="initial configuration: paper = (+,+), cycle = repeats go through all four, "
-                        "random, or a sign pair (default: paper for swim/curves/history, cycle otherwise)")
+                   help="initial configuration: paper = the authors' start per swimmer (Purcell (pi/3, pi/3), NG "
+                        "(10, 6), four-sphere (6, 10, 10), four-link hinges at +2pi/9), cycle = repeats go through "
+                        "every corner, random, or a sign pair (default: paper for swim/curves/history, cycle otherwise)")
     g.add_argument("--action-set", "--allowed", dest="action_set", default="all", choices=ACTION_SETS,
                    help="actions offered in S5 and by constrained decoding: all (the paper's) or only the "
                         "moves that change the shape (default all; --allowed is the old name)")
