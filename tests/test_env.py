@@ -196,7 +196,7 @@ def test_step_batch_matches_vmapped_advance_and_carries_unit_rotation():
         k = jax.random.PRNGKey(t)
         a = jax.random.randint(jax.random.fold_in(k, 1), (b,), 0, 6)
         states, info = env.step_batch(k, states, a, params)
-        y = env.uniforms(k, (b,), jnp.float64, -1.0, 1.0)  # the draw step_batch documents
+        y = env.noise(k, b).astype(jnp.float64)  # the draw step_batch documents
         singles, _ = jax.vmap(env.advance, in_axes=(0, 0, 0, None))(singles, a, y, params)
     np.testing.assert_allclose(np.asarray(states.x), np.asarray(singles.x), atol=1e-14)
     # The carried rotation is the orientation's (cos, sin): no drift from composing rotations.

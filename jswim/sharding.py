@@ -1,0 +1,139 @@
+"""Spread a swimmer/learner batch axis over every device, and cut it into bounded chunks.
+
+One mesh over ``jax.devices()`` with a single axis, ``"batch"``; a batched array is placed with
+``NamedSharding(mesh, P("batch"))`` (its leading axis split into equal, contiguous blocks, one
+per device) and jitted code follows the data: the per-swimmer computations are independent, so
+XLA partitions them without communication and every device runs the same program on its block.
+The numbers are the same as on one device because nothing in a swimmer's computation depends
+on where it runs (noise is counter-based, see :func:`jswim.env.noise`).
+
+The same code runs on one CPU, on the host devices forced by
+``XLA_FLAGS=--xla_force_host_platform_device_count=N``, on several GPUs, and on several hosts:
+call ``jax.distributed.initialize()`` first (README, "Scaling out") and ``jax.devices()`` lists
+every host's devices; results that come back to Python are gathered with :func:`to_host`.
+
+Memory is bounded by working through the batch in chunks (:func:`chunks`): a chunk is a
+multiple of :func:`granule` so that it splits evenly over the devices and keeps swimmer pairs
+(which share one noise hash) together.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+from typing import Any, Callable, Iterator, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+#: Name of the mesh axis that carries swimmers or learners.
+AXIS = "batch"
+
+
+@functools.lru_cache(maxsize=4)
+def _mesh(devices: tuple[Any, ...]) -> Mesh:
+    return Mesh(np.asarray(devices), (AXIS,))
+
+
+_LIMIT: list[int | None] = [None]
+
+
+def devices() -> list[Any]:
+    """The devices batches are spread over: ``jax.devices()``, or its first ``n`` inside
+    :func:`limit`."""
+    devs = jax.devices()
+    return devs if _LIMIT[0] is None else devs[: _LIMIT[0]]
+
+
+@contextlib.contextmanager
+def limit(n: int | None) -> Iterator[None]:
+    """Spread batches over only the first ``n`` devices inside this block (benchmarks, tests)."""
+    if n is not None and not 1 <= n <= len(jax.devices()):
+        raise ValueError(f"limit must lie in 1..{len(jax.devices())}, got {n}")
+    old, _LIMIT[0] = _LIMIT[0], n
+    try:
+        yield
+    finally:
+        _LIMIT[0] = old
+
+
+def mesh() -> Mesh:
+    """A one-axis mesh over every device of every process (``jax.devices()``)."""
+    return _mesh(tuple(devices()))
+
+
+def device_count() -> int:
+    return len(devices())
+
+
+def granule() -> int:
+    """Batch sizes that are multiples of this split evenly (two swimmers per device at least)."""
+    return 2 * device_count()
+
+
+def batch_sharding() -> NamedSharding:
+    """Leading axis split over the mesh, other axes whole."""
+    return NamedSharding(mesh(), PartitionSpec(AXIS))
+
+
+def replicated() -> NamedSharding:
+    return NamedSharding(mesh(), PartitionSpec())
+
+
+def padded_size(n: int) -> int:
+    """``n`` rounded up to a multiple of :func:`granule`."""
+    g = granule()
+    return -(-n // g) * g
+
+
+def pad(tree: Any, n: int, size: int) -> Any:
+    """Pad every leaf's leading axis from ``n`` to ``size`` by repeating its last entry."""
+    if size == n:
+        return tree
+    return jax.tree_util.tree_map(
+        lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], size - n, axis=0)], axis=0), tree
+    )
+
+
+def shard(tree: Any) -> Any:
+    """Place every leaf with its leading axis split over the mesh (a no-op on one device)."""
+    if device_count() == 1:
+        return tree
+    sh = batch_sharding()
+    return jax.tree_util.tree_map(lambda a: jax.device_put(a, sh), tree)
+
+
+def apply_batched(fn: Callable[..., Any], shared: Sequence[Any], batched: Sequence[Any], n: int) -> Any:
+    """``fn(*shared, *batched)`` with the batch axis (size ``n``) sharded over every device.
+
+    Every array leaf of ``batched`` must have leading axis ``n``; ``shared`` leaves are
+    replicated. On one device this is a plain call. Otherwise the batch is padded to a multiple
+    of :func:`granule`, sharded, and the outputs (leading axis ``n`` again) are cut back.
+    """
+    if device_count() == 1:
+        return fn(*shared, *batched)
+    size = padded_size(n)
+    args = shard(pad(tuple(batched), n, size))
+    out = fn(*shared, *args)
+    if size == n:
+        return out
+    return jax.tree_util.tree_map(lambda a: a[:n], out)
+
+
+def chunks(n: int, chunk: int) -> Iterator[tuple[int, int]]:
+    """``(start, stop)`` ranges covering ``0 .. n``; every start is a multiple of the chunk,
+    which is rounded up to a multiple of :func:`granule`."""
+    size = max(granule(), -(-max(1, chunk) // granule()) * granule())
+    for start in range(0, n, size):
+        yield start, min(n, start + size)
+
+
+def to_host(tree: Any) -> Any:
+    """Fetch arrays as NumPy, gathering the other processes' blocks in a multi-host run."""
+    if jax.process_count() > 1:
+        from jax.experimental import multihost_utils
+
+        return multihost_utils.process_allgather(tree, tiled=True)
+    return jax.tree_util.tree_map(np.asarray, jax.device_get(tree))
