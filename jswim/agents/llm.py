@@ -170,10 +170,13 @@ class _Group:
     def step(self, actions: np.ndarray) -> dict[str, np.ndarray]:
         self.states, info, dofs = _advance(self.step_keys, self.states, jnp.asarray(actions, jnp.int32), self.params)
         out = jax.device_get(
-            {"x": info.x, "y": self.states.y, "orientation": self.states.theta, "progress": info.progress,
-             "stuck": info.stuck, "moved": info.moved, "dofs": dofs}
+            {"x": info.x, "x_lo": self.states.x_lo, "y": self.states.y, "orientation": self.states.theta,
+             "progress": info.progress, "stuck": info.stuck, "moved": info.moved, "dofs": dofs}
         )
-        return {k: np.asarray(v) for k, v in out.items()}
+        out = {k: np.asarray(v) for k, v in out.items()}
+        # The full position (hi + lo): the prompt encodes X to 1e-3 a after any number of steps.
+        out["x"] = out["x"].astype(np.float64) + out.pop("x_lo").astype(np.float64)
+        return out
 
 
 class LLMDriver:

@@ -1,19 +1,22 @@
 """The Q-learning baseline's steps-to-learn distributions over many seeds (``jswim qlearn``).
 
-Many independent learners per (swimmer, direction, zeta) are trained in one vectorised call
-(:func:`jswim.agents.qlearning.train_batch`) and judged by the shared criterion; steps to learn
+Many independent learners per (swimmer, direction, zeta) are trained in vectorised calls
+(:func:`jswim.agents.qlearning.train_batch`, sharded over every device) and judged by the shared
+criterion, ``chunk`` learners at a time so that 10^6 seeds fit in bounded memory; steps to learn
 are summarised by :func:`jswim.stats.learn_stats`, the same statistic as the study tables.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence
+from typing import Callable, NamedTuple, Sequence
 
 import jax
 import numpy as np
 
+from jswim import sharding
 from jswim.agents.qlearning import QConfig, QRun, batch_params, evaluate, train_batch
 from jswim.env import EnvParams, make_params
+from jswim.errors import ConfigError
 from jswim.gait import PAPER, Criterion, GaitReport
 from jswim.stats import learn_stats
 
@@ -36,6 +39,33 @@ class Summary(NamedTuple):
     mean_x_end: float  # ... and at the end of the run
 
 
+class Outcomes(NamedTuple):
+    """Per-learner verdicts: all a study keeps of a trained learner (arrays over learners)."""
+
+    direction: np.ndarray  # float (B,)
+    zeta: np.ndarray  # float (B,)
+    learned: np.ndarray  # bool (B,)
+    success: np.ndarray  # bool (B,)
+    steps_to_learn: np.ndarray  # int (B,), -1 when never learned
+    x_horizon: np.ndarray  # X after `horizon` steps
+    x_end: np.ndarray  # X after the last step
+
+    @staticmethod
+    def of(run: QRun, params: EnvParams, report: GaitReport, horizon: int = PAPER.horizon) -> "Outcomes":
+        x = np.asarray(run.x)
+        h = min(horizon, x.shape[1]) - 1
+        shape = report.learned.shape
+        return Outcomes(
+            np.broadcast_to(np.asarray(params.direction), shape), np.broadcast_to(np.asarray(params.zeta), shape),
+            np.asarray(report.learned), np.asarray(report.success), np.asarray(report.steps_to_learn),
+            x[:, h], x[:, -1],
+        )
+
+    @staticmethod
+    def concat(parts: Sequence["Outcomes"]) -> "Outcomes":
+        return Outcomes(*(np.concatenate(cols) for cols in zip(*parts)))
+
+
 def summarize(
     run: QRun, params: EnvParams, report: GaitReport, *, swimmer: str, action_set: str,
     horizon: int = PAPER.horizon,
@@ -46,23 +76,30 @@ def summarize(
     over the learners that learned, and the count of those that did (never-learned learners are
     counted, not turned into numbers). ``horizon`` is where ``mean_x_horizon`` is read.
     """
-    direction = np.broadcast_to(np.asarray(params.direction), report.learned.shape)
-    zeta = np.broadcast_to(np.asarray(params.zeta), report.learned.shape)
-    x = np.asarray(run.x)
-    h = min(horizon, x.shape[1]) - 1
+    return summarize_outcomes(Outcomes.of(run, params, report, horizon), swimmer=swimmer, action_set=action_set)
+
+
+def summarize_outcomes(out: Outcomes, *, swimmer: str, action_set: str) -> list[Summary]:
+    """:func:`summarize` from per-learner verdicts (e.g. gathered chunk by chunk)."""
     rows = []
-    for d, z in sorted(set(zip(direction.tolist(), zeta.tolist())), key=lambda g: (-g[0], g[1])):
-        sel = (direction == d) & (zeta == z)
-        ls = learn_stats(report.steps_to_learn[sel].tolist())  # -1 marks never learned
+    for d, z in sorted(set(zip(out.direction.tolist(), out.zeta.tolist())), key=lambda g: (-g[0], g[1])):
+        sel = (out.direction == d) & (out.zeta == z)
+        ls = learn_stats(out.steps_to_learn[sel].tolist())  # -1 marks never learned
         rows.append(
             Summary(
                 swimmer, int(d), float(z), action_set, int(sel.sum()),
-                float(report.learned[sel].mean()), float(report.success[sel].mean()),
+                float(out.learned[sel].mean()), float(out.success[sel].mean()),
                 ls.learned, ls.q25, ls.median, ls.q75,
-                float(np.mean(d * x[sel, h])), float(np.mean(d * x[sel, -1])),
+                float(np.mean(d * out.x_horizon[sel], dtype=np.float64)),
+                float(np.mean(d * out.x_end[sel], dtype=np.float64)),
             )
         )
     return rows
+
+
+#: Learners trained and judged at once by :func:`study`: bounds its memory (~10 kB per learner
+#: at 200 steps, most of it the judge's replay) whatever ``n_seeds`` is.
+STUDY_CHUNK = 65_536
 
 
 def study(
@@ -75,6 +112,8 @@ def study(
     init: Sequence[int] | str | None = None,
     seed: int = 0,
     criterion: Criterion = PAPER,
+    chunk: int = STUDY_CHUNK,
+    progress: Callable[[int, int], None] | None = None,
 ) -> list[Summary]:
     """Train ``n_seeds`` learners per (swimmer, direction, zeta) and summarise each group.
 
@@ -83,34 +122,55 @@ def study(
     config : QConfig
         Hyperparameters shared by every learner.
     swimmers, directions, zetas : sequences
-        The grid; one batched call per swimmer covers all its directions and noise levels.
+        The grid; one batched call per swimmer and chunk covers all its directions and noise
+        levels.
     n_seeds : int
-        Learners per group.
+        Learners per group (10^6 and more: learners are trained and judged ``chunk`` at a time,
+        each chunk sharded over every device, and only their verdicts are kept).
     init : sequence of int or str, optional
         Initial configuration (default (+, +)); ``"random"`` draws one per learner.
     seed : int
-        Seed of the whole study.
+        Seed of the whole study. Learner ``i`` of a swimmer gets key ``i`` of one split, so the
+        results depend neither on ``chunk`` nor on the device count.
     criterion : Criterion
         The success criterion (default: the paper's).
+    chunk : int
+        Learners per chunk (default :data:`STUDY_CHUNK`).
+    progress : callable, optional
+        ``progress(done, total)`` after every chunk, in learners over the whole study.
 
     Returns
     -------
     list of Summary
         One row per (swimmer, direction, zeta).
+
+    Raises
+    ------
+    ConfigError
+        ``n_seeds`` or ``chunk`` below 1.
     """
+    if n_seeds < 1 or chunk < 1:
+        raise ConfigError(f"n_seeds and chunk must be >= 1, got {n_seeds} and {chunk}")
     rows: list[Summary] = []
     key = jax.random.PRNGKey(seed)
+    grid = [(d, z) for d in directions for z in zetas]
+    total, done = len(swimmers) * len(grid) * n_seeds, 0
     for swimmer in swimmers:
         base = make_params(swimmer, init=init)
-        grid = [(d, z) for d in directions for z in zetas]
         d_arr = np.repeat([g[0] for g in grid], n_seeds).astype(float)
         z_arr = np.repeat([g[1] for g in grid], n_seeds).astype(float)
-        params = batch_params(base, d_arr.size, direction=d_arr, zeta=z_arr)
         key, sub = jax.random.split(key)
-        run = train_batch(jax.random.split(sub, d_arr.size), params, config)
-        report = evaluate(run, params, criterion=criterion)
-        rows += summarize(run, params, report, swimmer=swimmer, action_set=config.action_set,
-                          horizon=criterion.horizon)
+        keys = jax.random.split(sub, d_arr.size)
+        parts = []
+        for start, stop in sharding.chunks(d_arr.size, chunk):
+            params = batch_params(base, stop - start, direction=d_arr[start:stop], zeta=z_arr[start:stop])
+            run = train_batch(keys[start:stop], params, config)
+            report = evaluate(run, params, criterion=criterion)
+            parts.append(Outcomes.of(run, params, report, criterion.horizon))
+            done += stop - start
+            if progress is not None:
+                progress(done, total)
+        rows += summarize_outcomes(Outcomes.concat(parts), swimmer=swimmer, action_set=config.action_set)
     return rows
 
 
