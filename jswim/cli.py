@@ -3,6 +3,7 @@
 ``jswim swim``           the main job: LLM-driven swimmers next to Q-learning and random learners
 ``jswim study NAME``     one of the paper's studies (curves, history, noise, ablation, inits)
 ``jswim qlearn``         the Q-learning baseline's steps-to-learn distributions
+``jswim ensemble``       a stroke or policy over many noisy swimmers: X/a statistics per step
 ``jswim gaits SWIMMER``  closed stroke cycles ranked by displacement per step
 ``jswim plot FOLDER``    redraw a study folder's figures
 ``jswim show FOLDER``    a study folder's status, settings, cost, summary table and figures (read-only)
@@ -163,6 +164,33 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--lr-min", type=float, default=0.0, metavar="ALPHA_MIN",
                    help="floor of the decaying learning rate (default 0)")
     p.add_argument("--seed", type=int, default=0, help="seed of the learners (default 0)")
+    p.add_argument("--chunk", type=int, default=None, metavar="N",
+                   help="learners trained and judged at once (default 65536); bounds memory for --seeds 1000000")
+    p = sub.add_parser("ensemble", help="a stroke or policy over many noisy swimmers: X/a statistics per step",
+                       description="Run one stroke (default: the signature gait) or the greedy policy of a "
+                                   "trained Q-learner over N noisy swimmers per noise level zeta, on every "
+                                   "device, in bounded chunks; print mean, spread, quantiles of X/a per step "
+                                   "and the fraction of swimmers still moving forward.")
+    p.add_argument("--swimmer", default="purcell", choices=("purcell", "ng", "nlink", "nsphere"))
+    p.add_argument("--direction", type=_direction, default=(1,), metavar="DIR", help="+x or -x (default +x)")
+    p.add_argument("--policy", default="signature", metavar="POLICY",
+                   help="signature (the best closed cycle), qlearn (greedy policy of one trained Q-learner), "
+                        "or moves such as '2,-1 1,-1 2,1 1,1' (DOF,ROC pairs repeated)")
+    p.add_argument("--init", default=None, metavar="LEVELS",
+                   help="start configuration as signs, e.g. ++, or random (default: the stroke's start; ++ "
+                        "for qlearn and given moves)")
+    p.add_argument("--n", type=int, default=100_000, help="swimmers per noise level (default 100000)")
+    p.add_argument("--zetas", type=_floats, default=(0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0), metavar="Z1,Z2,...",
+                   help="noise levels (default the paper's 0,0.5,...,3)")
+    p.add_argument("--steps", type=int, default=50, help="steps per swimmer (default 50)")
+    p.add_argument("--every", type=int, default=1, metavar="K", help="report every K-th step (default 1)")
+    p.add_argument("--window", type=int, default=None, metavar="W",
+                   help="'moving forward' means X/a grew over the last W steps (default: the stroke's period)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--chunk", type=int, default=1 << 20, metavar="N",
+                   help="swimmers simulated at once (default 1048576); bounds memory")
+    p.add_argument("--rows", type=int, default=12, metavar="R", help="reported steps printed per noise level")
+    p.add_argument("--out", default=None, metavar="FILE.csv", help="also write every reported step to this CSV")
     p = sub.add_parser("gaits", help="closed stroke cycles ranked by displacement per step",
                        description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
                                    "each exactly and rank them by displacement per step.")
@@ -292,10 +320,13 @@ def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, A
 
 def _qlearn(args: argparse.Namespace) -> int:
     from jswim.agents.qlearning import QConfig  # lazy: JAX loads only for commands that run
+    from jswim.console import Progress
     from jswim.studies import qlearn
 
     if args.seeds < 1 or args.steps < 1:
         raise ConfigError("--seeds and --steps must be >= 1")
+    if args.chunk is not None and args.chunk < 1:
+        raise ConfigError(f"--chunk must be >= 1, got {args.chunk}")
     if not (math.isfinite(args.noise) and args.noise >= 0):
         raise ConfigError(f"--noise (zeta) must be >= 0, got {args.noise}")
     rate = _learning_rate(args)
@@ -303,8 +334,12 @@ def _qlearn(args: argparse.Namespace) -> int:
     for action_set in sets:
         t0 = time.perf_counter()
         cfg = QConfig(steps=args.steps, action_set=action_set, **({"learning_rate": rate} if rate is not None else {}))
-        rows = qlearn.study(cfg, swimmers=args.swimmer, directions=args.direction, zetas=(args.noise,),
-                            n_seeds=args.seeds, seed=args.seed)
+        with Progress() as bar:
+            rows = qlearn.study(cfg, swimmers=args.swimmer, directions=args.direction, zetas=(args.noise,),
+                                n_seeds=args.seeds, seed=args.seed, chunk=args.chunk or qlearn.STUDY_CHUNK,
+                                progress=lambda done, total: bar.update(
+                                    f"Q-learners ({action_set})", done, total, _eta(t0, done, total),
+                                    final=done == total, unit="learners"))
         print(qlearn.format_table(rows))
         print(f"({action_set}: {time.perf_counter() - t0:.1f} s including compilation)\n")
     return 0
@@ -329,6 +364,88 @@ def _learning_rate(args: argparse.Namespace) -> Any:
         raise ConfigError(f"--lr-min must lie in [0, {start:g}] (the start rate), got {args.lr_min}")
     return optax.exponential_decay(start, transition_steps=1, decay_rate=args.lr_decay,
                                    end_value=args.lr_min or None)
+
+
+def _eta(t0: float, done: int, total: int) -> str:
+    from jswim.console import eta
+
+    left = eta(time.perf_counter() - t0, done / total) if total else None
+    return f"ETA {left}" if left and done < total else ""
+
+
+def _moves(text: str, n_dof: int) -> list[int]:
+    """'2,-1 1,-1 2,1 1,1' -> action indices (validated)."""
+    from jswim.env import validate_actions
+
+    try:
+        pairs = [tuple(int(v) for v in item.split(",")) for item in text.replace(";", " ").split()]
+    except ValueError:
+        raise ConfigError(f"--policy: expected signature, qlearn or DOF,ROC pairs like '2,-1 1,-1', got {text!r}") from None
+    if not pairs or any(len(p) != 2 for p in pairs):
+        raise ConfigError(f"--policy: expected DOF,ROC pairs like '2,-1 1,-1 2,1 1,1', got {text!r}")
+    return [int(a) for a in validate_actions(pairs, n_dof)]
+
+
+def _ensemble(args: argparse.Namespace) -> int:
+    import csv
+
+    import numpy as np
+
+    from jswim.console import Progress
+    from jswim.env import make_params
+    from jswim.studies import ensemble
+
+    for name in ("n", "steps", "every", "chunk", "rows"):
+        if getattr(args, name) < 1:
+            raise ConfigError(f"--{name} must be >= 1, got {getattr(args, name)}")
+    if args.every > args.steps:
+        raise ConfigError(f"--every ({args.every}) must not exceed --steps ({args.steps})")
+    if len(args.direction) != 1:
+        raise ConfigError("--direction takes +x or -x here")
+    if any(not (math.isfinite(z) and z >= 0) for z in args.zetas) or not args.zetas:
+        raise ConfigError(f"--zetas must be noise levels >= 0, got {','.join(map(str, args.zetas))}")
+    if args.out and not Path(args.out).resolve().parent.is_dir():
+        raise ConfigError(f"--out {args.out}: no such folder {str(Path(args.out).parent)!r}")
+    params = make_params(args.swimmer, direction=args.direction[0])
+    start = None
+    if args.policy == "signature":
+        policy, start = ensemble.signature_policy(params)
+    elif args.policy == "qlearn":
+        policy = None
+    else:
+        policy = ensemble.stroke_policy(_moves(args.policy, params.n_dof), label=args.policy)
+    init = args.init if args.init is not None else (start if start is not None else None)
+    params = make_params(args.swimmer, direction=args.direction[0], init=init)
+    if policy is None:
+        policy = ensemble.learned_policy(params, seed=args.seed)
+    t0 = time.perf_counter()
+    with Progress() as bar:
+        stats = ensemble.run(policy, params, n=args.n, zetas=args.zetas, steps=args.steps, every=args.every,
+                             window=args.window, seed=args.seed, chunk=args.chunk,
+                             progress=lambda done, total: bar.update("ensemble", done, total, _eta(t0, done, total),
+                                                                     final=done == total, unit="swimmer-steps"))
+    wall = time.perf_counter() - t0
+    start_txt = "".join("+" if v else "-" for v in np.asarray(params.init)) if np.all(np.asarray(params.init) >= 0) \
+        else "random"
+    moves = " ".join(f"[{a // 3 + 1}, {a % 3 - 1}]" for a in policy.actions) if policy.kind == "stroke" else ""
+    print(f"{params.model.label} swimmer, {policy.label}{' ' + moves if moves else ''}, start {start_txt}, target "
+          f"{'+x' if args.direction[0] > 0 else '-x'}: {args.n:,} swimmers per noise level, {args.steps} steps")
+    print(ensemble.format_table(stats, args.rows))
+    total = args.n * len(args.zetas) * (args.steps // args.every * args.every)
+    print(f"{total:,} swimmer-steps in {wall:.1f} s ({total / wall:,.0f}/s, compilation included); "
+          f"quantiles to within the histogram bin ({max(float(s.resolution.max()) for s in stats):.2g} a at most); "
+          f"forward: X/a grew over the last {args.window or policy.period} steps")
+    if args.out:
+        rows = ensemble.to_rows(stats)
+        try:
+            with open(args.out, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=list(rows[0]))
+                w.writeheader()
+                w.writerows(rows)
+        except OSError as exc:
+            raise ConfigError(f"--out {args.out}: {exc.strerror or exc}") from None
+        print(f"table: {args.out}")
+    return 0
 
 
 def _gaits(args: argparse.Namespace) -> int:
@@ -411,6 +528,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _run(args.name, args)
         if args.command == "qlearn":
             return _qlearn(args)
+        if args.command == "ensemble":
+            return _ensemble(args)
         if args.command == "gaits":
             return _gaits(args)
         if args.command == "show":

@@ -152,8 +152,9 @@ class Progress:
         """End the bar early (before printing an interruption message)."""
         self.__exit__(None, None, None)
 
-    def update(self, label: str, done: int, total: int, info: str = "", final: bool = False) -> None:
-        """Show ``label`` with ``done`` of ``total`` and ``info``."""
+    def update(self, label: str, done: int, total: int, info: str = "", final: bool = False,
+               unit: str = "runs") -> None:
+        """Show ``label`` with ``done`` of ``total`` (counted in ``unit`` in a log) and ``info``."""
         if self._bar is not None:
             self._bar.update(self._task, completed=done, total=total, description=label, info=info)
             return
@@ -162,5 +163,5 @@ class Progress:
             return
         self._last = (label, now)
         pct = f" ({100 * done / total:.0f}%)" if total else ""
-        text = f"[{format_duration(now - self._t0):>6}] {label}: {done}/{total} runs{pct}"
+        text = f"[{format_duration(now - self._t0):>6}] {label}: {done}/{total} {unit}{pct}"
         print(text + (f" · {info}" if info else ""), file=self.file, flush=True)

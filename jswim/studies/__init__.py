@@ -4,7 +4,9 @@
   :class:`StudyOptions` and :func:`build` (study -> list of :class:`Plan`);
 - :mod:`jswim.studies.run`: :func:`run_study` (runs what a study folder lacks, stores, summarises);
 - :mod:`jswim.studies.report`: :func:`summarize` (the table) and :func:`draw_figures`;
-- :mod:`jswim.studies.qlearn`: the Q-learning steps-to-learn distributions (``jswim qlearn``).
+- :mod:`jswim.studies.qlearn`: the Q-learning steps-to-learn distributions (``jswim qlearn``);
+- :mod:`jswim.studies.ensemble`: one stroke or policy over many noisy swimmers, X/a statistics
+  per step (``jswim ensemble``).
 
 Studies (``jswim study NAME``):
 
