@@ -171,7 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
                                    "trained Q-learner over N noisy swimmers per noise level zeta, on every "
                                    "device, in bounded chunks; print mean, spread, quantiles of X/a per step "
                                    "and the fraction of swimmers still moving forward.")
-    p.add_argument("--swimmer", default="purcell", choices=("purcell", "ng", "nlink", "nsphere"))
+    p.add_argument("--swimmer", default="purcell", choices=("purcell", "ng", "nlink", "nsphere"),
+                   help="purcell, ng, nlink or nsphere (default purcell)")
     p.add_argument("--direction", type=_direction, default=(1,), metavar="DIR", help="+x or -x (default +x)")
     p.add_argument("--policy", default="signature", metavar="POLICY",
                    help="signature (the best closed cycle), qlearn (greedy policy of one trained Q-learner), "
@@ -186,7 +187,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--every", type=int, default=1, metavar="K", help="report every K-th step (default 1)")
     p.add_argument("--window", type=int, default=None, metavar="W",
                    help="'moving forward' means X/a grew over the last W steps (default: the stroke's period)")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0,
+                   help="seed (default 0); each noise level's noise comes from (seed, zeta), and --policy qlearn "
+                        "trains its learner with it")
     p.add_argument("--chunk", type=int, default=1 << 20, metavar="N",
                    help="swimmers simulated at once (default 1048576); bounds memory")
     p.add_argument("--rows", type=int, default=12, metavar="R", help="reported steps printed per noise level")
