@@ -62,9 +62,7 @@ def best_time(fn, repeat: int) -> float:
 def step_batch_runner(batch: int, steps: int):
     params = env.make_params("purcell", zeta=1.0)
     size = sharding.padded_size(batch)
-    zero = jnp.zeros((size,), jnp.result_type(float))
-    states = env.EnvState(jnp.ones((size, 2), jnp.int32), zero, zero, zero, zero + 1, zero,
-                          jnp.zeros((size,), jnp.int32), zero, zero, zero, zero, zero)
+    states = jax.vmap(lambda lv: env.start_state(params.model, lv))(jnp.ones((size, 2), jnp.int32))
     states = sharding.shard(states)
 
     @jax.jit

@@ -39,7 +39,7 @@ import numpy as np
 from jax import Array
 
 from jswim import sharding
-from jswim.env import EnvParams, EnvState, advance, make_params, noise
+from jswim.env import EnvParams, EnvState, advance, make_params, noise, start_state
 from jswim.errors import ConfigError
 
 #: Swimmers per statistics block: partial sums are formed per block on the device and combined
@@ -155,8 +155,7 @@ def _run_chunk(
                        for k in range(init.shape[0])], axis=1).astype(jnp.int32)
     levels = jnp.where(init[None, :] < 0, coins, init[None, :])
     zero = jnp.zeros((size,), dtype)
-    state = EnvState(levels, zero, zero, zero, zero + 1.0, zero, jnp.zeros((size,), jnp.int32),
-                     zero, zero, zero, zero, zero)
+    state = jax.vmap(lambda lv: start_state(params.model, lv, dtype))(levels)
     ring = jnp.zeros((window, size), dtype)
     k_policy = jax.random.fold_in(key, 1)
     g = size // BLOCK
