@@ -78,10 +78,15 @@ def step_batch_runner(batch: int, steps: int):
     return lambda: run(states, key), size * steps
 
 
+#: Swimmers per ensemble chunk (``--gpu`` raises it: a GPU wants more work per kernel launch).
+CHUNK = [1 << 20]
+
+
 def ensemble_runner(batch: int, steps: int):
     params = env.make_params("purcell", init=(0, 0))
     policy = ensemble.stroke_policy([5, 2, 3, 0])
-    return (lambda: ensemble.run(policy, params, n=batch, zetas=(1.0,), steps=steps)[0].mean), batch * steps
+    run = lambda: ensemble.run(policy, params, n=batch, zetas=(1.0,), steps=steps, chunk=CHUNK[0])[0].mean  # noqa: E731
+    return run, batch * steps
 
 
 def qlearning_runner(batch: int, steps: int):
@@ -116,6 +121,7 @@ def main() -> None:
     args = ap.parse_args()
 
     if args.gpu:
+        CHUNK[0] = 1 << 23
         sizes = {"step_batch": [1_000_000, 10_000_000, 30_000_000], "ensemble": [10_000_000, 30_000_000],
                  "qlearning": [100_000, 1_000_000]}
     elif args.quick:
@@ -145,7 +151,7 @@ def main() -> None:
               "devices": len(jax.devices()), "cpu_count": os.cpu_count(), "rows": rows}
     if args.memory:
         n, steps = args.memory, 10
-        chunk = 1 << 20
+        chunk = CHUNK[0]
         t0 = time.perf_counter()
         ensemble.run(ensemble.stroke_policy([5, 2, 3, 0]), env.make_params("purcell", init=(0, 0)), n=n,
                      zetas=(1.0,), steps=steps, chunk=chunk)
