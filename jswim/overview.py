@@ -151,13 +151,14 @@ class StudyFolder:
         return sorted(fig_dir.glob("*.png")) + sorted(fig_dir.glob("*.pdf")) if fig_dir.is_dir() else []
 
 
-def _settings_text(options: Mapping[str, Any]) -> str:
+def _settings_text(options: Mapping[str, Any], skip: Sequence[str] = ()) -> str:
+    """The options of a study's identity worth reading, without those the study has no use for."""
     keep = ("swimmers", "directions", "runs", "q_runs", "steps", "n_ht", "zeta", "zetas", "n_hts", "init", "action_set",
             "variant", "variants", "seed")
     parts = []
     for k in keep:
         v = options.get(k)
-        if v is None:
+        if v is None or k in skip:
             continue
         if isinstance(v, list):
             v = ",".join(_fmt(x, "g") if isinstance(x, float) else str(x) for x in v)
@@ -173,7 +174,10 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     lines = [f"study {s.study} in {s.folder}: {s.status_text()}", f"model: {s.model_text()}"]
     opts = (s.meta.get("identity") or {}).get("options") or {}
     if opts:
-        lines.append(f"settings: {_settings_text(opts)}")
+        from jswim.studies.grids import SPECS  # lazy, as in StudyFolder: the grids load JAX
+
+        spec = SPECS.get(s.study)
+        lines.append(f"settings: {_settings_text(opts, spec.ignores if spec else ())}")
     lines.append(f"runs: {len(s.rows)} (" + ", ".join(f"{a} {n}" for a, n in sorted(agents.items())) + ")")
     if agents.get("llm"):
         lines.append(f"LLM usage: {u['calls']:,} calls, {u['prompt_tokens']:,} prompt + {u['completion_tokens']:,} "
