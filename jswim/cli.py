@@ -93,6 +93,15 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     g.add_argument("--seed", type=int, default=0, help="seed of the study (noise, random starts, learners)")
     g.add_argument("--prompt-file", default=None, metavar="FILE",
                    help="replace the prompt template with this file (see jswim.prompt for placeholders)")
+    g.add_argument("--share-identical", action="store_true",
+                   help="send identical temperature-0 requests of different runs once and share the reply (cheaper; "
+                        "the runs are then copies of one run, not the paper's independent repeats)")
+    g.add_argument("--x-min", type=float, default=-2.5, metavar="X",
+                   help="X_min of the position encoding (X - X_min) * 1000 (default -2.5, the paper's; a position "
+                        "below it is sent as a negative number and the run goes on)")
+    g.add_argument("--max-tokens", type=int, default=None, metavar="N",
+                   help="reply length limit (default per swimmer: 10 two DOFs, 20 four-DOF, as the authors' code; "
+                        "raised where a constrained format needs more)")
     if study:
         g.add_argument("--zetas", type=_floats, default=None, metavar="Z1,Z2,...",
                        help="noise grid of the noise study (default 0,0.5,1,1.5,2,2.5,3)")
@@ -105,7 +114,8 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--api-key-env", default="OPENAI_API_KEY", metavar="VAR",
                    help="environment variable that holds the API key (default OPENAI_API_KEY; never stored)")
     b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "none"),
-                   help="constrained decoding (auto: grammar for the embedded/llama.cpp server)")
+                   help="constrained decoding (auto: grammar for the embedded/llama.cpp server, none elsewhere "
+                        "and in the ablation study; the paper uses none)")
     b.add_argument("--temperature", type=float, default=0.0, help="sampling temperature (paper: 0)")
     b.add_argument("--parallel", type=int, default=4, help="decoding slots of the embedded server (default 4)")
     b.add_argument("--threads", type=int, default=None, metavar="N",
@@ -245,6 +255,7 @@ def _options(args: argparse.Namespace, study: str):
         swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,
         n_ht=args.n_ht, zeta=0.0 if args.noise is None else args.noise, init=args.init, seed=args.seed,
         action_set=args.action_set, prompt_file=args.prompt_file, chunk=args.chunk,
+        share_identical=args.share_identical, x_min=args.x_min, max_tokens=args.max_tokens,
     )
     if getattr(args, "zetas", None):
         kw["zetas"] = args.zetas
@@ -319,6 +330,14 @@ def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, A
     cols, cells = summary_table(order_summary(summary, rows))
     print_table(cols, cells, title)
     print(SUMMARY_NOTE)
+    from jswim.agents.fidelity import describe_constraint
+
+    llm = [r for r in rows if r.get("agent") == "llm"]
+    if line := describe_constraint(r.get("constraint") for r in llm):
+        print(line)
+    if any(r.get("share_identical") for r in llm):
+        print("LLM runs: --share-identical: identical requests of different runs were sent once, so runs from one "
+              "start are copies of one run, not independent repeats")
 
 
 def _qlearn(args: argparse.Namespace) -> int:

@@ -18,9 +18,11 @@ without subsequent failures") is then ``success``: the segment starts early enou
 cycles are complete by step ``horizon`` (50), and lasts to the end of the run. These numbers
 have one owner, :class:`Criterion`.
 
-``steps_to_learn`` is the number of steps before that final stroke starts: the start of the
-longest trailing segment that repeats with the cycle's period, moved past the last step that did
-not change the shape. Where several periods qualify, the earliest start wins (then the shorter
+``steps_to_learn`` counts as the paper does, from 1: the step at which that final stroke starts
+(a learner that plays the stroke from its first action learned in 1 step; ``stroke_start`` is the
+same point as a 0-based index, the number of steps before the stroke). The stroke is the longest
+trailing segment that repeats with the cycle's period, moved past the last step that did not
+change the shape. Where several periods qualify, the earliest start wins (then the shorter
 period). Cycles are considered up to ``max_period = 2**n_dof`` steps, the longest cycle that
 visits each corner of the DOF cube once (see :func:`default_max_period`).
 
@@ -157,8 +159,8 @@ class GaitReport(NamedTuple):
     learned : bool (B,)
         The run ends in at least ``n_cycles`` repetitions of a qualifying cycle.
     steps_to_learn : int (B,)
-        Steps before that final stroke starts (its first step is step ``steps_to_learn + 1``,
-        1-based), or -1 when not learned.
+        The step, counted from 1 as in the paper, at which that final stroke starts (1: from the
+        first action), or -1 when not learned.
     success : bool (B,)
         ``learned`` and the first ``n_cycles`` cycles are complete by step ``horizon``.
     period : int (B,)
@@ -170,6 +172,8 @@ class GaitReport(NamedTuple):
         when not learned).
     fraction : float (B,)
         ``per_step`` over the best cycle's displacement per step.
+    stroke_start : int (B,)
+        0-based index of the stroke's first action (``steps_to_learn - 1``), or -1.
     """
 
     learned: np.ndarray
@@ -179,6 +183,7 @@ class GaitReport(NamedTuple):
     cycle: np.ndarray
     per_step: np.ndarray
     fraction: np.ndarray
+    stroke_start: np.ndarray
 
 
 def default_max_period(n_dof: int) -> int:
@@ -439,7 +444,7 @@ def judge(
         out_disp = np.where(better, first, out_disp)
 
     learned = out_p > 0
-    steps_to_learn = np.where(learned, out_s, -1)
+    steps_to_learn = np.where(learned, out_s + 1, -1)  # 1-based, the paper's count
     success = learned & (out_s + n_cycles * out_p <= horizon)
     cycle = np.full((b, max_period), -1, np.int64)
     for p in np.unique(out_p[learned]):
@@ -447,4 +452,5 @@ def judge(
         idx = out_s[sel, None] + np.arange(p)[None]
         cycle[sel, :p] = a[sel[:, None], idx]
     per_step = np.where(learned, out_disp, np.nan)
-    return GaitReport(learned, steps_to_learn, success, out_p, cycle, per_step, per_step / best)
+    return GaitReport(learned, steps_to_learn, success, out_p, cycle, per_step, per_step / best,
+                      np.where(learned, out_s, -1))

@@ -18,9 +18,10 @@ from jswim.results import read_metadata, read_runs
 
 SETTING = ("agent", "swimmer", "direction", "group")
 
-SUMMARY_NOTE = ("X/a end: mean displacement in the target direction after the last step; learn: steps before the "
-                "final qualifying stroke, quartiles over the runs that learned (learned: how many did); fail: LLM "
-                "steps without a valid action.")
+SUMMARY_NOTE = ("X/a end: mean displacement in the target direction after the last step; learn: the step at which "
+                "the final qualifying stroke starts, counted from 1 as in the paper (1 = the stroke from the first "
+                "action), quartiles over the runs that learned (learned: how many did); fail: LLM steps without a "
+                "valid action.")
 
 
 def _fmt(v: Any, spec: str = ".3f") -> str:

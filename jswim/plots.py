@@ -317,7 +317,7 @@ def learned_cycles(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, int], t
         if not ok:
             continue
         r = min(ok, key=lambda r: ({"llm": 0, "qlearning": 1}.get(r["agent"], 2), r["steps_to_learn"]))
-        s, acts = r["steps_to_learn"], [tuple(a) for a in r["actions"]]
+        s, acts = r["steps_to_learn"] - 1, [tuple(a) for a in r["actions"]]  # 1-based count -> index
         levels = [1 if ch == "+" else 0 for ch in r["init"]]
         for dof, roc in acts[:s]:
             if roc:

@@ -4,6 +4,7 @@ paper, never from jswim's own output): starts, and the end-to-end request log of
 from __future__ import annotations
 
 import math
+import re
 
 import jax
 import numpy as np
@@ -50,3 +51,88 @@ def test_cycle_and_sign_starts_follow_the_swimmer_s_dofs():
 
     with pytest.raises(ConfigError, match="3 DOFs"):
         initial("++", 0, "nsphere")
+
+
+# -- end to end: what a server receives from `jswim swim` ---------------------------------------
+
+S_MARKERS = ("rates of change (ROC)", "Only one DOF changes at a time", "Latest records",
+             "long-term consequences", "Reply with the next action")
+
+
+def test_swim_sends_the_paper_s_prompt_independent_runs_from_the_paper_start(tmp_path):
+    from jswim import cli
+    from jswim.results import read_runs
+    from tests.fakeserver import FakeServer, hash_reply
+
+    with FakeServer(reply=hash_reply) as srv:
+        rc = cli.main(["swim", "--swimmer", "ng", "--runs", "2", "--steps", "12", "--temperature", "0",
+                       "--noise", "0", "--q-runs", "4", "--no-figures", "--out", str(tmp_path / "swim"),
+                       "--base-url", srv.url, "--model", "fake", "--api-key-env", "JSWIM_TEST_NO_KEY"])
+        bodies = list(srv.requests)
+    assert rc == 0
+    # Independent runs: 2 runs x 12 steps, every one its own call (no sharing, no cache).
+    assert len(bodies) == 24
+    for body in bodies:
+        # The authors' code: a system message holding a single space, then one user message.
+        assert [m["role"] for m in body["messages"]] == ["system", "user"]
+        assert body["messages"][0]["content"] == " "
+        assert body["temperature"] == 0 and body["max_tokens"] == 10  # fidelity.md: 10 for three-DOF
+        assert "grammar" not in body and "response_format" not in body  # no constrained decoding
+        text = body["messages"][1]["content"]
+        at = [text.index(m) for m in S_MARKERS]
+        assert at == sorted(at), text  # S1 S2 S3 S4 S5
+        history = text[at[2]:at[3]]  # the history sits third, between S2 and S4
+        assert "none yet" in history or re.search(r"\n\d+: \(", history)
+        assert text.rstrip().endswith("the ROC -1, 0 or 1.")  # the answer instruction is last
+    # NG's first record starts from (10, 6) at X = (0 - X_min) * 1000 = 2500.
+    texts = [b["messages"][1]["content"] for b in bodies]
+    first_records = [t for t in texts if re.search(r"\n1: \(\d+, \d+\) \[-?\d, -?\d\] -> \(\d+, \d+\), X 2500 -> ", t)]
+    assert len(first_records) >= 2  # step 2 of each run
+    assert all("\n1: (10, 6) [" in t for t in first_records)
+    assert sum("none yet" in t for t in texts) >= 2  # step 1 of each run (and after a clear)
+    # The baselines start where the LLM starts.
+    rows = read_runs(tmp_path / "swim")
+    assert {r["agent"] for r in rows} == {"llm", "qlearning", "random"}
+    assert {r["init"] for r in rows} == {"+-"}
+    assert all(r["constraint"] == "none" and r["share_identical"] is False for r in rows if r["agent"] == "llm")
+    # Deviations from the paper's protocol are recorded with the runs.
+    import json
+
+    from jswim.results import read_metadata
+
+    meta = read_metadata(tmp_path / "swim")
+    assert any("physics" in d for d in meta["fidelity_deviations"])
+    assert meta["summary"]["constrained_decoding"] == ["none"]
+    head = json.loads(next((tmp_path / "swim" / "transcripts").glob("*.jsonl")).read_text().splitlines()[0])
+    assert head["type"] == "meta" and head["deviations"] and not any("shared" in d for d in head["deviations"])
+
+
+def test_ablation_study_decodes_free_text_unless_told_otherwise():
+    from jswim.llm.backend import Backend
+    from jswim.studies.run import identity, study_backend
+
+    # fidelity.md: no constrained decoding. With a grammar, removing S5 would remove nothing.
+    auto = Backend(base_url="http://127.0.0.1:9/v1", model="m")
+    assert study_backend("ablation", auto).constrain == "none"
+    assert study_backend("swim", auto).constrain == "auto"
+    assert study_backend("ablation", Backend(base_url="http://127.0.0.1:9/v1", model="m", constrain="grammar")).constrain == "grammar"
+    from jswim.studies import StudyOptions
+
+    assert identity("ablation", StudyOptions(), auto)["backend"]["constrain"] == "none"
+
+
+def test_swim_options_share_identical_max_tokens_and_x_min_reach_the_server(tmp_path, capsys):
+    from jswim import cli
+    from tests.fakeserver import FakeServer
+
+    with FakeServer(reply=lambda body: "[1, -1]") as srv:  # Purcell from (+, +): moves toward -x
+        rc = cli.main(["swim", "--runs", "3", "--steps", "6", "--q-runs", "0", "--no-figures", "--share-identical",
+                       "--max-tokens", "7", "--x-min", "-0.001", "--out", str(tmp_path / "s"),
+                       "--base-url", srv.url, "--model", "fake", "--api-key-env", "JSWIM_TEST_NO_KEY"])
+        bodies = list(srv.requests)
+    assert rc == 0
+    out = capsys.readouterr().out
+    assert len(bodies) == 6  # three identical runs share every call: copies of one run
+    assert "copies of one run" in out and "free text" in out
+    assert {b["max_tokens"] for b in bodies} == {7}
+    assert re.search(r"X 1 -> -\d+, stuck no", bodies[1]["messages"][1]["content"])  # below X_min: sent negative

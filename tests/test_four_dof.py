@@ -77,4 +77,4 @@ def test_llm_run_on_a_three_dof_swimmer_uses_the_general_path(tmp_path):
     assert "D3" in prompt and "the changed DOF 1, 2 or 3 and the ROC -1 or 1." in prompt
     params = env.make_params("nlink", init=start)
     rep = gait.judge(np.array(res.actions), params)
-    assert rep.success[0] and rep.period[0] == best.period and rep.steps_to_learn[0] == 0
+    assert rep.success[0] and rep.period[0] == best.period and rep.steps_to_learn[0] == 1

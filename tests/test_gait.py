@@ -77,7 +77,9 @@ def test_verdicts_on_constructed_runs(swimmer, direction):
     ])
     r = judge(runs, params)
     assert r.learned.tolist() == [True, True, True, False, False, False, False, True, True]
-    assert r.steps_to_learn.tolist() == [0, 7, 48, -1, -1, -1, -1, 38, 39]
+    # Counted from 1 as in the paper: the stroke from the first action is learned in 1 step.
+    assert r.steps_to_learn.tolist() == [1, 8, 49, -1, -1, -1, -1, 39, 40]
+    assert r.stroke_start.tolist() == [0, 7, 48, -1, -1, -1, -1, 38, 39]
     assert r.success.tolist() == [True, True, False, False, False, False, False, True, False]
     assert set(r.period[r.learned].tolist()) == {4}
     np.testing.assert_allclose(r.fraction[r.learned], 1.0, rtol=1e-9)
@@ -103,7 +105,7 @@ def test_direction_and_init_may_be_batched():
     assert judge(actions, params).learned.tolist() == [True, False]
     # From the opposite corner the first two moves push against limits; the stroke starts after.
     params = make_params("ng").replace(init=np.array([start, [1 - v for v in start]]))
-    assert judge(actions, params).steps_to_learn.tolist() == [0, 2]
+    assert judge(actions, params).steps_to_learn.tolist() == [1, 3]
 
 
 def test_purcell_from_a_bent_start_still_qualifies_at_the_rotated_speed():
@@ -115,7 +117,7 @@ def test_purcell_from_a_bent_start_still_qualifies_at_the_rotated_speed():
     k = corners.index(1)  # the cycle's step that starts from levels (1, 0)
     shifted = cyc[k:] + cyc[:k]
     r = judge(_runs([shifted * 12]), make_params("purcell", init=(1, 0)))
-    assert r.learned[0] and r.steps_to_learn[0] == 0
+    assert r.learned[0] and r.steps_to_learn[0] == 1
     assert r.fraction[0] == pytest.approx(math.cos(0.6001), abs=1e-3)
 
 
@@ -149,4 +151,4 @@ def test_three_dof_cycles_use_the_same_code_path():
     assert all(c.per_step <= best.per_step + 1e-12 for c in cycles)
     params = make_params("nsphere", init=best.start)
     r = judge(_runs([[act(1, 0)] * 5 + list(best.actions) * 6]), params)
-    assert r.learned[0] and r.steps_to_learn[0] == 5 and r.period[0] == best.period
+    assert r.learned[0] and r.steps_to_learn[0] == 6 and r.period[0] == best.period  # after 5 holds

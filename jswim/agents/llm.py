@@ -38,7 +38,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim import env
-from jswim.agents import protocol
+from jswim.agents import fidelity, protocol
+from jswim.agents.defaults import default_max_tokens, default_n_ht
 from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
 from jswim.errors import ConfigError, LLMError, LLMServerError, PositionBelowMinimumError
@@ -120,6 +121,7 @@ class _Run:
     sink: TextIO | None = None
     stats: MoveStats = field(default_factory=MoveStats)
     max_tokens: int | None = None
+    deviations: list[str] = field(default_factory=list)  # from the paper's protocol (agents.fidelity)
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
@@ -241,12 +243,17 @@ class LLMDriver:
         constraint = constrain.resolve_mode(settings.constrain, settings.server_kind)
         run.max_tokens = protocol.max_tokens(cfg, params.model, constraint)
         result.knobs.update(constraint=constraint, max_tokens=run.max_tokens)
+        run.deviations = fidelity.deviations(
+            cfg, temperature=cfg.sampling_temperature(settings.temperature), constraint=constraint,
+            max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(params.model), n_ht=n_ht,
+            default_n_ht=default_n_ht(params.model, spec.direction))
         if self.transcript_dir is not None:
             self.transcript_dir.mkdir(parents=True, exist_ok=True)
             run.sink = open(self.transcript_dir / f"{run_id}.jsonl", "w", encoding="utf-8")
         run.log({
             "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
             "levels0": result.levels0, "agent": cfg.metadata(), "client": self.client.settings.metadata(),
+            "deviations": run.deviations,
         })
         return run
 

@@ -65,6 +65,9 @@ class StudyOptions:
     chunk: int = 64
     agents: tuple[str, ...] = AGENTS
     variant: str | None = None  # LLM protocol variant; None: the study's (SWIM_VARIANT or "paper")
+    share_identical: bool = False  # send identical temperature-0 requests of different runs once (runs become copies)
+    x_min: float = -2.5  # X_min of the position encoding (the paper's and the code's -2.5)
+    max_tokens: int | None = None  # reply length limit; None: per swimmer (10 two DOFs, 20 more)
     variants: tuple[str, ...] | None = None  # competence: the variants to compare (None: all default)
 
     def __post_init__(self) -> None:
@@ -82,6 +85,10 @@ class StudyOptions:
         bad = [z for z in (self.zeta, *self.zetas) if not (math.isfinite(z) and z >= 0)]
         if bad:
             raise ConfigError(f"--noise (zeta) must be >= 0, got {bad[0]}")
+        if not math.isfinite(self.x_min):
+            raise ConfigError(f"--x-min must be a finite number, got {self.x_min}")
+        if self.max_tokens is not None and not 1 <= self.max_tokens <= 100_000:
+            raise ConfigError(f"--max-tokens must be between 1 and 100000, got {self.max_tokens}")
         if self.chunk < 1:
             raise ConfigError("--chunk must be >= 1")
         for sw in self.swimmers or ():
@@ -169,6 +176,7 @@ class StudySpec:
     directions: tuple[int, ...] = (1,)
     q_runs: int = 100  # baseline runs per cell
     ignores: tuple[str, ...] = ("zetas", "n_hts")  # StudyOptions fields the study has no use for (IGNORED)
+    constrain: str | None = None  # decoding when the backend says "auto" (None: the backend's own choice)
 
 
 #: Why a study may have no use for an option (:class:`StudyOptions` field -> reason); the
@@ -192,7 +200,8 @@ SPECS: dict[str, StudySpec] = {
     # mean X/a and success rate p against zeta (Fig. 4)
     "noise": StudySpec(_noise, runs=10, ignores=("zeta", "n_hts")),
     # the full prompt and the prompt without each of S1..S5 (Fig. 5)
-    "ablation": StudySpec(_ablation, runs=10, ignores=("zetas", "n_hts", "q_runs")),
+    # (free-text replies unless --constrain says otherwise: with a grammar, removing S5 removes nothing)
+    "ablation": StudySpec(_ablation, runs=10, ignores=("zetas", "n_hts", "q_runs"), constrain="none"),
     # all four initial configurations, both directions
     "inits": StudySpec(_inits, runs=1, directions=(1, -1), ignores=("zetas", "n_hts", "q_runs", "init")),
     # the main job: a few LLM runs next to Q-learning and random learners

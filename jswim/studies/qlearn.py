@@ -14,11 +14,13 @@ import jax
 import numpy as np
 
 from jswim import sharding
+from jswim.agents.defaults import paper_init
 from jswim.agents.qlearning import QConfig, QRun, batch_params, evaluate, train_batch
 from jswim.env import EnvParams, make_params
 from jswim.errors import ConfigError
 from jswim.gait import PAPER, Criterion, GaitReport
 from jswim.stats import learn_stats
+from jswim.swimmers.models import make_model
 
 
 class Summary(NamedTuple):
@@ -128,7 +130,9 @@ def study(
         Learners per group (10^6 and more: learners are trained and judged ``chunk`` at a time,
         each chunk sharded over every device, and only their verdicts are kept).
     init : sequence of int or str, optional
-        Initial configuration (default (+, +)); ``"random"`` draws one per learner.
+        Initial configuration (default: each swimmer's paper start,
+        :func:`jswim.agents.defaults.paper_init`: Purcell (+, +), NG (10, 6)); ``"random"``
+        draws one per learner.
     seed : int
         Seed of the whole study. Learner ``i`` of a swimmer gets key ``i`` of one split, so the
         results depend neither on ``chunk`` nor on the device count.
@@ -156,7 +160,7 @@ def study(
     grid = [(d, z) for d in directions for z in zetas]
     total, done = len(swimmers) * len(grid) * n_seeds, 0
     for swimmer in swimmers:
-        base = make_params(swimmer, init=init)
+        base = make_params(swimmer, init=paper_init(make_model(swimmer)) if init is None else init)
         d_arr = np.repeat([g[0] for g in grid], n_seeds).astype(float)
         z_arr = np.repeat([g[1] for g in grid], n_seeds).astype(float)
         key, sub = jax.random.split(key)
@@ -189,5 +193,6 @@ def format_table(rows: Sequence[Summary]) -> str:
             f"{f'{r.n_learned} of {r.n}':>15} {r.success:7.3f} {num(r.q25):>5} {num(r.median):>6} {num(r.q75):>5} "
             f"{r.mean_x_horizon:7.3f} {r.mean_x_end:7.3f}"
         )
-    lines.append("q25/median/q75: steps to learn over the learners that learned (jswim.stats.learn_stats)")
+    lines.append("q25/median/q75: steps to learn over the learners that learned (jswim.stats.learn_stats), counted "
+                 "from 1 as in the paper: the step at which the final stroke starts")
     return "\n".join(lines)

@@ -24,7 +24,7 @@ import jax
 import numpy as np
 
 from jswim import __version__, env
-from jswim.agents import qlearning, random_policy
+from jswim.agents import fidelity, qlearning, random_policy
 from jswim.agents.llm import run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
 from jswim.console import eta
@@ -35,7 +35,7 @@ from jswim.llm.client import LLMClient
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.results import StudyStore, legacy_names, read_runs
-from jswim.studies.grids import COMPETENCE_VARIANTS, SWIM_VARIANT, Plan, StudyOptions, build
+from jswim.studies.grids import COMPETENCE_VARIANTS, SPECS, SWIM_VARIANT, Plan, StudyOptions, build
 from jswim.studies.report import draw_figures, summarize
 
 
@@ -115,8 +115,19 @@ class StudyResult:
     llm_speed: dict[str, float] = field(default_factory=dict)  # calls, billed calls, wall s, calls/s
 
 
+def study_backend(study: str, backend: Backend | None) -> Backend | None:
+    """The backend a study runs with: a study that fixes its decoding (the ablation study:
+    free text, :attr:`StudySpec.constrain`) overrides ``constrain="auto"``; an explicit
+    ``--constrain`` is kept."""
+    mode = SPECS[study].constrain if study in SPECS else None
+    if backend is None or mode is None or backend.constrain != "auto":
+        return backend
+    return dataclasses.replace(backend, constrain=mode)
+
+
 def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, Any]:
     """Everything that defines a study's runs (compared when a folder is resumed)."""
+    backend = study_backend(study, backend)
     opts = dataclasses.asdict(o)
     opts.pop("chunk")
     for name in ("variant", "variants"):  # left out when unset, so older folders keep their identity
@@ -175,6 +186,7 @@ def run_study(
         Also draw the study's figures into ``out/figures``.
     """
     t0 = time.perf_counter()
+    backend = study_backend(study, backend)
     plans = build(study, options)
     if not plans:
         raise ConfigError(f"these settings give the {study} study no runs at all (--runs 0 and --q-runs 0?); "
@@ -192,6 +204,8 @@ def run_study(
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS) if study == "competence"
         else [options.llm_variant(study)],
         "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
+        # What differs from the paper's protocol in every LLM run (each transcript lists its own too).
+        "fidelity_deviations": list(fidelity.ALWAYS),
     })
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
@@ -218,7 +232,9 @@ def run_study(
     summary = summarize(rows)
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
-    store.finalize("complete", {"groups": summary, **({"llm_speed": speed} if speed else {})})
+    constraint = sorted({r["constraint"] for r in rows if r.get("agent") == "llm" and r.get("constraint")})
+    store.finalize("complete", {"groups": summary, **({"llm_speed": speed} if speed else {}),
+                                **({"constrained_decoding": constraint} if constraint else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
     return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed)
 
@@ -279,7 +295,8 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     async def _llm_chunks(client: Any) -> None:
         nonlocal finished
         for (variant, action_set), group in _groups(plans, "variant", "action_set").items():
-            cfg = variant_config(variant, action_set=action_set, **({"template": template} if template else {}))
+            cfg = variant_config(variant, action_set=action_set, share_identical=o.share_identical, x_min=o.x_min,
+                                 max_tokens=o.max_tokens, **({"template": template} if template else {}))
             for i in range(0, len(group), o.chunk):
                 chunk = group[i: i + o.chunk]
                 results = await run_batch_async([spec(p) for p in chunk], client, cfg,

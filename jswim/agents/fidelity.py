@@ -1,0 +1,80 @@
+"""What a run's protocol does differently from the paper and the authors' code.
+
+The README's fidelity table lists every element; this module names, for one run's settings, the
+deviations that apply, so each transcript and study folder records them next to the results.
+Fixed ones (:data:`ALWAYS`) are jswim's choices where the code is plainly an artefact or the
+paper is followed over the code; the rest follow from the settings (:func:`deviations`).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from jswim.agents.variants import LLMAgentConfig
+from jswim.prompt import DEFAULT_TEMPLATE, PAPER_SYSTEM
+
+#: Deviations of every run (paper over code, or the code's artefact replaced), one line each.
+ALWAYS = (
+    "physics: exact per-step displacements (closed-form RFT for Purcell, the NG formula) instead of the code's "
+    "first-order time stepping (Purcell +x 0.19101, -x 0.19148 per cycle there; 0.19124724 both ways here)",
+    "position: an integer, X truncated to 3 decimals (the paper) where the code prints a rounded float (2691.0)",
+    "prompt wording: jswim's own sentences with the same elements and order (aliases, ranges, records with "
+    "stuck flags, separate DOF and ROC choices)",
+    "reply without a valid action: up to 2 corrective follow-ups, then the hold [1, 0] (the code re-sends the "
+    "identical prompt up to 5 times, then [1, 0])",
+)
+
+
+def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_tokens: int,
+               default_max_tokens: int, n_ht: int | None = None, default_n_ht: int | None = None) -> list[str]:
+    """The deviations of one run with these settings from the paper's protocol (:data:`ALWAYS` first).
+
+    Parameters
+    ----------
+    cfg : LLMAgentConfig
+        The agent settings.
+    temperature : float
+        The sampling temperature requests go out with.
+    constraint : str
+        The resolved constrained-decoding mode (``"none"`` in the paper).
+    max_tokens, default_max_tokens : int
+        The reply limit used and the swimmer's default (the code's).
+    n_ht, default_n_ht : int, optional
+        The history length used and the swimmer's default.
+    """
+    out = list(ALWAYS)
+    if cfg.variant != "paper":
+        out.append(f"protocol variant {cfg.variant!r} (not in the paper)")
+    if cfg.order != "paper":
+        out.append(f"sentence order {cfg.order!r}: S1 S2 S4 S5 before the history (paper: S1 S2 S3 S4 S5)")
+    if cfg.share_identical:
+        out.append("identical requests of different runs shared (--share-identical): runs from one start are copies, "
+                   "not independent repeats")
+    if constraint != "none":
+        out.append(f"constrained decoding ({constraint}): replies can only be an offered action (paper: free text)")
+    if max_tokens != default_max_tokens:
+        out.append(f"max_tokens {max_tokens} (code: {default_max_tokens})")
+    if temperature != 0:
+        out.append(f"temperature {temperature:g} (paper: 0)")
+    if cfg.x_min != -2.5:
+        out.append(f"X_min {cfg.x_min:g} (code: -2.5)")
+    if cfg.system != PAPER_SYSTEM:
+        out.append(f"system message {cfg.system!r} (code: a single space)")
+    if cfg.template != DEFAULT_TEMPLATE:
+        out.append("prompt template replaced (--prompt-file)")
+    if cfg.clearing is not None:
+        out.append(f"clearing rule: {cfg.clearing.describe()}")
+    if n_ht is not None and default_n_ht is not None and n_ht != default_n_ht:
+        out.append(f"n_ht {n_ht} (default {default_n_ht})")
+    return out
+
+
+def describe_constraint(modes: Any) -> str:
+    """One line for a study's output: whether its LLM replies were constrained."""
+    modes = sorted({m for m in modes if m})
+    if not modes:
+        return ""
+    if modes == ["none"]:
+        return "LLM replies: free text, parsed afterwards (no constrained decoding, as in the paper)"
+    return (f"LLM replies: constrained decoding ({', '.join(m for m in modes if m != 'none')}): the model could only "
+            "answer with an offered action (the paper uses none; --constrain none for free text)")
