@@ -94,7 +94,7 @@ def test_qlearn_validates_noise_and_learning_rate(extra, message, capsys):
 
 def _median(text: str) -> float:
     line = next(line for line in text.splitlines() if line.startswith("ng "))
-    return float(line.split()[9])  # swimmer dir zeta actions n learned "of" n success q25 median
+    return float(line.split()[10])  # swimmer dir zeta actions n learned "of" n success q25 median
 
 
 def test_qlearn_learning_rate_reaches_the_learner(capsys):
