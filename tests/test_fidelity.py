@@ -136,3 +136,20 @@ def test_swim_options_share_identical_max_tokens_and_x_min_reach_the_server(tmp_
     assert "copies of one run" in out and "free text" in out
     assert {b["max_tokens"] for b in bodies} == {7}
     assert re.search(r"X 1 -> -\d+, stuck no", bodies[1]["messages"][1]["content"])  # below X_min: sent negative
+
+
+@pytest.mark.parametrize("swimmer, start", [("nlink", "+++"), ("nsphere", "-++")])
+def test_swim_runs_four_dof_swimmers_from_their_paper_start(swimmer, start, tmp_path):
+    from jswim import cli
+    from jswim.results import read_runs
+    from tests.fakeserver import FakeServer
+
+    with FakeServer(reply=lambda body: "[3, -1]") as srv:
+        rc = cli.main(["swim", "--swimmer", swimmer, "--runs", "1", "--steps", "4", "--q-runs", "2", "--no-figures",
+                       "--out", str(tmp_path / swimmer), "--base-url", srv.url, "--model", "fake",
+                       "--api-key-env", "JSWIM_TEST_NO_KEY"])
+        first = srv.requests[0]
+    assert rc == 0
+    assert {r["init"] for r in read_runs(tmp_path / swimmer)} == {start}  # LLM and baselines alike
+    assert first["max_tokens"] == 20  # fidelity.md: 20 for four-DOF
+    assert "the changed DOF 1, 2 or 3 and the ROC -1 or 1." in first["messages"][-1]["content"]
