@@ -9,7 +9,9 @@ contains an API key. The tree::
     |   +-- PositionBelowMinimumError       X fell below x_min, so the prompt cannot encode it
     +-- LLMError (also RuntimeError)       the LLM server or the embedded model failed
     |   +-- LLMServerError                  unreachable, or kept failing (network, timeouts, 429, 5xx)
-    |   +-- LLMRequestError                 the server rejected the request (4xx; retrying won't help)
+    |   |   +-- LLMTimeoutError             kept answering slower than the timeout (a cold server)
+    |   +-- LLMRequestError                 this request was rejected (4xx; retrying won't help)
+    |   |   +-- LLMSetupError               every request would be: URL, key, model or a field
     |   +-- LLMResponseError                the server answered, but not with a usable completion
     |   +-- LocalModelError                 the embedded model cannot start (package or file missing)
     |   +-- BudgetExhausted                 the cost cap is reached (jswim.llm.budget)
@@ -51,12 +53,33 @@ class LLMServerError(LLMError):
     """The server could not be reached or kept failing (network, timeouts, 429, 5xx)."""
 
 
-class LLMRequestError(LLMError):
-    """The server rejected the request (4xx other than 408/409/429): retrying will not help."""
+class LLMTimeoutError(LLMServerError):
+    """The server kept answering slower than the timeout (a cold or overloaded server)."""
 
-    def __init__(self, message: str, status: int) -> None:
+
+class LLMRequestError(LLMError):
+    """The server rejected the request (4xx other than 408/409/429): retrying will not help.
+
+    Attributes
+    ----------
+    status : int
+        The HTTP status.
+    server_message : str
+        The server's own error text (one line).
+    field : str or None
+        The request field the server named as the cause, when it named one we sent.
+    """
+
+    def __init__(self, message: str, status: int, server_message: str = "", field: str | None = None) -> None:
         super().__init__(message)
         self.status = status
+        self.server_message = server_message
+        self.field = field
+
+
+class LLMSetupError(LLMRequestError):
+    """A rejection no request of this client can avoid: wrong URL (404), key (401/403), model,
+    or a request field the server does not accept. Stop and fix the settings."""
 
 
 class LLMResponseError(LLMError):

@@ -11,13 +11,19 @@ injected:
 
 Faults queued with :meth:`FakeServer.add_faults` apply to the next requests in arrival order
 (``None`` = answer normally). A ``reply`` callable may also return a :class:`Fault` to fail
-requests by content. ``latency`` may also be a callable of the request body, e.g.
+requests by content, or an :class:`Answer` to shape the message (null or list content,
+reasoning fields, ``finish_reason``). ``latency`` may also be a callable of the request body, e.g.
 :func:`lognormal_latency`: heavy-tailed delays drawn per request from a hash of its messages,
 so each (run, step) of a study gets its own reproducible delay and a benchmark can recompute
 every delay from the prompts it sent. ``tokens`` counts usage (default: words) and ``headers``
 adds response headers (rate-limit headers, for instance). Independent of jswim, so benchmarks
 can import it too; run it standalone with ``python -m tests.fakeserver --latency 0.1`` (it
 prints its base URL).
+
+Real servers misbehave in ordinary ways; :data:`MODES` names one scripted server per behaviour
+(reasoning blocks, null content, streams sent unasked, rejected fields, a context-length 400 at
+step 3, a cold start, ...), each usable as ``FakeServer(**MODES[name])`` or
+``python -m tests.fakeserver --mode NAME``.
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ import hashlib
 import json
 import math
 import random
+import re
 import threading
 import time
 import zlib
@@ -74,7 +81,24 @@ class Fault:
         return cls("malformed")
 
 
-Reply = Callable[[dict[str, Any]], "str | Fault"]
+@dataclass(frozen=True)
+class Answer:
+    """A scripted assistant message, for replies that are more than plain text.
+
+    content : the ``content`` field as sent: a string, ``None`` (JSON null) or a list of parts.
+    finish_reason : ``"stop"``, ``"length"``, ...
+    fields : more message fields, e.g. ``{"reasoning_content": "..."}``.
+    """
+
+    content: Any = ""
+    finish_reason: str = "stop"
+    fields: tuple[tuple[str, Any], ...] = ()
+
+    def message(self) -> dict[str, Any]:
+        return {"role": "assistant", "content": self.content, **dict(self.fields)}
+
+
+Reply = Callable[[dict[str, Any]], "str | Fault | Answer"]
 
 #: Moves of the two-DOF square gait; :func:`hash_reply` picks among them.
 GAIT_MOVES = ("[1, -1]", "[2, -1]", "[1, 1]", "[2, 1]")
@@ -129,6 +153,13 @@ class FakeServer:
         Request body -> extra headers of a completion (e.g. ``x-ratelimit-remaining-requests``).
     faults : iterable of Fault or None, optional
         Initial fault queue.
+    stream : {"never", "default", "always"}
+        Answer as an SSE stream: never; unless the request says ``"stream": false`` (servers
+        whose default is to stream); or always, whatever the request says.
+    reject_fields : mapping of str to str, optional
+        Request field -> error message: a request carrying the field gets HTTP 400 with it.
+    cold_start : float
+        Seconds after start during which requests wait (a local server loading its model).
 
     Attributes
     ----------
@@ -148,12 +179,19 @@ class FakeServer:
         self, reply: Reply | None = None, latency: float | Latency = 0.0, faults: Iterable[Fault | None] = (),
         tokens: Callable[[str], int] = count_words,
         headers: Callable[[dict[str, Any]], dict[str, str]] | None = None,
+        stream: str = "never", reject_fields: dict[str, str] | None = None, cold_start: float = 0.0,
     ) -> None:
+        if stream not in ("never", "default", "always"):
+            raise ValueError(f"stream must be never, default or always, got {stream!r}")
         self.reply: Reply = reply or (lambda body: "[1, 1]")
         self.latency = latency
         self.tokens = tokens
         self.headers = headers
         self.arrivals: list[float] = []  # time.monotonic() of each chat request's arrival
+        self.stream = stream
+        self.reject_fields = dict(reject_fields or {})
+        self.cold_start = cold_start
+        self._warm_at = 0.0
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
         self.requests: list[dict[str, Any]] = []
@@ -183,6 +221,7 @@ class FakeServer:
         self._loop = loop
         server = loop.run_until_complete(asyncio.start_server(self._connection, "127.0.0.1", 0, backlog=1024))
         self._port = server.sockets[0].getsockname()[1]
+        self._warm_at = time.monotonic() + self.cold_start
         ready.set()
         try:
             loop.run_forever()
@@ -229,18 +268,45 @@ class FakeServer:
             self.arrivals.clear()
             self.n_requests = self.n_answered = self.max_in_flight = 0
 
-    def completion(self, body: dict[str, Any], text: str) -> dict[str, Any]:
+    def completion(self, body: dict[str, Any], text: "str | Answer") -> dict[str, Any]:
         """The chat.completion object answering ``body`` with ``text``."""
+        answer = text if isinstance(text, Answer) else Answer(text)
         prompt = sum(self.tokens(str(m.get("content", ""))) for m in body.get("messages", []))
-        done = self.tokens(text)
+        parts = [answer.content if isinstance(answer.content, str) else json.dumps(answer.content)]
+        parts += [str(v) for _, v in answer.fields]
+        done = sum(self.tokens(p) for p in parts)
         return {
             "id": f"fake-{self.n_requests}",
             "object": "chat.completion",
             "created": int(time.time()),
             "model": body.get("model", "fake"),
-            "choices": [{"index": 0, "message": {"role": "assistant", "content": text}, "finish_reason": "stop"}],
+            "choices": [{"index": 0, "message": answer.message(), "finish_reason": answer.finish_reason}],
             "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done},
         }
+
+    def chunks(self, body: dict[str, Any], text: "str | Answer") -> list[dict[str, Any]]:
+        """The chat.completion.chunk events of a streamed answer (content in small pieces)."""
+        full = self.completion(body, text)
+        choice = full["choices"][0]
+        msg = choice["message"]
+        head = {k: full[k] for k in ("id", "created", "model")} | {"object": "chat.completion.chunk"}
+
+        def event(delta: dict[str, Any], finish: str | None = None) -> dict[str, Any]:
+            return {**head, "choices": [{"index": 0, "delta": delta, "finish_reason": finish}]}
+
+        out = [event({"role": "assistant", "content": ""})]
+        for key, value in msg.items():
+            if key in ("role", "content") or not isinstance(value, str):
+                continue
+            out += [event({key: value[i:i + 5]}) for i in range(0, len(value), 5)]
+        content = msg.get("content")
+        if isinstance(content, str):
+            out += [event({"content": content[i:i + 3]}) for i in range(0, len(content), 3)]
+        elif content is not None:
+            out.append(event({"content": content}))
+        out.append(event({}, choice["finish_reason"]))
+        out.append({**head, "choices": [], "usage": full["usage"]})
+        return out
 
     # -- HTTP --------------------------------------------------------------------------------
 
@@ -285,7 +351,8 @@ class FakeServer:
         if method == "GET" and path == "/v1/models":
             return await self._send(writer, 200, b'{"object":"list","data":[{"id":"fake","object":"model"}]}')
         if method != "POST" or path != "/v1/chat/completions":
-            return await self._send(writer, 404, b'{"error":{"message":"not found"}}')
+            msg = json.dumps({"error": {"message": f"File Not Found: {path}", "code": 404}}).encode()
+            return await self._send(writer, 404, msg)
         try:
             body = json.loads(raw)
         except ValueError:
@@ -305,7 +372,13 @@ class FakeServer:
                 self.in_flight -= 1
 
     async def _answer(self, body: dict[str, Any], fault: Fault | None, writer: asyncio.StreamWriter) -> bool:
-        text: str | Fault | None = None
+        text: str | Answer | Fault | None = None
+        cold = self._warm_at - time.monotonic()
+        if cold > 0:  # still "loading the model"
+            await asyncio.sleep(cold)
+        for name, message in self.reject_fields.items():
+            if name in body and fault is None:
+                fault = Fault("status", 400, message=message)
         if fault is None:
             text = self.reply(body)
             if isinstance(text, Fault):
@@ -325,11 +398,87 @@ class FakeServer:
             if fault.kind == "delay":
                 await asyncio.sleep(fault.seconds)
                 got = self.reply(body)
-                text = got if isinstance(got, str) else ""
+                text = got if isinstance(got, (str, Answer)) else ""
         with self._lock:
             self.n_answered += 1
+        if text is None:
+            text = ""
+        if self.stream == "always" or (self.stream == "default" and body.get("stream") is not False):
+            return await self._send_stream(writer, self.chunks(body, text))
         extra = self.headers(body) if self.headers is not None else None
-        return await self._send(writer, 200, json.dumps(self.completion(body, text or "")).encode(), extra)
+        return await self._send(writer, 200, json.dumps(self.completion(body, text)).encode(), extra)
+
+    @staticmethod
+    async def _send_stream(writer: asyncio.StreamWriter, events: list[dict[str, Any]]) -> bool:
+        head = ["HTTP/1.1 200 OK", "Content-Type: text/event-stream; charset=utf-8", "Cache-Control: no-cache",
+                "Transfer-Encoding: chunked"]
+        writer.write(("\r\n".join(head) + "\r\n\r\n").encode("latin-1"))
+        for data in [json.dumps(e) for e in events] + ["[DONE]"]:
+            piece = f"data: {data}\n\n".encode()
+            writer.write(f"{len(piece):x}\r\n".encode() + piece + b"\r\n")
+            await writer.drain()
+        writer.write(b"0\r\n\r\n")
+        await writer.drain()
+        return True
+
+
+# -- modes: one scripted server per ordinary real-server behaviour ---------------------------------
+
+#: Reasoning that names a move the answer then rejects: parsing it would execute [1, 1].
+THOUGHT = "The last move was [1, 1] and X did not grow; not [1, 1] again, try the other joint."
+
+
+def history_records(body: dict[str, Any]) -> int:
+    """History lines (``3: (...) [1, 1] -> ...``) in the request's first user message."""
+    first = next((m for m in body.get("messages", []) if m.get("role") == "user"), {})
+    return len(re.findall(r"^\d+: \(", str(first.get("content", "")), re.M))
+
+
+def _context_400(body: dict[str, Any]) -> "str | Fault":
+    # The prompt outgrows a small context once it shows two history records: from step 3 on.
+    if history_records(body) >= 2:
+        return Fault("status", 400, message=(
+            "This model's maximum context length is 64 tokens. However, you requested 97 tokens "
+            "(65 in the messages, 32 in the completion). Please reduce the length of the messages or completion."))
+    return "[2, -1]"
+
+
+def _think_then_follow_up(body: dict[str, Any]) -> "str | Answer":
+    # Thinks past max_tokens on a first request; answers a follow-up (a longer conversation).
+    if len(body.get("messages", [])) > 1:
+        return "[2, -1]"
+    return Answer("<think>" + THOUGHT, "length")
+
+
+#: name -> FakeServer keyword arguments. The comments give what a correct client executes.
+MODES: dict[str, dict[str, Any]] = {
+    "plain": {"reply": lambda body: "[2, -1]"},  # -> [2, -1]; base-URL shape cases use it
+    "think": {"reply": lambda body: f"<think>{THOUGHT}</think>\n[2, -1]"},  # -> [2, -1]
+    "think-no-open-tag": {"reply": lambda body: f"{THOUGHT}</think>\n\n[2, -1]"},  # -> [2, -1]
+    "reasoning-field": {"reply": lambda body: Answer("[2, -1]", fields=(("reasoning_content", THOUGHT),))},
+    "parts": {"reply": lambda body: Answer([{"type": "thinking", "thinking": THOUGHT},
+                                            {"type": "text", "text": "[2, -1]"}])},  # -> [2, -1]
+    # Cut off while thinking: no answer; the follow-up (a different request) answers.
+    "null-length": {"reply": lambda body: "[2, -1]" if len(body.get("messages", [])) > 1 else
+                    Answer(None, "length", (("reasoning_content", THOUGHT),))},
+    "empty-length": {"reply": lambda body: "[2, -1]" if len(body.get("messages", [])) > 1 else Answer("", "length")},
+    "think-length": {"reply": _think_then_follow_up},
+    # Never answers within max_tokens: every step fails (no-op), each reply counted as cut off.
+    "always-length": {"reply": lambda body: Answer(None, "length", (("reasoning_content", THOUGHT),))},
+    "stream-default": {"reply": lambda body: "[2, -1]", "stream": "default"},  # -> [2, -1]
+    "stream-always": {"reply": lambda body: Answer("[2, -1]", fields=(("reasoning_content", THOUGHT),)),
+                      "stream": "always"},  # -> [2, -1]
+    "reject-grammar": {"reply": lambda body: "[2, -1]",
+                       "reject_fields": {"grammar": "Unrecognized request argument supplied: grammar"}},
+    "reject-seed": {"reply": lambda body: "[2, -1]",
+                    "reject_fields": {"seed": "Unsupported parameter: 'seed' is not supported with this model."}},
+    "reject-max-tokens": {"reply": lambda body: "[2, -1]", "reject_fields": {"max_tokens": (
+        "Unsupported parameter: 'max_tokens' is not supported with this model. Use 'max_completion_tokens' instead.")}},
+    "context-400": {"reply": _context_400},  # steps 1-2 fine, then HTTP 400 (context length)
+    "bare-pair": {"reply": lambda body: "2, -1"},  # -> [2, -1]
+    "negated": {"reply": lambda body: "not [1, 1]; answer [2, -1]"},  # -> [2, -1]
+    "cold": {"reply": lambda body: "[2, -1]", "cold_start": 1.5},  # first answers after 1.5 s
+}
 
 
 def main() -> None:
@@ -340,10 +489,13 @@ def main() -> None:
     ap.add_argument("--latency-seed", type=int, default=0, help="seed of the lognormal delays")
     ap.add_argument("--reply", choices=("fixed", "hash"), default="hash",
                     help="'[1, 1]' always, or a prompt-dependent square-gait move (default)")
+    ap.add_argument("--mode", choices=sorted(MODES), default=None,
+                    help="behave like a real server in one ordinary way (overrides --reply)")
     args = ap.parse_args()
     reply = hash_reply if args.reply == "hash" else None
     latency = lognormal_latency(*args.lognormal, seed=args.latency_seed) if args.lognormal else args.latency
-    with FakeServer(reply=reply, latency=latency) as srv:
+    options = {"reply": reply, **MODES.get(args.mode, {})}
+    with FakeServer(latency=latency, **options) as srv:
         print(srv.url, flush=True)
         try:
             while True:

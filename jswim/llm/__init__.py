@@ -3,7 +3,15 @@ local model. No JAX here (see DESIGN.md)."""
 
 from jswim.llm.backend import Backend, check_server
 from jswim.llm.client import ChatResult, ClientSettings, LLMClient
-from jswim.llm.errors import LLMError, LLMRequestError, LLMResponseError, LLMServerError, LocalModelError
+from jswim.llm.errors import (
+    LLMError,
+    LLMRequestError,
+    LLMResponseError,
+    LLMServerError,
+    LLMSetupError,
+    LLMTimeoutError,
+    LocalModelError,
+)
 from jswim.llm.local import LocalServer, default_model_path
 from jswim.llm.usage import DEFAULT_PRICES, PriceTable, Usage, UsageTotals
 
@@ -17,6 +25,8 @@ __all__ = [
     "LLMRequestError",
     "LLMResponseError",
     "LLMServerError",
+    "LLMSetupError",
+    "LLMTimeoutError",
     "LocalModelError",
     "LocalServer",
     "PriceTable",

@@ -4,6 +4,10 @@ Keys are SHA-256 hashes of the full request body (model, messages, temperature, 
 grammar or response format...). The API key travels in a header and is never part of a key or a
 stored value. The server address is not part of the key either: the same model name and request
 give the same answer wherever it is served (the embedded server moves to a new port every run).
+
+Only replies that answered are stored (see ``cache_if`` of :meth:`jswim.llm.client.LLMClient.chat`):
+a reply cut off at ``max_tokens``, an empty one or one the caller found unusable is never
+replayed to a later run against a healthy server.
 """
 
 from __future__ import annotations
@@ -16,8 +20,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-#: Bump when the stored value's layout changes.
-CACHE_VERSION = "jswim-llm-cache-v1"
+#: Bump when the stored value's layout changes (v2: reasoning stored, failed replies no longer
+#: stored; v1 entries are ignored, so failures cached by older versions are never replayed).
+CACHE_VERSION = "jswim-llm-cache-v2"
 
 
 def request_key(payload: dict[str, Any]) -> str:

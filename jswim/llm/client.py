@@ -2,8 +2,15 @@
 
 One :class:`LLMClient` serves a whole study: many requests in flight at once (bounded by a
 semaphore), retries with exponential backoff and jitter on transient failures (connection errors,
-timeouts, 408, 409, 429, 5xx, unreadable bodies), ``Retry-After`` honoured, a disk cache and
-in-flight de-duplication for deterministic (temperature 0) requests, and usage/cost per call.
+408, 409, 429, 5xx, unreadable bodies; timeouts a bounded number of times), ``Retry-After``
+honoured, a disk cache and in-flight de-duplication for deterministic (temperature 0) requests,
+and usage/cost per call.
+
+Real servers differ in ordinary ways and the client absorbs them (see :mod:`jswim.llm.reply`):
+every request says ``"stream": false`` and a stream that comes anyway is assembled; reasoning
+(``<think>`` blocks, ``reasoning_content``) is split from the answer; null or list content is
+read; base URLs are accepted in their common shapes (:mod:`jswim.llm.urls`). A rejection names
+the server's own message, the URL tried and the setting that avoids it.
 
 The API key is read from an environment variable whose *name* is a setting; the key itself is
 only ever put in the ``Authorization`` header, never in logs, cache keys, results or errors.
@@ -20,14 +27,13 @@ from __future__ import annotations
 
 import asyncio
 import email.utils
-import ipaddress
+import json
 import os
 import random
 import ssl
 import time
 from dataclasses import dataclass, field, replace
-from typing import Any, Mapping, Sequence
-from urllib.parse import urlsplit, urlunsplit
+from typing import Any, Callable, Mapping, Sequence
 
 import httpx
 
@@ -35,10 +41,13 @@ from jswim.errors import ConfigError
 from jswim.llm import constrain
 from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
-from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError
+from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError, LLMTimeoutError
 from jswim.llm.pacing import Pacer
+from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text
+from jswim.llm.reply import Completion, MalformedReply, assemble_sse, looks_like_sse, read_completion
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
+from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
 from jswim.llm.usage import PriceTable, Usage
 
 def check_temperature(value: float) -> float:
@@ -58,6 +67,8 @@ def check_temperature(value: float) -> float:
 RETRY_STATUSES = frozenset({408, 409, 429})
 
 
+
+
 @dataclass(frozen=True)
 class ClientSettings:
     """Connection and request settings.
@@ -65,13 +76,17 @@ class ClientSettings:
     Attributes
     ----------
     base_url : str
-        Server root including the API prefix, e.g. ``https://api.openai.com/v1``.
+        Server root including the API prefix, e.g. ``https://api.openai.com/v1``. Common other
+        shapes are accepted and normalized (see :func:`jswim.llm.urls.normalize_base_url`).
     model : str
         Model name sent with each request (also keys the cache and the price table).
     api_key_env : str
         Name of the environment variable holding the API key (unset: no ``Authorization``).
     timeout_s : float
         Per-attempt timeout (connect, read, write, pool).
+    timeout_retries : int
+        Times a request that timed out is sent again (within ``max_retries``); then the call
+        fails with :class:`~jswim.llm.errors.LLMTimeoutError`, saying the server is slow.
     max_concurrency : int
         Requests in flight at once.
     max_retries : int
@@ -97,12 +112,16 @@ class ClientSettings:
     fast_transport : bool
         For ``http://`` servers on loopback, use :class:`jswim.llm.transport.LoopbackTransport`
         (asyncio streams) instead of httpx's default transport (anyio). Default True.
+    omit_fields : tuple of str
+        Optional request fields never sent (``"seed"``, ``"max_tokens"``, ``"stream"``, ...),
+        for servers that reject them.
     """
 
     base_url: str = "https://api.openai.com/v1"
     model: str = "gpt-4"
     api_key_env: str = "OPENAI_API_KEY"
     timeout_s: float = 60.0
+    timeout_retries: int = 1
     max_concurrency: int = 16
     max_retries: int = 4
     backoff_base_s: float = 0.5
@@ -116,13 +135,21 @@ class ClientSettings:
     cache_dir: str | None = None
     prices: Mapping[str, tuple[float, float]] | None = field(default=None, compare=False)
     fast_transport: bool = field(default=True, compare=False)
+    omit_fields: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
+        object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
+        required = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
+        if required:
+            raise ConfigError(f"cannot leave out the request field(s) {', '.join(required)}: every request needs them")
+        if self.timeout_retries < 0:
+            raise ConfigError(f"timeout_retries must be >= 0, got {self.timeout_retries}")
         if self.constrain not in constrain.MODES:
             raise ConfigError(f"constrain must be one of {constrain.MODES}, got {self.constrain!r}")
         if self.server_kind not in constrain.SERVER_KINDS:
             raise ConfigError(f"server_kind must be one of {constrain.SERVER_KINDS}, got {self.server_kind!r}")
-        if self.max_concurrency < 1 or self.max_retries < 0 or self.timeout_s <= 0:
+        if self.max_concurrency < 1 or self.max_retries < 0 or not self.timeout_s > 0:
             raise ConfigError("need max_concurrency >= 1, max_retries >= 0 and timeout_s > 0")
         check_temperature(self.temperature)
 
@@ -137,6 +164,9 @@ class ClientSettings:
             "constrain": self.constrain,
             "server_kind": self.server_kind,
             "max_retries": self.max_retries,
+            "timeout_s": self.timeout_s,
+            "timeout_retries": self.timeout_retries,
+            "omit_fields": list(self.omit_fields),
         }
 
 
@@ -165,7 +195,9 @@ class ChatResult:
     finish_reason : str or None
         As reported by the server.
     raw : str
-        The message content before unwrapping.
+        The message content as sent (reasoning blocks included), before unwrapping.
+    reasoning : str
+        The model's reasoning (reasoning fields and inline blocks), for transcripts only.
     """
 
     text: str
@@ -178,8 +210,20 @@ class ChatResult:
     constraint: str
     finish_reason: str | None = None
     raw: str = ""
+    reasoning: str = ""
+
+    @property
+    def truncated(self) -> bool:
+        """The reply was cut off at ``max_tokens`` (``finish_reason == "length"``): no answer."""
+        return self.finish_reason == "length"
 
     def as_dict(self) -> dict[str, Any]:
+        """A transcript record (the raw content only when it differs from ``text``)."""
+        extra: dict[str, Any] = {}
+        if self.reasoning:
+            extra["reasoning"] = self.reasoning
+        if self.raw != self.text:
+            extra["raw"] = self.raw
         return {
             "text": self.text,
             "prompt_tokens": self.usage.prompt_tokens,
@@ -191,26 +235,8 @@ class ChatResult:
             "cost_usd": self.cost_usd,
             "constraint": self.constraint,
             "finish_reason": self.finish_reason,
+            **extra,
         }
-
-
-def safe_url(url: str) -> str:
-    """``url`` without user info, query or fragment (safe to print)."""
-    parts = urlsplit(url)
-    host = parts.hostname or ""
-    if parts.port:
-        host = f"{host}:{parts.port}"
-    return urlunsplit((parts.scheme, host, parts.path.rstrip("/"), "", ""))
-
-
-def _is_loopback(url: str) -> bool:
-    host = urlsplit(url).hostname or ""
-    if host == "localhost":
-        return True
-    try:
-        return ipaddress.ip_address(host).is_loopback
-    except ValueError:
-        return False
 
 
 def parse_retry_after(headers: httpx.Headers, now: float | None = None) -> float | None:
@@ -239,11 +265,13 @@ def parse_retry_after(headers: httpx.Headers, now: float | None = None) -> float
 class _Failure(Exception):
     """A retryable attempt failure (internal)."""
 
-    def __init__(self, what: str, retry_after: float | None = None, bad_body: bool = False) -> None:
+    def __init__(self, what: str, retry_after: float | None = None, bad_body: bool = False,
+                 timeout: bool = False) -> None:
         super().__init__(what)
         self.what = what
         self.retry_after = retry_after
         self.bad_body = bad_body
+        self.timeout = timeout
 
 
 class _Slot:
@@ -283,7 +311,7 @@ class LLMClient:
         self.budget = budget
         self.settings = settings
         self._key = os.environ.get(settings.api_key_env) or None
-        self._url = settings.base_url.rstrip("/") + "/chat/completions"
+        self._url = endpoint(settings.base_url)
         self._where = safe_url(settings.base_url)
         self._prices = PriceTable(settings.prices)
         self._cache: ResponseCache | None = None
@@ -327,7 +355,7 @@ class LLMClient:
             # loading the CA files takes ~15 ms, which for 64 slots was a second of every study.
             self._ssl = httpx.create_ssl_context()
         limits = httpx.Limits(max_connections=1, max_keepalive_connections=1)
-        loopback = _is_loopback(s.base_url)
+        loopback = is_loopback(s.base_url)
         # Plain http on this machine: asyncio streams instead of anyio's (see transport.py);
         # about 8% less wall time per lockstep round against a fast server.
         fast = loopback and s.base_url.startswith("http://") and s.fast_transport
@@ -361,12 +389,17 @@ class LLMClient:
         seed: int | None = None,
         constrain_mode: str | None = None,
     ) -> tuple[dict[str, Any], str]:
-        """Request body and the resolved constraint mode."""
+        """Request body and the resolved constraint mode.
+
+        The body always says ``"stream": false`` (some servers stream unless told not to),
+        then every field in ``omit_fields`` is removed.
+        """
         s = self.settings
         payload: dict[str, Any] = {
             "model": s.model,
             "messages": [dict(m) for m in messages],
             "temperature": s.temperature if temperature is None else temperature,
+            "stream": False,
         }
         mt = s.max_tokens if max_tokens is None else max_tokens
         if mt is not None:
@@ -376,6 +409,10 @@ class LLMClient:
             payload["seed"] = sd
         mode = constrain.resolve_mode(constrain_mode or s.constrain, s.server_kind, bool(replies))
         constrain.apply(payload, mode, replies)
+        for name in s.omit_fields:
+            payload.pop(name, None)
+        if "grammar" not in payload and "response_format" not in payload:
+            mode = "none"
         return payload, mode
 
     async def chat(
@@ -389,6 +426,7 @@ class LLMClient:
         constrain_mode: str | None = None,
         use_cache: bool = True,
         cache_scope: str | None = None,
+        cache_if: Callable[[ChatResult], bool] | None = None,
     ) -> ChatResult:
         """Send one chat completion and return its result.
 
@@ -406,13 +444,20 @@ class LLMClient:
             Part of the cache key besides the request: a call with a scope is only ever answered
             by an earlier call with the same scope and request (never shared with other scopes),
             e.g. ``"<run id>/<step>/<attempt>"`` so a run resumes from its own replies only.
+        cache_if : callable, optional
+            Put a reply in the disk cache only when this returns True (e.g. "it names a valid
+            action"), so a failure is never replayed to a later run. Replies cut off at
+            ``max_tokens`` and replies without an answer are never cached.
 
         Raises
         ------
         LLMServerError
-            The server stayed unreachable or kept failing through every retry.
+            The server stayed unreachable or kept failing through every retry
+            (:class:`~jswim.llm.errors.LLMTimeoutError` when it kept timing out).
         LLMRequestError
-            The server rejected the request (e.g. 400, 401, 404).
+            The server rejected the request (e.g. 400: context too long);
+            :class:`~jswim.llm.errors.LLMSetupError` when no request can succeed as configured
+            (404, 401/403, a rejected field). The message names the server's own error.
         LLMResponseError
             The server kept sending bodies that are not chat completions.
         """
@@ -422,7 +467,7 @@ class LLMClient:
             constrain_mode=constrain_mode,
         )
         t0 = time.perf_counter()
-        deterministic = use_cache and payload["temperature"] == 0
+        deterministic = use_cache and payload.get("temperature", 0) == 0
         if not deterministic:
             return await self._send(payload, mode, t0)
         key = request_key(payload if cache_scope is None else {**payload, "jswim_cache_scope": cache_scope})
@@ -448,27 +493,35 @@ class LLMClient:
             raise
         else:
             fut.set_result(res)
-            if self._cache is not None:
+            if self._cache is not None and self._cacheable(res, cache_if):
                 self._cache.put(key, self._to_cache(res))
             return res
         finally:
             self._inflight.pop(key, None)
 
+    @staticmethod
+    def _cacheable(res: ChatResult, cache_if: Callable[[ChatResult], bool] | None) -> bool:
+        if res.truncated or not res.text.strip():
+            return False
+        return cache_if is None or bool(cache_if(res))
+
     def _to_cache(self, res: ChatResult) -> dict[str, Any]:
         u = res.usage
         return {
             "raw": res.raw,
+            "reasoning": res.reasoning,
+            "text": res.text,
             "finish_reason": res.finish_reason,
             "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens],
         }
 
     def _from_cache(self, value: dict[str, Any], mode: str, latency: float) -> ChatResult:
         usage = Usage(*value["usage"])
-        raw = value["raw"]
         return ChatResult(
-            text=constrain.reply_text(mode, raw), usage=usage, latency_s=latency, cache_hit=True,
+            text=value["text"], usage=usage, latency_s=latency, cache_hit=True,
             shared=False, retries=0, cost_usd=self._prices.cost(self.settings.model, usage),
-            constraint=mode, finish_reason=value.get("finish_reason"), raw=raw,
+            constraint=mode, finish_reason=value.get("finish_reason"), raw=value["raw"],
+            reasoning=value.get("reasoning", ""),
         )
 
     def _scrub(self, text: str) -> str:
@@ -485,7 +538,7 @@ class LLMClient:
         s = self.settings
         slots = self._slots
         assert slots is not None
-        retries = 0
+        retries = timeouts = 0
         tokens = estimate_prompt_tokens(payload["messages"]) + int(payload.get("max_tokens") or 0)
         while True:
             if self.pacer is not None:
@@ -514,10 +567,18 @@ class LLMClient:
                 self.counts.cost_usd += res.cost_usd
                 return res
             except _Failure as fail:
+                timeouts += fail.timeout
+                if fail.timeout and timeouts > s.timeout_retries:
+                    raise LLMTimeoutError(self._scrub(
+                        f"{self._where}: the server is slow: no answer within {s.timeout_s:g} s, "
+                        f"{timeouts} attempt(s); a cold local server may still be loading its model: "
+                        f"wait for it or raise --timeout (now {s.timeout_s:g} s)"
+                    )) from None
                 if retries >= s.max_retries:
                     msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts"
                     raise (LLMResponseError if fail.bad_body else LLMServerError)(self._scrub(msg)) from None
-                wait = self._backoff(retries)
+                # A timed-out request already waited a whole timeout: send it again at once.
+                wait = 0.0 if fail.timeout else self._backoff(retries)
                 if fail.retry_after is not None:
                     wait = min(fail.retry_after, s.max_retry_after_s)
                 retries += 1
@@ -525,12 +586,14 @@ class LLMClient:
                 slots.put_nowait(slot)  # free the slot before any backoff wait
             await asyncio.sleep(wait)
 
-    async def _attempt(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> dict[str, Any]:
+    async def _attempt(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> Completion:
         s = self.settings
         try:
             resp = await http.post(self._url, json=payload, headers=self._headers())
+        except httpx.ConnectTimeout:
+            raise _Failure(f"could not connect within {s.timeout_s:g} s") from None
         except httpx.TimeoutException:
-            raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)") from None
+            raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True) from None
         except httpx.TransportError as exc:
             detail = self._scrub(str(exc)) or "no detail"
             raise _Failure(f"connection failed ({type(exc).__name__}: {detail})") from None
@@ -538,28 +601,40 @@ class LLMClient:
             self.pacer.observe(resp.headers)
         status = resp.status_code
         if status in RETRY_STATUSES or status >= 500:
-            raise _Failure(f"HTTP {status}", retry_after=parse_retry_after(resp.headers))
+            detail = server_text(resp)
+            raise _Failure(f"HTTP {status}" + (f": {detail}" if detail else ""),
+                           retry_after=parse_retry_after(resp.headers))
         if status != 200:
-            detail = " ".join(resp.text.split())[:200]
-            hint = f"; check the API key in ${s.api_key_env}" if status in (401, 403) else ""
-            raise LLMRequestError(
-                self._scrub(f"{self._where}: HTTP {status} for model {s.model!r}: {detail}{hint}"), status
-            )
+            raise self._rejection(status, server_text(resp), payload)
+        text = resp.text
+        ctype = resp.headers.get("content-type", "")
         try:
-            body = resp.json()
-            choice = body["choices"][0]
-            content = choice["message"]["content"]
-            if not isinstance(content, str):
-                raise TypeError("content is not text")
-        except (ValueError, KeyError, IndexError, TypeError):
-            raise _Failure("the response is not a chat completion (malformed body)", bad_body=True) from None
-        return {"raw": content, "finish_reason": choice.get("finish_reason"), "usage": body.get("usage")}
+            if looks_like_sse(ctype, text):  # streamed although "stream": false was sent
+                return read_completion(assemble_sse(text), streamed=True)
+            return read_completion(json.loads(text))
+        except MalformedReply as exc:
+            raise _Failure(f"the response is not a chat completion ({exc})", bad_body=True) from None
+        except ValueError:
+            snippet = " ".join(text.split())[:80] or "empty"
+            raise _Failure(
+                f"the response is not a chat completion (malformed body, {ctype or 'no content type'}: {snippet})",
+                bad_body=True,
+            ) from None
 
-    def _attempt_result(self, got: dict[str, Any], mode: str, t0: float, retries: int) -> ChatResult:
-        usage = Usage.from_response(got["usage"])
+    def _rejection(self, status: int, server: str, payload: Mapping[str, Any]) -> LLMRequestError:
+        s = self.settings
+        err = rejection(status, server, payload, where=self._where, url=safe_url(self._url), model=s.model,
+                        api_key_env=s.api_key_env)
+        err.args = (self._scrub(str(err)),)
+        err.server_message = self._scrub(err.server_message)
+        return err
+
+    def _attempt_result(self, got: Completion, mode: str, t0: float, retries: int) -> ChatResult:
+        usage = Usage.from_response(got.usage)
         return ChatResult(
-            text=constrain.reply_text(mode, got["raw"]), usage=usage, latency_s=time.perf_counter() - t0,
+            text=constrain.reply_text(mode, got.answer), usage=usage, latency_s=time.perf_counter() - t0,
             cache_hit=False, shared=False, retries=retries,
             cost_usd=self._prices.cost(self.settings.model, usage), constraint=mode,
-            finish_reason=got["finish_reason"], raw=got["raw"],
+            finish_reason=got.finish_reason, raw=got.content, reasoning=got.reasoning,
         )
+

@@ -3,6 +3,15 @@
 Kept as a module so ``from jswim.llm.errors import LLMServerError`` goes on working.
 """
 
-from jswim.errors import LLMError, LLMRequestError, LLMResponseError, LLMServerError, LocalModelError
+from jswim.errors import (
+    LLMError,
+    LLMRequestError,
+    LLMResponseError,
+    LLMServerError,
+    LLMSetupError,
+    LLMTimeoutError,
+    LocalModelError,
+)
 
-__all__ = ["LLMError", "LLMRequestError", "LLMResponseError", "LLMServerError", "LocalModelError"]
+__all__ = ["LLMError", "LLMRequestError", "LLMResponseError", "LLMServerError", "LLMSetupError", "LLMTimeoutError",
+           "LocalModelError"]

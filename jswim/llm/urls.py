@@ -1,0 +1,101 @@
+"""Server addresses: the shapes users write, made into one API root.
+
+Users copy base URLs from server docs and logs in several shapes. :func:`normalize_base_url`
+accepts the common ones and returns the API root the client appends ``/chat/completions`` to:
+
+===========================================  ===========================================
+written                                      used
+===========================================  ===========================================
+``http://localhost:8080/v1``                 as is
+``http://localhost:8080`` (no path)          ``http://localhost:8080/v1``
+``http://host:8000/v1/chat/completions``     ``http://host:8000/v1``
+``localhost:11434/v1`` (no scheme)           ``http://localhost:11434/v1`` (local host)
+``api.example.com/v1`` (no scheme)           ``https://api.example.com/v1`` (public name)
+===========================================  ===========================================
+
+A path other than empty is kept (gateways mount the API anywhere); when the server answers 404
+the client's error names the URL it tried.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+from urllib.parse import urlsplit, urlunsplit
+
+from jswim.errors import ConfigError
+
+#: Path endings that name an endpoint rather than the API root (removed).
+ENDPOINT_SUFFIXES = ("/chat/completions", "/completions")
+
+
+def safe_url(url: str) -> str:
+    """``url`` without user info, query or fragment (safe to print)."""
+    parts = urlsplit(url)
+    host = parts.hostname or ""
+    if ":" in host:  # IPv6 literal
+        host = f"[{host}]"
+    if parts.port:
+        host = f"{host}:{parts.port}"
+    return urlunsplit((parts.scheme, host, parts.path.rstrip("/"), "", ""))
+
+
+def is_loopback(url: str) -> bool:
+    """Whether ``url`` points at this machine."""
+    host = urlsplit(url).hostname or ""
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def _is_local_name(host: str) -> bool:
+    """A host a scheme-less URL most likely reaches over plain http (this machine, a LAN box)."""
+    if host in ("localhost", "") or host.endswith((".local", ".lan", ".internal")) or "." not in host:
+        return True
+    try:
+        ip = ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    return ip.is_loopback or ip.is_private or ip.is_link_local
+
+
+def normalize_base_url(url: str) -> str:
+    """The API root for a base URL as a user wrote it (see the module docstring).
+
+    Raises
+    ------
+    ConfigError
+        Empty, not http(s), or without a host; the message says what to write.
+    """
+    text = (url or "").strip()
+    example = "write e.g. http://localhost:8080/v1 or https://api.openai.com/v1"
+    if not text:
+        raise ConfigError(f"the server base URL is empty; {example}")
+    if "://" not in text:
+        host = urlsplit("//" + text).hostname or ""
+        text = ("http://" if _is_local_name(host) else "https://") + text
+    parts = urlsplit(text)
+    if parts.scheme.lower() not in ("http", "https"):
+        raise ConfigError(f"the server base URL {text!r} is not http(s); {example}")
+    try:
+        parts.port  # noqa: B018 - raises on a bad port
+    except ValueError:
+        raise ConfigError(f"the server base URL {text!r} has a bad port; {example}") from None
+    if not parts.hostname:
+        raise ConfigError(f"the server base URL {text!r} has no host; {example}")
+    path = parts.path.rstrip("/")
+    for suffix in ENDPOINT_SUFFIXES:
+        if path.endswith(suffix):
+            path = path[: -len(suffix)]
+            break
+    if not path:
+        path = "/v1"
+    return urlunsplit((parts.scheme.lower(), parts.netloc, path, parts.query, ""))
+
+
+def endpoint(base_url: str, name: str = "chat/completions") -> str:
+    """``base_url`` + ``/name``, keeping a query string (``?api-version=...``) at the end."""
+    parts = urlsplit(base_url)
+    return urlunsplit((parts.scheme, parts.netloc, parts.path.rstrip("/") + "/" + name, parts.query, ""))
