@@ -284,3 +284,36 @@ def test_per_step_text_goes_last_and_the_paper_prompt_is_unchanged():
     cfg = PromptConfig(summary=True)
     text = render_prompt(PURCELL, cfg, 1, [rec], (lo, hi), summary="Observed so far: x.")
     assert text.index("Observed so far") < text.index("Latest records") < text.index("Reply with")
+
+
+@pytest.mark.parametrize(
+    "reply, expected",
+    [
+        # Bare pairs: the whole reply, or after an answer word.
+        ("1, 1", Action(1, 1)),
+        ("2, -1", Action(2, -1)),
+        ("2,-1.", Action(2, -1)),
+        ("`2, -1`", Action(2, -1)),
+        ("Answer: 2, -1", Action(2, -1)),
+        ("I pick 2, 1", Action(2, 1)),
+        ("2, 1.5", None),  # not two integers
+        ("Step 3: 1, 1", None),  # a step number, not an answer
+        # The final answer, not the first pair mentioned.
+        ("not [1, 1]; answer [2, -1]", Action(2, -1)),
+        ("Not [1, 1] again. [2, -1]", Action(2, -1)),
+        ("Instead of [1, 1], use [2, -1].", Action(2, -1)),
+        ("not [1, 1] but [2, -1]", Action(2, -1)),
+        ("Don't repeat [1, 1]; [2, 0] instead", Action(2, 0)),
+        ("[1, 1] didn't work so [2, -1]", Action(2, -1)),
+        ("Since [1, 1] was stuck, I'd go with [2, -1].", Action(2, -1)),
+        ("The move [1, 1] failed; next move: [2, -1]", Action(2, -1)),
+        ("Final answer: [2, 1]", Action(2, 1)),
+        ("[2, -1] because [1, 1] was stuck.", Action(2, -1)),  # answer first
+        ('{"dof": 2, "roc": -1}', Action(2, -1)),
+        # Two pairs, neither in an answer position: ambiguous, ask again.
+        ("Either [1, 1] or [2, -1] could work here", None),
+        ("not [1, 1]", None),  # only a rejected pair
+    ],
+)
+def test_parse_reply_takes_the_final_answer(reply, expected):
+    assert parse_reply(reply, allowed_actions(PURCELL)) == expected
