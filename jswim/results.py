@@ -16,18 +16,25 @@ rewritten), so no row is lost or duplicated. Every other file is derived from ``
 rewritten whole through a temporary file and ``os.replace``, so a kill never leaves half a file.
 
 :func:`load` reads a folder (finished or not, read-only) into pandas DataFrames.
+
+Files are plain: JSON without ``NaN``/``Infinity`` (non-finite numbers are written as ``null``,
+so any language's parser reads them) and the same permissions for every file (``0o666`` less
+the umask, as an ordinary ``open`` gives; a rewritten file keeps its mode). A folder that cannot
+be written (read-only, full disk) is a :class:`StudyFolderError` naming the folder and the cause.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import io
 import json
+import math
 import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Iterable, Mapping
+from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
 import numpy as np
 import pyarrow as pa
@@ -67,13 +74,66 @@ def legacy_names(obj: Any) -> Any:
     return obj
 
 
+class StudyFolderError(ResultFolderError):
+    """A study or output folder cannot be written (read-only, missing permission, disk full)."""
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)  # the only way to read it; set back at once (at import, single-threaded)
+    os.umask(mask)
+    return mask
+
+
+#: Mode of new files: what ``open`` gives (mkstemp alone would give 0600).
+FILE_MODE = 0o666 & ~_umask()
+
+
+@contextlib.contextmanager
+def writing(what: str | os.PathLike, hint: str = "choose a writable --out folder") -> Iterator[None]:
+    """Turn an ``OSError`` while writing ``what`` into a one-line :class:`StudyFolderError`."""
+    try:
+        yield
+    except OSError as exc:
+        where = exc.filename or what
+        cause = exc.strerror or type(exc).__name__
+        raise StudyFolderError(f"cannot write {where}: {cause}; {hint}") from None
+
+
+def plain_json(obj: Any) -> Any:
+    """``obj`` with only JSON types: NumPy values unwrapped, sets/tuples as lists, and
+    non-finite floats (NaN, +-inf) as ``None``, so the output is strict JSON."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, (str, int, bool)) or obj is None:
+        return obj
+    if isinstance(obj, Mapping):
+        return {str(k) if not isinstance(k, str) else k: plain_json(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, set, frozenset)):
+        items = sorted(obj, key=repr) if isinstance(obj, (set, frozenset)) else obj
+        return [plain_json(v) for v in items]
+    return plain_json(_jsonable(obj))
+
+
+def dumps(obj: Any, **kw: Any) -> str:
+    """Strict JSON text of ``obj`` (see :func:`plain_json`); ``kw`` go to :func:`json.dumps`."""
+    return json.dumps(plain_json(obj), allow_nan=False, **kw)
+
+
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
-    """Write ``data`` to ``path`` so that readers see the old or the new file, never a part."""
+    """Write ``data`` to ``path`` so that readers see the old or the new file, never a part.
+
+    The file gets :data:`FILE_MODE`, or the mode of the file it replaces.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     raw = data.encode() if isinstance(data, str) else data
+    try:
+        mode = path.stat().st_mode & 0o7777
+    except OSError:
+        mode = FILE_MODE
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
+        os.fchmod(fd, mode)
         with os.fdopen(fd, "wb") as fh:
             fh.write(raw)
             fh.flush()
@@ -85,8 +145,8 @@ def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
 
 
 def write_json(path: str | os.PathLike, obj: Any) -> None:
-    """Atomically write ``obj`` as indented JSON."""
-    atomic_write(path, json.dumps(obj, indent=2, sort_keys=True, default=_jsonable) + "\n")
+    """Atomically write ``obj`` as indented strict JSON (no NaN; see :func:`plain_json`)."""
+    atomic_write(path, dumps(obj, indent=2, sort_keys=True) + "\n")
 
 
 def _jsonable(obj: Any) -> Any:
@@ -94,8 +154,8 @@ def _jsonable(obj: Any) -> Any:
         return obj.item()
     if isinstance(obj, np.ndarray):
         return obj.tolist()
-    if isinstance(obj, (set, frozenset, tuple)):
-        return list(obj)
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
@@ -126,7 +186,7 @@ class StudyStore:
     ) -> None:
         self.folder = Path(folder)
         self.study = study
-        self.identity = json.loads(json.dumps(dict(identity), sort_keys=True, default=_jsonable))
+        self.identity = plain_json(dict(identity))
         meta_path = self.folder / META
         if self.folder.exists() and not self.folder.is_dir():
             raise ResultFolderError(f"--out {self.folder} is a file, not a folder; choose another path")
@@ -157,7 +217,8 @@ class StudyStore:
             self.meta = {"study": study, "identity": self.identity, "status": "running"}
         self.meta.update(dict(extra or {}))
         self.meta["status"] = "running"
-        write_json(meta_path, self.meta)
+        with writing(self.folder):
+            write_json(meta_path, self.meta)
 
     # -- runs -------------------------------------------------------------------------------
 
@@ -171,20 +232,22 @@ class StudyStore:
 
     def add_runs(self, rows: Iterable[Mapping[str, Any]]) -> None:
         """Append finished runs durably (one write and fsync for the batch)."""
-        lines = "".join(json.dumps(dict(r), sort_keys=True, default=_jsonable) + "\n" for r in rows)
+        lines = "".join(dumps(dict(r), sort_keys=True) + "\n" for r in rows)
         if not lines:
             return
         path = self.folder / RUNS
-        _repair_tail(path)
-        with open(path, "a", encoding="utf-8") as fh:
-            fh.write(lines)
-            fh.flush()
-            os.fsync(fh.fileno())
+        with writing(path):
+            _repair_tail(path)
+            with open(path, "a", encoding="utf-8") as fh:
+                fh.write(lines)
+                fh.flush()
+                os.fsync(fh.fileno())
 
     def transcript_path(self, run_id: str) -> Path:
         """Where the LLM transcript of ``run_id`` goes."""
         path = self.folder / "transcripts" / f"{run_id}.jsonl"
-        path.parent.mkdir(parents=True, exist_ok=True)
+        with writing(path.parent):
+            path.parent.mkdir(parents=True, exist_ok=True)
         return path
 
     # -- derived files ----------------------------------------------------------------------
@@ -192,12 +255,20 @@ class StudyStore:
     def finalize(self, status: str = "complete", summary: Mapping[str, Any] | None = None) -> None:
         """Rewrite the derived tables from ``runs.jsonl`` and record the status."""
         runs = self.load_runs()
-        write_tables(self.folder, runs)
-        self.meta["status"] = status
+        with writing(self.folder):
+            write_tables(self.folder, runs)
         self.meta["n_runs"] = len(runs)
         if summary is not None:
             self.meta["summary"] = dict(summary)
-        write_json(self.folder / META, self.meta)
+        self.set_status(status)
+
+    def set_status(self, status: str, **fields: Any) -> None:
+        """Record ``status`` (``"running"``, ``"complete"``, ``"interrupted"``, ``"failed"``...)
+        and ``fields`` in ``metadata.json`` (only that file is rewritten: safe in a handler)."""
+        self.meta["status"] = status
+        self.meta.update(fields)
+        with writing(self.folder):
+            write_json(self.folder / META, self.meta)
 
 
 def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:

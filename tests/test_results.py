@@ -2,13 +2,26 @@
 
 import json
 import math
+import os
+import stat
 
+import numpy as np
 import pytest
 
 import pandas as pd
 
+from jswim import results
 from jswim.errors import JswimError, ResultFolderError
-from jswim.results import StudyStore, atomic_write, legacy_names, load, read_metadata, read_runs, upgrade_names
+from jswim.results import (
+    StudyFolderError,
+    StudyStore,
+    atomic_write,
+    legacy_names,
+    load,
+    read_metadata,
+    read_runs,
+    upgrade_names,
+)
 from jswim.stats import learn_stats, mean_interval, wilson_interval
 
 
@@ -113,3 +126,85 @@ def test_learn_stats_counts_never_learned_runs_instead_of_inventing_steps():
     assert ls.label() == "10 [7-25], 3 of 5 learned"
     none = learn_stats([None, None])
     assert none.learned == 0 and math.isnan(none.median) and none.label() == "0 of 2 learned"
+
+
+def test_every_file_gets_the_same_ordinary_mode(tmp_path):
+    mask = os.umask(0o022)
+    os.umask(mask)
+    store = StudyStore(tmp_path / "s", "noise", {})
+    store.add_runs([{"run_id": "a", "x": [0.1], "actions": [1], "progress": [0.1], "stuck": [False]}])
+    store.finalize()
+    modes = {p.name: stat.S_IMODE(p.stat().st_mode) for p in (tmp_path / "s").iterdir() if p.is_file()}
+    assert {"metadata.json", "runs.jsonl", "runs.csv", "runs.parquet", "trajectories.parquet"} <= set(modes)
+    # What open() gives, for every file: with the usual umask 022, 0644 (collaborators can read).
+    assert set(modes.values()) == {0o666 & ~mask} == {results.FILE_MODE}, modes
+
+
+def test_a_rewritten_file_keeps_its_mode(tmp_path):
+    atomic_write(tmp_path / "f", "one")
+    os.chmod(tmp_path / "f", 0o640)
+    atomic_write(tmp_path / "f", "two")
+    assert stat.S_IMODE((tmp_path / "f").stat().st_mode) == 0o640
+
+
+def test_json_files_are_strict_json(tmp_path):
+    store = StudyStore(tmp_path / "s", "noise", {"zetas": [0.0, float("nan")]})
+    store.add_runs([{"run_id": "a", "final_x": float("nan"), "x": [float("inf"), np.float64("nan"), 1.0],
+                     "n": np.int64(3)}])
+    store.finalize(summary={"median": float("nan"), "rows": [{"mean": float("-inf")}]})
+    for name in ("metadata.json", "runs.jsonl"):
+        text = (tmp_path / "s" / name).read_text()
+        assert "NaN" not in text and "Infinity" not in text
+        for chunk in ([text] if name.endswith(".json") else text.splitlines()):
+            json.loads(chunk, parse_constant=lambda c: pytest.fail(f"{name} has {c}"))
+    meta = read_metadata(tmp_path / "s")
+    assert meta["summary"] == {"median": None, "rows": [{"mean": None}]}
+    assert read_runs(tmp_path / "s")[0]["x"] == [None, None, 1.0]
+    StudyStore(tmp_path / "s", "noise", {"zetas": [0.0, float("nan")]})  # still resumes
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes anywhere")
+def test_read_only_folder_is_one_line_error(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        with pytest.raises(StudyFolderError) as err:
+            StudyStore(ro / "study", "noise", {})
+        msg = str(err.value)
+        assert "\n" not in msg and str(ro / "study") in msg and "Permission denied" in msg and "--out" in msg
+        (tmp_path / "s").mkdir()
+        store = StudyStore(tmp_path / "s", "noise", {})
+        (tmp_path / "s").chmod(0o555)
+        with pytest.raises(StudyFolderError, match="cannot write"):
+            store.add_runs([{"run_id": "a"}])
+        with pytest.raises(StudyFolderError, match="cannot write"):
+            store.set_status("interrupted")
+    finally:
+        ro.chmod(0o755)
+        (tmp_path / "s").chmod(0o755)
+
+
+def test_set_status_records_the_status(tmp_path):
+    store = StudyStore(tmp_path / "s", "noise", {})
+    assert read_metadata(tmp_path / "s")["status"] == "running"
+    store.set_status("interrupted", n_runs=0)
+    meta = read_metadata(tmp_path / "s")
+    assert meta["status"] == "interrupted" and meta["n_runs"] == 0
+
+
+def test_unwritable_paths_are_one_line_errors(tmp_path, monkeypatch):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(StudyFolderError, match="cannot write") as err:
+        StudyStore(tmp_path / "file" / "study", "noise", {})  # a file where a folder should be
+    assert "\n" not in str(err.value)
+
+    def refuse(src, dst):
+        raise PermissionError(13, "Permission denied", str(dst))
+
+    store = StudyStore(tmp_path / "s", "noise", {})
+    monkeypatch.setattr(os, "replace", refuse)  # a read-only folder, as root sees it too
+    with pytest.raises(StudyFolderError) as err:
+        store.finalize()
+    assert str(err.value).startswith(f"cannot write {tmp_path / 's'}") and "Permission denied" in str(err.value)
+    assert not [p for p in (tmp_path / "s").iterdir() if p.name.endswith(".tmp")]
