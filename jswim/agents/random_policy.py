@@ -6,6 +6,8 @@ Runs are vectorised like the Q-learner (one ``lax.scan``, ``vmap`` over learners
 
 from __future__ import annotations
 
+import functools
+
 from typing import NamedTuple
 
 import jax
@@ -63,6 +65,12 @@ def run_batch(
     """
     check_action_set(action_set)
     rocs = tuple(default_rocs(params.model) if rocs is None else rocs)
-    batched = jnp.ndim(params.zeta) > 0
+    return _jitted(bool(jnp.ndim(params.zeta) > 0))(keys, params, steps, action_set, rocs)
+
+
+@functools.lru_cache(maxsize=None)
+def _jitted(batched: bool):
+    # One jitted function per batching mode: a new jax.jit object per call would compile again
+    # at every call (about 2 s for a study's random-policy batch).
     fn = jax.vmap(_one, in_axes=(0, 0 if batched else None, None, None, None))
-    return jax.jit(fn, static_argnums=(2, 3, 4))(keys, params, steps, action_set, rocs)
+    return jax.jit(fn, static_argnums=(2, 3, 4))
