@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import hashlib
 import math
 from typing import Any, NamedTuple, Sequence
 
@@ -575,6 +576,21 @@ def _scan(key: Array, actions: Array, params: EnvParams) -> Rollout:
     return out
 
 
+def seed32(seed: int) -> int:
+    """A seed :func:`jax.random.PRNGKey` takes, from any integer: ``seed`` itself in
+    ``[0, 2**32)`` (so existing seeds keep their streams), else a 32-bit BLAKE2b hash of it
+    (negative or huge seeds: ``--seed -1``, ``--seed 2**70``)."""
+    seed = int(seed)
+    if 0 <= seed < 2**32:
+        return seed
+    return int.from_bytes(hashlib.blake2b(str(seed).encode(), digest_size=4).digest(), "little")
+
+
+def seed_key(seed: int) -> Array:
+    """``jax.random.PRNGKey(seed32(seed))``: a key from any integer seed."""
+    return jax.random.PRNGKey(seed32(seed))
+
+
 def rollout(
     swimmer: str | SwimmerModel,
     actions: Any,
@@ -622,7 +638,7 @@ def rollout(
     # float64 whatever the global setting: this is the path physicists check numbers with.
     with jax.enable_x64(True):
         if isinstance(key, int):
-            key = jax.random.PRNGKey(key)
+            key = seed_key(key)
         if idx.ndim == 1:
             out = _scan(key, jnp.asarray(idx), params)
         else:

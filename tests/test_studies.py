@@ -96,3 +96,13 @@ def test_competence_grid():
         ("random", "shape-changing", "")}
     assert {p.variant for p in build("ablation", StudyOptions(runs=1))} == {"paper"}
     assert StudyOptions().llm_variant("ablation") == "paper"
+
+
+@pytest.mark.parametrize("seed", [4295, -1, 2**70])
+def test_any_integer_seed_gives_32_bit_run_seeds(seed):
+    from jswim.env import seed32, seed_key
+
+    plans = build("swim", StudyOptions(runs=2, q_runs=1, seed=seed))
+    assert all(0 <= p.seed < 2**32 for p in plans) and len({p.seed for p in plans}) == len(plans)
+    assert [p.seed for p in build("swim", StudyOptions(runs=2, q_runs=1, seed=seed))] == [p.seed for p in plans]
+    assert seed32(12345) == 12345 and seed32(-1) != seed32(-2) and seed_key(2**70).shape == (2,)

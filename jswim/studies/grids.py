@@ -4,7 +4,8 @@ which turns a study and its options into the list of runs (:class:`Plan`).
 A study runs, per swimmer and target direction, a list of *cells* (one group of a table or
 figure: a noise level, an n_ht, a dropped sentence, ...); a cell runs some agents, each
 ``runs`` (LLM) or ``q_runs`` (baselines) times. The order of the plans is part of a study's
-identity: a run's seed is ``seed * 1_000_003 + its index``, so cells and agents are laid out in
+identity: a run's seed is ``seed * 1_000_003 + its index`` (hashed to 32 bits when that falls
+outside ``[0, 2**32)``: :func:`jswim.env.seed32`), so cells and agents are laid out in
 the order the studies have always used.
 """
 
@@ -17,7 +18,7 @@ from typing import Callable, Iterable
 from jswim.actions import ACTION_SETS, check_action_set
 from jswim.agents.defaults import paper_init
 from jswim.agents.variants import VARIANTS, init_label, run_id, variant_action_set
-from jswim.env import all_inits
+from jswim.env import all_inits, seed32
 from jswim.errors import ConfigError
 from jswim.gait import PAPER
 from jswim.prompt import SENTENCES
@@ -298,7 +299,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     for k in range(runs[agent]):
                         init = initial(cell.init or o.init or spec.init, k, sw)
                         rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tag, repeat=k)
-                        plans.append(Plan(rid, agent, sw, d, init, zeta, o.seed * 1_000_003 + len(plans), o.steps,
+                        plans.append(Plan(rid, agent, sw, d, init, zeta, seed32(o.seed * 1_000_003 + len(plans)), o.steps,
                                           n_ht, drop, action_set, cell.group, v))
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"

@@ -16,7 +16,7 @@ import numpy as np
 from jswim import sharding
 from jswim.agents.defaults import paper_init
 from jswim.agents.qlearning import QConfig, QRun, batch_params, evaluate, train_batch
-from jswim.env import EnvParams, make_params
+from jswim.env import EnvParams, make_params, seed_key
 from jswim.errors import ConfigError
 from jswim.gait import PAPER, Criterion, GaitReport
 from jswim.stats import learn_stats
@@ -156,7 +156,7 @@ def study(
     if n_seeds < 1 or chunk < 1:
         raise ConfigError(f"n_seeds and chunk must be >= 1, got {n_seeds} and {chunk}")
     rows: list[Summary] = []
-    key = jax.random.PRNGKey(seed)
+    key = seed_key(seed)
     grid = [(d, z) for d in directions for z in zetas]
     total, done = len(swimmers) * len(grid) * n_seeds, 0
     for swimmer in swimmers:
