@@ -101,7 +101,8 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                         "below it is sent as a negative number and the run goes on)")
     g.add_argument("--max-tokens", type=int, default=None, metavar="N",
                    help="reply length limit (default per swimmer: 10 two DOFs, 20 four-DOF, as the authors' code; "
-                        "raised where a constrained format needs more)")
+                        "raised where a constrained format needs more); reasoning models need thousands; "
+                        "--omit-field max_tokens sends none")
     if study:
         g.add_argument("--zetas", type=_floats, default=None, metavar="Z1,Z2,...",
                        help="noise grid of the noise study (default 0,0.5,1,1.5,2,2.5,3)")
@@ -124,7 +125,14 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--cohorts", type=int, default=1, metavar="K",
                    help="advance the LLM runs in K independent lockstep cohorts (default 1; results do not "
                         "change; more helps against a fast server with many runs)")
-    b.add_argument("--cache-dir", default=None, metavar="DIR", help="persistent response cache (temperature 0)")
+    b.add_argument("--cache-dir", default=None, metavar="DIR",
+                   help="persistent response cache (temperature 0; only replies that named a valid action)")
+    b.add_argument("--timeout", type=float, default=None, metavar="S",
+                   help="seconds to wait for each reply (default 60; 120 for the embedded model); a reply that "
+                        "times out is asked for once more, then the study stops saying the server is slow")
+    b.add_argument("--omit-field", action="append", default=[], metavar="NAME",
+                   help="never send this optional request field (seed, max_tokens, stream, ...), for servers "
+                        "that reject it; repeat or comma-separate for several")
     p.add_argument("--out", default=None, metavar="FOLDER",
                    help="output folder (default jswim-out/<study>-<hash of the settings>; rerun to resume)")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
@@ -242,7 +250,8 @@ def _backend(args: argparse.Namespace):
     return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=args.api_key_env,
                    constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
                    n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
-                   cache_dir=args.cache_dir)
+                   cache_dir=args.cache_dir, timeout_s=args.timeout,
+                   omit_fields=tuple(f.strip() for v in args.omit_field for f in v.split(",") if f.strip()))
 
 
 def _options(args: argparse.Namespace, study: str):
@@ -316,10 +325,20 @@ def _run(study: str, args: argparse.Namespace) -> int:
             return 130
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
     _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
+    for limit, n in sorted(result.truncated.items()):
+        print(f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up); "
+              "a reasoning model needs a larger --max-tokens")
     print(f"results: {result.folder}")
     for f in result.figures:
         if f.suffix == ".png":
             print(f"figure:  {f}")
+    if result.failed_runs:
+        n_llm = sum(r.get("agent") == "llm" for r in result.rows)
+        first = result.failed_runs[0]
+        print(f"jswim: error: {len(result.failed_runs)} of {n_llm} LLM runs failed ({first['run_id']}: "
+              f"{first['error']}); they are recorded as failed in {result.folder}: run the same command to "
+              "run them again", file=sys.stderr)
+        return EXIT_USAGE
     return 0
 
 

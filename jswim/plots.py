@@ -32,6 +32,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
+from jswim.results import writing
 from jswim.stats import mean_interval, wilson_interval
 from jswim.swimmers.models import SwimmerModel, make_model
 
@@ -76,18 +77,29 @@ def save(fig: Figure, folder: str | os.PathLike, name: str, dpi: int = 300) -> l
 
     Each file is written to a temporary name and moved into place, so a kill never leaves half a
     figure.
+
+    Raises
+    ------
+    StudyFolderError
+        When ``folder`` cannot be written (read-only, a file in the way); one line.
     """
     folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     paths = []
-    with plt.rc_context(RC):
-        for ext in ("png", "pdf"):
-            path = folder / f"{name}.{ext}"
-            tmp = folder / f".{name}.tmp.{ext}"
-            fig.savefig(tmp, dpi=dpi, bbox_inches="tight", pad_inches=0.03, format=ext)
-            os.replace(tmp, path)
-            paths.append(path)
-    plt.close(fig)
+    try:
+        with writing(folder, "choose a writable folder"), plt.rc_context(RC):
+            folder.mkdir(parents=True, exist_ok=True)
+            for ext in ("png", "pdf"):
+                path = folder / f"{name}.{ext}"
+                tmp = folder / f".{name}.tmp.{ext}"
+                try:
+                    fig.savefig(tmp, dpi=dpi, bbox_inches="tight", pad_inches=0.03, format=ext)
+                    os.replace(tmp, path)
+                except BaseException:
+                    tmp.unlink(missing_ok=True)
+                    raise
+                paths.append(path)
+    finally:
+        plt.close(fig)
     return paths
 
 

@@ -313,7 +313,38 @@ class PromptTemplate:
             text = Path(path).read_text(encoding="utf-8")
         except OSError as exc:
             raise ConfigError(f"cannot read prompt template {path}: {exc.strerror}") from None
-        return cls.from_text(text)
+        return cls.from_text(text).check(f"--prompt-file {path}")
+
+    def check(self, where: str = "the prompt template") -> "PromptTemplate":
+        """``self`` if every placeholder is known and the prompt shows the history and the allowed
+        set (the paper's S3 and S5, or ``{history}`` and ``{allowed}``/``{choices}``); else
+        :class:`ConfigError` naming what is wrong. Checked when a file is read, so a bad file
+        fails before any run.
+        """
+        prompt_names, record_names = _placeholders()
+        parts = [("layout", self.layout, prompt_names)]
+        parts += [(name, text, prompt_names) for name, text in self.sentences]
+        parts.append(("record", self.record, record_names))
+        for what, text, known in parts:
+            try:
+                names = [f for _, f, _, _ in string.Formatter().parse(text) if f is not None]
+            except ValueError as exc:
+                raise ConfigError(f"{where}: bad braces in the {what} ({exc}); write literal braces as {{{{ }}}}") from None
+            unknown = sorted({n for n in names if n not in known})
+            if unknown:
+                raise ConfigError(f"{where}: unknown placeholder {{{unknown[0]}}} in the {what}; known: "
+                                  + ", ".join("{" + k + "}" for k in known))
+        shown = _fields(self.layout)
+        for name in SENTENCES:
+            if name in shown:
+                shown |= _fields(self.sentence(name))
+        # Shown means reached from the layout, directly or through a sentence it uses.
+        for needs, put, what in ((("history",), "{S3} or {history}", "history"),
+                                 (("allowed", "choices"), "{S5} or {allowed}", "allowed set")):
+            if not shown & set(needs):
+                raise ConfigError(f"{where}: the prompt never shows the {what}; put {put} in the layout "
+                                  "(or in a sentence it uses)")
+        return self
 
 
 DEFAULT_TEMPLATE = PromptTemplate()
@@ -424,8 +455,13 @@ def _dof_ranges(sw: SwimmerText) -> str:
 
 def render_record(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> str:
     """One history line."""
+    return _fill(cfg.template.record, _record_values(rec, sw, cfg), "record")
+
+
+def _record_values(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> dict[str, str]:
+    """The placeholders of a record line (one place: rendering and :meth:`PromptTemplate.check`)."""
     d = sw.dof_decimals
-    values = {
+    return {
         "step": str(rec.step),
         "dofs_before": ", ".join(format_dof(v, d) for v in rec.dofs_before),
         "dofs_after": ", ".join(format_dof(v, d) for v in rec.dofs_after),
@@ -434,7 +470,6 @@ def render_record(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> str
         "x_after": str(encode_position(rec.x_after, cfg.x_min)),
         "stuck": "yes" if rec.stuck or abs(rec.dx) < STUCK_DX else "no",
     }
-    return _fill(cfg.template.record, values, "record")
 
 
 def render_prompt(
@@ -475,8 +510,25 @@ def render_prompt(
         raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
     shown = list(records[-cfg.n_ht :]) if cfg.n_ht > 0 else []
     allowed = list(options) if options is not None else allowed_actions(sw, cfg.action_set, dof_values)
+    values = _prompt_values(sw, cfg, direction, shown, allowed, dof_values, x, summary)
+    for name in SENTENCES:
+        text = "" if name in cfg.drop else _fill(cfg.template.sentence(name), values, name)
+        values[name] = text
+    layout = cfg.layout
+    if summary and "summary" not in _fields(layout):
+        # No slot in the layout: the sentence goes right before the history (or last without it).
+        if values["S3"]:
+            values["S3"] = summary + "\n" + values["S3"]
+        else:
+            layout = layout + "\n{summary}"
+    return _tidy(_fill(layout, values, "layout"))
+
+
+def _prompt_values(sw: SwimmerText, cfg: PromptConfig, direction: int, shown: Sequence[HistoryRecord],
+                   allowed: Sequence[Action], dof_values: Sequence[float], x: float, summary: str) -> dict[str, str]:
+    """The placeholders of layouts and sentences (one place: rendering and :meth:`PromptTemplate.check`)."""
     d = sw.dof_decimals
-    values = {
+    return {
         "direction": "+x" if direction == 1 else "-x",
         "direction_words": "positive x" if direction == 1 else "negative x",
         "dofs": _join_prose(sw.names),
@@ -494,17 +546,15 @@ def render_prompt(
         f" X = {encode_position(x, cfg.x_min)}",
         "summary": summary,
     }
-    for name in SENTENCES:
-        text = "" if name in cfg.drop else _fill(cfg.template.sentence(name), values, name)
-        values[name] = text
-    layout = cfg.layout
-    if summary and "summary" not in _fields(layout):
-        # No slot in the layout: the sentence goes right before the history (or last without it).
-        if values["S3"]:
-            values["S3"] = summary + "\n" + values["S3"]
-        else:
-            layout = layout + "\n{summary}"
-    return _tidy(_fill(layout, values, "layout"))
+
+
+def _placeholders() -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """Names a layout or sentence may use (the variables and S1..S5), and a record line's."""
+    sw = SwimmerText(2, -1.0, 1.0, 3, (-1, 0, 1))  # any swimmer: only the names count
+    cfg = PromptConfig()
+    rec = HistoryRecord(1, (1.0, 1.0), (-1.0, 1.0), Action(1, -1), 0.0, 0.0)
+    prompt = tuple(_prompt_values(sw, cfg, 1, [], allowed_actions(sw), (1.0, 1.0), 0.0, "")) + SENTENCES
+    return prompt, tuple(_record_values(rec, sw, cfg))
 
 
 def _choices(sw: SwimmerText, allowed: Sequence[Action]) -> str:

@@ -48,6 +48,15 @@ if TYPE_CHECKING:
 RUNS = "runs.jsonl"
 META = "metadata.json"
 
+#: Statuses of runs that did not finish (the server failed them): recorded with their error, not
+#: done. A resume runs them again, and a later record of the same run replaces them.
+FAILED_STATUSES = frozenset({"llm_error", "aborted"})
+
+
+def is_failed(row: Mapping[str, Any]) -> bool:
+    """Whether a run record is a failed run (:data:`FAILED_STATUSES`), not a finished one."""
+    return row.get("status") in FAILED_STATUSES
+
 #: Fields renamed since folders were first written: old name -> new name. Folders keep what they
 #: were written with; readers translate (:func:`upgrade_names`), so an old folder still resumes,
 #: summarises and plots.
@@ -227,8 +236,8 @@ class StudyStore:
         return read_runs(self.folder)
 
     def done_ids(self) -> set[str]:
-        """Run ids already finished."""
-        return {r["run_id"] for r in self.load_runs()}
+        """Run ids already finished (failed runs are not: a resume runs them again)."""
+        return {r["run_id"] for r in self.load_runs() if not is_failed(r)}
 
     def add_runs(self, rows: Iterable[Mapping[str, Any]]) -> None:
         """Append finished runs durably (one write and fsync for the batch)."""
@@ -258,6 +267,7 @@ class StudyStore:
         with writing(self.folder):
             write_tables(self.folder, runs)
         self.meta["n_runs"] = len(runs)
+        self.meta.pop("error", None)  # of an earlier session that stopped
         if summary is not None:
             self.meta["summary"] = dict(summary)
         self.set_status(status)
@@ -272,23 +282,25 @@ class StudyStore:
 
 
 def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
-    """Finished runs of a study folder (see :class:`StudyStore`), fields under today's names
-    (:func:`upgrade_names`)."""
+    """Runs of a study folder (see :class:`StudyStore`), one record per ``run_id`` in first-seen
+    order, fields under today's names (:func:`upgrade_names`).
+
+    The first record of a run wins, except that a failed run (:func:`is_failed`) is replaced by
+    any later record of it: the one from the resume that ran it again.
+    """
     path = Path(folder) / RUNS
     if not path.exists():
         return []
-    seen: set[str] = set()
-    out = []
+    by_id: dict[str, dict[str, Any]] = {}
     for line in path.read_text(encoding="utf-8").splitlines():
         try:
             row = json.loads(line)
         except json.JSONDecodeError:
             continue  # a torn final line from a kill; the run simply counts as not done
-        if row.get("run_id") in seen:
-            continue
-        seen.add(row["run_id"])
-        out.append(upgrade_names(row))
-    return out
+        rid = row.get("run_id")
+        if rid not in by_id or is_failed(by_id[rid]):
+            by_id[rid] = upgrade_names(row)
+    return list(by_id.values())
 
 
 def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:

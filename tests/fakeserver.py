@@ -159,7 +159,8 @@ class FakeServer:
     reject_fields : mapping of str to str, optional
         Request field -> error message: a request carrying the field gets HTTP 400 with it.
     cold_start : float
-        Seconds after start during which requests wait (a local server loading its model).
+        Seconds from the first chat request during which requests wait: a server that loads its
+        model on first use (Ollama does), or is still loading it.
 
     Attributes
     ----------
@@ -191,7 +192,7 @@ class FakeServer:
         self.stream = stream
         self.reject_fields = dict(reject_fields or {})
         self.cold_start = cold_start
-        self._warm_at = 0.0
+        self._warm_at: float | None = None
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
         self.requests: list[dict[str, Any]] = []
@@ -221,7 +222,6 @@ class FakeServer:
         self._loop = loop
         server = loop.run_until_complete(asyncio.start_server(self._connection, "127.0.0.1", 0, backlog=1024))
         self._port = server.sockets[0].getsockname()[1]
-        self._warm_at = time.monotonic() + self.cold_start
         ready.set()
         try:
             loop.run_forever()
@@ -373,6 +373,8 @@ class FakeServer:
 
     async def _answer(self, body: dict[str, Any], fault: Fault | None, writer: asyncio.StreamWriter) -> bool:
         text: str | Answer | Fault | None = None
+        if self._warm_at is None:
+            self._warm_at = time.monotonic() + self.cold_start
         cold = self._warm_at - time.monotonic()
         if cold > 0:  # still "loading the model"
             await asyncio.sleep(cold)
@@ -434,6 +436,11 @@ def history_records(body: dict[str, Any]) -> int:
     return len(re.findall(r"^\d+: \(", str(first.get("content", "")), re.M))
 
 
+def is_follow_up(body: dict[str, Any]) -> bool:
+    """Whether the request continues a conversation (it carries an earlier assistant reply)."""
+    return any(m.get("role") == "assistant" for m in body.get("messages", []))
+
+
 def _context_400(body: dict[str, Any]) -> "str | Fault":
     # The prompt outgrows a small context once it shows two history records: from step 3 on.
     if history_records(body) >= 2:
@@ -445,7 +452,7 @@ def _context_400(body: dict[str, Any]) -> "str | Fault":
 
 def _think_then_follow_up(body: dict[str, Any]) -> "str | Answer":
     # Thinks past max_tokens on a first request; answers a follow-up (a longer conversation).
-    if len(body.get("messages", [])) > 1:
+    if is_follow_up(body):
         return "[2, -1]"
     return Answer("<think>" + THOUGHT, "length")
 
@@ -459,9 +466,9 @@ MODES: dict[str, dict[str, Any]] = {
     "parts": {"reply": lambda body: Answer([{"type": "thinking", "thinking": THOUGHT},
                                             {"type": "text", "text": "[2, -1]"}])},  # -> [2, -1]
     # Cut off while thinking: no answer; the follow-up (a different request) answers.
-    "null-length": {"reply": lambda body: "[2, -1]" if len(body.get("messages", [])) > 1 else
+    "null-length": {"reply": lambda body: "[2, -1]" if is_follow_up(body) else
                     Answer(None, "length", (("reasoning_content", THOUGHT),))},
-    "empty-length": {"reply": lambda body: "[2, -1]" if len(body.get("messages", [])) > 1 else Answer("", "length")},
+    "empty-length": {"reply": lambda body: "[2, -1]" if is_follow_up(body) else Answer("", "length")},
     "think-length": {"reply": _think_then_follow_up},
     # Never answers within max_tokens: every step fails (no-op), each reply counted as cut off.
     "always-length": {"reply": lambda body: Answer(None, "length", (("reasoning_content", THOUGHT),))},

@@ -356,3 +356,42 @@ def test_error_message_shapes():
         "seed: extra inputs are not permitted")
     assert error_message({"detail": "Not Found"}) == "Not Found"
     assert error_message({"error": "model not loaded"}) == "model not loaded"
+
+
+# -- backend settings -----------------------------------------------------------------------
+
+
+def test_backend_checks_its_settings_up_front(tmp_path):
+    from jswim.llm.backend import Backend
+
+    not_gguf = tmp_path / "model.gguf"
+    not_gguf.write_text("<html>a download page</html>")
+    with pytest.raises(ConfigError, match="not a GGUF model file"):
+        Backend(gguf=str(not_gguf))
+    real = tmp_path / "ok.gguf"
+    real.write_bytes(b"GGUF\x03\x00\x00\x00")
+    assert Backend(gguf=str(real)).gguf == str(real)  # only the header is read here
+    b = Backend(base_url="localhost:8080", model="m", timeout_s=300, omit_fields=("seed", "seed"))
+    assert b.base_url == "http://localhost:8080/v1" and b.omit_fields == ("seed",)
+    s = b.client_settings()
+    assert (s.timeout_s, s.omit_fields) == (300, ("seed",))
+    assert Backend(base_url="http://h/v1", model="m").describe().keys() == {
+        "kind", "base_url", "model", "constrain", "temperature"}  # defaults keep old identities
+    with pytest.raises(ConfigError, match="--timeout"):
+        Backend(base_url="http://h/v1", model="m", timeout_s=0)
+    with pytest.raises(ConfigError, match="--omit-field model"):
+        Backend(base_url="http://h/v1", model="m", omit_fields=("model",))
+
+
+def test_preflight_says_slow_when_the_server_does_not_answer():
+    import socket
+
+    from jswim.llm.backend import check_server
+
+    with socket.socket() as s:  # accepts connections (backlog) but never answers
+        s.bind(("127.0.0.1", 0))
+        s.listen(4)
+        port = s.getsockname()[1]
+        with pytest.raises(LLMTimeoutError, match="slow.*--timeout") as err:
+            check_server(f"127.0.0.1:{port}", 0.3)
+    assert f"http://127.0.0.1:{port}/v1/models" in str(err.value)

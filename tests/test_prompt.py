@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import sys
 
 import pytest
@@ -243,6 +244,9 @@ def test_template_from_text_and_file(tmp_path):
 
     f = tmp_path / "t.txt"
     f.write_text("[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S3}\n")
+    with pytest.raises(ConfigError, match="never shows the allowed set"):  # no S5: refused up front
+        PromptTemplate.from_file(f)
+    f.write_text("[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S5}\n{S3}\n")
     tpl = PromptTemplate.from_file(f)
     assert tpl.sentence("S1") == DEFAULT_SENTENCES["S1"]
     text = render_prompt(PURCELL, PromptConfig(template=tpl), 1, [rec(2, stuck=True)], HI)
@@ -317,3 +321,26 @@ def test_per_step_text_goes_last_and_the_paper_prompt_is_unchanged():
 )
 def test_parse_reply_takes_the_final_answer(reply, expected):
     assert parse_reply(reply, allowed_actions(PURCELL)) == expected
+
+
+@pytest.mark.parametrize("text, words", [
+    ("Go {direction}. {S5}\n{S3}\n{bogus}", "unknown placeholder {bogus} in the layout"),
+    ("[record]\n#{step} {nope}\n", "unknown placeholder {nope} in the record"),
+    ("Go {direction}. Answer with one of {allowed}.", "never shows the history"),
+    ("[S3]\nno records here\n[layout]\n{S3} {S5}", "never shows the history"),  # S3 without {history}
+    ("Go {direction}.\n{history}", "never shows the allowed set"),
+    ("Go {direction {S3} {S5}", "bad braces"),
+])
+def test_template_check_refuses_what_cannot_work(text, words):
+    with pytest.raises(ConfigError, match=re.escape(words)):
+        PromptTemplate.from_text(text).check()
+
+
+def test_template_check_accepts_every_placeholder_the_prompt_fills():
+    from jswim.prompt import _placeholders
+
+    names, record = _placeholders()
+    layout = " ".join("{" + n + "}" for n in names)
+    assert PromptTemplate.from_text(layout).check().layout == layout
+    assert PromptTemplate(record=" ".join("{" + n + "}" for n in record)).check()
+    PromptTemplate().check()  # the default template, and the paper's order

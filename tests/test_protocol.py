@@ -101,3 +101,16 @@ def test_the_paper_protocol_shares_nothing_between_runs_by_default():
     cfg = LLMAgentConfig()
     assert cfg.share_identical is False and cfg.system == " " and cfg.order == "paper"
     assert protocol.clearing_rule(cfg, make_model("nlink")).window == 40
+
+
+def test_a_cut_off_reply_is_no_answer_and_says_so():
+    cfg = LLMAgentConfig(parse_retries=1)
+    req = first_request(cfg)
+    # A reply stopped at max_tokens may end mid-sentence ("[1, 1] would fail, so"): never executed.
+    cut = protocol.read_reply(req, req.messages, "[1, 1] would fail, so", 0, cfg, truncated=True)
+    assert cut.action is None and "cut off" in cut.follow_up[-1]["content"]
+    assert cut.follow_up[-2] == {"role": "assistant", "content": "[1, 1] would fail, so"}
+    empty = protocol.read_reply(req, req.messages, "", 0, cfg, truncated=True)
+    assert empty.follow_up[-2]["content"] == protocol.CUTOFF_TURN  # never an empty assistant turn
+    assert empty.follow_up != req.messages  # a deterministic server is never asked the same again
+    assert protocol.valid_reply(req, "[2, -1]") and not protocol.valid_reply(req, "no idea")

@@ -42,7 +42,7 @@ from jswim.agents import fidelity, protocol
 from jswim.agents.defaults import default_max_tokens, default_n_ht
 from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
-from jswim.errors import ConfigError, LLMError, LLMServerError, PositionBelowMinimumError
+from jswim.errors import ConfigError, LLMError, LLMServerError, LLMSetupError, PositionBelowMinimumError
 from jswim.llm import constrain
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.local import LocalServer
@@ -76,6 +76,7 @@ class RunResult:
     stuck: list[bool] = field(default_factory=list)
     failed_steps: int = 0
     parse_retries: int = 0
+    truncated: int = 0  # replies the server cut off at max_tokens (no answer)
     n_clears: int = 0
     usage: UsageTotals = field(default_factory=UsageTotals)
     tokens_seen: int = 0  # prompt + reply tokens of every call, shared or cached ones included
@@ -96,7 +97,7 @@ class RunResult:
             "init": "".join(map(str, self.levels0)), "zeta": s.zeta, "seed": s.seed, "n_ht": self.n_ht,
             "drop": ",".join(sorted(s.drop)), "status": self.status, "error": self.error,
             "steps": self.steps, "final_x": self.x[-1] if self.x else 0.0,
-            "failed_steps": self.failed_steps, "parse_retries": self.parse_retries,
+            "failed_steps": self.failed_steps, "parse_retries": self.parse_retries, "truncated": self.truncated,
             "http_retries": u.retries, "n_clears": self.n_clears, "calls": u.calls,
             "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
             "completion_tokens": u.completion_tokens, "cached_tokens": u.cached_tokens, "cost_usd": u.cost_usd,
@@ -162,7 +163,7 @@ class _Group:
             direction=jnp.asarray([p.direction for p in params], dtype),
             init=jnp.asarray(np.stack([np.asarray(p.init) for p in params]), jnp.int32),
         )
-        keys = jnp.stack([jax.random.PRNGKey(s) for s in seeds])
+        keys = jnp.stack([env.seed_key(s) for s in seeds])
         split = jax.vmap(jax.random.split)(keys)
         self.reset_keys, self.step_keys = split[:, 0], split[:, 1]
         self.states, dofs = _start(self.reset_keys, self.params)
@@ -272,13 +273,16 @@ class LLMDriver:
         for k in range(cfg.parse_retries + 1):
             seed = protocol.sample_seed(spec.seed, step, k, temperature)
             # Not sharing: the cache key carries the run, step and attempt, so only this very
-            # call's earlier reply (a resume) can answer it, never another run's.
+            # call's earlier reply (a resume) can answer it, never another run's. Only replies
+            # that name a valid action go in the disk cache: a failure is never replayed.
             scope = None if cfg.share_identical else f"{run.result.run_id}/{step}/{k}"
             res = await self.client.chat(messages, replies=req.replies, temperature=cfg.temperature, seed=seed,
-                                         max_tokens=run.max_tokens, cache_scope=scope)
+                                         max_tokens=run.max_tokens, cache_scope=scope,
+                                         cache_if=lambda r: protocol.valid_reply(req, r.text))
             run.result.usage.add(res)
             run.result.tokens_seen += res.usage.total_tokens
-            reply = protocol.read_reply(req, messages, res.text, k, cfg)
+            run.result.truncated += res.truncated
+            reply = protocol.read_reply(req, messages, res.text, k, cfg, truncated=res.truncated)
             action = reply.action
             attempts.append({**res.as_dict(), "seed": seed, "parsed": list(action) if action else None})
             if action is not None or reply.follow_up is None:
@@ -325,10 +329,11 @@ class LLMDriver:
         active = [i for g in groups for i in g.members if self.runs[i].active]
         outcomes = await asyncio.gather(*[self._decide(self.runs[i]) for i in active], return_exceptions=True)
         decided: dict[int, tuple[Action, bool, dict[str, Any]]] = {}
-        down: LLMServerError | None = None
+        down: LLMError | None = None
         for i, out in zip(active, outcomes):
             run = self.runs[i]
-            if isinstance(out, LLMServerError):
+            # Down, or set up so that no request can succeed (URL, key, a rejected field): stop all.
+            if isinstance(out, (LLMServerError, LLMSetupError)):
                 down = down or out
             elif isinstance(out, LLMError):
                 self._finish(run, "llm_error", str(out))

@@ -160,21 +160,39 @@ class Reply:
     follow_up: list[dict[str, str]] | None = None
 
 
+#: Follow-up of a reply the server cut off at ``max_tokens`` (``{allowed}`` is filled in).
+CUTOFF_PROMPT = "Your reply was cut off before it named an action. Answer only with one of {allowed}."
+
+#: The assistant turn of a follow-up when the cut-off reply had no answer text at all.
+CUTOFF_TURN = "(reply cut off)"
+
+
+def valid_reply(req: Request, reply: str) -> bool:
+    """Whether ``reply`` (an answer, reasoning already split off) names one of the allowed actions."""
+    return parse_reply(reply, req.allowed) is not None
+
+
 def read_reply(
-    req: Request, messages: Sequence[dict[str, str]], reply: str, attempt: int, cfg: LLMAgentConfig
+    req: Request, messages: Sequence[dict[str, str]], reply: str, attempt: int, cfg: LLMAgentConfig,
+    *, truncated: bool = False,
 ) -> Reply:
     """Read the reply to ``messages`` (attempt ``attempt``, 0-based) of request ``req``.
 
-    A reply without a valid action gets a short corrective follow-up (a new request, so
-    temperature-0 caching does not replay the bad reply) while ``attempt < cfg.parse_retries``.
+    ``reply`` is the answer, after any reasoning (the client splits reasoning off; it is never
+    parsed). A reply cut off at ``max_tokens`` (``truncated``) has no answer, whatever its text:
+    it could stop in the middle of "not [1, 1] but ...". A reply without a valid action gets a
+    short corrective follow-up (a new request, so a deterministic server is never sent the same
+    request again and temperature-0 caching cannot replay the bad reply) while
+    ``attempt < cfg.parse_retries``.
     """
-    action = parse_reply(reply, req.allowed)
+    action = None if truncated else parse_reply(reply, req.allowed)
     if action is not None:
         return Reply(action)
     if attempt >= cfg.parse_retries:
         return Reply(None)
     offered = ", ".join(a.text() for a in req.options)
+    ask = CUTOFF_PROMPT if truncated else cfg.retry_prompt
     return Reply(None, list(messages) + [
-        {"role": "assistant", "content": reply},
-        {"role": "user", "content": cfg.retry_prompt.format(allowed=offered)},
+        {"role": "assistant", "content": reply or (CUTOFF_TURN if truncated else "")},
+        {"role": "user", "content": ask.format(allowed=offered)},
     ])

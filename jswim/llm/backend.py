@@ -16,8 +16,10 @@ from typing import Any
 
 import httpx
 
-from jswim.errors import ConfigError, LLMServerError
-from jswim.llm.client import ClientSettings, check_temperature, safe_url
+from jswim.errors import ConfigError, LLMServerError, LLMTimeoutError
+from jswim.llm.client import ClientSettings, check_temperature
+from jswim.llm.rejection import REQUIRED_FIELDS
+from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.local import LocalServer, default_model_path
 
@@ -55,12 +57,18 @@ class Backend:
         identical temperature-0 requests of different runs in flight together, so they are sent once.
     cache_dir : str or None
         Response cache (temperature 0 only).
+    timeout_s : float or None
+        Per-attempt request timeout (a request that times out is sent once more, then the
+        study stops saying the server is slow); ``None``: 60 s, 120 s for the embedded model.
+    omit_fields : tuple of str
+        Optional request fields never sent, for servers that reject them (``"seed"``, ...).
 
     Raises
     ------
     ConfigError
-        For a model without a server or a server without a model, a missing GGUF file, an
-        unknown ``constrain`` mode, a temperature outside [0, 2] or a count below 1.
+        For a model without a server or a server without a model, a base URL that is not one, a
+        missing or non-GGUF model file, an unknown ``constrain`` mode, a temperature outside
+        [0, 2], a count below 1 or a timeout that is not positive.
     """
 
     base_url: str | None = None
@@ -74,14 +82,24 @@ class Backend:
     concurrency: int = 16
     cohorts: int = 1
     cache_dir: str | None = None
+    timeout_s: float | None = None
+    omit_fields: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.base_url is None and self.model is not None:
             raise ConfigError("--model names a model on a server; give --base-url too (or --gguf for a local file)")
         if self.base_url is not None and self.model is None:
             raise ConfigError("--base-url needs --model (the model name on that server)")
-        if self.gguf is not None and not Path(self.gguf).is_file():
-            raise ConfigError(f"--gguf {self.gguf}: no such file")
+        if self.gguf is not None:
+            check_gguf(self.gguf)
+        if self.base_url is not None:
+            object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
+        object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
+        bad = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
+        if bad:
+            raise ConfigError(f"--omit-field {bad[0]}: every request needs it")
+        if self.timeout_s is not None and not self.timeout_s > 0:
+            raise ConfigError(f"--timeout must be > 0 seconds, got {self.timeout_s}")
         if self.constrain not in MODES:
             raise ConfigError(f"constrain must be one of {', '.join(MODES)}, got {self.constrain!r}")
         check_temperature(self.temperature)
@@ -102,9 +120,14 @@ class Backend:
             name = (Path(self.gguf) if self.gguf else default_model_path()).name
         else:
             name = self.model
-        return {"kind": "embedded" if self.local else "remote",
-                "base_url": None if self.local else safe_url(self.base_url),
-                "model": name, "constrain": self.constrain, "temperature": self.temperature}
+        out = {"kind": "embedded" if self.local else "remote",
+               "base_url": None if self.local else safe_url(self.base_url),
+               "model": name, "constrain": self.constrain, "temperature": self.temperature}
+        # What is sent changes the answers; recorded only when not the default, so folders
+        # written before these settings existed keep their identity.
+        if self.omit_fields:
+            out["omit_fields"] = list(self.omit_fields)
+        return out
 
     def server(self) -> LocalServer:
         """The embedded server of this backend (not started; use it as a context manager)."""
@@ -114,7 +137,10 @@ class Backend:
 
     def client_settings(self, server: LocalServer | None = None, **changes: Any) -> ClientSettings:
         """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``."""
-        common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir)
+        common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir,
+                      omit_fields=self.omit_fields)
+        if self.timeout_s is not None:
+            common["timeout_s"] = self.timeout_s
         if self.local:
             if server is None:
                 raise ConfigError("the embedded backend needs its running server (Backend.server())")
@@ -124,10 +150,31 @@ class Backend:
                                max_concurrency=self.concurrency, **common)
         return dataclasses.replace(s, **changes) if changes else s
 
-    def check(self, timeout_s: float = 5.0) -> None:
-        """For a remote backend, :func:`check_server`; nothing to check for the embedded one."""
+    def check(self, timeout_s: float | None = None) -> None:
+        """For a remote backend, :func:`check_server` (waiting ``timeout_s``, default the
+        backend's ``--timeout`` or 5 s); nothing to check for the embedded one."""
         if not self.local:
-            check_server(self.base_url, timeout_s)
+            check_server(self.base_url, timeout_s or self.timeout_s or 5.0)
+
+
+#: The first bytes of every GGUF file.
+GGUF_MAGIC = b"GGUF"
+
+
+def check_gguf(path: str) -> None:
+    """Raise :class:`ConfigError` unless ``path`` is a readable GGUF file (checked up front, so
+    a wrong file fails before any baseline runs, not when the embedded server starts)."""
+    p = Path(path)
+    if not p.is_file():
+        raise ConfigError(f"--gguf {path}: no such file")
+    try:
+        with open(p, "rb") as fh:
+            magic = fh.read(4)
+    except OSError as exc:
+        raise ConfigError(f"--gguf {path}: cannot read it ({exc.strerror})") from None
+    if magic != GGUF_MAGIC:
+        raise ConfigError(f"--gguf {path} is not a GGUF model file (it does not start with the GGUF magic bytes); "
+                          "give a .gguf file, e.g. from Hugging Face, or leave --gguf out for the packaged model")
 
 
 def check_server(base_url: str, timeout_s: float = 5.0) -> None:
@@ -135,8 +182,15 @@ def check_server(base_url: str, timeout_s: float = 5.0) -> None:
 
     Any HTTP answer counts (even 401 or 404): only an unreachable host or port is an error here.
     """
+    url = endpoint(normalize_base_url(base_url), "models")
     try:
-        httpx.get(base_url.rstrip("/") + "/models", timeout=timeout_s)
+        httpx.get(url, timeout=timeout_s)
+    except httpx.ConnectTimeout:
+        raise LLMServerError(f"cannot reach {safe_url(base_url)} (no connection within {timeout_s:g} s); "
+                             "check --base-url or start the server") from None
+    except httpx.TimeoutException:
+        raise LLMTimeoutError(f"{safe_url(url)} did not answer within {timeout_s:g} s: the server is slow or still "
+                              "loading its model; wait for it or raise --timeout") from None
     except httpx.HTTPError as exc:
         raise LLMServerError(
             f"cannot reach {safe_url(base_url)} ({type(exc).__name__}); check --base-url or start the server"

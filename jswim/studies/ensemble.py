@@ -39,7 +39,7 @@ import numpy as np
 from jax import Array
 
 from jswim import sharding
-from jswim.env import EnvParams, EnvState, advance, make_params, noise, start_state
+from jswim.env import EnvParams, EnvState, advance, make_params, noise, seed_key, start_state
 from jswim.errors import ConfigError
 
 #: Swimmers per statistics block: partial sums are formed per block on the device and combined
@@ -336,7 +336,7 @@ def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all")
     from jswim.agents import qlearning
 
     config = qlearning.QConfig(action_set=action_set)
-    run_ = qlearning.train(jax.random.PRNGKey(seed), params.replace(zeta=0.0), config)
+    run_ = qlearning.train(seed_key(seed), params.replace(zeta=0.0), config)
     return q_policy(np.asarray(run_.q), params, action_set, label=f"Q-policy (seed {seed}, {action_set})")
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from jswim import plots
+from jswim.results import is_failed
 from jswim.stats import learn_stats, mean_interval, wilson_interval
 
 
@@ -18,11 +19,16 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     ``tokens_per_step`` counts what the model read and wrote per decision (shared and cached calls
     included) where rows record it. ``distinct`` is the number of different runs (start and
     actions): at temperature 0 without noise, runs from the same start are identical copies, so
-    the intervals of such groups rest on fewer independent runs than ``n``."""
+    the intervals of such groups rest on fewer independent runs than ``n``.
+
+    Failed runs (:func:`jswim.results.is_failed`: the server stopped them) are left out: they
+    are not results, and the study reports them apart."""
     out = []
     keys = ("agent", "swimmer", "direction", "group")
     grouped: dict[tuple, list[dict]] = {}
     for r in rows:
+        if is_failed(r):
+            continue
         grouped.setdefault(tuple(r.get(k) for k in keys), []).append(r)
     for key, g in sorted(grouped.items(), key=lambda kv: tuple(str(v) for v in kv[0])):
         k = sum(bool(r["success"]) for r in g)
@@ -53,6 +59,7 @@ def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path,
     ``note`` (see :func:`jswim.plots.unfinished_note`) is written across each figure.
     """
     paths: list[Path] = []
+    rows = [r for r in rows if not is_failed(r)]  # failed runs are not results
     for name, fig in plots.study_figures(study, rows, note=note).items():
         paths += plots.save(fig, folder, name)
     return paths

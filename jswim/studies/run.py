@@ -28,13 +28,13 @@ from jswim.agents import fidelity, qlearning, random_policy
 from jswim.agents.llm import run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
 from jswim.console import eta
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, JswimError
 from jswim.gait import Criterion, judge
 from jswim.llm.backend import Backend
 from jswim.llm.client import LLMClient
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
-from jswim.results import StudyStore, legacy_names, read_runs
+from jswim.results import StudyStore, is_failed, legacy_names, read_runs
 from jswim.studies.grids import COMPETENCE_VARIANTS, SPECS, SWIM_VARIANT, Plan, StudyOptions, build
 from jswim.studies.report import draw_figures, summarize
 
@@ -75,6 +75,7 @@ def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, leve
             row["orientation"] = [float(v) for v in pose[1][i]]
         if extra is not None:
             row.update({k: v for k, v in extra[i].items() if k not in row})
+            row["status"] = extra[i].get("status", "done")  # an LLM run the server failed is not done
         rows.append(row)
     return rows
 
@@ -86,7 +87,7 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     init = np.array([[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32)
     params = qlearning.batch_params(base, len(plans), zeta=np.array([p.zeta for p in plans]),
                                     direction=np.array([p.direction for p in plans], float), init=init)
-    keys = jax.vmap(jax.random.PRNGKey)(np.array([p.seed for p in plans], np.uint32))
+    keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
     if p0.agent == "qlearning":
         cfg = qlearning.QConfig(steps=p0.steps, action_set=p0.action_set)
         run = qlearning.train_batch(keys, params, cfg, pose=True)
@@ -113,6 +114,8 @@ class StudyResult:
     figures: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
     llm_speed: dict[str, float] = field(default_factory=dict)  # calls, billed calls, wall s, calls/s
+    failed_runs: list[dict[str, Any]] = field(default_factory=list)  # run_id and the server's error
+    truncated: dict[str, int] = field(default_factory=dict)  # max_tokens -> LLM replies cut off there
 
 
 def study_backend(study: str, backend: Backend | None) -> Backend | None:
@@ -207,6 +210,19 @@ def run_study(
         # What differs from the paper's protocol in every LLM run (each transcript lists its own too).
         "fidelity_deviations": list(fidelity.ALWAYS),
     })
+    try:
+        return _run_in(store, study, plans, options, backend, folder, template, progress, figures, t0)
+    except KeyboardInterrupt:
+        store.set_status("interrupted")  # finished runs are kept; the same command resumes
+        raise
+    except JswimError as exc:
+        store.set_status("stopped", error=str(exc))
+        raise
+
+
+def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: StudyOptions, backend: Backend | None,
+            folder: Path, template: PromptTemplate | None, progress: ProgressFn | None, figures: bool,
+            t0: float) -> StudyResult:
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
     if backend is not None and any(p.agent == "llm" for p in todo):
@@ -233,10 +249,19 @@ def run_study(
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
     constraint = sorted({r["constraint"] for r in rows if r.get("agent") == "llm" and r.get("constraint")})
-    store.finalize("complete", {"groups": summary, **({"llm_speed": speed} if speed else {}),
-                                **({"constrained_decoding": constraint} if constraint else {})})
+    failed = [{"run_id": r["run_id"], "error": r.get("error")} for r in rows if is_failed(r)]
+    llm = [r for r in rows if r.get("agent") == "llm"]
+    cut: dict[str, int] = {}  # max_tokens -> replies cut off there (the limit is per swimmer)
+    for r in llm:
+        if r.get("truncated"):
+            cut[str(r.get("max_tokens"))] = cut.get(str(r.get("max_tokens")), 0) + r["truncated"]
+    replies = {"truncated_replies": sum(cut.values()), "truncated_at": cut} if llm else {}
+    store.finalize("incomplete" if failed else "complete",
+                   {"groups": summary, "failed_runs": failed, **replies, **({"llm_speed": speed} if speed else {}),
+                    **({"constrained_decoding": constraint} if constraint else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
-    return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed)
+    return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed, failed,
+                       dict(replies.get("truncated_at", {})))
 
 
 def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
