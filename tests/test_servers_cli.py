@@ -104,6 +104,8 @@ def test_swim_rejected_field_is_one_line_then_the_option_works(name, extra, fix,
         line = one_line_error(capsys)
         assert all(w in line for w in words), line
         assert not llm_rows(tmp_path / "o")  # nothing saved as done
+        meta = read_metadata(tmp_path / "o")
+        assert meta["status"] == "stopped" and words[0] in meta["error"]
         assert swim(srv.url, tmp_path / "o2", *extra, *fix) == 0
     assert all(r["status"] == "done" and r["actions"] == [GOOD] * 4 for r in llm_rows(tmp_path / "o2"))
 
