@@ -214,3 +214,20 @@ def test_qlearn_study_does_not_depend_on_the_chunk():
     parts = qlearn.study(cfg, chunk=16, progress=lambda done, total: seen.append((done, total)), **kw)
     assert whole == parts
     assert seen[-1] == (80, 80) and len(seen) == 5
+
+
+def test_plain_steps_of_the_baselines_agree_with_exact_steps_over_a_training_run(float32):
+    """``advance(exact=False)`` (the baselines' 200-step runs) matches the exact step to 1e-5 a."""
+    params = env.make_params("purcell", zeta=0.7)
+    acts = jax.random.randint(jax.random.PRNGKey(0), (200,), 0, 6)
+    ys = env.noise(jax.random.PRNGKey(1), 200)
+
+    def run(exact):
+        def body(st, inp):
+            st, info = env.advance(st, inp[0], inp[1], params, exact=exact)
+            return st, info.x
+        return np.asarray(jax.lax.scan(body, env.reset(jax.random.PRNGKey(0), params), (acts, ys))[1])
+
+    fast, exact = run(False), run(True)
+    assert fast.dtype == np.float32 and np.abs(exact).max() > 0.1
+    np.testing.assert_allclose(fast, exact, rtol=0, atol=1e-5)

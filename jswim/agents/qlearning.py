@@ -285,7 +285,7 @@ def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = Fals
         s = _corner(state.levels)
         mask = _offered(state.levels, params, config.action_set)
         action, explore = _act(_row(q, s), mask, epsilon(t), u[0], config.tie_break)
-        new, info = advance(state, action, 2.0 * u[1] - 1.0, params)
+        new, info = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
         mask2 = _offered(new.levels, params, config.action_set)
         future = jnp.max(jnp.where(mask2, _row(q, _corner(new.levels)), -jnp.inf))
         out = (action.astype(jnp.int8), new.x, explore) + ((new.y, new.theta) if pose else (None, None))
@@ -438,7 +438,7 @@ def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "a
     def body(state, u):
         mask = _offered(state.levels, params, action_set)
         action = _pick(_greedy_set(_row(q, _corner(state.levels)), mask, "random"), u[0])
-        state, _ = advance(state, action, 2.0 * u[1] - 1.0, params)
+        state, _ = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
         return state, action
 
     return jax.lax.scan(body, reset(k_reset, params), jax.random.uniform(k_run, (steps, 2)))[1]

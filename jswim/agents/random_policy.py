@@ -38,7 +38,7 @@ def _one(key: Array, params: EnvParams, steps: int, action_set: str, rocs: tuple
     def body(state, u):
         mask = offered_mask(state.levels, params.model, action_set, rocs)
         action = _pick(mask, u[0])
-        state, _ = advance(state, action, 2.0 * u[1] - 1.0, params)
+        state, _ = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
         return state, (action, state.x, state.y, state.theta)
 
     _, (acts, xs, ys, thetas) = jax.lax.scan(body, state0, jax.random.uniform(k_run, (steps, 2)))
