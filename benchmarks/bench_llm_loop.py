@@ -1,17 +1,25 @@
-"""How close the batched LLM loop gets to the ideal wall time against a fixed-latency server.
+"""How close the LLM loop gets to the wall time no scheduler can beat.
 
-R independent runs of S steps each talk to the fake server (:mod:`tests.fakeserver`), which
-answers every request after L seconds. Run one after the other, the study would take R*S*L; with
-every round's prompts in flight together it ideally takes S*L. The target is wall <= 1.2 * S*L.
+R independent runs of S steps each talk to the fake server (:mod:`tests.fakeserver`). Every run
+waits for its own replies one after the other, so no schedule can finish before the slowest run's
+own summed latency, ``bound = max_r sum_s d(r, s)``. That is the reference; the target is
+``wall <= 1.1 * bound`` at R = 64, S = 50 with heavy-tailed latency.
 
-A lockstep round costs about L + R*c, where c is this process's CPU time per request (httpx,
-prompt, parsing; printed below), because every request of the round is built before the wait
-and handled after it. ``--cohorts K`` splits the runs into K independently stepping cohorts so
-one cohort's CPU work overlaps the others' waiting.
+Latency (the server's delay per request):
+
+- ``--lognormal MEDIAN SIGMA`` (default 0.5 0.8): ``d = median * exp(sigma * N(0, 1))``, the
+  normal draw seeded by the request's messages (:func:`tests.fakeserver.lognormal_latency`), so
+  each (run, step) has its own reproducible delay and this script recomputes every delay from
+  the prompts in the transcripts. Real APIs look like this: most calls quick, a few very slow.
+- ``--latency L``: every answer after exactly L seconds (bound = S * L).
+
+Also printed, from the same delays: what lockstep rounds (every run's call, then one step for
+all) would have cost at the least, ``sum_s max_r d(r, s)``, and how many env calls the steps
+took (steps per env call = how many replies landed together).
 
 Run from the repository root: ``python benchmarks/bench_llm_loop.py [--runs 64 --steps 50
---latency 0.1]``. By default the server runs in its own process, as a real one would; ``--inprocess``
-puts it on a thread of this process (then it competes for the GIL).
+--lognormal 0.5 0.8]``. The server runs in its own process, as a real one would;
+``--inprocess`` puts it on a thread of this process (then it competes for the GIL).
 """
 
 from __future__ import annotations
@@ -26,9 +34,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # the fake server lives in tests/
 
-from jswim.agents.llm import LLMAgentConfig, LLMRunSpec, run_batch_async  # noqa: E402
+from jswim.agents.llm import LLMAgentConfig, LLMDriver, LLMRunSpec  # noqa: E402
 from jswim.llm import ClientSettings, LLMClient  # noqa: E402
-from tests.fakeserver import FakeServer, hash_reply  # noqa: E402
+from jswim.prompt import build_messages  # noqa: E402
+from tests.fakeserver import FakeServer, hash_reply, lognormal_latency  # noqa: E402
 
 
 def specs(runs: int, steps: int, swimmer: str) -> list[LLMRunSpec]:
@@ -36,58 +45,81 @@ def specs(runs: int, steps: int, swimmer: str) -> list[LLMRunSpec]:
     return [LLMRunSpec(swimmer=swimmer, zeta=0.5, seed=k, n_steps=steps) for k in range(runs)]
 
 
-async def study(url: str, runs: int, steps: int, swimmer: str, cohorts: int) -> tuple[float, float, list]:
-    settings = ClientSettings(base_url=url, model="fake", max_concurrency=runs, timeout_s=30.0)
+async def study(url: str, runs: int, steps: int, swimmer: str) -> tuple[float, float, list, int]:
+    settings = ClientSettings(base_url=url, model="fake", max_concurrency=runs, timeout_s=60.0)
     # Every request must reach the server: no cache, no sharing of identical prompts.
     config = LLMAgentConfig(share_identical=False)
     async with LLMClient(settings) as client:
-        await run_batch_async(specs(runs, 1, swimmer), client, config, cohorts=cohorts)  # compile
+        # Compile the env step for this batch size first (a prompt the timed runs never send).
+        await LLMDriver(specs(runs, 1, swimmer), client, config, transcripts=False).run()
+        driver = LLMDriver(specs(runs, steps, swimmer), client, config)
         t0, c0 = time.perf_counter(), time.process_time()
-        results = await run_batch_async(specs(runs, steps, swimmer), client, config, cohorts=cohorts)
-        return time.perf_counter() - t0, time.process_time() - c0, results
+        results = await driver.run()
+        return time.perf_counter() - t0, time.process_time() - c0, results, sum(g.n_steps for g in driver.groups)
+
+
+def delays(results: list, latency) -> list[list[float]]:
+    """Each run's server delays, recomputed from the prompts it sent (first attempts only)."""
+    out = []
+    for r in results:
+        out.append([latency({"messages": build_messages(rec["prompt"])})
+                    for rec in r.transcript if rec.get("type") == "step"])
+    return out
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=64, help="R, independent runs")
     ap.add_argument("--steps", type=int, default=50, help="S, steps per run")
-    ap.add_argument("--latency", type=float, default=0.1, help="L, seconds per server answer")
+    ap.add_argument("--lognormal", type=float, nargs=2, default=(0.5, 0.8), metavar=("MEDIAN", "SIGMA"),
+                    help="heavy-tailed latency (default 0.5 s median, sigma 0.8)")
+    ap.add_argument("--latency", type=float, default=None, help="fixed latency in seconds instead")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the lognormal delays")
     ap.add_argument("--swimmer", default="purcell")
-    ap.add_argument("--cohorts", type=int, default=8,
-                    help="independent lockstep cohorts (default 8; 1 = one env step per round)")
     ap.add_argument("--inprocess", action="store_true", help="serve from a thread of this process")
     args = ap.parse_args()
-    R, S, L = args.runs, args.steps, args.latency
+    R, S = args.runs, args.steps
+    if args.latency is not None:
+        fixed = args.latency
+        latency = lambda body: fixed  # noqa: E731
+        server_args = ["--latency", str(fixed)]
+        what = f"fixed {fixed:g} s"
+    else:
+        median, sigma = args.lognormal
+        latency = lognormal_latency(median, sigma, seed=args.seed)
+        server_args = ["--lognormal", str(median), str(sigma), "--latency-seed", str(args.seed)]
+        what = f"lognormal, median {median:g} s, sigma {sigma:g}"
 
     if args.inprocess:
-        srv = FakeServer(reply=hash_reply, latency=L).start()
+        srv = FakeServer(reply=hash_reply, latency=latency).start()
         url, stop = srv.url, srv.stop
     else:
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "tests.fakeserver", "--latency", str(L)], stdout=subprocess.PIPE, text=True, cwd=ROOT
-        )
+        proc = subprocess.Popen([sys.executable, "-m", "tests.fakeserver", *server_args], stdout=subprocess.PIPE,
+                                text=True, cwd=ROOT)
         url = proc.stdout.readline().strip()
         stop = proc.terminate
     try:
-        wall, cpu, results = asyncio.run(study(url, R, S, args.swimmer, args.cohorts))
+        wall, cpu, results, env_calls = asyncio.run(study(url, R, S, args.swimmer))
     finally:
         stop()
 
+    d = delays(results, latency)
     calls = sum(r.usage.calls for r in results)
-    failed = sum(r.failed_steps for r in results)
-    ideal, sequential = S * L, R * S * L
-    print(f"runs R={R}, steps S={S}, latency L={L:g} s, cohorts {args.cohorts}, "
-          f"server {'in-process' if args.inprocess else 'subprocess'}")
-    print(f"calls {calls}, failed steps {failed}, statuses {sorted({r.status for r in results})}")
-    print(f"wall time          {wall:8.2f} s   ({calls / wall:.0f} calls/s)")
-    print(f"ideal S*L          {ideal:8.2f} s   wall/ideal      = {wall / ideal:.3f}  (target <= 1.2)")
-    print(f"sequential R*S*L   {sequential:8.2f} s   sequential/wall = {sequential / wall:.1f}x")
-    print(f"overhead per round {(wall - ideal) / S * 1000:8.1f} ms   "
-          f"(this process: {cpu / calls * 1e6:.0f} us CPU per call)")
-    # Each round costs about L + R * c, with c the CPU per call spent in this process.
-    c = cpu / calls
-    print(f"=> wall/ideal <= 1.2 needs R <= 0.2 * L / c = {0.2 * L / c:.0f} runs at L = {L:g} s, "
-          f"or L >= 5 * R * c = {5 * R * c:.2f} s at R = {R}")
+    steps = sum(r.steps for r in results)
+    per_run = [sum(x) for x in d]
+    bound = max(per_run)
+    lockstep = sum(max(x[s] for x in d if s < len(x)) for s in range(max(len(x) for x in d)))
+    mean_d = sum(per_run) / max(sum(len(x) for x in d), 1)
+    print(f"runs R={R}, steps S={S}, latency {what}, server {'in-process' if args.inprocess else 'subprocess'}")
+    print(f"calls {calls}, steps {steps}, failed steps {sum(r.failed_steps for r in results)}, "
+          f"statuses {sorted({r.status for r in results})}")
+    print(f"mean delay per call {mean_d:.3f} s; runs' summed delays {min(per_run):.1f}-{bound:.1f} s")
+    print(f"wall time                 {wall:8.2f} s   ({calls / wall:.0f} calls/s)")
+    print(f"bound (slowest run's sum) {bound:8.2f} s   wall/bound = {wall / bound:.3f}  (target <= 1.1)")
+    print(f"lockstep rounds, at least {lockstep:8.2f} s   = {lockstep / bound:.2f} x bound "
+          f"({lockstep / (S * mean_d):.1f} x the mean delay per step)")
+    print(f"env calls {env_calls} for {steps} steps ({steps / max(env_calls, 1):.1f} steps per call); "
+          f"this process: {cpu / calls * 1e6:.0f} us CPU per call, {cpu:.1f} s in all")
 
 
 if __name__ == "__main__":

@@ -1,12 +1,13 @@
 """The LLM agent: prompt -> chat client -> parse -> env step, for a batch of independent runs.
 
-Runs advance in lockstep rounds. In a round every active run renders its prompt and all the
-requests go out together (``asyncio.gather`` over one :class:`jswim.llm.LLMClient`, which bounds
-how many are in flight); then one jitted, vmapped :func:`jswim.env.step` per swimmer model moves
-every swimmer of that model at once. Finished runs drop out of the LLM round; they stay in the
-fixed-size env batch with a no-op action so the compiled step is reused. Optionally the runs are
-dealt into several cohorts that each step in lockstep on their own (``cohorts``), which hides
-this process's per-request CPU time behind the other cohorts' waiting.
+Each run is its own pipeline: render the prompt, call the model (one
+:class:`jswim.llm.LLMClient` for all runs bounds the calls in flight and paces them), parse,
+step, record, and on to the next step as soon as its own reply is back. There is no round and
+no barrier: real APIs have heavy-tailed latency, and a barrier would make every step cost the
+slowest of all the runs' calls. Stepping is shared without holding anyone back: the runs of one
+swimmer model keep one batched env state, and the actions handed in during one turn of the
+event loop are stepped in one jitted call at the next turn (replies that land together, step
+together; a run never waits for another run's reply).
 
 The protocol itself (prompt in, action or follow-up out) is pure and lives in
 :mod:`jswim.agents.protocol`; the run spec, the agent settings and the named variants in
@@ -44,7 +45,9 @@ from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
 from jswim.errors import ConfigError, LLMError, LLMServerError, LLMSetupError, PositionBelowMinimumError
 from jswim.llm import constrain
-from jswim.llm.client import ClientSettings, LLMClient
+from jswim.llm.budget import BudgetExhausted
+from jswim.llm.client import ChatResult, ClientSettings, LLMClient
+from jswim.llm.journal import CallJournal, call_key
 from jswim.llm.local import LocalServer
 from jswim.llm.sync import run_sync
 from jswim.llm.usage import UsageTotals
@@ -80,6 +83,7 @@ class RunResult:
     n_clears: int = 0
     usage: UsageTotals = field(default_factory=UsageTotals)
     tokens_seen: int = 0  # prompt + reply tokens of every call, shared or cached ones included
+    replayed_calls: int = 0  # calls answered from the study's call journal (paid in an earlier session)
     transcript: list[dict[str, Any]] | None = None  # in memory when no transcript folder is given
     knobs: dict[str, Any] = field(default_factory=dict)  # the variant switches (LLMAgentConfig.knobs)
     below_x_min: int | None = None  # first step whose X fell below x_min (sent as a negative number)
@@ -101,7 +105,7 @@ class RunResult:
             "http_retries": u.retries, "n_clears": self.n_clears, "calls": u.calls,
             "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
             "completion_tokens": u.completion_tokens, "cached_tokens": u.cached_tokens, "cost_usd": u.cost_usd,
-            "tokens_seen": self.tokens_seen,
+            "tokens_seen": self.tokens_seen, "replayed_calls": self.replayed_calls,
             "levels0": self.levels0, "x": self.x, "y": self.y, "orientation": self.orientation,
             "actions": self.actions, "progress": self.progress,
             "stuck": self.stuck, "below_x_min": self.below_x_min, **self.knobs,
@@ -123,6 +127,10 @@ class _Run:
     stats: MoveStats = field(default_factory=MoveStats)
     max_tokens: int | None = None
     deviations: list[str] = field(default_factory=list)  # from the paper's protocol (agents.fidelity)
+    meta: dict[str, Any] = field(default_factory=dict)  # the transcript's first record
+    n_calls: int = 0  # calls made so far (their index in the call journal)
+    begun: bool = False
+    closed: bool = False
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
@@ -140,9 +148,13 @@ def _jsonable(obj: Any) -> Any:
 
 
 @jax.jit
-def _advance(base_keys: jax.Array, states: env.EnvState, actions: jax.Array, params: env.EnvParams):
+def _advance(base_keys: jax.Array, states: env.EnvState, actions: jax.Array, params: env.EnvParams,
+             mask: jax.Array):
+    # Every member is stepped (one compiled shape per group) and only the masked ones keep it:
+    # each swimmer's step key is folded from its own step count, so who else steps changes nothing.
     keys = jax.vmap(jax.random.fold_in)(base_keys, states.t)
     new, info = jax.vmap(env.step)(keys, states, actions, params)
+    new = jax.tree.map(lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, states)
     return new, info, jax.vmap(env.dof_values)(new, params)
 
 
@@ -153,7 +165,13 @@ def _start(reset_keys: jax.Array, params: env.EnvParams):
 
 
 class _Group:
-    """Runs sharing one swimmer model: one batched env state, stepped in one call."""
+    """Runs sharing one swimmer model: one batched env state.
+
+    A run hands its action to :meth:`submit` and awaits the result. The group steps every action
+    handed in since its last step at the next turn of the event loop (``call_soon``), in one
+    call: replies that land together are stepped together, and nobody waits for a reply that
+    has not landed.
+    """
 
     def __init__(self, members: list[int], params: list[env.EnvParams], seeds: list[int]) -> None:
         self.members = members
@@ -169,27 +187,55 @@ class _Group:
         self.states, dofs = _start(self.reset_keys, self.params)
         self.dofs = np.asarray(dofs, np.float64)
         self.levels0 = np.asarray(self.states.levels)
+        self._pending: dict[int, tuple[int, asyncio.Future]] = {}
+        self._noop = env.encode_action(*NO_OP)
+        self.n_steps = 0  # env calls made (for benchmarks: steps per call = batching achieved)
 
-    def step(self, actions: np.ndarray) -> dict[str, np.ndarray]:
-        self.states, info, dofs = _advance(self.step_keys, self.states, jnp.asarray(actions, jnp.int32), self.params)
-        out = jax.device_get(
-            {"x": info.x, "x_lo": self.states.x_lo, "y": self.states.y, "orientation": self.states.theta,
-             "progress": info.progress, "stuck": info.stuck, "moved": info.moved, "dofs": dofs}
-        )
-        out = {k: np.asarray(v) for k, v in out.items()}
-        # The full position (hi + lo): the prompt encodes X to 1e-3 a after any number of steps.
-        out["x"] = out["x"].astype(np.float64) + out.pop("x_lo").astype(np.float64)
-        return out
+    def submit(self, pos: int, action: int) -> asyncio.Future:
+        """Step member ``pos`` with env action ``action`` soon; the future gets its step's outputs."""
+        loop = asyncio.get_running_loop()
+        fut = loop.create_future()
+        if not self._pending:
+            loop.call_soon(self._flush)
+        self._pending[pos] = (action, fut)
+        return fut
+
+    def _flush(self) -> None:
+        pending, self._pending = self._pending, {}
+        n = len(self.members)
+        acts = np.full(n, self._noop, np.int32)
+        mask = np.zeros(n, bool)
+        for pos, (a, _) in pending.items():
+            acts[pos], mask[pos] = a, True
+        try:
+            self.states, info, dofs = _advance(self.step_keys, self.states, acts, self.params, mask)
+            out = jax.device_get({"x": info.x, "x_lo": self.states.x_lo, "y": self.states.y,
+                                  "orientation": self.states.theta, "progress": info.progress, "stuck": info.stuck,
+                                  "dofs": dofs})
+            out = {k: np.asarray(v) for k, v in out.items()}
+            # The full position (hi + lo): the prompt encodes X to 1e-3 a after any number of steps.
+            out["x"] = out["x"].astype(np.float64) + out.pop("x_lo").astype(np.float64)
+        except BaseException as exc:  # pragma: no cover - an env failure reaches every waiting run
+            for _, fut in pending.values():
+                if not fut.done():
+                    fut.set_exception(exc)
+            return
+        self.n_steps += 1
+        for pos, (_, fut) in pending.items():
+            if not fut.done():  # a cancelled run (Ctrl-C) no longer waits
+                fut.set_result({k: v[pos] for k, v in out.items()})
 
 
 class LLMDriver:
     """Runs a batch of :class:`LLMRunSpec` against one client (use :func:`run_batch`).
 
-    With ``cohorts = K > 1`` the runs are dealt into K cohorts that each advance in lockstep on
-    their own (one vectorised step per cohort and round). A round costs the server latency plus
-    this process's CPU time for every request of the round, sent before and handled after the
-    wait; with K cohorts that CPU time of one cohort overlaps the others' waiting. Results do
-    not depend on K (each run's randomness is its own).
+    Each run is its own pipeline (prompt, call, parse, step, record) and moves on as soon as its
+    own reply is back; the client bounds the calls in flight. ``window`` bounds the runs in
+    progress at once (a number, or a semaphore shared by several drivers); further runs start
+    as earlier ones finish, so runs end, and are saved, in order. ``journal`` answers a resumed
+    run's calls that were already paid for (:class:`jswim.llm.journal.CallJournal`) and records
+    new ones. ``on_step(n)`` is called after every step; ``on_done(result)`` when a run ends
+    (status ``done``, ``below_x_min``, ``llm_error`` or ``budget``: stopped by the cost cap).
     """
 
     def __init__(
@@ -198,17 +244,24 @@ class LLMDriver:
         client: LLMClient,
         config: LLMAgentConfig = LLMAgentConfig(),
         transcript_dir: str | Path | None = None,
-        cohorts: int = 1,
-        on_round: Callable[[int], None] | None = None,
+        *,
+        window: int | asyncio.Semaphore | None = None,
+        journal: CallJournal | None = None,
+        on_step: Callable[[int], None] | None = None,
+        on_done: Callable[[RunResult], None] | None = None,
+        transcripts: bool = True,
+        cohorts: int | None = None,  # deprecated: runs no longer move in lockstep; accepted, ignored
     ) -> None:
-        self.on_round = on_round  # called with the number of runs that stepped, for progress bars
         if not specs:
             raise ConfigError("no runs given")
-        if cohorts < 1:
-            raise ConfigError(f"cohorts must be >= 1, got {cohorts}")
         self.client = client
         self.config = config
         self.transcript_dir = Path(transcript_dir) if transcript_dir is not None else None
+        self.transcripts = transcripts
+        self.journal = journal
+        self.on_step = on_step
+        self.on_done = on_done
+        self.window = window
         ids = [s.label() for s in specs]
         dupes = sorted({i for i in ids if ids.count(i) > 1})
         if dupes:
@@ -217,18 +270,15 @@ class LLMDriver:
             env.make_params(s.swimmer, zeta=s.zeta, direction=s.direction, init=s.init, **dict(s.swimmer_options))
             for s in specs
         ]
-        # Cohort k holds runs k, k + K, ...; inside a cohort, one env batch per swimmer model.
-        self.cohorts: list[list[_Group]] = []
-        for k in range(min(cohorts, len(specs))):
-            by_model: dict[Any, list[int]] = {}
-            for i in range(k, len(specs), cohorts):
-                by_model.setdefault(params[i].model, []).append(i)
-            self.cohorts.append(
-                [_Group(idx, [params[i] for i in idx], [specs[i].seed for i in idx]) for idx in by_model.values()]
-            )
+        by_model: dict[Any, list[int]] = {}
+        for i, p in enumerate(params):
+            by_model.setdefault(p.model, []).append(i)
+        self.groups = [_Group(idx, [params[i] for i in idx], [specs[i].seed for i in idx]) for idx in by_model.values()]
         self.runs: list[_Run] = [None] * len(specs)  # type: ignore[list-item]
-        for g in (g for groups in self.cohorts for g in groups):
+        self._where: dict[int, tuple[_Group, int]] = {}
+        for g in self.groups:
             for j, i in enumerate(g.members):
+                self._where[i] = (g, j)
                 self.runs[i] = self._make_run(specs[i], ids[i], params[i], g.dofs[j], g.levels0[j])
 
     def _make_run(
@@ -237,7 +287,7 @@ class LLMDriver:
         n_ht, text, prompt = protocol.setup(spec, params.model, self.config)
         cfg = self.config
         result = RunResult(run_id, spec, n_ht, text.rocs, levels0=[int(v) for v in levels0],
-                           transcript=None if self.transcript_dir else [],
+                           transcript=None if self.transcript_dir or not self.transcripts else [],
                            knobs=cfg.knobs(self.client.settings.temperature))
         run = _Run(result, text, prompt, History(protocol.clearing_rule(cfg, params.model)), np.array(dofs, np.float64))
         settings = self.client.settings
@@ -248,15 +298,40 @@ class LLMDriver:
             cfg, temperature=cfg.sampling_temperature(settings.temperature), constraint=constraint,
             max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(params.model), n_ht=n_ht,
             default_n_ht=default_n_ht(params.model, spec.direction))
-        if self.transcript_dir is not None:
-            self.transcript_dir.mkdir(parents=True, exist_ok=True)
-            run.sink = open(self.transcript_dir / f"{run_id}.jsonl", "w", encoding="utf-8")
-        run.log({
+        run.meta = {
             "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
             "levels0": result.levels0, "agent": cfg.metadata(), "client": self.client.settings.metadata(),
             "deviations": run.deviations,
-        })
+        }
         return run
+
+    def _begin(self, run: _Run) -> None:
+        """Open the run's transcript when the run starts (not before: thousands may wait)."""
+        if self.transcript_dir is not None and self.transcripts:
+            self.transcript_dir.mkdir(parents=True, exist_ok=True)
+            run.sink = open(self.transcript_dir / f"{run.result.run_id}.jsonl", "w", encoding="utf-8")
+        run.begun = True
+        run.log(run.meta)
+
+    async def _call(self, run: _Run, messages: list[dict[str, str]], **kw: Any) -> ChatResult:
+        """One call of ``run``: replayed from the journal when already paid for, else sent (and recorded)."""
+        journal = self.journal
+        if journal is None:
+            return await self.client.chat(messages, **kw)
+        temperature = kw.get("temperature")
+        if temperature is None:
+            temperature = self.client.settings.temperature
+        params = {k: v for k, v in kw.items() if not callable(v)}  # cache_if: how to cache, not what is asked
+        key = call_key(messages, **{**params, "temperature": temperature, "model": self.client.settings.model})
+        n = run.n_calls
+        run.n_calls += 1
+        res = journal.replay(run.result.run_id, n, key)
+        if res is not None:
+            run.result.replayed_calls += 1
+            return res
+        res = await self.client.chat(messages, **kw)
+        journal.record(run.result.run_id, n, key, res)
+        return res
 
     # -- one decision ------------------------------------------------------------------------
 
@@ -276,9 +351,9 @@ class LLMDriver:
             # call's earlier reply (a resume) can answer it, never another run's. Only replies
             # that name a valid action go in the disk cache: a failure is never replayed.
             scope = None if cfg.share_identical else f"{run.result.run_id}/{step}/{k}"
-            res = await self.client.chat(messages, replies=req.replies, temperature=cfg.temperature, seed=seed,
-                                         max_tokens=run.max_tokens, cache_scope=scope,
-                                         cache_if=lambda r: protocol.valid_reply(req, r.text))
+            res = await self._call(run, messages, replies=req.replies, temperature=cfg.temperature, seed=seed,
+                                   max_tokens=run.max_tokens, cache_scope=scope,
+                                   cache_if=lambda r: protocol.valid_reply(req, r.text))
             run.result.usage.add(res)
             run.result.tokens_seen += res.usage.total_tokens
             run.result.truncated += res.truncated
@@ -303,59 +378,56 @@ class LLMDriver:
         LLMServerError
             The server stayed down (transcripts so far are written and closed first).
         """
-        tasks = [asyncio.ensure_future(self._cohort(groups)) for groups in self.cohorts]
+        window = self.window
+        if window is None or isinstance(window, int):
+            window = asyncio.Semaphore(window or len(self.runs))
+        tasks = [asyncio.ensure_future(self._pipeline(i, window)) for i in range(len(self.runs))]
         try:
             done, pending = await asyncio.wait(tasks, return_when=asyncio.FIRST_EXCEPTION)
-            for t in pending:  # a cohort failed: stop the others too
+            for t in pending:  # the server is down (or a bug): stop the other runs too
                 t.cancel()
             await asyncio.gather(*pending, return_exceptions=True)
-            # Read every finished cohort's exception (an unread one is logged at exit), raise the first.
+            # Read every finished task's exception (an unread one is logged at exit), raise the first.
             errors = [t.exception() for t in done if not t.cancelled() and t.exception() is not None]
             if errors:
                 raise errors[0]
         finally:
+            for t in tasks:
+                t.cancel()
             for run in self.runs:
                 if run.active:
                     run.result.status = "aborted"
                 self._close(run)
         return [r.result for r in self.runs]
 
-    async def _cohort(self, groups: list[_Group]) -> None:
-        members = [i for g in groups for i in g.members]
-        while any(self.runs[i].active for i in members):
-            await self._round(groups)
-
-    async def _round(self, groups: list[_Group]) -> None:
-        active = [i for g in groups for i in g.members if self.runs[i].active]
-        outcomes = await asyncio.gather(*[self._decide(self.runs[i]) for i in active], return_exceptions=True)
-        decided: dict[int, tuple[Action, bool, dict[str, Any]]] = {}
-        down: LLMError | None = None
-        for i, out in zip(active, outcomes):
-            run = self.runs[i]
-            # Down, or set up so that no request can succeed (URL, key, a rejected field): stop all.
-            if isinstance(out, (LLMServerError, LLMSetupError)):
-                down = down or out
-            elif isinstance(out, LLMError):
-                self._finish(run, "llm_error", str(out))
-            elif isinstance(out, PositionBelowMinimumError):  # can only come from a bad x_min
-                self._finish(run, "below_x_min", str(out))
-            elif isinstance(out, BaseException):
-                raise out
-            else:
-                decided[i] = out
-        if down is not None:
-            raise down
-        noop = env.encode_action(*NO_OP)
-        for g in groups:
-            if not any(i in decided for i in g.members):
-                continue
-            acts = np.array([env.encode_action(*decided[i][0]) if i in decided else noop for i in g.members], np.int32)
-            out = g.step(acts)
-            for j, i in enumerate(g.members):
-                if i in decided:
-                    self._record(self.runs[i], decided[i], acts[j], {k: v[j] for k, v in out.items()})
-        if self.on_round is not None:
-            self.on_round(len(decided))
+    async def _pipeline(self, i: int, window: asyncio.Semaphore) -> None:
+        run = self.runs[i]
+        group, pos = self._where[i]
+        async with window:
+            self._begin(run)
+            while run.active:
+                try:
+                    decision = await self._decide(run)
+                except BudgetExhausted as exc:
+                    self._finish(run, "budget", str(exc))
+                    break
+                except (LLMServerError, LLMSetupError):
+                    # Down, or set up so that no request can succeed (URL, key, a rejected field): stop all.
+                    raise
+                except LLMError as exc:
+                    self._finish(run, "llm_error", str(exc))
+                    break
+                except PositionBelowMinimumError as exc:  # can only come from a bad x_min
+                    self._finish(run, "below_x_min", str(exc))
+                    break
+                index = env.encode_action(*decision[0])
+                out = await group.submit(pos, index)
+                self._record(run, decision, index, out)
+                if self.on_step is not None:
+                    self.on_step(1)
+            self._close(run)
+        if self.on_done is not None:
+            self.on_done(run.result)
 
     def _record(
         self, run: _Run, decision: tuple[Action, bool, dict[str, Any]], index: int, out: dict[str, Any]
@@ -395,6 +467,9 @@ class LLMDriver:
         run.result.error = error
 
     def _close(self, run: _Run) -> None:
+        if run.closed or not run.begun:
+            return
+        run.closed = True
         res = run.result
         run.log({"type": "end", "status": res.status, "error": res.error, "steps": res.steps,
                  "failed_steps": res.failed_steps, "parse_retries": res.parse_retries, "n_clears": res.n_clears,
@@ -409,11 +484,11 @@ async def run_batch_async(
     client: LLMClient,
     config: LLMAgentConfig = LLMAgentConfig(),
     transcript_dir: str | Path | None = None,
-    cohorts: int = 1,
-    on_round: Callable[[int], None] | None = None,
+    **options: Any,
 ) -> list[RunResult]:
-    """Run a batch with an open client (see :class:`LLMDriver`)."""
-    return await LLMDriver(specs, client, config, transcript_dir, cohorts, on_round).run()
+    """Run a batch with an open client; ``options`` go to :class:`LLMDriver` (window, journal,
+    on_step, on_done, transcripts)."""
+    return await LLMDriver(specs, client, config, transcript_dir, **options).run()
 
 
 def run_batch(
@@ -421,7 +496,7 @@ def run_batch(
     settings: ClientSettings | None = None,
     config: LLMAgentConfig = LLMAgentConfig(),
     transcript_dir: str | Path | None = None,
-    cohorts: int = 1,
+    cohorts: int | None = None,
     **local_options: Any,
 ) -> list[RunResult]:
     """Run a batch of LLM runs to completion (blocking).
@@ -438,15 +513,14 @@ def run_batch(
     transcript_dir : str or Path, optional
         Folder for one ``<run_id>.jsonl`` transcript per run; ``None`` keeps transcripts in
         memory (``RunResult.transcript``).
-    cohorts : int
-        Split the runs into this many cohorts that advance in lockstep independently (see
-        :class:`LLMDriver`); 1 (default) moves every swimmer in one step per round.
+    cohorts : int, optional
+        Deprecated and ignored: runs no longer advance in lockstep rounds.
     """
     specs = list(specs)
 
     async def go(s: ClientSettings) -> list[RunResult]:
         async with LLMClient(s) as client:
-            return await run_batch_async(specs, client, config, transcript_dir, cohorts)
+            return await run_batch_async(specs, client, config, transcript_dir)
 
     if settings is not None:
         return run_sync(go(settings))

@@ -1,0 +1,119 @@
+"""A stand-in client for ``--dry-run``: every call answered at once, nothing sent.
+
+The driver runs a study's LLM runs against :class:`EstimatingClient` exactly as it would against
+a server: the prompts are rendered from real swimmer states, so their lengths (history records,
+positions, the summary sentence) are those of a real study. Each call is answered with a valid
+action picked from the allowed replies by a hash of the prompt (the swimmers move, as they would
+under a model), and its usage is estimated from the text (:mod:`jswim.llm.tokens`); the price
+table turns the totals into dollars. What the estimate leaves out: parse retries (a model that
+answers off-format costs more calls) and replies longer than the bare action (a model that
+explains itself costs up to ``max_tokens`` per call: :attr:`Estimate.cost_max_usd`).
+"""
+
+from __future__ import annotations
+
+import zlib
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+from jswim.llm.client import ChatResult, ClientSettings, LiveCounts
+from jswim.llm.tokens import estimate_prompt_tokens, estimate_tokens
+from jswim.llm.usage import PRICES_AS_OF, PriceTable, Usage
+
+
+class EstimatingClient:
+    """Answers chat calls without a server (see the module docstring); use like an LLMClient."""
+
+    def __init__(self, settings: ClientSettings) -> None:
+        self.settings = settings
+        self._prices = PriceTable(settings.prices)
+        self.counts = LiveCounts()
+        self.n_requests = 0
+        self.pacer = self.budget = None
+
+    async def __aenter__(self) -> "EstimatingClient":
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        return None
+
+    async def aclose(self) -> None:
+        return None
+
+    async def chat(
+        self, messages: Sequence[Mapping[str, str]], *, replies: Sequence[str] | None = None, **_: Any
+    ) -> ChatResult:
+        """An immediate answer: a valid reply and estimated usage (no request is sent)."""
+        last = str(messages[-1].get("content", "")) if messages else ""
+        options = list(replies) if replies else ["[1, 1]"]
+        text = options[zlib.crc32(last.encode()) % len(options)]
+        usage = Usage(estimate_prompt_tokens(messages), estimate_tokens(text))
+        cost = self._prices.cost(self.settings.model, usage)
+        self.n_requests += 1
+        self.counts.tokens += usage.total_tokens
+        self.counts.cost_usd += cost
+        return ChatResult(text=text, usage=usage, latency_s=0.0, cache_hit=False, shared=False, retries=0,
+                          cost_usd=cost, constraint="none", finish_reason="stop", raw=text)
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """What a study's LLM runs would cost.
+
+    Attributes
+    ----------
+    model : str
+    calls : int
+        Requests (one per step; parse retries not included).
+    prompt_tokens, completion_tokens : int
+        Estimated totals (completion: the bare action per call).
+    price_in, price_out : float
+        USD per 1M tokens from the price table (0 for unknown models).
+    cost_usd : float
+        Estimated cost.
+    cost_max_usd : float
+        Cost if every reply ran to ``max_tokens``.
+    prices_as_of : str
+        Date of the price table.
+    """
+
+    model: str
+    calls: int
+    prompt_tokens: int
+    completion_tokens: int
+    price_in: float
+    price_out: float
+    cost_usd: float
+    cost_max_usd: float
+    max_tokens: int | None
+    prices_as_of: str = PRICES_AS_OF
+
+    def as_dict(self) -> dict[str, Any]:
+        return dict(vars(self))
+
+    def lines(self) -> list[str]:
+        """A short human-readable report (what ``--dry-run`` prints)."""
+        per_call = (self.prompt_tokens + self.completion_tokens) / max(self.calls, 1)
+        out = [
+            f"dry run: {self.calls} calls to {self.model} (one per step; no request sent)",
+            f"  tokens: {self.prompt_tokens:,} prompt + {self.completion_tokens:,} completion "
+            f"(~{per_call:.0f} per call, estimated from the rendered prompts)",
+        ]
+        if self.price_in or self.price_out:
+            out.append(f"  cost: ${self.cost_usd:.2f} at ${self.price_in:g} / ${self.price_out:g} per 1M tokens "
+                       f"(price table of {self.prices_as_of}); at most ${self.cost_max_usd:.2f} if every reply "
+                       f"ran to max_tokens={self.max_tokens}")
+        else:
+            out.append(f"  cost: $0 ({self.model!r} is not in the price table: free or unknown)")
+        out.append("  not counted: parse retries after off-format replies")
+        return out
+
+
+def estimate(client: EstimatingClient, calls: int, prompt_tokens: int, completion_tokens: int) -> Estimate:
+    """Totals of a dry run priced by ``client``'s price table."""
+    s = client.settings
+    p_in, p_out = client._prices.lookup(s.model)
+    cost = (prompt_tokens * p_in + completion_tokens * p_out) / 1e6
+    mt = s.max_tokens
+    cost_max = (prompt_tokens * p_in + calls * (mt if mt else completion_tokens / max(calls, 1)) * p_out) / 1e6
+    return Estimate(s.model, calls, prompt_tokens, completion_tokens, p_in, p_out, cost, cost_max, mt)

@@ -1,0 +1,107 @@
+"""The answered calls of a study, kept so that a resume never pays for a call twice.
+
+Every call a run gets an answer to is appended to ``calls.jsonl`` in the study folder at once
+(one line, flushed), before the answer is used: the run's id, the call's index within the run,
+a hash of the request and what came back (text, usage, cost). A run interrupted by Ctrl-C, a
+crash or the cost cap starts again from its first step on the next session, and its calls are
+answered from this journal, in order, for as long as each request is the very request recorded
+(same messages, sampling and seed); the first request that differs, and every call after the
+journal's end, goes to the server. A run only ever replays its own calls, never another run's.
+
+The journal is also the study's ledger: the sum of its ``cost_usd`` is what the study has paid
+over all sessions (what ``--max-cost`` is compared with).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from jswim.llm.client import ChatResult
+from jswim.llm.usage import Usage
+
+JOURNAL = "calls.jsonl"
+
+
+def call_key(messages: Sequence[Mapping[str, Any]], **params: Any) -> str:
+    """Hash of what defines a call's answer: the messages and the sampling parameters."""
+    blob = json.dumps([list(map(dict, messages)), params], sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    return hashlib.sha256(blob.encode()).hexdigest()[:32]
+
+
+class CallJournal:
+    """Append-only record of answered calls (``calls.jsonl``), read back for replay.
+
+    Parameters
+    ----------
+    folder : path
+        The study folder; the journal is ``folder / calls.jsonl``.
+
+    Attributes
+    ----------
+    spent_usd : float
+        What the recorded calls cost (all sessions).
+    """
+
+    def __init__(self, folder: str | os.PathLike) -> None:
+        self.path = Path(folder) / JOURNAL
+        self._calls: dict[str, list[dict[str, Any]]] = {}
+        self.spent_usd = 0.0
+        self.n_calls = 0
+        if self.path.exists():
+            for line in self.path.read_text(encoding="utf-8").splitlines():
+                try:
+                    rec = json.loads(line)
+                except json.JSONDecodeError:
+                    continue  # a torn last line from a kill: that call is simply asked again
+                self._calls.setdefault(rec["run"], []).append(rec)
+                self.spent_usd += float(rec.get("cost_usd") or 0.0)
+                self.n_calls += 1
+        self._fh = None
+
+    def replay(self, run_id: str, index: int, key: str) -> ChatResult | None:
+        """The recorded answer of call ``index`` of ``run_id`` if it was this request, else ``None``."""
+        calls = self._calls.get(run_id)
+        if not calls or index >= len(calls):
+            return None
+        rec = calls[index]
+        if rec.get("n") != index or rec.get("key") != key:
+            del calls[index:]  # the run took another path: nothing after this point applies
+            return None
+        return ChatResult(
+            text=rec["text"], usage=Usage(*rec["usage"]), latency_s=0.0, cache_hit=bool(rec.get("cache_hit")),
+            shared=bool(rec.get("shared")), retries=0, cost_usd=float(rec.get("cost_usd") or 0.0),
+            constraint=rec.get("constraint", "none"), finish_reason=rec.get("finish_reason"), raw=rec.get("raw", ""),
+        )
+
+    def record(self, run_id: str, index: int, key: str, res: ChatResult) -> None:
+        """Append one answered call (flushed, so it survives an interrupt)."""
+        if self._fh is None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self._fh = open(self.path, "a", encoding="utf-8")
+        u = res.usage
+        billed = not (res.cache_hit or res.shared)
+        rec = {
+            "run": run_id, "n": index, "key": key, "text": res.text, "raw": res.raw,
+            "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens],
+            "cost_usd": res.cost_usd if billed else 0.0, "cache_hit": res.cache_hit, "shared": res.shared,
+            "constraint": res.constraint, "finish_reason": res.finish_reason,
+        }
+        self._fh.write(json.dumps(rec, ensure_ascii=False) + "\n")
+        self._fh.flush()
+        self.spent_usd += rec["cost_usd"]
+        self.n_calls += 1
+
+    def forget(self, run_id: str) -> None:
+        """Drop the replay entries of a run (kept on disk as a record of what was paid)."""
+        self._calls.pop(run_id, None)
+
+    def close(self) -> None:
+        if self._fh is not None:
+            self._fh.flush()
+            os.fsync(self._fh.fileno())
+            self._fh.close()
+            self._fh = None
