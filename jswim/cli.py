@@ -122,9 +122,12 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--threads", type=int, default=None, metavar="N",
                    help="CPU threads of the embedded server (default: one per core; fewer on a busy machine)")
     b.add_argument("--concurrency", type=int, default=16, help="requests in flight at once (default 16)")
-    b.add_argument("--cohorts", type=int, default=1, metavar="K",
-                   help="advance the LLM runs in K independent lockstep cohorts (default 1; results do not "
-                        "change; more helps against a fast server with many runs)")
+    b.add_argument("--cohorts", type=int, default=1, metavar="K", help=argparse.SUPPRESS)  # deprecated, no effect
+    b.add_argument("--rpm", type=float, default=None, metavar="N",
+                   help="requests per minute to pace to (default: none of our own; the provider's "
+                        "x-ratelimit-* and retry-after headers are always followed)")
+    b.add_argument("--tpm", type=float, default=None, metavar="N",
+                   help="tokens per minute to pace to, prompt plus max_tokens as providers count them")
     b.add_argument("--cache-dir", default=None, metavar="DIR",
                    help="persistent response cache (temperature 0; only replies that named a valid action)")
     b.add_argument("--timeout", type=float, default=None, metavar="S",
@@ -136,8 +139,15 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     p.add_argument("--out", default=None, metavar="FOLDER",
                    help="output folder (default jswim-out/<study>-<hash of the settings>; rerun to resume)")
     p.add_argument("--no-figures", action="store_true", help="skip the figures")
-    p.add_argument("--chunk", type=int, default=64, metavar="N",
-                   help="LLM runs advanced together; each finished chunk is saved at once (default 64)")
+    p.add_argument("--chunk", type=int, default=None, metavar="N",
+                   help="LLM runs in progress at once; each run is saved as it ends (default: --concurrency)")
+    c = p.add_argument_group("cost")
+    c.add_argument("--dry-run", action="store_true",
+                   help="print the calls, estimated tokens and cost of the LLM runs not yet done, and exit; "
+                        "no request is sent, nothing is written")
+    c.add_argument("--max-cost", type=float, default=None, metavar="USD",
+                   help="stop before the study's calls cost more than USD (over all its sessions; calls in "
+                        "flight count as reserved); rerun with a higher cap to continue, no call paid twice")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -251,7 +261,8 @@ def _backend(args: argparse.Namespace):
                    constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
                    n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
                    cache_dir=args.cache_dir, timeout_s=args.timeout,
-                   omit_fields=tuple(f.strip() for v in args.omit_field for f in v.split(",") if f.strip()))
+                   omit_fields=tuple(f.strip() for v in args.omit_field for f in v.split(",") if f.strip()),
+                   rpm=args.rpm, tpm=args.tpm)
 
 
 def _options(args: argparse.Namespace, study: str):
@@ -300,6 +311,10 @@ def _warn(message: str) -> None:
     print(f"jswim: warning: {message}", file=sys.stderr)
 
 
+#: Exit status of a study stopped by ``--max-cost`` (cleanly: rerun with a higher cap to go on).
+EXIT_COST_CAP = 3
+
+
 def _run(study: str, args: argparse.Namespace) -> int:
     from jswim.console import Progress  # lazy: JAX loads only for commands that run
     from jswim.studies import default_folder, run_study
@@ -307,7 +322,18 @@ def _run(study: str, args: argparse.Namespace) -> int:
 
     options = _options(args, study)
     backend = _backend(args)
+    if args.max_cost is not None and not (math.isfinite(args.max_cost) and args.max_cost >= 0):
+        raise ConfigError(f"--max-cost must be a number of dollars >= 0, got {args.max_cost}")
     out = Path(args.out) if args.out else default_folder(study, options, backend)
+    if args.dry_run:
+        import json  # lazy, as every import of a command's own code here
+
+        from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
+
+        est = estimate_study(study, options, backend, out)
+        print("\n".join(est.lines()))
+        print(json.dumps(est.as_dict(), sort_keys=True))  # the same, for scripts
+        return 0
     if (text := short_steps_warning(options)) is not None:
         _warn(text)
     labels = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning", "random": "random policy",
@@ -318,7 +344,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
             bar.update(labels.get(phase, "runs"), done, total, info)
 
         try:
-            result = run_study(study, options, backend, out, progress=tick, figures=not args.no_figures)
+            result = run_study(study, options, backend, out, progress=tick, figures=not args.no_figures,
+                               max_cost=args.max_cost)
         except KeyboardInterrupt:
             bar.stop()
             print(f"interrupted; finished runs are kept in {out}. Run the same command to resume.", file=sys.stderr)
@@ -328,10 +355,21 @@ def _run(study: str, args: argparse.Namespace) -> int:
     for limit, n in sorted(result.truncated.items()):
         print(f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up); "
               "a reasoning model needs a larger --max-tokens")
+    sp = result.llm_speed
+    if sp.get("calls"):
+        print(f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
+              f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "
+              f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
+              f"(list prices of {_prices_date()})")
     print(f"results: {result.folder}")
     for f in result.figures:
         if f.suffix == ".png":
             print(f"figure:  {f}")
+    if result.stopped == "cost cap":
+        print(f"jswim: stopped at the cost cap (--max-cost {args.max_cost:g}): ${sp.get('study_cost_usd', 0):.4f} "
+              f"spent; {len(result.rows)} of {result.total} runs done and kept in {result.folder}. Rerun with a "
+              "higher --max-cost to continue (no call is paid twice)", file=sys.stderr)
+        return EXIT_COST_CAP
     if result.failed_runs:
         n_llm = sum(r.get("agent") == "llm" for r in result.rows)
         first = result.failed_runs[0]
@@ -340,6 +378,12 @@ def _run(study: str, args: argparse.Namespace) -> int:
               "run them again", file=sys.stderr)
         return EXIT_USAGE
     return 0
+
+
+def _prices_date() -> str:
+    from jswim.llm.usage import PRICES_AS_OF  # lazy: httpx loads only for commands that run
+
+    return PRICES_AS_OF
 
 
 def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], title: str) -> None:

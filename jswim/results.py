@@ -128,6 +128,32 @@ def dumps(obj: Any, **kw: Any) -> str:
     return json.dumps(plain_json(obj), allow_nan=False, **kw)
 
 
+def identity_differences(folder: Mapping[str, Any], now: Mapping[str, Any], prefix: str = "") -> list[str]:
+    """Which settings differ between a folder's identity and today's, with both values.
+
+    Nested settings are named by their path (``backend.model``); e.g.
+    ``["backend.model: 'gpt-4o-mini' now, 'gpt-4o' in the folder"]``.
+    """
+    out = []
+    for key in sorted(set(folder) | set(now)):
+        name = f"{prefix}{key}"
+        a, b = folder.get(key, _MISSING), now.get(key, _MISSING)
+        if a == b:
+            continue
+        if isinstance(a, Mapping) and isinstance(b, Mapping):
+            out += identity_differences(a, b, name + ".")
+        elif a is _MISSING:
+            out.append(f"{name}: {b!r} now, not set in the folder (made by another jswim version)")
+        elif b is _MISSING:
+            out.append(f"{name}: not set now, {a!r} in the folder (made by another jswim version)")
+        else:
+            out.append(f"{name}: {b!r} now, {a!r} in the folder")
+    return out
+
+
+_MISSING = object()
+
+
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
     """Write ``data`` to ``path`` so that readers see the old or the new file, never a part.
 
@@ -211,10 +237,10 @@ class StudyStore:
                 )
             old = upgrade_names(meta.get("identity", {}))
             if old != self.identity:
-                diff = sorted(k for k in set(old) | set(self.identity) if old.get(k) != self.identity.get(k))
+                diff = identity_differences(old, self.identity)
                 raise ResultFolderError(
-                    f"{self.folder} holds a '{study}' study with different settings "
-                    f"({', '.join(diff)}); use a new --out folder or the same settings to resume"
+                    f"{self.folder} holds a '{study}' study with different settings: {'; '.join(diff[:4])}"
+                    f"{'; ...' if len(diff) > 4 else ''}. Use a new --out folder, or the folder's settings to resume"
                 )
             self.meta = meta
             self.meta["identity"] = self.identity  # rewritten under today's names

@@ -10,6 +10,7 @@ send identical requests (same model name, retries and backoff, hence the same ca
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -51,10 +52,11 @@ class Backend:
     concurrency : int
         Requests in flight at once.
     cohorts : int
-        Lockstep cohorts of a chunk of LLM runs (:func:`jswim.agents.llm.run_batch_async`); the
-        results do not depend on it. More than 1 overlaps this process's per-request CPU work with
-        other cohorts' waiting, which pays against a fast server with many distinct runs; 1 keeps
-        identical temperature-0 requests of different runs in flight together, so they are sent once.
+        Deprecated, no effect: runs no longer advance in lockstep rounds (each run is its own
+        pipeline; see :mod:`jswim.agents.llm`). Kept so old scripts keep working.
+    rpm, tpm : float or None
+        Requests and tokens (prompt + max_tokens) per minute to pace to
+        (:class:`jswim.llm.pacing.Pacer`); the provider's rate-limit headers are read either way.
     cache_dir : str or None
         Response cache (temperature 0 only).
     timeout_s : float or None
@@ -84,6 +86,8 @@ class Backend:
     cache_dir: str | None = None
     timeout_s: float | None = None
     omit_fields: tuple[str, ...] = ()
+    rpm: float | None = None
+    tpm: float | None = None
 
     def __post_init__(self) -> None:
         if self.base_url is None and self.model is not None:
@@ -107,6 +111,10 @@ class Backend:
             raise ConfigError("--parallel and --concurrency must be >= 1")
         if self.cohorts < 1:
             raise ConfigError(f"--cohorts must be >= 1, got {self.cohorts}")
+        for name in ("rpm", "tpm"):
+            v = getattr(self, name)
+            if v is not None and not (math.isfinite(v) and v > 0):
+                raise ConfigError(f"--{name} must be a number > 0, got {v}")
         if self.n_threads is not None and self.n_threads < 1:
             raise ConfigError(f"--threads must be >= 1, got {self.n_threads}")
 
@@ -115,19 +123,27 @@ class Backend:
         return self.base_url is None
 
     def describe(self) -> dict[str, Any]:
-        """What defines the backend's answers (recorded in the study's identity)."""
+        """What defines the backend's answers (recorded in the study's identity).
+
+        The model is the identity, the address is not: a restarted server on another port or a
+        new host name for the same model serves the same study (:meth:`address` is recorded
+        with each session instead).
+        """
         if self.local:
             name = (Path(self.gguf) if self.gguf else default_model_path()).name
         else:
             name = self.model
         out = {"kind": "embedded" if self.local else "remote",
-               "base_url": None if self.local else safe_url(self.base_url),
                "model": name, "constrain": self.constrain, "temperature": self.temperature}
         # What is sent changes the answers; recorded only when not the default, so folders
         # written before these settings existed keep their identity.
         if self.omit_fields:
             out["omit_fields"] = list(self.omit_fields)
         return out
+
+    def address(self) -> str | None:
+        """The server's address without credentials (``None`` for the embedded model)."""
+        return None if self.local else safe_url(self.base_url)
 
     def server(self) -> LocalServer:
         """The embedded server of this backend (not started; use it as a context manager)."""

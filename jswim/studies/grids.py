@@ -3,10 +3,10 @@ which turns a study and its options into the list of runs (:class:`Plan`).
 
 A study runs, per swimmer and target direction, a list of *cells* (one group of a table or
 figure: a noise level, an n_ht, a dropped sentence, ...); a cell runs some agents, each
-``runs`` (LLM) or ``q_runs`` (baselines) times. The order of the plans is part of a study's
-identity: a run's seed is ``seed * 1_000_003 + its index`` (hashed to 32 bits when that falls
-outside ``[0, 2**32)``: :func:`jswim.env.seed32`), so cells and agents are laid out in
-the order the studies have always used.
+``runs`` (LLM) or ``q_runs`` (baselines) times. A run's seed is derived from the study seed
+and the run's own id (:func:`run_seed`), never from its place in the grid: adding a noise
+level or a repeat changes no existing run, and the same run id with the same study seed is the
+same run in every folder.
 """
 
 from __future__ import annotations
@@ -17,8 +17,9 @@ from typing import Callable, Iterable
 
 from jswim.actions import ACTION_SETS, check_action_set
 from jswim.agents.defaults import paper_init
+from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import VARIANTS, init_label, run_id, variant_action_set
-from jswim.env import all_inits, seed32
+from jswim.env import all_inits
 from jswim.errors import ConfigError
 from jswim.gait import PAPER
 from jswim.prompt import SENTENCES
@@ -63,7 +64,7 @@ class StudyOptions:
     seed: int = 0
     action_set: str = "all"
     prompt_file: str | None = None
-    chunk: int = 64
+    chunk: int | None = None  # LLM runs in progress at once (None: the client's concurrency)
     agents: tuple[str, ...] = AGENTS
     variant: str | None = None  # LLM protocol variant; None: the study's (SWIM_VARIANT or "paper")
     share_identical: bool = False  # send identical temperature-0 requests of different runs once (runs become copies)
@@ -90,7 +91,7 @@ class StudyOptions:
             raise ConfigError(f"--x-min must be a finite number, got {self.x_min}")
         if self.max_tokens is not None and not 1 <= self.max_tokens <= 100_000:
             raise ConfigError(f"--max-tokens must be between 1 and 100000, got {self.max_tokens}")
-        if self.chunk < 1:
+        if self.chunk is not None and self.chunk < 1:
             raise ConfigError("--chunk must be >= 1")
         for sw in self.swimmers or ():
             if sw not in SWIMMERS:
@@ -266,6 +267,14 @@ def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | 
     return tuple(1 if ch == "+" else 0 for ch in choice)
 
 
+def run_seed(study_seed: int, run: str) -> int:
+    """The seed of run ``run`` (its id) in a study seeded ``study_seed``: a 31-bit hash of both.
+
+    Any integer study seed works (negative, huge); the result fits every PRNG key.
+    """
+    return derived_seed("run-seed", int(study_seed), run)
+
+
 def build(study: str, o: StudyOptions) -> list[Plan]:
     """The runs of ``study`` for options ``o``, in a fixed order (seeds follow it).
 
@@ -299,7 +308,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     for k in range(runs[agent]):
                         init = initial(cell.init or o.init or spec.init, k, sw)
                         rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tag, repeat=k)
-                        plans.append(Plan(rid, agent, sw, d, init, zeta, seed32(o.seed * 1_000_003 + len(plans)), o.steps,
+                        plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
                                           n_ht, drop, action_set, cell.group, v))
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"

@@ -1,11 +1,20 @@
 """Running a study: build its plans, run what is not done yet, store and summarise.
 
 Execution groups the plans (:mod:`jswim.studies.grids`): Q-learning and random-policy runs
-train/roll out in one vectorised call per swimmer, and LLM runs advance in lockstep chunks (all
-prompts of a round in flight at once). Each finished chunk lands in the study folder
-(:class:`jswim.results.StudyStore`), so an interrupted study resumes where it stopped. Every
-run, whatever its agent, is judged by the same code, :func:`jswim.gait.judge`, with the study's
+train/roll out in one vectorised call per swimmer; LLM runs are per-run pipelines
+(:class:`jswim.agents.llm.LLMDriver`), each moving on as soon as its own reply is back, and each
+lands in the study folder (:class:`jswim.results.StudyStore`) the moment it ends. Every answered
+call is journaled first (``calls.jsonl``, :class:`jswim.llm.journal.CallJournal`), so an
+interrupted or capped study resumes without paying for a call twice. Every run, whatever its
+agent, is judged by the same code, :func:`jswim.gait.judge`, with the study's
 :class:`jswim.gait.Criterion`.
+
+A study's identity (what a folder is compared on when resumed) is what defines its runs: the
+grid's settings, the seed, the model and its sampling, the prompt template. Not in it: the
+server's address (a restarted server on another port serves the same study), the concurrency,
+pacing and cost cap, and how many runs or which noise levels / n_ht values the grid has (a
+larger ``--runs`` or another noise level extends the folder; each run's seed comes from the
+study seed and its own id, so existing runs never change).
 """
 
 from __future__ import annotations
@@ -25,16 +34,21 @@ import numpy as np
 
 from jswim import __version__, env
 from jswim.agents import fidelity, qlearning, random_policy
-from jswim.agents.llm import run_batch_async
+from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
 from jswim.console import eta
 from jswim.errors import ConfigError, JswimError
 from jswim.gait import Criterion, judge
 from jswim.llm.backend import Backend
-from jswim.llm.client import LLMClient
+from jswim.llm.budget import Budget
+from jswim.llm.client import ClientSettings, LLMClient
+from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
+from jswim.llm.journal import CallJournal
+from jswim.llm.pacing import Pacer
+from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
-from jswim.results import StudyStore, is_failed, legacy_names, read_runs
+from jswim.results import StudyStore, is_failed, read_runs
 from jswim.studies.grids import COMPETENCE_VARIANTS, SPECS, SWIM_VARIANT, Plan, StudyOptions, build
 from jswim.studies.report import draw_figures, summarize
 
@@ -116,6 +130,20 @@ class StudyResult:
     llm_speed: dict[str, float] = field(default_factory=dict)  # calls, billed calls, wall s, calls/s
     failed_runs: list[dict[str, Any]] = field(default_factory=list)  # run_id and the server's error
     truncated: dict[str, int] = field(default_factory=dict)  # max_tokens -> LLM replies cut off there
+    stopped: str | None = None  # "cost cap" when --max-cost stopped the study before its end
+    total: int = 0  # runs in the study's grid
+
+
+#: Options that say how large the grid is, not what its runs are: left out of the identity, so a
+#: folder grows when they grow (and a smaller value reports the runs it names).
+GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts")
+
+#: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
+SEEDS = "hash of the study seed and the run id"
+
+#: Statuses of an LLM run that are stored; one stopped by the cost cap or an interrupt is not, and
+#: starts again on resume (its paid calls replayed from the journal).
+STORED = ("done", "below_x_min", "llm_error")
 
 
 def study_backend(study: str, backend: Backend | None) -> Backend | None:
@@ -132,7 +160,8 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     """Everything that defines a study's runs (compared when a folder is resumed)."""
     backend = study_backend(study, backend)
     opts = dataclasses.asdict(o)
-    opts.pop("chunk")
+    for name in ("chunk", *GRID_SIZE):
+        opts.pop(name)
     for name in ("variant", "variants"):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
@@ -141,18 +170,16 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     template = PromptTemplate.from_file(o.prompt_file) if o.prompt_file else PromptTemplate()
     tpl = json.dumps(dataclasses.asdict(template), sort_keys=True)
     return {
-        "study": study, "options": opts, "seed": o.seed,
+        "study": study, "options": opts, "seed": o.seed, "seeds": SEEDS,
         "backend": backend.describe() if backend is not None and "llm" in o.agents else None,
         "prompt_template_sha256": hashlib.sha256(tpl.encode()).hexdigest()[:16],
     }
 
 
 def default_folder(study: str, o: StudyOptions, backend: Backend | None, root: str = "jswim-out") -> Path:
-    """``jswim-out/<study>-<hash>``: the same settings reuse (and resume) the same folder.
-
-    The hash is taken over the identity with its fields under their earlier names
-    (:func:`jswim.results.legacy_names`), so folders made before the rename are found again."""
-    ident = legacy_names(identity(study, o, backend))
+    """``jswim-out/<study>-<hash of the identity>``: the same settings reuse (and resume, or
+    extend) the same folder."""
+    ident = identity(study, o, backend)
     digest = hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode())
     return Path(root) / f"{study}-{digest.hexdigest()[:8]}"
 
@@ -168,8 +195,9 @@ def run_study(
     out: str | Path | None = None,
     progress: ProgressFn | None = None,
     figures: bool = True,
+    max_cost: float | None = None,
 ) -> StudyResult:
-    """Run (or resume) a study and write its folder.
+    """Run (or resume, or extend) a study and write its folder.
 
     Parameters
     ----------
@@ -183,11 +211,24 @@ def run_study(
         Study folder (default :func:`default_folder`). Finished runs found there are kept.
     progress : callable, optional
         ``progress(phase, done, total, info)`` (:data:`ProgressFn`): after each finished batch of
-        runs and each LLM round (phase ``"llm"``), and every 0.5 s while LLM requests are out
-        (phase ``"llm-live"``: steps done, requests in flight, tokens, cache hits, shared calls).
+        baseline runs and each finished LLM run (phase ``"llm"``), and every 0.5 s while LLM
+        requests are out (phase ``"llm-live"``: steps done, requests in flight, tokens, cost).
     figures : bool
         Also draw the study's figures into ``out/figures``.
+    max_cost : float, optional
+        Cap in USD on what the study's calls cost, over all its sessions (the call journal's
+        total). Calls reserve their cost bound before they go out; at the cap no new call is
+        made, runs in flight finish their call, finished runs are kept, the folder's status reads
+        ``stopped at the cost cap`` and :attr:`StudyResult.stopped` is ``"cost cap"``. The same
+        call with a higher cap goes on from there, paying no call twice.
+
+    Raises
+    ------
+    ConfigError
+        For a negative cap or an LLM study without a backend.
     """
+    if max_cost is not None and not (max_cost >= 0):
+        raise ConfigError(f"--max-cost must be a number of dollars >= 0, got {max_cost}")
     t0 = time.perf_counter()
     backend = study_backend(study, backend)
     plans = build(study, options)
@@ -209,6 +250,9 @@ def run_study(
         "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
         # What differs from the paper's protocol in every LLM run (each transcript lists its own too).
         "fidelity_deviations": list(fidelity.ALWAYS),
+        "grid": {k: getattr(options, k) for k in GRID_SIZE},
+        "server": backend.address() if backend is not None else None,
+        "prices_as_of": PRICES_AS_OF,
     })
     try:
         return _run_in(store, study, plans, options, backend, folder, template, progress, figures, t0)
@@ -239,12 +283,16 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
 
     llm_plans = [p for p in todo if p.agent == "llm"]
     speed: dict[str, float] = {}
+    capped = False
     if llm_plans:
         if backend is None:
             raise ConfigError("this study has LLM runs; give a backend")
-        finished = _run_llm(llm_plans, options, backend, store, template, tick, finished, total, speed)
+        finished, capped = _run_llm(llm_plans, options, backend, store, template, tick, finished, total, speed,
+                                    max_cost)
 
-    rows = read_runs(folder)
+    # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
+    names = {p.run_id for p in plans}
+    rows = [r for r in read_runs(folder) if r["run_id"] in names]
     summary = summarize(rows)
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
@@ -256,31 +304,57 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
         if r.get("truncated"):
             cut[str(r.get("max_tokens"))] = cut.get(str(r.get("max_tokens")), 0) + r["truncated"]
     replies = {"truncated_replies": sum(cut.values()), "truncated_at": cut} if llm else {}
-    store.finalize("incomplete" if failed else "complete",
+    status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
+    store.finalize(status,
                    {"groups": summary, "failed_runs": failed, **replies, **({"llm_speed": speed} if speed else {}),
                     **({"constrained_decoding": constraint} if constraint else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
     return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed, failed,
-                       dict(replies.get("truncated_at", {})))
+                       dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total)
+
+
+def _spec(p: Plan) -> LLMRunSpec:
+    return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
+                      n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id)
+
+
+def _configs(plans: Sequence[Plan], o: StudyOptions,
+             template: PromptTemplate | None) -> list[tuple[Any, list[Plan]]]:
+    """The LLM plans by agent config: one driver per (variant, action set)."""
+    out = []
+    for (variant, action_set), group in _groups(plans, "variant", "action_set").items():
+        cfg = variant_config(variant, action_set=action_set, share_identical=o.share_identical, x_min=o.x_min,
+                             max_tokens=o.max_tokens, **({"template": template} if template else {}))
+        out.append((cfg, group))
+    return out
+
+
+def _row(plan: Plan, r: RunResult, horizon: int) -> dict[str, Any]:
+    """The judged result row of one finished LLM run."""
+    acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
+    xs = np.array([r.x], float).reshape(1, len(r.x))
+    extra = {k: v for k, v in r.as_row().items() if k not in ("x", "actions", "progress", "stuck", "levels0")}
+    return _judge_rows([plan], acts, xs, np.array([r.levels0], np.int64), horizon, [extra])[0]
 
 
 def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
              template: PromptTemplate | None, tick: ProgressFn, finished: int, total: int,
-             speed: dict[str, float] | None = None) -> int:
-    """Run the LLM plans, one lockstep batch per (variant, action set) group and chunk.
+             speed: dict[str, float], max_cost: float | None) -> tuple[int, bool]:
+    """Run the LLM plans as per-run pipelines; returns (runs finished, stopped by the cost cap).
 
-    ``speed`` (filled in) gets the calls made, the calls the server answered, the wall time and
-    calls per second of this session's LLM work.
+    At most ``o.chunk`` runs (default: the concurrency) are in progress at once, across all the
+    study's agent configs; a run that ends is stored at once and the next one starts, so runs
+    finish, and are saved, one by one. ``speed`` (filled in) gets this session's calls (made,
+    billed, replayed from the journal), wall time, tokens and cost.
     """
-    def spec(p: Plan) -> LLMRunSpec:
-        return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
-                          n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id)
-
+    by_id = {p.run_id: p for p in plans}
     steps_total = sum(p.steps for p in plans)
     steps_done = 0
     t_start = time.perf_counter()
-    calls = {"calls": 0, "billed_calls": 0}
-
+    totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
+    journal = CallJournal(store.folder)
+    spent_before = journal.spent_usd
+    budget = Budget(max_cost, spent_usd=spent_before)
     live: list[LLMClient] = []  # the open client, for its running counts
 
     def report(phase: str = "llm") -> None:
@@ -292,68 +366,100 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
             info += f" · ETA {left}"
         if live:
             c = live[0].counts
-            info += f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · {c.cache_hits} cached · {c.shared} shared"
+            info += f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · ${budget.spent_usd:.4f}"
+            if max_cost is not None:
+                info += f" of ${max_cost:g}"
+            if c.cache_hits or c.shared:
+                info += f" · {c.cache_hits} cached · {c.shared} shared"
         tick(phase, finished, total, info)
 
-    def on_round(n: int) -> None:
+    def on_step(n: int) -> None:
         nonlocal steps_done
         steps_done += n
-        report()
+
+    def on_done(r: RunResult) -> None:
+        nonlocal finished
+        totals["calls"] += r.usage.calls
+        totals["billed_calls"] += r.usage.billed_calls - r.replayed_calls
+        totals["replayed_calls"] += r.replayed_calls
+        if r.status in STORED:
+            store.add_runs([_row(by_id[r.run_id], r, o.horizon)])
+            journal.forget(r.run_id)
+            finished += 1
+            report()
 
     async def keep_reporting() -> None:
-        # Rounds of a slow model take seconds; show the requests in flight meanwhile.
-        while True:
+        while True:  # a slow model takes seconds per call: show the requests in flight meanwhile
             await asyncio.sleep(0.5)
             report("llm-live")
 
-    async def go(settings: Any) -> int:
-        async with LLMClient(settings) as client:
+    async def go(settings: ClientSettings) -> None:
+        pacer = Pacer(backend.rpm, backend.tpm, margin=settings.max_concurrency)
+        async with LLMClient(settings, pacer=pacer, budget=budget) as client:
             live.append(client)
+            window = asyncio.Semaphore(o.chunk or settings.max_concurrency)
             reporter = asyncio.ensure_future(keep_reporting())
             try:
-                await _llm_chunks(client)
+                await asyncio.gather(*[
+                    run_batch_async([_spec(p) for p in group], client, cfg, store.folder / "transcripts",
+                                    window=window, journal=journal, on_step=on_step, on_done=on_done)
+                    for cfg, group in _configs(plans, o, template)
+                ])
             finally:
                 reporter.cancel()
                 await asyncio.gather(reporter, return_exceptions=True)
-        return finished
-
-    async def _llm_chunks(client: Any) -> None:
-        nonlocal finished
-        for (variant, action_set), group in _groups(plans, "variant", "action_set").items():
-            cfg = variant_config(variant, action_set=action_set, share_identical=o.share_identical, x_min=o.x_min,
-                                 max_tokens=o.max_tokens, **({"template": template} if template else {}))
-            for i in range(0, len(group), o.chunk):
-                chunk = group[i: i + o.chunk]
-                results = await run_batch_async([spec(p) for p in chunk], client, cfg,
-                                                transcript_dir=store.folder / "transcripts", on_round=on_round,
-                                                cohorts=min(backend.cohorts, len(chunk)))
-                for r in results:
-                    calls["calls"] += r.usage.calls
-                    calls["billed_calls"] += r.usage.billed_calls
-                rows = []
-                by_swimmer = _groups(chunk, "swimmer")
-                res_by_id = {r.run_id: r for r in results}
-                for (_sw,), members in by_swimmer.items():
-                    res = [res_by_id[p.run_id] for p in members]
-                    steps = max(len(r.x) for r in res)
-                    acts = np.array([r.actions + [1] * (steps - len(r.actions)) for r in res], np.int64)
-                    xs = np.array([r.x + [r.x[-1] if r.x else 0.0] * (steps - len(r.x)) for r in res])
-                    lv = np.array([r.levels0 for r in res], np.int64)
-                    extra = [{k: v for k, v in r.as_row().items()
-                              if k not in ("x", "actions", "progress", "stuck", "levels0")} for r in res]
-                    rows += _judge_rows(members, acts, xs, lv, o.horizon, extra)
-                store.add_runs(rows)
-                finished += len(chunk)
-                report()
 
     try:
         if backend.local:
             with backend.server() as srv:
                 t_start = time.perf_counter()  # the model's loading time is not LLM work
-                return run_sync(go(backend.client_settings(srv)))
-        return run_sync(go(backend.client_settings()))
+                run_sync(go(backend.client_settings(srv)))
+        else:
+            run_sync(go(backend.client_settings()))
     finally:
-        if speed is not None:
-            wall = time.perf_counter() - t_start
-            speed.update(calls, wall_s=wall, calls_per_s=calls["calls"] / wall if wall > 0 else 0.0,
-                         billed_calls_per_s=calls["billed_calls"] / wall if wall > 0 else 0.0)
+        journal.close()
+        wall = time.perf_counter() - t_start
+        c = live[0].counts if live else None
+        speed.update(totals, wall_s=wall, calls_per_s=totals["calls"] / wall if wall > 0 else 0.0,
+                     billed_calls_per_s=totals["billed_calls"] / wall if wall > 0 else 0.0,
+                     tokens=c.tokens if c else 0, cost_usd=budget.spent_usd - spent_before,
+                     study_cost_usd=budget.spent_usd)
+    return finished, budget.exhausted
+
+
+def estimate_study(
+    study: str, options: StudyOptions = StudyOptions(), backend: Backend | None = Backend(),
+    out: str | Path | None = None,
+) -> Estimate:
+    """What the study's LLM runs not yet done would cost (``--dry-run``); nothing is sent.
+
+    The runs go through the real driver against :class:`jswim.llm.dryrun.EstimatingClient`, so
+    the prompts are rendered from real swimmer states; the study folder is read (to skip the
+    runs it has) but never written.
+    """
+    if backend is None:
+        raise ConfigError("a dry run needs a backend (the model to price)")
+    backend = study_backend(study, backend)
+    plans = [p for p in build(study, options) if p.agent == "llm"]
+    folder = Path(out) if out is not None else default_folder(study, options, backend)
+    done = {r["run_id"] for r in read_runs(folder)}
+    plans = [p for p in plans if p.run_id not in done]
+    template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
+    if backend.local:  # no server is started: the settings only name the model and the limits
+        settings = ClientSettings(base_url="http://127.0.0.1/v1", model=backend.describe()["model"],
+                                  temperature=backend.temperature)
+    else:
+        settings = backend.client_settings()
+    client = EstimatingClient(settings)
+    results: list[RunResult] = []
+
+    async def go() -> None:
+        window = asyncio.Semaphore(max(len(plans), 1))  # no waiting: every run steps at once
+        for cfg, group in _configs(plans, options, template):
+            results.extend(await run_batch_async([_spec(p) for p in group], client, cfg, window=window,
+                                                 transcripts=False))
+
+    if plans:
+        run_sync(go())
+    u = UsageTotals().merge(r.usage for r in results)
+    return estimate(client, u.calls, u.prompt_tokens, u.completion_tokens)

@@ -1,0 +1,174 @@
+"""Studies against a priced server: dry run, cost cap, resume without re-billing, identity, seeds."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from jswim.cli import main
+from jswim.llm.usage import DEFAULT_PRICES
+from jswim.results import read_runs
+from tests.fakeserver import FakeServer, hash_reply
+
+ROOT = Path(__file__).resolve().parent.parent
+bpe = pytest.importorskip("bpe_openai")
+O200K = bpe.get_encoding("o200k_base")
+
+
+def o200k(text: str) -> int:
+    """The server's token count: the real tokenizer of gpt-4o (independent of jswim's estimate)."""
+    return len(O200K.encode(text))
+
+
+def priced_server(**kw) -> FakeServer:
+    return FakeServer(reply=hash_reply, tokens=o200k, **kw)
+
+
+def billed_usd(srv: FakeServer, model: str) -> float:
+    """What the server's own usage numbers cost at the price table's rates (every request it answered)."""
+    p_in, p_out = DEFAULT_PRICES[model]
+    total = 0.0
+    for body in srv.requests:
+        prompt = sum(o200k(str(m.get("content", ""))) for m in body["messages"])
+        total += (prompt * p_in + o200k(hash_reply(body)) * p_out) / 1e6
+    return total
+
+
+def swim(url: str, out: Path, *extra: str, model: str = "gpt-4o", runs: int = 3, steps: int = 12) -> list[str]:
+    return ["swim", "--base-url", url, "--model", model, "--runs", str(runs), "--q-runs", "0", "--steps", str(steps),
+            "--noise", "0.5", "--no-figures", "--out", str(out), *extra]
+
+
+def test_dry_run_sends_nothing_and_estimates_the_real_tokens(tmp_path, capsys):
+    out = tmp_path / "study"
+    with priced_server() as srv:
+        assert main(swim(srv.url, out, "--dry-run")) == 0
+        printed = capsys.readouterr().out
+        assert srv.n_requests == 0
+        assert not (out / "runs.jsonl").exists()
+        est = json.loads(printed.strip().splitlines()[-1])  # the machine-readable last line
+        assert est["calls"] == 3 * 12
+        assert main(swim(srv.url, out)) == 0
+        rows = read_runs(out)
+        sent = srv.n_requests
+        real_prompt = sum(o200k(str(m.get("content", ""))) for body in srv.requests for m in body["messages"])
+        real_cost = billed_usd(srv, "gpt-4o")
+    assert "2025-04" in printed and "$" in printed
+    assert sum(r["calls"] for r in rows) == est["calls"]
+    # per call (runs that send identical requests may share one: the server then sees fewer)
+    assert abs((est["prompt_tokens"] / est["calls"]) / (real_prompt / sent) - 1) < 0.2
+    assert abs((est["cost_usd"] / est["calls"]) / (real_cost / sent) - 1) < 0.2
+
+
+def test_max_cost_stops_below_the_cap_and_a_higher_cap_finishes_without_rebilling(tmp_path, capsys):
+    out = tmp_path / "study"
+    runs, steps, conc = 4, 10, 2
+    with priced_server(latency=0.01) as srv:
+        # gpt-4 at $30/$60 per 1M: ~$0.01 per call here, so $0.05 buys a few calls of the 40.
+        code = main(swim(srv.url, out, "--max-cost", "0.05", "--concurrency", str(conc),
+                         model="gpt-4", runs=runs, steps=steps))
+        err = capsys.readouterr().err
+        assert code == 3, err
+        assert "cost cap" in err and "--max-cost" in err
+        first = srv.n_requests
+        spent = billed_usd(srv, "gpt-4")
+        one_call = max(billed_usd_one(b) for b in srv.requests)
+        assert 0 < first < runs * steps
+        assert spent <= 0.05 + conc * one_call
+        meta = json.loads((out / "metadata.json").read_text())
+        assert meta["status"] == "stopped at the cost cap"
+        assert len(read_runs(out)) < runs
+        assert main(swim(srv.url, out, "--max-cost", "10", "--concurrency", str(conc),
+                         model="gpt-4", runs=runs, steps=steps)) == 0
+        rows = read_runs(out)
+    assert len(rows) == runs and all(r["status"] == "done" and r["steps"] == steps for r in rows)
+    # every call the runs paid for reached the server exactly once over both sessions
+    # (billed_calls: calls not answered by another run's identical request in flight)
+    assert sum(r["calls"] for r in rows) == runs * steps
+    assert srv.n_requests == sum(r["billed_calls"] for r in rows)
+
+
+def billed_usd_one(body) -> float:
+    p_in, p_out = DEFAULT_PRICES["gpt-4"]
+    prompt = sum(o200k(str(m.get("content", ""))) for m in body["messages"])
+    return (prompt * p_in + o200k(hash_reply(body)) * p_out) / 1e6
+
+
+def test_interrupt_and_resume_bill_each_call_once(tmp_path):
+    out = tmp_path / "study"
+    runs, steps = 3, 12
+    with priced_server(latency=0.05) as srv:
+        cmd = [sys.executable, "-m", "jswim.cli", *swim(srv.url, out, runs=runs, steps=steps)]
+        # the same precision as this test process (conftest: float64), so both sessions step alike
+        env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_ENABLE_X64": "1"}
+        proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 120
+        while srv.n_answered < 10 and time.monotonic() < deadline and proc.poll() is None:
+            time.sleep(0.02)
+        proc.send_signal(signal.SIGINT)  # Ctrl-C in the middle of the runs
+        _, err = proc.communicate(timeout=60)
+        assert proc.returncode == 130, err
+        before = srv.n_requests
+        assert 10 <= before < runs * steps
+        assert len(read_runs(out)) < runs
+        kept = len((out / "calls.jsonl").read_text().splitlines())  # the answers the client received
+        assert kept >= 3
+        assert main(swim(srv.url, out, runs=runs, steps=steps)) == 0
+        rows = read_runs(out)
+    assert len(rows) == runs and sum(r["calls"] for r in rows) == runs * steps
+    # Every answer received before Ctrl-C is replayed, none is asked again ...
+    assert sum(r["replayed_calls"] for r in rows) == kept
+    # ... so the server answered each paid call once, plus at most the calls in flight at the
+    # interrupt (one per run), whose answers the interrupted process never read.
+    extra = srv.n_answered - sum(r["billed_calls"] for r in rows)
+    assert 0 <= extra <= runs
+
+
+def test_the_address_is_not_the_identity_but_the_model_is(tmp_path, capsys):
+    out = tmp_path / "study"
+    with priced_server() as a:
+        assert main(swim(a.url, out, runs=2, steps=4)) == 0
+    with priced_server() as b:  # a restarted server on another port: same study, resumed
+        assert main(swim(b.url, out, runs=2, steps=4)) == 0
+        assert b.n_requests == 0
+        capsys.readouterr()
+        assert main(swim(b.url, out, runs=2, steps=4, model="gpt-4o-mini")) == 2
+        err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "model" in err and "'gpt-4o-mini'" in err and "'gpt-4o'" in err
+
+
+def test_more_runs_extend_a_folder_and_keep_the_existing_ones(tmp_path):
+    out = tmp_path / "study"
+    with priced_server() as srv:
+        assert main(swim(srv.url, out, runs=2, steps=4)) == 0
+        before = {r["run_id"]: r for r in read_runs(out)}
+        srv.reset_counts()
+        assert main(swim(srv.url, out, runs=3, steps=4)) == 0
+        after = {r["run_id"]: r for r in read_runs(out)}
+        assert srv.n_requests == 4  # only the new run's steps
+    assert set(before) < set(after) and len(after) == 3
+    for rid, row in before.items():
+        assert after[rid]["x"] == row["x"] and after[rid]["seed"] == row["seed"]
+
+
+def test_seeds_follow_the_run_not_its_place_in_the_grid():
+    from jswim.studies.grids import StudyOptions, build
+
+    small = {p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2))}
+    large = {p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 0.5, 1.0), runs=3, q_runs=2))}
+    assert small.items() <= large.items()  # adding a level and a repeat changes no existing run
+    swim_ids = {p.run_id: p.seed for p in build("swim", StudyOptions(runs=2))}
+    curves = {p.run_id: p.seed for p in build("curves", StudyOptions(runs=2))}
+    shared = set(swim_ids) & set(curves)
+    assert shared and all(swim_ids[i] == curves[i] for i in shared)  # same run id, same seed
+    other = {p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2, seed=1))}
+    assert all(other[i] != small[i] for i in small)  # the study seed still matters
+    assert len(set(large.values())) == len(large)
