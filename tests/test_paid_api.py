@@ -134,12 +134,12 @@ def test_interrupt_and_resume_bill_each_call_once(tmp_path):
 def test_the_address_is_not_the_identity_but_the_model_is(tmp_path, capsys):
     out = tmp_path / "study"
     with priced_server() as a:
-        assert main(swim(a.url, out, runs=2, steps=4)) == 0
+        assert main(swim(a.url, out, runs=2, steps=12)) == 0
     with priced_server() as b:  # a restarted server on another port: same study, resumed
-        assert main(swim(b.url, out, runs=2, steps=4)) == 0
+        assert main(swim(b.url, out, runs=2, steps=12)) == 0
         assert b.n_requests == 0
         capsys.readouterr()
-        assert main(swim(b.url, out, runs=2, steps=4, model="gpt-4o-mini")) == 2
+        assert main(swim(b.url, out, runs=2, steps=12, model="gpt-4o-mini")) == 2
         err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1
     assert "model" in err and "'gpt-4o-mini'" in err and "'gpt-4o'" in err
@@ -148,12 +148,12 @@ def test_the_address_is_not_the_identity_but_the_model_is(tmp_path, capsys):
 def test_more_runs_extend_a_folder_and_keep_the_existing_ones(tmp_path):
     out = tmp_path / "study"
     with priced_server() as srv:
-        assert main(swim(srv.url, out, runs=2, steps=4)) == 0
+        assert main(swim(srv.url, out, runs=2, steps=12)) == 0
         before = {r["run_id"]: r for r in read_runs(out)}
         srv.reset_counts()
-        assert main(swim(srv.url, out, runs=3, steps=4)) == 0
+        assert main(swim(srv.url, out, runs=3, steps=12)) == 0
         after = {r["run_id"]: r for r in read_runs(out)}
-        assert srv.n_requests == 4  # only the new run's steps
+        assert srv.n_requests == 12  # only the new run's steps
     assert set(before) < set(after) and len(after) == 3
     for rid, row in before.items():
         assert after[rid]["x"] == row["x"] and after[rid]["seed"] == row["seed"]
