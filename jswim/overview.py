@@ -129,7 +129,8 @@ class StudyFolder:
         b = (self.meta.get("identity") or {}).get("backend")
         if not b:
             return "no LLM runs"
-        where = "embedded" if b.get("kind") == "embedded" else (b.get("base_url") or "remote")
+        # The address is not the identity (it may change between sessions): the latest session's.
+        where = "embedded" if b.get("kind") == "embedded" else (self.meta.get("server") or b.get("base_url") or "remote")
         return f"{b.get('model')} ({where}), temperature {_fmt(b.get('temperature'), 'g')}, constrain {b.get('constrain')}"
 
     def label(self) -> str:
