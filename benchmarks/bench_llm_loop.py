@@ -58,11 +58,11 @@ async def study(url: str, runs: int, steps: int, swimmer: str) -> tuple[float, f
         return time.perf_counter() - t0, time.process_time() - c0, results, sum(g.n_steps for g in driver.groups)
 
 
-def delays(results: list, latency) -> list[list[float]]:
+def delays(results: list, latency, system: str | None) -> list[list[float]]:
     """Each run's server delays, recomputed from the prompts it sent (first attempts only)."""
     out = []
     for r in results:
-        out.append([latency({"messages": build_messages(rec["prompt"])})
+        out.append([latency({"messages": build_messages(rec["prompt"], system)})
                     for rec in r.transcript if rec.get("type") == "step"])
     return out
 
@@ -103,7 +103,7 @@ def main() -> None:
     finally:
         stop()
 
-    d = delays(results, latency)
+    d = delays(results, latency, LLMAgentConfig().system)
     calls = sum(r.usage.calls for r in results)
     steps = sum(r.steps for r in results)
     per_run = [sum(x) for x in d]

@@ -23,7 +23,7 @@ def test_a_slow_run_holds_no_other_run_back():
     # would send its k-th request only after the slow run's (k-1)-th reply; as pipelines it is
     # done before the slow run's second request arrives.
     def latency(body):
-        return 0.4 if "+x" in body["messages"][-1]["content"] else 0.0
+        return 0.4 if "positive x" in body["messages"][-1]["content"] else 0.0
 
     specs = [LLMRunSpec(direction=1, seed=1, n_steps=4), LLMRunSpec(direction=-1, seed=2, n_steps=4)]
     with FakeServer(reply=hash_reply, latency=latency) as srv:
@@ -36,7 +36,7 @@ def test_a_slow_run_holds_no_other_run_back():
         run_batch([LLMRunSpec(seed=7, n_steps=1), LLMRunSpec(seed=8, n_steps=1)], _settings(srv), INDEPENDENT)  # compile the step first
         srv.reset_counts()
         results = asyncio.run(go())
-        order = ["+x" if "+x" in b["messages"][-1]["content"] else "-x" for b in srv.requests]
+        order = ["+x" if "positive x" in b["messages"][-1]["content"] else "-x" for b in srv.requests]
     assert [r.steps for r in results] == [4, 4]
     assert done == [-1, 1]
     assert order.index("+x", order.index("+x") + 1) > max(i for i, o in enumerate(order) if o == "-x")
