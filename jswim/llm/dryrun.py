@@ -29,6 +29,8 @@ class EstimatingClient:
         self._prices = PriceTable(settings.prices)
         self.counts = LiveCounts()
         self.n_requests = 0
+        self.max_completion_tokens = 0  # sum over calls of the max_tokens each was sent with
+        self.max_tokens_seen: set[int] = set()
         self.pacer = self.budget = None
 
     async def __aenter__(self) -> "EstimatingClient":
@@ -41,9 +43,14 @@ class EstimatingClient:
         return None
 
     async def chat(
-        self, messages: Sequence[Mapping[str, str]], *, replies: Sequence[str] | None = None, **_: Any
+        self, messages: Sequence[Mapping[str, str]], *, replies: Sequence[str] | None = None,
+        max_tokens: int | None = None, **_: Any
     ) -> ChatResult:
         """An immediate answer: a valid reply and estimated usage (no request is sent)."""
+        mt = max_tokens if max_tokens is not None else self.settings.max_tokens
+        if mt:
+            self.max_completion_tokens += mt
+            self.max_tokens_seen.add(mt)
         last = str(messages[-1].get("content", "")) if messages else ""
         options = list(replies) if replies else ["[1, 1]"]
         text = options[zlib.crc32(last.encode()) % len(options)]
@@ -72,7 +79,9 @@ class Estimate:
     cost_usd : float
         Estimated cost.
     cost_max_usd : float
-        Cost if every reply ran to ``max_tokens``.
+        Cost if every reply ran to the ``max_tokens`` it was sent with.
+    max_tokens : str or None
+        Those limits (``"10"``, or ``"10-20"`` when they differ by swimmer).
     prices_as_of : str
         Date of the price table.
     """
@@ -85,7 +94,7 @@ class Estimate:
     price_out: float
     cost_usd: float
     cost_max_usd: float
-    max_tokens: int | None
+    max_tokens: str | None
     prices_as_of: str = PRICES_AS_OF
 
     def as_dict(self) -> dict[str, Any]:
@@ -114,6 +123,8 @@ def estimate(client: EstimatingClient, calls: int, prompt_tokens: int, completio
     s = client.settings
     p_in, p_out = client._prices.lookup(s.model)
     cost = (prompt_tokens * p_in + completion_tokens * p_out) / 1e6
-    mt = s.max_tokens
-    cost_max = (prompt_tokens * p_in + calls * (mt if mt else completion_tokens / max(calls, 1)) * p_out) / 1e6
+    most = max(client.max_completion_tokens, completion_tokens)
+    cost_max = (prompt_tokens * p_in + most * p_out) / 1e6
+    seen = sorted(client.max_tokens_seen)
+    mt = None if not seen else str(seen[0]) if len(seen) == 1 else f"{seen[0]}-{seen[-1]}"
     return Estimate(s.model, calls, prompt_tokens, completion_tokens, p_in, p_out, cost, cost_max, mt)
