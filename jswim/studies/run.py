@@ -255,7 +255,7 @@ def run_study(
         "prices_as_of": PRICES_AS_OF,
     })
     try:
-        return _run_in(store, study, plans, options, backend, folder, template, progress, figures, t0)
+        return _run_in(store, study, plans, options, backend, folder, template, progress, figures, t0, max_cost)
     except KeyboardInterrupt:
         store.set_status("interrupted")  # finished runs are kept; the same command resumes
         raise
@@ -266,7 +266,7 @@ def run_study(
 
 def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: StudyOptions, backend: Backend | None,
             folder: Path, template: PromptTemplate | None, progress: ProgressFn | None, figures: bool,
-            t0: float) -> StudyResult:
+            t0: float, max_cost: float | None = None) -> StudyResult:
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
     if backend is not None and any(p.agent == "llm" for p in todo):
