@@ -375,8 +375,8 @@ def test_backend_checks_its_settings_up_front(tmp_path):
     assert b.base_url == "http://localhost:8080/v1" and b.omit_fields == ("seed",)
     s = b.client_settings()
     assert (s.timeout_s, s.omit_fields) == (300, ("seed",))
-    assert Backend(base_url="http://h/v1", model="m").describe().keys() == {
-        "kind", "base_url", "model", "constrain", "temperature"}  # defaults keep old identities
+    # defaults add nothing to the identity; the address is not part of it (Backend.address)
+    assert Backend(base_url="http://h/v1", model="m").describe().keys() == {"kind", "model", "constrain", "temperature"}
     with pytest.raises(ConfigError, match="--timeout"):
         Backend(base_url="http://h/v1", model="m", timeout_s=0)
     with pytest.raises(ConfigError, match="--omit-field model"):
