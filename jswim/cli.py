@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -25,6 +26,9 @@ from jswim.actions import ACTION_SETS
 from jswim.errors import ConfigError, JswimError
 
 EXIT_USAGE = 2
+#: Largest count a batched command accepts (--n, --seeds, --steps, --chunk): swimmer and learner
+#: indices are int32 on the device, and anything larger would fail deep inside JAX or NumPy.
+MAX_COUNT = 2**31 - 1
 
 
 class _Parser(argparse.ArgumentParser):
@@ -412,6 +416,8 @@ def _qlearn(args: argparse.Namespace) -> int:
         raise ConfigError("--seeds and --steps must be >= 1")
     if args.chunk is not None and args.chunk < 1:
         raise ConfigError(f"--chunk must be >= 1, got {args.chunk}")
+    for name in ("seeds", "steps", "chunk"):
+        _check_max(name, getattr(args, name))
     if not (math.isfinite(args.noise) and args.noise >= 0):
         raise ConfigError(f"--noise (zeta) must be >= 0, got {args.noise}")
     rate = _learning_rate(args)
@@ -471,6 +477,12 @@ def _moves(text: str, n_dof: int) -> list[int]:
     return [int(a) for a in validate_actions(pairs, n_dof)]
 
 
+def _check_max(name: str, value: int | None) -> None:
+    """One line for a count too large for the device's int32 indices (else a deep traceback)."""
+    if value is not None and value > MAX_COUNT:
+        raise ConfigError(f"--{name} must be at most {MAX_COUNT:,}, got {value}")
+
+
 def _ensemble(args: argparse.Namespace) -> int:
     import csv
 
@@ -483,6 +495,7 @@ def _ensemble(args: argparse.Namespace) -> int:
     for name in ("n", "steps", "every", "chunk", "rows"):
         if getattr(args, name) < 1:
             raise ConfigError(f"--{name} must be >= 1, got {getattr(args, name)}")
+        _check_max(name, getattr(args, name))
     if args.every > args.steps:
         raise ConfigError(f"--every ({args.every}) must not exceed --steps ({args.steps})")
     if len(args.direction) != 1:
@@ -628,11 +641,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)
         return 130
+    except MemoryError:
+        print("jswim: error: out of memory; use fewer swimmers/learners or a smaller --chunk", file=sys.stderr)
+        return EXIT_USAGE
+    except RuntimeError as exc:  # JAX's device errors are RuntimeErrors; only out-of-memory is the user's
+        if "RESOURCE_EXHAUSTED" not in str(exc):
+            raise
+        print("jswim: error: out of device memory; use fewer swimmers/learners, fewer --steps or a smaller --chunk",
+              file=sys.stderr)
+        return EXIT_USAGE
 
 
 def run() -> None:
     """Console-script wrapper."""
-    sys.exit(main())
+    try:
+        status = main()
+        sys.stdout.flush()
+    except BrokenPipeError:  # output piped into a reader that quit (`jswim show F | head`): not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at interpreter exit
+        status = 0
+    sys.exit(status)
 
 
 if __name__ == "__main__":

@@ -323,6 +323,8 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
             row = json.loads(line)
         except json.JSONDecodeError:
             continue  # a torn final line from a kill; the run simply counts as not done
+        if not isinstance(row, dict):
+            continue  # not a run record (hand-edited file); skipped like a torn line
         rid = row.get("run_id")
         if rid not in by_id or is_failed(by_id[rid]):
             by_id[rid] = upgrade_names(row)
@@ -336,9 +338,12 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     if not path.exists():
         raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
     try:
-        return upgrade_names(json.loads(path.read_text()))
-    except (OSError, json.JSONDecodeError) as exc:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:  # ValueError: bad JSON or bad UTF-8
         raise ResultFolderError(f"{path} is unreadable ({exc})") from None
+    if not isinstance(meta, dict):
+        raise ResultFolderError(f"{path} is not a study's metadata (a JSON {type(meta).__name__}, not an object)")
+    return upgrade_names(meta)
 
 
 def _repair_tail(path: Path) -> None:

@@ -161,3 +161,63 @@ def _actions(parser):
 def test_every_option_has_help_text():
     missing = [name for name, action in _actions(cli.build_parser()) if not (action.help or "").strip()]
     assert not missing, f"options without help: {missing}"
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["ensemble", "--n", "99999999999999999999", "--steps", "2", "--zetas", "0"], "--n must be at most"),
+    (["ensemble", "--n", "4", "--steps", "99999999999", "--zetas", "0"], "--steps must be at most"),
+    (["ensemble", "--n", "4", "--steps", "2", "--zetas", "0", "--chunk", "99999999999"], "--chunk must be at most"),
+    (["qlearn", "--swimmer", "purcell", "--seeds", "99999999999999999999", "--steps", "5"], "--seeds must be at most"),
+    (["qlearn", "--swimmer", "purcell", "--seeds", "2", "--steps", "99999999999"], "--steps must be at most"),
+])
+def test_huge_counts_are_one_line_errors(argv, message, capsys):
+    # QA: these reached JAX/NumPy (int32 overflow, a 745 GiB allocation) and ended in a traceback
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_absurd_concurrency_is_refused_before_any_run(tmp_path, capsys):
+    # QA: --concurrency 10**10 built one client slot per request in flight and never returned
+    rc = cli.main(["study", "noise", "--swimmer", "purcell", "--zetas", "0", "--runs", "1", "--q-runs", "0",
+                   "--steps", "12", "--base-url", "http://127.0.0.1:9/v1", "--model", "m",
+                   "--concurrency", "10000000000", "--out", str(tmp_path / "s"), "--no-figures"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "--concurrency must be at most" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("content,message", [
+    ("[1]", "not a study's metadata"),
+    ("\"swim\"", "not a study's metadata"),
+    (b"\xff\xfe", "is unreadable"),
+])
+def test_show_of_a_foreign_metadata_file_is_one_line(content, message, tmp_path, capsys):
+    # QA: a metadata.json that is JSON but not an object (or not UTF-8) gave a traceback
+    meta = tmp_path / "metadata.json"
+    meta.write_bytes(content if isinstance(content, bytes) else content.encode())
+    assert cli.main(["show", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+
+
+def test_show_into_a_closed_pipe_is_quiet(folder, tmp_path, monkeypatch, capsys):
+    # QA: `jswim show F | head -2` ended in a BrokenPipeError traceback once head had quit
+    class ClosedPipe:
+        def __init__(self, fd: int) -> None:
+            self.fd = fd
+
+        def write(self, text: str) -> int:
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self) -> None:
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def fileno(self) -> int:
+            return self.fd
+
+    with open(tmp_path / "stdout", "w") as sink:
+        monkeypatch.setattr("sys.stdout", ClosedPipe(sink.fileno()))
+        monkeypatch.setattr("sys.argv", ["jswim", "show", str(folder)])
+        with pytest.raises(SystemExit) as stop:
+            cli.run()
+    assert stop.value.code == 0 and capsys.readouterr().err == ""

@@ -24,6 +24,10 @@ from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.local import LocalServer, default_model_path
 
+#: Most requests in flight (and embedded decoding slots) a run may ask for: each has its own client
+#: slot, so an absurd value would stall the run building them.
+MAX_CONCURRENCY = 4096
+
 
 @dataclass(frozen=True)
 class Backend:
@@ -109,6 +113,10 @@ class Backend:
         check_temperature(self.temperature)
         if self.n_parallel < 1 or self.concurrency < 1:
             raise ConfigError("--parallel and --concurrency must be >= 1")
+        if self.concurrency > MAX_CONCURRENCY:  # one client slot is made per request in flight
+            raise ConfigError(f"--concurrency must be at most {MAX_CONCURRENCY}, got {self.concurrency}")
+        if self.n_parallel > MAX_CONCURRENCY:
+            raise ConfigError(f"--parallel must be at most {MAX_CONCURRENCY}, got {self.n_parallel}")
         if self.cohorts < 1:
             raise ConfigError(f"--cohorts must be >= 1, got {self.cohorts}")
         for name in ("rpm", "tpm"):
