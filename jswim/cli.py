@@ -273,7 +273,8 @@ def _options(args: argparse.Namespace, study: str):
     from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
 
     if args.prompt_file is not None and not Path(args.prompt_file).is_file():
-        raise ConfigError(f"--prompt-file {args.prompt_file}: no such file")
+        what = "a folder, not a file" if Path(args.prompt_file).is_dir() else "no such file"
+        raise ConfigError(f"--prompt-file {args.prompt_file}: {what}")
     _refuse_ignored(study, args)
     kw: dict[str, Any] = dict(
         swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,

@@ -348,7 +348,8 @@ def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Rep
         # steps' rotations is cheaper than cos and sin of a running sum.
         turn = np.exp(1j * table[:, 2])[idx]
         heading = np.empty((steps, b), np.complex128)
-        heading[0] = np.exp(1j * start_orientation(model, np.asarray(levels0), np))
+        if steps:  # a run the server failed at its first step has none
+            heading[0] = np.exp(1j * start_orientation(model, np.asarray(levels0), np))
         np.cumprod(turn[:-1], axis=0, out=heading[1:])
         dx = (heading * (table[:, 0] + 1j * table[:, 1])[idx]).real
         np.cumsum(dx, axis=0, out=x[1:])

@@ -313,6 +313,9 @@ class PromptTemplate:
             text = Path(path).read_text(encoding="utf-8")
         except OSError as exc:
             raise ConfigError(f"cannot read prompt template {path}: {exc.strerror}") from None
+        except UnicodeDecodeError as exc:
+            raise ConfigError(f"--prompt-file {path}: not UTF-8 text (byte {exc.start}); "
+                              "save the template as UTF-8") from None
         return cls.from_text(text).check(f"--prompt-file {path}")
 
     def check(self, where: str = "the prompt template") -> "PromptTemplate":

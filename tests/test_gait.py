@@ -152,3 +152,11 @@ def test_three_dof_cycles_use_the_same_code_path():
     params = make_params("nsphere", init=best.start)
     r = judge(_runs([[act(1, 0)] * 5 + list(best.actions) * 6]), params)
     assert r.learned[0] and r.steps_to_learn[0] == 6 and r.period[0] == best.period  # after 5 holds
+
+
+@pytest.mark.parametrize("swimmer", ["purcell", "ng"])
+def test_runs_without_steps_are_judged_not_learned(swimmer):
+    # A run the server failed at its first request has no executed action.
+    r = judge(np.zeros((2, 0), np.int64), make_params(swimmer))
+    assert r.learned.tolist() == [False, False] and r.success.tolist() == [False, False]
+    assert r.steps_to_learn.tolist() == [-1, -1]

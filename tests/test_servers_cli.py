@@ -14,7 +14,7 @@ import pytest
 
 from jswim import cli, env
 from jswim.results import read_metadata, read_runs
-from tests.fakeserver import MODES, THOUGHT, FakeServer
+from tests.fakeserver import MODES, THOUGHT, FakeServer, Fault
 
 FAST = ["--steps", "4", "--runs", "2", "--q-runs", "2", "--swimmer", "purcell", "--direction", "+x", "--no-figures"]
 GOOD = [2, -1]  # what every mode's answer is
@@ -123,6 +123,21 @@ def test_swim_context_400_fails_the_run_and_resume_reruns_it(tmp_path, capsys):
     rows = llm_rows(tmp_path / "o")
     assert len(rows) == 2 and all(r["status"] == "done" and len(r["x"]) == 4 for r in rows)
     assert read_metadata(tmp_path / "o")["status"] == "complete"
+
+
+def test_swim_error_at_the_first_request_fails_the_runs_in_one_line(tmp_path, capsys):
+    # A per-run rejection (HTTP 422) before any step: runs with no steps are recorded as failed.
+    reject = lambda body: Fault("status", 422, message="Unprocessable Entity: messages.0.content")
+    with FakeServer(reply=reject) as srv:
+        assert swim(srv.url, tmp_path / "o") == 2
+        line = one_line_error(capsys)
+        assert "2 of 2 LLM runs failed" in line and "HTTP 422" in line, line
+        rows = llm_rows(tmp_path / "o")
+        assert len(rows) == 2 and all(r["status"] == "llm_error" and r["steps"] == 0 for r in rows)
+        assert read_metadata(tmp_path / "o")["status"] == "incomplete"
+        srv.reply = MODES["plain"]["reply"]
+        assert swim(srv.url, tmp_path / "o") == 0
+    assert all(r["status"] == "done" and r["actions"] == [GOOD] * 4 for r in llm_rows(tmp_path / "o"))
 
 
 def test_swim_cold_server(tmp_path, capsys):
@@ -241,3 +256,17 @@ def test_bad_prompt_file_fails_before_the_baselines(text, words, tmp_path, capsy
     line = one_line_error(capsys)
     assert rc == 2 and all(w in line for w in words), line
     assert not (tmp_path / "o" / "runs.jsonl").exists()
+
+
+@pytest.mark.parametrize("kind, words", [("binary", ["UTF-8"]), ("folder", ["folder"])])
+def test_unreadable_prompt_file_is_one_line(kind, words, tmp_path, capsys):
+    path = tmp_path / "prompt.txt"
+    if kind == "binary":
+        path.write_bytes(b"\xff\xfe\x00 {history} {allowed}")
+    else:
+        path.mkdir()
+    with FakeServer(**MODES["plain"]) as srv:
+        rc = swim(srv.url, tmp_path / "o", "--prompt-file", str(path))
+        assert srv.n_requests == 0
+    line = one_line_error(capsys)
+    assert rc == 2 and all(w in line for w in words), line
