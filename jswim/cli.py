@@ -661,6 +661,9 @@ def run() -> None:
     except BrokenPipeError:  # output piped into a reader that quit (`jswim show F | head`): not an error
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at interpreter exit
         status = 0
+    except KeyboardInterrupt:  # Ctrl-C before main's own handler (imports, parser): nothing to keep yet
+        print("interrupted", file=sys.stderr)
+        status = 130
     sys.exit(status)
 
 

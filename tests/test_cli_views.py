@@ -221,3 +221,15 @@ def test_show_into_a_closed_pipe_is_quiet(folder, tmp_path, monkeypatch, capsys)
         with pytest.raises(SystemExit) as stop:
             cli.run()
     assert stop.value.code == 0 and capsys.readouterr().err == ""
+
+
+def test_ctrl_c_before_main_handles_it_is_one_line(monkeypatch, capsys):
+    # QA: Ctrl-C in the first seconds (imports, parser) ended in a KeyboardInterrupt traceback
+    def interrupted(argv=None):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "main", interrupted)
+    with pytest.raises(SystemExit) as stop:
+        cli.run()
+    err = capsys.readouterr().err
+    assert stop.value.code == 130 and err == "interrupted\n"
