@@ -43,7 +43,7 @@ from jax import Array
 
 from jswim.actions import check_action_set
 from jswim.agents.defaults import default_rocs
-from jswim.env import EnvParams, advance, make_params, reset, uniforms
+from jswim.env import EnvParams, advance, broadcast_params, make_params, reset, uniforms
 from jswim.errors import ConfigError
 from jswim.gait import PAPER, Criterion, GaitReport, judge
 
@@ -405,19 +405,8 @@ def _jitted(kind: str) -> Callable[..., QRun]:
     return jax.jit(fn, static_argnames=("config", "pose"), compiler_options=_compiler_options())
 
 
-def batch_params(params: EnvParams, size: int, **changes: Any) -> EnvParams:
-    """Broadcast the data leaves of ``params`` (after ``changes``) to a leading axis of ``size``.
-
-    ``changes`` may give per-learner values, e.g. ``zeta=np.linspace(0, 3, size)``.
-    """
-    n = params.model.n_dof
-    fields = {"zeta": params.zeta, "direction": params.direction, "init": params.init, **changes}
-    dtype = jnp.result_type(float)
-    return params.replace(
-        zeta=jnp.broadcast_to(jnp.asarray(fields["zeta"], dtype), (size,)),
-        direction=jnp.broadcast_to(jnp.asarray(fields["direction"], dtype), (size,)),
-        init=jnp.broadcast_to(jnp.asarray(fields["init"], jnp.int32), (size, n)),
-    )
+# Per-learner parameters are per-swimmer parameters: one broadcasting rule (env owns it).
+batch_params = broadcast_params
 
 
 def evaluate(run: QRun, params: EnvParams, *, criterion: Criterion = PAPER) -> GaitReport:
