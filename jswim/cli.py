@@ -155,7 +155,7 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from jswim.studies.grids import STUDIES  # lazy: the grids load JAX, so only when a parser is built
+    from jswim.studies.grids import DEFAULT_ZETAS, STUDIES  # lazy: the grids load JAX, so only when a parser is built
 
     ap = _Parser(prog="jswim", description="A large language model teaches model microswimmers to swim, "
                  "measured against Q-learning and a random policy.",
@@ -213,7 +213,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="start configuration as signs, e.g. ++, or random (default: the stroke's start; ++ "
                         "for qlearn and given moves)")
     p.add_argument("--n", type=int, default=100_000, help="swimmers per noise level (default 100000)")
-    p.add_argument("--zetas", type=_floats, default=(0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0), metavar="Z1,Z2,...",
+    p.add_argument("--zetas", type=_floats, default=DEFAULT_ZETAS, metavar="Z1,Z2,...",
                    help="noise levels (default the paper's 0,0.5,...,3)")
     p.add_argument("--steps", type=int, default=50, help="steps per swimmer (default 50)")
     p.add_argument("--every", type=int, default=1, metavar="K", help="report every K-th step (default 1)")
