@@ -152,6 +152,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     c.add_argument("--max-cost", type=float, default=None, metavar="USD",
                    help="stop before the study's calls cost more than USD (over all its sessions; calls in "
                         "flight count as reserved); rerun with a higher cap to continue, no call paid twice")
+    c.add_argument("--price-local", action="store_true",
+                   help="price a server on this machine or the LAN at the cloud list prices (a local gateway "
+                        "that forwards to a paid API); by default its calls cost nothing")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -266,7 +269,7 @@ def _backend(args: argparse.Namespace):
                    n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
                    cache_dir=args.cache_dir, timeout_s=args.timeout,
                    omit_fields=tuple(f.strip() for v in args.omit_field for f in v.split(",") if f.strip()),
-                   rpm=args.rpm, tpm=args.tpm)
+                   rpm=args.rpm, tpm=args.tpm, price_local=args.price_local)
 
 
 def _options(args: argparse.Namespace, study: str):

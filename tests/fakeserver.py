@@ -41,7 +41,7 @@ import zlib
 from collections import deque
 from dataclasses import dataclass
 from http import HTTPStatus
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Sequence
 
 
 @dataclass(frozen=True)
@@ -161,6 +161,11 @@ class FakeServer:
     cold_start : float
         Seconds from the first chat request during which requests wait: a server that loads its
         model on first use (Ollama does), or is still loading it.
+    models : sequence of str or None
+        The ids ``GET /v1/models`` lists (``None``: that endpoint answers 404).
+    served_model : str or None
+        The ``model`` field of every completion (``None``: the requested name echoed back, as
+        servers that accept any name do).
 
     Attributes
     ----------
@@ -181,6 +186,7 @@ class FakeServer:
         tokens: Callable[[str], int] = count_words,
         headers: Callable[[dict[str, Any]], dict[str, str]] | None = None,
         stream: str = "never", reject_fields: dict[str, str] | None = None, cold_start: float = 0.0,
+        models: "Sequence[str] | None" = ("fake",), served_model: str | None = None,
     ) -> None:
         if stream not in ("never", "default", "always"):
             raise ValueError(f"stream must be never, default or always, got {stream!r}")
@@ -192,6 +198,8 @@ class FakeServer:
         self.stream = stream
         self.reject_fields = dict(reject_fields or {})
         self.cold_start = cold_start
+        self.models = None if models is None else tuple(models)
+        self.served_model = served_model
         self._warm_at: float | None = None
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
@@ -279,7 +287,7 @@ class FakeServer:
             "id": f"fake-{self.n_requests}",
             "object": "chat.completion",
             "created": int(time.time()),
-            "model": body.get("model", "fake"),
+            "model": self.served_model or body.get("model", "fake"),
             "choices": [{"index": 0, "message": answer.message(), "finish_reason": answer.finish_reason}],
             "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done},
         }
@@ -348,8 +356,9 @@ class FakeServer:
     ) -> bool:
         if method == "GET" and path in ("/health", "/v1/health"):
             return await self._send(writer, 200, b'{"status":"ok"}')
-        if method == "GET" and path == "/v1/models":
-            return await self._send(writer, 200, b'{"object":"list","data":[{"id":"fake","object":"model"}]}')
+        if method == "GET" and path == "/v1/models" and self.models is not None:
+            data = [{"id": m, "object": "model"} for m in self.models]
+            return await self._send(writer, 200, json.dumps({"object": "list", "data": data}).encode())
         if method != "POST" or path != "/v1/chat/completions":
             msg = json.dumps({"error": {"message": f"File Not Found: {path}", "code": 404}}).encode()
             return await self._send(writer, 404, msg)

@@ -246,7 +246,7 @@ def test_no_key_no_header(server, monkeypatch):
 
 
 def test_usage_and_cost(server):
-    s = settings(server, model="gpt-4")
+    s = settings(server, model="gpt-4", price_local=True)  # the fake server stands in for a paid API
 
     async def calls():
         async with LLMClient(s) as c:
@@ -260,6 +260,41 @@ def test_usage_and_cost(server):
     assert totals.cost_usd == pytest.approx((18 * 30 + 6 * 60) / 1e6)
     study = totals.merge([totals, UsageTotals()])
     assert study.calls == 6 and study.cost_usd == pytest.approx(2 * totals.cost_usd)
+
+
+def priced_calls(srv: FakeServer, **kw) -> float:
+    async def calls():
+        async with LLMClient(settings(srv, model="gpt-4", **kw)) as c:
+            got = [await c.chat([{"role": "user", "content": "a b c"}]) for _ in range(2)]
+            return sum(r.cost_usd for r in got), c.unpriced
+
+    return run(calls())
+
+
+def test_a_local_server_is_not_priced_at_a_cloud_list_price(server):
+    cost, why = priced_calls(server)
+    assert cost == 0.0 and "--price-local" in why
+    cost, why = priced_calls(server, price_local=True)  # asked: a local gateway to a paid API
+    assert cost == pytest.approx(2 * (3 * 30 + 2 * 60) / 1e6) and why is None
+    cost, why = priced_calls(server, prices={"gpt-4": (1.0, 1.0)})  # the user's own table applies anywhere
+    assert cost == pytest.approx(2 * 5 / 1e6) and why is None
+
+
+def test_a_reply_from_another_model_is_not_priced():
+    # A server that runs one model whatever name it is sent (llama-cpp-python's does).
+    with FakeServer(served_model="/models/SmolLM2-135M-Instruct.Q4_1.gguf") as srv:
+        cost, why = priced_calls(srv, price_local=True)
+        assert cost == 0.0 and "SmolLM2" in why and "'gpt-4'" in why
+    with FakeServer(served_model="gpt-4-0613") as srv:  # a dated snapshot of the priced model: priced
+        cost, why = priced_calls(srv, price_local=True)
+        assert cost > 0 and why is None
+
+
+def test_a_model_the_server_does_not_list_is_not_priced(server):
+    cost, why = priced_calls(server, price_local=True, listed_models=("fake",))
+    assert cost == 0.0 and "does not list 'gpt-4'" in why
+    cost, _ = priced_calls(server, price_local=True, listed_models=("gpt-4",))
+    assert cost > 0
 
 
 def test_price_table():

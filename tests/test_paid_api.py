@@ -43,7 +43,7 @@ def billed_usd(srv: FakeServer, model: str) -> float:
 
 def swim(url: str, out: Path, *extra: str, model: str = "gpt-4o", runs: int = 3, steps: int = 12) -> list[str]:
     return ["swim", "--base-url", url, "--model", model, "--runs", str(runs), "--q-runs", "0", "--steps", str(steps),
-            "--noise", "0.5", "--no-figures", "--out", str(out), *extra]
+            "--noise", "0.5", "--no-figures", "--out", str(out), "--price-local", *extra]
 
 
 def test_dry_run_sends_nothing_and_estimates_the_real_tokens(tmp_path, capsys):

@@ -68,6 +68,9 @@ class Backend:
         study stops saying the server is slow); ``None``: 60 s, 120 s for the embedded model.
     omit_fields : tuple of str
         Optional request fields never sent, for servers that reject them (``"seed"``, ...).
+    price_local : bool
+        Price a local or LAN server's calls at the cloud list prices (a local gateway to a paid
+        API); by default they cost nothing (:func:`jswim.llm.usage.price_table`).
 
     Raises
     ------
@@ -92,6 +95,7 @@ class Backend:
     omit_fields: tuple[str, ...] = ()
     rpm: float | None = None
     tpm: float | None = None
+    price_local: bool = False
 
     def __post_init__(self) -> None:
         if self.base_url is None and self.model is not None:
@@ -162,7 +166,7 @@ class Backend:
     def client_settings(self, server: LocalServer | None = None, **changes: Any) -> ClientSettings:
         """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``."""
         common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir,
-                      omit_fields=self.omit_fields)
+                      omit_fields=self.omit_fields, price_local=self.price_local)
         if self.timeout_s is not None:
             common["timeout_s"] = self.timeout_s
         if self.local:

@@ -47,8 +47,8 @@ from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text
 from jswim.llm.reply import Completion, MalformedReply, assemble_sse, looks_like_sse, read_completion
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
-from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
-from jswim.llm.usage import PriceTable, Usage
+from jswim.llm.urls import endpoint, is_local_host, is_loopback, normalize_base_url, safe_url
+from jswim.llm.usage import Usage, price_table
 
 def check_temperature(value: float) -> float:
     """``value`` if it is a sampling temperature in [0, 2] (the OpenAI API's range).
@@ -108,7 +108,15 @@ class ClientSettings:
     cache_dir : str or None
         Directory of the response cache; ``None`` disables it.
     prices : mapping or None
-        USD per 1M tokens by model name; ``None`` uses :data:`jswim.llm.usage.DEFAULT_PRICES`.
+        USD per 1M tokens by model name, applied on any host; ``None`` uses
+        :data:`jswim.llm.usage.DEFAULT_PRICES` where they apply (:func:`jswim.llm.usage.price_table`:
+        not on this machine or the LAN, not for a model the server does not list, not for a reply
+        whose ``model`` field names another model).
+    price_local : bool
+        Price calls at the list prices even on a local or LAN server (a local gateway that
+        forwards to a paid API); default False: a local server's calls cost nothing.
+    listed_models : tuple of str or None
+        The models the server's ``/v1/models`` listed at preflight (``None``: not known).
     fast_transport : bool
         For ``http://`` servers on loopback, use :class:`jswim.llm.transport.LoopbackTransport`
         (asyncio streams) instead of httpx's default transport (anyio). Default True.
@@ -134,6 +142,8 @@ class ClientSettings:
     server_kind: str = "generic"
     cache_dir: str | None = None
     prices: Mapping[str, tuple[float, float]] | None = field(default=None, compare=False)
+    price_local: bool = field(default=False, compare=False)
+    listed_models: tuple[str, ...] | None = field(default=None, compare=False)
     fast_transport: bool = field(default=True, compare=False)
     omit_fields: tuple[str, ...] = ()
 
@@ -313,7 +323,9 @@ class LLMClient:
         self._key = os.environ.get(settings.api_key_env) or None
         self._url = endpoint(settings.base_url)
         self._where = safe_url(settings.base_url)
-        self._prices = PriceTable(settings.prices)
+        self._prices, self.unpriced = price_table(settings.prices, settings.model,
+                                                  local_host=is_local_host(settings.base_url),
+                                                  listed=settings.listed_models, price_local=settings.price_local)
         self._cache: ResponseCache | None = None
         self._rng = rng or random.Random()
         self._inflight: dict[str, asyncio.Future] = {}
@@ -629,12 +641,23 @@ class LLMClient:
         err.server_message = self._scrub(err.server_message)
         return err
 
+    def _cost(self, usage: Usage, replied: str | None) -> float:
+        """What a call cost: nothing when the reply says another model ran than the one priced
+        (a server that echoes any requested name), unless the user gave the prices."""
+        s = self.settings
+        if s.prices is None and not self._prices.agrees(s.model, replied):
+            if self.unpriced is None:
+                self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}: its calls are not priced at "
+                                 f"{s.model}'s list price")
+            return 0.0
+        return self._prices.cost(s.model, usage)
+
     def _attempt_result(self, got: Completion, mode: str, t0: float, retries: int) -> ChatResult:
         usage = Usage.from_response(got.usage)
         return ChatResult(
             text=constrain.reply_text(mode, got.answer), usage=usage, latency_s=time.perf_counter() - t0,
             cache_hit=False, shared=False, retries=retries,
-            cost_usd=self._prices.cost(self.settings.model, usage), constraint=mode,
+            cost_usd=self._cost(usage, got.model), constraint=mode,
             finish_reason=got.finish_reason, raw=got.content, reasoning=got.reasoning,
         )
 

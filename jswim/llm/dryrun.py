@@ -18,7 +18,8 @@ from typing import Any, Mapping, Sequence
 
 from jswim.llm.client import ChatResult, ClientSettings, LiveCounts
 from jswim.llm.tokens import estimate_prompt_tokens, estimate_tokens
-from jswim.llm.usage import PRICES_AS_OF, PriceTable, Usage
+from jswim.llm.urls import is_local_host
+from jswim.llm.usage import PRICES_AS_OF, Usage, price_table
 
 
 class EstimatingClient:
@@ -26,7 +27,9 @@ class EstimatingClient:
 
     def __init__(self, settings: ClientSettings) -> None:
         self.settings = settings
-        self._prices = PriceTable(settings.prices)
+        self._prices, self.unpriced = price_table(settings.prices, settings.model,
+                                                  local_host=is_local_host(settings.base_url),
+                                                  listed=settings.listed_models, price_local=settings.price_local)
         self.counts = LiveCounts()
         self.n_requests = 0
         self.max_completion_tokens = 0  # sum over calls of the max_tokens each was sent with
@@ -84,6 +87,8 @@ class Estimate:
         Those limits (``"10"``, or ``"10-20"`` when they differ by swimmer).
     prices_as_of : str
         Date of the price table.
+    unpriced : str or None
+        Why a model of the price table is not priced here (a local server), if it is not.
     """
 
     model: str
@@ -96,6 +101,7 @@ class Estimate:
     cost_max_usd: float
     max_tokens: str | None
     prices_as_of: str = PRICES_AS_OF
+    unpriced: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return dict(vars(self))
@@ -112,6 +118,8 @@ class Estimate:
             out.append(f"  cost: ${self.cost_usd:.2f} at ${self.price_in:g} / ${self.price_out:g} per 1M tokens "
                        f"(price table of {self.prices_as_of}); at most ${self.cost_max_usd:.2f} if every reply "
                        f"ran to max_tokens={self.max_tokens}")
+        elif self.unpriced:
+            out.append(f"  cost: $0 ({self.unpriced})")
         else:
             out.append(f"  cost: $0 ({self.model!r} is not in the price table: free or unknown)")
         out.append("  not counted: parse retries after off-format replies")
@@ -127,4 +135,5 @@ def estimate(client: EstimatingClient, calls: int, prompt_tokens: int, completio
     cost_max = (prompt_tokens * p_in + most * p_out) / 1e6
     seen = sorted(client.max_tokens_seen)
     mt = None if not seen else str(seen[0]) if len(seen) == 1 else f"{seen[0]}-{seen[-1]}"
-    return Estimate(s.model, calls, prompt_tokens, completion_tokens, p_in, p_out, cost, cost_max, mt)
+    return Estimate(s.model, calls, prompt_tokens, completion_tokens, p_in, p_out, cost, cost_max, mt,
+                    unpriced=client.unpriced)

@@ -62,6 +62,8 @@ class Completion:
         The ``usage`` object, as sent.
     streamed : bool
         The body was an SSE stream (assembled here).
+    model : str or None
+        The ``model`` field: the model the server says it ran.
     """
 
     content: str
@@ -70,6 +72,7 @@ class Completion:
     finish_reason: str | None
     usage: Mapping[str, Any] | None
     streamed: bool = False
+    model: str | None = None
 
     @property
     def truncated(self) -> bool:
@@ -183,6 +186,7 @@ def read_completion(body: Any, *, streamed: bool = False) -> Completion:
         content=text, reasoning=reasoning, answer=answer,
         finish_reason=finish if isinstance(finish, str) else None,
         usage=usage if isinstance(usage, Mapping) else None, streamed=streamed,
+        model=body["model"] if isinstance(body.get("model"), str) and body["model"] else None,
     )
 
 
@@ -211,6 +215,7 @@ def assemble_sse(text: str) -> dict[str, Any]:
     reasoning: dict[str, list[str]] = {k: [] for k in REASONING_FIELDS}
     finish: str | None = None
     usage: Any = None
+    model: Any = None
     seen = False
     for line in text.splitlines():
         if not line.startswith("data:"):
@@ -228,6 +233,8 @@ def assemble_sse(text: str) -> dict[str, Any]:
             raise MalformedReply(f"the stream carried an error: {error_message(chunk)}")
         if isinstance(chunk.get("usage"), Mapping):
             usage = chunk["usage"]
+        if isinstance(chunk.get("model"), str):
+            model = chunk["model"]
         for choice in chunk.get("choices") or []:
             if not isinstance(choice, Mapping) or choice.get("index", 0) != 0:
                 continue
@@ -247,7 +254,7 @@ def assemble_sse(text: str) -> dict[str, Any]:
         raise MalformedReply("the stream carried no choices")
     message: dict[str, Any] = {"role": "assistant", "content": "".join(content)}
     message.update({k: "".join(v) for k, v in reasoning.items() if v})
-    return {"choices": [{"index": 0, "message": message, "finish_reason": finish}], "usage": usage}
+    return {"choices": [{"index": 0, "message": message, "finish_reason": finish}], "usage": usage, "model": model}
 
 
 def error_message(body: Any) -> str:

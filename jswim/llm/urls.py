@@ -50,6 +50,12 @@ def is_loopback(url: str) -> bool:
         return False
 
 
+def is_local_host(url: str) -> bool:
+    """Whether ``url`` points at this machine or a LAN host (private or link-local address, a
+    single-label name, ``.local``/``.lan``/``.internal``): servers no cloud provider bills for."""
+    return _is_local_name((urlsplit(url).hostname or "").lower())
+
+
 def _is_local_name(host: str) -> bool:
     """A host a scheme-less URL most likely reaches over plain http (this machine, a LAN box)."""
     if host in ("localhost", "") or host.endswith((".local", ".lan", ".internal")) or "." not in host:

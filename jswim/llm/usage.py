@@ -4,12 +4,18 @@ Prices are USD per million tokens, ``(prompt, completion)``, looked up by model 
 match first, then the longest known prefix (so ``gpt-4o-2024-08-06`` finds ``gpt-4o``). They are
 list prices at the time of writing and change often: pass your own table for real budgets.
 Models not in the table (local GGUF files, self-hosted servers) cost 0.
+
+The list prices are a cloud provider's; :func:`price_table` applies them only where they can be
+right: a server on this machine or the LAN is never priced at them (it is free, or its price is
+the user's to give), nor a model the server does not list, nor a reply whose ``model`` field names
+another model than the one priced (servers that echo any requested name would otherwise bill a
+small local model at GPT-4's price). A table the user passes is always applied.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Mapping
+from typing import Iterable, Mapping, Sequence
 
 #: When :data:`DEFAULT_PRICES` was read off the providers' list prices (standard tier, no batch
 #: or cached-input discounts). Printed with every estimate.
@@ -61,17 +67,68 @@ class PriceTable:
     def __init__(self, prices: Mapping[str, tuple[float, float]] | None = None) -> None:
         self.prices = dict(DEFAULT_PRICES if prices is None else prices)
 
+    def entry(self, model: str) -> str | None:
+        """The table's name that prices ``model``: the exact name, else the longest matching
+        prefix, else ``None`` (free)."""
+        if model in self.prices:
+            return model
+        return max((k for k in self.prices if model.startswith(k)), key=len, default=None)
+
     def lookup(self, model: str) -> tuple[float, float]:
         """Price of ``model``: exact name, else longest matching prefix, else free."""
-        if model in self.prices:
-            return self.prices[model]
-        best = max((k for k in self.prices if model.startswith(k)), key=len, default=None)
-        return self.prices[best] if best else (0.0, 0.0)
+        name = self.entry(model)
+        return self.prices[name] if name is not None else (0.0, 0.0)
+
+    def agrees(self, model: str, replied: str | None) -> bool:
+        """Whether a reply that says it came from ``replied`` is priced as ``model`` is: the
+        same table entry (``gpt-4-0613`` for ``gpt-4``), or no ``model`` field in the reply."""
+        return not replied or self.entry(replied) == self.entry(model)
 
     def cost(self, model: str, usage: Usage) -> float:
         """USD for one call."""
         p_in, p_out = self.lookup(model)
         return (usage.prompt_tokens * p_in + usage.completion_tokens * p_out) / 1e6
+
+
+#: What a user passes to price a local server's calls at the list prices (a gateway on this
+#: machine or the LAN that forwards to a paid API).
+PRICE_LOCAL_OPTION = "--price-local"
+
+
+def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *, local_host: bool,
+                listed: Sequence[str] | None = None, price_local: bool = False) -> tuple[PriceTable, str | None]:
+    """The table to price ``model``'s calls by, and why it is empty when it is.
+
+    Parameters
+    ----------
+    prices : mapping or None
+        The user's table (always applied, on any host), or ``None`` for :data:`DEFAULT_PRICES`.
+    model : str
+        The model name requests carry.
+    local_host : bool
+        The server is on this machine or the LAN (:func:`jswim.llm.urls.is_local_host`).
+    price_local : bool
+        Price a local server's calls at the list prices anyway (a local gateway to a paid API).
+    listed : sequence of str, optional
+        The models the server's ``/v1/models`` lists (``None``: not known).
+
+    Returns
+    -------
+    (PriceTable, str or None)
+        An empty table (every call free) and the reason, when cloud list prices do not apply.
+    """
+    if prices is not None:
+        return PriceTable(prices), None
+    table = PriceTable()
+    if table.entry(model) is None:
+        return table, None  # not a priced model anyway
+    if local_host and not price_local:
+        return PriceTable({}), (f"{model!r} on a local or LAN server is not priced at a cloud list price; "
+                                f"{PRICE_LOCAL_OPTION} prices it (a local gateway to a paid API)")
+    if listed is not None and model not in listed:
+        return PriceTable({}), (f"the server does not list {model!r}, so its calls are not priced at "
+                                f"{model}'s list price; pass your own price table to count them")
+    return table, None
 
 
 @dataclass
