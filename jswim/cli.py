@@ -137,6 +137,13 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--timeout", type=float, default=None, metavar="S",
                    help="seconds to wait for each reply (default 60; 120 for the embedded model); a reply that "
                         "times out is asked for once more, then the study stops saying the server is slow")
+    b.add_argument("--reasoning", default="auto", choices=("auto", "on", "off"),
+                   help="reasoning models: auto (default) switches to max_completion_tokens with a budget of "
+                        "4096 (--max-tokens sets it) and to the temperature the model accepts when the server's "
+                        "400 asks for them; on gives that budget from the first request (open reasoning models "
+                        "behind vLLM/llama.cpp); off never switches")
+    b.add_argument("--reasoning-effort", default=None, choices=("minimal", "low", "medium", "high"),
+                   help="send reasoning_effort with every request (OpenAI reasoning models)")
     b.add_argument("--omit-field", action="append", default=[], metavar="NAME",
                    help="never send this optional request field (seed, max_tokens, stream, ...), for servers "
                         "that reject it; repeat or comma-separate for several")
@@ -269,7 +276,8 @@ def _backend(args: argparse.Namespace):
                    n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
                    cache_dir=args.cache_dir, timeout_s=args.timeout,
                    omit_fields=tuple(f.strip() for v in args.omit_field for f in v.split(",") if f.strip()),
-                   rpm=args.rpm, tpm=args.tpm, price_local=args.price_local)
+                   rpm=args.rpm, tpm=args.tpm, price_local=args.price_local, reasoning=args.reasoning,
+                   reasoning_effort=args.reasoning_effort)
 
 
 def _options(args: argparse.Namespace, study: str):
@@ -360,9 +368,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
             return 130
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
     _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
-    for limit, n in sorted(result.truncated.items()):
-        print(f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up); "
-              "a reasoning model needs a larger --max-tokens")
+    _print_reasoning(result)
     sp = result.llm_speed
     if sp.get("calls"):
         print(f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
@@ -386,6 +392,28 @@ def _run(study: str, args: argparse.Namespace) -> int:
               "run them again", file=sys.stderr)
         return EXIT_USAGE
     return 0
+
+
+def _print_reasoning(result: Any) -> None:
+    """What a reasoning model was sent, and the replies cut off (never executed)."""
+    sent = result.reasoning or {}
+    for note in sent.get("notes") or ():
+        print(f"reasoning model: {note}")
+    if sent.get("active") and not sent.get("notes"):
+        print(f"reasoning: {sent.get('token_field')}={sent.get('budget')} (--reasoning {sent.get('mode')})")
+    thought = sum(r.get("reasoning_tokens") or 0 for r in result.rows if r.get("agent") == "llm")
+    if thought:
+        print(f"reasoning tokens: {thought:,} (priced as output)")
+    if sent.get("active"):
+        cut = sum(result.truncated.values())
+        if cut:
+            print(f"{cut} replies cut at {sent.get('token_field')}={sent.get('budget')}, {result.cut_thinking} of them "
+                  "while still thinking (no answer, never executed; each went to the follow-up); raise --max-tokens")
+        return
+    for limit, n in sorted(result.truncated.items()):
+        print(f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up)"
+              + (f", {result.cut_thinking} of them while still thinking" if result.cut_thinking else "")
+              + "; a reasoning model needs room to think: --reasoning on (or a larger --max-tokens)")
 
 
 def _prices_date() -> str:

@@ -93,6 +93,7 @@ class Answer:
     content: Any = ""
     finish_reason: str = "stop"
     fields: tuple[tuple[str, Any], ...] = ()
+    usage: tuple[tuple[str, Any], ...] = ()  # fields of ``usage`` set as given (e.g. reasoning tokens)
 
     def message(self) -> dict[str, Any]:
         return {"role": "assistant", "content": self.content, **dict(self.fields)}
@@ -289,7 +290,8 @@ class FakeServer:
             "created": int(time.time()),
             "model": self.served_model or body.get("model", "fake"),
             "choices": [{"index": 0, "message": answer.message(), "finish_reason": answer.finish_reason}],
-            "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done},
+            "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done,
+                      **dict(answer.usage)},
         }
 
     def chunks(self, body: dict[str, Any], text: "str | Answer") -> list[dict[str, Any]]:
@@ -466,6 +468,43 @@ def _think_then_follow_up(body: dict[str, Any]) -> "str | Answer":
     return Answer("<think>" + THOUGHT, "length")
 
 
+#: Reasoning tokens the fake reasoning model spends before each answer.
+REASONING_TOKENS = 300
+
+
+def reasoning_model(answer: Reply | None = None, think: int = REASONING_TOKENS) -> Reply:
+    """A reply function behaving as OpenAI's reasoning models (o-series, gpt-5) do:
+
+    - HTTP 400 on ``max_tokens`` ("Use 'max_completion_tokens' instead");
+    - HTTP 400 on any ``temperature`` but 1 ("Only the default (1) value is supported");
+    - with ``max_completion_tokens`` below ``think`` plus a few tokens of answer: empty content,
+      ``finish_reason`` "length", every completion token a reasoning token (it was still thinking);
+    - otherwise ``answer(body)`` (default ``[2, -1]``) after ``think`` reasoning tokens, reported in
+      ``usage.completion_tokens_details.reasoning_tokens`` and counted in ``completion_tokens``.
+    """
+    answer = answer or (lambda body: "[2, -1]")
+
+    def reply(body: dict[str, Any]) -> "str | Fault | Answer":
+        if "max_tokens" in body:
+            return Fault("status", 400, message="Unsupported parameter: 'max_tokens' is not supported with this "
+                                                "model. Use 'max_completion_tokens' instead.")
+        t = body.get("temperature", 1)
+        if t != 1:
+            return Fault("status", 400, message=f"Unsupported value: 'temperature' does not support {t:g} with "
+                                                "this model. Only the default (1) value is supported.")
+        limit = body.get("max_completion_tokens")
+        if limit is not None and limit < think + 8:
+            return Answer("", "length", usage=(("completion_tokens", limit),
+                                                ("completion_tokens_details", {"reasoning_tokens": limit})))
+        text = answer(body)
+        if not isinstance(text, str):
+            return text
+        n = think + count_words(text)
+        return Answer(text, usage=(("completion_tokens", n), ("completion_tokens_details", {"reasoning_tokens": think})))
+
+    return reply
+
+
 #: name -> FakeServer keyword arguments. The comments give what a correct client executes.
 MODES: dict[str, dict[str, Any]] = {
     "plain": {"reply": lambda body: "[2, -1]"},  # -> [2, -1]; base-URL shape cases use it
@@ -494,6 +533,9 @@ MODES: dict[str, dict[str, Any]] = {
     "bare-pair": {"reply": lambda body: "2, -1"},  # -> [2, -1]
     "negated": {"reply": lambda body: "not [1, 1]; answer [2, -1]"},  # -> [2, -1]
     "cold": {"reply": lambda body: "[2, -1]", "cold_start": 1.5},  # first answers after 1.5 s
+    # OpenAI's reasoning models: 400 on max_tokens and on temperature != 1, cut while thinking
+    # below 308 max_completion_tokens, reasoning tokens in usage (see reasoning_model) -> [2, -1]
+    "openai-reasoning": {"reply": reasoning_model()},
 }
 
 

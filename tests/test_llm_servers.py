@@ -14,6 +14,7 @@ import time
 import pytest
 
 from jswim.errors import ConfigError
+from jswim.llm.reasoning import REASONING_MAX_TOKENS
 from jswim.llm.cache import ResponseCache
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMSetupError, LLMTimeoutError
@@ -138,11 +139,14 @@ def test_rejected_seed_names_the_option(mode):
 
 @pytest.mark.parametrize("mode", ["reject-max-tokens"], indirect=True)
 def test_rejected_max_tokens_names_the_option(mode):
+    res = call(mode.url)  # --reasoning auto (the default): sent again with max_completion_tokens
+    assert res.text == "[2, -1]" and "max_tokens" not in mode.requests[-1]
+    assert mode.requests[-1]["max_completion_tokens"] == REASONING_MAX_TOKENS
     with pytest.raises(LLMSetupError) as err:
-        call(mode.url)
+        call(mode.url, reasoning="off")
     msg = _one_line(err.value)
-    assert "max_completion_tokens" in msg and "--omit-field max_tokens" in msg
-    assert call(mode.url, omit_fields=("max_tokens",)).text == "[2, -1]"
+    assert "max_completion_tokens" in msg and "--omit-field max_tokens" in msg and "--reasoning auto" in msg
+    assert call(mode.url, reasoning="off", omit_fields=("max_tokens",)).text == "[2, -1]"
     assert "max_tokens" not in mode.requests[-1]
 
 

@@ -96,7 +96,8 @@ def test_swim_max_tokens_option_reaches_the_server(tmp_path):
 @pytest.mark.parametrize("name, extra, fix, words", [
     ("reject-grammar", ["--constrain", "grammar"], ["--constrain", "none"], ["supplied: grammar", "--constrain none"]),
     ("reject-seed", ["--temperature", "0.7"], ["--omit-field", "seed"], ["'seed' is not supported", "--omit-field seed"]),
-    ("reject-max-tokens", [], ["--omit-field", "max_tokens"], ["max_completion_tokens", "--omit-field max_tokens"]),
+    ("reject-max-tokens", ["--reasoning", "off"], ["--omit-field", "max_tokens"],
+     ["max_completion_tokens", "--omit-field max_tokens"]),
 ])
 def test_swim_rejected_field_is_one_line_then_the_option_works(name, extra, fix, words, tmp_path, capsys):
     with FakeServer(**MODES[name]) as srv:

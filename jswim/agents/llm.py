@@ -80,6 +80,7 @@ class RunResult:
     failed_steps: int = 0
     parse_retries: int = 0
     truncated: int = 0  # replies the server cut off at max_tokens (no answer)
+    cut_thinking: int = 0  # of those, replies cut while the model was still reasoning (never executed)
     n_clears: int = 0
     usage: UsageTotals = field(default_factory=UsageTotals)
     tokens_seen: int = 0  # prompt + reply tokens of every call, shared or cached ones included
@@ -102,6 +103,7 @@ class RunResult:
             "drop": ",".join(sorted(s.drop)), "status": self.status, "error": self.error,
             "steps": self.steps, "final_x": self.x[-1] if self.x else 0.0,
             "failed_steps": self.failed_steps, "parse_retries": self.parse_retries, "truncated": self.truncated,
+            "cut_thinking": self.cut_thinking, "reasoning_tokens": u.reasoning_tokens,
             "http_retries": u.retries, "n_clears": self.n_clears, "calls": u.calls,
             "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
             "completion_tokens": u.completion_tokens, "cached_tokens": u.cached_tokens, "cost_usd": u.cost_usd,
@@ -333,6 +335,14 @@ class LLMDriver:
         journal.record(run.result.run_id, n, key, res)
         return res
 
+    def _note_sent(self, run: _Run, res: ChatResult) -> None:
+        """Record in the run's row what a reasoning model was sent instead of what was asked."""
+        if res.temperature_sent is not None and res.temperature_sent != run.result.knobs.get("temperature"):
+            run.result.knobs["temperature_sent"] = res.temperature_sent
+        state = getattr(self.client, "reasoning", None)
+        if state is not None and state.active:
+            run.result.knobs.update(token_field=state.token_field, max_tokens_sent=state.budget)
+
     # -- one decision ------------------------------------------------------------------------
 
     async def _decide(self, run: _Run) -> tuple[Action, bool, dict[str, Any]]:
@@ -357,6 +367,8 @@ class LLMDriver:
             run.result.usage.add(res)
             run.result.tokens_seen += res.usage.total_tokens
             run.result.truncated += res.truncated
+            run.result.cut_thinking += res.cut_while_thinking
+            self._note_sent(run, res)
             reply = protocol.read_reply(req, messages, res.text, k, cfg, truncated=res.truncated)
             action = reply.action
             attempts.append({**res.as_dict(), "seed": seed, "parsed": list(action) if action else None})

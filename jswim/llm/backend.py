@@ -23,6 +23,7 @@ from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.local import LocalServer, default_model_path
+from jswim.llm.reasoning import check_mode
 
 #: Most requests in flight (and embedded decoding slots) a run may ask for: each has its own client
 #: slot, so an absurd value would stall the run building them.
@@ -71,6 +72,12 @@ class Backend:
     price_local : bool
         Price a local or LAN server's calls at the cloud list prices (a local gateway to a paid
         API); by default they cost nothing (:func:`jswim.llm.usage.price_table`).
+    reasoning : {"auto", "on", "off"}
+        Reasoning models (:mod:`jswim.llm.reasoning`): auto switches to ``max_completion_tokens``
+        and the model's temperature when the server asks; on gives the reasoning budget from the
+        first request (open reasoning models); off never switches.
+    reasoning_effort : str or None
+        ``reasoning_effort`` sent with every request when set.
 
     Raises
     ------
@@ -96,8 +103,11 @@ class Backend:
     rpm: float | None = None
     tpm: float | None = None
     price_local: bool = False
+    reasoning: str = "auto"
+    reasoning_effort: str | None = None
 
     def __post_init__(self) -> None:
+        check_mode(self.reasoning, self.reasoning_effort)
         if self.base_url is None and self.model is not None:
             raise ConfigError("--model names a model on a server; give --base-url too (or --gguf for a local file)")
         if self.base_url is not None and self.model is None:
@@ -151,6 +161,10 @@ class Backend:
         # written before these settings existed keep their identity.
         if self.omit_fields:
             out["omit_fields"] = list(self.omit_fields)
+        if self.reasoning != "auto":
+            out["reasoning"] = self.reasoning
+        if self.reasoning_effort is not None:
+            out["reasoning_effort"] = self.reasoning_effort
         return out
 
     def address(self) -> str | None:
@@ -166,7 +180,8 @@ class Backend:
     def client_settings(self, server: LocalServer | None = None, **changes: Any) -> ClientSettings:
         """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``."""
         common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir,
-                      omit_fields=self.omit_fields, price_local=self.price_local)
+                      omit_fields=self.omit_fields, price_local=self.price_local, reasoning=self.reasoning,
+                      reasoning_effort=self.reasoning_effort)
         if self.timeout_s is not None:
             common["timeout_s"] = self.timeout_s
         if self.local:

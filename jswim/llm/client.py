@@ -43,6 +43,7 @@ from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
 from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError, LLMTimeoutError
 from jswim.llm.pacing import Pacer
+from jswim.llm.reasoning import REASONING_MAX_TOKENS, ReasoningState, check_mode
 from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text
 from jswim.llm.reply import Completion, MalformedReply, assemble_sse, looks_like_sse, read_completion
 from jswim.llm.tokens import estimate_prompt_tokens
@@ -123,6 +124,15 @@ class ClientSettings:
     omit_fields : tuple of str
         Optional request fields never sent (``"seed"``, ``"max_tokens"``, ``"stream"``, ...),
         for servers that reject them.
+    reasoning : {"auto", "on", "off"}
+        Reasoning models (:mod:`jswim.llm.reasoning`): switch to ``max_completion_tokens`` and the
+        temperature the model accepts when the server's 400 asks for them (auto), use the
+        reasoning budget from the start (on), or never switch (off).
+    reasoning_max_tokens : int
+        The reply budget once reasoning is on (default
+        :data:`jswim.llm.reasoning.REASONING_MAX_TOKENS`).
+    reasoning_effort : str or None
+        Sent as ``reasoning_effort`` when given (``minimal``, ``low``, ``medium``, ``high``).
     """
 
     base_url: str = "https://api.openai.com/v1"
@@ -146,8 +156,12 @@ class ClientSettings:
     listed_models: tuple[str, ...] | None = field(default=None, compare=False)
     fast_transport: bool = field(default=True, compare=False)
     omit_fields: tuple[str, ...] = ()
+    reasoning: str = "auto"
+    reasoning_max_tokens: int = REASONING_MAX_TOKENS
+    reasoning_effort: str | None = None
 
     def __post_init__(self) -> None:
+        check_mode(self.reasoning, self.reasoning_effort)
         object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
         object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
         required = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
@@ -177,6 +191,9 @@ class ClientSettings:
             "timeout_s": self.timeout_s,
             "timeout_retries": self.timeout_retries,
             "omit_fields": list(self.omit_fields),
+            "reasoning": self.reasoning,
+            "reasoning_max_tokens": self.reasoning_max_tokens,
+            "reasoning_effort": self.reasoning_effort,
         }
 
 
@@ -221,11 +238,18 @@ class ChatResult:
     finish_reason: str | None = None
     raw: str = ""
     reasoning: str = ""
+    temperature_sent: float | None = None  # what the request carried (a reasoning model may refuse ours)
 
     @property
     def truncated(self) -> bool:
         """The reply was cut off at ``max_tokens`` (``finish_reason == "length"``): no answer."""
         return self.finish_reason == "length"
+
+    @property
+    def cut_while_thinking(self) -> bool:
+        """Cut off before any answer while the model was still reasoning (reasoning text or
+        reasoning tokens, no answer text): the budget left no room to think."""
+        return self.truncated and not self.text.strip() and bool(self.reasoning or self.usage.reasoning_tokens)
 
     def as_dict(self) -> dict[str, Any]:
         """A transcript record (the raw content only when it differs from ``text``)."""
@@ -245,6 +269,8 @@ class ChatResult:
             "cost_usd": self.cost_usd,
             "constraint": self.constraint,
             "finish_reason": self.finish_reason,
+            **({"reasoning_tokens": self.usage.reasoning_tokens} if self.usage.reasoning_tokens else {}),
+            **({"temperature_sent": self.temperature_sent} if self.temperature_sent is not None else {}),
             **extra,
         }
 
@@ -282,6 +308,10 @@ class _Failure(Exception):
         self.retry_after = retry_after
         self.bad_body = bad_body
         self.timeout = timeout
+
+
+class _Adapted(Exception):
+    """The server refused a field and said what it wants instead (internal; not billed)."""
 
 
 class _Slot:
@@ -326,6 +356,9 @@ class LLMClient:
         self._prices, self.unpriced = price_table(settings.prices, settings.model,
                                                   local_host=is_local_host(settings.base_url),
                                                   listed=settings.listed_models, price_local=settings.price_local)
+        #: What a reasoning model must be sent, amended by the server's 400s (jswim.llm.reasoning).
+        self.reasoning = ReasoningState(settings.reasoning, settings.reasoning_max_tokens, settings.reasoning_effort,
+                                        openai="api.openai.com" in settings.base_url)
         self._cache: ResponseCache | None = None
         self._rng = rng or random.Random()
         self._inflight: dict[str, asyncio.Future] = {}
@@ -421,6 +454,7 @@ class LLMClient:
             payload["seed"] = sd
         mode = constrain.resolve_mode(constrain_mode or s.constrain, s.server_kind, bool(replies))
         constrain.apply(payload, mode, replies)
+        payload = self.reasoning.apply(payload)
         for name in s.omit_fields:
             payload.pop(name, None)
         if "grammar" not in payload and "response_format" not in payload:
@@ -513,7 +547,7 @@ class LLMClient:
 
     @staticmethod
     def _cacheable(res: ChatResult, cache_if: Callable[[ChatResult], bool] | None) -> bool:
-        if res.truncated or not res.text.strip():
+        if res.truncated or not res.text.strip() or res.temperature_sent:  # sampled after all: never cached
             return False
         return cache_if is None or bool(cache_if(res))
 
@@ -524,7 +558,7 @@ class LLMClient:
             "reasoning": res.reasoning,
             "text": res.text,
             "finish_reason": res.finish_reason,
-            "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens],
+            "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens, u.reasoning_tokens],
         }
 
     def _from_cache(self, value: dict[str, Any], mode: str, latency: float) -> ChatResult:
@@ -551,8 +585,10 @@ class LLMClient:
         slots = self._slots
         assert slots is not None
         retries = timeouts = 0
-        tokens = estimate_prompt_tokens(payload["messages"]) + int(payload.get("max_tokens") or 0)
+        adaptations = 0
         while True:
+            tokens = estimate_prompt_tokens(payload["messages"]) + int(
+                payload.get("max_tokens") or payload.get("max_completion_tokens") or 0)
             if self.pacer is not None:
                 await self.pacer.wait(tokens)
             slot = await slots.get()
@@ -566,13 +602,21 @@ class LLMClient:
                 self.counts.in_flight += 1
                 try:
                     got = await self._attempt(slot.http, payload)
+                except _Adapted:
+                    if self.budget is not None:
+                        self.budget.release(held)
+                    adaptations += 1
+                    if adaptations > 3:  # a server that keeps refusing what it asked for
+                        raise self._rejection(400, "the server kept refusing the amended request", payload) from None
+                    payload = self._amend(payload)
+                    continue
                 except BaseException:
                     if self.budget is not None:
                         self.budget.release(held)
                     raise
                 finally:
                     self.counts.in_flight -= 1
-                res = self._attempt_result(got, mode, t0, retries)
+                res = self._attempt_result(got, mode, t0, retries, payload)
                 if self.budget is not None:
                     self.budget.settle(held, res.cost_usd)
                 self.counts.tokens += res.usage.prompt_tokens + res.usage.completion_tokens
@@ -617,7 +661,10 @@ class LLMClient:
             raise _Failure(f"HTTP {status}" + (f": {detail}" if detail else ""),
                            retry_after=parse_retry_after(resp.headers))
         if status != 200:
-            raise self._rejection(status, server_text(resp), payload)
+            said = server_text(resp)
+            if status == 400 and self.reasoning.adapt(said, payload, s.model):
+                raise _Adapted()  # the server said what it wants: send the request again as amended
+            raise self._rejection(status, said, payload)
         text = resp.text
         ctype = resp.headers.get("content-type", "")
         try:
@@ -652,12 +699,21 @@ class LLMClient:
             return 0.0
         return self._prices.cost(s.model, usage)
 
-    def _attempt_result(self, got: Completion, mode: str, t0: float, retries: int) -> ChatResult:
+    def _amend(self, payload: dict[str, Any]) -> dict[str, Any]:
+        """``payload`` as the reasoning state now sends it (omitted fields stay omitted)."""
+        out = self.reasoning.apply(payload)
+        for name in self.settings.omit_fields:
+            out.pop(name, None)
+        return out
+
+    def _attempt_result(self, got: Completion, mode: str, t0: float, retries: int,
+                        payload: Mapping[str, Any] | None = None) -> ChatResult:
         usage = Usage.from_response(got.usage)
         return ChatResult(
             text=constrain.reply_text(mode, got.answer), usage=usage, latency_s=time.perf_counter() - t0,
             cache_hit=False, shared=False, retries=retries,
             cost_usd=self._cost(usage, got.model), constraint=mode,
             finish_reason=got.finish_reason, raw=got.content, reasoning=got.reasoning,
+            temperature_sent=(payload or {}).get("temperature"),
         )
 

@@ -75,6 +75,7 @@ class CallJournal:
             text=rec["text"], usage=Usage(*rec["usage"]), latency_s=0.0, cache_hit=bool(rec.get("cache_hit")),
             shared=bool(rec.get("shared")), retries=0, cost_usd=float(rec.get("cost_usd") or 0.0),
             constraint=rec.get("constraint", "none"), finish_reason=rec.get("finish_reason"), raw=rec.get("raw", ""),
+            temperature_sent=rec.get("temperature_sent"),
         )
 
     def record(self, run_id: str, index: int, key: str, res: ChatResult) -> None:
@@ -86,7 +87,8 @@ class CallJournal:
         billed = not (res.cache_hit or res.shared)
         rec = {
             "run": run_id, "n": index, "key": key, "text": res.text, "raw": res.raw,
-            "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens],
+            "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens, u.reasoning_tokens],
+            "temperature_sent": res.temperature_sent,
             "cost_usd": res.cost_usd if billed else 0.0, "cache_hit": res.cache_hit, "shared": res.shared,
             "constraint": res.constraint, "finish_reason": res.finish_reason,
         }

@@ -50,7 +50,10 @@ def field_hint(name: str) -> str:
     if name in ("grammar", "response_format"):
         return "run with --constrain none (no constrained decoding) or the other --constrain mode"
     if name == "max_tokens":
-        return "change --max-tokens, or leave the field out with --omit-field max_tokens"
+        return ("run with --reasoning auto (it sends max_completion_tokens when the server asks), or leave the "
+                "field out with --omit-field max_tokens")
+    if name == "temperature":
+        return "run with --reasoning auto (it sends the temperature the model accepts), or set --temperature"
     return f"leave it out with --omit-field {name}"
 
 

@@ -42,6 +42,7 @@ class Usage:
     prompt_tokens: int = 0
     completion_tokens: int = 0
     cached_tokens: int = 0  # prompt tokens the server served from its prefix cache, if reported
+    reasoning_tokens: int = 0  # of the completion tokens, those spent reasoning, if reported
 
     @property
     def total_tokens(self) -> int:
@@ -54,11 +55,14 @@ class Usage:
             return cls()
         details = usage.get("prompt_tokens_details") or {}
         cached = details.get("cached_tokens", 0) if isinstance(details, Mapping) else 0
-        return cls(
-            int(usage.get("prompt_tokens") or 0),
-            int(usage.get("completion_tokens") or 0),
-            int(cached or 0),
-        )
+        out = usage.get("completion_tokens_details") or {}
+        thought = int((out.get("reasoning_tokens") if isinstance(out, Mapping) else 0) or 0)
+        completion = int(usage.get("completion_tokens") or 0)
+        # OpenAI counts reasoning inside completion_tokens; a server that reports more reasoning
+        # than completion tokens counted them apart, and both are billed as output.
+        if thought > completion:
+            completion += thought
+        return cls(int(usage.get("prompt_tokens") or 0), completion, int(cached or 0), thought)
 
 
 class PriceTable:
@@ -147,6 +151,7 @@ class UsageTotals:
     prompt_tokens: int = 0
     completion_tokens: int = 0
     cached_tokens: int = 0  # of the prompt tokens, those the server took from its prefix cache
+    reasoning_tokens: int = 0  # of the completion tokens, those spent reasoning (priced as output)
     cost_usd: float = 0.0
     latency_s: float = 0.0
 
@@ -164,6 +169,7 @@ class UsageTotals:
             self.prompt_tokens += result.usage.prompt_tokens
             self.completion_tokens += result.usage.completion_tokens
             self.cached_tokens += result.usage.cached_tokens
+            self.reasoning_tokens += result.usage.reasoning_tokens
             self.cost_usd += result.cost_usd
 
     def merge(self, others: Iterable["UsageTotals"]) -> "UsageTotals":

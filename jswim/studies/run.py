@@ -132,6 +132,8 @@ class StudyResult:
     truncated: dict[str, int] = field(default_factory=dict)  # max_tokens -> LLM replies cut off there
     stopped: str | None = None  # "cost cap" when --max-cost stopped the study before its end
     total: int = 0  # runs in the study's grid
+    reasoning: dict[str, Any] = field(default_factory=dict)  # what a reasoning model was sent (jswim.llm.reasoning)
+    cut_thinking: int = 0  # LLM replies cut while the model was still reasoning (never executed)
 
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
@@ -283,12 +285,13 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
 
     llm_plans = [p for p in todo if p.agent == "llm"]
     speed: dict[str, float] = {}
+    sent: dict[str, Any] = {}
     capped = False
     if llm_plans:
         if backend is None:
             raise ConfigError("this study has LLM runs; give a backend")
         finished, capped = _run_llm(llm_plans, options, backend, store, template, tick, finished, total, speed,
-                                    max_cost)
+                                    max_cost, sent)
 
     # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
     names = {p.run_id for p in plans}
@@ -304,13 +307,21 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
         if r.get("truncated"):
             cut[str(r.get("max_tokens"))] = cut.get(str(r.get("max_tokens")), 0) + r["truncated"]
     replies = {"truncated_replies": sum(cut.values()), "truncated_at": cut} if llm else {}
+    cut_thinking = sum(r.get("cut_thinking") or 0 for r in llm)
+    if llm:
+        replies["cut_while_thinking"] = cut_thinking
+        replies["reasoning_tokens"] = sum(r.get("reasoning_tokens") or 0 for r in llm)
+    # What a reasoning model was sent (this session's, else the one that ran LLM runs).
+    sent = sent or dict((store.meta.get("summary") or {}).get("reasoning") or {})
     status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
     store.finalize(status,
                    {"groups": summary, "failed_runs": failed, **replies, **({"llm_speed": speed} if speed else {}),
+                    **({"reasoning": sent} if sent else {}),
                     **({"constrained_decoding": constraint} if constraint else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
     return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed, failed,
-                       dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total)
+                       dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total, sent,
+                       cut_thinking)
 
 
 def _spec(p: Plan) -> LLMRunSpec:
@@ -339,13 +350,15 @@ def _row(plan: Plan, r: RunResult, horizon: int) -> dict[str, Any]:
 
 def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
              template: PromptTemplate | None, tick: ProgressFn, finished: int, total: int,
-             speed: dict[str, float], max_cost: float | None) -> tuple[int, bool]:
+             speed: dict[str, float], max_cost: float | None,
+             sent: dict[str, Any] | None = None) -> tuple[int, bool]:
     """Run the LLM plans as per-run pipelines; returns (runs finished, stopped by the cost cap).
 
     At most ``o.chunk`` runs (default: the concurrency) are in progress at once, across all the
     study's agent configs; a run that ends is stored at once and the next one starts, so runs
     finish, and are saved, one by one. ``speed`` (filled in) gets this session's calls (made,
-    billed, replayed from the journal), wall time, tokens and cost.
+    billed, replayed from the journal), wall time, tokens and cost; ``sent`` what a reasoning
+    model was sent (:meth:`jswim.llm.reasoning.ReasoningState.describe`).
     """
     by_id = {p.run_id: p for p in plans}
     steps_total = sum(p.steps for p in plans)
@@ -409,15 +422,20 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                 reporter.cancel()
                 await asyncio.gather(reporter, return_exceptions=True)
 
+    # --max-tokens is also the reasoning budget, once reasoning is on (jswim.llm.reasoning).
+    room = {"reasoning_max_tokens": o.max_tokens} if o.max_tokens is not None else {}
     try:
         if backend.local:
             with backend.server() as srv:
                 t_start = time.perf_counter()  # the model's loading time is not LLM work
-                run_sync(go(backend.client_settings(srv)))
+                run_sync(go(backend.client_settings(srv, **room)))
         else:
-            run_sync(go(backend.client_settings()))
+            run_sync(go(backend.client_settings(**room)))
     finally:
         journal.close()
+        if live and sent is not None and (live[0].reasoning.active or live[0].reasoning.notes
+                                          or live[0].reasoning.effort):
+            sent.update(live[0].reasoning.describe())
         wall = time.perf_counter() - t_start
         c = live[0].counts if live else None
         speed.update(totals, wall_s=wall, calls_per_s=totals["calls"] / wall if wall > 0 else 0.0,
