@@ -33,6 +33,8 @@ variable below; sentences may use the variables too.
 ``{dof_ranges}``   ``D1 and D2 each stay in [-1.047, 1.047]`` (per DOF when ranges differ)
 ``{dof_choices}``  ``1 or 2``
 ``{roc_choices}``  ``-1, 0 or 1``
+``{roc_levels}``   ``K`` of ``--roc-levels`` (ROC ``k`` moves a DOF by ``k/K`` of its range; 1 = the paper's)
+``{except_zero}``  ``, not 0`` when ROC 0 is not offered (four-DOF swimmers), else empty
 ``{allowed}``      the allowed replies, ``[1, -1], [1, 0], ...``
 ``{choices}``      S5's choices: with every action offered in (DOF, ROC) order, the DOF and
                    ROC choices separately (``the changed DOF 1 or 2 and the ROC -1, 0 or 1``,
@@ -51,6 +53,14 @@ data of this run only, noise included, kept across history clears). Numbers foll
 rule for X: integers in thousandths of ``a``, no minus sign (the direction is a word). A layout
 without ``{summary}`` gets the sentence right before the history (S3), which keeps every fixed
 sentence in front for prefix caching; the paper's prompt is unchanged when the summary is off.
+
+Finer ROCs (``--roc-levels K``, an extension). The reply still carries an integer, as the paper
+advises (no decimals): ROC ``k`` in ``-K..K`` moves the DOF by ``k/K`` of its range in one step,
+stopping at its limits. With ``K > 1`` S2 ends with :data:`ROC_SCALE_SENTENCE` and S5 with
+:data:`ROC_FORMAT_SENTENCE` (appended to whatever the template's sentences say, unless they are
+dropped); with ``K = 1`` the prompt is the paper's, byte for byte. :func:`parse_reply` accepts only
+the offered integers: ``[1, 0.5]``, ``[1, 1/2]`` or a ROC beyond ``K`` name no action and are
+asked again.
 
 The ``record`` template formats one history line with ``{step}`` (the record's index since the
 last clear, from 1), ``{dofs_before}``, ``{action}``, ``{dofs_after}``, ``{x_before}``,
@@ -176,9 +186,14 @@ class SwimmerText:
     lo, hi : float or tuple of float
         DOF range, shared by all DOFs or one value per DOF.
     dof_decimals : int
-        Decimals of DOF values in text (angles 3, NG arm lengths 0).
+        Decimals of DOF values in text (angles 3, NG arm lengths 0 on the paper's corners; see
+        :func:`jswim.agents.defaults.dof_decimals` for finer ROC lattices).
     rocs : tuple of int
-        ROCs an action may carry: ``(-1, 0, 1)`` (paper), ``(-1, 1)`` for 4-DOF swimmers.
+        ROCs an action may carry: ``(-1, 0, 1)`` (paper), ``(-1, 1)`` for 4-DOF swimmers; with
+        ``roc_levels = K`` integers in ``-K..K`` (``k`` means ``k/K`` of the range per step).
+    roc_levels : int
+        ``K`` (1, the paper's set, by default). Above 1, S2 and S5 each get one sentence saying
+        what the integer ROC means (:data:`ROC_SCALE_SENTENCE`, :data:`ROC_FORMAT_SENTENCE`).
     """
 
     n_dof: int
@@ -186,12 +201,15 @@ class SwimmerText:
     hi: float | tuple[float, ...]
     dof_decimals: int = 3
     rocs: tuple[int, ...] = (-1, 0, 1)
+    roc_levels: int = 1
 
     def __post_init__(self) -> None:
         if self.n_dof < 1:
             raise ConfigError(f"n_dof must be >= 1, got {self.n_dof}")
-        if not self.rocs or any(r not in (-1, 0, 1) for r in self.rocs):
-            raise ConfigError(f"rocs must be a non-empty subset of (-1, 0, 1), got {self.rocs}")
+        k = check_roc_levels(self.roc_levels)
+        if not self.rocs or any(isinstance(r, bool) or not isinstance(r, int) or abs(r) > k for r in self.rocs):
+            raise ConfigError(f"rocs must be a non-empty set of integers in -{k}..{k} (--roc-levels {k}), "
+                              f"got {self.rocs}")
         object.__setattr__(self, "rocs", tuple(sorted(set(self.rocs))))
 
     def bounds(self, k: int) -> tuple[float, float]:
@@ -205,6 +223,25 @@ class SwimmerText:
         return [f"D{k}" for k in range(1, self.n_dof + 1)]
 
 
+#: Largest ``--roc-levels``: ROCs stay integers of at most two digits in replies (k/K of the range).
+MAX_ROC_LEVELS = 99
+
+#: S2's extra sentence when ``roc_levels = K > 1`` (the paper's K = 1 prompt has none).
+ROC_SCALE_SENTENCE = "In one step a ROC of k changes the DOF by k/{roc_levels} of its range, stopping at its limits."
+
+#: S5's extra sentence when ``roc_levels = K > 1``: the reply carries a whole number, as the paper
+#: advises (no decimals; the sign is the only non-digit).
+ROC_FORMAT_SENTENCE = "The ROC is a whole number from -{roc_levels} to {roc_levels}{except_zero}."
+
+
+def check_roc_levels(k: object) -> int:
+    """``k`` if it is a valid ``--roc-levels`` (an integer in 1..:data:`MAX_ROC_LEVELS`), else
+    :class:`ConfigError`."""
+    if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_ROC_LEVELS:
+        raise ConfigError(f"--roc-levels must be an integer from 1 to {MAX_ROC_LEVELS}, got {k!r}")
+    return k
+
+
 def allowed_actions(
     swimmer: SwimmerText, action_set: str = "all", dof_values: Sequence[float] | None = None
 ) -> list[Action]:
@@ -216,7 +253,7 @@ def allowed_actions(
         DOF count, ranges and ROC set.
     action_set : {"all", "shape-changing"}
         One of :data:`jswim.actions.ACTION_SETS`. ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
-        that change the shape from ``dof_values``: ROC +1 below ``hi``, ROC -1 above ``lo``.
+        that change the shape from ``dof_values``: a positive ROC below ``hi``, a negative one above ``lo``.
     dof_values : sequence of float, optional
         Current DOF values; required for ``"shape-changing"``.
     """
@@ -231,7 +268,7 @@ def allowed_actions(
         lo, hi = swimmer.bounds(a.dof)
         v = float(dof_values[a.dof - 1])
         tol = 1e-9 * max(1.0, abs(hi - lo))
-        if (a.roc == 1 and v < hi - tol) or (a.roc == -1 and v > lo + tol):
+        if (a.roc > 0 and v < hi - tol) or (a.roc < 0 and v > lo + tol):
             out.append(a)
     return out
 
@@ -516,6 +553,8 @@ def render_prompt(
     values = _prompt_values(sw, cfg, direction, shown, allowed, dof_values, x, summary)
     for name in SENTENCES:
         text = "" if name in cfg.drop else _fill(cfg.template.sentence(name), values, name)
+        if text and sw.roc_levels > 1 and name in _ROC_SENTENCES:
+            text += " " + _ROC_SENTENCES[name].format_map(values)
         values[name] = text
     layout = cfg.layout
     if summary and "summary" not in _fields(layout):
@@ -525,6 +564,10 @@ def render_prompt(
         else:
             layout = layout + "\n{summary}"
     return _tidy(_fill(layout, values, "layout"))
+
+
+#: The sentence each of S2 and S5 gains when ``roc_levels > 1`` (appended, so templates stay as given).
+_ROC_SENTENCES = {"S2": ROC_SCALE_SENTENCE, "S5": ROC_FORMAT_SENTENCE}
 
 
 def _prompt_values(sw: SwimmerText, cfg: PromptConfig, direction: int, shown: Sequence[HistoryRecord],
@@ -548,6 +591,8 @@ def _prompt_values(sw: SwimmerText, cfg: PromptConfig, direction: int, shown: Se
         "current": f"({', '.join(sw.names)}) = ({', '.join(format_dof(v, d) for v in dof_values)}),"
         f" X = {encode_position(x, cfg.x_min)}",
         "summary": summary,
+        "roc_levels": str(sw.roc_levels),
+        "except_zero": "" if 0 in sw.rocs else ", not 0",
     }
 
 
@@ -595,8 +640,9 @@ _PATTERNS = (
     # [1, -1]  (2,1)  [D1, -1]  {1, 1}
     re.compile(r"[\[\(\{]\s*(?:D\s*)?" + _INT + r"\s*[,;]\s*(?:ROC\s*[:=]?\s*)?" + _INT + r"\s*[\]\)\}]", re.I),
     # DOF 1, ROC -1 / DOF=2 and ROC=+1 / dof: 1 roc: 0 / {"dof": 2, "roc": -1}
-    re.compile(r"\bDOF" + _Q + r"\s*[:=]?\s*(?:D\s*)?" + _INT + r"\W{0,4}(?:and\s+)?ROC" + _Q + r"\s*[:=]?\s*" + _INT,
-               re.I),
+    # (a ROC written as a decimal or a fraction, "ROC 0.5" or "ROC 1/2", is no integer: no match)
+    re.compile(r"\bDOF" + _Q + r"\s*[:=]?\s*(?:D\s*)?" + _INT + r"\W{0,4}(?:and\s+)?ROC" + _Q + r"\s*[:=]?\s*" + _INT
+               + r"(?!\d|[./]\d)", re.I),
 )
 # Two bare integers, "2, -1": only as the whole reply or right after an answer marker.
 _BARE = re.compile(r"(?:D\s*)?([+-]?\d+)\s*(?:,|;|\s)\s*([+-]?\d+)(?!\d|\.\d)")

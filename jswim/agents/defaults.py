@@ -7,14 +7,16 @@ the start, the reply length limit and how DOF values are written in the prompt. 
 from __future__ import annotations
 
 from jswim.agents.memory import ClearingRule
-from jswim.prompt import SwimmerText
+from jswim.prompt import SwimmerText, check_roc_levels
 from jswim.swimmers.models import SwimmerModel
 
 
-def default_rocs(model: SwimmerModel) -> tuple[int, ...]:
+def default_rocs(model: SwimmerModel, roc_levels: int = 1) -> tuple[int, ...]:
     """ROCs offered to an agent: the paper's {-1, 0, 1} for two DOFs, {-1, 1} for more (the
-    published four-DOF setting)."""
-    return (-1, 0, 1) if model.n_dof == 2 else (-1, 1)
+    published four-DOF setting). With ``roc_levels = K`` (an extension): every integer of
+    ``-K..K`` (ROC ``k`` moves the DOF by ``k/K`` of its range), 0 left out for more than two DOFs."""
+    k = check_roc_levels(roc_levels)
+    return tuple(r for r in range(-k, k + 1) if r != 0 or model.n_dof == 2)
 
 
 def default_n_ht(model: SwimmerModel, direction: int = 1) -> int:
@@ -67,12 +69,28 @@ def default_max_tokens(model: SwimmerModel) -> int:
     return 10 if model.n_dof == 2 else 20
 
 
-def dof_decimals(model: SwimmerModel) -> int:
-    """Decimals of DOF values in the prompt: angles 3, sphere arms 0."""
-    return 3 if model.planar else 0
+def dof_decimals(model: SwimmerModel, roc_levels: int = 1) -> int:
+    """Decimals of DOF values in the prompt: angles 3; sphere arms as few as write every point of
+    the ROC lattice exactly.
+
+    On the paper's corners (``roc_levels = 1``) arms are whole numbers (6 and 10): 0 decimals. A
+    ROC lattice of ``K`` levels puts arms at ``lo + j (hi - lo) / K``: NG's arms (6..10) need 0
+    decimals for K = 2 or 4 (steps of 2 and 1), 1 for K = 5 or 10 (0.8, 0.4), and 3 (the angles'
+    precision, which tells lattice points 0.001 apart) when no decimal count up to 3 is exact
+    (K = 3: steps of 1.333...).
+    """
+    if model.planar:
+        return 3
+    k = check_roc_levels(roc_levels)
+    lo, step = float(model.lo), (float(model.hi) - float(model.lo)) / k
+    for d in range(4):
+        if all(abs(v * 10**d - round(v * 10**d)) < 1e-9 for v in (lo, step)):
+            return d
+    return 3
 
 
-def swimmer_text(model: SwimmerModel, rocs: tuple[int, ...] | None = None) -> SwimmerText:
-    """What the prompt needs to know about ``model`` (``rocs`` default :func:`default_rocs`)."""
-    return SwimmerText(model.n_dof, model.lo, model.hi, dof_decimals(model),
-                       tuple(default_rocs(model) if rocs is None else rocs))
+def swimmer_text(model: SwimmerModel, rocs: tuple[int, ...] | None = None, roc_levels: int = 1) -> SwimmerText:
+    """What the prompt needs to know about ``model`` (``rocs`` default :func:`default_rocs`) with
+    ROCs on ``roc_levels`` levels (1: the paper's)."""
+    return SwimmerText(model.n_dof, model.lo, model.hi, dof_decimals(model, roc_levels),
+                       tuple(default_rocs(model, roc_levels) if rocs is None else rocs), roc_levels)

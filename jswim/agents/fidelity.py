@@ -25,8 +25,19 @@ ALWAYS = (
 )
 
 
+def roc_levels_deviation(roc_levels: int) -> str | None:
+    """The line of a ROC lattice finer than the paper's (``None`` for K = 1): an extension, the
+    paper's first future direction (continuous actions)."""
+    if roc_levels == 1:
+        return None
+    return (f"ROC on {roc_levels} levels (--roc-levels {roc_levels}, an extension): ROC k in -{roc_levels}..{roc_levels} "
+            f"moves a DOF by k/{roc_levels} of its range per step (paper: -1, 0, 1, the whole range); S2 and S5 "
+            "say so in one sentence each")
+
+
 def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_tokens: int,
-               default_max_tokens: int, n_ht: int | None = None, default_n_ht: int | None = None) -> list[str]:
+               default_max_tokens: int, n_ht: int | None = None, default_n_ht: int | None = None,
+               roc_levels: int = 1) -> list[str]:
     """The deviations of one run with these settings from the paper's protocol (:data:`ALWAYS` first).
 
     Parameters
@@ -41,6 +52,8 @@ def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_
         The reply limit used and the swimmer's default (the code's).
     n_ht, default_n_ht : int, optional
         The history length used and the swimmer's default.
+    roc_levels : int
+        ``K`` of the run's ROC lattice (1: the paper's).
     """
     out = list(ALWAYS)
     if cfg.variant != "paper":
@@ -66,6 +79,8 @@ def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_
         out.append(f"clearing rule: {cfg.clearing.describe()}")
     if n_ht is not None and default_n_ht is not None and n_ht != default_n_ht:
         out.append(f"n_ht {n_ht} (default {default_n_ht})")
+    if (line := roc_levels_deviation(roc_levels)) is not None:
+        out.append(line)
     return out
 
 

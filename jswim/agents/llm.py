@@ -107,7 +107,7 @@ class RunResult:
             "http_retries": u.retries, "n_clears": self.n_clears, "calls": u.calls,
             "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
             "completion_tokens": u.completion_tokens, "cached_tokens": u.cached_tokens, "cost_usd": u.cost_usd,
-            "tokens_seen": self.tokens_seen, "replayed_calls": self.replayed_calls,
+            "tokens_seen": self.tokens_seen, "replayed_calls": self.replayed_calls, "roc_levels": s.roc_levels,
             "levels0": self.levels0, "x": self.x, "y": self.y, "orientation": self.orientation,
             "actions": self.actions, "progress": self.progress,
             "stuck": self.stuck, "below_x_min": self.below_x_min, **self.knobs,
@@ -299,7 +299,7 @@ class LLMDriver:
         run.deviations = fidelity.deviations(
             cfg, temperature=cfg.sampling_temperature(settings.temperature), constraint=constraint,
             max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(params.model), n_ht=n_ht,
-            default_n_ht=default_n_ht(params.model, spec.direction))
+            default_n_ht=default_n_ht(params.model, spec.direction), roc_levels=spec.roc_levels)
         run.meta = {
             "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
             "levels0": result.levels0, "agent": cfg.metadata(), "client": self.client.settings.metadata(),

@@ -46,10 +46,10 @@ def setup(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig) -> tuple[i
     """What a run keeps from start to end: ``(n_ht, swimmer text, prompt knobs)``.
 
     ``n_ht`` and the ROC set come from the spec, else from the swimmer's agent defaults
-    (:mod:`jswim.agents.defaults`).
+    (:mod:`jswim.agents.defaults`), on the spec's ROC lattice (``spec.roc_levels``).
     """
     n_ht = spec.n_ht if spec.n_ht is not None else default_n_ht(model, spec.direction)
-    text = swimmer_text(model, spec.rocs)
+    text = swimmer_text(model, spec.rocs, spec.roc_levels)
     prompt = PromptConfig(n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, action_set=cfg.action_set,
                           template=cfg.template, system=cfg.system, summary=cfg.summary, shuffle=cfg.shuffle,
                           order=cfg.order)

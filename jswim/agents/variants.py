@@ -19,7 +19,8 @@ from jswim.actions import check_action_set
 from jswim.agents.memory import ClearingRule
 from jswim.errors import ConfigError
 from jswim.llm.client import check_temperature
-from jswim.prompt import DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, normalize_mask
+from jswim.prompt import (DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, check_roc_levels,
+                          normalize_mask)
 
 
 def init_label(init: tuple[int, ...] | str | None) -> str:
@@ -68,6 +69,11 @@ def run_id(
     return "-".join(parts)
 
 
+def roc_tag(roc_levels: int) -> str:
+    """The run-id tag of a ROC lattice: ``""`` for the paper's (K = 1), else ``"K<K>"``."""
+    return "" if roc_levels == 1 else f"K{roc_levels}"
+
+
 #: Executed when the model gives no valid action: hold still.
 NO_OP = Action(1, 0)
 
@@ -100,6 +106,9 @@ class LLMRunSpec:
         Sentences left out of the prompt.
     rocs : tuple of int or None
         ROCs offered; ``None``: the swimmer's default.
+    roc_levels : int
+        ``K`` of the ROC lattice: a reply's ROC ``k`` in ``-K..K`` moves the DOF by ``k/K`` of its
+        range (1: the paper's -1, 0, 1; above 1 an extension, named in the run id as ``K<K>``).
     run_id : str or None
         Name of the run (transcript file name); default from the fields above.
     """
@@ -115,18 +124,20 @@ class LLMRunSpec:
     drop: frozenset[str] = frozenset()
     rocs: tuple[int, ...] | None = None
     run_id: str | None = None
+    roc_levels: int = 1
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drop", normalize_mask(self.drop))
         if self.n_steps < 1:
             raise ConfigError(f"n_steps must be >= 1, got {self.n_steps}")
+        check_roc_levels(self.roc_levels)
 
     def label(self) -> str:
         """``run_id``, or one built from the fields by :func:`run_id` (seed in place of a repeat)."""
         if self.run_id:
             return self.run_id
         return run_id("llm", self.swimmer, self.direction, self.init, self.zeta, n_ht=self.n_ht,
-                      drop=self.drop, seed=self.seed)
+                      drop=self.drop, tag=roc_tag(self.roc_levels), seed=self.seed)
 
 
 @dataclass(frozen=True)
