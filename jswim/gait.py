@@ -186,14 +186,15 @@ class GaitReport(NamedTuple):
     stroke_start: np.ndarray
 
 
-def default_max_period(n_dof: int) -> int:
-    """Longest cycle considered: ``2**n_dof``, the longest cycle visiting each corner once.
+def default_max_period(n_dof: int, roc_levels: int = 1) -> int:
+    """Longest cycle considered: ``2**n_dof``, the longest cycle visiting each corner once, times
+    ``K`` on a ``K``-level ROC lattice (the square gait walked in steps of ``1/K`` of the range).
 
     Without rotation a closed walk's displacement is the sum over the simple cycles it decomposes
     into, so no longer walk beats the best simple cycle per step; for two DOFs this is the square
-    gait's 4.
+    gait's 4 (``4 K`` on the lattice: the full square's perimeter in its smallest steps).
     """
-    return 2**n_dof
+    return 2**n_dof * roc_levels
 
 
 @functools.lru_cache(maxsize=64)
@@ -371,8 +372,15 @@ def judge(
     *,
     levels0: Any = None,
     criterion: Criterion = PAPER,
+    roc_levels: int = 1,
 ) -> GaitReport:
     """Find, per run, the final stroke and whether it is a qualifying cycle (see module docs).
+
+    On a ``K``-level ROC lattice (``roc_levels = K > 1``, :mod:`jswim.lattice`) the same rules
+    hold with lattice points for corners: a cycle returns to the same lattice point (exactly: the
+    lattice is integer), every move changes the shape, and the speed threshold is relative to the
+    best closed lattice stroke (:func:`jswim.lattice.best_per_step`: the full square, the paper's
+    square gait, at every K measured); cycles are considered up to ``2**n_dof K`` moves.
 
     Parameters
     ----------
@@ -383,9 +391,13 @@ def judge(
         ``(B, n_dof)``) may be batched. Noise plays no part: the judge measures exact
         displacements.
     levels0 : int array-like (n_dof,) or (B, n_dof), optional
-        Actual initial levels; required when ``params.init`` asks for a random start.
+        Actual initial levels; required when ``params.init`` asks for a random start. On a ROC
+        lattice: the start's lattice positions ``j`` in ``0..K`` (a corner is ``level * K``).
     criterion : Criterion
         Horizon, cycle count and speed threshold (default: the paper's, :data:`PAPER`).
+    roc_levels : int
+        ``K``: ``actions`` are lattice codes (:func:`jswim.lattice.encode`); 1 (default) the
+        paper's action indices.
 
     Returns
     -------
@@ -400,25 +412,39 @@ def judge(
     model = params.model
     n = model.n_dof
     c = criterion
-    max_period = default_max_period(n) if c.max_period is None else int(c.max_period)
+    k_levels = int(roc_levels)
+    max_period = default_max_period(n, k_levels) if c.max_period is None else int(c.max_period)
     n_cycles, min_fraction, horizon = c.n_cycles, c.min_fraction, c.horizon
     a = np.asarray(actions)
     if a.ndim == 1:
         a = a[None]
     if a.ndim != 2 or not np.issubdtype(a.dtype, np.integer):
         raise ConfigError("actions must be integer action indices of shape (T,) or (runs, T)")
-    if a.size and (a.min() < 0 or a.max() >= 3 * n):
-        raise ConfigError(f"action indices must lie in [0, {3 * n}) for a {n}-DOF swimmer")
+    n_codes = n * (2 * k_levels + 1)
+    if a.size and (a.min() < 0 or a.max() >= n_codes):
+        raise ConfigError(f"action indices must lie in [0, {n_codes}) for a {n}-DOF swimmer"
+                          + (f" on {k_levels} ROC levels" if k_levels > 1 else ""))
     b, steps = a.shape
     init = np.asarray(params.init if levels0 is None else levels0).astype(np.int64)
     init = np.broadcast_to(init, (b, n))
     if np.any(init < 0):
         raise ConfigError("params.init asks for a random start: pass the actual levels0 to judge")
     direction = np.broadcast_to(np.sign(np.asarray(params.direction, np.float64)), (b,))
-    best = np.where(direction > 0, best_per_step(model, 1, max_period), best_per_step(model, -1, max_period))
-    threshold = min_fraction * best - _REL_TOL * np.abs(best)
     at = np.ascontiguousarray(a.T)  # time-major: reductions along time run over contiguous rows
-    rp = replay(at, model, init)
+    if k_levels == 1:
+        best = np.where(direction > 0, best_per_step(model, 1, max_period), best_per_step(model, -1, max_period))
+        rp = replay(at, model, init)
+    else:
+        from jswim import lattice
+
+        if levels0 is None:  # params.init holds levels: the corner's lattice positions
+            init = init * k_levels
+        if np.any(init > k_levels):
+            raise ConfigError(f"levels0 on {k_levels} ROC levels must lie in 0..{k_levels}")
+        best = np.where(direction > 0, lattice.best_per_step(model, 1, k_levels),
+                        lattice.best_per_step(model, -1, k_levels))
+        rp = lattice.replay(at, model, k_levels, init)
+    threshold = min_fraction * best - _REL_TOL * np.abs(best)
 
     # A qualifying stroke starts after the last step that did not change the shape.
     s_move = _last_true(~rp.moved) + 1
