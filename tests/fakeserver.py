@@ -167,6 +167,13 @@ class FakeServer:
     served_model : str or None
         The ``model`` field of every completion (``None``: the requested name echoed back, as
         servers that accept any name do).
+    hold : callable, optional
+        Request body -> bool: while it returns ``True`` the request's answer waits (checked every
+        5 ms, for at most ``hold_s`` seconds). Tests script the order of answers with it (answer
+        run A's call only after run B's three calls arrived) instead of relying on timing.
+    hold_s : float
+        Longest hold of one request; then it is answered anyway (a test that deadlocks fails on
+        its assertions instead of hanging).
 
     Attributes
     ----------
@@ -188,6 +195,7 @@ class FakeServer:
         headers: Callable[[dict[str, Any]], dict[str, str]] | None = None,
         stream: str = "never", reject_fields: dict[str, str] | None = None, cold_start: float = 0.0,
         models: "Sequence[str] | None" = ("fake",), served_model: str | None = None,
+        hold: Callable[[dict[str, Any]], bool] | None = None, hold_s: float = 30.0,
     ) -> None:
         if stream not in ("never", "default", "always"):
             raise ValueError(f"stream must be never, default or always, got {stream!r}")
@@ -201,6 +209,8 @@ class FakeServer:
         self.cold_start = cold_start
         self.models = None if models is None else tuple(models)
         self.served_model = served_model
+        self.hold = hold
+        self.hold_s = hold_s
         self._warm_at: float | None = None
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
@@ -389,6 +399,10 @@ class FakeServer:
         cold = self._warm_at - time.monotonic()
         if cold > 0:  # still "loading the model"
             await asyncio.sleep(cold)
+        if self.hold is not None:
+            give_up = time.monotonic() + self.hold_s
+            while self.hold(body) and time.monotonic() < give_up:
+                await asyncio.sleep(0.005)
         for name, message in self.reject_fields.items():
             if name in body and fault is None:
                 fault = Fault("status", 400, message=message)

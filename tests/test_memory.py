@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+import pytest
+
 from jswim.agents.defaults import default_clearing
 from jswim.agents.memory import ClearingRule, History, MoveStats, render_summary, shape_key
 from jswim.prompt import Action, HistoryRecord, SwimmerText
@@ -32,8 +35,13 @@ def test_clearing_rule_three_dof_follows_the_authors_code():
     # Rounded to 3 decimals first: 0.0096 -> 0.010 is not below 0.01; 0.0094 -> 0.009 is.
     assert not rule.should_clear(6, 6, [0.0, 0.0, 0.0024, 0.0024, 0.0024, 0.0024])
     assert rule.should_clear(6, 6, [0.0, 0.0, 0.00235, 0.00235, 0.00235, 0.00235])
-    # Toward -x the rule sees direction * dX: dX summing to -0.0096 rounds to -0.010, not > -0.01.
-    assert not rule.should_clear(6, 6, [-(-0.0024)] * 6)
+    # Toward -x the code's test is sum dX > -0.01: the rule gets direction * dX (see the env test
+    # below for where that product comes from), so dX = -0.0024 per step is progress +0.0024 and
+    # rounds to 0.010, not below; dX = +0.0024 (away from the target) is progress -0.0024: clear.
+    direction = -1
+    assert not rule.should_clear(6, 6, [direction * -0.0024] * 6)
+    assert rule.should_clear(6, 6, [direction * 0.0024] * 6)
+    assert rule.should_clear(6, 6, [direction * -0.00235] * 6)  # sum dX = -0.0094 -> -0.009 > -0.01
     assert not ClearingRule(enabled=False).should_clear(10, 10, [0.0] * 10)
 
 
@@ -50,6 +58,29 @@ def test_clearing_rule_four_dof_per_swimmer():
     assert not link.should_clear(12, 6, [0.01] * 6 + [0.0] * 6)  # the 6 steps before the clear count
     assert sphere.should_clear(6, 6, [1.0] + [0.0098] * 5)  # the last 5 only: 0.049
     assert not sphere.should_clear(6, 6, [0.0] + [0.01] * 5)  # 0.05 is not below
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_history_keeps_a_run_that_swims_toward_its_target_and_clears_one_that_swims_away(direction):
+    # The env's progress (direction * dX) feeds the clearing rule: the best cycle toward the target
+    # (~0.19 a per 4 steps) never clears; the same moves with the target reversed clear at step 6.
+    from jswim import env, gait
+
+    model = make_model("purcell")
+    best = gait.best_cycles(model, direction)[0]
+    moves = list(best.moves) * 3
+    toward = env.rollout("purcell", moves, direction=direction, init=best.start)
+    away = env.rollout("purcell", moves, direction=-direction, init=best.start)
+    dx = np.diff(np.concatenate([[0.0], np.asarray(toward.x, np.float64)]))
+    assert direction * dx.sum() > 0.5  # the cycle swims toward the target (3 cycles of ~0.19)
+    np.testing.assert_allclose(toward.progress, direction * dx, atol=1e-12)
+    np.testing.assert_allclose(away.progress, -direction * dx, atol=1e-12)
+    kept, dropped = History(default_clearing(model)), History(default_clearing(model))
+    for k, (p_toward, p_away) in enumerate(zip(toward.progress, away.progress), 1):
+        kept.add(rec(k), float(p_toward))
+        dropped.add(rec(k), float(p_away))
+    assert kept.n_clears == 0 and len(kept.records) == len(moves)
+    assert dropped.n_clears == 2  # at steps 6 and 12
 
 
 def test_history_clears_rebuilds_and_renumbers():

@@ -18,8 +18,10 @@ from jswim.results import read_runs
 from tests.fakeserver import FakeServer, hash_reply
 
 ROOT = Path(__file__).resolve().parent.parent
-bpe = pytest.importorskip("bpe_openai")
-O200K = bpe.get_encoding("o200k_base")
+# A test dependency (pyproject's `test` extra): missing, this module must fail, not skip.
+import bpe_openai  # noqa: E402
+
+O200K = bpe_openai.get_encoding("o200k_base")
 
 
 def o200k(text: str) -> int:
@@ -39,6 +41,12 @@ def billed_usd(srv: FakeServer, model: str) -> float:
         prompt = sum(o200k(str(m.get("content", ""))) for m in body["messages"])
         total += (prompt * p_in + o200k(hash_reply(body)) * p_out) / 1e6
     return total
+
+
+def ledger(folder: Path) -> list[dict]:
+    """The study's call journal (``calls.jsonl``), one dict per answered call."""
+    path = folder / "calls.jsonl"
+    return [json.loads(ln) for ln in path.read_text().splitlines()] if path.exists() else []
 
 
 def swim(url: str, out: Path, *extra: str, model: str = "gpt-4o", runs: int = 3, steps: int = 12) -> list[str]:
@@ -172,3 +180,113 @@ def test_seeds_follow_the_run_not_its_place_in_the_grid():
     other = {p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2, seed=1))}
     assert all(other[i] != small[i] for i in small)  # the study seed still matters
     assert len(set(large.values())) == len(large)
+
+
+# -- money promises: each number checked against one computed here, independently ---------------
+
+#: gpt-4's list prices, written out (not read from jswim's table): USD per 1M tokens.
+GPT4_IN, GPT4_OUT = 30.0, 60.0
+
+
+def test_the_cap_holds_over_three_sessions_and_a_higher_cap_bills_each_call_once(tmp_path, capsys):
+    out = tmp_path / "study"
+    runs, steps, conc = 4, 10, 2
+    with priced_server(latency=0.01) as srv:
+        def session(cap: str) -> int:
+            return main(swim(srv.url, out, "--max-cost", cap, "--concurrency", str(conc), model="gpt-4",
+                             runs=runs, steps=steps))
+
+        one_call = 0.0
+
+        def check_under(cap: float) -> None:
+            nonlocal one_call
+            one_call = max([one_call] + [billed_usd_one(b) for b in srv.requests])
+            assert billed_usd(srv, "gpt-4") <= cap + conc * one_call
+
+        # Session 1: stopped at the cap.
+        assert session("0.05") == 3
+        first = srv.n_requests
+        assert 0 < first < runs * steps
+        check_under(0.05)
+        paid = sum(r["cost_usd"] for r in ledger(out))
+        assert paid == pytest.approx(billed_usd(srv, "gpt-4"), rel=1e-9)
+        # Session 2, the same cap: the spend of session 1 counts, so nothing at all is sent.
+        assert session("0.05") == 3
+        assert srv.n_requests == first
+        assert sum(r["cost_usd"] for r in ledger(out)) == pytest.approx(paid, rel=1e-12)
+        # Session 3, a little more: some more calls, the study still under the new cap.
+        assert session("0.12") == 3
+        second = srv.n_requests
+        assert second > first
+        check_under(0.12)
+        # Session 4, enough: the study finishes.
+        assert session("10") == 0
+        rows = read_runs(out)
+        meta = json.loads((out / "metadata.json").read_text())
+        total = billed_usd(srv, "gpt-4")
+        calls = ledger(out)
+    capsys.readouterr()
+    assert len(rows) == runs and all(r["status"] == "done" and r["steps"] == steps for r in rows)
+    # Each call reached the server once over the four sessions, and was journaled once.
+    assert srv.n_requests == len(calls) == runs * steps
+    assert len({(c["run"], c["n"]) for c in calls}) == len(calls)
+    # The ledger, the metadata and the runs' rows all say what the server billed.
+    assert sum(c["cost_usd"] for c in calls) == pytest.approx(total, rel=1e-9)
+    assert meta["summary"]["llm_speed"]["study_cost_usd"] == pytest.approx(total, rel=1e-9)
+    assert sum(r["cost_usd"] for r in rows) == pytest.approx(total, rel=1e-9)
+
+
+def test_dry_run_cost_and_worst_case_match_the_hand_computed_prices(tmp_path, capsys):
+    out = tmp_path / "study"
+    runs, steps = 2, 12
+    with priced_server() as srv:
+        assert main(swim(srv.url, out, "--dry-run", model="gpt-4", runs=runs, steps=steps)) == 0
+        assert srv.n_requests == 0
+    printed = capsys.readouterr().out
+    est = json.loads(printed.strip().splitlines()[-1])
+    calls, prompt, completion = est["calls"], est["prompt_tokens"], est["completion_tokens"]
+    assert calls == runs * steps
+    assert (est["price_in"], est["price_out"]) == (GPT4_IN, GPT4_OUT)
+    # Purcell's replies are limited to 10 tokens (the authors' code); a bare action is a few tokens.
+    assert est["max_tokens"] == "10"
+    assert 2 * calls <= completion <= 10 * calls
+    assert 50 * calls < prompt < 1000 * calls  # a prompt is a few hundred tokens
+    cost = (prompt * GPT4_IN + completion * GPT4_OUT) / 1_000_000
+    worst = (prompt * GPT4_IN + calls * 10 * GPT4_OUT) / 1_000_000
+    assert est["cost_usd"] == pytest.approx(cost, rel=1e-12)
+    assert est["cost_max_usd"] == pytest.approx(worst, rel=1e-12)
+    assert worst > cost
+    assert f"cost: ${cost:.2f} at $30 / $60 per 1M tokens" in printed
+    assert f"at most ${worst:.2f} if every reply ran to max_tokens=10" in printed
+
+
+def test_a_cap_below_one_call_sends_nothing(tmp_path, capsys):
+    # One gpt-4 call here costs ~$0.01 at worst (a few hundred prompt tokens, 10 of completion).
+    out = tmp_path / "study"
+    with priced_server() as srv:
+        assert main(swim(srv.url, out, "--max-cost", "0.001", model="gpt-4", runs=2, steps=12)) == 3
+        assert srv.n_requests == 0
+    assert "cost cap" in capsys.readouterr().err
+    assert ledger(out) == []
+
+
+def test_the_journal_sums_what_every_session_paid(tmp_path):
+    from jswim.llm.client import ChatResult
+    from jswim.llm.journal import CallJournal
+    from jswim.llm.usage import Usage
+
+    def answer(cost: float, **kw) -> ChatResult:
+        return ChatResult(text="[1, 1]", usage=Usage(100, 5), latency_s=0.0, cache_hit=kw.get("cache_hit", False),
+                          shared=kw.get("shared", False), retries=0, cost_usd=cost, constraint="none",
+                          finish_reason="stop", raw="[1, 1]")
+
+    costs = [[0.25, 0.125], [0.5], [0.0625, 1.0]]
+    for k, session in enumerate(costs):
+        j = CallJournal(tmp_path)
+        assert j.spent_usd == sum(sum(c) for c in costs[:k])  # exact in binary: powers of two
+        for n, c in enumerate(session):
+            j.record(f"run{k}", n, f"key{n}", answer(c))
+        j.record(f"run{k}", len(session), "cached", answer(4.0, cache_hit=True))  # not billed: no cost
+        j.close()
+    assert CallJournal(tmp_path).spent_usd == 1.9375
+    assert CallJournal(tmp_path).replay("run2", 1, "key1").cost_usd == 1.0

@@ -19,26 +19,27 @@ def _settings(srv: FakeServer, **kw) -> ClientSettings:
 
 
 def test_a_slow_run_holds_no_other_run_back():
-    # Run "+x" gets every reply after 0.4 s, run "-x" at once. In lockstep rounds the fast run
-    # would send its k-th request only after the slow run's (k-1)-th reply; as pipelines it is
-    # done before the slow run's second request arrives.
-    def latency(body):
-        return 0.4 if "positive x" in body["messages"][-1]["content"] else 0.0
+    # The server answers run "+x" only once run "-x" has sent all four of its calls. As per-run
+    # pipelines, "-x" finishes first and "+x" then goes on; in lockstep rounds "-x" would wait for
+    # "+x"'s first reply and the server would give up holding it (hold_s) with "-x" at one call.
+    def fast_calls(srv):
+        return sum("negative x" in b["messages"][-1]["content"] for b in list(srv.requests))
 
     specs = [LLMRunSpec(direction=1, seed=1, n_steps=4), LLMRunSpec(direction=-1, seed=2, n_steps=4)]
-    with FakeServer(reply=hash_reply, latency=latency) as srv:
+    srv = FakeServer(reply=hash_reply, hold_s=20.0,
+                     hold=lambda body: "positive x" in body["messages"][-1]["content"] and fast_calls(srv) < 4)
+    with srv:
         done = []
 
         async def go():
             async with LLMClient(_settings(srv)) as c:
                 return await LLMDriver(specs, c, INDEPENDENT, on_done=lambda r: done.append(r.spec.direction)).run()
 
-        run_batch([LLMRunSpec(seed=7, n_steps=1), LLMRunSpec(seed=8, n_steps=1)], _settings(srv), INDEPENDENT)  # compile the step first
-        srv.reset_counts()
         results = asyncio.run(go())
         order = ["+x" if "positive x" in b["messages"][-1]["content"] else "-x" for b in srv.requests]
     assert [r.steps for r in results] == [4, 4]
     assert done == [-1, 1]
+    # "+x" sent its first call, then nothing until "-x" had sent all of its four.
     assert order.index("+x", order.index("+x") + 1) > max(i for i, o in enumerate(order) if o == "-x")
 
 
@@ -52,6 +53,9 @@ def test_results_do_not_depend_on_which_runs_step_together():
         assert a.levels0 == b.levels0
         np.testing.assert_array_equal(a.x, b.x)
         assert a.actions == b.actions
+        # Each step's progress is its displacement toward the target (the positions say so).
+        np.testing.assert_allclose(a.progress, a.spec.direction * np.diff([0.0, *a.x]), atol=1e-9)
+    assert any(abs(p) > 1e-3 for r in together for p in r.progress)
 
 
 def test_window_bounds_runs_in_progress():
