@@ -262,6 +262,9 @@ def build_parser() -> argparse.ArgumentParser:
                                    "with a bootstrap interval, median steps to learn, tokens per step and cost, "
                                    "one row per study. Only reads.")
     p.add_argument("folders", nargs="+", metavar="FOLDER", help="two or more study folders")
+    from jswim.commands import serve  # commands in their own modules register themselves
+
+    serve.register(sub)
     return ap
 
 
@@ -652,6 +655,8 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     matplotlib.use("Agg")  # the command only writes figure files; never open a window
     try:
+        if getattr(args, "command_main", None) is not None:
+            return args.command_main(args)
         if args.command == "swim":
             return _run("swim", args)
         if args.command == "study":

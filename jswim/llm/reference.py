@@ -1,0 +1,225 @@
+"""A prompt-only reference agent behind an OpenAI-compatible server (``jswim serve reference``).
+
+It is not a language model and is never presented as one: it is a plain rule that reads the
+rendered prompt text it receives, nothing else (no side channel to jswim's state), and answers
+one action. It measures whether the prompt carries enough to learn the stroke at each n_ht, gives
+a leaderboard a labelled non-LLM reference row, and gives a newcomer an offline success path
+through the real HTTP loop (``jswim swim --base-url`` at it).
+
+The rule (:func:`decide`), on the text of the first user message:
+
+1. Read the target direction (``positive``/``negative x direction``), the history records
+   (``k: (D before) [DOF, ROC] -> (D after), X before -> after, stuck yes|no``) and the offered
+   actions (S5: ``the changed DOF 1 or 2 and the ROC -1, 0 or 1``, or ``one of [1, -1], ...``).
+2. The current shape is the last record's shape after (with no record shown: unknown).
+3. Among the records made *from the current shape*, take the one whose X moved furthest toward
+   the target; if it moved toward the target at all, repeat its action.
+4. Else answer the first offered move not yet shown from the current shape (DOFs in order, ROC
+   -1 before +1, holds last), skipping moves shown as stuck and moves that S2's range says
+   cannot change the shape (ROC -1 at the lower end, +1 at the upper end).
+5. Else (every move shown, none forward) the one that moved furthest toward the target.
+
+With no record shown, step 4 gives the first offered move. A record is matched by the text of
+its shape, so the rule is exact on jswim's default record line; a prompt file that changes the
+record line is read where it still matches the pattern (else the rule sees no history).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import threading
+import time
+from dataclasses import dataclass
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any, Sequence
+
+from jswim.llm.tokens import estimate_prompt_tokens, estimate_tokens
+
+#: The model name the server answers with (and lists at /v1/models).
+MODEL = "reference-rule"
+
+_RECORD = re.compile(
+    r"^\s*\d+:\s*\(([^)]*)\)\s*\[\s*(\d+)\s*,\s*(-?\d+)\s*\]\s*->\s*\(([^)]*)\),\s*X\s*(-?\d+)\s*->\s*(-?\d+)"
+    r"(?:,\s*stuck\s*(yes|no))?", re.M)
+_PAIR = re.compile(r"\[\s*(\d+)\s*,\s*(-?\d+)\s*\]")
+_RANGE = re.compile(r"stays? in \[\s*(-?[\d.]+)\s*,\s*(-?[\d.]+)\s*\]", re.I)
+_SPLIT = re.compile(r"the changed DOF ([\d ,or]+?) and the ROC ([-\d ,or]+)", re.I)
+
+
+@dataclass(frozen=True)
+class Record:
+    """One history record as read from the prompt text."""
+
+    before: str
+    action: tuple[int, int]
+    after: str
+    progress: int  # X after - X before, toward the target (thousandths of a)
+    stuck: bool
+
+
+def _shape(text: str) -> str:
+    return ",".join(v.strip() for v in text.split(","))
+
+
+def read_prompt(text: str) -> tuple[int, list[Record], list[tuple[int, int]]]:
+    """``(direction, records, offered actions)`` read from a rendered prompt."""
+    direction = -1 if re.search(r"negative x", text, re.I) else 1
+    records = []
+    for m in _RECORD.finditer(text):
+        dx = (int(m.group(6)) - int(m.group(5))) * direction
+        records.append(Record(_shape(m.group(1)), (int(m.group(2)), int(m.group(3))), _shape(m.group(4)), dx,
+                              m.group(7) == "yes"))
+    tail = text[max((m.end() for m in _RECORD.finditer(text)), default=0):]
+    split = _SPLIT.search(tail)
+    if split:
+        dofs = [int(v) for v in re.findall(r"\d+", split.group(1))]
+        rocs = [int(v) for v in re.findall(r"-?\d+", split.group(2))]
+        offered = [(d, r) for d in dofs for r in rocs]
+    else:
+        offered = [(int(a), int(b)) for a, b in _PAIR.findall(tail)]
+    return direction, records, offered or [(1, -1), (1, 1), (2, -1), (2, 1)]
+
+
+def _order(action: tuple[int, int]) -> tuple[int, int, int]:
+    dof, roc = action
+    return (roc == 0, dof, roc)  # moves before holds, DOFs in order, -1 before +1
+
+
+def _blocked(action: tuple[int, int], here: str | None, text: str) -> bool:
+    """Whether S2's range says ``action`` cannot change shape ``here`` (a hold at a limit)."""
+    dof, roc = action
+    m = _RANGE.search(text)
+    if roc == 0 or here is None or m is None:
+        return roc == 0
+    try:
+        value = float(here.split(",")[dof - 1])
+    except (IndexError, ValueError):
+        return False
+    lo, hi = float(m.group(1)), float(m.group(2))
+    return (roc < 0 and value <= lo) or (roc > 0 and value >= hi)
+
+
+def decide(text: str) -> tuple[int, int]:
+    """The reference rule's action for a rendered prompt (see the module docstring)."""
+    _, records, offered = read_prompt(text)
+    here = records[-1].after if records else None
+    from_here = [r for r in records if r.before == here]
+    if from_here:
+        best = max(from_here, key=lambda r: r.progress)  # the first of equals: max keeps the first
+        if best.progress > 0 and best.action in offered:
+            return best.action
+    shown = {r.action for r in from_here}
+    stuck = {r.action for r in from_here if r.stuck}
+    for action in sorted(offered, key=_order):
+        if action not in shown and action not in stuck and not _blocked(action, here, text):
+            return action
+    moved = [r for r in from_here if r.action in offered and not r.stuck]
+    if moved:
+        return max(moved, key=lambda r: r.progress).action
+    return sorted(offered, key=_order)[0]
+
+
+def _prompt_of(messages: Sequence[dict[str, Any]]) -> str:
+    """The first user message (the protocol's prompt; a follow-up adds turns after it)."""
+    for m in messages:
+        if m.get("role") == "user":
+            content = m.get("content")
+            if isinstance(content, list):
+                return "".join(str(p.get("text", "")) for p in content if isinstance(p, dict))
+            return str(content or "")
+    return ""
+
+
+def completion(body: dict[str, Any]) -> dict[str, Any]:
+    """The chat.completion answering a request body."""
+    messages = body.get("messages") or []
+    dof, roc = decide(_prompt_of(messages))
+    text = f"[{dof}, {roc}]"
+    prompt, done = estimate_prompt_tokens(messages), estimate_tokens(text)
+    return {
+        "id": f"reference-{time.monotonic_ns()}", "object": "chat.completion", "created": int(time.time()),
+        "model": MODEL, "system_fingerprint": "jswim-reference-rule",
+        "choices": [{"index": 0, "message": {"role": "assistant", "content": text}, "finish_reason": "stop"}],
+        "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done},
+    }
+
+
+class _Handler(BaseHTTPRequestHandler):
+    protocol_version = "HTTP/1.1"
+
+    def log_message(self, *args: Any) -> None:  # quiet: one line per request would drown a study's output
+        return None
+
+    def _send(self, status: int, payload: dict[str, Any]) -> None:
+        data = json.dumps(payload).encode()
+        self.send_response(status)
+        self.send_header("Content-Type", "application/json")
+        self.send_header("Content-Length", str(len(data)))
+        self.end_headers()
+        self.wfile.write(data)
+
+    def do_GET(self) -> None:  # noqa: N802 (http.server's naming)
+        if self.path.rstrip("/") in ("/v1/models", "/models"):
+            self._send(200, {"object": "list", "data": [{"id": MODEL, "object": "model", "owned_by": "jswim"}]})
+        elif self.path.rstrip("/") in ("/health", "/v1/health"):
+            self._send(200, {"status": "ok"})
+        else:
+            self._send(404, {"error": {"message": f"no such endpoint: {self.path}"}})
+
+    def do_POST(self) -> None:  # noqa: N802
+        size = int(self.headers.get("Content-Length") or 0)
+        raw = self.rfile.read(size) if size else b""
+        if self.path.rstrip("/") not in ("/v1/chat/completions", "/chat/completions"):
+            self._send(404, {"error": {"message": f"no such endpoint: {self.path}"}})
+            return
+        try:
+            body = json.loads(raw)
+            if not isinstance(body, dict):
+                raise ValueError("not an object")
+        except ValueError:
+            self._send(400, {"error": {"message": "the request body is not a JSON object"}})
+            return
+        self._send(200, completion(body))
+
+
+class ReferenceServer:
+    """The reference agent's server on ``127.0.0.1`` (port 0: a free one); a context manager.
+
+    >>> with ReferenceServer() as srv:   # doctest: +SKIP
+    ...     print(srv.url)               # http://127.0.0.1:PORT/v1, model "reference-rule"
+    """
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 0) -> None:
+        self._httpd = ThreadingHTTPServer((host, port), _Handler)
+        self._httpd.daemon_threads = True
+        self._thread: threading.Thread | None = None
+
+    @property
+    def url(self) -> str:
+        host, port = self._httpd.server_address[:2]
+        return f"http://{host}:{port}/v1"
+
+    def start(self) -> "ReferenceServer":
+        self._thread = threading.Thread(target=self._httpd.serve_forever, name="jswim-reference", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._httpd.shutdown()
+        self._httpd.server_close()
+        if self._thread is not None:
+            self._thread.join(5)
+
+    def serve_forever(self) -> None:
+        """Serve in this thread until interrupted (``jswim serve reference``)."""
+        try:
+            self._httpd.serve_forever()
+        finally:
+            self._httpd.server_close()
+
+    def __enter__(self) -> "ReferenceServer":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
