@@ -144,6 +144,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                         "behind vLLM/llama.cpp); off never switches")
     b.add_argument("--reasoning-effort", default=None, choices=("minimal", "low", "medium", "high"),
                    help="send reasoning_effort with every request (OpenAI reasoning models)")
+    b.add_argument("--extra-field", action="append", default=[], metavar="NAME=JSON",
+                   help="send this field with every request, its value read as JSON (else as text), e.g. "
+                        "top_k=1 or 'response_format={\"type\": \"text\"}'; repeatable; part of the study's identity")
     b.add_argument("--omit-field", action="append", default=[], metavar="NAME",
                    help="never send this optional request field (seed, max_tokens, stream, ...), for servers "
                         "that reject it; repeat or comma-separate for several")
@@ -159,6 +162,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     c.add_argument("--max-cost", type=float, default=None, metavar="USD",
                    help="stop before the study's calls cost more than USD (over all its sessions; calls in "
                         "flight count as reserved); rerun with a higher cap to continue, no call paid twice")
+    c.add_argument("--prices", default=None, metavar="FILE",
+                   help="price table (TOML or JSON: model = [prompt, completion] USD per 1M tokens, optional "
+                        "as_of date) replacing the built-in one; see jswim.llm.prices")
     c.add_argument("--price-local", action="store_true",
                    help="price a server on this machine or the LAN at the cloud list prices (a local gateway "
                         "that forwards to a paid API); by default its calls cost nothing")
@@ -271,16 +277,39 @@ def build_parser() -> argparse.ArgumentParser:
 # -- commands -----------------------------------------------------------------------------------
 
 
+def _extra_fields(items: Sequence[str]) -> tuple[tuple[str, Any], ...]:
+    import json
+
+    out = []
+    for item in items:
+        name, sep, text = item.partition("=")
+        if not sep or not name.strip():
+            raise ConfigError(f"--extra-field expects NAME=VALUE, got {item!r}")
+        try:
+            value = json.loads(text)
+        except ValueError:
+            value = text
+        out.append((name.strip(), value))
+    return tuple(out)
+
+
 def _backend(args: argparse.Namespace):
     from jswim.llm.backend import Backend  # lazy: JAX and httpx load only for commands that run
 
+    prices, as_of = None, None
+    if getattr(args, "prices", None):
+        from jswim.llm.prices import load_prices
+
+        table, as_of = load_prices(args.prices)
+        prices = tuple(sorted(table.items()))
     return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=args.api_key_env,
                    constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
                    n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
                    cache_dir=args.cache_dir, timeout_s=args.timeout,
                    omit_fields=tuple(f.strip() for v in args.omit_field for f in v.split(",") if f.strip()),
                    rpm=args.rpm, tpm=args.tpm, price_local=args.price_local, reasoning=args.reasoning,
-                   reasoning_effort=args.reasoning_effort)
+                   reasoning_effort=args.reasoning_effort, prices=prices, prices_as_of=as_of,
+                   extra_fields=_extra_fields(args.extra_field))
 
 
 def _options(args: argparse.Namespace, study: str):
@@ -377,7 +406,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
         print(f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
               f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "
               f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
-              f"(list prices of {_prices_date()})")
+              f"({_price_note(backend)})")
     print(f"results: {result.folder}")
     for f in result.figures:
         if f.suffix == ".png":
@@ -417,6 +446,23 @@ def _print_reasoning(result: Any) -> None:
         print(f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up)"
               + (f", {result.cut_thinking} of them while still thinking" if result.cut_thinking else "")
               + "; a reasoning model needs room to think: --reasoning on (or a larger --max-tokens)")
+
+
+def _price_note(backend: Any) -> str:
+    """Where a cost line's prices come from, or why the model has none (never a silent $0)."""
+    from jswim.llm.usage import PRICES_AS_OF, price_table  # lazy: httpx loads only for commands that run
+    from jswim.llm.urls import is_local_host
+
+    if backend is None or backend.local:
+        return "the embedded model is free"
+    table, why = price_table(dict(backend.prices) if backend.prices is not None else None, backend.model,
+                             local_host=is_local_host(backend.base_url), price_local=backend.price_local)
+    if why:
+        return f"not priced: {why}"
+    if table.entry(backend.model) is None:
+        return (f"no price for {backend.model!r} in the {'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
+                ": not counted; --prices FILE prices it")
+    return f"prices of {backend.prices_as_of or PRICES_AS_OF}" + ("" if backend.prices else " (built-in list prices)")
 
 
 def _prices_date() -> str:

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -78,6 +78,12 @@ class Backend:
         first request (open reasoning models); off never switches.
     reasoning_effort : str or None
         ``reasoning_effort`` sent with every request when set.
+    prices, prices_as_of : optional
+        The user's price table (``--prices FILE``: model -> USD per 1M tokens, as pairs) and its
+        date; ``None`` uses the built-in table (:mod:`jswim.llm.usage`).
+    extra_fields : tuple of (name, value)
+        More request fields sent with every request (``--extra-field NAME=JSON``), recorded in the
+        identity (they change what the model does).
 
     Raises
     ------
@@ -105,6 +111,9 @@ class Backend:
     price_local: bool = False
     reasoning: str = "auto"
     reasoning_effort: str | None = None
+    prices: tuple[tuple[str, tuple[float, float]], ...] | None = field(default=None, compare=False)
+    prices_as_of: str | None = field(default=None, compare=False)
+    extra_fields: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self) -> None:
         check_mode(self.reasoning, self.reasoning_effort)
@@ -165,6 +174,8 @@ class Backend:
             out["reasoning"] = self.reasoning
         if self.reasoning_effort is not None:
             out["reasoning_effort"] = self.reasoning_effort
+        if self.extra_fields:
+            out["extra_fields"] = dict(self.extra_fields)
         return out
 
     def address(self) -> str | None:
@@ -181,7 +192,8 @@ class Backend:
         """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``."""
         common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir,
                       omit_fields=self.omit_fields, price_local=self.price_local, reasoning=self.reasoning,
-                      reasoning_effort=self.reasoning_effort)
+                      reasoning_effort=self.reasoning_effort, extra_fields=self.extra_fields,
+                      **({"prices": dict(self.prices)} if self.prices is not None else {}))
         if self.timeout_s is not None:
             common["timeout_s"] = self.timeout_s
         if self.local:

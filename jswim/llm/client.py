@@ -133,6 +133,9 @@ class ClientSettings:
         :data:`jswim.llm.reasoning.REASONING_MAX_TOKENS`).
     reasoning_effort : str or None
         Sent as ``reasoning_effort`` when given (``minimal``, ``low``, ``medium``, ``high``).
+    extra_fields : tuple of (name, value)
+        More fields of every request body (a models file's ``extra``, ``--extra-field``); they
+        never replace ``model`` or ``messages``.
     """
 
     base_url: str = "https://api.openai.com/v1"
@@ -159,6 +162,7 @@ class ClientSettings:
     reasoning: str = "auto"
     reasoning_max_tokens: int = REASONING_MAX_TOKENS
     reasoning_effort: str | None = None
+    extra_fields: tuple[tuple[str, Any], ...] = ()
 
     def __post_init__(self) -> None:
         check_mode(self.reasoning, self.reasoning_effort)
@@ -194,6 +198,7 @@ class ClientSettings:
             "reasoning": self.reasoning,
             "reasoning_max_tokens": self.reasoning_max_tokens,
             "reasoning_effort": self.reasoning_effort,
+            "extra_fields": dict(self.extra_fields),
         }
 
 
@@ -454,6 +459,9 @@ class LLMClient:
             payload["seed"] = sd
         mode = constrain.resolve_mode(constrain_mode or s.constrain, s.server_kind, bool(replies))
         constrain.apply(payload, mode, replies)
+        for name, value in s.extra_fields:
+            if name not in REQUIRED_FIELDS:
+                payload[name] = value
         payload = self.reasoning.apply(payload)
         for name in s.omit_fields:
             payload.pop(name, None)

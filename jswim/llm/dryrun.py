@@ -121,8 +121,10 @@ class Estimate:
         elif self.unpriced:
             out.append(f"  cost: $0 ({self.unpriced})")
         else:
-            out.append(f"  cost: $0 ({self.model!r} is not in the price table: free or unknown)")
-        out.append("  not counted: parse retries after off-format replies")
+            out.append(f"  cost: not priced: no price for {self.model!r} in the price table of {self.prices_as_of} "
+                       "(free or unknown); --prices FILE prices it")
+        out.append("  not counted: parse retries after off-format replies, and a reasoning model's thinking (up to "
+                   "its reasoning budget per call, 4096 tokens by default)")
         return out
 
 

@@ -254,7 +254,7 @@ def run_study(
         "fidelity_deviations": list(fidelity.ALWAYS),
         "grid": {k: getattr(options, k) for k in GRID_SIZE},
         "server": backend.address() if backend is not None else None,
-        "prices_as_of": PRICES_AS_OF,
+        "prices_as_of": (backend.prices_as_of if backend is not None and backend.prices_as_of else PRICES_AS_OF),
     })
     try:
         return _run_in(store, study, plans, options, backend, folder, template, progress, figures, t0, max_cost)
@@ -480,4 +480,5 @@ def estimate_study(
     if plans:
         run_sync(go())
     u = UsageTotals().merge(r.usage for r in results)
-    return estimate(client, u.calls, u.prompt_tokens, u.completion_tokens)
+    est = estimate(client, u.calls, u.prompt_tokens, u.completion_tokens)
+    return dataclasses.replace(est, prices_as_of=backend.prices_as_of) if backend.prices_as_of else est

@@ -1,0 +1,79 @@
+"""A price table from a file (``--prices FILE``, or the ``prices`` table of a bench's models file).
+
+The file is TOML (``.toml``) or JSON (anything else), USD per 1M tokens, prompt then completion:
+
+.. code-block:: toml
+
+    as_of = "2026-11"                 # printed with every cost (default: "your table <file>")
+    [prices]
+    "gpt-5" = [1.25, 10.0]            # [prompt, completion]
+    "gpt-5-mini" = { input = 0.25, output = 2.0 }
+
+The file replaces the built-in table (:data:`jswim.llm.usage.DEFAULT_PRICES`, dated
+:data:`~jswim.llm.usage.PRICES_AS_OF`) for the models it prices, on any host (a table you give is
+always applied); a model it does not name costs nothing and every cost line says so. Names match
+exactly, else by the longest prefix (``gpt-5-2026-08-07`` finds ``gpt-5``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+from typing import Any, Mapping
+
+from jswim.errors import ConfigError
+
+
+def parse_prices(table: Any, where: str) -> dict[str, tuple[float, float]]:
+    """``{model: (prompt, completion)}`` from a mapping of model -> ``[in, out]`` or
+    ``{input, output}`` (USD per 1M tokens).
+
+    Raises
+    ------
+    ConfigError
+        For anything else, naming ``where`` and the entry.
+    """
+    if not isinstance(table, Mapping):
+        raise ConfigError(f"{where}: prices must be a table of model = [prompt, completion] USD per 1M tokens")
+    out: dict[str, tuple[float, float]] = {}
+    for name, value in table.items():
+        if isinstance(value, Mapping):
+            value = [value.get("input", value.get("prompt")), value.get("output", value.get("completion"))]
+        try:
+            p_in, p_out = (float(v) for v in value)
+        except (TypeError, ValueError):
+            raise ConfigError(f"{where}: the price of {name!r} must be [prompt, completion] USD per 1M tokens, "
+                              f"got {value!r}") from None
+        if not all(math.isfinite(v) and v >= 0 for v in (p_in, p_out)):
+            raise ConfigError(f"{where}: the price of {name!r} must be two numbers >= 0, got {value!r}")
+        out[str(name)] = (p_in, p_out)
+    return out
+
+
+def load_prices(path: str | Path) -> tuple[dict[str, tuple[float, float]], str]:
+    """The table in ``path`` and its date (``as_of``, else ``"your table <path>"``).
+
+    Raises
+    ------
+    ConfigError
+        A missing or unreadable file, bad TOML/JSON, or a malformed entry (one line).
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(f"--prices {path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"--prices {path}: cannot read it ({getattr(exc, 'strerror', None) or exc})") from None
+    try:
+        data = tomllib.loads(text) if p.suffix.lower() == ".toml" else json.loads(text)
+    except (tomllib.TOMLDecodeError, ValueError) as exc:
+        raise ConfigError(f"--prices {path}: not valid {'TOML' if p.suffix.lower() == '.toml' else 'JSON'} "
+                          f"({str(exc).splitlines()[0]})") from None
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"--prices {path}: expected a table with a 'prices' table")
+    table = data.get("prices", {k: v for k, v in data.items() if k != "as_of"})
+    as_of = str(data.get("as_of") or f"your table {p.name}")
+    return parse_prices(table, f"--prices {path}"), as_of
