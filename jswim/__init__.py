@@ -12,7 +12,9 @@ Where to start
   ``step_batch`` (:mod:`jswim.env`).
 - Run a study: ``jswim.run_study("swim")`` (the ``jswim swim`` job; options in
   :class:`jswim.studies.StudyOptions`), then ``jswim.load(folder)`` for its runs and trajectories as
-  pandas DataFrames.
+  pandas DataFrames (and ``study.transcript(run_id)``, ``study.calls``).
+- See runs: ``jswim.animate(study, run_id)`` (inline in Jupyter; ``.save("runs.gif")``), and
+  ``jswim.report(folder)`` writes the folder's self-contained ``report.html``.
 - The command line: ``jswim --help``. The architecture map: ``docs/design.md``.
 
 The names above load on first use, so ``import jswim`` stays light (JAX loads with them).
@@ -35,6 +37,8 @@ _EXPORTS = {
     "run_study": "jswim.studies",
     "StudyOptions": "jswim.studies",
     "load": "jswim.results",
+    "animate": "jswim.viz.animate",
+    "report": "jswim.viz.page",
     "JswimError": "jswim.errors",
 }
 

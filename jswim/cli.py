@@ -8,6 +8,8 @@
 ``jswim plot FOLDER``    redraw a study folder's figures
 ``jswim show FOLDER``    a study folder's status, settings, cost, summary table and figures (read-only)
 ``jswim compare F1 F2..`` studies side by side, per setting present in all (read-only)
+``jswim report FOLDER``  write the folder's report.html (settings, table, figures, a run browser)
+``jswim animate FOLDER`` runs of a study folder as a GIF or MP4, side by side
 
 A user mistake ends with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
 """
@@ -268,9 +270,11 @@ def build_parser() -> argparse.ArgumentParser:
                                    "with a bootstrap interval, median steps to learn, tokens per step and cost, "
                                    "one row per study. Only reads.")
     p.add_argument("folders", nargs="+", metavar="FOLDER", help="two or more study folders")
-    from jswim.commands import serve  # commands in their own modules register themselves
+    from jswim.commands import animate, report, serve  # commands in their own modules register themselves
 
     serve.register(sub)
+    report.register(sub)
+    animate.register(sub)
     return ap
 
 
@@ -408,6 +412,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
               f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
               f"({_price_note(backend)})")
     print(f"results: {result.folder}")
+    if (result.folder / "report.html").is_file():
+        print(f"report:  {result.folder / 'report.html'} (open it in a browser)")
     for f in result.figures:
         if f.suffix == ".png":
             print(f"figure:  {f}")

@@ -447,6 +447,35 @@ class Study:
         """``complete``, ``running`` (or interrupted), as recorded in ``metadata.json``."""
         return str(self.metadata.get("status", "unknown"))
 
+    def transcript(self, run_id: str) -> "pd.DataFrame":
+        """The LLM transcript of ``run_id`` (``transcripts/RUN.jsonl``), one row per step.
+
+        Columns: ``step`` (from 1), ``prompt`` (the exact text sent), ``reply`` (the last reply
+        text), ``action`` (the action played, ``[DOF, ROC]``), ``failed`` (no valid action: the
+        hold was played), ``attempts`` (replies asked for, the first plus parse retries),
+        ``http_retries``, ``prompt_tokens``/``completion_tokens``/``cost_usd``/``latency_s``
+        (summed over the attempts), ``cache_hit``, ``x_before``, ``x_after``, ``progress``,
+        ``stuck``, ``cleared`` (the history was erased after this step), ``n_clears``,
+        ``dofs_after``, and ``replies`` (every attempt's record). Empty for a run without a
+        transcript (baselines, or an LLM run not started yet).
+        """
+        import pandas as pd  # lazy, as in load()
+
+        return pd.DataFrame(transcript_steps(read_transcript(self.folder, run_id)), columns=TRANSCRIPT_COLUMNS)
+
+    @property
+    def calls(self) -> "pd.DataFrame":
+        """Every answered LLM call (``calls.jsonl``), one row per call, in the order answered.
+
+        Columns: ``run`` (run id), ``n`` (the call's index in its run), ``key`` (hash of the
+        request), ``text`` (the answer), ``raw`` (the reply as sent, reasoning included),
+        ``prompt_tokens``, ``completion_tokens``, ``cached_tokens``, ``cost_usd``, ``cache_hit``,
+        ``shared``, ``constraint``, ``finish_reason``. A torn last line (a kill) is skipped.
+        """
+        import pandas as pd
+
+        return pd.DataFrame(read_calls(self.folder), columns=CALL_COLUMNS)
+
 
 def load(folder: str | os.PathLike) -> Study:
     """Read a study folder into pandas DataFrames, without writing anything to it.
@@ -513,3 +542,75 @@ def load(folder: str | os.PathLike) -> Study:
                 table[k] = pd.array([None if v is None or v != v else int(v) for v in table[k]], dtype="Int64")
     trajectories["stuck"] = trajectories["stuck"].astype("boolean")
     return Study(folder, meta, runs, trajectories)
+
+
+# -- transcripts and the call journal ------------------------------------------------------------
+
+TRANSCRIPT_COLUMNS = ("step", "prompt", "reply", "action", "failed", "attempts", "http_retries", "prompt_tokens",
+                      "completion_tokens", "cost_usd", "latency_s", "cache_hit", "x_before", "x_after", "progress",
+                      "stuck", "cleared", "n_clears", "dofs_after", "replies")
+CALL_COLUMNS = ("run", "n", "key", "text", "raw", "prompt_tokens", "completion_tokens", "cached_tokens", "cost_usd",
+                "cache_hit", "shared", "constraint", "finish_reason")
+
+
+def _jsonl(path: Path) -> list[dict[str, Any]]:
+    """The JSON objects of a JSON-lines file; torn or foreign lines are skipped, a missing file is empty."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return []
+    out = []
+    for line in text.splitlines():
+        try:
+            obj = json.loads(line)
+        except json.JSONDecodeError:
+            continue
+        if isinstance(obj, dict):
+            out.append(obj)
+    return out
+
+
+def read_transcript(folder: str | os.PathLike, run_id: str) -> list[dict[str, Any]]:
+    """The records of ``transcripts/RUN.jsonl`` (``meta``, one ``step`` per step, ``end``); ``[]`` if none.
+
+    A run id that is not a plain file name (a path, ``..``) reads nothing."""
+    name = f"{run_id}.jsonl"
+    if Path(name).name != name or run_id in ("", ".", ".."):
+        return []
+    return _jsonl(Path(folder) / "transcripts" / name)
+
+
+def transcript_steps(records: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """One flat dict per ``step`` record of a transcript (see :meth:`Study.transcript` for the keys)."""
+    out = []
+    for r in records:
+        if r.get("type") != "step":
+            continue
+        att = [a for a in (r.get("attempts") or []) if isinstance(a, dict)]
+
+        def total(key: str) -> float:
+            return sum(float(a.get(key) or 0) for a in att)
+
+        out.append({
+            "step": r.get("step"), "prompt": r.get("prompt"), "reply": att[-1].get("text") if att else None,
+            "action": r.get("action"), "failed": bool(r.get("failed")), "attempts": len(att),
+            "http_retries": int(total("retries")), "prompt_tokens": int(total("prompt_tokens")),
+            "completion_tokens": int(total("completion_tokens")), "cost_usd": total("cost_usd"),
+            "latency_s": total("latency_s"), "cache_hit": any(bool(a.get("cache_hit")) for a in att),
+            "x_before": r.get("x_before"), "x_after": r.get("x_after"), "progress": r.get("progress"),
+            "stuck": r.get("stuck"), "cleared": bool(r.get("cleared")), "n_clears": r.get("n_clears"),
+            "dofs_after": r.get("dofs_after"), "replies": att,
+        })
+    return out
+
+
+def read_calls(folder: str | os.PathLike) -> list[dict[str, Any]]:
+    """The answered calls of ``calls.jsonl``, flat (``usage`` split into its three token counts)."""
+    out = []
+    for c in _jsonl(Path(folder) / "calls.jsonl"):
+        usage = c.get("usage") if isinstance(c.get("usage"), list) else []
+        usage = (list(usage) + [None, None, None])[:3]
+        row = {k: c.get(k) for k in CALL_COLUMNS}
+        row.update(prompt_tokens=usage[0], completion_tokens=usage[1], cached_tokens=usage[2])
+        out.append(row)
+    return out

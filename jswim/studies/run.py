@@ -25,6 +25,7 @@ import hashlib
 import json
 import platform
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence
@@ -319,9 +320,23 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
                     **({"reasoning": sent} if sent else {}),
                     **({"constrained_decoding": constraint} if constraint else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
+    _write_report(folder, figures)
     return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed, failed,
                        dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total, sent,
                        cut_thinking)
+
+
+def _write_report(folder: Path, figures: bool) -> None:
+    """``report.html`` of the finished session (:mod:`jswim.viz.page`), with the figures just drawn.
+
+    The runs are safe on disk by now: a page that cannot be written is a warning, not a lost study."""
+    from jswim.viz.page import write_report  # lazy: the page's code loads only at the end
+
+    try:
+        write_report(folder, figures="files" if figures else "none")
+    except Exception as exc:  # noqa: BLE001 - the study's results are written; say why the page is not
+        warnings.warn(f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries",
+                      stacklevel=2)
 
 
 def _spec(p: Plan) -> LLMRunSpec:

@@ -1,0 +1,29 @@
+"""Seeing runs: a swimmer's true shape per step, animations and the study folder's report page.
+
+- :mod:`jswim.viz.tracks`: what a run did, step by step, read from what a folder records (the run's
+  row in ``runs.jsonl`` and its transcript): pose, DOF values, the body outline in the lab frame,
+  actions, stuck and clear events, the LLM's replies, where the success criterion found the stroke.
+- :mod:`jswim.viz.animate`: runs side by side as a GIF (Pillow) or MP4 (``imageio-ffmpeg``,
+  optional), :func:`jswim.viz.animate.animate` (``jswim.animate``) for notebooks.
+- :mod:`jswim.viz.page`: ``report.html``, one self-contained page per study folder.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_EXPORTS = {
+    "track": "jswim.viz.tracks",
+    "Track": "jswim.viz.tracks",
+    "outline": "jswim.viz.tracks",
+    "write_report": "jswim.viz.page",
+}
+
+__all__ = list(_EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(_EXPORTS[name]), name)
+    raise AttributeError(f"module 'jswim.viz' has no attribute {name!r}")

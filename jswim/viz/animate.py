@@ -1,0 +1,370 @@
+"""Animations of runs: the swimmer's true shape moving through the fluid, runs side by side.
+
+Each panel is one run: its body to scale (links of length ``a``, spheres of radius ``a``) at the
+recorded pose after each step, the centroid's trail (the steps of the stroke the success
+criterion found drawn thick), the start line, and under it the step counter, the action
+``[DOF, ROC]``, ``X/a``, the events of the step (stuck, history cleared, a failed reply, which cycle
+of the stroke) and, for LLM runs, the reply the model gave. One frame per step: the states between
+two recorded steps are not drawn (nothing is invented between them). Panels share one scale and
+one view, so runs compare at a glance (the LLM next to Q-learning and random from the same start,
+or one run per noise level).
+
+Writes GIF with Pillow (always available) and MP4 when an ffmpeg is at hand: the one inside the
+``imageio-ffmpeg`` wheel (``pip install 'jswim[video]'``) or one on ``PATH``.
+"""
+
+from __future__ import annotations
+
+import base64
+import os
+import shutil
+import tempfile
+import textwrap
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from jswim.errors import ConfigError
+from jswim.viz.tracks import Track, fmt_action, track, view_box
+
+#: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.plots.AGENT_STYLE`).
+AGENT_COLORS = {"llm": "#0072B2", "qlearning": "#D55E00", "random": "#555555"}
+FLUID = "#EAF3FA"
+STROKE_COLOR = "#009E73"
+
+#: Keys a run can be told apart by when several are shown.
+DISTINGUISH = ("agent", "zeta", "n_ht", "group", "variant", "init", "direction", "swimmer")
+
+
+@dataclass
+class Animation:
+    """Runs drawn side by side, ready to save or to show in a notebook.
+
+    Attributes
+    ----------
+    tracks : list of Track
+    fps : float
+        Steps per second.
+    title : str
+        What the animation shows (study, model), written across its top.
+    """
+
+    tracks: list[Track]
+    fps: float = 4.0
+    title: str = ""
+    dpi: int = 80
+
+    @property
+    def n_frames(self) -> int:
+        """Frames: step 0, one per step, and a short hold on the last (1 s)."""
+        return max(t.n_steps for t in self.tracks) + 1 + int(round(self.fps))
+
+    def figure(self):
+        """The figure and its update function ``draw(frame)`` (matplotlib)."""
+        return _build(self)
+
+    def frame_png(self, frame: int, dpi: int | None = None) -> bytes:
+        """One frame as PNG bytes (e.g. for a README)."""
+        import io
+
+        import matplotlib.pyplot as plt
+
+        fig, draw = _build(self)
+        draw(frame)
+        buf = io.BytesIO()
+        fig.savefig(buf, format="png", dpi=dpi or self.dpi)
+        plt.close(fig)
+        return buf.getvalue()
+
+    def save(self, path: str | os.PathLike) -> Path:
+        """Write the animation to ``path`` (``.gif`` or ``.mp4``), atomically; returns the path.
+
+        Raises
+        ------
+        ConfigError
+            Another suffix, or ``.mp4`` without an ffmpeg (one line naming the package to install).
+        """
+        import matplotlib.pyplot as plt
+        from matplotlib import animation
+
+        from jswim.results import writing
+
+        path = Path(path)
+        suffix = path.suffix.lower()
+        if suffix not in (".gif", ".mp4"):
+            raise ConfigError(f"{path}: an animation is written as .gif or .mp4, not {suffix or 'no suffix'!r}")
+        if suffix == ".mp4":
+            exe = ffmpeg_exe()
+            if exe is None:
+                raise ConfigError("MP4 needs an ffmpeg: pip install 'jswim[video]' (imageio-ffmpeg ships one), "
+                                  "or write a .gif")
+            plt.rcParams["animation.ffmpeg_path"] = exe
+            writer: Any = animation.FFMpegWriter(fps=self.fps, codec="libx264",
+                                                 extra_args=["-pix_fmt", "yuv420p", "-crf", "28"])
+        else:
+            writer = animation.PillowWriter(fps=self.fps)
+        fig, draw = _build(self)
+        with writing(path, "choose a writable --out path"):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.stem}.", suffix=suffix)
+            os.close(fd)
+            try:
+                anim = animation.FuncAnimation(fig, draw, frames=self.n_frames, blit=False)
+                anim.save(tmp, writer=writer, dpi=self.dpi)
+                os.chmod(tmp, _file_mode())
+                os.replace(tmp, path)
+            except BaseException:
+                Path(tmp).unlink(missing_ok=True)
+                raise
+            finally:
+                plt.close(fig)
+        return path
+
+    def to_gif_bytes(self) -> bytes:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = self.save(Path(tmp) / "run.gif")
+            return path.read_bytes()
+
+    def _repr_html_(self) -> str:  # Jupyter shows the GIF inline
+        data = base64.b64encode(self.to_gif_bytes()).decode()
+        return f'<img src="data:image/gif;base64,{data}" alt="{_esc(self.title)}"/>'
+
+
+def _file_mode() -> int:
+    from jswim.results import FILE_MODE
+
+    return FILE_MODE
+
+
+def _esc(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")
+
+
+def ffmpeg_exe() -> str | None:
+    """An ffmpeg binary: imageio-ffmpeg's (a wheel that ships one), else one on ``PATH``."""
+    try:
+        import imageio_ffmpeg  # optional: pip install 'jswim[video]'
+
+        return imageio_ffmpeg.get_ffmpeg_exe()
+    except Exception:  # not installed, or its binary missing on this platform
+        return shutil.which("ffmpeg")
+
+
+# -- choosing runs -------------------------------------------------------------------------------
+
+
+def pick_runs(rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 4) -> list[Mapping[str, Any]]:
+    """Runs worth showing side by side: one per value of ``by`` in the first panel of the study.
+
+    The first panel is the first (swimmer, target direction) in the figures' order; within it
+    the runs are held to the first start and (unless ``by`` is it) the first noise level, n_ht,
+    group and variant, and the first replicate of each value of ``by`` is kept (at most ``most``).
+    """
+    from jswim.plots import AGENT_ORDER, panel_keys
+
+    done = [r for r in rows if r.get("status", "done") == "done" and r.get("x")]
+    if not done:
+        return []
+    sw, d = panel_keys(done)[0]
+    sel = [r for r in done if r["swimmer"] == sw and int(r.get("direction", 1)) == d]
+    fixed = [k for k in ("init", "zeta", "n_ht", "group", "variant") if k != by]
+    ref = next((r for r in sel if r.get("agent") == "llm"), sel[0])
+    for k in fixed:
+        narrowed = [r for r in sel if r.get(k) == ref.get(k)]
+        # The baselines carry no n_ht/variant and a group of their own: hold a key fixed only
+        # where it leaves more than one value of `by` to show.
+        if len({r.get(by) for r in narrowed}) > 1 or len({r.get(by) for r in sel}) == 1:
+            sel = narrowed
+    out: dict[Any, Mapping[str, Any]] = {}
+    order = {a: i for i, a in enumerate(AGENT_ORDER)}
+    for r in sorted(sel, key=lambda r: (order.get(r.get("agent"), 9), str(r.get(by)), str(r.get("run_id")))):
+        out.setdefault(r.get(by), r)
+    return list(out.values())[:most]
+
+
+def build(folder_or_study: Any, run_ids: Sequence[str] | None = None, *, by: str = "agent", most: int = 4,
+          fps: float = 4.0, dpi: int = 80) -> Animation:
+    """An :class:`Animation` of runs of a study folder (or a :class:`jswim.results.Study`).
+
+    Parameters
+    ----------
+    folder_or_study : path or Study
+    run_ids : sequence of str, optional
+        The runs to show, left to right; default :func:`pick_runs` (``by``, ``most``).
+    fps : float
+        Steps per second.
+
+    Raises
+    ------
+    ConfigError
+        An unknown run id (the message lists some that exist), or a folder without finished runs.
+    """
+    from jswim.results import read_metadata, read_runs, read_transcript
+
+    folder = Path(getattr(folder_or_study, "folder", folder_or_study))
+    meta = read_metadata(folder)
+    rows = read_runs(folder)
+    by_id = {r.get("run_id"): r for r in rows}
+    if run_ids:
+        missing = [i for i in run_ids if i not in by_id]
+        if missing:
+            some = ", ".join(list(by_id)[:4])
+            raise ConfigError(f"{folder} has no run {missing[0]!r}; its runs are named like {some}")
+        chosen = [by_id[i] for i in run_ids]
+    else:
+        chosen = pick_runs(rows, by=by, most=most)
+    chosen = [r for r in chosen if r.get("x")]
+    if not chosen:
+        raise ConfigError(f"{folder} has no finished runs to animate yet")
+    if not (0 < fps <= 60):
+        raise ConfigError(f"--fps must lie in (0, 60], got {fps}")
+    tracks = [track(r, read_transcript(folder, r["run_id"]) if r.get("agent") == "llm" else None) for r in chosen]
+    model = (meta.get("identity", {}).get("backend") or {}).get("model")
+    for t in tracks:
+        if t.agent == "llm" and model and "model" not in t.row:
+            t.row["model"] = model
+    status = meta.get("status")
+    title = f"jswim {meta.get('study', '')} study" + (f" · LLM: {model}" if model and any(
+        t.agent == "llm" for t in tracks) else "") + ("" if status == "complete" else f" · UNFINISHED ({status})")
+    return Animation(tracks, fps=fps, title=title, dpi=dpi)
+
+
+def animate(study: Any, run_ids: str | Sequence[str] | None = None, **kw: Any) -> Animation:
+    """Runs of a study as an animation; in Jupyter it shows inline (a GIF).
+
+    ``jswim.animate(jswim.load(folder), "llm-purcell-px-i++-z0-r0")``, or with no run ids one run
+    per agent from the same start (:func:`pick_runs`). ``.save("runs.gif")`` or ``.mp4`` writes it.
+    Keywords: ``by``, ``most``, ``fps``, ``dpi`` (see :func:`build`).
+    """
+    if isinstance(run_ids, str):
+        run_ids = [run_ids]
+    return build(study, run_ids, **kw)
+
+
+# -- drawing -------------------------------------------------------------------------------------
+
+
+def _caption(t: Track, others: Sequence[Track]) -> str:
+    """A panel's name: the agent (and model) plus whatever tells it apart from the other panels."""
+    parts = [t.label]
+    for k in DISTINGUISH[1:]:
+        # A key is named where it tells apart panels of one agent (the baselines carry no n_ht).
+        same = [o for o in others if o.agent == t.agent]
+        if len({str(o.row.get(k)) for o in same}) > 1 and t.row.get(k) not in (None, ""):
+            v = t.row.get(k)
+            parts.append(f"\u03b6 = {v:g}" if k == "zeta" else f"{k} {v}")
+    return ", ".join(parts)
+
+
+def _build(anim: Animation):
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Circle
+
+    from jswim.plots import RC
+
+    tracks = anim.tracks
+    box = view_box(tracks)
+    width = box[1] - box[0]
+    follow = width > 16.0  # a long run: the view follows the swimmers instead of holding all of it
+    view_w = 12.0 if follow else width
+    view_h = max(box[3] - box[2], 4.0)
+    n = len(tracks)
+    panel_w = float(np.clip(1.1 + view_w * 0.28, 2.6, 4.2))
+    panel_h = panel_w * view_h / view_w
+    text_h = 0.62
+    with plt.rc_context(RC):
+        fig = plt.figure(figsize=(panel_w * n, panel_h + text_h + 0.35))
+    fig.patch.set_facecolor("white")
+    top = 1 - 0.35 / fig.get_figheight()
+    bottom = text_h / fig.get_figheight()
+    fig.text(0.5, 1 - 0.06 / fig.get_figheight(), anim.title, ha="center", va="top", fontsize=8,
+             color="#B00000" if "UNFINISHED" in anim.title else "black")
+    state = []
+    for i, t in enumerate(tracks):
+        ax = fig.add_axes([i / n + 0.01, bottom, 1 / n - 0.02, top - bottom])
+        ax.set_facecolor(FLUID)
+        ax.set_xlim(box[0], box[0] + view_w)
+        ax.set_ylim(box[2], box[2] + view_h)
+        ax.set_aspect("equal", adjustable="box")
+        ax.set_xticks([])
+        ax.set_yticks([])
+        # Scale bar: one a (link length, sphere radius); the start line is X = 0.
+        ax.plot([0.04, 0.04 + 1.0 / view_w], [0.06, 0.06], transform=ax.transAxes, color="0.25", lw=1.2)
+        ax.text(0.04 + 0.5 / view_w, 0.09, "a", transform=ax.transAxes, fontsize=6, ha="center", color="0.25")
+        for s in ax.spines.values():
+            s.set_color("0.7")
+        ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
+        ax.set_title(_caption(t, tracks), fontsize=7, pad=2)
+        ax.annotate("", xy=(0.97, 0.06), xytext=(0.82, 0.06), xycoords="axes fraction",
+                    arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8) if t.direction > 0
+                    else dict(arrowstyle="<-", color="0.35", lw=0.8))
+        ax.text(0.895, 0.09, "target", transform=ax.transAxes, fontsize=5.5, ha="center", color="0.35")
+        color = AGENT_COLORS.get(t.agent, "C0")
+        (trail,) = ax.plot([], [], "-", color=color, lw=0.8, alpha=0.6, zorder=2)
+        (stroke,) = ax.plot([], [], "-", color=STROKE_COLOR, lw=2.0, alpha=0.8, zorder=2)
+        if t.model.planar:
+            (body,) = ax.plot([], [], "-", color="black", lw=2.4, solid_capstyle="round", zorder=4)
+            (joints,) = ax.plot([], [], "o", color=color, ms=3, zorder=5)
+            spheres: list[Any] = []
+        else:
+            (body,) = ax.plot([], [], "-", color="0.3", lw=0.8, zorder=3)
+            joints = None
+            spheres = [ax.add_patch(Circle((0, 0), 1.0, fc="white", ec=color, lw=1.2, zorder=4))
+                       for _ in range(t.points.shape[1])]
+        (centre,) = ax.plot([], [], "+", color=color, ms=5, zorder=6)
+        txt = fig.text(i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=6.5, family="monospace")
+        state.append((t, ax, trail, stroke, body, joints, spheres, centre, txt))
+
+    def draw(frame: int):
+        for t, ax, trail, stroke, body, joints, spheres, centre, txt in state:
+            k = min(frame, t.n_steps)
+            pts = t.points[k]
+            trail.set_data(t.x[: k + 1], t.y[: k + 1])
+            if t.stroke is not None and k > t.stroke[0]:
+                s0 = t.stroke[0]
+                stroke.set_data(t.x[s0: k + 1], t.y[s0: k + 1])
+            else:
+                stroke.set_data([], [])
+            body.set_data(pts[:, 0], pts[:, 1])
+            if joints is not None:
+                joints.set_data(pts[1:-1, 0], pts[1:-1, 1])
+            for c, p in zip(spheres, pts):
+                c.center = (float(p[0]), float(p[1]))
+            centre.set_data([t.x[k]], [t.y[k]])
+            if follow:
+                x0 = float(np.clip(t.x[k] - view_w / 2, box[0], box[1] - view_w))
+                ax.set_xlim(x0, x0 + view_w)
+            txt.set_text(_frame_text(t, k))
+        return []
+
+    draw(0)
+    return fig, draw
+
+
+def _frame_text(t: Track, k: int) -> str:
+    """The lines under a panel at step ``k``."""
+    disp = "X/a" if t.direction > 0 else "\u2212X/a"
+    lines = [f"step {k:>3}/{t.n_steps}   {disp} = {t.direction * t.x[k]:+.4f}"]
+    if k == 0:
+        lines.append("start " + ("(" + ", ".join(f"{v:.3g}" for v in t.dofs[0]) + ")"))
+    else:
+        i = k - 1
+        events = []
+        if t.stuck[i]:
+            events.append("stuck")
+        if t.cleared[i]:
+            events.append("history cleared")
+        if t.failed[i]:
+            events.append("no valid reply: hold")
+        if t.in_stroke(k):
+            s0, p = t.stroke  # type: ignore[misc]
+            events.append(f"stroke cycle {(i - s0) // p + 1} (criterion)")
+        lines.append(f"action {fmt_action(t.actions[i])}  " + "  ".join(events))
+        if t.replies[i] is not None:
+            reply = " ".join(str(t.replies[i]).split())
+            lines.append("reply: " + textwrap.shorten(reply, 46, placeholder="..."))
+    if t.replayed:
+        lines.append("(pose replayed: not in this folder)")
+    return "\n".join(lines)

@@ -1,0 +1,265 @@
+"""``report.html``: a study folder as one self-contained page (offline, from the file system).
+
+The page holds the study's settings and identity, its summary table, its figures (inline PNG)
+and a run browser: filter the runs by agent, swimmer, direction, noise level, n_ht, variant and
+group, pick one, and watch it (drawn in the page from the recorded trajectory, with play, pause,
+step and a scrub bar) next to each step's record: for LLM runs the exact prompt sent, every reply
+asked for (parse retries included), how it was parsed, HTTP retries, tokens, latency and cost;
+for every run the action, ``X/a``, stuck and clear events and where the success criterion found
+the stroke's cycles. Nothing is fetched: the script and styles are inline, figures are data URIs,
+and no server is needed.
+
+Size and speed: the run list is a small table; each run's steps (body outlines, transcript) are a
+gzip-compressed JSON blob of its own, base64 in a ``<script type="text/plain">`` element, decoded
+by the browser (``DecompressionStream``) only when that run is opened. A prompt repeats most of
+the previous step's, so a transcript compresses ~10-30x.
+
+The page is written only from what the folder records (:mod:`jswim.viz.tracks`); a folder never
+holds a secret (API keys stay in the environment), and nothing is added here. ``jswim report`` on
+an existing folder writes ``report.html`` and nothing else.
+"""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import gzip
+import html
+import io
+import json
+from importlib import resources
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from jswim.results import atomic_write, dumps, is_failed, read_metadata, read_runs, read_transcript, writing
+from jswim.viz.tracks import Track, track
+
+REPORT = "report.html"
+
+#: Index columns of the run browser (one row per run), in the order of its filters.
+INDEX_KEYS = ("run_id", "agent", "swimmer", "direction", "zeta", "n_ht", "variant", "group", "init", "action_set",
+              "status", "success", "steps_to_learn", "period", "signed_final_x", "steps", "cost_usd")
+FILTER_KEYS = ("agent", "swimmer", "direction", "zeta", "n_ht", "variant", "group", "init", "success", "status")
+
+#: Longest side of an embedded figure (pixels): the figures are drawn at 300 dpi for print.
+FIGURE_PX = 1400
+
+
+def _round(a: Any, nd: int = 5) -> Any:
+    return np.round(np.asarray(a, np.float64), nd).tolist()
+
+
+def run_payload(t: Track) -> dict[str, Any]:
+    """What the page needs to draw and explain one run (see :mod:`jswim.viz.tracks`)."""
+    steps = []
+    for s in t.steps_log[: t.n_steps]:
+        atts = []
+        for a in s.get("attempts") or []:
+            if isinstance(a, dict):
+                atts.append({k: a.get(k) for k in ("text", "parsed", "prompt_tokens", "completion_tokens", "cost_usd",
+                                                   "latency_s", "retries", "cache_hit", "shared", "finish_reason",
+                                                   "constraint", "replayed") if k in a})
+        steps.append({"prompt": s.get("prompt"), "attempts": atts, "options": s.get("options"),
+                      "n_clears": s.get("n_clears"), "x_before": s.get("x_before"), "x_after": s.get("x_after")})
+    return {
+        "planar": bool(t.model.planar), "model": t.model.label, "n_dof": t.model.n_dof,
+        "lo": t.model.lo, "hi": t.model.hi,
+        "x": _round(t.x), "y": _round(t.y), "theta": _round(t.theta),
+        "pts": _round(t.points, 4), "dofs": _round(t.dofs, 4),
+        "actions": [list(a) for a in t.actions], "stuck": t.stuck.astype(int).tolist(),
+        "cleared": t.cleared.astype(int).tolist(), "failed": t.failed.astype(int).tolist(),
+        "stroke": list(t.stroke) if t.stroke else None, "success": t.success, "replayed": t.replayed,
+        "direction": t.direction, "steps": steps,
+        "error": t.row.get("error"),
+    }
+
+
+def _blob(obj: Any) -> str:
+    raw = json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
+    return base64.b64encode(gzip.compress(raw, compresslevel=6, mtime=0)).decode("ascii")
+
+
+def _figure_data(paths: Sequence[Path]) -> list[dict[str, str]]:
+    from PIL import Image
+
+    out = []
+    for p in paths:
+        with Image.open(p) as im:
+            im.load()
+            if max(im.size) > FIGURE_PX:
+                im.thumbnail((FIGURE_PX, FIGURE_PX), Image.LANCZOS)
+            buf = io.BytesIO()
+            im.save(buf, format="PNG", optimize=True)
+        out.append({"name": p.stem, "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()})
+    return out
+
+
+def _drawn_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | None) -> list[dict[str, str]]:
+    """The study's figures drawn in memory (no file written), as PNG data URIs."""
+    import matplotlib.pyplot as plt
+
+    from jswim import plots
+
+    out = []
+    for name, fig in plots.study_figures(study, [r for r in rows if not is_failed(r)], note=note).items():
+        buf = io.BytesIO()
+        with plt.rc_context(plots.RC):
+            fig.savefig(buf, format="png", dpi=170, bbox_inches="tight", pad_inches=0.03)
+        plt.close(fig)
+        out.append({"name": name, "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()})
+    return out
+
+
+def _figures(folder: Path, study: str, rows: Sequence[Mapping[str, Any]], note: str | None,
+             figures: str) -> tuple[list[dict[str, str]], str]:
+    """Figures for the page and a line saying where they come from.
+
+    ``figures``: ``"files"`` (the folder's ``figures/*.png``), ``"draw"`` (drawn now, in memory),
+    ``"auto"`` (the files when they are newer than the last finished run, else drawn), ``"none"``.
+    """
+    if figures == "none" or not rows:
+        return [], "no figures (drawn without them; jswim report FOLDER adds them)" if rows else "no finished runs yet"
+    pngs = sorted((folder / "figures").glob("*.png")) if (folder / "figures").is_dir() else []
+    runs_file = folder / "runs.jsonl"
+    fresh = bool(pngs) and runs_file.exists() and all(p.stat().st_mtime >= runs_file.stat().st_mtime for p in pngs)
+    if figures == "files" or (figures == "auto" and fresh):
+        if pngs:
+            return _figure_data(pngs), "figures: the folder's figures/*.png"
+    return _drawn_figures(study, rows, note), "figures: drawn from the runs when this page was written"
+
+
+def _status(meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]]) -> tuple[bool, str]:
+    planned = meta.get("n_planned")
+    done = len([r for r in rows if not is_failed(r)])
+    status = meta.get("status", "unknown")
+    finished = status == "complete" and (not isinstance(planned, int) or done >= planned)
+    if finished:
+        return True, f"complete: {done} runs"
+    of = f" of {planned}" if isinstance(planned, int) else ""
+    return False, f"UNFINISHED STUDY: {done}{of} runs done (status {status})"
+
+
+def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
+    from jswim.overview import SUMMARY_NOTE, order_summary, summary_table
+    from jswim.studies.report import summarize
+
+    if not rows:
+        return "<p>No finished runs yet.</p>"
+    cols, cells = summary_table(order_summary(summarize(list(rows)), rows))
+    head = "".join(f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols)
+    body = "".join("<tr>" + "".join(f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
+                                    for c, v in zip(cols, r)) + "</tr>" for r in cells)
+    return (f'<table class="summary"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+            f'<p class="note">{html.escape(SUMMARY_NOTE)}</p>')
+
+
+def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:
+    """The metadata shown as settings: everything but the summary (shown as the table) and the
+    (long) prompt template, which has its own block."""
+    return {k: v for k, v in meta.items() if k not in ("summary", "prompt_template")}
+
+
+def _asset(name: str) -> str:
+    return resources.files("jswim.viz").joinpath("assets", name).read_text(encoding="utf-8")
+
+
+def _script_json(obj: Any) -> str:
+    """JSON safe inside ``<script>``: no ``</`` can end the element early."""
+    return dumps(obj, separators=(",", ":")).replace("</", "<\\/").replace("<!--", "<\\!--")
+
+
+def report_html(folder: str | Path, figures: str = "auto") -> str:
+    """The page of a study folder (see the module docstring); reads the folder only.
+
+    Parameters
+    ----------
+    folder : path
+        A study folder, finished or not.
+    figures : {"auto", "files", "draw", "none"}
+        Where the figures come from (see :func:`_figures`).
+
+    Raises
+    ------
+    ResultFolderError
+        Not a study folder (no ``metadata.json``) or unreadable metadata.
+    """
+    from jswim.plots import unfinished_note
+
+    folder = Path(folder)
+    meta = read_metadata(folder)
+    rows = read_runs(folder)
+    study = str(meta.get("study", "?"))
+    finished, status_text = _status(meta, rows)
+    note = None if finished else unfinished_note(meta.get("status"), len(rows), meta.get("n_planned"))
+    figs, fig_source = _figures(folder, study, rows, note, figures)
+    backend = (meta.get("identity") or {}).get("backend") or {}
+    model = backend.get("model")
+    index, blobs = [], []
+    for i, r in enumerate(rows):
+        entry = {k: r.get(k) for k in INDEX_KEYS}
+        entry["i"] = i
+        index.append(entry)
+        if r.get("x"):
+            t = track(r, read_transcript(folder, r["run_id"]) if r.get("agent") == "llm" else None)
+            blobs.append(f'<script type="text/plain" id="run-{i}">{_blob(run_payload(t))}</script>')
+        else:
+            blobs.append(f'<script type="text/plain" id="run-{i}">{_blob({"error": r.get("error"), "x": []})}</script>')
+    data = {
+        "study": study, "model": model, "finished": finished, "status": status_text,
+        "folder": folder.name, "filters": list(FILTER_KEYS), "runs": index,
+        "written": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+    }
+    title = f"jswim {study} study" + (f" · LLM: {model}" if model else "")
+    template = meta.get("prompt_template")
+    figures_html = "".join(
+        f'<figure><img alt="{html.escape(f["name"])}" src="{f["src"]}"/><figcaption>{html.escape(f["name"])}'
+        f" ({html.escape(title)})</figcaption></figure>" for f in figs)
+    parts = [
+        "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8"/>',
+        '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
+        f"<title>{html.escape(title)}</title><style>{_asset('report.css')}</style></head><body>",
+        f'<header><h1>{html.escape(title)}</h1>',
+        f'<p id="status" class="{"ok" if finished else "unfinished"}">{html.escape(status_text)}</p>',
+        f'<p class="meta">folder <code>{html.escape(folder.name)}</code> · jswim {html.escape(str(meta.get("jswim_version", "?")))}'
+        f' · page written {data["written"]}</p></header>',
+        '<nav><a href="#summary">summary</a> <a href="#figures">figures</a> <a href="#browser">runs</a> '
+        '<a href="#settings">settings</a></nav>',
+        f'<section id="summary"><h2>Summary</h2>{_summary_html(rows)}</section>',
+        f'<section id="figures"><h2>Figures</h2><p class="note">{html.escape(fig_source)}</p>{figures_html}</section>',
+        '<section id="browser"><h2>Runs</h2><div id="filters"></div><p id="run-count"></p>'
+        '<div class="browser"><div id="run-list-wrap"><table id="run-list"></table></div>'
+        '<div id="viewer"><p id="viewer-empty">Pick a run.</p></div></div></section>',
+        '<section id="settings"><h2>Settings and identity</h2>'
+        f'<pre>{html.escape(json.dumps(_settings(meta), indent=2, sort_keys=True, default=str))}</pre>',
+        ("<details><summary>prompt template</summary><pre>"
+         f"{html.escape(json.dumps(template, indent=2, sort_keys=True))}</pre></details>" if template else ""),
+        "</section>",
+        f'<script type="application/json" id="report-data">{_script_json(data)}</script>',
+        *blobs,
+        f"<script>{_asset('report.js')}</script>",
+        "</body></html>",
+    ]
+    return "\n".join(parts)
+
+
+def report(folder: str | Path, figures: str = "auto", out: str | Path | None = None) -> Path:
+    """``jswim.report(folder)``: write the folder's ``report.html`` (see :func:`write_report`)."""
+    return write_report(folder, figures=figures, out=out)
+
+
+def write_report(folder: str | Path, figures: str = "auto", out: str | Path | None = None) -> Path:
+    """Write ``report.html`` into ``folder`` (or to ``out``) atomically; nothing else is written.
+
+    Raises
+    ------
+    ResultFolderError
+        Not a study folder; :class:`jswim.results.StudyFolderError` if the page cannot be written.
+    """
+    folder = Path(folder)
+    text = report_html(folder, figures=figures)
+    path = Path(out) if out is not None else folder / REPORT
+    with writing(path, "choose a writable --out path for the report"):
+        atomic_write(path, text)
+    return path

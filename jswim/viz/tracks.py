@@ -1,0 +1,300 @@
+"""A run step by step, as a folder records it: pose, DOF values, the body in the lab frame, events.
+
+Everything is read from what a study folder holds, never recomputed from the agent: the run's row
+in ``runs.jsonl`` (``x``, ``y``, ``orientation`` and ``actions`` per step, ``init``, the judge's
+``steps_to_learn`` and ``period``) and, for LLM runs, its transcript (``dofs_after``, the replies,
+clears). DOF values come from a row's own per-step ``dofs`` when it has them, else from the
+transcript, else they are replayed from the start shape and the actions: a step moves its DOF by
+``ROC x (hi - lo)``, stopping at a limit (for ROC in {-1, 0, 1} from a corner this is the corner
+the environment steps to; real-valued ROCs follow the same rule). Folders written before ``y``
+and ``orientation`` were recorded get them from a noiseless replay of the actions (exact for
+``zeta = 0``; with noise only ``x`` is the recorded value), and the track says so (``replayed``).
+
+The body outline (:func:`outline`) is the swimmer's true shape to scale in units of ``a``: link
+end points for the link swimmers (links of length 1), sphere centres for the sphere swimmers
+(spheres of radius 1), placed so that its geometric centroid sits at the recorded ``(x, y)`` and
+its reference link (the middle one, :func:`jswim.env.start_orientation`) points along the recorded
+orientation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from jswim.swimmers.models import SwimmerModel, make_model
+
+#: A step whose |dX| is below this is "stuck" (the prompt's rule, :mod:`jswim.prompt`).
+STUCK_TOL = 1e-6
+
+
+def outline(model: SwimmerModel, d: Any) -> np.ndarray:
+    """Body-frame outline of shapes ``d``, centred on the geometric centroid.
+
+    Parameters
+    ----------
+    model : SwimmerModel
+    d : array (..., n_dof)
+        DOF values: hinge angles (rad) or arm lengths (in ``a``).
+
+    Returns
+    -------
+    ndarray (..., P, 2), float64
+        Link swimmers: the ``n_dof + 2`` link end points, the reference link (index
+        ``n_dof // 2``) along +x and the centroid of the links (the mean of their centres, as
+        :func:`jswim.swimmers.nlink.centroid_offset`) at the origin. Sphere swimmers: the
+        ``n_dof + 1`` sphere centres on the x axis, their mean at the origin.
+    """
+    d = np.asarray(d, np.float64)
+    zero = np.zeros(d.shape[:-1] + (1,))
+    cum = np.concatenate([zero, np.cumsum(d, axis=-1)], axis=-1)
+    if model.planar:
+        m = model.n_dof // 2
+        phi = cum - cum[..., m: m + 1]  # link angles, the reference link at 0
+        t = np.stack([np.cos(phi), np.sin(phi)], axis=-1)  # unit links
+        joints = np.concatenate([np.zeros(d.shape[:-1] + (1, 2)), np.cumsum(t, axis=-2)], axis=-2)
+        centres = 0.5 * (joints[..., 1:, :] + joints[..., :-1, :])
+        return joints - centres.mean(axis=-2, keepdims=True)
+    pts = np.stack([cum, np.zeros_like(cum)], axis=-1)
+    return pts - pts.mean(axis=-2, keepdims=True)
+
+
+def place(points: np.ndarray, x: Any, y: Any, theta: Any) -> np.ndarray:
+    """Body-frame ``points`` (..., P, 2) rotated by ``theta`` and moved to ``(x, y)`` (each (...,))."""
+    x, y, theta = (np.asarray(v, np.float64)[..., None] for v in (x, y, theta))
+    c, s = np.cos(theta), np.sin(theta)
+    px, py = points[..., 0], points[..., 1]
+    return np.stack([x + c * px - s * py, y + s * px + c * py], axis=-1)
+
+
+def start_theta(model: SwimmerModel, d0: np.ndarray) -> float:
+    """Start orientation of the reference link for start shape ``d0`` (the rule of
+    :func:`jswim.env.start_orientation`: chains of more than three links start symmetric about x)."""
+    if not model.planar or model.n_dof <= 2:
+        return 0.0
+    cum = np.concatenate([[0.0], np.cumsum(d0)])
+    return float(-(cum.mean() - cum[model.n_dof // 2]))
+
+
+@dataclass
+class Track:
+    """One run, steps ``0..N`` (state before the first step, then after each step).
+
+    Attributes
+    ----------
+    run_id, agent, swimmer : str
+    model : SwimmerModel
+    direction : int
+        Target direction (+1 or -1).
+    x, y, theta : ndarray (N + 1,)
+        Centroid (in ``a``) and orientation of the reference link (rad).
+    dofs : ndarray (N + 1, n_dof)
+    points : ndarray (N + 1, P, 2)
+        The body in the lab frame (see :func:`outline`).
+    actions : list of (dof, roc), length N
+    stuck, cleared, failed : ndarray (N,) bool
+        No displacement; the LLM's history cleared after that step; the reply named no valid
+        action (the hold was played).
+    replies : list of str or None, length N
+        The LLM's last reply text of each step (``None`` for baselines).
+    stroke : (start, period) or None
+        Where the success criterion found the stroke: its 0-based first step and period.
+    success : bool
+    replayed : bool
+        ``y``/``orientation`` were not recorded and come from a noiseless replay.
+    row : dict
+        The run's record (``runs.jsonl``).
+    steps_log : list of dict
+        The transcript's step records (LLM runs; empty otherwise).
+    """
+
+    run_id: str
+    agent: str
+    swimmer: str
+    model: SwimmerModel
+    direction: int
+    x: np.ndarray
+    y: np.ndarray
+    theta: np.ndarray
+    dofs: np.ndarray
+    points: np.ndarray
+    actions: list[tuple[int, float]]
+    stuck: np.ndarray
+    cleared: np.ndarray
+    failed: np.ndarray
+    replies: list[str | None]
+    stroke: tuple[int, int] | None
+    success: bool
+    replayed: bool = False
+    row: dict[str, Any] = field(default_factory=dict, repr=False)
+    steps_log: list[dict[str, Any]] = field(default_factory=list, repr=False)
+
+    @property
+    def n_steps(self) -> int:
+        return len(self.actions)
+
+    @property
+    def label(self) -> str:
+        """``LLM``, ``Q-learning`` or ``random policy`` (the figures' names) with the model for LLM runs."""
+        name = {"llm": "LLM", "qlearning": "Q-learning", "random": "random policy"}.get(self.agent, self.agent)
+        model = self.row.get("model")
+        return f"{name} ({model})" if model and self.agent == "llm" else name
+
+    def in_stroke(self, step: int) -> bool:
+        """Whether step ``step`` (1-based) belongs to the stroke the criterion found."""
+        return self.stroke is not None and step - 1 >= self.stroke[0]
+
+
+def model_of(row: Mapping[str, Any], n_dof: int | None = None) -> SwimmerModel:
+    """The swimmer model of a run row (the default geometry of its kind; ``n_dof`` picks the
+    chain length of ``nlink``/``nsphere`` runs when their DOF count is known)."""
+    kind = str(row.get("swimmer", "purcell"))
+    kw: dict[str, Any] = {}
+    if n_dof is not None and kind in ("nlink", "nsphere"):
+        kw["n_links" if kind == "nlink" else "n_spheres"] = n_dof + 1
+    return make_model(kind, **kw)
+
+
+def _levels(init: Any) -> list[float] | None:
+    if isinstance(init, str) and init and not set(init) - {"+", "-"}:
+        return [1.0 if c == "+" else 0.0 for c in init]
+    if isinstance(init, (list, tuple)) and all(isinstance(v, (int, float)) for v in init):
+        return [float(v) for v in init]
+    return None
+
+
+def _replay_dofs(model: SwimmerModel, d0: np.ndarray, actions: Sequence[tuple[int, float]]) -> np.ndarray:
+    out = [d0.copy()]
+    d = d0.copy()
+    span = model.hi - model.lo
+    for dof, roc in actions:
+        if 1 <= dof <= d.size and roc:
+            d[dof - 1] = min(model.hi, max(model.lo, d[dof - 1] + float(roc) * span))
+        out.append(d.copy())
+    return np.asarray(out)
+
+
+def _roc(v: Any) -> float:
+    """A recorded ROC: an int for the paper's {-1, 0, 1}, a float for real-valued ones."""
+    f = float(v)
+    return int(f) if f.is_integer() else f
+
+
+def _floats(seq: Any, n: int) -> np.ndarray | None:
+    if not isinstance(seq, list) or len(seq) < n or any(v is None for v in seq[:n]):
+        return None
+    return np.asarray(seq[:n], np.float64)
+
+
+def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None = None) -> Track:
+    """The :class:`Track` of one run from its row and (LLM runs) its transcript records.
+
+    Parameters
+    ----------
+    row : mapping
+        A run record as in ``runs.jsonl`` (:func:`jswim.results.read_runs`).
+    transcript : sequence of mapping, optional
+        The records of ``transcripts/RUN.jsonl`` (:func:`jswim.results.read_transcript`); its
+        ``meta`` record gives the start levels, its ``step`` records the DOF values and replies.
+    """
+    row = dict(row)
+    recs = list(transcript or [])
+    meta = next((r for r in recs if r.get("type") == "meta"), {})
+    steps_log = [r for r in recs if r.get("type") == "step"]
+    xs = [float(v) for v in (row.get("x") or [])]
+    n = len(xs)
+    actions = [(int(a[0]), _roc(a[1])) for a in (row.get("actions") or [])[:n]]
+    while len(actions) < n:
+        actions.append((1, 0))
+    # DOF values: the row's own, the transcript's, or replayed from the start shape.
+    dofs = row.get("dofs")
+    levels0 = _levels(meta.get("levels0")) or _levels(row.get("init"))
+    n_dof = (len(dofs[0]) if isinstance(dofs, list) and dofs and isinstance(dofs[0], list) else None) \
+        or (len(levels0) if levels0 else None) or max((a[0] for a in actions), default=2)
+    model = model_of(row, n_dof)
+    if levels0 is None:
+        levels0 = [1.0] * model.n_dof
+    d0 = np.array([model.lo + (model.hi - model.lo) * v for v in levels0], np.float64)
+    if isinstance(dofs, list) and len(dofs) >= n and dofs and isinstance(dofs[0], list):
+        arr = np.asarray(dofs, np.float64)
+        d = np.concatenate([d0[None], arr[-n:]]) if len(arr) == n else arr[: n + 1]
+    elif len(steps_log) >= n and all(isinstance(s.get("dofs_after"), list) for s in steps_log[:n]):
+        d = np.concatenate([d0[None], np.asarray([s["dofs_after"] for s in steps_log[:n]], np.float64)])
+    else:
+        d = _replay_dofs(model, d0, actions)
+    theta0 = start_theta(model, d0)
+    ys, th = _floats(row.get("y"), n), _floats(row.get("orientation"), n)
+    replayed = False
+    if n and (ys is None or th is None):
+        ys2, th2 = _replay_pose(row, model, levels0, actions)
+        replayed = True
+        ys = ys if ys is not None else ys2
+        th = th if th is not None else th2
+    x = np.concatenate([[0.0], xs])
+    y = np.concatenate([[0.0], ys if ys is not None else np.zeros(n)])
+    theta = np.concatenate([[theta0], th if th is not None else np.full(n, theta0)])
+    pts = place(outline(model, d), x, y, theta)
+    stuck = np.abs(np.diff(x)) < STUCK_TOL
+    if isinstance(row.get("stuck"), list) and len(row["stuck"]) >= n:
+        stuck = np.asarray([bool(v) for v in row["stuck"][:n]])
+    cleared = np.zeros(n, bool)
+    failed = np.zeros(n, bool)
+    replies: list[str | None] = [None] * n
+    for i, s in enumerate(steps_log[:n]):
+        cleared[i] = bool(s.get("cleared"))
+        failed[i] = bool(s.get("failed"))
+        if "stuck" in s:
+            stuck[i] = bool(s["stuck"])
+        attempts = s.get("attempts") or []
+        replies[i] = str(attempts[-1].get("text", "")) if attempts else None
+    stroke = None
+    stl = row.get("steps_to_learn")
+    if row.get("learned", row.get("success")) and isinstance(stl, (int, float)) and row.get("period"):
+        stroke = (int(stl) - 1, int(row["period"]))
+    return Track(
+        run_id=str(row.get("run_id", "")), agent=str(row.get("agent", "")), swimmer=str(row.get("swimmer", "")),
+        model=model, direction=int(row.get("direction", 1) or 1),
+        x=x, y=y, theta=theta, dofs=d, points=pts, actions=actions, stuck=stuck, cleared=cleared, failed=failed,
+        replies=replies, stroke=stroke, success=bool(row.get("success")), replayed=replayed, row=row,
+        steps_log=steps_log)
+
+
+def _replay_pose(row: Mapping[str, Any], model: SwimmerModel, levels0: Sequence[float],
+                 actions: Sequence[tuple[int, float]]) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """``y`` and orientation after each step from a noiseless replay (folders that lack them)."""
+    if not model.planar:
+        n = len(actions)
+        return np.zeros(n), np.zeros(n)
+    try:
+        from jswim import env  # lazy: JAX only for folders written before the pose was recorded
+
+        if any(float(r) not in (-1.0, 0.0, 1.0) for _, r in actions) or any(v not in (0.0, 1.0) for v in levels0):
+            return None, None
+        r = env.rollout(str(row.get("swimmer")), [(int(a), int(b)) for a, b in actions],
+                        init=[int(v) for v in levels0], direction=int(row.get("direction", 1) or 1))
+        return np.asarray(r.y, np.float64), np.asarray(r.orientation, np.float64)
+    except Exception:  # an unknown swimmer or an API that moved: no pose, not a broken page
+        return None, None
+
+
+def view_box(tracks: Sequence[Track], pad: float = 1.5) -> tuple[float, float, float, float]:
+    """``(xmin, xmax, ymin, ymax)`` holding every body of ``tracks`` at every step, with ``pad``."""
+    pts = np.concatenate([t.points.reshape(-1, 2) for t in tracks]) if tracks else np.zeros((1, 2))
+    r = 1.0 if tracks and not tracks[0].model.planar else 0.0  # sphere radius
+    lo = pts.min(axis=0) - pad - r
+    hi = pts.max(axis=0) + pad + r
+    return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+
+
+def fmt_action(action: tuple[int, float]) -> str:
+    """``[DOF, ROC]`` as in the prompt (integers stay integers)."""
+    dof, roc = action
+    r = int(roc) if float(roc).is_integer() else roc
+    return f"[{dof}, {r:g}]" if isinstance(r, float) else f"[{dof}, {r}]"
+
+
+def is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
