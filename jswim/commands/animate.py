@@ -27,6 +27,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "pip install 'jswim[video]')")
     p.set_defaults(command_main=main)
 
+
 def main(args: argparse.Namespace) -> int:
     from jswim.errors import ConfigError
     from jswim.viz.animate import build

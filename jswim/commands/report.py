@@ -20,6 +20,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="write the page here instead (e.g. for a read-only folder)")
     p.set_defaults(command_main=main)
 
+
 def main(args: argparse.Namespace) -> int:
     from jswim.errors import ConfigError
     from jswim.viz.page import write_report
