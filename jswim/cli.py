@@ -118,8 +118,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--base-url", default=None, help="an OpenAI-compatible server, e.g. http://localhost:8080/v1")
     b.add_argument("--model", default=None, help="model name on that server (required with --base-url)")
     b.add_argument("--gguf", default=None, metavar="FILE", help="another GGUF model for the embedded server")
-    b.add_argument("--api-key-env", default="OPENAI_API_KEY", metavar="VAR",
-                   help="environment variable that holds the API key (default OPENAI_API_KEY; never stored)")
+    b.add_argument("--api-key-env", default=None, metavar="VAR",
+                   help="environment variable that holds the API key (default OPENAI_API_KEY; never stored or "
+                        "printed); named but unset: an error for a remote server, a warning for this machine")
     b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "none"),
                    help="constrained decoding (auto: grammar for the embedded/llama.cpp server, none elsewhere "
                         "and in the ablation study; the paper uses none)")
@@ -300,13 +301,21 @@ def _extra_fields(items: Sequence[str]) -> tuple[tuple[str, Any], ...]:
 def _backend(args: argparse.Namespace):
     from jswim.llm.backend import Backend  # lazy: JAX and httpx load only for commands that run
 
+    key_env = args.api_key_env or "OPENAI_API_KEY"
+    if args.api_key_env is not None and args.base_url is not None and not os.environ.get(key_env):
+        from jswim.llm.urls import is_loopback, normalize_base_url
+
+        if not is_loopback(normalize_base_url(args.base_url)):
+            raise ConfigError(f"--api-key-env {key_env}: ${key_env} is not set; export the key in it (a remote "
+                              f"server would refuse every call), or leave --api-key-env out for a server without keys")
+        _warn(f"--api-key-env {key_env}: ${key_env} is not set; requests to this machine's server go without a key")
     prices, as_of = None, None
     if getattr(args, "prices", None):
         from jswim.llm.prices import load_prices
 
         table, as_of = load_prices(args.prices)
         prices = tuple(sorted(table.items()))
-    return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=args.api_key_env,
+    return Backend(base_url=args.base_url, model=args.model, gguf=args.gguf, api_key_env=key_env,
                    constrain=args.constrain, temperature=args.temperature, n_parallel=args.parallel,
                    n_threads=args.threads, concurrency=args.concurrency, cohorts=args.cohorts,
                    cache_dir=args.cache_dir, timeout_s=args.timeout,
@@ -706,6 +715,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     import matplotlib  # lazy: only once the arguments parsed (fast usage errors)
 
     matplotlib.use("Agg")  # the command only writes figure files; never open a window
+    from jswim.permissions import private_files
+
+    with private_files():  # folders, figures and caches: owner only under the usual umask
+        return _main(args)
+
+
+def _main(args: argparse.Namespace) -> int:
     try:
         if getattr(args, "command_main", None) is not None:
             return args.command_main(args)
@@ -725,7 +741,9 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _compare(args)
         return _plot(args)
     except JswimError as exc:  # every user or server mistake (jswim.errors); anything else is a bug
-        print(f"jswim: error: {exc}", file=sys.stderr)
+        from jswim.llm.credentials import scrub  # no key or URL password in any message, in any form
+
+        print(f"jswim: error: {scrub(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("interrupted", file=sys.stderr)

@@ -18,8 +18,8 @@ rewritten whole through a temporary file and ``os.replace``, so a kill never lea
 :func:`load` reads a folder (finished or not, read-only) into pandas DataFrames.
 
 Files are plain: JSON without ``NaN``/``Infinity`` (non-finite numbers are written as ``null``,
-so any language's parser reads them) and the same permissions for every file (``0o666`` less
-the umask, as an ordinary ``open`` gives; a rewritten file keeps its mode). A folder that cannot
+so any language's parser reads them) and the same permissions for every file (owner only, ``0600``,
+unless the umask lets the group write: :mod:`jswim.permissions`; a rewritten file keeps its mode). A folder that cannot
 be written (read-only, full disk) is a :class:`StudyFolderError` naming the folder and the cause.
 """
 
@@ -41,6 +41,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from jswim.errors import ResultFolderError
+from jswim.permissions import file_mode, opener
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -93,8 +94,9 @@ def _umask() -> int:
     return mask
 
 
-#: Mode of new files: what ``open`` gives (mkstemp alone would give 0600).
-FILE_MODE = 0o666 & ~_umask()
+#: Mode of new files: ``0600`` under the usual umask, what the umask says where it lets the group
+#: write (:mod:`jswim.permissions`).
+FILE_MODE = file_mode(_umask())
 
 
 @contextlib.contextmanager
@@ -157,7 +159,7 @@ _MISSING = object()
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
     """Write ``data`` to ``path`` so that readers see the old or the new file, never a part.
 
-    The file gets :data:`FILE_MODE`, or the mode of the file it replaces.
+    The file gets :func:`jswim.permissions.file_mode`, or the mode of the file it replaces.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -165,7 +167,7 @@ def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
     try:
         mode = path.stat().st_mode & 0o7777
     except OSError:
-        mode = FILE_MODE
+        mode = file_mode()  # the umask now (FILE_MODE is the one at import)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         os.fchmod(fd, mode)
@@ -273,7 +275,7 @@ class StudyStore:
         path = self.folder / RUNS
         with writing(path):
             _repair_tail(path)
-            with open(path, "a", encoding="utf-8") as fh:
+            with open(path, "a", encoding="utf-8", opener=opener) as fh:
                 fh.write(lines)
                 fh.flush()
                 os.fsync(fh.fileno())

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import importlib.util
 import math
+import os
 
 import pytest
 
@@ -67,7 +68,21 @@ def test_embedded_model_constrained_replies():
     with local.LocalServer(n_parallel=3, n_ctx_per_slot=512) as srv:
         assert srv.base_url.startswith("http://127.0.0.1:")
         results = asyncio.run(ask(srv))
-    assert not srv.running
+        # Only this process can use the server: it demands this session's random key (no other
+        # local user can send it requests or read /props, which shows the model's path).
+        import httpx
+
+        root = srv.base_url.rsplit("/v1", 1)[0]
+        body = {"model": srv.model_name, "messages": [{"role": "user", "content": "hi"}], "max_tokens": 1}
+        assert httpx.post(f"{srv.base_url}/chat/completions", json=body, timeout=30).status_code == 401
+        assert httpx.get(f"{root}/props", timeout=30).status_code == 401
+        wrong = {"Authorization": "Bearer " + "x" * 32}
+        assert httpx.post(f"{srv.base_url}/chat/completions", json=body, headers=wrong, timeout=30).status_code == 401
+        key = os.environ[local.LOCAL_KEY_ENV]
+        assert len(key) >= 24
+    assert not srv.running and local.LOCAL_KEY_ENV not in os.environ
+    with local.LocalServer(n_parallel=1, n_ctx_per_slot=256) as again:
+        assert os.environ[local.LOCAL_KEY_ENV] != key  # a new key per session
     for (cfg, _, _, dofs), res in zip(cases, results):
         allowed = allowed_actions(sw, cfg.action_set, dofs)
         assert res.constraint == "grammar"

@@ -7,6 +7,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -112,15 +113,22 @@ def billed_usd_one(body) -> float:
 def test_interrupt_and_resume_bill_each_call_once(tmp_path):
     out = tmp_path / "study"
     runs, steps = 3, 12
-    with priced_server(latency=0.05) as srv:
+    interrupted = threading.Event()
+    # The server answers 10 calls, then holds every answer until Ctrl-C was sent: the study cannot
+    # finish before the interrupt however slow this (loaded) machine is.
+    srv = priced_server(latency=0.05, hold=lambda body: srv.n_answered >= 10 and not interrupted.is_set(),
+                        hold_s=300.0)
+    with srv:
         cmd = [sys.executable, "-m", "jswim.cli", *swim(srv.url, out, runs=runs, steps=steps)]
         # the same precision as this test process (conftest: float64), so both sessions step alike
         env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_ENABLE_X64": "1"}
         proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 120
-        while srv.n_answered < 10 and time.monotonic() < deadline and proc.poll() is None:
+        while srv.n_answered < 10 and proc.poll() is None:
+            time.sleep(0.02)
+        while srv.n_requests - srv.n_answered < 1 and proc.poll() is None:  # the next call is being held
             time.sleep(0.02)
         proc.send_signal(signal.SIGINT)  # Ctrl-C in the middle of the runs
+        interrupted.set()
         _, err = proc.communicate(timeout=60)
         assert proc.returncode == 130, err
         before = srv.n_requests

@@ -128,16 +128,37 @@ def test_learn_stats_counts_never_learned_runs_instead_of_inventing_steps():
     assert none.learned == 0 and math.isnan(none.median) and none.label() == "0 of 2 learned"
 
 
-def test_every_file_gets_the_same_ordinary_mode(tmp_path):
-    mask = os.umask(0o022)
-    os.umask(mask)
+def test_every_file_gets_the_same_mode(tmp_path):
     store = StudyStore(tmp_path / "s", "noise", {})
     store.add_runs([{"run_id": "a", "x": [0.1], "actions": [1], "progress": [0.1], "stuck": [False]}])
     store.finalize()
     modes = {p.name: stat.S_IMODE(p.stat().st_mode) for p in (tmp_path / "s").iterdir() if p.is_file()}
     assert {"metadata.json", "runs.jsonl", "runs.csv", "runs.parquet", "trajectories.parquet"} <= set(modes)
-    # What open() gives, for every file: with the usual umask 022, 0644 (collaborators can read).
-    assert set(modes.values()) == {0o666 & ~mask} == {results.FILE_MODE}, modes
+    assert set(modes.values()) == {results.FILE_MODE}, modes
+
+
+@pytest.mark.parametrize("umask, files, folders", [
+    (0o022, 0o600, 0o700),  # the usual umask, nobody's choice: the owner alone (was 0644 before)
+    (0o027, 0o600, 0o700),  # stricter: still the owner alone
+    (0o002, 0o664, 0o775),  # lets the group write: a shared-group setup, honoured
+    (0o007, 0o660, 0o770),
+])
+def test_study_folders_are_the_owner_s_unless_the_umask_shares_with_a_group(umask, files, folders, tmp_path):
+    from jswim.permissions import file_mode
+
+    from jswim.studies import StudyOptions, run_study
+
+    old = os.umask(umask)
+    try:
+        run_study("noise", StudyOptions(agents=("random",), q_runs=2, zetas=(0.0,), steps=4), backend=None,
+                  out=tmp_path / "s", figures=False)
+        assert os.umask(umask) == umask  # run_study set the process's umask back
+    finally:
+        os.umask(old)
+    assert file_mode(umask) == files
+    paths = [tmp_path / "s", *(tmp_path / "s").rglob("*")]
+    assert {stat.S_IMODE(p.stat().st_mode) for p in paths if p.is_file()} == {files}
+    assert {stat.S_IMODE(p.stat().st_mode) for p in paths if p.is_dir()} == {folders}
 
 
 def test_a_rewritten_file_keeps_its_mode(tmp_path):
@@ -163,26 +184,41 @@ def test_json_files_are_strict_json(tmp_path):
     StudyStore(tmp_path / "s", "noise", {"zetas": [0.0, float("nan")]})  # still resumes
 
 
-@pytest.mark.skipif(os.geteuid() == 0, reason="root writes anywhere")
-def test_read_only_folder_is_one_line_error(tmp_path):
-    ro = tmp_path / "ro"
-    ro.mkdir()
-    ro.chmod(0o555)
+@pytest.mark.parametrize("how", ["read-only", "under-a-file"])
+def test_a_folder_that_cannot_be_written_is_one_line_error(tmp_path, how):
+    # A read-only parent stops everyone but root; a parent that is a file stops root too (CI runs
+    # as root), so the second case always runs and the first wherever it means something.
+    if how == "read-only" and os.geteuid() == 0:
+        pytest.skip("root writes into read-only folders; the under-a-file case covers root")
+    parent = tmp_path / "ro"
+    if how == "read-only":
+        parent.mkdir()
+        parent.chmod(0o555)
+        cause = "Permission denied"
+    else:
+        parent.write_text("a file, not a folder")
+        cause = "Not a directory"
     try:
         with pytest.raises(StudyFolderError) as err:
-            StudyStore(ro / "study", "noise", {})
+            StudyStore(parent / "study", "noise", {})
         msg = str(err.value)
-        assert "\n" not in msg and str(ro / "study") in msg and "Permission denied" in msg and "--out" in msg
-        (tmp_path / "s").mkdir()
-        store = StudyStore(tmp_path / "s", "noise", {})
-        (tmp_path / "s").chmod(0o555)
-        with pytest.raises(StudyFolderError, match="cannot write"):
-            store.add_runs([{"run_id": "a"}])
-        with pytest.raises(StudyFolderError, match="cannot write"):
-            store.set_status("interrupted")
+        assert "\n" not in msg and str(parent / "study") in msg and cause in msg and "--out" in msg
     finally:
-        ro.chmod(0o755)
-        (tmp_path / "s").chmod(0o755)
+        if parent.is_dir():
+            parent.chmod(0o755)
+
+
+def test_a_folder_that_stops_being_writable_is_one_line_error(tmp_path):
+    folder = tmp_path / "s"
+    store = StudyStore(folder, "noise", {})
+    # The folder replaced by a file (a path no one, root included, can write into).
+    folder.rename(tmp_path / "moved")
+    folder.write_text("not a folder any more")
+    with pytest.raises(StudyFolderError, match="cannot write") as err:
+        store.add_runs([{"run_id": "a"}])
+    assert "\n" not in str(err.value)
+    with pytest.raises(StudyFolderError, match="cannot write"):
+        store.set_status("interrupted")
 
 
 def test_set_status_records_the_status(tmp_path):

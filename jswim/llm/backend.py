@@ -22,6 +22,7 @@ from jswim.llm.client import ClientSettings, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
+from jswim.llm.credentials import read_api_key
 from jswim.llm.local import LocalServer, default_model_path
 from jswim.llm.reasoning import check_mode
 
@@ -125,6 +126,7 @@ class Backend:
             check_gguf(self.gguf)
         if self.base_url is not None:
             object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
+            read_api_key(self.api_key_env)  # a key no header can carry: one line now, not retries later
         object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
         bad = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
         if bad:

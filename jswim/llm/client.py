@@ -38,7 +38,7 @@ from typing import Any, Callable, Mapping, Sequence
 import httpx
 
 from jswim.errors import ConfigError
-from jswim.llm import constrain
+from jswim.llm import constrain, credentials
 from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
 from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError, LLMTimeoutError
@@ -355,8 +355,10 @@ class LLMClient:
         self.pacer = pacer
         self.budget = budget
         self.settings = settings
-        self._key = os.environ.get(settings.api_key_env) or None
-        self._url = endpoint(settings.base_url)
+        self._key = credentials.read_api_key(settings.api_key_env)
+        # User info of the base URL goes as HTTP Basic auth unless an API key is set (the key wins:
+        # one Authorization header); either way it never stays in a URL a library could print.
+        self._url, self._basic = credentials.split_userinfo(endpoint(settings.base_url))
         self._where = safe_url(settings.base_url)
         self._prices, self.unpriced = price_table(settings.prices, settings.model,
                                                   local_host=is_local_host(settings.base_url),
@@ -579,10 +581,12 @@ class LLMClient:
         )
 
     def _scrub(self, text: str) -> str:
-        return text.replace(self._key, "***") if self._key else text
+        return credentials.scrub(text)  # the key and URL credentials, in any encoding
 
     def _headers(self) -> dict[str, str]:
-        return {"Authorization": f"Bearer {self._key}"} if self._key else {}
+        if self._key:
+            return {"Authorization": f"Bearer {self._key}"}
+        return {"Authorization": self._basic} if self._basic else {}
 
     def _backoff(self, retry: int) -> float:
         s = self.settings

@@ -22,6 +22,7 @@ from typing import Any, Mapping, Sequence
 
 from jswim.llm.client import ChatResult
 from jswim.llm.usage import Usage
+from jswim.permissions import opener
 
 JOURNAL = "calls.jsonl"
 
@@ -82,7 +83,7 @@ class CallJournal:
         """Append one answered call (flushed, so it survives an interrupt)."""
         if self._fh is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fh = open(self.path, "a", encoding="utf-8")
+            self._fh = open(self.path, "a", encoding="utf-8", opener=opener)  # owner only (jswim.permissions)
         u = res.usage
         billed = not (res.cache_hit or res.shared)
         rec = {

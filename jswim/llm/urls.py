@@ -23,6 +23,7 @@ import ipaddress
 from urllib.parse import urlsplit, urlunsplit
 
 from jswim.errors import ConfigError
+from jswim.llm.credentials import redact_url, register_url
 
 #: Path endings that name an endpoint rather than the API root (removed).
 ENDPOINT_SUFFIXES = ("/chat/completions", "/completions")
@@ -76,6 +77,7 @@ def normalize_base_url(url: str) -> str:
         Empty, not http(s), or without a host; the message says what to write.
     """
     text = (url or "").strip()
+    register_url(text)  # a password in the URL is masked in every message from now on
     example = "write e.g. http://localhost:8080/v1 or https://api.openai.com/v1"
     if not text:
         raise ConfigError(f"the server base URL is empty; {example}")
@@ -84,13 +86,13 @@ def normalize_base_url(url: str) -> str:
         text = ("http://" if _is_local_name(host) else "https://") + text
     parts = urlsplit(text)
     if parts.scheme.lower() not in ("http", "https"):
-        raise ConfigError(f"the server base URL {text!r} is not http(s); {example}")
+        raise ConfigError(f"the server base URL {redact_url(text)!r} is not http(s); {example}")
     try:
         parts.port  # noqa: B018 - raises on a bad port
     except ValueError:
-        raise ConfigError(f"the server base URL {text!r} has a bad port; {example}") from None
+        raise ConfigError(f"the server base URL {redact_url(text)!r} has a bad port; {example}") from None
     if not parts.hostname:
-        raise ConfigError(f"the server base URL {text!r} has no host; {example}")
+        raise ConfigError(f"the server base URL {redact_url(text)!r} has no host; {example}")
     path = parts.path.rstrip("/")
     for suffix in ENDPOINT_SUFFIXES:
         if path.endswith(suffix):

@@ -42,6 +42,8 @@ from jswim.errors import ConfigError, JswimError
 from jswim.gait import Criterion, judge
 from jswim.llm.backend import Backend
 from jswim.llm.budget import Budget
+from jswim.llm.credentials import scrub
+from jswim.permissions import private_files
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
 from jswim.llm.journal import CallJournal
@@ -191,6 +193,7 @@ def default_folder(study: str, o: StudyOptions, backend: Backend | None, root: s
 ProgressFn = Callable[[str, int, int, str], None]
 
 
+@private_files()  # the folder and the cache: owner only under the usual umask (jswim.permissions)
 def run_study(
     study: str,
     options: StudyOptions = StudyOptions(),
@@ -263,7 +266,7 @@ def run_study(
         store.set_status("interrupted")  # finished runs are kept; the same command resumes
         raise
     except JswimError as exc:
-        store.set_status("stopped", error=str(exc))
+        store.set_status("stopped", error=scrub(str(exc)))  # never a key, however the message got it
         raise
 
 

@@ -1,0 +1,145 @@
+"""API keys and URL credentials: read once, checked, and never shown in any form.
+
+A key is read from the environment variable the user names (``--api-key-env``), never from an
+argument, and checked before any request: a value no HTTP header can carry (a carriage return
+left by a Windows file, a non-ASCII character, a space) is one line naming the variable, without
+the value. Every secret the process handles (the key, the password and user of a
+``http://user:pw@host`` base URL, the embedded server's own key) is registered here, and
+:func:`scrub` removes it from any text about to be printed or raised, in each form a library may
+have written it: as is, ``repr``-escaped (``\\r``), JSON-escaped (``\\u000d``), percent-encoded,
+base64 (an HTTP Basic header), and without the stray whitespace.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+from urllib.parse import quote, quote_plus, unquote, urlsplit, urlunsplit
+
+from jswim.errors import ConfigError
+
+#: What replaces a secret in text.
+MASK = "***"
+
+#: Secrets shorter than this are not searched for in text (they would mask ordinary words);
+#: a key or password that short is no protection anyway.
+MIN_SECRET = 4
+
+_secrets: set[str] = set()
+_forms: list[str] = []  # every form of every secret, longest first
+
+
+def forms(secret: str) -> set[str]:
+    """The ways ``secret`` may appear in text: raw, escaped, JSON, percent-encoded, base64."""
+    out = {secret, secret.strip()}
+    for s in list(out):
+        out |= {
+            repr(s)[1:-1], ascii(s)[1:-1], json.dumps(s)[1:-1], json.dumps(s, ensure_ascii=False)[1:-1],
+            repr(s.encode("utf-8", "surrogateescape"))[2:-1], s.encode("unicode_escape").decode("ascii"),
+            quote(s, safe=""), quote_plus(s, safe=""), quote(s), base64.b64encode(s.encode("utf-8", "replace")).decode(),
+        }
+    return {f for f in out if len(f) >= MIN_SECRET}
+
+
+def register(secret: str | None) -> None:
+    """Remember ``secret`` so that :func:`scrub` masks it from now on (in this process)."""
+    if not secret or secret in _secrets:
+        return
+    _secrets.add(secret)
+    _forms[:] = sorted(set(_forms) | forms(secret), key=len, reverse=True)
+
+
+def scrub(text: str) -> str:
+    """``text`` with every registered secret, in every form of :func:`forms`, replaced by ``***``."""
+    if not _forms or not text:
+        return text
+    for f in _forms:
+        if f in text:
+            text = text.replace(f, MASK)
+    return text
+
+
+def _bad_character(value: str) -> str | None:
+    """What in ``value`` no header value may carry, said without showing the value."""
+    names = {"\r": "a carriage return (\\r)", "\n": "a line feed (\\n)", "\t": "a tab", " ": "a space",
+             "\x00": "a NUL byte"}
+    for i, ch in enumerate(value):
+        if "\x21" <= ch <= "\x7e":
+            continue
+        what = names.get(ch) or (f"a control character (U+{ord(ch):04X})" if ord(ch) < 0x20 or ord(ch) == 0x7F
+                                 else f"a non-ASCII character (U+{ord(ch):04X})")
+        where = "at its end" if i == len(value) - 1 else "at its start" if i == 0 else f"at position {i + 1}"
+        return f"{what} {where}"
+    return None
+
+
+def read_api_key(env_name: str) -> str | None:
+    """The key in ``$env_name`` (``None`` when unset or empty), registered for :func:`scrub`.
+
+    Raises
+    ------
+    ConfigError
+        When the value holds a character an HTTP header cannot carry; the message names the
+        variable and the character, never the value.
+    """
+    value = os.environ.get(env_name)
+    if not value:
+        return None
+    register(value)
+    bad = _bad_character(value)
+    if bad:
+        hint = " (a key pasted from a Windows file?)" if "\r" in value else ""
+        raise ConfigError(f"the API key in ${env_name} has {bad}{hint}, which no HTTP header can carry; "
+                          f"set ${env_name} again without it (the value is not shown)")
+    return value
+
+
+def register_url(url: str | None) -> None:
+    """Register the user and password of ``url`` (``http://user:pw@host/v1``), if any."""
+    if not url or "@" not in url:
+        return
+    try:
+        parts = urlsplit(url if "://" in url else "//" + url)
+        user, password = parts.username, parts.password
+    except ValueError:
+        return
+    for s in (password, user):
+        if s:
+            register(s)
+            register(unquote(s))
+    if user and password:
+        register(f"{unquote(user)}:{unquote(password)}")
+
+
+def split_userinfo(url: str) -> tuple[str, str | None]:
+    """``url`` without its user info, and the ``Authorization`` value of that user info (or ``None``).
+
+    ``http://user:pw@host/v1`` -> ``("http://host/v1", "Basic dXNlcjpwdw==")``: the credentials
+    travel in a header the client controls, not in a URL that libraries print.
+    """
+    parts = urlsplit(url)
+    if "@" not in parts.netloc:
+        return url, None
+    userinfo, host = parts.netloc.rsplit("@", 1)
+    user, _, password = userinfo.partition(":")
+    pair = f"{unquote(user)}:{unquote(password)}"
+    register_url(url)
+    return urlunsplit((parts.scheme, host, parts.path, parts.query, parts.fragment)), "Basic " + base64.b64encode(
+        pair.encode("utf-8")).decode("ascii")
+
+
+def redact_url(url: str) -> str:
+    """``url`` with its user info shown as ``***@`` (for messages about the URL as written)."""
+    text = str(url)
+    try:
+        parts = urlsplit(text if "://" in text else "//" + text)
+        netloc = parts.netloc
+    except ValueError:
+        return scrub(text)
+    if "@" not in netloc:
+        return scrub(text)
+    netloc = MASK + "@" + netloc.rsplit("@", 1)[1]
+    if "://" not in text:
+        return scrub(urlunsplit(("", netloc, parts.path, parts.query, parts.fragment))[2:])
+    return scrub(urlunsplit((parts.scheme, netloc, parts.path, parts.query, parts.fragment)))
