@@ -1,0 +1,98 @@
+"""Actions: a DOF and a rate of change ROC in [-1, 1].
+
+Two encodings reach :func:`jswim.env.step`:
+
+* an **integer code** (what the paper's agents and the tabular baselines use): with
+  ``K = params.roc_levels``, code ``(dof - 1) (2K + 1) + (k + K)`` moves DOF ``dof`` (1-based, as
+  in the prompt) at ROC ``k / K``, ``k`` in ``-K..K``. K = 1 gives the paper's codes
+  ``(dof - 1) * 3 + (roc + 1)``, ROC in {-1, 0, 1};
+* a **float ROC vector** of shape ``(n_dof,)``: entry ``i`` is DOF ``i + 1``'s ROC in [-1, 1]
+  (at most one non-zero unless ``params.diagonal``).
+
+(The *action sets* offered to agents, ``"all"`` / ``"shape-changing"``, live in
+:mod:`jswim.actions`.)
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from jswim.errors import ConfigError
+
+#: Rates of change an action may carry in the paper's discrete world (K = 1).
+ROCS = (-1, 0, 1)
+
+
+def encode_action(dof: int, roc: int, roc_levels: int = 1) -> int:
+    """Integer code of ``(dof, roc)``: ``dof`` 1-based as in the prompt, ``roc`` the integer
+    ``k`` in ``-K..K`` (ROC ``k / K``; with K = 1 the paper's -1, 0, 1)."""
+    return (dof - 1) * (2 * roc_levels + 1) + (roc + roc_levels)
+
+
+def decode_action(action: int, roc_levels: int = 1) -> tuple[int, int]:
+    """``(dof, k)`` of an integer code (ROC ``k / K``)."""
+    width = 2 * roc_levels + 1
+    return action // width + 1, action % width - roc_levels
+
+
+def roc_vector(dof: int, roc: float, n_dof: int) -> np.ndarray:
+    """Float ROC vector (float64, shape ``(n_dof,)``) moving DOF ``dof`` (1-based) at ``roc``."""
+    out = np.zeros(n_dof)
+    out[dof - 1] = roc
+    return out
+
+
+def validate_actions(actions: Any, n_dof: int) -> np.ndarray:
+    """Check ``(dof, roc)`` pairs (last axis of size 2) of the paper's discrete world and return
+    their action codes (K = 1)."""
+    arr = np.asarray(actions)
+    if arr.ndim < 1 or arr.shape[-1] != 2 or not np.issubdtype(arr.dtype, np.number):
+        raise ConfigError("actions must be (dof, roc) pairs, shape (steps, 2) or (batch, steps, 2)")
+    if not np.all(arr == np.round(arr)):
+        raise ConfigError("actions must be integers: dof in 1..n_dof, roc in {-1, 0, 1}")
+    dof, roc = arr[..., 0].astype(int), arr[..., 1].astype(int)
+    _check_dofs(dof, n_dof)
+    if np.any(np.abs(roc) > 1):
+        raise ConfigError(f"action roc must be -1, 0 or 1, got {sorted(set(roc[np.abs(roc) > 1].tolist()))}")
+    return ((dof - 1) * 3 + roc + 1).astype(np.int32)
+
+
+def validate_moves(actions: Any, n_dof: int) -> np.ndarray | None:
+    """Check ``(dof, roc)`` pairs with real ROCs and return them as float64 ROC vectors.
+
+    Returns
+    -------
+    ndarray (..., n_dof) float64, or None
+        ``None`` when every ROC is -1, 0 or 1 (the discrete world:
+        use :func:`validate_actions`); otherwise one ROC vector per pair.
+
+    Raises
+    ------
+    ConfigError
+        Not pairs, a DOF outside ``1..n_dof``, or a ROC that is not a finite number in [-1, 1].
+    """
+    try:
+        arr = np.asarray(actions, np.float64)
+    except (TypeError, ValueError):
+        raise ConfigError("actions must be (dof, roc) pairs of numbers") from None
+    if arr.ndim < 1 or arr.shape[-1] != 2:
+        raise ConfigError("actions must be (dof, roc) pairs, shape (steps, 2) or (batch, steps, 2)")
+    dof_f, roc = arr[..., 0], arr[..., 1]
+    if not np.all(np.isfinite(arr)) or not np.all(dof_f == np.round(dof_f)):
+        raise ConfigError(f"actions must be (dof, roc) pairs: dof one of the integers 1..{n_dof}, roc a finite number in [-1, 1]")
+    dof = dof_f.astype(int)
+    _check_dofs(dof, n_dof)
+    bad = np.abs(roc) > 1
+    if np.any(bad):
+        raise ConfigError(f"action roc must lie in [-1, 1], got {sorted(set(roc[bad].tolist()))}")
+    if np.all(np.isin(roc, (-1.0, 0.0, 1.0))):
+        return None
+    return np.eye(n_dof)[dof - 1] * roc[..., None]
+
+
+def _check_dofs(dof: np.ndarray, n_dof: int) -> None:
+    bad = (dof < 1) | (dof > n_dof)
+    if np.any(bad):
+        raise ConfigError(f"action dof must be in 1..{n_dof}, got {sorted(set(dof[bad].tolist()))}")

@@ -1,0 +1,202 @@
+"""Environment parameters: the swimmer, the noise level, the target direction, the start, and the
+action space (``roc_levels``, ``diagonal``)."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from typing import Any, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jswim.errors import ConfigError
+from jswim.swimmers.models import SwimmerModel, make_model
+
+
+@functools.partial(
+    jax.tree_util.register_dataclass,
+    data_fields=["zeta", "direction", "init"],
+    meta_fields=["model", "roc_levels", "diagonal"],
+)
+@dataclasses.dataclass(frozen=True)
+class EnvParams:
+    """Environment parameters.
+
+    Attributes
+    ----------
+    model : SwimmerModel
+        Static swimmer description (kind, number of DOFs, limits).
+    zeta : float or Array
+        Noise level, >= 0 (0 = the noiseless swimmer).
+    direction : float or Array
+        Target direction, +1 for +e_x, -1 for -e_x (sign of the reward ``progress``).
+    init : Array, int32 (n_dof,)
+        Initial DOF levels: 0 = lo, 1 = hi, -1 = drawn at random by :func:`jswim.env.reset`.
+    roc_levels : int
+        K (static): integer action codes carry ROC ``k / K`` with ``k`` in ``-K..K``
+        (``n_dof (2K + 1)`` codes, :func:`jswim.env.encode_action`). K = 1 is the paper's
+        ROC in {-1, 0, 1}. Float ROC vectors are accepted whatever K is.
+    diagonal : bool
+        Static. Whether a float ROC vector may move several DOFs at once (a diagonal stroke,
+        through the integrator). Off: only its first non-zero entry moves (S2 of the paper:
+        one DOF at a time).
+    """
+
+    model: SwimmerModel
+    zeta: Any = 0.0
+    direction: Any = 1.0
+    init: Any = None
+    roc_levels: int = 1
+    diagonal: bool = False
+
+    def replace(self, **changes: Any) -> "EnvParams":
+        """A copy with some fields changed (fields may be traced arrays)."""
+        return dataclasses.replace(self, **changes)
+
+    @property
+    def n_dof(self) -> int:
+        return self.model.n_dof
+
+    @property
+    def n_actions(self) -> int:
+        """Number of integer action codes, ``n_dof (2K + 1)`` (``3 n_dof`` for K = 1)."""
+        return (2 * self.roc_levels + 1) * self.model.n_dof
+
+    @property
+    def lo(self) -> float:
+        return self.model.lo
+
+    @property
+    def hi(self) -> float:
+        return self.model.hi
+
+
+def make_params(
+    swimmer: str | SwimmerModel = "purcell",
+    *,
+    zeta: float = 0.0,
+    direction: int | str = 1,
+    init: Sequence[int] | str | None = None,
+    roc_levels: int = 1,
+    diagonal: bool = False,
+    **model_kwargs: Any,
+) -> EnvParams:
+    """Validated environment parameters with the paper's defaults.
+
+    Parameters
+    ----------
+    swimmer : str or SwimmerModel
+        ``"purcell"``, ``"ng"``, ``"nlink"`` or ``"nsphere"``; model options (``d_max``,
+        ``d_min``, ``n_links``, ``n_spheres``, ``xi_ratio``) go by keyword, see
+        :func:`jswim.swimmers.models.make_model`.
+    zeta : float
+        Noise level, >= 0.
+    direction : int or str
+        +1 / ``"+x"`` or -1 / ``"-x"``.
+    init : sequence of int or str, optional
+        Initial configuration: levels per DOF as 0/1 (``(1, 1)``), as a sign string (``"+-"``:
+        + = hi, - = lo), or ``"random"``. Default: every DOF at ``hi``, the (+, +) start.
+    roc_levels : int
+        K >= 1: integer action codes mean ROC ``k / K``, ``k`` in ``-K..K`` (1: the paper's).
+    diagonal : bool
+        Allow float ROC vectors that move several DOFs at once (default False).
+
+    Raises
+    ------
+    ConfigError
+        For any invalid value.
+    """
+    model = swimmer if isinstance(swimmer, SwimmerModel) else make_model(swimmer, **model_kwargs)
+    try:
+        z = float(zeta)
+    except (TypeError, ValueError):
+        raise ConfigError(f"zeta must be a number, got {zeta!r}") from None
+    if not (math.isfinite(z) and z >= 0):
+        raise ConfigError(f"zeta (noise level) must be >= 0, got {zeta!r}")
+    return EnvParams(
+        model=model,
+        zeta=z,
+        direction=float(parse_direction(direction)),
+        init=np.asarray(parse_init(init, model.n_dof), np.int32),
+        roc_levels=check_roc_levels(roc_levels),
+        diagonal=bool(diagonal),
+    )
+
+
+def check_roc_levels(k: Any) -> int:
+    """``k`` as an int if it is a valid number of ROC levels K (an integer in 1..1000)."""
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= int(k) <= 1000:
+        raise ConfigError(f"roc_levels (K) must be an integer between 1 and 1000, got {k!r}")
+    return int(k)
+
+
+def parse_direction(direction: int | str) -> int:
+    """``+1`` / ``"+x"`` / ``"+"`` -> 1 and ``-1`` / ``"-x"`` / ``"-"`` -> -1."""
+    table = {"+x": 1, "+": 1, "x": 1, "+1": 1, "1": 1, "-x": -1, "-": -1, "-1": -1}
+    if isinstance(direction, str) and direction.strip().lower() in table:
+        return table[direction.strip().lower()]
+    if not isinstance(direction, (str, bool)) and direction in (1, -1):
+        return int(direction)
+    raise ConfigError(f"direction must be +1 ('+x') or -1 ('-x'), got {direction!r}")
+
+
+def parse_init(init: Sequence[int] | str | None, n_dof: int) -> tuple[int, ...]:
+    """Initial levels as a tuple of 0/1 (or -1 for random) of length ``n_dof``."""
+    if init is None:
+        return (1,) * n_dof
+    if isinstance(init, str):
+        text = init.strip().lower()
+        if text == "random":
+            return (-1,) * n_dof
+        if text and all(ch in "+-" for ch in text):
+            init = tuple(1 if ch == "+" else 0 for ch in text)
+        else:
+            raise ConfigError(
+                f"init must be levels like (1, 0), a sign string like '+-', or 'random'; got {init!r}"
+            )
+    try:
+        levels = tuple(int(v) for v in init)
+    except (TypeError, ValueError):
+        raise ConfigError(f"init must be a sequence of 0/1 levels, got {init!r}") from None
+    if len(levels) != n_dof or any(v not in (0, 1, -1) for v in levels):
+        raise ConfigError(
+            f"init must give {n_dof} levels, each 0 (lo), 1 (hi) or -1 (random); got {init!r}"
+        )
+    return levels
+
+
+def all_inits(n_dof: int) -> list[tuple[int, ...]]:
+    """Every corner of the DOF cube, e.g. the four initial configurations of a 2-DOF swimmer."""
+    return [tuple((c >> k) & 1 for k in range(n_dof)) for c in range(2**n_dof)][::-1]
+
+
+def is_batched(params: EnvParams) -> bool:
+    """Whether any data leaf of ``params`` carries a batch axis."""
+    return jnp.ndim(params.zeta) > 0 or jnp.ndim(params.direction) > 0 or jnp.ndim(params.init) > 1
+
+
+def param_axes(params: EnvParams) -> EnvParams:
+    """``vmap`` axes of ``params``: 0 for batched leaves, None for shared ones."""
+    return params.replace(
+        zeta=0 if jnp.ndim(params.zeta) > 0 else None,
+        direction=0 if jnp.ndim(params.direction) > 0 else None,
+        init=0 if jnp.ndim(params.init) > 1 else None,
+    )
+
+
+def broadcast_params(params: EnvParams, size: int, **changes: Any) -> EnvParams:
+    """Broadcast the data leaves of ``params`` (after ``changes``) to a leading axis of ``size``.
+
+    ``changes`` may give per-swimmer values, e.g. ``zeta=np.linspace(0, 3, size)``.
+    """
+    n = params.model.n_dof
+    fields = {"zeta": params.zeta, "direction": params.direction, "init": params.init, **changes}
+    dtype = jnp.result_type(float)
+    return params.replace(
+        zeta=jnp.broadcast_to(jnp.asarray(fields["zeta"], dtype), (size,)),
+        direction=jnp.broadcast_to(jnp.asarray(fields["direction"], dtype), (size,)),
+        init=jnp.broadcast_to(jnp.asarray(fields["init"], jnp.int32), (size, n)),
+    )
