@@ -142,14 +142,16 @@ def _advance_corner(state: EnvState, action: Array, y_noise: Array, params: EnvP
     n = model.n_dof
     action = jnp.clip(action.astype(jnp.int32), 0, 3 * n - 1)
     dof, roc = action // 3, action % 3 - 1
-    # One-hot arithmetic instead of gather/scatter on the levels: much cheaper under vmap.
-    onehot = jnp.arange(n, dtype=jnp.int32) == dof
-    level = jnp.sum(jnp.where(onehot, state.frac, 0))
+    # Integer one-hot arithmetic on the corner levels (exactly 0/1 on the corners) instead of
+    # gather/scatter: much cheaper under vmap, and as fast as the int32 levels it replaced.
+    onehot = (jnp.arange(n, dtype=jnp.int32) == dof).astype(jnp.int32)
+    levels = state.frac.astype(jnp.int32)
+    level = jnp.sum(levels * onehot, dtype=jnp.int32)
     stuck = ((roc == 1) & (level == 1)) | ((roc == -1) & (level == 0))
     moved = (roc != 0) & ~stuck
     # One gather per step; the table's last row is the identity step (nothing moved).
-    row = jnp.where(moved, _corner_index(state.frac.astype(jnp.int32)) * n + dof, _still_row(model))
-    frac = jnp.where(onehot & moved, 1 - state.frac, state.frac)
+    row = jnp.where(moved, _corner_index(levels) * n + dof, _still_row(model))
+    frac = (levels + onehot * moved.astype(jnp.int32) * (1 - 2 * level)).astype(state.frac.dtype)
     if not exact:
         return _advance_plain(state, frac, row, y_noise, params, stuck, moved)
     with jax.enable_x64(True):
