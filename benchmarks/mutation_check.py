@@ -32,8 +32,17 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-MONEY = ("tests/test_paid_api.py",)
-CLIENT = ("tests/test_llm_client.py", "tests/test_paid_api.py")
+_PAID = "tests/test_paid_api.py::"
+#: The money tests, fastest and most direct first (pytest -x stops at the first failure).
+MONEY = tuple(_PAID + t for t in (
+    "test_the_journal_sums_what_every_session_paid", "test_dry_run_cost_and_worst_case_match_the_hand_computed_prices",
+    "test_a_cap_below_one_call_sends_nothing",
+    "test_the_cap_holds_over_three_sessions_and_a_higher_cap_bills_each_call_once",
+    "test_max_cost_stops_below_the_cap_and_a_higher_cap_finishes_without_rebilling",
+    "test_dry_run_sends_nothing_and_estimates_the_real_tokens",
+)) + ("tests/test_pipelines.py::test_journal_replays_a_runs_own_paid_calls",
+      "tests/test_pipelines.py::test_journal_stops_replaying_where_a_run_diverges")
+CLIENT = ("tests/test_llm_client.py", *MONEY)
 PACING = ("tests/test_pacing.py",)
 MEMORY = ("tests/test_memory.py", "tests/test_llm_agent.py")
 PROTOCOL = ("tests/test_protocol.py", "tests/test_llm_agent.py")
@@ -184,17 +193,18 @@ def run_tests(copy: Path, tests: tuple[str, ...], timeout: float) -> tuple[str, 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--root", type=Path, default=ROOT, help="checkout whose code and tests are mutated (default: this one)")
-    ap.add_argument("--only", default=None, help="run only mutants whose name contains this")
+    ap.add_argument("--only", default=None, help="run only mutants whose name contains one of these (comma-separated)")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per pytest session (a timeout counts as caught)")
     ap.add_argument("--no-baseline", action="store_true", help="skip the unmutated runs (when known green)")
     args = ap.parse_args()
     mutants = [m for m in MUTANTS if m.old]
     if args.only:
-        mutants = [m for m in mutants if args.only in m.name]
+        words = [w for w in args.only.split(",") if w]
+        mutants = [m for m in mutants if any(w in m.name for w in words)]
     if args.list:
         for m in mutants:
-            print(f"{m.name:34} {m.path:28} {' '.join(Path(t).name for t in m.tests)}")
+            print(f"{m.name:34} {m.path:28} {' '.join(sorted({Path(t.split('::')[0]).name for t in m.tests}))}")
         return
     with tempfile.TemporaryDirectory(prefix="jswim-mutants-") as tmp:
         copy = Path(tmp)
@@ -231,8 +241,8 @@ def main() -> None:
     for m, line, verdict, dt in rows:
         change = f"`{m.old.strip()[:60]}` -> `{m.new.strip()[:60]}`" if m.new else f"`{m.old.strip()[:60]}` removed"
         change = change.replace("\n", " ").replace("|", "\\|")
-        tests = ", ".join(Path(t).stem for t in m.tests)
-        print(f"| {m.name} | {m.path}:{line} | {change} | {tests} | {verdict} |")
+        tests = ", ".join(sorted({Path(t.split("::")[0]).stem for t in m.tests}))
+        print(f"| {m.name} | {m.path}:{line} | {change} | {tests} | {verdict} ({dt:.0f} s) |")
     survived = [r for r in rows if r[2] == "SURVIVED"]
     print(f"\n{len(rows) - len(survived)} of {len(rows)} caught; {len(survived)} survived.")
 

@@ -25,11 +25,18 @@ def backend_args(srv):
     return ["--base-url", srv.url, "--model", "fake", "--api-key-env", "JSWIM_TEST_NO_KEY"]
 
 
-def test_swim_writes_every_file(server, tmp_path, capsys):
+def test_swim_writes_every_file(server, tmp_path, capsys, monkeypatch):
     out = tmp_path / "swim"
-    rc = cli.main(["swim", "--steps", "8", "--runs", "2", "--q-runs", "4", "--out", str(out), *backend_args(server)])
+    key = "sk-test-" + "k3y" * 12  # a key is set, so its absence from the folder means something
+    monkeypatch.setenv("JSWIM_TEST_KEY", key)
+    args = ["--base-url", server.url, "--model", "fake", "--api-key-env", "JSWIM_TEST_KEY"]
+    rc = cli.main(["swim", "--steps", "8", "--runs", "2", "--q-runs", "4", "--out", str(out), *args])
     assert rc == 0
-    text = capsys.readouterr().out
+    assert server.auth_headers and set(server.auth_headers) == {f"Bearer {key}"}  # it was used
+    printed = capsys.readouterr()
+    text = printed.out
+    assert key not in printed.out + printed.err
+    assert not any(key.encode() in p.read_bytes() for p in out.rglob("*") if p.is_file())
     assert "llm" in text and "qlearning" in text and "random" in text and str(out) in text
     for name in ("metadata.json", "runs.jsonl", "runs.parquet", "runs.csv", "trajectories.parquet",
                  "figures/swim.png", "figures/swim.pdf"):

@@ -13,12 +13,25 @@ from jswim.swimmers import ng
 from tests.fakeserver import FakeServer
 
 
-@pytest.mark.parametrize("swimmer", ["nlink", "nsphere"])
-def test_best_cycle_swims_and_its_reverse_swims_back(swimmer):
+@pytest.mark.parametrize("swimmer, per_step, per_cycle", [
+    ("nlink", 0.0519, None),  # README: the best four-link cycle (period 6) moves 0.0519 a per step
+    ("nsphere", 0.0674, 0.404209),  # README: 0.0674 a per step; the authors' code: 0.404209 per cycle
+])
+def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycle):
     model = env.make_params(swimmer).model
     assert model.n_dof == 3 and default_rocs(model) == (-1, 1) and default_n_ht(model) == 20
     best = gait.best_cycles(model, 1)[0]
-    assert best.per_step > 0.03 and abs(best.rotation) < 1e-12
+    assert best.period == 6 and abs(best.rotation) < 1e-12
+    assert best.per_step == pytest.approx(per_step, abs=5e-5)  # the README's 4 decimals
+    if per_cycle is not None:
+        assert best.displacement == pytest.approx(per_cycle, abs=5e-7)  # the code's 6 decimals
+    # A second integrator (RK4 on the velocity ODE, not the step table) gives the same cycle.
+    from tests.test_physics import run_cycle
+
+    start = [model.hi if v else model.lo for v in best.start]
+    moves = [(dof - 1, roc) for dof, roc in best.moves]
+    (dx, _), _ = run_cycle(model, moves, start, method="rk4", n_sub=96)  # (the four-link cycle drifts in y)
+    assert dx == pytest.approx(best.displacement, rel=1e-8)
     moves = list(best.moves)
     fwd = env.rollout(swimmer, moves * 2, init=best.start)
     assert float(fwd.x[-1]) == pytest.approx(2 * best.displacement, rel=1e-6)

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import time
 
 import pytest
 
@@ -247,13 +246,12 @@ def test_bad_base_urls_say_what_to_write(bad):
 
 @pytest.mark.parametrize("mode", ["cold"], indirect=True)
 def test_cold_server_timeouts_are_bounded_and_say_slow(mode):
-    t0 = time.perf_counter()
     with pytest.raises(LLMTimeoutError) as err:
         call(mode.url, timeout_s=0.3, timeout_retries=1, max_retries=6)
     msg = _one_line(err.value)
     assert "slow" in msg and "--timeout" in msg and "0.3 s" in msg
     assert mode.n_requests == 2  # one retry, not max_retries
-    assert time.perf_counter() - t0 < 1.4  # gave up before the server warmed up
+    assert mode.n_answered == 0  # gave up before the server warmed up (it never got to answer)
 
 
 @pytest.mark.parametrize("mode", ["cold"], indirect=True)

@@ -343,4 +343,8 @@ def test_template_check_accepts_every_placeholder_the_prompt_fills():
     layout = " ".join("{" + n + "}" for n in names)
     assert PromptTemplate.from_text(layout).check().layout == layout
     assert PromptTemplate(record=" ".join("{" + n + "}" for n in record)).check()
-    PromptTemplate().check()  # the default template, and the paper's order
+    # The default template passes and is the paper's order: S1 S2 / S3 / S4 S5, records as in Fig. 1.
+    default = PromptTemplate()
+    assert default.check() is default
+    assert default.layout == "{S1} {S2}\n{S3}\n{S4} {S5}"
+    assert default.record.startswith("{step}: ({dofs_before}) {action} -> ({dofs_after})")
