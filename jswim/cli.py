@@ -217,6 +217,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--seed", type=int, default=0, help="seed of the learners (default 0)")
     p.add_argument("--chunk", type=int, default=None, metavar="N",
                    help="learners trained and judged at once (default 65536); bounds memory for --seeds 1000000")
+    p.add_argument("--out", default=None, metavar="FOLDER",
+                   help="also write a histogram of steps to learn (qlearn.png, .pdf) and the table (qlearn.csv) here")
     p = sub.add_parser("ensemble", help="a stroke or policy over many noisy swimmers: X/a statistics per step",
                        description="Run one stroke (default: the signature gait) or the greedy policy of a "
                                    "trained Q-learner over N noisy swimmers per noise level zeta, on every "
@@ -244,7 +246,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--chunk", type=int, default=1 << 20, metavar="N",
                    help="swimmers simulated at once (default 1048576); bounds memory")
     p.add_argument("--rows", type=int, default=12, metavar="R", help="reported steps printed per noise level")
-    p.add_argument("--out", default=None, metavar="FILE.csv", help="also write every reported step to this CSV")
+    p.add_argument("--out", default=None, metavar="FILE.csv|FOLDER",
+                   help="also write every reported step to this CSV and a figure of mean X/a with quantile bands "
+                        "beside it (FILE.png, .pdf); a folder gets ensemble.csv and ensemble.png")
     p = sub.add_parser("gaits", help="closed stroke cycles ranked by displacement per step",
                        description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
                                    "each exactly and rank them by displacement per step.")
@@ -518,6 +522,9 @@ def _qlearn(args: argparse.Namespace) -> int:
         raise ConfigError(f"--noise (zeta) must be >= 0, got {args.noise}")
     rate = _learning_rate(args)
     sets = ACTION_SETS if args.action_set == "both" else (args.action_set,)
+    if args.out is not None:
+        _check_out_folder(args.out)
+    every: list[Any] = []
     for action_set in sets:
         t0 = time.perf_counter()
         cfg = QConfig(steps=args.steps, action_set=action_set, **({"learning_rate": rate} if rate is not None else {}))
@@ -529,7 +536,20 @@ def _qlearn(args: argparse.Namespace) -> int:
                                     final=done == total, unit="learners"))
         print(qlearn.format_table(rows))
         print(f"({action_set}: {time.perf_counter() - t0:.1f} s including compilation)\n")
+        every += rows
+    if args.out is not None:
+        from jswim.commands.figures import qlearn_outputs  # lazy: matplotlib only when asked
+
+        for path in qlearn_outputs(every, args):
+            if path.suffix != ".pdf":
+                print(f"{'figure' if path.suffix == '.png' else 'table'}: {path}")
     return 0
+
+
+def _check_out_folder(out: str) -> None:
+    """``--out FOLDER`` of a command: an existing file there is a mistake, caught before any work."""
+    if Path(out).exists() and not Path(out).is_dir():
+        raise ConfigError(f"--out {out} is a file; give a folder for the figures and the table")
 
 
 def _learning_rate(args: argparse.Namespace) -> Any:
@@ -598,7 +618,9 @@ def _ensemble(args: argparse.Namespace) -> int:
         raise ConfigError("--direction takes +x or -x here")
     if any(not (math.isfinite(z) and z >= 0) for z in args.zetas) or not args.zetas:
         raise ConfigError(f"--zetas must be noise levels >= 0, got {','.join(map(str, args.zetas))}")
-    if args.out and not Path(args.out).resolve().parent.is_dir():
+    if args.out and Path(args.out).suffix.lower() != ".csv":
+        _check_out_folder(args.out)
+    elif args.out and not Path(args.out).resolve().parent.is_dir():
         raise ConfigError(f"--out {args.out}: no such folder {str(Path(args.out).parent)!r}")
     params = make_params(args.swimmer, direction=args.direction[0])
     start = None
@@ -630,15 +652,24 @@ def _ensemble(args: argparse.Namespace) -> int:
           f"quantiles to within the histogram bin ({max(float(s.resolution.max()) for s in stats):.2g} a at most); "
           f"forward: X/a grew over the last {args.window or policy.period} steps")
     if args.out:
+        csv_path = Path(args.out) if Path(args.out).suffix.lower() == ".csv" else Path(args.out) / "ensemble.csv"
         rows = ensemble.to_rows(stats)
         try:
-            with open(args.out, "w", newline="") as f:
+            csv_path.parent.mkdir(parents=True, exist_ok=True)
+            with open(csv_path, "w", newline="") as f:
                 w = csv.DictWriter(f, fieldnames=list(rows[0]))
                 w.writeheader()
                 w.writerows(rows)
         except OSError as exc:
             raise ConfigError(f"--out {args.out}: {exc.strerror or exc}") from None
-        print(f"table: {args.out}")
+        print(f"table: {csv_path}")
+        from jswim.commands.figures import ensemble_figure_files  # lazy: matplotlib only when asked
+
+        title = (f"{params.model.label} swimmer, {policy.label}{' ' + moves if moves else ''}, start {start_txt}: "
+                 f"{args.n:,} swimmers per \u03b6")
+        for path in ensemble_figure_files(stats, title, args.direction[0], csv_path.parent, csv_path.stem):
+            if path.suffix == ".png":
+                print(f"figure: {path}")
     return 0
 
 

@@ -379,3 +379,55 @@ def test_unfinished_report_in_chromium(swim_folder, tmp_path):
     assert got["errors"] == [] and got["foreign"] == []
     assert got["status"].startswith("UNFINISHED STUDY: 7 of 8 runs") and got["listed"] == 7
     assert got["moved"] >= 2
+
+
+# -- figures of jswim qlearn and jswim ensemble -------------------------------------------------------
+
+
+def test_ensemble_table_rows_sit_at_regular_steps():
+    from jswim.studies.ensemble import regular_rows
+
+    steps = np.arange(1, 51)
+    assert list(steps[regular_rows(steps, 12)]) == [5, 10, 15, 20, 25, 30, 35, 40, 45, 50]
+    assert list(steps[regular_rows(steps[:49], 10)]) == [5, 10, 15, 20, 25, 30, 35, 40, 45, 49]  # the last step
+    every10 = np.arange(10, 1001, 10)
+    assert list(every10[regular_rows(every10, 12)]) == list(range(100, 1001, 100))
+    assert list(regular_rows(np.arange(1, 8), 12)) == list(range(7))
+
+
+def test_qlearn_out_writes_a_histogram_that_names_the_agent(tmp_path, capsys):
+    out = tmp_path / "ql"
+    assert cli.main(["qlearn", "--swimmer", "purcell", "--direction", "+x", "--seeds", "64", "--steps", "60",
+                     "--action-set", "all", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert (out / "qlearn.png").is_file() and (out / "qlearn.pdf").is_file() and "figure:" in text
+    import csv
+
+    rows = list(csv.DictReader((out / "qlearn.csv").open()))
+    assert len(rows) == 1 and rows[0]["swimmer"] == "purcell" and int(rows[0]["n"]) == 64
+    (tmp_path / "file").write_text("x")
+    assert cli.main(["qlearn", "--seeds", "4", "--out", str(tmp_path / "file")]) == 2
+
+
+def test_qlearn_histogram_counts_every_learner_that_learned():
+    from jswim.agents.qlearning import QConfig
+    from jswim.studies import qlearn
+
+    rows = qlearn.study(QConfig(steps=60), swimmers=("purcell",), directions=(1,), n_seeds=48)
+    (r,) = rows
+    assert sum(r.hist) == r.n_learned and r.hist[0] == 0
+    med = np.median(np.repeat(np.arange(len(r.hist)), r.hist))
+    assert med == r.median
+    from jswim.viz.charts import qlearn_figure
+
+    fig = qlearn_figure(rows, "Q-learning baseline: test")
+    assert fig._suptitle.get_text() == "Q-learning baseline: test"
+    assert "never learned" in fig.axes[0].get_legend().get_texts()[0].get_text()
+
+
+def test_ensemble_out_writes_the_table_and_a_figure(tmp_path, capsys):
+    assert cli.main(["ensemble", "--n", "4096", "--zetas", "0,1", "--steps", "12", "--out", str(tmp_path / "e")]) == 0
+    assert (tmp_path / "e" / "ensemble.csv").is_file() and (tmp_path / "e" / "ensemble.png").is_file()
+    assert cli.main(["ensemble", "--n", "4096", "--zetas", "1", "--steps", "8", "--out", str(tmp_path / "t.csv")]) == 0
+    assert (tmp_path / "t.csv").is_file() and (tmp_path / "t.png").is_file() and (tmp_path / "t.pdf").is_file()
+    assert "figure:" in capsys.readouterr().out

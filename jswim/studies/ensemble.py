@@ -341,7 +341,8 @@ def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all")
 
 
 def format_table(stats: Sequence[EnsembleStats], max_rows: int = 12) -> str:
-    """Plain-text table: per noise level, up to ``max_rows`` evenly spaced reported steps."""
+    """Plain-text table: per noise level, up to ``max_rows`` reported steps at a round stride
+    (:func:`regular_rows`: every 5th of 50 steps, say) and the last step."""
     if not stats:
         return ""
     qs = stats[0].qs
@@ -349,13 +350,35 @@ def format_table(stats: Sequence[EnsembleStats], max_rows: int = 12) -> str:
         f"{'q' + format(100 * q, 'g'):>9}" for q in qs) + f" {'min':>10} {'max':>10} {'forward':>8}"
     lines = [head, "-" * len(head)]
     for s in stats:
-        r_all = len(s.steps)
-        pick = np.unique(np.linspace(0, r_all - 1, min(max_rows, r_all)).round().astype(int))
-        for r in pick:
+        for r in regular_rows(s.steps, max_rows):
             qtxt = " ".join(f"{v:9.4f}" if np.isfinite(v) else f"{'-':>9}" for v in s.quantiles[r])
             lines.append(f"{s.zeta:5g} {s.steps[r]:8d} {s.mean[r]:11.5f} {s.std[r]:9.5f} {qtxt} "
                          f"{s.min[r]:10.4f} {s.max[r]:10.4f} {s.forward[r]:8.4f}")
     return "\n".join(lines)
+
+
+def regular_rows(steps: np.ndarray, most: int) -> np.ndarray:
+    """Indices of ``steps`` at a round stride (1, 2, 5, 10, 20, 25, 50, ... times 10^k) giving at
+    most ``most`` rows, the last step always included: the table's rows at regular steps."""
+    steps = np.asarray(steps)
+    if steps.size <= most:
+        return np.arange(steps.size)
+    span = int(steps[-1])
+    stride = 1
+    for scale in (10**k for k in range(12)):
+        for m in (1, 2, 2.5, 5):
+            stride = int(m * scale)
+            if m * scale == stride and span // stride + 1 <= most:
+                break
+        else:
+            continue
+        break
+    pick = [i for i, s in enumerate(steps) if int(s) % stride == 0]
+    if not pick or pick[-1] != steps.size - 1:
+        pick.append(steps.size - 1)
+    if len(pick) > most:  # the last step pushed it over: drop the one before it
+        pick.pop(-2)
+    return np.asarray(pick)
 
 
 def to_rows(stats: Sequence[EnsembleStats]) -> list[dict[str, Any]]:
@@ -372,4 +395,4 @@ def to_rows(stats: Sequence[EnsembleStats]) -> list[dict[str, Any]]:
 
 
 __all__ = ["Policy", "EnsembleStats", "stroke_policy", "q_policy", "signature_policy", "learned_policy",
-           "run", "format_table", "to_rows", "make_params"]
+           "run", "format_table", "regular_rows", "to_rows", "make_params"]

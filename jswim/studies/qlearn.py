@@ -39,6 +39,7 @@ class Summary(NamedTuple):
     q75: float
     mean_x_horizon: float  # mean displacement in the target direction after `horizon` steps
     mean_x_end: float  # ... and at the end of the run
+    hist: tuple[int, ...] = ()  # learners per steps-to-learn value: hist[k] learned at step k (hist[0] = 0)
 
 
 class Outcomes(NamedTuple):
@@ -86,7 +87,9 @@ def summarize_outcomes(out: Outcomes, *, swimmer: str, action_set: str) -> list[
     rows = []
     for d, z in sorted(set(zip(out.direction.tolist(), out.zeta.tolist())), key=lambda g: (-g[0], g[1])):
         sel = (out.direction == d) & (out.zeta == z)
-        ls = learn_stats(out.steps_to_learn[sel].tolist())  # -1 marks never learned
+        stl = out.steps_to_learn[sel]
+        ls = learn_stats(stl.tolist())  # -1 marks never learned
+        hist = np.bincount(stl[stl >= 1]) if np.any(stl >= 1) else np.zeros(1, int)
         rows.append(
             Summary(
                 swimmer, int(d), float(z), action_set, int(sel.sum()),
@@ -94,6 +97,7 @@ def summarize_outcomes(out: Outcomes, *, swimmer: str, action_set: str) -> list[
                 ls.learned, ls.q25, ls.median, ls.q75,
                 float(np.mean(d * out.x_horizon[sel], dtype=np.float64)),
                 float(np.mean(d * out.x_end[sel], dtype=np.float64)),
+                tuple(int(v) for v in hist),
             )
         )
     return rows
