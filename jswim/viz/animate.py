@@ -133,9 +133,9 @@ class Animation:
 
 
 def _file_mode() -> int:
-    from jswim.results import FILE_MODE
+    from jswim.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 
-    return FILE_MODE
+    return file_mode()
 
 
 def _esc(text: str) -> str:
