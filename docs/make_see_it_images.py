@@ -28,7 +28,7 @@ from tests.browser import Browser  # noqa: E402
 IMAGES = ROOT / "docs" / "images"
 
 
-def small_png(data: bytes, path: Path, width: int, colors: int = 128) -> None:
+def small_png(data: bytes, path: Path, width: int, colors: int = 256) -> None:
     im = Image.open(io.BytesIO(data)).convert("RGB")
     if im.width > width:
         im = im.resize((width, round(im.height * width / im.width)), Image.LANCZOS)
@@ -43,12 +43,12 @@ def main() -> None:
             run_study("swim", StudyOptions(runs=2, q_runs=10, steps=50),
                       backend=Backend(base_url=srv.url, model=MODEL), out=out, figures=True)
         t0 = time.perf_counter()
-        anim = build(out, fps=6)
+        anim = build(out, fps=6, dpi=64)
         gif = anim.save(Path(tmp) / "swim.gif")
         dt = time.perf_counter() - t0
         print(f"animation: {len(anim.tracks)} panels, {anim.n_frames} frames, {gif.stat().st_size / 1024:.0f} KB GIF, "
               f"written in {dt:.1f} s ({anim.n_frames / dt:.1f} frames/s)")
-        small_png(anim.frame_png(33, dpi=100), IMAGES / "animation-frame.png", 900)
+        small_png(anim.frame_png(33, dpi=130), IMAGES / "animation-frame.png", 1000)
         if gif.stat().st_size < 300 * 1024:
             (IMAGES / "swim.gif").write_bytes(gif.read_bytes())
             print(f"docs/images/swim.gif: {gif.stat().st_size / 1024:.0f} KB")
@@ -67,7 +67,7 @@ def main() -> None:
             b.eval("document.getElementById('browser').scrollIntoView()")
             with tempfile.NamedTemporaryFile(suffix=".png") as f:
                 b.screenshot(f.name)
-                small_png(Path(f.name).read_bytes(), IMAGES / "report.png", 1100, colors=96)
+                small_png(Path(f.name).read_bytes(), IMAGES / "report.png", 1100)
 
 
 if __name__ == "__main__":

@@ -431,3 +431,19 @@ def test_ensemble_out_writes_the_table_and_a_figure(tmp_path, capsys):
     assert cli.main(["ensemble", "--n", "4096", "--zetas", "1", "--steps", "8", "--out", str(tmp_path / "t.csv")]) == 0
     assert (tmp_path / "t.csv").is_file() and (tmp_path / "t.png").is_file() and (tmp_path / "t.pdf").is_file()
     assert "figure:" in capsys.readouterr().out
+
+
+def test_report_and_animation_of_a_folder_an_earlier_version_wrote(tmp_path):
+    """tests/data/folder-54c2edb: `jswim swim` of commit 54c2edb (before y, orientation, n_planned and
+    the call journal were recorded)."""
+    folder = tmp_path / "old"
+    shutil.copytree(os.path.join(os.path.dirname(__file__), "data", "folder-54c2edb"), folder)
+    rows = read_runs(folder)
+    assert rows and all("orientation" not in r for r in rows)
+    a = anim_mod.build(folder)
+    assert [t.agent for t in a.tracks] == ["llm", "qlearning", "random"] and all(t.replayed for t in a.tracks)
+    assert a.frame_png(5)[:4] == b"\x89PNG"
+    page = write_report(folder, figures="none").read_text()
+    assert "complete: 5 runs" in page and page.count('<script type="text/plain" id="run-') == 5
+    study = jswim.load(folder)
+    assert study.calls.empty and len(study.transcript("llm-purcell-px-i++-z0-r0")) == 12
