@@ -35,7 +35,7 @@ ROOT = Path(__file__).resolve().parent.parent
 _PAID = "tests/test_paid_api.py::"
 #: The money tests, fastest and most direct first (pytest -x stops at the first failure).
 MONEY = tuple(_PAID + t for t in (
-    "test_the_journal_sums_what_every_session_paid", "test_dry_run_cost_and_worst_case_match_the_hand_computed_prices",
+    "test_the_journal_sums_what_every_session_paid", "test_the_journal_answers_only_the_very_request_it_recorded", "test_dry_run_cost_and_worst_case_match_the_hand_computed_prices",
     "test_a_cap_below_one_call_sends_nothing",
     "test_the_cap_holds_over_three_sessions_and_a_higher_cap_bills_each_call_once",
     "test_max_cost_stops_below_the_cap_and_a_higher_cap_finishes_without_rebilling",

@@ -298,3 +298,22 @@ def test_the_journal_sums_what_every_session_paid(tmp_path):
         j.close()
     assert CallJournal(tmp_path).spent_usd == 1.9375
     assert CallJournal(tmp_path).replay("run2", 1, "key1").cost_usd == 1.0
+
+
+def test_the_journal_answers_only_the_very_request_it_recorded(tmp_path):
+    from jswim.llm.client import ChatResult
+    from jswim.llm.journal import CallJournal
+    from jswim.llm.usage import Usage
+
+    res = ChatResult(text="[2, -1]", usage=Usage(300, 6), latency_s=0.0, cache_hit=False, shared=False, retries=0,
+                     cost_usd=0.01, constraint="none", finish_reason="stop", raw="[2, -1]")
+    j = CallJournal(tmp_path)
+    j.record("run-a", 0, "request-0", res)
+    j.record("run-a", 1, "request-1", res)
+    j.close()
+    j = CallJournal(tmp_path)
+    assert j.replay("run-b", 0, "request-0") is None  # another run's call: never
+    assert j.replay("run-a", 0, "another request") is None  # the same place, a different request: sent
+    j = CallJournal(tmp_path)
+    assert j.replay("run-a", 0, "request-0").text == "[2, -1]"  # the very request: answered, not paid again
+    assert j.replay("run-a", 1, "request-0") is None  # the right request at the wrong index
