@@ -1,0 +1,512 @@
+"""Continuous-action RL baseline: PPO on one swimmer, thousands of learners at once.
+
+The learner sees what the Q-learner and the LLM see: the shape (each DOF's value, scaled to
+[-1, 1]). An action is a DOF and a real ROC in [-1, 1], the environment's continuous action
+(:mod:`jswim.env`): a one-hot ROC vector of shape ``(n_dof,)``. The reward of a step is its
+progress in the target direction (``StepInfo.progress``, noisy when ``zeta > 0``). As for the
+Q-learner there are no episodes: one learner is one swimmer that keeps swimming for
+``config.steps`` steps, and every step it takes is part of its record, so "steps to learn" is
+read from the training run itself, as for the other agents.
+
+Algorithm (proximal policy optimisation, Schulman et al. 2017, in the PureJaxRL style: the whole
+run is one jitted ``lax.scan``, vmapped over learners)::
+
+    repeat steps / rollout times:
+        act `rollout` steps with the current policy (one swimmer, no reset)
+        advantages by GAE(lambda), bootstrapped from V(last shape) (a continuing task)
+        `epochs` full-batch Adam steps on the clipped surrogate + value loss
+
+Policy (plain JAX, no framework): two small tanh MLPs on the scaled shape. The actor gives
+``n_dof`` DOF logits (a categorical choice of the DOF to move) and ``n_dof`` ROC means; the ROC is
+``clip(u, -1, 1)`` with ``u ~ N(mean[dof], std[dof])`` (the log-probability is that of ``u``,
+the usual treatment of bounded actions in PPO: the clip is part of the environment's reading of
+the action, so a policy can reach a limit exactly and return to the same shape, which a squashed
+distribution never quite does). ``log std`` is a learned vector per DOF. The critic gives V.
+
+Exploration must end for a learner to keep a stroke to the end of its run (the success
+criterion); the policy's own std and logits sharpen as it learns, and a temperature ``tau(t)``
+(default: 1 until ``anneal_start`` then down to ``anneal_end`` by the last step, see
+:class:`PPOConfig`) divides the logits and multiplies the std of the distribution that acts.
+The temperature is part of the behaviour policy, and the PPO ratio uses the same tempered
+distribution for old and new parameters, so the surrogate stays on-policy.
+
+Example::
+
+    import jax
+    from jswim.env import make_params, broadcast_params
+    from jswim.agents.ppo import PPOConfig, train_batch, evaluate
+
+    params = broadcast_params(make_params("purcell"), 1000)
+    run = train_batch(jax.random.split(jax.random.PRNGKey(0), 1000), params, PPOConfig())
+    report = evaluate(run, params)   # steps to learn, success, ... per learner
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from typing import Any, Callable, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+from jax import Array
+
+from jswim import env as _env
+from jswim.errors import ConfigError
+
+
+@dataclasses.dataclass(frozen=True)
+class PPOConfig:
+    """Hyperparameters of a PPO learner (static: one compilation per distinct config).
+
+    Chosen on Purcell's noiseless swimmer from the paper's start, 16-64 seeds per setting and
+    direction (a small sweep: the shared 2-core machine allowed about a dozen settings); the
+    README's "Continuous strokes" section lists what was tried and the 1,000-seed results.
+
+    Attributes
+    ----------
+    steps : int
+        Environment steps per run (200, the Q-learner's budget).
+    rollout : int
+        Steps per policy update (4): short, because 200 steps allow only ``steps / rollout``
+        updates (50 here; 8 steps per update learned less).
+    epochs : int
+        Full-batch Adam steps per rollout (8).
+    learning_rate : float
+        Adam's step size (3e-3; 1e-2 learned less, 6e-3 no better).
+    discount : float
+        ``gamma`` (0.9, as the Q-learner: NG's cycle needs ``gamma > 0.743``, see
+        :class:`jswim.agents.qlearning.QConfig`).
+    gae_lambda : float
+        GAE's ``lambda`` (0.5; 0.9 learned less at 200 steps).
+    clip : float
+        PPO's ratio clip ``epsilon`` (0.2).
+    value_coef : float
+        Weight of the value loss (0.5).
+    entropy_coef : float
+        Weight of the entropy bonus (0.03; it keeps exploring after the first rewards).
+    max_grad_norm : float
+        Global-norm gradient clip (0.5).
+    hidden : int
+        Width of the two hidden layers of each MLP (32).
+    init_std : float
+        Initial std of the ROC's Gaussian before the clip (2.0: about 60 % of the first pushes
+        reach a limit, i.e. sweep the whole remaining range).
+    anneal_start : float
+        Fraction of the run after which the temperature starts to fall (0.5; from the start
+        (0) or a quarter in, the policy froze before it had found a stroke).
+    anneal_end : float
+        Temperature at the last step (0.05).
+    normalize_advantages : bool
+        Standardise advantages per rollout (False: with 4 samples the standardised values are
+        noise when the rewards are all 0, and drove the policy to push against a limit).
+    reward_norm : bool
+        Divide rewards by their running RMS over the learner's run so far (True).
+    """
+
+    steps: int = 200
+    rollout: int = 4
+    epochs: int = 8
+    learning_rate: float = 3e-3
+    discount: float = 0.9
+    gae_lambda: float = 0.5
+    clip: float = 0.2
+    value_coef: float = 0.5
+    entropy_coef: float = 0.03
+    max_grad_norm: float = 0.5
+    hidden: int = 32
+    init_std: float = 2.0
+    anneal_start: float = 0.5
+    anneal_end: float = 0.05
+    normalize_advantages: bool = False
+    reward_norm: bool = True
+
+    def __post_init__(self) -> None:
+        for name in ("steps", "rollout", "epochs", "hidden"):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ConfigError(f"{name} must be a positive integer, got {value!r}")
+        if not 0.0 <= self.discount < 1.0:
+            raise ConfigError(f"discount must lie in [0, 1) (the task never ends), got {self.discount!r}")
+        if not 0.0 <= self.gae_lambda <= 1.0:
+            raise ConfigError(f"gae_lambda must lie in [0, 1], got {self.gae_lambda!r}")
+        if not 0.0 <= self.anneal_start <= 1.0:
+            raise ConfigError(f"anneal_start must lie in [0, 1], got {self.anneal_start!r}")
+        for name in ("learning_rate", "clip", "init_std", "anneal_end", "max_grad_norm"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+                raise ConfigError(f"{name} must be a positive number, got {value!r}")
+        for name in ("value_coef", "entropy_coef"):
+            value = getattr(self, name)
+            if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
+                raise ConfigError(f"{name} must be a number >= 0, got {value!r}")
+
+    def replace(self, **changes: Any) -> "PPOConfig":
+        """A copy with some fields changed."""
+        return dataclasses.replace(self, **changes)
+
+    def temperature(self, t: Array) -> Array:
+        """``tau(t)`` of step ``t`` (0-based): 1, then geometric down to ``anneal_end``."""
+        return _temperature(t, self.steps, self.anneal_start, self.anneal_end)
+
+
+#: The numeric hyperparameters: traced, not static, so one compilation serves every value (and
+#: a sweep can vmap over them).
+NUMERIC = ("learning_rate", "discount", "gae_lambda", "clip", "value_coef", "entropy_coef", "max_grad_norm",
+           "init_std", "anneal_start", "anneal_end")
+
+
+def _numbers(config: PPOConfig) -> dict[str, Array]:
+    dtype = jnp.result_type(float)
+    return {name: jnp.asarray(getattr(config, name), dtype) for name in NUMERIC}
+
+
+def _structure(config: PPOConfig) -> PPOConfig:
+    """``config`` with its numeric fields at their defaults: the static part (jit cache key)."""
+    return dataclasses.replace(config, **{name: getattr(PPOConfig, name) for name in NUMERIC})
+
+
+def _temperature(t: Array, steps: int, start: Array, end: Array) -> Array:
+    t0 = start * (steps - 1)
+    frac = jnp.clip((t - t0) / jnp.maximum(steps - 1 - t0, 1e-9), 0.0, 1.0)
+    return jnp.asarray(end, jnp.result_type(float)) ** frac
+
+
+class PPORun(NamedTuple):
+    """What training recorded, per learner (leading batch axis from :func:`train_batch`).
+
+    Attributes
+    ----------
+    actions : float (steps, n_dof)
+        Executed continuous actions: the ROC vector (one non-zero entry, in [-1, 1]) the
+        environment got.
+    dof : int8 (steps,)
+        The DOF chosen, 1-based as in the prompt.
+    x : float (steps,)
+        Centroid x after each step (noisy when ``zeta > 0``), the X of the paper.
+    progress : float (steps,)
+        Reward of each step, ``direction * dx``.
+    dofs : float (steps, n_dof)
+        DOF values after each step.
+    dofs0 : float (n_dof,)
+        DOF values at the start.
+    y, orientation : float (steps,)
+        Centroid y and orientation (rad, of the reference link) after each step.
+    """
+
+    actions: Array
+    dof: Array
+    x: Array
+    progress: Array
+    dofs: Array
+    dofs0: Array
+    y: Array
+    orientation: Array
+
+
+# ----------------------------------------------------------------------------- policy
+
+
+def _dense(key: Array, n_in: int, n_out: int, scale: float, dtype: Any) -> tuple[Array, Array]:
+    w = jax.nn.initializers.orthogonal(scale)(key, (n_in, n_out), dtype)
+    return w, jnp.zeros((n_out,), dtype)
+
+
+def init_policy(key: Array, n_dof: int, hidden: int = 32, init_std: float | Array = 1.0) -> dict[str, Any]:
+    """Initial network parameters (orthogonal init as in PureJaxRL: sqrt 2 for hidden layers,
+    0.01 for the actor's head so the first policy is near uniform over DOFs with ROC mean ~0,
+    1 for the critic's head).
+
+    Returns
+    -------
+    dict
+        ``actor`` and ``critic``: lists of ``(W, b)``; ``log_std``: float (n_dof,).
+    """
+    dtype = jnp.result_type(float)
+    h = hidden
+    ka, kc = jax.random.split(key)
+    ka = jax.random.split(ka, 3)
+    kc = jax.random.split(kc, 3)
+    root2 = math.sqrt(2.0)
+    actor = [_dense(ka[0], n_dof, h, root2, dtype), _dense(ka[1], h, h, root2, dtype),
+             _dense(ka[2], h, 2 * n_dof, 0.01, dtype)]
+    critic = [_dense(kc[0], n_dof, h, root2, dtype), _dense(kc[1], h, h, root2, dtype),
+              _dense(kc[2], h, 1, 1.0, dtype)]
+    log_std = jnp.full((n_dof,), jnp.log(init_std), dtype)
+    return {"actor": actor, "critic": critic, "log_std": log_std}
+
+
+def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:
+    for w, b in layers[:-1]:
+        x = jnp.tanh(x @ w + b)
+    w, b = layers[-1]
+    return x @ w + b
+
+
+def observe(dofs: Array, model: Any) -> Array:
+    """The learner's observation: DOF values scaled from ``[lo, hi]`` to ``[-1, 1]``."""
+    return 2.0 * (dofs - model.lo) / (model.hi - model.lo) - 1.0
+
+
+def policy(net: dict[str, Any], obs: Array) -> tuple[Array, Array, Array, Array]:
+    """``(dof logits, ROC means, ROC log-stds, value)`` for observations ``obs`` (..., n_dof)."""
+    n = obs.shape[-1]
+    out = _mlp(net["actor"], obs)
+    value = _mlp(net["critic"], obs)[..., 0]
+    return out[..., :n], out[..., n:], jnp.broadcast_to(net["log_std"], out[..., n:].shape), value
+
+
+def _log_prob(logits: Array, mean: Array, log_std: Array, dof: Array, u: Array, tau: Array) -> Array:
+    """Log-density of (dof, u) under the tempered policy (logits / tau, std * tau)."""
+    logp_dof = jnp.take_along_axis(jax.nn.log_softmax(logits / tau[..., None]), dof[..., None], -1)[..., 0]
+    m = jnp.take_along_axis(mean, dof[..., None], -1)[..., 0]
+    ls = jnp.take_along_axis(log_std, dof[..., None], -1)[..., 0] + jnp.log(tau)
+    z = (u - m) * jnp.exp(-ls)
+    return logp_dof - 0.5 * z * z - ls - 0.5 * math.log(2 * math.pi)
+
+
+def _entropy(logits: Array, log_std: Array, tau: Array) -> Array:
+    """Entropy of the tempered policy: the categorical's plus the expected Gaussian's."""
+    logp = jax.nn.log_softmax(logits / tau[..., None])
+    p = jnp.exp(logp)
+    gauss = log_std + jnp.log(tau)[..., None] + 0.5 * (1.0 + math.log(2 * math.pi))
+    return -jnp.sum(p * logp, -1) + jnp.sum(p * gauss, -1)
+
+
+def _sample(logits: Array, mean: Array, log_std: Array, tau: Array, u_dof: Array, z: Array) -> tuple[Array, Array]:
+    """A DOF (inverse CDF of the tempered categorical at ``u_dof``) and ``u = mean + std z``."""
+    cdf = jnp.cumsum(jax.nn.softmax(logits / tau), -1)
+    dof = jnp.minimum(jnp.sum(cdf < u_dof, dtype=jnp.int32), logits.shape[-1] - 1)
+    onehot = jnp.arange(logits.shape[-1]) == dof
+    m = jnp.sum(jnp.where(onehot, mean, 0.0))
+    ls = jnp.sum(jnp.where(onehot, log_std, 0.0))
+    return dof, m + jnp.exp(ls) * tau * z
+
+
+# ----------------------------------------------------------------------------- training
+
+
+class _Batch(NamedTuple):
+    """One rollout, time-major (rollout,)."""
+
+    obs: Array
+    dof: Array
+    u: Array
+    logp: Array
+    value: Array
+    reward: Array
+    tau: Array
+
+
+def _gae(reward: Array, value: Array, last_value: Array, gamma: float, lam: float) -> Array:
+    """Generalised advantage estimates of a continuing task (no episode ends)."""
+
+    def back(carry, inp):
+        adv, next_v = carry
+        r, v = inp
+        delta = r + gamma * next_v - v
+        adv = delta + gamma * lam * adv
+        return (adv, v), adv
+
+    _, adv = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value), (reward, value), reverse=True)
+    return adv
+
+
+def _loss(net: dict[str, Any], batch: _Batch, adv: Array, target: Array, config: PPOConfig, hp: dict) -> Array:
+    logits, mean, log_std, value = policy(net, batch.obs)
+    logp = _log_prob(logits, mean, log_std, batch.dof, batch.u, batch.tau)
+    ratio = jnp.exp(logp - batch.logp)
+    a = (adv - adv.mean()) / (adv.std() + 1e-8) if config.normalize_advantages else adv
+    surrogate = jnp.minimum(ratio * a, jnp.clip(ratio, 1.0 - hp["clip"], 1.0 + hp["clip"]) * a)
+    value_loss = 0.5 * jnp.mean((value - target) ** 2)
+    entropy = jnp.mean(_entropy(logits, log_std, batch.tau))
+    return -jnp.mean(surrogate) + hp["value_coef"] * value_loss - hp["entropy_coef"] * entropy
+
+
+def _optimizer(hp: dict) -> optax.GradientTransformation:
+    return optax.chain(optax.clip_by_global_norm(hp["max_grad_norm"]), optax.adam(hp["learning_rate"], eps=1e-5))
+
+
+def _train(keys: Array, params: Any, config: PPOConfig, hp: dict) -> PPORun:
+    """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B): time outermost.
+
+    The scans run over time and every step is vmapped over learners inside them (as in
+    PureJaxRL), which keeps the environment's float64 step blocks inside a plain ``vmap``.
+    """
+    model = params.model
+    n = model.n_dof
+    b = keys.shape[0]
+    dtype = jnp.result_type(float)
+    split = jax.vmap(lambda k: jax.random.split(k, 3))(keys)
+    states = jax.vmap(_env.reset)(split[:, 0], params)
+    dofs0 = jax.vmap(_env.dof_values)(states, params)
+    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"]))(split[:, 1])
+    opt = _optimizer(hp)
+    n_updates = -(-config.steps // config.rollout)
+    total = n_updates * config.rollout
+    # One draw per learner for the whole run: the DOF's uniform, the ROC's normal, the noise Y.
+    u = jax.vmap(lambda k: _env.uniforms(k, (total, 3), dtype))(split[:, 2])  # (B, total, 3)
+    u = jnp.moveaxis(u, 0, 1).reshape(n_updates, config.rollout, b, 3)
+    z = jax.scipy.special.ndtri(jnp.clip(u[..., 1], 1e-7, 1.0 - 1e-7))
+    inputs = (jnp.arange(total).reshape(n_updates, config.rollout), u[..., 0], z, 2.0 * u[..., 2] - 1.0)
+
+    def act_one(state, net, p, tau, u_dof, z_roc, y):
+        obs = observe(_env.dof_values(state, p), model)
+        logits, mean, log_std, value = policy(net, obs)
+        dof, u_roc = _sample(logits, mean, log_std, tau, u_dof, z_roc)
+        roc = jnp.clip(u_roc, -1.0, 1.0)
+        action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
+        logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
+        state, info = _env.advance(state, action, y, p, exact=False)
+        record = (action, (dof + 1).astype(jnp.int8), state.x, info.progress, _env.dof_values(state, p),
+                  state.y, state.theta)
+        return state, _Batch(obs, dof, u_roc, logp, value, info.progress, tau), record
+
+    def act(carry, inp):
+        states, nets = carry
+        t, u_dof, z_roc, y = inp
+        tau = _temperature(t, config.steps, hp["anneal_start"], hp["anneal_end"])
+        states, batch, record = jax.vmap(act_one, in_axes=(0, 0, 0, None, 0, 0, 0))(
+            states, nets, params, tau, u_dof, z_roc, y)
+        return (states, nets), (batch, record)
+
+    def learn_one(net, opt_state, r2, batch, last_obs, t_end):
+        if config.reward_norm:
+            # Rewards in units of their running RMS (this learner's, so far): one set of
+            # hyperparameters for swimmers whose steps differ in size.
+            r2 = r2 + jnp.sum(batch.reward**2)
+            batch = batch._replace(reward=batch.reward / (jnp.sqrt(r2 / t_end) + 1e-8))
+        last_value = policy(net, last_obs)[3]
+        adv = _gae(batch.reward, batch.value, last_value, hp["discount"], hp["gae_lambda"])
+        target = adv + batch.value
+
+        def epoch(c, _):
+            net, opt_state = c
+            grads = jax.grad(_loss)(net, batch, adv, target, config, hp)
+            updates, opt_state = opt.update(grads, opt_state, net)
+            return (optax.apply_updates(net, updates), opt_state), None
+
+        (net, opt_state), _ = jax.lax.scan(epoch, (net, opt_state), None, length=config.epochs)
+        return net, opt_state, r2
+
+    def update(carry, inp):
+        states, nets, opt_states, r2 = carry
+        (states, _), (batch, record) = jax.lax.scan(act, (states, nets), inp)
+        last_obs = observe(jax.vmap(_env.dof_values)(states, params), model)
+        t_end = (inp[0][-1] + 1).astype(dtype)
+        nets, opt_states, r2 = jax.vmap(learn_one, in_axes=(0, 0, 0, 1, 0, None))(
+            nets, opt_states, r2, batch, last_obs, t_end)
+        return (states, nets, opt_states, r2), record
+
+    carry = (states, nets, jax.vmap(opt.init)(nets), jnp.zeros((b,), dtype))
+    _, record = jax.lax.scan(update, carry, inputs)
+    # (n_updates, rollout, B, ...) -> (B, steps, ...)
+    record = jax.tree.map(lambda v: jnp.moveaxis(v.reshape((total,) + v.shape[2:]), 0, 1)[:, : config.steps], record)
+    actions, dof, x, progress, dofs, y, theta = record
+    return PPORun(actions, dof, x, progress, dofs, dofs0, y, theta)
+
+
+def train(key: Array, params: Any, config: PPOConfig = PPOConfig()) -> PPORun:
+    """Train one PPO learner online for ``config.steps`` steps.
+
+    Parameters
+    ----------
+    key : PRNG key
+        All randomness of the run: initial shape (if random), network init, actions and the
+        environment's noise.
+    params : EnvParams
+        The environment (unbatched leaves).
+    config : PPOConfig
+        Hyperparameters (static).
+
+    Returns
+    -------
+    PPORun
+        Per-step actions, X, progress and DOF values.
+    """
+    run = train_batch(jnp.asarray(key)[None], params, config)
+    return jax.tree.map(lambda v: v[0], run)
+
+
+def train_batch(keys: Array, params: Any, config: PPOConfig = PPOConfig()) -> PPORun:
+    """Train independent learners, one per key, in one jitted, vmapped call.
+
+    Parameters
+    ----------
+    keys : PRNG keys, shape (B, 2)
+        One key per learner; learner ``i`` matches ``train(keys[i], params_i, config)``.
+    params : EnvParams
+        Environment; ``zeta``, ``direction``, ``init`` either shared or with a leading axis of
+        size B (:func:`jswim.env.broadcast_params`).
+    config : PPOConfig
+        Hyperparameters shared by all learners (static).
+
+    Returns
+    -------
+    PPORun
+        Fields with a leading axis of size B. Memory: ``(4 (2 n_dof + 5) + 1) steps`` bytes per
+        learner in float32 (7.2 kB at 200 steps for two DOFs), plus the networks while training.
+    """
+    from jswim import sharding
+
+    n = keys.shape[0]
+    fn = functools.partial(_jitted(), config=_structure(config), hp=_numbers(config))
+    return sharding.apply_batched(fn, (), (keys, _env.broadcast_params(params, n)), n)
+
+
+@functools.lru_cache(maxsize=1)
+def _jitted() -> Callable[..., PPORun]:
+    from jswim.agents.qlearning import _compiler_options
+
+    return jax.jit(_train, static_argnames=("config",), compiler_options=_compiler_options())
+
+
+def exact_x(run: PPORun, params: Any) -> np.ndarray:
+    """Noiseless centroid x after each step of recorded runs, float64 (B, steps).
+
+    The runs' actions replayed from their start shapes with ``zeta = 0`` (the judge measures
+    exact displacements, as :func:`jswim.gait.judge` does); when no run had noise, the recorded
+    ``x`` is returned as it is.
+    """
+    actions = np.asarray(run.actions)
+    b = actions.shape[0]
+    if not np.any(np.asarray(params.zeta) != 0):
+        return np.asarray(run.x, np.float64)
+    model = params.model
+    levels = np.rint((np.asarray(run.dofs0, np.float64) - model.lo) / (model.hi - model.lo)).astype(np.int32)
+    replay_params = _env.broadcast_params(params, b, zeta=0.0, init=levels)
+    return np.asarray(_replay(replay_params, jnp.asarray(actions)), np.float64)
+
+
+@jax.jit
+def _replay(params: Any, actions: Array) -> Array:
+    keys = jax.random.split(jax.random.PRNGKey(0), actions.shape[0])  # unused: starts are given
+    states = jax.vmap(_env.reset)(keys, params)
+
+    def body(states, a):
+        states, info = jax.vmap(lambda s, act, p: _env.advance(s, act, 0.0, p))(states, a, params)
+        return states, info.x
+
+    return jnp.moveaxis(jax.lax.scan(body, states, jnp.moveaxis(actions, 0, 1))[1], 0, 1)
+
+
+def evaluate(run: PPORun, params: Any, *, criterion: Any = None, tol: float | None = None) -> Any:
+    """Judge training runs with the success criterion for real-valued strokes
+    (:func:`jswim.shape_judge.judge_shapes`: a cycle is a return to the same shape within ``tol``
+    of the range, default :data:`jswim.shape_judge.SHAPE_TOL`), on exact displacements.
+
+    Returns
+    -------
+    GaitReport
+        Per learner: ``learned``, ``steps_to_learn`` (from 1, -1 when never), ``success``, ...
+    """
+    from jswim.gait import PAPER
+    from jswim.shape_judge import SHAPE_TOL, judge_shapes
+
+    b = np.asarray(run.x).shape[0]
+    return judge_shapes(np.asarray(run.dofs), exact_x(run, params), _env.broadcast_params(params, b),
+                        dofs0=np.asarray(run.dofs0), criterion=PAPER if criterion is None else criterion,
+                        tol=SHAPE_TOL if tol is None else tol)
