@@ -317,3 +317,25 @@ def test_the_journal_answers_only_the_very_request_it_recorded(tmp_path):
     j = CallJournal(tmp_path)
     assert j.replay("run-a", 0, "request-0").text == "[2, -1]"  # the very request: answered, not paid again
     assert j.replay("run-a", 1, "request-0") is None  # the right request at the wrong index
+
+
+def test_reasoning_tokens_are_billed_at_the_completion_price(tmp_path, capsys):
+    # A reasoning model (gpt-5-like: max_completion_tokens, temperature 1) thinks 300 tokens per
+    # answer; they count as completion tokens, so each answered call costs, at gpt-4o's $2.5/$10:
+    # prompt words * 2.5 + (300 + 2 answer words) * 10, per 1M (the fake server counts words).
+    from tests.fakeserver import MODES, REASONING_TOKENS, count_words
+
+    out = tmp_path / "study"
+    with FakeServer(**MODES["openai-reasoning"]) as srv:
+        assert main(swim(srv.url, out, model="gpt-4o", runs=2, steps=4)) == 0, capsys.readouterr().err
+        answered = [b for b in srv.requests if "max_completion_tokens" in b and b.get("temperature") == 1]
+    capsys.readouterr()
+    assert len(answered) == 2 * 4
+    expected = sum(sum(count_words(str(m.get("content", ""))) for m in b["messages"]) * 2.5
+                   + (REASONING_TOKENS + count_words("[2, -1]")) * 10.0 for b in answered) / 1_000_000
+    calls = ledger(out)
+    assert len(calls) == len(answered)
+    assert sum(c["cost_usd"] for c in calls) == pytest.approx(expected, rel=1e-9)
+    assert expected > 8 * REASONING_TOKENS * 10.0 / 1_000_000  # the thinking is most of the bill
+    rows = [r for r in read_runs(out) if r["agent"] == "llm"]
+    assert sum(r["cost_usd"] for r in rows) == pytest.approx(expected, rel=1e-9)
