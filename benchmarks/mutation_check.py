@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
@@ -34,7 +35,10 @@ ROOT = Path(__file__).resolve().parent.parent
 
 _PAID = "tests/test_paid_api.py::"
 #: The money tests, fastest and most direct first (pytest -x stops at the first failure).
-MONEY = tuple(_PAID + t for t in (
+_BUDGET = tuple("tests/test_pacing.py::" + t for t in (
+    "test_budget_refuses_past_the_cap_and_stays_closed", "test_call_bound_prices_prompt_and_max_tokens",
+    "test_client_stops_at_the_cap_before_sending", "test_failed_attempts_release_their_reservation"))
+MONEY = _BUDGET + tuple(_PAID + t for t in (
     "test_the_journal_sums_what_every_session_paid", "test_the_journal_answers_only_the_very_request_it_recorded", "test_dry_run_cost_and_worst_case_match_the_hand_computed_prices",
     "test_a_cap_below_one_call_sends_nothing",
     "test_the_cap_holds_over_three_sessions_and_a_higher_cap_bills_each_call_once",
@@ -179,7 +183,7 @@ def run_tests(copy: Path, tests: tuple[str, ...], timeout: float) -> tuple[str, 
     try:
         proc = subprocess.run(cmd, cwd=copy, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
                               timeout=timeout, text=True)
-    except subprocess.TimeoutExpired:
+    except subprocess.TimeoutExpired:  # subprocess.run kills the child on timeout and on Ctrl-C
         return "timeout", time.perf_counter() - t0, ""
     dt = time.perf_counter() - t0
     tail = "\n".join(proc.stdout.splitlines()[-15:])
@@ -198,6 +202,8 @@ def main() -> None:
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per pytest session (a timeout counts as caught)")
     ap.add_argument("--no-baseline", action="store_true", help="skip the unmutated runs (when known green)")
     args = ap.parse_args()
+    # SIGTERM (kill, a batch system) unwinds like Ctrl-C, so the scratch copy is removed.
+    signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     mutants = [m for m in MUTANTS if m.old]
     if args.only:
         words = [w for w in args.only.split(",") if w]
