@@ -21,6 +21,7 @@ proves nothing). Timing per mutant is printed; run it ``nice``d on a shared mach
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import shutil
 import signal
@@ -200,11 +201,16 @@ def main() -> None:
     ap.add_argument("--only", default=None, help="run only mutants whose name contains one of these (comma-separated)")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per pytest session (a timeout counts as caught)")
+    ap.add_argument("--whole-files", action="store_true",
+                    help="run each mutant's whole test files, not the listed tests (for checkouts that lack them)")
     ap.add_argument("--no-baseline", action="store_true", help="skip the unmutated runs (when known green)")
     args = ap.parse_args()
     # SIGTERM (kill, a batch system) unwinds like Ctrl-C, so the scratch copy is removed.
     signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
     mutants = [m for m in MUTANTS if m.old]
+    if args.whole_files:
+        mutants = [dataclasses.replace(m, tests=tuple(dict.fromkeys(t.split("::")[0] for t in m.tests)))
+                   for m in mutants]
     if args.only:
         words = [w for w in args.only.split(",") if w]
         mutants = [m for m in mutants if any(w in m.name for w in words)]
