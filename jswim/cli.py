@@ -413,7 +413,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
                                max_cost=args.max_cost)
         except KeyboardInterrupt:
             bar.stop()
-            print(f"interrupted; finished runs are kept in {out}. Run the same command to resume.", file=sys.stderr)
+            print(f"interrupted; finished runs are kept in {out}. Run the same command to resume "
+                  f"(jswim report {out}: a page of what is done).", file=sys.stderr)
             return 130
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
     _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")

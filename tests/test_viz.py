@@ -135,6 +135,9 @@ def test_track_accepts_real_valued_rocs_and_recorded_dofs():
     span = model.hi - model.lo
     np.testing.assert_allclose(t.dofs[:, 0], [model.lo, model.lo + 0.5 * span, model.hi, model.hi])
     np.testing.assert_allclose(t.dofs[:, 1], [model.lo] * 4)  # pushed past the lower limit: stays
+    lattice = dict(row, roc_levels=4, actions=[[1, 1], [1, 2], [2, -3]])  # k / K of the range
+    np.testing.assert_allclose(track(lattice).dofs[:, 0], [model.lo, model.lo + span / 4, model.lo + 3 * span / 4,
+                                                             model.lo + 3 * span / 4])
     row["dofs"] = [[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]]
     np.testing.assert_allclose(track(row).dofs[1:], row["dofs"])
     assert anim_mod.Animation([t]).n_frames == 4 + 4

@@ -5,7 +5,8 @@ in ``runs.jsonl`` (``x``, ``y``, ``orientation`` and ``actions`` per step, ``ini
 ``steps_to_learn`` and ``period``) and, for LLM runs, its transcript (``dofs_after``, the replies,
 clears). DOF values come from a row's own per-step ``dofs`` when it has them, else from the
 transcript, else they are replayed from the start shape and the actions: a step moves its DOF by
-``ROC x (hi - lo)``, stopping at a limit (for ROC in {-1, 0, 1} from a corner this is the corner
+``ROC x (hi - lo)`` (ROC ``k / K`` for a recorded integer ``k`` on the K-level lattice,
+``roc_levels``), stopping at a limit (for ROC in {-1, 0, 1} from a corner this is the corner
 the environment steps to; real-valued ROCs follow the same rule). Folders written before ``y``
 and ``orientation`` were recorded get them from a noiseless replay of the actions (exact for
 ``zeta = 0``; with noise only ``x`` is the recorded value), and the track says so (``replayed``).
@@ -166,10 +167,13 @@ def _levels(init: Any) -> list[float] | None:
     return None
 
 
-def _replay_dofs(model: SwimmerModel, d0: np.ndarray, actions: Sequence[tuple[int, float]]) -> np.ndarray:
+def _replay_dofs(model: SwimmerModel, d0: np.ndarray, actions: Sequence[tuple[int, float]],
+                 roc_levels: int = 1) -> np.ndarray:
+    """DOF values after each action; on the K-level lattice (``roc_levels`` K) a recorded ROC ``k``
+    is ``k / K`` of the range."""
     out = [d0.copy()]
     d = d0.copy()
-    span = model.hi - model.lo
+    span = (model.hi - model.lo) / max(1, roc_levels)
     for dof, roc in actions:
         if 1 <= dof <= d.size and roc:
             d[dof - 1] = min(model.hi, max(model.lo, d[dof - 1] + float(roc) * span))
@@ -224,7 +228,7 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
     elif len(steps_log) >= n and all(isinstance(s.get("dofs_after"), list) for s in steps_log[:n]):
         d = np.concatenate([d0[None], np.asarray([s["dofs_after"] for s in steps_log[:n]], np.float64)])
     else:
-        d = _replay_dofs(model, d0, actions)
+        d = _replay_dofs(model, d0, actions, int(row.get("roc_levels") or 1))
     theta0 = start_theta(model, d0)
     ys, th = _floats(row.get("y"), n), _floats(row.get("orientation"), n)
     replayed = False
