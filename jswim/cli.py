@@ -17,12 +17,13 @@ A user mistake ends with one line on stderr and exit status 2; Ctrl-C keeps ever
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 from jswim.actions import ACTION_SETS
 from jswim.errors import ConfigError, JswimError
@@ -121,14 +122,34 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--api-key-env", default=None, metavar="VAR",
                    help="environment variable that holds the API key (default OPENAI_API_KEY; never stored or "
                         "printed); named but unset: an error for a remote server, a warning for this machine")
-    b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "none"),
-                   help="constrained decoding (auto: grammar for the embedded/llama.cpp server, none elsewhere "
-                        "and in the ablation study; the paper uses none)")
+    b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "json_object", "none"),
+                   help="constrained decoding (auto: grammar for llama.cpp's and llama-cpp-python's servers and the "
+                        "embedded one, json_schema for vLLM and Ollama, falling back to json_object with a schema, "
+                        "then grammar, where the server rejects a form; none for OpenAI, unknown servers and the "
+                        "ablation study; the paper uses none)")
+    b.add_argument("--sampling", default="auto", choices=("auto", "neutral", "server"),
+                   help="sampling fields sent: neutral turns off each knob the server family has (llama.cpp: "
+                        "repeat_penalty 1, top_k 0, top_p 1, min_p 0, no presence/frequency penalty; vLLM alike; "
+                        "nothing for OpenAI), server sends none (the server's own defaults, e.g. llama-cpp-python's "
+                        "repeat_penalty 1.1); auto (default): neutral for llama.cpp-family, vLLM and Ollama servers "
+                        "(the embedded one: the neutral penalties, its own defaults), none for OpenAI and unknown "
+                        "servers")
+    b.add_argument("--server-family", default=None,
+                   choices=("llamacpp", "llama-cpp-python", "vllm", "ollama", "openai", "generic"),
+                   help="what serves --base-url, instead of the preflight's guess (llama.cpp: /props answers; "
+                        "llama-cpp-python, vLLM, Ollama: /v1/models owned_by me, vllm, library); sets the sampling "
+                        "fields, the auto decoding form and the default concurrency")
+    b.add_argument("--strict-model", action="store_true",
+                   help="stop when the server's /v1/models does not list --model (default: a warning naming what "
+                        "it lists; many servers run their one model under any name)")
     b.add_argument("--temperature", type=float, default=0.0, help="sampling temperature (paper: 0)")
     b.add_argument("--parallel", type=int, default=4, help="decoding slots of the embedded server (default 4)")
     b.add_argument("--threads", type=int, default=None, metavar="N",
                    help="CPU threads of the embedded server (default: one per core; fewer on a busy machine)")
-    b.add_argument("--concurrency", type=int, default=16, help="requests in flight at once (default 16)")
+    b.add_argument("--concurrency", type=int, default=None,
+                   help="requests in flight at once (default: the server's slots where it says, llama.cpp's "
+                        "/props total_slots; 1 for llama-cpp-python's server; else 16). A single-slot server only "
+                        "queues the others, and their wait counts against --timeout")
     b.add_argument("--cohorts", type=int, default=1, metavar="K", help=argparse.SUPPRESS)  # deprecated, no effect
     b.add_argument("--rpm", type=float, default=None, metavar="N",
                    help="requests per minute to pace to (default: none of our own; the provider's "
@@ -326,7 +347,8 @@ def _backend(args: argparse.Namespace):
                    omit_fields=tuple(f.strip() for v in args.omit_field for f in v.split(",") if f.strip()),
                    rpm=args.rpm, tpm=args.tpm, price_local=args.price_local, reasoning=args.reasoning,
                    reasoning_effort=args.reasoning_effort, prices=prices, prices_as_of=as_of,
-                   extra_fields=_extra_fields(args.extra_field))
+                   extra_fields=_extra_fields(args.extra_field), sampling=args.sampling,
+                   server_family=args.server_family, strict_model=args.strict_model)
 
 
 def _options(args: argparse.Namespace, study: str):
@@ -376,6 +398,27 @@ def _warn(message: str) -> None:
     print(f"jswim: warning: {message}", file=sys.stderr)
 
 
+@contextlib.contextmanager
+def _warnings_as_lines() -> Iterator[None]:
+    """Inside: each :class:`~jswim.errors.JswimWarning` is one ``jswim: warning:`` line on stderr
+    (others as Python shows them); the hook is restored after."""
+    import warnings
+
+    from jswim.errors import JswimWarning
+
+    shown = warnings.showwarning
+
+    def one_line(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001 - warnings' hook
+        if issubclass(category, JswimWarning):
+            _warn(str(message))
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = one_line
+        yield
+
+
 #: Exit status of a study stopped by ``--max-cost`` (cleanly: rerun with a higher cap to go on).
 EXIT_COST_CAP = 3
 
@@ -409,8 +452,9 @@ def _run(study: str, args: argparse.Namespace) -> int:
             bar.update(labels.get(phase, "runs"), done, total, info)
 
         try:
-            result = run_study(study, options, backend, out, progress=tick, figures=not args.no_figures,
-                               max_cost=args.max_cost)
+            with _warnings_as_lines():
+                result = run_study(study, options, backend, out, progress=tick, figures=not args.no_figures,
+                                   max_cost=args.max_cost)
         except KeyboardInterrupt:
             bar.stop()
             print(f"interrupted; finished runs are kept in {out}. Run the same command to resume "
@@ -419,6 +463,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
     _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
     _print_reasoning(result)
+    for note in result.notes:
+        print(note)
     sp = result.llm_speed
     if sp.get("calls"):
         print(f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "

@@ -18,6 +18,9 @@ contains an API key. The tree::
     +-- ResultFolderError (also ValueError) a study folder is unusable: another study, other
                                             settings, not a study folder, unreadable
 
+:class:`JswimWarning` (a ``UserWarning``) is what does not stop the work; the command prints each as
+one ``jswim: warning:`` line.
+
 ``ConfigError`` and ``ResultFolderError`` subclass :class:`ValueError` and ``LLMError``
 :class:`RuntimeError`, as they did before the root existed, so older ``except`` clauses still work.
 """
@@ -93,3 +96,9 @@ class LocalModelError(LLMError):
 class ResultFolderError(JswimError, ValueError):
     """A study folder cannot be used: it holds another study or other settings, is not a study
     folder, or cannot be read. The message says which and what to do."""
+
+
+class JswimWarning(UserWarning):
+    """Something a user should know that does not stop the work (a model the server does not
+    list, more requests in flight than the server has slots). The command prints each as one
+    ``jswim: warning:`` line."""

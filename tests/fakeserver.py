@@ -51,7 +51,8 @@ class Fault:
     kind : ``"status"`` (HTTP ``status``, optional ``Retry-After``), ``"drop"`` (close the
     connection without answering), ``"delay"`` (answer normally after ``seconds``: a client
     timeout), ``"malformed"`` (200 with a body that is not JSON). ``message`` is the error text of
-    a status fault.
+    a status fault; ``body``, when given, is its whole JSON body instead (e.g. FastAPI's
+    ``{"detail": [...]}``).
     """
 
     kind: str
@@ -59,6 +60,7 @@ class Fault:
     retry_after: str | None = None
     seconds: float = 0.0
     message: str = "injected fault"
+    body: Any = None
 
     @classmethod
     def rate_limit(cls, retry_after: str | None = "0") -> "Fault":
@@ -174,6 +176,13 @@ class FakeServer:
     hold_s : float
         Longest hold of one request; then it is answered anyway (a test that deadlocks fails on
         its assertions instead of hanging).
+    owned_by : str or None
+        The ``owned_by`` of each ``/v1/models`` entry (a server family's tell).
+    props : dict or None
+        The JSON ``GET /props`` answers (llama.cpp's server); ``None``: 404 there.
+    api_key : str or None
+        The only key accepted: every request without ``Authorization: Bearer <api_key>`` (the
+        preflight's ``/v1/models`` too) gets HTTP 401.
 
     Attributes
     ----------
@@ -196,6 +205,7 @@ class FakeServer:
         stream: str = "never", reject_fields: dict[str, str] | None = None, cold_start: float = 0.0,
         models: "Sequence[str] | None" = ("fake",), served_model: str | None = None,
         hold: Callable[[dict[str, Any]], bool] | None = None, hold_s: float = 30.0,
+        owned_by: str | None = None, props: dict[str, Any] | None = None, api_key: str | None = None,
     ) -> None:
         if stream not in ("never", "default", "always"):
             raise ValueError(f"stream must be never, default or always, got {stream!r}")
@@ -211,6 +221,10 @@ class FakeServer:
         self.served_model = served_model
         self.hold = hold
         self.hold_s = hold_s
+        self.owned_by = owned_by
+        self.props = props
+        self.api_key = api_key
+        self.n_preflight = 0  # GET requests (models, props)
         self._warm_at: float | None = None
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
@@ -368,9 +382,21 @@ class FakeServer:
     ) -> bool:
         if method == "GET" and path in ("/health", "/v1/health"):
             return await self._send(writer, 200, b'{"status":"ok"}')
+        if method == "GET":
+            self.n_preflight += 1
+        if self.api_key is not None and headers.get("authorization") != f"Bearer {self.api_key}":
+            if method == "POST":
+                with self._lock:
+                    self.n_requests += 1
+            msg = {"error": {"message": "Incorrect API key provided", "type": "invalid_request_error",
+                             "code": "invalid_api_key"}}
+            return await self._send(writer, 401, json.dumps(msg).encode())
         if method == "GET" and path == "/v1/models" and self.models is not None:
-            data = [{"id": m, "object": "model"} for m in self.models]
+            data = [{"id": m, "object": "model", **({"owned_by": self.owned_by} if self.owned_by else {})}
+                    for m in self.models]
             return await self._send(writer, 200, json.dumps({"object": "list", "data": data}).encode())
+        if method == "GET" and path == "/props" and self.props is not None:
+            return await self._send(writer, 200, json.dumps(self.props).encode())
         if method != "POST" or path != "/v1/chat/completions":
             msg = json.dumps({"error": {"message": f"File Not Found: {path}", "code": 404}}).encode()
             return await self._send(writer, 404, msg)
@@ -418,7 +444,7 @@ class FakeServer:
                 return False  # close without a response
             if fault.kind == "status":
                 extra = {"Retry-After": fault.retry_after} if fault.retry_after is not None else {}
-                err = json.dumps({"error": {"message": fault.message}}).encode()
+                err = json.dumps(fault.body if fault.body is not None else {"error": {"message": fault.message}}).encode()
                 return await self._send(writer, fault.status, err, extra)
             if fault.kind == "malformed":
                 return await self._send(writer, 200, b'{"choices": [ {"message": ')
@@ -519,6 +545,49 @@ def reasoning_model(answer: Reply | None = None, think: int = REASONING_TOKENS) 
     return reply
 
 
+#: llama-cpp-python's server (0.3.x) answering ``response_format`` ``json_schema``: HTTP 500 whose
+#: message is pydantic's validation error followed by the server's traceback (with its paths).
+VALIDATION_500 = (
+    "1 validation error for CreateChatCompletionRequest\nresponse_format.type\n"
+    "  Input should be 'text' or 'json_object' [type=literal_error, input_value='json_schema', input_type=str]\n"
+    "    For further information visit https://errors.pydantic.dev/2.11/v/literal_error\n"
+    "Traceback (most recent call last):\n"
+    '  File "/opt/venv/lib/python3.11/site-packages/llama_cpp/server/errors.py", line 173, in custom_route_handler\n'
+    "    response = await original_route_handler(request)\n"
+    '  File "/opt/venv/lib/python3.11/site-packages/fastapi/routing.py", line 301, in app\n'
+    "    raise validation_error\n"
+    "fastapi.exceptions.RequestValidationError: 1 validation error"
+)
+
+#: What a GGUF-serving server lists at /v1/models: the file it loaded.
+GGUF_ID = "/models/SmolLM2-135M-Instruct.Q4_1.gguf"
+
+
+def _takes_json_object(body: dict[str, Any]) -> "str | Fault":
+    # llama-cpp-python: json_schema is a 500 validation error; json_object with a schema is honoured.
+    form = (body.get("response_format") or {}).get("type")
+    if form == "json_schema":
+        return Fault("status", 500, message=VALIDATION_500)
+    if form == "json_object":
+        return '{"action": "[2, -1]"}'
+    return "[2, -1]"
+
+
+def _repeat_penalty_default(body: dict[str, Any]) -> str:
+    # A server whose default repeat_penalty (1.1, llama-cpp-python's) turns the greedy reply into
+    # another one unless the request says repeat_penalty 1 (as the real server did with SmolLM2).
+    return "[2, -1]" if body.get("repeat_penalty", 1.1) == 1.0 else "[1, 0]"
+
+
+#: llama.cpp's ``/props`` (abridged): two slots and its sampling defaults.
+LLAMACPP_PROPS = {
+    "total_slots": 2,
+    "default_generation_settings": {"n_ctx": 2048, "params": {
+        "temperature": 0.8, "top_k": 40, "top_p": 0.95, "min_p": 0.05, "repeat_penalty": 1.0, "repeat_last_n": 64,
+        "presence_penalty": 0.0, "frequency_penalty": 0.0, "dry_multiplier": 0.0, "samplers": ["top_k", "top_p"]}},
+    "model_path": GGUF_ID,
+}
+
 #: name -> FakeServer keyword arguments. The comments give what a correct client executes.
 MODES: dict[str, dict[str, Any]] = {
     "plain": {"reply": lambda body: "[2, -1]"},  # -> [2, -1]; base-URL shape cases use it
@@ -550,6 +619,18 @@ MODES: dict[str, dict[str, Any]] = {
     # OpenAI's reasoning models: 400 on max_tokens and on temperature != 1, cut while thinking
     # below 308 max_completion_tokens, reasoning tokens in usage (see reasoning_model) -> [2, -1]
     "openai-reasoning": {"reply": reasoning_model()},
+    # llama-cpp-python-like: --constrain json_schema is a 500 validation error (a rejection, not
+    # retried); json_object with a schema works (what --constrain auto falls back to).
+    "validation-500": {"reply": _takes_json_object, "models": (GGUF_ID,), "owned_by": "me"},
+    # Runs its one model under any requested name, and lists only its file.
+    "echo-any-model": {"reply": lambda body: "[2, -1]", "models": (GGUF_ID,), "owned_by": "me"},
+    # Default repeat_penalty 1.1: [1, 0] unless the request sends repeat_penalty 1 -> [2, -1].
+    "repeat-penalty": {"reply": _repeat_penalty_default, "models": (GGUF_ID,), "owned_by": "me"},
+    # 401 for a missing or wrong key, at the preflight's GET /v1/models too.
+    "auth-401": {"reply": lambda body: "[2, -1]", "api_key": "sk-right-key"},
+    # llama.cpp's server: /props with total_slots 2 and its sampling defaults; grammar honoured.
+    "props-slots": {"reply": lambda body: "[2, -1]", "models": (GGUF_ID,), "owned_by": "llamacpp",
+                    "props": LLAMACPP_PROPS, "latency": 0.05},
 }
 
 

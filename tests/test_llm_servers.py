@@ -117,8 +117,8 @@ def _one_line(err: Exception) -> str:
 
 @pytest.mark.parametrize("mode", ["reject-grammar"], indirect=True)
 def test_rejected_grammar_names_the_server_and_the_option(mode):
-    with pytest.raises(LLMSetupError) as err:
-        call(mode.url, chat_kw={"replies": REPLIES}, server_kind="llamacpp")
+    with pytest.raises(LLMSetupError) as err:  # asked for by name: sent as asked, no fallback
+        call(mode.url, chat_kw={"replies": REPLIES}, server_kind="llamacpp", constrain="grammar")
     msg = _one_line(err.value)
     assert "Unrecognized request argument supplied: grammar" in msg and "--constrain none" in msg
     assert err.value.field == "grammar" and err.value.status == 400 and mode.n_requests == 1
@@ -165,11 +165,20 @@ def test_context_length_400_is_a_per_request_error(mode):
     assert mode.n_requests == 1
 
 
-def test_auth_and_unknown_model_are_setup_errors():
+def test_auth_and_unknown_model_are_setup_errors(monkeypatch):
     with FakeServer() as srv:
-        srv.add_faults(srv_fault(401, "Invalid API key"), srv_fault(404, "The model `gpt-5` does not exist"))
-        with pytest.raises(LLMSetupError, match=r"HTTP 401: Invalid API key; check the API key"):
+        srv.add_faults(srv_fault(401, "Invalid API key"), srv_fault(401, "Invalid API key"),
+                       srv_fault(401, "Invalid API key"), srv_fault(404, "The model `gpt-5` does not exist"))
+        monkeypatch.delenv("JSWIM_TEST_NO_KEY", raising=False)
+        with pytest.raises(LLMSetupError, match=r"HTTP 401: Invalid API key; \$JSWIM_TEST_NO_KEY .* is not set"):
             call(srv.url)
+        monkeypatch.setenv("JSWIM_TEST_NO_KEY", "")
+        with pytest.raises(LLMSetupError, match=r"\$JSWIM_TEST_NO_KEY .* is set but empty"):
+            call(srv.url)
+        monkeypatch.setenv("JSWIM_TEST_NO_KEY", "sk-wrong")
+        with pytest.raises(LLMSetupError, match=r"HTTP 401: Invalid API key; check the API key in \$JSWIM_TEST_NO_KEY"):
+            call(srv.url)
+        monkeypatch.delenv("JSWIM_TEST_NO_KEY")
         with pytest.raises(LLMSetupError, match=r"no model 'fake'.*check --model"):
             call(srv.url)
 
@@ -397,3 +406,70 @@ def test_preflight_says_slow_when_the_server_does_not_answer():
         with pytest.raises(LLMTimeoutError, match="slow.*--timeout") as err:
             check_server(f"127.0.0.1:{port}", 0.3)
     assert f"http://127.0.0.1:{port}/v1/models" in str(err.value)
+
+
+# -- server families, validation errors, sampling (issue 23) --------------------------------------
+
+
+def test_essential_message_drops_tracebacks_and_paths():
+    from jswim.llm.rejection import essential_message
+    from tests.fakeserver import VALIDATION_500
+
+    assert essential_message(VALIDATION_500) == "response_format.type: Input should be 'text' or 'json_object'"
+    bare = ('Traceback (most recent call last):\n  File "/srv/app/main.py", line 3, in f\n    x()\n'
+            "ValueError: top_k is not supported by /srv/app/models/x.py")
+    assert essential_message(bare) == "ValueError: top_k is not supported by <path>"
+    assert essential_message("Unrecognized request argument supplied: grammar") == (
+        "Unrecognized request argument supplied: grammar")
+
+
+@pytest.mark.parametrize("status, body, words", [
+    (500, {"error": {"message": "1 validation error for X\nresponse_format.type\n  Input should be 'text' "
+                                "[type=literal_error]", "type": "internal_server_error"}},
+     "response_format.type: Input should be 'text'"),
+    (422, {"detail": [{"type": "extra_forbidden", "loc": ["body", "top_k"], "msg": "Extra inputs are not permitted"}]},
+     "top_k: Extra inputs are not permitted"),
+    (503, {"error": {"message": "min_p is not supported by this backend"}}, "min_p is not supported"),
+])
+def test_a_validation_body_is_a_rejection_whatever_its_status(status, body, words):
+    from tests.fakeserver import Fault
+
+    with FakeServer(reply=lambda b: Fault("status", status, body=body)) as srv:
+        with pytest.raises(LLMSetupError) as err:
+            call(srv.url, sampling=(("top_k", 0), ("min_p", 0.0)))
+        assert srv.n_requests == 1  # not retried (a 5xx fault would be sent 5 times)
+    msg = _one_line(err.value)
+    assert words in msg and err.value.status == status
+
+
+def test_probe_tells_server_families_apart():
+    from jswim.llm.probe import probe
+    from tests.fakeserver import LLAMACPP_PROPS
+
+    cases = [({"owned_by": "vllm"}, "vllm"), ({"owned_by": "library"}, "ollama"), ({"owned_by": "me"}, "llama-cpp-python"),
+             ({"props": LLAMACPP_PROPS}, "llamacpp"), ({"owned_by": "organization_owner"}, "generic"), ({}, "generic")]
+    for kw, family in cases:
+        with FakeServer(**kw) as srv:
+            info = probe(srv.url, api_key_env="JSWIM_TEST_NO_KEY")
+        assert info.family == family, (kw, info)
+    with FakeServer(owned_by="vllm") as srv:
+        assert probe(srv.url, family="llamacpp").family == "llamacpp"  # forced
+    with FakeServer(props=LLAMACPP_PROPS) as srv:
+        info = probe(srv.url)
+    assert info.total_slots == 2 and info.slots == 2 and info.settings["min_p"] == 0.05
+    assert "samplers" not in info.settings  # scalars only
+
+
+def test_sampling_fields_per_family():
+    from jswim.llm.sampling import sampling_fields
+
+    llama = dict(sampling_fields("auto", "llama-cpp-python"))
+    assert llama == {"repeat_penalty": 1.0, "top_k": 0, "top_p": 1.0, "min_p": 0.0, "presence_penalty": 0.0,
+                     "frequency_penalty": 0.0}
+    assert dict(sampling_fields("auto", "vllm"))["repetition_penalty"] == 1.0
+    assert dict(sampling_fields("auto", "vllm"))["top_k"] == -1  # vLLM's "off"
+    assert sampling_fields("auto", "openai") == () and sampling_fields("neutral", "openai") == ()
+    assert sampling_fields("auto", "generic") == () and sampling_fields("server", "llamacpp") == ()
+    # The embedded server: its own penalty defaults are the neutral ones; truncations kept.
+    assert dict(sampling_fields("auto", "llamacpp", embedded=True)) == {
+        "repeat_penalty": 1.0, "presence_penalty": 0.0, "frequency_penalty": 0.0}

@@ -319,7 +319,7 @@ class LLMDriver:
         """One call of ``run``: replayed from the journal when already paid for, else sent (and recorded)."""
         journal = self.journal
         if journal is None:
-            return await self.client.chat(messages, **kw)
+            return self._note_form(run, await self.client.chat(messages, **kw))
         temperature = kw.get("temperature")
         if temperature is None:
             temperature = self.client.settings.temperature
@@ -331,7 +331,7 @@ class LLMDriver:
         if res is not None:
             run.result.replayed_calls += 1
             return res
-        res = await self.client.chat(messages, **kw)
+        res = self._note_form(run, await self.client.chat(messages, **kw))
         journal.record(run.result.run_id, n, key, res)
         return res
 
@@ -342,6 +342,14 @@ class LLMDriver:
         state = getattr(self.client, "reasoning", None)
         if state is not None and state.active:
             run.result.knobs.update(token_field=state.token_field, max_tokens_sent=state.budget)
+
+    @staticmethod
+    def _note_form(run: _Run, res: ChatResult) -> ChatResult:
+        """Record the constrained-decoding form a reply came with (``--constrain auto`` may have
+        fallen back to another form than the one the run started with)."""
+        if res.constraint != "none" and run.result.knobs.get("constraint") != res.constraint:
+            run.result.knobs["constraint"] = res.constraint
+        return res
 
     # -- one decision ------------------------------------------------------------------------
 

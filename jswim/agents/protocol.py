@@ -63,7 +63,7 @@ def clearing_rule(cfg: LLMAgentConfig, model: SwimmerModel) -> ClearingRule:
 
 #: Tokens a constrained reply needs: ``[1, -1]`` takes up to ~6 tokens, the JSON-schema form
 #: ``{"action": "[1, -1]"}`` up to ~12; the limit is raised to this where the format needs it.
-CONSTRAINED_MIN_TOKENS = {"grammar": 10, "json_schema": 24}
+CONSTRAINED_MIN_TOKENS = {"grammar": 10, "json_schema": 24, "json_object": 24}
 
 
 def max_tokens(cfg: LLMAgentConfig, model: SwimmerModel, constraint: str = "none") -> int:

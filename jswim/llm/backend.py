@@ -23,12 +23,17 @@ from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.credentials import read_api_key
-from jswim.llm.local import LocalServer, default_model_path
+from jswim.llm.local import LOCAL_KEY_ENV, LocalServer, default_model_path
+from jswim.llm.probe import ServerInfo, check_family, probe
 from jswim.llm.reasoning import check_mode
+from jswim.llm.sampling import check_preset, sampling_fields
 
 #: Most requests in flight (and embedded decoding slots) a run may ask for: each has its own client
 #: slot, so an absurd value would stall the run building them.
 MAX_CONCURRENCY = 4096
+
+#: Requests in flight when neither ``--concurrency`` nor the server says how many it serves at once.
+DEFAULT_CONCURRENCY = 16
 
 
 @dataclass(frozen=True)
@@ -55,8 +60,12 @@ class Backend:
     n_threads : int or None
         CPU threads of the embedded server (``None``: llama.cpp's choice, one per core). On a
         machine busy with other work, fewer threads than cores keep decoding steady.
-    concurrency : int
-        Requests in flight at once.
+    concurrency : int or None
+        Requests in flight at once. ``None``: fitted to the server: llama.cpp's ``/props``
+        ``total_slots``, 1 for llama-cpp-python's server (it serves one request at a time), else
+        16 (:data:`DEFAULT_CONCURRENCY`); the embedded server: 16, or ``n_parallel`` if larger.
+        Requests beyond the server's slots only queue there, and that wait counts against
+        ``timeout_s``.
     cohorts : int
         Deprecated, no effect: runs no longer advance in lockstep rounds (each run is its own
         pipeline; see :mod:`jswim.agents.llm`). Kept so old scripts keep working.
@@ -85,6 +94,15 @@ class Backend:
     extra_fields : tuple of (name, value)
         More request fields sent with every request (``--extra-field NAME=JSON``), recorded in the
         identity (they change what the model does).
+    sampling : {"auto", "neutral", "server"}
+        Sampling fields sent (:mod:`jswim.llm.sampling`): ``auto`` sends the neutral values to
+        llama.cpp-family, vLLM and Ollama servers (the embedded one: the neutral penalties),
+        nothing to OpenAI and unknown servers; ``neutral`` always; ``server`` never.
+    server_family : str or None
+        Force the server's family (:data:`jswim.llm.probe.FAMILIES`) instead of the preflight's
+        guess.
+    strict_model : bool
+        A model the server's ``/v1/models`` does not list is an error (default: a warning).
 
     Raises
     ------
@@ -102,7 +120,7 @@ class Backend:
     temperature: float = 0.0
     n_parallel: int = 4
     n_threads: int | None = None
-    concurrency: int = 16
+    concurrency: int | None = None
     cohorts: int = 1
     cache_dir: str | None = None
     timeout_s: float | None = None
@@ -115,9 +133,14 @@ class Backend:
     prices: tuple[tuple[str, tuple[float, float]], ...] | None = field(default=None, compare=False)
     prices_as_of: str | None = field(default=None, compare=False)
     extra_fields: tuple[tuple[str, Any], ...] = ()
+    sampling: str = "auto"
+    server_family: str | None = None
+    strict_model: bool = False
 
     def __post_init__(self) -> None:
         check_mode(self.reasoning, self.reasoning_effort)
+        check_preset(self.sampling)
+        check_family(self.server_family)
         if self.base_url is None and self.model is not None:
             raise ConfigError("--model names a model on a server; give --base-url too (or --gguf for a local file)")
         if self.base_url is not None and self.model is None:
@@ -136,9 +159,9 @@ class Backend:
         if self.constrain not in MODES:
             raise ConfigError(f"constrain must be one of {', '.join(MODES)}, got {self.constrain!r}")
         check_temperature(self.temperature)
-        if self.n_parallel < 1 or self.concurrency < 1:
+        if self.n_parallel < 1 or (self.concurrency is not None and self.concurrency < 1):
             raise ConfigError("--parallel and --concurrency must be >= 1")
-        if self.concurrency > MAX_CONCURRENCY:  # one client slot is made per request in flight
+        if self.concurrency is not None and self.concurrency > MAX_CONCURRENCY:  # one client slot is made per request in flight
             raise ConfigError(f"--concurrency must be at most {MAX_CONCURRENCY}, got {self.concurrency}")
         if self.n_parallel > MAX_CONCURRENCY:
             raise ConfigError(f"--parallel must be at most {MAX_CONCURRENCY}, got {self.n_parallel}")
@@ -178,6 +201,10 @@ class Backend:
             out["reasoning_effort"] = self.reasoning_effort
         if self.extra_fields:
             out["extra_fields"] = dict(self.extra_fields)
+        if self.sampling != "auto":
+            out["sampling"] = self.sampling
+        if self.server_family is not None:
+            out["server_family"] = self.server_family
         return out
 
     def address(self) -> str | None:
@@ -190,28 +217,70 @@ class Backend:
             raise ConfigError("a remote backend has no embedded server")
         return LocalServer(self.gguf, n_parallel=self.n_parallel, n_threads=self.n_threads)
 
-    def client_settings(self, server: LocalServer | None = None, **changes: Any) -> ClientSettings:
-        """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``."""
+    def family(self, info: ServerInfo | None = None) -> str:
+        """The server's family: forced, else the preflight's, else llama.cpp's (embedded) or generic."""
+        if self.server_family is not None:
+            return self.server_family
+        if info is not None:
+            return info.family
+        return "llamacpp" if self.local else "generic"
+
+    def client_settings(self, server: LocalServer | None = None, info: ServerInfo | None = None,
+                        **changes: Any) -> ClientSettings:
+        """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``.
+
+        ``info`` (from :meth:`preflight`) gives the server's family (sampling fields, ``auto``
+        decoding form), its listed models (pricing) and its slots (default concurrency)."""
+        family = self.family(info)
         common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir,
                       omit_fields=self.omit_fields, price_local=self.price_local, reasoning=self.reasoning,
                       reasoning_effort=self.reasoning_effort, extra_fields=self.extra_fields,
+                      sampling=sampling_fields(self.sampling, family, embedded=self.local),
                       **({"prices": dict(self.prices)} if self.prices is not None else {}))
         if self.timeout_s is not None:
             common["timeout_s"] = self.timeout_s
         if self.local:
             if server is None:
                 raise ConfigError("the embedded backend needs its running server (Backend.server())")
-            s = server.client_settings(max_concurrency=max(self.concurrency, self.n_parallel), **common)
+            s = server.client_settings(max_concurrency=max(self.concurrency or DEFAULT_CONCURRENCY, self.n_parallel),
+                                       **common)
         else:
+            slots = info.slots if info is not None else None
             s = ClientSettings(base_url=self.base_url, model=self.model, api_key_env=self.api_key_env,
-                               max_concurrency=self.concurrency, **common)
+                               max_concurrency=self.concurrency or slots or DEFAULT_CONCURRENCY, server_kind=family,
+                               listed_models=info.models if info is not None else None, **common)
         return dataclasses.replace(s, **changes) if changes else s
 
+    def preflight(self, server: LocalServer | None = None, timeout_s: float | None = None) -> ServerInfo:
+        """Ask the server what it is before any run (:func:`jswim.llm.probe.probe`): the remote
+        server at ``base_url``, or the running embedded ``server``.
+
+        Raises
+        ------
+        LLMServerError, LLMTimeoutError, LLMSetupError
+            As :func:`~jswim.llm.probe.probe`: nothing answers, too slow, a refused key, or (with
+            ``strict_model``) a model the server does not list.
+        """
+        wait = timeout_s or self.timeout_s or 5.0
+        if self.local:
+            if server is None:
+                raise ConfigError("the embedded backend needs its running server (Backend.server())")
+            return probe(server.base_url, api_key_env=LOCAL_KEY_ENV, timeout_s=max(wait, 10.0), family="llamacpp",
+                         local=True)
+        info = probe(self.base_url, api_key_env=self.api_key_env, timeout_s=wait, family=self.server_family,
+                     model=self.model, strict_model=self.strict_model)
+        if self.concurrency is not None and info.slots is not None and self.concurrency > info.slots:
+            info = dataclasses.replace(info, warnings=(*info.warnings, (
+                f"--concurrency {self.concurrency} on a server that serves {info.slots} request(s) at once: the "
+                f"others queue there, and their wait counts against --timeout; leave --concurrency out to send "
+                f"{info.slots}")))
+        return info
+
     def check(self, timeout_s: float | None = None) -> None:
-        """For a remote backend, :func:`check_server` (waiting ``timeout_s``, default the
-        backend's ``--timeout`` or 5 s); nothing to check for the embedded one."""
+        """For a remote backend, :meth:`preflight` (waiting ``timeout_s``, default the backend's
+        ``--timeout`` or 5 s); nothing to check for the embedded one."""
         if not self.local:
-            check_server(self.base_url, timeout_s or self.timeout_s or 5.0)
+            self.preflight(timeout_s=timeout_s)
 
 
 #: The first bytes of every GGUF file.

@@ -41,10 +41,10 @@ from jswim.errors import ConfigError
 from jswim.llm import constrain, credentials
 from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
-from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError, LLMTimeoutError
+from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError, LLMSetupError, LLMTimeoutError
 from jswim.llm.pacing import Pacer
 from jswim.llm.reasoning import REASONING_MAX_TOKENS, ReasoningState, check_mode
-from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text
+from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text, validation_error
 from jswim.llm.reply import Completion, MalformedReply, assemble_sse, looks_like_sse, read_completion
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
@@ -102,10 +102,11 @@ class ClientSettings:
         Reply length limit.
     seed : int or None
         Sent when given (some servers use it for sampling at temperature > 0).
-    constrain : {"auto", "grammar", "json_schema", "none"}
+    constrain : {"auto", "grammar", "json_schema", "json_object", "none"}
         Constrained decoding; see :mod:`jswim.llm.constrain`.
-    server_kind : {"generic", "llamacpp", "openai"}
-        What serves ``base_url``; only resolves ``constrain="auto"``.
+    server_kind : str
+        The server's family (:data:`jswim.llm.constrain.SERVER_KINDS`, told by
+        :func:`jswim.llm.probe.probe`); resolves ``constrain="auto"``.
     cache_dir : str or None
         Directory of the response cache; ``None`` disables it.
     prices : mapping or None
@@ -136,6 +137,9 @@ class ClientSettings:
     extra_fields : tuple of (name, value)
         More fields of every request body (a models file's ``extra``, ``--extra-field``); they
         never replace ``model`` or ``messages``.
+    sampling : tuple of (str, float)
+        Sampling fields every request carries (``(("repeat_penalty", 1.0), ...)``;
+        :func:`jswim.llm.sampling.sampling_fields`), before ``omit_fields`` are removed.
     """
 
     base_url: str = "https://api.openai.com/v1"
@@ -163,10 +167,12 @@ class ClientSettings:
     reasoning_max_tokens: int = REASONING_MAX_TOKENS
     reasoning_effort: str | None = None
     extra_fields: tuple[tuple[str, Any], ...] = ()
+    sampling: tuple[tuple[str, float], ...] = ()
 
     def __post_init__(self) -> None:
         check_mode(self.reasoning, self.reasoning_effort)
         object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
+        object.__setattr__(self, "sampling", tuple((str(k), v) for k, v in dict(self.sampling).items()))
         object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
         required = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
         if required:
@@ -199,6 +205,7 @@ class ClientSettings:
             "reasoning_max_tokens": self.reasoning_max_tokens,
             "reasoning_effort": self.reasoning_effort,
             "extra_fields": dict(self.extra_fields),
+            "sampling": dict(self.sampling),
         }
 
 
@@ -223,7 +230,7 @@ class ChatResult:
     cost_usd : float
         Price of the producing call (0 for free or unknown models).
     constraint : str
-        Constrained-decoding mode used: ``"grammar"``, ``"json_schema"`` or ``"none"``.
+        Constrained-decoding mode used: ``"grammar"``, ``"json_schema"``, ``"json_object"`` or ``"none"``.
     finish_reason : str or None
         As reported by the server.
     raw : str
@@ -374,6 +381,10 @@ class LLMClient:
         self._ssl: ssl.SSLContext | None = None
         self.n_requests = 0  # HTTP attempts made
         self.counts = LiveCounts()
+        self._auto_form: str | None = None  # under constrain="auto": the form the server took
+        self._forms_tried: set[str] = set()
+        #: Constrained-decoding forms the server rejected under ``"auto"`` (in order) and why.
+        self.fallbacks: list[dict[str, str]] = []
 
     def __repr__(self) -> str:  # never show the key
         return f"LLMClient(base_url={self._where!r}, model={self.settings.model!r})"
@@ -459,7 +470,11 @@ class LLMClient:
         sd = s.seed if seed is None else seed
         if sd is not None:
             payload["seed"] = sd
-        mode = constrain.resolve_mode(constrain_mode or s.constrain, s.server_kind, bool(replies))
+        payload.update(s.sampling)
+        asked = constrain_mode or s.constrain
+        if asked == "auto" and self._auto_form is not None:  # the server rejected auto's first form(s)
+            asked = self._auto_form
+        mode = constrain.resolve_mode(asked, s.server_kind, bool(replies))
         constrain.apply(payload, mode, replies)
         for name, value in s.extra_fields:
             if name not in REQUIRED_FIELDS:
@@ -518,10 +533,36 @@ class LLMClient:
             The server kept sending bodies that are not chat completions.
         """
         self._open()
-        payload, mode = self.build_payload(
-            messages, replies=replies, temperature=temperature, max_tokens=max_tokens, seed=seed,
-            constrain_mode=constrain_mode,
-        )
+        while True:
+            payload, mode = self.build_payload(
+                messages, replies=replies, temperature=temperature, max_tokens=max_tokens, seed=seed,
+                constrain_mode=constrain_mode,
+            )
+            try:
+                return await self._chat(payload, mode, use_cache, cache_scope, cache_if)
+            except LLMSetupError as exc:
+                auto = (constrain_mode or self.settings.constrain) == "auto"
+                if not (auto and mode != "none" and self._fall_back(mode, exc)):
+                    raise
+
+    def _fall_back(self, mode: str, exc: LLMSetupError) -> bool:
+        """Under ``constrain="auto"``: after the server rejected the form ``mode``, move to the next
+        form (:data:`jswim.llm.constrain.FALLBACK`); False when the error is not about the form
+        or no form is left."""
+        if exc.field not in ("grammar", "response_format"):
+            return False
+        self._forms_tried.add(mode)
+        if self._auto_form is not None and self._auto_form != mode:
+            return True  # another call already moved on: just send again
+        nxt = constrain.next_form(self._forms_tried)
+        if nxt is None:
+            return False
+        self.fallbacks.append({"rejected": mode, "server": exc.server_message, "next": nxt})
+        self._auto_form = nxt
+        return True
+
+    async def _chat(self, payload: dict[str, Any], mode: str, use_cache: bool, cache_scope: str | None,
+                    cache_if: Callable[[ChatResult], bool] | None) -> ChatResult:
         t0 = time.perf_counter()
         deterministic = use_cache and payload.get("temperature", 0) == 0
         if not deterministic:
@@ -668,6 +709,10 @@ class LLMClient:
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
         status = resp.status_code
+        if status not in (200, 408, 429):  # a validation error is a rejection whatever its status
+            invalid = validation_error(resp)
+            if invalid is not None:
+                raise self._rejection(status, invalid, payload, invalid=True)
         if status in RETRY_STATUSES or status >= 500:
             detail = server_text(resp)
             raise _Failure(f"HTTP {status}" + (f": {detail}" if detail else ""),
@@ -692,10 +737,10 @@ class LLMClient:
                 bad_body=True,
             ) from None
 
-    def _rejection(self, status: int, server: str, payload: Mapping[str, Any]) -> LLMRequestError:
+    def _rejection(self, status: int, server: str, payload: Mapping[str, Any], invalid: bool = False) -> LLMRequestError:
         s = self.settings
         err = rejection(status, server, payload, where=self._where, url=safe_url(self._url), model=s.model,
-                        api_key_env=s.api_key_env)
+                        api_key_env=s.api_key_env, invalid=invalid)
         err.args = (self._scrub(str(err)),)
         err.server_message = self._scrub(err.server_message)
         return err

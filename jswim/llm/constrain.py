@@ -5,8 +5,15 @@ Modes
 ``"grammar"``      llama.cpp servers: a GBNF ``grammar`` field whose root is the alternatives.
 ``"json_schema"``  OpenAI-style ``response_format`` with a JSON schema; the reply is
                    ``{"action": "<one of the replies>"}`` and :func:`reply_text` unwraps it.
+``"json_object"``  ``response_format`` ``{"type": "json_object", "schema": ...}``, the form
+                   llama-cpp-python's server takes (it rejects ``json_schema``); same reply.
 ``"none"``         plain text, parsed afterwards.
-``"auto"``         ``"grammar"`` for llama.cpp backends (the embedded default), else ``"none"``.
+``"auto"``         by server family (:mod:`jswim.llm.probe`): ``"grammar"`` for llama.cpp's
+                   server (the embedded default) and llama-cpp-python's, ``"json_schema"`` for
+                   vLLM and Ollama, ``"none"`` elsewhere (OpenAI, unknown servers: the paper's
+                   free text). When the server rejects the form, the client moves to the next
+                   of :data:`FALLBACK` (json_schema -> json_object -> grammar) and records the
+                   form used; only under ``"auto"``: an explicit mode is sent as asked.
 """
 
 from __future__ import annotations
@@ -16,10 +23,16 @@ from typing import Any, Sequence
 
 from jswim.errors import ConfigError
 
-MODES = ("auto", "grammar", "json_schema", "none")
+MODES = ("auto", "grammar", "json_schema", "json_object", "none")
 
-#: Server kinds the client knows; only used to resolve ``"auto"``.
-SERVER_KINDS = ("generic", "llamacpp", "openai")
+#: Server families the client knows (:mod:`jswim.llm.probe` tells them apart).
+SERVER_KINDS = ("generic", "llamacpp", "llama-cpp-python", "vllm", "ollama", "openai")
+
+#: ``"auto"``'s first form per family (the others: ``"none"``).
+AUTO_FORM = {"llamacpp": "grammar", "llama-cpp-python": "grammar", "vllm": "json_schema", "ollama": "json_schema"}
+
+#: The forms ``"auto"`` falls back through when the server rejects one, in this order.
+FALLBACK = ("json_schema", "json_object", "grammar")
 
 
 def resolve_mode(mode: str, server_kind: str, has_replies: bool = True) -> str:
@@ -29,8 +42,13 @@ def resolve_mode(mode: str, server_kind: str, has_replies: bool = True) -> str:
     if not has_replies:
         return "none"
     if mode == "auto":
-        return "grammar" if server_kind == "llamacpp" else "none"
+        return AUTO_FORM.get(server_kind, "none")
     return mode
+
+
+def next_form(tried: "set[str] | frozenset[str]") -> str | None:
+    """The next form of :data:`FALLBACK` not yet ``tried`` (``None``: none left)."""
+    return next((f for f in FALLBACK if f not in tried), None)
 
 
 def _gbnf_literal(text: str) -> str:
@@ -67,12 +85,15 @@ def apply(payload: dict[str, Any], mode: str, replies: Sequence[str] | None) -> 
         payload["grammar"] = gbnf(replies)
     elif mode == "json_schema" and replies:
         payload["response_format"] = json_schema(replies)
+    elif mode == "json_object" and replies:
+        payload["response_format"] = {"type": "json_object",
+                                      "schema": json_schema(replies)["json_schema"]["schema"]}
     return payload
 
 
 def reply_text(mode: str, content: str) -> str:
     """The reply proper: the ``action`` string of a JSON-schema reply, else ``content`` as is."""
-    if mode != "json_schema":
+    if mode not in ("json_schema", "json_object"):
         return content
     try:
         value = json.loads(content)

@@ -38,7 +38,7 @@ from jswim.agents import fidelity, qlearning, random_policy
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
 from jswim.console import eta
-from jswim.errors import ConfigError, JswimError
+from jswim.errors import ConfigError, JswimError, JswimWarning
 from jswim.gait import Criterion, judge
 from jswim.llm.backend import Backend
 from jswim.llm.budget import Budget
@@ -48,6 +48,8 @@ from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
 from jswim.llm.journal import CallJournal
 from jswim.llm.pacing import Pacer
+from jswim.llm.probe import ServerInfo
+from jswim.llm.sampling import describe as describe_sampling
 from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
@@ -137,6 +139,7 @@ class StudyResult:
     total: int = 0  # runs in the study's grid
     reasoning: dict[str, Any] = field(default_factory=dict)  # what a reasoning model was sent (jswim.llm.reasoning)
     cut_thinking: int = 0  # LLM replies cut while the model was still reasoning (never executed)
+    notes: list[str] = field(default_factory=list)  # what was sent for sampling, decoding fallbacks, pricing
 
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
@@ -275,8 +278,9 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
             t0: float, max_cost: float | None = None) -> StudyResult:
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
-    if backend is not None and any(p.agent == "llm" for p in todo):
-        backend.check()  # fail before the baselines, not after
+    info: ServerInfo | None = None
+    if backend is not None and not backend.local and any(p.agent == "llm" for p in todo):
+        info = _preflight(store, backend)  # fail before the baselines, not after
     total = len(plans)
     finished = total - len(todo)
     tick = progress or (lambda phase, d, t, info="": None)
@@ -290,12 +294,13 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     llm_plans = [p for p in todo if p.agent == "llm"]
     speed: dict[str, float] = {}
     sent: dict[str, Any] = {}
+    notes: list[str] = []
     capped = False
     if llm_plans:
         if backend is None:
             raise ConfigError("this study has LLM runs; give a backend")
         finished, capped = _run_llm(llm_plans, options, backend, store, template, tick, finished, total, speed,
-                                    max_cost, sent)
+                                    max_cost, sent, info, notes)
 
     # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
     names = {p.run_id for p in plans}
@@ -326,7 +331,38 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     _write_report(folder, figures)
     return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed, failed,
                        dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total, sent,
-                       cut_thinking)
+                       cut_thinking, notes)
+
+
+def _preflight(store: StudyStore, backend: Backend, server: Any = None) -> ServerInfo:
+    """The server's preflight (:meth:`Backend.preflight`), recorded in the study's metadata
+    (``llm_server``); its warnings go out as :class:`~jswim.errors.JswimWarning`."""
+    info = backend.preflight(server)
+    store.set_status("running", llm_server=info.metadata())
+    for text in info.warnings:
+        warnings.warn(text, JswimWarning, stacklevel=3)
+    return info
+
+
+def _record_session(store: StudyStore, backend: Backend, info: ServerInfo, client: LLMClient,
+                    notes: list[str]) -> None:
+    """What the session sent and what the server made of it: the sampling fields (with the
+    server's reported defaults, from the preflight), the decoding form ``auto`` settled on, and
+    why calls were not priced; into the metadata's ``llm_server`` and the printed ``notes``."""
+    s = client.settings
+    record = dict(store.meta.get("llm_server") or info.metadata())
+    record.update(sampling={"preset": backend.sampling, "sent": dict(s.sampling)},
+                  max_concurrency=s.max_concurrency)
+    notes.append(describe_sampling(backend.sampling, backend.family(info), s.sampling))
+    if client.fallbacks:
+        record["constrain_fallbacks"] = list(client.fallbacks)
+        for f in client.fallbacks:
+            notes.append(f"constrained decoding: the server rejected {f['rejected']} ({f['server']}); "
+                         f"--constrain auto moved on to {f['next']}")
+    if client.unpriced:
+        record["unpriced"] = client.unpriced
+        notes.append(f"cost: {client.unpriced}")
+    store.set_status(store.meta.get("status", "running"), llm_server=record)
 
 
 def _write_report(folder: Path, figures: bool) -> None:
@@ -368,8 +404,8 @@ def _row(plan: Plan, r: RunResult, horizon: int) -> dict[str, Any]:
 
 def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
              template: PromptTemplate | None, tick: ProgressFn, finished: int, total: int,
-             speed: dict[str, float], max_cost: float | None,
-             sent: dict[str, Any] | None = None) -> tuple[int, bool]:
+             speed: dict[str, float], max_cost: float | None, sent: dict[str, Any] | None = None,
+             info: ServerInfo | None = None, notes: list[str] | None = None) -> tuple[int, bool]:
     """Run the LLM plans as per-run pipelines; returns (runs finished, stopped by the cost cap).
 
     At most ``o.chunk`` runs (default: the concurrency) are in progress at once, across all the
@@ -424,10 +460,11 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
             await asyncio.sleep(0.5)
             report("llm-live")
 
-    async def go(settings: ClientSettings) -> None:
+    async def go(settings: ClientSettings, info: ServerInfo) -> None:
         pacer = Pacer(backend.rpm, backend.tpm, margin=settings.max_concurrency)
         async with LLMClient(settings, pacer=pacer, budget=budget) as client:
             live.append(client)
+            _record_session(store, backend, info, client, notes if notes is not None else [])
             window = asyncio.Semaphore(o.chunk or settings.max_concurrency)
             reporter = asyncio.ensure_future(keep_reporting())
             try:
@@ -439,16 +476,21 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
             finally:
                 reporter.cancel()
                 await asyncio.gather(reporter, return_exceptions=True)
+                if notes is not None:  # fallbacks and pricing are known once calls were answered
+                    notes.clear()
+                _record_session(store, backend, info, client, notes if notes is not None else [])
 
     # --max-tokens is also the reasoning budget, once reasoning is on (jswim.llm.reasoning).
     room = {"reasoning_max_tokens": o.max_tokens} if o.max_tokens is not None else {}
     try:
         if backend.local:
             with backend.server() as srv:
+                info = _preflight(store, backend, srv)
                 t_start = time.perf_counter()  # the model's loading time is not LLM work
-                run_sync(go(backend.client_settings(srv, **room)))
+                run_sync(go(backend.client_settings(srv, info, **room), info))
         else:
-            run_sync(go(backend.client_settings(**room)))
+            info = info or _preflight(store, backend)
+            run_sync(go(backend.client_settings(info=info, **room), info))
     finally:
         journal.close()
         if live and sent is not None and (live[0].reasoning.active or live[0].reasoning.notes

@@ -1,0 +1,105 @@
+"""Sampling made explicit: the neutral values of the knobs each server family has.
+
+"Temperature 0" is not one experiment across servers: the same GGUF file at temperature 0 gave
+``[1, 1]`` on llama.cpp's server and ``[1, 0]`` on llama-cpp-python's, because the second applies
+``repeat_penalty`` 1.1 unless told otherwise. Servers carry their own defaults (llama.cpp: top_k
+40, top_p 0.95, min_p 0.05; llama-cpp-python: the same and repeat_penalty 1.1; Ollama: top_k 40,
+top_p 0.9, repeat_penalty 1.1; vLLM: the model's ``generation_config.json``). The paper's GPT-4
+had none of them (OpenAI: top_p 1, no penalties), so ``--sampling neutral`` sends, per family,
+the value that turns each knob off:
+
+====================  =====================================================================
+family                neutral fields sent
+====================  =====================================================================
+llamacpp,             ``repeat_penalty`` 1, ``top_k`` 0 (off), ``top_p`` 1, ``min_p`` 0,
+llama-cpp-python      ``presence_penalty`` 0, ``frequency_penalty`` 0
+vllm                  ``repetition_penalty`` 1, ``top_k`` -1 (off), ``top_p`` 1, ``min_p`` 0,
+                      ``presence_penalty`` 0, ``frequency_penalty`` 0
+ollama                ``top_p`` 1, ``presence_penalty`` 0, ``frequency_penalty`` 0 (its OpenAI
+                      endpoint passes no ``repeat_penalty``/``top_k``: set those in a Modelfile)
+generic               ``top_p`` 1, ``presence_penalty`` 0, ``frequency_penalty`` 0 (the OpenAI
+                      API's own fields)
+openai                nothing (its defaults are the neutral values)
+====================  =====================================================================
+
+Presets: ``neutral`` (the table), ``server`` (send nothing: the server's defaults), and ``auto``,
+the default: ``neutral`` for llama.cpp-family, vLLM and Ollama servers, nothing for OpenAI and
+unknown servers (an unknown strict server could reject fields it does not have). For the
+embedded server ``auto`` sends the neutral *penalties* only: llama.cpp's own penalty defaults
+are already neutral (repeat_penalty 1, no presence/frequency penalty, as its ``/props`` reports),
+so its replies are unchanged at every temperature, and its truncations (top_k 40, top_p 0.95,
+min_p 0.05) never change a temperature-0 reply (the most likely token survives every one of
+them) while they keep the temperature-0.7 numbers of the README; ``--sampling neutral`` turns
+them off too.
+"""
+
+from __future__ import annotations
+
+from jswim.errors import ConfigError
+
+#: The ``--sampling`` presets.
+PRESETS = ("auto", "neutral", "server")
+
+_LLAMA = (("repeat_penalty", 1.0), ("top_k", 0), ("top_p", 1.0), ("min_p", 0.0), ("presence_penalty", 0.0),
+          ("frequency_penalty", 0.0))
+_OPENAI_FIELDS = (("top_p", 1.0), ("presence_penalty", 0.0), ("frequency_penalty", 0.0))
+
+#: Neutral sampling fields per server family (see the module docstring).
+NEUTRAL: dict[str, tuple[tuple[str, float], ...]] = {
+    "llamacpp": _LLAMA,
+    "llama-cpp-python": _LLAMA,
+    "vllm": (("repetition_penalty", 1.0), ("top_k", -1), ("top_p", 1.0), ("min_p", 0.0),
+             ("presence_penalty", 0.0), ("frequency_penalty", 0.0)),
+    "ollama": _OPENAI_FIELDS,
+    "generic": _OPENAI_FIELDS,
+    "openai": (),
+}
+
+#: Families ``auto`` sends the neutral values to.
+AUTO_NEUTRAL = ("llamacpp", "llama-cpp-python", "vllm", "ollama")
+
+#: The penalty fields (what ``auto`` sends to the embedded server).
+PENALTIES = ("repeat_penalty", "repetition_penalty", "presence_penalty", "frequency_penalty")
+
+
+def check_preset(name: str) -> str:
+    """``name`` if it is a preset, else :class:`ConfigError`."""
+    if name not in PRESETS:
+        raise ConfigError(f"--sampling must be one of {', '.join(PRESETS)}, got {name!r}")
+    return name
+
+
+def sampling_fields(preset: str, family: str, *, embedded: bool = False) -> tuple[tuple[str, float], ...]:
+    """The sampling fields every request carries under ``preset`` for a server of ``family``.
+
+    Parameters
+    ----------
+    preset : {"auto", "neutral", "server"}
+    family : str
+        A family of :data:`NEUTRAL` (unknown families are treated as ``"generic"``).
+    embedded : bool
+        The embedded server (``auto`` then sends the neutral penalties only).
+
+    Returns
+    -------
+    tuple of (name, value)
+        In a fixed order (they are part of each request, hence of its cache key).
+    """
+    check_preset(preset)
+    neutral = NEUTRAL.get(family, NEUTRAL["generic"])
+    if preset == "server":
+        return ()
+    if preset == "neutral":
+        return neutral
+    if embedded:
+        return tuple((k, v) for k, v in neutral if k in PENALTIES)
+    return neutral if family in AUTO_NEUTRAL else ()
+
+
+def describe(preset: str, family: str, fields: tuple[tuple[str, float], ...]) -> str:
+    """One line for the output: what was sent for sampling and why."""
+    if not fields:
+        return (f"sampling: {preset} for a {family} server: no sampling fields sent (the server's own defaults"
+                f"{'; OpenAI has no penalties or truncation by default' if family == 'openai' else ''})")
+    sent = ", ".join(f"{k}={v:g}" for k, v in fields)
+    return f"sampling: {preset} for a {family} server: {sent}"
