@@ -30,8 +30,12 @@ def o200k(text: str) -> int:
     return len(O200K.encode(text))
 
 
+#: What the stand-in for a paid API lists at /v1/models (a model it does not list is not priced).
+LISTED = ("gpt-4", "gpt-4o", "gpt-4o-mini")
+
+
 def priced_server(**kw) -> FakeServer:
-    return FakeServer(reply=hash_reply, tokens=o200k, **kw)
+    return FakeServer(reply=hash_reply, tokens=o200k, **{"models": LISTED, **kw})
 
 
 def billed_usd(srv: FakeServer, model: str) -> float:

@@ -709,11 +709,11 @@ class LLMClient:
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
         status = resp.status_code
-        if status not in (200, 408, 429):  # a validation error is a rejection whatever its status
-            invalid = validation_error(resp)
+        if status in RETRY_STATUSES or status >= 500:
+            # A 5xx whose body is a request-validation error is the server refusing the request.
+            invalid = validation_error(resp) if status not in (408, 429) else None
             if invalid is not None:
                 raise self._rejection(status, invalid, payload, invalid=True)
-        if status in RETRY_STATUSES or status >= 500:
             detail = server_text(resp)
             raise _Failure(f"HTTP {status}" + (f": {detail}" if detail else ""),
                            retry_after=parse_retry_after(resp.headers))
@@ -721,7 +721,7 @@ class LLMClient:
             said = server_text(resp)
             if status == 400 and self.reasoning.adapt(said, payload, s.model):
                 raise _Adapted()  # the server said what it wants: send the request again as amended
-            raise self._rejection(status, said, payload)
+            raise self._rejection(status, said, payload, invalid=validation_error(resp) is not None)
         text = resp.text
         ctype = resp.headers.get("content-type", "")
         try:
