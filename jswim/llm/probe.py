@@ -194,8 +194,6 @@ def probe(base_url: str, *, api_key_env: str = "OPENAI_API_KEY", timeout_s: floa
         if listed.status_code in (401, 403):
             said = server_text(listed)
             said = f"HTTP {listed.status_code}: {said}" if said else f"HTTP {listed.status_code}"
-            if key:
-                said = said.replace(key, "***")
             raise LLMSetupError(f"{where} refused the preflight request GET /v1/models ({said}); "
                                 f"{key_hint(api_key_env)}", listed.status_code, said)
         body = _json(listed)

@@ -21,6 +21,7 @@ from typing import Any, Mapping
 
 import httpx
 
+from jswim.llm.credentials import scrub
 from jswim.llm.errors import LLMRequestError, LLMSetupError
 from jswim.llm.reply import error_message
 
@@ -50,7 +51,12 @@ _TRACEBACK = "Traceback (most recent call last)"
 
 def raw_error_text(resp: httpx.Response) -> str:
     """The error text of a response as sent (line breaks kept): the ``error.message``, the
-    pydantic ``detail`` list as ``loc: msg`` items, or the body text."""
+    pydantic ``detail`` list as ``loc: msg`` items, or the body text; credentials masked
+    (:func:`jswim.llm.credentials.scrub`) before anything trims it, so no cut leaves part of a key."""
+    return scrub(_raw_error_text(resp))
+
+
+def _raw_error_text(resp: httpx.Response) -> str:
     try:
         body = resp.json()
     except ValueError:
