@@ -56,9 +56,16 @@ PHYSICS = ("tests/test_physics.py", "tests/test_env.py", "tests/test_four_dof.py
 PROGRESS = ("tests/test_memory.py", "tests/test_llm_agent.py", "tests/test_pipelines.py")
 
 
+#: Where the env step lives (a package since the continuous-env change; a module before).
+ENV_STEP = "jswim/env/stepping.py|jswim/env.py"
+
+
 @dataclass(frozen=True)
 class Mutant:
-    """One edit: ``old`` (which must occur once in ``path``) becomes ``new``."""
+    """One edit: ``old`` (which must occur once in ``path``) becomes ``new``.
+
+    ``path`` may list alternatives separated by ``|`` (the first that exists is used), so the
+    same list checks a checkout from before a module moved."""
 
     name: str
     path: str
@@ -139,13 +146,13 @@ MUTANTS: tuple[Mutant, ...] = (
            "if len({c[2] for c in cands}) == 1:", "if len({c[2] for c in cands}) >= 1:", PROMPT,
            "guesses among several candidates"),
     # -- physics and the environment step ----------------------------------------------------------
-    Mutant("env-progress-sign-exact", "jswim/env.py",
+    Mutant("env-progress-sign-exact", ENV_STEP,
            "progress = (jnp.asarray(params.direction, f64) * dx)", "progress = (-jnp.asarray(params.direction, f64) * dx)",
            PROGRESS, "reward of the wrong sign (the exact path, every default run)"),
-    Mutant("env-stuck-level", "jswim/env.py",
+    Mutant("env-stuck-level", ENV_STEP,
            "stuck = ((roc == 1) & (level == 1))", "stuck = ((roc == 1) & (level == 0))", PHYSICS,
            "pushing past a limit moves"),
-    Mutant("env-noise-factor", "jswim/env.py",
+    Mutant("env-noise-factor", ENV_STEP,
            "factor = 1.0 + jnp.asarray(params.zeta, f64) * jnp.asarray(y_noise, f64)",
            "factor = 1.0 + 0.5 * jnp.asarray(params.zeta, f64) * jnp.asarray(y_noise, f64)", PHYSICS,
            "noise half as strong as zeta says"),
@@ -233,7 +240,10 @@ def main() -> None:
                     raise SystemExit(f"the unmutated tests do not pass: fix them first\n{tail}")
         rows = []
         for m in mutants:
-            path = copy / m.path
+            path = next((copy / p for p in m.path.split("|") if (copy / p).is_file()), None)
+            if path is None:
+                rows.append((m, "?", "gone (no such file)", 0.0))
+                continue
             original = path.read_text()
             count = original.count(m.old)
             if count != 1:
@@ -254,7 +264,7 @@ def main() -> None:
         change = f"`{m.old.strip()[:60]}` -> `{m.new.strip()[:60]}`" if m.new else f"`{m.old.strip()[:60]}` removed"
         change = change.replace("\n", " ").replace("|", "\\|")
         tests = ", ".join(sorted({Path(t.split("::")[0]).stem for t in m.tests}))
-        print(f"| {m.name} | {m.path}:{line} | {change} | {tests} | {verdict} ({dt:.0f} s) |")
+        print(f"| {m.name} | {m.path.split('|')[0]}:{line} | {change} | {tests} | {verdict} ({dt:.0f} s) |")
     survived = [r for r in rows if r[2] == "SURVIVED"]
     print(f"\n{len(rows) - len(survived)} of {len(rows)} caught; {len(survived)} survived.")
 
