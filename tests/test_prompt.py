@@ -312,6 +312,9 @@ def test_per_step_text_goes_last_and_the_paper_prompt_is_unchanged():
         ("Since [1, 1] was stuck, I'd go with [2, -1].", Action(2, -1)),
         ("The move [1, 1] failed; next move: [2, -1]", Action(2, -1)),
         ("Final answer: [2, 1]", Action(2, 1)),
+        # Several answer words: the last one decides (a model that changes its mind).
+        ("I choose [1, 1]. On second thought, the answer is [2, -1]", Action(2, -1)),
+        ("Answer: [1, 1]... wait, that is stuck. Final answer: [2, 1]", Action(2, 1)),
         ("[2, -1] because [1, 1] was stuck.", Action(2, -1)),  # answer first
         ('{"dof": 2, "roc": -1}', Action(2, -1)),
         # Two pairs, neither in an answer position: ambiguous, ask again.
