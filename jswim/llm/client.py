@@ -752,7 +752,7 @@ class LLMClient:
         if s.prices is None and not self._prices.agrees(s.model, replied):
             if self.unpriced is None:
                 self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}: its calls are not priced at "
-                                 f"{s.model}'s list price")
+                                 f"{s.model}'s list price; --prices FILE gives your own prices, applied as given")
             return 0.0
         return self._prices.cost(s.model, usage)
 

@@ -131,7 +131,7 @@ def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *,
                                 f"{PRICE_LOCAL_OPTION} prices it (a local gateway to a paid API)")
     if listed is not None and model not in listed:
         return PriceTable({}), (f"the server does not list {model!r}, so its calls are not priced at "
-                                f"{model}'s list price; pass your own price table to count them")
+                                f"{model}'s list price; --prices FILE gives your own prices, applied as given")
     return table, None
 
 
