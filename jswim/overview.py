@@ -225,10 +225,18 @@ def compare_table(folders: Sequence[str | Path]) -> tuple[list[StudyFolder], lis
                                                             "learn median", "tok/step", "cost $")]
     rows = []
     for key in order:
+        # A baseline (Q-learning, random) is the same rows in every study of the same grid and
+        # seed: print it once, naming the studies that hold it, instead of once per study.
+        shown: dict[tuple, list[int]] = {}
         for i, k in enumerate(keyed):
             s = k[key]
+            same = (s["n"], s.get("success_rate"), s.get("mean_x"), s.get("steps_to_learn_median")) \
+                if key[0] != "llm" else (i,)
+            shown.setdefault(same, []).append(i)
+        for members in shown.values():
+            s = keyed[members[0]][key]
             row = [str(key[0]), str(key[1]), _dir(key[2])] + ([str(key[3] or "")] if groups else [])
-            row += [f"[{i + 1}]", str(s["n"]), _p_cell(s), _x_cell(s),
+            row += ["".join(f"[{i + 1}]" for i in members), str(s["n"]), _p_cell(s), _x_cell(s),
                     _fmt(s["steps_to_learn_median"], "g") if s.get("learned") else "-",
                     _fmt(s.get("tokens_per_step"), ".0f"), _cost_cell(s.get("cost_usd"))]
             rows.append(row)

@@ -125,6 +125,11 @@ def test_show_and_compare_commands(folder, tmp_path, capsys):
     assert cli.main(["compare", str(folder), str(folder)]) == 0
     text = capsys.readouterr().out
     assert text.count("[1]") == text.count("[2]") == 1 + 2 * 2 * 3  # header + one row per setting
+    # each baseline printed once (the same runs in both folders), each LLM row once per study
+    lines = text.splitlines()
+    assert sum(ln.startswith("qlearning") for ln in lines) == sum(ln.startswith("random") for ln in lines) == 4
+    assert all("[1][2]" in ln for ln in lines if ln.startswith(("qlearning", "random")))
+    assert sum(ln.startswith("llm") for ln in lines) == 2 * 4
     assert cli.main(["compare", str(folder)]) == 2
     assert "at least two" in capsys.readouterr().err
     assert cli.main(["show", str(tmp_path)]) == 2
