@@ -296,11 +296,12 @@ def build_parser() -> argparse.ArgumentParser:
                                    "with a bootstrap interval, median steps to learn, tokens per step and cost, "
                                    "one row per study. Only reads.")
     p.add_argument("folders", nargs="+", metavar="FOLDER", help="two or more study folders")
-    from jswim.commands import animate, report, serve  # commands in their own modules register themselves
+    from jswim.commands import animate, bench, report, serve  # commands in their own modules register themselves
 
     serve.register(sub)
     report.register(sub)
     animate.register(sub)
+    bench.register(sub)
     return ap
 
 

@@ -183,6 +183,13 @@ class _Handler(BaseHTTPRequestHandler):
         self._send(200, completion(body))
 
 
+class _Server(ThreadingHTTPServer):
+    daemon_threads = True
+
+    def handle_error(self, request: Any, client_address: Any) -> None:
+        return None  # a client that went away mid-answer (Ctrl-C of a study) is not an error here
+
+
 class ReferenceServer:
     """The reference agent's server on ``127.0.0.1`` (port 0: a free one); a context manager.
 
@@ -191,8 +198,7 @@ class ReferenceServer:
     """
 
     def __init__(self, host: str = "127.0.0.1", port: int = 0) -> None:
-        self._httpd = ThreadingHTTPServer((host, port), _Handler)
-        self._httpd.daemon_threads = True
+        self._httpd = _Server((host, port), _Handler)
         self._thread: threading.Thread | None = None
 
     @property

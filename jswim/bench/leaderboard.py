@@ -1,0 +1,169 @@
+"""The bench's leaderboard: one row per model (or baseline) and setting, from the study folders.
+
+Read only from the folders, so it is the same after a resume and can be redrawn at any time.
+Rows (``leaderboard.csv`` / ``leaderboard.json``, this schema; ``null`` where a value does not
+apply):
+
+=====================  ==========================================================================
+column                 meaning
+=====================  ==========================================================================
+``row``                the model's name, or ``Q-learning``, ``random``, ``reference``
+``kind``               ``llm``, ``baseline`` (Q-learning, random) or ``reference`` (the prompt-only
+                       rule of ``jswim serve reference``; not an LLM)
+``part``               the suite part (a study: ``curves``, ``noise``, ...)
+``swimmer``            ``purcell``, ``ng``, ...
+``direction``          +1 or -1 (target)
+``group``              the study's cell (``zeta=1``, ``n_ht=3``, ...; empty for one-cell studies)
+``n``                  runs
+``success``            success rate p (the paper's criterion, ``jswim.gait.judge``)
+``success_lo/hi``      its 95% Wilson interval
+``learned``            runs that learned ("k of n learned")
+``steps_median``       median steps to learn over the runs that learned (counted from 1)
+``steps_q25/q75``      their quartiles (the IQR)
+``mean_x``             mean X/a after the last step, toward the target; ``mean_x_lo/hi`` bootstrap 95%
+``failed_steps``       LLM steps without a valid action (summed over the runs)
+``tokens_per_step``    prompt + reply tokens per decision
+``suite_cost_usd``     what the model's calls cost over the whole suite (its call journals)
+``priced``             false when no price applied to the model (its cost is not counted, not $0)
+``status``             the model's bench status: ``complete``, ``failed: ...``, ``stopped at the
+                       cost cap``, ``interrupted``, ``not run``
+=====================  ==========================================================================
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+from jswim.console import Column, plain_table
+
+FIELDS = ("row", "kind", "part", "swimmer", "direction", "group", "n", "success", "success_lo", "success_hi",
+          "learned", "steps_median", "steps_q25", "steps_q75", "mean_x", "mean_x_lo", "mean_x_hi", "failed_steps",
+          "tokens_per_step", "suite_cost_usd", "priced", "status")
+
+_LABELS = {"qlearning": "Q-learning", "random": "random"}
+
+
+def folder_rows(folder: Path, label: str, kind: str, part: str, cost: float | None, priced: bool | None,
+                status: str) -> list[dict[str, Any]]:
+    """Leaderboard rows of one study folder (nothing when it holds no finished runs)."""
+    from jswim.results import read_runs  # lazy: pandas and JAX only when a leaderboard is built
+    from jswim.studies.report import summarize
+
+    if not (folder / "metadata.json").exists():
+        return []
+    out = []
+    for s in summarize(read_runs(folder)):
+        agent = s["agent"]
+        if kind == "baseline" and agent == "llm":
+            continue
+        out.append({
+            "row": _LABELS.get(agent, label) if kind == "baseline" else label, "kind": kind, "part": part,
+            "swimmer": s["swimmer"], "direction": s["direction"], "group": s.get("group") or "",
+            "n": s["n"], "success": s["success_rate"], "success_lo": s["success_lo"], "success_hi": s["success_hi"],
+            "learned": s["learned"], "steps_median": s["steps_to_learn_median"], "steps_q25": s["steps_to_learn_q25"],
+            "steps_q75": s["steps_to_learn_q75"], "mean_x": s["mean_x"], "mean_x_lo": s["mean_x_lo"],
+            "mean_x_hi": s["mean_x_hi"], "failed_steps": s["failed_steps"] if agent == "llm" else None,
+            "tokens_per_step": s.get("tokens_per_step") if agent == "llm" else None,
+            "suite_cost_usd": cost if kind != "baseline" else None, "priced": priced if kind != "baseline" else None,
+            "status": status,
+        })
+    return out
+
+
+def _num(v: Any, spec: str) -> str:
+    return "-" if v is None else format(v, spec)
+
+
+def _steps(r: Mapping[str, Any]) -> str:
+    if not r["learned"]:
+        return f"- (0 of {r['n']})"
+    return f"{r['steps_median']:g} [{r['steps_q25']:g}-{r['steps_q75']:g}] ({r['learned']} of {r['n']})"
+
+
+def _cost(r: Mapping[str, Any]) -> str:
+    if r["kind"] == "baseline":
+        return "-"
+    if r["priced"] is False:
+        return "not priced"
+    return _num(r["suite_cost_usd"], ".4f")
+
+
+def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> str:
+    """The leaderboard as a plain table, grouped by setting, models then reference then baselines."""
+    groups = any(r["group"] for r in rows)
+    cols = [Column("part", False), Column("swimmer", False), Column("dir", False)]
+    cols += [Column("group", False)] if groups else []
+    cols += [Column("row", False)] + [Column(h) for h in ("n", "success p [95% CI]", "steps to learn, median [IQR] "
+                                                          "(k of n learned)", "X/a end", "fail", "tok/step",
+                                                          "suite $")]
+    order = {"llm": 0, "reference": 1, "baseline": 2}
+    key = lambda r: (r["part"], r["swimmer"] != "purcell", r["swimmer"], -int(r["direction"]), str(r["group"]),
+                     order[r["kind"]], r["row"])
+    cells = []
+    for r in sorted(rows, key=key):
+        cells.append([r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x"] + ([r["group"]] if groups else [])
+                     + [r["row"] + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
+                        + ("" if r["status"] == "complete" or r["kind"] == "baseline" else f" [{r['status']}]"),
+                        str(r["n"]), f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]", _steps(r),
+                        f"{r['mean_x']:+.3f}", _num(r["failed_steps"], "d"), _num(r["tokens_per_step"], ".0f"),
+                        _cost(r)])
+    return plain_table(cols, cells, width=width)
+
+
+def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any]) -> list[Path]:
+    """``leaderboard.csv``, ``leaderboard.json`` (rows and the bench's definition) and the figure."""
+    from jswim.results import atomic_write, dumps
+
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=FIELDS)
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in FIELDS})
+    atomic_write(folder / "leaderboard.csv", buf.getvalue())
+    atomic_write(folder / "leaderboard.json", dumps({"schema": list(FIELDS), "bench": dict(meta), "rows": list(rows)},
+                                                    indent=1))
+    paths = [folder / "leaderboard.csv", folder / "leaderboard.json"]
+    if rows:
+        paths += figure(folder, rows)
+    return paths
+
+
+def figure(folder: Path, rows: Sequence[Mapping[str, Any]]) -> list[Path]:
+    """Success p with its 95% interval per row, one panel per part, swimmer and direction."""
+    import matplotlib.pyplot as plt
+
+    from jswim import plots
+
+    panels = sorted({(r["part"], r["swimmer"], r["direction"], r["group"]) for r in rows},
+                    key=lambda k: (k[0], k[1] != "purcell", k[1], -k[2], str(k[3])))
+    labels = sorted({r["row"] for r in rows if r["kind"] == "llm"}) + \
+        sorted({r["row"] for r in rows if r["kind"] == "reference"}) + ["Q-learning", "random"]
+    labels = [lab for lab in labels if any(r["row"] == lab for r in rows)]
+    ncol = min(4, len(panels))
+    nrow = -(-len(panels) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(7.0, 0.4 + (0.35 * len(labels) + 0.6) * nrow), squeeze=False,
+                             sharex=True)
+    colors = {"llm": "#0072B2", "reference": "#E69F00", "baseline": "#7f7f7f"}
+    for ax, (part, sw, d, g) in zip(axes.flat, panels):
+        for i, lab in enumerate(labels):
+            r = next((r for r in rows if (r["part"], r["swimmer"], r["direction"], r["group"], r["row"])
+                      == (part, sw, d, g, lab)), None)
+            if r is None:
+                continue
+            ax.errorbar(r["success"], i, xerr=[[r["success"] - r["success_lo"]], [r["success_hi"] - r["success"]]],
+                        fmt="o", ms=3, color=colors[r["kind"]], capsize=2, lw=1)
+        ax.set_yticks(range(len(labels)), labels if ax in axes[:, 0] else [""] * len(labels), fontsize=6)
+        ax.set_ylim(len(labels) - 0.5, -0.5)
+        ax.set_xlim(-0.05, 1.05)
+        ax.set_title(f"{part}: {sw} {'+x' if d > 0 else '-x'}{' ' + g if g else ''}", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.grid(axis="x", lw=0.3)
+    for ax in list(axes.flat)[len(panels):]:
+        ax.axis("off")
+    for ax in axes[-1]:
+        ax.set_xlabel("success p [95% CI]", fontsize=7)
+    fig.tight_layout()
+    return plots.save(fig, folder, "leaderboard")

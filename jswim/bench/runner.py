@@ -1,0 +1,245 @@
+"""Running a bench: every model's suite at once, each model in its own processes and folders.
+
+Layout of a bench folder::
+
+    bench.json               the suite's definition and seed, the models (no keys), status per model
+    prices.json              the models file's [prices] table, when it has one
+    <model>/<part>/          an ordinary study folder per model and suite part (show, plot, resume)
+    <model>/<part>.log       what that study printed
+    reference/<part>/        the prompt-only reference rule (jswim serve reference; not an LLM)
+    baselines/<part>/        Q-learning and random, run once for all models
+    leaderboard.csv, .json   the leaderboard (schema: jswim.bench.leaderboard), leaderboard.png/.pdf
+
+Each study is a ``jswim study`` child process with the model's own flags, so every model's
+calls are in flight together, each model paced (``--rpm``/``--tpm``), bounded (``--concurrency``)
+and capped (``max_cost`` over its whole suite: each part gets what the model's earlier parts left)
+on its own, and one model's failure (a server down, a rejected key, its cap) stops only that
+model. A model's parts run one after another. Ctrl-C stops every child cleanly (each keeps its
+finished runs and answered calls, ``interrupted``); the same command resumes, paying no call twice
+(each study's call journal). A model added to the models file later runs alone on the next call:
+the others' folders are complete and only read.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+from jswim.bench.models import ModelEntry
+from jswim.bench.suites import SIZE_OPTIONS, Part, Suite
+from jswim.errors import ConfigError
+from jswim.results import atomic_write, dumps
+
+REFERENCE = "reference"
+BASELINES = "baselines"
+
+
+@dataclass
+class Job:
+    """One study folder of the bench and the command that fills it."""
+
+    label: str  # model name, "reference" or "baselines"
+    kind: str  # "llm", "reference", "baseline"
+    part: Part
+    folder: Path
+    argv: list[str]
+    model: ModelEntry | None = None
+    proc: subprocess.Popen | None = None
+    rc: int | None = None
+    log: Path | None = None
+
+
+def _ignores(study: str) -> tuple[str, ...]:
+    from jswim.studies.grids import SPECS  # lazy: the grids load JAX
+
+    return SPECS[study].ignores
+
+
+def part_args(part: Part, suite: Suite) -> list[str]:
+    """The part's study command with the bench's size overrides (those the study uses)."""
+    sizes = {k: v for k, v in suite.sizes if k not in _ignores(part.study)}
+    return part.args(suite.seed, sizes)
+
+
+def plan(models: Sequence[ModelEntry], suite: Suite, out: Path, *, prices_file: Path | None,
+         reference_url: str | None, baselines: bool = True) -> list[Job]:
+    """Every study folder of the bench: per model (and the reference rule) and part; the baselines."""
+    jobs: list[Job] = []
+    for part in suite.parts:
+        uses_baselines = "q_runs" not in _ignores(part.study)
+        base = part_args(part, suite)
+        for m in models:
+            argv = base + m.args() + (["--prices", str(prices_file)] if prices_file else [])
+            argv += ["--q-runs", "0"] if uses_baselines else []
+            jobs.append(Job(m.name, "llm", part, out / m.name / part.name, argv, m))
+        if reference_url is not None:
+            from jswim.llm.reference import MODEL
+
+            argv = base + ["--base-url", reference_url, "--model", MODEL] + (["--q-runs", "0"] if uses_baselines else [])
+            jobs.append(Job(REFERENCE, "reference", part, out / REFERENCE / part.name, argv))
+        if baselines and uses_baselines:
+            jobs.append(Job(BASELINES, "baseline", part, out / BASELINES / part.name, base + ["--runs", "0"]))
+    for j in jobs:
+        j.argv = j.argv + ["--out", str(j.folder), "--no-figures"]
+        j.log = j.folder.parent / f"{j.part.name}.log"
+    return jobs
+
+
+def definition(suite: Suite, models: Sequence[ModelEntry], reference: bool, baselines: bool) -> dict[str, Any]:
+    return {"suite": suite.describe(), "reference": reference, "baselines": baselines,
+            "models": [m.describe() for m in models]}
+
+
+def open_folder(out: Path, meta: dict[str, Any]) -> dict[str, Any]:
+    """Create or resume a bench folder; refuse one made with another suite definition."""
+    path = out / "bench.json"
+    if path.exists():
+        try:
+            old = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise ConfigError(f"{path} is not a bench record ({exc}); use another --out") from None
+        if old.get("suite") != json.loads(dumps(meta["suite"])):  # compared as stored (tuples become lists)
+            raise ConfigError(f"{out} holds a bench of another suite definition ({old.get('suite', {}).get('name')!r}, "
+                              "its parts, seed or sizes differ); use another --out to keep both")
+        meta = {**old, **meta, "model_status": old.get("model_status", {})}
+    elif out.exists() and any(out.iterdir()):
+        raise ConfigError(f"{out} is not empty and is not a bench folder; use another --out")
+    out.mkdir(parents=True, exist_ok=True)
+    meta.setdefault("model_status", {})
+    write_meta(out, meta)
+    return meta
+
+
+def write_meta(out: Path, meta: dict[str, Any]) -> None:
+    atomic_write(out / "bench.json", dumps(meta, indent=1))
+
+
+def spent(folder: Path) -> float:
+    """What a study folder's answered calls cost (its call journal)."""
+    from jswim.llm.journal import CallJournal
+
+    return CallJournal(folder).spent_usd if (folder / "calls.jsonl").exists() else 0.0
+
+
+def _last_error(log: Path) -> str:
+    try:
+        lines = log.read_text(encoding="utf-8", errors="replace").splitlines()
+    except OSError:
+        return "no output"
+    errors = [ln for ln in lines if ln.startswith("jswim: error:")]
+    text = errors[-1] if errors else next((ln for ln in reversed(lines) if ln.strip()), "no output")
+    return text.removeprefix("jswim: error: ").strip()
+
+
+def _count(folder: Path) -> tuple[int, int | None]:
+    """Runs done and planned of a study folder (cheap: line counts)."""
+    done = 0
+    try:
+        with open(folder / "runs.jsonl", "rb") as fh:
+            done = sum(1 for _ in fh)
+    except OSError:
+        pass
+    try:
+        planned = json.loads((folder / "metadata.json").read_text(encoding="utf-8")).get("n_planned")
+    except (OSError, ValueError):
+        planned = None
+    return done, planned
+
+
+@dataclass
+class Outcome:
+    """What happened to each row of the bench in this call."""
+
+    status: dict[str, str] = field(default_factory=dict)  # label -> complete / failed: ... / ...
+    interrupted: bool = False
+
+
+def run_jobs(jobs: list[Job], out: Path, meta: dict[str, Any], say: Callable[[str], None],
+             every_s: float = 10.0) -> Outcome:
+    """Run the jobs: one at a time per label, every label at once; returns each label's status."""
+    queues: dict[str, list[Job]] = {}
+    for j in jobs:
+        queues.setdefault(j.label, []).append(j)
+    result = Outcome({label: "running" for label in queues})
+    running: dict[str, Job] = {}
+    env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+
+    def launch(label: str) -> None:
+        job = queues[label].pop(0)
+        argv = list(job.argv)
+        if job.model is not None and job.model.max_cost is not None:
+            # The model's cap is over its whole suite: this part may spend what the others left.
+            others = sum(spent(j.folder) for j in jobs if j.label == label and j.folder != job.folder)
+            argv += ["--max-cost", f"{max(0.0, job.model.max_cost - others) + spent(job.folder):.6f}"]
+        job.folder.parent.mkdir(parents=True, exist_ok=True)
+        log = open(job.log, "a", encoding="utf-8")
+        log.write(f"$ jswim {' '.join(argv)}\n")
+        log.flush()
+        job.proc = subprocess.Popen([sys.executable, "-m", "jswim", *argv], stdout=log, stderr=subprocess.STDOUT,
+                                    stdin=subprocess.DEVNULL, env=env, start_new_session=True)
+        log.close()
+        running[label] = job
+
+    def finish(label: str, job: Job) -> None:
+        job.rc = job.proc.returncode
+        del running[label]
+        what = f"{label} {job.part.name}"
+        if job.rc == 0:
+            say(f"bench: {what}: done")
+        elif job.rc == 3:
+            result.status[label] = "stopped at the cost cap"
+            say(f"bench: {what}: stopped at the model's cost cap (max_cost); its other parts are skipped")
+            queues[label].clear()
+        elif job.rc == 2 and "LLM runs failed" in _last_error(job.log):
+            result.status[label] = "incomplete"
+            say(f"bench: {what}: some runs failed ({_last_error(job.log)})")
+        elif job.rc == 130:
+            result.status[label] = "interrupted"
+        else:
+            result.status[label] = f"failed: {_last_error(job.log)}"
+            say(f"bench: {label} failed at {job.part.name}: {_last_error(job.log)} (see {job.log}); "
+                "the other models go on")
+            queues[label].clear()
+        if not queues[label] and result.status[label] == "running":
+            result.status[label] = "complete"
+
+    last = 0.0
+    try:
+        for label in queues:
+            launch(label)
+        while running:
+            time.sleep(0.2)
+            for label, job in list(running.items()):
+                if job.proc.poll() is not None:
+                    finish(label, job)
+                    if queues[label]:
+                        launch(label)
+            if time.monotonic() - last >= every_s and running:
+                last = time.monotonic()
+                parts = []
+                for label, job in running.items():
+                    done, planned = _count(job.folder)
+                    parts.append(f"{label} {job.part.name} {done}/{planned if planned is not None else '?'}")
+                say("bench: running " + " · ".join(parts))
+    except KeyboardInterrupt:
+        result.interrupted = True
+        for job in running.values():
+            if job.proc.poll() is None:
+                job.proc.send_signal(signal.SIGINT)  # each study keeps its runs and answered calls
+        deadline = time.monotonic() + 30
+        for job in running.values():
+            try:
+                job.proc.wait(max(0.1, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                job.proc.kill()
+                job.proc.wait()
+        for label in running:
+            result.status[label] = "interrupted"
+    return result

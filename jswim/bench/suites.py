@@ -1,0 +1,147 @@
+"""Bench suites: named lists of study parts, each a study and its options, with a seed.
+
+A suite's definition (parts, options, seed, sizes) is recorded in the bench folder
+(``bench.json``), so two labs running ``core`` get comparable rows; a folder made with another
+definition is refused, not mixed.
+
+``core`` -- the paper's headline results at a price a lab pays for every new model (its dry run
+on gpt-4o: 3,000 calls, $1.94 (at most $2.08 if every reply ran to max_tokens) at the 2025-04 list prices):
+
+- ``curves``: the paper's protocol and start (Purcell (pi/3, pi/3), NG (10, 6)), n_ht per swimmer
+  (Purcell 3, NG 3 / 6), 50 steps, both swimmers and both directions, 10 LLM runs each
+  (Fig. 2: success p and steps to learn);
+- ``noise``: the same at noise zeta = 1, target +x, 10 LLM runs per swimmer (Fig. 4's middle
+  level: is the stroke kept under noise).
+
+With 10 runs per setting, a success rate's 95% Wilson interval is [0, 0.28] at 0 of 10 and
+[0.72, 1] at 10 of 10, and at most 0.56 wide (5 of 10: [0.24, 0.76]); two models differ
+credibly when their intervals do not overlap.
+
+``paper`` -- every figure of the paper with its studies' own defaults (``jswim study`` NAME):
+curves (both directions), history (n_ht 1..8, both directions), noise (zeta 0..3), ablation
+(S1..S5 removed) and inits (the four starts, both directions).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+from jswim.errors import ConfigError
+
+#: Study options a suite part may set (StudyOptions through the command line; name -> flag).
+PART_OPTIONS = {
+    "swimmer": "--swimmer", "direction": "--direction", "steps": "--steps", "runs": "--runs",
+    "q_runs": "--q-runs", "n_ht": "--n-ht", "noise": "--noise", "init": "--init", "action_set": "--action-set",
+    "variant": "--variant", "prompt_file": "--prompt-file", "x_min": "--x-min", "zetas": "--zetas",
+    "n_hts": "--n-hts", "seed": "--seed",
+}
+
+#: Sizes a bench command may override for every part (``--runs``, ``--q-runs``, ``--steps``);
+#: recorded in the definition (rows then say they are not the suite's own sizes).
+SIZE_OPTIONS = ("runs", "q_runs", "steps")
+
+
+@dataclass(frozen=True)
+class Part:
+    """One study of a suite: ``study`` (a ``jswim study`` name, or ``swim``) and its options."""
+
+    name: str
+    study: str
+    options: tuple[tuple[str, Any], ...] = ()
+
+    def args(self, seed: int, sizes: Mapping[str, Any] | None = None) -> list[str]:
+        """The command line of this part (``jswim study NAME ...``), options then size overrides."""
+        opts = dict(self.options)
+        opts.setdefault("seed", seed)
+        opts.update({k: v for k, v in (sizes or {}).items() if v is not None})
+        out = ["swim"] if self.study == "swim" else ["study", self.study]
+        for key, value in opts.items():
+            flag = PART_OPTIONS[key]
+            if isinstance(value, (list, tuple)):
+                value = ",".join(str(v) for v in value)
+            out += [flag, str(value)]
+        return out
+
+    def describe(self) -> dict[str, Any]:
+        return {"name": self.name, "study": self.study, "options": dict(self.options)}
+
+
+@dataclass(frozen=True)
+class Suite:
+    """A named list of parts and the seed of every study in it."""
+
+    name: str
+    parts: tuple[Part, ...]
+    seed: int = 0
+    about: str = ""
+    sizes: tuple[tuple[str, Any], ...] = field(default=())  # overrides of SIZE_OPTIONS
+
+    def describe(self) -> dict[str, Any]:
+        """The definition recorded in ``bench.json`` (compared when a bench folder is resumed)."""
+        return {"name": self.name, "seed": self.seed, "parts": [p.describe() for p in self.parts],
+                "size_overrides": dict(self.sizes)}
+
+
+CORE = Suite("core", (
+    Part("curves", "curves", (("direction", "both"), ("runs", 10), ("init", "paper"))),
+    Part("noise", "noise", (("zetas", (1.0,)), ("runs", 10), ("init", "paper"))),
+), seed=0, about="the paper's headline results: p and steps to learn, both swimmers and directions; zeta = 1")
+
+PAPER = Suite("paper", (
+    Part("curves", "curves", (("direction", "both"),)),
+    Part("history", "history", ()),
+    Part("noise", "noise", ()),
+    Part("ablation", "ablation", ()),
+    Part("inits", "inits", ()),
+), seed=0, about="every figure of the paper, each study at its own defaults")
+
+SUITES = {"core": CORE, "paper": PAPER}
+
+
+def _check_name(name: str, what: str) -> str:
+    import re
+
+    if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}", str(name)):
+        raise ConfigError(f"{what} {name!r}: use letters, digits, '.', '_' or '-' (it names a folder)")
+    return str(name)
+
+
+def user_suite(name: str, table: Any, where: str) -> Suite:
+    """A suite from a models file's ``[suites.NAME]`` table.
+
+    Either one study (``study = "history"`` and an ``options`` table) or a list of parts
+    (``[[suites.NAME.parts]]`` each with ``name``, ``study``, ``options``); ``seed`` optional.
+
+    Raises
+    ------
+    ConfigError
+        For an unknown study or option (one line, naming the file).
+    """
+    from jswim.studies.grids import STUDIES  # lazy: the grids load JAX
+
+    if not isinstance(table, Mapping):
+        raise ConfigError(f"{where}: [suites.{name}] must be a table")
+    parts_in = table.get("parts")
+    if parts_in is None:
+        parts_in = [{"name": table.get("study", name), "study": table.get("study"), "options": table.get("options", {})}]
+    parts = []
+    for i, p in enumerate(parts_in):
+        if not isinstance(p, Mapping) or p.get("study") not in STUDIES:
+            raise ConfigError(f"{where}: suite {name!r} part {i + 1}: study must be one of {', '.join(STUDIES)}")
+        opts = p.get("options") or {}
+        if not isinstance(opts, Mapping):
+            raise ConfigError(f"{where}: suite {name!r} part {i + 1}: options must be a table")
+        bad = sorted(set(opts) - set(PART_OPTIONS))
+        if bad:
+            raise ConfigError(f"{where}: suite {name!r}: unknown option {bad[0]!r}; choose from "
+                              f"{', '.join(sorted(PART_OPTIONS))}")
+        parts.append(Part(_check_name(p.get("name") or p["study"], "suite part"), p["study"],
+                          tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in opts.items())))
+    if len({p.name for p in parts}) != len(parts):
+        raise ConfigError(f"{where}: suite {name!r} has two parts of the same name")
+    try:
+        seed = int(table.get("seed", 0))
+    except (TypeError, ValueError):
+        raise ConfigError(f"{where}: suite {name!r}: seed must be an integer") from None
+    return Suite(_check_name(name, "suite"), tuple(parts), seed, str(table.get("about", "")))

@@ -1,0 +1,182 @@
+"""``jswim bench``: one suite over several models at once, and a leaderboard."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+from jswim.errors import ConfigError
+
+#: Exit status when a model failed or stopped at its cap (the others finished).
+EXIT_SOME_FAILED = 2
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("bench", help="run a suite over several models at once and print a leaderboard",
+                       description="Run a suite (core: the paper's headline results; paper: every figure; or one "
+                                   "of the models file's [suites]) over every model of a models file (TOML) or of "
+                                   "repeated --model options, all at once, each model paced and capped on its "
+                                   "own, next to the reference rule and the Q-learning and random baselines; "
+                                   "write each model's studies as ordinary study folders and a leaderboard "
+                                   "(table, CSV, JSON, figure). The same command resumes.")
+    p.add_argument("models_file", nargs="?", default=None, metavar="MODELS.toml",
+                   help="the models file ([[models]] entries, optional [prices] and [suites.NAME])")
+    p.add_argument("--model", dest="model_options", action="append", default=[], metavar="KEY=VALUE,...",
+                   help="a model on the command line: base_url=URL,model=NAME[,name=LABEL,api_key_env=VAR,"
+                        "concurrency=N,rpm=N,tpm=N,max_cost=USD,reasoning=auto|on|off,...]; repeatable")
+    p.add_argument("--suite", default="core", metavar="NAME",
+                   help="core (default), paper, or a [suites.NAME] of the models file")
+    p.add_argument("--out", default=None, metavar="FOLDER", help="bench folder (default jswim-out/bench-<suite>)")
+    p.add_argument("--dry-run", action="store_true",
+                   help="price the whole bench per model (calls, tokens, cost) and exit; nothing is sent or written")
+    p.add_argument("--no-reference", action="store_true", help="leave out the reference rule's row")
+    p.add_argument("--no-baselines", action="store_true", help="leave out the Q-learning and random rows")
+    g = p.add_argument_group("sizes (change the suite: recorded, and its rows are then not the suite's own)")
+    g.add_argument("--runs", type=int, default=None, help="LLM runs per setting in every part")
+    g.add_argument("--q-runs", type=int, default=None, help="baseline runs per setting in every part")
+    g.add_argument("--steps", type=int, default=None, help="steps per run in every part")
+    p.set_defaults(command_main=main)
+
+
+def _models(args: argparse.Namespace) -> tuple[Any, Any]:
+    from jswim.bench.models import ModelsFile, check_unique, load_models_file, parse_model_option
+
+    mf = load_models_file(args.models_file) if args.models_file else ModelsFile(())
+    models = mf.models + tuple(parse_model_option(t) for t in args.model_options)
+    check_unique(models)
+    return mf, models
+
+
+def _suite(args: argparse.Namespace, mf: Any) -> Any:
+    import dataclasses
+
+    from jswim.bench.suites import SUITES
+
+    suites = {**SUITES, **{s.name: s for s in mf.suites}}
+    if args.suite not in suites:
+        raise ConfigError(f"unknown suite {args.suite!r}; choose one of {', '.join(suites)}")
+    sizes = tuple((k, getattr(args, k)) for k in ("runs", "q_runs", "steps") if getattr(args, k) is not None)
+    for k, v in sizes:
+        if v < (1 if k == "steps" else 0):
+            raise ConfigError(f"--{k.replace('_', '-')} must be >= {1 if k == 'steps' else 0}, got {v}")
+    return dataclasses.replace(suites[args.suite], sizes=sizes)
+
+
+def main(args: argparse.Namespace) -> int:
+    from jswim.bench import leaderboard, runner
+
+    mf, models = _models(args)
+    suite = _suite(args, mf)
+    out = Path(args.out or f"jswim-out/bench-{suite.name}")
+    if args.dry_run:
+        return _dry_run(suite, models, mf, out)
+    meta = runner.open_folder(out, {**runner.definition(suite, models, not args.no_reference, not args.no_baselines),
+                                    "status": "running"})
+    prices_file = None
+    if mf.prices is not None:
+        prices_file = out / "prices.json"
+        runner.atomic_write(prices_file, json.dumps({"as_of": mf.prices_as_of, "prices": mf.prices}, indent=1))
+    say = lambda text: print(text, file=sys.stderr, flush=True)
+    say(f"bench {suite.name} (seed {suite.seed}) in {out}: {len(models)} model(s)"
+        + ("" if args.no_reference else " + the reference rule") + ("" if args.no_baselines else " + baselines"))
+    ref = None
+    if not args.no_reference:
+        from jswim.llm.reference import ReferenceServer
+
+        ref = ReferenceServer().start()
+    try:
+        jobs = runner.plan(models, suite, out, prices_file=prices_file, reference_url=ref.url if ref else None,
+                           baselines=not args.no_baselines)
+        outcome = runner.run_jobs(jobs, out, meta, say)
+    finally:
+        if ref is not None:
+            ref.stop()
+    meta["model_status"].update(outcome.status)
+    meta["status"] = "interrupted" if outcome.interrupted else "complete"
+    runner.write_meta(out, meta)
+    rows = _rows(jobs, models, mf, outcome.status)
+    paths = leaderboard.write_files(out, rows, meta)
+    from jswim.console import terminal_width
+
+    print(f"bench {suite.name}: {suite.about or 'user suite'} (seed {suite.seed}"
+          + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "") + ")")
+    print(leaderboard.table_text(rows, width=terminal_width()))
+    print("success p: the paper's criterion, 95% Wilson interval; steps to learn counted from 1 over the runs that "
+          "learned; suite $: what the model's calls cost over the whole suite")
+    for p in paths:
+        print(f"wrote {p}")
+    if outcome.interrupted:
+        print(f"interrupted; finished runs and answered calls are kept in {out}. Run the same command to resume.",
+              file=sys.stderr)
+        return 130
+    bad = {k: v for k, v in outcome.status.items() if v not in ("complete",)}
+    for label, status in bad.items():
+        print(f"jswim: error: model {label}: {status}", file=sys.stderr)
+    return EXIT_SOME_FAILED if bad else 0
+
+
+def _priced(m: Any, mf: Any) -> bool:
+    from jswim.llm.urls import is_local_host
+    from jswim.llm.usage import price_table
+
+    table, why = price_table(mf.prices, m.get("model"), local_host=is_local_host(m.get("base_url")),
+                             price_local=bool(m.get("price_local")))
+    return why is None and table.entry(m.get("model")) is not None
+
+
+def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list[dict[str, Any]]:
+    from jswim.bench import leaderboard, runner
+
+    cost = {m.name: sum(runner.spent(j.folder) for j in jobs if j.label == m.name) for m in models}
+    priced = {m.name: _priced(m, mf) for m in models}
+    rows: list[dict[str, Any]] = []
+    for j in jobs:
+        rows += leaderboard.folder_rows(j.folder, j.label, j.kind, j.part.name, cost.get(j.label, 0.0),
+                                        priced.get(j.label, True), status.get(j.label, "complete"))
+    return rows
+
+
+def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
+    """Price every model's suite in process (nothing sent, nothing written)."""
+    import tempfile
+
+    from jswim import cli
+    from jswim.bench import runner
+    from jswim.console import Column, plain_table
+    from jswim.studies.run import estimate_study
+
+    with tempfile.TemporaryDirectory() as tmp:
+        prices_file = None
+        if mf.prices is not None:
+            prices_file = Path(tmp) / "prices.json"
+            prices_file.write_text(json.dumps({"as_of": mf.prices_as_of, "prices": mf.prices}))
+        jobs = runner.plan(models, suite, out, prices_file=prices_file, reference_url=None, baselines=False)
+        totals: dict[str, dict[str, Any]] = {}
+        parser = cli.build_parser()
+        for j in jobs:
+            args = parser.parse_args(j.argv)
+            study = "swim" if args.command == "swim" else args.name
+            est = estimate_study(study, cli._options(args, study), cli._backend(args), j.folder)
+            t = totals.setdefault(j.label, {"model": j.model.get("model"), "calls": 0, "prompt_tokens": 0,
+                                            "completion_tokens": 0, "cost_usd": 0.0, "cost_max_usd": 0.0,
+                                            "priced": bool(est.price_in or est.price_out),
+                                            "prices_as_of": est.prices_as_of, "note": est.unpriced})
+            for k in ("calls", "prompt_tokens", "completion_tokens", "cost_usd", "cost_max_usd"):
+                t[k] += getattr(est, k)
+    cols = [Column("model", False), Column("calls"), Column("prompt tok"), Column("completion tok"),
+            Column("cost $"), Column("at most $"), Column("prices", False)]
+    cells = [[name, f"{t['calls']:,}", f"{t['prompt_tokens']:,}", f"{t['completion_tokens']:,}",
+              f"{t['cost_usd']:.2f}" if t["priced"] else "not priced", f"{t['cost_max_usd']:.2f}" if t["priced"] else "-",
+              t["prices_as_of"] if t["priced"] else (t["note"] or f"no price for {t['model']!r}: --prices FILE")]
+             for name, t in totals.items()]
+    print(f"dry run of bench {suite.name} (seed {suite.seed}): {len(suite.parts)} part(s) per model "
+          f"({', '.join(p.name for p in suite.parts)}); no request sent, nothing written")
+    print(plain_table(cols, cells))
+    total = sum(t["cost_usd"] for t in totals.values() if t["priced"])
+    print(f"total: ${total:.2f} for the priced models; not counted: parse retries, reasoning tokens; the reference "
+          "rule and the baselines are free")
+    print(json.dumps({"suite": suite.name, "models": totals, "total_usd": total}, sort_keys=True))
+    return 0

@@ -1,0 +1,142 @@
+"""`jswim bench` end to end: two fake servers (plain; behaving as OpenAI's reasoning models) and the
+reference rule, the core suite at tiny sizes (--runs/--q-runs/--steps, the documented size
+overrides), a model whose server is down, Ctrl-C and the same command resuming with no call paid
+twice, the dry run's prices, and the leaderboard's files."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from jswim import cli
+from jswim.bench.leaderboard import FIELDS
+from jswim.bench.models import load_models_file, parse_model_option
+from jswim.errors import ConfigError
+from tests.fakeserver import FakeServer, hash_reply, reasoning_model
+
+ROOT = Path(__file__).resolve().parents[1]
+SIZES = ["--runs", "1", "--q-runs", "2", "--steps", "12"]
+
+
+def journal(folder: Path) -> list[dict]:
+    path = folder / "calls.jsonl"
+    return [json.loads(ln) for ln in path.read_text().splitlines() if ln.strip()] if path.exists() else []
+
+
+def models_file(tmp_path: Path, plain: str, reasoning: str) -> Path:
+    path = tmp_path / "models.toml"
+    path.write_text(f'''
+[[models]]
+name = "plain"
+base_url = "{plain}"
+model = "fake-plain"
+concurrency = 4
+
+[[models]]
+name = "gpt-5"
+base_url = "{reasoning}"
+model = "gpt-5"
+max_cost = 5.0
+
+[[models]]
+name = "down"
+base_url = "http://127.0.0.1:9/v1"
+model = "nothing-listens"
+
+[prices]
+as_of = "2026-11"
+"gpt-5" = [1.25, 10.0]
+''')
+    return path
+
+
+def bench(*args: str) -> subprocess.Popen:
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.Popen([sys.executable, "-m", "jswim", "bench", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT)
+
+
+@pytest.mark.slow
+def test_core_bench_three_servers_down_one_interrupt_and_resume(tmp_path):
+    out = tmp_path / "b"
+    with FakeServer(reply=hash_reply, latency=0.2) as plain, \
+            FakeServer(reply=reasoning_model(hash_reply), latency=0.2) as rsn:
+        models = models_file(tmp_path, plain.url, rsn.url)
+        first = bench(str(models), "--suite", "core", "--out", str(out), *SIZES)
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and not journal(out / "plain" / "curves"):
+            time.sleep(0.1)
+        assert journal(out / "plain" / "curves"), first.communicate()
+        first.send_signal(signal.SIGINT)
+        _, err1 = first.communicate(timeout=120)
+        assert first.returncode == 130 and "Run the same command to resume" in err1 and "Traceback" not in err1
+        assert json.loads((out / "bench.json").read_text())["status"] == "interrupted"
+        paid_before = {m: len(journal(out / m / "curves")) for m in ("plain", "gpt-5")}
+
+        second = bench(str(models), "--suite", "core", "--out", str(out), *SIZES)
+        text, err2 = second.communicate(timeout=600)
+        answered = {"plain": plain.n_answered, "gpt-5": rsn.n_answered}
+    assert second.returncode == 2, err2  # one model failed: the others finished
+    assert "model down" in err2 and "cannot reach" in err2 and "Traceback" not in err2
+    # The leaderboard: every model and the reference, each baseline once per setting.
+    rows = json.loads((out / "leaderboard.json").read_text())["rows"]
+    assert json.loads((out / "leaderboard.json").read_text())["schema"] == list(FIELDS)
+    for label in ("plain", "gpt-5", "reference"):
+        assert {(r["part"], r["swimmer"], r["direction"]) for r in rows if r["row"] == label} == {
+            ("curves", "purcell", 1), ("curves", "purcell", -1), ("curves", "ng", 1), ("curves", "ng", -1),
+            ("noise", "purcell", 1), ("noise", "ng", 1)}
+    base = [(r["row"], r["part"], r["swimmer"], r["direction"]) for r in rows if r["kind"] == "baseline"]
+    assert len(base) == len(set(base)) == 2 * 6 and not any(r["row"] == "down" for r in rows)
+    assert "reference (rule, not an LLM)" in text and "Q-learning" in text and "random" in text
+    assert all((out / f"leaderboard.{ext}").exists() for ext in ("csv", "png", "pdf"))
+    gpt5 = [r for r in rows if r["row"] == "gpt-5"]
+    assert all(r["priced"] and r["suite_cost_usd"] > 0 for r in gpt5)
+    assert all(r["priced"] is False for r in rows if r["row"] == "plain")  # no price: said, not $0
+    status = json.loads((out / "bench.json").read_text())["model_status"]
+    assert status["plain"] == status["gpt-5"] == "complete" and status["down"].startswith("failed")
+    # No call paid twice: every (run, call index) journaled once, and the servers answered no more
+    # than the journals hold plus what was in flight at Ctrl-C (4 + 16 requests at most).
+    for m in ("plain", "gpt-5"):
+        calls = [c for part in ("curves", "noise") for c in journal(out / m / part)]
+        assert len({(c["run"], c["n"]) for c in calls}) == len(calls)
+        assert len(calls) <= answered[m] <= len(calls) + 20
+        assert len(journal(out / m / "curves")) >= paid_before[m]
+    # Each model's results are an ordinary study folder: show reads it.
+    assert cli.main(["show", str(out / "gpt-5" / "curves")]) == 0
+
+
+def test_dry_run_prices_every_model_and_core_on_gpt4o_is_at_most_3_dollars(tmp_path, capsys):
+    models = models_file(tmp_path, "http://127.0.0.1:9/v1", "http://127.0.0.1:9/v1")
+    assert cli.main(["bench", str(models), "--dry-run", "--out", str(tmp_path / "b"), *SIZES]) == 0
+    text = capsys.readouterr().out
+    est = json.loads(text.strip().splitlines()[-1])
+    assert set(est["models"]) == {"plain", "gpt-5", "down"}
+    assert est["models"]["gpt-5"]["priced"] and est["models"]["gpt-5"]["prices_as_of"] == "2026-11"
+    assert not est["models"]["plain"]["priced"] and "not priced" in text
+    assert est["models"]["plain"]["calls"] == 6 * 12  # six settings x one run x 12 steps
+    assert not (tmp_path / "b").exists()  # nothing written
+    # The suite as defined (no size override) on gpt-4o at the built-in list prices.
+    assert cli.main(["bench", "--model", "base_url=https://api.openai.com/v1,model=gpt-4o", "--dry-run"]) == 0
+    est = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+    assert est["models"]["gpt-4o"]["calls"] == 3000 and est["total_usd"] <= 3.0
+
+
+def test_models_file_mistakes_are_one_line(tmp_path):
+    bad = tmp_path / "m.toml"
+    for text, words in [('[[models]]\nname = "x"\n', "needs base_url"),
+                        ('[[models]]\nbase_url = "http://a/v1"\nmodel = "m"\ncolour = 1\n', "unknown key 'colour'"),
+                        ('[[models]]\nbase_url = "http://a/v1"\nmodel = "m"\nname = "baselines"\n', "bench's own row"),
+                        ('[suites.x]\nstudy = "nope"\n', "study must be one of"),
+                        ("[[models]\n", "not valid TOML")]:
+        bad.write_text(text)
+        with pytest.raises(ConfigError, match=words):
+            load_models_file(bad)
+    assert parse_model_option("base_url=http://a/v1,model=m,concurrency=3").get("concurrency") == 3
+    assert cli.main(["bench", str(tmp_path / "missing.toml")]) == 2
