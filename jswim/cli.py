@@ -115,6 +115,12 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                        help="noise grid of the noise study (default 0,0.5,1,1.5,2,2.5,3)")
         g.add_argument("--n-hts", type=_ints, default=None, metavar="N1,N2,...",
                        help="history lengths of the history study (default 1..8)")
+        g.add_argument("--temperatures", type=_floats, default=None, metavar="T1,T2,...",
+                       help="sampling temperatures as a grid axis of the study's LLM runs (each run above 0 sends "
+                            "its own seed); the temperature study's grid (default 0,0.25,0.5,0.75,1); extends a folder")
+        g.add_argument("--prompt-files", default=None, metavar="A,B,...",
+                       help="prompt templates as a grid axis of the study's LLM runs (runs and rows named by each "
+                            "file's name); extends a folder")
     b = p.add_argument_group("LLM backend (default: the embedded SmolLM2-135M model, offline)")
     b.add_argument("--base-url", default=None, help="an OpenAI-compatible server, e.g. http://localhost:8080/v1")
     b.add_argument("--model", default=None, help="model name on that server (required with --base-url)")
@@ -212,7 +218,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "removed (Fig. 5); inits: the four initial configurations; competence: "
                                    "every protocol variant next to random and Q-learning baselines.")
     p.add_argument("name", choices=[s for s in STUDIES if s != "swim"], metavar="NAME",
-                   help="curves, history, noise, ablation, inits or competence")
+                   help="curves, history, noise, ablation, inits, competence or temperature")
     _add_run_options(p, study=True)
     p = sub.add_parser("qlearn", help="Q-learning steps-to-learn distributions",
                        description="Train many independent Q-learners on-device and summarise steps-to-learn.")
@@ -369,6 +375,17 @@ def _options(args: argparse.Namespace, study: str):
         kw["zetas"] = args.zetas
     if getattr(args, "n_hts", None):
         kw["n_hts"] = args.n_hts
+    if getattr(args, "temperatures", None):
+        kw["temperatures"] = args.temperatures
+    if getattr(args, "prompt_files", None):
+        files = tuple(f.strip() for f in args.prompt_files.split(",") if f.strip())
+        for f in files:
+            if not Path(f).is_file():
+                raise ConfigError(f"--prompt-files {f}: {'a folder, not a file' if Path(f).is_dir() else 'no such file'}")
+            from jswim.prompt import PromptTemplate
+
+            PromptTemplate.from_file(f)  # checked before anything runs
+        kw["prompt_files"] = files
     names = tuple(v.strip() for v in (args.variant or "").split(",") if v.strip())
     if study == "competence" and names:
         kw["variants"] = names

@@ -675,6 +675,9 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
         return {"ablation": ablation_figure(rows, note=note)}
     if study == "inits":
         return {"inits": inits_figure(rows, note=note)}
+    if study == "temperature":  # p and X/a against the sampling temperature T (LLM rows carry it)
+        return {"temperature": grid_figure(rows, "temperature", xlabel="sampling temperature T", numeric=True,
+                                           note=note)}
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [{**r, "entry": r["group"] if r["agent"] == "llm" else f"{r['agent']} ({r['group']})"} for r in rows]

@@ -26,7 +26,8 @@ def test_default_grid_sizes(study, total):
 
 
 def test_the_table_holds_each_study_s_defaults():
-    assert set(STUDIES) == set(SPECS) == {"curves", "history", "noise", "ablation", "inits", "swim", "competence"}
+    assert set(STUDIES) == set(SPECS) == {"curves", "history", "noise", "ablation", "inits", "swim", "competence",
+                                           "temperature"}
     for study, spec in SPECS.items():
         plans = build(study, StudyOptions())
         assert {p.swimmer for p in plans} == set(spec.swimmers)

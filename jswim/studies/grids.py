@@ -71,6 +71,10 @@ class StudyOptions:
     x_min: float = -2.5  # X_min of the position encoding (the paper's and the code's -2.5)
     max_tokens: int | None = None  # reply length limit; None: per swimmer (10 two DOFs, 20 more)
     variants: tuple[str, ...] | None = None  # competence: the variants to compare (None: all default)
+    # Sweeps over LLM settings, grid axes of any study (each crosses the study's LLM cells; the
+    # temperature study sweeps temperatures itself). None: the backend's temperature, the one prompt.
+    temperatures: tuple[float, ...] | None = None
+    prompt_files: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         if self.steps < 1 or self.steps > 10_000:
@@ -98,6 +102,17 @@ class StudyOptions:
                 raise ConfigError(f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS)}")
         for name in ([self.variant] if self.variant else []) + list(self.variants or ()):
             variant_action_set(name)  # raises for an unknown name
+        for t in self.temperatures or ():
+            if not (math.isfinite(t) and 0.0 <= t <= 2.0):
+                raise ConfigError(f"--temperatures must lie in [0, 2], got {t}")
+        for name, values in (("--temperatures", self.temperatures), ("--prompt-files", self.prompt_files)):
+            if values is not None and (not values or len(set(values)) != len(values)):
+                raise ConfigError(f"{name} must list distinct values, got {','.join(map(str, values))}")
+        stems = [prompt_label(f) for f in self.prompt_files or ()]
+        if len(set(stems)) != len(stems):
+            raise ConfigError("--prompt-files: two files have the same name (it names their runs); rename one")
+        if self.prompt_files and self.prompt_file:
+            raise ConfigError("give --prompt-file or --prompt-files, not both")
 
     def llm_variant(self, study: str) -> str:
         """The protocol variant of the study's LLM runs (outside the competence study)."""
@@ -121,6 +136,15 @@ class Plan:
     action_set: str = "all"
     group: str = ""
     variant: str = "paper"  # LLM protocol variant (jswim.agents.variants.VARIANTS); "" for baselines
+    temperature: float | None = None  # LLM sampling temperature of a sweep (None: the backend's)
+    prompt_file: str | None = None  # LLM prompt template of a --prompt-files sweep (None: the study's)
+
+
+def prompt_label(path: str) -> str:
+    """A prompt file's label in run ids and groups: its name without the suffix."""
+    from pathlib import Path
+
+    return Path(path).stem.replace(" ", "_") or "prompt"
 
 
 @dataclass(frozen=True)
@@ -136,6 +160,7 @@ class Cell:
     init: str | None = None  # None: the study's init choice
     variant: str | None = None  # LLM runs only; None: the options' variant
     action_set: str | None = None  # baselines only; None: the LLM variant's action set
+    temperature: float | None = None  # LLM runs only (the temperature study)
 
 
 WITH_BASELINES = ("llm", "qlearning", "random")
@@ -160,6 +185,14 @@ def _ablation(o: StudyOptions) -> list[Cell]:
 
 def _inits(o: StudyOptions) -> list[Cell]:
     return [Cell(f"init {init_label(i)}", ("llm",), n_ht=o.n_ht, init=init_label(i)) for i in all_inits(2)]
+
+
+#: The temperature study's grid (the paper's "next thing to study": T = 0 was its only setting).
+DEFAULT_TEMPERATURES = (0.0, 0.25, 0.5, 0.75, 1.0)
+
+
+def _temperature(o: StudyOptions) -> list[Cell]:
+    return [Cell(f"T={t:g}", ("llm",), n_ht=o.n_ht, temperature=t) for t in o.temperatures or DEFAULT_TEMPERATURES]
 
 
 def _competence(o: StudyOptions) -> list[Cell]:
@@ -210,6 +243,9 @@ SPECS: dict[str, StudySpec] = {
     "swim": StudySpec(_single, runs=4, init="paper", swimmers=("purcell",)),
     # every protocol variant next to random and Q-learning baselines on both action sets
     "competence": StudySpec(_competence, runs=10),
+    # p and steps to learn against the sampling temperature T, both swimmers and directions
+    "temperature": StudySpec(_temperature, runs=5, init="paper", directions=(1, -1),
+                             ignores=("zetas", "n_hts", "q_runs")),
 }
 
 STUDIES = tuple(SPECS)
@@ -275,6 +311,14 @@ def run_seed(study_seed: int, run: str) -> int:
     return derived_seed("run-seed", int(study_seed), run)
 
 
+def _sweeps(cell: Cell, o: StudyOptions) -> list[tuple[float | None, str | None]]:
+    """The (temperature, prompt file) settings an LLM cell runs under: the cell's own temperature
+    (the temperature study) or ``--temperatures``, crossed with ``--prompt-files``."""
+    temps = [cell.temperature] if cell.temperature is not None else list(o.temperatures or [None])
+    prompts = list(o.prompt_files or [None])
+    return [(t, p) for t in temps for p in prompts]
+
+
 def build(study: str, o: StudyOptions) -> list[Plan]:
     """The runs of ``study`` for options ``o``, in a fixed order (seeds follow it).
 
@@ -305,11 +349,18 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     zeta = float(o.zeta if cell.zeta is None else cell.zeta)
                     n_ht = cell.n_ht if llm else None
                     drop = cell.drop if llm else frozenset()
-                    for k in range(runs[agent]):
-                        init = initial(cell.init or o.init or spec.init, k, sw)
-                        rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tag, repeat=k)
-                        plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
-                                          n_ht, drop, action_set, cell.group, v))
+                    for temp, prompt in _sweeps(cell, o) if llm else [(None, None)]:
+                        # A sweep's setting names its runs (run id) and its rows (group).
+                        tags = "-".join(t for t in [tag, f"T{temp:g}" if temp is not None else "",
+                                                    f"p-{prompt_label(prompt)}" if prompt else ""] if t)
+                        swept = ([f"T={temp:g}"] if temp is not None and cell.temperature is None else []) + \
+                            ([f"prompt={prompt_label(prompt)}"] if prompt else [])
+                        group = ", ".join(g for g in [cell.group, *swept] if g)
+                        for k in range(runs[agent]):
+                            init = initial(cell.init or o.init or spec.init, k, sw)
+                            rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k)
+                            plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
+                                              n_ht, drop, action_set, group, v, temp, prompt))
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"
     return plans

@@ -144,7 +144,7 @@ class StudyResult:
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
 #: folder grows when they grow (and a smaller value reports the runs it names).
-GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts")
+GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files")
 
 #: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
@@ -169,7 +169,7 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     backend = study_backend(study, backend)
     opts = dataclasses.asdict(o)
     for name in ("chunk", *GRID_SIZE):
-        opts.pop(name)
+        opts.pop(name, None)
     for name in ("variant", "variants"):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
@@ -387,9 +387,13 @@ def _configs(plans: Sequence[Plan], o: StudyOptions,
              template: PromptTemplate | None) -> list[tuple[Any, list[Plan]]]:
     """The LLM plans by agent config: one driver per (variant, action set)."""
     out = []
-    for (variant, action_set), group in _groups(plans, "variant", "action_set").items():
+    for (variant, action_set, temp, prompt), group in _groups(plans, "variant", "action_set", "temperature",
+                                                              "prompt_file").items():
+        tpl = PromptTemplate.from_file(prompt) if prompt else template
         cfg = variant_config(variant, action_set=action_set, share_identical=o.share_identical, x_min=o.x_min,
-                             max_tokens=o.max_tokens, **({"template": template} if template else {}))
+                             max_tokens=o.max_tokens, **({"template": tpl} if tpl else {}))
+        if temp is not None:  # a sweep's temperature (each request above 0 carries its own seed)
+            cfg = dataclasses.replace(cfg, temperature=temp)
         out.append((cfg, group))
     return out
 

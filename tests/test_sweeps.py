@@ -1,0 +1,68 @@
+"""Sweeps over LLM settings as grid axes: --temperatures, --prompt-files, and `jswim study
+temperature`; each extends a folder as --zetas does."""
+
+from __future__ import annotations
+
+import pytest
+
+from jswim import cli
+from jswim.errors import ConfigError
+from jswim.results import read_metadata, read_runs
+from jswim.studies.grids import StudyOptions, build
+from tests.fakeserver import FakeServer, hash_reply
+
+FAST = ["--steps", "4", "--runs", "1", "--swimmer", "purcell", "--no-figures", "--api-key-env", "JSWIM_TEST_NO_KEY"]
+
+
+def test_temperature_and_prompt_axes_name_runs_and_groups():
+    plans = build("curves", StudyOptions(runs=1, q_runs=1, swimmers=("purcell",), temperatures=(0.0, 0.5),
+                                         prompt_files=("a.txt", "b.txt")))
+    llm = [p for p in plans if p.agent == "llm"]
+    assert sorted((p.temperature, p.prompt_file) for p in llm) == [(0.0, "a.txt"), (0.0, "b.txt"), (0.5, "a.txt"),
+                                                                   (0.5, "b.txt")]
+    assert {p.group for p in llm} == {"T=0, prompt=a", "T=0, prompt=b", "T=0.5, prompt=a", "T=0.5, prompt=b"}
+    assert len({p.seed for p in llm}) == 4  # each its own run seed (hash of the run id)
+    assert [p.temperature for p in plans if p.agent != "llm"] == [None, None]  # baselines are not swept
+    # The temperature study's own grid: both swimmers and directions, LLM runs only.
+    t = build("temperature", StudyOptions(runs=1))
+    assert {p.temperature for p in t} == {0.0, 0.25, 0.5, 0.75, 1.0} and {p.direction for p in t} == {1, -1}
+    assert {p.swimmer for p in t} == {"purcell", "ng"} and {p.agent for p in t} == {"llm"}
+    for bad in ({"temperatures": (0.0, 3.0)}, {"temperatures": (0.5, 0.5)}, {"prompt_files": ("x/a.txt", "y/a.txt")}):
+        with pytest.raises(ConfigError):
+            StudyOptions(**bad)
+
+
+def test_study_temperature_runs_end_to_end_and_temperatures_extend_the_folder(tmp_path, capsys):
+    with FakeServer(reply=hash_reply) as srv:
+        base = ["study", "temperature", *FAST, "--direction", "+x", "--out", str(tmp_path / "t"),
+                "--base-url", srv.url, "--model", "fake"]
+        assert cli.main([*base, "--temperatures", "0,0.5"]) == 0
+        first = {b.get("temperature") for b in srv.requests}
+        seeds = [b.get("seed") for b in srv.requests if b.get("temperature") == 0.5]
+        n_before = srv.n_requests
+        assert cli.main([*base, "--temperatures", "0,0.5,1"]) == 0  # one more level: only its runs run
+        added = srv.requests[n_before:]
+    assert first == {0.0, 0.5} and {b["temperature"] for b in added} == {1.0} and len(added) == 4
+    assert len(seeds) == 4 and len(set(seeds)) == 4 and None not in seeds  # T > 0: a seed per request
+    rows = read_runs(tmp_path / "t")
+    assert sorted(r["temperature"] for r in rows) == [0.0, 0.5, 1.0]
+    assert {g["group"] for g in read_metadata(tmp_path / "t")["summary"]["groups"]} == {"T=0", "T=0.5", "T=1"}
+    assert "T=1" in capsys.readouterr().out
+
+
+def test_prompt_files_extend_a_folder(tmp_path):
+    a, b = tmp_path / "short.txt", tmp_path / "long.txt"
+    a.write_text("{S1} {S2} {S3} {S5}")
+    b.write_text("{S1} {S2} {S3} {S4} {S5}")
+    with FakeServer(reply=hash_reply) as srv:
+        base = ["swim", *FAST, "--q-runs", "0", "--out", str(tmp_path / "o"), "--base-url", srv.url, "--model", "fake"]
+        with pytest.raises(SystemExit) as stop:  # swim takes no study axes: a usage error, exit 2
+            cli.main([*base, "--prompt-files", str(a)])
+        assert stop.value.code == 2
+        assert cli.main(["study", "curves", *base[1:], "--prompt-files", str(a)]) == 0
+        n = srv.n_requests
+        assert cli.main(["study", "curves", *base[1:], "--prompt-files", f"{a},{b}"]) == 0
+        later = srv.requests[n:]
+    assert len(later) == 4 and all("long-term consequences" in str(r["messages"]) for r in later)
+    groups = {r["group"] for r in read_runs(tmp_path / "o")}
+    assert groups == {"prompt=short", "prompt=long"}
