@@ -7,6 +7,11 @@ Three JAX paths, each jitted, batched and scanned over steps (compilation exclud
 * ``integrator``: every step integrated from scratch (Chebyshev degree 16, float64,
   ~1e-14 relative per cycle), the path for strokes that do not follow the table.
 
+``--continuous`` instead times one-DOF continuous steps (issue 18) side by side in one run, noisy,
+default dtype (float32), batch ``--batch`` (10^5): random DOF and real ROC in [-1, 1] on the
+motion table (``cont/table``) and through the integrator (``cont/integrator``, degree 24), integer
+codes on the K = 5 lattice (``lattice/K=5``), and the corner table (``corner``, the paper's codes).
+
 The reference is what a plain script does: one swimmer at a time, RK4 with 300 substeps per step
 on the paper's closed-form velocities (NumPy scalars). All numbers come from this run.
 
@@ -115,13 +120,73 @@ def python_reference(n_steps: int, d_max: float, substeps: int = 300, seed: int 
     return (time.perf_counter() - t0) / n_steps
 
 
+def continuous_runner(params: env.EnvParams, batch: int, steps: int, kind: str):
+    """Scan of ``env.step_batch`` over ``steps`` steps: ``kind`` ``"corner"`` / ``"lattice"``
+    (integer codes) or ``"rocs"`` (a random DOF at a real ROC in [-1, 1] per swimmer and step)."""
+
+    def run(key):
+        states = jax.vmap(env.reset, in_axes=(0, None))(jax.random.split(key, batch), params)
+        if kind == "rocs":
+            dof = jax.random.randint(key, (steps, batch), 0, params.n_dof)
+            roc = jax.random.uniform(jax.random.fold_in(key, 1), (steps, batch), minval=-1.0, maxval=1.0)
+            actions = jax.nn.one_hot(dof, params.n_dof) * roc[..., None]
+        else:
+            actions = jax.random.randint(key, (steps, batch), 0, params.n_actions)
+
+        def body(s, inp):
+            k, a = inp
+            s, _ = env.step_batch(k, s, a, params)
+            return s, None
+
+        s, _ = jax.lax.scan(body, states, (jax.random.split(key, steps), actions))
+        return s.x
+
+    return jax.jit(run)
+
+
+def continuous(args) -> None:
+    from jswim.env import stepping
+
+    b = args.batch
+    print(f"jswim bench_env --continuous | jax {jax.__version__} | {os.cpu_count()} cores | noisy Purcell, "
+          f"zeta={args.zeta}, float32, batch {b:,d}")
+    key = jax.random.PRNGKey(0)
+    rows = []
+    cases = [("corner", "corner", 1, args.steps), ("lattice/K=5", "lattice", 5, args.steps),
+             ("cont/table", "rocs", 1, args.steps), ("cont/integrator", "rocs", 1, max(1, args.steps // 10))]
+    for name, kind, big_k, steps in cases:
+        stepping.STEP_METHOD = "integrator" if name == "cont/integrator" else "table"
+        params = env.make_params("purcell", zeta=args.zeta, roc_levels=big_k)
+        t0 = time.perf_counter()
+        fn = continuous_runner(params, b, steps, kind)
+        jax.block_until_ready(fn(key))
+        compile_s = time.perf_counter() - t0
+        sec = best_time(fn, key, repeat=args.repeat)
+        rows.append(dict(path=name, batch=b, steps=steps, seconds=sec, steps_per_s=b * steps / sec, first_call_s=compile_s))
+    stepping.STEP_METHOD = "table"
+    base = {r["path"]: r["steps_per_s"] for r in rows}
+    print(f"{'path':18s} {'steps/s':>14s} {'x integrator':>13s} {'x corner':>9s} {'first call s':>13s}")
+    for r in rows:
+        print(f"{r['path']:18s} {r['steps_per_s']:14,.0f} {r['steps_per_s'] / base['cont/integrator']:13.1f} "
+              f"{r['steps_per_s'] / base['corner']:9.2f} {r['first_call_s']:13.1f}")
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(dict(rows=rows), fh, indent=2)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="smaller batches and fewer steps")
     ap.add_argument("--steps", type=int, default=100, help="steps per swimmer in the table paths")
     ap.add_argument("--zeta", type=float, default=1.0, help="noise level (the noisy env)")
     ap.add_argument("--json", help="also write the results here")
+    ap.add_argument("--continuous", action="store_true", help="time continuous one-DOF steps (see above)")
+    ap.add_argument("--batch", type=int, default=100_000, help="batch of --continuous")
+    ap.add_argument("--repeat", type=int, default=3, help="timed repeats of --continuous (best kept)")
     args = ap.parse_args()
+    if args.continuous:
+        continuous(args)
+        return
 
     batches = [1, 100, 10_000] if args.quick else [1, 10, 100, 1_000, 10_000, 100_000]
     params = env.make_params("purcell", zeta=args.zeta)

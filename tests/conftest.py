@@ -6,10 +6,15 @@ default (x64 off, float32), so the ``float32`` fixture runs a test under
 tests/test_scale.py, also checks a fresh interpreter with JAX's defaults and 4 host devices).
 """
 
+import os
+import tempfile
+
 import jax
 import pytest
 
 jax.config.update("jax_enable_x64", True)
+# The exact tables' disk cache (jswim.env.cache) goes to a fresh folder, never the user's.
+os.environ["JSWIM_TABLE_CACHE"] = tempfile.mkdtemp(prefix="jswim-test-tables-")
 
 
 @pytest.fixture

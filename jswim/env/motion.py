@@ -27,6 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from jswim.env.cache import cached, model_key
 from jswim.integrate import chebyshev_rule
 from jswim.swimmers.models import SwimmerModel
 
@@ -37,17 +38,15 @@ CUTOFF = 2e-16
 
 
 class MotionTable(NamedTuple):
-    """Chebyshev coefficients of ``Theta_k`` and ``W_k`` (float64).
+    """Chebyshev coefficients of ``Theta_0`` and ``W_0`` (float64), for moves of DOF 1.
 
-    ``coef[k]`` has shape ``(M + 1, F (N + 1))``: rows are degrees in ``c`` (the held DOF), columns
-    the functions (``Theta, Re W, Im W`` for planar swimmers; ``Re W`` for the sphere swimmers) by
-    degree in ``s`` (the moving DOF), function-major.
+    ``coef[j, f, i]``: degree ``j`` in ``c`` (the held DOF), function ``f`` (``Theta, Re W, Im W``
+    for planar swimmers; ``Re W`` for the sphere swimmers), degree ``i`` in ``s`` (the moving
+    DOF). Moves of DOF 2 read the same table through the swimmer's end-to-end symmetry
+    (:func:`mirror`).
     """
 
-    coef: np.ndarray  # (n_dof, M + 1, F * (N + 1))
-    n: int  # degree N in s
-    m: int  # degree M in c
-    n_fun: int  # F
+    coef: np.ndarray  # (M + 1, F, N + 1)
 
 
 def supported(model: SwimmerModel) -> bool:
@@ -55,77 +54,132 @@ def supported(model: SwimmerModel) -> bool:
     return model.n_dof == 2
 
 
+def mirror(model: SwimmerModel, a: Array, b: Array, c: Array, dof: Array) -> tuple[Array, Array, Array]:
+    """Map a move of DOF 2 onto one of DOF 1 (identity for DOF 1).
+
+    Read from the other end, a two-DOF swimmer is the same swimmer with its DOFs swapped; for the
+    link swimmers the hinge angles also change sign (``d -> -d``, i.e. ``frac -> 1 - frac`` on
+    the symmetric range), and the body frame turns by pi, so the move's body-frame displacement
+    changes sign and its rotation does not. Checked against the integrator when the table is
+    built (:func:`motion_table`) and in the tests.
+    """
+    if model.planar:
+        flip = dof != 0
+        a, b, c = (jnp.where(flip, 1.0 - v, v) for v in (a, b, c))
+    return a, b, c
+
+
 def _lobatto(n: int) -> np.ndarray:
     return (1.0 - np.cos(np.pi * np.arange(n + 1) / n)) / 2.0  # ascending on [0, 1]
 
 
-def build_values(model: SwimmerModel, k: int, deg: int = BUILD_DEGREE) -> np.ndarray:
-    """``(Theta, Re W, Im W)`` of moves of DOF ``k`` on the ``(deg + 1)^2`` Chebyshev-Lobatto grid
+def build_values(model: SwimmerModel, deg: int = BUILD_DEGREE) -> np.ndarray:
+    """``(Theta, Re W, Im W)`` of moves of DOF 1 on the ``(deg + 1)^2`` Chebyshev-Lobatto grid
     of ``(s, c)``; shape ``(deg + 1, deg + 1, 3)`` (s nodes, c nodes, function)."""
     nodes, running = chebyshev_rule(deg)
     span = model.hi - model.lo
     grid_s, grid_c = np.meshgrid(nodes, _lobatto(deg), indexing="ij")
-    frac = np.zeros(grid_s.shape + (2,))
-    frac[..., k], frac[..., 1 - k] = grid_s, grid_c
-    rate = np.zeros(2)
-    rate[k] = span  # d(d_k)/ds
+    frac = np.stack([grid_s, grid_c], axis=-1)
+    rate = np.array([span, 0.0])  # d(d_1)/ds
     with jax.ensure_compile_time_eval(), jax.enable_x64(True):
         d = jnp.asarray(model.lo + span * frac).reshape(-1, 2)
-        w = jax.vmap(lambda dd: model.body_velocity(dd, jnp.asarray(rate)))(d)
-        off = jax.vmap(model.centroid_offset)(d)
+        w = jax.jit(jax.vmap(lambda dd: model.body_velocity(dd, jnp.asarray(rate))))(d)
+        off = jax.jit(jax.vmap(model.centroid_offset))(d)
         w, off = np.asarray(w).reshape(grid_s.shape + (3,)), np.asarray(off).reshape(grid_s.shape + (2,))
     theta = running @ w[..., 2]  # running integral along s for every c
-    vel = np.exp(1j * theta) * (w[..., 0] + 1j * w[..., 1])
-    z = running @ vel
+    z = running @ (np.exp(1j * theta) * (w[..., 0] + 1j * w[..., 1]))
     wpos = z + np.exp(1j * theta) * (off[..., 0] + 1j * off[..., 1])
     return np.stack([theta, wpos.real, wpos.imag], axis=-1)
 
 
 @functools.lru_cache(maxsize=16)
 def motion_table(model: SwimmerModel) -> MotionTable:
-    """The motion table of a two-DOF ``model`` (float64, built once per model)."""
+    """The motion table of a two-DOF ``model`` (float64, built once per model).
+
+    Raises
+    ------
+    ValueError
+        If ``model`` is not a two-DOF swimmer.
+    """
+    if not supported(model):
+        raise ValueError(f"motion tables serve two-DOF swimmers, not {model.label}")
+    key = f"{model_key(model)}|deg={BUILD_DEGREE}|cut={CUTOFF}"
+    return MotionTable(cached("motion", key, lambda: {"coef": _build_motion_table(model)})["coef"])
+
+
+def _build_motion_table(model: SwimmerModel) -> np.ndarray:
     deg = BUILD_DEGREE
     vander = np.linalg.inv(np.polynomial.chebyshev.chebvander(2 * _lobatto(deg) - 1, deg))
     funs = [0, 1, 2] if model.planar else [1]
-    coefs = []
-    for k in range(model.n_dof):
-        vals = build_values(model, k, deg)[..., funs]
-        coefs.append(np.einsum("ia,jb,abf->jfi", vander, vander, vals))  # (c degree, function, s degree)
-    coef = np.stack(coefs)  # (n_dof, deg + 1, F, deg + 1)
+    vals = build_values(model, deg)[..., funs]
+    coef = np.einsum("ia,jb,abf->jfi", vander, vander, vals)  # (c degree, function, s degree)
     mag = np.abs(coef) / np.abs(coef).max()
-    keep_s = int(np.max(np.nonzero(mag.max(axis=(0, 1, 2)) > CUTOFF)[0]))
-    keep_c = int(np.max(np.nonzero(mag.max(axis=(0, 2, 3)) > CUTOFF)[0]))
-    coef = coef[:, : keep_c + 1, :, : keep_s + 1]
-    return MotionTable(coef.reshape(model.n_dof, keep_c + 1, -1), keep_s, keep_c, len(funs))
+    keep_s = int(np.max(np.nonzero(mag.max(axis=(0, 1)) > CUTOFF)[0]))
+    keep_c = int(np.max(np.nonzero(mag.max(axis=(1, 2)) > CUTOFF)[0]))
+    return np.ascontiguousarray(coef[: keep_c + 1, :, : keep_s + 1])
 
 
-def _chebyshev(x: Array, deg: int) -> Array:
-    """``T_0 .. T_deg`` at ``2 x - 1`` on a last axis (three-term recurrence)."""
+#: Patches per DOF and their degree: the global series is re-expanded on PATCHES x PATCHES
+#: patches of degree PATCH_DEGREE in each DOF, so a step gathers two small blocks (one per end)
+#: instead of summing the whole series (few, wide operations: what XLA runs fast on CPU).
+PATCHES = 16
+PATCH_DEGREE = 7
+
+
+@functools.lru_cache(maxsize=16)
+def patch_table(model: SwimmerModel) -> np.ndarray:
+    """The motion table on patches: shape ``(PATCHES^2, F, q + 1, q + 1)`` (float64), row
+    ``p_s PATCHES + p_c``, Chebyshev coefficients in the patch's local ``(s, c)``."""
+    coef = motion_table(model).coef  # (c degree, F, s degree)
+    q, n_p = PATCH_DEGREE, PATCHES
+    local = _lobatto(q)
+    pts = ((np.arange(n_p)[:, None] + local[None, :]) / n_p).reshape(-1)  # every patch's nodes
+    cheb = np.polynomial.chebyshev
+    ts, tc = cheb.chebvander(2 * pts - 1, coef.shape[2] - 1), cheb.chebvander(2 * pts - 1, coef.shape[0] - 1)
+    vals = np.einsum("si,cj,jfi->scf", ts, tc, coef).reshape(n_p, q + 1, n_p, q + 1, -1)
+    inv = np.linalg.inv(cheb.chebvander(2 * local - 1, q))
+    out = np.einsum("ia,jb,PaQbf->PQfij", inv, inv, vals)
+    return np.ascontiguousarray(out.reshape(n_p * n_p, coef.shape[1], q + 1, q + 1))
+
+
+def _chebyshev(x: Array, deg: int) -> list[Array]:
+    """``T_0 .. T_deg`` at ``2 x - 1`` (three-term recurrence), as a list of scalars."""
     t = 2.0 * x - 1.0
     out = [jnp.ones_like(t), t]
     for _ in range(deg - 1):
         out.append(2.0 * t * out[-1] - out[-2])
-    return jnp.stack(out[: deg + 1], axis=-1)
+    return out[: deg + 1]
+
+
+def _patch_eval(table: Array, x: Array, pc: Array, tv: Array) -> Array:
+    """The functions at moving-DOF value ``x`` in the patch column ``pc`` (local basis ``tv``)."""
+    n_p = PATCHES
+    ps = jnp.clip(jnp.floor(x * n_p), 0, n_p - 1)
+    u = x * n_p - ps  # in [0, 1] within the patch
+    tu = jnp.stack(_chebyshev(u, PATCH_DEGREE))
+    block = table[(ps.astype(jnp.int32) * n_p + pc)]  # (F, q + 1, q + 1)
+    return jnp.sum(block * tu[None, :, None] * tv[None, None, :], axis=(1, 2))
 
 
 def move_increment(model: SwimmerModel, s0: Array, s1: Array, dof: Array) -> Array:
     """Body-frame step row ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` (float64) of the move of
-    DOF ``dof`` from fractions ``s0`` to ``s1`` (the other DOF held); call under
-    ``jax.enable_x64``. Works under ``vmap``."""
-    tab = motion_table(model)
-    coef = jnp.asarray(tab.coef, jnp.float64)
-    other = 1 - dof
-    c = jnp.where(dof == 0, s0[1], s0[0])
-    a = jnp.where(dof == 0, s0[0], s0[1])
-    b = jnp.where(dof == 0, s1[0], s1[1])
-    tc = _chebyshev(c, tab.m)
-    # Contract the held DOF first (for both DOFs' tables: a matrix product under vmap), then pick.
-    v = jnp.where(dof == 0, tc @ coef[0], tc @ coef[1]).reshape(tab.n_fun, tab.n + 1)
-    del other
-    fa, fb = v @ _chebyshev(a, tab.n), v @ _chebyshev(b, tab.n)
+    DOF ``dof`` (0-based) from fractions ``s0`` to ``s1`` (the other DOF held); call under
+    ``jax.enable_x64``. Works under ``vmap``: two gathers of one patch block each.
+    """
+    table = jnp.asarray(patch_table(model), jnp.float64)
+    first = dof == 0
+    a, b, c = (jnp.where(first, u[0], u[1]) for u in (s0, s1, s0[::-1]))
+    a, b, c = mirror(model, a, b, c, dof)
+    n_p = PATCHES
+    pcf = jnp.clip(jnp.floor(c * n_p), 0, n_p - 1)
+    tv = jnp.stack(_chebyshev(c * n_p - pcf, PATCH_DEGREE))
+    pc = pcf.astype(jnp.int32)
+    fa, fb = _patch_eval(table, a, pc, tv), _patch_eval(table, b, pc, tv)
+    sign = jnp.where(first, 1.0, -1.0)
     if not model.planar:
-        return jnp.stack([fb[0] - fa[0], jnp.zeros(()), jnp.zeros(()), jnp.ones(()), jnp.zeros(())])
+        zero = jnp.zeros_like(a)
+        return jnp.stack([sign * (fb[0] - fa[0]), zero, zero, zero + 1.0, zero])
     dth = fb[0] - fa[0]
     ca, sa = jnp.cos(fa[0]), jnp.sin(fa[0])
     dwx, dwy = fb[1] - fa[1], fb[2] - fa[2]
-    return jnp.stack([ca * dwx + sa * dwy, ca * dwy - sa * dwx, dth, jnp.cos(dth), jnp.sin(dth)])
+    return jnp.stack([sign * (ca * dwx + sa * dwy), sign * (ca * dwy - sa * dwx), dth, jnp.cos(dth), jnp.sin(dth)])

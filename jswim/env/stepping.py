@@ -31,12 +31,12 @@ from jswim.env.params import EnvParams, broadcast_params, is_batched, param_axes
 from jswim.env import motion
 from jswim.env.randomness import noise
 from jswim.env.state import EnvState, StepInfo, corner_values, narrow, wide
-from jswim.env.tables import _corner_index, _step_rows, _still_row
+from jswim.env.tables import MAX_LATTICE_ROWS, _corner_index, _step_rows, _still_row, lattice_rows, lattice_table
 from jswim.integrate import centroid, integrate_stroke
 
 #: How one-DOF moves off the corner table are computed: ``"table"`` (the motion table, for
 #: two-DOF swimmers) or ``"integrator"``.
-STEP_METHOD = "integrator"
+STEP_METHOD = "table"
 
 #: Chebyshev degree of the integrator path for steps off the corner table (~1e-15 relative).
 INTEGRATOR_DEGREE = 24
@@ -161,18 +161,29 @@ def _advance_corner(state: EnvState, action: Array, y_noise: Array, params: EnvP
 
 def _advance_lattice(state: EnvState, action: Array, y_noise: Array, params: EnvParams) -> tuple[EnvState, StepInfo]:
     """An integer code on the K lattice: ROC ``k / K``; the new shape is the lattice point
-    ``round(K frac) + k`` (clipped to ``0..K``) over K, computed afresh so it never drifts."""
+    ``round(K frac) + k`` (clipped to ``0..K``) over K, computed afresh so it never drifts. The
+    step is read from the lattice table (:func:`jswim.env.tables.lattice_table`, one gather like
+    the corner table) when it is small enough, else integrated."""
     model = params.model
     n, big_k = model.n_dof, params.roc_levels
     width = 2 * big_k + 1
     action = jnp.clip(action.astype(jnp.int32), 0, width * n - 1)
     dof, k = action // width, action % width - big_k
-    onehot = jnp.arange(n, dtype=jnp.int32) == dof
+    onehot = (jnp.arange(n, dtype=jnp.int32) == dof).astype(jnp.int32)
+    j0 = jnp.round(state.frac * big_k).astype(jnp.int32)
+    j1 = j0 + onehot * (jnp.clip(jnp.sum(j0 * onehot) + k, 0, big_k) - jnp.sum(j0 * onehot))
+    moved = jnp.any(j1 != j0)
+    stuck = (k != 0) & ~moved
+    if lattice_rows(model, big_k) <= MAX_LATTICE_ROWS:
+        shape = jnp.sum(j0 * (big_k + 1) ** jnp.arange(n, dtype=jnp.int32), dtype=jnp.int32)
+        row = (shape * n + dof) * (big_k + 1) + jnp.sum(j1 * onehot)
+        with jax.enable_x64(True):
+            entry = jnp.asarray(lattice_table(model, big_k), jnp.float64)[row]
+            fh, fl = narrow(j1.astype(jnp.float64) / big_k, state.frac.dtype)
+        return _apply(state, entry, y_noise, params, stuck, moved, fh, fl)
     with jax.enable_x64(True):
-        j0 = jnp.round(wide(state.frac, state.frac_lo) * big_k)
-        j1 = jnp.where(onehot, jnp.clip(j0 + k, 0, big_k), j0)
-        s0, s1 = j0 / big_k, j1 / big_k
-    return _advance_path(state, s0, s1, y_noise, params, requested=k != 0, dof=dof)
+        s0, s1 = j0.astype(jnp.float64) / big_k, j1.astype(jnp.float64) / big_k
+        return _advance_path(state, s0, s1, y_noise, params, requested=k != 0, dof=dof)
 
 
 def _advance_rocs(state: EnvState, rocs: Array, y_noise: Array, params: EnvParams) -> tuple[EnvState, StepInfo]:

@@ -12,6 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from jswim.env.cache import cached, model_key
 from jswim.env.state import corner_values
 from jswim.integrate import centroid, integrate_stroke
 from jswim.swimmers.models import SwimmerModel
@@ -33,6 +34,11 @@ def step_table(model: SwimmerModel) -> tuple[np.ndarray, np.ndarray]:
     offsets : ndarray, shape (2**n_dof, 2)
         Centroid minus reference point, body frame, per corner.
     """
+    out = cached("corner", model_key(model), lambda: dict(zip(("inc", "offs"), _build_step_table(model))))
+    return out["inc"], out["offs"]
+
+
+def _build_step_table(model: SwimmerModel) -> tuple[np.ndarray, np.ndarray]:
     n = model.n_dof
     corners = np.array([[(c >> k) & 1 for k in range(n)] for c in range(2**n)], np.float64)
     # Evaluate now even when first called while tracing a step (the table is a constant).
@@ -73,3 +79,52 @@ def _step_rows(model: SwimmerModel) -> np.ndarray:
 
 def _still_row(model: SwimmerModel) -> int:
     return 2**model.n_dof * model.n_dof
+
+
+#: Largest lattice table built (rows); beyond it lattice steps go through the integrator.
+MAX_LATTICE_ROWS = 200_000
+
+
+def lattice_rows(model: SwimmerModel, roc_levels: int) -> int:
+    """Rows of the lattice table of ``model`` at K = ``roc_levels``: ``(K+1)^n n (K+1)``."""
+    return (roc_levels + 1) ** model.n_dof * model.n_dof * (roc_levels + 1)
+
+
+@functools.lru_cache(maxsize=64)
+def lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
+    """Exact body-frame rows of every one-DOF move on the K lattice (float64, built once).
+
+    The K lattice holds the shapes whose DOFs sit at ``lo + (j / K)(hi - lo)``, ``j`` in
+    ``0..K``. Row ``(i n + k)(K + 1) + j'`` (``i = sum_m j_m (K+1)^m`` the start shape, ``k`` the
+    DOF, ``j'`` its new lattice value) holds ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` of the
+    centroid in the body frame at the start, like the corner table (:func:`step_table`; the
+    lattice table at K = 1 holds the same moves). Rows for ``j' = j_k`` are the identity.
+
+    Returns
+    -------
+    ndarray, shape (lattice_rows(model, K), 5)
+    """
+    return cached("lattice", f"{model_key(model)}|K={roc_levels}|deg={TABLE_DEGREE}",
+                  lambda: {"rows": _build_lattice_table(model, roc_levels)})["rows"]
+
+
+def _build_lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
+    n, big_k = model.n_dof, roc_levels
+    shapes = np.stack(np.meshgrid(*[np.arange(big_k + 1)] * n, indexing="ij"), -1)[..., ::-1].reshape(-1, n)
+    # shapes[i] has digit m (base K+1) of i at position m: i = sum_m j_m (K+1)^m.
+    start = np.repeat(shapes, n * (big_k + 1), axis=0)
+    dof = np.tile(np.repeat(np.arange(n), big_k + 1), len(shapes))
+    target = np.tile(np.arange(big_k + 1), len(shapes) * n)
+    end = start.copy()
+    end[np.arange(len(end)), dof] = target
+    span = model.hi - model.lo
+    with jax.ensure_compile_time_eval(), jax.enable_x64(True):
+
+        def one(a: Array, b: Array) -> Array:
+            d0, d1 = corner_values(model, a), corner_values(model, b)
+            pose = integrate_stroke(model, d0, (b - a) * span, 1.0, n_sub=TABLE_DEGREE)
+            disp = centroid(model, d1, pose) - centroid(model, d0, jnp.zeros(3))
+            return jnp.stack([disp[0], disp[1], pose[2], jnp.cos(pose[2]), jnp.sin(pose[2])])
+
+        rows = jax.jit(jax.vmap(one))(jnp.asarray(start / big_k), jnp.asarray(end / big_k))
+        return np.asarray(rows)
