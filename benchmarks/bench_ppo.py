@@ -8,7 +8,8 @@ of the range, >= 1/2 of the square gait's speed, 3 cycles; steps to learn by
 is reported apart; the other direction runs on the compiled program (``block_until_ready``).
 References measured in the same run and reported as ratios: the same number of continuous
 environment steps alone (random one-DOF ROCs, one jitted scan of vmapped steps), and the tabular
-Q-learner (``qlearning.train_batch``, same seeds and steps).
+Q-learner (``qlearning.train_batch``, same seeds and steps). CPU seconds (all threads of the
+process) are printed beside wall seconds: on a loaded machine they bound what an idle one needs.
 
 The machine is shared: the load average is printed with the numbers.
 
@@ -33,8 +34,10 @@ from jswim.stats import learn_stats
 
 
 def _timed(fn, *args):
-    t0 = time.perf_counter()
+    """Result, wall seconds; the process's CPU seconds (all threads) go to ``_timed.cpu``."""
+    t0, c0 = time.perf_counter(), time.process_time()
     out = jax.block_until_ready(fn(*args))
+    _timed.cpu = time.process_time() - c0
     return out, time.perf_counter() - t0
 
 
@@ -69,11 +72,12 @@ def main() -> None:
                                           args.seeds)
             keys = jax.random.split(jax.random.PRNGKey(i), args.seeds)
             run, wall = _timed(ppo.train_batch, keys, params, cfg)
+            cpu = _timed.cpu
             report = ppo.evaluate(run, params)
             ls = learn_stats(report.steps_to_learn.tolist())
             x = np.asarray(run.progress, np.float64)
             row = {"swimmer": swimmer, "direction": direction, "seeds": args.seeds,
-                   "wall_s": wall, "compiled_in_call": i == 0, "learned": ls.learned, "q25": ls.q25,
+                   "wall_s": wall, "cpu_s": cpu, "compiled_in_call": i == 0, "learned": ls.learned, "q25": ls.q25,
                    "median": ls.median, "q75": ls.q75, "success": float(report.success.mean()),
                    "mean_X_200": float(x.sum(1).mean()), "mean_X_last50": float(x[:, -50:].sum(1).mean()),
                    "load": os.getloadavg()[0]}
@@ -90,7 +94,7 @@ def main() -> None:
             extra = (f"; env steps alone {row['env_only_s']:.2f} s (x{wall / row['env_only_s']:.1f}), Q-learning "
                      f"{row['qlearning_s']:.2f} s (x{wall / row['qlearning_s']:.0f}; {row['qlearning_learned']})"
                      if i == 1 else " (includes compilation)")
-            print(f"{swimmer:7} {'+x' if direction > 0 else '-x'}  {wall:6.1f} s{extra}\n"
+            print(f"{swimmer:7} {'+x' if direction > 0 else '-x'}  {wall:6.1f} s wall, {cpu:6.1f} s CPU{extra}\n"
                   f"         steps to learn {ls.label()}; success {row['success']:.3f}; mean X after 200 steps "
                   f"{row['mean_X_200']:.3f}, over the last 50 {row['mean_X_last50']:.3f}; load {row['load']:.1f}",
                   flush=True)

@@ -211,14 +211,16 @@ class PPORun(NamedTuple):
 
 
 def _dense(key: Array, n_in: int, n_out: int, scale: float, dtype: Any) -> tuple[Array, Array]:
-    w = jax.nn.initializers.orthogonal(scale)(key, (n_in, n_out), dtype)
+    # Gaussian weights of variance scale^2 / fan_in. Not orthogonal (PureJaxRL's choice): a
+    # vmapped orthogonal init is a batched LAPACK QR, which hung XLA:CPU at 384+ learners.
+    w = jax.random.normal(key, (n_in, n_out), dtype) * (scale / math.sqrt(n_in))
     return w, jnp.zeros((n_out,), dtype)
 
 
 def init_policy(key: Array, n_dof: int, hidden: int = 32, init_std: float | Array = 1.0) -> dict[str, Any]:
-    """Initial network parameters (orthogonal init as in PureJaxRL: sqrt 2 for hidden layers,
-    0.01 for the actor's head so the first policy is near uniform over DOFs with ROC mean ~0,
-    1 for the critic's head).
+    """Initial network parameters: Gaussian weights of std ``gain / sqrt(fan_in)``, gains as in
+    PureJaxRL (sqrt 2 for hidden layers, 0.01 for the actor's head so the first policy is near
+    uniform over DOFs with ROC mean ~0, 1 for the critic's head), zero biases.
 
     Returns
     -------
