@@ -106,6 +106,8 @@ def main(args: argparse.Namespace) -> int:
     print(leaderboard.table_text(rows, width=terminal_width()))
     print("success p: the paper's criterion, 95% Wilson interval; steps to learn counted from 1 over the runs that "
           "learned; suite $: what the model's calls cost over the whole suite")
+    for line in _sent_notes(jobs):
+        print(line)
     for p in paths:
         print(f"wrote {p}")
     if outcome.interrupted:
@@ -116,6 +118,22 @@ def main(args: argparse.Namespace) -> int:
     for label, status in bad.items():
         print(f"jswim: error: model {label}: {status}", file=sys.stderr)
     return EXIT_SOME_FAILED if bad else 0
+
+
+def _sent_notes(jobs: list[Any]) -> list[str]:
+    """What a reasoning model was sent instead of the paper's settings, once per model (from its folders)."""
+    from jswim.results import read_metadata
+
+    out: list[str] = []
+    for j in jobs:
+        if j.kind != "llm" or not (j.folder / "metadata.json").exists():
+            continue
+        sent = (read_metadata(j.folder).get("summary") or {}).get("reasoning") or {}
+        for note in sent.get("notes") or ():
+            line = f"{j.label}: {note}"
+            if line not in out:
+                out.append(line)
+    return out
 
 
 def _priced(m: Any, mf: Any) -> bool:
