@@ -18,15 +18,17 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import json
 import math
 import os
+import signal
 import sys
 import time
 from pathlib import Path
 from typing import Any, Iterator, Sequence
 
 from jswim.actions import ACTION_SETS
-from jswim.errors import ConfigError, JswimError
+from jswim.errors import ConfigError, JswimError, LLMServerError
 
 EXIT_USAGE = 2
 #: Largest count a batched command accepts (--n, --seeds, --steps, --chunk): swimmer and learner
@@ -177,6 +179,12 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
     b.add_argument("--extra-field", action="append", default=[], metavar="NAME=JSON",
                    help="send this field with every request, its value read as JSON (else as text), e.g. "
                         "top_k=1 or 'response_format={\"type\": \"text\"}'; repeatable; part of the study's identity")
+    b.add_argument("--retries", type=int, default=None, metavar="N",
+                   help="retries of a call after a transient failure (429, 5xx, a dropped connection, a timeout) "
+                        "before the study stops, keeping every finished run (default 20; see --retry-for)")
+    b.add_argument("--retry-for", type=float, default=None, metavar="S",
+                   help="seconds a call keeps retrying from its first failure, with exponential backoff and jitter "
+                        "(default 120: a server down for a minute does not stop the study)")
     b.add_argument("--omit-field", action="append", default=[], metavar="NAME",
                    help="never send this optional request field (seed, max_tokens, stream, ...), for servers "
                         "that reject it; repeat or comma-separate for several")
@@ -355,7 +363,8 @@ def _backend(args: argparse.Namespace):
                    rpm=args.rpm, tpm=args.tpm, price_local=args.price_local, reasoning=args.reasoning,
                    reasoning_effort=args.reasoning_effort, prices=prices, prices_as_of=as_of,
                    extra_fields=_extra_fields(args.extra_field), sampling=args.sampling,
-                   server_family=args.server_family, strict_model=args.strict_model)
+                   server_family=args.server_family, strict_model=args.strict_model, retries=args.retries,
+                   retry_for_s=args.retry_for)
 
 
 def _options(args: argparse.Namespace, study: str):
@@ -451,9 +460,13 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if args.max_cost is not None and not (math.isfinite(args.max_cost) and args.max_cost >= 0):
         raise ConfigError(f"--max-cost must be a number of dollars >= 0, got {args.max_cost}")
     out = Path(args.out) if args.out else default_folder(study, options, backend)
+    try:
+        out.stat()
+    except FileNotFoundError:
+        pass  # a new folder
+    except OSError as exc:  # a name longer than the file system allows, a file on the way, ...
+        raise ConfigError(f"--out {out}: {exc.strerror or type(exc).__name__}; choose another --out") from None
     if args.dry_run:
-        import json  # lazy, as every import of a command's own code here
-
         from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
 
         est = estimate_study(study, options, backend, out)
@@ -475,9 +488,17 @@ def _run(study: str, args: argparse.Namespace) -> int:
                                    max_cost=args.max_cost)
         except KeyboardInterrupt:
             bar.stop()
-            print(f"interrupted; finished runs are kept in {out}. Run the same command to resume "
-                  f"(jswim report {out}: a page of what is done).", file=sys.stderr)
-            return 130
+            from jswim import interrupts
+
+            sig = interrupts.received()
+            print(f"jswim: interrupted ({interrupts.name(sig)}); every finished run and answered call is kept in "
+                  f"{out}. Run the same command to resume (jswim report {out}: a page of what is done).",
+                  file=sys.stderr)
+            return 128 + (sig or signal.SIGINT)
+        except LLMServerError as exc:  # the retry budget is spent: the study stops cleanly, nothing lost
+            bar.stop()
+            print(f"jswim: error: {exc}. {_kept(out)}", file=sys.stderr)
+            return EXIT_USAGE
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
     _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
     _print_reasoning(result)
@@ -489,6 +510,10 @@ def _run(study: str, args: argparse.Namespace) -> int:
               f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "
               f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
               f"({_price_note(backend)})")
+    if sp.get("requests") is not None and (sp.get("calls") or sp.get("requests")):
+        from jswim.console import requests_text
+
+        print(f"HTTP requests: {requests_text(sp)}")
     print(f"results: {result.folder}")
     if (result.folder / "report.html").is_file():
         print(f"report:  {result.folder / 'report.html'} (open it in a browser)")
@@ -547,6 +572,21 @@ def _price_note(backend: Any) -> str:
         return (f"no price for {backend.model!r} in the {'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
                 ": not counted; --prices FILE prices it")
     return f"prices of {backend.prices_as_of or PRICES_AS_OF}" + ("" if backend.prices else " (built-in list prices)")
+
+
+def _kept(out: Path) -> str:
+    """What a stopped session leaves: ``The study stopped cleanly: 3 of 8 runs done and kept ...``."""
+    from jswim.results import read_runs
+
+    try:
+        done, planned = len(read_runs(out)), (json.loads((out / "metadata.json").read_text()) or {}).get("n_planned")
+    except (OSError, ValueError, AttributeError):
+        done, planned = 0, None
+    of = f" of {planned}" if isinstance(planned, int) else ""
+    if not done and not (out / "calls.jsonl").exists():
+        return "Nothing was done yet; run the same command once the server is back"
+    return (f"The study stopped cleanly: {done}{of} runs done and kept in {out}, every answered call journaled; "
+            "run the same command to resume (no call is paid twice)")
 
 
 def _prices_date() -> str:
@@ -805,9 +845,24 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _undecodable(args: argparse.Namespace) -> str | None:
+    """The first option whose text is not UTF-8 (Python holds such bytes as lone surrogates)."""
+    for name, value in vars(args).items():
+        for v in value if isinstance(value, (list, tuple)) else (value,):
+            if isinstance(v, str):
+                try:
+                    v.encode("utf-8")
+                except UnicodeEncodeError:
+                    return name
+    return None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jswim`` command; returns the exit status."""
     args = build_parser().parse_args(argv)
+    if (bad := _undecodable(args)) is not None:  # bytes that are not UTF-8 (e.g. $'m\xff') fail deep inside
+        print(f"jswim: error: --{bad.replace('_', '-')} is not valid UTF-8 text; write it in UTF-8", file=sys.stderr)
+        return EXIT_USAGE
     import matplotlib  # lazy: only once the arguments parsed (fast usage errors)
 
     matplotlib.use("Agg")  # the command only writes figure files; never open a window
@@ -842,8 +897,10 @@ def _main(args: argparse.Namespace) -> int:
         print(f"jswim: error: {scrub(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
+        from jswim import interrupts
+
         print("interrupted", file=sys.stderr)
-        return 130
+        return 128 + (interrupts.received() or signal.SIGINT)
     except MemoryError:
         print("jswim: error: out of memory; use fewer swimmers/learners or a smaller --chunk", file=sys.stderr)
         return EXIT_USAGE
@@ -855,17 +912,31 @@ def _main(args: argparse.Namespace) -> int:
         return EXIT_USAGE
 
 
+def _show_warning(message: Any, category: Any, filename: str, lineno: int, file: Any = None,
+                  line: str | None = None) -> None:
+    """Warnings as one line, ``jswim: warning: ...`` (not Python's file:line form)."""
+    print(f"jswim: warning: {message}", file=sys.stderr if file is None else file)
+
+
 def run() -> None:
-    """Console-script wrapper."""
+    """Console-script wrapper: signals end a session as Ctrl-C does (:mod:`jswim.interrupts`)."""
+    from jswim import interrupts
+
+    interrupts.install()
+    import warnings
+
+    warnings.showwarning = _show_warning
     try:
         status = main()
+        interrupts.quiet()  # a signal from here on (cleanup, atexit) is only noted: no traceback
         sys.stdout.flush()
     except BrokenPipeError:  # output piped into a reader that quit (`jswim show F | head`): not an error
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at interpreter exit
         status = 0
     except KeyboardInterrupt:  # Ctrl-C before main's own handler (imports, parser): nothing to keep yet
+        interrupts.quiet()
         print("interrupted", file=sys.stderr)
-        status = 130
+        status = 128 + (interrupts.received() or signal.SIGINT)
     sys.exit(status)
 
 

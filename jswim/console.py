@@ -13,7 +13,7 @@ import shutil
 import sys
 import time
 from dataclasses import dataclass
-from typing import IO, Any, Sequence
+from typing import IO, Any, Mapping, Sequence
 
 
 @dataclass(frozen=True)
@@ -87,6 +87,14 @@ def print_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title:
     """Print :func:`plain_table`, wrapped to the terminal's width on a terminal, whole elsewhere."""
     f = file or sys.stdout
     print(plain_table(columns, rows, title, terminal_width(f)), file=f)
+
+
+def requests_text(counts: Mapping[str, Any]) -> str:
+    """``132 sent (12 retries; transient faults: 429 x5, 5xx x4, connection x3)`` from a session's
+    or a study's ``requests``, ``retries`` and ``faults`` (by kind)."""
+    faults = ", ".join(f"{k} x{n}" for k, n in sorted((counts.get("faults") or {}).items()) if n)
+    return (f"{counts.get('requests', 0):.0f} sent ({counts.get('retries', 0):.0f} retries"
+            + (f"; transient faults: {faults}" if faults else "; no transient faults") + ")")
 
 
 def format_duration(seconds: float) -> str:

@@ -12,8 +12,9 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from jswim.console import Column, plain_table
+from jswim.console import Column, plain_table, requests_text
 from jswim.errors import ConfigError, ResultFolderError
+from jswim.folderlock import describe_holder, holder
 from jswim.results import read_metadata, read_runs
 
 SETTING = ("agent", "swimmer", "direction", "group")
@@ -119,11 +120,19 @@ class StudyFolder:
         return self.meta.get("status") == "complete" and (self.planned is None or len(self.rows) >= self.planned)
 
     def status_text(self) -> str:
-        """``complete`` or ``UNFINISHED: k of N runs done (status)``."""
+        """``complete`` or ``UNFINISHED: k of N runs done (status)``; a folder whose status reads
+        ``running`` says whether a live session holds it (:func:`jswim.folderlock.holder`)."""
         if self.finished:
             return "complete"
         of = f" of {self.planned}" if self.planned else ""
-        return f"UNFINISHED: {len(self.rows)}{of} runs done (status {self.meta.get('status', 'unknown')})"
+        status = str(self.meta.get("status", "unknown"))
+        if status == "running":
+            info = holder(self.folder)
+            if info is not None and info.get("alive") is not False:
+                status = f"running now: {describe_holder(info)}"
+            else:  # the session that wrote "running" died without a word (kill -9, power loss)
+                status = "running, but no live session holds the folder (killed?); the same command resumes"
+        return f"UNFINISHED: {len(self.rows)}{of} runs done (status {status})"
 
     def model_text(self) -> str:
         b = (self.meta.get("identity") or {}).get("backend")
@@ -131,7 +140,13 @@ class StudyFolder:
             return "no LLM runs"
         # The address is not the identity (it may change between sessions): the latest session's.
         where = "embedded" if b.get("kind") == "embedded" else (self.meta.get("server") or b.get("base_url") or "remote")
-        return f"{b.get('model')} ({where}), temperature {_fmt(b.get('temperature'), 'g')}, constrain {b.get('constrain')}"
+        # Decoding as the runs recorded it (``auto`` is resolved per server: grammar, json_schema
+        # or none, i.e. free text); the setting only while no LLM run has finished.
+        used = sorted({str(r["constraint"]) for r in self.rows if r.get("agent") == "llm" and r.get("constraint")})
+        decoding = ("constrain " + ",".join(used)) if used else f"constrain {b.get('constrain')}"
+        if used == ["none"]:
+            decoding = "free text (constrain none)"
+        return f"{b.get('model')} ({where}), temperature {_fmt(b.get('temperature'), 'g')}, {decoding}"
 
     def label(self) -> str:
         """Short name for a comparison: the folder name and the model."""
@@ -184,9 +199,16 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     if agents.get("llm"):
         lines.append(f"LLM usage: {u['calls']:,} calls, {u['prompt_tokens']:,} prompt + {u['completion_tokens']:,} "
                      f"completion tokens, cost ${u['cost_usd']:.4f} (estimate from the price table)")
-    speed = (s.meta.get("summary") or {}).get("llm_speed") or {}
-    if speed.get("wall_s"):
-        lines.append(f"LLM wall time: {speed['wall_s']:.1f} s ({speed.get('calls_per_s', 0):.2f} calls/s)")
+    totals = s.meta.get("llm_totals") or {}
+    if totals.get("sessions"):  # the study's own numbers, over all its sessions (one source each)
+        lines.append(f"LLM wall time: {totals.get('wall_s', 0):.1f} s over {totals['sessions']} session(s) for "
+                     f"{totals.get('answered_calls', 0):,} answered calls ({totals.get('calls_per_s', 0):.2f} calls/s)")
+        lines.append(f"HTTP requests: {requests_text(totals)}")
+    else:  # folders written before the study's totals were kept: the last session's
+        speed = (s.meta.get("summary") or {}).get("llm_speed") or {}
+        if speed.get("wall_s"):
+            lines.append(f"LLM wall time (last session): {speed['wall_s']:.1f} s "
+                         f"({speed.get('calls_per_s', 0):.2f} calls/s)")
     lines.append("")
     if s.summary:
         cols, rows = summary_table(s.summary)

@@ -78,6 +78,7 @@ from __future__ import annotations
 import math
 import re
 import string
+import unicodedata
 from dataclasses import dataclass, replace
 from decimal import ROUND_DOWN, Decimal
 from pathlib import Path
@@ -304,6 +305,11 @@ class HistoryRecord:
 # Templates
 
 
+#: Largest prompt template file read (bytes): the paper's prompt is about 2 kB, and every request
+#: carries the template whole (a 10 MB file would send 10 MB per request).
+MAX_TEMPLATE_BYTES = 100_000
+
+
 @dataclass(frozen=True)
 class PromptTemplate:
     """Layout, sentence and record templates (see the module docstring for placeholders)."""
@@ -345,8 +351,13 @@ class PromptTemplate:
 
     @classmethod
     def from_file(cls, path: str | Path) -> "PromptTemplate":
-        """Read a template file (see the module docstring for its format)."""
+        """Read a template file (see the module docstring for its format); at most
+        :data:`MAX_TEMPLATE_BYTES` (every request carries the whole prompt)."""
         try:
+            size = Path(path).stat().st_size
+            if size > MAX_TEMPLATE_BYTES:
+                raise ConfigError(f"--prompt-file {path} is {size / 1e6:.1f} MB; a prompt template may be at most "
+                                  f"{MAX_TEMPLATE_BYTES // 1000} kB (every request sends it whole)")
             text = Path(path).read_text(encoding="utf-8")
         except OSError as exc:
             raise ConfigError(f"cannot read prompt template {path}: {exc.strerror}") from None
@@ -634,7 +645,7 @@ def build_messages(prompt: str, system: str | None = None) -> list[dict[str, str
 # Replies
 
 _MINUS = str.maketrans({"\u2212": "-", "\u2013": "-", "\u2014": "-", "\uff0d": "-"})
-_INT = r"([+-]?\s*\d+)"
+_INT = r"([+-]?\s*[0-9]+)"  # ASCII digits only (see parse_reply)
 _Q = r"[\"']?"  # a JSON key's closing quote
 _PATTERNS = (
     # [1, -1]  (2,1)  [D1, -1]  {1, 1}
@@ -645,7 +656,7 @@ _PATTERNS = (
                + r"(?!\d|[./]\d)", re.I),
 )
 # Two bare integers, "2, -1": only as the whole reply or right after an answer marker.
-_BARE = re.compile(r"(?:D\s*)?([+-]?\d+)\s*(?:,|;|\s)\s*([+-]?\d+)(?!\d|\.\d)")
+_BARE = re.compile(r"(?:D\s*)?([+-]?[0-9]+)\s*(?:,|;|\s)\s*([+-]?[0-9]+)(?![0-9]|\.[0-9])")
 # Words that introduce the answer; the final answer is the first candidate after the last one.
 _MARKER = re.compile(
     r"\b(?:final\s+answer|answer|next\s+(?:action|move)|my\s+(?:action|move|choice)|action\s*" + _Q + r"\s*(?:[:=]|is\b)"
@@ -681,6 +692,13 @@ def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | 
     4. otherwise (several, none in an answer position) ``None``: the caller asks again rather
        than guess.
 
+    Characters: the reply is read after Unicode NFKC normalisation, so fullwidth and other
+    compatibility forms of ASCII (``［２，－１］`` from an East Asian input mode) read as the ASCII
+    they stand for, and Unicode minus signs and dashes as ``-``. Digits of other scripts
+    (Arabic-Indic ``٢``, Devanagari ``२``, ...) are not read: the prompt asks for the ASCII
+    format, and a reply in them names no action (the step asks again, as for any unreadable
+    reply).
+
     Parameters
     ----------
     text : str
@@ -690,7 +708,7 @@ def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | 
     """
     if not text or not text.strip():
         return None
-    text = text.translate(_MINUS)
+    text = unicodedata.normalize("NFKC", text).translate(_MINUS)
     ok = set(allowed) if allowed is not None else None
     markers = [m.end() for m in _MARKER.finditer(text)]
     found: dict[int, tuple[int, Action]] = {}  # start -> (end, action)

@@ -31,6 +31,7 @@ import io
 import json
 import math
 import os
+import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,12 +43,25 @@ import pyarrow.parquet as pq
 
 from jswim.errors import ResultFolderError
 from jswim.permissions import file_mode, opener
+from jswim.folderlock import HOLDER, LOCK, FolderLock
+from jswim.jsonl import repair_tail
 
 if TYPE_CHECKING:
     import pandas as pd
 
 RUNS = "runs.jsonl"
 META = "metadata.json"
+
+#: Temporary files of :func:`atomic_write` (``.NAME.XXXXXXXX.tmp``, as ``mkstemp`` names them).
+_TEMPORARY = re.compile(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$")
+
+
+def _is_own_file(p: Path) -> bool:
+    """What jswim itself leaves in a folder before its first record: its lock, its holder note,
+    temporary files of an interrupted first write, an empty figures folder."""
+    if p.name in (LOCK, HOLDER) or _TEMPORARY.match(p.name):
+        return True
+    return p.name == "figures" and p.is_dir()
 
 #: Statuses of runs that did not finish (the server failed them): recorded with their error, not
 #: done. A resume runs them again, and a later record of the same run replaces them.
@@ -220,18 +234,39 @@ class StudyStore:
         study: str,
         identity: Mapping[str, Any],
         extra: Mapping[str, Any] | None = None,
+        lock: bool = True,
     ) -> None:
         self.folder = Path(folder)
         self.study = study
         self.identity = plain_json(dict(identity))
+        #: What opening the folder repaired (torn journal lines, leftover temporary files), one
+        #: sentence each, for the caller to report.
+        self.repairs: list[str] = []
+        self._lock: FolderLock | None = None
         meta_path = self.folder / META
         if self.folder.exists() and not self.folder.is_dir():
             raise ResultFolderError(f"--out {self.folder} is a file, not a folder; choose another path")
+        with writing(self.folder):
+            self.folder.mkdir(parents=True, exist_ok=True)
+        try:
+            if lock:  # before anything is read: the folder is ours until close()
+                with writing(self.folder):
+                    self._lock = FolderLock(self.folder).acquire()
+            self._open(study, meta_path, extra)
+        except BaseException:
+            self.close()
+            raise
+
+    def _open(self, study: str, meta_path: Path, extra: Mapping[str, Any] | None) -> None:
+        with writing(self.folder):
+            self._clean_temporary_files()
         if meta_path.exists():
             try:
                 meta = json.loads(meta_path.read_text())
-            except (OSError, json.JSONDecodeError) as exc:
+            except (OSError, ValueError) as exc:
                 raise ResultFolderError(f"{meta_path} is unreadable ({exc}); use a new --out folder") from None
+            if not isinstance(meta, dict):
+                raise ResultFolderError(f"{meta_path} is not a study's metadata; use a new --out folder")
             if meta.get("study") != study:
                 raise ResultFolderError(
                     f"{self.folder} holds a '{meta.get('study')}' study, not '{study}'; "
@@ -246,16 +281,53 @@ class StudyStore:
                 )
             self.meta = meta
             self.meta["identity"] = self.identity  # rewritten under today's names
-        elif self.folder.exists() and any(p.name != "figures" for p in self.folder.iterdir()):
+            with writing(self.folder):
+                self._repair_journals()
+        elif any(not _is_own_file(p) for p in self.folder.iterdir()):
             raise ResultFolderError(
                 f"{self.folder} is not empty and is not a jswim study folder; choose another --out"
             )
-        else:
+        else:  # new, or holding nothing but what jswim itself leaves (a kill during the first write)
             self.meta = {"study": study, "identity": self.identity, "status": "running"}
         self.meta.update(dict(extra or {}))
         self.meta["status"] = "running"
         with writing(self.folder):
             write_json(meta_path, self.meta)
+
+    def _clean_temporary_files(self) -> None:
+        """Remove the temporary files of atomic writes that a kill left behind (ours alone hold
+        the lock, so no other writer is half way through one)."""
+        for where in (self.folder, self.folder / "figures"):
+            if not where.is_dir():
+                continue
+            for p in where.iterdir():
+                if _TEMPORARY.match(p.name) and p.is_file():
+                    p.unlink()
+                    self.repairs.append(f"removed {p.name}, a temporary file left by an interrupted write")
+
+    def _repair_journals(self) -> None:
+        """Cut the torn last line of every append-only file (see :mod:`jswim.jsonl`)."""
+        paths = [self.folder / RUNS, self.folder / "calls.jsonl"]
+        if (self.folder / "transcripts").is_dir():
+            paths += sorted((self.folder / "transcripts").glob("*.jsonl"))
+        for path in paths:
+            cut = repair_tail(path)
+            if cut:
+                rel = path.relative_to(self.folder)
+                self.repairs.append(f"{rel}: cut a torn last line ({cut} bytes, from an interrupted write); "
+                                    "what it held is redone, no answered call is lost")
+
+    def close(self) -> None:
+        """Release the folder's lock (the session is over; :meth:`set_status` first)."""
+        if self._lock is not None:
+            self._lock.release()
+            self._lock = None
+
+    def __enter__(self) -> "StudyStore":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
     # -- runs -------------------------------------------------------------------------------
 
@@ -274,7 +346,7 @@ class StudyStore:
             return
         path = self.folder / RUNS
         with writing(path):
-            _repair_tail(path)
+            repair_tail(path)  # never glue a record onto a torn line
             with open(path, "a", encoding="utf-8", opener=opener) as fh:
                 fh.write(lines)
                 fh.flush()
@@ -346,18 +418,6 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     if not isinstance(meta, dict):
         raise ResultFolderError(f"{path} is not a study's metadata (a JSON {type(meta).__name__}, not an object)")
     return upgrade_names(meta)
-
-
-def _repair_tail(path: Path) -> None:
-    """Cut a torn last line (no newline) left by a kill, so appends start on a fresh line."""
-    if not path.exists() or path.stat().st_size == 0:
-        return
-    with open(path, "rb+") as fh:
-        fh.seek(-1, os.SEEK_END)
-        if fh.read(1) == b"\n":
-            return
-        data = path.read_bytes()
-        fh.truncate(data.rfind(b"\n") + 1)
 
 
 SCALAR_TYPES = (str, int, float, bool, type(None))

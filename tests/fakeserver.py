@@ -206,6 +206,7 @@ class FakeServer:
         models: "Sequence[str] | None" = ("fake",), served_model: str | None = None,
         hold: Callable[[dict[str, Any]], bool] | None = None, hold_s: float = 30.0,
         owned_by: str | None = None, props: dict[str, Any] | None = None, api_key: str | None = None,
+        usage: Callable[[dict[str, Any]], Any] | None = None,
     ) -> None:
         if stream not in ("never", "default", "always"):
             raise ValueError(f"stream must be never, default or always, got {stream!r}")
@@ -225,6 +226,7 @@ class FakeServer:
         self.props = props
         self.api_key = api_key
         self.n_preflight = 0  # GET requests (models, props)
+        self.usage = usage  # replaces the usage object of every completion (servers that send odd ones)
         self._warm_at: float | None = None
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
@@ -315,7 +317,7 @@ class FakeServer:
             "model": self.served_model or body.get("model", "fake"),
             "choices": [{"index": 0, "message": answer.message(), "finish_reason": answer.finish_reason}],
             "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done,
-                      **dict(answer.usage)},
+                      **dict(answer.usage)} if self.usage is None else self.usage(body),
         }
 
     def chunks(self, body: dict[str, Any], text: "str | Answer") -> list[dict[str, Any]]:
@@ -631,6 +633,16 @@ MODES: dict[str, dict[str, Any]] = {
     # llama.cpp's server: /props with total_slots 2 and its sampling defaults; grammar honoured.
     "props-slots": {"reply": lambda body: "[2, -1]", "models": (GGUF_ID,), "owned_by": "llamacpp",
                     "props": LLAMACPP_PROPS, "latency": 0.05},
+    # Says "Content-Encoding: gzip" over a plain JSON body (a misconfigured proxy): -> [2, -1]
+    "lying-encoding": {"reply": lambda body: "[2, -1]", "headers": lambda body: {"Content-Encoding": "gzip"}},
+    # Token counts that are not numbers: read as missing (0), the answer still -> [2, -1]
+    "usage-not-numbers": {"reply": lambda body: "[2, -1]", "usage": lambda body: {
+        "prompt_tokens": "n/a", "completion_tokens": [3], "total_tokens": -1,
+        "prompt_tokens_details": {"cached_tokens": "lots"}}},
+    # Fullwidth brackets, comma, digits and minus (an East Asian input mode): -> [2, -1]
+    "fullwidth": {"reply": lambda body: "\uff3b\uff12\uff0c\uff0d\uff11\uff3d"},
+    # Arabic-Indic digits: not read as an answer (no action; the step fails to a no-op)
+    "arabic-digits": {"reply": lambda body: "[\u0662, -\u0661]"},
 }
 
 

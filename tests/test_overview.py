@@ -99,7 +99,9 @@ def test_show_marks_an_unfinished_study(folders, tmp_path):
     meta.update(status="running", n_planned=28)
     (part / "metadata.json").write_text(json.dumps(meta))
     (part / "runs.jsonl").write_text("".join(line + "\n" for line in (a / "runs.jsonl").read_text().splitlines()[:5]))
-    assert "UNFINISHED: 5 of 28 runs done (status running)" in overview.show_text(part)
+    text = overview.show_text(part)
+    # "running" with no live session holding the folder: its session died without a word
+    assert "UNFINISHED: 5 of 28 runs done (status running, but no live session holds the folder" in text
 
 
 def test_compare_lists_settings_present_in_all(folders):

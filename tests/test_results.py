@@ -98,6 +98,7 @@ def test_folder_written_with_old_field_names_resumes_and_reads_under_new_names(t
     assert store.done_ids() == {"a"}
     assert read_runs(folder)[0]["action_set"] == "shape-changing" and "allowed" not in read_runs(folder)[0]
     assert read_metadata(folder)["identity"] == new_identity
+    store.close()  # the session ends: its lock goes
     with pytest.raises(ResultFolderError, match="options"):  # a real difference is still refused
         StudyStore(folder, "swim", {**new_identity, "options": {"action_set": "shape-changing", "steps": 6}})
 
@@ -181,6 +182,7 @@ def test_json_files_are_strict_json(tmp_path):
     meta = read_metadata(tmp_path / "s")
     assert meta["summary"] == {"median": None, "rows": [{"mean": None}]}
     assert read_runs(tmp_path / "s")[0]["x"] == [None, None, 1.0]
+    store.close()
     StudyStore(tmp_path / "s", "noise", {"zetas": [0.0, float("nan")]})  # still resumes
 
 

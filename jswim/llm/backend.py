@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -20,7 +22,8 @@ import httpx
 from jswim.errors import ConfigError, LLMServerError, LLMTimeoutError
 from jswim.llm.client import ClientSettings, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
-from jswim.llm.urls import endpoint, normalize_base_url, safe_url
+from jswim.llm.cache import check_cache
+from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.credentials import read_api_key
 from jswim.llm.local import LOCAL_KEY_ENV, LocalServer, default_model_path
@@ -103,6 +106,11 @@ class Backend:
         guess.
     strict_model : bool
         A model the server's ``/v1/models`` does not list is an error (default: a warning).
+    retries, retry_for_s : int, float or None
+        Retry budget of each call against transient failures (429, 5xx, dropped connections,
+        timeouts): at most ``retries`` retries and ``retry_for_s`` seconds from the first failure,
+        whichever ends first (``None``: the client's defaults, 20 and 120 s; see
+        :class:`jswim.llm.client.ClientSettings`). Not part of the identity.
 
     Raises
     ------
@@ -136,6 +144,8 @@ class Backend:
     sampling: str = "auto"
     server_family: str | None = None
     strict_model: bool = False
+    retries: int | None = None
+    retry_for_s: float | None = None
 
     def __post_init__(self) -> None:
         check_mode(self.reasoning, self.reasoning_effort)
@@ -154,8 +164,12 @@ class Backend:
         bad = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
         if bad:
             raise ConfigError(f"--omit-field {bad[0]}: every request needs it")
-        if self.timeout_s is not None and not self.timeout_s > 0:
-            raise ConfigError(f"--timeout must be > 0 seconds, got {self.timeout_s}")
+        if self.timeout_s is not None and not (math.isfinite(self.timeout_s) and self.timeout_s > 0):
+            raise ConfigError(f"--timeout must be a finite number of seconds > 0, got {self.timeout_s}")
+        if self.retries is not None and self.retries < 0:
+            raise ConfigError(f"--retries must be >= 0, got {self.retries}")
+        if self.retry_for_s is not None and not (math.isfinite(self.retry_for_s) and self.retry_for_s >= 0):
+            raise ConfigError(f"--retry-for must be a finite number of seconds >= 0, got {self.retry_for_s}")
         if self.constrain not in MODES:
             raise ConfigError(f"constrain must be one of {', '.join(MODES)}, got {self.constrain!r}")
         check_temperature(self.temperature)
@@ -239,6 +253,10 @@ class Backend:
                       **({"prices": dict(self.prices)} if self.prices is not None else {}))
         if self.timeout_s is not None:
             common["timeout_s"] = self.timeout_s
+        if self.retries is not None:
+            common["max_retries"] = self.retries
+        if self.retry_for_s is not None:
+            common["retry_for_s"] = self.retry_for_s
         if self.local:
             if server is None:
                 raise ConfigError("the embedded backend needs its running server (Backend.server())")
@@ -278,9 +296,47 @@ class Backend:
 
     def check(self, timeout_s: float | None = None) -> None:
         """For a remote backend, :meth:`preflight` (waiting ``timeout_s``, default the backend's
-        ``--timeout`` or 5 s); nothing to check for the embedded one."""
+        ``--timeout`` or 5 s); for both, a ``--cache-dir`` that cannot be a cache is one line."""
+        if self.cache_dir is not None:
+            check_cache(self.cache_dir)
         if not self.local:
+            check_api_key(self.api_key_env, self.base_url)
             self.preflight(timeout_s=timeout_s)
+
+
+#: The variable ``--api-key-env`` names unless told otherwise.
+DEFAULT_KEY_ENV = "OPENAI_API_KEY"
+
+
+def check_api_key(api_key_env: str, base_url: str) -> None:
+    """An API-key variable that is unset is a mistake for a remote server (every request would be
+    refused after the baselines ran) and worth a warning for one on this machine, which may need
+    none (unless it is the default name, which local servers commonly leave unset);
+    ``--api-key-env ''`` says "no key". A key that cannot travel in an HTTP header (a
+    non-ASCII or control character, e.g. pasted from a rich-text page) is one line naming the
+    variable, never the value.
+
+    Raises
+    ------
+    ConfigError
+    """
+    if not api_key_env:
+        return
+    value = os.environ.get(api_key_env)
+    if value is None:
+        if is_loopback(base_url):
+            if api_key_env == DEFAULT_KEY_ENV:  # the default name, unset: a local server without a key
+                return
+            warnings.warn(f"${api_key_env} (--api-key-env) is not set: no API key is sent to {safe_url(base_url)}",
+                          stacklevel=2)
+            return
+        raise ConfigError(f"${api_key_env} (--api-key-env) is not set, and {safe_url(base_url)} is not on this "
+                          f"machine: export the key in it, or pass --api-key-env '' for a server that needs none")
+    bad = [c for c in value.strip() if not (" " < c <= "~")]
+    if bad:
+        kind = "a non-ASCII" if any(ord(c) > 126 for c in bad) else "a control or space"
+        raise ConfigError(f"${api_key_env} (--api-key-env) holds {kind} character, which an HTTP header cannot "
+                          "carry: copy the key again (the key itself is not shown)")
 
 
 #: The first bytes of every GGUF file.

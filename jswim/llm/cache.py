@@ -20,6 +20,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from jswim.errors import ConfigError
+
 #: Bump when the stored value's layout changes (v2: reasoning stored, failed replies no longer
 #: stored; v1 entries are ignored, so failures cached by older versions are never replayed).
 CACHE_VERSION = "jswim-llm-cache-v2"
@@ -29,6 +31,26 @@ def request_key(payload: dict[str, Any]) -> str:
     """Hash of a request body (canonical JSON: sorted keys, no spaces)."""
     blob = json.dumps([CACHE_VERSION, payload], sort_keys=True, separators=(",", ":"), ensure_ascii=False)
     return hashlib.sha256(blob.encode("utf-8")).hexdigest()
+
+
+def check_cache(path: str | Path) -> None:
+    """Open the cache at ``path`` once (creating it), so a bad ``--cache-dir`` fails in one line
+    before any run: not writable, a file where a folder should be, or a file that is not a cache.
+
+    Raises
+    ------
+    ConfigError
+        Naming the path and the cause.
+    """
+    try:
+        ResponseCache(path).close()
+    except sqlite3.DatabaseError as exc:  # "file is not a database", a read-only database, ...
+        raise ConfigError(f"--cache-dir {path}: not a usable jswim response cache ({exc}); "
+                          "give a folder, or a .sqlite file that jswim made") from None
+    except OSError as exc:
+        what = "a file, not a folder" if Path(path).is_file() and Path(path).suffix not in (".sqlite", ".db") else \
+            (exc.strerror or type(exc).__name__)
+        raise ConfigError(f"--cache-dir {path}: {what}; give a writable folder") from None
 
 
 class ResponseCache:

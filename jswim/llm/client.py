@@ -28,10 +28,12 @@ from __future__ import annotations
 import asyncio
 import email.utils
 import json
+import math
 import os
 import random
 import ssl
 import time
+import zlib
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Mapping, Sequence
 
@@ -91,9 +93,14 @@ class ClientSettings:
     max_concurrency : int
         Requests in flight at once.
     max_retries : int
-        Retries after the first attempt before giving up.
+        Retries after the first attempt before giving up (``--retries``).
+    retry_for_s : float or None
+        Longest time a call keeps retrying, from its first failure (``--retry-for``); the call
+        gives up when either budget is spent. ``None``: no time limit. The defaults (20 retries,
+        120 s) ride out a server that is down or rate-limiting for a minute or more.
     backoff_base_s, backoff_max_s : float
-        Backoff before retry ``k`` is ``min(max, base * 2**k)`` scaled by a jitter in [0.5, 1].
+        Backoff before retry ``k`` is ``min(max, base * 2**k)`` scaled by a jitter in [0.5, 1]
+        (the last wait is shortened to end at the ``retry_for_s`` deadline).
     max_retry_after_s : float
         Longest ``Retry-After`` wait honoured (longer ones are shortened to this).
     temperature : float
@@ -148,7 +155,8 @@ class ClientSettings:
     timeout_s: float = 60.0
     timeout_retries: int = 1
     max_concurrency: int = 16
-    max_retries: int = 4
+    max_retries: int = 20
+    retry_for_s: float | None = 120.0
     backoff_base_s: float = 0.5
     backoff_max_s: float = 30.0
     max_retry_after_s: float = 120.0
@@ -183,8 +191,10 @@ class ClientSettings:
             raise ConfigError(f"constrain must be one of {constrain.MODES}, got {self.constrain!r}")
         if self.server_kind not in constrain.SERVER_KINDS:
             raise ConfigError(f"server_kind must be one of {constrain.SERVER_KINDS}, got {self.server_kind!r}")
-        if self.max_concurrency < 1 or self.max_retries < 0 or not self.timeout_s > 0:
-            raise ConfigError("need max_concurrency >= 1, max_retries >= 0 and timeout_s > 0")
+        if self.max_concurrency < 1 or self.max_retries < 0 or not (math.isfinite(self.timeout_s) and self.timeout_s > 0):
+            raise ConfigError("need max_concurrency >= 1, max_retries >= 0 and a finite timeout_s > 0")
+        if self.retry_for_s is not None and not (self.retry_for_s >= 0):  # also NaN
+            raise ConfigError(f"retry_for_s must be >= 0 seconds, got {self.retry_for_s}")
         check_temperature(self.temperature)
 
     def metadata(self) -> dict[str, Any]:
@@ -198,6 +208,7 @@ class ClientSettings:
             "constrain": self.constrain,
             "server_kind": self.server_kind,
             "max_retries": self.max_retries,
+            "retry_for_s": self.retry_for_s,
             "timeout_s": self.timeout_s,
             "timeout_retries": self.timeout_retries,
             "omit_fields": list(self.omit_fields),
@@ -287,6 +298,30 @@ class ChatResult:
         }
 
 
+def decode_body(raw: bytes, content_encoding: str) -> bytes:
+    """The body ``raw`` undone from its ``Content-Encoding`` (gzip, deflate, identity).
+
+    A header that lies (a plain JSON body labelled ``gzip`` by a misconfigured proxy) or names
+    an encoding we did not ask for leaves the body as it came: whether it is a completion is then
+    decided by reading it, never by a decoding traceback.
+    """
+    out = raw
+    for name in reversed([t.strip().lower() for t in content_encoding.split(",") if t.strip()]):
+        try:
+            if name in ("gzip", "x-gzip"):
+                out = zlib.decompress(out, 16 + zlib.MAX_WBITS)
+            elif name == "deflate":
+                try:
+                    out = zlib.decompress(out)
+                except zlib.error:  # raw deflate, as some servers send it
+                    out = zlib.decompress(out, -zlib.MAX_WBITS)
+            elif name != "identity":
+                return raw
+        except zlib.error:
+            return raw
+    return out
+
+
 def parse_retry_after(headers: httpx.Headers, now: float | None = None) -> float | None:
     """Seconds to wait from ``retry-after-ms``, or ``Retry-After`` (seconds or an HTTP date)."""
     ms = headers.get("retry-after-ms")
@@ -310,16 +345,21 @@ def parse_retry_after(headers: httpx.Headers, now: float | None = None) -> float
     return max(0.0, when.timestamp() - now)
 
 
+#: Kinds of transient failure, as counted in :attr:`LiveCounts.faults` (and a study's summary).
+FAULT_KINDS = ("429", "5xx", "408/409", "connection", "timeout", "bad body")
+
+
 class _Failure(Exception):
-    """A retryable attempt failure (internal)."""
+    """A retryable attempt failure (internal); ``kind`` is one of :data:`FAULT_KINDS`."""
 
     def __init__(self, what: str, retry_after: float | None = None, bad_body: bool = False,
-                 timeout: bool = False) -> None:
+                 timeout: bool = False, kind: str = "connection") -> None:
         super().__init__(what)
         self.what = what
         self.retry_after = retry_after
         self.bad_body = bad_body
         self.timeout = timeout
+        self.kind = "bad body" if bad_body else "timeout" if timeout else kind
 
 
 class _Adapted(Exception):
@@ -344,6 +384,9 @@ class LiveCounts:
     cache_hits: int = 0  # calls answered from the disk cache
     shared: int = 0  # calls that waited on an identical request already in flight
     cost_usd: float = 0.0  # what the answered calls cost
+    requests: int = 0  # HTTP requests sent (first attempts and retries): what the server counts
+    retries: int = 0  # of those, retries after a transient failure
+    faults: dict[str, int] = field(default_factory=dict)  # transient failures by kind (FAULT_KINDS)
 
 
 class LLMClient:
@@ -639,6 +682,7 @@ class LLMClient:
         assert slots is not None
         retries = timeouts = 0
         adaptations = 0
+        first_failure: float | None = None
         while True:
             tokens = estimate_prompt_tokens(payload["messages"]) + int(
                 payload.get("max_tokens") or payload.get("max_completion_tokens") or 0)
@@ -652,6 +696,8 @@ class LLMClient:
                 if slot.http is None:
                     slot.http = self._http_client()
                 self.n_requests += 1
+                self.counts.requests += 1
+                self.counts.retries += retries > 0
                 self.counts.in_flight += 1
                 try:
                     got = await self._attempt(slot.http, payload)
@@ -676,6 +722,10 @@ class LLMClient:
                 self.counts.cost_usd += res.cost_usd
                 return res
             except _Failure as fail:
+                self.counts.faults[fail.kind] = self.counts.faults.get(fail.kind, 0) + 1
+                now = time.perf_counter()
+                first_failure = now if first_failure is None else first_failure
+                left = math.inf if s.retry_for_s is None else s.retry_for_s - (now - first_failure)
                 timeouts += fail.timeout
                 if fail.timeout and timeouts > s.timeout_retries:
                     raise LLMTimeoutError(self._scrub(
@@ -683,13 +733,16 @@ class LLMClient:
                         f"{timeouts} attempt(s); a cold local server may still be loading its model: "
                         f"wait for it or raise --timeout (now {s.timeout_s:g} s)"
                     )) from None
-                if retries >= s.max_retries:
-                    msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts"
+                if retries >= s.max_retries or left <= 0:
+                    spent = f"{retries} retries over {now - first_failure:.0f} s"
+                    msg = (f"{self._where}: {fail.what}; gave up after {retries + 1} attempts ({spent}; the budget is "
+                           f"--retries {s.max_retries}, --retry-for {s.retry_for_s if s.retry_for_s is not None else 'none'})")
                     raise (LLMResponseError if fail.bad_body else LLMServerError)(self._scrub(msg)) from None
                 # A timed-out request already waited a whole timeout: send it again at once.
                 wait = 0.0 if fail.timeout else self._backoff(retries)
                 if fail.retry_after is not None:
                     wait = min(fail.retry_after, s.max_retry_after_s)
+                wait = min(wait, left)  # the last attempt goes out at the deadline, not after it
                 retries += 1
             finally:
                 slots.put_nowait(slot)  # free the slot before any backoff wait
@@ -698,9 +751,9 @@ class LLMClient:
     async def _attempt(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> Completion:
         s = self.settings
         try:
-            resp = await http.post(self._url, json=payload, headers=self._headers())
+            resp = await self._post(http, payload)
         except httpx.ConnectTimeout:
-            raise _Failure(f"could not connect within {s.timeout_s:g} s") from None
+            raise _Failure(f"could not connect within {s.timeout_s:g} s", kind="connection") from None
         except httpx.TimeoutException:
             raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True) from None
         except httpx.TransportError as exc:
@@ -716,7 +769,8 @@ class LLMClient:
                 raise self._rejection(status, invalid, payload, invalid=True)
             detail = server_text(resp)
             raise _Failure(f"HTTP {status}" + (f": {detail}" if detail else ""),
-                           retry_after=parse_retry_after(resp.headers))
+                           retry_after=parse_retry_after(resp.headers),
+                           kind="429" if status == 429 else "5xx" if status >= 500 else "408/409")
         if status != 200:
             said = server_text(resp)
             if status == 400 and self.reasoning.adapt(said, payload, s.model):
@@ -736,6 +790,15 @@ class LLMClient:
                 f"the response is not a chat completion (malformed body, {ctype or 'no content type'}: {snippet})",
                 bad_body=True,
             ) from None
+
+    async def _post(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> httpx.Response:
+        """POST ``payload`` and read the body as it was sent (see :func:`decode_body`)."""
+        headers = {**self._headers(), "Accept-Encoding": "gzip, deflate"}  # what decode_body reads
+        async with http.stream("POST", self._url, json=payload, headers=headers) as resp:
+            raw = b"".join([chunk async for chunk in resp.aiter_raw()])
+        kept = [(k, v) for k, v in resp.headers.multi_items() if k.lower() not in ("content-encoding", "content-length")]
+        return httpx.Response(resp.status_code, headers=kept, request=resp.request,
+                              content=decode_body(raw, resp.headers.get("content-encoding", "")))
 
     def _rejection(self, status: int, server: str, payload: Mapping[str, Any], invalid: bool = False) -> LLMRequestError:
         s = self.settings

@@ -5,8 +5,10 @@ Every call a run gets an answer to is appended to ``calls.jsonl`` in the study f
 a hash of the request and what came back (text, usage, cost). A run interrupted by Ctrl-C, a
 crash or the cost cap starts again from its first step on the next session, and its calls are
 answered from this journal, in order, for as long as each request is the very request recorded
-(same messages, sampling and seed); the first request that differs, and every call after the
-journal's end, goes to the server. A run only ever replays its own calls, never another run's.
+(same messages, sampling and seed). Calls are matched by (run, index, request hash): a call whose
+record is missing (a torn line, cut on open by :func:`jswim.jsonl.repair_tail`) is simply sent
+again, and the calls after it still replay; a request that differs from its record goes to the
+server. A run only ever replays its own calls, never another run's.
 
 The journal is also the study's ledger: the sum of its ``cost_usd`` is what the study has paid
 over all sessions (what ``--max-cost`` is compared with).
@@ -20,6 +22,7 @@ import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from jswim.jsonl import repair_tail
 from jswim.llm.client import ChatResult
 from jswim.llm.usage import Usage
 from jswim.permissions import opener
@@ -49,28 +52,31 @@ class CallJournal:
 
     def __init__(self, folder: str | os.PathLike) -> None:
         self.path = Path(folder) / JOURNAL
-        self._calls: dict[str, list[dict[str, Any]]] = {}
+        self._calls: dict[str, dict[int, dict[str, Any]]] = {}
         self.spent_usd = 0.0
         self.n_calls = 0
+        #: Bytes of a torn last line cut on open (0: none).
+        self.repaired_bytes = repair_tail(self.path)  # the next record starts on a line of its own
         if self.path.exists():
-            for line in self.path.read_text(encoding="utf-8").splitlines():
+            for line in self.path.read_text(encoding="utf-8", errors="replace").splitlines():
                 try:
                     rec = json.loads(line)
                 except json.JSONDecodeError:
-                    continue  # a torn last line from a kill: that call is simply asked again
-                self._calls.setdefault(rec["run"], []).append(rec)
+                    continue  # not a record (cut by hand?): that call is simply asked again
+                if not isinstance(rec, dict) or not isinstance(rec.get("n"), int):
+                    continue
+                # The latest record of a (run, index) wins: a resume that took another path
+                # recorded that call anew.
+                self._calls.setdefault(str(rec.get("run")), {})[rec["n"]] = rec
                 self.spent_usd += float(rec.get("cost_usd") or 0.0)
                 self.n_calls += 1
         self._fh = None
 
     def replay(self, run_id: str, index: int, key: str) -> ChatResult | None:
-        """The recorded answer of call ``index`` of ``run_id`` if it was this request, else ``None``."""
-        calls = self._calls.get(run_id)
-        if not calls or index >= len(calls):
-            return None
-        rec = calls[index]
-        if rec.get("n") != index or rec.get("key") != key:
-            del calls[index:]  # the run took another path: nothing after this point applies
+        """The recorded answer of call ``index`` of ``run_id`` if it was this very request (same
+        hash ``key``), else ``None``; a missing index is no reason to stop replaying later ones."""
+        rec = self._calls.get(run_id, {}).get(index)
+        if rec is None or rec.get("key") != key:
             return None
         return ChatResult(
             text=rec["text"], usage=Usage(*rec["usage"]), latency_s=0.0, cache_hit=bool(rec.get("cache_hit")),

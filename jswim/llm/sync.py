@@ -6,7 +6,18 @@ import asyncio
 import concurrent.futures
 from typing import Any, Coroutine, TypeVar
 
+from jswim import interrupts
+
 T = TypeVar("T")
+
+
+async def _main(coro: Coroutine[Any, Any, T]) -> T:
+    """``coro`` as the task a signal cancels (:mod:`jswim.interrupts`)."""
+    interrupts.set_main_task(asyncio.current_task())
+    try:
+        return await coro
+    finally:
+        interrupts.set_main_task(None)
 
 
 def run_sync(coro: Coroutine[Any, Any, T]) -> T:
@@ -20,6 +31,11 @@ def run_sync(coro: Coroutine[Any, Any, T]) -> T:
     try:
         asyncio.get_running_loop()
     except RuntimeError:
-        return asyncio.run(coro)
+        try:
+            return asyncio.run(_main(coro))
+        except asyncio.CancelledError:
+            if interrupts.received() is not None:  # cancelled by a signal: an interrupt, as Ctrl-C
+                raise KeyboardInterrupt from None
+            raise
     with concurrent.futures.ThreadPoolExecutor(1, thread_name_prefix="jswim-loop") as pool:
         return pool.submit(asyncio.run, coro).result()

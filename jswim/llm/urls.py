@@ -81,10 +81,13 @@ def normalize_base_url(url: str) -> str:
     example = "write e.g. http://localhost:8080/v1 or https://api.openai.com/v1"
     if not text:
         raise ConfigError(f"the server base URL is empty; {example}")
-    if "://" not in text:
-        host = urlsplit("//" + text).hostname or ""
-        text = ("http://" if _is_local_name(host) else "https://") + text
-    parts = urlsplit(text)
+    try:
+        if "://" not in text:
+            host = urlsplit("//" + text).hostname or ""
+            text = ("http://" if _is_local_name(host) else "https://") + text
+        parts = urlsplit(text)
+    except ValueError as exc:  # e.g. "Invalid IPv6 URL" for http://[::1/v1 (the URL is not echoed: it may hold a password)
+        raise ConfigError(f"the server base URL is not a URL ({exc}); {example}") from None
     if parts.scheme.lower() not in ("http", "https"):
         raise ConfigError(f"the server base URL {redact_url(text)!r} is not http(s); {example}")
     try:

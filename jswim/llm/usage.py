@@ -50,19 +50,34 @@ class Usage:
 
     @classmethod
     def from_response(cls, usage: Mapping | None) -> "Usage":
-        """Read an OpenAI-style ``usage`` object (missing fields count as 0)."""
+        """Read an OpenAI-style ``usage`` object. A count that is missing, or is not a
+        non-negative whole number (``"n/a"``, ``[3]``, ``-1``, ``1.5``, NaN), counts as 0, as when
+        a server sends no usage at all: the answer is still read."""
         if not isinstance(usage, Mapping):
             return cls()
         details = usage.get("prompt_tokens_details") or {}
         cached = details.get("cached_tokens", 0) if isinstance(details, Mapping) else 0
         out = usage.get("completion_tokens_details") or {}
-        thought = int((out.get("reasoning_tokens") if isinstance(out, Mapping) else 0) or 0)
-        completion = int(usage.get("completion_tokens") or 0)
+        thought = _count(out.get("reasoning_tokens") if isinstance(out, Mapping) else 0)
+        completion = _count(usage.get("completion_tokens"))
         # OpenAI counts reasoning inside completion_tokens; a server that reports more reasoning
         # than completion tokens counted them apart, and both are billed as output.
         if thought > completion:
             completion += thought
-        return cls(int(usage.get("prompt_tokens") or 0), completion, int(cached or 0), thought)
+        return cls(_count(usage.get("prompt_tokens")), completion, _count(cached), thought)
+
+
+def _count(value: object) -> int:
+    """A token count as servers send it (an int, an integral float, a digit string), else 0."""
+    if isinstance(value, bool):
+        return 0
+    if isinstance(value, int):
+        return value if value >= 0 else 0
+    if isinstance(value, float):
+        return int(value) if value.is_integer() and 0 <= value < 2**53 else 0  # NaN and inf are not integers
+    if isinstance(value, str) and value.strip().isascii() and value.strip().isdigit():
+        return int(value.strip())
+    return 0
 
 
 class PriceTable:

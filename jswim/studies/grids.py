@@ -77,6 +77,11 @@ class StudyOptions:
     prompt_files: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
+        # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
+        for name in ("swimmers", "directions", "zetas", "n_hts", "variants"):
+            values = getattr(self, name)
+            if values is not None and len(set(values)) < len(values):
+                object.__setattr__(self, name, tuple(dict.fromkeys(values)))
         if self.steps < 1 or self.steps > 10_000:
             raise ConfigError(f"--steps must be between 1 and 10000, got {self.steps}")
         for name in ("runs", "q_runs"):

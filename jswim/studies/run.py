@@ -53,7 +53,7 @@ from jswim.llm.sampling import describe as describe_sampling
 from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
-from jswim.results import StudyStore, is_failed, read_runs
+from jswim.results import StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
 from jswim.studies.grids import COMPETENCE_VARIANTS, SPECS, SWIM_VARIANT, Plan, StudyOptions, build
 from jswim.studies.report import draw_figures, summarize
 
@@ -148,6 +148,9 @@ GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files")
 
 #: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
+
+#: The study's prompt template (written once per folder; its hash is in the identity).
+PROMPT_FILE = "prompt_template.json"
 
 #: Statuses of an LLM run that are stored; one stopped by the cost cap or an interrupt is not, and
 #: starts again on resume (its paid calls replayed from the journal).
@@ -251,7 +254,9 @@ def run_study(
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
     store = StudyStore(folder, study, ident, extra={
         "jswim_version": __version__, "jax_version": jax.__version__, "python": platform.python_version(),
-        "prompt_template": dataclasses.asdict(template or PromptTemplate()),
+        # The template itself is in prompt_template.json, written once (below), not in every
+        # rewrite of metadata.json at each status change.
+        "prompt_template_file": PROMPT_FILE,
         "success_criterion": Criterion(horizon=options.horizon).describe(),
         "horizon": options.horizon,
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS) if study == "competence"
@@ -263,14 +268,40 @@ def run_study(
         "server": backend.address() if backend is not None else None,
         "prices_as_of": (backend.prices_as_of if backend is not None and backend.prices_as_of else PRICES_AS_OF),
     })
+    for note in store.repairs:
+        warnings.warn(FolderRepaired(f"{folder}: {note}"), stacklevel=2)
     try:
+        store.meta.pop("prompt_template", None)  # folders before prompt_template.json had it here
+        tpl_path = folder / PROMPT_FILE
+        if not tpl_path.exists():  # the identity holds its hash: a resumed folder has this very template
+            with writing(folder):
+                write_json(tpl_path, dataclasses.asdict(template or PromptTemplate()))
         return _run_in(store, study, plans, options, backend, folder, template, progress, figures, t0, max_cost)
     except KeyboardInterrupt:
-        store.set_status("interrupted")  # finished runs are kept; the same command resumes
+        _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
         raise
     except JswimError as exc:
-        store.set_status("stopped", error=scrub(str(exc)))  # never a key, however the message got it
+        _record_status(store, "stopped", error=scrub(str(exc)))  # never a key, however the message got it
         raise
+    except OSError as exc:  # a full disk or an I/O error outside the store's own writes
+        msg = f"cannot write {exc.filename or folder}: {exc.strerror or exc}"
+        _record_status(store, "stopped", error=msg)
+        raise StudyFolderError(f"{msg}; every finished run and answered call is kept in {folder}: "
+                               "make room and run the same command to resume") from None
+    finally:
+        store.close()  # the folder's lock: the next session may start
+
+
+class FolderRepaired(UserWarning):
+    """Opening a study folder repaired it (a torn journal line cut, a temporary file removed)."""
+
+
+def _record_status(store: StudyStore, status: str, **fields: Any) -> None:
+    """``store.set_status`` where the folder still takes it (a full disk may refuse even that)."""
+    try:
+        store.set_status(status, **fields)
+    except (OSError, StudyFolderError):
+        pass
 
 
 def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: StudyOptions, backend: Backend | None,
@@ -505,8 +536,31 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
         speed.update(totals, wall_s=wall, calls_per_s=totals["calls"] / wall if wall > 0 else 0.0,
                      billed_calls_per_s=totals["billed_calls"] / wall if wall > 0 else 0.0,
                      tokens=c.tokens if c else 0, cost_usd=budget.spent_usd - spent_before,
-                     study_cost_usd=budget.spent_usd)
+                     study_cost_usd=budget.spent_usd, requests=c.requests if c else 0,
+                     retries=c.retries if c else 0, faults=dict(sorted(c.faults.items())) if c else {})
+        store.meta["llm_totals"] = add_session(store.meta.get("llm_totals"), speed, journal.n_calls)
     return finished, budget.exhausted
+
+
+def add_session(totals: dict[str, Any] | None, speed: dict[str, Any], answered_calls: int) -> dict[str, Any]:
+    """The study's LLM totals over all its sessions, with one more session's ``speed``.
+
+    ``answered_calls`` is the call journal's count (every answered call of the study, all
+    sessions, finished runs or not), so calls per second divide the study's calls by the study's
+    LLM wall time, never one session's by another's. ``requests`` are HTTP requests sent (what
+    the server counts: first attempts and retries), ``faults`` transient failures by kind.
+    """
+    t = dict(totals or {})
+    t["sessions"] = int(t.get("sessions", 0)) + 1
+    for k in ("wall_s", "requests", "retries", "billed_calls", "replayed_calls", "tokens"):
+        t[k] = (t.get(k) or 0) + (speed.get(k) or 0)
+    faults = dict(t.get("faults") or {})
+    for k, n in (speed.get("faults") or {}).items():
+        faults[k] = faults.get(k, 0) + n
+    t["faults"] = dict(sorted(faults.items()))
+    t["answered_calls"] = answered_calls
+    t["calls_per_s"] = answered_calls / t["wall_s"] if t["wall_s"] > 0 else 0.0
+    return t
 
 
 def estimate_study(

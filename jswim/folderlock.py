@@ -1,0 +1,143 @@
+"""One writer per study folder: an exclusive OS lock held for a whole session.
+
+A study folder holds paid calls; two processes writing it at once would send and journal every
+call twice and interleave the transcripts. :class:`FolderLock` takes an exclusive lock on
+``FOLDER/.jswim.lock`` (:mod:`filelock`, i.e. ``flock(2)`` on POSIX) before anything in the
+folder is read or written, and holds it until the session ends. Next to it,
+``FOLDER/.jswim.holder.json`` says who holds it (pid, host, start time, command), so a second
+process can say in one line whom it waits for.
+
+A lock held by a dead process is no lock: the kernel drops an ``flock`` when its holder dies
+(``kill -9`` included), so the next session simply takes it and rewrites the holder file; a
+holder file left by a dead process is only read to report, never trusted. (On a network file
+system without ``flock`` the library falls back as it documents.)
+
+Readers never lock: ``jswim show``, ``compare``, ``plot`` and ``--dry-run`` read a folder that a
+live session may be writing (every file they read is written atomically or append-only), and
+:func:`holder` tells them whether a live session holds it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import socket
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from jswim.errors import ResultFolderError
+
+LOCK = ".jswim.lock"
+HOLDER = ".jswim.holder.json"
+
+
+class FolderBusyError(ResultFolderError):
+    """Another live session holds the study folder's lock."""
+
+
+def holder(folder: str | os.PathLike) -> dict[str, Any] | None:
+    """Who last took the folder's lock (``pid``, ``host``, ``since`` in UTC, ``command``), with
+    ``alive`` (``True``/``False`` for a process on this host, ``None`` for another host); ``None``
+    when no session holds it or the holder file is unreadable."""
+    try:
+        info = json.loads((Path(folder) / HOLDER).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(info, dict):
+        return None
+    info["alive"] = _alive(info.get("pid")) if info.get("host") == socket.gethostname() else None
+    return info
+
+
+def describe_holder(info: dict[str, Any] | None) -> str:
+    """``pid 4242 on host node7 since 2026-12-01 19:40:03 UTC`` (or ``another process``)."""
+    if not info:
+        return "another process"
+    return f"pid {info.get('pid')} on host {info.get('host')} since {info.get('since')}"
+
+
+def _alive(pid: Any) -> bool | None:
+    if not isinstance(pid, int) or pid <= 0:
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # exists, owned by someone else
+        return True
+    except OSError:
+        return None
+    return True
+
+
+class FolderLock:
+    """Exclusive lock on a study folder for one session (see the module docstring).
+
+    Parameters
+    ----------
+    folder : path
+        An existing folder.
+
+    Raises
+    ------
+    FolderBusyError
+        From :meth:`acquire`, when a live process holds the lock: the message names it.
+    """
+
+    def __init__(self, folder: str | os.PathLike) -> None:
+        self.folder = Path(folder)
+        self._lock: Any = None
+
+    @property
+    def held(self) -> bool:
+        return self._lock is not None
+
+    def acquire(self) -> "FolderLock":
+        """Take the lock without waiting, and record this process as its holder."""
+        import filelock  # lazy: only a session that writes a folder needs it
+
+        from jswim.permissions import file_mode
+        from jswim.results import write_json  # lazy: results imports pyarrow
+
+        lock = filelock.FileLock(self.folder / LOCK, timeout=0, mode=file_mode())
+        try:
+            lock.acquire(timeout=0)
+        except filelock.Timeout:
+            who = describe_holder(holder(self.folder))
+            raise FolderBusyError(
+                f"{self.folder} is in use by another jswim session ({who}); one session writes a study "
+                "folder at a time: wait for it to end, or use another --out"
+            ) from None
+        self._lock = lock
+        write_json(self.folder / HOLDER, {
+            "pid": os.getpid(), "host": socket.gethostname(),
+            "since": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+            # The program only: arguments may carry a --base-url with credentials in it.
+            "command": os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "python",
+        })
+        return self
+
+    def release(self) -> None:
+        """Drop the lock (the holder file first, so nobody reads a holder that has left)."""
+        if self._lock is None:
+            return
+        try:
+            (self.folder / HOLDER).unlink(missing_ok=True)
+        except OSError:
+            pass  # a read-only or vanished folder: the lock itself still goes
+        self._lock.release()
+        self._lock = None
+
+    def __del__(self) -> None:  # a store dropped without close() (notebooks, tests) frees its folder
+        try:
+            self.release()
+        except Exception:
+            pass
+
+    def __enter__(self) -> "FolderLock":
+        return self.acquire()
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()

@@ -1,0 +1,73 @@
+"""SIGINT, SIGTERM and SIGHUP end a ``jswim`` session the same way, once.
+
+A batch scheduler, ``systemd`` or ``timeout`` stops a job with SIGTERM; a closed terminal sends
+SIGHUP; a user presses Ctrl-C. Each must end a study the same way: every finished run and
+answered call kept, the folder's status ``interrupted``, one line on stderr. :func:`install`
+(called by the ``jswim`` command, never on import) routes all three to one handler:
+
+- the first signal stops the session: inside the event loop the main task is cancelled (as
+  :func:`asyncio.run` does for Ctrl-C, so every ``finally`` runs and transcripts are closed),
+  elsewhere :class:`KeyboardInterrupt` is raised;
+- every later signal is only noted: the session is already saving what it has, and a second
+  Ctrl-C must not tear that save or print a traceback from a cleanup or ``atexit`` callback.
+
+:func:`quiet` makes even the first signal a note (the session is over; only exit remains).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import signal
+from typing import Any
+
+SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+_received: int | None = None
+_armed = False
+_main_task: asyncio.Task | None = None
+
+
+def install() -> None:
+    """Route SIGINT, SIGTERM and SIGHUP to the session's one handler (main thread only)."""
+    global _armed
+    for sig in SIGNALS:
+        signal.signal(sig, _handler)
+    _armed = True
+
+
+def quiet() -> None:
+    """From now on signals are noted, never raised (the work is done; cleanup and exit remain)."""
+    global _armed
+    _armed = False
+
+
+def received() -> int | None:
+    """The first signal received (its number), or ``None``."""
+    return _received
+
+
+def name(signum: int | None) -> str:
+    """``"SIGTERM"`` for 15; ``"Ctrl-C"`` for SIGINT or ``None``."""
+    if signum is None or signum == signal.SIGINT:
+        return "Ctrl-C"
+    return signal.Signals(signum).name
+
+
+def set_main_task(task: asyncio.Task | None) -> None:
+    """The task that the first signal cancels while an event loop runs (:func:`jswim.llm.sync.run_sync`)."""
+    global _main_task
+    _main_task = task
+
+
+def _handler(signum: int, frame: Any) -> None:
+    global _received
+    if _received is not None or not _armed:
+        _received = _received or signum
+        return
+    _received = signum
+    task = _main_task
+    if task is not None and not task.done():
+        task.cancel()
+        task.get_loop().call_soon_threadsafe(lambda: None)  # wake a loop waiting in select()
+        return
+    raise KeyboardInterrupt

@@ -1,0 +1,152 @@
+"""Odd input is one line on stderr and exit 2 before any run starts, never a traceback.
+
+Each case is an example of a kind: text that is not UTF-8, a key no HTTP header can carry, a URL
+that does not parse, a path the file system refuses, a grid value given twice, a number that is
+not finite, a cache that is not one, a prompt file too large to send, an unset key variable.
+"""
+
+from __future__ import annotations
+
+import os
+import sqlite3
+
+import pytest
+
+from jswim import cli
+from jswim.llm.cache import ResponseCache, check_cache
+from jswim.errors import ConfigError
+from jswim.prompt import MAX_TEMPLATE_BYTES
+from jswim.results import read_runs
+from jswim.studies import StudyOptions
+from tests.fakeserver import FakeServer, hash_reply
+
+BASE = ["--steps", "12", "--runs", "1", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x", "--no-figures",
+        "--model", "fake", "--api-key-env", "JSWIM_TEST_NO_KEY"]
+
+
+def refused(capsys, srv, out, *extra: str) -> str:
+    rc = cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(out), *extra])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    lines = [ln for ln in err.splitlines() if ln.startswith("jswim: error:")]
+    assert rc == 2 and len(lines) == 1, err
+    assert srv.n_requests == 0 and not os.path.exists(out / "runs.jsonl")  # before any run
+    return lines[0]
+
+
+@pytest.fixture
+def srv():
+    with FakeServer(reply=hash_reply) as s:
+        yield s
+
+
+def test_text_that_is_not_utf8(srv, tmp_path, capsys):
+    line = refused(capsys, srv, tmp_path / "o", "--model", "m\udcff")  # what Python makes of $'m\xff'
+    assert "--model" in line and "UTF-8" in line
+
+
+@pytest.mark.parametrize("key", ["sk-ü123", "sk-12\x0734", "sk-\u200babc"])
+def test_a_key_no_header_can_carry_names_the_variable_never_the_value(key, srv, tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("JSWIM_TEST_BAD_KEY", key)
+    line = refused(capsys, srv, tmp_path / "o", "--api-key-env", "JSWIM_TEST_BAD_KEY")
+    assert "$JSWIM_TEST_BAD_KEY" in line and "abc" not in line and "123" not in line and "sk-" not in line
+
+
+@pytest.mark.parametrize("url", ["http://[::1/v1", "http://[zz::1]/v1"])
+def test_a_url_that_does_not_parse(url, srv, tmp_path, capsys):
+    line = refused(capsys, srv, tmp_path / "o", "--base-url", url)
+    assert "base URL" in line
+
+
+def test_an_out_name_longer_than_the_file_system_allows(srv, tmp_path, capsys):
+    line = refused(capsys, srv, tmp_path / ("x" * 300))
+    assert "--out" in line and "too long" in line.lower()
+    (tmp_path / "file").write_text("x")
+    assert "Not a directory" in refused(capsys, srv, tmp_path / "file" / "o")
+
+
+@pytest.mark.parametrize("value", ["inf", "nan", "-1", "0"])
+def test_a_timeout_that_is_not_a_finite_positive_number(value, srv, tmp_path, capsys):
+    assert "--timeout" in refused(capsys, srv, tmp_path / "o", "--timeout", value)
+
+
+@pytest.mark.parametrize("option, value", [("--retries", "-1"), ("--retry-for", "inf"), ("--retry-for", "-2")])
+def test_a_retry_budget_that_is_not_one(option, value, srv, tmp_path, capsys):
+    assert option in refused(capsys, srv, tmp_path / "o", option, value)
+
+
+def test_a_cache_dir_that_is_a_file_or_not_a_cache(srv, tmp_path, capsys):
+    (tmp_path / "afile").write_text("x")
+    assert "a file, not a folder" in refused(capsys, srv, tmp_path / "o", "--cache-dir", str(tmp_path / "afile"))
+    (tmp_path / "bad.sqlite").write_text("not a database " * 100)
+    assert "not a usable" in refused(capsys, srv, tmp_path / "o", "--cache-dir", str(tmp_path / "bad.sqlite"))
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "responses.sqlite").write_bytes(b"\0" * 4096)
+    with pytest.raises(ConfigError, match="not a usable"):
+        check_cache(tmp_path / "d")
+    ResponseCache(tmp_path / "good").close()
+    check_cache(tmp_path / "good")  # a real cache is fine
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only folders")
+def test_a_read_only_cache_dir(srv, tmp_path, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        assert "--cache-dir" in refused(capsys, srv, tmp_path / "o", "--cache-dir", str(ro / "cache"))
+    finally:
+        ro.chmod(0o755)
+
+
+def test_a_read_only_cache_database(tmp_path):
+    db = tmp_path / "c.sqlite"
+    ResponseCache(db).close()
+    con = sqlite3.connect(db)
+    con.execute("PRAGMA journal_mode=DELETE")  # a copy without its WAL files, then made read-only
+    con.close()
+    db.chmod(0o444)
+    if os.geteuid() == 0:
+        pytest.skip("root writes into read-only files")
+    with pytest.raises(ConfigError, match="--cache-dir"):
+        check_cache(db)
+
+
+def test_a_prompt_file_over_the_limit_is_refused_before_any_request(srv, tmp_path, capsys):
+    big = tmp_path / "big.txt"
+    big.write_text("{history} {allowed}\n" + "x" * (10 * 10**6))
+    line = refused(capsys, srv, tmp_path / "o", "--prompt-file", str(big))
+    assert "10.0 MB" in line and f"{MAX_TEMPLATE_BYTES // 1000} kB" in line
+
+
+def test_the_prompt_template_is_stored_once_not_in_every_metadata_rewrite(srv, tmp_path, capsys):
+    assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(tmp_path / "o")]) == 0
+    meta = (tmp_path / "o" / "metadata.json").read_text()
+    assert "prompt_template\"" not in meta and "layout" not in meta
+    assert "layout" in (tmp_path / "o" / "prompt_template.json").read_text()
+
+
+def test_an_unset_key_variable_is_an_error_for_a_remote_server_and_a_warning_here(srv, tmp_path, capsys):
+    rc = cli.main(["swim", *BASE, "--base-url", "http://example.invalid/v1", "--out", str(tmp_path / "r"),
+                   "--api-key-env", "JSWIM_SURELY_UNSET"])
+    err = capsys.readouterr().err
+    assert rc == 2 and "$JSWIM_SURELY_UNSET" in err and "is not set" in err and "--api-key-env ''" in err
+    with pytest.warns(UserWarning, match="JSWIM_SURELY_UNSET.*not set"):  # loopback: may need no key
+        assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(tmp_path / "l"),
+                         "--api-key-env", "JSWIM_SURELY_UNSET"]) == 0
+
+
+@pytest.mark.parametrize("field, given, merged", [
+    ("zetas", (0, 0.0, 1), (0, 1)),
+    ("swimmers", ("purcell", "purcell"), ("purcell",)),
+    ("n_hts", (3, 3, 4), (3, 4)),
+    ("directions", (1, 1, -1), (1, -1)),
+])
+def test_a_grid_value_given_twice_is_one_setting(field, given, merged):
+    assert getattr(StudyOptions(**{field: given}), field) == merged
+
+
+def test_duplicate_swimmers_run_once(srv, tmp_path, capsys):
+    assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(tmp_path / "o"),
+                     "--swimmer", "purcell,purcell"]) == 0
+    assert len(read_runs(tmp_path / "o")) == 1

@@ -1,0 +1,119 @@
+"""Flaky servers: transient failures never end a study while the server comes back within the
+retry budget (--retries / --retry-for); a spent budget stops the study cleanly, keeping every
+finished run; requests, retries and faults are counted as the server counts them."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import time
+
+import pytest
+
+from jswim import cli
+from jswim.errors import LLMServerError
+from jswim.llm.client import ClientSettings, LLMClient
+from jswim.results import read_metadata, read_runs
+from tests.fakeserver import FakeServer, Fault, hash_reply
+
+MSG = [{"role": "user", "content": "Say [1, 1]"}]
+
+
+def settings(url: str, **kw) -> ClientSettings:
+    return ClientSettings(base_url=url, model="fake", backoff_base_s=0.02, backoff_max_s=0.1, timeout_s=5.0, **kw)
+
+
+async def one_call(s: ClientSettings):
+    async with LLMClient(s) as c:
+        res = await c.chat(MSG)
+        return res, c.counts
+
+
+def down_for(seconds: float):
+    """A server that answers 503 (and drops every third connection) until ``seconds`` after its
+    first request, then answers normally: an outage it comes back from."""
+    state = {"t0": None, "n": 0}
+
+    def reply(body):
+        state["t0"] = state["t0"] or time.monotonic()
+        state["n"] += 1
+        if time.monotonic() - state["t0"] < seconds:
+            return Fault.drop() if state["n"] % 3 == 0 else Fault.server_error(503, "overloaded")
+        return "[1, 1]"
+
+    return reply
+
+
+def test_an_outage_shorter_than_the_budget_is_ridden_out():
+    with FakeServer(reply=down_for(0.6)) as srv:
+        res, counts = asyncio.run(one_call(settings(srv.url, retry_for_s=30.0)))
+        assert res.text == "[1, 1]" and res.retries >= 3
+        assert counts.requests == srv.n_requests and counts.retries == srv.n_requests - 1
+        assert counts.faults.get("5xx", 0) + counts.faults.get("connection", 0) == srv.n_requests - 1
+        assert counts.faults.get("connection", 0) >= 1
+
+
+def test_the_default_budget_rides_out_a_minute():
+    # With the default backoff (0.5 s doubling to 30 s, jitter in [0.5, 1]) the shortest sum of
+    # waits of the default 20 retries exceeds a minute, and --retry-for 120 s allows it.
+    s = ClientSettings(base_url="http://127.0.0.1:1/v1", model="m")
+    shortest = sum(min(s.backoff_max_s, s.backoff_base_s * 2.0**k) * 0.5 for k in range(s.max_retries))
+    assert shortest > 60 and s.retry_for_s >= 60
+
+
+def test_a_spent_retry_count_is_one_line_naming_the_budget():
+    with FakeServer(reply=lambda body: Fault.server_error(500)) as srv:
+        with pytest.raises(LLMServerError) as err:
+            asyncio.run(one_call(settings(srv.url, max_retries=3)))
+        assert srv.n_requests == 4  # the first attempt and 3 retries
+    msg = str(err.value)
+    assert "\n" not in msg and "gave up after 4 attempts" in msg and "--retries 3" in msg
+
+
+def test_a_spent_retry_time_stops_retrying():
+    with FakeServer(reply=lambda body: Fault.rate_limit(None)) as srv:
+        with pytest.raises(LLMServerError, match="--retry-for 0.3"):
+            asyncio.run(one_call(settings(srv.url, max_retries=10_000, retry_for_s=0.3)))
+        assert 2 <= srv.n_requests < 10_000
+
+
+FAST = ["--steps", "12", "--runs", "2", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x",
+        "--no-figures", "--api-key-env", "JSWIM_TEST_NO_KEY", "--model", "fake"]
+
+
+def test_a_flaky_server_never_ends_the_study_and_every_request_is_counted(tmp_path, capsys):
+    faults = [Fault.rate_limit("0"), Fault.server_error(502), None, Fault.drop(), None, None, None] * 8
+    with FakeServer(reply=hash_reply, faults=faults) as srv:
+        assert cli.main(["swim", *FAST, "--base-url", srv.url, "--out", str(tmp_path / "F")]) == 0
+        out = capsys.readouterr().out
+        sent = srv.n_requests
+    line = next(ln for ln in out.splitlines() if ln.startswith("HTTP requests:"))
+    assert line.startswith(f"HTTP requests: {sent} sent (")  # ours match the server's count
+    assert "429 x" in line and "5xx x" in line and "connection x" in line
+    totals = read_metadata(tmp_path / "F")["llm_totals"]
+    assert totals["requests"] == sent and totals["retries"] == sent - 24 and sum(totals["faults"].values()) == sent - 24
+    assert cli.main(["show", str(tmp_path / "F")]) == 0
+    shown = capsys.readouterr().out
+    assert f"HTTP requests: {sent} sent ({sent - 24} retries" in shown and "24 answered calls" in shown
+
+
+def test_a_spent_budget_stops_cleanly_and_the_same_command_resumes(tmp_path, capsys):
+    state = {"down": False}
+
+    def reply(body):
+        return Fault.server_error(503) if state["down"] else hash_reply(body)
+
+    args = ["swim", *FAST, "--out", str(tmp_path / "F"), "--retries", "2", "--retry-for", "5"]
+    with FakeServer(reply=reply) as srv:
+        state["down"] = True  # down from the start of the LLM phase on, longer than the budget
+        rc = cli.main([*args, "--base-url", srv.url])
+        err = capsys.readouterr().err
+        last = err.strip().splitlines()[-1]
+        assert rc == 2 and "Traceback" not in err
+        assert "gave up" in last and "kept in" in last and "run the same command to resume" in last
+        assert read_metadata(tmp_path / "F")["status"] == "stopped"
+        state["down"] = False
+        assert cli.main([*args, "--base-url", srv.url]) == 0
+    rows = read_runs(tmp_path / "F")
+    assert len(rows) == 2 and all(r["status"] == "done" for r in rows)
+    assert json.loads((tmp_path / "F" / "metadata.json").read_text())["llm_totals"]["sessions"] == 2
