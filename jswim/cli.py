@@ -73,26 +73,42 @@ def _swimmers(text: str) -> tuple[str, ...]:
     return out
 
 
-def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
+def _dirs_text(directions: Sequence[int]) -> str:
+    return "both" if set(directions) == {1, -1} else ("+x" if directions[0] > 0 else "-x")
+
+
+def _add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> None:
+    """The options of ``jswim swim`` and ``jswim study NAME``; each help names the defaults of the
+    study (``spec``: its :class:`jswim.studies.grids.StudySpec`)."""
+    if isinstance(p, _Outline):
+        return
+    from jswim.studies.grids import DEFAULT_ZETAS, StudyOptions
+
+    unused = set(spec.ignores)
+
+    def shown(field: str, text: str) -> str:  # an option the study has no use for is refused, not shown
+        return argparse.SUPPRESS if field in unused else text
+
     g = p.add_argument_group("runs")
     g.add_argument("--swimmer", type=_swimmers, default=None, metavar="NAME",
-                   help="purcell, ng or both (default: purcell for swim, both for studies)")
+                   help=f"purcell, ng or both (or nlink, nsphere; default {','.join(spec.swimmers)})")
     g.add_argument("--direction", type=_direction, default=None, metavar="DIR",
-                   help="target direction: +x, -x or both (default: the study's)")
+                   help=f"target direction: +x, -x or both (default {_dirs_text(spec.directions)})")
     g.add_argument("--steps", type=int, default=50, help="steps per run (default 50, the paper's horizon)")
     g.add_argument("--runs", type=int, default=None,
-                   help="LLM runs per setting (default: 4 for swim, the study's otherwise)")
+                   help=f"LLM runs per setting (default {spec.runs})")
     g.add_argument("--q-runs", type=int, default=None,
-                   help="Q-learning and random-policy runs per setting (default 100)")
+                   help=shown("q_runs", f"Q-learning and random-policy runs per setting (default {spec.q_runs})"))
     g.add_argument("--n-ht", type=int, default=None,
-                   help="history records in the prompt (default: per swimmer, 3 Purcell, 3/6 NG for +x/-x, 20 four-DOF)")
+                   help=shown("n_ht", "history records in the prompt (default: per swimmer, 3 Purcell, 3/6 NG for "
+                              "+x/-x, 20 four-DOF)"))
     g.add_argument("--noise", type=float, default=None, metavar="ZETA",
-                   help="noise level zeta: each step's displacement becomes dX(1 + zeta Y), Y~U[-1,1] (default 0; "
-                        "the noise study sweeps --zetas instead)")
+                   help=shown("zeta", "noise level zeta: each step's displacement becomes dX(1 + zeta Y), Y~U[-1,1] "
+                              "(default 0)"))
     g.add_argument("--init", default=None, choices=("paper", "cycle", "random", "++", "+-", "-+", "--"),
-                   help="initial configuration: paper = the authors' start per swimmer (Purcell (pi/3, pi/3), NG "
-                        "(10, 6), four-sphere (6, 10, 10), four-link hinges at +2pi/9), cycle = repeats go through "
-                        "every corner, random, or a sign pair (default: paper for swim/curves/history, cycle otherwise)")
+                   help=shown("init", "initial configuration: paper = the authors' start per swimmer (Purcell "
+                              "(pi/3, pi/3), NG (10, 6), four-sphere (6, 10, 10), four-link hinges at +2pi/9), cycle = "
+                              f"repeats go through every corner, random, or a sign pair (default {spec.init})"))
     g.add_argument("--action-set", "--allowed", dest="action_set", default="all", choices=ACTION_SETS,
                    help="actions offered in S5 and by constrained decoding: all (the paper's) or only the "
                         "moves that change the shape (default all; --allowed is the old name)")
@@ -113,16 +129,18 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                         "raised where a constrained format needs more); reasoning models need thousands; "
                         "--omit-field max_tokens sends none")
     if study:
+        n_hts = StudyOptions().n_hts
         g.add_argument("--zetas", type=_floats, default=None, metavar="Z1,Z2,...",
-                       help="noise grid of the noise study (default 0,0.5,1,1.5,2,2.5,3)")
+                       help=shown("zetas", f"noise grid (default {','.join(f'{z:g}' for z in DEFAULT_ZETAS)})"))
         g.add_argument("--n-hts", type=_ints, default=None, metavar="N1,N2,...",
-                       help="history lengths of the history study (default 1..8)")
+                       help=shown("n_hts", f"history lengths (default {n_hts[0]}..{n_hts[-1]})"))
         g.add_argument("--temperatures", type=_floats, default=None, metavar="T1,T2,...",
-                       help="sampling temperatures as a grid axis of the study's LLM runs (each run above 0 sends "
-                            "its own seed); the temperature study's grid (default 0,0.25,0.5,0.75,1); extends a folder")
+                       help=shown("temperatures", "sampling temperatures as a grid axis of the study's LLM runs "
+                                  "(each run above 0 sends its own seed); the temperature study's grid (default "
+                                  "0,0.25,0.5,0.75,1); extends a folder"))
         g.add_argument("--prompt-files", default=None, metavar="A,B,...",
-                       help="prompt templates as a grid axis of the study's LLM runs (runs and rows named by each "
-                            "file's name); extends a folder")
+                       help=shown("prompt_files", "prompt templates as a grid axis of the study's LLM runs (runs "
+                                  "and rows named by each file's name); extends a folder"))
     b = p.add_argument_group("LLM backend (default: the embedded SmolLM2-135M model, offline)")
     b.add_argument("--base-url", default=None, help="an OpenAI-compatible server, e.g. http://localhost:8080/v1")
     b.add_argument("--model", default=None, help="model name on that server (required with --base-url)")
@@ -131,10 +149,12 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                    help="environment variable that holds the API key (default OPENAI_API_KEY; never stored or "
                         "printed); named but unset: an error for a remote server, a warning for this machine")
     b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "json_object", "none"),
-                   help="constrained decoding (auto: grammar for llama.cpp's and llama-cpp-python's servers and the "
-                        "embedded one, json_schema for vLLM and Ollama, falling back to json_object with a schema, "
-                        "then grammar, where the server rejects a form; none for OpenAI, unknown servers and the "
-                        "ablation study; the paper uses none)")
+                   help=("constrained decoding (auto: none in this study, free text as the paper's; "
+                         if spec.constrain == "none" else
+                         "constrained decoding (auto: grammar for llama.cpp's and llama-cpp-python's servers and the "
+                         "embedded one, json_schema for vLLM and Ollama, falling back to json_object with a schema, "
+                         "then grammar, where the server rejects a form; none for OpenAI and unknown servers; ")
+                   + "the paper uses none)")
     b.add_argument("--sampling", default="auto", choices=("auto", "neutral", "server"),
                    help="sampling fields sent: neutral turns off each knob the server family has (llama.cpp: "
                         "repeat_penalty 1, top_k 0, top_p 1, min_p 0, no presence/frequency penalty; vLLM alike; "
@@ -208,26 +228,70 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool) -> None:
                         "that forwards to a paid API); by default its calls cost nothing")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    from jswim.studies.grids import DEFAULT_ZETAS, STUDIES  # lazy: the grids load JAX, so only when a parser is built
+#: One line per study, for ``jswim study NAME --help``.
+STUDY_HELP = {
+    "curves": "X/a against step n for the LLM, Q-learning and random policy (Fig. 2)",
+    "history": "the n_ht sweep of the history length (Fig. 3)",
+    "noise": "mean X/a and success rate p against the noise level zeta (Fig. 4)",
+    "ablation": "the prompt without each of its sentences S1..S5, free-text replies (Fig. 5)",
+    "inits": "the four initial configurations",
+    "competence": "every protocol variant next to random and Q-learning baselines",
+    "temperature": "the LLM runs over a grid of sampling temperatures",
+}
 
-    ap = _Parser(prog="jswim", description="A large language model teaches model microswimmers to swim, "
+
+class _Outline(_Parser):
+    """A parser that keeps only the subcommands' names and help: all ``jswim --help`` shows, built
+    without the options' defaults (which import the study grids, and with them JAX: ~1.4 s)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._outlined = True  # argparse's own groups and -h/--help exist; every later option is left out
+
+    def add_argument(self, *args: Any, **kwargs: Any) -> Any:
+        return super().add_argument(*args, **kwargs) if not getattr(self, "_outlined", False) else None
+
+    def add_argument_group(self, *args: Any, **kwargs: Any) -> Any:
+        return super().add_argument_group(*args, **kwargs) if not getattr(self, "_outlined", False) else self
+
+    def add_mutually_exclusive_group(self, *args: Any, **kwargs: Any) -> Any:
+        return self
+
+    def add_subparsers(self, **kwargs: Any) -> Any:
+        return super().add_subparsers(**{**kwargs, "parser_class": _Outline})
+
+
+def build_parser(outline: bool = False) -> argparse.ArgumentParser:
+    """The ``jswim`` parser; ``outline`` builds only its subcommands' names (``jswim --help``)."""
+    if outline:
+        import collections
+
+        DEFAULT_ZETAS, SPECS, STUDIES = (), collections.defaultdict(lambda: None), ()  # noqa: N806
+    else:
+        from jswim.studies.grids import DEFAULT_ZETAS, SPECS, STUDIES  # lazy: the grids load JAX
+
+    ap = (_Outline if outline else _Parser)(prog="jswim", description="A large language model teaches model microswimmers to swim, "
                  "measured against Q-learning and a random policy.",
                  epilog="Every command takes --help. Results land in a study folder that a rerun resumes.")
-    sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Outline if outline else _Parser)
     sub.required = True
     p = sub.add_parser("swim", help="the main job: LLM runs next to Q-learning and random learners",
                        description="Drive swimmers with the LLM for a few short runs next to Q-learning and "
                                    "random-policy learners; print a summary table and write a figure.")
-    _add_run_options(p, study=False)
+    _add_run_options(p, study=False, spec=SPECS["swim"])
     p = sub.add_parser("study", help="run one of the paper's studies",
                        description="Run a study grid (resumable). curves: Fig. 2; history: the n_ht sweep "
                                    "(Fig. 3); noise: mean X/a and success vs zeta (Fig. 4); ablation: S1..S5 "
                                    "removed (Fig. 5); inits: the four initial configurations; competence: "
                                    "every protocol variant next to random and Q-learning baselines.")
-    p.add_argument("name", choices=[s for s in STUDIES if s != "swim"], metavar="NAME",
-                   help="curves, history, noise, ablation, inits, competence or temperature")
-    _add_run_options(p, study=True)
+    sub_studies = p.add_subparsers(dest="name", metavar="NAME", parser_class=_Parser,
+                                           help="curves, history, noise, ablation, inits, competence or temperature")
+    sub_studies.required = True
+    for name in (s for s in STUDIES if s != "swim"):
+        q = sub_studies.add_parser(name, help=STUDY_HELP.get(name, name),
+                                   description=f"The {name} study: {STUDY_HELP.get(name, name)}. Every default "
+                                               "below is this study's.")
+        _add_run_options(q, study=True, spec=SPECS[name])
     p = sub.add_parser("qlearn", help="Q-learning steps-to-learn distributions",
                        description="Train many independent Q-learners on-device and summarise steps-to-learn.")
     p.add_argument("--swimmer", type=_swimmers, default=("purcell", "ng"), metavar="NAME",
@@ -465,7 +529,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
     except FileNotFoundError:
         pass  # a new folder
     except OSError as exc:  # a name longer than the file system allows, a file on the way, ...
-        raise ConfigError(f"--out {out}: {exc.strerror or type(exc).__name__}; choose another --out") from None
+        raise ConfigError(f"cannot write --out {out}: {exc.strerror or type(exc).__name__}; choose another --out") from None
     if args.dry_run:
         from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
 
@@ -480,7 +544,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
     with Progress() as bar:
 
         def tick(phase: str, done: int, total: int, info: str = "") -> None:
-            bar.update(labels.get(phase, "runs"), done, total, info)
+            bar.update(labels.get(phase, "runs"), done, total, info,
+                       unit="LLM steps" if phase.startswith("llm") else "runs")
 
         try:
             with _warnings_as_lines():
@@ -859,10 +924,16 @@ def _undecodable(args: argparse.Namespace) -> str | None:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jswim`` command; returns the exit status."""
-    args = build_parser().parse_args(argv)
+    tokens = sys.argv[1:] if argv is None else list(argv)
+    # No command named (`jswim`, `jswim --help`): the outline parser says the same, without JAX.
+    args = build_parser(outline=all(t.startswith("-") for t in tokens)).parse_args(argv)
     if (bad := _undecodable(args)) is not None:  # bytes that are not UTF-8 (e.g. $'m\xff') fail deep inside
         print(f"jswim: error: --{bad.replace('_', '-')} is not valid UTF-8 text; write it in UTF-8", file=sys.stderr)
         return EXIT_USAGE
+    if args.command not in ("show", "compare"):
+        from jswim import compile_cache
+
+        compile_cache.enable()  # compiled programs kept on disk: later sessions start in seconds
     import matplotlib  # lazy: only once the arguments parsed (fast usage errors)
 
     matplotlib.use("Agg")  # the command only writes figure files; never open a window

@@ -16,9 +16,11 @@ answered call kept, the folder's status ``interrupted``, one line on stderr. :fu
 
 from __future__ import annotations
 
-import asyncio
 import signal
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # asyncio itself is not needed to handle a signal (and costs 0.1 s of start-up)
+    import asyncio
 
 SIGNALS = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 

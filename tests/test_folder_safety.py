@@ -32,7 +32,7 @@ FAST = ["--steps", str(STEPS), "--runs", "2", "--q-runs", "0", "--swimmer", "pur
 
 def swim_args(url: str, out: Path, *extra: str) -> list[str]:
     return ["swim", *FAST, "--out", str(out), "--base-url", url, "--model", "fake",
-            "--api-key-env", "JSWIM_TEST_NO_KEY", *extra]
+            "--api-key-env", "", *extra]
 
 
 def no_traceback(err: str) -> None:
@@ -111,7 +111,7 @@ def test_a_torn_journal_line_is_cut_never_glued_onto_and_replay_skips_the_gap(tm
     # Call 1's line lost (a hand edit or an old tear) and call 3's torn by a full disk.
     path.write_bytes(lines[0] + lines[2] + lines[3][: len(lines[3]) // 2])
     j = CallJournal(tmp_path)
-    assert j.repaired_bytes == len(lines[3]) - len(lines[3]) // 2
+    assert j.repaired_bytes == len(lines[3]) // 2  # the torn half, no newline
     assert path.read_bytes() == lines[0] + lines[2]  # cut back to the last whole line
     assert j.replay("r1", 0, "k0").text == "[0, 1]"
     assert j.replay("r1", 1, "k1") is None  # missing: sent again
@@ -269,3 +269,19 @@ def test_a_full_disk_ends_the_session_in_one_line_and_the_same_command_resumes(s
         assert cli.main(swim_args(srv.url, out)) == 0
         assert srv.n_requests - sent == CALLS - answered  # what was journaled is not paid again
     assert len(read_runs(out)) == 2 and read_metadata(out)["status"] == "complete"
+
+
+# -- the persistent compilation cache ------------------------------------------------------------
+
+
+def test_the_compilation_cache_stays_off_where_it_cannot_be_written(tmp_path, monkeypatch):
+    from jswim import compile_cache
+
+    monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
+    (tmp_path / "afile").write_text("x")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "afile"))  # a file where the folder would go
+    assert compile_cache.cache_folder() == tmp_path / "afile" / "jswim" / "jax"
+    assert compile_cache.enable() is None
+    monkeypatch.setenv("JSWIM_COMPILATION_CACHE", "0")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "ok"))
+    assert compile_cache.enable() is None and not (tmp_path / "ok").exists()

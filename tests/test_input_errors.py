@@ -21,7 +21,7 @@ from jswim.studies import StudyOptions
 from tests.fakeserver import FakeServer, hash_reply
 
 BASE = ["--steps", "12", "--runs", "1", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x", "--no-figures",
-        "--model", "fake", "--api-key-env", "JSWIM_TEST_NO_KEY"]
+        "--model", "fake", "--api-key-env", ""]
 
 
 def refused(capsys, srv, out, *extra: str) -> str:

@@ -78,7 +78,7 @@ def test_a_spent_retry_time_stops_retrying():
 
 
 FAST = ["--steps", "12", "--runs", "2", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x",
-        "--no-figures", "--api-key-env", "JSWIM_TEST_NO_KEY", "--model", "fake"]
+        "--no-figures", "--api-key-env", "", "--model", "fake"]
 
 
 def test_a_flaky_server_never_ends_the_study_and_every_request_is_counted(tmp_path, capsys):
@@ -98,22 +98,27 @@ def test_a_flaky_server_never_ends_the_study_and_every_request_is_counted(tmp_pa
 
 
 def test_a_spent_budget_stops_cleanly_and_the_same_command_resumes(tmp_path, capsys):
-    state = {"down": False}
+    state = {"down": False, "n": 0}
 
-    def reply(body):
-        return Fault.server_error(503) if state["down"] else hash_reply(body)
+    def reply(body):  # 5 calls answered, then down for longer than the budget
+        state["n"] += 1
+        return Fault.server_error(503) if state["down"] and state["n"] > 5 else hash_reply(body)
 
     args = ["swim", *FAST, "--out", str(tmp_path / "F"), "--retries", "2", "--retry-for", "5"]
     with FakeServer(reply=reply) as srv:
-        state["down"] = True  # down from the start of the LLM phase on, longer than the budget
+        state["down"] = True
         rc = cli.main([*args, "--base-url", srv.url])
         err = capsys.readouterr().err
         last = err.strip().splitlines()[-1]
         assert rc == 2 and "Traceback" not in err
         assert "gave up" in last and "kept in" in last and "run the same command to resume" in last
         assert read_metadata(tmp_path / "F")["status"] == "stopped"
+        answered = len((tmp_path / "F" / "calls.jsonl").read_text().splitlines())
+        assert answered == 5
         state["down"] = False
+        sent = srv.n_requests
         assert cli.main([*args, "--base-url", srv.url]) == 0
+        assert srv.n_requests - sent == 24 - answered  # the 5 answered calls are not paid again
     rows = read_runs(tmp_path / "F")
     assert len(rows) == 2 and all(r["status"] == "done" for r in rows)
     assert json.loads((tmp_path / "F" / "metadata.json").read_text())["llm_totals"]["sessions"] == 2

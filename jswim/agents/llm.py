@@ -302,10 +302,17 @@ class LLMDriver:
             default_n_ht=default_n_ht(params.model, spec.direction), roc_levels=spec.roc_levels)
         run.meta = {
             "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
-            "levels0": result.levels0, "agent": cfg.metadata(), "client": self.client.settings.metadata(),
+            "levels0": result.levels0, "agent": cfg.metadata(), "client": self._client_meta(run.max_tokens),
             "deviations": run.deviations,
         }
         return run
+
+    def _client_meta(self, max_tokens: int | None) -> dict[str, Any]:
+        """The client's settings as this run's requests carry them: ``max_tokens`` is the run's
+        own limit (per swimmer), not the client's default, and ``None`` when the field is omitted."""
+        meta = self.client.settings.metadata()
+        meta["max_tokens"] = None if "max_tokens" in meta.get("omit_fields", ()) else max_tokens
+        return meta
 
     def _begin(self, run: _Run) -> None:
         """Open the run's transcript when the run starts (not before: thousands may wait)."""

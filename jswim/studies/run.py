@@ -195,7 +195,9 @@ def default_folder(study: str, o: StudyOptions, backend: Backend | None, root: s
     return Path(root) / f"{study}-{digest.hexdigest()[:8]}"
 
 
-#: ``progress(phase, runs_done, runs_total, info)``; ``info`` is a short status text.
+#: ``progress(phase, done, total, info)``: runs done of the study's runs, except in the phases
+#: ``"llm"`` and ``"llm-live"``, where the work counted is LLM steps (runs are in ``info``);
+#: ``info`` is a short status text.
 ProgressFn = Callable[[str, int, int, str], None]
 
 
@@ -223,8 +225,9 @@ def run_study(
         Study folder (default :func:`default_folder`). Finished runs found there are kept.
     progress : callable, optional
         ``progress(phase, done, total, info)`` (:data:`ProgressFn`): after each finished batch of
-        baseline runs and each finished LLM run (phase ``"llm"``), and every 0.5 s while LLM
-        requests are out (phase ``"llm-live"``: steps done, requests in flight, tokens, cost).
+        baseline runs (runs done of all), and after each finished LLM run (phase ``"llm"``) and
+        every 0.5 s while LLM requests are out (phase ``"llm-live"``), counting LLM steps done of
+        all the session's LLM steps, with runs, requests in flight, tokens and cost in ``info``.
     figures : bool
         Also draw the study's figures into ``out/figures``.
     max_cost : float, optional
@@ -462,7 +465,7 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     def report(phase: str = "llm") -> None:
         elapsed = time.perf_counter() - t_start
         rate = steps_done / max(elapsed, 1e-9)
-        info = f"steps {steps_done}/{steps_total} {rate:.1f}/s"
+        info = f"runs {finished}/{total} · {rate:.1f} steps/s"
         left = eta(elapsed, steps_done / steps_total if steps_total else 0.0)
         if left is not None and steps_done < steps_total:
             info += f" · ETA {left}"
@@ -473,7 +476,9 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                 info += f" of ${max_cost:g}"
             if c.cache_hits or c.shared:
                 info += f" · {c.cache_hits} cached · {c.shared} shared"
-        tick(phase, finished, total, info)
+        # The LLM steps are the work (a baseline run takes milliseconds, an LLM step a request):
+        # the bar counts them, so it never reads 99% before the first LLM step.
+        tick(phase, steps_done, steps_total, info)
 
     def on_step(n: int) -> None:
         nonlocal steps_done
