@@ -31,8 +31,7 @@ FAST = ["--steps", str(STEPS), "--runs", "2", "--q-runs", "0", "--swimmer", "pur
 
 
 def swim_args(url: str, out: Path, *extra: str) -> list[str]:
-    return ["swim", *FAST, "--out", str(out), "--base-url", url, "--model", "fake",
-            "--api-key-env", "", *extra]
+    return ["swim", *FAST, "--out", str(out), "--base-url", url, "--model", "fake", *extra]
 
 
 def no_traceback(err: str) -> None:

@@ -52,3 +52,18 @@ def test_each_study_help_shows_its_own_defaults(study, capsys):
         assert "--zetas" not in text  # an option the study refuses is not offered
     if study == "ablation":
         assert "auto: none in this study" in text
+
+
+def test_show_reports_decoding_as_the_runs_recorded_it(tmp_path):
+    from jswim.overview import show_text
+    from jswim.results import StudyStore
+
+    ident = {"study": "ablation", "backend": {"kind": "remote", "model": "m", "constrain": "auto", "temperature": 0}}
+    with StudyStore(tmp_path / "s", "ablation", ident) as store:
+        store.add_runs([{"run_id": "a", "agent": "llm", "swimmer": "purcell", "direction": 1, "group": "full", "constraint": "none",
+                         "success": False, "learned": False, "steps_to_learn": None, "signed_final_x": 0.0, "final_x": 0.0,
+                         "x": [0.0], "status": "done", "steps": 1, "failed_steps": 0, "calls": 1, "prompt_tokens": 1,
+                         "completion_tokens": 1, "cost_usd": 0.0, "zeta": 0.0, "n_ht": 3, "period": 0}])
+        store.set_status("complete")
+    text = show_text(tmp_path / "s")
+    assert "free text (constrain none)" in text and "constrain auto" not in text

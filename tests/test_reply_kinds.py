@@ -72,7 +72,7 @@ def test_swim_reads_fullwidth_answers_and_refuses_other_digits(mode, good, tmp_p
     with FakeServer(**MODES[mode]) as srv:
         rc = cli.main(["swim", "--steps", "12", "--runs", "1", "--q-runs", "0", "--swimmer", "purcell", "--direction",
                        "+x", "--no-figures", "--out", str(tmp_path / "o"), "--base-url", srv.url, "--model", "fake",
-                       "--api-key-env", "", "--constrain", "none"])
+                       "--constrain", "none"])
     assert rc == 0, capsys.readouterr().err
     (row,) = read_runs(tmp_path / "o")
     if good:

@@ -78,7 +78,7 @@ def test_a_spent_retry_time_stops_retrying():
 
 
 FAST = ["--steps", "12", "--runs", "2", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x",
-        "--no-figures", "--api-key-env", "", "--model", "fake"]
+        "--no-figures", "--model", "fake"]
 
 
 def test_a_flaky_server_never_ends_the_study_and_every_request_is_counted(tmp_path, capsys):

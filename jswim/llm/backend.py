@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -23,7 +21,7 @@ from jswim.errors import ConfigError, LLMServerError, LLMTimeoutError
 from jswim.llm.client import ClientSettings, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.cache import check_cache
-from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
+from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.credentials import read_api_key
 from jswim.llm.local import LOCAL_KEY_ENV, LocalServer, default_model_path
@@ -300,43 +298,7 @@ class Backend:
         if self.cache_dir is not None:
             check_cache(self.cache_dir)
         if not self.local:
-            check_api_key(self.api_key_env, self.base_url)
             self.preflight(timeout_s=timeout_s)
-
-
-#: The variable ``--api-key-env`` names unless told otherwise.
-DEFAULT_KEY_ENV = "OPENAI_API_KEY"
-
-
-def check_api_key(api_key_env: str, base_url: str) -> None:
-    """An API-key variable that is unset is a mistake for a remote server (every request would be
-    refused after the baselines ran) and worth a warning for one on this machine, which may need
-    none (unless it is the default name, which local servers commonly leave unset);
-    ``--api-key-env ''`` says "no key". A key that cannot travel in an HTTP header (a
-    non-ASCII or control character, e.g. pasted from a rich-text page) is one line naming the
-    variable, never the value.
-
-    Raises
-    ------
-    ConfigError
-    """
-    if not api_key_env:
-        return
-    value = os.environ.get(api_key_env)
-    if value is None:
-        if is_loopback(base_url):
-            if api_key_env == DEFAULT_KEY_ENV:  # the default name, unset: a local server without a key
-                return
-            warnings.warn(f"${api_key_env} (--api-key-env) is not set: no API key is sent to {safe_url(base_url)}",
-                          stacklevel=2)
-            return
-        raise ConfigError(f"${api_key_env} (--api-key-env) is not set, and {safe_url(base_url)} is not on this "
-                          f"machine: export the key in it, or pass --api-key-env '' for a server that needs none")
-    bad = [c for c in value.strip() if not (" " < c <= "~")]
-    if bad:
-        kind = "a non-ASCII" if any(ord(c) > 126 for c in bad) else "a control or space"
-        raise ConfigError(f"${api_key_env} (--api-key-env) holds {kind} character, which an HTTP header cannot "
-                          "carry: copy the key again (the key itself is not shown)")
 
 
 #: The first bytes of every GGUF file.
