@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import errno
 import io
 import json
 import math
@@ -121,6 +122,8 @@ def writing(what: str | os.PathLike, hint: str = "choose a writable --out folder
     except OSError as exc:
         where = exc.filename or what
         cause = exc.strerror or type(exc).__name__
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # the folder is fine; the disk is full
+            hint = ("every finished run and answered call is kept: make room and run the same command to resume")
         raise StudyFolderError(f"cannot write {where}: {cause}; {hint}") from None
 
 

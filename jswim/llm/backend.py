@@ -276,7 +276,11 @@ class Backend:
         LLMServerError, LLMTimeoutError, LLMSetupError
             As :func:`~jswim.llm.probe.probe`: nothing answers, too slow, a refused key, or (with
             ``strict_model``) a model the server does not list.
+        ConfigError
+            A ``--cache-dir`` that cannot be a response cache (:func:`jswim.llm.cache.check_cache`).
         """
+        if self.cache_dir is not None:
+            check_cache(self.cache_dir)
         wait = timeout_s or self.timeout_s or 5.0
         if self.local:
             if server is None:
