@@ -441,3 +441,19 @@ def test_both_transports_report_a_dead_server(fast):
         port = s.getsockname()[1]
     with pytest.raises(LLMServerError, match="connection failed"):
         run(one_call(settings(f"http://127.0.0.1:{port}/v1", max_retries=1, fast_transport=fast)))
+
+
+def test_usage_totals_bill_only_what_reached_the_server():
+    from jswim.llm.client import ChatResult
+
+    def result(**kw):
+        base = dict(text="[1, 1]", usage=Usage(100, 5), latency_s=0.0, cache_hit=False, shared=False, retries=0,
+                    cost_usd=0.25, constraint="none", finish_reason="stop", raw="[1, 1]")
+        return ChatResult(**{**base, **kw})
+
+    t = UsageTotals()
+    t.add(result())
+    t.add(result(cache_hit=True))  # from the disk cache: counted, not billed
+    t.add(result(shared=True, retries=2))  # waited on an identical request in flight: not billed
+    assert (t.calls, t.billed_calls, t.cache_hits, t.shared, t.retries) == (3, 1, 1, 1, 2)
+    assert (t.prompt_tokens, t.completion_tokens, t.cost_usd) == (100, 5, 0.25)

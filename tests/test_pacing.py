@@ -89,9 +89,15 @@ class VirtualClockLoop(asyncio.SelectorEventLoop):
         self._now = 0.0
         select = self._selector.select
 
+        self._turns = 0
+
         def jump(timeout=None):
+            self._turns += 1
+            if self._turns > 100_000:  # a few hundred suffice here: a pacer that spins fails, not hangs
+                raise RuntimeError("the virtual-clock loop made no progress in 100,000 turns")
             if timeout:  # idle until the next timer: advance the clock instead of sleeping
-                self._now += timeout
+                # (by at least 0.1 us: a timer a rounding error ahead must not spin the loop)
+                self._now += max(timeout, 1e-7)
             return select(0)
 
         self._selector.select = jump
@@ -121,7 +127,7 @@ def test_rpm_60_spaces_requests_one_second_apart_with_no_burst():
     released = virtual_run(go)
     assert released[0] == pytest.approx(0.0, abs=1e-9)  # the first at once
     gaps = [b - a for a, b in zip(released, released[1:])]
-    assert gaps == pytest.approx([1.0] * 5, abs=1e-6)  # then one per second: no burst of the bucket
+    assert gaps == pytest.approx([1.0] * 5, abs=1e-5)  # then one per second: no burst of the bucket
 
 
 def test_tpm_spends_its_ten_seconds_of_tokens_then_paces():
@@ -135,7 +141,7 @@ def test_tpm_spends_its_ten_seconds_of_tokens_then_paces():
 
     t = virtual_run(go)
     assert t[:2] == pytest.approx([0.0, 0.0], abs=1e-9)  # 1000 tokens at once
-    assert [b - a for a, b in zip(t[1:], t[2:])] == pytest.approx([5.0, 5.0], abs=1e-6)  # then 500 per 5 s
+    assert [b - a for a, b in zip(t[1:], t[2:])] == pytest.approx([5.0, 5.0], abs=1e-5)  # then 500 per 5 s
 
 
 def test_retry_after_on_a_success_holds_every_next_request():
@@ -147,7 +153,7 @@ def test_retry_after_on_a_success_holds_every_next_request():
         return loop.time(), pacer.paused_s
 
     now, paused = virtual_run(go)
-    assert now == pytest.approx(0.4, abs=1e-6) and paused >= 0.4 - 1e-6
+    assert now == pytest.approx(0.4, abs=1e-5) and paused >= 0.4 - 1e-5
 
 
 def test_paced_client_sends_every_request():
