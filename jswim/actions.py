@@ -8,7 +8,12 @@ importing JAX.
 
 from __future__ import annotations
 
+from typing import Any
+
 from jswim.errors import ConfigError
+
+#: Largest number of ROC levels K (``--roc-levels``, ``make_params(roc_levels=K)``).
+MAX_ROC_LEVELS = 1000
 
 #: ``"all"``: every (DOF, ROC) pair (the paper's setting); ``"shape-changing"``: only the moves
 #: that change the shape from the current one (ROC +1 below ``hi``, ROC -1 above ``lo``).
@@ -26,3 +31,17 @@ def check_action_set(name: str) -> str:
     if name not in ACTION_SETS:
         raise ConfigError(f"action set must be one of {', '.join(ACTION_SETS)}, got {name!r}")
     return name
+
+
+def check_roc_levels(k: Any) -> int:
+    """``k`` as an int if it is a valid number of ROC levels K (an integer in
+    1..:data:`MAX_ROC_LEVELS`; ROC ``k`` in ``-K..K`` moves a DOF by ``k/K`` of its range).
+
+    Raises
+    ------
+    ConfigError
+        For anything else (the message names ``--roc-levels``).
+    """
+    if isinstance(k, bool) or not hasattr(k, "__index__") or not 1 <= int(k) <= MAX_ROC_LEVELS:
+        raise ConfigError(f"--roc-levels (K) must be an integer from 1 to {MAX_ROC_LEVELS}, got {k!r}")
+    return int(k)

@@ -115,6 +115,10 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> N
     g.add_argument("--variant", default=None, metavar="NAME[,NAME...]",
                    help="LLM protocol variant (jswim.agents.variants.VARIANTS; default: the study's, paper for the "
                         "paper's studies); the competence study takes a comma-separated list to compare")
+    g.add_argument("--roc-levels", type=_ints, default=None, metavar="K",
+                   help="ROC on K levels (an extension): a reply's ROC k in -K..K moves the DOF by k/K of its range, "
+                        "for the LLM and the baselines alike (default 1, the paper's -1, 0, 1); the continuous study "
+                        "takes a list (default 1,2,5,10)")
     g.add_argument("--seed", type=int, default=0, help="seed of the study (noise, random starts, learners)")
     g.add_argument("--prompt-file", default=None, metavar="FILE",
                    help="replace the prompt template with this file (see jswim.prompt for placeholders)")
@@ -237,6 +241,8 @@ STUDY_HELP = {
     "inits": "the four initial configurations",
     "competence": "every protocol variant next to random and Q-learning baselines",
     "temperature": "the LLM runs over a grid of sampling temperatures",
+    "continuous": "finer ROCs (K in 1, 2, 5, 10) for the LLM, lattice Q-learning and random policy, and the "
+                  "real-valued PPO baseline",
 }
 
 
@@ -283,9 +289,11 @@ def build_parser(outline: bool = False) -> argparse.ArgumentParser:
                        description="Run a study grid (resumable). curves: Fig. 2; history: the n_ht sweep "
                                    "(Fig. 3); noise: mean X/a and success vs zeta (Fig. 4); ablation: S1..S5 "
                                    "removed (Fig. 5); inits: the four initial configurations; competence: "
-                                   "every protocol variant next to random and Q-learning baselines.")
+                                   "every protocol variant next to random and Q-learning baselines; continuous: "
+                                   "finer ROCs (--roc-levels) for the LLM and lattice Q-learning, and a "
+                                   "real-valued RL baseline.")
     sub_studies = p.add_subparsers(dest="name", metavar="NAME", parser_class=_Parser,
-                                           help="curves, history, noise, ablation, inits, competence or temperature")
+                                           help="curves, history, noise, ablation, inits, competence, temperature or continuous")
     sub_studies.required = True
     for name in (s for s in STUDIES if s != "swim"):
         q = sub_studies.add_parser(name, help=STUDY_HELP.get(name, name),
@@ -356,7 +364,11 @@ def build_parser(outline: bool = False) -> argparse.ArgumentParser:
     p.add_argument("--n", type=int, default=None, help="links/spheres of nlink/nsphere (default 4)")
     p.add_argument("--direction", type=_direction, default=(1,), metavar="DIR",
                    help="rank by displacement toward +x, -x or both (default +x)")
-    p.add_argument("--max-len", type=int, default=None, help="longest cycle (default 2**n_dof)")
+    p.add_argument("--max-len", type=int, default=None,
+                   help="longest cycle (default 2**n_dof; 4 with --roc-levels above 1)")
+    p.add_argument("--roc-levels", type=int, default=1, metavar="K",
+                   help="search the K-level ROC lattice: one DOF per move, ROC k/K of the range, k in -K..K "
+                        "(default 1: the paper's corners)")
     p.add_argument("--top", type=int, default=8, help="cycles shown (default 8)")
     p.add_argument("--out", default=None, metavar="FOLDER", help="also write a figure of the best cycles here")
     p = sub.add_parser("plot", help="redraw the figures of a study folder",
@@ -459,6 +471,13 @@ def _options(args: argparse.Namespace, study: str):
 
             PromptTemplate.from_file(f)  # checked before anything runs
         kw["prompt_files"] = files
+    if args.roc_levels is not None:
+        if study == "continuous":
+            kw["roc_levels_grid"] = args.roc_levels
+        elif len(args.roc_levels) != 1:
+            raise ConfigError("--roc-levels takes one K here (a list only for the continuous study)")
+        else:
+            kw["roc_levels"] = args.roc_levels[0]
     names = tuple(v.strip() for v in (args.variant or "").split(",") if v.strip())
     if study == "competence" and names:
         kw["variants"] = names
@@ -540,6 +559,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if (text := short_steps_warning(options)) is not None:
         _warn(text)
     labels = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning", "random": "random policy",
+              "ppo": "continuous RL",
               "start": "start", "resume": "resume"}
     with Progress() as bar:
 
@@ -853,6 +873,8 @@ def _gaits(args: argparse.Namespace) -> int:
             raise ConfigError("--n applies to nlink and nsphere only")
         kw["n_links" if args.swimmer == "nlink" else "n_spheres"] = args.n
     model = make_model(args.swimmer, **kw)
+    if args.roc_levels != 1:
+        return _lattice_gaits(args, model)
     if model.n_dof > 5 and args.max_len is None:
         raise ConfigError("more than 5 DOFs: give --max-len to bound the enumeration")
     for d in args.direction:
@@ -871,6 +893,32 @@ def _gaits(args: argparse.Namespace) -> int:
 
             paths = plots.save(plots.gaits_figure(model, cycles), args.out, f"gaits-{args.swimmer}-{'px' if d > 0 else 'mx'}")
             print(f"figure: {paths[0]}")
+        print()
+    return 0
+
+
+def _lattice_gaits(args: argparse.Namespace, model: Any) -> int:
+    """``jswim gaits SWIMMER --roc-levels K``: closed strokes on the K-level lattice, best first."""
+    from jswim import lattice  # lazy: JAX loads only for commands that run
+    from jswim.actions import check_roc_levels
+
+    k = check_roc_levels(args.roc_levels)
+    if args.out:
+        raise ConfigError("--out draws corner cycles only; leave it out with --roc-levels above 1")
+    length = 4 if args.max_len is None else args.max_len
+    for d in args.direction:
+        cycles = lattice.best_lattice_cycles(model, d, k, length)
+        print(f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}, ROC on {k} levels (k/{k} of the range, "
+              f"one DOF per move): {len(cycles)} closed strokes up to {length} moves; best first")
+        print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9} simple"
+              "  start  moves (DOF, ROC)")
+        for i, c in enumerate(cycles[: args.top]):
+            start = "(" + ", ".join(str(v) for v in c.start) + f")/{k}"
+            moves = " ".join(f"[{dof}, {roc}]" for dof, roc in c.moves)
+            print(f"{i + 1:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f} "
+                  f"{'yes' if c.simple else 'no':>6}  {start:7}  {moves}")
+        print(f"start: each DOF's place on the lattice, j/{k} of its range from lo; moves that reach past a limit "
+              "and runs of moves of one DOF (equal to one move) are not listed")
         print()
     return 0
 

@@ -366,6 +366,42 @@ def _last_true(mask: np.ndarray) -> np.ndarray:
     return (mask * idx).max(axis=0, initial=0).astype(np.int64) - 1
 
 
+def _strokes(differs: Any, closed: Any, moved: np.ndarray, x: np.ndarray, direction: np.ndarray,
+             threshold: np.ndarray, max_period: int, n_cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The final qualifying stroke of each run: ``(start, period, displacement per step)``.
+
+    ``differs(p)`` (bool ``(T - p, B)``): step ``t`` and step ``t + p`` differ; ``closed(sc, p)``
+    (bool ``(B,)``): the shape after the period starting at ``sc`` is the shape before it;
+    ``moved`` (bool ``(T, B)``); ``x`` (float64 ``(T + 1, B)``) the exact centroid x before each
+    step and at the end. No stroke: start ``T + 1``, period 0.
+    """
+    steps, b = moved.shape
+    rows = np.arange(b)
+    # A qualifying stroke starts after the last step that did not change the shape.
+    s_move = _last_true(~moved) + 1
+    out_s = np.full(b, steps + 1, np.int64)
+    out_p = np.zeros(b, np.int64)
+    out_disp = np.full(b, np.nan)  # displacement per step of the stroke's first period
+    for p in range(1, max_period + 1):
+        # Start of the trailing segment that repeats with period p.
+        s = np.maximum(_last_true(differs(p)) + 1, s_move)
+        ok = steps - s >= n_cycles * p
+        sc = np.minimum(s, steps - p)
+        ok &= closed(sc, p)  # closed loop
+        # Every complete period of the segment must go far enough: per residue class of the
+        # period's start mod p, the last period that falls short must start before s.
+        short = direction * (x[p:] - x[:-p]) < threshold * p  # (steps - p + 1, B)
+        last_short = np.stack([_last_true(short[r::p]) * p + r for r in range(p)], axis=1)
+        last_short = np.where(last_short < 0, -1, last_short)
+        ok &= last_short[rows, s % p] < s
+        first = direction * (x[sc + p, rows] - x[sc, rows]) / p
+        better = ok & (s < out_s)
+        out_s = np.where(better, s, out_s)
+        out_p = np.where(better, p, out_p)
+        out_disp = np.where(better, first, out_disp)
+    return out_s, out_p, out_disp
+
+
 def judge(
     actions: Any,
     params: EnvParams,
@@ -446,29 +482,10 @@ def judge(
         rp = lattice.replay(at, model, k_levels, init)
     threshold = min_fraction * best - _REL_TOL * np.abs(best)
 
-    # A qualifying stroke starts after the last step that did not change the shape.
-    s_move = _last_true(~rp.moved) + 1
     rows = np.arange(b)
-    out_s = np.full(b, steps + 1, np.int64)
-    out_p = np.zeros(b, np.int64)
-    out_disp = np.full(b, np.nan)  # displacement per step of the stroke's first period
-    for p in range(1, min(max_period, steps // n_cycles) + 1):
-        # Start of the trailing segment that repeats with period p.
-        s = np.maximum(_last_true(at[:-p] != at[p:]) + 1, s_move)
-        ok = steps - s >= n_cycles * p
-        sc = np.minimum(s, steps - p)
-        ok &= rp.corner[sc + p, rows] == rp.corner[sc, rows]  # closed loop
-        # Every complete period of the segment must go far enough: per residue class of the
-        # period's start mod p, the last period that falls short must start before s.
-        short = direction * (rp.x[p:] - rp.x[:-p]) < threshold * p  # (steps - p + 1, B)
-        last_short = np.stack([_last_true(short[r::p]) * p + r for r in range(p)], axis=1)
-        last_short = np.where(last_short < 0, -1, last_short)
-        ok &= last_short[rows, s % p] < s
-        first = direction * (rp.x[sc + p, rows] - rp.x[sc, rows]) / p
-        better = ok & (s < out_s)
-        out_s = np.where(better, s, out_s)
-        out_p = np.where(better, p, out_p)
-        out_disp = np.where(better, first, out_disp)
+    out_s, out_p, out_disp = _strokes(
+        lambda p: at[:-p] != at[p:], lambda sc, p: rp.corner[sc + p, rows] == rp.corner[sc, rows],
+        rp.moved, rp.x, direction, threshold, min(max_period, steps // n_cycles), n_cycles)
 
     learned = out_p > 0
     steps_to_learn = np.where(learned, out_s + 1, -1)  # 1-based, the paper's count
@@ -481,3 +498,4 @@ def judge(
     per_step = np.where(learned, out_disp, np.nan)
     return GaitReport(learned, steps_to_learn, success, out_p, cycle, per_step, per_step / best,
                       np.where(learned, out_s, -1))
+

@@ -58,6 +58,7 @@ def integrate_stroke(
     pose0: Array | None = None,
     n_sub: int = 16,
     method: str = "chebyshev",
+    dotless: bool = False,
 ) -> Array:
     """Pose after moving the shape from ``d0`` at constant rate ``d_dot`` for ``duration``.
 
@@ -76,6 +77,11 @@ def integrate_stroke(
         RK4: substeps (error ~ ``n_sub**-4``; 96 gives ~3e-10 per cycle).
     method : str
         ``"chebyshev"`` or ``"rk4"``.
+    dotless : bool
+        Chebyshev quadrature as sums of products instead of matrix products (the same numbers to
+        ~1e-16). For calls traced inside a local ``jax.enable_x64`` under ``vmap`` and ``scan``
+        (the environment's float64 steps in batched float32 learners), where XLA lowers a dot at
+        the global precision and the step fails on mixed float32/float64 operands.
 
     Returns
     -------
@@ -91,9 +97,14 @@ def integrate_stroke(
         t = jnp.asarray(nodes, d0.dtype) * duration
         w = jax.vmap(lambda tk: model.body_velocity(d0 + d_dot * tk, d_dot))(t)  # (nodes, 3)
         s_mat = jnp.asarray(running, d0.dtype) * duration
-        theta = pose[2] + s_mat @ w[:, 2]
+        if dotless:  # products and sums: no dot for XLA to lower at the global (float32) precision
+            theta = pose[2] + jnp.sum(s_mat * w[None, :, 2], axis=1)
+        else:
+            theta = pose[2] + s_mat @ w[:, 2]
         c, s = jnp.cos(theta), jnp.sin(theta)
         vx, vy = c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1]
+        if dotless:
+            return jnp.stack([pose[0] + jnp.sum(s_mat[-1] * vx), pose[1] + jnp.sum(s_mat[-1] * vy), theta[-1]])
         return jnp.stack([pose[0] + s_mat[-1] @ vx, pose[1] + s_mat[-1] @ vy, theta[-1]])
     if method != "rk4":
         raise ConfigError(f"method must be 'chebyshev' or 'rk4', got {method!r}")

@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jswim.errors import ConfigError
-from jswim.prompt import check_roc_levels
+from jswim.actions import check_roc_levels
 from jswim.swimmers.models import SwimmerModel
 
 #: Unit segments integrated per compiled call of :func:`move_table`.
@@ -88,22 +88,67 @@ def nearest_points(dofs: np.ndarray, model: SwimmerModel, roc_levels: int) -> np
 
 
 class MoveTable(NamedTuple):
-    """Every move of a ``K``-level lattice, indexed ``[point, dof, k + K]``.
+    """The motions of a ``K``-level lattice, stored as ``G``: every move is ``G(j)^-1 G(j')``.
 
     Attributes
     ----------
-    motion : float64 ((K+1)**n, n, 2K+1, 3)
-        ``(dx, dy, dtheta)``: centroid displacement in the body frame at the start of the step,
-        and the change of orientation (all 0 where nothing moves).
-    target : int64 ((K+1)**n, n, 2K+1)
-        Lattice index after the move (a move past a limit stops at it).
-    moved : bool ((K+1)**n, n, 2K+1)
-        The move changed the shape (``k != 0`` and the DOF not already at the limit it pushes to).
+    prefix : float64 ((K+1)**n, n, 3)
+        ``G[p, d]``: the rigid motion ``(dx, dy, dtheta)`` (centroid frame) of moving DOF ``d``
+        from its lower limit to its value at point ``p``, the other DOFs as at ``p``.
+    roc_levels : int
+        ``K``.
+
+    :func:`move` reads any move from it; ``(K+1)**n n`` entries instead of ``2K + 1`` times as
+    many.
     """
 
-    motion: np.ndarray
-    target: np.ndarray
-    moved: np.ndarray
+    prefix: np.ndarray
+    roc_levels: int
+
+
+def move(tab: MoveTable, point: np.ndarray, dof: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Moves ``[dof + 1, k]`` from lattice points (arrays broadcast together).
+
+    Returns
+    -------
+    target : int64
+        The lattice point after the move (a move past a limit stops at it).
+    motion : float64 (..., 3)
+        ``(dx, dy, dtheta)`` in the body frame at the start (exactly 0 where nothing moves).
+    moved : bool
+        The move changed the shape (``k != 0`` and the DOF not already at that limit).
+    """
+    big_k = tab.roc_levels
+    n = tab.prefix.shape[1]
+    point, dof, k = (np.asarray(v, np.int64) for v in (point, dof, k))
+    stride = (big_k + 1) ** dof
+    j = (point // stride) % (big_k + 1)
+    new_j = np.clip(j + k, 0, big_k)
+    target = point + (new_j - j) * stride
+    del n
+    return target, between(tab, point, dof, target), new_j != j
+
+
+def between(tab: MoveTable, start: np.ndarray, dof: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Motion of the one-DOF move from lattice point ``start`` to ``end`` (differing in ``dof``
+    only): ``G[start]^-1 G[end]``, exactly 0 where they are equal."""
+    g0, g1 = tab.prefix[start, dof], tab.prefix[end, dof]
+    motion = _compose(_inverse(g0), g1)
+    motion[np.asarray(start) == np.asarray(end)] = 0.0
+    return motion
+
+
+#: Largest lattice the tabular tools take (judge, gait search, lattice Q-learning): ``(K+1)**n_dof``
+#: points (K = 200 for two DOFs).
+MAX_POINTS = 40_401
+
+
+def check_size(n_dof: int, roc_levels: int) -> None:
+    """:class:`ConfigError` when the lattice has more than :data:`MAX_POINTS` points."""
+    if (roc_levels + 1) ** n_dof > MAX_POINTS:
+        raise ConfigError(f"--roc-levels {roc_levels}: the {n_dof}-DOF lattice has {(roc_levels + 1) ** n_dof:,} "
+                          f"points, more than the {MAX_POINTS:,} the tabular tools (judge, lattice Q-learning, "
+                          "gait search) take; use fewer levels")
 
 
 def _compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -138,15 +183,21 @@ def _segment_fn(model: SwimmerModel):
 def move_table(model: SwimmerModel, roc_levels: int) -> MoveTable:
     """The exact :class:`MoveTable` of ``model`` on ``roc_levels`` levels (built once, float64).
 
-    ``(K+1)**n n`` unit segments go through the integrator; every longer move is composed from
-    them (``G(j)^-1 G(j')``, see the module docstring). ``K = 1`` reproduces
+    ``(K+1)**n n`` unit segments go through the integrator; ``G`` composes them, and every move
+    is read as ``G(j)^-1 G(j')`` (:func:`move`, see the module docstring). ``K = 1`` reproduces
     :func:`jswim.env.step_table` (tested).
+
+    Raises
+    ------
+    ConfigError
+        For a lattice of more than :data:`MAX_POINTS` points.
     """
     import jax
     import jax.numpy as jnp
 
     k = check_roc_levels(roc_levels)
     n = model.n_dof
+    check_size(n, k)
     m = (k + 1) ** n
     coords = point_coords(np.arange(m), n, k)  # (m, n)
     grid = values(model, k)
@@ -170,15 +221,7 @@ def move_table(model: SwimmerModel, roc_levels: int) -> MoveTable:
         for j in range(1, k + 1):
             at = np.flatnonzero(coords[:, d] == j)
             g[at, d] = _compose(g[at - stride[d], d], seg[at - stride[d], d])
-    ks = np.arange(-k, k + 1)
-    jd = coords[:, :, None]  # (m, n, 1)
-    new_j = np.clip(jd + ks, 0, k)  # (m, n, 2K+1)
-    target = np.arange(m)[:, None, None] + (new_j - jd) * stride[None, :, None]
-    g_end = g[target, np.arange(n)[None, :, None]]  # (m, n, 2K+1, 3)
-    motion = _compose(np.broadcast_to(_inverse(g)[:, :, None], g_end.shape), g_end)
-    moved = new_j != jd
-    motion[~moved] = 0.0
-    return MoveTable(motion, target.astype(np.int64), moved)
+    return MoveTable(g, k)
 
 
 # -- replay and gait search ----------------------------------------------------------------------
@@ -210,17 +253,19 @@ def replay(actions: np.ndarray, model: SwimmerModel, roc_levels: int, points0: n
     from jswim.env import start_orientation
 
     tab = move_table(model, roc_levels)
-    n = model.n_dof
     width = 2 * roc_levels + 1
     steps, b = actions.shape
     a = np.asarray(actions, np.int64)
     dof, kk = a // width, a % width
     p = np.empty((steps + 1, b), np.int64)
     p[0] = point_index(points0, roc_levels)
-    for t in range(steps):  # clipping makes the point path sequential; each step is one gather
-        p[t + 1] = tab.target[p[t], dof[t], kk[t]]
-    inc = tab.motion[p[:-1], dof, kk]  # (T, B, 3)
-    moved = tab.moved[p[:-1], dof, kk]
+    stride = (roc_levels + 1) ** dof
+    shift = kk - roc_levels
+    for t in range(steps):  # clipping makes the point path sequential
+        j = (p[t] // stride[t]) % (roc_levels + 1)
+        p[t + 1] = p[t] + (np.clip(j + shift[t], 0, roc_levels) - j) * stride[t]
+    inc = between(tab, p[:-1], dof, p[1:])  # (T, B, 3)
+    moved = p[1:] != p[:-1]
     x = np.zeros((steps + 1, b))
     if model.planar:
         heading = np.empty((steps, b), np.complex128)
@@ -231,7 +276,6 @@ def replay(actions: np.ndarray, model: SwimmerModel, roc_levels: int, points0: n
         np.cumsum((heading * (inc[..., 0] + 1j * inc[..., 1])).real, axis=0, out=x[1:])
     else:
         np.cumsum(inc[..., 0], axis=0, out=x[1:])
-    del n
     return LatticeReplay(p, moved, x)
 
 
@@ -382,11 +426,10 @@ def _walk_loops(tab: MoveTable, codes: np.ndarray, p0: np.ndarray, k: int, n: in
     ok = np.ones(len(p0), bool)
     for t in range(codes.shape[1]):
         d, kk = codes[:, t] // width, codes[:, t] % width
-        target = tab.target[p, d, kk]
+        target, inc, _ = move(tab, p, d, kk - k)
         # A move that reaches past a limit is clipped: not the stroke asked for.
         want = point_coords(p, n, k)[np.arange(len(p)), d] + kk - k
         ok &= (want >= 0) & (want <= k)
-        inc = tab.motion[p, d, kk]
         c, s = np.cos(theta), np.sin(theta)
         x, y = x + c * inc[:, 0] - s * inc[:, 1], y + s * inc[:, 0] + c * inc[:, 1]
         theta = theta + inc[:, 2]
@@ -397,10 +440,10 @@ def _walk_loops(tab: MoveTable, codes: np.ndarray, p0: np.ndarray, k: int, n: in
 
 def _loop_key(tab: MoveTable, p0: int, codes: tuple[int, ...]) -> tuple:
     """The loop as a set of cyclic shifts: the smallest (point, code) sequence over its shifts."""
-    width = tab.target.shape[2]
+    width = 2 * tab.roc_levels + 1
     pts = [p0]
     for c in codes[:-1]:
-        pts.append(int(tab.target[pts[-1], c // width, c % width]))
+        pts.append(int(move(tab, pts[-1], c // width, c % width - tab.roc_levels)[0]))
     pairs = list(zip(pts, codes))
     return min(tuple(pairs[i:] + pairs[:i]) for i in range(len(pairs)))
 

@@ -42,13 +42,14 @@ PAGE_IN = 7.0
 
 #: Panel order: the paper shows Purcell's swimmer first.
 SWIMMER_ORDER = ("purcell", "ng", "nlink", "nsphere")
-AGENT_ORDER = ("llm", "qlearning", "random")
+AGENT_ORDER = ("llm", "qlearning", "random", "ppo")
 
 # Okabe-Ito colours: distinguishable with the common colour-vision deficiencies and in grey.
 AGENT_STYLE: dict[str, dict[str, Any]] = {
     "llm": dict(color="#0072B2", ls="-", marker="o", label="LLM"),
     "qlearning": dict(color="#D55E00", ls="--", marker="s", label="Q-learning"),
     "random": dict(color="#555555", ls=":", marker="^", label="random policy"),
+    "ppo": dict(color="#009E73", ls="-.", marker="D", label="PPO (real ROC)"),
 }
 REFERENCE_STYLE = dict(color="black", ls="-.", lw=0.8, label="signature gait from step 0")
 NOTE_COLOR = "#B00000"
@@ -678,6 +679,8 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
     if study == "temperature":  # p and X/a against the sampling temperature T (LLM rows carry it)
         return {"temperature": grid_figure(rows, "temperature", xlabel="sampling temperature T", numeric=True,
                                            note=note)}
+    if study == "continuous":
+        return continuous_figures(rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [{**r, "entry": r["group"] if r["agent"] == "llm" else f"{r['agent']} ({r['group']})"} for r in rows]
@@ -685,6 +688,23 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
         order += sorted({e["entry"] for e in entries} - set(order))
         return {"competence": competence_figure(entries, order, note=note)}
     return {}
+
+
+def continuous_figures(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+    """The continuous study: success rate p and mean X/a against the ROC lattice K (and real ROCs)
+    per agent, and X/a against step n for each lattice (``continuous-K<K>``, ``continuous-real``).
+
+    Stroke sketches are drawn for the paper's lattice (K = 1) only, whose cycles go corner to corner.
+    """
+    groups = sorted({r["group"] for r in rows}, key=lambda g: (g == "continuous", int(g[2:]) if g[:2] == "K=" else 0))
+    labels = {g: ("real" if g == "continuous" else g[2:]) for g in groups}
+    figs = {"continuous": grid_figure(rows, "group", order=groups, tick_labels=labels,
+                                      xlabel="ROC levels K (real: the continuous RL baseline)", note=note)}
+    for g in groups:
+        sel = [r for r in rows if r["group"] == g]
+        cycles = learned_cycles(sel) if g == "K=1" else None
+        figs[f"continuous-{'real' if g == 'continuous' else 'K' + g[2:]}"] = curves_figure(sel, cycles=cycles, note=note)
+    return figs
 
 
 def unfinished_note(status: str | None, done: int, planned: int | None) -> str | None:

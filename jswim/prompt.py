@@ -84,7 +84,7 @@ from decimal import ROUND_DOWN, Decimal
 from pathlib import Path
 from typing import Iterable, NamedTuple, Sequence
 
-from jswim.actions import check_action_set
+from jswim.actions import check_action_set, check_roc_levels
 from jswim.errors import ConfigError
 
 #: Sentence names, in the paper's order.
@@ -224,23 +224,12 @@ class SwimmerText:
         return [f"D{k}" for k in range(1, self.n_dof + 1)]
 
 
-#: Largest ``--roc-levels``: ROCs stay integers of at most two digits in replies (k/K of the range).
-MAX_ROC_LEVELS = 99
-
 #: S2's extra sentence when ``roc_levels = K > 1`` (the paper's K = 1 prompt has none).
 ROC_SCALE_SENTENCE = "In one step a ROC of k changes the DOF by k/{roc_levels} of its range, stopping at its limits."
 
 #: S5's extra sentence when ``roc_levels = K > 1``: the reply carries a whole number, as the paper
 #: advises (no decimals; the sign is the only non-digit).
 ROC_FORMAT_SENTENCE = "The ROC is a whole number from -{roc_levels} to {roc_levels}{except_zero}."
-
-
-def check_roc_levels(k: object) -> int:
-    """``k`` if it is a valid ``--roc-levels`` (an integer in 1..:data:`MAX_ROC_LEVELS`), else
-    :class:`ConfigError`."""
-    if isinstance(k, bool) or not isinstance(k, int) or not 1 <= k <= MAX_ROC_LEVELS:
-        raise ConfigError(f"--roc-levels must be an integer from 1 to {MAX_ROC_LEVELS}, got {k!r}")
-    return k
 
 
 def allowed_actions(

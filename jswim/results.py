@@ -596,15 +596,20 @@ def load(folder: str | os.PathLike) -> Study:
                         for i in range(n)]
         acts = r.get("actions") or []
         traj["dof"] += [int(acts[i][0]) if i < len(acts) else None for i in range(n)]
-        traj["roc"] += [int(acts[i][1]) if i < len(acts) else None for i in range(n)]
+        traj["roc"] += [acts[i][1] if i < len(acts) else None for i in range(n)]  # real for the continuous agent
         stuck = r.get("stuck")
         traj["stuck"] += [bool(stuck[i]) if isinstance(stuck, list) and i < len(stuck) else None for i in range(n)]
     trajectories = pd.DataFrame(traj)
     # Nullable dtypes: "not recorded" stays missing instead of turning a column into objects.
-    for table, cols in ((trajectories, ("dof", "roc", "n_ht")), (runs, ("n_ht", "steps_to_learn"))):
+    real_roc = any(v is not None and v == v and float(v) != int(v) for v in traj["roc"])
+    for table, cols in ((trajectories, ("dof", "n_ht") + (() if real_roc else ("roc",))),
+                        (runs, ("n_ht", "steps_to_learn"))):
         for k in cols:
             if k in table.columns:
                 table[k] = pd.array([None if v is None or v != v else int(v) for v in table[k]], dtype="Int64")
+    if real_roc:  # real-valued ROCs (the continuous study's RL baseline): a float column
+        trajectories["roc"] = pd.array([None if v is None or v != v else float(v) for v in trajectories["roc"]],
+                                       dtype="Float64")
     trajectories["stuck"] = trajectories["stuck"].astype("boolean")
     return Study(folder, meta, runs, trajectories)
 

@@ -113,6 +113,25 @@ def hash_reply(body: dict[str, Any]) -> str:
     return GAIT_MOVES[zlib.crc32(last.encode()) % len(GAIT_MOVES)]
 
 
+_ROC_RANGE = re.compile(r"The ROC is a whole number from -(\d+) to (\d+)")
+
+
+def lattice_reply(body: dict[str, Any]) -> str:
+    """A deterministic, prompt-dependent move on the prompt's ROC lattice (``--roc-levels K``):
+    ``[dof, k]`` with ``k`` in ``-K..K`` read from S5 (K = 1 when S5 names no range); a first
+    attempt at K > 1 sometimes answers a ROC past the range, as a model may, to be asked again."""
+    last = str(body.get("messages", [{}])[-1].get("content", ""))
+    first = str(body.get("messages", [{}])[0].get("content", ""))
+    prompt = last if len(body.get("messages", [])) <= 2 else first + last
+    m = _ROC_RANGE.search("\n".join(str(msg.get("content", "")) for msg in body.get("messages", [])))
+    k = int(m.group(1)) if m else 1
+    h = zlib.crc32(prompt.encode())
+    if k > 1 and h % 7 == 0 and "names no valid action" not in last:
+        return f"[1, {k + 1}]"  # outside the lattice: the parser refuses it and the driver asks again
+    roc = h // 7 % (2 * k + 1) - k
+    return f"[{1 + h % 2}, {roc}]"
+
+
 def count_words(text: str) -> int:
     """Crude token count used for the fake ``usage`` field."""
     return len(text.split())

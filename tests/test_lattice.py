@@ -48,9 +48,10 @@ def test_k1_table_is_the_corner_table(name):
     for c in range(4):
         for d in range(2):
             k = 1 if (c >> d) & 1 == 0 else -1
-            np.testing.assert_allclose(tab.motion[c, d, k + 1], inc[c, d], rtol=0, atol=1e-14)
-            assert tab.target[c, d, k + 1] == c ^ (1 << d)
-    assert not tab.moved[:, :, 1].any()  # ROC 0 never moves
+            target, motion, moved = lattice.move(tab, c, d, k)
+            np.testing.assert_allclose(motion, inc[c, d], rtol=0, atol=1e-14)
+            assert target == c ^ (1 << d) and moved
+            assert not lattice.move(tab, c, d, 0)[2] and not lattice.move(tab, c, d, -k)[2]  # hold, stuck
 
 
 @pytest.mark.parametrize("name", ["purcell", "ng"])
@@ -120,10 +121,20 @@ def test_moves_stop_at_the_limit():
     tab = lattice.move_table(model, 5)
     p = lattice.point_index(np.array([4, 0]), 5)
     # D1 at 4/5 of the range: +5 moves one unit only, the same motion as +1.
-    assert lattice.point_coords(tab.target[p, 0, 5 + 5], 2, 5).tolist() == [5, 0]
-    np.testing.assert_array_equal(tab.motion[p, 0, 10], tab.motion[p, 0, 6])
+    target, motion, _ = lattice.move(tab, p, 0, 5)
+    assert lattice.point_coords(target, 2, 5).tolist() == [5, 0]
+    np.testing.assert_array_equal(motion, lattice.move(tab, p, 0, 1)[1])
     top = lattice.point_index(np.array([5, 0]), 5)
-    assert not tab.moved[top, 0, 6:].any() and tab.moved[top, 0, :5].all()
+    ks = np.arange(-5, 6)
+    moved = lattice.move(tab, np.full(11, top), np.zeros(11, np.int64), ks)[2]
+    assert moved.tolist() == [True] * 5 + [False] * 6
+
+
+def test_lattices_too_large_for_the_tables_are_refused():
+    from jswim.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="--roc-levels 500"):
+        lattice.move_table(make_model("ng"), 500)
 
 
 @pytest.mark.parametrize("name", ["purcell", "ng"])
@@ -166,3 +177,4 @@ def test_gait_search_finds_the_full_square():
             assert all(abs(m[1]) == k for m in best[0].moves)  # every side the whole range
             assert best[1].per_step < best[0].per_step - 1e-6
         assert lattice.best_per_step(model, -1, 2) == pytest.approx(SQUARE[name] / 4, abs=2e-9)
+

@@ -27,7 +27,7 @@ def test_default_grid_sizes(study, total):
 
 def test_the_table_holds_each_study_s_defaults():
     assert set(STUDIES) == set(SPECS) == {"curves", "history", "noise", "ablation", "inits", "swim", "competence",
-                                           "temperature"}
+                                           "temperature", "continuous"}
     for study, spec in SPECS.items():
         plans = build(study, StudyOptions())
         assert {p.swimmer for p in plans} == set(spec.swimmers)
@@ -109,3 +109,23 @@ def test_any_integer_seed_gives_32_bit_run_seeds(seed):
     assert all(0 <= p.seed < 2**32 for p in plans) and len({p.seed for p in plans}) == len(plans)
     assert [p.seed for p in build("swim", StudyOptions(runs=2, q_runs=1, seed=seed))] == [p.seed for p in plans]
     assert seed32(12345) == 12345 and seed32(-1) != seed32(-2) and seed_key(2**70).shape == (2,)
+
+
+def test_the_continuous_study_grid():
+    from jswim.studies.grids import continuous_agent_available
+
+    plans = build("continuous", StudyOptions(runs=1, q_runs=2, roc_levels_grid=(1, 5)))
+    cells = Counter((p.agent, p.group, p.roc_levels) for p in plans)
+    # Per swimmer and direction: each lattice for the LLM and both baselines, the real-valued RL once.
+    real = {("ppo", "continuous", 0): 8} if continuous_agent_available() else {}
+    assert cells == {("llm", "K=1", 1): 4, ("qlearning", "K=1", 1): 8, ("random", "K=1", 1): 8,
+                     ("llm", "K=5", 5): 4, ("qlearning", "K=5", 5): 8, ("random", "K=5", 5): 8, **real}
+    ids = {p.run_id for p in plans}
+    # K = 1 runs keep the paper's ids; finer lattices and real ROCs are named.
+    assert {"llm-ng-mx-i+--z0-r0", "llm-ng-mx-i+--z0-K5-r0", "qlearning-purcell-px-i++-z0-K5-r1"} <= ids
+    assert ("ppo-purcell-px-i++-z0-real-r0" in ids) == continuous_agent_available()
+    # One K on any other study: every run of the swim study on the K = 2 lattice.
+    swim = build("swim", StudyOptions(runs=1, q_runs=1, roc_levels=2))
+    assert [p.run_id for p in swim] == ["llm-purcell-px-i++-z0-K2-r0", "qlearning-purcell-px-i++-z0-K2-r0",
+                                        "random-purcell-px-i++-z0-K2-r0"]
+    assert {p.roc_levels for p in swim} == {2}

@@ -7,7 +7,8 @@ the start, the reply length limit and how DOF values are written in the prompt. 
 from __future__ import annotations
 
 from jswim.agents.memory import ClearingRule
-from jswim.prompt import SwimmerText, check_roc_levels
+from jswim.actions import check_roc_levels
+from jswim.prompt import SwimmerText
 from jswim.swimmers.models import SwimmerModel
 
 

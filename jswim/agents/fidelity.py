@@ -35,6 +35,19 @@ def roc_levels_deviation(roc_levels: int) -> str | None:
             "say so in one sentence each")
 
 
+#: The line of the real-valued RL baseline's action space (the continuous study).
+REAL_ROCS = ("real-valued ROC in [-1, 1] (the continuous RL baseline, an extension): a step moves one DOF by ROC "
+             "times its range, stopping at a limit; a cycle is a return to the same shape within 0.1 % of the range "
+             "(jswim.shape_judge.judge_shapes)")
+
+
+def study_extensions(roc_levels: set[int] | list[int]) -> list[str]:
+    """Lines for a study's metadata naming the extensions its runs use: each ROC lattice finer than
+    the paper's, and real-valued ROCs (``roc_levels`` 0)."""
+    out = [line for k in sorted(roc_levels) if k > 0 and (line := roc_levels_deviation(k)) is not None]
+    return out + ([REAL_ROCS] if 0 in roc_levels else [])
+
+
 def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_tokens: int,
                default_max_tokens: int, n_ht: int | None = None, default_n_ht: int | None = None,
                roc_levels: int = 1) -> list[str]:

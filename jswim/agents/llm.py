@@ -38,7 +38,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim import env
+from jswim import env, lattice
 from jswim.agents import fidelity, protocol
 from jswim.agents.defaults import default_max_tokens, default_n_ht
 from jswim.agents.memory import History, MoveStats, shape_key
@@ -190,7 +190,8 @@ class _Group:
         self.dofs = np.asarray(dofs, np.float64)
         self.levels0 = np.asarray(self.states.levels)
         self._pending: dict[int, tuple[int, asyncio.Future]] = {}
-        self._noop = env.encode_action(*NO_OP)
+        self.roc_levels = int(getattr(self.params, "roc_levels", 1))
+        self._noop = lattice.encode(*NO_OP, self.roc_levels)
         self.n_steps = 0  # env calls made (for benchmarks: steps per call = batching achieved)
 
     def submit(self, pos: int, action: int) -> asyncio.Future:
@@ -269,12 +270,13 @@ class LLMDriver:
         if dupes:
             raise ConfigError(f"duplicate run ids {dupes[:3]}; give the runs distinct seeds or run_id")
         params = [
-            env.make_params(s.swimmer, zeta=s.zeta, direction=s.direction, init=s.init, **dict(s.swimmer_options))
+            env.make_params(s.swimmer, zeta=s.zeta, direction=s.direction, init=s.init, **dict(s.swimmer_options),
+                            **({"roc_levels": s.roc_levels} if s.roc_levels != 1 else {}))
             for s in specs
         ]
         by_model: dict[Any, list[int]] = {}
-        for i, p in enumerate(params):
-            by_model.setdefault(p.model, []).append(i)
+        for i, p in enumerate(params):  # one batched state per swimmer model and ROC lattice
+            by_model.setdefault((p.model, specs[i].roc_levels), []).append(i)
         self.groups = [_Group(idx, [params[i] for i in idx], [specs[i].seed for i in idx]) for idx in by_model.values()]
         self.runs: list[_Run] = [None] * len(specs)  # type: ignore[list-item]
         self._where: dict[int, tuple[_Group, int]] = {}
@@ -447,7 +449,8 @@ class LLMDriver:
                 except PositionBelowMinimumError as exc:  # can only come from a bad x_min
                     self._finish(run, "below_x_min", str(exc))
                     break
-                index = env.encode_action(*decision[0])
+                # The reply's integer ROC k is the environment's code for ROC k/K (jswim.lattice).
+                index = lattice.encode(*decision[0], group.roc_levels)
                 out = await group.submit(pos, index)
                 self._record(run, decision, index, out)
                 if self.on_step is not None:

@@ -18,6 +18,12 @@ evaluated at the step count. A whole run is one ``lax.scan``; :func:`train_batch
 keys and environment parameters (noise level, direction, initial configuration), so one jitted
 call trains e.g. 10,000 learners.
 
+On a ROC lattice (``make_params(..., roc_levels=K)``, ``--roc-levels K``, an extension) the
+same learner is tabular over the lattice: a state is a point of the ``(K + 1)**n_dof`` grid of
+DOF values ``lo + j (hi - lo) / K``, an action one of the ``n_dof (2K + 1)`` codes ``[DOF, k]``
+(ROC ``k/K``; :mod:`jswim.lattice`), and the environment steps the code exactly. ``K = 1`` is the
+paper's learner, number for number (the same operations on the same values).
+
 Example::
 
     import jax
@@ -138,10 +144,12 @@ class QRun(NamedTuple):
         step t is ``direction * (x[t] - x[t - 1])`` (with ``x[-1] = 0``).
     explored : bool (steps,)
         The step's action was drawn at random (it may coincide with the greedy one).
-    q : float (2**n_dof, 3 n_dof)
-        Final Q-table, rows indexed by corner ``sum_k level_k 2**k``.
+    q : float ((K + 1)**n_dof, n_dof (2K + 1))
+        Final Q-table, rows indexed by lattice point ``sum_d j_d (K + 1)**d`` (``K = 1``: the
+        corner ``sum_k level_k 2**k``), columns by action code.
     levels0 : int32 (n_dof,)
-        Initial DOF levels (drawn by :func:`jswim.env.reset` for a random start).
+        Initial DOF levels (drawn by :func:`jswim.env.reset` for a random start); on a ROC
+        lattice the start's lattice positions ``j`` in ``0..K`` (a corner: ``level * K``).
     y, orientation : float (steps,) or None
         Centroid y and orientation (rad, of the reference link) after each step, when asked for
         (``pose=True``; the study folders' trajectories); ``None`` otherwise, which keeps the
@@ -161,34 +169,60 @@ def _schedule(value: float | optax.Schedule) -> optax.Schedule:
     return value if callable(value) else optax.constant_schedule(float(value))
 
 
-def _corner(levels: Array) -> Array:
-    """Table row of a configuration: corner index ``sum_k level_k 2**k``."""
-    return jnp.sum(levels * (2 ** jnp.arange(levels.shape[-1], dtype=jnp.int32)), dtype=jnp.int32)
+def _corner(levels: Array, roc_levels: int = 1) -> Array:
+    """Table row of a configuration: corner index ``sum_k level_k 2**k`` (on a ROC lattice the
+    point index ``sum_d j_d (K + 1)**d`` of lattice positions ``j``)."""
+    base = (roc_levels + 1) ** jnp.arange(levels.shape[-1], dtype=jnp.int32)
+    return jnp.sum(levels * base, dtype=jnp.int32)
+
+
+def positions(state: Any, roc_levels: int) -> Array:
+    """A state's lattice positions ``j`` (int32, ``(n_dof,)``): its levels when ``K = 1``, else
+    ``round(K frac)`` (every state reached from a corner by lattice codes lies on the lattice)."""
+    if roc_levels == 1:
+        return state.levels
+    return jnp.round(state.frac * roc_levels).astype(jnp.int32)
 
 
 def _row(q: Array, corner: Array) -> Array:
     return jax.lax.dynamic_slice_in_dim(q, corner, 1)[0]
 
 
-def offered(levels: Array, n_dof: int, action_set: str) -> Array:
-    """Boolean mask of the actions offered in configuration ``levels``."""
+def offered(levels: Array, n_dof: int, action_set: str, roc_levels: int = 1) -> Array:
+    """Boolean mask of the actions offered in configuration ``levels`` (lattice positions ``j``
+    on a ROC lattice): every code, or the shape-changing ones (a positive ROC below ``hi``, a
+    negative one above ``lo``)."""
+    width = 2 * roc_levels + 1
     if action_set == "all":
-        return jnp.ones((3 * n_dof,), bool)
-    roc = jnp.arange(3 * n_dof) % 3 - 1
-    level = jnp.repeat(levels, 3, total_repeat_length=3 * n_dof)
-    return roc == 1 - 2 * level  # +1 from lo, -1 from hi
+        return jnp.ones((width * n_dof,), bool)
+    roc = jnp.arange(width * n_dof) % width - roc_levels
+    level = jnp.repeat(levels, width, total_repeat_length=width * n_dof)
+    if roc_levels == 1:
+        return roc == 1 - 2 * level  # +1 from lo, -1 from hi
+    return ((roc > 0) & (level < roc_levels)) | ((roc < 0) & (level > 0))
 
 
-def offered_mask(levels: Array, model: Any, action_set: str, rocs: tuple[int, ...] | None = None) -> Array:
+def offered_mask(levels: Array, model: Any, action_set: str, rocs: tuple[int, ...] | None = None,
+                 roc_levels: int = 1) -> Array:
     """:func:`offered`, restricted to the ROCs offered (default: the swimmer's,
-    :func:`jswim.agents.defaults.default_rocs`: all three for two DOFs, +-1 for more)."""
-    rocs = default_rocs(model) if rocs is None else rocs
-    roc_ok = jnp.zeros(3, bool).at[jnp.asarray(rocs) + 1].set(True)
-    return offered(levels, model.n_dof, action_set) & jnp.tile(roc_ok, model.n_dof)
+    :func:`jswim.agents.defaults.default_rocs`: all three for two DOFs, +-1 for more; every
+    ``k`` in ``-K..K`` on a ROC lattice, 0 left out for more DOFs)."""
+    rocs = default_rocs(model, roc_levels) if rocs is None else rocs
+    roc_ok = jnp.zeros(2 * roc_levels + 1, bool).at[jnp.asarray(rocs) + roc_levels].set(True)
+    return offered(levels, model.n_dof, action_set, roc_levels) & jnp.tile(roc_ok, model.n_dof)
 
 
 def _offered(levels: Array, params: EnvParams, action_set: str) -> Array:
-    return offered_mask(levels, params.model, action_set)
+    return offered_mask(levels, params.model, action_set, roc_levels=_k(params))
+
+
+def _k(params: EnvParams) -> int:
+    """``K`` of the environment's ROC lattice (1 before environments had one)."""
+    return int(getattr(params, "roc_levels", 1))
+
+
+#: Largest action count :func:`_pick` serves from a bit-mask table (2**A rows); beyond, a scan.
+_TABLE_ACTIONS = 12
 
 
 @functools.lru_cache(maxsize=8)
@@ -208,9 +242,11 @@ def _pick(mask: Array, u: Array) -> Array:
     argmax over a handful of actions cost more than the whole lookup (20 % of a training step).
     """
     a = mask.shape[0]
-    bits = jnp.sum(mask.astype(jnp.int32) << jnp.arange(a, dtype=jnp.int32), dtype=jnp.int32)
     count = jnp.sum(mask, dtype=jnp.int32)
     k = jnp.clip(jnp.floor(u * count).astype(jnp.int32), 0, jnp.maximum(count - 1, 0))
+    if a > _TABLE_ACTIONS:  # ROC lattices: 2**A rows would not fit; the k-th set entry by a running count
+        return jnp.argmax(jnp.cumsum(mask, dtype=jnp.int32) > k).astype(jnp.int32)
+    bits = jnp.sum(mask.astype(jnp.int32) << jnp.arange(a, dtype=jnp.int32), dtype=jnp.int32)
     return jnp.asarray(_kth_true_table(a))[bits * a + k]
 
 
@@ -269,10 +305,11 @@ class _Pending(NamedTuple):
 
 def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = False) -> QRun:
     n = params.model.n_dof
+    big_k = _k(params)
     dtype = jnp.result_type(float)
     k_reset, k_run = jax.random.split(key)
     state = reset(k_reset, params)
-    q = jnp.full((2**n, 3 * n), config.q_init, dtype)
+    q = jnp.full(((big_k + 1) ** n, (2 * big_k + 1) * n), config.q_init, dtype)
     alpha = _schedule(config.learning_rate)
     # Update k of the optimizer is step k - 1's (update 0 is a no-op, see below), so the
     # learning-rate schedule is read one count back: step t learns at rate alpha(t).
@@ -282,12 +319,14 @@ def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = Fals
 
     def act(state, q, t, u):
         """Choose, step the swimmer, and form the TD target from the current table."""
-        s = _corner(state.levels)
-        mask = _offered(state.levels, params, config.action_set)
+        j = positions(state, big_k)
+        s = _corner(j, big_k)
+        mask = _offered(j, params, config.action_set)
         action, explore = _act(_row(q, s), mask, epsilon(t), u[0], config.tie_break)
         new, info = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
-        mask2 = _offered(new.levels, params, config.action_set)
-        future = jnp.max(jnp.where(mask2, _row(q, _corner(new.levels)), -jnp.inf))
+        j2 = positions(new, big_k)
+        mask2 = _offered(j2, params, config.action_set)
+        future = jnp.max(jnp.where(mask2, _row(q, _corner(j2, big_k)), -jnp.inf))
         out = (action.astype(jnp.int8), new.x, explore) + ((new.y, new.theta) if pose else (None, None))
         return new, _Pending(s, action, info.progress + gamma * future), out
 
@@ -317,7 +356,7 @@ def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = Fals
     carry = (state, q, opt.init(q), nothing)
     (_, q, opt_state, pending), (acts, x, explored, y, theta) = jax.lax.scan(body, carry, inputs)
     q, _ = learn(q, opt_state, pending)
-    return QRun(acts, x, explored, q, state.levels, y, theta)
+    return QRun(acts, x, explored, q, positions(state, big_k), y, theta)
 
 
 @functools.lru_cache(maxsize=1)
@@ -411,7 +450,8 @@ batch_params = broadcast_params
 
 def evaluate(run: QRun, params: EnvParams, *, criterion: Criterion = PAPER) -> GaitReport:
     """Judge training runs with the shared success criterion, :func:`jswim.gait.judge`."""
-    return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), criterion=criterion)
+    return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), criterion=criterion,
+                 roc_levels=_k(params))
 
 
 @functools.partial(jax.jit, static_argnames=("steps", "action_set"))
@@ -424,9 +464,12 @@ def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "a
     key = jax.random.PRNGKey(0) if key is None else key
     k_reset, k_run = jax.random.split(key)
 
+    big_k = _k(params)
+
     def body(state, u):
-        mask = _offered(state.levels, params, action_set)
-        action = _pick(_greedy_set(_row(q, _corner(state.levels)), mask, "random"), u[0])
+        j = positions(state, big_k)
+        mask = _offered(j, params, action_set)
+        action = _pick(_greedy_set(_row(q, _corner(j, big_k)), mask, "random"), u[0])
         state, _ = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
         return state, action
 

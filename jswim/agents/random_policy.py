@@ -16,7 +16,7 @@ from jax import Array
 
 from jswim.actions import check_action_set
 from jswim.agents.defaults import default_rocs
-from jswim.agents.qlearning import _pick, offered_mask
+from jswim.agents.qlearning import _k, _pick, offered_mask, positions
 from jswim.env import EnvParams, advance, reset
 
 
@@ -34,15 +34,16 @@ class RandomRun(NamedTuple):
 def _one(key: Array, params: EnvParams, steps: int, action_set: str, rocs: tuple[int, ...]) -> RandomRun:
     k_reset, k_run = jax.random.split(key)
     state0 = reset(k_reset, params)
+    big_k = _k(params)
 
     def body(state, u):
-        mask = offered_mask(state.levels, params.model, action_set, rocs)
+        mask = offered_mask(positions(state, big_k), params.model, action_set, rocs, big_k)
         action = _pick(mask, u[0])
         state, _ = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
         return state, (action, state.x, state.y, state.theta)
 
     _, (acts, xs, ys, thetas) = jax.lax.scan(body, state0, jax.random.uniform(k_run, (steps, 2)))
-    return RandomRun(acts, xs, state0.levels, ys, thetas)
+    return RandomRun(acts, xs, positions(state0, big_k), ys, thetas)
 
 
 def run_batch(
@@ -61,10 +62,11 @@ def run_batch(
     action_set : {"all", "shape-changing"}
         Offered actions (:data:`jswim.actions.ACTION_SETS`), as in the LLM's prompt.
     rocs : tuple of int, optional
-        ROCs offered (default: the swimmer's, e.g. (-1, 0, 1)).
+        ROCs offered (default: the swimmer's, e.g. (-1, 0, 1); every ``k`` in ``-K..K`` on the
+        environment's ROC lattice, ``params.roc_levels``).
     """
     check_action_set(action_set)
-    rocs = tuple(default_rocs(params.model) if rocs is None else rocs)
+    rocs = tuple(default_rocs(params.model, _k(params)) if rocs is None else rocs)
     return _jitted(bool(jnp.ndim(params.zeta) > 0))(keys, params, steps, action_set, rocs)
 
 

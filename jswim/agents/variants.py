@@ -15,12 +15,11 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any, Iterable
 
-from jswim.actions import check_action_set
+from jswim.actions import check_action_set, check_roc_levels
 from jswim.agents.memory import ClearingRule
 from jswim.errors import ConfigError
 from jswim.llm.client import check_temperature
-from jswim.prompt import (DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, check_roc_levels,
-                          normalize_mask)
+from jswim.prompt import DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, normalize_mask
 
 
 def init_label(init: tuple[int, ...] | str | None) -> str:

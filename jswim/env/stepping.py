@@ -228,7 +228,7 @@ def _segment_increment(model: Any, s0: Array, s1: Array) -> Array:
     """Body-frame step row ``(dx, dy, dtheta, cos, sin)`` of the straight move ``s0 -> s1``."""
     span = model.hi - model.lo
     d0, d1 = corner_values(model, s0), corner_values(model, s1)
-    pose = integrate_stroke(model, d0, (s1 - s0) * span, 1.0, n_sub=INTEGRATOR_DEGREE)
+    pose = integrate_stroke(model, d0, (s1 - s0) * span, 1.0, n_sub=INTEGRATOR_DEGREE, dotless=True)
     disp = centroid(model, d1, pose) - centroid(model, d0, jnp.zeros(3, jnp.float64))
     return jnp.stack([disp[0], disp[1], pose[2], jnp.cos(pose[2]), jnp.sin(pose[2])])
 
@@ -245,7 +245,8 @@ def _path_increment(model: Any, s0: Array, rocs: Array) -> Array:
         ta, tb = times[i], times[i + 1]
         rate = jnp.where(hit >= tb, rocs, 0.0) * span
         start = jnp.clip(s0 + rocs * ta, 0.0, 1.0)
-        pose = integrate_stroke(model, corner_values(model, start), rate, tb - ta, pose, n_sub=INTEGRATOR_DEGREE)
+        pose = integrate_stroke(model, corner_values(model, start), rate, tb - ta, pose, n_sub=INTEGRATOR_DEGREE,
+                                dotless=True)
     d0, d1 = corner_values(model, s0), corner_values(model, jnp.clip(s0 + rocs, 0.0, 1.0))
     disp = centroid(model, d1, pose) - centroid(model, d0, jnp.zeros(3, jnp.float64))
     return jnp.stack([disp[0], disp[1], pose[2], jnp.cos(pose[2]), jnp.sin(pose[2])])

@@ -15,10 +15,10 @@ import math
 from dataclasses import dataclass
 from typing import Callable, Iterable
 
-from jswim.actions import ACTION_SETS, check_action_set
+from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
 from jswim.agents.defaults import paper_init
 from jswim.agents.protocol import derived_seed
-from jswim.agents.variants import VARIANTS, init_label, run_id, variant_action_set
+from jswim.agents.variants import VARIANTS, init_label, roc_tag, run_id, variant_action_set
 from jswim.env import all_inits
 from jswim.errors import ConfigError
 from jswim.gait import PAPER
@@ -26,6 +26,12 @@ from jswim.prompt import SENTENCES
 from jswim.swimmers.models import SWIMMERS, make_model
 
 AGENTS = ("llm", "qlearning", "random")
+#: The continuous-action RL baseline (real ROCs; only the continuous study runs it).
+CONTINUOUS_AGENT = "ppo"
+#: Every agent a study may run (the default of :attr:`StudyOptions.agents`).
+ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT,)
+#: ROC lattices of the continuous study (``--roc-levels``; K = 1 is the paper's set).
+DEFAULT_ROC_LEVELS = (1, 2, 5, 10)
 DEFAULT_ZETAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
 INIT_CHOICES = ("paper", "cycle", "random", "++", "+-", "-+", "--")
 
@@ -65,7 +71,7 @@ class StudyOptions:
     action_set: str = "all"
     prompt_file: str | None = None
     chunk: int | None = None  # LLM runs in progress at once (None: the client's concurrency)
-    agents: tuple[str, ...] = AGENTS
+    agents: tuple[str, ...] = ALL_AGENTS
     variant: str | None = None  # LLM protocol variant; None: the study's (SWIM_VARIANT or "paper")
     share_identical: bool = False  # send identical temperature-0 requests of different runs once (runs become copies)
     x_min: float = -2.5  # X_min of the position encoding (the paper's and the code's -2.5)
@@ -75,6 +81,8 @@ class StudyOptions:
     # temperature study sweeps temperatures itself). None: the backend's temperature, the one prompt.
     temperatures: tuple[float, ...] | None = None
     prompt_files: tuple[str, ...] | None = None
+    roc_levels: int = 1  # K of the ROC lattice (--roc-levels; 1 = the paper's -1, 0, 1)
+    roc_levels_grid: tuple[int, ...] = DEFAULT_ROC_LEVELS  # the continuous study's K values
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
@@ -118,6 +126,13 @@ class StudyOptions:
             raise ConfigError("--prompt-files: two files have the same name (it names their runs); rename one")
         if self.prompt_files and self.prompt_file:
             raise ConfigError("give --prompt-file or --prompt-files, not both")
+        for k in (self.roc_levels, *self.roc_levels_grid):
+            check_roc_levels(k)
+        if not self.roc_levels_grid or len(set(self.roc_levels_grid)) != len(self.roc_levels_grid):
+            raise ConfigError(f"--roc-levels needs distinct values, got {self.roc_levels_grid}")
+        bad = sorted(set(self.agents) - set(ALL_AGENTS))
+        if bad:
+            raise ConfigError(f"unknown agents {bad}; choose from {', '.join(ALL_AGENTS)}")
 
     def llm_variant(self, study: str) -> str:
         """The protocol variant of the study's LLM runs (outside the competence study)."""
@@ -143,6 +158,7 @@ class Plan:
     variant: str = "paper"  # LLM protocol variant (jswim.agents.variants.VARIANTS); "" for baselines
     temperature: float | None = None  # LLM sampling temperature of a sweep (None: the backend's)
     prompt_file: str | None = None  # LLM prompt template of a --prompt-files sweep (None: the study's)
+    roc_levels: int = 1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
 
 
 def prompt_label(path: str) -> str:
@@ -166,6 +182,7 @@ class Cell:
     variant: str | None = None  # LLM runs only; None: the options' variant
     action_set: str | None = None  # baselines only; None: the LLM variant's action set
     temperature: float | None = None  # LLM runs only (the temperature study)
+    roc_levels: int | None = None  # None: the options' roc_levels; 0 for real-valued ROCs
 
 
 WITH_BASELINES = ("llm", "qlearning", "random")
@@ -200,6 +217,20 @@ def _temperature(o: StudyOptions) -> list[Cell]:
     return [Cell(f"T={t:g}", ("llm",), n_ht=o.n_ht, temperature=t) for t in o.temperatures or DEFAULT_TEMPERATURES]
 
 
+def continuous_agent_available() -> bool:
+    """Whether the real-valued RL baseline (:mod:`jswim.agents.ppo`) is installed."""
+    import importlib.util
+
+    return importlib.util.find_spec("jswim.agents.ppo") is not None
+
+
+def _continuous(o: StudyOptions) -> list[Cell]:
+    # Each lattice for the LLM and both tabular baselines, then the real-valued RL baseline once.
+    lattices = [Cell(f"K={k}", WITH_BASELINES, n_ht=o.n_ht, roc_levels=k) for k in o.roc_levels_grid]
+    real = [Cell("continuous", (CONTINUOUS_AGENT,), roc_levels=0)] if continuous_agent_available() else []
+    return lattices + real
+
+
 def _competence(o: StudyOptions) -> list[Cell]:
     llm = [Cell(v, ("llm",), n_ht=o.n_ht, variant=v) for v in o.variants or COMPETENCE_VARIANTS]
     return llm + [Cell(s, (agent,), action_set=s) for agent in ("random", "qlearning") for s in ACTION_SETS]
@@ -215,7 +246,7 @@ class StudySpec:
     swimmers: tuple[str, ...] = ("purcell", "ng")
     directions: tuple[int, ...] = (1,)
     q_runs: int = 100  # baseline runs per cell
-    ignores: tuple[str, ...] = ("zetas", "n_hts")  # StudyOptions fields the study has no use for (IGNORED)
+    ignores: tuple[str, ...] = ("zetas", "n_hts", "roc_levels_grid")  # StudyOptions fields the study has no use for (IGNORED)
     constrain: str | None = None  # decoding when the backend says "auto" (None: the backend's own choice)
 
 
@@ -228,6 +259,8 @@ IGNORED = {
     "n_ht": "it sweeps n_ht over --n-hts",
     "q_runs": "it has no Q-learning or random-policy runs",
     "init": "it runs each of the four initial configurations",
+    "roc_levels_grid": "only the continuous study sweeps K; give one value with --roc-levels",
+    "roc_levels": "it sweeps K over the --roc-levels list",
 }
 
 
@@ -236,14 +269,17 @@ SPECS: dict[str, StudySpec] = {
     # X/a against step n: LLM, Q-learning and random policy, both swimmers (Fig. 2)
     "curves": StudySpec(_single, runs=1, init="paper"),
     # the n_ht sweep, both directions, both swimmers (Fig. 3)
-    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1), ignores=("zetas", "n_ht", "q_runs")),
+    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1),
+                         ignores=("zetas", "n_ht", "q_runs", "roc_levels_grid")),
     # mean X/a and success rate p against zeta (Fig. 4)
-    "noise": StudySpec(_noise, runs=10, ignores=("zeta", "n_hts")),
+    "noise": StudySpec(_noise, runs=10, ignores=("zeta", "n_hts", "roc_levels_grid")),
     # the full prompt and the prompt without each of S1..S5 (Fig. 5)
     # (free-text replies unless --constrain says otherwise: with a grammar, removing S5 removes nothing)
-    "ablation": StudySpec(_ablation, runs=10, ignores=("zetas", "n_hts", "q_runs"), constrain="none"),
+    "ablation": StudySpec(_ablation, runs=10, ignores=("zetas", "n_hts", "q_runs", "roc_levels_grid"),
+                          constrain="none"),
     # all four initial configurations, both directions
-    "inits": StudySpec(_inits, runs=1, directions=(1, -1), ignores=("zetas", "n_hts", "q_runs", "init")),
+    "inits": StudySpec(_inits, runs=1, directions=(1, -1),
+                       ignores=("zetas", "n_hts", "q_runs", "init", "roc_levels_grid")),
     # the main job: a few LLM runs next to Q-learning and random learners
     "swim": StudySpec(_single, runs=4, init="paper", swimmers=("purcell",)),
     # every protocol variant next to random and Q-learning baselines on both action sets
@@ -251,6 +287,10 @@ SPECS: dict[str, StudySpec] = {
     # p and steps to learn against the sampling temperature T, both swimmers and directions
     "temperature": StudySpec(_temperature, runs=5, init="paper", directions=(1, -1),
                              ignores=("zetas", "n_hts", "q_runs")),
+    # continuous strokes (an extension): the LLM, lattice Q-learning and random at K in {1, 2, 5, 10},
+    # and the real-valued RL baseline, both swimmers, both directions (README "Continuous strokes")
+    "continuous": StudySpec(_continuous, runs=2, init="paper", directions=(1, -1),
+                            ignores=("zetas", "n_hts", "roc_levels")),
 }
 
 STUDIES = tuple(SPECS)
@@ -351,6 +391,8 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     action_set = variant_action_set(v, o.action_set) if llm else (cell.action_set or baseline_set)
                     # The run id names what differs from the study's own setting.
                     tag = (v if v != "paper" else "") if llm else (action_set if action_set != o.action_set else "")
+                    levels = o.roc_levels if cell.roc_levels is None else cell.roc_levels
+                    tag = "-".join(t for t in (tag, "real" if levels == 0 else roc_tag(levels)) if t)
                     zeta = float(o.zeta if cell.zeta is None else cell.zeta)
                     n_ht = cell.n_ht if llm else None
                     drop = cell.drop if llm else frozenset()
@@ -361,11 +403,11 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                         swept = ([f"T={temp:g}"] if temp is not None and cell.temperature is None else []) + \
                             ([f"prompt={prompt_label(prompt)}"] if prompt else [])
                         group = ", ".join(g for g in [cell.group, *swept] if g)
-                        for k in range(runs[agent]):
+                        for k in range(runs.get(agent, runs["qlearning"])):
                             init = initial(cell.init or o.init or spec.init, k, sw)
                             rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k)
                             plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
-                                              n_ht, drop, action_set, group, v, temp, prompt))
+                                              n_ht, drop, action_set, group, v, temp, prompt, levels))
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"
     return plans

@@ -38,8 +38,9 @@ from jswim.agents import fidelity, qlearning, random_policy
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
 from jswim.console import eta
+from jswim import lattice
 from jswim.errors import ConfigError, JswimError, JswimWarning
-from jswim.gait import Criterion, judge
+from jswim.gait import Criterion, GaitReport, judge
 from jswim.llm.backend import Backend
 from jswim.llm.budget import Budget
 from jswim.llm.credentials import scrub
@@ -54,7 +55,8 @@ from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.results import StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
-from jswim.studies.grids import COMPETENCE_VARIANTS, SPECS, SWIM_VARIANT, Plan, StudyOptions, build
+from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTINUOUS_AGENT, SPECS, SWIM_VARIANT, Plan,
+                                 StudyOptions, build)
 from jswim.studies.report import draw_figures, summarize
 
 
@@ -63,22 +65,27 @@ from jswim.studies.report import draw_figures, summarize
 
 def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, levels0: np.ndarray,
                 horizon: int, extra: Sequence[dict[str, Any]] | None = None,
-                pose: tuple[np.ndarray, np.ndarray] | None = None) -> list[dict[str, Any]]:
-    """Rows for a batch of runs of one swimmer, judged by the shared success criterion.
+                pose: tuple[np.ndarray, np.ndarray] | None = None, report: GaitReport | None = None,
+                moves: Sequence[list[list[float]]] | None = None) -> list[dict[str, Any]]:
+    """Rows for a batch of runs of one swimmer and ROC lattice, judged by the shared success criterion.
 
-    ``pose`` gives the centroid y and the orientation after each step, shape ``(runs, steps)``
-    each, for the trajectories (LLM runs bring theirs in ``extra``)."""
+    ``levels0`` holds the starts' lattice positions (levels on the paper's K = 1). ``pose``
+    gives the centroid y and the orientation after each step, shape ``(runs, steps)`` each, for
+    the trajectories (LLM runs bring theirs in ``extra``). The real-valued agent brings its own
+    ``report`` (:func:`jswim.agents.ppo.evaluate`) and ``moves`` (``[dof, roc]`` per step)."""
     p0 = plans[0]
+    k = p0.roc_levels
     params = env.make_params(p0.swimmer)
     params = params.replace(direction=np.array([p.direction for p in plans], float))
-    rep = judge(actions, params, levels0=levels0, criterion=Criterion(horizon=horizon))
+    rep = report if report is not None else judge(actions, params, levels0=levels0,
+                                                 criterion=Criterion(horizon=horizon), roc_levels=k)
     rows = []
     for i, p in enumerate(plans):
         x = [float(v) for v in xs[i]]
         prog = np.diff(np.concatenate([[0.0], xs[i]])) * p.direction
         row = {
             "run_id": p.run_id, "agent": p.agent, "swimmer": p.swimmer, "direction": p.direction,
-            "init": "".join("+" if v else "-" for v in levels0[i]), "zeta": p.zeta, "seed": p.seed,
+            "init": "".join("+" if v > 0 else "-" for v in levels0[i]), "zeta": p.zeta, "seed": p.seed,
             "n_ht": p.n_ht, "drop": ",".join(sorted(p.drop)), "action_set": p.action_set, "group": p.group,
             "variant": p.variant,
             "steps": len(x), "final_x": x[-1] if x else 0.0,
@@ -86,7 +93,9 @@ def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, leve
             "success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
             "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
             "period": int(rep.period[i]),
-            "x": x, "actions": [list(env.decode_action(int(a))) for a in actions[i]],
+            "roc_levels": k,
+            "x": x, "actions": moves[i] if moves is not None else [list(lattice.decode(int(a), max(k, 1)))
+                                                                  for a in actions[i]],
             "progress": [float(v) for v in prog], "status": "done",
         }
         if pose is not None:
@@ -100,9 +109,12 @@ def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, leve
 
 
 def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """Q-learning or random runs of one (agent, swimmer, action set) group, vectorised."""
+    """Q-learning, random or continuous-RL runs of one (agent, swimmer, action set, ROC lattice)
+    group, vectorised."""
     p0 = plans[0]
-    base = env.make_params(p0.swimmer)
+    if p0.agent == CONTINUOUS_AGENT:
+        return _run_continuous(plans, horizon)
+    base = env.make_params(p0.swimmer, **_lattice(p0.roc_levels))
     init = np.array([[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32)
     params = qlearning.batch_params(base, len(plans), zeta=np.array([p.zeta for p in plans]),
                                     direction=np.array([p.direction for p in plans], float), init=init)
@@ -114,6 +126,34 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         run = random_policy.run_batch(keys, params, p0.steps, p0.action_set)
     return _judge_rows(plans, np.asarray(run.actions), np.asarray(run.x), np.asarray(run.levels0), horizon,
                        pose=(np.asarray(run.y), np.asarray(run.orientation)))
+
+
+def _lattice(roc_levels: int) -> dict[str, int]:
+    """``make_params`` keywords of a ROC lattice (none for the paper's K = 1)."""
+    return {} if roc_levels == 1 else {"roc_levels": roc_levels}
+
+
+def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
+    """The real-valued RL baseline (:mod:`jswim.agents.ppo`) for one swimmer, judged on shapes
+    (:func:`jswim.agents.ppo.evaluate`: :func:`jswim.shape_judge.judge_shapes` on displacements
+    replayed exactly, without noise)."""
+    from jswim.agents import ppo
+
+    p0 = plans[0]
+    base = env.make_params(p0.swimmer)
+    init = np.array([[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32)
+    params = qlearning.batch_params(base, len(plans), zeta=np.array([p.zeta for p in plans]),
+                                    direction=np.array([p.direction for p in plans], float), init=init)
+    keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
+    run = ppo.train_batch(keys, params, ppo.PPOConfig(steps=p0.steps))
+    rocs, dofs0 = np.asarray(run.actions, np.float64), np.asarray(run.dofs0, np.float64)
+    rep = ppo.evaluate(run, params, criterion=Criterion(horizon=horizon))
+    dof = np.asarray(run.dof, np.int64)
+    moves = [[[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])] for i in range(len(plans))]
+    span = base.model.hi - base.model.lo
+    corners = np.rint((dofs0 - base.model.lo) / span).astype(np.int64)  # the starts are corners
+    return _judge_rows(plans, np.zeros(dof.shape, np.int64), np.asarray(run.x), corners, horizon,
+                       pose=(np.asarray(run.y), np.asarray(run.orientation)), report=rep, moves=moves)
 
 
 def _groups(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
@@ -144,7 +184,7 @@ class StudyResult:
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
 #: folder grows when they grow (and a smaller value reports the runs it names).
-GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files")
+GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files", "roc_levels_grid")
 
 #: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
@@ -176,6 +216,10 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     for name in ("variant", "variants"):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
+    if opts["roc_levels"] == 1:  # the paper's ROC set: as before --roc-levels existed
+        opts.pop("roc_levels")
+    if tuple(o.agents) == ALL_AGENTS:  # the default, written as before the continuous agent existed
+        opts["agents"] = AGENTS
     if study == "swim" and o.variant is None and SWIM_VARIANT != "paper":
         opts["variant"] = SWIM_VARIANT
     template = PromptTemplate.from_file(o.prompt_file) if o.prompt_file else PromptTemplate()
@@ -265,8 +309,10 @@ def run_study(
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS) if study == "competence"
         else [options.llm_variant(study)],
         "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
-        # What differs from the paper's protocol in every LLM run (each transcript lists its own too).
-        "fidelity_deviations": list(fidelity.ALWAYS),
+        # What differs from the paper's protocol in every LLM run (each transcript lists its own too),
+        # and the extensions some runs use (finer or real-valued ROCs).
+        "fidelity_deviations": list(fidelity.ALWAYS) + fidelity.study_extensions({p.roc_levels for p in plans}),
+        "roc_levels": sorted({p.roc_levels for p in plans}),
         "grid": {k: getattr(options, k) for k in GRID_SIZE},
         "server": backend.address() if backend is not None else None,
         "prices_as_of": (backend.prices_as_of if backend is not None and backend.prices_as_of else PRICES_AS_OF),
@@ -320,7 +366,8 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     tick = progress or (lambda phase, d, t, info="": None)
     tick("resume" if finished else "start", finished, total, f"{finished} runs already done" if finished else "")
 
-    for (agent, _sw, _allowed), group in _groups([p for p in todo if p.agent != "llm"], "agent", "swimmer", "action_set").items():
+    for (agent, *_), group in _groups([p for p in todo if p.agent != "llm"], "agent", "swimmer", "action_set",
+                                      "roc_levels").items():
         store.add_runs(_run_baselines(group, options.horizon))
         finished += len(group)
         tick(agent, finished, total, "")
@@ -414,7 +461,7 @@ def _write_report(folder: Path, figures: bool) -> None:
 
 def _spec(p: Plan) -> LLMRunSpec:
     return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
-                      n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id)
+                      n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id, roc_levels=p.roc_levels)
 
 
 def _configs(plans: Sequence[Plan], o: StudyOptions,
@@ -437,7 +484,8 @@ def _row(plan: Plan, r: RunResult, horizon: int) -> dict[str, Any]:
     acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
     xs = np.array([r.x], float).reshape(1, len(r.x))
     extra = {k: v for k, v in r.as_row().items() if k not in ("x", "actions", "progress", "stuck", "levels0")}
-    return _judge_rows([plan], acts, xs, np.array([r.levels0], np.int64), horizon, [extra])[0]
+    # The judge reads the start as lattice positions: a corner level times K.
+    return _judge_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon, [extra])[0]
 
 
 def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
