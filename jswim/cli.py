@@ -1056,6 +1056,7 @@ def run() -> None:
         interrupts.quiet()
         print("interrupted", file=sys.stderr)
         status = 128 + (interrupts.received() or signal.SIGINT)
+    interrupts.ignore()  # a signal during interpreter exit must not kill the process after its line
     sys.exit(status)
 
 

@@ -43,6 +43,21 @@ def quiet() -> None:
     _armed = False
 
 
+def ignore() -> None:
+    """Ignore every later signal: the interpreter is about to exit.
+
+    At finalisation CPython puts back the default, fatal, disposition of every signal that had
+    a Python handler, so a Ctrl-C landing then would kill the process (exit -2) after its one
+    line was printed; an ignored signal stays ignored through finalisation.
+    """
+    quiet()
+    for sig in SIGNALS:
+        try:
+            signal.signal(sig, signal.SIG_IGN)
+        except (ValueError, OSError):  # not the main thread: nothing to do
+            pass
+
+
 def received() -> int | None:
     """The first signal received (its number), or ``None``."""
     return _received

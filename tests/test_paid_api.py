@@ -330,7 +330,8 @@ def test_reasoning_tokens_are_billed_at_the_completion_price(tmp_path, capsys):
     from tests.fakeserver import MODES, REASONING_TOKENS, count_words
 
     out = tmp_path / "study"
-    with FakeServer(**MODES["openai-reasoning"]) as srv:
+    # The server lists the model it is asked for: an unlisted model is never priced.
+    with FakeServer(**MODES["openai-reasoning"], models=("gpt-4o",)) as srv:
         assert main(swim(srv.url, out, model="gpt-4o", runs=2, steps=4)) == 0, capsys.readouterr().err
         answered = [b for b in srv.requests if "max_completion_tokens" in b and b.get("temperature") == 1]
     capsys.readouterr()
