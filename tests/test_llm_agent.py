@@ -20,7 +20,9 @@ from tests.fakeserver import Fault, FakeServer, hash_reply
 
 
 def settings(srv: FakeServer, **kw) -> ClientSettings:
-    return ClientSettings(base_url=srv.url, model="fake", backoff_base_s=0.001, backoff_max_s=0.01, timeout_s=5.0, **kw)
+    # A generous timeout: on a loaded machine a jit compile can hold the event loop for seconds,
+    # and a timed-out request is retried, which would change the retry counts these tests assert.
+    return ClientSettings(base_url=srv.url, model="fake", backoff_base_s=0.001, backoff_max_s=0.01, timeout_s=120.0, **kw)
 
 
 HI = math.pi / 3
