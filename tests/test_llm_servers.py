@@ -413,6 +413,13 @@ def test_preflight_says_slow_when_the_server_does_not_answer():
 
 def test_essential_message_drops_tracebacks_and_paths():
     from jswim.llm.rejection import essential_message
+
+    # llama-cpp-python 0.3.36's real 500 body for --constrain json_schema (error.message as sent).
+    real = ("1 validation error:\n  {'type': 'literal_error', 'loc': ('body', 'response_format', 'type'), "
+            "'msg': \"Input should be 'text' or 'json_object'\", 'input': 'json_schema', 'ctx': {'expected': "
+            "\"'text' or 'json_object'\"}}\n\n  File \"/tmp/venv/lib/python3.11/site-packages/llama_cpp/server/"
+            "app.py\", line 376, in create_chat_completion\n    POST /v1/chat/completions")
+    assert essential_message(real) == "response_format.type: Input should be 'text' or 'json_object'"
     from tests.fakeserver import VALIDATION_500
 
     assert essential_message(VALIDATION_500) == "response_format.type: Input should be 'text' or 'json_object'"

@@ -44,6 +44,9 @@ _VALIDATION = re.compile(
 )
 #: A pydantic error block in text: the location on one line, the message indented below it.
 _PYDANTIC_ITEM = re.compile(r"^([A-Za-z_][\w.\[\]-]*)\n[ \t]+(.+?)(?: \[type=[^\]]*\])?[ \t]*$", re.M)
+#: A pydantic error as Python prints the dict (llama-cpp-python 0.3's 500 bodies):
+#: ``{'type': 'literal_error', 'loc': ('body', 'response_format', 'type'), 'msg': "Input should be ..."}``.
+_PYDANTIC_REPR = re.compile(r"""'loc':\s*\(([^)]*)\),\s*'msg':\s*(?:"((?:[^"\\]|\\.)*)"|'((?:[^'\\]|\\.)*)')""")
 #: File paths (a server's source files), replaced in what is shown.
 _PATH = re.compile(r"""(?:[A-Za-z]:)?(?:[/\\][\w.@+-]+){2,}[/\\]?""")
 _TRACEBACK = "Traceback (most recent call last)"
@@ -81,6 +84,10 @@ def essential_message(text: str, limit: int = 240) -> str:
     like a validation error is kept.
     """
     items = [(loc, msg) for loc, msg in _PYDANTIC_ITEM.findall(text) if not loc.lower().startswith("for ")]
+    if not items:
+        for loc, dq, sq in _PYDANTIC_REPR.findall(text):
+            parts = [a or b for a, b in re.findall(r"'([^']*)'|(\d+)", loc)]
+            items.append((".".join(p for p in parts[parts[:1] == ["body"]:]), dq or sq))
     if items:
         text = "; ".join(f"{loc}: {msg}" for loc, msg in items[:3])
     head, sep, tail = text.partition(_TRACEBACK)
