@@ -73,19 +73,23 @@ def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[s
 def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], list[list[str]]]:
     """Columns and rows of a study's summary (one row per agent, swimmer, direction and group).
 
-    ``summary`` is what :func:`jswim.studies.summarize` returns. Groups and cost appear only
-    when some row has them.
+    ``summary`` is what :func:`jswim.studies.summarize` returns. Groups, cost and ``samples``
+    (independent samples of each run pooled in the row, ``--samples``; ``n`` counts them all)
+    appear only when some row has them.
     """
     groups = any(s.get("group") for s in summary)
     cost = any(s.get("cost_usd") for s in summary)
+    samples = any((s.get("samples") or 1) > 1 for s in summary)
     cols = [Column("agent", False), Column("swimmer", False), Column("dir", False)]
     cols += [Column("group", False)] if groups else []
+    cols += [Column("samples")] if samples else []
     cols += [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "learned",
                                  "fail", "tok/step")]
     cols += [Column("cost $")] if cost else []
     rows = []
     for s in summary:
         row = [str(s["agent"]), str(s["swimmer"]), _dir(s["direction"])] + ([str(s.get("group") or "")] if groups else [])
+        row += [str(s.get("samples") or 1)] if samples else []
         row += [str(s["n"]), _p_cell(s), _x_cell(s), _learn_cell(s), f"{s.get('learned') or 0} of {s['n']}",
                 str(s["failed_steps"]) if s["agent"] == "llm" else "-", _fmt(s.get("tokens_per_step"), ".0f")]
         row += [_cost_cell(s.get("cost_usd"))] if cost else []

@@ -141,3 +141,41 @@ def test_models_file_mistakes_are_one_line(tmp_path):
             load_models_file(bad)
     assert parse_model_option("base_url=http://a/v1,model=m,concurrency=3").get("concurrency") == 3
     assert cli.main(["bench", str(tmp_path / "missing.toml")]) == 2
+
+
+def test_bench_samples_grow_a_folder_and_show_in_the_leaderboard(tmp_path, capsys):
+    import dataclasses
+
+    from jswim.bench import leaderboard, runner
+    from jswim.bench.suites import CORE
+
+    models = (parse_model_option("base_url=http://127.0.0.1:9/v1,model=m"),)
+    out = tmp_path / "b"
+    suite = dataclasses.replace(CORE, sizes=(("runs", 1),))
+    runner.open_folder(out, runner.definition(suite, models, True, True))
+    grown = dataclasses.replace(suite, samples=3)
+    meta = runner.open_folder(out, runner.definition(grown, models, True, True))  # not another definition
+    assert meta["samples"] == 3
+    jobs = runner.plan(models, grown, out, prices_file=None, reference_url="http://127.0.0.1:1/v1")
+    for j in jobs:
+        i = j.argv.index("--samples")
+        assert j.argv[i + 1] == "3"
+    with pytest.raises(ConfigError, match="another suite definition"):  # a size is part of the definition
+        runner.open_folder(out, runner.definition(dataclasses.replace(grown, sizes=(("runs", 2),)), models, True, True))
+    # The dry run prices every sample: three times the calls of one.
+    args = ["bench", "--model", "base_url=http://127.0.0.1:9/v1,model=gpt-4o", "--dry-run", "--out",
+            str(tmp_path / "d"), "--runs", "1", "--steps", "4"]
+    assert cli.main(args) == 0
+    one = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["models"]["gpt-4o"]["calls"]
+    assert cli.main([*args, "--samples", "3"]) == 0
+    three = json.loads(capsys.readouterr().out.strip().splitlines()[-1])["models"]["gpt-4o"]["calls"]
+    assert one == 6 * 4 and three == 3 * one
+    assert cli.main([*args, "--samples", "0"]) == 2
+    # A row pooling samples says how many.
+    row = {"row": "m", "kind": "llm", "part": "curves", "swimmer": "purcell", "direction": 1, "group": "", "n": 3,
+           "samples": 3, "success": 0.0, "success_lo": 0.0, "success_hi": 0.56, "learned": 0, "steps_median": None,
+           "steps_q25": None, "steps_q75": None, "mean_x": 0.1, "failed_steps": 0, "tokens_per_step": 100.0,
+           "suite_cost_usd": 0.0, "priced": False, "status": "complete"}
+    text = leaderboard.table_text([row])
+    header, line = [ln for ln in text.splitlines() if ln.strip() and not set(ln) <= set("-+ |")][:2]
+    assert "samples" in header and "- (0 of 3)" in line

@@ -66,3 +66,54 @@ def test_prompt_files_extend_a_folder(tmp_path):
     assert len(later) == 4 and all("long-term consequences" in str(r["messages"]) for r in later)
     groups = {r["group"] for r in read_runs(tmp_path / "o")}
     assert groups == {"prompt=short", "prompt=long"}
+
+
+def test_samples_repeat_the_very_setting_each_with_its_own_id_and_seed():
+    plans = build("curves", StudyOptions(runs=2, q_runs=2, swimmers=("purcell",), init="cycle", samples=3))
+    llm = [p for p in plans if p.agent == "llm"]
+    assert len(llm) == 6 and len({p.run_id for p in llm}) == 6 and len({p.seed for p in llm}) == 6
+    by_run = {}
+    for p in llm:
+        by_run.setdefault(p.run_id.split("-sample")[0], []).append(p)
+    # Each run's samples share its start (cycle: repeats 0 and 1 start from different corners).
+    assert sorted(len(v) for v in by_run.values()) == [3, 3]
+    assert all(len({p.init for p in v}) == 1 for v in by_run.values())
+    assert len({v[0].init for v in by_run.values()}) == 2
+    assert sorted(p.sample for p in llm) == [0, 0, 1, 1, 2, 2]
+    # Sample 0 keeps the id the run had before --samples existed (a folder extends).
+    one = {p.run_id for p in build("curves", StudyOptions(runs=2, q_runs=2, swimmers=("purcell",), init="cycle"))}
+    assert one <= {p.run_id for p in plans}
+    assert sum(p.agent != "llm" for p in plans) == 4  # baselines: --q-runs, not sampled
+    with pytest.raises(ConfigError, match="--samples"):
+        StudyOptions(samples=0)
+
+
+def test_samples_extend_a_folder_resume_and_pool_into_the_row(tmp_path, capsys):
+    out = tmp_path / "s"
+    with FakeServer(reply=hash_reply) as srv:
+        base = ["study", "curves", *FAST, "--q-runs", "0", "--direction", "+x", "--temperature", "0.7",
+                "--out", str(out), "--base-url", srv.url, "--model", "fake"]
+        assert cli.main(base) == 0
+        n1 = srv.n_requests
+        assert cli.main([*base, "--samples", "3"]) == 0  # two more samples of the one run: only theirs run
+        added = srv.requests[n1:]
+        n3 = srv.n_requests
+        capsys.readouterr()
+        assert cli.main([*base, "--samples", "3"]) == 0  # nothing left to do: no call
+        again = capsys.readouterr()
+        assert srv.n_requests == n3
+    assert n1 == 4 and len(added) == 8
+    seeds = [b["seed"] for b in srv.requests]
+    assert len(set(seeds)) == len(seeds) == 12  # T > 0: every sample's every request its own seed
+    meta = read_metadata(out)
+    assert meta["grid"]["samples"] == 3 and meta["n_planned"] == 3
+    (group,) = meta["summary"]["groups"]
+    assert group["n"] == 3 and group["samples"] == 3
+    assert sorted(r["sample"] for r in read_runs(out)) == [0, 1, 2]
+    assert "3 runs already done" in again.err
+    assert cli.main(["show", str(out)]) == 0
+    shown = capsys.readouterr().out
+    header = next(ln for ln in shown.splitlines() if "samples" in ln and "success" in ln)
+    row = next(ln for ln in shown.splitlines() if ln.startswith("llm"))
+    cells = dict(zip(header.split(), row.split()))
+    assert cells["samples"] == "3" and cells["n"] == "3"

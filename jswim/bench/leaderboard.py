@@ -14,7 +14,8 @@ column                 meaning
 ``swimmer``            ``purcell``, ``ng``, ...
 ``direction``          +1 or -1 (target)
 ``group``              the study's cell (``zeta=1``, ``n_ht=3``, ...; empty for one-cell studies)
-``n``                  runs
+``n``                  runs (every sample counted)
+``samples``            independent samples of each run pooled in the row (``--samples``; 1 without)
 ``success``            success rate p (the paper's criterion, ``jswim.gait.judge``)
 ``success_lo/hi``      its 95% Wilson interval
 ``learned``            runs that learned ("k of n learned")
@@ -39,7 +40,7 @@ from typing import Any, Mapping, Sequence
 
 from jswim.console import Column, plain_table
 
-FIELDS = ("row", "kind", "part", "swimmer", "direction", "group", "n", "success", "success_lo", "success_hi",
+FIELDS = ("row", "kind", "part", "swimmer", "direction", "group", "n", "samples", "success", "success_lo", "success_hi",
           "learned", "steps_median", "steps_q25", "steps_q75", "mean_x", "mean_x_lo", "mean_x_hi", "failed_steps",
           "tokens_per_step", "suite_cost_usd", "priced", "status")
 
@@ -62,7 +63,7 @@ def folder_rows(folder: Path, label: str, kind: str, part: str, cost: float | No
         out.append({
             "row": _LABELS.get(agent, label) if kind == "baseline" else label, "kind": kind, "part": part,
             "swimmer": s["swimmer"], "direction": s["direction"], "group": s.get("group") or "",
-            "n": s["n"], "success": s["success_rate"], "success_lo": s["success_lo"], "success_hi": s["success_hi"],
+            "n": s["n"], "samples": s.get("samples") or 1, "success": s["success_rate"], "success_lo": s["success_lo"], "success_hi": s["success_hi"],
             "learned": s["learned"], "steps_median": s["steps_to_learn_median"], "steps_q25": s["steps_to_learn_q25"],
             "steps_q75": s["steps_to_learn_q75"], "mean_x": s["mean_x"], "mean_x_lo": s["mean_x_lo"],
             "mean_x_hi": s["mean_x_hi"], "failed_steps": s["failed_steps"] if agent == "llm" else None,
@@ -94,11 +95,12 @@ def _cost(r: Mapping[str, Any]) -> str:
 def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> str:
     """The leaderboard as a plain table, grouped by setting, models then reference then baselines."""
     groups = any(r["group"] for r in rows)
+    samples = any((r.get("samples") or 1) > 1 for r in rows)
     cols = [Column("part", False), Column("swimmer", False), Column("dir", False)]
     cols += [Column("group", False)] if groups else []
-    cols += [Column("row", False)] + [Column(h) for h in ("n", "success p [95% CI]", "steps to learn, median [IQR] "
-                                                          "(k of n learned)", "X/a end", "fail", "tok/step",
-                                                          "suite $")]
+    cols += [Column("row", False)] + [Column("samples")] * samples
+    cols += [Column(h) for h in ("n", "success p [95% CI]", "steps to learn, median [IQR] (k of n learned)", "X/a end",
+                                 "fail", "tok/step", "suite $")]
     order = {"llm": 0, "reference": 1, "baseline": 2}
     key = lambda r: (r["part"], r["swimmer"] != "purcell", r["swimmer"], -int(r["direction"]), str(r["group"]),
                      order[r["kind"]], r["row"])
@@ -106,8 +108,9 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
     for r in sorted(rows, key=key):
         cells.append([r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x"] + ([r["group"]] if groups else [])
                      + [r["row"] + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
-                        + ("" if r["status"] == "complete" or r["kind"] == "baseline" else f" [{r['status']}]"),
-                        str(r["n"]), f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]", _steps(r),
+                        + ("" if r["status"] == "complete" or r["kind"] == "baseline" else f" [{r['status']}]")]
+                     + [str(r.get("samples") or 1)] * samples
+                     + [str(r["n"]), f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]", _steps(r),
                         f"{r['mean_x']:+.3f}", _num(r["failed_steps"], "d"), _num(r["tokens_per_step"], ".0f"),
                         _cost(r)])
     return plain_table(cols, cells, width=width)

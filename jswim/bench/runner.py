@@ -65,7 +65,7 @@ def _ignores(study: str) -> tuple[str, ...]:
 def part_args(part: Part, suite: Suite) -> list[str]:
     """The part's study command with the bench's size overrides (those the study uses)."""
     sizes = {k: v for k, v in suite.sizes if k not in _ignores(part.study)}
-    return part.args(suite.seed, sizes)
+    return part.args(suite.seed, sizes, suite.samples)
 
 
 def plan(models: Sequence[ModelEntry], suite: Suite, out: Path, *, prices_file: Path | None,
@@ -93,7 +93,7 @@ def plan(models: Sequence[ModelEntry], suite: Suite, out: Path, *, prices_file: 
 
 
 def definition(suite: Suite, models: Sequence[ModelEntry], reference: bool, baselines: bool) -> dict[str, Any]:
-    return {"suite": suite.describe(), "reference": reference, "baselines": baselines,
+    return {"suite": suite.describe(), "samples": suite.samples or 1, "reference": reference, "baselines": baselines,
             "models": [m.describe() for m in models]}
 
 

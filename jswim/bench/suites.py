@@ -34,7 +34,8 @@ PART_OPTIONS = {
     "swimmer": "--swimmer", "direction": "--direction", "steps": "--steps", "runs": "--runs",
     "q_runs": "--q-runs", "n_ht": "--n-ht", "noise": "--noise", "init": "--init", "action_set": "--action-set",
     "variant": "--variant", "prompt_file": "--prompt-file", "x_min": "--x-min", "zetas": "--zetas",
-    "n_hts": "--n-hts", "seed": "--seed",
+    "n_hts": "--n-hts", "seed": "--seed", "temperatures": "--temperatures", "prompt_files": "--prompt-files",
+    "samples": "--samples",
 }
 
 #: Sizes a bench command may override for every part (``--runs``, ``--q-runs``, ``--steps``);
@@ -50,11 +51,14 @@ class Part:
     study: str
     options: tuple[tuple[str, Any], ...] = ()
 
-    def args(self, seed: int, sizes: Mapping[str, Any] | None = None) -> list[str]:
-        """The command line of this part (``jswim study NAME ...``), options then size overrides."""
+    def args(self, seed: int, sizes: Mapping[str, Any] | None = None, samples: int | None = None) -> list[str]:
+        """The command line of this part (``jswim study NAME ...``), options then size overrides
+        and the bench's ``--samples`` (which replaces a part's own)."""
         opts = dict(self.options)
         opts.setdefault("seed", seed)
         opts.update({k: v for k, v in (sizes or {}).items() if v is not None})
+        if samples is not None:
+            opts["samples"] = samples
         out = ["swim"] if self.study == "swim" else ["study", self.study]
         for key, value in opts.items():
             flag = PART_OPTIONS[key]
@@ -76,9 +80,13 @@ class Suite:
     seed: int = 0
     about: str = ""
     sizes: tuple[tuple[str, Any], ...] = field(default=())  # overrides of SIZE_OPTIONS
+    # ``jswim bench --samples N``: independent samples of every LLM run. Not part of the compared
+    # definition (recorded beside it in bench.json): like --zetas for a study, it grows a folder.
+    samples: int | None = None
 
     def describe(self) -> dict[str, Any]:
-        """The definition recorded in ``bench.json`` (compared when a bench folder is resumed)."""
+        """The definition recorded in ``bench.json`` (compared when a bench folder is resumed;
+        ``samples`` is recorded beside it, not compared)."""
         return {"name": self.name, "seed": self.seed, "parts": [p.describe() for p in self.parts],
                 "size_overrides": dict(self.sizes)}
 

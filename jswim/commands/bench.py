@@ -38,6 +38,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--runs", type=int, default=None, help="LLM runs per setting in every part")
     g.add_argument("--q-runs", type=int, default=None, help="baseline runs per setting in every part")
     g.add_argument("--steps", type=int, default=None, help="steps per run in every part")
+    p.add_argument("--samples", type=int, default=None, metavar="N",
+                   help="independent samples of every LLM run (each its own run id and seed), pooled into each "
+                        "row with the count shown; grows an existing bench folder (recorded, not part of the "
+                        "suite's definition)")
     p.set_defaults(command_main=main)
 
 
@@ -62,7 +66,9 @@ def _suite(args: argparse.Namespace, mf: Any) -> Any:
     for k, v in sizes:
         if v < (1 if k == "steps" else 0):
             raise ConfigError(f"--{k.replace('_', '-')} must be >= {1 if k == 'steps' else 0}, got {v}")
-    return dataclasses.replace(suites[args.suite], sizes=sizes)
+    if args.samples is not None and not 1 <= args.samples <= 10_000:
+        raise ConfigError(f"--samples must be between 1 and 10000, got {args.samples}")
+    return dataclasses.replace(suites[args.suite], sizes=sizes, samples=args.samples)
 
 
 def main(args: argparse.Namespace) -> int:
@@ -102,7 +108,8 @@ def main(args: argparse.Namespace) -> int:
     from jswim.console import terminal_width
 
     print(f"bench {suite.name}: {suite.about or 'user suite'} (seed {suite.seed}"
-          + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "") + ")")
+          + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "")
+          + (f"; {suite.samples} samples of every LLM run" if (suite.samples or 1) > 1 else "") + ")")
     print(leaderboard.table_text(rows, width=terminal_width()))
     print("success p: the paper's criterion, 95% Wilson interval; steps to learn counted from 1 over the runs that "
           "learned; suite $: what the model's calls cost over the whole suite")

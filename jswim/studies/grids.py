@@ -81,6 +81,9 @@ class StudyOptions:
     # temperature study sweeps temperatures itself). None: the backend's temperature, the one prompt.
     temperatures: tuple[float, ...] | None = None
     prompt_files: tuple[str, ...] | None = None
+    # Independent repeats of each LLM run's very setting (same start, same everything but the run
+    # id and so its seed); the baselines' repeats are --q-runs. Pooled into the setting's row.
+    samples: int = 1
     roc_levels: int = 1  # K of the ROC lattice (--roc-levels; 1 = the paper's -1, 0, 1)
     roc_levels_grid: tuple[int, ...] = DEFAULT_ROC_LEVELS  # the continuous study's K values
 
@@ -96,6 +99,8 @@ class StudyOptions:
             v = getattr(self, name)
             if v is not None and (v < 0 or v > 100_000):
                 raise ConfigError(f"--{name.replace('_', '-')} must be between 0 and 100000, got {v}")
+        if not 1 <= self.samples <= 10_000:
+            raise ConfigError(f"--samples must be between 1 and 10000, got {self.samples}")
         if self.n_ht is not None and not 0 <= self.n_ht <= 100:
             raise ConfigError(f"--n-ht must be between 0 and 100, got {self.n_ht}")
         if self.init is not None and self.init not in INIT_CHOICES:
@@ -159,6 +164,13 @@ class Plan:
     temperature: float | None = None  # LLM sampling temperature of a sweep (None: the backend's)
     prompt_file: str | None = None  # LLM prompt template of a --prompt-files sweep (None: the study's)
     roc_levels: int = 1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
+    sample: int = 0  # which independent repeat of this very setting (--samples; 0: the run itself)
+
+
+def sample_id(run: str, sample: int) -> str:
+    """The run id of sample ``sample`` of run ``run``: sample 0 is the run itself (so a folder made
+    before ``--samples`` extends), later ones end in ``-sample<k>``."""
+    return run if sample == 0 else f"{run}-sample{sample}"
 
 
 def prompt_label(path: str) -> str:
@@ -405,9 +417,11 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                         group = ", ".join(g for g in [cell.group, *swept] if g)
                         for k in range(runs.get(agent, runs["qlearning"])):
                             init = initial(cell.init or o.init or spec.init, k, sw)
-                            rid = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k)
-                            plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
-                                              n_ht, drop, action_set, group, v, temp, prompt, levels))
+                            base = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k)
+                            for s in range(o.samples if llm else 1):
+                                rid = sample_id(base, s)
+                                plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
+                                                  n_ht, drop, action_set, group, v, temp, prompt, levels, s))
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"
     return plans

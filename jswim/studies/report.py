@@ -19,7 +19,8 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     ``tokens_per_step`` counts what the model read and wrote per decision (shared and cached calls
     included) where rows record it. ``distinct`` is the number of different runs (start and
     actions): at temperature 0 without noise, runs from the same start are identical copies, so
-    the intervals of such groups rest on fewer independent runs than ``n``.
+    the intervals of such groups rest on fewer independent runs than ``n``. ``samples`` is how many
+    independent samples of each run (``--samples``) the group pools (``n`` counts them all).
 
     Failed runs (:func:`jswim.results.is_failed`: the server stopped them) are left out: they
     are not results, and the study reports them apart."""
@@ -41,6 +42,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         distinct = len({(r.get("init"), json.dumps(r.get("actions"))) for r in g})
         out.append({
             **dict(zip(keys, key)), "n": len(g), "distinct": distinct,
+            "samples": len({int(r.get("sample") or 0) for r in g}),
             "success_rate": k / len(g), "success_lo": lo, "success_hi": hi,
             "mean_x": m, "mean_x_lo": mlo, "mean_x_hi": mhi,
             "steps_to_learn_q25": ls.q25, "steps_to_learn_median": ls.median, "steps_to_learn_q75": ls.q75,

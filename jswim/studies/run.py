@@ -93,7 +93,7 @@ def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, leve
             "success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
             "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
             "period": int(rep.period[i]),
-            "roc_levels": k,
+            "roc_levels": k, "sample": p.sample,
             "x": x, "actions": moves[i] if moves is not None else [list(lattice.decode(int(a), max(k, 1)))
                                                                   for a in actions[i]],
             "progress": [float(v) for v in prog], "status": "done",
@@ -184,7 +184,7 @@ class StudyResult:
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
 #: folder grows when they grow (and a smaller value reports the runs it names).
-GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files", "roc_levels_grid")
+GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files", "samples", "roc_levels_grid")
 
 #: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
