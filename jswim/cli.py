@@ -475,7 +475,10 @@ def _options(args: argparse.Namespace, study: str):
                 raise ConfigError(f"--prompt-files {f}: {'a folder, not a file' if Path(f).is_dir() else 'no such file'}")
             from jswim.prompt import PromptTemplate
 
-            PromptTemplate.from_file(f)  # checked before anything runs
+            try:
+                PromptTemplate.from_file(f)  # checked before anything runs
+            except ConfigError as exc:  # named as the option the user gave
+                raise ConfigError(str(exc).replace("--prompt-file ", "--prompt-files ", 1)) from None
         kw["prompt_files"] = files
     if args.roc_levels is not None:
         if study == "continuous":

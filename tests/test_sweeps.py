@@ -117,3 +117,53 @@ def test_samples_extend_a_folder_resume_and_pool_into_the_row(tmp_path, capsys):
     row = next(ln for ln in shown.splitlines() if ln.startswith("llm"))
     cells = dict(zip(header.split(), row.split()))
     assert cells["samples"] == "3" and cells["n"] == "3"
+
+
+def test_prompt_files_are_known_by_their_bytes(tmp_path, capsys):
+    import json
+
+    a = tmp_path / "short.txt"
+    a.write_text("{S1} {S2} {S3} {S5}")
+    out = tmp_path / "o"
+    with FakeServer(reply=hash_reply) as srv:
+        def study(path, *more):
+            return cli.main(["study", "curves", *FAST, "--q-runs", "0", "--direction", "+x", "--out", str(out),
+                             "--base-url", srv.url, "--model", "fake", "--prompt-files", str(path), *more])
+
+        assert study(a) == 0
+        meta = read_metadata(out)
+        rec = meta["prompt_files"]["short"]
+        assert rec["file"] == "short.txt" and len(rec["sha256"]) == 16
+        n = srv.n_requests
+        capsys.readouterr()
+        # The same bytes under the same name elsewhere: the same setting, resumed (no call).
+        same = tmp_path / "copy" / "short.txt"
+        same.parent.mkdir()
+        same.write_bytes(a.read_bytes())
+        assert study(same) == 0 and srv.n_requests == n
+        # An edited file, or another file of that name: refused in one line before anything runs.
+        a.write_text("{S1} {S2} {S3} {S4} {S5}")
+        other = tmp_path / "other" / "short.txt"
+        other.parent.mkdir()
+        other.write_text("{S3} {S5}")
+        for path in (a, other):
+            capsys.readouterr()
+            assert study(path) == 2
+            err = [ln for ln in capsys.readouterr().err.strip().splitlines() if "warning" not in ln]
+            assert len(err) == 1 and "prompt=short made with another text" in err[0] and rec["sha256"] in err[0]
+            assert "rename the file" in err[0] and "Traceback" not in err[0]
+            assert study(path, "--dry-run") == 2  # the dry run refuses alike
+        assert srv.n_requests == n and read_metadata(out)["n_planned"] == meta["n_planned"]
+        assert read_metadata(out)["status"] == "complete"
+        # Renamed: a new setting in the same folder.
+        renamed = tmp_path / "short2.txt"
+        renamed.write_bytes(a.read_bytes())
+        assert study(f"{same},{renamed}") == 0 and srv.n_requests == n + 4
+        assert set(read_metadata(out)["prompt_files"]) == {"short", "short2"}
+        # A folder made before the records resumes (its file trusted by name) and records it then.
+        m = json.loads((out / "metadata.json").read_text())
+        del m["prompt_files"]
+        (out / "metadata.json").write_text(json.dumps(m))
+        assert study(a) == 0 and srv.n_requests == n + 4
+        assert read_metadata(out)["prompt_files"]["short"]["sha256"] != rec["sha256"]
+    assert {r["group"] for r in read_runs(out)} == {"prompt=short", "prompt=short2"}

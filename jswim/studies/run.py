@@ -57,6 +57,7 @@ from jswim.prompt import PromptTemplate
 from jswim.results import StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
 from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTINUOUS_AGENT, SPECS, SWIM_VARIANT, Plan,
                                  StudyOptions, build)
+from jswim.studies import prompt_files
 from jswim.studies.report import draw_figures, summarize
 
 
@@ -299,7 +300,9 @@ def run_study(
         ident["variants"] = {v: VARIANTS[v] for v in options.variants or COMPETENCE_VARIANTS}
     folder = Path(out) if out is not None else default_folder(study, options, backend)
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
+    prompts = prompt_files.check(folder, options)  # an edited prompt file never resumes into old runs
     store = StudyStore(folder, study, ident, extra={
+        **prompts,  # each prompt file's name and the hash of its bytes (jswim.studies.prompt_files)
         "jswim_version": __version__, "jax_version": jax.__version__, "python": platform.python_version(),
         # The template itself is in prompt_template.json, written once (below), not in every
         # rewrite of metadata.json at each status change.
@@ -631,6 +634,7 @@ def estimate_study(
     backend = study_backend(study, backend)
     plans = [p for p in build(study, options) if p.agent == "llm"]
     folder = Path(out) if out is not None else default_folder(study, options, backend)
+    prompt_files.check(folder, options)  # the same refusal as the study itself
     done = {r["run_id"] for r in read_runs(folder)}
     plans = [p for p in plans if p.run_id not in done]
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
