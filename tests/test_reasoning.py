@@ -107,3 +107,41 @@ def test_open_reasoning_model_gets_room_with_reasoning_on(tmp_path, capsys):
         assert swim(srv.url, tmp_path / "o", "--reasoning", "on") == 0, capsys.readouterr().err
         assert {b["max_tokens"] for b in srv.requests} == {REASONING_MAX_TOKENS}
     assert "reasoning: max_tokens=4096 (--reasoning on)" in capsys.readouterr().out
+
+
+def _dry(tmp_path, capsys, model, *extra):
+    prices = tmp_path / "prices.toml"
+    prices.write_text('as_of = "2026-11"\n"gpt-5" = [1.25, 10.0]\n"gpt-4o" = [2.5, 10.0]\n"qwq-32b" = [1.0, 2.0]\n')
+    capsys.readouterr()
+    assert cli.main(["study", "curves", "--runs", "1", "--q-runs", "0", "--steps", "6", "--swimmer", "purcell",
+                     "--direction", "+x", "--out", str(tmp_path / "o"), "--base-url", "https://api.openai.com/v1",
+                     "--model", model, "--prices", str(prices), "--dry-run", *extra]) == 0
+    out = capsys.readouterr().out
+    return out, json.loads(out.strip().splitlines()[-1])
+
+
+def test_dry_run_counts_a_reasoning_models_thinking_and_its_worst_case(tmp_path, capsys):
+    plain_text, plain = _dry(tmp_path, capsys, "gpt-4o")
+    assert plain["reasoning_tokens"] == 0 and plain["reasoning_budget"] is None and "reasoning:" not in plain_text
+    text, est = _dry(tmp_path, capsys, "gpt-5")  # auto: OpenAI's reasoning model by name gets the budget
+    calls = est["calls"]
+    assert calls == 6 and est["prompt_tokens"] == plain["prompt_tokens"]  # the same prompts
+    assert est["reasoning_budget"] == REASONING_MAX_TOKENS and est["reasoning_share"] == 0.25
+    assert est["reasoning_tokens"] == calls * 1024  # a quarter of 4096 per call
+    assert est["completion_tokens"] == plain["completion_tokens"] + calls * 1024  # thinking is output
+    assert est["cost_usd"] == pytest.approx((est["prompt_tokens"] * 1.25 + est["completion_tokens"] * 10.0) / 1e6)
+    assert est["cost_max_usd"] == pytest.approx((est["prompt_tokens"] * 1.25 + calls * 4096 * 10.0) / 1e6)
+    assert "6,144 of the completion tokens are thinking" in text and "reasoning tokens included" in text
+    assert "used its whole reasoning budget (4096 tokens)" in text and "thinking is counted only" not in text
+    # --max-tokens is the budget; the effort sets the share; off sends the plain max_tokens.
+    _, est = _dry(tmp_path, capsys, "gpt-5", "--max-tokens", "2000")
+    assert est["reasoning_budget"] == 2000 and est["reasoning_tokens"] == calls * 500
+    _, est = _dry(tmp_path, capsys, "gpt-5", "--reasoning-effort", "high")
+    assert est["reasoning_tokens"] == calls * 2048
+    _, est = _dry(tmp_path, capsys, "gpt-5", "--reasoning", "off")
+    assert est["reasoning_tokens"] == 0 and est["cost_max_usd"] < 0.01
+    # An open reasoning model: on gives the budget; auto would cut it while thinking, and says so.
+    _, est = _dry(tmp_path, capsys, "qwq-32b", "--reasoning", "on")
+    assert est["reasoning_tokens"] == calls * 1024
+    text, est = _dry(tmp_path, capsys, "qwq-32b")
+    assert est["reasoning_tokens"] == 0 and "give --reasoning on" in text

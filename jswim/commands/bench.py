@@ -186,14 +186,17 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
             study = "swim" if args.command == "swim" else args.name
             est = estimate_study(study, cli._options(args, study), cli._backend(args), j.folder)
             t = totals.setdefault(j.label, {"model": j.model.get("model"), "calls": 0, "prompt_tokens": 0,
-                                            "completion_tokens": 0, "cost_usd": 0.0, "cost_max_usd": 0.0,
-                                            "priced": bool(est.price_in or est.price_out),
-                                            "prices_as_of": est.prices_as_of, "note": est.unpriced})
-            for k in ("calls", "prompt_tokens", "completion_tokens", "cost_usd", "cost_max_usd"):
+                                            "completion_tokens": 0, "reasoning_tokens": 0, "cost_usd": 0.0,
+                                            "cost_max_usd": 0.0, "priced": bool(est.price_in or est.price_out),
+                                            "prices_as_of": est.prices_as_of, "note": est.unpriced,
+                                            "reasoning_budget": est.reasoning_budget,
+                                            "reasoning_warning": est.reasoning_warning})
+            for k in ("calls", "prompt_tokens", "completion_tokens", "reasoning_tokens", "cost_usd", "cost_max_usd"):
                 t[k] += getattr(est, k)
     cols = [Column("model", False), Column("calls"), Column("prompt tok"), Column("completion tok"),
-            Column("cost $"), Column("at most $"), Column("prices", False)]
+            Column("of which reasoning"), Column("cost $"), Column("at most $"), Column("prices", False)]
     cells = [[name, f"{t['calls']:,}", f"{t['prompt_tokens']:,}", f"{t['completion_tokens']:,}",
+              f"~{t['reasoning_tokens']:,}" if t["reasoning_budget"] else "-",
               f"{t['cost_usd']:.2f}" if t["priced"] else "not priced", f"{t['cost_max_usd']:.2f}" if t["priced"] else "-",
               t["prices_as_of"] if t["priced"] else (t["note"] or f"no price for {t['model']!r}: --prices FILE")]
              for name, t in totals.items()]
@@ -201,7 +204,18 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
           f"({', '.join(p.name for p in suite.parts)}); no request sent, nothing written")
     print(plain_table(cols, cells))
     total = sum(t["cost_usd"] for t in totals.values() if t["priced"])
-    print(f"total: ${total:.2f} for the priced models; not counted: parse retries, reasoning tokens; the reference "
-          "rule and the baselines are free")
+    print(f"total: ${total:.2f} for the priced models; the reference rule and the baselines are free; not counted: "
+          "parse retries")
+    from jswim.llm.reasoning import ESTIMATE_SHARE
+
+    thinking = [name for name, t in totals.items() if t["reasoning_budget"]]
+    if thinking:
+        print(f"reasoning models ({', '.join(thinking)}): their thinking is in the completion tokens and the cost, "
+              "estimated as a share of the reasoning budget per call ("
+              + ", ".join(f"{v:g} {k or 'default'}" for k, v in ESTIMATE_SHARE.items())
+              + " reasoning_effort; an assumption, not a measurement); 'at most' is every call using its whole budget")
+    for name, t in totals.items():
+        if t["reasoning_warning"]:
+            print(f"warning: {name}: {t['reasoning_warning']}")
     print(json.dumps({"suite": suite.name, "models": totals, "total_usd": total}, sort_keys=True))
     return 0

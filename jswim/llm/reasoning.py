@@ -48,6 +48,47 @@ _ONLY_TEMPERATURE = re.compile(
     r"temperature.*?only (?:the default )?\(?\s*(\d+(?:\.\d+)?)\s*\)?(?: value)? (?:is )?supported", re.I | re.S)
 
 
+#: Model names of OpenAI's reasoning models (o1, o3, o4-mini, gpt-5 and their variants): their
+#: API refuses ``max_tokens``, so ``--reasoning auto`` switches to the budget after the first 400,
+#: and the dry run prices them with it. Matched on the name after any ``provider/`` prefix.
+OPENAI_REASONING = re.compile(r"^(o[134](-|$)|gpt-5(?!-chat)(-|$|\.))", re.I)
+
+#: Names of open reasoning models (behind vLLM or llama.cpp, which never refuse ``max_tokens``):
+#: under ``--reasoning auto`` they are sent the paper's ``max_tokens`` and cut while thinking,
+#: so the dry run says to give ``--reasoning on``.
+OPEN_REASONING = re.compile(r"(deepseek-r1|deepseek-reasoner|qwq|qwen3|thinking|reasoner|-r1\b|magistral)", re.I)
+
+#: The dry run's estimate of the reasoning tokens per call, as a share of the budget sent, per
+#: ``reasoning_effort`` (None: the provider's default, medium). An assumption, not a measurement
+#: (no reasoning model was reachable where this was written); the worst case, every call using its
+#: whole budget, is printed beside it.
+ESTIMATE_SHARE = {"minimal": 1 / 16, "low": 1 / 8, "medium": 1 / 4, None: 1 / 4, "high": 1 / 2}
+
+
+def _bare(model: str) -> str:
+    return str(model or "").rsplit("/", 1)[-1]
+
+
+def dry_run_budget(model: str, mode: str, budget: int) -> int | None:
+    """The reply budget a study's calls will carry for reasoning (``None``: the plain ``max_tokens``).
+
+    ``on``: the budget from the first call. ``auto``: the budget for OpenAI's reasoning models by name
+    (:data:`OPENAI_REASONING`; their first 400 switches the client). ``off``: never.
+    """
+    if mode == "on" or (mode == "auto" and OPENAI_REASONING.search(_bare(model))):
+        return budget
+    return None
+
+
+def dry_run_warning(model: str, mode: str) -> str | None:
+    """A dry run's warning for an open reasoning model that ``auto`` would cut while thinking."""
+    if mode == "auto" and not OPENAI_REASONING.search(_bare(model)) and OPEN_REASONING.search(_bare(model)):
+        return (f"{model} looks like a reasoning model: --reasoning auto sends it the paper's max_tokens (an open "
+                "server never refuses it) and its replies would be cut while thinking; give --reasoning on "
+                "(priced here without thinking)")
+    return None
+
+
 def check_mode(mode: str, effort: str | None = None) -> None:
     """Raise :class:`ConfigError` for an unknown ``--reasoning`` or ``--reasoning-effort``."""
     if mode not in MODES:

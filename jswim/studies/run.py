@@ -641,8 +641,9 @@ def estimate_study(
     if backend.local:  # no server is started: the settings only name the model and the limits
         settings = ClientSettings(base_url="http://127.0.0.1/v1", model=backend.describe()["model"],
                                   temperature=backend.temperature)
-    else:
-        settings = backend.client_settings()
+    else:  # --max-tokens is also the reasoning budget, as in the study itself
+        settings = backend.client_settings(**({"reasoning_max_tokens": options.max_tokens}
+                                              if options.max_tokens is not None else {}))
     client = EstimatingClient(settings)
     results: list[RunResult] = []
 
