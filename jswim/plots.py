@@ -33,7 +33,7 @@ from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
 from jswim.results import writing
-from jswim.stats import mean_interval, wilson_interval
+from jswim.stats import learn_stats, mean_interval, wilson_interval
 from jswim.swimmers.models import SwimmerModel, make_model
 
 #: Single- and double-column widths of the paper's journal (inches).
@@ -502,17 +502,34 @@ def _errorbars(ax: Any, x: np.ndarray, y: Sequence[float], lo: Sequence[float], 
                        label=style["label"], zorder=3)
 
 
+def _learn_points(ax: Any, x: np.ndarray, stats: Sequence[Any], connect: bool, style: Mapping[str, Any]) -> None:
+    """Median steps to learn with its IQR where some runs learned, each point labelled k/n; a
+    value where none learned gets its "0/n" on the axis (no point: there is no median)."""
+    have = [i for i, st in enumerate(stats) if st.learned]
+    if have:
+        _errorbars(ax, x[have], [stats[i].median for i in have], [stats[i].q25 for i in have],
+                   [stats[i].q75 for i in have], connect, **style)
+    tallest = max([stats[i].q75 for i in have] + [1.0])
+    ax.set_ylim(0, max(ax.get_ylim()[1] if have else 0.0, tallest * 1.3))  # room for the labels above the bars
+    for xi, st in zip(x, stats):
+        y = st.q75 if st.learned else 0.0
+        ax.annotate(f"{st.learned}/{st.n}", (xi, y), xytext=(0, 3), textcoords="offset points", ha="center",
+                    va="bottom", fontsize=5, color=style["color"])
+
+
 @_styled
 def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[Any] | None = None,
                 xlabel: str, numeric: bool = False, tick_labels: Mapping[Any, str] | None = None,
-                note: str | None = None) -> Figure:
+                note: str | None = None, learn: bool = False) -> Figure:
     """Success rate p and mean target-direction X/a against the values of ``key``, per agent.
 
     For each swimmer (Purcell first) two panels share the x axis, success rate ``p`` (95% Wilson
     interval) above mean ``X/a`` after the last step (95% bootstrap interval); one column per
     target direction. Agents share the axes, offset sideways so their intervals never overlap.
     ``numeric`` places the values of ``key`` on a number line (noise levels), otherwise one slot
-    per value in ``order``.
+    per value in ``order``. ``learn`` adds a panel between them: the median steps to learn with
+    its interquartile range over the runs that learned (:func:`jswim.stats.learn_stats`, counted
+    from 1), each point labelled "k/n" (k of n runs learned; "0/n" on the axis where none did).
     """
     keys = panel_keys(rows)
     swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
@@ -526,18 +543,20 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
     width = 0.5 * step  # the agents' points of one value spread over half the gap to the next
     offsets = {a: (i - (len(agents) - 1) / 2) * width / max(1, len(agents)) for i, a in enumerate(agents)}
     n_cols = len(dirs)
-    fig, grid, legend_ax, top = _frame([1.3] * (2 * len(swimmers)), n_cols, len(agents))
-    axes = np.empty((2 * len(swimmers), n_cols), object)
+    per = 3 if learn else 2  # panels per swimmer: p, (steps to learn,) X/a
+    fig, grid, legend_ax, top = _frame([1.3] * (per * len(swimmers)), n_cols, len(agents))
+    axes = np.empty((per * len(swimmers), n_cols), object)
     for j in range(n_cols):
-        for i in range(2 * len(swimmers)):
+        for i in range(per * len(swimmers)):
             axes[i, j] = fig.add_subplot(grid[top + i, j], sharex=axes[0, j] if i else None)
-            if i < 2 * len(swimmers) - 1:
+            if i < per * len(swimmers) - 1:
                 axes[i, j].tick_params(labelbottom=False)
     handles: dict[str, Any] = {}
     counts: dict[str, set[int]] = defaultdict(set)
     for i, sw in enumerate(swimmers):
         for j, d in enumerate(dirs):
-            ax_p, ax_x = axes[2 * i, j], axes[2 * i + 1, j]
+            ax_p, ax_x = axes[per * i, j], axes[per * i + per - 1, j]
+            ax_l = axes[per * i + 1, j] if learn else None
             sel = _select(rows, sw, d)
             for a_i, agent in enumerate(agents):
                 by = _by([r for r in sel if r["agent"] == agent], key)
@@ -549,13 +568,20 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
                 style = dict(AGENT_STYLE.get(agent, dict(color=f"C{a_i}", ls="-", marker="o", label=agent)))
                 handles.setdefault(agent, _errorbars(ax_p, x, stats[:, 0], stats[:, 1], stats[:, 2], numeric, **style))
                 _errorbars(ax_x, x, stats[:, 3], stats[:, 4], stats[:, 5], numeric, **style)
+                if ax_l is not None:
+                    _learn_points(ax_l, x, [learn_stats([r.get("steps_to_learn") for r in by[v]]) for v in vs],
+                                  numeric, style)
                 counts[agent].update(len(by[v]) for v in vs)
             ax_p.set_ylim(-0.06, 1.06)
             ax_p.set_ylabel("success rate p\n(95% Wilson CI)")
             ax_p.set_title(_panel_title(sw, d))
             ax_x.axhline(0, color="0.75", lw=0.6, zorder=0)
             ax_x.set_ylabel(f"mean {_disp_label(d)}\n(95% bootstrap CI)")
-            for ax in (ax_p, ax_x):
+            if ax_l is not None:
+                ax_l.set_ylabel("steps to learn\n(median, IQR)")
+                ax_l.text(0.99, 0.97, "k/n: runs that learned", transform=ax_l.transAxes, ha="right", va="top",
+                          fontsize=5, color="0.4")
+            for ax in (ax_p, ax_x) + ((ax_l,) if ax_l is not None else ()):
                 ax.grid(axis="y", alpha=0.25, lw=0.5)
     for ax in axes[-1]:
         ax.set_xlabel(xlabel)
@@ -676,9 +702,9 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
         return {"ablation": ablation_figure(rows, note=note)}
     if study == "inits":
         return {"inits": inits_figure(rows, note=note)}
-    if study == "temperature":  # p and X/a against the sampling temperature T (LLM rows carry it)
+    if study == "temperature":  # p, steps to learn and X/a against the sampling temperature T
         return {"temperature": grid_figure(rows, "temperature", xlabel="sampling temperature T", numeric=True,
-                                           note=note)}
+                                           note=note, learn=True)}
     if study == "continuous":
         return continuous_figures(rows, note=note)
     if study == "competence":

@@ -163,3 +163,27 @@ def test_unfinished_note():
     assert plots.unfinished_note("complete", 10, 10) is None
     assert plots.unfinished_note("complete", 10, None) is None
     assert plots.unfinished_note("running", 4, 10) == "UNFINISHED STUDY: 4 of 10 runs done (running)"
+
+
+def test_temperature_figure_shows_p_steps_to_learn_with_iqr_and_k_of_n():
+    # Four runs per T: steps to learn 4, 6, 8 and one that never learned at T=0; none learned at T=1.
+    rows = []
+    for sw in ("purcell", "ng"):
+        for d in (1, -1):
+            for t, steps in ((0.0, [4, 6, 8, None]), (1.0, [None] * 4)):
+                for k, s in enumerate(steps):
+                    rows.append({"run_id": f"{sw}{d}{t}{k}", "agent": "llm", "swimmer": sw, "direction": d,
+                                 "temperature": t, "success": s is not None, "steps_to_learn": s,
+                                 "signed_final_x": 0.1 * d, "final_x": 0.1, "group": f"T={t:g}"})
+    fig = plots.study_figures("temperature", rows)["temperature"]
+    learn = [ax for ax in fig.axes if ax.get_ylabel().startswith("steps to learn")]
+    assert len(learn) == 4  # both swimmers and both directions
+    for ax in learn:
+        (bars,) = [c for c in ax.containers if isinstance(c, ErrorbarContainer)]
+        x, y = bars.lines[0].get_data()
+        assert list(x) == [0.0] and list(y) == [6.0]  # only T=0 has a median: of 4, 6, 8
+        (seg,) = bars.lines[2][0].get_segments()
+        assert seg[0][1] == pytest.approx(5.0) and seg[1][1] == pytest.approx(7.0)  # the IQR of 4, 6, 8
+        assert sorted(t.get_text() for t in ax.texts if "/" in t.get_text() and ":" not in t.get_text()) == \
+            ["0/4", "3/4"]
+    assert sum(ax.get_ylabel().startswith("success rate") for ax in fig.axes) == 4
