@@ -70,8 +70,9 @@ def rollout(
     zeta: float = 0.0,
     direction: int | str = 1,
     init: Sequence[int] | str | None = None,
+    scene: Any = None,
     **model_kwargs: Any,
-) -> Rollout:
+) -> Any:
     """Run a given action sequence for one swimmer or a batch.
 
     Parameters
@@ -87,6 +88,12 @@ def rollout(
         independent keys split from it.
     zeta, direction, init, **model_kwargs
         As in :func:`jswim.env.make_params` (``d_max``, ``d_min``, ...).
+    scene : jswim.scenes.Scene, optional
+        Swim in a scene (``"ng"`` only): a wall, obstacles, two swimmers
+        (:func:`jswim.scenes.scene_rollout`, which returns a
+        :class:`jswim.scenes.SceneRollout`; ``actions`` may then be ``(swimmer, dof, roc)``
+        triples). ``None``, or one untilted swimmer in the ``"bulk"`` medium, is exactly this
+        function without a scene.
 
     Returns
     -------
@@ -111,6 +118,12 @@ def rollout(
     """
     from jswim import sharding
 
+    if scene is not None and not _is_plain_bulk(scene):
+        from jswim.scenes import scene_rollout
+
+        if direction not in (1, "+x", "+", "x", "+1", "1"):
+            raise ConfigError("direction is not a scene option: scene rollouts record x, z and tilt")
+        return scene_rollout(swimmer, actions, scene, key=key, zeta=zeta, init=init, **model_kwargs)
     params = make_params(swimmer, zeta=zeta, direction=direction, init=init, **model_kwargs)
     moves = validate_moves(actions, params.n_dof)
     idx = validate_actions(actions, params.n_dof) if moves is None else moves
@@ -127,6 +140,16 @@ def rollout(
             keys = jax.random.split(key, idx.shape[0])
             out = sharding.apply_batched(_scan_batch, (params,), (keys, jnp.asarray(idx)), idx.shape[0])
         return Rollout(*(np.asarray(v) for v in out))
+
+
+def _is_plain_bulk(scene: Any) -> bool:
+    """Whether ``scene`` is today's environment: one untilted swimmer in the bulk medium."""
+    from jswim.scenes import Scene
+
+    if not isinstance(scene, Scene):
+        raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
+    scene.validate()
+    return scene.medium == "bulk" and scene.swimmers == 1 and scene.tilt == 0.0
 
 
 @jax.jit

@@ -1,0 +1,200 @@
+"""``SceneParams``: a scene, a sphere swimmer and the numerics, as a pytree for jit and vmap."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from typing import Any, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jswim.errors import ConfigError
+from jswim.scenes.scene import Scene
+from jswim.swimmers.models import make_model
+
+#: A step is refused when a sphere's surface would come closer than this to the wall, an
+#: obstacle or another swimmer's sphere (units of a): the point-force model has no lubrication.
+CONTACT_GAP = 0.1
+
+#: Gauss-Legendre nodes per step and Picard sweeps (see :mod:`jswim.scenes.collocation`).
+DEFAULT_NODES = 8
+DEFAULT_SWEEPS = 6
+
+
+@functools.partial(
+    jax.tree_util.register_dataclass,
+    data_fields=["zeta", "centre0", "tilt0", "arms0", "obstacles"],
+    meta_fields=["scene", "lo", "hi", "roc_levels", "nodes", "sweeps", "contact_gap"],
+)
+@dataclasses.dataclass(frozen=True)
+class SceneParams:
+    """Parameters of the scene environment (:func:`scene_params` builds them).
+
+    Attributes
+    ----------
+    zeta : float or Array
+        Noise level >= 0 (the paper's ``(1 + zeta Y)`` on each step's displacement).
+    centre0 : Array (S, 2)
+        Start ``(x, z)`` of each swimmer's middle sphere.
+    tilt0 : Array (S,)
+        Start tilt of each swimmer, rad.
+    arms0 : Array (S, 2)
+        Start arm lengths ``(d1, d2)``.
+    obstacles : Array (O, 3)
+        Fixed spheres ``(x, z, radius)``.
+    scene : Scene
+        Static: the scene these were built from (``medium``, ``swimmers``).
+    lo, hi : float
+        Static arm limits (``d_min``, ``d_max``); ROC 1 moves an arm by ``hi - lo``.
+    roc_levels : int
+        Static K of integer action codes (:func:`jswim.scenes.encode_scene_action`).
+    nodes, sweeps : int
+        Static numerics of a step (Gauss-Legendre nodes, Picard sweeps).
+    contact_gap : float
+        Static: the surface gap below which a step is refused (:data:`CONTACT_GAP`).
+    """
+
+    zeta: Any
+    centre0: Any
+    tilt0: Any
+    arms0: Any
+    obstacles: Any
+    scene: Scene
+    lo: float = 6.0
+    hi: float = 10.0
+    roc_levels: int = 1
+    nodes: int = DEFAULT_NODES
+    sweeps: int = DEFAULT_SWEEPS
+    contact_gap: float = CONTACT_GAP
+
+    def replace(self, **changes: Any) -> "SceneParams":
+        return dataclasses.replace(self, **changes)
+
+    @property
+    def n_swimmers(self) -> int:
+        return self.scene.swimmers
+
+    @property
+    def n_dof(self) -> int:
+        return 2
+
+    @property
+    def n_actions(self) -> int:
+        """Integer action codes: ``swimmers x n_dof x (2K + 1)``."""
+        return self.scene.swimmers * self.n_dof * (2 * self.roc_levels + 1)
+
+    @property
+    def wall(self) -> bool:
+        return self.scene.medium == "wall"
+
+
+def scene_params(
+    swimmer: str,
+    scene: Scene,
+    *,
+    zeta: float = 0.0,
+    roc_levels: int = 1,
+    dtype: Any = None,
+    init: Sequence[int] | str | None = None,
+    nodes: int = DEFAULT_NODES,
+    sweeps: int | None = None,
+    contact_gap: float = CONTACT_GAP,
+    **model_kwargs: Any,
+) -> SceneParams:
+    """Validated parameters of a scene with NG three-sphere swimmers.
+
+    Parameters
+    ----------
+    swimmer : str
+        ``"ng"`` (the three-sphere swimmer; ``d_min``/``d_max`` by keyword as in
+        :func:`jswim.make_params`).
+    scene : Scene
+        The scene (validated here).
+    zeta : float
+        Noise level >= 0.
+    roc_levels : int
+        K >= 1 for integer action codes (1: ROC in {-1, 0, 1}).
+    dtype : dtype, optional
+        Working dtype of states and solves (default: JAX's default float, float32 unless x64).
+    init : levels, optional
+        Start arms of every swimmer as in :func:`jswim.make_params` (default both at ``d_max``).
+    nodes, sweeps : int
+        Gauss-Legendre nodes per step and Picard sweeps; default sweeps: 1 where the motion does
+        not depend on the pose (one swimmer in the unbounded fluid or bulk), else
+        :data:`DEFAULT_SWEEPS`.
+    contact_gap : float
+        Surface gap (units of a) below which a step is refused.
+
+    Raises
+    ------
+    ConfigError (a ValueError)
+        Bad swimmer, scene, zeta or start (spheres overlapping or touching the wall at the start).
+    """
+    from jswim.env.params import check_roc_levels, parse_init
+
+    if not isinstance(scene, Scene):
+        raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
+    scene.validate()
+    if not isinstance(swimmer, str) or swimmer.lower() != "ng":
+        raise ConfigError(f"scenes hold NG three-sphere swimmers only (swimmer='ng'), got {swimmer!r}")
+    model = make_model("ng", **model_kwargs)
+    try:
+        z = float(zeta)
+    except (TypeError, ValueError):
+        raise ConfigError(f"zeta must be a number, got {zeta!r}") from None
+    if not (math.isfinite(z) and z >= 0):
+        raise ConfigError(f"zeta (noise level) must be >= 0, got {zeta!r}")
+    if isinstance(nodes, bool) or not isinstance(nodes, int) or not 1 <= nodes <= 32:
+        raise ConfigError(f"nodes must be an integer in 1..32, got {nodes!r}")
+    if not (isinstance(contact_gap, (int, float)) and math.isfinite(contact_gap) and contact_gap >= 0):
+        raise ConfigError(f"contact_gap must be a number >= 0, got {contact_gap!r}")
+    pose_free = scene.medium == "bulk" or (scene.medium == "free" and scene.swimmers == 1 and not scene.obstacles)
+    if sweeps is None:
+        sweeps = 1 if pose_free else DEFAULT_SWEEPS
+    if isinstance(sweeps, bool) or not isinstance(sweeps, int) or not 1 <= sweeps <= 64:
+        raise ConfigError(f"sweeps must be an integer in 1..64, got {sweeps!r}")
+    levels = np.asarray(parse_init(init, 2), np.float64)
+    if np.any(levels < 0):
+        raise ConfigError("init='random' is not offered for scenes; give levels like (1, 1)")
+    s = scene.swimmers
+    arms = np.broadcast_to(model.lo + (model.hi - model.lo) * levels, (s, 2))
+    centre = np.stack([np.arange(s) * scene.separation, np.full(s, scene.height)], -1)
+    tilt = np.full(s, scene.tilt)
+    obstacles = np.asarray(scene.obstacles, np.float64).reshape(-1, 3)
+    _check_start(scene, centre, tilt, arms, obstacles, float(contact_gap))
+    dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
+    as_dtype = functools.partial(jnp.asarray, dtype=dtype)
+    return SceneParams(
+        zeta=z, centre0=as_dtype(centre), tilt0=as_dtype(tilt), arms0=as_dtype(arms),
+        obstacles=as_dtype(obstacles), scene=scene, lo=float(model.lo), hi=float(model.hi),
+        roc_levels=check_roc_levels(roc_levels), nodes=nodes, sweeps=sweeps, contact_gap=float(contact_gap),
+    )
+
+
+def _check_start(scene: Scene, centre: np.ndarray, tilt: np.ndarray, arms: np.ndarray,
+                 obstacles: np.ndarray, gap: float) -> None:
+    """One-line error if the start already has a contact (NumPy, float64)."""
+    if scene.medium == "bulk":
+        return
+    q = np.concatenate([np.zeros((len(arms), 1)), np.cumsum(arms, -1)], -1)
+    q = q - q[:, 1:2]
+    e = np.stack([np.cos(tilt), np.sin(tilt)], -1)
+    pos = centre[:, None, :] + q[..., None] * e[:, None, :]  # (S, 3, 2)
+    if scene.medium == "wall":
+        low = float(pos[..., 1].min()) - 1.0
+        if low < gap:
+            raise ConfigError(
+                f"the swimmer starts with a sphere {low:.3g} a from the wall (needs >= {gap}); raise height or lower tilt")
+    for o in obstacles:
+        g = float(np.min(np.hypot(*(pos - o[:2]).transpose(2, 0, 1))) - 1.0 - o[2])
+        if g < gap:
+            raise ConfigError(f"obstacle {tuple(o.tolist())} is {g:.3g} a from a swimmer sphere at the start (needs >= {gap})")
+    if len(pos) == 2:
+        d = pos[0][:, None, :] - pos[1][None, :, :]
+        g = float(np.min(np.hypot(d[..., 0], d[..., 1])) - 2.0)
+        g = min(g, float(pos[1, :, 0].min() - pos[0, :, 0].max()) - 2.0)  # one behind the other
+        if g < gap:
+            raise ConfigError(f"the two swimmers' spheres start {g:.3g} a apart (needs >= {gap}); raise separation")

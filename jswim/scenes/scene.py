@@ -1,0 +1,122 @@
+"""``Scene``: the fluid, the swimmers' starts and the obstacles of a sphere-swimmer environment."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+#: Media: the paper's first-order formula, the point-force solve without and with a wall.
+MEDIA = ("bulk", "free", "wall")
+
+#: Most swimmers a scene holds (coaxial along x).
+MAX_SWIMMERS = 2
+
+
+@dataclasses.dataclass(frozen=True)
+class Scene:
+    """Where the swimmers swim. Hashable; a static parameter of the scene environment.
+
+    Lengths are in sphere radii ``a``; angles in radians.
+
+    Attributes
+    ----------
+    medium : str
+        ``"bulk"``: the paper's first-order velocity formula, each swimmer on its own (today's
+        environment, the same numbers); ``"free"``: every sphere coupled through the point-force
+        (Oseen) mobility in the unbounded fluid; ``"wall"``: the same above Blake's no-slip wall
+        at z = 0.
+    height : float
+        Initial height of each swimmer's middle sphere above the wall (``"wall"``; elsewhere it is
+        just the starting z).
+    tilt : float
+        Initial angle of each swimmer's axis from the wall plane (positive: nose up), rad.
+    swimmers : int
+        1 or 2. Two swimmers are coaxial along x: swimmer 0's middle sphere at x = 0, swimmer 1's
+        at ``x = separation`` (ahead of it, in its swimming direction).
+    separation : float
+        D, distance between the two swimmers' middle spheres.
+    obstacles : tuple of (x, z, radius)
+        Fixed spheres (zero velocity, unknown force); ``"free"`` and ``"wall"`` only.
+    """
+
+    medium: str = "bulk"
+    height: float = 10.0
+    tilt: float = 0.0
+    swimmers: int = 1
+    separation: float = 30.0
+    obstacles: tuple[tuple[float, float, float], ...] = ()
+
+    def __post_init__(self) -> None:
+        # Normalise for hashing and equality: floats and nested tuples whatever was passed.
+        try:
+            obs = tuple(tuple(float(v) for v in o) for o in self.obstacles)
+        except (TypeError, ValueError):
+            return  # left as given: validate() names the problem
+        object.__setattr__(self, "obstacles", obs)
+
+    def validate(self) -> "Scene":
+        """``self`` if every field is valid.
+
+        Raises
+        ------
+        ValueError
+            (a :class:`jswim.errors.ConfigError`) naming the first bad field, in one line.
+        """
+        from jswim.errors import ConfigError
+
+        if self.medium not in MEDIA:
+            raise ConfigError(f"scene medium must be one of {', '.join(MEDIA)}; got {self.medium!r}")
+        for name in ("height", "tilt", "separation"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ConfigError(f"scene {name} must be a finite number, got {v!r}")
+        if self.medium == "wall" and not self.height > 1.0:
+            raise ConfigError(f"scene height must exceed 1 (a sphere radius) above the wall, got {self.height!r}")
+        if not abs(self.tilt) < math.pi / 2:
+            raise ConfigError(f"scene tilt must lie in (-pi/2, pi/2), got {self.tilt!r}")
+        if isinstance(self.swimmers, bool) or self.swimmers not in range(1, MAX_SWIMMERS + 1):
+            raise ConfigError(f"scene swimmers must be 1 or 2, got {self.swimmers!r}")
+        if self.swimmers > 1 and not self.separation > 0:
+            raise ConfigError(f"scene separation must be positive, got {self.separation!r}")
+        if not isinstance(self.obstacles, tuple):
+            raise ConfigError(f"scene obstacles must be (x, z, radius) triples, got {self.obstacles!r}")
+        for o in self.obstacles:
+            if len(o) != 3 or not all(math.isfinite(v) for v in o):
+                raise ConfigError(f"each obstacle must be three finite numbers (x, z, radius), got {o!r}")
+            if not o[2] > 0:
+                raise ConfigError(f"an obstacle's radius must be positive, got {o!r}")
+            if self.medium == "wall" and not o[1] > o[2]:
+                raise ConfigError(f"obstacle {o!r} reaches the wall (its z must exceed its radius)")
+        if self.obstacles and self.medium == "bulk":
+            raise ConfigError("obstacles need medium 'free' or 'wall' (the bulk formula has no hydrodynamic coupling)")
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-ready dict (obstacles as lists)."""
+        out = dataclasses.asdict(self)
+        out["obstacles"] = [list(o) for o in self.obstacles]
+        return out
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "Scene":
+        """Inverse of :meth:`to_dict` (unknown keys are an error); validated."""
+        from jswim.errors import ConfigError
+
+        if not isinstance(data, dict):
+            raise ConfigError(f"a scene must be a JSON object, got {type(data).__name__}")
+        names = {f.name for f in dataclasses.fields(cls)}
+        extra = sorted(set(data) - names)
+        if extra:
+            raise ConfigError(f"unknown scene field(s): {', '.join(extra)}; known: {', '.join(sorted(names))}")
+        fields = dict(data)
+        if "obstacles" in fields:
+            try:
+                fields["obstacles"] = tuple(tuple(float(v) for v in o) for o in fields["obstacles"])
+            except (TypeError, ValueError):
+                raise ConfigError(f"scene obstacles must be (x, z, radius) triples, got {data['obstacles']!r}") from None
+        for name in ("height", "tilt", "separation"):
+            if name in fields and isinstance(fields[name], int) and not isinstance(fields[name], bool):
+                fields[name] = float(fields[name])
+        return cls(**fields).validate()
+

@@ -1,0 +1,174 @@
+"""``scene_step``: one action moves one arm of one swimmer; every body in the scene responds.
+
+A step moves arm ``dof`` of swimmer ``swimmer`` by ``roc x (d_max - d_min)`` at unit rate
+(duration ``|roc| (d_max - d_min)``; at zero Reynolds number only the path matters), clipped to
+``[d_min, d_max]`` (a non-zero ROC that cannot move the arm at all is ``stuck``). The other arms
+are held fixed. Then, by medium:
+
+* ``"bulk"``: the paper's formula (:mod:`jswim.swimmers.ng`): the moving swimmer advances along its
+  axis by the closed-form displacement of the move; the others do not move; no contact.
+* ``"free"`` / ``"wall"``: all spheres of all swimmers and the obstacles are coupled through the
+  point-force mobility (:mod:`jswim.swimmers.mobility`), every swimmer force- and torque-free
+  (:mod:`jswim.swimmers.forcefree`); the poses ``(x, z, tilt)`` of all swimmers are integrated
+  over the step by Gauss-Legendre collocation (:mod:`jswim.scenes.collocation`).
+
+Contact: if along the step (at any collocation node or at its end) a swimmer sphere's surface
+comes within ``params.contact_gap`` (0.1 a) of the wall, of an obstacle's surface or of a sphere of
+another swimmer, the step is refused: the state is left as it was (shape and pose; only ``t``
+advances) and ``contact`` is set. The point-force model has no lubrication or contact forces, so
+motion that close is not modelled.
+
+Noise, as in the paper and :mod:`jswim.env`: swimmer ``s``'s displacement ``(dx, dz)`` over the
+step is multiplied by ``1 + zeta Y_s``, ``Y_s ~ U[-1, 1]`` drawn from the step's key (one per
+swimmer: ``jax.random.uniform(key, (S,))``, for one swimmer ``uniform(key, ())`` as
+:func:`jswim.env.step` draws it); the tilt change is not perturbed.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+from jax import Array
+
+from jswim.scenes.actions import split_action
+from jswim.scenes.collocation import gauss_rule
+from jswim.scenes.params import SceneParams
+from jswim.scenes.state import SceneState, SceneStepInfo
+from jswim.swimmers import forcefree
+
+
+def scene_step(params: SceneParams, state: SceneState, action: Any, key: Array) -> tuple[SceneState, SceneStepInfo]:
+    """Advance a scene by one action.
+
+    Parameters
+    ----------
+    params : SceneParams
+    state : SceneState
+    action : (swimmer, dof, roc)
+        A 3-tuple of scalars/arrays (int32, int32, float) or a float array ``(3,)``; ``swimmer``
+        and ``dof`` 0-based, ``roc`` in [-1, 1] (clipped). Integer codes: decode them with
+        :func:`jswim.scenes.decode_scene_action`.
+    key : PRNG key
+        The step's noise key.
+
+    Returns
+    -------
+    (SceneState, SceneStepInfo)
+        Works under ``jit`` and ``vmap`` (batch states, actions and keys together).
+    """
+    dtype = state.arms.dtype
+    s = params.n_swimmers
+    if s == 1:
+        y = jax.random.uniform(key, (), dtype, -1.0, 1.0)[None]
+    else:
+        y = jax.random.uniform(key, (s,), dtype, -1.0, 1.0)
+    return scene_advance(params, state, action, y)
+
+
+def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: Array
+                  ) -> tuple[SceneState, SceneStepInfo]:
+    """:func:`scene_step` with given noise variables ``y_noise`` ``(S,)`` in [-1, 1]."""
+    sw, dof, roc = split_action(action)
+    arms = state.arms
+    dtype = arms.dtype
+    s = params.n_swimmers
+    span = params.hi - params.lo
+    roc = jnp.clip(jnp.asarray(roc, dtype), -1.0, 1.0)
+    onehot = (jnp.arange(s)[:, None] == sw) & (jnp.arange(2)[None, :] == dof)  # (S, 2)
+    d0 = jnp.sum(jnp.where(onehot, arms, 0.0))
+    target = jnp.clip(d0 + roc * span, params.lo, params.hi)
+    delta = target - d0
+    stuck = (roc != 0) & (delta == 0)
+    moved = delta != 0
+    new_arms = jnp.where(onehot, target, arms)
+    if params.scene.medium == "bulk":
+        disp = _bulk_displacement(arms, sw, dof, delta)  # along the moving swimmer's axis
+        mine = jnp.arange(s) == sw
+        step_x = jnp.where(mine, disp * jnp.cos(state.tilt), 0.0)
+        step_z = jnp.where(mine, disp * jnp.sin(state.tilt), 0.0)
+        step_t = jnp.zeros_like(state.tilt)
+        gap = jnp.asarray(jnp.inf, dtype)
+    else:
+        rates = jnp.where(onehot, jnp.sign(delta), 0.0).astype(dtype)
+        pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
+        end, gap = integrate_move(params, pose0, arms, rates, jnp.abs(delta))
+        step_x, step_z, step_t = (end - pose0).T
+    contact = ~(gap >= params.contact_gap)  # NaN (a solve that broke down at contact) counts as contact
+    factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
+    dx = jnp.where(contact, 0.0, step_x * factor)
+    dz = jnp.where(contact, 0.0, step_z * factor)
+    dtilt = jnp.where(contact, 0.0, step_t)
+    new = SceneState(
+        arms=jnp.where(contact, arms, new_arms),
+        centre=state.centre + jnp.stack([dx, dz], -1),
+        tilt=state.tilt + dtilt,
+        t=state.t + 1,
+    )
+    return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
+
+
+def _bulk_displacement(arms: Array, sw: Array, dof: Array, delta: Array) -> Array:
+    """The paper's displacement of one arm move (closed form of :func:`jswim.swimmers.ng.arm_move_displacement`)."""
+    d1, d2 = arms[sw, 0], arms[sw, 1]
+    move_1 = (-jnp.log1p(delta / (d1 + d2)) + 2.0 * delta / d2) / 6.0
+    move_2 = (jnp.log1p(delta / (d1 + d2)) - 2.0 * delta / d1) / 6.0
+    return jnp.where(dof == 0, move_1, move_2)
+
+
+def integrate_move(params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
+                   ) -> tuple[Array, Array]:
+    """Poses after moving the arms at ``rates`` for ``duration``, and the smallest surface gap.
+
+    Parameters
+    ----------
+    pose0 : Array (S, 3)
+        ``(x, z, tilt)`` of every swimmer at the start.
+    arms, rates : Array (S, 2)
+        Start arms and their (constant) rates.
+    duration : scalar
+        Time of the move.
+
+    Returns
+    -------
+    (Array (S, 3), scalar)
+        End poses; the smallest surface gap over the nodes and the end.
+    """
+    nodes, y_run, y_end = (jnp.asarray(v, pose0.dtype) for v in gauss_rule(params.nodes))
+    t = nodes * duration
+    arms_t = arms[None] + t[:, None, None] * rates[None]  # (n, S, 2)
+    obstacles = jnp.asarray(params.obstacles, pose0.dtype)
+
+    def rate(pose: Array, arms_k: Array) -> Array:
+        r = forcefree.solve(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
+        return jnp.concatenate([r.velocity, r.omega[:, None]], -1)
+
+    poses = jnp.broadcast_to(pose0, (params.nodes,) + pose0.shape)
+    for _ in range(params.sweeps):  # static and short: unrolled
+        f = jax.vmap(rate)(poses, arms_t)  # (n, S, 3)
+        poses = pose0 + duration * jnp.einsum("ij,jsk->isk", y_run, f)
+    end = pose0 + duration * jnp.einsum("j,jsk->sk", y_end, f)
+    arms_end = arms + duration * rates
+    gaps = jax.vmap(lambda p, a: surface_gap(p, a, obstacles, params.wall))(poses, arms_t)
+    return end, jnp.minimum(jnp.min(gaps), surface_gap(end, arms_end, obstacles, params.wall))
+
+
+def surface_gap(pose: Array, arms: Array, obstacles: Array, wall: bool) -> Array:
+    """Smallest surface gap between a swimmer sphere and the wall, an obstacle or another
+    swimmer's sphere (units of a); ``inf`` when there is nothing to touch."""
+    pos = forcefree.sphere_centres(pose[:, :2], pose[:, 2], arms)  # (S, n, 2)
+    s, n = pos.shape[:2]
+    flat = pos.reshape(s * n, 2)
+    out = jnp.asarray(jnp.inf, pose.dtype)
+    if wall:
+        out = jnp.minimum(out, jnp.min(flat[:, 1]) - 1.0)
+    if obstacles.shape[0]:
+        d = flat[:, None, :] - obstacles[None, :, :2]
+        out = jnp.minimum(out, jnp.min(jnp.sqrt(jnp.sum(d * d, -1)) - 1.0 - obstacles[None, :, 2]))
+    if s > 1:
+        owner = jnp.repeat(jnp.arange(s), n)
+        d = flat[:, None, :] - flat[None, :, :]
+        r = jnp.sqrt(jnp.sum(d * d, -1) + (owner[:, None] == owner[None, :]))  # own spheres: masked below
+        out = jnp.minimum(out, jnp.min(jnp.where(owner[:, None] != owner[None, :], r - 2.0, jnp.inf)))
+    return out

@@ -1,0 +1,105 @@
+"""Point-force mobilities (jswim.swimmers.mobility) and the force-free solve: independent checks."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jswim.swimmers import forcefree, mobility
+
+
+def random_config(rng, n, wall, min_gap=0.0, box=12.0):
+    """Centres of ``n`` unit spheres in the x-z plane, surfaces at least ``min_gap`` apart (and
+    from the wall)."""
+    pts = []
+    while len(pts) < n:
+        p = np.array([rng.uniform(-box, box), rng.uniform(1.0 + min_gap, 1.0 + min_gap + box)])
+        if all(np.hypot(*(p - q)) >= 2.0 + min_gap for q in pts):
+            pts.append(p)
+    return np.array(pts)
+
+
+def test_blake_velocity_vanishes_on_the_wall():
+    rng = np.random.default_rng(0)
+    rx = jnp.asarray(rng.uniform(-20, 20, 50))
+    h = jnp.asarray(rng.uniform(0.5, 30, 50))
+    g = mobility.blake(rx, jnp.zeros(50), h)
+    scale = np.abs(np.asarray(mobility.oseen(rx, -h))).max()
+    assert np.abs(np.asarray(g)).max() < 1e-14 * scale
+
+
+def test_blake_tends_to_oseen_far_from_the_wall():
+    # relative image contribution ~ r / (2h): check that it shrinks like 1/h
+    rx, rz = jnp.asarray(3.0), jnp.asarray(-2.0)
+    errs = []
+    for h in (1e2, 1e3, 1e4):
+        g = np.asarray(mobility.blake(rx, jnp.asarray(h + rz), jnp.asarray(h)))
+        o = np.asarray(mobility.oseen(rx, rz))
+        errs.append(np.abs(g - o).max() / np.abs(o).max())
+    assert errs[0] < 0.05 and errs[1] / errs[0] < 0.11 and errs[2] / errs[1] < 0.11
+
+
+def test_self_image_is_the_first_order_wall_correction():
+    # the image of a point force at its own position: -9/16 a/h along the wall, -9/8 a/h normal
+    # (Lorentz 1907; Faxen); the self-mobility's first-order terms
+    h, eps = 7.0, 1e-7
+    g = np.asarray(mobility.blake(jnp.asarray(eps), jnp.asarray(h), jnp.asarray(h)))
+    s = np.asarray(mobility.oseen(jnp.asarray(eps), jnp.asarray(0.0)))
+    image = mobility.OSEEN_PREFACTOR * (g - s) * h
+    np.testing.assert_allclose(np.diag(image), [-9 / 16, -9 / 8], atol=1e-6)
+    par, nor = mobility.wall_self_factors(jnp.asarray(1 / h))
+    assert abs(float(par) - (1 - 9 / 16 / h)) < 2 / h**3 and abs(float(nor) - (1 - 9 / 8 / h)) < 1 / h**3
+
+
+@pytest.mark.parametrize("wall", [False, True])
+def test_mobility_symmetric_positive_definite(wall):
+    rng = np.random.default_rng(1 + wall)
+    for n in (2, 3, 6, 12):
+        for _ in range(10):
+            pos = random_config(rng, n, wall)
+            m = np.asarray(mobility.mobility_matrix(jnp.asarray(pos), jnp.ones(n), wall))
+            assert np.abs(m - m.T).max() < 1e-14
+            assert np.linalg.eigvalsh(m).min() > 0
+
+
+def test_blake_symmetry_between_points():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        xi, xj = rng.uniform(-5, 5, 2)
+        zi, zj = rng.uniform(0.5, 9, 2)
+        g = np.asarray(mobility.blake(jnp.asarray(xi - xj), jnp.asarray(zi), jnp.asarray(zj)))
+        gt = np.asarray(mobility.blake(jnp.asarray(xj - xi), jnp.asarray(zj), jnp.asarray(zi)))
+        np.testing.assert_allclose(g, gt.T, rtol=1e-13, atol=1e-15)
+
+
+@pytest.mark.parametrize("wall", [False, True])
+def test_force_and_torque_free(wall):
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        centre = jnp.asarray([[0.0, 9.0], [31.0, 8.0]])
+        tilt = jnp.asarray(rng.uniform(-0.3, 0.3, 2))
+        arms = jnp.asarray(rng.uniform(6, 10, (2, 2)))
+        rates = jnp.asarray([[1.0, 0.0], [0.0, -1.0]])
+        obstacles = jnp.asarray([[15.0, 20.0, 2.5]])
+        r = forcefree.solve(centre, tilt, arms, rates, obstacles, wall)
+        f = np.asarray(r.forces)
+        pos = np.asarray(forcefree.sphere_centres(centre, tilt, arms))
+        for s in range(2):
+            fs, rel = f[3 * s:3 * s + 3], pos[s] - np.asarray(centre[s])
+            assert np.abs(fs.sum(0)).max() < 1e-12
+            assert abs(np.sum(rel[:, 0] * fs[:, 1] - rel[:, 1] * fs[:, 0])) < 1e-12
+        assert np.abs(f[6]).max() > 1e-6  # the obstacle is held: it carries a force
+        # sphere velocities from the forces (M F) are rigid + prescribed; the obstacle's is zero
+        radii = np.ones(7)
+        radii[6] = 2.5
+        allpos = np.concatenate([pos.reshape(6, 2), np.asarray(obstacles)[:, :2]])
+        v = (np.asarray(mobility.mobility_matrix(jnp.asarray(allpos), jnp.asarray(radii), wall)) @ f.reshape(-1)).reshape(7, 2)
+        assert np.abs(v[6]).max() < 1e-12
+        e = np.stack([np.cos(tilt), np.sin(tilt)], -1)
+        q = np.asarray(forcefree.axial_offsets(arms))
+        qd = np.asarray(forcefree.axial_offsets(rates))
+        for s in range(2):
+            rel = pos[s] - np.asarray(centre[s])
+            want = (np.asarray(r.velocity[s]) + float(r.omega[s]) * np.stack([-rel[:, 1], rel[:, 0]], -1)
+                    + qd[s][:, None] * e[s])
+            np.testing.assert_allclose(v[3 * s:3 * s + 3], want, atol=1e-12)
+        assert np.allclose(np.hypot(*(pos[0, 1:] - pos[0, :-1]).T), q[0, 1:] - q[0, :-1])

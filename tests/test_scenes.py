@@ -1,0 +1,165 @@
+"""The scene environment (jswim.scenes): interface, media, contact, noise, dtypes."""
+
+import json
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import quad
+
+import jswim
+from jswim.errors import ConfigError
+from jswim.scenes import (Scene, decode_scene_action, encode_scene_action, scene_params, scene_reset,
+                          scene_rollout, scene_step)
+
+SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]  # NG square stroke from (10, 10): arms 10 -> 6 -> 10
+
+
+def collinear_velocity(d1, d2, r1, r2):
+    """Middle-sphere velocity of three collinear point-force spheres (unit Stokes mobility,
+    Oseen 3/(2 r) along the line), force-free, arm rates r1, r2: a 4 x 4 solve in NumPy."""
+    x = np.array([-d1, 0.0, d2])
+    r = np.abs(x[:, None] - x[None, :])
+    m = np.eye(3) + np.where(r > 0, 1.5 / np.where(r > 0, r, 1), 0.0)
+    a = np.zeros((4, 4))
+    a[:3, :3] = m
+    a[:3, 3] = -1.0
+    a[3, :3] = 1.0
+    sol = np.linalg.solve(a, np.array([-r1, 0.0, r2, 0.0]))
+    return sol[3]
+
+
+def collinear_square_cycle(lo=6.0, hi=10.0):
+    moves = [(0, -1), (1, -1), (0, 1), (1, 1)]
+    d = [hi, hi]
+    total = 0.0
+    for dof, sign in moves:
+        start = list(d)
+
+        def u(t, dof=dof, sign=sign, start=start):
+            dd = list(start)
+            dd[dof] += sign * t
+            rr = [0.0, 0.0]
+            rr[dof] = sign
+            return collinear_velocity(dd[0], dd[1], *rr)
+
+        total += quad(u, 0.0, hi - lo, epsabs=1e-13, epsrel=1e-13)[0]
+        d[dof] += sign * (hi - lo)
+    return total
+
+
+def test_scene_json_round_trip_and_hash():
+    s = Scene(medium="wall", height=7.5, tilt=0.1, swimmers=2, separation=40, obstacles=[(1, 20, 2)])
+    back = Scene.from_dict(json.loads(json.dumps(s.to_dict())))
+    assert back == s and hash(back) == hash(s)
+    assert isinstance(back.obstacles[0], tuple)
+
+
+@pytest.mark.parametrize("fields, word", [
+    ({"medium": "honey"}, "medium"), ({"medium": "wall", "height": 0.5}, "height"),
+    ({"tilt": 2.0}, "tilt"), ({"swimmers": 3}, "swimmers"), ({"swimmers": 2, "separation": -1.0}, "separation"),
+    ({"medium": "free", "obstacles": ((0, 0, -1),)}, "radius"), ({"obstacles": ((0, 30, 1),)}, "obstacles"),
+    ({"height": float("nan")}, "height"),
+])
+def test_scene_validate_one_line(fields, word):
+    with pytest.raises(ValueError) as err:
+        Scene(**fields).validate()
+    assert word in str(err.value) and "\n" not in str(err.value)
+    with pytest.raises(ConfigError):
+        Scene.from_dict(Scene(**fields).to_dict() if fields.get("obstacles") is None else {**fields})
+
+
+def test_start_overlaps_refused():
+    with pytest.raises(ConfigError, match="wall"):
+        scene_params("ng", Scene(medium="wall", height=3.0, tilt=0.3))
+    with pytest.raises(ConfigError, match="separation"):
+        scene_params("ng", Scene(medium="free", swimmers=2, separation=15.0))
+    with pytest.raises(ConfigError, match="ng"):
+        scene_params("purcell", Scene())
+    with pytest.raises(ConfigError):
+        Scene.from_dict({"medium": "wall", "depth": 3})
+
+
+def test_free_square_stroke_matches_independent_collinear_solve():
+    want = collinear_square_cycle()
+    assert abs(want - 0.1720914) < 1e-7  # extensions.md's independent number
+    r = scene_rollout("ng", SQUARE * 2, Scene(medium="free"))
+    assert abs(r.x[3, 0] - want) < 1e-12 and abs(r.x[7, 0] - 2 * want) < 1e-12
+    np.testing.assert_array_equal(r.z, 10.0)
+    np.testing.assert_array_equal(r.tilt, 0.0)
+    np.testing.assert_array_equal(r.arms[3], [[10.0, 10.0]])
+
+
+def test_bulk_is_todays_environment():
+    moves = SQUARE * 3 + [(1, -0.5), (2, 0.3), (1, 1), (2, -1), (2, 1), (1, 0)]
+    today = jswim.rollout("ng", moves)
+    same = jswim.rollout("ng", moves, scene=Scene())
+    np.testing.assert_array_equal(today.x, same.x)
+    r = scene_rollout("ng", moves, Scene())
+    np.testing.assert_allclose(r.x[:, 0], today.x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(r.arms[:, 0], today.dofs, atol=1e-12)
+    np.testing.assert_array_equal(r.stuck, today.stuck)
+    assert abs(r.x[3, 0] - 0.15626494) < 5e-9
+    # two swimmers in bulk: independent, each the paper's number
+    two = scene_rollout("ng", [(2, d, k) for d, k in SQUARE] + [(1, d, k) for d, k in SQUARE], Scene(swimmers=2))
+    np.testing.assert_allclose(two.x[-1], [r.x[3, 0], 30.0 + r.x[3, 0]], atol=1e-12)
+
+
+def test_rollout_routes_scenes():
+    r = jswim.rollout("ng", SQUARE, scene=Scene(medium="free"))
+    assert r.x.shape == (4, 1) and abs(r.x[-1, 0] - 0.1720914) < 1e-7
+    with pytest.raises(ConfigError):
+        jswim.rollout("ng", SQUARE, scene="wall")
+    with pytest.raises(ConfigError, match="triples"):
+        scene_rollout("ng", SQUARE, Scene(swimmers=2))
+
+
+def test_action_codes():
+    for k_levels in (1, 3):
+        for sw in (0, 1):
+            for dof in (0, 1):
+                for k in range(-k_levels, k_levels + 1):
+                    c = encode_scene_action(sw, dof, k, k_levels)
+                    s, d, roc = decode_scene_action(c, k_levels)
+                    assert (int(s), int(d)) == (sw, dof) and abs(float(roc) - k / k_levels) < 1e-7
+    assert [encode_scene_action(0, d, k) for d in (0, 1) for k in (-1, 0, 1)] == list(range(6))
+
+
+def test_contact_refuses_the_step_and_stuck():
+    scene = Scene(medium="wall", height=2.5, tilt=-0.2)
+    r = scene_rollout("ng", [(2, 1), (2, -1), (1, 0.5)], scene, init=(0, 0))
+    assert r.contact.tolist() == [True, False, False] and r.stuck.tolist() == [False, True, False]
+    np.testing.assert_array_equal(r.arms[0], [[6.0, 6.0]])  # refused: nothing moved
+    assert r.x[0, 0] == 0.0 and r.z[0, 0] == 2.5
+    assert r.gap[0] < 0.1
+    s = scene_rollout("ng", [(1, 1), (1, -1)], Scene(medium="wall", height=20.0))
+    assert s.stuck.tolist() == [True, False] and s.x[0, 0] == 0.0
+
+
+def test_noise_scales_the_displacement_not_the_tilt():
+    scene = Scene(medium="wall", height=6.0)
+    clean = scene_rollout("ng", [(1, -1)], scene)
+    key = jax.random.PRNGKey(5)
+    noisy = scene_rollout("ng", [(1, -1)], scene, zeta=0.5, key=key)
+    with jax.enable_x64(True):
+        y = float(jax.random.uniform(jax.random.split(key, 1)[0], (), jnp.float64, -1.0, 1.0))
+    np.testing.assert_allclose(noisy.x[0, 0], clean.x[0, 0] * (1 + 0.5 * y), rtol=1e-13)
+    np.testing.assert_allclose(noisy.z[0, 0] - 6.0, (clean.z[0, 0] - 6.0) * (1 + 0.5 * y), rtol=1e-10)
+    assert noisy.tilt[0, 0] == clean.tilt[0, 0]
+
+
+def test_float32_jit_vmap(float32):
+    params = scene_params("ng", Scene(medium="wall", height=5.0, swimmers=2, separation=30.0))
+    assert params.arms0.dtype == jnp.float32
+    b = 4
+    states = jax.tree.map(lambda v: jnp.broadcast_to(v, (b,) + v.shape), scene_reset(params))
+    acts = (jnp.array([0, 1, 0, 1], jnp.int32), jnp.array([0, 0, 1, 1], jnp.int32), jnp.array([-1.0, -1.0, -0.5, 1.0]))
+    keys = jax.random.split(jax.random.PRNGKey(0), b)
+    step = jax.jit(jax.vmap(scene_step, in_axes=(None, 0, 0, 0)))
+    new, info = step(params, states, acts, keys)
+    assert new.centre.dtype == jnp.float32 and info.dx.shape == (b, 2)
+    assert bool(info.stuck[3]) and not bool(info.stuck[0])
+    with jax.enable_x64(True):
+        ref = scene_rollout("ng", [(1, 1, -1)], Scene(medium="wall", height=5.0, swimmers=2, separation=30.0))
+    np.testing.assert_allclose(np.asarray(new.centre[0]), np.stack([ref.x[0], ref.z[0]], -1), atol=2e-5)
