@@ -599,6 +599,11 @@ def _run(study: str, args: argparse.Namespace) -> int:
     for note in result.notes:
         print(note)
     sp = result.llm_speed
+    if not sp and any(r.get("agent") == "llm" for r in result.rows):  # a resume with every LLM run done
+        from jswim.llm.journal import CallJournal
+
+        print(f"LLM calls: none this session (every LLM run was done already; nothing sent, nothing paid); the "
+              f"study's calls cost ${CallJournal(result.folder).spent_usd:.4f} ({_price_note(backend)})")
     if sp.get("calls"):
         print(f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
               f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "

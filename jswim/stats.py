@@ -20,7 +20,9 @@ def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, flo
     den = 1.0 + z * z / n
     centre = (p + z * z / (2 * n)) / den
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / den
-    return (max(0.0, centre - half), min(1.0, centre + half))
+    # The interval holds p (exactly 0 at k = 0 and 1 at k = n); rounding alone can put the bound
+    # 1e-16 on the wrong side (n = 6, 11, 21, ...), which an error bar of p - lo would draw negative.
+    return (min(p, max(0.0, centre - half)), max(p, min(1.0, centre + half)))
 
 
 def mean_interval(

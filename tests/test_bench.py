@@ -179,3 +179,26 @@ def test_bench_samples_grow_a_folder_and_show_in_the_leaderboard(tmp_path, capsy
     text = leaderboard.table_text([row])
     header, line = [ln for ln in text.splitlines() if ln.strip() and not set(ln) <= set("-+ |")][:2]
     assert "samples" in header and "- (0 of 3)" in line
+
+
+def test_leaderboard_figure_draws_rows_at_p_0_and_1_for_any_n(tmp_path):
+    from jswim.bench import leaderboard
+    from jswim.stats import wilson_interval
+
+    rows = []
+    for n in (6, 11, 21):  # sizes where Wilson's bounds rounded past p (an interrupted part holds any n)
+        for k in (0, n):
+            lo, hi = wilson_interval(k, n)
+            rows.append({"row": f"m{n}-{k}", "kind": "llm", "part": "curves", "swimmer": "purcell", "direction": 1,
+                         "group": "", "n": n, "samples": 1, "success": k / n, "success_lo": lo, "success_hi": hi})
+    paths = leaderboard.figure(tmp_path, rows)
+    assert any(p.suffix == ".png" and p.stat().st_size > 0 for p in paths)
+
+
+def test_dry_run_warns_when_a_models_cap_is_below_its_estimate(tmp_path, capsys):
+    base = ["bench", "--dry-run", "--out", str(tmp_path / "d"), "--runs", "1", "--steps", "4", "--model"]
+    assert cli.main([*base, "base_url=http://127.0.0.1:9/v1,model=gpt-4o,max_cost=0.001,price_local=true"]) == 0
+    text = capsys.readouterr().out
+    assert "warning: gpt-4o: its max_cost $0.001 is below the estimated" in text and "would stop at the cap" in text
+    assert cli.main([*base, "base_url=http://127.0.0.1:9/v1,model=gpt-4o,max_cost=100,price_local=true"]) == 0
+    assert "max_cost" not in capsys.readouterr().out

@@ -79,6 +79,16 @@ def test_wilson_interval_known_values():
     assert lo == pytest.approx(0.2366, abs=1e-4) and hi == pytest.approx(0.7634, abs=1e-4)
 
 
+def test_wilson_interval_holds_p_at_every_n_exactly_at_the_ends():
+    # All of k = 0 and k = n: [0, x] and [x, 1] exactly (rounding put hi at 1 - 1.1e-16 for
+    # 6 of 6, and lo at 2.8e-17 for 0 of 11: a leaderboard's error bar came out negative).
+    for n in range(1, 201):
+        assert wilson_interval(0, n)[0] == 0.0 and wilson_interval(n, n)[1] == 1.0
+        for k in range(n + 1):
+            lo, hi = wilson_interval(k, n)
+            assert 0.0 <= lo <= k / n <= hi <= 1.0
+
+
 def test_mean_interval_covers_the_mean():
     m, lo, hi = mean_interval([1.0, 2.0, 3.0, 4.0])
     assert m == 2.5 and lo < m < hi

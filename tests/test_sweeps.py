@@ -111,6 +111,8 @@ def test_samples_extend_a_folder_resume_and_pool_into_the_row(tmp_path, capsys):
     assert group["n"] == 3 and group["samples"] == 3
     assert sorted(r["sample"] for r in read_runs(out)) == [0, 1, 2]
     assert "3 runs already done" in again.err
+    # A resume that ran nothing says so, never the earlier session's calls as this session's.
+    assert "LLM calls: none this session" in again.out and "sent, 0 replayed" not in again.out
     assert cli.main(["show", str(out)]) == 0
     shown = capsys.readouterr().out
     header = next(ln for ln in shown.splitlines() if "samples" in ln and "success" in ln)

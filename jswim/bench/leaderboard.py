@@ -87,6 +87,8 @@ def _steps(r: Mapping[str, Any]) -> str:
 def _cost(r: Mapping[str, Any]) -> str:
     if r["kind"] == "baseline":
         return "-"
+    if r["kind"] == "reference":
+        return "free"  # a rule on 127.0.0.1
     if r["priced"] is False:
         return "not priced"
     return _num(r["suite_cost_usd"], ".4f")
@@ -156,7 +158,8 @@ def figure(folder: Path, rows: Sequence[Mapping[str, Any]]) -> list[Path]:
                       == (part, sw, d, g, lab)), None)
             if r is None:
                 continue
-            ax.errorbar(r["success"], i, xerr=[[r["success"] - r["success_lo"]], [r["success_hi"] - r["success"]]],
+            err = [[max(0.0, r["success"] - r["success_lo"])], [max(0.0, r["success_hi"] - r["success"])]]
+            ax.errorbar(r["success"], i, xerr=err,
                         fmt="o", ms=3, color=colors[r["kind"]], capsize=2, lw=1)
         ax.set_yticks(range(len(labels)), labels if ax in axes[:, 0] else [""] * len(labels), fontsize=6)
         ax.set_ylim(len(labels) - 0.5, -0.5)

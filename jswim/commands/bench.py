@@ -217,5 +217,17 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
     for name, t in totals.items():
         if t["reasoning_warning"]:
             print(f"warning: {name}: {t['reasoning_warning']}")
+    caps = {m.name: m.max_cost for m in models if m.max_cost is not None}
+    for name, t in totals.items():
+        cap = caps.get(name)
+        if cap is None or not t["priced"]:
+            continue
+        if t["cost_usd"] > cap:
+            print(f"warning: {name}: its max_cost ${cap:g} is below the estimated ${t['cost_usd']:.2f}: the suite "
+                  "would stop at the cap, its later parts skipped (raise max_cost, or the same command with a "
+                  "higher one goes on, paying no call twice)")
+        elif t["cost_max_usd"] > cap:
+            print(f"note: {name}: its max_cost ${cap:g} covers the estimate (${t['cost_usd']:.2f}) but not the worst "
+                  f"case (${t['cost_max_usd']:.2f}): long replies would stop it at the cap")
     print(json.dumps({"suite": suite.name, "models": totals, "total_usd": total}, sort_keys=True))
     return 0

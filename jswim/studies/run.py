@@ -173,7 +173,9 @@ class StudyResult:
     summary: list[dict[str, Any]]
     figures: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
-    llm_speed: dict[str, float] = field(default_factory=dict)  # calls, billed calls, wall s, calls/s
+    # This session's LLM calls, billed calls, wall s, calls/s, cost (empty when it ran no LLM run: a
+    # resume of a finished study); the metadata summary keeps the last session that ran some.
+    llm_speed: dict[str, float] = field(default_factory=dict)
     failed_runs: list[dict[str, Any]] = field(default_factory=list)  # run_id and the server's error
     truncated: dict[str, int] = field(default_factory=dict)  # max_tokens -> LLM replies cut off there
     stopped: str | None = None  # "cost cap" when --max-cost stopped the study before its end
@@ -391,6 +393,7 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     rows = [r for r in read_runs(folder) if r["run_id"] in names]
     summary = summarize(rows)
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
+    session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
     constraint = sorted({r["constraint"] for r in rows if r.get("agent") == "llm" and r.get("constraint")})
     failed = [{"run_id": r["run_id"], "error": r.get("error")} for r in rows if is_failed(r)]
@@ -413,7 +416,7 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
                     **({"constrained_decoding": constraint} if constraint else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
     _write_report(folder, figures)
-    return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, speed, failed,
+    return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, session_speed, failed,
                        dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total, sent,
                        cut_thinking, notes)
 
