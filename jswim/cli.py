@@ -939,7 +939,7 @@ def _lattice_gaits(args: argparse.Namespace, model: Any) -> int:
 
 def _plot(args: argparse.Namespace) -> int:
     from jswim.overview import StudyFolder  # lazy: JAX loads only for commands that run
-    from jswim.plots import unfinished_note
+    from jswim.results import unfinished_note
     from jswim.studies.report import draw_figures
 
     study = StudyFolder(args.folder)
@@ -996,9 +996,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         from jswim import compile_cache
 
         compile_cache.enable()  # compiled programs kept on disk: later sessions start in seconds
-    import matplotlib  # lazy: only once the arguments parsed (fast usage errors)
-
-    matplotlib.use("Agg")  # the command only writes figure files; never open a window
+    # The command only writes figure files; never open a window. Through the environment, so
+    # matplotlib (~0.5 s) is imported only by commands that draw (`--no-figures` never does).
+    if "matplotlib" in sys.modules:
+        sys.modules["matplotlib"].use("Agg")
+    else:
+        os.environ["MPLBACKEND"] = "Agg"
     from jswim.permissions import private_files
 
     with private_files():  # folders, figures and caches: owner only under the usual umask

@@ -48,6 +48,11 @@ def _learn_cell(s: Mapping[str, Any]) -> str:
     return q if s.get("learned") else "-"
 
 
+#: Reading order of agents and swimmers in tables and figure panels (jswim.plots reads them here).
+SWIMMER_ORDER = ("purcell", "ng", "nlink", "nsphere")
+AGENT_ORDER = ("llm", "qlearning", "random", "ppo")
+
+
 def _cost_cell(v: Any) -> str:
     return "-" if not v else f"{v:.4f}" if v < 1 else f"{v:.2f}"
 
@@ -55,8 +60,6 @@ def _cost_cell(v: Any) -> str:
 def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()) -> list[Mapping[str, Any]]:
     """Summary rows in reading order: agent (LLM first), Purcell before NG, +x before -x, and the
     groups in the order the study's grid ran them (the order of ``rows``; zeta 0.5 before 1)."""
-    from jswim.plots import AGENT_ORDER, SWIMMER_ORDER  # lazy: plots loads matplotlib; only two constants needed
-
     first: dict[Any, int] = {}
     for i, r in enumerate(rows):
         first.setdefault(r.get("group"), i)

@@ -32,7 +32,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
-from jswim.results import writing
+from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the reading order of tables and panels)
+from jswim.results import unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
 from jswim.stats import learn_stats, mean_interval, wilson_interval
 from jswim.swimmers.models import SwimmerModel, make_model
 
@@ -41,8 +42,6 @@ COLUMN_IN = 3.4
 PAGE_IN = 7.0
 
 #: Panel order: the paper shows Purcell's swimmer first.
-SWIMMER_ORDER = ("purcell", "ng", "nlink", "nsphere")
-AGENT_ORDER = ("llm", "qlearning", "random", "ppo")
 
 # Okabe-Ito colours: distinguishable with the common colour-vision deficiencies and in grey.
 AGENT_STYLE: dict[str, dict[str, Any]] = {
@@ -731,11 +730,3 @@ def continuous_figures(rows: Sequence[Mapping[str, Any]], note: str | None = Non
         cycles = learned_cycles(sel) if g == "K=1" else None
         figs[f"continuous-{'real' if g == 'continuous' else 'K' + g[2:]}"] = curves_figure(sel, cycles=cycles, note=note)
     return figs
-
-
-def unfinished_note(status: str | None, done: int, planned: int | None) -> str | None:
-    """The red line of a figure whose study has not finished (``None`` when it has)."""
-    if status == "complete" and (planned is None or done >= planned):
-        return None
-    of = f" of {planned}" if planned else ""
-    return f"UNFINISHED STUDY: {done}{of} runs done ({status or 'status unknown'})"

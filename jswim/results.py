@@ -39,8 +39,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
 import numpy as np
-import pyarrow as pa
-import pyarrow.parquet as pq
 
 from jswim.errors import ResultFolderError
 from jswim.permissions import file_mode, opener
@@ -423,6 +421,14 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     return upgrade_names(meta)
 
 
+def unfinished_note(status: str | None, done: int, planned: int | None) -> str | None:
+    """The red line of a figure whose study has not finished (``None`` when it has)."""
+    if status == "complete" and (planned is None or done >= planned):
+        return None
+    of = f" of {planned}" if planned else ""
+    return f"UNFINISHED STUDY: {done}{of} runs done ({status or 'status unknown'})"
+
+
 SCALAR_TYPES = (str, int, float, bool, type(None))
 
 
@@ -457,10 +463,55 @@ def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
                 "action": _at(r.get("actions"), i), "progress": _at(r.get("progress"), i),
                 "stuck": _at(r.get("stuck"), i),
             })
+    import pyarrow as pa  # lazy: ~0.3 s of import that only the tables at a session's end need
+    import pyarrow.parquet as pq
+
     for name, rows in (("runs.parquet", table_rows), ("trajectories.parquet", traj)):
         sink = pa.BufferOutputStream()
-        pq.write_table(pa.Table.from_pylist(rows) if rows else pa.table({}), sink)
+        pq.write_table(arrow_table(rows), sink)
         atomic_write(folder / name, sink.getvalue().to_pybytes())
+
+
+def _arrow_type(values: Iterable[Any]) -> Any:
+    """The Arrow type ``pyarrow.Table.from_pylist`` infers for a column of these Python scalars
+    (``None`` where it is not one of the plain cases: bool, int, int and float, str, all null)."""
+    import pyarrow as pa
+
+    kinds = {next((t for t in (bool, int, float, str) if isinstance(v, t)), type(v)) for v in values if v is not None}
+    if not kinds:
+        return pa.null()
+    if kinds == {bool}:
+        return pa.bool_()
+    if kinds == {int}:
+        return pa.int64() if all(-2**63 <= v < 2**63 for v in values if v is not None) else None
+    if kinds <= {int, float}:
+        return pa.float64()
+    return pa.string() if kinds == {str} else None
+
+
+def arrow_table(rows: list[dict[str, Any]]) -> Any:
+    """``rows`` (dicts of scalars, keys in column order) as a ``pyarrow.Table``, typed as
+    ``Table.from_pylist`` would type them.
+
+    Built through Arrow's JSON reader with an explicit schema rather than ``from_pylist``: any
+    conversion from Python objects makes pyarrow import pandas (~0.4 s at every session's end),
+    the JSON reader does not. Columns of other kinds fall back to ``from_pylist``."""
+    import pyarrow as pa
+    import pyarrow.json as pj
+
+    cols: list[str] = []
+    for r in rows:
+        cols += [k for k in r if k not in cols]
+    if not rows:
+        return pa.schema([]).empty_table()
+    types = [_arrow_type([r.get(c) for r in rows]) for c in cols]
+    if any(t is None for t in types):
+        return pa.Table.from_pylist(rows)
+    schema = pa.schema(list(zip(cols, types)))
+    data = "".join(dumps(r) + "\n" for r in rows).encode("utf-8")
+    # One block: a line longer than the reader's block would not parse.
+    return pj.read_json(io.BytesIO(data), read_options=pj.ReadOptions(block_size=max(1 << 20, len(data) + 1)),
+                        parse_options=pj.ParseOptions(explicit_schema=schema))
 
 
 def _at(seq: Any, i: int) -> Any:

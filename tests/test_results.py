@@ -256,3 +256,33 @@ def test_unwritable_paths_are_one_line_errors(tmp_path, monkeypatch):
         store.finalize()
     assert str(err.value).startswith(f"cannot write {tmp_path / 's'}") and "Permission denied" in str(err.value)
     assert not [p for p in (tmp_path / "s").iterdir() if p.name.endswith(".tmp")]
+
+
+@pytest.mark.parametrize("rows", [
+    [{"run_id": "a", "n": 1, "x": 0.5, "ok": True, "note": None, "mixed": 1},
+     {"run_id": "b", "n": 2, "x": None, "ok": False, "note": None, "mixed": 2.25}],
+    [{"run_id": "a", "late": None, "n": None}, {"run_id": "b", "late": "text", "n": 3}],  # values first seen late
+    [{"run_id": "a", "odd": [1, 2]}],  # not a scalar column: pyarrow's own conversion
+])
+def test_tables_are_typed_as_pyarrow_s_own_conversion_types_them(rows):
+    import pyarrow as pa
+
+    ours, theirs = results.arrow_table(rows), pa.Table.from_pylist(rows)
+    assert ours.schema == theirs.schema
+    assert ours.to_pylist() == theirs.to_pylist()
+    assert results.arrow_table([]).num_rows == 0
+
+
+def test_writing_a_study_s_tables_does_not_import_pandas(tmp_path):
+    # pyarrow imports pandas (~0.4 s) on any conversion from Python objects; the session's end
+    # must not pay it (issue 22's start-up target). A fresh interpreter, so nothing is loaded yet.
+    import subprocess
+    import sys
+
+    code = ("import sys; from jswim import results; "
+            f"results.write_tables({str(tmp_path)!r}, [{{'run_id': 'r', 'agent': 'llm', 'x': [0.1, 0.2], 'success': True}}]); "
+            "print('pandas' in sys.modules); "
+            "import pyarrow.parquet as pq; "  # reading a table back imports pandas itself
+            f"assert pq.read_table({str(tmp_path / 'trajectories.parquet')!r}).num_rows == 2")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"

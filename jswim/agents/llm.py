@@ -161,9 +161,13 @@ def _advance(base_keys: jax.Array, states: env.EnvState, actions: jax.Array, par
 
 
 @jax.jit
-def _start(reset_keys: jax.Array, params: env.EnvParams):
+def _start(seeds: jax.Array, params: env.EnvParams):
+    # One program for the whole start (keys, split, reset): every separate JAX call is one more
+    # trace and compile-cache lookup each session pays before its first request.
+    split = jax.vmap(jax.random.split)(jax.vmap(jax.random.PRNGKey)(seeds))  # = env.seed_key per run
+    reset_keys, step_keys = split[:, 0], split[:, 1]
     states = jax.vmap(env.reset)(reset_keys, params)
-    return states, jax.vmap(env.dof_values)(states, params)
+    return reset_keys, step_keys, states, jax.vmap(env.dof_values)(states, params)
 
 
 class _Group:
@@ -177,16 +181,14 @@ class _Group:
 
     def __init__(self, members: list[int], params: list[env.EnvParams], seeds: list[int]) -> None:
         self.members = members
-        dtype = jnp.result_type(float)
+        dtype = np.dtype(jnp.result_type(float))  # NumPy in, one jitted start: no eager JAX calls
         self.params = params[0].replace(
-            zeta=jnp.asarray([p.zeta for p in params], dtype),
-            direction=jnp.asarray([p.direction for p in params], dtype),
-            init=jnp.asarray(np.stack([np.asarray(p.init) for p in params]), jnp.int32),
+            zeta=np.asarray([p.zeta for p in params], dtype),
+            direction=np.asarray([p.direction for p in params], dtype),
+            init=np.stack([np.asarray(p.init) for p in params]).astype(np.int32),
         )
-        keys = jnp.stack([env.seed_key(s) for s in seeds])
-        split = jax.vmap(jax.random.split)(keys)
-        self.reset_keys, self.step_keys = split[:, 0], split[:, 1]
-        self.states, dofs = _start(self.reset_keys, self.params)
+        seeds32 = np.array([env.seed32(s) for s in seeds], np.uint32)
+        self.reset_keys, self.step_keys, self.states, dofs = _start(seeds32, self.params)
         self.dofs = np.asarray(dofs, np.float64)
         self.levels0 = np.asarray(self.states.levels)
         self._pending: dict[int, tuple[int, asyncio.Future]] = {}

@@ -6,7 +6,6 @@ import json
 from pathlib import Path
 from typing import Any, Sequence
 
-from jswim import plots
 from jswim.results import is_failed
 from jswim.stats import learn_stats, mean_interval, wilson_interval
 
@@ -58,8 +57,10 @@ def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path,
                  note: str | None = None) -> list[Path]:
     """The study's figures (:func:`jswim.plots.study_figures`) as PNG and PDF in ``folder``.
 
-    ``note`` (see :func:`jswim.plots.unfinished_note`) is written across each figure.
+    ``note`` (see :func:`jswim.results.unfinished_note`) is written across each figure.
     """
+    from jswim import plots  # lazy: matplotlib is ~0.5 s of import that --no-figures never needs
+
     paths: list[Path] = []
     rows = [r for r in rows if not is_failed(r)]  # failed runs are not results
     for name, fig in plots.study_figures(study, rows, note=note).items():

@@ -34,7 +34,7 @@ import jax
 import numpy as np
 
 from jswim import __version__, env
-from jswim.agents import fidelity, qlearning, random_policy
+from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
 from jswim.console import eta
@@ -115,6 +115,8 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     p0 = plans[0]
     if p0.agent == CONTINUOUS_AGENT:
         return _run_continuous(plans, horizon)
+    from jswim.agents import qlearning, random_policy  # lazy: optax and their jits, for baselines only
+
     base = env.make_params(p0.swimmer, **_lattice(p0.roc_levels))
     init = np.array([[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32)
     params = qlearning.batch_params(base, len(plans), zeta=np.array([p.zeta for p in plans]),
@@ -138,7 +140,7 @@ def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]
     """The real-valued RL baseline (:mod:`jswim.agents.ppo`) for one swimmer, judged on shapes
     (:func:`jswim.agents.ppo.evaluate`: :func:`jswim.shape_judge.judge_shapes` on displacements
     replayed exactly, without noise)."""
-    from jswim.agents import ppo
+    from jswim.agents import ppo, qlearning
 
     p0 = plans[0]
     base = env.make_params(p0.swimmer)

@@ -185,7 +185,7 @@ def report_html(folder: str | Path, figures: str = "auto") -> str:
     ResultFolderError
         Not a study folder (no ``metadata.json``) or unreadable metadata.
     """
-    from jswim.plots import unfinished_note
+    from jswim.results import unfinished_note
 
     folder = Path(folder)
     meta = read_metadata(folder)
