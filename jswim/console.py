@@ -93,8 +93,14 @@ def requests_text(counts: Mapping[str, Any]) -> str:
     """``132 sent (12 retries; transient faults: 429 x5, 5xx x4, connection x3)`` from a session's
     or a study's ``requests``, ``retries`` and ``faults`` (by kind)."""
     faults = ", ".join(f"{k} x{n}" for k, n in sorted((counts.get("faults") or {}).items()) if n)
-    return (f"{counts.get('requests', 0):.0f} sent ({counts.get('retries', 0):.0f} retries"
+    text = (f"{counts.get('requests', 0):.0f} sent ({counts.get('retries', 0):.0f} retries"
             + (f"; transient faults: {faults}" if faults else "; no transient faults") + ")")
+    unanswered = counts.get("unanswered") or 0
+    if unanswered:  # sent whole, no answer: a provider may have billed them (jswim.llm.budget)
+        usd = counts.get("unanswered_usd") or 0.0
+        text += (f"; {unanswered:.0f} got no answer (timed out or cut while waiting) and may have been billed"
+                 + (f": at most ${usd:.4f}, counted against --max-cost" if usd else ""))
+    return text
 
 
 def format_duration(seconds: float) -> str:

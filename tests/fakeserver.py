@@ -113,6 +113,21 @@ def hash_reply(body: dict[str, Any]) -> str:
     return GAIT_MOVES[zlib.crc32(last.encode()) % len(GAIT_MOVES)]
 
 
+def hangs_for(seconds: float, reply: "Reply" = hash_reply) -> "Reply":
+    """A server that hangs: every request arriving within ``seconds`` of the first one is read and
+    never answered (a wedged worker, a proxy that lost its upstream; the client times out), and
+    later ones are answered by ``reply``. Use as ``FakeServer(reply=hangs_for(2.0))``."""
+    state: dict[str, float] = {}
+
+    def answer(body: dict[str, Any]) -> "str | Answer | Fault":
+        t0 = state.setdefault("t0", time.monotonic())
+        if time.monotonic() - t0 < seconds:
+            return Fault.delay(3600.0)  # until the server stops (its tasks are cancelled then)
+        return reply(body)
+
+    return answer
+
+
 _ROC_RANGE = re.compile(r"The ROC is a whole number from -(\d+) to (\d+)")
 
 
@@ -384,6 +399,8 @@ class FakeServer:
                     break
         except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, ConnectionError, ValueError):
             pass  # the client went away or sent garbage
+        except asyncio.CancelledError:
+            pass  # the server stops while an answer still waits (hangs_for): no noise in the log
         finally:
             writer.close()
 

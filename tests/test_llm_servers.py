@@ -254,13 +254,21 @@ def test_bad_base_urls_say_what_to_write(bad):
 
 
 @pytest.mark.parametrize("mode", ["cold"], indirect=True)
-def test_cold_server_timeouts_are_bounded_and_say_slow(mode):
+def test_cold_server_timeouts_are_bounded_by_the_retry_budget_and_say_slow(mode):
     with pytest.raises(LLMTimeoutError) as err:
-        call(mode.url, timeout_s=0.3, timeout_retries=1, max_retries=6)
+        call(mode.url, timeout_s=0.3, max_retries=2)
     msg = _one_line(err.value)
-    assert "slow" in msg and "--timeout" in msg and "0.3 s" in msg
-    assert mode.n_requests == 2  # one retry, not max_retries
+    assert "slow" in msg and "--timeout" in msg and "0.3 s" in msg and "--retries 2" in msg
+    assert "gave up after 3 attempts" in msg
+    assert mode.n_requests == 3  # timeouts count against --retries like any transient failure
     assert mode.n_answered == 0  # gave up before the server warmed up (it never got to answer)
+
+
+@pytest.mark.parametrize("mode", ["cold"], indirect=True)
+def test_cold_server_timeouts_are_ridden_out_within_the_retry_budget(mode):
+    # The server answers nothing for its first 1.5 s; 0.3 s timeouts are retried at once.
+    res = call(mode.url, timeout_s=0.3, max_retries=20)
+    assert res.text == "[2, -1]" and res.retries >= 3 and mode.n_requests == res.retries + 1
 
 
 @pytest.mark.parametrize("mode", ["cold"], indirect=True)
@@ -271,7 +279,7 @@ def test_cold_server_with_a_longer_timeout_works(mode):
 
 def test_timeout_settings_are_recorded():
     meta = settings("http://127.0.0.1:1/v1", timeout_s=120, omit_fields=("seed",)).metadata()
-    assert meta["timeout_s"] == 120 and meta["omit_fields"] == ["seed"] and meta["timeout_retries"] == 1
+    assert meta["timeout_s"] == 120 and meta["omit_fields"] == ["seed"] and meta["max_retries"] == 20
 
 
 # -- caching only answers -------------------------------------------------------------------

@@ -20,7 +20,7 @@ MSG = [{"role": "user", "content": "Say [1, 1]"}]
 
 
 def settings(url: str, **kw) -> ClientSettings:
-    return ClientSettings(base_url=url, model="fake", backoff_base_s=0.02, backoff_max_s=0.1, timeout_s=5.0, **kw)
+    return ClientSettings(base_url=url, model="fake", **{"backoff_base_s": 0.02, "backoff_max_s": 0.1, "timeout_s": 5.0, **kw})
 
 
 async def one_call(s: ClientSettings):
@@ -122,3 +122,73 @@ def test_a_spent_budget_stops_cleanly_and_the_same_command_resumes(tmp_path, cap
     rows = read_runs(tmp_path / "F")
     assert len(rows) == 2 and all(r["status"] == "done" for r in rows)
     assert json.loads((tmp_path / "F" / "metadata.json").read_text())["llm_totals"]["sessions"] == 2
+
+
+# -- timeouts: transient like the rest, and a request that got no answer may have been billed --
+
+
+def test_a_server_that_hangs_then_recovers_is_ridden_out_and_every_timeout_counted():
+    from tests.fakeserver import hangs_for
+
+    with FakeServer(reply=hangs_for(0.8)) as srv:
+        res, counts = asyncio.run(one_call(settings(srv.url, timeout_s=0.2, max_retries=20, retry_for_s=30.0)))
+        assert res.text in ("[1, -1]", "[2, -1]", "[1, 1]", "[2, 1]")
+        assert res.retries >= 3 and counts.requests == srv.n_requests == res.retries + 1
+    assert counts.faults == {"timeout": res.retries}
+    assert counts.unanswered == res.retries  # each was read whole by the server and never answered
+
+
+def test_timeouts_spend_the_retry_time_from_when_the_first_attempt_went_out():
+    from tests.fakeserver import hangs_for
+
+    with FakeServer(reply=hangs_for(60.0)) as srv:
+        t0 = time.monotonic()
+        with pytest.raises(LLMServerError, match="slow.*--retry-for 0.5") as err:
+            asyncio.run(one_call(settings(srv.url, timeout_s=0.2, max_retries=10_000, retry_for_s=0.5)))
+        took = time.monotonic() - t0
+    # 0.2 s timeouts sent back to back: the 0.5 s budget (counted from the first send) allows 3
+    # (a loaded machine may fit fewer), never the 10,000 retries the count would.
+    assert 2 <= srv.n_requests <= 4 and took < 5
+    assert "no answer within 0.2 s" in str(err.value)
+
+
+def test_a_request_that_got_no_answer_counts_against_the_cost_cap():
+    from jswim.llm.budget import Budget, BudgetExhausted
+    from tests.fakeserver import hangs_for
+
+    prices = {"fake": (1_000_000.0, 1_000_000.0)}  # $1 per token: a call's bound is some dollars
+
+    async def run(url: str, budget: Budget):
+        async with LLMClient(settings(url, timeout_s=0.2, prices=prices), budget=budget) as c:
+            return await c.chat(MSG), c.counts
+
+    with FakeServer(reply=hangs_for(0.1)) as srv:  # the first request hangs, the retry is answered
+        budget = Budget(cap_usd=1e6)
+        res, counts = asyncio.run(run(srv.url, budget))
+        bound = counts.unanswered_usd
+        assert counts.unanswered == 1 and res.retries == 1 and bound > 1
+        assert budget.unanswered_usd == pytest.approx(bound)  # kept against the cap, not released
+        assert budget.spent_usd == pytest.approx(res.cost_usd) and budget.reserved_usd == 0
+    with FakeServer(reply=hangs_for(60.0)) as srv:  # room for one request: the unanswered one fills it
+        budget = Budget(cap_usd=1.5 * bound)
+        with pytest.raises(BudgetExhausted, match="got no answer"):
+            asyncio.run(run(srv.url, budget))
+        assert srv.n_requests == 1 and budget.spent_usd == 0 and budget.unanswered_usd == pytest.approx(bound)
+
+
+def test_the_summary_and_show_say_how_many_requests_got_no_answer(tmp_path, capsys):
+    from tests.fakeserver import hangs_for
+
+    args = ["swim", *FAST, "--runs", "1", "--timeout", "0.3", "--out", str(tmp_path / "F")]
+    with FakeServer(reply=hangs_for(1.0)) as srv:
+        assert cli.main([*args, "--base-url", srv.url]) == 0
+        out = capsys.readouterr().out
+        sent = srv.n_requests
+    line = next(ln for ln in out.splitlines() if ln.startswith("HTTP requests:"))
+    totals = read_metadata(tmp_path / "F")["llm_totals"]
+    timeouts = totals["faults"]["timeout"]
+    assert totals["requests"] == sent and timeouts >= 2 and totals["unanswered"] == timeouts
+    assert line.startswith(f"HTTP requests: {sent} sent ({timeouts} retries; transient faults: timeout x{timeouts}")
+    assert f"{timeouts} got no answer" in line and "may have been billed" in line
+    assert cli.main(["show", str(tmp_path / "F")]) == 0
+    assert f"{timeouts} got no answer" in capsys.readouterr().out

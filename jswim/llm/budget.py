@@ -11,6 +11,12 @@ calls in flight fell short by.
 
 ``spent_usd`` starts at what earlier sessions of the same study already paid, so the cap is on
 the study, and the same command with a higher cap goes on where the last one stopped.
+
+A request sent whole that got no answer (a read timeout, a connection cut while waiting) may
+still have been run and billed by the server, which jswim cannot see: its reservation is kept, as
+``unanswered_usd``, and counts against the cap like money spent (earlier sessions' too, from the
+study's ``llm_totals``). The cap stays a bound on what the provider can bill, while ``spent_usd``
+stays what the answered calls cost.
 """
 
 from __future__ import annotations
@@ -44,6 +50,8 @@ class Budget:
         The cap (``None``: no cap; reservations are still tracked).
     spent_usd : float
         Already spent (earlier sessions).
+    unanswered_usd : float
+        Bounds of earlier sessions' requests that got no answer (see the module docstring).
 
     Raises
     ------
@@ -51,20 +59,21 @@ class Budget:
         For a negative or non-finite cap.
     """
 
-    def __init__(self, cap_usd: float | None, spent_usd: float = 0.0) -> None:
+    def __init__(self, cap_usd: float | None, spent_usd: float = 0.0, unanswered_usd: float = 0.0) -> None:
         if cap_usd is not None and not (math.isfinite(cap_usd) and cap_usd >= 0):
             raise ConfigError(f"the cost cap must be a number >= 0, got {cap_usd}")
         self.cap_usd = cap_usd
         self.spent_usd = float(spent_usd)
+        self.unanswered_usd = float(unanswered_usd)
         self.reserved_usd = 0.0
         self.exhausted = False  # set by the first refusal; every later reservation is refused
 
     @property
     def remaining_usd(self) -> float | None:
-        """Cap minus spent minus reserved (``None`` without a cap)."""
+        """Cap minus spent, unanswered and reserved (``None`` without a cap)."""
         if self.cap_usd is None:
             return None
-        return self.cap_usd - self.spent_usd - self.reserved_usd
+        return self.cap_usd - self.spent_usd - self.unanswered_usd - self.reserved_usd
 
     def reserve(self, usd: float) -> float:
         """Reserve ``usd`` for a call about to go out; returns the amount to settle later.
@@ -74,10 +83,13 @@ class Budget:
         BudgetExhausted
             When the cap would be passed (or was reached before).
         """
-        if self.cap_usd is not None and (self.exhausted or self.spent_usd + self.reserved_usd + usd > self.cap_usd):
+        if self.cap_usd is not None and (self.exhausted or self.spent_usd + self.unanswered_usd + self.reserved_usd
+                                         + usd > self.cap_usd):
             self.exhausted = True
+            unanswered = (f", at most ${self.unanswered_usd:.4f} for requests that got no answer"
+                          if self.unanswered_usd else "")
             raise BudgetExhausted(
-                f"stopped at the cost cap: ${self.spent_usd:.4f} spent, ${self.reserved_usd:.4f} in flight, "
+                f"stopped at the cost cap: ${self.spent_usd:.4f} spent{unanswered}, ${self.reserved_usd:.4f} in flight, "
                 f"cap ${self.cap_usd:.4f}; rerun with a higher --max-cost to continue"
             )
         self.reserved_usd += usd
@@ -91,3 +103,8 @@ class Budget:
     def release(self, reserved: float) -> None:
         """Drop a reservation whose call was not billed (failed attempt)."""
         self.reserved_usd = max(0.0, self.reserved_usd - reserved)
+
+    def unanswered(self, reserved: float) -> None:
+        """Keep a reservation whose request went out and got no answer: the server may bill it."""
+        self.reserved_usd = max(0.0, self.reserved_usd - reserved)
+        self.unanswered_usd += reserved

@@ -2,8 +2,9 @@
 
 One :class:`LLMClient` serves a whole study: many requests in flight at once (bounded by a
 semaphore), retries with exponential backoff and jitter on transient failures (connection errors,
-408, 409, 429, 5xx, unreadable bodies; timeouts a bounded number of times), ``Retry-After``
-honoured, a disk cache and in-flight de-duplication for deterministic (temperature 0) requests,
+timeouts, 408, 409, 429, 5xx, unreadable bodies) within one budget per call (``max_retries``,
+``retry_for_s``), ``Retry-After`` honoured, requests that got no answer counted as possibly
+billed, a disk cache and in-flight de-duplication for deterministic (temperature 0) requests,
 and usage/cost per call.
 
 Real servers differ in ordinary ways and the client absorbs them (see :mod:`jswim.llm.reply`):
@@ -86,10 +87,11 @@ class ClientSettings:
     api_key_env : str
         Name of the environment variable holding the API key (unset: no ``Authorization``).
     timeout_s : float
-        Per-attempt timeout (connect, read, write, pool).
-    timeout_retries : int
-        Times a request that timed out is sent again (within ``max_retries``); then the call
-        fails with :class:`~jswim.llm.errors.LLMTimeoutError`, saying the server is slow.
+        Per-attempt timeout (connect, read, write, pool). A request that times out is a transient
+        failure like a 5xx: sent again within the retry budget (``max_retries``, ``retry_for_s``,
+        whose clock runs from when the first failed attempt went out, so the waits for answers
+        that never came count); when the budget is spent on timeouts the call fails with
+        :class:`~jswim.llm.errors.LLMTimeoutError`, saying the server is slow.
     max_concurrency : int
         Requests in flight at once.
     max_retries : int
@@ -153,7 +155,6 @@ class ClientSettings:
     model: str = "gpt-4"
     api_key_env: str = "OPENAI_API_KEY"
     timeout_s: float = 60.0
-    timeout_retries: int = 1
     max_concurrency: int = 16
     max_retries: int = 20
     retry_for_s: float | None = 120.0
@@ -185,8 +186,6 @@ class ClientSettings:
         required = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
         if required:
             raise ConfigError(f"cannot leave out the request field(s) {', '.join(required)}: every request needs them")
-        if self.timeout_retries < 0:
-            raise ConfigError(f"timeout_retries must be >= 0, got {self.timeout_retries}")
         if self.constrain not in constrain.MODES:
             raise ConfigError(f"constrain must be one of {constrain.MODES}, got {self.constrain!r}")
         if self.server_kind not in constrain.SERVER_KINDS:
@@ -210,7 +209,6 @@ class ClientSettings:
             "max_retries": self.max_retries,
             "retry_for_s": self.retry_for_s,
             "timeout_s": self.timeout_s,
-            "timeout_retries": self.timeout_retries,
             "omit_fields": list(self.omit_fields),
             "reasoning": self.reasoning,
             "reasoning_max_tokens": self.reasoning_max_tokens,
@@ -353,12 +351,15 @@ class _Failure(Exception):
     """A retryable attempt failure (internal); ``kind`` is one of :data:`FAULT_KINDS`."""
 
     def __init__(self, what: str, retry_after: float | None = None, bad_body: bool = False,
-                 timeout: bool = False, kind: str = "connection") -> None:
+                 timeout: bool = False, kind: str = "connection", unanswered: bool = False) -> None:
         super().__init__(what)
         self.what = what
         self.retry_after = retry_after
         self.bad_body = bad_body
         self.timeout = timeout
+        #: The request went out whole and no answer came back (a read timeout, a connection cut
+        #: while waiting): the server may have run, and billed, it.
+        self.unanswered = unanswered
         self.kind = "bad body" if bad_body else "timeout" if timeout else kind
 
 
@@ -387,6 +388,11 @@ class LiveCounts:
     requests: int = 0  # HTTP requests sent (first attempts and retries): what the server counts
     retries: int = 0  # of those, retries after a transient failure
     faults: dict[str, int] = field(default_factory=dict)  # transient failures by kind (FAULT_KINDS)
+    # Requests sent whole that got no answer (timed out, cut while waiting, cancelled in flight by
+    # an interruption): a server may still have run and billed them. ``unanswered_usd`` is what
+    # they could have cost at most (their call bound; 0 where calls are not priced).
+    unanswered: int = 0
+    unanswered_usd: float = 0.0
 
 
 class LLMClient:
@@ -680,9 +686,9 @@ class LLMClient:
         s = self.settings
         slots = self._slots
         assert slots is not None
-        retries = timeouts = 0
+        retries = 0
         adaptations = 0
-        first_failure: float | None = None
+        first_failure: float | None = None  # when the first failed attempt went out
         while True:
             tokens = estimate_prompt_tokens(payload["messages"]) + int(
                 payload.get("max_tokens") or payload.get("max_completion_tokens") or 0)
@@ -699,6 +705,7 @@ class LLMClient:
                 self.counts.requests += 1
                 self.counts.retries += retries > 0
                 self.counts.in_flight += 1
+                sent_at = time.perf_counter()
                 try:
                     got = await self._attempt(slot.http, payload)
                 except _Adapted:
@@ -709,9 +716,20 @@ class LLMClient:
                         raise self._rejection(400, "the server kept refusing the amended request", payload) from None
                     payload = self._amend(payload)
                     continue
-                except BaseException:
-                    if self.budget is not None:
+                except BaseException as exc:
+                    # Sent and never answered (a timeout, a cut, a Ctrl-C while waiting): the server
+                    # may bill it, so its bound stays counted against the cap; anything else was
+                    # refused or never arrived and costs nothing.
+                    if isinstance(exc, _Failure) and exc.unanswered or isinstance(exc, asyncio.CancelledError):
+                        bound = call_bound(payload, self._prices, s.model)
+                        self.counts.unanswered += 1
+                        self.counts.unanswered_usd += bound
+                        if self.budget is not None:
+                            self.budget.unanswered(held)
+                    elif self.budget is not None:
                         self.budget.release(held)
+                    if isinstance(exc, _Failure) and first_failure is None:
+                        first_failure = sent_at
                     raise
                 finally:
                     self.counts.in_flight -= 1
@@ -726,17 +744,17 @@ class LLMClient:
                 now = time.perf_counter()
                 first_failure = now if first_failure is None else first_failure
                 left = math.inf if s.retry_for_s is None else s.retry_for_s - (now - first_failure)
-                timeouts += fail.timeout
-                if fail.timeout and timeouts > s.timeout_retries:
-                    raise LLMTimeoutError(self._scrub(
-                        f"{self._where}: the server is slow: no answer within {s.timeout_s:g} s, "
-                        f"{timeouts} attempt(s); a cold local server may still be loading its model: "
-                        f"wait for it or raise --timeout (now {s.timeout_s:g} s)"
-                    )) from None
                 if retries >= s.max_retries or left <= 0:
                     spent = f"{retries} retries over {now - first_failure:.0f} s"
-                    msg = (f"{self._where}: {fail.what}; gave up after {retries + 1} attempts ({spent}; the budget is "
-                           f"--retries {s.max_retries}, --retry-for {s.retry_for_s if s.retry_for_s is not None else 'none'})")
+                    budget = (f"the budget is --retries {s.max_retries}, "
+                              f"--retry-for {s.retry_for_s if s.retry_for_s is not None else 'none'}")
+                    if fail.timeout:  # the last straw was a timeout: say slow, and what to raise
+                        raise LLMTimeoutError(self._scrub(
+                            f"{self._where}: the server is slow: no answer within {s.timeout_s:g} s; gave up after "
+                            f"{retries + 1} attempts ({spent}; {budget}); a cold local server may still be loading "
+                            f"its model: wait for it or raise --timeout (now {s.timeout_s:g} s)"
+                        )) from None
+                    msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts ({spent}; {budget})"
                     raise (LLMResponseError if fail.bad_body else LLMServerError)(self._scrub(msg)) from None
                 # A timed-out request already waited a whole timeout: send it again at once.
                 wait = 0.0 if fail.timeout else self._backoff(retries)
@@ -754,11 +772,14 @@ class LLMClient:
             resp = await self._post(http, payload)
         except httpx.ConnectTimeout:
             raise _Failure(f"could not connect within {s.timeout_s:g} s", kind="connection") from None
-        except httpx.TimeoutException:
-            raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True) from None
+        except httpx.TimeoutException as exc:  # read (the request was sent whole), write or pool
+            raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
+                           unanswered=isinstance(exc, httpx.ReadTimeout)) from None
         except httpx.TransportError as exc:
             detail = self._scrub(str(exc)) or "no detail"
-            raise _Failure(f"connection failed ({type(exc).__name__}: {detail})") from None
+            # Cut while waiting for the answer (after the request went out) vs never connected.
+            cut = isinstance(exc, (httpx.ReadError, httpx.RemoteProtocolError))
+            raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=cut) from None
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
         status = resp.status_code

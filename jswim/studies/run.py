@@ -515,7 +515,9 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
     journal = CallJournal(store.folder)
     spent_before = journal.spent_usd
-    budget = Budget(max_cost, spent_usd=spent_before)
+    # Earlier sessions' requests that got no answer may have been billed: still under the cap.
+    unanswered_before = float((store.meta.get("llm_totals") or {}).get("unanswered_usd") or 0.0)
+    budget = Budget(max_cost, spent_usd=spent_before, unanswered_usd=unanswered_before)
     live: list[LLMClient] = []  # the open client, for its running counts
 
     def report(phase: str = "llm") -> None:
@@ -598,7 +600,8 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                      billed_calls_per_s=totals["billed_calls"] / wall if wall > 0 else 0.0,
                      tokens=c.tokens if c else 0, cost_usd=budget.spent_usd - spent_before,
                      study_cost_usd=budget.spent_usd, requests=c.requests if c else 0,
-                     retries=c.retries if c else 0, faults=dict(sorted(c.faults.items())) if c else {})
+                     retries=c.retries if c else 0, faults=dict(sorted(c.faults.items())) if c else {},
+                     unanswered=c.unanswered if c else 0, unanswered_usd=c.unanswered_usd if c else 0.0)
         store.meta["llm_totals"] = add_session(store.meta.get("llm_totals"), speed, journal.n_calls)
     return finished, budget.exhausted
 
@@ -609,11 +612,14 @@ def add_session(totals: dict[str, Any] | None, speed: dict[str, Any], answered_c
     ``answered_calls`` is the call journal's count (every answered call of the study, all
     sessions, finished runs or not), so calls per second divide the study's calls by the study's
     LLM wall time, never one session's by another's. ``requests`` are HTTP requests sent (what
-    the server counts: first attempts and retries), ``faults`` transient failures by kind.
+    the server counts: first attempts and retries), ``faults`` transient failures by kind,
+    ``unanswered`` requests sent whole that got no answer (the server may have billed them; at most
+    ``unanswered_usd``).
     """
     t = dict(totals or {})
     t["sessions"] = int(t.get("sessions", 0)) + 1
-    for k in ("wall_s", "requests", "retries", "billed_calls", "replayed_calls", "tokens"):
+    for k in ("wall_s", "requests", "retries", "billed_calls", "replayed_calls", "tokens", "unanswered",
+              "unanswered_usd"):
         t[k] = (t.get(k) or 0) + (speed.get(k) or 0)
     faults = dict(t.get("faults") or {})
     for k, n in (speed.get("faults") or {}).items():
