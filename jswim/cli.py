@@ -29,6 +29,7 @@ from typing import Any, Iterator, Sequence
 
 from jswim.actions import ACTION_SETS
 from jswim.errors import ConfigError, JswimError, LLMServerError
+from jswim.commands import scenes as scene_options
 
 EXIT_USAGE = 2
 #: Largest count a batched command accepts (--n, --seeds, --steps, --chunk): swimmer and learner
@@ -245,6 +246,7 @@ STUDY_HELP = {
     "inits": "the four initial configurations",
     "competence": "every protocol variant next to random and Q-learning baselines",
     "temperature": "the LLM runs over a grid of sampling temperatures",
+    **scene_options.STUDY_HELP,
     "continuous": "finer ROCs (K in 1, 2, 5, 10) for the LLM, lattice Q-learning and random policy, and the "
                   "real-valued PPO baseline",
 }
@@ -297,13 +299,14 @@ def build_parser(outline: bool = False) -> argparse.ArgumentParser:
                                    "finer ROCs (--roc-levels) for the LLM and lattice Q-learning, and a "
                                    "real-valued RL baseline.")
     sub_studies = p.add_subparsers(dest="name", metavar="NAME", parser_class=_Parser,
-                                           help="curves, history, noise, ablation, inits, competence, temperature or continuous")
+                                           help="curves, history, noise, ablation, inits, competence, temperature, continuous, wall or pair")
     sub_studies.required = True
     for name in (s for s in STUDIES if s != "swim"):
         q = sub_studies.add_parser(name, help=STUDY_HELP.get(name, name),
                                    description=f"The {name} study: {STUDY_HELP.get(name, name)}. Every default "
                                                "below is this study's.")
         _add_run_options(q, study=True, spec=SPECS[name])
+        scene_options.register(q, name)
     p = sub.add_parser("qlearn", help="Q-learning steps-to-learn distributions",
                        description="Train many independent Q-learners on-device and summarise steps-to-learn.")
     p.add_argument("--swimmer", type=_swimmers, default=("purcell", "ng"), metavar="NAME",
@@ -494,6 +497,7 @@ def _options(args: argparse.Namespace, study: str):
         raise ConfigError("--variant takes one name here (a list only for the competence study)")
     elif names:
         kw["variant"] = names[0]
+    kw.update(scene_options.options(args))
     return StudyOptions(**kw)
 
 
@@ -595,6 +599,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
             return EXIT_USAGE
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
     _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
+    scene_options.print_table(result.rows)
     _print_reasoning(result)
     for note in result.notes:
         print(note)

@@ -220,6 +220,10 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     if s.summary:
         cols, rows = summary_table(s.summary)
         lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
+        if any(r.get("scene") for r in s.rows):  # walls and pairs: the scene table too (jswim.studies.scenes)
+            from jswim.studies.scenes import scene_summary, table
+
+            lines += ["", plain_table(*table(scene_summary(s.rows)), title="scenes", width=width)]
     else:
         lines.append("no finished runs yet")
     lines.append("")

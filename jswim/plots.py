@@ -706,6 +706,10 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
                                            note=note, learn=True)}
     if study == "continuous":
         return continuous_figures(rows, note=note)
+    if study in ("wall", "pair"):  # walls and pairs (issue 19)
+        from jswim.scene_plots import scene_figures
+
+        return scene_figures(study, rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [{**r, "entry": r["group"] if r["agent"] == "llm" else f"{r['agent']} ({r['group']})"} for r in rows]

@@ -62,6 +62,17 @@ dropped); with ``K = 1`` the prompt is the paper's, byte for byte. :func:`parse_
 the offered integers: ``[1, 0.5]``, ``[1, 1/2]`` or a ROC beyond ``K`` name no action and are
 asked again.
 
+Scenes (walls, obstacles and pairs, an extension; :class:`SceneView` on :class:`SwimmerText`).
+The prompt grows only what the agent needs. With a wall, S2 gains one sentence and every record
+shows the height ``H`` of the middle sphere above the wall (thousandths of ``a``, truncated, as X
+is: :func:`encode_height`) and the tilt (rad, three decimals). With two swimmers the DOFs are joint
+(D1, D2 swimmer 1's arms, D3, D4 swimmer 2's): a reply ``[3, 1]`` names swimmer 2 through its DOF,
+so the answer format, the parser and constrained decoding are the paper's; S2 says which DOFs are
+whose and where swimmer 2 starts, and every record shows both positions X1 and X2 (X, the reward's
+position, is their mean). :func:`scene_template` builds S3's legend and the record line; a
+template file is used as given (its placeholders ``{x1_before}`` .. ``{tilt2_after}``, ``{h_before}``,
+``{tilt_before}`` are always known). Without a scene the prompt is the paper's, byte for byte.
+
 The ``record`` template formats one history line with ``{step}`` (the record's index since the
 last clear, from 1), ``{dofs_before}``, ``{action}``, ``{dofs_after}``, ``{x_before}``,
 ``{x_after}`` and ``{stuck}`` (``yes`` when ``|dX| <`` :data:`STUCK_DX`, holds and moves past a
@@ -177,6 +188,32 @@ def _join_prose(items: Sequence[str], last: str = "and") -> str:
 
 
 @dataclass(frozen=True)
+class SceneView:
+    """What the prompt shows of a scene (issue 19, an extension; ``None`` on
+    :class:`SwimmerText` is the paper's lone swimmer in bulk fluid, whose prompt is unchanged).
+
+    Attributes
+    ----------
+    swimmers : int
+        1 or 2. With two, the DOFs are joint (swimmer 1's arms D1, D2; swimmer 2's D3, D4: a reply
+        names the swimmer through its DOF) and every record shows each swimmer's position X1, X2.
+    wall : bool
+        A no-slip wall below: every record shows each swimmer's height H (integer-encoded as X is:
+        thousandths of ``a``, :func:`encode_height`) and tilt (rad, three decimals).
+    separation : float
+        The pair's starting distance D (sphere radii), said once in S2.
+    """
+
+    swimmers: int = 1
+    wall: bool = False
+    separation: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.swimmers not in (1, 2):
+            raise ConfigError(f"a scene holds 1 or 2 swimmers, got {self.swimmers}")
+
+
+@dataclass(frozen=True)
 class SwimmerText:
     """What the prompt needs to know about a swimmer.
 
@@ -195,6 +232,8 @@ class SwimmerText:
     roc_levels : int
         ``K`` (1, the paper's set, by default). Above 1, S2 and S5 each get one sentence saying
         what the integer ROC means (:data:`ROC_SCALE_SENTENCE`, :data:`ROC_FORMAT_SENTENCE`).
+    scene : SceneView, optional
+        A wall and/or a second swimmer (:class:`SceneView`); ``None``: the paper's bulk fluid.
     """
 
     n_dof: int
@@ -203,6 +242,7 @@ class SwimmerText:
     dof_decimals: int = 3
     rocs: tuple[int, ...] = (-1, 0, 1)
     roc_levels: int = 1
+    scene: SceneView | None = None
 
     def __post_init__(self) -> None:
         if self.n_dof < 1:
@@ -284,6 +324,14 @@ class HistoryRecord:
     x_before: float
     x_after: float
     stuck: bool = False
+    # Scenes only (empty in the paper's bulk fluid): per swimmer, positions (X1, X2), heights
+    # above the wall and tilts (rad), before and after the step.
+    xs_before: tuple[float, ...] = ()
+    xs_after: tuple[float, ...] = ()
+    heights_before: tuple[float, ...] = ()
+    heights_after: tuple[float, ...] = ()
+    tilts_before: tuple[float, ...] = ()
+    tilts_after: tuple[float, ...] = ()
 
     @property
     def dx(self) -> float:
@@ -509,7 +557,79 @@ def _record_values(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> di
         "x_before": str(encode_position(rec.x_before, cfg.x_min)),
         "x_after": str(encode_position(rec.x_after, cfg.x_min)),
         "stuck": "yes" if rec.stuck or abs(rec.dx) < STUCK_DX else "no",
+        **_scene_record_values(rec, cfg),
     }
+
+
+def encode_height(h: float) -> int:
+    """A height above the wall as the prompt shows it: thousandths of ``a``, truncated, as X is
+    (:func:`encode_position` with ``X_min = 0``: heights are positive)."""
+    return encode_position(h, 0.0)
+
+
+def _scene_record_values(rec: HistoryRecord, cfg: PromptConfig) -> dict[str, str]:
+    """A record's scene placeholders (empty where the record has no scene): ``x1_before`` ..
+    ``x2_after`` (encoded as X), ``h1_before`` .. ``h2_after`` (:func:`encode_height`),
+    ``tilt1_before`` .. ``tilt2_after`` (rad, 3 decimals), and ``h_*``/``tilt_*`` for swimmer 1."""
+    out: dict[str, str] = {}
+    for k in (1, 2):
+        for when in ("before", "after"):
+            xs, hs, ts = (getattr(rec, f"{n}_{when}") for n in ("xs", "heights", "tilts"))
+            out[f"x{k}_{when}"] = str(encode_position(xs[k - 1], cfg.x_min)) if k <= len(xs) else ""
+            out[f"h{k}_{when}"] = str(encode_height(hs[k - 1])) if k <= len(hs) else ""
+            out[f"tilt{k}_{when}"] = format_dof(ts[k - 1], 3) if k <= len(ts) else ""
+    for when in ("before", "after"):
+        out[f"h_{when}"], out[f"tilt_{when}"] = out[f"h1_{when}"], out[f"tilt1_{when}"]
+    return out
+
+
+def scene_template(view: SceneView, base: PromptTemplate | None = None) -> PromptTemplate:
+    """The default template for a scene: S3's legend and the record line gain what
+    :class:`SceneView` says each record shows. A template other than the default (a
+    ``--prompt-file``) is returned as given: its author chose what to show."""
+    base = DEFAULT_TEMPLATE if base is None else base
+    if base != DEFAULT_TEMPLATE:
+        return base
+    legend, line = [], []
+    if view.swimmers == 1:
+        legend.append("X before -> after")
+        line.append("X {x_before} -> {x_after}")
+    else:
+        legend += ["X1 before -> after", "X2 before -> after"]
+        line += ["X1 {x1_before} -> {x1_after}", "X2 {x2_before} -> {x2_after}"]
+    if view.wall:
+        for k in range(1, view.swimmers + 1):
+            n = "" if view.swimmers == 1 else str(k)
+            legend += [f"H{n} before -> after", f"tilt{n} before -> after"]
+            line += [f"H{n} {{h{k}_before}} -> {{h{k}_after}}", f"tilt{n} {{tilt{k}_before}} -> {{tilt{k}_after}}"]
+    s3 = ("Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, "
+          + ", ".join(legend) + ", stuck):\n{history}")
+    record = "{step}: ({dofs_before}) {action} -> ({dofs_after}), " + ", ".join(line) + ", stuck {stuck}"
+    return replace(base.with_sentences(S3=s3), record=record)
+
+
+#: S2's extra sentence for a wall (one swimmer), for a pair, and for a pair above a wall.
+WALL_SENTENCE = ("The swimmer moves above a flat wall: H is its height above the wall in thousandths of its sphere "
+                 "radius and tilt its angle to the wall in radians.")
+PAIR_SENTENCE = ("D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swimmer 2, which starts {separation} "
+                 "sphere radii ahead of it on the same axis; X1 and X2 are their positions, and the movement sought is "
+                 "that of their mean.")
+PAIR_WALL_SENTENCE = ("Both swim above a flat wall: H1 and H2 are their heights above it in thousandths of the sphere "
+                      "radius, tilt1 and tilt2 their angles to it in radians.")
+
+
+def scene_sentence(view: SceneView | None) -> str:
+    """What S2 gains for a scene (empty for none)."""
+    if view is None:
+        return ""
+    parts = []
+    if view.swimmers == 2:
+        parts.append(PAIR_SENTENCE.format(separation=f"{view.separation:g}"))
+        if view.wall:
+            parts.append(PAIR_WALL_SENTENCE)
+    elif view.wall:
+        parts.append(WALL_SENTENCE)
+    return " ".join(parts)
 
 
 def render_prompt(
@@ -555,6 +675,8 @@ def render_prompt(
         text = "" if name in cfg.drop else _fill(cfg.template.sentence(name), values, name)
         if text and sw.roc_levels > 1 and name in _ROC_SENTENCES:
             text += " " + _ROC_SENTENCES[name].format_map(values)
+        if text and name == "S2" and sw.scene is not None:
+            text += " " + scene_sentence(sw.scene)
         values[name] = text
     layout = cfg.layout
     if summary and "summary" not in _fields(layout):
@@ -600,7 +722,7 @@ def _placeholders() -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Names a layout or sentence may use (the variables and S1..S5), and a record line's."""
     sw = SwimmerText(2, -1.0, 1.0, 3, (-1, 0, 1))  # any swimmer: only the names count
     cfg = PromptConfig()
-    rec = HistoryRecord(1, (1.0, 1.0), (-1.0, 1.0), Action(1, -1), 0.0, 0.0)
+    rec = HistoryRecord(1, (1.0, 1.0), (-1.0, 1.0), Action(1, -1), 0.0, 0.0)  # scene names are always listed
     prompt = tuple(_prompt_values(sw, cfg, 1, [], allowed_actions(sw), (1.0, 1.0), 0.0, "")) + SENTENCES
     return prompt, tuple(_record_values(rec, sw, cfg))
 

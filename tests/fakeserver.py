@@ -147,6 +147,24 @@ def lattice_reply(body: dict[str, Any]) -> str:
     return f"[{1 + h % 2}, {roc}]"
 
 
+_DOF_CHOICES = re.compile(r"the changed DOF ([0-9, or]+?) and the ROC")
+
+
+def scene_reply(body: dict[str, Any]) -> str:
+    """A deterministic, prompt-dependent move over the DOFs S5 offers (four for a pair of NG
+    swimmers: D3 and D4 are swimmer 2's). A first attempt sometimes names a DOF one past the last,
+    as a model may that miscounts the swimmers' arms, to be asked again."""
+    msgs = body.get("messages", [])
+    last = str(msgs[-1].get("content", "")) if msgs else ""
+    text = "\n".join(str(m.get("content", "")) for m in msgs)
+    m = _DOF_CHOICES.search(text)
+    n = max(int(v) for v in re.findall(r"[0-9]+", m.group(1))) if m else 2
+    h = zlib.crc32(last.encode())
+    if h % 5 == 0 and "names no valid action" not in last:
+        return f"[{n + 1}, 1]"  # no such DOF: refused by the parser, asked again
+    return f"[{1 + h % n}, {h // n % 2 * 2 - 1}]"
+
+
 def count_words(text: str) -> int:
     """Crude token count used for the fake ``usage`` field."""
     return len(text.split())

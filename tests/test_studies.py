@@ -27,14 +27,15 @@ def test_default_grid_sizes(study, total):
 
 def test_the_table_holds_each_study_s_defaults():
     assert set(STUDIES) == set(SPECS) == {"curves", "history", "noise", "ablation", "inits", "swim", "competence",
-                                           "temperature", "continuous"}
+                                           "temperature", "continuous", "wall", "pair"}
     for study, spec in SPECS.items():
         plans = build(study, StudyOptions())
         assert {p.swimmer for p in plans} == set(spec.swimmers)
         assert {p.direction for p in plans} == set(spec.directions)
         per_cell = Counter((p.agent, p.swimmer, p.direction, p.group) for p in plans)
         assert {n for (a, *_), n in per_cell.items() if a == "llm"} <= {spec.runs}
-        assert {n for (a, *_), n in per_cell.items() if a != "llm"} <= {spec.q_runs}
+        assert {n for (a, *_), n in per_cell.items() if a not in ("llm", "stroke")} <= {spec.q_runs}
+        assert {n for (a, *_), n in per_cell.items() if a == "stroke"} <= {1}  # deterministic without noise
     # Options override the table.
     plans = build("noise", StudyOptions(swimmers=("ng",), runs=2, q_runs=0, zetas=(0.0, 1.0)))
     assert Counter(p.group for p in plans) == {"zeta=0": 2, "zeta=1": 2} and {p.zeta for p in plans} == {0.0, 1.0}

@@ -48,6 +48,26 @@ def study_extensions(roc_levels: set[int] | list[int]) -> list[str]:
     return out + ([REAL_ROCS] if 0 in roc_levels else [])
 
 
+def scene_deviation(scene: Any) -> str:
+    """The line of a run in a scene (issue 19, an extension: the paper's swimmer is alone in an
+    unbounded fluid), naming the medium, the swimmers and what the prompt shows."""
+    parts = [f"scene (an extension): medium {scene.medium!r}"]
+    if scene.medium == "wall":
+        parts.append(f"start {scene.height:g} a above a no-slip wall, tilt {scene.tilt:g} rad; records show each "
+                     "swimmer's height H (thousandths of a, as X) and tilt (rad)")
+    if scene.swimmers == 2:
+        parts.append(f"two coaxial NG swimmers {scene.separation:g} a apart steered through joint DOFs D1..D4 "
+                     "(swimmer 2 owns D3, D4); records show X1 and X2; the reward is the progress of their mean")
+    if scene.obstacles:
+        parts.append(f"{len(scene.obstacles)} fixed spheres")
+    return "; ".join(parts)
+
+
+def scene_extensions(scenes: Any) -> list[str]:
+    """Lines for a study's metadata: one per distinct scene its runs use (none for the bulk fluid)."""
+    return [scene_deviation(s) for s in scenes]
+
+
 def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_tokens: int,
                default_max_tokens: int, n_ht: int | None = None, default_n_ht: int | None = None,
                roc_levels: int = 1) -> list[str]:

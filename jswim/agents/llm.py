@@ -39,7 +39,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim import env, lattice
-from jswim.agents import fidelity, protocol
+from jswim.agents import fidelity, protocol, scene_env
+from jswim.agents.scene_driver import SceneGroup, scene_text
 from jswim.agents.defaults import default_max_tokens, default_n_ht
 from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
@@ -88,6 +89,11 @@ class RunResult:
     transcript: list[dict[str, Any]] | None = None  # in memory when no transcript folder is given
     knobs: dict[str, Any] = field(default_factory=dict)  # the variant switches (LLMAgentConfig.knobs)
     below_x_min: int | None = None  # first step whose X fell below x_min (sent as a negative number)
+    # Scenes (issue 19) only: per step, each swimmer's displacement, height, tilt, and any contact.
+    xs: list[list[float]] = field(default_factory=list)
+    heights: list[list[float]] = field(default_factory=list)
+    tilts: list[list[float]] = field(default_factory=list)
+    contact: list[bool] = field(default_factory=list)
 
     @property
     def steps(self) -> int:
@@ -111,6 +117,8 @@ class RunResult:
             "levels0": self.levels0, "x": self.x, "y": self.y, "orientation": self.orientation,
             "actions": self.actions, "progress": self.progress,
             "stuck": self.stuck, "below_x_min": self.below_x_min, **self.knobs,
+            **({"scene": s.scene, "xs": self.xs, "heights": self.heights, "tilts": self.tilts,
+                "contact": self.contact} if s.scene else {}),
         }
 
 
@@ -133,6 +141,7 @@ class _Run:
     n_calls: int = 0  # calls made so far (their index in the call journal)
     begun: bool = False
     closed: bool = False
+    scene_now: dict[str, Any] | None = None  # a scene run's positions, heights, tilts before the next step
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
@@ -278,20 +287,31 @@ class LLMDriver:
         ]
         by_model: dict[Any, list[int]] = {}
         for i, p in enumerate(params):  # one batched state per swimmer model and ROC lattice
-            by_model.setdefault((p.model, specs[i].roc_levels), []).append(i)
-        self.groups = [_Group(idx, [params[i] for i in idx], [specs[i].seed for i in idx]) for idx in by_model.values()]
+            s = specs[i]  # (a scene's runs: per scene, noise level and lattice; jswim.agents.scene_driver)
+            key = ("scene", s.scene, s.swimmer, s.zeta, s.roc_levels, s.init) if s.scene else (p.model, s.roc_levels)
+            by_model.setdefault(key, []).append(i)
+        self.groups = [
+            SceneGroup(idx, [specs[i] for i in idx]) if key[0] == "scene"
+            else _Group(idx, [params[i] for i in idx], [specs[i].seed for i in idx])
+            for key, idx in by_model.items()
+        ]
         self.runs: list[_Run] = [None] * len(specs)  # type: ignore[list-item]
         self._where: dict[int, tuple[_Group, int]] = {}
         for g in self.groups:
             for j, i in enumerate(g.members):
                 self._where[i] = (g, j)
                 self.runs[i] = self._make_run(specs[i], ids[i], params[i], g.dofs[j], g.levels0[j])
+                if isinstance(g, SceneGroup):
+                    self.runs[i].scene_now = g.start_view(j)
 
     def _make_run(
         self, spec: LLMRunSpec, run_id: str, params: env.EnvParams, dofs: np.ndarray, levels0: np.ndarray
     ) -> _Run:
         n_ht, text, prompt = protocol.setup(spec, params.model, self.config)
         cfg = self.config
+        if spec.scene:  # the joint DOFs and the records' scene fields (jswim.agents.scene_driver)
+            text, template = scene_text(spec, prompt.template, spec.rocs)
+            prompt = dataclasses.replace(prompt, template=template)
         result = RunResult(run_id, spec, n_ht, text.rocs, levels0=[int(v) for v in levels0],
                            transcript=None if self.transcript_dir or not self.transcripts else [],
                            knobs=cfg.knobs(self.client.settings.temperature))
@@ -304,10 +324,13 @@ class LLMDriver:
             cfg, temperature=cfg.sampling_temperature(settings.temperature), constraint=constraint,
             max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(params.model), n_ht=n_ht,
             default_n_ht=default_n_ht(params.model, spec.direction), roc_levels=spec.roc_levels)
+        if spec.scene:
+            run.deviations.append(fidelity.scene_deviation(scene_env.from_json(spec.scene)))
         run.meta = {
             "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
             "levels0": result.levels0, "agent": cfg.metadata(), "client": self._client_meta(run.max_tokens),
             "deviations": run.deviations,
+            **({"scene": json.loads(spec.scene)} if spec.scene else {}),
         }
         return run
 
@@ -467,8 +490,18 @@ class LLMDriver:
         action, failed, log = decision
         res = run.result
         x_before, x_after = run.x, float(out["x"])
+        scene = {}
+        if run.scene_now is not None:  # a scene run: positions, heights and tilts of each swimmer
+            now = {k: tuple(float(v) for v in out[k]) for k in ("xs", "heights", "tilts")}
+            scene = {f"{k}_{w}": (tuple(float(v) for v in run.scene_now[k]) if w == "before" else now[k])
+                     for k in ("xs", "heights", "tilts") for w in ("before", "after")}
+            run.scene_now = now
+            res.xs.append(list(now["xs"]))
+            res.heights.append(list(now["heights"]))
+            res.tilts.append(list(now["tilts"]))
+            res.contact.append(bool(out["contact"]))
         rec = HistoryRecord(res.steps + 1, tuple(run.dofs), tuple(float(v) for v in out["dofs"]), action,
-                            x_before, x_after, bool(out["stuck"]))
+                            x_before, x_after, bool(out["stuck"]), **scene)
         run.stats.add(shape_key(run.text, rec.dofs_before), action, float(out["progress"]))
         cleared = run.history.add(rec, float(out["progress"]))
         run.dofs = np.asarray(out["dofs"], np.float64)
@@ -485,6 +518,8 @@ class LLMDriver:
             "type": "step", "step": rec.step, **log, "action": list(action), "failed": failed,
             "x_before": x_before, "x_after": x_after, "progress": float(out["progress"]), "stuck": rec.stuck,
             "dofs_after": list(rec.dofs_after), "cleared": cleared, "n_clears": run.history.n_clears,
+            **({"xs_after": list(rec.xs_after), "heights_after": list(rec.heights_after),
+                "tilts_after": list(rec.tilts_after), "contact": bool(out["contact"])} if scene else {}),
         })
         if x_after < run.prompt.x_min and res.below_x_min is None:
             # Sent as a negative number, as the authors' code does; the run goes on.

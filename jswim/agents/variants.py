@@ -110,6 +110,9 @@ class LLMRunSpec:
         range (1: the paper's -1, 0, 1; above 1 an extension, named in the run id as ``K<K>``).
     run_id : str or None
         Name of the run (transcript file name); default from the fields above.
+    scene : str
+        A scene (walls, obstacles, pairs; issue 19) as canonical JSON of ``Scene.to_dict()``
+        (:func:`jswim.agents.scene_env.canonical`); ``""``: the paper's lone swimmer in bulk fluid.
     """
 
     swimmer: str = "purcell"
@@ -124,6 +127,7 @@ class LLMRunSpec:
     rocs: tuple[int, ...] | None = None
     run_id: str | None = None
     roc_levels: int = 1
+    scene: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drop", normalize_mask(self.drop))

@@ -28,8 +28,10 @@ from jswim.swimmers.models import SWIMMERS, make_model
 AGENTS = ("llm", "qlearning", "random")
 #: The continuous-action RL baseline (real ROCs; only the continuous study runs it).
 CONTINUOUS_AGENT = "ppo"
+#: A fixed stroke (the signature square gait, or two copies of it for a pair): the scene studies' reference.
+STROKE_AGENT = "stroke"
 #: Every agent a study may run (the default of :attr:`StudyOptions.agents`).
-ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT,)
+ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT)
 #: ROC lattices of the continuous study (``--roc-levels``; K = 1 is the paper's set).
 DEFAULT_ROC_LEVELS = (1, 2, 5, 10)
 DEFAULT_ZETAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
@@ -86,6 +88,11 @@ class StudyOptions:
     samples: int = 1
     roc_levels: int = 1  # K of the ROC lattice (--roc-levels; 1 = the paper's -1, 0, 1)
     roc_levels_grid: tuple[int, ...] = DEFAULT_ROC_LEVELS  # the continuous study's K values
+    # The scene studies' grids (jswim.studies.scenes): starting heights above the wall (a), the
+    # pair's starting distances D (a) and the phase offsets of its two square strokes (quarter cycles).
+    heights: tuple[float, ...] = (3.0, 5.0, 7.0, 10.0, 20.0, 50.0)
+    separations: tuple[float, ...] = (25.0, 50.0)
+    phases: tuple[int, ...] = (0, 1, 2, 3)
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
@@ -135,6 +142,17 @@ class StudyOptions:
             check_roc_levels(k)
         if not self.roc_levels_grid or len(set(self.roc_levels_grid)) != len(self.roc_levels_grid):
             raise ConfigError(f"--roc-levels needs distinct values, got {self.roc_levels_grid}")
+        for name in ("heights", "separations", "phases"):
+            values = getattr(self, name)
+            if not values or len(set(values)) != len(values):
+                raise ConfigError(f"--{name} needs distinct values, got {','.join(map(str, values))}")
+        if any(not (math.isfinite(h) and h > 1.0) for h in self.heights):
+            raise ConfigError(f"--heights must be above 1 sphere radius (the middle sphere touches the wall at 1), "
+                              f"got {','.join(map(str, self.heights))}")
+        if any(not (math.isfinite(d) and d > 0) for d in self.separations):
+            raise ConfigError(f"--separations must be positive distances, got {','.join(map(str, self.separations))}")
+        if any(p not in (0, 1, 2, 3) for p in self.phases):
+            raise ConfigError(f"--phases are quarter cycles 0, 1, 2 or 3, got {','.join(map(str, self.phases))}")
         bad = sorted(set(self.agents) - set(ALL_AGENTS))
         if bad:
             raise ConfigError(f"unknown agents {bad}; choose from {', '.join(ALL_AGENTS)}")
@@ -165,6 +183,7 @@ class Plan:
     prompt_file: str | None = None  # LLM prompt template of a --prompt-files sweep (None: the study's)
     roc_levels: int = 1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
     sample: int = 0  # which independent repeat of this very setting (--samples; 0: the run itself)
+    scene: str = ""  # canonical JSON of the run's Scene (jswim.agents.scene_env.canonical); "": the bulk fluid
 
 
 def sample_id(run: str, sample: int) -> str:
@@ -195,6 +214,9 @@ class Cell:
     action_set: str | None = None  # baselines only; None: the LLM variant's action set
     temperature: float | None = None  # LLM runs only (the temperature study)
     roc_levels: int | None = None  # None: the options' roc_levels; 0 for real-valued ROCs
+    scene: str = ""  # a scene (jswim.studies.scenes), canonical JSON; "": the bulk fluid
+    tag: str = ""  # what names this cell's runs (a scene's height or distance, a stroke's phase)
+    stroke: str = ""  # the stroke agent's stroke (jswim.studies.scenes.stroke_codes), its plans' variant
 
 
 WITH_BASELINES = ("llm", "qlearning", "random")
@@ -305,6 +327,22 @@ SPECS: dict[str, StudySpec] = {
                             ignores=("zetas", "n_hts", "roc_levels")),
 }
 
+
+def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
+    def cells(o: StudyOptions) -> list[Cell]:
+        from jswim.studies import scenes  # the scene studies' grids
+
+        return scenes.cells(name, o)
+    return cells
+
+
+# Walls and pairs (issue 19, extensions): NG swimmers only (jswim.studies.scenes, README "Walls,
+# obstacles and pairs"); --init is the paper's NG start (10, 6), the scene's start.
+SPECS["wall"] = StudySpec(_scene_cells("wall"), runs=1, init="paper", swimmers=("ng",), q_runs=10,
+                          ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
+SPECS["pair"] = StudySpec(_scene_cells("pair"), runs=1, init="paper", swimmers=("ng",), q_runs=10,
+                          ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
+
 STUDIES = tuple(SPECS)
 
 
@@ -393,18 +431,20 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     baseline_set = variant_action_set(variant, o.action_set)
     runs = {"llm": spec.runs if o.runs is None else o.runs}
     runs["qlearning"] = runs["random"] = spec.q_runs if o.q_runs is None else o.q_runs
+    # A stroke is deterministic without noise: one run says it all (--q-runs of them under noise).
+    runs[STROKE_AGENT] = runs["qlearning"] if o.zeta > 0 else min(1, runs["qlearning"])
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:
             for cell in spec.cells(o):
                 for agent in (a for a in cell.agents if a in o.agents):
                     llm = agent == "llm"
-                    v = (cell.variant or variant) if llm else ""
+                    v = (cell.variant or variant) if llm else (cell.stroke if agent == STROKE_AGENT else "")
                     action_set = variant_action_set(v, o.action_set) if llm else (cell.action_set or baseline_set)
                     # The run id names what differs from the study's own setting.
                     tag = (v if v != "paper" else "") if llm else (action_set if action_set != o.action_set else "")
                     levels = o.roc_levels if cell.roc_levels is None else cell.roc_levels
-                    tag = "-".join(t for t in (tag, "real" if levels == 0 else roc_tag(levels)) if t)
+                    tag = "-".join(t for t in (tag, "real" if levels == 0 else roc_tag(levels), cell.tag) if t)
                     zeta = float(o.zeta if cell.zeta is None else cell.zeta)
                     n_ht = cell.n_ht if llm else None
                     drop = cell.drop if llm else frozenset()
@@ -421,7 +461,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                             for s in range(o.samples if llm else 1):
                                 rid = sample_id(base, s)
                                 plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
-                                                  n_ht, drop, action_set, group, v, temp, prompt, levels, s))
+                                                  n_ht, drop, action_set, group, v, temp, prompt, levels, s, cell.scene))
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"
     return plans

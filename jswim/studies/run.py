@@ -113,6 +113,10 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     """Q-learning, random or continuous-RL runs of one (agent, swimmer, action set, ROC lattice)
     group, vectorised."""
     p0 = plans[0]
+    if p0.scene:  # walls and pairs (issue 19): the stroke and the baselines on the scene
+        from jswim.studies import scenes
+
+        return scenes.run_baselines(plans, horizon)
     if p0.agent == CONTINUOUS_AGENT:
         return _run_continuous(plans, horizon)
     from jswim.agents import qlearning, random_policy  # lazy: optax and their jits, for baselines only
@@ -189,7 +193,8 @@ class StudyResult:
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
 #: folder grows when they grow (and a smaller value reports the runs it names).
-GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files", "samples", "roc_levels_grid")
+GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files", "samples", "roc_levels_grid",
+             "heights", "separations", "phases")
 
 #: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
@@ -318,7 +323,8 @@ def run_study(
         "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
         # What differs from the paper's protocol in every LLM run (each transcript lists its own too),
         # and the extensions some runs use (finer or real-valued ROCs).
-        "fidelity_deviations": list(fidelity.ALWAYS) + fidelity.study_extensions({p.roc_levels for p in plans}),
+        "fidelity_deviations": list(fidelity.ALWAYS) + fidelity.study_extensions({p.roc_levels for p in plans})
+        + _scene_extensions(plans),
         "roc_levels": sorted({p.roc_levels for p in plans}),
         "grid": {k: getattr(options, k) for k in GRID_SIZE},
         "server": backend.address() if backend is not None else None,
@@ -348,6 +354,20 @@ def run_study(
         store.close()  # the folder's lock: the next session may start
 
 
+def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
+    """The fidelity lines of the scenes a study's runs use (none in the paper's studies), and a
+    line saying so when the scene physics is the agents' stand-in (jswim.agents.scene_env)."""
+    scenes = sorted({p.scene for p in plans if p.scene})
+    if not scenes:
+        return []
+    from jswim.agents import scene_env
+
+    lines = fidelity.scene_extensions([scene_env.from_json(s) for s in scenes])
+    if scene_env.STAND_IN:
+        lines.append("scene physics: STAND-IN (bulk NG formula per swimmer, heights fixed) until jswim.scenes lands")
+    return lines
+
+
 class FolderRepaired(UserWarning):
     """Opening a study folder repaired it (a torn journal line cut, a temporary file removed)."""
 
@@ -374,7 +394,7 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     tick("resume" if finished else "start", finished, total, f"{finished} runs already done" if finished else "")
 
     for (agent, *_), group in _groups([p for p in todo if p.agent != "llm"], "agent", "swimmer", "action_set",
-                                      "roc_levels").items():
+                                      "roc_levels", "scene", "variant", "zeta").items():
         store.add_runs(_run_baselines(group, options.horizon))
         finished += len(group)
         tick(agent, finished, total, "")
@@ -394,6 +414,7 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     names = {p.run_id for p in plans}
     rows = [r for r in read_runs(folder) if r["run_id"] in names]
     summary = summarize(rows)
+    scene_table = _scene_table(rows)
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
@@ -413,7 +434,7 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     sent = sent or dict((store.meta.get("summary") or {}).get("reasoning") or {})
     status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
     store.finalize(status,
-                   {"groups": summary, "failed_runs": failed, **replies, **({"llm_speed": speed} if speed else {}),
+                   {"groups": summary, **scene_table, "failed_runs": failed, **replies, **({"llm_speed": speed} if speed else {}),
                     **({"reasoning": sent} if sent else {}),
                     **({"constrained_decoding": constraint} if constraint else {})})
     figs = draw_figures(study, rows, folder / "figures") if figures else []
@@ -421,6 +442,15 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, session_speed, failed,
                        dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total, sent,
                        cut_thinking, notes)
+
+
+def _scene_table(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """``{"scenes": table}`` of a study with scene runs (:func:`jswim.studies.scenes.scene_summary`), else ``{}``."""
+    if not any(r.get("scene") for r in rows):
+        return {}
+    from jswim.studies import scenes
+
+    return {"scenes": scenes.scene_summary([r for r in rows if not is_failed(r)])}
 
 
 def _preflight(store: StudyStore, backend: Backend, server: Any = None) -> ServerInfo:
@@ -469,7 +499,8 @@ def _write_report(folder: Path, figures: bool) -> None:
 
 def _spec(p: Plan) -> LLMRunSpec:
     return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
-                      n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id, roc_levels=p.roc_levels)
+                      n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id, roc_levels=p.roc_levels,
+                      scene=p.scene)
 
 
 def _configs(plans: Sequence[Plan], o: StudyOptions,
@@ -491,6 +522,11 @@ def _row(plan: Plan, r: RunResult, horizon: int) -> dict[str, Any]:
     """The judged result row of one finished LLM run."""
     acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
     xs = np.array([r.x], float).reshape(1, len(r.x))
+    if plan.scene:  # a scene run: judged per swimmer, with the scene's columns (jswim.studies.scenes)
+        from jswim.studies import scenes
+
+        extra = {k: v for k, v in r.as_row().items() if k not in ("x", "actions", "progress", "levels0")}
+        return scenes.llm_row(plan, r, horizon, extra)
     extra = {k: v for k, v in r.as_row().items() if k not in ("x", "actions", "progress", "stuck", "levels0")}
     # The judge reads the start as lattice positions: a corner level times K.
     return _judge_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon, [extra])[0]

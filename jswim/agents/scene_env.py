@@ -1,0 +1,123 @@
+"""The agents' side of a scene (walls, obstacles, pairs; issue 19): one place that reaches the
+scene environment, joint action codes, and batched steps for the drivers and baselines.
+
+An agent steers every swimmer of a scene through one set of **joint DOFs**: swimmer ``s``
+(0-based) owns DOFs ``2s + 1`` and ``2s + 2`` (its two arms, 1-based as in the prompt), so the
+paper's reply ``[changed DOF, ROC]`` names the swimmer through its DOF (``[3, 1]`` lengthens swimmer
+2's first arm). A joint action code is the paper's lattice code over the joint DOFs,
+``(dof - 1)(2K + 1) + k + K`` (:func:`jswim.lattice.encode`), so one swimmer's codes are the
+bulk swimmer's codes unchanged.
+
+The environment is :mod:`jswim.scenes` (the hydrodynamics, part A of issue 19). Until that
+package is on main this module falls back to a stand-in with the same signatures
+(:mod:`jswim.agents._scene_standin`: bulk NG per swimmer, heights fixed) and :data:`STAND_IN`
+says so; study metadata records it.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+try:  # the real scene environment (part A)
+    from jswim.scenes import Scene, scene_params, scene_reset, scene_step  # type: ignore[attr-defined]
+
+    STAND_IN = False
+except ImportError:  # pragma: no cover - depends on which part has landed
+    from jswim.agents._scene_standin import Scene, scene_params, scene_reset, scene_step
+
+    STAND_IN = True
+
+#: Arms (DOFs) of one NG swimmer.
+ARMS = 2
+
+
+def canonical(scene: Any) -> str:
+    """A scene as canonical JSON (``Scene.to_dict()``, sorted keys): the form plans and run ids
+    carry; ``""`` is no scene (the paper's bulk swimmer through :mod:`jswim.env`)."""
+    if scene is None or scene == "":
+        return ""
+    if isinstance(scene, str):
+        scene = from_json(scene)
+    return json.dumps(scene.to_dict(), sort_keys=True)
+
+
+def from_json(text: str) -> Any:
+    """The :class:`Scene` of :func:`canonical`'s text (validated)."""
+    return Scene.from_dict(json.loads(text))
+
+
+def start_levels(init: Any) -> tuple[int, ...] | None:
+    """The ``init`` of :func:`scene_params` (every swimmer's arm levels) from a plan's or spec's
+    start: corner levels as given, ``None`` (the scene's default) for anything else."""
+    if isinstance(init, (tuple, list)) and all(v in (0, 1) for v in init):
+        return tuple(int(v) for v in init)
+    return None
+
+
+def n_swimmers(scene: Any) -> int:
+    return int(scene.swimmers)
+
+
+def has_wall(scene: Any) -> bool:
+    return scene.medium == "wall"
+
+
+def decode(codes: jax.Array, roc_levels: int = 1) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Joint action codes -> ``(swimmer, dof, roc)`` of :func:`jswim.scenes.scene_step`: the
+    swimmer and its arm 0-based (int32), the ROC ``k / K`` as a float."""
+    codes = jnp.asarray(codes, jnp.int32)
+    width = 2 * roc_levels + 1
+    joint = codes // width  # 0-based joint DOF
+    k = codes % width - roc_levels
+    return joint // ARMS, joint % ARMS, k.astype(jnp.result_type(float)) / roc_levels
+
+
+class Observation(NamedTuple):
+    """What the agents read after a step, per scene in a batch (leading axis ``B``).
+
+    ``x`` is the swimmers' mean centre x (the quantity whose progress is rewarded), ``xs``,
+    ``z`` (the middle sphere's height above the wall, in a) and ``tilt`` (rad) per swimmer
+    ``(B, S)``, ``dofs`` the joint arm lengths ``(B, 2S)``, ``stuck`` whether a non-zero ROC could
+    not move its arm, ``contact`` whether any sphere touched the wall or another body.
+    """
+
+    x: jax.Array
+    xs: jax.Array
+    z: jax.Array
+    tilt: jax.Array
+    dofs: jax.Array
+    stuck: jax.Array
+    contact: jax.Array
+
+
+def observe(state: Any, stuck: Any = False, contact: Any = False) -> Observation:
+    """The :class:`Observation` of one (unbatched) scene state."""
+    xs = state.centre[..., 0]
+    return Observation(jnp.mean(xs, axis=-1), xs, state.centre[..., 1], state.tilt,
+                       state.arms.reshape(state.arms.shape[:-2] + (-1,)), jnp.asarray(stuck, bool).reshape(()),
+                       jnp.any(jnp.asarray(contact, bool)))
+
+
+def start(params: Any, batch: int) -> tuple[Any, Observation]:
+    """``batch`` copies of the scene's start state and their observation."""
+    s0 = scene_reset(params)
+    states = jax.tree.map(lambda a: jnp.broadcast_to(a, (batch,) + jnp.shape(a)), s0)
+    return states, jax.vmap(observe)(states)
+
+
+def step(params: Any, state: Any, code: jax.Array, key: jax.Array, roc_levels: int = 1) -> tuple[Any, Observation]:
+    """One joint action on one scene state (vmap it for batches)."""
+    sw, dof, roc = decode(code, roc_levels)
+    new, info = scene_step(params, state, (sw, dof, roc), key)
+    return new, observe(new, jnp.any(jnp.asarray(info.stuck)), info.contact)
+
+
+def as_numpy(obs: Observation) -> dict[str, np.ndarray]:
+    """An observation's arrays on the host, float64 where real."""
+    out = jax.device_get(obs._asdict())
+    return {k: np.asarray(v, np.float64 if k not in ("stuck", "contact") else bool) for k, v in out.items()}

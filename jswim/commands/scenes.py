@@ -1,0 +1,64 @@
+"""The scene studies' own options (``jswim study wall`` / ``jswim study pair``) and their table.
+
+Registered from :mod:`jswim.cli` with one call each: :func:`register` adds ``--heights`` to the
+wall study and ``--separations``/``--phases`` to the pair study; :func:`options` reads them into
+:class:`jswim.studies.StudyOptions` keywords; :func:`print_table` prints the scene table after
+the usual summary.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any, Sequence
+
+#: The studies that take the options below.
+SCENE_STUDIES = ("wall", "pair")
+
+STUDY_HELP = {
+    "wall": "one NG swimmer started at several heights above a no-slip wall: the square stroke's displacement per "
+            "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines",
+    "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
+            "offset and D, and whether an agent steering both finds a faster joint stroke",
+}
+
+
+def _numbers(kind: type) -> Any:
+    def parse(text: str) -> tuple:
+        try:
+            return tuple(kind(v) for v in text.split(",") if v.strip())
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+    return parse
+
+
+def register(q: argparse.ArgumentParser, name: str) -> None:
+    """Add the scene options of study ``name`` to its parser (nothing for other studies)."""
+    if name not in SCENE_STUDIES:
+        return
+    g = q.add_argument_group("scene")
+    if name == "wall":
+        g.add_argument("--heights", type=_numbers(float), default=None, metavar="H1,H2,...",
+                       help="starting heights of the middle sphere above the wall, in sphere radii "
+                            "(default 3,5,7,10,20,50)")
+    else:
+        g.add_argument("--separations", type=_numbers(float), default=None, metavar="D1,D2,...",
+                       help="starting distances D between the two swimmers' centres, in sphere radii (default 25,50)")
+        g.add_argument("--phases", type=_numbers(int), default=None, metavar="P1,P2,...",
+                       help="phase offsets of the two square strokes, in quarter cycles of swimmer 2 ahead "
+                            "(default 0,1,2,3)")
+
+
+def options(args: argparse.Namespace) -> dict[str, Any]:
+    """The StudyOptions keywords of the scene options given."""
+    return {k: getattr(args, k) for k in ("heights", "separations", "phases") if getattr(args, k, None)}
+
+
+def print_table(rows: Sequence[dict[str, Any]]) -> None:
+    """The scene table of a study's rows (nothing when it has no scene runs)."""
+    if not any(r.get("scene") for r in rows):
+        return
+    from jswim.console import print_table as show
+    from jswim.studies.scenes import scene_summary, table
+
+    cols, cells = table(scene_summary(rows))
+    show(cols, cells, "scenes: displacement per stroke cycle, speed per step (second half), fates")

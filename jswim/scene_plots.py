@@ -1,0 +1,124 @@
+"""Figures of the scene studies (issue 19): ``jswim study wall`` and ``jswim study pair``.
+
+Same conventions as :mod:`jswim.plots` (paper sizes, the agents' palette, ``note`` across the
+top of an unfinished study's figures); chosen by :func:`jswim.plots.study_figures`.
+
+wall
+    ``wall``: the square stroke's displacement per cycle against the starting height (log axis),
+    with the same stroke in the unbounded fluid of the same solver as a line; ``wall-track``:
+    height (top) and X/a (bottom) against step for every agent at every height (one colour per
+    agent, darker for lower starts).
+pair
+    ``pair``: the pair's displacement per cycle (both swimmers one square each; their mean x)
+    against the phase offset, one line per D, with the lone swimmer's as a line and the agents'
+    best as markers at the right; ``pair-track``: X/a against step per agent and D.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from jswim.plots import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
+
+STROKE_STYLE = dict(color="black", ls="-", marker="o", label="square stroke")
+_STYLES = {**AGENT_STYLE, "stroke": STROKE_STYLE}
+
+
+def _note(fig: Figure, note: str | None) -> None:
+    if note:
+        fig.suptitle(note, color=NOTE_COLOR, fontsize=7)
+
+
+def scene_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+    """The figures of a scene study by file name (none without scene rows)."""
+    rows = [r for r in rows if r.get("scene")]
+    if not rows:
+        return {}
+    if study == "wall":
+        return {"wall": wall_figure(rows, note), "wall-track": track_figure(rows, "start_height", note, heights=True)}
+    return {"pair": pair_figure(rows, note), "pair-track": track_figure(rows, "separation", note, heights=False)}
+
+
+@_styled
+def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
+    fig = Figure(figsize=(COLUMN_IN, 2.4))
+    ax = fig.add_subplot()
+    for d in sorted({int(r["direction"]) for r in rows}, reverse=True):
+        pts = sorted((r["start_height"], d * r["per_cycle"]) for r in rows
+                     if r["agent"] == "stroke" and r.get("start_height") and r.get("per_cycle") is not None
+                     and int(r["direction"]) == d)
+        if pts:
+            h, v = zip(*pts)
+            ax.plot(h, v, **{**STROKE_STYLE, "label": f"square stroke ({'+x' if d > 0 else '-x'}), wall"})
+        free = [d * r["per_cycle"] for r in rows if r["agent"] == "stroke" and r.get("medium") == "free"
+                and r.get("per_cycle") is not None and int(r["direction"]) == d]
+        if free:
+            ax.axhline(float(np.mean(free)), color="0.4", ls="--", lw=0.8, label="same stroke, no wall")
+    ax.set_xscale("log")
+    ax.set_xlabel("starting height h/a above the wall")
+    ax.set_ylabel("X/a per cycle (target direction)")
+    ax.legend(loc="best")
+    _note(fig, note)
+    return fig
+
+
+@_styled
+def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
+    fig = Figure(figsize=(COLUMN_IN, 2.4))
+    ax = fig.add_subplot()
+    strokes = [r for r in rows if r["agent"] == "stroke" and r.get("separation") and r.get("per_cycle") is not None]
+    for i, dist in enumerate(sorted({r["separation"] for r in strokes})):
+        pts = sorted((int(str(r["variant"]).removeprefix("phase")), r["direction"] * r["per_cycle"])
+                     for r in strokes if r["separation"] == dist)
+        ph, v = zip(*pts)
+        ax.plot(ph, v, marker="o", ls="-", color=str(0.15 + 0.5 * i / max(1, len(strokes))), label=f"two strokes, D={dist:g}")
+    alone = [r["direction"] * r["per_cycle"] for r in rows if r["agent"] == "stroke" and not r.get("separation")
+             and r.get("per_cycle") is not None]
+    if alone:
+        ax.axhline(float(np.mean(alone)), color="0.4", ls="--", lw=0.8, label="one swimmer alone")
+    for agent in ("llm", "qlearning", "random"):
+        got = [8 * r["speed"] for r in rows if r["agent"] == agent and r.get("speed") is not None]
+        if got:  # 8 steps per joint cycle: speed per step (whole cycles of the second half) times 8
+            st = _STYLES[agent]
+            ax.plot([3.6], [max(got)], marker=st["marker"], color=st["color"], ls="none",
+                    label=f"{st['label']} best (8 x speed/step, 2nd half)")
+    ax.set_xticks([0, 1, 2, 3])
+    ax.set_xlabel("phase offset (quarter cycles of swimmer 2 ahead)")
+    ax.set_ylabel("pair X/a per cycle")
+    ax.legend(loc="best", fontsize=6)
+    _note(fig, note)
+    return fig
+
+
+@_styled
+def track_figure(rows: Sequence[Mapping[str, Any]], key: str, note: str | None = None, *,
+                 heights: bool) -> Figure:
+    panels = 2 if heights else 1
+    fig = Figure(figsize=(COLUMN_IN, 1.8 * panels + 0.4))
+    axes = [fig.add_subplot(panels, 1, i + 1) for i in range(panels)]
+    values = sorted({r.get(key) for r in rows if r.get(key) is not None})
+    seen: set[str] = set()
+    for r in rows:
+        if r.get(key) is None:
+            continue
+        st = _STYLES.get(r["agent"], AGENT_STYLE["random"])
+        shade = 0.35 + 0.65 * (values.index(r[key]) + 1) / len(values)
+        label = st["label"] if r["agent"] not in seen else None
+        seen.add(r["agent"])
+        steps = np.arange(1, len(r["x"]) + 1)
+        kw = dict(color=st["color"], ls=st["ls"], alpha=shade, lw=0.8, label=label)
+        if heights:
+            axes[0].plot(steps, r["y"], **kw)
+        axes[-1].plot(steps, r["direction"] * np.asarray(r["x"]), **kw)
+    if heights:
+        axes[0].set_yscale("log")
+        axes[0].set_ylabel("height h/a")
+    axes[-1].set_ylabel("X/a (target direction)")
+    axes[-1].set_xlabel("step n")
+    axes[0].legend(loc="best", fontsize=6)
+    axes[0].set_title(("starting heights " if heights else "distances D ") + ", ".join(f"{v:g}" for v in values))
+    _note(fig, note)
+    return fig

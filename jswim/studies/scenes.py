@@ -1,0 +1,308 @@
+"""The scene studies (issue 19, extensions): ``jswim study wall`` and ``jswim study pair``.
+
+``wall``
+    One NG swimmer started at each height ``h`` of ``--heights`` (a, the middle sphere's height
+    above a no-slip wall; medium ``"wall"``): the signature square stroke (agent ``stroke``), the
+    LLM, Q-learning on (shape, height bin) and the random policy. Measured: the stroke's
+    displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
+    same solver, medium ``"free"``: group ``free``), and every run's **fate** (:func:`fate`).
+``pair``
+    Two coaxial NG swimmers started ``D`` apart (``--separations``; medium ``"free"``: the
+    point-force solve, in which the swimmers feel each other; the paper's formula has no
+    interaction). Measured: two copies of the square stroke at each phase offset
+    (``--phases``, quarter cycles of swimmer 2 ahead of swimmer 1), the lone swimmer's stroke in
+    the same medium (group ``alone``), and whether the LLM, Q-learning or the random policy steering
+    both (joint DOFs D1..D4) find a faster joint stroke.
+
+Runs, rows, resume, figures, ``show`` and ``compare`` are the study folder's
+(:mod:`jswim.studies.run`); this module gives the cells, runs the baselines and the stroke on a
+scene, and adds the scene's columns to each row.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import jax
+import numpy as np
+
+from jswim import env
+from jswim.agents import scene_baselines, scene_env
+from jswim.agents.qlearning import QConfig
+from jswim.gait import Criterion, judge
+from jswim.studies.grids import STROKE_AGENT, WITH_BASELINES, Cell, Plan, StudyOptions
+
+#: The NG square stroke toward +x from the paper's start (10, 6), as joint codes of swimmer 1:
+#: D2 up, D1 down, D2 down, D1 up (``(dof - 1) * 3 + roc + 1``). Toward -x: its time reverse.
+SQUARE = {1: (5, 0, 3, 2), -1: (0, 5, 2, 3)}
+
+#: The fate rule's thresholds (:func:`fate`), in sphere radii.
+TRAP_HEIGHT = 1.5  # the middle sphere within half a radius of the wall
+ESCAPE_FACTOR = 2.0  # at twice the starting height or more
+RISE_FRACTION = 0.1  # rising by 10 % of the start over the run's second half
+
+FATES = ("trapped", "escaped", "gliding")
+
+
+def wall_scene(h: float) -> str:
+    return scene_env.canonical(scene_env.Scene(medium="wall", height=float(h), swimmers=1))
+
+
+def pair_scene(d: float | None = None) -> str:
+    """Two coaxial swimmers ``d`` apart in the unbounded fluid of the point-force solve; ``None``:
+    one swimmer alone there."""
+    if d is None:
+        return scene_env.canonical(scene_env.Scene(medium="free", swimmers=1))
+    return scene_env.canonical(scene_env.Scene(medium="free", swimmers=2, separation=float(d)))
+
+
+def cells(study: str, o: StudyOptions) -> list[Cell]:
+    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids."""
+    if study == "wall":
+        out = [Cell("free", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="free")]
+        for h in o.heights:
+            out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
+                            stroke="square", tag=f"h{h:g}"))
+        return out
+    out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
+    for d in o.separations:
+        for ph in o.phases:
+            out.append(Cell(f"D={d:g}, phase {ph}", (STROKE_AGENT,), scene=pair_scene(d), stroke=f"phase{ph}",
+                            tag=f"D{d:g}-ph{ph}"))
+        out.append(Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}"))
+    return out
+
+
+# -- fates ---------------------------------------------------------------------------------------
+
+
+def fate(heights: Sequence[float], h0: float, contact: Sequence[bool] | None = None) -> tuple[str, float]:
+    """A wall run's fate from its height after each step (a, swimmer 1's middle sphere) and start.
+
+    Over the run's second half (the last ``ceil(T / 2)`` steps):
+
+    - ``trapped``: a sphere touched the wall (``contact``) or the height fell below
+      :data:`TRAP_HEIGHT`;
+    - ``escaped``: the final height is at least :data:`ESCAPE_FACTOR` times the start, or it is above
+      the start and rose by more than :data:`RISE_FRACTION` of the start over the second half;
+    - ``gliding`` otherwise, at the mean height of the second half (returned; for every fate).
+
+    Returns
+    -------
+    (fate, mean_height)
+    """
+    h = np.asarray(heights, np.float64)
+    if h.size == 0:
+        return "gliding", float(h0)
+    late = h[h.size // 2:]
+    touched = contact is not None and bool(np.any(np.asarray(contact, bool)[h.size // 2:]))
+    mean = float(late.mean())
+    if touched or late.min() < TRAP_HEIGHT:
+        return "trapped", mean
+    if h[-1] >= ESCAPE_FACTOR * h0 or (h[-1] > h0 and late[-1] - late[0] > RISE_FRACTION * h0):
+        return "escaped", mean
+    return "gliding", mean
+
+
+# -- strokes -------------------------------------------------------------------------------------
+
+
+def stroke_codes(variant: str, direction: int, steps: int, swimmers: int) -> np.ndarray:
+    """The joint codes of a stroke plan: ``"square"`` (swimmer 1 alone; the lone square gait), or
+    ``"phase<p>"`` for a pair: swimmer 2 first makes ``p`` moves of its square (so it runs ``p``
+    quarter cycles ahead), then the two alternate, one move each, swimmer 1 first."""
+    sq = SQUARE[1 if direction > 0 else -1]
+    if swimmers == 1:
+        return np.array([sq[t % 4] for t in range(steps)], np.int32)
+    ph = int(variant.removeprefix("phase"))
+    b = [c + 3 * scene_env.ARMS for c in sq]
+    seq = [b[j] for j in range(ph)]
+    j = 0
+    while len(seq) < steps:
+        seq += [sq[j % 4], b[(j + ph) % 4]]
+        j += 1
+    return np.array(seq[:steps], np.int32)
+
+
+def per_cycle(x: Sequence[float], variant: str, swimmers: int) -> float | None:
+    """A stroke run's displacement per stroke cycle (a): over its complete cycles after the
+    warm-up (a pair's cycle is 8 steps, one square of each swimmer; its ``x`` is their mean)."""
+    x = np.concatenate([[0.0], np.asarray(x, np.float64)])
+    warm = int(variant.removeprefix("phase")) if swimmers == 2 and variant.startswith("phase") else 0
+    period = 4 * swimmers
+    n = (x.size - 1 - warm) // period
+    if n < 1:
+        return None
+    return float((x[warm + n * period] - x[warm]) / n)
+
+
+def late_speed(x: Sequence[float], direction: int, swimmers: int) -> float | None:
+    """Mean progress per step (a, target direction) over the run's second half, cut to whole
+    stroke cycles of ``4 * swimmers`` steps: a single NG move goes about +-1 a while a cycle nets
+    0.17 a, so a window with a partial cycle would measure the partial cycle. Comparable across
+    agents: a stroke's value is its displacement per cycle over the cycle's length."""
+    x = np.concatenate([[0.0], np.asarray(x, np.float64)])
+    period = 4 * swimmers
+    n = (x.size - 1) // 2 // period * period
+    if n < period:
+        n = (x.size - 1) // period * period
+    if n < 1:
+        return None
+    return float(direction * (x[-1] - x[-1 - n]) / n)
+
+
+# -- rows ----------------------------------------------------------------------------------------
+
+
+def _keys(plans: Sequence[Plan]) -> jax.Array:
+    return jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
+
+
+def _params(plan: Plan) -> Any:
+    scene = scene_env.from_json(plan.scene)
+    return scene, scene_env.scene_params(plan.swimmer, scene, zeta=plan.zeta, init=scene_env.start_levels(plan.init))
+
+
+def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
+    """The stroke, random or Q-learning runs of one (agent, scene, zeta, action set, variant) group
+    (in sub-batches by start)."""
+    by_init: dict[Any, list[Plan]] = {}
+    for p in plans:
+        by_init.setdefault(p.init, []).append(p)
+    if len(by_init) > 1:
+        done = {r["run_id"]: r for g in by_init.values() for r in run_baselines(g, horizon)}
+        return [done[p.run_id] for p in plans]
+    p0 = plans[0]
+    scene, params = _params(p0)
+    keys = _keys(plans)
+    direction = np.array([p.direction for p in plans], np.float64)
+    if p0.agent == STROKE_AGENT:
+        codes = np.stack([stroke_codes(p.variant, p.direction, p.steps, scene.swimmers) for p in plans])
+        run = scene_baselines.stroke(params, codes, keys)
+    elif p0.agent == "random":
+        run = scene_baselines.random_runs(params, keys, p0.steps, p0.action_set)
+    else:
+        run = scene_baselines.qlearning_runs(params, keys, p0.steps, direction, wall=scene_env.has_wall(scene),
+                                             action_set=p0.action_set, config=QConfig(steps=p0.steps))
+    _, obs0 = scene_env.start(params, 1)
+    o0 = scene_env.as_numpy(obs0)
+    xs = run.xs - o0["xs"][0]
+    rows = []
+    for i, p in enumerate(plans):
+        extra = {"xs": xs[i].tolist(), "heights": run.z[i].tolist(), "tilts": run.tilt[i].tolist(),
+                 "contact": run.contact[i].tolist(), "stuck": run.stuck[i].tolist()}
+        rows.append(scene_row(p, run.actions[i].tolist(), xs[i].mean(axis=-1).tolist(), extra, horizon,
+                              z0=o0["z"][0], tilt0=o0["tilt"][0]))
+    return rows
+
+
+def llm_row(plan: Plan, result: Any, horizon: int, extra: dict[str, Any]) -> dict[str, Any]:
+    """The row of a finished LLM run on a scene (``extra``: its as_row fields)."""
+    _, params = _params(plan)
+    _, obs0 = scene_env.start(params, 1)
+    o0 = scene_env.as_numpy(obs0)
+    return scene_row(plan, list(result.actions), list(result.x), extra, horizon, z0=o0["z"][0], tilt0=o0["tilt"][0])
+
+
+def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dict[str, Any]:
+    """The paper's success criterion (:func:`jswim.gait.judge`, bulk displacements) on each
+    swimmer's own moves: one swimmer as in the bulk studies; a pair succeeds when both
+    swimmers' move sequences do (each judged on its own moves, with the same horizon)."""
+    params = env.make_params(plan.swimmer, direction=plan.direction, init=plan.init)
+    codes = np.asarray(codes, np.int64)
+    per = []
+    for s in range(swimmers):
+        own = codes[(codes // 3) // scene_env.ARMS == s] - 3 * scene_env.ARMS * s
+        if own.size < 4:
+            per.append(None)
+            continue
+        rep = judge(own[None], params, criterion=Criterion(horizon=horizon))
+        per.append(rep)
+    ok = all(r is not None and bool(r.success[0]) for r in per)
+    learned = all(r is not None and bool(r.learned[0]) for r in per)
+    stl = [int(r.steps_to_learn[0]) for r in per if r is not None and r.learned[0]]
+    return {"success": ok, "learned": learned,
+            "steps_to_learn": (max(stl) if learned and stl else None),
+            "period": int(per[0].period[0]) if swimmers == 1 and per[0] is not None else 0}
+
+
+def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any], horizon: int, *,
+              z0: np.ndarray, tilt0: np.ndarray) -> dict[str, Any]:
+    """One row of a scene run: the bulk studies' columns (success by :func:`_judge`), the scene,
+    its medium, start height or distance, per-step ``xs``/``heights``/``tilts``/``contact``, and
+    ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for
+    strokes, ``per_cycle``. ``y`` and ``orientation`` of the trajectories table are swimmer 1's
+    height and tilt."""
+    scene = scene_env.from_json(plan.scene)
+    sw = scene.swimmers
+    heights = extra.get("heights") or []
+    contact = extra.get("contact") or []
+    prog = np.diff(np.concatenate([[0.0], np.asarray(x, np.float64)])) * plan.direction
+    judged = _judge(codes, plan, sw, horizon)
+    h1 = [float(h[0]) for h in heights]
+    f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in contact]) if scene_env.has_wall(scene) else (None, None)
+    row = {
+        "run_id": plan.run_id, "agent": plan.agent, "swimmer": plan.swimmer, "direction": plan.direction,
+        "init": "".join("+" if v > 0 else "-" for v in plan.init) if not isinstance(plan.init, str) else plan.init,
+        "zeta": plan.zeta, "seed": plan.seed, "n_ht": plan.n_ht, "drop": ",".join(sorted(plan.drop)),
+        "action_set": plan.action_set, "group": plan.group, "variant": plan.variant, "steps": len(x),
+        "final_x": x[-1] if x else 0.0, "signed_final_x": plan.direction * (x[-1] if x else 0.0),
+        **judged, "roc_levels": plan.roc_levels,
+        "scene": plan.scene, "medium": scene.medium, "n_swimmers": sw,
+        "start_height": float(z0[0]) if scene_env.has_wall(scene) else None,
+        "separation": float(scene.separation) if sw > 1 else None,
+        "fate": f, "mean_height": mean_h,
+        "speed": late_speed(x, plan.direction, sw),
+        "per_cycle": per_cycle(x, plan.variant, sw) if plan.agent == STROKE_AGENT else None,
+        "x": [float(v) for v in x],
+        "y": h1 or [float(z0[0])] * len(x), "orientation": [float(t[0]) for t in extra.get("tilts") or []]
+        or [float(tilt0[0])] * len(x),
+        "actions": [[int(c) // 3 + 1, int(c) % 3 - 1] for c in codes], "progress": [float(v) for v in prog],
+        "status": "done",
+    }
+    row.update({k: v for k, v in extra.items() if k not in row or k in ("stuck",)})
+    if plan.agent == "llm":
+        row["status"] = extra.get("status", "done")
+    return row
+
+
+def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Per (agent, group) of a scene study: runs, mean displacement per cycle (strokes), mean
+    speed per step over the second half, the fates seen and the mean height of the second half."""
+    out: dict[tuple, list[dict[str, Any]]] = {}
+    for r in rows:
+        if r.get("scene"):
+            out.setdefault((r["agent"], r.get("direction"), r["group"]), []).append(r)
+    table = []
+    for (agent, d, group), g in out.items():
+        fates = [r["fate"] for r in g if r.get("fate")]
+        pc = [r["per_cycle"] for r in g if r.get("per_cycle") is not None]
+        hs = [r["mean_height"] for r in g if r.get("mean_height") is not None]
+        sp = [r["speed"] for r in g if r.get("speed") is not None]
+        table.append({
+            "agent": agent, "direction": d, "group": group, "n": len(g),
+            "per_cycle": float(np.mean(pc)) if pc else None, "speed": float(np.mean(sp)) if sp else None,
+            "fates": ", ".join(f"{f} {fates.count(f)}" for f in FATES if f in fates) or None,
+            "mean_height": float(np.mean(hs)) if hs else None,
+            "start_height": g[0].get("start_height"), "separation": g[0].get("separation"),
+            "medium": g[0].get("medium"),
+        })
+    return table
+
+
+def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]]:
+    """Columns and cells of :func:`scene_summary` for ``jswim study``'s output and ``jswim show``."""
+    from jswim.console import Column
+
+    def fmt(v: Any, spec: str) -> str:
+        return "-" if v is None else format(v, spec)
+
+    cols = [Column("agent", False), Column("dir", False), Column("group", False), Column("medium", False),
+            Column("n"), Column("X/a per cycle"), Column("X/a per step"), Column("fates", False),
+            Column("mean height")]
+    order = sorted(summary, key=lambda s: (s.get("separation") or 0.0, s.get("start_height") or 0.0,
+                                           str(s["group"]), str(s["agent"])))
+    cells = [[str(s["agent"]), "+x" if (s.get("direction") or 1) > 0 else "-x", str(s["group"]),
+              str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
+              s.get("fates") or "-", fmt(s.get("mean_height"), ".2f")] for s in order]
+    return cols, cells
