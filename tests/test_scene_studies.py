@@ -177,6 +177,7 @@ WALL = dict(heights=(3.0,), runs=1, q_runs=2, steps=12)
 PAIR = dict(separations=(30.0,), phases=(1,), runs=1, q_runs=2, steps=12)
 
 
+@pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_wall_study_end_to_end(server, tmp_path):
     out = tmp_path / "wall"
     run_study("wall", StudyOptions(**WALL), fake(server), out, figures=True)
@@ -201,6 +202,7 @@ def test_wall_study_end_to_end(server, tmp_path):
     assert {p.name for p in (out / "figures").glob("*.png")} == {"wall.png", "wall-track.png"}
 
 
+@pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_show_prints_the_scene_table(server, tmp_path, capsys):
     out = tmp_path / "pair"
     rc = cli.main(["study", "pair", "--separations", "30", "--phases", "2", "--runs", "1", "--q-runs", "2",
@@ -224,6 +226,7 @@ def test_scene_options_are_checked(tmp_path, capsys):
         assert "Traceback" not in capsys.readouterr().err
 
 
+@pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_interrupted_pair_study_resumes(server, tmp_path):
     opts = StudyOptions(**PAIR)
     whole = run_study("pair", opts, fake(server), tmp_path / "whole", figures=False)

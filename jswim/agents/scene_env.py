@@ -8,10 +8,8 @@ paper's reply ``[changed DOF, ROC]`` names the swimmer through its DOF (``[3, 1]
 ``(dof - 1)(2K + 1) + k + K`` (:func:`jswim.lattice.encode`), so one swimmer's codes are the
 bulk swimmer's codes unchanged.
 
-The environment is :mod:`jswim.scenes` (the hydrodynamics, part A of issue 19). Until that
-package is on main this module falls back to a stand-in with the same signatures
-(:mod:`jswim.agents._scene_standin`: bulk NG per swimmer, heights fixed) and :data:`STAND_IN`
-says so; study metadata records it.
+The environment is :mod:`jswim.scenes` (the hydrodynamics, part A of issue 19); nothing else in
+the agents or studies imports it.
 """
 
 from __future__ import annotations
@@ -23,14 +21,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-try:  # the real scene environment (part A)
-    from jswim.scenes import Scene, scene_params, scene_reset, scene_step  # type: ignore[attr-defined]
-
-    STAND_IN = False
-except ImportError:  # pragma: no cover - depends on which part has landed
-    from jswim.agents._scene_standin import Scene, scene_params, scene_reset, scene_step
-
-    STAND_IN = True
+from jswim.scenes import Scene, decode_scene_action, scene_params, scene_reset, scene_step
 
 #: Arms (DOFs) of one NG swimmer.
 ARMS = 2
@@ -69,12 +60,9 @@ def has_wall(scene: Any) -> bool:
 
 def decode(codes: jax.Array, roc_levels: int = 1) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Joint action codes -> ``(swimmer, dof, roc)`` of :func:`jswim.scenes.scene_step`: the
-    swimmer and its arm 0-based (int32), the ROC ``k / K`` as a float."""
-    codes = jnp.asarray(codes, jnp.int32)
-    width = 2 * roc_levels + 1
-    joint = codes // width  # 0-based joint DOF
-    k = codes % width - roc_levels
-    return joint // ARMS, joint % ARMS, k.astype(jnp.result_type(float)) / roc_levels
+    swimmer and its arm 0-based (int32), the ROC ``k / K`` as a float (the joint codes are
+    :func:`jswim.scenes.encode_scene_action`'s)."""
+    return decode_scene_action(codes, roc_levels)
 
 
 class Observation(NamedTuple):

@@ -355,17 +355,13 @@ def run_study(
 
 
 def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
-    """The fidelity lines of the scenes a study's runs use (none in the paper's studies), and a
-    line saying so when the scene physics is the agents' stand-in (jswim.agents.scene_env)."""
+    """The fidelity lines of the scenes a study's runs use (none in the paper's studies)."""
     scenes = sorted({p.scene for p in plans if p.scene})
     if not scenes:
         return []
     from jswim.agents import scene_env
 
-    lines = fidelity.scene_extensions([scene_env.from_json(s) for s in scenes])
-    if scene_env.STAND_IN:
-        lines.append("scene physics: STAND-IN (bulk NG formula per swimmer, heights fixed) until jswim.scenes lands")
-    return lines
+    return fidelity.scene_extensions([scene_env.from_json(s) for s in scenes])
 
 
 class FolderRepaired(UserWarning):
