@@ -57,9 +57,28 @@ def _cost_cell(v: Any) -> str:
     return "-" if not v else f"{v:.4f}" if v < 1 else f"{v:.2f}"
 
 
+def grid_order(rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any]) -> list[Mapping[str, Any]]:
+    """``rows`` (in the order runs finished, which concurrency scrambles) with their groups in the
+    order of the study's grid (``group_order`` in the metadata: n_ht 1 before 2 before 10, the
+    full prompt before each sentence removed); groups it does not name keep their first place
+    after those (folders made before it was recorded: the finishing order)."""
+    import re
+
+    order = {g: i for i, g in enumerate(meta.get("group_order") or ())}
+    first: dict[Any, int] = {}
+    for i, r in enumerate(rows):
+        first.setdefault(r.get("group"), i)
+    # Without a recorded order, one swept number (n_ht=10, T=0.25, zeta=1.5) is put in its order.
+    swept = {g: re.fullmatch(r"(\w+)=(-?\d+(?:\.\d+)?)", str(g)) for g in first}
+    if not order and all(swept.values()) and len({m.group(1) for m in swept.values()}) == 1:
+        order = {g: i for i, g in enumerate(sorted(first, key=lambda g: float(swept[g].group(2))))}
+    return sorted(rows, key=lambda r: (order.get(r.get("group"), len(order)), first[r.get("group")]))
+
+
 def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()) -> list[Mapping[str, Any]]:
     """Summary rows in reading order: agent (LLM first), Purcell before NG, +x before -x, and the
-    groups in the order the study's grid ran them (the order of ``rows``; zeta 0.5 before 1)."""
+    groups in the order they first appear in ``rows`` (pass them through :func:`grid_order`: the
+    order the study's grid has them; zeta 0.5 before 1)."""
     first: dict[Any, int] = {}
     for i, r in enumerate(rows):
         first.setdefault(r.get("group"), i)
@@ -110,7 +129,7 @@ class StudyFolder:
         if not self.folder.is_dir():
             raise ResultFolderError(f"{folder}: no such folder")
         self.meta = read_metadata(self.folder)
-        self.rows = read_runs(self.folder)
+        self.rows = grid_order(read_runs(self.folder), self.meta)
         self.summary = order_summary(summarize(self.rows), self.rows)
 
     @property
@@ -153,7 +172,16 @@ class StudyFolder:
         decoding = ("constrain " + ",".join(used)) if used else f"constrain {b.get('constrain')}"
         if used == ["none"]:
             decoding = "free text (constrain none)"
-        return f"{b.get('model')} ({where}), temperature {_fmt(b.get('temperature'), 'g')}, {decoding}"
+        temperature = f"temperature {_fmt(b.get('temperature'), 'g')}"
+        # A reasoning model that accepts one temperature was sent that one (the runs record it).
+        sent = sorted({r["temperature_sent"] for r in self.rows
+                       if r.get("agent") == "llm" and r.get("temperature_sent") is not None})
+        if sent:
+            temperature += f" asked, {','.join(_fmt(t, 'g') for t in sent)} sent (all the model accepts)"
+        thinking = (self.meta.get("summary") or {}).get("reasoning") or {}
+        room = (f", reasoning model: {thinking.get('token_field')}={thinking.get('budget')}"
+                if thinking.get("active") else "")
+        return f"{b.get('model')} ({where}), {temperature}, {decoding}{room}"
 
     def label(self) -> str:
         """Short name for a comparison: the folder name and the model."""

@@ -9,6 +9,7 @@ import pytest
 
 from jswim import console, overview
 from jswim.errors import ConfigError, ResultFolderError
+from jswim.results import read_metadata
 from jswim.studies import Backend, StudyOptions, run_study
 from tests.fakeserver import FakeServer, hash_reply
 
@@ -117,3 +118,40 @@ def test_compare_lists_settings_present_in_all(folders):
         overview.compare_table([a])
     with pytest.raises(ResultFolderError, match="not a jswim study folder"):
         overview.compare_table([a, a.parent])
+
+
+def test_groups_read_in_the_grids_order_not_the_order_runs_finished(tmp_path, capsys):
+    import random
+
+    from jswim import cli
+    from tests.fakeserver import FakeServer, hash_reply
+
+    out = tmp_path / "h"
+    with FakeServer(reply=hash_reply) as srv:
+        args = ["study", "history", "--n-hts", "10,2,1", "--runs", "1", "--steps", "4", "--swimmer", "purcell",
+                "--direction", "+x", "--no-figures", "--out", str(out), "--base-url", srv.url, "--model", "fake"]
+        assert cli.main(args) == 0
+        # Runs land as they finish (concurrency scrambles them): shuffle the file to say so.
+        lines = (out / "runs.jsonl").read_text().splitlines()
+        for seed in range(10):
+            random.Random(seed).shuffle(lines)
+            if [json.loads(ln)["group"] for ln in lines][0] != "n_ht=10":
+                break
+        (out / "runs.jsonl").write_text("\n".join(lines) + "\n")
+        capsys.readouterr()
+        assert cli.main(args) == 0  # the resumed session's table
+        printed = capsys.readouterr().out
+    assert read_metadata(out)["group_order"] == ["n_ht=10", "n_ht=2", "n_ht=1"]
+
+    def groups(text):
+        return [w for ln in text.splitlines() if ln.startswith("llm") for w in ln.split() if w.startswith("n_ht=")]
+
+    assert groups(printed) == ["n_ht=10", "n_ht=2", "n_ht=1"]  # as --n-hts gave them
+    assert cli.main(["show", str(out)]) == 0
+    assert groups(capsys.readouterr().out) == ["n_ht=10", "n_ht=2", "n_ht=1"]
+    # A folder from before the order was recorded: one swept number in its numeric order.
+    meta = json.loads((out / "metadata.json").read_text())
+    del meta["group_order"]
+    (out / "metadata.json").write_text(json.dumps(meta))
+    assert cli.main(["show", str(out)]) == 0
+    assert groups(capsys.readouterr().out) == ["n_ht=1", "n_ht=2", "n_ht=10"]

@@ -145,3 +145,12 @@ def test_dry_run_counts_a_reasoning_models_thinking_and_its_worst_case(tmp_path,
     assert est["reasoning_tokens"] == calls * 1024
     text, est = _dry(tmp_path, capsys, "qwq-32b")
     assert est["reasoning_tokens"] == 0 and "give --reasoning on" in text
+
+
+def test_show_says_what_a_reasoning_model_was_sent(tmp_path, capsys):
+    with FakeServer(**MODES["openai-reasoning"]) as srv:
+        assert swim(srv.url, tmp_path / "o") == 0
+    capsys.readouterr()
+    assert cli.main(["show", str(tmp_path / "o")]) == 0
+    model = next(ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("model:"))
+    assert "temperature 0 asked, 1 sent" in model and "max_completion_tokens=4096" in model

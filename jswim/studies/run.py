@@ -321,6 +321,8 @@ def run_study(
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS) if study == "competence"
         else [options.llm_variant(study)],
         "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
+        # The grid's order of its groups (n_ht 1, 2, ..., 10): readers show them so, not as runs finished.
+        "group_order": list(dict.fromkeys(p.group for p in plans)),
         # What differs from the paper's protocol in every LLM run (each transcript lists its own too),
         # and the extensions some runs use (finer or real-valued ROCs).
         "fidelity_deviations": list(fidelity.ALWAYS) + fidelity.study_extensions({p.roc_levels for p in plans})
@@ -407,8 +409,8 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
                                     max_cost, sent, info, notes)
 
     # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
-    names = {p.run_id for p in plans}
-    rows = [r for r in read_runs(folder) if r["run_id"] in names]
+    names = {p.run_id: i for i, p in enumerate(plans)}
+    rows = sorted((r for r in read_runs(folder) if r["run_id"] in names), key=lambda r: names[r["run_id"]])
     summary = summarize(rows)
     scene_table = _scene_table(rows)
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).

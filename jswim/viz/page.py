@@ -189,7 +189,9 @@ def report_html(folder: str | Path, figures: str = "auto") -> str:
 
     folder = Path(folder)
     meta = read_metadata(folder)
-    rows = read_runs(folder)
+    from jswim.overview import grid_order
+
+    rows = grid_order(read_runs(folder), meta)  # groups in the grid's order, not the finishing order
     study = str(meta.get("study", "?"))
     finished, status_text = _status(meta, rows)
     note = None if finished else unfinished_note(meta.get("status"), len(rows), meta.get("n_planned"))
