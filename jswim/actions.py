@@ -33,15 +33,18 @@ def check_action_set(name: str) -> str:
     return name
 
 
-def check_roc_levels(k: Any) -> int:
+def check_roc_levels(k: Any, name: str = "--roc-levels") -> int:
     """``k`` as an int if it is a valid number of ROC levels K (an integer in
     1..:data:`MAX_ROC_LEVELS`; ROC ``k`` in ``-K..K`` moves a DOF by ``k/K`` of its range).
+
+    The one rule for K, shared by the CLI, the agents and the environment; ``name`` is what the
+    message calls it (``--roc-levels`` on the command line, ``roc_levels`` in Python).
 
     Raises
     ------
     ConfigError
-        For anything else (the message names ``--roc-levels``).
+        For anything else (the message names ``name``).
     """
     if isinstance(k, bool) or not hasattr(k, "__index__") or not 1 <= int(k) <= MAX_ROC_LEVELS:
-        raise ConfigError(f"--roc-levels (K) must be an integer from 1 to {MAX_ROC_LEVELS}, got {k!r}")
+        raise ConfigError(f"{name} (K) must be an integer from 1 to {MAX_ROC_LEVELS}, got {k!r}")
     return int(k)

@@ -366,9 +366,13 @@ def _last_true(mask: np.ndarray) -> np.ndarray:
     return (mask * idx).max(axis=0, initial=0).astype(np.int64) - 1
 
 
-def _strokes(differs: Any, closed: Any, moved: np.ndarray, x: np.ndarray, direction: np.ndarray,
+def trailing_strokes(differs: Any, closed: Any, moved: np.ndarray, x: np.ndarray, direction: np.ndarray,
              threshold: np.ndarray, max_period: int, n_cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The final qualifying stroke of each run: ``(start, period, displacement per step)``.
+
+    Shared by :func:`judge` (action sequences on corners or the K lattice) and
+    :func:`jswim.shape_judge.judge_shapes` (shapes within a tolerance): they differ only in what
+    "repeats with period p" means.
 
     ``differs(p)`` (bool ``(T - p, B)``): step ``t`` and step ``t + p`` differ; ``closed(sc, p)``
     (bool ``(B,)``): the shape after the period starting at ``sc`` is the shape before it;
@@ -483,7 +487,7 @@ def judge(
     threshold = min_fraction * best - _REL_TOL * np.abs(best)
 
     rows = np.arange(b)
-    out_s, out_p, out_disp = _strokes(
+    out_s, out_p, out_disp = trailing_strokes(
         lambda p: at[:-p] != at[p:], lambda sc, p: rp.corner[sc + p, rows] == rp.corner[sc, rows],
         rp.moved, rp.x, direction, threshold, min(max_period, steps // n_cycles), n_cycles)
 

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from jswim.errors import ConfigError
-from jswim.gait import PAPER, Criterion, GaitReport, best_per_step
+from jswim.gait import PAPER, Criterion, GaitReport, best_per_step, trailing_strokes
 
 #: Shape tolerance of a cycle, as a fraction of each DOF's range (a return within 0.1 % counts).
 SHAPE_TOL = 1e-3
@@ -44,11 +44,6 @@ _REL_TOL = 1e-9
 def default_max_period(n_dof: int) -> int:
     """Longest stroke considered for real-valued runs: ``2 * 2**n_dof`` steps."""
     return 2 * 2**n_dof
-
-
-def _last_true(mask: np.ndarray) -> np.ndarray:
-    idx = np.arange(1, mask.shape[0] + 1, dtype=np.int64)[:, None]
-    return (mask * idx).max(axis=0, initial=0) - 1
 
 
 def judge_shapes(
@@ -113,25 +108,13 @@ def judge_shapes(
     threshold = c.min_fraction * best - _REL_TOL * np.abs(best)
 
     moved = np.max(np.abs(shapes[1:] - shapes[:-1]), axis=-1) > tol_abs  # (T, B)
-    s_move = _last_true(~moved) + 1
-    rows = np.arange(b)
-    out_s = np.full(b, steps + 1, np.int64)
-    out_p = np.zeros(b, np.int64)
-    out_disp = np.full(b, np.nan)
-    for p in range(1, min(max_period, steps // c.n_cycles) + 1):
-        periodic = np.max(np.abs(shapes[p:] - shapes[:-p]), axis=-1) <= tol_abs  # (T + 1 - p, B)
-        s = np.maximum(_last_true(~periodic) + 1, s_move)
-        ok = steps - s >= c.n_cycles * p
-        sc = np.minimum(s, steps - p)
-        short = direction * (pos[p:] - pos[:-p]) < threshold * p
-        last_short = np.stack([_last_true(short[r::p]) * p + r for r in range(p)], axis=1)
-        last_short = np.where(last_short < 0, -1, last_short)
-        ok &= last_short[rows, s % p] < s
-        first = direction * (pos[sc + p, rows] - pos[sc, rows]) / p
-        better = ok & (s < out_s)
-        out_s = np.where(better, s, out_s)
-        out_p = np.where(better, p, out_p)
-        out_disp = np.where(better, first, out_disp)
+
+    def differs(p: int) -> np.ndarray:  # shape t and shape t + p differ; (T + 1 - p, B)
+        return np.max(np.abs(shapes[p:] - shapes[:-p]), axis=-1) > tol_abs
+
+    # Shapes periodic up to the final one already close the loop: no separate closure test.
+    out_s, out_p, out_disp = trailing_strokes(differs, lambda sc, p: np.ones(b, bool), moved, pos, direction,
+                                              threshold, min(max_period, steps // c.n_cycles), c.n_cycles)
 
     learned = out_p > 0
     steps_to_learn = np.where(learned, out_s + 1, -1)

@@ -127,10 +127,11 @@ def make_params(
 
 
 def check_roc_levels(k: Any) -> int:
-    """``k`` as an int if it is a valid number of ROC levels K (an integer in 1..1000)."""
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= int(k) <= 1000:
-        raise ConfigError(f"roc_levels (K) must be an integer between 1 and 1000, got {k!r}")
-    return int(k)
+    """``k`` as an int if it is a valid number of ROC levels K (the rule of
+    :func:`jswim.actions.check_roc_levels`, with the message naming ``roc_levels``)."""
+    from jswim.actions import check_roc_levels as check
+
+    return check(k, "roc_levels")
 
 
 def parse_direction(direction: int | str) -> int:
