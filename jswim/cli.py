@@ -672,6 +672,8 @@ def _price_note(backend: Any) -> str:
                              local_host=is_local_host(backend.base_url), price_local=backend.price_local)
     if why:
         return f"not priced: {why}"
+    if table.entry(backend.model) is None and is_local_host(backend.base_url) and backend.prices is None:
+        return f"a server on this machine or the LAN, and no list price for {backend.model!r}: free"
     if table.entry(backend.model) is None:
         return (f"no price for {backend.model!r} in the {'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
                 ": not counted; --prices FILE prices it")

@@ -53,3 +53,11 @@ def test_a_model_without_a_price_says_so_in_every_cost_line(tmp_path, capsys):
         out = capsys.readouterr().out
     assert "not priced: no price for 'fake'" in dry and "--prices FILE" in dry
     assert "no price for 'fake'" in out and "not counted" in out
+
+
+def test_a_local_server_without_a_list_price_is_free_not_unpriced(tmp_path, capsys):
+    with FakeServer(**MODES["plain"]) as srv:  # the reference rule, a llama.cpp box: on this machine
+        assert cli.main(["swim", *FAST, "--out", str(tmp_path / "o"), "--base-url", srv.url, "--model",
+                         "reference-rule"]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("LLM calls:"))
+    assert "a server on this machine or the LAN" in line and "free" in line and "--prices FILE" not in line

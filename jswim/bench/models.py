@@ -105,7 +105,8 @@ def model_entry(table: Any, where: str) -> ModelEntry:
         raise ConfigError(f"{where}: unknown key {bad[0]!r} in a model entry; use {', '.join(MODEL_KEYS)}")
     for key in ("base_url", "model"):
         if not table.get(key):
-            raise ConfigError(f"{where}: a model entry needs {key} (and base_url, model, optionally name)")
+            raise ConfigError(f"{where}: a model entry needs {key} (every entry has base_url and model; name is "
+                              "optional)")
     name = _check_name(table.get("name") or table["model"], "model name")
     if name in RESERVED:
         raise ConfigError(f"{where}: the model name {name!r} is the bench's own row; choose another")
