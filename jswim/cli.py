@@ -1042,7 +1042,7 @@ def _main(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         from jswim import interrupts
 
-        print("interrupted", file=sys.stderr)
+        print(f"jswim: interrupted ({interrupts.name(interrupts.received())})", file=sys.stderr)
         return 128 + (interrupts.received() or signal.SIGINT)
     except MemoryError:
         print("jswim: error: out of memory; use fewer swimmers/learners or a smaller --chunk", file=sys.stderr)
@@ -1078,7 +1078,8 @@ def run() -> None:
         status = 0
     except KeyboardInterrupt:  # Ctrl-C before main's own handler (imports, parser): nothing to keep yet
         interrupts.quiet()
-        print("interrupted", file=sys.stderr)
+        print(f"jswim: interrupted ({interrupts.name(interrupts.received())}) while starting; nothing was written",
+              file=sys.stderr)
         status = 128 + (interrupts.received() or signal.SIGINT)
     interrupts.ignore()  # a signal during interpreter exit must not kill the process after its line
     sys.exit(status)

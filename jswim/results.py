@@ -254,7 +254,12 @@ class StudyStore:
                 with writing(self.folder):
                     self._lock = FolderLock(self.folder).acquire()
             self._open(study, meta_path, extra)
-        except BaseException:
+        except BaseException as exc:
+            # A signal right after "running" was written: the caller holds no store yet to mark
+            # it, so the folder would read "running" with nobody running it.
+            if isinstance(exc, KeyboardInterrupt) and getattr(self, "meta", {}).get("status") == "running":
+                with contextlib.suppress(OSError, ResultFolderError):
+                    self.set_status("interrupted")
             self.close()
             raise
 

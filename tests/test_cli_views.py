@@ -237,4 +237,4 @@ def test_ctrl_c_before_main_handles_it_is_one_line(monkeypatch, capsys):
     with pytest.raises(SystemExit) as stop:
         cli.run()
     err = capsys.readouterr().err
-    assert stop.value.code == 130 and err == "interrupted\n"
+    assert stop.value.code == 130 and err == "jswim: interrupted (Ctrl-C) while starting; nothing was written\n"

@@ -219,6 +219,112 @@ def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(sign
         assert sum(r["replayed_calls"] for r in rows) + sum(r.get("calls", 0) for r in rows) >= CALLS
 
 
+# Signals at awkward moments: inside an import (a C extension half initialised raises ImportError
+# or crashes at exit), inside a callback that cannot raise (the interrupt would be lost), right
+# after "running" was written (nobody left to mark it).
+
+SELF_KILL_IMPORT = """
+import os, signal, sys, time
+sys.path.insert(0, sys.argv[1])
+from jswim import interrupts
+interrupts.install()
+try:
+    import selfkill  # sends SIGTERM to its own process half way through its own import
+    time.sleep(5)
+    print("not interrupted")
+except KeyboardInterrupt:
+    print("interrupted after the import:", sys.modules["selfkill"].DONE, interrupts.name(interrupts.received()))
+"""
+
+
+def test_a_signal_during_an_import_waits_for_the_import_to_finish(tmp_path):
+    (tmp_path / "selfkill.py").write_text(
+        "import os, signal, time\nos.kill(os.getpid(), signal.SIGTERM)\n"
+        "for _ in range(20):\n    time.sleep(0.01)  # bytecode runs: the handler is called in here\nDONE = True\n")
+    r = subprocess.run([sys.executable, "-c", SELF_KILL_IMPORT, str(tmp_path)], capture_output=True, text=True, timeout=60)
+    no_traceback(r.stderr)
+    assert r.stdout.strip() == "interrupted after the import: True SIGTERM"
+
+
+SELF_KILL_GC = """
+import gc, os, signal, time
+from jswim import interrupts
+interrupts.install()
+
+def callback(phase, info):  # Python prints and drops any exception raised in here
+    if phase == "start" and not fired:
+        fired.append(1)
+        os.kill(os.getpid(), signal.SIGTERM)
+        sum(range(10000))  # bytecode runs: the handler is called inside the callback
+
+fired = []
+gc.callbacks.append(callback)
+try:
+    gc.collect()
+    time.sleep(5)
+    print("not interrupted")
+except KeyboardInterrupt:
+    print("interrupted", interrupts.name(interrupts.received()))
+"""
+
+
+def test_a_signal_inside_a_garbage_collector_callback_is_not_lost():
+    r = subprocess.run([sys.executable, "-c", SELF_KILL_GC], capture_output=True, text=True, timeout=60)
+    no_traceback(r.stderr)
+    assert r.stdout.strip() == "interrupted SIGTERM"
+
+
+def test_an_interrupt_right_after_running_was_written_marks_the_folder_interrupted(tmp_path, monkeypatch):
+    from jswim import results
+
+    real = results.write_json
+
+    def write_then_interrupt(path, obj):
+        real(path, obj)
+        if Path(path).name == "metadata.json" and obj.get("status") == "running":
+            raise KeyboardInterrupt  # the signal lands as the open's own write returns
+
+    monkeypatch.setattr(results, "write_json", write_then_interrupt)
+    with pytest.raises(KeyboardInterrupt):
+        StudyStore(tmp_path / "F", "swim", {"study": "swim"})
+    monkeypatch.setattr(results, "write_json", real)
+    assert read_metadata(tmp_path / "F")["status"] == "interrupted"
+    StudyStore(tmp_path / "F", "swim", {"study": "swim"}).close()  # the lock was released
+
+
+def test_sigterm_at_start_up_in_the_llm_phase_and_in_the_final_writes_never_leaves_running(tmp_path):
+    # The stress of issue 22 in small: a session killed at each phase; each resume sends only the
+    # calls that had no answer (answered by the server but not journaled when the process died).
+    out = tmp_path / "F"
+    with FakeServer(reply=hash_reply, latency=0.05) as srv:
+        lost = 0
+        for when in ("start-up", "llm", "final writes"):
+            answered0, journaled0 = srv.n_answered, _lines(out / "calls.jsonl")
+            proc = start_swim(srv.url, out)
+            if when == "start-up":
+                time.sleep(0.5)
+            elif when == "llm":
+                wait_for_calls(out, journaled0 + 3, proc)
+            else:
+                while proc.poll() is None and _lines(out / "runs.jsonl") < 2:
+                    time.sleep(0.002)
+            proc.send_signal(signal.SIGTERM)
+            _, err = proc.communicate(timeout=120)
+            no_traceback(err)
+            assert proc.returncode in (0, 143), err  # 0: it had finished first
+            time.sleep(0.2)  # answers to the dead process land
+            lost += (srv.n_answered - answered0) - (_lines(out / "calls.jsonl") - journaled0)
+            if (out / "metadata.json").exists():
+                assert read_metadata(out)["status"] != "running", when
+        assert cli.main(swim_args(srv.url, out)) == 0
+        assert srv.n_answered == _lines(out / "calls.jsonl") + lost  # no journaled call sent again
+    assert read_metadata(out)["status"] == "complete" and len(read_runs(out)) == 2
+
+
+def _lines(path: Path) -> int:
+    return len(path.read_text().splitlines()) if path.exists() else 0
+
+
 # -- a full disk --------------------------------------------------------------------------------
 
 

@@ -332,9 +332,9 @@ def run_study(
         "server": backend.address() if backend is not None else None,
         "prices_as_of": (backend.prices_as_of if backend is not None and backend.prices_as_of else PRICES_AS_OF),
     })
-    for note in store.repairs:
-        warnings.warn(FolderRepaired(f"{folder}: {note}"), stacklevel=2)
     try:
+        for note in store.repairs:
+            warnings.warn(FolderRepaired(f"{folder}: {note}"), stacklevel=2)
         store.meta.pop("prompt_template", None)  # folders before prompt_template.json had it here
         tpl_path = folder / PROMPT_FILE
         if not tpl_path.exists():  # the identity holds its hash: a resumed folder has this very template
