@@ -247,3 +247,13 @@ def test_interrupted_pair_study_resumes(server, tmp_path):
     key = lambda r: r["run_id"]  # noqa: E731
     assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == \
         [(r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)]
+
+
+def test_positions_are_sphere_centroids_outside_the_bulk_formula():
+    from jswim.scenes import SceneState
+
+    st = SceneState(np.array([[10.0, 6.0]]), np.array([[2.0, 5.0]]), np.array([np.pi / 3]), np.int32(0))
+    # Spheres at x_mid - d1 cos, x_mid, x_mid + d2 cos: centroid x_mid + (d2 - d1) cos(tilt) / 3.
+    spheres = 2.0 + np.array([-10.0, 0.0, 6.0]) * np.cos(np.pi / 3)
+    assert float(scene_env.centroid_x(st, "wall")[0]) == pytest.approx(spheres.mean())
+    assert float(scene_env.centroid_x(st, "bulk")[0]) == 2.0  # the paper's X as the formula moves it

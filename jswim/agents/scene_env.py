@@ -68,7 +68,7 @@ def decode(codes: jax.Array, roc_levels: int = 1) -> tuple[jax.Array, jax.Array,
 class Observation(NamedTuple):
     """What the agents read after a step, per scene in a batch (leading axis ``B``).
 
-    ``x`` is the swimmers' mean centre x (the quantity whose progress is rewarded), ``xs``,
+    ``x`` is the swimmers' mean position (:func:`centroid_x`) (the quantity whose progress is rewarded), ``xs``,
     ``z`` (the middle sphere's height above the wall, in a) and ``tilt`` (rad) per swimmer
     ``(B, S)``, ``dofs`` the joint arm lengths ``(B, 2S)``, ``stuck`` whether a non-zero ROC could
     not move its arm, ``contact`` whether any sphere touched the wall or another body.
@@ -83,9 +83,22 @@ class Observation(NamedTuple):
     contact: jax.Array
 
 
-def observe(state: Any, stuck: Any = False, contact: Any = False) -> Observation:
-    """The :class:`Observation` of one (unbatched) scene state."""
-    xs = state.centre[..., 0]
+def centroid_x(state: Any, medium: str) -> jax.Array:
+    """Each swimmer's position along x ``(S,)``: the centroid of its three spheres (the middle
+    sphere's x plus ``(d2 - d1) cos(tilt) / 3``), the point whose velocity the paper's formula gives.
+    The middle sphere itself jumps by more than 1 a at every move while the swimmer nets 0.17 a per
+    cycle; the centroid moves by about a tenth of that per move, as the bulk swimmer's X does. In the
+    ``"bulk"`` medium the state's x already is the paper's X."""
+    x = state.centre[..., 0]
+    if medium == "bulk":
+        return x
+    return x + (state.arms[..., 1] - state.arms[..., 0]) * jnp.cos(state.tilt) / 3.0
+
+
+def observe(state: Any, stuck: Any = False, contact: Any = False, medium: str = "bulk") -> Observation:
+    """The :class:`Observation` of one (unbatched) scene state (positions: :func:`centroid_x`;
+    heights: the middle sphere's)."""
+    xs = centroid_x(state, medium)
     return Observation(jnp.mean(xs, axis=-1), xs, state.centre[..., 1], state.tilt,
                        state.arms.reshape(state.arms.shape[:-2] + (-1,)), jnp.asarray(stuck, bool).reshape(()),
                        jnp.any(jnp.asarray(contact, bool)))
@@ -95,14 +108,14 @@ def start(params: Any, batch: int) -> tuple[Any, Observation]:
     """``batch`` copies of the scene's start state and their observation."""
     s0 = scene_reset(params)
     states = jax.tree.map(lambda a: jnp.broadcast_to(a, (batch,) + jnp.shape(a)), s0)
-    return states, jax.vmap(observe)(states)
+    return states, jax.vmap(lambda st: observe(st, medium=params.scene.medium))(states)
 
 
 def step(params: Any, state: Any, code: jax.Array, key: jax.Array, roc_levels: int = 1) -> tuple[Any, Observation]:
     """One joint action on one scene state (vmap it for batches)."""
     sw, dof, roc = decode(code, roc_levels)
     new, info = scene_step(params, state, (sw, dof, roc), key)
-    return new, observe(new, jnp.any(jnp.asarray(info.stuck)), info.contact)
+    return new, observe(new, jnp.any(jnp.asarray(info.stuck)), info.contact, params.scene.medium)
 
 
 def as_numpy(obs: Observation) -> dict[str, np.ndarray]:

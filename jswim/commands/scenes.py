@@ -42,7 +42,7 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
                             "(default 3,5,7,10,20,50)")
     else:
         g.add_argument("--separations", type=_numbers(float), default=None, metavar="D1,D2,...",
-                       help="starting distances D between the two swimmers' centres, in sphere radii (default 25,50)")
+                       help="starting distances D between the two swimmers' centres, in sphere radii (default 30,60)")
         g.add_argument("--phases", type=_numbers(int), default=None, metavar="P1,P2,...",
                        help="phase offsets of the two square strokes, in quarter cycles of swimmer 2 ahead "
                             "(default 0,1,2,3)")

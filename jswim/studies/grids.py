@@ -91,7 +91,7 @@ class StudyOptions:
     # The scene studies' grids (jswim.studies.scenes): starting heights above the wall (a), the
     # pair's starting distances D (a) and the phase offsets of its two square strokes (quarter cycles).
     heights: tuple[float, ...] = (3.0, 5.0, 7.0, 10.0, 20.0, 50.0)
-    separations: tuple[float, ...] = (25.0, 50.0)
+    separations: tuple[float, ...] = (30.0, 60.0)
     phases: tuple[int, ...] = (0, 1, 2, 3)
 
     def __post_init__(self) -> None:
