@@ -111,6 +111,10 @@ def main(args: argparse.Namespace) -> int:
           + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "")
           + (f"; {suite.samples} samples of every LLM run" if (suite.samples or 1) > 1 else "") + ")")
     print(leaderboard.table_text(rows, width=terminal_width()))
+    on_board = {r["row"] for r in rows}
+    for m in models:  # a model with no finished run has no row: say so under the table, not only on stderr
+        if m.name not in on_board:
+            print(f"no rows yet: {m.name} ({meta['model_status'].get(m.name, 'not run')})")
     print("success p: the paper's criterion, 95% Wilson interval; steps to learn counted from 1 over the runs that "
           "learned; suite $: what the model's calls cost over the whole suite")
     for line in _sent_notes(jobs):
