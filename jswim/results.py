@@ -50,6 +50,10 @@ if TYPE_CHECKING:
 
 RUNS = "runs.jsonl"
 META = "metadata.json"
+#: Room kept on the study's disk while a session runs, freed to record its status when the disk
+#: fills up (a full disk would otherwise leave ``metadata.json`` reading "running").
+RESERVE = ".jswim.reserve"
+RESERVE_MIN_BYTES = 64 * 1024
 
 #: Temporary files of :func:`atomic_write` (``.NAME.XXXXXXXX.tmp``, as ``mkstemp`` names them).
 _TEMPORARY = re.compile(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$")
@@ -58,7 +62,7 @@ _TEMPORARY = re.compile(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$")
 def _is_own_file(p: Path) -> bool:
     """What jswim itself leaves in a folder before its first record: its lock, its holder note,
     temporary files of an interrupted first write, an empty figures folder."""
-    if p.name in (LOCK, HOLDER) or _TEMPORARY.match(p.name):
+    if p.name in (LOCK, HOLDER, RESERVE) or _TEMPORARY.match(p.name):
         return True
     return p.name == "figures" and p.is_dir()
 
@@ -244,6 +248,7 @@ class StudyStore:
         #: sentence each, for the caller to report.
         self.repairs: list[str] = []
         self._lock: FolderLock | None = None
+        self._reserved = False  # RESERVE is ours to free
         meta_path = self.folder / META
         if self.folder.exists() and not self.folder.is_dir():
             raise ResultFolderError(f"--out {self.folder} is a file, not a folder; choose another path")
@@ -299,6 +304,32 @@ class StudyStore:
         self.meta["status"] = "running"
         with writing(self.folder):
             write_json(meta_path, self.meta)
+        self._keep_reserve(len(dumps(self.meta)))
+
+    def _keep_reserve(self, meta_bytes: int) -> None:
+        """Hold back room for two rewrites of ``metadata.json`` (best effort: a disk too full for
+        it now is found at the next write)."""
+        path = self.folder / RESERVE
+        try:
+            with open(path, "wb", opener=opener) as f:
+                f.write(bytes(max(RESERVE_MIN_BYTES, 2 * meta_bytes)))
+                f.flush()
+                os.fsync(f.fileno())
+            self._reserved = True
+        except OSError:
+            with contextlib.suppress(OSError):
+                path.unlink()
+
+    def _free_reserve(self) -> bool:
+        """Give the reserved room back to the disk; ``False`` when there was none."""
+        if not self._reserved:
+            return False
+        self._reserved = False
+        try:
+            (self.folder / RESERVE).unlink()
+        except OSError:
+            return False
+        return True
 
     def _clean_temporary_files(self) -> None:
         """Remove the temporary files of atomic writes that a kill left behind (ours alone hold
@@ -325,6 +356,8 @@ class StudyStore:
 
     def close(self) -> None:
         """Release the folder's lock (the session is over; :meth:`set_status` first)."""
+        if self._reserved:
+            self._free_reserve()
         if self._lock is not None:
             self._lock.release()
             self._lock = None
@@ -383,8 +416,14 @@ class StudyStore:
         and ``fields`` in ``metadata.json`` (only that file is rewritten: safe in a handler)."""
         self.meta["status"] = status
         self.meta.update(fields)
-        with writing(self.folder):
-            write_json(self.folder / META, self.meta)
+        try:
+            with writing(self.folder):
+                write_json(self.folder / META, self.meta)
+        except StudyFolderError:  # a full disk: the room held back since the open takes this write
+            if not self._free_reserve():
+                raise
+            with writing(self.folder):
+                write_json(self.folder / META, self.meta)
 
 
 def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:

@@ -368,6 +368,8 @@ def test_a_full_disk_ends_the_session_in_one_line_and_the_same_command_resumes(s
         lines = [ln for ln in err.splitlines() if ln.startswith("jswim:")]
         assert rc == 2 and len(lines) == 1 and "No space left on device" in lines[0], err
         assert "run the same command to resume" in lines[0]
+        # The room held back since the open took the status, though the disk is full to the byte.
+        assert read_metadata(out)["status"] == "stopped" and not (out / ".jswim.reserve").exists()
         filler.unlink()
         sent = srv.n_requests
         answered = len((out / "calls.jsonl").read_text().splitlines())
