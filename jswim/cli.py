@@ -146,10 +146,10 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> N
         g.add_argument("--prompt-files", default=None, metavar="A,B,...",
                        help=shown("prompt_files", "prompt templates as a grid axis of the study's LLM runs (runs "
                                   "and rows named by each file's name); extends a folder"))
-        g.add_argument("--samples", type=int, default=None, metavar="N",
-                       help="independent samples of each LLM run's very setting (same start; each its own run id "
-                            "and seed, and at T > 0 its own request seeds), pooled into the setting's row; the "
-                            "baselines' repeats are --q-runs (default 1); extends a folder")
+    g.add_argument("--samples", type=int, default=None, metavar="N",
+                   help="independent samples of each LLM run's very setting (same start; each its own run id "
+                        "and seed, and at T > 0 its own request seeds), pooled into the setting's row; the "
+                        "baselines' repeats are --q-runs (default 1); extends a folder")
     b = p.add_argument_group("LLM backend (default: the embedded SmolLM2-135M model, offline)")
     b.add_argument("--base-url", default=None, help="an OpenAI-compatible server, e.g. http://localhost:8080/v1")
     b.add_argument("--model", default=None, help="model name on that server (required with --base-url)")

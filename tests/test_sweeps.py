@@ -169,3 +169,11 @@ def test_prompt_files_are_known_by_their_bytes(tmp_path, capsys):
         assert study(a) == 0 and srv.n_requests == n + 4
         assert read_metadata(out)["prompt_files"]["short"]["sha256"] != rec["sha256"]
     assert {r["group"] for r in read_runs(out)} == {"prompt=short", "prompt=short2"}
+
+
+def test_swim_takes_samples_too():
+    from jswim import cli as c
+
+    args = c.build_parser().parse_args(["swim", "--samples", "3", "--runs", "2"])
+    plans = build("swim", c._options(args, "swim"))
+    assert sum(p.agent == "llm" for p in plans) == 6
