@@ -576,6 +576,9 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
             ax_p.set_title(_panel_title(sw, d))
             ax_x.axhline(0, color="0.75", lw=0.6, zorder=0)
             ax_x.set_ylabel(f"mean {_disp_label(d)}\n(95% bootstrap CI)")
+            lo, hi = ax_x.get_ylim()
+            if hi - lo < 1e-9:  # all X/a equal (a swimmer that never moved): not an axis of 1e-17 rounding
+                ax_x.set_ylim(lo - 0.05, hi + 0.05)
             if ax_l is not None:
                 ax_l.set_ylabel("steps to learn\n(median, IQR)")
                 ax_l.text(0.99, 0.97, "k/n: runs that learned", transform=ax_l.transAxes, ha="right", va="top",

@@ -187,3 +187,9 @@ def test_temperature_figure_shows_p_steps_to_learn_with_iqr_and_k_of_n():
         assert sorted(t.get_text() for t in ax.texts if "/" in t.get_text() and ":" not in t.get_text()) == \
             ["0/4", "3/4"]
     assert sum(ax.get_ylabel().startswith("success rate") for ax in fig.axes) == 4
+    # X/a equal everywhere, up to rounding (-8e-17 where a swimmer never moved): a readable axis.
+    rows = [{**r, "signed_final_x": -8.3e-17 * (1 + i % 2)} for i, r in enumerate(rows)]
+    fig = plots.study_figures("temperature", rows)["temperature"]
+    for ax in (ax for ax in fig.axes if ax.get_ylabel().startswith("mean")):
+        lo, hi = ax.get_ylim()
+        assert hi - lo >= 0.1
