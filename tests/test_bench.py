@@ -136,6 +136,10 @@ def test_models_file_mistakes_are_one_line(tmp_path):
                         ('[[models]]\nbase_url = "http://a/v1"\nmodel = "m"\ncolour = 1\n', "unknown key 'colour'"),
                         ('[[models]]\nbase_url = "http://a/v1"\nmodel = "m"\nname = "baselines"\n', "bench's own row"),
                         ('[suites.x]\nstudy = "nope"\n', "study must be one of"),
+                        ('[suites.x]\nstudy = "swim"\noptions = { temperatures = [0, 0.5] }\n',
+                         "jswim swim takes no --temperatures"),
+                        ('[suites.x]\nstudy = "history"\noptions = { q_runs = 3 }\n',
+                         "history study has no use for q_runs"),
                         ("[[models]\n", "not valid TOML")]:
         bad.write_text(text)
         with pytest.raises(ConfigError, match=words):

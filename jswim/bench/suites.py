@@ -115,6 +115,26 @@ def _check_name(name: str, what: str) -> str:
     return str(name)
 
 
+#: Grid axes only ``jswim study`` takes (``jswim swim`` refuses them).
+STUDY_AXES = ("zetas", "n_hts", "temperatures", "prompt_files")
+
+
+def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None:
+    """Refuse, when the models file is read, an option the part's study would refuse at run time
+    (every model's process would fail on it)."""
+    from jswim.studies.grids import ignored_options  # lazy: the grids load JAX
+
+    if study == "swim":
+        axis = next((k for k in opts if k in STUDY_AXES), None)
+        if axis is not None:
+            raise ConfigError(f"{where}: jswim swim takes no {PART_OPTIONS[axis]} (a study's grid axis); use a "
+                              "study, e.g. study = \"curves\"")
+    fields = {"noise": "zeta"}
+    for field, why in ignored_options(study, [fields.get(k, k) for k in opts]).items():
+        option = next(k for k in opts if fields.get(k, k) == field)
+        raise ConfigError(f"{where}: the {study} study has no use for {option} ({why}); leave it out")
+
+
 def user_suite(name: str, table: Any, where: str) -> Suite:
     """A suite from a models file's ``[suites.NAME]`` table.
 
@@ -144,6 +164,7 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
         if bad:
             raise ConfigError(f"{where}: suite {name!r}: unknown option {bad[0]!r}; choose from "
                               f"{', '.join(sorted(PART_OPTIONS))}")
+        _check_part_options(p["study"], opts, f"{where}: suite {name!r} part {i + 1}")
         parts.append(Part(_check_name(p.get("name") or p["study"], "suite part"), p["study"],
                           tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in opts.items())))
     if len({p.name for p in parts}) != len(parts):
