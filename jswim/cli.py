@@ -967,6 +967,12 @@ def _show(args: argparse.Namespace) -> int:
     from jswim.console import terminal_width  # lazy: JAX loads only for commands that run
     from jswim.overview import show_text
 
+    folder = Path(args.folder)
+    if (folder / "bench.json").is_file() and not (folder / "metadata.json").exists():  # a bench's folder
+        from jswim.commands import bench
+
+        print(bench.show_text(folder, width=terminal_width()))
+        return 0
     print(show_text(args.folder, width=terminal_width()))
     return 0
 

@@ -207,3 +207,24 @@ def test_dry_run_warns_when_a_models_cap_is_below_its_estimate(tmp_path, capsys)
     assert "warning: gpt-4o: its max_cost $0.001 is below the estimated" in text and "would stop at the cap" in text
     assert cli.main([*base, "base_url=http://127.0.0.1:9/v1,model=gpt-4o,max_cost=100,price_local=true"]) == 0
     assert "max_cost" not in capsys.readouterr().out
+
+
+def test_show_on_a_bench_folder_prints_its_leaderboard(tmp_path, capsys):
+    from jswim.bench import leaderboard, runner
+    from jswim.bench.suites import CORE
+
+    out = tmp_path / "b"
+    models = (parse_model_option("base_url=http://127.0.0.1:9/v1,model=m"),)
+    meta = runner.open_folder(out, {**runner.definition(CORE, models, True, True), "status": "complete",
+                                    "model_status": {"m": "complete", "down": "failed: cannot reach it"}})
+    assert cli.main(["show", str(out)]) == 0
+    assert "no leaderboard yet" in capsys.readouterr().out
+    row = {"row": "m", "kind": "llm", "part": "curves", "swimmer": "ng", "direction": -1, "group": "", "n": 10,
+           "samples": 1, "success": 0.3, "success_lo": 0.11, "success_hi": 0.6, "learned": 3, "steps_median": 21.0,
+           "steps_q25": 18.0, "steps_q75": 30.0, "mean_x": 0.2, "failed_steps": 1, "tokens_per_step": 240.0,
+           "suite_cost_usd": 1.25, "priced": True, "status": "complete"}
+    leaderboard.write_files(out, [row], meta)
+    assert cli.main(["show", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "bench core (seed 0)" in text and "down: failed: cannot reach it" in text
+    assert "21 [18-30] (3 of 10)" in text and "1.2500" in text

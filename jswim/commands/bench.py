@@ -235,3 +235,28 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
                   f"case (${t['cost_max_usd']:.2f}): long replies would stop it at the cap")
     print(json.dumps({"suite": suite.name, "models": totals, "total_usd": total}, sort_keys=True))
     return 0
+
+
+def show_text(folder: Path, width: int | None = None) -> str:
+    """``jswim show BENCH``: the bench's definition, each model's status and its last leaderboard
+    (read from ``bench.json`` and ``leaderboard.json``; nothing is run or written)."""
+    from jswim.bench import leaderboard
+
+    try:
+        meta = json.loads((folder / "bench.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ConfigError(f"{folder}/bench.json is unreadable ({exc})") from None
+    suite = meta.get("suite") or {}
+    lines = [f"bench {suite.get('name')} (seed {suite.get('seed')}) in {folder}: {meta.get('status')}"
+             + (f"; {meta['samples']} samples of every LLM run" if (meta.get("samples") or 1) > 1 else "")]
+    lines += [f"  {name}: {status}" for name, status in (meta.get("model_status") or {}).items()]
+    try:
+        rows = json.loads((folder / "leaderboard.json").read_text(encoding="utf-8")).get("rows") or []
+    except (OSError, ValueError):
+        rows = []
+    if rows:
+        lines += ["", leaderboard.table_text(rows, width=width)]
+    else:
+        lines.append("no leaderboard yet: the same jswim bench command writes it")
+    lines.append(f"each model's studies: {folder}/<model>/<part>/ (jswim show on each)")
+    return "\n".join(lines)
