@@ -352,6 +352,7 @@ def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Rep
         if steps:  # a run the server failed at its first step has none
             heading[0] = np.exp(1j * start_orientation(model, np.asarray(levels0), np))
         np.cumprod(turn[:-1], axis=0, out=heading[1:])
+        heading[1:] *= heading[:1]  # the start orientation (nonzero for chains of 3+ hinges)
         dx = (heading * (table[:, 0] + 1j * table[:, 1])[idx]).real
         np.cumsum(dx, axis=0, out=x[1:])
     else:

@@ -46,10 +46,13 @@ def test_reversed_direction_reverses_the_best_cycle():
     assert best_per_step(model, -1) == pytest.approx(best_per_step(model, 1))
 
 
-@pytest.mark.parametrize("swimmer", ["purcell", "ng"])
+@pytest.mark.parametrize("swimmer", ["purcell", "ng", "nlink"])
 def test_replay_matches_the_environment(swimmer):
-    actions = np.random.default_rng(1).integers(0, 6, (6, 40))
-    for init in [(1, 1), (1, 0)]:
+    # The four-link swimmer starts turned (symmetric about x), so its replay must carry the start
+    # orientation through every step, not only the first.
+    n = make_params(swimmer).model.n_dof
+    actions = np.random.default_rng(1).integers(0, 3 * n, (6, 40))
+    for init in [(1,) * n, (1, 0) + (1,) * (n - 2)]:
         moves = [[decode_action(int(a)) for a in row] for row in actions]
         env = rollout(swimmer, moves, init=init)
         rp = replay(actions.T, make_params(swimmer).model, np.tile(init, (6, 1)))
