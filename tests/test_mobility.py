@@ -103,3 +103,17 @@ def test_force_and_torque_free(wall):
                     + qd[s][:, None] * e[s])
             np.testing.assert_allclose(v[3 * s:3 * s + 3], want, atol=1e-12)
         assert np.allclose(np.hypot(*(pos[0, 1:] - pos[0, :-1]).T), q[0, 1:] - q[0, :-1])
+
+
+@pytest.mark.parametrize("S, O, wall", [(1, 0, True), (2, 0, True), (1, 3, False), (2, 1, False)])
+def test_unrolled_solve_matches_lapack(S, O, wall):
+    rng = np.random.default_rng(5)
+    c = jnp.asarray([[0.0, 9.0], [31.0, 8.0]][:S])
+    t = jnp.asarray(rng.uniform(-0.3, 0.3, S))
+    a = jnp.asarray(rng.uniform(6, 10, (S, 2)))
+    r = jnp.asarray(rng.uniform(-1, 1, (S, 2)))
+    ob = jnp.asarray([[15.0, 20.0, 2.5], [-20, 15, 1.0], [0, 30, 3]][:O]).reshape(O, 3)
+    want = forcefree.solve(c, t, a, r, ob, wall)
+    got = forcefree.solve_unrolled(c, t, a, r, ob, wall)
+    for x, y in zip(want, got):
+        np.testing.assert_allclose(np.asarray(y), np.asarray(x), atol=1e-14)

@@ -85,7 +85,8 @@ def test_free_square_stroke_matches_independent_collinear_solve():
     want = collinear_square_cycle()
     assert abs(want - 0.1720914) < 1e-7  # extensions.md's independent number
     r = scene_rollout("ng", SQUARE * 2, Scene(medium="free"))
-    assert abs(r.x[3, 0] - want) < 1e-12 and abs(r.x[7, 0] - 2 * want) < 1e-12
+    # 6 Gauss nodes: ~5e-12 per cycle (nodes=8: ~1e-15)
+    assert abs(r.x[3, 0] - want) < 1e-11 and abs(r.x[7, 0] - 2 * want) < 2e-11
     np.testing.assert_array_equal(r.z, 10.0)
     np.testing.assert_array_equal(r.tilt, 0.0)
     np.testing.assert_array_equal(r.arms[3], [[10.0, 10.0]])

@@ -20,8 +20,8 @@ from jswim.swimmers.models import make_model
 CONTACT_GAP = 0.1
 
 #: Gauss-Legendre nodes per step and Picard sweeps (see :mod:`jswim.scenes.collocation`).
-DEFAULT_NODES = 8
-DEFAULT_SWEEPS = 6
+DEFAULT_NODES = 6
+DEFAULT_SWEEPS = 5
 
 
 @functools.partial(

@@ -115,3 +115,49 @@ def _scan(params: SceneParams, key: Array, sw: Array, dof: Array, roc: Array) ->
 
     _, out = jax.lax.scan(body, scene_reset(params), (keys, sw, dof, roc))
     return out
+
+
+def batch_starts(params: SceneParams, *, height: Any = None, tilt: Any = None, separation: Any = None
+                 ) -> SceneParams:
+    """``params`` with a leading batch axis of start poses: one compiled scene, many starts.
+
+    ``height``, ``tilt`` and ``separation`` are 1-D arrays of one length ``B`` (or None: the
+    scene's own value); the result's ``centre0`` is ``(B, S, 2)`` and ``tilt0`` ``(B, S)``, the other
+    leaves are shared. ``params.scene`` (static) stays the template; the starts are not validated
+    again beyond finiteness. Run with :func:`scene_rollout_batch`.
+    """
+    sc = params.scene
+    vals = [np.asarray(v, np.float64).reshape(-1) for v in (height, tilt, separation) if v is not None]
+    if not vals:
+        raise ConfigError("batch_starts needs at least one of height, tilt, separation")
+    b = len(vals[0])
+    if any(len(v) != b for v in vals) or not all(np.all(np.isfinite(v)) for v in vals):
+        raise ConfigError("batch_starts: height, tilt and separation must be finite and of one length")
+    h = np.broadcast_to(np.asarray(sc.height if height is None else height, np.float64), (b,))
+    t = np.broadcast_to(np.asarray(sc.tilt if tilt is None else tilt, np.float64), (b,))
+    d = np.broadcast_to(np.asarray(sc.separation if separation is None else separation, np.float64), (b,))
+    s = sc.swimmers
+    centre = np.stack([np.arange(s)[None, :] * d[:, None], np.broadcast_to(h[:, None], (b, s))], -1)
+    dtype = params.arms0.dtype
+    return params.replace(centre0=jnp.asarray(centre, dtype), tilt0=jnp.asarray(np.repeat(t[:, None], s, 1), dtype))
+
+
+def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0) -> SceneRollout:
+    """:func:`scene_rollout` of the same moves from each start of :func:`batch_starts` (float64
+    when ``params`` is). Leading axes of the result: (batch, steps, ...)."""
+    from jswim.env.rollouts import seed_key
+
+    with jax.enable_x64(True):
+        acts = parse_scene_moves(moves, params.n_swimmers)
+        k = seed_key(key) if isinstance(key, int) else key
+        b = params.centre0.shape[0]
+        out = _scan_starts(
+            params, jax.random.split(k, b), jnp.asarray(acts[:, 0], jnp.int32),
+            jnp.asarray(acts[:, 1], jnp.int32), jnp.asarray(acts[:, 2], params.arms0.dtype))
+        return SceneRollout(*(np.asarray(v) for v in out))
+
+
+@jax.jit
+def _scan_starts(params: SceneParams, keys: Array, sw: Array, dof: Array, roc: Array) -> SceneRollout:
+    axes = params.replace(zeta=None, centre0=0, tilt0=0, arms0=None, obstacles=None)
+    return jax.vmap(_scan, in_axes=(axes, 0, None, None, None))(params, keys, sw, dof, roc)

@@ -109,6 +109,42 @@ def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: 
     return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
 
 
+def scene_step_joint(params: SceneParams, state: SceneState, dofs: Any, rocs: Any, key: Array
+                     ) -> tuple[SceneState, SceneStepInfo]:
+    """Every swimmer moves one arm at once: swimmer ``s`` moves arm ``dofs[s]`` by
+    ``rocs[s] x (d_max - d_min)`` (clipped), all along one straight path in the joint shape space
+    (each arm at rate ``delta_s / T``, ``T`` the longest move). For simultaneous strokes of two
+    swimmers (a phase offset between their cycles); ``"free"`` and ``"wall"`` media. Noise, contact
+    and the info as in :func:`scene_step` (``stuck``: every non-zero ROC was stuck)."""
+    if params.scene.medium == "bulk":
+        raise ValueError("scene_step_joint needs medium 'free' or 'wall'")
+    arms = state.arms
+    dtype = arms.dtype
+    s = params.n_swimmers
+    span = params.hi - params.lo
+    rocs = jnp.clip(jnp.asarray(rocs, dtype).reshape(s), -1.0, 1.0)
+    onehot = jnp.arange(2)[None, :] == jnp.asarray(dofs, jnp.int32).reshape(s, 1)  # (S, 2)
+    d0 = jnp.sum(jnp.where(onehot, arms, 0.0), -1)
+    target = jnp.clip(d0 + rocs * span, params.lo, params.hi)
+    delta = target - d0
+    duration = jnp.max(jnp.abs(delta))
+    rates = jnp.where(onehot, (delta / jnp.where(duration > 0, duration, 1.0))[:, None], 0.0)
+    pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
+    end, gap = integrate_move(params, pose0, arms, rates, duration)
+    y = jax.random.uniform(key, (s,), dtype, -1.0, 1.0)
+    contact = ~(gap >= params.contact_gap)
+    factor = 1.0 + jnp.asarray(params.zeta, dtype) * y
+    step_x, step_z, step_t = (end - pose0).T
+    dx = jnp.where(contact, 0.0, step_x * factor)
+    dz = jnp.where(contact, 0.0, step_z * factor)
+    dtilt = jnp.where(contact, 0.0, step_t)
+    new = SceneState(jnp.where(contact, arms, jnp.where(onehot, target[:, None], arms)),
+                     state.centre + jnp.stack([dx, dz], -1), state.tilt + dtilt, state.t + 1)
+    stuck = jnp.any(rocs != 0) & jnp.all((rocs == 0) | (delta == 0))
+    moved = jnp.any(delta != 0)
+    return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
+
+
 def _bulk_displacement(arms: Array, sw: Array, dof: Array, delta: Array) -> Array:
     """The paper's displacement of one arm move (closed form of :func:`jswim.swimmers.ng.arm_move_displacement`)."""
     d1, d2 = arms[sw, 0], arms[sw, 1]
@@ -140,15 +176,29 @@ def integrate_move(params: SceneParams, pose0: Array, arms: Array, rates: Array,
     arms_t = arms[None] + t[:, None, None] * rates[None]  # (n, S, 2)
     obstacles = jnp.asarray(params.obstacles, pose0.dtype)
 
-    def rate(pose: Array, arms_k: Array) -> Array:
-        r = forcefree.solve(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
-        return jnp.concatenate([r.velocity, r.omega[:, None]], -1)
+    def body_rate(pose: Array, arms_k: Array) -> Array:
+        """Body-frame (along the axis, normal to it) velocity and rotation rate, (S, 3)."""
+        r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
+        c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
+        u, w = r.velocity[:, 0], r.velocity[:, 1]
+        return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1)
+
+    # Sweep: the body-frame rates at the current node poses, then tilt first and position with the
+    # new tilt, so that the strong dependence (the rotation of the swimming direction) is exact
+    # within a sweep and only the weak one (wall and neighbours) is iterated.
+    def sweep(poses: Array) -> tuple[Array, Array, Array]:
+        b = jax.vmap(body_rate)(poses, arms_t)  # (n, S, 3)
+        tilt = pose0[:, 2] + duration * (y_run @ b[..., 2])  # (n, S)
+        c, s = jnp.cos(tilt), jnp.sin(tilt)
+        lab = jnp.stack([c * b[..., 0] - s * b[..., 1], s * b[..., 0] + c * b[..., 1]], -1)  # (n, S, 2)
+        xz = pose0[:, :2] + duration * jnp.einsum("ij,jsk->isk", y_run, lab)
+        return jnp.concatenate([xz, tilt[..., None]], -1), lab, b[..., 2]
 
     poses = jnp.broadcast_to(pose0, (params.nodes,) + pose0.shape)
-    for _ in range(params.sweeps):  # static and short: unrolled
-        f = jax.vmap(rate)(poses, arms_t)  # (n, S, 3)
-        poses = pose0 + duration * jnp.einsum("ij,jsk->isk", y_run, f)
-    end = pose0 + duration * jnp.einsum("j,jsk->sk", y_end, f)
+    if params.sweeps > 1:  # a loop, not unrolled: the solve is large straight-line code
+        poses = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], poses)
+    poses, lab, omega = sweep(poses)
+    end = pose0 + duration * jnp.concatenate([jnp.einsum("j,jsk->sk", y_end, lab), (y_end @ omega)[:, None]], -1)
     arms_end = arms + duration * rates
     gaps = jax.vmap(lambda p, a: surface_gap(p, a, obstacles, params.wall))(poses, arms_t)
     return end, jnp.minimum(jnp.min(gaps), surface_gap(end, arms_end, obstacles, params.wall))

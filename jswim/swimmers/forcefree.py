@@ -114,3 +114,130 @@ def solve(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: 
     forces = a_mat @ xi + b_vec
     xi = xi.reshape(S, 3)
     return RigidMotion(xi[:, :2], xi[:, 2], forces.reshape(N, 2))
+
+
+#: Largest system (2 N rows) that :func:`rigid_motion` solves by unrolled elimination.
+UNROLLED_MAX_ROWS = 6
+
+
+def rigid_motion(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
+                 wall: bool) -> RigidMotion:
+    """:func:`solve`, by unrolled elimination for small scenes (``2 N <=``
+    :data:`UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
+    else through LAPACK. The two agree to rounding (a test checks it)."""
+    n_rows = 2 * (arms.shape[0] * (arms.shape[1] + 1) + obstacles.shape[0])
+    if n_rows <= UNROLLED_MAX_ROWS:
+        return solve_unrolled(centre, tilt, arms, arm_rates, obstacles, wall)
+    return solve(centre, tilt, arms, arm_rates, obstacles, wall)
+
+
+def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
+                   wall: bool) -> RigidMotion:
+    """:func:`solve` written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
+    complement), so that under ``vmap`` every operation is elementwise over the batch and XLA
+    fuses the whole solve; the sizes are static, the loops below run at trace time over matrix
+    entries. Same arguments and result as :func:`solve`."""
+    from jswim.swimmers.mobility import OSEEN_PREFACTOR, blake_entries, stokeslet, wall_self_factors
+
+    S, nd = arms.shape
+    n = nd + 1
+    O = obstacles.shape[0]
+    pos_sw = sphere_centres(centre, tilt, arms)  # (S, n, 2)
+    e = jnp.stack([jnp.cos(tilt), jnp.sin(tilt)], -1)
+    qdot = axial_offsets(arm_rates)
+    xs = [pos_sw[s, i, 0] for s in range(S) for i in range(n)] + [obstacles[o, 0] for o in range(O)]
+    zs = [pos_sw[s, i, 1] for s in range(S) for i in range(n)] + [obstacles[o, 1] for o in range(O)]
+    rad = [None] * (S * n) + [obstacles[o, 2] for o in range(O)]  # None: radius a = 1
+    N = len(xs)
+    if wall:
+        zs = [jnp.maximum(z, 1.0 if r is None else r) for z, r in zip(zs, rad)]
+    m = [[None] * (2 * N) for _ in range(2 * N)]
+    for i in range(N):
+        if wall:
+            e_i = (1.0 / zs[i]) if rad[i] is None else rad[i] / zs[i]
+            par, nor = wall_self_factors(e_i)
+        else:
+            par = nor = 1.0
+        inv_r = 1.0 if rad[i] is None else 1.0 / rad[i]
+        m[2 * i][2 * i] = par * inv_r + 0.0 * zs[i]
+        m[2 * i + 1][2 * i + 1] = nor * inv_r + 0.0 * zs[i]
+        m[2 * i + 1][2 * i] = 0.0 * zs[i]
+        for j in range(i):
+            rx = xs[i] - xs[j]
+            if wall:
+                gxx, gxz, gzx, gzz = blake_entries(rx, zs[i], zs[j])
+            else:
+                gxx, gxz, gzz = stokeslet(rx, zs[i] - zs[j])
+                gzx = gxz
+            c = OSEEN_PREFACTOR
+            m[2 * i][2 * j], m[2 * i][2 * j + 1] = c * gxx, c * gxz
+            m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = c * gzx, c * gzz
+    chol, inv_diag = _cholesky(m)
+    # Right-hand sides: the rigid modes K (3 per swimmer) and the prescribed velocities v.
+    zero = 0.0 * xs[0]
+    cols = []
+    for s in range(S):
+        cx, cz = centre[s, 0], centre[s, 1]
+        kx = [zero] * (2 * N)
+        kz = [zero] * (2 * N)
+        kr = [zero] * (2 * N)
+        for i in range(n):
+            p = s * n + i
+            kx[2 * p] = 1.0 + zero
+            kz[2 * p + 1] = 1.0 + zero
+            kr[2 * p] = -(pos_sw[s, i, 1] - cz)
+            kr[2 * p + 1] = pos_sw[s, i, 0] - cx
+        cols += [kx, kz, kr]
+    v = [zero] * (2 * N)
+    for s in range(S):
+        for i in range(n):
+            p = s * n + i
+            v[2 * p] = qdot[s, i] * e[s, 0]
+            v[2 * p + 1] = qdot[s, i] * e[s, 1]
+    sols = [_chol_solve(chol, inv_diag, c) for c in cols]
+    sol_v = _chol_solve(chol, inv_diag, v)
+    k3 = 3 * S
+    schur = [[sum(cols[a][p] * sols[b][p] for p in range(2 * N)) for b in range(k3)] for a in range(k3)]
+    rhs = [-sum(cols[a][p] * sol_v[p] for p in range(2 * N)) for a in range(k3)]
+    sc, sd = _cholesky(schur)
+    xi = _chol_solve(sc, sd, rhs)
+    forces = [sum(sols[b][p] * xi[b] for b in range(k3)) + sol_v[p] for p in range(2 * N)]
+    xi_arr = jnp.stack(xi).reshape(S, 3)
+    return RigidMotion(xi_arr[:, :2], xi_arr[:, 2], jnp.stack(forces).reshape(N, 2))
+
+
+def _cholesky(m: list) -> tuple[list, list]:
+    """Lower Cholesky factor of a symmetric matrix given by its lower triangle (lists of
+    scalars), with the reciprocals of its diagonal."""
+    size = len(m)
+    low = [[None] * size for _ in range(size)]
+    inv_diag = [None] * size
+    for p in range(size):
+        for q in range(p + 1):
+            acc = m[p][q]
+            for k in range(q):
+                acc = acc - low[p][k] * low[q][k]
+            if p == q:
+                inv_diag[p] = jax.lax.rsqrt(acc)
+                low[p][p] = acc * inv_diag[p]
+            else:
+                low[p][q] = acc * inv_diag[q]
+    return low, inv_diag
+
+
+def _chol_solve(low: list, inv_diag: list, b: list) -> list:
+    """``x`` with ``L L^T x = b`` (forward then back substitution, lists of scalars)."""
+    size = len(b)
+    y = [None] * size
+    for p in range(size):
+        acc = b[p]
+        for k in range(p):
+            acc = acc - low[p][k] * y[k]
+        y[p] = acc * inv_diag[p]
+    x = [None] * size
+    for p in reversed(range(size)):
+        acc = y[p]
+        for k in range(p + 1, size):
+            acc = acc - low[k][p] * x[k]
+        x[p] = acc * inv_diag[p]
+    return x

@@ -53,6 +53,12 @@ def stokeslet(rx: Array, rz: Array) -> tuple[Array, Array, Array]:
 
 
 def blake(rx: Array, zi: Array, zj: Array) -> Array:
+    """Blake's tensor as ``(..., 2, 2)`` (see :func:`blake_entries`)."""
+    gxx, gxz, gzx, gzz = blake_entries(rx, zi, zj)
+    return jnp.stack([jnp.stack([gxx, gxz], -1), jnp.stack([gzx, gzz], -1)], -2)
+
+
+def blake_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array, Array]:
     """Blake's wall Green function ``8 pi mu G`` for a force at height ``zj`` and a field point at
     height ``zi``, ``rx = x_i - x_j`` apart along x; (x, z) components.
 
@@ -63,9 +69,9 @@ def blake(rx: Array, zi: Array, zj: Array) -> Array:
 
     Returns
     -------
-    Array (..., 2, 2)
-        ``out[..., i, k]``: velocity component ``i`` (0 = x, 1 = z) per unit force component ``k``,
-        times ``8 pi mu`` (units of 1 / length). The field point must differ from the source.
+    (G_xx, G_xz, G_zx, G_zz), each of shape (...)
+        ``G_ik``: velocity component ``i`` per unit force component ``k``, times ``8 pi mu``
+        (units of 1 / length). The field point must differ from the source.
     """
     h = zj
     rz = zi - zj
@@ -88,11 +94,7 @@ def blake(rx: Array, zi: Array, zj: Array) -> Array:
     dzx = 2.0 * h * df(Rz, rx, 0.0, 1.0, 0.0)
     dxz = -2.0 * h * df(rx, Rz, 0.0, 0.0, 1.0)
     dzz = -2.0 * h * df(Rz, Rz, 1.0, 1.0, 1.0)
-    gxx = sxx - ixx + dxx
-    gxz = sxz - ixz + dxz
-    gzx = sxz - ixz + dzx
-    gzz = szz - izz + dzz
-    return jnp.stack([jnp.stack([gxx, gxz], -1), jnp.stack([gzx, gzz], -1)], -2)
+    return sxx - ixx + dxx, sxz - ixz + dxz, sxz - ixz + dzx, szz - izz + dzz
 
 
 def oseen(rx: Array, rz: Array) -> Array:
