@@ -9,6 +9,8 @@ from scipy.optimize import minimize_scalar
 from jswim.scenes import (Scene, batch_starts, scene_params, scene_reset, scene_rollout, scene_rollout_batch,
                           scene_step, scene_step_joint)
 
+pytestmark = pytest.mark.slow  # ~2 min on 2 loaded cores (compilations); CI runs it
+
 SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]
 FREE_CYCLE = 0.1720914  # tests/test_scenes.py derives it from an independent collinear solve
 

@@ -164,3 +164,17 @@ def test_float32_jit_vmap(float32):
     with jax.enable_x64(True):
         ref = scene_rollout("ng", [(1, 1, -1)], Scene(medium="wall", height=5.0, swimmers=2, separation=30.0))
     np.testing.assert_allclose(np.asarray(new.centre[0]), np.stack([ref.x[0], ref.z[0]], -1), atol=2e-5)
+
+
+def test_float32_one_swimmer_near_a_wall(float32):
+    # the unrolled solve in the dtype users get: a square cycle within float32 rounding of float64
+    params = scene_params("ng", Scene(medium="wall", height=4.0))
+    step = jax.jit(scene_step)
+    st = scene_reset(params)
+    for d, k in SQUARE:
+        st, info = step(params, st, (0, d - 1, float(k)), jax.random.PRNGKey(0))
+    assert st.centre.dtype == jnp.float32
+    with jax.enable_x64(True):
+        ref = scene_rollout("ng", SQUARE, Scene(medium="wall", height=4.0))
+    np.testing.assert_allclose(np.asarray(st.centre[0]), [ref.x[-1, 0], ref.z[-1, 0]], atol=2e-5)
+    assert abs(float(st.tilt[0]) - ref.tilt[-1, 0]) < 2e-6
