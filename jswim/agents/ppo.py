@@ -39,6 +39,10 @@ Example::
     params = broadcast_params(make_params("purcell"), 1000)
     run = train_batch(jax.random.split(jax.random.PRNGKey(0), 1000), params, PPOConfig())
     report = evaluate(run, params)   # steps to learn, success, ... per learner
+
+The same learner runs on a scene of :mod:`jswim.scenes` (a wall, a pair; issue 19) through
+:func:`train_scene_batch` / :func:`evaluate_scene`; the environment is an adapter of
+:mod:`jswim.agents.ppo_envs` (bulk or scene) that the training scan takes.
 """
 
 from __future__ import annotations
@@ -55,6 +59,7 @@ import optax
 from jax import Array
 
 from jswim import env as _env
+from jswim.agents.ppo_envs import BulkEnv, SceneEnv, SceneTask
 from jswim.errors import ConfigError
 
 
@@ -217,10 +222,12 @@ def _dense(key: Array, n_in: int, n_out: int, scale: float, dtype: Any) -> tuple
     return w, jnp.zeros((n_out,), dtype)
 
 
-def init_policy(key: Array, n_dof: int, hidden: int = 32, init_std: float | Array = 1.0) -> dict[str, Any]:
+def init_policy(key: Array, n_dof: int, hidden: int = 32, init_std: float | Array = 1.0,
+                n_obs: int | None = None) -> dict[str, Any]:
     """Initial network parameters: Gaussian weights of std ``gain / sqrt(fan_in)``, gains as in
     PureJaxRL (sqrt 2 for hidden layers, 0.01 for the actor's head so the first policy is near
-    uniform over DOFs with ROC mean ~0, 1 for the critic's head), zero biases.
+    uniform over DOFs with ROC mean ~0, 1 for the critic's head), zero biases. ``n_obs`` is the
+    observation's length (default ``n_dof``: the shape alone).
 
     Returns
     -------
@@ -229,13 +236,14 @@ def init_policy(key: Array, n_dof: int, hidden: int = 32, init_std: float | Arra
     """
     dtype = jnp.result_type(float)
     h = hidden
+    n_in = n_dof if n_obs is None else n_obs
     ka, kc = jax.random.split(key)
     ka = jax.random.split(ka, 3)
     kc = jax.random.split(kc, 3)
     root2 = math.sqrt(2.0)
-    actor = [_dense(ka[0], n_dof, h, root2, dtype), _dense(ka[1], h, h, root2, dtype),
+    actor = [_dense(ka[0], n_in, h, root2, dtype), _dense(ka[1], h, h, root2, dtype),
              _dense(ka[2], h, 2 * n_dof, 0.01, dtype)]
-    critic = [_dense(kc[0], n_dof, h, root2, dtype), _dense(kc[1], h, h, root2, dtype),
+    critic = [_dense(kc[0], n_in, h, root2, dtype), _dense(kc[1], h, h, root2, dtype),
               _dense(kc[2], h, 1, 1.0, dtype)]
     log_std = jnp.full((n_dof,), jnp.log(init_std), dtype)
     return {"actor": actor, "critic": critic, "log_std": log_std}
@@ -254,9 +262,9 @@ def observe(dofs: Array, model: Any) -> Array:
 
 
 def policy(net: dict[str, Any], obs: Array) -> tuple[Array, Array, Array, Array]:
-    """``(dof logits, ROC means, ROC log-stds, value)`` for observations ``obs`` (..., n_dof)."""
-    n = obs.shape[-1]
+    """``(dof logits, ROC means, ROC log-stds, value)`` for observations ``obs`` (..., n_obs)."""
     out = _mlp(net["actor"], obs)
+    n = out.shape[-1] // 2
     value = _mlp(net["critic"], obs)[..., 0]
     return out[..., :n], out[..., n:], jnp.broadcast_to(net["log_std"], out[..., n:].shape), value
 
@@ -332,46 +340,50 @@ def _optimizer(hp: dict) -> optax.GradientTransformation:
     return optax.chain(optax.clip_by_global_norm(hp["max_grad_norm"]), optax.adam(hp["learning_rate"], eps=1e-5))
 
 
-def _train(keys: Array, params: Any, config: PPOConfig, hp: dict) -> PPORun:
-    """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B): time outermost.
+def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Any = None) -> PPORun:
+    """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``world.params_axes``
+    says): time outermost. ``world`` is the environment's adapter (:mod:`jswim.agents.ppo_envs`;
+    default :class:`~jswim.agents.ppo_envs.BulkEnv` on ``params``, the paper's swimmer).
 
     The scans run over time and every step is vmapped over learners inside them (as in
     PureJaxRL), which keeps the environment's float64 step blocks inside a plain ``vmap``.
     """
-    model = params.model
-    n = model.n_dof
+    if world is None:
+        world = BulkEnv(params.model.n_dof)
+    axes = world.params_axes
+    n = world.n_dof
     b = keys.shape[0]
     dtype = jnp.result_type(float)
     split = jax.vmap(lambda k: jax.random.split(k, 3))(keys)
-    states = jax.vmap(_env.reset)(split[:, 0], params)
-    dofs0 = jax.vmap(_env.dof_values)(states, params)
-    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"]))(split[:, 1])
+    states = jax.vmap(world.reset, in_axes=(0, axes))(split[:, 0], params)
+    dofs0 = jax.vmap(world.dofs, in_axes=(0, axes))(states, params)
+    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_obs))(split[:, 1])
     opt = _optimizer(hp)
     n_updates = -(-config.steps // config.rollout)
     total = n_updates * config.rollout
     # One draw per learner for the whole run: the DOF's uniform, the ROC's normal, the noise Y.
-    u = jax.vmap(lambda k: _env.uniforms(k, (total, 3), dtype))(split[:, 2])  # (B, total, 3)
-    u = jnp.moveaxis(u, 0, 1).reshape(n_updates, config.rollout, b, 3)
+    width = 2 + world.n_noise
+    u = jax.vmap(lambda k: _env.uniforms(k, (total, width), dtype))(split[:, 2])  # (B, total, 2 + noise)
+    u = jnp.moveaxis(u, 0, 1).reshape(n_updates, config.rollout, b, width)
     z = jax.scipy.special.ndtri(jnp.clip(u[..., 1], 1e-7, 1.0 - 1e-7))
-    inputs = (jnp.arange(total).reshape(n_updates, config.rollout), u[..., 0], z, 2.0 * u[..., 2] - 1.0)
+    inputs = (jnp.arange(total).reshape(n_updates, config.rollout), u[..., 0], z, 2.0 * u[..., 2:] - 1.0)
 
     def act_one(state, net, p, tau, u_dof, z_roc, y):
-        obs = observe(_env.dof_values(state, p), model)
+        obs = world.observe(state, p)
         logits, mean, log_std, value = policy(net, obs)
         dof, u_roc = _sample(logits, mean, log_std, tau, u_dof, z_roc)
         roc = jnp.clip(u_roc, -1.0, 1.0)
         action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
         logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
-        state, info = _env.advance(state, action, y, p, exact=False)
-        record = (action, (dof + 1).astype(jnp.int8), state.x, info.progress, _env.dof_values(state, p),
-                  state.y, state.theta)
-        return state, _Batch(obs, dof, u_roc, logp, value, info.progress, tau), record
+        state, reward, (x, dofs, y_pos, theta) = world.step(state, dof, roc, action, y, p)
+        record = (action, (dof + 1).astype(jnp.int8), x, reward, dofs, y_pos, theta)
+        return state, _Batch(obs, dof, u_roc, logp, value, reward, tau), record
 
     def act(carry, inp):
         states, nets = carry
         t, u_dof, z_roc, y = inp
         tau = _temperature(t, config.steps, hp["anneal_start"], hp["anneal_end"])
-        states, batch, record = jax.vmap(act_one, in_axes=(0, 0, 0, None, 0, 0, 0))(
+        states, batch, record = jax.vmap(act_one, in_axes=(0, 0, axes, None, 0, 0, 0))(
             states, nets, params, tau, u_dof, z_roc, y)
         return (states, nets), (batch, record)
 
@@ -397,7 +409,7 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict) -> PPORun:
     def update(carry, inp):
         states, nets, opt_states, r2 = carry
         (states, _), (batch, record) = jax.lax.scan(act, (states, nets), inp)
-        last_obs = observe(jax.vmap(_env.dof_values)(states, params), model)
+        last_obs = jax.vmap(world.observe, in_axes=(0, axes))(states, params)
         t_end = (inp[0][-1] + 1).astype(dtype)
         nets, opt_states, r2 = jax.vmap(learn_one, in_axes=(0, 0, 0, 1, 0, None))(
             nets, opt_states, r2, batch, last_obs, t_end)
@@ -463,7 +475,7 @@ def train_batch(keys: Array, params: Any, config: PPOConfig = PPOConfig()) -> PP
 def _jitted() -> Callable[..., PPORun]:
     from jswim.agents.qlearning import _compiler_options
 
-    return jax.jit(_train, static_argnames=("config",), compiler_options=_compiler_options())
+    return jax.jit(_train, static_argnames=("config", "world"), compiler_options=_compiler_options())
 
 
 def exact_x(run: PPORun, params: Any) -> np.ndarray:
@@ -512,3 +524,85 @@ def evaluate(run: PPORun, params: Any, *, criterion: Any = None, tol: float | No
     return judge_shapes(np.asarray(run.dofs), exact_x(run, params), _env.broadcast_params(params, b),
                         dofs0=np.asarray(run.dofs0), criterion=PAPER if criterion is None else criterion,
                         tol=SHAPE_TOL if tol is None else tol)
+
+
+# ----------------------------------------------------------------------------- scenes
+
+
+def train_scene(key: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: int = 1) -> PPORun:
+    """Train one PPO learner on a scene (:mod:`jswim.scenes`; issue 19) for ``config.steps`` steps.
+
+    :func:`train_scene_batch` for one key (unbatched fields).
+    """
+    run = train_scene_batch(jnp.asarray(key)[None], scene_params, config, direction)
+    return jax.tree.map(lambda v: v[0], run)
+
+
+def train_scene_batch(keys: Array, scene_params: Any, config: PPOConfig = PPOConfig(),
+                      direction: Any = 1) -> PPORun:
+    """Train independent PPO learners on one scene, one per key, in one jitted, vmapped call.
+
+    The learner is the bulk one (same network, hyperparameters and temperature) in the world of
+    :class:`jswim.agents.ppo_envs.SceneEnv`: it moves one arm of one swimmer per step by a real
+    ROC; it sees the joint arms scaled to [-1, 1] and, with a wall, each swimmer's height and tilt;
+    its reward is the progress of the swimmers' mean centroid x (the scene studies' X).
+
+    Parameters
+    ----------
+    keys : PRNG keys, shape (B, 2)
+    scene_params : SceneParams
+        From :func:`jswim.scenes.scene_params` (shared by all learners; ``zeta`` is its noise).
+    config : PPOConfig
+        Hyperparameters (static).
+    direction : int or int array (B,)
+        Target direction, +1 or -1.
+
+    Returns
+    -------
+    PPORun
+        Leading axis B. ``x`` is the mean centroid x after each step relative to the start, as the
+        scene studies record it; ``y`` and ``orientation`` are swimmer 1's height (a, of its middle
+        sphere above the wall) and tilt (rad); ``dofs`` the joint arms ``(B, steps, 2S)``.
+    """
+    from jswim.agents.scene_env import centroid_x, scene_reset
+
+    b = keys.shape[0]
+    medium = scene_params.scene.medium
+    world = SceneEnv(int(scene_params.n_swimmers), bool(scene_params.wall), medium)
+    dtype = jnp.result_type(float)
+    task = SceneTask(scene_params, jnp.broadcast_to(jnp.asarray(direction, dtype), (b,)))
+    run = _jitted()(keys, task, config=_structure(config), hp=_numbers(config), world=world)
+    x0 = jnp.mean(centroid_x(scene_reset(scene_params), medium))
+    return run._replace(x=run.x - x0)
+
+
+def evaluate_scene(run: PPORun, scene_params: Any, direction: Any = 1, *, criterion: Any = None,
+                   tol: float | None = None) -> Any:
+    """Judge one-swimmer scene runs as the scene studies judge their agents: the success criterion
+    on the run's own moves with the bulk swimmer's (noiseless, paper's formula) displacements
+    (:func:`jswim.studies.scenes._judge` for lattice moves; here :func:`evaluate`'s shape judge for
+    real ROCs, the moves replayed in :mod:`jswim.env` from the scene's start arms).
+
+    Raises
+    ------
+    ConfigError
+        For a scene of more than one swimmer (a pair's per-swimmer judge is not done for PPO).
+    """
+    from jswim.gait import PAPER
+    from jswim.shape_judge import SHAPE_TOL, judge_shapes
+
+    if int(scene_params.n_swimmers) != 1:
+        raise ConfigError("evaluate_scene judges one-swimmer scenes only")
+    actions = np.asarray(run.actions)
+    b = actions.shape[0]
+    lo, hi = float(scene_params.lo), float(scene_params.hi)
+    levels = np.rint((np.asarray(scene_params.arms0, np.float64)[0] - lo) / (hi - lo)).astype(np.int32)
+    bulk = _env.make_params("ng", direction=1, init=tuple(int(v) for v in levels))
+    if not (np.isclose(float(bulk.model.lo), lo) and np.isclose(float(bulk.model.hi), hi)):
+        raise ConfigError("evaluate_scene needs the scene's arm limits to be the bulk swimmer's")
+    dirs = np.broadcast_to(np.asarray(direction, np.int32), (b,))
+    params = _env.broadcast_params(bulk, b, direction=dirs)
+    x = np.asarray(_replay(_env.broadcast_params(bulk, b), jnp.asarray(actions)), np.float64)
+    dofs0 = np.broadcast_to(np.asarray(scene_params.arms0, np.float64).reshape(-1), (b, 2))
+    return judge_shapes(np.asarray(run.dofs), x, params, dofs0=dofs0,
+                        criterion=PAPER if criterion is None else criterion, tol=SHAPE_TOL if tol is None else tol)

@@ -21,7 +21,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim.scenes import Scene, decode_scene_action, scene_params, scene_reset, scene_step
+from jswim.scenes import Scene, decode_scene_action, scene_advance, scene_params, scene_reset, scene_step
 
 #: Arms (DOFs) of one NG swimmer.
 ARMS = 2
@@ -116,6 +116,12 @@ def step(params: Any, state: Any, code: jax.Array, key: jax.Array, roc_levels: i
     sw, dof, roc = decode(code, roc_levels)
     new, info = scene_step(params, state, (sw, dof, roc), key)
     return new, observe(new, jnp.any(jnp.asarray(info.stuck)), info.contact, params.scene.medium)
+
+
+def advance(params: Any, state: Any, action: Any, y_noise: jax.Array) -> Any:
+    """One ``(swimmer, arm, real ROC)`` action on one scene state with given noise variables
+    ``(S,)`` in [-1, 1] (the PPO baseline's step, :mod:`jswim.agents.ppo_envs`): the new state."""
+    return scene_advance(params, state, action, y_noise)[0]
 
 
 def as_numpy(obs: Observation) -> dict[str, np.ndarray]:

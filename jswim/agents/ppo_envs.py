@@ -1,0 +1,122 @@
+"""The worlds PPO learns in: one small adapter per environment (reset, observe, step).
+
+:func:`jswim.agents.ppo._train` asks a world for a learner's start state, its observation and one
+step (the DOF chosen, its real ROC in [-1, 1], the noise variables), and gets back the new state,
+the step's reward and what the run records. Two worlds:
+
+* :class:`BulkEnv`: the paper's swimmer alone in the fluid (:mod:`jswim.env`), observed through
+  its DOFs scaled to [-1, 1]; the reward is ``StepInfo.progress``. The bulk PPO numbers are this
+  world's.
+* :class:`SceneEnv`: a scene of :mod:`jswim.scenes` (a wall, obstacles, a pair; issue 19). The
+  DOFs are the joint arms (swimmer ``s`` owns DOFs ``2s``, ``2s + 1``, 0-based, as in
+  :mod:`jswim.agents.scene_env`); with a wall the observation also holds each swimmer's height
+  and tilt, scaled (``ln(z / 10 a)`` and ``tilt / 0.5 rad``: about [-1.6, 1.6] over the studies'
+  3-50 a). The reward is the progress of the swimmers' mean centroid x in the target direction
+  (:func:`jswim.agents.scene_env.centroid_x`, the quantity the other scene agents are rewarded on),
+  noisy as the scene's step is (``(1 + zeta Y_s)`` per swimmer). It reaches the scenes through
+  :mod:`jswim.agents.scene_env`, their one door.
+
+A world is static (hashable, one compilation per world); its ``params`` travel as a pytree whose
+mapped leaves :attr:`params_axes` names (``vmap``'s ``in_axes`` prefix).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, NamedTuple
+
+import jax.numpy as jnp
+from jax import Array
+
+from jswim import env as _env
+
+
+def scaled(dofs: Array, lo: Any, hi: Any) -> Array:
+    """DOF values scaled from ``[lo, hi]`` to ``[-1, 1]``."""
+    return 2.0 * (dofs - lo) / (hi - lo) - 1.0
+
+
+@dataclasses.dataclass(frozen=True)
+class BulkEnv:
+    """The bulk swimmer of :mod:`jswim.env`; ``params`` is an :class:`EnvParams` batched along B."""
+
+    n_dof: int
+    params_axes: Any = 0
+    n_noise: int = 1
+
+    @property
+    def n_obs(self) -> int:
+        return self.n_dof
+
+    def reset(self, key: Array, params: Any) -> Any:
+        return _env.reset(key, params)
+
+    def dofs(self, state: Any, params: Any) -> Array:
+        return _env.dof_values(state, params)
+
+    def observe(self, state: Any, params: Any) -> Array:
+        return scaled(_env.dof_values(state, params), params.model.lo, params.model.hi)
+
+    def step(self, state: Any, dof: Array, roc: Array, action: Array, y: Array, params: Any) -> tuple[Any, Array, tuple]:
+        state, info = _env.advance(state, action, y[0], params, exact=False)
+        return state, info.progress, (state.x, _env.dof_values(state, params), state.y, state.theta)
+
+
+class SceneTask(NamedTuple):
+    """A scene learner's environment: the scene (shared) and the target direction (per learner)."""
+
+    scene: Any  # SceneParams, unbatched
+    direction: Array  # (B,) +1 or -1
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneEnv:
+    """A scene of :mod:`jswim.scenes` (module docs); ``params`` is a :class:`SceneTask`."""
+
+    n_swimmers: int
+    wall: bool
+    medium: str
+    params_axes: Any = SceneTask(None, 0)
+
+    @property
+    def n_dof(self) -> int:
+        return 2 * self.n_swimmers
+
+    @property
+    def n_noise(self) -> int:
+        return self.n_swimmers
+
+    @property
+    def n_obs(self) -> int:
+        return self.n_dof + (2 * self.n_swimmers if self.wall else 0)
+
+    def reset(self, key: Array, params: SceneTask) -> Any:
+        from jswim.agents.scene_env import scene_reset
+
+        return scene_reset(params.scene)
+
+    def dofs(self, state: Any, params: SceneTask) -> Array:
+        return state.arms.reshape(-1)
+
+    def _x(self, state: Any) -> Array:
+        from jswim.agents.scene_env import centroid_x
+
+        return jnp.mean(centroid_x(state, self.medium))
+
+    def observe(self, state: Any, params: SceneTask) -> Array:
+        obs = scaled(state.arms.reshape(-1), params.scene.lo, params.scene.hi)
+        if not self.wall:
+            return obs
+        # Heights below 0.1 a are contacts the step refuses; the floor only keeps the log finite.
+        z = jnp.log(jnp.maximum(state.centre[:, 1], 0.1) / 10.0)
+        return jnp.concatenate([obs, z.astype(obs.dtype), (state.tilt / 0.5).astype(obs.dtype)])
+
+    def step(self, state: Any, dof: Array, roc: Array, action: Array, y: Array, params: SceneTask
+             ) -> tuple[Any, Array, tuple]:
+        from jswim.agents.scene_env import advance
+
+        x0 = self._x(state)
+        new = advance(params.scene, state, (dof // 2, dof % 2, roc), y)
+        x1 = self._x(new)
+        reward = (params.direction * (x1 - x0)).astype(action.dtype)
+        return new, reward, (x1, new.arms.reshape(-1), new.centre[0, 1], new.tilt[0])
