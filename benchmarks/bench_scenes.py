@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import time
 
 import jax
 import jax.numpy as jnp
@@ -28,15 +27,7 @@ import jax.numpy as jnp
 from jswim import env
 from jswim.scenes import Scene, scene_params, scene_reset, scene_step
 
-
-def best_time(fn, *args, repeat: int = 2) -> float:
-    jax.block_until_ready(fn(*args))
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        jax.block_until_ready(fn(*args))
-        times.append(time.perf_counter() - t0)
-    return min(times)
+from bench_env import best_time  # noqa: E402  (this folder is on sys.path when run as a script)
 
 
 def scene_rate(scene: Scene, batch: int, steps: int, **kw) -> float:
@@ -54,7 +45,7 @@ def scene_rate(scene: Scene, batch: int, steps: int, **kw) -> float:
             return st, None
         return jax.lax.scan(body, states, jax.random.split(key, steps))[0]
 
-    return batch * steps / best_time(run, states, jax.random.PRNGKey(0))
+    return batch * steps / best_time(run, states, jax.random.PRNGKey(0), repeat=2)
 
 
 def table_rate(batch: int, steps: int) -> float:
@@ -68,7 +59,7 @@ def table_rate(batch: int, steps: int) -> float:
             return env.step_batch(k, st, a, params)[0], None
         return jax.lax.scan(body, states, jax.random.split(key, steps))[0]
 
-    return batch * steps / best_time(run, states, jax.random.PRNGKey(1))
+    return batch * steps / best_time(run, states, jax.random.PRNGKey(1), repeat=2)
 
 
 def main() -> None:

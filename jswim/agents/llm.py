@@ -41,6 +41,7 @@ import numpy as np
 from jswim import env, lattice
 from jswim.agents import fidelity, protocol, scene_env
 from jswim.agents.scene_driver import SceneGroup, scene_text
+from jswim.agents.step_batcher import StepBatcher
 from jswim.agents.defaults import default_max_tokens, default_n_ht
 from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
@@ -179,13 +180,11 @@ def _start(seeds: jax.Array, params: env.EnvParams):
     return reset_keys, step_keys, states, jax.vmap(env.dof_values)(states, params)
 
 
-class _Group:
+class _Group(StepBatcher):
     """Runs sharing one swimmer model: one batched env state.
 
-    A run hands its action to :meth:`submit` and awaits the result. The group steps every action
-    handed in since its last step at the next turn of the event loop (``call_soon``), in one
-    call: replies that land together are stepped together, and nobody waits for a reply that
-    has not landed.
+    A run hands its action to :meth:`submit` and awaits the result; actions handed in during one
+    event-loop turn are stepped together (:class:`jswim.agents.step_batcher.StepBatcher`).
     """
 
     def __init__(self, members: list[int], params: list[env.EnvParams], seeds: list[int]) -> None:
@@ -205,39 +204,15 @@ class _Group:
         self._noop = lattice.encode(*NO_OP, self.roc_levels)
         self.n_steps = 0  # env calls made (for benchmarks: steps per call = batching achieved)
 
-    def submit(self, pos: int, action: int) -> asyncio.Future:
-        """Step member ``pos`` with env action ``action`` soon; the future gets its step's outputs."""
-        loop = asyncio.get_running_loop()
-        fut = loop.create_future()
-        if not self._pending:
-            loop.call_soon(self._flush)
-        self._pending[pos] = (action, fut)
-        return fut
-
-    def _flush(self) -> None:
-        pending, self._pending = self._pending, {}
-        n = len(self.members)
-        acts = np.full(n, self._noop, np.int32)
-        mask = np.zeros(n, bool)
-        for pos, (a, _) in pending.items():
-            acts[pos], mask[pos] = a, True
-        try:
-            self.states, info, dofs = _advance(self.step_keys, self.states, acts, self.params, mask)
-            out = jax.device_get({"x": info.x, "x_lo": self.states.x_lo, "y": self.states.y,
-                                  "orientation": self.states.theta, "progress": info.progress, "stuck": info.stuck,
-                                  "dofs": dofs})
-            out = {k: np.asarray(v) for k, v in out.items()}
-            # The full position (hi + lo): the prompt encodes X to 1e-3 a after any number of steps.
-            out["x"] = out["x"].astype(np.float64) + out.pop("x_lo").astype(np.float64)
-        except BaseException as exc:  # pragma: no cover - an env failure reaches every waiting run
-            for _, fut in pending.values():
-                if not fut.done():
-                    fut.set_exception(exc)
-            return
-        self.n_steps += 1
-        for pos, (_, fut) in pending.items():
-            if not fut.done():  # a cancelled run (Ctrl-C) no longer waits
-                fut.set_result({k: v[pos] for k, v in out.items()})
+    def _step(self, codes: np.ndarray, mask: np.ndarray) -> Any:
+        self.states, info, dofs = _advance(self.step_keys, self.states, codes, self.params, mask)
+        out = jax.device_get({"x": info.x, "x_lo": self.states.x_lo, "y": self.states.y,
+                              "orientation": self.states.theta, "progress": info.progress, "stuck": info.stuck,
+                              "dofs": dofs})
+        out = {k: np.asarray(v) for k, v in out.items()}
+        # The full position (hi + lo): the prompt encodes X to 1e-3 a after any number of steps.
+        out["x"] = out["x"].astype(np.float64) + out.pop("x_lo").astype(np.float64)
+        return lambda pos: {k: v[pos] for k, v in out.items()}
 
 
 class LLMDriver:

@@ -19,6 +19,7 @@ import numpy as np
 from jswim import env, lattice
 from jswim.agents import scene_env
 from jswim.agents.defaults import dof_decimals
+from jswim.agents.step_batcher import StepBatcher
 from jswim.agents.variants import NO_OP, LLMRunSpec
 from jswim.prompt import PromptTemplate, SceneView, SwimmerText, scene_template
 from jswim.swimmers.models import make_model
@@ -57,7 +58,7 @@ def _step(params: Any, roc_levels: int):
     return advance
 
 
-class SceneGroup:
+class SceneGroup(StepBatcher):
     """Runs sharing one scene, noise level and ROC lattice: one batched scene state, stepped like
     :class:`jswim.agents.llm._Group` (actions handed in during one event-loop turn go together).
 
@@ -93,40 +94,20 @@ class SceneGroup:
         """Member ``pos``'s positions, heights and tilts before its first step."""
         return {"xs": np.zeros(self.xs0.shape[1]), "heights": self.z0[pos], "tilts": self.tilt0[pos]}
 
-    def submit(self, pos: int, action: int) -> asyncio.Future:
-        loop = asyncio.get_running_loop()
-        fut = loop.create_future()
-        if not self._pending:
-            loop.call_soon(self._flush)
-        self._pending[pos] = (action, fut)
-        return fut
-
-    def _flush(self) -> None:
-        pending, self._pending = self._pending, {}
-        n = len(self.members)
-        codes = np.full(n, self._noop, np.int32)
-        mask = np.zeros(n, bool)
-        for pos, (a, _) in pending.items():
-            codes[pos], mask[pos] = a, True
-        try:
-            self.states, obs = self._advance(self.step_keys, jnp.asarray(self.t), self.states, codes, mask)
-            o = scene_env.as_numpy(obs)
-        except BaseException as exc:  # pragma: no cover - an env failure reaches every waiting run
-            for _, fut in pending.values():
-                if not fut.done():
-                    fut.set_exception(exc)
-            return
+    def _step(self, codes: np.ndarray, mask: np.ndarray) -> Any:
+        self.states, obs = self._advance(self.step_keys, jnp.asarray(self.t), self.states, codes, mask)
+        o = scene_env.as_numpy(obs)
         self.t = self.t + mask.astype(np.int32)
         xs = o["xs"] - self.xs0
         old = self._xs
         self._xs = np.where(mask[:, None], xs, old)
-        self.n_steps += 1
-        for pos, (_, fut) in pending.items():
-            if fut.done():
-                continue
+
+        def outputs(pos: int) -> dict[str, Any]:
             x = float(np.mean(xs[pos]))
-            fut.set_result({
+            return {
                 "x": x, "progress": self.direction[pos] * (x - float(np.mean(old[pos]))), "stuck": bool(o["stuck"][pos]),
                 "dofs": o["dofs"][pos], "y": float(o["z"][pos, 0]), "orientation": float(o["tilt"][pos, 0]),
                 "xs": xs[pos], "heights": o["z"][pos], "tilts": o["tilt"][pos], "contact": bool(o["contact"][pos]),
-            })
+            }
+
+        return outputs
