@@ -348,6 +348,24 @@ class FakeServer:
         with self._lock:
             self._faults.extend(faults)
 
+    def settle(self, quiet: float = 0.3, limit: float = 20.0) -> int:
+        """``n_requests`` once every request already on the wire has been read.
+
+        A client that stopped (a full disk, a signal, a spent budget) may leave a request sent
+        but not yet read by this server's thread; counting before it is read would charge it to
+        the next session. Waits until nothing is in flight and the count holds for ``quiet``
+        seconds (at most ``limit``); a wait, never an assertion on time.
+        """
+        last, end = -1, time.monotonic() + limit
+        while time.monotonic() < end:
+            with self._lock:
+                n, busy = self.n_requests, self.in_flight
+            if n == last and not busy:
+                return n
+            last = n
+            time.sleep(quiet)
+        return self.n_requests
+
     def reset_counts(self) -> None:
         with self._lock:
             self.requests.clear()

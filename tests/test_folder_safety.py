@@ -208,7 +208,7 @@ def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(sign
         assert proc.returncode == status and len(lines) == 1 and "interrupted" in lines[0], err
         assert "Run the same command to resume" in lines[0]
         assert read_metadata(out)["status"] == "interrupted"
-        sent = srv.n_requests
+        sent = srv.settle()
         answered = len((out / "calls.jsonl").read_text().splitlines())
         assert answered >= 3
         assert cli.main(swim_args(srv.url, out)) == 0  # the same command finishes the study
@@ -371,7 +371,7 @@ def test_a_full_disk_ends_the_session_in_one_line_and_the_same_command_resumes(s
         # The room held back since the open took the status, though the disk is full to the byte.
         assert read_metadata(out)["status"] == "stopped" and not (out / ".jswim.reserve").exists()
         filler.unlink()
-        sent = srv.n_requests
+        sent = srv.settle()
         answered = len((out / "calls.jsonl").read_text().splitlines())
         assert cli.main(swim_args(srv.url, out)) == 0
         assert srv.n_requests - sent == CALLS - answered  # what was journaled is not paid again

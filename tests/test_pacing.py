@@ -211,7 +211,7 @@ def test_client_stops_at_the_cap_before_sending():
 
     with FakeServer() as srv:
         ok, budget, bound = asyncio.run(go(srv.url))
-        sent = srv.n_requests
+        sent = srv.settle()
     assert 3 <= ok == sent < 10  # refused before sending: the server saw only the paid calls
     assert budget.exhausted and budget.reserved_usd == 0.0
     assert 0 < budget.spent_usd <= budget.cap_usd < budget.spent_usd + bound

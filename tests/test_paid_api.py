@@ -70,7 +70,7 @@ def test_dry_run_sends_nothing_and_estimates_the_real_tokens(tmp_path, capsys):
         assert est["calls"] == 3 * 12
         assert main(swim(srv.url, out)) == 0
         rows = read_runs(out)
-        sent = srv.n_requests
+        sent = srv.settle()
         real_prompt = sum(o200k(str(m.get("content", ""))) for body in srv.requests for m in body["messages"])
         real_cost = billed_usd(srv, "gpt-4o")
     assert "2025-04" in printed and "$" in printed

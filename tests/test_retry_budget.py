@@ -86,7 +86,7 @@ def test_a_flaky_server_never_ends_the_study_and_every_request_is_counted(tmp_pa
     with FakeServer(reply=hash_reply, faults=faults) as srv:
         assert cli.main(["swim", *FAST, "--base-url", srv.url, "--out", str(tmp_path / "F")]) == 0
         out = capsys.readouterr().out
-        sent = srv.n_requests
+        sent = srv.settle()
     line = next(ln for ln in out.splitlines() if ln.startswith("HTTP requests:"))
     assert line.startswith(f"HTTP requests: {sent} sent (")  # ours match the server's count
     assert "429 x" in line and "5xx x" in line and "connection x" in line
@@ -116,7 +116,7 @@ def test_a_spent_budget_stops_cleanly_and_the_same_command_resumes(tmp_path, cap
         answered = len((tmp_path / "F" / "calls.jsonl").read_text().splitlines())
         assert answered == 5
         state["down"] = False
-        sent = srv.n_requests
+        sent = srv.settle()
         assert cli.main([*args, "--base-url", srv.url]) == 0
         assert srv.n_requests - sent == 24 - answered  # the 5 answered calls are not paid again
     rows = read_runs(tmp_path / "F")
@@ -183,7 +183,7 @@ def test_the_summary_and_show_say_how_many_requests_got_no_answer(tmp_path, caps
     with FakeServer(reply=hangs_for(1.0)) as srv:
         assert cli.main([*args, "--base-url", srv.url]) == 0
         out = capsys.readouterr().out
-        sent = srv.n_requests
+        sent = srv.settle()
     line = next(ln for ln in out.splitlines() if ln.startswith("HTTP requests:"))
     totals = read_metadata(tmp_path / "F")["llm_totals"]
     timeouts = totals["faults"]["timeout"]
