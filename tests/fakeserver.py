@@ -348,6 +348,12 @@ class FakeServer:
         with self._lock:
             self._faults.extend(faults)
 
+    def backend(self, model: str = "fake") -> Any:
+        """A :class:`jswim.studies.Backend` pointed at this server, with no API key set."""
+        from jswim.studies import Backend
+
+        return Backend(base_url=self.url, model=model, api_key_env="JSWIM_TEST_NO_KEY")
+
     def settle(self, quiet: float = 0.3, limit: float = 20.0) -> int:
         """``n_requests`` once every request already on the wire has been read.
 

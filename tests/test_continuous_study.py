@@ -24,10 +24,6 @@ def server():
         yield srv
 
 
-def fake(srv) -> Backend:
-    return Backend(base_url=srv.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")
-
-
 def test_lattice_q_learning_learns_on_k2():
     params = qlearning.batch_params(env.make_params("purcell", roc_levels=2), 64)
     run = qlearning.train_batch(jax.random.split(jax.random.PRNGKey(0), 64), params, qlearning.QConfig(steps=200))
@@ -53,7 +49,7 @@ def test_lattice_random_policy_uses_every_roc():
 
 def test_continuous_study_end_to_end(server, tmp_path):
     out = tmp_path / "cont"
-    res = run_study("continuous", StudyOptions(**TINY, agents=("llm", "qlearning", "random")), fake(server), out,
+    res = run_study("continuous", StudyOptions(**TINY, agents=("llm", "qlearning", "random")), server.backend(), out,
                     figures=True)
     rows = read_runs(out)
     groups = {(r["agent"], r["group"]) for r in rows}
@@ -85,7 +81,7 @@ def test_continuous_study_end_to_end(server, tmp_path):
 
 def test_interrupted_continuous_study_resumes(server, tmp_path):
     opts = StudyOptions(**TINY, agents=("llm", "qlearning", "random"))
-    whole = run_study("continuous", opts, fake(server), tmp_path / "whole", figures=False)
+    whole = run_study("continuous", opts, server.backend(), tmp_path / "whole", figures=False)
     seen = {"n": 0}
 
     def interrupt(phase, done, total, info=""):
@@ -96,11 +92,11 @@ def test_interrupted_continuous_study_resumes(server, tmp_path):
 
     part = tmp_path / "part"
     with pytest.raises(KeyboardInterrupt):
-        run_study("continuous", opts, fake(server), part, progress=interrupt, figures=False)
+        run_study("continuous", opts, server.backend(), part, progress=interrupt, figures=False)
     assert read_metadata(part)["status"] == "interrupted"
     n_before = len(read_runs(part))
     assert 0 < n_before < len(whole.rows)
-    again = run_study("continuous", opts, fake(server), part, figures=False)
+    again = run_study("continuous", opts, server.backend(), part, figures=False)
     key = lambda r: r["run_id"]  # noqa: E731
     assert [(r["run_id"], r["actions"], r["success"]) for r in sorted(again.rows, key=key)] == \
         [(r["run_id"], r["actions"], r["success"]) for r in sorted(whole.rows, key=key)]

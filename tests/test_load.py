@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from jswim.results import load, read_runs
-from jswim.studies import Backend, StudyOptions, run_study
+from jswim.studies import StudyOptions, run_study
 from tests.fakeserver import FakeServer, hash_reply
 
 
@@ -14,7 +14,7 @@ from tests.fakeserver import FakeServer, hash_reply
 def folders(tmp_path_factory):
     root = tmp_path_factory.mktemp("load")
     with FakeServer(reply=hash_reply, latency=0.001) as srv:
-        backend = Backend(base_url=srv.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")
+        backend = srv.backend()
         opts = StudyOptions(swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3)
         run_study("swim", opts, backend, root / "a", figures=False)
     return (root / "a",)

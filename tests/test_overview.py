@@ -10,7 +10,7 @@ import pytest
 from jswim import console, overview
 from jswim.errors import ConfigError, ResultFolderError
 from jswim.results import read_metadata
-from jswim.studies import Backend, StudyOptions, run_study
+from jswim.studies import StudyOptions, run_study
 from tests.fakeserver import FakeServer, hash_reply
 
 COLS = [console.Column("agent", False), console.Column("group", False), console.Column("n"),
@@ -68,7 +68,7 @@ def test_eta_and_durations():
 def folders(tmp_path_factory):
     root = tmp_path_factory.mktemp("studies")
     with FakeServer(reply=hash_reply, latency=0.001) as srv:
-        backend = Backend(base_url=srv.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")
+        backend = srv.backend()
         opts = StudyOptions(swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3)
         run_study("swim", opts, backend, root / "a", figures=False)
         run_study("swim", StudyOptions(swimmers=("purcell",), directions=(1,), steps=8, runs=2, q_runs=3, seed=1),

@@ -15,7 +15,7 @@ from jswim.agents import scene_baselines, scene_env
 from jswim.prompt import (DEFAULT_TEMPLATE, Action, HistoryRecord, PromptConfig, SceneView, SwimmerText,
                           allowed_actions, parse_reply, render_prompt, render_record, scene_template)
 from jswim.results import read_metadata, read_runs
-from jswim.studies import Backend, StudyOptions, run_study
+from jswim.studies import StudyOptions, run_study
 from jswim.studies import scenes
 from tests.fakeserver import FakeServer, scene_reply
 
@@ -169,10 +169,6 @@ def server():
         yield srv
 
 
-def fake(srv) -> Backend:
-    return Backend(base_url=srv.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")
-
-
 WALL = dict(heights=(3.0,), runs=1, q_runs=2, steps=12)
 PAIR = dict(separations=(30.0,), phases=(1,), runs=1, q_runs=2, steps=12)
 
@@ -180,7 +176,7 @@ PAIR = dict(separations=(30.0,), phases=(1,), runs=1, q_runs=2, steps=12)
 @pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_wall_study_end_to_end(server, tmp_path):
     out = tmp_path / "wall"
-    run_study("wall", StudyOptions(**WALL), fake(server), out, figures=True)
+    run_study("wall", StudyOptions(**WALL), server.backend(), out, figures=True)
     rows = read_runs(out)
     assert {(r["agent"], r["group"]) for r in rows} == \
         {("stroke", "free")} | {(a, "h=3") for a in ("stroke", "llm", "qlearning", "random")}
@@ -229,7 +225,7 @@ def test_scene_options_are_checked(tmp_path, capsys):
 @pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_interrupted_pair_study_resumes(server, tmp_path):
     opts = StudyOptions(**PAIR)
-    whole = run_study("pair", opts, fake(server), tmp_path / "whole", figures=False)
+    whole = run_study("pair", opts, server.backend(), tmp_path / "whole", figures=False)
     seen = {"n": 0}
 
     def interrupt(phase, done, total, info=""):
@@ -240,10 +236,10 @@ def test_interrupted_pair_study_resumes(server, tmp_path):
 
     part = tmp_path / "part"
     with pytest.raises(KeyboardInterrupt):
-        run_study("pair", opts, fake(server), part, progress=interrupt, figures=False)
+        run_study("pair", opts, server.backend(), part, progress=interrupt, figures=False)
     assert read_metadata(part)["status"] == "interrupted"
     assert 0 < len(read_runs(part)) < len(whole.rows)
-    again = run_study("pair", opts, fake(server), part, figures=False)
+    again = run_study("pair", opts, server.backend(), part, figures=False)
     key = lambda r: r["run_id"]  # noqa: E731
     assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == \
         [(r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)]

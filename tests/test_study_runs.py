@@ -8,7 +8,7 @@ from collections import Counter
 
 from jswim import cli
 from jswim.results import read_metadata, read_runs
-from jswim.studies import Backend, StudyOptions, run_study, summarize
+from jswim.studies import StudyOptions, run_study, summarize
 from tests.fakeserver import FakeServer, hash_reply
 
 
@@ -47,7 +47,7 @@ def test_study_reports_llm_calls_per_second(tmp_path):
     with FakeServer(reply=hash_reply) as srv:
         res = run_study("competence", StudyOptions(swimmers=("ng",), runs=1, q_runs=0, steps=4,
                                                     variants=("paper",)),
-                        Backend(base_url=srv.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY"),
+                        srv.backend(),
                         tmp_path / "c", figures=False)
     sp = res.llm_speed
     assert sp["calls"] == 4 and sp["billed_calls"] == 4 and sp["calls_per_s"] > 0
