@@ -69,7 +69,10 @@ is: :func:`encode_height`) and the tilt (rad, three decimals). With two swimmers
 (D1, D2 swimmer 1's arms, D3, D4 swimmer 2's): a reply ``[3, 1]`` names swimmer 2 through its DOF,
 so the answer format, the parser and constrained decoding are the paper's; S2 says which DOFs are
 whose and where swimmer 2 starts, and every record shows both positions X1 and X2 (X, the reward's
-position, is their mean). :func:`scene_template` builds S3's legend and the record line; a
+position, is their mean). With ``SceneView.own`` (``--pair-prompt each``, a variant) the prompt is one
+swimmer's alone: its own D1, D2 and X as in the paper, S2 says where the other starts and that it
+moves between this one's steps, and every record also shows ``other X``, the other's position
+(its displacement from its own start, encoded as X is). :func:`scene_template` builds S3's legend and the record line; a
 template file is used as given (its placeholders ``{x1_before}`` .. ``{tilt2_after}``, ``{h_before}``,
 ``{tilt_before}`` are always known). Without a scene the prompt is the paper's, byte for byte.
 
@@ -202,15 +205,24 @@ class SceneView:
         thousandths of ``a``, :func:`encode_height`) and tilt (rad, three decimals).
     separation : float
         The pair's starting distance D (sphere radii), said once in S2.
+    own : int
+        0: the joint prompt (one conversation steers both swimmers). 1 or 2: the prompt of that
+        swimmer of a pair alone (``--pair-prompt each``, a variant): its own arms D1, D2 and
+        position X, and the other swimmer's position ``other X`` (encoded as X is); with a wall,
+        its own H and tilt.
     """
 
     swimmers: int = 1
     wall: bool = False
     separation: float = 0.0
+    own: int = 0
 
     def __post_init__(self) -> None:
         if self.swimmers not in (1, 2):
             raise ConfigError(f"a scene holds 1 or 2 swimmers, got {self.swimmers}")
+        if self.own not in ((0, 1, 2) if self.swimmers == 2 else (0,)):
+            raise ConfigError(f"a per-swimmer prompt needs a pair and swimmer 1 or 2, got swimmer {self.own} "
+                              f"of {self.swimmers}")
 
 
 @dataclass(frozen=True)
@@ -591,13 +603,20 @@ def scene_template(view: SceneView, base: PromptTemplate | None = None) -> Promp
     if base != DEFAULT_TEMPLATE:
         return base
     legend, line = [], []
-    if view.swimmers == 1:
+    if view.own:  # one swimmer of a pair: the lone swimmer's record, then the other's position
+        me, other = view.own, 3 - view.own
+        legend += ["X before -> after", "other X before -> after"]
+        line += [f"X {{x{me}_before}} -> {{x{me}_after}}", f"other X {{x{other}_before}} -> {{x{other}_after}}"]
+        if view.wall:
+            legend += ["H before -> after", "tilt before -> after"]
+            line += [f"H {{h{me}_before}} -> {{h{me}_after}}", f"tilt {{tilt{me}_before}} -> {{tilt{me}_after}}"]
+    elif view.swimmers == 1:
         legend.append("X before -> after")
         line.append("X {x_before} -> {x_after}")
     else:
         legend += ["X1 before -> after", "X2 before -> after"]
         line += ["X1 {x1_before} -> {x1_after}", "X2 {x2_before} -> {x2_after}"]
-    if view.wall:
+    if view.wall and not view.own:
         for k in range(1, view.swimmers + 1):
             n = "" if view.swimmers == 1 else str(k)
             legend += [f"H{n} before -> after", f"tilt{n} before -> after"]
@@ -614,6 +633,12 @@ WALL_SENTENCE = ("The swimmer moves above a flat wall: H is its height above the
 PAIR_SENTENCE = ("D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swimmer 2, which starts {separation} "
                  "sphere radii ahead of it on the same axis; X1 and X2 are their positions, and the movement sought is "
                  "that of their mean.")
+#: S2's extra sentence of one swimmer's own prompt in a pair (``--pair-prompt each``): where the
+#: other starts (``{where}``: ``ahead of`` for swimmer 1, ``behind`` for swimmer 2), that it moves
+#: between this one's steps, and what ``other X`` is; with a wall, :data:`WALL_SENTENCE` follows.
+OWN_PAIR_SENTENCE = ("A second swimmer on the same axis, steered on its own, starts {separation} sphere radii {where} "
+                     "this one and moves its arms between this one's steps; other X is its position, counted from its "
+                     "own start as X is.")
 PAIR_WALL_SENTENCE = ("Both swim above a flat wall: H1 and H2 are their heights above it in thousandths of the sphere "
                       "radius, tilt1 and tilt2 their angles to it in radians.")
 
@@ -623,7 +648,12 @@ def scene_sentence(view: SceneView | None) -> str:
     if view is None:
         return ""
     parts = []
-    if view.swimmers == 2:
+    if view.own:
+        where = "ahead of" if view.own == 1 else "behind"
+        parts.append(OWN_PAIR_SENTENCE.format(separation=f"{view.separation:g}", where=where))
+        if view.wall:
+            parts.append(WALL_SENTENCE)
+    elif view.swimmers == 2:
         parts.append(PAIR_SENTENCE.format(separation=f"{view.separation:g}"))
         if view.wall:
             parts.append(PAIR_WALL_SENTENCE)

@@ -48,14 +48,24 @@ def study_extensions(roc_levels: set[int] | list[int]) -> list[str]:
     return out + ([REAL_ROCS] if 0 in roc_levels else [])
 
 
-def scene_deviation(scene: Any) -> str:
+#: What a pair's prompt is under ``--pair-prompt each`` (a variant of the joint prompt).
+EACH_PAIR_PROMPT = ("each swimmer steered by its own LLM conversation (--pair-prompt each, a variant of the joint "
+                    "prompt): swimmer 1 decides at odd steps, swimmer 2 at even ones, each with its own prompt about its "
+                    "arms D1, D2 and X, its own last n_ht records and clearing; records also show the other's position "
+                    "(other X, encoded as X); the reward is the progress of their mean")
+
+
+def scene_deviation(scene: Any, pair_prompt: str = "joint") -> str:
     """The line of a run in a scene (issue 19, an extension: the paper's swimmer is alone in an
-    unbounded fluid), naming the medium, the swimmers and what the prompt shows."""
+    unbounded fluid), naming the medium, the swimmers and what the prompt shows (a pair's:
+    ``pair_prompt``, :data:`jswim.agents.variants.PAIR_PROMPTS`)."""
     parts = [f"scene (an extension): medium {scene.medium!r}"]
     if scene.medium == "wall":
         parts.append(f"start {scene.height:g} a above a no-slip wall, tilt {scene.tilt:g} rad; records show each "
                      "swimmer's height H (thousandths of a, as X) and tilt (rad)")
-    if scene.swimmers == 2:
+    if scene.swimmers == 2 and pair_prompt == "each":
+        parts.append(f"two coaxial NG swimmers {scene.separation:g} a apart, {EACH_PAIR_PROMPT}")
+    elif scene.swimmers == 2:
         parts.append(f"two coaxial NG swimmers {scene.separation:g} a apart steered through joint DOFs D1..D4 "
                      "(swimmer 2 owns D3, D4); records show X1 and X2; the reward is the progress of their mean")
     if scene.obstacles:
@@ -64,8 +74,9 @@ def scene_deviation(scene: Any) -> str:
 
 
 def scene_extensions(scenes: Any) -> list[str]:
-    """Lines for a study's metadata: one per distinct scene its runs use (none for the bulk fluid)."""
-    return [scene_deviation(s) for s in scenes]
+    """Lines for a study's metadata: one per distinct scene its runs use (none for the bulk fluid);
+    an item may be a ``(scene, pair_prompt)`` pair."""
+    return [scene_deviation(*s) if isinstance(s, tuple) else scene_deviation(s) for s in scenes]
 
 
 def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_tokens: int,

@@ -39,7 +39,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim import env, lattice
-from jswim.agents import fidelity, protocol, scene_env
+from jswim.agents import fidelity, pair_prompt, protocol, scene_env
 from jswim.agents.scene_driver import SceneGroup, scene_text
 from jswim.agents.step_batcher import StepBatcher
 from jswim.agents.defaults import default_max_tokens, default_n_ht
@@ -143,6 +143,7 @@ class _Run:
     begun: bool = False
     closed: bool = False
     scene_now: dict[str, Any] | None = None  # a scene run's positions, heights, tilts before the next step
+    convs: list[pair_prompt.Conversation] = field(default_factory=list)  # --pair-prompt each: one per swimmer
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
@@ -300,12 +301,18 @@ class LLMDriver:
             max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(params.model), n_ht=n_ht,
             default_n_ht=default_n_ht(params.model, spec.direction), roc_levels=spec.roc_levels)
         if spec.scene:
-            run.deviations.append(fidelity.scene_deviation(scene_env.from_json(spec.scene)))
+            scene = scene_env.from_json(spec.scene)
+            run.deviations.append(fidelity.scene_deviation(scene, spec.pair_prompt))
+            if scene_env.n_swimmers(scene) == 2:
+                result.knobs["pair_prompt"] = spec.pair_prompt
+        if spec.pair_prompt == "each":  # one conversation per swimmer (jswim.agents.pair_prompt)
+            run.convs = pair_prompt.conversations(spec, params.model, cfg, dofs)
         run.meta = {
             "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
             "levels0": result.levels0, "agent": cfg.metadata(), "client": self._client_meta(run.max_tokens),
             "deviations": run.deviations,
             **({"scene": json.loads(spec.scene)} if spec.scene else {}),
+            **(pair_prompt.metadata(run.convs) if run.convs else {}),
         }
         return run
 
@@ -366,8 +373,11 @@ class LLMDriver:
         cfg = self.config
         spec = run.result.spec
         step = run.result.steps + 1
-        req = protocol.request(cfg, run.text, run.prompt, direction=spec.direction, seed=spec.seed, step=step,
-                               records=run.history.records, dofs=run.dofs, x=run.x, stats=run.stats)
+        # Who decides: the run's one conversation, or (--pair-prompt each) the swimmer whose turn it is.
+        conv = run.convs[pair_prompt.turn(step)] if run.convs else None
+        mind = conv if conv is not None else run
+        req = protocol.request(cfg, mind.text, mind.prompt, direction=spec.direction, seed=spec.seed, step=step,
+                               records=mind.history.records, dofs=mind.dofs, x=mind.x, stats=mind.stats)
         temperature = cfg.sampling_temperature(self.client.settings.temperature)
         messages = req.messages
         attempts = []
@@ -395,7 +405,11 @@ class LLMDriver:
             messages = reply.follow_up
         failed = action is None
         log = {"prompt": req.prompt, "attempts": attempts, "options": [list(a) for a in req.options]}
-        return (NO_OP if failed else action), failed, log
+        action = NO_OP if failed else action
+        if conv is not None:  # the swimmer's own [d, ROC] as the joint action
+            log.update(swimmer=conv.swimmer + 1, own_action=list(action))
+            action = pair_prompt.to_joint(conv.swimmer, action)
+        return action, failed, log
 
     # -- the loop ----------------------------------------------------------------------------
 
@@ -477,8 +491,13 @@ class LLMDriver:
             res.contact.append(bool(out["contact"]))
         rec = HistoryRecord(res.steps + 1, tuple(run.dofs), tuple(float(v) for v in out["dofs"]), action,
                             x_before, x_after, bool(out["stuck"]), **scene)
-        run.stats.add(shape_key(run.text, rec.dofs_before), action, float(out["progress"]))
-        cleared = run.history.add(rec, float(out["progress"]))
+        if run.convs:  # each swimmer's own record, progress and clearing (jswim.agents.pair_prompt)
+            cleared = pair_prompt.record(run.convs, rec, res.spec.direction)
+            n_clears = sum(c.history.n_clears for c in run.convs)
+        else:
+            run.stats.add(shape_key(run.text, rec.dofs_before), action, float(out["progress"]))
+            cleared = run.history.add(rec, float(out["progress"]))
+            n_clears = run.history.n_clears
         run.dofs = np.asarray(out["dofs"], np.float64)
         run.x = x_after
         res.x.append(x_after)
@@ -488,11 +507,11 @@ class LLMDriver:
         res.progress.append(float(out["progress"]))
         res.stuck.append(bool(out["stuck"]))
         res.failed_steps += failed
-        res.n_clears = run.history.n_clears
+        res.n_clears = n_clears
         run.log({
             "type": "step", "step": rec.step, **log, "action": list(action), "failed": failed,
             "x_before": x_before, "x_after": x_after, "progress": float(out["progress"]), "stuck": rec.stuck,
-            "dofs_after": list(rec.dofs_after), "cleared": cleared, "n_clears": run.history.n_clears,
+            "dofs_after": list(rec.dofs_after), "cleared": cleared, "n_clears": n_clears,
             **({"xs_after": list(rec.xs_after), "heights_after": list(rec.heights_after),
                 "tilts_after": list(rec.tilts_after), "contact": bool(out["contact"])} if scene else {}),
         })

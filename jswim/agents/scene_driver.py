@@ -25,20 +25,23 @@ from jswim.prompt import PromptTemplate, SceneView, SwimmerText, scene_template
 from jswim.swimmers.models import make_model
 
 
-def view(scene: Any) -> SceneView:
-    """What the prompt shows of ``scene`` (:class:`jswim.prompt.SceneView`)."""
+def view(scene: Any, own: int = 0) -> SceneView:
+    """What the prompt shows of ``scene`` (:class:`jswim.prompt.SceneView`); ``own`` 1 or 2: the
+    prompt of that swimmer of a pair alone (``--pair-prompt each``)."""
     return SceneView(scene_env.n_swimmers(scene), scene_env.has_wall(scene),
-                     float(scene.separation) if scene_env.n_swimmers(scene) > 1 else 0.0)
+                     float(scene.separation) if scene_env.n_swimmers(scene) > 1 else 0.0, own)
 
 
-def scene_text(spec: LLMRunSpec, template: PromptTemplate, rocs: tuple[int, ...] | None = None) -> tuple[SwimmerText, PromptTemplate]:
+def scene_text(spec: LLMRunSpec, template: PromptTemplate, rocs: tuple[int, ...] | None = None,
+               own: int = 0) -> tuple[SwimmerText, PromptTemplate]:
     """The joint swimmer text (two arms per swimmer, the NG ranges) and the template of a scene run
-    (:func:`jswim.prompt.scene_template`: the default grows the scene's fields; a user's is kept)."""
+    (:func:`jswim.prompt.scene_template`: the default grows the scene's fields; a user's is kept);
+    ``own`` 1 or 2: swimmer ``own``'s text alone (its two arms; :mod:`jswim.agents.pair_prompt`)."""
     scene = scene_env.from_json(spec.scene)
     model = make_model(spec.swimmer, **dict(spec.swimmer_options))
     k = spec.roc_levels
-    n = scene_env.ARMS * scene_env.n_swimmers(scene)
-    v = view(scene)
+    n = scene_env.ARMS * (1 if own else scene_env.n_swimmers(scene))
+    v = view(scene, own)
     text = SwimmerText(n, model.lo, model.hi, dof_decimals(model, k),
                        tuple(rocs) if rocs is not None else tuple(range(-k, k + 1)), k, scene=v)
     return text, scene_template(v, template)

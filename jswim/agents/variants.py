@@ -12,6 +12,7 @@ ranked or pruned by observed value.
 from __future__ import annotations
 
 import dataclasses
+import json
 from dataclasses import dataclass
 from typing import Any, Iterable
 
@@ -73,6 +74,30 @@ def roc_tag(roc_levels: int) -> str:
     return "" if roc_levels == 1 else f"K{roc_levels}"
 
 
+#: How an LLM steers a pair of swimmers (``--pair-prompt``): ``"joint"`` (default), one conversation
+#: for both through joint DOFs D1..D4; ``"each"`` (a variant), one conversation per swimmer, each
+#: with its own D1, D2, history and clearing, the two taking turns (:mod:`jswim.agents.pair_prompt`).
+PAIR_PROMPTS = ("joint", "each")
+
+
+def check_pair_prompt(value: str) -> str:
+    """``value`` if it is one of :data:`PAIR_PROMPTS`.
+
+    Raises
+    ------
+    ConfigError
+        For any other value.
+    """
+    if value not in PAIR_PROMPTS:
+        raise ConfigError(f"--pair-prompt must be one of {', '.join(PAIR_PROMPTS)}, got {value!r}")
+    return value
+
+
+def pair_tag(pair_prompt: str) -> str:
+    """The run-id tag of a pair's prompt: ``""`` for the joint one (the default), else its name."""
+    return "" if pair_prompt == "joint" else pair_prompt
+
+
 #: Executed when the model gives no valid action: hold still.
 NO_OP = Action(1, 0)
 
@@ -113,6 +138,9 @@ class LLMRunSpec:
     scene : str
         A scene (walls, obstacles, pairs; issue 19) as canonical JSON of ``Scene.to_dict()``
         (:func:`jswim.agents.scene_env.canonical`); ``""``: the paper's lone swimmer in bulk fluid.
+    pair_prompt : {"joint", "each"}
+        A pair's prompt (:data:`PAIR_PROMPTS`): one joint conversation, or one per swimmer
+        (``"each"`` needs a two-swimmer scene; named ``each`` in the default run id).
     """
 
     swimmer: str = "purcell"
@@ -128,19 +156,24 @@ class LLMRunSpec:
     run_id: str | None = None
     roc_levels: int = 1
     scene: str = ""
+    pair_prompt: str = "joint"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drop", normalize_mask(self.drop))
         if self.n_steps < 1:
             raise ConfigError(f"n_steps must be >= 1, got {self.n_steps}")
         check_roc_levels(self.roc_levels)
+        check_pair_prompt(self.pair_prompt)
+        if self.pair_prompt == "each" and (not self.scene or json.loads(self.scene).get("swimmers") != 2):
+            raise ConfigError("--pair-prompt each needs a scene with two swimmers")
 
     def label(self) -> str:
         """``run_id``, or one built from the fields by :func:`run_id` (seed in place of a repeat)."""
         if self.run_id:
             return self.run_id
         return run_id("llm", self.swimmer, self.direction, self.init, self.zeta, n_ht=self.n_ht,
-                      drop=self.drop, tag=roc_tag(self.roc_levels), seed=self.seed)
+                      drop=self.drop, tag="-".join(t for t in (pair_tag(self.pair_prompt), roc_tag(self.roc_levels)) if t),
+                      seed=self.seed)
 
 
 @dataclass(frozen=True)

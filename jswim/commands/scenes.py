@@ -1,7 +1,7 @@
 """The scene studies' own options (``jswim study wall`` / ``jswim study pair``) and their table.
 
 Registered from :mod:`jswim.cli` with one call each: :func:`register` adds ``--heights`` to the
-wall study and ``--separations``/``--phases`` to the pair study; :func:`options` reads them into
+wall study and ``--separations``/``--phases``/``--pair-prompt`` to the pair study; :func:`options` reads them into
 :class:`jswim.studies.StudyOptions` keywords; :func:`print_table` prints the scene table after
 the usual summary.
 """
@@ -35,6 +35,8 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
     """Add the scene options of study ``name`` to its parser (nothing for other studies)."""
     if name not in SCENE_STUDIES:
         return
+    from jswim.agents.variants import PAIR_PROMPTS  # here: `jswim --help` imports this module, not the agents
+
     g = q.add_argument_group("scene")
     if name == "wall":
         g.add_argument("--heights", type=_numbers(float), default=None, metavar="H1,H2,...",
@@ -46,11 +48,15 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
         g.add_argument("--phases", type=_numbers(int), default=None, metavar="P1,P2,...",
                        help="phase offsets of the two square strokes, in quarter cycles of swimmer 2 ahead "
                             "(default 0,1,2,3)")
+        g.add_argument("--pair-prompt", choices=PAIR_PROMPTS, default=None,
+                       help="how the LLM steers the pair: joint (default: one conversation, joint DOFs D1..D4) or "
+                            "each (a variant: one conversation per swimmer, taking turns, each shown the other's "
+                            "position)")
 
 
 def options(args: argparse.Namespace) -> dict[str, Any]:
     """The StudyOptions keywords of the scene options given."""
-    return {k: getattr(args, k) for k in ("heights", "separations", "phases") if getattr(args, k, None)}
+    return {k: getattr(args, k) for k in ("heights", "separations", "phases", "pair_prompt") if getattr(args, k, None)}
 
 
 def print_table(rows: Sequence[dict[str, Any]]) -> None:

@@ -11,6 +11,7 @@ same run in every folder.
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import dataclass
 from typing import Callable, Iterable
@@ -18,7 +19,8 @@ from typing import Callable, Iterable
 from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
 from jswim.agents.defaults import paper_init
 from jswim.agents.protocol import derived_seed
-from jswim.agents.variants import VARIANTS, init_label, roc_tag, run_id, variant_action_set
+from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
+                                   variant_action_set)
 from jswim.env import all_inits
 from jswim.errors import ConfigError
 from jswim.gait import PAPER
@@ -93,6 +95,9 @@ class StudyOptions:
     heights: tuple[float, ...] = (3.0, 5.0, 7.0, 10.0, 20.0, 50.0)
     separations: tuple[float, ...] = (30.0, 60.0)
     phases: tuple[int, ...] = (0, 1, 2, 3)
+    # How the LLM steers a pair (--pair-prompt): "joint" (one conversation, D1..D4) or "each" (one
+    # conversation per swimmer, a variant; jswim.agents.pair_prompt). Only pair cells read it.
+    pair_prompt: str = "joint"
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
@@ -153,6 +158,7 @@ class StudyOptions:
             raise ConfigError(f"--separations must be positive distances, got {','.join(map(str, self.separations))}")
         if any(p not in (0, 1, 2, 3) for p in self.phases):
             raise ConfigError(f"--phases are quarter cycles 0, 1, 2 or 3, got {','.join(map(str, self.phases))}")
+        check_pair_prompt(self.pair_prompt)
         bad = sorted(set(self.agents) - set(ALL_AGENTS))
         if bad:
             raise ConfigError(f"unknown agents {bad}; choose from {', '.join(ALL_AGENTS)}")
@@ -184,6 +190,7 @@ class Plan:
     roc_levels: int = 1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
     sample: int = 0  # which independent repeat of this very setting (--samples; 0: the run itself)
     scene: str = ""  # canonical JSON of the run's Scene (jswim.agents.scene_env.canonical); "": the bulk fluid
+    pair_prompt: str = "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
 
 
 def sample_id(run: str, sample: int) -> str:
@@ -414,6 +421,11 @@ def _sweeps(cell: Cell, o: StudyOptions) -> list[tuple[float | None, str | None]
     return [(t, p) for t in temps for p in prompts]
 
 
+def _is_pair(scene: str) -> bool:
+    """Whether a cell's scene (canonical JSON, ``""`` for none) holds two swimmers."""
+    return bool(scene) and json.loads(scene).get("swimmers") == 2
+
+
 def build(study: str, o: StudyOptions) -> list[Plan]:
     """The runs of ``study`` for options ``o``, in a fixed order (seeds follow it).
 
@@ -444,7 +456,10 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     # The run id names what differs from the study's own setting.
                     tag = (v if v != "paper" else "") if llm else (action_set if action_set != o.action_set else "")
                     levels = o.roc_levels if cell.roc_levels is None else cell.roc_levels
-                    tag = "-".join(t for t in (tag, "real" if levels == 0 else roc_tag(levels), cell.tag) if t)
+                    # A pair's LLM runs under --pair-prompt each are named so (never a joint run's id).
+                    pair = o.pair_prompt if llm and _is_pair(cell.scene) else "joint"
+                    tag = "-".join(t for t in (tag, pair_tag(pair), "real" if levels == 0 else roc_tag(levels),
+                                               cell.tag) if t)
                     zeta = float(o.zeta if cell.zeta is None else cell.zeta)
                     n_ht = cell.n_ht if llm else None
                     drop = cell.drop if llm else frozenset()
@@ -461,7 +476,8 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                             for s in range(o.samples if llm else 1):
                                 rid = sample_id(base, s)
                                 plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
-                                                  n_ht, drop, action_set, group, v, temp, prompt, levels, s, cell.scene))
+                                                  n_ht, drop, action_set, group, v, temp, prompt, levels, s, cell.scene,
+                                                  pair))
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"
     return plans

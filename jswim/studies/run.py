@@ -228,6 +228,8 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
             opts.pop(name)
     if opts["roc_levels"] == 1:  # the paper's ROC set: as before --roc-levels existed
         opts.pop("roc_levels")
+    if opts["pair_prompt"] == "joint":  # the default: as before --pair-prompt existed
+        opts.pop("pair_prompt")
     if tuple(o.agents) == ALL_AGENTS:  # the default, written as before the continuous agent existed
         opts["agents"] = AGENTS
     if study == "swim" and o.variant is None and SWIM_VARIANT != "paper":
@@ -358,12 +360,12 @@ def run_study(
 
 def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
     """The fidelity lines of the scenes a study's runs use (none in the paper's studies)."""
-    scenes = sorted({p.scene for p in plans if p.scene})
+    scenes = sorted({(p.scene, p.pair_prompt) for p in plans if p.scene})
     if not scenes:
         return []
     from jswim.agents import scene_env
 
-    return fidelity.scene_extensions([scene_env.from_json(s) for s in scenes])
+    return fidelity.scene_extensions([(scene_env.from_json(s), pair) for s, pair in scenes])
 
 
 class FolderRepaired(UserWarning):
@@ -498,7 +500,7 @@ def _write_report(folder: Path, figures: bool) -> None:
 def _spec(p: Plan) -> LLMRunSpec:
     return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
                       n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id, roc_levels=p.roc_levels,
-                      scene=p.scene)
+                      scene=p.scene, pair_prompt=p.pair_prompt)
 
 
 def _configs(plans: Sequence[Plan], o: StudyOptions,
