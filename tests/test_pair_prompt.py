@@ -69,6 +69,22 @@ def test_each_swimmer_prompt_literal():
     assert one.x == 0.1734 and two.x == 0.1740  # the other's move carried swimmer 1 too
 
 
+def test_above_a_wall_each_swimmer_sees_its_own_height_and_tilt():
+    from jswim.prompt import PromptConfig, SceneView, SwimmerText, render_record, scene_sentence, scene_template
+
+    v = SceneView(2, True, 40.0, own=2)
+    rec = HistoryRecord(1, (10.0, 6.0), (10.0, 10.0), Action(2, 1), 0.0, 0.1722, False,
+                        (0.0, 0.0), (0.0012, 0.1722), (5.0, 5.5), (5.001, 5.49), (0.0, 0.1), (0.002, 0.099))
+    line = render_record(rec, SwimmerText(2, 6.0, 10.0, 0, scene=v), PromptConfig(template=scene_template(v)))
+    assert line == "1: (10, 6) [2, 1] -> (10, 10), X 2500 -> 2672, other X 2500 -> 2501, H 5500 -> 5490, " \
+                   "tilt 0.100 -> 0.099, stuck no"
+    assert scene_sentence(v).endswith("counted from its own start as X is. The swimmer moves above a flat wall: H "
+                                      "is its height above the wall in thousandths of its sphere radius and tilt its "
+                                      "angle to the wall in radians.")
+    with pytest.raises(ConfigError):
+        SceneView(1, True, own=1)  # a lone swimmer has no other
+
+
 def test_turns_and_joint_actions():
     assert [pair_prompt.turn(t) for t in range(1, 6)] == [0, 1, 0, 1, 0]
     assert pair_prompt.to_joint(1, Action(2, -1)) == Action(4, -1)
