@@ -213,6 +213,9 @@ def test_show_prints_the_scene_table(server, tmp_path, capsys):
     llm = next(r for r in rows if r["agent"] == "llm")
     assert max(a[0] for a in llm["actions"]) <= 4 and len(llm["xs"][0]) == 2
     assert llm["separation"] == 30.0
+    assert llm["pair_prompt"] == "joint" and "-each-" not in llm["run_id"]  # the default: one joint prompt
+    meta_line = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0])
+    assert meta_line["pair_prompt"] == "joint" and "conversations" not in meta_line
 
 
 def test_scene_options_are_checked(tmp_path, capsys):

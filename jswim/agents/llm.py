@@ -312,6 +312,7 @@ class LLMDriver:
             "levels0": result.levels0, "agent": cfg.metadata(), "client": self._client_meta(run.max_tokens),
             "deviations": run.deviations,
             **({"scene": json.loads(spec.scene)} if spec.scene else {}),
+            **({"pair_prompt": spec.pair_prompt} if "pair_prompt" in result.knobs else {}),
             **(pair_prompt.metadata(run.convs) if run.convs else {}),
         }
         return run
