@@ -146,14 +146,33 @@ def test_plans_tag_the_variant_and_the_identity_keeps_old_folders():
         default_folder("pair", StudyOptions(**grid, pair_prompt="each"), None)
 
 
-@pytest.mark.slow  # the pair's scene step compiles once (~10-20 s under load)
-def test_each_pair_study_end_to_end_and_resume(tmp_path):
+@pytest.mark.slow  # the pair's scene step compiles once per session (~10-20 s under load)
+def test_each_pair_study_end_to_end_and_resume(tmp_path, monkeypatch):
+    from jswim.llm import client as client_module
+
     opts = StudyOptions(agents=("llm",), separations=(30.0,), phases=(0,), runs=1, steps=8, pair_prompt="each")
     out = tmp_path / "pair"
+    real_chat = client_module.LLMClient.chat
+    answered = {"n": 0}
+
+    async def chat(self, *a, **kw):  # Ctrl-C before the 6th call: mid-run, after both swimmers spoke
+        if answered["n"] >= 5:
+            raise KeyboardInterrupt
+        res = await real_chat(self, *a, **kw)
+        answered["n"] += 1
+        return res
+
     with FakeServer(reply=scene_reply) as srv:
+        monkeypatch.setattr(client_module.LLMClient, "chat", chat)
+        with pytest.raises(KeyboardInterrupt):
+            run_study("pair", opts, srv.backend(), out, figures=False)
+        monkeypatch.setattr(client_module.LLMClient, "chat", real_chat)
+        assert srv.settle() == 5 and read_runs(out) == []
         run_study("pair", opts, srv.backend(), out, figures=False)
         sent = srv.settle()
         (row,) = read_runs(out)
+        # The five answered calls were replayed from the journal, not asked again.
+        assert row["replayed_calls"] == 5 and sent == row["calls"]
         assert row["run_id"] == "llm-ng-px-i+--z0-each-D30-r0" and row["pair_prompt"] == "each"
         assert row["steps"] == 8 and row["failed_steps"] == 0 and row["parse_retries"] >= 1
         # Swimmer 1 (D1, D2) moves at odd steps, swimmer 2 (D3, D4) at even ones.
@@ -174,6 +193,6 @@ def test_each_pair_study_end_to_end_and_resume(tmp_path):
         assert shown == [f"[{d}, {r}]" for d, r in mine]
         meta = read_metadata(out)
         assert any("--pair-prompt each" in line for line in meta["fidelity_deviations"])
-        # Resumed: nothing is asked again.
+        # Resumed once more: nothing is asked again.
         again = run_study("pair", opts, srv.backend(), out, figures=False)
         assert srv.settle() == sent and [r["actions"] for r in again.rows] == [row["actions"]]
