@@ -79,7 +79,7 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
              and r.get("per_cycle") is not None]
     if alone:
         ax.axhline(float(np.mean(alone)), color="0.4", ls="--", lw=0.8, label="one swimmer alone")
-    for agent in ("llm", "qlearning", "random"):
+    for agent in ("llm", "qlearning", "random", "ppo"):
         got = [8 * r["signed_final_x"] / r["steps"] for r in rows if r["agent"] == agent and r.get("steps")]
         if got:  # 8 steps per joint cycle: the whole run's mean progress per step, times 8
             st = _STYLES[agent]

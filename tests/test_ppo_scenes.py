@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from jswim.agents import ppo
-from jswim.errors import ConfigError
 from jswim.scenes import Scene, scene_advance, scene_params, scene_reset
 
 STEPS = 8
@@ -54,7 +53,52 @@ def test_wall_scene_run_records_the_scene_progress():
         assert np.asarray(report.success).shape == (3,)
 
 
-def test_evaluate_scene_refuses_a_pair():
-    pair = scene_params("ng", Scene(medium="free", swimmers=2, separation=30.0))
-    with pytest.raises(ConfigError):
-        ppo.evaluate_scene(None, pair)
+def _hand_made(codes_per_run):
+    """A PPORun of lattice moves played by hand on a pair's joint arms (no training): code c moves
+    joint DOF c // 3 by ROC c % 3 - 1 (the whole range), clipped to [6, 10], from (10, 6, 10, 6)."""
+    actions, dofs, dof = [], [], []
+    for codes in codes_per_run:
+        arms = np.array([10.0, 6.0, 10.0, 6.0])
+        a_run, d_run = [], []
+        for c in codes:
+            j, roc = c // 3, c % 3 - 1
+            a = np.zeros(4)
+            a[j] = roc
+            arms = arms.copy()
+            arms[j] = np.clip(arms[j] + 4.0 * roc, 6.0, 10.0)
+            a_run.append(a)
+            d_run.append(arms)
+        actions.append(a_run)
+        dofs.append(d_run)
+        dof.append([c // 3 + 1 for c in codes])
+    actions, dofs = np.array(actions), np.array(dofs)
+    z = np.zeros(actions.shape[:2])
+    return ppo.PPORun(actions, np.array(dof, np.int8), z, z, dofs, np.broadcast_to([10.0, 6.0, 10.0, 6.0], dofs[:, 0].shape), z, z)
+
+
+def test_pair_judge_on_hand_made_strokes():
+    # The real-valued pair judge against the lattice one of the studies (jswim.gait.judge on each
+    # swimmer's own codes, an independent code path) on corner moves, where the two must agree.
+    from jswim.studies import scenes
+    from jswim.studies.grids import Plan
+
+    pair = scene_params("ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0))  # paper's (10, 6)
+    both = scenes.stroke_codes("phase0", 1, 30, 2)  # two squares, alternating moves
+    late = np.r_[np.ones(6, np.int64), both[:24]]  # 6 holds of swimmer 1 ([1, 0]), then 3 squares each
+    only_one = scenes.stroke_codes("square", 1, 30, 1)  # swimmer 2 never moves
+    lopsided = np.r_[scenes.stroke_codes("square", 1, 27, 1), [7, 6, 7]]  # swimmer 2: 3 moves
+    runs = [both, late, only_one, lopsided, scenes.stroke_codes("phase0", -1, 30, 2)]
+    rep = ppo.evaluate_scene(_hand_made(runs), pair, direction=np.array([1, 1, 1, 1, 1]))
+    assert rep.success.tolist() == [True, True, False, False, False]
+    assert rep.learned.tolist() == [True, True, False, False, False]
+    assert rep.period.tolist() == [8, 8, 0, 0, 0]  # 4 own moves each
+    assert rep.steps_to_learn.tolist() == [1, 7, -1, -1, -1]  # in own moves: swimmer 1's stroke starts at its 7th
+    plan = Plan("r", "ppo", "ng", 1, (1, 0), 0.0, 0, 30)
+    for i, codes in enumerate(runs):
+        lattice = scenes._judge(list(codes), plan, 2, 50)
+        assert (lattice["success"], lattice["learned"]) == (rep.success[i], rep.learned[i])
+        assert lattice["steps_to_learn"] == (int(rep.steps_to_learn[i]) if rep.learned[i] else None)
+    # The -x target is met by the time-reversed strokes, not by the +x ones.
+    back = ppo.evaluate_scene(_hand_made([scenes.stroke_codes("phase0", -1, 30, 2), both]), pair,
+                              direction=np.array([-1, -1]))
+    assert back.success.tolist() == [True, False]

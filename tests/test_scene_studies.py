@@ -176,7 +176,9 @@ PAIR = dict(separations=(30.0,), phases=(1,), runs=1, q_runs=2, steps=12)
 @pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_wall_study_end_to_end(server, tmp_path):
     out = tmp_path / "wall"
-    run_study("wall", StudyOptions(**WALL), server.backend(), out, figures=True)
+    # PPO's wall rows: tests/test_scene_ppo_rows.py (its compilation is paid there once).
+    run_study("wall", StudyOptions(**WALL, agents=("stroke", "llm", "qlearning", "random")), server.backend(), out,
+              figures=True)
     rows = read_runs(out)
     assert {(r["agent"], r["group"]) for r in rows} == \
         {("stroke", "free")} | {(a, "h=3") for a in ("stroke", "llm", "qlearning", "random")}
@@ -216,6 +218,12 @@ def test_show_prints_the_scene_table(server, tmp_path, capsys):
     assert llm["pair_prompt"] == "joint" and "-each-" not in llm["run_id"]  # the default: one joint prompt
     meta_line = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0])
     assert meta_line["pair_prompt"] == "joint" and "conversations" not in meta_line
+    # The continuous RL baseline steers both swimmers next to the others, judged on both swimmers' moves.
+    learners = [r for r in rows if r["agent"] == "ppo"]
+    assert len(learners) == 2 and {r["group"] for r in learners} == {"D=30"} and "ppo" in printed
+    for r in learners:
+        assert isinstance(r["success"], bool) and r["fate"] is None and r["separation"] == 30.0
+        assert {d for d, _ in r["actions"]} <= {1, 2, 3, 4} and len(r["xs"][0]) == 2 and r["speed"] is not None
 
 
 def test_scene_options_are_checked(tmp_path, capsys):

@@ -73,10 +73,20 @@ def scene_deviation(scene: Any, pair_prompt: str = "joint") -> str:
     return "; ".join(parts)
 
 
-def scene_extensions(scenes: Any) -> list[str]:
+#: The line of the continuous RL baseline's rows in the scene studies.
+SCENE_PPO = ("continuous RL baseline (PPO) on scenes (an extension): the continuous study's learner moves one arm of "
+             "one swimmer per step by a real ROC (a pair: both swimmers, joint DOFs D1..D4); it observes the joint arms "
+             "and, with a wall, each swimmer's height and tilt; reward = progress of the swimmers' mean x, the study's "
+             "--steps and --q-runs; success = the shape judge on each swimmer's own moves with the bulk swimmer's "
+             "displacements (a pair succeeds when both swimmers' own moves do)")
+
+
+def scene_extensions(scenes: Any, ppo: bool = False) -> list[str]:
     """Lines for a study's metadata: one per distinct scene its runs use (none for the bulk fluid);
-    an item may be a ``(scene, pair_prompt)`` pair."""
-    return [scene_deviation(*s) if isinstance(s, tuple) else scene_deviation(s) for s in scenes]
+    an item may be a ``(scene, pair_prompt)`` pair. :data:`SCENE_PPO` follows when the continuous RL
+    baseline runs on them (``ppo``)."""
+    lines = [scene_deviation(*s) if isinstance(s, tuple) else scene_deviation(s) for s in scenes]
+    return lines + ([SCENE_PPO] if ppo and lines else [])
 
 
 def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_tokens: int,

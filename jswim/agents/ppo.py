@@ -200,6 +200,9 @@ class PPORun(NamedTuple):
         DOF values at the start.
     y, orientation : float (steps,)
         Centroid y and orientation (rad, of the reference link) after each step.
+    scene : SceneRecord or None
+        On a scene (:func:`train_scene_batch`): every swimmer's position, height and tilt after each
+        step, and whether the step was stuck or refused at contact; ``None`` in the bulk fluid.
     """
 
     actions: Array
@@ -210,6 +213,7 @@ class PPORun(NamedTuple):
     dofs0: Array
     y: Array
     orientation: Array
+    scene: Any = None
 
 
 # ----------------------------------------------------------------------------- policy
@@ -375,8 +379,8 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Any = N
         roc = jnp.clip(u_roc, -1.0, 1.0)
         action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
         logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
-        state, reward, (x, dofs, y_pos, theta) = world.step(state, dof, roc, action, y, p)
-        record = (action, (dof + 1).astype(jnp.int8), x, reward, dofs, y_pos, theta)
+        state, reward, (x, dofs, y_pos, theta, *more) = world.step(state, dof, roc, action, y, p)
+        record = (action, (dof + 1).astype(jnp.int8), x, reward, dofs, y_pos, theta, tuple(more))
         return state, _Batch(obs, dof, u_roc, logp, value, reward, tau), record
 
     def act(carry, inp):
@@ -419,8 +423,8 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Any = N
     _, record = jax.lax.scan(update, carry, inputs)
     # (n_updates, rollout, B, ...) -> (B, steps, ...)
     record = jax.tree.map(lambda v: jnp.moveaxis(v.reshape((total,) + v.shape[2:]), 0, 1)[:, : config.steps], record)
-    actions, dof, x, progress, dofs, y, theta = record
-    return PPORun(actions, dof, x, progress, dofs, dofs0, y, theta)
+    actions, dof, x, progress, dofs, y, theta, more = record
+    return PPORun(actions, dof, x, progress, dofs, dofs0, y, theta, more[0] if more else None)
 
 
 def train(key: Array, params: Any, config: PPOConfig = PPOConfig()) -> PPORun:
@@ -562,7 +566,9 @@ def train_scene_batch(keys: Array, scene_params: Any, config: PPOConfig = PPOCon
     PPORun
         Leading axis B. ``x`` is the mean centroid x after each step relative to the start, as the
         scene studies record it; ``y`` and ``orientation`` are swimmer 1's height (a, of its middle
-        sphere above the wall) and tilt (rad); ``dofs`` the joint arms ``(B, steps, 2S)``.
+        sphere above the wall) and tilt (rad); ``dofs`` the joint arms ``(B, steps, 2S)``; ``scene``
+        (:class:`jswim.agents.ppo_envs.SceneRecord`) every swimmer's x relative to its start, height
+        and tilt ``(B, steps, S)``, and the stuck and contact flags ``(B, steps)``.
     """
     from jswim.agents.scene_env import centroid_x, scene_reset
 
@@ -572,37 +578,88 @@ def train_scene_batch(keys: Array, scene_params: Any, config: PPOConfig = PPOCon
     dtype = jnp.result_type(float)
     task = SceneTask(scene_params, jnp.broadcast_to(jnp.asarray(direction, dtype), (b,)))
     run = _jitted()(keys, task, config=_structure(config), hp=_numbers(config), world=world)
-    x0 = jnp.mean(centroid_x(scene_reset(scene_params), medium))
-    return run._replace(x=run.x - x0)
+    x0s = centroid_x(scene_reset(scene_params), medium)
+    return run._replace(x=run.x - jnp.mean(x0s), scene=run.scene._replace(xs=run.scene.xs - x0s))
 
 
 def evaluate_scene(run: PPORun, scene_params: Any, direction: Any = 1, *, criterion: Any = None,
                    tol: float | None = None) -> Any:
-    """Judge one-swimmer scene runs as the scene studies judge their agents: the success criterion
-    on the run's own moves with the bulk swimmer's (noiseless, paper's formula) displacements
-    (:func:`jswim.studies.scenes._judge` for lattice moves; here :func:`evaluate`'s shape judge for
-    real ROCs, the moves replayed in :mod:`jswim.env` from the scene's start arms).
+    """Judge scene runs as the scene studies judge their agents
+    (:func:`jswim.studies.scenes._judge` for lattice moves): the success criterion on each
+    swimmer's own moves, with the bulk swimmer's (noiseless, paper's formula) displacements; here
+    the shape judge for real ROCs (:func:`jswim.shape_judge.judge_shapes`), each swimmer's moves
+    replayed in :mod:`jswim.env` from its start arms.
+
+    One swimmer: its run judged as it is. A pair (a learner steering both swimmers): swimmer ``s``'s
+    own moves (the steps whose DOF is one of its arms), in order, are its stroke; the other
+    swimmer's steps are left out, as if it paused. The pair **succeeds** when both swimmers'
+    own move sequences do (and has learned when both have); fewer than four own moves (the
+    shortest stroke) fail. ``steps_to_learn`` is the later of the two swimmers', counted in their
+    own moves (the lattice judge's convention); ``period`` is the sum of the two periods (the
+    length of the joint stroke when the swimmers alternate); ``per_step`` and ``fraction`` are the
+    mean of the two swimmers' (each per own move); ``cycle`` is swimmer 1's.
+
+    Returns
+    -------
+    GaitReport
+        One verdict per learner (leading axis B).
 
     Raises
     ------
     ConfigError
-        For a scene of more than one swimmer (a pair's per-swimmer judge is not done for PPO).
+        When the scene's arm limits are not the bulk swimmer's.
     """
-    from jswim.gait import PAPER
+    from jswim.gait import PAPER, GaitReport
     from jswim.shape_judge import SHAPE_TOL, judge_shapes
 
-    if int(scene_params.n_swimmers) != 1:
-        raise ConfigError("evaluate_scene judges one-swimmer scenes only")
+    criterion = PAPER if criterion is None else criterion
+    tol = SHAPE_TOL if tol is None else tol
+    n_sw = int(scene_params.n_swimmers)
     actions = np.asarray(run.actions)
+    dofs = np.asarray(run.dofs, np.float64)
+    owner = (np.asarray(run.dof, np.int64) - 1) // 2  # the swimmer each step moved (0-based)
     b = actions.shape[0]
     lo, hi = float(scene_params.lo), float(scene_params.hi)
-    levels = np.rint((np.asarray(scene_params.arms0, np.float64)[0] - lo) / (hi - lo)).astype(np.int32)
-    bulk = _env.make_params("ng", direction=1, init=tuple(int(v) for v in levels))
-    if not (np.isclose(float(bulk.model.lo), lo) and np.isclose(float(bulk.model.hi), hi)):
-        raise ConfigError("evaluate_scene needs the scene's arm limits to be the bulk swimmer's")
+    arms0 = np.asarray(scene_params.arms0, np.float64).reshape(n_sw, 2)
     dirs = np.broadcast_to(np.asarray(direction, np.int32), (b,))
-    params = _env.broadcast_params(bulk, b, direction=dirs)
-    x = np.asarray(_replay(_env.broadcast_params(bulk, b), jnp.asarray(actions)), np.float64)
-    dofs0 = np.broadcast_to(np.asarray(scene_params.arms0, np.float64).reshape(-1), (b, 2))
-    return judge_shapes(np.asarray(run.dofs), x, params, dofs0=dofs0,
-                        criterion=PAPER if criterion is None else criterion, tol=SHAPE_TOL if tol is None else tol)
+    reports = []
+    for s in range(n_sw):
+        levels = np.rint((arms0[s] - lo) / (hi - lo)).astype(np.int32)
+        bulk = _env.make_params("ng", direction=1, init=tuple(int(v) for v in levels))
+        if not (np.isclose(float(bulk.model.lo), lo) and np.isclose(float(bulk.model.hi), hi)):
+            raise ConfigError("evaluate_scene needs the scene's arm limits to be the bulk swimmer's")
+        # The other swimmer's steps replayed as zero ROCs: no move, no displacement.
+        own_actions = np.where((owner == s)[..., None], actions[..., 2 * s:2 * s + 2], 0.0)
+        x = np.asarray(_replay(_env.broadcast_params(bulk, b), jnp.asarray(own_actions)), np.float64)
+        arms = dofs[..., 2 * s:2 * s + 2]
+        if n_sw == 1:
+            reports.append(judge_shapes(arms, x, _env.broadcast_params(bulk, b, direction=dirs), dofs0=arms0[s],
+                                        criterion=criterion, tol=tol))
+            continue
+        per = []
+        for i in range(b):
+            own = np.flatnonzero(owner[i] == s)
+            if own.size < 4:
+                per.append(None)
+                continue
+            per.append(judge_shapes(arms[i, own][None], x[i, own][None], bulk.replace(direction=float(dirs[i])),
+                                    dofs0=arms0[s], criterion=criterion, tol=tol))
+        reports.append(per)
+    if n_sw == 1:
+        return reports[0]
+
+    def field(name: str, fill: Any) -> np.ndarray:  # (S, B): one swimmer's verdicts per learner
+        return np.array([[getattr(r, name)[0] if r is not None else fill for r in per] for per in reports])
+
+    learned = field("learned", False).all(0)
+    success = field("success", False).all(0)
+    stl = np.where(learned, field("steps_to_learn", -1).max(0), -1)
+    period = np.where(learned, field("period", 0).sum(0), 0)
+    per_step = np.where(learned, field("per_step", np.nan).mean(0), np.nan)
+    fraction = np.where(learned, field("fraction", np.nan).mean(0), np.nan)
+    width = max([r.cycle.shape[1] for per in reports for r in per if r is not None] or [1])
+    cycle = np.full((b, width), -1, np.int64)
+    for i, r in enumerate(reports[0]):
+        if r is not None and learned[i]:
+            cycle[i, :r.cycle.shape[1]] = r.cycle[0]
+    return GaitReport(learned, stl, success, period, cycle, per_step, fraction, np.where(learned, stl - 1, -1))

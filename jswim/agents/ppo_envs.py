@@ -62,6 +62,19 @@ class BulkEnv:
         return state, info.progress, (state.x, _env.dof_values(state, params), state.y, state.theta)
 
 
+class SceneRecord(NamedTuple):
+    """What a scene step records beyond the bulk fields (:attr:`jswim.agents.ppo.PPORun.scene`):
+    every swimmer's centroid x (absolute), height and tilt after the step ``(S,)``, whether a
+    non-zero ROC could not move its arm (``stuck``) and whether the step was refused at contact
+    (``contact``): what the scene studies' rows and fates read."""
+
+    xs: Array
+    z: Array
+    tilt: Array
+    stuck: Array
+    contact: Array
+
+
 class SceneTask(NamedTuple):
     """A scene learner's environment: the scene (shared) and the target direction (per learner)."""
 
@@ -116,7 +129,8 @@ class SceneEnv:
         from jswim.agents.scene_env import advance
 
         x0 = self._x(state)
-        new = advance(params.scene, state, (dof // 2, dof % 2, roc), y)
+        new, obs = advance(params.scene, state, (dof // 2, dof % 2, roc), y)
         x1 = self._x(new)
         reward = (params.direction * (x1 - x0)).astype(action.dtype)
-        return new, reward, (x1, new.arms.reshape(-1), new.centre[0, 1], new.tilt[0])
+        record = SceneRecord(obs.xs, obs.z, obs.tilt, obs.stuck, obs.contact)
+        return new, reward, (x1, new.arms.reshape(-1), new.centre[0, 1], new.tilt[0], record)

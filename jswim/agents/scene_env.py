@@ -118,10 +118,12 @@ def step(params: Any, state: Any, code: jax.Array, key: jax.Array, roc_levels: i
     return new, observe(new, jnp.any(jnp.asarray(info.stuck)), info.contact, params.scene.medium)
 
 
-def advance(params: Any, state: Any, action: Any, y_noise: jax.Array) -> Any:
+def advance(params: Any, state: Any, action: Any, y_noise: jax.Array) -> tuple[Any, Observation]:
     """One ``(swimmer, arm, real ROC)`` action on one scene state with given noise variables
-    ``(S,)`` in [-1, 1] (the PPO baseline's step, :mod:`jswim.agents.ppo_envs`): the new state."""
-    return scene_advance(params, state, action, y_noise)[0]
+    ``(S,)`` in [-1, 1] (the PPO baseline's step, :mod:`jswim.agents.ppo_envs`): the new state and
+    its :class:`Observation`."""
+    new, info = scene_advance(params, state, action, y_noise)
+    return new, observe(new, jnp.any(jnp.asarray(info.stuck)), info.contact, params.scene.medium)
 
 
 def as_numpy(obs: Observation) -> dict[str, np.ndarray]:

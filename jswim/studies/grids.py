@@ -339,6 +339,10 @@ def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
     def cells(o: StudyOptions) -> list[Cell]:
         from jswim.studies import scenes  # the scene studies' grids
 
+        if o.roc_levels != 1:  # the scene rows read and judge K = 1 codes; PPO has real ROCs anyway
+            raise ConfigError(f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
+                              "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
+                              "[-1, 1]); leave it out")
         return scenes.cells(name, o)
     return cells
 

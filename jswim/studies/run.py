@@ -365,7 +365,8 @@ def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
         return []
     from jswim.agents import scene_env
 
-    return fidelity.scene_extensions([(scene_env.from_json(s), pair) for s, pair in scenes])
+    ppo = any(p.scene and p.agent == CONTINUOUS_AGENT for p in plans)
+    return fidelity.scene_extensions([(scene_env.from_json(s), pair) for s, pair in scenes], ppo=ppo)
 
 
 class FolderRepaired(UserWarning):

@@ -3,7 +3,8 @@
 ``wall``
     One NG swimmer started at each height ``h`` of ``--heights`` (a, the middle sphere's height
     above a no-slip wall; medium ``"wall"``): the signature square stroke (agent ``stroke``), the
-    LLM, Q-learning on (shape, height bin) and the random policy. Measured: the stroke's
+    LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs,
+    :mod:`jswim.studies.scene_ppo`). Measured: the stroke's
     displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
     same solver, medium ``"free"``: group ``free``), and every run's **fate** (:func:`fate`).
 ``pair``
@@ -11,8 +12,8 @@
     point-force solve, in which the swimmers feel each other; the paper's formula has no
     interaction). Measured: two copies of the square stroke at each phase offset
     (``--phases``, quarter cycles of swimmer 2 ahead of swimmer 1), the lone swimmer's stroke in
-    the same medium (group ``alone``), and whether the LLM, Q-learning or the random policy steering
-    both (joint DOFs D1..D4) find a faster joint stroke.
+    the same medium (group ``alone``), and whether the LLM, Q-learning, the random policy or PPO
+    steering both (joint DOFs D1..D4) find a faster joint stroke.
 
 Runs, rows, resume, figures, ``show`` and ``compare`` are the study folder's
 (:mod:`jswim.studies.run`); this module gives the cells, runs the baselines and the stroke on a
@@ -30,7 +31,8 @@ from jswim import env
 from jswim.agents import scene_baselines, scene_env
 from jswim.agents.qlearning import QConfig
 from jswim.gait import Criterion, judge
-from jswim.studies.grids import STROKE_AGENT, WITH_BASELINES, Cell, Plan, StudyOptions
+from jswim.studies.grids import (CONTINUOUS_AGENT, STROKE_AGENT, WITH_BASELINES, Cell, Plan, StudyOptions,
+                                 continuous_agent_available)
 
 #: The NG square stroke toward +x from the paper's start (10, 6), as joint codes of swimmer 1:
 #: D2 up, D1 down, D2 down, D1 up (``(dof - 1) * 3 + roc + 1``). Toward -x: its time reverse.
@@ -63,6 +65,7 @@ def cells(study: str, o: StudyOptions) -> list[Cell]:
         for h in o.heights:
             out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
                             stroke="square", tag=f"h{h:g}"))
+            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
         return out
     out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
     for d in o.separations:
@@ -70,7 +73,16 @@ def cells(study: str, o: StudyOptions) -> list[Cell]:
             out.append(Cell(f"D={d:g}, phase {ph}", (STROKE_AGENT,), scene=pair_scene(d), stroke=f"phase{ph}",
                             tag=f"D{d:g}-ph{ph}"))
         out.append(Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}"))
+        out += _ppo_cells(f"D={d:g}", pair_scene(d), f"D{d:g}")
     return out
+
+
+def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
+    """The continuous RL baseline's cell next to the other agents of a group (same group name,
+    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scene_ppo`)."""
+    if not continuous_agent_available():
+        return []
+    return [Cell(group, (CONTINUOUS_AGENT,), scene=scene, roc_levels=0, tag=tag)]
 
 
 # -- fates ---------------------------------------------------------------------------------------
@@ -173,6 +185,10 @@ def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         done = {r["run_id"]: r for g in by_init.values() for r in run_baselines(g, horizon)}
         return [done[p.run_id] for p in plans]
     p0 = plans[0]
+    if p0.agent == CONTINUOUS_AGENT:
+        from jswim.studies import scene_ppo
+
+        return scene_ppo.run(plans, horizon)
     scene, params = _params(p0)
     keys = _keys(plans)
     direction = np.array([p.direction for p in plans], np.float64)
@@ -227,8 +243,10 @@ def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dic
 
 
 def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any], horizon: int, *,
-              z0: np.ndarray, tilt0: np.ndarray) -> dict[str, Any]:
-    """One row of a scene run: the bulk studies' columns (success by :func:`_judge`), the scene,
+              z0: np.ndarray, tilt0: np.ndarray, judged: dict[str, Any] | None = None,
+              moves: list[list[float]] | None = None) -> dict[str, Any]:
+    """One row of a scene run: the bulk studies' columns (success by :func:`_judge` on the lattice
+    ``codes``, or the real-valued agent's own verdict ``judged`` and ``moves``), the scene,
     its medium, start height or distance, per-step ``xs``/``heights``/``tilts``/``contact``, and
     ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for
     strokes, ``per_cycle``. ``y`` and ``orientation`` of the trajectories table are swimmer 1's
@@ -238,7 +256,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
     heights = extra.get("heights") or []
     contact = extra.get("contact") or []
     prog = np.diff(np.concatenate([[0.0], np.asarray(x, np.float64)])) * plan.direction
-    judged = _judge(codes, plan, sw, horizon)
+    judged = _judge(codes, plan, sw, horizon) if judged is None else judged
     h1 = [float(h[0]) for h in heights]
     f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in contact]) if scene_env.has_wall(scene) else (None, None)
     row = {
@@ -257,7 +275,8 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
         "x": [float(v) for v in x],
         "y": h1 or [float(z0[0])] * len(x), "orientation": [float(t[0]) for t in extra.get("tilts") or []]
         or [float(tilt0[0])] * len(x),
-        "actions": [[int(c) // 3 + 1, int(c) % 3 - 1] for c in codes], "progress": [float(v) for v in prog],
+        "actions": moves if moves is not None else [[int(c) // 3 + 1, int(c) % 3 - 1] for c in codes],
+        "progress": [float(v) for v in prog],
         "status": "done",
     }
     row.update({k: v for k, v in extra.items() if k not in row or k in ("stuck",)})

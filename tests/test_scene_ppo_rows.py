@@ -1,0 +1,82 @@
+"""The continuous RL baseline (PPO) as rows of ``jswim study wall`` / ``pair`` (issue 19): its rows
+with their fate and success columns, its metadata line, resume without retraining, and the one-line
+refusal of an option the scene rows cannot honour."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from jswim import cli
+from jswim.agents import fidelity, ppo
+from jswim.results import read_metadata, read_runs
+from jswim.studies import StudyOptions, run_study
+from jswim.studies import scenes
+
+WALL = dict(heights=(3.0,), q_runs=2, steps=12, agents=("stroke", "ppo"))
+
+
+@pytest.mark.slow  # one PPO compilation on the wall scene (~25 s under load) and the strokes'
+def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32):
+    out = tmp_path / "wall"
+    seen = {"n": 0}
+
+    def interrupt(phase, done, total, info=""):
+        if phase == "stroke":
+            seen["n"] += 1
+            if seen["n"] == 2:  # both strokes stored, PPO not started
+                raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        run_study("wall", StudyOptions(**WALL), None, out, progress=interrupt, figures=False)
+    assert read_metadata(out)["status"] == "interrupted"
+    assert {r["agent"] for r in read_runs(out)} == {"stroke"}
+
+    calls = {"n": 0}
+    train = ppo.train_scene_batch
+
+    def counted(*a, **k):
+        calls["n"] += 1
+        return train(*a, **k)
+
+    monkeypatch.setattr(ppo, "train_scene_batch", counted)
+    res = run_study("wall", StudyOptions(**WALL), None, out, figures=False)
+    assert calls["n"] == 1  # the strokes kept, the PPO cell trained once
+    rows = {r["run_id"]: r for r in read_runs(out)}
+    learners = [r for r in rows.values() if r["agent"] == "ppo"]
+    assert [r["run_id"] for r in learners] == ["ppo-ng-px-i+--z0-real-h3-r0", "ppo-ng-px-i+--z0-real-h3-r1"]
+    for r in learners:
+        assert r["group"] == "h=3" and r["roc_levels"] == 0 and r["start_height"] == 3.0
+        assert r["fate"] in scenes.FATES and r["mean_height"] > 1.0
+        assert isinstance(r["success"], bool) and isinstance(r["learned"], bool)
+        assert len(r["actions"]) == 12 and all(1 <= d <= 2 and -1 <= roc <= 1 for d, roc in r["actions"])
+        assert any(roc != round(roc) for _, roc in r["actions"])  # real ROCs, not the lattice's
+        assert len(r["heights"]) == len(r["contact"]) == len(r["xs"]) == 12 and r["y"] == [h[0] for h in r["heights"]]
+        # x is the mean of the swimmers' positions, progress its steps (the reward the learner had).
+        assert r["x"] == pytest.approx([sum(v) / len(v) for v in r["xs"]], abs=1e-6)
+        assert json.loads(r["scene"])["medium"] == "wall"
+    meta = read_metadata(out)
+    assert fidelity.SCENE_PPO in meta["fidelity_deviations"] and fidelity.REAL_ROCS in meta["fidelity_deviations"]
+    table = {(s["agent"], s["group"]): s for s in meta["summary"]["scenes"]}
+    assert table[("ppo", "h=3")]["n"] == 2 and table[("ppo", "h=3")]["fates"]
+    assert {s["group"] for s in res.summary if s["agent"] == "ppo"} == {"h=3"}
+
+    # A finished study run again trains nothing and changes no row.
+    def refuse(*a, **k):
+        raise AssertionError("a finished PPO run was trained again")
+
+    monkeypatch.setattr(ppo, "train_scene_batch", refuse)
+    again = run_study("wall", StudyOptions(**WALL), None, out, figures=False)
+    assert {r["run_id"]: r["actions"] for r in again.rows} == {k: r["actions"] for k, r in rows.items()}
+    assert read_metadata(out)["status"] == "complete"
+
+
+@pytest.mark.parametrize("study, grid", [("wall", ["--heights", "5"]), ("pair", ["--separations", "30"])])
+def test_roc_levels_are_refused_by_the_scene_studies(study, grid, tmp_path, capsys):
+    # Their lattice rows are read and judged on the paper's ROCs and PPO's are real: a K would be dropped.
+    out = tmp_path / "o"
+    assert cli.main(["study", study, *grid, "--roc-levels", "2", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--roc-levels 2" in err[0] and "PPO runs real ROCs" in err[0]
+    assert not out.exists()
