@@ -60,6 +60,8 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
     assert fidelity.SCENE_PPO in meta["fidelity_deviations"] and fidelity.REAL_ROCS in meta["fidelity_deviations"]
     table = {(s["agent"], s["group"]): s for s in meta["summary"]["scenes"]}
     assert table[("ppo", "h=3")]["n"] == 2 and table[("ppo", "h=3")]["fates"]
+    stroke_speed = next(r["speed"] for r in rows.values() if r["agent"] == "stroke" and r["group"] == "h=3")
+    assert table[("ppo", "h=3")]["vs_stroke"] == pytest.approx(sum(r["speed"] for r in learners) / 2 / stroke_speed)
     assert {s["group"] for s in res.summary if s["agent"] == "ppo"} == {"h=3"}
 
     # A finished study run again trains nothing and changes no row.
@@ -80,3 +82,21 @@ def test_roc_levels_are_refused_by_the_scene_studies(study, grid, tmp_path, caps
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--roc-levels 2" in err[0] and "PPO runs real ROCs" in err[0]
     assert not out.exists()
+
+
+def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene():
+    def row(agent, group, speed, d=30.0, direction=1):
+        return {"scene": "{}", "agent": agent, "group": group, "direction": direction, "speed": speed,
+                "separation": d, "medium": "free", "start_height": None}
+
+    rows = [row("stroke", "D=30, phase 0", 0.02), row("stroke", "D=30, phase 1", 0.025),
+            row("ppo", "D=30", 0.001), row("ppo", "D=30", 0.004), row("qlearning", "D=30", 0.03),
+            row("stroke", "D=60, phase 0", 0.0215), row("random", "D=60", -0.0043, d=60.0),
+            row("ppo", "D=30", 0.01, direction=-1)]  # no -x stroke: nothing to compare with
+    rows[5]["separation"] = 60.0
+    got = {(s["agent"], s["group"], s["direction"]): s["vs_stroke"] for s in scenes.scene_summary(rows)}
+    assert got[("ppo", "D=30", 1)] == pytest.approx(0.0025 / 0.025)  # the fastest phase at that D
+    assert got[("qlearning", "D=30", 1)] == pytest.approx(1.2)  # a faster joint stroke than two squares
+    assert got[("stroke", "D=30, phase 0", 1)] == pytest.approx(0.8)
+    assert got[("random", "D=60", 1)] == pytest.approx(-0.2)
+    assert got[("ppo", "D=30", -1)] is None

@@ -287,7 +287,10 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
 
 def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, group) of a scene study: runs, mean displacement per cycle (strokes), mean
-    speed per step over the second half, the fates seen and the mean height of the second half."""
+    speed per step over the second half, the fates seen and the mean height of the second half,
+    and ``vs_stroke``: that mean speed over the best square stroke's in the same scene and
+    direction (a wall: the stroke at that height; a pair: the fastest phase offset at that D), so
+    above 1 is a faster stroke than the square one (for a pair, than two copies of it)."""
     out: dict[tuple, list[dict[str, Any]]] = {}
     for r in rows:
         if r.get("scene"):
@@ -306,7 +309,19 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             "start_height": g[0].get("start_height"), "separation": g[0].get("separation"),
             "medium": g[0].get("medium"),
         })
+    best: dict[tuple, float] = {}
+    for t in table:
+        if t["agent"] == STROKE_AGENT and t["speed"] is not None:
+            k = _scene_key(t)
+            best[k] = max(best.get(k, -np.inf), t["speed"])
+    for t in table:
+        b = best.get(_scene_key(t))
+        t["vs_stroke"] = t["speed"] / b if t["speed"] is not None and b is not None and b > 0 else None
     return table
+
+
+def _scene_key(t: dict[str, Any]) -> tuple:
+    return (t.get("direction"), t.get("medium"), t.get("start_height"), t.get("separation"))
 
 
 def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]]:
@@ -318,10 +333,10 @@ def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]
 
     cols = [Column("agent", False), Column("dir", False), Column("group", False), Column("medium", False),
             Column("n"), Column("X/a per cycle"), Column("X/a per step"), Column("fates", False),
-            Column("mean height")]
+            Column("mean height"), Column("x stroke")]
     order = sorted(summary, key=lambda s: (s.get("separation") or 0.0, s.get("start_height") or 0.0,
                                            str(s["group"]), str(s["agent"])))
     cells = [[str(s["agent"]), "+x" if (s.get("direction") or 1) > 0 else "-x", str(s["group"]),
               str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
-              s.get("fates") or "-", fmt(s.get("mean_height"), ".2f")] for s in order]
+              s.get("fates") or "-", fmt(s.get("mean_height"), ".2f"), fmt(s.get("vs_stroke"), ".3f")] for s in order]
     return cols, cells
