@@ -99,7 +99,8 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> N
     g.add_argument("--runs", type=int, default=None,
                    help=f"LLM runs per setting (default {spec.runs})")
     g.add_argument("--q-runs", type=int, default=None,
-                   help=shown("q_runs", f"Q-learning and random-policy runs per setting (default {spec.q_runs})"))
+                   help=shown("q_runs", "baseline runs per setting: Q-learning, random policy, PPO where the study "
+                                        f"has it (default {spec.q_runs})"))
     g.add_argument("--n-ht", type=int, default=None,
                    help=shown("n_ht", "history records in the prompt (default: per swimmer, 3 Purcell, 3/6 NG for "
                               "+x/-x, 20 four-DOF)"))
