@@ -1,5 +1,6 @@
 """The scene environment (jswim.scenes): interface, media, contact, noise, dtypes."""
 
+import functools
 import json
 
 import jax
@@ -178,3 +179,64 @@ def test_float32_one_swimmer_near_a_wall(float32):
         ref = scene_rollout("ng", SQUARE, Scene(medium="wall", height=4.0))
     np.testing.assert_allclose(np.asarray(st.centre[0]), [ref.x[-1, 0], ref.z[-1, 0]], atol=2e-5)
     assert abs(float(st.tilt[0]) - ref.tilt[-1, 0]) < 2e-6
+
+
+# -- adaptive Picard sweeps (issue 19 speed) -----------------------------------------------------
+
+NEAR_WALL = Scene(medium="wall", height=3.5)
+
+
+def _pose_change(scene, dtype, x0=0.0, **kw):
+    """One D1 lengthening 6 -> 10 from arms (6, 10), tilt 0.3, at x0: (dx, dz, dtilt), float64."""
+    from jswim.scenes.stepping import pose_change
+
+    p = scene_params("ng", scene, dtype=dtype, **kw)
+    pose0 = jnp.asarray([[x0, scene.height, 0.3]], dtype)
+    arms, rates = jnp.asarray([[6.0, 10.0]], dtype), jnp.asarray([[1.0, 0.0]], dtype)
+    inc, _ = jax.jit(lambda p0: pose_change(p, p0, arms, rates, jnp.asarray(4.0, dtype)))(pose0)
+    return np.asarray(inc, np.float64)[0]
+
+
+@functools.lru_cache(maxsize=1)
+def _converged_near_wall():
+    """The same step, 12 nodes x 14 fixed sweeps in float64 (converged to ~1e-15)."""
+    with jax.enable_x64(True):
+        return _pose_change(NEAR_WALL, jnp.float64, nodes=12, sweeps=14)
+
+
+def test_adaptive_sweeps_reach_the_converged_step_in_float64():
+    # the default (adaptive sweeps, 6 nodes) against the converged step: near the wall the Picard
+    # iteration gains only ~20x per sweep, so a fixed 3 sweeps is far off there
+    ref = _converged_near_wall()
+    with jax.enable_x64(True):
+        auto = _pose_change(NEAR_WALL, jnp.float64)
+        three = _pose_change(NEAR_WALL, jnp.float64, sweeps=3)
+    scale = np.abs(ref[:2]).max()
+    assert np.abs(auto[:2] - ref[:2]).max() < 5e-11 * scale and abs(auto[2] - ref[2]) < 1e-11
+    assert np.abs(three[:2] - ref[:2]).max() > 1e-6 * scale  # the case the adaptive rule is for
+
+
+def test_float32_default_numerics_within_rounding_of_float64_far_from_the_origin(float32):
+    # 4 nodes and adaptive sweeps in float32: within float32 rounding of the float64 step, also
+    # 1e5 a from x = 0, where float32 positions are only good to ~4e-3 a (the solve works relative
+    # to swimmer 1's x)
+    assert scene_params("ng", NEAR_WALL).nodes == 4
+    ref = _converged_near_wall()
+    for x0 in (0.0, 1e5):
+        got = _pose_change(NEAR_WALL, jnp.float32, x0=x0)
+        np.testing.assert_allclose(got[:2], ref[:2], rtol=0, atol=2e-6 * np.abs(ref[:2]).max())
+        assert abs(got[2] - ref[2]) < 1e-7
+
+
+def test_adaptive_sweeps_per_swimmer_do_not_depend_on_the_batch():
+    # under vmap the sweep loop runs until the slowest swimmer converges; the others keep their
+    # converged values, so a swimmer's step is the same next to a fast or a slow one
+    with jax.enable_x64(True):
+        p = scene_params("ng", Scene(medium="wall", height=40.0))
+        far, near = scene_reset(p), scene_reset(scene_params("ng", NEAR_WALL))
+        step = jax.jit(jax.vmap(scene_step, in_axes=(None, 0, None, None)))
+        pairs = [jax.tree.map(lambda a, b: jnp.stack([a, b]), far, other) for other in (far, near)]
+        (same, _), (mixed, _) = (step(p, s, (0, 0, -1.0), jax.random.PRNGKey(0)) for s in pairs)
+    np.testing.assert_array_equal(np.asarray(mixed.centre[0]), np.asarray(same.centre[0]))
+    np.testing.assert_array_equal(np.asarray(mixed.tilt[0]), np.asarray(same.tilt[0]))
+    assert not np.array_equal(np.asarray(mixed.centre[1]), np.asarray(same.centre[1]))

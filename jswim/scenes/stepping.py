@@ -30,6 +30,7 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from jswim.scenes.actions import split_action
@@ -93,8 +94,8 @@ def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: 
     else:
         rates = jnp.where(onehot, jnp.sign(delta), 0.0).astype(dtype)
         pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
-        end, gap = integrate_move(params, pose0, arms, rates, jnp.abs(delta))
-        step_x, step_z, step_t = (end - pose0).T
+        inc, gap = pose_change(params, pose0, arms, rates, jnp.abs(delta))
+        step_x, step_z, step_t = inc.T
     contact = ~(gap >= params.contact_gap)  # NaN (a solve that broke down at contact) counts as contact
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
     dx = jnp.where(contact, 0.0, step_x * factor)
@@ -130,11 +131,11 @@ def scene_step_joint(params: SceneParams, state: SceneState, dofs: Any, rocs: An
     duration = jnp.max(jnp.abs(delta))
     rates = jnp.where(onehot, (delta / jnp.where(duration > 0, duration, 1.0))[:, None], 0.0)
     pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
-    end, gap = integrate_move(params, pose0, arms, rates, duration)
+    inc, gap = pose_change(params, pose0, arms, rates, duration)
     y = jax.random.uniform(key, (s,), dtype, -1.0, 1.0)
     contact = ~(gap >= params.contact_gap)
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * y
-    step_x, step_z, step_t = (end - pose0).T
+    step_x, step_z, step_t = inc.T
     dx = jnp.where(contact, 0.0, step_x * factor)
     dz = jnp.where(contact, 0.0, step_z * factor)
     dtilt = jnp.where(contact, 0.0, step_t)
@@ -155,7 +156,16 @@ def _bulk_displacement(arms: Array, sw: Array, dof: Array, delta: Array) -> Arra
 
 def integrate_move(params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
                    ) -> tuple[Array, Array]:
-    """Poses after moving the arms at ``rates`` for ``duration``, and the smallest surface gap.
+    """Poses after moving the arms at ``rates`` for ``duration``, and the smallest surface gap:
+    ``pose0`` plus :func:`pose_change`."""
+    inc, gap = pose_change(params, pose0, arms, rates, duration)
+    return pose0 + inc, gap
+
+
+def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
+                   ) -> tuple[Array, Array]:
+    """Change of every swimmer's pose over a move of the arms at ``rates`` for ``duration``, and
+    the smallest surface gap.
 
     Parameters
     ----------
@@ -169,12 +179,18 @@ def integrate_move(params: SceneParams, pose0: Array, arms: Array, rates: Array,
     Returns
     -------
     (Array (S, 3), scalar)
-        End poses; the smallest surface gap over the nodes and the end.
+        Pose changes ``(dx, dz, dtilt)``; the smallest surface gap over the nodes and the end.
+        The solve runs in coordinates whose x origin is swimmer 1's start (the physics is
+        invariant under translations along the wall), so in float32 the result does not lose
+        precision as the swimmers travel far from x = 0.
     """
-    nodes, y_run, y_end = (jnp.asarray(v, pose0.dtype) for v in gauss_rule(params.nodes))
-    t = nodes * duration
+    nodes_np, a_run, w_end = gauss_rule(params.nodes)
+    t = jnp.asarray(nodes_np, pose0.dtype) * duration
     arms_t = arms[None] + t[:, None, None] * rates[None]  # (n, S, 2)
+    shift = pose0[0, 0]
     obstacles = jnp.asarray(params.obstacles, pose0.dtype)
+    obstacles = obstacles.at[:, 0].add(-shift)
+    pose0 = pose0.at[:, 0].add(-shift)
 
     def body_rate(pose: Array, arms_k: Array) -> Array:
         """Body-frame (along the axis, normal to it) velocity and rotation rate, (S, 3)."""
@@ -185,23 +201,83 @@ def integrate_move(params: SceneParams, pose0: Array, arms: Array, rates: Array,
 
     # Sweep: the body-frame rates at the current node poses, then tilt first and position with the
     # new tilt, so that the strong dependence (the rotation of the swimming direction) is exact
-    # within a sweep and only the weak one (wall and neighbours) is iterated.
-    def sweep(poses: Array) -> tuple[Array, Array, Array]:
-        b = jax.vmap(body_rate)(poses, arms_t)  # (n, S, 3)
-        tilt = pose0[:, 2] + duration * (y_run @ b[..., 2])  # (n, S)
+    # within a sweep and only the weak one (wall and neighbours) is iterated. The sweeps carry the
+    # poses' increments from pose0, not the poses: in float32 far from the origin the absolute x
+    # could not resolve the small differences between sweeps that the stopping rule reads.
+    def sweep(inc: Array) -> tuple[Array, Array, Array]:
+        b = jax.vmap(body_rate)(pose0 + inc, arms_t)  # (n, S, 3)
+        dtilt = duration * _combine(a_run, b[..., 2])  # (n, S)
+        tilt = pose0[:, 2] + dtilt
         c, s = jnp.cos(tilt), jnp.sin(tilt)
         lab = jnp.stack([c * b[..., 0] - s * b[..., 1], s * b[..., 0] + c * b[..., 1]], -1)  # (n, S, 2)
-        xz = pose0[:, :2] + duration * jnp.einsum("ij,jsk->isk", y_run, lab)
-        return jnp.concatenate([xz, tilt[..., None]], -1), lab, b[..., 2]
+        dxz = duration * _combine(a_run, lab)
+        return jnp.concatenate([dxz, dtilt[..., None]], -1), lab, b[..., 2]
 
-    poses = jnp.broadcast_to(pose0, (params.nodes,) + pose0.shape)
-    if params.sweeps > 1:  # a loop, not unrolled: the solve is large straight-line code
-        poses = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], poses)
-    poses, lab, omega = sweep(poses)
-    end = pose0 + duration * jnp.concatenate([jnp.einsum("j,jsk->sk", y_end, lab), (y_end @ omega)[:, None]], -1)
+    inc = jnp.zeros((params.nodes,) + pose0.shape, pose0.dtype)
+    if params.sweeps is None:
+        inc, lab, omega, _ = _sweep_until_converged(sweep, inc, picard_tolerance(pose0.dtype))
+    else:
+        if params.sweeps > 1:  # a loop, not unrolled: the solve is large straight-line code
+            inc = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], inc)
+        inc, lab, omega = sweep(inc)
+    poses = pose0 + inc
+    step = duration * jnp.concatenate([_combine(w_end[None], lab)[0], _combine(w_end[None], omega)[0][:, None]], -1)
     arms_end = arms + duration * rates
     gaps = jax.vmap(lambda p, a: surface_gap(p, a, obstacles, params.wall))(poses, arms_t)
-    return end, jnp.minimum(jnp.min(gaps), surface_gap(end, arms_end, obstacles, params.wall))
+    return step, jnp.minimum(jnp.min(gaps), surface_gap(pose0 + step, arms_end, obstacles, params.wall))
+
+
+#: Most Picard sweeps of an adaptive step (:func:`_sweep_until_converged`); 3 at least.
+MAX_SWEEPS = 16
+MIN_SWEEPS = 3
+
+
+def picard_tolerance(dtype: Any) -> float:
+    """Error per step, relative to the step's largest displacement, at which adaptive sweeps stop:
+    below the working dtype's own rounding of a step (float32 ~1e-7, float64 1e-13)."""
+    return 1e-7 if jnp.dtype(dtype).itemsize <= 4 else 1e-13
+
+
+def _sweep_until_converged(sweep: Any, inc: Array, tol: float) -> tuple[Array, Array, Array, Array]:
+    """Picard sweeps until the error estimate of the increments falls below ``tol`` times the
+    largest displacement of the step, at least :data:`MIN_SWEEPS` and at most :data:`MAX_SWEEPS`.
+
+    The iteration converges linearly, so with ``c_k`` the largest change of the increments made
+    by sweep ``k`` the error left after it is about ``c_k rho`` with ``rho = c_k / c_(k-1)``
+    (for ``rho`` small). The first change is the whole step, so the rule is read from sweep 3 on.
+    Under ``vmap`` the loop runs until every swimmer of the batch has converged (the others keep
+    their values: a swimmer's result does not depend on its batch). Returns the increments, the
+    last sweep's lab-frame velocities and rotation rates, and the number of sweeps.
+    """
+    def step(carry: tuple) -> tuple:
+        k, inc, _, _, change, _ = carry
+        new, lab, omega = (v.astype(inc.dtype) for v in sweep(inc))
+        return k + 1, new, lab, omega, jnp.max(jnp.abs(new - inc)), change
+
+    def more(carry: tuple) -> Array:
+        k, inc, _, _, change, prev = carry
+        scale = jnp.max(jnp.abs(inc[..., :2]))
+        estimate = change * jnp.minimum(1.0, change / jnp.where(prev > 0, prev, 1.0))
+        return (k < MIN_SWEEPS) | ((k < MAX_SWEEPS) & (estimate > tol * scale))
+
+    first, lab, omega = (v.astype(inc.dtype) for v in sweep(inc))
+    big = jnp.asarray(jnp.inf, inc.dtype)
+    carry = (jnp.asarray(1, jnp.int32), first, lab, omega, jnp.max(jnp.abs(first)), big)
+    k, inc, lab, omega, _, _ = jax.lax.while_loop(more, step, carry)
+    return inc, lab, omega, k
+
+
+def _combine(coef: "np.ndarray", values: Array) -> Array:
+    """``coef @ values`` over the leading (node) axis, written as a sum of scaled arrays: the
+    coefficients are trace-time constants and the node count is small, and under ``vmap`` this
+    stays elementwise over the batch, where a tiny batched matrix product is slow on XLA:CPU."""
+    rows = []
+    for i in range(coef.shape[0]):
+        acc = float(coef[i, 0]) * values[0]  # Python floats: weakly typed, keep the values' dtype
+        for j in range(1, coef.shape[1]):
+            acc = acc + float(coef[i, j]) * values[j]
+        rows.append(acc)
+    return jnp.stack(rows)
 
 
 def surface_gap(pose: Array, arms: Array, obstacles: Array, wall: bool) -> Array:
