@@ -133,6 +133,17 @@ def test_bad_value_is_one_line(tmp_path, capsys):
     assert StudyOptions(**scene_options.options(args)).pair_prompt == "each"
 
 
+def test_each_is_refused_where_no_llm_run_steers_a_pair(tmp_path):
+    # It names the folder (identity), so dropping it silently would split one study into two folders.
+    grid = dict(separations=(30.0,), phases=(0,), steps=4, q_runs=1)
+    for study, extra in (("wall", {}), ("curves", {}), ("pair", {"agents": ("stroke", "ppo")})):
+        with pytest.raises(ConfigError, match="has no use for --pair-prompt each") as err:
+            run_study(study, StudyOptions(**grid, **extra, pair_prompt="each"), None, tmp_path / study, figures=False)
+        assert "\n" not in str(err.value)
+        assert not (tmp_path / study).exists()
+    assert build("pair", StudyOptions(**grid, agents=("llm",), pair_prompt="each"))  # the one place it applies
+
+
 def test_plans_tag_the_variant_and_the_identity_keeps_old_folders():
     grid = dict(separations=(30.0,), phases=(0,))
     joint, each = build("pair", StudyOptions(**grid)), build("pair", StudyOptions(**grid, pair_prompt="each"))

@@ -231,6 +231,14 @@ def test_scene_options_are_checked(tmp_path, capsys):
                  ["study", "pair", "--separations", "30,30"]):
         assert cli.main(argv + ["--out", str(tmp_path / "x")]) == 2
         assert "Traceback" not in capsys.readouterr().err
+    # An empty list ("," or "") is a mistake, not the defaults.
+    for argv in (["study", "wall", "--heights", ","], ["study", "pair", "--separations", ""],
+                 ["study", "pair", "--phases", ",,"]):
+        with pytest.raises(SystemExit) as stop:
+            cli.main(argv + ["--dry-run", "--out", str(tmp_path / "x")])
+        err = capsys.readouterr().err
+        assert stop.value.code == 2 and len(err.strip().splitlines()) == 1 and "expected comma-separated" in err
+    assert not (tmp_path / "x").exists()
 
 
 @pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)

@@ -25,9 +25,12 @@ STUDY_HELP = {
 def _numbers(kind: type) -> Any:
     def parse(text: str) -> tuple:
         try:
-            return tuple(kind(v) for v in text.split(",") if v.strip())
+            values = tuple(kind(v) for v in text.split(",") if v.strip())
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+            values = ()
+        if not values:  # "" or "," would otherwise fall back to the defaults silently
+            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}")
+        return values
     return parse
 
 

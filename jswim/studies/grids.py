@@ -441,6 +441,12 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     if study not in SPECS:
         raise ConfigError(f"unknown study {study!r}; choose one of {', '.join(STUDIES)}")
     spec = SPECS[study]
+    if o.pair_prompt != "joint" and not ("llm" in o.agents and any("llm" in c.agents and _is_pair(c.scene)
+                                                                    for c in spec.cells(o))):
+        # It would be dropped here, yet it names the folder (identity): refuse it, as the CLI refuses
+        # an option a study has no use for.
+        raise ConfigError(f"the {study} study has no use for --pair-prompt {o.pair_prompt} (pair_prompt: only LLM "
+                          "runs on a pair of swimmers read it, as in jswim study pair with the llm agent); leave it out")
     # Outside the competence study every LLM run uses one variant; its action set (if it sets
     # one) applies to the baselines too, so they are offered what the model is offered.
     variant = o.llm_variant(study)
