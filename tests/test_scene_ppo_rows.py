@@ -100,3 +100,6 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
     assert got[("stroke", "D=30, phase 0", 1)] == pytest.approx(0.8)
     assert got[("random", "D=60", 1)] == pytest.approx(-0.2)
     assert got[("ppo", "D=30", -1)] is None
+    # Per cycle, like speed, reads in the target direction: a -x stroke going -0.17 a per cycle is +0.17.
+    back = [dict(row("stroke", "alone", 0.043, d=None, direction=-1), per_cycle=-0.172)]
+    assert scenes.scene_summary(back)[0]["per_cycle"] == pytest.approx(0.172)

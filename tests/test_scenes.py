@@ -82,6 +82,37 @@ def test_start_overlaps_refused():
         Scene.from_dict({"medium": "wall", "depth": 3})
 
 
+def test_numerics_and_numpy_numbers_checked_in_one_line():
+    wall = Scene(medium="wall", height=5.0)
+    for kw in ({"nodes": 0}, {"nodes": 2.0}, {"nodes": True}, {"sweeps": 0}, {"sweeps": True}, {"sweeps": 2.5},
+               {"sweeps": 65}, {"sweeps": "3"}):
+        with pytest.raises(ConfigError) as err:
+            scene_params("ng", wall, **kw)
+        assert next(iter(kw)) in str(err.value) and "\n" not in str(err.value)
+    # A NumPy number is the plain number it holds (static fields stay plain, hashable ints and floats).
+    p = scene_params("ng", wall, nodes=np.int64(4), sweeps=np.int32(3))
+    assert (p.nodes, p.sweeps) == (4, 3) and type(p.nodes) is int and type(p.sweeps) is int
+    s = Scene(medium="wall", height=np.float32(5.0), swimmers=np.int64(2), separation=np.int32(30))
+    assert s == Scene(medium="wall", height=5.0, swimmers=2, separation=30.0) and type(s.swimmers) is int
+
+
+def test_start_beyond_the_dtype_refused(float32):
+    # float32 rounds x to 2^-23 of its size: swimmer 2 at D >= 1024 a (its spheres out to D + 20 a)
+    # would move in steps of >= 1.2e-4 a (at D = 1e7 a it does not move at all): refused, one line.
+    scene_params("ng", Scene(medium="free", swimmers=2, separation=1000.0))
+    for d in (1010.0, 1e5, 1e12):
+        with pytest.raises(ConfigError, match="separation .* too far for float32 .* below 1004 a") as err:
+            scene_params("ng", Scene(medium="free", swimmers=2, separation=d))
+        assert "\n" not in str(err.value)
+    for scene in (Scene(medium="wall", height=1e39), Scene(medium="free", obstacles=((1e39, 0.0, 1.0),))):
+        with pytest.raises(ConfigError, match="overflow float32"):
+            scene_params("ng", scene)
+    with jax.enable_x64(True):  # float64 resolves 1e-4 a out to 2^39 a
+        scene_params("ng", Scene(medium="free", swimmers=2, separation=1e10), dtype=jnp.float64)
+        with pytest.raises(ConfigError, match="float64 positions"):
+            jswim.rollout("ng", [(1, 1, -1)], scene=Scene(medium="free", swimmers=2, separation=1e12))
+
+
 def test_free_square_stroke_matches_independent_collinear_solve():
     want = collinear_square_cycle()
     assert abs(want - 0.1720914) < 1e-7  # extensions.md's independent number

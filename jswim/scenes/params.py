@@ -157,6 +157,7 @@ def scene_params(
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
     if nodes is None:
         nodes = DEFAULT_NODES_FLOAT32 if dtype.itemsize <= 4 else DEFAULT_NODES
+    nodes, sweeps = _plain_int(nodes), _plain_int(sweeps)  # a NumPy integer is the int it holds (static, hashed)
     if isinstance(nodes, bool) or not isinstance(nodes, int) or not 1 <= nodes <= 32:
         raise ConfigError(f"nodes must be an integer in 1..32, got {nodes!r}")
     if not (isinstance(contact_gap, (int, float)) and math.isfinite(contact_gap) and contact_gap >= 0):
@@ -175,12 +176,41 @@ def scene_params(
     tilt = np.full(s, scene.tilt)
     obstacles = np.asarray(scene.obstacles, np.float64).reshape(-1, 3)
     _check_start(scene, centre, tilt, arms, obstacles, float(contact_gap))
+    _check_resolution(scene, centre, obstacles, np.dtype(dtype), float(model.hi))
     as_dtype = functools.partial(jnp.asarray, dtype=dtype)
     return SceneParams(
         zeta=z, centre0=as_dtype(centre), tilt0=as_dtype(tilt), arms0=as_dtype(arms),
         obstacles=as_dtype(obstacles), scene=scene, lo=float(model.lo), hi=float(model.hi),
         roc_levels=check_roc_levels(roc_levels), nodes=nodes, sweeps=sweeps, contact_gap=float(contact_gap),
     )
+
+
+def _plain_int(v: Any) -> Any:
+    return int(v) if isinstance(v, np.integer) else v
+
+
+#: Coarsest spacing (a) the working dtype may have at a swimmer's start x: a swimmer far from
+#: x = 0 (swimmer 2 at D) moves in steps of its position's rounding, so float32 at D = 1e5 a
+#: rounds its displacement per cycle to 0.1719 (0.1721) and at 1e7 a it does not move at all.
+POSITION_RESOLUTION = 1e-4
+
+
+def _check_resolution(scene: Scene, centre: np.ndarray, obstacles: np.ndarray, dtype: np.dtype, reach: float) -> None:
+    """One-line error if the start does not fit the working dtype: a coordinate that overflows it,
+    or a swimmer so far from x = 0 that its moves are lost to rounding (:data:`POSITION_RESOLUTION`)."""
+    with np.errstate(over="ignore"):
+        fits = np.all(np.isfinite(centre.astype(dtype))) and np.all(np.isfinite(obstacles.astype(dtype)))
+    if not fits:
+        raise ConfigError(f"the scene's heights, separation or obstacles overflow {dtype.name}: give finite, smaller lengths")
+    far = float(np.abs(centre[:, 0]).max()) + 2 * reach  # the farthest sphere's x at the start
+    step = float(np.spacing(np.asarray(far, dtype)))
+    if step > POSITION_RESOLUTION:
+        # spacing(x) = eps 2^floor(log2 x): fine enough below the next power of two
+        limit = 2.0 ** (math.floor(math.log2(POSITION_RESOLUTION / float(np.finfo(dtype).eps))) + 1) - 2 * reach
+        more = ", or float64 from Python (scene_params(..., dtype=\"float64\") with jax_enable_x64)" if dtype.itemsize < 8 else ""
+        raise ConfigError(f"separation {scene.separation:g} a is too far for {dtype.name} positions (they are rounded "
+                          f"to {step:.2g} a there, more than {POSITION_RESOLUTION:g} a): use a separation below "
+                          f"{limit:g} a{more}")
 
 
 def _check_start(scene: Scene, centre: np.ndarray, tilt: np.ndarray, arms: np.ndarray,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from typing import Any
 
 #: Media: the paper's first-order formula, the point-force solve without and with a wall.
@@ -48,7 +49,14 @@ class Scene:
     obstacles: tuple[tuple[float, float, float], ...] = ()
 
     def __post_init__(self) -> None:
-        # Normalise for hashing and equality: floats and nested tuples whatever was passed.
+        # Normalise for hashing and equality: floats and nested tuples whatever was passed; a NumPy
+        # number (np.float32(5.0), a value read from an array) is the plain float it holds.
+        for name in ("height", "tilt", "separation"):
+            v = getattr(self, name)
+            if isinstance(v, numbers.Real) and not isinstance(v, (bool, int, float)):
+                object.__setattr__(self, name, float(v))
+        if isinstance(self.swimmers, numbers.Integral) and not isinstance(self.swimmers, (bool, int)):
+            object.__setattr__(self, "swimmers", int(self.swimmers))
         try:
             obs = tuple(tuple(float(v) for v in o) for o in self.obstacles)
         except (TypeError, ValueError):

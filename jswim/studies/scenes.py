@@ -287,7 +287,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
 
 def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, group) of a scene study: runs, mean displacement per cycle (strokes), mean
-    speed per step over the second half, the fates seen and the mean height of the second half,
+    speed per step over the second half (both in the target direction), the fates seen and the mean height of the second half,
     and ``vs_stroke``: that mean speed over the best square stroke's in the same scene and
     direction (a wall: the stroke at that height; a pair: the fastest phase offset at that D), so
     above 1 is a faster stroke than the square one (for a pair, than two copies of it)."""
@@ -298,7 +298,9 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     table = []
     for (agent, d, group), g in out.items():
         fates = [r["fate"] for r in g if r.get("fate")]
-        pc = [r["per_cycle"] for r in g if r.get("per_cycle") is not None]
+        # in the target direction, as speed, the figures and the main table's X/a end (a row's own
+        # per_cycle is the signed x)
+        pc = [(d or 1) * r["per_cycle"] for r in g if r.get("per_cycle") is not None]
         hs = [r["mean_height"] for r in g if r.get("mean_height") is not None]
         sp = [r["speed"] for r in g if r.get("speed") is not None]
         table.append({
