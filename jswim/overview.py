@@ -249,9 +249,11 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
         cols, rows = summary_table(s.summary)
         lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
         if any(r.get("scene") for r in s.rows):  # walls and pairs: the scene table too (jswim.studies.scenes)
-            from jswim.studies.scenes import scene_summary, table
+            from jswim.studies.scenes import scene_summary, table, table_note
 
-            lines += ["", plain_table(*table(scene_summary(s.rows)), title="scenes", width=width)]
+            scene_rows = scene_summary(s.rows)
+            lines += ["", plain_table(*table(scene_rows), title="scenes", width=width)]
+            lines += [note] if (note := table_note(scene_rows)) else []
     else:
         lines.append("no finished runs yet")
     lines.append("")

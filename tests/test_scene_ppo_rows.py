@@ -103,3 +103,7 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
     # Per cycle, like speed, reads in the target direction: a -x stroke going -0.17 a per cycle is +0.17.
     back = [dict(row("stroke", "alone", 0.043, d=None, direction=-1), per_cycle=-0.172)]
     assert scenes.scene_summary(back)[0]["per_cycle"] == pytest.approx(0.172)
+    # Runs with no whole cycle (a pair's 6 steps) leave blanks, and the table says why.
+    assert scenes.table_note(scenes.scene_summary(rows)) is None
+    short = scenes.scene_summary(rows + [row("llm", "D=60", None, d=60.0)])
+    assert "no whole stroke cycle" in scenes.table_note(short) and "--steps" in scenes.table_note(short)

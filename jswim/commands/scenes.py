@@ -67,7 +67,10 @@ def print_table(rows: Sequence[dict[str, Any]]) -> None:
     if not any(r.get("scene") for r in rows):
         return
     from jswim.console import print_table as show
-    from jswim.studies.scenes import scene_summary, table
+    from jswim.studies.scenes import scene_summary, table, table_note
 
-    cols, cells = table(scene_summary(rows))
+    summary = scene_summary(rows)
+    cols, cells = table(summary)
     show(cols, cells, "scenes: displacement per stroke cycle, speed per step (second half), fates")
+    if note := table_note(summary):
+        print(note)

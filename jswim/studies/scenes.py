@@ -342,3 +342,11 @@ def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]
               str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
               s.get("fates") or "-", fmt(s.get("mean_height"), ".2f"), fmt(s.get("vs_stroke"), ".3f")] for s in order]
     return cols, cells
+
+
+def table_note(summary: Sequence[dict[str, Any]]) -> str | None:
+    """A line under :func:`table` when some speeds are blank: the runs hold no whole stroke cycle."""
+    if all(t.get("speed") is not None for t in summary):
+        return None
+    return ("-: no whole stroke cycle in the run (4 steps alone, 8 for a pair, after a phase's warm-up moves): "
+            "no X/a per cycle, X/a per step or x stroke; give more --steps")
