@@ -142,6 +142,11 @@ def test_each_is_refused_where_no_llm_run_steers_a_pair(tmp_path):
         assert "\n" not in str(err.value)
         assert not (tmp_path / study).exists()
     assert build("pair", StudyOptions(**grid, agents=("llm",), pair_prompt="each"))  # the one place it applies
+    # The scene grids likewise: another study would drop them.
+    for study, kw in (("wall", {"separations": (60.0,)}), ("curves", {"heights": (3.0,)}), ("pair", {"heights": [5.0]})):
+        with pytest.raises(ConfigError, match=f"the {study} study has no use for --{next(iter(kw))}"):
+            build(study, StudyOptions(**kw))
+    assert build("wall", StudyOptions(heights=[3, 5], phases=[0, 1, 2, 3]))  # the defaults, as a list: fine
 
 
 def test_plans_tag_the_variant_and_the_identity_keeps_old_folders():

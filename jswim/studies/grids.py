@@ -11,6 +11,7 @@ same run in every folder.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass
@@ -430,6 +431,10 @@ def _is_pair(scene: str) -> bool:
     return bool(scene) and json.loads(scene).get("swimmers") == 2
 
 
+#: The scene studies' grids as StudyOptions gives them (a changed one on another study is refused).
+_DEFAULT_GRIDS = {f.name: f.default for f in dataclasses.fields(StudyOptions) if f.name in ("heights", "separations", "phases")}
+
+
 def build(study: str, o: StudyOptions) -> list[Plan]:
     """The runs of ``study`` for options ``o``, in a fixed order (seeds follow it).
 
@@ -447,6 +452,9 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
         # an option a study has no use for.
         raise ConfigError(f"the {study} study has no use for --pair-prompt {o.pair_prompt} (pair_prompt: only LLM "
                           "runs on a pair of swimmers read it, as in jswim study pair with the llm agent); leave it out")
+    for name, owner in (("heights", "wall"), ("separations", "pair"), ("phases", "pair")):
+        if study != owner and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]:  # a scene grid another study would drop
+            raise ConfigError(f"the {study} study has no use for --{name} (only jswim study {owner} reads it); leave it out")
     # Outside the competence study every LLM run uses one variant; its action set (if it sets
     # one) applies to the baselines too, so they are offered what the model is offered.
     variant = o.llm_variant(study)
