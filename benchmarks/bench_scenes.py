@@ -11,7 +11,8 @@ batch and scanned over steps; compilation excluded):
   10 a, 4-6 sweeps at 3.5 a; unrolled elimination), and at h = 10 a with the numerics before
   adaptive sweeps (6 nodes x 5 fixed sweeps = 30 solves), for the ratio;
 * ``free, 1 swimmer``: the unbounded fluid (one sweep: 6 solves);
-* ``pair free`` / ``pair wall``: two swimmers, one moving per step (LAPACK solves, 12 x 12);
+* ``pair free`` / ``pair wall``: two swimmers, one moving per step (block Gauss-Seidel by
+  swimmer: two unrolled one-swimmer solves per node and sweep);
 * ``N spheres``: one swimmer and ``N - 3`` unit-sphere obstacles, N = 3, 6, 12, 24, in the free medium.
 
 The load average is printed: the machine is shared. Usage:

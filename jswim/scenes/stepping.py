@@ -192,34 +192,47 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     obstacles = obstacles.at[:, 0].add(-shift)
     pose0 = pose0.at[:, 0].add(-shift)
 
-    def body_rate(pose: Array, arms_k: Array) -> Array:
-        """Body-frame (along the axis, normal to it) velocity and rotation rate, (S, 3)."""
-        r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
+    # Two or more swimmers without obstacles: block Gauss-Seidel by swimmer, one sweep per Picard
+    # sweep, the forces carried along (fast one-swimmer solves instead of one large LAPACK solve).
+    by_swimmer = pose0.shape[0] >= 2 and obstacles.shape[0] == 0
+    n_spheres = pose0.shape[0] * (arms.shape[1] + 1)
+
+    def body_rate(pose: Array, arms_k: Array, forces: Array) -> tuple[Array, Array]:
+        """Body-frame (along the axis, normal to it) velocity and rotation rate, (S, 3), and the
+        sphere forces."""
+        if by_swimmer:
+            r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces)
+        else:
+            r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
         c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
         u, w = r.velocity[:, 0], r.velocity[:, 1]
-        return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1)
+        return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1), r.forces.astype(forces.dtype)
 
     # Sweep: the body-frame rates at the current node poses, then tilt first and position with the
     # new tilt, so that the strong dependence (the rotation of the swimming direction) is exact
     # within a sweep and only the weak one (wall and neighbours) is iterated. The sweeps carry the
     # poses' increments from pose0, not the poses: in float32 far from the origin the absolute x
     # could not resolve the small differences between sweeps that the stopping rule reads.
-    def sweep(inc: Array) -> tuple[Array, Array, Array]:
-        b = jax.vmap(body_rate)(pose0 + inc, arms_t)  # (n, S, 3)
+    def sweep(it: tuple[Array, Array]) -> tuple[tuple[Array, Array], Array, Array]:
+        inc, forces = it
+        b, forces = jax.vmap(body_rate)(pose0 + inc, arms_t, forces)  # (n, S, 3), (n, N, 2)
         dtilt = duration * _combine(a_run, b[..., 2])  # (n, S)
         tilt = pose0[:, 2] + dtilt
         c, s = jnp.cos(tilt), jnp.sin(tilt)
         lab = jnp.stack([c * b[..., 0] - s * b[..., 1], s * b[..., 0] + c * b[..., 1]], -1)  # (n, S, 2)
         dxz = duration * _combine(a_run, lab)
-        return jnp.concatenate([dxz, dtilt[..., None]], -1), lab, b[..., 2]
+        new = jnp.concatenate([dxz, dtilt[..., None]], -1).astype(inc.dtype)
+        return (new, forces), lab.astype(inc.dtype), b[..., 2].astype(inc.dtype)
 
-    inc = jnp.zeros((params.nodes,) + pose0.shape, pose0.dtype)
+    it = (jnp.zeros((params.nodes,) + pose0.shape, pose0.dtype),
+          jnp.zeros((params.nodes, n_spheres + obstacles.shape[0], 2), pose0.dtype))
     if params.sweeps is None:
-        inc, lab, omega, _ = _sweep_until_converged(sweep, inc, picard_tolerance(pose0.dtype))
+        it, lab, omega, _ = _sweep_until_converged(sweep, it, picard_tolerance(pose0.dtype))
     else:
         if params.sweeps > 1:  # a loop, not unrolled: the solve is large straight-line code
-            inc = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], inc)
-        inc, lab, omega = sweep(inc)
+            it = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], it)
+        it, lab, omega = sweep(it)
+    inc = it[0]
     poses = pose0 + inc
     step = duration * jnp.concatenate([_combine(w_end[None], lab)[0], _combine(w_end[None], omega)[0][:, None]], -1)
     arms_end = arms + duration * rates
@@ -238,33 +251,35 @@ def picard_tolerance(dtype: Any) -> float:
     return 1e-7 if jnp.dtype(dtype).itemsize <= 4 else 1e-13
 
 
-def _sweep_until_converged(sweep: Any, inc: Array, tol: float) -> tuple[Array, Array, Array, Array]:
+def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> tuple[tuple[Array, Array], Array, Array, Array]:
     """Picard sweeps until the error estimate of the increments falls below ``tol`` times the
     largest displacement of the step, at least :data:`MIN_SWEEPS` and at most :data:`MAX_SWEEPS`.
 
-    The iteration converges linearly, so with ``c_k`` the largest change of the increments made
-    by sweep ``k`` the error left after it is about ``c_k rho`` with ``rho = c_k / c_(k-1)``
-    (for ``rho`` small). The first change is the whole step, so the rule is read from sweep 3 on.
-    Under ``vmap`` the loop runs until every swimmer of the batch has converged (the others keep
-    their values: a swimmer's result does not depend on its batch). Returns the increments, the
-    last sweep's lab-frame velocities and rotation rates, and the number of sweeps.
+    ``it`` is ``(increments, forces)``: the poses' increments at the nodes and the sphere forces
+    the block solve by swimmer carries from sweep to sweep. The iteration converges linearly, so
+    with ``c_k`` the largest change of the increments made by sweep ``k`` the error left after it
+    is about ``c_k rho`` with ``rho = c_k / c_(k-1)`` (for ``rho`` small). The first change is the
+    whole step, so the rule is read from sweep 3 on. Under ``vmap`` the loop runs until every
+    swimmer of the batch has converged (the others keep their values: a swimmer's result does not
+    depend on its batch). Returns the iterate, the last sweep's lab-frame velocities and rotation
+    rates, and the number of sweeps.
     """
     def step(carry: tuple) -> tuple:
-        k, inc, _, _, change, _ = carry
-        new, lab, omega = (v.astype(inc.dtype) for v in sweep(inc))
-        return k + 1, new, lab, omega, jnp.max(jnp.abs(new - inc)), change
+        k, it, _, _, change, _ = carry
+        new, lab, omega = sweep(it)
+        return k + 1, new, lab, omega, jnp.max(jnp.abs(new[0] - it[0])), change
 
     def more(carry: tuple) -> Array:
-        k, inc, _, _, change, prev = carry
-        scale = jnp.max(jnp.abs(inc[..., :2]))
+        k, it, _, _, change, prev = carry
+        scale = jnp.max(jnp.abs(it[0][..., :2]))
         estimate = change * jnp.minimum(1.0, change / jnp.where(prev > 0, prev, 1.0))
         return (k < MIN_SWEEPS) | ((k < MAX_SWEEPS) & (estimate > tol * scale))
 
-    first, lab, omega = (v.astype(inc.dtype) for v in sweep(inc))
-    big = jnp.asarray(jnp.inf, inc.dtype)
-    carry = (jnp.asarray(1, jnp.int32), first, lab, omega, jnp.max(jnp.abs(first)), big)
-    k, inc, lab, omega, _, _ = jax.lax.while_loop(more, step, carry)
-    return inc, lab, omega, k
+    first, lab, omega = sweep(it)
+    big = jnp.asarray(jnp.inf, it[0].dtype)
+    carry = (jnp.asarray(1, jnp.int32), first, lab, omega, jnp.max(jnp.abs(first[0])), big)
+    k, it, lab, omega, _, _ = jax.lax.while_loop(more, step, carry)
+    return it, lab, omega, k
 
 
 def _combine(coef: "np.ndarray", values: Array) -> Array:

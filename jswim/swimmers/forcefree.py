@@ -132,11 +132,13 @@ def rigid_motion(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obst
 
 
 def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
-                   wall: bool) -> RigidMotion:
+                   wall: bool, background: Array | None = None) -> RigidMotion:
     """:func:`solve` written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
     complement), so that under ``vmap`` every operation is elementwise over the batch and XLA
     fuses the whole solve; the sizes are static, the loops below run at trace time over matrix
-    entries. Same arguments and result as :func:`solve`."""
+    entries. Same arguments and result as :func:`solve`; ``background`` ``(S, n, 2)``, if given,
+    is an imposed flow velocity at each swimmer sphere (the spheres then move at
+    ``K xi + v = M F + background``)."""
     from jswim.swimmers.mobility import OSEEN_PREFACTOR, blake_entries, stokeslet, wall_self_factors
 
     S, nd = arms.shape
@@ -194,6 +196,9 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
             p = s * n + i
             v[2 * p] = qdot[s, i] * e[s, 0]
             v[2 * p + 1] = qdot[s, i] * e[s, 1]
+            if background is not None:
+                v[2 * p] = v[2 * p] - background[s, i, 0]
+                v[2 * p + 1] = v[2 * p + 1] - background[s, i, 1]
     sols = [_chol_solve(chol, inv_diag, c) for c in cols]
     sol_v = _chol_solve(chol, inv_diag, v)
     k3 = 3 * S
@@ -204,6 +209,66 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
     forces = [sum(sols[b][p] * xi[b] for b in range(k3)) + sol_v[p] for p in range(2 * N)]
     xi_arr = jnp.stack(xi).reshape(S, 3)
     return RigidMotion(xi_arr[:, :2], xi_arr[:, 2], jnp.stack(forces).reshape(N, 2))
+
+
+def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, wall: bool,
+                     forces: Array) -> RigidMotion:
+    """One block Gauss-Seidel sweep of the coupled solve of ``S >= 2`` swimmers (no obstacles).
+
+    Swimmer ``s`` in turn is solved alone (:func:`solve_unrolled`, force- and torque-free exactly)
+    in the flow that the other swimmers' forces make at its spheres, taking the forces of the
+    swimmers already solved in this sweep and ``forces`` for the others. Repeated, it converges to
+    :func:`solve`: by the swimmers' far field, ~2e-3 per sweep at D = 30 a and ~1e-5 at 60 a
+    (measured for coaxial NG swimmers, free fluid and wall). The collocation's Picard sweeps
+    (:mod:`jswim.scenes.collocation`) carry the forces from sweep to sweep, so the two iterations
+    converge together at the cost of ``S`` one-swimmer solves per node.
+
+    Parameters
+    ----------
+    centre, tilt, arms, arm_rates, wall
+        As in :func:`solve`.
+    forces : Array (S n, 2)
+        The forces of the previous sweep (zeros at the start), ordered as :func:`solve`'s.
+
+    Returns
+    -------
+    RigidMotion
+        With the new forces.
+    """
+    from jswim.swimmers.mobility import OSEEN_PREFACTOR, blake_entries, stokeslet
+
+    S, nd = arms.shape
+    n = nd + 1
+    pos = sphere_centres(centre, tilt, arms)  # (S, n, 2)
+    if wall:
+        pos = pos.at[..., 1].set(jnp.maximum(pos[..., 1], 1.0))
+    f = [forces[s * n:(s + 1) * n] for s in range(S)]
+    no_obstacles = jnp.zeros((0, 3), arms.dtype)
+    vel, om = [], []
+    for s in range(S):
+        bg = []
+        for i in range(n):
+            ux = uz = 0.0 * pos[s, i, 0]
+            for o in range(S):
+                if o == s:
+                    continue
+                for j in range(n):
+                    rx = pos[s, i, 0] - pos[o, j, 0]
+                    if wall:
+                        gxx, gxz, gzx, gzz = blake_entries(rx, pos[s, i, 1], pos[o, j, 1])
+                    else:
+                        gxx, gxz, gzz = stokeslet(rx, pos[s, i, 1] - pos[o, j, 1])
+                        gzx = gxz
+                    fx, fz = f[o][j, 0], f[o][j, 1]
+                    ux = ux + OSEEN_PREFACTOR * (gxx * fx + gxz * fz)
+                    uz = uz + OSEEN_PREFACTOR * (gzx * fx + gzz * fz)
+            bg.append(jnp.stack([ux, uz]))
+        r = solve_unrolled(centre[s:s + 1], tilt[s:s + 1], arms[s:s + 1], arm_rates[s:s + 1], no_obstacles,
+                           wall, jnp.stack(bg)[None])
+        f[s] = r.forces
+        vel.append(r.velocity[0])
+        om.append(r.omega[0])
+    return RigidMotion(jnp.stack(vel), jnp.stack(om), jnp.concatenate(f, 0))
 
 
 def _cholesky(m: list) -> tuple[list, list]:
