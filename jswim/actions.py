@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_choice
 
 #: Largest number of ROC levels K (``--roc-levels``, ``make_params(roc_levels=K)``).
 MAX_ROC_LEVELS = 1000
@@ -28,9 +28,7 @@ def check_action_set(name: str) -> str:
     ConfigError
         For any other name.
     """
-    if name not in ACTION_SETS:
-        raise ConfigError(f"action set must be one of {', '.join(ACTION_SETS)}, got {name!r}")
-    return name
+    return check_choice(name, ACTION_SETS, "action set")
 
 
 def check_roc_levels(k: Any, name: str = "--roc-levels") -> int:

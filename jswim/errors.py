@@ -36,6 +36,14 @@ class ConfigError(JswimError, ValueError):
     """A parameter has a bad value; the message names the parameter and what to change."""
 
 
+def check_choice(value: object, choices: tuple[str, ...], what: str) -> str:
+    """``value`` if it is one of ``choices``, else a one-line :class:`ConfigError` that names
+    ``what`` and every choice."""
+    if value not in choices:
+        raise ConfigError(f"{what} must be one of {', '.join(choices)}, got {value!r}")
+    return value  # type: ignore[return-value]
+
+
 class PositionBelowMinimumError(ConfigError):
     """X fell below ``X_min``, so it cannot be sent as a non-negative integer.
 

@@ -18,7 +18,7 @@ from typing import Any, Iterable
 
 from jswim.actions import check_action_set, check_roc_levels
 from jswim.agents.memory import ClearingRule
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_choice
 from jswim.llm.client import check_temperature
 from jswim.prompt import DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, normalize_mask
 
@@ -88,9 +88,7 @@ def check_pair_prompt(value: str) -> str:
     ConfigError
         For any other value.
     """
-    if value not in PAIR_PROMPTS:
-        raise ConfigError(f"--pair-prompt must be one of {', '.join(PAIR_PROMPTS)}, got {value!r}")
-    return value
+    return check_choice(value, PAIR_PROMPTS, "--pair-prompt")
 
 
 def pair_tag(pair_prompt: str) -> str:
@@ -238,8 +236,7 @@ class LLMAgentConfig:
 
     def __post_init__(self) -> None:
         check_action_set(self.action_set)
-        if self.order not in ORDERS:
-            raise ConfigError(f"order must be one of {', '.join(ORDERS)}, got {self.order!r}")
+        check_choice(self.order, ORDERS, "order")
         if self.max_tokens is not None and not 1 <= self.max_tokens <= 100_000:
             raise ConfigError(f"--max-tokens must be between 1 and 100000, got {self.max_tokens}")
         if self.temperature is not None:
