@@ -30,7 +30,6 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 from jax import Array
 
 from jswim.scenes.actions import split_action
@@ -184,8 +183,8 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         invariant under translations along the wall), so in float32 the result does not lose
         precision as the swimmers travel far from x = 0.
     """
-    nodes_np, a_run, w_end = gauss_rule(params.nodes)
-    t = jnp.asarray(nodes_np, pose0.dtype) * duration
+    nodes, y_run, y_end = (jnp.asarray(v, pose0.dtype) for v in gauss_rule(params.nodes))
+    t = nodes * duration
     arms_t = arms[None] + t[:, None, None] * rates[None]  # (n, S, 2)
     shift = pose0[0, 0]
     obstacles = jnp.asarray(params.obstacles, pose0.dtype)
@@ -216,25 +215,25 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     def sweep(it: tuple[Array, Array]) -> tuple[tuple[Array, Array], Array, Array]:
         inc, forces = it
         b, forces = jax.vmap(body_rate)(pose0 + inc, arms_t, forces)  # (n, S, 3), (n, N, 2)
-        dtilt = duration * _combine(a_run, b[..., 2])  # (n, S)
+        dtilt = duration * (y_run @ b[..., 2])  # (n, S)
         tilt = pose0[:, 2] + dtilt
         c, s = jnp.cos(tilt), jnp.sin(tilt)
         lab = jnp.stack([c * b[..., 0] - s * b[..., 1], s * b[..., 0] + c * b[..., 1]], -1)  # (n, S, 2)
-        dxz = duration * _combine(a_run, lab)
+        dxz = duration * jnp.einsum("ij,jsk->isk", y_run, lab)
         new = jnp.concatenate([dxz, dtilt[..., None]], -1).astype(inc.dtype)
         return (new, forces), lab.astype(inc.dtype), b[..., 2].astype(inc.dtype)
 
     it = (jnp.zeros((params.nodes,) + pose0.shape, pose0.dtype),
           jnp.zeros((params.nodes, n_spheres + obstacles.shape[0], 2), pose0.dtype))
     if params.sweeps is None:
-        it, lab, omega, _ = _sweep_until_converged(sweep, it, picard_tolerance(pose0.dtype))
+        it, lab, omega = _sweep_until_converged(sweep, it, picard_tolerance(pose0.dtype))
     else:
         if params.sweeps > 1:  # a loop, not unrolled: the solve is large straight-line code
             it = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], it)
         it, lab, omega = sweep(it)
     inc = it[0]
     poses = pose0 + inc
-    step = duration * jnp.concatenate([_combine(w_end[None], lab)[0], _combine(w_end[None], omega)[0][:, None]], -1)
+    step = duration * jnp.concatenate([jnp.einsum("j,jsk->sk", y_end, lab), (y_end @ omega)[:, None]], -1)
     arms_end = arms + duration * rates
     gaps = jax.vmap(lambda p, a: surface_gap(p, a, obstacles, params.wall))(poses, arms_t)
     return step, jnp.minimum(jnp.min(gaps), surface_gap(pose0 + step, arms_end, obstacles, params.wall))
@@ -251,7 +250,7 @@ def picard_tolerance(dtype: Any) -> float:
     return 1e-7 if jnp.dtype(dtype).itemsize <= 4 else 1e-13
 
 
-def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> tuple[tuple[Array, Array], Array, Array, Array]:
+def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> tuple[tuple[Array, Array], Array, Array]:
     """Picard sweeps until the error estimate of the increments falls below ``tol`` times the
     largest displacement of the step, at least :data:`MIN_SWEEPS` and at most :data:`MAX_SWEEPS`.
 
@@ -261,8 +260,8 @@ def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> t
     is about ``c_k rho`` with ``rho = c_k / c_(k-1)`` (for ``rho`` small). The first change is the
     whole step, so the rule is read from sweep 3 on. Under ``vmap`` the loop runs until every
     swimmer of the batch has converged (the others keep their values: a swimmer's result does not
-    depend on its batch). Returns the iterate, the last sweep's lab-frame velocities and rotation
-    rates, and the number of sweeps.
+    depend on its batch). Returns the iterate and the last sweep's lab-frame velocities and
+    rotation rates.
     """
     def step(carry: tuple) -> tuple:
         k, it, _, _, change, _ = carry
@@ -278,21 +277,8 @@ def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> t
     first, lab, omega = sweep(it)
     big = jnp.asarray(jnp.inf, it[0].dtype)
     carry = (jnp.asarray(1, jnp.int32), first, lab, omega, jnp.max(jnp.abs(first[0])), big)
-    k, it, lab, omega, _, _ = jax.lax.while_loop(more, step, carry)
-    return it, lab, omega, k
-
-
-def _combine(coef: "np.ndarray", values: Array) -> Array:
-    """``coef @ values`` over the leading (node) axis, written as a sum of scaled arrays: the
-    coefficients are trace-time constants and the node count is small, and under ``vmap`` this
-    stays elementwise over the batch, where a tiny batched matrix product is slow on XLA:CPU."""
-    rows = []
-    for i in range(coef.shape[0]):
-        acc = float(coef[i, 0]) * values[0]  # Python floats: weakly typed, keep the values' dtype
-        for j in range(1, coef.shape[1]):
-            acc = acc + float(coef[i, j]) * values[j]
-        rows.append(acc)
-    return jnp.stack(rows)
+    _, it, lab, omega, _, _ = jax.lax.while_loop(more, step, carry)
+    return it, lab, omega
 
 
 def surface_gap(pose: Array, arms: Array, obstacles: Array, wall: bool) -> Array:
