@@ -27,7 +27,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from jswim.swimmers.mobility import mobility_matrix
+from jswim.swimmers.mobility import mobility_matrix, pair_entries, wall_self_factors
 
 
 class RigidMotion(NamedTuple):
@@ -139,7 +139,6 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
     entries. Same arguments and result as :func:`solve`; ``background`` ``(S, n, 2)``, if given,
     is an imposed flow velocity at each swimmer sphere (the spheres then move at
     ``K xi + v = M F + background``)."""
-    from jswim.swimmers.mobility import OSEEN_PREFACTOR, blake_entries, stokeslet, wall_self_factors
 
     S, nd = arms.shape
     n = nd + 1
@@ -165,15 +164,9 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
         m[2 * i + 1][2 * i + 1] = nor * inv_r + 0.0 * zs[i]
         m[2 * i + 1][2 * i] = 0.0 * zs[i]
         for j in range(i):
-            rx = xs[i] - xs[j]
-            if wall:
-                gxx, gxz, gzx, gzz = blake_entries(rx, zs[i], zs[j])
-            else:
-                gxx, gxz, gzz = stokeslet(rx, zs[i] - zs[j])
-                gzx = gxz
-            c = OSEEN_PREFACTOR
-            m[2 * i][2 * j], m[2 * i][2 * j + 1] = c * gxx, c * gxz
-            m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = c * gzx, c * gzz
+            mxx, mxz, mzx, mzz = pair_entries(xs[i] - xs[j], zs[i], zs[j], wall)
+            m[2 * i][2 * j], m[2 * i][2 * j + 1] = mxx, mxz
+            m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = mzx, mzz
     chol, inv_diag = _cholesky(m)
     # Right-hand sides: the rigid modes K (3 per swimmer) and the prescribed velocities v.
     zero = 0.0 * xs[0]
@@ -235,7 +228,6 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
     RigidMotion
         With the new forces.
     """
-    from jswim.swimmers.mobility import OSEEN_PREFACTOR, blake_entries, stokeslet
 
     S, nd = arms.shape
     n = nd + 1
@@ -253,15 +245,10 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
                 if o == s:
                     continue
                 for j in range(n):
-                    rx = pos[s, i, 0] - pos[o, j, 0]
-                    if wall:
-                        gxx, gxz, gzx, gzz = blake_entries(rx, pos[s, i, 1], pos[o, j, 1])
-                    else:
-                        gxx, gxz, gzz = stokeslet(rx, pos[s, i, 1] - pos[o, j, 1])
-                        gzx = gxz
+                    mxx, mxz, mzx, mzz = pair_entries(pos[s, i, 0] - pos[o, j, 0], pos[s, i, 1], pos[o, j, 1], wall)
                     fx, fz = f[o][j, 0], f[o][j, 1]
-                    ux = ux + OSEEN_PREFACTOR * (gxx * fx + gxz * fz)
-                    uz = uz + OSEEN_PREFACTOR * (gzx * fx + gzz * fz)
+                    ux = ux + (mxx * fx + mxz * fz)
+                    uz = uz + (mzx * fx + mzz * fz)
             bg.append(jnp.stack([ux, uz]))
         r = solve_unrolled(centre[s:s + 1], tilt[s:s + 1], arms[s:s + 1], arm_rates[s:s + 1], no_obstacles,
                            wall, jnp.stack(bg)[None])

@@ -97,6 +97,19 @@ def blake_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array,
     return sxx - ixx + dxx, sxz - ixz + dxz, sxz - ixz + dzx, szz - izz + dzz
 
 
+def pair_entries(rx: Array, zi: Array, zj: Array, wall: bool) -> tuple[Array, Array, Array, Array]:
+    """Mobility ``(M_xx, M_xz, M_zx, M_zz)`` of sphere ``i`` per unit point force on sphere ``j``
+    (units of ``1 / (6 pi mu a)``): Blake's tensor above the wall, else the Oseen tensor, times
+    :data:`OSEEN_PREFACTOR`; ``rx = x_i - x_j``, heights ``zi``, ``zj``; elementwise."""
+    if wall:
+        gxx, gxz, gzx, gzz = blake_entries(rx, zi, zj)
+    else:
+        gxx, gxz, gzz = stokeslet(rx, zi - zj)
+        gzx = gxz
+    c = OSEEN_PREFACTOR
+    return c * gxx, c * gxz, c * gzx, c * gzz
+
+
 def oseen(rx: Array, rz: Array) -> Array:
     """``8 pi mu`` times the Oseen tensor in the (x, z) plane, ``(..., 2, 2)``."""
     sxx, sxz, szz = stokeslet(rx, rz)
