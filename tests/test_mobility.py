@@ -145,3 +145,41 @@ def test_block_solve_by_swimmer_converges_to_the_coupled_solve(wall):
     assert errors[0] > 1e-5 * scale  # the first sweep ignores the other swimmer's forces
     assert errors[2] < 1e-6 * scale and errors[-1] < 1e-13 * scale
     np.testing.assert_allclose(np.asarray(got.omega), np.asarray(want.omega), atol=1e-13 * scale)
+
+
+def test_free_fluid_response_solves_each_swimmer_exactly():
+    # the unbounded fluid's scene path (jswim.swimmers.bodyframe): each swimmer through (P, Q), a
+    # function of its arms alone, at any pose. One swimmer: one sweep is the LAPACK solve. Two:
+    # the Gauss-Seidel sweeps converge to the coupled 12 x 12 LAPACK solve, every sweep force- and
+    # torque-free per swimmer (K'^T P = 0)
+    from jswim.swimmers import bodyframe
+
+    rng = np.random.default_rng(11)
+    for S in (1, 2):
+        c = jnp.asarray([[0.0, 9.0], [26.0, 3.0]][:S])
+        t = jnp.asarray(rng.uniform(-0.4, 0.4, S))
+        a = jnp.asarray(rng.uniform(6, 10, (S, 2)))
+        r = jnp.asarray(rng.uniform(-1, 1, (S, 2)))
+        want = forcefree.solve(c, t, a, r, jnp.zeros((0, 3)), False)
+        e = np.stack([np.cos(t), np.sin(t)], -1)
+        nrm = np.stack([-e[:, 1], e[:, 0]], -1)
+        want_body = np.stack([(np.asarray(want.velocity) * e).sum(-1), (np.asarray(want.velocity) * nrm).sum(-1),
+                              np.asarray(want.omega)], -1)
+        resp = bodyframe.response(a)
+        np.testing.assert_allclose(np.asarray(resp.p), np.asarray(resp.p).transpose(0, 2, 1), atol=1e-14)
+        forces = jnp.zeros((S, 3, 2))
+        errors = []
+        for _ in range(7):
+            forces, xi = bodyframe.sweep(c, t, a, r, resp, forces)
+            f = np.asarray(forces)
+            q = np.asarray(forcefree.axial_offsets(a))
+            np.testing.assert_allclose(f.sum(1), 0.0, atol=1e-13)  # force-free (body frame)
+            np.testing.assert_allclose((q * f[..., 1]).sum(1), 0.0, atol=1e-12)  # torque-free
+            errors.append(float(np.abs(np.asarray(xi) - want_body).max()))
+        scale = float(np.abs(want_body).max())
+        if S == 1:
+            assert errors[0] < 1e-14 * scale
+        else:
+            assert errors[0] > 1e-5 * scale and errors[2] < 1e-6 * scale and errors[-1] < 1e-13 * scale
+        lab = f[..., :1] * e[:, None, :] + f[..., 1:] * nrm[:, None, :]
+        np.testing.assert_allclose(lab.reshape(-1, 2), np.asarray(want.forces), atol=1e-12 * np.abs(lab).max())

@@ -9,8 +9,10 @@ are held fixed. Then, by medium:
   axis by the closed-form displacement of the move; the others do not move; no contact.
 * ``"free"`` / ``"wall"``: all spheres of all swimmers and the obstacles are coupled through the
   point-force mobility (:mod:`jswim.swimmers.mobility`), every swimmer force- and torque-free
-  (:mod:`jswim.swimmers.forcefree`); the poses ``(x, z, tilt)`` of all swimmers are integrated
-  over the step by Gauss-Legendre collocation (:mod:`jswim.scenes.collocation`).
+  (:mod:`jswim.swimmers.forcefree`; in the unbounded fluid without obstacles each swimmer is
+  solved through its response, :mod:`jswim.swimmers.bodyframe`, a function of its arms alone);
+  the poses ``(x, z, tilt)`` of all swimmers are integrated over the step by Gauss-Legendre
+  collocation (:mod:`jswim.scenes.collocation`).
 
 Contact: if along the step (at any collocation node or at its end) a swimmer sphere's surface
 comes within ``params.contact_gap`` (0.1 a) of the wall, of an obstacle's surface or of a sphere of
@@ -36,7 +38,7 @@ from jswim.scenes.actions import split_action
 from jswim.scenes.collocation import gauss_rule
 from jswim.scenes.params import SceneParams
 from jswim.scenes.state import SceneState, SceneStepInfo
-from jswim.swimmers import forcefree
+from jswim.swimmers import bodyframe, forcefree
 
 
 def scene_step(params: SceneParams, state: SceneState, action: Any, key: Array) -> tuple[SceneState, SceneStepInfo]:
@@ -191,21 +193,40 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     obstacles = obstacles.at[:, 0].add(-shift)
     pose0 = pose0.at[:, 0].add(-shift)
 
-    # Two or more swimmers without obstacles: block Gauss-Seidel by swimmer, one sweep per Picard
-    # sweep, the forces carried along (fast one-swimmer solves instead of one large LAPACK solve).
-    by_swimmer = pose0.shape[0] >= 2 and obstacles.shape[0] == 0
-    n_spheres = pose0.shape[0] * (arms.shape[1] + 1)
+    # How each node's force-free solve is done (all agree to rounding; tests check it):
+    # * unbounded fluid, no obstacles: each swimmer through its response to the flow at its
+    #   spheres, a function of the arms alone, built once per node (jswim.swimmers.bodyframe);
+    # * above the wall, two swimmers: each swimmer solved afresh at its pose in the other's flow;
+    # * otherwise (one swimmer above the wall, obstacles): one solve of all spheres.
+    # With two swimmers the solves go by block Gauss-Seidel, one sweep per Picard sweep, the
+    # forces carried from sweep to sweep.
+    n_nodes, n_sw, n_sph = params.nodes, pose0.shape[0], arms.shape[1] + 1
+    if obstacles.shape[0] == 0 and not params.wall:
+        path, state = "response", jnp.zeros((n_nodes, n_sw, n_sph, 2), pose0.dtype)
+        resp = jax.vmap(bodyframe.response)(arms_t)
+    elif obstacles.shape[0] == 0 and n_sw >= 2:
+        path, state = "by_swimmer", jnp.zeros((n_nodes, n_sw * n_sph, 2), pose0.dtype)
+    else:
+        path, state = "coupled", jnp.zeros((n_nodes,), pose0.dtype)
 
-    def body_rate(pose: Array, arms_k: Array, forces: Array) -> tuple[Array, Array]:
-        """Body-frame (along the axis, normal to it) velocity and rotation rate, (S, 3), and the
-        sphere forces."""
-        if by_swimmer:
-            r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces)
-        else:
-            r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
-        c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
-        u, w = r.velocity[:, 0], r.velocity[:, 1]
-        return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1), r.forces.astype(forces.dtype)
+    def body_rates(poses: Array, state: Array) -> tuple[Array, Array]:
+        """Body-frame (along the axis, normal to it) velocities and rotation rates ``(n, S, 3)``
+        at the node poses, and what the next sweep starts from."""
+        if path == "response":
+            solve = lambda pose, a, r, f: bodyframe.sweep(pose[:, :2], pose[:, 2], a, rates, r, f)
+            state, xi = jax.vmap(solve)(poses, arms_t, resp, state)
+            return xi, state
+
+        def one(pose: Array, arms_k: Array, forces: Array) -> tuple[Array, Array]:
+            if path == "by_swimmer":
+                r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces)
+                forces = r.forces.astype(forces.dtype)
+            else:
+                r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
+            c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
+            u, w = r.velocity[:, 0], r.velocity[:, 1]
+            return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1), forces
+        return jax.vmap(one)(poses, arms_t, state)
 
     # Sweep: the body-frame rates at the current node poses, then tilt first and position with the
     # new tilt, so that the strong dependence (the rotation of the swimming direction) is exact
@@ -213,18 +234,18 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     # poses' increments from pose0, not the poses: in float32 far from the origin the absolute x
     # could not resolve the small differences between sweeps that the stopping rule reads.
     def sweep(it: tuple[Array, Array]) -> tuple[tuple[Array, Array], Array, Array]:
-        inc, forces = it
-        b, forces = jax.vmap(body_rate)(pose0 + inc, arms_t, forces)  # (n, S, 3), (n, N, 2)
+        inc, state = it
+        b, state = body_rates(pose0 + inc, state)
+        b = b.astype(inc.dtype)
         dtilt = duration * (y_run @ b[..., 2])  # (n, S)
         tilt = pose0[:, 2] + dtilt
         c, s = jnp.cos(tilt), jnp.sin(tilt)
         lab = jnp.stack([c * b[..., 0] - s * b[..., 1], s * b[..., 0] + c * b[..., 1]], -1)  # (n, S, 2)
         dxz = duration * jnp.einsum("ij,jsk->isk", y_run, lab)
         new = jnp.concatenate([dxz, dtilt[..., None]], -1).astype(inc.dtype)
-        return (new, forces), lab.astype(inc.dtype), b[..., 2].astype(inc.dtype)
+        return (new, state), lab, b[..., 2]
 
-    it = (jnp.zeros((params.nodes,) + pose0.shape, pose0.dtype),
-          jnp.zeros((params.nodes, n_spheres + obstacles.shape[0], 2), pose0.dtype))
+    it = (jnp.zeros((n_nodes, n_sw, 3), pose0.dtype), state)
     if params.sweeps is None:
         it, lab, omega = _sweep_until_converged(sweep, it, picard_tolerance(pose0.dtype))
     else:
@@ -255,7 +276,7 @@ def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> t
     largest displacement of the step, at least :data:`MIN_SWEEPS` and at most :data:`MAX_SWEEPS`.
 
     ``it`` is ``(increments, forces)``: the poses' increments at the nodes and the sphere forces
-    the block solve by swimmer carries from sweep to sweep. The iteration converges linearly, so
+    the solves by swimmer carry from sweep to sweep. The iteration converges linearly, so
     with ``c_k`` the largest change of the increments made by sweep ``k`` the error left after it
     is about ``c_k rho`` with ``rho = c_k / c_(k-1)`` (for ``rho`` small). The first change is the
     whole step, so the rule is read from sweep 3 on. Under ``vmap`` the loop runs until every

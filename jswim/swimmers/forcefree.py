@@ -236,6 +236,9 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
         pos = pos.at[..., 1].set(jnp.maximum(pos[..., 1], 1.0))
     f = [forces[s * n:(s + 1) * n] for s in range(S)]
     no_obstacles = jnp.zeros((0, 3), arms.dtype)
+    # the blocks between two swimmers' spheres, each pair once: M_(o j, s i) = M_(s i, o j)^T
+    cross = {(s, i, o, j): pair_entries(pos[s, i, 0] - pos[o, j, 0], pos[s, i, 1], pos[o, j, 1], wall)
+             for s in range(S) for o in range(s) for i in range(n) for j in range(n)}
     vel, om = [], []
     for s in range(S):
         bg = []
@@ -245,7 +248,10 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
                 if o == s:
                     continue
                 for j in range(n):
-                    mxx, mxz, mzx, mzz = pair_entries(pos[s, i, 0] - pos[o, j, 0], pos[s, i, 1], pos[o, j, 1], wall)
+                    if s > o:
+                        mxx, mxz, mzx, mzz = cross[s, i, o, j]
+                    else:
+                        mxx, mzx, mxz, mzz = cross[o, j, s, i]
                     fx, fz = f[o][j, 0], f[o][j, 1]
                     ux = ux + (mxx * fx + mxz * fz)
                     uz = uz + (mzx * fx + mzz * fz)
@@ -258,9 +264,16 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
     return RigidMotion(jnp.stack(vel), jnp.stack(om), jnp.concatenate(f, 0))
 
 
+def _is_zero(v: object) -> bool:
+    """A structural zero of the unrolled solves: a Python zero (not a traced value), which the
+    entry-by-entry arithmetic drops instead of multiplying through."""
+    return isinstance(v, float) and v == 0.0
+
+
 def _cholesky(m: list) -> tuple[list, list]:
     """Lower Cholesky factor of a symmetric matrix given by its lower triangle (lists of
-    scalars), with the reciprocals of its diagonal."""
+    scalars), with the reciprocals of its diagonal. Python zeros in ``m`` stay Python zeros where
+    the factor keeps them (no fill-in), so a block-structured matrix costs what its blocks cost."""
     size = len(m)
     low = [[None] * size for _ in range(size)]
     inv_diag = [None] * size
@@ -268,28 +281,32 @@ def _cholesky(m: list) -> tuple[list, list]:
         for q in range(p + 1):
             acc = m[p][q]
             for k in range(q):
-                acc = acc - low[p][k] * low[q][k]
+                if not (_is_zero(low[p][k]) or _is_zero(low[q][k])):
+                    acc = acc - low[p][k] * low[q][k]
             if p == q:
-                inv_diag[p] = jax.lax.rsqrt(acc)
+                inv_diag[p] = jax.lax.rsqrt(jnp.asarray(acc))
                 low[p][p] = acc * inv_diag[p]
             else:
-                low[p][q] = acc * inv_diag[q]
+                low[p][q] = 0.0 if _is_zero(acc) else acc * inv_diag[q]
     return low, inv_diag
 
 
 def _chol_solve(low: list, inv_diag: list, b: list) -> list:
-    """``x`` with ``L L^T x = b`` (forward then back substitution, lists of scalars)."""
+    """``x`` with ``L L^T x = b`` (forward then back substitution, lists of scalars; Python zeros
+    in ``L`` and ``b`` are skipped)."""
     size = len(b)
     y = [None] * size
     for p in range(size):
         acc = b[p]
         for k in range(p):
-            acc = acc - low[p][k] * y[k]
-        y[p] = acc * inv_diag[p]
+            if not (_is_zero(low[p][k]) or _is_zero(y[k])):
+                acc = acc - low[p][k] * y[k]
+        y[p] = 0.0 if _is_zero(acc) else acc * inv_diag[p]
     x = [None] * size
     for p in reversed(range(size)):
         acc = y[p]
         for k in range(p + 1, size):
-            acc = acc - low[k][p] * x[k]
-        x[p] = acc * inv_diag[p]
+            if not (_is_zero(low[k][p]) or _is_zero(x[k])):
+                acc = acc - low[k][p] * x[k]
+        x[p] = 0.0 if _is_zero(acc) else acc * inv_diag[p]
     return x
