@@ -107,3 +107,18 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
     assert scenes.table_note(scenes.scene_summary(rows)) is None
     short = scenes.scene_summary(rows + [row("llm", "D=60", None, d=60.0)])
     assert "no whole stroke cycle" in scenes.table_note(short) and "--steps" in scenes.table_note(short)
+
+
+@pytest.mark.parametrize("study, extra", [("wall", {"heights": (5.0,)}), ("continuous", {})])
+def test_ppo_runs_are_offered_every_move_whatever_the_action_set(study, extra):
+    # --action-set restricts the lattice agents' (DOF, ROC) moves; PPO picks any arm and any real
+    # ROC, so its plans say "all" (not a set it was never held to), and the others keep the option
+    from jswim.studies import grids
+
+    plans = grids.build(study, StudyOptions(action_set="shape-changing", q_runs=1, steps=8,
+                                            agents=("random", "ppo"), **extra))
+    by_agent = {}
+    for p in plans:
+        by_agent.setdefault(p.agent, set()).add(p.action_set)
+    assert by_agent["ppo"] == {"all"}
+    assert by_agent["random"] == {"shape-changing"}

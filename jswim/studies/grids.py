@@ -471,6 +471,8 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                     llm = agent == "llm"
                     v = (cell.variant or variant) if llm else (cell.stroke if agent == STROKE_AGENT else "")
                     action_set = variant_action_set(v, o.action_set) if llm else (cell.action_set or baseline_set)
+                    if agent == CONTINUOUS_AGENT:
+                        action_set = "all"  # PPO is offered every arm and every real ROC; it has no smaller set
                     # The run id names what differs from the study's own setting.
                     tag = (v if v != "paper" else "") if llm else (action_set if action_set != o.action_set else "")
                     levels = o.roc_levels if cell.roc_levels is None else cell.roc_levels
