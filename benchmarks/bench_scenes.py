@@ -10,9 +10,11 @@ batch and scanned over steps; compilation excluded):
   float32: 4 Gauss nodes x adaptive Picard sweeps, 3 sweeps = 12 force-free solves per step at
   10 a, 4-6 sweeps at 3.5 a; unrolled elimination), and at h = 10 a with the numerics before
   adaptive sweeps (6 nodes x 5 fixed sweeps = 30 solves), for the ratio;
-* ``free, 1 swimmer``: the unbounded fluid (one sweep: 6 solves);
-* ``pair free`` / ``pair wall``: two swimmers, one moving per step (block Gauss-Seidel by
-  swimmer: two unrolled one-swimmer solves per node and sweep);
+* ``free, 1 swimmer``: the unbounded fluid (one sweep through the body-frame response,
+  :mod:`jswim.swimmers.bodyframe`);
+* ``pair free`` / ``pair wall``: two swimmers, one moving per step, block Gauss-Seidel by swimmer
+  (free: each swimmer through its response, factored once per node; wall: two unrolled
+  one-swimmer solves per node and sweep);
 * ``N spheres``: one swimmer and ``N - 3`` unit-sphere obstacles, N = 3, 6, 12, 24, in the free medium.
 
 The load average is printed: the machine is shared. Usage:
