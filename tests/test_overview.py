@@ -110,8 +110,12 @@ def test_compare_lists_settings_present_in_all(folders):
     text = overview.compare_text([a, b])
     assert text.splitlines()[0].startswith("[1] a (fake): study swim, complete")
     body = [line for line in text.splitlines() if line.startswith(("llm", "qlearning", "random"))]
-    # b has Purcell toward +x only: 3 settings in common, one row per study each
-    assert len(body) == 3 * 2
+    # b has Purcell toward +x only: 3 settings in common, each shown for both studies: one row per
+    # study, or one row naming both ([1][2]) where a baseline's numbers agree (seeds 0 and 1 can
+    # give the random policy's 3 runs the same summary: they did in a from-scratch install, jax 0.10.2)
+    assert {line.split()[0] for line in body} == {"llm", "qlearning", "random"}
+    assert sum(line.split()[3].count("[") for line in body) == 3 * 2
+    assert all(line.split()[3] in ("[1]", "[2]") for line in body if line.startswith("llm"))
     assert all(" purcell " in line and " +x " in line for line in body)
     assert "9 setting(s) not present in every study are left out" in text
     with pytest.raises(ConfigError, match="at least two"):

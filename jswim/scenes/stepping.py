@@ -314,9 +314,8 @@ def surface_gap(pose: Array, arms: Array, obstacles: Array, wall: bool) -> Array
     if obstacles.shape[0]:
         d = flat[:, None, :] - obstacles[None, :, :2]
         out = jnp.minimum(out, jnp.min(jnp.sqrt(jnp.sum(d * d, -1)) - 1.0 - obstacles[None, :, 2]))
-    if s > 1:
-        owner = jnp.repeat(jnp.arange(s), n)
-        d = flat[:, None, :] - flat[None, :, :]
-        r = jnp.sqrt(jnp.sum(d * d, -1) + (owner[:, None] == owner[None, :]))  # own spheres: masked below
-        out = jnp.minimum(out, jnp.min(jnp.where(owner[:, None] != owner[None, :], r - 2.0, jnp.inf)))
+    for a in range(s):  # each pair of swimmers once (a swimmer's own spheres are held apart by its arms)
+        for b in range(a):
+            d = pos[a][:, None, :] - pos[b][None, :, :]
+            out = jnp.minimum(out, jnp.min(jnp.sqrt(jnp.sum(d * d, -1))) - 2.0)
     return out
