@@ -198,6 +198,25 @@ def test_float32_jit_vmap(float32):
     np.testing.assert_allclose(np.asarray(new.centre[0]), np.stack([ref.x[0], ref.z[0]], -1), atol=2e-5)
 
 
+def test_float32_pair_in_the_free_fluid(float32):
+    # the free fluid's pair path (body-frame responses, jswim.swimmers.bodyframe) in the dtype users
+    # get: each swimmer's square cycle in turn, within float32 rounding of float64
+    scene = Scene(medium="free", swimmers=2, separation=30.0)
+    params = scene_params("ng", scene)
+    moves = [(s, d, k) for s in (1, 2) for d, k in SQUARE]
+    step = jax.jit(scene_step)
+    st = scene_reset(params)
+    for s, d, k in moves:
+        st, info = step(params, st, (s - 1, d - 1, float(k)), jax.random.PRNGKey(0))
+        assert not bool(info.contact)
+    assert st.centre.dtype == jnp.float32
+    with jax.enable_x64(True):
+        ref = scene_rollout("ng", moves, scene)
+    np.testing.assert_allclose(np.asarray(st.centre[:, 0]), ref.x[-1], atol=2e-5)
+    assert abs(ref.x[-1, 1] - 30.0) > 0.1  # swimmer 2 swam its own cycle (and was pushed by swimmer 1's)
+    np.testing.assert_allclose(np.asarray(st.centre[:, 1]), ref.z[-1], atol=1e-6)
+
+
 def test_float32_one_swimmer_near_a_wall(float32):
     # the unrolled solve in the dtype users get: a square cycle within float32 rounding of float64
     params = scene_params("ng", Scene(medium="wall", height=4.0))
