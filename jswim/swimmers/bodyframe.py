@@ -30,7 +30,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim.swimmers.forcefree import _chol_solve, _cholesky, _is_zero, axial_offsets, sphere_centres
-from jswim.swimmers.mobility import OSEEN_PREFACTOR, pair_entries
+from jswim.swimmers.mobility import OSEEN_PREFACTOR, oseen
 
 
 class Response(NamedTuple):
@@ -113,8 +113,7 @@ def sweep(centre: Array, tilt: Array, arms: Array, arm_rates: Array, resp: Respo
 def _pair_blocks(a: Array, b: Array) -> Array:
     """Oseen blocks ``(n_a, n_b, 2, 2)`` of the spheres at ``a`` per point force on those at ``b``
     (lab frame, x-z)."""
-    mxx, mxz, mzx, mzz = pair_entries(a[:, None, 0] - b[None, :, 0], a[:, None, 1], b[None, :, 1], False)
-    return jnp.stack([jnp.stack([mxx, mxz], -1), jnp.stack([mzx, mzz], -1)], -2)
+    return OSEEN_PREFACTOR * oseen(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
 
 
 def _one_response(arms: Array) -> tuple[Array, Array]:
