@@ -95,7 +95,7 @@ def test_core_bench_three_servers_down_one_interrupt_and_resume(tmp_path):
     base = [(r["row"], r["part"], r["swimmer"], r["direction"]) for r in rows if r["kind"] == "baseline"]
     assert len(base) == len(set(base)) == 2 * 6 and not any(r["row"] == "down" for r in rows)
     assert "reference (rule, not an LLM)" in text and "Q-learning" in text and "random" in text
-    assert "no rows yet: down (failed: cannot reach" in text
+    assert "missing rows: down curves (failed: cannot reach" in text and "missing rows: down noise (failed" in text
     assert "gpt-5: gpt-5 accepts only temperature 1" in text  # the deviation from T = 0, printed
     assert all((out / f"leaderboard.{ext}").exists() for ext in ("csv", "png", "pdf"))
     gpt5 = [r for r in rows if r["row"] == "gpt-5"]

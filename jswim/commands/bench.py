@@ -104,17 +104,16 @@ def main(args: argparse.Namespace) -> int:
     meta["status"] = "interrupted" if outcome.interrupted else "complete"
     runner.write_meta(out, meta)
     rows = _rows(jobs, models, mf, outcome.status)
-    paths = leaderboard.write_files(out, rows, meta)
+    missing = _missing(jobs, rows, meta["model_status"])
+    paths = leaderboard.write_files(out, rows, meta, missing)
     from jswim.console import terminal_width
 
     print(f"bench {suite.name}: {suite.about or 'user suite'} (seed {suite.seed}"
           + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "")
           + (f"; {suite.samples} samples of every LLM run" if (suite.samples or 1) > 1 else "") + ")")
     print(leaderboard.table_text(rows, width=terminal_width()))
-    on_board = {r["row"] for r in rows}
-    for m in models:  # a model with no finished run has no row: say so under the table, not only on stderr
-        if m.name not in on_board:
-            print(f"no rows yet: {m.name} ({meta['model_status'].get(m.name, 'not run')})")
+    for line in leaderboard.missing_text(missing):  # under the table, not only on stderr
+        print(line)
     print("success p: the paper's criterion, 95% Wilson interval; steps to learn counted from 1 over the runs that "
           "learned; suite $: what the model's calls cost over the whole suite")
     for line in _sent_notes(jobs):
@@ -144,6 +143,24 @@ def _sent_notes(jobs: list[Any]) -> list[str]:
             line = f"{j.label}: {note}"
             if line not in out:
                 out.append(line)
+    return out
+
+
+def _missing(jobs: list[Any], rows: list[dict[str, Any]], status: dict[str, str]) -> list[dict[str, Any]]:
+    """Every study folder of the bench that gave no leaderboard row, and why (its label's status,
+    else the last error its study printed, else that it has no finished run yet)."""
+    from jswim.bench import runner
+
+    have = {(r["kind"], r["part"]) if r["kind"] == "baseline" else (r["row"], r["part"]) for r in rows}
+    out = []
+    for j in jobs:
+        if ("baseline" if j.kind == "baseline" else j.label, j.part.name) in have:
+            continue
+        why = status.get(j.label, "not run")
+        if why in ("complete", "running"):
+            why = runner._last_error(j.log) if j.log is not None and j.log.exists() else "no finished run yet"
+        row = "Q-learning and random" if j.kind == "baseline" else j.label
+        out.append({"row": row, "kind": j.kind, "part": j.part.name, "why": why})
     return out
 
 
@@ -251,12 +268,14 @@ def show_text(folder: Path, width: int | None = None) -> str:
              + (f"; {meta['samples']} samples of every LLM run" if (meta.get("samples") or 1) > 1 else "")]
     lines += [f"  {name}: {status}" for name, status in (meta.get("model_status") or {}).items()]
     try:
-        rows = json.loads((folder / "leaderboard.json").read_text(encoding="utf-8")).get("rows") or []
+        board = json.loads((folder / "leaderboard.json").read_text(encoding="utf-8"))
     except (OSError, ValueError):
-        rows = []
+        board = {}
+    rows = board.get("rows") or []
     if rows:
         lines += ["", leaderboard.table_text(rows, width=width)]
     else:
         lines.append("no leaderboard yet: the same jswim bench command writes it")
+    lines += leaderboard.missing_text(board.get("missing") or [])
     lines.append(f"each model's studies: {folder}/<model>/<part>/ (jswim show on each)")
     return "\n".join(lines)

@@ -12,7 +12,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "run browser that replays each run with its prompts and replies. Works on "
                                    "finished and unfinished folders; writes the page and nothing else. Open it "
                                    "in any browser, offline.")
-    p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
+    p.add_argument("folder", help="a study folder written by jswim swim / jswim study, or a bench folder "
+                                  "(jswim bench: its leaderboard page and each part's page)")
     p.add_argument("--figures", default="auto", choices=("auto", "files", "draw", "none"),
                    help="auto (default): the folder's figures if they are newer than its runs, else drawn now; "
                         "files; draw; none")
@@ -25,8 +26,15 @@ def main(args: argparse.Namespace) -> int:
     from jswim.errors import ConfigError
     from jswim.viz.page import write_report
 
+    from jswim.viz.bench_page import is_bench, write_bench_report
+
     if not Path(args.folder).is_dir():
         raise ConfigError(f"{args.folder}: no such folder")
+    if is_bench(args.folder):  # the bench's page and each of its study folders' pages
+        path = write_bench_report(args.folder, figures="none" if args.figures == "none" else "draw", out=args.out)
+        print(f"bench report: {path} ({path.stat().st_size / 1024:.0f} KB) and each part's page; open it in a "
+              f"browser (file://{path.resolve()})")
+        return 0
     path = write_report(args.folder, figures=args.figures, out=args.out)
     print(f"report: {path} ({path.stat().st_size / 1024:.0f} KB); open it in a browser (file://{path.resolve()})")
     return 0

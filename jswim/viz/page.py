@@ -170,7 +170,7 @@ def _script_json(obj: Any) -> str:
     return dumps(obj, separators=(",", ":")).replace("</", "<\\/").replace("<!--", "<\\!--")
 
 
-def report_html(folder: str | Path, figures: str = "auto") -> str:
+def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str | Path] = ()) -> str:
     """The page of a study folder (see the module docstring); reads the folder only.
 
     Parameters
@@ -179,6 +179,10 @@ def report_html(folder: str | Path, figures: str = "auto") -> str:
         A study folder, finished or not.
     figures : {"auto", "files", "draw", "none"}
         Where the figures come from (see :func:`_figures`).
+    beside : sequence of paths
+        Other study folders whose baseline runs (Q-learning, random) are shown beside this
+        folder's in the summary, the figures (then drawn) and the run list: a bench's model
+        part next to the bench's baselines of that part (:mod:`jswim.viz.bench_page`).
 
     Raises
     ------
@@ -191,11 +195,21 @@ def report_html(folder: str | Path, figures: str = "auto") -> str:
     meta = read_metadata(folder)
     from jswim.overview import grid_order
 
-    rows = grid_order(read_runs(folder), meta)  # groups in the grid's order, not the finishing order
+    own = read_runs(folder)
     study = str(meta.get("study", "?"))
-    finished, status_text = _status(meta, rows)
-    note = None if finished else unfinished_note(meta.get("status"), len(rows), meta.get("n_planned"))
+    finished, status_text = _status(meta, own)
+    note = None if finished else unfinished_note(meta.get("status"), len(own), meta.get("n_planned"))
+    extra = []
+    if beside:
+        from jswim.viz.bench_page import beside_rows
+
+        extra = beside_rows([Path(b) for b in beside])
+        figures = "none" if figures == "none" else "draw"  # the folder's own files lack the baselines
+    rows = grid_order(own + extra, meta)  # groups in the grid's order, not the finishing order
     figs, fig_source = _figures(folder, study, rows, note, figures)
+    if extra:
+        fig_source += ("; with the bench's Q-learning and random runs of this part beside the model's ("
+                       + ", ".join(sorted({f"{Path(b).parent.name}/{Path(b).name}" for b in beside})) + ")")
     backend = (meta.get("identity") or {}).get("backend") or {}
     model = backend.get("model")
     index, blobs = [], []
@@ -204,7 +218,8 @@ def report_html(folder: str | Path, figures: str = "auto") -> str:
         entry["i"] = i
         index.append(entry)
         if r.get("x"):
-            t = track(r, read_transcript(folder, r["run_id"]) if r.get("agent") == "llm" else None)
+            t = track(r, read_transcript(folder, r["run_id"]) if r.get("agent") == "llm" and not r.get("beside")
+                      else None)
             blobs.append(f'<script type="text/plain" id="run-{i}">{_blob(run_payload(t))}</script>')
         else:
             blobs.append(f'<script type="text/plain" id="run-{i}">{_blob({"error": r.get("error"), "x": []})}</script>')
@@ -251,7 +266,8 @@ def report(folder: str | Path, figures: str = "auto", out: str | Path | None = N
     return write_report(folder, figures=figures, out=out)
 
 
-def write_report(folder: str | Path, figures: str = "auto", out: str | Path | None = None) -> Path:
+def write_report(folder: str | Path, figures: str = "auto", out: str | Path | None = None,
+                 beside: Sequence[str | Path] = ()) -> Path:
     """Write ``report.html`` into ``folder`` (or to ``out``) atomically; nothing else is written.
 
     Raises
@@ -260,7 +276,7 @@ def write_report(folder: str | Path, figures: str = "auto", out: str | Path | No
         Not a study folder; :class:`jswim.results.StudyFolderError` if the page cannot be written.
     """
     folder = Path(folder)
-    text = report_html(folder, figures=figures)
+    text = report_html(folder, figures=figures, beside=beside)
     path = Path(out) if out is not None else folder / REPORT
     with writing(path, "choose a writable --out path for the report"):
         atomic_write(path, text)
