@@ -12,7 +12,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                                    "shape to scale at each step, its trail, the step, action, X/a, stuck and clear "
                                    "events and the LLM's reply. Default: one run per agent from the same start. "
                                    "Only reads the folder (the animation goes to --out).")
-    p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
+    p.add_argument("folder", help="a study folder written by jswim swim / jswim study, or a bench folder "
+                                  "(one run per model, the reference rule and the baselines)")
+    p.add_argument("--part", default=None, metavar="NAME",
+                   help="on a bench folder: the suite part to show (default its first)")
     p.add_argument("--run", action="append", default=None, metavar="ID",
                    help="a run id to show (repeat for several, side by side); see jswim report or runs.csv")
     p.add_argument("--by", default="agent", choices=("agent", "zeta", "n_ht", "group", "variant", "init", "direction"),
@@ -38,7 +41,16 @@ def main(args: argparse.Namespace) -> int:
         raise ConfigError(f"--dpi must lie in [20, 400], got {args.dpi}")
     if not Path(args.folder).is_dir():
         raise ConfigError(f"{args.folder}: no such folder")
-    anim = build(args.folder, args.run, by=args.by, most=args.max, fps=args.fps, dpi=args.dpi)
+    from jswim.viz.bench_page import is_bench
+
+    if is_bench(args.folder):  # one run per model, the reference rule and the baselines, from one setting
+        from jswim.viz.animate import build_bench
+
+        if args.run:
+            raise ConfigError("--run names runs of a study folder; on a bench folder use --part NAME")
+        anim = build_bench(args.folder, args.part, most=args.max, fps=args.fps, dpi=args.dpi)
+    else:
+        anim = build(args.folder, args.run, by=args.by, most=args.max, fps=args.fps, dpi=args.dpi)
     out = Path(args.out) if args.out else Path(args.folder) / "animations" / "runs.gif"
     path = anim.save(out)
     print(f"{len(anim.tracks)} runs ({', '.join(t.run_id for t in anim.tracks)}), {anim.n_frames} frames at "

@@ -231,6 +231,53 @@ def build(folder_or_study: Any, run_ids: Sequence[str] | None = None, *, by: str
     return Animation(tracks, fps=fps, title=title, dpi=dpi)
 
 
+def build_bench(folder: str | Path, part: str | None = None, *, most: int = 4, fps: float = 4.0,
+                dpi: int = 80) -> Animation:
+    """An :class:`Animation` of a bench folder: one run per model, the reference rule, Q-learning and
+    random, from the same setting of one part (default the suite's first), left to right.
+
+    Raises
+    ------
+    ConfigError
+        An unknown part, or a part without finished runs.
+    """
+    from jswim.results import read_runs, read_transcript
+    from jswim.viz.bench_page import _read, part_folders
+
+    folder = Path(folder)
+    meta, _ = _read(folder)
+    found = part_folders(folder, meta)
+    names = list(dict.fromkeys(p for _, _, p, _ in found))
+    if part is None and names:
+        part = names[0]
+    if part not in names:
+        raise ConfigError(f"{folder}: the bench has no finished part {part!r}; its parts: {', '.join(names) or 'none'}")
+    sources = [(label, kind, sub) for label, kind, p, sub in found if p == part]
+    rows_of = {label: [r for r in read_runs(sub) if r.get("x") and r.get("status", "done") == "done"]
+               for label, _, sub in sources}
+    first = next((rs[0] for rs in rows_of.values() if rs), None)
+    if first is None:
+        raise ConfigError(f"{folder}: part {part!r} has no finished runs to animate yet")
+    same = lambda r: (r.get("swimmer"), r.get("direction"), r.get("zeta")) == \
+        (first.get("swimmer"), first.get("direction"), first.get("zeta"))
+    tracks = []
+    for label, kind, sub in sources:
+        agents = ("qlearning", "random") if kind == "baseline" else ("llm",)
+        for agent in agents:
+            r = next((r for r in sorted(rows_of[label], key=lambda r: str(r.get("run_id")))
+                      if r.get("agent") == agent and same(r)), None)
+            if r is None:
+                continue
+            r = dict(r)
+            if agent == "llm":
+                r["model"] = "reference rule" if kind == "reference" else label
+            tracks.append(track(r, read_transcript(sub, r["run_id"]) if agent == "llm" else None))
+    if not (0 < fps <= 60):
+        raise ConfigError(f"--fps must lie in (0, 60], got {fps}")
+    suite = (meta.get("suite") or {}).get("name", "?")
+    return Animation(tracks[:most], fps=fps, title=f"jswim bench {suite} · {part}", dpi=dpi)
+
+
 def animate(study: Any, run_ids: str | Sequence[str] | None = None, **kw: Any) -> Animation:
     """Runs of a study as an animation; in Jupyter it shows inline (a GIF).
 
