@@ -27,6 +27,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from jswim.errors import ConfigError
+from jswim.viz import worlds
 from jswim.viz.tracks import Track, fmt_action, track, view_box
 
 #: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.plots.AGENT_STYLE`).
@@ -314,8 +315,12 @@ def _build(anim: Animation):
     tracks = anim.tracks
     box = view_box(tracks)
     width = box[1] - box[0]
-    follow = width > 16.0  # a long run: the view follows the swimmers instead of holding all of it
-    view_w = 12.0 if follow else width
+    spheres = not tracks[0].model.planar
+    # A long run: the view follows the swimmers, always wide enough for the whole body (an NG
+    # swimmer at arms (10, 10) is 22 a long); a pair is shown whole (both swimmers in view).
+    hold = max(worlds.follow_width(t.bodies, spheres, 12.0) for t in tracks)
+    follow = width > max(16.0, hold + 4.0) and all(t.n_swimmers == 1 for t in tracks)
+    view_w = hold if follow else width
     view_h = max(box[3] - box[2], 4.0)
     n = len(tracks)
     panel_w = float(np.clip(1.1 + view_w * 0.28, 2.6, 4.2))
@@ -343,45 +348,51 @@ def _build(anim: Animation):
         for s in ax.spines.values():
             s.set_color("0.7")
         ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
+        worlds.draw_fixed(ax, t.world, (box[0], box[1]))
         ax.set_title(_caption(t, tracks), fontsize=7, pad=2)
         ax.annotate("", xy=(0.97, 0.06), xytext=(0.82, 0.06), xycoords="axes fraction",
                     arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8) if t.direction > 0
                     else dict(arrowstyle="<-", color="0.35", lw=0.8))
         ax.text(0.895, 0.09, "target", transform=ax.transAxes, fontsize=5.5, ha="center", color="0.35")
         color = AGENT_COLORS.get(t.agent, "C0")
-        (trail,) = ax.plot([], [], "-", color=color, lw=0.8, alpha=0.6, zorder=2)
-        (stroke,) = ax.plot([], [], "-", color=STROKE_COLOR, lw=2.0, alpha=0.8, zorder=2)
-        if t.model.planar:
-            (body,) = ax.plot([], [], "-", color="black", lw=2.4, solid_capstyle="round", zorder=4)
-            (joints,) = ax.plot([], [], "o", color=color, ms=3, zorder=5)
-            spheres: list[Any] = []
-        else:
-            (body,) = ax.plot([], [], "-", color="0.3", lw=0.8, zorder=3)
-            joints = None
-            spheres = [ax.add_patch(Circle((0, 0), 1.0, fc="white", ec=color, lw=1.2, zorder=4))
-                       for _ in range(t.points.shape[1])]
+        artists = []
+        for j in range(t.n_swimmers):  # every swimmer of the world, swimmer 2 in its own edge colour
+            c_j = color if j == 0 else worlds.SECOND_SWIMMER
+            (trail,) = ax.plot([], [], "-", color=c_j, lw=0.8, alpha=0.6, zorder=2)
+            (stroke,) = ax.plot([], [], "-", color=STROKE_COLOR, lw=2.0, alpha=0.8, zorder=2)
+            if t.model.planar:
+                (body,) = ax.plot([], [], "-", color="black", lw=2.4, solid_capstyle="round", zorder=4)
+                (joints,) = ax.plot([], [], "o", color=c_j, ms=3, zorder=5)
+                spheres: list[Any] = []
+            else:
+                (body,) = ax.plot([], [], "-", color="0.3", lw=0.8, zorder=3)
+                joints = None
+                spheres = [ax.add_patch(Circle((0, 0), 1.0, fc="white", ec=c_j, lw=1.2, zorder=4))
+                           for _ in range(t.bodies.shape[2])]
+            artists.append((trail, stroke, body, joints, spheres))
         (centre,) = ax.plot([], [], "+", color=color, ms=5, zorder=6)
         txt = fig.text(i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=6.5, family="monospace")
-        state.append((t, ax, trail, stroke, body, joints, spheres, centre, txt))
+        state.append((t, ax, artists, centre, txt))
 
     def draw(frame: int):
-        for t, ax, trail, stroke, body, joints, spheres, centre, txt in state:
+        for t, ax, artists, centre, txt in state:
             k = min(frame, t.n_steps)
-            pts = t.points[k]
-            trail.set_data(t.x[: k + 1], t.y[: k + 1])
-            if t.stroke is not None and k > t.stroke[0]:
-                s0 = t.stroke[0]
-                stroke.set_data(t.x[s0: k + 1], t.y[s0: k + 1])
-            else:
-                stroke.set_data([], [])
-            body.set_data(pts[:, 0], pts[:, 1])
-            if joints is not None:
-                joints.set_data(pts[1:-1, 0], pts[1:-1, 1])
-            for c, p in zip(spheres, pts):
-                c.center = (float(p[0]), float(p[1]))
-            centre.set_data([t.x[k]], [t.y[k]])
+            for j, (trail, stroke, body, joints, spheres) in enumerate(artists):
+                pts, pos = t.bodies[k, j], t.positions[:, j]
+                trail.set_data(pos[: k + 1, 0], pos[: k + 1, 1])
+                if t.stroke is not None and k > t.stroke[0]:
+                    s0 = t.stroke[0]
+                    stroke.set_data(pos[s0: k + 1, 0], pos[s0: k + 1, 1])
+                else:
+                    stroke.set_data([], [])
+                body.set_data(pts[:, 0], pts[:, 1])
+                if joints is not None:
+                    joints.set_data(pts[1:-1, 0], pts[1:-1, 1])
+                for c, p in zip(spheres, pts):
+                    c.center = (float(p[0]), float(p[1]))
+            centre.set_data([t.positions[k, 0, 0]], [t.positions[k, 0, 1]])
             if follow:
-                x0 = float(np.clip(t.x[k] - view_w / 2, box[0], box[1] - view_w))
+                x0 = float(np.clip(t.positions[k, 0, 0] - view_w / 2, box[0], box[1] - view_w))
                 ax.set_xlim(x0, x0 + view_w)
             txt.set_text(_frame_text(t, k))
         return []
@@ -395,7 +406,7 @@ def _frame_text(t: Track, k: int) -> str:
     disp = "X/a" if t.direction > 0 else "\u2212X/a"
     lines = [f"step {k:>3}/{t.n_steps}   {disp} = {t.direction * t.x[k]:+.4f}"]
     if k == 0:
-        lines.append("start " + ("(" + ", ".join(f"{v:.3g}" for v in t.dofs[0]) + ")"))
+        lines.append("start " + ("(" + ", ".join(f"{n} {v:.3g}" for n, v in zip(t.dof_names, t.dofs[0])) + ")"))
     else:
         i = k - 1
         events = []

@@ -34,6 +34,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from jswim.results import atomic_write, dumps, is_failed, read_metadata, read_runs, read_transcript, writing
+from jswim.viz import worlds
 from jswim.viz.tracks import Track, track
 
 REPORT = "report.html"
@@ -67,7 +68,9 @@ def run_payload(t: Track) -> dict[str, Any]:
         "planar": bool(t.model.planar), "model": t.model.label, "n_dof": t.model.n_dof,
         "lo": t.model.lo, "hi": t.model.hi,
         "x": _round(t.x), "y": _round(t.y), "theta": _round(t.theta),
-        "pts": _round(t.points, 4), "dofs": _round(t.dofs, 4),
+        "pts": _round(t.points, 4), "dofs": _round(t.dofs, 4), "dof_names": t.dof_names,
+        # every swimmer (N + 1, S, P, 2) and its position (N + 1, S, 2); the wall and obstacles
+        "bodies": _round(t.bodies, 4), "pos": _round(t.positions, 4), **worlds.payload(t.world),
         "actions": [list(a) for a in t.actions], "stuck": t.stuck.astype(int).tolist(),
         "cleared": t.cleared.astype(int).tolist(), "failed": t.failed.astype(int).tolist(),
         "stroke": list(t.stroke) if t.stroke else None, "success": t.success, "replayed": t.replayed,
@@ -152,7 +155,31 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
     body = "".join("<tr>" + "".join(f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
                                     for c, v in zip(cols, r)) + "</tr>" for r in cells)
     return (f'<table class="summary"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
-            f'<p class="note">{html.escape(SUMMARY_NOTE)}</p>')
+            f'<p class="note">{html.escape(SUMMARY_NOTE)}</p>' + _scenes_html(rows))
+
+
+def _table_html(cols: Sequence[Any], cells: Sequence[Sequence[str]], table_id: str) -> str:
+    head = "".join(f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols)
+    body = "".join("<tr>" + "".join(f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
+                                    for c, v in zip(cols, r)) + "</tr>" for r in cells)
+    return f'<table class="summary" id="{table_id}"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+
+
+def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
+    """A wall or pair study's own table (per cycle, per step, fates, mean height), as ``jswim show``
+    prints it; nothing for other studies."""
+    if not any(r.get("scene") for r in rows):
+        return ""
+    from jswim.studies.scenes import scene_summary, table, table_note  # lazy: the scene studies load JAX
+
+    summary = scene_summary([dict(r) for r in rows])
+    cols, cells = table(summary)
+    note = table_note(summary)
+    return ('<h3>Scenes</h3>' + _table_html(cols, cells, "scenes")
+            + '<p class="note">X/a per cycle and per step: in the target direction; fates: trapped, escaped or '
+              'gliding (the wall study\'s rule); mean height: the middle sphere over the second half, in a; '
+              'x stroke: speed over the best square stroke\'s in the same scene.'
+            + (f" {html.escape(note)}" if note else "") + "</p>")
 
 
 def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:

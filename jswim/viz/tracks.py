@@ -27,6 +27,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from jswim.swimmers.models import SwimmerModel, make_model
+from jswim.viz.worlds import World, per_swimmer, world_of
 
 #: A step whose |dX| is below this is "stuck" (the prompt's rule, :mod:`jswim.prompt`).
 STUCK_TOL = 1e-6
@@ -132,6 +133,27 @@ class Track:
     replayed: bool = False
     row: dict[str, Any] = field(default_factory=dict, repr=False)
     steps_log: list[dict[str, Any]] = field(default_factory=list, repr=False)
+    #: The run's world (:mod:`jswim.viz.worlds`): swimmers, wall, obstacles, start poses.
+    world: World = field(default_factory=World, repr=False)
+    #: Every swimmer's body in the lab frame, (N + 1, S, P, 2); ``points`` is swimmer 1's.
+    bodies: np.ndarray | None = field(default=None, repr=False)
+    #: Every swimmer's reference position (centroid; a scene's middle sphere), (N + 1, S, 2).
+    positions: np.ndarray | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if self.bodies is None:
+            self.bodies = self.points[:, None]
+        if self.positions is None:
+            self.positions = np.stack([self.x, self.y], axis=-1)[:, None]
+
+    @property
+    def n_swimmers(self) -> int:
+        return int(self.bodies.shape[1])
+
+    @property
+    def dof_names(self) -> list[str]:
+        """``D1..Dk``: every DOF the actions move (a pair: both swimmers')."""
+        return [f"D{i + 1}" for i in range(self.dofs.shape[1])]
 
     @property
     def n_steps(self) -> int:
@@ -218,10 +240,16 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
     levels0 = _levels(meta.get("levels0")) or _levels(row.get("init"))
     n_dof = (len(dofs[0]) if isinstance(dofs, list) and dofs and isinstance(dofs[0], list) else None) \
         or (len(levels0) if levels0 else None) or max((a[0] for a in actions), default=2)
+    world = world_of(row)
+    n_sw = world.n_swimmers
+    if n_sw > 1 and n_dof is not None and not levels0:
+        n_dof = -(-n_dof // n_sw)  # the actions name joint DOFs: D1..D4 for a pair of 2-DOF swimmers
     model = model_of(row, n_dof)
     if levels0 is None:
         levels0 = [1.0] * model.n_dof
     d0 = np.array([model.lo + (model.hi - model.lo) * v for v in levels0], np.float64)
+    if n_sw > 1 and d0.size == model.n_dof:
+        d0 = np.tile(d0, n_sw)  # every swimmer starts from the same shape (the scene's rule)
     if isinstance(dofs, list) and len(dofs) >= n and dofs and isinstance(dofs[0], list):
         arr = np.asarray(dofs, np.float64)
         d = np.concatenate([d0[None], arr[-n:]]) if len(arr) == n else arr[: n + 1]
@@ -238,9 +266,17 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         ys = ys if ys is not None else ys2
         th = th if th is not None else th2
     x = np.concatenate([[0.0], xs])
-    y = np.concatenate([[0.0], ys if ys is not None else np.zeros(n)])
+    y0 = world.start[0][1] if row.get("scene") else 0.0  # a scene's step 0 is at its start height
+    if row.get("scene"):
+        theta0 = world.start[0][2]
+    y = np.concatenate([[y0], ys if ys is not None else np.full(n, y0)])
     theta = np.concatenate([[theta0], th if th is not None else np.full(n, theta0)])
-    pts = place(outline(model, d), x, y, theta)
+    if row.get("scene"):
+        bodies, positions = _scene_bodies(row, world, model, d, n)
+        pts = bodies[:, 0]
+    else:
+        pts = place(outline(model, d), x, y, theta)
+        bodies, positions = pts[:, None], np.stack([x, y], axis=-1)[:, None]
     stuck = np.abs(np.diff(x)) < STUCK_TOL
     if isinstance(row.get("stuck"), list) and len(row["stuck"]) >= n:
         stuck = np.asarray([bool(v) for v in row["stuck"][:n]])
@@ -263,7 +299,38 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         model=model, direction=int(row.get("direction", 1) or 1),
         x=x, y=y, theta=theta, dofs=d, points=pts, actions=actions, stuck=stuck, cleared=cleared, failed=failed,
         replies=replies, stroke=stroke, success=bool(row.get("success")), replayed=replayed, row=row,
-        steps_log=steps_log)
+        steps_log=steps_log, world=world, bodies=bodies, positions=positions)
+
+
+def _scene_bodies(row: Mapping[str, Any], world: World, model: SwimmerModel, d: np.ndarray,
+                  n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every swimmer of a scene run, (N + 1, S, P, 2), and their middle spheres, (N + 1, S, 2).
+
+    A scene records per step and swimmer the x displacement from its start (``xs``), the middle
+    sphere's height (``heights``) and the axis tilt (``tilts``); step 0 is the world's start pose.
+    """
+    s_n = world.n_swimmers
+    start = np.asarray(world.start, np.float64)  # (S, 3)
+    dx = per_swimmer(row, "xs", n, s_n)
+    if dx is None:
+        dx = np.repeat(np.asarray(row.get("x") or [0.0] * n, np.float64)[:n, None], s_n, axis=1)
+    hz = per_swimmer(row, "heights", n, s_n)
+    if hz is None:
+        hz = np.repeat(np.asarray(row.get("y") or [start[0, 1]] * n, np.float64)[:n, None], s_n, axis=1)
+    tl = per_swimmer(row, "tilts", n, s_n)
+    if tl is None:
+        tl = np.repeat(start[None, :, 2], n, axis=0)
+    px = start[None, :, 0] + np.concatenate([np.zeros((1, s_n)), dx])
+    pz = np.concatenate([start[None, :, 1], hz])
+    pt = np.concatenate([start[None, :, 2], tl])
+    k = model.n_dof
+    bodies = []
+    for s in range(s_n):
+        shape = outline(model, d[:, s * k:(s + 1) * k] if d.shape[1] >= (s + 1) * k else d[:, :k])
+        if not model.planar:  # a scene places the middle sphere (not the centroid) at its position
+            shape = shape - shape[..., 1:2, :]
+        bodies.append(place(shape, px[:, s], pz[:, s], pt[:, s]))
+    return np.stack(bodies, axis=1), np.stack([px, pz], axis=-1)
 
 
 def _replay_pose(row: Mapping[str, Any], model: SwimmerModel, levels0: Sequence[float],
@@ -285,12 +352,12 @@ def _replay_pose(row: Mapping[str, Any], model: SwimmerModel, levels0: Sequence[
 
 
 def view_box(tracks: Sequence[Track], pad: float = 1.5) -> tuple[float, float, float, float]:
-    """``(xmin, xmax, ymin, ymax)`` holding every body of ``tracks`` at every step, with ``pad``."""
-    pts = np.concatenate([t.points.reshape(-1, 2) for t in tracks]) if tracks else np.zeros((1, 2))
-    r = 1.0 if tracks and not tracks[0].model.planar else 0.0  # sphere radius
-    lo = pts.min(axis=0) - pad - r
-    hi = pts.max(axis=0) + pad + r
-    return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+    """``(xmin, xmax, ymin, ymax)`` holding every body of every swimmer of ``tracks`` at every step,
+    the wall and the obstacles, with ``pad`` (:func:`jswim.viz.worlds.view_box`)."""
+    from jswim.viz import worlds
+
+    return worlds.view_box([t.bodies for t in tracks], [t.world for t in tracks],
+                           bool(tracks) and not tracks[0].model.planar, pad)
 
 
 def fmt_action(action: tuple[int, float]) -> str:

@@ -95,12 +95,26 @@
   }
   function prepare(d) {
     if (!d.x || !d.x.length) return;
-    var x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity, r = d.planar ? 0 : 1;
-    d.pts.forEach(function (frame) { frame.forEach(function (p) {
-      x0 = Math.min(x0, p[0] - r); x1 = Math.max(x1, p[0] + r); y0 = Math.min(y0, p[1] - r); y1 = Math.max(y1, p[1] + r);
+    var x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity, r = d.planar ? 0 : 1, ext = 0;
+    d.bodies = d.bodies || d.pts.map(function (f) { return [f]; });
+    d.pos = d.pos || d.x.map(function (x, i) { return [[x, d.y[i]]]; });
+    d.bodies.forEach(function (frame) { frame.forEach(function (body) {
+      var bx0 = Infinity, bx1 = -Infinity;
+      body.forEach(function (p) {
+        x0 = Math.min(x0, p[0] - r); x1 = Math.max(x1, p[0] + r); y0 = Math.min(y0, p[1] - r); y1 = Math.max(y1, p[1] + r);
+        bx0 = Math.min(bx0, p[0] - r); bx1 = Math.max(bx1, p[0] + r);
+      });
+      ext = Math.max(ext, bx1 - bx0);
     }); });
+    if (d.wall) y0 = Math.min(y0, -0.6);
+    (d.obstacles || []).forEach(function (o) {
+      x0 = Math.min(x0, o[0] - o[2]); x1 = Math.max(x1, o[0] + o[2]); y0 = Math.min(y0, o[1] - o[2]); y1 = Math.max(y1, o[1] + o[2]);
+    });
     d.box = [x0 - 1, x1 + 1, y0 - 1, y1 + 1];
-    d.follow = (x1 - x0) > 20;
+    // A long run is followed by a window that always holds the whole swimmer (an NG swimmer at arms
+    // (10, 10) is 22 a long), never a fixed 16 a; a pair far apart is shown whole.
+    d.followW = Math.max(16, ext + 4);
+    d.follow = d.bodies[0].length === 1 && (x1 - x0) > Math.max(20, d.followW + 4);
   }
 
   // -- the viewer --------------------------------------------------------------------------------
@@ -196,7 +210,7 @@
   function draw(d, k) {
     var cv = document.getElementById("swim"), ctx = cv.getContext("2d");
     var W = cv.width, H = cv.height, b = d.box.slice(), r = runs[st.sel];
-    if (d.follow) { var w = 16; b[0] = d.x[k] - w / 2; b[1] = d.x[k] + w / 2; }
+    if (d.follow) { var w = d.followW, c = d.pos[k][0][0]; b[0] = c - w / 2; b[1] = c + w / 2; }
     var s = Math.min(W / (b[1] - b[0]), H / (b[3] - b[2]));
     var ox = (W - s * (b[1] - b[0])) / 2, oy = (H - s * (b[3] - b[2])) / 2;
     function X(x) { return ox + (x - b[0]) * s; }
@@ -207,17 +221,35 @@
     for (var gy = Math.ceil(b[2]); gy <= b[3]; gy++) { ctx.beginPath(); ctx.moveTo(0, Y(gy)); ctx.lineTo(W, Y(gy)); ctx.stroke(); }
     ctx.setLineDash([4, 4]); ctx.strokeStyle = "#888"; ctx.beginPath(); ctx.moveTo(X(0), 0); ctx.lineTo(X(0), H); ctx.stroke();
     ctx.setLineDash([]);
+    if (d.wall) {  // the no-slip wall: the plane y = 0, the fluid above it
+      ctx.fillStyle = "#d9cfc2"; ctx.fillRect(0, Y(0), W, H - Y(0));
+      ctx.strokeStyle = "#6b5b45"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(0, Y(0)); ctx.lineTo(W, Y(0)); ctx.stroke();
+      ctx.fillStyle = "#6b5b45"; ctx.font = "12px sans-serif"; ctx.fillText("wall", W - 40, Math.min(H - 30, Y(0) + 14));
+    }
+    (d.obstacles || []).forEach(function (o) {
+      ctx.beginPath(); ctx.arc(X(o[0]), Y(o[1]), o[2] * s, 0, 2 * Math.PI);
+      ctx.fillStyle = "#9a8c7a"; ctx.fill(); ctx.strokeStyle = "#6b5b45"; ctx.lineWidth = 1; ctx.stroke();
+    });
     var color = COLORS[r.agent] || "#333";
-    ctx.strokeStyle = color; ctx.globalAlpha = 0.7; ctx.lineWidth = 1.5; ctx.beginPath();
-    for (var i = 0; i <= k; i++) { if (i) ctx.lineTo(X(d.x[i]), Y(d.y[i])); else ctx.moveTo(X(d.x[i]), Y(d.y[i])); }
-    ctx.stroke();
-    if (d.stroke && k > d.stroke[0]) {
-      ctx.strokeStyle = "#009e73"; ctx.lineWidth = 4; ctx.beginPath();
-      for (i = d.stroke[0]; i <= k; i++) { if (i > d.stroke[0]) ctx.lineTo(X(d.x[i]), Y(d.y[i])); else ctx.moveTo(X(d.x[i]), Y(d.y[i])); }
+    var swColors = [color, "#CC79A7", "#56B4E9", "#F0E442"];
+    for (var j = 0; j < d.bodies[k].length; j++) {
+      ctx.strokeStyle = swColors[j % swColors.length]; ctx.globalAlpha = 0.7; ctx.lineWidth = 1.5; ctx.beginPath();
+      for (var i = 0; i <= k; i++) {
+        var q = d.pos[i][j]; if (i) ctx.lineTo(X(q[0]), Y(q[1])); else ctx.moveTo(X(q[0]), Y(q[1]));
+      }
       ctx.stroke();
+      if (d.stroke && k > d.stroke[0]) {
+        ctx.strokeStyle = "#009e73"; ctx.lineWidth = 4; ctx.beginPath();
+        for (i = d.stroke[0]; i <= k; i++) {
+          q = d.pos[i][j]; if (i > d.stroke[0]) ctx.lineTo(X(q[0]), Y(q[1])); else ctx.moveTo(X(q[0]), Y(q[1]));
+        }
+        ctx.stroke();
+      }
     }
     ctx.globalAlpha = 1;
-    var p = d.pts[k];
+    st.drawn = d.bodies[k].length;
+    for (j = 0; j < d.bodies[k].length; j++) { drawBody(d.bodies[k][j], swColors[j % swColors.length]); }
+    function drawBody(p, color) {
     if (d.planar) {
       ctx.strokeStyle = "#111"; ctx.lineWidth = Math.max(3, 0.09 * s); ctx.lineCap = "round"; ctx.lineJoin = "round";
       ctx.beginPath(); p.forEach(function (q, j) { if (j) ctx.lineTo(X(q[0]), Y(q[1])); else ctx.moveTo(X(q[0]), Y(q[1])); });
@@ -232,7 +264,8 @@
         ctx.fillStyle = "#fff"; ctx.fill(); ctx.strokeStyle = color; ctx.lineWidth = 2; ctx.stroke();
       });
     }
-    ctx.strokeStyle = color; ctx.lineWidth = 2; var cx = X(d.x[k]), cy = Y(d.y[k]);
+    }
+    ctx.strokeStyle = color; ctx.lineWidth = 2; var cx = X(d.pos[k][0][0]), cy = Y(d.pos[k][0][1]);
     ctx.beginPath(); ctx.moveTo(cx - 6, cy); ctx.lineTo(cx + 6, cy); ctx.moveTo(cx, cy - 6); ctx.lineTo(cx, cy + 6); ctx.stroke();
     // scale bar (one a) and the text of the step
     ctx.strokeStyle = "#333"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(12, H - 14); ctx.lineTo(12 + s, H - 14); ctx.stroke();
@@ -256,9 +289,13 @@
     ctx.fillText("target " + (d.direction > 0 ? "\u2192" : "\u2190"), W - 90, H - 12);
   }
 
+  function dofList(d, k) {
+    var names = d.dof_names || [];
+    return d.dofs[k].map(function (v, i) { return (names[i] ? names[i] + " " : "") + num(v, 3); }).join(", ");
+  }
   function stepHtml(d, k) {
     if (k === 0) {
-      return "<h3>Start</h3><p>DOF values (" + d.dofs[0].map(function (v) { return num(v, 3); }).join(", ") +
+      return "<h3>Start</h3><p>" + (d.world ? esc(d.world) + " \u00b7 " : "") + "DOF values (" + dofList(d, 0) +
         "), X/a = 0. Press \u25b6 or step through the run.</p>";
     }
     var i = k - 1, tags = [];
@@ -272,7 +309,7 @@
     var h = "<h3>Step " + k + ": action " + action(d.actions[i]) + "</h3><p>" + tags.join("") +
       " X/a " + signed(d.x[i], 4) + " \u2192 " + signed(d.x[k], 4) + " (progress toward the target " +
       signed(d.direction * (d.x[k] - d.x[i]), 4) + ") \u00b7 DOF values (" +
-      d.dofs[k].map(function (v) { return num(v, 3); }).join(", ") + ")</p>";
+      dofList(d, k) + ")</p>";
     var step = d.steps[i];
     if (!step) return h;
     h += "<h3>Prompt sent (exact)</h3><pre class=\"prompt\">" + esc(step.prompt || "") + "</pre>";
@@ -311,7 +348,8 @@
   // For scripts and tests (the page's own state, read-only apart from these controls).
   window.jswimReport = {
     opened: opened, select: select, play: play, pause: pause,
-    step: function () { return st.k; }, steps: function () { return st.data && st.data.actions ? st.data.actions.length : 0; },
+    step: function () { return st.k; }, drawn: function () { return st.drawn || 0; },
+    data: function () { return st.data; }, steps: function () { return st.data && st.data.actions ? st.data.actions.length : 0; },
     listed: function () { return document.querySelectorAll("#run-list tbody tr").length; },
     finished: D.finished
   };

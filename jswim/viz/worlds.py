@@ -1,0 +1,150 @@
+"""What a run's world holds, read from the folder's record, and how it is drawn (once, for every picture).
+
+A run row says which world it swam in: a scene row carries ``scene`` (the scene's JSON: medium,
+height, tilt, swimmers, separation, obstacles) and per-step, per-swimmer ``xs``, ``heights`` and
+``tilts``; a row without one is the paper's bulk fluid, one swimmer starting at the origin.
+:func:`world_of` turns that record into a :class:`World`, so the report page, ``jswim animate`` and
+the figures that draw swimmers all draw the same things: every swimmer, the wall (the plane
+``y = 0``, the scene's ``z = 0``), the obstacles, each swimmer's start pose at step 0 (for a wall
+or a pair run: the middle sphere at ``y = h``, swimmer ``k`` at ``x = k D``), and a view that holds
+every body whole. Keyed by the record only (no import of the environment), so a world recorded
+the same way by another environment is drawn the same way.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+#: Colours of the world's fixed parts (shared by the page's canvas and matplotlib).
+WALL_COLOR = "#6b5b45"
+OBSTACLE_COLOR = "#9a8c7a"
+#: Edge colours of swimmer 1, 2, ... (swimmer 1 keeps the agent's colour).
+SECOND_SWIMMER = "#CC79A7"
+
+
+@dataclass(frozen=True)
+class World:
+    """The fixed parts of a run's world and its start, from the run's record.
+
+    Attributes
+    ----------
+    n_swimmers : int
+    wall : bool
+        A no-slip wall at ``y = 0`` (the scene's ``z = 0``); heights are above it.
+    obstacles : tuple of (x, y, radius)
+        Fixed spheres, in ``a``.
+    start : tuple of (x, y, tilt)
+        Each swimmer's start pose: the middle sphere's (or centroid's) position in ``a`` and the
+        axis angle in rad.
+    medium : str
+        ``"bulk"`` (the paper's formula), ``"free"`` or ``"wall"``.
+    """
+
+    n_swimmers: int = 1
+    wall: bool = False
+    obstacles: tuple[tuple[float, float, float], ...] = ()
+    start: tuple[tuple[float, float, float], ...] = ((0.0, 0.0, 0.0),)
+    medium: str = "bulk"
+    separation: float | None = None
+    extra: dict[str, Any] = field(default_factory=dict, compare=False)
+
+    def describe(self) -> str:
+        """A short line for captions: ``"wall, h = 3 a"``, ``"pair, D = 30 a"``, ``""`` for bulk."""
+        bits = []
+        if self.wall:
+            bits.append(f"wall, h = {self.start[0][1]:g} a")
+        if self.n_swimmers > 1:
+            bits.append(f"{self.n_swimmers} swimmers, D = {self.separation:g} a")
+        if self.obstacles:
+            bits.append(f"{len(self.obstacles)} obstacle(s)")
+        return ", ".join(bits)
+
+
+def world_of(row: Mapping[str, Any]) -> World:
+    """The :class:`World` a run row records (its ``scene``; none: the bulk fluid)."""
+    raw = row.get("scene")
+    if not raw:
+        return World()
+    try:
+        sc = json.loads(raw) if isinstance(raw, str) else dict(raw)
+    except (TypeError, ValueError):
+        return World()
+    n = int(sc.get("swimmers") or 1)
+    h = float(sc.get("height", 0.0) or 0.0)
+    tilt = float(sc.get("tilt", 0.0) or 0.0)
+    d = float(sc.get("separation", 0.0) or 0.0)
+    obstacles = tuple((float(o[0]), float(o[1]), float(o[2])) for o in sc.get("obstacles") or ())
+    return World(n_swimmers=n, wall=sc.get("medium") == "wall", obstacles=obstacles,
+                 start=tuple((k * d, h, tilt) for k in range(n)), medium=str(sc.get("medium", "bulk")),
+                 separation=d if n > 1 else None)
+
+
+def per_swimmer(row: Mapping[str, Any], key: str, n: int, n_swimmers: int) -> np.ndarray | None:
+    """A per-step, per-swimmer record (``xs``, ``heights``, ``tilts``) as an (n, S) array, or None."""
+    v = row.get(key)
+    if not isinstance(v, list) or len(v) < n:
+        return None
+    try:
+        a = np.asarray([[float(u) for u in (s if isinstance(s, list) else [s])] for s in v[:n]], np.float64)
+    except (TypeError, ValueError):
+        return None
+    return a if a.ndim == 2 and a.shape[1] == n_swimmers else None
+
+
+def dof_names(n_dof: int, n_swimmers: int) -> list[str]:
+    """The DOFs the actions move: ``D1..D{S n}`` (a pair of NG swimmers: D1, D2 of swimmer 1, D3, D4 of 2)."""
+    return [f"D{i + 1}" for i in range(n_dof * n_swimmers)]
+
+
+def view_box(bodies: Sequence[np.ndarray], worlds: Sequence[World], spheres: bool,
+             pad: float = 1.5) -> tuple[float, float, float, float]:
+    """``(xmin, xmax, ymin, ymax)`` holding every body (each (N + 1, S, P, 2)) at every step, the
+    wall's line and the obstacles, with ``pad`` (``a``) around."""
+    pts = np.concatenate([b.reshape(-1, 2) for b in bodies]) if bodies else np.zeros((1, 2))
+    r = 1.0 if spheres else 0.0
+    lo = pts.min(axis=0) - pad - r
+    hi = pts.max(axis=0) + pad + r
+    for w in worlds:
+        if w.wall:
+            lo[1] = min(lo[1], -0.6)
+        for ox, oy, orad in w.obstacles:
+            lo = np.minimum(lo, [ox - orad - pad, oy - orad - pad])
+            hi = np.maximum(hi, [ox + orad + pad, oy + orad + pad])
+    return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+
+
+def body_extent(bodies: np.ndarray, spheres: bool) -> float:
+    """The longest a swimmer gets along x over the run (``a``, sphere radii included)."""
+    span = bodies[..., 0].max(axis=-1) - bodies[..., 0].min(axis=-1)  # (N + 1, S)
+    return float(span.max()) + (2.0 if spheres else 0.0)
+
+
+def follow_width(bodies: np.ndarray, spheres: bool, at_least: float) -> float:
+    """The width of a view that follows a swimmer and always holds it whole (``a``)."""
+    return max(at_least, body_extent(bodies, spheres) + 4.0)
+
+
+def draw_fixed(ax: Any, world: World, xlim: tuple[float, float] | None = None) -> list[Any]:
+    """Draw the world's wall and obstacles on a matplotlib axis; returns the artists."""
+    from matplotlib.patches import Circle, Rectangle
+
+    out: list[Any] = []
+    if world.wall:
+        x0, x1 = xlim if xlim is not None else ax.get_xlim()
+        big = max(abs(x0), abs(x1)) * 4 + 1e3  # wide enough for a view that follows the swimmer
+        out.append(ax.add_patch(Rectangle((-big, -50.0), 2 * big, 50.0, fc="#d9cfc2", ec="none", zorder=1.5,
+                                          hatch="///")))
+        out.append(ax.axhline(0.0, color=WALL_COLOR, lw=1.6, zorder=1.6))
+    for ox, oy, orad in world.obstacles:
+        out.append(ax.add_patch(Circle((ox, oy), orad, fc=OBSTACLE_COLOR, ec=WALL_COLOR, lw=0.8, zorder=3)))
+    return out
+
+
+def payload(world: World) -> dict[str, Any]:
+    """What the page's canvas needs to draw the world's fixed parts."""
+    return {"wall": world.wall, "obstacles": [list(o) for o in world.obstacles], "n_swimmers": world.n_swimmers,
+            "world": world.describe()}
