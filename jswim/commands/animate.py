@@ -53,6 +53,9 @@ def main(args: argparse.Namespace) -> int:
         anim = build(args.folder, args.run, by=args.by, most=args.max, fps=args.fps, dpi=args.dpi)
     out = Path(args.out) if args.out else Path(args.folder) / "animations" / "runs.gif"
     path = anim.save(out)
-    print(f"{len(anim.tracks)} runs ({', '.join(t.run_id for t in anim.tracks)}), {anim.n_frames} frames at "
-          f"{args.fps:g} steps/s: {path} ({path.stat().st_size / 1024:.0f} KB)")
+    frames = anim.frames_written or anim.n_frames
+    steps = max(t.n_steps for t in anim.tracks)
+    print(f"{len(anim.tracks)} runs ({', '.join(t.run_id for t in anim.tracks)}), {steps} steps at {args.fps:g} "
+          f"steps/s, {frames} frames in the file (the start, a frame per step that changes, the last held 1 s): "
+          f"{path} ({path.stat().st_size / 1024:.0f} KB)")
     return 0

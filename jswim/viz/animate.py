@@ -31,7 +31,8 @@ from jswim.viz import worlds
 from jswim.viz.tracks import Track, fmt_action, track, view_box
 
 #: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.plots.AGENT_STYLE`).
-AGENT_COLORS = {"llm": "#0072B2", "qlearning": "#D55E00", "random": "#555555"}
+#: Each agent's colour: the figures' (jswim.plots.AGENT_STYLE), the square stroke in black.
+AGENT_COLORS = {"llm": "#0072B2", "qlearning": "#D55E00", "random": "#555555", "ppo": "#009E73", "stroke": "#000000"}
 FLUID = "#EAF3FA"
 STROKE_COLOR = "#009E73"
 
@@ -114,6 +115,7 @@ class Animation:
             try:
                 anim = animation.FuncAnimation(fig, draw, frames=self.n_frames, blit=False)
                 anim.save(tmp, writer=writer, dpi=self.dpi)
+                self.frames_written = _count_frames(tmp, suffix, self.n_frames)
                 os.chmod(tmp, _file_mode())
                 os.replace(tmp, path)
             except BaseException:
@@ -123,6 +125,10 @@ class Animation:
                 plt.close(fig)
         return path
 
+    #: Frames the last :meth:`save` wrote: a GIF merges identical frames (the hold on the last step
+    #: becomes one longer frame), so it may hold fewer than :attr:`n_frames`.
+    frames_written: int | None = None
+
     def to_gif_bytes(self) -> bytes:
         with tempfile.TemporaryDirectory() as tmp:
             path = self.save(Path(tmp) / "run.gif")
@@ -131,6 +137,16 @@ class Animation:
     def _repr_html_(self) -> str:  # Jupyter shows the GIF inline
         data = base64.b64encode(self.to_gif_bytes()).decode()
         return f'<img src="data:image/gif;base64,{data}" alt="{_esc(self.title)}"/>'
+
+
+def _count_frames(path: str, suffix: str, drawn: int) -> int:
+    """Frames in a written animation (a GIF's own count; an MP4 holds every drawn frame)."""
+    if suffix != ".gif":
+        return drawn
+    from PIL import Image
+
+    with Image.open(path) as im:
+        return int(getattr(im, "n_frames", 1))
 
 
 def _file_mode() -> int:
@@ -323,15 +339,15 @@ def _build(anim: Animation):
     view_w = hold if follow else width
     view_h = max(box[3] - box[2], 4.0)
     n = len(tracks)
-    panel_w = float(np.clip(1.1 + view_w * 0.28, 2.6, 4.2))
+    panel_w = float(np.clip(1.1 + view_w * 0.28, 3.0, 4.2))
     panel_h = panel_w * view_h / view_w
-    text_h = 0.62
+    text_h = 0.85  # three lines of 8.5 pt: legible (>= 9 px) at the default 80 dpi
     with plt.rc_context(RC):
         fig = plt.figure(figsize=(panel_w * n, panel_h + text_h + 0.35))
     fig.patch.set_facecolor("white")
     top = 1 - 0.35 / fig.get_figheight()
     bottom = text_h / fig.get_figheight()
-    fig.text(0.5, 1 - 0.06 / fig.get_figheight(), anim.title, ha="center", va="top", fontsize=8,
+    fig.text(0.5, 1 - 0.06 / fig.get_figheight(), anim.title, ha="center", va="top", fontsize=10,
              color="#B00000" if "UNFINISHED" in anim.title else "black")
     state = []
     for i, t in enumerate(tracks):
@@ -344,16 +360,17 @@ def _build(anim: Animation):
         ax.set_yticks([])
         # Scale bar: one a (link length, sphere radius); the start line is X = 0.
         ax.plot([0.04, 0.04 + 1.0 / view_w], [0.06, 0.06], transform=ax.transAxes, color="0.25", lw=1.2)
-        ax.text(0.04 + 0.5 / view_w, 0.09, "a", transform=ax.transAxes, fontsize=6, ha="center", color="0.25")
+        ax.text(0.04 + 0.5 / view_w, 0.09, "a", transform=ax.transAxes, fontsize=8, ha="center", color="0.25")
         for s in ax.spines.values():
             s.set_color("0.7")
         ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
         worlds.draw_fixed(ax, t.world, (box[0], box[1]))
-        ax.set_title(_caption(t, tracks), fontsize=7, pad=2)
+        # Every panel names its agent in that agent's colour (the figures' colours).
+        ax.set_title(_caption(t, tracks), fontsize=9, pad=2, color=AGENT_COLORS.get(t.agent, "black"))
         ax.annotate("", xy=(0.97, 0.06), xytext=(0.82, 0.06), xycoords="axes fraction",
                     arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8) if t.direction > 0
                     else dict(arrowstyle="<-", color="0.35", lw=0.8))
-        ax.text(0.895, 0.09, "target", transform=ax.transAxes, fontsize=5.5, ha="center", color="0.35")
+        ax.text(0.895, 0.09, "target", transform=ax.transAxes, fontsize=7, ha="center", color="0.35")
         color = AGENT_COLORS.get(t.agent, "C0")
         artists = []
         for j in range(t.n_swimmers):  # every swimmer of the world, swimmer 2 in its own edge colour
@@ -371,7 +388,7 @@ def _build(anim: Animation):
                            for _ in range(t.bodies.shape[2])]
             artists.append((trail, stroke, body, joints, spheres))
         (centre,) = ax.plot([], [], "+", color=color, ms=5, zorder=6)
-        txt = fig.text(i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=6.5, family="monospace")
+        txt = fig.text(i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=8.5, family="monospace")
         state.append((t, ax, artists, centre, txt))
 
     def draw(frame: int):
@@ -422,7 +439,7 @@ def _frame_text(t: Track, k: int) -> str:
         lines.append(f"action {fmt_action(t.actions[i])}  " + "  ".join(events))
         if t.replies[i] is not None:
             reply = " ".join(str(t.replies[i]).split())
-            lines.append("reply: " + textwrap.shorten(reply, 46, placeholder="..."))
+            lines.append("reply: " + textwrap.shorten(reply, 38, placeholder="..."))
     if t.replayed:
         lines.append("(pose replayed: not in this folder)")
     return "\n".join(lines)

@@ -162,7 +162,8 @@ class Track:
     @property
     def label(self) -> str:
         """``LLM``, ``Q-learning`` or ``random policy`` (the figures' names) with the model for LLM runs."""
-        name = {"llm": "LLM", "qlearning": "Q-learning", "random": "random policy"}.get(self.agent, self.agent)
+        name = {"llm": "LLM", "qlearning": "Q-learning", "random": "random policy", "ppo": "PPO (real ROC)",
+                "stroke": "square stroke"}.get(self.agent, self.agent)
         model = self.row.get("model")
         return f"{name} ({model})" if model and self.agent == "llm" else name
 

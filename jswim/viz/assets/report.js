@@ -3,8 +3,8 @@
   "use strict";
   var D = JSON.parse(document.getElementById("report-data").textContent);
   var runs = D.runs;
-  var COLORS = { llm: "#0072B2", qlearning: "#D55E00", random: "#555555" };
-  var NAMES = { llm: "LLM", qlearning: "Q-learning", random: "random policy" };
+  var COLORS = { llm: "#0072B2", qlearning: "#D55E00", random: "#555555", ppo: "#009E73", stroke: "#000000" };
+  var NAMES = { llm: "LLM", qlearning: "Q-learning", random: "random policy", ppo: "PPO (real ROC)", stroke: "square stroke" };
   var LIST_MAX = 400;
   var st = { filters: {}, sel: null, data: null, k: 0, timer: null, fps: 4, loading: 0 };
 
@@ -215,6 +215,7 @@
     var ox = (W - s * (b[1] - b[0])) / 2, oy = (H - s * (b[3] - b[2])) / 2;
     function X(x) { return ox + (x - b[0]) * s; }
     function Y(y) { return H - oy - (y - b[2]) * s; }
+    st.X = X; st.Y = Y;  // the last drawing's map from a to canvas pixels (for tests)
     ctx.fillStyle = "#eaf3fa"; ctx.fillRect(0, 0, W, H);
     ctx.strokeStyle = "#d5e4f0"; ctx.lineWidth = 1;
     for (var gx = Math.ceil(b[0]); gx <= b[1]; gx++) { ctx.beginPath(); ctx.moveTo(X(gx), 0); ctx.lineTo(X(gx), H); ctx.stroke(); }
@@ -349,7 +350,8 @@
   window.jswimReport = {
     opened: opened, select: select, play: play, pause: pause,
     step: function () { return st.k; }, drawn: function () { return st.drawn || 0; },
-    data: function () { return st.data; }, steps: function () { return st.data && st.data.actions ? st.data.actions.length : 0; },
+    data: function () { return st.data; },
+    toCanvas: function (x, y) { return [st.X(x), st.Y(y)]; }, steps: function () { return st.data && st.data.actions ? st.data.actions.length : 0; },
     listed: function () { return document.querySelectorAll("#run-list tbody tr").length; },
     finished: D.finished
   };
