@@ -105,9 +105,14 @@ def test_gif_view_always_holds_the_whole_ng_swimmer_at_10_10(far_ng):
         assert im.n_frames == a.frames_written  # the count reported is the file's
 
 
-def test_wall_page_has_the_scenes_table(scenes):
+def test_wall_page_has_the_scenes_table_and_only_its_own_settings(scenes):
     page = write_report(scenes / "wall", figures="none").read_text()
     assert 'id="scenes"' in page and "mean height" in page and "fates" in page
+    block = page[page.index('id="settings-table"'):page.index('id="full-record"')]
+    assert "<th>heights</th><td>3.0</td>" in block
+    for other in ("separations", "phases", "zetas", "n_hts", "horizon", "model"):  # other studies', or no LLM run
+        assert f"<th>{other}</th>" not in block
+    assert "&quot;separations&quot;" in page[page.index('id="full-record"'):]  # the full record one click away
 
 
 # -- in a real browser ----------------------------------------------------------------------------
@@ -151,6 +156,10 @@ def test_world_pictures_in_chromium(scenes, far_ng):
         mid_y = b.eval(f"window.jswimReport.toCanvas(0, {H})[1]")
         wall_y = b.eval("window.jswimReport.toCanvas(0, 0)[1]")
         b.screenshot(os.path.join(ARTIFACTS, "report-wall.png"))
+        settings = b.eval("document.getElementById('settings-table').innerText")
+        closed = b.eval("!document.getElementById('full-record').open")
+        b.eval("document.getElementById('settings').scrollIntoView()")
+        b.screenshot(os.path.join(ARTIFACTS, "report-wall-settings.png"))
 
         _open(b, write_report(far_ng, figures="none"), "random-ng-far")
         inside = []
@@ -166,3 +175,4 @@ def test_world_pictures_in_chromium(scenes, far_ng):
     assert drawn == 2 and "D1" in start and "D4" in start
     assert below == [217, 207, 194] and wall_y > mid_y  # the wall drawn, below the swimmer (canvas y grows down)
     assert inside == [True] * 4
+    assert "heights" in settings and "separations" not in settings and closed

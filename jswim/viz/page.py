@@ -188,6 +188,51 @@ def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in meta.items() if k not in ("summary", "prompt_template")}
 
 
+#: Grid axes that belong to some studies only (the others' folders record their defaults too).
+_OWN_AXES = {"heights": ("wall",), "separations": ("pair",), "phases": ("pair",)}
+#: Settings shown in the full record only (the compact block shows what defines this study).
+_NOT_COMPACT = ("horizon", "share_identical")
+
+
+def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """``(name, value)`` of the settings that apply to the folder's study, for the settings block.
+
+    From the identity's options and the recorded grid: values left unset (``None``) and options
+    or grid axes the study has no use for (its :data:`jswim.studies.grids.SPECS` ``ignores``; a
+    scene study's own axes only on that study) are left out; the full record stays one click away.
+    """
+    from jswim.studies.grids import SPECS
+
+    study = str(meta.get("study", "?"))
+    ident = meta.get("identity") or {}
+    ignores = set(getattr(SPECS.get(study), "ignores", ()) or ())
+    out: list[tuple[str, str]] = [("study", study)]
+    backend = ident.get("backend") or {}
+    if backend and (meta.get("grid") or {}).get("runs") != 0:  # no model applies to a baselines-only study
+        out.append(("model", f"{backend.get('model')} ({backend.get('kind')}), temperature "
+                             f"{backend.get('temperature')}, constrain {backend.get('constrain')}"))
+    fmt = lambda v: ", ".join(map(str, v)) if isinstance(v, (list, tuple)) else str(v)
+    for k, v in sorted((ident.get("options") or {}).items()):
+        if v is None or k in ignores or k in _NOT_COMPACT:
+            continue
+        out.append((k, fmt(v)))
+    for k, v in sorted((meta.get("grid") or {}).items()):
+        if v is None or k in ignores or (k in _OWN_AXES and study not in _OWN_AXES[k]):
+            continue
+        out.append((k, fmt(v)))
+    if meta.get("success_criterion"):
+        out.append(("success criterion", fmt(meta["success_criterion"]) if not isinstance(
+            meta["success_criterion"], Mapping) else json.dumps(meta["success_criterion"], sort_keys=True)))
+    return out
+
+
+def _settings_html(meta: Mapping[str, Any]) -> str:
+    rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in applicable_settings(meta))
+    return (f'<table class="settings" id="settings-table"><tbody>{rows}</tbody></table>'
+            '<details id="full-record"><summary>the full record (metadata.json, every setting recorded)</summary>'
+            f'<pre>{html.escape(json.dumps(_settings(meta), indent=2, sort_keys=True, default=str))}</pre></details>')
+
+
 def _asset(name: str) -> str:
     return resources.files("jswim.viz").joinpath("assets", name).read_text(encoding="utf-8")
 
@@ -275,8 +320,8 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
         '<section id="browser"><h2>Runs</h2><div id="filters"></div><p id="run-count"></p>'
         '<div class="browser"><div id="run-list-wrap"><table id="run-list"></table></div>'
         '<div id="viewer"><p id="viewer-empty">Pick a run.</p></div></div></section>',
-        '<section id="settings"><h2>Settings and identity</h2>'
-        f'<pre>{html.escape(json.dumps(_settings(meta), indent=2, sort_keys=True, default=str))}</pre>',
+        '<section id="settings"><h2>Settings and identity</h2>',
+        _settings_html(meta),
         ("<details><summary>prompt template</summary><pre>"
          f"{html.escape(json.dumps(template, indent=2, sort_keys=True))}</pre></details>" if template else ""),
         "</section>",
