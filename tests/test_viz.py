@@ -265,11 +265,15 @@ def _blob(page, i):
 def test_report_page_data_decodes(swim_folder):
     """The per-run blobs are gzip+base64 JSON with a frame per step (what the page's script reads)."""
     page = (swim_folder / "report.html").read_text()
-    data = _blob(page, 0)
-    runs = read_runs(swim_folder)
-    assert len(data["pts"]) == len(runs[0]["x"]) + 1 and data["planar"]
     index = json.loads(re.search(r'<script type="application/json" id="report-data">(.+?)</script>', page, re.S).group(1))
-    assert [r["run_id"] for r in index["runs"]] == [r["run_id"] for r in runs]
+    runs = {r["run_id"]: r for r in read_runs(swim_folder)}
+    data = _blob(page, 0)
+    assert len(data["pts"]) == len(runs[index["runs"][0]["run_id"]]["x"]) + 1 and data["planar"]
+    # Every run once, listed by the study's axes (agent, then replicate), not in finishing order.
+    ids = [r["run_id"] for r in index["runs"]]
+    assert sorted(ids) == sorted(runs)
+    assert ids == ["llm-purcell-px-i++-z0-r0", "llm-purcell-px-i++-z0-r1"] + \
+        [f"qlearning-purcell-px-i++-z0-r{i}" for i in range(3)] + [f"random-purcell-px-i++-z0-r{i}" for i in range(3)]
 
 
 # -- every study and swimmer ---------------------------------------------------------------------------

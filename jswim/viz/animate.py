@@ -420,8 +420,9 @@ def _build(anim: Animation):
 
 def _frame_text(t: Track, k: int) -> str:
     """The lines under a panel at step ``k``."""
-    disp = "X/a" if t.direction > 0 else "\u2212X/a"
-    lines = [f"step {k:>3}/{t.n_steps}   {disp} = {t.direction * t.x[k]:+.4f}"]
+    # The page's convention: X/a toward the target direction, labelled with it.
+    disp = "X/a toward " + ("+x" if t.direction > 0 else "-x")
+    lines = [f"step {k:>3}/{t.n_steps}  {disp} {t.direction * t.x[k]:+.4f}"]
     if k == 0:
         lines.append("start " + ("(" + ", ".join(f"{n} {v:.3g}" for n, v in zip(t.dof_names, t.dofs[0])) + ")"))
     else:

@@ -48,6 +48,26 @@ FILTER_KEYS = ("agent", "swimmer", "direction", "zeta", "n_ht", "variant", "grou
 FIGURE_PX = 1400
 
 
+def _axes_key(meta: Mapping[str, Any]) -> Any:
+    """Sort key of runs by the study's axes: agent, swimmer, target direction, the grid's group
+    order, noise level, n_ht, variant, start, then the replicate (``-r0`` before ``-r1``)."""
+    import re
+
+    from jswim.overview import AGENT_ORDER
+
+    agents = {a: i for i, a in enumerate(AGENT_ORDER)}
+    groups = {g: i for i, g in enumerate(meta.get("group_order") or [])}
+    num = lambda v: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else float("inf")
+
+    def key(r: Mapping[str, Any]) -> tuple:
+        m = re.search(r"-r(\d+)$", str(r.get("run_id", "")))
+        return (agents.get(r.get("agent"), len(agents)), r.get("swimmer") != "purcell", str(r.get("swimmer")),
+                -int(r.get("direction") or 1), groups.get(r.get("group"), len(groups)), str(r.get("group") or ""),
+                num(r.get("zeta")), num(r.get("n_ht")), str(r.get("variant") or ""), str(r.get("init") or ""),
+                int(m.group(1)) if m else 0, str(r.get("run_id")))
+    return key
+
+
 def _round(a: Any, nd: int = 5) -> Any:
     return np.round(np.asarray(a, np.float64), nd).tolist()
 
@@ -277,7 +297,7 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
 
         extra = beside_rows([Path(b) for b in beside])
         figures = "none" if figures == "none" else "draw"  # the folder's own files lack the baselines
-    rows = grid_order(own + extra, meta)  # groups in the grid's order, not the finishing order
+    rows = sorted(grid_order(own + extra, meta), key=_axes_key(meta))  # by the study's axes, not finishing order
     figs, fig_source = _figures(folder, study, rows, note, figures)
     if extra:
         fig_source += ("; with the bench's Q-learning and random runs of this part beside the model's ("

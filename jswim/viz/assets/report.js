@@ -20,6 +20,9 @@
   function num(v, d) { return (v === null || v === undefined) ? "\u2013" : Number(v).toFixed(d); }
   function signed(v, d) { return (v >= 0 ? "+" : "") + Number(v).toFixed(d); }
   function action(a) { return "[" + a[0] + ", " + a[1] + "]"; }
+  // One sign convention for every number on the page: X/a toward the run's target direction
+  // (a -x run that swims to x = -0.62 a reads +0.62), always labelled with that direction.
+  function toward(d) { return "X/a toward " + fmt("direction", d.direction); }
 
   // -- filters and the run list ------------------------------------------------------------------
   function values(key) {
@@ -28,11 +31,22 @@
     return out.sort(function (a, b) { var x = parseFloat(a), y = parseFloat(b);
       return (isNaN(x) || isNaN(y)) ? (a < b ? -1 : a > b ? 1 : 0) : x - y; });
   }
+  function sameSplit(a, b) {  // two filters that split the runs the same way say the same thing twice
+    var ab = {}, ba = {};
+    for (var i = 0; i < runs.length; i++) {
+      var x = fmt(a, runs[i][a]), y = fmt(b, runs[i][b]);
+      if ((x in ab && ab[x] !== y) || (y in ba && ba[y] !== x)) return false;
+      ab[x] = y; ba[y] = x;
+    }
+    return true;
+  }
   function buildFilters() {
-    var box = document.getElementById("filters");
+    var box = document.getElementById("filters"), shown = [];
     D.filters.forEach(function (key) {
       var vals = values(key);
       if (vals.length < 2) return;
+      if (shown.some(function (k) { return sameSplit(k, key); })) return;
+      shown.push(key);
       var label = document.createElement("label");
       label.textContent = key.replace("_", " ");
       var sel = document.createElement("select");
@@ -50,11 +64,10 @@
     }
     return true;
   }
-  var ORDER = { llm: 0, qlearning: 1, random: 2 };
   function renderList() {
-    var m = runs.filter(matches).sort(function (a, b) {
-      var x = ORDER[a.agent] === undefined ? 9 : ORDER[a.agent], y = ORDER[b.agent] === undefined ? 9 : ORDER[b.agent];
-      return x - y || a.i - b.i; });
+    // The page lists runs in the order the writer sorted them: by the study's axes (agent, swimmer,
+    // direction, group, zeta, n_ht, variant, start, replicate), never by when they finished.
+    var m = runs.filter(matches).sort(function (a, b) { return a.i - b.i; });
     var shown = m.slice(0, LIST_MAX);
     document.getElementById("run-count").textContent = m.length + " of " + runs.length + " runs" +
       (m.length > LIST_MAX ? " (the first " + LIST_MAX + " listed; narrow the filters for the rest)" : "");
@@ -65,7 +78,7 @@
         signed(r.signed_final_x, 3)) + "</td></tr>";
     });
     document.getElementById("run-list").innerHTML =
-      "<thead><tr><th>run</th><th>success</th><th>X/a end</th></tr></thead><tbody>" + rows.join("") + "</tbody>";
+      "<thead><tr><th>run</th><th>success</th><th title=\"X/a after the last step, positive toward the run's target direction\">X/a end toward target</th></tr></thead><tbody>" + rows.join("") + "</tbody>";
   }
 
   // -- one run: decoding -------------------------------------------------------------------------
@@ -137,7 +150,7 @@
     if (r.variant) bits.push("variant " + r.variant);
     if (r.group) bits.push("group " + r.group);
     var html = '<h3 id="run-title">' + esc(r.run_id) + "</h3><p>" + esc(bits.join(" \u00b7 ")) + "<br/>success: " +
-      (r.success ? "yes" : "no") + " \u00b7 X/a end (target direction) " + signed(r.signed_final_x || 0, 4) +
+      (r.success ? "yes" : "no") + " \u00b7 X/a end toward " + fmt("direction", r.direction) + " " + signed(r.signed_final_x || 0, 4) +
       " \u00b7 " + esc(stroke) + (d.replayed ? ' \u00b7 <span class="error">y and orientation replayed (not recorded in this folder)</span>' : "") +
       '</p><canvas class="swim" id="swim" width="900" height="340"></canvas>' +
       '<div class="controls"><button id="b-first" title="first step">|\u25c0</button>' +
@@ -272,8 +285,7 @@
     ctx.strokeStyle = "#333"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(12, H - 14); ctx.lineTo(12 + s, H - 14); ctx.stroke();
     ctx.fillStyle = "#333"; ctx.font = "12px sans-serif"; ctx.fillText("a", 12 + s / 2 - 3, H - 20);
     ctx.font = "13px monospace";
-    var disp = d.direction > 0 ? "X/a" : "\u2212X/a";
-    ctx.fillText("step " + k + "/" + d.actions.length + "   " + disp + " = " + signed(d.direction * d.x[k], 4), 10, 18);
+    ctx.fillText("step " + k + "/" + d.actions.length + "   " + toward(d) + " = " + signed(d.direction * d.x[k], 4), 10, 18);
     if (k > 0) {
       var ev = [];
       if (d.stuck[k - 1]) ev.push("stuck");
@@ -297,7 +309,7 @@
   function stepHtml(d, k) {
     if (k === 0) {
       return "<h3>Start</h3><p>" + (d.world ? esc(d.world) + " \u00b7 " : "") + "DOF values (" + dofList(d, 0) +
-        "), X/a = 0. Press \u25b6 or step through the run.</p>";
+        "), " + toward(d) + " = 0. Press \u25b6 or step through the run.</p>";
     }
     var i = k - 1, tags = [];
     if (d.stuck[i]) tags.push('<span class="tag stuck">stuck</span>');
@@ -308,8 +320,8 @@
         " (the criterion's qualifying cycles)</span>");
     }
     var h = "<h3>Step " + k + ": action " + action(d.actions[i]) + "</h3><p>" + tags.join("") +
-      " X/a " + signed(d.x[i], 4) + " \u2192 " + signed(d.x[k], 4) + " (progress toward the target " +
-      signed(d.direction * (d.x[k] - d.x[i]), 4) + ") \u00b7 DOF values (" +
+      " " + toward(d) + " " + signed(d.direction * d.x[i], 4) + " \u2192 " + signed(d.direction * d.x[k], 4) +
+      " (this step " + signed(d.direction * (d.x[k] - d.x[i]), 4) + ") \u00b7 DOF values (" +
       dofList(d, k) + ")</p>";
     var step = d.steps[i];
     if (!step) return h;
