@@ -667,17 +667,23 @@ def _price_note(backend: Any) -> str:
     from jswim.llm.usage import PRICES_AS_OF, price_table  # lazy: httpx loads only for commands that run
     from jswim.llm.urls import is_local_host
 
+    from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED, cost_text
+    from jswim.llm.reference import MODEL as REFERENCE_MODEL
+
     if backend is None or backend.local:
-        return "the embedded model is free"
+        return cost_text(None, EMBEDDED_UNPRICED)
+    if backend.model == REFERENCE_MODEL:
+        return cost_text(None, REFERENCE_UNPRICED)
     table, why = price_table(dict(backend.prices) if backend.prices is not None else None, backend.model,
                              local_host=is_local_host(backend.base_url), price_local=backend.price_local)
     if why:
-        return f"not priced: {why}"
+        return cost_text(None, why)
     if table.entry(backend.model) is None and is_local_host(backend.base_url) and backend.prices is None:
-        return f"a server on this machine or the LAN, and no list price for {backend.model!r}: free"
+        return cost_text(None, LOCAL_UNPRICED)
     if table.entry(backend.model) is None:
-        return (f"no price for {backend.model!r} in the {'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
-                ": not counted; --prices FILE prices it")
+        return cost_text(None, f"no price for {backend.model!r} in the "
+                               f"{'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
+                               "; --prices FILE prices it")
     return f"prices of {backend.prices_as_of or PRICES_AS_OF}" + ("" if backend.prices else " (built-in list prices)")
 
 

@@ -179,3 +179,22 @@ class Progress:
         pct = f" ({100 * done / total:.0f}%)" if total else ""
         text = f"[{format_duration(now - self._t0):>6}] {label}: {done}/{total} {unit}{pct}"
         print(text + (f" · {info}" if info else ""), file=self.file, flush=True)
+
+
+#: Why a call is not priced, in the words every cost line uses (:func:`cost_text`).
+EMBEDDED_UNPRICED = "the embedded model runs on this machine"
+REFERENCE_UNPRICED = "a rule on this machine, not an LLM"
+LOCAL_UNPRICED = "a server on this machine or the LAN, with no list price for its model"
+
+
+def cost_text(cost_usd: float | None, unpriced: str | None = None, source: str | None = None) -> str:
+    """One wording for a cost everywhere (``jswim swim``/``study``, ``show``, the leaderboard, the pages).
+
+    ``unpriced``: why the calls have no price (then ``not priced (WHY); $0 counted``, never a bare
+    ``$0`` or ``free``); ``source``: where a price came from (``list prices of 2025-04``).
+    """
+    if unpriced:
+        return f"not priced ({unpriced}); $0 counted"
+    if cost_usd is None:
+        return "-"
+    return f"${cost_usd:.4f}" + (f" ({source})" if source else "")

@@ -12,7 +12,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from jswim.console import Column, plain_table, requests_text
+from jswim.console import Column, cost_text, plain_table, requests_text
 from jswim.errors import ConfigError, ResultFolderError
 from jswim.folderlock import describe_holder, holder
 from jswim.results import read_metadata, read_runs
@@ -218,6 +218,26 @@ def _settings_text(options: Mapping[str, Any], skip: Sequence[str] = ()) -> str:
     return "; ".join(parts)
 
 
+def unpriced_reason(meta: Mapping[str, Any], cost_usd: float | None) -> str | None:
+    """Why a study folder's calls are not priced (:func:`jswim.console.cost_text`), from its record:
+    the embedded model, the reference rule, the reason the session recorded, or a local server
+    whose calls cost nothing; ``None`` when they are priced."""
+    from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED
+
+    backend = (meta.get("identity") or {}).get("backend") or {}
+    if backend.get("kind") == "embedded":
+        return EMBEDDED_UNPRICED
+    if backend.get("model") == "reference-rule":  # jswim.llm.reference.MODEL (not imported: no httpx here)
+        return REFERENCE_UNPRICED
+    why = (meta.get("llm_server") or {}).get("unpriced")
+    if why:
+        return str(why)
+    server = str(meta.get("server") or "")
+    if not cost_usd and any(h in server for h in ("//127.", "//localhost", "//[::1]", "//0.0.0.0")):
+        return LOCAL_UNPRICED
+    return None
+
+
 def show_text(folder: str | Path, width: int | None = None) -> str:
     """What ``jswim show FOLDER`` prints: status, model, settings, usage, summary table, figures."""
     s = StudyFolder(folder)
@@ -233,7 +253,7 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     lines.append(f"runs: {len(s.rows)} (" + ", ".join(f"{a} {n}" for a, n in sorted(agents.items())) + ")")
     if agents.get("llm"):
         lines.append(f"LLM usage: {u['calls']:,} calls, {u['prompt_tokens']:,} prompt + {u['completion_tokens']:,} "
-                     f"completion tokens, cost ${u['cost_usd']:.4f} (estimate from the price table)")
+                     f"completion tokens, cost {cost_text(u['cost_usd'], unpriced_reason(s.meta, u['cost_usd']), 'estimate from the price table')}")
     totals = s.meta.get("llm_totals") or {}
     if totals.get("sessions"):  # the study's own numbers, over all its sessions (one source each)
         lines.append(f"LLM wall time: {totals.get('wall_s', 0):.1f} s over {totals['sessions']} session(s) for "

@@ -52,12 +52,18 @@ def test_a_model_without_a_price_says_so_in_every_cost_line(tmp_path, capsys):
         assert cli.main(["swim", *args]) == 0
         out = capsys.readouterr().out
     assert "not priced: no price for 'fake'" in dry and "--prices FILE" in dry
-    assert "no price for 'fake'" in out and "not counted" in out
+    assert "not priced (no price for 'fake'" in out and "$0 counted" in out
 
 
-def test_a_local_server_without_a_list_price_is_free_not_unpriced(tmp_path, capsys):
-    with FakeServer(**MODES["plain"]) as srv:  # the reference rule, a llama.cpp box: on this machine
-        assert cli.main(["swim", *FAST, "--out", str(tmp_path / "o"), "--base-url", srv.url, "--model",
-                         "reference-rule"]) == 0
-    line = next(ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("LLM calls:"))
-    assert "a server on this machine or the LAN" in line and "free" in line and "--prices FILE" not in line
+def test_a_local_server_without_a_list_price_says_why_it_is_not_priced(tmp_path, capsys):
+    for model, why in (("llama-local", "a server on this machine or the LAN, with no list price for its model"),
+                       ("reference-rule", "a rule on this machine, not an LLM")):
+        with FakeServer(**MODES["plain"]) as srv:  # a llama.cpp box, the reference rule: on this machine
+            assert cli.main(["swim", *FAST, "--out", str(tmp_path / model), "--base-url", srv.url, "--model",
+                             model]) == 0
+        out = capsys.readouterr().out
+        line = next(ln for ln in out.splitlines() if ln.startswith("LLM calls:"))
+        # One wording, with the reason, in the study's line and in jswim show.
+        assert f"not priced ({why}); $0 counted" in line and "free" not in line and "--prices FILE" not in line
+        assert cli.main(["show", str(tmp_path / model)]) == 0
+        assert f"not priced ({why}); $0 counted" in capsys.readouterr().out

@@ -26,6 +26,7 @@ column                 meaning
 ``tokens_per_step``    prompt + reply tokens per decision
 ``suite_cost_usd``     what the model's calls cost over the whole suite (its call journals)
 ``priced``             false when no price applied to the model (its cost is not counted, not $0)
+``unpriced``           why the model's calls are not priced (when ``priced`` is false)
 ``status``             the model's bench status: ``complete``, ``failed: ...``, ``stopped at the
                        cost cap``, ``interrupted``, ``not run``
 =====================  ==========================================================================
@@ -42,7 +43,7 @@ from jswim.console import Column, plain_table
 
 FIELDS = ("row", "kind", "part", "swimmer", "direction", "group", "n", "samples", "success", "success_lo", "success_hi",
           "learned", "steps_median", "steps_q25", "steps_q75", "mean_x", "mean_x_lo", "mean_x_hi", "failed_steps",
-          "tokens_per_step", "suite_cost_usd", "priced", "status")
+          "tokens_per_step", "suite_cost_usd", "priced", "status", "unpriced")
 
 _LABELS = {"qlearning": "Q-learning", "random": "random"}
 
@@ -85,13 +86,16 @@ def _steps(r: Mapping[str, Any]) -> str:
 
 
 def _cost(r: Mapping[str, Any]) -> str:
+    """The row's cost in the one wording of :func:`jswim.console.cost_text` (with why it is not priced)."""
+    from jswim.console import REFERENCE_UNPRICED, cost_text
+
     if r["kind"] == "baseline":
         return "-"
     if r["kind"] == "reference":
-        return "free"  # a rule on 127.0.0.1
+        return cost_text(None, REFERENCE_UNPRICED)
     if r["priced"] is False:
-        return "not priced"
-    return _num(r["suite_cost_usd"], ".4f")
+        return cost_text(None, r.get("unpriced") or "no price applies to the model")
+    return cost_text(r["suite_cost_usd"])
 
 
 def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> str:

@@ -164,13 +164,23 @@ def _missing(jobs: list[Any], rows: list[dict[str, Any]], status: dict[str, str]
     return out
 
 
-def _priced(m: Any, mf: Any) -> bool:
+def _unpriced(m: Any, mf: Any) -> str | None:
+    """Why a model's calls are not priced (None: they are), in :func:`jswim.console.cost_text`'s words."""
+    from jswim.console import LOCAL_UNPRICED
     from jswim.llm.urls import is_local_host
     from jswim.llm.usage import price_table
 
-    table, why = price_table(mf.prices, m.get("model"), local_host=is_local_host(m.get("base_url")),
-                             price_local=bool(m.get("price_local")))
-    return why is None and table.entry(m.get("model")) is not None
+    local = is_local_host(m.get("base_url"))
+    table, why = price_table(mf.prices, m.get("model"), local_host=local, price_local=bool(m.get("price_local")))
+    if why is not None:
+        return why
+    if table.entry(m.get("model")) is None:
+        return LOCAL_UNPRICED if local else f"no price for {m.get('model')!r} in the price table; [prices] prices it"
+    return None
+
+
+def _priced(m: Any, mf: Any) -> bool:
+    return _unpriced(m, mf) is None
 
 
 def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list[dict[str, Any]]:
@@ -178,10 +188,14 @@ def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list
 
     cost = {m.name: sum(runner.spent(j.folder) for j in jobs if j.label == m.name) for m in models}
     priced = {m.name: _priced(m, mf) for m in models}
+    why = {m.name: _unpriced(m, mf) for m in models}
     rows: list[dict[str, Any]] = []
     for j in jobs:
-        rows += leaderboard.folder_rows(j.folder, j.label, j.kind, j.part.name, cost.get(j.label, 0.0),
-                                        priced.get(j.label, True), status.get(j.label, "complete"))
+        got = leaderboard.folder_rows(j.folder, j.label, j.kind, j.part.name, cost.get(j.label, 0.0),
+                                      priced.get(j.label, True), status.get(j.label, "complete"))
+        for r in got:
+            r["unpriced"] = why.get(j.label) if j.kind == "llm" else None
+        rows += got
     return rows
 
 
@@ -225,7 +239,8 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
           f"({', '.join(p.name for p in suite.parts)}); no request sent, nothing written")
     print(plain_table(cols, cells))
     total = sum(t["cost_usd"] for t in totals.values() if t["priced"])
-    print(f"total: ${total:.2f} for the priced models; the reference rule and the baselines are free; not counted: "
+    print(f"total: ${total:.2f} for the priced models; the reference rule and the baselines are not priced (a rule and "
+          "baselines on this machine; $0 counted); not counted: "
           "parse retries")
     from jswim.llm.reasoning import ESTIMATE_SHARE
 
