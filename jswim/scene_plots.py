@@ -79,13 +79,15 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
              and r.get("per_cycle") is not None]
     if alone:
         ax.axhline(float(np.mean(alone)), color="0.4", ls="--", lw=0.8, label="one swimmer alone")
+    agents_at = 4.3  # the agents choose their own phase: a labelled column right of the offsets
     for agent in ("llm", "qlearning", "random", "ppo"):
         got = [8 * r["signed_final_x"] / r["steps"] for r in rows if r["agent"] == agent and r.get("steps")]
         if got:  # 8 steps per joint cycle: the whole run's mean progress per step, times 8
             st = _STYLES[agent]
-            ax.plot([3.6], [float(np.mean(got))], marker=st["marker"], color=st["color"], ls="none",
+            ax.plot([agents_at], [float(np.mean(got))], marker=st["marker"], color=st["color"], ls="none",
                     label=f"{st['label']} (mean, 8 x X/a end / steps)")
-    ax.set_xticks([0, 1, 2, 3])
+    ax.axvline(3.65, color="0.8", lw=0.6)
+    ax.set_xticks([0, 1, 2, 3, agents_at], ["0", "1", "2", "3", "agents\n(own phase)"])
     ax.set_xlabel("phase offset (quarter cycles of swimmer 2 ahead)")
     ax.set_ylabel("pair X/a per cycle")
     ax.legend(loc="best", fontsize=6)
