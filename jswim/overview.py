@@ -19,10 +19,16 @@ from jswim.results import read_metadata, read_runs
 
 SETTING = ("agent", "swimmer", "direction", "group")
 
-SUMMARY_NOTE = ("X/a end: mean displacement in the target direction after the last step; learn: the step at which "
-                "the final qualifying stroke starts, counted from 1 as in the paper (1 = the stroke from the first "
-                "action), quartiles over the runs that learned (learned: how many did); fail: LLM steps without a "
-                "valid action.")
+#: Fewest runs that learned for which quartiles of the steps to learn are printed (below: the median).
+MIN_QUARTILE_N = 4
+#: Fewest runs for which a bootstrap interval of X/a end is printed (two runs resample to three values).
+MIN_BOOTSTRAP_N = 3
+
+SUMMARY_NOTE = ("X/a end: mean displacement in the target direction after the last step, its 95% bootstrap interval "
+                f"over the runs (none below {MIN_BOOTSTRAP_N} runs: [n<{MIN_BOOTSTRAP_N}]; rough below 10); learn: the "
+                "step at which the final qualifying stroke starts, counted from 1 as in the paper (1 = the stroke from "
+                f"the first action), quartiles over the runs that learned (the median alone below {MIN_QUARTILE_N}: "
+                "'med 1.5'; learned: how many did); fail: LLM steps without a valid action.")
 
 
 def _fmt(v: Any, spec: str = ".3f") -> str:
@@ -40,12 +46,17 @@ def _p_cell(s: Mapping[str, Any]) -> str:
 
 
 def _x_cell(s: Mapping[str, Any]) -> str:
+    if (s.get("n") or 0) < MIN_BOOTSTRAP_N:  # a bootstrap over one or two runs is no interval
+        return f"{_fmt(s['mean_x'], '+.3f')} [n<{MIN_BOOTSTRAP_N}]"
     return f"{_fmt(s['mean_x'], '+.3f')} [{_fmt(s['mean_x_lo'], '+.2f')},{_fmt(s['mean_x_hi'], '+.2f')}]"
 
 
 def _learn_cell(s: Mapping[str, Any]) -> str:
-    q = "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75"))
-    return q if s.get("learned") else "-"
+    if not s.get("learned"):
+        return "-"
+    if s["learned"] < MIN_QUARTILE_N:  # quartiles of 2 values (1.25/1.5/1.75) are interpolation, not data
+        return f"med {_fmt(s['steps_to_learn_median'], 'g')}"
+    return "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75"))
 
 
 #: Reading order of agents and swimmers in tables and figure panels (jswim.plots reads them here).

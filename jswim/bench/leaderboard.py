@@ -82,6 +82,10 @@ def _num(v: Any, spec: str) -> str:
 def _steps(r: Mapping[str, Any]) -> str:
     if not r["learned"]:
         return f"- (0 of {r['n']})"
+    from jswim.overview import MIN_QUARTILE_N
+
+    if r["learned"] < MIN_QUARTILE_N:  # no IQR from fewer than 4 values
+        return f"{r['steps_median']:g} ({r['learned']} of {r['n']})"
     return f"{r['steps_median']:g} [{r['steps_q25']:g}-{r['steps_q75']:g}] ({r['learned']} of {r['n']})"
 
 

@@ -174,15 +174,16 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
     head = "".join(f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols)
     body = "".join("<tr>" + "".join(f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
                                     for c, v in zip(cols, r)) + "</tr>" for r in cells)
-    return (f'<table class="summary"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
-            f'<p class="note">{html.escape(SUMMARY_NOTE)}</p>' + _scenes_html(rows))
+    return (f'<div class="table-wrap"><table class="summary" id="summary-table"><thead><tr>{head}</tr></thead>'
+            f'<tbody>{body}</tbody></table></div><p class="note">{html.escape(SUMMARY_NOTE)}</p>' + _scenes_html(rows))
 
 
 def _table_html(cols: Sequence[Any], cells: Sequence[Sequence[str]], table_id: str) -> str:
     head = "".join(f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols)
     body = "".join("<tr>" + "".join(f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
                                     for c, v in zip(cols, r)) + "</tr>" for r in cells)
-    return f'<table class="summary" id="{table_id}"><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>'
+    return (f'<div class="table-wrap"><table class="summary" id="{table_id}"><thead><tr>{head}</tr></thead>'
+            f'<tbody>{body}</tbody></table></div>')
 
 
 def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
