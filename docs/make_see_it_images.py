@@ -49,7 +49,7 @@ def main() -> None:
         print(f"animation: {len(anim.tracks)} panels, {anim.n_frames} frames, {gif.stat().st_size / 1024:.0f} KB GIF, "
               f"written in {dt:.1f} s ({anim.n_frames / dt:.1f} frames/s)")
         small_png(anim.frame_png(33, dpi=130), IMAGES / "animation-frame.png", 1000)
-        if gif.stat().st_size < 300 * 1024:
+        if gif.stat().st_size < 450 * 1024:  # legible text (issue 33) made the frames richer: 334 KB at 64 dpi
             (IMAGES / "swim.gif").write_bytes(gif.read_bytes())
             print(f"docs/images/swim.gif: {gif.stat().st_size / 1024:.0f} KB")
         page = out / "report.html"

@@ -319,19 +319,22 @@ def draw_shape(ax: Any, model: SwimmerModel, d: Sequence[float], origin: tuple[f
 
 
 def draw_cycle(ax: Any, model: SwimmerModel, start: Sequence[int], moves: Sequence[tuple[int, int]],
-               title: str | None = None) -> None:
-    """Sketch a stroke cycle: the start shape and the shape after each move, left to right."""
+               title: str | None = None, color: str = "#0072B2") -> None:
+    """Sketch a stroke cycle: the start shape (in ``color``, the learner's) and the shape after each
+    move, left to right, with the moves between them."""
     levels = list(start)
     shapes = [list(levels)]
     for dof, roc in moves:
         if roc:
             levels[dof - 1] = 1 if roc > 0 else 0
         shapes.append(list(levels))
-    span = 4.0 if model.planar else model.hi * model.n_dof + 4
-    label_y = -2.2 if model.planar else -2.6
+    # Room between sketches: a sphere swimmer at full arms is hi * n_dof + 2 radii long; the gap
+    # holds the move's label, so neighbours never touch.
+    span = 4.0 if model.planar else model.hi * model.n_dof + 10
+    label_y = -2.2 if model.planar else -3.2
     for i, lv in enumerate(shapes):
         d = [model.lo + (model.hi - model.lo) * v for v in lv]
-        draw_shape(ax, model, d, origin=(i * span, 0.0), color="#0072B2" if i == 0 else "k")
+        draw_shape(ax, model, d, origin=(i * span, 0.0), color=color if i == 0 else "k")
         if i < len(moves):
             dof, roc = moves[i]
             # The move between two sketches, in the prompt's [DOF, ROC] notation.
@@ -438,7 +441,8 @@ def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, Swimme
                 if (sw, d) in cycles:
                     start, moves, *who = cycles[(sw, d)]
                     by_text = f" by {AGENT_STYLE.get(who[0], dict(label=who[0]))['label']}" if who else ""
-                    draw_cycle(ax, model, start, moves, title=f"stroke cycle learned{by_text}")
+                    draw_cycle(ax, model, start, moves, title=f"stroke cycle learned{by_text}",
+                               color=AGENT_STYLE.get(who[0], {}).get("color", "#0072B2") if who else "#0072B2")
                 else:
                     ax.axis("off")
             row += 1

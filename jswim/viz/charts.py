@@ -33,7 +33,7 @@ def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
     dirs = sorted({k[1] for k in keys}, reverse=True)
     with plt.rc_context(RC):
         fig, axes = plt.subplots(len(swimmers), len(dirs), squeeze=False, layout="constrained",
-                                 figsize=(COLUMN_IN if len(dirs) == 1 else PAGE_IN, 1.9 * len(swimmers) + 0.45))
+                                 figsize=(COLUMN_IN if len(dirs) == 1 else PAGE_IN, 2.4 * len(swimmers) + 0.45))
         for i, sw in enumerate(swimmers):
             for j, d in enumerate(dirs):
                 ax = axes[i, j]
@@ -55,8 +55,10 @@ def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
                 ax.set_xlabel("steps to learn (from 1: the step the final stroke starts)")
                 ax.set_ylabel("fraction of learners")
                 ax.set_xlim(left=0)
-                ax.set_ylim(0, ax.get_ylim()[1] * 1.35)  # room for the legend above the bars
-                ax.legend(loc="upper right", fontsize=6)
+                ax.set_ylim(bottom=0)
+                # Below the axis, never over the bars or the tick labels (constrained layout makes room).
+                ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.32), fontsize=6, frameon=False,
+                          borderaxespad=0.0)
         fig.suptitle(title, fontsize=8)
     return fig
 
