@@ -46,7 +46,8 @@ def main() -> None:
         anim = build(out, fps=6, dpi=64)
         gif = anim.save(Path(tmp) / "swim.gif")
         dt = time.perf_counter() - t0
-        print(f"animation: {len(anim.tracks)} panels, {anim.n_frames} frames, {gif.stat().st_size / 1024:.0f} KB GIF, "
+        print(f"animation: {len(anim.tracks)} panels, {anim.frames_written} frames in the GIF ({anim.n_frames} drawn), "
+              f"{gif.stat().st_size / 1024:.0f} KB, "
               f"written in {dt:.1f} s ({anim.n_frames / dt:.1f} frames/s)")
         small_png(anim.frame_png(33, dpi=130), IMAGES / "animation-frame.png", 1000)
         if gif.stat().st_size < 450 * 1024:  # legible text (issue 33) made the frames richer: 334 KB at 64 dpi

@@ -86,7 +86,9 @@ def test_show_prints_status_table_and_cost_without_writing(folders, capsys):
     text = overview.show_text(a)
     assert _snapshot(a) == before
     assert text.startswith(f"study swim in {a}: complete")
-    assert "model: fake" in text and "LLM usage:" in text and "cost $" in text
+    assert "model: fake" in text and "LLM usage:" in text
+    # A fake server on 127.0.0.1 with no list price: the one wording, with the reason (not "$0.0000").
+    assert "cost not priced (a server on this machine or the LAN, with no list price for its model); $0 counted" in text
     assert "no figures yet" in text  # figures=False
     for agent in ("llm", "qlearning", "random"):
         assert f"\n{agent}" in text

@@ -225,7 +225,7 @@ def test_study_writes_report_with_table_figures_and_every_run(swim_folder):
     assert "fake-model" in page and "complete: 8 runs" in page
     assert page.count('<script type="text/plain" id="run-') == 8
     assert '<img alt="swim" src="data:image/png;base64,' in page
-    assert '<table class="summary">' in page and "qlearning" in page
+    assert '<table class="summary" id="summary-table">' in page and "qlearning" in page
     assert not re.search(r"""(src|href)=["']https?:""", page)  # nothing fetched from a network
 
 
