@@ -304,7 +304,9 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
         fig_source += ("; with the bench's Q-learning and random runs of this part beside the model's ("
                        + ", ".join(sorted({f"{Path(b).parent.name}/{Path(b).name}" for b in beside})) + ")")
     backend = (meta.get("identity") or {}).get("backend") or {}
-    model = backend.get("model")
+    # A study with no LLM run (--runs 0: baselines only) names no model.
+    model = backend.get("model") if any(r.get("agent") == "llm" for r in own) or \
+        (meta.get("grid") or {}).get("runs") != 0 else None
     index, blobs = [], []
     for i, r in enumerate(rows):
         entry = {k: r.get(k) for k in INDEX_KEYS}
