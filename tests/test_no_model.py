@@ -104,3 +104,34 @@ def _check_bench_page(path: Path) -> None:
     assert rows == 6 * 4 and kinds.count("kind-baseline") == 12 and kinds.count("kind-reference") == 6
     assert fig == 1 and "down curves" in missing
     assert len(links) == rows and all(Path(u.removeprefix("file://")).is_file() for u in links)
+
+
+@pytest.mark.slow
+def test_baselines_only_noise_page_in_chromium_shows_its_own_settings(no_model, tmp_path):
+    from tests.browser import find_browser
+
+    pytest.importorskip("websocket")
+    if find_browser() is None:
+        pytest.skip("no Chromium installed")
+    from tests.browser import Browser
+
+    out = tmp_path / "noise"
+    assert cli.main(["study", "noise", "--runs", "0", "--q-runs", "2", "--zetas", "0,1", "--steps", "12",
+                     "--swimmer", "purcell", "--out", str(out)]) == 0
+    with Browser(height=1100) as b:
+        b.open((out / "report.html").resolve().as_uri())
+        b.eval("window.jswimReport.opened")
+        title = b.eval("document.title")
+        settings = b.eval("document.getElementById('settings-table').innerText")
+        full = b.eval("document.getElementById('full-record').textContent")
+        filters = b.eval("Array.from(document.querySelectorAll('#filters select')).map(s => s.id).join(' ')")
+        ids = b.eval("Array.from(document.querySelectorAll('#run-list tbody tr td:first-child')).map(t => t.textContent)")
+        b.screenshot(os.path.join(ARTIFACTS, "report-noise.png"), full_page=True)
+        assert b.errors == []
+    assert "LLM" not in title  # no model applies: no LLM run
+    assert "zetas" in settings and "0.0, 1.0" in settings
+    for other in ("heights", "separations", "phases", "n_hts", "model"):
+        assert other not in settings
+    assert "separations" in full  # the full record, one click away
+    assert "filter-zeta" in filters and "filter-group" not in filters  # zeta and group 'zeta=1' split alike
+    assert ids == sorted(ids, key=lambda i: (not i.startswith("qlearning"), "-z1-" in i, i))  # by agent, zeta, r
