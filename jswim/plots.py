@@ -328,19 +328,21 @@ def draw_cycle(ax: Any, model: SwimmerModel, start: Sequence[int], moves: Sequen
         if roc:
             levels[dof - 1] = 1 if roc > 0 else 0
         shapes.append(list(levels))
-    # Room between sketches: a sphere swimmer at full arms is hi * n_dof + 2 radii long; the gap
-    # holds the move's label, so neighbours never touch.
-    span = 4.0 if model.planar else model.hi * model.n_dof + 10
-    label_y = -2.2 if model.planar else -3.2
+    # Room between sketches: a sphere swimmer at full arms is hi * n_dof + 2 radii long, and a row
+    # of them is so flat that a label under it would overlap the spheres: the move's label sits in
+    # the gap between two shapes, on their axis, and the gap is wide enough to hold it.
+    span = 4.0 if model.planar else model.hi * model.n_dof + 24
+    label_y = -2.2 if model.planar else 0.0
     for i, lv in enumerate(shapes):
         d = [model.lo + (model.hi - model.lo) * v for v in lv]
         draw_shape(ax, model, d, origin=(i * span, 0.0), color=color if i == 0 else "k")
         if i < len(moves):
             dof, roc = moves[i]
             # The move between two sketches, in the prompt's [DOF, ROC] notation.
-            ax.annotate(f"[{dof}, {roc}]", (i * span + span / 2, label_y), ha="center", fontsize=6, color="0.3")
+            ax.annotate(f"[{dof}, {roc}]", (i * span + span / 2, label_y), ha="center", va="center", fontsize=6,
+                        color="0.3", bbox=dict(fc="white", ec="none", pad=0.3) if not model.planar else None)
     ax.set_xlim(-span / 2, (len(shapes) - 0.5) * span)
-    ax.set_ylim(label_y - 0.8, 2.0)
+    ax.set_ylim(label_y - 0.8 if model.planar else -2.0, 2.0)
     ax.set_aspect("equal")
     ax.axis("off")
     if title:
