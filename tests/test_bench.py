@@ -228,3 +228,25 @@ def test_show_on_a_bench_folder_prints_its_leaderboard(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "bench core (seed 0)" in text and "down: failed: cannot reach it" in text
     assert "21 (3 of 10)" in text and "1.2500" in text  # 3 that learned: the median, no IQR
+
+
+def test_leaderboard_figure_draws_x_a_beside_success_and_labels_every_panel():
+    from jswim.bench import leaderboard
+
+    rows = []
+    for part, sw, d in (("curves", "purcell", 1), ("curves", "purcell", -1), ("curves", "ng", 1)):
+        for name, kind, mx in (("m", "llm", 0.12), ("Q-learning", "baseline", 0.4), ("random", "baseline", -0.05)):
+            rows.append({"row": name, "kind": kind, "part": part, "swimmer": sw, "direction": d, "group": "", "n": 10,
+                         "samples": 1, "success": 0.0, "success_lo": 0.0, "success_hi": 0.28, "mean_x": mx,
+                         "mean_x_lo": mx - 0.05, "mean_x_hi": mx + 0.05})
+    fig = leaderboard.figure_object(rows)
+    fig.canvas.draw()
+    shown = [ax for ax in fig.axes if ax.axison]
+    assert len(shown) == 2 * 3  # success p and X/a per setting
+    for ax in shown:  # every panel, the top-right ones too, has its own x tick labels
+        assert any(t.get_text() for t in ax.get_xticklabels()), ax.get_xlabel()
+    xa = [ax for ax in shown if ax.get_xlabel().startswith("X/a end toward")]
+    assert len(xa) == 3 and "toward -x" in xa[1].get_xlabel()
+    # The X/a panel places each row at its mean: Q-learning (0.4) right of the model (0.12).
+    xs = {round(float(line.get_xdata()[0]), 3) for line in xa[0].get_lines() if len(line.get_xdata()) == 1}
+    assert {0.12, 0.4, -0.05} <= xs
