@@ -89,17 +89,40 @@ def _steps(r: Mapping[str, Any]) -> str:
     return f"{r['steps_median']:g} [{r['steps_q25']:g}-{r['steps_q75']:g}] ({r['learned']} of {r['n']})"
 
 
-def _cost(r: Mapping[str, Any]) -> str:
-    """The row's cost in the one wording of :func:`jswim.console.cost_text` (with why it is not priced)."""
-    from jswim.console import REFERENCE_UNPRICED, cost_text
+def _why_unpriced(r: Mapping[str, Any]) -> str | None:
+    from jswim.console import REFERENCE_UNPRICED
+
+    if r["kind"] == "reference":
+        return REFERENCE_UNPRICED
+    if r["kind"] == "llm" and r.get("priced") is False:
+        return r.get("unpriced") or "no price applies to the model"
+    return None
+
+
+def _cost(r: Mapping[str, Any], short: bool = False) -> str:
+    """The row's cost in the one wording of :func:`jswim.console.cost_text`, with why it is not
+    priced; ``short`` (the terminal table): ``not priced ($0)``, the reasons under the table
+    (:func:`unpriced_notes`)."""
+    from jswim.console import cost_text
 
     if r["kind"] == "baseline":
         return "-"
-    if r["kind"] == "reference":
-        return cost_text(None, REFERENCE_UNPRICED)
-    if r["priced"] is False:
-        return cost_text(None, r.get("unpriced") or "no price applies to the model")
+    why = _why_unpriced(r)
+    if why is not None:
+        return "not priced ($0)" if short else cost_text(None, why)
     return cost_text(r["suite_cost_usd"])
+
+
+def unpriced_notes(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """One line per row name whose calls are not priced, saying why (under the terminal table)."""
+    from jswim.console import cost_text
+
+    seen: dict[str, str] = {}
+    for r in rows:
+        why = _why_unpriced(r)
+        if why is not None:
+            seen.setdefault(str(r["row"]), why)
+    return [f"{name}: {cost_text(None, why)}" for name, why in seen.items()]
 
 
 def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> str:
@@ -122,7 +145,7 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
                      + [str(r.get("samples") or 1)] * samples
                      + [str(r["n"]), f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]", _steps(r),
                         f"{r['mean_x']:+.3f}", _num(r["failed_steps"], "d"), _num(r["tokens_per_step"], ".0f"),
-                        _cost(r)])
+                        _cost(r, short=True)])
     return plain_table(cols, cells, width=width)
 
 

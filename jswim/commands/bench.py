@@ -112,7 +112,7 @@ def main(args: argparse.Namespace) -> int:
           + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "")
           + (f"; {suite.samples} samples of every LLM run" if (suite.samples or 1) > 1 else "") + ")")
     print(leaderboard.table_text(rows, width=terminal_width()))
-    for line in leaderboard.missing_text(missing):  # under the table, not only on stderr
+    for line in leaderboard.unpriced_notes(rows) + leaderboard.missing_text(missing):  # under the table
         print(line)
     print("success p: the paper's criterion, 95% Wilson interval; steps to learn counted from 1 over the runs that "
           "learned; suite $: what the model's calls cost over the whole suite")
@@ -288,7 +288,7 @@ def show_text(folder: Path, width: int | None = None) -> str:
         board = {}
     rows = board.get("rows") or []
     if rows:
-        lines += ["", leaderboard.table_text(rows, width=width)]
+        lines += ["", leaderboard.table_text(rows, width=width)] + leaderboard.unpriced_notes(rows)
     else:
         lines.append("no leaderboard yet: the same jswim bench command writes it")
     lines += leaderboard.missing_text(board.get("missing") or [])
