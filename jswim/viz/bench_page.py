@@ -88,7 +88,10 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
         link = (f'<a href="{html.escape(page)}">{html.escape(name)}</a>' if (folder / target).is_dir()
                 else html.escape(name))
         mx = r.get("mean_x")
-        ci = (f" [{r['mean_x_lo']:+.3f}, {r['mean_x_hi']:+.3f}]" if r.get("mean_x_lo") is not None
+        from jswim.overview import MIN_BOOTSTRAP_N
+
+        ci = (f" [n<{MIN_BOOTSTRAP_N}]" if (r.get("n") or 0) < MIN_BOOTSTRAP_N  # no interval from 1 or 2 runs
+              else f" [{r['mean_x_lo']:+.3f}, {r['mean_x_hi']:+.3f}]" if r.get("mean_x_lo") is not None
               and r.get("mean_x_hi") is not None else "")
         cells = [r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x", r["group"] or "", None, str(r["n"]),
                  f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]", _steps(r),
