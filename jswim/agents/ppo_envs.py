@@ -134,3 +134,42 @@ class SceneEnv:
         reward = (params.direction * (x1 - x0)).astype(action.dtype)
         record = SceneRecord(obs.xs, obs.z, obs.tilt, obs.stuck, obs.contact)
         return new, reward, (x1, new.arms.reshape(-1), new.centre[0, 1], new.tilt[0], record)
+
+
+@dataclasses.dataclass(frozen=True)
+class ProtocolEnv:
+    """Any world of the protocol (:class:`jswim.env.base.Environment`) as PPO's world: it sees
+    the world's :meth:`~jswim.env.base.Environment.features`, is rewarded with
+    :attr:`StepInfo.progress <jswim.env.base.StepInfo>`, and records the swimmers' mean x, the
+    joint DOFs, and swimmer 1's y and orientation. ``params_axes``: ``vmap``'s axes of the
+    learners' params (None: shared)."""
+
+    env: Any
+    params_axes: Any = None
+
+    @property
+    def n_dof(self) -> int:
+        return self.env.n_dof
+
+    @property
+    def n_noise(self) -> int:
+        return self.env.n_swimmers
+
+    @property
+    def n_obs(self) -> int:
+        return self.env.n_features
+
+    def reset(self, key: Array, params: Any) -> Any:
+        return self.env.reset(key, params)
+
+    def dofs(self, state: Any, params: Any) -> Array:
+        return self.env.observe(state, params).dofs
+
+    def observe(self, state: Any, params: Any) -> Array:
+        return self.env.features(state, params)
+
+    def step(self, state: Any, dof: Array, roc: Array, action: Array, y: Array, params: Any) -> tuple[Any, Array, tuple]:
+        new, info = self.env.advance(state, action, y, params)
+        obs = self.env.observe(new, params)
+        x = jnp.mean(obs.position[:, 0])
+        return new, info.progress.astype(action.dtype), (x, obs.dofs, obs.position[0, 1], obs.orientation[0])
