@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from jswim._io.atomic import write_json
 from jswim.errors import ResultFolderError
 
 LOCK = ".jswim.lock"
@@ -99,7 +100,6 @@ class FolderLock:
         import filelock  # lazy: only a session that writes a folder needs it
 
         from jswim.permissions import file_mode
-        from jswim.results import write_json  # lazy: results imports pyarrow
 
         lock = filelock.FileLock(self.folder / LOCK, timeout=0, mode=file_mode())
         try:
