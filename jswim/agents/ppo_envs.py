@@ -29,11 +29,9 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim import env as _env
-
-
-def scaled(dofs: Array, lo: Any, hi: Any) -> Array:
-    """DOF values scaled from ``[lo, hi]`` to ``[-1, 1]``."""
-    return 2.0 * (dofs - lo) / (hi - lo) - 1.0
+from jswim.env.base import scaled  # DOF values from [lo, hi] to [-1, 1]
+from jswim.env.scene_world import features as scene_features
+from jswim.env.scene_world import SceneTask  # a scene learner's world: the scene (shared), the direction (per learner)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,13 +73,6 @@ class SceneRecord(NamedTuple):
     contact: Array
 
 
-class SceneTask(NamedTuple):
-    """A scene learner's environment: the scene (shared) and the target direction (per learner)."""
-
-    scene: Any  # SceneParams, unbatched
-    direction: Array  # (B,) +1 or -1
-
-
 @dataclasses.dataclass(frozen=True)
 class SceneEnv:
     """A scene of :mod:`jswim.scenes` (module docs); ``params`` is a :class:`SceneTask`."""
@@ -117,12 +108,7 @@ class SceneEnv:
         return jnp.mean(centroid_x(state, self.medium))
 
     def observe(self, state: Any, params: SceneTask) -> Array:
-        obs = scaled(state.arms.reshape(-1), params.scene.lo, params.scene.hi)
-        if not self.wall:
-            return obs
-        # Heights below 0.1 a are contacts the step refuses; the floor only keeps the log finite.
-        z = jnp.log(jnp.maximum(state.centre[:, 1], 0.1) / 10.0)
-        return jnp.concatenate([obs, z.astype(obs.dtype), (state.tilt / 0.5).astype(obs.dtype)])
+        return scene_features(state, params.scene, self.wall)
 
     def step(self, state: Any, dof: Array, roc: Array, action: Array, y: Array, params: SceneTask
              ) -> tuple[Any, Array, tuple]:

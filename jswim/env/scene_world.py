@@ -114,13 +114,18 @@ class SceneWorld(Environment):
         """The arms scaled to [-1, 1]; with a wall also each swimmer's middle-sphere height as
         ``ln(z / 10 a)`` and tilt as ``tilt / 0.5 rad`` (about [-1.6, 1.6] over 3-50 a), as the
         PPO baseline reads them."""
-        obs = scaled(state.arms.reshape(-1), params.scene.lo, params.scene.hi)
-        if not self.wall:
-            return obs
-        # Heights below 0.1 a are contacts the step refuses; the floor only keeps the log finite.
-        z = jnp.log(jnp.maximum(state.centre[:, 1], 0.1) / 10.0)
-        return jnp.concatenate([obs, z.astype(obs.dtype), (state.tilt / 0.5).astype(obs.dtype)])
+        return features(state, params.scene, self.wall)
 
     @property
     def n_features(self) -> int:
         return self.n_dof + (2 * self.n_swimmers if self.wall else 0)
+
+
+def features(state: SceneState, params: SceneParams, wall: bool) -> Array:
+    """:meth:`SceneWorld.features` of a scene's state (also the PPO scene world's observation)."""
+    obs = scaled(state.arms.reshape(-1), params.lo, params.hi)
+    if not wall:
+        return obs
+    # Heights below 0.1 a are contacts the step refuses; the floor only keeps the log finite.
+    z = jnp.log(jnp.maximum(state.centre[:, 1], 0.1) / 10.0)
+    return jnp.concatenate([obs, z.astype(obs.dtype), (state.tilt / 0.5).astype(obs.dtype)])
