@@ -93,6 +93,7 @@ def _purejaxrl_loop(env, params, n_envs, n_steps, key):
     return weights, traj
 
 
+@pytest.mark.slow
 def test_gymnax_interface_in_a_purejaxrl_loop(float32):
     world, params = jswim.make("purcell")
     env = GymnaxEnv(world, max_steps=5)
@@ -115,6 +116,7 @@ def test_gymnax_interface_in_a_purejaxrl_loop(float32):
     assert done.shape == (30, 4)
 
 
+@pytest.mark.slow
 def test_gymnax_wrappers_take_the_world(float32):
     pytest.importorskip("gymnax")
     from gymnax.wrappers.purerl import LogWrapper

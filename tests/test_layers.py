@@ -8,6 +8,7 @@ first anyway and it re-exports lazily.
 """
 
 import ast
+import functools
 from collections import defaultdict
 from pathlib import Path
 
@@ -100,6 +101,12 @@ def _modules() -> dict[str, Path]:
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def _graph() -> tuple[tuple[str, str, bool, bool], ...]:
+    """:func:`_imports` of jswim as it is on disk (read once per session)."""
+    return tuple(_imports(_modules()))
+
+
 def _imports(modules: dict[str, Path]) -> list[tuple[str, str, bool, bool]]:
     """``(importer, imported, inside a function, marked lazy)`` for every import of a jswim module."""
 
@@ -188,14 +195,14 @@ def test_every_module_sits_in_a_layer():
 
 
 def test_no_upward_import():
-    imports = _imports(_modules())
+    imports = _graph()
     upward = sorted({(a, b) for a, b, _, _ in imports if _layer(b) > _layer(a)} - UPWARD_ALLOWED)
     assert not upward, "imports up a layer (docs/design.md, Layers): " + ", ".join(f"{a} -> {b}" for a, b in upward)
 
 
 def test_no_import_cycle():
     edges = defaultdict(set)
-    for a, b, _, _ in _imports(_modules()):
+    for a, b, _, _ in _graph():
         edges[a].add(b)
     cycles = [c for c in _cycles(edges) if c not in CYCLES_ALLOWED]
     assert not cycles, "import cycles (function-level imports included): " + "; ".join(
@@ -203,7 +210,7 @@ def test_no_import_cycle():
 
 
 def test_function_level_imports_say_why():
-    unmarked = {f"{a}->{b}" for a, b, inside, marked in _imports(_modules()) if inside and not marked}
+    unmarked = {f"{a}->{b}" for a, b, inside, marked in _graph() if inside and not marked}
     new = sorted(unmarked - UNMARKED_ALLOWED)
     assert not new, ("imports inside functions with no reason: move them to the top of the module, or say "
                      "why they must wait with a '# lazy: ...' comment (e.g. '# lazy: start-up'): " + ", ".join(new))
