@@ -46,7 +46,6 @@ CYCLES_ALLOWED = [{"jswim.plots", "jswim.scene_plots"}]
 UNMARKED_ALLOWED = set("""
     jswim.agents.ppo->jswim.agents.qlearning jswim.agents.ppo->jswim.agents.scene_env
     jswim.agents.ppo->jswim.gait jswim.agents.ppo->jswim.shape_judge jswim.agents.ppo->jswim.sharding
-    jswim.agents.ppo_envs->jswim.agents.scene_env
     jswim.agents.qlearning->jswim.sharding
     jswim.bench.leaderboard->jswim.plots jswim.bench.leaderboard->jswim.results
     jswim.bench.leaderboard->jswim.studies.report
@@ -71,16 +70,11 @@ UNMARKED_ALLOWED = set("""
     jswim.commands.scenes->jswim.agents.variants jswim.commands.scenes->jswim.console
     jswim.commands.scenes->jswim.studies.scenes
     jswim.commands.serve->jswim.llm.reference
-    jswim.env.params->jswim.actions
-    jswim.env.rollouts->jswim.env.base
     jswim.env.stepping->jswim.sharding
-    jswim.folderlock->jswim.permissions
     jswim.gait->jswim.lattice
     jswim.lattice->jswim.env jswim.lattice->jswim.integrate
     jswim.overview->jswim.studies jswim.overview->jswim.studies.grids jswim.overview->jswim.studies.scenes
     jswim.plots->jswim.scene_plots
-    jswim.scenes.params->jswim.env.params
-    jswim.scenes.scene->jswim.errors
     jswim.studies.ensemble->jswim.actions jswim.studies.ensemble->jswim.agents.defaults
     jswim.studies.ensemble->jswim.agents.qlearning jswim.studies.ensemble->jswim.gait
     jswim.studies.run->jswim.agents.ppo jswim.studies.run->jswim.agents.qlearning

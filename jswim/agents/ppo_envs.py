@@ -29,6 +29,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim import env as _env
+from jswim.agents import scene_env
 from jswim.env.base import scaled  # DOF values from [lo, hi] to [-1, 1]
 from jswim.env.scene_world import features as scene_features
 from jswim.env.scene_world import SceneTask  # a scene learner's world: the scene (shared), the direction (per learner)
@@ -95,27 +96,21 @@ class SceneEnv:
         return self.n_dof + (2 * self.n_swimmers if self.wall else 0)
 
     def reset(self, key: Array, params: SceneTask) -> Any:
-        from jswim.agents.scene_env import scene_reset
-
-        return scene_reset(params.scene)
+        return scene_env.scene_reset(params.scene)
 
     def dofs(self, state: Any, params: SceneTask) -> Array:
         return state.arms.reshape(-1)
 
     def _x(self, state: Any) -> Array:
-        from jswim.agents.scene_env import centroid_x
-
-        return jnp.mean(centroid_x(state, self.medium))
+        return jnp.mean(scene_env.centroid_x(state, self.medium))
 
     def observe(self, state: Any, params: SceneTask) -> Array:
         return scene_features(state, params.scene, self.wall)
 
     def step(self, state: Any, dof: Array, roc: Array, action: Array, y: Array, params: SceneTask
              ) -> tuple[Any, Array, tuple]:
-        from jswim.agents.scene_env import advance
-
         x0 = self._x(state)
-        new, obs = advance(params.scene, state, (dof // 2, dof % 2, roc), y)
+        new, obs = scene_env.advance(params.scene, state, (dof // 2, dof % 2, roc), y)
         x1 = self._x(new)
         reward = (params.direction * (x1 - x0)).astype(action.dtype)
         record = SceneRecord(obs.xs, obs.z, obs.tilt, obs.stuck, obs.contact)

@@ -10,8 +10,9 @@ import numpy as np
 from jax import Array
 
 from jswim.env.actions import validate_actions, validate_moves
+from jswim.env.base import Environment
 from jswim.env.params import EnvParams, make_params
-from jswim.env.randomness import seed32, seed_key  # re-exported: their old place
+from jswim.env.randomness import seed32, seed_key  # noqa: F401  (seed32 re-exported: its old place)
 from jswim.env.state import EnvState, dof_values, reset
 from jswim.env.stepping import step
 from jswim.errors import ConfigError
@@ -104,8 +105,6 @@ def rollout(
     >>> rollout("purcell", [(1, -0.5), (2, -0.5)]).dofs[-1].round(4).tolist()
     [0.0, 0.0]
     """
-    from jswim.env.base import Environment
-
     if isinstance(swimmer, Environment):  # the protocol's rollout(env, params, key, actions)
         from jswim.env.episodes import rollout as protocol_rollout  # lazy: start-up (the protocol's modules)
 
