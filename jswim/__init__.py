@@ -7,6 +7,8 @@ Q-learning baseline and the paper's studies.
 
 Where to start
 --------------
+- Any world through one protocol: ``env, params = jswim.make("ng", scene)``, then
+  ``env.reset``/``env.step`` or ``jswim.rollout(env, params, key, actions)`` (:mod:`jswim.env.base`).
 - Step a swimmer: ``jswim.rollout("purcell", [(2, -1), (1, -1), (2, 1), (1, 1)])`` (one square
   gait cycle), or the functional environment ``make_params``, ``reset``, ``step``,
   ``step_batch`` (:mod:`jswim.env`).
@@ -30,6 +32,8 @@ __version__ = "0.1.0"
 #: Public name -> the module that owns it (imported on first access, PEP 562).
 _EXPORTS = {
     "rollout": "jswim.env",
+    "make": "jswim.env.worlds",
+    "rollout_batch": "jswim.env.episodes",
     "make_params": "jswim.env",
     "reset": "jswim.env",
     "step": "jswim.env",

@@ -399,8 +399,25 @@ def build_parser(outline: bool = False) -> argparse.ArgumentParser:
     serve.register(sub)
     report.register(sub)
     animate.register(sub)
-    bench.register(sub)
+    bench.register(sub, StudyArgv())
     return ap
+
+
+class StudyArgv:
+    """The front's reader of a study's argv, handed to ``jswim bench`` (which prices each job's
+    command line in process) so that :mod:`jswim.commands.bench` needs no import of this module."""
+
+    @staticmethod
+    def build_parser() -> argparse.ArgumentParser:
+        return build_parser()
+
+    @staticmethod
+    def options(args: argparse.Namespace, study: str) -> Any:
+        return _options(args, study)
+
+    @staticmethod
+    def backend(args: argparse.Namespace) -> Any:
+        return _backend(args)
 
 
 # -- commands -----------------------------------------------------------------------------------

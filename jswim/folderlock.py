@@ -27,7 +27,9 @@ import time
 from pathlib import Path
 from typing import Any
 
+from jswim._io.atomic import write_json
 from jswim.errors import ResultFolderError
+from jswim.permissions import file_mode
 
 LOCK = ".jswim.lock"
 HOLDER = ".jswim.holder.json"
@@ -98,8 +100,6 @@ class FolderLock:
         """Take the lock without waiting, and record this process as its holder."""
         import filelock  # lazy: only a session that writes a folder needs it
 
-        from jswim.permissions import file_mode
-        from jswim.results import write_json  # lazy: results imports pyarrow
 
         lock = filelock.FileLock(self.folder / LOCK, timeout=0, mode=file_mode())
         try:

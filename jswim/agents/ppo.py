@@ -59,7 +59,7 @@ import optax
 from jax import Array
 
 from jswim import env as _env
-from jswim.agents.ppo_envs import BulkEnv, SceneEnv, SceneTask
+from jswim.agents.ppo_envs import BulkEnv, ProtocolEnv, SceneEnv, SceneTask
 from jswim.errors import ConfigError
 
 
@@ -473,6 +473,19 @@ def train_batch(keys: Array, params: Any, config: PPOConfig = PPOConfig()) -> PP
     n = keys.shape[0]
     fn = functools.partial(_jitted(), config=_structure(config), hp=_numbers(config))
     return sharding.apply_batched(fn, (), (keys, _env.broadcast_params(params, n)), n)
+
+
+def train_env(env: Any, keys: Array, params: Any, config: PPOConfig = PPOConfig(), *, params_axes: Any = None) -> PPORun:
+    """Train independent PPO learners, one per key, in any world of the protocol
+    (:class:`jswim.env.base.Environment`, e.g. from :func:`jswim.make`), in one jitted, vmapped call.
+
+    The learner is :func:`train_batch`'s; the world gives its observation
+    (``env.features``), reward (``StepInfo.progress``) and step (:class:`jswim.agents.ppo_envs.ProtocolEnv`).
+    ``params`` are shared by the learners, or batched along B as ``params_axes`` (hashable) says.
+    ``PPORun.x`` is the swimmers' mean x after each step.
+    """
+    return _jitted()(keys, params, config=_structure(config), hp=_numbers(config),
+                     world=ProtocolEnv(env, params_axes))
 
 
 @functools.lru_cache(maxsize=1)

@@ -29,11 +29,10 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim import env as _env
-
-
-def scaled(dofs: Array, lo: Any, hi: Any) -> Array:
-    """DOF values scaled from ``[lo, hi]`` to ``[-1, 1]``."""
-    return 2.0 * (dofs - lo) / (hi - lo) - 1.0
+from jswim.agents import scene_env
+from jswim.env.base import scaled  # DOF values from [lo, hi] to [-1, 1]
+from jswim.env.scene_world import features as scene_features
+from jswim.env.scene_world import SceneTask  # a scene learner's world: the scene (shared), the direction (per learner)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -75,13 +74,6 @@ class SceneRecord(NamedTuple):
     contact: Array
 
 
-class SceneTask(NamedTuple):
-    """A scene learner's environment: the scene (shared) and the target direction (per learner)."""
-
-    scene: Any  # SceneParams, unbatched
-    direction: Array  # (B,) +1 or -1
-
-
 @dataclasses.dataclass(frozen=True)
 class SceneEnv:
     """A scene of :mod:`jswim.scenes` (module docs); ``params`` is a :class:`SceneTask`."""
@@ -104,33 +96,61 @@ class SceneEnv:
         return self.n_dof + (2 * self.n_swimmers if self.wall else 0)
 
     def reset(self, key: Array, params: SceneTask) -> Any:
-        from jswim.agents.scene_env import scene_reset
-
-        return scene_reset(params.scene)
+        return scene_env.scene_reset(params.scene)
 
     def dofs(self, state: Any, params: SceneTask) -> Array:
         return state.arms.reshape(-1)
 
     def _x(self, state: Any) -> Array:
-        from jswim.agents.scene_env import centroid_x
-
-        return jnp.mean(centroid_x(state, self.medium))
+        return jnp.mean(scene_env.centroid_x(state, self.medium))
 
     def observe(self, state: Any, params: SceneTask) -> Array:
-        obs = scaled(state.arms.reshape(-1), params.scene.lo, params.scene.hi)
-        if not self.wall:
-            return obs
-        # Heights below 0.1 a are contacts the step refuses; the floor only keeps the log finite.
-        z = jnp.log(jnp.maximum(state.centre[:, 1], 0.1) / 10.0)
-        return jnp.concatenate([obs, z.astype(obs.dtype), (state.tilt / 0.5).astype(obs.dtype)])
+        return scene_features(state, params.scene, self.wall)
 
     def step(self, state: Any, dof: Array, roc: Array, action: Array, y: Array, params: SceneTask
              ) -> tuple[Any, Array, tuple]:
-        from jswim.agents.scene_env import advance
-
         x0 = self._x(state)
-        new, obs = advance(params.scene, state, (dof // 2, dof % 2, roc), y)
+        new, obs = scene_env.advance(params.scene, state, (dof // 2, dof % 2, roc), y)
         x1 = self._x(new)
         reward = (params.direction * (x1 - x0)).astype(action.dtype)
         record = SceneRecord(obs.xs, obs.z, obs.tilt, obs.stuck, obs.contact)
         return new, reward, (x1, new.arms.reshape(-1), new.centre[0, 1], new.tilt[0], record)
+
+
+@dataclasses.dataclass(frozen=True)
+class ProtocolEnv:
+    """Any world of the protocol (:class:`jswim.env.base.Environment`) as PPO's world: it sees
+    the world's :meth:`~jswim.env.base.Environment.features`, is rewarded with
+    :attr:`StepInfo.progress <jswim.env.base.StepInfo>`, and records the swimmers' mean x, the
+    joint DOFs, and swimmer 1's y and orientation. ``params_axes``: ``vmap``'s axes of the
+    learners' params (None: shared)."""
+
+    env: Any
+    params_axes: Any = None
+
+    @property
+    def n_dof(self) -> int:
+        return self.env.n_dof
+
+    @property
+    def n_noise(self) -> int:
+        return self.env.n_swimmers
+
+    @property
+    def n_obs(self) -> int:
+        return self.env.n_features
+
+    def reset(self, key: Array, params: Any) -> Any:
+        return self.env.reset(key, params)
+
+    def dofs(self, state: Any, params: Any) -> Array:
+        return self.env.observe(state, params).dofs
+
+    def observe(self, state: Any, params: Any) -> Array:
+        return self.env.features(state, params)
+
+    def step(self, state: Any, dof: Array, roc: Array, action: Array, y: Array, params: Any) -> tuple[Any, Array, tuple]:
+        new, info = self.env.advance(state, action, y, params)
+        obs = self.env.observe(new, params)
+        x = jnp.mean(obs.position[:, 0])
+        return new, info.progress.astype(action.dtype), (x, obs.dofs, obs.position[0, 1], obs.orientation[0])

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import functools
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -76,3 +76,37 @@ def _jitted(batched: bool):
     # at every call (about 2 s for a study's random-policy batch).
     fn = jax.vmap(_one, in_axes=(0, 0 if batched else None, None, None, None))
     return jax.jit(fn, static_argnums=(2, 3, 4))
+
+
+class WorldRun(NamedTuple):
+    """Per-step record of :func:`run_env` (leading axes: runs, steps): the action codes, the
+    reward, and each swimmer's position ``(S, 2)`` after the step."""
+
+    actions: Array
+    progress: Array
+    position: Array
+
+
+def run_env(env: Any, params: Any, keys: Array, steps: int) -> WorldRun:
+    """The random policy in any world of the protocol (:class:`jswim.env.base.Environment`):
+    every step a uniformly random integer code of ``env.action_space(params)``, one run per key,
+    one scan vmapped over runs (``params`` shared)."""
+    return _run_env(env, params, keys, steps)
+
+
+@functools.partial(jax.jit, static_argnums=(0, 3))
+def _run_env(env: Any, params: Any, keys: Array, steps: int) -> WorldRun:
+    space = env.action_space(params)
+
+    def one(key: Array) -> WorldRun:
+        k_reset, k_run = jax.random.split(key)
+
+        def body(state, k):
+            k_act, k_step = jax.random.split(k)
+            action = space.sample(k_act)
+            state, info = env.step(k_step, state, action, params)
+            return state, WorldRun(action, info.progress, env.observe(state, params).position)
+
+        return jax.lax.scan(body, env.reset(k_reset, params), jax.random.split(k_run, steps))[1]
+
+    return jax.vmap(one)(keys)

@@ -14,7 +14,11 @@ from jswim.errors import ConfigError
 EXIT_SOME_FAILED = 2
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction, study_argv: Any = None) -> None:
+    """Add ``jswim bench`` to ``sub``. ``study_argv`` is the command line's reader of a study's
+    argv: an object with ``build_parser()``, ``options(args, study)`` and ``backend(args)`` (the
+    front's one place for argv -> options; given by :func:`jswim.cli.build_parser`, so this
+    module does not import the front that imports it)."""
     p = sub.add_parser("bench", help="run a suite over several models at once and print a leaderboard",
                        description="Run a suite (core: the paper's headline results; paper: every figure; or one "
                                    "of the models file's [suites]) over every model of a models file (TOML) or of "
@@ -42,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="independent samples of every LLM run (each its own run id and seed), pooled into each "
                         "row with the count shown; grows an existing bench folder (recorded, not part of the "
                         "suite's definition)")
-    p.set_defaults(command_main=main)
+    p.set_defaults(command_main=main, study_argv=study_argv)
 
 
 def _models(args: argparse.Namespace) -> tuple[Any, Any]:
@@ -78,7 +82,7 @@ def main(args: argparse.Namespace) -> int:
     suite = _suite(args, mf)
     out = Path(args.out or f"jswim-out/bench-{suite.name}")
     if args.dry_run:
-        return _dry_run(suite, models, mf, out)
+        return _dry_run(suite, models, mf, out, args.study_argv)
     meta = runner.open_folder(out, {**runner.definition(suite, models, not args.no_reference, not args.no_baselines),
                                     "status": "running"})
     prices_file = None
@@ -199,11 +203,11 @@ def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list
     return rows
 
 
-def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
-    """Price every model's suite in process (nothing sent, nothing written)."""
+def _dry_run(suite: Any, models: Any, mf: Any, out: Path, cli: Any) -> int:
+    """Price every model's suite in process (nothing sent, nothing written); ``cli`` reads each
+    job's argv (:func:`register`'s ``study_argv``)."""
     import tempfile
 
-    from jswim import cli
     from jswim.bench import runner
     from jswim.console import Column, plain_table
     from jswim.studies.run import estimate_study
@@ -219,7 +223,7 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
         for j in jobs:
             args = parser.parse_args(j.argv)
             study = "swim" if args.command == "swim" else args.name
-            est = estimate_study(study, cli._options(args, study), cli._backend(args), j.folder)
+            est = estimate_study(study, cli.options(args, study), cli.backend(args), j.folder)
             t = totals.setdefault(j.label, {"model": j.model.get("model"), "calls": 0, "prompt_tokens": 0,
                                             "completion_tokens": 0, "reasoning_tokens": 0, "cost_usd": 0.0,
                                             "cost_max_usd": 0.0, "priced": bool(est.price_in or est.price_out),

@@ -22,6 +22,16 @@ One concern per module: :mod:`~jswim.env.params` (``EnvParams``, ``make_params``
 (``EnvState``, pose, DOF values), :mod:`~jswim.env.tables` (exact step tables),
 :mod:`~jswim.env.randomness` (counter-based noise), :mod:`~jswim.env.stepping` (``step``,
 ``step_batch``, ``advance``), :mod:`~jswim.env.rollouts` (``rollout``, seeds).
+
+The world protocol (one interface for this world and the scenes'): :mod:`~jswim.env.base`
+(``Environment``, its ``StepInfo``, ``Observation``, spaces), :mod:`~jswim.env.swimmer_world`
+(``SwimmerWorld``: this environment), :mod:`~jswim.env.scene_world` (``SceneWorld``,
+``SceneTask``: :mod:`jswim.scenes`), :mod:`~jswim.env.worlds` (``make``),
+:mod:`~jswim.env.episodes` (``rollout(env, params, key, actions)``, ``rollout_batch``)::
+
+    env, params = make("ng", Scene(medium="wall", height=5.0), direction="-x")
+    state = env.reset(key, params)
+    state, info = env.step(key, state, env.action_space(params).sample(key), params)
 """
 
 from jswim.env.actions import ROCS, decode_action, encode_action, roc_vector, validate_actions, validate_moves
@@ -51,9 +61,30 @@ from jswim.env.state import (
     start_state,
 )
 from jswim.env.stepping import advance, step, step_batch
+from jswim.env.base import Box, Discrete, Environment, Observation
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env.tables import TABLE_DEGREE, _corner_index, _flat_table, _step_rows, _still_row, step_table
 
+#: The protocol's names that reach the scene physics, loaded on first use (PEP 562) so that
+#: ``import jswim.env`` does not import :mod:`jswim.scenes`.
+_LAZY = {
+    "make": "jswim.env.worlds", "SceneWorld": "jswim.env.scene_world", "SceneTask": "jswim.env.scene_world",
+    "Trajectory": "jswim.env.episodes", "rollout_batch": "jswim.env.episodes",
+}
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        import importlib
+
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'jswim.env' has no attribute {name!r}")
+
+
 __all__ = [
+    "Box", "Discrete", "Environment", "Observation", "SwimmerWorld", *_LAZY,
     "ROCS", "TABLE_DEGREE", "EnvParams", "EnvState", "Rollout", "StepInfo", "advance", "all_inits",
     "broadcast_params", "check_roc_levels", "corner_values", "decode_action", "dof_values", "encode_action",
     "fractions", "is_batched", "make_params", "noise", "param_axes", "parse_direction", "parse_init", "position",

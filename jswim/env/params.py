@@ -12,6 +12,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jswim.actions import check_roc_levels as _check_roc_levels
 from jswim.errors import ConfigError
 from jswim.swimmers.models import SwimmerModel, make_model
 
@@ -129,9 +130,7 @@ def make_params(
 def check_roc_levels(k: Any) -> int:
     """``k`` as an int if it is a valid number of ROC levels K (the rule of
     :func:`jswim.actions.check_roc_levels`, with the message naming ``roc_levels``)."""
-    from jswim.actions import check_roc_levels as check
-
-    return check(k, "roc_levels")
+    return _check_roc_levels(k, "roc_levels")
 
 
 def parse_direction(direction: int | str) -> int:

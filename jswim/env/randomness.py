@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from typing import Any
 
 import jax
@@ -39,3 +40,18 @@ def uniforms(key: Array, shape: tuple[int, ...], dtype: Any, minval: float = 0.0
     """
     with jax.threefry_partitionable(False):
         return jax.random.uniform(key, shape, dtype, minval, maxval)
+
+
+def seed32(seed: int) -> int:
+    """A seed :func:`jax.random.PRNGKey` takes, from any integer: ``seed`` itself in
+    ``[0, 2**32)`` (so existing seeds keep their streams), else a 32-bit BLAKE2b hash of it
+    (negative or huge seeds: ``--seed -1``, ``--seed 2**70``)."""
+    seed = int(seed)
+    if 0 <= seed < 2**32:
+        return seed
+    return int.from_bytes(hashlib.blake2b(str(seed).encode(), digest_size=4).digest(), "little")
+
+
+def seed_key(seed: int) -> Array:
+    """``jax.random.PRNGKey(seed32(seed))``: a key from any integer seed."""
+    return jax.random.PRNGKey(seed32(seed))

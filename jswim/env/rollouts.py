@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import hashlib
 from typing import Any, NamedTuple, Sequence
 
 import jax
@@ -11,7 +10,9 @@ import numpy as np
 from jax import Array
 
 from jswim.env.actions import validate_actions, validate_moves
+from jswim.env.base import Environment
 from jswim.env.params import EnvParams, make_params
+from jswim.env.randomness import seed32, seed_key  # noqa: F401  (seed32 re-exported: its old place)
 from jswim.env.state import EnvState, dof_values, reset
 from jswim.env.stepping import step
 from jswim.errors import ConfigError
@@ -47,25 +48,10 @@ def _scan(key: Array, actions: Array, params: EnvParams) -> Rollout:
     return out
 
 
-def seed32(seed: int) -> int:
-    """A seed :func:`jax.random.PRNGKey` takes, from any integer: ``seed`` itself in
-    ``[0, 2**32)`` (so existing seeds keep their streams), else a 32-bit BLAKE2b hash of it
-    (negative or huge seeds: ``--seed -1``, ``--seed 2**70``)."""
-    seed = int(seed)
-    if 0 <= seed < 2**32:
-        return seed
-    return int.from_bytes(hashlib.blake2b(str(seed).encode(), digest_size=4).digest(), "little")
-
-
-def seed_key(seed: int) -> Array:
-    """``jax.random.PRNGKey(seed32(seed))``: a key from any integer seed."""
-    return jax.random.PRNGKey(seed32(seed))
-
-
 def rollout(
     swimmer: str | SwimmerModel,
     actions: Any,
-    *,
+    *protocol_args: Any,
     key: Array | int = 0,
     zeta: float = 0.0,
     direction: int | str = 1,
@@ -74,6 +60,9 @@ def rollout(
     **model_kwargs: Any,
 ) -> Any:
     """Run a given action sequence for one swimmer or a batch.
+
+    ``rollout(env, params, key, actions)`` with a world of :func:`jswim.make` first is the
+    protocol's rollout for any world (:func:`jswim.env.episodes.rollout`).
 
     Parameters
     ----------
@@ -116,10 +105,15 @@ def rollout(
     >>> rollout("purcell", [(1, -0.5), (2, -0.5)]).dofs[-1].round(4).tolist()
     [0.0, 0.0]
     """
-    from jswim import sharding
+    if isinstance(swimmer, Environment):  # the protocol's rollout(env, params, key, actions)
+        from jswim.env.episodes import rollout as protocol_rollout  # lazy: start-up (the protocol's modules)
 
+        return protocol_rollout(swimmer, actions, *protocol_args)
+    if protocol_args:
+        raise TypeError("rollout(swimmer, actions, *, key=..., ...) takes two positional arguments; "
+                        "rollout(env, params, key, actions) takes a world")
     if scene is not None and not _is_plain_bulk(scene):
-        from jswim.scenes import scene_rollout
+        from jswim.scenes import scene_rollout  # lazy: start-up (the scene physics loads for a scene)
 
         if direction not in (1, "+x", "+", "x", "+1", "1"):
             raise ConfigError("direction is not a scene option: scene rollouts record x, z and tilt")
@@ -131,6 +125,8 @@ def rollout(
     if batch_ndim not in (1, 2):
         raise ConfigError("actions must have shape (steps, 2) or (batch, steps, 2)")
     # float64 whatever the global setting: this is the path physicists check numbers with.
+    from jswim import sharding  # lazy: start-up (device mesh helpers)
+
     with jax.enable_x64(True):
         if isinstance(key, int):
             key = seed_key(key)
@@ -144,12 +140,9 @@ def rollout(
 
 def _is_plain_bulk(scene: Any) -> bool:
     """Whether ``scene`` is today's environment: one untilted swimmer in the bulk medium."""
-    from jswim.scenes import Scene
+    from jswim.env.worlds import is_plain_bulk  # lazy: start-up (the scene modules)
 
-    if not isinstance(scene, Scene):
-        raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
-    scene.validate()
-    return scene.medium == "bulk" and scene.swimmers == 1 and scene.tilt == 0.0
+    return is_plain_bulk(scene)
 
 
 @jax.jit

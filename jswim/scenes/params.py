@@ -11,6 +11,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jswim.env.params import check_roc_levels, parse_init
 from jswim.errors import ConfigError
 from jswim.scenes.scene import Scene
 from jswim.swimmers.models import make_model
@@ -140,8 +141,6 @@ def scene_params(
     ConfigError (a ValueError)
         Bad swimmer, scene, zeta or start (spheres overlapping or touching the wall at the start).
     """
-    from jswim.env.params import check_roc_levels, parse_init
-
     if not isinstance(scene, Scene):
         raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
     scene.validate()

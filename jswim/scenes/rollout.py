@@ -9,6 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from jswim.env.randomness import seed_key
 from jswim.errors import ConfigError
 from jswim.scenes.params import SceneParams, scene_params
 from jswim.scenes.scene import Scene
@@ -91,8 +92,6 @@ def scene_rollout(
     SceneRollout
         NumPy float64 arrays, one entry per step (the state after it).
     """
-    from jswim.env.rollouts import seed_key
-
     with jax.enable_x64(True):
         if params is None:
             params = scene_params(swimmer, scene, zeta=zeta, dtype=jnp.float64, **kwargs)
@@ -145,8 +144,6 @@ def batch_starts(params: SceneParams, *, height: Any = None, tilt: Any = None, s
 def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0) -> SceneRollout:
     """:func:`scene_rollout` of the same moves from each start of :func:`batch_starts` (float64
     when ``params`` is). Leading axes of the result: (batch, steps, ...)."""
-    from jswim.env.rollouts import seed_key
-
     with jax.enable_x64(True):
         acts = parse_scene_moves(moves, params.n_swimmers)
         k = seed_key(key) if isinstance(key, int) else key

@@ -7,6 +7,8 @@ import math
 import numbers
 from typing import Any
 
+from jswim.errors import ConfigError
+
 #: Media: the paper's first-order formula, the point-force solve without and with a wall.
 MEDIA = ("bulk", "free", "wall")
 
@@ -71,8 +73,6 @@ class Scene:
         ValueError
             (a :class:`jswim.errors.ConfigError`) naming the first bad field, in one line.
         """
-        from jswim.errors import ConfigError
-
         if self.medium not in MEDIA:
             raise ConfigError(f"scene medium must be one of {', '.join(MEDIA)}; got {self.medium!r}")
         for name in ("height", "tilt", "separation"):
@@ -109,8 +109,6 @@ class Scene:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "Scene":
         """Inverse of :meth:`to_dict` (unknown keys are an error); validated."""
-        from jswim.errors import ConfigError
-
         if not isinstance(data, dict):
             raise ConfigError(f"a scene must be a JSON object, got {type(data).__name__}")
         names = {f.name for f in dataclasses.fields(cls)}

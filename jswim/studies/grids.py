@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from typing import Callable, Iterable
 
 from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
+from jswim.agents import scene_env
 from jswim.agents.defaults import paper_init
 from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
@@ -336,15 +337,52 @@ SPECS: dict[str, StudySpec] = {
 }
 
 
+def wall_scene(h: float) -> str:
+    return scene_env.canonical(scene_env.Scene(medium="wall", height=float(h), swimmers=1))
+
+
+def pair_scene(d: float | None = None) -> str:
+    """Two coaxial swimmers ``d`` apart in the unbounded fluid of the point-force solve; ``None``:
+    one swimmer alone there."""
+    if d is None:
+        return scene_env.canonical(scene_env.Scene(medium="free", swimmers=1))
+    return scene_env.canonical(scene_env.Scene(medium="free", swimmers=2, separation=float(d)))
+
+
+def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
+    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids."""
+    if study == "wall":
+        out = [Cell("free", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="free")]
+        for h in o.heights:
+            out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
+                            stroke="square", tag=f"h{h:g}"))
+            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
+        return out
+    out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
+    for d in o.separations:
+        for ph in o.phases:
+            out.append(Cell(f"D={d:g}, phase {ph}", (STROKE_AGENT,), scene=pair_scene(d), stroke=f"phase{ph}",
+                            tag=f"D{d:g}-ph{ph}"))
+        out.append(Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}"))
+        out += _ppo_cells(f"D={d:g}", pair_scene(d), f"D{d:g}")
+    return out
+
+
+def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
+    """The continuous RL baseline's cell next to the other agents of a group (same group name,
+    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scene_ppo`)."""
+    if not continuous_agent_available():
+        return []
+    return [Cell(group, (CONTINUOUS_AGENT,), scene=scene, roc_levels=0, tag=tag)]
+
+
 def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
     def cells(o: StudyOptions) -> list[Cell]:
-        from jswim.studies import scenes  # the scene studies' grids
-
         if o.roc_levels != 1:  # the scene rows read and judge K = 1 codes; PPO has real ROCs anyway
             raise ConfigError(f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
                               "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
                               "[-1, 1]); leave it out")
-        return scenes.cells(name, o)
+        return scene_cells(name, o)
     return cells
 
 

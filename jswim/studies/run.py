@@ -113,8 +113,12 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     """Q-learning, random or continuous-RL runs of one (agent, swimmer, action set, ROC lattice)
     group, vectorised."""
     p0 = plans[0]
-    if p0.scene:  # walls and pairs (issue 19): the stroke and the baselines on the scene
-        from jswim.studies import scenes
+    if p0.scene and p0.agent == CONTINUOUS_AGENT:  # walls and pairs (issue 19): PPO on the scene
+        from jswim.studies import scene_ppo  # lazy: start-up (optax and the PPO module, for PPO runs only)
+
+        return scene_ppo.run_all(plans, horizon)
+    if p0.scene:  # the stroke and the other baselines on the scene
+        from jswim.studies import scenes  # lazy: start-up (the scene baselines' module, for scene studies only)
 
         return scenes.run_baselines(plans, horizon)
     if p0.agent == CONTINUOUS_AGENT:

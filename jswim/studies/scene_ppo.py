@@ -25,7 +25,13 @@ from typing import Any, Sequence
 import numpy as np
 
 from jswim.gait import Criterion
+from jswim.studies import scenes
 from jswim.studies.grids import Plan
+
+
+def run_all(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
+    """:func:`run` for each start among ``plans`` (:func:`jswim.studies.scenes.by_start`)."""
+    return scenes.by_start(plans, horizon, run)
 
 
 def run(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
@@ -37,7 +43,6 @@ def run(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     import jax.numpy as jnp
 
     from jswim.agents import ppo, scene_env
-    from jswim.studies import scenes
 
     p0 = plans[0]
     scene, params = scenes._params(p0)

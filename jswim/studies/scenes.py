@@ -31,8 +31,8 @@ from jswim import env
 from jswim.agents import scene_baselines, scene_env
 from jswim.agents.qlearning import QConfig
 from jswim.gait import Criterion, judge
-from jswim.studies.grids import (CONTINUOUS_AGENT, STROKE_AGENT, WITH_BASELINES, Cell, Plan, StudyOptions,
-                                 continuous_agent_available)
+from jswim.studies.grids import STROKE_AGENT, Plan
+from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
 #: The NG square stroke toward +x from the paper's start (10, 6), as joint codes of swimmer 1:
 #: D2 up, D1 down, D2 down, D1 up (``(dof - 1) * 3 + roc + 1``). Toward -x: its time reverse.
@@ -44,45 +44,6 @@ ESCAPE_FACTOR = 2.0  # at twice the starting height or more
 RISE_FRACTION = 0.1  # rising by 10 % of the start over the run's second half
 
 FATES = ("trapped", "escaped", "gliding")
-
-
-def wall_scene(h: float) -> str:
-    return scene_env.canonical(scene_env.Scene(medium="wall", height=float(h), swimmers=1))
-
-
-def pair_scene(d: float | None = None) -> str:
-    """Two coaxial swimmers ``d`` apart in the unbounded fluid of the point-force solve; ``None``:
-    one swimmer alone there."""
-    if d is None:
-        return scene_env.canonical(scene_env.Scene(medium="free", swimmers=1))
-    return scene_env.canonical(scene_env.Scene(medium="free", swimmers=2, separation=float(d)))
-
-
-def cells(study: str, o: StudyOptions) -> list[Cell]:
-    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids."""
-    if study == "wall":
-        out = [Cell("free", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="free")]
-        for h in o.heights:
-            out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
-                            stroke="square", tag=f"h{h:g}"))
-            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
-        return out
-    out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
-    for d in o.separations:
-        for ph in o.phases:
-            out.append(Cell(f"D={d:g}, phase {ph}", (STROKE_AGENT,), scene=pair_scene(d), stroke=f"phase{ph}",
-                            tag=f"D{d:g}-ph{ph}"))
-        out.append(Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}"))
-        out += _ppo_cells(f"D={d:g}", pair_scene(d), f"D{d:g}")
-    return out
-
-
-def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
-    """The continuous RL baseline's cell next to the other agents of a group (same group name,
-    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scene_ppo`)."""
-    if not continuous_agent_available():
-        return []
-    return [Cell(group, (CONTINUOUS_AGENT,), scene=scene, roc_levels=0, tag=tag)]
 
 
 # -- fates ---------------------------------------------------------------------------------------
@@ -175,20 +136,25 @@ def _params(plan: Plan) -> Any:
     return scene, scene_env.scene_params(plan.swimmer, scene, zeta=plan.zeta, init=scene_env.start_levels(plan.init))
 
 
-def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """The stroke, random or Q-learning runs of one (agent, scene, zeta, action set, variant) group
-    (in sub-batches by start)."""
+def by_start(plans: Sequence[Plan], horizon: int, run_group: Any) -> list[dict[str, Any]]:
+    """``run_group(plans, horizon)``'s rows for each sub-batch of one start, in the order of ``plans``."""
     by_init: dict[Any, list[Plan]] = {}
     for p in plans:
         by_init.setdefault(p.init, []).append(p)
-    if len(by_init) > 1:
-        done = {r["run_id"]: r for g in by_init.values() for r in run_baselines(g, horizon)}
-        return [done[p.run_id] for p in plans]
-    p0 = plans[0]
-    if p0.agent == CONTINUOUS_AGENT:
-        from jswim.studies import scene_ppo
+    if len(by_init) == 1:
+        return run_group(plans, horizon)
+    done = {r["run_id"]: r for g in by_init.values() for r in run_group(g, horizon)}
+    return [done[p.run_id] for p in plans]
 
-        return scene_ppo.run(plans, horizon)
+
+def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
+    """The stroke, random or Q-learning runs of one (agent, scene, zeta, action set, variant) group
+    (in sub-batches by start; the continuous RL baseline's: :func:`jswim.studies.scene_ppo.run_all`)."""
+    return by_start(plans, horizon, _run_group)
+
+
+def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
+    p0 = plans[0]
     scene, params = _params(p0)
     keys = _keys(plans)
     direction = np.array([p.direction for p in plans], np.float64)

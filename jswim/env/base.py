@@ -1,0 +1,210 @@
+"""The world protocol: what every environment of jswim offers the layers above it.
+
+A world is a static, hashable object (a frozen dataclass: one compilation per world) in the
+gymnax manner; its numbers travel separately as ``params`` (a pytree whose leaves may be
+batched). Every world answers:
+
+* ``reset(key, params) -> state`` and ``step(key, state, action, params) -> (state, StepInfo)``;
+* ``advance(state, action, noise, params)``: the step for given noise draws ``(n_swimmers,)`` in
+  [-1, 1] (what :meth:`Environment.step` draws from its key: :meth:`Environment.noise`);
+* ``observe(state, params) -> Observation``: what agents may see; ``features(state, params)``:
+  the same as one flat float vector (the input of a policy network);
+* ``action_space(params)`` (integer codes, :class:`Discrete`) and ``roc_space(params)`` (float
+  ROC vectors, :class:`Box`), each with ``sample(key)`` as in gymnax;
+* the sizes ``n_dof`` (joint DOFs of every swimmer), ``n_actions``, ``n_swimmers``, and
+  ``default_params``.
+
+An action is an integer code over the joint DOFs, ``(dof - 1)(2K + 1) + k + K`` (DOF 1-based,
+ROC ``k / K``; swimmer ``s`` of a scene owns DOFs ``2s + 1, 2s + 2``), or a float ROC vector of
+shape ``(n_dof,)`` in [-1, 1] (only its first non-zero entry moves unless the world allows
+diagonal strokes). One :class:`StepInfo` serves every world; ``progress`` is the reward of the
+paper's task toward ``params.direction`` (+1: +x, -1: -x), a parameter of every world.
+
+Worlds: :class:`jswim.env.swimmer_world.SwimmerWorld` (the paper's swimmers alone in the fluid,
+over :mod:`jswim.env`) and :class:`jswim.env.scene_world.SceneWorld` (walls, obstacles, pairs,
+over :mod:`jswim.scenes`); :func:`jswim.env.worlds.make` builds either. A new world subclasses
+:class:`Environment` and fills in ``reset``, ``advance``, ``observe`` and the sizes (see
+docs/design.md, *Adding a world*).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+from jax import Array
+
+
+class StepInfo(NamedTuple):
+    """What one step of any world did (``S`` swimmers).
+
+    Attributes
+    ----------
+    displacement : Array (S, 2)
+        Each swimmer's displacement ``(dx, dy)`` over the step, of the point
+        :attr:`Observation.position` reports (the paper's centroid), lab frame, units of the
+        world's length (link length or sphere radius ``a``); noisy when ``zeta > 0``. ``dy`` is
+        the height change above a wall.
+    progress : Array ()
+        The reward: ``direction`` times the swimmers' mean ``dx``.
+    stuck : Array () bool
+        A non-zero ROC could not move its DOF at all (it sat at its limit); nothing moved.
+    moved : Array () bool
+        The shape changed.
+    contact : Array () bool
+        The move would have brought two surfaces too close; it was refused (False where nothing
+        can be touched).
+    gap : Array ()
+        Smallest surface gap along the step (``inf`` where nothing can be touched).
+    """
+
+    displacement: Array
+    progress: Array
+    stuck: Array
+    moved: Array
+    contact: Array
+    gap: Array
+
+
+class Observation(NamedTuple):
+    """What agents may see of a state (``S`` swimmers).
+
+    Attributes
+    ----------
+    dofs : Array (n_dof,)
+        Joint DOF values (hinge angles in rad, arm lengths in ``a``), swimmer by swimmer.
+    position : Array (S, 2)
+        Each swimmer's centroid ``(x, y)``; above a wall ``y`` is the height.
+    orientation : Array (S,)
+        Each swimmer's orientation (rad): the reference link's angle, or a scene swimmer's tilt
+        from the wall plane.
+    """
+
+    dofs: Array
+    position: Array
+    orientation: Array
+
+
+class Discrete:
+    """``n`` integer actions ``0 .. n - 1`` (gymnax's ``spaces.Discrete`` interface)."""
+
+    def __init__(self, n: int, dtype: Any = jnp.int32) -> None:
+        self.n = int(n)
+        self.shape: tuple[int, ...] = ()
+        self.dtype = dtype
+
+    def sample(self, key: Array) -> Array:
+        """A uniformly random action."""
+        return jax.random.randint(key, self.shape, 0, self.n, self.dtype)
+
+    def contains(self, x: Any) -> Array:
+        x = jnp.asarray(x)
+        return jnp.logical_and(x >= 0, x < self.n)
+
+    def __repr__(self) -> str:
+        return f"Discrete({self.n})"
+
+
+class Box:
+    """Real vectors in ``[low, high]`` of a fixed shape (gymnax's ``spaces.Box`` interface)."""
+
+    def __init__(self, low: Any, high: Any, shape: tuple[int, ...], dtype: Any = jnp.float32) -> None:
+        self.low, self.high, self.shape, self.dtype = low, high, tuple(shape), dtype
+
+    def sample(self, key: Array) -> Array:
+        """A uniformly random vector."""
+        return jax.random.uniform(key, self.shape, minval=self.low, maxval=self.high).astype(self.dtype)
+
+    def contains(self, x: Any) -> Array:
+        x = jnp.asarray(x)
+        return jnp.logical_and(jnp.all(x >= self.low), jnp.all(x <= self.high))
+
+    def __repr__(self) -> str:
+        return f"Box({self.low}, {self.high}, {self.shape})"
+
+
+@dataclasses.dataclass(frozen=True)
+class Environment:
+    """Base of every world (module docs). Subclasses are frozen dataclasses (static, hashable).
+
+    Subclasses define ``n_dof``, ``n_swimmers``, ``roc_levels`` (K of the integer codes),
+    ``default_params``, ``reset``, ``advance`` and ``observe``; ``step``, ``noise``, the spaces
+    and ``n_actions`` come from here.
+    """
+
+    @property
+    def n_dof(self) -> int:
+        raise NotImplementedError
+
+    @property
+    def n_swimmers(self) -> int:
+        return 1
+
+    @property
+    def roc_levels(self) -> int:
+        return 1
+
+    @property
+    def n_actions(self) -> int:
+        """Integer action codes: ``n_dof (2K + 1)``."""
+        return self.n_dof * (2 * self.roc_levels + 1)
+
+    @property
+    def default_params(self) -> Any:
+        raise NotImplementedError
+
+    def reset(self, key: Array, params: Any) -> Any:
+        raise NotImplementedError
+
+    def advance(self, state: Any, action: Array, noise: Array, params: Any) -> tuple[Any, StepInfo]:
+        raise NotImplementedError
+
+    def observe(self, state: Any, params: Any) -> Observation:
+        raise NotImplementedError
+
+    def dtype(self, state: Any) -> Any:
+        """The working float dtype of ``state`` (the dtype of its first float leaf)."""
+        return next(leaf.dtype for leaf in jax.tree.leaves(state) if jnp.issubdtype(leaf.dtype, jnp.floating))
+
+    def noise(self, key: Array, state: Any) -> Array:
+        """The step's noise variables ``Y ~ U[-1, 1]``, one per swimmer ``(n_swimmers,)``; one
+        swimmer's is ``uniform(key, ())``, the draw of :func:`jswim.env.step`."""
+        dtype = self.dtype(state)
+        if self.n_swimmers == 1:
+            return jax.random.uniform(key, (), dtype, -1.0, 1.0)[None]
+        return jax.random.uniform(key, (self.n_swimmers,), dtype, -1.0, 1.0)
+
+    def step(self, key: Array, state: Any, action: Array, params: Any) -> tuple[Any, StepInfo]:
+        """One step, its noise drawn from ``key`` (:meth:`noise`), then :meth:`advance`."""
+        return self.advance(state, action, self.noise(key, state), params)
+
+    def action_space(self, params: Any = None) -> Discrete:
+        """The integer action codes."""
+        return Discrete(self.n_actions)
+
+    def roc_space(self, params: Any = None) -> Box:
+        """Float ROC vectors ``(n_dof,)`` in [-1, 1]."""
+        return Box(-1.0, 1.0, (self.n_dof,), jnp.result_type(float))
+
+    def features(self, state: Any, params: Any) -> Array:
+        """The observation as one flat float vector: the DOFs scaled to [-1, 1] (the default;
+        worlds add what else a policy may read)."""
+        raise NotImplementedError
+
+    @property
+    def n_features(self) -> int:
+        """Length of :meth:`features`."""
+        return self.n_dof
+
+
+def scaled(values: Array, lo: Any, hi: Any) -> Array:
+    """Values scaled from ``[lo, hi]`` to ``[-1, 1]``."""
+    return 2.0 * (values - lo) / (hi - lo) - 1.0
+
+
+def first_move(rocs: Array) -> tuple[Array, Array]:
+    """``(dof, roc)`` of a ROC vector's first non-zero entry (DOF 0-based; ``(0, 0)`` if none)."""
+    i = jnp.argmax(rocs != 0).astype(jnp.int32)
+    return i, rocs[i]

@@ -1,0 +1,131 @@
+"""Scenes through the protocol: NG swimmers near a wall, among obstacles, in pairs (:mod:`jswim.scenes`).
+
+The physics is :mod:`jswim.scenes`' own: :meth:`SceneWorld.step` of a joint action code is
+:func:`jswim.scenes.scene_step` of the code's ``(swimmer, dof, roc)`` (the same draw from the key,
+the same state, bit for bit). What the world adds is the task: a target ``direction`` in its
+params (:class:`SceneTask`), the reward ``progress`` and positions of each swimmer's centroid.
+
+A swimmer's position is the centroid of its three spheres, the middle sphere's ``(x, z)`` plus
+``(d2 - d1) / 3`` along its axis: the point whose velocity the paper's formula gives (the middle
+sphere jumps by more than 1 a at every move while the swimmer nets about 0.17 a per cycle). In the
+``"bulk"`` medium the state's centre already is the paper's X (:mod:`jswim.scenes.stepping`), so
+there the position is the centre.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, NamedTuple
+
+import jax.numpy as jnp
+from jax import Array
+
+from jswim.env.base import Environment, Observation, StepInfo, first_move, scaled
+from jswim.scenes.actions import decode_scene_action
+from jswim.scenes.params import SceneParams, scene_params
+from jswim.scenes.scene import Scene
+from jswim.scenes.state import SceneState, scene_reset
+from jswim.scenes.stepping import scene_advance
+
+#: Arms (DOFs) of one NG swimmer.
+ARMS = 2
+
+
+class SceneTask(NamedTuple):
+    """A scene world's params: the scene's own (:class:`jswim.scenes.SceneParams`) and the target
+    direction (+1: +x, -1: -x); both may be batched (``vmap`` axes as a ``SceneTask`` prefix)."""
+
+    scene: SceneParams
+    direction: Any = 1.0
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneWorld(Environment):
+    """A :class:`jswim.scenes.Scene` as a world; ``params`` is a :class:`SceneTask`.
+
+    Swimmer ``s`` (0-based) owns joint DOFs ``2s + 1, 2s + 2`` (1-based), so a joint code is the
+    paper's code over the joint DOFs (one swimmer's codes are the bulk swimmer's).
+    """
+
+    scene: Scene
+    k: int = 1
+
+    @property
+    def n_dof(self) -> int:
+        return ARMS * self.scene.swimmers
+
+    @property
+    def n_swimmers(self) -> int:
+        return self.scene.swimmers
+
+    @property
+    def roc_levels(self) -> int:
+        return self.k
+
+    @property
+    def wall(self) -> bool:
+        return self.scene.medium == "wall"
+
+    @property
+    def default_params(self) -> SceneTask:
+        return SceneTask(scene_params("ng", self.scene, roc_levels=self.k), 1.0)
+
+    def reset(self, key: Array, params: SceneTask) -> SceneState:
+        """The scene's start (deterministic: ``key`` is not used)."""
+        return scene_reset(params.scene)
+
+    def dtype(self, state: SceneState) -> Any:
+        return state.arms.dtype
+
+    def move(self, action: Array) -> tuple[Array, Array, Array]:
+        """``(swimmer, arm, roc)`` of an integer joint code or a float ROC vector ``(n_dof,)``
+        (its first non-zero entry)."""
+        action = jnp.asarray(action)
+        if jnp.issubdtype(action.dtype, jnp.integer):
+            if action.ndim != 0:
+                raise ValueError(f"an integer action code is a scalar, got shape {action.shape}")
+            return decode_scene_action(action, self.k)
+        if action.shape != (self.n_dof,):
+            raise ValueError(f"a float action is a ROC vector of shape ({self.n_dof},), got {action.shape}")
+        i, roc = first_move(action)
+        return i // ARMS, i % ARMS, roc
+
+    def offset(self, state: SceneState) -> Array:
+        """Each swimmer's centroid minus its middle sphere ``(S, 2)`` (0 in the bulk medium)."""
+        if self.scene.medium == "bulk":
+            return jnp.zeros_like(state.centre)
+        along = (state.arms[:, 1] - state.arms[:, 0]) / 3.0
+        return jnp.stack([along * jnp.cos(state.tilt), along * jnp.sin(state.tilt)], -1)
+
+    def advance(self, state: SceneState, action: Array, noise: Array, params: SceneTask
+                ) -> tuple[SceneState, StepInfo]:
+        """:func:`jswim.scenes.scene_advance` of the action, with noise ``(S,)``."""
+        new, info = scene_advance(params.scene, state, self.move(action), noise)
+        dtype = new.arms.dtype
+        disp = jnp.stack([info.dx, info.dz], -1) + (self.offset(new) - self.offset(state))
+        progress = jnp.asarray(params.direction, dtype) * jnp.mean(disp[:, 0])
+        return new, StepInfo(disp, progress, jnp.asarray(info.stuck), info.moved, info.contact,
+                             jnp.asarray(info.gap, dtype))
+
+    def observe(self, state: SceneState, params: SceneTask) -> Observation:
+        return Observation(state.arms.reshape(-1), state.centre + self.offset(state), state.tilt)
+
+    def features(self, state: SceneState, params: SceneTask) -> Array:
+        """The arms scaled to [-1, 1]; with a wall also each swimmer's middle-sphere height as
+        ``ln(z / 10 a)`` and tilt as ``tilt / 0.5 rad`` (about [-1.6, 1.6] over 3-50 a), as the
+        PPO baseline reads them."""
+        return features(state, params.scene, self.wall)
+
+    @property
+    def n_features(self) -> int:
+        return self.n_dof + (2 * self.n_swimmers if self.wall else 0)
+
+
+def features(state: SceneState, params: SceneParams, wall: bool) -> Array:
+    """:meth:`SceneWorld.features` of a scene's state (also the PPO scene world's observation)."""
+    obs = scaled(state.arms.reshape(-1), params.lo, params.hi)
+    if not wall:
+        return obs
+    # Heights below 0.1 a are contacts the step refuses; the floor only keeps the log finite.
+    z = jnp.log(jnp.maximum(state.centre[:, 1], 0.1) / 10.0)
+    return jnp.concatenate([obs, z.astype(obs.dtype), (state.tilt / 0.5).astype(obs.dtype)])

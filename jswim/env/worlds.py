@@ -1,0 +1,91 @@
+"""``make``: a world and its params from a swimmer and an optional scene (the protocol's door)."""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+from jswim.env.base import Environment
+from jswim.env.params import EnvParams, make_params, parse_direction
+from jswim.env.scene_world import SceneTask, SceneWorld
+from jswim.env.swimmer_world import SwimmerWorld
+from jswim.errors import ConfigError
+from jswim.scenes.params import scene_params
+from jswim.scenes.scene import Scene
+from jswim.swimmers.models import SwimmerModel
+
+
+def as_scene(scene: Any) -> Scene:
+    """``scene`` validated: a :class:`jswim.scenes.Scene` or its dict (:meth:`Scene.from_dict`)."""
+    if isinstance(scene, dict):
+        return Scene.from_dict(scene)
+    if not isinstance(scene, Scene):
+        raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
+    return scene.validate()
+
+
+def is_plain_bulk(scene: Any) -> bool:
+    """Whether ``scene`` is the paper's world: one untilted swimmer in the bulk medium."""
+    scene = as_scene(scene)
+    return scene.medium == "bulk" and scene.swimmers == 1 and scene.tilt == 0.0
+
+
+def make(
+    swimmer: str | SwimmerModel = "purcell",
+    scene: Scene | dict | None = None,
+    *,
+    zeta: float = 0.0,
+    direction: int | str = 1,
+    init: Sequence[int] | str | None = None,
+    roc_levels: int = 1,
+    diagonal: bool = False,
+    dtype: Any = None,
+    **kwargs: Any,
+) -> tuple[Environment, EnvParams | SceneTask]:
+    """A world and its params.
+
+    Parameters
+    ----------
+    swimmer : str or SwimmerModel
+        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"`` (scenes: ``"ng"``); model options
+        (``d_max``, ``d_min``, ``n_links``, ...) by keyword.
+    scene : Scene or dict, optional
+        ``None``, or one untilted swimmer in the ``"bulk"`` medium: the paper's world
+        (:class:`~jswim.env.swimmer_world.SwimmerWorld`, params :class:`jswim.env.EnvParams`).
+        Anything else: a :class:`~jswim.env.scene_world.SceneWorld` (params
+        :class:`~jswim.env.scene_world.SceneTask`).
+    zeta, direction, init, roc_levels
+        As in :func:`jswim.env.make_params` (every world has a target direction).
+    diagonal : bool
+        The paper's world only: ROC vectors may move several DOFs at once.
+    dtype : dtype, optional
+        Scenes only: the working dtype of states and solves (default JAX's default float). The
+        paper's world follows JAX's default float (its positions are drift-free pairs).
+    **kwargs
+        More options of :func:`jswim.env.make_params` or :func:`jswim.scenes.scene_params`
+        (``nodes``, ``sweeps``, ``contact_gap``).
+
+    Raises
+    ------
+    ConfigError
+        Any invalid value (one line).
+
+    Examples
+    --------
+    >>> env, params = make("purcell", direction="-x")
+    >>> env.n_dof, env.n_actions
+    (2, 6)
+    >>> env, params = make("ng", Scene(medium="wall", height=5.0, swimmers=2))
+    >>> env.n_swimmers, env.n_dof
+    (2, 4)
+    """
+    if scene is None or is_plain_bulk(scene):
+        if dtype is not None:
+            raise ConfigError("dtype is a scene option; the paper's world follows JAX's default float")
+        params = make_params(swimmer, zeta=zeta, direction=direction, init=init, roc_levels=roc_levels,
+                             diagonal=diagonal, **kwargs)
+        return SwimmerWorld(params.model, params.roc_levels, params.diagonal), params
+    if diagonal:
+        raise ConfigError("diagonal strokes are not offered in scenes (one arm moves per step)")
+    scene = as_scene(scene)
+    sp = scene_params(swimmer, scene, zeta=zeta, roc_levels=roc_levels, dtype=dtype, init=init, **kwargs)
+    return SceneWorld(scene, sp.roc_levels), SceneTask(sp, float(parse_direction(direction)))
