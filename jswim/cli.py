@@ -685,7 +685,7 @@ def _price_note(backend: Any) -> str:
     from jswim.llm.urls import is_local_host
 
     from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED, cost_text
-    from jswim.llm.reference import MODEL as REFERENCE_MODEL
+    from jswim.llm.reference import MODEL as REFERENCE_MODEL  # lazy: start-up (the reference rule loads only for a run)
 
     if backend is None or backend.local:
         return cost_text(None, EMBEDDED_UNPRICED)

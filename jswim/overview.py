@@ -16,6 +16,7 @@ from jswim.console import Column, cost_text, plain_table, requests_text
 from jswim.errors import ConfigError, ResultFolderError
 from jswim.folderlock import describe_holder, holder
 from jswim.results import read_metadata, read_runs
+from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED
 
 SETTING = ("agent", "swimmer", "direction", "group")
 
@@ -233,7 +234,6 @@ def unpriced_reason(meta: Mapping[str, Any], cost_usd: float | None) -> str | No
     """Why a study folder's calls are not priced (:func:`jswim.console.cost_text`), from its record:
     the embedded model, the reference rule, the reason the session recorded, or a local server
     whose calls cost nothing; ``None`` when they are priced."""
-    from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED
 
     backend = (meta.get("identity") or {}).get("backend") or {}
     if backend.get("kind") == "embedded":

@@ -40,6 +40,8 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from jswim.console import Column, plain_table
+from jswim.console import cost_text, REFERENCE_UNPRICED
+from jswim.overview import MIN_QUARTILE_N
 
 FIELDS = ("row", "kind", "part", "swimmer", "direction", "group", "n", "samples", "success", "success_lo", "success_hi",
           "learned", "steps_median", "steps_q25", "steps_q75", "mean_x", "mean_x_lo", "mean_x_hi", "failed_steps",
@@ -82,7 +84,6 @@ def _num(v: Any, spec: str) -> str:
 def _steps(r: Mapping[str, Any]) -> str:
     if not r["learned"]:
         return f"- (0 of {r['n']})"
-    from jswim.overview import MIN_QUARTILE_N
 
     if r["learned"] < MIN_QUARTILE_N:  # no IQR from fewer than 4 values
         return f"{r['steps_median']:g} ({r['learned']} of {r['n']})"
@@ -90,7 +91,6 @@ def _steps(r: Mapping[str, Any]) -> str:
 
 
 def _why_unpriced(r: Mapping[str, Any]) -> str | None:
-    from jswim.console import REFERENCE_UNPRICED
 
     if r["kind"] == "reference":
         return REFERENCE_UNPRICED
@@ -103,7 +103,6 @@ def _cost(r: Mapping[str, Any], short: bool = False) -> str:
     """The row's cost in the one wording of :func:`jswim.console.cost_text`, with why it is not
     priced; ``short`` (the terminal table): ``not priced ($0)``, the reasons under the table
     (:func:`unpriced_notes`)."""
-    from jswim.console import cost_text
 
     if r["kind"] == "baseline":
         return "-"
@@ -115,7 +114,6 @@ def _cost(r: Mapping[str, Any], short: bool = False) -> str:
 
 def unpriced_notes(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     """One line per row name whose calls are not priced, saying why (under the terminal table)."""
-    from jswim.console import cost_text
 
     seen: dict[str, str] = {}
     for r in rows:

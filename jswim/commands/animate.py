@@ -41,7 +41,7 @@ def main(args: argparse.Namespace) -> int:
         raise ConfigError(f"--dpi must lie in [20, 400], got {args.dpi}")
     if not Path(args.folder).is_dir():
         raise ConfigError(f"{args.folder}: no such folder")
-    from jswim.viz.bench_page import is_bench
+    from jswim.viz.bench_page import is_bench  # lazy: start-up (the pages load matplotlib)
 
     if is_bench(args.folder):  # one run per model, the reference rule and the baselines, from one setting
         from jswim.viz.animate import build_bench

@@ -26,7 +26,7 @@ def main(args: argparse.Namespace) -> int:
     from jswim.errors import ConfigError
     from jswim.viz.page import write_report
 
-    from jswim.viz.bench_page import is_bench, write_bench_report
+    from jswim.viz.bench_page import is_bench, write_bench_report  # lazy: start-up (the pages load matplotlib)
 
     if not Path(args.folder).is_dir():
         raise ConfigError(f"{args.folder}: no such folder")

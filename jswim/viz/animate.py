@@ -29,6 +29,7 @@ import numpy as np
 from jswim.errors import ConfigError
 from jswim.viz import worlds
 from jswim.viz.tracks import Track, fmt_action, track, view_box
+from jswim.viz.bench_page import _read, part_folders
 
 #: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.plots.AGENT_STYLE`).
 #: Each agent's colour: the figures' (jswim.plots.AGENT_STYLE), the square stroke in black.
@@ -259,7 +260,6 @@ def build_bench(folder: str | Path, part: str | None = None, *, most: int = 4, f
         An unknown part, or a part without finished runs.
     """
     from jswim.results import read_runs, read_transcript
-    from jswim.viz.bench_page import _read, part_folders
 
     folder = Path(folder)
     meta, _ = _read(folder)

@@ -20,6 +20,11 @@ from typing import Any, Mapping, Sequence
 
 from jswim.errors import ConfigError
 from jswim.results import atomic_write, read_runs, writing
+from jswim.bench.runner import BASELINES, REFERENCE
+from jswim.bench.leaderboard import _cost as cost_text, _steps, figure_object, missing_text
+from jswim.overview import MIN_BOOTSTRAP_N
+from jswim import plots
+from jswim.viz.page import _asset, write_report
 
 BENCH_FILE = "bench.json"
 REPORT = "report.html"
@@ -44,7 +49,6 @@ def _read(folder: Path) -> tuple[dict[str, Any], dict[str, Any]]:
 
 def part_folders(folder: Path, meta: Mapping[str, Any]) -> list[tuple[str, str, str, Path]]:
     """``(label, kind, part, folder)`` of every study folder of the bench that exists."""
-    from jswim.bench.runner import BASELINES, REFERENCE
 
     parts = [p["name"] for p in (meta.get("suite") or {}).get("parts") or []]
     labels = [(m.get("name"), "llm") for m in meta.get("models") or []]
@@ -54,20 +58,17 @@ def part_folders(folder: Path, meta: Mapping[str, Any]) -> list[tuple[str, str, 
 
 
 def _row_folder(r: Mapping[str, Any]) -> str:
-    from jswim.bench.runner import BASELINES, REFERENCE
 
     label = BASELINES if r["kind"] == "baseline" else REFERENCE if r["kind"] == "reference" else r["row"]
     return f"{label}/{r['part']}"
 
 
 def _cost(r: Mapping[str, Any]) -> str:
-    from jswim.bench.leaderboard import _cost as cost_text
 
     return cost_text(r)
 
 
 def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
-    from jswim.bench.leaderboard import _steps
 
     order = {"llm": 0, "reference": 1, "baseline": 2}
     key = lambda r: (r["part"], r["swimmer"] != "purcell", r["swimmer"], -int(r["direction"]), str(r["group"]),
@@ -88,7 +89,6 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
         link = (f'<a href="{html.escape(page)}">{html.escape(name)}</a>' if (folder / target).is_dir()
                 else html.escape(name))
         mx = r.get("mean_x")
-        from jswim.overview import MIN_BOOTSTRAP_N
 
         ci = (f" [n<{MIN_BOOTSTRAP_N}]" if (r.get("n") or 0) < MIN_BOOTSTRAP_N  # no interval from 1 or 2 runs
               else f" [{r['mean_x_lo']:+.3f}, {r['mean_x_hi']:+.3f}]" if r.get("mean_x_lo") is not None
@@ -111,8 +111,6 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
 def _figure_src(rows: Sequence[Mapping[str, Any]]) -> str:
     import matplotlib.pyplot as plt
 
-    from jswim import plots
-    from jswim.bench.leaderboard import figure_object
 
     fig = figure_object(rows)
     buf = io.BytesIO()
@@ -124,8 +122,6 @@ def _figure_src(rows: Sequence[Mapping[str, Any]]) -> str:
 
 def bench_html(folder: str | Path) -> str:
     """The bench's page (see the module docstring); reads the folder only."""
-    from jswim.bench.leaderboard import missing_text
-    from jswim.viz.page import _asset
 
     folder = Path(folder)
     meta, board = _read(folder)
@@ -190,8 +186,6 @@ def write_bench_report(folder: str | Path, figures: str = "draw", out: str | Pat
     ConfigError
         Unreadable ``bench.json``; :class:`jswim.results.StudyFolderError` if a page cannot be written.
     """
-    from jswim.bench.runner import BASELINES
-    from jswim.viz.page import write_report
 
     folder = Path(folder)
     meta, _ = _read(folder)
@@ -206,10 +200,3 @@ def write_bench_report(folder: str | Path, figures: str = "draw", out: str | Pat
         atomic_write(path, text)
     return path
 
-
-def beside_rows(folders: Sequence[Path]) -> list[dict[str, Any]]:
-    """Baseline runs (Q-learning, random) of other study folders, to draw beside a model's."""
-    out: list[dict[str, Any]] = []
-    for f in folders:
-        out += [dict(r, beside=str(f)) for r in read_runs(f) if r.get("agent") != "llm"]
-    return out

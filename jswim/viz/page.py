@@ -222,7 +222,7 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
     or grid axes the study has no use for (its :data:`jswim.studies.grids.SPECS` ``ignores``; a
     scene study's own axes only on that study) are left out; the full record stays one click away.
     """
-    from jswim.studies.grids import SPECS
+    from jswim.studies.grids import SPECS  # lazy: the grids load JAX, which a page of a finished folder does not need
 
     study = str(meta.get("study", "?"))
     ident = meta.get("identity") or {}
@@ -275,7 +275,7 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
     beside : sequence of paths
         Other study folders whose baseline runs (Q-learning, random) are shown beside this
         folder's in the summary, the figures (then drawn) and the run list: a bench's model
-        part next to the bench's baselines of that part (:mod:`jswim.viz.bench_page`).
+        part next to the bench's baselines of that part (:func:`beside_rows`).
 
     Raises
     ------
@@ -294,8 +294,6 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
     note = None if finished else unfinished_note(meta.get("status"), len(own), meta.get("n_planned"))
     extra = []
     if beside:
-        from jswim.viz.bench_page import beside_rows
-
         extra = beside_rows([Path(b) for b in beside])
         figures = "none" if figures == "none" else "draw"  # the folder's own files lack the baselines
     rows = sorted(grid_order(own + extra, meta), key=_axes_key(meta))  # by the study's axes, not finishing order
@@ -376,3 +374,14 @@ def write_report(folder: str | Path, figures: str = "auto", out: str | Path | No
     with writing(path, "choose a writable --out path for the report"):
         atomic_write(path, text)
     return path
+
+
+def beside_rows(folders: Sequence[Path]) -> list[dict[str, Any]]:
+    """Baseline runs (Q-learning, random) of other study folders, to draw beside a model's.
+
+    Each row gains ``beside``, the folder it came from.
+    """
+    out: list[dict[str, Any]] = []
+    for f in folders:
+        out += [dict(r, beside=str(f)) for r in read_runs(f) if r.get("agent") != "llm"]
+    return out

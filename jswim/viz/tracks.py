@@ -28,6 +28,7 @@ import numpy as np
 
 from jswim.swimmers.models import SwimmerModel, make_model
 from jswim.viz.worlds import World, per_swimmer, world_of
+from jswim.viz import worlds
 
 #: A step whose |dX| is below this is "stuck" (the prompt's rule, :mod:`jswim.prompt`).
 STUCK_TOL = 1e-6
@@ -355,7 +356,6 @@ def _replay_pose(row: Mapping[str, Any], model: SwimmerModel, levels0: Sequence[
 def view_box(tracks: Sequence[Track], pad: float = 1.5) -> tuple[float, float, float, float]:
     """``(xmin, xmax, ymin, ymax)`` holding every body of every swimmer of ``tracks`` at every step,
     the wall and the obstacles, with ``pad`` (:func:`jswim.viz.worlds.view_box`)."""
-    from jswim.viz import worlds
 
     return worlds.view_box([t.bodies for t in tracks], [t.world for t in tracks],
                            bool(tracks) and not tracks[0].model.planar, pad)
