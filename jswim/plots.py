@@ -37,66 +37,10 @@ from jswim.results import unfinished_note, writing  # noqa: F401  (unfinished_no
 from jswim.stats import learn_stats, mean_interval, wilson_interval
 from jswim.swimmers.models import SwimmerModel, make_model
 
-#: Single- and double-column widths of the paper's journal (inches).
-COLUMN_IN = 3.4
-PAGE_IN = 7.0
-
-#: Panel order: the paper shows Purcell's swimmer first.
-
-# Okabe-Ito colours: distinguishable with the common colour-vision deficiencies and in grey.
-AGENT_STYLE: dict[str, dict[str, Any]] = {
-    "llm": dict(color="#0072B2", ls="-", marker="o", label="LLM"),
-    "qlearning": dict(color="#D55E00", ls="--", marker="s", label="Q-learning"),
-    "random": dict(color="#555555", ls=":", marker="^", label="random policy"),
-    "ppo": dict(color="#009E73", ls="-.", marker="D", label="PPO (real ROC)"),
-}
-REFERENCE_STYLE = dict(color="black", ls="-.", lw=0.8, label="signature gait from step 0")
-NOTE_COLOR = "#B00000"
-
-RC = {
-    "font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8, "xtick.labelsize": 7,
-    "ytick.labelsize": 7, "legend.fontsize": 7, "lines.linewidth": 1.3, "lines.markersize": 3.5,
-    "errorbar.capsize": 2, "axes.linewidth": 0.6, "savefig.dpi": 300, "pdf.fonttype": 42,
-    "ps.fonttype": 42, "legend.frameon": False,
-}
-
-
-def _styled(fn):
-    """Build the figure under the paper's rc settings (sizes are fixed when artists are made)."""
-
-    @functools.wraps(fn)
-    def wrapper(*args: Any, **kwargs: Any) -> Figure:
-        with plt.rc_context(RC):
-            fig = fn(*args, **kwargs)
-            if isinstance(fig, Figure):
-                tidy(fig)
-            return fig
-
-    return wrapper
-
-
-def tidy(fig: Figure) -> Figure:
-    """What every figure gets: ticks at whole steps on step axes (not 2.5, 7.5, ...), plain tick
-    labels on log axes (3, 5, 10, not "3x10^0 4x10^0" run together), and the signature-gait line
-    on top, dashed and outlined, so a perfect LLM line drawn on it cannot hide it."""
-    from matplotlib import patheffects
-    from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
-
-    for ax in fig.axes:
-        if ax.get_xlabel().startswith("step"):
-            ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        for axis, scale in ((ax.xaxis, ax.get_xscale()), (ax.yaxis, ax.get_yscale())):
-            if scale == "log":
-                axis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
-                axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-                axis.set_minor_formatter(NullFormatter())
-        for line in ax.get_lines():
-            if line.get_label() == REFERENCE_STYLE["label"]:
-                line.set_zorder(20)
-                line.set_linestyle((0, (4, 2, 1, 2)))
-                line.set_linewidth(1.0)
-                line.set_path_effects([patheffects.withStroke(linewidth=2.6, foreground="white")])
-    return fig
+from jswim.scene_plots import scene_figures
+from jswim.figure_style import (  # noqa: F401  (the style's old home)
+    AGENT_STYLE, COLUMN_IN, NOTE_COLOR, PAGE_IN, RC, REFERENCE_STYLE, _styled, tidy,
+)
 
 
 def save(fig: Figure, folder: str | os.PathLike, name: str, dpi: int = 300) -> list[Path]:
@@ -743,8 +687,6 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
     if study == "continuous":
         return continuous_figures(rows, note=note)
     if study in ("wall", "pair"):  # walls and pairs (issue 19)
-        from jswim.scene_plots import scene_figures
-
         return scene_figures(study, rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).

@@ -21,7 +21,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.plots import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
+from jswim.figure_style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
 
 STROKE_STYLE = dict(color="black", ls="-", marker="o", label="square stroke")
 _STYLES = {**AGENT_STYLE, "stroke": STROKE_STYLE}

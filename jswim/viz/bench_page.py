@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from jswim.errors import ConfigError
-from jswim.results import atomic_write, read_runs, writing
+from jswim.results import atomic_write, writing
 from jswim.bench.runner import BASELINES, REFERENCE
 from jswim.bench.leaderboard import _cost as cost_text, _steps, figure_object, missing_text
 from jswim.overview import MIN_BOOTSTRAP_N
