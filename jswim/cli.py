@@ -566,7 +566,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if args.dry_run:
         from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
 
-        est = estimate_study(study, options, backend, out)
+        est = estimate_study(study, options, backend, out, max_cost=args.max_cost)
         print("\n".join(est.lines()))
         print(json.dumps(est.as_dict(), sort_keys=True))  # the same, for scripts
         return 0

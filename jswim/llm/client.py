@@ -834,6 +834,12 @@ class LLMClient:
         (a server that echoes any requested name), unless the user gave the prices."""
         s = self.settings
         if s.prices is None and not self._prices.agrees(s.model, replied):
+            if self.budget is not None and self.budget.cap_usd is not None:
+                # Under --max-cost a $0 call would let the cap lapse: priced as requested, and said.
+                if self.unpriced is None:
+                    self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}; priced at {s.model}'s "
+                                     "price anyway, because --max-cost needs a price (--prices FILE gives yours)")
+                return self._prices.cost(s.model, usage)
             if self.unpriced is None:
                 self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}: its calls are not priced at "
                                  f"{s.model}'s list price; --prices FILE gives your own prices, applied as given")
