@@ -156,8 +156,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> N
     b.add_argument("--model", default=None, help="model name on that server (required with --base-url)")
     b.add_argument("--gguf", default=None, metavar="FILE", help="another GGUF model for the embedded server")
     b.add_argument("--api-key-env", default=None, metavar="VAR",
-                   help="environment variable that holds the API key (default OPENAI_API_KEY; never stored or "
-                        "printed); named but unset: an error for a remote server, a warning for this machine")
+                   help="environment variable that holds the API key (never stored or printed); left out, "
+                        "OPENAI_API_KEY is sent to api.openai.com only and no key to any other host; named but "
+                        "unset or empty: an error for a remote server, a warning for this machine")
     b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "json_object", "none"),
                    help=("constrained decoding (auto: none in this study, free text as the paper's; "
                          if spec.constrain == "none" else
@@ -422,17 +423,42 @@ def _extra_fields(items: Sequence[str]) -> tuple[tuple[str, Any], ...]:
     return tuple(out)
 
 
+#: The variable read for the key when --api-key-env is left out, and the only hosts it is sent to.
+DEFAULT_KEY_ENV, OPENAI_HOSTS = "OPENAI_API_KEY", ("api.openai.com",)
+
+
+def default_key_env(base_url: str | None) -> str:
+    """The key variable of a backend whose ``--api-key-env`` was left out: ``OPENAI_API_KEY`` for
+    OpenAI's own API, else none (``""``): a key nobody named never goes to another host (a
+    gateway, a local server), whatever the environment holds."""
+    if base_url is None:
+        return DEFAULT_KEY_ENV  # the embedded model: its own key (jswim.llm.local), this one is never read
+    from urllib.parse import urlsplit
+
+    from jswim.llm.urls import normalize_base_url
+
+    try:
+        host = (urlsplit(normalize_base_url(base_url)).hostname or "").lower()
+    except (ValueError, ConfigError):
+        return ""
+    return DEFAULT_KEY_ENV if host in OPENAI_HOSTS else ""
+
+
 def _backend(args: argparse.Namespace):
     from jswim.llm.backend import Backend  # lazy: JAX and httpx load only for commands that run
 
-    key_env = args.api_key_env or "OPENAI_API_KEY"
+    key_env = default_key_env(args.base_url) if args.api_key_env is None else args.api_key_env.strip()
+    if args.api_key_env is not None and not key_env:
+        raise ConfigError("--api-key-env '': name the variable that holds the key (e.g. --api-key-env "
+                          "OPENAI_API_KEY), or leave --api-key-env out for a server without keys")
     if args.api_key_env is not None and args.base_url is not None and not os.environ.get(key_env):
         from jswim.llm.urls import is_loopback, normalize_base_url
 
+        state = "is set but empty" if key_env in os.environ else "is not set"
         if not is_loopback(normalize_base_url(args.base_url)):
-            raise ConfigError(f"--api-key-env {key_env}: ${key_env} is not set; export the key in it (a remote "
+            raise ConfigError(f"--api-key-env {key_env}: ${key_env} {state}; export the key in it (a remote "
                               f"server would refuse every call), or leave --api-key-env out for a server without keys")
-        _warn(f"--api-key-env {key_env}: ${key_env} is not set; requests to this machine's server go without a key")
+        _warn(f"--api-key-env {key_env}: ${key_env} {state}; requests to this machine's server go without a key")
     prices, as_of = None, None
     if getattr(args, "prices", None):
         from jswim.llm.prices import load_prices

@@ -151,3 +151,23 @@ def test_duplicate_swimmers_run_once(srv, tmp_path, capsys):
     assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(tmp_path / "o"),
                      "--swimmer", "purcell,purcell"]) == 0
     assert len(read_runs(tmp_path / "o")) == 1
+
+
+@pytest.mark.parametrize("field, option", [
+    ("max_tokens=5000", "--max-tokens"), ("temperature=0.7", "--temperature"), ("stream=true", "stream"),
+    ("model=\"gpt-4\"", "--model"), ("messages=[]", "--prompt-file"), ("max_completion_tokens=99", "--max-tokens"),
+    ("response_format={}", "--constrain"),
+])
+def test_an_extra_field_jswim_sets_itself_is_refused_naming_the_real_option(field, option, srv, tmp_path, capsys):
+    # It would bypass the cost reservation (max_tokens), the identity (temperature) or be dropped (model).
+    line = refused(capsys, srv, tmp_path / "o", "--extra-field", field)
+    assert f"--extra-field {field.split('=')[0]}=" in line and option in line
+
+
+def test_an_extra_field_jswim_does_not_set_is_sent_and_recorded(srv, tmp_path, capsys):
+    out = tmp_path / "o"
+    assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(out), "--extra-field", "top_k=5"]) == 0
+    assert srv.requests and all(b["top_k"] == 5 for b in srv.requests)
+    import json
+
+    assert json.loads((out / "metadata.json").read_text())["identity"]["backend"]["extra_fields"] == {"top_k": 5}

@@ -36,7 +36,7 @@ import ssl
 import time
 import zlib
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import httpx
 
@@ -71,6 +71,31 @@ def check_temperature(value: float) -> float:
 RETRY_STATUSES = frozenset({408, 409, 429})
 
 
+
+
+#: Request fields jswim itself sets, and the option that sets each: an extra field (a models
+#: file's ``extra``, ``--extra-field``) naming one is refused, since it would change what is sent
+#: behind the cost reservation, the study's identity and the record of what was sent.
+CORE_FIELDS = {
+    "model": "--model", "messages": "--prompt-file (the prompt template)", "max_tokens": "--max-tokens",
+    "max_completion_tokens": "--max-tokens (with --reasoning on)", "temperature": "--temperature",
+    "stream": "nothing: jswim always sends \"stream\": false (--omit-field stream leaves it out)",
+    "response_format": "--constrain",
+    "grammar": "--constrain", "reasoning_effort": "--reasoning-effort",
+}
+
+
+def check_extra_fields(fields: Iterable[tuple[str, Any]], option: str = "--extra-field") -> None:
+    """Refuse an extra request field that jswim sets itself (:data:`CORE_FIELDS`).
+
+    Raises
+    ------
+    ConfigError
+        One line naming the field and the option that sets it.
+    """
+    for name, _ in fields:
+        if name in CORE_FIELDS:
+            raise ConfigError(f"{option} {name}=...: jswim sets {name!r} itself; use {CORE_FIELDS[name]}")
 
 
 @dataclass(frozen=True)
@@ -144,8 +169,9 @@ class ClientSettings:
     reasoning_effort : str or None
         Sent as ``reasoning_effort`` when given (``minimal``, ``low``, ``medium``, ``high``).
     extra_fields : tuple of (name, value)
-        More fields of every request body (a models file's ``extra``, ``--extra-field``); they
-        never replace ``model`` or ``messages``.
+        More fields of every request body (a models file's ``extra``, ``--extra-field``); a field
+        jswim sets itself (:data:`CORE_FIELDS`: ``model``, ``messages``, ``max_tokens``,
+        ``temperature``, ``stream``, ...) is refused with :class:`~jswim.errors.ConfigError`.
     sampling : tuple of (str, float)
         Sampling fields every request carries (``(("repeat_penalty", 1.0), ...)``;
         :func:`jswim.llm.sampling.sampling_fields`), before ``omit_fields`` are removed.
@@ -195,6 +221,7 @@ class ClientSettings:
         if self.retry_for_s is not None and not (self.retry_for_s >= 0):  # also NaN
             raise ConfigError(f"retry_for_s must be >= 0 seconds, got {self.retry_for_s}")
         check_temperature(self.temperature)
+        check_extra_fields(self.extra_fields)
 
     def metadata(self) -> dict[str, Any]:
         """Settings worth recording with a run (no secrets: only the key's variable name)."""
@@ -856,11 +883,14 @@ class LLMClient:
     def _attempt_result(self, got: Completion, mode: str, t0: float, retries: int,
                         payload: Mapping[str, Any] | None = None) -> ChatResult:
         usage = Usage.from_response(got.usage)
+        # A reply may echo a credential (a proxy quoting the request's headers): scrubbed by the
+        # registry the error messages use, before the journal, the cache or a transcript see it.
+        clean = self._scrub
         return ChatResult(
-            text=constrain.reply_text(mode, got.answer), usage=usage, latency_s=time.perf_counter() - t0,
+            text=clean(constrain.reply_text(mode, got.answer)), usage=usage, latency_s=time.perf_counter() - t0,
             cache_hit=False, shared=False, retries=retries,
             cost_usd=self._cost(usage, got.model), constraint=mode,
-            finish_reason=got.finish_reason, raw=got.content, reasoning=got.reasoning,
+            finish_reason=got.finish_reason, raw=clean(got.content), reasoning=clean(got.reasoning),
             temperature_sent=(payload or {}).get("temperature"),
         )
 
