@@ -1044,7 +1044,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.environ["MPLBACKEND"] = "Agg"
     from jswim.permissions import private_files
 
-    with private_files():  # folders, figures and caches: owner only under the usual umask
+    # Folders, figures and caches: owner only under the usual umask; every jswim warning (a
+    # skipped record of a damaged folder, ...) one line, whatever the command.
+    from jswim.jsonl import forget_warnings
+
+    forget_warnings()
+    with private_files(), _warnings_as_lines():
         return _main(args)
 
 

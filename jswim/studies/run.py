@@ -349,11 +349,15 @@ def run_study(
         _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
         raise
     except JswimError as exc:
-        _record_status(store, "stopped", error=scrub(str(exc)))  # never a key, however the message got it
+        # A session that stops before changing anything (a refused cap, a server that is not there)
+        # leaves the folder's status as it was; otherwise it says stopped, and why.
+        if not store.restore_status():
+            _record_status(store, "stopped", error=scrub(str(exc)))  # never a key, however the message got it
         raise
     except OSError as exc:  # a full disk or an I/O error outside the store's own writes
         msg = f"cannot write {exc.filename or folder}: {exc.strerror or exc}"
-        _record_status(store, "stopped", error=msg)
+        if not store.restore_status():
+            _record_status(store, "stopped", error=msg)
         raise StudyFolderError(f"{msg}; every finished run and answered call is kept in {folder}: "
                                "make room and run the same command to resume") from None
     finally:
@@ -575,6 +579,7 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
     journal = CallJournal(store.folder)
     spent_before = journal.spent_usd
+    calls_before = journal.n_calls
     # Earlier sessions' requests that got no answer may have been billed: still under the cap.
     unanswered_before = float((store.meta.get("llm_totals") or {}).get("unanswered_usd") or 0.0)
     budget = Budget(max_cost, spent_usd=spent_before, unanswered_usd=unanswered_before)
@@ -651,6 +656,8 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
             run_sync(go(backend.client_settings(info=info, **room), info))
     finally:
         journal.close()
+        if journal.n_calls > calls_before:
+            store.changed = True  # calls were paid for: the folder's status must say how it ended
         if live and sent is not None and (live[0].reasoning.active or live[0].reasoning.notes
                                           or live[0].reasoning.effort):
             sent.update(live[0].reasoning.describe())
