@@ -386,12 +386,21 @@ class StudyStore:
         paths = [self.folder / RUNS, self.folder / "calls.jsonl"]
         if (self.folder / "transcripts").is_dir():
             paths += sorted((self.folder / "transcripts").glob("*.jsonl"))
+        done: set[str] | None = None
         for path in paths:
             cut = repair_tail(path)
-            if cut:
-                rel = path.relative_to(self.folder)
-                self.repairs.append(f"{rel}: cut a torn last line ({cut} bytes, from an interrupted write); "
-                                    "what it held is redone, no answered call is lost")
+            if not cut:
+                continue
+            rel = path.relative_to(self.folder)
+            what = f"{rel}: cut a torn last line ({cut} bytes, from an interrupted write)"
+            if path.parent.name == "transcripts":
+                done = {r["run_id"] for r in read_runs(self.folder) if not is_failed(r)} if done is None else done
+                if path.stem in done:  # a finished run is not run again: say what its transcript lost
+                    self.repairs.append(f"{what}; the run is finished and is not redone, so the transcript lacks "
+                                        "that last record (its end or last step); runs.jsonl keeps the run's "
+                                        "result and calls.jsonl every answered call")
+                    continue
+            self.repairs.append(f"{what}; what it held is redone, no answered call is lost")
 
     def close(self) -> None:
         """Release the folder's lock (the session is over; :meth:`set_status` first)."""

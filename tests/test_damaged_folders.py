@@ -174,3 +174,17 @@ def prices_without(tmp_path: Path) -> Path:
     p = tmp_path / "prices.toml"
     p.write_text('[prices]\n"other" = [1.0, 2.0]\n')
     return p
+
+
+def test_a_torn_transcript_of_a_finished_run_says_what_is_lost(finished, srv, tmp_path, capsys):
+    out = copy(finished, tmp_path)
+    path = sorted((out / "transcripts").glob("*.jsonl"))[0]
+    data = path.read_bytes()
+    path.write_bytes(data[:-20])  # its end record torn
+    srv.reset_counts()
+    rc = cli.main(swim_args(srv.url, out))
+    printed = capsys.readouterr()
+    assert rc == 0 and srv.n_requests == 0
+    said = [ln for ln in (printed.err + printed.out).splitlines() if path.name in ln]
+    assert said and "not redone" in said[0] and "redone, no answered" not in said[0], said
+    assert path.read_bytes() == data[:data[:-20].rfind(b"\n") + 1]  # cut back to whole records

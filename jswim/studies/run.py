@@ -375,7 +375,7 @@ def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
     return fidelity.scene_extensions([(scene_env.from_json(s), pair) for s, pair in scenes], ppo=ppo)
 
 
-class FolderRepaired(UserWarning):
+class FolderRepaired(JswimWarning):
     """Opening a study folder repaired it (a torn journal line cut, a temporary file removed)."""
 
 
