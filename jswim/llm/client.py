@@ -67,6 +67,9 @@ def check_temperature(value: float) -> float:
     return value
 
 
+#: Same-host 307/308 redirects a request follows before it fails.
+MAX_REDIRECTS = 5
+
 #: HTTP statuses worth retrying: timeout, conflict, rate limit (5xx are added in code).
 RETRY_STATUSES = frozenset({408, 409, 429})
 
@@ -840,10 +843,33 @@ class LLMClient:
             ) from None
 
     async def _post(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> httpx.Response:
-        """POST ``payload`` and read the body as it was sent (see :func:`decode_body`)."""
+        """POST ``payload`` and read the body as it was sent (see :func:`decode_body`).
+
+        A 307 or 308 to the same scheme, host and port is followed (at most
+        :data:`MAX_REDIRECTS`, the body and the key sent again); one to another host is refused
+        (:class:`~jswim.llm.errors.LLMSetupError`): the key never goes to a host nobody named."""
         headers = {**self._headers(), "Accept-Encoding": "gzip, deflate"}  # what decode_body reads
-        async with http.stream("POST", self._url, json=payload, headers=headers) as resp:
-            raw = b"".join([chunk async for chunk in resp.aiter_raw()])
+        url = httpx.URL(self._url)
+        for _ in range(MAX_REDIRECTS + 1):
+            async with http.stream("POST", url, json=payload, headers=headers) as resp:
+                raw = b"".join([chunk async for chunk in resp.aiter_raw()])
+            if resp.status_code not in (307, 308) or "location" not in resp.headers:
+                break
+            try:
+                nxt = url.join(resp.headers["location"])
+            except (httpx.InvalidURL, ValueError):
+                raise LLMSetupError(self._scrub(f"{self._where}: HTTP {resp.status_code} to an address that does "
+                                                "not parse; give --base-url the server's address"),
+                                    resp.status_code, "") from None
+            if (nxt.scheme, nxt.host, nxt.port) != (url.scheme, url.host, url.port):
+                raise LLMSetupError(self._scrub(
+                    f"{self._where}: HTTP {resp.status_code} redirects to another host ({safe_url(str(nxt.copy_with(query=None)))}); "
+                    "not followed, so the API key is not sent there: give --base-url that address if you trust it"),
+                    resp.status_code, "")
+            url = nxt
+        else:
+            raise LLMSetupError(self._scrub(f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
+                                            "the address they lead to"), resp.status_code, "")
         kept = [(k, v) for k, v in resp.headers.multi_items() if k.lower() not in ("content-encoding", "content-length")]
         return httpx.Response(resp.status_code, headers=kept, request=resp.request,
                               content=decode_body(raw, resp.headers.get("content-encoding", "")))
