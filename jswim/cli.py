@@ -444,6 +444,23 @@ def default_key_env(base_url: str | None) -> str:
     return DEFAULT_KEY_ENV if host in OPENAI_HOSTS else ""
 
 
+def path_kind(path: str | os.PathLike, wanted: str) -> str:
+    """Why ``path`` is not ``wanted`` (``"a file"``, ``"a folder"``): what is there instead, or
+    that nothing is (a FIFO or a device is said to be one, never "no such file")."""
+    import stat
+
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return "no such " + wanted.split()[-1]
+    except OSError as exc:
+        return f"cannot read it ({exc.strerror or type(exc).__name__})"
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISREG, "a file"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
+             (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"), (stat.S_ISSOCK, "a socket"))
+    what = next((name for test, name in kinds if test(mode)), "not a regular file")
+    return f"{what}, not {wanted}"
+
+
 def _backend(args: argparse.Namespace):
     from jswim.llm.backend import Backend  # lazy: JAX and httpx load only for commands that run
 
@@ -481,8 +498,7 @@ def _options(args: argparse.Namespace, study: str):
     from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
 
     if args.prompt_file is not None and not Path(args.prompt_file).is_file():
-        what = "a folder, not a file" if Path(args.prompt_file).is_dir() else "no such file"
-        raise ConfigError(f"--prompt-file {args.prompt_file}: {what}")
+        raise ConfigError(f"--prompt-file {args.prompt_file}: {path_kind(args.prompt_file, 'a file')}")
     _refuse_ignored(study, args)
     kw: dict[str, Any] = dict(
         swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,
@@ -1012,6 +1028,21 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _undecodable_token(tokens: Sequence[str]) -> str | None:
+    """The option (or argument) of the first command-line token that is not UTF-8, named as the
+    user typed it (``--swimmer``), never as Python holds the bytes (``'\udcff'``)."""
+    for i, t in enumerate(tokens):
+        try:
+            t.encode("utf-8")
+        except UnicodeEncodeError:
+            if t.startswith("--") and "=" in t:
+                return t.split("=", 1)[0]
+            if i and tokens[i - 1].startswith("-") and len(tokens[i - 1]) > 1:
+                return tokens[i - 1]
+            return f"argument {i + 1}"
+    return None
+
+
 def _undecodable(args: argparse.Namespace) -> str | None:
     """The first option whose text is not UTF-8 (Python holds such bytes as lone surrogates)."""
     for name, value in vars(args).items():
@@ -1027,6 +1058,9 @@ def _undecodable(args: argparse.Namespace) -> str | None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jswim`` command; returns the exit status."""
     tokens = sys.argv[1:] if argv is None else list(argv)
+    if (bad := _undecodable_token(tokens)) is not None:  # before argparse, which would print '\udcff'
+        print(f"jswim: error: {bad} is not valid UTF-8 text; write it in UTF-8", file=sys.stderr)
+        return EXIT_USAGE
     # No command named (`jswim`, `jswim --help`): the outline parser says the same, without JAX.
     args = build_parser(outline=all(t.startswith("-") for t in tokens)).parse_args(argv)
     if (bad := _undecodable(args)) is not None:  # bytes that are not UTF-8 (e.g. $'m\xff') fail deep inside

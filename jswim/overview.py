@@ -127,7 +127,9 @@ class StudyFolder:
 
         self.folder = Path(folder)
         if not self.folder.is_dir():
-            raise ResultFolderError(f"{folder}: no such folder")
+            from jswim.cli import path_kind
+
+            raise ResultFolderError(f"{folder}: {path_kind(folder, 'a study folder')}")
         self.meta = read_metadata(self.folder)
         self.rows = grid_order(read_runs(self.folder), self.meta)
         self.summary = order_summary(summarize(self.rows), self.rows)

@@ -269,6 +269,11 @@ class StudyStore:
             raise
 
     def _open(self, study: str, meta_path: Path, extra: Mapping[str, Any] | None) -> None:
+        for name in ("transcripts", "figures"):  # a file in the way is no full disk: said so, nothing written
+            p = self.folder / name
+            if (p.exists() or p.is_symlink()) and not p.is_dir():
+                raise ResultFolderError(f"{p} is a file where jswim keeps a folder; move it away and run the "
+                                        "same command (the study folder is left as it is)")
         with writing(self.folder):
             self._clean_temporary_files()
         if meta_path.exists():

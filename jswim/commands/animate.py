@@ -37,7 +37,9 @@ def main(args: argparse.Namespace) -> int:
     if not 20 <= args.dpi <= 400:
         raise ConfigError(f"--dpi must lie in [20, 400], got {args.dpi}")
     if not Path(args.folder).is_dir():
-        raise ConfigError(f"{args.folder}: no such folder")
+        from jswim.cli import path_kind
+
+        raise ConfigError(f"{args.folder}: {path_kind(args.folder, 'a study folder')}")
     anim = build(args.folder, args.run, by=args.by, most=args.max, fps=args.fps, dpi=args.dpi)
     out = Path(args.out) if args.out else Path(args.folder) / "animations" / "runs.gif"
     path = anim.save(out)

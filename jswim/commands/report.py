@@ -26,7 +26,9 @@ def main(args: argparse.Namespace) -> int:
     from jswim.viz.page import write_report
 
     if not Path(args.folder).is_dir():
-        raise ConfigError(f"{args.folder}: no such folder")
+        from jswim.cli import path_kind
+
+        raise ConfigError(f"{args.folder}: {path_kind(args.folder, 'a study folder')}")
     path = write_report(args.folder, figures=args.figures, out=args.out)
     print(f"report: {path} ({path.stat().st_size / 1024:.0f} KB); open it in a browser (file://{path.resolve()})")
     return 0

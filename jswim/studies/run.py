@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import errno
 import hashlib
 import json
 import platform
@@ -358,8 +359,13 @@ def run_study(
         msg = f"cannot write {exc.filename or folder}: {exc.strerror or exc}"
         if not store.restore_status():
             _record_status(store, "stopped", error=msg)
-        raise StudyFolderError(f"{msg}; every finished run and answered call is kept in {folder}: "
-                               "make room and run the same command to resume") from None
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+            hint = "make room and run the same command to resume"
+        elif exc.errno in (errno.EEXIST, errno.ENOTDIR, errno.EISDIR):
+            hint = "a file or folder is in the way of one jswim writes: move it away and run the same command"
+        else:
+            hint = "fix that and run the same command to resume"
+        raise StudyFolderError(f"{msg}; every finished run and answered call is kept in {folder}: {hint}") from None
     finally:
         store.close()  # the folder's lock: the next session may start
 
