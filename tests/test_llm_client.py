@@ -332,17 +332,16 @@ def test_a_reply_from_another_model_is_not_priced():
         assert cost > 0 and why is None
 
 
-def test_a_model_the_server_does_not_list_is_not_priced_unless_price_local_asks(server, monkeypatch):
+def test_a_model_the_server_does_not_list_is_not_priced(server, monkeypatch):
+    cost, why = priced_calls(server, price_local=True, listed_models=("fake",))
+    assert cost == 0.0 and "does not list 'gpt-4'" in why
+    cost, _ = priced_calls(server, price_local=True, listed_models=("gpt-4",))
+    assert cost > 0
     from tests.fakeserver import as_remote
 
-    as_remote(monkeypatch)  # a gateway off this machine, where list prices apply
+    as_remote(monkeypatch)  # a gateway off this machine, where list prices apply: the same rule
     cost, why = priced_calls(server, listed_models=("fake",))
-    assert cost == 0.0 and "does not list 'gpt-4'" in why and "--price-local" in why
-    cost, _ = priced_calls(server, listed_models=("gpt-4",))
-    assert cost > 0
-    # --price-local asks for the list price anyway (README: "asks for pricing anyway").
-    cost, why = priced_calls(server, price_local=True, listed_models=("fake",))
-    assert cost == pytest.approx(2 * (3 * 30 + 2 * 60) / 1e6) and why is None
+    assert cost == 0.0 and "does not list 'gpt-4'" in why and "--prices" in why
 
 
 def test_price_table():

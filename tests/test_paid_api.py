@@ -356,16 +356,28 @@ def status(folder: Path) -> str | None:
     return json.loads(meta.read_text()).get("status") if meta.exists() else None
 
 
-def test_price_local_prices_a_model_the_server_does_not_list_and_the_cap_stops_it(tmp_path, capsys):
+def test_a_cap_on_a_model_the_server_does_not_list_is_refused_and_prices_file_makes_it_hold(tmp_path, capsys):
     # The case: --price-local, a server listing other names, --max-cost 0.05, 8 x 20 calls.
+    # It sent all 160 requests at $0 while its dry run printed $1.23; now both apply one rule.
     out = tmp_path / "study"
     with priced_server(models=GATEWAY_MODELS, latency=0.005) as srv:
         args = swim(srv.url, out, "--max-cost", "0.05", "--concurrency", "2", model="gpt-4", runs=8, steps=20)
         assert main([*args, "--dry-run"]) == 0
+        dry = capsys.readouterr().out
+        est = json.loads(dry.strip().splitlines()[-1])
+        assert srv.n_preflight > 0 and srv.n_requests == 0  # the dry run asked /v1/models, sent no chat
+        assert est["cost_usd"] == 0 and "does not list 'gpt-4'" in est["unpriced"]
+        assert "--prices" in est["cap_refusal"] and "--max-cost: the run would send nothing" in dry
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert srv.n_requests == 0 and len(err) == 1
+        assert "--max-cost 0.05 cannot hold" in err[0] and "--prices" in err[0]
+        prices = tmp_path / "prices.toml"
+        prices.write_text('as_of = "test"\n[prices]\n"gpt-4" = [30.0, 60.0]\n')
+        assert main([*args, "--prices", str(prices), "--dry-run"]) == 0
         est = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
-        assert srv.n_requests == 0 and est["cap_refusal"] is None
-        assert est["price_in"] == GPT4_IN and est["cost_usd"] > 0.5  # the run's price, not $0
-        code = main(args)
+        assert est["price_in"] == GPT4_IN and est["cost_usd"] > 0.5 and est["cap_refusal"] is None
+        code = main([*args, "--prices", str(prices)])
         err = capsys.readouterr().err
         sent = srv.settle()
         one_call = max(billed_usd_one(b) for b in srv.requests)

@@ -9,9 +9,8 @@ The list prices are a cloud provider's; :func:`price_table` applies them only wh
 right: a server on this machine or the LAN is never priced at them (it is free, or its price is
 the user's to give), nor a model the server does not list, nor a reply whose ``model`` field names
 another model than the one priced (servers that echo any requested name would otherwise bill a
-small local model at GPT-4's price). ``--price-local`` lifts the first two rules (a gateway to a
-paid API, on this machine or listing its models under other names). A table the user passes is
-always applied.
+small local model at GPT-4's price). ``--price-local`` lifts the first rule only (a local gateway
+to a paid API). A table the user passes is always applied.
 
 Under a cost cap (``--max-cost``) a call must have a price, or the cap would never be reached:
 :func:`cap_refusal` says, before the first request, why the study's calls could not be priced
@@ -134,9 +133,8 @@ def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *,
     local_host : bool
         The server is on this machine or the LAN (:func:`jswim.llm.urls.is_local_host`).
     price_local : bool
-        Price the calls at the list prices anyway: on a local server (a local gateway to a paid
-        API) and for a model the server's ``/v1/models`` does not list (a gateway that lists its
-        models under other names).
+        Price a local server's calls at the list prices anyway (a local gateway to a paid API);
+        a model the server's ``/v1/models`` does not list stays unpriced.
     listed : sequence of str, optional
         The models the server's ``/v1/models`` lists (``None``: not known).
 
@@ -153,10 +151,9 @@ def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *,
     if local_host and not price_local:
         return PriceTable({}), (f"{model!r} on a local or LAN server is not priced at a cloud list price; "
                                 f"{PRICE_LOCAL_OPTION} prices it (a local gateway to a paid API)")
-    if listed is not None and model not in listed and not price_local:
+    if listed is not None and model not in listed:  # also with --price-local: a server may answer any name
         return PriceTable({}), (f"the server does not list {model!r}, so its calls are not priced at "
-                                f"{model}'s list price; --prices FILE gives your own prices, applied as given "
-                                f"({PRICE_LOCAL_OPTION}: the list price anyway)")
+                                f"{model}'s list price; --prices FILE gives your own prices, applied as given")
     return table, None
 
 
