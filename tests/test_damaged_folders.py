@@ -98,7 +98,7 @@ def test_a_bad_runs_line_is_skipped_with_one_line_and_the_resume_pays_nothing(ca
 def test_every_reader_of_a_non_utf8_runs_line_warns_and_goes_on(finished, tmp_path, capsys):
     out = copy(finished, tmp_path)
     replace_line(out / "runs.jsonl", 2, RUN_EDITS["non-utf8"](second_run_record(out)))
-    for argv in (["plot", str(out)], ["report", str(out)]):
+    for argv in (["plot", str(out)], ["report", str(out)], ["animate", str(out), "--max", "1", "--dpi", "20"]):
         rc, err = run(capsys, *argv)
         assert rc == 0, err
         assert "runs.jsonl, line 2" in err
