@@ -488,7 +488,7 @@ _RUN_NUMBERS = ("final_x", "signed_final_x", "zeta", "cost_usd", "temperature", 
                 "reasoning_tokens", "parse_retries", "http_retries", "failed_steps", "n_clears", "tokens_seen",
                 "seed", "period", "n_ht", "steps_to_learn", "truncated", "cut_thinking", "roc_levels", "max_tokens")
 _RUN_FLAGS = ("success", "learned")
-_RUN_STRINGS = ("swimmer", "group", "status", "variant", "init", "action_set", "error", "constraint")
+_RUN_STRINGS = ("swimmer", "group", "status", "variant", "action_set", "error", "constraint")
 _RUN_SERIES = ("x", "y", "orientation", "progress")
 
 
