@@ -28,8 +28,10 @@ from pathlib import Path
 from typing import Any, Iterator, Sequence
 
 from jswim.actions import ACTION_SETS
+from jswim._io.paths import path_kind  # noqa: F401  (also read from here)
 from jswim.errors import ConfigError, JswimError, LLMServerError
 from jswim.commands import scenes as scene_options
+from jswim.jsonl import forget_warnings
 
 EXIT_USAGE = 2
 #: Largest count a batched command accepts (--n, --seeds, --steps, --chunk): swimmer and learner
@@ -156,8 +158,9 @@ def _add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> N
     b.add_argument("--model", default=None, help="model name on that server (required with --base-url)")
     b.add_argument("--gguf", default=None, metavar="FILE", help="another GGUF model for the embedded server")
     b.add_argument("--api-key-env", default=None, metavar="VAR",
-                   help="environment variable that holds the API key (default OPENAI_API_KEY; never stored or "
-                        "printed); named but unset: an error for a remote server, a warning for this machine")
+                   help="environment variable that holds the API key (never stored or printed); left out, "
+                        "OPENAI_API_KEY is sent to api.openai.com only and no key to any other host; named but "
+                        "unset or empty: an error for a remote server, a warning for this machine")
     b.add_argument("--constrain", default="auto", choices=("auto", "grammar", "json_schema", "json_object", "none"),
                    help=("constrained decoding (auto: none in this study, free text as the paper's; "
                          if spec.constrain == "none" else
@@ -439,17 +442,44 @@ def _extra_fields(items: Sequence[str]) -> tuple[tuple[str, Any], ...]:
     return tuple(out)
 
 
+#: The variable read for the key when --api-key-env is left out, and the only hosts it is sent to.
+DEFAULT_KEY_ENV, OPENAI_HOSTS = "OPENAI_API_KEY", ("api.openai.com",)
+
+
+def default_key_env(base_url: str | None) -> str:
+    """The key variable of a backend whose ``--api-key-env`` was left out: ``OPENAI_API_KEY`` for
+    OpenAI's own API, else none (``""``): a key nobody named never goes to another host (a
+    gateway, a local server), whatever the environment holds."""
+    if base_url is None:
+        return DEFAULT_KEY_ENV  # the embedded model: its own key (jswim.llm.local), this one is never read
+    from urllib.parse import urlsplit
+
+    from jswim.llm.urls import normalize_base_url
+
+    try:
+        host = (urlsplit(normalize_base_url(base_url)).hostname or "").lower()
+    except (ValueError, ConfigError):
+        return ""
+    return DEFAULT_KEY_ENV if host in OPENAI_HOSTS else ""
+
+
+
+
 def _backend(args: argparse.Namespace):
     from jswim.llm.backend import Backend  # lazy: JAX and httpx load only for commands that run
 
-    key_env = args.api_key_env or "OPENAI_API_KEY"
+    key_env = default_key_env(args.base_url) if args.api_key_env is None else args.api_key_env.strip()
+    if args.api_key_env is not None and not key_env:
+        raise ConfigError("--api-key-env '': name the variable that holds the key (e.g. --api-key-env "
+                          "OPENAI_API_KEY), or leave --api-key-env out for a server without keys")
     if args.api_key_env is not None and args.base_url is not None and not os.environ.get(key_env):
         from jswim.llm.urls import is_loopback, normalize_base_url
 
+        state = "is set but empty" if key_env in os.environ else "is not set"
         if not is_loopback(normalize_base_url(args.base_url)):
-            raise ConfigError(f"--api-key-env {key_env}: ${key_env} is not set; export the key in it (a remote "
+            raise ConfigError(f"--api-key-env {key_env}: ${key_env} {state}; export the key in it (a remote "
                               f"server would refuse every call), or leave --api-key-env out for a server without keys")
-        _warn(f"--api-key-env {key_env}: ${key_env} is not set; requests to this machine's server go without a key")
+        _warn(f"--api-key-env {key_env}: ${key_env} {state}; requests to this machine's server go without a key")
     prices, as_of = None, None
     if getattr(args, "prices", None):
         from jswim.llm.prices import load_prices
@@ -472,8 +502,7 @@ def _options(args: argparse.Namespace, study: str):
     from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
 
     if args.prompt_file is not None and not Path(args.prompt_file).is_file():
-        what = "a folder, not a file" if Path(args.prompt_file).is_dir() else "no such file"
-        raise ConfigError(f"--prompt-file {args.prompt_file}: {what}")
+        raise ConfigError(f"--prompt-file {args.prompt_file}: {path_kind(args.prompt_file, 'a file')}")
     _refuse_ignored(study, args)
     kw: dict[str, Any] = dict(
         swimmers=args.swimmer, directions=args.direction, runs=args.runs, q_runs=args.q_runs, steps=args.steps,
@@ -583,7 +612,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if args.dry_run:
         from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
 
-        est = estimate_study(study, options, backend, out)
+        est = estimate_study(study, options, backend, out, max_cost=args.max_cost)
         print("\n".join(est.lines()))
         print(json.dumps(est.as_dict(), sort_keys=True))  # the same, for scripts
         return 0
@@ -1009,6 +1038,21 @@ def _compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _undecodable_token(tokens: Sequence[str]) -> str | None:
+    """The option (or argument) of the first command-line token that is not UTF-8, named as the
+    user typed it (``--swimmer``), never as Python holds the bytes (``'\udcff'``)."""
+    for i, t in enumerate(tokens):
+        try:
+            t.encode("utf-8")
+        except UnicodeEncodeError:
+            if t.startswith("--") and "=" in t:
+                return t.split("=", 1)[0]
+            if i and tokens[i - 1].startswith("-") and len(tokens[i - 1]) > 1:
+                return tokens[i - 1]
+            return f"argument {i + 1}"
+    return None
+
+
 def _undecodable(args: argparse.Namespace) -> str | None:
     """The first option whose text is not UTF-8 (Python holds such bytes as lone surrogates)."""
     for name, value in vars(args).items():
@@ -1024,6 +1068,9 @@ def _undecodable(args: argparse.Namespace) -> str | None:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jswim`` command; returns the exit status."""
     tokens = sys.argv[1:] if argv is None else list(argv)
+    if (bad := _undecodable_token(tokens)) is not None:  # before argparse, which would print '\udcff'
+        print(f"jswim: error: {bad} is not valid UTF-8 text; write it in UTF-8", file=sys.stderr)
+        return EXIT_USAGE
     # No command named (`jswim`, `jswim --help`): the outline parser says the same, without JAX.
     args = build_parser(outline=all(t.startswith("-") for t in tokens)).parse_args(argv)
     if (bad := _undecodable(args)) is not None:  # bytes that are not UTF-8 (e.g. $'m\xff') fail deep inside
@@ -1041,7 +1088,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         os.environ["MPLBACKEND"] = "Agg"
     from jswim.permissions import private_files
 
-    with private_files():  # folders, figures and caches: owner only under the usual umask
+    # Folders, figures and caches: owner only under the usual umask; every jswim warning (a
+    # skipped record of a damaged folder, ...) one line, whatever the command.
+
+    forget_warnings()
+    with private_files(), _warnings_as_lines():
         return _main(args)
 
 

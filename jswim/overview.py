@@ -12,6 +12,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
+from jswim._io.paths import path_kind
 from jswim.console import Column, cost_text, plain_table, requests_text
 from jswim.errors import ConfigError, ResultFolderError
 from jswim.folderlock import describe_holder, holder
@@ -139,7 +140,7 @@ class StudyFolder:
 
         self.folder = Path(folder)
         if not self.folder.is_dir():
-            raise ResultFolderError(f"{folder}: no such folder")
+            raise ResultFolderError(f"{folder}: {path_kind(folder, 'a study folder')}")
         self.meta = read_metadata(self.folder)
         self.rows = grid_order(read_runs(self.folder), self.meta)
         self.summary = order_summary(summarize(self.rows), self.rows)

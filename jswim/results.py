@@ -39,7 +39,7 @@ from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 from jswim.errors import ResultFolderError
 from jswim.permissions import file_mode, opener
 from jswim.folderlock import HOLDER, LOCK, FolderLock
-from jswim.jsonl import repair_tail
+from jswim.jsonl import SkippedRecord, read_records, repair_tail
 from jswim._io.atomic import _jsonable, atomic_write, dumps, plain_json, write_json  # noqa: F401  (their old place)
 
 if TYPE_CHECKING:
@@ -206,6 +206,11 @@ class StudyStore:
             raise
 
     def _open(self, study: str, meta_path: Path, extra: Mapping[str, Any] | None) -> None:
+        for name in ("transcripts", "figures"):  # a file in the way is no full disk: said so, nothing written
+            p = self.folder / name
+            if (p.exists() or p.is_symlink()) and not p.is_dir():
+                raise ResultFolderError(f"{p} is a file where jswim keeps a folder; move it away and run the "
+                                        "same command (the study folder is left as it is)")
         with writing(self.folder):
             self._clean_temporary_files()
         if meta_path.exists():
@@ -215,6 +220,10 @@ class StudyStore:
                 raise ResultFolderError(f"{meta_path} is unreadable ({exc}); use a new --out folder") from None
             if not isinstance(meta, dict):
                 raise ResultFolderError(f"{meta_path} is not a study's metadata; use a new --out folder")
+            if not isinstance(meta.get("identity"), dict):  # nothing to compare today's settings with
+                raise ResultFolderError(f"{meta_path}: 'identity' is {meta.get('identity')!r:.40}, not the study's "
+                                        "settings (an object); the folder is left as it is: use a new --out folder")
+            meta = clean_metadata(meta, meta_path)  # derived fields of the wrong type are rewritten
             if meta.get("study") != study:
                 raise ResultFolderError(
                     f"{self.folder} holds a '{meta.get('study')}' study, not '{study}'; "
@@ -237,25 +246,60 @@ class StudyStore:
             )
         else:  # new, or holding nothing but what jswim itself leaves (a kill during the first write)
             self.meta = {"study": study, "identity": self.identity, "status": "running"}
+        #: The status the folder had before this session (``None``: a new folder), restored by
+        #: :meth:`restore_status` when the session stops on an error before changing anything.
+        self.status_before = self.meta.get("status") if meta_path.exists() else None
+        #: Whether this session changed the study (a run recorded, a call journaled).
+        self.changed = False
         self.meta.update(dict(extra or {}))
         self.meta["status"] = "running"
-        with writing(self.folder):
-            write_json(meta_path, self.meta)
-        self._keep_reserve(len(dumps(self.meta)))
+        # The room to record how the session ends exists before "running" is written: a disk too
+        # full for it is one line now, and the folder keeps the status it had.
+        self._keep_reserve(2 * len(dumps(self.meta)))
+        try:
+            with writing(self.folder):
+                write_json(meta_path, self.meta)
+        except BaseException:
+            self._free_reserve()
+            raise
 
     def _keep_reserve(self, meta_bytes: int) -> None:
-        """Hold back room for two rewrites of ``metadata.json`` (best effort: a disk too full for
-        it now is found at the next write)."""
+        """Hold back room for two rewrites of ``metadata.json``.
+
+        Raises
+        ------
+        StudyFolderError
+            The disk has no room for it (nothing else was written).
+        """
         path = self.folder / RESERVE
         try:
-            with open(path, "wb", opener=opener) as f:
-                f.write(bytes(max(RESERVE_MIN_BYTES, 2 * meta_bytes)))
-                f.flush()
-                os.fsync(f.fileno())
-            self._reserved = True
-        except OSError:
+            with writing(self.folder):
+                self._write_reserve(path, max(RESERVE_MIN_BYTES, 2 * meta_bytes))
+        except StudyFolderError:
             with contextlib.suppress(OSError):
                 path.unlink()
+            raise
+        self._reserved = True
+
+    @staticmethod
+    def _write_reserve(path: Path, size: int) -> None:
+        with open(path, "wb", opener=opener) as f:
+            # Written, not only sized: a sparse file would hold no blocks back.
+            f.write(bytes(size))
+            f.flush()
+            os.fsync(f.fileno())
+
+    def restore_status(self) -> bool:
+        """Put back the status the folder had before this session, when the session changed
+        nothing (it stopped on an error before any run or call); ``False`` otherwise."""
+        if self.changed or self.status_before is None:
+            return False
+        self.meta["status"] = self.status_before
+        try:
+            self.set_status(self.status_before)
+        except (OSError, StudyFolderError):
+            return False
+        return True
 
     def _free_reserve(self) -> bool:
         """Give the reserved room back to the disk; ``False`` when there was none."""
@@ -284,12 +328,21 @@ class StudyStore:
         paths = [self.folder / RUNS, self.folder / "calls.jsonl"]
         if (self.folder / "transcripts").is_dir():
             paths += sorted((self.folder / "transcripts").glob("*.jsonl"))
+        done: set[str] | None = None
         for path in paths:
             cut = repair_tail(path)
-            if cut:
-                rel = path.relative_to(self.folder)
-                self.repairs.append(f"{rel}: cut a torn last line ({cut} bytes, from an interrupted write); "
-                                    "what it held is redone, no answered call is lost")
+            if not cut:
+                continue
+            rel = path.relative_to(self.folder)
+            what = f"{rel}: cut a torn last line ({cut} bytes, from an interrupted write)"
+            if path.parent.name == "transcripts":
+                done = {r["run_id"] for r in read_runs(self.folder) if not is_failed(r)} if done is None else done
+                if path.stem in done:  # a finished run is not run again: say what its transcript lost
+                    self.repairs.append(f"{what}; the run is finished and is not redone, so the transcript lacks "
+                                        "that last record (its end or last step); runs.jsonl keeps the run's "
+                                        "result and calls.jsonl every answered call")
+                    continue
+            self.repairs.append(f"{what}; what it held is redone, no answered call is lost")
 
     def close(self) -> None:
         """Release the folder's lock (the session is over; :meth:`set_status` first)."""
@@ -321,6 +374,7 @@ class StudyStore:
         if not lines:
             return
         path = self.folder / RUNS
+        self.changed = True
         with writing(path):
             repair_tail(path)  # never glue a record onto a torn line
             with open(path, "a", encoding="utf-8", opener=opener) as fh:
@@ -363,33 +417,104 @@ class StudyStore:
                 write_json(self.folder / META, self.meta)
 
 
+#: The fields of a run record that readers compute with, by kind: a record where one of them has
+#: another type (a hand edit) is skipped with a warning (:func:`run_problem`).
+_RUN_TEXT = ("run_id", "agent")  # run_id required
+_RUN_NUMBERS = ("final_x", "signed_final_x", "zeta", "cost_usd", "temperature", "direction", "steps", "calls",
+                "billed_calls", "cache_hits", "prompt_tokens", "completion_tokens", "cached_tokens",
+                "reasoning_tokens", "parse_retries", "http_retries", "failed_steps", "n_clears", "tokens_seen",
+                "seed", "period", "n_ht", "steps_to_learn", "truncated", "cut_thinking", "roc_levels", "max_tokens")
+_RUN_FLAGS = ("success", "learned")
+_RUN_STRINGS = ("swimmer", "group", "status", "variant", "action_set", "error", "constraint")
+_RUN_SERIES = ("x", "y", "orientation", "progress")
+
+
+def _number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def run_problem(row: Mapping[str, Any]) -> str | None:
+    """What makes ``row`` no run record readers can use (a field of the wrong type), or ``None``."""
+    row = upgrade_names(dict(row))
+    for k in _RUN_TEXT:
+        if k == "run_id" and "run_id" not in row:
+            return "no 'run_id'"
+        if k in row and (not isinstance(row[k], str) or not row[k]):
+            return f"{k!r} is {row[k]!r}, not a name"
+    for k in _RUN_NUMBERS:
+        if row.get(k) is not None and not _number(row[k]):
+            return f"{k!r} is {row[k]!r}, not a number"
+    for k in _RUN_FLAGS:
+        if row.get(k) is not None and not isinstance(row[k], bool):
+            return f"{k!r} is {row[k]!r}, not true or false"
+    for k in _RUN_STRINGS:
+        if row.get(k) is not None and not isinstance(row[k], str):
+            return f"{k!r} is {row[k]!r}, not text"
+    for k in _RUN_SERIES:
+        v = row.get(k)
+        if v is not None and not (isinstance(v, list) and all(e is None or _number(e) for e in v)):
+            return f"{k!r} is not a list of numbers"
+    acts = row.get("actions")
+    if acts is not None and not isinstance(acts, list):
+        return "'actions' is not a list"
+    return None
+
+
 def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     """Runs of a study folder (see :class:`StudyStore`), one record per ``run_id`` in first-seen
     order, fields under today's names (:func:`upgrade_names`).
 
     The first record of a run wins, except that a failed run (:func:`is_failed`) is replaced by
-    any later record of it: the one from the resume that ran it again.
+    any later record of it: the one from the resume that ran it again. A line that is no run
+    record (not UTF-8, not JSON, a field of the wrong type: :func:`run_problem`) is skipped with
+    a warning naming the file and the line (:func:`jswim.jsonl.read_records`); that run counts as
+    not done, as a torn line's does.
     """
     path = Path(folder) / RUNS
-    if not path.exists():
-        return []
     by_id: dict[str, dict[str, Any]] = {}
-    for line in path.read_text(encoding="utf-8").splitlines():
-        try:
-            row = json.loads(line)
-        except json.JSONDecodeError:
-            continue  # a torn final line from a kill; the run simply counts as not done
-        if not isinstance(row, dict):
-            continue  # not a run record (hand-edited file); skipped like a torn line
+    for _, row in read_records(path, run_problem):
         rid = row.get("run_id")
         if rid not in by_id or is_failed(by_id[rid]):
             by_id[rid] = upgrade_names(row)
     return list(by_id.values())
 
 
+#: Fields of ``metadata.json`` by the JSON type readers expect of them.
+_META_TYPES: dict[str, tuple[type, ...]] = {
+    "study": (str,), "status": (str,), "identity": (dict,), "summary": (dict,), "llm_totals": (dict,),
+    "llm_server": (dict,), "grid": (dict,), "prompt_template": (dict,), "n_planned": (int,), "n_runs": (int,),
+    "horizon": (int,), "group_order": (list,), "llm_variants": (list,), "roc_levels": (list,),
+    "fidelity_deviations": (list,), "server": (str, type(None)), "prices_as_of": (str,), "error": (str, type(None)),
+}
+_JSON_NAMES = {dict: "an object", list: "a list", str: "text", int: "a whole number", type(None): "null"}
+
+
+def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
+    """``meta`` without the fields of the wrong type (a hand edit: ``"summary": 5``), each dropped
+    with one :class:`~jswim.jsonl.SkippedRecord` warning naming the file and the field; the
+    fields left are what a reader may compute with. ``summary.groups`` must be a list of objects."""
+    import warnings
+
+
+    out = dict(meta)
+    for k, types in _META_TYPES.items():
+        v = out.get(k)
+        if k in out and not (isinstance(v, types) and not isinstance(v, bool)):
+            want = " or ".join(_JSON_NAMES[t] for t in types)
+            warnings.warn(SkippedRecord(f"{path}: {k!r} is {v!r:.40}, not {want}; that field is ignored"), stacklevel=3)
+            out.pop(k)
+    groups = (out.get("summary") or {}).get("groups")
+    if groups is not None and not (isinstance(groups, list) and all(isinstance(g, dict) for g in groups)):
+        warnings.warn(SkippedRecord(f"{path}: 'summary.groups' is not a list of objects; the summary is ignored"),
+                      stacklevel=3)
+        out.pop("summary")
+    return out
+
+
 def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     """The study's ``metadata.json`` (fields under today's names); :class:`ResultFolderError` if
-    the folder is not a study."""
+    the folder is not a study. A field of the wrong type is dropped with a warning
+    (:func:`clean_metadata`)."""
     path = Path(folder) / META
     if not path.exists():
         raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
@@ -399,7 +524,7 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
         raise ResultFolderError(f"{path} is unreadable ({exc})") from None
     if not isinstance(meta, dict):
         raise ResultFolderError(f"{path} is not a study's metadata (a JSON {type(meta).__name__}, not an object)")
-    return upgrade_names(meta)
+    return upgrade_names(clean_metadata(meta, path))
 
 
 def unfinished_note(status: str | None, done: int, planned: int | None) -> str | None:
@@ -657,19 +782,7 @@ CALL_COLUMNS = ("run", "n", "key", "text", "raw", "prompt_tokens", "completion_t
 
 def _jsonl(path: Path) -> list[dict[str, Any]]:
     """The JSON objects of a JSON-lines file; torn or foreign lines are skipped, a missing file is empty."""
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return []
-    out = []
-    for line in text.splitlines():
-        try:
-            obj = json.loads(line)
-        except json.JSONDecodeError:
-            continue
-        if isinstance(obj, dict):
-            out.append(obj)
-    return out
+    return [rec for _, rec in read_records(path)]
 
 
 def read_transcript(folder: str | os.PathLike, run_id: str) -> list[dict[str, Any]]:
@@ -709,7 +822,9 @@ def transcript_steps(records: Iterable[Mapping[str, Any]]) -> list[dict[str, Any
 def read_calls(folder: str | os.PathLike) -> list[dict[str, Any]]:
     """The answered calls of ``calls.jsonl``, flat (``usage`` split into its three token counts)."""
     out = []
-    for c in _jsonl(Path(folder) / "calls.jsonl"):
+    from jswim.llm.journal import call_problem  # lazy: the journal's rule, without httpx for other readers
+
+    for _, c in read_records(Path(folder) / "calls.jsonl", call_problem):
         usage = c.get("usage") if isinstance(c.get("usage"), list) else []
         usage = (list(usage) + [None, None, None])[:3]
         row = {k: c.get(k) for k in CALL_COLUMNS}

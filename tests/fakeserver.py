@@ -259,6 +259,7 @@ class FakeServer:
         hold: Callable[[dict[str, Any]], bool] | None = None, hold_s: float = 30.0,
         owned_by: str | None = None, props: dict[str, Any] | None = None, api_key: str | None = None,
         usage: Callable[[dict[str, Any]], Any] | None = None,
+        redirects: dict[str, tuple[int, str]] | None = None,
     ) -> None:
         if stream not in ("never", "default", "always"):
             raise ValueError(f"stream must be never, default or always, got {stream!r}")
@@ -279,6 +280,10 @@ class FakeServer:
         self.api_key = api_key
         self.n_preflight = 0  # GET requests (models, props)
         self.usage = usage  # replaces the usage object of every completion (servers that send odd ones)
+        # POST path -> (status, Location): a moved endpoint; the chat endpoint also answers at any
+        # path ending in /chat/completions (where a redirect leads).
+        self.redirects = dict(redirects or {})
+        self.redirected: list[str | None] = []  # the Authorization header of each redirected request
         self._warm_at: float | None = None
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
@@ -477,7 +482,12 @@ class FakeServer:
             return await self._send(writer, 200, json.dumps({"object": "list", "data": data}).encode())
         if method == "GET" and path == "/props" and self.props is not None:
             return await self._send(writer, 200, json.dumps(self.props).encode())
-        if method != "POST" or path != "/v1/chat/completions":
+        if method == "POST" and path in self.redirects:
+            status, location = self.redirects[path]
+            with self._lock:
+                self.redirected.append(headers.get("authorization"))
+            return await self._send(writer, status, b"", {"Location": location})
+        if method != "POST" or not path.endswith("/chat/completions"):
             msg = json.dumps({"error": {"message": f"File Not Found: {path}", "code": 404}}).encode()
             return await self._send(writer, 404, msg)
         try:
@@ -749,3 +759,19 @@ def main() -> None:
 
 if __name__ == "__main__":
     main()
+
+
+#: What a gateway lists at /v1/models: the paid models under its own names (never plain ``gpt-4``).
+GATEWAY_MODELS = ("openai/gpt-4", "openai/gpt-4o", "meta-llama/llama-3-70b")
+
+
+def as_remote(monkeypatch: Any) -> None:
+    """Make jswim take the fake server (on loopback) for a remote host: a gateway off this
+    machine, where the list prices apply (:func:`jswim.llm.urls.is_local_host` answers False)."""
+    import jswim.llm.client
+    import jswim.llm.dryrun
+    import jswim.llm.urls
+    import jswim.studies.run
+
+    for module in (jswim.llm.urls, jswim.llm.client, jswim.llm.dryrun, jswim.studies.run):
+        monkeypatch.setattr(module, "is_local_host", lambda url: False)

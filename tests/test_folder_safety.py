@@ -392,3 +392,39 @@ def test_the_compilation_cache_stays_off_where_it_cannot_be_written(tmp_path, mo
     monkeypatch.setenv("JSWIM_COMPILATION_CACHE", "0")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "ok"))
     assert compile_cache.enable() is None and not (tmp_path / "ok").exists()
+
+
+def fill_disk_but(where: Path, free_bytes: int) -> Path:
+    """Fill the file system of ``where`` to the byte, then give ``free_bytes`` back."""
+    filler = where / "filler"
+    fd = os.open(filler, os.O_WRONLY | os.O_CREAT)
+    try:
+        while True:
+            os.write(fd, b"\0" * 4096)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+    os.truncate(filler, max(0, filler.stat().st_size - free_bytes))
+    return filler
+
+
+@pytest.mark.parametrize("free_kb", [8, 40])
+def test_a_nearly_full_disk_at_start_never_leaves_running(free_kb, small_disk, capsys):
+    # Less room than the reserve (64 kB) when a study starts: one line, exit 2, and metadata.json
+    # never says "running" (it did, seen at 8-70 kB free): the reserve exists before it is written.
+    fresh, done = small_disk / "F", small_disk / "D"
+    with FakeServer(reply=hash_reply) as srv:
+        assert cli.main(swim_args(srv.url, done)) == 0
+        filler = fill_disk_but(small_disk, free_kb * 1024)
+        capsys.readouterr()
+        for out in (fresh, done):
+            rc = cli.main(swim_args(srv.url, out, "--runs", "3"))
+            err = capsys.readouterr().err
+            no_traceback(err)
+            lines = [ln for ln in err.splitlines() if ln.startswith("jswim: error:")]
+            assert rc == 2 and len(lines) == 1 and "No space left on device" in lines[0], err
+        assert not (fresh / "metadata.json").exists() or read_metadata(fresh)["status"] != "running"
+        assert read_metadata(done)["status"] == "complete"
+        filler.unlink()
+        assert cli.main(swim_args(srv.url, fresh)) == 0

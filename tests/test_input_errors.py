@@ -151,3 +151,78 @@ def test_duplicate_swimmers_run_once(srv, tmp_path, capsys):
     assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(tmp_path / "o"),
                      "--swimmer", "purcell,purcell"]) == 0
     assert len(read_runs(tmp_path / "o")) == 1
+
+
+@pytest.mark.parametrize("field, option", [
+    ("max_tokens=5000", "--max-tokens"), ("temperature=0.7", "--temperature"), ("stream=true", "stream"),
+    ("model=\"gpt-4\"", "--model"), ("messages=[]", "--prompt-file"), ("max_completion_tokens=99", "--max-tokens"),
+    ("response_format={}", "--constrain"),
+])
+def test_an_extra_field_jswim_sets_itself_is_refused_naming_the_real_option(field, option, srv, tmp_path, capsys):
+    # It would bypass the cost reservation (max_tokens), the identity (temperature) or be dropped (model).
+    line = refused(capsys, srv, tmp_path / "o", "--extra-field", field)
+    assert f"--extra-field {field.split('=')[0]}=" in line and option in line
+
+
+def test_an_extra_field_jswim_does_not_set_is_sent_and_recorded(srv, tmp_path, capsys):
+    out = tmp_path / "o"
+    assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(out), "--extra-field", "top_k=5"]) == 0
+    assert srv.requests and all(b["top_k"] == 5 for b in srv.requests)
+    import json
+
+    assert json.loads((out / "metadata.json").read_text())["identity"]["backend"]["extra_fields"] == {"top_k": 5}
+
+
+# -- messages that named the wrong cause (issue 32) ------------------------------------------------
+
+
+def test_a_fifo_or_a_device_as_prompt_file_says_what_it_is(srv, tmp_path, capsys):
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    line = refused(capsys, srv, tmp_path / "o", "--prompt-file", str(fifo))
+    assert "a FIFO" in line and "no such file" not in line
+    line = refused(capsys, srv, tmp_path / "o", "--prompt-file", "/dev/zero")
+    assert "a device" in line and "no such file" not in line
+    line = refused(capsys, srv, tmp_path / "o", "--prompt-file", str(tmp_path / "missing.txt"))
+    assert "no such file" in line
+
+
+@pytest.mark.parametrize("command", ["show", "report", "animate"])
+def test_a_file_given_as_a_study_folder_is_said_to_be_a_file(command, tmp_path, capsys):
+    f = tmp_path / "notes.txt"
+    f.write_text("x")
+    assert cli.main([command, str(f)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "a file, not a study folder" in err and "no such" not in err, err
+    assert cli.main([command, str(tmp_path / "nothing")]) == 2
+    assert "no such folder" in capsys.readouterr().err
+
+
+def test_a_transcripts_file_in_the_way_is_not_called_a_full_disk(srv, tmp_path, capsys):
+    out = tmp_path / "o"
+    assert cli.main(["swim", *BASE, "--base-url", srv.url, "--out", str(out)]) == 0
+    meta = (out / "metadata.json").read_bytes()
+    for p in (out / "transcripts").iterdir():
+        p.unlink()
+    (out / "transcripts").rmdir()
+    (out / "transcripts").write_text("in the way")
+    capsys.readouterr()
+    assert cli.main(["swim", *BASE, "--runs", "2", "--base-url", srv.url, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.startswith("jswim: error:")]
+    assert len(lines) == 1 and "transcripts is a file where jswim keeps a folder" in lines[0], err
+    assert "make room" not in err and "File exists" not in err
+    assert (out / "metadata.json").read_bytes() == meta  # status and all left as they were
+
+
+@pytest.mark.parametrize("argv, named", [
+    (["swim", "--swimmer", "\udcff"], "--swimmer"),
+    (["qlearn", "--swimmer", "\udcff"], "--swimmer"),
+    (["swim", "--direction=\udcff"], "--direction"),
+    (["show", "\udcff"], "argument 2"),
+])
+def test_non_utf8_bytes_are_named_by_their_option_never_shown_as_surrogates(argv, named, capsys):
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"jswim: error: {named} is not valid UTF-8 text; write it in UTF-8"
+    assert "udcff" not in err

@@ -332,11 +332,16 @@ def test_a_reply_from_another_model_is_not_priced():
         assert cost > 0 and why is None
 
 
-def test_a_model_the_server_does_not_list_is_not_priced(server):
+def test_a_model_the_server_does_not_list_is_not_priced(server, monkeypatch):
     cost, why = priced_calls(server, price_local=True, listed_models=("fake",))
     assert cost == 0.0 and "does not list 'gpt-4'" in why
     cost, _ = priced_calls(server, price_local=True, listed_models=("gpt-4",))
     assert cost > 0
+    from tests.fakeserver import as_remote
+
+    as_remote(monkeypatch)  # a gateway off this machine, where list prices apply: the same rule
+    cost, why = priced_calls(server, listed_models=("fake",))
+    assert cost == 0.0 and "does not list 'gpt-4'" in why and "--prices" in why
 
 
 def test_price_table():
@@ -457,3 +462,40 @@ def test_usage_totals_bill_only_what_reached_the_server():
     t.add(result(shared=True, retries=2))  # waited on an identical request in flight: not billed
     assert (t.calls, t.billed_calls, t.cache_hits, t.shared, t.retries) == (3, 1, 1, 1, 2)
     assert (t.prompt_tokens, t.completion_tokens, t.cost_usd) == (100, 5, 0.25)
+
+
+# -- redirects (issue 32) -------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("status", [307, 308])
+def test_a_same_host_redirect_is_followed_with_the_key_and_the_body(status, monkeypatch):
+    monkeypatch.setenv("JSWIM_TEST_KEY", SECRET)
+    with FakeServer(reply=lambda body: "[2, 1]",
+                    redirects={"/v1/chat/completions": (status, "/v2/chat/completions")}) as srv:
+        res = run(one_call(settings(srv, api_key_env="JSWIM_TEST_KEY")))
+        assert res.text == "[2, 1]"
+        assert srv.redirected == [f"Bearer {SECRET}"] and srv.auth_headers == [f"Bearer {SECRET}"]
+        assert srv.requests[0]["messages"] == MSG  # the body went again, whole
+
+
+def test_a_redirect_loop_stops_at_the_limit():
+    from jswim.llm.client import MAX_REDIRECTS
+    from jswim.llm.errors import LLMSetupError
+
+    with FakeServer(redirects={"/v1/chat/completions": (307, "/v1/chat/completions")}) as srv:
+        with pytest.raises(LLMSetupError, match=f"more than {MAX_REDIRECTS} redirects"):
+            run(one_call(settings(srv)))
+        assert len(srv.redirected) == MAX_REDIRECTS + 1 and srv.n_requests == 0
+
+
+def test_a_redirect_to_another_host_is_refused_and_the_key_never_goes_there(monkeypatch):
+    from jswim.llm.errors import LLMSetupError
+
+    monkeypatch.setenv("JSWIM_TEST_KEY", SECRET)
+    with FakeServer() as other:
+        # Same machine, another port: another host as far as the key is concerned.
+        with FakeServer(redirects={"/v1/chat/completions": (308, other.url + "/chat/completions")}) as srv:
+            with pytest.raises(LLMSetupError, match="another host") as err:
+                run(one_call(settings(srv, api_key_env="JSWIM_TEST_KEY")))
+        assert other.n_requests == 0 and other.auth_headers == []
+    assert SECRET not in str(err.value)

@@ -344,3 +344,98 @@ def test_reasoning_tokens_are_billed_at_the_completion_price(tmp_path, capsys):
     assert expected > 8 * REASONING_TOKENS * 10.0 / 1_000_000  # the thinking is most of the bill
     rows = [r for r in read_runs(out) if r["agent"] == "llm"]
     assert sum(r["cost_usd"] for r in rows) == pytest.approx(expected, rel=1e-9)
+
+
+# -- a cap that cannot lapse: calls the price rule would not price (issue 32) -----------------------
+
+from tests.fakeserver import GATEWAY_MODELS, as_remote  # noqa: E402
+
+
+def status(folder: Path) -> str | None:
+    meta = folder / "metadata.json"
+    return json.loads(meta.read_text()).get("status") if meta.exists() else None
+
+
+def test_a_cap_on_a_model_the_server_does_not_list_is_refused_and_prices_file_makes_it_hold(tmp_path, capsys):
+    # The issue's case: --price-local, a server listing other names, --max-cost 0.05, 8 x 20 calls.
+    # It sent all 160 requests at $0 while its dry run printed $1.23; now both apply one rule.
+    out = tmp_path / "study"
+    with priced_server(models=GATEWAY_MODELS, latency=0.005) as srv:
+        args = swim(srv.url, out, "--max-cost", "0.05", "--concurrency", "2", model="gpt-4", runs=8, steps=20)
+        assert main([*args, "--dry-run"]) == 0
+        dry = capsys.readouterr().out
+        est = json.loads(dry.strip().splitlines()[-1])
+        assert srv.n_preflight > 0 and srv.n_requests == 0  # the dry run asked /v1/models, sent no chat
+        assert est["cost_usd"] == 0 and "does not list 'gpt-4'" in est["unpriced"]
+        assert "--prices" in est["cap_refusal"] and "--max-cost: the run would send nothing" in dry
+        assert main(args) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert srv.n_requests == 0 and len(err) == 1
+        assert "--max-cost 0.05 cannot hold" in err[0] and "--prices" in err[0]
+        prices = tmp_path / "prices.toml"
+        prices.write_text('as_of = "test"\n[prices]\n"gpt-4" = [30.0, 60.0]\n')
+        assert main([*args, "--prices", str(prices), "--dry-run"]) == 0
+        est = json.loads(capsys.readouterr().out.strip().splitlines()[-1])
+        assert est["price_in"] == GPT4_IN and est["cost_usd"] > 0.5 and est["cap_refusal"] is None
+        code = main([*args, "--prices", str(prices)])
+        err = capsys.readouterr().err
+        sent = srv.settle()
+        one_call = max(billed_usd_one(b) for b in srv.requests)
+        spent = billed_usd(srv, "gpt-4")
+    assert code == 3, err
+    assert 0 < sent < 160
+    assert spent <= 0.05 + 2 * one_call
+    assert status(out) == "stopped at the cost cap"
+
+
+def test_a_cap_on_calls_a_local_server_would_not_price_is_refused_before_any_request(tmp_path, capsys):
+    out = tmp_path / "study"
+    with priced_server() as srv:
+        args = [a for a in swim(srv.url, out, "--max-cost", "0.05", model="gpt-4") if a != "--price-local"]
+        assert main([*args, "--dry-run"]) == 0
+        dry = capsys.readouterr().out
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert srv.n_requests == 0
+    line = dry.strip().splitlines()[-1]
+    assert json.loads(line)["cap_refusal"] and "--max-cost: the run would send nothing" in dry
+    assert len(err.strip().splitlines()) == 1 and "--prices" in err and "--price-local" in err
+    assert status(out) != "running"
+
+
+def test_a_remote_gateway_listing_other_names_refuses_the_cap_and_prices_file_makes_it_hold(
+        tmp_path, capsys, monkeypatch):
+    as_remote(monkeypatch)
+    out = tmp_path / "study"
+    with priced_server(models=GATEWAY_MODELS, latency=0.005) as srv:
+        args = [a for a in swim(srv.url, out, "--max-cost", "0.05", "--concurrency", "2", model="gpt-4",
+                                runs=4, steps=12) if a != "--price-local"]
+        # The dry run asks /v1/models (free) and applies the run's rule: not priced, the cap refused.
+        assert main([*args, "--dry-run"]) == 0
+        dry = capsys.readouterr().out
+        est = json.loads(dry.strip().splitlines()[-1])
+        assert est["cost_usd"] == 0 and "does not list 'gpt-4'" in est["unpriced"]
+        assert "--prices" in est["cap_refusal"]
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert srv.n_requests == 0 and len(err.strip().splitlines()) == 1
+        assert "--max-cost 0.05 cannot hold" in err and "--prices" in err
+        prices = tmp_path / "prices.toml"
+        prices.write_text('as_of = "test"\n[prices]\n"gpt-4" = [30.0, 60.0]\n')
+        assert main([*args, "--prices", str(prices)]) == 3
+        assert 0 < srv.settle() < 48
+        assert billed_usd(srv, "gpt-4") <= 0.05 + 2 * max(billed_usd_one(b) for b in srv.requests)
+
+
+def test_a_reply_naming_another_model_is_priced_under_a_cap(tmp_path, capsys, monkeypatch):
+    # A gateway that lists gpt-4 but answers "openai/gpt-4-0613": uncapped that call costs $0 (and
+    # says why); under --max-cost it is priced as requested, so the cap still stops the study.
+    as_remote(monkeypatch)
+    out = tmp_path / "study"
+    with priced_server(served_model="openai/gpt-4-0613", latency=0.005) as srv:
+        args = [a for a in swim(srv.url, out, "--max-cost", "0.05", "--concurrency", "2", model="gpt-4",
+                                runs=4, steps=12) if a != "--price-local"]
+        assert main(args) == 3
+        assert 0 < srv.settle() < 48
+    assert "priced at gpt-4's price anyway" in capsys.readouterr().out
+    assert sum(rec["cost_usd"] for rec in ledger(out)) > 0.04

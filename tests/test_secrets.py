@@ -139,3 +139,53 @@ def test_a_password_in_the_base_url_is_never_echoed(url, tmp_path, capsys):
     assert code == 2
     assert not leaks(printed.out + printed.err, PASSWORD, f"{USER}:{PASSWORD}")
     assert not leaks(folder_text(tmp_path), PASSWORD, f"{USER}:{PASSWORD}")
+
+
+def test_a_key_echoed_in_a_200_reply_is_scrubbed_before_anything_is_written(tmp_path, monkeypatch, capsys):
+    # A server (or proxy) quoting the request's credentials inside a normal answer.
+    monkeypatch.setenv("MYKEY", KEY)
+    out, cache = tmp_path / "study", tmp_path / "cache"
+    srv: FakeServer
+
+    def reply(body):
+        return f"[1, 1] (your key: {srv.auth_headers[-1]}, {json.dumps(KEY)}, {quote(KEY, safe='')})"
+
+    srv = FakeServer(reply=reply)
+    with srv:
+        code = cli.main(swim(srv.url, out, "--api-key-env", "MYKEY", "--cache-dir", str(cache)))
+    printed = capsys.readouterr()
+    assert code == 0, printed.err
+    calls = [json.loads(ln) for ln in (out / "calls.jsonl").read_text().splitlines()]
+    assert calls and all(c["raw"].startswith("[1, 1] (your key: Bearer") and "***" in c["raw"] for c in calls)
+    for where, text in (("stdout", printed.out), ("stderr", printed.err), ("folder", folder_text(out)),
+                        ("cache", folder_text(cache) if cache.exists() else "")):
+        assert not leaks(text, KEY), where
+
+
+def test_a_key_nobody_named_never_goes_to_another_host(tmp_path, monkeypatch, capsys):
+    # $OPENAI_API_KEY is read when --api-key-env is left out only for api.openai.com.
+    monkeypatch.setenv("OPENAI_API_KEY", KEY)
+    with FakeServer() as srv:
+        assert cli.main(swim(srv.url, tmp_path / "a")) == 0
+        assert srv.n_requests > 0 and set(srv.auth_headers) == {None}
+        # Named, it is sent.
+        assert cli.main(swim(srv.url, tmp_path / "b", "--api-key-env", "OPENAI_API_KEY")) == 0
+        assert f"Bearer {KEY}" in srv.auth_headers
+        srv.reset_counts()
+        capsys.readouterr()
+        # --api-key-env '' names nothing: one line, nothing sent (it used to fall back to $OPENAI_API_KEY).
+        assert cli.main(swim(srv.url, tmp_path / "c", "--api-key-env", "")) == 2
+        assert srv.n_requests == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--api-key-env ''" in err[0]
+    from jswim.cli import default_key_env
+
+    assert default_key_env("https://api.openai.com/v1") == "OPENAI_API_KEY"
+    assert default_key_env("https://openrouter.ai/api/v1") == ""
+
+
+def test_a_key_variable_set_to_empty_is_said_to_be_empty(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("EMPTY_KEY", "")
+    code = cli.main(swim("https://api.example.invalid/v1", tmp_path / "r", "--api-key-env", "EMPTY_KEY"))
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "$EMPTY_KEY is set but empty" in err

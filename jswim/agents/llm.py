@@ -29,6 +29,7 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import json
+import os
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -537,6 +538,10 @@ class LLMDriver:
                  "failed_steps": res.failed_steps, "parse_retries": res.parse_retries, "n_clears": res.n_clears,
                  "usage": res.usage.as_dict()})
         if run.sink is not None:
+            # On disk before the run's record reaches runs.jsonl (fsynced too): a finished run's
+            # transcript is never torn by a crash after it.
+            run.sink.flush()
+            os.fsync(run.sink.fileno())
             run.sink.close()
             run.sink = None
 

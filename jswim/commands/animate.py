@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from jswim._io.paths import path_kind
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("animate", help="animate runs of a study folder (GIF, or MP4 with imageio-ffmpeg)",
@@ -40,7 +42,7 @@ def main(args: argparse.Namespace) -> int:
     if not 20 <= args.dpi <= 400:
         raise ConfigError(f"--dpi must lie in [20, 400], got {args.dpi}")
     if not Path(args.folder).is_dir():
-        raise ConfigError(f"{args.folder}: no such folder")
+        raise ConfigError(f"{args.folder}: {path_kind(args.folder, 'a study folder')}")
     from jswim.viz.bench_page import is_bench  # lazy: start-up (the pages load matplotlib)
 
     if is_bench(args.folder):  # one run per model, the reference rule and the baselines, from one setting

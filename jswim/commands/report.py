@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from jswim._io.paths import path_kind
+
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("report", help="write a study folder's report.html (one self-contained page)",
@@ -29,7 +31,7 @@ def main(args: argparse.Namespace) -> int:
     from jswim.viz.bench_page import is_bench, write_bench_report  # lazy: start-up (the pages load matplotlib)
 
     if not Path(args.folder).is_dir():
-        raise ConfigError(f"{args.folder}: no such folder")
+        raise ConfigError(f"{args.folder}: {path_kind(args.folder, 'a study folder')}")
     if is_bench(args.folder):  # the bench's page and each of its study folders' pages
         path = write_bench_report(args.folder, figures="none" if args.figures == "none" else "draw", out=args.out)
         print(f"bench report: {path} ({path.stat().st_size / 1024:.0f} KB) and each part's page; open it in a "

@@ -18,7 +18,7 @@ from typing import Any
 import httpx
 
 from jswim.errors import ConfigError, LLMServerError, LLMTimeoutError
-from jswim.llm.client import ClientSettings, check_temperature
+from jswim.llm.client import ClientSettings, check_extra_fields, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.cache import check_cache
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
@@ -158,6 +158,7 @@ class Backend:
         if self.base_url is not None:
             object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
             read_api_key(self.api_key_env)  # a key no header can carry: one line now, not retries later
+        check_extra_fields(self.extra_fields)  # a core field there would bypass the cap and the identity
         object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
         bad = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
         if bad:

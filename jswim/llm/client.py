@@ -36,7 +36,7 @@ import ssl
 import time
 import zlib
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import httpx
 
@@ -67,10 +67,38 @@ def check_temperature(value: float) -> float:
     return value
 
 
+#: Same-host 307/308 redirects a request follows before it fails.
+MAX_REDIRECTS = 5
+
 #: HTTP statuses worth retrying: timeout, conflict, rate limit (5xx are added in code).
 RETRY_STATUSES = frozenset({408, 409, 429})
 
 
+
+
+#: Request fields jswim itself sets, and the option that sets each: an extra field (a models
+#: file's ``extra``, ``--extra-field``) naming one is refused, since it would change what is sent
+#: behind the cost reservation, the study's identity and the record of what was sent.
+CORE_FIELDS = {
+    "model": "--model", "messages": "--prompt-file (the prompt template)", "max_tokens": "--max-tokens",
+    "max_completion_tokens": "--max-tokens (with --reasoning on)", "temperature": "--temperature",
+    "stream": "nothing: jswim always sends \"stream\": false (--omit-field stream leaves it out)",
+    "response_format": "--constrain",
+    "grammar": "--constrain", "reasoning_effort": "--reasoning-effort",
+}
+
+
+def check_extra_fields(fields: Iterable[tuple[str, Any]], option: str = "--extra-field") -> None:
+    """Refuse an extra request field that jswim sets itself (:data:`CORE_FIELDS`).
+
+    Raises
+    ------
+    ConfigError
+        One line naming the field and the option that sets it.
+    """
+    for name, _ in fields:
+        if name in CORE_FIELDS:
+            raise ConfigError(f"{option} {name}=...: jswim sets {name!r} itself; use {CORE_FIELDS[name]}")
 
 
 @dataclass(frozen=True)
@@ -144,8 +172,9 @@ class ClientSettings:
     reasoning_effort : str or None
         Sent as ``reasoning_effort`` when given (``minimal``, ``low``, ``medium``, ``high``).
     extra_fields : tuple of (name, value)
-        More fields of every request body (a models file's ``extra``, ``--extra-field``); they
-        never replace ``model`` or ``messages``.
+        More fields of every request body (a models file's ``extra``, ``--extra-field``); a field
+        jswim sets itself (:data:`CORE_FIELDS`: ``model``, ``messages``, ``max_tokens``,
+        ``temperature``, ``stream``, ...) is refused with :class:`~jswim.errors.ConfigError`.
     sampling : tuple of (str, float)
         Sampling fields every request carries (``(("repeat_penalty", 1.0), ...)``;
         :func:`jswim.llm.sampling.sampling_fields`), before ``omit_fields`` are removed.
@@ -195,6 +224,7 @@ class ClientSettings:
         if self.retry_for_s is not None and not (self.retry_for_s >= 0):  # also NaN
             raise ConfigError(f"retry_for_s must be >= 0 seconds, got {self.retry_for_s}")
         check_temperature(self.temperature)
+        check_extra_fields(self.extra_fields)
 
     def metadata(self) -> dict[str, Any]:
         """Settings worth recording with a run (no secrets: only the key's variable name)."""
@@ -813,10 +843,33 @@ class LLMClient:
             ) from None
 
     async def _post(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> httpx.Response:
-        """POST ``payload`` and read the body as it was sent (see :func:`decode_body`)."""
+        """POST ``payload`` and read the body as it was sent (see :func:`decode_body`).
+
+        A 307 or 308 to the same scheme, host and port is followed (at most
+        :data:`MAX_REDIRECTS`, the body and the key sent again); one to another host is refused
+        (:class:`~jswim.llm.errors.LLMSetupError`): the key never goes to a host nobody named."""
         headers = {**self._headers(), "Accept-Encoding": "gzip, deflate"}  # what decode_body reads
-        async with http.stream("POST", self._url, json=payload, headers=headers) as resp:
-            raw = b"".join([chunk async for chunk in resp.aiter_raw()])
+        url = httpx.URL(self._url)
+        for _ in range(MAX_REDIRECTS + 1):
+            async with http.stream("POST", url, json=payload, headers=headers) as resp:
+                raw = b"".join([chunk async for chunk in resp.aiter_raw()])
+            if resp.status_code not in (307, 308) or "location" not in resp.headers:
+                break
+            try:
+                nxt = url.join(resp.headers["location"])
+            except (httpx.InvalidURL, ValueError):
+                raise LLMSetupError(self._scrub(f"{self._where}: HTTP {resp.status_code} to an address that does "
+                                                "not parse; give --base-url the server's address"),
+                                    resp.status_code, "") from None
+            if (nxt.scheme, nxt.host, nxt.port) != (url.scheme, url.host, url.port):
+                raise LLMSetupError(self._scrub(
+                    f"{self._where}: HTTP {resp.status_code} redirects to another host ({safe_url(str(nxt.copy_with(query=None)))}); "
+                    "not followed, so the API key is not sent there: give --base-url that address if you trust it"),
+                    resp.status_code, "")
+            url = nxt
+        else:
+            raise LLMSetupError(self._scrub(f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
+                                            "the address they lead to"), resp.status_code, "")
         kept = [(k, v) for k, v in resp.headers.multi_items() if k.lower() not in ("content-encoding", "content-length")]
         return httpx.Response(resp.status_code, headers=kept, request=resp.request,
                               content=decode_body(raw, resp.headers.get("content-encoding", "")))
@@ -834,6 +887,12 @@ class LLMClient:
         (a server that echoes any requested name), unless the user gave the prices."""
         s = self.settings
         if s.prices is None and not self._prices.agrees(s.model, replied):
+            if self.budget is not None and self.budget.cap_usd is not None:
+                # Under --max-cost a $0 call would let the cap lapse: priced as requested, and said.
+                if self.unpriced is None:
+                    self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}; priced at {s.model}'s "
+                                     "price anyway, because --max-cost needs a price (--prices FILE gives yours)")
+                return self._prices.cost(s.model, usage)
             if self.unpriced is None:
                 self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}: its calls are not priced at "
                                  f"{s.model}'s list price; --prices FILE gives your own prices, applied as given")
@@ -850,11 +909,14 @@ class LLMClient:
     def _attempt_result(self, got: Completion, mode: str, t0: float, retries: int,
                         payload: Mapping[str, Any] | None = None) -> ChatResult:
         usage = Usage.from_response(got.usage)
+        # A reply may echo a credential (a proxy quoting the request's headers): scrubbed by the
+        # registry the error messages use, before the journal, the cache or a transcript see it.
+        clean = self._scrub
         return ChatResult(
-            text=constrain.reply_text(mode, got.answer), usage=usage, latency_s=time.perf_counter() - t0,
+            text=clean(constrain.reply_text(mode, got.answer)), usage=usage, latency_s=time.perf_counter() - t0,
             cache_hit=False, shared=False, retries=retries,
             cost_usd=self._cost(usage, got.model), constraint=mode,
-            finish_reason=got.finish_reason, raw=got.content, reasoning=got.reasoning,
+            finish_reason=got.finish_reason, raw=clean(got.content), reasoning=clean(got.reasoning),
             temperature_sent=(payload or {}).get("temperature"),
         )
 

@@ -83,7 +83,7 @@ def read_api_key(env_name: str) -> str | None:
         When the value holds a character an HTTP header cannot carry; the message names the
         variable and the character, never the value.
     """
-    value = os.environ.get(env_name)
+    value = os.environ.get(env_name) if env_name else None  # "": no variable named, no key sent
     if not value:
         return None
     register(value)

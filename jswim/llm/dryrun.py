@@ -114,6 +114,10 @@ class Estimate:
         The share of the budget each call is estimated to think.
     reasoning_warning : str or None
         An open reasoning model that ``--reasoning auto`` would cut while thinking.
+    cap_refusal : str or None
+        The line the run would refuse its ``--max-cost`` with (calls it could not price).
+    models_unasked : str or None
+        Why the server's ``/v1/models`` could not be asked (then the model is priced as if listed).
     """
 
     model: str
@@ -131,6 +135,8 @@ class Estimate:
     reasoning_budget: int | None = None
     reasoning_share: float | None = None
     reasoning_warning: str | None = None
+    cap_refusal: str | None = None
+    models_unasked: str | None = None
 
     def as_dict(self) -> dict[str, Any]:
         return dict(vars(self))
@@ -159,6 +165,10 @@ class Estimate:
         else:
             out.append(f"  cost: not priced: no price for {self.model!r} in the price table of {self.prices_as_of} "
                        "(free or unknown); --prices FILE prices it")
+        if self.models_unasked:
+            out.append(f"  note: {self.models_unasked}; priced as if it lists {self.model!r}")
+        if self.cap_refusal:
+            out.append(f"  --max-cost: the run would send nothing and stop: {self.cap_refusal}")
         if self.reasoning_warning:
             out.append(f"  warning: {self.reasoning_warning}")
         out.append("  not counted: parse retries after off-format replies" + (

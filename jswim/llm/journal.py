@@ -18,16 +18,56 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from jswim.jsonl import repair_tail
+from jswim.jsonl import read_records, repair_tail
 from jswim.llm.client import ChatResult
 from jswim.llm.usage import Usage
 from jswim.permissions import opener
 
 JOURNAL = "calls.jsonl"
+
+
+def _count(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool) and v >= 0
+
+
+def call_problem(rec: Mapping[str, Any]) -> str | None:
+    """What makes ``rec`` no answered call that can be replayed or summed, or ``None``.
+
+    A record is replayed as the answer it holds, so every field the replay uses must have its
+    type: ``run`` and ``key`` text, ``n`` a count, ``text`` (and ``raw``) text, ``usage`` four
+    counts, ``cost_usd`` a finite number >= 0.
+    """
+    if not isinstance(rec.get("run"), str):
+        return f"'run' is {rec.get('run')!r}, not a run id"
+    if not _count(rec.get("n")):
+        return f"'n' is {rec.get('n')!r}, not a call index"
+    if not isinstance(rec.get("key"), str):
+        return f"'key' is {rec.get('key')!r}, not a request hash"
+    for k in ("text", "raw"):
+        if (k == "text" or k in rec) and not isinstance(rec.get(k), str):
+            return f"{k!r} is {rec.get(k)!r}, not text"
+    usage = rec.get("usage")
+    if not (isinstance(usage, list) and 2 <= len(usage) <= 4 and all(_count(u) for u in usage)):
+        return f"'usage' is {usage!r}, not token counts"
+    cost = rec.get("cost_usd")
+    if cost is not None and not (isinstance(cost, (int, float)) and not isinstance(cost, bool)
+                                 and math.isfinite(cost) and cost >= 0):
+        return f"'cost_usd' is {cost!r}, not a price"
+    for k in ("cache_hit", "shared"):
+        if rec.get(k) is not None and not isinstance(rec[k], bool):
+            return f"{k!r} is {rec[k]!r}, not true or false"
+    for k in ("constraint", "finish_reason"):
+        if rec.get(k) is not None and not isinstance(rec[k], str):
+            return f"{k!r} is {rec[k]!r}, not text"
+    t = rec.get("temperature_sent")
+    if t is not None and not (isinstance(t, (int, float)) and not isinstance(t, bool)):
+        return f"'temperature_sent' is {t!r}, not a number"
+    return None
 
 
 def call_key(messages: Sequence[Mapping[str, Any]], **params: Any) -> str:
@@ -58,13 +98,10 @@ class CallJournal:
         #: Bytes of a torn last line cut on open (0: none).
         self.repaired_bytes = repair_tail(self.path)  # the next record starts on a line of its own
         if self.path.exists():
-            for line in self.path.read_text(encoding="utf-8", errors="replace").splitlines():
-                try:
-                    rec = json.loads(line)
-                except json.JSONDecodeError:
-                    continue  # not a record (cut by hand?): that call is simply asked again
-                if not isinstance(rec, dict) or not isinstance(rec.get("n"), int):
-                    continue
+            # A line that is no valid record (cut or edited by hand, a text of null) is skipped
+            # with a warning: that one call is asked again, under its own index, and the calls
+            # after it still replay (nothing shifts, nothing else is paid twice).
+            for _, rec in read_records(self.path, call_problem):
                 # The latest record of a (run, index) wins: a resume that took another path
                 # recorded that call anew.
                 self._calls.setdefault(str(rec.get("run")), {})[rec["n"]] = rec

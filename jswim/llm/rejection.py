@@ -129,6 +129,9 @@ def key_hint(api_key_env: str) -> str:
     """What to do about a refused key, naming the variable's state (unset, empty, set)."""
     import os
 
+    if not api_key_env:
+        return ("no API key was sent: $OPENAI_API_KEY goes only to api.openai.com unless --api-key-env names "
+                "it; name the variable that holds this server's key with --api-key-env")
     value = os.environ.get(api_key_env)
     if value is None:
         return (f"${api_key_env} (the variable --api-key-env names) is not set: export the key in it, or name "

@@ -9,7 +9,13 @@ The list prices are a cloud provider's; :func:`price_table` applies them only wh
 right: a server on this machine or the LAN is never priced at them (it is free, or its price is
 the user's to give), nor a model the server does not list, nor a reply whose ``model`` field names
 another model than the one priced (servers that echo any requested name would otherwise bill a
-small local model at GPT-4's price). A table the user passes is always applied.
+small local model at GPT-4's price). ``--price-local`` lifts the first rule only (a local gateway
+to a paid API). A table the user passes is always applied.
+
+Under a cost cap (``--max-cost``) a call must have a price, or the cap would never be reached:
+:func:`cap_refusal` says, before the first request, why the study's calls could not be priced
+(the run refuses in that one line, naming ``--prices``), and a reply naming another model is
+priced at the requested model's price anyway (:meth:`jswim.llm.client.LLMClient`).
 """
 
 from __future__ import annotations
@@ -127,7 +133,8 @@ def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *,
     local_host : bool
         The server is on this machine or the LAN (:func:`jswim.llm.urls.is_local_host`).
     price_local : bool
-        Price a local server's calls at the list prices anyway (a local gateway to a paid API).
+        Price a local server's calls at the list prices anyway (a local gateway to a paid API);
+        a model the server's ``/v1/models`` does not list stays unpriced.
     listed : sequence of str, optional
         The models the server's ``/v1/models`` lists (``None``: not known).
 
@@ -144,10 +151,36 @@ def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *,
     if local_host and not price_local:
         return PriceTable({}), (f"{model!r} on a local or LAN server is not priced at a cloud list price; "
                                 f"{PRICE_LOCAL_OPTION} prices it (a local gateway to a paid API)")
-    if listed is not None and model not in listed:
+    if listed is not None and model not in listed:  # also with --price-local: a server may answer any name
         return PriceTable({}), (f"the server does not list {model!r}, so its calls are not priced at "
                                 f"{model}'s list price; --prices FILE gives your own prices, applied as given")
     return table, None
+
+
+def cap_refusal(prices: Mapping[str, tuple[float, float]] | None, model: str, cap_usd: float | None, *,
+                local_host: bool, listed: Sequence[str] | None = None, price_local: bool = False) -> str | None:
+    """Why a cost cap could not hold for ``model``'s calls (one line naming ``--prices``), or ``None``.
+
+    A cap holds when the calls have a price: from the user's table, or the list price where
+    :func:`price_table` applies it. A server on this machine or the LAN without
+    ``--price-local`` and with no list price for the model is free, and the cap has nothing to
+    bound. Anything else priced at $0 would let the cap lapse: every call would be sent.
+    """
+    if cap_usd is None:
+        return None
+    table, why = price_table(prices, model, local_host=local_host, listed=listed, price_local=price_local)
+    head = f"--max-cost {cap_usd:g} cannot hold, since the calls to {model!r} would cost $0"
+    if why is not None:
+        also = "" if "--prices" in why else "; or --prices FILE with your own prices"
+        return f"{head}: {why}{also}; nothing was sent"
+    if table.entry(model) is not None:
+        return None
+    if prices is not None:
+        return f"{head}: --prices has no price for {model!r}; add one to the file; nothing was sent"
+    if local_host and not price_local:
+        return None  # a local server's own model: free, nothing to cap
+    return (f"{head}: the built-in table of {PRICES_AS_OF} has no price for {model!r}; give --prices FILE "
+            f"with its price; nothing was sent")
 
 
 @dataclass

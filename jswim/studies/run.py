@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import errno
 import hashlib
 import json
 import platform
@@ -51,7 +52,9 @@ from jswim.llm.journal import CallJournal
 from jswim.llm.pacing import Pacer
 from jswim.llm.probe import ServerInfo
 from jswim.llm.sampling import describe as describe_sampling
-from jswim.llm.usage import PRICES_AS_OF, UsageTotals
+from jswim.llm.errors import LLMError
+from jswim.llm.urls import is_local_host
+from jswim.llm.usage import PRICES_AS_OF, UsageTotals, cap_refusal
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.results import StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
@@ -351,13 +354,22 @@ def run_study(
         _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
         raise
     except JswimError as exc:
-        _record_status(store, "stopped", error=scrub(str(exc)))  # never a key, however the message got it
+        # A session that stops before changing anything (a refused cap, a server that is not there)
+        # leaves the folder's status as it was; otherwise it says stopped, and why.
+        if not store.restore_status():
+            _record_status(store, "stopped", error=scrub(str(exc)))  # never a key, however the message got it
         raise
     except OSError as exc:  # a full disk or an I/O error outside the store's own writes
         msg = f"cannot write {exc.filename or folder}: {exc.strerror or exc}"
-        _record_status(store, "stopped", error=msg)
-        raise StudyFolderError(f"{msg}; every finished run and answered call is kept in {folder}: "
-                               "make room and run the same command to resume") from None
+        if not store.restore_status():
+            _record_status(store, "stopped", error=msg)
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+            hint = "make room and run the same command to resume"
+        elif exc.errno in (errno.EEXIST, errno.ENOTDIR, errno.EISDIR):
+            hint = "a file or folder is in the way of one jswim writes: move it away and run the same command"
+        else:
+            hint = "fix that and run the same command to resume"
+        raise StudyFolderError(f"{msg}; every finished run and answered call is kept in {folder}: {hint}") from None
     finally:
         store.close()  # the folder's lock: the next session may start
 
@@ -373,7 +385,7 @@ def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
     return fidelity.scene_extensions([(scene_env.from_json(s), pair) for s, pair in scenes], ppo=ppo)
 
 
-class FolderRepaired(UserWarning):
+class FolderRepaired(JswimWarning):
     """Opening a study folder repaired it (a torn journal line cut, a temporary file removed)."""
 
 
@@ -392,7 +404,7 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     todo = [p for p in plans if p.run_id not in done]
     info: ServerInfo | None = None
     if backend is not None and not backend.local and any(p.agent == "llm" for p in todo):
-        info = _preflight(store, backend)  # fail before the baselines, not after
+        info = _preflight(store, backend, max_cost=max_cost)  # fail before the baselines, not after
     total = len(plans)
     finished = total - len(todo)
     tick = progress or (lambda phase, d, t, info="": None)
@@ -458,10 +470,31 @@ def _scene_table(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
     return {"scenes": scenes.scene_summary([r for r in rows if not is_failed(r)])}
 
 
-def _preflight(store: StudyStore, backend: Backend, server: Any = None) -> ServerInfo:
+def cap_check(backend: Backend, info: ServerInfo | None, max_cost: float | None) -> None:
+    """Refuse a cost cap the study's calls could not reach (:func:`jswim.llm.usage.cap_refusal`),
+    by the pricing rule of the run and of its dry run alike: the server's listed models
+    (``info``), the host, ``--price-local`` and ``--prices``.
+
+    Raises
+    ------
+    ConfigError
+        One line naming ``--prices``, before any request is sent.
+    """
+    if backend.local or max_cost is None:
+        return
+    s = backend.client_settings(info=info)
+    why = cap_refusal(s.prices, s.model, max_cost, local_host=is_local_host(s.base_url), listed=s.listed_models,
+                      price_local=s.price_local)
+    if why is not None:
+        raise ConfigError(why)
+
+
+def _preflight(store: StudyStore, backend: Backend, server: Any = None, max_cost: float | None = None) -> ServerInfo:
     """The server's preflight (:meth:`Backend.preflight`), recorded in the study's metadata
-    (``llm_server``); its warnings go out as :class:`~jswim.errors.JswimWarning`."""
+    (``llm_server``); its warnings go out as :class:`~jswim.errors.JswimWarning`. A cost cap the
+    calls could not reach is refused here (:func:`cap_check`), before the status says running."""
     info = backend.preflight(server)
+    cap_check(backend, info, max_cost)
     store.set_status("running", llm_server=info.metadata())
     for text in info.warnings:
         warnings.warn(text, JswimWarning, stacklevel=3)
@@ -556,6 +589,7 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
     totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
     journal = CallJournal(store.folder)
     spent_before = journal.spent_usd
+    calls_before = journal.n_calls
     # Earlier sessions' requests that got no answer may have been billed: still under the cap.
     unanswered_before = float((store.meta.get("llm_totals") or {}).get("unanswered_usd") or 0.0)
     budget = Budget(max_cost, spent_usd=spent_before, unanswered_usd=unanswered_before)
@@ -628,10 +662,12 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
                 t_start = time.perf_counter()  # the model's loading time is not LLM work
                 run_sync(go(backend.client_settings(srv, info, **room), info))
         else:
-            info = info or _preflight(store, backend)
+            info = info or _preflight(store, backend, max_cost=max_cost)
             run_sync(go(backend.client_settings(info=info, **room), info))
     finally:
         journal.close()
+        if journal.n_calls > calls_before:
+            store.changed = True  # calls were paid for: the folder's status must say how it ended
         if live and sent is not None and (live[0].reasoning.active or live[0].reasoning.notes
                                           or live[0].reasoning.effort):
             sent.update(live[0].reasoning.describe())
@@ -673,13 +709,16 @@ def add_session(totals: dict[str, Any] | None, speed: dict[str, Any], answered_c
 
 def estimate_study(
     study: str, options: StudyOptions = StudyOptions(), backend: Backend | None = Backend(),
-    out: str | Path | None = None,
+    out: str | Path | None = None, max_cost: float | None = None,
 ) -> Estimate:
-    """What the study's LLM runs not yet done would cost (``--dry-run``); nothing is sent.
+    """What the study's LLM runs not yet done would cost (``--dry-run``); no chat request is sent.
 
     The runs go through the real driver against :class:`jswim.llm.dryrun.EstimatingClient`, so
     the prompts are rendered from real swimmer states; the study folder is read (to skip the
-    runs it has) but never written.
+    runs it has) but never written. A remote server is asked its ``/v1/models`` (free), so the
+    dry run prices the calls by the very rule the run will (a model the server does not list is
+    not priced at a list price); when it cannot be asked, the estimate says so. With
+    ``max_cost``, :attr:`Estimate.cap_refusal` is the line the run would refuse with, if any.
     """
     if backend is None:
         raise ConfigError("a dry run needs a backend (the model to price)")
@@ -693,9 +732,21 @@ def estimate_study(
     if backend.local:  # no server is started: the settings only name the model and the limits
         settings = ClientSettings(base_url="http://127.0.0.1/v1", model=backend.describe()["model"],
                                   temperature=backend.temperature)
-    else:  # --max-tokens is also the reasoning budget, as in the study itself
-        settings = backend.client_settings(**({"reasoning_max_tokens": options.max_tokens}
-                                              if options.max_tokens is not None else {}))
+    info, unasked = None, None
+    if not backend.local:
+        try:
+            info = backend.preflight(timeout_s=min(backend.timeout_s or 5.0, 5.0))
+        except (LLMError, ConfigError) as exc:  # no server (yet), no key: price as if it lists the model
+            unasked = f"could not ask the server which models it lists ({scrub(str(exc)).split(';')[0]})"
+    if not backend.local:  # --max-tokens is also the reasoning budget, as in the study itself
+        settings = backend.client_settings(info=info, **({"reasoning_max_tokens": options.max_tokens}
+                                                          if options.max_tokens is not None else {}))
+    refusal = None
+    if max_cost is not None and not backend.local:
+        try:
+            cap_check(backend, info, max_cost)
+        except ConfigError as exc:
+            refusal = str(exc)
     client = EstimatingClient(settings)
     results: list[RunResult] = []
 
@@ -709,4 +760,5 @@ def estimate_study(
         run_sync(go())
     u = UsageTotals().merge(r.usage for r in results)
     est = estimate(client, u.calls, u.prompt_tokens, u.completion_tokens)
+    est = dataclasses.replace(est, cap_refusal=refusal, models_unasked=unasked)
     return dataclasses.replace(est, prices_as_of=backend.prices_as_of) if backend.prices_as_of else est
