@@ -212,9 +212,10 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     # With two swimmers the solves go by block Gauss-Seidel, one sweep per Picard sweep, the
     # forces carried from sweep to sweep.
     n_nodes, n_sw, n_sph = params.nodes, pose0.shape[0], arms.shape[1] + 1
+    mob = params.scene.mobility
     if obstacles.shape[0] == 0 and not params.wall:
         path, state = "response", jnp.zeros((n_nodes, n_sw, n_sph, 2), pose0.dtype)
-        resp = jax.vmap(bodyframe.response)(arms_t)
+        resp = jax.vmap(lambda a: bodyframe.response(a, mob))(arms_t)
     elif obstacles.shape[0] == 0 and n_sw >= 2:
         path, state = "by_swimmer", jnp.zeros((n_nodes, n_sw * n_sph, 2), pose0.dtype)
     else:
@@ -224,16 +225,16 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         """Body-frame (along the axis, normal to it) velocities and rotation rates ``(n, S, 3)``
         at the node poses, and what the next sweep starts from."""
         if path == "response":
-            solve = lambda pose, a, r, f: bodyframe.sweep(pose[:, :2], pose[:, 2], a, rates, r, f)
+            solve = lambda pose, a, r, f: bodyframe.sweep(pose[:, :2], pose[:, 2], a, rates, r, f, mob)
             state, xi = jax.vmap(solve)(poses, arms_t, resp, state)
             return xi, state
 
         def one(pose: Array, arms_k: Array, forces: Array) -> tuple[Array, Array]:
             if path == "by_swimmer":
-                r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces)
+                r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces, mob)
                 forces = r.forces.astype(forces.dtype)
             else:
-                r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
+                r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall, mob)
             c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
             u, w = r.velocity[:, 0], r.velocity[:, 1]
             return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1), forces
