@@ -21,17 +21,20 @@ Pair blocks (sphere ``i`` moved by a point force on sphere ``j``):
   two points together with the two indices (the tests check both).
 
 Self blocks (a sphere of radius ``b`` moved by its own force): the Stokes mobility ``a / b``;
-above the wall times the wall corrections of Faxen (parallel) and Lorentz/Brenner (normal) to
-fifth order in ``b / h`` as used in the Rotne-Prager-Blake self-mobility (Swan & Brady, Phys.
-Fluids 19, 113306, 2007):
+above the wall times the Rotne-Prager-Blake self terms (Swan & Brady, Phys. Fluids 19, 113306,
+2007: the Faxen operator applied twice to Blake's image part at the sphere's own centre):
 
   parallel ``1 - (9/16) e + (1/8) e^3 - (1/16) e^5``, normal ``1 - (9/8) e + (1/2) e^3 - (1/8) e^5``,
   ``e = b / h``.
 
-Their first-order terms are exactly the point-force image of the sphere's own force (a check in
-the tests). The pair blocks are point forces (no Faxen/Rotne-Prager size terms): the model of
-Golestanian & Ajdari for the three-sphere swimmer and of Zargar, Najafi & Miri (Phys. Rev. E 80,
-026308, 2009) near a wall; accurate to first order in ``a / d`` between spheres ``d`` apart.
+These are not the exact wall mobilities: Faxen's parallel series has a ``-(45/256) e^4`` term
+that is absent here (0.27 % of the parallel factor at h = 3 a), and the normal factor leaves
+Brenner's exact series beyond third order. Their first-order terms are exactly the point-force image
+of the sphere's own force (a check in the tests). The default pair blocks are point forces (no
+Faxen/Rotne-Prager size terms): the model of Golestanian & Ajdari for the three-sphere swimmer
+and of Zargar, Najafi & Miri (Phys. Rev. E 80, 026308, 2009) near a wall; accurate to first
+order in ``a / d`` between spheres ``d`` apart. ``mobility="rpy"`` gives finite-size pair
+blocks (:func:`rpy_entries`, :func:`rpb_entries`), consistent with these self terms.
 """
 
 from __future__ import annotations
@@ -183,7 +186,8 @@ def oseen(rx: Array, rz: Array) -> Array:
 
 def wall_self_factors(e: Array) -> tuple[Array, Array]:
     """Wall corrections to a sphere's self-mobility, parallel and normal to the wall, at
-    ``e = radius / height`` (Faxen; Lorentz/Brenner; fifth order as in Swan & Brady 2007)."""
+    ``e = radius / height``: the Rotne-Prager-Blake self terms (Swan & Brady 2007), not Faxen's or
+    Brenner's exact series (see the module docstring)."""
     e3 = e * e * e
     e5 = e3 * e * e
     return 1.0 - 0.5625 * e + 0.125 * e3 - 0.0625 * e5, 1.0 - 1.125 * e + 0.5 * e3 - 0.125 * e5
