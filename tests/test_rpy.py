@@ -46,6 +46,7 @@ def _plane(m3):
     return np.asarray(m3)[np.ix_([0, 2], [0, 2])]
 
 
+@pytest.mark.slow  # ~10-20 s: fourth derivatives by autodiff
 def test_rpy_is_the_faxen_operators_on_the_oseen_tensor():
     rng = np.random.default_rng(1)
     with jax.enable_x64(True):
@@ -59,6 +60,7 @@ def test_rpy_is_the_faxen_operators_on_the_oseen_tensor():
             np.testing.assert_allclose([[mxx, mxz], [mxz, mzz]], want, rtol=1e-11, atol=1e-14)
 
 
+@pytest.mark.slow  # ~10-20 s: fourth derivatives by autodiff
 def test_rpb_is_the_faxen_operators_on_blakes_image_system():
     rng = np.random.default_rng(2)
     with jax.enable_x64(True):
