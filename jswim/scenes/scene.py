@@ -41,6 +41,13 @@ class Scene:
         D, distance between the two swimmers' middle spheres.
     obstacles : tuple of (x, z, radius)
         Fixed spheres (zero velocity, unknown force); ``"free"`` and ``"wall"`` only.
+    mobility : str
+        Pair mobility between spheres (``"free"`` and ``"wall"``): ``"point"`` (point forces,
+        Oseen / Blake; the default and every number of the README's tables) or ``"rpy"``
+        (finite-size spheres: Rotne-Prager-Yamakawa in the unbounded fluid, Rotne-Prager-Blake
+        above the wall, Swan & Brady 2007; above the wall obstacles must then have radius 1).
+        Omitted from :meth:`to_dict` when ``"point"``, so the canonical JSON of earlier scenes
+        (and the run ids built from it) is unchanged.
     """
 
     medium: str = "bulk"
@@ -49,6 +56,7 @@ class Scene:
     swimmers: int = 1
     separation: float = 30.0
     obstacles: tuple[tuple[float, float, float], ...] = ()
+    mobility: str = "point"
 
     def __post_init__(self) -> None:
         # Normalise for hashing and equality: floats and nested tuples whatever was passed; a NumPy
@@ -98,12 +106,22 @@ class Scene:
                 raise ConfigError(f"obstacle {o!r} reaches the wall (its z must exceed its radius)")
         if self.obstacles and self.medium == "bulk":
             raise ConfigError("obstacles need medium 'free' or 'wall' (the bulk formula has no hydrodynamic coupling)")
+        from jswim.swimmers.mobility import MOBILITIES
+
+        if self.mobility not in MOBILITIES:
+            raise ConfigError(f"scene mobility must be one of {', '.join(MOBILITIES)}; got {self.mobility!r}")
+        if self.mobility != "point" and self.medium == "bulk":
+            raise ConfigError("mobility 'rpy' needs medium 'free' or 'wall' (the bulk formula has no pair mobility)")
+        if self.mobility == "rpy" and self.medium == "wall" and any(o[2] != 1.0 for o in self.obstacles):
+            raise ConfigError("mobility 'rpy' above a wall is built for spheres of one radius: obstacles need radius 1")
         return self
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-ready dict (obstacles as lists)."""
         out = dataclasses.asdict(self)
         out["obstacles"] = [list(o) for o in self.obstacles]
+        if self.mobility == "point":
+            del out["mobility"]  # the default: earlier scenes' JSON (and run ids) unchanged
         return out
 
     @classmethod

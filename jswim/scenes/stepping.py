@@ -37,7 +37,7 @@ from jax import Array
 from jswim.scenes.actions import split_action
 from jswim.scenes.collocation import gauss_rule
 from jswim.scenes.params import SceneParams
-from jswim.scenes.state import SceneState, SceneStepInfo
+from jswim.scenes.state import SceneState, SceneStepInfo, add_displacement, centre_low
 from jswim.swimmers import bodyframe, forcefree
 
 
@@ -95,18 +95,20 @@ def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: 
     else:
         rates = jnp.where(onehot, jnp.sign(delta), 0.0).astype(dtype)
         pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
-        inc, gap = pose_change(params, pose0, arms, rates, jnp.abs(delta))
+        inc, gap = pose_change(params, pose0, arms, rates, jnp.abs(delta), centre_low(state))
         step_x, step_z, step_t = inc.T
     contact = ~(gap >= params.contact_gap)  # NaN (a solve that broke down at contact) counts as contact
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
     dx = jnp.where(contact, 0.0, step_x * factor)
     dz = jnp.where(contact, 0.0, step_z * factor)
     dtilt = jnp.where(contact, 0.0, step_t)
+    centre, centre_lo = add_displacement(state, jnp.stack([dx, dz], -1))
     new = SceneState(
         arms=jnp.where(contact, arms, new_arms),
-        centre=state.centre + jnp.stack([dx, dz], -1),
+        centre=centre,
         tilt=state.tilt + dtilt,
         t=state.t + 1,
+        centre_lo=centre_lo,
     )
     return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
 
@@ -132,7 +134,7 @@ def scene_step_joint(params: SceneParams, state: SceneState, dofs: Any, rocs: An
     duration = jnp.max(jnp.abs(delta))
     rates = jnp.where(onehot, (delta / jnp.where(duration > 0, duration, 1.0))[:, None], 0.0)
     pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
-    inc, gap = pose_change(params, pose0, arms, rates, duration)
+    inc, gap = pose_change(params, pose0, arms, rates, duration, centre_low(state))
     y = jax.random.uniform(key, (s,), dtype, -1.0, 1.0)
     contact = ~(gap >= params.contact_gap)
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * y
@@ -140,8 +142,9 @@ def scene_step_joint(params: SceneParams, state: SceneState, dofs: Any, rocs: An
     dx = jnp.where(contact, 0.0, step_x * factor)
     dz = jnp.where(contact, 0.0, step_z * factor)
     dtilt = jnp.where(contact, 0.0, step_t)
+    centre, centre_lo = add_displacement(state, jnp.stack([dx, dz], -1))
     new = SceneState(jnp.where(contact, arms, jnp.where(onehot, target[:, None], arms)),
-                     state.centre + jnp.stack([dx, dz], -1), state.tilt + dtilt, state.t + 1)
+                     centre, state.tilt + dtilt, state.t + 1, centre_lo)
     stuck = jnp.any(rocs != 0) & jnp.all((rocs == 0) | (delta == 0))
     moved = jnp.any(delta != 0)
     return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
@@ -163,8 +166,8 @@ def integrate_move(params: SceneParams, pose0: Array, arms: Array, rates: Array,
     return pose0 + inc, gap
 
 
-def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
-                   ) -> tuple[Array, Array]:
+def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array,
+                centre_lo: Array | None = None) -> tuple[Array, Array]:
     """Change of every swimmer's pose over a move of the arms at ``rates`` for ``duration``, and
     the smallest surface gap.
 
@@ -176,6 +179,9 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         Start arms and their (constant) rates.
     duration : scalar
         Time of the move.
+    centre_lo : Array (S, 2), optional
+        Low words of the positions (:class:`jswim.scenes.SceneState`): the positions are
+        ``pose0[:, :2] + centre_lo``.
 
     Returns
     -------
@@ -183,7 +189,8 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         Pose changes ``(dx, dz, dtilt)``; the smallest surface gap over the nodes and the end.
         The solve runs in coordinates whose x origin is swimmer 1's start (the physics is
         invariant under translations along the wall), so in float32 the result does not lose
-        precision as the swimmers travel far from x = 0.
+        precision as the swimmers travel far from x = 0; with ``centre_lo`` the swimmers' offsets
+        from it are formed from both words, so they are exact to the dtype's rounding of the offset.
     """
     nodes, y_run, y_end = (jnp.asarray(v, pose0.dtype) for v in gauss_rule(params.nodes))
     t = nodes * duration
@@ -192,6 +199,10 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     obstacles = jnp.asarray(params.obstacles, pose0.dtype)
     obstacles = obstacles.at[:, 0].add(-shift)
     pose0 = pose0.at[:, 0].add(-shift)
+    if centre_lo is not None:  # the low words: offsets from swimmer 1, heights (rounded to the dtype)
+        lo = jnp.asarray(centre_lo, pose0.dtype)
+        pose0 = pose0.at[:, 0].add(lo[:, 0] - lo[0, 0]).at[:, 1].add(lo[:, 1])
+        obstacles = obstacles.at[:, 0].add(-lo[0, 0])
 
     # How each node's force-free solve is done (all agree to rounding; tests check it):
     # * unbounded fluid, no obstacles: each swimmer through its response to the flow at its
@@ -201,9 +212,10 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     # With two swimmers the solves go by block Gauss-Seidel, one sweep per Picard sweep, the
     # forces carried from sweep to sweep.
     n_nodes, n_sw, n_sph = params.nodes, pose0.shape[0], arms.shape[1] + 1
+    mob = params.scene.mobility
     if obstacles.shape[0] == 0 and not params.wall:
         path, state = "response", jnp.zeros((n_nodes, n_sw, n_sph, 2), pose0.dtype)
-        resp = jax.vmap(bodyframe.response)(arms_t)
+        resp = jax.vmap(lambda a: bodyframe.response(a, mob))(arms_t)
     elif obstacles.shape[0] == 0 and n_sw >= 2:
         path, state = "by_swimmer", jnp.zeros((n_nodes, n_sw * n_sph, 2), pose0.dtype)
     else:
@@ -213,16 +225,16 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         """Body-frame (along the axis, normal to it) velocities and rotation rates ``(n, S, 3)``
         at the node poses, and what the next sweep starts from."""
         if path == "response":
-            solve = lambda pose, a, r, f: bodyframe.sweep(pose[:, :2], pose[:, 2], a, rates, r, f)
+            solve = lambda pose, a, r, f: bodyframe.sweep(pose[:, :2], pose[:, 2], a, rates, r, f, mob)
             state, xi = jax.vmap(solve)(poses, arms_t, resp, state)
             return xi, state
 
         def one(pose: Array, arms_k: Array, forces: Array) -> tuple[Array, Array]:
             if path == "by_swimmer":
-                r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces)
+                r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces, mob)
                 forces = r.forces.astype(forces.dtype)
             else:
-                r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall)
+                r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall, mob)
             c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
             u, w = r.velocity[:, 0], r.velocity[:, 1]
             return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1), forces

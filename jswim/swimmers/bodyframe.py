@@ -30,7 +30,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim.swimmers.forcefree import _chol_solve, _cholesky, _is_zero, axial_offsets, sphere_centres
-from jswim.swimmers.mobility import OSEEN_PREFACTOR, oseen
+from jswim.swimmers.mobility import OSEEN_PREFACTOR, oseen, rpy_entries
 
 
 class Response(NamedTuple):
@@ -40,13 +40,15 @@ class Response(NamedTuple):
     q: Array  # (..., 3, 2n) rows (U_e, U_n, Omega)
 
 
-def response(arms: Array) -> Response:
+def response(arms: Array, mobility: str = "point") -> Response:
     """``(P, Q)`` of every swimmer alone in the unbounded fluid.
 
     Parameters
     ----------
     arms : Array (S, n_dof)
         Arm lengths, units of ``a``.
+    mobility : str
+        Static: ``"point"`` (Oseen) or ``"rpy"`` (Rotne-Prager-Yamakawa) blocks between the spheres.
 
     Returns
     -------
@@ -55,12 +57,12 @@ def response(arms: Array) -> Response:
         in units of ``6 pi mu a`` (forces per velocity) and of ``1`` and ``1 / a`` (rigid motion
         per velocity). Works under ``jit`` and ``vmap``.
     """
-    out = [_one_response(arms[s]) for s in range(arms.shape[0])]
+    out = [_one_response(arms[s], mobility) for s in range(arms.shape[0])]
     return Response(jnp.stack([o[0] for o in out]), jnp.stack([o[1] for o in out]))
 
 
 def sweep(centre: Array, tilt: Array, arms: Array, arm_rates: Array, resp: Response,
-          forces: Array) -> tuple[Array, Array]:
+          forces: Array, mobility: str = "point") -> tuple[Array, Array]:
     """One block Gauss-Seidel sweep over the swimmers in the unbounded fluid (no obstacles).
 
     Swimmer ``s`` in turn is solved alone, exactly, in the flow that the other swimmers' forces
@@ -77,6 +79,8 @@ def sweep(centre: Array, tilt: Array, arms: Array, arm_rates: Array, resp: Respo
         :func:`response` of these arms.
     forces : Array (S, n, 2)
         Body-frame sphere forces ``F'`` of the previous sweep (zeros at the start).
+    mobility : str
+        Static: the pair blocks between the swimmers, as for :func:`response`.
 
     Returns
     -------
@@ -90,7 +94,7 @@ def sweep(centre: Array, tilt: Array, arms: Array, arm_rates: Array, resp: Respo
     nrm = jnp.stack([-e[:, 1], e[:, 0]], -1)  # (S, 2) normal
     qdot = axial_offsets(arm_rates)
     # the Oseen blocks between two swimmers' spheres, each pair of swimmers once (M_ji = M_ij^T)
-    cross = {(s, o): _pair_blocks(pos[s], pos[o]) for s in range(S) for o in range(s)}
+    cross = {(s, o): _pair_blocks(pos[s], pos[o], mobility) for s in range(S) for o in range(s)}
     lab = [forces[s, :, :1] * e[s] + forces[s, :, 1:] * nrm[s] for s in range(S)]  # (n, 2) each
     new_f, new_xi = [], []
     for s in range(S):
@@ -110,13 +114,17 @@ def sweep(centre: Array, tilt: Array, arms: Array, arm_rates: Array, resp: Respo
     return jnp.stack(new_f).astype(forces.dtype), jnp.stack(new_xi).astype(forces.dtype)
 
 
-def _pair_blocks(a: Array, b: Array) -> Array:
-    """Oseen blocks ``(n_a, n_b, 2, 2)`` of the spheres at ``a`` per point force on those at ``b``
-    (lab frame, x-z)."""
-    return OSEEN_PREFACTOR * oseen(a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1])
+def _pair_blocks(a: Array, b: Array, mobility: str = "point") -> Array:
+    """Oseen (or RPY) blocks ``(n_a, n_b, 2, 2)`` of the spheres at ``a`` per force on those at
+    ``b`` (lab frame, x-z)."""
+    rx, rz = a[:, None, 0] - b[None, :, 0], a[:, None, 1] - b[None, :, 1]
+    if mobility == "rpy":
+        mxx, mxz, mzz = rpy_entries(rx, rz)
+        return jnp.stack([jnp.stack([mxx, mxz], -1), jnp.stack([mxz, mzz], -1)], -2)
+    return OSEEN_PREFACTOR * oseen(rx, rz)
 
 
-def _one_response(arms: Array) -> tuple[Array, Array]:
+def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
     """``(P, Q)`` of one swimmer, ``(2n, 2n)`` and ``(3, 2n)``, entry by entry: the exact zeros of
     ``M'`` (axis and normal do not couple) are Python zeros, which the elimination skips."""
     nd = arms.shape[0]
@@ -129,8 +137,12 @@ def _one_response(arms: Array) -> tuple[Array, Array]:
         m[2 * i][2 * i], m[2 * i + 1][2 * i], m[2 * i + 1][2 * i + 1] = 1.0, 0.0, 1.0
         for j in range(i):
             inv_r = 1.0 / (q[i] - q[j])
-            m[2 * i][2 * j], m[2 * i][2 * j + 1] = 2.0 * OSEEN_PREFACTOR * inv_r, 0.0
-            m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = 0.0, OSEEN_PREFACTOR * inv_r
+            axial, normal = 2.0 * OSEEN_PREFACTOR * inv_r, OSEEN_PREFACTOR * inv_r
+            if mobility == "rpy":  # collinear unit spheres: (3/4)/r [(1 + 2/(3r^2)) I + (1 - 2/r^2) e e]
+                inv_r3 = inv_r * inv_r * inv_r
+                axial, normal = axial - inv_r3, normal + 0.5 * inv_r3
+            m[2 * i][2 * j], m[2 * i][2 * j + 1] = axial, 0.0
+            m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = 0.0, normal
     low, inv_diag = _cholesky(m)
     minv = [_chol_solve(low, inv_diag, [1.0 if r == col else 0.0 for r in range(size)]) for col in range(size)]
     # G = M'^-1 K' (size x 3): the columns of K' are sums of unit columns (and q_i times them)

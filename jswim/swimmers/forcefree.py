@@ -55,7 +55,7 @@ def sphere_centres(centre: Array, tilt: Array, arms: Array) -> Array:
 
 
 def solve(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
-          wall: bool) -> RigidMotion:
+          wall: bool, mobility: str = "point") -> RigidMotion:
     """Rigid motion of every swimmer for given arm rates.
 
     Parameters
@@ -72,6 +72,8 @@ def solve(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: 
         Fixed spheres ``(x, z, radius)``; ``O`` may be 0.
     wall : bool
         Static: a no-slip wall at z = 0 (Blake) or the unbounded fluid (Oseen).
+    mobility : str
+        Static: ``"point"`` or ``"rpy"`` pair blocks (:func:`jswim.swimmers.mobility.pair_entries`).
 
     Returns
     -------
@@ -94,7 +96,7 @@ def solve(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: 
         # Keep the solve finite for a sphere pushed into the wall (the scene refuses such steps
         # by their surface gap; the point-force model is not valid that close anyway).
         pos = pos.at[:, 1].set(jnp.maximum(pos[:, 1], radii))
-    mob = mobility_matrix(pos, radii, wall)
+    mob = mobility_matrix(pos, radii, wall, mobility)
     # K: (N, 2, S, 3): rigid velocity of sphere i per unit (U_x, U_z, Omega) of swimmer s.
     rel = pos_sw - centre[:, None, :]  # (S, n, 2)
     one = jnp.ones((S, n), dtype)
@@ -121,18 +123,18 @@ UNROLLED_MAX_ROWS = 6
 
 
 def rigid_motion(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
-                 wall: bool) -> RigidMotion:
+                 wall: bool, mobility: str = "point") -> RigidMotion:
     """:func:`solve`, by unrolled elimination for small scenes (``2 N <=``
     :data:`UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
     else through LAPACK. The two agree to rounding (a test checks it)."""
     n_rows = 2 * (arms.shape[0] * (arms.shape[1] + 1) + obstacles.shape[0])
     if n_rows <= UNROLLED_MAX_ROWS:
-        return solve_unrolled(centre, tilt, arms, arm_rates, obstacles, wall)
-    return solve(centre, tilt, arms, arm_rates, obstacles, wall)
+        return solve_unrolled(centre, tilt, arms, arm_rates, obstacles, wall, mobility=mobility)
+    return solve(centre, tilt, arms, arm_rates, obstacles, wall, mobility)
 
 
 def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
-                   wall: bool, background: Array | None = None) -> RigidMotion:
+                   wall: bool, background: Array | None = None, mobility: str = "point") -> RigidMotion:
     """:func:`solve` written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
     complement), so that under ``vmap`` every operation is elementwise over the batch and XLA
     fuses the whole solve; the sizes are static, the loops below run at trace time over matrix
@@ -164,7 +166,8 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
         m[2 * i + 1][2 * i + 1] = nor * inv_r + 0.0 * zs[i]
         m[2 * i + 1][2 * i] = 0.0 * zs[i]
         for j in range(i):
-            mxx, mxz, mzx, mzz = pair_entries(xs[i] - xs[j], zs[i], zs[j], wall)
+            mxx, mxz, mzx, mzz = pair_entries(xs[i] - xs[j], zs[i], zs[j], wall, mobility,
+                                              1.0 if rad[i] is None else rad[i], 1.0 if rad[j] is None else rad[j])
             m[2 * i][2 * j], m[2 * i][2 * j + 1] = mxx, mxz
             m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = mzx, mzz
     chol, inv_diag = _cholesky(m)
@@ -205,7 +208,7 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
 
 
 def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, wall: bool,
-                     forces: Array) -> RigidMotion:
+                     forces: Array, mobility: str = "point") -> RigidMotion:
     """One block Gauss-Seidel sweep of the coupled solve of ``S >= 2`` swimmers (no obstacles).
 
     Swimmer ``s`` in turn is solved alone (:func:`solve_unrolled`, force- and torque-free exactly)
@@ -237,7 +240,7 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
     f = [forces[s * n:(s + 1) * n] for s in range(S)]
     no_obstacles = jnp.zeros((0, 3), arms.dtype)
     # the blocks between two swimmers' spheres, each pair once: M_(o j, s i) = M_(s i, o j)^T
-    cross = {(s, i, o, j): pair_entries(pos[s, i, 0] - pos[o, j, 0], pos[s, i, 1], pos[o, j, 1], wall)
+    cross = {(s, i, o, j): pair_entries(pos[s, i, 0] - pos[o, j, 0], pos[s, i, 1], pos[o, j, 1], wall, mobility)
              for s in range(S) for o in range(s) for i in range(n) for j in range(n)}
     vel, om = [], []
     for s in range(S):
@@ -257,7 +260,7 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
                     uz = uz + (mzx * fx + mzz * fz)
             bg.append(jnp.stack([ux, uz]))
         r = solve_unrolled(centre[s:s + 1], tilt[s:s + 1], arms[s:s + 1], arm_rates[s:s + 1], no_obstacles,
-                           wall, jnp.stack(bg)[None])
+                           wall, jnp.stack(bg)[None], mobility)
         f[s] = r.forces
         vel.append(r.velocity[0])
         om.append(r.omega[0])
