@@ -106,7 +106,7 @@ class Scene:
                 raise ConfigError(f"obstacle {o!r} reaches the wall (its z must exceed its radius)")
         if self.obstacles and self.medium == "bulk":
             raise ConfigError("obstacles need medium 'free' or 'wall' (the bulk formula has no hydrodynamic coupling)")
-        from jswim.swimmers.mobility import MOBILITIES
+        from jswim.swimmers.mobility import MOBILITIES  # lazy: start-up (a Scene is built before JAX loads)
 
         if self.mobility not in MOBILITIES:
             raise ConfigError(f"scene mobility must be one of {', '.join(MOBILITIES)}; got {self.mobility!r}")
