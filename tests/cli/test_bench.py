@@ -21,7 +21,7 @@ from jswim.bench.models import load_models_file, parse_model_option
 from jswim.errors import ConfigError
 from tests.fakeserver import FakeServer, hash_reply, reasoning_model
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SIZES = ["--runs", "1", "--q-runs", "2", "--steps", "12"]
 
 

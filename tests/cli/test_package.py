@@ -15,7 +15,7 @@ from jswim import errors
 def test_top_level_names_are_the_owners_and_load_lazily():
     code = ("import sys, jswim; assert 'jax' not in sys.modules, 'import jswim loaded jax'; "
             "jswim.rollout; assert 'jax' in sys.modules")
-    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(Path(__file__).parents[1]))
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(Path(__file__).parents[2]))
     from jswim import env, results, studies
 
     assert jswim.rollout is env.rollout and jswim.step_batch is env.step_batch and jswim.reset is env.reset

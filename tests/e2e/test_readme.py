@@ -9,7 +9,7 @@ import pytest
 
 from jswim.cli import build_parser
 
-README = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+README = (Path(__file__).resolve().parents[2] / "README.md").read_text()
 
 
 def test_python_examples_run():

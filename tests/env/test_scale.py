@@ -159,15 +159,15 @@ import json, sys, numpy as np, jax
 assert jax.device_count() == 4, jax.devices()
 assert not jax.config.jax_enable_x64
 sys.path.insert(0, {root!r})
-from tests.test_scale import _scaled_cases
+from tests.env.test_scale import _scaled_cases
 np.savez({out!r}, **_scaled_cases())
-x, _ = __import__("tests.test_scale", fromlist=["_square_gait_x"])._square_gait_x(2500)
+x, _ = __import__("tests.env.test_scale", fromlist=["_square_gait_x"])._square_gait_x(2500)
 print(json.dumps({{"x": x, "devices": jax.device_count()}}))
 """
 
 
 def test_four_host_devices_give_the_numbers_of_one(tmp_path, float32):
-    root = str(Path(__file__).resolve().parents[1])
+    root = str(Path(__file__).resolve().parents[2])
     out = tmp_path / "sharded.npz"
     envvars = {k: v for k, v in os.environ.items() if k not in ("JAX_ENABLE_X64", "JAX_PLATFORMS")}
     envvars["XLA_FLAGS"] = (envvars.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4").strip()

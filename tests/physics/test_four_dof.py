@@ -26,7 +26,7 @@ def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycl
     if per_cycle is not None:
         assert best.displacement == pytest.approx(per_cycle, abs=5e-7)  # the code's 6 decimals
     # A second integrator (RK4 on the velocity ODE, not the step table) gives the same cycle.
-    from tests.test_physics import run_cycle
+    from tests.physics.test_physics import run_cycle
 
     start = [model.hi if v else model.lo for v in best.start]
     moves = [(dof - 1, roc) for dof, roc in best.moves]

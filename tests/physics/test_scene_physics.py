@@ -12,7 +12,7 @@ from jswim.scenes import (Scene, batch_starts, scene_params, scene_reset, scene_
 pytestmark = pytest.mark.slow  # ~2 min on 2 loaded cores (compilations); CI runs it
 
 SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]
-FREE_CYCLE = 0.1720914  # tests/test_scenes.py derives it from an independent collinear solve
+FREE_CYCLE = 0.1720914  # tests/env/test_scenes.py derives it from an independent collinear solve
 
 
 @pytest.fixture(scope="module")

@@ -50,7 +50,7 @@ def test_prompt_layer_never_imports_jax():
     import subprocess
 
     code = "import sys, jswim.prompt, jswim.llm, jswim.llm.local; assert 'jax' not in sys.modules, 'jax imported'"
-    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(__import__("pathlib").Path(__file__).parents[1]))
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(__import__("pathlib").Path(__file__).parents[2]))
 
 
 def test_full_prompt_contents():

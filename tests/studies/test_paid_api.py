@@ -18,7 +18,7 @@ from jswim.llm.usage import DEFAULT_PRICES
 from jswim.results import read_runs
 from tests.fakeserver import FakeServer, hash_reply
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 # A test dependency (pyproject's `test` extra): missing, this module must fail, not skip.
 import bpe_openai  # noqa: E402
 

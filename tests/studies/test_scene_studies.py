@@ -176,7 +176,7 @@ PAIR = dict(separations=(30.0,), phases=(1,), runs=1, q_runs=2, steps=12)
 @pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_wall_study_end_to_end(server, tmp_path):
     out = tmp_path / "wall"
-    # PPO's wall rows: tests/test_scene_ppo_rows.py (its compilation is paid there once).
+    # PPO's wall rows: tests/studies/test_scene_ppo_rows.py (its compilation is paid there once).
     run_study("wall", StudyOptions(**WALL, agents=("stroke", "llm", "qlearning", "random")), server.backend(), out,
               figures=True)
     rows = read_runs(out)

@@ -360,6 +360,7 @@ def _check_page(path, shot):
                     figures=figures, errors=b.errors, foreign=foreign)
 
 
+@pytest.mark.slow  # a real browser (Chromium start, page load, screenshots)
 def test_report_in_chromium(swim_folder):
     got = _check_page(swim_folder / "report.html", os.path.join(ARTIFACTS, "report-swim.png"))
     assert got["errors"] == [] and got["foreign"] == []
@@ -370,6 +371,7 @@ def test_report_in_chromium(swim_folder):
     assert got["figures"] == 1 and got["status"].startswith("complete")
 
 
+@pytest.mark.slow  # a real browser (Chromium start, page load, screenshots)
 def test_unfinished_report_in_chromium(swim_folder, tmp_path):
     folder = tmp_path / "unfinished"
     shutil.copytree(swim_folder, folder)
@@ -440,7 +442,7 @@ def test_report_and_animation_of_a_folder_an_earlier_version_wrote(tmp_path):
     """tests/data/folder-54c2edb: `jswim swim` of commit 54c2edb (before y, orientation, n_planned and
     the call journal were recorded)."""
     folder = tmp_path / "old"
-    shutil.copytree(os.path.join(os.path.dirname(__file__), "data", "folder-54c2edb"), folder)
+    shutil.copytree(os.path.join(os.path.dirname(os.path.dirname(__file__)), "data", "folder-54c2edb"), folder)
     rows = read_runs(folder)
     assert rows and all("orientation" not in r for r in rows)
     a = anim_mod.build(folder)
