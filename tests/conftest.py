@@ -41,8 +41,12 @@ import jax  # noqa: E402  (after the cache variables, which JAX reads at import)
 import pytest  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
-jax.config.update("jax_compilation_cache_dir", os.environ["JAX_COMPILATION_CACHE_DIR"])
-jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.05)
+if os.environ.get("JSWIM_TEST_DISK_CACHE", "1") != "0":
+    jax.config.update("jax_compilation_cache_dir", os.environ["JAX_COMPILATION_CACHE_DIR"])
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.05)
+else:
+    del os.environ["JAX_COMPILATION_CACHE_DIR"]
+    jax.config.update("jax_compilation_cache_dir", None)
 
 _TESTS = Path(__file__).resolve().parent
 #: folders whose every test is in the slow tier
@@ -77,7 +81,8 @@ def _fresh_jax_caches():
     session's persistent cache on disk.
     """
     yield
-    jax.clear_caches()
+    if os.environ.get("JSWIM_TEST_CLEAR_CACHES", "1") != "0":
+        jax.clear_caches()
 
 
 @pytest.fixture

@@ -132,7 +132,7 @@ def test_an_unset_key_variable_is_an_error_for_a_remote_server_and_a_warning_her
     f"ftp://{USER}:{PASSWORD}@host/v1",  # not http(s)
     f"http://{USER}:{PASSWORD}@host:99999/v1",  # bad port
     f"http://{USER}:{PASSWORD}@127.0.0.1:9/v1",  # nothing listens there
-])
+], ids=["not-http", "bad-port", "nothing-listens"])  # fixed ids: the password is new every run (xdist)
 def test_a_password_in_the_base_url_is_never_echoed(url, tmp_path, capsys):
     code = cli.main(swim(url, tmp_path / "o"))
     printed = capsys.readouterr()
