@@ -41,12 +41,8 @@ import jax  # noqa: E402  (after the cache variables, which JAX reads at import)
 import pytest  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
-if os.environ.get("JSWIM_TEST_DISK_CACHE", "1") != "0":
-    jax.config.update("jax_compilation_cache_dir", os.environ["JAX_COMPILATION_CACHE_DIR"])
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.05)
-else:
-    del os.environ["JAX_COMPILATION_CACHE_DIR"]
-    jax.config.update("jax_compilation_cache_dir", None)
+jax.config.update("jax_compilation_cache_dir", os.environ["JAX_COMPILATION_CACHE_DIR"])
+jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.05)
 
 _TESTS = Path(__file__).resolve().parent
 #: folders whose every test is in the slow tier
@@ -81,8 +77,7 @@ def _fresh_jax_caches():
     session's persistent cache on disk.
     """
     yield
-    if os.environ.get("JSWIM_TEST_CLEAR_CACHES", "1") != "0":
-        jax.clear_caches()
+    jax.clear_caches()
 
 
 @pytest.fixture

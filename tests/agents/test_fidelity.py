@@ -138,6 +138,7 @@ def test_swim_options_share_identical_max_tokens_and_x_min_reach_the_server(tmp_
     assert re.search(r"X 1 -> -\d+, stuck no", bodies[1]["messages"][1]["content"])  # below X_min: sent negative
 
 
+@pytest.mark.slow  # jswim swim end to end on the four-DOF swimmers (35 s for both under load 8)
 @pytest.mark.parametrize("swimmer, start", [("nlink", "+++"), ("nsphere", "-++")])
 def test_swim_runs_four_dof_swimmers_from_their_paper_start(swimmer, start, tmp_path):
     from jswim import cli

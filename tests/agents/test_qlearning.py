@@ -75,6 +75,7 @@ def test_greedy_rollout_runs_the_greedy_policy():
     np.testing.assert_array_equal(actions, _greedy_actions(np.asarray(run.q), np.asarray(run.levels0), 16, "all"))
 
 
+@pytest.mark.slow  # compiles a training run with argmax ties (15 s under load 8)
 def test_first_index_ties_repeat_the_first_action_forever():
     # Every value starts at 0 and nothing explores: argmax picks action 0, (DOF 1, ROC -1).
     # It bends DOF 1 from (+, +) to its lower limit; from then on action 0 pushes against that
@@ -87,6 +88,7 @@ def test_first_index_ties_repeat_the_first_action_forever():
     assert not evaluate(run, params).learned.any()
 
 
+@pytest.mark.slow  # compiles a training run without exploration (20 s under load 8)
 def test_random_ties_without_exploration_trap_ng_in_a_reciprocal_stroke():
     # With only shape-changing moves and no exploration, NG's learner chases immediate reward.
     # Two of the four strokes of its cycle move it backwards, so it never completes one: it
@@ -111,6 +113,7 @@ def ng_greedy_all():
     return train_batch(_keys(5), params, NEVER_EXPLORES), params
 
 
+@pytest.mark.slow  # compiles a training run without exploration (17 s under load 8)
 def test_random_ties_without_exploration_leave_ng_standing_still(ng_greedy_all):
     # Offered all six actions, the same learner soon meets a shape where every move has cost it
     # displacement while holding (or pushing against a limit) has cost nothing: it stops.
@@ -127,6 +130,7 @@ def test_ties_are_broken_uniformly(ng_greedy_all):
     assert counts.sum() == B and counts.min() >= 2 and counts.max() <= 25
 
 
+@pytest.mark.slow  # trains learners one by one to compare with the vmapped batch (31 s under load 8)
 def test_vmapped_learners_equal_individually_trained_ones():
     base = make_params("ng", init="random")
     zeta = np.array([0.0, 0.5, 1.0, 3.0])
@@ -158,6 +162,7 @@ def test_optax_update_is_textbook_q_learning():
     np.testing.assert_allclose(np.asarray(run.q), ref["q"], atol=1e-9)
 
 
+@pytest.mark.slow  # compiles training under three schedules (20 s under load 8)
 def test_schedules_are_optax_schedules_evaluated_at_the_step_count():
     # Learning rate 0: the table never moves. Exploration that decays linearly to 0 by step 10:
     # no random action after it.

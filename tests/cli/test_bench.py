@@ -114,6 +114,7 @@ def test_core_bench_three_servers_down_one_interrupt_and_resume(tmp_path):
     assert cli.main(["show", str(out / "gpt-5" / "curves")]) == 0
 
 
+@pytest.mark.slow  # a bench dry run of every suite part (57 s under load 8)
 def test_dry_run_prices_every_model_and_core_on_gpt4o_is_at_most_3_dollars(tmp_path, capsys):
     models = models_file(tmp_path, "http://127.0.0.1:9/v1", "http://127.0.0.1:9/v1")
     assert cli.main(["bench", str(models), "--dry-run", "--out", str(tmp_path / "b"), *SIZES]) == 0
@@ -148,6 +149,7 @@ def test_models_file_mistakes_are_one_line(tmp_path):
     assert cli.main(["bench", str(tmp_path / "missing.toml")]) == 2
 
 
+@pytest.mark.slow  # a bench run end to end, twice (22 s under load 8)
 def test_bench_samples_grow_a_folder_and_show_in_the_leaderboard(tmp_path, capsys):
     import dataclasses
 

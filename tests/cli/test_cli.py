@@ -72,6 +72,7 @@ def _table(folder):
     return sorted((tuple(sorted((k, json.dumps(v)) for k, v in r.items() if k not in drop)) for r in read_runs(folder)))
 
 
+@pytest.mark.slow  # a study interrupted and resumed end to end (21 s under load 8)
 def test_interrupted_study_resumes_to_the_same_table(server, tmp_path):
     opts = StudyOptions(swimmers=("purcell",), zetas=(0.0, 2.0), runs=3, q_runs=3, steps=6, chunk=2)
     backend = Backend(base_url=server.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")

@@ -22,6 +22,7 @@ def backend_args(srv):
     return ["--base-url", srv.url, "--model", "fake"]  # no --api-key-env: a named unset variable is warned about
 
 
+@pytest.mark.slow  # a noise study end to end (75 s under load 8)
 def test_noise_study_in_a_log_keeps_every_zeta_and_number(server, tmp_path, capsys):
     # capsys is not a terminal: the table must be whole plain text, progress plain lines
     out = tmp_path / "noise"
@@ -67,6 +68,7 @@ def test_no_runs_at_all_is_an_error(server, tmp_path, capsys):
     assert rc == 2 and "no runs at all" in err and not (tmp_path / "x").exists()
 
 
+@pytest.mark.slow  # a study end to end after the warning (40 s under load 8)
 def test_short_steps_warn_that_nothing_can_succeed(server, tmp_path, capsys):
     rc = cli.main(["swim", "--runs", "0", "--q-runs", "2", "--steps", "11", "--no-figures", "--out", str(tmp_path / "s"),
                    *backend_args(server)])
@@ -97,6 +99,7 @@ def _median(text: str) -> float:
     return float(line.split()[10])  # swimmer dir zeta actions n learned "of" n success q25 median
 
 
+@pytest.mark.slow  # two jswim qlearn runs end to end (43 s under load 8)
 def test_qlearn_learning_rate_reaches_the_learner(capsys):
     # NG on the shape-changing set: alpha = 1 learns in ~32 steps, alpha = 0.25 in ~73 (README)
     base = ["qlearn", "--swimmer", "ng", "--direction", "+x", "--seeds", "200", "--action-set", "shape-changing"]
@@ -117,6 +120,7 @@ def folder(server, tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # two studies end to end, then show and compare (38 s under load 8)
 def test_show_and_compare_commands(folder, tmp_path, capsys):
     capsys.readouterr()
     assert cli.main(["show", str(folder)]) == 0

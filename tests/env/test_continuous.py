@@ -53,6 +53,7 @@ def test_unit_rocs_on_the_continuous_path_give_the_square_gaits():
     assert abs(_x(states[-1][0]) - ng.square_cycle_displacement(6.0, 10.0)) < 1e-12
 
 
+@pytest.mark.slow  # builds and compiles the lattice table for each K (56 s under load 8)
 def test_lattice_codes_give_the_square_gaits_at_any_k():
     for big_k in (2, 5):
         p = env.make_params("purcell", roc_levels=big_k)
@@ -109,6 +110,7 @@ def _rk4_square(d_lo, d_hi, substeps=400):
     return pose[0] + c * off[0] - s * off[1] - start[0], pose[2]
 
 
+@pytest.mark.slow  # compiles RK4 and the spectral integrator (17 s under load 8)
 def test_half_amplitude_square_matches_rk4_and_the_spectral_integrator():
     p = env.make_params("purcell")
     m = p.model
@@ -203,6 +205,7 @@ def test_noise_scales_the_continuous_displacement():
     assert float(noisy.theta) == float(quiet.theta)  # the rotation is not perturbed
 
 
+@pytest.mark.slow  # a million steps in both dtypes (32 s under load 8)
 def test_float32_positions_stay_within_1e9_of_float64_over_a_million_steps(float32):
     def run(dtype, steps=1_000_000, n=3):
         p = env.make_params("purcell", roc_levels=4)

@@ -16,6 +16,7 @@ PURCELL_PLUS_X = [(2, -1), (1, -1), (2, 1), (1, 1)]  # from (+, +), (dof, roc) a
 NG_PLUS_X = [(1, 1), (2, 1), (1, -1), (2, -1)]  # from (-, -)
 
 
+@pytest.mark.slow  # compiles the integrator over random walks (32 s under load 8)
 def test_table_steps_match_the_integrator_over_random_walks():
     """Every step of a random walk equals a direct RK4 integration of the ODE (<= 1e-9)."""
     params = env.make_params("purcell")

@@ -166,6 +166,7 @@ print(json.dumps({{"x": x, "devices": jax.device_count()}}))
 """
 
 
+@pytest.mark.slow  # a fresh interpreter with 4 host devices recompiles every batched path (83 s under load 8)
 def test_four_host_devices_give_the_numbers_of_one(tmp_path, float32):
     root = str(Path(__file__).resolve().parents[2])
     out = tmp_path / "sharded.npz"
@@ -203,6 +204,7 @@ def test_ensemble_command(tmp_path, capsys):
         assert err.count("\n") == 1 and word in err, err
 
 
+@pytest.mark.slow  # compiles the Q-learning study for several chunk sizes (26 s under load 8)
 def test_qlearn_study_does_not_depend_on_the_chunk():
     from jswim.agents.qlearning import QConfig
     from jswim.studies import qlearn

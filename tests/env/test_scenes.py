@@ -159,6 +159,7 @@ def test_action_codes():
     assert [encode_scene_action(0, d, k) for d in (0, 1) for k in (-1, 0, 1)] == list(range(6))
 
 
+@pytest.mark.slow  # compiles the scene step with obstacles (30 s under load 8)
 def test_contact_refuses_the_step_and_stuck():
     scene = Scene(medium="wall", height=2.5, tilt=-0.2)
     r = scene_rollout("ng", [(2, 1), (2, -1), (1, 0.5)], scene, init=(0, 0))
@@ -182,6 +183,7 @@ def test_noise_scales_the_displacement_not_the_tilt():
     assert noisy.tilt[0, 0] == clean.tilt[0, 0]
 
 
+@pytest.mark.slow  # compiles the scene step in float32 under jit and vmap (116 s under load 8)
 def test_float32_jit_vmap(float32):
     params = scene_params("ng", Scene(medium="wall", height=5.0, swimmers=2, separation=30.0))
     assert params.arms0.dtype == jnp.float32
@@ -198,6 +200,7 @@ def test_float32_jit_vmap(float32):
     np.testing.assert_allclose(np.asarray(new.centre[0]), np.stack([ref.x[0], ref.z[0]], -1), atol=2e-5)
 
 
+@pytest.mark.slow  # compiles the free pair's body-frame path in both dtypes (47 s under load 8)
 def test_float32_pair_in_the_free_fluid(float32):
     # the free fluid's pair path (body-frame responses, jswim.swimmers.bodyframe) in the dtype users
     # get: each swimmer's square cycle in turn, within float32 rounding of float64
@@ -217,6 +220,7 @@ def test_float32_pair_in_the_free_fluid(float32):
     np.testing.assert_allclose(np.asarray(st.centre[:, 1]), ref.z[-1], atol=1e-6)
 
 
+@pytest.mark.slow  # compiles the wall scene in float32 and float64 (77 s under load 8)
 def test_float32_one_swimmer_near_a_wall(float32):
     # the unrolled solve in the dtype users get: a square cycle within float32 rounding of float64
     params = scene_params("ng", Scene(medium="wall", height=4.0))
@@ -254,6 +258,7 @@ def _converged_near_wall():
         return _pose_change(NEAR_WALL, jnp.float64, nodes=12, sweeps=14)
 
 
+@pytest.mark.slow  # compiles the scene solver at several sweep counts (125 s under load 8)
 def test_adaptive_sweeps_reach_the_converged_step_in_float64():
     # the default (adaptive sweeps, 6 nodes) against the converged step: near the wall the Picard
     # iteration gains only ~20x per sweep, so a fixed 3 sweeps is far off there
@@ -266,6 +271,7 @@ def test_adaptive_sweeps_reach_the_converged_step_in_float64():
     assert np.abs(three[:2] - ref[:2]).max() > 1e-6 * scale  # the case the adaptive rule is for
 
 
+@pytest.mark.slow  # compiles the scene step in both dtypes (50 s under load 8)
 def test_float32_default_numerics_within_rounding_of_float64_far_from_the_origin(float32):
     # 4 nodes and adaptive sweeps in float32: within float32 rounding of the float64 step, also
     # 1e5 a from x = 0, where float32 positions are only good to ~4e-3 a (the solve works relative
@@ -278,6 +284,7 @@ def test_float32_default_numerics_within_rounding_of_float64_far_from_the_origin
         assert abs(got[2] - ref[2]) < 1e-7
 
 
+@pytest.mark.slow  # compiles the pair scene at two batch sizes (49 s under load 8)
 def test_adaptive_sweeps_per_swimmer_do_not_depend_on_the_batch():
     # under vmap the sweep loop runs until the slowest swimmer converges; the others keep their
     # converged values, so a swimmer's step is the same next to a fast or a slow one

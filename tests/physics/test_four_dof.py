@@ -17,6 +17,7 @@ from tests.fakeserver import FakeServer
     ("nlink", 0.0519, None),  # README: the best four-link cycle (period 6) moves 0.0519 a per step
     ("nsphere", 0.0674, 0.404209),  # README: 0.0674 a per step; the authors' code: 0.404209 per cycle
 ])
+@pytest.mark.slow  # the gait search over three-DOF tables (35 s for both under load 8)
 def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycle):
     model = env.make_params(swimmer).model
     assert model.n_dof == 3 and default_rocs(model) == (-1, 1) and default_n_ht(model) == 20

@@ -24,6 +24,7 @@ def server():
         yield srv
 
 
+@pytest.mark.slow  # trains lattice Q-learners on K = 2 (15 s under load 8)
 def test_lattice_q_learning_learns_on_k2():
     params = qlearning.batch_params(env.make_params("purcell", roc_levels=2), 64)
     run = qlearning.train_batch(jax.random.split(jax.random.PRNGKey(0), 64), params, qlearning.QConfig(steps=200))
@@ -37,6 +38,7 @@ def test_lattice_q_learning_learns_on_k2():
     assert (rep.fraction[rep.learned] > 0.95).all()
 
 
+@pytest.mark.slow  # compiles the lattice random policy (13 s under load 8)
 def test_lattice_random_policy_uses_every_roc():
     from jswim.agents import random_policy
 
@@ -47,6 +49,7 @@ def test_lattice_random_policy_uses_every_roc():
     assert np.asarray(run.levels0).tolist() == [[5, 5]] * 8  # the (+, +) corner on the K = 5 lattice
 
 
+@pytest.mark.slow  # jswim study continuous end to end (53 s under load 8)
 def test_continuous_study_end_to_end(server, tmp_path):
     out = tmp_path / "cont"
     res = run_study("continuous", StudyOptions(**TINY, agents=("llm", "qlearning", "random")), server.backend(), out,
@@ -102,6 +105,7 @@ def test_interrupted_continuous_study_resumes(server, tmp_path):
         [(r["run_id"], r["actions"], r["success"]) for r in sorted(whole.rows, key=key)]
 
 
+@pytest.mark.slow  # lattice studies at several K end to end (36 s under load 8)
 def test_noise_and_options_work_with_k_levels(server, tmp_path):
     out = tmp_path / "swim"
     rc = cli.main(["swim", "--swimmer", "purcell", "--roc-levels", "5", "--noise", "0.5", "--steps", "10",

@@ -194,6 +194,7 @@ def wait_for_calls(out: Path, n: int, proc: subprocess.Popen, timeout: float = 1
     ((signal.SIGTERM,), 143),
     ((signal.SIGHUP,) + (signal.SIGINT,) * 5, 129),  # repeats while it saves: still one line
 ])
+@pytest.mark.slow  # jswim subprocesses signalled and resumed (32 s for both under load 8)
 def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(signals, status, tmp_path, capsys):
     out = tmp_path / "F"
     with FakeServer(reply=hash_reply, latency=0.2) as srv:
@@ -292,6 +293,7 @@ def test_an_interrupt_right_after_running_was_written_marks_the_folder_interrupt
     StudyStore(tmp_path / "F", "swim", {"study": "swim"}).close()  # the lock was released
 
 
+@pytest.mark.slow  # three jswim subprocesses signalled and resumed (33 s under load 8)
 def test_sigterm_at_start_up_in_the_llm_phase_and_in_the_final_writes_never_leaves_running(tmp_path):
     # The stress of issue 22 in small: a session killed at each phase; each resume sends only the
     # calls that had no answer (answered by the server but not journaled when the process died).

@@ -135,6 +135,7 @@ def test_joint_decode_matches_the_scene_codes():
     assert sw.tolist() == [0, 0, 1, 1] and dof.tolist() == [0, 1, 0, 1] and roc.tolist() == [-1, 1, -1, 1]
 
 
+@pytest.mark.slow  # compiles joint-state Q-learning on a pair scene (23 s under load 8)
 def test_q_learning_joint_state_shapes():
     assert scene_baselines.n_states(2, False) == 16
     assert scene_baselines.n_states(1, True) == 4 * (len(scene_baselines.HEIGHT_EDGES) + 1)
@@ -150,6 +151,7 @@ def test_q_learning_joint_state_shapes():
     assert np.allclose(run.x, run.xs.mean(axis=-1))
 
 
+@pytest.mark.slow  # compiles and trains Q-learning on a scene (20 s under load 8)
 def test_q_learning_learns_the_square_alone_in_the_bulk_scene():
     params = scene_env.scene_params("ng", scene_env.Scene(medium="bulk"), init=(1, 0))
     run = scene_baselines.qlearning_runs(params, jax.random.split(jax.random.PRNGKey(1), 16), 120, np.ones(16),

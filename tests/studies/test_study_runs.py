@@ -6,12 +6,15 @@ from __future__ import annotations
 import json
 from collections import Counter
 
+import pytest
+
 from jswim import cli
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study, summarize
 from tests.fakeserver import FakeServer, hash_reply
 
 
+@pytest.mark.slow  # jswim study competence end to end (27 s under load 8)
 def test_competence_study_end_to_end(tmp_path, capsys):
     out = tmp_path / "competence"
     with FakeServer(reply=hash_reply, latency=0.002) as srv:

@@ -299,6 +299,7 @@ def test_report_and_animation_of_every_study(study, tmp_path):
     assert a.frame_png(a.n_frames - 1)[:4] == b"\x89PNG"
 
 
+@pytest.mark.slow  # four-DOF studies, animations and a report end to end (60 s under load 8)
 def test_four_dof_swimmers_animate_and_report(tmp_path):
     out = tmp_path / "four"
     run_study("curves", StudyOptions(swimmers=("nlink", "nsphere"), directions=(1,), q_runs=2, steps=8,
