@@ -34,9 +34,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 
-_PAID = "tests/test_paid_api.py::"
+_PAID = "tests/studies/test_paid_api.py::"
 #: The money tests, fastest and most direct first (pytest -x stops at the first failure).
-_BUDGET = tuple("tests/test_pacing.py::" + t for t in (
+_BUDGET = tuple("tests/llm/test_pacing.py::" + t for t in (
     "test_budget_refuses_past_the_cap_and_stays_closed", "test_call_bound_prices_prompt_and_max_tokens",
     "test_client_stops_at_the_cap_before_sending", "test_failed_attempts_release_their_reservation"))
 MONEY = _BUDGET + tuple(_PAID + t for t in (
@@ -45,15 +45,15 @@ MONEY = _BUDGET + tuple(_PAID + t for t in (
     "test_the_cap_holds_over_three_sessions_and_a_higher_cap_bills_each_call_once",
     "test_max_cost_stops_below_the_cap_and_a_higher_cap_finishes_without_rebilling",
     "test_dry_run_sends_nothing_and_estimates_the_real_tokens",
-)) + ("tests/test_pipelines.py::test_journal_replays_a_runs_own_paid_calls",
-      "tests/test_pipelines.py::test_journal_stops_replaying_where_a_run_diverges")
-CLIENT = ("tests/test_llm_client.py", *MONEY)
-PACING = ("tests/test_pacing.py",)
-MEMORY = ("tests/test_memory.py", "tests/test_llm_agent.py")
-PROTOCOL = ("tests/test_protocol.py", "tests/test_llm_agent.py")
-PROMPT = ("tests/test_prompt.py",)
-PHYSICS = ("tests/test_physics.py", "tests/test_env.py", "tests/test_four_dof.py")
-PROGRESS = ("tests/test_memory.py", "tests/test_llm_agent.py", "tests/test_pipelines.py")
+)) + ("tests/agents/test_pipelines.py::test_journal_replays_a_runs_own_paid_calls",
+      "tests/agents/test_pipelines.py::test_journal_stops_replaying_where_a_run_diverges")
+CLIENT = ("tests/llm/test_llm_client.py", *MONEY)
+PACING = ("tests/llm/test_pacing.py",)
+MEMORY = ("tests/agents/test_memory.py", "tests/agents/test_llm_agent.py")
+PROTOCOL = ("tests/agents/test_protocol.py", "tests/agents/test_llm_agent.py")
+PROMPT = ("tests/prompt/test_prompt.py",)
+PHYSICS = ("tests/physics/test_physics.py", "tests/env/test_env.py", "tests/physics/test_four_dof.py")
+PROGRESS = ("tests/agents/test_memory.py", "tests/agents/test_llm_agent.py", "tests/agents/test_pipelines.py")
 
 
 #: Where the env step lives (a package since the continuous-env change; a module before).
@@ -186,7 +186,8 @@ def scratch_copy(root: Path, into: Path) -> None:
 def run_tests(copy: Path, tests: tuple[str, ...], timeout: float) -> tuple[str, float, str]:
     """``"pass"``, ``"fail"`` or ``"timeout"``, the seconds it took and pytest's last lines."""
     env = {**os.environ, "PYTHONPATH": str(copy), "PYTHONDONTWRITEBYTECODE": "1"}
-    cmd = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", *tests]
+    # -m "": every guarding test, the slow tier too (pyproject deselects it by default)
+    cmd = [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-m", "", *tests]
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, cwd=copy, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,

@@ -30,7 +30,7 @@ from jswim.scenes import (Scene, batch_starts, scene_params, scene_reset, scene_
 
 SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]
 WALL_TABLE = [3.0, 5.0, 7.0, 10.0, 20.0, 50.0]
-FIT = [20.0, 25.0, 30.0, 40.0, 50.0, 65.0, 80.0, 100.0, 130.0, 160.0, 200.0]  # tests/test_scene_physics.py's heights
+FIT = [20.0, 25.0, 30.0, 40.0, 50.0, 65.0, 80.0, 100.0, 130.0, 160.0, 200.0]  # tests/physics/test_scene_physics.py's heights
 FAR = [160.0, 200.0, 400.0, 800.0, 1600.0]
 SEPARATIONS = np.array([30.0, 60.0, 180.0, 240.0])
 

@@ -90,6 +90,9 @@ def nearest_points(dofs: np.ndarray, model: SwimmerModel, roc_levels: int) -> np
 class MoveTable(NamedTuple):
     """The motions of a ``K``-level lattice, stored as ``G``: every move is ``G(j)^-1 G(j')``.
 
+    :func:`move` reads any move from it; ``(K+1)**n n`` entries instead of ``2K + 1`` times as
+    many.
+
     Attributes
     ----------
     prefix : float64 ((K+1)**n, n, 3)
@@ -97,9 +100,6 @@ class MoveTable(NamedTuple):
         from its lower limit to its value at point ``p``, the other DOFs as at ``p``.
     roc_levels : int
         ``K``.
-
-    :func:`move` reads any move from it; ``(K+1)**n n`` entries instead of ``2K + 1`` times as
-    many.
     """
 
     prefix: np.ndarray

@@ -1,0 +1,41 @@
+"""The package's top level and its error root."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import jswim
+from jswim import errors
+
+
+def test_top_level_names_are_the_owners_and_load_lazily():
+    code = ("import sys, jswim; assert 'jax' not in sys.modules, 'import jswim loaded jax'; "
+            "jswim.rollout; assert 'jax' in sys.modules")
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(Path(__file__).parents[2]))
+    from jswim import env, results, studies
+
+    assert jswim.rollout is env.rollout and jswim.step_batch is env.step_batch and jswim.reset is env.reset
+    assert jswim.make_params is env.make_params and jswim.step is env.step
+    assert jswim.run_study is studies.run_study and jswim.load is results.load
+    assert {"rollout", "make_params", "reset", "step", "step_batch", "run_study", "load"} <= set(jswim.__all__)
+    assert "Where to start" in jswim.__doc__ and "docs/design.md" in jswim.__doc__
+    with pytest.raises(AttributeError):
+        jswim.no_such_name  # noqa: B018
+
+
+def test_every_user_error_derives_from_the_root():
+    for cls in (errors.ConfigError, errors.PositionBelowMinimumError, errors.LLMError, errors.LLMServerError,
+                errors.LLMRequestError, errors.LLMResponseError, errors.LocalModelError, errors.ResultFolderError):
+        assert issubclass(cls, errors.JswimError)
+        assert cls.__name__ in errors.__doc__  # the tree in the docstring names every class
+    assert issubclass(errors.ConfigError, ValueError) and issubclass(errors.LLMError, RuntimeError)
+    from jswim.llm import ClientSettings
+
+    with pytest.raises(errors.ConfigError, match="temperature"):
+        ClientSettings(temperature=5.0)
+    with pytest.raises(errors.ConfigError, match="constrain"):
+        ClientSettings(constrain="regex")

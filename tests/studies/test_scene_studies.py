@@ -1,0 +1,276 @@
+"""Agents and studies on scenes (issue 19, part B): the prompt's scene records, the parser on joint
+DOFs, the fate rule, the joint-state Q-learner, the strokes, and ``jswim study wall`` / ``pair``
+end to end against a fake server (folder, figures, show, resume)."""
+
+from __future__ import annotations
+
+import json
+
+import jax
+import numpy as np
+import pytest
+
+from jswim import cli
+from jswim.agents import scene_baselines, scene_env
+from jswim.prompt import (DEFAULT_TEMPLATE, Action, HistoryRecord, PromptConfig, SceneView, SwimmerText,
+                          allowed_actions, parse_reply, render_prompt, render_record, scene_template)
+from jswim.results import read_metadata, read_runs
+from jswim.studies import StudyOptions, run_study
+from jswim.studies import scenes
+from tests.fakeserver import FakeServer, scene_reply
+
+# -- prompt ---------------------------------------------------------------------------------------
+
+
+def _wall_text():
+    v = SceneView(1, True)
+    return SwimmerText(2, 6.0, 10.0, 0, scene=v), PromptConfig(n_ht=3, template=scene_template(v))
+
+
+def test_wall_record_shows_height_and_tilt():
+    sw, cfg = _wall_text()
+    rec = HistoryRecord(2, (10.0, 6.0), (10.0, 10.0), Action(2, 1), 0.25, 0.4129, False,
+                        (0.25,), (0.4129,), (5.0, ), (4.98765, ), (0.0,), (-0.01234,))
+    assert render_record(rec, sw, cfg) == \
+        "2: (10, 6) [2, 1] -> (10, 10), X 2750 -> 2912, H 5000 -> 4987, tilt 0.000 -> -0.012, stuck no"
+
+
+def test_wall_prompt_literal():
+    sw, cfg = _wall_text()
+    text = render_prompt(sw, cfg, 1, [], (10.0, 6.0), 0.0)
+    assert text == (
+        "Find the sequence of rates of change (ROC) of the degrees of freedom (DOF) D1 and D2 that gives the fastest "
+        "long-term movement in the positive x direction. Only one DOF changes at a time, and D1 and D2 each stay in "
+        "[6, 10]. The swimmer moves above a flat wall: H is its height above the wall in thousandths of its sphere "
+        "radius and tilt its angle to the wall in radians.\n"
+        "Latest records (step: (D1, D2) before [changed DOF, ROC] -> (D1, D2) after, X before -> after, "
+        "H before -> after, tilt before -> after, stuck):\nnone yet\n"
+        "Keep in mind that an action can have long-term consequences. Reply with the next action as "
+        "[changed DOF, ROC], the changed DOF 1 or 2 and the ROC -1, 0 or 1.")
+
+
+def test_pair_record_and_prompt_literal():
+    v = SceneView(2, False, 30.0)
+    sw = SwimmerText(4, 6.0, 10.0, 0, scene=v)
+    cfg = PromptConfig(n_ht=3, template=scene_template(v))
+    rec = HistoryRecord(1, (10.0, 6.0, 10.0, 6.0), (10.0, 6.0, 10.0, 10.0), Action(4, 1), 0.0, 0.0861,
+                        False, (0.0, 0.0), (0.0, 0.1722))
+    assert render_record(rec, sw, cfg) == \
+        "1: (10, 6, 10, 6) [4, 1] -> (10, 6, 10, 10), X1 2500 -> 2500, X2 2500 -> 2672, stuck no"
+    text = render_prompt(sw, cfg, -1, [rec], (10.0, 6.0, 10.0, 10.0), 0.0861)
+    assert ("D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swimmer 2, which starts 30 sphere radii "
+            "ahead of it on the same axis; X1 and X2 are their positions, and the movement sought is that of their "
+            "mean.\n") in text
+    assert "(step: (D1, D2, D3, D4) before [changed DOF, ROC] -> (D1, D2, D3, D4) after, X1 before -> after, " \
+           "X2 before -> after, stuck):\n1: (10, 6, 10, 6) [4, 1]" in text
+    assert text.endswith("the changed DOF 1, 2, 3 or 4 and the ROC -1, 0 or 1.")
+    assert "negative x direction" in text
+
+
+def test_pair_above_a_wall_shows_both_heights():
+    v = SceneView(2, True, 40.0)
+    rec = HistoryRecord(1, (10.0,) * 4, (6.0,) + (10.0,) * 3, Action(1, -1), 0.0, -0.01, False,
+                        (0.0, 0.0), (-0.02, 0.0), (5.0, 5.5), (5.001, 5.5), (0.0, 0.1), (0.002, 0.1))
+    line = render_record(rec, SwimmerText(4, 6.0, 10.0, 0, scene=v), PromptConfig(template=scene_template(v)))
+    assert line == ("1: (10, 10, 10, 10) [1, -1] -> (6, 10, 10, 10), X1 2500 -> 2480, X2 2500 -> 2500, "
+                    "H1 5000 -> 5001, tilt1 0.000 -> 0.002, H2 5500 -> 5500, tilt2 0.100 -> 0.100, stuck no")
+
+
+def test_bulk_prompt_is_untouched_by_scenes():
+    # No scene: the paper's template and record (the literal tests in test_prompt.py hold the text).
+    sw = SwimmerText(2, 6.0, 10.0, 0)
+    rec = HistoryRecord(1, (10.0, 6.0), (10.0, 10.0), Action(2, 1), 0.0, 0.1)
+    assert render_record(rec, sw, PromptConfig()) == "1: (10, 6) [2, 1] -> (10, 10), X 2500 -> 2600, stuck no"
+
+
+def test_a_user_template_is_kept_for_a_scene():
+    tpl = DEFAULT_TEMPLATE.with_sentences(S4="Think.")
+    assert scene_template(SceneView(2, True, 30.0), tpl) is tpl
+
+
+def test_parser_takes_exactly_the_joint_actions():
+    pair = allowed_actions(SwimmerText(4, 6.0, 10.0, 0, scene=SceneView(2, False, 30.0)))
+    assert parse_reply("[3, 1]", pair) == Action(3, 1)
+    assert parse_reply("I choose [4, -1].", pair) == Action(4, -1)
+    for bad in ("[5, 1]", "[0, 1]", "[3, 2]", "[3, 0.5]", "swimmer 2"):
+        assert parse_reply(bad, pair) is None, bad
+    alone = allowed_actions(SwimmerText(2, 6.0, 10.0, 0, scene=SceneView(1, True)))
+    assert parse_reply("[3, 1]", alone) is None and parse_reply("[2, -1]", alone) == Action(2, -1)
+
+
+# -- fates, strokes, joint actions ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("heights, contact, expected", [
+    ([5.0, 4.0, 3.0, 2.0, 1.4, 1.2], None, "trapped"),  # below 1.5 a in the second half
+    ([5.0, 4.8, 4.7, 4.7, 4.7, 4.7], [False, False, False, False, True, False], "trapped"),  # touched
+    ([5.0, 6.0, 7.5, 8.0, 9.0, 10.2], None, "escaped"),  # twice the start
+    ([5.0, 5.0, 5.1, 5.3, 5.6, 5.9], None, "escaped"),  # above the start and rising by > 10 % of it
+    ([5.0, 5.1, 4.9, 5.05, 4.95, 5.0], None, "gliding"),
+    ([20.0, 19.0, 18.0, 17.5, 17.2, 17.0], None, "gliding"),  # sinking slowly, far from the wall
+])
+def test_fate_rule(heights, contact, expected):
+    f, mean = scenes.fate(heights, heights[0], contact)
+    assert f == expected
+    assert mean == pytest.approx(np.mean(heights[3:]))
+
+
+def test_stroke_codes_and_per_cycle():
+    assert scenes.stroke_codes("square", 1, 6, 1).tolist() == [5, 0, 3, 2, 5, 0]
+    assert scenes.stroke_codes("square", -1, 4, 1).tolist() == [0, 5, 2, 3]
+    # Swimmer 2 (codes + 6) two moves ahead, then alternating, swimmer 1 first.
+    assert scenes.stroke_codes("phase2", 1, 8, 2).tolist() == [11, 6, 5, 9, 0, 8, 3, 11]
+    x = np.arange(1, 13) * 0.25  # 0.25 per step: 1.0 per four-step cycle
+    assert scenes.per_cycle(x, "square", 1) == pytest.approx(1.0)
+    assert scenes.per_cycle(np.r_[0.5, 0.5 + np.arange(1, 17) * 0.25], "phase1", 2) == pytest.approx(2.0)
+    # Speed over whole cycles of the second half: a big back-and-forth move outside them is left out.
+    moves = np.tile([1.0, -0.9, 1.0, -0.9], 5)  # 0.2 per four-step cycle
+    x = np.cumsum(np.r_[moves, 1.0])  # 21 steps: the last one a lone +1
+    assert scenes.late_speed(x[:-1], 1, 1) == pytest.approx(0.05)
+    assert scenes.late_speed(x, 1, 1) == pytest.approx((x[-1] - x[-9]) / 8)
+
+
+def test_joint_decode_matches_the_scene_codes():
+    sw, dof, roc = scene_env.decode(np.array([0, 5, 6, 11]))
+    assert sw.tolist() == [0, 0, 1, 1] and dof.tolist() == [0, 1, 0, 1] and roc.tolist() == [-1, 1, -1, 1]
+
+
+@pytest.mark.slow  # compiles joint-state Q-learning on a pair scene (23 s under load 8)
+def test_q_learning_joint_state_shapes():
+    assert scene_baselines.n_states(2, False) == 16
+    assert scene_baselines.n_states(1, True) == 4 * (len(scene_baselines.HEIGHT_EDGES) + 1)
+    d = np.array([10.0, 6.0, 6.0, 10.0])  # bits 1, 0, 0, 1
+    assert int(scene_baselines.corner_state(d, 5.0, 6.0, 10.0, False)) == 9
+    assert int(scene_baselines.corner_state(d[:2], 5.0, 6.0, 10.0, True)) == 1 * 7 + 2  # bin of 5 a: (3.5, 6]
+    sc = scene_env.Scene(medium="bulk", swimmers=2, separation=30.0)
+    params = scene_env.scene_params("ng", sc, init=(1, 0))
+    run = scene_baselines.qlearning_runs(params, jax.random.split(jax.random.PRNGKey(0), 3), 20, np.ones(3),
+                                         wall=False, action_set="shape-changing")
+    assert run.actions.shape == (3, 20) and run.xs.shape == (3, 20, 2) and run.dofs.shape == (3, 20, 4)
+    assert run.actions.max() < 12
+    assert np.allclose(run.x, run.xs.mean(axis=-1))
+
+
+@pytest.mark.slow  # compiles and trains Q-learning on a scene (20 s under load 8)
+def test_q_learning_learns_the_square_alone_in_the_bulk_scene():
+    params = scene_env.scene_params("ng", scene_env.Scene(medium="bulk"), init=(1, 0))
+    run = scene_baselines.qlearning_runs(params, jax.random.split(jax.random.PRNGKey(1), 16), 120, np.ones(16),
+                                         wall=False, action_set="shape-changing")
+    tail = run.actions[:, -8:]
+    # The +x square gait from (10, 6) as a cycle of the four shape-changing moves, in some rotation.
+    cycles = {tuple(np.roll([5, 0, 3, 2], k)) for k in range(4)}
+    assert sum(tuple(t[:4]) in cycles and tuple(t[4:]) == tuple(t[:4]) for t in tail) >= 12
+
+
+# -- studies end to end ----------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def server():
+    with FakeServer(reply=scene_reply) as srv:
+        yield srv
+
+
+WALL = dict(heights=(3.0,), runs=1, q_runs=2, steps=12)
+PAIR = dict(separations=(30.0,), phases=(1,), runs=1, q_runs=2, steps=12)
+
+
+@pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
+def test_wall_study_end_to_end(server, tmp_path):
+    out = tmp_path / "wall"
+    # PPO's wall rows: tests/studies/test_scene_ppo_rows.py (its compilation is paid there once).
+    run_study("wall", StudyOptions(**WALL, agents=("stroke", "llm", "qlearning", "random")), server.backend(), out,
+              figures=True)
+    rows = read_runs(out)
+    assert {(r["agent"], r["group"]) for r in rows} == \
+        {("stroke", "free")} | {(a, "h=3") for a in ("stroke", "llm", "qlearning", "random")}
+    meta = read_metadata(out)
+    assert any("scene (an extension): medium 'wall'" in line for line in meta["fidelity_deviations"])
+    table = meta["summary"]["scenes"]
+    stroke = {r["group"]: r for r in table if r["agent"] == "stroke"}
+    assert stroke["h=3"]["per_cycle"] > 0.1 and stroke["free"]["medium"] == "free"
+    for r in rows:
+        assert json.loads(r["scene"])["medium"] in ("wall", "free")
+        if r["group"] != "free":
+            assert r["fate"] in scenes.FATES and len(r["heights"]) == 12 and r["start_height"] == 3.0
+    llm = next(r for r in rows if r["agent"] == "llm")
+    meta_line = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0])
+    assert meta_line["scene"]["medium"] == "wall"
+    step = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[1])
+    assert ", H " in step["prompt"] and len(step["heights_after"]) == 1
+    assert llm["parse_retries"] >= 0 and llm["failed_steps"] == 0
+    assert {p.name for p in (out / "figures").glob("*.png")} == {"wall.png", "wall-track.png"}
+
+
+@pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
+def test_show_prints_the_scene_table(server, tmp_path, capsys):
+    out = tmp_path / "pair"
+    rc = cli.main(["study", "pair", "--separations", "30", "--phases", "2", "--runs", "1", "--q-runs", "2",
+                   "--steps", "12", "--no-figures", "--out", str(out), "--base-url", server.url, "--model", "fake"])
+    assert rc == 0
+    printed = capsys.readouterr().out
+    assert "scenes: displacement per stroke cycle" in printed and "D=30, phase 2" in printed
+    assert cli.main(["show", str(out)]) == 0
+    shown = capsys.readouterr().out
+    assert "X/a per cycle" in shown and "alone" in shown
+    rows = read_runs(out)
+    llm = next(r for r in rows if r["agent"] == "llm")
+    assert max(a[0] for a in llm["actions"]) <= 4 and len(llm["xs"][0]) == 2
+    assert llm["separation"] == 30.0
+    assert llm["pair_prompt"] == "joint" and "-each-" not in llm["run_id"]  # the default: one joint prompt
+    meta_line = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0])
+    assert meta_line["pair_prompt"] == "joint" and "conversations" not in meta_line
+    # The continuous RL baseline steers both swimmers next to the others, judged on both swimmers' moves.
+    learners = [r for r in rows if r["agent"] == "ppo"]
+    assert len(learners) == 2 and {r["group"] for r in learners} == {"D=30"} and "ppo" in printed
+    for r in learners:
+        assert isinstance(r["success"], bool) and r["fate"] is None and r["separation"] == 30.0
+        assert {d for d, _ in r["actions"]} <= {1, 2, 3, 4} and len(r["xs"][0]) == 2 and r["speed"] is not None
+
+
+def test_scene_options_are_checked(tmp_path, capsys):
+    for argv in (["study", "wall", "--heights", "0.5"], ["study", "pair", "--phases", "5"],
+                 ["study", "pair", "--separations", "30,30"]):
+        assert cli.main(argv + ["--out", str(tmp_path / "x")]) == 2
+        assert "Traceback" not in capsys.readouterr().err
+    # An empty list ("," or "") is a mistake, not the defaults.
+    for argv in (["study", "wall", "--heights", ","], ["study", "pair", "--separations", ""],
+                 ["study", "pair", "--phases", ",,"]):
+        with pytest.raises(SystemExit) as stop:
+            cli.main(argv + ["--dry-run", "--out", str(tmp_path / "x")])
+        err = capsys.readouterr().err
+        assert stop.value.code == 2 and len(err.strip().splitlines()) == 1 and "expected comma-separated" in err
+    assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
+def test_interrupted_pair_study_resumes(server, tmp_path):
+    opts = StudyOptions(**PAIR)
+    whole = run_study("pair", opts, server.backend(), tmp_path / "whole", figures=False)
+    seen = {"n": 0}
+
+    def interrupt(phase, done, total, info=""):
+        if phase in ("stroke", "qlearning", "random"):
+            seen["n"] += 1
+            if seen["n"] == 3:
+                raise KeyboardInterrupt
+
+    part = tmp_path / "part"
+    with pytest.raises(KeyboardInterrupt):
+        run_study("pair", opts, server.backend(), part, progress=interrupt, figures=False)
+    assert read_metadata(part)["status"] == "interrupted"
+    assert 0 < len(read_runs(part)) < len(whole.rows)
+    again = run_study("pair", opts, server.backend(), part, figures=False)
+    key = lambda r: r["run_id"]  # noqa: E731
+    assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == \
+        [(r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)]
+
+
+def test_positions_are_sphere_centroids_outside_the_bulk_formula():
+    from jswim.scenes import SceneState
+
+    st = SceneState(np.array([[10.0, 6.0]]), np.array([[2.0, 5.0]]), np.array([np.pi / 3]), np.int32(0))
+    # Spheres at x_mid - d1 cos, x_mid, x_mid + d2 cos: centroid x_mid + (d2 - d1) cos(tilt) / 3.
+    spheres = 2.0 + np.array([-10.0, 0.0, 6.0]) * np.cos(np.pi / 3)
+    assert float(scene_env.centroid_x(st, "wall")[0]) == pytest.approx(spheres.mean())
+    assert float(scene_env.centroid_x(st, "bulk")[0]) == 2.0  # the paper's X as the formula moves it
