@@ -32,6 +32,7 @@ import argparse
 import asyncio
 import hashlib
 import json
+import urllib.parse
 import math
 import random
 import re
@@ -280,8 +281,8 @@ class FakeServer:
         self.api_key = api_key
         self.n_preflight = 0  # GET requests (models, props)
         self.usage = usage  # replaces the usage object of every completion (servers that send odd ones)
-        # POST path -> (status, Location): a moved endpoint; the chat endpoint also answers at any
-        # path ending in /chat/completions (where a redirect leads).
+        # POST path -> (status, Location): a moved endpoint; the chat endpoint also answers where
+        # a redirect leads.
         self.redirects = dict(redirects or {})
         self.redirected: list[str | None] = []  # the Authorization header of each redirected request
         self._warm_at: float | None = None
@@ -487,7 +488,10 @@ class FakeServer:
             with self._lock:
                 self.redirected.append(headers.get("authorization"))
             return await self._send(writer, status, b"", {"Location": location})
-        if method != "POST" or not path.endswith("/chat/completions"):
+        # The chat endpoint answers at /v1/chat/completions and where a redirect leads, nowhere
+        # else: a wrong base URL must still get the 404 real servers send.
+        targets = {"/v1/chat/completions"} | {urllib.parse.urlsplit(loc).path for _, loc in self.redirects.values()}
+        if method != "POST" or path not in targets:
             msg = json.dumps({"error": {"message": f"File Not Found: {path}", "code": 404}}).encode()
             return await self._send(writer, 404, msg)
         try:
