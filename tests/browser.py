@@ -182,3 +182,17 @@ class Browser:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_bytes(base64.b64decode(data))
         return path
+
+
+def browser_or_skip(**kwargs: Any) -> Browser:
+    """A :class:`Browser` (not yet started: use it as a context manager), or the calling test
+    skipped with the reason: websocket-client or Chromium missing."""
+    import pytest
+
+    try:
+        import websocket  # noqa: F401  (websocket-client, a test dependency)
+    except ImportError:
+        pytest.skip("websocket-client is not installed (pip install -e '.[test]')")
+    if find_browser() is None:
+        pytest.skip("no Chromium installed (Debian: apt-get install chromium; .ci/run installs it)")
+    return Browser(**kwargs)

@@ -17,6 +17,7 @@ from pathlib import Path
 
 import pytest
 
+from tests.browser import browser_or_skip
 from jswim import cli
 from jswim.errors import LocalModelError
 from jswim.llm.local import default_model_path
@@ -85,14 +86,7 @@ def test_bench_without_the_embedded_model_has_baseline_rows_missing_rows_and_a_p
 
 
 def _check_bench_page(path: Path) -> None:
-    from tests.browser import find_browser
-
-    pytest.importorskip("websocket")
-    if find_browser() is None:
-        pytest.skip("no Chromium installed")
-    from tests.browser import Browser
-
-    with Browser() as b:
+    with browser_or_skip() as b:
         b.open(path.resolve().as_uri())
         rows = b.eval("document.querySelectorAll('#leaderboard tbody tr').length")
         kinds = b.eval("Array.from(document.querySelectorAll('#leaderboard tbody tr')).map(r => r.className).join(' ')")
@@ -108,17 +102,11 @@ def _check_bench_page(path: Path) -> None:
 
 @pytest.mark.slow
 def test_baselines_only_noise_page_in_chromium_shows_its_own_settings(no_model, tmp_path):
-    from tests.browser import find_browser
-
-    pytest.importorskip("websocket")
-    if find_browser() is None:
-        pytest.skip("no Chromium installed")
-    from tests.browser import Browser
-
+    browser = browser_or_skip(height=1100)  # skip before the study runs where no browser is
     out = tmp_path / "noise"
     assert cli.main(["study", "noise", "--runs", "0", "--q-runs", "2", "--zetas", "0,1", "--steps", "12",
                      "--swimmer", "purcell", "--out", str(out)]) == 0
-    with Browser(height=1100) as b:
+    with browser as b:
         b.open((out / "report.html").resolve().as_uri())
         b.eval("window.jswimReport.opened")
         title = b.eval("document.title")

@@ -15,6 +15,7 @@ from PIL import Image
 
 import jswim
 
+from tests.browser import browser_or_skip
 from jswim import cli, env
 from jswim.errors import ConfigError
 from jswim.results import read_runs, read_transcript
@@ -328,17 +329,7 @@ def test_four_dof_swimmers_animate_and_report(tmp_path):
 
 
 def _browser():
-    from tests.browser import find_browser
-
-    try:
-        import websocket  # noqa: F401  (websocket-client, a test dependency)
-    except ImportError:
-        pytest.skip("websocket-client is not installed (pip install -e '.[test]')")
-    if find_browser() is None:
-        pytest.skip("no Chromium installed (Debian: apt-get install chromium; .ci/run installs it)")
-    from tests.browser import Browser
-
-    return Browser()
+    return browser_or_skip()
 
 
 ARTIFACTS = os.environ.get("JSWIM_TEST_ARTIFACTS", "test-artifacts")

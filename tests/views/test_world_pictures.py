@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.browser import browser_or_skip
 from jswim.studies.grids import StudyOptions
 from jswim.studies.run import run_study
 from jswim.viz import animate as anim_mod
@@ -119,14 +120,7 @@ def test_wall_page_has_the_scenes_table_and_only_its_own_settings(scenes):
 
 
 def _browser():
-    from tests.browser import find_browser
-
-    pytest.importorskip("websocket")
-    if find_browser() is None:
-        pytest.skip("no Chromium installed (Debian: apt-get install chromium)")
-    from tests.browser import Browser
-
-    return Browser(height=1100)
+    return browser_or_skip(height=1100)
 
 
 def _open(b, page: Path, run_id: str) -> None:
