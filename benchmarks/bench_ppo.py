@@ -4,7 +4,7 @@ For each swimmer and target direction, ``--seeds`` PPO learners (default config,
 the paper's start) are trained in one jitted, vmapped call and judged by
 :func:`jswim.agents.ppo.evaluate` (real-valued strokes: a return to the same shape within 0.1 %
 of the range, >= 1/2 of the square gait's speed, 3 cycles; steps to learn by
-:func:`jswim.stats.learn_stats`). Timing: the first call of a swimmer includes compilation and
+:func:`jswim.judging.stats.learn_stats`). Timing: the first call of a swimmer includes compilation and
 is reported apart; the other direction runs on the compiled program (``block_until_ready``).
 References measured in the same run and reported as ratios: the same number of continuous
 environment steps alone (random one-DOF ROCs, one jitted scan of vmapped steps), and the tabular
@@ -30,7 +30,7 @@ import numpy as np
 from jswim import env
 from jswim.agents import ppo, qlearning
 from jswim.agents.defaults import paper_init
-from jswim.stats import learn_stats
+from jswim.judging.stats import learn_stats
 
 
 def _timed(fn, *args):

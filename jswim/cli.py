@@ -31,7 +31,7 @@ from jswim.actions import ACTION_SETS
 from jswim._io.paths import path_kind  # noqa: F401  (also read from here)
 from jswim.errors import ConfigError, JswimError, LLMServerError
 from jswim.commands import scenes as scene_options
-from jswim.jsonl import forget_warnings
+from jswim._io.jsonl import forget_warnings
 
 EXIT_USAGE = 2
 #: Largest count a batched command accepts (--n, --seeds, --steps, --chunk): swimmer and learner
@@ -633,7 +633,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
                                    max_cost=args.max_cost)
         except KeyboardInterrupt:
             bar.stop()
-            from jswim import interrupts
+            from jswim._io import interrupts
 
             sig = interrupts.received()
             print(f"jswim: interrupted ({interrupts.name(sig)}); every finished run and answered call is kept in "
@@ -938,7 +938,7 @@ def _ensemble(args: argparse.Namespace) -> int:
 
 
 def _gaits(args: argparse.Namespace) -> int:
-    from jswim import gait  # lazy: JAX loads only for commands that run
+    from jswim.judging import gait  # lazy: JAX loads only for commands that run
     from jswim.swimmers.models import make_model
 
     kw = {}
@@ -963,7 +963,7 @@ def _gaits(args: argparse.Namespace) -> int:
                   f"{'yes' if c.simple else 'no':>6}  {start:5}  {moves}")
         print("simple: no shape visited twice per period; the others add detours that go back and forth")
         if args.out:
-            from jswim import plots  # lazy: matplotlib only when a figure is asked for
+            from jswim.figures import plots  # lazy: matplotlib only when a figure is asked for
 
             paths = plots.save(plots.gaits_figure(model, cycles), args.out, f"gaits-{args.swimmer}-{'px' if d > 0 else 'mx'}")
             print(f"figure: {paths[0]}")
@@ -973,7 +973,7 @@ def _gaits(args: argparse.Namespace) -> int:
 
 def _lattice_gaits(args: argparse.Namespace, model: Any) -> int:
     """``jswim gaits SWIMMER --roc-levels K``: closed strokes on the K-level lattice, best first."""
-    from jswim import lattice  # lazy: JAX loads only for commands that run
+    from jswim.judging import lattice  # lazy: JAX loads only for commands that run
     from jswim.actions import check_roc_levels
 
     k = check_roc_levels(args.roc_levels)
@@ -1086,7 +1086,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.modules["matplotlib"].use("Agg")
     else:
         os.environ["MPLBACKEND"] = "Agg"
-    from jswim.permissions import private_files
+    from jswim._io.permissions import private_files
 
     # Folders, figures and caches: owner only under the usual umask; every jswim warning (a
     # skipped record of a damaged folder, ...) one line, whatever the command.
@@ -1121,7 +1121,7 @@ def _main(args: argparse.Namespace) -> int:
         print(f"jswim: error: {scrub(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
-        from jswim import interrupts
+        from jswim._io import interrupts
 
         print(f"jswim: interrupted ({interrupts.name(interrupts.received())})", file=sys.stderr)
         return 128 + (interrupts.received() or signal.SIGINT)
@@ -1143,8 +1143,8 @@ def _show_warning(message: Any, category: Any, filename: str, lineno: int, file:
 
 
 def run() -> None:
-    """Console-script wrapper: signals end a session as Ctrl-C does (:mod:`jswim.interrupts`)."""
-    from jswim import interrupts
+    """Console-script wrapper: signals end a session as Ctrl-C does (:mod:`jswim._io.interrupts`)."""
+    from jswim._io import interrupts
 
     interrupts.install()
     import warnings

@@ -15,7 +15,7 @@ from typing import Any, Mapping, Sequence
 from jswim._io.paths import path_kind
 from jswim.console import Column, cost_text, plain_table, requests_text
 from jswim.errors import ConfigError, ResultFolderError
-from jswim.folderlock import describe_holder, holder
+from jswim._io.folderlock import describe_holder, holder
 from jswim.results import read_metadata, read_runs
 from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED
 
@@ -61,7 +61,7 @@ def _learn_cell(s: Mapping[str, Any]) -> str:
     return "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75"))
 
 
-#: Reading order of agents and swimmers in tables and figure panels (jswim.plots reads them here).
+#: Reading order of agents and swimmers in tables and figure panels (jswim.figures.plots reads them here).
 SWIMMER_ORDER = ("purcell", "ng", "nlink", "nsphere")
 AGENT_ORDER = ("llm", "qlearning", "random", "ppo")
 
@@ -160,7 +160,7 @@ class StudyFolder:
 
     def status_text(self) -> str:
         """``complete`` or ``UNFINISHED: k of N runs done (status)``; a folder whose status reads
-        ``running`` says whether a live session holds it (:func:`jswim.folderlock.holder`)."""
+        ``running`` says whether a live session holds it (:func:`jswim._io.folderlock.holder`)."""
         if self.finished:
             return "complete"
         of = f" of {self.planned}" if self.planned else ""

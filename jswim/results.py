@@ -19,7 +19,7 @@ rewritten whole through a temporary file and ``os.replace``, so a kill never lea
 
 Files are plain: JSON without ``NaN``/``Infinity`` (non-finite numbers are written as ``null``,
 so any language's parser reads them) and the same permissions for every file (owner only, ``0600``,
-unless the umask lets the group write: :mod:`jswim.permissions`; a rewritten file keeps its mode). A folder that cannot
+unless the umask lets the group write: :mod:`jswim._io.permissions`; a rewritten file keeps its mode). A folder that cannot
 be written (read-only, full disk) is a :class:`StudyFolderError` naming the folder and the cause.
 """
 
@@ -37,9 +37,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
 from jswim.errors import ResultFolderError
-from jswim.permissions import file_mode, opener
-from jswim.folderlock import HOLDER, LOCK, FolderLock
-from jswim.jsonl import SkippedRecord, read_records, repair_tail
+from jswim._io.permissions import file_mode, opener
+from jswim._io.folderlock import HOLDER, LOCK, FolderLock
+from jswim._io.jsonl import SkippedRecord, read_records, repair_tail
 from jswim._io.atomic import _jsonable, atomic_write, dumps, plain_json, write_json  # noqa: F401  (their old place)
 
 if TYPE_CHECKING:
@@ -109,7 +109,7 @@ def _umask() -> int:
 
 
 #: Mode of new files: ``0600`` under the usual umask, what the umask says where it lets the group
-#: write (:mod:`jswim.permissions`).
+#: write (:mod:`jswim._io.permissions`).
 FILE_MODE = file_mode(_umask())
 
 
@@ -324,7 +324,7 @@ class StudyStore:
                     self.repairs.append(f"removed {p.name}, a temporary file left by an interrupted write")
 
     def _repair_journals(self) -> None:
-        """Cut the torn last line of every append-only file (see :mod:`jswim.jsonl`)."""
+        """Cut the torn last line of every append-only file (see :mod:`jswim._io.jsonl`)."""
         paths = [self.folder / RUNS, self.folder / "calls.jsonl"]
         if (self.folder / "transcripts").is_dir():
             paths += sorted((self.folder / "transcripts").glob("*.jsonl"))
@@ -467,7 +467,7 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     The first record of a run wins, except that a failed run (:func:`is_failed`) is replaced by
     any later record of it: the one from the resume that ran it again. A line that is no run
     record (not UTF-8, not JSON, a field of the wrong type: :func:`run_problem`) is skipped with
-    a warning naming the file and the line (:func:`jswim.jsonl.read_records`); that run counts as
+    a warning naming the file and the line (:func:`jswim._io.jsonl.read_records`); that run counts as
     not done, as a torn line's does.
     """
     path = Path(folder) / RUNS
@@ -491,7 +491,7 @@ _JSON_NAMES = {dict: "an object", list: "a list", str: "text", int: "a whole num
 
 def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
     """``meta`` without the fields of the wrong type (a hand edit: ``"summary": 5``), each dropped
-    with one :class:`~jswim.jsonl.SkippedRecord` warning naming the file and the field; the
+    with one :class:`~jswim._io.jsonl.SkippedRecord` warning naming the file and the field; the
     fields left are what a reader may compute with. ``summary.groups`` must be a list of objects."""
     import warnings
 

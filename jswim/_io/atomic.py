@@ -1,6 +1,6 @@
 """Atomic file writes and strict JSON: what every folder writer uses (JAX-free, no pyarrow).
 
-Moved from :mod:`jswim.results` (which re-exports every name) so that :mod:`jswim.folderlock`
+Moved from :mod:`jswim.results` (which re-exports every name) so that :mod:`jswim._io.folderlock`
 writes its holder file without importing the results layer (issue 30: the results <-> folderlock
 import cycle).
 """
@@ -16,7 +16,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from jswim.permissions import file_mode
+from jswim._io.permissions import file_mode
 
 
 def plain_json(obj: Any) -> Any:
@@ -42,7 +42,7 @@ def dumps(obj: Any, **kw: Any) -> str:
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
     """Write ``data`` to ``path`` so that readers see the old or the new file, never a part.
 
-    The file gets :func:`jswim.permissions.file_mode`, or the mode of the file it replaces.
+    The file gets :func:`jswim._io.permissions.file_mode`, or the mode of the file it replaces.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -38,7 +38,7 @@ def roc_levels_deviation(roc_levels: int) -> str | None:
 #: The line of the real-valued RL baseline's action space (the continuous study).
 REAL_ROCS = ("real-valued ROC in [-1, 1] (the continuous RL baseline, an extension): a step moves one DOF by ROC "
              "times its range, stopping at a limit; a cycle is a return to the same shape within 0.1 % of the range "
-             "(jswim.shape_judge.judge_shapes)")
+             "(jswim.judging.shape_judge.judge_shapes)")
 
 
 def study_extensions(roc_levels: set[int] | list[int]) -> list[str]:

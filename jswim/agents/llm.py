@@ -39,7 +39,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim import env, lattice
+from jswim import env
+
+from jswim.judging import lattice
 from jswim.agents import fidelity, pair_prompt, protocol, scene_env
 from jswim.agents.scene_driver import SceneGroup, scene_text
 from jswim.agents.step_batcher import StepBatcher
@@ -465,7 +467,7 @@ class LLMDriver:
                 except PositionBelowMinimumError as exc:  # can only come from a bad x_min
                     self._finish(run, "below_x_min", str(exc))
                     break
-                # The reply's integer ROC k is the environment's code for ROC k/K (jswim.lattice).
+                # The reply's integer ROC k is the environment's code for ROC k/K (jswim.judging.lattice).
                 index = lattice.encode(*decision[0], group.roc_levels)
                 out = await group.submit(pos, index)
                 self._record(run, decision, index, out)

@@ -499,7 +499,7 @@ def exact_x(run: PPORun, params: Any) -> np.ndarray:
     """Noiseless centroid x after each step of recorded runs, float64 (B, steps).
 
     The runs' actions replayed from their start shapes with ``zeta = 0`` (the judge measures
-    exact displacements, as :func:`jswim.gait.judge` does); when no run had noise, the recorded
+    exact displacements, as :func:`jswim.judging.gait.judge` does); when no run had noise, the recorded
     ``x`` is returned as it is.
     """
     actions = np.asarray(run.actions)
@@ -526,16 +526,16 @@ def _replay(params: Any, actions: Array) -> Array:
 
 def evaluate(run: PPORun, params: Any, *, criterion: Any = None, tol: float | None = None) -> Any:
     """Judge training runs with the success criterion for real-valued strokes
-    (:func:`jswim.shape_judge.judge_shapes`: a cycle is a return to the same shape within ``tol``
-    of the range, default :data:`jswim.shape_judge.SHAPE_TOL`), on exact displacements.
+    (:func:`jswim.judging.shape_judge.judge_shapes`: a cycle is a return to the same shape within ``tol``
+    of the range, default :data:`jswim.judging.shape_judge.SHAPE_TOL`), on exact displacements.
 
     Returns
     -------
     GaitReport
         Per learner: ``learned``, ``steps_to_learn`` (from 1, -1 when never), ``success``, ...
     """
-    from jswim.gait import PAPER
-    from jswim.shape_judge import SHAPE_TOL, judge_shapes
+    from jswim.judging.gait import PAPER
+    from jswim.judging.shape_judge import SHAPE_TOL, judge_shapes
 
     b = np.asarray(run.x).shape[0]
     return judge_shapes(np.asarray(run.dofs), exact_x(run, params), _env.broadcast_params(params, b),
@@ -600,7 +600,7 @@ def evaluate_scene(run: PPORun, scene_params: Any, direction: Any = 1, *, criter
     """Judge scene runs as the scene studies judge their agents
     (:func:`jswim.studies.scenes._judge` for lattice moves): the success criterion on each
     swimmer's own moves, with the bulk swimmer's (noiseless, paper's formula) displacements; here
-    the shape judge for real ROCs (:func:`jswim.shape_judge.judge_shapes`), each swimmer's moves
+    the shape judge for real ROCs (:func:`jswim.judging.shape_judge.judge_shapes`), each swimmer's moves
     replayed in :mod:`jswim.env` from its start arms.
 
     One swimmer: its run judged as it is. A pair (a learner steering both swimmers): swimmer ``s``'s
@@ -622,8 +622,8 @@ def evaluate_scene(run: PPORun, scene_params: Any, direction: Any = 1, *, criter
     ConfigError
         When the scene's arm limits are not the bulk swimmer's.
     """
-    from jswim.gait import PAPER, GaitReport
-    from jswim.shape_judge import SHAPE_TOL, judge_shapes
+    from jswim.judging.gait import PAPER, GaitReport
+    from jswim.judging.shape_judge import SHAPE_TOL, judge_shapes
 
     criterion = PAPER if criterion is None else criterion
     tol = SHAPE_TOL if tol is None else tol

@@ -5,7 +5,7 @@ of the DOF cube, ``2**n_dof`` states), an action is a ``(DOF, ROC)`` pair from t
 action set, and the reward of a step is its displacement in the target direction (noisy when
 ``zeta > 0``). There are no episodes: one learner is one swimmer that keeps swimming, exactly like
 one LLM run, so "steps to learn" means the same thing for both and is judged by the same code,
-:func:`jswim.gait.judge`.
+:func:`jswim.judging.gait.judge`.
 
 The update is Q-learning written as an optax problem: the Q-table is the parameter, the loss is
 half the squared TD error of the visited entry with the bootstrapped target held fixed,
@@ -21,7 +21,7 @@ call trains e.g. 10,000 learners.
 On a ROC lattice (``make_params(..., roc_levels=K)``, ``--roc-levels K``, an extension) the
 same learner is tabular over the lattice: a state is a point of the ``(K + 1)**n_dof`` grid of
 DOF values ``lo + j (hi - lo) / K``, an action one of the ``n_dof (2K + 1)`` codes ``[DOF, k]``
-(ROC ``k/K``; :mod:`jswim.lattice`), and the environment steps the code exactly. ``K = 1`` is the
+(ROC ``k/K``; :mod:`jswim.judging.lattice`), and the environment steps the code exactly. ``K = 1`` is the
 paper's learner, number for number (the same operations on the same values).
 
 Example::
@@ -51,7 +51,7 @@ from jswim.actions import check_action_set
 from jswim.agents.defaults import default_rocs
 from jswim.env import EnvParams, advance, broadcast_params, make_params, reset, uniforms
 from jswim.errors import ConfigError
-from jswim.gait import PAPER, Criterion, GaitReport, judge
+from jswim.judging.gait import PAPER, Criterion, GaitReport, judge
 
 #: Exploration rate ``0.8**t``: 1 at the start (nothing is known yet), below 1 % after 21 steps,
 #: about 5 random steps in all. It has to reach 0: success means the stroke lasts to the end of
@@ -449,7 +449,7 @@ batch_params = broadcast_params
 
 
 def evaluate(run: QRun, params: EnvParams, *, criterion: Criterion = PAPER) -> GaitReport:
-    """Judge training runs with the shared success criterion, :func:`jswim.gait.judge`."""
+    """Judge training runs with the shared success criterion, :func:`jswim.judging.gait.judge`."""
     return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), criterion=criterion,
                  roc_levels=_k(params))
 

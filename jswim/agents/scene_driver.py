@@ -16,7 +16,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim import env, lattice
+from jswim import env
+
+from jswim.judging import lattice
 from jswim.agents import scene_env
 from jswim.agents.defaults import dof_decimals
 from jswim.agents.step_batcher import StepBatcher

@@ -5,7 +5,7 @@ An agent steers every swimmer of a scene through one set of **joint DOFs**: swim
 (0-based) owns DOFs ``2s + 1`` and ``2s + 2`` (its two arms, 1-based as in the prompt), so the
 paper's reply ``[changed DOF, ROC]`` names the swimmer through its DOF (``[3, 1]`` lengthens swimmer
 2's first arm). A joint action code is the paper's lattice code over the joint DOFs,
-``(dof - 1)(2K + 1) + k + K`` (:func:`jswim.lattice.encode`), so one swimmer's codes are the
+``(dof - 1)(2K + 1) + k + K`` (:func:`jswim.judging.lattice.encode`), so one swimmer's codes are the
 bulk swimmer's codes unchanged.
 
 The environment is :mod:`jswim.scenes` (the hydrodynamics, part A of issue 19); nothing else in

@@ -16,7 +16,7 @@ column                 meaning
 ``group``              the study's cell (``zeta=1``, ``n_ht=3``, ...; empty for one-cell studies)
 ``n``                  runs (every sample counted)
 ``samples``            independent samples of each run pooled in the row (``--samples``; 1 without)
-``success``            success rate p (the paper's criterion, ``jswim.gait.judge``)
+``success``            success rate p (the paper's criterion, ``jswim.judging.gait.judge``)
 ``success_lo/hi``      its 95% Wilson interval
 ``learned``            runs that learned ("k of n learned")
 ``steps_median``       median steps to learn over the runs that learned (counted from 1)
@@ -176,7 +176,7 @@ def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[s
 def figure(folder: Path, rows: Sequence[Mapping[str, Any]]) -> list[Path]:
     """Success p and X/a end, each with its 95% interval, per row; a pair of panels per part,
     swimmer, direction and group (``leaderboard.png``/``.pdf``)."""
-    from jswim import plots
+    from jswim.figures import plots
 
     return plots.save(figure_object(rows), folder, "leaderboard")
 

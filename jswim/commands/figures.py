@@ -13,7 +13,7 @@ from jswim.results import atomic_write, writing
 
 def qlearn_outputs(rows: Sequence[Any], args: argparse.Namespace) -> list[Path]:
     """``qlearn.png``/``.pdf`` (histograms) and ``qlearn.csv`` (the table) in ``args.out``."""
-    from jswim import plots
+    from jswim.figures import plots
     from jswim.viz.charts import qlearn_figure
 
     out = Path(args.out)
@@ -36,7 +36,7 @@ def qlearn_outputs(rows: Sequence[Any], args: argparse.Namespace) -> list[Path]:
 
 def ensemble_figure_files(stats: Sequence[Any], title: str, direction: int, folder: Path, stem: str) -> list[Path]:
     """The ensemble figure as ``STEM.png`` and ``STEM.pdf`` in ``folder``."""
-    from jswim import plots
+    from jswim.figures import plots
     from jswim.viz.charts import ensemble_figure
 
     return plots.save(ensemble_figure(stats, title, direction), folder, stem)

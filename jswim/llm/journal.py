@@ -6,7 +6,7 @@ a hash of the request and what came back (text, usage, cost). A run interrupted 
 crash or the cost cap starts again from its first step on the next session, and its calls are
 answered from this journal, in order, for as long as each request is the very request recorded
 (same messages, sampling and seed). Calls are matched by (run, index, request hash): a call whose
-record is missing (a torn line, cut on open by :func:`jswim.jsonl.repair_tail`) is simply sent
+record is missing (a torn line, cut on open by :func:`jswim._io.jsonl.repair_tail`) is simply sent
 again, and the calls after it still replay; a request that differs from its record goes to the
 server. A run only ever replays its own calls, never another run's.
 
@@ -23,10 +23,10 @@ import os
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from jswim.jsonl import read_records, repair_tail
+from jswim._io.jsonl import read_records, repair_tail
 from jswim.llm.client import ChatResult
 from jswim.llm.usage import Usage
-from jswim.permissions import opener
+from jswim._io.permissions import opener
 
 JOURNAL = "calls.jsonl"
 
@@ -126,7 +126,7 @@ class CallJournal:
         """Append one answered call (flushed, so it survives an interrupt)."""
         if self._fh is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fh = open(self.path, "a", encoding="utf-8", opener=opener)  # owner only (jswim.permissions)
+            self._fh = open(self.path, "a", encoding="utf-8", opener=opener)  # owner only (jswim._io.permissions)
         u = res.usage
         billed = not (res.cache_hit or res.shared)
         rec = {

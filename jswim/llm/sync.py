@@ -6,13 +6,13 @@ import asyncio
 import concurrent.futures
 from typing import Any, Coroutine, TypeVar
 
-from jswim import interrupts
+from jswim._io import interrupts
 
 T = TypeVar("T")
 
 
 async def _main(coro: Coroutine[Any, Any, T]) -> T:
-    """``coro`` as the task a signal cancels (:mod:`jswim.interrupts`)."""
+    """``coro`` as the task a signal cancels (:mod:`jswim._io.interrupts`)."""
     interrupts.set_main_task(asyncio.current_task())
     try:
         return await coro

@@ -8,7 +8,7 @@ swimmers that keep moving forward (``direction * (X_t - X_{t-w}) > 0`` over the 
 steps, ``w`` = the stroke's period by default).
 
 Policies: a fixed stroke repeated cyclically (:func:`stroke_policy`; the signature gait is
-``jswim.gait.best_cycles(model, direction)[0]``) or the greedy policy of a Q-table
+``jswim.judging.gait.best_cycles(model, direction)[0]``) or the greedy policy of a Q-table
 (:func:`q_policy`, ties broken at random per swimmer).
 
 Scale: swimmers are simulated ``chunk`` at a time (one jitted scan over all steps per chunk,
@@ -323,7 +323,7 @@ def _combine(parts: list, zeta: float, n: int, every: int, n_rep: int, qs: tuple
 
 def signature_policy(params: EnvParams) -> tuple[Policy, tuple[int, ...]]:
     """The best closed cycle in the target direction and its start levels."""
-    from jswim import gait
+    from jswim.judging import gait
 
     direction = int(np.sign(float(np.asarray(params.direction))))
     best = gait.best_cycles(params.model, direction)[0]

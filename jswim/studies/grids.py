@@ -25,7 +25,7 @@ from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair
                                    variant_action_set)
 from jswim.env import all_inits
 from jswim.errors import ConfigError
-from jswim.gait import PAPER
+from jswim.judging.gait import PAPER
 from jswim.prompt import SENTENCES
 from jswim.swimmers.models import SWIMMERS, make_model
 
@@ -67,7 +67,7 @@ class StudyOptions:
     runs: int | None = None  # LLM runs per setting
     q_runs: int | None = None  # Q-learning and random runs per setting
     steps: int = 50
-    horizon: int = PAPER.horizon  # of the success criterion (jswim.gait.Criterion)
+    horizon: int = PAPER.horizon  # of the success criterion (jswim.judging.gait.Criterion)
     n_ht: int | None = None
     n_hts: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 7, 8)
     zeta: float = 0.0
@@ -412,7 +412,7 @@ def short_steps_warning(o: StudyOptions) -> str | None:
     """A warning when runs are too short for any of them to meet the success criterion.
 
     Success needs ``n_cycles`` consecutive cycles of at least :data:`MIN_PERIOD` steps each within
-    the horizon (:class:`jswim.gait.Criterion`), so a run of fewer steps fails whatever it does.
+    the horizon (:class:`jswim.judging.gait.Criterion`), so a run of fewer steps fails whatever it does.
     """
     need = PAPER.n_cycles * MIN_PERIOD
     if o.steps < need:

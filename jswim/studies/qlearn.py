@@ -3,7 +3,7 @@
 Many independent learners per (swimmer, direction, zeta) are trained in vectorised calls
 (:func:`jswim.agents.qlearning.train_batch`, sharded over every device) and judged by the shared
 criterion, ``chunk`` learners at a time so that 10^6 seeds fit in bounded memory; steps to learn
-are summarised by :func:`jswim.stats.learn_stats`, the same statistic as the study tables.
+are summarised by :func:`jswim.judging.stats.learn_stats`, the same statistic as the study tables.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from jswim.agents.defaults import paper_init
 from jswim.agents.qlearning import QConfig, QRun, batch_params, evaluate, train_batch
 from jswim.env import EnvParams, make_params, seed_key
 from jswim.errors import ConfigError
-from jswim.gait import PAPER, Criterion, GaitReport
-from jswim.stats import learn_stats
+from jswim.judging.gait import PAPER, Criterion, GaitReport
+from jswim.judging.stats import learn_stats
 from jswim.swimmers.models import make_model
 
 
@@ -32,8 +32,8 @@ class Summary(NamedTuple):
     action_set: str
     n: int
     learned: float  # fraction that end in the qualifying stroke (within the run)
-    success: float  # fraction meeting the success criterion (jswim.gait.Criterion)
-    n_learned: int  # learners that learned; the quartiles below are over these (jswim.stats.learn_stats)
+    success: float  # fraction meeting the success criterion (jswim.judging.gait.Criterion)
+    n_learned: int  # learners that learned; the quartiles below are over these (jswim.judging.stats.learn_stats)
     q25: float  # NaN when none learned
     median: float
     q75: float
@@ -75,7 +75,7 @@ def summarize(
 ) -> list[Summary]:
     """One :class:`Summary` per (direction, zeta) group of a batched run.
 
-    Steps to learn follow :func:`jswim.stats.learn_stats`, as in every study table: quartiles
+    Steps to learn follow :func:`jswim.judging.stats.learn_stats`, as in every study table: quartiles
     over the learners that learned, and the count of those that did (never-learned learners are
     counted, not turned into numbers). ``horizon`` is where ``mean_x_horizon`` is read.
     """
@@ -197,6 +197,6 @@ def format_table(rows: Sequence[Summary]) -> str:
             f"{f'{r.n_learned} of {r.n}':>15} {r.success:7.3f} {num(r.q25):>5} {num(r.median):>6} {num(r.q75):>5} "
             f"{r.mean_x_horizon:7.3f} {r.mean_x_end:7.3f}"
         )
-    lines.append("q25/median/q75: steps to learn over the learners that learned (jswim.stats.learn_stats), counted "
+    lines.append("q25/median/q75: steps to learn over the learners that learned (jswim.judging.stats.learn_stats), counted "
                  "from 1 as in the paper: the step at which the final stroke starts")
     return "\n".join(lines)

@@ -7,12 +7,12 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from jswim.results import is_failed
-from jswim.stats import learn_stats, mean_interval, wilson_interval
+from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
 
 
 def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, swimmer, direction, group): success rate with 95% Wilson CI, mean X/a in the
-    target direction with a bootstrap CI, steps to learn (:func:`jswim.stats.learn_stats`:
+    target direction with a bootstrap CI, steps to learn (:func:`jswim.judging.stats.learn_stats`:
     quartiles over the runs that learned, and ``learned``, how many did), tokens per step.
 
     ``tokens_per_step`` counts what the model read and wrote per decision (shared and cached calls
@@ -55,11 +55,11 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path,
                  note: str | None = None) -> list[Path]:
-    """The study's figures (:func:`jswim.plots.study_figures`) as PNG and PDF in ``folder``.
+    """The study's figures (:func:`jswim.figures.plots.study_figures`) as PNG and PDF in ``folder``.
 
     ``note`` (see :func:`jswim.results.unfinished_note`) is written across each figure.
     """
-    from jswim import plots  # lazy: matplotlib is ~0.5 s of import that --no-figures never needs
+    from jswim.figures import plots  # lazy: matplotlib is ~0.5 s of import that --no-figures never needs
 
     paths: list[Path] = []
     rows = [r for r in rows if not is_failed(r)]  # failed runs are not results

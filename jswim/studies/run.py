@@ -6,8 +6,8 @@ train/roll out in one vectorised call per swimmer; LLM runs are per-run pipeline
 lands in the study folder (:class:`jswim.results.StudyStore`) the moment it ends. Every answered
 call is journaled first (``calls.jsonl``, :class:`jswim.llm.journal.CallJournal`), so an
 interrupted or capped study resumes without paying for a call twice. Every run, whatever its
-agent, is judged by the same code, :func:`jswim.gait.judge`, with the study's
-:class:`jswim.gait.Criterion`.
+agent, is judged by the same code, :func:`jswim.judging.gait.judge`, with the study's
+:class:`jswim.judging.gait.Criterion`.
 
 A study's identity (what a folder is compared on when resumed) is what defines its runs: the
 grid's settings, the seed, the model and its sampling, the prompt template. Not in it: the
@@ -39,13 +39,13 @@ from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
 from jswim.console import eta
-from jswim import lattice
+from jswim.judging import lattice
 from jswim.errors import ConfigError, JswimError, JswimWarning
-from jswim.gait import Criterion, GaitReport, judge
+from jswim.judging.gait import Criterion, GaitReport, judge
 from jswim.llm.backend import Backend
 from jswim.llm.budget import Budget
 from jswim.llm.credentials import scrub
-from jswim.permissions import private_files
+from jswim._io.permissions import private_files
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
 from jswim.llm.journal import CallJournal
@@ -149,7 +149,7 @@ def _lattice(roc_levels: int) -> dict[str, int]:
 
 def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     """The real-valued RL baseline (:mod:`jswim.agents.ppo`) for one swimmer, judged on shapes
-    (:func:`jswim.agents.ppo.evaluate`: :func:`jswim.shape_judge.judge_shapes` on displacements
+    (:func:`jswim.agents.ppo.evaluate`: :func:`jswim.judging.shape_judge.judge_shapes` on displacements
     replayed exactly, without noise)."""
     from jswim.agents import ppo, qlearning
 
@@ -264,7 +264,7 @@ def default_folder(study: str, o: StudyOptions, backend: Backend | None, root: s
 ProgressFn = Callable[[str, int, int, str], None]
 
 
-@private_files()  # the folder and the cache: owner only under the usual umask (jswim.permissions)
+@private_files()  # the folder and the cache: owner only under the usual umask (jswim._io.permissions)
 def run_study(
     study: str,
     options: StudyOptions = StudyOptions(),

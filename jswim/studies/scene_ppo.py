@@ -10,8 +10,8 @@ of one swimmer per step by a real ROC in [-1, 1]; for a pair it steers both (joi
 
 Success is the study's criterion in its real-valued form (:func:`jswim.agents.ppo.evaluate_scene`):
 on each swimmer's own moves, with the bulk swimmer's noiseless displacements, the shape judge of
-the continuous study (:func:`jswim.shape_judge.judge_shapes`) where the lattice agents get
-:func:`jswim.gait.judge`; a pair succeeds when both swimmers' own move sequences do. Whether it
+the continuous study (:func:`jswim.judging.shape_judge.judge_shapes`) where the lattice agents get
+:func:`jswim.judging.gait.judge`; a pair succeeds when both swimmers' own move sequences do. Whether it
 found a joint stroke faster than two square strokes is read, as for the other agents, from the
 row's ``speed`` (progress per step over the second half) against the strokes' rows. Wall runs get
 their fate (:func:`jswim.studies.scenes.fate`) from the heights and contacts the training run
@@ -24,7 +24,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from jswim.gait import Criterion
+from jswim.judging.gait import Criterion
 from jswim.studies import scenes
 from jswim.studies.grids import Plan
 

@@ -30,7 +30,7 @@ import numpy as np
 from jswim import env
 from jswim.agents import scene_baselines, scene_env
 from jswim.agents.qlearning import QConfig
-from jswim.gait import Criterion, judge
+from jswim.judging.gait import Criterion, judge
 from jswim.studies.grids import STROKE_AGENT, Plan
 from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
@@ -187,7 +187,7 @@ def llm_row(plan: Plan, result: Any, horizon: int, extra: dict[str, Any]) -> dic
 
 
 def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dict[str, Any]:
-    """The paper's success criterion (:func:`jswim.gait.judge`, bulk displacements) on each
+    """The paper's success criterion (:func:`jswim.judging.gait.judge`, bulk displacements) on each
     swimmer's own moves: one swimmer as in the bulk studies; a pair succeeds when both
     swimmers' move sequences do (each judged on its own moves, with the same horizon)."""
     params = env.make_params(plan.swimmer, direction=plan.direction, init=plan.init)

@@ -31,8 +31,8 @@ from jswim.viz import worlds
 from jswim.viz.tracks import Track, fmt_action, track, view_box
 from jswim.viz.bench_page import _read, part_folders
 
-#: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.plots.AGENT_STYLE`).
-#: Each agent's colour: the figures' (jswim.plots.AGENT_STYLE), the square stroke in black.
+#: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.figures.plots.AGENT_STYLE`).
+#: Each agent's colour: the figures' (jswim.figures.plots.AGENT_STYLE), the square stroke in black.
 AGENT_COLORS = {"llm": "#0072B2", "qlearning": "#D55E00", "random": "#555555", "ppo": "#009E73", "stroke": "#000000"}
 FLUID = "#EAF3FA"
 STROKE_COLOR = "#009E73"
@@ -151,7 +151,7 @@ def _count_frames(path: str, suffix: str, drawn: int) -> int:
 
 
 def _file_mode() -> int:
-    from jswim.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
+    from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 
     return file_mode()
 
@@ -180,7 +180,7 @@ def pick_runs(rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 
     the runs are held to the first start and (unless ``by`` is it) the first noise level, n_ht,
     group and variant, and the first replicate of each value of ``by`` is kept (at most ``most``).
     """
-    from jswim.plots import AGENT_ORDER, panel_keys
+    from jswim.figures.plots import AGENT_ORDER, panel_keys
 
     done = [r for r in rows if r.get("status", "done") == "done" and r.get("x")]
     if not done:
@@ -326,7 +326,7 @@ def _build(anim: Animation):
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle
 
-    from jswim.plots import RC
+    from jswim.figures.plots import RC
 
     tracks = anim.tracks
     box = view_box(tracks)

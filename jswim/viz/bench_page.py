@@ -23,7 +23,7 @@ from jswim.results import atomic_write, writing
 from jswim.bench.runner import BASELINES, REFERENCE
 from jswim.bench.leaderboard import _cost as cost_text, _steps, figure_object, missing_text
 from jswim.overview import MIN_BOOTSTRAP_N
-from jswim import plots
+from jswim.figures import plots
 from jswim.viz.page import _asset, write_report
 
 BENCH_FILE = "bench.json"

@@ -1,7 +1,7 @@
 """Figures of the commands that write no study folder: ``jswim qlearn`` and ``jswim ensemble``.
 
-Both follow the study figures' rules (:mod:`jswim.plots`: paper sizes, 7-8 pt text, colour-blind
-safe colours, PNG and PDF through :func:`jswim.plots.save`) and name the agent or stroke they
+Both follow the study figures' rules (:mod:`jswim.figures.plots`: paper sizes, 7-8 pt text, colour-blind
+safe colours, PNG and PDF through :func:`jswim.figures.plots.save`) and name the agent or stroke they
 show in their title, so a figure taken out of its folder still says what it is.
 """
 
@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.plots import COLUMN_IN, PAGE_IN, RC, SWIMMER_ORDER, _dir_text, _disp_label, _swimmer_label
+from jswim.figures.plots import COLUMN_IN, PAGE_IN, RC, SWIMMER_ORDER, _dir_text, _disp_label, _swimmer_label
 
 #: Colours of the two action sets (Okabe-Ito).
 SET_STYLE = {"all": dict(color="#D55E00", label="all six actions (the paper's)"),

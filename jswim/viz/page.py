@@ -123,7 +123,7 @@ def _drawn_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | No
     """The study's figures drawn in memory (no file written), as PNG data URIs."""
     import matplotlib.pyplot as plt
 
-    from jswim import plots
+    from jswim.figures import plots
 
     out = []
     for name, fig in plots.study_figures(study, [r for r in rows if not is_failed(r)], note=note).items():

@@ -64,7 +64,8 @@ def test_clearing_rule_four_dof_per_swimmer():
 def test_history_keeps_a_run_that_swims_toward_its_target_and_clears_one_that_swims_away(direction):
     # The env's progress (direction * dX) feeds the clearing rule: the best cycle toward the target
     # (~0.19 a per 4 steps) never clears; the same moves with the target reversed clear at step 6.
-    from jswim import env, gait
+    from jswim import env
+    from jswim.judging import gait
 
     model = make_model("purcell")
     best = gait.best_cycles(model, direction)[0]

@@ -1,4 +1,4 @@
-"""The continuous-action RL baseline (jswim.agents.ppo) and the real-valued judge (jswim.shape_judge)."""
+"""The continuous-action RL baseline (jswim.agents.ppo) and the real-valued judge (jswim.judging.shape_judge)."""
 
 from __future__ import annotations
 
@@ -7,11 +7,13 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jswim import env, gait
+from jswim import env
+
+from jswim.judging import gait
 from jswim.agents import ppo
 from jswim.agents.defaults import paper_init
 from jswim.errors import ConfigError
-from jswim.shape_judge import judge_shapes
+from jswim.judging.shape_judge import judge_shapes
 
 B = 32
 

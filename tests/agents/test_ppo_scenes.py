@@ -77,7 +77,7 @@ def _hand_made(codes_per_run):
 
 
 def test_pair_judge_on_hand_made_strokes():
-    # The real-valued pair judge against the lattice one of the studies (jswim.gait.judge on each
+    # The real-valued pair judge against the lattice one of the studies (jswim.judging.gait.judge on each
     # swimmer's own codes, an independent code path) on corner moves, where the two must agree.
     from jswim.studies import scenes
     from jswim.studies.grids import Plan

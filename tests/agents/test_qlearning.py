@@ -17,7 +17,7 @@ from jswim.agents.qlearning import (
 )
 from jswim.env import encode_action as act, make_params
 from jswim.errors import ConfigError
-from jswim.gait import Criterion, best_cycles, judge, replay
+from jswim.judging.gait import Criterion, best_cycles, judge, replay
 from jswim.studies.qlearn import format_table, summarize
 
 B = 64  # learners per batch; one size keeps the number of compilations down
@@ -186,7 +186,7 @@ def test_summaries(ng_greedy_all):
     run, params = ng_greedy_all
     rows = summarize(run, params, evaluate(run, params), swimmer="ng", action_set="all")
     assert [r.direction for r in rows] == [1, -1] and all(r.n == B // 2 for r in rows)
-    # Never-learned learners are counted, not turned into +inf steps (jswim.stats.learn_stats).
+    # Never-learned learners are counted, not turned into +inf steps (jswim.judging.stats.learn_stats).
     assert all(r.learned == 0.0 and r.n_learned == 0 and np.isnan(r.median) for r in rows)
     assert f"0 of {B // 2}" in format_table(rows)
 

@@ -5,7 +5,9 @@ from __future__ import annotations
 import jax
 import numpy as np
 
-from jswim import env, gait
+from jswim import env
+
+from jswim.judging import gait
 from jswim.agents import random_policy
 
 

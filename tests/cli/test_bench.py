@@ -190,7 +190,7 @@ def test_bench_samples_grow_a_folder_and_show_in_the_leaderboard(tmp_path, capsy
 
 def test_leaderboard_figure_draws_rows_at_p_0_and_1_for_any_n(tmp_path):
     from jswim.bench import leaderboard
-    from jswim.stats import wilson_interval
+    from jswim.judging.stats import wilson_interval
 
     rows = []
     for n in (6, 11, 21):  # sizes where Wilson's bounds rounded past p (an interrupted part holds any n)

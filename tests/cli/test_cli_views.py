@@ -150,7 +150,7 @@ def test_plot_marks_an_unfinished_study(folder, tmp_path, capsys, monkeypatch):
     (part / "metadata.json").write_text(json.dumps(meta))
     lines = (folder / "runs.jsonl").read_text().splitlines()
     (part / "runs.jsonl").write_text("\n".join(lines[:9]) + "\n")
-    from jswim import plots
+    from jswim.figures import plots
 
     notes = []
     original = plots.study_figures

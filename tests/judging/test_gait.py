@@ -9,7 +9,7 @@ import pytest
 
 from jswim.env import decode_action, encode_action as act, make_params, rollout
 from jswim.errors import ConfigError
-from jswim.gait import best_cycles, best_per_step, judge, replay
+from jswim.judging.gait import best_cycles, best_per_step, judge, replay
 
 HOLD = act(1, 0)
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from jswim import lattice
+from jswim.judging import lattice
 from jswim.env import make_params, step_table
-from jswim.gait import judge
+from jswim.judging.gait import judge
 from jswim.swimmers.models import make_model
 
 SQUARE = {"purcell": 0.19124724, "ng": 0.15626494}
@@ -156,7 +156,7 @@ def test_judge_on_the_lattice(name):
 
 @pytest.mark.parametrize("name", ["purcell", "ng"])
 def test_k1_replay_matches_the_corner_replay(name):
-    from jswim.gait import replay
+    from jswim.judging.gait import replay
 
     model = make_model(name)
     rng = np.random.default_rng(0)

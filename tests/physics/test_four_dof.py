@@ -5,7 +5,9 @@ import itertools
 import numpy as np
 import pytest
 
-from jswim import env, gait
+from jswim import env
+
+from jswim.judging import gait
 from jswim.agents.defaults import default_n_ht, default_rocs
 from jswim.agents.llm import LLMAgentConfig, LLMRunSpec, run_batch
 from jswim.llm import ClientSettings

@@ -17,8 +17,8 @@ from pathlib import Path
 import pytest
 
 from jswim import cli
-from jswim.folderlock import HOLDER, LOCK, FolderBusyError, holder
-from jswim.jsonl import repair_tail
+from jswim._io.folderlock import HOLDER, LOCK, FolderBusyError, holder
+from jswim._io.jsonl import repair_tail
 from jswim.llm.client import ChatResult
 from jswim.llm.journal import CallJournal
 from jswim.llm.usage import Usage
@@ -227,7 +227,7 @@ def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(sign
 SELF_KILL_IMPORT = """
 import os, signal, sys, time
 sys.path.insert(0, sys.argv[1])
-from jswim import interrupts
+from jswim._io import interrupts
 interrupts.install()
 try:
     import selfkill  # sends SIGTERM to its own process half way through its own import
@@ -249,7 +249,7 @@ def test_a_signal_during_an_import_waits_for_the_import_to_finish(tmp_path):
 
 SELF_KILL_GC = """
 import gc, os, signal, time
-from jswim import interrupts
+from jswim._io import interrupts
 interrupts.install()
 
 def callback(phase, info):  # Python prints and drops any exception raised in here

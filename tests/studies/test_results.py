@@ -22,7 +22,7 @@ from jswim.results import (
     read_runs,
     upgrade_names,
 )
-from jswim.stats import learn_stats, mean_interval, wilson_interval
+from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
 
 
 def test_torn_last_line_is_dropped_and_repaired(tmp_path):
@@ -155,7 +155,7 @@ def test_every_file_gets_the_same_mode(tmp_path):
     (0o007, 0o660, 0o770),
 ])
 def test_study_folders_are_the_owner_s_unless_the_umask_shares_with_a_group(umask, files, folders, tmp_path):
-    from jswim.permissions import file_mode
+    from jswim._io.permissions import file_mode
 
     from jswim.studies import StudyOptions, run_study
 

@@ -12,7 +12,7 @@ import pytest
 from matplotlib.container import ErrorbarContainer
 from PIL import Image
 
-from jswim import plots
+from jswim.figures import plots
 
 SPEED = {"llm": 0.04, "qlearning": 0.02, "random": 0.0}
 

@@ -2,7 +2,7 @@
 agent (Okabe-Ito, legible with the common colour-vision deficiencies and in grey), the rc settings
 every figure is built under, and :func:`tidy`, what every figure gets.
 
-Its own module so that every figure module (:mod:`jswim.plots`, :mod:`jswim.scene_plots`) reads
+Its own module so that every figure module (:mod:`jswim.figures.plots`, :mod:`jswim.figures.scenes`) reads
 the style from below, and neither imports the other to get it.
 """
 

@@ -34,11 +34,11 @@ from matplotlib.figure import Figure
 from jswim.agents.variants import VARIANTS
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the reading order of tables and panels)
 from jswim.results import unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
-from jswim.stats import learn_stats, mean_interval, wilson_interval
+from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
 from jswim.swimmers.models import SwimmerModel, make_model
 
-from jswim.scene_plots import scene_figures
-from jswim.figure_style import (  # noqa: F401  (the style's old home)
+from jswim.figures.scenes import scene_figures
+from jswim.figures.style import (  # noqa: F401  (the style's old home)
     AGENT_STYLE, COLUMN_IN, NOTE_COLOR, PAGE_IN, RC, REFERENCE_STYLE, _styled, tidy,
 )
 
@@ -187,7 +187,8 @@ def _signature_path(swimmer: str, direction: int, init: tuple[int, ...], steps: 
     ``None`` when the best cycle does not pass through ``init`` (then no run from there can
     follow it from step 0).
     """
-    from jswim import env, gait  # lazy: JAX only when a reference line is drawn (jswim.overview imports plots)
+    from jswim import env  # lazy: JAX only when a reference line is drawn (jswim.overview imports plots)
+    from jswim.judging import gait  # lazy: as above
 
     model = make_model(swimmer)
     cyc = gait.best_cycles(model, direction)[0]
@@ -210,7 +211,7 @@ def signature_reference(rows: Sequence[Mapping[str, Any]]) -> np.ndarray | None:
     """Mean target-direction X/a the runs of one panel would reach with the signature gait from step 0.
 
     The upper bound of a mean curve: every run from its own start following the swimmer's best
-    closed stroke cycle (:func:`jswim.gait.best_cycles`) from the first step. ``None`` if some
+    closed stroke cycle (:func:`jswim.judging.gait.best_cycles`) from the first step. ``None`` if some
     start is not on that cycle or the swimmer is unknown.
     """
     if not rows:
@@ -504,7 +505,7 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
     target direction. Agents share the axes, offset sideways so their intervals never overlap.
     ``numeric`` places the values of ``key`` on a number line (noise levels), otherwise one slot
     per value in ``order``. ``learn`` adds a panel between them: the median steps to learn with
-    its interquartile range over the runs that learned (:func:`jswim.stats.learn_stats`, counted
+    its interquartile range over the runs that learned (:func:`jswim.judging.stats.learn_stats`, counted
     from 1), each point labelled "k/n" (k of n runs learned; "0/n" on the axis where none did).
     """
     keys = panel_keys(rows)

@@ -29,7 +29,7 @@ from typing import Any
 
 from jswim._io.atomic import write_json
 from jswim.errors import ResultFolderError
-from jswim.permissions import file_mode
+from jswim._io.permissions import file_mode
 
 LOCK = ".jswim.lock"
 HOLDER = ".jswim.holder.json"

@@ -18,7 +18,7 @@ degree as the corner table), and tabulates every ``(point, DOF, k)``. Motions ar
 geometric centroid's frame (centroid position, orientation of the reference link) in the body
 frame at the start of the step, as in :func:`jswim.env.step_table`.
 
-This module is NumPy on top of the integrator: the judge (:func:`jswim.gait.judge`), the gait
+This module is NumPy on top of the integrator: the judge (:func:`jswim.judging.gait.judge`), the gait
 search (:func:`best_lattice_cycles`, ``jswim gaits --roc-levels K``) and the lattice baselines
 read it.
 """
@@ -334,7 +334,7 @@ def best_lattice_cycles(model: SwimmerModel, direction: int, roc_levels: int, ma
     segment of shape space and equals a single move (zero Reynolds number), so merging it never
     lowers the speed per step. Every start point and every such sequence is walked exactly
     (:func:`move_table`); one entry per loop up to cyclic shifts, shown from the shift that goes
-    furthest from orientation 0 (as :func:`jswim.gait.best_cycles`).
+    furthest from orientation 0 (as :func:`jswim.judging.gait.best_cycles`).
 
     Parameters
     ----------

@@ -144,7 +144,7 @@ class Criterion:
     def describe(self) -> str:
         """One line for run metadata."""
         return (f"{self.n_cycles} consecutive qualifying cycles (>= {self.min_fraction:g} of the best cycle's "
-                f"speed) within {self.horizon} steps, no later failure (jswim.gait.judge)")
+                f"speed) within {self.horizon} steps, no later failure (jswim.judging.gait.judge)")
 
 
 #: The paper's criterion.
@@ -372,7 +372,7 @@ def trailing_strokes(differs: Any, closed: Any, moved: np.ndarray, x: np.ndarray
     """The final qualifying stroke of each run: ``(start, period, displacement per step)``.
 
     Shared by :func:`judge` (action sequences on corners or the K lattice) and
-    :func:`jswim.shape_judge.judge_shapes` (shapes within a tolerance): they differ only in what
+    :func:`jswim.judging.shape_judge.judge_shapes` (shapes within a tolerance): they differ only in what
     "repeats with period p" means.
 
     ``differs(p)`` (bool ``(T - p, B)``): step ``t`` and step ``t + p`` differ; ``closed(sc, p)``
@@ -417,10 +417,10 @@ def judge(
 ) -> GaitReport:
     """Find, per run, the final stroke and whether it is a qualifying cycle (see module docs).
 
-    On a ``K``-level ROC lattice (``roc_levels = K > 1``, :mod:`jswim.lattice`) the same rules
+    On a ``K``-level ROC lattice (``roc_levels = K > 1``, :mod:`jswim.judging.lattice`) the same rules
     hold with lattice points for corners: a cycle returns to the same lattice point (exactly: the
     lattice is integer), every move changes the shape, and the speed threshold is relative to the
-    best closed lattice stroke (:func:`jswim.lattice.best_per_step`: the full square, the paper's
+    best closed lattice stroke (:func:`jswim.judging.lattice.best_per_step`: the full square, the paper's
     square gait, at every K measured); cycles are considered up to ``2**n_dof K`` moves.
 
     Parameters
@@ -437,7 +437,7 @@ def judge(
     criterion : Criterion
         Horizon, cycle count and speed threshold (default: the paper's, :data:`PAPER`).
     roc_levels : int
-        ``K``: ``actions`` are lattice codes (:func:`jswim.lattice.encode`); 1 (default) the
+        ``K``: ``actions`` are lattice codes (:func:`jswim.judging.lattice.encode`); 1 (default) the
         paper's action indices.
 
     Returns
@@ -476,7 +476,7 @@ def judge(
         best = np.where(direction > 0, best_per_step(model, 1, max_period), best_per_step(model, -1, max_period))
         rp = replay(at, model, init)
     else:
-        from jswim import lattice
+        from jswim.judging import lattice
 
         if levels0 is None:  # params.init holds levels: the corner's lattice positions
             init = init * k_levels

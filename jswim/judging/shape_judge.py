@@ -1,6 +1,6 @@
 """The success criterion for real-valued strokes: cycles read from the shape, within a tolerance.
 
-:func:`jswim.gait.judge` reads cycles from action indices (on the K lattice, from lattice codes):
+:func:`jswim.judging.gait.judge` reads cycles from action indices (on the K lattice, from lattice codes):
 a cycle is a repeated block of actions that returns to the same corner. An agent with real ROCs
 (:mod:`jswim.agents.ppo`) never repeats an action exactly, but it can repeat a *shape*: a push
 past a limit stops at the limit, so a policy whose ROCs saturate returns to the same corner
@@ -14,13 +14,13 @@ to the end of the run,
   exactly and without noise, by at least ``min_fraction`` of the best displacement per step of
   a closed stroke with the same constraints (one DOF at a time, ``|ROC| <= 1``), times ``p``.
 
-The best stroke's speed is :func:`jswim.gait.best_per_step`, the full square of corner moves:
+The best stroke's speed is :func:`jswim.judging.gait.best_per_step`, the full square of corner moves:
 for one DOF at a time and ``|ROC| <= 1`` a step sweeps at most the whole range, and a closed
 stroke's displacement is the curvature integrated over the area it encloses, which the full
-square maximises per step among the lattice strokes measured (:func:`jswim.lattice.best_per_step`
+square maximises per step among the lattice strokes measured (:func:`jswim.judging.lattice.best_per_step`
 finds the full square at every K). ``steps_to_learn``, ``success`` and the horizon are as in
-:func:`jswim.gait.judge` (:class:`jswim.gait.Criterion`, counted from 1). On corner-to-corner
-runs (ROC in {-1, 1}) this judge and :func:`jswim.gait.judge` agree, which the tests check.
+:func:`jswim.judging.gait.judge` (:class:`jswim.judging.gait.Criterion`, counted from 1). On corner-to-corner
+runs (ROC in {-1, 1}) this judge and :func:`jswim.judging.gait.judge` agree, which the tests check.
 
 Cycles are considered up to ``max_period`` steps (default ``2 * 2**n_dof``: a corner cycle, or a
 stroke with sides of half the range).
@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from jswim.errors import ConfigError
-from jswim.gait import PAPER, Criterion, GaitReport, best_per_step, trailing_strokes
+from jswim.judging.gait import PAPER, Criterion, GaitReport, best_per_step, trailing_strokes
 
 #: Shape tolerance of a cycle, as a fraction of each DOF's range (a return within 0.1 % counts).
 SHAPE_TOL = 1e-3
@@ -78,7 +78,7 @@ def judge_shapes(
     Returns
     -------
     GaitReport
-        As :func:`jswim.gait.judge`; ``cycle`` holds the stroke's DOFs moved (1-based), padded
+        As :func:`jswim.judging.gait.judge`; ``cycle`` holds the stroke's DOFs moved (1-based), padded
         with -1, since real-valued actions have no index.
 
     Raises

@@ -1,7 +1,7 @@
 """Figures of the scene studies (issue 19): ``jswim study wall`` and ``jswim study pair``.
 
-Same conventions as :mod:`jswim.plots` (paper sizes, the agents' palette, ``note`` across the
-top of an unfinished study's figures); chosen by :func:`jswim.plots.study_figures`.
+Same conventions as :mod:`jswim.figures.plots` (paper sizes, the agents' palette, ``note`` across the
+top of an unfinished study's figures); chosen by :func:`jswim.figures.plots.study_figures`.
 
 wall
     ``wall``: the square stroke's displacement per cycle against the starting height (log axis),
@@ -21,7 +21,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.figure_style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
+from jswim.figures.style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
 
 STROKE_STYLE = dict(color="black", ls="-", marker="o", label="square stroke")
 _STYLES = {**AGENT_STYLE, "stroke": STROKE_STYLE}
