@@ -18,14 +18,15 @@ PACKAGE = ROOT / "jswim"
 #: docs/design.md's layers, bottom first; a module may import its own layer and those below.
 #: The longest matching prefix decides.
 LAYERS = [
-    ("root", ["jswim.errors", "jswim.compile_cache", "jswim._io"]),
+    ("root", ["jswim.errors", "jswim.compile_cache", "jswim._io",
+              "jswim.folderlock", "jswim.jsonl", "jswim.permissions", "jswim.interrupts"]),  # the last four: old paths
     ("physics", ["jswim.swimmers"]),
     ("environment", ["jswim.env", "jswim.scenes", "jswim.integrate", "jswim.actions", "jswim.sharding"]),
     ("prompt text", ["jswim.prompt"]),
     ("LLM I/O", ["jswim.llm"]),
-    ("judging", ["jswim.judging"]),
+    ("judging", ["jswim.judging", "jswim.gait", "jswim.lattice", "jswim.shape_judge", "jswim.stats"]),
     ("agents", ["jswim.agents"]),
-    ("studies", ["jswim.studies", "jswim.figures", "jswim.commands.scenes", "jswim.results",
+    ("studies", ["jswim.studies", "jswim.figures", "jswim.plots", "jswim.scene_plots", "jswim.figure_style", "jswim.commands.scenes", "jswim.results",
                  "jswim.overview", "jswim.console"]),
     ("bench", ["jswim.bench", "jswim.commands.bench", "jswim.commands.serve"]),
     ("views", ["jswim.viz", "jswim.commands"]),
