@@ -1,0 +1,59 @@
+"""Study results on disk: one folder per study, resumable, written atomically.
+
+Layout of a study folder::
+
+    metadata.json        study name, parameters, seed, backend, prompt template, versions, status
+    runs.jsonl           one line per finished run (the durable record, appended and fsynced)
+    runs.parquet         tidy table of runs (rebuilt from runs.jsonl; also runs.csv)
+    trajectories.parquet per-step rows: run_id, step, x, y, orientation, action, progress, stuck
+    transcripts/RUN.jsonl  the LLM transcript of each LLM run
+    usage.json           tokens and cost per run and in total
+    figures/             PNG and PDF figures
+
+A run is "done" once its line is in ``runs.jsonl``. Running a study again on the same folder skips
+the done runs; a run that was interrupted is started again from scratch (its transcript is
+rewritten), so no row is lost or duplicated. Every other file is derived from ``runs.jsonl`` and
+rewritten whole through a temporary file and ``os.replace``, so a kill never leaves half a file.
+
+:func:`load` reads a folder (finished or not, read-only) into pandas DataFrames.
+
+Files are plain: JSON without ``NaN``/``Infinity`` (non-finite numbers are written as ``null``,
+so any language's parser reads them) and the same permissions for every file (owner only, ``0600``,
+unless the umask lets the group write: :mod:`jswim._io.permissions`; a rewritten file keeps its mode). A folder that cannot
+be written (read-only, full disk) is a :class:`StudyFolderError` naming the folder and the cause.
+"""
+
+from jswim._io.atomic import _jsonable, atomic_write, dumps, plain_json, write_json  # noqa: F401  (their old place)
+from jswim.results.load import TRAJECTORY_KEYS, Study, load  # noqa: F401
+from jswim.results.read import (  # noqa: F401
+    CALL_COLUMNS,
+    TRANSCRIPT_COLUMNS,
+    clean_metadata,
+    read_calls,
+    read_metadata,
+    read_runs,
+    read_transcript,
+    transcript_steps,
+    unfinished_note,
+)
+from jswim.results.schema import (  # noqa: F401
+    FAILED_STATUSES,
+    RENAMED,
+    SCALAR_TYPES,
+    is_failed,
+    legacy_names,
+    run_problem,
+    upgrade_names,
+)
+from jswim.results.store import (  # noqa: F401
+    FILE_MODE,
+    META,
+    RESERVE,
+    RESERVE_MIN_BYTES,
+    RUNS,
+    StudyFolderError,
+    StudyStore,
+    identity_differences,
+    writing,
+)
+from jswim.results.tables import arrow_table, write_tables  # noqa: F401

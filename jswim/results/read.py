@@ -1,0 +1,150 @@
+"""Reading what a study folder holds: its runs, its metadata, transcripts and the call journal.
+Damaged records are skipped with one warning naming the file and line."""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any, Iterable, Mapping
+
+from jswim._io.jsonl import SkippedRecord, read_records
+from jswim.errors import ResultFolderError
+from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_names
+
+
+def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
+    """Runs of a study folder (see :class:`StudyStore`), one record per ``run_id`` in first-seen
+    order, fields under today's names (:func:`upgrade_names`).
+
+    The first record of a run wins, except that a failed run (:func:`is_failed`) is replaced by
+    any later record of it: the one from the resume that ran it again. A line that is no run
+    record (not UTF-8, not JSON, a field of the wrong type: :func:`run_problem`) is skipped with
+    a warning naming the file and the line (:func:`jswim._io.jsonl.read_records`); that run counts as
+    not done, as a torn line's does.
+    """
+    path = Path(folder) / RUNS
+    by_id: dict[str, dict[str, Any]] = {}
+    for _, row in read_records(path, run_problem):
+        rid = row.get("run_id")
+        if rid not in by_id or is_failed(by_id[rid]):
+            by_id[rid] = upgrade_names(row)
+    return list(by_id.values())
+
+
+#: Fields of ``metadata.json`` by the JSON type readers expect of them.
+_META_TYPES: dict[str, tuple[type, ...]] = {
+    "study": (str,), "status": (str,), "identity": (dict,), "summary": (dict,), "llm_totals": (dict,),
+    "llm_server": (dict,), "grid": (dict,), "prompt_template": (dict,), "n_planned": (int,), "n_runs": (int,),
+    "horizon": (int,), "group_order": (list,), "llm_variants": (list,), "roc_levels": (list,),
+    "fidelity_deviations": (list,), "server": (str, type(None)), "prices_as_of": (str,), "error": (str, type(None)),
+}
+_JSON_NAMES = {dict: "an object", list: "a list", str: "text", int: "a whole number", type(None): "null"}
+
+
+def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
+    """``meta`` without the fields of the wrong type (a hand edit: ``"summary": 5``), each dropped
+    with one :class:`~jswim._io.jsonl.SkippedRecord` warning naming the file and the field; the
+    fields left are what a reader may compute with. ``summary.groups`` must be a list of objects."""
+    import warnings
+
+
+    out = dict(meta)
+    for k, types in _META_TYPES.items():
+        v = out.get(k)
+        if k in out and not (isinstance(v, types) and not isinstance(v, bool)):
+            want = " or ".join(_JSON_NAMES[t] for t in types)
+            warnings.warn(SkippedRecord(f"{path}: {k!r} is {v!r:.40}, not {want}; that field is ignored"), stacklevel=3)
+            out.pop(k)
+    groups = (out.get("summary") or {}).get("groups")
+    if groups is not None and not (isinstance(groups, list) and all(isinstance(g, dict) for g in groups)):
+        warnings.warn(SkippedRecord(f"{path}: 'summary.groups' is not a list of objects; the summary is ignored"),
+                      stacklevel=3)
+        out.pop("summary")
+    return out
+
+
+def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
+    """The study's ``metadata.json`` (fields under today's names); :class:`ResultFolderError` if
+    the folder is not a study. A field of the wrong type is dropped with a warning
+    (:func:`clean_metadata`)."""
+    path = Path(folder) / META
+    if not path.exists():
+        raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:  # ValueError: bad JSON or bad UTF-8
+        raise ResultFolderError(f"{path} is unreadable ({exc})") from None
+    if not isinstance(meta, dict):
+        raise ResultFolderError(f"{path} is not a study's metadata (a JSON {type(meta).__name__}, not an object)")
+    return upgrade_names(clean_metadata(meta, path))
+
+
+def unfinished_note(status: str | None, done: int, planned: int | None) -> str | None:
+    """The red line of a figure whose study has not finished (``None`` when it has)."""
+    if status == "complete" and (planned is None or done >= planned):
+        return None
+    of = f" of {planned}" if planned else ""
+    return f"UNFINISHED STUDY: {done}{of} runs done ({status or 'status unknown'})"
+
+
+# -- transcripts and the call journal ------------------------------------------------------------
+
+TRANSCRIPT_COLUMNS = ("step", "prompt", "reply", "action", "failed", "attempts", "http_retries", "prompt_tokens",
+                      "completion_tokens", "cost_usd", "latency_s", "cache_hit", "x_before", "x_after", "progress",
+                      "stuck", "cleared", "n_clears", "dofs_after", "replies")
+CALL_COLUMNS = ("run", "n", "key", "text", "raw", "prompt_tokens", "completion_tokens", "cached_tokens", "cost_usd",
+                "cache_hit", "shared", "constraint", "finish_reason")
+
+
+def _jsonl(path: Path) -> list[dict[str, Any]]:
+    """The JSON objects of a JSON-lines file; torn or foreign lines are skipped, a missing file is empty."""
+    return [rec for _, rec in read_records(path)]
+
+
+def read_transcript(folder: str | os.PathLike, run_id: str) -> list[dict[str, Any]]:
+    """The records of ``transcripts/RUN.jsonl`` (``meta``, one ``step`` per step, ``end``); ``[]`` if none.
+
+    A run id that is not a plain file name (a path, ``..``) reads nothing."""
+    name = f"{run_id}.jsonl"
+    if Path(name).name != name or run_id in ("", ".", ".."):
+        return []
+    return _jsonl(Path(folder) / "transcripts" / name)
+
+
+def transcript_steps(records: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """One flat dict per ``step`` record of a transcript (see :meth:`Study.transcript` for the keys)."""
+    out = []
+    for r in records:
+        if r.get("type") != "step":
+            continue
+        att = [a for a in (r.get("attempts") or []) if isinstance(a, dict)]
+
+        def total(key: str) -> float:
+            return sum(float(a.get(key) or 0) for a in att)
+
+        out.append({
+            "step": r.get("step"), "prompt": r.get("prompt"), "reply": att[-1].get("text") if att else None,
+            "action": r.get("action"), "failed": bool(r.get("failed")), "attempts": len(att),
+            "http_retries": int(total("retries")), "prompt_tokens": int(total("prompt_tokens")),
+            "completion_tokens": int(total("completion_tokens")), "cost_usd": total("cost_usd"),
+            "latency_s": total("latency_s"), "cache_hit": any(bool(a.get("cache_hit")) for a in att),
+            "x_before": r.get("x_before"), "x_after": r.get("x_after"), "progress": r.get("progress"),
+            "stuck": r.get("stuck"), "cleared": bool(r.get("cleared")), "n_clears": r.get("n_clears"),
+            "dofs_after": r.get("dofs_after"), "replies": att,
+        })
+    return out
+
+
+def read_calls(folder: str | os.PathLike) -> list[dict[str, Any]]:
+    """The answered calls of ``calls.jsonl``, flat (``usage`` split into its three token counts)."""
+    out = []
+    from jswim.llm.journal import call_problem  # lazy: the journal's rule, without httpx for other readers
+
+    for _, c in read_records(Path(folder) / "calls.jsonl", call_problem):
+        usage = c.get("usage") if isinstance(c.get("usage"), list) else []
+        usage = (list(usage) + [None, None, None])[:3]
+        row = {k: c.get(k) for k in CALL_COLUMNS}
+        row.update(prompt_tokens=usage[0], completion_tokens=usage[1], cached_tokens=usage[2])
+        out.append(row)
+    return out
