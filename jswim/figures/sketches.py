@@ -14,23 +14,15 @@ from jswim.figures.style import (
     _styled,
 )
 from jswim.swimmers.models import SwimmerModel
+from jswim.swimmers.outline import outline
 
 # -- swimmer sketches -------------------------------------------------------------------------
 
 
 def shape_points(model: SwimmerModel, d: Sequence[float]) -> np.ndarray:
-    """Body-frame outline of a shape: link end points ``(N+1, 2)`` or sphere centres ``(N, 2)``."""
-    d = np.asarray(d, float)
-    if model.planar:
-        n = d.size + 1
-        m = (n - 1) // 2
-        cum = np.concatenate([[0.0], np.cumsum(d)])
-        phi = cum - cum[m]
-        t = np.stack([np.cos(phi), np.sin(phi)], -1)
-        joints = np.concatenate([[np.zeros(2)], np.cumsum(t, axis=0)])
-        return joints - joints.mean(axis=0)
-    x = np.concatenate([[0.0], np.cumsum(d)])
-    return np.stack([x - x.mean(), np.zeros_like(x)], -1)
+    """Body-frame outline of a shape: link end points ``(N+1, 2)`` or sphere centres ``(N, 2)``
+    (:func:`jswim.swimmers.outline.outline`, the pictures' one outline)."""
+    return outline(model, d)
 
 
 def draw_shape(ax: Any, model: SwimmerModel, d: Sequence[float], origin: tuple[float, float] = (0, 0),

@@ -27,42 +27,12 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from jswim.swimmers.models import SwimmerModel, make_model
+from jswim.swimmers.outline import outline
 from jswim.viz.worlds import World, per_swimmer, world_of
 from jswim.viz import worlds
 
 #: A step whose |dX| is below this is "stuck" (the prompt's rule, :mod:`jswim.prompt`).
 STUCK_TOL = 1e-6
-
-
-def outline(model: SwimmerModel, d: Any) -> np.ndarray:
-    """Body-frame outline of shapes ``d``, centred on the geometric centroid.
-
-    Parameters
-    ----------
-    model : SwimmerModel
-    d : array (..., n_dof)
-        DOF values: hinge angles (rad) or arm lengths (in ``a``).
-
-    Returns
-    -------
-    ndarray (..., P, 2), float64
-        Link swimmers: the ``n_dof + 2`` link end points, the reference link (index
-        ``n_dof // 2``) along +x and the centroid of the links (the mean of their centres, as
-        :func:`jswim.swimmers.nlink.centroid_offset`) at the origin. Sphere swimmers: the
-        ``n_dof + 1`` sphere centres on the x axis, their mean at the origin.
-    """
-    d = np.asarray(d, np.float64)
-    zero = np.zeros(d.shape[:-1] + (1,))
-    cum = np.concatenate([zero, np.cumsum(d, axis=-1)], axis=-1)
-    if model.planar:
-        m = model.n_dof // 2
-        phi = cum - cum[..., m: m + 1]  # link angles, the reference link at 0
-        t = np.stack([np.cos(phi), np.sin(phi)], axis=-1)  # unit links
-        joints = np.concatenate([np.zeros(d.shape[:-1] + (1, 2)), np.cumsum(t, axis=-2)], axis=-2)
-        centres = 0.5 * (joints[..., 1:, :] + joints[..., :-1, :])
-        return joints - centres.mean(axis=-2, keepdims=True)
-    pts = np.stack([cum, np.zeros_like(cum)], axis=-1)
-    return pts - pts.mean(axis=-2, keepdims=True)
 
 
 def place(points: np.ndarray, x: Any, y: Any, theta: Any) -> np.ndarray:
