@@ -1,4 +1,5 @@
-"""Action sets: which ``(DOF, ROC)`` actions an agent is offered (environment layer, no JAX).
+"""Action sets and the action codec (environment layer, no JAX): which ``(DOF, ROC)`` actions an
+agent is offered, and the integer codes every world reads (:func:`encode_action`).
 
 One name for the concept everywhere (``action_set``): the LLM's S5 and grammar, the Q-learner's
 and the random policy's choices, study grids and the command line all take one of
@@ -9,6 +10,8 @@ importing JAX.
 from __future__ import annotations
 
 from typing import Any
+
+import numpy as np
 
 from jswim.errors import ConfigError, check_choice
 
@@ -46,3 +49,27 @@ def check_roc_levels(k: Any, name: str = "--roc-levels") -> int:
     if isinstance(k, bool) or not hasattr(k, "__index__") or not 1 <= int(k) <= MAX_ROC_LEVELS:
         raise ConfigError(f"{name} (K) must be an integer from 1 to {MAX_ROC_LEVELS}, got {k!r}")
     return int(k)
+
+
+# -- the integer action codec of every world ---------------------------------------------------
+
+
+def n_actions(n_dof: int, roc_levels: int = 1) -> int:
+    """Number of integer codes: ``n_dof (2K + 1)`` (``K = 1``: the paper's ``3 n_dof``)."""
+    return n_dof * (2 * roc_levels + 1)
+
+
+def encode_action(dof: Any, roc: Any, roc_levels: int = 1) -> Any:
+    """Integer code of ``(dof, roc)``: ``dof`` 1-based as in the prompt, ``roc`` the integer
+    ``k`` in ``-K..K`` (ROC ``k / K``; with K = 1 the paper's -1, 0, 1). The one codec of every
+    world (a scene's joint DOF ``2 s + j`` of swimmer ``s`` is ``dof``); ints, NumPy or JAX arrays."""
+    return (dof - 1) * (2 * roc_levels + 1) + (roc + roc_levels)
+
+
+def decode_action(action: Any, roc_levels: int = 1) -> tuple[Any, Any]:
+    """``(dof, k)`` of integer codes (ROC ``k / K``, ``dof`` 1-based); Python ints for an integer
+    code, arrays (NumPy or JAX, jit-friendly) for arrays."""
+    if isinstance(action, (int, np.integer)):
+        action = int(action)
+    width = 2 * roc_levels + 1
+    return action // width + 1, action % width - roc_levels

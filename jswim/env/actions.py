@@ -19,22 +19,11 @@ from typing import Any
 
 import numpy as np
 
+from jswim.actions import decode_action, encode_action, n_actions  # noqa: F401  (the one codec, JAX-free)
 from jswim.errors import ConfigError
 
 #: Rates of change an action may carry in the paper's discrete world (K = 1).
 ROCS = (-1, 0, 1)
-
-
-def encode_action(dof: int, roc: int, roc_levels: int = 1) -> int:
-    """Integer code of ``(dof, roc)``: ``dof`` 1-based as in the prompt, ``roc`` the integer
-    ``k`` in ``-K..K`` (ROC ``k / K``; with K = 1 the paper's -1, 0, 1)."""
-    return (dof - 1) * (2 * roc_levels + 1) + (roc + roc_levels)
-
-
-def decode_action(action: int, roc_levels: int = 1) -> tuple[int, int]:
-    """``(dof, k)`` of an integer code (ROC ``k / K``)."""
-    width = 2 * roc_levels + 1
-    return action // width + 1, action % width - roc_levels
 
 
 def roc_vector(dof: int, roc: float, n_dof: int) -> np.ndarray:
@@ -56,7 +45,7 @@ def validate_actions(actions: Any, n_dof: int) -> np.ndarray:
     _check_dofs(dof, n_dof)
     if np.any(np.abs(roc) > 1):
         raise ConfigError(f"action roc must be -1, 0 or 1, got {sorted(set(roc[np.abs(roc) > 1].tolist()))}")
-    return ((dof - 1) * 3 + roc + 1).astype(np.int32)
+    return encode_action(dof, roc).astype(np.int32)
 
 
 def validate_moves(actions: Any, n_dof: int) -> np.ndarray | None:

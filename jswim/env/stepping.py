@@ -27,6 +27,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+from jswim.actions import decode_action
 from jswim.env.params import EnvParams, broadcast_params, is_batched, param_axes
 from jswim.env import motion
 from jswim.env.randomness import noise
@@ -141,7 +142,8 @@ def _advance_corner(state: EnvState, action: Array, y_noise: Array, params: EnvP
     model = params.model
     n = model.n_dof
     action = jnp.clip(action.astype(jnp.int32), 0, 3 * n - 1)
-    dof, roc = action // 3, action % 3 - 1
+    dof, roc = decode_action(action)
+    dof = dof - 1
     # Integer one-hot arithmetic on the corner levels (exactly 0/1 on the corners) instead of
     # gather/scatter: much cheaper under vmap, and as fast as the int32 levels it replaced.
     onehot = (jnp.arange(n, dtype=jnp.int32) == dof).astype(jnp.int32)

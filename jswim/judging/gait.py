@@ -46,7 +46,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from jswim.env import EnvParams, decode_action, start_orientation, step_table
+from jswim.env import EnvParams, decode_action, encode_action, start_orientation, step_table
 from jswim.errors import ConfigError
 from jswim.swimmers.models import SwimmerModel
 
@@ -255,7 +255,7 @@ def best_cycles(model: SwimmerModel, direction: int = 1, max_len: int | None = N
             start = tuple(int(v) for v in levels)
             actions = []
             for k in seq[row]:
-                actions.append(int(k) * 3 + (1 if levels[k] == 0 else -1) + 1)
+                actions.append(encode_action(int(k) + 1, 1 if levels[k] == 0 else -1))
                 levels[k] ^= 1
             found.append(Cycle(tuple(actions), start, float(value[row]), float(rot[row])))
     return tuple(sorted(found, key=lambda c: (-c.per_step, c.period, c.actions)))
@@ -322,8 +322,8 @@ def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Rep
     steps, b = actions.shape
     n = model.n_dof
     a = actions.astype(np.intp)
-    dof = (np.arange(3 * n, dtype=np.int8) // 3)[a]
-    roc = (np.arange(3 * n, dtype=np.int8) % 3 - 1)[a]
+    dof1, roc = decode_action(np.arange(3 * n, dtype=np.int8))
+    dof, roc = (dof1 - 1)[a], roc[a]
     itype = np.int16 if steps < 16_000 else np.int32
     stamp = 2 * np.arange(1, steps + 1, dtype=itype)[:, None]  # 2 (t + 1): room for one bit
     # A DOF's level is set by the last nonzero ROC applied to it (a stuck move leaves it where it

@@ -32,7 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jswim.errors import ConfigError
-from jswim.actions import check_roc_levels
+from jswim.actions import check_roc_levels, decode_action, encode_action, n_actions  # noqa: F401  (n_actions: its old place)
 from jswim.swimmers.models import SwimmerModel
 
 #: Unit segments integrated per compiled call of :func:`move_table`.
@@ -42,20 +42,14 @@ _CHUNK = 128
 MAX_WALKS = 20_000_000
 
 
-def n_actions(n_dof: int, roc_levels: int) -> int:
-    """Action codes of a ``K``-level lattice: ``n_dof (2K + 1)`` (``K = 1``: the paper's ``3 n_dof``)."""
-    return n_dof * (2 * roc_levels + 1)
-
-
 def encode(dof: int, k: int, roc_levels: int) -> int:
-    """Code of the action ``[dof, k]`` (``dof`` 1-based, ``k`` in ``-K..K``)."""
-    return (dof - 1) * (2 * roc_levels + 1) + k + roc_levels
+    """Code of the action ``[dof, k]`` (``dof`` 1-based, ``k`` in ``-K..K``): :func:`jswim.actions.encode_action`."""
+    return encode_action(dof, k, roc_levels)
 
 
 def decode(code: int, roc_levels: int) -> tuple[int, int]:
-    """``(dof, k)`` of an action code."""
-    width = 2 * roc_levels + 1
-    return int(code) // width + 1, int(code) % width - roc_levels
+    """``(dof, k)`` of an action code: :func:`jswim.actions.decode_action`."""
+    return decode_action(int(code), roc_levels)
 
 
 def roc_fraction(code: np.ndarray, roc_levels: int) -> np.ndarray:

@@ -14,19 +14,18 @@ from typing import Any
 import jax.numpy as jnp
 from jax import Array
 
+from jswim.actions import decode_action, encode_action
+
 
 def encode_scene_action(swimmer: Any, dof: Any, k: Any, roc_levels: int = 1) -> Any:
     """Integer code of swimmer ``swimmer`` (0-based), ``dof`` (0-based) at ROC ``k / K``."""
-    width = 2 * roc_levels + 1
-    return (swimmer * 2 + dof) * width + (k + roc_levels)
+    return encode_action(swimmer * 2 + dof + 1, k, roc_levels)
 
 
 def decode_scene_action(code: Array, roc_levels: int = 1) -> tuple[Array, Array, Array]:
     """``(swimmer, dof, roc)`` of integer codes (jit-friendly; roc as a float ``k / K``)."""
-    code = jnp.asarray(code, jnp.int32)
-    width = 2 * roc_levels + 1
-    pair, k = code // width, code % width - roc_levels
-    return pair // 2, pair % 2, k.astype(jnp.result_type(float)) / roc_levels
+    joint, k = decode_action(jnp.asarray(code, jnp.int32), roc_levels)
+    return (joint - 1) // 2, (joint - 1) % 2, k.astype(jnp.result_type(float)) / roc_levels
 
 
 def split_action(action: Any) -> tuple[Array, Array, Array]:
