@@ -39,9 +39,10 @@ import io
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
-from jswim.console import Column, plain_table
-from jswim.console import cost_text, REFERENCE_UNPRICED
+from jswim.console import REFERENCE_UNPRICED, Column, cost_text, plain_table
 from jswim.overview import MIN_QUARTILE_N
+from jswim.results import atomic_write, dumps, read_runs
+from jswim.studies.report import summarize
 
 FIELDS = ("row", "kind", "part", "swimmer", "direction", "group", "n", "samples", "success", "success_lo", "success_hi",
           "learned", "steps_median", "steps_q25", "steps_q75", "mean_x", "mean_x_lo", "mean_x_hi", "failed_steps",
@@ -53,9 +54,6 @@ _LABELS = {"qlearning": "Q-learning", "random": "random"}
 def folder_rows(folder: Path, label: str, kind: str, part: str, cost: float | None, priced: bool | None,
                 status: str) -> list[dict[str, Any]]:
     """Leaderboard rows of one study folder (nothing when it holds no finished runs)."""
-    from jswim.results import read_runs  # lazy: pandas and JAX only when a leaderboard is built
-    from jswim.studies.report import summarize
-
     if not (folder / "metadata.json").exists():
         return []
     out = []
@@ -156,8 +154,6 @@ def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[s
                 missing: Sequence[Mapping[str, Any]] = ()) -> list[Path]:
     """``leaderboard.csv``, ``leaderboard.json`` (rows, the bench's definition and the ``missing``
     rows: ``{"row", "kind", "part", "why"}`` per study folder that gave none) and the figure."""
-    from jswim.results import atomic_write, dumps
-
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=FIELDS)
     w.writeheader()
@@ -176,7 +172,7 @@ def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[s
 def figure(folder: Path, rows: Sequence[Mapping[str, Any]]) -> list[Path]:
     """Success p and X/a end, each with its 95% interval, per row; a pair of panels per part,
     swimmer, direction and group (``leaderboard.png``/``.pdf``)."""
-    from jswim.figures import plots
+    from jswim.figures import plots  # lazy: matplotlib only when the leaderboard's figure is drawn
 
     return plots.save(figure_object(rows), folder, "leaderboard")
 

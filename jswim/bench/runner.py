@@ -33,9 +33,11 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 from jswim.bench.models import ModelEntry
-from jswim.bench.suites import SIZE_OPTIONS, Part, Suite
+from jswim.bench.suites import Part, Suite
 from jswim.errors import ConfigError
 from jswim.results import atomic_write, dumps
+from jswim.llm.journal import CallJournal
+from jswim.llm.reference import MODEL
 
 REFERENCE = "reference"
 BASELINES = "baselines"
@@ -80,8 +82,6 @@ def plan(models: Sequence[ModelEntry], suite: Suite, out: Path, *, prices_file: 
             argv += ["--q-runs", "0"] if uses_baselines else []
             jobs.append(Job(m.name, "llm", part, out / m.name / part.name, argv, m))
         if reference_url is not None:
-            from jswim.llm.reference import MODEL
-
             argv = base + ["--base-url", reference_url, "--model", MODEL] + (["--q-runs", "0"] if uses_baselines else [])
             jobs.append(Job(REFERENCE, "reference", part, out / REFERENCE / part.name, argv))
         if baselines and uses_baselines:
@@ -123,8 +123,6 @@ def write_meta(out: Path, meta: dict[str, Any]) -> None:
 
 def spent(folder: Path) -> float:
     """What a study folder's answered calls cost (its call journal)."""
-    from jswim.llm.journal import CallJournal
-
     return CallJournal(folder).spent_usd if (folder / "calls.jsonl").exists() else 0.0
 
 

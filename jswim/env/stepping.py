@@ -34,6 +34,7 @@ from jswim.env.randomness import noise
 from jswim.env.state import EnvState, StepInfo, corner_values, narrow, wide
 from jswim.env.tables import MAX_LATTICE_ROWS, _corner_index, _step_rows, _still_row, lattice_rows, lattice_table
 from jswim.integrate import centroid, integrate_stroke
+from jswim import sharding
 
 #: How one-DOF moves off the corner table are computed: ``"table"`` (the motion table, for
 #: two-DOF swimmers) or ``"integrator"``.
@@ -84,8 +85,6 @@ def step_batch(
     start : int
         Index of the first swimmer in a larger population (even; for chunked callers).
     """
-    from jswim import sharding
-
     n = states.x.shape[0]
     if is_batched(params):
         return sharding.apply_batched(_step_batch_jit, (key, start), (states, actions, broadcast_params(params, n)), n)

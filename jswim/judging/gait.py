@@ -49,6 +49,7 @@ import numpy as np
 from jswim.env import EnvParams, decode_action, encode_action, start_orientation, step_table
 from jswim.errors import ConfigError
 from jswim.swimmers.models import SwimmerModel
+from jswim.judging import lattice
 
 #: Displacements within this relative margin of the threshold count as reaching it (float64
 #: composition of the same table entries in a different order differs in the last bits).
@@ -476,8 +477,6 @@ def judge(
         best = np.where(direction > 0, best_per_step(model, 1, max_period), best_per_step(model, -1, max_period))
         rp = replay(at, model, init)
     else:
-        from jswim.judging import lattice
-
         if levels0 is None:  # params.init holds levels: the corner's lattice positions
             init = init * k_levels
         if np.any(init > k_levels):

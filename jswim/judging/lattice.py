@@ -34,6 +34,8 @@ import numpy as np
 from jswim.errors import ConfigError
 from jswim.actions import check_roc_levels, decode_action, encode_action, n_actions  # noqa: F401  (n_actions: its old place)
 from jswim.swimmers.models import SwimmerModel
+from jswim.env import start_orientation
+from jswim.integrate import centroid, integrate_stroke
 
 #: Unit segments integrated per compiled call of :func:`move_table`.
 _CHUNK = 128
@@ -163,8 +165,6 @@ def _segment_fn(model: SwimmerModel):
     import jax
     import jax.numpy as jnp
 
-    from jswim.integrate import centroid, integrate_stroke
-
     def one(a, r, span):
         pose = integrate_stroke(model, a, r, span, n_sub=32)
         disp = centroid(model, a + r * span, pose) - centroid(model, a, jnp.zeros(3))
@@ -244,8 +244,6 @@ def replay(actions: np.ndarray, model: SwimmerModel, roc_levels: int, points0: n
     points0 : int array (B, n_dof)
         Start positions ``j`` per DOF (a corner: ``level * K``).
     """
-    from jswim.env import start_orientation
-
     tab = move_table(model, roc_levels)
     width = 2 * roc_levels + 1
     steps, b = actions.shape

@@ -26,10 +26,13 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 from jswim.errors import ConfigError
+from jswim.figures.plots import AGENT_ORDER, RC, panel_keys
+from jswim.results import read_metadata, read_runs, read_transcript, writing
 from jswim.viz import worlds
-from jswim.viz.tracks import Track, fmt_action, track, view_box
 from jswim.viz.bench_page import _read, part_folders
+from jswim.viz.tracks import Track, fmt_action, track, view_box
 
 #: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.figures.plots.AGENT_STYLE`).
 #: Each agent's colour: the figures' (jswim.figures.plots.AGENT_STYLE), the square stroke in black.
@@ -92,8 +95,6 @@ class Animation:
         import matplotlib.pyplot as plt
         from matplotlib import animation
 
-        from jswim.results import writing
-
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix not in (".gif", ".mp4"):
@@ -151,8 +152,6 @@ def _count_frames(path: str, suffix: str, drawn: int) -> int:
 
 
 def _file_mode() -> int:
-    from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
-
     return file_mode()
 
 
@@ -180,8 +179,6 @@ def pick_runs(rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 
     the runs are held to the first start and (unless ``by`` is it) the first noise level, n_ht,
     group and variant, and the first replicate of each value of ``by`` is kept (at most ``most``).
     """
-    from jswim.figures.plots import AGENT_ORDER, panel_keys
-
     done = [r for r in rows if r.get("status", "done") == "done" and r.get("x")]
     if not done:
         return []
@@ -219,8 +216,6 @@ def build(folder_or_study: Any, run_ids: Sequence[str] | None = None, *, by: str
     ConfigError
         An unknown run id (the message lists some that exist), or a folder without finished runs.
     """
-    from jswim.results import read_metadata, read_runs, read_transcript
-
     folder = Path(getattr(folder_or_study, "folder", folder_or_study))
     meta = read_metadata(folder)
     rows = read_runs(folder)
@@ -259,8 +254,6 @@ def build_bench(folder: str | Path, part: str | None = None, *, most: int = 4, f
     ConfigError
         An unknown part, or a part without finished runs.
     """
-    from jswim.results import read_runs, read_transcript
-
     folder = Path(folder)
     meta, _ = _read(folder)
     found = part_folders(folder, meta)
@@ -325,8 +318,6 @@ def _caption(t: Track, others: Sequence[Track]) -> str:
 def _build(anim: Animation):
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle
-
-    from jswim.figures.plots import RC
 
     tracks = anim.tracks
     box = view_box(tracks)

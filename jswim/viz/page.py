@@ -33,7 +33,11 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from jswim.results import atomic_write, dumps, is_failed, read_metadata, read_runs, read_transcript, writing
+from jswim.figures import plots
+from jswim.overview import AGENT_ORDER, SUMMARY_NOTE, grid_order, order_summary, summary_table
+from jswim.results import (atomic_write, dumps, is_failed, read_metadata, read_runs, read_transcript, unfinished_note,
+                           writing)
+from jswim.studies.report import summarize
 from jswim.viz import worlds
 from jswim.viz.tracks import Track, track
 
@@ -52,8 +56,6 @@ def _axes_key(meta: Mapping[str, Any]) -> Any:
     """Sort key of runs by the study's axes: agent, swimmer, target direction, the grid's group
     order, noise level, n_ht, variant, start, then the replicate (``-r0`` before ``-r1``)."""
     import re
-
-    from jswim.overview import AGENT_ORDER
 
     agents = {a: i for i, a in enumerate(AGENT_ORDER)}
     groups = {g: i for i, g in enumerate(meta.get("group_order") or [])}
@@ -123,8 +125,6 @@ def _drawn_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | No
     """The study's figures drawn in memory (no file written), as PNG data URIs."""
     import matplotlib.pyplot as plt
 
-    from jswim.figures import plots
-
     out = []
     for name, fig in plots.study_figures(study, [r for r in rows if not is_failed(r)], note=note).items():
         buf = io.BytesIO()
@@ -165,9 +165,6 @@ def _status(meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]]) -> tuple
 
 
 def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
-    from jswim.overview import SUMMARY_NOTE, order_summary, summary_table
-    from jswim.studies.report import summarize
-
     if not rows:
         return "<p>No finished runs yet.</p>"
     cols, cells = summary_table(order_summary(summarize(list(rows)), rows))
@@ -282,12 +279,8 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
     ResultFolderError
         Not a study folder (no ``metadata.json``) or unreadable metadata.
     """
-    from jswim.results import unfinished_note
-
     folder = Path(folder)
     meta = read_metadata(folder)
-    from jswim.overview import grid_order
-
     own = read_runs(folder)
     study = str(meta.get("study", "?"))
     finished, status_text = _status(meta, own)

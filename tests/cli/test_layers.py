@@ -47,9 +47,7 @@ UNMARKED_ALLOWED = set("""
     jswim.agents.ppo->jswim.agents.qlearning jswim.agents.ppo->jswim.agents.scene_env
     jswim.agents.ppo->jswim.judging.gait jswim.agents.ppo->jswim.judging.shape_judge jswim.agents.ppo->jswim.sharding
     jswim.agents.qlearning->jswim.sharding
-    jswim.bench.leaderboard->jswim.figures.plots jswim.bench.leaderboard->jswim.results
-    jswim.bench.leaderboard->jswim.studies.report
-    jswim.bench.runner->jswim.llm.journal jswim.bench.runner->jswim.llm.reference
+    
     jswim.cli->jswim.actions jswim.cli->jswim.agents.fidelity jswim.cli->jswim.commands.animate
     jswim.cli->jswim.commands.bench jswim.cli->jswim.commands.report jswim.cli->jswim.commands.serve
     jswim.cli->jswim.compile_cache jswim.cli->jswim.console jswim.cli->jswim.env jswim.cli->jswim.errors
@@ -70,9 +68,8 @@ UNMARKED_ALLOWED = set("""
     jswim.commands.scenes->jswim.agents.variants jswim.commands.scenes->jswim.console
     jswim.commands.scenes->jswim.studies.scenes
     jswim.commands.serve->jswim.llm.reference
-    jswim.env.stepping->jswim.sharding
-    jswim.judging.gait->jswim.judging.lattice
-    jswim.judging.lattice->jswim.env jswim.judging.lattice->jswim.integrate
+    
+    
     jswim.overview->jswim.studies jswim.overview->jswim.studies.grids jswim.overview->jswim.studies.scenes
     
     jswim.studies.ensemble->jswim.actions jswim.studies.ensemble->jswim.agents.defaults
@@ -81,9 +78,8 @@ UNMARKED_ALLOWED = set("""
     jswim.studies.run->jswim.agents.scene_env jswim.studies.run->jswim.studies.scenes
     jswim.studies.scene_ppo->jswim.agents.ppo jswim.studies.scene_ppo->jswim.agents.scene_env
     jswim.studies.scenes->jswim.console
-    jswim.viz.animate->jswim._io.permissions jswim.viz.animate->jswim.figures.plots jswim.viz.animate->jswim.results
-    jswim.viz.page->jswim.overview jswim.viz.page->jswim.figures.plots jswim.viz.page->jswim.results
-    jswim.viz.page->jswim.studies.report
+      
+    
 """.split())
 
 
