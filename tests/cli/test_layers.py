@@ -25,10 +25,9 @@ LAYERS = [
     ("LLM I/O", ["jswim.llm"]),
     ("judging", ["jswim.judging"]),
     ("agents", ["jswim.agents"]),
-    ("studies", ["jswim.studies", "jswim.figures", "jswim.commands.scenes", "jswim.results",
-                 "jswim.overview", "jswim.console"]),
-    ("bench", ["jswim.bench", "jswim.commands.bench", "jswim.commands.serve"]),
-    ("views", ["jswim.viz", "jswim.commands"]),
+    ("studies", ["jswim.studies", "jswim.figures", "jswim.results", "jswim.overview", "jswim.console"]),
+    ("bench", ["jswim.bench"]),
+    ("views", ["jswim.viz"]),
     ("front", ["jswim.cli", "jswim.__main__", "jswim.gym"]),
 ]
 
@@ -49,26 +48,6 @@ UNMARKED_ALLOWED = set("""
     jswim.bench.leaderboard->jswim.figures.plots jswim.bench.leaderboard->jswim.results
     jswim.bench.leaderboard->jswim.studies.report
     jswim.bench.runner->jswim.llm.journal jswim.bench.runner->jswim.llm.reference
-    jswim.cli->jswim.actions jswim.cli->jswim.agents.fidelity jswim.cli->jswim.commands.animate
-    jswim.cli->jswim.commands.bench jswim.cli->jswim.commands.report jswim.cli->jswim.commands.serve
-    jswim.cli->jswim.compile_cache jswim.cli->jswim.console jswim.cli->jswim.env jswim.cli->jswim.errors
-    jswim.cli->jswim._io.interrupts jswim.cli->jswim.llm.credentials jswim.cli->jswim.llm.journal
-    jswim.cli->jswim.llm.prices jswim.cli->jswim.llm.urls jswim.cli->jswim.overview
-    jswim.cli->jswim._io.permissions jswim.cli->jswim.prompt jswim.cli->jswim.results jswim.cli->jswim.studies
-    jswim.cli->jswim.studies.ensemble jswim.cli->jswim.studies.grids jswim.cli->jswim.studies.qlearn
-    jswim.cli->jswim.studies.report jswim.cli->jswim.swimmers.models
-    jswim.commands.animate->jswim.errors jswim.commands.animate->jswim.viz.animate
-    jswim.commands.bench->jswim.bench.leaderboard jswim.commands.bench->jswim.bench.models
-    jswim.commands.bench->jswim.bench.runner jswim.commands.bench->jswim.bench.suites
-    jswim.commands.bench->jswim.console jswim.commands.bench->jswim.llm.reasoning
-    jswim.commands.bench->jswim.llm.reference jswim.commands.bench->jswim.llm.urls
-    jswim.commands.bench->jswim.llm.usage jswim.commands.bench->jswim.results
-    jswim.commands.bench->jswim.studies.run
-    jswim.commands.figures->jswim.figures.plots jswim.commands.figures->jswim.viz.charts
-    jswim.commands.report->jswim.errors jswim.commands.report->jswim.viz.page
-    jswim.commands.scenes->jswim.agents.variants jswim.commands.scenes->jswim.console
-    jswim.commands.scenes->jswim.studies.scenes
-    jswim.commands.serve->jswim.llm.reference
     jswim.env.stepping->jswim.sharding
     jswim.judging.gait->jswim.judging.lattice
     jswim.judging.lattice->jswim.env jswim.judging.lattice->jswim.integrate

@@ -27,6 +27,19 @@ def test_top_level_names_are_the_owners_and_load_lazily():
         jswim.no_such_name  # noqa: B018
 
 
+def test_help_starts_light():
+    # `jswim --help` and `jswim` alone: the outline of the commands, without JAX, NumPy or httpx
+    # (the study grids load JAX; the LLM client httpx), and `python -m jswim.cli` is the command too.
+    code = ("import sys, runpy; sys.argv = ['jswim', '--help']\n"
+            "try:\n    runpy.run_module('jswim.cli', run_name='__main__')\nexcept SystemExit as e:\n"
+            "    assert e.code == 0, e.code\n"
+            "heavy = [m for m in ('jax', 'numpy', 'httpx') if m in sys.modules]\n"
+            "assert not heavy, f'jswim --help imported {heavy}'")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=str(Path(__file__).parents[2]))
+    assert out.returncode == 0, out.stderr
+    assert "swim" in out.stdout and "bench" in out.stdout
+
+
 def test_every_user_error_derives_from_the_root():
     for cls in (errors.ConfigError, errors.PositionBelowMinimumError, errors.LLMError, errors.LLMServerError,
                 errors.LLMRequestError, errors.LLMResponseError, errors.LocalModelError, errors.ResultFolderError):
