@@ -44,7 +44,8 @@ from jswim.errors import ConfigError
 from jswim.llm import constrain, credentials
 from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
-from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError, LLMSetupError, LLMTimeoutError
+from jswim.llm.errors import (LLMRequestError, LLMResponseError, LLMServerError, LLMSetupError, LLMTimeoutError,
+                              no_answer)
 from jswim.llm.pacing import Pacer
 from jswim.llm.reasoning import REASONING_MAX_TOKENS, ReasoningState, check_mode
 from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text, validation_error
@@ -800,16 +801,15 @@ class LLMClient:
         s = self.settings
         try:
             resp = await self._post(http, payload)
-        except httpx.ConnectTimeout:
-            raise _Failure(f"could not connect within {s.timeout_s:g} s", kind="connection") from None
-        except httpx.TimeoutException as exc:  # read (the request was sent whole), write or pool
-            raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
-                           unanswered=isinstance(exc, httpx.ReadTimeout)) from None
         except httpx.TransportError as exc:
+            kind, unanswered = no_answer(exc)
+            if kind == "connect":
+                raise _Failure(f"could not connect within {s.timeout_s:g} s", kind="connection") from None
+            if kind == "timeout":
+                raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
+                               unanswered=unanswered) from None
             detail = self._scrub(str(exc)) or "no detail"
-            # Cut while waiting for the answer (after the request went out) vs never connected.
-            cut = isinstance(exc, (httpx.ReadError, httpx.RemoteProtocolError))
-            raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=cut) from None
+            raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=unanswered) from None
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
         status = resp.status_code
