@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Iterable, Iterator, Mapping
 
-from jswim.errors import ResultFolderError
+from jswim.errors import ResultFolderError, StudyFolderError  # noqa: F401  (also read from here)
 from jswim._io.permissions import file_mode, opener
 from jswim._io.folderlock import HOLDER, LOCK, FolderLock
 from jswim._io.jsonl import SkippedRecord, read_records, repair_tail
@@ -96,10 +96,6 @@ def legacy_names(obj: Any) -> Any:
     if isinstance(obj, list):
         return [legacy_names(v) for v in obj]
     return obj
-
-
-class StudyFolderError(ResultFolderError):
-    """A study or output folder cannot be written (read-only, missing permission, disk full)."""
 
 
 def _umask() -> int:

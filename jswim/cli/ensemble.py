@@ -5,14 +5,13 @@ from __future__ import annotations
 
 import argparse
 import csv
-import math
 import time
 from pathlib import Path
 from typing import Any, Sequence
 
 from jswim.cli import base
 from jswim.console import Progress
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_zeta
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -67,8 +66,10 @@ def main(args: argparse.Namespace) -> int:
         raise ConfigError(f"--every ({args.every}) must not exceed --steps ({args.steps})")
     if len(args.direction) != 1:
         raise ConfigError("--direction takes +x or -x here")
-    if any(not (math.isfinite(z) and z >= 0) for z in args.zetas) or not args.zetas:
-        raise ConfigError(f"--zetas must be noise levels >= 0, got {','.join(map(str, args.zetas))}")
+    if not args.zetas:
+        raise ConfigError("--zetas must list noise levels >= 0")
+    for z in args.zetas:
+        check_zeta(z, "--zetas")
     if args.out and Path(args.out).suffix.lower() != ".csv":
         base.check_out_folder(args.out)
     elif args.out and not Path(args.out).resolve().parent.is_dir():
@@ -80,7 +81,7 @@ def main(args: argparse.Namespace) -> int:
     elif args.policy == "qlearn":
         policy = None
     else:
-        policy = ensemble.stroke_policy(moves(args.policy, params.n_dof), label=args.policy)
+        policy = ensemble.stroke_policy(parse_moves(args.policy, params.n_dof), label=args.policy)
     init = args.init if args.init is not None else (start if start is not None else None)
     params = make_params(args.swimmer, direction=args.direction[0], init=init)
     if policy is None:
@@ -123,7 +124,7 @@ def main(args: argparse.Namespace) -> int:
 
 
 
-def moves(text: str, n_dof: int) -> list[int]:
+def parse_moves(text: str, n_dof: int) -> list[int]:
     """'2,-1 1,-1 2,1 1,1' -> action indices (validated)."""
     from jswim.env import validate_actions  # lazy: JAX loads only for commands that run
 

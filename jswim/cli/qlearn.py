@@ -14,7 +14,7 @@ from typing import Any, Sequence
 from jswim.actions import ACTION_SETS
 from jswim.cli import base
 from jswim.console import Progress
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_zeta
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -57,8 +57,7 @@ def main(args: argparse.Namespace) -> int:
         raise ConfigError(f"--chunk must be >= 1, got {args.chunk}")
     for name in ("seeds", "steps", "chunk"):
         base.check_max(name, getattr(args, name))
-    if not (math.isfinite(args.noise) and args.noise >= 0):
-        raise ConfigError(f"--noise (zeta) must be >= 0, got {args.noise}")
+    check_zeta(args.noise, "--noise")
     rate = _learning_rate(args)
     sets = ACTION_SETS if args.action_set == "both" else (args.action_set,)
     if args.out is not None:

@@ -55,8 +55,9 @@ from jswim.llm.transport import LoopbackTransport
 from jswim.llm.urls import endpoint, is_local_host, is_loopback, normalize_base_url, safe_url
 from jswim.llm.usage import Usage, price_table
 
-def check_temperature(value: float) -> float:
-    """``value`` if it is a sampling temperature in [0, 2] (the OpenAI API's range).
+def check_temperature(value: float, name: str = "temperature") -> float:
+    """``value`` if it is a sampling temperature in [0, 2] (the OpenAI API's range); ``name`` is
+    how the message names it (``"--temperatures"``).
 
     Raises
     ------
@@ -64,7 +65,18 @@ def check_temperature(value: float) -> float:
         Otherwise.
     """
     if not 0.0 <= value <= 2.0:  # also rejects NaN
-        raise ConfigError(f"temperature must lie in [0, 2], got {value}")
+        raise ConfigError(f"{name} must lie in [0, 2], got {value}")
+    return value
+
+
+#: Longest reply a request may ask for (``--max-tokens``; a reasoning budget has its own range).
+MAX_TOKENS = 100_000
+
+
+def check_max_tokens(value: int | None) -> int | None:
+    """``value`` if it is ``None`` (the default) or a reply length limit in 1..:data:`MAX_TOKENS`."""
+    if value is not None and not 1 <= value <= MAX_TOKENS:
+        raise ConfigError(f"--max-tokens must be between 1 and {MAX_TOKENS}, got {value}")
     return value
 
 

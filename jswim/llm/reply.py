@@ -23,6 +23,8 @@ import re
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from jswim.errors import MalformedReply  # noqa: F401  (also read from here)
+
 #: Message fields in which servers put reasoning next to (or instead of) the content.
 REASONING_FIELDS = ("reasoning_content", "reasoning", "thinking")
 
@@ -37,10 +39,6 @@ _CLOSE = re.compile(r"<\s*/\s*(?:" + "|".join(REASONING_TAGS) + r")\s*>", re.I)
 # OpenAI's "harmony" format (gpt-oss) when a server passes it through raw.
 _HARMONY_FINAL = "<|channel|>final<|message|>"
 _HARMONY_ANY = "<|channel|>"
-
-
-class MalformedReply(ValueError):
-    """The body is not a chat completion; the message says what was wrong (one line)."""
 
 
 @dataclass(frozen=True)
