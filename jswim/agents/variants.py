@@ -19,7 +19,7 @@ from typing import Any, Iterable
 from jswim.actions import check_action_set, check_roc_levels
 from jswim.agents.memory import ClearingRule
 from jswim.errors import ConfigError, check_choice
-from jswim.llm.client import check_max_tokens, check_temperature
+from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.prompt import DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, normalize_mask
 
 

@@ -7,7 +7,7 @@ from typing import Any
 #: Every name of the package and its module, loaded on first use: ``jswim.llm.urls`` (read by the
 #: command line's parser) does not load httpx, the client or the embedded server.
 _HOMES = {
-    "Backend": "backend", "check_server": "backend", "ChatResult": "client", "ClientSettings": "client",
+    "Backend": "backend", "check_server": "backend", "ChatResult": "result", "ClientSettings": "settings",
     "LLMClient": "client", "LocalServer": "local", "default_model_path": "local", "DEFAULT_PRICES": "usage",
     "PriceTable": "usage", "Usage": "usage", "UsageTotals": "usage",
     **dict.fromkeys(("LLMError", "LLMRequestError", "LLMResponseError", "LLMServerError", "LLMSetupError",

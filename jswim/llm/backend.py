@@ -18,7 +18,7 @@ from typing import Any
 import httpx
 
 from jswim.errors import ConfigError
-from jswim.llm.client import ClientSettings, check_extra_fields, check_temperature
+from jswim.llm.settings import ClientSettings, check_extra_fields, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.cache import check_cache
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url

@@ -20,7 +20,7 @@ from typing import Callable, Iterable
 from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
 from jswim.agents import scene_env
 from jswim.agents.defaults import paper_init
-from jswim.llm.client import check_max_tokens, check_temperature
+from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
                                    variant_action_set)
