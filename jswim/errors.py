@@ -13,10 +13,16 @@ contains an API key. The tree::
     |   +-- LLMRequestError                 this request was rejected (4xx; retrying won't help)
     |   |   +-- LLMSetupError               every request would be: URL, key, model or a field
     |   +-- LLMResponseError                the server answered, but not with a usable completion
+    |   |   +-- MalformedReply (also ValueError)  the body is not a chat completion (jswim.llm.reply)
     |   +-- LocalModelError                 the embedded model cannot start (package or file missing)
     |   +-- BudgetExhausted                 the cost cap is reached (jswim.llm.budget)
     +-- ResultFolderError (also ValueError) a study folder is unusable: another study, other
-                                            settings, not a study folder, unreadable
+        |                                   settings, not a study folder, unreadable
+        +-- FolderBusyError                 another live session holds the folder's lock
+        +-- StudyFolderError                a study or output folder cannot be written
+
+Each is defined here and also read from the module that raises it (``jswim.llm.budget``,
+``jswim.llm.reply``, ``jswim._io.folderlock``, ``jswim.results``).
 
 :class:`JswimWarning` (a ``UserWarning``) is what does not stop the work; the command prints each as
 one ``jswim: warning:`` line.
@@ -26,6 +32,8 @@ one ``jswim: warning:`` line.
 """
 
 from __future__ import annotations
+
+import math
 
 
 class JswimError(Exception):
@@ -42,6 +50,27 @@ def check_choice(value: object, choices: tuple[str, ...], what: str) -> str:
     if value not in choices:
         raise ConfigError(f"{what} must be one of {', '.join(choices)}, got {value!r}")
     return value  # type: ignore[return-value]
+
+
+def check_zeta(value: object, option: str | None = None) -> float:
+    """The noise level zeta as a float >= 0 (each step's displacement becomes dX(1 + zeta Y), Y ~
+    U[-1, 1]): the one check of every zeta (the environment, the scenes, the studies and their
+    ensembles, ``--noise``, ``--zetas``); ``option`` names it as the user gave it."""
+    try:
+        z = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ConfigError(f"{option or 'zeta'} must be a number, got {value!r}") from None
+    if not (math.isfinite(z) and z >= 0):
+        raise ConfigError(f"{option + ' (zeta)' if option else 'zeta (noise level)'} must be >= 0, got {value!r}")
+    return z
+
+
+def check_direction(direction: object) -> int:
+    """The target direction, +1 or -1 (a number; :func:`jswim.env.parse_direction` also reads
+    ``"+x"``/``"-x"``)."""
+    if isinstance(direction, bool) or direction not in (1, -1):
+        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    return int(direction)  # type: ignore[call-overload]
 
 
 class PositionBelowMinimumError(ConfigError):
@@ -97,13 +126,29 @@ class LLMResponseError(LLMError):
     """The server answered, but not with a usable chat completion (bad JSON, no choices)."""
 
 
+class MalformedReply(LLMResponseError, ValueError):
+    """The body is not a chat completion; the message says what was wrong (one line)."""
+
+
 class LocalModelError(LLMError):
     """The embedded local model cannot be started (missing package or model file)."""
+
+
+class BudgetExhausted(LLMError):
+    """The next call would take the study past its ``--max-cost`` cap."""
 
 
 class ResultFolderError(JswimError, ValueError):
     """A study folder cannot be used: it holds another study or other settings, is not a study
     folder, or cannot be read. The message says which and what to do."""
+
+
+class FolderBusyError(ResultFolderError):
+    """Another live session holds the study folder's lock."""
+
+
+class StudyFolderError(ResultFolderError):
+    """A study or output folder cannot be written (read-only, missing permission, disk full)."""
 
 
 class JswimWarning(UserWarning):

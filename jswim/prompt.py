@@ -99,7 +99,7 @@ from pathlib import Path
 from typing import Iterable, NamedTuple, Sequence
 
 from jswim.actions import check_action_set, check_roc_levels
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_direction
 
 #: Sentence names, in the paper's order.
 SENTENCES = ("S1", "S2", "S3", "S4", "S5")
@@ -696,8 +696,7 @@ def render_prompt(
         The summary sentence (:func:`jswim.agents.memory.render_summary`), or empty.
 
     """
-    if direction not in (1, -1):
-        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    check_direction(direction)
     shown = list(records[-cfg.n_ht :]) if cfg.n_ht > 0 else []
     allowed = list(options) if options is not None else allowed_actions(sw, cfg.action_set, dof_values)
     values = _prompt_values(sw, cfg, direction, shown, allowed, dof_values, x, summary)

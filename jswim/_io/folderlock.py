@@ -28,15 +28,11 @@ from pathlib import Path
 from typing import Any
 
 from jswim._io.atomic import write_json
-from jswim.errors import ResultFolderError
+from jswim.errors import FolderBusyError  # noqa: F401  (also read from here)
 from jswim._io.permissions import file_mode
 
 LOCK = ".jswim.lock"
 HOLDER = ".jswim.holder.json"
-
-
-class FolderBusyError(ResultFolderError):
-    """Another live session holds the study folder's lock."""
 
 
 def holder(folder: str | os.PathLike) -> dict[str, Any] | None:

@@ -19,7 +19,7 @@ from typing import Any, Iterable
 from jswim.actions import check_action_set, check_roc_levels
 from jswim.agents.memory import ClearingRule
 from jswim.errors import ConfigError, check_choice
-from jswim.llm.client import check_temperature
+from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.prompt import DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, normalize_mask
 
 
@@ -237,8 +237,7 @@ class LLMAgentConfig:
     def __post_init__(self) -> None:
         check_action_set(self.action_set)
         check_choice(self.order, ORDERS, "order")
-        if self.max_tokens is not None and not 1 <= self.max_tokens <= 100_000:
-            raise ConfigError(f"--max-tokens must be between 1 and 100000, got {self.max_tokens}")
+        check_max_tokens(self.max_tokens)
         if self.temperature is not None:
             check_temperature(self.temperature)
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import math
 from typing import Any, Sequence
 
 import jax
@@ -13,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim.actions import check_roc_levels as _check_roc_levels
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_zeta
 from jswim.swimmers.models import SwimmerModel, make_model
 
 
@@ -111,15 +110,9 @@ def make_params(
         For any invalid value.
     """
     model = swimmer if isinstance(swimmer, SwimmerModel) else make_model(swimmer, **model_kwargs)
-    try:
-        z = float(zeta)
-    except (TypeError, ValueError):
-        raise ConfigError(f"zeta must be a number, got {zeta!r}") from None
-    if not (math.isfinite(z) and z >= 0):
-        raise ConfigError(f"zeta (noise level) must be >= 0, got {zeta!r}")
     return EnvParams(
         model=model,
-        zeta=z,
+        zeta=check_zeta(zeta),
         direction=float(parse_direction(direction)),
         init=np.asarray(parse_init(init, model.n_dof), np.int32),
         roc_levels=check_roc_levels(roc_levels),

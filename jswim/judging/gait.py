@@ -47,7 +47,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from jswim.env import EnvParams, decode_action, encode_action, start_orientation, step_table
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_direction
 from jswim.swimmers.models import SwimmerModel
 from jswim.judging import lattice
 
@@ -227,8 +227,7 @@ def best_cycles(model: SwimmerModel, direction: int = 1, max_len: int | None = N
     """
     n = model.n_dof
     max_len = default_max_period(n) if max_len is None else int(max_len)
-    if direction not in (1, -1):
-        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    check_direction(direction)
     if max_len < 1:
         raise ConfigError(f"max_len must be >= 1, got {max_len}")
     if sum(n**length for length in range(2, max_len + 1, 2)) * 2**n > _MAX_WALKS:

@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_direction
 from jswim.actions import check_roc_levels, decode_action, encode_action, n_actions  # noqa: F401  (n_actions: its old place)
 from jswim.swimmers.models import SwimmerModel
 from jswim.env import start_orientation
@@ -348,8 +348,7 @@ def best_lattice_cycles(model: SwimmerModel, direction: int, roc_levels: int, ma
     """
     k = check_roc_levels(roc_levels)
     n = model.n_dof
-    if direction not in (1, -1):
-        raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
+    check_direction(direction)
     if max_len < 4:
         raise ConfigError(f"--max-len must be >= 4 (the shortest closed stroke has four moves), got {max_len}")
     tab = move_table(model, k)

@@ -1,19 +1,25 @@
 """LLM I/O: an async OpenAI-compatible chat client, its cache and accounting, and the embedded
 local model. No JAX here (see DESIGN.md)."""
 
-from jswim.llm.backend import Backend, check_server
-from jswim.llm.client import ChatResult, ClientSettings, LLMClient
-from jswim.llm.errors import (
-    LLMError,
-    LLMRequestError,
-    LLMResponseError,
-    LLMServerError,
-    LLMSetupError,
-    LLMTimeoutError,
-    LocalModelError,
-)
-from jswim.llm.local import LocalServer, default_model_path
-from jswim.llm.usage import DEFAULT_PRICES, PriceTable, Usage, UsageTotals
+import importlib
+from typing import Any
+
+#: Every name of the package and its module, loaded on first use: ``jswim.llm.urls`` (read by the
+#: command line's parser) does not load httpx, the client or the embedded server.
+_HOMES = {
+    "Backend": "backend", "check_server": "backend", "ChatResult": "result", "ClientSettings": "settings",
+    "LLMClient": "client", "LocalServer": "local", "default_model_path": "local", "DEFAULT_PRICES": "usage",
+    "PriceTable": "usage", "Usage": "usage", "UsageTotals": "usage",
+    **dict.fromkeys(("LLMError", "LLMRequestError", "LLMResponseError", "LLMServerError", "LLMSetupError",
+                     "LLMTimeoutError", "LocalModelError"), "errors"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _HOMES:
+        raise AttributeError(f"module 'jswim.llm' has no attribute {name!r}")
+    return getattr(importlib.import_module(f"jswim.llm.{_HOMES[name]}"), name)
+
 
 __all__ = [
     "Backend",

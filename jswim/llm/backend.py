@@ -17,13 +17,14 @@ from typing import Any
 
 import httpx
 
-from jswim.errors import ConfigError, LLMServerError, LLMTimeoutError
-from jswim.llm.client import ClientSettings, check_extra_fields, check_temperature
+from jswim.errors import ConfigError
+from jswim.llm.settings import ClientSettings, check_extra_fields, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.cache import check_cache
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.credentials import read_api_key
+from jswim.llm.errors import unreachable
 from jswim.llm.local import DEFAULT_MODEL_FILE, LOCAL_KEY_ENV, LocalServer, default_model_path
 from jswim.llm.probe import ServerInfo, check_family, probe
 from jswim.llm.reasoning import check_mode
@@ -337,13 +338,5 @@ def check_server(base_url: str, timeout_s: float = 5.0) -> None:
     url = endpoint(normalize_base_url(base_url), "models")
     try:
         httpx.get(url, timeout=timeout_s)
-    except httpx.ConnectTimeout:
-        raise LLMServerError(f"cannot reach {safe_url(base_url)} (no connection within {timeout_s:g} s); "
-                             "check --base-url or start the server") from None
-    except httpx.TimeoutException:
-        raise LLMTimeoutError(f"{safe_url(url)} did not answer within {timeout_s:g} s: the server is slow or still "
-                              "loading its model; wait for it or raise --timeout") from None
     except httpx.HTTPError as exc:
-        raise LLMServerError(
-            f"cannot reach {safe_url(base_url)} ({type(exc).__name__}); check --base-url or start the server"
-        ) from None
+        raise unreachable(exc, safe_url(base_url), safe_url(url), timeout_s) from None

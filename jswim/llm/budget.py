@@ -24,13 +24,9 @@ from __future__ import annotations
 import math
 from typing import Any, Mapping
 
-from jswim.errors import ConfigError, LLMError
+from jswim.errors import BudgetExhausted, ConfigError  # noqa: F401  (BudgetExhausted: also read from here)
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.usage import PriceTable
-
-
-class BudgetExhausted(LLMError):
-    """The next call would take the study past its ``--max-cost`` cap."""
 
 
 def call_bound(payload: Mapping[str, Any], prices: PriceTable, model: str, default_max_tokens: int = 256) -> float:

@@ -27,354 +27,39 @@ Example
 from __future__ import annotations
 
 import asyncio
-import email.utils
 import json
 import math
-import os
 import random
 import ssl
 import time
-import zlib
-from dataclasses import dataclass, field, replace
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from dataclasses import replace
+from typing import Any, Callable, Mapping, Sequence
 
 import httpx
 
-from jswim.errors import ConfigError
 from jswim.llm import constrain, credentials
 from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
-from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError, LLMSetupError, LLMTimeoutError
+from jswim.llm.errors import (LLMRequestError, LLMResponseError, LLMServerError, LLMSetupError, LLMTimeoutError,
+                              no_answer)
 from jswim.llm.pacing import Pacer
-from jswim.llm.reasoning import REASONING_MAX_TOKENS, ReasoningState, check_mode
+from jswim.llm.reasoning import ReasoningState
 from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text, validation_error
-from jswim.llm.reply import Completion, MalformedReply, assemble_sse, looks_like_sse, read_completion
+from jswim.llm.reply import (Completion, MalformedReply, assemble_sse, decode_body, looks_like_sse,  # noqa: F401
+                             parse_retry_after, read_completion)
+from jswim.llm.result import FAULT_KINDS, ChatResult, LiveCounts  # noqa: F401  (also read from here)
+from jswim.llm.settings import (CORE_FIELDS, MAX_TOKENS, ClientSettings, check_extra_fields,  # noqa: F401
+                                check_max_tokens, check_temperature)
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
-from jswim.llm.urls import endpoint, is_local_host, is_loopback, normalize_base_url, safe_url
+from jswim.llm.urls import endpoint, is_local_host, is_loopback, safe_url
 from jswim.llm.usage import Usage, price_table
-
-def check_temperature(value: float) -> float:
-    """``value`` if it is a sampling temperature in [0, 2] (the OpenAI API's range).
-
-    Raises
-    ------
-    ConfigError
-        Otherwise.
-    """
-    if not 0.0 <= value <= 2.0:  # also rejects NaN
-        raise ConfigError(f"temperature must lie in [0, 2], got {value}")
-    return value
-
 
 #: Same-host 307/308 redirects a request follows before it fails.
 MAX_REDIRECTS = 5
 
 #: HTTP statuses worth retrying: timeout, conflict, rate limit (5xx are added in code).
 RETRY_STATUSES = frozenset({408, 409, 429})
-
-
-
-
-#: Request fields jswim itself sets, and the option that sets each: an extra field (a models
-#: file's ``extra``, ``--extra-field``) naming one is refused, since it would change what is sent
-#: behind the cost reservation, the study's identity and the record of what was sent.
-CORE_FIELDS = {
-    "model": "--model", "messages": "--prompt-file (the prompt template)", "max_tokens": "--max-tokens",
-    "max_completion_tokens": "--max-tokens (with --reasoning on)", "temperature": "--temperature",
-    "stream": "nothing: jswim always sends \"stream\": false (--omit-field stream leaves it out)",
-    "response_format": "--constrain",
-    "grammar": "--constrain", "reasoning_effort": "--reasoning-effort",
-}
-
-
-def check_extra_fields(fields: Iterable[tuple[str, Any]], option: str = "--extra-field") -> None:
-    """Refuse an extra request field that jswim sets itself (:data:`CORE_FIELDS`).
-
-    Raises
-    ------
-    ConfigError
-        One line naming the field and the option that sets it.
-    """
-    for name, _ in fields:
-        if name in CORE_FIELDS:
-            raise ConfigError(f"{option} {name}=...: jswim sets {name!r} itself; use {CORE_FIELDS[name]}")
-
-
-@dataclass(frozen=True)
-class ClientSettings:
-    """Connection and request settings.
-
-    Attributes
-    ----------
-    base_url : str
-        Server root including the API prefix, e.g. ``https://api.openai.com/v1``. Common other
-        shapes are accepted and normalized (see :func:`jswim.llm.urls.normalize_base_url`).
-    model : str
-        Model name sent with each request (also keys the cache and the price table).
-    api_key_env : str
-        Name of the environment variable holding the API key (unset: no ``Authorization``).
-    timeout_s : float
-        Per-attempt timeout (connect, read, write, pool). A request that times out is a transient
-        failure like a 5xx: sent again within the retry budget (``max_retries``, ``retry_for_s``,
-        whose clock runs from when the first failed attempt went out, so the waits for answers
-        that never came count); when the budget is spent on timeouts the call fails with
-        :class:`~jswim.llm.errors.LLMTimeoutError`, saying the server is slow.
-    max_concurrency : int
-        Requests in flight at once.
-    max_retries : int
-        Retries after the first attempt before giving up (``--retries``).
-    retry_for_s : float or None
-        Longest time a call keeps retrying, from its first failure (``--retry-for``); the call
-        gives up when either budget is spent. ``None``: no time limit. The defaults (20 retries,
-        120 s) ride out a server that is down or rate-limiting for a minute or more.
-    backoff_base_s, backoff_max_s : float
-        Backoff before retry ``k`` is ``min(max, base * 2**k)`` scaled by a jitter in [0.5, 1]
-        (the last wait is shortened to end at the ``retry_for_s`` deadline).
-    max_retry_after_s : float
-        Longest ``Retry-After`` wait honoured (longer ones are shortened to this).
-    temperature : float
-        Sampling temperature (0, the paper's setting, makes requests cacheable).
-    max_tokens : int or None
-        Reply length limit.
-    seed : int or None
-        Sent when given (some servers use it for sampling at temperature > 0).
-    constrain : {"auto", "grammar", "json_schema", "json_object", "none"}
-        Constrained decoding; see :mod:`jswim.llm.constrain`.
-    server_kind : str
-        The server's family (:data:`jswim.llm.constrain.SERVER_KINDS`, told by
-        :func:`jswim.llm.probe.probe`); resolves ``constrain="auto"``.
-    cache_dir : str or None
-        Directory of the response cache; ``None`` disables it.
-    prices : mapping or None
-        USD per 1M tokens by model name, applied on any host; ``None`` uses
-        :data:`jswim.llm.usage.DEFAULT_PRICES` where they apply (:func:`jswim.llm.usage.price_table`:
-        not on this machine or the LAN, not for a model the server does not list, not for a reply
-        whose ``model`` field names another model).
-    price_local : bool
-        Price calls at the list prices even on a local or LAN server (a local gateway that
-        forwards to a paid API); default False: a local server's calls cost nothing.
-    listed_models : tuple of str or None
-        The models the server's ``/v1/models`` listed at preflight (``None``: not known).
-    fast_transport : bool
-        For ``http://`` servers on loopback, use :class:`jswim.llm.transport.LoopbackTransport`
-        (asyncio streams) instead of httpx's default transport (anyio). Default True.
-    omit_fields : tuple of str
-        Optional request fields never sent (``"seed"``, ``"max_tokens"``, ``"stream"``, ...),
-        for servers that reject them.
-    reasoning : {"auto", "on", "off"}
-        Reasoning models (:mod:`jswim.llm.reasoning`): switch to ``max_completion_tokens`` and the
-        temperature the model accepts when the server's 400 asks for them (auto), use the
-        reasoning budget from the start (on), or never switch (off).
-    reasoning_max_tokens : int
-        The reply budget once reasoning is on (default
-        :data:`jswim.llm.reasoning.REASONING_MAX_TOKENS`).
-    reasoning_effort : str or None
-        Sent as ``reasoning_effort`` when given (``minimal``, ``low``, ``medium``, ``high``).
-    extra_fields : tuple of (name, value)
-        More fields of every request body (a models file's ``extra``, ``--extra-field``); a field
-        jswim sets itself (:data:`CORE_FIELDS`: ``model``, ``messages``, ``max_tokens``,
-        ``temperature``, ``stream``, ...) is refused with :class:`~jswim.errors.ConfigError`.
-    sampling : tuple of (str, float)
-        Sampling fields every request carries (``(("repeat_penalty", 1.0), ...)``;
-        :func:`jswim.llm.sampling.sampling_fields`), before ``omit_fields`` are removed.
-    """
-
-    base_url: str = "https://api.openai.com/v1"
-    model: str = "gpt-4"
-    api_key_env: str = "OPENAI_API_KEY"
-    timeout_s: float = 60.0
-    max_concurrency: int = 16
-    max_retries: int = 20
-    retry_for_s: float | None = 120.0
-    backoff_base_s: float = 0.5
-    backoff_max_s: float = 30.0
-    max_retry_after_s: float = 120.0
-    temperature: float = 0.0
-    max_tokens: int | None = 32
-    seed: int | None = None
-    constrain: str = "auto"
-    server_kind: str = "generic"
-    cache_dir: str | None = None
-    prices: Mapping[str, tuple[float, float]] | None = field(default=None, compare=False)
-    price_local: bool = field(default=False, compare=False)
-    listed_models: tuple[str, ...] | None = field(default=None, compare=False)
-    fast_transport: bool = field(default=True, compare=False)
-    omit_fields: tuple[str, ...] = ()
-    reasoning: str = "auto"
-    reasoning_max_tokens: int = REASONING_MAX_TOKENS
-    reasoning_effort: str | None = None
-    extra_fields: tuple[tuple[str, Any], ...] = ()
-    sampling: tuple[tuple[str, float], ...] = ()
-
-    def __post_init__(self) -> None:
-        check_mode(self.reasoning, self.reasoning_effort)
-        object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
-        object.__setattr__(self, "sampling", tuple((str(k), v) for k, v in dict(self.sampling).items()))
-        object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
-        required = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
-        if required:
-            raise ConfigError(f"cannot leave out the request field(s) {', '.join(required)}: every request needs them")
-        if self.constrain not in constrain.MODES:
-            raise ConfigError(f"constrain must be one of {constrain.MODES}, got {self.constrain!r}")
-        if self.server_kind not in constrain.SERVER_KINDS:
-            raise ConfigError(f"server_kind must be one of {constrain.SERVER_KINDS}, got {self.server_kind!r}")
-        if self.max_concurrency < 1 or self.max_retries < 0 or not (math.isfinite(self.timeout_s) and self.timeout_s > 0):
-            raise ConfigError("need max_concurrency >= 1, max_retries >= 0 and a finite timeout_s > 0")
-        if self.retry_for_s is not None and not (self.retry_for_s >= 0):  # also NaN
-            raise ConfigError(f"retry_for_s must be >= 0 seconds, got {self.retry_for_s}")
-        check_temperature(self.temperature)
-        check_extra_fields(self.extra_fields)
-
-    def metadata(self) -> dict[str, Any]:
-        """Settings worth recording with a run (no secrets: only the key's variable name)."""
-        return {
-            "base_url": safe_url(self.base_url),
-            "model": self.model,
-            "temperature": self.temperature,
-            "max_tokens": self.max_tokens,
-            "seed": self.seed,
-            "constrain": self.constrain,
-            "server_kind": self.server_kind,
-            "max_retries": self.max_retries,
-            "retry_for_s": self.retry_for_s,
-            "timeout_s": self.timeout_s,
-            "omit_fields": list(self.omit_fields),
-            "reasoning": self.reasoning,
-            "reasoning_max_tokens": self.reasoning_max_tokens,
-            "reasoning_effort": self.reasoning_effort,
-            "extra_fields": dict(self.extra_fields),
-            "sampling": dict(self.sampling),
-        }
-
-
-@dataclass(frozen=True)
-class ChatResult:
-    """One chat completion.
-
-    Attributes
-    ----------
-    text : str
-        The reply (unwrapped from JSON in ``json_schema`` mode).
-    usage : Usage
-        Tokens reported by the server for the call that produced the reply.
-    latency_s : float
-        Wall time of this call, including retries and waits.
-    cache_hit : bool
-        Served from the disk cache.
-    shared : bool
-        Shared the answer of an identical request already in flight.
-    retries : int
-        Retries this call needed (0 for cache hits and shared calls).
-    cost_usd : float
-        Price of the producing call (0 for free or unknown models).
-    constraint : str
-        Constrained-decoding mode used: ``"grammar"``, ``"json_schema"``, ``"json_object"`` or ``"none"``.
-    finish_reason : str or None
-        As reported by the server.
-    raw : str
-        The message content as sent (reasoning blocks included), before unwrapping.
-    reasoning : str
-        The model's reasoning (reasoning fields and inline blocks), for transcripts only.
-    """
-
-    text: str
-    usage: Usage
-    latency_s: float
-    cache_hit: bool
-    shared: bool
-    retries: int
-    cost_usd: float
-    constraint: str
-    finish_reason: str | None = None
-    raw: str = ""
-    reasoning: str = ""
-    temperature_sent: float | None = None  # what the request carried (a reasoning model may refuse ours)
-
-    @property
-    def truncated(self) -> bool:
-        """The reply was cut off at ``max_tokens`` (``finish_reason == "length"``): no answer."""
-        return self.finish_reason == "length"
-
-    @property
-    def cut_while_thinking(self) -> bool:
-        """Cut off before any answer while the model was still reasoning (reasoning text or
-        reasoning tokens, no answer text): the budget left no room to think."""
-        return self.truncated and not self.text.strip() and bool(self.reasoning or self.usage.reasoning_tokens)
-
-    def as_dict(self) -> dict[str, Any]:
-        """A transcript record (the raw content only when it differs from ``text``)."""
-        extra: dict[str, Any] = {}
-        if self.reasoning:
-            extra["reasoning"] = self.reasoning
-        if self.raw != self.text:
-            extra["raw"] = self.raw
-        return {
-            "text": self.text,
-            "prompt_tokens": self.usage.prompt_tokens,
-            "completion_tokens": self.usage.completion_tokens,
-            "latency_s": round(self.latency_s, 6),
-            "cache_hit": self.cache_hit,
-            "shared": self.shared,
-            "retries": self.retries,
-            "cost_usd": self.cost_usd,
-            "constraint": self.constraint,
-            "finish_reason": self.finish_reason,
-            **({"reasoning_tokens": self.usage.reasoning_tokens} if self.usage.reasoning_tokens else {}),
-            **({"temperature_sent": self.temperature_sent} if self.temperature_sent is not None else {}),
-            **extra,
-        }
-
-
-def decode_body(raw: bytes, content_encoding: str) -> bytes:
-    """The body ``raw`` undone from its ``Content-Encoding`` (gzip, deflate, identity).
-
-    A header that lies (a plain JSON body labelled ``gzip`` by a misconfigured proxy) or names
-    an encoding we did not ask for leaves the body as it came: whether it is a completion is then
-    decided by reading it, never by a decoding traceback.
-    """
-    out = raw
-    for name in reversed([t.strip().lower() for t in content_encoding.split(",") if t.strip()]):
-        try:
-            if name in ("gzip", "x-gzip"):
-                out = zlib.decompress(out, 16 + zlib.MAX_WBITS)
-            elif name == "deflate":
-                try:
-                    out = zlib.decompress(out)
-                except zlib.error:  # raw deflate, as some servers send it
-                    out = zlib.decompress(out, -zlib.MAX_WBITS)
-            elif name != "identity":
-                return raw
-        except zlib.error:
-            return raw
-    return out
-
-
-def parse_retry_after(headers: httpx.Headers, now: float | None = None) -> float | None:
-    """Seconds to wait from ``retry-after-ms``, or ``Retry-After`` (seconds or an HTTP date)."""
-    ms = headers.get("retry-after-ms")
-    if ms:
-        try:
-            return max(0.0, float(ms) / 1000.0)
-        except ValueError:
-            pass
-    value = headers.get("retry-after")
-    if not value:
-        return None
-    try:
-        return max(0.0, float(value))
-    except ValueError:
-        pass
-    try:
-        when = email.utils.parsedate_to_datetime(value)
-    except (TypeError, ValueError, IndexError):
-        return None
-    now = time.time() if now is None else now
-    return max(0.0, when.timestamp() - now)
-
-
-#: Kinds of transient failure, as counted in :attr:`LiveCounts.faults` (and a study's summary).
-FAULT_KINDS = ("429", "5xx", "408/409", "connection", "timeout", "bad body")
 
 
 class _Failure(Exception):
@@ -404,25 +89,6 @@ class _Slot:
 
     def __init__(self) -> None:
         self.http: httpx.AsyncClient | None = None
-
-
-@dataclass
-class LiveCounts:
-    """Running totals of one client, for progress displays."""
-
-    in_flight: int = 0  # HTTP requests sent and not yet answered
-    tokens: int = 0  # prompt + completion tokens the server reported
-    cache_hits: int = 0  # calls answered from the disk cache
-    shared: int = 0  # calls that waited on an identical request already in flight
-    cost_usd: float = 0.0  # what the answered calls cost
-    requests: int = 0  # HTTP requests sent (first attempts and retries): what the server counts
-    retries: int = 0  # of those, retries after a transient failure
-    faults: dict[str, int] = field(default_factory=dict)  # transient failures by kind (FAULT_KINDS)
-    # Requests sent whole that got no answer (timed out, cut while waiting, cancelled in flight by
-    # an interruption): a server may still have run and billed them. ``unanswered_usd`` is what
-    # they could have cost at most (their call bound; 0 where calls are not priced).
-    unanswered: int = 0
-    unanswered_usd: float = 0.0
 
 
 class LLMClient:
@@ -800,16 +466,15 @@ class LLMClient:
         s = self.settings
         try:
             resp = await self._post(http, payload)
-        except httpx.ConnectTimeout:
-            raise _Failure(f"could not connect within {s.timeout_s:g} s", kind="connection") from None
-        except httpx.TimeoutException as exc:  # read (the request was sent whole), write or pool
-            raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
-                           unanswered=isinstance(exc, httpx.ReadTimeout)) from None
         except httpx.TransportError as exc:
+            kind, unanswered = no_answer(exc)
+            if kind == "connect":
+                raise _Failure(f"could not connect within {s.timeout_s:g} s", kind="connection") from None
+            if kind == "timeout":
+                raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
+                               unanswered=unanswered) from None
             detail = self._scrub(str(exc)) or "no detail"
-            # Cut while waiting for the answer (after the request went out) vs never connected.
-            cut = isinstance(exc, (httpx.ReadError, httpx.RemoteProtocolError))
-            raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=cut) from None
+            raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=unanswered) from None
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
         status = resp.status_code

@@ -23,7 +23,8 @@ import zlib
 from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
-from jswim.llm.client import ChatResult, ClientSettings, LiveCounts
+from jswim.llm.result import ChatResult, LiveCounts
+from jswim.llm.settings import ClientSettings
 from jswim.llm.reasoning import ESTIMATE_SHARE, dry_run_budget, dry_run_warning
 from jswim.llm.tokens import estimate_prompt_tokens, estimate_tokens
 from jswim.llm.urls import is_local_host

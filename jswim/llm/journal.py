@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 from jswim._io.jsonl import read_records, repair_tail
-from jswim.llm.client import ChatResult
+from jswim.llm.result import ChatResult
 from jswim.llm.usage import Usage
 from jswim._io.permissions import opener
 

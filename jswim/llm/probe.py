@@ -32,9 +32,9 @@ from urllib.parse import urlsplit, urlunsplit
 
 import httpx
 
-from jswim.errors import ConfigError, LLMServerError, LLMTimeoutError
+from jswim.errors import ConfigError
 from jswim.llm.credentials import read_api_key
-from jswim.llm.errors import LLMSetupError
+from jswim.llm.errors import LLMSetupError, unreachable
 from jswim.llm.rejection import key_hint, server_text
 from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
 
@@ -182,15 +182,8 @@ def probe(base_url: str, *, api_key_env: str = "OPENAI_API_KEY", timeout_s: floa
     with httpx.Client(timeout=timeout_s, headers=headers, trust_env=not is_loopback(base_url)) as client:
         try:
             listed = client.get(models_url)
-        except httpx.ConnectTimeout:
-            raise LLMServerError(f"cannot reach {where} (no connection within {timeout_s:g} s); "
-                                 "check --base-url or start the server") from None
-        except httpx.TimeoutException:
-            raise LLMTimeoutError(f"{safe_url(models_url)} did not answer within {timeout_s:g} s: the server is slow "
-                                  "or still loading its model; wait for it or raise --timeout") from None
         except httpx.HTTPError as exc:
-            raise LLMServerError(f"cannot reach {where} ({type(exc).__name__}); check --base-url or start "
-                                 "the server") from None
+            raise unreachable(exc, where, safe_url(models_url), timeout_s) from None
         if listed.status_code in (401, 403):
             said = server_text(listed)
             said = f"HTTP {listed.status_code}: {said}" if said else f"HTTP {listed.status_code}"

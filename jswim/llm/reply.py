@@ -18,10 +18,15 @@ Everything here is pure (no I/O), so each server behaviour is a unit test.
 
 from __future__ import annotations
 
+import email.utils
 import json
 import re
+import time
+import zlib
 from dataclasses import dataclass
 from typing import Any, Mapping
+
+from jswim.errors import MalformedReply  # noqa: F401  (also read from here)
 
 #: Message fields in which servers put reasoning next to (or instead of) the content.
 REASONING_FIELDS = ("reasoning_content", "reasoning", "thinking")
@@ -37,10 +42,6 @@ _CLOSE = re.compile(r"<\s*/\s*(?:" + "|".join(REASONING_TAGS) + r")\s*>", re.I)
 # OpenAI's "harmony" format (gpt-oss) when a server passes it through raw.
 _HARMONY_FINAL = "<|channel|>final<|message|>"
 _HARMONY_ANY = "<|channel|>"
-
-
-class MalformedReply(ValueError):
-    """The body is not a chat completion; the message says what was wrong (one line)."""
 
 
 @dataclass(frozen=True)
@@ -286,3 +287,50 @@ def error_message(body: Any) -> str:
 def _one_line(text: str, limit: int = 300) -> str:
     text = " ".join(text.split())
     return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def decode_body(raw: bytes, content_encoding: str) -> bytes:
+    """The body ``raw`` undone from its ``Content-Encoding`` (gzip, deflate, identity).
+
+    A header that lies (a plain JSON body labelled ``gzip`` by a misconfigured proxy) or names
+    an encoding we did not ask for leaves the body as it came: whether it is a completion is then
+    decided by reading it, never by a decoding traceback.
+    """
+    out = raw
+    for name in reversed([t.strip().lower() for t in content_encoding.split(",") if t.strip()]):
+        try:
+            if name in ("gzip", "x-gzip"):
+                out = zlib.decompress(out, 16 + zlib.MAX_WBITS)
+            elif name == "deflate":
+                try:
+                    out = zlib.decompress(out)
+                except zlib.error:  # raw deflate, as some servers send it
+                    out = zlib.decompress(out, -zlib.MAX_WBITS)
+            elif name != "identity":
+                return raw
+        except zlib.error:
+            return raw
+    return out
+
+
+def parse_retry_after(headers: Mapping[str, str], now: float | None = None) -> float | None:
+    """Seconds to wait from ``retry-after-ms``, or ``Retry-After`` (seconds or an HTTP date)."""
+    ms = headers.get("retry-after-ms")
+    if ms:
+        try:
+            return max(0.0, float(ms) / 1000.0)
+        except ValueError:
+            pass
+    value = headers.get("retry-after")
+    if not value:
+        return None
+    try:
+        return max(0.0, float(value))
+    except ValueError:
+        pass
+    try:
+        when = email.utils.parsedate_to_datetime(value)
+    except (TypeError, ValueError, IndexError):
+        return None
+    now = time.time() if now is None else now
+    return max(0.0, when.timestamp() - now)

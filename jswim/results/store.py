@@ -14,7 +14,7 @@ from jswim._io.atomic import dumps, plain_json, write_json
 from jswim._io.folderlock import HOLDER, LOCK, FolderLock
 from jswim._io.jsonl import repair_tail
 from jswim._io.permissions import file_mode, opener
-from jswim.errors import ResultFolderError
+from jswim.errors import ResultFolderError, StudyFolderError
 from jswim.results.read import clean_metadata, read_runs
 from jswim.results.schema import META, RUNS, is_failed, upgrade_names
 from jswim.results.tables import write_tables
@@ -34,10 +34,6 @@ def _is_own_file(p: Path) -> bool:
     if p.name in (LOCK, HOLDER, RESERVE) or _TEMPORARY.match(p.name):
         return True
     return p.name == "figures" and p.is_dir()
-
-
-class StudyFolderError(ResultFolderError):
-    """A study or output folder cannot be written (read-only, missing permission, disk full)."""
 
 
 def _umask() -> int:

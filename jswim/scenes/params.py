@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim.env.params import check_roc_levels, parse_init
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_zeta
 from jswim.scenes.scene import Scene
 from jswim.swimmers.models import make_model
 
@@ -147,12 +147,7 @@ def scene_params(
     if not isinstance(swimmer, str) or swimmer.lower() != "ng":
         raise ConfigError(f"scenes hold NG three-sphere swimmers only (swimmer='ng'), got {swimmer!r}")
     model = make_model("ng", **model_kwargs)
-    try:
-        z = float(zeta)
-    except (TypeError, ValueError):
-        raise ConfigError(f"zeta must be a number, got {zeta!r}") from None
-    if not (math.isfinite(z) and z >= 0):
-        raise ConfigError(f"zeta (noise level) must be >= 0, got {zeta!r}")
+    z = check_zeta(zeta)
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
     if nodes is None:
         nodes = DEFAULT_NODES_FLOAT32 if dtype.itemsize <= 4 else DEFAULT_NODES

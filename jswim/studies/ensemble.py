@@ -40,7 +40,7 @@ from jax import Array
 
 from jswim import sharding
 from jswim.env import EnvParams, EnvState, advance, make_params, noise, seed_key, start_state
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_zeta
 
 #: Swimmers per statistics block: partial sums are formed per block on the device and combined
 #: on the host in float64, in block order; chunks are multiples of it.
@@ -252,9 +252,9 @@ def run(
         raise ConfigError("n, steps, every, chunk and bins must be >= 1")
     if every > steps:
         raise ConfigError(f"every ({every}) must not exceed steps ({steps})")
-    zetas = [float(z) for z in zetas]
-    if not zetas or any(not np.isfinite(z) or z < 0 for z in zetas):
-        raise ConfigError(f"noise levels zeta must be >= 0, got {zetas}")
+    zetas = [check_zeta(z) for z in zetas]
+    if not zetas:
+        raise ConfigError("give at least one noise level zeta")
     if any(not 0.0 < q < 1.0 for q in qs):
         raise ConfigError(f"quantiles must lie in (0, 1), got {list(qs)}")
     window = policy.period if window is None else int(window)

@@ -20,11 +20,12 @@ from typing import Callable, Iterable
 from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
 from jswim.agents import scene_env
 from jswim.agents.defaults import paper_init
+from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
                                    variant_action_set)
 from jswim.env import all_inits
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_zeta
 from jswim.judging.gait import PAPER
 from jswim.prompt import SENTENCES
 from jswim.swimmers.models import SWIMMERS, make_model
@@ -120,13 +121,11 @@ class StudyOptions:
         if self.init is not None and self.init not in INIT_CHOICES:
             raise ConfigError(f"--init must be one of {', '.join(INIT_CHOICES)}, got {self.init!r}")
         check_action_set(self.action_set)
-        bad = [z for z in (self.zeta, *self.zetas) if not (math.isfinite(z) and z >= 0)]
-        if bad:
-            raise ConfigError(f"--noise (zeta) must be >= 0, got {bad[0]}")
+        for z in (self.zeta, *self.zetas):
+            check_zeta(z, "--noise")
         if not math.isfinite(self.x_min):
             raise ConfigError(f"--x-min must be a finite number, got {self.x_min}")
-        if self.max_tokens is not None and not 1 <= self.max_tokens <= 100_000:
-            raise ConfigError(f"--max-tokens must be between 1 and 100000, got {self.max_tokens}")
+        check_max_tokens(self.max_tokens)
         if self.chunk is not None and self.chunk < 1:
             raise ConfigError("--chunk must be >= 1")
         for sw in self.swimmers or ():
@@ -135,8 +134,7 @@ class StudyOptions:
         for name in ([self.variant] if self.variant else []) + list(self.variants or ()):
             variant_action_set(name)  # raises for an unknown name
         for t in self.temperatures or ():
-            if not (math.isfinite(t) and 0.0 <= t <= 2.0):
-                raise ConfigError(f"--temperatures must lie in [0, 2], got {t}")
+            check_temperature(t, "--temperatures")
         for name, values in (("--temperatures", self.temperatures), ("--prompt-files", self.prompt_files)):
             if values is not None and (not values or len(set(values)) != len(values)):
                 raise ConfigError(f"{name} must list distinct values, got {','.join(map(str, values))}")

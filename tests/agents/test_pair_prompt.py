@@ -127,7 +127,7 @@ def test_bad_value_is_one_line(tmp_path, capsys):
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "--pair-prompt" in err
-    from jswim.commands import scenes as scene_options
+    from jswim.cli import scenes as scene_options
 
     args = cli.build_parser().parse_args(["study", "pair", "--pair-prompt", "each"])
     assert StudyOptions(**scene_options.options(args)).pair_prompt == "each"

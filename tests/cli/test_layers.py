@@ -26,10 +26,10 @@ LAYERS = [
     ("LLM I/O", ["jswim.llm"]),
     ("judging", ["jswim.judging", "jswim.gait", "jswim.lattice", "jswim.shape_judge", "jswim.stats"]),
     ("agents", ["jswim.agents"]),
-    ("studies", ["jswim.studies", "jswim.figures", "jswim.plots", "jswim.scene_plots", "jswim.figure_style", "jswim.commands.scenes", "jswim.results",
-                 "jswim.overview", "jswim.console"]),
-    ("bench", ["jswim.bench", "jswim.commands.bench", "jswim.commands.serve"]),
-    ("views", ["jswim.viz", "jswim.commands"]),
+    ("studies", ["jswim.studies", "jswim.figures", "jswim.plots", "jswim.scene_plots", "jswim.figure_style",
+                 "jswim.results", "jswim.overview", "jswim.console"]),
+    ("bench", ["jswim.bench"]),
+    ("views", ["jswim.viz"]),
     ("front", ["jswim.cli", "jswim.__main__", "jswim.gym"]),
 ]
 
@@ -47,29 +47,6 @@ UNMARKED_ALLOWED = set("""
     jswim.agents.ppo->jswim.agents.qlearning jswim.agents.ppo->jswim.agents.scene_env
     jswim.agents.ppo->jswim.judging.gait jswim.agents.ppo->jswim.judging.shape_judge jswim.agents.ppo->jswim.sharding
     jswim.agents.qlearning->jswim.sharding
-    
-    jswim.cli->jswim.actions jswim.cli->jswim.agents.fidelity jswim.cli->jswim.commands.animate
-    jswim.cli->jswim.commands.bench jswim.cli->jswim.commands.report jswim.cli->jswim.commands.serve
-    jswim.cli->jswim.compile_cache jswim.cli->jswim.console jswim.cli->jswim.env jswim.cli->jswim.errors
-    jswim.cli->jswim._io.interrupts jswim.cli->jswim.llm.credentials jswim.cli->jswim.llm.journal
-    jswim.cli->jswim.llm.prices jswim.cli->jswim.llm.urls jswim.cli->jswim.overview
-    jswim.cli->jswim._io.permissions jswim.cli->jswim.prompt jswim.cli->jswim.results jswim.cli->jswim.studies
-    jswim.cli->jswim.studies.ensemble jswim.cli->jswim.studies.grids jswim.cli->jswim.studies.qlearn
-    jswim.cli->jswim.studies.report jswim.cli->jswim.swimmers.models
-    jswim.commands.animate->jswim.errors jswim.commands.animate->jswim.viz.animate
-    jswim.commands.bench->jswim.bench.leaderboard jswim.commands.bench->jswim.bench.models
-    jswim.commands.bench->jswim.bench.runner jswim.commands.bench->jswim.bench.suites
-    jswim.commands.bench->jswim.console jswim.commands.bench->jswim.llm.reasoning
-    jswim.commands.bench->jswim.llm.reference jswim.commands.bench->jswim.llm.urls
-    jswim.commands.bench->jswim.llm.usage jswim.commands.bench->jswim.results
-    jswim.commands.bench->jswim.studies.run
-    jswim.commands.figures->jswim.figures.plots jswim.commands.figures->jswim.viz.charts
-    jswim.commands.report->jswim.errors jswim.commands.report->jswim.viz.page
-    jswim.commands.scenes->jswim.agents.variants jswim.commands.scenes->jswim.console
-    jswim.commands.scenes->jswim.studies.scenes
-    jswim.commands.serve->jswim.llm.reference
-    
-    
     jswim.overview->jswim.studies jswim.overview->jswim.studies.grids jswim.overview->jswim.studies.scenes
     
     jswim.studies.ensemble->jswim.actions jswim.studies.ensemble->jswim.agents.defaults

@@ -27,9 +27,41 @@ def test_top_level_names_are_the_owners_and_load_lazily():
         jswim.no_such_name  # noqa: B018
 
 
+def test_help_starts_light():
+    # `jswim --help` and `jswim` alone: the outline of the commands, without JAX, NumPy or httpx
+    # (the study grids load JAX; the LLM client httpx), and `python -m jswim.cli` is the command too.
+    code = ("import sys, runpy; sys.argv = ['jswim', '--help']\n"
+            "try:\n    runpy.run_module('jswim.cli', run_name='__main__')\nexcept SystemExit as e:\n"
+            "    assert e.code == 0, e.code\n"
+            "heavy = [m for m in ('jax', 'numpy', 'httpx') if m in sys.modules]\n"
+            "assert not heavy, f'jswim --help imported {heavy}'")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=str(Path(__file__).parents[2]))
+    assert out.returncode == 0, out.stderr
+    assert "swim" in out.stdout and "bench" in out.stdout
+
+
+def test_every_error_class_is_defined_in_the_tree():
+    # errors.py holds every public exception class (the tree); others may only re-export them.
+    import ast
+
+    from jswim._io import folderlock
+    from jswim.llm import budget, reply
+
+    outside = []
+    for path in Path(jswim.__file__).parent.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_") and any(
+                    getattr(b, "id", getattr(b, "attr", "")).endswith(("Error", "Exception")) for b in node.bases):
+                outside += [f"{path.name}:{node.name}"] if path.name != "errors.py" else []
+    assert not outside, outside
+    assert budget.BudgetExhausted is errors.BudgetExhausted and reply.MalformedReply is errors.MalformedReply
+    assert folderlock.FolderBusyError is errors.FolderBusyError and issubclass(errors.MalformedReply, ValueError)
+
+
 def test_every_user_error_derives_from_the_root():
     for cls in (errors.ConfigError, errors.PositionBelowMinimumError, errors.LLMError, errors.LLMServerError,
-                errors.LLMRequestError, errors.LLMResponseError, errors.LocalModelError, errors.ResultFolderError):
+                errors.LLMRequestError, errors.LLMResponseError, errors.LocalModelError, errors.ResultFolderError,
+                errors.BudgetExhausted, errors.MalformedReply, errors.FolderBusyError, errors.StudyFolderError):
         assert issubclass(cls, errors.JswimError)
         assert cls.__name__ in errors.__doc__  # the tree in the docstring names every class
     assert issubclass(errors.ConfigError, ValueError) and issubclass(errors.LLMError, RuntimeError)

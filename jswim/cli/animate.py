@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from jswim._io.paths import path_kind
+from jswim.errors import ConfigError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -34,8 +35,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from jswim.errors import ConfigError
-    from jswim.viz.animate import build
 
     if args.max < 1:
         raise ConfigError(f"--max must be >= 1, got {args.max}")
@@ -43,11 +42,10 @@ def main(args: argparse.Namespace) -> int:
         raise ConfigError(f"--dpi must lie in [20, 400], got {args.dpi}")
     if not Path(args.folder).is_dir():
         raise ConfigError(f"{args.folder}: {path_kind(args.folder, 'a study folder')}")
-    from jswim.viz.bench_page import is_bench  # lazy: start-up (the pages load matplotlib)
+    from jswim.viz.animate import build, build_bench  # lazy: start-up (the pictures load matplotlib)
+    from jswim.viz.bench_page import is_bench  # lazy: as above
 
     if is_bench(args.folder):  # one run per model, the reference rule and the baselines, from one setting
-        from jswim.viz.animate import build_bench
-
         if args.run:
             raise ConfigError("--run names runs of a study folder; on a bench folder use --part NAME")
         anim = build_bench(args.folder, args.part, most=args.max, fps=args.fps, dpi=args.dpi)

@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from jswim.llm.reference import MODEL, ReferenceServer
+    from jswim.llm.reference import MODEL, ReferenceServer  # lazy: start-up (the reference rule loads only for a run)
 
     if not 0 <= args.port <= 65535:
         raise ConfigError(f"--port must be between 0 and 65535, got {args.port}")

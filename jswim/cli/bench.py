@@ -3,22 +3,28 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
+from jswim.bench.models import ModelsFile, check_unique, load_models_file, parse_model_option
+from jswim.bench.suites import SUITES
+from jswim.cli import options
+from jswim.console import LOCAL_UNPRICED, Column, plain_table, terminal_width
 from jswim.errors import ConfigError
+from jswim.llm.reasoning import ESTIMATE_SHARE
+from jswim.llm.urls import is_local_host
+from jswim.llm.usage import price_table
 
 #: Exit status when a model failed or stopped at its cap (the others finished).
 EXIT_SOME_FAILED = 2
 
 
-def register(sub: argparse._SubParsersAction, study_argv: Any = None) -> None:
-    """Add ``jswim bench`` to ``sub``. ``study_argv`` is the command line's reader of a study's
-    argv: an object with ``build_parser()``, ``options(args, study)`` and ``backend(args)`` (the
-    front's one place for argv -> options; given by :func:`jswim.cli.build_parser`, so this
-    module does not import the front that imports it)."""
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add ``jswim bench`` to ``sub``."""
     p = sub.add_parser("bench", help="run a suite over several models at once and print a leaderboard",
                        description="Run a suite (core: the paper's headline results; paper: every figure; or one "
                                    "of the models file's [suites]) over every model of a models file (TOML) or of "
@@ -46,12 +52,10 @@ def register(sub: argparse._SubParsersAction, study_argv: Any = None) -> None:
                    help="independent samples of every LLM run (each its own run id and seed), pooled into each "
                         "row with the count shown; grows an existing bench folder (recorded, not part of the "
                         "suite's definition)")
-    p.set_defaults(command_main=main, study_argv=study_argv)
+    p.set_defaults(command_main=main)
 
 
 def _models(args: argparse.Namespace) -> tuple[Any, Any]:
-    from jswim.bench.models import ModelsFile, check_unique, load_models_file, parse_model_option
-
     mf = load_models_file(args.models_file) if args.models_file else ModelsFile(())
     models = mf.models + tuple(parse_model_option(t) for t in args.model_options)
     check_unique(models)
@@ -59,10 +63,6 @@ def _models(args: argparse.Namespace) -> tuple[Any, Any]:
 
 
 def _suite(args: argparse.Namespace, mf: Any) -> Any:
-    import dataclasses
-
-    from jswim.bench.suites import SUITES
-
     suites = {**SUITES, **{s.name: s for s in mf.suites}}
     if args.suite not in suites:
         raise ConfigError(f"unknown suite {args.suite!r}; choose one of {', '.join(suites)}")
@@ -76,13 +76,13 @@ def _suite(args: argparse.Namespace, mf: Any) -> Any:
 
 
 def main(args: argparse.Namespace) -> int:
-    from jswim.bench import leaderboard, runner
+    from jswim.bench import leaderboard, runner  # lazy: start-up (NumPy and the study folders' readers)
 
     mf, models = _models(args)
     suite = _suite(args, mf)
     out = Path(args.out or f"jswim-out/bench-{suite.name}")
     if args.dry_run:
-        return _dry_run(suite, models, mf, out, args.study_argv)
+        return _dry_run(suite, models, mf, out)
     meta = runner.open_folder(out, {**runner.definition(suite, models, not args.no_reference, not args.no_baselines),
                                     "status": "running"})
     prices_file = None
@@ -94,7 +94,7 @@ def main(args: argparse.Namespace) -> int:
         + ("" if args.no_reference else " + the reference rule") + ("" if args.no_baselines else " + baselines"))
     ref = None
     if not args.no_reference:
-        from jswim.llm.reference import ReferenceServer
+        from jswim.llm.reference import ReferenceServer  # lazy: start-up (the reference rule loads only for a run)
 
         ref = ReferenceServer().start()
     try:
@@ -110,8 +110,6 @@ def main(args: argparse.Namespace) -> int:
     rows = _rows(jobs, models, mf, outcome.status)
     missing = _missing(jobs, rows, meta["model_status"])
     paths = leaderboard.write_files(out, rows, meta, missing)
-    from jswim.console import terminal_width
-
     print(f"bench {suite.name}: {suite.about or 'user suite'} (seed {suite.seed}"
           + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "")
           + (f"; {suite.samples} samples of every LLM run" if (suite.samples or 1) > 1 else "") + ")")
@@ -136,7 +134,7 @@ def main(args: argparse.Namespace) -> int:
 
 def _sent_notes(jobs: list[Any]) -> list[str]:
     """What a reasoning model was sent instead of the paper's settings, once per model (from its folders)."""
-    from jswim.results import read_metadata
+    from jswim.results import read_metadata  # lazy: start-up (NumPy)
 
     out: list[str] = []
     for j in jobs:
@@ -153,7 +151,7 @@ def _sent_notes(jobs: list[Any]) -> list[str]:
 def _missing(jobs: list[Any], rows: list[dict[str, Any]], status: dict[str, str]) -> list[dict[str, Any]]:
     """Every study folder of the bench that gave no leaderboard row, and why (its label's status,
     else the last error its study printed, else that it has no finished run yet)."""
-    from jswim.bench import runner
+    from jswim.bench import runner  # lazy: start-up (NumPy)
 
     have = {(r["kind"], r["part"]) if r["kind"] == "baseline" else (r["row"], r["part"]) for r in rows}
     out = []
@@ -170,10 +168,6 @@ def _missing(jobs: list[Any], rows: list[dict[str, Any]], status: dict[str, str]
 
 def _unpriced(m: Any, mf: Any) -> str | None:
     """Why a model's calls are not priced (None: they are), in :func:`jswim.console.cost_text`'s words."""
-    from jswim.console import LOCAL_UNPRICED
-    from jswim.llm.urls import is_local_host
-    from jswim.llm.usage import price_table
-
     local = is_local_host(m.get("base_url"))
     table, why = price_table(mf.prices, m.get("model"), local_host=local, price_local=bool(m.get("price_local")))
     if why is not None:
@@ -188,7 +182,7 @@ def _priced(m: Any, mf: Any) -> bool:
 
 
 def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list[dict[str, Any]]:
-    from jswim.bench import leaderboard, runner
+    from jswim.bench import leaderboard, runner  # lazy: start-up (NumPy and the study folders' readers)
 
     cost = {m.name: sum(runner.spent(j.folder) for j in jobs if j.label == m.name) for m in models}
     priced = {m.name: _priced(m, mf) for m in models}
@@ -203,14 +197,11 @@ def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list
     return rows
 
 
-def _dry_run(suite: Any, models: Any, mf: Any, out: Path, cli: Any) -> int:
-    """Price every model's suite in process (nothing sent, nothing written); ``cli`` reads each
-    job's argv (:func:`register`'s ``study_argv``)."""
-    import tempfile
-
-    from jswim.bench import runner
-    from jswim.console import Column, plain_table
-    from jswim.studies.run import estimate_study
+def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
+    """Price every model's suite in process (nothing sent, nothing written); each job's argv is read
+    as ``jswim study`` reads it (:mod:`jswim.cli.options`)."""
+    from jswim.bench import runner  # lazy: start-up (NumPy)
+    from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
 
     with tempfile.TemporaryDirectory() as tmp:
         prices_file = None
@@ -219,11 +210,11 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path, cli: Any) -> int:
             prices_file.write_text(json.dumps({"as_of": mf.prices_as_of, "prices": mf.prices}))
         jobs = runner.plan(models, suite, out, prices_file=prices_file, reference_url=None, baselines=False)
         totals: dict[str, dict[str, Any]] = {}
-        parser = cli.build_parser()
+        parser = options.study_parser()
         for j in jobs:
             args = parser.parse_args(j.argv)
             study = "swim" if args.command == "swim" else args.name
-            est = estimate_study(study, cli.options(args, study), cli.backend(args), j.folder)
+            est = estimate_study(study, options.options(args, study), options.backend(args), j.folder)
             t = totals.setdefault(j.label, {"model": j.model.get("model"), "calls": 0, "prompt_tokens": 0,
                                             "completion_tokens": 0, "reasoning_tokens": 0, "cost_usd": 0.0,
                                             "cost_max_usd": 0.0, "priced": bool(est.price_in or est.price_out),
@@ -246,8 +237,6 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path, cli: Any) -> int:
     print(f"total: ${total:.2f} for the priced models; the reference rule and the baselines are not priced (a rule and "
           "baselines on this machine; $0 counted); not counted: "
           "parse retries")
-    from jswim.llm.reasoning import ESTIMATE_SHARE
-
     thinking = [name for name, t in totals.items() if t["reasoning_budget"]]
     if thinking:
         print(f"reasoning models ({', '.join(thinking)}): their thinking is in the completion tokens and the cost, "
@@ -276,7 +265,7 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path, cli: Any) -> int:
 def show_text(folder: Path, width: int | None = None) -> str:
     """``jswim show BENCH``: the bench's definition, each model's status and its last leaderboard
     (read from ``bench.json`` and ``leaderboard.json``; nothing is run or written)."""
-    from jswim.bench import leaderboard
+    from jswim.bench import leaderboard  # lazy: start-up (the study folders' readers)
 
     try:
         meta = json.loads((folder / "bench.json").read_text(encoding="utf-8"))

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from jswim._io.paths import path_kind
+from jswim.errors import ConfigError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -25,10 +26,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    from jswim.errors import ConfigError
-    from jswim.viz.page import write_report
-
     from jswim.viz.bench_page import is_bench, write_bench_report  # lazy: start-up (the pages load matplotlib)
+    from jswim.viz.page import write_report  # lazy: as above
 
     if not Path(args.folder).is_dir():
         raise ConfigError(f"{args.folder}: {path_kind(args.folder, 'a study folder')}")

@@ -1,0 +1,127 @@
+"""What every ``jswim`` command shares: the parser that reports a mistake in one line (exit 2),
+the outline parser of ``jswim --help``, the option types and checks, and warnings as one line."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+import time
+import warnings
+from pathlib import Path
+from typing import Any, Iterator, Sequence
+
+from jswim.console import eta as _eta_text
+from jswim.errors import ConfigError, JswimWarning
+
+EXIT_USAGE = 2
+#: Largest count a batched command accepts (--n, --seeds, --steps, --chunk): swimmer and learner
+#: indices are int32 on the device, and anything larger would fail deep inside JAX or NumPy.
+MAX_COUNT = 2**31 - 1
+#: The swimmers a command line names.
+SWIMMERS = ("purcell", "ng", "nlink", "nsphere")
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports mistakes in one line with exit status 2 (its own default too)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
+
+
+class Outline(Parser):
+    """A parser that keeps only the subcommands' names and help: all ``jswim --help`` shows, built
+    without the options' defaults (which import the study grids, and with them JAX: ~1.4 s)."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self._outlined = True  # argparse's own groups and -h/--help exist; every later option is left out
+
+    def add_argument(self, *args: Any, **kwargs: Any) -> Any:
+        return super().add_argument(*args, **kwargs) if not getattr(self, "_outlined", False) else None
+
+    def add_argument_group(self, *args: Any, **kwargs: Any) -> Any:
+        return super().add_argument_group(*args, **kwargs) if not getattr(self, "_outlined", False) else self
+
+    def add_mutually_exclusive_group(self, *args: Any, **kwargs: Any) -> Any:
+        return self
+
+    def add_subparsers(self, **kwargs: Any) -> Any:
+        return super().add_subparsers(**{**kwargs, "parser_class": Outline})
+
+
+def outlined(p: argparse.ArgumentParser) -> bool:
+    """Whether ``p`` is an outline (``jswim --help``): its command adds no options, imports nothing."""
+    return isinstance(p, Outline)
+
+
+def floats(text: str) -> tuple[float, ...]:
+    try:
+        return tuple(float(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+
+
+def ints(text: str) -> tuple[int, ...]:
+    try:
+        return tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
+
+
+def direction(text: str) -> tuple[int, ...]:
+    table = {"+x": (1,), "-x": (-1,), "both": (1, -1), "+1": (1,), "-1": (-1,), "1": (1,)}
+    if text not in table:
+        raise argparse.ArgumentTypeError(f"direction must be +x, -x or both, got {text!r}")
+    return table[text]
+
+
+def swimmers(text: str) -> tuple[str, ...]:
+    out = ("purcell", "ng") if text == "both" else tuple(v.strip().lower() for v in text.split(","))
+    for v in out:
+        if v not in SWIMMERS:
+            raise argparse.ArgumentTypeError(f"unknown swimmer {v!r}; choose purcell, ng, both (or nlink, nsphere)")
+    return out
+
+
+def dirs_text(directions: Sequence[int]) -> str:
+    return "both" if set(directions) == {1, -1} else ("+x" if directions[0] > 0 else "-x")
+
+
+def check_out_folder(out: str) -> None:
+    """``--out FOLDER`` of a command: an existing file there is a mistake, caught before any work."""
+    if Path(out).exists() and not Path(out).is_dir():
+        raise ConfigError(f"--out {out} is a file; give a folder for the figures and the table")
+
+
+def check_max(name: str, value: int | None) -> None:
+    """One line for a count too large for the device's int32 indices (else a deep traceback)."""
+    if value is not None and value > MAX_COUNT:
+        raise ConfigError(f"--{name} must be at most {MAX_COUNT:,}, got {value}")
+
+
+def eta(t0: float, done: int, total: int) -> str:
+    """``ETA 1 min`` of a progress bar started at ``t0`` (``time.perf_counter``), or ``""``."""
+    left = _eta_text(time.perf_counter() - t0, done / total) if total else None
+    return f"ETA {left}" if left and done < total else ""
+
+
+def warn(message: str) -> None:
+    print(f"jswim: warning: {message}", file=sys.stderr)
+
+
+@contextlib.contextmanager
+def warnings_as_lines() -> Iterator[None]:
+    """Inside: each :class:`~jswim.errors.JswimWarning` is one ``jswim: warning:`` line on stderr
+    (others as Python shows them); the hook is restored after."""
+    shown = warnings.showwarning
+
+    def one_line(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001 - warnings' hook
+        if issubclass(category, JswimWarning):
+            warn(str(message))
+        else:
+            shown(message, category, filename, lineno, file, line)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = one_line
+        yield

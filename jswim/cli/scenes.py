@@ -1,0 +1,92 @@
+"""Each study's own options (today the scene studies': ``jswim study wall`` / ``jswim study pair``)
+and the scene table printed after the usual summary.
+
+:data:`OPTIONS` is the table: study -> its options, each ``(flag, argparse keywords)`` whose dest is
+the :class:`jswim.studies.StudyOptions` field it sets; :func:`register` adds them to the study's
+parser, :func:`options` reads them back. A study's new option is one row here.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any, Sequence
+
+from jswim.console import print_table as show
+
+STUDY_HELP = {
+    "wall": "one NG swimmer started at several heights above a no-slip wall: the square stroke's displacement per "
+            "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines",
+    "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
+            "offset and D, and whether an agent steering both finds a faster joint stroke",
+}
+
+
+def _numbers(kind: type) -> Any:
+    def parse(text: str) -> tuple:
+        try:
+            values = tuple(kind(v) for v in text.split(",") if v.strip())
+        except ValueError:
+            values = ()
+        if not values:  # "" or "," would otherwise fall back to the defaults silently
+            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}")
+        return values
+    return parse
+
+
+#: study -> its own options: (flag, argparse keywords); ``choices="PAIR_PROMPTS"`` is read from
+#: :mod:`jswim.agents.variants` when the parser is built (`jswim --help` never imports the agents).
+OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
+    "wall": (
+        ("--heights", dict(type=_numbers(float), metavar="H1,H2,...",
+                           help="starting heights of the middle sphere above the wall, in sphere radii "
+                                "(default 3,5,7,10,20,50)")),
+    ),
+    "pair": (
+        ("--separations", dict(type=_numbers(float), metavar="D1,D2,...",
+                               help="starting distances D between the two swimmers' centres, in sphere radii "
+                                    "(default 30,60)")),
+        ("--phases", dict(type=_numbers(int), metavar="P1,P2,...",
+                          help="phase offsets of the two square strokes, in quarter cycles of swimmer 2 ahead "
+                               "(default 0,1,2,3)")),
+        ("--pair-prompt", dict(choices="PAIR_PROMPTS",
+                               help="how the LLM steers the pair: joint (default: one conversation, joint DOFs "
+                                    "D1..D4) or each (a variant: one conversation per swimmer, taking turns, each "
+                                    "shown the other's position)")),
+    ),
+}
+
+
+def _dest(flag: str) -> str:
+    return flag.lstrip("-").replace("-", "_")
+
+
+def register(q: argparse.ArgumentParser, name: str) -> None:
+    """Add study ``name``'s own options (:data:`OPTIONS`) to its parser (nothing for other studies)."""
+    if name not in OPTIONS:
+        return
+    from jswim.agents import variants  # lazy: start-up (`jswim --help` imports this module, not the agents)
+
+    g = q.add_argument_group("scene")
+    for flag, kw in OPTIONS[name]:
+        if isinstance(kw.get("choices"), str):
+            kw = {**kw, "choices": getattr(variants, kw["choices"])}
+        g.add_argument(flag, default=None, **kw)
+
+
+def options(args: argparse.Namespace) -> dict[str, Any]:
+    """The StudyOptions keywords of the study's own options given."""
+    return {d: getattr(args, d) for d in {_dest(f) for rows in OPTIONS.values() for f, _ in rows}
+            if getattr(args, d, None)}
+
+
+def print_table(rows: Sequence[dict[str, Any]]) -> None:
+    """The scene table of a study's rows (nothing when it has no scene runs)."""
+    if not any(r.get("scene") for r in rows):
+        return
+    from jswim.studies.scenes import scene_summary, table, table_note  # lazy: JAX loads only for a study
+
+    summary = scene_summary(rows)
+    cols, cells = table(summary)
+    show(cols, cells, "scenes: displacement per stroke cycle, speed per step (second half), fates")
+    if note := table_note(summary):
+        print(note)

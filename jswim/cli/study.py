@@ -1,0 +1,194 @@
+"""``jswim swim`` and ``jswim study NAME``: run a study (argv -> options in :mod:`jswim.cli.options`),
+then print its summary, scene table, LLM calls and cost, and where the folder, page and figures are."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import signal
+import sys
+from pathlib import Path
+from typing import Any, Sequence
+
+from jswim._io import interrupts
+from jswim.cli import base, options, scenes
+from jswim.console import (EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED, Progress, cost_text, print_table,
+                           requests_text)
+from jswim.errors import ConfigError, LLMServerError
+from jswim.llm.urls import is_local_host
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    for p in options.add_study_commands(sub):
+        p.set_defaults(command_main=main)
+
+
+def main(args: argparse.Namespace) -> int:
+    return _run("swim" if args.command == "swim" else args.name, args)
+
+
+#: Exit status of a study stopped by ``--max-cost`` (cleanly: rerun with a higher cap to go on).
+EXIT_COST_CAP = 3
+
+
+def _run(study: str, args: argparse.Namespace) -> int:
+    from jswim.studies import default_folder, run_study  # lazy: JAX loads only for commands that run
+    from jswim.studies.grids import short_steps_warning  # lazy: as above
+
+    opts, backend = options.options(args, study), options.backend(args)
+    if args.max_cost is not None and not (math.isfinite(args.max_cost) and args.max_cost >= 0):
+        raise ConfigError(f"--max-cost must be a number of dollars >= 0, got {args.max_cost}")
+    out = Path(args.out) if args.out else default_folder(study, opts, backend)
+    try:
+        out.stat()
+    except FileNotFoundError:
+        pass  # a new folder
+    except OSError as exc:  # a name longer than the file system allows, a file on the way, ...
+        raise ConfigError(f"cannot write --out {out}: {exc.strerror or type(exc).__name__}; choose another --out") from None
+    if args.dry_run:
+        from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
+
+        est = estimate_study(study, opts, backend, out, max_cost=args.max_cost)
+        print("\n".join(est.lines()))
+        print(json.dumps(est.as_dict(), sort_keys=True))  # the same, for scripts
+        return 0
+    if (text := short_steps_warning(opts)) is not None:
+        base.warn(text)
+    labels = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning", "random": "random policy",
+              "ppo": "continuous RL",
+              "start": "start", "resume": "resume"}
+    with Progress() as bar:
+
+        def tick(phase: str, done: int, total: int, info: str = "") -> None:
+            bar.update(labels.get(phase, "runs"), done, total, info,
+                       unit="LLM steps" if phase.startswith("llm") else "runs")
+
+        try:
+            with base.warnings_as_lines():
+                result = run_study(study, opts, backend, out, progress=tick, figures=not args.no_figures,
+                                   max_cost=args.max_cost)
+        except KeyboardInterrupt:
+            bar.stop()
+            sig = interrupts.received()
+            print(f"jswim: interrupted ({interrupts.name(sig)}); every finished run and answered call is kept in "
+                  f"{out}. Run the same command to resume (jswim report {out}: a page of what is done).",
+                  file=sys.stderr)
+            return 128 + (sig or signal.SIGINT)
+        except LLMServerError as exc:  # the retry budget is spent: the study stops cleanly, nothing lost
+            bar.stop()
+            print(f"jswim: error: {exc}. {_kept(out)}", file=sys.stderr)
+            return base.EXIT_USAGE
+        bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
+    _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
+    scenes.print_table(result.rows)
+    _print_reasoning(result)
+    for note in result.notes:
+        print(note)
+    sp = result.llm_speed
+    if not sp and any(r.get("agent") == "llm" for r in result.rows):  # a resume with every LLM run done
+        from jswim.llm.journal import CallJournal  # lazy: httpx loads only for commands that run
+
+        print(f"LLM calls: none this session (every LLM run was done already; nothing sent, nothing paid); the "
+              f"study's calls cost ${CallJournal(result.folder).spent_usd:.4f} ({_price_note(backend)})")
+    if sp.get("calls"):
+        print(f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
+              f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "
+              f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
+              f"({_price_note(backend)})")
+    if sp.get("requests") is not None and (sp.get("calls") or sp.get("requests")):
+        print(f"HTTP requests: {requests_text(sp)}")
+    print(f"results: {result.folder}")
+    if (result.folder / "report.html").is_file():
+        print(f"report:  {result.folder / 'report.html'} (open it in a browser)")
+    for f in result.figures:
+        if f.suffix == ".png":
+            print(f"figure:  {f}")
+    if result.stopped == "cost cap":
+        print(f"jswim: stopped at the cost cap (--max-cost {args.max_cost:g}): ${sp.get('study_cost_usd', 0):.4f} "
+              f"spent; {len(result.rows)} of {result.total} runs done and kept in {result.folder}. Rerun with a "
+              "higher --max-cost to continue (no call is paid twice)", file=sys.stderr)
+        return EXIT_COST_CAP
+    if result.failed_runs:
+        n_llm = sum(r.get("agent") == "llm" for r in result.rows)
+        first = result.failed_runs[0]
+        print(f"jswim: error: {len(result.failed_runs)} of {n_llm} LLM runs failed ({first['run_id']}: "
+              f"{first['error']}); they are recorded as failed in {result.folder}: run the same command to "
+              "run them again", file=sys.stderr)
+        return base.EXIT_USAGE
+    return 0
+
+
+def _print_reasoning(result: Any) -> None:
+    """What a reasoning model was sent, and the replies cut off (never executed)."""
+    sent = result.reasoning or {}
+    for note in sent.get("notes") or ():
+        print(f"reasoning model: {note}")
+    if sent.get("active") and not sent.get("notes"):
+        print(f"reasoning: {sent.get('token_field')}={sent.get('budget')} (--reasoning {sent.get('mode')})")
+    thought = sum(r.get("reasoning_tokens") or 0 for r in result.rows if r.get("agent") == "llm")
+    if thought:
+        print(f"reasoning tokens: {thought:,} (priced as output)")
+    if sent.get("active"):
+        cut = sum(result.truncated.values())
+        if cut:
+            print(f"{cut} replies cut at {sent.get('token_field')}={sent.get('budget')}, {result.cut_thinking} of them "
+                  "while still thinking (no answer, never executed; each went to the follow-up); raise --max-tokens")
+        return
+    for limit, n in sorted(result.truncated.items()):
+        print(f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up)"
+              + (f", {result.cut_thinking} of them while still thinking" if result.cut_thinking else "")
+              + "; a reasoning model needs room to think: --reasoning on (or a larger --max-tokens)")
+
+
+def _price_note(backend: Any) -> str:
+    """Where a cost line's prices come from, or why the model has none (never a silent $0)."""
+    from jswim.llm.reference import MODEL as REFERENCE_MODEL  # lazy: start-up (the reference rule loads only for a run)
+    from jswim.llm.usage import PRICES_AS_OF, price_table  # lazy: httpx loads only for commands that run
+
+    if backend is None or backend.local:
+        return cost_text(None, EMBEDDED_UNPRICED)
+    if backend.model == REFERENCE_MODEL:
+        return cost_text(None, REFERENCE_UNPRICED)
+    table, why = price_table(dict(backend.prices) if backend.prices is not None else None, backend.model,
+                             local_host=is_local_host(backend.base_url), price_local=backend.price_local)
+    if why:
+        return cost_text(None, why)
+    if table.entry(backend.model) is None and is_local_host(backend.base_url) and backend.prices is None:
+        return cost_text(None, LOCAL_UNPRICED)
+    if table.entry(backend.model) is None:
+        return cost_text(None, f"no price for {backend.model!r} in the "
+                               f"{'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
+                               "; --prices FILE prices it")
+    return f"prices of {backend.prices_as_of or PRICES_AS_OF}" + ("" if backend.prices else " (built-in list prices)")
+
+
+def _kept(out: Path) -> str:
+    """What a stopped session leaves: ``The study stopped cleanly: 3 of 8 runs done and kept ...``."""
+    from jswim.results import read_runs  # lazy: start-up (results loads NumPy)
+
+    try:
+        done, planned = len(read_runs(out)), (json.loads((out / "metadata.json").read_text()) or {}).get("n_planned")
+    except (OSError, ValueError, AttributeError):
+        done, planned = 0, None
+    of = f" of {planned}" if isinstance(planned, int) else ""
+    if not done and not (out / "calls.jsonl").exists():
+        return "Nothing was done yet; run the same command once the server is back"
+    return (f"The study stopped cleanly: {done}{of} runs done and kept in {out}, every answered call journaled; "
+            "run the same command to resume (no call is paid twice)")
+
+
+def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], title: str) -> None:
+    from jswim.agents.fidelity import describe_constraint  # lazy: JAX loads only for commands that run
+    from jswim.overview import SUMMARY_NOTE, order_summary, summary_table  # lazy: as above
+
+    cols, cells = summary_table(order_summary(summary, rows))
+    print_table(cols, cells, title)
+    print(SUMMARY_NOTE)
+    llm = [r for r in rows if r.get("agent") == "llm"]
+    if line := describe_constraint(r.get("constraint") for r in llm):
+        print(line)
+    if any(r.get("share_identical") for r in llm):
+        print("LLM runs: --share-identical: identical requests of different runs were sent once, so runs from one "
+              "start are copies of one run, not independent repeats")
+
