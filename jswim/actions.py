@@ -9,9 +9,8 @@ importing JAX.
 
 from __future__ import annotations
 
+import numbers
 from typing import Any
-
-import numpy as np
 
 from jswim.errors import ConfigError, check_choice
 
@@ -69,7 +68,7 @@ def encode_action(dof: Any, roc: Any, roc_levels: int = 1) -> Any:
 def decode_action(action: Any, roc_levels: int = 1) -> tuple[Any, Any]:
     """``(dof, k)`` of integer codes (ROC ``k / K``, ``dof`` 1-based); Python ints for an integer
     code, arrays (NumPy or JAX, jit-friendly) for arrays."""
-    if isinstance(action, (int, np.integer)):
+    if isinstance(action, numbers.Integral):  # NumPy's integers too, without importing NumPy
         action = int(action)
     width = 2 * roc_levels + 1
     return action // width + 1, action % width - roc_levels
