@@ -16,7 +16,8 @@ SCENE_STUDIES = ("wall", "pair")
 
 STUDY_HELP = {
     "wall": "one NG swimmer started at several heights above a no-slip wall: the square stroke's displacement per "
-            "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines",
+            "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines; "
+            "--swimmer purcell: Purcell's swimmer in a plane parallel to the wall (stroke, Q-learning, random)",
     "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
             "offset and D, and whether an agent steering both finds a faster joint stroke",
 }
@@ -44,7 +45,7 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
     if name == "wall":
         g.add_argument("--heights", type=_numbers(float), default=None, metavar="H1,H2,...",
                        help="starting heights of the middle sphere above the wall, in sphere radii "
-                            "(default 3,5,7,10,20,50)")
+                            "(default 3,5,7,10,20,50); Purcell's: of its plane, in link lengths")
     else:
         g.add_argument("--separations", type=_numbers(float), default=None, metavar="D1,D2,...",
                        help="starting distances D between the two swimmers' centres, in sphere radii (default 30,60)")
