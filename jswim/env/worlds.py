@@ -83,8 +83,7 @@ def make(
     """
     if scene is not None and purcell_wall.is_purcell(swimmer) and not is_plain_bulk(scene):
         # Purcell's swimmer above a wall: the paper's planar world with wall-corrected drag
-        swimmer, scene = purcell_wall.model(as_scene(scene), **{k: kwargs.pop(k) for k in ("link_radius", "d_max")
-                                                               if k in kwargs}), None
+        swimmer, scene, kwargs = purcell_wall.model(as_scene(scene), **kwargs), None, {}
     if scene is None or is_plain_bulk(scene):
         if dtype is not None:
             raise ConfigError("dtype is a scene option; the paper's world follows JAX's default float")

@@ -44,13 +44,17 @@ def check_scene(scene: Scene) -> Scene:
     return scene
 
 
-def model(scene: Scene, *, link_radius: float = LINK_RADIUS, d_max: float | None = None) -> WallPurcellModel:
-    """The wall-corrected Purcell model of ``scene`` (height in link lengths)."""
+def model(scene: Scene, *, link_radius: float = LINK_RADIUS, d_max: float | None = None,
+          **other: Any) -> WallPurcellModel:
+    """The wall-corrected Purcell model of ``scene`` (height in link lengths); an option it does not
+    take (``other``) is a one-line ConfigError rather than dropped."""
+    if other:
+        raise ConfigError(f"Purcell's swimmer above a wall takes link_radius and d_max, not {', '.join(sorted(other))}")
     return wall_model(check_scene(scene).height, link_radius, d_max=d_max)
 
 
 def rollout(moves: np.ndarray, scene: Scene, *, key: Any = 0, zeta: float = 0.0, init: Any = None,
-            link_radius: float = LINK_RADIUS, d_max: float | None = None) -> dict[str, np.ndarray]:
+            link_radius: float = LINK_RADIUS, d_max: float | None = None, **other: Any) -> dict[str, np.ndarray]:
     """The fields of a :class:`jswim.scenes.SceneRollout` of ``moves``, float64.
 
     ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` (:func:`jswim.scenes.parse_scene_moves`).
@@ -59,7 +63,7 @@ def rollout(moves: np.ndarray, scene: Scene, *, key: Any = 0, zeta: float = 0.0,
     ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
     the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
     """
-    m = model(scene, link_radius=link_radius, d_max=d_max)
+    m = model(scene, link_radius=link_radius, d_max=d_max, **other)
     dof, roc = np.asarray(moves, np.float64)[:, 1:].T
     with jax.enable_x64(True):
         params = make_params(m, zeta=zeta, init=init)

@@ -102,5 +102,8 @@ def test_what_is_not_built_is_refused_in_one_line(scene, words):
         with pytest.raises(ConfigError) as e:
             call()
         assert words in str(e.value) and "\n" not in str(e.value)
+    for kw in ({"link_radius": 0.5}, {"xi_ratio": 3.0}, {"nodes": 4}):
+        with pytest.raises(ConfigError):
+            jswim.make("purcell", scene=WALL, **kw)
     with pytest.raises(ConfigError):
-        jswim.make("purcell", scene=WALL, link_radius=0.5)
+        scene_rollout("purcell", SQUARE, WALL, sweeps=3)
