@@ -12,6 +12,7 @@ import pytest
 
 import jswim
 from jswim import env
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
 from jswim.scenes import Scene, scene_rollout
 from jswim.swimmers import wall_rft
@@ -47,6 +48,18 @@ def test_scene_rollout_per_cycle_is_the_independent_rk4(expected):
     assert expected > 0.19124724 + 1e-3  # the wall's ratio above 2 makes the stroke go further
 
 
+def test_make_gives_the_paper_world_over_the_wall_model():
+    world, params = jswim.make("purcell", scene=WALL, direction="-x")
+    assert isinstance(world, SwimmerWorld) and world.model == params.model
+    xi_t, xi_n = wall_rft.drag_coefficients(H)
+    m = params.model
+    assert (m.kind, m.height, m.xi_par, m.xi_perp) == ("purcell", H, xi_t, xi_n) and float(params.direction) == -1.0
+    assert (world.n_dof, world.n_actions, world.n_swimmers) == (2, 6, 1)
+    # the plain bulk scene is still the paper's own swimmer
+    assert jswim.make("purcell", scene=Scene())[1].model == make_model("purcell")
+
+
+@pytest.mark.slow  # compile-heavy: the wall model's tables and programs in both dtypes
 def test_make_float32_default_and_float64(float32, expected):
     world, params = jswim.make("purcell", scene=WALL)
     assert world.n_dof == 2 and world.n_swimmers == 1 and params.model.height == H
