@@ -35,8 +35,9 @@ Limits (the tests check both against the literature's forms):
 * near the wall (b << h << l): ``L - k_T -> ln(h / b) + 3/2`` and ``L - k_N -> ln(h / b) + 1/2``:
   both coefficients are set by the distance to the wall rather than the link's length, the
   ``ln(2 h / b)`` of Katz, Blake & Paveri-Fontana (J. Fluid Mech. 72, 529, 1975). Their
-  ``xi_N / xi_T = 2`` there holds once the bulk's own O(1) constants are kept (slender-body
-  theory's ``L - 1/2`` along and ``L + 1/2`` across: ``k_N - k_T -> 1`` cancels them; tested);
+  ``xi_N / xi_T = 2`` there holds once the bulk's own O(1) constants are kept (the local terms of
+  slender-body theory, Gray & Hancock's ``L - 1/2`` along and ``L + 1/2`` across: ``k_N - k_T -> 1``
+  cancels their difference; tested);
   jswim's bulk ratio 2 drops those constants, so here the near-wall ratio is
   ``2 (ln(h/b) + 3/2) / (ln(h/b) + 1/2)``, above 2.
 
