@@ -13,8 +13,13 @@ Prints, for the point-force default and for ``mobility="rpy"``:
 * the relative drift per cycle of a pair above the wall (h = 10 a, D = 30 a): swimmers
   alternating (swimmer 1's move, then swimmer 2's, square strokes) and stroking together (k = 0).
 
-Usage: ``python benchmarks/scene_tables.py [--mobility point|rpy|both]`` (a few minutes: one
-compilation per table and mobility).
+And (``--purcell``, alone) Purcell's swimmer above a wall (issue 34, ``docs/scenes.md``): its
+square stroke's displacement per cycle against the height of its plane, 1.5..1000 link lengths,
+with the drag ratio xi_N / xi_T and the approach to the bulk 0.19124724.
+
+Usage: ``python benchmarks/scene_tables.py [--mobility point|rpy|both] [--purcell]`` (a few
+minutes: one compilation per table and mobility; ``--purcell`` about a minute, one table build
+per height).
 """
 
 from __future__ import annotations
@@ -88,10 +93,39 @@ def local_exponent(h1: float, h2: float, c1: float, c2: float) -> float:
     return float(np.log(c1 / c2) / np.log(h2 / h1))
 
 
+PURCELL_SQUARE = [(2, -1), (1, -1), (2, 1), (1, 1)]  # from the paper's start (+, +), toward +x
+PURCELL_HEIGHTS = [1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 1000.0]
+
+
+def purcell_wall_table() -> None:
+    """Purcell's square stroke per cycle above a wall, through ``scene_rollout`` (float64)."""
+    from jswim.env import rollout
+    from jswim.swimmers.wall_rft import LINK_RADIUS, drag_coefficients
+
+    bulk = float(rollout("purcell", PURCELL_SQUARE).x[-1])
+    per, ratio = [], []
+    for h in PURCELL_HEIGHTS:
+        per.append(float(scene_rollout("purcell", PURCELL_SQUARE, Scene(medium="wall", height=h)).x[-1, 0]))
+        xi_t, xi_n = drag_coefficients(h)
+        ratio.append(float(xi_n / xi_t))
+    print(f"== Purcell's swimmer above a wall (link radius {LINK_RADIUS:g} l), square stroke from (+, +)")
+    print("| h / l | " + " | ".join(f"{h:g}" for h in PURCELL_HEIGHTS) + " | bulk |")
+    print("|---|" + "---|" * (len(PURCELL_HEIGHTS) + 1))
+    print("| xi_N / xi_T | " + " | ".join(f"{r:.6f}" for r in ratio) + " | 2 |")
+    print("| X per cycle (l) | " + " | ".join(f"{v:.8f}" for v in per) + f" | {bulk:.8f} |")
+    print("| X - bulk (l) | " + " | ".join(f"{v - bulk:+.3e}" for v in per) + " | 0 |")
+    print("| h (X - bulk) (l^2) | " + " | ".join(f"{h * (v - bulk):.5f}" for h, v in zip(PURCELL_HEIGHTS, per)) + " | |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--mobility", choices=("point", "rpy", "both"), default="both")
+    ap.add_argument("--purcell", action="store_true", help="only Purcell's swimmer above a wall")
     args = ap.parse_args()
+    if args.purcell:
+        with jax.enable_x64(True):
+            purcell_wall_table()
+        return
     mobs = ("point", "rpy") if args.mobility == "both" else (args.mobility,)
     with jax.enable_x64(True):
         res = {}

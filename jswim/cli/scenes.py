@@ -15,7 +15,8 @@ from jswim.console import print_table as show
 
 STUDY_HELP = {
     "wall": "one NG swimmer started at several heights above a no-slip wall: the square stroke's displacement per "
-            "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines",
+            "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines; "
+            "--swimmer purcell: Purcell's swimmer in a plane parallel to the wall (stroke, Q-learning, random)",
     "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
             "offset and D, and whether an agent steering both finds a faster joint stroke",
 }
@@ -39,7 +40,7 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
     "wall": (
         ("--heights", dict(type=_numbers(float), metavar="H1,H2,...",
                            help="starting heights of the middle sphere above the wall, in sphere radii "
-                                "(default 3,5,7,10,20,50)")),
+                                "(default 3,5,7,10,20,50); Purcell's: of its plane, in link lengths")),
     ),
     "pair": (
         ("--separations", dict(type=_numbers(float), metavar="D1,D2,...",

@@ -22,7 +22,7 @@ import numpy as np
 
 #: Modules whose source decides a table's numbers.
 _SOURCES = ("jswim.integrate", "jswim.swimmers.models", "jswim.swimmers.purcell", "jswim.swimmers.nlink",
-            "jswim.swimmers.ng", "jswim.swimmers.nsphere", "jswim.env.tables", "jswim.env.motion",
+            "jswim.swimmers.ng", "jswim.swimmers.nsphere", "jswim.swimmers.wall_rft", "jswim.env.tables", "jswim.env.motion",
             "jswim.env.state")
 
 

@@ -9,6 +9,7 @@ from jswim.env.params import EnvParams, make_params, parse_direction
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
+from jswim.scenes import purcell_wall
 from jswim.scenes.params import scene_params
 from jswim.scenes.scene import Scene
 from jswim.swimmers.models import SwimmerModel
@@ -46,7 +47,9 @@ def make(
     Parameters
     ----------
     swimmer : str or SwimmerModel
-        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"`` (scenes: ``"ng"``); model options
+        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"`` (scenes: ``"ng"``; ``"purcell"`` above a
+        wall, :mod:`jswim.scenes.purcell_wall`: the paper's world with wall-corrected drag, its
+        plane ``scene.height`` link lengths up, ``link_radius`` by keyword); model options
         (``d_max``, ``d_min``, ``n_links``, ...) by keyword.
     scene : Scene or dict, optional
         ``None``, or one untilted swimmer in the ``"bulk"`` medium: the paper's world
@@ -78,6 +81,9 @@ def make(
     >>> env.n_swimmers, env.n_dof
     (2, 4)
     """
+    if scene is not None and purcell_wall.is_purcell(swimmer) and not is_plain_bulk(scene):
+        # Purcell's swimmer above a wall: the paper's planar world with wall-corrected drag
+        swimmer, scene, kwargs = purcell_wall.model(as_scene(scene), **kwargs), None, {}
     if scene is None or is_plain_bulk(scene):
         if dtype is not None:
             raise ConfigError("dtype is a scene option; the paper's world follows JAX's default float")

@@ -5,7 +5,8 @@ top of an unfinished study's figures); chosen by :func:`jswim.figures.plots.stud
 
 wall
     ``wall``: the square stroke's displacement per cycle against the starting height (log axis),
-    with the same stroke in the unbounded fluid of the same solver as a line; ``wall-track``:
+    with the same stroke in the unbounded fluid of the same solver as a line (Purcell's swimmer,
+    issue 34: heights in link lengths, the bulk RFT stroke as the line; one series per swimmer); ``wall-track``:
     height (top) and X/a (bottom) against step for every agent at every height (one colour per
     agent, darker for lower starts).
 pair
@@ -46,17 +47,21 @@ def scene_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
 def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     fig = Figure(figsize=(COLUMN_IN, 2.4))
     ax = fig.add_subplot()
-    for d in sorted({int(r["direction"]) for r in rows}, reverse=True):
-        pts = sorted((r["start_height"], d * r["per_cycle"]) for r in rows
-                     if r["agent"] == "stroke" and r.get("start_height") and r.get("per_cycle") is not None
-                     and int(r["direction"]) == d)
-        if pts:
-            h, v = zip(*pts)
-            ax.plot(h, v, **{**STROKE_STYLE, "label": f"square stroke ({'+x' if d > 0 else '-x'}), wall"})
-        free = [d * r["per_cycle"] for r in rows if r["agent"] == "stroke" and r.get("medium") == "free"
-                and r.get("per_cycle") is not None and int(r["direction"]) == d]
-        if free:
-            ax.axhline(float(np.mean(free)), color="0.4", ls="--", lw=0.8, label="same stroke, no wall")
+    kinds = sorted({str(r.get("swimmer", "ng")) for r in rows})
+    for sw in kinds:  # NG (a = sphere radius) and Purcell (a = link length; issue 34)
+        tag = f"{sw}, " if len(kinds) > 1 else ""
+        for d in sorted({int(r["direction"]) for r in rows if str(r.get("swimmer", "ng")) == sw}, reverse=True):
+            own = [r for r in rows if r["agent"] == "stroke" and str(r.get("swimmer", "ng")) == sw
+                   and r.get("per_cycle") is not None and int(r["direction"]) == d]
+            pts = sorted((r["start_height"], d * r["per_cycle"]) for r in own if r.get("start_height"))
+            if pts:
+                h, v = zip(*pts)
+                ax.plot(h, v, **{**STROKE_STYLE, "label": f"{tag}square stroke ({'+x' if d > 0 else '-x'}), wall",
+                                 **({"marker": "s", "ls": "-."} if sw == "purcell" and len(kinds) > 1 else {})})
+            # the no-wall reference: the same solver without the wall (NG: "free"; Purcell: bulk RFT)
+            free = [d * r["per_cycle"] for r in own if r.get("medium") in ("free", "bulk")]
+            if free:
+                ax.axhline(float(np.mean(free)), color="0.4", ls="--", lw=0.8, label=f"{tag}same stroke, no wall")
     ax.set_xscale("log")
     ax.set_xlabel("starting height h/a above the wall")
     ax.set_ylabel("X/a per cycle (target direction)")
@@ -112,8 +117,8 @@ def track_figure(rows: Sequence[Mapping[str, Any]], key: str, note: str | None =
         seen.add(r["agent"])
         steps = np.arange(1, len(r["x"]) + 1)
         kw = dict(color=st["color"], ls=st["ls"], alpha=shade, lw=0.8, label=label)
-        if heights:
-            axes[0].plot(steps, r["y"], **kw)
+        if heights:  # the recorded heights (Purcell's row y is its in-plane y)
+            axes[0].plot(steps, [h[0] for h in r["heights"]] if r.get("heights") else r["y"], **kw)
         axes[-1].plot(steps, r["direction"] * np.asarray(r["x"]), **kw)
     if heights:
         axes[0].set_yscale("log")

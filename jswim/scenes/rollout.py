@@ -11,6 +11,7 @@ from jax import Array
 
 from jswim.env.randomness import seed_key
 from jswim.errors import ConfigError
+from jswim.scenes import purcell_wall
 from jswim.scenes.params import SceneParams, scene_params
 from jswim.scenes.scene import Scene
 from jswim.scenes.state import SceneState, scene_reset
@@ -28,6 +29,8 @@ class SceneRollout(NamedTuple):
     stuck: np.ndarray  # (steps,)
     contact: np.ndarray  # (steps,)
     gap: np.ndarray  # (steps,)
+    y: np.ndarray | None = None  # (steps, S) Purcell's swimmer above a wall: in-plane y (else None)
+    orientation: np.ndarray | None = None  # (steps, S) Purcell's: its middle link's angle in the plane
 
 
 def parse_scene_moves(moves: Any, n_swimmers: int) -> np.ndarray:
@@ -74,7 +77,8 @@ def scene_rollout(
     Parameters
     ----------
     swimmer : str
-        ``"ng"``.
+        ``"ng"``, or ``"purcell"`` above a wall (:mod:`jswim.scenes.purcell_wall`: its plane
+        ``scene.height`` link lengths above the wall; ``link_radius``, ``d_max`` by keyword).
     moves : array-like (steps, 2) or (steps, 3)
         ``(dof, roc)`` (one swimmer) or ``(swimmer, dof, roc)``, 1-based as in the prompt.
     scene : Scene
@@ -92,6 +96,8 @@ def scene_rollout(
     SceneRollout
         NumPy float64 arrays, one entry per step (the state after it).
     """
+    if purcell_wall.is_purcell(swimmer) and params is None:
+        return SceneRollout(**purcell_wall.rollout(parse_scene_moves(moves, 1), scene, key=key, zeta=zeta, **kwargs))
     with jax.enable_x64(True):
         if params is None:
             params = scene_params(swimmer, scene, zeta=zeta, dtype=jnp.float64, **kwargs)

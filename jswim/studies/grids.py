@@ -366,6 +366,19 @@ def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
     return out
 
 
+def purcell_wall_cells(o: StudyOptions) -> list[Cell]:
+    """Purcell's swimmer in the wall study (issue 34; :mod:`jswim.studies.purcell_wall`): the
+    square stroke in the bulk (group ``bulk``) and at each height (link lengths) the stroke,
+    Q-learning and random. No LLM or PPO rows: their scene drivers are the NG swimmer's."""
+    if o.roc_levels != 1:
+        raise ConfigError(f"the wall study has no use for --roc-levels {o.roc_levels} (its runs use the paper's "
+                          "ROCs -1, 0, 1); leave it out")
+    bulk = scene_env.canonical(scene_env.Scene(medium="bulk"))
+    return [Cell("bulk", (STROKE_AGENT,), scene=bulk, stroke="square", tag="bulk")] + [
+        Cell(f"h={h:g}", (STROKE_AGENT, "qlearning", "random"), scene=wall_scene(h), stroke="square", tag=f"h{h:g}")
+        for h in o.heights]
+
+
 def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
     """The continuous RL baseline's cell next to the other agents of a group (same group name,
     real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scene_ppo`)."""
@@ -502,7 +515,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:
-            for cell in spec.cells(o):
+            for cell in purcell_wall_cells(o) if (study, sw) == ("wall", "purcell") else spec.cells(o):
                 for agent in (a for a in cell.agents if a in o.agents):
                     llm = agent == "llm"
                     v = (cell.variant or variant) if llm else (cell.stroke if agent == STROKE_AGENT else "")

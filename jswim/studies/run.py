@@ -116,6 +116,10 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     """Q-learning, random or continuous-RL runs of one (agent, swimmer, action set, ROC lattice)
     group, vectorised."""
     p0 = plans[0]
+    if p0.scene and p0.swimmer == "purcell":  # Purcell above a wall (issue 34): its planar world
+        from jswim.studies import purcell_wall  # lazy: start-up (scene studies only)
+
+        return purcell_wall.run_baselines(plans, horizon)
     if p0.scene and p0.agent == CONTINUOUS_AGENT:  # walls and pairs (issue 19): PPO on the scene
         from jswim.studies import scene_ppo  # lazy: start-up (optax and the PPO module, for PPO runs only)
 

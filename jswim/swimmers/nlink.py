@@ -47,7 +47,7 @@ def _cross(a: Array, b: Array) -> Array:
 
 
 def velocity(
-    d: Array, d_dot: Array, theta: Array | float = 0.0, xi_ratio: float = 2.0
+    d: Array, d_dot: Array, theta: Array | float = 0.0, xi_ratio: float = 2.0, xi_par: float = 1.0
 ) -> Array:
     """Reference-link velocity ``(U_x, U_y, Omega)`` of the N-link swimmer in the lab frame.
 
@@ -59,7 +59,10 @@ def velocity(
         Orientation of the reference (middle) link.
     xi_ratio : float
         ``xi_perp / xi_par``; 2 is the slender-body limit used by the paper, 1 is isotropic drag
-        (no propulsion at all).
+        (no propulsion at all). With ``xi_par`` given: ``xi_perp`` itself.
+    xi_par : float
+        Drag along a link (default 1, the unit of ``xi_ratio``); the velocities depend only on
+        ``xi_ratio / xi_par`` (:mod:`jswim.swimmers.wall_rft` passes both).
     """
     d = jnp.asarray(d)
     d_dot = jnp.asarray(d_dot)
@@ -74,7 +77,7 @@ def velocity(
     hinge_v = 0.5 * (phi_dot_rel[:-1, None] * nrm[:-1] + phi_dot_rel[1:, None] * nrm[1:])
     cum = jnp.concatenate([jnp.zeros((1, 2), t.dtype), jnp.cumsum(hinge_v, axis=0)])
     shape_v = cum - cum[m]
-    xi_par, xi_perp = 1.0, xi_ratio
+    xi_perp = xi_ratio
 
     def residual(q: Array) -> Array:
         u, omega = q[:2], q[2]

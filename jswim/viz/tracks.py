@@ -238,12 +238,13 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         ys = ys if ys is not None else ys2
         th = th if th is not None else th2
     x = np.concatenate([[0.0], xs])
-    y0 = world.start[0][1] if row.get("scene") else 0.0  # a scene's step 0 is at its start height
-    if row.get("scene"):
+    side = bool(row.get("scene")) and not worlds.from_above(row)  # a scene drawn in its vertical plane
+    y0 = world.start[0][1] if side else 0.0  # a scene's step 0 is at its start height
+    if side:
         theta0 = world.start[0][2]
     y = np.concatenate([[y0], ys if ys is not None else np.full(n, y0)])
     theta = np.concatenate([[theta0], th if th is not None else np.full(n, theta0)])
-    if row.get("scene"):
+    if side:
         bodies, positions = _scene_bodies(row, world, model, d, n)
         pts = bodies[:, 0]
     else:

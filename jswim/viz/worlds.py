@@ -55,6 +55,8 @@ class World:
     def describe(self) -> str:
         """A short line for captions: ``"wall, h = 3 a"``, ``"pair, D = 30 a"``, ``""`` for bulk."""
         bits = []
+        if self.extra.get("plane_height") is not None:  # Purcell's swimmer above a wall, drawn from above
+            bits.append(f"seen from above: its plane h = {self.extra['plane_height']:g} a above a wall")
         if self.wall:
             bits.append(f"wall, h = {self.start[0][1]:g} a")
         if self.n_swimmers > 1:
@@ -62,6 +64,13 @@ class World:
         if self.obstacles:
             bits.append(f"{len(self.obstacles)} obstacle(s)")
         return ", ".join(bits)
+
+
+def from_above(row: Mapping[str, Any]) -> bool:
+    """Whether a scene row is drawn from above, in the swimmer's own plane: Purcell's swimmer above
+    a wall (issue 34) swims in a plane parallel to the wall, so its bends are seen only from above
+    (its row's ``y`` and ``orientation`` are in that plane), with the wall beneath it."""
+    return bool(row.get("scene")) and str(row.get("swimmer", "")) == "purcell"
 
 
 def world_of(row: Mapping[str, Any]) -> World:
@@ -73,6 +82,9 @@ def world_of(row: Mapping[str, Any]) -> World:
         sc = json.loads(raw) if isinstance(raw, str) else dict(raw)
     except (TypeError, ValueError):
         return World()
+    if from_above(row):
+        return World(medium=str(sc.get("medium", "bulk")),
+                     extra={"plane_height": float(sc.get("height", 0.0))} if sc.get("medium") == "wall" else {})
     n = int(sc.get("swimmers") or 1)
     h = float(sc.get("height", 0.0) or 0.0)
     tilt = float(sc.get("tilt", 0.0) or 0.0)
@@ -133,6 +145,8 @@ def draw_fixed(ax: Any, world: World, xlim: tuple[float, float] | None = None) -
     from matplotlib.patches import Circle, Rectangle
 
     out: list[Any] = []
+    if world.extra.get("plane_height") is not None:  # the wall beneath the swimmer's plane, seen from above
+        ax.set_facecolor("#efe9e1")
     if world.wall:
         x0, x1 = xlim if xlim is not None else ax.get_xlim()
         big = max(abs(x0), abs(x1)) * 4 + 1e3  # wide enough for a view that follows the swimmer

@@ -1,0 +1,81 @@
+"""Purcell's swimmer in a scene: its plane parallel to a wall at ``Scene.height`` (link lengths).
+
+The links stay at that height (no force normal to the wall, :mod:`jswim.swimmers.wall_rft`), so
+the world is the paper's planar world (:class:`jswim.env.swimmer_world.SwimmerWorld`: exact
+corner steps, drift-free positions, JAX's default float) with wall-corrected drag coefficients.
+``jswim.make("purcell", scene=...)`` and :func:`jswim.scenes.scene_rollout` come here. What is
+not built is refused in one line: a second swimmer, obstacles, a tilt, ``mobility="rpy"`` or
+medium ``"free"`` (resistive force theory has no interactions to solve; ``"bulk"`` is the paper's
+world).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jswim.env.episodes import rollout as world_rollout
+from jswim.env.params import make_params
+from jswim.env.swimmer_world import SwimmerWorld
+from jswim.errors import ConfigError
+from jswim.scenes.scene import Scene
+from jswim.swimmers.wall_rft import LINK_RADIUS, WallPurcellModel, wall_model
+
+
+def is_purcell(swimmer: Any) -> bool:
+    """Whether ``swimmer`` names Purcell's three-link swimmer (``"purcell"``)."""
+    return isinstance(swimmer, str) and swimmer.lower() == "purcell"
+
+
+def check_scene(scene: Scene) -> Scene:
+    """``scene`` if Purcell's swimmer can swim in it above a wall, else a one-line ConfigError."""
+    scene.validate()
+    if scene.medium != "wall":
+        raise ConfigError(f"Purcell's swimmer swims in medium 'bulk' (the paper's world) or 'wall', not "
+                          f"{scene.medium!r} (resistive force theory has no interactions to solve)")
+    bad = [name for name, off in (("swimmers", scene.swimmers != 1), ("obstacles", bool(scene.obstacles)),
+                                  ("tilt", scene.tilt != 0.0), ("mobility", scene.mobility != "point")) if off]
+    if bad:
+        raise ConfigError(f"Purcell's swimmer above a wall is one swimmer in a plane parallel to it: leave "
+                          f"{', '.join(bad)} at the default")
+    return scene
+
+
+def model(scene: Scene, *, link_radius: float = LINK_RADIUS, d_max: float | None = None,
+          **other: Any) -> WallPurcellModel:
+    """The wall-corrected Purcell model of ``scene`` (height in link lengths); an option it does not
+    take (``other``) is a one-line ConfigError rather than dropped."""
+    if other:
+        raise ConfigError(f"Purcell's swimmer above a wall takes link_radius and d_max, not {', '.join(sorted(other))}")
+    return wall_model(check_scene(scene).height, link_radius, d_max=d_max)
+
+
+def rollout(moves: np.ndarray, scene: Scene, *, key: Any = 0, zeta: float = 0.0, init: Any = None,
+            link_radius: float = LINK_RADIUS, d_max: float | None = None, **other: Any) -> dict[str, np.ndarray]:
+    """The fields of a :class:`jswim.scenes.SceneRollout` of ``moves``, float64.
+
+    ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` (:func:`jswim.scenes.parse_scene_moves`).
+
+    ``x``, ``y``: the centroid (as :func:`jswim.env.rollout`); ``z``: the plane's height (fixed);
+    ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
+    the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
+    """
+    m = model(scene, link_radius=link_radius, d_max=d_max, **other)
+    dof, roc = np.asarray(moves, np.float64)[:, 1:].T
+    with jax.enable_x64(True):
+        params = make_params(m, zeta=zeta, init=init)
+        if np.all(np.isin(roc, (-1.0, 0.0, 1.0))):  # the paper's ROCs: integer codes, the exact corner table
+            acts = jnp.asarray(dof * 3 + roc + 1, jnp.int32)
+        else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout does)
+            acts = jnp.asarray(np.eye(2)[dof.astype(int)] * roc[:, None], jnp.float64)
+        t = world_rollout(SwimmerWorld(m), params, key, acts)
+        pos = np.asarray(t.obs.position[:, 0], np.float64)  # (steps, 2): the centroid
+        out = {"x": pos[:, :1], "arms": np.asarray(t.obs.dofs, np.float64)[:, None, :],
+               "dx": np.asarray(t.info.displacement[:, 0, :1], np.float64), "stuck": np.asarray(t.info.stuck),
+               "y": pos[:, 1:], "orientation": np.asarray(t.obs.orientation, np.float64)}
+    steps = pos.shape[0]
+    return {**out, "z": np.full((steps, 1), m.height), "tilt": np.zeros((steps, 1)), "contact": np.zeros(steps, bool),
+            "gap": np.full(steps, m.height - m.link_radius)}
