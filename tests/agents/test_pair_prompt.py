@@ -12,7 +12,7 @@ from jswim import cli
 from jswim.agents import pair_prompt
 from jswim.agents.variants import LLMAgentConfig, LLMRunSpec
 from jswim.errors import ConfigError
-from jswim.prompt import Action, HistoryRecord, render_prompt
+from jswim.prompt import Action, HistoryRecord, SceneView, render_prompt
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
 from jswim.studies.grids import build
@@ -25,7 +25,7 @@ SPEC = LLMRunSpec(swimmer="ng", scene=pair_scene(30.0), pair_prompt="each", init
 
 
 def _convs():
-    return pair_prompt.conversations(SPEC, make_model("ng"), LLMAgentConfig(), [10.0, 6.0, 10.0, 6.0])
+    return pair_prompt.conversations(SPEC, make_model("ng"), LLMAgentConfig(), [10.0, 6.0, 10.0, 6.0], SceneView(2, False, 30.0))
 
 
 def _joint(dofs_before, action, dofs_after, xs_before, xs_after):
