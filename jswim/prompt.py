@@ -646,16 +646,15 @@ PAIR_SENTENCE = ("D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swi
 OWN_PAIR_SENTENCE = ("A second swimmer on the same axis, steered on its own, starts {separation} sphere radii {where} "
                      "this one and moves its arms between this one's steps; other X is its position, counted from its "
                      "own start as X is.")
-PAIR_WALL_SENTENCE = ("Both swim above a flat wall: H1 and H2 are their heights above it in thousandths of the sphere "
-                      "radius, tilt1 and tilt2 their angles to it in radians.")
+#: With several swimmers above a wall (``{all}``: Both or All; ``{to}``: and, or to for three or more).
+SEVERAL_WALL_SENTENCE = ("{all} swim above a flat wall: H1 {to} H{n} are their heights above it in thousandths of the "
+                         "sphere radius, tilt1 {to} tilt{n} their angles to it in radians.")
 
 
-#: S2's extra sentences of a school (three or more swimmers; ``{starts}``: where each starts from
+#: S2's extra sentence of a school (three or more swimmers; ``{starts}``: where each starts from
 #: swimmer 1, or from this one in one swimmer's own prompt, ``--pair-prompt each``).
 SCHOOL_SENTENCE = ("Swimmer k has the arms D(2k-1) and D(2k), up to D{last} of swimmer {n}; they start with {starts} "
                    "from swimmer 1; X1 to X{n} are their positions, and the movement sought is that of their mean.")
-SCHOOL_WALL_SENTENCE = ("All swim above a flat wall: H1 to H{n} are their heights above it in thousandths of the "
-                        "sphere radius, tilt1 to tilt{n} their angles to it in radians.")
 OWN_SCHOOL_SENTENCE = ("This is swimmer {own} of {n}, steered on its own; the others start with {starts} from it and "
                        "move their arms between this one's steps; Xk is swimmer k's position, counted from its own "
                        "start as X is.")
@@ -684,7 +683,7 @@ def scene_sentence(view: SceneView | None) -> str:
             own=view.own, n=n, last=2 * n, starts=_starts(view)))
     if view.wall:
         parts.append(WALL_SENTENCE if n == 1 or view.own else
-                     PAIR_WALL_SENTENCE if n == 2 else SCHOOL_WALL_SENTENCE.format(n=n))
+                     SEVERAL_WALL_SENTENCE.format(all="Both" if n == 2 else "All", to="and" if n == 2 else "to", n=n))
     return " ".join(parts)
 
 

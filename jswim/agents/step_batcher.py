@@ -66,12 +66,8 @@ def stack_params(params: Sequence[Any]) -> Any:
     axis; a Python number takes JAX's default float, as the world would read it)."""
     dtype = np.dtype(jnp.result_type(float))
 
-    def leaf(*vs: Any) -> np.ndarray:
-        arrays = [np.asarray(v) if hasattr(v, "dtype") else np.asarray(v, dtype if isinstance(v, float) else None)
-                  for v in vs]
-        return np.stack(arrays)
-
-    return jax.tree.map(leaf, *params)
+    return jax.tree.map(lambda *vs: np.stack([np.asarray(v, dtype if isinstance(v, float) else None) for v in vs]),
+                        *params)
 
 
 def group_key(env: Environment, params: Any) -> tuple[Any, ...]:

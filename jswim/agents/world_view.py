@@ -17,6 +17,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from jswim.agents import scene_env
 from jswim.agents.fidelity import scene_deviation
 from jswim.agents.variants import LLMRunSpec
 from jswim.env.base import Environment
@@ -31,10 +32,8 @@ def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
     if not spec.scene:
         return make(spec.swimmer, zeta=spec.zeta, direction=spec.direction, init=spec.init,
                     roc_levels=spec.roc_levels, **dict(spec.swimmer_options))
-    init = spec.init  # a scene starts from corner levels (every swimmer alike) or its own default
-    corners = isinstance(init, (tuple, list)) and all(v in (0, 1) for v in init)
     return make(spec.swimmer, json.loads(spec.scene), zeta=spec.zeta, direction=spec.direction,
-                init=tuple(int(v) for v in init) if corners else None, roc_levels=spec.roc_levels)
+                init=scene_env.start_levels(spec.init), roc_levels=spec.roc_levels)
 
 
 def view(env: Environment, x0: Sequence[float], y0: Sequence[float]) -> SceneView | None:
