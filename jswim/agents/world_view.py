@@ -17,7 +17,6 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from jswim.agents import scene_env
 from jswim.agents.fidelity import scene_deviation
 from jswim.agents.variants import LLMRunSpec
 from jswim.env.base import Environment
@@ -32,8 +31,9 @@ def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
     if not spec.scene:
         return make(spec.swimmer, zeta=spec.zeta, direction=spec.direction, init=spec.init,
                     roc_levels=spec.roc_levels, **dict(spec.swimmer_options))
+    corners = isinstance(spec.init, (tuple, list)) and all(v in (0, 1) for v in spec.init)  # else the scene's own
     return make(spec.swimmer, json.loads(spec.scene), zeta=spec.zeta, direction=spec.direction,
-                init=scene_env.start_levels(spec.init), roc_levels=spec.roc_levels)
+                init=tuple(int(v) for v in spec.init) if corners else None, roc_levels=spec.roc_levels)
 
 
 def view(env: Environment, x0: Sequence[float], y0: Sequence[float]) -> SceneView | None:
