@@ -1,33 +1,27 @@
 """The LLM agent: prompt -> chat client -> parse -> env step, for a batch of independent runs.
 
-Each run is its own pipeline: render the prompt, call the model (one
-:class:`jswim.llm.LLMClient` for all runs bounds the calls in flight and paces them), parse,
-step, record, and on to the next step as soon as its own reply is back. There is no round and
-no barrier: real APIs have heavy-tailed latency, and a barrier would make every step cost the
-slowest of all the runs' calls. Stepping is shared without holding anyone back: the runs of one
-world keep one batched state, and the actions handed in during one turn of the event loop are
-stepped in one jitted call at the next turn (replies that land together, step together; a run
-never waits for another run's reply; :mod:`jswim.agents.step_batcher`).
+Each run is its own pipeline: render the prompt, call the model (one :class:`jswim.llm.LLMClient`
+for all runs bounds the calls in flight and paces them), parse, step, record, and on to the next
+step as soon as its own reply is back. There is no round and no barrier: real APIs have
+heavy-tailed latency, and a barrier would make every step cost the slowest of all the runs' calls.
+Stepping is shared without holding anyone back: the runs of one world keep one batched state, and
+the actions handed in during one turn of the event loop are stepped in one jitted call at the next
+turn (replies that land together, step together; a run never waits for another run's reply;
+:mod:`jswim.agents.step_batcher`).
 
-Any world serves, through the world protocol (:class:`jswim.env.base.Environment`): a run's world
-is :func:`jswim.agents.world_view.world` of its spec (the paper's swimmer, or its scene) unless the
-driver is handed another builder (``worlds=``), and what the prompt shows of it beyond the paper's
-lone swimmer (joint DOFs, each swimmer's X, height and tilt, one conversation per swimmer) comes
-from the world and its observation (:func:`jswim.agents.world_view.view`).
+Any world serves (:class:`jswim.env.base.Environment`; ``worlds=``, default
+:func:`jswim.agents.world_view.world`); what the prompt shows beyond the paper's lone swimmer comes
+from the world and its observation (:func:`jswim.agents.world_view.view`). The protocol itself
+(prompt in, action or follow-up out) is pure and lives in :mod:`jswim.agents.protocol`; the run
+spec, the agent settings and the named variants in :mod:`jswim.agents.variants`; the history and
+its clearing rule in :mod:`jswim.agents.memory`. This module does the I/O: requests, env steps,
+transcripts.
 
-The protocol itself (prompt in, action or follow-up out) is pure and lives in
-:mod:`jswim.agents.protocol`; the run spec, the agent settings and the named variants in
-:mod:`jswim.agents.variants`; the history and its clearing rule in :mod:`jswim.agents.memory`.
-This module does the I/O: requests, env steps, transcripts.
-
-A reply without a valid action is retried ``parse_retries`` times with a short corrective
-follow-up message (a new request, so temperature-0 caching does not replay the bad reply); if
-it still fails, the step executes the no-op ``[1, 0]`` and counts as a failed step. The executed
-step, failed or not, enters the history shown to the model.
-
-Randomness: run ``i`` draws its initial configuration (when random) and its noise from
-``PRNGKey(seed_i)`` alone, with the step key folded in from the step index, so a run's physics
-does not depend on which other runs share its batch.
+A reply without a valid action is retried ``parse_retries`` times with a short corrective follow-up
+message (a new request, so temperature-0 caching does not replay the bad reply); if it still fails,
+the step executes the no-op ``[1, 0]`` and counts as a failed step. The executed step, failed or
+not, enters the history shown to the model. Randomness: run ``i``'s start and noise come from
+``PRNGKey(seed_i)`` alone (:mod:`jswim.agents.step_batcher`), whoever shares its batch.
 """
 
 from __future__ import annotations

@@ -1,27 +1,18 @@
 """Each swimmer of a pair (or a school) its own LLM conversation (``--pair-prompt each``; issue 19,
 a variant of the joint prompt, which stays the default).
 
-With the joint prompt one conversation steers every swimmer through joint DOFs D1..D(2N). Here each
-swimmer has its own conversation, kept as the paper keeps a lone swimmer's:
+Each swimmer's conversation is kept as the paper keeps a lone swimmer's: the paper's five sentences
+about its own arms D1, D2 and its own X (it replies ``[1 or 2, ROC]``), S2 saying where the others
+start and that they move between its steps (:data:`jswim.prompt.OWN_PAIR_SENTENCE`), every record
+also showing the others' positions (a pair's: ``other X``), each counted from its own start and
+encoded as X is; its own last ``n_ht`` records and its own clearing rule, on the progress of its own
+X over its own steps; the same request, parsing, follow-ups and no-op on failure as every LLM run
+(:mod:`jswim.agents.protocol`), through the same client, journal and step batching.
 
-- its own prompt, the paper's five sentences about its own arms D1, D2 and its own position X
-  (S1, S4, S5 and the answer format unchanged: it replies ``[1 or 2, ROC]``); S2 gains one sentence
-  (:data:`jswim.prompt.OWN_PAIR_SENTENCE`: where the other swimmer starts, that it moves between
-  this one's steps) and every record one field per other swimmer (a pair's: ``other X``), its
-  position encoded as X is (its centroid's displacement from its own start, ``(X - X_min) * 1000``
-  truncated);
-- its own history of the last ``n_ht`` records (the swimmer's default n_ht) and its own clearing
-  rule, which reads the progress of its own X over its own steps (as a lone swimmer's reads X);
-- the same request, parsing, corrective follow-ups and no-op on failure as every LLM run
-  (:mod:`jswim.agents.protocol`), through the same client, journal and step batching.
-
-**Turns.** Swimmer ``k`` of ``N`` decides at the run's steps ``k, k + N, ...`` (a pair: swimmer 1 at
-odd steps, swimmer 2 at even ones); every step moves one arm of one swimmer, as the joint prompt's
-steps and the alternating square strokes of ``jswim study pair`` do, so ``--steps`` is the same
-budget for all of them. A swimmer's records are those of its own steps; the others' moves show as
-the change of their positions between them. The run's row is the joint one (actions as joint
-codes, ``x`` the swimmers' mean, whose progress is the reward), so it compares with the joint
-prompt's rows.
+**Turns.** Swimmer ``k`` of ``N`` decides at steps ``k, k + N, ...`` (a pair: swimmer 1 at odd
+steps, swimmer 2 at even ones); every step moves one arm of one swimmer, as the joint prompt's and
+the alternating square strokes do, so ``--steps`` is the same budget for all. The run's row is the
+joint one (joint action codes, ``x`` the swimmers' mean, whose progress is the reward).
 
 Everything here is pure (no client, no environment): the driver (:mod:`jswim.agents.llm`) keeps
 one :class:`Conversation` per swimmer on a run and asks :func:`turn` whose step it is.
