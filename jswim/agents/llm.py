@@ -90,7 +90,7 @@ class RunResult:
     knobs: dict[str, Any] = field(default_factory=dict)  # the variant switches (LLMAgentConfig.knobs)
     below_x_min: int | None = None  # first step whose X fell below x_min (sent as a negative number)
     # Worlds beyond the paper's lone swimmer (several swimmers, a wall: ``per_swimmer``): per step,
-    # each swimmer's displacement, height (its position y), tilt, and any contact.
+    # each swimmer's displacement, height (the observation's ``height``), tilt, and any contact.
     per_swimmer: bool = False
     xs: list[list[float]] = field(default_factory=list)
     heights: list[list[float]] = field(default_factory=list)

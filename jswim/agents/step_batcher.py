@@ -81,8 +81,9 @@ class StepGroup:
 
     A run hands its action to :meth:`submit` and awaits what it sees after the step: ``xs`` (each
     swimmer's x displacement from its start ``x0``, float64 ``(S,)``) and their mean ``x``,
-    ``heights`` and ``tilts`` (each swimmer's position y and orientation), ``dofs`` (float64),
-    ``y`` and ``orientation`` (swimmer 1's, the world's dtype), ``progress`` (the reward), ``stuck``
+    ``heights`` (the observation's ``height``, else each position's y) and ``tilts`` (each
+    orientation), ``dofs`` (float64), ``y`` and ``orientation`` (swimmer 1's height and orientation,
+    the world's dtype), ``progress`` (the reward), ``stuck``
     and ``contact``. ``start`` holds the same (but the step's) before the first step, with a batch
     axis; ``levels0`` each start as corner levels of ``[lo, hi]``; ``n_steps`` the env calls made
     (for benchmarks: steps per call = the batching achieved).
@@ -108,10 +109,10 @@ class StepGroup:
     def _outputs(self, obs: Any, position: Any, rest: Any) -> dict[str, np.ndarray]:
         obs, position = jax.device_get((obs, position))
         xs = np.asarray(position, np.float64)[..., 0] - self.x0
-        out = {"xs": xs, "x": xs.mean(-1),
-               "heights": np.asarray(obs.position[..., 1], np.float64),
+        height = obs.position[..., 1] if obs.height is None else obs.height  # a scene's: the middle sphere's
+        out = {"xs": xs, "x": xs.mean(-1), "heights": np.asarray(height, np.float64),
                "tilts": np.asarray(obs.orientation, np.float64), "dofs": np.asarray(obs.dofs, np.float64),
-               "y": np.asarray(obs.position[:, 0, 1]), "orientation": np.asarray(obs.orientation[:, 0])}
+               "y": np.asarray(height[:, 0]), "orientation": np.asarray(obs.orientation[:, 0])}
         if rest is not None:
             progress, stuck, contact = jax.device_get(rest)
             out.update(progress=np.asarray(progress), stuck=np.asarray(stuck), contact=np.asarray(contact))

@@ -4,7 +4,7 @@ The driver (:mod:`jswim.agents.llm`) builds each run's world with :func:`world` 
 unless handed another builder (any :class:`jswim.env.base.Environment`, a test's toy world
 included). What the prompt shows beyond the paper's lone swimmer comes from the world and its
 first observation (:func:`view`): ``env.n_swimmers`` (swimmer ``s`` owns joint DOFs ``2s + 1, 2s + 2``),
-a wall (a world with one says ``wall = True``; its positions' y is then each swimmer's height)
+a wall (a world with one says ``wall = True``; the observation's ``height`` is each swimmer's H)
 and the swimmers' starts. DOF ranges and the run's defaults are the named swimmer's
 (:mod:`jswim.agents.defaults`), over the world's joint DOFs.
 """
