@@ -62,17 +62,18 @@ dropped); with ``K = 1`` the prompt is the paper's, byte for byte. :func:`parse_
 the offered integers: ``[1, 0.5]``, ``[1, 1/2]`` or a ROC beyond ``K`` name no action and are
 asked again.
 
-Scenes (walls, obstacles and pairs, an extension; :class:`SceneView` on :class:`SwimmerText`).
-The prompt grows only what the agent needs. With a wall, S2 gains one sentence and every record
-shows the height ``H`` of the middle sphere above the wall (thousandths of ``a``, truncated, as X
-is: :func:`encode_height`) and the tilt (rad, three decimals). With two swimmers the DOFs are joint
-(D1, D2 swimmer 1's arms, D3, D4 swimmer 2's): a reply ``[3, 1]`` names swimmer 2 through its DOF,
-so the answer format, the parser and constrained decoding are the paper's; S2 says which DOFs are
-whose and where swimmer 2 starts, and every record shows both positions X1 and X2 (X, the reward's
-position, is their mean). With ``SceneView.own`` (``--pair-prompt each``, a variant) the prompt is one
-swimmer's alone: its own D1, D2 and X as in the paper, S2 says where the other starts and that it
-moves between this one's steps, and every record also shows ``other X``, the other's position
-(its displacement from its own start, encoded as X is). :func:`scene_template` builds S3's legend and the record line; a
+Scenes (walls, obstacles, pairs and schools, an extension; :class:`SceneView` on :class:`SwimmerText`,
+built by the agents from the world they drive). The prompt grows only what the agent needs. With a
+wall, S2 gains one sentence and every record shows the height ``H`` of the swimmer above the wall
+(thousandths of ``a``, truncated, as X is: :func:`encode_height`) and the tilt (rad, three
+decimals). With several swimmers the DOFs are joint (D1, D2 swimmer 1's arms, D3, D4 swimmer 2's,
+and so on): a reply ``[3, 1]`` names swimmer 2 through its DOF, so the answer format, the parser and
+constrained decoding are the paper's; S2 says which DOFs are whose and where the others start, and
+every record shows each position X1, X2, ... (X, the reward's position, is their mean). With
+``SceneView.own`` (``--pair-prompt each``, a variant) the prompt is one swimmer's alone: its own D1,
+D2 and X as in the paper, S2 says where the others start and that they move between this one's
+steps, and every record also shows their positions (a pair's: ``other X``), each counted from its
+own start and encoded as X is. :func:`scene_template` builds S3's legend and the record line; a
 template file is used as given (its placeholders ``{x1_before}`` .. ``{tilt2_after}``, ``{h_before}``,
 ``{tilt_before}`` are always known). Without a scene the prompt is the paper's, byte for byte.
 
@@ -192,36 +193,39 @@ def _join_prose(items: Sequence[str], last: str = "and") -> str:
 
 @dataclass(frozen=True)
 class SceneView:
-    """What the prompt shows of a scene (issue 19, an extension; ``None`` on
-    :class:`SwimmerText` is the paper's lone swimmer in bulk fluid, whose prompt is unchanged).
+    """What the prompt shows of a world beyond the paper's lone swimmer in bulk fluid (walls,
+    pairs, schools; an extension; ``None`` on :class:`SwimmerText` is the paper's prompt, unchanged).
 
     Attributes
     ----------
     swimmers : int
-        1 or 2. With two, the DOFs are joint (swimmer 1's arms D1, D2; swimmer 2's D3, D4: a reply
-        names the swimmer through its DOF) and every record shows each swimmer's position X1, X2.
+        1 or more. With several, the DOFs are joint (swimmer ``k`` owns D(2k-1), D(2k): a reply
+        names the swimmer through its DOF) and every record shows each swimmer's position X1, X2, ...
     wall : bool
         A no-slip wall below: every record shows each swimmer's height H (integer-encoded as X is:
         thousandths of ``a``, :func:`encode_height`) and tilt (rad, three decimals).
     separation : float
-        The pair's starting distance D (sphere radii), said once in S2.
+        The starting distance D (sphere radii) of swimmer 2 ahead of swimmer 1, said once in S2.
     own : int
-        0: the joint prompt (one conversation steers both swimmers). 1 or 2: the prompt of that
-        swimmer of a pair alone (``--pair-prompt each``, a variant): its own arms D1, D2 and
-        position X, and the other swimmer's position ``other X`` (encoded as X is); with a wall,
-        its own H and tilt.
+        0: the joint prompt (one conversation steers every swimmer). ``k`` >= 1: the prompt of
+        swimmer ``k`` alone (``--pair-prompt each``, a variant): its own arms D1, D2 and position
+        X, and the others' positions (a pair's: ``other X``; more: ``X1``, ``X2``, ... of the
+        others), encoded as X is; with a wall, its own H and tilt.
+    starts : tuple of (x, z)
+        Three or more swimmers: each one's start relative to swimmer 1 (sphere radii), said in S2.
     """
 
     swimmers: int = 1
     wall: bool = False
     separation: float = 0.0
     own: int = 0
+    starts: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
-        if self.swimmers not in (1, 2):
-            raise ConfigError(f"a scene holds 1 or 2 swimmers, got {self.swimmers}")
-        if self.own not in ((0, 1, 2) if self.swimmers == 2 else (0,)):
-            raise ConfigError(f"a per-swimmer prompt needs a pair and swimmer 1 or 2, got swimmer {self.own} "
+        if isinstance(self.swimmers, bool) or not isinstance(self.swimmers, int) or self.swimmers < 1:
+            raise ConfigError(f"a scene holds 1 or more swimmers, got {self.swimmers}")
+        if self.own not in (range(self.swimmers + 1) if self.swimmers > 1 else (0,)):
+            raise ConfigError(f"a per-swimmer prompt needs several swimmers and one of them, got swimmer {self.own} "
                               f"of {self.swimmers}")
 
 
@@ -582,9 +586,10 @@ def encode_height(h: float) -> int:
 def _scene_record_values(rec: HistoryRecord, cfg: PromptConfig) -> dict[str, str]:
     """A record's scene placeholders (empty where the record has no scene): ``x1_before`` ..
     ``x2_after`` (encoded as X), ``h1_before`` .. ``h2_after`` (:func:`encode_height`),
-    ``tilt1_before`` .. ``tilt2_after`` (rad, 3 decimals), and ``h_*``/``tilt_*`` for swimmer 1."""
+    ``tilt1_before`` .. ``tilt2_after`` (rad, 3 decimals), and ``h_*``/``tilt_*`` for swimmer 1;
+    a school's ``x3_*``, ``h3_*``, ... likewise (names up to swimmer 2 are always known)."""
     out: dict[str, str] = {}
-    for k in (1, 2):
+    for k in range(1, max(2, len(rec.xs_before), len(rec.xs_after)) + 1):
         for when in ("before", "after"):
             xs, hs, ts = (getattr(rec, f"{n}_{when}") for n in ("xs", "heights", "tilts"))
             out[f"x{k}_{when}"] = str(encode_position(xs[k - 1], cfg.x_min)) if k <= len(xs) else ""
@@ -602,25 +607,27 @@ def scene_template(view: SceneView, base: PromptTemplate | None = None) -> Promp
     base = DEFAULT_TEMPLATE if base is None else base
     if base != DEFAULT_TEMPLATE:
         return base
+    n, me = view.swimmers, view.own
     legend, line = [], []
-    if view.own:  # one swimmer of a pair: the lone swimmer's record, then the other's position
-        me, other = view.own, 3 - view.own
-        legend += ["X before -> after", "other X before -> after"]
-        line += [f"X {{x{me}_before}} -> {{x{me}_after}}", f"other X {{x{other}_before}} -> {{x{other}_after}}"]
+
+    def show(label: str, key: str) -> None:
+        legend.append(f"{label} before -> after")
+        line.append(f"{label} {{{key}_before}} -> {{{key}_after}}")
+
+    if me:  # one swimmer of several: the lone swimmer's record, then the others' positions
+        show("X", f"x{me}")
+        for k in range(1, n + 1):
+            if k != me:
+                show("other X" if n == 2 else f"X{k}", f"x{k}")
         if view.wall:
-            legend += ["H before -> after", "tilt before -> after"]
-            line += [f"H {{h{me}_before}} -> {{h{me}_after}}", f"tilt {{tilt{me}_before}} -> {{tilt{me}_after}}"]
-    elif view.swimmers == 1:
-        legend.append("X before -> after")
-        line.append("X {x_before} -> {x_after}")
+            show("H", f"h{me}")
+            show("tilt", f"tilt{me}")
     else:
-        legend += ["X1 before -> after", "X2 before -> after"]
-        line += ["X1 {x1_before} -> {x1_after}", "X2 {x2_before} -> {x2_after}"]
-    if view.wall and not view.own:
-        for k in range(1, view.swimmers + 1):
-            n = "" if view.swimmers == 1 else str(k)
-            legend += [f"H{n} before -> after", f"tilt{n} before -> after"]
-            line += [f"H{n} {{h{k}_before}} -> {{h{k}_after}}", f"tilt{n} {{tilt{k}_before}} -> {{tilt{k}_after}}"]
+        for k in range(1, n + 1):
+            show("X" if n == 1 else f"X{k}", "x" if n == 1 else f"x{k}")
+        for k in range(1, n + 1) if view.wall else ():
+            show("H" if n == 1 else f"H{k}", f"h{k}")
+            show("tilt" if n == 1 else f"tilt{k}", f"tilt{k}")
     s3 = ("Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, "
           + ", ".join(legend) + ", stuck):\n{history}")
     record = "{step}: ({dofs_before}) {action} -> ({dofs_after}), " + ", ".join(line) + ", stuck {stuck}"
@@ -639,8 +646,25 @@ PAIR_SENTENCE = ("D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swi
 OWN_PAIR_SENTENCE = ("A second swimmer on the same axis, steered on its own, starts {separation} sphere radii {where} "
                      "this one and moves its arms between this one's steps; other X is its position, counted from its "
                      "own start as X is.")
-PAIR_WALL_SENTENCE = ("Both swim above a flat wall: H1 and H2 are their heights above it in thousandths of the sphere "
-                      "radius, tilt1 and tilt2 their angles to it in radians.")
+#: With several swimmers above a wall (``{all}``: Both or All; ``{to}``: and, or to for three or more).
+SEVERAL_WALL_SENTENCE = ("{all} swim above a flat wall: H1 {to} H{n} are their heights above it in thousandths of the "
+                         "sphere radius, tilt1 {to} tilt{n} their angles to it in radians.")
+
+
+#: S2's extra sentence of a school (three or more swimmers; ``{starts}``: where each starts from
+#: swimmer 1, or from this one in one swimmer's own prompt, ``--pair-prompt each``).
+SCHOOL_SENTENCE = ("Swimmer k has the arms D(2k-1) and D(2k), up to D{last} of swimmer {n}; they start with {starts} "
+                   "from swimmer 1; X1 to X{n} are their positions, and the movement sought is that of their mean.")
+OWN_SCHOOL_SENTENCE = ("This is swimmer {own} of {n}, steered on its own; the others start with {starts} from it and "
+                       "move their arms between this one's steps; Xk is swimmer k's position, counted from its own "
+                       "start as X is.")
+
+
+def _starts(view: SceneView) -> str:
+    """``swimmer 1 at (0, 0), ... sphere radii (x, z)``: each start from swimmer ``own`` (or 1)."""
+    ox, oz = view.starts[max(view.own, 1) - 1]
+    return _join_prose([f"swimmer {k} at ({x - ox:g}, {z - oz:g})" for k, (x, z) in enumerate(view.starts, 1)
+                        if k != view.own]) + " sphere radii (x, z)"
 
 
 def scene_sentence(view: SceneView | None) -> str:
@@ -648,17 +672,18 @@ def scene_sentence(view: SceneView | None) -> str:
     if view is None:
         return ""
     parts = []
-    if view.own:
+    n = view.swimmers
+    if view.own and n == 2:
         where = "ahead of" if view.own == 1 else "behind"
         parts.append(OWN_PAIR_SENTENCE.format(separation=f"{view.separation:g}", where=where))
-        if view.wall:
-            parts.append(WALL_SENTENCE)
-    elif view.swimmers == 2:
+    elif n == 2:
         parts.append(PAIR_SENTENCE.format(separation=f"{view.separation:g}"))
-        if view.wall:
-            parts.append(PAIR_WALL_SENTENCE)
-    elif view.wall:
-        parts.append(WALL_SENTENCE)
+    elif n > 2:
+        parts.append((OWN_SCHOOL_SENTENCE if view.own else SCHOOL_SENTENCE).format(
+            own=view.own, n=n, last=2 * n, starts=_starts(view)))
+    if view.wall:
+        parts.append(WALL_SENTENCE if n == 1 or view.own else
+                     SEVERAL_WALL_SENTENCE.format(all="Both" if n == 2 else "All", to="and" if n == 2 else "to", n=n))
     return " ".join(parts)
 
 

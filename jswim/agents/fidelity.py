@@ -55,19 +55,33 @@ EACH_PAIR_PROMPT = ("each swimmer steered by its own LLM conversation (--pair-pr
                     "(other X, encoded as X); the reward is the progress of their mean")
 
 
+def each_prompt(n: int) -> str:
+    """What ``--pair-prompt each`` is for ``n`` >= 2 swimmers (:data:`EACH_PAIR_PROMPT` for a pair)."""
+    if n == 2:
+        return EACH_PAIR_PROMPT
+    return ("each swimmer steered by its own LLM conversation (--pair-prompt each, a variant of the joint prompt): "
+            f"swimmer k decides at steps k, k + {n}, ..., each with its own prompt about its arms D1, D2 and X, its "
+            f"own last n_ht records and clearing; records also show the others' positions (X1..X{n} but its own, "
+            "encoded as X); the reward is the progress of their mean")
+
+
 def scene_deviation(scene: Any, pair_prompt: str = "joint") -> str:
     """The line of a run in a scene (issue 19, an extension: the paper's swimmer is alone in an
-    unbounded fluid), naming the medium, the swimmers and what the prompt shows (a pair's:
-    ``pair_prompt``, :data:`jswim.agents.variants.PAIR_PROMPTS`)."""
+    unbounded fluid), naming the medium, the swimmers (any number) and what the prompt shows
+    (several swimmers': ``pair_prompt``, :data:`jswim.agents.variants.PAIR_PROMPTS`)."""
     parts = [f"scene (an extension): medium {scene.medium!r}"]
     if scene.medium == "wall":
         parts.append(f"start {scene.height:g} a above a no-slip wall, tilt {scene.tilt:g} rad; records show each "
                      "swimmer's height H (thousandths of a, as X) and tilt (rad)")
-    if scene.swimmers == 2 and pair_prompt == "each":
-        parts.append(f"two coaxial NG swimmers {scene.separation:g} a apart, {EACH_PAIR_PROMPT}")
-    elif scene.swimmers == 2:
-        parts.append(f"two coaxial NG swimmers {scene.separation:g} a apart steered through joint DOFs D1..D4 "
-                     "(swimmer 2 owns D3, D4); records show X1 and X2; the reward is the progress of their mean")
+    n = int(scene.swimmers)
+    who = f"two coaxial NG swimmers {scene.separation:g} a apart" if n == 2 else \
+        f"{n} NG swimmers {scene.separation:g} a apart"
+    if n >= 2 and pair_prompt == "each":
+        parts.append(f"{who}, {each_prompt(n)}")
+    elif n >= 2:
+        owns, xs = ("swimmer 2 owns D3, D4", "X1 and X2") if n == 2 else ("swimmer k owns D(2k-1), D(2k)", f"X1..X{n}")
+        parts.append(f"{who} steered through joint DOFs D1..D{2 * n} ({owns}); records show {xs}; the reward is the "
+                     "progress of their mean")
     if scene.obstacles:
         parts.append(f"{len(scene.obstacles)} fixed spheres")
     return "; ".join(parts)

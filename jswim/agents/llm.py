@@ -1,27 +1,27 @@
 """The LLM agent: prompt -> chat client -> parse -> env step, for a batch of independent runs.
 
-Each run is its own pipeline: render the prompt, call the model (one
-:class:`jswim.llm.LLMClient` for all runs bounds the calls in flight and paces them), parse,
-step, record, and on to the next step as soon as its own reply is back. There is no round and
-no barrier: real APIs have heavy-tailed latency, and a barrier would make every step cost the
-slowest of all the runs' calls. Stepping is shared without holding anyone back: the runs of one
-swimmer model keep one batched env state, and the actions handed in during one turn of the
-event loop are stepped in one jitted call at the next turn (replies that land together, step
-together; a run never waits for another run's reply).
+Each run is its own pipeline: render the prompt, call the model (one :class:`jswim.llm.LLMClient`
+for all runs bounds the calls in flight and paces them), parse, step, record, and on to the next
+step as soon as its own reply is back. There is no round and no barrier: real APIs have
+heavy-tailed latency, and a barrier would make every step cost the slowest of all the runs' calls.
+Stepping is shared without holding anyone back: the runs of one world keep one batched state, and
+the actions handed in during one turn of the event loop are stepped in one jitted call at the next
+turn (replies that land together, step together; a run never waits for another run's reply;
+:mod:`jswim.agents.step_batcher`).
 
-The protocol itself (prompt in, action or follow-up out) is pure and lives in
-:mod:`jswim.agents.protocol`; the run spec, the agent settings and the named variants in
-:mod:`jswim.agents.variants`; the history and its clearing rule in :mod:`jswim.agents.memory`.
-This module does the I/O: requests, env steps, transcripts.
+Any world serves (:class:`jswim.env.base.Environment`; ``worlds=``, default
+:func:`jswim.agents.world_view.world`); what the prompt shows beyond the paper's lone swimmer comes
+from the world and its observation (:func:`jswim.agents.world_view.view`). The protocol itself
+(prompt in, action or follow-up out) is pure and lives in :mod:`jswim.agents.protocol`; the run
+spec, the agent settings and the named variants in :mod:`jswim.agents.variants`; the history and
+its clearing rule in :mod:`jswim.agents.memory`. This module does the I/O: requests, env steps,
+transcripts.
 
-A reply without a valid action is retried ``parse_retries`` times with a short corrective
-follow-up message (a new request, so temperature-0 caching does not replay the bad reply); if
-it still fails, the step executes the no-op ``[1, 0]`` and counts as a failed step. The executed
-step, failed or not, enters the history shown to the model.
-
-Randomness: run ``i`` draws its initial configuration (when random) and its noise from
-``PRNGKey(seed_i)`` alone, with the step key folded in from the step index, so a run's physics
-does not depend on which other runs share its batch.
+A reply without a valid action is retried ``parse_retries`` times with a short corrective follow-up
+message (a new request, so temperature-0 caching does not replay the bad reply); if it still fails,
+the step executes the no-op ``[1, 0]`` and counts as a failed step. The executed step, failed or
+not, enters the history shown to the model. Randomness: run ``i``'s start and noise come from
+``PRNGKey(seed_i)`` alone (:mod:`jswim.agents.step_batcher`), whoever shares its batch.
 """
 
 from __future__ import annotations
@@ -35,16 +35,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Sequence, TextIO
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from jswim import env
-
 from jswim.judging import lattice
-from jswim.agents import fidelity, pair_prompt, protocol, scene_env
-from jswim.agents.scene_driver import SceneGroup, scene_text
-from jswim.agents.step_batcher import StepBatcher
+from jswim.agents import fidelity, pair_prompt, protocol, world_view
+from jswim.agents.step_batcher import StepGroup, group_key
 from jswim.agents.defaults import default_max_tokens, default_n_ht
 from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
@@ -56,7 +51,8 @@ from jswim.llm.journal import CallJournal, call_key
 from jswim.llm.local import LocalServer
 from jswim.llm.sync import run_sync
 from jswim.llm.usage import UsageTotals
-from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText, encode_position
+from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText
+from jswim.swimmers.models import make_model
 
 
 #: Shown once (Python's default warning filter) when a position falls below x_min.
@@ -93,7 +89,9 @@ class RunResult:
     transcript: list[dict[str, Any]] | None = None  # in memory when no transcript folder is given
     knobs: dict[str, Any] = field(default_factory=dict)  # the variant switches (LLMAgentConfig.knobs)
     below_x_min: int | None = None  # first step whose X fell below x_min (sent as a negative number)
-    # Scenes (issue 19) only: per step, each swimmer's displacement, height, tilt, and any contact.
+    # Worlds beyond the paper's lone swimmer (several swimmers, a wall: ``per_swimmer``): per step,
+    # each swimmer's displacement, height (the observation's ``height``), tilt, and any contact.
+    per_swimmer: bool = False
     xs: list[list[float]] = field(default_factory=list)
     heights: list[list[float]] = field(default_factory=list)
     tilts: list[list[float]] = field(default_factory=list)
@@ -122,7 +120,7 @@ class RunResult:
             "actions": self.actions, "progress": self.progress,
             "stuck": self.stuck, "below_x_min": self.below_x_min, **self.knobs,
             **({"scene": s.scene, "xs": self.xs, "heights": self.heights, "tilts": self.tilts,
-                "contact": self.contact} if s.scene else {}),
+                "contact": self.contact} if self.per_swimmer else {}),
         }
 
 
@@ -145,7 +143,7 @@ class _Run:
     n_calls: int = 0  # calls made so far (their index in the call journal)
     begun: bool = False
     closed: bool = False
-    scene_now: dict[str, Any] | None = None  # a scene run's positions, heights, tilts before the next step
+    seen: dict[str, Any] | None = None  # per_swimmer: each swimmer's position, height, tilt before the next step
     convs: list[pair_prompt.Conversation] = field(default_factory=list)  # --pair-prompt each: one per swimmer
 
     def log(self, record: dict[str, Any]) -> None:
@@ -163,62 +161,6 @@ def _jsonable(obj: Any) -> Any:
     return str(obj)
 
 
-@jax.jit
-def _advance(base_keys: jax.Array, states: env.EnvState, actions: jax.Array, params: env.EnvParams,
-             mask: jax.Array):
-    # Every member is stepped (one compiled shape per group) and only the masked ones keep it:
-    # each swimmer's step key is folded from its own step count, so who else steps changes nothing.
-    keys = jax.vmap(jax.random.fold_in)(base_keys, states.t)
-    new, info = jax.vmap(env.step)(keys, states, actions, params)
-    new = jax.tree.map(lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, states)
-    return new, info, jax.vmap(env.dof_values)(new, params)
-
-
-@jax.jit
-def _start(seeds: jax.Array, params: env.EnvParams):
-    # One program for the whole start (keys, split, reset): every separate JAX call is one more
-    # trace and compile-cache lookup each session pays before its first request.
-    split = jax.vmap(jax.random.split)(jax.vmap(jax.random.PRNGKey)(seeds))  # = env.seed_key per run
-    reset_keys, step_keys = split[:, 0], split[:, 1]
-    states = jax.vmap(env.reset)(reset_keys, params)
-    return reset_keys, step_keys, states, jax.vmap(env.dof_values)(states, params)
-
-
-class _Group(StepBatcher):
-    """Runs sharing one swimmer model: one batched env state.
-
-    A run hands its action to :meth:`submit` and awaits the result; actions handed in during one
-    event-loop turn are stepped together (:class:`jswim.agents.step_batcher.StepBatcher`).
-    """
-
-    def __init__(self, members: list[int], params: list[env.EnvParams], seeds: list[int]) -> None:
-        self.members = members
-        dtype = np.dtype(jnp.result_type(float))  # NumPy in, one jitted start: no eager JAX calls
-        self.params = params[0].replace(
-            zeta=np.asarray([p.zeta for p in params], dtype),
-            direction=np.asarray([p.direction for p in params], dtype),
-            init=np.stack([np.asarray(p.init) for p in params]).astype(np.int32),
-        )
-        seeds32 = np.array([env.seed32(s) for s in seeds], np.uint32)
-        self.reset_keys, self.step_keys, self.states, dofs = _start(seeds32, self.params)
-        self.dofs = np.asarray(dofs, np.float64)
-        self.levels0 = np.asarray(self.states.levels)
-        self._pending: dict[int, tuple[int, asyncio.Future]] = {}
-        self.roc_levels = int(getattr(self.params, "roc_levels", 1))
-        self._noop = lattice.encode(*NO_OP, self.roc_levels)
-        self.n_steps = 0  # env calls made (for benchmarks: steps per call = batching achieved)
-
-    def _step(self, codes: np.ndarray, mask: np.ndarray) -> Any:
-        self.states, info, dofs = _advance(self.step_keys, self.states, codes, self.params, mask)
-        out = jax.device_get({"x": info.x, "x_lo": self.states.x_lo, "y": self.states.y,
-                              "orientation": self.states.theta, "progress": info.progress, "stuck": info.stuck,
-                              "dofs": dofs})
-        out = {k: np.asarray(v) for k, v in out.items()}
-        # The full position (hi + lo): the prompt encodes X to 1e-3 a after any number of steps.
-        out["x"] = out["x"].astype(np.float64) + out.pop("x_lo").astype(np.float64)
-        return lambda pos: {k: v[pos] for k, v in out.items()}
-
-
 class LLMDriver:
     """Runs a batch of :class:`LLMRunSpec` against one client (use :func:`run_batch`).
 
@@ -229,6 +171,8 @@ class LLMDriver:
     run's calls that were already paid for (:class:`jswim.llm.journal.CallJournal`) and records
     new ones. ``on_step(n)`` is called after every step; ``on_done(result)`` when a run ends
     (status ``done``, ``below_x_min``, ``llm_error`` or ``budget``: stopped by the cost cap).
+    ``worlds(spec) -> (env, params)`` builds each run's world (default
+    :func:`jswim.agents.world_view.world`); any :class:`jswim.env.base.Environment` serves.
     """
 
     def __init__(
@@ -244,6 +188,7 @@ class LLMDriver:
         on_done: Callable[[RunResult], None] | None = None,
         transcripts: bool = True,
         cohorts: int | None = None,  # deprecated: runs no longer move in lockstep; accepted, ignored
+        worlds: Callable[[LLMRunSpec], tuple[Any, Any]] = world_view.world,
     ) -> None:
         if not specs:
             raise ConfigError("no runs given")
@@ -259,62 +204,55 @@ class LLMDriver:
         dupes = sorted({i for i in ids if ids.count(i) > 1})
         if dupes:
             raise ConfigError(f"duplicate run ids {dupes[:3]}; give the runs distinct seeds or run_id")
-        params = [
-            env.make_params(s.swimmer, zeta=s.zeta, direction=s.direction, init=s.init, **dict(s.swimmer_options),
-                            **({"roc_levels": s.roc_levels} if s.roc_levels != 1 else {}))
-            for s in specs
-        ]
-        by_model: dict[Any, list[int]] = {}
-        for i, p in enumerate(params):  # one batched state per swimmer model and ROC lattice
-            s = specs[i]  # (a scene's runs: per scene, noise level and lattice; jswim.agents.scene_driver)
-            key = ("scene", s.scene, s.swimmer, s.zeta, s.roc_levels, s.init) if s.scene else (p.model, s.roc_levels)
-            by_model.setdefault(key, []).append(i)
-        self.groups = [
-            SceneGroup(idx, [specs[i] for i in idx]) if key[0] == "scene"
-            else _Group(idx, [params[i] for i in idx], [specs[i].seed for i in idx])
-            for key, idx in by_model.items()
-        ]
+        built = [worlds(s) for s in specs]
+        by_world: dict[Any, list[int]] = {}
+        for i, (w, p) in enumerate(built):  # one batched state per world (and params structure)
+            by_world.setdefault(group_key(w, p), []).append(i)
         self.runs: list[_Run] = [None] * len(specs)  # type: ignore[list-item]
-        self._where: dict[int, tuple[_Group, int]] = {}
-        for g in self.groups:
-            for j, i in enumerate(g.members):
+        self._where: dict[int, tuple[StepGroup, int]] = {}
+        self.groups = []
+        for idx in by_world.values():
+            w = built[idx[0]][0]
+            models = [make_model(specs[i].swimmer, **dict(specs[i].swimmer_options)) for i in idx]
+            g = StepGroup(idx, w, [built[i][1] for i in idx], [specs[i].seed for i in idx],
+                          lattice.encode(*NO_OP, w.roc_levels), models[0].lo, models[0].hi)
+            self.groups.append(g)
+            for j, i in enumerate(idx):
                 self._where[i] = (g, j)
-                self.runs[i] = self._make_run(specs[i], ids[i], params[i], g.dofs[j], g.levels0[j])
-                if isinstance(g, SceneGroup):
-                    self.runs[i].scene_now = g.start_view(j)
+                self.runs[i] = self._make_run(specs[i], ids[i], models[j], g, j)
 
-    def _make_run(
-        self, spec: LLMRunSpec, run_id: str, params: env.EnvParams, dofs: np.ndarray, levels0: np.ndarray
-    ) -> _Run:
-        n_ht, text, prompt = protocol.setup(spec, params.model, self.config)
+    def _make_run(self, spec: LLMRunSpec, run_id: str, model: Any, group: StepGroup, pos: int) -> _Run:
+        n_ht, base, prompt = protocol.setup(spec, model, self.config)
         cfg = self.config
-        if spec.scene:  # the joint DOFs and the records' scene fields (jswim.agents.scene_driver)
-            text, template = scene_text(spec, prompt.template, spec.rocs)
-            prompt = dataclasses.replace(prompt, template=template)
-        result = RunResult(run_id, spec, n_ht, text.rocs, levels0=[int(v) for v in levels0],
+        env, start = group.env, {k: v[pos] for k, v in group.start.items()}
+        view = world_view.view(env, group.x0[pos], start["heights"])  # None: the paper's prompt
+        text, template = world_view.text(base, prompt.template, env.n_dof, view)
+        prompt = dataclasses.replace(prompt, template=template)
+        levels0 = [int(v) for v in group.levels0[pos]]
+        result = RunResult(run_id, spec, n_ht, text.rocs, levels0=levels0, per_swimmer=view is not None,
                            transcript=None if self.transcript_dir or not self.transcripts else [],
                            knobs=cfg.knobs(self.client.settings.temperature))
-        run = _Run(result, text, prompt, History(protocol.clearing_rule(cfg, params.model)), np.array(dofs, np.float64))
+        run = _Run(result, text, prompt, History(protocol.clearing_rule(cfg, model)), np.array(start["dofs"], np.float64))
         settings = self.client.settings
         constraint = constrain.resolve_mode(settings.constrain, settings.server_kind)
-        run.max_tokens = protocol.max_tokens(cfg, params.model, constraint)
+        run.max_tokens = protocol.max_tokens(cfg, model, constraint)
         result.knobs.update(constraint=constraint, max_tokens=run.max_tokens)
         run.deviations = fidelity.deviations(
             cfg, temperature=cfg.sampling_temperature(settings.temperature), constraint=constraint,
-            max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(params.model), n_ht=n_ht,
-            default_n_ht=default_n_ht(params.model, spec.direction), roc_levels=spec.roc_levels)
-        if spec.scene:
-            scene = scene_env.from_json(spec.scene)
-            run.deviations.append(fidelity.scene_deviation(scene, spec.pair_prompt))
-            if scene_env.n_swimmers(scene) == 2:
-                result.knobs["pair_prompt"] = spec.pair_prompt
+            max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(model), n_ht=n_ht,
+            default_n_ht=default_n_ht(model, spec.direction), roc_levels=spec.roc_levels)
+        world_meta, deviation = world_view.notes(spec)
+        run.deviations += [deviation] if deviation else []
+        if env.n_swimmers > 1:
+            result.knobs["pair_prompt"] = spec.pair_prompt
         if spec.pair_prompt == "each":  # one conversation per swimmer (jswim.agents.pair_prompt)
-            run.convs = pair_prompt.conversations(spec, params.model, cfg, dofs)
+            run.convs = pair_prompt.conversations(spec, model, cfg, run.dofs, view)
+        if view is not None:
+            run.seen = {k: tuple(float(v) for v in start[k]) for k in ("xs", "heights", "tilts")}
         run.meta = {
             "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
             "levels0": result.levels0, "agent": cfg.metadata(), "client": self._client_meta(run.max_tokens),
-            "deviations": run.deviations,
-            **({"scene": json.loads(spec.scene)} if spec.scene else {}),
+            "deviations": run.deviations, **world_meta,
             **({"pair_prompt": spec.pair_prompt} if "pair_prompt" in result.knobs else {}),
             **(pair_prompt.metadata(run.convs) if run.convs else {}),
         }
@@ -378,7 +316,7 @@ class LLMDriver:
         spec = run.result.spec
         step = run.result.steps + 1
         # Who decides: the run's one conversation, or (--pair-prompt each) the swimmer whose turn it is.
-        conv = run.convs[pair_prompt.turn(step)] if run.convs else None
+        conv = run.convs[pair_prompt.turn(step, len(run.convs))] if run.convs else None
         mind = conv if conv is not None else run
         req = protocol.request(cfg, mind.text, mind.prompt, direction=spec.direction, seed=spec.seed, step=step,
                                records=mind.history.records, dofs=mind.dofs, x=mind.x, stats=mind.stats)
@@ -468,7 +406,7 @@ class LLMDriver:
                     self._finish(run, "below_x_min", str(exc))
                     break
                 # The reply's integer ROC k is the environment's code for ROC k/K (jswim.judging.lattice).
-                index = lattice.encode(*decision[0], group.roc_levels)
+                index = lattice.encode(*decision[0], group.env.roc_levels)
                 out = await group.submit(pos, index)
                 self._record(run, decision, index, out)
                 if self.on_step is not None:
@@ -484,11 +422,11 @@ class LLMDriver:
         res = run.result
         x_before, x_after = run.x, float(out["x"])
         scene = {}
-        if run.scene_now is not None:  # a scene run: positions, heights and tilts of each swimmer
+        if run.seen is not None:  # a world beyond the paper's: positions, heights and tilts of each swimmer
             now = {k: tuple(float(v) for v in out[k]) for k in ("xs", "heights", "tilts")}
-            scene = {f"{k}_{w}": (tuple(float(v) for v in run.scene_now[k]) if w == "before" else now[k])
+            scene = {f"{k}_{w}": run.seen[k] if w == "before" else now[k]
                      for k in ("xs", "heights", "tilts") for w in ("before", "after")}
-            run.scene_now = now
+            run.seen = now
             res.xs.append(list(now["xs"]))
             res.heights.append(list(now["heights"]))
             res.tilts.append(list(now["tilts"]))
@@ -566,6 +504,7 @@ def run_batch(
     config: LLMAgentConfig = LLMAgentConfig(),
     transcript_dir: str | Path | None = None,
     cohorts: int | None = None,
+    worlds: Callable[[LLMRunSpec], tuple[Any, Any]] = world_view.world,
     **local_options: Any,
 ) -> list[RunResult]:
     """Run a batch of LLM runs to completion (blocking).
@@ -584,12 +523,14 @@ def run_batch(
         memory (``RunResult.transcript``).
     cohorts : int, optional
         Deprecated and ignored: runs no longer advance in lockstep rounds.
+    worlds : callable, optional
+        ``worlds(spec) -> (env, params)``: each run's world (:class:`LLMDriver`).
     """
     specs = list(specs)
 
     async def go(s: ClientSettings) -> list[RunResult]:
         async with LLMClient(s) as client:
-            return await run_batch_async(specs, client, config, transcript_dir)
+            return await run_batch_async(specs, client, config, transcript_dir, worlds=worlds)
 
     if settings is not None:
         return run_sync(go(settings))

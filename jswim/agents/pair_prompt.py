@@ -1,25 +1,18 @@
-"""Each swimmer of a pair its own LLM conversation (``--pair-prompt each``; issue 19, a variant of
-the joint prompt, which stays the default).
+"""Each swimmer of a pair (or a school) its own LLM conversation (``--pair-prompt each``; issue 19,
+a variant of the joint prompt, which stays the default).
 
-With the joint prompt one conversation steers both swimmers through joint DOFs D1..D4. Here each
-swimmer has its own conversation, kept as the paper keeps a lone swimmer's:
+Each swimmer's conversation is kept as the paper keeps a lone swimmer's: the paper's five sentences
+about its own arms D1, D2 and its own X (it replies ``[1 or 2, ROC]``), S2 saying where the others
+start and that they move between its steps (:data:`jswim.prompt.OWN_PAIR_SENTENCE`), every record
+also showing the others' positions (a pair's: ``other X``), each counted from its own start and
+encoded as X is; its own last ``n_ht`` records and its own clearing rule, on the progress of its own
+X over its own steps; the same request, parsing, follow-ups and no-op on failure as every LLM run
+(:mod:`jswim.agents.protocol`), through the same client, journal and step batching.
 
-- its own prompt, the paper's five sentences about its own arms D1, D2 and its own position X
-  (S1, S4, S5 and the answer format unchanged: it replies ``[1 or 2, ROC]``); S2 gains one sentence
-  (:data:`jswim.prompt.OWN_PAIR_SENTENCE`: where the other swimmer starts, that it moves between
-  this one's steps) and every record one field, ``other X``, the other's position encoded as X is
-  (its centroid's displacement from its own start, ``(X - X_min) * 1000`` truncated);
-- its own history of the last ``n_ht`` records (the swimmer's default n_ht) and its own clearing
-  rule, which reads the progress of its own X over its own steps (as a lone swimmer's reads X);
-- the same request, parsing, corrective follow-ups and no-op on failure as every LLM run
-  (:mod:`jswim.agents.protocol`), through the same client, journal and step batching.
-
-**Turns.** Swimmer 1 decides at the run's odd steps (1, 3, 5, ...) and swimmer 2 at the even ones;
-every step moves one arm of one swimmer, as the joint prompt's steps and the alternating square
-strokes of ``jswim study pair`` do, so ``--steps`` is the same budget for all of them (each swimmer
-makes half the moves). A swimmer's records are those of its own steps; the other's moves show
-as the change of ``other X`` between them. The run's row is the joint one (actions as joint codes,
-``x`` the pair's mean, whose progress is the reward), so it compares with the joint prompt's rows.
+**Turns.** Swimmer ``k`` of ``N`` decides at steps ``k, k + N, ...`` (a pair: swimmer 1 at odd
+steps, swimmer 2 at even ones); every step moves one arm of one swimmer, as the joint prompt's and
+the alternating square strokes do, so ``--steps`` is the same budget for all. The run's row is the
+joint one (joint action codes, ``x`` the swimmers' mean, whose progress is the reward).
 
 Everything here is pure (no client, no environment): the driver (:mod:`jswim.agents.llm`) keeps
 one :class:`Conversation` per swimmer on a run and asks :func:`turn` whose step it is.
@@ -33,13 +26,14 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from jswim.agents import protocol
+from jswim.agents import protocol, world_view
 from jswim.agents.memory import History, MoveStats, shape_key
-from jswim.agents.scene_driver import scene_text
-from jswim.agents.scene_env import ARMS
 from jswim.agents.variants import LLMAgentConfig, LLMRunSpec
-from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText
+from jswim.prompt import Action, HistoryRecord, PromptConfig, SceneView, SwimmerText
 from jswim.swimmers.models import SwimmerModel
+
+#: Arms (DOFs) of one swimmer of a pair or school (swimmer ``s`` owns DOFs ``2s + 1, 2s + 2``).
+ARMS = 2
 
 
 @dataclass
@@ -59,23 +53,26 @@ class Conversation:
     stats: MoveStats = field(default_factory=MoveStats)
 
 
-def conversations(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig, dofs: Sequence[float]) -> list[Conversation]:
-    """The two conversations of a ``pair_prompt="each"`` run whose joint arm lengths start at ``dofs``
-    ``(2 * ARMS,)``: each with the lone swimmer's n_ht and clearing rule (:func:`protocol.setup`,
-    :func:`protocol.clearing_rule`) and its own template (:func:`jswim.agents.scene_driver.scene_text`)."""
-    _, _, prompt = protocol.setup(spec, model, cfg)
+def conversations(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig, dofs: Sequence[float],
+                  view: SceneView) -> list[Conversation]:
+    """The conversations of a ``pair_prompt="each"`` run in a world of ``view.swimmers`` swimmers
+    whose joint DOFs start at ``dofs`` (``(ARMS N,)``): each with the lone swimmer's n_ht and
+    clearing rule (:func:`protocol.setup`, :func:`protocol.clearing_rule`) and its own text and
+    template (:func:`jswim.agents.world_view.text` with ``own``)."""
+    _, base, prompt = protocol.setup(spec, model, cfg)
     out = []
-    for s in range(2):
-        text, template = scene_text(spec, prompt.template, spec.rocs, own=s + 1)
+    for s in range(view.swimmers):
+        text, template = world_view.text(base, prompt.template, len(dofs), view, own=s + 1)
         out.append(Conversation(s, text, dataclasses.replace(prompt, template=template),
                                 History(protocol.clearing_rule(cfg, model)),
                                 np.asarray(dofs, np.float64)[ARMS * s:ARMS * (s + 1)].copy()))
     return out
 
 
-def turn(step: int) -> int:
-    """The swimmer (0-based) whose conversation decides step ``step`` (1-based): 1 at odd steps, 2 at even."""
-    return (step - 1) % 2
+def turn(step: int, swimmers: int = 2) -> int:
+    """The swimmer (0-based) whose conversation decides step ``step`` (1-based): swimmer ``k``
+    (1-based) at steps ``k, k + N, ...``."""
+    return (step - 1) % swimmers
 
 
 def to_joint(swimmer: int, action: Action) -> Action:
@@ -90,7 +87,7 @@ def swimmer_of(action: Action) -> int:
 
 def own_record(rec: HistoryRecord, swimmer: int) -> HistoryRecord:
     """A joint step's record as ``swimmer`` sees it: its own arms, its own action and its own X
-    (the joint record's scene fields keep both swimmers' positions, for ``other X``)."""
+    (the joint record's scene fields keep every swimmer's position, for the others' X)."""
     own = slice(ARMS * swimmer, ARMS * (swimmer + 1))
     return dataclasses.replace(
         rec, dofs_before=tuple(rec.dofs_before[own]), dofs_after=tuple(rec.dofs_after[own]),
@@ -100,8 +97,8 @@ def own_record(rec: HistoryRecord, swimmer: int) -> HistoryRecord:
 
 def record(convs: Sequence[Conversation], rec: HistoryRecord, direction: int) -> bool:
     """Enter the joint step ``rec`` into the conversation of the swimmer it moved (its record, its
-    observed progress, its clearing rule), and move the other's view on (its position changes too:
-    the two feel each other). Returns whether the mover's history was cleared."""
+    observed progress, its clearing rule), and move the others' view on (their positions change
+    too: the swimmers feel each other). Returns whether the mover's history was cleared."""
     s = swimmer_of(rec.action)
     mine = own_record(rec, s)
     progress = direction * mine.dx
@@ -116,6 +113,8 @@ def record(convs: Sequence[Conversation], rec: HistoryRecord, direction: int) ->
 
 def metadata(convs: Sequence[Conversation]) -> dict[str, Any]:
     """What a transcript's first line records of the conversations."""
-    return {"pair_prompt": "each", "turns": "swimmer 1 at odd steps, swimmer 2 at even steps",
+    n = len(convs)
+    turns = "swimmer 1 at odd steps, swimmer 2 at even steps" if n == 2 else f"swimmer k at steps k, k + {n}, ..."
+    return {"pair_prompt": "each", "turns": turns,
             "conversations": [{"swimmer": c.swimmer + 1, "n_ht": c.prompt.n_ht, "clearing": c.history.rule.describe()}
                               for c in convs]}

@@ -1,5 +1,6 @@
-"""The agents' side of a scene (walls, obstacles, pairs; issue 19): one place that reaches the
-scene environment, joint action codes, and batched steps for the drivers and baselines.
+"""The baselines' side of a scene (walls, obstacles, pairs; issue 19): joint action codes and
+batched steps for the scene baselines and the scene studies (the LLM driver steps any world
+through the world protocol instead: :mod:`jswim.agents.step_batcher`).
 
 An agent steers every swimmer of a scene through one set of **joint DOFs**: swimmer ``s``
 (0-based) owns DOFs ``2s + 1`` and ``2s + 2`` (its two arms, 1-based as in the prompt), so the
@@ -8,8 +9,7 @@ paper's reply ``[changed DOF, ROC]`` names the swimmer through its DOF (``[3, 1]
 ``(dof - 1)(2K + 1) + k + K`` (:func:`jswim.judging.lattice.encode`), so one swimmer's codes are the
 bulk swimmer's codes unchanged.
 
-The environment is :mod:`jswim.scenes` (the hydrodynamics, part A of issue 19); nothing else in
-the agents or studies imports it.
+The environment is :mod:`jswim.scenes` (the hydrodynamics, part A of issue 19).
 """
 
 from __future__ import annotations
@@ -48,10 +48,6 @@ def start_levels(init: Any) -> tuple[int, ...] | None:
     if isinstance(init, (tuple, list)) and all(v in (0, 1) for v in init):
         return tuple(int(v) for v in init)
     return None
-
-
-def n_swimmers(scene: Any) -> int:
-    return int(scene.swimmers)
 
 
 def has_wall(scene: Any) -> bool:

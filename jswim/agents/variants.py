@@ -138,7 +138,7 @@ class LLMRunSpec:
         (:func:`jswim.agents.scene_env.canonical`); ``""``: the paper's lone swimmer in bulk fluid.
     pair_prompt : {"joint", "each"}
         A pair's prompt (:data:`PAIR_PROMPTS`): one joint conversation, or one per swimmer
-        (``"each"`` needs a two-swimmer scene; named ``each`` in the default run id).
+        (``"each"`` needs a scene of two or more swimmers; named ``each`` in the default run id).
     """
 
     swimmer: str = "purcell"
@@ -162,8 +162,8 @@ class LLMRunSpec:
             raise ConfigError(f"n_steps must be >= 1, got {self.n_steps}")
         check_roc_levels(self.roc_levels)
         check_pair_prompt(self.pair_prompt)
-        if self.pair_prompt == "each" and (not self.scene or json.loads(self.scene).get("swimmers") != 2):
-            raise ConfigError("--pair-prompt each needs a scene with two swimmers")
+        if self.pair_prompt == "each" and (not self.scene or json.loads(self.scene).get("swimmers", 1) < 2):
+            raise ConfigError("--pair-prompt each needs a scene with two or more swimmers")
 
     def label(self) -> str:
         """``run_id``, or one built from the fields by :func:`run_id` (seed in place of a repeat)."""

@@ -80,11 +80,16 @@ class Observation(NamedTuple):
     orientation : Array (S,)
         Each swimmer's orientation (rad): the reference link's angle, or a scene swimmer's tilt
         from the wall plane.
+    height : Array (S,) or None
+        Each swimmer's height as its world records it (a scene's: the middle sphere's ``z``,
+        :class:`jswim.scenes.SceneState`), which the prompt's ``H`` shows; ``None``: the world has
+        none (then ``position``'s ``y`` stands for it).
     """
 
     dofs: Array
     position: Array
     orientation: Array
+    height: Any = None
 
 
 class Discrete:

@@ -24,7 +24,7 @@ from jswim.env.base import Environment, Observation, StepInfo, first_move, scale
 from jswim.scenes.actions import decode_scene_action
 from jswim.scenes.params import SceneParams, scene_params
 from jswim.scenes.scene import Scene
-from jswim.scenes.state import SceneState, scene_reset
+from jswim.scenes.state import SceneState, centre_low, scene_reset
 from jswim.scenes.stepping import scene_advance
 
 #: Arms (DOFs) of one NG swimmer.
@@ -108,7 +108,11 @@ class SceneWorld(Environment):
                              jnp.asarray(info.gap, dtype))
 
     def observe(self, state: SceneState, params: SceneTask) -> Observation:
-        return Observation(state.arms.reshape(-1), state.centre + self.offset(state), state.tilt)
+        """Positions: each swimmer's centroid from the full pair ``centre + centre_lo`` (in the
+        state's dtype the sum is ``centre``; widened to float64 it is exact, drift-free); height:
+        the middle sphere's ``z`` (:class:`jswim.scenes.SceneState`'s, what the scenes record)."""
+        centre = state.centre + centre_low(state)
+        return Observation(state.arms.reshape(-1), centre + self.offset(state), state.tilt, centre[:, 1])
 
     def features(self, state: SceneState, params: SceneTask) -> Array:
         """The arms scaled to [-1, 1]; with a wall also each swimmer's middle-sphere height as

@@ -12,7 +12,7 @@ from jswim import cli
 from jswim.agents import pair_prompt
 from jswim.agents.variants import LLMAgentConfig, LLMRunSpec
 from jswim.errors import ConfigError
-from jswim.prompt import Action, HistoryRecord, render_prompt
+from jswim.prompt import Action, HistoryRecord, SceneView, render_prompt
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
 from jswim.studies.grids import build
@@ -25,7 +25,7 @@ SPEC = LLMRunSpec(swimmer="ng", scene=pair_scene(30.0), pair_prompt="each", init
 
 
 def _convs():
-    return pair_prompt.conversations(SPEC, make_model("ng"), LLMAgentConfig(), [10.0, 6.0, 10.0, 6.0])
+    return pair_prompt.conversations(SPEC, make_model("ng"), LLMAgentConfig(), [10.0, 6.0, 10.0, 6.0], SceneView(2, False, 30.0))
 
 
 def _joint(dofs_before, action, dofs_after, xs_before, xs_after):
@@ -114,8 +114,11 @@ def test_the_two_histories_and_clearings_are_separate():
 def test_the_option_is_checked():
     with pytest.raises(ConfigError, match="--pair-prompt must be one of joint, each"):
         LLMRunSpec(swimmer="ng", scene=pair_scene(30.0), pair_prompt="both")
-    with pytest.raises(ConfigError, match="two swimmers"):
+    with pytest.raises(ConfigError, match="two or more swimmers"):
         LLMRunSpec(swimmer="ng", scene=pair_scene(), pair_prompt="each")
+    # A school: the per-swimmer prompt takes any number of swimmers.
+    school = json.dumps({"medium": "free", "separation": 30.0, "swimmers": 3})
+    assert LLMRunSpec(swimmer="ng", scene=school, pair_prompt="each").pair_prompt == "each"
     with pytest.raises(ConfigError, match="--pair-prompt"):
         StudyOptions(pair_prompt="separate")
     assert SPEC.label() == "llm-ng-px-i+--z0-each-s0"
@@ -212,3 +215,21 @@ def test_each_pair_study_end_to_end_and_resume(tmp_path, monkeypatch):
         # Resumed once more: nothing is asked again.
         again = run_study("pair", opts, srv.backend(), out, figures=False)
         assert srv.settle() == sent and [r["actions"] for r in again.rows] == [row["actions"]]
+
+
+def test_the_fidelity_line_names_every_swimmer():
+    from types import SimpleNamespace
+
+    from jswim.agents.fidelity import EACH_PAIR_PROMPT, scene_deviation
+
+    def scene(n):
+        return SimpleNamespace(medium="free", swimmers=n, separation=30.0, obstacles=())
+
+    assert scene_deviation(scene(1)) == "scene (an extension): medium 'free'"
+    pair = scene_deviation(scene(2))
+    assert "two coaxial NG swimmers 30 a apart" in pair and "D1..D4 (swimmer 2 owns D3, D4)" in pair
+    assert scene_deviation(scene(2), "each").endswith(EACH_PAIR_PROMPT)
+    four = scene_deviation(scene(4))
+    assert "4 NG swimmers 30 a apart" in four and "D1..D8" in four and "X1..X4" in four
+    each = scene_deviation(scene(4), "each")
+    assert "swimmer k decides at steps k, k + 4" in each and "D1..D8" not in each

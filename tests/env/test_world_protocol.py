@@ -146,6 +146,28 @@ def test_scene_progress_follows_direction_and_the_centroid():
     assert 0.1 < -total / 2 < 0.2
 
 
+def test_scene_observation_heights_are_the_middle_sphere_s_positions_the_full_centroid(float32):
+    # A hand-built float32 state: arms (10, 6), tilt 0.3, the middle sphere at x = 1e4 + 1e-4 held
+    # as the pair centre + centre_lo (1e4 alone is float32's nearest; its spacing there is 9.8e-4).
+    env, task = jswim.make("ng", Scene(medium="wall", height=6.0))
+    state = env.reset(jax.random.PRNGKey(0), task)._replace(
+        arms=jnp.array([[10.0, 6.0]], jnp.float32), tilt=jnp.array([0.3], jnp.float32),
+        centre=jnp.array([[1e4, 6.0]], jnp.float32), centre_lo=jnp.array([[1e-4, 0.0]], jnp.float32))
+    obs = env.observe(state, task)
+    # The centroid: (d2 - d1) / 3 = -4/3 a along the axis; the height H: the middle sphere's z.
+    assert obs.height.dtype == jnp.float32 and float(obs.height[0]) == 6.0
+    assert float(obs.position[0, 1]) == pytest.approx(6.0 - 4 / 3 * math.sin(0.3), abs=1e-6)
+    assert float(obs.position[0, 0]) == pytest.approx(1e4 - 4 / 3 * math.cos(0.3), abs=1e-3)
+    # Widened to float64 (as the LLM's step group reads X), the low word counts: drift-free.
+    with jax.enable_x64(True):
+        wide = env.observe(jax.tree.map(lambda a: a.astype(jnp.float64) if a.dtype == jnp.float32 else a, state), task)
+        x = float(wide.position[0, 0])
+    assert x == pytest.approx(1e4 + float(np.float32(1e-4)) - 4 / 3 * math.cos(np.float32(0.3)), abs=1e-9)
+    # The paper's world has no separate height (its position's y stands for it).
+    env, params = jswim.make("ng")
+    assert env.observe(env.reset(jax.random.PRNGKey(0), params), params).height is None
+
+
 @pytest.mark.slow
 def test_vmapped_batch_equals_each_member(float32):
     env, params = jswim.make("purcell", zeta=1.0)

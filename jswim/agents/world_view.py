@@ -1,0 +1,70 @@
+"""What an LLM run reads of its world: the world a run spec names, and the prompt's view of it.
+
+The driver (:mod:`jswim.agents.llm`) builds each run's world with :func:`world` (:func:`jswim.make`)
+unless handed another builder (any :class:`jswim.env.base.Environment`, a test's toy world
+included). What the prompt shows beyond the paper's lone swimmer comes from the world and its
+first observation (:func:`view`): ``env.n_swimmers`` (swimmer ``s`` owns joint DOFs ``2s + 1, 2s + 2``),
+a wall (a world with one says ``wall = True``; the observation's ``height`` is each swimmer's H)
+and the swimmers' starts. DOF ranges and the run's defaults are the named swimmer's
+(:mod:`jswim.agents.defaults`), over the world's joint DOFs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from typing import Any, Sequence
+
+import numpy as np
+
+from jswim.agents.fidelity import scene_deviation
+from jswim.agents.variants import LLMRunSpec
+from jswim.env.base import Environment
+from jswim.env.worlds import make
+from jswim.prompt import PromptTemplate, SceneView, SwimmerText, scene_template
+from jswim.scenes.scene import Scene
+
+
+def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
+    """The world and params of ``spec``: its swimmer in its scene (``spec.scene``, canonical JSON;
+    ``""``: the paper's world), noise level, direction, start and ROC lattice."""
+    if not spec.scene:
+        return make(spec.swimmer, zeta=spec.zeta, direction=spec.direction, init=spec.init,
+                    roc_levels=spec.roc_levels, **dict(spec.swimmer_options))
+    corners = isinstance(spec.init, (tuple, list)) and all(v in (0, 1) for v in spec.init)  # else the scene's own
+    return make(spec.swimmer, json.loads(spec.scene), zeta=spec.zeta, direction=spec.direction,
+                init=tuple(int(v) for v in spec.init) if corners else None, roc_levels=spec.roc_levels)
+
+
+def view(env: Environment, x0: Sequence[float], y0: Sequence[float]) -> SceneView | None:
+    """What the prompt shows of ``env`` whose swimmers start at ``(x0, y0)`` (each ``(S,)``,
+    :attr:`jswim.env.base.Observation.position`); ``None``: nothing beyond the paper's prompt
+    (one swimmer, no wall)."""
+    n, wall = int(env.n_swimmers), bool(getattr(env, "wall", False))
+    if n == 1 and not wall:
+        return None
+    starts = tuple((round(float(x0[k] - x0[0]), 9), round(float(y0[k] - y0[0]), 9)) for k in range(n))
+    return SceneView(n, wall, starts[1][0] if n > 1 else 0.0, starts=starts if n > 2 else ())
+
+
+def text(base: SwimmerText, template: PromptTemplate, n_dof: int, scene: SceneView | None,
+         own: int = 0) -> tuple[SwimmerText, PromptTemplate]:
+    """The swimmer text over the world's ``n_dof`` joint DOFs (``base``: one swimmer's,
+    :func:`jswim.agents.protocol.setup`) with its view and the template the view needs
+    (:func:`jswim.prompt.scene_template`); ``own`` >= 1: swimmer ``own``'s text alone (its own DOFs)."""
+    if scene is None:
+        return dataclasses.replace(base, n_dof=n_dof), template
+    if own:
+        scene = dataclasses.replace(scene, own=own)
+        n_dof //= scene.swimmers
+    lo, hi = (tuple(np.resize(v, n_dof).tolist()) if isinstance(v, tuple) else v for v in (base.lo, base.hi))
+    return dataclasses.replace(base, n_dof=n_dof, lo=lo, hi=hi, scene=scene), scene_template(scene, template)
+
+
+def notes(spec: LLMRunSpec) -> tuple[dict[str, Any], str | None]:
+    """What a run's transcript records of the scene its spec names (``{"scene": ...}``) and its
+    fidelity line (:func:`jswim.agents.fidelity.scene_deviation`); nothing for the paper's world."""
+    if not spec.scene:
+        return {}, None
+    scene = json.loads(spec.scene)
+    return {"scene": scene}, scene_deviation(Scene.from_dict(scene), spec.pair_prompt)
