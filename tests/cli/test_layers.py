@@ -51,7 +51,7 @@ UNMARKED_ALLOWED = set("""
     jswim.env.stepping->jswim.sharding
     jswim.judging.gait->jswim.judging.lattice
     jswim.judging.lattice->jswim.env jswim.judging.lattice->jswim.integrate
-    jswim.overview->jswim.studies jswim.overview->jswim.studies.grids jswim.overview->jswim.studies.scenes
+
     
     jswim.studies.ensemble->jswim.actions jswim.studies.ensemble->jswim.agents.defaults
     jswim.studies.ensemble->jswim.agents.qlearning jswim.studies.ensemble->jswim.judging.gait
