@@ -136,7 +136,7 @@ class StudyFolder:
     """A study folder read once: metadata, finished runs and their summary (read-only)."""
 
     def __init__(self, folder: str | Path) -> None:
-        from jswim.studies import summarize  # the studies layer's summary; imported late to keep this module light
+        from jswim.studies import summarize  # lazy: start-up (the studies load JAX)
 
         self.folder = Path(folder)
         if not self.folder.is_dir():
@@ -258,7 +258,7 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     lines = [f"study {s.study} in {s.folder}: {s.status_text()}", f"model: {s.model_text()}"]
     opts = (s.meta.get("identity") or {}).get("options") or {}
     if opts:
-        from jswim.studies.grids import SPECS  # lazy, as in StudyFolder: the grids load JAX
+        from jswim.studies.grids import SPECS  # lazy: the grids load JAX
 
         spec = SPECS.get(s.study)
         lines.append(f"settings: {_settings_text(opts, spec.ignores if spec else ())}")
@@ -281,7 +281,7 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
         cols, rows = summary_table(s.summary)
         lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
         if any(r.get("scene") for r in s.rows):  # walls and pairs: the scene table too (jswim.studies.scenes)
-            from jswim.studies.scenes import scene_summary, table, table_note
+            from jswim.studies.scenes import scene_summary, table, table_note  # lazy: only for a scene study
 
             scene_rows = scene_summary(s.rows)
             lines += ["", plain_table(*table(scene_rows), title="scenes", width=width)]

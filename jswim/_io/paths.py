@@ -5,6 +5,8 @@ from __future__ import annotations
 import os
 import stat
 
+from jswim.errors import ConfigError
+
 
 def path_kind(path: str | os.PathLike, wanted: str) -> str:
     """Why ``path`` is not ``wanted`` (``"a file"``, ``"a folder"``): what is there instead, or
@@ -19,3 +21,10 @@ def path_kind(path: str | os.PathLike, wanted: str) -> str:
              (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"), (stat.S_ISSOCK, "a socket"))
     what = next((name for test, name in kinds if test(mode)), "not a regular file")
     return f"{what}, not {wanted}"
+
+
+def check_file(path: str | os.PathLike, option: str) -> None:
+    """The one check of a file a user names (``--prompt-file``, ``--prompt-files``, ``--gguf``):
+    a :class:`ConfigError` ``OPTION PATH: what is there instead`` unless it is a regular file."""
+    if not os.path.isfile(path):
+        raise ConfigError(f"{option} {path}: {path_kind(path, 'a file')}")

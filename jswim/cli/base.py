@@ -94,10 +94,15 @@ def check_out_folder(out: str) -> None:
         raise ConfigError(f"--out {out} is a file; give a folder for the figures and the table")
 
 
-def check_max(name: str, value: int | None) -> None:
-    """One line for a count too large for the device's int32 indices (else a deep traceback)."""
-    if value is not None and value > MAX_COUNT:
-        raise ConfigError(f"--{name} must be at most {MAX_COUNT:,}, got {value}")
+def check_counts(args: argparse.Namespace, *names: str) -> None:
+    """The one check of a command's counts (``--n``, ``--steps``, ``--seeds``, ``--chunk``, ...):
+    each given one ``>= 1`` and at most :data:`MAX_COUNT` (the device's int32 indices; else a deep
+    traceback)."""
+    for name in names:
+        value = getattr(args, name)
+        if value is not None and not 1 <= value <= MAX_COUNT:
+            raise ConfigError(f"--{name} must be " + (f"at most {MAX_COUNT:,}" if value > 1 else ">= 1")
+                              + f", got {value}")
 
 
 def eta(t0: float, done: int, total: int) -> str:

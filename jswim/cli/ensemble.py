@@ -58,10 +58,7 @@ def main(args: argparse.Namespace) -> int:
     from jswim.env import make_params  # lazy: JAX loads only for commands that run
     from jswim.studies import ensemble  # lazy: as above
 
-    for name in ("n", "steps", "every", "chunk", "rows"):
-        if getattr(args, name) < 1:
-            raise ConfigError(f"--{name} must be >= 1, got {getattr(args, name)}")
-        base.check_max(name, getattr(args, name))
+    base.check_counts(args, "n", "steps", "every", "chunk", "rows")
     if args.every > args.steps:
         raise ConfigError(f"--every ({args.every}) must not exceed --steps ({args.steps})")
     if len(args.direction) != 1:

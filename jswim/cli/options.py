@@ -11,11 +11,10 @@ from __future__ import annotations
 import argparse
 import json
 import os
-from pathlib import Path
 from typing import Any, Sequence
 from urllib.parse import urlsplit
 
-from jswim._io.paths import path_kind
+from jswim._io.paths import check_file
 from jswim.actions import ACTION_SETS
 from jswim.cli import base, scenes
 from jswim.errors import ConfigError
@@ -313,8 +312,8 @@ def options(args: argparse.Namespace, study: str) -> Any:
     """The :class:`jswim.studies.StudyOptions` of a study's command line (validated there)."""
     from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
 
-    if args.prompt_file is not None and not Path(args.prompt_file).is_file():
-        raise ConfigError(f"--prompt-file {args.prompt_file}: {path_kind(args.prompt_file, 'a file')}")
+    if args.prompt_file is not None:
+        check_file(args.prompt_file, "--prompt-file")
     _refuse_ignored(study, args)
     kw: dict[str, Any] = {field: getattr(args, dest) for field, dest in PASSED.items()}
     kw["zeta"] = 0.0 if args.noise is None else args.noise
@@ -347,8 +346,7 @@ def _prompt_files(text: str) -> tuple[str, ...]:
 
     files = tuple(f.strip() for f in text.split(",") if f.strip())
     for f in files:
-        if not Path(f).is_file():
-            raise ConfigError(f"--prompt-files {f}: {'a folder, not a file' if Path(f).is_dir() else 'no such file'}")
+        check_file(f, "--prompt-files")
         try:
             PromptTemplate.from_file(f)
         except ConfigError as exc:  # named as the option the user gave

@@ -51,12 +51,7 @@ def main(args: argparse.Namespace) -> int:
     from jswim.agents.qlearning import QConfig  # lazy: JAX loads only for commands that run
     from jswim.studies import qlearn  # lazy: as above
 
-    if args.seeds < 1 or args.steps < 1:
-        raise ConfigError("--seeds and --steps must be >= 1")
-    if args.chunk is not None and args.chunk < 1:
-        raise ConfigError(f"--chunk must be >= 1, got {args.chunk}")
-    for name in ("seeds", "steps", "chunk"):
-        base.check_max(name, getattr(args, name))
+    base.check_counts(args, "seeds", "steps", "chunk")
     check_zeta(args.noise, "--noise")
     rate = _learning_rate(args)
     sets = ACTION_SETS if args.action_set == "both" else (args.action_set,)

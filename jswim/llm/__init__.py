@@ -14,30 +14,10 @@ _HOMES = {
                      "LLMTimeoutError", "LocalModelError"), "errors"),
 }
 
+__all__ = sorted(_HOMES)
+
 
 def __getattr__(name: str) -> Any:
     if name not in _HOMES:
         raise AttributeError(f"module 'jswim.llm' has no attribute {name!r}")
     return getattr(importlib.import_module(f"jswim.llm.{_HOMES[name]}"), name)
-
-
-__all__ = [
-    "Backend",
-    "ChatResult",
-    "ClientSettings",
-    "DEFAULT_PRICES",
-    "LLMClient",
-    "LLMError",
-    "LLMRequestError",
-    "LLMResponseError",
-    "LLMServerError",
-    "LLMSetupError",
-    "LLMTimeoutError",
-    "LocalModelError",
-    "LocalServer",
-    "PriceTable",
-    "Usage",
-    "UsageTotals",
-    "check_server",
-    "default_model_path",
-]

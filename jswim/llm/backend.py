@@ -17,6 +17,7 @@ from typing import Any
 
 import httpx
 
+from jswim._io.paths import check_file
 from jswim.errors import ConfigError
 from jswim.llm.settings import ClientSettings, check_extra_fields, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
@@ -317,9 +318,8 @@ GGUF_MAGIC = b"GGUF"
 def check_gguf(path: str) -> None:
     """Raise :class:`ConfigError` unless ``path`` is a readable GGUF file (checked up front, so
     a wrong file fails before any baseline runs, not when the embedded server starts)."""
+    check_file(path, "--gguf")
     p = Path(path)
-    if not p.is_file():
-        raise ConfigError(f"--gguf {path}: no such file")
     try:
         with open(p, "rb") as fh:
             magic = fh.read(4)

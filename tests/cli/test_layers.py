@@ -47,7 +47,6 @@ UNMARKED_ALLOWED = set("""
     jswim.agents.ppo->jswim.agents.qlearning jswim.agents.ppo->jswim.agents.scene_env
     jswim.agents.ppo->jswim.judging.gait jswim.agents.ppo->jswim.judging.shape_judge jswim.agents.ppo->jswim.sharding
     jswim.agents.qlearning->jswim.sharding
-    jswim.overview->jswim.studies jswim.overview->jswim.studies.grids jswim.overview->jswim.studies.scenes
     
     jswim.studies.ensemble->jswim.actions jswim.studies.ensemble->jswim.agents.defaults
     jswim.studies.ensemble->jswim.agents.qlearning jswim.studies.ensemble->jswim.judging.gait

@@ -173,7 +173,8 @@ def test_prompt_files_are_known_by_their_bytes(tmp_path, capsys):
 
 def test_swim_takes_samples_too():
     from jswim import cli as c
+    from jswim.cli.options import options
 
     args = c.build_parser().parse_args(["swim", "--samples", "3", "--runs", "2"])
-    plans = build("swim", c._options(args, "swim"))
+    plans = build("swim", options(args, "swim"))
     assert sum(p.agent == "llm" for p in plans) == 6

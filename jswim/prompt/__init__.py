@@ -90,17 +90,16 @@ are dropped.
 
 from __future__ import annotations
 
-import math
 import re
 import string
-import unicodedata
 from dataclasses import dataclass, replace
-from decimal import ROUND_DOWN, Decimal
 from pathlib import Path
-from typing import Iterable, NamedTuple, Sequence
+from typing import Iterable, Sequence
 
 from jswim.actions import check_action_set, check_roc_levels
 from jswim.errors import ConfigError, check_direction
+from jswim.prompt.numbers import Action, encode_position, format_dof
+from jswim.prompt.reply import parse_reply  # noqa: F401  (also read from here)
 
 #: Sentence names, in the paper's order.
 SENTENCES = ("S1", "S2", "S3", "S4", "S5")
@@ -134,52 +133,6 @@ DEFAULT_SENTENCES = {
 }
 
 DEFAULT_RECORD = "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}, stuck {stuck}"
-
-class Action(NamedTuple):
-    """One action: the changed DOF (1-based) and its rate of change."""
-
-    dof: int
-    roc: int
-
-    def text(self) -> str:
-        """The reply form, ``[dof, roc]``."""
-        return f"[{self.dof}, {self.roc}]"
-
-
-# ---------------------------------------------------------------------------------------------
-# Numbers
-
-
-def _decimal(value: float) -> Decimal:
-    # repr gives the shortest exact-looking form, so 1.001 stays 1.001 (not 1.000999...).
-    return Decimal(repr(float(value)))
-
-
-def encode_position(x: float, x_min: float = -2.5) -> int:
-    """``(X/a)_LLM = (X/a - X_min/a) * 1000`` as an integer.
-
-    ``X`` is truncated (toward zero, not rounded) to three decimals first, as in the paper.
-    ``X_min`` is chosen so that values stay positive; a position below it gives a negative
-    number, which is sent as it is (the authors' code does the same; a run is never stopped
-    for it; the driver warns once and records the step).
-
-    Raises
-    ------
-    ConfigError
-        When ``x`` is not finite.
-    """
-    if not math.isfinite(x):
-        raise ConfigError(f"position X must be finite, got {x!r}")
-    x3 = _decimal(x).quantize(Decimal("0.001"), rounding=ROUND_DOWN)
-    shifted = (x3 - _decimal(x_min)) * 1000
-    return int(shifted.to_integral_value(rounding=ROUND_DOWN))
-
-
-def format_dof(value: float, decimals: int) -> str:
-    """A DOF value rounded to ``decimals`` (angles: 3, sphere arms: 0), without ``-0``."""
-    r = round(float(value), decimals) + 0.0  # + 0.0 turns -0.0 into 0.0
-    return f"{r:.{decimals}f}"
-
 
 def _join_prose(items: Sequence[str], last: str = "and") -> str:
     if len(items) <= 1:
@@ -804,108 +757,3 @@ def build_messages(prompt: str, system: str | None = None) -> list[dict[str, str
     msgs = [{"role": "system", "content": system}] if system else []
     msgs.append({"role": "user", "content": prompt})
     return msgs
-
-
-# ---------------------------------------------------------------------------------------------
-# Replies
-
-_MINUS = str.maketrans({"\u2212": "-", "\u2013": "-", "\u2014": "-", "\uff0d": "-"})
-_INT = r"([+-]?\s*[0-9]+)"  # ASCII digits only (see parse_reply)
-_Q = r"[\"']?"  # a JSON key's closing quote
-_PATTERNS = (
-    # [1, -1]  (2,1)  [D1, -1]  {1, 1}
-    re.compile(r"[\[\(\{]\s*(?:D\s*)?" + _INT + r"\s*[,;]\s*(?:ROC\s*[:=]?\s*)?" + _INT + r"\s*[\]\)\}]", re.I),
-    # DOF 1, ROC -1 / DOF=2 and ROC=+1 / dof: 1 roc: 0 / {"dof": 2, "roc": -1}
-    # (a ROC written as a decimal or a fraction, "ROC 0.5" or "ROC 1/2", is no integer: no match)
-    re.compile(r"\bDOF" + _Q + r"\s*[:=]?\s*(?:D\s*)?" + _INT + r"\W{0,4}(?:and\s+)?ROC" + _Q + r"\s*[:=]?\s*" + _INT
-               + r"(?!\d|[./]\d)", re.I),
-)
-# Two bare integers, "2, -1": only as the whole reply or right after an answer marker.
-_BARE = re.compile(r"(?:D\s*)?([+-]?[0-9]+)\s*(?:,|;|\s)\s*([+-]?[0-9]+)(?![0-9]|\.[0-9])")
-# Words that introduce the answer; the final answer is the first candidate after the last one.
-_MARKER = re.compile(
-    r"\b(?:final\s+answer|answer|next\s+(?:action|move)|my\s+(?:action|move|choice)|action\s*" + _Q + r"\s*(?:[:=]|is\b)"
-    r"|(?:i\s+(?:will|'ll|would|)\s*)?(?:choose|pick|select|go\s+with|take)|so|therefore|thus|hence)\b",
-    re.I,
-)
-# A candidate right after one of these (in the same clause) is one the reply rejects.
-_NEGATION = re.compile(
-    r"(?:\b(?:not|never|avoid(?:ing)?|instead\s+of|rather\s+than|except|other\s+than|besides|without)|n't)\b"
-    r"(?P<tail>[^\[\(\{\n.;:,]{0,24})$",
-    re.I,
-)
-# ...unless a new clause starts in between ("[1, 1] didn't work, so [2, -1]").
-_NEW_CLAUSE = re.compile(r"\b(?:so|but|then|therefore|thus|hence|use|try|choose|pick|take)\b", re.I)
-_FILLER = re.compile(r"^[\s`'\"*>_]*(?:json|text)?[\s`'\"*:>_]*$", re.I)  # fences, quotes, bold marks
-
-
-def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | None:
-    """The final answer of a reply, or ``None`` when it names no valid action unambiguously.
-
-    ``text`` is the answer part of a reply (reasoning already split off by the client; see
-    :mod:`jswim.llm.reply`). Accepted forms: ``[1, -1]``, ``[1,-1]``, ``(2, 1)``, ``[D1, -1]``,
-    ``DOF 1, ROC -1``, ``{"dof": 1, "roc": -1}``, and two bare integers ``1, -1`` when they are
-    the whole reply or follow an answer word; code fences, JSON wrappers
-    (``{"action": "[1, -1]"}``) and prose may surround them. Which candidate is the answer:
-
-    1. candidates the reply rejects (``not [1, 1]``, ``instead of [1, 1]``, ``avoid [1, 1]``) and
-       candidates outside ``allowed`` are skipped;
-    2. after an answer word (``answer``, ``final answer``, ``next move``, ``I choose``, ``so``,
-       ``therefore``...), the first candidate after the last such word that has one;
-    3. otherwise a single distinct candidate; or the candidate the reply opens with
-       (``[2, -1] because ...``); or the one it ends with (``... so we go [2, -1].``);
-    4. otherwise (several, none in an answer position) ``None``: the caller asks again rather
-       than guess.
-
-    Characters: the reply is read after Unicode NFKC normalisation, so fullwidth and other
-    compatibility forms of ASCII (``［２，－１］`` from an East Asian input mode) read as the ASCII
-    they stand for, and Unicode minus signs and dashes as ``-``. Digits of other scripts
-    (Arabic-Indic ``٢``, Devanagari ``२``, ...) are not read: the prompt asks for the ASCII
-    format, and a reply in them names no action (the step asks again, as for any unreadable
-    reply).
-
-    Parameters
-    ----------
-    text : str
-        The model's answer.
-    allowed : sequence of Action, optional
-        Valid actions; ``None`` accepts any pair.
-    """
-    if not text or not text.strip():
-        return None
-    text = unicodedata.normalize("NFKC", text).translate(_MINUS)
-    ok = set(allowed) if allowed is not None else None
-    markers = [m.end() for m in _MARKER.finditer(text)]
-    found: dict[int, tuple[int, Action]] = {}  # start -> (end, action)
-    for pat in _PATTERNS:
-        for m in pat.finditer(text):
-            dof, roc = (int(g.replace(" ", "")) for g in m.groups())
-            found.setdefault(m.start(), (m.end(), Action(dof, roc)))
-    for at in [0, *markers]:  # bare pairs: the whole reply, or right after an answer word
-        m = _BARE.match(text, at + len(text[at:]) - len(text[at:].lstrip(" \t\n:=*`'\"")))
-        if m and (at > 0 or _FILLER.match(text[m.end():].rstrip(".!"))) and not any(s <= m.start() < e for s, (e, _) in found.items()):
-            found.setdefault(m.start(), (m.end(), Action(int(m.group(1)), int(m.group(2)))))
-    cands = [
-        (start, end, act) for start, (end, act) in sorted(found.items())
-        if (ok is None or act in ok) and not _rejected(text[max(0, start - 40):start])
-    ]
-    if not cands:
-        return None
-    for at in reversed(markers):
-        after = [c for c in cands if c[0] >= at]
-        if after:
-            return after[0][2]
-    if len({c[2] for c in cands}) == 1:
-        return cands[0][2]
-    first, last = cands[0], cands[-1]
-    if _FILLER.match(text[: first[0]]):
-        return first[2]
-    if _FILLER.match(text[last[1]:].rstrip(".!")):
-        return last[2]
-    return None
-
-
-def _rejected(before: str) -> bool:
-    """Whether the text right before a candidate rejects it (``not``, ``avoid``, ``instead of``)."""
-    m = _NEGATION.search(before)
-    return bool(m) and not _NEW_CLAUSE.search(m.group("tail"))
