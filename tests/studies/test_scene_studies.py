@@ -142,11 +142,11 @@ def test_joint_decode_matches_the_scene_codes():
 
 def test_scene_discretisers_are_the_joint_corner_and_the_height_bin():
     # A pair's 16 joint corners (bit i: arm i long); with a wall, times 7 height bins of swimmer 1.
-    pair, pair_task = make("ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0, 0, 1))
+    pair, pair_task = make("ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0))  # both (10, 6)
     cells = worlds.cells(pair)
     state = pair.reset(None, pair_task)
     j = cells.positions(state, pair_task)
-    assert cells.n_cells == 16 and j.tolist() == [1, 0, 0, 1] and int(cells.cell(state, j, pair_task)) == 9
+    assert cells.n_cells == 16 and j.tolist() == [1, 0, 1, 0] and int(cells.cell(state, j, pair_task)) == 5
     wall, wall_task = make("ng", Scene(medium="wall", height=5.0), init=(0, 1))
     cells = worlds.cells(wall)
     assert isinstance(cells, worlds.WallCells) and cells.n_cells == 4 * (len(worlds.HEIGHT_EDGES) + 1)
