@@ -33,6 +33,7 @@ def test_toy_discretiser_is_the_joint_corner(float32):
     assert np.flatnonzero(cells.mask(j, ToyParams(), "shape-changing")).tolist() == [0, 3]
 
 
+@pytest.mark.slow  # two compilations (~5 s idle, 23 s under load 14)
 def test_toy_stroke_and_random_policy(float32):
     env, params = ToyWorld(), ToyParams()
     tr = worlds.play(env, params, _keys(0, 2), jnp.stack([jnp.tile(SQUARE, 5), jnp.tile(SQUARE[::-1], 5)]))
@@ -47,7 +48,7 @@ def test_toy_stroke_and_random_policy(float32):
     np.testing.assert_allclose(np.cumsum(run.trace.info.progress, 1), run.x, atol=1e-5)
 
 
-@pytest.mark.slow  # compiles the Q-learner and PPO on a new world (~20 s of CPU)
+@pytest.mark.slow  # compiles the Q-learner and PPO on a new world (51 s under load 14)
 def test_toy_q_learner_finds_the_area_rule_stroke_and_ppo_trains(float32):
     env = ToyWorld()
     directions = np.repeat([1.0, -1.0], B // 2)
