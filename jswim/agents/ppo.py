@@ -40,9 +40,10 @@ Example::
     run = train_batch(jax.random.split(jax.random.PRNGKey(0), 1000), params, PPOConfig())
     report = evaluate(run, params)   # steps to learn, success, ... per learner
 
-The same learner runs on a scene of :mod:`jswim.scenes` (a wall, a pair; issue 19) through
-:func:`train_scene_batch` / :func:`evaluate_scene`; the environment is an adapter of
-:mod:`jswim.agents.ppo_envs` (bulk or scene) that the training scan takes.
+The same learner runs in any world of the protocol (:func:`train_env`; a wall or a pair of
+:mod:`jswim.scenes` also through :func:`train_scene_batch`), judged by :func:`evaluate`
+(:mod:`jswim.agents.ppo_judge`); the paper's world is stepped as the other baselines step it
+(:func:`jswim.agents.worlds.step`).
 """
 
 from __future__ import annotations
@@ -54,12 +55,17 @@ from typing import Any, Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
-import numpy as np
 import optax
 from jax import Array
 
 from jswim import env as _env
-from jswim.agents.ppo_envs import BulkEnv, ProtocolEnv, SceneEnv, SceneTask
+from jswim import sharding
+from jswim.agents import worlds
+from jswim.agents.qlearning import _compiler_options
+from jswim.env.base import Environment
+from jswim.env.scene_world import SceneTask, SceneWorld
+from jswim.env.swimmer_world import SwimmerWorld
+from jswim.agents.ppo_judge import evaluate, evaluate_scene, exact_x  # noqa: F401  (their old place)
 from jswim.errors import ConfigError
 
 
@@ -200,9 +206,10 @@ class PPORun(NamedTuple):
         DOF values at the start.
     y, orientation : float (steps,)
         Centroid y and orientation (rad, of the reference link) after each step.
-    scene : SceneRecord or None
-        On a scene (:func:`train_scene_batch`): every swimmer's position, height and tilt after each
-        step, and whether the step was stuck or refused at contact; ``None`` in the bulk fluid.
+    trace : Trajectory or None
+        With ``trace=True`` (:func:`train_env`): the world's state, observation and
+        :class:`~jswim.env.base.StepInfo` after each step (:class:`jswim.env.episodes.Trajectory`;
+        what the scene studies' rows read: every swimmer's position, height, tilt, stuck, contact).
     """
 
     actions: Array
@@ -213,7 +220,7 @@ class PPORun(NamedTuple):
     dofs0: Array
     y: Array
     orientation: Array
-    scene: Any = None
+    trace: Any = None
 
 
 # ----------------------------------------------------------------------------- policy
@@ -258,11 +265,6 @@ def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:
         x = jnp.tanh(x @ w + b)
     w, b = layers[-1]
     return x @ w + b
-
-
-def observe(dofs: Array, model: Any) -> Array:
-    """The learner's observation: DOF values scaled from ``[lo, hi]`` to ``[-1, 1]``."""
-    return 2.0 * (dofs - model.lo) / (model.hi - model.lo) - 1.0
 
 
 def policy(net: dict[str, Any], obs: Array) -> tuple[Array, Array, Array, Array]:
@@ -344,43 +346,47 @@ def _optimizer(hp: dict) -> optax.GradientTransformation:
     return optax.chain(optax.clip_by_global_norm(hp["max_grad_norm"]), optax.adam(hp["learning_rate"], eps=1e-5))
 
 
-def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Any = None) -> PPORun:
-    """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``world.params_axes``
-    says): time outermost. ``world`` is the environment's adapter (:mod:`jswim.agents.ppo_envs`;
-    default :class:`~jswim.agents.ppo_envs.BulkEnv` on ``params``, the paper's swimmer).
+def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Environment | None = None, axes: Any = 0,
+           trace: bool = False) -> PPORun:
+    """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``axes`` says, a
+    ``vmap`` prefix) in the world ``world`` (default: the paper's world of ``params``): time
+    outermost. The world's step is :func:`jswim.agents.worlds.step`, its observation
+    ``features``, its reward ``StepInfo.progress``.
 
     The scans run over time and every step is vmapped over learners inside them (as in
     PureJaxRL), which keeps the environment's float64 step blocks inside a plain ``vmap``.
     """
     if world is None:
-        world = BulkEnv(params.model.n_dof)
-    axes = world.params_axes
+        world = SwimmerWorld(params.model, params.roc_levels, params.diagonal)
     n = world.n_dof
     b = keys.shape[0]
     dtype = jnp.result_type(float)
     split = jax.vmap(lambda k: jax.random.split(k, 3))(keys)
     states = jax.vmap(world.reset, in_axes=(0, axes))(split[:, 0], params)
-    dofs0 = jax.vmap(world.dofs, in_axes=(0, axes))(states, params)
-    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_obs))(split[:, 1])
+    dofs0 = jax.vmap(lambda st, p: world.observe(st, p).dofs, in_axes=(0, axes))(states, params)
+    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features))(split[:, 1])
     opt = _optimizer(hp)
     n_updates = -(-config.steps // config.rollout)
     total = n_updates * config.rollout
     # One draw per learner for the whole run: the DOF's uniform, the ROC's normal, the noise Y.
-    width = 2 + world.n_noise
+    width = 2 + world.n_swimmers
     u = jax.vmap(lambda k: _env.uniforms(k, (total, width), dtype))(split[:, 2])  # (B, total, 2 + noise)
     u = jnp.moveaxis(u, 0, 1).reshape(n_updates, config.rollout, b, width)
     z = jax.scipy.special.ndtri(jnp.clip(u[..., 1], 1e-7, 1.0 - 1e-7))
     inputs = (jnp.arange(total).reshape(n_updates, config.rollout), u[..., 0], z, 2.0 * u[..., 2:] - 1.0)
 
     def act_one(state, net, p, tau, u_dof, z_roc, y):
-        obs = world.observe(state, p)
+        obs = world.features(state, p)
         logits, mean, log_std, value = policy(net, obs)
         dof, u_roc = _sample(logits, mean, log_std, tau, u_dof, z_roc)
         roc = jnp.clip(u_roc, -1.0, 1.0)
         action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
         logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
-        state, reward, (x, dofs, y_pos, theta, *more) = world.step(state, dof, roc, action, y, p)
-        record = (action, (dof + 1).astype(jnp.int8), x, reward, dofs, y_pos, theta, tuple(more))
+        state, info = worlds.step(world, state, action, y, p)
+        reward = info.progress.astype(dtype)
+        x, y_pos, theta = worlds.pose(world, state, p)
+        record = (action, (dof + 1).astype(jnp.int8), x, reward, world.observe(state, p).dofs, y_pos, theta,
+                  worlds.trace(world, state, info, p) if trace else None)
         return state, _Batch(obs, dof, u_roc, logp, value, reward, tau), record
 
     def act(carry, inp):
@@ -413,7 +419,7 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Any = N
     def update(carry, inp):
         states, nets, opt_states, r2 = carry
         (states, _), (batch, record) = jax.lax.scan(act, (states, nets), inp)
-        last_obs = jax.vmap(world.observe, in_axes=(0, axes))(states, params)
+        last_obs = jax.vmap(world.features, in_axes=(0, axes))(states, params)
         t_end = (inp[0][-1] + 1).astype(dtype)
         nets, opt_states, r2 = jax.vmap(learn_one, in_axes=(0, 0, 0, 1, 0, None))(
             nets, opt_states, r2, batch, last_obs, t_end)
@@ -423,8 +429,7 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Any = N
     _, record = jax.lax.scan(update, carry, inputs)
     # (n_updates, rollout, B, ...) -> (B, steps, ...)
     record = jax.tree.map(lambda v: jnp.moveaxis(v.reshape((total,) + v.shape[2:]), 0, 1)[:, : config.steps], record)
-    actions, dof, x, progress, dofs, y, theta, more = record
-    return PPORun(actions, dof, x, progress, dofs, dofs0, y, theta, more[0] if more else None)
+    return PPORun(*record[:5], dofs0, *record[5:])
 
 
 def train(key: Array, params: Any, config: PPOConfig = PPOConfig()) -> PPORun:
@@ -468,79 +473,29 @@ def train_batch(keys: Array, params: Any, config: PPOConfig = PPOConfig()) -> PP
         Fields with a leading axis of size B. Memory: ``(4 (2 n_dof + 5) + 1) steps`` bytes per
         learner in float32 (7.2 kB at 200 steps for two DOFs), plus the networks while training.
     """
-    from jswim import sharding
-
     n = keys.shape[0]
     fn = functools.partial(_jitted(), config=_structure(config), hp=_numbers(config))
     return sharding.apply_batched(fn, (), (keys, _env.broadcast_params(params, n)), n)
 
 
-def train_env(env: Any, keys: Array, params: Any, config: PPOConfig = PPOConfig(), *, params_axes: Any = None) -> PPORun:
+def train_env(env: Environment, keys: Array, params: Any, config: PPOConfig = PPOConfig(), *,
+              params_axes: Any = None, trace: bool = False) -> PPORun:
     """Train independent PPO learners, one per key, in any world of the protocol
     (:class:`jswim.env.base.Environment`, e.g. from :func:`jswim.make`), in one jitted, vmapped call.
 
-    The learner is :func:`train_batch`'s; the world gives its observation
-    (``env.features``), reward (``StepInfo.progress``) and step (:class:`jswim.agents.ppo_envs.ProtocolEnv`).
-    ``params`` are shared by the learners, or batched along B as ``params_axes`` (hashable) says.
-    ``PPORun.x`` is the swimmers' mean x after each step.
+    The learner sees the world's ``features``, is rewarded with ``StepInfo.progress``, and acts
+    with float ROC vectors (one non-zero entry). ``params`` are shared by the learners, or batched
+    along B as ``params_axes`` (hashable) says. ``PPORun.x`` is the swimmers' mean x after each step,
+    ``y`` and ``orientation`` swimmer 1's; ``trace`` the world's own record. In the paper's world
+    (params batched along B) the learners of :func:`train_batch`, number for number.
     """
-    return _jitted()(keys, params, config=_structure(config), hp=_numbers(config),
-                     world=ProtocolEnv(env, params_axes))
+    return _jitted()(keys, params, config=_structure(config), hp=_numbers(config), world=env, axes=params_axes,
+                     trace=trace)
 
 
 @functools.lru_cache(maxsize=1)
 def _jitted() -> Callable[..., PPORun]:
-    from jswim.agents.qlearning import _compiler_options
-
-    return jax.jit(_train, static_argnames=("config", "world"), compiler_options=_compiler_options())
-
-
-def exact_x(run: PPORun, params: Any) -> np.ndarray:
-    """Noiseless centroid x after each step of recorded runs, float64 (B, steps).
-
-    The runs' actions replayed from their start shapes with ``zeta = 0`` (the judge measures
-    exact displacements, as :func:`jswim.judging.gait.judge` does); when no run had noise, the recorded
-    ``x`` is returned as it is.
-    """
-    actions = np.asarray(run.actions)
-    b = actions.shape[0]
-    if not np.any(np.asarray(params.zeta) != 0):
-        return np.asarray(run.x, np.float64)
-    model = params.model
-    levels = np.rint((np.asarray(run.dofs0, np.float64) - model.lo) / (model.hi - model.lo)).astype(np.int32)
-    replay_params = _env.broadcast_params(params, b, zeta=0.0, init=levels)
-    return np.asarray(_replay(replay_params, jnp.asarray(actions)), np.float64)
-
-
-@jax.jit
-def _replay(params: Any, actions: Array) -> Array:
-    keys = jax.random.split(jax.random.PRNGKey(0), actions.shape[0])  # unused: starts are given
-    states = jax.vmap(_env.reset)(keys, params)
-
-    def body(states, a):
-        states, info = jax.vmap(lambda s, act, p: _env.advance(s, act, 0.0, p))(states, a, params)
-        return states, info.x
-
-    return jnp.moveaxis(jax.lax.scan(body, states, jnp.moveaxis(actions, 0, 1))[1], 0, 1)
-
-
-def evaluate(run: PPORun, params: Any, *, criterion: Any = None, tol: float | None = None) -> Any:
-    """Judge training runs with the success criterion for real-valued strokes
-    (:func:`jswim.judging.shape_judge.judge_shapes`: a cycle is a return to the same shape within ``tol``
-    of the range, default :data:`jswim.judging.shape_judge.SHAPE_TOL`), on exact displacements.
-
-    Returns
-    -------
-    GaitReport
-        Per learner: ``learned``, ``steps_to_learn`` (from 1, -1 when never), ``success``, ...
-    """
-    from jswim.judging.gait import PAPER
-    from jswim.judging.shape_judge import SHAPE_TOL, judge_shapes
-
-    b = np.asarray(run.x).shape[0]
-    return judge_shapes(np.asarray(run.dofs), exact_x(run, params), _env.broadcast_params(params, b),
-                        dofs0=np.asarray(run.dofs0), criterion=PAPER if criterion is None else criterion,
-                        tol=SHAPE_TOL if tol is None else tol)
+    return jax.jit(_train, static_argnames=("config", "world", "axes", "trace"), compiler_options=_compiler_options())
 
 
 # ----------------------------------------------------------------------------- scenes
@@ -557,122 +512,24 @@ def train_scene(key: Array, scene_params: Any, config: PPOConfig = PPOConfig(), 
 
 def train_scene_batch(keys: Array, scene_params: Any, config: PPOConfig = PPOConfig(),
                       direction: Any = 1) -> PPORun:
-    """Train independent PPO learners on one scene, one per key, in one jitted, vmapped call.
+    """:func:`train_env` on one scene of :mod:`jswim.scenes` (shared by the learners), a target
+    direction per learner (+1 or -1, or one for all).
 
-    The learner is the bulk one (same network, hyperparameters and temperature) in the world of
-    :class:`jswim.agents.ppo_envs.SceneEnv`: it moves one arm of one swimmer per step by a real
-    ROC; it sees the joint arms scaled to [-1, 1] and, with a wall, each swimmer's height and tilt;
-    its reward is the progress of the swimmers' mean centroid x (the scene studies' X).
-
-    Parameters
-    ----------
-    keys : PRNG keys, shape (B, 2)
-    scene_params : SceneParams
-        From :func:`jswim.scenes.scene_params` (shared by all learners; ``zeta`` is its noise).
-    config : PPOConfig
-        Hyperparameters (static).
-    direction : int or int array (B,)
-        Target direction, +1 or -1.
+    The learner moves one arm of one swimmer per step by a real ROC; it sees the joint arms scaled
+    to [-1, 1] and, with a wall, each swimmer's height and tilt (the world's ``features``); its
+    reward is the progress of the swimmers' mean centroid x (the scene studies' X).
 
     Returns
     -------
     PPORun
         Leading axis B. ``x`` is the mean centroid x after each step relative to the start, as the
-        scene studies record it; ``y`` and ``orientation`` are swimmer 1's height (a, of its middle
-        sphere above the wall) and tilt (rad); ``dofs`` the joint arms ``(B, steps, 2S)``; ``scene``
-        (:class:`jswim.agents.ppo_envs.SceneRecord`) every swimmer's x relative to its start, height
-        and tilt ``(B, steps, S)``, and the stuck and contact flags ``(B, steps)``.
+        scene studies record it; ``y`` and ``orientation`` are swimmer 1's centroid height (a above
+        the wall) and tilt (rad); ``dofs`` the joint arms ``(B, steps, 2S)``; ``trace`` the world's
+        states, observations and step infos (every swimmer's position, height, tilt, stuck, contact).
     """
-    from jswim.agents.scene_env import centroid_x, scene_reset
-
-    b = keys.shape[0]
-    medium = scene_params.scene.medium
-    world = SceneEnv(int(scene_params.n_swimmers), bool(scene_params.wall), medium)
+    world = SceneWorld(scene_params.scene, scene_params.roc_levels)
     dtype = jnp.result_type(float)
-    task = SceneTask(scene_params, jnp.broadcast_to(jnp.asarray(direction, dtype), (b,)))
-    run = _jitted()(keys, task, config=_structure(config), hp=_numbers(config), world=world)
-    x0s = centroid_x(scene_reset(scene_params), medium)
-    return run._replace(x=run.x - jnp.mean(x0s), scene=run.scene._replace(xs=run.scene.xs - x0s))
-
-
-def evaluate_scene(run: PPORun, scene_params: Any, direction: Any = 1, *, criterion: Any = None,
-                   tol: float | None = None) -> Any:
-    """Judge scene runs as the scene studies judge their agents
-    (:func:`jswim.studies.scenes._judge` for lattice moves): the success criterion on each
-    swimmer's own moves, with the bulk swimmer's (noiseless, paper's formula) displacements; here
-    the shape judge for real ROCs (:func:`jswim.judging.shape_judge.judge_shapes`), each swimmer's moves
-    replayed in :mod:`jswim.env` from its start arms.
-
-    One swimmer: its run judged as it is. A pair (a learner steering both swimmers): swimmer ``s``'s
-    own moves (the steps whose DOF is one of its arms), in order, are its stroke; the other
-    swimmer's steps are left out, as if it paused. The pair **succeeds** when both swimmers'
-    own move sequences do (and has learned when both have); fewer than four own moves (the
-    shortest stroke) fail. ``steps_to_learn`` is the later of the two swimmers', counted in their
-    own moves (the lattice judge's convention); ``period`` is the sum of the two periods (the
-    length of the joint stroke when the swimmers alternate); ``per_step`` and ``fraction`` are the
-    mean of the two swimmers' (each per own move); ``cycle`` is swimmer 1's.
-
-    Returns
-    -------
-    GaitReport
-        One verdict per learner (leading axis B).
-
-    Raises
-    ------
-    ConfigError
-        When the scene's arm limits are not the bulk swimmer's.
-    """
-    from jswim.judging.gait import PAPER, GaitReport
-    from jswim.judging.shape_judge import SHAPE_TOL, judge_shapes
-
-    criterion = PAPER if criterion is None else criterion
-    tol = SHAPE_TOL if tol is None else tol
-    n_sw = int(scene_params.n_swimmers)
-    actions = np.asarray(run.actions)
-    dofs = np.asarray(run.dofs, np.float64)
-    owner = (np.asarray(run.dof, np.int64) - 1) // 2  # the swimmer each step moved (0-based)
-    b = actions.shape[0]
-    lo, hi = float(scene_params.lo), float(scene_params.hi)
-    arms0 = np.asarray(scene_params.arms0, np.float64).reshape(n_sw, 2)
-    dirs = np.broadcast_to(np.asarray(direction, np.int32), (b,))
-    reports = []
-    for s in range(n_sw):
-        levels = np.rint((arms0[s] - lo) / (hi - lo)).astype(np.int32)
-        bulk = _env.make_params("ng", direction=1, init=tuple(int(v) for v in levels))
-        if not (np.isclose(float(bulk.model.lo), lo) and np.isclose(float(bulk.model.hi), hi)):
-            raise ConfigError("evaluate_scene needs the scene's arm limits to be the bulk swimmer's")
-        # The other swimmer's steps replayed as zero ROCs: no move, no displacement.
-        own_actions = np.where((owner == s)[..., None], actions[..., 2 * s:2 * s + 2], 0.0)
-        x = np.asarray(_replay(_env.broadcast_params(bulk, b), jnp.asarray(own_actions)), np.float64)
-        arms = dofs[..., 2 * s:2 * s + 2]
-        if n_sw == 1:
-            reports.append(judge_shapes(arms, x, _env.broadcast_params(bulk, b, direction=dirs), dofs0=arms0[s],
-                                        criterion=criterion, tol=tol))
-            continue
-        per = []
-        for i in range(b):
-            own = np.flatnonzero(owner[i] == s)
-            if own.size < 4:
-                per.append(None)
-                continue
-            per.append(judge_shapes(arms[i, own][None], x[i, own][None], bulk.replace(direction=float(dirs[i])),
-                                    dofs0=arms0[s], criterion=criterion, tol=tol))
-        reports.append(per)
-    if n_sw == 1:
-        return reports[0]
-
-    def field(name: str, fill: Any) -> np.ndarray:  # (S, B): one swimmer's verdicts per learner
-        return np.array([[getattr(r, name)[0] if r is not None else fill for r in per] for per in reports])
-
-    learned = field("learned", False).all(0)
-    success = field("success", False).all(0)
-    stl = np.where(learned, field("steps_to_learn", -1).max(0), -1)
-    period = np.where(learned, field("period", 0).sum(0), 0)
-    per_step = np.where(learned, field("per_step", np.nan).mean(0), np.nan)
-    fraction = np.where(learned, field("fraction", np.nan).mean(0), np.nan)
-    width = max([r.cycle.shape[1] for per in reports for r in per if r is not None] or [1])
-    cycle = np.full((b, width), -1, np.int64)
-    for i, r in enumerate(reports[0]):
-        if r is not None and learned[i]:
-            cycle[i, :r.cycle.shape[1]] = r.cycle[0]
-    return GaitReport(learned, stl, success, period, cycle, per_step, fraction, np.where(learned, stl - 1, -1))
+    task = SceneTask(scene_params, jnp.broadcast_to(jnp.asarray(direction, dtype), (keys.shape[0],)))
+    run = train_env(world, keys, task, config, params_axes=SceneTask(None, 0), trace=True)
+    start = world.observe(world.reset(keys[0], task), task).position
+    return run._replace(x=run.x - jnp.mean(start[:, 0]))

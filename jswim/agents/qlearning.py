@@ -24,6 +24,12 @@ DOF values ``lo + j (hi - lo) / K``, an action one of the ``n_dof (2K + 1)`` cod
 (ROC ``k/K``; :mod:`jswim.judging.lattice`), and the environment steps the code exactly. ``K = 1`` is the
 paper's learner, number for number (the same operations on the same values).
 
+The same learner runs in any world of the protocol (:func:`train_env`: walls, pairs, a world of
+one's own): its table rows come from the world's discretiser (:mod:`jswim.agents.worlds`: the
+paper's world its corner code, a scene its joint corners, times a height bin with a wall), its
+reward is ``StepInfo.progress``, and one uniform per step drives the agent and one per swimmer the
+world's noise, as in the paper's world.
+
 Example::
 
     import jax
@@ -39,7 +45,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Any, Callable, NamedTuple, Sequence
+from typing import Any, Callable, NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -47,9 +53,13 @@ import numpy as np
 import optax
 from jax import Array
 
+from jswim import sharding
 from jswim.actions import check_action_set
-from jswim.agents.defaults import default_rocs
-from jswim.env import EnvParams, advance, broadcast_params, make_params, reset, uniforms
+from jswim.agents import worlds
+from jswim.agents.worlds import Cells, offered, offered_mask  # noqa: F401  (offered*: their old place)
+from jswim.env import EnvParams, advance, broadcast_params, reset, uniforms
+from jswim.env.base import Environment
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
 from jswim.judging.gait import PAPER, Criterion, GaitReport, judge
 
@@ -153,7 +163,11 @@ class QRun(NamedTuple):
     y, orientation : float (steps,) or None
         Centroid y and orientation (rad, of the reference link) after each step, when asked for
         (``pose=True``; the study folders' trajectories); ``None`` otherwise, which keeps the
-        training loop's memory traffic to what learning needs.
+        training loop's memory traffic to what learning needs. In other worlds (:func:`train_env`)
+        ``x`` is the swimmers' mean x, ``y`` and ``orientation`` swimmer 1's.
+    trace : Trajectory or None
+        With ``trace=True`` (:func:`train_env`): the world's state, observation and
+        :class:`~jswim.env.base.StepInfo` after each step (:class:`jswim.env.episodes.Trajectory`).
     """
 
     actions: Array
@@ -163,53 +177,21 @@ class QRun(NamedTuple):
     levels0: Array
     y: Array
     orientation: Array
+    trace: Any = None
 
 
 def _schedule(value: float | optax.Schedule) -> optax.Schedule:
     return value if callable(value) else optax.constant_schedule(float(value))
 
 
-def _corner(levels: Array, roc_levels: int = 1) -> Array:
-    """Table row of a configuration: corner index ``sum_k level_k 2**k`` (on a ROC lattice the
-    point index ``sum_d j_d (K + 1)**d`` of lattice positions ``j``)."""
-    base = (roc_levels + 1) ** jnp.arange(levels.shape[-1], dtype=jnp.int32)
-    return jnp.sum(levels * base, dtype=jnp.int32)
+_corner = worlds.corner
 
 
-def positions(state: Any, roc_levels: int) -> Array:
-    """A state's lattice positions ``j`` (int32, ``(n_dof,)``): its levels when ``K = 1``, else
-    ``round(K frac)`` (every state reached from a corner by lattice codes lies on the lattice)."""
-    if roc_levels == 1:
-        return state.levels
-    return jnp.round(state.frac * roc_levels).astype(jnp.int32)
+positions = worlds.positions
 
 
 def _row(q: Array, corner: Array) -> Array:
     return jax.lax.dynamic_slice_in_dim(q, corner, 1)[0]
-
-
-def offered(levels: Array, n_dof: int, action_set: str, roc_levels: int = 1) -> Array:
-    """Boolean mask of the actions offered in configuration ``levels`` (lattice positions ``j``
-    on a ROC lattice): every code, or the shape-changing ones (a positive ROC below ``hi``, a
-    negative one above ``lo``)."""
-    width = 2 * roc_levels + 1
-    if action_set == "all":
-        return jnp.ones((width * n_dof,), bool)
-    roc = jnp.arange(width * n_dof) % width - roc_levels
-    level = jnp.repeat(levels, width, total_repeat_length=width * n_dof)
-    if roc_levels == 1:
-        return roc == 1 - 2 * level  # +1 from lo, -1 from hi
-    return ((roc > 0) & (level < roc_levels)) | ((roc < 0) & (level > 0))
-
-
-def offered_mask(levels: Array, model: Any, action_set: str, rocs: tuple[int, ...] | None = None,
-                 roc_levels: int = 1) -> Array:
-    """:func:`offered`, restricted to the ROCs offered (default: the swimmer's,
-    :func:`jswim.agents.defaults.default_rocs`: all three for two DOFs, +-1 for more; every
-    ``k`` in ``-K..K`` on a ROC lattice, 0 left out for more DOFs)."""
-    rocs = default_rocs(model, roc_levels) if rocs is None else rocs
-    roc_ok = jnp.zeros(2 * roc_levels + 1, bool).at[jnp.asarray(rocs) + roc_levels].set(True)
-    return offered(levels, model.n_dof, action_set, roc_levels) & jnp.tile(roc_ok, model.n_dof)
 
 
 def _offered(levels: Array, params: EnvParams, action_set: str) -> Array:
@@ -303,13 +285,14 @@ class _Pending(NamedTuple):
     target: Array  # r + gamma max_a' Q(s', a'), from the table the step acted on
 
 
-def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = False) -> QRun:
-    n = params.model.n_dof
-    big_k = _k(params)
+def _train_one(key: Array, params: Any, config: QConfig, pose: bool = False, cells: Cells | None = None,
+               trace: bool = False) -> QRun:
+    cells = _paper(params) if cells is None else cells
+    env = cells.env
     dtype = jnp.result_type(float)
     k_reset, k_run = jax.random.split(key)
-    state = reset(k_reset, params)
-    q = jnp.full(((big_k + 1) ** n, (2 * big_k + 1) * n), config.q_init, dtype)
+    state = env.reset(k_reset, params)
+    q = jnp.full((cells.n_cells, env.n_actions), config.q_init, dtype)
     alpha = _schedule(config.learning_rate)
     # Update k of the optimizer is step k - 1's (update 0 is a no-op, see below), so the
     # learning-rate schedule is read one count back: step t learns at rate alpha(t).
@@ -318,16 +301,18 @@ def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = Fals
     gamma = config.discount
 
     def act(state, q, t, u):
-        """Choose, step the swimmer, and form the TD target from the current table."""
-        j = positions(state, big_k)
-        s = _corner(j, big_k)
-        mask = _offered(j, params, config.action_set)
+        """Choose, step the world, and form the TD target from the current table."""
+        j = cells.positions(state, params)
+        s = cells.cell(state, j, params)
+        mask = cells.mask(j, params, config.action_set)
         action, explore = _act(_row(q, s), mask, epsilon(t), u[0], config.tie_break)
-        new, info = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
-        j2 = positions(new, big_k)
-        mask2 = _offered(j2, params, config.action_set)
-        future = jnp.max(jnp.where(mask2, _row(q, _corner(j2, big_k)), -jnp.inf))
-        out = (action.astype(jnp.int8), new.x, explore) + ((new.y, new.theta) if pose else (None, None))
+        new, info = worlds.step(env, state, action, 2.0 * u[1:] - 1.0, params)
+        j2 = cells.positions(new, params)
+        mask2 = cells.mask(j2, params, config.action_set)
+        future = jnp.max(jnp.where(mask2, _row(q, cells.cell(new, j2, params)), -jnp.inf))
+        x, y, theta = worlds.pose(env, new, params)
+        out = (action.astype(jnp.int8), x, explore) + ((y, theta) if pose else (None, None))
+        out += (worlds.trace(env, new, info, params) if trace else None,)
         return new, _Pending(s, action, info.progress + gamma * future), out
 
     def learn(q, opt_state, pending):
@@ -350,13 +335,19 @@ def _train_one(key: Array, params: EnvParams, config: QConfig, pose: bool = Fals
         return (state, q, opt_state, pending), out
 
     steps = config.steps
-    # One draw for the whole run: column 0 drives the agent, column 1 is the env's noise Y.
-    inputs = (jnp.arange(steps), uniforms(k_run, (steps, 2), dtype))
+    # One draw for the whole run: column 0 drives the agent, the others are the world's noise
+    # Y, one per swimmer.
+    inputs = (jnp.arange(steps), uniforms(k_run, (steps, 1 + env.n_swimmers), dtype))
     nothing = _Pending(jnp.int32(-1), jnp.int32(0), jnp.zeros((), dtype))
     carry = (state, q, opt.init(q), nothing)
-    (_, q, opt_state, pending), (acts, x, explored, y, theta) = jax.lax.scan(body, carry, inputs)
+    (_, q, opt_state, pending), (acts, x, explored, y, theta, tr) = jax.lax.scan(body, carry, inputs)
     q, _ = learn(q, opt_state, pending)
-    return QRun(acts, x, explored, q, positions(state, big_k), y, theta)
+    return QRun(acts, x, explored, q, cells.positions(state, params), y, theta, tr)
+
+
+def _paper(params: EnvParams) -> Cells:
+    """The discretiser of the paper's world of ``params``."""
+    return worlds.PaperCells(SwimmerWorld(params.model, _k(params), bool(getattr(params, "diagonal", False))))
 
 
 @functools.lru_cache(maxsize=1)
@@ -397,7 +388,7 @@ def train(key: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool
     QRun
         Per-step actions, X and exploration flags; final Q-table; initial levels.
     """
-    return _jitted("one")(key, params, config, pose)
+    return _jitted("one")(key, params, config, pose, _paper(params))
 
 
 def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool = False) -> QRun:
@@ -427,21 +418,52 @@ def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig(), pos
     4 n_dof`` bytes per learner in float32 (1,304 at 200 steps for the two-DOF swimmers); bound
     it for large populations by training in chunks, as :func:`study` does.
     """
-    from jswim import sharding
-
     n = keys.shape[0]
-    fn = functools.partial(_jitted("batch"), config=config, pose=pose)
+    fn = functools.partial(_jitted("batch"), config=config, pose=pose, cells=_paper(params))
     return sharding.apply_batched(fn, (), (keys, batch_params(params, n)), n)
 
 
-def _batch(keys: Array, params: EnvParams, config: QConfig, pose: bool = False) -> QRun:
-    return jax.vmap(lambda k, p: _train_one(k, p, config, pose))(keys, params)
+def train_env(env: Environment, keys: Array, params: Any, config: QConfig = QConfig(), *, params_axes: Any = None,
+              cells: Cells | None = None, pose: bool = False, trace: bool = False) -> QRun:
+    """Train independent Q-learners, one per key, in any world of the protocol (e.g. from
+    :func:`jswim.make`), in one jitted call vmapped over learners.
+
+    Parameters
+    ----------
+    env : Environment
+        The world (static).
+    keys : PRNG keys, shape (B, 2)
+    params : pytree
+        The world's params, shared, or batched along B as ``params_axes`` (``vmap``'s ``in_axes``
+        prefix, hashable: e.g. ``SceneTask(None, 0)`` for a direction per learner) says.
+    config : QConfig
+        Hyperparameters (static); ``action_set`` "shape-changing" offers the moves that change
+        the shape from the current lattice point.
+    cells : Cells, optional
+        The discretiser (default :func:`jswim.agents.worlds.cells` of ``env``).
+    pose, trace : bool
+        Also record swimmer 1's y and orientation; the world's state, observation and step info
+        (:attr:`QRun.trace`).
+
+    Returns
+    -------
+    QRun
+        Leading axis B. In the paper's world the learners of :func:`train_batch`, number for number.
+    """
+    cells = worlds.cells(env) if cells is None else cells
+    return _jitted("batch")(keys, params, config=config, pose=pose, cells=cells, trace=trace, axes=params_axes)
+
+
+def _batch(keys: Array, params: Any, config: QConfig, pose: bool = False, cells: Cells | None = None,
+           trace: bool = False, axes: Any = 0) -> QRun:
+    return jax.vmap(lambda k, p: _train_one(k, p, config, pose, cells, trace), in_axes=(0, axes))(keys, params)
 
 
 @functools.lru_cache(maxsize=2)
 def _jitted(kind: str) -> Callable[..., QRun]:
     fn = _train_one if kind == "one" else _batch
-    return jax.jit(fn, static_argnames=("config", "pose"), compiler_options=_compiler_options())
+    static = ("config", "pose", "cells", "trace") + (() if kind == "one" else ("axes",))
+    return jax.jit(fn, static_argnames=static, compiler_options=_compiler_options())
 
 
 # Per-learner parameters are per-swimmer parameters: one broadcasting rule (env owns it).

@@ -15,35 +15,44 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim.actions import check_action_set
+from jswim.agents import worlds
 from jswim.agents.defaults import default_rocs
-from jswim.agents.qlearning import _k, _pick, offered_mask, positions
-from jswim.env import EnvParams, advance, reset
+from jswim.agents.qlearning import _k, _paper, _pick
+from jswim.agents.worlds import Cells
+from jswim.env import EnvParams
+from jswim.env.base import Environment
 
 
 class RandomRun(NamedTuple):
-    """Per-run record (leading batch axis): executed actions, X after each step, start levels, and
-    the centroid y and orientation (rad) after each step."""
+    """Per-run record (leading batch axis): executed actions, X after each step (the swimmers'
+    mean x), start levels (lattice positions), and swimmer 1's y (its height above a wall) and
+    orientation (rad) after each step; ``trace`` (``trace=True``): the world's state, observation
+    and step info after each step (:class:`jswim.env.episodes.Trajectory`)."""
 
     actions: Array
     x: Array
     levels0: Array
     y: Array
     orientation: Array
+    trace: Any = None
 
 
-def _one(key: Array, params: EnvParams, steps: int, action_set: str, rocs: tuple[int, ...]) -> RandomRun:
+def _one(key: Array, params: Any, steps: int, action_set: str, rocs: tuple[int, ...] | None, cells: Cells,
+         trace: bool = False) -> RandomRun:
+    env = cells.env
     k_reset, k_run = jax.random.split(key)
-    state0 = reset(k_reset, params)
-    big_k = _k(params)
+    state0 = env.reset(k_reset, params)
 
     def body(state, u):
-        mask = offered_mask(positions(state, big_k), params.model, action_set, rocs, big_k)
+        mask = cells.mask(cells.positions(state, params), params, action_set, rocs)
         action = _pick(mask, u[0])
-        state, _ = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
-        return state, (action, state.x, state.y, state.theta)
+        state, info = worlds.step(env, state, action, 2.0 * u[1:] - 1.0, params)
+        x, y, theta = worlds.pose(env, state, params)
+        return state, (action, x, y, theta, worlds.trace(env, state, info, params) if trace else None)
 
-    _, (acts, xs, ys, thetas) = jax.lax.scan(body, state0, jax.random.uniform(k_run, (steps, 2)))
-    return RandomRun(acts, xs, positions(state0, big_k), ys, thetas)
+    u = jax.random.uniform(k_run, (steps, 1 + env.n_swimmers))
+    _, (acts, xs, ys, thetas, tr) = jax.lax.scan(body, state0, u)
+    return RandomRun(acts, xs, cells.positions(state0, params), ys, thetas, tr)
 
 
 def run_batch(
@@ -67,46 +76,27 @@ def run_batch(
     """
     check_action_set(action_set)
     rocs = tuple(default_rocs(params.model, _k(params)) if rocs is None else rocs)
-    return _jitted(bool(jnp.ndim(params.zeta) > 0))(keys, params, steps, action_set, rocs)
+    axes = 0 if jnp.ndim(params.zeta) > 0 else None
+    return _jitted(keys, params, steps, action_set, rocs, _paper(params), False, axes)
 
 
-@functools.lru_cache(maxsize=None)
-def _jitted(batched: bool):
-    # One jitted function per batching mode: a new jax.jit object per call would compile again
-    # at every call (about 2 s for a study's random-policy batch).
-    fn = jax.vmap(_one, in_axes=(0, 0 if batched else None, None, None, None))
-    return jax.jit(fn, static_argnums=(2, 3, 4))
+def run_env(env: Environment, params: Any, keys: Array, steps: int, action_set: str = "all", *,
+            rocs: tuple[int, ...] | None = None, params_axes: Any = None, cells: Cells | None = None,
+            trace: bool = False) -> RandomRun:
+    """The random policy in any world of the protocol (:class:`jswim.env.base.Environment`, e.g.
+    from :func:`jswim.make`): every step a uniformly random code among those offered
+    (``action_set``, ``rocs``: by default every ROC, the swimmer's own in the paper's world), one
+    run per key, one scan vmapped over runs. ``params`` are shared, or batched along the runs as
+    ``params_axes`` (hashable) says; ``cells`` the world's discretiser
+    (:func:`jswim.agents.worlds.cells`), whose lattice point says which moves change the shape.
+    In the paper's world the runs of :func:`run_batch`, number for number."""
+    check_action_set(action_set)
+    cells = worlds.cells(env) if cells is None else cells
+    return _jitted(keys, params, steps, action_set, None if rocs is None else tuple(rocs), cells, trace, params_axes)
 
 
-class WorldRun(NamedTuple):
-    """Per-step record of :func:`run_env` (leading axes: runs, steps): the action codes, the
-    reward, and each swimmer's position ``(S, 2)`` after the step."""
-
-    actions: Array
-    progress: Array
-    position: Array
-
-
-def run_env(env: Any, params: Any, keys: Array, steps: int) -> WorldRun:
-    """The random policy in any world of the protocol (:class:`jswim.env.base.Environment`):
-    every step a uniformly random integer code of ``env.action_space(params)``, one run per key,
-    one scan vmapped over runs (``params`` shared)."""
-    return _run_env(env, params, keys, steps)
-
-
-@functools.partial(jax.jit, static_argnums=(0, 3))
-def _run_env(env: Any, params: Any, keys: Array, steps: int) -> WorldRun:
-    space = env.action_space(params)
-
-    def one(key: Array) -> WorldRun:
-        k_reset, k_run = jax.random.split(key)
-
-        def body(state, k):
-            k_act, k_step = jax.random.split(k)
-            action = space.sample(k_act)
-            state, info = env.step(k_step, state, action, params)
-            return state, WorldRun(action, info.progress, env.observe(state, params).position)
-
-        return jax.lax.scan(body, env.reset(k_reset, params), jax.random.split(k_run, steps))[1]
-
-    return jax.vmap(one)(keys)
+@functools.partial(jax.jit, static_argnums=(2, 3, 4, 5, 6, 7))
+def _jitted(keys: Array, params: Any, steps: int, action_set: str, rocs: Any, cells: Cells, trace: bool,
+            axes: Any) -> RandomRun:
+    return jax.vmap(_one, in_axes=(0, axes, None, None, None, None, None))(keys, params, steps, action_set, rocs,
+                                                                          cells, trace)

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 from typing import Callable, Iterable
 
 from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
-from jswim.agents import scene_env
 from jswim.agents.defaults import paper_init
 from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.agents.protocol import derived_seed
@@ -28,6 +27,7 @@ from jswim.env import all_inits
 from jswim.errors import ConfigError, check_zeta
 from jswim.judging.gait import PAPER
 from jswim.prompt import SENTENCES
+from jswim.scenes import Scene
 from jswim.swimmers.models import SWIMMERS, make_model
 
 AGENTS = ("llm", "qlearning", "random")
@@ -189,7 +189,7 @@ class Plan:
     prompt_file: str | None = None  # LLM prompt template of a --prompt-files sweep (None: the study's)
     roc_levels: int = 1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
     sample: int = 0  # which independent repeat of this very setting (--samples; 0: the run itself)
-    scene: str = ""  # canonical JSON of the run's Scene (jswim.agents.scene_env.canonical); "": the bulk fluid
+    scene: str = ""  # canonical JSON of the run's Scene (:func:`scene_json`); "": the bulk fluid
     pair_prompt: str = "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
 
 
@@ -335,16 +335,21 @@ SPECS: dict[str, StudySpec] = {
 }
 
 
+def scene_json(scene: Scene) -> str:
+    """A scene as canonical JSON (``Scene.to_dict()``, sorted keys): the form plans and run ids carry."""
+    return json.dumps(scene.to_dict(), sort_keys=True)
+
+
 def wall_scene(h: float) -> str:
-    return scene_env.canonical(scene_env.Scene(medium="wall", height=float(h), swimmers=1))
+    return scene_json(Scene(medium="wall", height=float(h), swimmers=1))
 
 
 def pair_scene(d: float | None = None) -> str:
     """Two coaxial swimmers ``d`` apart in the unbounded fluid of the point-force solve; ``None``:
     one swimmer alone there."""
     if d is None:
-        return scene_env.canonical(scene_env.Scene(medium="free", swimmers=1))
-    return scene_env.canonical(scene_env.Scene(medium="free", swimmers=2, separation=float(d)))
+        return scene_json(Scene(medium="free", swimmers=1))
+    return scene_json(Scene(medium="free", swimmers=2, separation=float(d)))
 
 
 def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
@@ -381,7 +386,7 @@ def purcell_wall_cells(o: StudyOptions) -> list[Cell]:
 
 def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
     """The continuous RL baseline's cell next to the other agents of a group (same group name,
-    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scene_ppo`)."""
+    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scenes`)."""
     if not continuous_agent_available():
         return []
     return [Cell(group, (CONTINUOUS_AGENT,), scene=scene, roc_levels=0, tag=tag)]

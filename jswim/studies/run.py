@@ -57,6 +57,7 @@ from jswim.llm.urls import is_local_host
 from jswim.llm.usage import PRICES_AS_OF, UsageTotals, cap_refusal
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
+from jswim.scenes import Scene
 from jswim.results import StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
 from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTINUOUS_AGENT, SPECS, SWIM_VARIANT, Plan,
                                  StudyOptions, build)
@@ -120,11 +121,7 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         from jswim.studies import purcell_wall  # lazy: start-up (scene studies only)
 
         return purcell_wall.run_baselines(plans, horizon)
-    if p0.scene and p0.agent == CONTINUOUS_AGENT:  # walls and pairs (issue 19): PPO on the scene
-        from jswim.studies import scene_ppo  # lazy: start-up (optax and the PPO module, for PPO runs only)
-
-        return scene_ppo.run_all(plans, horizon)
-    if p0.scene:  # the stroke and the other baselines on the scene
+    if p0.scene:  # walls and pairs (issue 19): the stroke and the baselines on the scene
         from jswim.studies import scenes  # lazy: start-up (the scene baselines' module, for scene studies only)
 
         return scenes.run_baselines(plans, horizon)
@@ -383,10 +380,8 @@ def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
     scenes = sorted({(p.scene, p.pair_prompt) for p in plans if p.scene})
     if not scenes:
         return []
-    from jswim.agents import scene_env
-
     ppo = any(p.scene and p.agent == CONTINUOUS_AGENT for p in plans)
-    return fidelity.scene_extensions([(scene_env.from_json(s), pair) for s, pair in scenes], ppo=ppo)
+    return fidelity.scene_extensions([(Scene.from_dict(json.loads(s)), pair) for s, pair in scenes], ppo=ppo)
 
 
 class FolderRepaired(JswimWarning):

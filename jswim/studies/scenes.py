@@ -3,8 +3,7 @@
 ``wall``
     One NG swimmer started at each height ``h`` of ``--heights`` (a, the middle sphere's height
     above a no-slip wall; medium ``"wall"``): the signature square stroke (agent ``stroke``), the
-    LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs,
-    :mod:`jswim.studies.scene_ppo`). Measured: the stroke's
+    LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs). Measured: the stroke's
     displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
     same solver, medium ``"free"``: group ``free``), and every run's **fate** (:func:`fate`).
 ``pair``
@@ -17,21 +16,35 @@
 
 Runs, rows, resume, figures, ``show`` and ``compare`` are the study folder's
 (:mod:`jswim.studies.run`); this module gives the cells, runs the baselines and the stroke on a
-scene, and adds the scene's columns to each row.
+scene (the agents that take any world: :mod:`jswim.agents.worlds`, ``random_policy.run_env``,
+``qlearning.train_env``, ``ppo.train_env``, on a :class:`~jswim.env.scene_world.SceneWorld`), and
+adds the scene's columns to each row.
+
+PPO's rows (agent ``ppo``, an extension): the continuous study's learner (same network,
+:class:`~jswim.agents.ppo.PPOConfig` and temperature) with the other scene agents' task and budget
+(``--steps``, ``--q-runs`` learners per cell and direction, ``--noise`` the scene's); it moves one
+arm of one swimmer per step by a real ROC (for a pair it steers both). Success is the study's
+criterion in its real-valued form (:func:`jswim.agents.ppo.evaluate_scene`: the shape judge on
+each swimmer's own moves, with the bulk swimmer's noiseless displacements; a pair succeeds when
+both swimmers' own move sequences do); wall runs get their fate from the heights and contacts the
+training run recorded; the moves are ``[dof, real ROC]``.
 """
 
 from __future__ import annotations
 
+import json
 from typing import Any, Sequence
 
 import jax
 import numpy as np
 
 from jswim import env
-from jswim.agents import scene_baselines, scene_env
+from jswim.agents import qlearning, random_policy, worlds
 from jswim.agents.qlearning import QConfig
+from jswim.env.scene_world import ARMS, SceneTask, SceneWorld
 from jswim.judging.gait import Criterion, judge
-from jswim.studies.grids import STROKE_AGENT, Plan
+from jswim.scenes import Scene, scene_params
+from jswim.studies.grids import CONTINUOUS_AGENT, STROKE_AGENT, Plan
 from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
 #: The NG square stroke toward +x from the paper's start (10, 6), as joint codes of swimmer 1:
@@ -88,7 +101,7 @@ def stroke_codes(variant: str, direction: int, steps: int, swimmers: int) -> np.
     if swimmers == 1:
         return np.array([sq[t % 4] for t in range(steps)], np.int32)
     ph = int(variant.removeprefix("phase"))
-    b = [c + 3 * scene_env.ARMS for c in sq]
+    b = [c + 3 * ARMS for c in sq]
     seq = [b[j] for j in range(ph)]
     j = 0
     while len(seq) < steps:
@@ -131,9 +144,24 @@ def _keys(plans: Sequence[Plan]) -> jax.Array:
     return jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
 
 
-def _params(plan: Plan) -> Any:
-    scene = scene_env.from_json(plan.scene)
-    return scene, scene_env.scene_params(plan.swimmer, scene, zeta=plan.zeta, init=scene_env.start_levels(plan.init))
+def scene_of(plan: Plan) -> Scene:
+    """The :class:`jswim.scenes.Scene` of a plan (its canonical JSON)."""
+    return Scene.from_dict(json.loads(plan.scene))
+
+
+def _world(plan: Plan) -> tuple[Scene, SceneWorld, SceneTask]:
+    """A plan's scene, its world and the world's params (toward +x; the runs set their own)."""
+    scene = scene_of(plan)
+    init = plan.init if isinstance(plan.init, (tuple, list)) and all(v in (0, 1) for v in plan.init) else None
+    params = scene_params(plan.swimmer, scene, zeta=plan.zeta, init=None if init is None else tuple(init))
+    return scene, SceneWorld(scene, params.roc_levels), SceneTask(params, 1.0)
+
+
+def _start(world: SceneWorld, task: SceneTask) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each swimmer's start x, height (its middle sphere's) and tilt ``(S,)``."""
+    state = world.reset(jax.random.PRNGKey(0), task)
+    x0 = world.observe(state, task).position[:, 0]
+    return tuple(np.asarray(v, np.float64) for v in (x0, state.centre[:, 1], state.tilt))
 
 
 def by_start(plans: Sequence[Plan], horizon: int, run_group: Any) -> list[dict[str, Any]]:
@@ -148,42 +176,58 @@ def by_start(plans: Sequence[Plan], horizon: int, run_group: Any) -> list[dict[s
 
 
 def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """The stroke, random or Q-learning runs of one (agent, scene, zeta, action set, variant) group
-    (in sub-batches by start; the continuous RL baseline's: :func:`jswim.studies.scene_ppo.run_all`)."""
+    """The stroke, random, Q-learning or PPO runs of one (agent, scene, zeta, action set, variant)
+    group (in sub-batches by start)."""
     return by_start(plans, horizon, _run_group)
 
 
 def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     p0 = plans[0]
-    scene, params = _params(p0)
+    scene, world, task = _world(p0)
     keys = _keys(plans)
-    direction = np.array([p.direction for p in plans], np.float64)
+    task = task._replace(direction=np.array([p.direction for p in plans], np.float64))
+    axes = SceneTask(None, 0)  # the scene shared, a direction per run
+    judged, moves = [None] * len(plans), [None] * len(plans)
     if p0.agent == STROKE_AGENT:
         codes = np.stack([stroke_codes(p.variant, p.direction, p.steps, scene.swimmers) for p in plans])
-        run = scene_baselines.stroke(params, codes, keys)
+        tr = worlds.play(world, task, keys, codes, params_axes=axes)
     elif p0.agent == "random":
-        run = scene_baselines.random_runs(params, keys, p0.steps, p0.action_set)
+        run = random_policy.run_env(world, task, keys, p0.steps, p0.action_set, params_axes=axes, trace=True)
+        codes, tr = np.asarray(run.actions), run.trace
+    elif p0.agent == CONTINUOUS_AGENT:
+        from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
+
+        run = ppo.train_env(world, keys, task, ppo.PPOConfig(steps=p0.steps), params_axes=axes, trace=True)
+        rep = ppo.evaluate(run, task, criterion=Criterion(horizon=horizon))
+        codes, tr = np.zeros((len(plans), 0), np.int64), run.trace
+        dof, rocs = np.asarray(run.dof, np.int64), np.asarray(run.actions, np.float64)
+        for i in range(len(plans)):
+            moves[i] = [[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])]
+            judged[i] = {"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
+                         "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
+                         # a pair's period is 0, as the lattice judge of the pair rows gives it
+                         "period": int(rep.period[i]) if scene.swimmers == 1 else 0}
     else:
-        run = scene_baselines.qlearning_runs(params, keys, p0.steps, direction, wall=scene_env.has_wall(scene),
-                                             action_set=p0.action_set, config=QConfig(steps=p0.steps))
-    _, obs0 = scene_env.start(params, 1)
-    o0 = scene_env.as_numpy(obs0)
-    xs = run.xs - o0["xs"][0]
+        config = QConfig(steps=p0.steps, action_set=p0.action_set)
+        run = qlearning.train_env(world, keys, task, config, params_axes=axes, trace=True)
+        codes, tr = np.asarray(run.actions), run.trace
+    x0, z0, tilt0 = _start(world, task)
+    xs = np.asarray(tr.obs.position[..., 0], np.float64) - x0
+    heights, tilts = (np.asarray(v, np.float64) for v in (tr.state.centre[..., 1], tr.state.tilt))
+    stuck, contact = (np.asarray(v, bool).reshape(xs.shape[:2] + (-1,)).any(-1) for v in (tr.info.stuck, tr.info.contact))
     rows = []
     for i, p in enumerate(plans):
-        extra = {"xs": xs[i].tolist(), "heights": run.z[i].tolist(), "tilts": run.tilt[i].tolist(),
-                 "contact": run.contact[i].tolist(), "stuck": run.stuck[i].tolist()}
-        rows.append(scene_row(p, run.actions[i].tolist(), xs[i].mean(axis=-1).tolist(), extra, horizon,
-                              z0=o0["z"][0], tilt0=o0["tilt"][0]))
+        extra = {"xs": xs[i].tolist(), "heights": heights[i].tolist(), "tilts": tilts[i].tolist(),
+                 "contact": contact[i].tolist(), "stuck": stuck[i].tolist()}
+        rows.append(scene_row(p, [int(c) for c in codes[i]], xs[i].mean(axis=-1).tolist(), extra, horizon, z0=z0,
+                              tilt0=tilt0, judged=judged[i], moves=moves[i]))
     return rows
 
 
 def llm_row(plan: Plan, result: Any, horizon: int, extra: dict[str, Any]) -> dict[str, Any]:
     """The row of a finished LLM run on a scene (``extra``: its as_row fields)."""
-    _, params = _params(plan)
-    _, obs0 = scene_env.start(params, 1)
-    o0 = scene_env.as_numpy(obs0)
-    return scene_row(plan, list(result.actions), list(result.x), extra, horizon, z0=o0["z"][0], tilt0=o0["tilt"][0])
+    _, z0, tilt0 = _start(*_world(plan)[1:])
+    return scene_row(plan, list(result.actions), list(result.x), extra, horizon, z0=z0, tilt0=tilt0)
 
 
 def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dict[str, Any]:
@@ -194,7 +238,7 @@ def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dic
     codes = np.asarray(codes, np.int64)
     per = []
     for s in range(swimmers):
-        own = codes[(codes // 3) // scene_env.ARMS == s] - 3 * scene_env.ARMS * s
+        own = codes[(codes // 3) // ARMS == s] - 3 * ARMS * s
         if own.size < 4:
             per.append(None)
             continue
@@ -217,14 +261,15 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
     ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for
     strokes, ``per_cycle``. ``y`` and ``orientation`` of the trajectories table are swimmer 1's
     height and tilt."""
-    scene = scene_env.from_json(plan.scene)
+    scene = scene_of(plan)
+    wall = scene.medium == "wall"
     sw = scene.swimmers
     heights = extra.get("heights") or []
     contact = extra.get("contact") or []
     prog = np.diff(np.concatenate([[0.0], np.asarray(x, np.float64)])) * plan.direction
     judged = _judge(codes, plan, sw, horizon) if judged is None else judged
     h1 = [float(h[0]) for h in heights]
-    f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in contact]) if scene_env.has_wall(scene) else (None, None)
+    f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in contact]) if wall else (None, None)
     row = {
         "run_id": plan.run_id, "agent": plan.agent, "swimmer": plan.swimmer, "direction": plan.direction,
         "init": "".join("+" if v > 0 else "-" for v in plan.init) if not isinstance(plan.init, str) else plan.init,
@@ -233,7 +278,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
         "final_x": x[-1] if x else 0.0, "signed_final_x": plan.direction * (x[-1] if x else 0.0),
         **judged, "roc_levels": plan.roc_levels,
         "scene": plan.scene, "medium": scene.medium, "n_swimmers": sw,
-        "start_height": float(z0[0]) if scene_env.has_wall(scene) else None,
+        "start_height": float(z0[0]) if wall else None,
         "separation": float(scene.separation) if sw > 1 else None,
         "fate": f, "mean_height": mean_h,
         "speed": late_speed(x, plan.direction, sw),

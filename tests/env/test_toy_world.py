@@ -87,10 +87,10 @@ def test_toy_world_rollouts_follow_the_area_rule(float32):
 @pytest.mark.slow
 def test_agents_take_the_toy_world(float32):
     env, params = ToyWorld(), ToyParams()
-    run = random_policy.run_env(env, params, jax.random.split(jax.random.PRNGKey(0), 8), 40)
+    run = random_policy.run_env(env, params, jax.random.split(jax.random.PRNGKey(0), 8), 40, trace=True)
     assert run.actions.shape == (8, 40) and set(np.unique(run.actions).tolist()) <= set(range(6))
     # Each step's reward is the position's change (the toy has no noise here).
-    np.testing.assert_allclose(np.cumsum(run.progress, 1), run.position[..., 0, 0], atol=1e-5)
+    np.testing.assert_allclose(np.cumsum(run.trace.info.progress, 1), run.trace.obs.position[..., 0, 0], atol=1e-5)
     trained = ppo.train_env(env, jax.random.split(jax.random.PRNGKey(1), 2), params, ppo.PPOConfig(steps=64))
     assert trained.x.shape == (2, 64) and trained.dofs.shape == (2, 64, 2)
     np.testing.assert_allclose(np.cumsum(trained.progress, 1), trained.x, atol=1e-5)

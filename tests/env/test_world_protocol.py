@@ -219,8 +219,6 @@ def test_old_names_import_from_their_old_places():
         # moved by issue 30's import clean-up, still importable where they were
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
         "jswim.studies.scenes": ["wall_scene", "pair_scene", "cells", "run_baselines", "fate", "scene_row"],
-        "jswim.studies.scene_ppo": ["run"],
-        "jswim.agents.ppo_envs": ["BulkEnv", "SceneEnv", "SceneTask", "scaled"],
     }.items():
         mod = importlib.import_module(module)
         for name in names:

@@ -11,7 +11,12 @@ import numpy as np
 import pytest
 
 from jswim import cli
-from jswim.agents import scene_baselines, scene_env
+import jax.numpy as jnp
+
+from jswim.agents import qlearning, scene_env, worlds
+from jswim.env.scene_world import SceneTask, SceneWorld
+from jswim.env.worlds import make
+from jswim.scenes import Scene, scene_params
 from jswim.prompt import (DEFAULT_TEMPLATE, Action, HistoryRecord, PromptConfig, SceneView, SwimmerText,
                           allowed_actions, parse_reply, render_prompt, render_record, scene_template)
 from jswim.results import read_metadata, read_runs
@@ -135,28 +140,42 @@ def test_joint_decode_matches_the_scene_codes():
     assert sw.tolist() == [0, 0, 1, 1] and dof.tolist() == [0, 1, 0, 1] and roc.tolist() == [-1, 1, -1, 1]
 
 
+def test_scene_discretisers_are_the_joint_corner_and_the_height_bin():
+    # A pair's 16 joint corners (bit i: arm i long); with a wall, times 7 height bins of swimmer 1.
+    pair, pair_task = make("ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0))  # both (10, 6)
+    cells = worlds.cells(pair)
+    state = pair.reset(None, pair_task)
+    j = cells.positions(state, pair_task)
+    assert cells.n_cells == 16 and j.tolist() == [1, 0, 1, 0] and int(cells.cell(state, j, pair_task)) == 5
+    wall, wall_task = make("ng", Scene(medium="wall", height=5.0), init=(0, 1))
+    cells = worlds.cells(wall)
+    assert isinstance(cells, worlds.WallCells) and cells.n_cells == 4 * (len(worlds.HEIGHT_EDGES) + 1)
+    state = wall.reset(None, wall_task)
+    assert int(cells.cell(state, cells.positions(state, wall_task), wall_task)) == 2 * 7 + 2  # 5 a: bin (3.5, 6]
+    # Shape-changing moves of a pair at (long, short, short, long): D1 -1, D2 +1, D3 +1, D4 -1.
+    mask = worlds.cells(pair).mask(jnp.array([1, 0, 0, 1]), pair_task, "shape-changing")
+    assert np.flatnonzero(mask).tolist() == [0, 5, 8, 9]
+
+
 @pytest.mark.slow  # compiles joint-state Q-learning on a pair scene (23 s under load 8)
 def test_q_learning_joint_state_shapes():
-    assert scene_baselines.n_states(2, False) == 16
-    assert scene_baselines.n_states(1, True) == 4 * (len(scene_baselines.HEIGHT_EDGES) + 1)
-    d = np.array([10.0, 6.0, 6.0, 10.0])  # bits 1, 0, 0, 1
-    assert int(scene_baselines.corner_state(d, 5.0, 6.0, 10.0, False)) == 9
-    assert int(scene_baselines.corner_state(d[:2], 5.0, 6.0, 10.0, True)) == 1 * 7 + 2  # bin of 5 a: (3.5, 6]
-    sc = scene_env.Scene(medium="bulk", swimmers=2, separation=30.0)
-    params = scene_env.scene_params("ng", sc, init=(1, 0))
-    run = scene_baselines.qlearning_runs(params, jax.random.split(jax.random.PRNGKey(0), 3), 20, np.ones(3),
-                                         wall=False, action_set="shape-changing")
-    assert run.actions.shape == (3, 20) and run.xs.shape == (3, 20, 2) and run.dofs.shape == (3, 20, 4)
-    assert run.actions.max() < 12
-    assert np.allclose(run.x, run.xs.mean(axis=-1))
+    sc = Scene(medium="bulk", swimmers=2, separation=30.0)
+    world, task = make("ng", sc, init=(1, 0))
+    run = qlearning.train_env(world, jax.random.split(jax.random.PRNGKey(0), 3), task,
+                              qlearning.QConfig(steps=20, action_set="shape-changing"), trace=True)
+    assert run.actions.shape == (3, 20) and run.trace.obs.position.shape == (3, 20, 2, 2)
+    assert run.q.shape == (3, 16, 12) and np.asarray(run.actions).max() < 12
+    assert np.allclose(run.x, np.asarray(run.trace.obs.position[..., 0]).mean(axis=-1))
 
 
 @pytest.mark.slow  # compiles and trains Q-learning on a scene (20 s under load 8)
 def test_q_learning_learns_the_square_alone_in_the_bulk_scene():
-    params = scene_env.scene_params("ng", scene_env.Scene(medium="bulk"), init=(1, 0))
-    run = scene_baselines.qlearning_runs(params, jax.random.split(jax.random.PRNGKey(1), 16), 120, np.ones(16),
-                                         wall=False, action_set="shape-changing")
-    tail = run.actions[:, -8:]
+    # One untilted bulk swimmer is the paper's world for jswim.make; the scene world itself here.
+    world = SceneWorld(Scene(medium="bulk"))
+    task = SceneTask(scene_params("ng", Scene(medium="bulk"), init=(1, 0)), 1.0)
+    run = qlearning.train_env(world, jax.random.split(jax.random.PRNGKey(1), 16), task,
+                              qlearning.QConfig(steps=120, action_set="shape-changing"))
+    tail = np.asarray(run.actions)[:, -8:]
     # The +x square gait from (10, 6) as a cycle of the four shape-changing moves, in some rotation.
     cycles = {tuple(np.roll([5, 0, 3, 2], k)) for k in range(4)}
     assert sum(tuple(t[:4]) in cycles and tuple(t[4:]) == tuple(t[:4]) for t in tail) >= 12
