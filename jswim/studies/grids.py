@@ -378,7 +378,7 @@ def purcell_wall_cells(o: StudyOptions) -> list[Cell]:
     if o.roc_levels != 1:
         raise ConfigError(f"the wall study has no use for --roc-levels {o.roc_levels} (its runs use the paper's "
                           "ROCs -1, 0, 1); leave it out")
-    bulk = scene_env.canonical(scene_env.Scene(medium="bulk"))
+    bulk = scene_json(Scene(medium="bulk"))
     return [Cell("bulk", (STROKE_AGENT,), scene=bulk, stroke="square", tag="bulk")] + [
         Cell(f"h={h:g}", (STROKE_AGENT, "qlearning", "random"), scene=wall_scene(h), stroke="square", tag=f"h{h:g}")
         for h in o.heights]
