@@ -1,7 +1,8 @@
-"""The scene studies' own options (``jswim study wall`` / ``jswim study pair``) and their table.
+"""The scene studies' own options (``jswim study wall`` / ``pair`` / ``school``) and their table.
 
 Registered from :mod:`jswim.cli` with one call each: :func:`register` adds ``--heights`` to the
-wall study and ``--separations``/``--phases``/``--pair-prompt`` to the pair study; :func:`options` reads them into
+wall study, ``--separations``/``--phases``/``--pair-prompt`` to the pair study and
+``--school-sizes``/``--separations``/``--formations`` to the school study; :func:`options` reads them into
 :class:`jswim.studies.StudyOptions` keywords; :func:`print_table` prints the scene table after
 the usual summary.
 """
@@ -12,20 +13,32 @@ import argparse
 from typing import Any, Sequence
 
 #: The studies that take the options below.
-SCENE_STUDIES = ("wall", "pair")
+SCENE_STUDIES = ("wall", "pair", "school")
 
 STUDY_HELP = {
     "wall": "one NG swimmer started at several heights above a no-slip wall: the square stroke's displacement per "
             "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines",
     "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
             "offset and D, and whether an agent steering both finds a faster joint stroke",
+    "school": "schools of N NG swimmers in a line or side by side D apart, every one doing the square stroke in "
+              "turn: the school's speed against N and D, beside a lone swimmer's",
+}
+
+#: Each study's own options: (flag, StudyOptions field, parser, metavar, help).
+_OPTIONS = {
+    "school": (
+        ("--school-sizes", "school_sizes", int, "N1,N2,...", "numbers of swimmers N (default 1,2,3,4,5)"),
+        ("--separations", "separations", float, "D1,D2,...",
+         "distances D between neighbouring swimmers' centres, in sphere radii (default 30,60; a line needs D > 22)"),
+        ("--formations", "formations", str, "F1,F2", "line (one behind the other), side (side by side); default both"),
+    ),
 }
 
 
 def _numbers(kind: type) -> Any:
     def parse(text: str) -> tuple:
         try:
-            values = tuple(kind(v) for v in text.split(",") if v.strip())
+            values = tuple(kind(v.strip()) for v in text.split(",") if v.strip())
         except ValueError:
             values = ()
         if not values:  # "" or "," would otherwise fall back to the defaults silently
@@ -41,6 +54,10 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
     from jswim.agents.variants import PAIR_PROMPTS  # here: `jswim --help` imports this module, not the agents
 
     g = q.add_argument_group("scene")
+    for flag, dest, kind, metavar, text in _OPTIONS.get(name, ()):
+        g.add_argument(flag, dest=dest, type=_numbers(kind), default=None, metavar=metavar, help=text)
+    if name in _OPTIONS:
+        return
     if name == "wall":
         g.add_argument("--heights", type=_numbers(float), default=None, metavar="H1,H2,...",
                        help="starting heights of the middle sphere above the wall, in sphere radii "
@@ -59,7 +76,8 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
 
 def options(args: argparse.Namespace) -> dict[str, Any]:
     """The StudyOptions keywords of the scene options given."""
-    return {k: getattr(args, k) for k in ("heights", "separations", "phases", "pair_prompt") if getattr(args, k, None)}
+    names = ("heights", "separations", "phases", "pair_prompt", "school_sizes", "formations")
+    return {k: getattr(args, k) for k in names if getattr(args, k, None)}
 
 
 def print_table(rows: Sequence[dict[str, Any]]) -> None:
