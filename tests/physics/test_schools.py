@@ -98,12 +98,15 @@ def test_line_of_three_matches_an_independent_collinear_solve(line):
 def test_line_ends_move_alike_and_the_middle_gains(line):
     # Mirror x -> -x and reverse time: the square stroke maps to itself and the line of three to
     # itself with its ends exchanged, so the two end swimmers' displacements per cycle agree (the
-    # pair's zero relative drift is the same argument). The middle swimmer is not constrained: it
-    # feels two neighbours at D, each end one at D and one at 2D.
+    # pair's zero relative drift is the same argument). Unlike the pair's, the reversed image
+    # starts from the cycle's end, whose spacings differ from the start's by the middle's gain, so
+    # here they agree to second order in the interaction: 1.8e-5 a at D = 30 a against a gain of
+    # 1e-2, 2e-8 against 9e-4 at 60 a. The middle swimmer is not constrained: it feels two
+    # neighbours at D, each end one at D and one at 2D.
     ds, (pd, _), (disp, _) = line
     ends = disp[:, 0, 0] - disp[:, 2, 0]
     gain = disp[:, 1, 0] - disp[:, 0, 0]
-    assert np.all(np.abs(ends) < 1e-12)
+    assert np.all(np.abs(ends) < 3e-3 * np.abs(gain)) and np.all(np.diff(np.abs(ends / gain)) < 0)
     # Far apart the interactions add pair by pair (the far field is linear in each swimmer's
     # force distribution): middle minus end = delta(D) - delta(2D), delta the pair's change of
     # speed from a lone swimmer's, and the school's mean change = (2/3)(2 delta(D) + delta(2D)).
