@@ -118,6 +118,7 @@ def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) ->
                 color=str(0.1 + 0.6 * i / max(1, len(lines))), label=f"{form}, D={dist:g}")
     if alone:
         ax.axhline(float(np.mean(alone)), color="0.4", ls=":", lw=0.8, label="one swimmer alone")
+    ax.set_xticks(sorted({int(r["n_swimmers"]) for r in strokes}))
     ax.set_xlabel("swimmers N")
     ax.set_ylabel("school X/a per cycle")
     ax.legend(loc="best", fontsize=6)
