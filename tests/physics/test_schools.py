@@ -184,3 +184,19 @@ def test_red_black_sweeps_converge_to_the_coupled_solve_and_are_force_free():
             rel = np.asarray(forcefree.sphere_centres(centre, tilt, arms)) - np.asarray(centre)[:, None]
             assert np.abs(fs.sum(1)).max() < 1e-12
             assert np.abs((rel[..., 0] * fs[..., 1] - rel[..., 1] * fs[..., 0]).sum(1)).max() < 1e-11
+
+
+def test_one_and_two_swimmers_keep_their_numbers():
+    # The school code is the only code: one swimmer and a pair give the numbers they gave before
+    # it (commit 05c762b, the pair's own Python-unrolled solves), to the last bit in the free
+    # fluid (a pair alternating square cycles, 30 a apart, float64)
+    from jswim.scenes import scene_rollout
+
+    lone = scene_rollout("ng", [(1, -1), (2, -1), (1, 1), (2, 1)], Scene(medium="free"))
+    assert lone.x[-1, 0] == 0.17209143956404405
+    moves = [(s, d, k) for d, k in [(1, -1), (2, -1), (1, 1), (2, 1)] for s in (1, 2)] * 2
+    pair = scene_rollout("ng", moves, Scene(medium="free", swimmers=2, separation=30.0))
+    assert pair.x[-1].tolist() == [0.34236806285915594, 30.342368062859176]
+    wall = scene_rollout("ng", moves, Scene(medium="wall", swimmers=2, separation=30.0, height=10.0))
+    np.testing.assert_allclose(wall.x[-1], [0.3321212518703214, 30.332091498616528], atol=1e-15, rtol=0)
+    np.testing.assert_allclose(wall.tilt[-1], [-0.002504793702242466, -0.002518806917165861], atol=1e-16, rtol=0)
