@@ -19,13 +19,15 @@ STUDY_HELP = {
             "--swimmer purcell: Purcell's swimmer in a plane parallel to the wall (stroke, Q-learning, random)",
     "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
             "offset and D, and whether an agent steering both finds a faster joint stroke",
+    "school": "schools of N NG swimmers in a line or side by side D apart, every one doing the square stroke in "
+              "turn: the school's speed against N and D, beside a lone swimmer's",
 }
 
 
 def _numbers(kind: type) -> Any:
     def parse(text: str) -> tuple:
         try:
-            values = tuple(kind(v) for v in text.split(",") if v.strip())
+            values = tuple(kind(v.strip()) for v in text.split(",") if v.strip())
         except ValueError:
             values = ()
         if not values:  # "" or "," would otherwise fall back to the defaults silently
@@ -53,6 +55,14 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
                                help="how the LLM steers the pair: joint (default: one conversation, joint DOFs "
                                     "D1..D4) or each (a variant: one conversation per swimmer, taking turns, each "
                                     "shown the other's position)")),
+    ),
+    "school": (
+        ("--school-sizes", dict(type=_numbers(int), metavar="N1,N2,...", help="numbers of swimmers N (default 1,2,3,4,5)")),
+        ("--separations", dict(type=_numbers(float), metavar="D1,D2,...",
+                               help="distances D between neighbouring swimmers' centres, in sphere radii (default 30,60; "
+                                    "a line needs D > 22)")),
+        ("--formations", dict(type=_numbers(str), metavar="F1,F2",
+                              help="line (one behind the other), side (side by side); default both")),
     ),
 }
 

@@ -157,6 +157,18 @@ class Environment:
         return self.n_dof * (2 * self.roc_levels + 1)
 
     @property
+    def dof_names(self) -> tuple[str, ...]:
+        """Joint DOF names ``D1 .. D<n_dof>`` (1-based, as prompts and replies name them)."""
+        return tuple(f"D{i}" for i in range(1, self.n_dof + 1))
+
+    @property
+    def dof_swimmer(self) -> tuple[int, ...]:
+        """The swimmer (0-based) that owns each joint DOF: swimmer ``s`` owns ``n_dof / n_swimmers``
+        consecutive DOFs (a scene's swimmer ``s``: DOFs ``2s + 1, 2s + 2``)."""
+        per = self.n_dof // self.n_swimmers
+        return tuple(i // per for i in range(self.n_dof))
+
+    @property
     def default_params(self) -> Any:
         raise NotImplementedError
 

@@ -77,7 +77,7 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
                                            note=note, learn=True)}
     if study == "continuous":
         return continuous_figures(rows, note=note)
-    if study in ("wall", "pair"):  # walls and pairs (issue 19)
+    if study in ("wall", "pair", "school"):  # walls and pairs (issue 19), schools (issue 34)
         return scene_figures(study, rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).

@@ -13,10 +13,14 @@ pair
     ``pair``: the pair's displacement per cycle (both swimmers one square each; their mean x)
     against the phase offset, one line per D, with the lone swimmer's as a line and the agents'
     mean progress per 8 steps (whole runs) as markers at the right; ``pair-track``: X/a against step per agent and D.
+school
+    ``school``: the school's displacement per cycle (every swimmer one square; their mean x)
+    against N, one line per formation and D, the lone swimmer's as a line.
 """
 
 from __future__ import annotations
 
+import json
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -40,6 +44,8 @@ def scene_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
         return {}
     if study == "wall":
         return {"wall": wall_figure(rows, note), "wall-track": track_figure(rows, "start_height", note, heights=True)}
+    if study == "school":
+        return {"school": school_figure(rows, note)}
     return {"pair": pair_figure(rows, note), "pair-track": track_figure(rows, "separation", note, heights=False)}
 
 
@@ -95,6 +101,31 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     ax.set_xticks([0, 1, 2, 3, agents_at], ["0", "1", "2", "3", "agents\n(own phase)"])
     ax.set_xlabel("phase offset (quarter cycles of swimmer 2 ahead)")
     ax.set_ylabel("pair X/a per cycle")
+    ax.legend(loc="best", fontsize=6)
+    _note(fig, note)
+    return fig
+
+
+@_styled
+def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
+    fig = Figure(figsize=(COLUMN_IN, 2.4))
+    ax = fig.add_subplot()
+    strokes = [r for r in rows if r["agent"] == "stroke" and r.get("per_cycle") is not None]
+    alone = [r["direction"] * r["per_cycle"] for r in strokes if not r.get("separation")]
+    lines: dict[tuple[str, float], list[tuple[int, float]]] = {}
+    for r in strokes:
+        if r.get("separation"):
+            form = json.loads(r["scene"]).get("formation", "line")
+            lines.setdefault((form, r["separation"]), []).append((int(r["n_swimmers"]), r["direction"] * r["per_cycle"]))
+    for i, ((form, dist), pts) in enumerate(sorted(lines.items())):
+        n, v = zip(*sorted(pts + ([(1, float(np.mean(alone)))] if alone else [])))
+        ax.plot(n, v, marker="o" if form == "line" else "s", ls="-" if form == "line" else "--",
+                color=str(0.1 + 0.6 * i / max(1, len(lines))), label=f"{form}, D={dist:g}")
+    if alone:
+        ax.axhline(float(np.mean(alone)), color="0.4", ls=":", lw=0.8, label="one swimmer alone")
+    ax.set_xticks(sorted({int(r["n_swimmers"]) for r in strokes}))
+    ax.set_xlabel("swimmers N")
+    ax.set_ylabel("school X/a per cycle")
     ax.legend(loc="best", fontsize=6)
     _note(fig, note)
     return fig

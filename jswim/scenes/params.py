@@ -166,7 +166,7 @@ def scene_params(
         raise ConfigError("init='random' is not offered for scenes; give levels like (1, 1)")
     s = scene.swimmers
     arms = np.broadcast_to(model.lo + (model.hi - model.lo) * levels, (s, 2))
-    centre = np.stack([np.arange(s) * scene.separation, np.full(s, scene.height)], -1)
+    centre = scene.start_offsets() * scene.separation + np.array([0.0, scene.height])
     tilt = np.full(s, scene.tilt)
     obstacles = np.asarray(scene.obstacles, np.float64).reshape(-1, 3)
     _check_start(scene, centre, tilt, arms, obstacles, float(contact_gap))
@@ -225,9 +225,11 @@ def _check_start(scene: Scene, centre: np.ndarray, tilt: np.ndarray, arms: np.nd
         g = float(np.min(np.hypot(*(pos - o[:2]).transpose(2, 0, 1))) - 1.0 - o[2])
         if g < gap:
             raise ConfigError(f"obstacle {tuple(o.tolist())} is {g:.3g} a from a swimmer sphere at the start (needs >= {gap})")
-    if len(pos) == 2:
-        d = pos[0][:, None, :] - pos[1][None, :, :]
-        g = float(np.min(np.hypot(d[..., 0], d[..., 1])) - 2.0)
-        g = min(g, float(pos[1, :, 0].min() - pos[0, :, 0].max()) - 2.0)  # one behind the other
+    if len(pos) >= 2:
+        d = pos[:, None, :, None, :] - pos[None, :, None, :, :]  # (S, S, n, n, 2)
+        dist = np.hypot(d[..., 0], d[..., 1]).min(axis=(2, 3)) + np.diag(np.full(len(pos), np.inf))
+        g = float(dist.min()) - 2.0
+        if scene.formation == "line":  # each one wholly behind the next, not interleaved
+            g = min(g, float(np.min(pos[1:, :, 0].min(-1) - pos[:-1, :, 0].max(-1))) - 2.0)
         if g < gap:
-            raise ConfigError(f"the two swimmers' spheres start {g:.3g} a apart (needs >= {gap}); raise separation")
+            raise ConfigError(f"the swimmers' spheres start {g:.3g} a apart (needs >= {gap}); raise separation")

@@ -48,7 +48,7 @@ def parse_scene_moves(moves: Any, n_swimmers: int) -> np.ndarray:
         raise ConfigError(f"scene moves must have shape (steps, 2) or (steps, 3), got {arr.shape}")
     if arr.shape[1] == 2:
         if n_swimmers != 1:
-            raise ConfigError("a scene with two swimmers needs (swimmer, dof, roc) triples")
+            raise ConfigError("a scene with two or more swimmers needs (swimmer, dof, roc) triples")
         arr = np.concatenate([np.ones((len(arr), 1)), arr], 1)
     if not np.all(np.isfinite(arr)):
         raise ConfigError("scene moves must be finite")
@@ -142,7 +142,7 @@ def batch_starts(params: SceneParams, *, height: Any = None, tilt: Any = None, s
     t = np.broadcast_to(np.asarray(sc.tilt if tilt is None else tilt, np.float64), (b,))
     d = np.broadcast_to(np.asarray(sc.separation if separation is None else separation, np.float64), (b,))
     s = sc.swimmers
-    centre = np.stack([np.arange(s)[None, :] * d[:, None], np.broadcast_to(h[:, None], (b, s))], -1)
+    centre = sc.start_offsets()[None] * d[:, None, None] + np.stack([np.zeros(b), h], -1)[:, None, :]
     dtype = params.arms0.dtype
     return params.replace(centre0=jnp.asarray(centre, dtype), tilt0=jnp.asarray(np.repeat(t[:, None], s, 1), dtype))
 

@@ -12,8 +12,13 @@ from jswim.errors import ConfigError
 #: Media: the paper's first-order formula, the point-force solve without and with a wall.
 MEDIA = ("bulk", "free", "wall")
 
-#: Most swimmers a scene holds (coaxial along x).
-MAX_SWIMMERS = 2
+#: Most swimmers a scene holds (a school: a pair's physics, N swimmers; the cost of a step grows
+#: as N^2, see docs/scenes.md "Schools").
+MAX_SWIMMERS = 16
+
+#: How a school's swimmers are placed: ``"line"``, one behind the other on the x axis D apart;
+#: ``"side"``, side by side, D apart along z (perpendicular to their axes, in their common plane).
+FORMATIONS = ("line", "side")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -35,10 +40,10 @@ class Scene:
     tilt : float
         Initial angle of each swimmer's axis from the wall plane (positive: nose up), rad.
     swimmers : int
-        1 or 2. Two swimmers are coaxial along x: swimmer 0's middle sphere at x = 0, swimmer 1's
-        at ``x = separation`` (ahead of it, in its swimming direction).
+        1 to :data:`MAX_SWIMMERS`. Swimmer ``s`` (0-based) starts at :meth:`start_offsets` ``[s]``
+        times the separation from swimmer 0's middle sphere, all parallel to x.
     separation : float
-        D, distance between the two swimmers' middle spheres.
+        D, distance between neighbouring swimmers' middle spheres.
     obstacles : tuple of (x, z, radius)
         Fixed spheres (zero velocity, unknown force); ``"free"`` and ``"wall"`` only.
     mobility : str
@@ -48,6 +53,11 @@ class Scene:
         above the wall, Swan & Brady 2007; above the wall obstacles must then have radius 1).
         Omitted from :meth:`to_dict` when ``"point"``, so the canonical JSON of earlier scenes
         (and the run ids built from it) is unchanged.
+    formation : str
+        Where a school's swimmers start (:data:`FORMATIONS`): ``"line"`` (the default; coaxial,
+        swimmer ``s`` at ``x = s D``, ahead in the swimming direction) or ``"side"`` (side by side,
+        swimmer ``s`` at ``z = height + s D``: above a wall, each one D higher). Omitted from
+        :meth:`to_dict` when ``"line"`` (earlier scenes' JSON unchanged).
     """
 
     medium: str = "bulk"
@@ -57,6 +67,7 @@ class Scene:
     separation: float = 30.0
     obstacles: tuple[tuple[float, float, float], ...] = ()
     mobility: str = "point"
+    formation: str = "line"
 
     def __post_init__(self) -> None:
         # Normalise for hashing and equality: floats and nested tuples whatever was passed; a NumPy
@@ -92,7 +103,9 @@ class Scene:
         if not abs(self.tilt) < math.pi / 2:
             raise ConfigError(f"scene tilt must lie in (-pi/2, pi/2), got {self.tilt!r}")
         if isinstance(self.swimmers, bool) or self.swimmers not in range(1, MAX_SWIMMERS + 1):
-            raise ConfigError(f"scene swimmers must be 1 or 2, got {self.swimmers!r}")
+            raise ConfigError(f"scene swimmers must be an integer in 1..{MAX_SWIMMERS}, got {self.swimmers!r}")
+        if self.formation not in FORMATIONS:
+            raise ConfigError(f"scene formation must be one of {', '.join(FORMATIONS)}; got {self.formation!r}")
         if self.swimmers > 1 and not self.separation > 0:
             raise ConfigError(f"scene separation must be positive, got {self.separation!r}")
         if not isinstance(self.obstacles, tuple):
@@ -122,7 +135,18 @@ class Scene:
         out["obstacles"] = [list(o) for o in self.obstacles]
         if self.mobility == "point":
             del out["mobility"]  # the default: earlier scenes' JSON (and run ids) unchanged
+        if self.formation == "line":
+            del out["formation"]  # likewise
         return out
+
+    def start_offsets(self) -> Any:
+        """Each swimmer's start offset from swimmer 0 per unit separation, NumPy ``(S, 2)``
+        (``(x, z)``): ``(s, 0)`` in a line, ``(0, s)`` side by side."""
+        import numpy as np  # lazy: start-up (a Scene is built before NumPy is needed)
+
+        s = np.arange(self.swimmers, dtype=np.float64)
+        zero = np.zeros_like(s)
+        return np.stack([s, zero] if self.formation == "line" else [zero, s], -1)
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "Scene":

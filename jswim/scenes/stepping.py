@@ -32,6 +32,7 @@ from typing import Any
 
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from jswim.scenes.actions import split_action
@@ -326,8 +327,8 @@ def surface_gap(pose: Array, arms: Array, obstacles: Array, wall: bool) -> Array
     if obstacles.shape[0]:
         d = flat[:, None, :] - obstacles[None, :, :2]
         out = jnp.minimum(out, jnp.min(jnp.sqrt(jnp.sum(d * d, -1)) - 1.0 - obstacles[None, :, 2]))
-    for a in range(s):  # each pair of swimmers once (a swimmer's own spheres are held apart by its arms)
-        for b in range(a):
-            d = pos[a][:, None, :] - pos[b][None, :, :]
-            out = jnp.minimum(out, jnp.min(jnp.sqrt(jnp.sum(d * d, -1))) - 2.0)
+    if s > 1:  # each pair of swimmers once (a swimmer's own spheres are held apart by its arms)
+        a, b = np.tril_indices(s, -1)
+        d = pos[a][:, :, None, :] - pos[b][:, None, :, :]  # (pairs, n, n, 2)
+        out = jnp.minimum(out, jnp.min(jnp.sqrt(jnp.sum(d * d, -1))) - 2.0)
     return out

@@ -101,6 +101,9 @@ class StudyOptions:
     # How the LLM steers a pair (--pair-prompt): "joint" (one conversation, D1..D4) or "each" (one
     # conversation per swimmer, a variant; jswim.agents.pair_prompt). Only pair cells read it.
     pair_prompt: str = "joint"
+    # The school study's grids: the school sizes N and the formations (spacings: --separations).
+    school_sizes: tuple[int, ...] = (1, 2, 3, 4, 5)
+    formations: tuple[str, ...] = ("line", "side")
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
@@ -159,6 +162,7 @@ class StudyOptions:
         if any(p not in (0, 1, 2, 3) for p in self.phases):
             raise ConfigError(f"--phases are quarter cycles 0, 1, 2 or 3, got {','.join(map(str, self.phases))}")
         check_pair_prompt(self.pair_prompt)
+        _check_school(self.school_sizes, self.formations)
         bad = sorted(set(self.agents) - set(ALL_AGENTS))
         if bad:
             raise ConfigError(f"unknown agents {bad}; choose from {', '.join(ALL_AGENTS)}")
@@ -384,6 +388,36 @@ def purcell_wall_cells(o: StudyOptions) -> list[Cell]:
         for h in o.heights]
 
 
+def school_scene(n: int, d: float, formation: str = "line") -> str:
+    """``n`` swimmers ``d`` apart in a line or side by side, in the unbounded fluid of the
+    point-force solve (one swimmer: alone there)."""
+    if n == 1:
+        return pair_scene()
+    return scene_json(Scene(medium="free", swimmers=int(n), separation=float(d), formation=formation))
+
+
+def school_cells(o: StudyOptions) -> list[Cell]:
+    """The school study's cells: every swimmer doing the square stroke, in turn and in phase
+    (stroke ``phase0``), for each formation, spacing and size (a lone swimmer once)."""
+    out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")] if 1 in o.school_sizes else []
+    for f in o.formations:
+        for d in o.separations:
+            out += [Cell(f"{f}, D={d:g}, N={n}", (STROKE_AGENT,), scene=school_scene(n, d, f), stroke="phase0",
+                         tag=f"{f}-D{d:g}-N{n}") for n in o.school_sizes if n > 1]
+    return out
+
+
+def _check_school(sizes: tuple[int, ...], formations: tuple[str, ...]) -> None:
+    from jswim.scenes.scene import FORMATIONS, MAX_SWIMMERS  # lazy: start-up (the CLI's outline loads no scenes)
+
+    if not sizes or len(set(sizes)) != len(sizes) or any(isinstance(n, bool) or n not in range(1, MAX_SWIMMERS + 1)
+                                                           for n in sizes):
+        raise ConfigError(f"--school-sizes needs distinct swimmer counts in 1..{MAX_SWIMMERS}, got "
+                          f"{','.join(map(str, sizes))}")
+    if not formations or len(set(formations)) != len(formations) or set(formations) - set(FORMATIONS):
+        raise ConfigError(f"--formations needs distinct values of {', '.join(FORMATIONS)}, got {','.join(formations)}")
+
+
 def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
     """The continuous RL baseline's cell next to the other agents of a group (same group name,
     real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scenes`)."""
@@ -398,7 +432,7 @@ def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
             raise ConfigError(f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
                               "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
                               "[-1, 1]); leave it out")
-        return scene_cells(name, o)
+        return school_cells(o) if name == "school" else scene_cells(name, o)
     return cells
 
 
@@ -408,6 +442,9 @@ SPECS["wall"] = StudySpec(_scene_cells("wall"), runs=1, init="paper", swimmers=(
                           ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
 SPECS["pair"] = StudySpec(_scene_cells("pair"), runs=1, init="paper", swimmers=("ng",), q_runs=10,
                           ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
+# Schools (issue 34): N NG swimmers in a line or side by side, fixed strokes only.
+SPECS["school"] = StudySpec(_scene_cells("school"), runs=0, init="paper", swimmers=("ng",), q_runs=1,
+                            ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
 
 STUDIES = tuple(SPECS)
 
@@ -486,7 +523,8 @@ def _is_pair(scene: str) -> bool:
 
 
 #: The scene studies' grids as StudyOptions gives them (a changed one on another study is refused).
-_DEFAULT_GRIDS = {f.name: f.default for f in dataclasses.fields(StudyOptions) if f.name in ("heights", "separations", "phases")}
+_DEFAULT_GRIDS = {f.name: f.default for f in dataclasses.fields(StudyOptions)
+                  if f.name in ("heights", "separations", "phases", "school_sizes", "formations")}
 
 
 def build(study: str, o: StudyOptions) -> list[Plan]:
@@ -506,9 +544,11 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
         # an option a study has no use for.
         raise ConfigError(f"the {study} study has no use for --pair-prompt {o.pair_prompt} (pair_prompt: only LLM "
                           "runs on a pair of swimmers read it, as in jswim study pair with the llm agent); leave it out")
-    for name, owner in (("heights", "wall"), ("separations", "pair"), ("phases", "pair")):
-        if study != owner and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]:  # a scene grid another study would drop
-            raise ConfigError(f"the {study} study has no use for --{name} (only jswim study {owner} reads it); leave it out")
+    for name, owners in (("heights", ("wall",)), ("separations", ("pair", "school")), ("phases", ("pair",)),
+                         ("school_sizes", ("school",)), ("formations", ("school",))):
+        if study not in owners and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]:  # a scene grid another study would drop
+            flag, who = name.replace("_", "-"), " and ".join(f"jswim study {w}" for w in owners)
+            raise ConfigError(f"the {study} study has no use for --{flag} (only {who} reads it); leave it out")
     # Outside the competence study every LLM run uses one variant; its action set (if it sets
     # one) applies to the baselines too, so they are offered what the model is offered.
     variant = o.llm_variant(study)

@@ -202,7 +202,7 @@ class StudyResult:
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
 #: folder grows when they grow (and a smaller value reports the runs it names).
 GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files", "samples", "roc_levels_grid",
-             "heights", "separations", "phases")
+             "heights", "separations", "phases", "school_sizes", "formations")
 
 #: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"

@@ -40,6 +40,7 @@ blocks (:func:`rpy_entries`, :func:`rpb_entries`), consistent with these self te
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 #: Mobility of a point force's far field in units of 1 / (6 pi mu a): 6 pi a / (8 pi) = 3/4.
@@ -176,6 +177,30 @@ def pair_entries(rx: Array, zi: Array, zj: Array, wall: bool, mobility: str = "p
         gzx = gxz
     c = OSEEN_PREFACTOR
     return c * gxx, c * gxz, c * gzx, c * gzz
+
+
+def swimmer_blocks(pa: Array, pb: Array, wall: bool, mobility: str = "point", same: bool = False) -> Array:
+    """The pair blocks between two groups of swimmers' spheres, ``(A, B, n, n, 2, 2)``.
+
+    Entry ``[s, o, i, j]`` is the mobility ``[[M_xx, M_xz], [M_zx, M_zz]]`` of sphere ``i`` of
+    swimmer ``s`` of ``pa`` ``(A, n, 2)`` per force on sphere ``j`` of swimmer ``o`` of ``pb``
+    ``(B, n, 2)`` (:func:`pair_entries`, unit spheres). ``same`` (static): ``pa`` and ``pb`` are
+    one group, and a swimmer's blocks with itself are zero (its own spheres are solved with it).
+    """
+    rx = pa[:, None, :, None, 0] - pb[None, :, None, :, 0]  # (A, B, n, n)
+    zi = jnp.broadcast_to(pa[:, None, :, None, 1], rx.shape)
+    zj = jnp.broadcast_to(pb[None, :, None, :, 1], rx.shape)
+    if same:
+        own = np.eye(pa.shape[0], dtype=bool)[:, :, None, None]
+        rx, zj = jnp.where(own, 1.0, rx), jnp.where(own, zi + 1.0, zj)  # finite stand-ins, zeroed below
+    mxx, mxz, mzx, mzz = pair_entries(rx, zi, zj, wall, mobility)
+    blk = jnp.stack([jnp.stack([mxx, mxz], -1), jnp.stack([mzx, mzz], -1)], -2)
+    return jnp.where(own[..., None, None], 0.0, blk) if same else blk
+
+
+def transposed_blocks(blocks: Array) -> Array:
+    """:func:`swimmer_blocks` of ``(pb, pa)`` from that of ``(pa, pb)``: ``M_(o j, s i) = M_(s i, o j)^T``."""
+    return jnp.transpose(blocks, (1, 0, 3, 2, 5, 4))
 
 
 def oseen(rx: Array, rz: Array) -> Array:

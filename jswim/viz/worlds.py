@@ -60,7 +60,8 @@ class World:
         if self.wall:
             bits.append(f"wall, h = {self.start[0][1]:g} a")
         if self.n_swimmers > 1:
-            bits.append(f"{self.n_swimmers} swimmers, D = {self.separation:g} a")
+            side = len({round(st[0], 9) for st in self.start}) == 1  # all at one x: side by side
+            bits.append(f"{self.n_swimmers} swimmers{' side by side' if side else ''}, D = {self.separation:g} a")
         if self.obstacles:
             bits.append(f"{len(self.obstacles)} obstacle(s)")
         return ", ".join(bits)
@@ -90,9 +91,10 @@ def world_of(row: Mapping[str, Any]) -> World:
     tilt = float(sc.get("tilt", 0.0) or 0.0)
     d = float(sc.get("separation", 0.0) or 0.0)
     obstacles = tuple((float(o[0]), float(o[1]), float(o[2])) for o in sc.get("obstacles") or ())
+    side = sc.get("formation") == "side"  # a school side by side: each one D higher (else in a line, D ahead)
     return World(n_swimmers=n, wall=sc.get("medium") == "wall", obstacles=obstacles,
-                 start=tuple((k * d, h, tilt) for k in range(n)), medium=str(sc.get("medium", "bulk")),
-                 separation=d if n > 1 else None)
+                 start=tuple(((0.0, h + k * d) if side else (k * d, h)) + (tilt,) for k in range(n)),
+                 medium=str(sc.get("medium", "bulk")), separation=d if n > 1 else None)
 
 
 def per_swimmer(row: Mapping[str, Any], key: str, n: int, n_swimmers: int) -> np.ndarray | None:

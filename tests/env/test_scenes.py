@@ -59,7 +59,8 @@ def test_scene_json_round_trip_and_hash():
 
 @pytest.mark.parametrize("fields, word", [
     ({"medium": "honey"}, "medium"), ({"medium": "wall", "height": 0.5}, "height"),
-    ({"tilt": 2.0}, "tilt"), ({"swimmers": 3}, "swimmers"), ({"swimmers": 2, "separation": -1.0}, "separation"),
+    ({"tilt": 2.0}, "tilt"), ({"swimmers": 17}, "swimmers"), ({"swimmers": 0}, "swimmers"),
+    ({"formation": "circle"}, "formation"), ({"swimmers": 2, "separation": -1.0}, "separation"),
     ({"medium": "free", "obstacles": ((0, 0, -1),)}, "radius"), ({"obstacles": ((0, 30, 1),)}, "obstacles"),
     ({"height": float("nan")}, "height"),
 ])
@@ -76,6 +77,14 @@ def test_start_overlaps_refused():
         scene_params("ng", Scene(medium="wall", height=3.0, tilt=0.3))
     with pytest.raises(ConfigError, match="separation"):
         scene_params("ng", Scene(medium="free", swimmers=2, separation=15.0))
+    # schools: swimmers 2 and 3 of a line 21 a apart would touch (arms 10: a 1 a gap between
+    # spheres of radius 1), side by side 2 a apart the spheres overlap
+    with pytest.raises(ConfigError, match="separation"):
+        scene_params("ng", Scene(medium="free", swimmers=3, separation=21.0))
+    with pytest.raises(ConfigError, match="separation"):
+        scene_params("ng", Scene(medium="free", swimmers=4, separation=2.0, formation="side"))
+    ok = scene_params("ng", Scene(medium="wall", swimmers=3, separation=2.5, formation="side", height=3.0))
+    np.testing.assert_allclose(np.asarray(ok.centre0), [[0.0, 3.0], [0.0, 5.5], [0.0, 8.0]])
     with pytest.raises(ConfigError, match="ng"):
         scene_params("purcell", Scene())
     with pytest.raises(ConfigError):

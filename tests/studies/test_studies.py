@@ -27,7 +27,7 @@ def test_default_grid_sizes(study, total):
 
 def test_the_table_holds_each_study_s_defaults():
     assert set(STUDIES) == set(SPECS) == {"curves", "history", "noise", "ablation", "inits", "swim", "competence",
-                                           "temperature", "continuous", "wall", "pair"}
+                                           "temperature", "continuous", "wall", "pair", "school"}
     for study, spec in SPECS.items():
         plans = build(study, StudyOptions())
         assert {p.swimmer for p in plans} == set(spec.swimmers)
