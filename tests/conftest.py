@@ -20,8 +20,12 @@ start the embedded model. The fast tier is ``pytest -m "not slow and not model"`
 
 from __future__ import annotations
 
+import ctypes
+import gc
 import os
+import resource
 import shutil
+import sys
 import tempfile
 from pathlib import Path
 
@@ -63,14 +67,30 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.slow)
 
 
+def pytest_configure(config):
+    """With ``-n N`` and no ``--dist``: whole files to a worker (pytest-xdist's ``loadfile``), so a
+    module's module-scoped fixtures (small studies) are built once and its programs compiled once;
+    xdist's default (``load``) split such modules between the workers, which built them twice."""
+    if getattr(config.option, "dist", "no") == "load" and not any(
+            a.startswith("--dist") for a in config.invocation_params.args):
+        config.option.dist = "loadfile"
+
+
 def pytest_unconfigure(config):
     if _made_here and not os.environ.get("PYTEST_XDIST_WORKER"):
         shutil.rmtree(_ROOT, ignore_errors=True)
 
 
+def _malloc_trim() -> None:
+    try:  # glibc only: hand the heap that XLA's compiles freed back to the system
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
+
+
 @pytest.fixture(autouse=True, scope="module")
 def _fresh_jax_caches():
-    """Drop JAX's in-memory compiled programs after each module.
+    """Drop JAX's in-memory compiled programs, and figures left open, after each module.
 
     Without this the process keeps every program any earlier module compiled (the full run's
     peak resident set grew to 5.8 GB); what a later module needs again comes back from the
@@ -78,6 +98,42 @@ def _fresh_jax_caches():
     """
     yield
     jax.clear_caches()
+    plt = sys.modules.get("matplotlib.pyplot")
+    if plt is not None:
+        plt.close("all")  # pyplot keeps every figure a test made and did not close
+    gc.collect()
+    _malloc_trim()
+
+
+# -- peak resident set: one line at the end of every run, per process ------------------------------
+
+
+def _peak_rss_gb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1e6  # Linux reports KiB
+
+
+def pytest_sessionfinish(session):
+    workeroutput = getattr(session.config, "workeroutput", None)
+    if workeroutput is not None:  # an xdist worker: tell the controller its peak
+        workeroutput["peak_rss_gb"] = _peak_rss_gb()
+
+
+_worker_peaks: dict[str, float] = {}
+
+
+@pytest.hookimpl(optionalhook=True)  # pytest-xdist's hook: absent without it
+def pytest_testnodedown(node, error):
+    peak = getattr(node, "workeroutput", {}).get("peak_rss_gb")
+    if peak is not None:
+        _worker_peaks[node.gateway.id] = peak
+
+
+def pytest_terminal_summary(terminalreporter):
+    parts = [f"{w} {gb:.2f} GB" for w, gb in sorted(_worker_peaks.items())]
+    parts.append(f"this process {_peak_rss_gb():.2f} GB")
+    total = sum(_worker_peaks.values()) + _peak_rss_gb()
+    terminalreporter.write_line(f"peak resident set: {', '.join(parts)}"
+                                + (f" (together at most {total:.2f} GB)" if _worker_peaks else ""))
 
 
 @pytest.fixture

@@ -30,6 +30,7 @@ def test_swim_writes_every_file(server, tmp_path, capsys, monkeypatch):
     key = "sk-test-" + "k3y" * 12  # a key is set, so its absence from the folder means something
     monkeypatch.setenv("JSWIM_TEST_KEY", key)
     args = ["--base-url", server.url, "--model", "fake", "--api-key-env", "JSWIM_TEST_KEY"]
+    server.reset_counts()  # the module's server: count only this test's requests, in any order
     rc = cli.main(["swim", "--steps", "8", "--runs", "2", "--q-runs", "4", "--out", str(out), *args])
     assert rc == 0
     assert server.auth_headers and set(server.auth_headers) == {f"Bearer {key}"}  # it was used

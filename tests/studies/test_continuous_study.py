@@ -82,6 +82,7 @@ def test_continuous_study_end_to_end(server, tmp_path):
     assert cli.main(["compare", str(out), str(out)]) == 0
 
 
+@pytest.mark.slow  # three continuous studies end to end with every agent (12 s CPU)
 def test_interrupted_continuous_study_resumes(server, tmp_path):
     opts = StudyOptions(**TINY, agents=("llm", "qlearning", "random"))
     whole = run_study("continuous", opts, server.backend(), tmp_path / "whole", figures=False)
