@@ -102,7 +102,7 @@ def stroke_codes(variant: str, direction: int, steps: int, swimmers: int) -> np.
         return np.array([sq[t % 4] for t in range(steps)], np.int32)
     if swimmers > 2:  # a school ("phase0"): every swimmer in turn makes the same move of its square
         t = np.arange(steps)
-        return (np.asarray(sq)[(t // swimmers) % 4] + 3 * scene_env.ARMS * (t % swimmers)).astype(np.int32)
+        return (np.asarray(sq)[(t // swimmers) % 4] + 3 * ARMS * (t % swimmers)).astype(np.int32)
     ph = int(variant.removeprefix("phase"))
     b = [c + 3 * ARMS for c in sq]
     seq = [b[j] for j in range(ph)]

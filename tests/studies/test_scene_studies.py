@@ -13,7 +13,8 @@ import pytest
 from jswim import cli
 import jax.numpy as jnp
 
-from jswim.agents import qlearning, scene_env, worlds
+from jswim.agents import qlearning, worlds
+from jswim.scenes import decode_scene_action
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.worlds import make
 from jswim.scenes import Scene, scene_params
@@ -136,7 +137,7 @@ def test_stroke_codes_and_per_cycle():
 
 
 def test_joint_decode_matches_the_scene_codes():
-    sw, dof, roc = scene_env.decode(np.array([0, 5, 6, 11]))
+    sw, dof, roc = decode_scene_action(np.array([0, 5, 6, 11]))
     assert sw.tolist() == [0, 0, 1, 1] and dof.tolist() == [0, 1, 0, 1] and roc.tolist() == [-1, 1, -1, 1]
 
 
@@ -283,13 +284,3 @@ def test_interrupted_pair_study_resumes(server, tmp_path):
     key = lambda r: r["run_id"]  # noqa: E731
     assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == \
         [(r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)]
-
-
-def test_positions_are_sphere_centroids_outside_the_bulk_formula():
-    from jswim.scenes import SceneState
-
-    st = SceneState(np.array([[10.0, 6.0]]), np.array([[2.0, 5.0]]), np.array([np.pi / 3]), np.int32(0))
-    # Spheres at x_mid - d1 cos, x_mid, x_mid + d2 cos: centroid x_mid + (d2 - d1) cos(tilt) / 3.
-    spheres = 2.0 + np.array([-10.0, 0.0, 6.0]) * np.cos(np.pi / 3)
-    assert float(scene_env.centroid_x(st, "wall")[0]) == pytest.approx(spheres.mean())
-    assert float(scene_env.centroid_x(st, "bulk")[0]) == 2.0  # the paper's X as the formula moves it
