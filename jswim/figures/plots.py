@@ -102,3 +102,4 @@ def continuous_figures(rows: Sequence[Mapping[str, Any]], note: str | None = Non
         sel = [r for r in rows if r["group"] == g]
         cycles = learned_cycles(sel) if g == "K=1" else None
         figs[f"continuous-{'real' if g == 'continuous' else 'K' + g[2:]}"] = curves_figure(sel, cycles=cycles, note=note)
+    return figs
