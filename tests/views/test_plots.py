@@ -193,3 +193,14 @@ def test_temperature_figure_shows_p_steps_to_learn_with_iqr_and_k_of_n():
     for ax in (ax for ax in fig.axes if ax.get_ylabel().startswith("mean")):
         lo, hi = ax.get_ylim()
         assert hi - lo >= 0.1
+
+
+def test_continuous_figures_returns_one_grid_and_a_curve_per_lattice(monkeypatch):
+    # The study's figure selection, its drawing stubbed: the grid over K and one curves figure per group.
+    monkeypatch.setattr(plots, "grid_figure", lambda rows, key, **kw: ("grid", key))
+    monkeypatch.setattr(plots, "curves_figure", lambda rows, cycles=None, note=None: ("curves", len(rows)))
+    monkeypatch.setattr(plots, "learned_cycles", lambda rows: {})
+    rows = [{"group": g} for g in ("K=1", "K=2", "K=2", "continuous")]
+    figs = plots.study_figures("continuous", rows)
+    assert figs == {"continuous": ("grid", "group"), "continuous-K1": ("curves", 1),
+                    "continuous-K2": ("curves", 2), "continuous-real": ("curves", 1)}
