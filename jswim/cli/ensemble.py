@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
+from jswim.actions import decode_action
 from jswim.cli import base
 from jswim.console import Progress
 from jswim.errors import ConfigError, check_zeta
@@ -92,7 +93,7 @@ def main(args: argparse.Namespace) -> int:
     wall = time.perf_counter() - t0
     start_txt = "".join("+" if v else "-" for v in np.asarray(params.init)) if np.all(np.asarray(params.init) >= 0) \
         else "random"
-    moves = " ".join(f"[{a // 3 + 1}, {a % 3 - 1}]" for a in policy.actions) if policy.kind == "stroke" else ""
+    moves = " ".join("[{}, {}]".format(*decode_action(int(a))) for a in policy.actions) if policy.kind == "stroke" else ""
     print(f"{params.model.label} swimmer, {policy.label}{' ' + moves if moves else ''}, start {start_txt}, target "
           f"{'+x' if args.direction[0] > 0 else '-x'}: {args.n:,} swimmers per noise level, {args.steps} steps")
     print(ensemble.format_table(stats, args.rows))

@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jswim.actions import encode_action
 from jswim.env.episodes import rollout as world_rollout
 from jswim.env.params import make_params
 from jswim.env.swimmer_world import SwimmerWorld
@@ -68,7 +69,7 @@ def rollout(moves: np.ndarray, scene: Scene, *, key: Any = 0, zeta: float = 0.0,
     with jax.enable_x64(True):
         params = make_params(m, zeta=zeta, init=init)
         if np.all(np.isin(roc, (-1.0, 0.0, 1.0))):  # the paper's ROCs: integer codes, the exact corner table
-            acts = jnp.asarray(dof * 3 + roc + 1, jnp.int32)
+            acts = jnp.asarray(encode_action(dof + 1, roc), jnp.int32)
         else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout does)
             acts = jnp.asarray(np.eye(2)[dof.astype(int)] * roc[:, None], jnp.float64)
         t = world_rollout(SwimmerWorld(m), params, key, acts)

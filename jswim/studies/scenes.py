@@ -39,6 +39,7 @@ import jax
 import numpy as np
 
 from jswim import env
+from jswim.actions import decode_action, n_actions
 from jswim.agents import qlearning, random_policy, worlds
 from jswim.agents.qlearning import QConfig
 from jswim.env.scene_world import ARMS, SceneTask, SceneWorld
@@ -102,9 +103,9 @@ def stroke_codes(variant: str, direction: int, steps: int, swimmers: int) -> np.
         return np.array([sq[t % 4] for t in range(steps)], np.int32)
     if swimmers > 2:  # a school ("phase0"): every swimmer in turn makes the same move of its square
         t = np.arange(steps)
-        return (np.asarray(sq)[(t // swimmers) % 4] + 3 * ARMS * (t % swimmers)).astype(np.int32)
+        return (np.asarray(sq)[(t // swimmers) % 4] + n_actions(ARMS) * (t % swimmers)).astype(np.int32)
     ph = int(variant.removeprefix("phase"))
-    b = [c + 3 * ARMS for c in sq]
+    b = [c + n_actions(ARMS) for c in sq]
     seq = [b[j] for j in range(ph)]
     j = 0
     while len(seq) < steps:
@@ -241,7 +242,7 @@ def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dic
     codes = np.asarray(codes, np.int64)
     per = []
     for s in range(swimmers):
-        own = codes[(codes // 3) // ARMS == s] - 3 * ARMS * s
+        own = codes[(decode_action(codes)[0] - 1) // ARMS == s] - n_actions(ARMS) * s
         if own.size < 4:
             per.append(None)
             continue
@@ -289,7 +290,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
         "x": [float(v) for v in x],
         "y": h1 or [float(z0[0])] * len(x), "orientation": [float(t[0]) for t in extra.get("tilts") or []]
         or [float(tilt0[0])] * len(x),
-        "actions": moves if moves is not None else [[int(c) // 3 + 1, int(c) % 3 - 1] for c in codes],
+        "actions": moves if moves is not None else [list(decode_action(int(c))) for c in codes],
         "progress": [float(v) for v in prog],
         "status": "done",
     }
