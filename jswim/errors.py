@@ -34,6 +34,7 @@ one ``jswim: warning:`` line.
 from __future__ import annotations
 
 import math
+import numbers
 
 
 class JswimError(Exception):
@@ -71,6 +72,25 @@ def check_direction(direction: object) -> int:
     if isinstance(direction, bool) or direction not in (1, -1):
         raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
     return int(direction)  # type: ignore[call-overload]
+
+
+#: The one range of each study size, read by every check of it (:class:`jswim.studies.StudyOptions`,
+#: ``jswim study``, ``jswim bench``, :class:`jswim.prompt.PromptConfig`): name -> (lowest, highest).
+#: ``n_ht``: the paper sweeps 1 to 8 history records (its Fig. 3; the history study's default
+#: ``--n-hts``) and picks 3 and 6; 0 is the no-history ablation; 100 is far past the sweep (a run
+#: of the paper's 50 steps never holds more than 50 records).
+SIZE_RANGES = {"steps": (1, 10_000), "runs": (0, 100_000), "q_runs": (0, 100_000), "samples": (1, 10_000),
+               "n_ht": (0, 100)}
+
+
+def check_size(name: str, value: object, option: str | None = None) -> int:
+    """``value`` as an int if it lies in :data:`SIZE_RANGES` ``[name]``: the one check of that size,
+    whose one-line message names the command-line option (``--n-ht``, ``--q-runs``, ...; ``option``
+    for a grid of it, ``--n-hts``)."""
+    lo, hi = SIZE_RANGES[name]
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
+        raise ConfigError(f"{option or '--' + name.replace('_', '-')} must be between {lo} and {hi}, got {value!r}")
+    return int(value)
 
 
 class PositionBelowMinimumError(ConfigError):

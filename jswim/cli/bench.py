@@ -14,7 +14,7 @@ from jswim.bench.models import ModelsFile, check_unique, load_models_file, parse
 from jswim.bench.suites import SUITES
 from jswim.cli import options
 from jswim.console import LOCAL_UNPRICED, Column, plain_table, terminal_width
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_size
 from jswim.llm.reasoning import ESTIMATE_SHARE
 from jswim.llm.urls import is_local_host
 from jswim.llm.usage import price_table
@@ -67,11 +67,9 @@ def _suite(args: argparse.Namespace, mf: Any) -> Any:
     if args.suite not in suites:
         raise ConfigError(f"unknown suite {args.suite!r}; choose one of {', '.join(suites)}")
     sizes = tuple((k, getattr(args, k)) for k in ("runs", "q_runs", "steps") if getattr(args, k) is not None)
-    for k, v in sizes:
-        if v < (1 if k == "steps" else 0):
-            raise ConfigError(f"--{k.replace('_', '-')} must be >= {1 if k == 'steps' else 0}, got {v}")
-    if args.samples is not None and not 1 <= args.samples <= 10_000:
-        raise ConfigError(f"--samples must be between 1 and 10000, got {args.samples}")
+    for k, v in (*sizes, ("samples", args.samples)):
+        if v is not None:
+            check_size(k, v)
     return dataclasses.replace(suites[args.suite], sizes=sizes, samples=args.samples)
 
 

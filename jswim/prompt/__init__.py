@@ -97,7 +97,7 @@ from pathlib import Path
 from typing import Iterable, Sequence
 
 from jswim.actions import check_action_set, check_roc_levels
-from jswim.errors import ConfigError, check_direction
+from jswim.errors import ConfigError, check_direction, check_size
 from jswim.prompt.numbers import Action, encode_position, format_dof
 from jswim.prompt.reply import parse_reply  # noqa: F401  (also read from here)
 
@@ -483,8 +483,7 @@ class PromptConfig:
         object.__setattr__(self, "drop", normalize_mask(self.drop))
         if self.order not in ORDERS:
             raise ConfigError(f"order must be one of {', '.join(ORDERS)}, got {self.order!r}")
-        if self.n_ht < 0:
-            raise ConfigError(f"n_ht must be >= 0, got {self.n_ht}")
+        check_size("n_ht", self.n_ht)
         check_action_set(self.action_set)
 
     @property

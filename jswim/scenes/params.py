@@ -141,11 +141,7 @@ def scene_params(
     ConfigError (a ValueError)
         Bad swimmer, scene, zeta or start (spheres overlapping or touching the wall at the start).
     """
-    if not isinstance(scene, Scene):
-        raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
-    scene.validate()
-    if not isinstance(swimmer, str) or swimmer.lower() != "ng":
-        raise ConfigError(f"scenes hold NG three-sphere swimmers only (swimmer='ng'), got {swimmer!r}")
+    centre, tilt, arms, obstacles = check_start(swimmer, scene, init, contact_gap, **model_kwargs)
     model = make_model("ng", **model_kwargs)
     z = check_zeta(zeta)
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
@@ -154,13 +150,42 @@ def scene_params(
     nodes, sweeps = _plain_int(nodes), _plain_int(sweeps)  # a NumPy integer is the int it holds (static, hashed)
     if isinstance(nodes, bool) or not isinstance(nodes, int) or not 1 <= nodes <= 32:
         raise ConfigError(f"nodes must be an integer in 1..32, got {nodes!r}")
-    if not (isinstance(contact_gap, (int, float)) and math.isfinite(contact_gap) and contact_gap >= 0):
-        raise ConfigError(f"contact_gap must be a number >= 0, got {contact_gap!r}")
     pose_free = scene.medium == "bulk" or (scene.medium == "free" and scene.swimmers == 1 and not scene.obstacles)
     if sweeps is None and pose_free:
         sweeps = 1
     if sweeps is not None and (isinstance(sweeps, bool) or not isinstance(sweeps, int) or not 1 <= sweeps <= 64):
         raise ConfigError(f"sweeps must be an integer in 1..64, got {sweeps!r}")
+    _check_resolution(scene, centre, obstacles, np.dtype(dtype), float(model.hi))
+    as_dtype = functools.partial(jnp.asarray, dtype=dtype)
+    return SceneParams(
+        zeta=z, centre0=as_dtype(centre), tilt0=as_dtype(tilt), arms0=as_dtype(arms),
+        obstacles=as_dtype(obstacles), scene=scene, lo=float(model.lo), hi=float(model.hi),
+        roc_levels=check_roc_levels(roc_levels), nodes=nodes, sweeps=sweeps, contact_gap=float(contact_gap),
+    )
+
+
+def check_start(swimmer: str, scene: Scene, init: Sequence[int] | str | None = None,
+                contact_gap: float = CONTACT_GAP, **model_kwargs: Any) -> tuple[np.ndarray, ...]:
+    """The start of ``scene`` (the one check of it, NumPy, float64, no JAX work): each swimmer's
+    middle sphere ``(S, 2)``, tilt ``(S,)``, arms ``(S, 2)`` and the obstacles ``(O, 3)``, if no
+    sphere starts closer than ``contact_gap`` to the wall, an obstacle or another swimmer's.
+
+    :func:`scene_params` calls it; :class:`jswim.studies.StudyOptions` too, so a study's
+    ``--separations`` that would overlap its swimmers is refused before anything runs.
+
+    Raises
+    ------
+    ConfigError
+        A bad scene, swimmer or start, in one line (an overlap names the separation it needs).
+    """
+    if not isinstance(scene, Scene):
+        raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
+    scene.validate()
+    if not isinstance(swimmer, str) or swimmer.lower() != "ng":
+        raise ConfigError(f"scenes hold NG three-sphere swimmers only (swimmer='ng'), got {swimmer!r}")
+    model = make_model("ng", **model_kwargs)
+    if not (isinstance(contact_gap, (int, float)) and math.isfinite(contact_gap) and contact_gap >= 0):
+        raise ConfigError(f"contact_gap must be a number >= 0, got {contact_gap!r}")
     levels = np.asarray(parse_init(init, 2), np.float64)
     if np.any(levels < 0):
         raise ConfigError("init='random' is not offered for scenes; give levels like (1, 1)")
@@ -170,13 +195,7 @@ def scene_params(
     tilt = np.full(s, scene.tilt)
     obstacles = np.asarray(scene.obstacles, np.float64).reshape(-1, 3)
     _check_start(scene, centre, tilt, arms, obstacles, float(contact_gap))
-    _check_resolution(scene, centre, obstacles, np.dtype(dtype), float(model.hi))
-    as_dtype = functools.partial(jnp.asarray, dtype=dtype)
-    return SceneParams(
-        zeta=z, centre0=as_dtype(centre), tilt0=as_dtype(tilt), arms0=as_dtype(arms),
-        obstacles=as_dtype(obstacles), scene=scene, lo=float(model.lo), hi=float(model.hi),
-        roc_levels=check_roc_levels(roc_levels), nodes=nodes, sweeps=sweeps, contact_gap=float(contact_gap),
-    )
+    return centre, tilt, arms, obstacles
 
 
 def _plain_int(v: Any) -> Any:
@@ -231,5 +250,6 @@ def _check_start(scene: Scene, centre: np.ndarray, tilt: np.ndarray, arms: np.nd
         g = float(dist.min()) - 2.0
         if scene.formation == "line":  # each one wholly behind the next, not interleaved
             g = min(g, float(np.min(pos[1:, :, 0].min(-1) - pos[:-1, :, 0].max(-1))) - 2.0)
-        if g < gap:
-            raise ConfigError(f"the swimmers' spheres start {g:.3g} a apart (needs >= {gap}); raise separation")
+        if g < gap:  # untilted, g grows one for one with the separation: the bound
+            least = f" above {scene.separation + gap - g:.4g}" if scene.tilt == 0 else ""
+            raise ConfigError(f"the swimmers' spheres start {g:.3g} a apart (needs >= {gap}); raise separation{least}")

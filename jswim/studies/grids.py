@@ -24,10 +24,11 @@ from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
                                    variant_action_set)
 from jswim.env import all_inits
-from jswim.errors import ConfigError, check_zeta
+from jswim.errors import ConfigError, check_size, check_zeta
 from jswim.judging.gait import PAPER
 from jswim.prompt import SENTENCES
 from jswim.scenes import Scene
+from jswim.scenes.params import check_start
 from jswim.swimmers.models import SWIMMERS, make_model
 
 AGENTS = ("llm", "qlearning", "random")
@@ -111,16 +112,11 @@ class StudyOptions:
             values = getattr(self, name)
             if values is not None and len(set(values)) < len(values):
                 object.__setattr__(self, name, tuple(dict.fromkeys(values)))
-        if self.steps < 1 or self.steps > 10_000:
-            raise ConfigError(f"--steps must be between 1 and 10000, got {self.steps}")
-        for name in ("runs", "q_runs"):
-            v = getattr(self, name)
-            if v is not None and (v < 0 or v > 100_000):
-                raise ConfigError(f"--{name.replace('_', '-')} must be between 0 and 100000, got {v}")
-        if not 1 <= self.samples <= 10_000:
-            raise ConfigError(f"--samples must be between 1 and 10000, got {self.samples}")
-        if self.n_ht is not None and not 0 <= self.n_ht <= 100:
-            raise ConfigError(f"--n-ht must be between 0 and 100, got {self.n_ht}")
+        for name in ("steps", "runs", "q_runs", "samples", "n_ht"):
+            if getattr(self, name) is not None:
+                check_size(name, getattr(self, name))
+        for h in self.n_hts:
+            check_size("n_ht", h, "--n-hts")
         if self.init is not None and self.init not in INIT_CHOICES:
             raise ConfigError(f"--init must be one of {', '.join(INIT_CHOICES)}, got {self.init!r}")
         check_action_set(self.action_set)
@@ -163,6 +159,12 @@ class StudyOptions:
             raise ConfigError(f"--phases are quarter cycles 0, 1, 2 or 3, got {','.join(map(str, self.phases))}")
         check_pair_prompt(self.pair_prompt)
         _check_school(self.school_sizes, self.formations)
+        for f in self.formations if max(self.school_sizes) > 1 else ():  # a pair is a line; a school each
+            for d in self.separations:
+                try:  # the scenes' own start check: the swimmers' geometry, written once
+                    check_start("ng", Scene(medium="free", swimmers=2, separation=float(d), formation=f))
+                except ConfigError as exc:
+                    raise ConfigError(f"--separations {d:g} ({f}): {exc}") from None
         bad = sorted(set(self.agents) - set(ALL_AGENTS))
         if bad:
             raise ConfigError(f"unknown agents {bad}; choose from {', '.join(ALL_AGENTS)}")

@@ -226,3 +226,78 @@ def test_non_utf8_bytes_are_named_by_their_option_never_shown_as_surrogates(argv
     err = capsys.readouterr().err.strip()
     assert err == f"jswim: error: {named} is not valid UTF-8 text; write it in UTF-8"
     assert "udcff" not in err
+
+
+# -- one check of each value, one message wherever it is given (issue 30) ---------------------------
+
+BENCH = ["bench", "--model", "base_url=http://127.0.0.1:9/v1,model=fake", "--dry-run"]
+
+
+def one_error_line(capsys, argv: list[str], out) -> str:
+    rc = cli.main([*argv, "--out", str(out)])
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.startswith("jswim: error:")]
+    assert rc == 2 and len(lines) == 1 and "Traceback" not in err, err
+    assert not out.exists()  # refused before any folder was written
+    return lines[0].removeprefix("jswim: error: ")
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--n-ht", "-1", "--n-ht must be between 0 and 100, got -1"),
+    ("--n-ht", "101", "--n-ht must be between 0 and 100, got 101"),
+    ("--samples", "0", "--samples must be between 1 and 10000, got 0"),
+    ("--samples", "10001", "--samples must be between 1 and 10000, got 10001"),
+    ("--steps", "0", "--steps must be between 1 and 10000, got 0"),
+    ("--q-runs", "-1", "--q-runs must be between 0 and 100000, got -1"),
+])
+def test_a_size_out_of_range_is_one_message_from_study_swim_and_python(option, value, message, tmp_path, capsys):
+    field = option.removeprefix("--").replace("-", "_")
+    assert one_error_line(capsys, ["study", "curves", option, value], tmp_path / "s") == message
+    assert one_error_line(capsys, ["swim", option, value], tmp_path / "w") == message
+    with pytest.raises(ConfigError) as exc:
+        StudyOptions(**{field: int(value)})
+    assert str(exc.value) == message
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--samples", "0", "--samples must be between 1 and 10000, got 0"),
+    ("--samples", "10001", "--samples must be between 1 and 10000, got 10001"),
+    ("--steps", "0", "--steps must be between 1 and 10000, got 0"),
+    ("--steps", "10001", "--steps must be between 1 and 10000, got 10001"),
+    ("--runs", "-1", "--runs must be between 0 and 100000, got -1"),
+])
+def test_a_size_out_of_range_is_the_same_message_from_bench(option, value, message, tmp_path, capsys):
+    assert one_error_line(capsys, [*BENCH, option, value], tmp_path / "b") == message
+
+
+@pytest.mark.parametrize("n_ht", [-1, 101])
+def test_the_prompt_refuses_the_n_ht_the_study_refuses(n_ht):
+    from jswim.prompt import PromptConfig
+
+    with pytest.raises(ConfigError, match=f"^--n-ht must be between 0 and 100, got {n_ht}$"):
+        PromptConfig(n_ht=n_ht)
+    PromptConfig(n_ht=0), PromptConfig(n_ht=100)  # the ends are in range for both
+
+
+def test_an_n_ht_grid_is_checked_value_by_value(tmp_path, capsys):
+    line = one_error_line(capsys, ["study", "history", "--n-hts", "1,200"], tmp_path / "h")
+    assert line == "--n-hts must be between 0 and 100, got 200"
+
+
+@pytest.mark.parametrize("argv, least", [
+    (["study", "pair", "--separations", "20"], "22.1"),
+    (["study", "school", "--separations", "30,20"], "22.1"),
+    (["study", "school", "--separations", "1.5", "--formations", "side"], "2.1"),
+])
+def test_swimmers_that_would_overlap_are_refused_when_the_options_are_checked(argv, least, tmp_path, capsys):
+    # Arms at d_max = 10: a line needs D >= 2 * 10 + 2 radii + the contact gap 0.1; side by side, 2 + 0.1.
+    line = one_error_line(capsys, argv, tmp_path / "o")
+    assert line.startswith("--separations ") and f"raise separation above {least}" in line
+
+
+def test_separations_that_fit_pass_and_a_lone_swimmer_needs_none():
+    StudyOptions(separations=(22.2, 30.0))
+    StudyOptions(separations=(2.2,), formations=("side",))
+    StudyOptions(separations=(5.0,), school_sizes=(1,))  # nobody to overlap
+    with pytest.raises(ConfigError, match=r"^--separations 22 \(line\)"):
+        StudyOptions(separations=(22.0,))
