@@ -60,8 +60,7 @@ def main(args: argparse.Namespace) -> int:
     from jswim.studies import ensemble  # lazy: as above
 
     base.check_counts(args, "n", "steps", "every", "chunk", "rows")
-    if args.every > args.steps:
-        raise ConfigError(f"--every ({args.every}) must not exceed --steps ({args.steps})")
+    ensemble.check_every(args.every, args.steps)
     if len(args.direction) != 1:
         raise ConfigError("--direction takes +x or -x here")
     if not args.zetas:

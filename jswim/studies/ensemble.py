@@ -39,8 +39,13 @@ import numpy as np
 from jax import Array
 
 from jswim import sharding
+from jswim.actions import check_action_set
+from jswim.agents import qlearning
+from jswim.agents.defaults import default_rocs
+from jswim.agents.qlearning import _corner, _greedy_set, _offered, _pick
 from jswim.env import EnvParams, EnvState, advance, make_params, noise, seed_key, start_state
 from jswim.errors import ConfigError, check_zeta
+from jswim.judging import gait
 
 #: Swimmers per statistics block: partial sums are formed per block on the device and combined
 #: on the host in float64, in block order; chunks are multiples of it.
@@ -82,9 +87,6 @@ def stroke_policy(actions: Sequence[int], label: str = "stroke") -> Policy:
 
 def q_policy(q: Any, params: EnvParams, action_set: str = "all", label: str = "Q-policy") -> Policy:
     """The greedy policy of a Q-table (rows: corners, columns: actions); random tie-breaks."""
-    from jswim.actions import check_action_set
-    from jswim.agents.defaults import default_rocs
-
     check_action_set(action_set)
     q = np.asarray(q, np.float64)
     n = params.model.n_dof
@@ -118,8 +120,6 @@ def _seed_key(seed: int, zeta: float) -> Array:
 def _policy_action(policy: Policy, params: EnvParams, t: Array, state: EnvState, u: Array) -> Array:
     if policy.kind == "stroke":
         return jnp.asarray(policy.actions, jnp.int32)[t % len(policy.actions)]
-    from jswim.agents.qlearning import _corner, _greedy_set, _offered, _pick
-
     q = jnp.asarray(policy.q, state.x.dtype)
     row = jax.lax.dynamic_slice_in_dim(q, _corner(state.levels), 1)[0]
     mask = _offered(state.levels, params, policy.action_set)
@@ -192,6 +192,13 @@ def _run_chunk(
     return _Chunk(counts, mean, m2, xmin, xmax, fwd, hist)
 
 
+def check_every(every: int, steps: int) -> None:
+    """The one check that a report every ``every`` steps fits a run of ``steps`` (``jswim ensemble``
+    makes it before it trains a policy)."""
+    if every > steps:
+        raise ConfigError(f"--every ({every}) must not exceed --steps ({steps})")
+
+
 def run(
     policy: Policy,
     params: EnvParams,
@@ -250,8 +257,7 @@ def run(
     """
     if n < 1 or steps < 1 or every < 1 or chunk < 1 or bins < 1:
         raise ConfigError("n, steps, every, chunk and bins must be >= 1")
-    if every > steps:
-        raise ConfigError(f"every ({every}) must not exceed steps ({steps})")
+    check_every(every, steps)
     zetas = [check_zeta(z) for z in zetas]
     if not zetas:
         raise ConfigError("give at least one noise level zeta")
@@ -323,8 +329,6 @@ def _combine(parts: list, zeta: float, n: int, every: int, n_rep: int, qs: tuple
 
 def signature_policy(params: EnvParams) -> tuple[Policy, tuple[int, ...]]:
     """The best closed cycle in the target direction and its start levels."""
-    from jswim.judging import gait
-
     direction = int(np.sign(float(np.asarray(params.direction))))
     best = gait.best_cycles(params.model, direction)[0]
     return stroke_policy(best.actions, label="signature gait"), tuple(best.start)
@@ -333,8 +337,6 @@ def signature_policy(params: EnvParams) -> tuple[Policy, tuple[int, ...]]:
 def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all") -> Policy:
     """Train one Q-learner (default :class:`~jswim.agents.qlearning.QConfig`, no noise) and
     return its greedy policy."""
-    from jswim.agents import qlearning
-
     config = qlearning.QConfig(action_set=action_set)
     run_ = qlearning.train(seed_key(seed), params.replace(zeta=0.0), config)
     return q_policy(np.asarray(run_.q), params, action_set, label=f"Q-policy (seed {seed}, {action_set})")

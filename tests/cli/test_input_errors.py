@@ -301,3 +301,13 @@ def test_separations_that_fit_pass_and_a_lone_swimmer_needs_none():
     StudyOptions(separations=(5.0,), school_sizes=(1,))  # nobody to overlap
     with pytest.raises(ConfigError, match=r"^--separations 22 \(line\)"):
         StudyOptions(separations=(22.0,))
+
+
+def test_a_report_interval_longer_than_the_run_is_one_message_from_the_command_and_python(tmp_path, capsys):
+    from jswim.studies import ensemble
+
+    line = one_error_line(capsys, ["ensemble", "--n", "4", "--steps", "3", "--every", "5", "--zetas", "0"],
+                          tmp_path / "e.csv")
+    assert line == "--every (5) must not exceed --steps (3)"
+    with pytest.raises(ConfigError, match=r"^--every \(5\) must not exceed --steps \(3\)$"):
+        ensemble.run(None, None, n=4, zetas=[0.0], steps=3, every=5)
