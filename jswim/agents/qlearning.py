@@ -84,15 +84,15 @@ class QConfig:
     learning_rate : float or optax schedule
         ``alpha`` (1.0 constant). The noiseless swimmer is deterministic, so one update makes an
         entry exact given the values it bootstraps from; a smaller ``alpha`` only slows the
-        propagation of value around the stroke (NG, shape-changing moves: median 32 steps to learn
-        at 1.0, 40 at 0.5, 73 at 0.25). With noise (``zeta > 0``) pass a smaller rate, or a decaying
+        propagation of value around the stroke (NG toward +x, shape-changing moves: median 30 steps
+        to learn at 1.0, 39 at 0.5, 71 at 0.25). With noise (``zeta > 0``) pass a smaller rate, or a decaying
         optax schedule, so that estimates average over the noise.
     discount : float
         ``gamma`` (0.9). A move's worth depends on the moves after it: two of the four strokes
         of NG's cycle move the swimmer backwards, and the cycle is the optimal policy only for
         ``gamma > 0.743`` (from the exact step table). 0.9 clears that with a margin; closer to 1,
-        values take longer to settle (NG, shape-changing: median 45 steps at 0.8, 32 at 0.9, 47
-        at 0.95, 178 at 0.99).
+        values take longer to settle (NG toward +x, shape-changing: median 47 steps at 0.8, 30 at
+        0.9, 43 at 0.95, 135 at 0.99; ``benchmarks/qlearn_tables.py``).
     epsilon : float or optax schedule
         Probability of a uniformly random action from the offered set (default
         :data:`DEFAULT_EPSILON`, ``0.8**t``).

@@ -1,0 +1,41 @@
+"""The numbers the docs pages quote are jswim's: each recomputed from the code by the script that
+regenerates it (benchmarks/physics_tables.py, benchmarks/qlearn_tables.py) and compared with the
+number parsed from the page, to the page's decimals. The physics values themselves are checked
+against independent ones (closed forms, symmetries, the authors' code) in tests/physics."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _script(name: str):
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_physics_numbers_of_the_pages_are_the_code_s():
+    # square gaits, the corner MDP's discount threshold, NG's strokes (~10 s)
+    lines: list[str] = []
+    wrong = _script("physics_tables").check(fast=True, say=lines.append)
+    assert len(lines) >= 15 and not wrong, "\n".join(wrong)
+
+
+@pytest.mark.slow  # the K = 20 lattice searches and the three-DOF gait searches (~5 min on 2 shared cores)
+def test_the_searched_strokes_of_the_pages_are_the_code_s():
+    lines: list[str] = []
+    wrong = _script("physics_tables").check(fast=False, say=lines.append)
+    assert len(lines) >= 22 and not wrong, "\n".join(wrong)
+
+
+@pytest.mark.slow  # 80,000 + 7,000 Q-learners (~2 min on 2 shared cores)
+def test_the_q_learning_tables_of_the_pages_are_the_code_s():
+    lines: list[str] = []
+    wrong = _script("qlearn_tables").check(say=lines.append)
+    assert len(lines) >= 16 and not wrong, "\n".join(wrong)
