@@ -6,7 +6,7 @@ number the page gives, to the page's own decimals: a page that drifts from the c
 (``tests/e2e/test_docs_numbers.py`` runs the check). The tests under ``tests/physics`` check the
 same values against independent ones (closed forms, symmetries, the authors' code).
 
-    python benchmarks/physics_tables.py            # print every number (~5 min on 2 shared cores)
+    python benchmarks/physics_tables.py            # print every number (~6 min on 2 shared cores)
     python benchmarks/physics_tables.py --check    # exit 1 where a page says otherwise
     python benchmarks/physics_tables.py --fast     # without the K = 20 and three-DOF searches (~15 s)
 """
@@ -157,9 +157,9 @@ def quotes(fast: bool = False) -> Iterator[Quote]:
 
     for swimmer, pattern in (("nlink", r"best four-link cycle \(period 6\) moves (0\.\d+) a per step"),
                              ("nsphere", r"the\s+best four-sphere cycle (0\.\d+) a per step")):
-        yield Quote("physics.md", pattern, gait.best_cycles(env.make_params(swimmer).model, 1)[0].per_step)
-    yield Quote("physics.md", r"four-sphere swimmer agrees exactly \((0\.\d+) per cycle\)",
-                gait.best_cycles(env.make_params("nsphere").model, 1)[0].displacement)
+        best = gait.best_cycles(env.make_params(swimmer).model, 1)[0]
+        yield Quote("physics.md", pattern, best.per_step)
+    yield Quote("physics.md", r"four-sphere swimmer agrees exactly \((0\.\d+) per cycle\)", best.displacement)
     # README's and getting-started's wall example: three square cycles 5 a above a wall
     import jswim
     from jswim.env import encode_action

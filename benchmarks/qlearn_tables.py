@@ -6,7 +6,8 @@
   the median steps to learn at other learning rates and discounts.
 
 The learners are seeded (learner ``i`` gets key ``i`` of one split), so the numbers are exact
-and the same on any machine and device count; ``--check`` compares them with the pages, to the
+and the same on any machine and device count, in JAX's default float32 (a session with x64 on
+draws other uniforms, so other learners); ``--check`` compares them with the pages, to the
 pages' decimals (``tests/e2e/test_docs_numbers.py`` runs it in the slow tier).
 
     python benchmarks/qlearn_tables.py             # print both tables (~1-2 min on 2 cores)

@@ -60,7 +60,7 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
         ("--school-sizes", dict(type=_numbers(int), metavar="N1,N2,...", help="numbers of swimmers N (default 1,2,3,4,5)")),
         ("--separations", dict(type=_numbers(float), metavar="D1,D2,...",
                                help="distances D between neighbouring swimmers' centres, in sphere radii (default 30,60; "
-                                    "a line needs D > 22)")),
+                                    "one that would overlap the swimmers is refused, naming the least D)")),
         ("--formations", dict(type=_numbers(str), metavar="F1,F2",
                               help="line (one behind the other), side (side by side); default both")),
     ),
