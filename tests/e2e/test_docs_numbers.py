@@ -1,5 +1,5 @@
 """The numbers the docs pages quote are jswim's: each recomputed from the code by the script that
-regenerates it (benchmarks/physics_tables.py, benchmarks/qlearn_tables.py) and compared with the
+regenerates it (benchmarks/physics_tables.py, qlearn_tables.py, school_tables.py) and compared with the
 number parsed from the page, to the page's decimals. The physics values themselves are checked
 against independent ones (closed forms, symmetries, the authors' code) in tests/physics."""
 
@@ -40,3 +40,26 @@ def test_the_q_learning_tables_of_the_pages_are_the_code_s(float32):
     lines: list[str] = []
     wrong = _script("qlearn_tables").check(say=lines.append)
     assert len(lines) >= 16 and not wrong, "\n".join(wrong)
+
+
+def _school_table(text: str, title: str) -> tuple[list[float], dict[int, list[float]]]:
+    """A school table of scenes.md: its spacings D and, per N, the school's speed per D."""
+    import re
+
+    lines = text.split(f"| {title} |", 1)[1].split("\n\n", 1)[0].splitlines()
+    spacings = [float(d) for d in re.findall(r"D = ([\d.]+) a", lines[0])]
+    rows = {int(re.match(r"\| N = (\d+)", ln).group(1)): [float(c.split()[0]) for c in ln.strip("|").split("|")[1:]]
+            for ln in lines[2:] if ln.startswith("| N = ")}
+    return spacings, rows
+
+
+@pytest.mark.slow  # nine compilations of the N-swimmer joint step (~1 min on 2 shared cores)
+def test_the_school_tables_of_the_scenes_page_are_the_code_s():
+    schools = _script("school_tables")
+    text = (ROOT / "docs" / "scenes.md").read_text()
+    for formation, title in (("line", "line"), ("side", "side by side")):
+        spacings, rows = _school_table(text, title)
+        assert len(spacings) == 4 and len(rows) >= 4
+        for n, page in rows.items():
+            mean = schools.school_cycles(n, formation, spacings)["disp"][..., 0].mean(-1)
+            assert mean == pytest.approx(page, abs=5e-9), (formation, n)  # the page's 8 decimals
