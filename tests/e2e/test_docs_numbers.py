@@ -1,5 +1,6 @@
 """The numbers the docs pages quote are jswim's: each recomputed from the code by the script that
-regenerates it (benchmarks/physics_tables.py, qlearn_tables.py, school_tables.py) and compared with the
+regenerates it (benchmarks/physics_tables.py, qlearn_tables.py, school_tables.py,
+scene_tables.py) and compared with the
 number parsed from the page, to the page's decimals. The physics values themselves are checked
 against independent ones (closed forms, symmetries, the authors' code) in tests/physics."""
 
@@ -63,3 +64,21 @@ def test_the_school_tables_of_the_scenes_page_are_the_code_s():
         for n, page in rows.items():
             mean = schools.school_cycles(n, formation, spacings)["disp"][..., 0].mean(-1)
             assert mean == pytest.approx(page, abs=5e-9), (formation, n)  # the page's 8 decimals
+
+
+def _row(text: str, label: str) -> list[float]:
+    line = next(ln for ln in text.splitlines() if ln.startswith(f"| {label} |"))
+    return [float(c.split()[0]) for c in line.strip().strip("|").split("|")[1:]]
+
+
+@pytest.mark.slow  # a wall rollout per mobility (~1 min on 2 shared cores)
+def test_the_wall_tables_of_the_scenes_page_are_the_code_s():
+    tables = _script("scene_tables")
+    text = (ROOT / "docs" / "scenes.md").read_text()
+    page = _row(text, "X per cycle (a)")  # h = 3..50, free, bulk (the paper's formula)
+    ours = [*tables.wall_cycles("point", tables.WALL_TABLE)["x"], tables.lone_cycle("point"),
+            _script("physics_tables")._square("ng")[0]]
+    assert ours == pytest.approx(page, abs=5e-9)  # the page's 8 decimals
+    page = _row(text, "rpy, X per cycle (a)")  # h = 3..50, free
+    ours = [*tables.wall_cycles("rpy", tables.WALL_TABLE)["x"], tables.lone_cycle("rpy")]
+    assert ours == pytest.approx(page, abs=5e-9)
