@@ -93,6 +93,21 @@ def check_size(name: str, value: object, option: str | None = None) -> int:
     return int(value)
 
 
+#: Largest count a batched command accepts (``--n``, ``--seeds``, ``--steps``, ``--chunk``): swimmer
+#: and learner indices are int32 on the device, and anything larger would fail deep inside JAX or NumPy.
+MAX_COUNT = 2**31 - 1
+
+
+def check_count(name: str, value: object) -> int:
+    """``value`` as an int if it is a count in ``1..MAX_COUNT``: the one check of a batched command's
+    counts, from the command line (:func:`jswim.cli.base.check_counts`) and from Python
+    (:func:`jswim.studies.qlearn.study`); the message names the option ``--name``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not 1 <= value <= MAX_COUNT:
+        raise ConfigError(f"--{name} must be " + (f"at most {MAX_COUNT:,}" if isinstance(value, numbers.Integral)
+                                                   and value > 1 else ">= 1") + f", got {value!r}")
+    return int(value)
+
+
 class PositionBelowMinimumError(ConfigError):
     """X fell below ``X_min``, so it cannot be sent as a non-negative integer.
 

@@ -12,12 +12,9 @@ from pathlib import Path
 from typing import Any, Iterator, Sequence
 
 from jswim.console import eta as _eta_text
-from jswim.errors import ConfigError, JswimWarning
+from jswim.errors import MAX_COUNT, ConfigError, JswimWarning, check_count  # noqa: F401  (MAX_COUNT read from here)
 
 EXIT_USAGE = 2
-#: Largest count a batched command accepts (--n, --seeds, --steps, --chunk): swimmer and learner
-#: indices are int32 on the device, and anything larger would fail deep inside JAX or NumPy.
-MAX_COUNT = 2**31 - 1
 #: The swimmers a command line names.
 SWIMMERS = ("purcell", "ng", "nlink", "nsphere")
 
@@ -99,10 +96,8 @@ def check_counts(args: argparse.Namespace, *names: str) -> None:
     each given one ``>= 1`` and at most :data:`MAX_COUNT` (the device's int32 indices; else a deep
     traceback)."""
     for name in names:
-        value = getattr(args, name)
-        if value is not None and not 1 <= value <= MAX_COUNT:
-            raise ConfigError(f"--{name} must be " + (f"at most {MAX_COUNT:,}" if value > 1 else ">= 1")
-                              + f", got {value}")
+        if getattr(args, name) is not None:
+            check_count(name, getattr(args, name))
 
 
 def eta(t0: float, done: int, total: int) -> str:

@@ -17,7 +17,7 @@ from jswim import sharding
 from jswim.agents.defaults import paper_init
 from jswim.agents.qlearning import QConfig, QRun, batch_params, evaluate, train_batch
 from jswim.env import EnvParams, make_params, seed_key
-from jswim.errors import ConfigError
+from jswim.errors import check_count
 from jswim.judging.gait import PAPER, Criterion, GaitReport
 from jswim.judging.stats import learn_stats
 from jswim.swimmers.models import make_model
@@ -155,10 +155,9 @@ def study(
     Raises
     ------
     ConfigError
-        ``n_seeds`` or ``chunk`` below 1.
+        ``n_seeds`` or ``chunk`` not a count in ``1..2**31 - 1`` (:func:`jswim.errors.check_count`).
     """
-    if n_seeds < 1 or chunk < 1:
-        raise ConfigError(f"n_seeds and chunk must be >= 1, got {n_seeds} and {chunk}")
+    n_seeds, chunk = check_count("seeds", n_seeds), check_count("chunk", chunk)
     rows: list[Summary] = []
     key = seed_key(seed)
     grid = [(d, z) for d in directions for z in zetas]

@@ -311,3 +311,15 @@ def test_a_report_interval_longer_than_the_run_is_one_message_from_the_command_a
     assert line == "--every (5) must not exceed --steps (3)"
     with pytest.raises(ConfigError, match=r"^--every \(5\) must not exceed --steps \(3\)$"):
         ensemble.run(None, None, n=4, zetas=[0.0], steps=3, every=5)
+
+
+@pytest.mark.parametrize("seeds, chunk, message", [(0, 10, "--seeds must be >= 1, got 0"),
+                                                   (5, 0, "--chunk must be >= 1, got 0"),
+                                                   (2**31, 10, "--seeds must be at most 2,147,483,647, got 2147483648")])
+def test_a_count_out_of_range_is_one_message_from_qlearn_and_python(seeds, chunk, message, tmp_path, capsys):
+    from jswim.studies import qlearn
+
+    argv = ["qlearn", "--seeds", str(seeds), "--chunk", str(chunk), "--steps", "10"]
+    assert one_error_line(capsys, argv, tmp_path / "q.csv") == message
+    with pytest.raises(ConfigError, match="^" + message.replace("+", r"\+") + "$"):
+        qlearn.study(["purcell"], n_seeds=seeds, chunk=chunk)
