@@ -376,9 +376,9 @@ def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
 
 
 def purcell_wall_cells(o: StudyOptions) -> list[Cell]:
-    """Purcell's swimmer in the wall study (issue 34; :mod:`jswim.studies.purcell_wall`): the
-    square stroke in the bulk (group ``bulk``) and at each height (link lengths) the stroke,
-    Q-learning and random. No LLM or PPO rows: their scene drivers are the NG swimmer's."""
+    """Purcell's swimmer in the wall study (issue 34; its world: ``jswim.make("purcell", scene)``,
+    run by :mod:`jswim.studies.scenes` as every scene is): the square stroke in the bulk (group
+    ``bulk``) and at each height (link lengths) the stroke, Q-learning and random."""
     if o.roc_levels != 1:
         raise ConfigError(f"the wall study has no use for --roc-levels {o.roc_levels} (its runs use the paper's "
                           "ROCs -1, 0, 1); leave it out")
