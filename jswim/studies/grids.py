@@ -24,6 +24,7 @@ from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
                                    variant_action_set)
 from jswim.env import all_inits
+from jswim.env.worlds import registered_worlds
 from jswim.errors import ConfigError, check_zeta
 from jswim.judging.gait import PAPER
 from jswim.prompt import SENTENCES
@@ -132,8 +133,8 @@ class StudyOptions:
         if self.chunk is not None and self.chunk < 1:
             raise ConfigError("--chunk must be >= 1")
         for sw in self.swimmers or ():
-            if sw not in SWIMMERS:
-                raise ConfigError(f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS)}")
+            if sw not in SWIMMERS + registered_worlds():
+                raise ConfigError(f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS + registered_worlds())}")
         for name in ([self.variant] if self.variant else []) + list(self.variants or ()):
             variant_action_set(name)  # raises for an unknown name
         for t in self.temperatures or ():
@@ -486,7 +487,11 @@ def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | 
     ------
     ConfigError
         A sign string whose length is not the swimmer's number of DOFs.
+
+    A world of :func:`jswim.register_world` starts where it starts: ``"default"``.
     """
+    if swimmer in registered_worlds():
+        return "default"
     model = make_model(swimmer)
     if choice == "paper":
         return paper_init(model)

@@ -187,11 +187,12 @@ def _world(plan: Plan) -> tuple[Scene, Environment, Any]:
 def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: the world's own
     (:attr:`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
-    a plane parallel to the wall, a registered world) stays at the scene's height, untilted."""
+    a plane parallel to the wall, a registered world) stays at the scene's start height (0 in the
+    paper's bulk fluid), untilted."""
     if obs.height is not None:
         return np.asarray(obs.height, np.float64), np.asarray(obs.orientation, np.float64)
     shape = np.shape(obs.orientation)
-    return np.full(shape, scene.height if scene.medium == "wall" else 0.0), np.zeros(shape)
+    return np.full(shape, scene.height if scene.medium != "bulk" else 0.0), np.zeros(shape)
 
 
 def _start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, ...]:

@@ -67,6 +67,29 @@ class World:
         return ", ".join(bits)
 
 
+@dataclass(frozen=True)
+class Marker:
+    """The stand-in model of a world with no outline of its own (one of
+    :func:`jswim.register_world`): each swimmer drawn as one sphere of radius 1 at the position
+    its world observes, its DOFs as places in their range, ``[0, 1]``. Read by the pictures where
+    they read a :class:`jswim.swimmers.models.SwimmerModel` (``n_dof``, ``lo``, ``hi``, ``planar``,
+    ``label``)."""
+
+    kind: str
+    n_dof: int
+    lo: float = 0.0
+    hi: float = 1.0
+    planar: bool = False
+
+    @property
+    def label(self) -> str:
+        return self.kind
+
+    def outline(self, dofs: np.ndarray) -> np.ndarray:
+        """The body in its own frame, ``(..., 1, 2)``: one point, at the position."""
+        return np.zeros(np.shape(dofs)[:-1] + (1, 2))
+
+
 def from_above(row: Mapping[str, Any]) -> bool:
     """Whether a scene row is drawn from above, in the swimmer's own plane: Purcell's swimmer above
     a wall (issue 34) swims in a plane parallel to the wall, so its bends are seen only from above
