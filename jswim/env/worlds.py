@@ -20,21 +20,13 @@ _REGISTERED: dict[str, Callable[..., tuple[Environment, Any]]] = {}
 
 
 def register_world(name: str, factory: Callable[..., tuple[Environment, Any]]) -> None:
-    """Add a world by name, so ``jswim.make(name, scene, **options)`` returns ``factory(scene,
-    **options)`` and a study whose runs name it as their swimmer runs it.
-
-    Parameters
-    ----------
-    name : str
-        Not one of the paper's swimmers (``"purcell"``, ``"ng"``, ...); registering it again
-        replaces the factory.
-    factory : callable
-        ``factory(scene, *, zeta, direction, init, **options) -> (env, params)``: ``scene`` a
-        :class:`jswim.scenes.Scene` or ``None``, ``direction`` +1 or -1, ``init`` the start
-        levels or ``None`` (the world's own start); ``env`` an
-        :class:`~jswim.env.base.Environment` and ``params`` a pytree with a ``direction`` field
-        (a NamedTuple or a dataclass). It raises a one-line :class:`ConfigError` for a scene or
-        an option it does not take.
+    """Add a world by name: ``jswim.make(name, scene, **options)`` then returns ``factory(scene,
+    zeta=, direction=, init=, **options)`` (``scene`` a :class:`jswim.scenes.Scene` or ``None``,
+    ``direction`` +1 or -1, ``init`` start levels or ``None``; only the options asked for), an
+    :class:`~jswim.env.base.Environment` and its params (a NamedTuple or dataclass with a
+    ``direction`` field), and a study whose runs name it as their swimmer runs it. The factory
+    raises a one-line :class:`ConfigError` for a scene or option it does not take; registering a
+    name again replaces its factory.
 
     Raises
     ------

@@ -357,14 +357,18 @@ def pair_scene(d: float | None = None) -> str:
     return scene_json(Scene(medium="free", swimmers=2, separation=float(d)))
 
 
-def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
-    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids."""
+def scene_cells(study: str, o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
+    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids. Purcell's swimmer
+    above a wall (issue 34) swims in a plane parallel to it: its reference is the paper's bulk
+    fluid (group ``bulk``), and at each height (link lengths) it runs the stroke, Q-learning and
+    random."""
     if study == "wall":
-        out = [Cell("free", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="free")]
+        ref = "bulk" if swimmer == "purcell" else "free"
+        agents = (STROKE_AGENT, "qlearning", "random") if ref == "bulk" else (STROKE_AGENT, *WITH_BASELINES)
+        out = [Cell(ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref)]
         for h in o.heights:
-            out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
-                            stroke="square", tag=f"h{h:g}"))
-            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
+            out.append(Cell(f"h={h:g}", agents, n_ht=o.n_ht, scene=wall_scene(h), stroke="square", tag=f"h{h:g}"))
+            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}") if ref == "free" else []
         return out
     out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
     for d in o.separations:
@@ -374,19 +378,6 @@ def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
         out.append(Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}"))
         out += _ppo_cells(f"D={d:g}", pair_scene(d), f"D{d:g}")
     return out
-
-
-def purcell_wall_cells(o: StudyOptions) -> list[Cell]:
-    """Purcell's swimmer in the wall study (issue 34; its world: ``jswim.make("purcell", scene)``,
-    run by :mod:`jswim.studies.scenes` as every scene is): the square stroke in the bulk (group
-    ``bulk``) and at each height (link lengths) the stroke, Q-learning and random."""
-    if o.roc_levels != 1:
-        raise ConfigError(f"the wall study has no use for --roc-levels {o.roc_levels} (its runs use the paper's "
-                          "ROCs -1, 0, 1); leave it out")
-    bulk = scene_json(Scene(medium="bulk"))
-    return [Cell("bulk", (STROKE_AGENT,), scene=bulk, stroke="square", tag="bulk")] + [
-        Cell(f"h={h:g}", (STROKE_AGENT, "qlearning", "random"), scene=wall_scene(h), stroke="square", tag=f"h{h:g}")
-        for h in o.heights]
 
 
 def school_scene(n: int, d: float, formation: str = "line") -> str:
@@ -428,12 +419,12 @@ def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
 
 
 def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
-    def cells(o: StudyOptions) -> list[Cell]:
+    def cells(o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
         if o.roc_levels != 1:  # the scene rows read and judge K = 1 codes; PPO has real ROCs anyway
             raise ConfigError(f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
                               "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
                               "[-1, 1]); leave it out")
-        return school_cells(o) if name == "school" else scene_cells(name, o)
+        return school_cells(o) if name == "school" else scene_cells(name, o, swimmer)
     return cells
 
 
@@ -565,7 +556,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:
-            for cell in purcell_wall_cells(o) if (study, sw) == ("wall", "purcell") else spec.cells(o):
+            for cell in spec.cells(o, sw) if study == "wall" else spec.cells(o):
                 for agent in (a for a in cell.agents if a in o.agents):
                     llm = agent == "llm"
                     v = (cell.variant or variant) if llm else (cell.stroke if agent == STROKE_AGENT else "")

@@ -67,9 +67,6 @@ def square(start: Sequence[int], direction: int) -> tuple[int, int, int, int]:
     return tuple(int(encode_action(d, r)) for d, r in moves)
 
 
-#: The NG square stroke from the paper's start (10, 6), toward +x and -x (:func:`square`).
-SQUARE = {d: square((1, 0), d) for d in (1, -1)}
-
 #: The fate rule's thresholds (:func:`fate`), in sphere radii.
 TRAP_HEIGHT = 1.5  # the middle sphere within half a radius of the wall
 ESCAPE_FACTOR = 2.0  # at twice the starting height or more
@@ -212,21 +209,14 @@ def _per_run(params: Any, directions: Sequence[int]) -> tuple[Any, Any]:
     return params._replace(direction=d), none._replace(direction=0)
 
 
-def by_start(plans: Sequence[Plan], horizon: int, run_group: Any) -> list[dict[str, Any]]:
-    """``run_group(plans, horizon)``'s rows for each sub-batch of one start, in the order of ``plans``."""
+def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
+    """The stroke, random, Q-learning or PPO runs of one (agent, scene, zeta, action set, variant)
+    group (in sub-batches by start), in the order of ``plans``."""
     by_init: dict[Any, list[Plan]] = {}
     for p in plans:
         by_init.setdefault(p.init, []).append(p)
-    if len(by_init) == 1:
-        return run_group(plans, horizon)
-    done = {r["run_id"]: r for g in by_init.values() for r in run_group(g, horizon)}
+    done = {r["run_id"]: r for g in by_init.values() for r in _run_group(g, horizon)}
     return [done[p.run_id] for p in plans]
-
-
-def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """The stroke, random, Q-learning or PPO runs of one (agent, scene, zeta, action set, variant)
-    group (in sub-batches by start)."""
-    return by_start(plans, horizon, _run_group)
 
 
 def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
@@ -279,10 +269,8 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
 
 
 def _unjudged(plan: Plan) -> dict[str, Any] | None:
-    """``None`` for the paper's swimmers (:func:`scene_row` judges the run on the bulk swimmer's
-    displacements); a registered world's run is not judged (the criterion's speed threshold is
-    the paper swimmer's best stroke; such a world has none): success, learned and steps to learn
-    are ``None``."""
+    """``None`` for the paper's swimmers (:func:`scene_row` judges them); a registered world's run
+    is not judged (the criterion's threshold is the paper swimmer's best stroke): ``None`` verdicts."""
     if plan.swimmer in SWIMMERS:
         return None
     return {"success": None, "learned": None, "steps_to_learn": None, "period": 0}

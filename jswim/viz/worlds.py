@@ -69,21 +69,15 @@ class World:
 
 @dataclass(frozen=True)
 class Marker:
-    """The stand-in model of a world with no outline of its own (one of
-    :func:`jswim.register_world`): each swimmer drawn as one sphere of radius 1 at the position
-    its world observes, its DOFs as places in their range, ``[0, 1]``. Read by the pictures where
-    they read a :class:`jswim.swimmers.models.SwimmerModel` (``n_dof``, ``lo``, ``hi``, ``planar``,
-    ``label``)."""
+    """The stand-in model of a world with no outline of its own (:func:`jswim.register_world`'s):
+    each swimmer one sphere of radius 1 at its observed position, its DOFs as places in [0, 1];
+    the fields the pictures read of a :class:`jswim.swimmers.models.SwimmerModel`."""
 
-    kind: str
+    label: str
     n_dof: int
     lo: float = 0.0
     hi: float = 1.0
     planar: bool = False
-
-    @property
-    def label(self) -> str:
-        return self.kind
 
     def outline(self, dofs: np.ndarray) -> np.ndarray:
         """The body in its own frame, ``(..., 1, 2)``: one point, at the position."""
@@ -130,11 +124,6 @@ def per_swimmer(row: Mapping[str, Any], key: str, n: int, n_swimmers: int) -> np
     except (TypeError, ValueError):
         return None
     return a if a.ndim == 2 and a.shape[1] == n_swimmers else None
-
-
-def dof_names(n_dof: int, n_swimmers: int) -> list[str]:
-    """The DOFs the actions move: ``D1..D{S n}`` (a pair of NG swimmers: D1, D2 of swimmer 1, D3, D4 of 2)."""
-    return [f"D{i + 1}" for i in range(n_dof * n_swimmers)]
 
 
 def view_box(bodies: Sequence[np.ndarray], worlds: Sequence[World], spheres: bool,

@@ -58,6 +58,15 @@ def test_register_world_and_make(toy_folder):
         StudyOptions(swimmers=("nope",))
 
 
+def test_square_stroke_from_the_start_corner():
+    from jswim.studies.scenes import square
+
+    # Purcell's square from (+, +) (D2 down, D1 down, D2 up, D1 up), NG's from (10, 6) (D2 up, D1
+    # down, D2 down, D1 up); toward -x each one's time reverse. Codes (dof - 1) * 3 + roc + 1.
+    assert square((1, 1), 1) == (3, 0, 5, 2) and square((1, 1), -1) == (0, 3, 2, 5)
+    assert square((1, 0), 1) == (5, 0, 3, 2) and square((1, 0), -1) == (0, 5, 2, 3)
+
+
 def test_toy_world_runs_a_study(toy_folder):
     out, res = toy_folder
     rows = {r["run_id"]: r for r in res.rows}
