@@ -33,6 +33,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "rollout": "jswim.env",
     "make": "jswim.env.worlds",
+    "register_world": "jswim.env.worlds",
     "rollout_batch": "jswim.env.episodes",
     "make_params": "jswim.env",
     "reset": "jswim.env",

@@ -1,8 +1,9 @@
-"""``make``: a world and its params from a swimmer and an optional scene (the protocol's door)."""
+"""``make``: a world and its params from a swimmer and an optional scene (the protocol's door);
+``register_world``: a new world by name, which ``make``, the studies and the pictures then take."""
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 from jswim.env.base import Environment
 from jswim.env.params import EnvParams, make_params, parse_direction
@@ -12,7 +13,35 @@ from jswim.errors import ConfigError
 from jswim.scenes import purcell_wall
 from jswim.scenes.params import scene_params
 from jswim.scenes.scene import Scene
-from jswim.swimmers.models import SwimmerModel
+from jswim.swimmers.models import SWIMMERS, SwimmerModel
+
+#: Worlds added by name (:func:`register_world`): name -> factory.
+_REGISTERED: dict[str, Callable[..., tuple[Environment, Any]]] = {}
+
+
+def register_world(name: str, factory: Callable[..., tuple[Environment, Any]]) -> None:
+    """Add a world by name: ``jswim.make(name, scene, **options)`` then returns ``factory(scene,
+    zeta=, direction=, init=, **options)`` (``scene`` a :class:`jswim.scenes.Scene` or ``None``,
+    ``direction`` +1 or -1, ``init`` start levels or ``None``; only the options asked for), an
+    :class:`~jswim.env.base.Environment` and its params (a NamedTuple or dataclass with a
+    ``direction`` field), and a study whose runs name it as their swimmer runs it. The factory
+    raises a one-line :class:`ConfigError` for a scene or option it does not take; registering a
+    name again replaces its factory.
+
+    Raises
+    ------
+    ConfigError
+        For an empty name, one of the paper's swimmers, or a factory that is not callable.
+    """
+    if not isinstance(name, str) or not name or name.lower() in SWIMMERS or not callable(factory):
+        raise ConfigError(f"register_world needs a new name (not {', '.join(SWIMMERS)}) and a callable factory, "
+                          f"got {name!r}")
+    _REGISTERED[name] = factory
+
+
+def registered_worlds() -> tuple[str, ...]:
+    """The names :func:`register_world` added, in order."""
+    return tuple(_REGISTERED)
 
 
 def as_scene(scene: Any) -> Scene:
@@ -47,7 +76,8 @@ def make(
     Parameters
     ----------
     swimmer : str or SwimmerModel
-        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"`` (scenes: ``"ng"``; ``"purcell"`` above a
+        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"``, or a world of :func:`register_world`
+        (its factory gets the scene, zeta, direction, init and the keywords) (scenes: ``"ng"``; ``"purcell"`` above a
         wall, :mod:`jswim.scenes.purcell_wall`: the paper's world with wall-corrected drag, its
         plane ``scene.height`` link lengths up, ``link_radius`` by keyword); model options
         (``d_max``, ``d_min``, ``n_links``, ...) by keyword.
@@ -81,6 +111,12 @@ def make(
     >>> env.n_swimmers, env.n_dof
     (2, 4)
     """
+    if isinstance(swimmer, str) and swimmer in _REGISTERED:
+        # only the options asked for: the factory refuses what it lacks
+        given = {**({"roc_levels": roc_levels} if roc_levels != 1 else {}), **({"diagonal": True} if diagonal else {}),
+                 **({"dtype": dtype} if dtype is not None else {})}
+        return _REGISTERED[swimmer](None if scene is None else as_scene(scene), zeta=zeta,
+                                    direction=parse_direction(direction), init=init, **given, **kwargs)
     if scene is not None and purcell_wall.is_purcell(swimmer) and not is_plain_bulk(scene):
         # Purcell's swimmer above a wall: the paper's planar world with wall-corrected drag
         swimmer, scene, kwargs = purcell_wall.model(as_scene(scene), **kwargs), None, {}

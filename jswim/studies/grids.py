@@ -24,6 +24,7 @@ from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
                                    variant_action_set)
 from jswim.env import all_inits
+from jswim.env.worlds import registered_worlds
 from jswim.errors import ConfigError, check_size, check_zeta
 from jswim.judging.gait import PAPER
 from jswim.prompt import SENTENCES
@@ -128,8 +129,8 @@ class StudyOptions:
         if self.chunk is not None and self.chunk < 1:
             raise ConfigError("--chunk must be >= 1")
         for sw in self.swimmers or ():
-            if sw not in SWIMMERS:
-                raise ConfigError(f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS)}")
+            if sw not in SWIMMERS + registered_worlds():
+                raise ConfigError(f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS + registered_worlds())}")
         for name in ([self.variant] if self.variant else []) + list(self.variants or ()):
             variant_action_set(name)  # raises for an unknown name
         for t in self.temperatures or ():
@@ -358,14 +359,18 @@ def pair_scene(d: float | None = None) -> str:
     return scene_json(Scene(medium="free", swimmers=2, separation=float(d)))
 
 
-def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
-    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids."""
+def scene_cells(study: str, o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
+    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids. Purcell's swimmer
+    above a wall (issue 34) swims in a plane parallel to it: its reference is the paper's bulk
+    fluid (group ``bulk``), and at each height (link lengths) it runs the stroke, Q-learning and
+    random."""
     if study == "wall":
-        out = [Cell("free", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="free")]
+        ref = "bulk" if swimmer == "purcell" else "free"
+        agents = (STROKE_AGENT, "qlearning", "random") if ref == "bulk" else (STROKE_AGENT, *WITH_BASELINES)
+        out = [Cell(ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref)]
         for h in o.heights:
-            out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
-                            stroke="square", tag=f"h{h:g}"))
-            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
+            out.append(Cell(f"h={h:g}", agents, n_ht=o.n_ht, scene=wall_scene(h), stroke="square", tag=f"h{h:g}"))
+            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}") if ref == "free" else []
         return out
     out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
     for d in o.separations:
@@ -375,19 +380,6 @@ def scene_cells(study: str, o: StudyOptions) -> list[Cell]:
         out.append(Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}"))
         out += _ppo_cells(f"D={d:g}", pair_scene(d), f"D{d:g}")
     return out
-
-
-def purcell_wall_cells(o: StudyOptions) -> list[Cell]:
-    """Purcell's swimmer in the wall study (issue 34; :mod:`jswim.studies.purcell_wall`): the
-    square stroke in the bulk (group ``bulk``) and at each height (link lengths) the stroke,
-    Q-learning and random. No LLM or PPO rows: their scene drivers are the NG swimmer's."""
-    if o.roc_levels != 1:
-        raise ConfigError(f"the wall study has no use for --roc-levels {o.roc_levels} (its runs use the paper's "
-                          "ROCs -1, 0, 1); leave it out")
-    bulk = scene_json(Scene(medium="bulk"))
-    return [Cell("bulk", (STROKE_AGENT,), scene=bulk, stroke="square", tag="bulk")] + [
-        Cell(f"h={h:g}", (STROKE_AGENT, "qlearning", "random"), scene=wall_scene(h), stroke="square", tag=f"h{h:g}")
-        for h in o.heights]
 
 
 def school_scene(n: int, d: float, formation: str = "line") -> str:
@@ -429,12 +421,12 @@ def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
 
 
 def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
-    def cells(o: StudyOptions) -> list[Cell]:
+    def cells(o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
         if o.roc_levels != 1:  # the scene rows read and judge K = 1 codes; PPO has real ROCs anyway
             raise ConfigError(f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
                               "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
                               "[-1, 1]); leave it out")
-        return school_cells(o) if name == "school" else scene_cells(name, o)
+        return school_cells(o) if name == "school" else scene_cells(name, o, swimmer)
     return cells
 
 
@@ -488,7 +480,11 @@ def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | 
     ------
     ConfigError
         A sign string whose length is not the swimmer's number of DOFs.
+
+    A world of :func:`jswim.register_world` starts where it starts: ``"default"``.
     """
+    if swimmer in registered_worlds():
+        return "default"
     model = make_model(swimmer)
     if choice == "paper":
         return paper_init(model)
@@ -562,7 +558,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:
-            for cell in purcell_wall_cells(o) if (study, sw) == ("wall", "purcell") else spec.cells(o):
+            for cell in spec.cells(o, sw) if study == "wall" else spec.cells(o):
                 for agent in (a for a in cell.agents if a in o.agents):
                     llm = agent == "llm"
                     v = (cell.variant or variant) if llm else (cell.stroke if agent == STROKE_AGENT else "")

@@ -117,11 +117,7 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     """Q-learning, random or continuous-RL runs of one (agent, swimmer, action set, ROC lattice)
     group, vectorised."""
     p0 = plans[0]
-    if p0.scene and p0.swimmer == "purcell":  # Purcell above a wall (issue 34): its planar world
-        from jswim.studies import purcell_wall  # lazy: start-up (scene studies only)
-
-        return purcell_wall.run_baselines(plans, horizon)
-    if p0.scene:  # walls and pairs (issue 19): the stroke and the baselines on the scene
+    if p0.scene:  # walls, pairs, Purcell above a wall (issues 19, 34): the stroke and the baselines on the scene
         from jswim.studies import scenes  # lazy: start-up (the scene baselines' module, for scene studies only)
 
         return scenes.run_baselines(plans, horizon)

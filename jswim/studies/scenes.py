@@ -16,9 +16,13 @@
 
 Runs, rows, resume, figures, ``show`` and ``compare`` are the study folder's
 (:mod:`jswim.studies.run`); this module gives the cells, runs the baselines and the stroke on a
-scene (the agents that take any world: :mod:`jswim.agents.worlds`, ``random_policy.run_env``,
-``qlearning.train_env``, ``ppo.train_env``, on a :class:`~jswim.env.scene_world.SceneWorld`), and
-adds the scene's columns to each row.
+scene, and adds the scene's columns to each row. Every run goes one way, whatever the world:
+:func:`jswim.make` builds it from the plan's swimmer and scene (a scene world, the paper's world
+for a bulk reference, Purcell's swimmer above a wall, or a world of :func:`jswim.register_world`),
+the agents that take any world run on it (:mod:`jswim.agents.worlds`, ``random_policy.run_env``,
+``qlearning.train_env``, ``ppo.train_env``), and the rows are read from their trace through the
+protocol (positions, :attr:`~jswim.env.base.Observation.height` and orientation, the step's
+stuck and contact).
 
 PPO's rows (agent ``ppo``, an extension): the continuous study's learner (same network,
 :class:`~jswim.agents.ppo.PPOConfig` and temperature) with the other scene agents' task and budget
@@ -32,6 +36,7 @@ training run recorded; the moves are ``[dof, real ROC]``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from typing import Any, Sequence
 
@@ -39,18 +44,28 @@ import jax
 import numpy as np
 
 from jswim import env
-from jswim.actions import decode_action, n_actions
+from jswim.actions import decode_action, encode_action, n_actions
 from jswim.agents import qlearning, random_policy, worlds
 from jswim.agents.qlearning import QConfig
-from jswim.env.scene_world import ARMS, SceneTask, SceneWorld
+from jswim.env.base import Environment, Observation
+from jswim.env.scene_world import ARMS
+from jswim.env.worlds import make
 from jswim.judging.gait import Criterion, judge
-from jswim.scenes import Scene, scene_params
+from jswim.scenes import Scene
+from jswim.swimmers.models import SWIMMERS
 from jswim.studies.grids import CONTINUOUS_AGENT, STROKE_AGENT, Plan
 from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
-#: The NG square stroke toward +x from the paper's start (10, 6), as joint codes of swimmer 1:
-#: D2 up, D1 down, D2 down, D1 up (``(dof - 1) * 3 + roc + 1``). Toward -x: its time reverse.
-SQUARE = {1: (5, 0, 3, 2), -1: (0, 5, 2, 3)}
+def square(start: Sequence[int], direction: int) -> tuple[int, int, int, int]:
+    """The square stroke of a swimmer's first two DOFs from their start corner ``start`` (0 = lo,
+    1 = hi), as codes ``(dof - 1) * 3 + roc + 1``: toward +x D2 to its other limit, D1 to its
+    other limit, D2 back, D1 back; toward -x its time reverse (Purcell's from (+, +): D2 down, D1
+    down, D2 up, D1 up; NG's from (10, 6): D2 up, D1 down, D2 down, D1 up)."""
+    flip = [1 - 2 * int(v) for v in start[:2]]  # the ROC that leaves each DOF's start limit
+    moves = ((2, flip[1]), (1, flip[0]), (2, -flip[1]), (1, -flip[0])) if direction > 0 else \
+        ((1, flip[0]), (2, flip[1]), (1, -flip[0]), (2, -flip[1]))
+    return tuple(int(encode_action(d, r)) for d, r in moves)
+
 
 #: The fate rule's thresholds (:func:`fate`), in sphere radii.
 TRAP_HEIGHT = 1.5  # the middle sphere within half a radius of the wall
@@ -94,18 +109,21 @@ def fate(heights: Sequence[float], h0: float, contact: Sequence[bool] | None = N
 # -- strokes -------------------------------------------------------------------------------------
 
 
-def stroke_codes(variant: str, direction: int, steps: int, swimmers: int) -> np.ndarray:
-    """The joint codes of a stroke plan: ``"square"`` (swimmer 1 alone; the lone square gait), or
-    ``"phase<p>"`` for a pair: swimmer 2 first makes ``p`` moves of its square (so it runs ``p``
-    quarter cycles ahead), then the two alternate, one move each, swimmer 1 first."""
-    sq = SQUARE[1 if direction > 0 else -1]
+def stroke_codes(variant: str, direction: int, steps: int, swimmers: int, start: Sequence[int] = (1, 0),
+                 width: int = n_actions(ARMS)) -> np.ndarray:
+    """The joint codes of a stroke plan: ``"square"`` (swimmer 1 alone; the lone :func:`square` gait
+    from its start corner ``start``, default NG's (10, 6)), or ``"phase<p>"`` for a pair: swimmer
+    2 first makes ``p`` moves of its square (so it runs ``p`` quarter cycles ahead), then the two
+    alternate, one move each, swimmer 1 first. Swimmer ``s``'s codes are swimmer 1's plus
+    ``s * width`` (its DOFs' codes: 6 for two DOFs)."""
+    sq = square(start, direction)
     if swimmers == 1:
         return np.array([sq[t % 4] for t in range(steps)], np.int32)
     if swimmers > 2:  # a school ("phase0"): every swimmer in turn makes the same move of its square
         t = np.arange(steps)
-        return (np.asarray(sq)[(t // swimmers) % 4] + n_actions(ARMS) * (t % swimmers)).astype(np.int32)
+        return (np.asarray(sq)[(t // swimmers) % 4] + width * (t % swimmers)).astype(np.int32)
     ph = int(variant.removeprefix("phase"))
-    b = [c + n_actions(ARMS) for c in sq]
+    b = [c + width for c in sq]
     seq = [b[j] for j in range(ph)]
     j = 0
     while len(seq) < steps:
@@ -153,47 +171,65 @@ def scene_of(plan: Plan) -> Scene:
     return Scene.from_dict(json.loads(plan.scene))
 
 
-def _world(plan: Plan) -> tuple[Scene, SceneWorld, SceneTask]:
-    """A plan's scene, its world and the world's params (toward +x; the runs set their own)."""
+def _world(plan: Plan) -> tuple[Scene, Environment, Any]:
+    """A plan's scene, its world and the world's params (:func:`jswim.make`: a scene world, the
+    paper's world for a plain bulk scene, Purcell's swimmer above a wall, or a registered world),
+    toward +x (the runs set their own)."""
     scene = scene_of(plan)
     init = plan.init if isinstance(plan.init, (tuple, list)) and all(v in (0, 1) for v in plan.init) else None
-    params = scene_params(plan.swimmer, scene, zeta=plan.zeta, init=None if init is None else tuple(init))
-    return scene, SceneWorld(scene, params.roc_levels), SceneTask(params, 1.0)
+    world, params = make(plan.swimmer, scene, zeta=plan.zeta, init=None if init is None else tuple(init))
+    return scene, world, params
 
 
-def _start(world: SceneWorld, task: SceneTask) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Each swimmer's start x, height (its middle sphere's) and tilt ``(S,)``."""
-    state = world.reset(jax.random.PRNGKey(0), task)
-    x0 = world.observe(state, task).position[:, 0]
-    return tuple(np.asarray(v, np.float64) for v in (x0, state.centre[:, 1], state.tilt))
+def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
+    """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: the world's own
+    (:attr:`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
+    a plane parallel to the wall, a registered world) stays at the scene's start height (0 in the
+    paper's bulk fluid), untilted."""
+    if obs.height is not None:
+        return np.asarray(obs.height, np.float64), np.asarray(obs.orientation, np.float64)
+    shape = np.shape(obs.orientation)
+    return np.full(shape, scene.height if scene.medium != "bulk" else 0.0), np.zeros(shape)
 
 
-def by_start(plans: Sequence[Plan], horizon: int, run_group: Any) -> list[dict[str, Any]]:
-    """``run_group(plans, horizon)``'s rows for each sub-batch of one start, in the order of ``plans``."""
-    by_init: dict[Any, list[Plan]] = {}
-    for p in plans:
-        by_init.setdefault(p.init, []).append(p)
-    if len(by_init) == 1:
-        return run_group(plans, horizon)
-    done = {r["run_id"]: r for g in by_init.values() for r in run_group(g, horizon)}
-    return [done[p.run_id] for p in plans]
+def _start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, ...]:
+    """Each swimmer's start x, height and tilt ``(S,)`` (:func:`_lift`), and the DOFs' start
+    corner (the discretiser's lattice positions, ``(n_dof,)``)."""
+    state = world.reset(jax.random.PRNGKey(0), params)
+    obs = world.observe(state, params)
+    corner = np.asarray(worlds.cells(world).positions(state, params), np.int64)
+    return (np.asarray(obs.position[:, 0], np.float64), *_lift(obs, scene), corner)
+
+
+def _per_run(params: Any, directions: Sequence[int]) -> tuple[Any, Any]:
+    """``params`` with a target direction per run, and ``vmap``'s axes of them (the rest shared)."""
+    d, none = np.asarray(directions, np.float64), jax.tree.map(lambda _: None, params)
+    if dataclasses.is_dataclass(params):
+        return dataclasses.replace(params, direction=d), dataclasses.replace(none, direction=0)
+    return params._replace(direction=d), none._replace(direction=0)
 
 
 def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     """The stroke, random, Q-learning or PPO runs of one (agent, scene, zeta, action set, variant)
-    group (in sub-batches by start)."""
-    return by_start(plans, horizon, _run_group)
+    group (in sub-batches by start), in the order of ``plans``."""
+    by_init: dict[Any, list[Plan]] = {}
+    for p in plans:
+        by_init.setdefault(p.init, []).append(p)
+    done = {r["run_id"]: r for g in by_init.values() for r in _run_group(g, horizon)}
+    return [done[p.run_id] for p in plans]
 
 
 def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     p0 = plans[0]
-    scene, world, task = _world(p0)
+    scene, world, params = _world(p0)
+    x0, z0, tilt0, corner = _start(world, params, scene)
     keys = _keys(plans)
-    task = task._replace(direction=np.array([p.direction for p in plans], np.float64))
-    axes = SceneTask(None, 0)  # the scene shared, a direction per run
+    task, axes = _per_run(params, [p.direction for p in plans])
+    n_sw = world.n_swimmers
     judged, moves = [None] * len(plans), [None] * len(plans)
     if p0.agent == STROKE_AGENT:
-        codes = np.stack([stroke_codes(p.variant, p.direction, p.steps, scene.swimmers) for p in plans])
+        codes = np.stack([stroke_codes(p.variant, p.direction, p.steps, n_sw, corner, world.n_actions // n_sw)
+                          for p in plans])
         tr = worlds.play(world, task, keys, codes, params_axes=axes)
     elif p0.agent == "random":
         run = random_policy.run_env(world, task, keys, p0.steps, p0.action_set, params_axes=axes, trace=True)
@@ -210,27 +246,40 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
             judged[i] = {"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
                          "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
                          # a pair's period is 0, as the lattice judge of the pair rows gives it
-                         "period": int(rep.period[i]) if scene.swimmers == 1 else 0}
+                         "period": int(rep.period[i]) if n_sw == 1 else 0}
     else:
         config = QConfig(steps=p0.steps, action_set=p0.action_set)
         run = qlearning.train_env(world, keys, task, config, params_axes=axes, trace=True)
         codes, tr = np.asarray(run.actions), run.trace
-    x0, z0, tilt0 = _start(world, task)
-    xs = np.asarray(tr.obs.position[..., 0], np.float64) - x0
-    heights, tilts = (np.asarray(v, np.float64) for v in (tr.state.centre[..., 1], tr.state.tilt))
+    obs = tr.obs
+    xs = np.asarray(obs.position[..., 0], np.float64) - x0
+    heights, tilts = _lift(obs, scene)
     stuck, contact = (np.asarray(v, bool).reshape(xs.shape[:2] + (-1,)).any(-1) for v in (tr.info.stuck, tr.info.contact))
     rows = []
     for i, p in enumerate(plans):
         extra = {"xs": xs[i].tolist(), "heights": heights[i].tolist(), "tilts": tilts[i].tolist(),
                  "contact": contact[i].tolist(), "stuck": stuck[i].tolist()}
-        rows.append(scene_row(p, [int(c) for c in codes[i]], xs[i].mean(axis=-1).tolist(), extra, horizon, z0=z0,
-                              tilt0=tilt0, judged=judged[i], moves=moves[i]))
+        row = scene_row(p, [int(c) for c in codes[i]], xs[i].mean(axis=-1).tolist(), extra, horizon, z0=z0,
+                        tilt0=tilt0, judged=judged[i] or _unjudged(p), moves=moves[i])
+        if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
+            row["y"], row["orientation"] = (np.asarray(v[i, :, 0], np.float64).tolist()
+                                            for v in (obs.position[..., 1], obs.orientation))
+        rows.append(row)
     return rows
+
+
+def _unjudged(plan: Plan) -> dict[str, Any] | None:
+    """``None`` for the paper's swimmers (:func:`scene_row` judges them); a registered world's run
+    is not judged (the criterion's threshold is the paper swimmer's best stroke): ``None`` verdicts."""
+    if plan.swimmer in SWIMMERS:
+        return None
+    return {"success": None, "learned": None, "steps_to_learn": None, "period": 0}
 
 
 def llm_row(plan: Plan, result: Any, horizon: int, extra: dict[str, Any]) -> dict[str, Any]:
     """The row of a finished LLM run on a scene (``extra``: its as_row fields)."""
-    _, z0, tilt0 = _start(*_world(plan)[1:])
+    scene, world, params = _world(plan)
+    _, z0, tilt0, _ = _start(world, params, scene)
     return scene_row(plan, list(result.actions), list(result.x), extra, horizon, z0=z0, tilt0=tilt0)
 
 

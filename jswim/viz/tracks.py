@@ -26,9 +26,9 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from jswim.swimmers.models import SwimmerModel, make_model
-from jswim.swimmers.outline import outline
-from jswim.viz.worlds import World, per_swimmer, world_of
+from jswim.swimmers.models import SWIMMERS, SwimmerModel, make_model
+from jswim.swimmers.outline import outline as _outline
+from jswim.viz.worlds import Marker, World, per_swimmer, world_of
 from jswim.viz import worlds
 
 #: A step whose |dX| is below this is "stuck" (the prompt's rule, :mod:`jswim.prompt`).
@@ -143,10 +143,19 @@ class Track:
         return self.stroke is not None and step - 1 >= self.stroke[0]
 
 
-def model_of(row: Mapping[str, Any], n_dof: int | None = None) -> SwimmerModel:
+def outline(model: SwimmerModel | Marker, dofs: np.ndarray) -> np.ndarray:
+    """The body of ``model`` at ``dofs`` in its own frame, ``(..., P, 2)``
+    (:func:`jswim.swimmers.outline.outline`; a :class:`~jswim.viz.worlds.Marker`: one point)."""
+    return model.outline(dofs) if isinstance(model, Marker) else _outline(model, dofs)
+
+
+def model_of(row: Mapping[str, Any], n_dof: int | None = None) -> SwimmerModel | Marker:
     """The swimmer model of a run row (the default geometry of its kind; ``n_dof`` picks the
-    chain length of ``nlink``/``nsphere`` runs when their DOF count is known)."""
+    chain length of ``nlink``/``nsphere`` runs when their DOF count is known); a swimmer that is
+    none of the paper's (a registered world) gets a :class:`~jswim.viz.worlds.Marker`."""
     kind = str(row.get("swimmer", "purcell"))
+    if kind.lower() not in SWIMMERS:
+        return Marker(kind, n_dof or 2)
     kw: dict[str, Any] = {}
     if n_dof is not None and kind in ("nlink", "nsphere"):
         kw["n_links" if kind == "nlink" else "n_spheres"] = n_dof + 1
@@ -300,7 +309,7 @@ def _scene_bodies(row: Mapping[str, Any], world: World, model: SwimmerModel, d: 
     bodies = []
     for s in range(s_n):
         shape = outline(model, d[:, s * k:(s + 1) * k] if d.shape[1] >= (s + 1) * k else d[:, :k])
-        if not model.planar:  # a scene places the middle sphere (not the centroid) at its position
+        if isinstance(model, SwimmerModel) and not model.planar:  # a scene places the middle sphere (not the centroid) at its position
             shape = shape - shape[..., 1:2, :]
         bodies.append(place(shape, px[:, s], pz[:, s], pt[:, s]))
     return np.stack(bodies, axis=1), np.stack([px, pz], axis=-1)

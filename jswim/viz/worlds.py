@@ -67,6 +67,23 @@ class World:
         return ", ".join(bits)
 
 
+@dataclass(frozen=True)
+class Marker:
+    """The stand-in model of a world with no outline of its own (:func:`jswim.register_world`'s):
+    each swimmer one sphere of radius 1 at its observed position, its DOFs as places in [0, 1];
+    the fields the pictures read of a :class:`jswim.swimmers.models.SwimmerModel`."""
+
+    label: str
+    n_dof: int
+    lo: float = 0.0
+    hi: float = 1.0
+    planar: bool = False
+
+    def outline(self, dofs: np.ndarray) -> np.ndarray:
+        """The body in its own frame, ``(..., 1, 2)``: one point, at the position."""
+        return np.zeros(np.shape(dofs)[:-1] + (1, 2))
+
+
 def from_above(row: Mapping[str, Any]) -> bool:
     """Whether a scene row is drawn from above, in the swimmer's own plane: Purcell's swimmer above
     a wall (issue 34) swims in a plane parallel to the wall, so its bends are seen only from above
@@ -107,11 +124,6 @@ def per_swimmer(row: Mapping[str, Any], key: str, n: int, n_swimmers: int) -> np
     except (TypeError, ValueError):
         return None
     return a if a.ndim == 2 and a.shape[1] == n_swimmers else None
-
-
-def dof_names(n_dof: int, n_swimmers: int) -> list[str]:
-    """The DOFs the actions move: ``D1..D{S n}`` (a pair of NG swimmers: D1, D2 of swimmer 1, D3, D4 of 2)."""
-    return [f"D{i + 1}" for i in range(n_dof * n_swimmers)]
 
 
 def view_box(bodies: Sequence[np.ndarray], worlds: Sequence[World], spheres: bool,

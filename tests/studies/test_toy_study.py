@@ -1,0 +1,128 @@
+"""A new world through a study and its report page, unchanged: the toy swimmer of
+tests/env/test_toy_world.py, registered by name (``jswim.register_world``), runs the wall study's
+cells (its factory takes any scene and swims the same in it: it has no wall to feel) with the
+stroke, Q-learning and the random policy, and the page and ``jswim animate`` draw it from what
+the protocol observes (its position and DOFs: one sphere at the position, no outline of its own).
+
+The numbers checked are the toy's area rule, independent of jswim: the square gait from (1, 1)
+nets -1 per cycle toward +x (clockwise round the unit square), its time reverse +1.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+
+import jswim
+from jswim.env import worlds as env_worlds
+from jswim.errors import ConfigError
+from jswim.studies.grids import StudyOptions
+from jswim.studies.run import run_study
+from jswim.viz.page import run_payload, write_report
+from jswim.viz.tracks import track
+from tests.browser import browser_or_skip
+from tests.env.test_toy_world import ToyParams, ToyWorld
+
+ARTIFACTS = os.environ.get("JSWIM_TEST_ARTIFACTS", "test-artifacts")
+H, STEPS = 3.0, 12
+
+
+def toy_factory(scene, *, zeta=0.0, direction=1, init=None):
+    """The toy in any scene: its world and params."""
+    if init is not None:
+        raise ConfigError("the toy starts at (1, 1)")
+    return ToyWorld(), ToyParams(float(zeta), float(direction))
+
+
+@pytest.fixture(scope="module")
+def toy_folder(tmp_path_factory):
+    jswim.register_world("toy", toy_factory)
+    out = tmp_path_factory.mktemp("toy") / "wall"
+    o = StudyOptions(swimmers=("toy",), heights=(H,), directions=(1, -1), agents=("stroke", "qlearning", "random"),
+                     steps=STEPS, q_runs=1)
+    res = run_study("wall", o, backend=None, out=out, figures=False)
+    yield out, res
+    env_worlds._REGISTERED.pop("toy", None)
+
+
+def test_register_world_and_make(toy_folder):
+    env, params = jswim.make("toy", direction="-x")
+    assert isinstance(env, ToyWorld) and params.direction == -1.0
+    assert "toy" in env_worlds.registered_worlds()
+    with pytest.raises(ConfigError, match="new name"):
+        jswim.register_world("ng", toy_factory)
+    with pytest.raises(ConfigError, match="unknown swimmer 'nope'"):
+        StudyOptions(swimmers=("nope",))
+
+
+def test_square_stroke_from_the_start_corner():
+    from jswim.studies.scenes import square
+
+    # Purcell's square from (+, +) (D2 down, D1 down, D2 up, D1 up), NG's from (10, 6) (D2 up, D1
+    # down, D2 down, D1 up); toward -x each one's time reverse. Codes (dof - 1) * 3 + roc + 1.
+    assert square((1, 1), 1) == (3, 0, 5, 2) and square((1, 1), -1) == (0, 3, 2, 5)
+    assert square((1, 0), 1) == (5, 0, 3, 2) and square((1, 0), -1) == (0, 5, 2, 3)
+
+
+def test_toy_world_runs_a_study(toy_folder):
+    out, res = toy_folder
+    rows = {r["run_id"]: r for r in res.rows}
+    # per direction: the free-fluid reference stroke, and at h = 3 the stroke, Q-learning and random
+    assert len(rows) == 2 * 4
+    strokes = [r for r in rows.values() if r["agent"] == "stroke"]
+    assert len(strokes) == 4
+    for r in strokes:
+        # the area rule: the square from (1, 1) nets -1 per cycle toward +x, its reverse +1
+        assert r["per_cycle"] == pytest.approx(-1.0 * r["direction"], abs=1e-6)
+        assert r["x"][-1] == pytest.approx(-STEPS / 4 * r["direction"], abs=1e-5)
+    for r in rows.values():
+        assert r["swimmer"] == "toy" and r["success"] is None  # no paper criterion for a new world
+        dx = np.diff(np.r_[0.0, r["x"]])
+        assert len(dx) == STEPS and np.all(np.abs(dx) <= 0.5 + 1e-6)  # one move sweeps at most half the square
+        assert all(1 <= a[0] <= 2 and a[1] in (-1, 0, 1) for a in r["actions"])
+    assert {(t["agent"], t["group"]) for t in res.summary} >= {("stroke", f"h={H:g}"), ("qlearning", f"h={H:g}")}
+    saved = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
+    assert {r["run_id"] for r in saved} == set(rows)
+
+
+def test_toy_run_pictured_from_the_protocol(toy_folder):
+    out, res = toy_folder
+    row = next(r for r in res.rows if r["agent"] == "stroke" and r["group"] == f"h={H:g}" and r["direction"] == 1)
+    t = track(row)
+    p = run_payload(t)
+    # one sphere per swimmer at its observed position (above the wall at h), the DOFs in [0, 1]
+    assert p["n_swimmers"] == 1 and p["wall"] and p["dof_names"] == ["D1", "D2"] and not p["planar"]
+    assert np.shape(p["bodies"]) == (STEPS + 1, 1, 1, 2)
+    np.testing.assert_allclose(np.asarray(p["pos"])[:, 0, 0], np.r_[0.0, row["x"]], atol=1e-6)
+    np.testing.assert_allclose(np.asarray(p["pos"])[:, 0, 1], H)
+    # the square's corners: (1, 1) -> (1, 0) -> (0, 0) -> (0, 1) -> (1, 1)
+    np.testing.assert_allclose(np.asarray(p["dofs"])[:5], [[1, 1], [1, 0], [0, 0], [0, 1], [1, 1]])
+    assert (out / "report.html").exists()
+
+
+@pytest.mark.slow
+def test_toy_page_in_chromium(toy_folder):
+    out, res = toy_folder
+    run = next(r["run_id"] for r in res.rows if r["agent"] == "stroke" and r["group"] == f"h={H:g}")
+    page = write_report(out, figures="none")
+    with browser_or_skip(height=1100) as b:
+        b.open(page.resolve().as_uri())
+        b.eval("window.jswimReport.opened")
+        i = b.eval("JSON.parse(document.getElementById('report-data').textContent).runs"
+                   f".filter(r => r.run_id === {json.dumps(run)})[0].i")
+        b.eval(f"window.jswimReport.select({i})")
+        b.pump(0.5)
+        b.eval("document.getElementById('browser').scrollIntoView()")
+        drawn = b.eval("window.jswimReport.drawn()")
+        # inside the sphere (half a radius right of its centre, off the centre's cross): its white fill
+        inside = b.eval("(() => { var d = window.jswimReport.data(), q = d.pos[window.jswimReport.step()][0],"
+                        "p = window.jswimReport.toCanvas(q[0] + 0.5, q[1] + 0.5), c = document.getElementById('swim');"
+                        "return Array.from(c.getContext('2d').getImageData(p[0], p[1], 1, 1).data).slice(0, 3); })()")
+        start = b.eval("document.getElementById('step').textContent")
+        b.screenshot(os.path.join(ARTIFACTS, "report-toy-world.png"))
+        assert b.errors == []
+    assert drawn == 1 and inside == [255, 255, 255]
+    assert "D1" in start and "D2" in start
