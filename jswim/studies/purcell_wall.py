@@ -12,6 +12,8 @@ The rows' ``y`` and ``orientation`` are the swimmer's in its plane.
 
 from __future__ import annotations
 
+import dataclasses
+
 import json
 from typing import Any, Sequence
 
@@ -70,6 +72,5 @@ def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
                  "contact": [False] * n}
         row = scene_row(p, [int(a) for a in acts[i]], [float(v) for v in x[i]], extra, horizon,
                         z0=np.array([h]), tilt0=np.zeros(1))
-        row["y"], row["orientation"] = [float(v) for v in y[i]], [float(v) for v in th[i]]
-        rows.append(row)
+        rows.append(dataclasses.replace(row, y=[float(v) for v in y[i]], orientation=[float(v) for v in th[i]]))
     return rows

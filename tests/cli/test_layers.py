@@ -49,8 +49,6 @@ UNMARKED_ALLOWED = set("""
     
     jswim.studies.ensemble->jswim.actions jswim.studies.ensemble->jswim.agents.defaults
     jswim.studies.ensemble->jswim.agents.qlearning jswim.studies.ensemble->jswim.judging.gait
-    jswim.studies.run->jswim.agents.ppo jswim.studies.run->jswim.agents.qlearning
-    jswim.studies.run->jswim.studies.scenes
     jswim.studies.scenes->jswim.console
     
 """.split())
