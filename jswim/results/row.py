@@ -27,17 +27,23 @@ USAGE = ("error", "failed_steps", "parse_retries", "truncated", "cut_thinking", 
          "n_clears", "calls", "billed_calls", "cache_hits", "prompt_tokens", "completion_tokens", "cached_tokens",
          "cost_usd", "tokens_seen", "replayed_calls")
 
+#: The LLM agent's switches (:meth:`jswim.agents.variants.LLMAgentConfig.knobs` and what the
+#: driver adds); the last two are written only where set.
+SWITCHES = ("summary", "shuffle", "temperature", "order", "share_identical", "constraint", "max_tokens",
+            "pair_prompt", "temperature_sent")
+_WHERE_SET = ("pair_prompt", "temperature_sent")
+
 #: The four layouts of a row (bulk or scene world, LLM or not), as written since the columns
-#: existed; ``knobs`` is where the LLM agent's switches go. A layout's order is the in-memory
-#: order; ``runs.jsonl`` sorts its keys.
+#: existed; ``other`` is where columns this version does not know go. A layout's order is the
+#: in-memory order; ``runs.jsonl`` sorts its keys.
 LAYOUTS = {
-    (False, False): HEAD + ("sample", "x", "actions", "progress", "status", "y", "orientation", "knobs"),
+    (False, False): HEAD + ("sample", "x", "actions", "progress", "status", "y", "orientation", "other"),
     (False, True): HEAD + ("sample", "x", "actions", "progress", "status") + USAGE
-    + ("y", "orientation", "below_x_min", "knobs"),
+    + ("y", "orientation", "below_x_min") + SWITCHES + ("other",),
     (True, False): HEAD + SCENE + ("x", "y", "orientation", "actions", "progress", "status") + TRACKS
-    + ("stuck", "knobs"),
+    + ("stuck", "other"),
     (True, True): HEAD + SCENE + ("x", "y", "orientation", "actions", "progress", "status") + USAGE
-    + ("stuck", "below_x_min", "knobs") + TRACKS,
+    + ("stuck", "below_x_min") + SWITCHES + ("other",) + TRACKS,
 }
 
 
@@ -140,10 +146,24 @@ class RunRow(Mapping):
         What the run's calls cost (USD).
     below_x_min : int or None
         First step whose x fell below ``x_min`` (LLM runs).
-    knobs : Mapping
-        The LLM agent's switches (:meth:`jswim.agents.variants.LLMAgentConfig.knobs`: summary,
-        shuffle, temperature, order, share_identical, constraint, max_tokens, ...), and any column
-        this version does not know (a folder written by another one), in their order.
+    summary, shuffle, share_identical : bool or None
+        The LLM agent's switches (:class:`jswim.agents.variants.LLMAgentConfig`).
+    temperature : float or None
+        The sampling temperature the agent asked for.
+    order : str or None
+        The order of the prompt's options (``"paper"`` or ``"cache"``).
+    constraint : str or None
+        Constrained decoding used: ``"grammar"``, ``"json_schema"``, ``"json_object"`` or ``"none"``.
+    max_tokens : int or None
+        The reply budget sent per call (None: none sent).
+    pair_prompt : str or None
+        Several swimmers: one joint conversation (``"joint"``) or one per swimmer (``"each"``);
+        written only where set.
+    temperature_sent : float or None
+        The temperature the requests carried where the server's model refused the agent's;
+        written only where set.
+    other : Mapping
+        Any column this version does not know (a folder written by another one), in its order.
     """
 
     run_id: str
@@ -205,13 +225,22 @@ class RunRow(Mapping):
     tokens_seen: int | None = None
     replayed_calls: int | None = None
     below_x_min: int | None = None
-    knobs: Mapping[str, Any] = field(default_factory=dict)
+    summary: bool | None = None
+    shuffle: bool | None = None
+    temperature: float | None = None
+    order: str | None = None
+    share_identical: bool | None = None
+    constraint: str | None = None
+    max_tokens: int | None = None
+    pair_prompt: str | None = None
+    temperature_sent: float | None = None
+    other: Mapping[str, Any] = field(default_factory=dict)
 
     def columns(self) -> tuple[str, ...]:
-        """The row's column names in order (its layout, with the knobs in place; a knob named
-        like a column is not one: the row's own value stands)."""
-        knobs = tuple(k for k in self.knobs if k not in _FIELDS)
-        return sum(((knobs if k == "knobs" else (k,)) for k in LAYOUTS[self._kind]), ())
+        """The row's column names in order (its layout, the unknown columns in place)."""
+        other = tuple(k for k in self.other if k not in _FIELDS)
+        return tuple(c for k in LAYOUTS[self._kind] for c in (other if k == "other" else (k,))
+                     if c not in _WHERE_SET or getattr(self, c) is not None)
 
     @property
     def _kind(self) -> tuple[bool, bool]:
@@ -225,17 +254,16 @@ class RunRow(Mapping):
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> RunRow:
         """A row from a record (any version's: old names renamed, missing columns None, unknown
-        ones kept in :attr:`knobs`)."""
+        ones kept in :attr:`other`)."""
         d = upgrade_names(dict(d))
-        names = {f.name for f in dataclasses.fields(cls)} - {"knobs"}
-        return cls(**{k: d.get(k) for k in names}, knobs={k: v for k, v in d.items() if k not in names})
+        return cls(**{k: d.get(k) for k in _FIELDS}, other={k: v for k, v in d.items() if k not in _FIELDS})
 
     def __getitem__(self, key: str) -> Any:
         if key in _FIELDS:
-            if key not in _IN_LAYOUT[self._kind]:  # a column of another layout (a bulk row's scene)
-                raise KeyError(key)
+            if key not in _IN_LAYOUT[self._kind] or (key in _WHERE_SET and getattr(self, key) is None):
+                raise KeyError(key)  # a column of another layout (a bulk row's scene), or one not set
             return getattr(self, key)
-        return self.knobs[key]
+        return self.other[key]
 
     def __iter__(self) -> Iterator[str]:
         return iter(self.columns())
@@ -244,5 +272,5 @@ class RunRow(Mapping):
         return len(self.columns())
 
 
-_FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"knobs"}
-_IN_LAYOUT = {kind: frozenset(cols) - {"knobs"} for kind, cols in LAYOUTS.items()}
+_FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}
+_IN_LAYOUT = {kind: frozenset(cols) - {"other"} for kind, cols in LAYOUTS.items()}

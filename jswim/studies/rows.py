@@ -18,8 +18,12 @@ from jswim import env
 from jswim.agents.llm import RunResult
 from jswim.judging import lattice
 from jswim.judging.gait import Criterion, GaitReport, judge
-from jswim.results.row import RunRow
+from jswim.results.row import SWITCHES, RunRow
 from jswim.studies.grids import Plan
+
+
+#: An LLM run's switches that are columns of their own: the plan's (its value stands) and the typed ones.
+_PLAN = ("variant", "action_set") + SWITCHES
 
 
 def signs(levels: Sequence[float]) -> str:
@@ -96,7 +100,8 @@ def with_llm(row: RunRow, r: RunResult) -> RunRow:
         http_retries=u.retries, n_clears=r.n_clears, calls=u.calls, billed_calls=u.billed_calls,
         cache_hits=u.cache_hits, prompt_tokens=u.prompt_tokens, completion_tokens=u.completion_tokens,
         cached_tokens=u.cached_tokens, cost_usd=u.cost_usd, tokens_seen=r.tokens_seen,
-        replayed_calls=r.replayed_calls, below_x_min=r.below_x_min, knobs=dict(r.knobs),
+        replayed_calls=r.replayed_calls, below_x_min=r.below_x_min,
+        **{k: r.knobs.get(k) for k in SWITCHES}, other={k: v for k, v in r.knobs.items() if k not in _PLAN},
         y=r.y if row.y is None else row.y, orientation=r.orientation if row.orientation is None else row.orientation)
 
 

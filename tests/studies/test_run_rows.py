@@ -3,6 +3,8 @@ in one step, today's columns in today's order, and rows that round-trip through 
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -88,7 +90,10 @@ def test_bulk_llm_row_merges_the_runs_fields():
         ["y", "orientation", "below_x_min"] + KNOB_COLUMNS
     assert row.status == "below_x_min" and row.calls == 4 and row.cost_usd == 0.25 and row.tokens_seen == 108
     assert row.y == [0.0] * 4 and row.orientation == [0.1] * 4  # the run's own trajectory
-    assert row["max_tokens"] == 64 and row["variant"] == "paper"  # a knob, and the plan's column
+    assert row.max_tokens == 64 and row["constraint"] == "none" and row["variant"] == "paper"  # the plan's column
+    assert "pair_prompt" not in row and "temperature_sent" not in row  # written only where set
+    sent = rows.with_llm(judged, dataclasses.replace(_result(plan), knobs={**KNOBS, "temperature_sent": 1.0}))
+    assert list(sent.to_dict())[-1] == "temperature_sent" and sent.temperature_sent == 1.0
 
 
 @pytest.mark.parametrize("scene", [wall_scene(3.0), pair_scene(30.0)])
