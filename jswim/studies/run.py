@@ -51,7 +51,7 @@ from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.scenes import Scene
-from jswim.results import StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
+from jswim.results import RunRow, StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
 from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTINUOUS_AGENT, SPECS, SWIM_VARIANT, Plan,
                                  StudyOptions, build)
 from jswim.studies import prompt_files
@@ -341,18 +341,18 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
-    constraint = sorted({r["constraint"] for r in rows if r.get("agent") == "llm" and r.get("constraint")})
+    llm = [r for r in map(RunRow.from_dict, rows) if r.agent == "llm"]
+    constraint = sorted({r.constraint for r in llm if r.constraint})
     failed = [{"run_id": r["run_id"], "error": r.get("error")} for r in rows if is_failed(r)]
-    llm = [r for r in rows if r.get("agent") == "llm"]
     cut: dict[str, int] = {}  # max_tokens -> replies cut off there (the limit is per swimmer)
     for r in llm:
-        if r.get("truncated"):
-            cut[str(r.get("max_tokens"))] = cut.get(str(r.get("max_tokens")), 0) + r["truncated"]
+        if r.truncated:
+            cut[str(r.max_tokens)] = cut.get(str(r.max_tokens), 0) + r.truncated
     replies = {"truncated_replies": sum(cut.values()), "truncated_at": cut} if llm else {}
-    cut_thinking = sum(r.get("cut_thinking") or 0 for r in llm)
+    cut_thinking = sum(r.cut_thinking or 0 for r in llm)
     if llm:
         replies["cut_while_thinking"] = cut_thinking
-        replies["reasoning_tokens"] = sum(r.get("reasoning_tokens") or 0 for r in llm)
+        replies["reasoning_tokens"] = sum(r.reasoning_tokens or 0 for r in llm)
     # What a reasoning model was sent (this session's, else the one that ran LLM runs).
     sent = sent or dict((store.meta.get("summary") or {}).get("reasoning") or {})
     status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
