@@ -57,9 +57,9 @@ from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTIN
 from jswim.studies import prompt_files
 # The execution and the session, in their own modules; their names stay importable from here.
 from jswim.studies.execute import (STORED, ProgressFn, _configs, _groups, _lattice,  # noqa: F401
-                                   _run_continuous, _run_llm, _spec)
+                                   _row, _run_continuous, _run_llm, _spec)
 from jswim.studies.rows import judged_rows as _judge_rows
-from jswim.studies.session import _preflight, add_session, cap_check  # noqa: F401
+from jswim.studies.session import _preflight, _record_session, add_session, cap_check  # noqa: F401
 from jswim.studies.report import draw_figures, summarize
 
 
