@@ -775,7 +775,7 @@ def as_remote(monkeypatch: Any) -> None:
     import jswim.llm.client
     import jswim.llm.dryrun
     import jswim.llm.urls
-    import jswim.studies.run
+    import jswim.studies.session
 
-    for module in (jswim.llm.urls, jswim.llm.client, jswim.llm.dryrun, jswim.studies.run):
+    for module in (jswim.llm.urls, jswim.llm.client, jswim.llm.dryrun, jswim.studies.session):
         monkeypatch.setattr(module, "is_local_host", lambda url: False)

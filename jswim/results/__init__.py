@@ -36,6 +36,7 @@ from jswim.results.read import (  # noqa: F401
     transcript_steps,
     unfinished_note,
 )
+from jswim.results.row import RunRow  # noqa: F401
 from jswim.results.schema import (  # noqa: F401
     FAILED_STATUSES,
     RENAMED,

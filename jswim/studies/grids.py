@@ -21,7 +21,7 @@ from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
 from jswim.agents.defaults import paper_init
 from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.agents.protocol import derived_seed
-from jswim.agents.variants import (VARIANTS, check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
+from jswim.agents.variants import (check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
                                    variant_action_set)
 from jswim.env import all_inits
 from jswim.env.worlds import registered_worlds

@@ -1,13 +1,13 @@
 """Running a study: build its plans, run what is not done yet, store and summarise.
 
 Execution groups the plans (:mod:`jswim.studies.grids`): Q-learning and random-policy runs
-train/roll out in one vectorised call per swimmer; LLM runs are per-run pipelines
-(:class:`jswim.agents.llm.LLMDriver`), each moving on as soon as its own reply is back, and each
-lands in the study folder (:class:`jswim.results.StudyStore`) the moment it ends. Every answered
-call is journaled first (``calls.jsonl``, :class:`jswim.llm.journal.CallJournal`), so an
-interrupted or capped study resumes without paying for a call twice. Every run, whatever its
-agent, is judged by the same code, :func:`jswim.judging.gait.judge`, with the study's
-:class:`jswim.judging.gait.Criterion`.
+train/roll out in one vectorised call per swimmer (here and in :mod:`jswim.studies.execute`);
+LLM runs are per-run pipelines (:func:`jswim.studies.execute._run_llm`), each landing in the study
+folder (:class:`jswim.results.StudyStore`) the moment it ends, with the server's preflight and the
+cost cap of :mod:`jswim.studies.session`. Every run, whatever its agent, is judged by the same
+code, :func:`jswim.judging.gait.judge`, with the study's :class:`jswim.judging.gait.Criterion`,
+and becomes one :class:`jswim.results.RunRow` (:mod:`jswim.studies.rows`). The names of those
+modules stay importable from here.
 
 A study's identity (what a folder is compared on when resumed) is what defines its runs: the
 grid's settings, the seed, the model and its sampling, the prompt template. Not in it: the
@@ -29,7 +29,7 @@ import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Sequence
 
 import jax
 import numpy as np
@@ -37,80 +37,33 @@ import numpy as np
 from jswim import __version__, env
 from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
-from jswim.agents.variants import VARIANTS, LLMRunSpec, variant_config
-from jswim.console import eta
-from jswim.judging import lattice
+from jswim.agents.variants import VARIANTS
 from jswim.errors import ConfigError, JswimError, JswimWarning
-from jswim.judging.gait import Criterion, GaitReport, judge
+from jswim.judging.gait import Criterion
 from jswim.llm.backend import Backend
-from jswim.llm.budget import Budget
 from jswim.llm.credentials import scrub
 from jswim._io.permissions import private_files
-from jswim.llm.client import ClientSettings, LLMClient
+from jswim.llm.client import ClientSettings
 from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
-from jswim.llm.journal import CallJournal
-from jswim.llm.pacing import Pacer
 from jswim.llm.probe import ServerInfo
-from jswim.llm.sampling import describe as describe_sampling
 from jswim.llm.errors import LLMError
-from jswim.llm.urls import is_local_host
-from jswim.llm.usage import PRICES_AS_OF, UsageTotals, cap_refusal
+from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.scenes import Scene
-from jswim.results import StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
+from jswim.results import RunRow, StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
 from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTINUOUS_AGENT, SPECS, SWIM_VARIANT, Plan,
                                  StudyOptions, build)
 from jswim.studies import prompt_files
+# The execution and the session, in their own modules; their names stay importable from here.
+from jswim.studies.execute import (STORED, ProgressFn, _configs, _groups, _lattice,  # noqa: F401
+                                   _row, _run_continuous, _run_llm, _spec)
+from jswim.studies.rows import judged_rows as _judge_rows
+from jswim.studies.session import _preflight, _record_session, add_session, cap_check  # noqa: F401
 from jswim.studies.report import draw_figures, summarize
 
 
 # -- execution ----------------------------------------------------------------------------------
-
-
-def _judge_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, levels0: np.ndarray,
-                horizon: int, extra: Sequence[dict[str, Any]] | None = None,
-                pose: tuple[np.ndarray, np.ndarray] | None = None, report: GaitReport | None = None,
-                moves: Sequence[list[list[float]]] | None = None) -> list[dict[str, Any]]:
-    """Rows for a batch of runs of one swimmer and ROC lattice, judged by the shared success criterion.
-
-    ``levels0`` holds the starts' lattice positions (levels on the paper's K = 1). ``pose``
-    gives the centroid y and the orientation after each step, shape ``(runs, steps)`` each, for
-    the trajectories (LLM runs bring theirs in ``extra``). The real-valued agent brings its own
-    ``report`` (:func:`jswim.agents.ppo.evaluate`) and ``moves`` (``[dof, roc]`` per step)."""
-    p0 = plans[0]
-    k = p0.roc_levels
-    params = env.make_params(p0.swimmer)
-    params = params.replace(direction=np.array([p.direction for p in plans], float))
-    rep = report if report is not None else judge(actions, params, levels0=levels0,
-                                                 criterion=Criterion(horizon=horizon), roc_levels=k)
-    rows = []
-    for i, p in enumerate(plans):
-        x = [float(v) for v in xs[i]]
-        prog = np.diff(np.concatenate([[0.0], xs[i]])) * p.direction
-        row = {
-            "run_id": p.run_id, "agent": p.agent, "swimmer": p.swimmer, "direction": p.direction,
-            "init": "".join("+" if v > 0 else "-" for v in levels0[i]), "zeta": p.zeta, "seed": p.seed,
-            "n_ht": p.n_ht, "drop": ",".join(sorted(p.drop)), "action_set": p.action_set, "group": p.group,
-            "variant": p.variant,
-            "steps": len(x), "final_x": x[-1] if x else 0.0,
-            "signed_final_x": p.direction * (x[-1] if x else 0.0),
-            "success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
-            "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
-            "period": int(rep.period[i]),
-            "roc_levels": k, "sample": p.sample,
-            "x": x, "actions": moves[i] if moves is not None else [list(lattice.decode(int(a), max(k, 1)))
-                                                                  for a in actions[i]],
-            "progress": [float(v) for v in prog], "status": "done",
-        }
-        if pose is not None:
-            row["y"] = [float(v) for v in pose[0][i]]
-            row["orientation"] = [float(v) for v in pose[1][i]]
-        if extra is not None:
-            row.update({k: v for k, v in extra[i].items() if k not in row})
-            row["status"] = extra[i].get("status", "done")  # an LLM run the server failed is not done
-        rows.append(row)
-    return rows
 
 
 def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
@@ -137,41 +90,6 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         run = random_policy.run_batch(keys, params, p0.steps, p0.action_set)
     return _judge_rows(plans, np.asarray(run.actions), np.asarray(run.x), np.asarray(run.levels0), horizon,
                        pose=(np.asarray(run.y), np.asarray(run.orientation)))
-
-
-def _lattice(roc_levels: int) -> dict[str, int]:
-    """``make_params`` keywords of a ROC lattice (none for the paper's K = 1)."""
-    return {} if roc_levels == 1 else {"roc_levels": roc_levels}
-
-
-def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """The real-valued RL baseline (:mod:`jswim.agents.ppo`) for one swimmer, judged on shapes
-    (:func:`jswim.agents.ppo.evaluate`: :func:`jswim.judging.shape_judge.judge_shapes` on displacements
-    replayed exactly, without noise)."""
-    from jswim.agents import ppo, qlearning
-
-    p0 = plans[0]
-    base = env.make_params(p0.swimmer)
-    init = np.array([[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32)
-    params = qlearning.batch_params(base, len(plans), zeta=np.array([p.zeta for p in plans]),
-                                    direction=np.array([p.direction for p in plans], float), init=init)
-    keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
-    run = ppo.train_batch(keys, params, ppo.PPOConfig(steps=p0.steps))
-    rocs, dofs0 = np.asarray(run.actions, np.float64), np.asarray(run.dofs0, np.float64)
-    rep = ppo.evaluate(run, params, criterion=Criterion(horizon=horizon))
-    dof = np.asarray(run.dof, np.int64)
-    moves = [[[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])] for i in range(len(plans))]
-    span = base.model.hi - base.model.lo
-    corners = np.rint((dofs0 - base.model.lo) / span).astype(np.int64)  # the starts are corners
-    return _judge_rows(plans, np.zeros(dof.shape, np.int64), np.asarray(run.x), corners, horizon,
-                       pose=(np.asarray(run.y), np.asarray(run.orientation)), report=rep, moves=moves)
-
-
-def _groups(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
-    out: dict[tuple, list[Plan]] = {}
-    for p in plans:
-        out.setdefault(tuple(getattr(p, k) for k in keys), []).append(p)
-    return out
 
 
 @dataclass
@@ -205,11 +123,6 @@ SEEDS = "hash of the study seed and the run id"
 
 #: The study's prompt template (written once per folder; its hash is in the identity).
 PROMPT_FILE = "prompt_template.json"
-
-#: Statuses of an LLM run that are stored; one stopped by the cost cap or an interrupt is not, and
-#: starts again on resume (its paid calls replayed from the journal).
-STORED = ("done", "below_x_min", "llm_error")
-
 
 def study_backend(study: str, backend: Backend | None) -> Backend | None:
     """The backend a study runs with: a study that fixes its decoding (the ablation study:
@@ -253,12 +166,6 @@ def default_folder(study: str, o: StudyOptions, backend: Backend | None, root: s
     ident = identity(study, o, backend)
     digest = hashlib.sha256(json.dumps(ident, sort_keys=True, default=str).encode())
     return Path(root) / f"{study}-{digest.hexdigest()[:8]}"
-
-
-#: ``progress(phase, done, total, info)``: runs done of the study's runs, except in the phases
-#: ``"llm"`` and ``"llm-live"``, where the work counted is LLM steps (runs are in ``info``);
-#: ``info`` is a short status text.
-ProgressFn = Callable[[str, int, int, str], None]
 
 
 @private_files()  # the folder and the cache: owner only under the usual umask (jswim._io.permissions)
@@ -430,18 +337,18 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
-    constraint = sorted({r["constraint"] for r in rows if r.get("agent") == "llm" and r.get("constraint")})
+    llm = [r for r in map(RunRow.from_dict, rows) if r.agent == "llm"]
+    constraint = sorted({r.constraint for r in llm if r.constraint})
     failed = [{"run_id": r["run_id"], "error": r.get("error")} for r in rows if is_failed(r)]
-    llm = [r for r in rows if r.get("agent") == "llm"]
     cut: dict[str, int] = {}  # max_tokens -> replies cut off there (the limit is per swimmer)
     for r in llm:
-        if r.get("truncated"):
-            cut[str(r.get("max_tokens"))] = cut.get(str(r.get("max_tokens")), 0) + r["truncated"]
+        if r.truncated:
+            cut[str(r.max_tokens)] = cut.get(str(r.max_tokens), 0) + r.truncated
     replies = {"truncated_replies": sum(cut.values()), "truncated_at": cut} if llm else {}
-    cut_thinking = sum(r.get("cut_thinking") or 0 for r in llm)
+    cut_thinking = sum(r.cut_thinking or 0 for r in llm)
     if llm:
         replies["cut_while_thinking"] = cut_thinking
-        replies["reasoning_tokens"] = sum(r.get("reasoning_tokens") or 0 for r in llm)
+        replies["reasoning_tokens"] = sum(r.reasoning_tokens or 0 for r in llm)
     # What a reasoning model was sent (this session's, else the one that ran LLM runs).
     sent = sent or dict((store.meta.get("summary") or {}).get("reasoning") or {})
     status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
@@ -460,61 +367,9 @@ def _scene_table(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
     """``{"scenes": table}`` of a study with scene runs (:func:`jswim.studies.scenes.scene_summary`), else ``{}``."""
     if not any(r.get("scene") for r in rows):
         return {}
-    from jswim.studies import scenes
+    from jswim.studies import scenes  # lazy: start-up (the scene module, for scene studies only)
 
     return {"scenes": scenes.scene_summary([r for r in rows if not is_failed(r)])}
-
-
-def cap_check(backend: Backend, info: ServerInfo | None, max_cost: float | None) -> None:
-    """Refuse a cost cap the study's calls could not reach (:func:`jswim.llm.usage.cap_refusal`),
-    by the pricing rule of the run and of its dry run alike: the server's listed models
-    (``info``), the host, ``--price-local`` and ``--prices``.
-
-    Raises
-    ------
-    ConfigError
-        One line naming ``--prices``, before any request is sent.
-    """
-    if backend.local or max_cost is None:
-        return
-    s = backend.client_settings(info=info)
-    why = cap_refusal(s.prices, s.model, max_cost, local_host=is_local_host(s.base_url), listed=s.listed_models,
-                      price_local=s.price_local)
-    if why is not None:
-        raise ConfigError(why)
-
-
-def _preflight(store: StudyStore, backend: Backend, server: Any = None, max_cost: float | None = None) -> ServerInfo:
-    """The server's preflight (:meth:`Backend.preflight`), recorded in the study's metadata
-    (``llm_server``); its warnings go out as :class:`~jswim.errors.JswimWarning`. A cost cap the
-    calls could not reach is refused here (:func:`cap_check`), before the status says running."""
-    info = backend.preflight(server)
-    cap_check(backend, info, max_cost)
-    store.set_status("running", llm_server=info.metadata())
-    for text in info.warnings:
-        warnings.warn(text, JswimWarning, stacklevel=3)
-    return info
-
-
-def _record_session(store: StudyStore, backend: Backend, info: ServerInfo, client: LLMClient,
-                    notes: list[str]) -> None:
-    """What the session sent and what the server made of it: the sampling fields (with the
-    server's reported defaults, from the preflight), the decoding form ``auto`` settled on, and
-    why calls were not priced; into the metadata's ``llm_server`` and the printed ``notes``."""
-    s = client.settings
-    record = dict(store.meta.get("llm_server") or info.metadata())
-    record.update(sampling={"preset": backend.sampling, "sent": dict(s.sampling)},
-                  max_concurrency=s.max_concurrency)
-    notes.append(describe_sampling(backend.sampling, backend.family(info), s.sampling))
-    if client.fallbacks:
-        record["constrain_fallbacks"] = list(client.fallbacks)
-        for f in client.fallbacks:
-            notes.append(f"constrained decoding: the server rejected {f['rejected']} ({f['server']}); "
-                         f"--constrain auto moved on to {f['next']}")
-    if client.unpriced:
-        record["unpriced"] = client.unpriced
-        notes.append(f"cost: {client.unpriced}")
-    store.set_status(store.meta.get("status", "running"), llm_server=record)
 
 
 def _write_report(folder: Path, figures: bool) -> None:
@@ -528,178 +383,6 @@ def _write_report(folder: Path, figures: bool) -> None:
     except Exception as exc:  # noqa: BLE001 - the study's results are written; say why the page is not
         warnings.warn(f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries",
                       stacklevel=2)
-
-
-def _spec(p: Plan) -> LLMRunSpec:
-    return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
-                      n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id, roc_levels=p.roc_levels,
-                      scene=p.scene, pair_prompt=p.pair_prompt)
-
-
-def _configs(plans: Sequence[Plan], o: StudyOptions,
-             template: PromptTemplate | None) -> list[tuple[Any, list[Plan]]]:
-    """The LLM plans by agent config: one driver per (variant, action set)."""
-    out = []
-    for (variant, action_set, temp, prompt), group in _groups(plans, "variant", "action_set", "temperature",
-                                                              "prompt_file").items():
-        tpl = PromptTemplate.from_file(prompt) if prompt else template
-        cfg = variant_config(variant, action_set=action_set, share_identical=o.share_identical, x_min=o.x_min,
-                             max_tokens=o.max_tokens, **({"template": tpl} if tpl else {}))
-        if temp is not None:  # a sweep's temperature (each request above 0 carries its own seed)
-            cfg = dataclasses.replace(cfg, temperature=temp)
-        out.append((cfg, group))
-    return out
-
-
-def _row(plan: Plan, r: RunResult, horizon: int) -> dict[str, Any]:
-    """The judged result row of one finished LLM run."""
-    acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
-    xs = np.array([r.x], float).reshape(1, len(r.x))
-    if plan.scene:  # a scene run: judged per swimmer, with the scene's columns (jswim.studies.scenes)
-        from jswim.studies import scenes
-
-        extra = {k: v for k, v in r.as_row().items() if k not in ("x", "actions", "progress", "levels0")}
-        return scenes.llm_row(plan, r, horizon, extra)
-    extra = {k: v for k, v in r.as_row().items() if k not in ("x", "actions", "progress", "stuck", "levels0")}
-    # The judge reads the start as lattice positions: a corner level times K.
-    return _judge_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon, [extra])[0]
-
-
-def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
-             template: PromptTemplate | None, tick: ProgressFn, finished: int, total: int,
-             speed: dict[str, float], max_cost: float | None, sent: dict[str, Any] | None = None,
-             info: ServerInfo | None = None, notes: list[str] | None = None) -> tuple[int, bool]:
-    """Run the LLM plans as per-run pipelines; returns (runs finished, stopped by the cost cap).
-
-    At most ``o.chunk`` runs (default: the concurrency) are in progress at once, across all the
-    study's agent configs; a run that ends is stored at once and the next one starts, so runs
-    finish, and are saved, one by one. ``speed`` (filled in) gets this session's calls (made,
-    billed, replayed from the journal), wall time, tokens and cost; ``sent`` what a reasoning
-    model was sent (:meth:`jswim.llm.reasoning.ReasoningState.describe`).
-    """
-    by_id = {p.run_id: p for p in plans}
-    steps_total = sum(p.steps for p in plans)
-    steps_done = 0
-    t_start = time.perf_counter()
-    totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
-    journal = CallJournal(store.folder)
-    spent_before = journal.spent_usd
-    calls_before = journal.n_calls
-    # Earlier sessions' requests that got no answer may have been billed: still under the cap.
-    unanswered_before = float((store.meta.get("llm_totals") or {}).get("unanswered_usd") or 0.0)
-    budget = Budget(max_cost, spent_usd=spent_before, unanswered_usd=unanswered_before)
-    live: list[LLMClient] = []  # the open client, for its running counts
-
-    def report(phase: str = "llm") -> None:
-        elapsed = time.perf_counter() - t_start
-        rate = steps_done / max(elapsed, 1e-9)
-        info = f"runs {finished}/{total} · {rate:.1f} steps/s"
-        left = eta(elapsed, steps_done / steps_total if steps_total else 0.0)
-        if left is not None and steps_done < steps_total:
-            info += f" · ETA {left}"
-        if live:
-            c = live[0].counts
-            info += f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · ${budget.spent_usd:.4f}"
-            if max_cost is not None:
-                info += f" of ${max_cost:g}"
-            if c.cache_hits or c.shared:
-                info += f" · {c.cache_hits} cached · {c.shared} shared"
-        # The LLM steps are the work (a baseline run takes milliseconds, an LLM step a request):
-        # the bar counts them, so it never reads 99% before the first LLM step.
-        tick(phase, steps_done, steps_total, info)
-
-    def on_step(n: int) -> None:
-        nonlocal steps_done
-        steps_done += n
-
-    def on_done(r: RunResult) -> None:
-        nonlocal finished
-        totals["calls"] += r.usage.calls
-        totals["billed_calls"] += r.usage.billed_calls - r.replayed_calls
-        totals["replayed_calls"] += r.replayed_calls
-        if r.status in STORED:
-            store.add_runs([_row(by_id[r.run_id], r, o.horizon)])
-            journal.forget(r.run_id)
-            finished += 1
-            report()
-
-    async def keep_reporting() -> None:
-        while True:  # a slow model takes seconds per call: show the requests in flight meanwhile
-            await asyncio.sleep(0.5)
-            report("llm-live")
-
-    async def go(settings: ClientSettings, info: ServerInfo) -> None:
-        pacer = Pacer(backend.rpm, backend.tpm, margin=settings.max_concurrency)
-        async with LLMClient(settings, pacer=pacer, budget=budget) as client:
-            live.append(client)
-            _record_session(store, backend, info, client, notes if notes is not None else [])
-            window = asyncio.Semaphore(o.chunk or settings.max_concurrency)
-            reporter = asyncio.ensure_future(keep_reporting())
-            try:
-                await asyncio.gather(*[
-                    run_batch_async([_spec(p) for p in group], client, cfg, store.folder / "transcripts",
-                                    window=window, journal=journal, on_step=on_step, on_done=on_done)
-                    for cfg, group in _configs(plans, o, template)
-                ])
-            finally:
-                reporter.cancel()
-                await asyncio.gather(reporter, return_exceptions=True)
-                if notes is not None:  # fallbacks and pricing are known once calls were answered
-                    notes.clear()
-                _record_session(store, backend, info, client, notes if notes is not None else [])
-
-    # --max-tokens is also the reasoning budget, once reasoning is on (jswim.llm.reasoning).
-    room = {"reasoning_max_tokens": o.max_tokens} if o.max_tokens is not None else {}
-    try:
-        if backend.local:
-            with backend.server() as srv:
-                info = _preflight(store, backend, srv)
-                t_start = time.perf_counter()  # the model's loading time is not LLM work
-                run_sync(go(backend.client_settings(srv, info, **room), info))
-        else:
-            info = info or _preflight(store, backend, max_cost=max_cost)
-            run_sync(go(backend.client_settings(info=info, **room), info))
-    finally:
-        journal.close()
-        if journal.n_calls > calls_before:
-            store.changed = True  # calls were paid for: the folder's status must say how it ended
-        if live and sent is not None and (live[0].reasoning.active or live[0].reasoning.notes
-                                          or live[0].reasoning.effort):
-            sent.update(live[0].reasoning.describe())
-        wall = time.perf_counter() - t_start
-        c = live[0].counts if live else None
-        speed.update(totals, wall_s=wall, calls_per_s=totals["calls"] / wall if wall > 0 else 0.0,
-                     billed_calls_per_s=totals["billed_calls"] / wall if wall > 0 else 0.0,
-                     tokens=c.tokens if c else 0, cost_usd=budget.spent_usd - spent_before,
-                     study_cost_usd=budget.spent_usd, requests=c.requests if c else 0,
-                     retries=c.retries if c else 0, faults=dict(sorted(c.faults.items())) if c else {},
-                     unanswered=c.unanswered if c else 0, unanswered_usd=c.unanswered_usd if c else 0.0)
-        store.meta["llm_totals"] = add_session(store.meta.get("llm_totals"), speed, journal.n_calls)
-    return finished, budget.exhausted
-
-
-def add_session(totals: dict[str, Any] | None, speed: dict[str, Any], answered_calls: int) -> dict[str, Any]:
-    """The study's LLM totals over all its sessions, with one more session's ``speed``.
-
-    ``answered_calls`` is the call journal's count (every answered call of the study, all
-    sessions, finished runs or not), so calls per second divide the study's calls by the study's
-    LLM wall time, never one session's by another's. ``requests`` are HTTP requests sent (what
-    the server counts: first attempts and retries), ``faults`` transient failures by kind,
-    ``unanswered`` requests sent whole that got no answer (the server may have billed them; at most
-    ``unanswered_usd``).
-    """
-    t = dict(totals or {})
-    t["sessions"] = int(t.get("sessions", 0)) + 1
-    for k in ("wall_s", "requests", "retries", "billed_calls", "replayed_calls", "tokens", "unanswered",
-              "unanswered_usd"):
-        t[k] = (t.get(k) or 0) + (speed.get(k) or 0)
-    faults = dict(t.get("faults") or {})
-    for k, n in (speed.get("faults") or {}).items():
-        faults[k] = faults.get(k, 0) + n
-    t["faults"] = dict(sorted(faults.items()))
-    t["answered_calls"] = answered_calls
-    t["calls_per_s"] = answered_calls / t["wall_s"] if t["wall_s"] > 0 else 0.0
-    return t
 
 
 def estimate_study(

@@ -53,6 +53,8 @@ from jswim.env.worlds import make
 from jswim.judging.gait import Criterion, judge
 from jswim.scenes import Scene
 from jswim.swimmers.models import SWIMMERS
+from jswim.results.row import RunRow
+from jswim.studies.rows import build_row, signs, with_llm
 from jswim.studies.grids import CONTINUOUS_AGENT, STROKE_AGENT, Plan
 from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
@@ -262,8 +264,9 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         row = scene_row(p, [int(c) for c in codes[i]], xs[i].mean(axis=-1).tolist(), extra, horizon, z0=z0,
                         tilt0=tilt0, judged=judged[i] or _unjudged(p), moves=moves[i])
         if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
-            row["y"], row["orientation"] = (np.asarray(v[i, :, 0], np.float64).tolist()
-                                            for v in (obs.position[..., 1], obs.orientation))
+            y, orientation = (np.asarray(v[i, :, 0], np.float64).tolist()
+                              for v in (obs.position[..., 1], obs.orientation))
+            row = dataclasses.replace(row, y=y, orientation=orientation)
         rows.append(row)
     return rows
 
@@ -276,11 +279,14 @@ def _unjudged(plan: Plan) -> dict[str, Any] | None:
     return {"success": None, "learned": None, "steps_to_learn": None, "period": 0}
 
 
-def llm_row(plan: Plan, result: Any, horizon: int, extra: dict[str, Any]) -> dict[str, Any]:
-    """The row of a finished LLM run on a scene (``extra``: its as_row fields)."""
+def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
+    """The row of a finished LLM run on a scene (:func:`scene_row` and the run's own fields:
+    :func:`jswim.studies.rows.with_llm`)."""
     scene, world, params = _world(plan)
     _, z0, tilt0, _ = _start(world, params, scene)
-    return scene_row(plan, list(result.actions), list(result.x), extra, horizon, z0=z0, tilt0=tilt0)
+    tracks = {k: getattr(result, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
+    return with_llm(scene_row(plan, list(result.actions), list(result.x), tracks, horizon, z0=z0, tilt0=tilt0),
+                    result)
 
 
 def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dict[str, Any]:
@@ -307,46 +313,29 @@ def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dic
 
 def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any], horizon: int, *,
               z0: np.ndarray, tilt0: np.ndarray, judged: dict[str, Any] | None = None,
-              moves: list[list[float]] | None = None) -> dict[str, Any]:
-    """One row of a scene run: the bulk studies' columns (success by :func:`_judge` on the lattice
-    ``codes``, or the real-valued agent's own verdict ``judged`` and ``moves``), the scene,
-    its medium, start height or distance, per-step ``xs``/``heights``/``tilts``/``contact``, and
-    ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for
-    strokes, ``per_cycle``. ``y`` and ``orientation`` of the trajectories table are swimmer 1's
-    height and tilt."""
+              moves: list[list[float]] | None = None) -> RunRow:
+    """One row of a scene run (:func:`jswim.studies.rows.build_row`): the bulk studies' columns
+    (success by :func:`_judge` on the lattice ``codes``, or the real-valued agent's own verdict
+    ``judged`` and ``moves``) and the scene's: the scene, its medium, start height or distance,
+    the per-step tracks ``extra`` holds (``xs``, ``heights``, ``tilts``, ``contact``, ``stuck``),
+    ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for strokes, ``per_cycle``.
+    ``y`` and ``orientation`` of the trajectories table are swimmer 1's height and tilt."""
     scene = scene_of(plan)
     wall = scene.medium == "wall"
     sw = scene.swimmers
-    heights = extra.get("heights") or []
-    contact = extra.get("contact") or []
-    prog = np.diff(np.concatenate([[0.0], np.asarray(x, np.float64)])) * plan.direction
-    judged = _judge(codes, plan, sw, horizon) if judged is None else judged
-    h1 = [float(h[0]) for h in heights]
-    f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in contact]) if wall else (None, None)
-    row = {
-        "run_id": plan.run_id, "agent": plan.agent, "swimmer": plan.swimmer, "direction": plan.direction,
-        "init": "".join("+" if v > 0 else "-" for v in plan.init) if not isinstance(plan.init, str) else plan.init,
-        "zeta": plan.zeta, "seed": plan.seed, "n_ht": plan.n_ht, "drop": ",".join(sorted(plan.drop)),
-        "action_set": plan.action_set, "group": plan.group, "variant": plan.variant, "steps": len(x),
-        "final_x": x[-1] if x else 0.0, "signed_final_x": plan.direction * (x[-1] if x else 0.0),
-        **judged, "roc_levels": plan.roc_levels,
-        "scene": plan.scene, "medium": scene.medium, "n_swimmers": sw,
-        "start_height": float(z0[0]) if wall else None,
-        "separation": float(scene.separation) if sw > 1 else None,
-        "fate": f, "mean_height": mean_h,
-        "speed": late_speed(x, plan.direction, sw),
-        "per_cycle": per_cycle(x, plan.variant, sw) if plan.agent == STROKE_AGENT else None,
-        "x": [float(v) for v in x],
-        "y": h1 or [float(z0[0])] * len(x), "orientation": [float(t[0]) for t in extra.get("tilts") or []]
-        or [float(tilt0[0])] * len(x),
-        "actions": moves if moves is not None else [list(decode_action(int(c))) for c in codes],
-        "progress": [float(v) for v in prog],
-        "status": "done",
-    }
-    row.update({k: v for k, v in extra.items() if k not in row or k in ("stuck",)})
-    if plan.agent == "llm":
-        row["status"] = extra.get("status", "done")
-    return row
+    h1 = [float(h[0]) for h in extra.get("heights") or []]
+    f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in extra.get("contact") or []]) if wall else (None, None)
+    return build_row(
+        plan, x, moves if moves is not None else [list(decode_action(int(c))) for c in codes],
+        _judge(codes, plan, sw, horizon) if judged is None else judged,
+        init=signs(plan.init) if not isinstance(plan.init, str) else plan.init,
+        scene=plan.scene, medium=scene.medium, n_swimmers=sw, start_height=float(z0[0]) if wall else None,
+        separation=float(scene.separation) if sw > 1 else None, fate=f, mean_height=mean_h,
+        speed=late_speed(x, plan.direction, sw),
+        per_cycle=per_cycle(x, plan.variant, sw) if plan.agent == STROKE_AGENT else None,
+        y=h1 or [float(z0[0])] * len(x),
+        orientation=[float(t[0]) for t in extra.get("tilts") or []] or [float(tilt0[0])] * len(x),
+        **{k: extra.get(k) for k in ("xs", "heights", "tilts", "contact", "stuck")})
 
 
 def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:

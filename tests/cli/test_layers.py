@@ -47,8 +47,6 @@ UNMARKED_ALLOWED = set("""
       
     
     
-    jswim.studies.run->jswim.agents.ppo jswim.studies.run->jswim.agents.qlearning
-    jswim.studies.run->jswim.studies.scenes
     jswim.studies.scenes->jswim.console
     
 """.split())

@@ -1,0 +1,276 @@
+"""One run of a study as a typed row (:class:`RunRow`): its columns, their order, and reading old rows.
+
+Rows are built in one place (:func:`jswim.studies.rows.build_row`) and written by
+:meth:`jswim.results.StudyStore.add_runs`; :func:`jswim.results.read_runs` gives them back as
+plain dicts, under today's names (:func:`jswim.results.schema.upgrade_names`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Iterator
+
+from jswim.results.schema import upgrade_names
+
+#: The columns every row starts with, in their order.
+HEAD = ("run_id", "agent", "swimmer", "direction", "init", "zeta", "seed", "n_ht", "drop", "action_set", "group",
+        "variant", "steps", "final_x", "signed_final_x", "success", "learned", "steps_to_learn", "period",
+        "roc_levels")
+#: A scene run's own columns (None in the paper's world), after :data:`HEAD`.
+SCENE = ("scene", "medium", "n_swimmers", "start_height", "separation", "fate", "mean_height", "speed", "per_cycle")
+#: A scene run's per-step, per-swimmer tracks.
+TRACKS = ("xs", "heights", "tilts", "contact")
+#: An LLM run's calls and replies (None for the other agents).
+USAGE = ("error", "failed_steps", "parse_retries", "truncated", "cut_thinking", "reasoning_tokens", "http_retries",
+         "n_clears", "calls", "billed_calls", "cache_hits", "prompt_tokens", "completion_tokens", "cached_tokens",
+         "cost_usd", "tokens_seen", "replayed_calls")
+
+#: The LLM agent's switches (:meth:`jswim.agents.variants.LLMAgentConfig.knobs` and what the
+#: driver adds); the last two are written only where set.
+SWITCHES = ("summary", "shuffle", "temperature", "order", "share_identical", "constraint", "max_tokens",
+            "pair_prompt", "temperature_sent")
+_WHERE_SET = ("pair_prompt", "temperature_sent")
+
+#: The four layouts of a row (bulk or scene world, LLM or not), as written since the columns
+#: existed; ``other`` is where columns this version does not know go. A layout's order is the
+#: in-memory order; ``runs.jsonl`` sorts its keys.
+LAYOUTS = {
+    (False, False): HEAD + ("sample", "x", "actions", "progress", "status", "y", "orientation", "other"),
+    (False, True): HEAD + ("sample", "x", "actions", "progress", "status") + USAGE
+    + ("y", "orientation", "below_x_min") + SWITCHES + ("other",),
+    (True, False): HEAD + SCENE + ("x", "y", "orientation", "actions", "progress", "status") + TRACKS
+    + ("stuck", "other"),
+    (True, True): HEAD + SCENE + ("x", "y", "orientation", "actions", "progress", "status") + USAGE
+    + ("stuck", "below_x_min") + SWITCHES + ("other",) + TRACKS,
+}
+
+
+@dataclass(frozen=True, eq=False)
+class RunRow(Mapping):
+    """One finished (or failed) run of a study: the record ``runs.jsonl`` holds per line.
+
+    Lengths in sphere radii ``a`` (Purcell: its link length), angles in radians, steps counted
+    from 1; series hold one value per executed step (the state after it). Readers may index a
+    row by column name (``row["final_x"]``, ``row.get("cost_usd")``: a read-only
+    :class:`~collections.abc.Mapping` of :meth:`to_dict`), so code written for the dict rows that
+    :func:`~jswim.results.read_runs` returns takes a fresh row as well, and users' notebooks that
+    index rows keep working; new code reads attributes.
+
+    Attributes
+    ----------
+    run_id : str
+        The run's id in its study (``<group>-<agent>-...``; ``-sample<k>`` for repeats).
+    agent : str
+        ``"llm"``, ``"qlearning"``, ``"random"``, ``"ppo"`` (real-valued ROCs) or ``"stroke"``.
+    swimmer : str
+        ``"purcell"`` or ``"ng"``.
+    direction : int
+        Target direction along x, +1 or -1.
+    init : str
+        Start: one ``+``/``-`` per DOF (at its upper or lower bound), or the plan's text (scenes).
+    zeta : float
+        Noise level of the run (dimensionless, the paper's zeta).
+    seed : int
+        The run's seed (from the study seed and its id).
+    n_ht : int or None
+        History length shown to the LLM (None for the other agents).
+    drop : str
+        Prompt sentences left out (``"S1,S3"``; ``""``: none).
+    action_set : str
+        The actions offered (``"all"`` or the set's name).
+    group : str
+        The cell of the study's grid the run belongs to (``"n_ht=3"``, ``"h=3"``, ...).
+    variant : str
+        LLM protocol variant (:data:`jswim.agents.variants.VARIANTS`; ``""`` for baselines).
+    steps : int
+        Steps executed.
+    final_x : float
+        Centroid x after the last step (a; a scene: the swimmers' mean).
+    signed_final_x : float
+        ``direction * final_x``: the displacement in the target direction.
+    success, learned : bool
+        The study's success criterion (:func:`jswim.judging.gait.judge`), and whether the run
+        ends on a qualifying stroke.
+    steps_to_learn : int or None
+        The step at which the final qualifying stroke starts (None unless learned).
+    period : int
+        Period of the final stroke in steps (0: none; a pair's rows: 0).
+    roc_levels : int
+        K of the ROC lattice (1: the paper's; 0: real ROCs).
+    sample : int or None
+        Which repeat of its setting (``--samples``); paper's world only (None in scene rows).
+    x, progress : list of float
+        Centroid x after each step (a), and each step's displacement in the target direction (a).
+    actions : list of list
+        Each step's ``[dof, roc]`` (ROC in -1, 0, 1, or a real ROC for ``ppo``).
+    status : str
+        ``"done"``, ``"below_x_min"``, or a failure (:data:`jswim.results.schema.FAILED_STATUSES`).
+    y, orientation : list of float or None
+        Centroid y (a) and orientation (rad) after each step; a scene: swimmer 1's height above
+        the wall and tilt.
+    scene : str or None
+        Canonical JSON of the run's :class:`jswim.scenes.Scene`; None (and every scene column
+        None) in the paper's world.
+    medium : str or None
+        ``"wall"`` or ``"free"``.
+    n_swimmers : int or None
+        Swimmers in the scene.
+    start_height : float or None
+        Swimmer 1's middle-sphere height above the wall at the start (a; wall scenes).
+    separation : float or None
+        Distance D between the swimmers at the start (a; several swimmers).
+    fate : str or None
+        A wall run's fate (:data:`jswim.studies.scenes.FATES`).
+    mean_height : float or None
+        Mean height of the run's second half (a; wall scenes).
+    speed : float or None
+        Mean progress per step over the second half, in whole stroke cycles (a per step).
+    per_cycle : float or None
+        A stroke run's displacement per stroke cycle (a; strokes only).
+    xs, heights, tilts : list of list of float or None
+        Per step, each swimmer's displacement (a), height (a) and tilt (rad).
+    contact, stuck : list of bool or None
+        Per step, whether a sphere touched the wall, and whether a swimmer was stuck.
+    error : str or None
+        The server's error of a failed LLM run.
+    failed_steps, parse_retries, truncated, cut_thinking, n_clears : int or None
+        LLM steps without a valid action, follow-ups asked, replies cut at ``max_tokens``, of those
+        cut while reasoning, history clears.
+    reasoning_tokens, prompt_tokens, completion_tokens, cached_tokens, tokens_seen : int or None
+        Tokens the server reported (``tokens_seen``: of every call, cached and shared ones too).
+    http_retries, calls, billed_calls, cache_hits, replayed_calls : int or None
+        Retries, chat calls, calls billed, answered from the disk cache, replayed from the journal.
+    cost_usd : float or None
+        What the run's calls cost (USD).
+    below_x_min : int or None
+        First step whose x fell below ``x_min`` (LLM runs).
+    summary, shuffle, share_identical : bool or None
+        The LLM agent's switches (:class:`jswim.agents.variants.LLMAgentConfig`).
+    temperature : float or None
+        The sampling temperature the agent asked for.
+    order : str or None
+        The order of the prompt's options (``"paper"`` or ``"cache"``).
+    constraint : str or None
+        Constrained decoding used: ``"grammar"``, ``"json_schema"``, ``"json_object"`` or ``"none"``.
+    max_tokens : int or None
+        The reply budget sent per call (None: none sent).
+    pair_prompt : str or None
+        Several swimmers: one joint conversation (``"joint"``) or one per swimmer (``"each"``);
+        written only where set.
+    temperature_sent : float or None
+        The temperature the requests carried where the server's model refused the agent's;
+        written only where set.
+    other : Mapping
+        Any column this version does not know (a folder written by another one), in its order.
+    """
+
+    run_id: str
+    agent: str
+    swimmer: str
+    direction: int
+    init: str
+    zeta: float
+    seed: int
+    n_ht: int | None
+    drop: str
+    action_set: str
+    group: str
+    variant: str
+    steps: int
+    final_x: float
+    signed_final_x: float
+    success: bool
+    learned: bool
+    steps_to_learn: int | None
+    period: int
+    roc_levels: int
+    x: list[float]
+    actions: list[list[float]]
+    progress: list[float]
+    status: str = "done"
+    sample: int | None = None
+    y: list[float] | None = None
+    orientation: list[float] | None = None
+    scene: str | None = None
+    medium: str | None = None
+    n_swimmers: int | None = None
+    start_height: float | None = None
+    separation: float | None = None
+    fate: str | None = None
+    mean_height: float | None = None
+    speed: float | None = None
+    per_cycle: float | None = None
+    xs: list[list[float]] | None = None
+    heights: list[list[float]] | None = None
+    tilts: list[list[float]] | None = None
+    contact: list[bool] | None = None
+    stuck: list[bool] | None = None
+    error: str | None = None
+    failed_steps: int | None = None
+    parse_retries: int | None = None
+    truncated: int | None = None
+    cut_thinking: int | None = None
+    reasoning_tokens: int | None = None
+    http_retries: int | None = None
+    n_clears: int | None = None
+    calls: int | None = None
+    billed_calls: int | None = None
+    cache_hits: int | None = None
+    prompt_tokens: int | None = None
+    completion_tokens: int | None = None
+    cached_tokens: int | None = None
+    cost_usd: float | None = None
+    tokens_seen: int | None = None
+    replayed_calls: int | None = None
+    below_x_min: int | None = None
+    summary: bool | None = None
+    shuffle: bool | None = None
+    temperature: float | None = None
+    order: str | None = None
+    share_identical: bool | None = None
+    constraint: str | None = None
+    max_tokens: int | None = None
+    pair_prompt: str | None = None
+    temperature_sent: float | None = None
+    other: Mapping[str, Any] = field(default_factory=dict)
+
+    def columns(self) -> tuple[str, ...]:
+        """The row's column names in order (its layout, the unknown columns in place)."""
+        other = tuple(k for k in self.other if k not in _FIELDS)
+        return tuple(c for k in LAYOUTS[self._kind] for c in (other if k == "other" else (k,))
+                     if c not in _WHERE_SET or getattr(self, c) is not None)
+
+    @property
+    def _kind(self) -> tuple[bool, bool]:
+        """(a scene's row, an LLM run's row): the key of its layout in :data:`LAYOUTS`."""
+        return self.medium is not None, self.agent == "llm"
+
+    def to_dict(self) -> dict[str, Any]:
+        """The record ``runs.jsonl`` holds: the columns of the row's layout, in order."""
+        return {k: self[k] for k in self.columns()}
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any]) -> RunRow:
+        """A row from a record (any version's: old names renamed, missing columns None, unknown
+        ones kept in :attr:`other`)."""
+        d = upgrade_names(dict(d))
+        return cls(**{k: d.get(k) for k in _FIELDS}, other={k: v for k, v in d.items() if k not in _FIELDS})
+
+    def __getitem__(self, key: str) -> Any:
+        if key in _FIELDS:
+            if key not in _IN_LAYOUT[self._kind] or (key in _WHERE_SET and getattr(self, key) is None):
+                raise KeyError(key)  # a column of another layout (a bulk row's scene), or one not set
+            return getattr(self, key)
+        return self.other[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.columns())
+
+    def __len__(self) -> int:
+        return len(self.columns())
+
+
+_FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}
+_IN_LAYOUT = {kind: frozenset(cols) - {"other"} for kind, cols in LAYOUTS.items()}

@@ -1,0 +1,114 @@
+"""A study's result rows (:class:`jswim.results.RunRow`), built in one place.
+
+:func:`build_row` is the one builder: a plan's columns, the x series and what follows from it,
+the judge's verdict and the columns a world adds (a scene's: :func:`jswim.studies.scenes.scene_row`).
+:func:`judged_rows` judges a batch of bulk runs (Q-learning, random, PPO, an LLM run) and builds
+their rows; :func:`with_llm` merges an LLM run's own fields (its calls, tokens, switches) into its
+judged row, in the bulk world and in a scene alike.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from jswim import env
+from jswim.agents.llm import RunResult
+from jswim.judging import lattice
+from jswim.judging.gait import Criterion, GaitReport, judge
+from jswim.results.row import SWITCHES, RunRow
+from jswim.studies.grids import Plan
+
+
+#: An LLM run's switches that are columns of their own: the plan's (its value stands) and the typed ones.
+_PLAN = ("variant", "action_set") + SWITCHES
+
+
+def signs(levels: Sequence[float]) -> str:
+    """A start as text: ``+`` for each DOF at its upper bound, ``-`` at its lower one."""
+    return "".join("+" if v > 0 else "-" for v in levels)
+
+
+def build_row(plan: Plan, x: Sequence[float], actions: list[list[float]], verdict: Mapping[str, Any], *,
+              init: str, **columns: Any) -> RunRow:
+    """The row of one judged run of ``plan``.
+
+    Parameters
+    ----------
+    x : sequence of float
+        Centroid x after each step (a; a scene: the swimmers' mean); gives ``steps``,
+        ``final_x``, ``signed_final_x`` and ``progress``.
+    actions : list of list
+        Each step's ``[dof, roc]``.
+    verdict : mapping
+        ``success``, ``learned``, ``steps_to_learn``, ``period`` (:func:`jswim.judging.gait.judge`
+        or the real-valued agent's own judge).
+    init : str
+        The start as the row shows it (:func:`signs`).
+    **columns
+        Further :class:`~jswim.results.RunRow` columns: ``y``, ``orientation``, a scene's.
+    """
+    x = [float(v) for v in x]
+    end = x[-1] if x else 0.0
+    prog = np.diff(np.concatenate([[0.0], np.asarray(x, np.float64)])) * plan.direction
+    return RunRow(
+        run_id=plan.run_id, agent=plan.agent, swimmer=plan.swimmer, direction=plan.direction, init=init,
+        zeta=plan.zeta, seed=plan.seed, n_ht=plan.n_ht, drop=",".join(sorted(plan.drop)),
+        action_set=plan.action_set, group=plan.group, variant=plan.variant, steps=len(x), final_x=end,
+        signed_final_x=plan.direction * end, **verdict, roc_levels=plan.roc_levels,
+        sample=None if plan.scene else plan.sample, x=x, actions=actions, progress=[float(v) for v in prog],
+        **columns)
+
+
+def verdict(rep: GaitReport, i: int) -> dict[str, Any]:
+    """Run ``i``'s verdict in a judge's report (the keys :func:`build_row` takes)."""
+    return {"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
+            "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None, "period": int(rep.period[i])}
+
+
+def judged_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, levels0: np.ndarray, horizon: int,
+                pose: tuple[np.ndarray, np.ndarray] | None = None, report: GaitReport | None = None,
+                moves: Sequence[list[list[float]]] | None = None) -> list[RunRow]:
+    """Rows for a batch of runs of one swimmer and ROC lattice, judged by the shared success criterion.
+
+    ``levels0`` holds the starts' lattice positions (levels on the paper's K = 1). ``pose``
+    gives the centroid y and the orientation after each step, shape ``(runs, steps)`` each, for
+    the trajectories (an LLM run brings its own: :func:`with_llm`). The real-valued agent brings
+    its own ``report`` (:func:`jswim.agents.ppo.evaluate`) and ``moves`` (``[dof, roc]`` per step)."""
+    k = plans[0].roc_levels
+    params = env.make_params(plans[0].swimmer).replace(direction=np.array([p.direction for p in plans], float))
+    rep = report if report is not None else judge(actions, params, levels0=levels0,
+                                                 criterion=Criterion(horizon=horizon), roc_levels=k)
+    return [build_row(p, xs[i], moves[i] if moves is not None else
+                      [list(lattice.decode(int(a), max(k, 1))) for a in actions[i]], verdict(rep, i),
+                      init=signs(levels0[i]),
+                      **({} if pose is None else {"y": [float(v) for v in pose[0][i]],
+                                                  "orientation": [float(v) for v in pose[1][i]]}))
+            for i, p in enumerate(plans)]
+
+
+def with_llm(row: RunRow, r: RunResult) -> RunRow:
+    """``row`` (an LLM run's judged row) with the run's own fields: its status and error, calls,
+    tokens, cost, replies cut or retried, the agent's switches (:attr:`RunResult.knobs`), and its
+    trajectory's y and orientation where the row has none (the bulk world's)."""
+    u = r.usage
+    return dataclasses.replace(
+        row, status=r.status, error=r.error, failed_steps=r.failed_steps, parse_retries=r.parse_retries,
+        truncated=r.truncated, cut_thinking=r.cut_thinking, reasoning_tokens=u.reasoning_tokens,
+        http_retries=u.retries, n_clears=r.n_clears, calls=u.calls, billed_calls=u.billed_calls,
+        cache_hits=u.cache_hits, prompt_tokens=u.prompt_tokens, completion_tokens=u.completion_tokens,
+        cached_tokens=u.cached_tokens, cost_usd=u.cost_usd, tokens_seen=r.tokens_seen,
+        replayed_calls=r.replayed_calls, below_x_min=r.below_x_min,
+        **{k: r.knobs.get(k) for k in SWITCHES}, other={k: v for k, v in r.knobs.items() if k not in _PLAN},
+        y=r.y if row.y is None else row.y, orientation=r.orientation if row.orientation is None else row.orientation)
+
+
+def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
+    """The judged row of one finished LLM run in the paper's world (a scene's:
+    :func:`jswim.studies.scenes.llm_row`)."""
+    acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
+    xs = np.array([r.x], float).reshape(1, len(r.x))
+    # The judge reads the start as lattice positions: a corner level times K.
+    return with_llm(judged_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon)[0], r)
