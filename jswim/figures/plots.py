@@ -20,22 +20,13 @@ radius) against the execution step ``n``.
 
 from __future__ import annotations
 
-import functools
-import math
-import os
-from collections import defaultdict
-from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
-import matplotlib.pyplot as plt
-import numpy as np
 from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the reading order of tables and panels)
 from jswim.results import unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
-from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
-from jswim.swimmers.models import SwimmerModel, make_model
 
 from jswim.figures.style import (  # noqa: F401  (the style's old home)
     AGENT_STYLE, COLUMN_IN, NOTE_COLOR, PAGE_IN, RC, REFERENCE_STYLE, _styled, tidy,

@@ -26,7 +26,7 @@ from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.credentials import read_api_key
 from jswim.llm.errors import unreachable
-from jswim.llm.local import DEFAULT_MODEL_FILE, LOCAL_KEY_ENV, LocalServer, default_model_path
+from jswim.llm.local import DEFAULT_MODEL_FILE, LOCAL_KEY_ENV, LocalServer
 from jswim.llm.probe import ServerInfo, check_family, probe
 from jswim.llm.reasoning import check_mode
 from jswim.llm.sampling import check_preset, sampling_fields
