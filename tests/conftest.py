@@ -90,7 +90,7 @@ def _malloc_trim() -> None:
 
 #: A process holding more than this after a module drops JAX's compiled programs (GB, resident).
 #: Kept below it, a later module reuses them in memory (no retracing, relowering, reloading).
-_KEEP_PROGRAMS_BELOW_GB = float(os.environ.get("JSWIM_TEST_KEEP_PROGRAMS_GB", "1.0"))
+_KEEP_PROGRAMS_BELOW_GB = float(os.environ.get("JSWIM_TEST_KEEP_PROGRAMS_GB", "0.8"))
 
 
 def _resident_gb() -> float | None:

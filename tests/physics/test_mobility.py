@@ -1,5 +1,6 @@
 """Point-force mobilities (jswim.swimmers.mobility) and the force-free solve: independent checks."""
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -52,11 +53,13 @@ def test_self_image_is_the_first_order_wall_correction():
 
 @pytest.mark.parametrize("wall", [False, True])
 def test_mobility_symmetric_positive_definite(wall):
+    # under jit, as scene steps call it: one compile per size (op by op: ~30, twice the CPU)
+    matrix = jax.jit(mobility.mobility_matrix, static_argnums=2)
     rng = np.random.default_rng(1 + wall)
     for n in (2, 3, 6, 12):
         for _ in range(10):
             pos = random_config(rng, n, wall)
-            m = np.asarray(mobility.mobility_matrix(jnp.asarray(pos), jnp.ones(n), wall))
+            m = np.asarray(matrix(jnp.asarray(pos), jnp.ones(n), wall))
             assert np.abs(m - m.T).max() < 1e-14
             assert np.linalg.eigvalsh(m).min() > 0
 
