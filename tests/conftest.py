@@ -88,21 +88,38 @@ def _malloc_trim() -> None:
         pass
 
 
+#: A process holding more than this after a module drops JAX's compiled programs (GB, resident).
+#: Kept below it, a later module reuses them in memory (no retracing, relowering, reloading).
+_KEEP_PROGRAMS_BELOW_GB = float(os.environ.get("JSWIM_TEST_KEEP_PROGRAMS_GB", "0.8"))
+
+
+def _resident_gb() -> float | None:
+    try:  # Linux: the resident set now (not the peak)
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e9
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 @pytest.fixture(autouse=True, scope="module")
 def _fresh_jax_caches():
-    """Drop JAX's in-memory compiled programs, and figures left open, after each module.
+    """After each module, close the figures it left open; past a memory budget, drop JAX's
+    in-memory compiled programs too.
 
-    Without this the process keeps every program any earlier module compiled (the full run's
-    peak resident set grew to 5.8 GB); what a later module needs again comes back from the
-    session's persistent cache on disk.
+    Keeping every program any earlier module compiled grew the full run's peak resident set to
+    5.8 GB; dropping them after every module made each later module retrace, relower and reload
+    from the session's persistent cache what it shared with earlier ones. So they are dropped
+    only once the process holds more than ``_KEEP_PROGRAMS_BELOW_GB``.
     """
     yield
-    jax.clear_caches()
     plt = sys.modules.get("matplotlib.pyplot")
     if plt is not None:
         plt.close("all")  # pyplot keeps every figure a test made and did not close
-    gc.collect()
-    _malloc_trim()
+    rss = _resident_gb()
+    if rss is None or rss > _KEEP_PROGRAMS_BELOW_GB:
+        jax.clear_caches()
+        gc.collect()
+        _malloc_trim()
 
 
 # -- peak resident set: one line at the end of every run, per process ------------------------------
@@ -134,6 +151,34 @@ def pytest_terminal_summary(terminalreporter):
     total = sum(_worker_peaks.values()) + _peak_rss_gb()
     terminalreporter.write_line(f"peak resident set: {', '.join(parts)}"
                                 + (f" (together at most {total:.2f} GB)" if _worker_peaks else ""))
+
+
+@pytest.fixture(scope="session")
+def small_swim_study() -> Path:
+    """A complete small swim study, built once per session and shared by every worker.
+
+    Purcell and NG toward +x and -x, 8 steps: 1 LLM run (the fake server's hash replies), 3
+    Q-learning and 3 random runs per setting (28 runs), no figures. Tests read it and never write
+    to it (copy it first). The first process to ask builds it under a file lock; the others wait
+    and reuse it, so the session pays for its compiles and runs once.
+    """
+    from filelock import FileLock
+
+    from jswim.studies.grids import StudyOptions
+    from jswim.studies.run import run_study
+    from tests.fakeserver import FakeServer, hash_reply
+
+    home = _ROOT / "studies"
+    home.mkdir(exist_ok=True)
+    folder, built = home / "swim-small", home / "swim-small.built"
+    with FileLock(str(home / "swim-small.lock")):
+        if not built.exists():
+            shutil.rmtree(folder, ignore_errors=True)  # a build cut short by a failed test
+            with FakeServer(reply=hash_reply, latency=0.001) as srv:
+                opts = StudyOptions(swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3)
+                run_study("swim", opts, srv.backend(), folder, figures=False)
+            built.touch()
+    return folder
 
 
 @pytest.fixture

@@ -294,6 +294,7 @@ class FakeServer:
         self.n_answered = 0
         self.n_connections = 0  # TCP connections accepted (keep-alive reuse shows here)
         self.in_flight = 0
+        self._held = 0  # of those in flight, held on purpose by a delay fault (a hang)
         self.max_in_flight = 0
         self._loop: asyncio.AbstractEventLoop | None = None
         self._thread: threading.Thread | None = None
@@ -371,7 +372,9 @@ class FakeServer:
         last, end = -1, time.monotonic() + limit
         while time.monotonic() < end:
             with self._lock:
-                n, busy = self.n_requests, self.in_flight
+                # a request held by a delay fault has been read and counted: no need to wait for
+                # it (a hang of an hour would otherwise hold every settle to its limit)
+                n, busy = self.n_requests, self.in_flight - self._held
             if n == last and not busy:
                 return n
             last = n
@@ -543,7 +546,13 @@ class FakeServer:
             if fault.kind == "malformed":
                 return await self._send(writer, 200, b'{"choices": [ {"message": ')
             if fault.kind == "delay":
-                await asyncio.sleep(fault.seconds)
+                with self._lock:
+                    self._held += 1
+                try:
+                    await asyncio.sleep(fault.seconds)
+                finally:
+                    with self._lock:
+                        self._held -= 1
                 got = self.reply(body)
                 text = got if isinstance(got, (str, Answer)) else ""
         with self._lock:

@@ -49,8 +49,12 @@ def _greedy_actions(q: np.ndarray, levels0: np.ndarray, steps: int, action_set: 
     return out
 
 
-@pytest.mark.parametrize("swimmer", ["purcell", "ng"])
-@pytest.mark.parametrize("action_set", ["all", "shape-changing"])
+@pytest.mark.parametrize("swimmer, action_set", [
+    ("purcell", "all"), ("ng", "shape-changing"),
+    # each case compiles a 600-step training run (~2.5 CPU-s): two in the fast tier, one per swimmer
+    pytest.param("purcell", "shape-changing", marks=pytest.mark.slow),
+    pytest.param("ng", "all", marks=pytest.mark.slow),
+])
 def test_learned_greedy_policy_is_the_signature_cycle(swimmer, action_set):
     # 600 steps: with all six actions NG's learner needs more than 200 steps (see the docs).
     params = _batched(swimmer)

@@ -115,15 +115,21 @@ def test_qlearn_learning_rate_reaches_the_learner(capsys):
 
 
 @pytest.fixture(scope="module")
-def folder(server, tmp_path_factory):
+def figures_folder(server, tmp_path_factory):
     out = tmp_path_factory.mktemp("views") / "swim"
     assert cli.main(["swim", "--swimmer", "both", "--direction", "both", "--runs", "1", "--q-runs", "3",
                      "--steps", "12", "--out", str(out), *backend_args(server)]) == 0
     return out
 
 
+@pytest.fixture
+def folder(small_swim_study):
+    return small_swim_study  # the session's small swim study (tests/conftest.py): read, never written
+
+
 @pytest.mark.slow  # two studies end to end, then show and compare (38 s under load 8)
-def test_show_and_compare_commands(folder, tmp_path, capsys):
+def test_show_and_compare_commands(figures_folder, tmp_path, capsys):
+    folder = figures_folder
     capsys.readouterr()
     assert cli.main(["show", str(folder)]) == 0
     text = capsys.readouterr().out

@@ -121,6 +121,7 @@ def test_ensemble_matches_the_closed_form_and_ignores_the_chunk_size(float32):
     assert np.all(a[1].min <= a[1].quantiles[:, 0]) and np.all(a[1].quantiles[:, -1] <= a[1].max)
 
 
+@pytest.mark.slow  # trains a Q-learner, then a 40-step ensemble (3.5 CPU-s); the closed-form ensemble test stays fast
 def test_ensemble_q_policy_swims_the_square_gait(float32):
     params = env.make_params("purcell")
     pol = ensemble.learned_policy(params, seed=0)

@@ -180,6 +180,7 @@ def test_contact_refuses_the_step_and_stuck():
     assert s.stuck.tolist() == [True, False] and s.x[0, 0] == 0.0
 
 
+@pytest.mark.slow  # compiles the wall scene's noisy step (5 CPU-s); the unbounded world's noise: tests/env/test_env.py
 def test_noise_scales_the_displacement_not_the_tilt():
     scene = Scene(medium="wall", height=6.0)
     clean = scene_rollout("ng", [(1, -1)], scene)

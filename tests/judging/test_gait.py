@@ -46,7 +46,7 @@ def test_reversed_direction_reverses_the_best_cycle():
     assert best_per_step(model, -1) == pytest.approx(best_per_step(model, 1))
 
 
-@pytest.mark.parametrize("swimmer", ["purcell", "ng", "nlink"])
+@pytest.mark.parametrize("swimmer", ["purcell", "ng", pytest.param("nlink", marks=pytest.mark.slow)])  # nlink: 3.5 CPU-s
 def test_replay_matches_the_environment(swimmer):
     # The four-link swimmer starts turned (symmetric about x), so its replay must carry the start
     # orientation through every step, not only the first.

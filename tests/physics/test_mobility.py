@@ -1,10 +1,17 @@
 """Point-force mobilities (jswim.swimmers.mobility) and the force-free solve: independent checks."""
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jswim.swimmers import forcefree, mobility
+from jswim.swimmers import bodyframe, forcefree, mobility
+
+# Under jit, as scene steps call them: one compile per shape (op by op, the matrix and the solve
+# compiled dozens of small programs per shape, about twice the CPU; the block solves below stay op by
+# op: jitted, the wall's solve compiled longer than it ran)
+_matrix = jax.jit(mobility.mobility_matrix, static_argnums=2)
+_solve = jax.jit(forcefree.solve, static_argnums=5)
 
 
 def random_config(rng, n, wall, min_gap=0.0, box=12.0):
@@ -56,7 +63,7 @@ def test_mobility_symmetric_positive_definite(wall):
     for n in (2, 3, 6, 12):
         for _ in range(10):
             pos = random_config(rng, n, wall)
-            m = np.asarray(mobility.mobility_matrix(jnp.asarray(pos), jnp.ones(n), wall))
+            m = np.asarray(_matrix(jnp.asarray(pos), jnp.ones(n), wall))
             assert np.abs(m - m.T).max() < 1e-14
             assert np.linalg.eigvalsh(m).min() > 0
 
@@ -80,7 +87,7 @@ def test_force_and_torque_free(wall):
         arms = jnp.asarray(rng.uniform(6, 10, (2, 2)))
         rates = jnp.asarray([[1.0, 0.0], [0.0, -1.0]])
         obstacles = jnp.asarray([[15.0, 20.0, 2.5]])
-        r = forcefree.solve(centre, tilt, arms, rates, obstacles, wall)
+        r = _solve(centre, tilt, arms, rates, obstacles, wall)
         f = np.asarray(r.forces)
         pos = np.asarray(forcefree.sphere_centres(centre, tilt, arms))
         for s in range(2):
@@ -92,7 +99,7 @@ def test_force_and_torque_free(wall):
         radii = np.ones(7)
         radii[6] = 2.5
         allpos = np.concatenate([pos.reshape(6, 2), np.asarray(obstacles)[:, :2]])
-        v = (np.asarray(mobility.mobility_matrix(jnp.asarray(allpos), jnp.asarray(radii), wall)) @ f.reshape(-1)).reshape(7, 2)
+        v = (np.asarray(_matrix(jnp.asarray(allpos), jnp.asarray(radii), wall)) @ f.reshape(-1)).reshape(7, 2)
         assert np.abs(v[6]).max() < 1e-12
         e = np.stack([np.cos(tilt), np.sin(tilt)], -1)
         q = np.asarray(forcefree.axial_offsets(arms))
@@ -152,8 +159,6 @@ def test_free_fluid_response_solves_each_swimmer_exactly():
     # function of its arms alone, at any pose. One swimmer: one sweep is the LAPACK solve. Two:
     # the Gauss-Seidel sweeps converge to the coupled 12 x 12 LAPACK solve, every sweep force- and
     # torque-free per swimmer (K'^T P = 0)
-    from jswim.swimmers import bodyframe
-
     rng = np.random.default_rng(11)
     for S in (1, 2):
         c = jnp.asarray([[0.0, 9.0], [26.0, 3.0]][:S])

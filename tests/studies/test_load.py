@@ -6,18 +6,11 @@ import numpy as np
 import pytest
 
 from jswim.results import load, read_runs
-from jswim.studies import StudyOptions, run_study
-from tests.fakeserver import FakeServer, hash_reply
 
 
 @pytest.fixture(scope="module")
-def folders(tmp_path_factory):
-    root = tmp_path_factory.mktemp("load")
-    with FakeServer(reply=hash_reply, latency=0.001) as srv:
-        backend = srv.backend()
-        opts = StudyOptions(swimmers=("purcell", "ng"), directions=(-1,), steps=8, runs=1, q_runs=3)
-        run_study("swim", opts, backend, root / "a", figures=False)
-    return (root / "a",)
+def folders(small_swim_study):
+    return (small_swim_study,)  # Purcell and NG toward +x and -x, 8 steps; 1 + 3 + 3 runs per setting
 
 
 def _snapshot(folder):
@@ -30,7 +23,7 @@ def test_load_returns_runs_and_trajectories(folders):
     s = load(a)
     assert _snapshot(a) == before  # read-only
     runs = read_runs(a)
-    assert len(s.runs) == len(runs) == 2 * (1 + 3 + 3) and s.name == "swim" and s.status == "complete"
+    assert len(s.runs) == len(runs) == 2 * 2 * (1 + 3 + 3) and s.name == "swim" and s.status == "complete"
     assert {"run_id", "agent", "swimmer", "direction", "success", "signed_final_x"} <= set(s.runs.columns)
     t = s.trajectories
     assert len(t) == len(runs) * 8

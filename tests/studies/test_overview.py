@@ -65,15 +65,13 @@ def test_eta_and_durations():
 
 
 @pytest.fixture(scope="module")
-def folders(tmp_path_factory):
+def folders(small_swim_study, tmp_path_factory):
     root = tmp_path_factory.mktemp("studies")
     with FakeServer(reply=hash_reply, latency=0.001) as srv:
         backend = srv.backend()
-        opts = StudyOptions(swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3)
-        run_study("swim", opts, backend, root / "a", figures=False)
         run_study("swim", StudyOptions(swimmers=("purcell",), directions=(1,), steps=8, runs=2, q_runs=3, seed=1),
                   backend, root / "b", figures=False)
-    return root / "a", root / "b"
+    return small_swim_study, root / "b"  # a: Purcell and NG toward +x and -x, 8 steps
 
 
 def _snapshot(folder):
@@ -110,7 +108,7 @@ def test_show_marks_an_unfinished_study(folders, tmp_path):
 def test_compare_lists_settings_present_in_all(folders):
     a, b = folders
     text = overview.compare_text([a, b])
-    assert text.splitlines()[0].startswith("[1] a (fake): study swim, complete")
+    assert text.splitlines()[0].startswith(f"[1] {a.name} (fake): study swim, complete")
     body = [line for line in text.splitlines() if line.startswith(("llm", "qlearning", "random"))]
     # b has Purcell toward +x only: 3 settings in common, each shown for both studies: one row per
     # study, or one row naming both ([1][2]) where a baseline's numbers agree (seeds 0 and 1 can

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import signal
@@ -22,12 +23,16 @@ ROOT = Path(__file__).resolve().parents[2]
 # A test dependency (pyproject's `test` extra): missing, this module must fail, not skip.
 import bpe_openai  # noqa: E402
 
-O200K = bpe_openai.get_encoding("o200k_base")
+
+@functools.cache
+def _o200k_encoding():
+    # loaded on first use, not at import: every pytest-xdist worker collects (imports) this module
+    return bpe_openai.get_encoding("o200k_base")
 
 
 def o200k(text: str) -> int:
     """The server's token count: the real tokenizer of gpt-4o (independent of jswim's estimate)."""
-    return len(O200K.encode(text))
+    return len(_o200k_encoding().encode(text))
 
 
 #: What the stand-in for a paid API lists at /v1/models (a model it does not list is not priced).

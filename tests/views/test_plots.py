@@ -102,7 +102,8 @@ def test_history_has_one_series_per_n_ht_and_none_hidden():
         assert series[0].get_ydata()[-1] > 0
 
 
-@pytest.mark.parametrize("kind", ["noise", "ablation", "inits"])
+@pytest.mark.parametrize("kind", [  # each draws and saves a grid figure (~2.3 CPU-s): one in the fast tier
+    "noise", pytest.param("ablation", marks=pytest.mark.slow), pytest.param("inits", marks=pytest.mark.slow)])
 def test_grid_figures_show_p_and_mean_per_agent_and_direction(kind, tmp_path):
     if kind == "noise":
         rows = [{**r, "zeta": z, "run_id": f"{r['run_id']}-{z}"} for z in (0.0, 0.5, 3.0) for r in _rows()]

@@ -166,6 +166,7 @@ def test_load_gives_transcripts_and_calls(swim_folder):
 # -- animations ---------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # renders a 19-frame GIF (6 CPU-s); `jswim animate` writes one in the fast tier
 def test_animation_gif_has_a_frame_per_step_and_names_the_model(swim_folder, tmp_path):
     a = jswim.animate(jswim.load(swim_folder))
     assert [t.agent for t in a.tracks] == ["llm", "qlearning", "random"]
@@ -398,14 +399,14 @@ def test_ensemble_table_rows_sit_at_regular_steps():
 
 def test_qlearn_out_writes_a_histogram_that_names_the_agent(tmp_path, capsys):
     out = tmp_path / "ql"
-    assert cli.main(["qlearn", "--swimmer", "purcell", "--direction", "+x", "--seeds", "64", "--steps", "60",
+    assert cli.main(["qlearn", "--swimmer", "purcell", "--direction", "+x", "--seeds", "48", "--steps", "60",
                      "--action-set", "all", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert (out / "qlearn.png").is_file() and (out / "qlearn.pdf").is_file() and "figure:" in text
     import csv
 
     rows = list(csv.DictReader((out / "qlearn.csv").open()))
-    assert len(rows) == 1 and rows[0]["swimmer"] == "purcell" and int(rows[0]["n"]) == 64
+    assert len(rows) == 1 and rows[0]["swimmer"] == "purcell" and int(rows[0]["n"]) == 48  # the 48 learners of the next test: one program
     (tmp_path / "file").write_text("x")
     assert cli.main(["qlearn", "--seeds", "4", "--out", str(tmp_path / "file")]) == 2
 

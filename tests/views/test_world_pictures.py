@@ -53,6 +53,7 @@ def far_ng(tmp_path_factory):
     return out
 
 
+@pytest.mark.slow  # the scenes fixture compiles a wall and a pair scene study (17 CPU-s)
 def test_pair_track_has_both_swimmers_their_dofs_and_the_start(scenes):
     r = next(r for r in rows(scenes / "pair") if r.get("n_swimmers") == 2)
     t = track(r)
@@ -72,6 +73,7 @@ def test_pair_track_has_both_swimmers_their_dofs_and_the_start(scenes):
     assert any(dof >= 3 for dof, _ in r["actions"]) and np.ptp(t.dofs[:, 2:]) > 0
 
 
+@pytest.mark.slow  # the scenes fixture compiles a wall and a pair scene study (17 CPU-s)
 def test_wall_track_starts_at_its_height_and_the_view_holds_the_wall(scenes):
     from jswim.viz.tracks import view_box
 
@@ -106,6 +108,7 @@ def test_gif_view_always_holds_the_whole_ng_swimmer_at_10_10(far_ng):
         assert im.n_frames == a.frames_written  # the count reported is the file's
 
 
+@pytest.mark.slow  # the scenes fixture compiles a wall and a pair scene study (17 CPU-s)
 def test_wall_page_has_the_scenes_table_and_only_its_own_settings(scenes):
     page = write_report(scenes / "wall", figures="none").read_text()
     assert 'id="scenes"' in page and "mean height" in page and "fates" in page
