@@ -196,3 +196,14 @@ def browser_or_skip(**kwargs: Any) -> Browser:
     if find_browser() is None:
         pytest.skip("no Chromium installed (Debian: apt-get install chromium; .ci/run installs it)")
     return Browser(**kwargs)
+
+
+def open_report_run(b: Browser, page: Path, run_id: str) -> None:
+    """Open the report ``page`` in ``b``, select the run ``run_id`` and scroll to its view."""
+    b.open(page.resolve().as_uri())
+    b.eval("window.jswimReport.opened")
+    i = b.eval("JSON.parse(document.getElementById('report-data').textContent).runs"
+               f".filter(r => r.run_id === {json.dumps(run_id)})[0].i")
+    b.eval(f"window.jswimReport.select({i})")
+    b.pump(0.5)
+    b.eval("document.getElementById('browser').scrollIntoView()")

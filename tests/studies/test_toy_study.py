@@ -23,7 +23,7 @@ from jswim.studies.grids import StudyOptions
 from jswim.studies.run import run_study
 from jswim.viz.page import run_payload, write_report
 from jswim.viz.tracks import track
-from tests.browser import browser_or_skip
+from tests.browser import browser_or_skip, open_report_run
 from tests.env.test_toy_world import ToyParams, ToyWorld
 
 ARTIFACTS = os.environ.get("JSWIM_TEST_ARTIFACTS", "test-artifacts")
@@ -109,13 +109,7 @@ def test_toy_page_in_chromium(toy_folder):
     run = next(r["run_id"] for r in res.rows if r["agent"] == "stroke" and r["group"] == f"h={H:g}")
     page = write_report(out, figures="none")
     with browser_or_skip(height=1100) as b:
-        b.open(page.resolve().as_uri())
-        b.eval("window.jswimReport.opened")
-        i = b.eval("JSON.parse(document.getElementById('report-data').textContent).runs"
-                   f".filter(r => r.run_id === {json.dumps(run)})[0].i")
-        b.eval(f"window.jswimReport.select({i})")
-        b.pump(0.5)
-        b.eval("document.getElementById('browser').scrollIntoView()")
+        open_report_run(b, page, run)
         drawn = b.eval("window.jswimReport.drawn()")
         # inside the sphere (half a radius right of its centre, off the centre's cross): its white fill
         inside = b.eval("(() => { var d = window.jswimReport.data(), q = d.pos[window.jswimReport.step()][0],"

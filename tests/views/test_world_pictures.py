@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.browser import browser_or_skip
+from tests.browser import browser_or_skip, open_report_run
 from jswim.studies.grids import StudyOptions
 from jswim.studies.run import run_study
 from jswim.viz import animate as anim_mod
@@ -127,13 +127,7 @@ def _browser():
 
 
 def _open(b, page: Path, run_id: str) -> None:
-    b.open(page.resolve().as_uri())
-    b.eval("window.jswimReport.opened")
-    i = b.eval("JSON.parse(document.getElementById('report-data').textContent).runs"
-               f".filter(r => r.run_id === {json.dumps(run_id)})[0].i")
-    b.eval(f"window.jswimReport.select({i})")
-    b.pump(0.5)
-    b.eval("document.getElementById('browser').scrollIntoView()")
+    open_report_run(b, page, run_id)
 
 
 @pytest.mark.slow
