@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Iterator
+from typing import Any, Iterable, Iterator
 
 from jswim.results.schema import upgrade_names
 
@@ -274,3 +274,22 @@ class RunRow(Mapping):
 
 _FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}
 _IN_LAYOUT = {kind: frozenset(cols) - {"other"} for kind, cols in LAYOUTS.items()}
+
+
+def as_run_rows(rows: Iterable[Mapping[str, Any]]) -> list[RunRow]:
+    """``rows`` as :class:`RunRow` objects: the one entry point of readers given rows by users.
+
+    Parameters
+    ----------
+    rows : iterable of Mapping
+        Run records: :class:`RunRow` objects (passed through unchanged) or dicts, such as
+        :func:`jswim.results.read_runs` returns or a notebook builds (through
+        :meth:`RunRow.from_dict`: old names renamed, missing columns None, unknown ones kept in
+        :attr:`RunRow.other`).
+
+    Returns
+    -------
+    list of RunRow
+        One row per record, in order.
+    """
+    return [r if isinstance(r, RunRow) else RunRow.from_dict(r) for r in rows]
