@@ -37,7 +37,7 @@ from jswim.results.read import (  # noqa: F401
     transcript_steps,
     unfinished_note,
 )
-from jswim.results.row import RunRow, as_run_rows  # noqa: F401
+from jswim.results.row import RunRow, as_run_row, as_run_rows  # noqa: F401
 from jswim.results.schema import (  # noqa: F401
     FAILED_STATUSES,
     RENAMED,

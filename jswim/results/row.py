@@ -276,6 +276,13 @@ _FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}
 _IN_LAYOUT = {kind: frozenset(cols) - {"other"} for kind, cols in LAYOUTS.items()}
 
 
+def as_run_row(row: Mapping[str, Any]) -> RunRow:
+    """``row`` as a :class:`RunRow`: a RunRow passes through, a dict goes through
+    :meth:`RunRow.from_dict` (old names renamed, missing columns None, unknown ones in
+    :attr:`RunRow.other`)."""
+    return row if isinstance(row, RunRow) else RunRow.from_dict(row)
+
+
 def as_run_rows(rows: Iterable[Mapping[str, Any]]) -> list[RunRow]:
     """``rows`` as :class:`RunRow` objects: the one entry point of readers given rows by users.
 
@@ -283,13 +290,11 @@ def as_run_rows(rows: Iterable[Mapping[str, Any]]) -> list[RunRow]:
     ----------
     rows : iterable of Mapping
         Run records: :class:`RunRow` objects (passed through unchanged) or dicts, such as
-        :func:`jswim.results.read_runs` returns or a notebook builds (through
-        :meth:`RunRow.from_dict`: old names renamed, missing columns None, unknown ones kept in
-        :attr:`RunRow.other`).
+        :func:`jswim.results.read_runs` returns or a notebook builds (:func:`as_run_row`).
 
     Returns
     -------
     list of RunRow
         One row per record, in order.
     """
-    return [r if isinstance(r, RunRow) else RunRow.from_dict(r) for r in rows]
+    return [as_run_row(r) for r in rows]
