@@ -23,7 +23,8 @@ OLD = ROOT / "tests" / "data" / "folder-54c2edb"
 READERS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "jswim" / "figures").glob("*.py")) + [
     "jswim/viz/tracks.py", "jswim/viz/animate.py", "jswim/viz/page.py", "jswim/viz/worlds.py", "jswim/overview.py",
     "jswim/studies/report.py", "jswim/studies/run.py", "jswim/studies/scenes.py", "jswim/studies/session.py",
-    "jswim/results/tables.py", "jswim/results/store.py", "jswim/cli/study.py", "jswim/cli/scenes.py",
+    "jswim/results/tables.py", "jswim/results/store.py", "jswim/results/load.py", "jswim/cli/study.py",
+    "jswim/cli/scenes.py",
 ]
 #: The names readers give a run row.
 ROW_NAMES = {"r", "row", "rows", "r0", "run", "first", "ref"}
