@@ -2,7 +2,9 @@
 
 Rows are built in one place (:func:`jswim.studies.rows.build_row`) and written by
 :meth:`jswim.results.StudyStore.add_runs`; :func:`jswim.results.read_runs` gives them back as
-plain dicts, under today's names (:func:`jswim.results.schema.upgrade_names`).
+plain dicts, under today's names (:func:`jswim.results.schema.upgrade_names`), for users;
+the package's readers read :func:`jswim.results.read_run_rows` (typed rows) and convert rows given
+to them with :func:`as_run_rows`.
 """
 
 from __future__ import annotations
