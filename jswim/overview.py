@@ -16,7 +16,7 @@ from jswim._io.paths import path_kind
 from jswim.console import Column, cost_text, plain_table, requests_text
 from jswim.errors import ConfigError, ResultFolderError
 from jswim._io.folderlock import describe_holder, holder
-from jswim.results import read_metadata, read_runs
+from jswim.results import RunRow, as_run_rows, read_metadata, read_run_rows
 from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED
 
 SETTING = ("agent", "swimmer", "direction", "group")
@@ -70,31 +70,33 @@ def _cost_cell(v: Any) -> str:
     return "-" if not v else f"{v:.4f}" if v < 1 else f"{v:.2f}"
 
 
-def grid_order(rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any]) -> list[Mapping[str, Any]]:
+def grid_order(rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any]) -> list[RunRow]:
     """``rows`` (in the order runs finished, which concurrency scrambles) with their groups in the
     order of the study's grid (``group_order`` in the metadata: n_ht 1 before 2 before 10, the
     full prompt before each sentence removed); groups it does not name keep their first place
     after those (folders made before it was recorded: the finishing order)."""
+    rows = as_run_rows(rows)
     import re
 
     order = {g: i for i, g in enumerate(meta.get("group_order") or ())}
     first: dict[Any, int] = {}
     for i, r in enumerate(rows):
-        first.setdefault(r.get("group"), i)
+        first.setdefault(r.group, i)
     # Without a recorded order, one swept number (n_ht=10, T=0.25, zeta=1.5) is put in its order.
     swept = {g: re.fullmatch(r"(\w+)=(-?\d+(?:\.\d+)?)", str(g)) for g in first}
     if not order and all(swept.values()) and len({m.group(1) for m in swept.values()}) == 1:
         order = {g: i for i, g in enumerate(sorted(first, key=lambda g: float(swept[g].group(2))))}
-    return sorted(rows, key=lambda r: (order.get(r.get("group"), len(order)), first[r.get("group")]))
+    return sorted(rows, key=lambda r: (order.get(r.group, len(order)), first[r.group]))
 
 
 def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()) -> list[Mapping[str, Any]]:
     """Summary rows in reading order: agent (LLM first), Purcell before NG, +x before -x, and the
     groups in the order they first appear in ``rows`` (pass them through :func:`grid_order`: the
     order the study's grid has them; zeta 0.5 before 1)."""
+    rows = as_run_rows(rows)
     first: dict[Any, int] = {}
     for i, r in enumerate(rows):
-        first.setdefault(r.get("group"), i)
+        first.setdefault(r.group, i)
 
     def key(s: Mapping[str, Any]) -> tuple:
         a, sw = s.get("agent"), s.get("swimmer")
@@ -142,7 +144,7 @@ class StudyFolder:
         if not self.folder.is_dir():
             raise ResultFolderError(f"{folder}: {path_kind(folder, 'a study folder')}")
         self.meta = read_metadata(self.folder)
-        self.rows = grid_order(read_runs(self.folder), self.meta)
+        self.rows = grid_order(read_run_rows(self.folder), self.meta)
         self.summary = order_summary(summarize(self.rows), self.rows)
 
     @property
@@ -181,14 +183,14 @@ class StudyFolder:
         where = "embedded" if b.get("kind") == "embedded" else (self.meta.get("server") or b.get("base_url") or "remote")
         # Decoding as the runs recorded it (``auto`` is resolved per server: grammar, json_schema
         # or none, i.e. free text); the setting only while no LLM run has finished.
-        used = sorted({str(r["constraint"]) for r in self.rows if r.get("agent") == "llm" and r.get("constraint")})
+        used = sorted({str(r.constraint) for r in self.rows if r.agent == "llm" and r.constraint})
         decoding = ("constrain " + ",".join(used)) if used else f"constrain {b.get('constrain')}"
         if used == ["none"]:
             decoding = "free text (constrain none)"
         temperature = f"temperature {_fmt(b.get('temperature'), 'g')}"
         # A reasoning model that accepts one temperature was sent that one (the runs record it).
-        sent = sorted({r["temperature_sent"] for r in self.rows
-                       if r.get("agent") == "llm" and r.get("temperature_sent") is not None})
+        sent = sorted({r.temperature_sent for r in self.rows
+                       if r.agent == "llm" and r.temperature_sent is not None})
         if sent:
             temperature += f" asked, {','.join(_fmt(t, 'g') for t in sent)} sent (all the model accepts)"
         thinking = (self.meta.get("summary") or {}).get("reasoning") or {}
@@ -203,12 +205,12 @@ class StudyFolder:
 
     def usage(self) -> dict[str, float]:
         """LLM calls, tokens and cost over the finished runs."""
-        llm = [r for r in self.rows if r.get("agent") == "llm"]
+        llm = [r for r in self.rows if r.agent == "llm"]
         return {
-            "calls": sum(r.get("calls") or 0 for r in llm),
-            "prompt_tokens": sum(r.get("prompt_tokens") or 0 for r in llm),
-            "completion_tokens": sum(r.get("completion_tokens") or 0 for r in llm),
-            "cost_usd": sum(r.get("cost_usd") or 0.0 for r in llm),
+            "calls": sum(r.calls or 0 for r in llm),
+            "prompt_tokens": sum(r.prompt_tokens or 0 for r in llm),
+            "completion_tokens": sum(r.completion_tokens or 0 for r in llm),
+            "cost_usd": sum(r.cost_usd or 0.0 for r in llm),
         }
 
     def figures(self) -> list[Path]:
@@ -253,7 +255,7 @@ def unpriced_reason(meta: Mapping[str, Any], cost_usd: float | None) -> str | No
 def show_text(folder: str | Path, width: int | None = None) -> str:
     """What ``jswim show FOLDER`` prints: status, model, settings, usage, summary table, figures."""
     s = StudyFolder(folder)
-    agents = Counter(r.get("agent") for r in s.rows)
+    agents = Counter(r.agent for r in s.rows)
     u = s.usage()
     lines = [f"study {s.study} in {s.folder}: {s.status_text()}", f"model: {s.model_text()}"]
     opts = (s.meta.get("identity") or {}).get("options") or {}
@@ -280,7 +282,7 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     if s.summary:
         cols, rows = summary_table(s.summary)
         lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
-        if any(r.get("scene") for r in s.rows):  # walls and pairs: the scene table too (jswim.studies.scenes)
+        if any(r.scene for r in s.rows):  # walls and pairs: the scene table too (jswim.studies.scenes)
             from jswim.studies.scenes import scene_summary, table, table_note  # lazy: only for a scene study
 
             scene_rows = scene_summary(s.rows)

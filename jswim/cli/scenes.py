@@ -92,7 +92,10 @@ def options(args: argparse.Namespace) -> dict[str, Any]:
 
 def print_table(rows: Sequence[dict[str, Any]]) -> None:
     """The scene table of a study's rows (nothing when it has no scene runs)."""
-    if not any(r.get("scene") for r in rows):
+    from jswim.results import as_run_rows  # lazy: start-up (results loads NumPy)
+
+    rows = as_run_rows(rows)
+    if not any(r.scene for r in rows):
         return
     from jswim.studies.scenes import scene_summary, table, table_note  # lazy: JAX loads only for a study
 

@@ -86,7 +86,10 @@ def _run(study: str, args: argparse.Namespace) -> int:
     for note in result.notes:
         print(note)
     sp = result.llm_speed
-    if not sp and any(r.get("agent") == "llm" for r in result.rows):  # a resume with every LLM run done
+    from jswim.results import as_run_rows  # lazy: start-up (results loads NumPy)
+
+    n_llm = sum(r.agent == "llm" for r in as_run_rows(result.rows))
+    if not sp and n_llm:  # a resume with every LLM run done
         from jswim.llm.journal import CallJournal  # lazy: httpx loads only for commands that run
 
         print(f"LLM calls: none this session (every LLM run was done already; nothing sent, nothing paid); the "
@@ -110,7 +113,6 @@ def _run(study: str, args: argparse.Namespace) -> int:
               "higher --max-cost to continue (no call is paid twice)", file=sys.stderr)
         return EXIT_COST_CAP
     if result.failed_runs:
-        n_llm = sum(r.get("agent") == "llm" for r in result.rows)
         first = result.failed_runs[0]
         print(f"jswim: error: {len(result.failed_runs)} of {n_llm} LLM runs failed ({first['run_id']}: "
               f"{first['error']}); they are recorded as failed in {result.folder}: run the same command to "
@@ -126,7 +128,9 @@ def _print_reasoning(result: Any) -> None:
         print(f"reasoning model: {note}")
     if sent.get("active") and not sent.get("notes"):
         print(f"reasoning: {sent.get('token_field')}={sent.get('budget')} (--reasoning {sent.get('mode')})")
-    thought = sum(r.get("reasoning_tokens") or 0 for r in result.rows if r.get("agent") == "llm")
+    from jswim.results import as_run_rows  # lazy: start-up (results loads NumPy)
+
+    thought = sum(r.reasoning_tokens or 0 for r in as_run_rows(result.rows) if r.agent == "llm")
     if thought:
         print(f"reasoning tokens: {thought:,} (priced as output)")
     if sent.get("active"):
@@ -185,10 +189,12 @@ def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, A
     cols, cells = summary_table(order_summary(summary, rows))
     print_table(cols, cells, title)
     print(SUMMARY_NOTE)
-    llm = [r for r in rows if r.get("agent") == "llm"]
-    if line := describe_constraint(r.get("constraint") for r in llm):
+    from jswim.results import as_run_rows  # lazy: as above
+
+    llm = [r for r in as_run_rows(rows) if r.agent == "llm"]
+    if line := describe_constraint(r.constraint for r in llm):
         print(line)
-    if any(r.get("share_identical") for r in llm):
+    if any(r.share_identical for r in llm):
         print("LLM runs: --share-identical: identical requests of different runs were sent once, so runs from one "
               "start are copies of one run, not independent repeats")
 

@@ -31,6 +31,7 @@ from jswim.figures.style import (
 )
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER
 from jswim.swimmers.models import SwimmerModel, make_model
+from jswim.results import as_run_rows
 
 # -- reference: the signature gait from step 0 ---------------------------------------------------
 
@@ -69,16 +70,17 @@ def signature_reference(rows: Sequence[Mapping[str, Any]]) -> np.ndarray | None:
     closed stroke cycle (:func:`jswim.judging.gait.best_cycles`) from the first step. ``None`` if some
     start is not on that cycle or the swimmer is unknown.
     """
+    rows = as_run_rows(rows)
     if not rows:
         return None
-    steps = max(len(r["x"]) for r in rows)
+    steps = max(len(r.x) for r in rows)
     paths = []
     for r in rows:
-        init = r.get("init")
+        init = r.init
         if not isinstance(init, str) or set(init) - {"+", "-"}:
             return None
         try:
-            p = _signature_path(r["swimmer"], int(r.get("direction", 1)), tuple(int(c == "+") for c in init), steps)
+            p = _signature_path(r.swimmer, int(r.direction or 1), tuple(int(c == "+") for c in init), steps)
         except Exception:  # unknown swimmer or model: no reference, not a broken figure
             return None
         if p is None:
@@ -98,6 +100,7 @@ def _marks(n_steps: int, index: int, count: int) -> tuple[int, int]:
 
 def _mean_curve(ax: Any, rows: Sequence[Mapping[str, Any]], index: int, count: int, *, singles: bool,
                 lw: float, zorder: float, **style: Any) -> Any:
+    rows = as_run_rows(rows)
     xs = target_displacement(rows)
     n = np.arange(xs.shape[1])
     if singles and len(rows) > 1:
@@ -120,13 +123,14 @@ def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, Swimme
     adds a row of stroke-cycle sketches under a swimmer's panels; swimmers with nothing learned
     get none.
     """
+    rows = as_run_rows(rows)
     keys = panel_keys(rows)
     swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
     dirs = _order({k[1] for k in keys}, (1, -1))
     cycles = dict(cycles or {})
     sketch = {sw: any((sw, d) in cycles for d in dirs) for sw in swimmers}
     heights = [h for sw in swimmers for h in ([2.1, 0.65] if sketch[sw] else [2.1])]
-    n_agents = len({r["agent"] for r in rows})
+    n_agents = len({r.agent for r in rows})
     fig, grid, legend_ax, row = _frame(heights, len(dirs), n_agents + int(reference), most=2)
     handles: dict[str, Any] = {}
     counts: dict[str, set[int]] = defaultdict(set)
@@ -187,10 +191,11 @@ def history_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None, r
     n_ht has its own colour, marker and line width (the first drawn widest), so equal curves
     stay visible.
     """
+    rows = as_run_rows(rows)
     keys = panel_keys(rows)
     swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
     dirs = _order({k[1] for k in keys}, (1, -1))
-    n_hts = sorted({r.get("n_ht") for r in rows}, key=lambda v: (v is None, v))
+    n_hts = sorted({r.n_ht for r in rows}, key=lambda v: (v is None, v))
     markers = "osD^vPX*<>"
     cmap = plt.get_cmap("viridis")
     fig, grid, legend_ax, top = _frame([2.1] * len(swimmers), len(dirs), len(n_hts) + int(reference), most=5)

@@ -26,6 +26,7 @@ from jswim.figures.style import (
     PAGE_IN,
     _styled,
 )
+from jswim.results import as_run_rows
 from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER
 
@@ -34,9 +35,9 @@ from jswim.overview import AGENT_ORDER, SWIMMER_ORDER
 
 def _stats(g: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, float, float, float]:
     """``p, p_lo, p_hi`` (Wilson 95%) and ``mean, lo, hi`` (bootstrap 95%) of target-direction X/a."""
-    k = sum(bool(r["success"]) for r in g)
+    k = sum(bool(r.success) for r in g)
     lo, hi = wilson_interval(k, len(g))
-    m, mlo, mhi = mean_interval([r["signed_final_x"] for r in g])
+    m, mlo, mhi = mean_interval([r.signed_final_x for r in g])
     return k / len(g), lo, hi, m, mlo, mhi
 
 
@@ -79,12 +80,13 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
     its interquartile range over the runs that learned (:func:`jswim.judging.stats.learn_stats`, counted
     from 1), each point labelled "k/n" (k of n runs learned; "0/n" on the axis where none did).
     """
+    rows = as_run_rows(rows)
     keys = panel_keys(rows)
     swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
     dirs = _order({k[1] for k in keys}, (1, -1))
     values = [v for v in (order or []) if any(r.get(key) == v for r in rows)]
     values += sorted({r.get(key) for r in rows} - set(values), key=lambda v: (str(type(v)), v))
-    agents = _order({r["agent"] for r in rows}, AGENT_ORDER)
+    agents = _order({r.agent for r in rows}, AGENT_ORDER)
     pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(values)}
     span = (max(pos.values()) - min(pos.values())) if len(pos) > 1 else 1.0
     step = span / max(1, len(pos) - 1) if not numeric else min(np.diff(sorted(pos.values())), default=span)
@@ -107,7 +109,7 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
             ax_l = axes[per * i + 1, j] if learn else None
             sel = _select(rows, sw, d)
             for a_i, agent in enumerate(agents):
-                by = _by([r for r in sel if r["agent"] == agent], key)
+                by = _by([r for r in sel if r.agent == agent], key)
                 vs = [v for v in values if v in by]
                 if not vs:
                     continue
@@ -117,7 +119,7 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
                 handles.setdefault(agent, _errorbars(ax_p, x, stats[:, 0], stats[:, 1], stats[:, 2], numeric, **style))
                 _errorbars(ax_x, x, stats[:, 3], stats[:, 4], stats[:, 5], numeric, **style)
                 if ax_l is not None:
-                    _learn_points(ax_l, x, [learn_stats([r.get("steps_to_learn") for r in by[v]]) for v in vs],
+                    _learn_points(ax_l, x, [learn_stats([r.steps_to_learn for r in by[v]]) for v in vs],
                                   numeric, style)
                 counts[agent].update(len(by[v]) for v in vs)
             ax_p.set_ylim(-0.06, 1.06)
@@ -187,6 +189,7 @@ def competence_figure(rows: Sequence[Mapping[str, Any]], order: Sequence[str], n
     direction; horizontal intervals keep long variant names readable, and the dotted line marks
     the random baseline on the paper's action set (all).
     """
+    rows = as_run_rows(rows)
     keys = panel_keys(rows)
     n = max(1, len(order))
     fig, axes = plt.subplots(len(keys), 2, figsize=(PAGE_IN, (0.17 * n + 0.75) * len(keys) + 0.3), squeeze=False,
@@ -204,7 +207,7 @@ def competence_figure(rows: Sequence[Mapping[str, Any]], order: Sequence[str], n
             ax_x.errorbar(m, y[j], xerr=[[max(0.0, m - mlo)], [max(0.0, mhi - m)]], fmt=style["marker"],
                           color=style["color"], capsize=2, elinewidth=0.8)
         if "random (all)" in by:
-            ax_x.axvline(float(np.mean([r["signed_final_x"] for r in by["random (all)"]])), color="0.5", ls=":", lw=0.8)
+            ax_x.axvline(float(np.mean([r.signed_final_x for r in by["random (all)"]])), color="0.5", ls=":", lw=0.8)
         ax_p.set_yticks(y, [f"{k} (n={len(by[k])})" for k in labels], fontsize=6)
         ax_x.set_yticks(y, [""] * len(labels))  # the entries are named once, on the left
         ax_x.set_ylim(ax_p.get_ylim())

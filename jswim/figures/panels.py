@@ -20,7 +20,7 @@ from jswim.figures.style import (
     RC,
 )
 from jswim.overview import SWIMMER_ORDER
-from jswim.results import writing
+from jswim.results import as_run_rows, writing
 from jswim.swimmers.models import make_model
 
 
@@ -65,10 +65,11 @@ def _order(values: Iterable[Any], order: Sequence[Any]) -> list[Any]:
 
 def panel_keys(rows: Iterable[Mapping[str, Any]]) -> list[tuple[str, int]]:
     """The ``(swimmer, direction)`` panels of ``rows``: Purcell first, +x before -x."""
+    rows = as_run_rows(rows)
     rows = list(rows)
-    swimmers = _order({r["swimmer"] for r in rows}, SWIMMER_ORDER)
-    dirs = _order({int(r.get("direction", 1)) for r in rows}, (1, -1))
-    present = {(r["swimmer"], int(r.get("direction", 1))) for r in rows}
+    swimmers = _order({r.swimmer for r in rows}, SWIMMER_ORDER)
+    dirs = _order({int(r.direction or 1) for r in rows}, (1, -1))
+    present = {(r.swimmer, int(r.direction or 1)) for r in rows}
     return [(s, d) for s in swimmers for d in dirs if (s, d) in present]
 
 
@@ -80,7 +81,8 @@ def _by(rows: Iterable[Mapping[str, Any]], key: str) -> dict[Any, list[Mapping[s
 
 
 def _select(rows: Iterable[Mapping[str, Any]], swimmer: str, direction: int) -> list[Mapping[str, Any]]:
-    return [r for r in rows if r["swimmer"] == swimmer and int(r.get("direction", 1)) == direction]
+    rows = as_run_rows(rows)
+    return [r for r in rows if r.swimmer == swimmer and int(r.direction or 1) == direction]
 
 
 def _dir_text(direction: int) -> str:
@@ -108,11 +110,12 @@ def target_displacement(rows: Sequence[Mapping[str, Any]]) -> np.ndarray:
 
     Column 0 is the start (0); shorter runs are padded with NaN.
     """
-    n = max((len(r["x"]) for r in rows), default=0)
+    rows = as_run_rows(rows)
+    n = max((len(r.x) for r in rows), default=0)
     out = np.full((len(rows), n + 1), np.nan)
     for i, r in enumerate(rows):
         out[i, 0] = 0.0
-        out[i, 1: len(r["x"]) + 1] = np.asarray(r["x"], float) * int(r.get("direction", 1))
+        out[i, 1: len(r.x) + 1] = np.asarray(r.x, float) * int(r.direction or 1)
     return out
 
 

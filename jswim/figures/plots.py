@@ -26,7 +26,7 @@ from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the reading order of tables and panels)
-from jswim.results import unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
+from jswim.results import as_run_rows, unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
 
 from jswim.figures.style import (  # noqa: F401  (the style's old home)
     AGENT_STYLE, COLUMN_IN, NOTE_COLOR, PAGE_IN, RC, REFERENCE_STYLE, _styled, tidy,
@@ -51,6 +51,7 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
 
     ``note`` (e.g. ``"unfinished: 12 of 40 runs"``) is written across the top of each.
     """
+    rows = as_run_rows(rows)
     if not rows:
         return {}
     if study in ("curves", "swim"):
@@ -72,7 +73,7 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
         return scene_figures(study, rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
-        entries = [{**r, "entry": r["group"] if r["agent"] == "llm" else f"{r['agent']} ({r['group']})"} for r in rows]
+        entries = [{**r, "entry": r.group if r.agent == "llm" else f"{r.agent} ({r.group})"} for r in rows]
         order = [v for v in VARIANTS if any(e["entry"] == v for e in entries)]
         order += sorted({e["entry"] for e in entries} - set(order))
         return {"competence": competence_figure(entries, order, note=note)}
@@ -85,12 +86,13 @@ def continuous_figures(rows: Sequence[Mapping[str, Any]], note: str | None = Non
 
     Stroke sketches are drawn for the paper's lattice (K = 1) only, whose cycles go corner to corner.
     """
-    groups = sorted({r["group"] for r in rows}, key=lambda g: (g == "continuous", int(g[2:]) if g[:2] == "K=" else 0))
+    rows = as_run_rows(rows)
+    groups = sorted({r.group for r in rows}, key=lambda g: (g == "continuous", int(g[2:]) if g[:2] == "K=" else 0))
     labels = {g: ("real" if g == "continuous" else g[2:]) for g in groups}
     figs = {"continuous": grid_figure(rows, "group", order=groups, tick_labels=labels,
                                       xlabel="ROC levels K (real: the continuous RL baseline)", note=note)}
     for g in groups:
-        sel = [r for r in rows if r["group"] == g]
+        sel = [r for r in rows if r.group == g]
         cycles = learned_cycles(sel) if g == "K=1" else None
         figs[f"continuous-{'real' if g == 'continuous' else 'K' + g[2:]}"] = curves_figure(sel, cycles=cycles, note=note)
     return figs

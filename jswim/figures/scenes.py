@@ -27,6 +27,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from jswim.figures.style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
+from jswim.results import as_run_rows
 
 STROKE_STYLE = dict(color="black", ls="-", marker="o", label="square stroke")
 _STYLES = {**AGENT_STYLE, "stroke": STROKE_STYLE}
@@ -39,7 +40,8 @@ def _note(fig: Figure, note: str | None) -> None:
 
 def scene_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
     """The figures of a scene study by file name (none without scene rows)."""
-    rows = [r for r in rows if r.get("scene")]
+    rows = as_run_rows(rows)
+    rows = [r for r in rows if r.scene]
     if not rows:
         return {}
     if study == "wall":
@@ -51,21 +53,22 @@ def scene_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
 
 @_styled
 def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
+    rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
     ax = fig.add_subplot()
-    kinds = sorted({str(r.get("swimmer", "ng")) for r in rows})
+    kinds = sorted({str(r.swimmer or "ng") for r in rows})
     for sw in kinds:  # NG (a = sphere radius) and Purcell (a = link length; issue 34)
         tag = f"{sw}, " if len(kinds) > 1 else ""
-        for d in sorted({int(r["direction"]) for r in rows if str(r.get("swimmer", "ng")) == sw}, reverse=True):
-            own = [r for r in rows if r["agent"] == "stroke" and str(r.get("swimmer", "ng")) == sw
-                   and r.get("per_cycle") is not None and int(r["direction"]) == d]
-            pts = sorted((r["start_height"], d * r["per_cycle"]) for r in own if r.get("start_height"))
+        for d in sorted({int(r.direction) for r in rows if str(r.swimmer or "ng") == sw}, reverse=True):
+            own = [r for r in rows if r.agent == "stroke" and str(r.swimmer or "ng") == sw
+                   and r.per_cycle is not None and int(r.direction) == d]
+            pts = sorted((r.start_height, d * r.per_cycle) for r in own if r.start_height)
             if pts:
                 h, v = zip(*pts)
                 ax.plot(h, v, **{**STROKE_STYLE, "label": f"{tag}square stroke ({'+x' if d > 0 else '-x'}), wall",
                                  **({"marker": "s", "ls": "-."} if sw == "purcell" and len(kinds) > 1 else {})})
             # the no-wall reference: the same solver without the wall (NG: "free"; Purcell: bulk RFT)
-            free = [d * r["per_cycle"] for r in own if r.get("medium") in ("free", "bulk")]
+            free = [d * r.per_cycle for r in own if r.medium in ("free", "bulk")]
             if free:
                 ax.axhline(float(np.mean(free)), color="0.4", ls="--", lw=0.8, label=f"{tag}same stroke, no wall")
     ax.set_xscale("log")
@@ -78,21 +81,22 @@ def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
 
 @_styled
 def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
+    rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
     ax = fig.add_subplot()
-    strokes = [r for r in rows if r["agent"] == "stroke" and r.get("separation") and r.get("per_cycle") is not None]
-    for i, dist in enumerate(sorted({r["separation"] for r in strokes})):
-        pts = sorted((int(str(r["variant"]).removeprefix("phase")), r["direction"] * r["per_cycle"])
-                     for r in strokes if r["separation"] == dist)
+    strokes = [r for r in rows if r.agent == "stroke" and r.separation and r.per_cycle is not None]
+    for i, dist in enumerate(sorted({r.separation for r in strokes})):
+        pts = sorted((int(str(r.variant).removeprefix("phase")), r.direction * r.per_cycle)
+                     for r in strokes if r.separation == dist)
         ph, v = zip(*pts)
         ax.plot(ph, v, marker="o", ls="-", color=str(0.15 + 0.5 * i / max(1, len(strokes))), label=f"two strokes, D={dist:g}")
-    alone = [r["direction"] * r["per_cycle"] for r in rows if r["agent"] == "stroke" and not r.get("separation")
-             and r.get("per_cycle") is not None]
+    alone = [r.direction * r.per_cycle for r in rows if r.agent == "stroke" and not r.separation
+             and r.per_cycle is not None]
     if alone:
         ax.axhline(float(np.mean(alone)), color="0.4", ls="--", lw=0.8, label="one swimmer alone")
     agents_at = 4.3  # the agents choose their own phase: a labelled column right of the offsets
     for agent in ("llm", "qlearning", "random", "ppo"):
-        got = [8 * r["signed_final_x"] / r["steps"] for r in rows if r["agent"] == agent and r.get("steps")]
+        got = [8 * r.signed_final_x / r.steps for r in rows if r.agent == agent and r.steps]
         if got:  # 8 steps per joint cycle: the whole run's mean progress per step, times 8
             st = _STYLES[agent]
             ax.plot([agents_at], [float(np.mean(got))], marker=st["marker"], color=st["color"], ls="none",
@@ -108,22 +112,23 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
 
 @_styled
 def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
+    rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
     ax = fig.add_subplot()
-    strokes = [r for r in rows if r["agent"] == "stroke" and r.get("per_cycle") is not None]
-    alone = [r["direction"] * r["per_cycle"] for r in strokes if not r.get("separation")]
+    strokes = [r for r in rows if r.agent == "stroke" and r.per_cycle is not None]
+    alone = [r.direction * r.per_cycle for r in strokes if not r.separation]
     lines: dict[tuple[str, float], list[tuple[int, float]]] = {}
     for r in strokes:
-        if r.get("separation"):
-            form = json.loads(r["scene"]).get("formation", "line")
-            lines.setdefault((form, r["separation"]), []).append((int(r["n_swimmers"]), r["direction"] * r["per_cycle"]))
+        if r.separation:
+            form = json.loads(r.scene).get("formation", "line")
+            lines.setdefault((form, r.separation), []).append((int(r.n_swimmers), r.direction * r.per_cycle))
     for i, ((form, dist), pts) in enumerate(sorted(lines.items())):
         n, v = zip(*sorted(pts + ([(1, float(np.mean(alone)))] if alone else [])))
         ax.plot(n, v, marker="o" if form == "line" else "s", ls="-" if form == "line" else "--",
                 color=str(0.1 + 0.6 * i / max(1, len(lines))), label=f"{form}, D={dist:g}")
     if alone:
         ax.axhline(float(np.mean(alone)), color="0.4", ls=":", lw=0.8, label="one swimmer alone")
-    ax.set_xticks(sorted({int(r["n_swimmers"]) for r in strokes}))
+    ax.set_xticks(sorted({int(r.n_swimmers) for r in strokes}))
     ax.set_xlabel("swimmers N")
     ax.set_ylabel("school X/a per cycle")
     ax.legend(loc="best", fontsize=6)
@@ -134,6 +139,7 @@ def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) ->
 @_styled
 def track_figure(rows: Sequence[Mapping[str, Any]], key: str, note: str | None = None, *,
                  heights: bool) -> Figure:
+    rows = as_run_rows(rows)
     panels = 2 if heights else 1
     fig = Figure(figsize=(COLUMN_IN, 1.8 * panels + 0.4))
     axes = [fig.add_subplot(panels, 1, i + 1) for i in range(panels)]
@@ -142,15 +148,15 @@ def track_figure(rows: Sequence[Mapping[str, Any]], key: str, note: str | None =
     for r in rows:
         if r.get(key) is None:
             continue
-        st = _STYLES.get(r["agent"], AGENT_STYLE["random"])
+        st = _STYLES.get(r.agent, AGENT_STYLE["random"])
         shade = 0.35 + 0.65 * (values.index(r[key]) + 1) / len(values)
-        label = st["label"] if r["agent"] not in seen else None
-        seen.add(r["agent"])
-        steps = np.arange(1, len(r["x"]) + 1)
+        label = st["label"] if r.agent not in seen else None
+        seen.add(r.agent)
+        steps = np.arange(1, len(r.x) + 1)
         kw = dict(color=st["color"], ls=st["ls"], alpha=shade, lw=0.8, label=label)
         if heights:  # the recorded heights (Purcell's row y is its in-plane y)
-            axes[0].plot(steps, [h[0] for h in r["heights"]] if r.get("heights") else r["y"], **kw)
-        axes[-1].plot(steps, r["direction"] * np.asarray(r["x"]), **kw)
+            axes[0].plot(steps, [h[0] for h in r.heights] if r.heights else r.y, **kw)
+        axes[-1].plot(steps, r.direction * np.asarray(r.x), **kw)
     if heights:
         axes[0].set_yscale("log")
         axes[0].set_ylabel("height h/a")

@@ -14,6 +14,7 @@ from jswim.figures.style import (
     _styled,
 )
 from jswim.swimmers.models import SwimmerModel
+from jswim.results import as_run_rows
 from jswim.swimmers.outline import outline
 
 # -- swimmer sketches -------------------------------------------------------------------------
@@ -75,18 +76,19 @@ def learned_cycles(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, int], t
     Returns ``{(swimmer, direction): (levels at the cycle's start, moves, agent)}`` for the
     panels where some run met the success criterion.
     """
+    rows = as_run_rows(rows)
     out = {}
     for sw, d in panel_keys(rows):
-        ok = [r for r in _select(rows, sw, d) if r.get("success") and r.get("steps_to_learn") is not None]
+        ok = [r for r in _select(rows, sw, d) if r.success and r.steps_to_learn is not None]
         if not ok:
             continue
-        r = min(ok, key=lambda r: ({"llm": 0, "qlearning": 1}.get(r["agent"], 2), r["steps_to_learn"]))
-        s, acts = r["steps_to_learn"] - 1, [tuple(a) for a in r["actions"]]  # 1-based count -> index
-        levels = [1 if ch == "+" else 0 for ch in r["init"]]
+        r = min(ok, key=lambda r: ({"llm": 0, "qlearning": 1}.get(r.agent, 2), r.steps_to_learn))
+        s, acts = r.steps_to_learn - 1, [tuple(a) for a in r.actions]  # 1-based count -> index
+        levels = [1 if ch == "+" else 0 for ch in r.init]
         for dof, roc in acts[:s]:
             if roc:
                 levels[dof - 1] = 1 if roc > 0 else 0
-        out[(sw, d)] = (levels, acts[s: s + r["period"]], r["agent"])
+        out[(sw, d)] = (levels, acts[s: s + r.period], r.agent)
     return out
 
 

@@ -31,12 +31,13 @@ from jswim.results.read import (  # noqa: F401
     clean_metadata,
     read_calls,
     read_metadata,
+    read_run_rows,
     read_runs,
     read_transcript,
     transcript_steps,
     unfinished_note,
 )
-from jswim.results.row import RunRow  # noqa: F401
+from jswim.results.row import RunRow, as_run_row, as_run_rows  # noqa: F401
 from jswim.results.schema import (  # noqa: F401
     FAILED_STATUSES,
     RENAMED,

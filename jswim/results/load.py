@@ -18,6 +18,7 @@ from jswim.results.read import (
     read_transcript,
     transcript_steps,
 )
+from jswim.results.row import as_run_rows
 from jswim.results.schema import SCALAR_TYPES
 
 # -- reading a study into pandas ----------------------------------------------------------------
@@ -131,23 +132,22 @@ def load(folder: str | os.PathLike) -> Study:
     traj: dict[str, list[Any]] = {k: [] for k in (*TRAJECTORY_KEYS, "step", "x", "y", "orientation", "target_x",
                                                   "dof", "roc", "progress", "stuck")}
     nan = float("nan")
-    for r in rows:
-        xs = r.get("x") or []
+    for r in as_run_rows(rows):  # the runs table above keeps every column of the file, as written
+        xs = r.x or []
         n = len(xs)
-        direction = r.get("direction", 1) or 1
+        direction = r.direction or 1
         for k in TRAJECTORY_KEYS:
             traj[k] += [r.get(k)] * n
         traj["step"] += list(range(1, n + 1))
         traj["x"] += [float(v) for v in xs]
         traj["target_x"] += [direction * float(v) for v in xs]
-        for k in ("y", "orientation", "progress"):
-            vals = r.get(k)
+        for k, vals in (("y", r.y), ("orientation", r.orientation), ("progress", r.progress)):
             traj[k] += [float(vals[i]) if isinstance(vals, list) and i < len(vals) and vals[i] is not None else nan
                         for i in range(n)]
-        acts = r.get("actions") or []
+        acts = r.actions or []
         traj["dof"] += [int(acts[i][0]) if i < len(acts) else None for i in range(n)]
         traj["roc"] += [acts[i][1] if i < len(acts) else None for i in range(n)]  # real for the continuous agent
-        stuck = r.get("stuck")
+        stuck = r.stuck
         traj["stuck"] += [bool(stuck[i]) if isinstance(stuck, list) and i < len(stuck) else None for i in range(n)]
     trajectories = pd.DataFrame(traj)
     # Nullable dtypes: "not recorded" stays missing instead of turning a column into objects.

@@ -10,6 +10,7 @@ from typing import Any, Iterable, Mapping
 
 from jswim._io.jsonl import SkippedRecord, read_records
 from jswim.errors import ResultFolderError
+from jswim.results.row import RunRow, as_run_rows
 from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_names
 
 
@@ -30,6 +31,23 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
         if rid not in by_id or is_failed(by_id[rid]):
             by_id[rid] = upgrade_names(row)
     return list(by_id.values())
+
+
+def read_run_rows(folder: str | os.PathLike) -> list[RunRow]:
+    """The runs of a study folder as typed rows (:class:`RunRow`), for the package's readers.
+
+    Parameters
+    ----------
+    folder : str or os.PathLike
+        A study folder (see :class:`StudyStore`); a missing ``runs.jsonl`` reads as no runs.
+
+    Returns
+    -------
+    list of RunRow
+        :func:`read_runs`'s records (same rule: first record wins, a failed one is replaced, a
+        damaged line skipped with a warning), each through :meth:`RunRow.from_dict`.
+    """
+    return as_run_rows(read_runs(folder))
 
 
 #: Fields of ``metadata.json`` by the JSON type readers expect of them.

@@ -2,7 +2,9 @@
 
 Rows are built in one place (:func:`jswim.studies.rows.build_row`) and written by
 :meth:`jswim.results.StudyStore.add_runs`; :func:`jswim.results.read_runs` gives them back as
-plain dicts, under today's names (:func:`jswim.results.schema.upgrade_names`).
+plain dicts, under today's names (:func:`jswim.results.schema.upgrade_names`), for users;
+the package's readers read :func:`jswim.results.read_run_rows` (typed rows) and convert rows given
+to them with :func:`as_run_rows`.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Iterator
+from typing import Any, Iterable, Iterator
 
 from jswim.results.schema import upgrade_names
 
@@ -274,3 +276,27 @@ class RunRow(Mapping):
 
 _FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}
 _IN_LAYOUT = {kind: frozenset(cols) - {"other"} for kind, cols in LAYOUTS.items()}
+
+
+def as_run_row(row: Mapping[str, Any]) -> RunRow:
+    """``row`` as a :class:`RunRow`: a RunRow passes through, a dict goes through
+    :meth:`RunRow.from_dict` (old names renamed, missing columns None, unknown ones in
+    :attr:`RunRow.other`)."""
+    return row if isinstance(row, RunRow) else RunRow.from_dict(row)
+
+
+def as_run_rows(rows: Iterable[Mapping[str, Any]]) -> list[RunRow]:
+    """``rows`` as :class:`RunRow` objects: the one entry point of readers given rows by users.
+
+    Parameters
+    ----------
+    rows : iterable of Mapping
+        Run records: :class:`RunRow` objects (passed through unchanged) or dicts, such as
+        :func:`jswim.results.read_runs` returns or a notebook builds (:func:`as_run_row`).
+
+    Returns
+    -------
+    list of RunRow
+        One row per record, in order.
+    """
+    return [as_run_row(r) for r in rows]

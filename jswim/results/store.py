@@ -15,7 +15,7 @@ from jswim._io.folderlock import HOLDER, LOCK, FolderLock
 from jswim._io.jsonl import repair_tail
 from jswim._io.permissions import file_mode, opener
 from jswim.errors import ResultFolderError, StudyFolderError
-from jswim.results.read import clean_metadata, read_runs
+from jswim.results.read import clean_metadata, read_run_rows, read_runs
 from jswim.results.schema import META, RUNS, is_failed, upgrade_names
 from jswim.results.tables import write_tables
 
@@ -270,7 +270,7 @@ class StudyStore:
             rel = path.relative_to(self.folder)
             what = f"{rel}: cut a torn last line ({cut} bytes, from an interrupted write)"
             if path.parent.name == "transcripts":
-                done = {r["run_id"] for r in read_runs(self.folder) if not is_failed(r)} if done is None else done
+                done = {r.run_id for r in read_run_rows(self.folder) if not is_failed(r)} if done is None else done
                 if path.stem in done:  # a finished run is not run again: say what its transcript lost
                     self.repairs.append(f"{what}; the run is finished and is not redone, so the transcript lacks "
                                         "that last record (its end or last step); runs.jsonl keeps the run's "
@@ -300,7 +300,7 @@ class StudyStore:
 
     def done_ids(self) -> set[str]:
         """Run ids already finished (failed runs are not: a resume runs them again)."""
-        return {r["run_id"] for r in self.load_runs() if not is_failed(r)}
+        return {r.run_id for r in read_run_rows(self.folder) if not is_failed(r)}
 
     def add_runs(self, rows: Iterable[Mapping[str, Any]]) -> None:
         """Append finished runs durably (one write and fsync for the batch)."""

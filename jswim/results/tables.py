@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from jswim._io.atomic import atomic_write, dumps
+from jswim.results.row import as_run_rows
 from jswim.results.schema import SCALAR_TYPES
 
 
@@ -35,14 +36,13 @@ def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
     writer.writerows(table_rows)
     atomic_write(folder / "runs.csv", buf.getvalue())
     traj = []
-    for r in runs:
-        xs = r.get("x") or []
-        for i, x in enumerate(xs):
+    for r in as_run_rows(runs):
+        for i, x in enumerate(r.x or []):
             traj.append({
-                "run_id": r["run_id"], "step": i + 1, "x": x,
-                "y": _at(r.get("y"), i), "orientation": _at(r.get("orientation"), i),
-                "action": _at(r.get("actions"), i), "progress": _at(r.get("progress"), i),
-                "stuck": _at(r.get("stuck"), i),
+                "run_id": r.run_id, "step": i + 1, "x": x,
+                "y": _at(r.y, i), "orientation": _at(r.orientation, i),
+                "action": _at(r.actions, i), "progress": _at(r.progress, i),
+                "stuck": _at(r.stuck, i),
             })
     import pyarrow as pa  # lazy: ~0.3 s of import that only the tables at a session's end need
     import pyarrow.parquet as pq

@@ -6,7 +6,7 @@ import json
 from pathlib import Path
 from typing import Any, Sequence
 
-from jswim.results import is_failed
+from jswim.results import as_run_rows, is_failed
 from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
 
 
@@ -23,6 +23,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
     Failed runs (:func:`jswim.results.is_failed`: the server stopped them) are left out: they
     are not results, and the study reports them apart."""
+    rows = as_run_rows(rows)
     out = []
     keys = ("agent", "swimmer", "direction", "group")
     grouped: dict[tuple, list[dict]] = {}
@@ -31,24 +32,24 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             continue
         grouped.setdefault(tuple(r.get(k) for k in keys), []).append(r)
     for key, g in sorted(grouped.items(), key=lambda kv: tuple(str(v) for v in kv[0])):
-        k = sum(bool(r["success"]) for r in g)
+        k = sum(bool(r.success) for r in g)
         lo, hi = wilson_interval(k, len(g))
-        m, mlo, mhi = mean_interval([r["signed_final_x"] for r in g])
-        ls = learn_stats([r.get("steps_to_learn") for r in g])
-        steps = sum(r["steps"] for r in g) or 1
-        tokens = sum(r["tokens_seen"] if r.get("tokens_seen") is not None
-                     else (r.get("prompt_tokens") or 0) + (r.get("completion_tokens") or 0) for r in g)
-        distinct = len({(r.get("init"), json.dumps(r.get("actions"))) for r in g})
+        m, mlo, mhi = mean_interval([r.signed_final_x for r in g])
+        ls = learn_stats([r.steps_to_learn for r in g])
+        steps = sum(r.steps for r in g) or 1
+        tokens = sum(r.tokens_seen if r.tokens_seen is not None
+                     else (r.prompt_tokens or 0) + (r.completion_tokens or 0) for r in g)
+        distinct = len({(r.init, json.dumps(r.actions)) for r in g})
         out.append({
             **dict(zip(keys, key)), "n": len(g), "distinct": distinct,
-            "samples": len({int(r.get("sample") or 0) for r in g}),
+            "samples": len({int(r.sample or 0) for r in g}),
             "success_rate": k / len(g), "success_lo": lo, "success_hi": hi,
             "mean_x": m, "mean_x_lo": mlo, "mean_x_hi": mhi,
             "steps_to_learn_q25": ls.q25, "steps_to_learn_median": ls.median, "steps_to_learn_q75": ls.q75,
             "learned": ls.learned, "tokens_per_step": tokens / steps if tokens else None,
-            "failed_steps": sum(r.get("failed_steps") or 0 for r in g),
-            "parse_retries": sum(r.get("parse_retries") or 0 for r in g),
-            "cost_usd": sum(r.get("cost_usd") or 0.0 for r in g),
+            "failed_steps": sum(r.failed_steps or 0 for r in g),
+            "parse_retries": sum(r.parse_retries or 0 for r in g),
+            "cost_usd": sum(r.cost_usd or 0.0 for r in g),
         })
     return out
 
@@ -59,6 +60,7 @@ def draw_figures(study: str, rows: Sequence[dict[str, Any]], folder: str | Path,
 
     ``note`` (see :func:`jswim.results.unfinished_note`) is written across each figure.
     """
+    rows = as_run_rows(rows)
     from jswim.figures import plots  # lazy: matplotlib is ~0.5 s of import that --no-figures never needs
 
     paths: list[Path] = []

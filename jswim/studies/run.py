@@ -51,7 +51,7 @@ from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.scenes import Scene
-from jswim.results import RunRow, StudyFolderError, StudyStore, is_failed, read_runs, write_json, writing
+from jswim.results import RunRow, StudyFolderError, StudyStore, as_run_rows, is_failed, read_run_rows, read_runs, write_json, writing
 from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTINUOUS_AGENT, SPECS, SWIM_VARIANT, Plan,
                                  StudyOptions, build)
 from jswim.studies import prompt_files
@@ -332,14 +332,15 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
     names = {p.run_id: i for i, p in enumerate(plans)}
     rows = sorted((r for r in read_runs(folder) if r["run_id"] in names), key=lambda r: names[r["run_id"]])
-    summary = summarize(rows)
-    scene_table = _scene_table(rows)
+    typed = as_run_rows(rows)  # StudyResult.rows stay the dicts of read_runs (users index them)
+    summary = summarize(typed)
+    scene_table = _scene_table(typed)
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
-    llm = [r for r in map(RunRow.from_dict, rows) if r.agent == "llm"]
+    llm = [r for r in typed if r.agent == "llm"]
     constraint = sorted({r.constraint for r in llm if r.constraint})
-    failed = [{"run_id": r["run_id"], "error": r.get("error")} for r in rows if is_failed(r)]
+    failed = [{"run_id": r.run_id, "error": r.error} for r in typed if is_failed(r)]
     cut: dict[str, int] = {}  # max_tokens -> replies cut off there (the limit is per swimmer)
     for r in llm:
         if r.truncated:
@@ -356,16 +357,16 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
                    {"groups": summary, **scene_table, "failed_runs": failed, **replies, **({"llm_speed": speed} if speed else {}),
                     **({"reasoning": sent} if sent else {}),
                     **({"constrained_decoding": constraint} if constraint else {})})
-    figs = draw_figures(study, rows, folder / "figures") if figures else []
+    figs = draw_figures(study, typed, folder / "figures") if figures else []
     _write_report(folder, figures)
     return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, session_speed, failed,
                        dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total, sent,
                        cut_thinking, notes)
 
 
-def _scene_table(rows: Sequence[dict[str, Any]]) -> dict[str, Any]:
+def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
     """``{"scenes": table}`` of a study with scene runs (:func:`jswim.studies.scenes.scene_summary`), else ``{}``."""
-    if not any(r.get("scene") for r in rows):
+    if not any(r.scene for r in rows):
         return {}
     from jswim.studies import scenes  # lazy: start-up (the scene module, for scene studies only)
 
@@ -404,7 +405,7 @@ def estimate_study(
     plans = [p for p in build(study, options) if p.agent == "llm"]
     folder = Path(out) if out is not None else default_folder(study, options, backend)
     prompt_files.check(folder, options)  # the same refusal as the study itself
-    done = {r["run_id"] for r in read_runs(folder)}
+    done = {r.run_id for r in read_run_rows(folder)}
     plans = [p for p in plans if p.run_id not in done]
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
     if backend.local:  # no server is started: the settings only name the model and the limits

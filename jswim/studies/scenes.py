@@ -53,7 +53,7 @@ from jswim.env.worlds import make
 from jswim.judging.gait import Criterion, judge
 from jswim.scenes import Scene
 from jswim.swimmers.models import SWIMMERS
-from jswim.results.row import RunRow
+from jswim.results.row import RunRow, as_run_rows
 from jswim.studies.rows import build_row, signs, with_llm
 from jswim.studies.grids import CONTINUOUS_AGENT, STROKE_AGENT, Plan
 from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
@@ -344,25 +344,26 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     and ``vs_stroke``: that mean speed over the best square stroke's in the same scene and
     direction (a wall: the stroke at that height; a pair: the fastest phase offset at that D), so
     above 1 is a faster stroke than the square one (for a pair, than two copies of it)."""
+    rows = as_run_rows(rows)
     out: dict[tuple, list[dict[str, Any]]] = {}
     for r in rows:
-        if r.get("scene"):
-            out.setdefault((r["agent"], r.get("direction"), r["group"]), []).append(r)
+        if r.scene:
+            out.setdefault((r.agent, r.direction, r.group), []).append(r)
     table = []
     for (agent, d, group), g in out.items():
-        fates = [r["fate"] for r in g if r.get("fate")]
+        fates = [r.fate for r in g if r.fate]
         # in the target direction, as speed, the figures and the main table's X/a end (a row's own
         # per_cycle is the signed x)
-        pc = [(d or 1) * r["per_cycle"] for r in g if r.get("per_cycle") is not None]
-        hs = [r["mean_height"] for r in g if r.get("mean_height") is not None]
-        sp = [r["speed"] for r in g if r.get("speed") is not None]
+        pc = [(d or 1) * r.per_cycle for r in g if r.per_cycle is not None]
+        hs = [r.mean_height for r in g if r.mean_height is not None]
+        sp = [r.speed for r in g if r.speed is not None]
         table.append({
             "agent": agent, "direction": d, "group": group, "n": len(g),
             "per_cycle": float(np.mean(pc)) if pc else None, "speed": float(np.mean(sp)) if sp else None,
             "fates": ", ".join(f"{f} {fates.count(f)}" for f in FATES if f in fates) or None,
             "mean_height": float(np.mean(hs)) if hs else None,
-            "start_height": g[0].get("start_height"), "separation": g[0].get("separation"),
-            "medium": g[0].get("medium"),
+            "start_height": g[0].start_height, "separation": g[0].separation,
+            "medium": g[0].medium,
         })
     best: dict[tuple, float] = {}
     for t in table:

@@ -16,6 +16,7 @@ Writes GIF with Pillow (always available) and MP4 when an ffmpeg is at hand: the
 from __future__ import annotations
 
 import base64
+import dataclasses
 import os
 import shutil
 import tempfile
@@ -29,7 +30,7 @@ import numpy as np
 from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 from jswim.errors import ConfigError
 from jswim.figures.plots import AGENT_ORDER, RC, panel_keys
-from jswim.results import read_metadata, read_runs, read_transcript, writing
+from jswim.results import as_run_rows, read_metadata, read_run_rows, read_transcript, writing
 from jswim.viz import worlds
 from jswim.viz.bench_page import _read, part_folders
 from jswim.viz.tracks import Track, fmt_action, track, view_box
@@ -179,13 +180,13 @@ def pick_runs(rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 
     the runs are held to the first start and (unless ``by`` is it) the first noise level, n_ht,
     group and variant, and the first replicate of each value of ``by`` is kept (at most ``most``).
     """
-    done = [r for r in rows if r.get("status", "done") == "done" and r.get("x")]
+    done = [r for r in as_run_rows(rows) if (r.status or "done") == "done" and r.x]
     if not done:
         return []
     sw, d = panel_keys(done)[0]
-    sel = [r for r in done if r["swimmer"] == sw and int(r.get("direction", 1)) == d]
+    sel = [r for r in done if r.swimmer == sw and int(r.direction or 1) == d]
     fixed = [k for k in ("init", "zeta", "n_ht", "group", "variant") if k != by]
-    ref = next((r for r in sel if r.get("agent") == "llm"), sel[0])
+    ref = next((r for r in sel if r.agent == "llm"), sel[0])
     for k in fixed:
         narrowed = [r for r in sel if r.get(k) == ref.get(k)]
         # The baselines carry no n_ht/variant and a group of their own: hold a key fixed only
@@ -194,7 +195,7 @@ def pick_runs(rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 
             sel = narrowed
     out: dict[Any, Mapping[str, Any]] = {}
     order = {a: i for i, a in enumerate(AGENT_ORDER)}
-    for r in sorted(sel, key=lambda r: (order.get(r.get("agent"), 9), str(r.get(by)), str(r.get("run_id")))):
+    for r in sorted(sel, key=lambda r: (order.get(r.agent, 9), str(r.get(by)), str(r.run_id))):
         out.setdefault(r.get(by), r)
     return list(out.values())[:most]
 
@@ -218,8 +219,8 @@ def build(folder_or_study: Any, run_ids: Sequence[str] | None = None, *, by: str
     """
     folder = Path(getattr(folder_or_study, "folder", folder_or_study))
     meta = read_metadata(folder)
-    rows = read_runs(folder)
-    by_id = {r.get("run_id"): r for r in rows}
+    rows = read_run_rows(folder)
+    by_id = {r.run_id: r for r in rows}
     if run_ids:
         missing = [i for i in run_ids if i not in by_id]
         if missing:
@@ -228,12 +229,12 @@ def build(folder_or_study: Any, run_ids: Sequence[str] | None = None, *, by: str
         chosen = [by_id[i] for i in run_ids]
     else:
         chosen = pick_runs(rows, by=by, most=most)
-    chosen = [r for r in chosen if r.get("x")]
+    chosen = [r for r in chosen if r.x]
     if not chosen:
         raise ConfigError(f"{folder} has no finished runs to animate yet")
     if not (0 < fps <= 60):
         raise ConfigError(f"--fps must lie in (0, 60], got {fps}")
-    tracks = [track(r, read_transcript(folder, r["run_id"]) if r.get("agent") == "llm" else None) for r in chosen]
+    tracks = [track(r, read_transcript(folder, r.run_id) if r.agent == "llm" else None) for r in chosen]
     model = (meta.get("identity", {}).get("backend") or {}).get("model")
     for t in tracks:
         if t.agent == "llm" and model and "model" not in t.row:
@@ -263,25 +264,23 @@ def build_bench(folder: str | Path, part: str | None = None, *, most: int = 4, f
     if part not in names:
         raise ConfigError(f"{folder}: the bench has no finished part {part!r}; its parts: {', '.join(names) or 'none'}")
     sources = [(label, kind, sub) for label, kind, p, sub in found if p == part]
-    rows_of = {label: [r for r in read_runs(sub) if r.get("x") and r.get("status", "done") == "done"]
+    rows_of = {label: [r for r in read_run_rows(sub) if r.x and (r.status or "done") == "done"]
                for label, _, sub in sources}
     first = next((rs[0] for rs in rows_of.values() if rs), None)
     if first is None:
         raise ConfigError(f"{folder}: part {part!r} has no finished runs to animate yet")
-    same = lambda r: (r.get("swimmer"), r.get("direction"), r.get("zeta")) == \
-        (first.get("swimmer"), first.get("direction"), first.get("zeta"))
+    same = lambda r: (r.swimmer, r.direction, r.zeta) == (first.swimmer, first.direction, first.zeta)
     tracks = []
     for label, kind, sub in sources:
         agents = ("qlearning", "random") if kind == "baseline" else ("llm",)
         for agent in agents:
-            r = next((r for r in sorted(rows_of[label], key=lambda r: str(r.get("run_id")))
-                      if r.get("agent") == agent and same(r)), None)
+            r = next((r for r in sorted(rows_of[label], key=lambda r: str(r.run_id))
+                      if r.agent == agent and same(r)), None)
             if r is None:
                 continue
-            r = dict(r)
-            if agent == "llm":
-                r["model"] = "reference rule" if kind == "reference" else label
-            tracks.append(track(r, read_transcript(sub, r["run_id"]) if agent == "llm" else None))
+            if agent == "llm":  # the track's label names the model (a column of no run row: in ``other``)
+                r = dataclasses.replace(r, other={**r.other, "model": "reference rule" if kind == "reference" else label})
+            tracks.append(track(r, read_transcript(sub, r.run_id) if agent == "llm" else None))
     if not (0 < fps <= 60):
         raise ConfigError(f"--fps must lie in (0, 60], got {fps}")
     suite = (meta.get("suite") or {}).get("name", "?")

@@ -22,6 +22,7 @@ an existing folder writes ``report.html`` and nothing else.
 from __future__ import annotations
 
 import base64
+import dataclasses
 import datetime as _dt
 import gzip
 import html
@@ -35,8 +36,8 @@ import numpy as np
 
 from jswim.figures import plots
 from jswim.overview import AGENT_ORDER, SUMMARY_NOTE, grid_order, order_summary, summary_table
-from jswim.results import (atomic_write, dumps, is_failed, read_metadata, read_runs, read_transcript, unfinished_note,
-                           writing)
+from jswim.results import (RunRow, as_run_row, as_run_rows, atomic_write, dumps, is_failed, read_metadata, read_run_rows,
+                           read_transcript, unfinished_note, writing)
 from jswim.studies.report import summarize
 from jswim.viz import worlds
 from jswim.viz.tracks import Track, track
@@ -61,12 +62,13 @@ def _axes_key(meta: Mapping[str, Any]) -> Any:
     groups = {g: i for i, g in enumerate(meta.get("group_order") or [])}
     num = lambda v: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else float("inf")
 
-    def key(r: Mapping[str, Any]) -> tuple:
-        m = re.search(r"-r(\d+)$", str(r.get("run_id", "")))
-        return (agents.get(r.get("agent"), len(agents)), r.get("swimmer") != "purcell", str(r.get("swimmer")),
-                -int(r.get("direction") or 1), groups.get(r.get("group"), len(groups)), str(r.get("group") or ""),
-                num(r.get("zeta")), num(r.get("n_ht")), str(r.get("variant") or ""), str(r.get("init") or ""),
-                int(m.group(1)) if m else 0, str(r.get("run_id")))
+    def key(row: Mapping[str, Any]) -> tuple:
+        r = as_run_row(row)
+        m = re.search(r"-r(\d+)$", str(r.run_id or ""))
+        return (agents.get(r.agent, len(agents)), r.swimmer != "purcell", str(r.swimmer),
+                -int(r.direction or 1), groups.get(r.group, len(groups)), str(r.group or ""),
+                num(r.zeta), num(r.n_ht), str(r.variant or ""), str(r.init or ""),
+                int(m.group(1)) if m else 0, str(r.run_id))
     return key
 
 
@@ -186,11 +188,12 @@ def _table_html(cols: Sequence[Any], cells: Sequence[Sequence[str]], table_id: s
 def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
     """A wall or pair study's own table (per cycle, per step, fates, mean height), as ``jswim show``
     prints it; nothing for other studies."""
-    if not any(r.get("scene") for r in rows):
+    rows = as_run_rows(rows)
+    if not any(r.scene for r in rows):
         return ""
     from jswim.studies.scenes import scene_summary, table, table_note  # lazy: the scene studies load JAX
 
-    summary = scene_summary([dict(r) for r in rows])
+    summary = scene_summary(rows)
     cols, cells = table(summary)
     note = table_note(summary)
     return ('<h3>Scenes</h3>' + _table_html(cols, cells, "scenes")
@@ -281,7 +284,7 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
     """
     folder = Path(folder)
     meta = read_metadata(folder)
-    own = read_runs(folder)
+    own = read_run_rows(folder)
     study = str(meta.get("study", "?"))
     finished, status_text = _status(meta, own)
     note = None if finished else unfinished_note(meta.get("status"), len(own), meta.get("n_planned"))
@@ -296,19 +299,19 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
                        + ", ".join(sorted({f"{Path(b).parent.name}/{Path(b).name}" for b in beside})) + ")")
     backend = (meta.get("identity") or {}).get("backend") or {}
     # A study with no LLM run (--runs 0: baselines only) names no model.
-    model = backend.get("model") if any(r.get("agent") == "llm" for r in own) or \
+    model = backend.get("model") if any(r.agent == "llm" for r in own) or \
         (meta.get("grid") or {}).get("runs") != 0 else None
     index, blobs = [], []
     for i, r in enumerate(rows):
         entry = {k: r.get(k) for k in INDEX_KEYS}
         entry["i"] = i
         index.append(entry)
-        if r.get("x"):
-            t = track(r, read_transcript(folder, r["run_id"]) if r.get("agent") == "llm" and not r.get("beside")
+        if r.x:
+            t = track(r, read_transcript(folder, r.run_id) if r.agent == "llm" and not r.other.get("beside")
                       else None)
             blobs.append(f'<script type="text/plain" id="run-{i}">{_blob(run_payload(t))}</script>')
         else:
-            blobs.append(f'<script type="text/plain" id="run-{i}">{_blob({"error": r.get("error"), "x": []})}</script>')
+            blobs.append(f'<script type="text/plain" id="run-{i}">{_blob({"error": r.error, "x": []})}</script>')
     data = {
         "study": study, "model": model, "finished": finished, "status": status_text,
         "folder": folder.name, "filters": list(FILTER_KEYS), "runs": index,
@@ -369,12 +372,12 @@ def write_report(folder: str | Path, figures: str = "auto", out: str | Path | No
     return path
 
 
-def beside_rows(folders: Sequence[Path]) -> list[dict[str, Any]]:
+def beside_rows(folders: Sequence[Path]) -> list[RunRow]:
     """Baseline runs (Q-learning, random) of other study folders, to draw beside a model's.
 
-    Each row gains ``beside``, the folder it came from.
+    Each row gains ``beside``, the folder it came from (in :attr:`RunRow.other`: no run column).
     """
-    out: list[dict[str, Any]] = []
+    out: list[RunRow] = []
     for f in folders:
-        out += [dict(r, beside=str(f)) for r in read_runs(f) if r.get("agent") != "llm"]
+        out += [dataclasses.replace(r, other={**r.other, "beside": str(f)}) for r in read_run_rows(f) if r.agent != "llm"]
     return out

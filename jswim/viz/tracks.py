@@ -26,6 +26,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from jswim.results.row import as_run_row
 from jswim.swimmers.models import SWIMMERS, SwimmerModel, make_model
 from jswim.swimmers.outline import outline as _outline
 from jswim.viz.worlds import Marker, World, per_swimmer, world_of
@@ -153,7 +154,7 @@ def model_of(row: Mapping[str, Any], n_dof: int | None = None) -> SwimmerModel |
     """The swimmer model of a run row (the default geometry of its kind; ``n_dof`` picks the
     chain length of ``nlink``/``nsphere`` runs when their DOF count is known); a swimmer that is
     none of the paper's (a registered world) gets a :class:`~jswim.viz.worlds.Marker`."""
-    kind = str(row.get("swimmer", "purcell"))
+    kind = str(as_run_row(row).swimmer or "purcell")
     if kind.lower() not in SWIMMERS:
         return Marker(kind, n_dof or 2)
     kw: dict[str, Any] = {}
@@ -207,25 +208,26 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         The records of ``transcripts/RUN.jsonl`` (:func:`jswim.results.read_transcript`); its
         ``meta`` record gives the start levels, its ``step`` records the DOF values and replies.
     """
+    r0 = as_run_row(row)  # typed reads; Track.row stays a plain dict (animate labels it with the model)
     row = dict(row)
     recs = list(transcript or [])
     meta = next((r for r in recs if r.get("type") == "meta"), {})
     steps_log = [r for r in recs if r.get("type") == "step"]
-    xs = [float(v) for v in (row.get("x") or [])]
+    xs = [float(v) for v in (r0.x or [])]
     n = len(xs)
-    actions = [(int(a[0]), _roc(a[1])) for a in (row.get("actions") or [])[:n]]
+    actions = [(int(a[0]), _roc(a[1])) for a in (r0.actions or [])[:n]]
     while len(actions) < n:
         actions.append((1, 0))
     # DOF values: the row's own, the transcript's, or replayed from the start shape.
-    dofs = row.get("dofs")
-    levels0 = _levels(meta.get("levels0")) or _levels(row.get("init"))
+    dofs = r0.other.get("dofs")  # not a RunRow column: rows of hand-made or other tools' folders
+    levels0 = _levels(meta.get("levels0")) or _levels(r0.init)
     n_dof = (len(dofs[0]) if isinstance(dofs, list) and dofs and isinstance(dofs[0], list) else None) \
         or (len(levels0) if levels0 else None) or max((a[0] for a in actions), default=2)
-    world = world_of(row)
+    world = world_of(r0)
     n_sw = world.n_swimmers
     if n_sw > 1 and n_dof is not None and not levels0:
         n_dof = -(-n_dof // n_sw)  # the actions name joint DOFs: D1..D4 for a pair of 2-DOF swimmers
-    model = model_of(row, n_dof)
+    model = model_of(r0, n_dof)
     if levels0 is None:
         levels0 = [1.0] * model.n_dof
     d0 = np.array([model.lo + (model.hi - model.lo) * v for v in levels0], np.float64)
@@ -237,31 +239,31 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
     elif len(steps_log) >= n and all(isinstance(s.get("dofs_after"), list) for s in steps_log[:n]):
         d = np.concatenate([d0[None], np.asarray([s["dofs_after"] for s in steps_log[:n]], np.float64)])
     else:
-        d = _replay_dofs(model, d0, actions, int(row.get("roc_levels") or 1))
+        d = _replay_dofs(model, d0, actions, int(r0.roc_levels or 1))
     theta0 = start_theta(model, d0)
-    ys, th = _floats(row.get("y"), n), _floats(row.get("orientation"), n)
+    ys, th = _floats(r0.y, n), _floats(r0.orientation, n)
     replayed = False
     if n and (ys is None or th is None):
-        ys2, th2 = _replay_pose(row, model, levels0, actions)
+        ys2, th2 = _replay_pose(r0, model, levels0, actions)
         replayed = True
         ys = ys if ys is not None else ys2
         th = th if th is not None else th2
     x = np.concatenate([[0.0], xs])
-    side = bool(row.get("scene")) and not worlds.from_above(row)  # a scene drawn in its vertical plane
+    side = bool(r0.scene) and not worlds.from_above(r0)  # a scene drawn in its vertical plane
     y0 = world.start[0][1] if side else 0.0  # a scene's step 0 is at its start height
     if side:
         theta0 = world.start[0][2]
     y = np.concatenate([[y0], ys if ys is not None else np.full(n, y0)])
     theta = np.concatenate([[theta0], th if th is not None else np.full(n, theta0)])
     if side:
-        bodies, positions = _scene_bodies(row, world, model, d, n)
+        bodies, positions = _scene_bodies(r0, world, model, d, n)
         pts = bodies[:, 0]
     else:
         pts = place(outline(model, d), x, y, theta)
         bodies, positions = pts[:, None], np.stack([x, y], axis=-1)[:, None]
     stuck = np.abs(np.diff(x)) < STUCK_TOL
-    if isinstance(row.get("stuck"), list) and len(row["stuck"]) >= n:
-        stuck = np.asarray([bool(v) for v in row["stuck"][:n]])
+    if isinstance(r0.stuck, list) and len(r0.stuck) >= n:
+        stuck = np.asarray([bool(v) for v in r0.stuck[:n]])
     cleared = np.zeros(n, bool)
     failed = np.zeros(n, bool)
     replies: list[str | None] = [None] * n
@@ -273,14 +275,15 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         attempts = s.get("attempts") or []
         replies[i] = str(attempts[-1].get("text", "")) if attempts else None
     stroke = None
-    stl = row.get("steps_to_learn")
-    if row.get("learned", row.get("success")) and isinstance(stl, (int, float)) and row.get("period"):
-        stroke = (int(stl) - 1, int(row["period"]))
+    stl = r0.steps_to_learn
+    learned = r0.success if r0.learned is None else r0.learned  # rows from before ``learned``: success
+    if learned and isinstance(stl, (int, float)) and r0.period:
+        stroke = (int(stl) - 1, int(r0.period))
     return Track(
-        run_id=str(row.get("run_id", "")), agent=str(row.get("agent", "")), swimmer=str(row.get("swimmer", "")),
-        model=model, direction=int(row.get("direction", 1) or 1),
+        run_id=str(r0.run_id or ""), agent=str(r0.agent or ""), swimmer=str(r0.swimmer or ""),
+        model=model, direction=int(r0.direction or 1),
         x=x, y=y, theta=theta, dofs=d, points=pts, actions=actions, stuck=stuck, cleared=cleared, failed=failed,
-        replies=replies, stroke=stroke, success=bool(row.get("success")), replayed=replayed, row=row,
+        replies=replies, stroke=stroke, success=bool(r0.success), replayed=replayed, row=row,
         steps_log=steps_log, world=world, bodies=bodies, positions=positions)
 
 
@@ -293,12 +296,13 @@ def _scene_bodies(row: Mapping[str, Any], world: World, model: SwimmerModel, d: 
     """
     s_n = world.n_swimmers
     start = np.asarray(world.start, np.float64)  # (S, 3)
+    row = as_run_row(row)
     dx = per_swimmer(row, "xs", n, s_n)
     if dx is None:
-        dx = np.repeat(np.asarray(row.get("x") or [0.0] * n, np.float64)[:n, None], s_n, axis=1)
+        dx = np.repeat(np.asarray(row.x or [0.0] * n, np.float64)[:n, None], s_n, axis=1)
     hz = per_swimmer(row, "heights", n, s_n)
     if hz is None:
-        hz = np.repeat(np.asarray(row.get("y") or [start[0, 1]] * n, np.float64)[:n, None], s_n, axis=1)
+        hz = np.repeat(np.asarray(row.y or [start[0, 1]] * n, np.float64)[:n, None], s_n, axis=1)
     tl = per_swimmer(row, "tilts", n, s_n)
     if tl is None:
         tl = np.repeat(start[None, :, 2], n, axis=0)
@@ -326,8 +330,9 @@ def _replay_pose(row: Mapping[str, Any], model: SwimmerModel, levels0: Sequence[
 
         if any(float(r) not in (-1.0, 0.0, 1.0) for _, r in actions) or any(v not in (0.0, 1.0) for v in levels0):
             return None, None
-        r = env.rollout(str(row.get("swimmer")), [(int(a), int(b)) for a, b in actions],
-                        init=[int(v) for v in levels0], direction=int(row.get("direction", 1) or 1))
+        row = as_run_row(row)
+        r = env.rollout(str(row.swimmer), [(int(a), int(b)) for a, b in actions],
+                        init=[int(v) for v in levels0], direction=int(row.direction or 1))
         return np.asarray(r.y, np.float64), np.asarray(r.orientation, np.float64)
     except Exception:  # an unknown swimmer or an API that moved: no pose, not a broken page
         return None, None

@@ -19,6 +19,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from jswim.results.row import as_run_row
+
 #: Colours of the world's fixed parts (shared by the page's canvas and matplotlib).
 WALL_COLOR = "#6b5b45"
 OBSTACLE_COLOR = "#9a8c7a"
@@ -88,12 +90,13 @@ def from_above(row: Mapping[str, Any]) -> bool:
     """Whether a scene row is drawn from above, in the swimmer's own plane: Purcell's swimmer above
     a wall (issue 34) swims in a plane parallel to the wall, so its bends are seen only from above
     (its row's ``y`` and ``orientation`` are in that plane), with the wall beneath it."""
-    return bool(row.get("scene")) and str(row.get("swimmer", "")) == "purcell"
+    r = as_run_row(row)
+    return bool(r.scene) and str(r.swimmer or "") == "purcell"
 
 
 def world_of(row: Mapping[str, Any]) -> World:
     """The :class:`World` a run row records (its ``scene``; none: the bulk fluid)."""
-    raw = row.get("scene")
+    raw = as_run_row(row).scene
     if not raw:
         return World()
     try:
