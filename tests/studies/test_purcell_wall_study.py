@@ -16,11 +16,16 @@ from jswim.viz.tracks import track
 BULK_CYCLE = 0.19124724  # DESIGN.md
 
 
-def test_purcell_cells_are_the_stroke_qlearning_and_random():
+def test_purcell_cells_run_every_agent_at_each_height():
     plans = build("wall", StudyOptions(swimmers=("purcell",), heights=(1.5, 10.0), q_runs=2))
     agents = {(p.agent, p.group) for p in plans}
-    assert agents == {("stroke", "bulk"), ("stroke", "h=1.5"), ("qlearning", "h=1.5"), ("random", "h=1.5"),
-                      ("stroke", "h=10"), ("qlearning", "h=10"), ("random", "h=10")}
+    # the bulk reference stroke, and at each height every agent NG's wall cells run (issue 30)
+    assert agents == {("stroke", "bulk")} | {(a, f"h={h}") for h in ("1.5", "10")
+                                             for a in ("stroke", "llm", "qlearning", "random", "ppo")}
+    per_height = {a: sum(p.agent == a and p.group == "h=10" for p in plans) for a in ("llm", "ppo", "qlearning")}
+    assert per_height == {"llm": 1, "ppo": 2, "qlearning": 2}  # the wall study's --runs 1, --q-runs learners
+    ppo = [p for p in plans if p.agent == "ppo"]
+    assert all(p.roc_levels == 0 and p.action_set == "all" and "-real-" in p.run_id for p in ppo)
     assert {json.loads(p.scene)["medium"] for p in plans} == {"bulk", "wall"}
     assert all(p.init == (1, 1) for p in plans)  # the paper's Purcell start (+, +)
     # NG's wall study is as before: its free reference and its LLM and PPO rows stay
