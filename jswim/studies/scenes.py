@@ -48,7 +48,7 @@ from jswim.actions import decode_action, encode_action, n_actions
 from jswim.agents import qlearning, random_policy, worlds
 from jswim.agents.qlearning import QConfig
 from jswim.env.base import Environment, Observation
-from jswim.env.scene_world import ARMS
+from jswim.env.scene_world import ARMS, SceneTask
 from jswim.env.worlds import make
 from jswim.judging.gait import Criterion, judge
 from jswim.scenes import Scene
@@ -240,15 +240,10 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
         run = ppo.train_env(world, keys, task, ppo.PPOConfig(steps=p0.steps), params_axes=axes, trace=True)
-        rep = ppo.evaluate(run, task, criterion=Criterion(horizon=horizon))
         codes, tr = np.zeros((len(plans), 0), np.int64), run.trace
         dof, rocs = np.asarray(run.dof, np.int64), np.asarray(run.actions, np.float64)
-        for i in range(len(plans)):
-            moves[i] = [[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])]
-            judged[i] = {"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
-                         "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
-                         # a pair's period is 0, as the lattice judge of the pair rows gives it
-                         "period": int(rep.period[i]) if n_sw == 1 else 0}
+        moves = [[[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])] for i in range(len(plans))]
+        judged = _ppo_judged(run, plans, task, horizon, n_sw)
     else:
         config = QConfig(steps=p0.steps, action_set=p0.action_set)
         run = qlearning.train_env(world, keys, task, config, params_axes=axes, trace=True)
@@ -262,13 +257,35 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         extra = {"xs": xs[i].tolist(), "heights": heights[i].tolist(), "tilts": tilts[i].tolist(),
                  "contact": contact[i].tolist(), "stuck": stuck[i].tolist()}
         row = scene_row(p, [int(c) for c in codes[i]], xs[i].mean(axis=-1).tolist(), extra, horizon, z0=z0,
-                        tilt0=tilt0, judged=judged[i] or _unjudged(p), moves=moves[i])
+                        tilt0=tilt0, judged=judged[i], moves=moves[i])
         if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
             y, orientation = (np.asarray(v[i, :, 0], np.float64).tolist()
                               for v in (obs.position[..., 1], obs.orientation))
             row = dataclasses.replace(row, y=y, orientation=orientation)
         rows.append(row)
     return rows
+
+
+def _ppo_judged(run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: int) -> list[dict[str, Any] | None]:
+    """PPO's verdicts per plan, as :func:`_judge` judges lattice moves: the shape judge
+    (:func:`jswim.agents.ppo.evaluate`) per swimmer of a scene world; the paper's swimmer in a
+    world of its own (Purcell's above a wall) on its moves replayed in the bulk; a registered
+    world unjudged (:func:`_unjudged`)."""
+    from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
+
+    p0 = plans[0]
+    if p0.swimmer not in SWIMMERS:
+        return [_unjudged(p) for p in plans]
+    crit = Criterion(horizon=horizon)
+    if isinstance(task, SceneTask):
+        rep = ppo.evaluate(run, task, criterion=crit)
+    else:
+        bulk, _ = _per_run(env.make_params(p0.swimmer, init=p0.init), [p.direction for p in plans])
+        rep = ppo.evaluate(run, bulk, criterion=crit, replay=True)
+    return [{"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
+             "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
+             # a pair's period is 0, as the lattice judge of the pair rows gives it
+             "period": int(rep.period[i]) if n_sw == 1 else 0} for i in range(len(plans))]
 
 
 def _unjudged(plan: Plan) -> dict[str, Any] | None:
@@ -316,7 +333,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
               moves: list[list[float]] | None = None) -> RunRow:
     """One row of a scene run (:func:`jswim.studies.rows.build_row`): the bulk studies' columns
     (success by :func:`_judge` on the lattice ``codes``, or the real-valued agent's own verdict
-    ``judged`` and ``moves``) and the scene's: the scene, its medium, start height or distance,
+    ``judged`` and ``moves``; a registered world's runs unjudged, :func:`_unjudged`) and the scene's: the scene, its medium, start height or distance,
     the per-step tracks ``extra`` holds (``xs``, ``heights``, ``tilts``, ``contact``, ``stuck``),
     ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for strokes, ``per_cycle``.
     ``y`` and ``orientation`` of the trajectories table are swimmer 1's height and tilt."""
@@ -327,7 +344,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
     f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in extra.get("contact") or []]) if wall else (None, None)
     return build_row(
         plan, x, moves if moves is not None else [list(decode_action(int(c))) for c in codes],
-        _judge(codes, plan, sw, horizon) if judged is None else judged,
+        judged if judged is not None else _unjudged(plan) or _judge(codes, plan, sw, horizon),
         init=signs(plan.init) if not isinstance(plan.init, str) else plan.init,
         scene=plan.scene, medium=scene.medium, n_swimmers=sw, start_height=float(z0[0]) if wall else None,
         separation=float(scene.separation) if sw > 1 else None, fate=f, mean_height=mean_h,
