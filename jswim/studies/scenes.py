@@ -302,6 +302,9 @@ def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
     scene, world, params = _world(plan)
     _, z0, tilt0, _ = _start(world, params, scene)
     tracks = {k: getattr(result, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
+    if scene.medium == "wall" and not tracks["heights"]:
+        # a world that reports no height (Purcell's plane above a wall): the start's throughout, as _lift
+        tracks.update(heights=[z0.tolist()] * len(result.x), tilts=[tilt0.tolist()] * len(result.x))
     return with_llm(scene_row(plan, list(result.actions), list(result.x), tracks, horizon, z0=z0, tilt0=tilt0),
                     result)
 
