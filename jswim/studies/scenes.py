@@ -6,6 +6,10 @@
     LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs). Measured: the stroke's
     displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
     same solver, medium ``"free"``: group ``free``), and every run's **fate** (:func:`fate`).
+    ``--swimmer purcell`` (issue 34): Purcell's swimmer in a plane ``h`` link lengths above the
+    wall runs the same five agents per height (next to the paper's bulk fluid, group ``bulk``),
+    judged by the paper's criterion on its D1/D2 moves; its height is fixed, so every fate is
+    ``gliding`` at ``h``. A registered world (:func:`jswim.register_world`) runs them too, unjudged.
 ``pair``
     Two coaxial NG swimmers started ``D`` apart (``--separations``; medium ``"free"``: the
     point-force solve, in which the swimmers feel each other; the paper's formula has no
@@ -411,10 +415,10 @@ def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]
             Column("mean height"), Column("x stroke")]
     order = sorted(summary, key=lambda s: (s.get("separation") or 0.0, s.get("start_height") or 0.0,
                                            str(s["group"]), str(s["agent"])))
-    cells = [[str(s["agent"]), "+x" if (s.get("direction") or 1) > 0 else "-x", str(s["group"]),
-              str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
-              s.get("fates") or "-", fmt(s.get("mean_height"), ".2f"), fmt(s.get("vs_stroke"), ".3f")] for s in order]
-    return cols, cells
+    body = [[str(s["agent"]), "+x" if (s.get("direction") or 1) > 0 else "-x", str(s["group"]),
+             str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
+             s.get("fates") or "-", fmt(s.get("mean_height"), ".2f"), fmt(s.get("vs_stroke"), ".3f")] for s in order]
+    return cols, body
 
 
 def table_note(summary: Sequence[dict[str, Any]]) -> str | None:
