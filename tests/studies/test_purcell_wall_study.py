@@ -38,7 +38,8 @@ def test_purcell_cells_run_every_agent_at_each_height():
 @pytest.mark.slow  # a study: tables and programs of two models
 def test_purcell_wall_study_rows_figure_and_picture(tmp_path):
     out = tmp_path / "pw"
-    run_study("wall", StudyOptions(swimmers=("purcell",), heights=(1.5,), q_runs=1, steps=16), out=out)
+    run_study("wall", StudyOptions(swimmers=("purcell",), heights=(1.5,), q_runs=1, steps=16,
+                                   agents=("stroke", "qlearning", "random")), out=out)  # LLM, PPO rows: below
     rows = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     by = {(r["agent"], r["group"]): r for r in rows}
     assert by[("stroke", "bulk")]["per_cycle"] == pytest.approx(BULK_CYCLE, abs=1e-7)
