@@ -21,10 +21,10 @@ import numpy as np
 from jswim.agents.fidelity import scene_deviation
 from jswim.agents.variants import LLMRunSpec
 from jswim.env.base import Environment
-from jswim.env.worlds import make
+from jswim.env.worlds import make, registered_worlds
 from jswim.prompt import PromptTemplate, SceneView, SwimmerText, scene_template
 from jswim.scenes.scene import Scene
-from jswim.swimmers.models import SWIMMERS, SwimmerModel, make_model
+from jswim.swimmers.models import SwimmerModel, make_model
 
 
 def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
@@ -45,7 +45,7 @@ def model(spec: LLMRunSpec, env: Environment) -> SwimmerModel:
     over :attr:`~jswim.env.base.Environment.dof_range`, ``kind`` the world's name (no paper
     swimmer's defaults: n_ht 3, the two-DOF clearing rule for two DOFs). Only its size, range
     and kind are read; it carries no physics."""
-    if spec.swimmer in SWIMMERS:
+    if spec.swimmer not in registered_worlds():
         return make_model(spec.swimmer, **dict(spec.swimmer_options))
     lo, hi = (float(v) for v in env.dof_range)
     return SwimmerModel(spec.swimmer, int(env.n_dof) // int(env.n_swimmers), lo, hi)
