@@ -52,7 +52,6 @@ from jswim.llm.local import LocalServer
 from jswim.llm.sync import run_sync
 from jswim.llm.usage import UsageTotals
 from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText
-from jswim.swimmers.models import make_model
 
 
 #: Shown once (Python's default warning filter) when a position falls below x_min.
@@ -213,7 +212,7 @@ class LLMDriver:
         self.groups = []
         for idx in by_world.values():
             w = built[idx[0]][0]
-            models = [make_model(specs[i].swimmer, **dict(specs[i].swimmer_options)) for i in idx]
+            models = [world_view.model(specs[i], w) for i in idx]
             g = StepGroup(idx, w, [built[i][1] for i in idx], [specs[i].seed for i in idx],
                           lattice.encode(*NO_OP, w.roc_levels), models[0].lo, models[0].hi)
             self.groups.append(g)

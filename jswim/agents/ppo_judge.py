@@ -19,16 +19,17 @@ from jswim.judging.gait import PAPER, GaitReport
 from jswim.judging.shape_judge import SHAPE_TOL, judge_shapes
 
 
-def exact_x(run: Any, params: Any) -> np.ndarray:
+def exact_x(run: Any, params: Any, *, replay: bool = False) -> np.ndarray:
     """Noiseless centroid x after each step of recorded runs, float64 (B, steps).
 
-    The runs' actions replayed from their start shapes with ``zeta = 0`` (the judge measures
-    exact displacements, as :func:`jswim.judging.gait.judge` does); when no run had noise, the recorded
-    ``x`` is returned as it is.
+    The runs' actions replayed in ``params``'s world from their start shapes with ``zeta = 0``
+    (the judge measures exact displacements, as :func:`jswim.judging.gait.judge` does); when no
+    run had noise, the recorded ``x`` is returned as it is, unless ``replay`` (runs made in another
+    world of the same swimmer, e.g. Purcell's above a wall, measured in ``params``'s).
     """
     actions = np.asarray(run.actions)
     b = actions.shape[0]
-    if not np.any(np.asarray(params.zeta) != 0):
+    if not replay and not np.any(np.asarray(params.zeta) != 0):
         return np.asarray(run.x, np.float64)
     model = params.model
     levels = np.rint((np.asarray(run.dofs0, np.float64) - model.lo) / (model.hi - model.lo)).astype(np.int32)
@@ -48,13 +49,16 @@ def _replay(params: Any, actions: Array) -> Array:
     return jnp.moveaxis(jax.lax.scan(body, states, jnp.moveaxis(actions, 0, 1))[1], 0, 1)
 
 
-def evaluate(run: Any, params: Any, *, criterion: Any = None, tol: float | None = None) -> Any:
+def evaluate(run: Any, params: Any, *, criterion: Any = None, tol: float | None = None,
+             replay: bool = False) -> Any:
     """Judge training runs with the success criterion for real-valued strokes
     (:func:`jswim.judging.shape_judge.judge_shapes`: a cycle is a return to the same shape within ``tol``
     of the range, default :data:`jswim.judging.shape_judge.SHAPE_TOL`), on exact displacements.
 
     A scene's runs (``params`` a :class:`~jswim.env.scene_world.SceneTask`) are judged per
-    swimmer (:func:`evaluate_scene`).
+    swimmer (:func:`evaluate_scene`). ``replay``: the displacements are those of the moves
+    replayed in ``params``'s world (:func:`exact_x`), for runs trained in another world of the
+    same swimmer (Purcell's above a wall, judged on the bulk swimmer's, as the scene studies do).
 
     Returns
     -------
@@ -64,7 +68,7 @@ def evaluate(run: Any, params: Any, *, criterion: Any = None, tol: float | None 
     if isinstance(params, SceneTask):
         return evaluate_scene(run, params.scene, params.direction, criterion=criterion, tol=tol)
     b = np.asarray(run.x).shape[0]
-    return judge_shapes(np.asarray(run.dofs), exact_x(run, params), _env.broadcast_params(params, b),
+    return judge_shapes(np.asarray(run.dofs), exact_x(run, params, replay=replay), _env.broadcast_params(params, b),
                         dofs0=np.asarray(run.dofs0), criterion=PAPER if criterion is None else criterion,
                         tol=SHAPE_TOL if tol is None else tol)
 

@@ -6,7 +6,8 @@ included). What the prompt shows beyond the paper's lone swimmer comes from the 
 first observation (:func:`view`): ``env.n_swimmers`` (swimmer ``s`` owns joint DOFs ``2s + 1, 2s + 2``),
 a wall (a world with one says ``wall = True``; the observation's ``height`` is each swimmer's H)
 and the swimmers' starts. DOF ranges and the run's defaults are the named swimmer's
-(:mod:`jswim.agents.defaults`), over the world's joint DOFs.
+(:mod:`jswim.agents.defaults`), over the world's joint DOFs; a registered world's come from
+the world (:func:`model`: its DOFs per swimmer and their range).
 """
 
 from __future__ import annotations
@@ -20,9 +21,10 @@ import numpy as np
 from jswim.agents.fidelity import scene_deviation
 from jswim.agents.variants import LLMRunSpec
 from jswim.env.base import Environment
-from jswim.env.worlds import make
+from jswim.env.worlds import make, registered_worlds
 from jswim.prompt import PromptTemplate, SceneView, SwimmerText, scene_template
 from jswim.scenes.scene import Scene
+from jswim.swimmers.models import SwimmerModel, make_model
 
 
 def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
@@ -34,6 +36,19 @@ def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
     corners = isinstance(spec.init, (tuple, list)) and all(v in (0, 1) for v in spec.init)  # else the scene's own
     return make(spec.swimmer, json.loads(spec.scene), zeta=spec.zeta, direction=spec.direction,
                 init=tuple(int(v) for v in spec.init) if corners else None, roc_levels=spec.roc_levels)
+
+
+def model(spec: LLMRunSpec, env: Environment) -> SwimmerModel:
+    """The swimmer description a run's prompt, memory and defaults read (:mod:`jswim.agents.defaults`):
+    the named paper swimmer's model (:func:`jswim.swimmers.models.make_model`, its options); for a
+    world of :func:`jswim.register_world`, one swimmer of the world itself: its DOFs per swimmer
+    over :attr:`~jswim.env.base.Environment.dof_range`, ``kind`` the world's name (no paper
+    swimmer's defaults: n_ht 3, the two-DOF clearing rule for two DOFs). Only its size, range
+    and kind are read; it carries no physics."""
+    if spec.swimmer not in registered_worlds():
+        return make_model(spec.swimmer, **dict(spec.swimmer_options))
+    lo, hi = (float(v) for v in env.dof_range)
+    return SwimmerModel(spec.swimmer, int(env.n_dof) // int(env.n_swimmers), lo, hi)
 
 
 def view(env: Environment, x0: Sequence[float], y0: Sequence[float]) -> SceneView | None:

@@ -162,6 +162,15 @@ class Environment:
         return tuple(f"D{i}" for i in range(1, self.n_dof + 1))
 
     @property
+    def dof_range(self) -> tuple[float, float]:
+        """The interval ``(lo, hi)`` each DOF of :meth:`observe` stays in, what an LLM's prompt
+        states of a world of :func:`jswim.register_world` (:func:`jswim.agents.world_view.model`);
+        default ``(0.0, 1.0)``: DOFs observed as their places in their ranges. The paper's
+        swimmers' ranges are their models' (:class:`~jswim.swimmers.models.SwimmerModel`
+        ``lo``, ``hi``), which the agents read instead."""
+        return (0.0, 1.0)
+
+    @property
     def dof_swimmer(self) -> tuple[int, ...]:
         """The swimmer (0-based) that owns each joint DOF: swimmer ``s`` owns ``n_dof / n_swimmers``
         consecutive DOFs (a scene's swimmer ``s``: DOFs ``2s + 1, 2s + 2``)."""

@@ -47,6 +47,10 @@ class SwimmerWorld(Environment):
         return self.k
 
     @property
+    def dof_range(self) -> tuple[float, float]:
+        return (float(self.model.lo), float(self.model.hi))
+
+    @property
     def default_params(self) -> EnvParams:
         return make_params(self.model, roc_levels=self.k, diagonal=self.diagonal)
 

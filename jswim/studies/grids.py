@@ -360,17 +360,18 @@ def pair_scene(d: float | None = None) -> str:
 
 
 def scene_cells(study: str, o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
-    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids. Purcell's swimmer
-    above a wall (issue 34) swims in a plane parallel to it: its reference is the paper's bulk
-    fluid (group ``bulk``), and at each height (link lengths) it runs the stroke, Q-learning and
-    random."""
+    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids. Every swimmer's
+    wall cells run the same agents at each height: the stroke, the LLM, Q-learning, random and
+    PPO. Only the reference differs: Purcell's swimmer above a wall (issue 34) swims in a plane
+    parallel to it, so its reference is the paper's bulk fluid (group ``bulk``); NG's (and a
+    registered world's) is the unbounded fluid of the scene solver (group ``free``)."""
     if study == "wall":
         ref = "bulk" if swimmer == "purcell" else "free"
-        agents = (STROKE_AGENT, "qlearning", "random") if ref == "bulk" else (STROKE_AGENT, *WITH_BASELINES)
         out = [Cell(ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref)]
         for h in o.heights:
-            out.append(Cell(f"h={h:g}", agents, n_ht=o.n_ht, scene=wall_scene(h), stroke="square", tag=f"h{h:g}"))
-            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}") if ref == "free" else []
+            out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
+                            stroke="square", tag=f"h{h:g}"))
+            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
         return out
     out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
     for d in o.separations:

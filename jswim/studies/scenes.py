@@ -6,6 +6,10 @@
     LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs). Measured: the stroke's
     displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
     same solver, medium ``"free"``: group ``free``), and every run's **fate** (:func:`fate`).
+    ``--swimmer purcell`` (issue 34): Purcell's swimmer in a plane ``h`` link lengths above the
+    wall runs the same five agents per height (next to the paper's bulk fluid, group ``bulk``),
+    judged by the paper's criterion on its D1/D2 moves; its height is fixed, so every fate is
+    ``gliding`` at ``h``. A registered world (:func:`jswim.register_world`) runs them too, unjudged.
 ``pair``
     Two coaxial NG swimmers started ``D`` apart (``--separations``; medium ``"free"``: the
     point-force solve, in which the swimmers feel each other; the paper's formula has no
@@ -48,7 +52,7 @@ from jswim.actions import decode_action, encode_action, n_actions
 from jswim.agents import qlearning, random_policy, worlds
 from jswim.agents.qlearning import QConfig
 from jswim.env.base import Environment, Observation
-from jswim.env.scene_world import ARMS
+from jswim.env.scene_world import ARMS, SceneTask
 from jswim.env.worlds import make
 from jswim.judging.gait import Criterion, judge
 from jswim.scenes import Scene
@@ -240,15 +244,10 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
         run = ppo.train_env(world, keys, task, ppo.PPOConfig(steps=p0.steps), params_axes=axes, trace=True)
-        rep = ppo.evaluate(run, task, criterion=Criterion(horizon=horizon))
         codes, tr = np.zeros((len(plans), 0), np.int64), run.trace
         dof, rocs = np.asarray(run.dof, np.int64), np.asarray(run.actions, np.float64)
-        for i in range(len(plans)):
-            moves[i] = [[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])]
-            judged[i] = {"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
-                         "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
-                         # a pair's period is 0, as the lattice judge of the pair rows gives it
-                         "period": int(rep.period[i]) if n_sw == 1 else 0}
+        moves = [[[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])] for i in range(len(plans))]
+        judged = _ppo_judged(run, plans, task, horizon, n_sw)
     else:
         config = QConfig(steps=p0.steps, action_set=p0.action_set)
         run = qlearning.train_env(world, keys, task, config, params_axes=axes, trace=True)
@@ -262,13 +261,35 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         extra = {"xs": xs[i].tolist(), "heights": heights[i].tolist(), "tilts": tilts[i].tolist(),
                  "contact": contact[i].tolist(), "stuck": stuck[i].tolist()}
         row = scene_row(p, [int(c) for c in codes[i]], xs[i].mean(axis=-1).tolist(), extra, horizon, z0=z0,
-                        tilt0=tilt0, judged=judged[i] or _unjudged(p), moves=moves[i])
+                        tilt0=tilt0, judged=judged[i], moves=moves[i])
         if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
             y, orientation = (np.asarray(v[i, :, 0], np.float64).tolist()
                               for v in (obs.position[..., 1], obs.orientation))
             row = dataclasses.replace(row, y=y, orientation=orientation)
         rows.append(row)
     return rows
+
+
+def _ppo_judged(run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: int) -> list[dict[str, Any] | None]:
+    """PPO's verdicts per plan, as :func:`_judge` judges lattice moves: the shape judge
+    (:func:`jswim.agents.ppo.evaluate`) per swimmer of a scene world; the paper's swimmer in a
+    world of its own (Purcell's above a wall) on its moves replayed in the bulk; a registered
+    world unjudged (:func:`_unjudged`)."""
+    from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
+
+    p0 = plans[0]
+    if p0.swimmer not in SWIMMERS:
+        return [_unjudged(p) for p in plans]
+    crit = Criterion(horizon=horizon)
+    if isinstance(task, SceneTask):
+        rep = ppo.evaluate(run, task, criterion=crit)
+    else:
+        bulk, _ = _per_run(env.make_params(p0.swimmer, init=p0.init), [p.direction for p in plans])
+        rep = ppo.evaluate(run, bulk, criterion=crit, replay=True)
+    return [{"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
+             "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
+             # a pair's period is 0, as the lattice judge of the pair rows gives it
+             "period": int(rep.period[i]) if n_sw == 1 else 0} for i in range(len(plans))]
 
 
 def _unjudged(plan: Plan) -> dict[str, Any] | None:
@@ -285,6 +306,9 @@ def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
     scene, world, params = _world(plan)
     _, z0, tilt0, _ = _start(world, params, scene)
     tracks = {k: getattr(result, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
+    if scene.medium == "wall" and not tracks["heights"]:
+        # a world that reports no height (Purcell's plane above a wall): the start's throughout, as _lift
+        tracks.update(heights=[z0.tolist()] * len(result.x), tilts=[tilt0.tolist()] * len(result.x))
     return with_llm(scene_row(plan, list(result.actions), list(result.x), tracks, horizon, z0=z0, tilt0=tilt0),
                     result)
 
@@ -316,7 +340,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
               moves: list[list[float]] | None = None) -> RunRow:
     """One row of a scene run (:func:`jswim.studies.rows.build_row`): the bulk studies' columns
     (success by :func:`_judge` on the lattice ``codes``, or the real-valued agent's own verdict
-    ``judged`` and ``moves``) and the scene's: the scene, its medium, start height or distance,
+    ``judged`` and ``moves``; a registered world's runs unjudged, :func:`_unjudged`) and the scene's: the scene, its medium, start height or distance,
     the per-step tracks ``extra`` holds (``xs``, ``heights``, ``tilts``, ``contact``, ``stuck``),
     ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for strokes, ``per_cycle``.
     ``y`` and ``orientation`` of the trajectories table are swimmer 1's height and tilt."""
@@ -327,7 +351,7 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
     f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in extra.get("contact") or []]) if wall else (None, None)
     return build_row(
         plan, x, moves if moves is not None else [list(decode_action(int(c))) for c in codes],
-        _judge(codes, plan, sw, horizon) if judged is None else judged,
+        judged if judged is not None else _unjudged(plan) or _judge(codes, plan, sw, horizon),
         init=signs(plan.init) if not isinstance(plan.init, str) else plan.init,
         scene=plan.scene, medium=scene.medium, n_swimmers=sw, start_height=float(z0[0]) if wall else None,
         separation=float(scene.separation) if sw > 1 else None, fate=f, mean_height=mean_h,
@@ -392,10 +416,10 @@ def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]
             Column("mean height"), Column("x stroke")]
     order = sorted(summary, key=lambda s: (s.get("separation") or 0.0, s.get("start_height") or 0.0,
                                            str(s["group"]), str(s["agent"])))
-    cells = [[str(s["agent"]), "+x" if (s.get("direction") or 1) > 0 else "-x", str(s["group"]),
-              str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
-              s.get("fates") or "-", fmt(s.get("mean_height"), ".2f"), fmt(s.get("vs_stroke"), ".3f")] for s in order]
-    return cols, cells
+    body = [[str(s["agent"]), "+x" if (s.get("direction") or 1) > 0 else "-x", str(s["group"]),
+             str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
+             s.get("fates") or "-", fmt(s.get("mean_height"), ".2f"), fmt(s.get("vs_stroke"), ".3f")] for s in order]
+    return cols, body
 
 
 def table_note(summary: Sequence[dict[str, Any]]) -> str | None:

@@ -102,3 +102,24 @@ def test_pair_judge_on_hand_made_strokes():
     back = ppo.evaluate_scene(_hand_made([scenes.stroke_codes("phase0", -1, 30, 2), both]), pair,
                               direction=np.array([-1, -1]))
     assert back.success.tolist() == [True, False]
+
+
+def test_a_run_from_another_world_is_judged_on_its_moves_replayed_in_the_bulk():
+    """PPO on Purcell above a wall is judged as the scene studies judge lattice moves: on the bulk
+    swimmer's displacements (``replay=True``), not on the run's own x. The square from (+, +) at
+    full ROCs is the corner stroke, 0.19124724 l per cycle in the bulk (DESIGN.md)."""
+    from types import SimpleNamespace
+
+    from jswim import env
+
+    lo, hi = -np.pi / 3, np.pi / 3
+    rocs = np.array([[0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]] * 4)  # D2 down, D1 down, D2 up, D1 up
+    dofs = np.array([[hi, lo], [lo, lo], [lo, hi], [hi, hi]] * 4)
+    run = SimpleNamespace(actions=rocs[None], dofs=dofs[None], dofs0=np.array([[hi, hi]]),
+                          x=np.zeros((1, 16)), dof=np.argmax(rocs != 0, -1)[None] + 1)
+    bulk = env.make_params("purcell", init=(1, 1))
+    rep = ppo.evaluate(run, bulk, replay=True)
+    assert bool(rep.success[0]) and int(rep.period[0]) == 4
+    assert float(rep.per_step[0]) * 4 == pytest.approx(0.19124724, abs=1e-7)
+    # the run's own x (here: it never moved) is what is judged without replay
+    assert not bool(ppo.evaluate(run, bulk).learned[0])

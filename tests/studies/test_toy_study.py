@@ -1,17 +1,20 @@
 """A new world through a study and its report page, unchanged: the toy swimmer of
 tests/env/test_toy_world.py, registered by name (``jswim.register_world``), runs the wall study's
-cells (its factory takes any scene and swims the same in it: it has no wall to feel) with the
-stroke, Q-learning and the random policy, and the page and ``jswim animate`` draw it from what
-the protocol observes (its position and DOFs: one sphere at the position, no outline of its own).
+cells (its factory takes any scene and swims the same in it: it has no wall to feel) with every
+agent: the stroke, the LLM (against the fake server), Q-learning, the random policy and PPO (issue
+30); and the page and ``jswim animate`` draw it from what the protocol observes (its position and
+DOFs: one sphere at the position, no outline of its own).
 
 The numbers checked are the toy's area rule, independent of jswim: the square gait from (1, 1)
-nets -1 per cycle toward +x (clockwise round the unit square), its time reverse +1.
+nets -1 per cycle toward +x (clockwise round the unit square), its time reverse +1; one move
+sweeps at most half the unit square (|dx| <= 0.5).
 """
 
 from __future__ import annotations
 
 import json
 import os
+import re
 
 import numpy as np
 import pytest
@@ -25,6 +28,7 @@ from jswim.viz.page import run_payload, write_report
 from jswim.viz.tracks import track
 from tests.browser import browser_or_skip, open_report_run
 from tests.env.test_toy_world import ToyParams, ToyWorld
+from tests.fakeserver import FakeServer
 
 ARTIFACTS = os.environ.get("JSWIM_TEST_ARTIFACTS", "test-artifacts")
 H, STEPS = 3.0, 12
@@ -37,13 +41,32 @@ def toy_factory(scene, *, zeta=0.0, direction=1, init=None):
     return ToyWorld(), ToyParams(float(zeta), float(direction))
 
 
+#: The toy's square toward each target, as the next move from the shape (D1, D2) the last record
+#: ends at: counter-clockwise (+1 per cycle) toward +x, clockwise (-1) toward -x.
+TOWARD = {"positive": {"1, 1": "[1, -1]", "0, 1": "[2, -1]", "0, 0": "[1, 1]", "1, 0": "[2, 1]"},
+          "negative": {"1, 1": "[2, -1]", "1, 0": "[1, -1]", "0, 0": "[2, 1]", "0, 1": "[1, 1]"}}
+PROMPTS: list[str] = []
+
+
+def toy_reply(body):
+    """The square toward the prompt's target from the shape its records report (the toy starts at
+    (1, 1)); a shape the toy never takes (the DOFs written otherwise than as its observation's 0 and
+    1) gets an invalid reply, so that run's steps fail."""
+    text = "\n".join(str(m.get("content", "")) for m in body["messages"])  # a retry's too
+    PROMPTS.append(text)
+    after = re.findall(r"-> \(([\d., ]+)\)", text)  # the records', not the legend's "(D1, D2)"
+    way = "positive" if "positive x direction" in text else "negative"
+    return TOWARD[way].get(after[-1] if after else "1, 1", "[7, 7]")
+
+
 @pytest.fixture(scope="module")
 def toy_folder(tmp_path_factory):
     jswim.register_world("toy", toy_factory)
     out = tmp_path_factory.mktemp("toy") / "wall"
-    o = StudyOptions(swimmers=("toy",), heights=(H,), directions=(1, -1), agents=("stroke", "qlearning", "random"),
-                     steps=STEPS, q_runs=1)
-    res = run_study("wall", o, backend=None, out=out, figures=False)
+    o = StudyOptions(swimmers=("toy",), heights=(H,), directions=(1, -1), steps=STEPS, q_runs=1, runs=1,
+                     agents=("stroke", "qlearning", "random", "llm", "ppo"))
+    with FakeServer(reply=toy_reply) as srv:
+        res = run_study("wall", o, backend=srv.backend(), out=out, figures=False)
     yield out, res
     env_worlds._REGISTERED.pop("toy", None)
 
@@ -70,8 +93,10 @@ def test_square_stroke_from_the_start_corner():
 def test_toy_world_runs_a_study(toy_folder):
     out, res = toy_folder
     rows = {r["run_id"]: r for r in res.rows}
-    # per direction: the free-fluid reference stroke, and at h = 3 the stroke, Q-learning and random
-    assert len(rows) == 2 * 4
+    # per direction: the free-fluid reference stroke, and at h = 3 every agent, one run each
+    assert len(rows) == 2 * 6
+    assert sorted(r["agent"] for r in rows.values() if r["direction"] == 1) == \
+        ["llm", "ppo", "qlearning", "random", "stroke", "stroke"]
     strokes = [r for r in rows.values() if r["agent"] == "stroke"]
     assert len(strokes) == 4
     for r in strokes:
@@ -82,10 +107,48 @@ def test_toy_world_runs_a_study(toy_folder):
         assert r["swimmer"] == "toy" and r["success"] is None  # no paper criterion for a new world
         dx = np.diff(np.r_[0.0, r["x"]])
         assert len(dx) == STEPS and np.all(np.abs(dx) <= 0.5 + 1e-6)  # one move sweeps at most half the square
-        assert all(1 <= a[0] <= 2 and a[1] in (-1, 0, 1) for a in r["actions"])
+        assert len(r["actions"]) == STEPS and all(a[0] in (1, 2) for a in r["actions"])
+        if r["agent"] == "ppo":  # real ROCs in [-1, 1], not only the lattice's
+            assert all(-1.0 <= a[1] <= 1.0 for a in r["actions"])
+            assert any(a[1] not in (-1.0, 0.0, 1.0) for a in r["actions"])
+        else:
+            assert all(a[1] in (-1, 0, 1) for a in r["actions"])
     assert {(t["agent"], t["group"]) for t in res.summary} >= {("stroke", f"h={H:g}"), ("qlearning", f"h={H:g}")}
     saved = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     assert {r["run_id"] for r in saved} == set(rows)
+
+
+def test_toy_llm_runs_read_the_toy_world(toy_folder):
+    out, res = toy_folder
+    llm = {r["direction"]: r for r in res.rows if r["agent"] == "llm"}
+    assert set(llm) == {1, -1}
+    for d, r in llm.items():
+        # The reply followed the shapes the records gave, so the run is the toy's square toward
+        # the target: +1 per cycle by the area rule (0.5 at a cycle's first and last moves).
+        assert r["failed_steps"] == 0 and r["success"] is None
+        np.testing.assert_allclose(np.asarray(r["x"]) * d, np.repeat(np.arange(1, 4), 4) - [0.5, 0.5, 0.5, 0.0] * 3,
+                                   atol=1e-6)
+    # The prompt is the toy's: its two DOFs over the world's range [0, 1] and records of its observed
+    # shapes (the paper's swimmers' ranges are [-1.047, 1.047] and [6, 10]).
+    toy = [p for p in PROMPTS if "D1 and D2 each stay in [0, 1]" in p]
+    assert len(toy) == len(PROMPTS) == 2 * STEPS
+    assert any("(1, 1) [1, -1] -> (0, 1), X" in p for p in toy) and any("(1, 1) [2, -1] -> (1, 0), X" in p for p in toy)
+    first = json.loads((out / "transcripts" / f"{llm[1]['run_id']}.jsonl").read_text().splitlines()[0])
+    assert first["spec"]["swimmer"] == "toy" and first["levels0"] == [1, 1]
+
+
+def test_toy_ppo_learns_on_the_toy_world(toy_folder):
+    out, res = toy_folder
+    for r in (r for r in res.rows if r["agent"] == "ppo"):
+        assert r["success"] is None and r["period"] == 0  # no paper criterion for a new world
+        # the recorded x is the area rule's on the recorded moves, replayed here from (1, 1)
+        f, x = np.ones(2), 0.0
+        for (dof, roc), xr in zip(r["actions"], r["x"]):
+            f1 = f.copy()
+            f1[dof - 1] = np.clip(f1[dof - 1] + roc, 0.0, 1.0)
+            mid, dd = (f + f1) / 2, f1 - f
+            x, f = x + 0.5 * (mid[0] * dd[1] - mid[1] * dd[0]), f1
+            assert xr == pytest.approx(x, abs=1e-5)
 
 
 def test_toy_run_pictured_from_the_protocol(toy_folder):
