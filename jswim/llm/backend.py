@@ -211,18 +211,10 @@ class Backend:
                "model": name, "constrain": self.constrain, "temperature": self.temperature}
         # What is sent changes the answers; recorded only when not the default, so folders
         # written before these settings existed keep their identity.
-        if self.omit_fields:
-            out["omit_fields"] = list(self.omit_fields)
-        if self.reasoning != "auto":
-            out["reasoning"] = self.reasoning
-        if self.reasoning_effort is not None:
-            out["reasoning_effort"] = self.reasoning_effort
-        if self.extra_fields:
-            out["extra_fields"] = dict(self.extra_fields)
-        if self.sampling != "auto":
-            out["sampling"] = self.sampling
-        if self.server_family is not None:
-            out["server_family"] = self.server_family
+        given = {"omit_fields": list(self.omit_fields) or None, "reasoning": self.reasoning,
+                 "reasoning_effort": self.reasoning_effort, "extra_fields": dict(self.extra_fields) or None,
+                 "sampling": self.sampling, "server_family": self.server_family}
+        out.update({k: v for k, v in given.items() if v not in (None, "auto")})
         return out
 
     def address(self) -> str | None:
@@ -319,9 +311,8 @@ def check_gguf(path: str) -> None:
     """Raise :class:`ConfigError` unless ``path`` is a readable GGUF file (checked up front, so
     a wrong file fails before any baseline runs, not when the embedded server starts)."""
     check_file(path, "--gguf")
-    p = Path(path)
     try:
-        with open(p, "rb") as fh:
+        with open(path, "rb") as fh:
             magic = fh.read(4)
     except OSError as exc:
         raise ConfigError(f"--gguf {path}: cannot read it ({exc.strerror})") from None

@@ -55,6 +55,9 @@ from jswim.llm.transport import LoopbackTransport
 from jswim.llm.urls import endpoint, is_local_host, is_loopback, safe_url
 from jswim.llm.usage import Usage, price_table
 
+#: The key and URL credentials taken out of a text, in any encoding.
+_scrub = credentials.scrub
+
 #: Same-host 307/308 redirects a request follows before it fails.
 MAX_REDIRECTS = 5
 
@@ -224,9 +227,7 @@ class LLMClient:
         for name, value in s.extra_fields:
             if name not in REQUIRED_FIELDS:
                 payload[name] = value
-        payload = self.reasoning.apply(payload)
-        for name in s.omit_fields:
-            payload.pop(name, None)
+        payload = self._amend(payload)
         if "grammar" not in payload and "response_format" not in payload:
             mode = "none"
         return payload, mode
@@ -366,9 +367,6 @@ class LLMClient:
             reasoning=value.get("reasoning", ""),
         )
 
-    def _scrub(self, text: str) -> str:
-        return credentials.scrub(text)  # the key and URL credentials, in any encoding
-
     def _headers(self) -> dict[str, str]:
         if self._key:
             return {"Authorization": f"Bearer {self._key}"}
@@ -445,13 +443,13 @@ class LLMClient:
                     budget = (f"the budget is --retries {s.max_retries}, "
                               f"--retry-for {s.retry_for_s if s.retry_for_s is not None else 'none'}")
                     if fail.timeout:  # the last straw was a timeout: say slow, and what to raise
-                        raise LLMTimeoutError(self._scrub(
+                        raise LLMTimeoutError(_scrub(
                             f"{self._where}: the server is slow: no answer within {s.timeout_s:g} s; gave up after "
                             f"{retries + 1} attempts ({spent}; {budget}); a cold local server may still be loading "
                             f"its model: wait for it or raise --timeout (now {s.timeout_s:g} s)"
                         )) from None
                     msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts ({spent}; {budget})"
-                    raise (LLMResponseError if fail.bad_body else LLMServerError)(self._scrub(msg)) from None
+                    raise (LLMResponseError if fail.bad_body else LLMServerError)(_scrub(msg)) from None
                 # A timed-out request already waited a whole timeout: send it again at once.
                 wait = 0.0 if fail.timeout else self._backoff(retries)
                 if fail.retry_after is not None:
@@ -473,7 +471,7 @@ class LLMClient:
             if kind == "timeout":
                 raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
                                unanswered=unanswered) from None
-            detail = self._scrub(str(exc)) or "no detail"
+            detail = _scrub(str(exc)) or "no detail"
             raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=unanswered) from None
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
@@ -523,17 +521,17 @@ class LLMClient:
             try:
                 nxt = url.join(resp.headers["location"])
             except (httpx.InvalidURL, ValueError):
-                raise LLMSetupError(self._scrub(f"{self._where}: HTTP {resp.status_code} to an address that does "
+                raise LLMSetupError(_scrub(f"{self._where}: HTTP {resp.status_code} to an address that does "
                                                 "not parse; give --base-url the server's address"),
                                     resp.status_code, "") from None
             if (nxt.scheme, nxt.host, nxt.port) != (url.scheme, url.host, url.port):
-                raise LLMSetupError(self._scrub(
+                raise LLMSetupError(_scrub(
                     f"{self._where}: HTTP {resp.status_code} redirects to another host ({safe_url(str(nxt.copy_with(query=None)))}); "
                     "not followed, so the API key is not sent there: give --base-url that address if you trust it"),
                     resp.status_code, "")
             url = nxt
         else:
-            raise LLMSetupError(self._scrub(f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
+            raise LLMSetupError(_scrub(f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
                                             "the address they lead to"), resp.status_code, "")
         kept = [(k, v) for k, v in resp.headers.multi_items() if k.lower() not in ("content-encoding", "content-length")]
         return httpx.Response(resp.status_code, headers=kept, request=resp.request,
@@ -543,8 +541,8 @@ class LLMClient:
         s = self.settings
         err = rejection(status, server, payload, where=self._where, url=safe_url(self._url), model=s.model,
                         api_key_env=s.api_key_env, invalid=invalid)
-        err.args = (self._scrub(str(err)),)
-        err.server_message = self._scrub(err.server_message)
+        err.args = (_scrub(str(err)),)
+        err.server_message = _scrub(err.server_message)
         return err
 
     def _cost(self, usage: Usage, replied: str | None) -> float:
@@ -576,12 +574,11 @@ class LLMClient:
         usage = Usage.from_response(got.usage)
         # A reply may echo a credential (a proxy quoting the request's headers): scrubbed by the
         # registry the error messages use, before the journal, the cache or a transcript see it.
-        clean = self._scrub
         return ChatResult(
-            text=clean(constrain.reply_text(mode, got.answer)), usage=usage, latency_s=time.perf_counter() - t0,
+            text=_scrub(constrain.reply_text(mode, got.answer)), usage=usage, latency_s=time.perf_counter() - t0,
             cache_hit=False, shared=False, retries=retries,
             cost_usd=self._cost(usage, got.model), constraint=mode,
-            finish_reason=got.finish_reason, raw=clean(got.content), reasoning=clean(got.reasoning),
+            finish_reason=got.finish_reason, raw=_scrub(got.content), reasoning=_scrub(got.reasoning),
             temperature_sent=(payload or {}).get("temperature"),
         )
 
