@@ -1,20 +1,8 @@
 """Server addresses: the shapes users write, made into one API root.
 
-Users copy base URLs from server docs and logs in several shapes. :func:`normalize_base_url`
-accepts the common ones and returns the API root the client appends ``/chat/completions`` to:
-
-===========================================  ===========================================
-written                                      used
-===========================================  ===========================================
-``http://localhost:8080/v1``                 as is
-``http://localhost:8080`` (no path)          ``http://localhost:8080/v1``
-``http://host:8000/v1/chat/completions``     ``http://host:8000/v1``
-``localhost:11434/v1`` (no scheme)           ``http://localhost:11434/v1`` (local host)
-``api.example.com/v1`` (no scheme)           ``https://api.example.com/v1`` (public name)
-===========================================  ===========================================
-
-A path other than empty is kept (gateways mount the API anywhere); when the server answers 404
-the client's error names the URL it tried.
+:func:`normalize_base_url` accepts the common shapes users copy from server docs and logs (no
+path, a pasted ``/v1/chat/completions``, no scheme) and returns the API root the client appends
+``/chat/completions`` to; docs/servers.md (*Base URL*) lists them.
 """
 
 from __future__ import annotations
@@ -69,7 +57,7 @@ def _is_local_name(host: str) -> bool:
 
 
 def normalize_base_url(url: str) -> str:
-    """The API root for a base URL as a user wrote it (see the module docstring).
+    """The API root for a base URL as a user wrote it (docs/servers.md).
 
     Raises
     ------
