@@ -126,8 +126,7 @@ def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[s
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=FIELDS)
     w.writeheader()
-    for r in rows:
-        w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in FIELDS})
+    w.writerows({k: ("" if r.get(k) is None else r.get(k)) for k in FIELDS} for r in rows)
     atomic_write(folder / "leaderboard.csv", buf.getvalue())
     atomic_write(folder / "leaderboard.json", dumps({"schema": list(FIELDS), "bench": dict(meta), "rows": list(rows),
                                                      "missing": list(missing)},
