@@ -1,20 +1,12 @@
 """Async client for OpenAI-compatible chat-completions servers, over httpx.
 
 One :class:`LLMClient` serves a whole study: many requests in flight at once (bounded by a
-semaphore), retries with exponential backoff and jitter on transient failures (connection errors,
-timeouts, 408, 409, 429, 5xx, unreadable bodies) within one budget per call (``max_retries``,
-``retry_for_s``), ``Retry-After`` honoured, requests that got no answer counted as possibly
-billed, a disk cache and in-flight de-duplication for deterministic (temperature 0) requests,
-and usage/cost per call.
-
-Real servers differ in ordinary ways and the client absorbs them (see :mod:`jswim.llm.reply`):
-every request says ``"stream": false`` and a stream that comes anyway is assembled; reasoning
-(``<think>`` blocks, ``reasoning_content``) is split from the answer; null or list content is
-read; base URLs are accepted in their common shapes (:mod:`jswim.llm.urls`). A rejection names
-the server's own message, the URL tried and the setting that avoids it.
-
-The API key is read from an environment variable whose *name* is a setting; the key itself is
-only ever put in the ``Authorization`` header, never in logs, cache keys, results or errors.
+semaphore), retries with backoff and jitter within one budget per call (``max_retries``,
+``retry_for_s``), requests that got no answer counted as possibly billed, a disk cache and
+in-flight de-duplication for temperature-0 requests, and usage/cost per call. How it absorbs real
+servers' differences (streams, reasoning, content shapes, base URLs: :mod:`jswim.llm.reply`,
+:mod:`jswim.llm.urls`), what it retries and what a rejection says are in docs/servers.md; how the
+API key is kept (only in the ``Authorization`` header) in docs/studies.md (*Secrets*).
 
 Example
 -------
