@@ -57,9 +57,7 @@ def _undecodable_token(tokens: Sequence[str]) -> str | None:
     """The option (or argument) of the first command-line token that is not UTF-8, named as the
     user typed it (``--swimmer``), never as Python holds the bytes (``'\udcff'``)."""
     for i, t in enumerate(tokens):
-        try:
-            t.encode("utf-8")
-        except UnicodeEncodeError:
+        if not _utf8(t):
             if t.startswith("--") and "=" in t:
                 return t.split("=", 1)[0]
             if i and tokens[i - 1].startswith("-") and len(tokens[i - 1]) > 1:
@@ -68,16 +66,20 @@ def _undecodable_token(tokens: Sequence[str]) -> str | None:
     return None
 
 
+def _utf8(text: str) -> bool:
+    """Whether ``text`` encodes as UTF-8 (Python holds bytes that are not as lone surrogates)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
 def _undecodable(args: argparse.Namespace) -> str | None:
     """The first option whose text is not UTF-8 (Python holds such bytes as lone surrogates)."""
-    for name, value in vars(args).items():
-        for v in value if isinstance(value, (list, tuple)) else (value,):
-            if isinstance(v, str):
-                try:
-                    v.encode("utf-8")
-                except UnicodeEncodeError:
-                    return name
-    return None
+    values = ((name, v) for name, value in vars(args).items()
+              for v in (value if isinstance(value, (list, tuple)) else (value,)))
+    return next((name for name, v in values if isinstance(v, str) and not _utf8(v)), None)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -150,5 +152,3 @@ def run() -> None:
         status = 128 + (interrupts.received() or signal.SIGINT)
     interrupts.ignore()  # a signal during interpreter exit must not kill the process after its line
     sys.exit(status)
-
-
