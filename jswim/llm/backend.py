@@ -54,8 +54,7 @@ class Backend:
     api_key_env : str
         Environment variable holding the API key (its value is never stored).
     constrain : str
-        Constrained decoding: ``auto`` (grammar for llama.cpp, none otherwise), ``grammar``,
-        ``json_schema`` or ``none``.
+        Constrained decoding, one of :data:`jswim.llm.constrain.MODES` (:mod:`jswim.llm.constrain`).
     temperature : float
         Sampling temperature (paper: 0).
     n_parallel : int
@@ -64,11 +63,8 @@ class Backend:
         CPU threads of the embedded server (``None``: llama.cpp's choice, one per core). On a
         machine busy with other work, fewer threads than cores keep decoding steady.
     concurrency : int or None
-        Requests in flight at once. ``None``: fitted to the server: llama.cpp's ``/props``
-        ``total_slots``, 1 for llama-cpp-python's server (it serves one request at a time), else
-        16 (:data:`DEFAULT_CONCURRENCY`); the embedded server: 16, or ``n_parallel`` if larger.
-        Requests beyond the server's slots only queue there, and that wait counts against
-        ``timeout_s``.
+        Requests in flight at once. ``None``: fitted to the server (its slots where it says, else
+        :data:`DEFAULT_CONCURRENCY`; the rule per server is in docs/servers.md, *Concurrency*).
     cohorts : int
         Deprecated, no effect: runs no longer advance in lockstep rounds (each run is its own
         pipeline; see :mod:`jswim.agents.llm`). Kept so old scripts keep working.
@@ -83,12 +79,9 @@ class Backend:
     omit_fields : tuple of str
         Optional request fields never sent, for servers that reject them (``"seed"``, ...).
     price_local : bool
-        Price a local or LAN server's calls at the cloud list prices (a local gateway to a paid
-        API); by default they cost nothing (:func:`jswim.llm.usage.price_table`).
+        Price a local or LAN server's calls at the list prices (a local gateway), as in ClientSettings.
     reasoning : {"auto", "on", "off"}
-        Reasoning models (:mod:`jswim.llm.reasoning`): auto switches to ``max_completion_tokens``
-        and the model's temperature when the server asks; on gives the reasoning budget from the
-        first request (open reasoning models); off never switches.
+        Reasoning models: auto, on or off, as in :class:`~jswim.llm.settings.ClientSettings`.
     reasoning_effort : str or None
         ``reasoning_effort`` sent with every request when set.
     prices, prices_as_of : optional
@@ -98,19 +91,15 @@ class Backend:
         More request fields sent with every request (``--extra-field NAME=JSON``), recorded in the
         identity (they change what the model does).
     sampling : {"auto", "neutral", "server"}
-        Sampling fields sent (:mod:`jswim.llm.sampling`): ``auto`` sends the neutral values to
-        llama.cpp-family, vLLM and Ollama servers (the embedded one: the neutral penalties),
-        nothing to OpenAI and unknown servers; ``neutral`` always; ``server`` never.
+        Sampling preset (:mod:`jswim.llm.sampling`; what each sends to which server: docs/servers.md).
     server_family : str or None
         Force the server's family (:data:`jswim.llm.probe.FAMILIES`) instead of the preflight's
         guess.
     strict_model : bool
         A model the server's ``/v1/models`` does not list is an error (default: a warning).
     retries, retry_for_s : int, float or None
-        Retry budget of each call against transient failures (429, 5xx, dropped connections,
-        timeouts): at most ``retries`` retries and ``retry_for_s`` seconds from the first failure,
-        whichever ends first (``None``: the client's defaults, 20 and 120 s; see
-        :class:`jswim.llm.client.ClientSettings`). Not part of the identity.
+        Retry budget of each call (``max_retries``, ``retry_for_s`` of
+        :class:`~jswim.llm.settings.ClientSettings`; ``None``: its defaults). Not part of the identity.
 
     Raises
     ------
