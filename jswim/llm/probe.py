@@ -76,16 +76,10 @@ class ServerInfo:
 
     def metadata(self) -> dict[str, Any]:
         """A JSON-able record for the study's metadata."""
-        out: dict[str, Any] = {"family": self.family, "detected_by": self.detected_by}
-        if self.models is not None:
-            out["models"] = list(self.models[:20])
-        if self.total_slots is not None:
-            out["total_slots"] = self.total_slots
-        if self.settings:
-            out["server_sampling_defaults"] = dict(self.settings)
-        if self.warnings:
-            out["warnings"] = list(self.warnings)
-        return out
+        known = {"models": None if self.models is None else list(self.models[:20]), "total_slots": self.total_slots,
+                 "server_sampling_defaults": dict(self.settings) or None, "warnings": list(self.warnings) or None}
+        return {"family": self.family, "detected_by": self.detected_by,
+                **{k: v for k, v in known.items() if v is not None}}
 
 
 def server_root(base_url: str) -> str:
