@@ -1,19 +1,7 @@
 """The ``jswim`` command: one module per command (``register(sub)`` adds its parser, ``main(args)``
 runs it), argv -> options of the studies in :mod:`jswim.cli.options`, shared parts in
-:mod:`jswim.cli.base`.
-
-``jswim swim``           the main job: LLM-driven swimmers next to Q-learning and random learners
-``jswim study NAME``     one of the paper's studies (curves, history, noise, ablation, inits)
-``jswim qlearn``         the Q-learning baseline's steps-to-learn distributions
-``jswim ensemble``       a stroke or policy over many noisy swimmers: X/a statistics per step
-``jswim gaits SWIMMER``  closed stroke cycles ranked by displacement per step
-``jswim plot FOLDER``    redraw a study folder's figures
-``jswim show FOLDER``    a study folder's status, settings, cost, summary table and figures (read-only)
-``jswim compare F1 F2..`` studies side by side, per setting present in all (read-only)
-``jswim report FOLDER``  write the folder's report.html (settings, table, figures, a run browser)
-``jswim animate FOLDER`` runs of a study folder as a GIF or MP4, side by side
-
-A user mistake ends with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
+:mod:`jswim.cli.base`. Every command, in one table: docs/getting-started.md. A user mistake ends
+with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
 """
 
 from __future__ import annotations
