@@ -236,12 +236,8 @@ class Backend:
                       reasoning_effort=self.reasoning_effort, extra_fields=self.extra_fields,
                       sampling=sampling_fields(self.sampling, family, embedded=self.local),
                       **({"prices": dict(self.prices)} if self.prices is not None else {}))
-        if self.timeout_s is not None:
-            common["timeout_s"] = self.timeout_s
-        if self.retries is not None:
-            common["max_retries"] = self.retries
-        if self.retry_for_s is not None:
-            common["retry_for_s"] = self.retry_for_s
+        given = {"timeout_s": self.timeout_s, "max_retries": self.retries, "retry_for_s": self.retry_for_s}
+        common.update({k: v for k, v in given.items() if v is not None})  # else the settings' defaults
         if self.local:
             if server is None:
                 raise ConfigError("the embedded backend needs its running server (Backend.server())")

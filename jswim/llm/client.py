@@ -204,12 +204,9 @@ class LLMClient:
             "temperature": s.temperature if temperature is None else temperature,
             "stream": False,
         }
-        mt = s.max_tokens if max_tokens is None else max_tokens
-        if mt is not None:
-            payload["max_tokens"] = mt
-        sd = s.seed if seed is None else seed
-        if sd is not None:
-            payload["seed"] = sd
+        given = {"max_tokens": s.max_tokens if max_tokens is None else max_tokens,
+                 "seed": s.seed if seed is None else seed}
+        payload.update({k: v for k, v in given.items() if v is not None})
         payload.update(s.sampling)
         asked = constrain_mode or s.constrain
         if asked == "auto" and self._auto_form is not None:  # the server rejected auto's first form(s)
