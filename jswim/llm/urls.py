@@ -31,10 +31,8 @@ def safe_url(url: str) -> str:
 def is_loopback(url: str) -> bool:
     """Whether ``url`` points at this machine."""
     host = urlsplit(url).hostname or ""
-    if host == "localhost":
-        return True
     try:
-        return ipaddress.ip_address(host).is_loopback
+        return host == "localhost" or ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
 
@@ -84,13 +82,8 @@ def normalize_base_url(url: str) -> str:
         raise ConfigError(f"the server base URL {redact_url(text)!r} has a bad port; {example}") from None
     if not parts.hostname:
         raise ConfigError(f"the server base URL {redact_url(text)!r} has no host; {example}")
-    path = parts.path.rstrip("/")
-    for suffix in ENDPOINT_SUFFIXES:
-        if path.endswith(suffix):
-            path = path[: -len(suffix)]
-            break
-    if not path:
-        path = "/v1"
+    path = parts.path.rstrip("/")  # the first endpoint suffix cut off; no path at all means /v1
+    path = next((path[: -len(s)] for s in ENDPOINT_SUFFIXES if path.endswith(s)), path) or "/v1"
     return urlunsplit((parts.scheme.lower(), parts.netloc, path, parts.query, ""))
 
 
