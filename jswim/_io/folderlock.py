@@ -1,20 +1,10 @@
 """One writer per study folder: an exclusive OS lock held for a whole session.
 
-A study folder holds paid calls; two processes writing it at once would send and journal every
-call twice and interleave the transcripts. :class:`FolderLock` takes an exclusive lock on
-``FOLDER/.jswim.lock`` (:mod:`filelock`, i.e. ``flock(2)`` on POSIX) before anything in the
-folder is read or written, and holds it until the session ends. Next to it,
-``FOLDER/.jswim.holder.json`` says who holds it (pid, host, start time, command), so a second
-process can say in one line whom it waits for.
-
-A lock held by a dead process is no lock: the kernel drops an ``flock`` when its holder dies
-(``kill -9`` included), so the next session simply takes it and rewrites the holder file; a
-holder file left by a dead process is only read to report, never trusted. (On a network file
-system without ``flock`` the library falls back as it documents.)
-
-Readers never lock: ``jswim show``, ``compare``, ``plot`` and ``--dry-run`` read a folder that a
-live session may be writing (every file they read is written atomically or append-only), and
-:func:`holder` tells them whether a live session holds it.
+Two processes writing one study folder would send and journal every call twice. :class:`FolderLock`
+takes an exclusive lock on ``FOLDER/.jswim.lock`` (:mod:`filelock`) before anything in the folder
+is read or written and holds it until the session ends; ``FOLDER/.jswim.holder.json`` says who
+holds it. Readers never lock (:func:`holder` tells them whether a live session holds it). What
+happens to a dead holder's lock is in docs/studies.md (*One writer*).
 """
 
 from __future__ import annotations
@@ -71,7 +61,7 @@ def _alive(pid: Any) -> bool | None:
 
 
 class FolderLock:
-    """Exclusive lock on a study folder for one session (see the module docstring).
+    """Exclusive lock on a study folder for one session (docs/studies.md).
 
     Parameters
     ----------
@@ -95,7 +85,6 @@ class FolderLock:
     def acquire(self) -> "FolderLock":
         """Take the lock without waiting, and record this process as its holder."""
         import filelock  # lazy: only a session that writes a folder needs it
-
 
         lock = filelock.FileLock(self.folder / LOCK, timeout=0, mode=file_mode())
         try:

@@ -1,24 +1,10 @@
 """SIGINT, SIGTERM and SIGHUP end a ``jswim`` session the same way, once.
 
-A batch scheduler, ``systemd`` or ``timeout`` stops a job with SIGTERM; a closed terminal sends
-SIGHUP; a user presses Ctrl-C. Each must end a study the same way: every finished run and
-answered call kept, the folder's status ``interrupted``, one line on stderr. :func:`install`
-(called by the ``jswim`` command, never on import) routes all three to one handler:
-
-- the first signal stops the session: inside the event loop the main task is cancelled (as
-  :func:`asyncio.run` does for Ctrl-C, so every ``finally`` runs and transcripts are closed),
-  elsewhere :class:`KeyboardInterrupt` is raised;
-- every later signal is only noted: the session is already saving what it has, and a second
-  Ctrl-C must not tear that save or print a traceback from a cleanup or ``atexit`` callback.
-
-:func:`quiet` makes even the first signal a note (the session is over; only exit remains).
-
-The first signal is acted on at a moment that can take it. Not inside an import: an exception
-raised while a C extension initialises (JAX's ``jaxlib._jax``, pyarrow) leaves it half made, an
-``ImportError`` traceback or a crash at exit; the handler then looks again every 50 ms (SIGALRM)
-until the import is over. And not lost: a :class:`KeyboardInterrupt` raised inside a callback that
-cannot raise (a garbage-collector callback, a ``__del__``) is swallowed by Python; the
-unraisable hook sees it and delivers it again the same way.
+A scheduler's SIGTERM, a closed terminal's SIGHUP and Ctrl-C must each end a study the same way:
+every finished run and answered call kept, the status ``interrupted``, one line on stderr.
+:func:`install` (called by the ``jswim`` command, never on import) routes all three to one
+handler; when it acts on the first signal (never inside an import) and why later ones are only
+noted is in docs/design.md (*Study folders under kills, signals and a second writer*).
 """
 
 from __future__ import annotations

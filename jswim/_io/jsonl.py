@@ -1,11 +1,9 @@
 """Append-only JSON-lines files that survive tears.
 
-A study's journals (``runs.jsonl``, ``calls.jsonl``, ``transcripts/RUN.jsonl``) are appended one
-whole line at a time. A kill, a full disk or a crash can still leave the last line torn (no
-final newline). Appending after it would glue the next record onto the torn one and lose both,
-so every writer opens a journal through :func:`repair_tail`, which cuts the torn bytes back to
-the last complete line and says how many it cut. Readers skip a line that is not JSON (only
-the last can be torn), so a journal is always read as the records that were written whole.
+A kill, a full disk or a crash can leave a journal's last line torn; every writer opens it through
+:func:`repair_tail`, which cuts the torn bytes back to the last complete line (appending after them
+would glue the next record on and lose both), and readers (:func:`read_records`) skip a line that
+is not a record. docs/studies.md (*Torn files*) says what a session does with both.
 """
 
 from __future__ import annotations

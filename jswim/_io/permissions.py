@@ -1,11 +1,8 @@
 """Who may read what jswim writes: the owner alone, unless the umask shares with a group on purpose.
 
-A study folder holds a paid study's prompts, replies, costs and server addresses, and the
-response cache holds the replies; on a shared machine other users should not read them by
-default. The usual umask, ``022``, is nobody's choice (it is what a fresh account gets), and it
-would make every file world-readable, so under it, and under any umask that does not let the
-group write, jswim creates folders ``0700`` and files ``0600``. A umask that lets the group write
-(``002``, ``007``, ``000``: a shared-group setup someone made) is honoured as it is.
+Under the usual umask ``022``, or any umask that does not let the group write, jswim creates
+folders ``0700`` and files ``0600``; a umask that lets the group write (``002``, ``007``, ``000``)
+is honoured as it is. Why: docs/studies.md.
 """
 
 from __future__ import annotations

@@ -1,35 +1,8 @@
 """The bench's leaderboard: one row per model (or baseline) and setting, from the study folders.
 
 Read only from the folders, so it is the same after a resume and can be redrawn at any time.
-Rows (``leaderboard.csv`` / ``leaderboard.json``, this schema; ``null`` where a value does not
-apply):
-
-=====================  ==========================================================================
-column                 meaning
-=====================  ==========================================================================
-``row``                the model's name, or ``Q-learning``, ``random``, ``reference``
-``kind``               ``llm``, ``baseline`` (Q-learning, random) or ``reference`` (the prompt-only
-                       rule of ``jswim serve reference``; not an LLM)
-``part``               the suite part (a study: ``curves``, ``noise``, ...)
-``swimmer``            ``purcell``, ``ng``, ...
-``direction``          +1 or -1 (target)
-``group``              the study's cell (``zeta=1``, ``n_ht=3``, ...; empty for one-cell studies)
-``n``                  runs (every sample counted)
-``samples``            independent samples of each run pooled in the row (``--samples``; 1 without)
-``success``            success rate p (the paper's criterion, ``jswim.judging.gait.judge``)
-``success_lo/hi``      its 95% Wilson interval
-``learned``            runs that learned ("k of n learned")
-``steps_median``       median steps to learn over the runs that learned (counted from 1)
-``steps_q25/q75``      their quartiles (the IQR)
-``mean_x``             mean X/a after the last step, toward the target; ``mean_x_lo/hi`` bootstrap 95%
-``failed_steps``       LLM steps without a valid action (summed over the runs)
-``tokens_per_step``    prompt + reply tokens per decision
-``suite_cost_usd``     what the model's calls cost over the whole suite (its call journals)
-``priced``             false when no price applied to the model (its cost is not counted, not $0)
-``unpriced``           why the model's calls are not priced (when ``priced`` is false)
-``status``             the model's bench status: ``complete``, ``failed: ...``, ``stopped at the
-                       cost cap``, ``interrupted``, ``not run``
-=====================  ==========================================================================
+Rows are written to ``leaderboard.csv`` / ``leaderboard.json`` (columns :data:`FIELDS`, ``null``
+where a value does not apply); each column is described in docs/bench.md (*The leaderboard*).
 """
 
 from __future__ import annotations
@@ -82,14 +55,12 @@ def _num(v: Any, spec: str) -> str:
 def _steps(r: Mapping[str, Any]) -> str:
     if not r["learned"]:
         return f"- (0 of {r['n']})"
-
     if r["learned"] < MIN_QUARTILE_N:  # no IQR from fewer than 4 values
         return f"{r['steps_median']:g} ({r['learned']} of {r['n']})"
     return f"{r['steps_median']:g} [{r['steps_q25']:g}-{r['steps_q75']:g}] ({r['learned']} of {r['n']})"
 
 
 def _why_unpriced(r: Mapping[str, Any]) -> str | None:
-
     if r["kind"] == "reference":
         return REFERENCE_UNPRICED
     if r["kind"] == "llm" and r.get("priced") is False:
@@ -101,7 +72,6 @@ def _cost(r: Mapping[str, Any], short: bool = False) -> str:
     """The row's cost in the one wording of :func:`jswim.console.cost_text`, with why it is not
     priced; ``short`` (the terminal table): ``not priced ($0)``, the reasons under the table
     (:func:`unpriced_notes`)."""
-
     if r["kind"] == "baseline":
         return "-"
     why = _why_unpriced(r)
@@ -112,7 +82,6 @@ def _cost(r: Mapping[str, Any], short: bool = False) -> str:
 
 def unpriced_notes(rows: Sequence[Mapping[str, Any]]) -> list[str]:
     """One line per row name whose calls are not priced, saying why (under the terminal table)."""
-
     seen: dict[str, str] = {}
     for r in rows:
         why = _why_unpriced(r)
@@ -157,8 +126,7 @@ def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[s
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=FIELDS)
     w.writeheader()
-    for r in rows:
-        w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in FIELDS})
+    w.writerows({k: ("" if r.get(k) is None else r.get(k)) for k in FIELDS} for r in rows)
     atomic_write(folder / "leaderboard.csv", buf.getvalue())
     atomic_write(folder / "leaderboard.json", dumps({"schema": list(FIELDS), "bench": dict(meta), "rows": list(rows),
                                                      "missing": list(missing)},

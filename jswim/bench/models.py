@@ -1,29 +1,9 @@
 """The models of a bench: a TOML models file or repeated ``--model`` options.
 
-.. code-block:: toml
-
-    [[models]]
-    name = "gpt-4o"                       # the row's label and its folder's name
-    base_url = "https://api.openai.com/v1"
-    model = "gpt-4o"
-    api_key_env = "OPENAI_API_KEY"        # the variable's name; the key is never written anywhere
-    concurrency = 8                       # requests in flight for this model (default 16)
-    rpm = 500                             # pacing, per model
-    tpm = 30000
-    max_cost = 3.0                        # USD over the whole suite for this model
-    # optional: temperature, max_tokens, timeout, reasoning ("auto"|"on"|"off"), reasoning_effort,
-    # constrain, omit_fields = ["seed"], price_local = true, extra = { top_k = 1 }
-
-    [prices]                              # optional: USD per 1M tokens (jswim.llm.prices)
-    as_of = "2026-11"
-    "gpt-5" = [1.25, 10.0]
-
-    [suites.mine]                         # optional: a user suite (jswim.bench.suites.user_suite)
-    study = "history"
-    options = { n_hts = [1, 2, 3], runs = 3 }
-
-``--model base_url=URL,model=NAME[,name=LABEL,api_key_env=VAR,concurrency=N,...]`` gives the same
-keys on the command line (values that hold commas belong in a file).
+A models file has one ``[[models]]`` entry per row (``name``, ``base_url``, ``model``,
+``api_key_env`` and per-model options), an optional ``[prices]`` table and ``[suites.NAME]``
+tables; ``--model base_url=URL,model=NAME[,KEY=VALUE...]`` gives the same keys on the command
+line. docs/bench.md (*The models file*) lists every key, with an example.
 """
 
 from __future__ import annotations

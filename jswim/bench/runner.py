@@ -1,23 +1,9 @@
 """Running a bench: every model's suite at once, each model in its own processes and folders.
 
-Layout of a bench folder::
-
-    bench.json               the suite's definition and seed, the models (no keys), status per model
-    prices.json              the models file's [prices] table, when it has one
-    <model>/<part>/          an ordinary study folder per model and suite part (show, plot, resume)
-    <model>/<part>.log       what that study printed
-    reference/<part>/        the prompt-only reference rule (jswim serve reference; not an LLM)
-    baselines/<part>/        Q-learning and random, run once for all models
-    leaderboard.csv, .json   the leaderboard (schema: jswim.bench.leaderboard), leaderboard.png/.pdf
-
-Each study is a ``jswim study`` child process with the model's own flags, so every model's
-calls are in flight together, each model paced (``--rpm``/``--tpm``), bounded (``--concurrency``)
-and capped (``max_cost`` over its whole suite: each part gets what the model's earlier parts left)
-on its own, and one model's failure (a server down, a rejected key, its cap) stops only that
-model. A model's parts run one after another. Ctrl-C stops every child cleanly (each keeps its
-finished runs and answered calls, ``interrupted``); the same command resumes, paying no call twice
-(each study's call journal). A model added to the models file later runs alone on the next call:
-the others' folders are complete and only read.
+Each study is a ``jswim study`` child process with the model's own flags, so every model is
+paced, bounded and capped on its own and one model's failure stops only that model; a model's
+parts run one after another. The bench folder's layout, Ctrl-C and resume are in docs/bench.md
+(*How it runs*).
 """
 
 from __future__ import annotations

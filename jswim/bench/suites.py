@@ -2,24 +2,8 @@
 
 A suite's definition (parts, options, seed, sizes) is recorded in the bench folder
 (``bench.json``), so two labs running ``core`` get comparable rows; a folder made with another
-definition is refused, not mixed.
-
-``core`` -- the paper's headline results at a price a lab pays for every new model (its dry run
-on gpt-4o: 3,000 calls, $1.94 (at most $2.08 if every reply ran to max_tokens) at the 2025-04 list prices):
-
-- ``curves``: the paper's protocol and start (Purcell (pi/3, pi/3), NG (10, 6)), n_ht per swimmer
-  (Purcell 3, NG 3 / 6), 50 steps, both swimmers and both directions, 10 LLM runs each
-  (Fig. 2: success p and steps to learn);
-- ``noise``: the same at noise zeta = 1, target +x, 10 LLM runs per swimmer (Fig. 4's middle
-  level: is the stroke kept under noise).
-
-With 10 runs per setting, a success rate's 95% Wilson interval is [0, 0.28] at 0 of 10 and
-[0.72, 1] at 10 of 10, and at most 0.56 wide (5 of 10: [0.24, 0.76]); two models differ
-credibly when their intervals do not overlap.
-
-``paper`` -- every figure of the paper with its studies' own defaults (``jswim study`` NAME):
-curves (both directions), history (n_ht 1..8, both directions), noise (zeta 0..3), ablation
-(S1..S5 removed) and inits (the four starts, both directions).
+definition is refused, not mixed. The suites ``core`` and ``paper`` (their parts, sizes and
+cost) are described in docs/bench.md (*Suites*).
 """
 
 from __future__ import annotations

@@ -1,19 +1,7 @@
 """The ``jswim`` command: one module per command (``register(sub)`` adds its parser, ``main(args)``
 runs it), argv -> options of the studies in :mod:`jswim.cli.options`, shared parts in
-:mod:`jswim.cli.base`.
-
-``jswim swim``           the main job: LLM-driven swimmers next to Q-learning and random learners
-``jswim study NAME``     one of the paper's studies (curves, history, noise, ablation, inits)
-``jswim qlearn``         the Q-learning baseline's steps-to-learn distributions
-``jswim ensemble``       a stroke or policy over many noisy swimmers: X/a statistics per step
-``jswim gaits SWIMMER``  closed stroke cycles ranked by displacement per step
-``jswim plot FOLDER``    redraw a study folder's figures
-``jswim show FOLDER``    a study folder's status, settings, cost, summary table and figures (read-only)
-``jswim compare F1 F2..`` studies side by side, per setting present in all (read-only)
-``jswim report FOLDER``  write the folder's report.html (settings, table, figures, a run browser)
-``jswim animate FOLDER`` runs of a study folder as a GIF or MP4, side by side
-
-A user mistake ends with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
+:mod:`jswim.cli.base`. Every command, in one table: docs/getting-started.md. A user mistake ends
+with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
 """
 
 from __future__ import annotations
@@ -57,9 +45,7 @@ def _undecodable_token(tokens: Sequence[str]) -> str | None:
     """The option (or argument) of the first command-line token that is not UTF-8, named as the
     user typed it (``--swimmer``), never as Python holds the bytes (``'\udcff'``)."""
     for i, t in enumerate(tokens):
-        try:
-            t.encode("utf-8")
-        except UnicodeEncodeError:
+        if not _utf8(t):
             if t.startswith("--") and "=" in t:
                 return t.split("=", 1)[0]
             if i and tokens[i - 1].startswith("-") and len(tokens[i - 1]) > 1:
@@ -68,16 +54,20 @@ def _undecodable_token(tokens: Sequence[str]) -> str | None:
     return None
 
 
+def _utf8(text: str) -> bool:
+    """Whether ``text`` encodes as UTF-8 (Python holds bytes that are not as lone surrogates)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
+
+
 def _undecodable(args: argparse.Namespace) -> str | None:
     """The first option whose text is not UTF-8 (Python holds such bytes as lone surrogates)."""
-    for name, value in vars(args).items():
-        for v in value if isinstance(value, (list, tuple)) else (value,):
-            if isinstance(v, str):
-                try:
-                    v.encode("utf-8")
-                except UnicodeEncodeError:
-                    return name
-    return None
+    values = ((name, v) for name, value in vars(args).items()
+              for v in (value if isinstance(value, (list, tuple)) else (value,)))
+    return next((name for name, v in values if isinstance(v, str) and not _utf8(v)), None)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -150,5 +140,3 @@ def run() -> None:
         status = 128 + (interrupts.received() or signal.SIGINT)
     interrupts.ignore()  # a signal during interpreter exit must not kill the process after its line
     sys.exit(status)
-
-

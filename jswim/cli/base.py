@@ -52,18 +52,19 @@ def outlined(p: argparse.ArgumentParser) -> bool:
     return isinstance(p, Outline)
 
 
-def floats(text: str) -> tuple[float, ...]:
+def _listed(text: str, kind: type, what: str) -> tuple[Any, ...]:
     try:
-        return tuple(float(v) for v in text.split(",") if v.strip())
+        return tuple(kind(v) for v in text.split(",") if v.strip())
     except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}") from None
+        raise argparse.ArgumentTypeError(f"expected comma-separated {what}, got {text!r}") from None
+
+
+def floats(text: str) -> tuple[float, ...]:
+    return _listed(text, float, "numbers")
 
 
 def ints(text: str) -> tuple[int, ...]:
-    try:
-        return tuple(int(v) for v in text.split(",") if v.strip())
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated integers, got {text!r}") from None
+    return _listed(text, int, "integers")
 
 
 def direction(text: str) -> tuple[int, ...]:

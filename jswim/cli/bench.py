@@ -175,20 +175,15 @@ def _unpriced(m: Any, mf: Any) -> str | None:
     return None
 
 
-def _priced(m: Any, mf: Any) -> bool:
-    return _unpriced(m, mf) is None
-
-
 def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list[dict[str, Any]]:
     from jswim.bench import leaderboard, runner  # lazy: start-up (NumPy and the study folders' readers)
 
     cost = {m.name: sum(runner.spent(j.folder) for j in jobs if j.label == m.name) for m in models}
-    priced = {m.name: _priced(m, mf) for m in models}
     why = {m.name: _unpriced(m, mf) for m in models}
     rows: list[dict[str, Any]] = []
     for j in jobs:
         got = leaderboard.folder_rows(j.folder, j.label, j.kind, j.part.name, cost.get(j.label, 0.0),
-                                      priced.get(j.label, True), status.get(j.label, "complete"))
+                                      why.get(j.label) is None, status.get(j.label, "complete"))
         for r in got:
             r["unpriced"] = why.get(j.label) if j.kind == "llm" else None
         rows += got

@@ -79,7 +79,7 @@ def main(args: argparse.Namespace) -> int:
         policy = None
     else:
         policy = ensemble.stroke_policy(parse_moves(args.policy, params.n_dof), label=args.policy)
-    init = args.init if args.init is not None else (start if start is not None else None)
+    init = args.init if args.init is not None else start
     params = make_params(args.swimmer, direction=args.direction[0], init=init)
     if policy is None:
         policy = ensemble.learned_policy(params, seed=args.seed)
@@ -118,7 +118,6 @@ def main(args: argparse.Namespace) -> int:
             if path.suffix == ".png":
                 print(f"figure: {path}")
     return 0
-
 
 
 def parse_moves(text: str, n_dof: int) -> list[int]:

@@ -4,7 +4,7 @@ K-level ROC lattice with ``--roc-levels K``)."""
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import Any, Callable, Sequence
 
 from jswim.actions import check_roc_levels
 from jswim.cli import base
@@ -47,13 +47,7 @@ def main(args: argparse.Namespace) -> int:
     for d in args.direction:
         cycles = gait.best_cycles(model, d, args.max_len)
         print(f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}: {len(cycles)} closed cycles; best first")
-        print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9} simple"
-              "  start  moves (DOF, ROC)")
-        for i, c in enumerate(cycles[: args.top]):
-            start = "".join("+" if v else "-" for v in c.start)
-            moves = " ".join(f"[{dof}, {roc}]" for dof, roc in c.moves)
-            print(f"{i + 1:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f} "
-                  f"{'yes' if c.simple else 'no':>6}  {start:5}  {moves}")
+        _print_cycles(cycles[: args.top], lambda c: "".join("+" if v else "-" for v in c.start), 5)
         print("simple: no shape visited twice per period; the others add detours that go back and forth")
         if args.out:
             from jswim.figures import plots  # lazy: matplotlib only when a figure is asked for
@@ -62,6 +56,16 @@ def main(args: argparse.Namespace) -> int:
             print(f"figure: {paths[0]}")
         print()
     return 0
+
+
+def _print_cycles(cycles: Sequence[Any], start: Callable[[Any], str], width: int) -> None:
+    """The ranked table both listings print; ``start`` writes a cycle's first shape (``width`` wide)."""
+    print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9} simple"
+          "  start  moves (DOF, ROC)")
+    for i, c in enumerate(cycles, 1):
+        moves = " ".join(f"[{dof}, {roc}]" for dof, roc in c.moves)
+        print(f"{i:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f} "
+              f"{'yes' if c.simple else 'no':>6}  {start(c):{width}}  {moves}")
 
 
 def _lattice_gaits(args: argparse.Namespace, model: Any) -> int:
@@ -76,13 +80,7 @@ def _lattice_gaits(args: argparse.Namespace, model: Any) -> int:
         cycles = lattice.best_lattice_cycles(model, d, k, length)
         print(f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}, ROC on {k} levels (k/{k} of the range, "
               f"one DOF per move): {len(cycles)} closed strokes up to {length} moves; best first")
-        print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9} simple"
-              "  start  moves (DOF, ROC)")
-        for i, c in enumerate(cycles[: args.top]):
-            start = "(" + ", ".join(str(v) for v in c.start) + f")/{k}"
-            moves = " ".join(f"[{dof}, {roc}]" for dof, roc in c.moves)
-            print(f"{i + 1:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f} "
-                  f"{'yes' if c.simple else 'no':>6}  {start:7}  {moves}")
+        _print_cycles(cycles[: args.top], lambda c: "(" + ", ".join(str(v) for v in c.start) + f")/{k}", 7)
         print(f"start: each DOF's place on the lattice, j/{k} of its range from lo; moves that reach past a limit "
               "and runs of moves of one DOF (equal to one move) are not listed")
         print()

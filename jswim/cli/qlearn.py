@@ -115,8 +115,7 @@ def qlearn_outputs(rows: Sequence[Any], args: argparse.Namespace) -> list[Path]:
     fields = [f for f in rows[0]._fields if f != "hist"] if rows else []
     w = csv.writer(buf)
     w.writerow(fields)
-    for r in rows:
-        w.writerow([getattr(r, f) for f in fields])
+    w.writerows([getattr(r, f) for f in fields] for r in rows)
     with writing(out, "choose a writable --out folder"):
         atomic_write(out / "qlearn.csv", buf.getvalue())
     return paths + [out / "qlearn.csv"]

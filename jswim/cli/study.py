@@ -56,8 +56,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if (text := short_steps_warning(opts)) is not None:
         base.warn(text)
     labels = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning", "random": "random policy",
-              "ppo": "continuous RL",
-              "start": "start", "resume": "resume"}
+              "ppo": "continuous RL", "start": "start", "resume": "resume"}
     with Progress() as bar:
 
         def tick(phase: str, done: int, total: int, info: str = "") -> None:
@@ -158,9 +157,9 @@ def _price_note(backend: Any) -> str:
                              local_host=is_local_host(backend.base_url), price_local=backend.price_local)
     if why:
         return cost_text(None, why)
-    if table.entry(backend.model) is None and is_local_host(backend.base_url) and backend.prices is None:
-        return cost_text(None, LOCAL_UNPRICED)
     if table.entry(backend.model) is None:
+        if is_local_host(backend.base_url) and backend.prices is None:
+            return cost_text(None, LOCAL_UNPRICED)
         return cost_text(None, f"no price for {backend.model!r} in the "
                                f"{'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
                                "; --prices FILE prices it")

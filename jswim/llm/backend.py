@@ -54,8 +54,7 @@ class Backend:
     api_key_env : str
         Environment variable holding the API key (its value is never stored).
     constrain : str
-        Constrained decoding: ``auto`` (grammar for llama.cpp, none otherwise), ``grammar``,
-        ``json_schema`` or ``none``.
+        Constrained decoding, one of :data:`jswim.llm.constrain.MODES` (:mod:`jswim.llm.constrain`).
     temperature : float
         Sampling temperature (paper: 0).
     n_parallel : int
@@ -64,11 +63,8 @@ class Backend:
         CPU threads of the embedded server (``None``: llama.cpp's choice, one per core). On a
         machine busy with other work, fewer threads than cores keep decoding steady.
     concurrency : int or None
-        Requests in flight at once. ``None``: fitted to the server: llama.cpp's ``/props``
-        ``total_slots``, 1 for llama-cpp-python's server (it serves one request at a time), else
-        16 (:data:`DEFAULT_CONCURRENCY`); the embedded server: 16, or ``n_parallel`` if larger.
-        Requests beyond the server's slots only queue there, and that wait counts against
-        ``timeout_s``.
+        Requests in flight at once. ``None``: fitted to the server (its slots where it says, else
+        :data:`DEFAULT_CONCURRENCY`; the rule per server is in docs/servers.md, *Concurrency*).
     cohorts : int
         Deprecated, no effect: runs no longer advance in lockstep rounds (each run is its own
         pipeline; see :mod:`jswim.agents.llm`). Kept so old scripts keep working.
@@ -83,12 +79,9 @@ class Backend:
     omit_fields : tuple of str
         Optional request fields never sent, for servers that reject them (``"seed"``, ...).
     price_local : bool
-        Price a local or LAN server's calls at the cloud list prices (a local gateway to a paid
-        API); by default they cost nothing (:func:`jswim.llm.usage.price_table`).
+        Price a local or LAN server's calls at the list prices (a local gateway), as in ClientSettings.
     reasoning : {"auto", "on", "off"}
-        Reasoning models (:mod:`jswim.llm.reasoning`): auto switches to ``max_completion_tokens``
-        and the model's temperature when the server asks; on gives the reasoning budget from the
-        first request (open reasoning models); off never switches.
+        Reasoning models: auto, on or off, as in :class:`~jswim.llm.settings.ClientSettings`.
     reasoning_effort : str or None
         ``reasoning_effort`` sent with every request when set.
     prices, prices_as_of : optional
@@ -98,19 +91,15 @@ class Backend:
         More request fields sent with every request (``--extra-field NAME=JSON``), recorded in the
         identity (they change what the model does).
     sampling : {"auto", "neutral", "server"}
-        Sampling fields sent (:mod:`jswim.llm.sampling`): ``auto`` sends the neutral values to
-        llama.cpp-family, vLLM and Ollama servers (the embedded one: the neutral penalties),
-        nothing to OpenAI and unknown servers; ``neutral`` always; ``server`` never.
+        Sampling preset (:mod:`jswim.llm.sampling`; what each sends to which server: docs/servers.md).
     server_family : str or None
         Force the server's family (:data:`jswim.llm.probe.FAMILIES`) instead of the preflight's
         guess.
     strict_model : bool
         A model the server's ``/v1/models`` does not list is an error (default: a warning).
     retries, retry_for_s : int, float or None
-        Retry budget of each call against transient failures (429, 5xx, dropped connections,
-        timeouts): at most ``retries`` retries and ``retry_for_s`` seconds from the first failure,
-        whichever ends first (``None``: the client's defaults, 20 and 120 s; see
-        :class:`jswim.llm.client.ClientSettings`). Not part of the identity.
+        Retry budget of each call (``max_retries``, ``retry_for_s`` of
+        :class:`~jswim.llm.settings.ClientSettings`; ``None``: its defaults). Not part of the identity.
 
     Raises
     ------
@@ -211,18 +200,10 @@ class Backend:
                "model": name, "constrain": self.constrain, "temperature": self.temperature}
         # What is sent changes the answers; recorded only when not the default, so folders
         # written before these settings existed keep their identity.
-        if self.omit_fields:
-            out["omit_fields"] = list(self.omit_fields)
-        if self.reasoning != "auto":
-            out["reasoning"] = self.reasoning
-        if self.reasoning_effort is not None:
-            out["reasoning_effort"] = self.reasoning_effort
-        if self.extra_fields:
-            out["extra_fields"] = dict(self.extra_fields)
-        if self.sampling != "auto":
-            out["sampling"] = self.sampling
-        if self.server_family is not None:
-            out["server_family"] = self.server_family
+        given = {"omit_fields": list(self.omit_fields) or None, "reasoning": self.reasoning,
+                 "reasoning_effort": self.reasoning_effort, "extra_fields": dict(self.extra_fields) or None,
+                 "sampling": self.sampling, "server_family": self.server_family}
+        out.update({k: v for k, v in given.items() if v not in (None, "auto")})
         return out
 
     def address(self) -> str | None:
@@ -255,12 +236,8 @@ class Backend:
                       reasoning_effort=self.reasoning_effort, extra_fields=self.extra_fields,
                       sampling=sampling_fields(self.sampling, family, embedded=self.local),
                       **({"prices": dict(self.prices)} if self.prices is not None else {}))
-        if self.timeout_s is not None:
-            common["timeout_s"] = self.timeout_s
-        if self.retries is not None:
-            common["max_retries"] = self.retries
-        if self.retry_for_s is not None:
-            common["retry_for_s"] = self.retry_for_s
+        given = {"timeout_s": self.timeout_s, "max_retries": self.retries, "retry_for_s": self.retry_for_s}
+        common.update({k: v for k, v in given.items() if v is not None})  # else the settings' defaults
         if self.local:
             if server is None:
                 raise ConfigError("the embedded backend needs its running server (Backend.server())")
@@ -319,9 +296,8 @@ def check_gguf(path: str) -> None:
     """Raise :class:`ConfigError` unless ``path`` is a readable GGUF file (checked up front, so
     a wrong file fails before any baseline runs, not when the embedded server starts)."""
     check_file(path, "--gguf")
-    p = Path(path)
     try:
-        with open(p, "rb") as fh:
+        with open(path, "rb") as fh:
             magic = fh.read(4)
     except OSError as exc:
         raise ConfigError(f"--gguf {path}: cannot read it ({exc.strerror})") from None

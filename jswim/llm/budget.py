@@ -1,22 +1,10 @@
 """A spending cap for a study: calls reserve their worst cost before they go out.
 
-A study run with ``--max-cost USD`` holds one :class:`Budget`. Before each request reaches the
-server, the client reserves that call's bound (estimated prompt tokens at the prompt price plus
-``max_tokens`` at the completion price, :func:`call_bound`); when the answer comes back the
-reservation is replaced by what the call cost. A reservation that would take spent plus reserved
-past the cap is refused with :class:`BudgetExhausted`, and from then on every reservation is
-refused (the stop is clean: no run starts a new call after the first refusal, and calls already
-in flight finish). So a study never spends more than the cap plus what the estimate of the
-calls in flight fell short by.
-
-``spent_usd`` starts at what earlier sessions of the same study already paid, so the cap is on
-the study, and the same command with a higher cap goes on where the last one stopped.
-
-A request sent whole that got no answer (a read timeout, a connection cut while waiting) may
-still have been run and billed by the server, which jswim cannot see: its reservation is kept, as
-``unanswered_usd``, and counts against the cap like money spent (earlier sessions' too, from the
-study's ``llm_totals``). The cap stays a bound on what the provider can bill, while ``spent_usd``
-stays what the answered calls cost.
+A study run with ``--max-cost USD`` holds one :class:`Budget`: each request reserves its bound
+(:func:`call_bound`), the answer replaces it with the call's cost, and the first reservation past
+the cap (spent, reserved and unanswered together) raises :class:`BudgetExhausted`, as every later
+one does. ``spent_usd`` starts at what earlier sessions paid. docs/paid-apis.md (*Cap*) describes
+the rule, and why unanswered requests count.
 """
 
 from __future__ import annotations
@@ -47,7 +35,7 @@ class Budget:
     spent_usd : float
         Already spent (earlier sessions).
     unanswered_usd : float
-        Bounds of earlier sessions' requests that got no answer (see the module docstring).
+        Bounds of earlier sessions' requests that got no answer (docs/paid-apis.md).
 
     Raises
     ------

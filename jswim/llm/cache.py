@@ -1,13 +1,8 @@
 """Persistent response cache (sqlite3) for deterministic requests.
 
-Keys are SHA-256 hashes of the full request body (model, messages, temperature, max_tokens, seed,
-grammar or response format...). The API key travels in a header and is never part of a key or a
-stored value. The server address is not part of the key either: the same model name and request
-give the same answer wherever it is served (the embedded server moves to a new port every run).
-
-Only replies that answered are stored (see ``cache_if`` of :meth:`jswim.llm.client.LLMClient.chat`):
-a reply cut off at ``max_tokens``, an empty one or one the caller found unusable is never
-replayed to a later run against a healthy server.
+Keys are SHA-256 hashes of the full request body, without the API key or the server's address;
+only replies that answered are stored (``cache_if`` of :meth:`jswim.llm.client.LLMClient.chat`).
+docs/servers.md (*Cache*) says why.
 """
 
 from __future__ import annotations

@@ -1,20 +1,12 @@
 """Async client for OpenAI-compatible chat-completions servers, over httpx.
 
 One :class:`LLMClient` serves a whole study: many requests in flight at once (bounded by a
-semaphore), retries with exponential backoff and jitter on transient failures (connection errors,
-timeouts, 408, 409, 429, 5xx, unreadable bodies) within one budget per call (``max_retries``,
-``retry_for_s``), ``Retry-After`` honoured, requests that got no answer counted as possibly
-billed, a disk cache and in-flight de-duplication for deterministic (temperature 0) requests,
-and usage/cost per call.
-
-Real servers differ in ordinary ways and the client absorbs them (see :mod:`jswim.llm.reply`):
-every request says ``"stream": false`` and a stream that comes anyway is assembled; reasoning
-(``<think>`` blocks, ``reasoning_content``) is split from the answer; null or list content is
-read; base URLs are accepted in their common shapes (:mod:`jswim.llm.urls`). A rejection names
-the server's own message, the URL tried and the setting that avoids it.
-
-The API key is read from an environment variable whose *name* is a setting; the key itself is
-only ever put in the ``Authorization`` header, never in logs, cache keys, results or errors.
+semaphore), retries with backoff and jitter within one budget per call (``max_retries``,
+``retry_for_s``), requests that got no answer counted as possibly billed, a disk cache and
+in-flight de-duplication for temperature-0 requests, and usage/cost per call. How it absorbs real
+servers' differences (streams, reasoning, content shapes, base URLs: :mod:`jswim.llm.reply`,
+:mod:`jswim.llm.urls`), what it retries and what a rejection says are in docs/servers.md; how the
+API key is kept (only in the ``Authorization`` header) in docs/studies.md (*Secrets*).
 
 Example
 -------
@@ -54,6 +46,9 @@ from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
 from jswim.llm.urls import endpoint, is_local_host, is_loopback, safe_url
 from jswim.llm.usage import Usage, price_table
+
+#: The key and URL credentials taken out of a text, in any encoding.
+_scrub = credentials.scrub
 
 #: Same-host 307/308 redirects a request follows before it fails.
 MAX_REDIRECTS = 5
@@ -209,12 +204,9 @@ class LLMClient:
             "temperature": s.temperature if temperature is None else temperature,
             "stream": False,
         }
-        mt = s.max_tokens if max_tokens is None else max_tokens
-        if mt is not None:
-            payload["max_tokens"] = mt
-        sd = s.seed if seed is None else seed
-        if sd is not None:
-            payload["seed"] = sd
+        given = {"max_tokens": s.max_tokens if max_tokens is None else max_tokens,
+                 "seed": s.seed if seed is None else seed}
+        payload.update({k: v for k, v in given.items() if v is not None})
         payload.update(s.sampling)
         asked = constrain_mode or s.constrain
         if asked == "auto" and self._auto_form is not None:  # the server rejected auto's first form(s)
@@ -224,9 +216,7 @@ class LLMClient:
         for name, value in s.extra_fields:
             if name not in REQUIRED_FIELDS:
                 payload[name] = value
-        payload = self.reasoning.apply(payload)
-        for name in s.omit_fields:
-            payload.pop(name, None)
+        payload = self._amend(payload)
         if "grammar" not in payload and "response_format" not in payload:
             mode = "none"
         return payload, mode
@@ -366,9 +356,6 @@ class LLMClient:
             reasoning=value.get("reasoning", ""),
         )
 
-    def _scrub(self, text: str) -> str:
-        return credentials.scrub(text)  # the key and URL credentials, in any encoding
-
     def _headers(self) -> dict[str, str]:
         if self._key:
             return {"Authorization": f"Bearer {self._key}"}
@@ -445,13 +432,13 @@ class LLMClient:
                     budget = (f"the budget is --retries {s.max_retries}, "
                               f"--retry-for {s.retry_for_s if s.retry_for_s is not None else 'none'}")
                     if fail.timeout:  # the last straw was a timeout: say slow, and what to raise
-                        raise LLMTimeoutError(self._scrub(
+                        raise LLMTimeoutError(_scrub(
                             f"{self._where}: the server is slow: no answer within {s.timeout_s:g} s; gave up after "
                             f"{retries + 1} attempts ({spent}; {budget}); a cold local server may still be loading "
                             f"its model: wait for it or raise --timeout (now {s.timeout_s:g} s)"
                         )) from None
                     msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts ({spent}; {budget})"
-                    raise (LLMResponseError if fail.bad_body else LLMServerError)(self._scrub(msg)) from None
+                    raise (LLMResponseError if fail.bad_body else LLMServerError)(_scrub(msg)) from None
                 # A timed-out request already waited a whole timeout: send it again at once.
                 wait = 0.0 if fail.timeout else self._backoff(retries)
                 if fail.retry_after is not None:
@@ -473,7 +460,7 @@ class LLMClient:
             if kind == "timeout":
                 raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
                                unanswered=unanswered) from None
-            detail = self._scrub(str(exc)) or "no detail"
+            detail = _scrub(str(exc)) or "no detail"
             raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=unanswered) from None
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
@@ -523,17 +510,17 @@ class LLMClient:
             try:
                 nxt = url.join(resp.headers["location"])
             except (httpx.InvalidURL, ValueError):
-                raise LLMSetupError(self._scrub(f"{self._where}: HTTP {resp.status_code} to an address that does "
+                raise LLMSetupError(_scrub(f"{self._where}: HTTP {resp.status_code} to an address that does "
                                                 "not parse; give --base-url the server's address"),
                                     resp.status_code, "") from None
             if (nxt.scheme, nxt.host, nxt.port) != (url.scheme, url.host, url.port):
-                raise LLMSetupError(self._scrub(
+                raise LLMSetupError(_scrub(
                     f"{self._where}: HTTP {resp.status_code} redirects to another host ({safe_url(str(nxt.copy_with(query=None)))}); "
                     "not followed, so the API key is not sent there: give --base-url that address if you trust it"),
                     resp.status_code, "")
             url = nxt
         else:
-            raise LLMSetupError(self._scrub(f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
+            raise LLMSetupError(_scrub(f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
                                             "the address they lead to"), resp.status_code, "")
         kept = [(k, v) for k, v in resp.headers.multi_items() if k.lower() not in ("content-encoding", "content-length")]
         return httpx.Response(resp.status_code, headers=kept, request=resp.request,
@@ -543,8 +530,8 @@ class LLMClient:
         s = self.settings
         err = rejection(status, server, payload, where=self._where, url=safe_url(self._url), model=s.model,
                         api_key_env=s.api_key_env, invalid=invalid)
-        err.args = (self._scrub(str(err)),)
-        err.server_message = self._scrub(err.server_message)
+        err.args = (_scrub(str(err)),)
+        err.server_message = _scrub(err.server_message)
         return err
 
     def _cost(self, usage: Usage, replied: str | None) -> float:
@@ -576,12 +563,11 @@ class LLMClient:
         usage = Usage.from_response(got.usage)
         # A reply may echo a credential (a proxy quoting the request's headers): scrubbed by the
         # registry the error messages use, before the journal, the cache or a transcript see it.
-        clean = self._scrub
         return ChatResult(
-            text=clean(constrain.reply_text(mode, got.answer)), usage=usage, latency_s=time.perf_counter() - t0,
+            text=_scrub(constrain.reply_text(mode, got.answer)), usage=usage, latency_s=time.perf_counter() - t0,
             cache_hit=False, shared=False, retries=retries,
             cost_usd=self._cost(usage, got.model), constraint=mode,
-            finish_reason=got.finish_reason, raw=clean(got.content), reasoning=clean(got.reasoning),
+            finish_reason=got.finish_reason, raw=_scrub(got.content), reasoning=_scrub(got.reasoning),
             temperature_sent=(payload or {}).get("temperature"),
         )
 

@@ -8,12 +8,8 @@ Modes
 ``"json_object"``  ``response_format`` ``{"type": "json_object", "schema": ...}``, the form
                    llama-cpp-python's server takes (it rejects ``json_schema``); same reply.
 ``"none"``         plain text, parsed afterwards.
-``"auto"``         by server family (:mod:`jswim.llm.probe`): ``"grammar"`` for llama.cpp's
-                   server (the embedded default) and llama-cpp-python's, ``"json_schema"`` for
-                   vLLM and Ollama, ``"none"`` elsewhere (OpenAI, unknown servers: the paper's
-                   free text). When the server rejects the form, the client moves to the next
-                   of :data:`FALLBACK` (json_schema -> json_object -> grammar) and records the
-                   form used; only under ``"auto"``: an explicit mode is sent as asked.
+``"auto"``         by server family, falling back through :data:`FALLBACK` where the server
+                   rejects the form (docs/servers.md, *Constrained decoding*).
 """
 
 from __future__ import annotations

@@ -1,13 +1,9 @@
 """API keys and URL credentials: read once, checked, and never shown in any form.
 
-A key is read from the environment variable the user names (``--api-key-env``), never from an
-argument, and checked before any request: a value no HTTP header can carry (a carriage return
-left by a Windows file, a non-ASCII character, a space) is one line naming the variable, without
-the value. Every secret the process handles (the key, the password and user of a
-``http://user:pw@host`` base URL, the embedded server's own key) is registered here, and
-:func:`scrub` removes it from any text about to be printed or raised, in each form a library may
-have written it: as is, ``repr``-escaped (``\\r``), JSON-escaped (``\\u000d``), percent-encoded,
-base64 (an HTTP Basic header), and without the stray whitespace.
+A key is read from the environment variable the user names (``--api-key-env``) and checked before
+any request; every secret the process handles is registered here, and :func:`scrub` removes it
+from any text about to be printed or raised, in each form a library may have written it
+(docs/studies.md, *Secrets*).
 """
 
 from __future__ import annotations

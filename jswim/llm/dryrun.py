@@ -1,20 +1,10 @@
 """A stand-in client for ``--dry-run``: every call answered at once, nothing sent.
 
-The driver runs a study's LLM runs against :class:`EstimatingClient` exactly as it would against
-a server: the prompts are rendered from real swimmer states, so their lengths (history records,
-positions, the summary sentence) are those of a real study. Each call is answered with a valid
-action picked from the allowed replies by a hash of the prompt (the swimmers move, as they would
-under a model), and its usage is estimated from the text (:mod:`jswim.llm.tokens`); the price
-table turns the totals into dollars. What the estimate leaves out: parse retries (a model that
-answers off-format costs more calls) and replies longer than the bare action (a model that
-explains itself costs up to ``max_tokens`` per call: :attr:`Estimate.cost_max_usd`).
-
-Reasoning models: where the study's calls will carry a reasoning budget
-(:func:`jswim.llm.reasoning.dry_run_budget`: ``--reasoning on``, or an OpenAI reasoning model by
-name under ``auto``), each call is estimated to think a share of that budget
-(:data:`jswim.llm.reasoning.ESTIMATE_SHARE`: a quarter at the default effort, an assumption), its
-reasoning tokens counted in the completion and priced as output, and the worst case is every call
-using its whole budget (``max_completion_tokens``, reasoning and answer together).
+The driver runs a study's LLM runs against :class:`EstimatingClient` exactly as against a server,
+so the prompts are those of a real study; usage is estimated from the text (:mod:`jswim.llm.tokens`)
+and priced. What the estimate leaves out (parse retries; replies longer than the bare action:
+:attr:`Estimate.cost_max_usd`) and how a reasoning model's thinking is estimated
+(:data:`jswim.llm.reasoning.ESTIMATE_SHARE`, an assumption) are in docs/paid-apis.md.
 """
 
 from __future__ import annotations
@@ -32,7 +22,7 @@ from jswim.llm.usage import PRICES_AS_OF, Usage, price_table
 
 
 class EstimatingClient:
-    """Answers chat calls without a server (see the module docstring); use like an LLMClient."""
+    """Answers chat calls without a server (docs/paid-apis.md); use like an LLMClient."""
 
     def __init__(self, settings: ClientSettings) -> None:
         self.settings = settings

@@ -1,17 +1,9 @@
 """The answered calls of a study, kept so that a resume never pays for a call twice.
 
-Every call a run gets an answer to is appended to ``calls.jsonl`` in the study folder at once
-(one line, flushed), before the answer is used: the run's id, the call's index within the run,
-a hash of the request and what came back (text, usage, cost). A run interrupted by Ctrl-C, a
-crash or the cost cap starts again from its first step on the next session, and its calls are
-answered from this journal, in order, for as long as each request is the very request recorded
-(same messages, sampling and seed). Calls are matched by (run, index, request hash): a call whose
-record is missing (a torn line, cut on open by :func:`jswim._io.jsonl.repair_tail`) is simply sent
-again, and the calls after it still replay; a request that differs from its record goes to the
-server. A run only ever replays its own calls, never another run's.
-
-The journal is also the study's ledger: the sum of its ``cost_usd`` is what the study has paid
-over all sessions (what ``--max-cost`` is compared with).
+Every answered call is appended to ``calls.jsonl`` at once, before the answer is used; a resumed
+run's calls are answered from it, matched by (run, index, request hash). The journal is also the
+study's ledger: the sum of its ``cost_usd`` is what ``--max-cost`` is compared with. docs/paid-apis.md
+(*Nothing is paid twice*) describes both.
 """
 
 from __future__ import annotations

@@ -1,21 +1,9 @@
 """Pacing requests to a provider's rate limits before the 429s come.
 
-Two sources, used together by :class:`Pacer`:
-
-- the user's limits, ``rpm`` (requests per minute) and ``tpm`` (tokens per minute), enforced
-  with :class:`aiolimiter.AsyncLimiter` leaky buckets. The request bucket holds one request, so
-  requests are spaced ``60 / rpm`` seconds apart with no burst (providers enforce per-minute
-  limits over shorter windows); the token bucket holds ten seconds' worth of ``tpm``. A request
-  counts its estimated prompt tokens plus ``max_tokens``, as OpenAI counts them against TPM.
-- the provider's own headers on every response: ``x-ratelimit-remaining-requests`` /
-  ``-tokens`` with ``x-ratelimit-limit-*`` and ``x-ratelimit-reset-*`` (OpenAI, Azure, vLLM
-  gateways, OpenRouter's ``x-ratelimit-*``), and ``retry-after`` / ``retry-after-ms``. When what
-  remains would not cover the requests that may already be on their way (``margin``), new
-  requests wait until the provider has refilled that much; a ``retry-after`` on any response
-  holds every new request, not only the one that got it.
-
-The pacer never sleeps for longer than ``max_pause_s`` on one header (a broken header must not
-stall a study).
+:class:`Pacer` uses two sources together: the user's limits, ``rpm`` and ``tpm``, enforced with
+:class:`aiolimiter.AsyncLimiter` leaky buckets (a request counts its estimated prompt tokens plus
+``max_tokens``, as OpenAI counts them against TPM), and the provider's own ``x-ratelimit-*`` and
+``retry-after`` headers on every response. docs/paid-apis.md (*Pacing*) says how each is applied.
 """
 
 from __future__ import annotations

@@ -1,18 +1,8 @@
 """A price table from a file (``--prices FILE``, or the ``prices`` table of a bench's models file).
 
-The file is TOML (``.toml``) or JSON (anything else), USD per 1M tokens, prompt then completion:
-
-.. code-block:: toml
-
-    as_of = "2026-11"                 # printed with every cost (default: "your table <file>")
-    [prices]
-    "gpt-5" = [1.25, 10.0]            # [prompt, completion]
-    "gpt-5-mini" = { input = 0.25, output = 2.0 }
-
-The file replaces the built-in table (:data:`jswim.llm.usage.DEFAULT_PRICES`, dated
-:data:`~jswim.llm.usage.PRICES_AS_OF`) for the models it prices, on any host (a table you give is
-always applied); a model it does not name costs nothing and every cost line says so. Names match
-exactly, else by the longest prefix (``gpt-5-2026-08-07`` finds ``gpt-5``).
+The file is TOML (``.toml``) or JSON (anything else), USD per 1M tokens, prompt then completion;
+it replaces the built-in table (:data:`jswim.llm.usage.DEFAULT_PRICES`) on any host. Its format
+and matching rule are in docs/paid-apis.md (*Estimate first*).
 """
 
 from __future__ import annotations

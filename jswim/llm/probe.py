@@ -1,27 +1,11 @@
 """Preflight: what serves the base URL, which models it lists, its slots and sampling defaults.
 
-Before any run, :func:`probe` asks the server two cheap questions and decides its *family* (which
-sampling knobs it has, which constrained-decoding forms it takes, how many requests it serves at
-once):
-
-=====================  ==========================================================================
-family                 how it is told
-=====================  ==========================================================================
-``llamacpp``           ``GET /props`` (at the server root) answers JSON with
-                       ``default_generation_settings`` or ``total_slots``: llama.cpp's own C++
-                       server (also the embedded one)
-``llama-cpp-python``   ``/v1/models`` entries say ``"owned_by": "me"`` (its FastAPI app's fixed
-                       value); it has no ``/props``
-``vllm``               ``/v1/models`` entries say ``"owned_by": "vllm"``
-``ollama``             ``/v1/models`` entries say ``"owned_by": "library"`` (or ``"ollama"``)
-``openai``             the host is ``api.openai.com``, or entries say ``"owned_by": "openai"`` /
-                       ``"system"``
-``generic``            none of these
-=====================  ==========================================================================
-
-``--server-family`` overrides the guess. The preflight also makes authentication mistakes fail
-first: a 401/403 on ``/v1/models`` stops the study before any baseline runs, in one line that
-says whether the key's environment variable is unset, empty or refused.
+Before any run, :func:`probe` asks the server two cheap questions (``GET /v1/models`` and, where it
+may be llama.cpp, ``GET /props``) and decides its *family* (:data:`FAMILIES`: which sampling knobs
+it has, which constrained-decoding forms it takes, how many requests it serves at once); how each
+family is told is tabled in docs/servers.md. ``--server-family`` overrides the guess. A 401/403 on
+``/v1/models`` stops the study before any baseline runs, in one line that says whether the key's
+environment variable is unset, empty or refused.
 """
 
 from __future__ import annotations
@@ -38,7 +22,7 @@ from jswim.llm.errors import LLMSetupError, unreachable
 from jswim.llm.rejection import key_hint, server_text
 from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
 
-#: Server families jswim tells apart (see the module docstring).
+#: Server families jswim tells apart (docs/servers.md).
 FAMILIES = ("llamacpp", "llama-cpp-python", "vllm", "ollama", "openai", "generic")
 
 #: ``/v1/models`` ``owned_by`` values that name a family.
@@ -92,16 +76,10 @@ class ServerInfo:
 
     def metadata(self) -> dict[str, Any]:
         """A JSON-able record for the study's metadata."""
-        out: dict[str, Any] = {"family": self.family, "detected_by": self.detected_by}
-        if self.models is not None:
-            out["models"] = list(self.models[:20])
-        if self.total_slots is not None:
-            out["total_slots"] = self.total_slots
-        if self.settings:
-            out["server_sampling_defaults"] = dict(self.settings)
-        if self.warnings:
-            out["warnings"] = list(self.warnings)
-        return out
+        known = {"models": None if self.models is None else list(self.models[:20]), "total_slots": self.total_slots,
+                 "server_sampling_defaults": dict(self.settings) or None, "warnings": list(self.warnings) or None}
+        return {"family": self.family, "detected_by": self.detected_by,
+                **{k: v for k, v in known.items() if v is not None}}
 
 
 def server_root(base_url: str) -> str:
@@ -144,7 +122,7 @@ def _json(resp: httpx.Response | None) -> Any:
 def probe(base_url: str, *, api_key_env: str = "OPENAI_API_KEY", timeout_s: float = 5.0,
           family: str | None = None, model: str | None = None, strict_model: bool = False,
           local: bool = False) -> ServerInfo:
-    """Ask the server at ``base_url`` what it is (see the module docstring).
+    """Ask the server at ``base_url`` what it is (docs/servers.md).
 
     Parameters
     ----------

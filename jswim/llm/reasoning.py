@@ -1,26 +1,12 @@
 """Reasoning models: what they must be sent, learned from the server's own rejections.
 
-Today's reasoning models (OpenAI's o-series and gpt-5, and open ones behind vLLM or llama.cpp)
-think before they answer, and a reply limit meant for a bare ``[2, -1]`` (the paper's 10 tokens)
-cuts them off while still thinking. OpenAI's reasoning models also refuse two fields the paper's
-protocol sends: ``max_tokens`` ("Use 'max_completion_tokens' instead") and any ``temperature``
-but their default ("Only the default (1) value is supported").
-
-A client's :class:`ReasoningState` starts from the ``reasoning`` setting:
-
-- ``"auto"`` (default): plain requests until the server says otherwise. A 400 that asks for
-  ``max_completion_tokens`` switches the client to it, with the reasoning budget
-  (:data:`REASONING_MAX_TOKENS` unless ``--max-tokens`` is given); a 400 that names the only
-  temperature the model accepts switches to that temperature. Each switch is made once, the
-  refused request is sent again as amended (a 400 is not billed), and the switch is recorded
-  (:meth:`ReasoningState.describe`: study metadata, the printed summary, each call's row).
-- ``"on"``: the budget from the first request (for open reasoning models, which never refuse
-  ``max_tokens`` but need room to think), ``max_completion_tokens`` for OpenAI's API.
-- ``"off"``: never switch; a refusal stops the study in one line naming ``--reasoning auto``.
-
-Reasoning tokens are read from ``usage.completion_tokens_details.reasoning_tokens``
-(:class:`jswim.llm.usage.Usage`); OpenAI counts them inside ``completion_tokens``, so they are
-priced as output.
+Reasoning models think before they answer, so the paper's 10-token reply limit cuts them off, and
+OpenAI's refuse ``max_tokens`` ("Use 'max_completion_tokens' instead") and any ``temperature`` but
+their default ("Only the default (1) value is supported"). A client's :class:`ReasoningState`
+starts from the ``reasoning`` setting: ``"auto"`` (default; each such 400 switches once and the
+refused request is sent again as amended, a 400 is not billed), ``"on"`` (the budget from the first
+request) or ``"off"`` (never switch). docs/servers.md (*Reasoning models need no flags*) says what
+each sends, how reasoning tokens are read and priced, and where each switch is recorded.
 """
 
 from __future__ import annotations

@@ -1,27 +1,9 @@
 """A prompt-only reference agent behind an OpenAI-compatible server (``jswim serve reference``).
 
-It is not a language model and is never presented as one: it is a plain rule that reads the
-rendered prompt text it receives, nothing else (no side channel to jswim's state), and answers
-one action. It measures whether the prompt carries enough to learn the stroke at each n_ht, gives
-a leaderboard a labelled non-LLM reference row, and gives a newcomer an offline success path
-through the real HTTP loop (``jswim swim --base-url`` at it).
-
-The rule (:func:`decide`), on the text of the first user message:
-
-1. Read the target direction (``positive``/``negative x direction``), the history records
-   (``k: (D before) [DOF, ROC] -> (D after), X before -> after, stuck yes|no``) and the offered
-   actions (S5: ``the changed DOF 1 or 2 and the ROC -1, 0 or 1``, or ``one of [1, -1], ...``).
-2. The current shape is the last record's shape after (with no record shown: unknown).
-3. Among the records made *from the current shape*, take the one whose X moved furthest toward
-   the target; if it moved toward the target at all, repeat its action.
-4. Else answer the first offered move not yet shown from the current shape (DOFs in order, ROC
-   -1 before +1, holds last), skipping moves shown as stuck and moves that S2's range says
-   cannot change the shape (ROC -1 at the lower end, +1 at the upper end).
-5. Else (every move shown, none forward) the one that moved furthest toward the target.
-
-With no record shown, step 4 gives the first offered move. A record is matched by the text of
-its shape, so the rule is exact on jswim's default record line; a prompt file that changes the
-record line is read where it still matches the pattern (else the rule sees no history).
+It is not a language model and is never presented as one: a plain rule (:func:`decide`) that reads
+the rendered prompt text it receives, nothing else, and answers one action. Its purpose, the rule
+step by step, what it reads of the prompt and what it measured are in docs/bench.md (*The
+reference agent*).
 """
 
 from __future__ import annotations
@@ -101,7 +83,7 @@ def _blocked(action: tuple[int, int], here: str | None, text: str) -> bool:
 
 
 def decide(text: str) -> tuple[int, int]:
-    """The reference rule's action for a rendered prompt (see the module docstring)."""
+    """The reference rule's action for a rendered prompt (docs/bench.md)."""
     _, records, offered = read_prompt(text)
     here = records[-1].after if records else None
     from_here = [r for r in records if r.before == here]

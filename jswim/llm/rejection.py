@@ -1,17 +1,10 @@
 """What a server's 4xx answer means, in one line: its own words, the URL tried, what to change.
 
-A rejection is recognised by what the server says, not only by its status: a 5xx whose body is
-a request-validation error (FastAPI/pydantic's ``{"detail": [{"loc": ..., "msg": ...}]}``, a
-pydantic ``N validation error(s) for ...`` text, "Input should be", "extra inputs are not
-permitted", "not supported", "unrecognized") is the server refusing the request, not a passing
-fault: it is never retried (:func:`validation_error`). The server's message is trimmed to the
-sentence that matters (:func:`essential_message`): no traceback, no server file paths.
-
-A rejection is either about *this request* (the prompt does not fit the context: the run that
-sent it fails, others go on) or about *every request* of the client (wrong URL, key or model; a
-request field the server does not accept): :class:`~jswim.llm.errors.LLMSetupError`, and the
-message names the option that avoids it. jswim never drops a field on its own: what is sent is
-what the settings say, and the run metadata records it.
+A rejection is recognised by what the server says, not only its status (:func:`validation_error`:
+never retried) and trimmed to the sentence that matters (:func:`essential_message`). It is about
+*this request* (the run fails, others go on) or *every request* of the client
+(:class:`~jswim.llm.errors.LLMSetupError`, naming the option that avoids it); jswim never drops a
+field on its own. docs/servers.md (*Rejected fields*, *Errors per run*) has the details.
 """
 
 from __future__ import annotations

@@ -1,19 +1,11 @@
 """Reading a chat-completion body the way real servers send it.
 
-Servers that speak the OpenAI chat API differ in ordinary ways, and this module absorbs them:
-
-- ``message.content`` is a string, ``null`` (a reasoning model that spent its tokens thinking,
-  a refusal, a tool call) or a list of parts (``{"type": "text", "text": ...}``, ``{"type":
-  "thinking", "thinking": ...}``); the text parts are joined.
-- Reasoning arrives in a field (``reasoning_content``: DeepSeek, vLLM, llama.cpp; ``reasoning``:
-  OpenRouter, Ollama; ``thinking``) or inline in the content, between tags such as
-  ``<think>...</think>``; the opening tag may be missing (it was part of the chat template) and
-  the closing one may be missing (the reply was cut off while thinking). The *answer* is what
-  follows the last closed reasoning block; reasoning is kept for transcripts, never parsed.
-- The body is an SSE stream (``text/event-stream``) although ``"stream": false`` was sent; its
-  deltas are assembled into one message.
-
-Everything here is pure (no I/O), so each server behaviour is a unit test.
+Servers that speak the OpenAI chat API differ in ordinary ways (content as a string, ``null`` or a
+list of parts; reasoning in a field or inline between tags such as ``<think>...</think>``, either
+tag possibly missing; an SSE stream although ``"stream": false`` was sent), and this module absorbs
+them; docs/servers.md (*Reasoning models*, *Streams*) lists each. The *answer* is what follows the
+last closed reasoning block; reasoning is kept for transcripts, never parsed. Everything here is
+pure (no I/O), so each server behaviour is a unit test.
 """
 
 from __future__ import annotations

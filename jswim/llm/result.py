@@ -65,26 +65,14 @@ class ChatResult:
 
     def as_dict(self) -> dict[str, Any]:
         """A transcript record (the raw content only when it differs from ``text``)."""
-        extra: dict[str, Any] = {}
-        if self.reasoning:
-            extra["reasoning"] = self.reasoning
-        if self.raw != self.text:
-            extra["raw"] = self.raw
-        return {
-            "text": self.text,
-            "prompt_tokens": self.usage.prompt_tokens,
-            "completion_tokens": self.usage.completion_tokens,
-            "latency_s": round(self.latency_s, 6),
-            "cache_hit": self.cache_hit,
-            "shared": self.shared,
-            "retries": self.retries,
-            "cost_usd": self.cost_usd,
-            "constraint": self.constraint,
-            "finish_reason": self.finish_reason,
-            **({"reasoning_tokens": self.usage.reasoning_tokens} if self.usage.reasoning_tokens else {}),
-            **({"temperature_sent": self.temperature_sent} if self.temperature_sent is not None else {}),
-            **extra,
-        }
+        u = self.usage
+        out = {"text": self.text, "prompt_tokens": u.prompt_tokens, "completion_tokens": u.completion_tokens,
+               "latency_s": round(self.latency_s, 6)}
+        plain = ("cache_hit", "shared", "retries", "cost_usd", "constraint", "finish_reason")
+        out |= {k: getattr(self, k) for k in plain}
+        optional = {"reasoning_tokens": u.reasoning_tokens or None, "temperature_sent": self.temperature_sent,
+                    "reasoning": self.reasoning or None, "raw": None if self.raw == self.text else self.raw}
+        return out | {k: v for k, v in optional.items() if v is not None}
 
 
 #: Kinds of transient failure, as counted in :attr:`LiveCounts.faults` (and a study's summary).

@@ -1,36 +1,10 @@
 """Sampling made explicit: the neutral values of the knobs each server family has.
 
-"Temperature 0" is not one experiment across servers: the same GGUF file at temperature 0 gave
-``[1, 1]`` on llama.cpp's server and ``[1, 0]`` on llama-cpp-python's, because the second applies
-``repeat_penalty`` 1.1 unless told otherwise. Servers carry their own defaults (llama.cpp: top_k
-40, top_p 0.95, min_p 0.05; llama-cpp-python: the same and repeat_penalty 1.1; Ollama: top_k 40,
-top_p 0.9, repeat_penalty 1.1; vLLM: the model's ``generation_config.json``). The paper's GPT-4
-had none of them (OpenAI: top_p 1, no penalties), so ``--sampling neutral`` sends, per family,
-the value that turns each knob off:
-
-====================  =====================================================================
-family                neutral fields sent
-====================  =====================================================================
-llamacpp,             ``repeat_penalty`` 1, ``top_k`` 0 (off), ``top_p`` 1, ``min_p`` 0,
-llama-cpp-python      ``presence_penalty`` 0, ``frequency_penalty`` 0
-vllm                  ``repetition_penalty`` 1, ``top_k`` -1 (off), ``top_p`` 1, ``min_p`` 0,
-                      ``presence_penalty`` 0, ``frequency_penalty`` 0
-ollama                ``top_p`` 1, ``presence_penalty`` 0, ``frequency_penalty`` 0 (its OpenAI
-                      endpoint passes no ``repeat_penalty``/``top_k``: set those in a Modelfile)
-generic               ``top_p`` 1, ``presence_penalty`` 0, ``frequency_penalty`` 0 (the OpenAI
-                      API's own fields)
-openai                nothing (its defaults are the neutral values)
-====================  =====================================================================
-
-Presets: ``neutral`` (the table), ``server`` (send nothing: the server's defaults), and ``auto``,
-the default: ``neutral`` for llama.cpp-family, vLLM and Ollama servers, nothing for OpenAI and
-unknown servers (an unknown strict server could reject fields it does not have). For the
-embedded server ``auto`` sends the neutral *penalties* only: llama.cpp's own penalty defaults
-are already neutral (repeat_penalty 1, no presence/frequency penalty, as its ``/props`` reports),
-so its replies are unchanged at every temperature, and its truncations (top_k 40, top_p 0.95,
-min_p 0.05) never change a temperature-0 reply (the most likely token survives every one of
-them) while they keep the temperature-0.7 numbers of the README; ``--sampling neutral`` turns
-them off too.
+"Temperature 0" is not one experiment across servers: each carries its own sampling defaults
+(llama-cpp-python's ``repeat_penalty`` 1.1 turned a ``[1, 1]`` into ``[1, 0]``), so ``--sampling
+neutral`` sends, per family, the value that turns each knob off (:data:`NEUTRAL`). The families'
+defaults, the neutral fields, the presets (``auto``, ``neutral``, ``server``) and why ``auto`` sends
+the embedded server the neutral penalties only are tabled in docs/servers.md (*Servers*).
 """
 
 from __future__ import annotations
@@ -44,7 +18,7 @@ _LLAMA = (("repeat_penalty", 1.0), ("top_k", 0), ("top_p", 1.0), ("min_p", 0.0),
           ("frequency_penalty", 0.0))
 _OPENAI_FIELDS = (("top_p", 1.0), ("presence_penalty", 0.0), ("frequency_penalty", 0.0))
 
-#: Neutral sampling fields per server family (see the module docstring).
+#: Neutral sampling fields per server family (docs/servers.md).
 NEUTRAL: dict[str, tuple[tuple[str, float], ...]] = {
     "llamacpp": _LLAMA,
     "llama-cpp-python": _LLAMA,

@@ -189,21 +189,11 @@ class ClientSettings:
 
     def metadata(self) -> dict[str, Any]:
         """Settings worth recording with a run (no secrets: only the key's variable name)."""
-        return {
-            "base_url": safe_url(self.base_url),
-            "model": self.model,
-            "temperature": self.temperature,
-            "max_tokens": self.max_tokens,
-            "seed": self.seed,
-            "constrain": self.constrain,
-            "server_kind": self.server_kind,
-            "max_retries": self.max_retries,
-            "retry_for_s": self.retry_for_s,
-            "timeout_s": self.timeout_s,
-            "omit_fields": list(self.omit_fields),
-            "reasoning": self.reasoning,
-            "reasoning_max_tokens": self.reasoning_max_tokens,
-            "reasoning_effort": self.reasoning_effort,
-            "extra_fields": dict(self.extra_fields),
-            "sampling": dict(self.sampling),
-        }
+        plain = ("model", "temperature", "max_tokens", "seed", "constrain", "server_kind", "max_retries",
+                 "retry_for_s", "timeout_s", "omit_fields", "reasoning", "reasoning_max_tokens", "reasoning_effort",
+                 "extra_fields", "sampling")
+        out = {"base_url": safe_url(self.base_url)} | {name: getattr(self, name) for name in plain}
+        # The tuple-valued fields as JSON shapes (keys keep their places: update only replaces).
+        out.update(omit_fields=list(self.omit_fields), extra_fields=dict(self.extra_fields),
+                   sampling=dict(self.sampling))
+        return out

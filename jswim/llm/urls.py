@@ -1,20 +1,8 @@
 """Server addresses: the shapes users write, made into one API root.
 
-Users copy base URLs from server docs and logs in several shapes. :func:`normalize_base_url`
-accepts the common ones and returns the API root the client appends ``/chat/completions`` to:
-
-===========================================  ===========================================
-written                                      used
-===========================================  ===========================================
-``http://localhost:8080/v1``                 as is
-``http://localhost:8080`` (no path)          ``http://localhost:8080/v1``
-``http://host:8000/v1/chat/completions``     ``http://host:8000/v1``
-``localhost:11434/v1`` (no scheme)           ``http://localhost:11434/v1`` (local host)
-``api.example.com/v1`` (no scheme)           ``https://api.example.com/v1`` (public name)
-===========================================  ===========================================
-
-A path other than empty is kept (gateways mount the API anywhere); when the server answers 404
-the client's error names the URL it tried.
+:func:`normalize_base_url` accepts the common shapes users copy from server docs and logs (no
+path, a pasted ``/v1/chat/completions``, no scheme) and returns the API root the client appends
+``/chat/completions`` to; docs/servers.md (*Base URL*) lists them.
 """
 
 from __future__ import annotations
@@ -43,10 +31,8 @@ def safe_url(url: str) -> str:
 def is_loopback(url: str) -> bool:
     """Whether ``url`` points at this machine."""
     host = urlsplit(url).hostname or ""
-    if host == "localhost":
-        return True
     try:
-        return ipaddress.ip_address(host).is_loopback
+        return host == "localhost" or ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
 
@@ -69,7 +55,7 @@ def _is_local_name(host: str) -> bool:
 
 
 def normalize_base_url(url: str) -> str:
-    """The API root for a base URL as a user wrote it (see the module docstring).
+    """The API root for a base URL as a user wrote it (docs/servers.md).
 
     Raises
     ------
@@ -96,13 +82,8 @@ def normalize_base_url(url: str) -> str:
         raise ConfigError(f"the server base URL {redact_url(text)!r} has a bad port; {example}") from None
     if not parts.hostname:
         raise ConfigError(f"the server base URL {redact_url(text)!r} has no host; {example}")
-    path = parts.path.rstrip("/")
-    for suffix in ENDPOINT_SUFFIXES:
-        if path.endswith(suffix):
-            path = path[: -len(suffix)]
-            break
-    if not path:
-        path = "/v1"
+    path = parts.path.rstrip("/")  # the first endpoint suffix cut off; no path at all means /v1
+    path = next((path[: -len(s)] for s in ENDPOINT_SUFFIXES if path.endswith(s)), path) or "/v1"
     return urlunsplit((parts.scheme.lower(), parts.netloc, path, parts.query, ""))
 
 

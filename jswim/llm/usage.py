@@ -1,21 +1,9 @@
 """Token usage and cost accounting.
 
-Prices are USD per million tokens, ``(prompt, completion)``, looked up by model name: an exact
-match first, then the longest known prefix (so ``gpt-4o-2024-08-06`` finds ``gpt-4o``). They are
-list prices at the time of writing and change often: pass your own table for real budgets.
-Models not in the table (local GGUF files, self-hosted servers) cost 0.
-
-The list prices are a cloud provider's; :func:`price_table` applies them only where they can be
-right: a server on this machine or the LAN is never priced at them (it is free, or its price is
-the user's to give), nor a model the server does not list, nor a reply whose ``model`` field names
-another model than the one priced (servers that echo any requested name would otherwise bill a
-small local model at GPT-4's price). ``--price-local`` lifts the first rule only (a local gateway
-to a paid API). A table the user passes is always applied.
-
-Under a cost cap (``--max-cost``) a call must have a price, or the cap would never be reached:
-:func:`cap_refusal` says, before the first request, why the study's calls could not be priced
-(the run refuses in that one line, naming ``--prices``), and a reply naming another model is
-priced at the requested model's price anyway (:meth:`jswim.llm.client.LLMClient`).
+Prices are USD per million tokens, ``(prompt, completion)``, looked up by model name (exact, then
+the longest known prefix); models not in the table cost 0. :func:`price_table` applies the list
+prices only where they can be right, and :func:`cap_refusal` says why a capped study's calls could
+not be priced: both rules are in docs/paid-apis.md.
 """
 
 from __future__ import annotations

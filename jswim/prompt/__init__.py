@@ -1,91 +1,8 @@
 """The paper's five-sentence prompt, history records, number encoding and reply parsing.
 
-Text only: this module never imports JAX, so the LLM layer stays light and testable.
-
-The prompt has five one-sentence parts, named as in the paper:
-
-S1 objective, S2 constraints on the DOFs, S3 the last ``n_ht`` history records, S4 a reminder that
-actions have long-term consequences, S5 the answer format and the allowed set. Any subset can be
-dropped with a sentence mask (the paper's ablation).
-
-Order. The default layout is the paper's and the authors' code's: S1 S2 S3 S4 S5 in one user
-message, the history third, so the answer instruction is the last thing the model reads
-(:data:`PAPER_LAYOUT`). ``order="cache"`` (:class:`PromptConfig`; the ``cache-order`` variant)
-puts every fixed sentence first, ``S1 S2 S4 S5`` then ``S3`` (:data:`CACHE_LAYOUT`), so a server
-with prefix (prompt) caching reuses the fixed part; when S5 itself changes from step to step
-(the shape-changing action set, shuffled options) or the summary sentence is on, that order
-becomes :data:`CACHE_LAYOUT_LATE`, ``S1 S2 S4`` then ``S3``, the summary and ``S5``. A
-template file can set any other layout (a layout set by hand is always used as given).
-
-Template placeholders
----------------------
-A :class:`PromptTemplate` has a ``layout``, five sentence templates and a ``record`` template,
-all Python format strings (write literal braces as ``{{`` and ``}}``). The layout may use
-``{S1}`` .. ``{S5}`` (the rendered sentences; a masked sentence renders empty) and every
-variable below; sentences may use the variables too.
-
-=================  ============================================================================
-``{direction}``    ``+x`` or ``-x``
-``{direction_words}`` ``positive x`` or ``negative x``
-``{dofs}``         DOF names joined as prose, ``D1 and D2``
-``{dof_names}``    DOF names joined by commas, ``D1, D2``
-``{n_dof}``        number of DOFs
-``{dof_ranges}``   ``D1 and D2 each stay in [-1.047, 1.047]`` (per DOF when ranges differ)
-``{dof_choices}``  ``1 or 2``
-``{roc_choices}``  ``-1, 0 or 1``
-``{roc_levels}``   ``K`` of ``--roc-levels`` (ROC ``k`` moves a DOF by ``k/K`` of its range; 1 = the paper's)
-``{except_zero}``  ``, not 0`` when ROC 0 is not offered (four-DOF swimmers), else empty
-``{allowed}``      the allowed replies, ``[1, -1], [1, 0], ...``
-``{choices}``      S5's choices: with every action offered in (DOF, ROC) order, the DOF and
-                   ROC choices separately (``the changed DOF 1 or 2 and the ROC -1, 0 or 1``,
-                   as the authors' code); otherwise the allowed replies (``one of [1, -1], ...``)
-``{n_ht}``         the history length setting
-``{n_records}``    the number of records shown (<= ``n_ht``; fewer right after a start or clear)
-``{history}``      the records, one per line (``none yet`` when empty)
-``{current}``      the current DOF values and X, ``(D1, D2) = (1.047, 1.047), X = 2500``
-``{summary}``      the observed-progress sentence (empty unless the summary variant is on; see
-                   :func:`jswim.agents.memory.render_summary`)
-=================  ============================================================================
-
-The summary sentence. With ``PromptConfig.summary`` on, one extra sentence reports, for each
-action offered now, the mean displacement it produced so far from the current shape (observed
-data of this run only, noise included, kept across history clears). Numbers follow the paper's
-rule for X: integers in thousandths of ``a``, no minus sign (the direction is a word). A layout
-without ``{summary}`` gets the sentence right before the history (S3), which keeps every fixed
-sentence in front for prefix caching; the paper's prompt is unchanged when the summary is off.
-
-Finer ROCs (``--roc-levels K``, an extension). The reply still carries an integer, as the paper
-advises (no decimals): ROC ``k`` in ``-K..K`` moves the DOF by ``k/K`` of its range in one step,
-stopping at its limits. With ``K > 1`` S2 ends with :data:`ROC_SCALE_SENTENCE` and S5 with
-:data:`ROC_FORMAT_SENTENCE` (appended to whatever the template's sentences say, unless they are
-dropped); with ``K = 1`` the prompt is the paper's, byte for byte. :func:`parse_reply` accepts only
-the offered integers: ``[1, 0.5]``, ``[1, 1/2]`` or a ROC beyond ``K`` name no action and are
-asked again.
-
-Scenes (walls, obstacles, pairs and schools, an extension; :class:`SceneView` on :class:`SwimmerText`,
-built by the agents from the world they drive). The prompt grows only what the agent needs. With a
-wall, S2 gains one sentence and every record shows the height ``H`` of the swimmer above the wall
-(thousandths of ``a``, truncated, as X is: :func:`encode_height`) and the tilt (rad, three
-decimals). With several swimmers the DOFs are joint (D1, D2 swimmer 1's arms, D3, D4 swimmer 2's,
-and so on): a reply ``[3, 1]`` names swimmer 2 through its DOF, so the answer format, the parser and
-constrained decoding are the paper's; S2 says which DOFs are whose and where the others start, and
-every record shows each position X1, X2, ... (X, the reward's position, is their mean). With
-``SceneView.own`` (``--pair-prompt each``, a variant) the prompt is one swimmer's alone: its own D1,
-D2 and X as in the paper, S2 says where the others start and that they move between this one's
-steps, and every record also shows their positions (a pair's: ``other X``), each counted from its
-own start and encoded as X is. :func:`scene_template` builds S3's legend and the record line; a
-template file is used as given (its placeholders ``{x1_before}`` .. ``{tilt2_after}``, ``{h_before}``,
-``{tilt_before}`` are always known). Without a scene the prompt is the paper's, byte for byte.
-
-The ``record`` template formats one history line with ``{step}`` (the record's index since the
-last clear, from 1), ``{dofs_before}``, ``{action}``, ``{dofs_after}``, ``{x_before}``,
-``{x_after}`` and ``{stuck}`` (``yes`` when ``|dX| <`` :data:`STUCK_DX`, holds and moves past a
-limit included, else ``no``: every record carries the flag, as in the authors' code).
-
-A template file (:meth:`PromptTemplate.from_file`) is plain text. Without section headers the
-whole file is the layout. With headers, lines ``[layout]``, ``[S1]`` .. ``[S5]`` and ``[record]``
-start sections; sections left out keep their defaults. Leading/trailing blank lines of a section
-are dropped.
+Text only: this module never imports JAX. The sentences S1..S5, their layouts (paper and cache
+orders), every template placeholder, the template file format, the summary sentence, finer ROCs
+and scenes are described in docs/api/prompt.md.
 """
 
 from __future__ import annotations
@@ -318,7 +235,7 @@ MAX_TEMPLATE_BYTES = 100_000
 
 @dataclass(frozen=True)
 class PromptTemplate:
-    """Layout, sentence and record templates (see the module docstring for placeholders)."""
+    """Layout, sentence and record templates (placeholders: docs/api/prompt.md)."""
 
     layout: str = PAPER_LAYOUT
     sentences: tuple[tuple[str, str], ...] = tuple(DEFAULT_SENTENCES.items())
@@ -357,7 +274,7 @@ class PromptTemplate:
 
     @classmethod
     def from_file(cls, path: str | Path) -> "PromptTemplate":
-        """Read a template file (see the module docstring for its format); at most
+        """Read a template file (format: docs/api/prompt.md); at most
         :data:`MAX_TEMPLATE_BYTES` (every request carries the whole prompt)."""
         try:
             size = Path(path).stat().st_size
