@@ -55,6 +55,7 @@ def test_make_gives_the_paper_world_over_the_wall_model():
     m = params.model
     assert (m.kind, m.height, m.xi_par, m.xi_perp) == ("purcell", H, xi_t, xi_n) and float(params.direction) == -1.0
     assert (world.n_dof, world.n_actions, world.n_swimmers) == (2, 6, 1)
+    assert world.dof_range == pytest.approx((-np.pi / 3, np.pi / 3))  # the hinges' +-60 degrees (the paper's)
     # the plain bulk scene is still the paper's own swimmer
     assert jswim.make("purcell", scene=Scene())[1].model == make_model("purcell")
 
