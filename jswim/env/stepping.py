@@ -1,22 +1,12 @@
 """Stepping: one action moves one DOF at a rate of change ROC in [-1, 1] for one step.
 
-A step moves the DOF by ``ROC x (hi - lo)``, stopping at a limit: a push past a limit moves only
-up to it, and a move that cannot change the shape at all (ROC +1 at ``hi``, -1 at ``lo``) is
-flagged ``stuck``; ROC 0 holds still. At zero Reynolds number the motion depends on the path in
-shape space only, not on the rate, and the body-frame motion does not depend on the
-orientation. So:
-
-* the paper's discrete world (integer codes with K = 1: every step from corner to corner) reads
-  each step from the corner table (:func:`jswim.env.step_table`) and rotates it by the current
-  orientation;
-* any other step (integer codes on the K lattice, float ROC vectors) integrates its path with
-  the spectral integrator (:func:`jswim.integrate.integrate_stroke`, float64); a diagonal stroke
-  whose DOFs reach their limits at different times is integrated piece by piece along its bent
-  path.
-
-Noise follows the paper: the step's centroid displacement becomes ``(dX, dY) (1 + zeta Y)`` with
-``Y ~ U[-1, 1]`` drawn from the step's key (the rotation is not perturbed; the paper perturbs the
-displacement only).
+A step moves the DOF by ``ROC x (hi - lo)``, stopping at a limit (``stuck`` when it cannot move at
+all; ROC 0 holds still). Motion depends only on the path in shape space, and body-frame motion not
+on the orientation, so the paper's discrete world (K = 1, corner to corner) reads each step from
+the corner table (:func:`jswim.env.step_table`) rotated by the orientation, and any other step is
+integrated along its (possibly bent) path (:func:`jswim.integrate.integrate_stroke`, float64).
+Noise follows the paper: the centroid displacement becomes ``(dX, dY) (1 + zeta Y)``,
+``Y ~ U[-1, 1]`` from the step's key, the rotation unperturbed. docs/continuous.md says the rest.
 """
 
 from __future__ import annotations
