@@ -54,7 +54,7 @@ from jswim.env.state import (
 from jswim.env.stepping import advance, step, step_batch
 from jswim.env.base import Box, Discrete, Environment, Observation
 from jswim.env.swimmer_world import SwimmerWorld
-from jswim.env.tables import TABLE_DEGREE, _corner_index, _flat_table, _step_rows, _still_row, step_table
+from jswim.env.tables import TABLE_DEGREE, step_table
 
 #: The protocol's names that reach the scene physics, loaded on first use (PEP 562) so that
 #: ``import jswim.env`` does not import :mod:`jswim.scenes`.
