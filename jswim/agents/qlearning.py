@@ -370,10 +370,8 @@ def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig(), pos
     params : EnvParams
         Environment; each of ``zeta``, ``direction``, ``init`` is either unbatched (shared) or
         has a leading axis of size B (see :func:`batch_params`).
-    config : QConfig
-        Hyperparameters shared by all learners (static).
-    pose : bool
-        Also record the centroid y and the orientation after each step (static).
+    config, pose
+        As in :func:`train`, shared by all learners (static).
 
     Returns
     -------

@@ -269,13 +269,11 @@ def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> t
     largest displacement of the step, at least :data:`MIN_SWEEPS` and at most :data:`MAX_SWEEPS`.
 
     ``it`` is ``(increments, forces)``: the poses' increments at the nodes and the sphere forces
-    the solves by swimmer carry from sweep to sweep. The iteration converges linearly, so
-    with ``c_k`` the largest change of the increments made by sweep ``k`` the error left after it
-    is about ``c_k rho`` with ``rho = c_k / c_(k-1)`` (for ``rho`` small). The first change is the
-    whole step, so the rule is read from sweep 3 on. Under ``vmap`` the loop runs until every
-    swimmer of the batch has converged (the others keep their values: a swimmer's result does not
-    depend on its batch). Returns the iterate and the last sweep's lab-frame velocities and
-    rotation rates.
+    the solves by swimmer carry from sweep to sweep. The iteration converges linearly: with ``c_k`` the largest change made by sweep ``k``
+    the error left is about ``c_k rho``, ``rho = c_k / c_(k-1)``; the first change is the whole
+    step, so the rule is read from sweep 3 on. Under ``vmap`` the loop runs until every member of
+    the batch has converged (the others keep their values: a swimmer's result does not depend on
+    its batch). Returns the iterate and the last sweep's lab-frame velocities and rotation rates.
     """
     def step(carry: tuple) -> tuple:
         k, it, _, _, change, _ = carry
