@@ -27,10 +27,6 @@ class Column:
     header: str
     numeric: bool = True
 
-    @property
-    def justify(self) -> str:
-        return "right" if self.numeric else "left"
-
 
 def is_terminal(file: IO[str] | None = None) -> bool:
     """Whether ``file`` (default stdout) is an interactive terminal."""

@@ -117,8 +117,7 @@ def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], l
     groups = any(s.get("group") for s in summary)
     cost = any(s.get("cost_usd") for s in summary)
     samples = any((s.get("samples") or 1) > 1 for s in summary)
-    cols = [Column("agent", False), Column("swimmer", False), Column("dir", False)]
-    cols += [Column("group", False)] if groups else []
+    cols = [Column(h, False) for h in ("agent", "swimmer", "dir") + (("group",) if groups else ())]
     cols += [Column("samples")] if samples else []
     cols += [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "learned",
                                  "fail", "tok/step")]
@@ -206,12 +205,8 @@ class StudyFolder:
     def usage(self) -> dict[str, float]:
         """LLM calls, tokens and cost over the finished runs."""
         llm = [r for r in self.rows if r.agent == "llm"]
-        return {
-            "calls": sum(r.calls or 0 for r in llm),
-            "prompt_tokens": sum(r.prompt_tokens or 0 for r in llm),
-            "completion_tokens": sum(r.completion_tokens or 0 for r in llm),
-            "cost_usd": sum(r.cost_usd or 0.0 for r in llm),
-        }
+        return {k: sum(getattr(r, k) or (0.0 if k == "cost_usd" else 0) for r in llm)
+                for k in ("calls", "prompt_tokens", "completion_tokens", "cost_usd")}
 
     def figures(self) -> list[Path]:
         fig_dir = self.folder / "figures"
@@ -310,14 +305,11 @@ def compare_table(folders: Sequence[str | Path]) -> tuple[list[StudyFolder], lis
         raise ConfigError("compare needs at least two study folders")
     studies = [StudyFolder(f) for f in folders]
     keyed = [{tuple(s.get(k) for k in SETTING): s for s in st.summary} for st in studies]
-    common = set(keyed[0])
-    for k in keyed[1:]:
-        common &= set(k)
+    common = set(keyed[0]).intersection(*keyed[1:])
     every = set().union(*keyed)
-    order = [tuple(s.get(k) for k in SETTING) for s in studies[0].summary if tuple(s.get(k) for k in SETTING) in common]
+    order = [key for key in keyed[0] if key in common]  # the first study's reading order
     groups = any(key[3] for key in order)
-    cols = [Column("agent", False), Column("swimmer", False), Column("dir", False)]
-    cols += [Column("group", False)] if groups else []
+    cols = [Column(h, False) for h in ("agent", "swimmer", "dir") + (("group",) if groups else ())]
     cols += [Column("study", False)] + [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]",
                                                             "learn median", "tok/step", "cost $")]
     rows = []

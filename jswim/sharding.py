@@ -1,20 +1,12 @@
 """Spread a swimmer/learner batch axis over every device, and cut it into bounded chunks.
 
 One mesh over ``jax.devices()`` with a single axis, ``"batch"``; a batched array is placed with
-``NamedSharding(mesh, P("batch"))`` (its leading axis split into equal, contiguous blocks, one
-per device) and jitted code follows the data: the per-swimmer computations are independent, so
-XLA partitions them without communication and every device runs the same program on its block.
-The numbers are the same as on one device because nothing in a swimmer's computation depends
-on where it runs (noise is counter-based, see :func:`jswim.env.noise`).
-
-The same code runs on one CPU, on the host devices forced by
-``XLA_FLAGS=--xla_force_host_platform_device_count=N``, on several GPUs, and on several hosts:
-call ``jax.distributed.initialize()`` first (README, "Scaling out") and ``jax.devices()`` lists
-every host's devices; results that come back to Python are gathered with :func:`to_host`.
-
-Memory is bounded by working through the batch in chunks (:func:`chunks`): a chunk is a
-multiple of :func:`granule` so that it splits evenly over the devices and keeps swimmer pairs
-(which share one noise hash) together.
+``NamedSharding(mesh, P("batch"))`` (contiguous blocks, one per device) and jitted code follows the
+data without communication. The numbers are the same on any device count (noise is counter-based,
+:func:`jswim.env.noise`). Memory is bounded by chunks (:func:`chunks`), multiples of
+:func:`granule` so that they split evenly and keep swimmer pairs (which share one noise hash)
+together. One CPU, forced host devices, GPUs, several hosts (results gathered by
+:func:`to_host`): docs/performance.md, "Scaling out".
 """
 
 from __future__ import annotations
@@ -78,10 +70,6 @@ def batch_sharding() -> NamedSharding:
     return NamedSharding(mesh(), PartitionSpec(AXIS))
 
 
-def replicated() -> NamedSharding:
-    return NamedSharding(mesh(), PartitionSpec())
-
-
 def padded_size(n: int) -> int:
     """``n`` rounded up to a multiple of :func:`granule`."""
     g = granule()
@@ -92,9 +80,7 @@ def pad(tree: Any, n: int, size: int) -> Any:
     """Pad every leaf's leading axis from ``n`` to ``size`` by repeating its last entry."""
     if size == n:
         return tree
-    return jax.tree_util.tree_map(
-        lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], size - n, axis=0)], axis=0), tree
-    )
+    return jax.tree_util.tree_map(lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], size - n, axis=0)]), tree)
 
 
 def shard(tree: Any) -> Any:
@@ -125,7 +111,7 @@ def apply_batched(fn: Callable[..., Any], shared: Sequence[Any], batched: Sequen
 def chunks(n: int, chunk: int) -> Iterator[tuple[int, int]]:
     """``(start, stop)`` ranges covering ``0 .. n``; every start is a multiple of the chunk,
     which is rounded up to a multiple of :func:`granule`."""
-    size = max(granule(), -(-max(1, chunk) // granule()) * granule())
+    size = padded_size(max(1, chunk))
     for start in range(0, n, size):
         yield start, min(n, start + size)
 

@@ -89,10 +89,6 @@ class ClearingRule:
                 f"when the last {self.window} displacements toward the target sum{rounding} to < {self.threshold:g}")
 
 
-#: Never clears.
-NO_CLEARING = ClearingRule(enabled=False)
-
-
 @dataclass
 class History:
     """Records since the last clear, plus the run's progress the clearing rule looks at.

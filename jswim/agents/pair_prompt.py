@@ -1,18 +1,13 @@
 """Each swimmer of a pair (or a school) its own LLM conversation (``--pair-prompt each``; issue 19,
 a variant of the joint prompt, which stays the default).
 
-Each swimmer's conversation is kept as the paper keeps a lone swimmer's: the paper's five sentences
-about its own arms D1, D2 and its own X (it replies ``[1 or 2, ROC]``), S2 saying where the others
-start and that they move between its steps (:data:`jswim.prompt.OWN_PAIR_SENTENCE`), every record
-also showing the others' positions (a pair's: ``other X``), each counted from its own start and
-encoded as X is; its own last ``n_ht`` records and its own clearing rule, on the progress of its own
-X over its own steps; the same request, parsing, follow-ups and no-op on failure as every LLM run
-(:mod:`jswim.agents.protocol`), through the same client, journal and step batching.
-
-**Turns.** Swimmer ``k`` of ``N`` decides at steps ``k, k + N, ...`` (a pair: swimmer 1 at odd
-steps, swimmer 2 at even ones); every step moves one arm of one swimmer, as the joint prompt's and
-the alternating square strokes do, so ``--steps`` is the same budget for all. The run's row is the
-joint one (joint action codes, ``x`` the swimmers' mean, whose progress is the reward).
+Each conversation is kept as the paper keeps a lone swimmer's (its own D1, D2 and X, its own last
+``n_ht`` records and clearing rule; S2 and every record also name the others,
+:data:`jswim.prompt.OWN_PAIR_SENTENCE`), with the same request, parsing, follow-ups and no-op on
+failure as every LLM run (:mod:`jswim.agents.protocol`). Swimmer ``k`` of ``N`` decides at steps
+``k, k + N, ...``; the run's row is the joint one (joint action codes, ``x`` the swimmers' mean,
+whose progress is the reward). The prompt's text and the turns: docs/scenes.md, "Pair: one prompt
+per swimmer".
 
 Everything here is pure (no client, no environment): the driver (:mod:`jswim.agents.llm`) keeps
 one :class:`Conversation` per swimmer on a run and asks :func:`turn` whose step it is.

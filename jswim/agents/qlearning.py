@@ -1,34 +1,19 @@
 """Tabular Q-learning baseline, trained online on one swimmer, thousands of learners at once.
 
-The learner sees what the LLM sees and nothing more: the state is the DOF configuration (a corner
-of the DOF cube, ``2**n_dof`` states), an action is a ``(DOF, ROC)`` pair from the environment's
-action set, and the reward of a step is its displacement in the target direction (noisy when
-``zeta > 0``). There are no episodes: one learner is one swimmer that keeps swimming, exactly like
-one LLM run, so "steps to learn" means the same thing for both and is judged by the same code,
-:func:`jswim.judging.gait.judge`.
-
-The update is Q-learning written as an optax problem: the Q-table is the parameter, the loss is
-half the squared TD error of the visited entry with the bootstrapped target held fixed,
+The learner sees what the LLM sees: the state is the DOF configuration, an action a ``(DOF, ROC)``
+pair of the environment's action set, the reward the step's displacement in the target direction.
+There are no episodes: one learner is one swimmer that keeps swimming, like one LLM run, judged by
+the same code, :func:`jswim.judging.gait.judge`. The update is Q-learning as an optax problem: the
+Q-table is the parameter, the loss half the squared TD error of the visited entry,
 
     L(Q) = 1/2 (r + gamma max_a' Q(s', a') - Q(s, a))^2,   target under stop_gradient,
 
 and ``optax.sgd`` with learning rate ``alpha`` turns its gradient into the textbook update
-``Q(s, a) += alpha * TD error``. Learning-rate and exploration schedules are optax schedules
-evaluated at the step count. A whole run is one ``lax.scan``; :func:`train_batch` vmaps it over
-keys and environment parameters (noise level, direction, initial configuration), so one jitted
-call trains e.g. 10,000 learners.
-
-On a ROC lattice (``make_params(..., roc_levels=K)``, ``--roc-levels K``, an extension) the
-same learner is tabular over the lattice: a state is a point of the ``(K + 1)**n_dof`` grid of
-DOF values ``lo + j (hi - lo) / K``, an action one of the ``n_dof (2K + 1)`` codes ``[DOF, k]``
-(ROC ``k/K``; :mod:`jswim.judging.lattice`), and the environment steps the code exactly. ``K = 1`` is the
-paper's learner, number for number (the same operations on the same values).
-
-The same learner runs in any world of the protocol (:func:`train_env`: walls, pairs, a world of
-one's own): its table rows come from the world's discretiser (:mod:`jswim.agents.worlds`: the
-paper's world its corner code, a scene its joint corners, times a height bin with a wall), its
-reward is ``StepInfo.progress``, and one uniform per step drives the agent and one per swimmer the
-world's noise, as in the paper's world.
+``Q(s, a) += alpha * TD error``. A whole run is one ``lax.scan``; :func:`train_batch` vmaps it over
+keys and environment parameters, so one jitted call trains e.g. 10,000 learners. On a ROC lattice
+the table is over lattice points and codes (``K = 1``: the paper's learner, number for number), and
+:func:`train_env` runs it in any world of the protocol; docs/baselines.md ("Q-learning baseline",
+"Any world") and docs/continuous.md say the rest.
 
 Example::
 
@@ -74,46 +59,32 @@ class QConfig:
     """Hyperparameters of a Q-learner (static: one compilation per distinct config).
 
     The defaults were chosen on the noiseless swimmers, the setting of the paper's comparison;
-    the README's results section lists what else was tried and how steps-to-learn moved.
+    docs/baselines.md gives each one's reason and the steps to learn measured around it.
 
     Attributes
     ----------
     steps : int
-        Steps per run (200). Long enough to measure slow learners well past the paper's 50-step
-        horizon, and to check that a learned stroke lasts ("without subsequent failures").
+        Steps per run (200), past the paper's 50-step horizon, to check that a learned stroke lasts.
     learning_rate : float or optax schedule
-        ``alpha`` (1.0 constant). The noiseless swimmer is deterministic, so one update makes an
-        entry exact given the values it bootstraps from; a smaller ``alpha`` only slows the
-        propagation of value around the stroke (NG toward +x, shape-changing moves: median 30 steps
-        to learn at 1.0, 39 at 0.5, 71 at 0.25). With noise (``zeta > 0``) pass a smaller rate, or a decaying
-        optax schedule, so that estimates average over the noise.
+        ``alpha`` (1.0 constant: the noiseless swimmer is deterministic). With noise (``zeta > 0``)
+        pass a smaller rate, or a decaying optax schedule, so that estimates average over the noise.
     discount : float
-        ``gamma`` (0.9). A move's worth depends on the moves after it: two of the four strokes
-        of NG's cycle move the swimmer backwards, and the cycle is the optimal policy only for
-        ``gamma > 0.743`` (from the exact step table). 0.9 clears that with a margin; closer to 1,
-        values take longer to settle (NG toward +x, shape-changing: median 47 steps at 0.8, 30 at
-        0.9, 43 at 0.95, 135 at 0.99; ``benchmarks/qlearn_tables.py``).
+        ``gamma`` (0.9: NG's cycle is the optimal policy only for ``gamma > 0.743``).
     epsilon : float or optax schedule
         Probability of a uniformly random action from the offered set (default
         :data:`DEFAULT_EPSILON`, ``0.8**t``).
     q_init : float
-        Initial value of every table entry (0.35): mildly optimistic. Every action that does
-        nothing (a hold, a move against a limit) is truly worth 0 and every move that goes
-        backwards less, so an untried action looks better than one seen to do nothing and the
-        greedy learner tries each action before repeating a useless one; but it stays below the
-        value of the best stroke kept up forever (0.48 for Purcell's swimmer at ``gamma = 0.9``),
-        so the optimism wears off within a few visits. At 0 NG's learner gets stuck (it never
-        learns with all actions offered); at 1.0 it takes more than 100 steps to unlearn the
-        optimism.
+        Initial value of every table entry (0.35): mildly optimistic, so the greedy learner tries
+        each action before repeating a useless one.
     action_set : str
         ``"all"``: every ``(DOF, ROC)`` pair offered to the LLM (six for the two-DOF swimmers;
         ROC 0 is left out for more DOFs, see ``SwimmerModel.default_rocs``), holds and moves
-        against a limit included, though they do nothing. ``"shape-changing"``: only the
-        ``n_dof`` moves that change the shape from the current configuration.
+        against a limit included. ``"shape-changing"``: only the ``n_dof`` moves that change the
+        shape from the current configuration.
     tie_break : str
-        How the greedy choice splits equal values: ``"random"`` (uniformly among the maxima,
-        the default) or ``"first"`` (lowest index, like ``argmax``: a learner that starts from
-        equal values then repeats one useless action forever; kept to show that failure).
+        ``"random"`` (uniformly among the maxima, the default) or ``"first"`` (lowest index, like
+        ``argmax``: from equal values the learner repeats one useless action forever; kept to show
+        that failure).
     """
 
     steps: int = 200
@@ -185,8 +156,6 @@ def _schedule(value: float | optax.Schedule) -> optax.Schedule:
 
 
 _corner = worlds.corner
-
-
 positions = worlds.positions
 
 
@@ -401,10 +370,8 @@ def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig(), pos
     params : EnvParams
         Environment; each of ``zeta``, ``direction``, ``init`` is either unbatched (shared) or
         has a leading axis of size B (see :func:`batch_params`).
-    config : QConfig
-        Hyperparameters shared by all learners (static).
-    pose : bool
-        Also record the centroid y and the orientation after each step (static).
+    config, pose
+        As in :func:`train`, shared by all learners (static).
 
     Returns
     -------
@@ -485,7 +452,6 @@ def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "a
     """
     key = jax.random.PRNGKey(0) if key is None else key
     k_reset, k_run = jax.random.split(key)
-
     big_k = _k(params)
 
     def body(state, u):

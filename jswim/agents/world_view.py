@@ -1,13 +1,9 @@
-"""What an LLM run reads of its world: the world a run spec names, and the prompt's view of it.
-
-The driver (:mod:`jswim.agents.llm`) builds each run's world with :func:`world` (:func:`jswim.make`)
-unless handed another builder (any :class:`jswim.env.base.Environment`, a test's toy world
-included). What the prompt shows beyond the paper's lone swimmer comes from the world and its
-first observation (:func:`view`): ``env.n_swimmers`` (swimmer ``s`` owns joint DOFs ``2s + 1, 2s + 2``),
-a wall (a world with one says ``wall = True``; the observation's ``height`` is each swimmer's H)
-and the swimmers' starts. DOF ranges and the run's defaults are the named swimmer's
-(:mod:`jswim.agents.defaults`), over the world's joint DOFs; a registered world's come from
-the world (:func:`model`: its DOFs per swimmer and their range).
+"""What an LLM run reads of its world: the world a run spec names (:func:`world`, by
+:func:`jswim.make`, unless the driver is handed another builder, a test's toy world included),
+and the prompt's view of it (:func:`view`: from ``env.n_swimmers``, the world's ``wall``
+attribute and the swimmers' starts; docs/design.md, agents row). DOF ranges and the run's
+defaults are the named swimmer's (:mod:`jswim.agents.defaults`), over the world's joint DOFs; a
+registered world's come from the world (:func:`model`: its DOFs per swimmer and their range).
 """
 
 from __future__ import annotations

@@ -17,17 +17,8 @@ API in the gymnax style::
 Batch with ``jax.vmap(step, in_axes=(0, 0, 0, None))``; ``params`` is a pytree whose ``zeta``,
 ``direction`` and ``init`` leaves may also be batched.
 
-One concern per module: :mod:`~jswim.env.params` (``EnvParams``, ``make_params``),
-:mod:`~jswim.env.actions` (integer codes, ROC vectors, validation), :mod:`~jswim.env.state`
-(``EnvState``, pose, DOF values), :mod:`~jswim.env.tables` (exact step tables),
-:mod:`~jswim.env.randomness` (counter-based noise), :mod:`~jswim.env.stepping` (``step``,
-``step_batch``, ``advance``), :mod:`~jswim.env.rollouts` (``rollout``, seeds).
-
-The world protocol (one interface for this world and the scenes'): :mod:`~jswim.env.base`
-(``Environment``, its ``StepInfo``, ``Observation``, spaces), :mod:`~jswim.env.swimmer_world`
-(``SwimmerWorld``: this environment), :mod:`~jswim.env.scene_world` (``SceneWorld``,
-``SceneTask``: :mod:`jswim.scenes`), :mod:`~jswim.env.worlds` (``make``),
-:mod:`~jswim.env.episodes` (``rollout(env, params, key, actions)``, ``rollout_batch``)::
+The world protocol (one interface for this world and the scenes', :mod:`~jswim.env.base`) and
+the module of each concern: docs/design.md (module map, *The world protocol*)::
 
     env, params = make("ng", Scene(medium="wall", height=5.0), direction="-x")
     state = env.reset(key, params)
@@ -63,7 +54,7 @@ from jswim.env.state import (
 from jswim.env.stepping import advance, step, step_batch
 from jswim.env.base import Box, Discrete, Environment, Observation
 from jswim.env.swimmer_world import SwimmerWorld
-from jswim.env.tables import TABLE_DEGREE, _corner_index, _flat_table, _step_rows, _still_row, step_table
+from jswim.env.tables import TABLE_DEGREE, step_table
 
 #: The protocol's names that reach the scene physics, loaded on first use (PEP 562) so that
 #: ``import jswim.env`` does not import :mod:`jswim.scenes`.

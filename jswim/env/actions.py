@@ -1,16 +1,10 @@
 """Actions: a DOF and a rate of change ROC in [-1, 1].
 
-Two encodings reach :func:`jswim.env.step`:
-
-* an **integer code** (what the paper's agents and the tabular baselines use): with
-  ``K = params.roc_levels``, code ``(dof - 1) (2K + 1) + (k + K)`` moves DOF ``dof`` (1-based, as
-  in the prompt) at ROC ``k / K``, ``k`` in ``-K..K``. K = 1 gives the paper's codes
-  ``(dof - 1) * 3 + (roc + 1)``, ROC in {-1, 0, 1};
-* a **float ROC vector** of shape ``(n_dof,)``: entry ``i`` is DOF ``i + 1``'s ROC in [-1, 1]
-  (at most one non-zero unless ``params.diagonal``).
-
-(The *action sets* offered to agents, ``"all"`` / ``"shape-changing"``, live in
-:mod:`jswim.actions`.)
+Two encodings reach :func:`jswim.env.step` (docs/continuous.md, "Actions"): an **integer code**
+``(dof - 1) (2K + 1) + (k + K)`` (``K = params.roc_levels``; DOF ``dof`` 1-based, ROC ``k / K``;
+K = 1 gives the paper's codes), or a **float ROC vector** ``(n_dof,)``, entry ``i`` DOF ``i + 1``'s
+ROC (at most one non-zero unless ``params.diagonal``). The *action sets* offered to agents
+(``"all"`` / ``"shape-changing"``) live in :mod:`jswim.actions`.
 """
 
 from __future__ import annotations

@@ -3,10 +3,8 @@
 Building a table runs the float64 integrator (seconds, mostly compilation); reading it back takes
 milliseconds. Entries are keyed by the table's name, the swimmer model, its parameters and the
 code version (a hash of ``jswim.__version__`` and of the source of every module a table depends
-on), so a change to the physics never reads a stale table. The folder is ``$JSWIM_TABLE_CACHE``
-if set, else ``$XDG_CACHE_HOME/jswim/tables`` (``~/.cache/jswim/tables`` when unset). Any problem
-(missing, corrupt or foreign file, unwritable folder, full disk) falls back to building the
-table; the cache never makes a step fail. Set ``JSWIM_TABLE_CACHE=off`` to disable it.
+on), so a change to the physics never reads a stale table. Any problem falls back to building;
+the folder and ``JSWIM_TABLE_CACHE=off``: docs/continuous.md, "Start-up".
 """
 
 from __future__ import annotations

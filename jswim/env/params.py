@@ -147,17 +147,13 @@ def parse_init(init: Sequence[int] | str | None, n_dof: int) -> tuple[int, ...]:
         if text and all(ch in "+-" for ch in text):
             init = tuple(1 if ch == "+" else 0 for ch in text)
         else:
-            raise ConfigError(
-                f"init must be levels like (1, 0), a sign string like '+-', or 'random'; got {init!r}"
-            )
+            raise ConfigError(f"init must be levels like (1, 0), a sign string like '+-', or 'random'; got {init!r}")
     try:
         levels = tuple(int(v) for v in init)
     except (TypeError, ValueError):
         raise ConfigError(f"init must be a sequence of 0/1 levels, got {init!r}") from None
     if len(levels) != n_dof or any(v not in (0, 1, -1) for v in levels):
-        raise ConfigError(
-            f"init must give {n_dof} levels, each 0 (lo), 1 (hi) or -1 (random); got {init!r}"
-        )
+        raise ConfigError(f"init must give {n_dof} levels, each 0 (lo), 1 (hi) or -1 (random); got {init!r}")
     return levels
 
 

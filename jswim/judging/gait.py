@@ -10,31 +10,9 @@ run repeat one *qualifying cycle*, at least ``n_cycles`` (3) times in a row. A c
   ``min_fraction`` (1/2) of the best displacement per step any closed cycle of length
   ``<= max_period`` achieves in the target direction.
 
-For the two-DOF swimmers of the paper the only qualifying cycle is the four-step square gait run
-in the target direction, the paper's "signature cycle": a two-step cycle is reciprocal and goes
-nowhere (scallop theorem), and the square gait run backwards goes the wrong way. The paper's
-success criterion for a task ("three consecutive cycles of its signature gaits within 50 steps,
-without subsequent failures") is then ``success``: the segment starts early enough that three
-cycles are complete by step ``horizon`` (50), and lasts to the end of the run. These numbers
-have one owner, :class:`Criterion`.
-
-``steps_to_learn`` counts as the paper does, from 1: the step at which that final stroke starts
-(a learner that plays the stroke from its first action learned in 1 step; ``stroke_start`` is the
-same point as a 0-based index, the number of steps before the stroke). The stroke is the longest
-trailing segment that repeats with the cycle's period, moved past the last step that did not
-change the shape. Where several periods qualify, the earliest start wins (then the shorter
-period). Cycles are considered up to ``max_period = 2**n_dof`` steps, the longest cycle that
-visits each corner of the DOF cube once (see :func:`default_max_period`).
-
-Displacements are composed from :func:`jswim.env.step_table` in float64 by replaying the run's
-actions from its initial shape, start orientation (:func:`jswim.env.start_orientation`) and the
-origin, exactly as :func:`jswim.env.step` does without noise. A cycle is therefore measured from the orientation the swimmer actually has
-when the cycle starts (for Purcell's swimmer the orientation is a function of the shape, so the
-square gait from a start with a bent link goes at ``cos(0.6) = 0.83`` of the best speed; it still
-qualifies). The best cycle is measured from orientation 0 at its start corner.
-
-This is post-processing in NumPy, vectorised over runs (a Python loop runs over candidate periods
-only); judging 10,000 runs of 200 steps takes about 0.1-0.2 s on two cores.
+What the paper's success adds (the horizon), how steps to learn are counted, how the stroke is
+found and how displacements are replayed: docs/baselines.md, "The success criterion". The
+numbers have one owner, :class:`Criterion`.
 """
 
 from __future__ import annotations
@@ -417,11 +395,9 @@ def judge(
 ) -> GaitReport:
     """Find, per run, the final stroke and whether it is a qualifying cycle (see module docs).
 
-    On a ``K``-level ROC lattice (``roc_levels = K > 1``, :mod:`jswim.judging.lattice`) the same rules
-    hold with lattice points for corners: a cycle returns to the same lattice point (exactly: the
-    lattice is integer), every move changes the shape, and the speed threshold is relative to the
-    best closed lattice stroke (:func:`jswim.judging.lattice.best_per_step`: the full square, the paper's
-    square gait, at every K measured); cycles are considered up to ``2**n_dof K`` moves.
+    On a ``K``-level ROC lattice (``roc_levels = K > 1``) the same rules hold with lattice points
+    for corners, the threshold relative to :func:`jswim.judging.lattice.best_per_step` and cycles up
+    to ``2**n_dof K`` moves (docs/continuous.md, "Judging continuous strokes").
 
     Parameters
     ----------
@@ -455,7 +431,6 @@ def judge(
     c = criterion
     k_levels = int(roc_levels)
     max_period = default_max_period(n, k_levels) if c.max_period is None else int(c.max_period)
-    n_cycles, min_fraction, horizon = c.n_cycles, c.min_fraction, c.horizon
     a = np.asarray(actions)
     if a.ndim == 1:
         a = a[None]
@@ -483,21 +458,27 @@ def judge(
         best = np.where(direction > 0, lattice.best_per_step(model, 1, k_levels),
                         lattice.best_per_step(model, -1, k_levels))
         rp = lattice.replay(at, model, k_levels, init)
-    threshold = min_fraction * best - _REL_TOL * np.abs(best)
+    threshold = c.min_fraction * best - _REL_TOL * np.abs(best)
 
     rows = np.arange(b)
     out_s, out_p, out_disp = trailing_strokes(
         lambda p: at[:-p] != at[p:], lambda sc, p: rp.corner[sc + p, rows] == rp.corner[sc, rows],
-        rp.moved, rp.x, direction, threshold, min(max_period, steps // n_cycles), n_cycles)
+        rp.moved, rp.x, direction, threshold, min(max_period, steps // c.n_cycles), c.n_cycles)
 
+    return stroke_report(out_s, out_p, out_disp, best, c, a, max_period)
+
+
+def stroke_report(out_s: np.ndarray, out_p: np.ndarray, out_disp: np.ndarray, best: np.ndarray,
+                  criterion: Criterion, per_step_label: np.ndarray, max_period: int) -> GaitReport:
+    """The :class:`GaitReport` of :func:`trailing_strokes`' output, shared with
+    :func:`jswim.judging.shape_judge.judge_shapes`; ``per_step_label`` (B, T) fills ``cycle``."""
     learned = out_p > 0
     steps_to_learn = np.where(learned, out_s + 1, -1)  # 1-based, the paper's count
-    success = learned & (out_s + n_cycles * out_p <= horizon)
-    cycle = np.full((b, max_period), -1, np.int64)
+    success = learned & (out_s + criterion.n_cycles * out_p <= criterion.horizon)
+    cycle = np.full((out_p.shape[0], max_period), -1, np.int64)
     for p in np.unique(out_p[learned]):
         sel = np.flatnonzero(out_p == p)
-        idx = out_s[sel, None] + np.arange(p)[None]
-        cycle[sel, :p] = a[sel[:, None], idx]
+        cycle[sel, :p] = per_step_label[sel[:, None], out_s[sel, None] + np.arange(p)[None]]
     per_step = np.where(learned, out_disp, np.nan)
     return GaitReport(learned, steps_to_learn, success, out_p, cycle, per_step, per_step / best,
                       np.where(learned, out_s, -1))

@@ -1,26 +1,13 @@
 """The ROC lattice of ``--roc-levels K``: DOF values on ``K + 1`` points, exact moves between them.
 
-With ``K`` levels an action is a DOF and an integer ROC ``k`` in ``-K..K``; the step moves that
-DOF by ``k/K`` of its range, stopping at a limit. Started on a corner (as every study starts),
-each DOF then stays on the points ``lo + j (hi - lo) / K``, ``j = 0..K``: the state is a point of
-a ``(K + 1)**n_dof`` grid, and ``K = 1`` is the paper's corners.
-
-Action codes. ``code = (dof - 1) (2K + 1) + (k + K)`` (``dof`` 1-based as in the prompt): ``K = 1``
-gives the environment's codes, ``(dof - 1) 3 + roc + 1``. Lattice points are indexed
-``sum_d j_d (K + 1)**d`` (``K = 1``: the corner index).
-
-Exact motion. The rigid motion of a one-DOF move depends only on the path in shape space (zero
-Reynolds number: not on the rate), and motions along a path compose: the move from ``j`` to
-``j'`` of DOF ``d`` is ``G(j)^-1 G(j')`` with ``G(j)`` the motion from ``j = 0`` to ``j`` (the
-other DOFs fixed). :func:`move_table` builds ``G`` from the unit segments ``j -> j + 1``, each
-integrated once in float64 by :func:`jswim.integrate.integrate_stroke` (the same integrator and
-degree as the corner table), and tabulates every ``(point, DOF, k)``. Motions are those of the
-geometric centroid's frame (centroid position, orientation of the reference link) in the body
-frame at the start of the step, as in :func:`jswim.env.step_table`.
-
-This module is NumPy on top of the integrator: the judge (:func:`jswim.judging.gait.judge`), the gait
-search (:func:`best_lattice_cycles`, ``jswim gaits --roc-levels K``) and the lattice baselines
-read it.
+An action is a DOF and an integer ROC ``k`` in ``-K..K``, code ``(dof - 1) (2K + 1) + (k + K)``
+(``K = 1``: the environment's codes); started on a corner each DOF stays on the points
+``lo + j (hi - lo) / K``, and lattice points are indexed ``sum_d j_d (K + 1)**d`` (``K = 1``: the
+corner index). Exact motion: at zero Reynolds number a one-DOF move depends only on its path, so
+the move from ``j`` to ``j'`` is ``G(j)^-1 G(j')``, ``G`` composed from unit segments each
+integrated once in float64 (:func:`move_table`), in the centroid frame of
+:func:`jswim.env.step_table`. The judge, the gait search and the lattice baselines read it
+(docs/continuous.md, "Finer ROCs for the agents").
 """
 
 from __future__ import annotations
@@ -54,11 +41,6 @@ def decode(code: int, roc_levels: int) -> tuple[int, int]:
     return decode_action(int(code), roc_levels)
 
 
-def roc_fraction(code: np.ndarray, roc_levels: int) -> np.ndarray:
-    """``k / K`` of action codes: the real ROC the environment steps with (float64)."""
-    return (np.asarray(code) % (2 * roc_levels + 1) - roc_levels) / roc_levels
-
-
 def values(model: SwimmerModel, roc_levels: int) -> np.ndarray:
     """The ``K + 1`` values a DOF takes on the lattice, ``lo + j (hi - lo) / K`` (float64)."""
     k = check_roc_levels(roc_levels)
@@ -75,12 +57,6 @@ def point_coords(index: np.ndarray, n_dof: int, roc_levels: int) -> np.ndarray:
     """Per-DOF positions ``j`` (last axis) of lattice indices."""
     index = np.asarray(index, np.int64)
     return (index[..., None] // (roc_levels + 1) ** np.arange(n_dof)) % (roc_levels + 1)
-
-
-def nearest_points(dofs: np.ndarray, model: SwimmerModel, roc_levels: int) -> np.ndarray:
-    """Per-DOF lattice positions ``j`` nearest to DOF values (a shape on the lattice maps exactly)."""
-    j = np.rint((np.asarray(dofs, np.float64) - model.lo) / (model.hi - model.lo) * roc_levels)
-    return np.clip(j, 0, roc_levels).astype(np.int64)
 
 
 class MoveTable(NamedTuple):
@@ -115,13 +91,11 @@ def move(tab: MoveTable, point: np.ndarray, dof: np.ndarray, k: np.ndarray) -> t
         The move changed the shape (``k != 0`` and the DOF not already at that limit).
     """
     big_k = tab.roc_levels
-    n = tab.prefix.shape[1]
     point, dof, k = (np.asarray(v, np.int64) for v in (point, dof, k))
     stride = (big_k + 1) ** dof
     j = (point // stride) % (big_k + 1)
     new_j = np.clip(j + k, 0, big_k)
     target = point + (new_j - j) * stride
-    del n
     return target, between(tab, point, dof, target), new_j != j
 
 

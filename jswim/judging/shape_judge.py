@@ -33,13 +33,10 @@ from typing import Any
 import numpy as np
 
 from jswim.errors import ConfigError
-from jswim.judging.gait import PAPER, Criterion, GaitReport, best_per_step, trailing_strokes
+from jswim.judging.gait import _REL_TOL, PAPER, Criterion, GaitReport, best_per_step, stroke_report, trailing_strokes
 
 #: Shape tolerance of a cycle, as a fraction of each DOF's range (a return within 0.1 % counts).
 SHAPE_TOL = 1e-3
-
-_REL_TOL = 1e-9
-
 
 def default_max_period(n_dof: int) -> int:
     """Longest stroke considered for real-valued runs: ``2 * 2**n_dof`` steps."""
@@ -116,14 +113,5 @@ def judge_shapes(
     out_s, out_p, out_disp = trailing_strokes(differs, lambda sc, p: np.ones(b, bool), moved, pos, direction,
                                               threshold, min(max_period, steps // c.n_cycles), c.n_cycles)
 
-    learned = out_p > 0
-    steps_to_learn = np.where(learned, out_s + 1, -1)
-    success = learned & (out_s + c.n_cycles * out_p <= c.horizon)
     moved_dof = np.argmax(np.abs(shapes[1:] - shapes[:-1]), axis=-1).T + 1  # (B, T), 1-based
-    cycle = np.full((b, max_period), -1, np.int64)
-    for p in np.unique(out_p[learned]):
-        sel = np.flatnonzero(out_p == p)
-        cycle[sel, :p] = moved_dof[sel[:, None], out_s[sel, None] + np.arange(p)[None]]
-    per_step = np.where(learned, out_disp, np.nan)
-    return GaitReport(learned, steps_to_learn, success, out_p, cycle, per_step, per_step / best,
-                      np.where(learned, out_s, -1))
+    return stroke_report(out_s, out_p, out_disp, best, c, moved_dof, max_period)

@@ -32,7 +32,7 @@ def mean_interval(
 
     Returns ``(mean, lo, hi)``; with fewer than two finite values the interval is the mean itself.
     """
-    x = np.asarray([v for v in values if v is not None and math.isfinite(v)], float)
+    x = _finite(values)
     if x.size == 0:
         return (math.nan, math.nan, math.nan)
     m = float(x.mean())
@@ -46,7 +46,7 @@ def mean_interval(
 
 def quartiles(values: Sequence[float]) -> tuple[float, float, float]:
     """25th, 50th and 75th percentiles of the finite values (nan if none)."""
-    x = np.asarray([v for v in values if v is not None and math.isfinite(v)], float)
+    x = _finite(values)
     if x.size == 0:
         return (math.nan, math.nan, math.nan)
     q = np.quantile(x, [0.25, 0.5, 0.75])
@@ -83,6 +83,10 @@ def learn_stats(steps_to_learn: Sequence[float | None]) -> LearnStats:
     done = [float(v) for v in steps_to_learn if v is not None and math.isfinite(v) and v >= 0]
     q = quartiles(done)
     return LearnStats(len(steps_to_learn), len(done), *q)
+
+
+def _finite(values: Sequence[float | None]) -> np.ndarray:
+    return np.asarray([v for v in values if v is not None and math.isfinite(v)], float)
 
 
 def _num(v: float) -> str:

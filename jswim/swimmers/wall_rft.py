@@ -1,53 +1,23 @@
 """Resistive force theory of Purcell's swimmer above a plane wall, its plane parallel to the wall.
 
 Every link (length ``l = 1``, the unit of length; radius ``b``) lies in the plane z = h above a
-no-slip wall at z = 0. Its drag per unit length is ``xi_T`` along it and ``xi_N`` across it, in
-the plane. Only these two matter: by the mirror symmetries of a straight link parallel to the
-wall (x -> -x through its middle, y -> -y through its axis), motion in the plane gives no force
-normal to the wall, so the swimmer stays at height h and moves in its plane as in the bulk.
-
-**Only the ratio changes the stroke.** The swimmer is force- and torque-free and its shape is
-prescribed, so its velocities solve a linear system homogeneous in ``(xi_T, xi_N)``: scaling both
-by one factor changes nothing (the tests check it, to rounding). A wall that raised both alike
-would not change the stroke's displacement at all; it changes only through
-``xi_N / xi_T``, which grows above 2 near the wall here, so the stroke goes further there.
-
-Coefficients (leading order in ``1 / ln(l / b)``, the order of the bulk model's ratio 2)::
+no-slip wall at z = 0, with drag per unit length ``xi_T`` along it and ``xi_N`` across it; by the
+link's mirror symmetries, motion in the plane gives no force normal to the wall, so the swimmer
+stays at height h. To leading order in ``1 / ln(l / b)``, with ``c = 2 h``, ``S = sqrt(l^2 + c^2)``::
 
     xi_T = 2 pi mu / (L - k_T(h)),   xi_N = 4 pi mu / (L - k_N(h)),   L = ln(l / b),
-
-returned in units of the bulk ``xi_T = 2 pi mu / L``: ``(L / (L - k_T), 2 L / (L - k_N))``, which
-is ``(1, 2)``, jswim's bulk Purcell coefficients (:mod:`jswim.swimmers.nlink`, ``xi_ratio = 2``),
-as h -> infinity. ``k_T``, ``k_N`` are the wall's image (Blake 1971) of a uniform force density on
-the link, averaged over the link: slender-body theory's local approximation, as in Gray & Hancock's
-and Lighthill's coefficients. With ``c = 2 h`` and ``S = sqrt(l^2 + c^2)`` the averages are in
-closed form (written out here from Blake's tensor at equal heights)::
-
     k_T = asinh(l / c) - 2 l / (S + c) + l (2 S + c) / (4 S (S + c))
     k_N = asinh(l / c) - l / (2 (S + c))
 
-Limits (the tests check both against the literature's forms):
-
-* far from the wall (h >> l): ``k_T = 3 l / (16 h)``, ``k_N = 3 l / (8 h)``. The link's own
-  image slows it as a point force's image slows a sphere (the 9/16 of Lorentz and Faxen); this is
-  de Mestre & Russel's far-wall correction (J. Eng. Math. 9, 81, 1975), as Brennen & Winet give it
-  (Annu. Rev. Fluid Mech. 9, 339, 1977). The ratio then exceeds 2 by ``3 / (8 L) (l / h)``.
-* near the wall (b << h << l): ``L - k_T -> ln(h / b) + 3/2`` and ``L - k_N -> ln(h / b) + 1/2``:
-  both coefficients are set by the distance to the wall rather than the link's length, the
-  ``ln(2 h / b)`` of Katz, Blake & Paveri-Fontana (J. Fluid Mech. 72, 529, 1975). Their
-  ``xi_N / xi_T = 2`` there holds once the bulk's own O(1) constants are kept (the local terms of
-  slender-body theory, Gray & Hancock's ``L - 1/2`` along and ``L + 1/2`` across: ``k_N - k_T -> 1``
-  cancels their difference; tested);
-  jswim's bulk ratio 2 drops those constants, so here the near-wall ratio is
-  ``2 (ln(h/b) + 3/2) / (ln(h/b) + 1/2)``, above 2.
-
-Range of validity: b << h (lubrication between link and wall is not modelled; heights below
-:data:`MIN_GAP` radii are refused) and ``L`` large. Like the bulk model, the theory is local: it
-leaves out the other links' flows, so it also leaves out their images. For h >> l the images of a
-force-free swimmer's links cancel at first order, so there the ``l / h`` correction is a property
-of the local model (a full Stokes solve of a force-free body decays faster, as the NG swimmer's
-``h^-3`` in :mod:`jswim.scenes` does); at h <~ l the wall screens the links from one another
-(the image cancels each link's far field beyond ~2 h), which is where local drag does best.
+``k_T``, ``k_N``: the wall's image (Blake 1971) of a uniform force density, averaged over the link
+(written out here from Blake's tensor at equal heights). Returned in units of the bulk
+``xi_T = 2 pi mu / L``: ``(1, 2)`` as h -> infinity (:mod:`jswim.swimmers.nlink`, ``xi_ratio = 2``).
+Far away ``k_T = 3 l / (16 h)``, ``k_N = 3 l / (8 h)`` (de Mestre & Russel, J. Eng. Math. 9, 81,
+1975, as Brennen & Winet give it, Annu. Rev. Fluid Mech. 9, 339, 1977); near the wall (b << h << l)
+``L - k_T -> ln(h / b) + 3/2``, ``L - k_N -> ln(h / b) + 1/2`` (Katz, Blake & Paveri-Fontana, J.
+Fluid Mech. 72, 529, 1975), so with jswim's bulk ratio 2 the near-wall ratio is
+``2 (ln(h/b) + 3/2) / (ln(h/b) + 1/2)``. Only ``xi_N / xi_T`` changes the stroke. Why, the limits'
+derivation and the range of validity: docs/scenes.md, "Purcell's swimmer near a wall".
 """
 
 from __future__ import annotations
