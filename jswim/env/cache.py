@@ -38,7 +38,7 @@ def code_version() -> str:
     """Hash of ``jswim.__version__`` and the source of the modules in :data:`_SOURCES`."""
     import importlib.util
 
-    import jswim
+    import jswim  # lazy: the package's __init__ imports this module, so only a call can read its version
 
     h = hashlib.blake2b(jswim.__version__.encode(), digest_size=10)
     for name in _SOURCES:

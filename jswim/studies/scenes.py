@@ -49,6 +49,7 @@ import numpy as np
 
 from jswim import env
 from jswim.actions import decode_action, encode_action, n_actions
+from jswim.console import Column
 from jswim.agents import qlearning, random_policy, worlds
 from jswim.agents.qlearning import QConfig
 from jswim.env.base import Environment, Observation
@@ -406,8 +407,6 @@ def _scene_key(t: dict[str, Any]) -> tuple:
 
 def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]]:
     """Columns and cells of :func:`scene_summary` for ``jswim study``'s output and ``jswim show``."""
-    from jswim.console import Column
-
     def fmt(v: Any, spec: str) -> str:
         return "-" if v is None else format(v, spec)
 

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 
-import pytest
 
 from jswim.agents import protocol
 from jswim.agents.memory import MoveStats

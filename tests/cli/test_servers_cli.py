@@ -12,7 +12,7 @@ from collections import Counter
 
 import pytest
 
-from jswim import cli, env
+from jswim import cli
 from jswim.results import read_metadata, read_runs
 from tests.fakeserver import MODES, THOUGHT, FakeServer, Fault
 

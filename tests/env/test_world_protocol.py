@@ -14,10 +14,10 @@ import jswim
 from jswim import env as jenv
 from jswim.env.base import Environment, StepInfo
 from jswim.env.episodes import rollout, rollout_batch
-from jswim.env.scene_world import SceneTask, SceneWorld
+from jswim.env.scene_world import SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
-from jswim.scenes import Scene, decode_scene_action, scene_params, scene_reset, scene_rollout, scene_step
+from jswim.scenes import Scene, decode_scene_action, scene_reset, scene_rollout, scene_step
 
 #: The square gait (DOF 2 down, DOF 1 down, DOF 2 up, DOF 1 up) as (dof, roc) and as codes.
 SQUARE = [(2, -1), (1, -1), (2, 1), (1, 1)]
