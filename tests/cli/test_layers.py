@@ -43,13 +43,7 @@ CYCLES_ALLOWED: list[set[str]] = []
 
 #: Function-level imports of jswim modules without a ``# lazy:`` reason, as of issue 30 (the debt:
 #: each either moves to the top of its module or gets its reason; the list only shrinks).
-UNMARKED_ALLOWED = set("""
-      
-    
-    
-    jswim.studies.scenes->jswim.console
-    
-""".split())
+UNMARKED_ALLOWED: set[str] = set()  # the debt is paid: every function-level import says why
 
 
 def _modules() -> dict[str, Path]:
