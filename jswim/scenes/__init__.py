@@ -10,7 +10,11 @@ where; the environment is functional, in the gymnax style::
     state = scene_reset(params)
     state, info = scene_step(params, state, (0, 0, -1.0), key)   # swimmer 0, arm d1, ROC -1
 
-Its modules, one concept each: docs/design.md (module map, environment row).
+One concept per module: :mod:`~jswim.scenes.scene` (``Scene``), :mod:`~jswim.scenes.params`
+(``SceneParams``, ``scene_params``), :mod:`~jswim.scenes.state` (``SceneState``,
+``SceneStepInfo``, ``scene_reset``), :mod:`~jswim.scenes.actions` (codes),
+:mod:`~jswim.scenes.collocation` (the step's time integration), :mod:`~jswim.scenes.stepping`
+(``scene_step``), :mod:`~jswim.scenes.rollout` (``scene_rollout``).
 """
 
 from jswim.scenes.actions import decode_scene_action, encode_scene_action, split_action

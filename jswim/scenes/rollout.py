@@ -39,6 +39,7 @@ def parse_scene_moves(moves: Any, n_swimmers: int) -> np.ndarray:
     Accepted: ``(dof, roc)`` pairs (one swimmer; dof 1-based as in the prompt) or
     ``(swimmer, dof, roc)`` triples (both 1-based).
     """
+    arr = np.asarray(moves, dtype=object if not len(np.shape(moves)) else None)
     try:
         arr = np.asarray(moves, np.float64)
     except (TypeError, ValueError):

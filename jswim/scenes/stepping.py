@@ -1,15 +1,29 @@
 """``scene_step``: one action moves one arm of one swimmer; every body in the scene responds.
 
-A step moves arm ``dof`` of swimmer ``swimmer`` by ``roc x (d_max - d_min)`` at unit rate, clipped
-to ``[d_min, d_max]`` (``stuck`` when it cannot move at all), the other arms held fixed. In
-``"bulk"`` the moving swimmer advances by the paper's closed form (:mod:`jswim.swimmers.ng`); in
-``"free"`` / ``"wall"`` every sphere and obstacle is coupled (:mod:`jswim.swimmers.mobility`,
-:mod:`jswim.swimmers.forcefree`, :mod:`jswim.swimmers.bodyframe`) and the poses ``(x, z, tilt)``
-are integrated by Gauss-Legendre collocation (:mod:`jswim.scenes.collocation`). A step that brings
-a surface within ``params.contact_gap`` of another is refused (only ``t`` advances, ``contact``
-set); swimmer ``s``'s displacement is multiplied by ``1 + zeta Y_s``, one ``Y_s ~ U[-1, 1]`` per
-swimmer from the step's key (``uniform(key, ())`` for one swimmer, as :func:`jswim.env.step`
-draws it). The model, contact and noise in full: docs/scenes.md, "The hydrodynamics".
+A step moves arm ``dof`` of swimmer ``swimmer`` by ``roc x (d_max - d_min)`` at unit rate
+(duration ``|roc| (d_max - d_min)``; at zero Reynolds number only the path matters), clipped to
+``[d_min, d_max]`` (a non-zero ROC that cannot move the arm at all is ``stuck``). The other arms
+are held fixed. Then, by medium:
+
+* ``"bulk"``: the paper's formula (:mod:`jswim.swimmers.ng`): the moving swimmer advances along its
+  axis by the closed-form displacement of the move; the others do not move; no contact.
+* ``"free"`` / ``"wall"``: all spheres of all swimmers and the obstacles are coupled through the
+  point-force mobility (:mod:`jswim.swimmers.mobility`), every swimmer force- and torque-free
+  (:mod:`jswim.swimmers.forcefree`; in the unbounded fluid without obstacles each swimmer is
+  solved through its response, :mod:`jswim.swimmers.bodyframe`, a function of its arms alone);
+  the poses ``(x, z, tilt)`` of all swimmers are integrated over the step by Gauss-Legendre
+  collocation (:mod:`jswim.scenes.collocation`).
+
+Contact: if along the step (at any collocation node or at its end) a swimmer sphere's surface
+comes within ``params.contact_gap`` (0.1 a) of the wall, of an obstacle's surface or of a sphere of
+another swimmer, the step is refused: the state is left as it was (shape and pose; only ``t``
+advances) and ``contact`` is set. The point-force model has no lubrication or contact forces, so
+motion that close is not modelled.
+
+Noise, as in the paper and :mod:`jswim.env`: swimmer ``s``'s displacement ``(dx, dz)`` over the
+step is multiplied by ``1 + zeta Y_s``, ``Y_s ~ U[-1, 1]`` drawn from the step's key (one per
+swimmer: ``jax.random.uniform(key, (S,))``, for one swimmer ``uniform(key, ())`` as
+:func:`jswim.env.step` draws it); the tilt change is not perturbed.
 """
 
 from __future__ import annotations
@@ -84,22 +98,19 @@ def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: 
         pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
         inc, gap = pose_change(params, pose0, arms, rates, jnp.abs(delta), centre_low(state))
         step_x, step_z, step_t = inc.T
-    return _finish(params, state, new_arms, (step_x, step_z, step_t), gap, y_noise, stuck, moved)
-
-
-def _finish(params: SceneParams, state: SceneState, new_arms: Array, step: tuple[Array, Array, Array], gap: Array,
-            y_noise: Array, stuck: Array, moved: Array) -> tuple[SceneState, SceneStepInfo]:
-    """The new state and info from a step's pose change ``step`` (``dx, dz, dtilt``, each ``(S,)``):
-    the displacement times the noise factor, or nothing when the move came too close (contact)."""
-    dtype = state.arms.dtype
-    step_x, step_z, step_t = step
     contact = ~(gap >= params.contact_gap)  # NaN (a solve that broke down at contact) counts as contact
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
     dx = jnp.where(contact, 0.0, step_x * factor)
     dz = jnp.where(contact, 0.0, step_z * factor)
     dtilt = jnp.where(contact, 0.0, step_t)
     centre, centre_lo = add_displacement(state, jnp.stack([dx, dz], -1))
-    new = SceneState(jnp.where(contact, state.arms, new_arms), centre, state.tilt + dtilt, state.t + 1, centre_lo)
+    new = SceneState(
+        arms=jnp.where(contact, arms, new_arms),
+        centre=centre,
+        tilt=state.tilt + dtilt,
+        t=state.t + 1,
+        centre_lo=centre_lo,
+    )
     return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
 
 
@@ -126,9 +137,18 @@ def scene_step_joint(params: SceneParams, state: SceneState, dofs: Any, rocs: An
     pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
     inc, gap = pose_change(params, pose0, arms, rates, duration, centre_low(state))
     y = jax.random.uniform(key, (s,), dtype, -1.0, 1.0)
+    contact = ~(gap >= params.contact_gap)
+    factor = 1.0 + jnp.asarray(params.zeta, dtype) * y
+    step_x, step_z, step_t = inc.T
+    dx = jnp.where(contact, 0.0, step_x * factor)
+    dz = jnp.where(contact, 0.0, step_z * factor)
+    dtilt = jnp.where(contact, 0.0, step_t)
+    centre, centre_lo = add_displacement(state, jnp.stack([dx, dz], -1))
+    new = SceneState(jnp.where(contact, arms, jnp.where(onehot, target[:, None], arms)),
+                     centre, state.tilt + dtilt, state.t + 1, centre_lo)
     stuck = jnp.any(rocs != 0) & jnp.all((rocs == 0) | (delta == 0))
-    return _finish(params, state, jnp.where(onehot, target[:, None], arms), tuple(inc.T), gap, y, stuck,
-                   jnp.any(delta != 0))
+    moved = jnp.any(delta != 0)
+    return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
 
 
 def _bulk_displacement(arms: Array, sw: Array, dof: Array, delta: Array) -> Array:
