@@ -1,12 +1,22 @@
 """Stepping: one action moves one DOF at a rate of change ROC in [-1, 1] for one step.
 
-A step moves the DOF by ``ROC x (hi - lo)``, stopping at a limit (``stuck`` when it cannot move at
-all; ROC 0 holds still). Motion depends only on the path in shape space, and body-frame motion not
-on the orientation, so the paper's discrete world (K = 1, corner to corner) reads each step from
-the corner table (:func:`jswim.env.step_table`) rotated by the orientation, and any other step is
-integrated along its (possibly bent) path (:func:`jswim.integrate.integrate_stroke`, float64).
-Noise follows the paper: the centroid displacement becomes ``(dX, dY) (1 + zeta Y)``,
-``Y ~ U[-1, 1]`` from the step's key, the rotation unperturbed. docs/continuous.md says the rest.
+A step moves the DOF by ``ROC x (hi - lo)``, stopping at a limit: a push past a limit moves only
+up to it, and a move that cannot change the shape at all (ROC +1 at ``hi``, -1 at ``lo``) is
+flagged ``stuck``; ROC 0 holds still. At zero Reynolds number the motion depends on the path in
+shape space only, not on the rate, and the body-frame motion does not depend on the
+orientation. So:
+
+* the paper's discrete world (integer codes with K = 1: every step from corner to corner) reads
+  each step from the corner table (:func:`jswim.env.step_table`) and rotates it by the current
+  orientation;
+* any other step (integer codes on the K lattice, float ROC vectors) integrates its path with
+  the spectral integrator (:func:`jswim.integrate.integrate_stroke`, float64); a diagonal stroke
+  whose DOFs reach their limits at different times is integrated piece by piece along its bent
+  path.
+
+Noise follows the paper: the step's centroid displacement becomes ``(dX, dY) (1 + zeta Y)`` with
+``Y ~ U[-1, 1]`` drawn from the step's key (the rotation is not perturbed; the paper perturbs the
+displacement only).
 """
 
 from __future__ import annotations
@@ -255,7 +265,13 @@ def _apply(state: EnvState, entry: Array, y_noise: Array, params: EnvParams, stu
         factor = 1.0 + jnp.asarray(params.zeta, f64) * jnp.asarray(y_noise, f64)
         x, y, theta = wide(state.x, state.x_lo), wide(state.y, state.y_lo), wide(state.theta, state.theta_lo)
         c, s = wide(state.cos, state.cos_lo), wide(state.sin, state.sin_lo)
-        dx, dy, c, s = _displace(model.planar, c, s, entry, factor)
+        if model.planar:
+            dx = (c * entry[0] - s * entry[1]) * factor
+            dy = (s * entry[0] + c * entry[1]) * factor
+            # Compose rotations as unit complex numbers: no sin/cos per step.
+            c, s = c * entry[3] - s * entry[4], s * entry[3] + c * entry[4]
+        else:
+            dx, dy = entry[0] * factor, jnp.zeros((), f64)
         x, y, theta = x + dx, y + dy, theta + entry[2]
 
         (xh, xl), (yh, yl), (th, tl), (ch, cl), (sh, sl) = (narrow(v, dtype) for v in (x, y, theta, c, s))
@@ -265,22 +281,19 @@ def _apply(state: EnvState, entry: Array, y_noise: Array, params: EnvParams, stu
     return new, StepInfo(dxh, dyh, progress, stuck, moved, new.x)
 
 
-def _displace(planar: bool, c: Array, s: Array, entry: Array, factor: Array) -> tuple[Array, Array, Array, Array]:
-    """``(dx, dy)`` of a step row at orientation ``(c, s)`` times the noise ``factor``, and the
-    new ``(c, s)``; composed as unit complex numbers: no sin/cos per step."""
-    if planar:
-        return ((c * entry[0] - s * entry[1]) * factor, (s * entry[0] + c * entry[1]) * factor,
-                c * entry[3] - s * entry[4], s * entry[3] + c * entry[4])
-    return entry[0] * factor, jnp.zeros((), entry.dtype), c, s
-
-
 def _advance_plain(state: EnvState, frac: Array, row: Array, y_noise: Array, params: EnvParams,
                    stuck: Array, moved: Array) -> tuple[EnvState, StepInfo]:
     """:func:`advance` with ``exact=False``: the same step in working-dtype arithmetic."""
     dtype = state.x.dtype
     entry = jnp.asarray(_step_rows(params.model), dtype)[row]
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
-    dx, dy, c, s = _displace(params.model.planar, state.cos, state.sin, entry, factor)
+    c, s = state.cos, state.sin
+    if params.model.planar:
+        dx = (c * entry[0] - s * entry[1]) * factor
+        dy = (s * entry[0] + c * entry[1]) * factor
+        c, s = c * entry[3] - s * entry[4], s * entry[3] + c * entry[4]
+    else:
+        dx, dy = entry[0] * factor, jnp.zeros((), dtype)
     zero = jnp.zeros((), dtype)
     new = state._replace(frac=frac, x=state.x + dx, y=state.y + dy, theta=state.theta + entry[2], cos=c, sin=s,
                          t=state.t + 1, cos_lo=zero, sin_lo=zero)

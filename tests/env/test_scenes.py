@@ -256,7 +256,9 @@ def test_float32_pair_separation_does_not_drift(float32):
     with jax.enable_x64(True):
         s64 = separation(jnp.float64)
     assert abs(s64 - 30.0) < 1e-9  # the true drift is zero
-    assert abs(s32 - s64) < 1e-5
+    # a float32 ulp at 30 a is 1.9e-6: within ~10 ulp after 400 steps (1.24e-5 measured on an AMD
+    # EPYC, under 1e-5 on another CPU: XLA's code differs between processors)
+    assert abs(s32 - s64) < 2e-5
 
 
 @pytest.mark.slow  # compiles the wall scene in float32 and float64 (77 s under load 8)
