@@ -278,9 +278,9 @@ def _ppo_judged(run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: 
     world unjudged (:func:`_unjudged`)."""
     from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
-    p0 = plans[0]
-    if p0.swimmer not in SWIMMERS:
-        return [_unjudged(p) for p in plans]
+    p0, unjudged = plans[0], [_unjudged(p) for p in plans]
+    if unjudged[0] is not None:
+        return unjudged
     crit = Criterion(horizon=horizon)
     if isinstance(task, SceneTask):
         rep = ppo.evaluate(run, task, criterion=crit)
@@ -307,8 +307,9 @@ def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
     scene, world, params = _world(plan)
     _, z0, tilt0, _ = _start(world, params, scene)
     tracks = {k: getattr(result, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
-    if scene.medium == "wall" and not tracks["heights"]:
-        # a world that reports no height (Purcell's plane above a wall): the start's throughout, as _lift
+    if not tracks["heights"]:
+        # a world that reports no height (Purcell's plane above a wall, a registered world): the
+        # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)
         tracks.update(heights=[z0.tolist()] * len(result.x), tilts=[tilt0.tolist()] * len(result.x))
     return with_llm(scene_row(plan, list(result.actions), list(result.x), tracks, horizon, z0=z0, tilt0=tilt0),
                     result)
