@@ -47,7 +47,8 @@ def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycl
 
 
 @pytest.mark.parametrize("swimmer", ["nlink", "nsphere"])
-@pytest.mark.parametrize("dof", [1, 2, 3])
+# both swimmers at DOF 2 in the fast tier; DOF 1 and 3 (a compile each, ~3 s) in the slow tier
+@pytest.mark.parametrize("dof", [pytest.param(1, marks=pytest.mark.slow), 2, pytest.param(3, marks=pytest.mark.slow)])
 def test_reciprocal_stroke_goes_nowhere(swimmer, dof):
     init = (0, 1, 1)  # asymmetric, so that each half-stroke moves the body
     first = 1 if init[dof - 1] == 0 else -1

@@ -82,6 +82,7 @@ def test_reversed_cycle_gives_opposite_displacement(swimmer, gait, start):
     assert abs(fwd[0]) > 0.1
 
 
+@pytest.mark.slow  # a cycle compiled for a third drag model (~3 s); the scallop test keeps the symmetry fast
 def test_isotropic_drag_gives_no_net_displacement():
     model = make_model("purcell", xi_ratio=1.0)
     assert model.kind == "nlink"  # the closed form is for xi_perp/xi_par = 2 only
@@ -105,6 +106,7 @@ def test_rotating_start_orientation_rotates_step_displacement():
         assert abs(rot - rot0) < 1e-13
 
 
+@pytest.mark.slow  # compiles the RK4 integrator (~3.5 s); the non-corner convergence test stays fast
 def test_chebyshev_integrator_agrees_with_rk4():
     model = make_model("purcell")
     cheb, _ = run_cycle(model, PURCELL_PLUS_X, (model.hi, model.hi))
