@@ -246,10 +246,12 @@ def test_shared_failure_reaches_every_waiter():
 
 
 def test_concurrency_limit_and_overlap():
-    # The server holds every answer until `limit` requests are in flight together (or 20 s pass):
-    # with 8 slots all 8 calls overlap; with 2, never more than 2 are in flight.
+    # The server holds every answer until `limit` requests have been in flight together (or 20 s
+    # pass): with 8 slots all 8 calls overlap; with 2, never more than 2 are in flight. The hold
+    # latches on the peak, not on the count now: the first answer drops the count below `limit`
+    # again, and the held requests would then wait for the client's timeout and a retry.
     limit = {"n": 8}
-    srv = FakeServer(hold=lambda body: srv.in_flight < limit["n"], hold_s=20.0)
+    srv = FakeServer(hold=lambda body: srv.max_in_flight < limit["n"], hold_s=20.0)
     with srv:
 
         async def many(n):
@@ -259,10 +261,10 @@ def test_concurrency_limit_and_overlap():
                 return await asyncio.gather(*[c.chat(m) for m in msgs])
 
         assert len(run(many(8))) == 8
-        assert srv.max_in_flight == 8
+        assert srv.max_in_flight == 8 and srv.n_requests == 8
         srv.reset_counts()
         assert len(run(many(2))) == 8
-        assert srv.max_in_flight == 2 and srv.n_requests == 8
+        assert srv.max_in_flight == 2 and srv.n_requests == 8  # 8: no request timed out and was sent again
 
 
 def test_api_key_never_leaks(server, tmp_path, monkeypatch):
