@@ -26,6 +26,7 @@ import os
 import re
 import resource
 import shutil
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -92,18 +93,44 @@ def _fast_tier_codegen(config):
       2026-12-04 the tier went from 420 to 320 CPU-s (3:49 to 3:12 wall), every test passing.
 
     The slow tier (``-m`` naming slow or model) and ``-m ""`` keep XLA's defaults, the code users
-    run. XLA reads ``XLA_FLAGS`` when the backend starts (the first computation, after this hook,
-    in this process and in every xdist worker).
+    run. XLA reads ``XLA_FLAGS`` when the backend starts (the first computation, after this hook);
+    the controller sets them and every xdist worker inherits them. XLA aborts the process on a
+    flag it does not know, and the fusion-emitter flag is recent (pyproject allows older jaxlibs),
+    so that one is tried first in a throwaway interpreter (:func:`_xla_accepts`).
     """
     expr = config.option.markexpr or ""
-    if not expr or re.search(r"(?<!not )\b(slow|model)\b", expr):
+    if os.environ.get("PYTEST_XDIST_WORKER") or not expr or re.search(r"(?<!not )\b(slow|model)\b", expr):
         return
     flags = os.environ.get("XLA_FLAGS", "")
-    for name, value in (("xla_backend_optimization_level", "0"),
-                        ("xla_cpu_use_fusion_emitters", "false")):
-        if name not in flags:
-            flags = f"{flags} --{name}={value}".strip()
+    if "xla_backend_optimization_level" not in flags:
+        flags = f"{flags} --xla_backend_optimization_level=0".strip()
+    emitters = "--xla_cpu_use_fusion_emitters=false"
+    if "xla_cpu_use_fusion_emitters" not in flags and _xla_accepts(config, emitters):
+        flags = f"{flags} {emitters}".strip()
     os.environ["XLA_FLAGS"] = flags
+
+
+def _xla_accepts(config, flag: str) -> bool:
+    """Whether this jaxlib's XLA starts with ``flag`` (a child interpreter runs one computation).
+
+    About 1.5 s; the answer is kept in pytest's cache (``.pytest_cache``) per jaxlib version.
+    """
+    import jaxlib
+
+    key = f"jswim/xla-accepts/{jaxlib.__version__}/{flag.lstrip('-')}"
+    cache = getattr(config, "cache", None)  # absent under -p no:cacheprovider
+    known = cache.get(key, None) if cache is not None else None
+    if known is not None:
+        return bool(known)
+    env = {**os.environ, "XLA_FLAGS": flag, "JAX_PLATFORMS": "cpu"}
+    try:
+        ok = subprocess.run([sys.executable, "-c", "import jax.numpy as j; j.zeros(1).block_until_ready()"],
+                            env=env, capture_output=True, timeout=120).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        return False
+    if cache is not None:
+        cache.set(key, ok)
+    return ok
 
 
 def pytest_unconfigure(config):
