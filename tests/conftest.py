@@ -125,7 +125,7 @@ def _xla_accepts(config, flag: str) -> bool:
     env = {**os.environ, "XLA_FLAGS": flag, "JAX_PLATFORMS": "cpu"}
     try:
         ok = subprocess.run([sys.executable, "-c", "import jax.numpy as j; j.zeros(1).block_until_ready()"],
-                            env=env, capture_output=True, timeout=120).returncode == 0
+                            env=env, capture_output=True, timeout=120, check=False).returncode == 0
     except (OSError, subprocess.TimeoutExpired):
         return False
     if cache is not None:
