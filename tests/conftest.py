@@ -82,15 +82,15 @@ def pytest_configure(config):
 def _fast_tier_codegen(config):
     """The fast tier compiles cheaply: LLVM at -O0 and XLA's classic CPU fusion emitters.
 
-    Most of the fast tier's time is XLA's CPU backend compiling programs that then run a few
-    steps. Two flags go into ``XLA_FLAGS`` (each one only where the caller has not set it):
+    Much of the fast tier's time is XLA compiling programs that then run a few steps. Two flags
+    go into ``XLA_FLAGS`` (each one only where the caller has not set it):
 
     - ``--xla_backend_optimization_level=0``: LLVM at -O0. The HLO passes are unchanged, and
       LLVM does not reorder floating point without fast-math at any level. On 2026-12-03 the
       tier took 4:15 in place of 5:11.
     - ``--xla_cpu_use_fusion_emitters=false``: fusions go through XLA's older IR emitters in
       place of the MLIR fusion emitters, which spend longer compiling each small program. On
-      2026-12-04 the tier went from 420 to 320 CPU-s (3:49 to 3:12 wall), every test passing.
+      2026-12-04 the tier went from 420 to 301 CPU-s (3:49 to 3:02 wall), every test passing.
 
     The slow tier (``-m`` naming slow or model) and ``-m ""`` keep XLA's defaults, the code users
     run. XLA reads ``XLA_FLAGS`` when the backend starts (the first computation, after this hook);
@@ -113,7 +113,7 @@ def _fast_tier_codegen(config):
 def _xla_accepts(config, flag: str) -> bool:
     """Whether this jaxlib's XLA starts with ``flag`` (a child interpreter runs one computation).
 
-    About 1.5 s; the answer is kept in pytest's cache (``.pytest_cache``) per jaxlib version.
+    About 2 s; the answer is kept in pytest's cache (``.pytest_cache``) per jaxlib version.
     """
     import jaxlib
 

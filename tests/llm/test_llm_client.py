@@ -248,8 +248,8 @@ def test_shared_failure_reaches_every_waiter():
 def test_concurrency_limit_and_overlap():
     # The server holds every answer until `limit` requests have been in flight together (or 20 s
     # pass): with 8 slots all 8 calls overlap; with 2, never more than 2 are in flight. The hold
-    # latches on the peak, not on the count now: the first answer drops the count below `limit`
-    # again, and the held requests would then wait for the client's timeout and a retry.
+    # reads the peak, not the current count: the first answer drops the count below `limit` again,
+    # and the requests still held would then wait out the client's timeout and be sent again.
     limit = {"n": 8}
     srv = FakeServer(hold=lambda body: srv.max_in_flight < limit["n"], hold_s=20.0)
     with srv:
