@@ -56,7 +56,9 @@ def table_runner(params: env.EnvParams, batch: int, steps: int, per_swimmer_keys
         def body(s, inp):
             k, a = inp
             if per_swimmer_keys:
-                s, _ = jax.vmap(env.step, in_axes=(0, 0, 0, None))(jax.random.split(k, batch), s, a, params)
+                s, _ = jax.vmap(env.step, in_axes=(0, 0, 0, None))(
+                    jax.random.split(k, batch), s, a, params
+                )
             else:
                 s, _ = env.step_batch(k, s, a, params)
             return s, None
@@ -128,7 +130,9 @@ def continuous_runner(params: env.EnvParams, batch: int, steps: int, kind: str):
         states = jax.vmap(env.reset, in_axes=(0, None))(jax.random.split(key, batch), params)
         if kind == "rocs":
             dof = jax.random.randint(key, (steps, batch), 0, params.n_dof)
-            roc = jax.random.uniform(jax.random.fold_in(key, 1), (steps, batch), minval=-1.0, maxval=1.0)
+            roc = jax.random.uniform(
+                jax.random.fold_in(key, 1), (steps, batch), minval=-1.0, maxval=1.0
+            )
             actions = jax.nn.one_hot(dof, params.n_dof) * roc[..., None]
         else:
             actions = jax.random.randint(key, (steps, batch), 0, params.n_actions)
@@ -148,12 +152,18 @@ def continuous(args) -> None:
     from jswim.env import stepping
 
     b = args.batch
-    print(f"jswim bench_env --continuous | jax {jax.__version__} | {os.cpu_count()} cores | noisy Purcell, "
-          f"zeta={args.zeta}, float32, batch {b:,d}")
+    print(
+        f"jswim bench_env --continuous | jax {jax.__version__} | {os.cpu_count()} cores | noisy Purcell, "
+        f"zeta={args.zeta}, float32, batch {b:,d}"
+    )
     key = jax.random.PRNGKey(0)
     rows = []
-    cases = [("corner", "corner", 1, args.steps), ("lattice/K=5", "lattice", 5, args.steps),
-             ("cont/table", "rocs", 1, args.steps), ("cont/integrator", "rocs", 1, max(1, args.steps // 10))]
+    cases = [
+        ("corner", "corner", 1, args.steps),
+        ("lattice/K=5", "lattice", 5, args.steps),
+        ("cont/table", "rocs", 1, args.steps),
+        ("cont/integrator", "rocs", 1, max(1, args.steps // 10)),
+    ]
     for name, kind, big_k, steps in cases:
         stepping.STEP_METHOD = "integrator" if name == "cont/integrator" else "table"
         params = env.make_params("purcell", zeta=args.zeta, roc_levels=big_k)
@@ -162,27 +172,46 @@ def continuous(args) -> None:
         jax.block_until_ready(fn(key))
         compile_s = time.perf_counter() - t0
         sec = best_time(fn, key, repeat=args.repeat)
-        rows.append(dict(path=name, batch=b, steps=steps, seconds=sec, steps_per_s=b * steps / sec, first_call_s=compile_s))
+        rows.append(
+            dict(
+                path=name,
+                batch=b,
+                steps=steps,
+                seconds=sec,
+                steps_per_s=b * steps / sec,
+                first_call_s=compile_s,
+            )
+        )
     stepping.STEP_METHOD = "table"
     base = {r["path"]: r["steps_per_s"] for r in rows}
-    print(f"{'path':18s} {'steps/s':>14s} {'x integrator':>13s} {'x corner':>9s} {'first call s':>13s}")
+    print(
+        f"{'path':18s} {'steps/s':>14s} {'x integrator':>13s} {'x corner':>9s} {'first call s':>13s}"
+    )
     for r in rows:
-        print(f"{r['path']:18s} {r['steps_per_s']:14,.0f} {r['steps_per_s'] / base['cont/integrator']:13.1f} "
-              f"{r['steps_per_s'] / base['corner']:9.2f} {r['first_call_s']:13.1f}")
+        print(
+            f"{r['path']:18s} {r['steps_per_s']:14,.0f} {r['steps_per_s'] / base['cont/integrator']:13.1f} "
+            f"{r['steps_per_s'] / base['corner']:9.2f} {r['first_call_s']:13.1f}"
+        )
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(dict(rows=rows), fh, indent=2)
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("--quick", action="store_true", help="smaller batches and fewer steps")
     ap.add_argument("--steps", type=int, default=100, help="steps per swimmer in the table paths")
     ap.add_argument("--zeta", type=float, default=1.0, help="noise level (the noisy env)")
     ap.add_argument("--json", help="also write the results here")
-    ap.add_argument("--continuous", action="store_true", help="time continuous one-DOF steps (see above)")
+    ap.add_argument(
+        "--continuous", action="store_true", help="time continuous one-DOF steps (see above)"
+    )
     ap.add_argument("--batch", type=int, default=100_000, help="batch of --continuous")
-    ap.add_argument("--repeat", type=int, default=3, help="timed repeats of --continuous (best kept)")
+    ap.add_argument(
+        "--repeat", type=int, default=3, help="timed repeats of --continuous (best kept)"
+    )
     args = ap.parse_args()
     if args.continuous:
         continuous(args)
@@ -190,14 +219,18 @@ def main() -> None:
 
     batches = [1, 100, 10_000] if args.quick else [1, 10, 100, 1_000, 10_000, 100_000]
     params = env.make_params("purcell", zeta=args.zeta)
-    print(f"jswim bench_env | jax {jax.__version__} | {platform.processor() or platform.machine()} "
-          f"| {os.cpu_count()} cores | noisy Purcell, zeta={args.zeta}, d_max=pi/3")
+    print(
+        f"jswim bench_env | jax {jax.__version__} | {platform.processor() or platform.machine()} "
+        f"| {os.cpu_count()} cores | noisy Purcell, zeta={args.zeta}, d_max=pi/3"
+    )
 
     ref_steps = 4 if args.quick else 12
     ref = python_reference(ref_steps, math.pi / 3)
     ref_rate = 1.0 / ref
-    print(f"plain Python reference (RK4, 300 substeps, one swimmer): {ref_rate:,.1f} steps/s "
-          f"({ref_steps} steps timed)\n")
+    print(
+        f"plain Python reference (RK4, 300 substeps, one swimmer): {ref_rate:,.1f} steps/s "
+        f"({ref_steps} steps timed)\n"
+    )
 
     rows = []
     header = f"{'path':20s} {'dtype':8s} {'batch':>8s} {'steps':>6s} {'seconds':>9s} {'steps/s':>14s} {'x Python':>10s}"
@@ -206,33 +239,64 @@ def main() -> None:
 
     def report(path, dtype, batch, steps, seconds):
         rate = batch * steps / seconds
-        rows.append(dict(path=path, dtype=dtype, batch=batch, steps=steps, seconds=seconds,
-                         steps_per_s=rate, ratio_vs_python=rate / ref_rate))
-        print(f"{path:20s} {dtype:8s} {batch:8,d} {steps:6d} {seconds:9.4f} {rate:14,.0f} {rate / ref_rate:10,.0f}")
+        rows.append(
+            dict(
+                path=path,
+                dtype=dtype,
+                batch=batch,
+                steps=steps,
+                seconds=seconds,
+                steps_per_s=rate,
+                ratio_vs_python=rate / ref_rate,
+            )
+        )
+        print(
+            f"{path:20s} {dtype:8s} {batch:8,d} {steps:6d} {seconds:9.4f} {rate:14,.0f} {rate / ref_rate:10,.0f}"
+        )
 
     key = jax.random.PRNGKey(0)
     for per_key in (False, True):
         name = "table/vmap(step)" if per_key else "table/step_batch"
         for b in batches:
             steps = args.steps if b >= 1000 else args.steps * 10
-            report(name, "float32", b, steps, best_time(table_runner(params, b, steps, per_key), key))
+            report(
+                name, "float32", b, steps, best_time(table_runner(params, b, steps, per_key), key)
+            )
     with jax.enable_x64(True):
         params64 = env.make_params("purcell", zeta=args.zeta)
         for b in batches:
             if b > 10_000 and args.quick:
                 continue
             steps = 10 if b >= 10_000 else 50
-            report("integrator", "float64", b, steps, best_time(integrator_runner(params64, b, steps), key, repeat=2))
+            report(
+                "integrator",
+                "float64",
+                b,
+                steps,
+                best_time(integrator_runner(params64, b, steps), key, repeat=2),
+            )
     # The four-DOF swimmers (four links, four spheres) on the same paths, at the largest batch.
     b4 = batches[-1]
     for sw in ("nlink", "nsphere"):
         p4 = env.make_params(sw, zeta=args.zeta)
-        report(f"{sw}4 table/batch", "float32", b4, args.steps, best_time(table_runner(p4, b4, args.steps, False), key))
+        report(
+            f"{sw}4 table/batch",
+            "float32",
+            b4,
+            args.steps,
+            best_time(table_runner(p4, b4, args.steps, False), key),
+        )
     with jax.enable_x64(True):
         for sw in ("nlink", "nsphere"):
             p4 = env.make_params(sw, zeta=args.zeta)
             b = min(b4, 10_000)
-            report(f"{sw}4 integrator", "float64", b, 10, best_time(integrator_runner(p4, b, 10), key, repeat=2))
+            report(
+                f"{sw}4 integrator",
+                "float64",
+                b,
+                10,
+                best_time(integrator_runner(p4, b, 10), key, repeat=2),
+            )
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(dict(reference_steps_per_s=ref_rate, rows=rows), fh, indent=2)

@@ -34,10 +34,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))  # the fake server lives in tests/
 
-from jswim.agents.llm import LLMAgentConfig, LLMDriver, LLMRunSpec  # noqa: E402
-from jswim.llm import ClientSettings, LLMClient  # noqa: E402
-from jswim.prompt import build_messages  # noqa: E402
-from tests.fakeserver import FakeServer, hash_reply, lognormal_latency  # noqa: E402
+from jswim.agents.llm import LLMAgentConfig, LLMDriver, LLMRunSpec
+from jswim.llm import ClientSettings, LLMClient
+from jswim.prompt import build_messages
+from tests.fakeserver import FakeServer, hash_reply, lognormal_latency
 
 
 def specs(runs: int, steps: int, swimmer: str) -> list[LLMRunSpec]:
@@ -55,15 +55,25 @@ async def study(url: str, runs: int, steps: int, swimmer: str) -> tuple[float, f
         driver = LLMDriver(specs(runs, steps, swimmer), client, config)
         t0, c0 = time.perf_counter(), time.process_time()
         results = await driver.run()
-        return time.perf_counter() - t0, time.process_time() - c0, results, sum(g.n_steps for g in driver.groups)
+        return (
+            time.perf_counter() - t0,
+            time.process_time() - c0,
+            results,
+            sum(g.n_steps for g in driver.groups),
+        )
 
 
 def delays(results: list, latency, system: str | None) -> list[list[float]]:
     """Each run's server delays, recomputed from the prompts it sent (first attempts only)."""
     out = []
     for r in results:
-        out.append([latency({"messages": build_messages(rec["prompt"], system)})
-                    for rec in r.transcript if rec.get("type") == "step"])
+        out.append(
+            [
+                latency({"messages": build_messages(rec["prompt"], system)})
+                for rec in r.transcript
+                if rec.get("type") == "step"
+            ]
+        )
     return out
 
 
@@ -71,8 +81,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=64, help="R, independent runs")
     ap.add_argument("--steps", type=int, default=50, help="S, steps per run")
-    ap.add_argument("--lognormal", type=float, nargs=2, default=(0.5, 0.8), metavar=("MEDIAN", "SIGMA"),
-                    help="heavy-tailed latency (default 0.5 s median, sigma 0.8)")
+    ap.add_argument(
+        "--lognormal",
+        type=float,
+        nargs=2,
+        default=(0.5, 0.8),
+        metavar=("MEDIAN", "SIGMA"),
+        help="heavy-tailed latency (default 0.5 s median, sigma 0.8)",
+    )
     ap.add_argument("--latency", type=float, default=None, help="fixed latency in seconds instead")
     ap.add_argument("--seed", type=int, default=0, help="seed of the lognormal delays")
     ap.add_argument("--swimmer", default="purcell")
@@ -81,7 +97,7 @@ def main() -> None:
     R, S = args.runs, args.steps
     if args.latency is not None:
         fixed = args.latency
-        latency = lambda body: fixed  # noqa: E731
+        latency = lambda body: fixed
         server_args = ["--latency", str(fixed)]
         what = f"fixed {fixed:g} s"
     else:
@@ -94,8 +110,12 @@ def main() -> None:
         srv = FakeServer(reply=hash_reply, latency=latency).start()
         url, stop = srv.url, srv.stop
     else:
-        proc = subprocess.Popen([sys.executable, "-m", "tests.fakeserver", *server_args], stdout=subprocess.PIPE,
-                                text=True, cwd=ROOT)
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "tests.fakeserver", *server_args],
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=ROOT,
+        )
         url = proc.stdout.readline().strip()
         stop = proc.terminate
     try:
@@ -110,16 +130,28 @@ def main() -> None:
     bound = max(per_run)
     lockstep = sum(max(x[s] for x in d if s < len(x)) for s in range(max(len(x) for x in d)))
     mean_d = sum(per_run) / max(sum(len(x) for x in d), 1)
-    print(f"runs R={R}, steps S={S}, latency {what}, server {'in-process' if args.inprocess else 'subprocess'}")
-    print(f"calls {calls}, steps {steps}, failed steps {sum(r.failed_steps for r in results)}, "
-          f"statuses {sorted({r.status for r in results})}")
-    print(f"mean delay per call {mean_d:.3f} s; runs' summed delays {min(per_run):.1f}-{bound:.1f} s")
+    print(
+        f"runs R={R}, steps S={S}, latency {what}, server {'in-process' if args.inprocess else 'subprocess'}"
+    )
+    print(
+        f"calls {calls}, steps {steps}, failed steps {sum(r.failed_steps for r in results)}, "
+        f"statuses {sorted({r.status for r in results})}"
+    )
+    print(
+        f"mean delay per call {mean_d:.3f} s; runs' summed delays {min(per_run):.1f}-{bound:.1f} s"
+    )
     print(f"wall time                 {wall:8.2f} s   ({calls / wall:.0f} calls/s)")
-    print(f"bound (slowest run's sum) {bound:8.2f} s   wall/bound = {wall / bound:.3f}  (target <= 1.1)")
-    print(f"lockstep rounds, at least {lockstep:8.2f} s   = {lockstep / bound:.2f} x bound "
-          f"({lockstep / (S * mean_d):.1f} x the mean delay per step)")
-    print(f"env calls {env_calls} for {steps} steps ({steps / max(env_calls, 1):.1f} steps per call); "
-          f"this process: {cpu / calls * 1e6:.0f} us CPU per call, {cpu:.1f} s in all")
+    print(
+        f"bound (slowest run's sum) {bound:8.2f} s   wall/bound = {wall / bound:.3f}  (target <= 1.1)"
+    )
+    print(
+        f"lockstep rounds, at least {lockstep:8.2f} s   = {lockstep / bound:.2f} x bound "
+        f"({lockstep / (S * mean_d):.1f} x the mean delay per step)"
+    )
+    print(
+        f"env calls {env_calls} for {steps} steps ({steps / max(env_calls, 1):.1f} steps per call); "
+        f"this process: {cpu / calls * 1e6:.0f} us CPU per call, {cpu:.1f} s in all"
+    )
 
 
 if __name__ == "__main__":

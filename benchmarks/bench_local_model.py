@@ -53,7 +53,9 @@ def history(n: int, offset: int = 0) -> list[HistoryRecord]:
 
 def prompt_for(n_ht: int, offset: int = 0) -> str:
     records = history(n_ht, offset)
-    return render_prompt(SWIMMER, PromptConfig(n_ht=n_ht), 1, records, records[-1].dofs_after, records[-1].x_after)
+    return render_prompt(
+        SWIMMER, PromptConfig(n_ht=n_ht), 1, records, records[-1].dofs_after, records[-1].x_after
+    )
 
 
 async def timed(client: LLMClient, prompt: str, replies: list[str]) -> tuple[float, int, int, str]:
@@ -87,8 +89,10 @@ async def main_async(args: argparse.Namespace, srv: LocalServer) -> None:
         t0 = time.perf_counter()
         await asyncio.gather(*[timed(client, q, replies) for q in prompts])
         wall = time.perf_counter() - t0
-        print(f"throughput: {args.batch} distinct prompts over {args.slots} slots in {wall:.2f} s "
-              f"= {args.batch / wall:.2f} calls/s")
+        print(
+            f"throughput: {args.batch} distinct prompts over {args.slots} slots in {wall:.2f} s "
+            f"= {args.batch / wall:.2f} calls/s"
+        )
 
 
 def main() -> None:
@@ -96,7 +100,9 @@ def main() -> None:
     ap.add_argument("--tokens", type=int, default=420, help="target prompt length in tokens")
     ap.add_argument("--slots", type=int, default=4, help="server slots (n_parallel)")
     ap.add_argument("--batch", type=int, default=16, help="prompts in the throughput burst")
-    ap.add_argument("--threads", type=int, default=None, help="decoding threads (default: llama.cpp's)")
+    ap.add_argument(
+        "--threads", type=int, default=None, help="decoding threads (default: llama.cpp's)"
+    )
     args = ap.parse_args()
     t0 = time.perf_counter()
     with LocalServer(n_parallel=args.slots, n_ctx_per_slot=1024, n_threads=args.threads) as srv:

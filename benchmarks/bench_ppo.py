@@ -63,24 +63,38 @@ def main() -> None:
     args = ap.parse_args()
     cfg = ppo.PPOConfig()
     rows = []
-    print(f"PPO baseline, {args.seeds} seeds x {cfg.steps} steps; {os.cpu_count()} CPUs, "
-          f"load average at start {os.getloadavg()[0]:.1f}")
+    print(
+        f"PPO baseline, {args.seeds} seeds x {cfg.steps} steps; {os.cpu_count()} CPUs, "
+        f"load average at start {os.getloadavg()[0]:.1f}"
+    )
     for swimmer in args.swimmers.split(","):
         model = env.make_params(swimmer).model
         for i, direction in enumerate((1, -1)):
-            params = env.broadcast_params(env.make_params(swimmer, direction=direction, init=paper_init(model)),
-                                          args.seeds)
+            params = env.broadcast_params(
+                env.make_params(swimmer, direction=direction, init=paper_init(model)), args.seeds
+            )
             keys = jax.random.split(jax.random.PRNGKey(i), args.seeds)
             run, wall = _timed(ppo.train_batch, keys, params, cfg)
             cpu = _timed.cpu
             report = ppo.evaluate(run, params)
             ls = learn_stats(report.steps_to_learn.tolist())
             x = np.asarray(run.progress, np.float64)
-            row = {"swimmer": swimmer, "direction": direction, "seeds": args.seeds,
-                   "wall_s": wall, "cpu_s": cpu, "compiled_in_call": i == 0, "learned": ls.learned, "q25": ls.q25,
-                   "median": ls.median, "q75": ls.q75, "success": float(report.success.mean()),
-                   "mean_X_200": float(x.sum(1).mean()), "mean_X_last50": float(x[:, -50:].sum(1).mean()),
-                   "load": os.getloadavg()[0]}
+            row = {
+                "swimmer": swimmer,
+                "direction": direction,
+                "seeds": args.seeds,
+                "wall_s": wall,
+                "cpu_s": cpu,
+                "compiled_in_call": i == 0,
+                "learned": ls.learned,
+                "q25": ls.q25,
+                "median": ls.median,
+                "q75": ls.q75,
+                "success": float(report.success.mean()),
+                "mean_X_200": float(x.sum(1).mean()),
+                "mean_X_last50": float(x[:, -50:].sum(1).mean()),
+                "load": os.getloadavg()[0],
+            }
             if i == 1:  # references on the compiled programs (each warmed up first)
                 u = jax.random.uniform(jax.random.PRNGKey(9), (cfg.steps, args.seeds, 2))
                 _env_only(params, keys, u).block_until_ready()
@@ -89,15 +103,22 @@ def main() -> None:
                 qlearning.train_batch(keys, params, qcfg)
                 _, row["qlearning_s"] = _timed(qlearning.train_batch, keys, params, qcfg)
                 q = qlearning.train_batch(keys, params, qcfg)
-                row["qlearning_learned"] = learn_stats(qlearning.evaluate(q, params).steps_to_learn.tolist()).label()
+                row["qlearning_learned"] = learn_stats(
+                    qlearning.evaluate(q, params).steps_to_learn.tolist()
+                ).label()
             rows.append(row)
-            extra = (f"; env steps alone {row['env_only_s']:.2f} s (x{wall / row['env_only_s']:.1f}), Q-learning "
-                     f"{row['qlearning_s']:.2f} s (x{wall / row['qlearning_s']:.0f}; {row['qlearning_learned']})"
-                     if i == 1 else " (includes compilation)")
-            print(f"{swimmer:7} {'+x' if direction > 0 else '-x'}  {wall:6.1f} s wall, {cpu:6.1f} s CPU{extra}\n"
-                  f"         steps to learn {ls.label()}; success {row['success']:.3f}; mean X after 200 steps "
-                  f"{row['mean_X_200']:.3f}, over the last 50 {row['mean_X_last50']:.3f}; load {row['load']:.1f}",
-                  flush=True)
+            extra = (
+                f"; env steps alone {row['env_only_s']:.2f} s (x{wall / row['env_only_s']:.1f}), Q-learning "
+                f"{row['qlearning_s']:.2f} s (x{wall / row['qlearning_s']:.0f}; {row['qlearning_learned']})"
+                if i == 1
+                else " (includes compilation)"
+            )
+            print(
+                f"{swimmer:7} {'+x' if direction > 0 else '-x'}  {wall:6.1f} s wall, {cpu:6.1f} s CPU{extra}\n"
+                f"         steps to learn {ls.label()}; success {row['success']:.3f}; mean X after 200 steps "
+                f"{row['mean_X_200']:.3f}, over the last 50 {row['mean_X_last50']:.3f}; load {row['load']:.1f}",
+                flush=True,
+            )
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(rows, fh, indent=1)

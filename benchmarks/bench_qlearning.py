@@ -22,7 +22,8 @@ import json
 import os
 import platform
 import time
-from typing import Any, Callable
+from typing import Any
+from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
@@ -55,7 +56,9 @@ def numpy_train(u: np.ndarray, params: EnvParams, config: QConfig) -> dict[str, 
     n = params.model.n_dof
     n_actions = 3 * n
     inc = step_table(params.model)[0].reshape(-1, 3)
-    table = np.concatenate([inc, np.cos(inc[:, 2:]), np.sin(inc[:, 2:])], axis=1).astype(dtype).T.copy()
+    table = (
+        np.concatenate([inc, np.cos(inc[:, 2:]), np.sin(inc[:, 2:])], axis=1).astype(dtype).T.copy()
+    )
     t = np.arange(steps)
     eps = np.asarray(jax.vmap(qlearning._schedule(config.epsilon))(t), dtype)
     lr = np.asarray(jax.vmap(qlearning._schedule(config.learning_rate))(t), dtype)
@@ -139,7 +142,9 @@ def best_time(fn: Callable[[], Any], repeat: int) -> float:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     ap.add_argument("--steps", type=int, default=200)
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--swimmer", default="purcell")
@@ -152,9 +157,11 @@ def main() -> None:
     config = QConfig(steps=args.steps, action_set=args.action_set)
     base = make_params(args.swimmer, zeta=args.zeta)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"jswim bench_qlearning | jax {jax.__version__} | {platform.processor() or platform.machine()} | "
-          f"{os.cpu_count()} cores, load {load:.2f} | {args.swimmer}, zeta={args.zeta}, "
-          f"{args.action_set} actions, {args.steps} steps | min of {args.repeat}, compilation excluded")
+    print(
+        f"jswim bench_qlearning | jax {jax.__version__} | {platform.processor() or platform.machine()} | "
+        f"{os.cpu_count()} cores, load {load:.2f} | {args.swimmer}, zeta={args.zeta}, "
+        f"{args.action_set} actions, {args.steps} steps | min of {args.repeat}, compilation excluded"
+    )
 
     # The two implementations agree action for action on the same random numbers.
     keys = jax.random.split(jax.random.PRNGKey(1), 256)
@@ -162,11 +169,15 @@ def main() -> None:
     ref = numpy_train(jax_uniforms(keys, args.steps), params, config)
     run = train_batch(keys, params, config)
     same = float(np.mean(np.asarray(run.actions) == ref["actions"]))
-    print(f"NumPy vs JAX on the same uniforms: {same:.4%} of 256 x {args.steps} actions identical, "
-          f"max |X difference| {np.max(np.abs(np.asarray(run.x) - ref['x'])):.1e}\n")
+    print(
+        f"NumPy vs JAX on the same uniforms: {same:.4%} of 256 x {args.steps} actions identical, "
+        f"max |X difference| {np.max(np.abs(np.asarray(run.x) - ref['x'])):.1e}\n"
+    )
 
-    header = (f"{'learners':>8} {'steps':>6} {'JAX s':>9} {'NumPy s':>9} {'JAX learner-steps/s':>20} "
-              f"{'NumPy learner-steps/s':>22} {'ratio':>7}")
+    header = (
+        f"{'learners':>8} {'steps':>6} {'JAX s':>9} {'NumPy s':>9} {'JAX learner-steps/s':>20} "
+        f"{'NumPy learner-steps/s':>22} {'ratio':>7}"
+    )
     print(header)
     print("-" * len(header))
     rows = []
@@ -177,15 +188,31 @@ def main() -> None:
         params = batch_params(base, b)
         jax.block_until_ready(train_batch(keys, params, config))  # compile for this batch size
         t_jax = best_time(lambda: train_batch(keys, params, config), args.repeat)
-        t_np = best_time(lambda: numpy_train(rng.random((args.steps, b, 2), dtype=dtype), params, config), args.repeat)
+        t_np = best_time(
+            lambda: numpy_train(rng.random((args.steps, b, 2), dtype=dtype), params, config),
+            args.repeat,
+        )
         work = b * args.steps
-        rows.append(dict(learners=b, steps=args.steps, jax_s=t_jax, numpy_s=t_np,
-                         jax_rate=work / t_jax, numpy_rate=work / t_np, ratio=t_np / t_jax))
-        print(f"{b:8,d} {args.steps:6d} {t_jax:9.4f} {t_np:9.4f} {work / t_jax:20,.0f} {work / t_np:22,.0f} "
-              f"{t_np / t_jax:7.1f}")
+        rows.append(
+            dict(
+                learners=b,
+                steps=args.steps,
+                jax_s=t_jax,
+                numpy_s=t_np,
+                jax_rate=work / t_jax,
+                numpy_rate=work / t_np,
+                ratio=t_np / t_jax,
+            )
+        )
+        print(
+            f"{b:8,d} {args.steps:6d} {t_jax:9.4f} {t_np:9.4f} {work / t_jax:20,.0f} {work / t_np:22,.0f} "
+            f"{t_np / t_jax:7.1f}"
+        )
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump(dict(load=load, config=repr(config), same_actions=same, rows=rows), fh, indent=2)
+            json.dump(
+                dict(load=load, config=repr(config), same_actions=same, rows=rows), fh, indent=2
+            )
 
 
 if __name__ == "__main__":

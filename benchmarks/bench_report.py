@@ -22,10 +22,10 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from jswim.studies import Backend, StudyOptions, run_study  # noqa: E402
-from jswim.viz.animate import build  # noqa: E402
-from jswim.viz.page import write_report  # noqa: E402
-from tests.fakeserver import FakeServer, hash_reply  # noqa: E402
+from jswim.studies import Backend, StudyOptions, run_study
+from jswim.viz.animate import build
+from jswim.viz.page import write_report
+from tests.fakeserver import FakeServer, hash_reply
 
 
 def main() -> None:
@@ -38,14 +38,23 @@ def main() -> None:
         out = Path(args.folder or Path(tmp) / "noise")
         t0 = time.perf_counter()
         with FakeServer(reply=hash_reply, latency=0.0) as srv:
-            res = run_study("noise", StudyOptions(runs=args.runs, q_runs=args.q_runs, steps=50),
-                            backend=Backend(base_url=srv.url, model="fake"), out=out, figures=False)
-        print(f"study: {len(res.rows)} runs ({sum(r['agent'] == 'llm' for r in res.rows)} LLM) in "
-              f"{time.perf_counter() - t0:.0f} s")
+            res = run_study(
+                "noise",
+                StudyOptions(runs=args.runs, q_runs=args.q_runs, steps=50),
+                backend=Backend(base_url=srv.url, model="fake"),
+                out=out,
+                figures=False,
+            )
+        print(
+            f"study: {len(res.rows)} runs ({sum(r['agent'] == 'llm' for r in res.rows)} LLM) in "
+            f"{time.perf_counter() - t0:.0f} s"
+        )
         t0 = time.perf_counter()
         page = write_report(out, figures="draw")
-        print(f"report.html: {page.stat().st_size / 2**20:.2f} MiB, written in {time.perf_counter() - t0:.1f} s "
-              "(figures drawn in memory)")
+        print(
+            f"report.html: {page.stat().st_size / 2**20:.2f} MiB, written in {time.perf_counter() - t0:.1f} s "
+            "(figures drawn in memory)"
+        )
         try:
             from tests.browser import Browser, find_browser
 
@@ -60,16 +69,20 @@ def main() -> None:
                 t0 = time.perf_counter()
                 b.eval("window.jswimReport.select(700)")
                 other = time.perf_counter() - t0
-                print(f"chromium: loaded with the first run open in {load:.2f} s ({listed} runs listed, the list "
-                      f"holds at most 400); another run opened in {other * 1000:.0f} ms; errors: {b.errors or 'none'}")
+                print(
+                    f"chromium: loaded with the first run open in {load:.2f} s ({listed} runs listed, the list "
+                    f"holds at most 400); another run opened in {other * 1000:.0f} ms; errors: {b.errors or 'none'}"
+                )
         except (ImportError, RuntimeError) as exc:
             print(f"chromium: not measured ({exc})")
         anim = build(out)
         t0 = time.perf_counter()
         gif = anim.save(Path(tmp) / "runs.gif")
         dt = time.perf_counter() - t0
-        print(f"animation: {len(anim.tracks)} panels x {anim.n_frames} frames, {gif.stat().st_size / 1024:.0f} KB GIF, "
-              f"written at {anim.n_frames / dt:.1f} frames/s ({dt:.1f} s); plays at {anim.fps:g} steps/s")
+        print(
+            f"animation: {len(anim.tracks)} panels x {anim.n_frames} frames, {gif.stat().st_size / 1024:.0f} KB GIF, "
+            f"written at {anim.n_frames / dt:.1f} frames/s ({dt:.1f} s); plays at {anim.fps:g} steps/s"
+        )
 
 
 if __name__ == "__main__":

@@ -18,12 +18,11 @@ import argparse
 import os
 import time
 
-import jax
 import jax.numpy as jnp
 
 from jswim.scenes import Scene
 
-from bench_scenes import scene_rate, table_rate  # noqa: E402  (this folder is on sys.path when run as a script)
+from bench_scenes import scene_rate, table_rate
 
 
 def main() -> None:
@@ -34,13 +33,18 @@ def main() -> None:
     ap.add_argument("--media", default="line,side,wall")
     a = ap.parse_args()
     sizes = [int(v) for v in a.sizes.split(",")]
-    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; batch {a.batch}, {a.steps} steps, "
-          f"dtype {jnp.result_type(float)}", flush=True)
+    print(
+        f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; batch {a.batch}, {a.steps} steps, "
+        f"dtype {jnp.result_type(float)}",
+        flush=True,
+    )
     ref = table_rate(a.batch * 10, a.steps)
     print(f"env table (reference): {ref:.4g} swimmer-steps/s", flush=True)
-    scenes = {"line": lambda n: Scene(medium="free", swimmers=n, separation=30.0),
-              "side": lambda n: Scene(medium="free", swimmers=n, separation=10.0, formation="side"),
-              "wall": lambda n: Scene(medium="wall", swimmers=n, separation=30.0, height=10.0)}
+    scenes = {
+        "line": lambda n: Scene(medium="free", swimmers=n, separation=30.0),
+        "side": lambda n: Scene(medium="free", swimmers=n, separation=10.0, formation="side"),
+        "wall": lambda n: Scene(medium="wall", swimmers=n, separation=30.0, height=10.0),
+    }
     print("| school | N | school-steps/s | x the env table | compile s |")
     print("|---|---|---|---|---|")
     for name in a.media.split(","):

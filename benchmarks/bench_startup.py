@@ -36,7 +36,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from tests.fakeserver import FakeServer, hash_reply  # noqa: E402
+from tests.fakeserver import FakeServer, hash_reply
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -50,7 +50,9 @@ def timed(cmd: list[str], env: dict[str, str], cwd: Path) -> tuple[float, float]
     after = os.times()
     if r.returncode != 0:
         raise SystemExit(f"{' '.join(cmd)} failed ({r.returncode}): {r.stderr.strip()[-400:]}")
-    return wall, (after.children_user - before.children_user) + (after.children_system - before.children_system)
+    return wall, (after.children_user - before.children_user) + (
+        after.children_system - before.children_system
+    )
 
 
 class Side:
@@ -59,23 +61,54 @@ class Side:
     def __init__(self, name: str, python: str, src: Path, tmp: Path, url: str) -> None:
         self.name, self.python, self.src, self.url = name, python, src, url
         self.tmp = tmp / name
-        base = {k: v for k, v in os.environ.items() if k not in ("PYTHONDONTWRITEBYTECODE", "JAX_COMPILATION_CACHE_DIR")}
-        self.env = {**base, "XDG_CACHE_HOME": str(self.tmp / "cache"), "PYTHONPYCACHEPREFIX": str(self.tmp / "pyc"),
-                    "PYTHONPATH": str(src), "PYTHONWARNINGS": "ignore"}
+        base = {
+            k: v
+            for k, v in os.environ.items()
+            if k not in ("PYTHONDONTWRITEBYTECODE", "JAX_COMPILATION_CACHE_DIR")
+        }
+        self.env = {
+            **base,
+            "XDG_CACHE_HOME": str(self.tmp / "cache"),
+            "PYTHONPYCACHEPREFIX": str(self.tmp / "pyc"),
+            "PYTHONPATH": str(src),
+            "PYTHONWARNINGS": "ignore",
+        }
         self.n = 0
         self.times: dict[str, list[tuple[float, float]]] = {}
 
     def warm_bytecode(self) -> None:
-        timed([self.python, "-c", "import jax.numpy, jswim.cli, jswim.studies.run, jswim.agents.llm"], self.env, self.src)
+        timed(
+            [self.python, "-c", "import jax.numpy, jswim.cli, jswim.studies.run, jswim.agents.llm"],
+            self.env,
+            self.src,
+        )
 
     def run(self, what: str, *args: str, **extra: str) -> None:
         self.n += 1
         if what == "help":
             cmd = [self.python, "-m", "jswim.cli", "--help"]
         else:
-            cmd = [self.python, "-m", "jswim.cli", "swim", "--runs", "1", "--steps", "12", "--q-runs", "0",
-                   "--no-figures", "--base-url", self.url, "--model", "fake", "--api-key-env", "",
-                   "--out", str(self.tmp / f"run{self.n}")]
+            cmd = [
+                self.python,
+                "-m",
+                "jswim.cli",
+                "swim",
+                "--runs",
+                "1",
+                "--steps",
+                "12",
+                "--q-runs",
+                "0",
+                "--no-figures",
+                "--base-url",
+                self.url,
+                "--model",
+                "fake",
+                "--api-key-env",
+                "",
+                "--out",
+                str(self.tmp / f"run{self.n}"),
+            ]
         self.times.setdefault(what, []).append(timed(cmd, {**self.env, **extra}, self.src))
 
     def median(self, what: str) -> tuple[float, float]:
@@ -94,7 +127,10 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp, FakeServer(reply=hash_reply) as srv:
         sides = [Side("after", sys.executable, ROOT, Path(tmp), srv.url)]
         if args.before:
-            sides.insert(0, Side("before", args.before_python, Path(args.before).resolve(), Path(tmp), srv.url))
+            sides.insert(
+                0,
+                Side("before", args.before_python, Path(args.before).resolve(), Path(tmp), srv.url),
+            )
         for s in sides:
             s.warm_bytecode()
         plan = [("help", {}), ("no cache", {"JSWIM_COMPILATION_CACHE": "0"})]
@@ -108,13 +144,23 @@ def main() -> None:
             for s in sides:
                 s.run("warm")
     load1 = os.getloadavg()[0]
-    print(f"load average {load0:.1f} at the start, {load1:.1f} at the end, on {os.cpu_count()} CPUs; "
-          f"median of {args.repeats} processes, wall s (CPU s)")
+    print(
+        f"load average {load0:.1f} at the start, {load1:.1f} at the end, on {os.cpu_count()} CPUs; "
+        f"median of {args.repeats} processes, wall s (CPU s)"
+    )
     rows = ["help", "no cache", "first (fills the cache)", "warm"]
-    labels = {"help": "jswim --help", "no cache": "swim, no compilation cache",
-              "first (fills the cache)": "swim, first run (fills the cache)", "warm": "swim, warm"}
+    labels = {
+        "help": "jswim --help",
+        "no cache": "swim, no compilation cache",
+        "first (fills the cache)": "swim, first run (fills the cache)",
+        "warm": "swim, warm",
+    }
     print(f"{'':36s}" + "".join(f"{s.name:>18s}" for s in sides))
-    out: dict[str, object] = {"load_average_start": load0, "load_average_end": load1, "cpus": os.cpu_count() or 0}
+    out: dict[str, object] = {
+        "load_average_start": load0,
+        "load_average_end": load1,
+        "cpus": os.cpu_count() or 0,
+    }
     for r in rows:
         cells = []
         for s in sides:

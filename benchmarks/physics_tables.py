@@ -19,7 +19,8 @@ import math
 import re
 import sys
 from pathlib import Path
-from typing import Callable, Iterator, NamedTuple
+from typing import NamedTuple
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
@@ -48,7 +49,7 @@ def _square(swimmer: str, direction: int = 1, **model_kwargs) -> tuple[float, np
     return best.displacement, np.diff(np.concatenate([[0.0], x]))
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _corner_mdp(swimmer: str) -> tuple[np.ndarray, np.ndarray]:
     """The noiseless two-DOF swimmer as a deterministic MDP on its four corners (toward +x):
     reward ``r[s, a]`` (the step's displacement) and next corner ``nxt[s, a]``, read from the
@@ -121,21 +122,27 @@ def quotes(fast: bool = False) -> Iterator[Quote]:
     from jswim.judging import lattice
     from jswim.swimmers.models import make_model
 
-    purcell, purcell_steps = _square("purcell")
+    purcell, _purcell_steps = _square("purcell")
     purcell_back, _ = _square("purcell", -1)
     ng, ng_steps = _square("ng")
     pi4, _ = _square("purcell", d_max=math.pi / 4)
     s = r"\s+"
     yield Quote("physics.md", r"exact value, the same both ways by symmetry, is (0\.\d+)", purcell)
-    yield Quote("physics.md", r"exact value, the same both ways by symmetry, is (0\.\d+)", purcell_back)
-    yield Quote("physics.md", r"square gait per cycle (0\.\d+) \(`d_max =" + s + "pi/4`\)", pi4)
+    yield Quote(
+        "physics.md", r"exact value, the same both ways by symmetry, is (0\.\d+)", purcell_back
+    )
+    yield Quote("physics.md", r"square gait per cycle (0\.\d+) \(`d_max =" + s + r"pi/4`\)", pi4)
     yield Quote("physics.md", r"(0\.\d+) \(`pi/3`\)", purcell)
     yield Quote("physics.md", r"NG \(6, 10\) (0\.\d+)", ng)
     yield Quote("fidelity.md", r"exact: (0\.\d+) both ways", purcell)
     yield Quote("continuous.md", r"the whole range \| (0\.\d+) \|", purcell / 4)
     yield Quote("continuous.md", r"the whole range \| 0\.\d+ \| (0\.\d+) \|", purcell)
-    yield Quote("continuous.md", r"\| NG \(arms 6\.\.10\) \| the full square \| (0\.\d+) \|", ng / 4)
-    yield Quote("continuous.md", r"\| NG \(arms 6\.\.10\) \| the full square \| 0\.\d+ \| (0\.\d+) \|", ng)
+    yield Quote(
+        "continuous.md", r"\| NG \(arms 6\.\.10\) \| the full square \| (0\.\d+) \|", ng / 4
+    )
+    yield Quote(
+        "continuous.md", r"\| NG \(arms 6\.\.10\) \| the full square \| 0\.\d+ \| (0\.\d+) \|", ng
+    )
     yield Quote("continuous.md", r"\(0\.\d+, (0\.\d+) per cycle\) and with K = 2", ng)
     # NG's square gait: two strokes forward, two back (bench.md's reading of the reference rule)
     big, small = float(np.max(np.abs(ng_steps))), float(np.min(np.abs(ng_steps)))
@@ -144,22 +151,39 @@ def quotes(fast: bool = False) -> Iterator[Quote]:
     yield Quote("bench.md", r"strokes net (0\.\d+) per cycle", ng)
     # The Q-learner's discount and optimistic start (baselines.md)
     yield Quote("baselines.md", r"optimal policy only for gamma > (0\.\d+)", _gait_threshold("ng"))
-    yield Quote("baselines.md", r"kept up forever \((0\.\d+) for Purcell at gamma = 0\.9\)", _gait_value("purcell", 0.9))
+    yield Quote(
+        "baselines.md",
+        r"kept up forever \((0\.\d+) for Purcell at gamma = 0\.9\)",
+        _gait_value("purcell", 0.9),
+    )
     if fast:
         return
     # The lattice search's runner-up at K = 20 (continuous.md's best-stroke table; ~2 min each)
-    for name, label in (("purcell", r"the whole range"), ("ng", r"NG \(arms 6\.\.10\) \| the full square")):
+    for name, label in (
+        ("purcell", r"the whole range"),
+        ("ng", r"NG \(arms 6\.\.10\) \| the full square"),
+    ):
         cycles = lattice.best_lattice_cycles(make_model(name), 1, 20, max_len=4)
         runner_up = next(c.per_step for c in cycles if c.per_step < cycles[0].per_step - 1e-12)
-        yield Quote("continuous.md", label + r" \| 0\.\d+ \| 0\.\d+ \|[^|]*\| K = 20: [^|]*?(0\.\d+) per step", runner_up)
+        yield Quote(
+            "continuous.md",
+            label + r" \| 0\.\d+ \| 0\.\d+ \|[^|]*\| K = 20: [^|]*?(0\.\d+) per step",
+            runner_up,
+        )
     from jswim import env
     from jswim.judging import gait
 
-    for swimmer, pattern in (("nlink", r"best four-link cycle \(period 6\) moves (0\.\d+) a per step"),
-                             ("nsphere", r"the\s+best four-sphere cycle (0\.\d+) a per step")):
+    for swimmer, pattern in (
+        ("nlink", r"best four-link cycle \(period 6\) moves (0\.\d+) a per step"),
+        ("nsphere", r"the\s+best four-sphere cycle (0\.\d+) a per step"),
+    ):
         best = gait.best_cycles(env.make_params(swimmer).model, 1)[0]
         yield Quote("physics.md", pattern, best.per_step)
-    yield Quote("physics.md", r"four-sphere swimmer agrees exactly \((0\.\d+) per cycle\)", best.displacement)
+    yield Quote(
+        "physics.md",
+        r"four-sphere swimmer agrees exactly \((0\.\d+) per cycle\)",
+        best.displacement,
+    )
     # README's and getting-started's wall example: three square cycles 5 a above a wall
     import jswim
     from jswim.env import encode_action
@@ -171,7 +195,9 @@ def quotes(fast: bool = False) -> Iterator[Quote]:
     for page in ("../README.md", "getting-started.md"):
         yield Quote(page, r"# (0\.\d+) a toward \+x in 3 cycles", progress)
     along_x, orientation0 = _four_link_x()
-    yield Quote("physics.md", r"the best stroke moves (0\.\d+)\s+a per 6-step cycle along x", along_x)
+    yield Quote(
+        "physics.md", r"the best stroke moves (0\.\d+)\s+a per 6-step cycle along x", along_x
+    )
     yield Quote("physics.md", r"\((0\.\d+) if the middle link started along x\)", orientation0)
 
 
@@ -190,7 +216,7 @@ def check(fast: bool = False, say: Callable[[str], None] = print) -> list[str]:
     wrong = []
     for q in quotes(fast):
         written, decimals = _page_number(q)
-        ok = written is not None and abs(float(written) - q.value) <= 0.5 * 10.0 ** -decimals + 1e-12
+        ok = written is not None and abs(float(written) - q.value) <= 0.5 * 10.0**-decimals + 1e-12
         line = f"{q.page:14} {written or 'NOT FOUND':>11}  jswim {q.value:.10f}  {'ok' if ok else 'DIFFERS'}  /{q.pattern}/"
         say(line)
         if not ok:
@@ -200,8 +226,12 @@ def check(fast: bool = False, say: Callable[[str], None] = print) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--check", action="store_true", help="exit 1 where a page's number differs from jswim's")
-    p.add_argument("--fast", action="store_true", help="leave out the K = 20 and three-DOF searches")
+    p.add_argument(
+        "--check", action="store_true", help="exit 1 where a page's number differs from jswim's"
+    )
+    p.add_argument(
+        "--fast", action="store_true", help="leave out the K = 20 and three-DOF searches"
+    )
     a = p.parse_args(argv)
     wrong = check(a.fast)
     if wrong:

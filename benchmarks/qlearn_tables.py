@@ -20,7 +20,7 @@ import argparse
 import re
 import sys
 from pathlib import Path
-from typing import Callable
+from collections.abc import Callable
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 SETS = {"all six": "all", "shape-changing (two)": "shape-changing"}
@@ -40,8 +40,16 @@ def results_rows(n_seeds: int = 10_000) -> list[list[str]]:
         for label in SETS:
             for d in (1, -1):
                 r = by[(swimmer, d, label)]
-                out.append([{"purcell": "Purcell", "ng": "NG"}[swimmer], "+x" if d > 0 else "-x", label,
-                            f"{r.median:g} [{r.q25:g}–{r.q75:g}]", _pct(r.learned), _pct(r.success)])
+                out.append(
+                    [
+                        {"purcell": "Purcell", "ng": "NG"}[swimmer],
+                        "+x" if d > 0 else "-x",
+                        label,
+                        f"{r.median:g} [{r.q25:g}–{r.q75:g}]",
+                        _pct(r.learned),
+                        _pct(r.success),
+                    ]
+                )
     return out
 
 
@@ -55,8 +63,12 @@ def baseline_medians(n_seeds: int = 1000) -> dict[str, float]:
     from jswim.studies import qlearn
 
     def median(**kw) -> float:
-        (r,) = qlearn.study(QConfig(action_set="shape-changing", **kw), swimmers=("ng",), directions=(1,),
-                            n_seeds=n_seeds)
+        (r,) = qlearn.study(
+            QConfig(action_set="shape-changing", **kw),
+            swimmers=("ng",),
+            directions=(1,),
+            n_seeds=n_seeds,
+        )
         return r.median
 
     out = {f"alpha {a:g}": median(learning_rate=a) for a in (1.0, 0.5, 0.25)}
@@ -80,14 +92,18 @@ def _close(page: str, ours: str) -> bool:
     a, b = re.findall(r"\d+(?:\.\d+)?", page), re.findall(r"\d+(?:\.\d+)?", ours)
     if len(a) != len(b):
         return False
-    return all(abs(float(x) - float(y)) <= 0.5 * 10.0 ** -(len(x.split(".")[1]) if "." in x else 0) + 1e-9
-               for x, y in zip(a, b))
+    return all(
+        abs(float(x) - float(y)) <= 0.5 * 10.0 ** -(len(x.split(".")[1]) if "." in x else 0) + 1e-9
+        for x, y in zip(a, b)
+    )
 
 
 def _baselines_quotes() -> dict[str, str]:
     text = " ".join((DOCS / "baselines.md").read_text().split())
     m = re.search(r"median (\d+) steps at 1\.0, (\d+) at 0\.5, (\d+) at 0\.25", text)
-    g = re.search(r"median (\d+) steps at 0\.8, (\d+) at 0\.9, (\d+) at 0\.95, (\d+) at 0\.99", text)
+    g = re.search(
+        r"median (\d+) steps at 0\.8, (\d+) at 0\.9, (\d+) at 0\.95, (\d+) at 0\.99", text
+    )
     out = {}
     if m:
         out.update(zip(("alpha 1", "alpha 0.5", "alpha 0.25"), m.groups()))
@@ -100,15 +116,21 @@ def check(say: Callable[[str], None] = print, n_seeds: int = 10_000) -> list[str
     """Each number of the two pages that differs from jswim's (printed as it goes)."""
     wrong = []
     page = _page_rows()
-    say("| swimmer | dir | actions offered | steps to learn, median [q25–q75] | learned (200 steps) | success (50 steps) |")
+    say(
+        "| swimmer | dir | actions offered | steps to learn, median [q25–q75] | learned (200 steps) | success (50 steps) |"
+    )
     for row in results_rows(n_seeds):
         say("| " + " | ".join(row) + " |")
         theirs = page.get(tuple(row[:3]))
         if theirs is None or not all(_close(p, o) for p, o in zip(theirs[3:], row[3:])):
-            wrong.append(f"results.md {' '.join(row[:3])}: page {theirs and theirs[3:]}, jswim {row[3:]}")
+            wrong.append(
+                f"results.md {' '.join(row[:3])}: page {theirs and theirs[3:]}, jswim {row[3:]}"
+            )
     quoted = _baselines_quotes()
     for name, value in baseline_medians().items():
-        say(f"baselines.md NG +x shape-changing, {name}: median {value:g} (page: {quoted.get(name, 'NOT FOUND')})")
+        say(
+            f"baselines.md NG +x shape-changing, {name}: median {value:g} (page: {quoted.get(name, 'NOT FOUND')})"
+        )
         if name not in quoted or not _close(quoted[name], f"{value:g}"):
             wrong.append(f"baselines.md {name}: page {quoted.get(name)}, jswim {value:g}")
     return wrong
@@ -116,7 +138,9 @@ def check(say: Callable[[str], None] = print, n_seeds: int = 10_000) -> list[str
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--check", action="store_true", help="exit 1 where a page's number differs from jswim's")
+    p.add_argument(
+        "--check", action="store_true", help="exit 1 where a page's number differs from jswim's"
+    )
     a = p.parse_args(argv)
     wrong = check()
     if wrong:

@@ -40,17 +40,26 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "swim"
         with ReferenceServer() as srv:
-            run_study("swim", StudyOptions(runs=2, q_runs=10, steps=50),
-                      backend=Backend(base_url=srv.url, model=MODEL), out=out, figures=True)
+            run_study(
+                "swim",
+                StudyOptions(runs=2, q_runs=10, steps=50),
+                backend=Backend(base_url=srv.url, model=MODEL),
+                out=out,
+                figures=True,
+            )
         t0 = time.perf_counter()
         anim = build(out, fps=6, dpi=64)
         gif = anim.save(Path(tmp) / "swim.gif")
         dt = time.perf_counter() - t0
-        print(f"animation: {len(anim.tracks)} panels, {anim.frames_written} frames in the GIF ({anim.n_frames} drawn), "
-              f"{gif.stat().st_size / 1024:.0f} KB, "
-              f"written in {dt:.1f} s ({anim.n_frames / dt:.1f} frames/s)")
+        print(
+            f"animation: {len(anim.tracks)} panels, {anim.frames_written} frames in the GIF ({anim.n_frames} drawn), "
+            f"{gif.stat().st_size / 1024:.0f} KB, "
+            f"written in {dt:.1f} s ({anim.n_frames / dt:.1f} frames/s)"
+        )
         small_png(anim.frame_png(33, dpi=130), IMAGES / "animation-frame.png", 1000)
-        if gif.stat().st_size < 450 * 1024:  # legible text (issue 33) made the frames richer: 334 KB at 64 dpi
+        if (
+            gif.stat().st_size < 450 * 1024
+        ):  # legible text (issue 33) made the frames richer: 334 KB at 64 dpi
             (IMAGES / "swim.gif").write_bytes(gif.read_bytes())
             print(f"docs/images/swim.gif: {gif.stat().st_size / 1024:.0f} KB")
         page = out / "report.html"
@@ -58,10 +67,14 @@ def main() -> None:
             t0 = time.perf_counter()
             b.open(page.as_uri())
             b.eval("window.jswimReport.opened")
-            print(f"report: {page.stat().st_size / 1024:.0f} KB, loaded and first run open in "
-                  f"{time.perf_counter() - t0:.2f} s; console errors: {b.errors or 'none'}")
-            b.eval("(() => { const r = Array.from(document.querySelectorAll('#run-list tr[data-i]'))"
-                   ".find(tr => tr.textContent.startsWith('llm-')); return window.jswimReport.select(+r.dataset.i); })()")
+            print(
+                f"report: {page.stat().st_size / 1024:.0f} KB, loaded and first run open in "
+                f"{time.perf_counter() - t0:.2f} s; console errors: {b.errors or 'none'}"
+            )
+            b.eval(
+                "(() => { const r = Array.from(document.querySelectorAll('#run-list tr[data-i]'))"
+                ".find(tr => tr.textContent.startsWith('llm-')); return window.jswimReport.select(+r.dataset.i); })()"
+            )
             b.eval("window.jswimReport.play()")
             b.pump(33 / 4 + 0.1)
             b.eval("window.jswimReport.pause()")

@@ -13,7 +13,8 @@ import shutil
 import sys
 import time
 from dataclasses import dataclass
-from typing import IO, Any, Mapping, Sequence
+from typing import IO, Any
+from collections.abc import Mapping, Sequence
 
 
 @dataclass(frozen=True)
@@ -42,8 +43,12 @@ def terminal_width(file: IO[str] | None = None) -> int | None:
     return shutil.get_terminal_size().columns if is_terminal(file) else None
 
 
-def plain_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title: str | None = None,
-                width: int | None = None) -> str:
+def plain_table(
+    columns: Sequence[Column],
+    rows: Sequence[Sequence[str]],
+    title: str | None = None,
+    width: int | None = None,
+) -> str:
     """The table as aligned text, every cell whole.
 
     With a ``width`` (a terminal's) that the table exceeds, the columns are wrapped into blocks
@@ -66,7 +71,9 @@ def plain_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title:
         blocks.append(list(range(n_keys)) + current)
 
     def line(row: Sequence[str], cols: Sequence[int]) -> str:
-        parts = [row[j].rjust(widths[j]) if columns[j].numeric else row[j].ljust(widths[j]) for j in cols]
+        parts = [
+            row[j].rjust(widths[j]) if columns[j].numeric else row[j].ljust(widths[j]) for j in cols
+        ]
         return "  ".join(parts).rstrip()
 
     out = [title] if title else []
@@ -78,8 +85,12 @@ def plain_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title:
     return "\n".join(out)
 
 
-def print_table(columns: Sequence[Column], rows: Sequence[Sequence[str]], title: str | None = None,
-                file: IO[str] | None = None) -> None:
+def print_table(
+    columns: Sequence[Column],
+    rows: Sequence[Sequence[str]],
+    title: str | None = None,
+    file: IO[str] | None = None,
+) -> None:
     """Print :func:`plain_table`, wrapped to the terminal's width on a terminal, whole elsewhere."""
     f = file or sys.stdout
     print(plain_table(columns, rows, title, terminal_width(f)), file=f)
@@ -89,19 +100,24 @@ def requests_text(counts: Mapping[str, Any]) -> str:
     """``132 sent (12 retries; transient faults: 429 x5, 5xx x4, connection x3)`` from a session's
     or a study's ``requests``, ``retries`` and ``faults`` (by kind)."""
     faults = ", ".join(f"{k} x{n}" for k, n in sorted((counts.get("faults") or {}).items()) if n)
-    text = (f"{counts.get('requests', 0):.0f} sent ({counts.get('retries', 0):.0f} retries"
-            + (f"; transient faults: {faults}" if faults else "; no transient faults") + ")")
+    text = (
+        f"{counts.get('requests', 0):.0f} sent ({counts.get('retries', 0):.0f} retries"
+        + (f"; transient faults: {faults}" if faults else "; no transient faults")
+        + ")"
+    )
     unanswered = counts.get("unanswered") or 0
     if unanswered:  # sent whole, no answer: a provider may have billed them (jswim.llm.budget)
         usd = counts.get("unanswered_usd") or 0.0
-        text += (f"; {unanswered:.0f} got no answer (timed out or cut while waiting) and may have been billed"
-                 + (f": at most ${usd:.4f}, counted against --max-cost" if usd else ""))
+        text += (
+            f"; {unanswered:.0f} got no answer (timed out or cut while waiting) and may have been billed"
+            + (f": at most ${usd:.4f}, counted against --max-cost" if usd else "")
+        )
     return text
 
 
 def format_duration(seconds: float) -> str:
     """``"42s"``, ``"3m05s"``, ``"1h02m"``."""
-    s = int(round(max(0.0, seconds)))
+    s = round(max(0.0, seconds))
     if s < 60:
         return f"{s}s"
     if s < 3600:
@@ -140,15 +156,21 @@ class Progress:
         self._bar: Any = None
         self._task: Any = None
 
-    def __enter__(self) -> "Progress":
+    def __enter__(self) -> Progress:
         if self.terminal:
             from rich.console import Console  # lazy: rich only when writing to a terminal
             from rich.progress import BarColumn, MofNCompleteColumn, TextColumn, TimeElapsedColumn
             from rich.progress import Progress as Bar
 
             # A short bar leaves room for the status text (steps, ETA, requests in flight).
-            self._bar = Bar(TextColumn("[bold]{task.description}"), BarColumn(bar_width=20), MofNCompleteColumn(),
-                            TimeElapsedColumn(), TextColumn("{task.fields[info]}"), console=Console(file=self.file))
+            self._bar = Bar(
+                TextColumn("[bold]{task.description}"),
+                BarColumn(bar_width=20),
+                MofNCompleteColumn(),
+                TimeElapsedColumn(),
+                TextColumn("{task.fields[info]}"),
+                console=Console(file=self.file),
+            )
             self._bar.__enter__()
             self._task = self._bar.add_task("runs", total=None, info="")
         return self
@@ -162,14 +184,26 @@ class Progress:
         """End the bar early (before printing an interruption message)."""
         self.__exit__(None, None, None)
 
-    def update(self, label: str, done: int, total: int, info: str = "", final: bool = False,
-               unit: str = "runs") -> None:
+    def update(
+        self,
+        label: str,
+        done: int,
+        total: int,
+        info: str = "",
+        final: bool = False,
+        unit: str = "runs",
+    ) -> None:
         """Show ``label`` with ``done`` of ``total`` (counted in ``unit`` in a log) and ``info``."""
         if self._bar is not None:
             self._bar.update(self._task, completed=done, total=total, description=label, info=info)
             return
         now = time.monotonic()
-        if not final and self._last is not None and self._last[0] == label and now - self._last[1] < self.interval:
+        if (
+            not final
+            and self._last is not None
+            and self._last[0] == label
+            and now - self._last[1] < self.interval
+        ):
             return
         self._last = (label, now)
         pct = f" ({100 * done / total:.0f}%)" if total else ""
@@ -183,7 +217,9 @@ REFERENCE_UNPRICED = "a rule on this machine, not an LLM"
 LOCAL_UNPRICED = "a server on this machine or the LAN, with no list price for its model"
 
 
-def cost_text(cost_usd: float | None, unpriced: str | None = None, source: str | None = None) -> str:
+def cost_text(
+    cost_usd: float | None, unpriced: str | None = None, source: str | None = None
+) -> str:
     """One wording for a cost everywhere (``jswim swim``/``study``, ``show``, the leaderboard, the pages).
 
     ``unpriced``: why the calls have no price (then ``not priced (WHY); $0 counted``, never a bare

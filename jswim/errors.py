@@ -62,7 +62,9 @@ def check_zeta(value: object, option: str | None = None) -> float:
     except (TypeError, ValueError):
         raise ConfigError(f"{option or 'zeta'} must be a number, got {value!r}") from None
     if not (math.isfinite(z) and z >= 0):
-        raise ConfigError(f"{option + ' (zeta)' if option else 'zeta (noise level)'} must be >= 0, got {value!r}")
+        raise ConfigError(
+            f"{option + ' (zeta)' if option else 'zeta (noise level)'} must be >= 0, got {value!r}"
+        )
     return z
 
 
@@ -79,8 +81,13 @@ def check_direction(direction: object) -> int:
 #: ``n_ht``: the paper sweeps 1 to 8 history records (its Fig. 3; the history study's default
 #: ``--n-hts``) and picks 3 and 6; 0 is the no-history ablation; 100 is far past the sweep (a run
 #: of the paper's 50 steps never holds more than 50 records).
-SIZE_RANGES = {"steps": (1, 10_000), "runs": (0, 100_000), "q_runs": (0, 100_000), "samples": (1, 10_000),
-               "n_ht": (0, 100)}
+SIZE_RANGES = {
+    "steps": (1, 10_000),
+    "runs": (0, 100_000),
+    "q_runs": (0, 100_000),
+    "samples": (1, 10_000),
+    "n_ht": (0, 100),
+}
 
 
 def check_size(name: str, value: object, option: str | None = None) -> int:
@@ -89,7 +96,9 @@ def check_size(name: str, value: object, option: str | None = None) -> int:
     for a grid of it, ``--n-hts``)."""
     lo, hi = SIZE_RANGES[name]
     if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not lo <= value <= hi:
-        raise ConfigError(f"{option or '--' + name.replace('_', '-')} must be between {lo} and {hi}, got {value!r}")
+        raise ConfigError(
+            f"{option or '--' + name.replace('_', '-')} must be between {lo} and {hi}, got {value!r}"
+        )
     return int(value)
 
 
@@ -102,9 +111,20 @@ def check_count(name: str, value: object) -> int:
     """``value`` as an int if it is a count in ``1..MAX_COUNT``: the one check of a batched command's
     counts, from the command line (:func:`jswim.cli.base.check_counts`) and from Python
     (:func:`jswim.studies.qlearn.study`); the message names the option ``--name``."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or not 1 <= value <= MAX_COUNT:
-        raise ConfigError(f"--{name} must be " + (f"at most {MAX_COUNT:,}" if isinstance(value, numbers.Integral)
-                                                   and value > 1 else ">= 1") + f", got {value!r}")
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, numbers.Integral)
+        or not 1 <= value <= MAX_COUNT
+    ):
+        raise ConfigError(
+            f"--{name} must be "
+            + (
+                f"at most {MAX_COUNT:,}"
+                if isinstance(value, numbers.Integral) and value > 1
+                else ">= 1"
+            )
+            + f", got {value!r}"
+        )
     return int(value)
 
 
@@ -145,7 +165,9 @@ class LLMRequestError(LLMError):
         The request field the server named as the cause, when it named one we sent.
     """
 
-    def __init__(self, message: str, status: int, server_message: str = "", field: str | None = None) -> None:
+    def __init__(
+        self, message: str, status: int, server_message: str = "", field: str | None = None
+    ) -> None:
         super().__init__(message)
         self.status = status
         self.server_message = server_message

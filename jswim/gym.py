@@ -22,7 +22,7 @@ observations its :meth:`~jswim.env.base.Environment.features` (float32), the rew
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium
 import jax
@@ -37,7 +37,10 @@ ENVIRONMENTS: dict[str, dict[str, Any]] = {
     "jswim/Purcell-v0": {"swimmer": "purcell"},
     "jswim/NG-v0": {"swimmer": "ng"},
     "jswim/NGWall-v0": {"swimmer": "ng", "scene": {"medium": "wall", "height": 5.0}},
-    "jswim/NGPair-v0": {"swimmer": "ng", "scene": {"medium": "free", "swimmers": 2, "separation": 30.0}},
+    "jswim/NGPair-v0": {
+        "swimmer": "ng",
+        "scene": {"medium": "free", "swimmers": 2, "separation": 30.0},
+    },
 }
 
 
@@ -68,10 +71,17 @@ class JswimEnv(gymnasium.Env):
         Float ROC vectors as actions instead of integer codes.
     """
 
-    metadata = {"render_modes": []}
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": []}
 
-    def __init__(self, swimmer: str = "purcell", scene: Any = None, *, max_steps: int = 200,
-                 continuous: bool = False, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        swimmer: str = "purcell",
+        scene: Any = None,
+        *,
+        max_steps: int = 200,
+        continuous: bool = False,
+        **kwargs: Any,
+    ) -> None:
         self.world, self.params = make(swimmer, scene, **kwargs)
         self.max_steps = int(max_steps)
         self.continuous = bool(continuous)
@@ -90,7 +100,9 @@ class JswimEnv(gymnasium.Env):
         # Every draw from the env's seeded generator: reset(seed=...) makes an episode repeatable.
         return jax.random.PRNGKey(int(self.np_random.integers(2**31)))
 
-    def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+    def reset(
+        self, *, seed: int | None = None, options: dict | None = None
+    ) -> tuple[np.ndarray, dict]:
         super().reset(seed=seed)
         self._state, obs = _reset_jit(self.world, self._key(), self.params)
         self._t = 0
@@ -100,14 +112,22 @@ class JswimEnv(gymnasium.Env):
         if self._state is None:
             raise RuntimeError("call reset() before step()")
         if self.continuous:
-            a = jnp.asarray(np.clip(np.asarray(action, np.float64), -1.0, 1.0), jnp.result_type(float))
+            a = jnp.asarray(
+                np.clip(np.asarray(action, np.float64), -1.0, 1.0), jnp.result_type(float)
+            )
         else:
             a = jnp.asarray(int(action), jnp.int32)
         self._state, obs, info = _step_jit(self.world, self._key(), self._state, a, self.params)
         self._t += 1
         position = np.asarray(self.world.observe(self._state, self.params).position, np.float64)
         extra = {"position": position, "stuck": bool(info.stuck), "contact": bool(info.contact)}
-        return np.asarray(obs, np.float32), float(info.progress), False, self._t >= self.max_steps, extra
+        return (
+            np.asarray(obs, np.float32),
+            float(info.progress),
+            False,
+            self._t >= self.max_steps,
+            extra,
+        )
 
 
 def register() -> None:

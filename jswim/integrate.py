@@ -45,7 +45,9 @@ def chebyshev_rule(n: int) -> tuple[np.ndarray, np.ndarray]:
     x = -np.cos(np.pi * np.arange(n + 1) / n)  # ascending on [-1, 1]
     cheb = np.polynomial.chebyshev
     basis = cheb.chebvander(x, n)  # (nodes, coefficients)
-    integ = np.stack([cheb.chebval(x, cheb.chebint(np.eye(n + 1)[k], lbnd=-1)) for k in range(n + 1)], axis=1)
+    integ = np.stack(
+        [cheb.chebval(x, cheb.chebint(np.eye(n + 1)[k], lbnd=-1)) for k in range(n + 1)], axis=1
+    )
     running = integ @ np.linalg.inv(basis) / 2.0  # map [-1, 1] -> [0, 1]
     return (x + 1.0) / 2.0, running
 
@@ -104,7 +106,9 @@ def integrate_stroke(
         c, s = jnp.cos(theta), jnp.sin(theta)
         vx, vy = c * w[:, 0] - s * w[:, 1], s * w[:, 0] + c * w[:, 1]
         if dotless:
-            return jnp.stack([pose[0] + jnp.sum(s_mat[-1] * vx), pose[1] + jnp.sum(s_mat[-1] * vy), theta[-1]])
+            return jnp.stack(
+                [pose[0] + jnp.sum(s_mat[-1] * vx), pose[1] + jnp.sum(s_mat[-1] * vy), theta[-1]]
+            )
         return jnp.stack([pose[0] + s_mat[-1] @ vx, pose[1] + s_mat[-1] @ vy, theta[-1]])
     if method != "rk4":
         raise ConfigError(f"method must be 'chebyshev' or 'rk4', got {method!r}")

@@ -10,7 +10,8 @@ from __future__ import annotations
 import math
 from collections import Counter
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 from jswim._io.paths import path_kind
 from jswim.console import Column, cost_text, plain_table, requests_text
@@ -26,11 +27,13 @@ MIN_QUARTILE_N = 4
 #: Fewest runs for which a bootstrap interval of X/a end is printed (two runs resample to three values).
 MIN_BOOTSTRAP_N = 3
 
-SUMMARY_NOTE = ("X/a end: mean displacement in the target direction after the last step, its 95% bootstrap interval "
-                f"over the runs (none below {MIN_BOOTSTRAP_N} runs: [n<{MIN_BOOTSTRAP_N}]; rough below 10); learn: the "
-                "step at which the final qualifying stroke starts, counted from 1 as in the paper (1 = the stroke from "
-                f"the first action), quartiles over the runs that learned (the median alone below {MIN_QUARTILE_N}: "
-                "'med 1.5'; learned: how many did); fail: LLM steps without a valid action.")
+SUMMARY_NOTE = (
+    "X/a end: mean displacement in the target direction after the last step, its 95% bootstrap interval "
+    f"over the runs (none below {MIN_BOOTSTRAP_N} runs: [n<{MIN_BOOTSTRAP_N}]; rough below 10); learn: the "
+    "step at which the final qualifying stroke starts, counted from 1 as in the paper (1 = the stroke from "
+    f"the first action), quartiles over the runs that learned (the median alone below {MIN_QUARTILE_N}: "
+    "'med 1.5'; learned: how many did); fail: LLM steps without a valid action."
+)
 
 
 def _fmt(v: Any, spec: str = ".3f") -> str:
@@ -44,7 +47,9 @@ def _dir(d: Any) -> str:
 
 
 def _p_cell(s: Mapping[str, Any]) -> str:
-    return f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')},{_fmt(s['success_hi'], '.2f')}]"
+    return (
+        f"{s['success_rate']:.2f} [{_fmt(s['success_lo'], '.2f')},{_fmt(s['success_hi'], '.2f')}]"
+    )
 
 
 def _x_cell(s: Mapping[str, Any]) -> str:
@@ -56,9 +61,14 @@ def _x_cell(s: Mapping[str, Any]) -> str:
 def _learn_cell(s: Mapping[str, Any]) -> str:
     if not s.get("learned"):
         return "-"
-    if s["learned"] < MIN_QUARTILE_N:  # quartiles of 2 values (1.25/1.5/1.75) are interpolation, not data
+    if (
+        s["learned"] < MIN_QUARTILE_N
+    ):  # quartiles of 2 values (1.25/1.5/1.75) are interpolation, not data
         return f"med {_fmt(s['steps_to_learn_median'], 'g')}"
-    return "/".join(_fmt(s[k], "g") for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75"))
+    return "/".join(
+        _fmt(s[k], "g")
+        for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75")
+    )
 
 
 #: Reading order of agents and swimmers in tables and figure panels (jswim.figures.plots reads them here).
@@ -89,7 +99,9 @@ def grid_order(rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any]) -> li
     return sorted(rows, key=lambda r: (order.get(r.group, len(order)), first[r.group]))
 
 
-def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()) -> list[Mapping[str, Any]]:
+def order_summary(
+    summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()
+) -> list[Mapping[str, Any]]:
     """Summary rows in reading order: agent (LLM first), Purcell before NG, +x before -x, and the
     groups in the order they first appear in ``rows`` (pass them through :func:`grid_order`: the
     order the study's grid has them; zeta 0.5 before 1)."""
@@ -100,9 +112,15 @@ def order_summary(summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[s
 
     def key(s: Mapping[str, Any]) -> tuple:
         a, sw = s.get("agent"), s.get("swimmer")
-        return (AGENT_ORDER.index(a) if a in AGENT_ORDER else len(AGENT_ORDER), str(a),
-                SWIMMER_ORDER.index(sw) if sw in SWIMMER_ORDER else len(SWIMMER_ORDER), str(sw),
-                -(s.get("direction") or 1), first.get(s.get("group"), len(first)), str(s.get("group")))
+        return (
+            AGENT_ORDER.index(a) if a in AGENT_ORDER else len(AGENT_ORDER),
+            str(a),
+            SWIMMER_ORDER.index(sw) if sw in SWIMMER_ORDER else len(SWIMMER_ORDER),
+            str(sw),
+            -(s.get("direction") or 1),
+            first.get(s.get("group"), len(first)),
+            str(s.get("group")),
+        )
 
     return sorted(summary, key=key)
 
@@ -119,15 +137,34 @@ def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], l
     samples = any((s.get("samples") or 1) > 1 for s in summary)
     cols = [Column(h, False) for h in ("agent", "swimmer", "dir") + (("group",) if groups else ())]
     cols += [Column("samples")] if samples else []
-    cols += [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]", "learn q25/med/q75", "learned",
-                                 "fail", "tok/step")]
+    cols += [
+        Column(h)
+        for h in (
+            "n",
+            "success p [95% CI]",
+            "X/a end [95% CI]",
+            "learn q25/med/q75",
+            "learned",
+            "fail",
+            "tok/step",
+        )
+    ]
     cols += [Column("cost $")] if cost else []
     rows = []
     for s in summary:
-        row = [str(s["agent"]), str(s["swimmer"]), _dir(s["direction"])] + ([str(s.get("group") or "")] if groups else [])
+        row = [str(s["agent"]), str(s["swimmer"]), _dir(s["direction"])] + (
+            [str(s.get("group") or "")] if groups else []
+        )
         row += [str(s.get("samples") or 1)] if samples else []
-        row += [str(s["n"]), _p_cell(s), _x_cell(s), _learn_cell(s), f"{s.get('learned') or 0} of {s['n']}",
-                str(s["failed_steps"]) if s["agent"] == "llm" else "-", _fmt(s.get("tokens_per_step"), ".0f")]
+        row += [
+            str(s["n"]),
+            _p_cell(s),
+            _x_cell(s),
+            _learn_cell(s),
+            f"{s.get('learned') or 0} of {s['n']}",
+            str(s["failed_steps"]) if s["agent"] == "llm" else "-",
+            _fmt(s.get("tokens_per_step"), ".0f"),
+        ]
         row += [_cost_cell(s.get("cost_usd"))] if cost else []
         rows.append(row)
     return cols, rows
@@ -157,7 +194,9 @@ class StudyFolder:
 
     @property
     def finished(self) -> bool:
-        return self.meta.get("status") == "complete" and (self.planned is None or len(self.rows) >= self.planned)
+        return self.meta.get("status") == "complete" and (
+            self.planned is None or len(self.rows) >= self.planned
+        )
 
     def status_text(self) -> str:
         """``complete`` or ``UNFINISHED: k of N runs done (status)``; a folder whose status reads
@@ -179,7 +218,11 @@ class StudyFolder:
         if not b:
             return "no LLM runs"
         # The address is not the identity (it may change between sessions): the latest session's.
-        where = "embedded" if b.get("kind") == "embedded" else (self.meta.get("server") or b.get("base_url") or "remote")
+        where = (
+            "embedded"
+            if b.get("kind") == "embedded"
+            else (self.meta.get("server") or b.get("base_url") or "remote")
+        )
         # Decoding as the runs recorded it (``auto`` is resolved per server: grammar, json_schema
         # or none, i.e. free text); the setting only while no LLM run has finished.
         used = sorted({str(r.constraint) for r in self.rows if r.agent == "llm" and r.constraint})
@@ -188,13 +231,23 @@ class StudyFolder:
             decoding = "free text (constrain none)"
         temperature = f"temperature {_fmt(b.get('temperature'), 'g')}"
         # A reasoning model that accepts one temperature was sent that one (the runs record it).
-        sent = sorted({r.temperature_sent for r in self.rows
-                       if r.agent == "llm" and r.temperature_sent is not None})
+        sent = sorted(
+            {
+                r.temperature_sent
+                for r in self.rows
+                if r.agent == "llm" and r.temperature_sent is not None
+            }
+        )
         if sent:
-            temperature += f" asked, {','.join(_fmt(t, 'g') for t in sent)} sent (all the model accepts)"
+            temperature += (
+                f" asked, {','.join(_fmt(t, 'g') for t in sent)} sent (all the model accepts)"
+            )
         thinking = (self.meta.get("summary") or {}).get("reasoning") or {}
-        room = (f", reasoning model: {thinking.get('token_field')}={thinking.get('budget')}"
-                if thinking.get("active") else "")
+        room = (
+            f", reasoning model: {thinking.get('token_field')}={thinking.get('budget')}"
+            if thinking.get("active")
+            else ""
+        )
         return f"{b.get('model')} ({where}), {temperature}, {decoding}{room}"
 
     def label(self) -> str:
@@ -205,18 +258,38 @@ class StudyFolder:
     def usage(self) -> dict[str, float]:
         """LLM calls, tokens and cost over the finished runs."""
         llm = [r for r in self.rows if r.agent == "llm"]
-        return {k: sum(getattr(r, k) or (0.0 if k == "cost_usd" else 0) for r in llm)
-                for k in ("calls", "prompt_tokens", "completion_tokens", "cost_usd")}
+        return {
+            k: sum(getattr(r, k) or (0.0 if k == "cost_usd" else 0) for r in llm)
+            for k in ("calls", "prompt_tokens", "completion_tokens", "cost_usd")
+        }
 
     def figures(self) -> list[Path]:
         fig_dir = self.folder / "figures"
-        return sorted(fig_dir.glob("*.png")) + sorted(fig_dir.glob("*.pdf")) if fig_dir.is_dir() else []
+        return (
+            sorted(fig_dir.glob("*.png")) + sorted(fig_dir.glob("*.pdf"))
+            if fig_dir.is_dir()
+            else []
+        )
 
 
 def _settings_text(options: Mapping[str, Any], skip: Sequence[str] = ()) -> str:
     """The options of a study's identity worth reading, without those the study has no use for."""
-    keep = ("swimmers", "directions", "runs", "q_runs", "steps", "n_ht", "zeta", "zetas", "n_hts", "init", "action_set",
-            "variant", "variants", "seed")
+    keep = (
+        "swimmers",
+        "directions",
+        "runs",
+        "q_runs",
+        "steps",
+        "n_ht",
+        "zeta",
+        "zetas",
+        "n_hts",
+        "init",
+        "action_set",
+        "variant",
+        "variants",
+        "seed",
+    )
     parts = []
     for k in keep:
         v = options.get(k)
@@ -236,7 +309,9 @@ def unpriced_reason(meta: Mapping[str, Any], cost_usd: float | None) -> str | No
     backend = (meta.get("identity") or {}).get("backend") or {}
     if backend.get("kind") == "embedded":
         return EMBEDDED_UNPRICED
-    if backend.get("model") == "reference-rule":  # jswim.llm.reference.MODEL (not imported: no httpx here)
+    if (
+        backend.get("model") == "reference-rule"
+    ):  # jswim.llm.reference.MODEL (not imported: no httpx here)
         return REFERENCE_UNPRICED
     why = (meta.get("llm_server") or {}).get("unpriced")
     if why:
@@ -259,26 +334,40 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
 
         spec = SPECS.get(s.study)
         lines.append(f"settings: {_settings_text(opts, spec.ignores if spec else ())}")
-    lines.append(f"runs: {len(s.rows)} (" + ", ".join(f"{a} {n}" for a, n in sorted(agents.items())) + ")")
+    lines.append(
+        f"runs: {len(s.rows)} (" + ", ".join(f"{a} {n}" for a, n in sorted(agents.items())) + ")"
+    )
     if agents.get("llm"):
-        lines.append(f"LLM usage: {u['calls']:,} calls, {u['prompt_tokens']:,} prompt + {u['completion_tokens']:,} "
-                     f"completion tokens, cost {cost_text(u['cost_usd'], unpriced_reason(s.meta, u['cost_usd']), 'estimate from the price table')}")
+        lines.append(
+            f"LLM usage: {u['calls']:,} calls, {u['prompt_tokens']:,} prompt + {u['completion_tokens']:,} "
+            f"completion tokens, cost {cost_text(u['cost_usd'], unpriced_reason(s.meta, u['cost_usd']), 'estimate from the price table')}"
+        )
     totals = s.meta.get("llm_totals") or {}
     if totals.get("sessions"):  # the study's own numbers, over all its sessions (one source each)
-        lines.append(f"LLM wall time: {totals.get('wall_s', 0):.1f} s over {totals['sessions']} session(s) for "
-                     f"{totals.get('answered_calls', 0):,} answered calls ({totals.get('calls_per_s', 0):.2f} calls/s)")
+        lines.append(
+            f"LLM wall time: {totals.get('wall_s', 0):.1f} s over {totals['sessions']} session(s) for "
+            f"{totals.get('answered_calls', 0):,} answered calls ({totals.get('calls_per_s', 0):.2f} calls/s)"
+        )
         lines.append(f"HTTP requests: {requests_text(totals)}")
     else:  # folders written before the study's totals were kept: the last session's
         speed = (s.meta.get("summary") or {}).get("llm_speed") or {}
         if speed.get("wall_s"):
-            lines.append(f"LLM wall time (last session): {speed['wall_s']:.1f} s "
-                         f"({speed.get('calls_per_s', 0):.2f} calls/s)")
+            lines.append(
+                f"LLM wall time (last session): {speed['wall_s']:.1f} s "
+                f"({speed.get('calls_per_s', 0):.2f} calls/s)"
+            )
     lines.append("")
     if s.summary:
         cols, rows = summary_table(s.summary)
         lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
-        if any(r.scene for r in s.rows):  # walls and pairs: the scene table too (jswim.studies.scenes)
-            from jswim.studies.scenes import scene_summary, table, table_note  # lazy: only for a scene study
+        if any(
+            r.scene for r in s.rows
+        ):  # walls and pairs: the scene table too (jswim.studies.scenes)
+            from jswim.studies.scenes import (
+                scene_summary,
+                table,
+                table_note,
+            )  # lazy: only for a scene study
 
             scene_rows = scene_summary(s.rows)
             lines += ["", plain_table(*table(scene_rows), title="scenes", width=width)]
@@ -295,7 +384,9 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     return "\n".join(lines)
 
 
-def compare_table(folders: Sequence[str | Path]) -> tuple[list[StudyFolder], list[Column], list[list[str]], int]:
+def compare_table(
+    folders: Sequence[str | Path],
+) -> tuple[list[StudyFolder], list[Column], list[list[str]], int]:
     """Studies side by side, per setting (agent, swimmer, direction, group) present in all of them.
 
     Returns the studies, the table's columns and rows (for each setting one row per study, in the
@@ -310,8 +401,17 @@ def compare_table(folders: Sequence[str | Path]) -> tuple[list[StudyFolder], lis
     order = [key for key in keyed[0] if key in common]  # the first study's reading order
     groups = any(key[3] for key in order)
     cols = [Column(h, False) for h in ("agent", "swimmer", "dir") + (("group",) if groups else ())]
-    cols += [Column("study", False)] + [Column(h) for h in ("n", "success p [95% CI]", "X/a end [95% CI]",
-                                                            "learn median", "tok/step", "cost $")]
+    cols += [Column("study", False)] + [
+        Column(h)
+        for h in (
+            "n",
+            "success p [95% CI]",
+            "X/a end [95% CI]",
+            "learn median",
+            "tok/step",
+            "cost $",
+        )
+    ]
     rows = []
     for key in order:
         # A baseline (Q-learning, random) is the same rows in every study of the same grid and
@@ -319,15 +419,24 @@ def compare_table(folders: Sequence[str | Path]) -> tuple[list[StudyFolder], lis
         shown: dict[tuple, list[int]] = {}
         for i, k in enumerate(keyed):
             s = k[key]
-            same = (s["n"], s.get("success_rate"), s.get("mean_x"), s.get("steps_to_learn_median")) \
-                if key[0] != "llm" else (i,)
+            same = (
+                (s["n"], s.get("success_rate"), s.get("mean_x"), s.get("steps_to_learn_median"))
+                if key[0] != "llm"
+                else (i,)
+            )
             shown.setdefault(same, []).append(i)
         for members in shown.values():
             s = keyed[members[0]][key]
             row = [str(key[0]), str(key[1]), _dir(key[2])] + ([str(key[3] or "")] if groups else [])
-            row += ["".join(f"[{i + 1}]" for i in members), str(s["n"]), _p_cell(s), _x_cell(s),
-                    _fmt(s["steps_to_learn_median"], "g") if s.get("learned") else "-",
-                    _fmt(s.get("tokens_per_step"), ".0f"), _cost_cell(s.get("cost_usd"))]
+            row += [
+                "".join(f"[{i + 1}]" for i in members),
+                str(s["n"]),
+                _p_cell(s),
+                _x_cell(s),
+                _fmt(s["steps_to_learn_median"], "g") if s.get("learned") else "-",
+                _fmt(s.get("tokens_per_step"), ".0f"),
+                _cost_cell(s.get("cost_usd")),
+            ]
             rows.append(row)
     return studies, cols, rows, len(every - common)
 
@@ -335,8 +444,10 @@ def compare_table(folders: Sequence[str | Path]) -> tuple[list[StudyFolder], lis
 def compare_text(folders: Sequence[str | Path], width: int | None = None) -> str:
     """What ``jswim compare FOLDER...`` prints."""
     studies, cols, rows, left_out = compare_table(folders)
-    lines = [f"[{i + 1}] {s.label()}: study {s.study}, {s.status_text()}, {len(s.rows)} runs"
-             for i, s in enumerate(studies)]
+    lines = [
+        f"[{i + 1}] {s.label()}: study {s.study}, {s.status_text()}, {len(s.rows)} runs"
+        for i, s in enumerate(studies)
+    ]
     lines.append("")
     if rows:
         lines.append(plain_table(cols, rows, width=width))

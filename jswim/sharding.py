@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import contextlib
 import functools
-from typing import Any, Callable, Iterator, Sequence
+from typing import Any
+from collections.abc import Callable, Iterator, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -80,7 +81,9 @@ def pad(tree: Any, n: int, size: int) -> Any:
     """Pad every leaf's leading axis from ``n`` to ``size`` by repeating its last entry."""
     if size == n:
         return tree
-    return jax.tree_util.tree_map(lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], size - n, axis=0)]), tree)
+    return jax.tree_util.tree_map(
+        lambda a: jnp.concatenate([a, jnp.repeat(a[-1:], size - n, axis=0)]), tree
+    )
 
 
 def shard(tree: Any) -> Any:
@@ -91,7 +94,9 @@ def shard(tree: Any) -> Any:
     return jax.tree_util.tree_map(lambda a: jax.device_put(a, sh), tree)
 
 
-def apply_batched(fn: Callable[..., Any], shared: Sequence[Any], batched: Sequence[Any], n: int) -> Any:
+def apply_batched(
+    fn: Callable[..., Any], shared: Sequence[Any], batched: Sequence[Any], n: int
+) -> Any:
     """``fn(*shared, *batched)`` with the batch axis (size ``n``) sharded over every device.
 
     Every array leaf of ``batched`` must have leading axis ``n``; ``shared`` leaves are

@@ -45,8 +45,13 @@ class BrowserError(RuntimeError):
 class Browser:
     """One headless Chromium with one page; use as a context manager."""
 
-    def __init__(self, executable: str | None = None, width: int = 1280, height: int = 1400,
-                 timeout: float = 60.0) -> None:
+    def __init__(
+        self,
+        executable: str | None = None,
+        width: int = 1280,
+        height: int = 1400,
+        timeout: float = 60.0,
+    ) -> None:
         self.executable = executable or find_browser()
         if not self.executable:
             raise BrowserError("no Chromium on PATH")
@@ -57,16 +62,30 @@ class Browser:
         self._events: list[dict[str, Any]] = []
         self._id = 0
 
-    def __enter__(self) -> "Browser":
+    def __enter__(self) -> Browser:
         import websocket  # websocket-client (a test dependency)
 
         self._profile = tempfile.mkdtemp(prefix="jswim-chromium-")
-        args = [self.executable, "--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                "--no-first-run", "--no-default-browser-check", "--disable-extensions", "--mute-audio",
-                "--disable-background-networking", "--disable-component-update", "--hide-scrollbars",
-                f"--user-data-dir={self._profile}", "--remote-debugging-address=127.0.0.1",
-                "--remote-debugging-port=0", "--remote-allow-origins=*",
-                f"--window-size={self.size[0]},{self.size[1]}", "about:blank"]
+        args = [
+            self.executable,
+            "--headless=new",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-dev-shm-usage",
+            "--no-first-run",
+            "--no-default-browser-check",
+            "--disable-extensions",
+            "--mute-audio",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--hide-scrollbars",
+            f"--user-data-dir={self._profile}",
+            "--remote-debugging-address=127.0.0.1",
+            "--remote-debugging-port=0",
+            "--remote-allow-origins=*",
+            f"--window-size={self.size[0]},{self.size[1]}",
+            "about:blank",
+        ]
         self._proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         port_file = Path(self._profile) / "DevToolsActivePort"
         deadline = time.monotonic() + self.timeout
@@ -82,12 +101,18 @@ class Browser:
                 pages = [t for t in json.load(resp) if t.get("type") == "page"]
             if not pages:
                 time.sleep(0.05)
-        self._ws = websocket.create_connection(pages[0]["webSocketDebuggerUrl"], timeout=self.timeout,
-                                               suppress_origin=True)
+        self._ws = websocket.create_connection(
+            pages[0]["webSocketDebuggerUrl"], timeout=self.timeout, suppress_origin=True
+        )
         for domain in ("Page", "Runtime", "Log", "Network"):
             self.call(f"{domain}.enable")
-        self.call("Emulation.setDeviceMetricsOverride", width=self.size[0], height=self.size[1],
-                  deviceScaleFactor=1, mobile=False)
+        self.call(
+            "Emulation.setDeviceMetricsOverride",
+            width=self.size[0],
+            height=self.size[1],
+            deviceScaleFactor=1,
+            mobile=False,
+        )
         return self
 
     def __exit__(self, *exc: Any) -> None:
@@ -112,12 +137,19 @@ class Browser:
     def _note(self, msg: dict[str, Any]) -> None:
         method, p = msg.get("method"), msg.get("params", {})
         if method == "Runtime.consoleAPICalled" and p.get("type") in ("error", "assert"):
-            self.errors.append("console: " + " ".join(str(a.get("value", a.get("description", ""))) for a in p.get("args", [])))
+            self.errors.append(
+                "console: "
+                + " ".join(str(a.get("value", a.get("description", ""))) for a in p.get("args", []))
+            )
         elif method == "Runtime.exceptionThrown":
             d = p.get("exceptionDetails", {})
-            self.errors.append("exception: " + str(d.get("exception", {}).get("description") or d.get("text")))
+            self.errors.append(
+                "exception: " + str(d.get("exception", {}).get("description") or d.get("text"))
+            )
         elif method == "Log.entryAdded" and p.get("entry", {}).get("level") == "error":
-            self.errors.append("log: " + str(p["entry"].get("text")) + " " + str(p["entry"].get("url", "")))
+            self.errors.append(
+                "log: " + str(p["entry"].get("text")) + " " + str(p["entry"].get("url", ""))
+            )
         elif method == "Network.requestWillBeSent":
             self.requests.append(p.get("request", {}).get("url", ""))
         self._events.append(msg)
@@ -159,10 +191,17 @@ class Browser:
 
     def eval(self, expression: str, await_promise: bool = True) -> Any:
         """The value of a JavaScript expression in the page (promises awaited)."""
-        res = self.call("Runtime.evaluate", expression=expression, awaitPromise=await_promise, returnByValue=True)
+        res = self.call(
+            "Runtime.evaluate",
+            expression=expression,
+            awaitPromise=await_promise,
+            returnByValue=True,
+        )
         if "exceptionDetails" in res:
             d = res["exceptionDetails"]
-            raise BrowserError(f"{expression!r}: {d.get('exception', {}).get('description') or d.get('text')}")
+            raise BrowserError(
+                f"{expression!r}: {d.get('exception', {}).get('description') or d.get('text')}"
+            )
         return res.get("result", {}).get("value")
 
     def pump(self, seconds: float) -> None:
@@ -202,8 +241,10 @@ def open_report_run(b: Browser, page: Path, run_id: str) -> None:
     """Open the report ``page`` in ``b``, select the run ``run_id`` and scroll to its view."""
     b.open(page.resolve().as_uri())
     b.eval("window.jswimReport.opened")
-    i = b.eval("JSON.parse(document.getElementById('report-data').textContent).runs"
-               f".filter(r => r.run_id === {json.dumps(run_id)})[0].i")
+    i = b.eval(
+        "JSON.parse(document.getElementById('report-data').textContent).runs"
+        f".filter(r => r.run_id === {json.dumps(run_id)})[0].i"
+    )
     b.eval(f"window.jswimReport.select({i})")
     b.pump(0.5)
     b.eval("document.getElementById('browser').scrollIntoView()")

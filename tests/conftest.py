@@ -74,7 +74,8 @@ def pytest_configure(config):
     module's module-scoped fixtures (small studies) are built once and its programs compiled once;
     xdist's default (``load``) split such modules between the workers, which built them twice."""
     if getattr(config.option, "dist", "no") == "load" and not any(
-            a.startswith("--dist") for a in config.invocation_params.args):
+        a.startswith("--dist") for a in config.invocation_params.args
+    ):
         config.option.dist = "loadfile"
     _fast_tier_codegen(config)
 
@@ -99,7 +100,11 @@ def _fast_tier_codegen(config):
     so that one is tried first in a throwaway interpreter (:func:`_xla_accepts`).
     """
     expr = config.option.markexpr or ""
-    if os.environ.get("PYTEST_XDIST_WORKER") or not expr or re.search(r"(?<!not )\b(slow|model)\b", expr):
+    if (
+        os.environ.get("PYTEST_XDIST_WORKER")
+        or not expr
+        or re.search(r"(?<!not )\b(slow|model)\b", expr)
+    ):
         return
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_backend_optimization_level" not in flags:
@@ -124,8 +129,16 @@ def _xla_accepts(config, flag: str) -> bool:
         return bool(known)
     env = {**os.environ, "XLA_FLAGS": flag, "JAX_PLATFORMS": "cpu"}
     try:
-        ok = subprocess.run([sys.executable, "-c", "import jax.numpy as j; j.zeros(1).block_until_ready()"],
-                            env=env, capture_output=True, timeout=120, check=False).returncode == 0
+        ok = (
+            subprocess.run(
+                [sys.executable, "-c", "import jax.numpy as j; j.zeros(1).block_until_ready()"],
+                env=env,
+                capture_output=True,
+                timeout=120,
+                check=False,
+            ).returncode
+            == 0
+        )
     except (OSError, subprocess.TimeoutExpired):
         return False
     if cache is not None:
@@ -206,8 +219,10 @@ def pytest_terminal_summary(terminalreporter):
     parts = [f"{w} {gb:.2f} GB" for w, gb in sorted(_worker_peaks.items())]
     parts.append(f"this process {_peak_rss_gb():.2f} GB")
     total = sum(_worker_peaks.values()) + _peak_rss_gb()
-    terminalreporter.write_line(f"peak resident set: {', '.join(parts)}"
-                                + (f" (together at most {total:.2f} GB)" if _worker_peaks else ""))
+    terminalreporter.write_line(
+        f"peak resident set: {', '.join(parts)}"
+        + (f" (together at most {total:.2f} GB)" if _worker_peaks else "")
+    )
 
 
 @pytest.fixture(scope="session")
@@ -232,7 +247,9 @@ def small_swim_study() -> Path:
         if not built.exists():
             shutil.rmtree(folder, ignore_errors=True)  # a build cut short by a failed test
             with FakeServer(reply=hash_reply, latency=0.001) as srv:
-                opts = StudyOptions(swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3)
+                opts = StudyOptions(
+                    swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3
+                )
                 run_study("swim", opts, srv.backend(), folder, figures=False)
             built.touch()
     return folder

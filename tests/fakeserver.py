@@ -42,7 +42,8 @@ import zlib
 from collections import deque
 from dataclasses import dataclass
 from http import HTTPStatus
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any
+from collections.abc import Callable, Iterable, Sequence
 
 
 @dataclass(frozen=True)
@@ -64,23 +65,23 @@ class Fault:
     body: Any = None
 
     @classmethod
-    def rate_limit(cls, retry_after: str | None = "0") -> "Fault":
+    def rate_limit(cls, retry_after: str | None = "0") -> Fault:
         return cls("status", 429, retry_after)
 
     @classmethod
-    def server_error(cls, status: int = 500, message: str = "injected fault") -> "Fault":
+    def server_error(cls, status: int = 500, message: str = "injected fault") -> Fault:
         return cls("status", status, message=message)
 
     @classmethod
-    def drop(cls) -> "Fault":
+    def drop(cls) -> Fault:
         return cls("drop")
 
     @classmethod
-    def delay(cls, seconds: float) -> "Fault":
+    def delay(cls, seconds: float) -> Fault:
         return cls("delay", seconds=seconds)
 
     @classmethod
-    def malformed(cls) -> "Fault":
+    def malformed(cls) -> Fault:
         return cls("malformed")
 
 
@@ -96,7 +97,9 @@ class Answer:
     content: Any = ""
     finish_reason: str = "stop"
     fields: tuple[tuple[str, Any], ...] = ()
-    usage: tuple[tuple[str, Any], ...] = ()  # fields of ``usage`` set as given (e.g. reasoning tokens)
+    usage: tuple[
+        tuple[str, Any], ...
+    ] = ()  # fields of ``usage`` set as given (e.g. reasoning tokens)
 
     def message(self) -> dict[str, Any]:
         return {"role": "assistant", "content": self.content, **dict(self.fields)}
@@ -114,13 +117,13 @@ def hash_reply(body: dict[str, Any]) -> str:
     return GAIT_MOVES[zlib.crc32(last.encode()) % len(GAIT_MOVES)]
 
 
-def hangs_for(seconds: float, reply: "Reply" = hash_reply) -> "Reply":
+def hangs_for(seconds: float, reply: Reply = hash_reply) -> Reply:
     """A server that hangs: every request arriving within ``seconds`` of the first one is read and
     never answered (a wedged worker, a proxy that lost its upstream; the client times out), and
     later ones are answered by ``reply``. Use as ``FakeServer(reply=hangs_for(2.0))``."""
     state: dict[str, float] = {}
 
-    def answer(body: dict[str, Any]) -> "str | Answer | Fault":
+    def answer(body: dict[str, Any]) -> str | Answer | Fault:
         t0 = state.setdefault("t0", time.monotonic())
         if time.monotonic() - t0 < seconds:
             return Fault.delay(3600.0)  # until the server stops (its tasks are cancelled then)
@@ -139,11 +142,15 @@ def lattice_reply(body: dict[str, Any]) -> str:
     last = str(body.get("messages", [{}])[-1].get("content", ""))
     first = str(body.get("messages", [{}])[0].get("content", ""))
     prompt = last if len(body.get("messages", [])) <= 2 else first + last
-    m = _ROC_RANGE.search("\n".join(str(msg.get("content", "")) for msg in body.get("messages", [])))
+    m = _ROC_RANGE.search(
+        "\n".join(str(msg.get("content", "")) for msg in body.get("messages", []))
+    )
     k = int(m.group(1)) if m else 1
     h = zlib.crc32(prompt.encode())
     if k > 1 and h % 7 == 0 and "names no valid action" not in last:
-        return f"[1, {k + 1}]"  # outside the lattice: the parser refuses it and the driver asks again
+        return (
+            f"[1, {k + 1}]"  # outside the lattice: the parser refuses it and the driver asks again
+        )
     roc = h // 7 % (2 * k + 1) - k
     return f"[{1 + h % 2}, {roc}]"
 
@@ -252,13 +259,22 @@ class FakeServer:
     """
 
     def __init__(
-        self, reply: Reply | None = None, latency: float | Latency = 0.0, faults: Iterable[Fault | None] = (),
+        self,
+        reply: Reply | None = None,
+        latency: float | Latency = 0.0,
+        faults: Iterable[Fault | None] = (),
         tokens: Callable[[str], int] = count_words,
         headers: Callable[[dict[str, Any]], dict[str, str]] | None = None,
-        stream: str = "never", reject_fields: dict[str, str] | None = None, cold_start: float = 0.0,
-        models: "Sequence[str] | None" = ("fake",), served_model: str | None = None,
-        hold: Callable[[dict[str, Any]], bool] | None = None, hold_s: float = 30.0,
-        owned_by: str | None = None, props: dict[str, Any] | None = None, api_key: str | None = None,
+        stream: str = "never",
+        reject_fields: dict[str, str] | None = None,
+        cold_start: float = 0.0,
+        models: Sequence[str] | None = ("fake",),
+        served_model: str | None = None,
+        hold: Callable[[dict[str, Any]], bool] | None = None,
+        hold_s: float = 30.0,
+        owned_by: str | None = None,
+        props: dict[str, Any] | None = None,
+        api_key: str | None = None,
         usage: Callable[[dict[str, Any]], Any] | None = None,
         redirects: dict[str, tuple[int, str]] | None = None,
     ) -> None:
@@ -280,11 +296,15 @@ class FakeServer:
         self.props = props
         self.api_key = api_key
         self.n_preflight = 0  # GET requests (models, props)
-        self.usage = usage  # replaces the usage object of every completion (servers that send odd ones)
+        self.usage = (
+            usage  # replaces the usage object of every completion (servers that send odd ones)
+        )
         # POST path -> (status, Location): a moved endpoint; the chat endpoint also answers where
         # a redirect leads.
         self.redirects = dict(redirects or {})
-        self.redirected: list[str | None] = []  # the Authorization header of each redirected request
+        self.redirected: list[
+            str | None
+        ] = []  # the Authorization header of each redirected request
         self._warm_at: float | None = None
         self._faults: deque[Fault | None] = deque(faults)
         self._lock = threading.Lock()
@@ -302,9 +322,11 @@ class FakeServer:
 
     # -- lifecycle ---------------------------------------------------------------------------
 
-    def start(self) -> "FakeServer":
+    def start(self) -> FakeServer:
         ready = threading.Event()
-        self._thread = threading.Thread(target=self._serve, args=(ready,), daemon=True, name="fakeserver")
+        self._thread = threading.Thread(
+            target=self._serve, args=(ready,), daemon=True, name="fakeserver"
+        )
         self._thread.start()
         if not ready.wait(10) or self._port is None:
             raise RuntimeError("fake server did not start")
@@ -314,7 +336,9 @@ class FakeServer:
         loop = asyncio.new_event_loop()
         asyncio.set_event_loop(loop)
         self._loop = loop
-        server = loop.run_until_complete(asyncio.start_server(self._connection, "127.0.0.1", 0, backlog=1024))
+        server = loop.run_until_complete(
+            asyncio.start_server(self._connection, "127.0.0.1", 0, backlog=1024)
+        )
         self._port = server.sockets[0].getsockname()[1]
         ready.set()
         try:
@@ -333,7 +357,7 @@ class FakeServer:
             self._thread.join(10)
             self._loop = self._thread = None
 
-    def __enter__(self) -> "FakeServer":
+    def __enter__(self) -> FakeServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
@@ -388,7 +412,7 @@ class FakeServer:
             self.arrivals.clear()
             self.n_requests = self.n_answered = self.max_in_flight = 0
 
-    def completion(self, body: dict[str, Any], text: "str | Answer") -> dict[str, Any]:
+    def completion(self, body: dict[str, Any], text: str | Answer) -> dict[str, Any]:
         """The chat.completion object answering ``body`` with ``text``."""
         answer = text if isinstance(text, Answer) else Answer(text)
         prompt = sum(self.tokens(str(m.get("content", ""))) for m in body.get("messages", []))
@@ -400,17 +424,27 @@ class FakeServer:
             "object": "chat.completion",
             "created": int(time.time()),
             "model": self.served_model or body.get("model", "fake"),
-            "choices": [{"index": 0, "message": answer.message(), "finish_reason": answer.finish_reason}],
-            "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done,
-                      **dict(answer.usage)} if self.usage is None else self.usage(body),
+            "choices": [
+                {"index": 0, "message": answer.message(), "finish_reason": answer.finish_reason}
+            ],
+            "usage": {
+                "prompt_tokens": prompt,
+                "completion_tokens": done,
+                "total_tokens": prompt + done,
+                **dict(answer.usage),
+            }
+            if self.usage is None
+            else self.usage(body),
         }
 
-    def chunks(self, body: dict[str, Any], text: "str | Answer") -> list[dict[str, Any]]:
+    def chunks(self, body: dict[str, Any], text: str | Answer) -> list[dict[str, Any]]:
         """The chat.completion.chunk events of a streamed answer (content in small pieces)."""
         full = self.completion(body, text)
         choice = full["choices"][0]
         msg = choice["message"]
-        head = {k: full[k] for k in ("id", "created", "model")} | {"object": "chat.completion.chunk"}
+        head = {k: full[k] for k in ("id", "created", "model")} | {
+            "object": "chat.completion.chunk"
+        }
 
         def event(delta: dict[str, Any], finish: str | None = None) -> dict[str, Any]:
             return {**head, "choices": [{"index": 0, "delta": delta, "finish_reason": finish}]}
@@ -419,10 +453,10 @@ class FakeServer:
         for key, value in msg.items():
             if key in ("role", "content") or not isinstance(value, str):
                 continue
-            out += [event({key: value[i:i + 5]}) for i in range(0, len(value), 5)]
+            out += [event({key: value[i : i + 5]}) for i in range(0, len(value), 5)]
         content = msg.get("content")
         if isinstance(content, str):
-            out += [event({"content": content[i:i + 3]}) for i in range(0, len(content), 3)]
+            out += [event({"content": content[i : i + 3]}) for i in range(0, len(content), 3)]
         elif content is not None:
             out.append(event({"content": content}))
         out.append(event({}, choice["finish_reason"]))
@@ -448,7 +482,12 @@ class FakeServer:
                 keep = await self._dispatch(method, path.rstrip("/"), headers, raw, writer)
                 if not keep or headers.get("connection", "").lower() == "close":
                     break
-        except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, ConnectionError, ValueError):
+        except (
+            asyncio.IncompleteReadError,
+            asyncio.LimitOverrunError,
+            ConnectionError,
+            ValueError,
+        ):
             pass  # the client went away or sent garbage
         except asyncio.CancelledError:
             pass  # the server stops while an answer still waits (hangs_for): no noise in the log
@@ -457,17 +496,28 @@ class FakeServer:
 
     @staticmethod
     async def _send(
-        writer: asyncio.StreamWriter, status: int, payload: bytes, extra: dict[str, str] | None = None
+        writer: asyncio.StreamWriter,
+        status: int,
+        payload: bytes,
+        extra: dict[str, str] | None = None,
     ) -> bool:
-        head = [f"HTTP/1.1 {status} {HTTPStatus(status).phrase}", "Content-Type: application/json",
-                f"Content-Length: {len(payload)}"]
+        head = [
+            f"HTTP/1.1 {status} {HTTPStatus(status).phrase}",
+            "Content-Type: application/json",
+            f"Content-Length: {len(payload)}",
+        ]
         head += [f"{k}: {v}" for k, v in (extra or {}).items()]
         writer.write(("\r\n".join(head) + "\r\n\r\n").encode("latin-1") + payload)
         await writer.drain()
         return True
 
     async def _dispatch(
-        self, method: str, path: str, headers: dict[str, str], raw: bytes, writer: asyncio.StreamWriter
+        self,
+        method: str,
+        path: str,
+        headers: dict[str, str],
+        raw: bytes,
+        writer: asyncio.StreamWriter,
     ) -> bool:
         if method == "GET" and path in ("/health", "/v1/health"):
             return await self._send(writer, 200, b'{"status":"ok"}')
@@ -477,13 +527,26 @@ class FakeServer:
             if method == "POST":
                 with self._lock:
                     self.n_requests += 1
-            msg = {"error": {"message": "Incorrect API key provided", "type": "invalid_request_error",
-                             "code": "invalid_api_key"}}
+            msg = {
+                "error": {
+                    "message": "Incorrect API key provided",
+                    "type": "invalid_request_error",
+                    "code": "invalid_api_key",
+                }
+            }
             return await self._send(writer, 401, json.dumps(msg).encode())
         if method == "GET" and path == "/v1/models" and self.models is not None:
-            data = [{"id": m, "object": "model", **({"owned_by": self.owned_by} if self.owned_by else {})}
-                    for m in self.models]
-            return await self._send(writer, 200, json.dumps({"object": "list", "data": data}).encode())
+            data = [
+                {
+                    "id": m,
+                    "object": "model",
+                    **({"owned_by": self.owned_by} if self.owned_by else {}),
+                }
+                for m in self.models
+            ]
+            return await self._send(
+                writer, 200, json.dumps({"object": "list", "data": data}).encode()
+            )
         if method == "GET" and path == "/props" and self.props is not None:
             return await self._send(writer, 200, json.dumps(self.props).encode())
         if method == "POST" and path in self.redirects:
@@ -493,14 +556,20 @@ class FakeServer:
             return await self._send(writer, status, b"", {"Location": location})
         # The chat endpoint answers at /v1/chat/completions and where a redirect leads, nowhere
         # else: a wrong base URL must still get the 404 real servers send.
-        targets = {"/v1/chat/completions"} | {urllib.parse.urlsplit(loc).path for _, loc in self.redirects.values()}
+        targets = {"/v1/chat/completions"} | {
+            urllib.parse.urlsplit(loc).path for _, loc in self.redirects.values()
+        }
         if method != "POST" or path not in targets:
-            msg = json.dumps({"error": {"message": f"File Not Found: {path}", "code": 404}}).encode()
+            msg = json.dumps(
+                {"error": {"message": f"File Not Found: {path}", "code": 404}}
+            ).encode()
             return await self._send(writer, 404, msg)
         try:
             body = json.loads(raw)
         except ValueError:
-            return await self._send(writer, 400, b'{"error":{"message":"request body is not JSON"}}')
+            return await self._send(
+                writer, 400, b'{"error":{"message":"request body is not JSON"}}'
+            )
         with self._lock:
             self.n_requests += 1
             self.requests.append(body)
@@ -515,7 +584,9 @@ class FakeServer:
             with self._lock:
                 self.in_flight -= 1
 
-    async def _answer(self, body: dict[str, Any], fault: Fault | None, writer: asyncio.StreamWriter) -> bool:
+    async def _answer(
+        self, body: dict[str, Any], fault: Fault | None, writer: asyncio.StreamWriter
+    ) -> bool:
         text: str | Answer | Fault | None = None
         if self._warm_at is None:
             self._warm_at = time.monotonic() + self.cold_start
@@ -541,7 +612,9 @@ class FakeServer:
                 return False  # close without a response
             if fault.kind == "status":
                 extra = {"Retry-After": fault.retry_after} if fault.retry_after is not None else {}
-                err = json.dumps(fault.body if fault.body is not None else {"error": {"message": fault.message}}).encode()
+                err = json.dumps(
+                    fault.body if fault.body is not None else {"error": {"message": fault.message}}
+                ).encode()
                 return await self._send(writer, fault.status, err, extra)
             if fault.kind == "malformed":
                 return await self._send(writer, 200, b'{"choices": [ {"message": ')
@@ -559,15 +632,23 @@ class FakeServer:
             self.n_answered += 1
         if text is None:
             text = ""
-        if self.stream == "always" or (self.stream == "default" and body.get("stream") is not False):
+        if self.stream == "always" or (
+            self.stream == "default" and body.get("stream") is not False
+        ):
             return await self._send_stream(writer, self.chunks(body, text))
         extra = self.headers(body) if self.headers is not None else None
-        return await self._send(writer, 200, json.dumps(self.completion(body, text)).encode(), extra)
+        return await self._send(
+            writer, 200, json.dumps(self.completion(body, text)).encode(), extra
+        )
 
     @staticmethod
     async def _send_stream(writer: asyncio.StreamWriter, events: list[dict[str, Any]]) -> bool:
-        head = ["HTTP/1.1 200 OK", "Content-Type: text/event-stream; charset=utf-8", "Cache-Control: no-cache",
-                "Transfer-Encoding: chunked"]
+        head = [
+            "HTTP/1.1 200 OK",
+            "Content-Type: text/event-stream; charset=utf-8",
+            "Cache-Control: no-cache",
+            "Transfer-Encoding: chunked",
+        ]
         writer.write(("\r\n".join(head) + "\r\n\r\n").encode("latin-1"))
         for data in [json.dumps(e) for e in events] + ["[DONE]"]:
             piece = f"data: {data}\n\n".encode()
@@ -595,16 +676,21 @@ def is_follow_up(body: dict[str, Any]) -> bool:
     return any(m.get("role") == "assistant" for m in body.get("messages", []))
 
 
-def _context_400(body: dict[str, Any]) -> "str | Fault":
+def _context_400(body: dict[str, Any]) -> str | Fault:
     # The prompt outgrows a small context once it shows two history records: from step 3 on.
     if history_records(body) >= 2:
-        return Fault("status", 400, message=(
-            "This model's maximum context length is 64 tokens. However, you requested 97 tokens "
-            "(65 in the messages, 32 in the completion). Please reduce the length of the messages or completion."))
+        return Fault(
+            "status",
+            400,
+            message=(
+                "This model's maximum context length is 64 tokens. However, you requested 97 tokens "
+                "(65 in the messages, 32 in the completion). Please reduce the length of the messages or completion."
+            ),
+        )
     return "[2, -1]"
 
 
-def _think_then_follow_up(body: dict[str, Any]) -> "str | Answer":
+def _think_then_follow_up(body: dict[str, Any]) -> str | Answer:
     # Thinks past max_tokens on a first request; answers a follow-up (a longer conversation).
     if is_follow_up(body):
         return "[2, -1]"
@@ -627,23 +713,43 @@ def reasoning_model(answer: Reply | None = None, think: int = REASONING_TOKENS) 
     """
     answer = answer or (lambda body: "[2, -1]")
 
-    def reply(body: dict[str, Any]) -> "str | Fault | Answer":
+    def reply(body: dict[str, Any]) -> str | Fault | Answer:
         if "max_tokens" in body:
-            return Fault("status", 400, message="Unsupported parameter: 'max_tokens' is not supported with this "
-                                                "model. Use 'max_completion_tokens' instead.")
+            return Fault(
+                "status",
+                400,
+                message="Unsupported parameter: 'max_tokens' is not supported with this "
+                "model. Use 'max_completion_tokens' instead.",
+            )
         t = body.get("temperature", 1)
         if t != 1:
-            return Fault("status", 400, message=f"Unsupported value: 'temperature' does not support {t:g} with "
-                                                "this model. Only the default (1) value is supported.")
+            return Fault(
+                "status",
+                400,
+                message=f"Unsupported value: 'temperature' does not support {t:g} with "
+                "this model. Only the default (1) value is supported.",
+            )
         limit = body.get("max_completion_tokens")
         if limit is not None and limit < think + 8:
-            return Answer("", "length", usage=(("completion_tokens", limit),
-                                                ("completion_tokens_details", {"reasoning_tokens": limit})))
+            return Answer(
+                "",
+                "length",
+                usage=(
+                    ("completion_tokens", limit),
+                    ("completion_tokens_details", {"reasoning_tokens": limit}),
+                ),
+            )
         text = answer(body)
         if not isinstance(text, str):
             return text
         n = think + count_words(text)
-        return Answer(text, usage=(("completion_tokens", n), ("completion_tokens_details", {"reasoning_tokens": think})))
+        return Answer(
+            text,
+            usage=(
+                ("completion_tokens", n),
+                ("completion_tokens_details", {"reasoning_tokens": think}),
+            ),
+        )
 
     return reply
 
@@ -666,7 +772,7 @@ VALIDATION_500 = (
 GGUF_ID = "/models/SmolLM2-135M-Instruct.Q4_1.gguf"
 
 
-def _takes_json_object(body: dict[str, Any]) -> "str | Fault":
+def _takes_json_object(body: dict[str, Any]) -> str | Fault:
     # llama-cpp-python: json_schema is a 500 validation error; json_object with a schema is honoured.
     form = (body.get("response_format") or {}).get("type")
     if form == "json_schema":
@@ -685,9 +791,21 @@ def _repeat_penalty_default(body: dict[str, Any]) -> str:
 #: llama.cpp's ``/props`` (abridged): two slots and its sampling defaults.
 LLAMACPP_PROPS = {
     "total_slots": 2,
-    "default_generation_settings": {"n_ctx": 2048, "params": {
-        "temperature": 0.8, "top_k": 40, "top_p": 0.95, "min_p": 0.05, "repeat_penalty": 1.0, "repeat_last_n": 64,
-        "presence_penalty": 0.0, "frequency_penalty": 0.0, "dry_multiplier": 0.0, "samplers": ["top_k", "top_p"]}},
+    "default_generation_settings": {
+        "n_ctx": 2048,
+        "params": {
+            "temperature": 0.8,
+            "top_k": 40,
+            "top_p": 0.95,
+            "min_p": 0.05,
+            "repeat_penalty": 1.0,
+            "repeat_last_n": 64,
+            "presence_penalty": 0.0,
+            "frequency_penalty": 0.0,
+            "dry_multiplier": 0.0,
+            "samplers": ["top_k", "top_p"],
+        },
+    },
     "model_path": GGUF_ID,
 }
 
@@ -696,25 +814,53 @@ MODES: dict[str, dict[str, Any]] = {
     "plain": {"reply": lambda body: "[2, -1]"},  # -> [2, -1]; base-URL shape cases use it
     "think": {"reply": lambda body: f"<think>{THOUGHT}</think>\n[2, -1]"},  # -> [2, -1]
     "think-no-open-tag": {"reply": lambda body: f"{THOUGHT}</think>\n\n[2, -1]"},  # -> [2, -1]
-    "reasoning-field": {"reply": lambda body: Answer("[2, -1]", fields=(("reasoning_content", THOUGHT),))},
-    "parts": {"reply": lambda body: Answer([{"type": "thinking", "thinking": THOUGHT},
-                                            {"type": "text", "text": "[2, -1]"}])},  # -> [2, -1]
+    "reasoning-field": {
+        "reply": lambda body: Answer("[2, -1]", fields=(("reasoning_content", THOUGHT),))
+    },
+    "parts": {
+        "reply": lambda body: Answer(
+            [{"type": "thinking", "thinking": THOUGHT}, {"type": "text", "text": "[2, -1]"}]
+        )
+    },  # -> [2, -1]
     # Cut off while thinking: no answer; the follow-up (a different request) answers.
-    "null-length": {"reply": lambda body: "[2, -1]" if is_follow_up(body) else
-                    Answer(None, "length", (("reasoning_content", THOUGHT),))},
-    "empty-length": {"reply": lambda body: "[2, -1]" if is_follow_up(body) else Answer("", "length")},
+    "null-length": {
+        "reply": lambda body: (
+            "[2, -1]"
+            if is_follow_up(body)
+            else Answer(None, "length", (("reasoning_content", THOUGHT),))
+        )
+    },
+    "empty-length": {
+        "reply": lambda body: "[2, -1]" if is_follow_up(body) else Answer("", "length")
+    },
     "think-length": {"reply": _think_then_follow_up},
     # Never answers within max_tokens: every step fails (no-op), each reply counted as cut off.
-    "always-length": {"reply": lambda body: Answer(None, "length", (("reasoning_content", THOUGHT),))},
+    "always-length": {
+        "reply": lambda body: Answer(None, "length", (("reasoning_content", THOUGHT),))
+    },
     "stream-default": {"reply": lambda body: "[2, -1]", "stream": "default"},  # -> [2, -1]
-    "stream-always": {"reply": lambda body: Answer("[2, -1]", fields=(("reasoning_content", THOUGHT),)),
-                      "stream": "always"},  # -> [2, -1]
-    "reject-grammar": {"reply": lambda body: "[2, -1]",
-                       "reject_fields": {"grammar": "Unrecognized request argument supplied: grammar"}},
-    "reject-seed": {"reply": lambda body: "[2, -1]",
-                    "reject_fields": {"seed": "Unsupported parameter: 'seed' is not supported with this model."}},
-    "reject-max-tokens": {"reply": lambda body: "[2, -1]", "reject_fields": {"max_tokens": (
-        "Unsupported parameter: 'max_tokens' is not supported with this model. Use 'max_completion_tokens' instead.")}},
+    "stream-always": {
+        "reply": lambda body: Answer("[2, -1]", fields=(("reasoning_content", THOUGHT),)),
+        "stream": "always",
+    },  # -> [2, -1]
+    "reject-grammar": {
+        "reply": lambda body: "[2, -1]",
+        "reject_fields": {"grammar": "Unrecognized request argument supplied: grammar"},
+    },
+    "reject-seed": {
+        "reply": lambda body: "[2, -1]",
+        "reject_fields": {
+            "seed": "Unsupported parameter: 'seed' is not supported with this model."
+        },
+    },
+    "reject-max-tokens": {
+        "reply": lambda body: "[2, -1]",
+        "reject_fields": {
+            "max_tokens": (
+                "Unsupported parameter: 'max_tokens' is not supported with this model. Use 'max_completion_tokens' instead."
+            )
+        },
+    },
     "context-400": {"reply": _context_400},  # steps 1-2 fine, then HTTP 400 (context length)
     "bare-pair": {"reply": lambda body: "2, -1"},  # -> [2, -1]
     "negated": {"reply": lambda body: "not [1, 1]; answer [2, -1]"},  # -> [2, -1]
@@ -732,14 +878,28 @@ MODES: dict[str, dict[str, Any]] = {
     # 401 for a missing or wrong key, at the preflight's GET /v1/models too.
     "auth-401": {"reply": lambda body: "[2, -1]", "api_key": "sk-right-key"},
     # llama.cpp's server: /props with total_slots 2 and its sampling defaults; grammar honoured.
-    "props-slots": {"reply": lambda body: "[2, -1]", "models": (GGUF_ID,), "owned_by": "llamacpp",
-                    "props": LLAMACPP_PROPS, "latency": 0.05},
+    "props-slots": {
+        "reply": lambda body: "[2, -1]",
+        "models": (GGUF_ID,),
+        "owned_by": "llamacpp",
+        "props": LLAMACPP_PROPS,
+        "latency": 0.05,
+    },
     # Says "Content-Encoding: gzip" over a plain JSON body (a misconfigured proxy): -> [2, -1]
-    "lying-encoding": {"reply": lambda body: "[2, -1]", "headers": lambda body: {"Content-Encoding": "gzip"}},
+    "lying-encoding": {
+        "reply": lambda body: "[2, -1]",
+        "headers": lambda body: {"Content-Encoding": "gzip"},
+    },
     # Token counts that are not numbers: read as missing (0), the answer still -> [2, -1]
-    "usage-not-numbers": {"reply": lambda body: "[2, -1]", "usage": lambda body: {
-        "prompt_tokens": "n/a", "completion_tokens": [3], "total_tokens": -1,
-        "prompt_tokens_details": {"cached_tokens": "lots"}}},
+    "usage-not-numbers": {
+        "reply": lambda body: "[2, -1]",
+        "usage": lambda body: {
+            "prompt_tokens": "n/a",
+            "completion_tokens": [3],
+            "total_tokens": -1,
+            "prompt_tokens_details": {"cached_tokens": "lots"},
+        },
+    },
     # Fullwidth brackets, comma, digits and minus (an East Asian input mode): -> [2, -1]
     "fullwidth": {"reply": lambda body: "\uff3b\uff12\uff0c\uff0d\uff11\uff3d"},
     # Arabic-Indic digits: not read as an answer (no action; the step fails to a no-op)
@@ -750,16 +910,34 @@ MODES: dict[str, dict[str, Any]] = {
 def main() -> None:
     ap = argparse.ArgumentParser(description="Fake chat-completions server; prints its base URL.")
     ap.add_argument("--latency", type=float, default=0.0, help="seconds added to every answer")
-    ap.add_argument("--lognormal", type=float, nargs=2, default=None, metavar=("MEDIAN", "SIGMA"),
-                    help="heavy-tailed latency per request instead (see lognormal_latency)")
+    ap.add_argument(
+        "--lognormal",
+        type=float,
+        nargs=2,
+        default=None,
+        metavar=("MEDIAN", "SIGMA"),
+        help="heavy-tailed latency per request instead (see lognormal_latency)",
+    )
     ap.add_argument("--latency-seed", type=int, default=0, help="seed of the lognormal delays")
-    ap.add_argument("--reply", choices=("fixed", "hash"), default="hash",
-                    help="'[1, 1]' always, or a prompt-dependent square-gait move (default)")
-    ap.add_argument("--mode", choices=sorted(MODES), default=None,
-                    help="behave like a real server in one ordinary way (overrides --reply)")
+    ap.add_argument(
+        "--reply",
+        choices=("fixed", "hash"),
+        default="hash",
+        help="'[1, 1]' always, or a prompt-dependent square-gait move (default)",
+    )
+    ap.add_argument(
+        "--mode",
+        choices=sorted(MODES),
+        default=None,
+        help="behave like a real server in one ordinary way (overrides --reply)",
+    )
     args = ap.parse_args()
     reply = hash_reply if args.reply == "hash" else None
-    latency = lognormal_latency(*args.lognormal, seed=args.latency_seed) if args.lognormal else args.latency
+    latency = (
+        lognormal_latency(*args.lognormal, seed=args.latency_seed)
+        if args.lognormal
+        else args.latency
+    )
     options = {"reply": reply, **MODES.get(args.mode, {})}
     with FakeServer(latency=latency, **options) as srv:
         print(srv.url, flush=True)

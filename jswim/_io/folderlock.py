@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from jswim._io.atomic import write_json
-from jswim.errors import FolderBusyError  # noqa: F401  (also read from here)
+from jswim.errors import FolderBusyError
 from jswim._io.permissions import file_mode
 
 LOCK = ".jswim.lock"
@@ -82,7 +82,7 @@ class FolderLock:
     def held(self) -> bool:
         return self._lock is not None
 
-    def acquire(self) -> "FolderLock":
+    def acquire(self) -> FolderLock:
         """Take the lock without waiting, and record this process as its holder."""
         import filelock  # lazy: only a session that writes a folder needs it
 
@@ -96,12 +96,16 @@ class FolderLock:
                 "folder at a time: wait for it to end, or use another --out"
             ) from None
         self._lock = lock
-        write_json(self.folder / HOLDER, {
-            "pid": os.getpid(), "host": socket.gethostname(),
-            "since": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
-            # The program only: arguments may carry a --base-url with credentials in it.
-            "command": os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "python",
-        })
+        write_json(
+            self.folder / HOLDER,
+            {
+                "pid": os.getpid(),
+                "host": socket.gethostname(),
+                "since": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
+                # The program only: arguments may carry a --base-url with credentials in it.
+                "command": os.path.basename(sys.argv[0]) if sys.argv and sys.argv[0] else "python",
+            },
+        )
         return self
 
     def release(self) -> None:
@@ -115,13 +119,15 @@ class FolderLock:
         self._lock.release()
         self._lock = None
 
-    def __del__(self) -> None:  # a store dropped without close() (notebooks, tests) frees its folder
+    def __del__(
+        self,
+    ) -> None:  # a store dropped without close() (notebooks, tests) frees its folder
         try:
             self.release()
         except Exception:
             pass
 
-    def __enter__(self) -> "FolderLock":
+    def __enter__(self) -> FolderLock:
         return self.acquire()
 
     def __exit__(self, *exc: object) -> None:

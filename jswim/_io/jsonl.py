@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any
+from collections.abc import Callable, Iterator
 
 from jswim.errors import JswimWarning
 
@@ -59,7 +60,9 @@ class SkippedRecord(JswimWarning):
     an object, or fields of the wrong type: a hand edit or damage), skipped as a torn line is."""
 
 
-_warned: set[tuple[str, int, bytes]] = set()  # each bad line is said once (per command: forget_warnings)
+_warned: set[tuple[str, int, bytes]] = (
+    set()
+)  # each bad line is said once (per command: forget_warnings)
 
 
 def forget_warnings() -> None:
@@ -67,8 +70,10 @@ def forget_warnings() -> None:
     _warned.clear()
 
 
-def read_records(path: str | os.PathLike, check: "Callable[[dict[str, Any]], str | None] | None" = None,
-                 ) -> "Iterator[tuple[int, dict[str, Any]]]":
+def read_records(
+    path: str | os.PathLike,
+    check: Callable[[dict[str, Any]], str | None] | None = None,
+) -> Iterator[tuple[int, dict[str, Any]]]:
     """``(line number, record)`` for every readable record of the JSON-lines file ``path``.
 
     A torn last line (no final newline, from a kill) is skipped silently. Any other line that is
@@ -110,5 +115,9 @@ def read_records(path: str | os.PathLike, check: "Callable[[dict[str, Any]], str
         key = (str(Path(path).resolve()), n, raw[:64])
         if key not in _warned:
             _warned.add(key)
-            warnings.warn(SkippedRecord(f"{path}, line {n}: {why}; that record is skipped, as a torn line is"),
-                          stacklevel=3)
+            warnings.warn(
+                SkippedRecord(
+                    f"{path}, line {n}: {why}; that record is skipped, as a torn line is"
+                ),
+                stacklevel=3,
+            )

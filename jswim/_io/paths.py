@@ -17,8 +17,14 @@ def path_kind(path: str | os.PathLike, wanted: str) -> str:
         return "no such " + wanted.split()[-1]
     except OSError as exc:
         return f"cannot read it ({exc.strerror or type(exc).__name__})"
-    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISREG, "a file"), (stat.S_ISFIFO, "a FIFO (named pipe)"),
-             (stat.S_ISCHR, "a device"), (stat.S_ISBLK, "a device"), (stat.S_ISSOCK, "a socket"))
+    kinds = (
+        (stat.S_ISDIR, "a folder"),
+        (stat.S_ISREG, "a file"),
+        (stat.S_ISFIFO, "a FIFO (named pipe)"),
+        (stat.S_ISCHR, "a device"),
+        (stat.S_ISBLK, "a device"),
+        (stat.S_ISSOCK, "a socket"),
+    )
     what = next((name for test, name in kinds if test(mode)), "not a regular file")
     return f"{what}, not {wanted}"
 

@@ -90,8 +90,16 @@ def dof_decimals(model: SwimmerModel, roc_levels: int = 1) -> int:
     return 3
 
 
-def swimmer_text(model: SwimmerModel, rocs: tuple[int, ...] | None = None, roc_levels: int = 1) -> SwimmerText:
+def swimmer_text(
+    model: SwimmerModel, rocs: tuple[int, ...] | None = None, roc_levels: int = 1
+) -> SwimmerText:
     """What the prompt needs to know about ``model`` (``rocs`` default :func:`default_rocs`) with
     ROCs on ``roc_levels`` levels (1: the paper's)."""
-    return SwimmerText(model.n_dof, model.lo, model.hi, dof_decimals(model, roc_levels),
-                       tuple(default_rocs(model, roc_levels) if rocs is None else rocs), roc_levels)
+    return SwimmerText(
+        model.n_dof,
+        model.lo,
+        model.hi,
+        dof_decimals(model, roc_levels),
+        tuple(default_rocs(model, roc_levels) if rocs is None else rocs),
+        roc_levels,
+    )

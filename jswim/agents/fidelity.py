@@ -30,39 +30,49 @@ def roc_levels_deviation(roc_levels: int) -> str | None:
     paper's first future direction (continuous actions)."""
     if roc_levels == 1:
         return None
-    return (f"ROC on {roc_levels} levels (--roc-levels {roc_levels}, an extension): ROC k in -{roc_levels}..{roc_levels} "
-            f"moves a DOF by k/{roc_levels} of its range per step (paper: -1, 0, 1, the whole range); S2 and S5 "
-            "say so in one sentence each")
+    return (
+        f"ROC on {roc_levels} levels (--roc-levels {roc_levels}, an extension): ROC k in -{roc_levels}..{roc_levels} "
+        f"moves a DOF by k/{roc_levels} of its range per step (paper: -1, 0, 1, the whole range); S2 and S5 "
+        "say so in one sentence each"
+    )
 
 
 #: The line of the real-valued RL baseline's action space (the continuous study).
-REAL_ROCS = ("real-valued ROC in [-1, 1] (the continuous RL baseline, an extension): a step moves one DOF by ROC "
-             "times its range, stopping at a limit; a cycle is a return to the same shape within 0.1 % of the range "
-             "(jswim.judging.shape_judge.judge_shapes)")
+REAL_ROCS = (
+    "real-valued ROC in [-1, 1] (the continuous RL baseline, an extension): a step moves one DOF by ROC "
+    "times its range, stopping at a limit; a cycle is a return to the same shape within 0.1 % of the range "
+    "(jswim.judging.shape_judge.judge_shapes)"
+)
 
 
 def study_extensions(roc_levels: set[int] | list[int]) -> list[str]:
     """Lines for a study's metadata naming the extensions its runs use: each ROC lattice finer than
     the paper's, and real-valued ROCs (``roc_levels`` 0)."""
-    out = [line for k in sorted(roc_levels) if k > 0 and (line := roc_levels_deviation(k)) is not None]
+    out = [
+        line for k in sorted(roc_levels) if k > 0 and (line := roc_levels_deviation(k)) is not None
+    ]
     return out + ([REAL_ROCS] if 0 in roc_levels else [])
 
 
 #: What a pair's prompt is under ``--pair-prompt each`` (a variant of the joint prompt).
-EACH_PAIR_PROMPT = ("each swimmer steered by its own LLM conversation (--pair-prompt each, a variant of the joint "
-                    "prompt): swimmer 1 decides at odd steps, swimmer 2 at even ones, each with its own prompt about its "
-                    "arms D1, D2 and X, its own last n_ht records and clearing; records also show the other's position "
-                    "(other X, encoded as X); the reward is the progress of their mean")
+EACH_PAIR_PROMPT = (
+    "each swimmer steered by its own LLM conversation (--pair-prompt each, a variant of the joint "
+    "prompt): swimmer 1 decides at odd steps, swimmer 2 at even ones, each with its own prompt about its "
+    "arms D1, D2 and X, its own last n_ht records and clearing; records also show the other's position "
+    "(other X, encoded as X); the reward is the progress of their mean"
+)
 
 
 def each_prompt(n: int) -> str:
     """What ``--pair-prompt each`` is for ``n`` >= 2 swimmers (:data:`EACH_PAIR_PROMPT` for a pair)."""
     if n == 2:
         return EACH_PAIR_PROMPT
-    return ("each swimmer steered by its own LLM conversation (--pair-prompt each, a variant of the joint prompt): "
-            f"swimmer k decides at steps k, k + {n}, ..., each with its own prompt about its arms D1, D2 and X, its "
-            f"own last n_ht records and clearing; records also show the others' positions (X1..X{n} but its own, "
-            "encoded as X); the reward is the progress of their mean")
+    return (
+        "each swimmer steered by its own LLM conversation (--pair-prompt each, a variant of the joint prompt): "
+        f"swimmer k decides at steps k, k + {n}, ..., each with its own prompt about its arms D1, D2 and X, its "
+        f"own last n_ht records and clearing; records also show the others' positions (X1..X{n} but its own, "
+        "encoded as X); the reward is the progress of their mean"
+    )
 
 
 def scene_deviation(scene: Any, pair_prompt: str = "joint") -> str:
@@ -71,28 +81,41 @@ def scene_deviation(scene: Any, pair_prompt: str = "joint") -> str:
     (several swimmers': ``pair_prompt``, :data:`jswim.agents.variants.PAIR_PROMPTS`)."""
     parts = [f"scene (an extension): medium {scene.medium!r}"]
     if scene.medium == "wall":
-        parts.append(f"start {scene.height:g} a above a no-slip wall, tilt {scene.tilt:g} rad; records show each "
-                     "swimmer's height H (thousandths of a, as X) and tilt (rad)")
+        parts.append(
+            f"start {scene.height:g} a above a no-slip wall, tilt {scene.tilt:g} rad; records show each "
+            "swimmer's height H (thousandths of a, as X) and tilt (rad)"
+        )
     n = int(scene.swimmers)
-    who = f"two coaxial NG swimmers {scene.separation:g} a apart" if n == 2 else \
-        f"{n} NG swimmers {scene.separation:g} a apart"
+    who = (
+        f"two coaxial NG swimmers {scene.separation:g} a apart"
+        if n == 2
+        else f"{n} NG swimmers {scene.separation:g} a apart"
+    )
     if n >= 2 and pair_prompt == "each":
         parts.append(f"{who}, {each_prompt(n)}")
     elif n >= 2:
-        owns, xs = ("swimmer 2 owns D3, D4", "X1 and X2") if n == 2 else ("swimmer k owns D(2k-1), D(2k)", f"X1..X{n}")
-        parts.append(f"{who} steered through joint DOFs D1..D{2 * n} ({owns}); records show {xs}; the reward is the "
-                     "progress of their mean")
+        owns, xs = (
+            ("swimmer 2 owns D3, D4", "X1 and X2")
+            if n == 2
+            else ("swimmer k owns D(2k-1), D(2k)", f"X1..X{n}")
+        )
+        parts.append(
+            f"{who} steered through joint DOFs D1..D{2 * n} ({owns}); records show {xs}; the reward is the "
+            "progress of their mean"
+        )
     if scene.obstacles:
         parts.append(f"{len(scene.obstacles)} fixed spheres")
     return "; ".join(parts)
 
 
 #: The line of the continuous RL baseline's rows in the scene studies.
-SCENE_PPO = ("continuous RL baseline (PPO) on scenes (an extension): the continuous study's learner moves one arm of "
-             "one swimmer per step by a real ROC (a pair: both swimmers, joint DOFs D1..D4); it observes the joint arms "
-             "and, with a wall, each swimmer's height and tilt; reward = progress of the swimmers' mean x, the study's "
-             "--steps and --q-runs; success = the shape judge on each swimmer's own moves with the bulk swimmer's "
-             "displacements (a pair succeeds when both swimmers' own moves do)")
+SCENE_PPO = (
+    "continuous RL baseline (PPO) on scenes (an extension): the continuous study's learner moves one arm of "
+    "one swimmer per step by a real ROC (a pair: both swimmers, joint DOFs D1..D4); it observes the joint arms "
+    "and, with a wall, each swimmer's height and tilt; reward = progress of the swimmers' mean x, the study's "
+    "--steps and --q-runs; success = the shape judge on each swimmer's own moves with the bulk swimmer's "
+    "displacements (a pair succeeds when both swimmers' own moves do)"
+)
 
 
 def scene_extensions(scenes: Any, ppo: bool = False) -> list[str]:
@@ -103,9 +126,17 @@ def scene_extensions(scenes: Any, ppo: bool = False) -> list[str]:
     return lines + ([SCENE_PPO] if ppo and lines else [])
 
 
-def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_tokens: int,
-               default_max_tokens: int, n_ht: int | None = None, default_n_ht: int | None = None,
-               roc_levels: int = 1) -> list[str]:
+def deviations(
+    cfg: LLMAgentConfig,
+    *,
+    temperature: float,
+    constraint: str,
+    max_tokens: int,
+    default_max_tokens: int,
+    n_ht: int | None = None,
+    default_n_ht: int | None = None,
+    roc_levels: int = 1,
+) -> list[str]:
     """The deviations of one run with these settings from the paper's protocol (:data:`ALWAYS` first).
 
     Parameters
@@ -127,12 +158,18 @@ def deviations(cfg: LLMAgentConfig, *, temperature: float, constraint: str, max_
     if cfg.variant != "paper":
         out.append(f"protocol variant {cfg.variant!r} (not in the paper)")
     if cfg.order != "paper":
-        out.append(f"sentence order {cfg.order!r}: S1 S2 S4 S5 before the history (paper: S1 S2 S3 S4 S5)")
+        out.append(
+            f"sentence order {cfg.order!r}: S1 S2 S4 S5 before the history (paper: S1 S2 S3 S4 S5)"
+        )
     if cfg.share_identical:
-        out.append("identical requests of different runs shared (--share-identical): runs from one start are copies, "
-                   "not independent repeats")
+        out.append(
+            "identical requests of different runs shared (--share-identical): runs from one start are copies, "
+            "not independent repeats"
+        )
     if constraint != "none":
-        out.append(f"constrained decoding ({constraint}): replies can only be an offered action (paper: free text)")
+        out.append(
+            f"constrained decoding ({constraint}): replies can only be an offered action (paper: free text)"
+        )
     if max_tokens != default_max_tokens:
         out.append(f"max_tokens {max_tokens} (code: {default_max_tokens})")
     if temperature != 0:
@@ -158,6 +195,10 @@ def describe_constraint(modes: Any) -> str:
     if not modes:
         return ""
     if modes == ["none"]:
-        return "LLM replies: free text, parsed afterwards (no constrained decoding, as in the paper)"
-    return (f"LLM replies: constrained decoding ({', '.join(m for m in modes if m != 'none')}): the model could only "
-            "answer with an offered action (the paper uses none; --constrain none for free text)")
+        return (
+            "LLM replies: free text, parsed afterwards (no constrained decoding, as in the paper)"
+        )
+    return (
+        f"LLM replies: constrained decoding ({', '.join(m for m in modes if m != 'none')}): the model could only "
+        "answer with an offered action (the paper uses none; --constrain none for free text)"
+    )

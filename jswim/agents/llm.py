@@ -33,7 +33,8 @@ import os
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable, Sequence, TextIO
+from typing import Any, TextIO
+from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 
@@ -43,7 +44,13 @@ from jswim.agents.step_batcher import StepGroup, group_key
 from jswim.agents.defaults import default_max_tokens, default_n_ht
 from jswim.agents.memory import History, MoveStats, shape_key
 from jswim.agents.variants import NO_OP, LLMAgentConfig, LLMRunSpec
-from jswim.errors import ConfigError, LLMError, LLMServerError, LLMSetupError, PositionBelowMinimumError
+from jswim.errors import (
+    ConfigError,
+    LLMError,
+    LLMServerError,
+    LLMSetupError,
+    PositionBelowMinimumError,
+)
 from jswim.llm import constrain
 from jswim.llm.budget import BudgetExhausted
 from jswim.llm.client import ChatResult, ClientSettings, LLMClient
@@ -55,9 +62,11 @@ from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText
 
 
 #: Shown once (Python's default warning filter) when a position falls below x_min.
-BELOW_X_MIN_WARNING = ("a swimmer's X fell below x_min = {x_min:g}: the prompt shows that position as a negative "
-                       "number, as the authors' code does, and the run goes on (the step is recorded in "
-                       "below_x_min; a lower --x-min keeps positions positive)")
+BELOW_X_MIN_WARNING = (
+    "a swimmer's X fell below x_min = {x_min:g}: the prompt shows that position as a negative "
+    "number, as the authors' code does, and the run goes on (the step is recorded in "
+    "below_x_min; a lower --x-min keeps positions positive)"
+)
 
 
 @dataclass
@@ -80,14 +89,22 @@ class RunResult:
     failed_steps: int = 0
     parse_retries: int = 0
     truncated: int = 0  # replies the server cut off at max_tokens (no answer)
-    cut_thinking: int = 0  # of those, replies cut while the model was still reasoning (never executed)
+    cut_thinking: int = (
+        0  # of those, replies cut while the model was still reasoning (never executed)
+    )
     n_clears: int = 0
     usage: UsageTotals = field(default_factory=UsageTotals)
     tokens_seen: int = 0  # prompt + reply tokens of every call, shared or cached ones included
-    replayed_calls: int = 0  # calls answered from the study's call journal (paid in an earlier session)
+    replayed_calls: int = (
+        0  # calls answered from the study's call journal (paid in an earlier session)
+    )
     transcript: list[dict[str, Any]] | None = None  # in memory when no transcript folder is given
-    knobs: dict[str, Any] = field(default_factory=dict)  # the variant switches (LLMAgentConfig.knobs)
-    below_x_min: int | None = None  # first step whose X fell below x_min (sent as a negative number)
+    knobs: dict[str, Any] = field(
+        default_factory=dict
+    )  # the variant switches (LLMAgentConfig.knobs)
+    below_x_min: int | None = (
+        None  # first step whose X fell below x_min (sent as a negative number)
+    )
     # Worlds beyond the paper's lone swimmer (several swimmers, a wall: ``per_swimmer``): per step,
     # each swimmer's displacement, height (the observation's ``height``), tilt, and any contact.
     per_swimmer: bool = False
@@ -105,21 +122,56 @@ class RunResult:
         s = self.spec
         u = self.usage
         return {
-            "run_id": self.run_id, "agent": "llm", "swimmer": s.swimmer, "direction": s.direction,
-            "init": "".join(map(str, self.levels0)), "zeta": s.zeta, "seed": s.seed, "n_ht": self.n_ht,
-            "drop": ",".join(sorted(s.drop)), "status": self.status, "error": self.error,
-            "steps": self.steps, "final_x": self.x[-1] if self.x else 0.0,
-            "failed_steps": self.failed_steps, "parse_retries": self.parse_retries, "truncated": self.truncated,
-            "cut_thinking": self.cut_thinking, "reasoning_tokens": u.reasoning_tokens,
-            "http_retries": u.retries, "n_clears": self.n_clears, "calls": u.calls,
-            "billed_calls": u.billed_calls, "cache_hits": u.cache_hits, "prompt_tokens": u.prompt_tokens,
-            "completion_tokens": u.completion_tokens, "cached_tokens": u.cached_tokens, "cost_usd": u.cost_usd,
-            "tokens_seen": self.tokens_seen, "replayed_calls": self.replayed_calls, "roc_levels": s.roc_levels,
-            "levels0": self.levels0, "x": self.x, "y": self.y, "orientation": self.orientation,
-            "actions": self.actions, "progress": self.progress,
-            "stuck": self.stuck, "below_x_min": self.below_x_min, **self.knobs,
-            **({"scene": s.scene, "xs": self.xs, "heights": self.heights, "tilts": self.tilts,
-                "contact": self.contact} if self.per_swimmer else {}),
+            "run_id": self.run_id,
+            "agent": "llm",
+            "swimmer": s.swimmer,
+            "direction": s.direction,
+            "init": "".join(map(str, self.levels0)),
+            "zeta": s.zeta,
+            "seed": s.seed,
+            "n_ht": self.n_ht,
+            "drop": ",".join(sorted(s.drop)),
+            "status": self.status,
+            "error": self.error,
+            "steps": self.steps,
+            "final_x": self.x[-1] if self.x else 0.0,
+            "failed_steps": self.failed_steps,
+            "parse_retries": self.parse_retries,
+            "truncated": self.truncated,
+            "cut_thinking": self.cut_thinking,
+            "reasoning_tokens": u.reasoning_tokens,
+            "http_retries": u.retries,
+            "n_clears": self.n_clears,
+            "calls": u.calls,
+            "billed_calls": u.billed_calls,
+            "cache_hits": u.cache_hits,
+            "prompt_tokens": u.prompt_tokens,
+            "completion_tokens": u.completion_tokens,
+            "cached_tokens": u.cached_tokens,
+            "cost_usd": u.cost_usd,
+            "tokens_seen": self.tokens_seen,
+            "replayed_calls": self.replayed_calls,
+            "roc_levels": s.roc_levels,
+            "levels0": self.levels0,
+            "x": self.x,
+            "y": self.y,
+            "orientation": self.orientation,
+            "actions": self.actions,
+            "progress": self.progress,
+            "stuck": self.stuck,
+            "below_x_min": self.below_x_min,
+            **self.knobs,
+            **(
+                {
+                    "scene": s.scene,
+                    "xs": self.xs,
+                    "heights": self.heights,
+                    "tilts": self.tilts,
+                    "contact": self.contact,
+                }
+                if self.per_swimmer
+                else {}
+            ),
         }
 
 
@@ -137,13 +189,19 @@ class _Run:
     sink: TextIO | None = None
     stats: MoveStats = field(default_factory=MoveStats)
     max_tokens: int | None = None
-    deviations: list[str] = field(default_factory=list)  # from the paper's protocol (agents.fidelity)
+    deviations: list[str] = field(
+        default_factory=list
+    )  # from the paper's protocol (agents.fidelity)
     meta: dict[str, Any] = field(default_factory=dict)  # the transcript's first record
     n_calls: int = 0  # calls made so far (their index in the call journal)
     begun: bool = False
     closed: bool = False
-    seen: dict[str, Any] | None = None  # per_swimmer: each swimmer's position, height, tilt before the next step
-    convs: list[pair_prompt.Conversation] = field(default_factory=list)  # --pair-prompt each: one per swimmer
+    seen: dict[str, Any] | None = (
+        None  # per_swimmer: each swimmer's position, height, tilt before the next step
+    )
+    convs: list[pair_prompt.Conversation] = field(
+        default_factory=list
+    )  # --pair-prompt each: one per swimmer
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
@@ -186,7 +244,8 @@ class LLMDriver:
         on_step: Callable[[int], None] | None = None,
         on_done: Callable[[RunResult], None] | None = None,
         transcripts: bool = True,
-        cohorts: int | None = None,  # deprecated: runs no longer move in lockstep; accepted, ignored
+        cohorts: int
+        | None = None,  # deprecated: runs no longer move in lockstep; accepted, ignored
         worlds: Callable[[LLMRunSpec], tuple[Any, Any]] = world_view.world,
     ) -> None:
         if not specs:
@@ -202,7 +261,9 @@ class LLMDriver:
         ids = [s.label() for s in specs]
         dupes = sorted({i for i in ids if ids.count(i) > 1})
         if dupes:
-            raise ConfigError(f"duplicate run ids {dupes[:3]}; give the runs distinct seeds or run_id")
+            raise ConfigError(
+                f"duplicate run ids {dupes[:3]}; give the runs distinct seeds or run_id"
+            )
         built = [worlds(s) for s in specs]
         by_world: dict[Any, list[int]] = {}
         for i, (w, p) in enumerate(built):  # one batched state per world (and params structure)
@@ -213,14 +274,23 @@ class LLMDriver:
         for idx in by_world.values():
             w = built[idx[0]][0]
             models = [world_view.model(specs[i], w) for i in idx]
-            g = StepGroup(idx, w, [built[i][1] for i in idx], [specs[i].seed for i in idx],
-                          lattice.encode(*NO_OP, w.roc_levels), models[0].lo, models[0].hi)
+            g = StepGroup(
+                idx,
+                w,
+                [built[i][1] for i in idx],
+                [specs[i].seed for i in idx],
+                lattice.encode(*NO_OP, w.roc_levels),
+                models[0].lo,
+                models[0].hi,
+            )
             self.groups.append(g)
             for j, i in enumerate(idx):
                 self._where[i] = (g, j)
                 self.runs[i] = self._make_run(specs[i], ids[i], models[j], g, j)
 
-    def _make_run(self, spec: LLMRunSpec, run_id: str, model: Any, group: StepGroup, pos: int) -> _Run:
+    def _make_run(
+        self, spec: LLMRunSpec, run_id: str, model: Any, group: StepGroup, pos: int
+    ) -> _Run:
         n_ht, base, prompt = protocol.setup(spec, model, self.config)
         cfg = self.config
         env, start = group.env, {k: v[pos] for k, v in group.start.items()}
@@ -228,18 +298,37 @@ class LLMDriver:
         text, template = world_view.text(base, prompt.template, env.n_dof, view)
         prompt = dataclasses.replace(prompt, template=template)
         levels0 = [int(v) for v in group.levels0[pos]]
-        result = RunResult(run_id, spec, n_ht, text.rocs, levels0=levels0, per_swimmer=view is not None,
-                           transcript=None if self.transcript_dir or not self.transcripts else [],
-                           knobs=cfg.knobs(self.client.settings.temperature))
-        run = _Run(result, text, prompt, History(protocol.clearing_rule(cfg, model)), np.array(start["dofs"], np.float64))
+        result = RunResult(
+            run_id,
+            spec,
+            n_ht,
+            text.rocs,
+            levels0=levels0,
+            per_swimmer=view is not None,
+            transcript=None if self.transcript_dir or not self.transcripts else [],
+            knobs=cfg.knobs(self.client.settings.temperature),
+        )
+        run = _Run(
+            result,
+            text,
+            prompt,
+            History(protocol.clearing_rule(cfg, model)),
+            np.array(start["dofs"], np.float64),
+        )
         settings = self.client.settings
         constraint = constrain.resolve_mode(settings.constrain, settings.server_kind)
         run.max_tokens = protocol.max_tokens(cfg, model, constraint)
         result.knobs.update(constraint=constraint, max_tokens=run.max_tokens)
         run.deviations = fidelity.deviations(
-            cfg, temperature=cfg.sampling_temperature(settings.temperature), constraint=constraint,
-            max_tokens=run.max_tokens, default_max_tokens=default_max_tokens(model), n_ht=n_ht,
-            default_n_ht=default_n_ht(model, spec.direction), roc_levels=spec.roc_levels)
+            cfg,
+            temperature=cfg.sampling_temperature(settings.temperature),
+            constraint=constraint,
+            max_tokens=run.max_tokens,
+            default_max_tokens=default_max_tokens(model),
+            n_ht=n_ht,
+            default_n_ht=default_n_ht(model, spec.direction),
+            roc_levels=spec.roc_levels,
+        )
         world_meta, deviation = world_view.notes(spec)
         run.deviations += [deviation] if deviation else []
         if env.n_swimmers > 1:
@@ -249,9 +338,16 @@ class LLMDriver:
         if view is not None:
             run.seen = {k: tuple(float(v) for v in start[k]) for k in ("xs", "heights", "tilts")}
         run.meta = {
-            "type": "meta", "run_id": run_id, "spec": dataclasses.asdict(spec), "n_ht": n_ht, "rocs": list(text.rocs),
-            "levels0": result.levels0, "agent": cfg.metadata(), "client": self._client_meta(run.max_tokens),
-            "deviations": run.deviations, **world_meta,
+            "type": "meta",
+            "run_id": run_id,
+            "spec": dataclasses.asdict(spec),
+            "n_ht": n_ht,
+            "rocs": list(text.rocs),
+            "levels0": result.levels0,
+            "agent": cfg.metadata(),
+            "client": self._client_meta(run.max_tokens),
+            "deviations": run.deviations,
+            **world_meta,
             **({"pair_prompt": spec.pair_prompt} if "pair_prompt" in result.knobs else {}),
             **(pair_prompt.metadata(run.convs) if run.convs else {}),
         }
@@ -268,7 +364,9 @@ class LLMDriver:
         """Open the run's transcript when the run starts (not before: thousands may wait)."""
         if self.transcript_dir is not None and self.transcripts:
             self.transcript_dir.mkdir(parents=True, exist_ok=True)
-            run.sink = open(self.transcript_dir / f"{run.result.run_id}.jsonl", "w", encoding="utf-8")
+            run.sink = open(
+                self.transcript_dir / f"{run.result.run_id}.jsonl", "w", encoding="utf-8"
+            )
         run.begun = True
         run.log(run.meta)
 
@@ -280,8 +378,12 @@ class LLMDriver:
         temperature = kw.get("temperature")
         if temperature is None:
             temperature = self.client.settings.temperature
-        params = {k: v for k, v in kw.items() if not callable(v)}  # cache_if: how to cache, not what is asked
-        key = call_key(messages, **{**params, "temperature": temperature, "model": self.client.settings.model})
+        params = {
+            k: v for k, v in kw.items() if not callable(v)
+        }  # cache_if: how to cache, not what is asked
+        key = call_key(
+            messages, **{**params, "temperature": temperature, "model": self.client.settings.model}
+        )
         n = run.n_calls
         run.n_calls += 1
         res = journal.replay(run.result.run_id, n, key)
@@ -294,7 +396,9 @@ class LLMDriver:
 
     def _note_sent(self, run: _Run, res: ChatResult) -> None:
         """Record in the run's row what a reasoning model was sent instead of what was asked."""
-        if res.temperature_sent is not None and res.temperature_sent != run.result.knobs.get("temperature"):
+        if res.temperature_sent is not None and res.temperature_sent != run.result.knobs.get(
+            "temperature"
+        ):
             run.result.knobs["temperature_sent"] = res.temperature_sent
         state = getattr(self.client, "reasoning", None)
         if state is not None and state.active:
@@ -317,8 +421,18 @@ class LLMDriver:
         # Who decides: the run's one conversation, or (--pair-prompt each) the swimmer whose turn it is.
         conv = run.convs[pair_prompt.turn(step, len(run.convs))] if run.convs else None
         mind = conv if conv is not None else run
-        req = protocol.request(cfg, mind.text, mind.prompt, direction=spec.direction, seed=spec.seed, step=step,
-                               records=mind.history.records, dofs=mind.dofs, x=mind.x, stats=mind.stats)
+        req = protocol.request(
+            cfg,
+            mind.text,
+            mind.prompt,
+            direction=spec.direction,
+            seed=spec.seed,
+            step=step,
+            records=mind.history.records,
+            dofs=mind.dofs,
+            x=mind.x,
+            stats=mind.stats,
+        )
         temperature = cfg.sampling_temperature(self.client.settings.temperature)
         messages = req.messages
         attempts = []
@@ -329,9 +443,16 @@ class LLMDriver:
             # call's earlier reply (a resume) can answer it, never another run's. Only replies
             # that name a valid action go in the disk cache: a failure is never replayed.
             scope = None if cfg.share_identical else f"{run.result.run_id}/{step}/{k}"
-            res = await self._call(run, messages, replies=req.replies, temperature=cfg.temperature, seed=seed,
-                                   max_tokens=run.max_tokens, cache_scope=scope,
-                                   cache_if=lambda r: protocol.valid_reply(req, r.text))
+            res = await self._call(
+                run,
+                messages,
+                replies=req.replies,
+                temperature=cfg.temperature,
+                seed=seed,
+                max_tokens=run.max_tokens,
+                cache_scope=scope,
+                cache_if=lambda r: protocol.valid_reply(req, r.text),
+            )
             run.result.usage.add(res)
             run.result.tokens_seen += res.usage.total_tokens
             run.result.truncated += res.truncated
@@ -339,13 +460,19 @@ class LLMDriver:
             self._note_sent(run, res)
             reply = protocol.read_reply(req, messages, res.text, k, cfg, truncated=res.truncated)
             action = reply.action
-            attempts.append({**res.as_dict(), "seed": seed, "parsed": list(action) if action else None})
+            attempts.append(
+                {**res.as_dict(), "seed": seed, "parsed": list(action) if action else None}
+            )
             if action is not None or reply.follow_up is None:
                 break
             run.result.parse_retries += 1
             messages = reply.follow_up
         failed = action is None
-        log = {"prompt": req.prompt, "attempts": attempts, "options": [list(a) for a in req.options]}
+        log = {
+            "prompt": req.prompt,
+            "attempts": attempts,
+            "options": [list(a) for a in req.options],
+        }
         action = NO_OP if failed else action
         if conv is not None:  # the swimmer's own [d, ROC] as the joint action
             log.update(swimmer=conv.swimmer + 1, own_action=list(action))
@@ -372,7 +499,9 @@ class LLMDriver:
                 t.cancel()
             await asyncio.gather(*pending, return_exceptions=True)
             # Read every finished task's exception (an unread one is logged at exit), raise the first.
-            errors = [t.exception() for t in done if not t.cancelled() and t.exception() is not None]
+            errors = [
+                t.exception() for t in done if not t.cancelled() and t.exception() is not None
+            ]
             if errors:
                 raise errors[0]
         finally:
@@ -415,23 +544,40 @@ class LLMDriver:
             self.on_done(run.result)
 
     def _record(
-        self, run: _Run, decision: tuple[Action, bool, dict[str, Any]], index: int, out: dict[str, Any]
+        self,
+        run: _Run,
+        decision: tuple[Action, bool, dict[str, Any]],
+        index: int,
+        out: dict[str, Any],
     ) -> None:
         action, failed, log = decision
         res = run.result
         x_before, x_after = run.x, float(out["x"])
         scene = {}
-        if run.seen is not None:  # a world beyond the paper's: positions, heights and tilts of each swimmer
+        if (
+            run.seen is not None
+        ):  # a world beyond the paper's: positions, heights and tilts of each swimmer
             now = {k: tuple(float(v) for v in out[k]) for k in ("xs", "heights", "tilts")}
-            scene = {f"{k}_{w}": run.seen[k] if w == "before" else now[k]
-                     for k in ("xs", "heights", "tilts") for w in ("before", "after")}
+            scene = {
+                f"{k}_{w}": run.seen[k] if w == "before" else now[k]
+                for k in ("xs", "heights", "tilts")
+                for w in ("before", "after")
+            }
             run.seen = now
             res.xs.append(list(now["xs"]))
             res.heights.append(list(now["heights"]))
             res.tilts.append(list(now["tilts"]))
             res.contact.append(bool(out["contact"]))
-        rec = HistoryRecord(res.steps + 1, tuple(run.dofs), tuple(float(v) for v in out["dofs"]), action,
-                            x_before, x_after, bool(out["stuck"]), **scene)
+        rec = HistoryRecord(
+            res.steps + 1,
+            tuple(run.dofs),
+            tuple(float(v) for v in out["dofs"]),
+            action,
+            x_before,
+            x_after,
+            bool(out["stuck"]),
+            **scene,
+        )
         if run.convs:  # each swimmer's own record, progress and clearing (jswim.agents.pair_prompt)
             cleared = pair_prompt.record(run.convs, rec, res.spec.direction)
             n_clears = sum(c.history.n_clears for c in run.convs)
@@ -449,13 +595,32 @@ class LLMDriver:
         res.stuck.append(bool(out["stuck"]))
         res.failed_steps += failed
         res.n_clears = n_clears
-        run.log({
-            "type": "step", "step": rec.step, **log, "action": list(action), "failed": failed,
-            "x_before": x_before, "x_after": x_after, "progress": float(out["progress"]), "stuck": rec.stuck,
-            "dofs_after": list(rec.dofs_after), "cleared": cleared, "n_clears": n_clears,
-            **({"xs_after": list(rec.xs_after), "heights_after": list(rec.heights_after),
-                "tilts_after": list(rec.tilts_after), "contact": bool(out["contact"])} if scene else {}),
-        })
+        run.log(
+            {
+                "type": "step",
+                "step": rec.step,
+                **log,
+                "action": list(action),
+                "failed": failed,
+                "x_before": x_before,
+                "x_after": x_after,
+                "progress": float(out["progress"]),
+                "stuck": rec.stuck,
+                "dofs_after": list(rec.dofs_after),
+                "cleared": cleared,
+                "n_clears": n_clears,
+                **(
+                    {
+                        "xs_after": list(rec.xs_after),
+                        "heights_after": list(rec.heights_after),
+                        "tilts_after": list(rec.tilts_after),
+                        "contact": bool(out["contact"]),
+                    }
+                    if scene
+                    else {}
+                ),
+            }
+        )
         if x_after < run.prompt.x_min and res.below_x_min is None:
             # Sent as a negative number, as the authors' code does; the run goes on.
             res.below_x_min = res.steps
@@ -473,9 +638,18 @@ class LLMDriver:
             return
         run.closed = True
         res = run.result
-        run.log({"type": "end", "status": res.status, "error": res.error, "steps": res.steps,
-                 "failed_steps": res.failed_steps, "parse_retries": res.parse_retries, "n_clears": res.n_clears,
-                 "usage": res.usage.as_dict()})
+        run.log(
+            {
+                "type": "end",
+                "status": res.status,
+                "error": res.error,
+                "steps": res.steps,
+                "failed_steps": res.failed_steps,
+                "parse_retries": res.parse_retries,
+                "n_clears": res.n_clears,
+                "usage": res.usage.as_dict(),
+            }
+        )
         if run.sink is not None:
             # On disk before the run's record reaches runs.jsonl (fsynced too): a finished run's
             # transcript is never torn by a crash after it.

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Sequence
+from collections.abc import Sequence
 
 from jswim.errors import ConfigError
 from jswim.prompt import Action, HistoryRecord, SwimmerText, format_dof
@@ -59,7 +59,9 @@ class ClearingRule:
 
     def __post_init__(self) -> None:
         if self.window < 1 or self.min_records < 0 or self.min_steps < 0:
-            raise ConfigError(f"a clearing rule needs window >= 1, min_records >= 0 and min_steps >= 0, got {self}")
+            raise ConfigError(
+                f"a clearing rule needs window >= 1, min_records >= 0 and min_steps >= 0, got {self}"
+            )
 
     def should_clear(self, n_steps: int, n_records: int, progress: Sequence[float]) -> bool:
         """Whether to clear now.
@@ -85,8 +87,10 @@ class ClearingRule:
         if not self.enabled:
             return "never"
         rounding = f", rounded to {self.decimals} decimals," if self.decimals is not None else ""
-        return (f"from step {self.min_steps}, with >= {self.min_records} records since the last clear: clear "
-                f"when the last {self.window} displacements toward the target sum{rounding} to < {self.threshold:g}")
+        return (
+            f"from step {self.min_steps}, with >= {self.min_records} records since the last clear: clear "
+            f"when the last {self.window} displacements toward the target sum{rounding} to < {self.threshold:g}"
+        )
 
 
 @dataclass
@@ -155,7 +159,11 @@ class MoveStats:
 
 
 def render_summary(
-    sw: SwimmerText, stats: MoveStats, dof_values: Sequence[float], options: Sequence[Action], direction: int
+    sw: SwimmerText,
+    stats: MoveStats,
+    dof_values: Sequence[float],
+    options: Sequence[Action],
+    direction: int,
 ) -> str:
     """The summary sentence for the actions in ``options`` (in that order) from the current shape.
 
@@ -177,6 +185,16 @@ def render_summary(
             items.append(SUMMARY_STILL.format(action=a.text(), count=count, tries=tries))
         else:
             way = "toward" if mean > 0 else "away from"
-            items.append(SUMMARY_TRIED.format(action=a.text(), amount=amount, way=way, direction=target,
-                                              count=count, tries=tries))
-    return SUMMARY_SENTENCE.format(dof_names=", ".join(sw.names), shape=", ".join(shape), moves="; ".join(items))
+            items.append(
+                SUMMARY_TRIED.format(
+                    action=a.text(),
+                    amount=amount,
+                    way=way,
+                    direction=target,
+                    count=count,
+                    tries=tries,
+                )
+            )
+    return SUMMARY_SENTENCE.format(
+        dof_names=", ".join(sw.names), shape=", ".join(shape), moves="; ".join(items)
+    )

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -48,8 +49,13 @@ class Conversation:
     stats: MoveStats = field(default_factory=MoveStats)
 
 
-def conversations(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig, dofs: Sequence[float],
-                  view: SceneView) -> list[Conversation]:
+def conversations(
+    spec: LLMRunSpec,
+    model: SwimmerModel,
+    cfg: LLMAgentConfig,
+    dofs: Sequence[float],
+    view: SceneView,
+) -> list[Conversation]:
     """The conversations of a ``pair_prompt="each"`` run in a world of ``view.swimmers`` swimmers
     whose joint DOFs start at ``dofs`` (``(ARMS N,)``): each with the lone swimmer's n_ht and
     clearing rule (:func:`protocol.setup`, :func:`protocol.clearing_rule`) and its own text and
@@ -58,9 +64,15 @@ def conversations(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig, do
     out = []
     for s in range(view.swimmers):
         text, template = world_view.text(base, prompt.template, len(dofs), view, own=s + 1)
-        out.append(Conversation(s, text, dataclasses.replace(prompt, template=template),
-                                History(protocol.clearing_rule(cfg, model)),
-                                np.asarray(dofs, np.float64)[ARMS * s:ARMS * (s + 1)].copy()))
+        out.append(
+            Conversation(
+                s,
+                text,
+                dataclasses.replace(prompt, template=template),
+                History(protocol.clearing_rule(cfg, model)),
+                np.asarray(dofs, np.float64)[ARMS * s : ARMS * (s + 1)].copy(),
+            )
+        )
     return out
 
 
@@ -85,9 +97,13 @@ def own_record(rec: HistoryRecord, swimmer: int) -> HistoryRecord:
     (the joint record's scene fields keep every swimmer's position, for the others' X)."""
     own = slice(ARMS * swimmer, ARMS * (swimmer + 1))
     return dataclasses.replace(
-        rec, dofs_before=tuple(rec.dofs_before[own]), dofs_after=tuple(rec.dofs_after[own]),
+        rec,
+        dofs_before=tuple(rec.dofs_before[own]),
+        dofs_after=tuple(rec.dofs_after[own]),
         action=Action(rec.action.dof - ARMS * swimmer, rec.action.roc),
-        x_before=rec.xs_before[swimmer], x_after=rec.xs_after[swimmer])
+        x_before=rec.xs_before[swimmer],
+        x_after=rec.xs_after[swimmer],
+    )
 
 
 def record(convs: Sequence[Conversation], rec: HistoryRecord, direction: int) -> bool:
@@ -101,7 +117,7 @@ def record(convs: Sequence[Conversation], rec: HistoryRecord, direction: int) ->
     c.stats.add(shape_key(c.text, mine.dofs_before), mine.action, progress)
     cleared = c.history.add(mine, progress)
     for k, conv in enumerate(convs):
-        conv.dofs = np.asarray(rec.dofs_after[ARMS * k:ARMS * (k + 1)], np.float64)
+        conv.dofs = np.asarray(rec.dofs_after[ARMS * k : ARMS * (k + 1)], np.float64)
         conv.x = float(rec.xs_after[k])
     return cleared
 
@@ -109,7 +125,16 @@ def record(convs: Sequence[Conversation], rec: HistoryRecord, direction: int) ->
 def metadata(convs: Sequence[Conversation]) -> dict[str, Any]:
     """What a transcript's first line records of the conversations."""
     n = len(convs)
-    turns = "swimmer 1 at odd steps, swimmer 2 at even steps" if n == 2 else f"swimmer k at steps k, k + {n}, ..."
-    return {"pair_prompt": "each", "turns": turns,
-            "conversations": [{"swimmer": c.swimmer + 1, "n_ht": c.prompt.n_ht, "clearing": c.history.rule.describe()}
-                              for c in convs]}
+    turns = (
+        "swimmer 1 at odd steps, swimmer 2 at even steps"
+        if n == 2
+        else f"swimmer k at steps k, k + {n}, ..."
+    )
+    return {
+        "pair_prompt": "each",
+        "turns": turns,
+        "conversations": [
+            {"swimmer": c.swimmer + 1, "n_ht": c.prompt.n_ht, "clearing": c.history.rule.describe()}
+            for c in convs
+        ],
+    }

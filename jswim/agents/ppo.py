@@ -51,7 +51,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from typing import Any, Callable, NamedTuple
+from typing import Any, NamedTuple
+from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
@@ -141,7 +142,9 @@ class PPOConfig:
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ConfigError(f"{name} must be a positive integer, got {value!r}")
         if not 0.0 <= self.discount < 1.0:
-            raise ConfigError(f"discount must lie in [0, 1) (the task never ends), got {self.discount!r}")
+            raise ConfigError(
+                f"discount must lie in [0, 1) (the task never ends), got {self.discount!r}"
+            )
         if not 0.0 <= self.gae_lambda <= 1.0:
             raise ConfigError(f"gae_lambda must lie in [0, 1], got {self.gae_lambda!r}")
         if not 0.0 <= self.anneal_start <= 1.0:
@@ -155,7 +158,7 @@ class PPOConfig:
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
                 raise ConfigError(f"{name} must be a number >= 0, got {value!r}")
 
-    def replace(self, **changes: Any) -> "PPOConfig":
+    def replace(self, **changes: Any) -> PPOConfig:
         """A copy with some fields changed."""
         return dataclasses.replace(self, **changes)
 
@@ -166,8 +169,18 @@ class PPOConfig:
 
 #: The numeric hyperparameters: traced, not static, so one compilation serves every value (and
 #: a sweep can vmap over them).
-NUMERIC = ("learning_rate", "discount", "gae_lambda", "clip", "value_coef", "entropy_coef", "max_grad_norm",
-           "init_std", "anneal_start", "anneal_end")
+NUMERIC = (
+    "learning_rate",
+    "discount",
+    "gae_lambda",
+    "clip",
+    "value_coef",
+    "entropy_coef",
+    "max_grad_norm",
+    "init_std",
+    "anneal_start",
+    "anneal_end",
+)
 
 
 def _numbers(config: PPOConfig) -> dict[str, Array]:
@@ -233,8 +246,13 @@ def _dense(key: Array, n_in: int, n_out: int, scale: float, dtype: Any) -> tuple
     return w, jnp.zeros((n_out,), dtype)
 
 
-def init_policy(key: Array, n_dof: int, hidden: int = 32, init_std: float | Array = 1.0,
-                n_obs: int | None = None) -> dict[str, Any]:
+def init_policy(
+    key: Array,
+    n_dof: int,
+    hidden: int = 32,
+    init_std: float | Array = 1.0,
+    n_obs: int | None = None,
+) -> dict[str, Any]:
     """Initial network parameters: Gaussian weights of std ``gain / sqrt(fan_in)``, gains as in
     PureJaxRL (sqrt 2 for hidden layers, 0.01 for the actor's head so the first policy is near
     uniform over DOFs with ROC mean ~0, 1 for the critic's head), zero biases. ``n_obs`` is the
@@ -252,10 +270,16 @@ def init_policy(key: Array, n_dof: int, hidden: int = 32, init_std: float | Arra
     ka = jax.random.split(ka, 3)
     kc = jax.random.split(kc, 3)
     root2 = math.sqrt(2.0)
-    actor = [_dense(ka[0], n_in, h, root2, dtype), _dense(ka[1], h, h, root2, dtype),
-             _dense(ka[2], h, 2 * n_dof, 0.01, dtype)]
-    critic = [_dense(kc[0], n_in, h, root2, dtype), _dense(kc[1], h, h, root2, dtype),
-              _dense(kc[2], h, 1, 1.0, dtype)]
+    actor = [
+        _dense(ka[0], n_in, h, root2, dtype),
+        _dense(ka[1], h, h, root2, dtype),
+        _dense(ka[2], h, 2 * n_dof, 0.01, dtype),
+    ]
+    critic = [
+        _dense(kc[0], n_in, h, root2, dtype),
+        _dense(kc[1], h, h, root2, dtype),
+        _dense(kc[2], h, 1, 1.0, dtype),
+    ]
     log_std = jnp.full((n_dof,), jnp.log(init_std), dtype)
     return {"actor": actor, "critic": critic, "log_std": log_std}
 
@@ -275,9 +299,13 @@ def policy(net: dict[str, Any], obs: Array) -> tuple[Array, Array, Array, Array]
     return out[..., :n], out[..., n:], jnp.broadcast_to(net["log_std"], out[..., n:].shape), value
 
 
-def _log_prob(logits: Array, mean: Array, log_std: Array, dof: Array, u: Array, tau: Array) -> Array:
+def _log_prob(
+    logits: Array, mean: Array, log_std: Array, dof: Array, u: Array, tau: Array
+) -> Array:
     """Log-density of (dof, u) under the tempered policy (logits / tau, std * tau)."""
-    logp_dof = jnp.take_along_axis(jax.nn.log_softmax(logits / tau[..., None]), dof[..., None], -1)[..., 0]
+    logp_dof = jnp.take_along_axis(jax.nn.log_softmax(logits / tau[..., None]), dof[..., None], -1)[
+        ..., 0
+    ]
     m = jnp.take_along_axis(mean, dof[..., None], -1)[..., 0]
     ls = jnp.take_along_axis(log_std, dof[..., None], -1)[..., 0] + jnp.log(tau)
     z = (u - m) * jnp.exp(-ls)
@@ -292,7 +320,9 @@ def _entropy(logits: Array, log_std: Array, tau: Array) -> Array:
     return -jnp.sum(p * logp, -1) + jnp.sum(p * gauss, -1)
 
 
-def _sample(logits: Array, mean: Array, log_std: Array, tau: Array, u_dof: Array, z: Array) -> tuple[Array, Array]:
+def _sample(
+    logits: Array, mean: Array, log_std: Array, tau: Array, u_dof: Array, z: Array
+) -> tuple[Array, Array]:
     """A DOF (inverse CDF of the tempered categorical at ``u_dof``) and ``u = mean + std z``."""
     cdf = jnp.cumsum(jax.nn.softmax(logits / tau), -1)
     dof = jnp.minimum(jnp.sum(cdf < u_dof, dtype=jnp.int32), logits.shape[-1] - 1)
@@ -327,11 +357,15 @@ def _gae(reward: Array, value: Array, last_value: Array, gamma: float, lam: floa
         adv = delta + gamma * lam * adv
         return (adv, v), adv
 
-    _, adv = jax.lax.scan(back, (jnp.zeros_like(last_value), last_value), (reward, value), reverse=True)
+    _, adv = jax.lax.scan(
+        back, (jnp.zeros_like(last_value), last_value), (reward, value), reverse=True
+    )
     return adv
 
 
-def _loss(net: dict[str, Any], batch: _Batch, adv: Array, target: Array, config: PPOConfig, hp: dict) -> Array:
+def _loss(
+    net: dict[str, Any], batch: _Batch, adv: Array, target: Array, config: PPOConfig, hp: dict
+) -> Array:
     logits, mean, log_std, value = policy(net, batch.obs)
     logp = _log_prob(logits, mean, log_std, batch.dof, batch.u, batch.tau)
     ratio = jnp.exp(logp - batch.logp)
@@ -343,11 +377,20 @@ def _loss(net: dict[str, Any], batch: _Batch, adv: Array, target: Array, config:
 
 
 def _optimizer(hp: dict) -> optax.GradientTransformation:
-    return optax.chain(optax.clip_by_global_norm(hp["max_grad_norm"]), optax.adam(hp["learning_rate"], eps=1e-5))
+    return optax.chain(
+        optax.clip_by_global_norm(hp["max_grad_norm"]), optax.adam(hp["learning_rate"], eps=1e-5)
+    )
 
 
-def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Environment | None = None, axes: Any = 0,
-           trace: bool = False) -> PPORun:
+def _train(
+    keys: Array,
+    params: Any,
+    config: PPOConfig,
+    hp: dict,
+    world: Environment | None = None,
+    axes: Any = 0,
+    trace: bool = False,
+) -> PPORun:
     """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``axes`` says, a
     ``vmap`` prefix) in the world ``world`` (default: the paper's world of ``params``): time
     outermost. The world's step is :func:`jswim.agents.worlds.step`, its observation
@@ -364,16 +407,25 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Environ
     split = jax.vmap(lambda k: jax.random.split(k, 3))(keys)
     states = jax.vmap(world.reset, in_axes=(0, axes))(split[:, 0], params)
     dofs0 = jax.vmap(lambda st, p: world.observe(st, p).dofs, in_axes=(0, axes))(states, params)
-    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features))(split[:, 1])
+    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features))(
+        split[:, 1]
+    )
     opt = _optimizer(hp)
     n_updates = -(-config.steps // config.rollout)
     total = n_updates * config.rollout
     # One draw per learner for the whole run: the DOF's uniform, the ROC's normal, the noise Y.
     width = 2 + world.n_swimmers
-    u = jax.vmap(lambda k: _env.uniforms(k, (total, width), dtype))(split[:, 2])  # (B, total, 2 + noise)
+    u = jax.vmap(lambda k: _env.uniforms(k, (total, width), dtype))(
+        split[:, 2]
+    )  # (B, total, 2 + noise)
     u = jnp.moveaxis(u, 0, 1).reshape(n_updates, config.rollout, b, width)
     z = jax.scipy.special.ndtri(jnp.clip(u[..., 1], 1e-7, 1.0 - 1e-7))
-    inputs = (jnp.arange(total).reshape(n_updates, config.rollout), u[..., 0], z, 2.0 * u[..., 2:] - 1.0)
+    inputs = (
+        jnp.arange(total).reshape(n_updates, config.rollout),
+        u[..., 0],
+        z,
+        2.0 * u[..., 2:] - 1.0,
+    )
 
     def act_one(state, net, p, tau, u_dof, z_roc, y):
         obs = world.features(state, p)
@@ -385,8 +437,16 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Environ
         state, info = worlds.step(world, state, action, y, p)
         reward = info.progress.astype(dtype)
         x, y_pos, theta = worlds.pose(world, state, p)
-        record = (action, (dof + 1).astype(jnp.int8), x, reward, world.observe(state, p).dofs, y_pos, theta,
-                  worlds.trace(world, state, info, p) if trace else None)
+        record = (
+            action,
+            (dof + 1).astype(jnp.int8),
+            x,
+            reward,
+            world.observe(state, p).dofs,
+            y_pos,
+            theta,
+            worlds.trace(world, state, info, p) if trace else None,
+        )
         return state, _Batch(obs, dof, u_roc, logp, value, reward, tau), record
 
     def act(carry, inp):
@@ -394,7 +454,8 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Environ
         t, u_dof, z_roc, y = inp
         tau = _temperature(t, config.steps, hp["anneal_start"], hp["anneal_end"])
         states, batch, record = jax.vmap(act_one, in_axes=(0, 0, axes, None, 0, 0, 0))(
-            states, nets, params, tau, u_dof, z_roc, y)
+            states, nets, params, tau, u_dof, z_roc, y
+        )
         return (states, nets), (batch, record)
 
     def learn_one(net, opt_state, r2, batch, last_obs, t_end):
@@ -422,13 +483,16 @@ def _train(keys: Array, params: Any, config: PPOConfig, hp: dict, world: Environ
         last_obs = jax.vmap(world.features, in_axes=(0, axes))(states, params)
         t_end = (inp[0][-1] + 1).astype(dtype)
         nets, opt_states, r2 = jax.vmap(learn_one, in_axes=(0, 0, 0, 1, 0, None))(
-            nets, opt_states, r2, batch, last_obs, t_end)
+            nets, opt_states, r2, batch, last_obs, t_end
+        )
         return (states, nets, opt_states, r2), record
 
     carry = (states, nets, jax.vmap(opt.init)(nets), jnp.zeros((b,), dtype))
     _, record = jax.lax.scan(update, carry, inputs)
     # (n_updates, rollout, B, ...) -> (B, steps, ...)
-    record = jax.tree.map(lambda v: jnp.moveaxis(v.reshape((total,) + v.shape[2:]), 0, 1)[:, : config.steps], record)
+    record = jax.tree.map(
+        lambda v: jnp.moveaxis(v.reshape((total,) + v.shape[2:]), 0, 1)[:, : config.steps], record
+    )
     return PPORun(*record[:5], dofs0, *record[5:])
 
 
@@ -478,8 +542,15 @@ def train_batch(keys: Array, params: Any, config: PPOConfig = PPOConfig()) -> PP
     return sharding.apply_batched(fn, (), (keys, _env.broadcast_params(params, n)), n)
 
 
-def train_env(env: Environment, keys: Array, params: Any, config: PPOConfig = PPOConfig(), *,
-              params_axes: Any = None, trace: bool = False) -> PPORun:
+def train_env(
+    env: Environment,
+    keys: Array,
+    params: Any,
+    config: PPOConfig = PPOConfig(),
+    *,
+    params_axes: Any = None,
+    trace: bool = False,
+) -> PPORun:
     """Train independent PPO learners, one per key, in any world of the protocol
     (:class:`jswim.env.base.Environment`, e.g. from :func:`jswim.make`), in one jitted, vmapped call.
 
@@ -489,19 +560,32 @@ def train_env(env: Environment, keys: Array, params: Any, config: PPOConfig = PP
     ``y`` and ``orientation`` swimmer 1's; ``trace`` the world's own record. In the paper's world
     (params batched along B) the learners of :func:`train_batch`, number for number.
     """
-    return _jitted()(keys, params, config=_structure(config), hp=_numbers(config), world=env, axes=params_axes,
-                     trace=trace)
+    return _jitted()(
+        keys,
+        params,
+        config=_structure(config),
+        hp=_numbers(config),
+        world=env,
+        axes=params_axes,
+        trace=trace,
+    )
 
 
 @functools.lru_cache(maxsize=1)
 def _jitted() -> Callable[..., PPORun]:
-    return jax.jit(_train, static_argnames=("config", "world", "axes", "trace"), compiler_options=_compiler_options())
+    return jax.jit(
+        _train,
+        static_argnames=("config", "world", "axes", "trace"),
+        compiler_options=_compiler_options(),
+    )
 
 
 # ----------------------------------------------------------------------------- scenes
 
 
-def train_scene(key: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: int = 1) -> PPORun:
+def train_scene(
+    key: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: int = 1
+) -> PPORun:
     """Train one PPO learner on a scene (:mod:`jswim.scenes`; issue 19) for ``config.steps`` steps.
 
     :func:`train_scene_batch` for one key (unbatched fields).
@@ -510,8 +594,9 @@ def train_scene(key: Array, scene_params: Any, config: PPOConfig = PPOConfig(), 
     return jax.tree.map(lambda v: v[0], run)
 
 
-def train_scene_batch(keys: Array, scene_params: Any, config: PPOConfig = PPOConfig(),
-                      direction: Any = 1) -> PPORun:
+def train_scene_batch(
+    keys: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: Any = 1
+) -> PPORun:
     """:func:`train_env` on one scene of :mod:`jswim.scenes` (shared by the learners), a target
     direction per learner (+1 or -1, or one for all).
 
@@ -529,7 +614,9 @@ def train_scene_batch(keys: Array, scene_params: Any, config: PPOConfig = PPOCon
     """
     world = SceneWorld(scene_params.scene, scene_params.roc_levels)
     dtype = jnp.result_type(float)
-    task = SceneTask(scene_params, jnp.broadcast_to(jnp.asarray(direction, dtype), (keys.shape[0],)))
+    task = SceneTask(
+        scene_params, jnp.broadcast_to(jnp.asarray(direction, dtype), (keys.shape[0],))
+    )
     run = train_env(world, keys, task, config, params_axes=SceneTask(None, 0), trace=True)
     start = world.observe(world.reset(keys[0], task), task).position
     return run._replace(x=run.x - jnp.mean(start[:, 0]))

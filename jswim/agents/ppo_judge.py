@@ -32,7 +32,9 @@ def exact_x(run: Any, params: Any, *, replay: bool = False) -> np.ndarray:
     if not replay and not np.any(np.asarray(params.zeta) != 0):
         return np.asarray(run.x, np.float64)
     model = params.model
-    levels = np.rint((np.asarray(run.dofs0, np.float64) - model.lo) / (model.hi - model.lo)).astype(np.int32)
+    levels = np.rint((np.asarray(run.dofs0, np.float64) - model.lo) / (model.hi - model.lo)).astype(
+        np.int32
+    )
     replay_params = _env.broadcast_params(params, b, zeta=0.0, init=levels)
     return np.asarray(_replay(replay_params, jnp.asarray(actions)), np.float64)
 
@@ -49,8 +51,9 @@ def _replay(params: Any, actions: Array) -> Array:
     return jnp.moveaxis(jax.lax.scan(body, states, jnp.moveaxis(actions, 0, 1))[1], 0, 1)
 
 
-def evaluate(run: Any, params: Any, *, criterion: Any = None, tol: float | None = None,
-             replay: bool = False) -> Any:
+def evaluate(
+    run: Any, params: Any, *, criterion: Any = None, tol: float | None = None, replay: bool = False
+) -> Any:
     """Judge training runs with the success criterion for real-valued strokes
     (:func:`jswim.judging.shape_judge.judge_shapes`: a cycle is a return to the same shape within ``tol``
     of the range, default :data:`jswim.judging.shape_judge.SHAPE_TOL`), on exact displacements.
@@ -68,13 +71,24 @@ def evaluate(run: Any, params: Any, *, criterion: Any = None, tol: float | None 
     if isinstance(params, SceneTask):
         return evaluate_scene(run, params.scene, params.direction, criterion=criterion, tol=tol)
     b = np.asarray(run.x).shape[0]
-    return judge_shapes(np.asarray(run.dofs), exact_x(run, params, replay=replay), _env.broadcast_params(params, b),
-                        dofs0=np.asarray(run.dofs0), criterion=PAPER if criterion is None else criterion,
-                        tol=SHAPE_TOL if tol is None else tol)
+    return judge_shapes(
+        np.asarray(run.dofs),
+        exact_x(run, params, replay=replay),
+        _env.broadcast_params(params, b),
+        dofs0=np.asarray(run.dofs0),
+        criterion=PAPER if criterion is None else criterion,
+        tol=SHAPE_TOL if tol is None else tol,
+    )
 
 
-def evaluate_scene(run: Any, scene_params: Any, direction: Any = 1, *, criterion: Any = None,
-                   tol: float | None = None) -> Any:
+def evaluate_scene(
+    run: Any,
+    scene_params: Any,
+    direction: Any = 1,
+    *,
+    criterion: Any = None,
+    tol: float | None = None,
+) -> Any:
     """Judge scene runs as the scene studies judge their agents
     (:func:`jswim.studies.scenes._judge` for lattice moves): the success criterion on each
     swimmer's own moves, with the bulk swimmer's (noiseless, paper's formula) displacements; here
@@ -115,14 +129,26 @@ def evaluate_scene(run: Any, scene_params: Any, direction: Any = 1, *, criterion
         levels = np.rint((arms0[s] - lo) / (hi - lo)).astype(np.int32)
         bulk = _env.make_params("ng", direction=1, init=tuple(int(v) for v in levels))
         if not (np.isclose(float(bulk.model.lo), lo) and np.isclose(float(bulk.model.hi), hi)):
-            raise ConfigError("evaluate_scene needs the scene's arm limits to be the bulk swimmer's")
+            raise ConfigError(
+                "evaluate_scene needs the scene's arm limits to be the bulk swimmer's"
+            )
         # The other swimmer's steps replayed as zero ROCs: no move, no displacement.
-        own_actions = np.where((owner == s)[..., None], actions[..., 2 * s:2 * s + 2], 0.0)
-        x = np.asarray(_replay(_env.broadcast_params(bulk, b), jnp.asarray(own_actions)), np.float64)
-        arms = dofs[..., 2 * s:2 * s + 2]
+        own_actions = np.where((owner == s)[..., None], actions[..., 2 * s : 2 * s + 2], 0.0)
+        x = np.asarray(
+            _replay(_env.broadcast_params(bulk, b), jnp.asarray(own_actions)), np.float64
+        )
+        arms = dofs[..., 2 * s : 2 * s + 2]
         if n_sw == 1:
-            reports.append(judge_shapes(arms, x, _env.broadcast_params(bulk, b, direction=dirs), dofs0=arms0[s],
-                                        criterion=criterion, tol=tol))
+            reports.append(
+                judge_shapes(
+                    arms,
+                    x,
+                    _env.broadcast_params(bulk, b, direction=dirs),
+                    dofs0=arms0[s],
+                    criterion=criterion,
+                    tol=tol,
+                )
+            )
             continue
         per = []
         for i in range(b):
@@ -130,14 +156,24 @@ def evaluate_scene(run: Any, scene_params: Any, direction: Any = 1, *, criterion
             if own.size < 4:
                 per.append(None)
                 continue
-            per.append(judge_shapes(arms[i, own][None], x[i, own][None], bulk.replace(direction=float(dirs[i])),
-                                    dofs0=arms0[s], criterion=criterion, tol=tol))
+            per.append(
+                judge_shapes(
+                    arms[i, own][None],
+                    x[i, own][None],
+                    bulk.replace(direction=float(dirs[i])),
+                    dofs0=arms0[s],
+                    criterion=criterion,
+                    tol=tol,
+                )
+            )
         reports.append(per)
     if n_sw == 1:
         return reports[0]
 
     def field(name: str, fill: Any) -> np.ndarray:  # (S, B): one swimmer's verdicts per learner
-        return np.array([[getattr(r, name)[0] if r is not None else fill for r in per] for per in reports])
+        return np.array(
+            [[getattr(r, name)[0] if r is not None else fill for r in per] for per in reports]
+        )
 
     learned = field("learned", False).all(0)
     success = field("success", False).all(0)
@@ -149,5 +185,7 @@ def evaluate_scene(run: Any, scene_params: Any, direction: Any = 1, *, criterion
     cycle = np.full((b, width), -1, np.int64)
     for i, r in enumerate(reports[0]):
         if r is not None and learned[i]:
-            cycle[i, :r.cycle.shape[1]] = r.cycle[0]
-    return GaitReport(learned, stl, success, period, cycle, per_step, fraction, np.where(learned, stl - 1, -1))
+            cycle[i, : r.cycle.shape[1]] = r.cycle[0]
+    return GaitReport(
+        learned, stl, success, period, cycle, per_step, fraction, np.where(learned, stl - 1, -1)
+    )

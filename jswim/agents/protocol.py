@@ -18,7 +18,8 @@ from __future__ import annotations
 import hashlib
 import random
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 from jswim.agents.defaults import default_clearing, default_max_tokens, default_n_ht, swimmer_text
 from jswim.agents.memory import ClearingRule, MoveStats, render_summary
@@ -42,7 +43,9 @@ def derived_seed(*parts: Any) -> int:
     return int.from_bytes(digest, "little") & 0x7FFFFFFF
 
 
-def setup(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig) -> tuple[int, SwimmerText, PromptConfig]:
+def setup(
+    spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig
+) -> tuple[int, SwimmerText, PromptConfig]:
     """What a run keeps from start to end: ``(n_ht, swimmer text, prompt knobs)``.
 
     ``n_ht`` and the ROC set come from the spec, else from the swimmer's agent defaults
@@ -50,9 +53,17 @@ def setup(spec: LLMRunSpec, model: SwimmerModel, cfg: LLMAgentConfig) -> tuple[i
     """
     n_ht = spec.n_ht if spec.n_ht is not None else default_n_ht(model, spec.direction)
     text = swimmer_text(model, spec.rocs, spec.roc_levels)
-    prompt = PromptConfig(n_ht=n_ht, x_min=cfg.x_min, drop=spec.drop, action_set=cfg.action_set,
-                          template=cfg.template, system=cfg.system, summary=cfg.summary, shuffle=cfg.shuffle,
-                          order=cfg.order)
+    prompt = PromptConfig(
+        n_ht=n_ht,
+        x_min=cfg.x_min,
+        drop=spec.drop,
+        action_set=cfg.action_set,
+        template=cfg.template,
+        system=cfg.system,
+        summary=cfg.summary,
+        shuffle=cfg.shuffle,
+        order=cfg.order,
+    )
     return n_ht, text, prompt
 
 
@@ -141,7 +152,9 @@ def request(
     if cfg.shuffle:  # same set, new order; seeded per run and step so a run replays exactly
         random.Random(derived_seed(seed, step, "shuffle")).shuffle(options)
     summary = render_summary(text, stats, dofs, options, direction) if cfg.summary else ""
-    body = render_prompt(text, prompt, direction, records, dofs, x, options=options, summary=summary)
+    body = render_prompt(
+        text, prompt, direction, records, dofs, x, options=options, summary=summary
+    )
     return Request(body, build_messages(body, cfg.system), allowed, options)
 
 
@@ -161,7 +174,9 @@ class Reply:
 
 
 #: Follow-up of a reply the server cut off at ``max_tokens`` (``{allowed}`` is filled in).
-CUTOFF_PROMPT = "Your reply was cut off before it named an action. Answer only with one of {allowed}."
+CUTOFF_PROMPT = (
+    "Your reply was cut off before it named an action. Answer only with one of {allowed}."
+)
 
 #: The assistant turn of a follow-up when the cut-off reply had no answer text at all.
 CUTOFF_TURN = "(reply cut off)"
@@ -173,8 +188,13 @@ def valid_reply(req: Request, reply: str) -> bool:
 
 
 def read_reply(
-    req: Request, messages: Sequence[dict[str, str]], reply: str, attempt: int, cfg: LLMAgentConfig,
-    *, truncated: bool = False,
+    req: Request,
+    messages: Sequence[dict[str, str]],
+    reply: str,
+    attempt: int,
+    cfg: LLMAgentConfig,
+    *,
+    truncated: bool = False,
 ) -> Reply:
     """Read the reply to ``messages`` (attempt ``attempt``, 0-based) of request ``req``.
 
@@ -192,7 +212,11 @@ def read_reply(
         return Reply(None)
     offered = ", ".join(a.text() for a in req.options)
     ask = CUTOFF_PROMPT if truncated else cfg.retry_prompt
-    return Reply(None, list(messages) + [
-        {"role": "assistant", "content": reply or (CUTOFF_TURN if truncated else "")},
-        {"role": "user", "content": ask.format(allowed=offered)},
-    ])
+    return Reply(
+        None,
+        list(messages)
+        + [
+            {"role": "assistant", "content": reply or (CUTOFF_TURN if truncated else "")},
+            {"role": "user", "content": ask.format(allowed=offered)},
+        ],
+    )

@@ -30,7 +30,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Any, Callable, NamedTuple
+from typing import Any, NamedTuple
+from collections.abc import Callable
 
 import jax
 import jax.numpy as jnp
@@ -99,16 +100,20 @@ class QConfig:
         if not isinstance(self.steps, int) or self.steps < 1:
             raise ConfigError(f"steps must be a positive integer, got {self.steps!r}")
         if not 0.0 <= self.discount < 1.0:
-            raise ConfigError(f"discount must lie in [0, 1) (the task never ends), got {self.discount!r}")
+            raise ConfigError(
+                f"discount must lie in [0, 1) (the task never ends), got {self.discount!r}"
+            )
         check_action_set(self.action_set)
         if self.tie_break not in ("random", "first"):
             raise ConfigError(f"tie_break must be 'random' or 'first', got {self.tie_break!r}")
         for name in ("learning_rate", "epsilon"):
             value = getattr(self, name)
             if not callable(value) and not (isinstance(value, (int, float)) and value >= 0):
-                raise ConfigError(f"{name} must be a number >= 0 or an optax schedule, got {value!r}")
+                raise ConfigError(
+                    f"{name} must be a number >= 0 or an optax schedule, got {value!r}"
+                )
 
-    def replace(self, **changes: Any) -> "QConfig":
+    def replace(self, **changes: Any) -> QConfig:
         """A copy with some fields changed."""
         return dataclasses.replace(self, **changes)
 
@@ -195,7 +200,9 @@ def _pick(mask: Array, u: Array) -> Array:
     a = mask.shape[0]
     count = jnp.sum(mask, dtype=jnp.int32)
     k = jnp.clip(jnp.floor(u * count).astype(jnp.int32), 0, jnp.maximum(count - 1, 0))
-    if a > _TABLE_ACTIONS:  # ROC lattices: 2**A rows would not fit; the k-th set entry by a running count
+    if (
+        a > _TABLE_ACTIONS
+    ):  # ROC lattices: 2**A rows would not fit; the k-th set entry by a running count
         return jnp.argmax(jnp.cumsum(mask, dtype=jnp.int32) > k).astype(jnp.int32)
     bits = jnp.sum(mask.astype(jnp.int32) << jnp.arange(a, dtype=jnp.int32), dtype=jnp.int32)
     return jnp.asarray(_kth_true_table(a))[bits * a + k]
@@ -210,14 +217,18 @@ def _greedy_set(q_row: Array, mask: Array, tie_break: str) -> Array:
     return ties
 
 
-def _act(q_row: Array, mask: Array, epsilon: Array, u: Array, tie_break: str) -> tuple[Array, Array]:
+def _act(
+    q_row: Array, mask: Array, epsilon: Array, u: Array, tie_break: str
+) -> tuple[Array, Array]:
     """Epsilon-greedy choice from one uniform ``u``: explore when ``u < epsilon``.
 
     Conditioned on the coin, ``u / epsilon`` and ``(u - epsilon) / (1 - epsilon)`` are again
     uniform on [0, 1), so one random number per step picks both the branch and the action.
     """
     explore = u < epsilon
-    v = jnp.where(explore, u / jnp.maximum(epsilon, 1e-30), (u - epsilon) / jnp.maximum(1.0 - epsilon, 1e-30))
+    v = jnp.where(
+        explore, u / jnp.maximum(epsilon, 1e-30), (u - epsilon) / jnp.maximum(1.0 - epsilon, 1e-30)
+    )
     candidates = jnp.where(explore, mask, _greedy_set(q_row, mask, tie_break))
     return _pick(candidates, v), explore
 
@@ -254,8 +265,14 @@ class _Pending(NamedTuple):
     target: Array  # r + gamma max_a' Q(s', a'), from the table the step acted on
 
 
-def _train_one(key: Array, params: Any, config: QConfig, pose: bool = False, cells: Cells | None = None,
-               trace: bool = False) -> QRun:
+def _train_one(
+    key: Array,
+    params: Any,
+    config: QConfig,
+    pose: bool = False,
+    cells: Cells | None = None,
+    trace: bool = False,
+) -> QRun:
     cells = _paper(params) if cells is None else cells
     env = cells.env
     dtype = jnp.result_type(float)
@@ -288,7 +305,14 @@ def _train_one(key: Array, params: Any, config: QConfig, pose: bool = False, cel
         """One optax step on the squared TD error, the target held fixed (semi-gradient)."""
 
         def td_loss(q: Array) -> Array:
-            return 0.5 * (jax.lax.stop_gradient(pending.target) - _entry(q, pending.corner, pending.action)) ** 2
+            return (
+                0.5
+                * (
+                    jax.lax.stop_gradient(pending.target)
+                    - _entry(q, pending.corner, pending.action)
+                )
+                ** 2
+            )
 
         updates, opt_state = opt.update(jax.grad(td_loss)(q), opt_state, q)
         return optax.apply_updates(q, updates), opt_state
@@ -309,14 +333,18 @@ def _train_one(key: Array, params: Any, config: QConfig, pose: bool = False, cel
     inputs = (jnp.arange(steps), uniforms(k_run, (steps, 1 + env.n_swimmers), dtype))
     nothing = _Pending(jnp.int32(-1), jnp.int32(0), jnp.zeros((), dtype))
     carry = (state, q, opt.init(q), nothing)
-    (_, q, opt_state, pending), (acts, x, explored, y, theta, tr) = jax.lax.scan(body, carry, inputs)
+    (_, q, opt_state, pending), (acts, x, explored, y, theta, tr) = jax.lax.scan(
+        body, carry, inputs
+    )
     q, _ = learn(q, opt_state, pending)
     return QRun(acts, x, explored, q, cells.positions(state, params), y, theta, tr)
 
 
 def _paper(params: EnvParams) -> Cells:
     """The discretiser of the paper's world of ``params``."""
-    return worlds.PaperCells(SwimmerWorld(params.model, _k(params), bool(getattr(params, "diagonal", False))))
+    return worlds.PaperCells(
+        SwimmerWorld(params.model, _k(params), bool(getattr(params, "diagonal", False)))
+    )
 
 
 @functools.lru_cache(maxsize=1)
@@ -360,7 +388,9 @@ def train(key: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool
     return _jitted("one")(key, params, config, pose, _paper(params))
 
 
-def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool = False) -> QRun:
+def train_batch(
+    keys: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool = False
+) -> QRun:
     """Train independent learners, one per key, in one jitted, vmapped call.
 
     Parameters
@@ -390,8 +420,17 @@ def train_batch(keys: Array, params: EnvParams, config: QConfig = QConfig(), pos
     return sharding.apply_batched(fn, (), (keys, batch_params(params, n)), n)
 
 
-def train_env(env: Environment, keys: Array, params: Any, config: QConfig = QConfig(), *, params_axes: Any = None,
-              cells: Cells | None = None, pose: bool = False, trace: bool = False) -> QRun:
+def train_env(
+    env: Environment,
+    keys: Array,
+    params: Any,
+    config: QConfig = QConfig(),
+    *,
+    params_axes: Any = None,
+    cells: Cells | None = None,
+    pose: bool = False,
+    trace: bool = False,
+) -> QRun:
     """Train independent Q-learners, one per key, in any world of the protocol (e.g. from
     :func:`jswim.make`), in one jitted call vmapped over learners.
 
@@ -418,12 +457,23 @@ def train_env(env: Environment, keys: Array, params: Any, config: QConfig = QCon
         Leading axis B. In the paper's world the learners of :func:`train_batch`, number for number.
     """
     cells = worlds.cells(env) if cells is None else cells
-    return _jitted("batch")(keys, params, config=config, pose=pose, cells=cells, trace=trace, axes=params_axes)
+    return _jitted("batch")(
+        keys, params, config=config, pose=pose, cells=cells, trace=trace, axes=params_axes
+    )
 
 
-def _batch(keys: Array, params: Any, config: QConfig, pose: bool = False, cells: Cells | None = None,
-           trace: bool = False, axes: Any = 0) -> QRun:
-    return jax.vmap(lambda k, p: _train_one(k, p, config, pose, cells, trace), in_axes=(0, axes))(keys, params)
+def _batch(
+    keys: Array,
+    params: Any,
+    config: QConfig,
+    pose: bool = False,
+    cells: Cells | None = None,
+    trace: bool = False,
+    axes: Any = 0,
+) -> QRun:
+    return jax.vmap(lambda k, p: _train_one(k, p, config, pose, cells, trace), in_axes=(0, axes))(
+        keys, params
+    )
 
 
 @functools.lru_cache(maxsize=2)
@@ -439,12 +489,19 @@ batch_params = broadcast_params
 
 def evaluate(run: QRun, params: EnvParams, *, criterion: Criterion = PAPER) -> GaitReport:
     """Judge training runs with the shared success criterion, :func:`jswim.judging.gait.judge`."""
-    return judge(np.asarray(run.actions), params, levels0=np.asarray(run.levels0), criterion=criterion,
-                 roc_levels=_k(params))
+    return judge(
+        np.asarray(run.actions),
+        params,
+        levels0=np.asarray(run.levels0),
+        criterion=criterion,
+        roc_levels=_k(params),
+    )
 
 
 @functools.partial(jax.jit, static_argnames=("steps", "action_set"))
-def greedy_rollout(q: Array, params: EnvParams, steps: int, action_set: str = "all", key: Array | None = None) -> Array:
+def greedy_rollout(
+    q: Array, params: EnvParams, steps: int, action_set: str = "all", key: Array | None = None
+) -> Array:
     """Actions of the greedy policy of a Q-table, run on a fresh swimmer without learning.
 
     Ties are broken at random from ``key`` (default ``PRNGKey(0)``). Returns action indices,

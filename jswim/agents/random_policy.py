@@ -37,8 +37,15 @@ class RandomRun(NamedTuple):
     trace: Any = None
 
 
-def _one(key: Array, params: Any, steps: int, action_set: str, rocs: tuple[int, ...] | None, cells: Cells,
-         trace: bool = False) -> RandomRun:
+def _one(
+    key: Array,
+    params: Any,
+    steps: int,
+    action_set: str,
+    rocs: tuple[int, ...] | None,
+    cells: Cells,
+    trace: bool = False,
+) -> RandomRun:
     env = cells.env
     k_reset, k_run = jax.random.split(key)
     state0 = env.reset(k_reset, params)
@@ -48,7 +55,13 @@ def _one(key: Array, params: Any, steps: int, action_set: str, rocs: tuple[int, 
         action = _pick(mask, u[0])
         state, info = worlds.step(env, state, action, 2.0 * u[1:] - 1.0, params)
         x, y, theta = worlds.pose(env, state, params)
-        return state, (action, x, y, theta, worlds.trace(env, state, info, params) if trace else None)
+        return state, (
+            action,
+            x,
+            y,
+            theta,
+            worlds.trace(env, state, info, params) if trace else None,
+        )
 
     u = jax.random.uniform(k_run, (steps, 1 + env.n_swimmers))
     _, (acts, xs, ys, thetas, tr) = jax.lax.scan(body, state0, u)
@@ -56,7 +69,11 @@ def _one(key: Array, params: Any, steps: int, action_set: str, rocs: tuple[int, 
 
 
 def run_batch(
-    keys: Array, params: EnvParams, steps: int, action_set: str = "all", rocs: tuple[int, ...] | None = None
+    keys: Array,
+    params: EnvParams,
+    steps: int,
+    action_set: str = "all",
+    rocs: tuple[int, ...] | None = None,
 ) -> RandomRun:
     """Run one random policy per key; ``params`` leaves may carry a leading batch axis.
 
@@ -80,9 +97,18 @@ def run_batch(
     return _jitted(keys, params, steps, action_set, rocs, _paper(params), False, axes)
 
 
-def run_env(env: Environment, params: Any, keys: Array, steps: int, action_set: str = "all", *,
-            rocs: tuple[int, ...] | None = None, params_axes: Any = None, cells: Cells | None = None,
-            trace: bool = False) -> RandomRun:
+def run_env(
+    env: Environment,
+    params: Any,
+    keys: Array,
+    steps: int,
+    action_set: str = "all",
+    *,
+    rocs: tuple[int, ...] | None = None,
+    params_axes: Any = None,
+    cells: Cells | None = None,
+    trace: bool = False,
+) -> RandomRun:
     """The random policy in any world of the protocol (:class:`jswim.env.base.Environment`, e.g.
     from :func:`jswim.make`): every step a uniformly random code among those offered
     (``action_set``, ``rocs``: by default every ROC, the swimmer's own in the paper's world), one
@@ -92,11 +118,29 @@ def run_env(env: Environment, params: Any, keys: Array, steps: int, action_set: 
     In the paper's world the runs of :func:`run_batch`, number for number."""
     check_action_set(action_set)
     cells = worlds.cells(env) if cells is None else cells
-    return _jitted(keys, params, steps, action_set, None if rocs is None else tuple(rocs), cells, trace, params_axes)
+    return _jitted(
+        keys,
+        params,
+        steps,
+        action_set,
+        None if rocs is None else tuple(rocs),
+        cells,
+        trace,
+        params_axes,
+    )
 
 
 @functools.partial(jax.jit, static_argnums=(2, 3, 4, 5, 6, 7))
-def _jitted(keys: Array, params: Any, steps: int, action_set: str, rocs: Any, cells: Cells, trace: bool,
-            axes: Any) -> RandomRun:
-    return jax.vmap(_one, in_axes=(0, axes, None, None, None, None, None))(keys, params, steps, action_set, rocs,
-                                                                          cells, trace)
+def _jitted(
+    keys: Array,
+    params: Any,
+    steps: int,
+    action_set: str,
+    rocs: Any,
+    cells: Cells,
+    trace: bool,
+    axes: Any,
+) -> RandomRun:
+    return jax.vmap(_one, in_axes=(0, axes, None, None, None, None, None))(
+        keys, params, steps, action_set, rocs, cells, trace
+    )

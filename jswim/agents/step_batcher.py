@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import asyncio
 import functools
-from typing import Any, Callable, Sequence
+from typing import Any
+from collections.abc import Callable, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -26,7 +27,9 @@ from jswim.env.randomness import seed32
 
 def _wide(tree: Any) -> Any:
     """Every float leaf as float64 (call under ``jax.enable_x64``)."""
-    return jax.tree.map(lambda a: a.astype(jnp.float64) if jnp.issubdtype(a.dtype, jnp.floating) else a, tree)
+    return jax.tree.map(
+        lambda a: a.astype(jnp.float64) if jnp.issubdtype(a.dtype, jnp.floating) else a, tree
+    )
 
 
 def _seen(env: Environment, states: Any, params: Any) -> tuple[Any, jax.Array]:
@@ -35,7 +38,9 @@ def _seen(env: Environment, states: Any, params: Any) -> tuple[Any, jax.Array]:
     ``hi + lo`` pairs gives their exact sum (the prompt encodes X to 1e-3 after any number of steps)."""
     obs = jax.vmap(env.observe)(states, params)
     with jax.enable_x64(True):
-        position = jax.vmap(lambda s, p: env.observe(_wide(s), p).position.astype(jnp.float64))(states, params)
+        position = jax.vmap(lambda s, p: env.observe(_wide(s), p).position.astype(jnp.float64))(
+            states, params
+        )
     return obs, position
 
 
@@ -43,22 +48,39 @@ def _seen(env: Environment, states: Any, params: Any) -> tuple[Any, jax.Array]:
 def _start(env: Environment, seeds: jax.Array, params: Any):
     # One program for the whole start (keys, split, reset): every separate JAX call is one more
     # trace and compile-cache lookup each session pays before its first request.
-    split = jax.vmap(jax.random.split)(jax.vmap(jax.random.PRNGKey)(seeds))  # = env.seed_key per run
+    split = jax.vmap(jax.random.split)(
+        jax.vmap(jax.random.PRNGKey)(seeds)
+    )  # = env.seed_key per run
     states = jax.vmap(env.reset)(split[:, 0], params)
     return (split[:, 1], states) + _seen(env, states, params)
 
 
 @functools.partial(jax.jit, static_argnums=0)
-def _advance(env: Environment, base_keys: jax.Array, t: jax.Array, states: Any, actions: jax.Array, params: Any,
-             mask: jax.Array):
+def _advance(
+    env: Environment,
+    base_keys: jax.Array,
+    t: jax.Array,
+    states: Any,
+    actions: jax.Array,
+    params: Any,
+    mask: jax.Array,
+):
     # Every member is stepped (one compiled shape per group) and only the masked ones keep it:
     # each run's step key is folded from its own step count, so who else steps changes nothing.
     keys = jax.vmap(jax.random.fold_in)(base_keys, t)
     new, info = jax.vmap(env.step)(keys, states, actions, params)
-    new = jax.tree.map(lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, states)
+    new = jax.tree.map(
+        lambda a, b: jnp.where(mask.reshape(mask.shape + (1,) * (a.ndim - 1)), a, b), new, states
+    )
     obs, position = _seen(env, new, params)
-    return new, info.progress, jnp.any(info.stuck.reshape(mask.shape + (-1,)), -1), \
-        jnp.any(info.contact.reshape(mask.shape + (-1,)), -1), obs, position
+    return (
+        new,
+        info.progress,
+        jnp.any(info.stuck.reshape(mask.shape + (-1,)), -1),
+        jnp.any(info.contact.reshape(mask.shape + (-1,)), -1),
+        obs,
+        position,
+    )
 
 
 def stack_params(params: Sequence[Any]) -> Any:
@@ -66,8 +88,10 @@ def stack_params(params: Sequence[Any]) -> Any:
     axis; a Python number takes JAX's default float, as the world would read it)."""
     dtype = np.dtype(jnp.result_type(float))
 
-    return jax.tree.map(lambda *vs: np.stack([np.asarray(v, dtype if isinstance(v, float) else None) for v in vs]),
-                        *params)
+    return jax.tree.map(
+        lambda *vs: np.stack([np.asarray(v, dtype if isinstance(v, float) else None) for v in vs]),
+        *params,
+    )
 
 
 def group_key(env: Environment, params: Any) -> tuple[Any, ...]:
@@ -89,8 +113,16 @@ class StepGroup:
     (for benchmarks: steps per call = the batching achieved).
     """
 
-    def __init__(self, members: list[int], env: Environment, params: Sequence[Any], seeds: Sequence[int],
-                 noop: int, lo: Any, hi: Any) -> None:
+    def __init__(
+        self,
+        members: list[int],
+        env: Environment,
+        params: Sequence[Any],
+        seeds: Sequence[int],
+        noop: int,
+        lo: Any,
+        hi: Any,
+    ) -> None:
         self.members = members
         self.env = env
         self.params = stack_params(params)
@@ -100,8 +132,10 @@ class StepGroup:
         self.x0 = np.asarray(position, np.float64)[..., 0]
         self.start = self._outputs(obs, position, None)
         self.start["x"] = np.zeros(len(members))
-        self.levels0 = np.rint((self.start["dofs"] - np.asarray(lo, np.float64))
-                               / (np.asarray(hi, np.float64) - np.asarray(lo, np.float64))).astype(np.int64)
+        self.levels0 = np.rint(
+            (self.start["dofs"] - np.asarray(lo, np.float64))
+            / (np.asarray(hi, np.float64) - np.asarray(lo, np.float64))
+        ).astype(np.int64)
         self.t = np.zeros(len(members), np.int32)
         self._pending: dict[int, tuple[int, asyncio.Future]] = {}
         self.n_steps = 0
@@ -109,13 +143,23 @@ class StepGroup:
     def _outputs(self, obs: Any, position: Any, rest: Any) -> dict[str, np.ndarray]:
         obs, position = jax.device_get((obs, position))
         xs = np.asarray(position, np.float64)[..., 0] - self.x0
-        height = obs.position[..., 1] if obs.height is None else obs.height  # a scene's: the middle sphere's
-        out = {"xs": xs, "x": xs.mean(-1), "heights": np.asarray(height, np.float64),
-               "tilts": np.asarray(obs.orientation, np.float64), "dofs": np.asarray(obs.dofs, np.float64),
-               "y": np.asarray(height[:, 0]), "orientation": np.asarray(obs.orientation[:, 0])}
+        height = (
+            obs.position[..., 1] if obs.height is None else obs.height
+        )  # a scene's: the middle sphere's
+        out = {
+            "xs": xs,
+            "x": xs.mean(-1),
+            "heights": np.asarray(height, np.float64),
+            "tilts": np.asarray(obs.orientation, np.float64),
+            "dofs": np.asarray(obs.dofs, np.float64),
+            "y": np.asarray(height[:, 0]),
+            "orientation": np.asarray(obs.orientation[:, 0]),
+        }
         if rest is not None:
             progress, stuck, contact = jax.device_get(rest)
-            out.update(progress=np.asarray(progress), stuck=np.asarray(stuck), contact=np.asarray(contact))
+            out.update(
+                progress=np.asarray(progress), stuck=np.asarray(stuck), contact=np.asarray(contact)
+            )
         return out
 
     def submit(self, pos: int, action: int) -> asyncio.Future:
@@ -130,7 +174,8 @@ class StepGroup:
     def _step(self, codes: np.ndarray, mask: np.ndarray) -> Callable[[int], dict[str, Any]]:
         """Advance the members in ``mask`` by ``codes`` (int32 ``(n,)``); each member's outputs by position."""
         self.states, progress, stuck, contact, obs, position = _advance(
-            self.env, self.step_keys, self.t, self.states, codes, self.params, mask)
+            self.env, self.step_keys, self.t, self.states, codes, self.params, mask
+        )
         self.t = self.t + mask.astype(np.int32)
         out = self._outputs(obs, position, (progress, stuck, contact))
         return lambda pos: {k: v[pos] for k, v in out.items()}

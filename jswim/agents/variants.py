@@ -14,13 +14,21 @@ from __future__ import annotations
 import dataclasses
 import json
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any
+from collections.abc import Iterable
 
 from jswim.actions import check_action_set, check_roc_levels
 from jswim.agents.memory import ClearingRule
 from jswim.errors import ConfigError, check_choice
 from jswim.llm.settings import check_max_tokens, check_temperature
-from jswim.prompt import DEFAULT_TEMPLATE, ORDERS, PAPER_SYSTEM, Action, PromptTemplate, normalize_mask
+from jswim.prompt import (
+    DEFAULT_TEMPLATE,
+    ORDERS,
+    PAPER_SYSTEM,
+    Action,
+    PromptTemplate,
+    normalize_mask,
+)
 
 
 def init_label(init: tuple[int, ...] | str | None) -> str:
@@ -162,16 +170,26 @@ class LLMRunSpec:
             raise ConfigError(f"n_steps must be >= 1, got {self.n_steps}")
         check_roc_levels(self.roc_levels)
         check_pair_prompt(self.pair_prompt)
-        if self.pair_prompt == "each" and (not self.scene or json.loads(self.scene).get("swimmers", 1) < 2):
+        if self.pair_prompt == "each" and (
+            not self.scene or json.loads(self.scene).get("swimmers", 1) < 2
+        ):
             raise ConfigError("--pair-prompt each needs a scene with two or more swimmers")
 
     def label(self) -> str:
         """``run_id``, or one built from the fields by :func:`run_id` (seed in place of a repeat)."""
         if self.run_id:
             return self.run_id
-        return run_id("llm", self.swimmer, self.direction, self.init, self.zeta, n_ht=self.n_ht,
-                      drop=self.drop, tag="-".join(t for t in (pair_tag(self.pair_prompt), roc_tag(self.roc_levels)) if t),
-                      seed=self.seed)
+        return run_id(
+            "llm",
+            self.swimmer,
+            self.direction,
+            self.init,
+            self.zeta,
+            n_ht=self.n_ht,
+            drop=self.drop,
+            tag="-".join(t for t in (pair_tag(self.pair_prompt), roc_tag(self.roc_levels)) if t),
+            seed=self.seed,
+        )
 
 
 @dataclass(frozen=True)
@@ -247,9 +265,15 @@ class LLMAgentConfig:
 
     def knobs(self, client_temperature: float) -> dict[str, Any]:
         """The variant switches as flat values (result rows, summaries)."""
-        return {"variant": self.variant, "action_set": self.action_set, "summary": self.summary,
-                "shuffle": self.shuffle, "temperature": float(self.sampling_temperature(client_temperature)),
-                "order": self.order, "share_identical": self.share_identical}
+        return {
+            "variant": self.variant,
+            "action_set": self.action_set,
+            "summary": self.summary,
+            "shuffle": self.shuffle,
+            "temperature": float(self.sampling_temperature(client_temperature)),
+            "order": self.order,
+            "share_identical": self.share_identical,
+        }
 
     def metadata(self) -> dict[str, Any]:
         d = dataclasses.asdict(self)
@@ -272,7 +296,11 @@ VARIANTS: dict[str, dict[str, Any]] = {
     "shape-changing+shuffle": {"action_set": "shape-changing", "shuffle": True},
     "temperature": {"temperature": 0.7},
     "shape-changing+temperature": {"action_set": "shape-changing", "temperature": 0.7},
-    "shape-changing+summary+temperature": {"action_set": "shape-changing", "summary": True, "temperature": 0.7},
+    "shape-changing+summary+temperature": {
+        "action_set": "shape-changing",
+        "summary": True,
+        "temperature": 0.7,
+    },
 }
 
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -27,11 +28,25 @@ def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
     """The world and params of ``spec``: its swimmer in its scene (``spec.scene``, canonical JSON;
     ``""``: the paper's world), noise level, direction, start and ROC lattice."""
     if not spec.scene:
-        return make(spec.swimmer, zeta=spec.zeta, direction=spec.direction, init=spec.init,
-                    roc_levels=spec.roc_levels, **dict(spec.swimmer_options))
-    corners = isinstance(spec.init, (tuple, list)) and all(v in (0, 1) for v in spec.init)  # else the scene's own
-    return make(spec.swimmer, json.loads(spec.scene), zeta=spec.zeta, direction=spec.direction,
-                init=tuple(int(v) for v in spec.init) if corners else None, roc_levels=spec.roc_levels)
+        return make(
+            spec.swimmer,
+            zeta=spec.zeta,
+            direction=spec.direction,
+            init=spec.init,
+            roc_levels=spec.roc_levels,
+            **dict(spec.swimmer_options),
+        )
+    corners = isinstance(spec.init, (tuple, list)) and all(
+        v in (0, 1) for v in spec.init
+    )  # else the scene's own
+    return make(
+        spec.swimmer,
+        json.loads(spec.scene),
+        zeta=spec.zeta,
+        direction=spec.direction,
+        init=tuple(int(v) for v in spec.init) if corners else None,
+        roc_levels=spec.roc_levels,
+    )
 
 
 def model(spec: LLMRunSpec, env: Environment) -> SwimmerModel:
@@ -54,12 +69,15 @@ def view(env: Environment, x0: Sequence[float], y0: Sequence[float]) -> SceneVie
     n, wall = int(env.n_swimmers), bool(getattr(env, "wall", False))
     if n == 1 and not wall:
         return None
-    starts = tuple((round(float(x0[k] - x0[0]), 9), round(float(y0[k] - y0[0]), 9)) for k in range(n))
+    starts = tuple(
+        (round(float(x0[k] - x0[0]), 9), round(float(y0[k] - y0[0]), 9)) for k in range(n)
+    )
     return SceneView(n, wall, starts[1][0] if n > 1 else 0.0, starts=starts if n > 2 else ())
 
 
-def text(base: SwimmerText, template: PromptTemplate, n_dof: int, scene: SceneView | None,
-         own: int = 0) -> tuple[SwimmerText, PromptTemplate]:
+def text(
+    base: SwimmerText, template: PromptTemplate, n_dof: int, scene: SceneView | None, own: int = 0
+) -> tuple[SwimmerText, PromptTemplate]:
     """The swimmer text over the world's ``n_dof`` joint DOFs (``base``: one swimmer's,
     :func:`jswim.agents.protocol.setup`) with its view and the template the view needs
     (:func:`jswim.prompt.scene_template`); ``own`` >= 1: swimmer ``own``'s text alone (its own DOFs)."""
@@ -68,8 +86,13 @@ def text(base: SwimmerText, template: PromptTemplate, n_dof: int, scene: SceneVi
     if own:
         scene = dataclasses.replace(scene, own=own)
         n_dof //= scene.swimmers
-    lo, hi = (tuple(np.resize(v, n_dof).tolist()) if isinstance(v, tuple) else v for v in (base.lo, base.hi))
-    return dataclasses.replace(base, n_dof=n_dof, lo=lo, hi=hi, scene=scene), scene_template(scene, template)
+    lo, hi = (
+        tuple(np.resize(v, n_dof).tolist()) if isinstance(v, tuple) else v
+        for v in (base.lo, base.hi)
+    )
+    return dataclasses.replace(base, n_dof=n_dof, lo=lo, hi=hi, scene=scene), scene_template(
+        scene, template
+    )
 
 
 def notes(spec: LLMRunSpec) -> tuple[dict[str, Any], str | None]:

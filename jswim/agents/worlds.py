@@ -37,12 +37,20 @@ from jswim.env.swimmer_world import SwimmerWorld
 HEIGHT_EDGES = (2.0, 3.5, 6.0, 10.0, 17.0, 30.0)
 
 
-def step(env: Environment, state: Any, action: Array, noise: Array, params: Any) -> tuple[Any, StepInfo]:
+def step(
+    env: Environment, state: Any, action: Array, noise: Array, params: Any
+) -> tuple[Any, StepInfo]:
     """One step of ``env`` with noise variables ``noise`` ``(n_swimmers,)`` in [-1, 1] (module docs)."""
     if isinstance(env, SwimmerWorld):
         new, i = env_advance(state, action, noise[0], params, exact=False)
-        return new, StepInfo(jnp.stack([i.dx, i.dy])[None], i.progress, i.stuck, i.moved, jnp.zeros((), bool),
-                             jnp.asarray(jnp.inf, i.dx.dtype))
+        return new, StepInfo(
+            jnp.stack([i.dx, i.dy])[None],
+            i.progress,
+            i.stuck,
+            i.moved,
+            jnp.zeros((), bool),
+            jnp.asarray(jnp.inf, i.dx.dtype),
+        )
     return env.advance(state, action, noise, params)
 
 
@@ -96,13 +104,20 @@ def restrict(mask: Array, rocs: tuple[int, ...], n_dof: int, roc_levels: int = 1
     return mask & jnp.tile(roc_ok, n_dof)
 
 
-def offered_mask(levels: Array, model: Any, action_set: str, rocs: tuple[int, ...] | None = None,
-                 roc_levels: int = 1) -> Array:
+def offered_mask(
+    levels: Array,
+    model: Any,
+    action_set: str,
+    rocs: tuple[int, ...] | None = None,
+    roc_levels: int = 1,
+) -> Array:
     """The paper's swimmer's :func:`offered`, restricted to the ROCs offered (default: the
     swimmer's, :func:`jswim.agents.defaults.default_rocs`: all three for two DOFs, +-1 for more;
     every ``k`` in ``-K..K`` on a ROC lattice, 0 left out for more DOFs)."""
     rocs = default_rocs(model, roc_levels) if rocs is None else rocs
-    return restrict(offered(levels, model.n_dof, action_set, roc_levels), rocs, model.n_dof, roc_levels)
+    return restrict(
+        offered(levels, model.n_dof, action_set, roc_levels), rocs, model.n_dof, roc_levels
+    )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -125,7 +140,9 @@ class Cells:
         """The table row of ``state`` (at positions ``j``)."""
         return corner(j, self.env.roc_levels)
 
-    def mask(self, j: Array, params: Any, action_set: str, rocs: tuple[int, ...] | None = None) -> Array:
+    def mask(
+        self, j: Array, params: Any, action_set: str, rocs: tuple[int, ...] | None = None
+    ) -> Array:
         """The codes offered at ``j`` (``rocs``: the ROCs ``k`` offered, default every one)."""
         env = self.env
         mask = offered(j, env.n_dof, action_set, env.roc_levels)
@@ -140,7 +157,9 @@ class PaperCells(Cells):
     def positions(self, state: Any, params: Any) -> Array:
         return positions(state, self.env.roc_levels)
 
-    def mask(self, j: Array, params: Any, action_set: str, rocs: tuple[int, ...] | None = None) -> Array:
+    def mask(
+        self, j: Array, params: Any, action_set: str, rocs: tuple[int, ...] | None = None
+    ) -> Array:
         return offered_mask(j, self.env.model, action_set, rocs, self.env.roc_levels)
 
 
@@ -153,7 +172,9 @@ class WallCells(Cells):
         return super().n_cells * (len(HEIGHT_EDGES) + 1)
 
     def cell(self, state: Any, j: Array, params: Any) -> Array:
-        h = jnp.searchsorted(jnp.asarray(HEIGHT_EDGES, state.centre.dtype), state.centre[0, 1]).astype(jnp.int32)
+        h = jnp.searchsorted(
+            jnp.asarray(HEIGHT_EDGES, state.centre.dtype), state.centre[0, 1]
+        ).astype(jnp.int32)
         return super().cell(state, j, params) * (len(HEIGHT_EDGES) + 1) + h
 
 
@@ -166,9 +187,10 @@ def cells(env: Environment) -> Cells:
     return Cells(env)
 
 
-def play(env: Environment, params: Any, keys: Array, actions: Any, *, params_axes: Any = None) -> Trajectory:
+def play(
+    env: Environment, params: Any, keys: Array, actions: Any, *, params_axes: Any = None
+) -> Trajectory:
     """Fixed action sequences ``(B, T)`` codes (or ``(B, T, n_dof)`` ROC vectors), run ``i`` reset
     with ``keys[i]`` and stepped with ``split(keys[i], T)`` as :func:`jswim.rollout` does: one
     scan vmapped over runs (``params_axes``: ``vmap``'s axes of ``params``, hashable)."""
     return _run_batch(env, params, keys, jnp.asarray(actions), params_axes)
-

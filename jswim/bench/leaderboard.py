@@ -10,22 +10,53 @@ from __future__ import annotations
 import csv
 import io
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 from jswim.console import REFERENCE_UNPRICED, Column, cost_text, plain_table
 from jswim.overview import MIN_QUARTILE_N
 from jswim.results import atomic_write, dumps, read_runs
 from jswim.studies.report import summarize
 
-FIELDS = ("row", "kind", "part", "swimmer", "direction", "group", "n", "samples", "success", "success_lo", "success_hi",
-          "learned", "steps_median", "steps_q25", "steps_q75", "mean_x", "mean_x_lo", "mean_x_hi", "failed_steps",
-          "tokens_per_step", "suite_cost_usd", "priced", "status", "unpriced")
+FIELDS = (
+    "row",
+    "kind",
+    "part",
+    "swimmer",
+    "direction",
+    "group",
+    "n",
+    "samples",
+    "success",
+    "success_lo",
+    "success_hi",
+    "learned",
+    "steps_median",
+    "steps_q25",
+    "steps_q75",
+    "mean_x",
+    "mean_x_lo",
+    "mean_x_hi",
+    "failed_steps",
+    "tokens_per_step",
+    "suite_cost_usd",
+    "priced",
+    "status",
+    "unpriced",
+)
 
 _LABELS = {"qlearning": "Q-learning", "random": "random"}
 
 
-def folder_rows(folder: Path, label: str, kind: str, part: str, cost: float | None, priced: bool | None,
-                status: str) -> list[dict[str, Any]]:
+def folder_rows(
+    folder: Path,
+    label: str,
+    kind: str,
+    part: str,
+    cost: float | None,
+    priced: bool | None,
+    status: str,
+) -> list[dict[str, Any]]:
     """Leaderboard rows of one study folder (nothing when it holds no finished runs)."""
     if not (folder / "metadata.json").exists():
         return []
@@ -34,17 +65,33 @@ def folder_rows(folder: Path, label: str, kind: str, part: str, cost: float | No
         agent = s["agent"]
         if kind == "baseline" and agent == "llm":
             continue
-        out.append({
-            "row": _LABELS.get(agent, label) if kind == "baseline" else label, "kind": kind, "part": part,
-            "swimmer": s["swimmer"], "direction": s["direction"], "group": s.get("group") or "",
-            "n": s["n"], "samples": s.get("samples") or 1, "success": s["success_rate"], "success_lo": s["success_lo"], "success_hi": s["success_hi"],
-            "learned": s["learned"], "steps_median": s["steps_to_learn_median"], "steps_q25": s["steps_to_learn_q25"],
-            "steps_q75": s["steps_to_learn_q75"], "mean_x": s["mean_x"], "mean_x_lo": s["mean_x_lo"],
-            "mean_x_hi": s["mean_x_hi"], "failed_steps": s["failed_steps"] if agent == "llm" else None,
-            "tokens_per_step": s.get("tokens_per_step") if agent == "llm" else None,
-            "suite_cost_usd": cost if kind != "baseline" else None, "priced": priced if kind != "baseline" else None,
-            "status": status,
-        })
+        out.append(
+            {
+                "row": _LABELS.get(agent, label) if kind == "baseline" else label,
+                "kind": kind,
+                "part": part,
+                "swimmer": s["swimmer"],
+                "direction": s["direction"],
+                "group": s.get("group") or "",
+                "n": s["n"],
+                "samples": s.get("samples") or 1,
+                "success": s["success_rate"],
+                "success_lo": s["success_lo"],
+                "success_hi": s["success_hi"],
+                "learned": s["learned"],
+                "steps_median": s["steps_to_learn_median"],
+                "steps_q25": s["steps_to_learn_q25"],
+                "steps_q75": s["steps_to_learn_q75"],
+                "mean_x": s["mean_x"],
+                "mean_x_lo": s["mean_x_lo"],
+                "mean_x_hi": s["mean_x_hi"],
+                "failed_steps": s["failed_steps"] if agent == "llm" else None,
+                "tokens_per_step": s.get("tokens_per_step") if agent == "llm" else None,
+                "suite_cost_usd": cost if kind != "baseline" else None,
+                "priced": priced if kind != "baseline" else None,
+                "status": status,
+            }
+        )
     return out
 
 
@@ -97,20 +144,53 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
     cols = [Column("part", False), Column("swimmer", False), Column("dir", False)]
     cols += [Column("group", False)] if groups else []
     cols += [Column("row", False)] + [Column("samples")] * samples
-    cols += [Column(h) for h in ("n", "success p [95% CI]", "steps to learn, median [IQR] (k of n learned)", "X/a end",
-                                 "fail", "tok/step", "suite $")]
+    cols += [
+        Column(h)
+        for h in (
+            "n",
+            "success p [95% CI]",
+            "steps to learn, median [IQR] (k of n learned)",
+            "X/a end",
+            "fail",
+            "tok/step",
+            "suite $",
+        )
+    ]
     order = {"llm": 0, "reference": 1, "baseline": 2}
-    key = lambda r: (r["part"], r["swimmer"] != "purcell", r["swimmer"], -int(r["direction"]), str(r["group"]),
-                     order[r["kind"]], r["row"])
+    key = lambda r: (
+        r["part"],
+        r["swimmer"] != "purcell",
+        r["swimmer"],
+        -int(r["direction"]),
+        str(r["group"]),
+        order[r["kind"]],
+        r["row"],
+    )
     cells = []
     for r in sorted(rows, key=key):
-        cells.append([r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x"] + ([r["group"]] if groups else [])
-                     + [r["row"] + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
-                        + ("" if r["status"] == "complete" or r["kind"] == "baseline" else f" [{r['status']}]")]
-                     + [str(r.get("samples") or 1)] * samples
-                     + [str(r["n"]), f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]", _steps(r),
-                        f"{r['mean_x']:+.3f}", _num(r["failed_steps"], "d"), _num(r["tokens_per_step"], ".0f"),
-                        _cost(r, short=True)])
+        cells.append(
+            [r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x"]
+            + ([r["group"]] if groups else [])
+            + [
+                r["row"]
+                + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
+                + (
+                    ""
+                    if r["status"] == "complete" or r["kind"] == "baseline"
+                    else f" [{r['status']}]"
+                )
+            ]
+            + [str(r.get("samples") or 1)] * samples
+            + [
+                str(r["n"]),
+                f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
+                _steps(r),
+                f"{r['mean_x']:+.3f}",
+                _num(r["failed_steps"], "d"),
+                _num(r["tokens_per_step"], ".0f"),
+                _cost(r, short=True),
+            ]
+        )
     return plain_table(cols, cells, width=width)
 
 
@@ -119,8 +199,12 @@ def missing_text(missing: Sequence[Mapping[str, Any]]) -> list[str]:
     return [f"missing rows: {m['row']} {m['part']} ({m['why']})" for m in missing]
 
 
-def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[str, Any],
-                missing: Sequence[Mapping[str, Any]] = ()) -> list[Path]:
+def write_files(
+    folder: Path,
+    rows: Sequence[Mapping[str, Any]],
+    meta: Mapping[str, Any],
+    missing: Sequence[Mapping[str, Any]] = (),
+) -> list[Path]:
     """``leaderboard.csv``, ``leaderboard.json`` (rows, the bench's definition and the ``missing``
     rows: ``{"row", "kind", "part", "why"}`` per study folder that gave none) and the figure."""
     buf = io.StringIO()
@@ -128,9 +212,18 @@ def write_files(folder: Path, rows: Sequence[Mapping[str, Any]], meta: Mapping[s
     w.writeheader()
     w.writerows({k: ("" if r.get(k) is None else r.get(k)) for k in FIELDS} for r in rows)
     atomic_write(folder / "leaderboard.csv", buf.getvalue())
-    atomic_write(folder / "leaderboard.json", dumps({"schema": list(FIELDS), "bench": dict(meta), "rows": list(rows),
-                                                     "missing": list(missing)},
-                                                    indent=1))
+    atomic_write(
+        folder / "leaderboard.json",
+        dumps(
+            {
+                "schema": list(FIELDS),
+                "bench": dict(meta),
+                "rows": list(rows),
+                "missing": list(missing),
+            },
+            indent=1,
+        ),
+    )
     paths = [folder / "leaderboard.csv", folder / "leaderboard.json"]
     if rows:
         paths += figure(folder, rows)
@@ -154,30 +247,64 @@ def figure_object(rows: Sequence[Mapping[str, Any]]) -> Any:
     """
     import matplotlib.pyplot as plt
 
-    panels = sorted({(r["part"], r["swimmer"], r["direction"], r["group"]) for r in rows},
-                    key=lambda k: (k[0], k[1] != "purcell", k[1], -k[2], str(k[3])))
-    labels = sorted({r["row"] for r in rows if r["kind"] == "llm"}) + \
-        sorted({r["row"] for r in rows if r["kind"] == "reference"}) + ["Q-learning", "random"]
+    panels = sorted(
+        {(r["part"], r["swimmer"], r["direction"], r["group"]) for r in rows},
+        key=lambda k: (k[0], k[1] != "purcell", k[1], -k[2], str(k[3])),
+    )
+    labels = (
+        sorted({r["row"] for r in rows if r["kind"] == "llm"})
+        + sorted({r["row"] for r in rows if r["kind"] == "reference"})
+        + ["Q-learning", "random"]
+    )
     labels = [lab for lab in labels if any(r["row"] == lab for r in rows)]
     pairs = min(2, len(panels))
     nrow = -(-len(panels) // pairs)
-    fig, axes = plt.subplots(nrow, 2 * pairs, figsize=(7.0, 0.5 + (0.3 * len(labels) + 0.9) * nrow), squeeze=False)
+    fig, axes = plt.subplots(
+        nrow, 2 * pairs, figsize=(7.0, 0.5 + (0.3 * len(labels) + 0.9) * nrow), squeeze=False
+    )
     colors = {"llm": "#0072B2", "reference": "#E69F00", "baseline": "#7f7f7f"}
-    xs = [r.get(k) for r in rows for k in ("mean_x", "mean_x_lo", "mean_x_hi") if r.get(k) is not None]
+    xs = [
+        r.get(k) for r in rows for k in ("mean_x", "mean_x_lo", "mean_x_hi") if r.get(k) is not None
+    ]
     span = max([0.1] + [abs(v) for v in xs]) * 1.15
     for n, (part, sw, d, g) in enumerate(panels):
         ax_p, ax_x = axes[n // pairs, 2 * (n % pairs)], axes[n // pairs, 2 * (n % pairs) + 1]
         for i, lab in enumerate(labels):
-            r = next((r for r in rows if (r["part"], r["swimmer"], r["direction"], r["group"], r["row"])
-                      == (part, sw, d, g, lab)), None)
+            r = next(
+                (
+                    r
+                    for r in rows
+                    if (r["part"], r["swimmer"], r["direction"], r["group"], r["row"])
+                    == (part, sw, d, g, lab)
+                ),
+                None,
+            )
             if r is None:
                 continue
-            err = [[max(0.0, r["success"] - r["success_lo"])], [max(0.0, r["success_hi"] - r["success"])]]
-            ax_p.errorbar(r["success"], i, xerr=err, fmt="o", ms=3, color=colors[r["kind"]], capsize=2, lw=1)
+            err = [
+                [max(0.0, r["success"] - r["success_lo"])],
+                [max(0.0, r["success_hi"] - r["success"])],
+            ]
+            ax_p.errorbar(
+                r["success"], i, xerr=err, fmt="o", ms=3, color=colors[r["kind"]], capsize=2, lw=1
+            )
             if r.get("mean_x") is not None:
                 lo, hi = r.get("mean_x_lo"), r.get("mean_x_hi")
-                xerr = None if lo is None or hi is None else [[max(0.0, r["mean_x"] - lo)], [max(0.0, hi - r["mean_x"])]]
-                ax_x.errorbar(r["mean_x"], i, xerr=xerr, fmt="s", ms=3, color=colors[r["kind"]], capsize=2, lw=1)
+                xerr = (
+                    None
+                    if lo is None or hi is None
+                    else [[max(0.0, r["mean_x"] - lo)], [max(0.0, hi - r["mean_x"])]]
+                )
+                ax_x.errorbar(
+                    r["mean_x"],
+                    i,
+                    xerr=xerr,
+                    fmt="s",
+                    ms=3,
+                    color=colors[r["kind"]],
+                    capsize=2,
+                    lw=1,
+                )
         direction = "+x" if d > 0 else "-x"
         ax_p.set_title(f"{part}: {sw} {direction}{' ' + g if g else ''}", fontsize=7, loc="left")
         ax_p.set_xlim(-0.05, 1.05)
@@ -186,11 +313,15 @@ def figure_object(rows: Sequence[Mapping[str, Any]]) -> Any:
         ax_p.set_xlabel("success p [95% CI]", fontsize=6)
         ax_x.set_xlabel(f"X/a end toward {direction} [95% CI]", fontsize=6)
         for j, ax in enumerate((ax_p, ax_x)):
-            ax.set_yticks(range(len(labels)), labels if n % pairs == 0 and j == 0 else [""] * len(labels), fontsize=6)
+            ax.set_yticks(
+                range(len(labels)),
+                labels if n % pairs == 0 and j == 0 else [""] * len(labels),
+                fontsize=6,
+            )
             ax.set_ylim(len(labels) - 0.5, -0.5)
             ax.tick_params(labelsize=6, labelbottom=True)
             ax.grid(axis="x", lw=0.3)
-    for ax in list(axes.flat)[2 * len(panels):]:
+    for ax in list(axes.flat)[2 * len(panels) :]:
         ax.axis("off")
     fig.tight_layout()
     return fig

@@ -11,7 +11,8 @@ from __future__ import annotations
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 from jswim.bench.suites import Suite, _check_name, user_suite
 from jswim.errors import ConfigError
@@ -19,11 +20,23 @@ from jswim.llm.prices import parse_prices
 
 #: Keys of a model entry -> the ``jswim study`` flag each becomes (``None``: handled apart).
 MODEL_KEYS = {
-    "name": None, "base_url": "--base-url", "model": "--model", "api_key_env": "--api-key-env",
-    "concurrency": "--concurrency", "rpm": "--rpm", "tpm": "--tpm", "max_cost": None,
-    "temperature": "--temperature", "max_tokens": "--max-tokens", "timeout": "--timeout",
-    "reasoning": "--reasoning", "reasoning_effort": "--reasoning-effort", "constrain": "--constrain",
-    "omit_fields": "--omit-field", "price_local": "--price-local", "extra": "--extra-field",
+    "name": None,
+    "base_url": "--base-url",
+    "model": "--model",
+    "api_key_env": "--api-key-env",
+    "concurrency": "--concurrency",
+    "rpm": "--rpm",
+    "tpm": "--tpm",
+    "max_cost": None,
+    "temperature": "--temperature",
+    "max_tokens": "--max-tokens",
+    "timeout": "--timeout",
+    "reasoning": "--reasoning",
+    "reasoning_effort": "--reasoning-effort",
+    "constrain": "--constrain",
+    "omit_fields": "--omit-field",
+    "price_local": "--price-local",
+    "extra": "--extra-field",
 }
 
 #: Names a user's model may not take: the bench's own rows and folders.
@@ -82,14 +95,20 @@ def model_entry(table: Any, where: str) -> ModelEntry:
         raise ConfigError(f"{where}: each [[models]] entry must be a table")
     bad = sorted(set(table) - set(MODEL_KEYS))
     if bad:
-        raise ConfigError(f"{where}: unknown key {bad[0]!r} in a model entry; use {', '.join(MODEL_KEYS)}")
+        raise ConfigError(
+            f"{where}: unknown key {bad[0]!r} in a model entry; use {', '.join(MODEL_KEYS)}"
+        )
     for key in ("base_url", "model"):
         if not table.get(key):
-            raise ConfigError(f"{where}: a model entry needs {key} (every entry has base_url and model; name is "
-                              "optional)")
+            raise ConfigError(
+                f"{where}: a model entry needs {key} (every entry has base_url and model; name is "
+                "optional)"
+            )
     name = _check_name(table.get("name") or table["model"], "model name")
     if name in RESERVED:
-        raise ConfigError(f"{where}: the model name {name!r} is the bench's own row; choose another")
+        raise ConfigError(
+            f"{where}: the model name {name!r} is the bench's own row; choose another"
+        )
     if "omit_fields" in table and not isinstance(table["omit_fields"], list):
         raise ConfigError(f"{where}: omit_fields must be a list of field names")
     if "extra" in table and not isinstance(table["extra"], Mapping):
@@ -99,7 +118,9 @@ def model_entry(table: Any, where: str) -> ModelEntry:
             if not float(table["max_cost"]) >= 0:
                 raise ValueError
         except (TypeError, ValueError):
-            raise ConfigError(f"{where}: max_cost of {name!r} must be a number of dollars >= 0") from None
+            raise ConfigError(
+                f"{where}: max_cost of {name!r} must be a number of dollars >= 0"
+            ) from None
     settings = tuple((k, table[k]) for k in MODEL_KEYS if k in table and k != "name")
     return ModelEntry(name, settings)
 
@@ -110,7 +131,9 @@ def parse_model_option(text: str) -> ModelEntry:
     for item in text.split(","):
         key, sep, value = item.partition("=")
         if not sep:
-            raise ConfigError(f"--model expects key=value pairs such as base_url=URL,model=NAME, got {text!r}")
+            raise ConfigError(
+                f"--model expects key=value pairs such as base_url=URL,model=NAME, got {text!r}"
+            )
         key = key.strip()
         if key in ("concurrency", "max_tokens"):
             try:
@@ -156,12 +179,18 @@ def load_models_file(path: str | Path) -> ModelsFile:
     except FileNotFoundError:
         raise ConfigError(f"models file {where}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"models file {where}: cannot read it ({getattr(exc, 'strerror', None) or exc})") from None
+        raise ConfigError(
+            f"models file {where}: cannot read it ({getattr(exc, 'strerror', None) or exc})"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"models file {where}: not valid TOML ({str(exc).splitlines()[0]})") from None
+        raise ConfigError(
+            f"models file {where}: not valid TOML ({str(exc).splitlines()[0]})"
+        ) from None
     unknown = sorted(set(data) - {"models", "prices", "suites"})
     if unknown:
-        raise ConfigError(f"models file {where}: unknown table {unknown[0]!r}; use [[models]], [prices], [suites.NAME]")
+        raise ConfigError(
+            f"models file {where}: unknown table {unknown[0]!r}; use [[models]], [prices], [suites.NAME]"
+        )
     entries = data.get("models") or []
     if not isinstance(entries, list):
         raise ConfigError(f"models file {where}: models must be an array of tables ([[models]])")
@@ -171,7 +200,10 @@ def load_models_file(path: str | Path) -> ModelsFile:
         raw = dict(data["prices"])
         as_of = str(raw.pop("as_of", f"the prices of {p.name}"))
         prices = parse_prices(raw, f"models file {where}")
-    suites = tuple(user_suite(name, table, f"models file {where}") for name, table in (data.get("suites") or {}).items())
+    suites = tuple(
+        user_suite(name, table, f"models file {where}")
+        for name, table in (data.get("suites") or {}).items()
+    )
     return ModelsFile(models, prices, as_of, suites)
 
 
@@ -179,6 +211,10 @@ def check_unique(models: tuple[ModelEntry, ...]) -> None:
     names = [m.name for m in models]
     dupes = sorted({n for n in names if names.count(n) > 1})
     if dupes:
-        raise ConfigError(f"two models are named {dupes[0]!r}; give each its own name (it names its folder)")
+        raise ConfigError(
+            f"two models are named {dupes[0]!r}; give each its own name (it names its folder)"
+        )
     if not models:
-        raise ConfigError("no models: give a models file with [[models]] entries or --model base_url=URL,model=NAME")
+        raise ConfigError(
+            "no models: give a models file with [[models]] entries or --model base_url=URL,model=NAME"
+        )

@@ -16,7 +16,8 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import Any
+from collections.abc import Callable, Sequence
 
 from jswim.bench.models import ModelEntry
 from jswim.bench.suites import Part, Suite
@@ -56,8 +57,15 @@ def part_args(part: Part, suite: Suite) -> list[str]:
     return part.args(suite.seed, sizes, suite.samples)
 
 
-def plan(models: Sequence[ModelEntry], suite: Suite, out: Path, *, prices_file: Path | None,
-         reference_url: str | None, baselines: bool = True) -> list[Job]:
+def plan(
+    models: Sequence[ModelEntry],
+    suite: Suite,
+    out: Path,
+    *,
+    prices_file: Path | None,
+    reference_url: str | None,
+    baselines: bool = True,
+) -> list[Job]:
     """Every study folder of the bench: per model (and the reference rule) and part; the baselines."""
     jobs: list[Job] = []
     for part in suite.parts:
@@ -68,19 +76,34 @@ def plan(models: Sequence[ModelEntry], suite: Suite, out: Path, *, prices_file: 
             argv += ["--q-runs", "0"] if uses_baselines else []
             jobs.append(Job(m.name, "llm", part, out / m.name / part.name, argv, m))
         if reference_url is not None:
-            argv = base + ["--base-url", reference_url, "--model", MODEL] + (["--q-runs", "0"] if uses_baselines else [])
+            argv = (
+                base
+                + ["--base-url", reference_url, "--model", MODEL]
+                + (["--q-runs", "0"] if uses_baselines else [])
+            )
             jobs.append(Job(REFERENCE, "reference", part, out / REFERENCE / part.name, argv))
         if baselines and uses_baselines:
-            jobs.append(Job(BASELINES, "baseline", part, out / BASELINES / part.name, base + ["--runs", "0"]))
+            jobs.append(
+                Job(
+                    BASELINES, "baseline", part, out / BASELINES / part.name, base + ["--runs", "0"]
+                )
+            )
     for j in jobs:
         j.argv = j.argv + ["--out", str(j.folder), "--no-figures"]
         j.log = j.folder.parent / f"{j.part.name}.log"
     return jobs
 
 
-def definition(suite: Suite, models: Sequence[ModelEntry], reference: bool, baselines: bool) -> dict[str, Any]:
-    return {"suite": suite.describe(), "samples": suite.samples or 1, "reference": reference, "baselines": baselines,
-            "models": [m.describe() for m in models]}
+def definition(
+    suite: Suite, models: Sequence[ModelEntry], reference: bool, baselines: bool
+) -> dict[str, Any]:
+    return {
+        "suite": suite.describe(),
+        "samples": suite.samples or 1,
+        "reference": reference,
+        "baselines": baselines,
+        "models": [m.describe() for m in models],
+    }
 
 
 def open_folder(out: Path, meta: dict[str, Any]) -> dict[str, Any]:
@@ -91,9 +114,13 @@ def open_folder(out: Path, meta: dict[str, Any]) -> dict[str, Any]:
             old = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError) as exc:
             raise ConfigError(f"{path} is not a bench record ({exc}); use another --out") from None
-        if old.get("suite") != json.loads(dumps(meta["suite"])):  # compared as stored (tuples become lists)
-            raise ConfigError(f"{out} holds a bench of another suite definition ({old.get('suite', {}).get('name')!r}, "
-                              "its parts, seed or sizes differ); use another --out to keep both")
+        if old.get("suite") != json.loads(
+            dumps(meta["suite"])
+        ):  # compared as stored (tuples become lists)
+            raise ConfigError(
+                f"{out} holds a bench of another suite definition ({old.get('suite', {}).get('name')!r}, "
+                "its parts, seed or sizes differ); use another --out to keep both"
+            )
         meta = {**old, **meta, "model_status": old.get("model_status", {})}
     elif out.exists() and any(out.iterdir()):
         raise ConfigError(f"{out} is not empty and is not a bench folder; use another --out")
@@ -131,7 +158,9 @@ def _count(folder: Path) -> tuple[int, int | None]:
     except OSError:
         pass
     try:
-        planned = json.loads((folder / "metadata.json").read_text(encoding="utf-8")).get("n_planned")
+        planned = json.loads((folder / "metadata.json").read_text(encoding="utf-8")).get(
+            "n_planned"
+        )
     except (OSError, ValueError):
         planned = None
     return done, planned
@@ -145,8 +174,13 @@ class Outcome:
     interrupted: bool = False
 
 
-def run_jobs(jobs: list[Job], out: Path, meta: dict[str, Any], say: Callable[[str], None],
-             every_s: float = 10.0) -> Outcome:
+def run_jobs(
+    jobs: list[Job],
+    out: Path,
+    meta: dict[str, Any],
+    say: Callable[[str], None],
+    every_s: float = 10.0,
+) -> Outcome:
     """Run the jobs: one at a time per label, every label at once; returns each label's status."""
     queues: dict[str, list[Job]] = {}
     for j in jobs:
@@ -160,14 +194,25 @@ def run_jobs(jobs: list[Job], out: Path, meta: dict[str, Any], say: Callable[[st
         argv = list(job.argv)
         if job.model is not None and job.model.max_cost is not None:
             # The model's cap is over its whole suite: this part may spend what the others left.
-            others = sum(spent(j.folder) for j in jobs if j.label == label and j.folder != job.folder)
-            argv += ["--max-cost", f"{max(0.0, job.model.max_cost - others) + spent(job.folder):.6f}"]
+            others = sum(
+                spent(j.folder) for j in jobs if j.label == label and j.folder != job.folder
+            )
+            argv += [
+                "--max-cost",
+                f"{max(0.0, job.model.max_cost - others) + spent(job.folder):.6f}",
+            ]
         job.folder.parent.mkdir(parents=True, exist_ok=True)
         log = open(job.log, "a", encoding="utf-8")
         log.write(f"$ jswim {' '.join(argv)}\n")
         log.flush()
-        job.proc = subprocess.Popen([sys.executable, "-m", "jswim", *argv], stdout=log, stderr=subprocess.STDOUT,
-                                    stdin=subprocess.DEVNULL, env=env, start_new_session=True)
+        job.proc = subprocess.Popen(
+            [sys.executable, "-m", "jswim", *argv],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            env=env,
+            start_new_session=True,
+        )
         log.close()
         running[label] = job
 
@@ -179,7 +224,9 @@ def run_jobs(jobs: list[Job], out: Path, meta: dict[str, Any], say: Callable[[st
             say(f"bench: {what}: done")
         elif job.rc == 3:
             result.status[label] = "stopped at the cost cap"
-            say(f"bench: {what}: stopped at the model's cost cap (max_cost); its other parts are skipped")
+            say(
+                f"bench: {what}: stopped at the model's cost cap (max_cost); its other parts are skipped"
+            )
             queues[label].clear()
         elif job.rc == 2 and "LLM runs failed" in _last_error(job.log):
             result.status[label] = "incomplete"
@@ -188,8 +235,10 @@ def run_jobs(jobs: list[Job], out: Path, meta: dict[str, Any], say: Callable[[st
             result.status[label] = "interrupted"
         else:
             result.status[label] = f"failed: {_last_error(job.log)}"
-            say(f"bench: {label} failed at {job.part.name}: {_last_error(job.log)} (see {job.log}); "
-                "the other models go on")
+            say(
+                f"bench: {label} failed at {job.part.name}: {_last_error(job.log)} (see {job.log}); "
+                "the other models go on"
+            )
             queues[label].clear()
         if not queues[label] and result.status[label] == "running":
             result.status[label] = "complete"
@@ -210,7 +259,9 @@ def run_jobs(jobs: list[Job], out: Path, meta: dict[str, Any], say: Callable[[st
                 parts = []
                 for label, job in running.items():
                     done, planned = _count(job.folder)
-                    parts.append(f"{label} {job.part.name} {done}/{planned if planned is not None else '?'}")
+                    parts.append(
+                        f"{label} {job.part.name} {done}/{planned if planned is not None else '?'}"
+                    )
                 say("bench: running " + " · ".join(parts))
     except KeyboardInterrupt:
         result.interrupted = True

@@ -9,16 +9,30 @@ cost) are described in docs/bench.md (*Suites*).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 from jswim.errors import ConfigError
 
 #: Study options a suite part may set (StudyOptions through the command line; name -> flag).
 PART_OPTIONS = {
-    "swimmer": "--swimmer", "direction": "--direction", "steps": "--steps", "runs": "--runs",
-    "q_runs": "--q-runs", "n_ht": "--n-ht", "noise": "--noise", "init": "--init", "action_set": "--action-set",
-    "variant": "--variant", "prompt_file": "--prompt-file", "x_min": "--x-min", "zetas": "--zetas",
-    "n_hts": "--n-hts", "seed": "--seed", "temperatures": "--temperatures", "prompt_files": "--prompt-files",
+    "swimmer": "--swimmer",
+    "direction": "--direction",
+    "steps": "--steps",
+    "runs": "--runs",
+    "q_runs": "--q-runs",
+    "n_ht": "--n-ht",
+    "noise": "--noise",
+    "init": "--init",
+    "action_set": "--action-set",
+    "variant": "--variant",
+    "prompt_file": "--prompt-file",
+    "x_min": "--x-min",
+    "zetas": "--zetas",
+    "n_hts": "--n-hts",
+    "seed": "--seed",
+    "temperatures": "--temperatures",
+    "prompt_files": "--prompt-files",
     "samples": "--samples",
 }
 
@@ -35,7 +49,9 @@ class Part:
     study: str
     options: tuple[tuple[str, Any], ...] = ()
 
-    def args(self, seed: int, sizes: Mapping[str, Any] | None = None, samples: int | None = None) -> list[str]:
+    def args(
+        self, seed: int, sizes: Mapping[str, Any] | None = None, samples: int | None = None
+    ) -> list[str]:
         """The command line of this part (``jswim study NAME ...``), options then size overrides
         and the bench's ``--samples`` (which replaces a part's own)."""
         opts = dict(self.options)
@@ -71,22 +87,36 @@ class Suite:
     def describe(self) -> dict[str, Any]:
         """The definition recorded in ``bench.json`` (compared when a bench folder is resumed;
         ``samples`` is recorded beside it, not compared)."""
-        return {"name": self.name, "seed": self.seed, "parts": [p.describe() for p in self.parts],
-                "size_overrides": dict(self.sizes)}
+        return {
+            "name": self.name,
+            "seed": self.seed,
+            "parts": [p.describe() for p in self.parts],
+            "size_overrides": dict(self.sizes),
+        }
 
 
-CORE = Suite("core", (
-    Part("curves", "curves", (("direction", "both"), ("runs", 10), ("init", "paper"))),
-    Part("noise", "noise", (("zetas", (1.0,)), ("runs", 10), ("init", "paper"))),
-), seed=0, about="the paper's headline results: p and steps to learn, both swimmers and directions; zeta = 1")
+CORE = Suite(
+    "core",
+    (
+        Part("curves", "curves", (("direction", "both"), ("runs", 10), ("init", "paper"))),
+        Part("noise", "noise", (("zetas", (1.0,)), ("runs", 10), ("init", "paper"))),
+    ),
+    seed=0,
+    about="the paper's headline results: p and steps to learn, both swimmers and directions; zeta = 1",
+)
 
-PAPER = Suite("paper", (
-    Part("curves", "curves", (("direction", "both"),)),
-    Part("history", "history", ()),
-    Part("noise", "noise", ()),
-    Part("ablation", "ablation", ()),
-    Part("inits", "inits", ()),
-), seed=0, about="every figure of the paper, each study at its own defaults")
+PAPER = Suite(
+    "paper",
+    (
+        Part("curves", "curves", (("direction", "both"),)),
+        Part("history", "history", ()),
+        Part("noise", "noise", ()),
+        Part("ablation", "ablation", ()),
+        Part("inits", "inits", ()),
+    ),
+    seed=0,
+    about="every figure of the paper, each study at its own defaults",
+)
 
 SUITES = {"core": CORE, "paper": PAPER}
 
@@ -95,7 +125,9 @@ def _check_name(name: str, what: str) -> str:
     import re
 
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}", str(name)):
-        raise ConfigError(f"{what} {name!r}: use letters, digits, '.', '_' or '-' (it names a folder)")
+        raise ConfigError(
+            f"{what} {name!r}: use letters, digits, '.', '_' or '-' (it names a folder)"
+        )
     return str(name)
 
 
@@ -111,12 +143,16 @@ def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None
     if study == "swim":
         axis = next((k for k in opts if k in STUDY_AXES), None)
         if axis is not None:
-            raise ConfigError(f"{where}: jswim swim takes no {PART_OPTIONS[axis]} (a study's grid axis); use a "
-                              "study, e.g. study = \"curves\"")
+            raise ConfigError(
+                f"{where}: jswim swim takes no {PART_OPTIONS[axis]} (a study's grid axis); use a "
+                'study, e.g. study = "curves"'
+            )
     fields = {"noise": "zeta"}
-    for field, why in ignored_options(study, [fields.get(k, k) for k in opts]).items():
-        option = next(k for k in opts if fields.get(k, k) == field)
-        raise ConfigError(f"{where}: the {study} study has no use for {option} ({why}); leave it out")
+    for name, why in ignored_options(study, [fields.get(k, k) for k in opts]).items():
+        option = next(k for k in opts if fields.get(k, k) == name)
+        raise ConfigError(
+            f"{where}: the {study} study has no use for {option} ({why}); leave it out"
+        )
 
 
 def user_suite(name: str, table: Any, where: str) -> Suite:
@@ -136,21 +172,36 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
         raise ConfigError(f"{where}: [suites.{name}] must be a table")
     parts_in = table.get("parts")
     if parts_in is None:
-        parts_in = [{"name": table.get("study", name), "study": table.get("study"), "options": table.get("options", {})}]
+        parts_in = [
+            {
+                "name": table.get("study", name),
+                "study": table.get("study"),
+                "options": table.get("options", {}),
+            }
+        ]
     parts = []
     for i, p in enumerate(parts_in):
         if not isinstance(p, Mapping) or p.get("study") not in STUDIES:
-            raise ConfigError(f"{where}: suite {name!r} part {i + 1}: study must be one of {', '.join(STUDIES)}")
+            raise ConfigError(
+                f"{where}: suite {name!r} part {i + 1}: study must be one of {', '.join(STUDIES)}"
+            )
         opts = p.get("options") or {}
         if not isinstance(opts, Mapping):
             raise ConfigError(f"{where}: suite {name!r} part {i + 1}: options must be a table")
         bad = sorted(set(opts) - set(PART_OPTIONS))
         if bad:
-            raise ConfigError(f"{where}: suite {name!r}: unknown option {bad[0]!r}; choose from "
-                              f"{', '.join(sorted(PART_OPTIONS))}")
+            raise ConfigError(
+                f"{where}: suite {name!r}: unknown option {bad[0]!r}; choose from "
+                f"{', '.join(sorted(PART_OPTIONS))}"
+            )
         _check_part_options(p["study"], opts, f"{where}: suite {name!r} part {i + 1}")
-        parts.append(Part(_check_name(p.get("name") or p["study"], "suite part"), p["study"],
-                          tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in opts.items())))
+        parts.append(
+            Part(
+                _check_name(p.get("name") or p["study"], "suite part"),
+                p["study"],
+                tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in opts.items()),
+            )
+        )
     if len({p.name for p in parts}) != len(parts):
         raise ConfigError(f"{where}: suite {name!r} has two parts of the same name")
     try:

@@ -11,7 +11,8 @@ import os
 import signal
 import sys
 import warnings
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 from jswim import compile_cache
 from jswim._io import interrupts
@@ -31,10 +32,14 @@ COMMANDS = (study, qlearn, ensemble, gaits, folders, serve, report, animate, ben
 def build_parser(outline: bool = False) -> argparse.ArgumentParser:
     """The ``jswim`` parser; ``outline`` builds only its subcommands' names (``jswim --help``)."""
     ap = (Outline if outline else Parser)(
-        prog="jswim", description="A large language model teaches model microswimmers to swim, measured against "
-                                  "Q-learning and a random policy.",
-        epilog="Every command takes --help. Results land in a study folder that a rerun resumes.")
-    sub = ap.add_subparsers(dest="command", metavar="COMMAND", parser_class=Outline if outline else Parser)
+        prog="jswim",
+        description="A large language model teaches model microswimmers to swim, measured against "
+        "Q-learning and a random policy.",
+        epilog="Every command takes --help. Results land in a study folder that a rerun resumes.",
+    )
+    sub = ap.add_subparsers(
+        dest="command", metavar="COMMAND", parser_class=Outline if outline else Parser
+    )
     sub.required = True
     for command in COMMANDS:
         command.register(sub)
@@ -65,21 +70,31 @@ def _utf8(text: str) -> bool:
 
 def _undecodable(args: argparse.Namespace) -> str | None:
     """The first option whose text is not UTF-8 (Python holds such bytes as lone surrogates)."""
-    values = ((name, v) for name, value in vars(args).items()
-              for v in (value if isinstance(value, (list, tuple)) else (value,)))
+    values = (
+        (name, v)
+        for name, value in vars(args).items()
+        for v in (value if isinstance(value, (list, tuple)) else (value,))
+    )
     return next((name for name, v in values if isinstance(v, str) and not _utf8(v)), None)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``jswim`` command; returns the exit status."""
     tokens = sys.argv[1:] if argv is None else list(argv)
-    if (bad := _undecodable_token(tokens)) is not None:  # before argparse, which would print '\udcff'
+    if (
+        bad := _undecodable_token(tokens)
+    ) is not None:  # before argparse, which would print '\udcff'
         print(f"jswim: error: {bad} is not valid UTF-8 text; write it in UTF-8", file=sys.stderr)
         return EXIT_USAGE
     # No command named (`jswim`, `jswim --help`): the outline parser says the same, without JAX.
     args = build_parser(outline=all(t.startswith("-") for t in tokens)).parse_args(argv)
-    if (bad := _undecodable(args)) is not None:  # bytes that are not UTF-8 (e.g. $'m\xff') fail deep inside
-        print(f"jswim: error: --{bad.replace('_', '-')} is not valid UTF-8 text; write it in UTF-8", file=sys.stderr)
+    if (
+        bad := _undecodable(args)
+    ) is not None:  # bytes that are not UTF-8 (e.g. $'m\xff') fail deep inside
+        print(
+            f"jswim: error: --{bad.replace('_', '-')} is not valid UTF-8 text; write it in UTF-8",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
     if args.command not in ("show", "compare"):
         compile_cache.enable()  # compiled programs kept on disk: later sessions start in seconds
@@ -100,24 +115,39 @@ def _main(args: argparse.Namespace) -> int:
     try:
         return args.command_main(args)
     except JswimError as exc:  # every user or server mistake (jswim.errors); anything else is a bug
-        print(f"jswim: error: {scrub(str(exc))}", file=sys.stderr)  # no key or URL password, in any form
+        print(
+            f"jswim: error: {scrub(str(exc))}", file=sys.stderr
+        )  # no key or URL password, in any form
         return EXIT_USAGE
     except KeyboardInterrupt:
         print(f"jswim: interrupted ({interrupts.name(interrupts.received())})", file=sys.stderr)
         return 128 + (interrupts.received() or signal.SIGINT)
     except MemoryError:
-        print("jswim: error: out of memory; use fewer swimmers/learners or a smaller --chunk", file=sys.stderr)
+        print(
+            "jswim: error: out of memory; use fewer swimmers/learners or a smaller --chunk",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
-    except RuntimeError as exc:  # JAX's device errors are RuntimeErrors; only out-of-memory is the user's
+    except (
+        RuntimeError
+    ) as exc:  # JAX's device errors are RuntimeErrors; only out-of-memory is the user's
         if "RESOURCE_EXHAUSTED" not in str(exc):
             raise
-        print("jswim: error: out of device memory; use fewer swimmers/learners, fewer --steps or a smaller --chunk",
-              file=sys.stderr)
+        print(
+            "jswim: error: out of device memory; use fewer swimmers/learners, fewer --steps or a smaller --chunk",
+            file=sys.stderr,
+        )
         return EXIT_USAGE
 
 
-def _show_warning(message: Any, category: Any, filename: str, lineno: int, file: Any = None,
-                  line: str | None = None) -> None:
+def _show_warning(
+    message: Any,
+    category: Any,
+    filename: str,
+    lineno: int,
+    file: Any = None,
+    line: str | None = None,
+) -> None:
     """Warnings as one line, ``jswim: warning: ...`` (not Python's file:line form)."""
     print(f"jswim: warning: {message}", file=sys.stderr if file is None else file)
 
@@ -130,13 +160,21 @@ def run() -> None:
         status = main()
         interrupts.quiet()  # a signal from here on (cleanup, atexit) is only noted: no traceback
         sys.stdout.flush()
-    except BrokenPipeError:  # output piped into a reader that quit (`jswim show F | head`): not an error
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at interpreter exit
+    except (
+        BrokenPipeError
+    ):  # output piped into a reader that quit (`jswim show F | head`): not an error
+        os.dup2(
+            os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno()
+        )  # no second error at interpreter exit
         status = 0
-    except KeyboardInterrupt:  # Ctrl-C before main's own handler (imports, parser): nothing to keep yet
+    except (
+        KeyboardInterrupt
+    ):  # Ctrl-C before main's own handler (imports, parser): nothing to keep yet
         interrupts.quiet()
-        print(f"jswim: interrupted ({interrupts.name(interrupts.received())}) while starting; nothing was written",
-              file=sys.stderr)
+        print(
+            f"jswim: interrupted ({interrupts.name(interrupts.received())}) while starting; nothing was written",
+            file=sys.stderr,
+        )
         status = 128 + (interrupts.received() or signal.SIGINT)
     interrupts.ignore()  # a signal during interpreter exit must not kill the process after its line
     sys.exit(status)

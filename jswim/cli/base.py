@@ -9,7 +9,8 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Any, Iterator, Sequence
+from typing import Any
+from collections.abc import Iterator, Sequence
 
 from jswim.console import eta as _eta_text
 from jswim.errors import MAX_COUNT, ConfigError, JswimWarning, check_count  # noqa: F401  (MAX_COUNT read from here)
@@ -32,13 +33,21 @@ class Outline(Parser):
 
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         super().__init__(*args, **kwargs)
-        self._outlined = True  # argparse's own groups and -h/--help exist; every later option is left out
+        self._outlined = (
+            True  # argparse's own groups and -h/--help exist; every later option is left out
+        )
 
     def add_argument(self, *args: Any, **kwargs: Any) -> Any:
-        return super().add_argument(*args, **kwargs) if not getattr(self, "_outlined", False) else None
+        return (
+            super().add_argument(*args, **kwargs) if not getattr(self, "_outlined", False) else None
+        )
 
     def add_argument_group(self, *args: Any, **kwargs: Any) -> Any:
-        return super().add_argument_group(*args, **kwargs) if not getattr(self, "_outlined", False) else self
+        return (
+            super().add_argument_group(*args, **kwargs)
+            if not getattr(self, "_outlined", False)
+            else self
+        )
 
     def add_mutually_exclusive_group(self, *args: Any, **kwargs: Any) -> Any:
         return self
@@ -78,7 +87,9 @@ def swimmers(text: str) -> tuple[str, ...]:
     out = ("purcell", "ng") if text == "both" else tuple(v.strip().lower() for v in text.split(","))
     for v in out:
         if v not in SWIMMERS:
-            raise argparse.ArgumentTypeError(f"unknown swimmer {v!r}; choose purcell, ng, both (or nlink, nsphere)")
+            raise argparse.ArgumentTypeError(
+                f"unknown swimmer {v!r}; choose purcell, ng, both (or nlink, nsphere)"
+            )
     return out
 
 
@@ -117,7 +128,7 @@ def warnings_as_lines() -> Iterator[None]:
     (others as Python shows them); the hook is restored after."""
     shown = warnings.showwarning
 
-    def one_line(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001 - warnings' hook
+    def one_line(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, JswimWarning):
             warn(str(message))
         else:

@@ -12,22 +12,31 @@ from jswim.errors import ConfigError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("plot", help="redraw the figures of a study folder",
-                       description="Redraw a study folder's figures into FOLDER/figures (an unfinished study's "
-                                   "figures say so).")
+    p = sub.add_parser(
+        "plot",
+        help="redraw the figures of a study folder",
+        description="Redraw a study folder's figures into FOLDER/figures (an unfinished study's "
+        "figures say so).",
+    )
     p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
     p.set_defaults(command_main=plot)
-    p = sub.add_parser("show", help="a study folder: status, settings, cost, summary table, figures",
-                       description="Print what a study folder holds: complete or how many runs are done, the "
-                                   "model and settings, LLM usage and cost, the summary table and the figures. "
-                                   "Only reads, so it works on interrupted and read-only folders.")
+    p = sub.add_parser(
+        "show",
+        help="a study folder: status, settings, cost, summary table, figures",
+        description="Print what a study folder holds: complete or how many runs are done, the "
+        "model and settings, LLM usage and cost, the summary table and the figures. "
+        "Only reads, so it works on interrupted and read-only folders.",
+    )
     p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
     p.set_defaults(command_main=show)
-    p = sub.add_parser("compare", help="studies side by side (e.g. two models on the same grid)",
-                       description="For every setting (agent, swimmer, direction, group) present in all the "
-                                   "given study folders: success rate p with its 95%% Wilson interval, mean X/a "
-                                   "with a bootstrap interval, median steps to learn, tokens per step and cost, "
-                                   "one row per study. Only reads.")
+    p = sub.add_parser(
+        "compare",
+        help="studies side by side (e.g. two models on the same grid)",
+        description="For every setting (agent, swimmer, direction, group) present in all the "
+        "given study folders: success rate p with its 95%% Wilson interval, mean X/a "
+        "with a bootstrap interval, median steps to learn, tokens per step and cost, "
+        "one row per study. Only reads.",
+    )
     p.add_argument("folders", nargs="+", metavar="FOLDER", help="two or more study folders")
     p.set_defaults(command_main=compare)
 
@@ -44,8 +53,10 @@ def plot(args: argparse.Namespace) -> int:
     try:
         paths = draw_figures(study.study, study.rows, Path(args.folder) / "figures", note=note)
     except OSError as exc:
-        raise ConfigError(f"cannot write the figures into {Path(args.folder) / 'figures'} ({exc.strerror or exc}); "
-                          "jswim show FOLDER reads a read-only folder") from None
+        raise ConfigError(
+            f"cannot write the figures into {Path(args.folder) / 'figures'} ({exc.strerror or exc}); "
+            "jswim show FOLDER reads a read-only folder"
+        ) from None
     for f in paths:
         print(f"figure: {f}")
     return 0
@@ -55,7 +66,9 @@ def show(args: argparse.Namespace) -> int:
     from jswim.overview import show_text  # lazy: start-up (the study folders' readers load NumPy)
 
     folder = Path(args.folder)
-    if (folder / "bench.json").is_file() and not (folder / "metadata.json").exists():  # a bench's folder
+    if (folder / "bench.json").is_file() and not (
+        folder / "metadata.json"
+    ).exists():  # a bench's folder
         print(bench.show_text(folder, width=terminal_width()))
         return 0
     print(show_text(args.folder, width=terminal_width()))
@@ -63,7 +76,9 @@ def show(args: argparse.Namespace) -> int:
 
 
 def compare(args: argparse.Namespace) -> int:
-    from jswim.overview import compare_text  # lazy: start-up (the study folders' readers load NumPy)
+    from jswim.overview import (
+        compare_text,
+    )  # lazy: start-up (the study folders' readers load NumPy)
 
     print(compare_text(args.folders, width=terminal_width()))
     return 0

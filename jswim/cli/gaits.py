@@ -4,7 +4,8 @@ K-level ROC lattice with ``--roc-levels K``)."""
 from __future__ import annotations
 
 import argparse
-from typing import Any, Callable, Sequence
+from typing import Any
+from collections.abc import Callable, Sequence
 
 from jswim.actions import check_roc_levels
 from jswim.cli import base
@@ -12,21 +13,41 @@ from jswim.errors import ConfigError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("gaits", help="closed stroke cycles ranked by displacement per step",
-                       description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
-                                   "each exactly and rank them by displacement per step.")
-    p.add_argument("swimmer", choices=base.SWIMMERS,
-                   help="purcell, ng, nlink (N links) or nsphere (N spheres)")
+    p = sub.add_parser(
+        "gaits",
+        help="closed stroke cycles ranked by displacement per step",
+        description="Enumerate closed stroke cycles on the corners of the DOF cube, integrate "
+        "each exactly and rank them by displacement per step.",
+    )
+    p.add_argument(
+        "swimmer", choices=base.SWIMMERS, help="purcell, ng, nlink (N links) or nsphere (N spheres)"
+    )
     p.add_argument("--n", type=int, default=None, help="links/spheres of nlink/nsphere (default 4)")
-    p.add_argument("--direction", type=base.direction, default=(1,), metavar="DIR",
-                   help="rank by displacement toward +x, -x or both (default +x)")
-    p.add_argument("--max-len", type=int, default=None,
-                   help="longest cycle (default 2**n_dof; 4 with --roc-levels above 1)")
-    p.add_argument("--roc-levels", type=int, default=1, metavar="K",
-                   help="search the K-level ROC lattice: one DOF per move, ROC k/K of the range, k in -K..K "
-                        "(default 1: the paper's corners)")
+    p.add_argument(
+        "--direction",
+        type=base.direction,
+        default=(1,),
+        metavar="DIR",
+        help="rank by displacement toward +x, -x or both (default +x)",
+    )
+    p.add_argument(
+        "--max-len",
+        type=int,
+        default=None,
+        help="longest cycle (default 2**n_dof; 4 with --roc-levels above 1)",
+    )
+    p.add_argument(
+        "--roc-levels",
+        type=int,
+        default=1,
+        metavar="K",
+        help="search the K-level ROC lattice: one DOF per move, ROC k/K of the range, k in -K..K "
+        "(default 1: the paper's corners)",
+    )
     p.add_argument("--top", type=int, default=8, help="cycles shown (default 8)")
-    p.add_argument("--out", default=None, metavar="FOLDER", help="also write a figure of the best cycles here")
+    p.add_argument(
+        "--out", default=None, metavar="FOLDER", help="also write a figure of the best cycles here"
+    )
     p.set_defaults(command_main=main)
 
 
@@ -46,13 +67,21 @@ def main(args: argparse.Namespace) -> int:
         raise ConfigError("more than 5 DOFs: give --max-len to bound the enumeration")
     for d in args.direction:
         cycles = gait.best_cycles(model, d, args.max_len)
-        print(f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}: {len(cycles)} closed cycles; best first")
+        print(
+            f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}: {len(cycles)} closed cycles; best first"
+        )
         _print_cycles(cycles[: args.top], lambda c: "".join("+" if v else "-" for v in c.start), 5)
-        print("simple: no shape visited twice per period; the others add detours that go back and forth")
+        print(
+            "simple: no shape visited twice per period; the others add detours that go back and forth"
+        )
         if args.out:
             from jswim.figures import plots  # lazy: matplotlib only when a figure is asked for
 
-            paths = plots.save(plots.gaits_figure(model, cycles), args.out, f"gaits-{args.swimmer}-{'px' if d > 0 else 'mx'}")
+            paths = plots.save(
+                plots.gaits_figure(model, cycles),
+                args.out,
+                f"gaits-{args.swimmer}-{'px' if d > 0 else 'mx'}",
+            )
             print(f"figure: {paths[0]}")
         print()
     return 0
@@ -60,12 +89,16 @@ def main(args: argparse.Namespace) -> int:
 
 def _print_cycles(cycles: Sequence[Any], start: Callable[[Any], str], width: int) -> None:
     """The ranked table both listings print; ``start`` writes a cycle's first shape (``width`` wide)."""
-    print(f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9} simple"
-          "  start  moves (DOF, ROC)")
+    print(
+        f"{'rank':>4} {'period':>6} {'X/a per step':>13} {'X/a per cycle':>14} {'rotation':>9} simple"
+        "  start  moves (DOF, ROC)"
+    )
     for i, c in enumerate(cycles, 1):
         moves = " ".join(f"[{dof}, {roc}]" for dof, roc in c.moves)
-        print(f"{i:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f} "
-              f"{'yes' if c.simple else 'no':>6}  {start(c):{width}}  {moves}")
+        print(
+            f"{i:4d} {c.period:6d} {c.per_step:+13.6f} {c.displacement:+14.6f} {c.rotation:+9.4f} "
+            f"{'yes' if c.simple else 'no':>6}  {start(c):{width}}  {moves}"
+        )
 
 
 def _lattice_gaits(args: argparse.Namespace, model: Any) -> int:
@@ -78,10 +111,16 @@ def _lattice_gaits(args: argparse.Namespace, model: Any) -> int:
     length = 4 if args.max_len is None else args.max_len
     for d in args.direction:
         cycles = lattice.best_lattice_cycles(model, d, k, length)
-        print(f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}, ROC on {k} levels (k/{k} of the range, "
-              f"one DOF per move): {len(cycles)} closed strokes up to {length} moves; best first")
-        _print_cycles(cycles[: args.top], lambda c: "(" + ", ".join(str(v) for v in c.start) + f")/{k}", 7)
-        print(f"start: each DOF's place on the lattice, j/{k} of its range from lo; moves that reach past a limit "
-              "and runs of moves of one DOF (equal to one move) are not listed")
+        print(
+            f"{model.label} swimmer, target {'+x' if d > 0 else '-x'}, ROC on {k} levels (k/{k} of the range, "
+            f"one DOF per move): {len(cycles)} closed strokes up to {length} moves; best first"
+        )
+        _print_cycles(
+            cycles[: args.top], lambda c: "(" + ", ".join(str(v) for v in c.start) + f")/{k}", 7
+        )
+        print(
+            f"start: each DOF's place on the lattice, j/{k} of its range from lo; moves that reach past a limit "
+            "and runs of moves of one DOF (equal to one move) are not listed"
+        )
         print()
     return 0

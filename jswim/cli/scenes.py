@@ -9,18 +9,19 @@ parser, :func:`options` reads them back. A study's new option is one row here.
 from __future__ import annotations
 
 import argparse
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 from jswim.console import print_table as show
 
 STUDY_HELP = {
     "wall": "one NG swimmer started at several heights above a no-slip wall: the square stroke's displacement per "
-            "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines; "
-            "--swimmer purcell: Purcell's swimmer in a plane parallel to the wall (stroke, Q-learning, random)",
+    "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines; "
+    "--swimmer purcell: Purcell's swimmer in a plane parallel to the wall (stroke, Q-learning, random)",
     "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
-            "offset and D, and whether an agent steering both finds a faster joint stroke",
+    "offset and D, and whether an agent steering both finds a faster joint stroke",
     "school": "schools of N NG swimmers in a line or side by side D apart, every one doing the square stroke in "
-              "turn: the school's speed against N and D, beside a lone swimmer's",
+    "turn: the school's speed against N and D, beside a lone swimmer's",
 }
 
 
@@ -33,6 +34,7 @@ def _numbers(kind: type) -> Any:
         if not values:  # "" or "," would otherwise fall back to the defaults silently
             raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}")
         return values
+
     return parse
 
 
@@ -40,29 +42,71 @@ def _numbers(kind: type) -> Any:
 #: :mod:`jswim.agents.variants` when the parser is built (`jswim --help` never imports the agents).
 OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
     "wall": (
-        ("--heights", dict(type=_numbers(float), metavar="H1,H2,...",
-                           help="starting heights of the middle sphere above the wall, in sphere radii "
-                                "(default 3,5,7,10,20,50); Purcell's: of its plane, in link lengths")),
+        (
+            "--heights",
+            dict(
+                type=_numbers(float),
+                metavar="H1,H2,...",
+                help="starting heights of the middle sphere above the wall, in sphere radii "
+                "(default 3,5,7,10,20,50); Purcell's: of its plane, in link lengths",
+            ),
+        ),
     ),
     "pair": (
-        ("--separations", dict(type=_numbers(float), metavar="D1,D2,...",
-                               help="starting distances D between the two swimmers' centres, in sphere radii "
-                                    "(default 30,60)")),
-        ("--phases", dict(type=_numbers(int), metavar="P1,P2,...",
-                          help="phase offsets of the two square strokes, in quarter cycles of swimmer 2 ahead "
-                               "(default 0,1,2,3)")),
-        ("--pair-prompt", dict(choices="PAIR_PROMPTS",
-                               help="how the LLM steers the pair: joint (default: one conversation, joint DOFs "
-                                    "D1..D4) or each (a variant: one conversation per swimmer, taking turns, each "
-                                    "shown the other's position)")),
+        (
+            "--separations",
+            dict(
+                type=_numbers(float),
+                metavar="D1,D2,...",
+                help="starting distances D between the two swimmers' centres, in sphere radii "
+                "(default 30,60)",
+            ),
+        ),
+        (
+            "--phases",
+            dict(
+                type=_numbers(int),
+                metavar="P1,P2,...",
+                help="phase offsets of the two square strokes, in quarter cycles of swimmer 2 ahead "
+                "(default 0,1,2,3)",
+            ),
+        ),
+        (
+            "--pair-prompt",
+            dict(
+                choices="PAIR_PROMPTS",
+                help="how the LLM steers the pair: joint (default: one conversation, joint DOFs "
+                "D1..D4) or each (a variant: one conversation per swimmer, taking turns, each "
+                "shown the other's position)",
+            ),
+        ),
     ),
     "school": (
-        ("--school-sizes", dict(type=_numbers(int), metavar="N1,N2,...", help="numbers of swimmers N (default 1,2,3,4,5)")),
-        ("--separations", dict(type=_numbers(float), metavar="D1,D2,...",
-                               help="distances D between neighbouring swimmers' centres, in sphere radii (default 30,60; "
-                                    "one that would overlap the swimmers is refused, naming the least D)")),
-        ("--formations", dict(type=_numbers(str), metavar="F1,F2",
-                              help="line (one behind the other), side (side by side); default both")),
+        (
+            "--school-sizes",
+            dict(
+                type=_numbers(int),
+                metavar="N1,N2,...",
+                help="numbers of swimmers N (default 1,2,3,4,5)",
+            ),
+        ),
+        (
+            "--separations",
+            dict(
+                type=_numbers(float),
+                metavar="D1,D2,...",
+                help="distances D between neighbouring swimmers' centres, in sphere radii (default 30,60; "
+                "one that would overlap the swimmers is refused, naming the least D)",
+            ),
+        ),
+        (
+            "--formations",
+            dict(
+                type=_numbers(str),
+                metavar="F1,F2",
+                help="line (one behind the other), side (side by side); default both",
+            ),
+        ),
     ),
 }
 
@@ -75,7 +119,9 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
     """Add study ``name``'s own options (:data:`OPTIONS`) to its parser (nothing for other studies)."""
     if name not in OPTIONS:
         return
-    from jswim.agents import variants  # lazy: start-up (`jswim --help` imports this module, not the agents)
+    from jswim.agents import (
+        variants,
+    )  # lazy: start-up (`jswim --help` imports this module, not the agents)
 
     g = q.add_argument_group("scene")
     for flag, kw in OPTIONS[name]:
@@ -86,8 +132,11 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
 
 def options(args: argparse.Namespace) -> dict[str, Any]:
     """The StudyOptions keywords of the study's own options given."""
-    return {d: getattr(args, d) for d in {_dest(f) for rows in OPTIONS.values() for f, _ in rows}
-            if getattr(args, d, None)}
+    return {
+        d: getattr(args, d)
+        for d in {_dest(f) for rows in OPTIONS.values() for f, _ in rows}
+        if getattr(args, d, None)
+    }
 
 
 def print_table(rows: Sequence[dict[str, Any]]) -> None:
@@ -97,7 +146,11 @@ def print_table(rows: Sequence[dict[str, Any]]) -> None:
     rows = as_run_rows(rows)
     if not any(r.scene for r in rows):
         return
-    from jswim.studies.scenes import scene_summary, table, table_note  # lazy: JAX loads only for a study
+    from jswim.studies.scenes import (
+        scene_summary,
+        table,
+        table_note,
+    )  # lazy: JAX loads only for a study
 
     summary = scene_summary(rows)
     cols, cells = table(summary)

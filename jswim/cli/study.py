@@ -9,12 +9,20 @@ import math
 import signal
 import sys
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 from jswim._io import interrupts
 from jswim.cli import base, options, scenes
-from jswim.console import (EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED, Progress, cost_text, print_table,
-                           requests_text)
+from jswim.console import (
+    EMBEDDED_UNPRICED,
+    LOCAL_UNPRICED,
+    REFERENCE_UNPRICED,
+    Progress,
+    cost_text,
+    print_table,
+    requests_text,
+)
 from jswim.errors import ConfigError, LLMServerError
 from jswim.llm.urls import is_local_host
 
@@ -33,7 +41,10 @@ EXIT_COST_CAP = 3
 
 
 def _run(study: str, args: argparse.Namespace) -> int:
-    from jswim.studies import default_folder, run_study  # lazy: JAX loads only for commands that run
+    from jswim.studies import (
+        default_folder,
+        run_study,
+    )  # lazy: JAX loads only for commands that run
     from jswim.studies.grids import short_steps_warning  # lazy: as above
 
     opts, backend = options.options(args, study), options.backend(args)
@@ -45,7 +56,9 @@ def _run(study: str, args: argparse.Namespace) -> int:
     except FileNotFoundError:
         pass  # a new folder
     except OSError as exc:  # a name longer than the file system allows, a file on the way, ...
-        raise ConfigError(f"cannot write --out {out}: {exc.strerror or type(exc).__name__}; choose another --out") from None
+        raise ConfigError(
+            f"cannot write --out {out}: {exc.strerror or type(exc).__name__}; choose another --out"
+        ) from None
     if args.dry_run:
         from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
 
@@ -55,31 +68,56 @@ def _run(study: str, args: argparse.Namespace) -> int:
         return 0
     if (text := short_steps_warning(opts)) is not None:
         base.warn(text)
-    labels = {"llm": "LLM runs", "llm-live": "LLM runs", "qlearning": "Q-learning", "random": "random policy",
-              "ppo": "continuous RL", "start": "start", "resume": "resume"}
+    labels = {
+        "llm": "LLM runs",
+        "llm-live": "LLM runs",
+        "qlearning": "Q-learning",
+        "random": "random policy",
+        "ppo": "continuous RL",
+        "start": "start",
+        "resume": "resume",
+    }
     with Progress() as bar:
 
         def tick(phase: str, done: int, total: int, info: str = "") -> None:
-            bar.update(labels.get(phase, "runs"), done, total, info,
-                       unit="LLM steps" if phase.startswith("llm") else "runs")
+            bar.update(
+                labels.get(phase, "runs"),
+                done,
+                total,
+                info,
+                unit="LLM steps" if phase.startswith("llm") else "runs",
+            )
 
         try:
             with base.warnings_as_lines():
-                result = run_study(study, opts, backend, out, progress=tick, figures=not args.no_figures,
-                                   max_cost=args.max_cost)
+                result = run_study(
+                    study,
+                    opts,
+                    backend,
+                    out,
+                    progress=tick,
+                    figures=not args.no_figures,
+                    max_cost=args.max_cost,
+                )
         except KeyboardInterrupt:
             bar.stop()
             sig = interrupts.received()
-            print(f"jswim: interrupted ({interrupts.name(sig)}); every finished run and answered call is kept in "
-                  f"{out}. Run the same command to resume (jswim report {out}: a page of what is done).",
-                  file=sys.stderr)
+            print(
+                f"jswim: interrupted ({interrupts.name(sig)}); every finished run and answered call is kept in "
+                f"{out}. Run the same command to resume (jswim report {out}: a page of what is done).",
+                file=sys.stderr,
+            )
             return 128 + (sig or signal.SIGINT)
-        except LLMServerError as exc:  # the retry budget is spent: the study stops cleanly, nothing lost
+        except (
+            LLMServerError
+        ) as exc:  # the retry budget is spent: the study stops cleanly, nothing lost
             bar.stop()
             print(f"jswim: error: {exc}. {_kept(out)}", file=sys.stderr)
             return base.EXIT_USAGE
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
-    _print_summary(result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s")
+    _print_summary(
+        result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s"
+    )
     scenes.print_table(result.rows)
     _print_reasoning(result)
     for note in result.notes:
@@ -91,13 +129,17 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if not sp and n_llm:  # a resume with every LLM run done
         from jswim.llm.journal import CallJournal  # lazy: httpx loads only for commands that run
 
-        print(f"LLM calls: none this session (every LLM run was done already; nothing sent, nothing paid); the "
-              f"study's calls cost ${CallJournal(result.folder).spent_usd:.4f} ({_price_note(backend)})")
+        print(
+            f"LLM calls: none this session (every LLM run was done already; nothing sent, nothing paid); the "
+            f"study's calls cost ${CallJournal(result.folder).spent_usd:.4f} ({_price_note(backend)})"
+        )
     if sp.get("calls"):
-        print(f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
-              f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "
-              f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
-              f"({_price_note(backend)})")
+        print(
+            f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
+            f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "
+            f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
+            f"({_price_note(backend)})"
+        )
     if sp.get("requests") is not None and (sp.get("calls") or sp.get("requests")):
         print(f"HTTP requests: {requests_text(sp)}")
     print(f"results: {result.folder}")
@@ -107,15 +149,21 @@ def _run(study: str, args: argparse.Namespace) -> int:
         if f.suffix == ".png":
             print(f"figure:  {f}")
     if result.stopped == "cost cap":
-        print(f"jswim: stopped at the cost cap (--max-cost {args.max_cost:g}): ${sp.get('study_cost_usd', 0):.4f} "
-              f"spent; {len(result.rows)} of {result.total} runs done and kept in {result.folder}. Rerun with a "
-              "higher --max-cost to continue (no call is paid twice)", file=sys.stderr)
+        print(
+            f"jswim: stopped at the cost cap (--max-cost {args.max_cost:g}): ${sp.get('study_cost_usd', 0):.4f} "
+            f"spent; {len(result.rows)} of {result.total} runs done and kept in {result.folder}. Rerun with a "
+            "higher --max-cost to continue (no call is paid twice)",
+            file=sys.stderr,
+        )
         return EXIT_COST_CAP
     if result.failed_runs:
         first = result.failed_runs[0]
-        print(f"jswim: error: {len(result.failed_runs)} of {n_llm} LLM runs failed ({first['run_id']}: "
-              f"{first['error']}); they are recorded as failed in {result.folder}: run the same command to "
-              "run them again", file=sys.stderr)
+        print(
+            f"jswim: error: {len(result.failed_runs)} of {n_llm} LLM runs failed ({first['run_id']}: "
+            f"{first['error']}); they are recorded as failed in {result.folder}: run the same command to "
+            "run them again",
+            file=sys.stderr,
+        )
         return base.EXIT_USAGE
     return 0
 
@@ -126,7 +174,9 @@ def _print_reasoning(result: Any) -> None:
     for note in sent.get("notes") or ():
         print(f"reasoning model: {note}")
     if sent.get("active") and not sent.get("notes"):
-        print(f"reasoning: {sent.get('token_field')}={sent.get('budget')} (--reasoning {sent.get('mode')})")
+        print(
+            f"reasoning: {sent.get('token_field')}={sent.get('budget')} (--reasoning {sent.get('mode')})"
+        )
     from jswim.results import as_run_rows  # lazy: start-up (results loads NumPy)
 
     thought = sum(r.reasoning_tokens or 0 for r in as_run_rows(result.rows) if r.agent == "llm")
@@ -135,35 +185,57 @@ def _print_reasoning(result: Any) -> None:
     if sent.get("active"):
         cut = sum(result.truncated.values())
         if cut:
-            print(f"{cut} replies cut at {sent.get('token_field')}={sent.get('budget')}, {result.cut_thinking} of them "
-                  "while still thinking (no answer, never executed; each went to the follow-up); raise --max-tokens")
+            print(
+                f"{cut} replies cut at {sent.get('token_field')}={sent.get('budget')}, {result.cut_thinking} of them "
+                "while still thinking (no answer, never executed; each went to the follow-up); raise --max-tokens"
+            )
         return
     for limit, n in sorted(result.truncated.items()):
-        print(f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up)"
-              + (f", {result.cut_thinking} of them while still thinking" if result.cut_thinking else "")
-              + "; a reasoning model needs room to think: --reasoning on (or a larger --max-tokens)")
+        print(
+            f"{n} replies cut at max_tokens={limit} (no answer; each went to the follow-up)"
+            + (
+                f", {result.cut_thinking} of them while still thinking"
+                if result.cut_thinking
+                else ""
+            )
+            + "; a reasoning model needs room to think: --reasoning on (or a larger --max-tokens)"
+        )
 
 
 def _price_note(backend: Any) -> str:
     """Where a cost line's prices come from, or why the model has none (never a silent $0)."""
-    from jswim.llm.reference import MODEL as REFERENCE_MODEL  # lazy: start-up (the reference rule loads only for a run)
-    from jswim.llm.usage import PRICES_AS_OF, price_table  # lazy: httpx loads only for commands that run
+    from jswim.llm.reference import (
+        MODEL as REFERENCE_MODEL,
+    )  # lazy: start-up (the reference rule loads only for a run)
+    from jswim.llm.usage import (
+        PRICES_AS_OF,
+        price_table,
+    )  # lazy: httpx loads only for commands that run
 
     if backend is None or backend.local:
         return cost_text(None, EMBEDDED_UNPRICED)
     if backend.model == REFERENCE_MODEL:
         return cost_text(None, REFERENCE_UNPRICED)
-    table, why = price_table(dict(backend.prices) if backend.prices is not None else None, backend.model,
-                             local_host=is_local_host(backend.base_url), price_local=backend.price_local)
+    table, why = price_table(
+        dict(backend.prices) if backend.prices is not None else None,
+        backend.model,
+        local_host=is_local_host(backend.base_url),
+        price_local=backend.price_local,
+    )
     if why:
         return cost_text(None, why)
     if table.entry(backend.model) is None:
         if is_local_host(backend.base_url) and backend.prices is None:
             return cost_text(None, LOCAL_UNPRICED)
-        return cost_text(None, f"no price for {backend.model!r} in the "
-                               f"{'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
-                               "; --prices FILE prices it")
-    return f"prices of {backend.prices_as_of or PRICES_AS_OF}" + ("" if backend.prices else " (built-in list prices)")
+        return cost_text(
+            None,
+            f"no price for {backend.model!r} in the "
+            f"{'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
+            "; --prices FILE prices it",
+        )
+    return f"prices of {backend.prices_as_of or PRICES_AS_OF}" + (
+        "" if backend.prices else " (built-in list prices)"
+    )
 
 
 def _kept(out: Path) -> str:
@@ -171,18 +243,27 @@ def _kept(out: Path) -> str:
     from jswim.results import read_runs  # lazy: start-up (results loads NumPy)
 
     try:
-        done, planned = len(read_runs(out)), (json.loads((out / "metadata.json").read_text()) or {}).get("n_planned")
+        done, planned = (
+            len(read_runs(out)),
+            (json.loads((out / "metadata.json").read_text()) or {}).get("n_planned"),
+        )
     except (OSError, ValueError, AttributeError):
         done, planned = 0, None
     of = f" of {planned}" if isinstance(planned, int) else ""
     if not done and not (out / "calls.jsonl").exists():
         return "Nothing was done yet; run the same command once the server is back"
-    return (f"The study stopped cleanly: {done}{of} runs done and kept in {out}, every answered call journaled; "
-            "run the same command to resume (no call is paid twice)")
+    return (
+        f"The study stopped cleanly: {done}{of} runs done and kept in {out}, every answered call journaled; "
+        "run the same command to resume (no call is paid twice)"
+    )
 
 
-def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], title: str) -> None:
-    from jswim.agents.fidelity import describe_constraint  # lazy: JAX loads only for commands that run
+def _print_summary(
+    summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], title: str
+) -> None:
+    from jswim.agents.fidelity import (
+        describe_constraint,
+    )  # lazy: JAX loads only for commands that run
     from jswim.overview import SUMMARY_NOTE, order_summary, summary_table  # lazy: as above
 
     cols, cells = summary_table(order_summary(summary, rows))
@@ -194,6 +275,7 @@ def _print_summary(summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, A
     if line := describe_constraint(r.constraint for r in llm):
         print(line)
     if any(r.share_identical for r in llm):
-        print("LLM runs: --share-identical: identical requests of different runs were sent once, so runs from one "
-              "start are copies of one run, not independent repeats")
-
+        print(
+            "LLM runs: --share-identical: identical requests of different runs were sent once, so runs from one "
+            "start are copies of one run, not independent repeats"
+        )

@@ -25,7 +25,14 @@ the module of each concern: docs/design.md (module map, *The world protocol*)::
     state, info = env.step(key, state, env.action_space(params).sample(key), params)
 """
 
-from jswim.env.actions import ROCS, decode_action, encode_action, roc_vector, validate_actions, validate_moves
+from jswim.env.actions import (
+    ROCS,
+    decode_action,
+    encode_action,
+    roc_vector,
+    validate_actions,
+    validate_moves,
+)
 from jswim.env.params import (
     EnvParams,
     all_inits,
@@ -59,8 +66,11 @@ from jswim.env.tables import TABLE_DEGREE, step_table
 #: The protocol's names that reach the scene physics, loaded on first use (PEP 562) so that
 #: ``import jswim.env`` does not import :mod:`jswim.scenes`.
 _LAZY = {
-    "make": "jswim.env.worlds", "SceneWorld": "jswim.env.scene_world", "SceneTask": "jswim.env.scene_world",
-    "Trajectory": "jswim.env.episodes", "rollout_batch": "jswim.env.episodes",
+    "make": "jswim.env.worlds",
+    "SceneWorld": "jswim.env.scene_world",
+    "SceneTask": "jswim.env.scene_world",
+    "Trajectory": "jswim.env.episodes",
+    "rollout_batch": "jswim.env.episodes",
 }
 
 
@@ -75,10 +85,46 @@ def __getattr__(name: str):
 
 
 __all__ = [
-    "Box", "Discrete", "Environment", "Observation", "SwimmerWorld", *_LAZY,
-    "ROCS", "TABLE_DEGREE", "EnvParams", "EnvState", "Rollout", "StepInfo", "advance", "all_inits",
-    "broadcast_params", "check_roc_levels", "corner_values", "decode_action", "dof_values", "encode_action",
-    "fractions", "is_batched", "make_params", "noise", "param_axes", "parse_direction", "parse_init", "position",
-    "reference_point", "reset", "roc_vector", "rollout", "seed32", "seed_key", "start_orientation",
-    "start_state", "step", "step_batch", "step_table", "uniforms", "validate_actions", "validate_moves",
+    "Box",
+    "Discrete",
+    "Environment",
+    "Observation",
+    "SwimmerWorld",
+    *_LAZY,
+    "ROCS",
+    "TABLE_DEGREE",
+    "EnvParams",
+    "EnvState",
+    "Rollout",
+    "StepInfo",
+    "advance",
+    "all_inits",
+    "broadcast_params",
+    "check_roc_levels",
+    "corner_values",
+    "decode_action",
+    "dof_values",
+    "encode_action",
+    "fractions",
+    "is_batched",
+    "make_params",
+    "noise",
+    "param_axes",
+    "parse_direction",
+    "parse_init",
+    "position",
+    "reference_point",
+    "reset",
+    "roc_vector",
+    "rollout",
+    "seed32",
+    "seed_key",
+    "start_orientation",
+    "start_state",
+    "step",
+    "step_batch",
+    "step_table",
+    "uniforms",
+    "validate_actions",
+    "validate_moves",
 ]

@@ -38,7 +38,9 @@ def validate_actions(actions: Any, n_dof: int) -> np.ndarray:
     dof, roc = arr[..., 0].astype(int), arr[..., 1].astype(int)
     _check_dofs(dof, n_dof)
     if np.any(np.abs(roc) > 1):
-        raise ConfigError(f"action roc must be -1, 0 or 1, got {sorted(set(roc[np.abs(roc) > 1].tolist()))}")
+        raise ConfigError(
+            f"action roc must be -1, 0 or 1, got {sorted(set(roc[np.abs(roc) > 1].tolist()))}"
+        )
     return encode_action(dof, roc).astype(np.int32)
 
 
@@ -64,7 +66,9 @@ def validate_moves(actions: Any, n_dof: int) -> np.ndarray | None:
         raise ConfigError("actions must be (dof, roc) pairs, shape (steps, 2) or (batch, steps, 2)")
     dof_f, roc = arr[..., 0], arr[..., 1]
     if not np.all(np.isfinite(arr)) or not np.all(dof_f == np.round(dof_f)):
-        raise ConfigError(f"actions must be (dof, roc) pairs: dof one of the integers 1..{n_dof}, roc a finite number in [-1, 1]")
+        raise ConfigError(
+            f"actions must be (dof, roc) pairs: dof one of the integers 1..{n_dof}, roc a finite number in [-1, 1]"
+        )
     dof = dof_f.astype(int)
     _check_dofs(dof, n_dof)
     bad = np.abs(roc) > 1

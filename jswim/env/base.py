@@ -115,12 +115,16 @@ class Discrete:
 class Box:
     """Real vectors in ``[low, high]`` of a fixed shape (gymnax's ``spaces.Box`` interface)."""
 
-    def __init__(self, low: Any, high: Any, shape: tuple[int, ...], dtype: Any = jnp.float32) -> None:
+    def __init__(
+        self, low: Any, high: Any, shape: tuple[int, ...], dtype: Any = jnp.float32
+    ) -> None:
         self.low, self.high, self.shape, self.dtype = low, high, tuple(shape), dtype
 
     def sample(self, key: Array) -> Array:
         """A uniformly random vector."""
-        return jax.random.uniform(key, self.shape, minval=self.low, maxval=self.high).astype(self.dtype)
+        return jax.random.uniform(key, self.shape, minval=self.low, maxval=self.high).astype(
+            self.dtype
+        )
 
     def contains(self, x: Any) -> Array:
         x = jnp.asarray(x)
@@ -192,7 +196,11 @@ class Environment:
 
     def dtype(self, state: Any) -> Any:
         """The working float dtype of ``state`` (the dtype of its first float leaf)."""
-        return next(leaf.dtype for leaf in jax.tree.leaves(state) if jnp.issubdtype(leaf.dtype, jnp.floating))
+        return next(
+            leaf.dtype
+            for leaf in jax.tree.leaves(state)
+            if jnp.issubdtype(leaf.dtype, jnp.floating)
+        )
 
     def noise(self, key: Array, state: Any) -> Array:
         """The step's noise variables ``Y ~ U[-1, 1]``, one per swimmer ``(n_swimmers,)``; one

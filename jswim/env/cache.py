@@ -14,14 +14,23 @@ import hashlib
 import os
 import tempfile
 from pathlib import Path
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
 #: Modules whose source decides a table's numbers.
-_SOURCES = ("jswim.integrate", "jswim.swimmers.models", "jswim.swimmers.purcell", "jswim.swimmers.nlink",
-            "jswim.swimmers.ng", "jswim.swimmers.nsphere", "jswim.swimmers.wall_rft", "jswim.env.tables", "jswim.env.motion",
-            "jswim.env.state")
+_SOURCES = (
+    "jswim.integrate",
+    "jswim.swimmers.models",
+    "jswim.swimmers.purcell",
+    "jswim.swimmers.nlink",
+    "jswim.swimmers.ng",
+    "jswim.swimmers.nsphere",
+    "jswim.swimmers.wall_rft",
+    "jswim.env.tables",
+    "jswim.env.motion",
+    "jswim.env.state",
+)
 
 
 def cache_dir() -> Path | None:
@@ -51,7 +60,9 @@ def code_version() -> str:
     return h.hexdigest()
 
 
-def cached(name: str, key: str, build: Callable[[], dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+def cached(
+    name: str, key: str, build: Callable[[], dict[str, np.ndarray]]
+) -> dict[str, np.ndarray]:
     """``build()`` (a dict of float64 arrays), read from the cache when present and valid."""
     folder = cache_dir()
     if folder is None:
@@ -63,7 +74,7 @@ def cached(name: str, key: str, build: Callable[[], dict[str, np.ndarray]]) -> d
             out = {k: np.asarray(data[k]) for k in data.files}
         if out and all(v.dtype == np.float64 and np.all(np.isfinite(v)) for v in out.values()):
             return out
-    except Exception:  # noqa: BLE001 - missing, torn or foreign file: build instead
+    except Exception:
         pass
     out = build()
     try:
@@ -76,7 +87,7 @@ def cached(name: str, key: str, build: Callable[[], dict[str, np.ndarray]]) -> d
         finally:
             if os.path.exists(tmp):
                 os.unlink(tmp)
-    except Exception:  # noqa: BLE001 - read-only or full disk: the table still works
+    except Exception:
         pass
     return out
 

@@ -72,12 +72,15 @@ def rollout(env: Environment, params: Any, key: Array | int, actions: Any) -> Tr
 
 
 @functools.partial(jax.jit, static_argnums=(0, 4))
-def _run_batch(env: Environment, params: Any, keys: Array, actions: Array, params_axes: Any) -> Trajectory:
+def _run_batch(
+    env: Environment, params: Any, keys: Array, actions: Array, params_axes: Any
+) -> Trajectory:
     return jax.vmap(_scan, in_axes=(None, params_axes, 0, 0))(env, params, keys, actions)
 
 
-def rollout_batch(env: Environment, params: Any, key: Array | int, actions: Any, *, params_axes: Any = None
-                  ) -> Trajectory:
+def rollout_batch(
+    env: Environment, params: Any, key: Array | int, actions: Any, *, params_axes: Any = None
+) -> Trajectory:
     """:func:`rollout` of a batch: ``actions`` ``(B, T)`` / ``(B, T, n_dof)``, member ``i`` with
     key ``split(key, B)[i]``, one vectorised scan (``vmap``, no Python loop over members).
 

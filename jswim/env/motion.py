@@ -54,7 +54,9 @@ def supported(model: SwimmerModel) -> bool:
     return model.n_dof == 2
 
 
-def mirror(model: SwimmerModel, a: Array, b: Array, c: Array, dof: Array) -> tuple[Array, Array, Array]:
+def mirror(
+    model: SwimmerModel, a: Array, b: Array, c: Array, dof: Array
+) -> tuple[Array, Array, Array]:
     """Map a move of DOF 2 onto one of DOF 1 (identity for DOF 1).
 
     Read from the other end, a two-DOF swimmer is the same swimmer with its DOFs swapped; for the
@@ -85,7 +87,10 @@ def build_values(model: SwimmerModel, deg: int = BUILD_DEGREE) -> np.ndarray:
         d = jnp.asarray(model.lo + span * frac).reshape(-1, 2)
         w = jax.jit(jax.vmap(lambda dd: model.body_velocity(dd, jnp.asarray(rate))))(d)
         off = jax.jit(jax.vmap(model.centroid_offset))(d)
-        w, off = np.asarray(w).reshape(grid_s.shape + (3,)), np.asarray(off).reshape(grid_s.shape + (2,))
+        w, off = (
+            np.asarray(w).reshape(grid_s.shape + (3,)),
+            np.asarray(off).reshape(grid_s.shape + (2,)),
+        )
     theta = running @ w[..., 2]  # running integral along s for every c
     z = running @ (np.exp(1j * theta) * (w[..., 0] + 1j * w[..., 1]))
     wpos = z + np.exp(1j * theta) * (off[..., 0] + 1j * off[..., 1])
@@ -135,7 +140,10 @@ def patch_table(model: SwimmerModel) -> np.ndarray:
     local = _lobatto(q)
     pts = ((np.arange(n_p)[:, None] + local[None, :]) / n_p).reshape(-1)  # every patch's nodes
     cheb = np.polynomial.chebyshev
-    ts, tc = cheb.chebvander(2 * pts - 1, coef.shape[2] - 1), cheb.chebvander(2 * pts - 1, coef.shape[0] - 1)
+    ts, tc = (
+        cheb.chebvander(2 * pts - 1, coef.shape[2] - 1),
+        cheb.chebvander(2 * pts - 1, coef.shape[0] - 1),
+    )
     vals = np.einsum("si,cj,jfi->scf", ts, tc, coef).reshape(n_p, q + 1, n_p, q + 1, -1)
     inv = np.linalg.inv(cheb.chebvander(2 * local - 1, q))
     out = np.einsum("ia,jb,PaQbf->PQfij", inv, inv, vals)
@@ -182,4 +190,12 @@ def move_increment(model: SwimmerModel, s0: Array, s1: Array, dof: Array) -> Arr
     dth = fb[0] - fa[0]
     ca, sa = jnp.cos(fa[0]), jnp.sin(fa[0])
     dwx, dwy = fb[1] - fa[1], fb[2] - fa[2]
-    return jnp.stack([sign * (ca * dwx + sa * dwy), sign * (ca * dwy - sa * dwx), dth, jnp.cos(dth), jnp.sin(dth)])
+    return jnp.stack(
+        [
+            sign * (ca * dwx + sa * dwy),
+            sign * (ca * dwy - sa * dwx),
+            dth,
+            jnp.cos(dth),
+            jnp.sin(dth),
+        ]
+    )

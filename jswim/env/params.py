@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import jax
 import jax.numpy as jnp
@@ -52,7 +53,7 @@ class EnvParams:
     roc_levels: int = 1
     diagonal: bool = False
 
-    def replace(self, **changes: Any) -> "EnvParams":
+    def replace(self, **changes: Any) -> EnvParams:
         """A copy with some fields changed (fields may be traced arrays)."""
         return dataclasses.replace(self, **changes)
 
@@ -147,13 +148,17 @@ def parse_init(init: Sequence[int] | str | None, n_dof: int) -> tuple[int, ...]:
         if text and all(ch in "+-" for ch in text):
             init = tuple(1 if ch == "+" else 0 for ch in text)
         else:
-            raise ConfigError(f"init must be levels like (1, 0), a sign string like '+-', or 'random'; got {init!r}")
+            raise ConfigError(
+                f"init must be levels like (1, 0), a sign string like '+-', or 'random'; got {init!r}"
+            )
     try:
         levels = tuple(int(v) for v in init)
     except (TypeError, ValueError):
         raise ConfigError(f"init must be a sequence of 0/1 levels, got {init!r}") from None
     if len(levels) != n_dof or any(v not in (0, 1, -1) for v in levels):
-        raise ConfigError(f"init must give {n_dof} levels, each 0 (lo), 1 (hi) or -1 (random); got {init!r}")
+        raise ConfigError(
+            f"init must give {n_dof} levels, each 0 (lo), 1 (hi) or -1 (random); got {init!r}"
+        )
     return levels
 
 

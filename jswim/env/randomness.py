@@ -32,7 +32,9 @@ def noise(key: Array, n: int, *, start: int | Array = 0, step: int | Array = 0) 
     return 2.0 * u - 1.0
 
 
-def uniforms(key: Array, shape: tuple[int, ...], dtype: Any, minval: float = 0.0, maxval: float = 1.0) -> Array:
+def uniforms(
+    key: Array, shape: tuple[int, ...], dtype: Any, minval: float = 0.0, maxval: float = 1.0
+) -> Array:
     """``jax.random.uniform`` under the non-partitionable threefry.
 
     It uses both words of each hash, so it costs about half as much on CPU, and gives the same

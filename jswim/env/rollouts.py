@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple, Sequence
+from typing import Any, NamedTuple
+from collections.abc import Sequence
 
 import jax
 import jax.numpy as jnp
@@ -41,8 +42,14 @@ def _scan(key: Array, actions: Array, params: EnvParams) -> Rollout:
     def body(st: EnvState, inp: tuple[Array, Array]) -> tuple[EnvState, Rollout]:
         k, a = inp
         st, info = step(k, st, a, params)
-        return st, Rollout(st.x + st.x_lo, st.y + st.y_lo, st.theta + st.theta_lo, dof_values(st, params),
-                           info.stuck, info.progress)
+        return st, Rollout(
+            st.x + st.x_lo,
+            st.y + st.y_lo,
+            st.theta + st.theta_lo,
+            dof_values(st, params),
+            info.stuck,
+            info.progress,
+        )
 
     _, out = jax.lax.scan(body, state, (keys, actions))
     return out
@@ -106,17 +113,25 @@ def rollout(
     [0.0, 0.0]
     """
     if isinstance(swimmer, Environment):  # the protocol's rollout(env, params, key, actions)
-        from jswim.env.episodes import rollout as protocol_rollout  # lazy: start-up (the protocol's modules)
+        from jswim.env.episodes import (
+            rollout as protocol_rollout,
+        )  # lazy: start-up (the protocol's modules)
 
         return protocol_rollout(swimmer, actions, *protocol_args)
     if protocol_args:
-        raise TypeError("rollout(swimmer, actions, *, key=..., ...) takes two positional arguments; "
-                        "rollout(env, params, key, actions) takes a world")
+        raise TypeError(
+            "rollout(swimmer, actions, *, key=..., ...) takes two positional arguments; "
+            "rollout(env, params, key, actions) takes a world"
+        )
     if scene is not None and not _is_plain_bulk(scene):
-        from jswim.scenes import scene_rollout  # lazy: start-up (the scene physics loads for a scene)
+        from jswim.scenes import (
+            scene_rollout,
+        )  # lazy: start-up (the scene physics loads for a scene)
 
         if direction not in (1, "+x", "+", "x", "+1", "1"):
-            raise ConfigError("direction is not a scene option: scene rollouts record x, z and tilt")
+            raise ConfigError(
+                "direction is not a scene option: scene rollouts record x, z and tilt"
+            )
         return scene_rollout(swimmer, actions, scene, key=key, zeta=zeta, init=init, **model_kwargs)
     params = make_params(swimmer, zeta=zeta, direction=direction, init=init, **model_kwargs)
     moves = validate_moves(actions, params.n_dof)
@@ -134,7 +149,9 @@ def rollout(
             out = _scan(key, jnp.asarray(idx), params)
         else:
             keys = jax.random.split(key, idx.shape[0])
-            out = sharding.apply_batched(_scan_batch, (params,), (keys, jnp.asarray(idx)), idx.shape[0])
+            out = sharding.apply_batched(
+                _scan_batch, (params,), (keys, jnp.asarray(idx)), idx.shape[0]
+            )
         return Rollout(*(np.asarray(v) for v in out))
 
 

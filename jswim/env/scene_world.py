@@ -86,7 +86,9 @@ class SceneWorld(Environment):
                 raise ValueError(f"an integer action code is a scalar, got shape {action.shape}")
             return decode_scene_action(action, self.k)
         if action.shape != (self.n_dof,):
-            raise ValueError(f"a float action is a ROC vector of shape ({self.n_dof},), got {action.shape}")
+            raise ValueError(
+                f"a float action is a ROC vector of shape ({self.n_dof},), got {action.shape}"
+            )
         i, roc = first_move(action)
         return i // ARMS, i % ARMS, roc
 
@@ -97,22 +99,31 @@ class SceneWorld(Environment):
         along = (state.arms[:, 1] - state.arms[:, 0]) / 3.0
         return jnp.stack([along * jnp.cos(state.tilt), along * jnp.sin(state.tilt)], -1)
 
-    def advance(self, state: SceneState, action: Array, noise: Array, params: SceneTask
-                ) -> tuple[SceneState, StepInfo]:
+    def advance(
+        self, state: SceneState, action: Array, noise: Array, params: SceneTask
+    ) -> tuple[SceneState, StepInfo]:
         """:func:`jswim.scenes.scene_advance` of the action, with noise ``(S,)``."""
         new, info = scene_advance(params.scene, state, self.move(action), noise)
         dtype = new.arms.dtype
         disp = jnp.stack([info.dx, info.dz], -1) + (self.offset(new) - self.offset(state))
         progress = jnp.asarray(params.direction, dtype) * jnp.mean(disp[:, 0])
-        return new, StepInfo(disp, progress, jnp.asarray(info.stuck), info.moved, info.contact,
-                             jnp.asarray(info.gap, dtype))
+        return new, StepInfo(
+            disp,
+            progress,
+            jnp.asarray(info.stuck),
+            info.moved,
+            info.contact,
+            jnp.asarray(info.gap, dtype),
+        )
 
     def observe(self, state: SceneState, params: SceneTask) -> Observation:
         """Positions: each swimmer's centroid from the full pair ``centre + centre_lo`` (in the
         state's dtype the sum is ``centre``; widened to float64 it is exact, drift-free); height:
         the middle sphere's ``z`` (:class:`jswim.scenes.SceneState`'s, what the scenes record)."""
         centre = state.centre + centre_low(state)
-        return Observation(state.arms.reshape(-1), centre + self.offset(state), state.tilt, centre[:, 1])
+        return Observation(
+            state.arms.reshape(-1), centre + self.offset(state), state.tilt, centre[:, 1]
+        )
 
     def features(self, state: SceneState, params: SceneTask) -> Array:
         """The arms scaled to [-1, 1]; with a wall also each swimmer's middle-sphere height as

@@ -132,9 +132,13 @@ def start_state(model: SwimmerModel, levels: Array, dtype: Any = None) -> EnvSta
     with jax.enable_x64(True):
         frac64 = jnp.asarray(levels, jnp.float64)
         theta = jnp.asarray(start_orientation(model, frac64), jnp.float64)
-        (th, tl), (ch, cl), (sh, sl) = (narrow(v, dtype) for v in (theta, jnp.cos(theta), jnp.sin(theta)))
+        (th, tl), (ch, cl), (sh, sl) = (
+            narrow(v, dtype) for v in (theta, jnp.cos(theta), jnp.sin(theta))
+        )
         fh, fl = narrow(frac64, dtype)
-    return EnvState(fh, zero, zero, th, ch, sh, jnp.zeros((), jnp.int32), zero, zero, tl, cl, sl, fl)
+    return EnvState(
+        fh, zero, zero, th, ch, sh, jnp.zeros((), jnp.int32), zero, zero, tl, cl, sl, fl
+    )
 
 
 def narrow(v: Array, dtype: Any) -> tuple[Array, Array]:

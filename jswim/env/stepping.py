@@ -32,7 +32,14 @@ from jswim.env.params import EnvParams, broadcast_params, is_batched, param_axes
 from jswim.env import motion
 from jswim.env.randomness import noise
 from jswim.env.state import EnvState, StepInfo, corner_values, narrow, wide
-from jswim.env.tables import MAX_LATTICE_ROWS, _corner_index, _step_rows, _still_row, lattice_rows, lattice_table
+from jswim.env.tables import (
+    MAX_LATTICE_ROWS,
+    _corner_index,
+    _step_rows,
+    _still_row,
+    lattice_rows,
+    lattice_table,
+)
 from jswim.integrate import centroid, integrate_stroke
 from jswim import sharding
 
@@ -44,7 +51,9 @@ STEP_METHOD = "table"
 INTEGRATOR_DEGREE = 24
 
 
-def step(key: Array, state: EnvState, action: Array, params: EnvParams) -> tuple[EnvState, StepInfo]:
+def step(
+    key: Array, state: EnvState, action: Array, params: EnvParams
+) -> tuple[EnvState, StepInfo]:
     """Advance one swimmer by one action.
 
     ``action`` is an integer code (:func:`jswim.env.encode_action`, ROC ``k / K`` with
@@ -87,9 +96,14 @@ def step_batch(
     """
     n = states.x.shape[0]
     if is_batched(params):
-        return sharding.apply_batched(_step_batch_jit, (key, start), (states, actions, broadcast_params(params, n)), n)
+        return sharding.apply_batched(
+            _step_batch_jit, (key, start), (states, actions, broadcast_params(params, n)), n
+        )
     return sharding.apply_batched(
-        lambda k, s0, p, st, a: _step_batch_jit(k, s0, st, a, p), (key, start, params), (states, actions), n
+        lambda k, s0, p, st, a: _step_batch_jit(k, s0, st, a, p),
+        (key, start, params),
+        (states, actions),
+        n,
     )
 
 
@@ -131,12 +145,15 @@ def advance(
             return _advance_corner(state, action, y_noise, params, exact)
         return _advance_lattice(state, action, y_noise, params)
     if action.shape != (params.model.n_dof,):
-        raise ValueError(f"a float action is a ROC vector of shape ({params.model.n_dof},), got {action.shape}")
+        raise ValueError(
+            f"a float action is a ROC vector of shape ({params.model.n_dof},), got {action.shape}"
+        )
     return _advance_rocs(state, action, y_noise, params)
 
 
-def _advance_corner(state: EnvState, action: Array, y_noise: Array, params: EnvParams,
-                    exact: bool) -> tuple[EnvState, StepInfo]:
+def _advance_corner(
+    state: EnvState, action: Array, y_noise: Array, params: EnvParams, exact: bool
+) -> tuple[EnvState, StepInfo]:
     """The paper's discrete step: corner to corner, read from the corner table."""
     model = params.model
     n = model.n_dof
@@ -160,7 +177,9 @@ def _advance_corner(state: EnvState, action: Array, y_noise: Array, params: EnvP
     return _apply(state, entry, y_noise, params, stuck, moved, frac, state.frac_lo)
 
 
-def _advance_lattice(state: EnvState, action: Array, y_noise: Array, params: EnvParams) -> tuple[EnvState, StepInfo]:
+def _advance_lattice(
+    state: EnvState, action: Array, y_noise: Array, params: EnvParams
+) -> tuple[EnvState, StepInfo]:
     """An integer code on the K lattice: ROC ``k / K``; the new shape is the lattice point
     ``round(K frac) + k`` (clipped to ``0..K``) over K, computed afresh so it never drifts. The
     step is read from the lattice table (:func:`jswim.env.tables.lattice_table`, one gather like
@@ -187,7 +206,9 @@ def _advance_lattice(state: EnvState, action: Array, y_noise: Array, params: Env
         return _advance_path(state, s0, s1, y_noise, params, requested=k != 0, dof=dof)
 
 
-def _advance_rocs(state: EnvState, rocs: Array, y_noise: Array, params: EnvParams) -> tuple[EnvState, StepInfo]:
+def _advance_rocs(
+    state: EnvState, rocs: Array, y_noise: Array, params: EnvParams
+) -> tuple[EnvState, StepInfo]:
     """A float ROC vector: each moving DOF at its ROC, stopping at its limit."""
     n = params.model.n_dof
     # Integer work outside the float64 block (its index types would not match the caller's).
@@ -198,13 +219,30 @@ def _advance_rocs(state: EnvState, rocs: Array, y_noise: Array, params: EnvParam
         s0 = wide(state.frac, state.frac_lo)
         s1 = jnp.clip(s0 + r, 0.0, 1.0)
         requested = jnp.any(r != 0)
-        return _advance_path(state, s0, s1, y_noise, params, requested=requested, rocs=r,
-                             dof=None if params.diagonal else first)
+        return _advance_path(
+            state,
+            s0,
+            s1,
+            y_noise,
+            params,
+            requested=requested,
+            rocs=r,
+            dof=None if params.diagonal else first,
+        )
 
 
-def _advance_path(state: EnvState, s0: Array, s1: Array, y_noise: Array, params: EnvParams, *,
-                  requested: Array, rocs: Array | None = None, dof: Array | None = None,
-                  method: str | None = None) -> tuple[EnvState, StepInfo]:
+def _advance_path(
+    state: EnvState,
+    s0: Array,
+    s1: Array,
+    y_noise: Array,
+    params: EnvParams,
+    *,
+    requested: Array,
+    rocs: Array | None = None,
+    dof: Array | None = None,
+    method: str | None = None,
+) -> tuple[EnvState, StepInfo]:
     """Move the shape from ``s0`` to ``s1`` (float64 fractions of the range), integrating the path.
 
     With ``rocs`` and ``params.diagonal`` the path is the one the motors follow:
@@ -239,22 +277,39 @@ def _path_increment(model: Any, s0: Array, rocs: Array) -> Array:
     piece between consecutive times at which a DOF reaches its limit."""
     span = model.hi - model.lo
     room = jnp.where(rocs > 0, 1.0 - s0, s0)
-    hit = jnp.where(rocs != 0, jnp.clip(room / jnp.where(rocs != 0, jnp.abs(rocs), 1.0), 0.0, 1.0), 1.0)
+    hit = jnp.where(
+        rocs != 0, jnp.clip(room / jnp.where(rocs != 0, jnp.abs(rocs), 1.0), 0.0, 1.0), 1.0
+    )
     times = jnp.concatenate([jnp.zeros(1), jnp.sort(hit)])
     pose = jnp.zeros(3, jnp.float64)
     for i in range(model.n_dof):  # n_dof pieces (static), some of length 0
         ta, tb = times[i], times[i + 1]
         rate = jnp.where(hit >= tb, rocs, 0.0) * span
         start = jnp.clip(s0 + rocs * ta, 0.0, 1.0)
-        pose = integrate_stroke(model, corner_values(model, start), rate, tb - ta, pose, n_sub=INTEGRATOR_DEGREE,
-                                dotless=True)
+        pose = integrate_stroke(
+            model,
+            corner_values(model, start),
+            rate,
+            tb - ta,
+            pose,
+            n_sub=INTEGRATOR_DEGREE,
+            dotless=True,
+        )
     d0, d1 = corner_values(model, s0), corner_values(model, jnp.clip(s0 + rocs, 0.0, 1.0))
     disp = centroid(model, d1, pose) - centroid(model, d0, jnp.zeros(3, jnp.float64))
     return jnp.stack([disp[0], disp[1], pose[2], jnp.cos(pose[2]), jnp.sin(pose[2])])
 
 
-def _apply(state: EnvState, entry: Array, y_noise: Array, params: EnvParams, stuck: Array, moved: Array,
-           frac: Array, frac_lo: Array) -> tuple[EnvState, StepInfo]:
+def _apply(
+    state: EnvState,
+    entry: Array,
+    y_noise: Array,
+    params: EnvParams,
+    stuck: Array,
+    moved: Array,
+    frac: Array,
+    frac_lo: Array,
+) -> tuple[EnvState, StepInfo]:
     """Apply a body-frame step row ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` (float64) to the
     pose, with the paper's noise on the displacement, in float64; store the result as pairs."""
     model = params.model
@@ -263,7 +318,11 @@ def _apply(state: EnvState, entry: Array, y_noise: Array, params: EnvParams, stu
         f64 = jnp.float64
         entry = entry.astype(f64)
         factor = 1.0 + jnp.asarray(params.zeta, f64) * jnp.asarray(y_noise, f64)
-        x, y, theta = wide(state.x, state.x_lo), wide(state.y, state.y_lo), wide(state.theta, state.theta_lo)
+        x, y, theta = (
+            wide(state.x, state.x_lo),
+            wide(state.y, state.y_lo),
+            wide(state.theta, state.theta_lo),
+        )
         c, s = wide(state.cos, state.cos_lo), wide(state.sin, state.sin_lo)
         if model.planar:
             dx = (c * entry[0] - s * entry[1]) * factor
@@ -274,15 +333,38 @@ def _apply(state: EnvState, entry: Array, y_noise: Array, params: EnvParams, stu
             dx, dy = entry[0] * factor, jnp.zeros((), f64)
         x, y, theta = x + dx, y + dy, theta + entry[2]
 
-        (xh, xl), (yh, yl), (th, tl), (ch, cl), (sh, sl) = (narrow(v, dtype) for v in (x, y, theta, c, s))
+        (xh, xl), (yh, yl), (th, tl), (ch, cl), (sh, sl) = (
+            narrow(v, dtype) for v in (x, y, theta, c, s)
+        )
         dxh, dyh = dx.astype(dtype), dy.astype(dtype)
         progress = (jnp.asarray(params.direction, f64) * dx).astype(dtype)
-    new = EnvState(frac.astype(dtype), xh, yh, th, ch, sh, state.t + 1, xl, yl, tl, cl, sl, frac_lo.astype(dtype))
+    new = EnvState(
+        frac.astype(dtype),
+        xh,
+        yh,
+        th,
+        ch,
+        sh,
+        state.t + 1,
+        xl,
+        yl,
+        tl,
+        cl,
+        sl,
+        frac_lo.astype(dtype),
+    )
     return new, StepInfo(dxh, dyh, progress, stuck, moved, new.x)
 
 
-def _advance_plain(state: EnvState, frac: Array, row: Array, y_noise: Array, params: EnvParams,
-                   stuck: Array, moved: Array) -> tuple[EnvState, StepInfo]:
+def _advance_plain(
+    state: EnvState,
+    frac: Array,
+    row: Array,
+    y_noise: Array,
+    params: EnvParams,
+    stuck: Array,
+    moved: Array,
+) -> tuple[EnvState, StepInfo]:
     """:func:`advance` with ``exact=False``: the same step in working-dtype arithmetic."""
     dtype = state.x.dtype
     entry = jnp.asarray(_step_rows(params.model), dtype)[row]
@@ -295,7 +377,16 @@ def _advance_plain(state: EnvState, frac: Array, row: Array, y_noise: Array, par
     else:
         dx, dy = entry[0] * factor, jnp.zeros((), dtype)
     zero = jnp.zeros((), dtype)
-    new = state._replace(frac=frac, x=state.x + dx, y=state.y + dy, theta=state.theta + entry[2], cos=c, sin=s,
-                         t=state.t + 1, cos_lo=zero, sin_lo=zero)
+    new = state._replace(
+        frac=frac,
+        x=state.x + dx,
+        y=state.y + dy,
+        theta=state.theta + entry[2],
+        cos=c,
+        sin=s,
+        t=state.t + 1,
+        cos_lo=zero,
+        sin_lo=zero,
+    )
     progress = jnp.asarray(params.direction, dtype) * dx
     return new, StepInfo(dx, dy, progress, stuck, moved, new.x)

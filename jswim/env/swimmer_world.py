@@ -60,7 +60,9 @@ class SwimmerWorld(Environment):
     def dtype(self, state: EnvState) -> Any:
         return state.x.dtype
 
-    def advance(self, state: EnvState, action: Array, noise: Array, params: EnvParams) -> tuple[EnvState, StepInfo]:
+    def advance(
+        self, state: EnvState, action: Array, noise: Array, params: EnvParams
+    ) -> tuple[EnvState, StepInfo]:
         """:func:`jswim.env.advance` with the noise variable ``noise[0]``."""
         new, info = advance(state, action, jnp.reshape(noise, (-1,))[0], params)
         dtype = new.x.dtype
@@ -75,7 +77,9 @@ class SwimmerWorld(Environment):
 
     def observe(self, state: EnvState, params: EnvParams) -> Observation:
         position = jnp.stack([state.x + state.x_lo, state.y + state.y_lo])[None]
-        return Observation(dof_values(state, params), position, (state.theta + state.theta_lo)[None])
+        return Observation(
+            dof_values(state, params), position, (state.theta + state.theta_lo)[None]
+        )
 
     def features(self, state: EnvState, params: EnvParams) -> Array:
         """The DOFs scaled to [-1, 1] (what the PPO baseline reads)."""

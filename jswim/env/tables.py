@@ -34,7 +34,9 @@ def step_table(model: SwimmerModel) -> tuple[np.ndarray, np.ndarray]:
     offsets : ndarray, shape (2**n_dof, 2)
         Centroid minus reference point, body frame, per corner.
     """
-    out = cached("corner", model_key(model), lambda: dict(zip(("inc", "offs"), _build_step_table(model))))
+    out = cached(
+        "corner", model_key(model), lambda: dict(zip(("inc", "offs"), _build_step_table(model)))
+    )
     return out["inc"], out["offs"]
 
 
@@ -61,7 +63,9 @@ def _build_step_table(model: SwimmerModel) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _corner_index(levels: Array) -> Array:
-    return jnp.sum(levels * (2 ** jnp.arange(levels.shape[-1], dtype=jnp.int32)), axis=-1, dtype=jnp.int32)
+    return jnp.sum(
+        levels * (2 ** jnp.arange(levels.shape[-1], dtype=jnp.int32)), axis=-1, dtype=jnp.int32
+    )
 
 
 @functools.lru_cache(maxsize=64)
@@ -104,13 +108,18 @@ def lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
     -------
     ndarray, shape (lattice_rows(model, K), 5)
     """
-    return cached("lattice", f"{model_key(model)}|K={roc_levels}|deg={TABLE_DEGREE}",
-                  lambda: {"rows": _build_lattice_table(model, roc_levels)})["rows"]
+    return cached(
+        "lattice",
+        f"{model_key(model)}|K={roc_levels}|deg={TABLE_DEGREE}",
+        lambda: {"rows": _build_lattice_table(model, roc_levels)},
+    )["rows"]
 
 
 def _build_lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
     n, big_k = model.n_dof, roc_levels
-    shapes = np.stack(np.meshgrid(*[np.arange(big_k + 1)] * n, indexing="ij"), -1)[..., ::-1].reshape(-1, n)
+    shapes = np.stack(np.meshgrid(*[np.arange(big_k + 1)] * n, indexing="ij"), -1)[
+        ..., ::-1
+    ].reshape(-1, n)
     # shapes[i] has digit m (base K+1) of i at position m: i = sum_m j_m (K+1)^m.
     start = np.repeat(shapes, n * (big_k + 1), axis=0)
     dof = np.tile(np.repeat(np.arange(n), big_k + 1), len(shapes))

@@ -3,7 +3,8 @@
 
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+from typing import Any
+from collections.abc import Callable, Sequence
 
 from jswim.env.base import Environment
 from jswim.env.params import EnvParams, make_params, parse_direction
@@ -34,8 +35,10 @@ def register_world(name: str, factory: Callable[..., tuple[Environment, Any]]) -
         For an empty name, one of the paper's swimmers, or a factory that is not callable.
     """
     if not isinstance(name, str) or not name or name.lower() in SWIMMERS or not callable(factory):
-        raise ConfigError(f"register_world needs a new name (not {', '.join(SWIMMERS)}) and a callable factory, "
-                          f"got {name!r}")
+        raise ConfigError(
+            f"register_world needs a new name (not {', '.join(SWIMMERS)}) and a callable factory, "
+            f"got {name!r}"
+        )
     _REGISTERED[name] = factory
 
 
@@ -113,21 +116,41 @@ def make(
     """
     if isinstance(swimmer, str) and swimmer in _REGISTERED:
         # only the options asked for: the factory refuses what it lacks
-        given = {**({"roc_levels": roc_levels} if roc_levels != 1 else {}), **({"diagonal": True} if diagonal else {}),
-                 **({"dtype": dtype} if dtype is not None else {})}
-        return _REGISTERED[swimmer](None if scene is None else as_scene(scene), zeta=zeta,
-                                    direction=parse_direction(direction), init=init, **given, **kwargs)
+        given = {
+            **({"roc_levels": roc_levels} if roc_levels != 1 else {}),
+            **({"diagonal": True} if diagonal else {}),
+            **({"dtype": dtype} if dtype is not None else {}),
+        }
+        return _REGISTERED[swimmer](
+            None if scene is None else as_scene(scene),
+            zeta=zeta,
+            direction=parse_direction(direction),
+            init=init,
+            **given,
+            **kwargs,
+        )
     if scene is not None and purcell_wall.is_purcell(swimmer) and not is_plain_bulk(scene):
         # Purcell's swimmer above a wall: the paper's planar world with wall-corrected drag
         swimmer, scene, kwargs = purcell_wall.model(as_scene(scene), **kwargs), None, {}
     if scene is None or is_plain_bulk(scene):
         if dtype is not None:
-            raise ConfigError("dtype is a scene option; the paper's world follows JAX's default float")
-        params = make_params(swimmer, zeta=zeta, direction=direction, init=init, roc_levels=roc_levels,
-                             diagonal=diagonal, **kwargs)
+            raise ConfigError(
+                "dtype is a scene option; the paper's world follows JAX's default float"
+            )
+        params = make_params(
+            swimmer,
+            zeta=zeta,
+            direction=direction,
+            init=init,
+            roc_levels=roc_levels,
+            diagonal=diagonal,
+            **kwargs,
+        )
         return SwimmerWorld(params.model, params.roc_levels, params.diagonal), params
     if diagonal:
         raise ConfigError("diagonal strokes are not offered in scenes (one arm moves per step)")
     scene = as_scene(scene)
-    sp = scene_params(swimmer, scene, zeta=zeta, roc_levels=roc_levels, dtype=dtype, init=init, **kwargs)
+    sp = scene_params(
+        swimmer, scene, zeta=zeta, roc_levels=roc_levels, dtype=dtype, init=init, **kwargs
+    )
     return SceneWorld(scene, sp.roc_levels), SceneTask(sp, float(parse_direction(direction)))

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import functools
 from collections import defaultdict
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -37,13 +38,17 @@ from jswim.results import as_run_rows
 
 
 @functools.lru_cache(maxsize=64)
-def _signature_path(swimmer: str, direction: int, init: tuple[int, ...], steps: int) -> tuple[float, ...] | None:
+def _signature_path(
+    swimmer: str, direction: int, init: tuple[int, ...], steps: int
+) -> tuple[float, ...] | None:
     """Target-direction X/a after 0..steps steps of the best closed cycle started from ``init``.
 
     ``None`` when the best cycle does not pass through ``init`` (then no run from there can
     follow it from step 0).
     """
-    from jswim import env  # lazy: JAX only when a reference line is drawn (jswim.overview imports plots)
+    from jswim import (
+        env,
+    )  # lazy: JAX only when a reference line is drawn (jswim.overview imports plots)
     from jswim.judging import gait  # lazy: as above
 
     model = make_model(swimmer)
@@ -80,7 +85,9 @@ def signature_reference(rows: Sequence[Mapping[str, Any]]) -> np.ndarray | None:
         if not isinstance(init, str) or set(init) - {"+", "-"}:
             return None
         try:
-            p = _signature_path(r.swimmer, int(r.direction or 1), tuple(int(c == "+") for c in init), steps)
+            p = _signature_path(
+                r.swimmer, int(r.direction or 1), tuple(int(c == "+") for c in init), steps
+            )
         except Exception:  # unknown swimmer or model: no reference, not a broken figure
             return None
         if p is None:
@@ -95,26 +102,46 @@ def signature_reference(rows: Sequence[Mapping[str, Any]]) -> np.ndarray | None:
 def _marks(n_steps: int, index: int, count: int) -> tuple[int, int]:
     """``markevery`` of series ``index`` of ``count``: markers every ~n/8 steps, staggered."""
     every = max(2, n_steps // 8)
-    return (int(round(index * every / max(count, 1))), every)
+    return (round(index * every / max(count, 1)), every)
 
 
-def _mean_curve(ax: Any, rows: Sequence[Mapping[str, Any]], index: int, count: int, *, singles: bool,
-                lw: float, zorder: float, **style: Any) -> Any:
+def _mean_curve(
+    ax: Any,
+    rows: Sequence[Mapping[str, Any]],
+    index: int,
+    count: int,
+    *,
+    singles: bool,
+    lw: float,
+    zorder: float,
+    **style: Any,
+) -> Any:
     rows = as_run_rows(rows)
     xs = target_displacement(rows)
     n = np.arange(xs.shape[1])
     if singles and len(rows) > 1:
         for row in xs[:20]:
             ax.plot(n, row, color=style["color"], alpha=0.18, lw=0.5, zorder=1)
-    (line,) = ax.plot(n, np.nanmean(xs, axis=0), lw=lw, zorder=zorder, markevery=_marks(len(n), index, count),
-                      mfc="white" if index % 2 else style["color"], **style)
+    (line,) = ax.plot(
+        n,
+        np.nanmean(xs, axis=0),
+        lw=lw,
+        zorder=zorder,
+        markevery=_marks(len(n), index, count),
+        mfc="white" if index % 2 else style["color"],
+        **style,
+    )
     return line
 
 
 @_styled
-def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, SwimmerModel] | None = None,
-                  cycles: Mapping[tuple[str, int], tuple] | None = None, note: str | None = None,
-                  reference: bool = True) -> Figure:
+def curves_figure(
+    rows: Sequence[Mapping[str, Any]],
+    models: Mapping[str, SwimmerModel] | None = None,
+    cycles: Mapping[tuple[str, int], tuple] | None = None,
+    note: str | None = None,
+    reference: bool = True,
+) -> Figure:
     """Target-direction displacement against step n for each agent (paper Fig. 2).
 
     One panel per swimmer (rows, Purcell first) and target direction (columns): the mean of each
@@ -143,12 +170,27 @@ def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, Swimme
             if reference:
                 ref = signature_reference(sel)
                 if ref is not None:
-                    handles["reference"] = ax.plot(np.arange(ref.size), ref, zorder=2, **REFERENCE_STYLE)[0]
+                    handles["reference"] = ax.plot(
+                        np.arange(ref.size), ref, zorder=2, **REFERENCE_STYLE
+                    )[0]
             for i, agent in enumerate(agents):
-                style = dict(AGENT_STYLE.get(agent, dict(color=f"C{i}", ls="-", marker="o", label=agent)))
+                style = dict(
+                    AGENT_STYLE.get(agent, dict(color=f"C{i}", ls="-", marker="o", label=agent))
+                )
                 # Later agents drawn thinner and on top: a mean hidden under another still shows.
-                handles.setdefault(agent, _mean_curve(ax, by[agent], i, len(agents), singles=True,
-                                                      lw=2.0 - 0.45 * i, zorder=3 + i, **style))
+                handles.setdefault(
+                    agent,
+                    _mean_curve(
+                        ax,
+                        by[agent],
+                        i,
+                        len(agents),
+                        singles=True,
+                        lw=2.0 - 0.45 * i,
+                        zorder=3 + i,
+                        **style,
+                    ),
+                )
                 counts[agent].add(len(by[agent]))
             ax.axhline(0, color="0.75", lw=0.6, zorder=0)
             ax.set_title(_panel_title(sw, d))
@@ -163,9 +205,19 @@ def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, Swimme
                 ax = fig.add_subplot(grid[row, j])
                 if (sw, d) in cycles:
                     start, moves, *who = cycles[(sw, d)]
-                    by_text = f" by {AGENT_STYLE.get(who[0], dict(label=who[0]))['label']}" if who else ""
-                    draw_cycle(ax, model, start, moves, title=f"stroke cycle learned{by_text}",
-                               color=AGENT_STYLE.get(who[0], {}).get("color", "#0072B2") if who else "#0072B2")
+                    by_text = (
+                        f" by {AGENT_STYLE.get(who[0], dict(label=who[0]))['label']}" if who else ""
+                    )
+                    draw_cycle(
+                        ax,
+                        model,
+                        start,
+                        moves,
+                        title=f"stroke cycle learned{by_text}",
+                        color=AGENT_STYLE.get(who[0], {}).get("color", "#0072B2")
+                        if who
+                        else "#0072B2",
+                    )
                 else:
                     ax.axis("off")
             row += 1
@@ -173,8 +225,11 @@ def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, Swimme
     for agent in _order([a for a in handles if a != "reference"], AGENT_ORDER):
         h = handles[agent]
         n = counts[agent]
-        h.set_label(f"{AGENT_STYLE.get(agent, {}).get('label', agent)}, mean of {n.pop()}" if len(n) == 1
-                    else AGENT_STYLE.get(agent, {}).get("label", agent))
+        h.set_label(
+            f"{AGENT_STYLE.get(agent, {}).get('label', agent)}, mean of {n.pop()}"
+            if len(n) == 1
+            else AGENT_STYLE.get(agent, {}).get("label", agent)
+        )
         legend.append(h)
     if "reference" in handles:
         legend.append(handles["reference"])
@@ -184,7 +239,9 @@ def curves_figure(rows: Sequence[Mapping[str, Any]], models: Mapping[str, Swimme
 
 
 @_styled
-def history_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None, reference: bool = True) -> Figure:
+def history_figure(
+    rows: Sequence[Mapping[str, Any]], note: str | None = None, reference: bool = True
+) -> Figure:
     """Target-direction displacement against step for each history length n_ht (paper Fig. 3).
 
     One panel per swimmer and target direction (``X/a`` toward +x, ``-X/a`` toward -x). Each
@@ -198,8 +255,15 @@ def history_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None, r
     n_hts = sorted({r.n_ht for r in rows}, key=lambda v: (v is None, v))
     markers = "osD^vPX*<>"
     cmap = plt.get_cmap("viridis")
-    fig, grid, legend_ax, top = _frame([2.1] * len(swimmers), len(dirs), len(n_hts) + int(reference), most=5)
-    axes = np.array([[fig.add_subplot(grid[top + i, j]) for j in range(len(dirs))] for i in range(len(swimmers))])
+    fig, grid, legend_ax, top = _frame(
+        [2.1] * len(swimmers), len(dirs), len(n_hts) + int(reference), most=5
+    )
+    axes = np.array(
+        [
+            [fig.add_subplot(grid[top + i, j]) for j in range(len(dirs))]
+            for i in range(len(swimmers))
+        ]
+    )
     handles: dict[Any, Any] = {}
     sizes: set[int] = set()
     for i, sw in enumerate(swimmers):
@@ -210,15 +274,31 @@ def history_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None, r
             if reference:
                 ref = signature_reference(sel)
                 if ref is not None:
-                    handles["reference"] = ax.plot(np.arange(ref.size), ref, zorder=2, **REFERENCE_STYLE)[0]
+                    handles["reference"] = ax.plot(
+                        np.arange(ref.size), ref, zorder=2, **REFERENCE_STYLE
+                    )[0]
             for k, h in enumerate(n_hts):
                 if h not in by:
                     continue
-                style = dict(color=cmap(0.9 * k / max(1, len(n_hts) - 1)), ls="-", marker=markers[k % len(markers)],
-                             label=f"n_ht = {h}")
-                handles.setdefault(h, _mean_curve(ax, by[h], k, len(n_hts), singles=False,
-                                                  lw=max(0.8, 3.0 - 2.2 * k / max(1, len(n_hts) - 1)),
-                                                  zorder=3 + k, **style))
+                style = dict(
+                    color=cmap(0.9 * k / max(1, len(n_hts) - 1)),
+                    ls="-",
+                    marker=markers[k % len(markers)],
+                    label=f"n_ht = {h}",
+                )
+                handles.setdefault(
+                    h,
+                    _mean_curve(
+                        ax,
+                        by[h],
+                        k,
+                        len(n_hts),
+                        singles=False,
+                        lw=max(0.8, 3.0 - 2.2 * k / max(1, len(n_hts) - 1)),
+                        zorder=3 + k,
+                        **style,
+                    ),
+                )
                 sizes.add(len(by[h]))
             ax.axhline(0, color="0.75", lw=0.6, zorder=0)
             ax.set_title(_panel_title(sw, d))

@@ -4,7 +4,8 @@ competence variants): success rate p, steps to learn and X/a per agent."""
 from __future__ import annotations
 
 from collections import defaultdict
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -41,35 +42,79 @@ def _stats(g: Sequence[Mapping[str, Any]]) -> tuple[float, float, float, float, 
     return k / len(g), lo, hi, m, mlo, mhi
 
 
-def _errorbars(ax: Any, x: np.ndarray, y: Sequence[float], lo: Sequence[float], hi: Sequence[float],
-               connect: bool, **style: Any) -> Any:
+def _errorbars(
+    ax: Any,
+    x: np.ndarray,
+    y: Sequence[float],
+    lo: Sequence[float],
+    hi: Sequence[float],
+    connect: bool,
+    **style: Any,
+) -> Any:
     y, lo, hi = (np.asarray(v, float) for v in (y, lo, hi))
     # Intervals never come out negative; at p = 0 rounding can give -1e-17.
     err = [np.maximum(0.0, y - lo), np.maximum(0.0, hi - y)]
-    return ax.errorbar(x, y, yerr=err, color=style["color"], marker=style["marker"], ls=style["ls"] if connect else "none",
-                       mfc="white" if style.get("hollow") else style["color"], elinewidth=0.8, capsize=2,
-                       label=style["label"], zorder=3)
+    return ax.errorbar(
+        x,
+        y,
+        yerr=err,
+        color=style["color"],
+        marker=style["marker"],
+        ls=style["ls"] if connect else "none",
+        mfc="white" if style.get("hollow") else style["color"],
+        elinewidth=0.8,
+        capsize=2,
+        label=style["label"],
+        zorder=3,
+    )
 
 
-def _learn_points(ax: Any, x: np.ndarray, stats: Sequence[Any], connect: bool, style: Mapping[str, Any]) -> None:
+def _learn_points(
+    ax: Any, x: np.ndarray, stats: Sequence[Any], connect: bool, style: Mapping[str, Any]
+) -> None:
     """Median steps to learn with its IQR where some runs learned, each point labelled k/n; a
     value where none learned gets its "0/n" on the axis (no point: there is no median)."""
     have = [i for i, st in enumerate(stats) if st.learned]
     if have:
-        _errorbars(ax, x[have], [stats[i].median for i in have], [stats[i].q25 for i in have],
-                   [stats[i].q75 for i in have], connect, **style)
+        _errorbars(
+            ax,
+            x[have],
+            [stats[i].median for i in have],
+            [stats[i].q25 for i in have],
+            [stats[i].q75 for i in have],
+            connect,
+            **style,
+        )
     tallest = max([stats[i].q75 for i in have] + [1.0])
-    ax.set_ylim(0, max(ax.get_ylim()[1] if have else 0.0, tallest * 1.3))  # room for the labels above the bars
+    ax.set_ylim(
+        0, max(ax.get_ylim()[1] if have else 0.0, tallest * 1.3)
+    )  # room for the labels above the bars
     for xi, st in zip(x, stats):
         y = st.q75 if st.learned else 0.0
-        ax.annotate(f"{st.learned}/{st.n}", (xi, y), xytext=(0, 3), textcoords="offset points", ha="center",
-                    va="bottom", fontsize=5, color=style["color"])
+        ax.annotate(
+            f"{st.learned}/{st.n}",
+            (xi, y),
+            xytext=(0, 3),
+            textcoords="offset points",
+            ha="center",
+            va="bottom",
+            fontsize=5,
+            color=style["color"],
+        )
 
 
 @_styled
-def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[Any] | None = None,
-                xlabel: str, numeric: bool = False, tick_labels: Mapping[Any, str] | None = None,
-                note: str | None = None, learn: bool = False) -> Figure:
+def grid_figure(
+    rows: Sequence[Mapping[str, Any]],
+    key: str,
+    *,
+    order: Sequence[Any] | None = None,
+    xlabel: str,
+    numeric: bool = False,
+    tick_labels: Mapping[Any, str] | None = None,
+    note: str | None = None,
+    learn: bool = False,
+) -> Figure:
     """Success rate p and mean target-direction X/a against the values of ``key``, per agent.
 
     For each swimmer (Purcell first) two panels share the x axis, success rate ``p`` (95% Wilson
@@ -89,9 +134,15 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
     agents = _order({r.agent for r in rows}, AGENT_ORDER)
     pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(values)}
     span = (max(pos.values()) - min(pos.values())) if len(pos) > 1 else 1.0
-    step = span / max(1, len(pos) - 1) if not numeric else min(np.diff(sorted(pos.values())), default=span)
+    step = (
+        span / max(1, len(pos) - 1)
+        if not numeric
+        else min(np.diff(sorted(pos.values())), default=span)
+    )
     width = 0.5 * step  # the agents' points of one value spread over half the gap to the next
-    offsets = {a: (i - (len(agents) - 1) / 2) * width / max(1, len(agents)) for i, a in enumerate(agents)}
+    offsets = {
+        a: (i - (len(agents) - 1) / 2) * width / max(1, len(agents)) for i, a in enumerate(agents)
+    }
     n_cols = len(dirs)
     per = 3 if learn else 2  # panels per swimmer: p, (steps to learn,) X/a
     fig, grid, legend_ax, top = _frame([1.3] * (per * len(swimmers)), n_cols, len(agents))
@@ -115,12 +166,22 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
                     continue
                 stats = np.array([_stats(by[v]) for v in vs])
                 x = np.array([pos[v] for v in vs]) + offsets[agent]
-                style = dict(AGENT_STYLE.get(agent, dict(color=f"C{a_i}", ls="-", marker="o", label=agent)))
-                handles.setdefault(agent, _errorbars(ax_p, x, stats[:, 0], stats[:, 1], stats[:, 2], numeric, **style))
+                style = dict(
+                    AGENT_STYLE.get(agent, dict(color=f"C{a_i}", ls="-", marker="o", label=agent))
+                )
+                handles.setdefault(
+                    agent,
+                    _errorbars(ax_p, x, stats[:, 0], stats[:, 1], stats[:, 2], numeric, **style),
+                )
                 _errorbars(ax_x, x, stats[:, 3], stats[:, 4], stats[:, 5], numeric, **style)
                 if ax_l is not None:
-                    _learn_points(ax_l, x, [learn_stats([r.steps_to_learn for r in by[v]]) for v in vs],
-                                  numeric, style)
+                    _learn_points(
+                        ax_l,
+                        x,
+                        [learn_stats([r.steps_to_learn for r in by[v]]) for v in vs],
+                        numeric,
+                        style,
+                    )
                 counts[agent].update(len(by[v]) for v in vs)
             ax_p.set_ylim(-0.06, 1.06)
             ax_p.set_ylabel("success rate p\n(95% Wilson CI)")
@@ -128,12 +189,22 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
             ax_x.axhline(0, color="0.75", lw=0.6, zorder=0)
             ax_x.set_ylabel(f"mean {_disp_label(d)}\n(95% bootstrap CI)")
             lo, hi = ax_x.get_ylim()
-            if hi - lo < 1e-9:  # all X/a equal (a swimmer that never moved): not an axis of 1e-17 rounding
+            if (
+                hi - lo < 1e-9
+            ):  # all X/a equal (a swimmer that never moved): not an axis of 1e-17 rounding
                 ax_x.set_ylim(lo - 0.05, hi + 0.05)
             if ax_l is not None:
                 ax_l.set_ylabel("steps to learn\n(median, IQR)")
-                ax_l.text(0.99, 0.97, "k/n: runs that learned", transform=ax_l.transAxes, ha="right", va="top",
-                          fontsize=5, color="0.4")
+                ax_l.text(
+                    0.99,
+                    0.97,
+                    "k/n: runs that learned",
+                    transform=ax_l.transAxes,
+                    ha="right",
+                    va="top",
+                    fontsize=5,
+                    color="0.4",
+                )
             for ax in (ax_p, ax_x) + ((ax_l,) if ax_l is not None else ()):
                 ax.grid(axis="y", alpha=0.25, lw=0.5)
     for ax in axes[-1]:
@@ -141,8 +212,12 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
         if not numeric:
             labels = [(tick_labels or {}).get(v, str(v)) for v in values]
             rotate = sum(len(t) for t in labels) > (40 if n_cols == 1 else 30)
-            ax.set_xticks([pos[v] for v in values], labels, rotation=30 if rotate else 0,
-                          ha="right" if rotate else "center")
+            ax.set_xticks(
+                [pos[v] for v in values],
+                labels,
+                rotation=30 if rotate else 0,
+                ha="right" if rotate else "center",
+            )
             ax.set_xlim(-0.6, len(values) - 0.4)
         else:
             ax.set_xticks([pos[v] for v in values], [f"{v:g}" for v in values])
@@ -152,7 +227,9 @@ def grid_figure(rows: Sequence[Mapping[str, Any]], key: str, *, order: Sequence[
             h = handles[agent]
             n = counts[agent]
             base = AGENT_STYLE.get(agent, {}).get("label", agent)
-            h.set_label(f"{base}, n = {n.pop()}" if len(n) == 1 else f"{base}, n = {min(n)}-{max(n)}")
+            h.set_label(
+                f"{base}, n = {n.pop()}" if len(n) == 1 else f"{base}, n = {min(n)}-{max(n)}"
+            )
             legend.append(h)
     _legend(legend_ax, legend)
     _mark_unfinished(fig, note)
@@ -168,20 +245,34 @@ def ablation_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) 
     """The full prompt and the prompt without each sentence S1..S5 (paper Fig. 5)."""
     order = ["full"] + [f"-S{i}" for i in range(1, 6)]
     labels = {"full": "full", **{f"-S{i}": f"\u2212S{i}" for i in range(1, 6)}}
-    return grid_figure(rows, "group", order=order, tick_labels=labels, xlabel="sentence removed from the prompt",
-                       note=note)
+    return grid_figure(
+        rows,
+        "group",
+        order=order,
+        tick_labels=labels,
+        xlabel="sentence removed from the prompt",
+        note=note,
+    )
 
 
 def inits_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     """Each of the four initial configurations (signs of D1, D2)."""
     order = [f"init {a}{b}" for a in "+-" for b in "+-"]
     labels = {g: f"({g[5]}, {g[6]})".replace("-", "\u2212") for g in order}
-    return grid_figure(rows, "group", order=order, tick_labels=labels,
-                       xlabel="initial configuration (signs of D1, D2)", note=note)
+    return grid_figure(
+        rows,
+        "group",
+        order=order,
+        tick_labels=labels,
+        xlabel="initial configuration (signs of D1, D2)",
+        note=note,
+    )
 
 
 @_styled
-def competence_figure(rows: Sequence[Mapping[str, Any]], order: Sequence[str], note: str | None = None) -> Figure:
+def competence_figure(
+    rows: Sequence[Mapping[str, Any]], order: Sequence[str], note: str | None = None
+) -> Figure:
     """Success rate p and mean target-direction X/a per LLM variant and per baseline.
 
     Rows carry an ``entry`` label (a variant name, or ``"agent (action set)"`` for baselines);
@@ -192,8 +283,13 @@ def competence_figure(rows: Sequence[Mapping[str, Any]], order: Sequence[str], n
     rows = as_run_rows(rows)
     keys = panel_keys(rows)
     n = max(1, len(order))
-    fig, axes = plt.subplots(len(keys), 2, figsize=(PAGE_IN, (0.17 * n + 0.75) * len(keys) + 0.3), squeeze=False,
-                             layout="constrained")
+    fig, axes = plt.subplots(
+        len(keys),
+        2,
+        figsize=(PAGE_IN, (0.17 * n + 0.75) * len(keys) + 0.3),
+        squeeze=False,
+        layout="constrained",
+    )
     for (ax_p, ax_x), (sw, d) in zip(axes, keys):
         by = _by(_select(rows, sw, d), "entry")
         labels = [k for k in order if k in by]
@@ -202,12 +298,31 @@ def competence_figure(rows: Sequence[Mapping[str, Any]], order: Sequence[str], n
             g = by[k]
             style = AGENT_STYLE.get(g[0]["agent"], dict(color="C0", marker="o"))
             p, plo, phi, m, mlo, mhi = _stats(g)
-            ax_p.errorbar(p, y[j], xerr=[[max(0.0, p - plo)], [max(0.0, phi - p)]], fmt=style["marker"],
-                          color=style["color"], capsize=2, elinewidth=0.8)
-            ax_x.errorbar(m, y[j], xerr=[[max(0.0, m - mlo)], [max(0.0, mhi - m)]], fmt=style["marker"],
-                          color=style["color"], capsize=2, elinewidth=0.8)
+            ax_p.errorbar(
+                p,
+                y[j],
+                xerr=[[max(0.0, p - plo)], [max(0.0, phi - p)]],
+                fmt=style["marker"],
+                color=style["color"],
+                capsize=2,
+                elinewidth=0.8,
+            )
+            ax_x.errorbar(
+                m,
+                y[j],
+                xerr=[[max(0.0, m - mlo)], [max(0.0, mhi - m)]],
+                fmt=style["marker"],
+                color=style["color"],
+                capsize=2,
+                elinewidth=0.8,
+            )
         if "random (all)" in by:
-            ax_x.axvline(float(np.mean([r.signed_final_x for r in by["random (all)"]])), color="0.5", ls=":", lw=0.8)
+            ax_x.axvline(
+                float(np.mean([r.signed_final_x for r in by["random (all)"]])),
+                color="0.5",
+                ls=":",
+                lw=0.8,
+            )
         ax_p.set_yticks(y, [f"{k} (n={len(by[k])})" for k in labels], fontsize=6)
         ax_x.set_yticks(y, [""] * len(labels))  # the entries are named once, on the left
         ax_x.set_ylim(ax_p.get_ylim())

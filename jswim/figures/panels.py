@@ -7,7 +7,8 @@ import math
 import os
 from collections import defaultdict
 from pathlib import Path
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any
+from collections.abc import Iterable, Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -80,7 +81,9 @@ def _by(rows: Iterable[Mapping[str, Any]], key: str) -> dict[Any, list[Mapping[s
     return dict(out)
 
 
-def _select(rows: Iterable[Mapping[str, Any]], swimmer: str, direction: int) -> list[Mapping[str, Any]]:
+def _select(
+    rows: Iterable[Mapping[str, Any]], swimmer: str, direction: int
+) -> list[Mapping[str, Any]]:
     rows = as_run_rows(rows)
     return [r for r in rows if r.swimmer == swimmer and int(r.direction or 1) == direction]
 
@@ -115,7 +118,7 @@ def target_displacement(rows: Sequence[Mapping[str, Any]]) -> np.ndarray:
     out = np.full((len(rows), n + 1), np.nan)
     for i, r in enumerate(rows):
         out[i, 0] = 0.0
-        out[i, 1: len(r.x) + 1] = np.asarray(r.x, float) * int(r.direction or 1)
+        out[i, 1 : len(r.x) + 1] = np.asarray(r.x, float) * int(r.direction or 1)
     return out
 
 
@@ -128,8 +131,9 @@ def _legend_cols(width: float, entries: int, most: int = 3) -> int:
     return max(1, min(entries, most if width > COLUMN_IN + 0.1 else 2))
 
 
-def _frame(heights: Sequence[float], n_cols: int, legend_entries: int,
-           most: int = 3) -> tuple[Figure, Any, Any, int]:
+def _frame(
+    heights: Sequence[float], n_cols: int, legend_entries: int, most: int = 3
+) -> tuple[Figure, Any, Any, int]:
     """A figure of panel rows ``heights`` (inches) under a legend row spanning every column.
 
     The legend gets its own row of the grid (not constrained layout's "outside" legend, which
@@ -137,11 +141,18 @@ def _frame(heights: Sequence[float], n_cols: int, legend_entries: int,
     figure, its grid, the legend's (blank) axes and the grid row of the first panel row.
     """
     width = _width(n_cols)
-    lines = math.ceil(legend_entries / _legend_cols(width, legend_entries, most)) if legend_entries else 0
+    lines = (
+        math.ceil(legend_entries / _legend_cols(width, legend_entries, most))
+        if legend_entries
+        else 0
+    )
     top = 0.14 * lines + 0.04 if lines else 0.0
     fig = plt.figure(figsize=(width, sum(heights) + top), layout="constrained")
-    grid = fig.add_gridspec(len(heights) + (1 if lines else 0), n_cols,
-                            height_ratios=([top] if lines else []) + list(heights))
+    grid = fig.add_gridspec(
+        len(heights) + (1 if lines else 0),
+        n_cols,
+        height_ratios=([top] if lines else []) + list(heights),
+    )
     legend_ax = None
     if lines:
         legend_ax = fig.add_subplot(grid[0, :])
@@ -153,8 +164,15 @@ def _legend(legend_ax: Any, handles: Sequence[Any], most: int = 3) -> None:
     if legend_ax is None or not handles:
         return
     width = legend_ax.figure.get_figwidth()
-    legend_ax.legend(handles=list(handles), loc="center", ncol=_legend_cols(width, len(handles), most),
-                     handlelength=2.6, columnspacing=1.2, borderaxespad=0.0, borderpad=0.0)
+    legend_ax.legend(
+        handles=list(handles),
+        loc="center",
+        ncol=_legend_cols(width, len(handles), most),
+        handlelength=2.6,
+        columnspacing=1.2,
+        borderaxespad=0.0,
+        borderpad=0.0,
+    )
 
 
 def _width(n_cols: int) -> float:

@@ -20,7 +20,8 @@ radius) against the execution step ``n``.
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 from matplotlib.figure import Figure
 
@@ -29,24 +30,56 @@ from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the readin
 from jswim.results import as_run_rows, unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
 
 from jswim.figures.style import (  # noqa: F401  (the style's old home)
-    AGENT_STYLE, COLUMN_IN, NOTE_COLOR, PAGE_IN, RC, REFERENCE_STYLE, _styled, tidy,
+    AGENT_STYLE,
+    COLUMN_IN,
+    NOTE_COLOR,
+    PAGE_IN,
+    RC,
+    REFERENCE_STYLE,
+    _styled,
+    tidy,
 )
 from jswim.figures.scenes import scene_figures
 from jswim.figures.panels import (  # noqa: F401  (every figure's name stays importable from here)
-    _by, _dir_text, _disp_label, _frame, _legend, _legend_cols, _mark_unfinished, _order, _panel_title, _select,
-    _swimmer_label, _width, panel_keys, save, target_displacement,
+    _by,
+    _dir_text,
+    _disp_label,
+    _frame,
+    _legend,
+    _legend_cols,
+    _mark_unfinished,
+    _order,
+    _panel_title,
+    _select,
+    _swimmer_label,
+    _width,
+    panel_keys,
+    save,
+    target_displacement,
 )
-from jswim.figures.sketches import draw_cycle, draw_shape, gaits_figure, learned_cycles, shape_points  # noqa: F401
+from jswim.figures.sketches import (  # noqa: F401
+    draw_cycle,
+    draw_shape,
+    gaits_figure,
+    learned_cycles,
+    shape_points,
+)
 from jswim.figures.curves import curves_figure, history_figure, signature_reference  # noqa: F401
-from jswim.figures.grid import (  # noqa: F401
-    ablation_figure, competence_figure, grid_figure, inits_figure, noise_figure,
+from jswim.figures.grid import (
+    ablation_figure,
+    competence_figure,
+    grid_figure,
+    inits_figure,
+    noise_figure,
 )
 
 
 # -- a study's figures ------------------------------------------------------------------------
 
 
-def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+def study_figures(
+    study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None
+) -> dict[str, Figure]:
     """The figures of ``study`` from its run rows, by file name (without extension).
 
     ``note`` (e.g. ``"unfinished: 12 of 40 runs"``) is written across the top of each.
@@ -65,34 +98,59 @@ def study_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | Non
     if study == "inits":
         return {"inits": inits_figure(rows, note=note)}
     if study == "temperature":  # p, steps to learn and X/a against the sampling temperature T
-        return {"temperature": grid_figure(rows, "temperature", xlabel="sampling temperature T", numeric=True,
-                                           note=note, learn=True)}
+        return {
+            "temperature": grid_figure(
+                rows,
+                "temperature",
+                xlabel="sampling temperature T",
+                numeric=True,
+                note=note,
+                learn=True,
+            )
+        }
     if study == "continuous":
         return continuous_figures(rows, note=note)
     if study in ("wall", "pair", "school"):  # walls and pairs (issue 19), schools (issue 34)
         return scene_figures(study, rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
-        entries = [{**r, "entry": r.group if r.agent == "llm" else f"{r.agent} ({r.group})"} for r in rows]
+        entries = [
+            {**r, "entry": r.group if r.agent == "llm" else f"{r.agent} ({r.group})"} for r in rows
+        ]
         order = [v for v in VARIANTS if any(e["entry"] == v for e in entries)]
         order += sorted({e["entry"] for e in entries} - set(order))
         return {"competence": competence_figure(entries, order, note=note)}
     return {}
 
 
-def continuous_figures(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+def continuous_figures(
+    rows: Sequence[Mapping[str, Any]], note: str | None = None
+) -> dict[str, Figure]:
     """The continuous study: success rate p and mean X/a against the ROC lattice K (and real ROCs)
     per agent, and X/a against step n for each lattice (``continuous-K<K>``, ``continuous-real``).
 
     Stroke sketches are drawn for the paper's lattice (K = 1) only, whose cycles go corner to corner.
     """
     rows = as_run_rows(rows)
-    groups = sorted({r.group for r in rows}, key=lambda g: (g == "continuous", int(g[2:]) if g[:2] == "K=" else 0))
+    groups = sorted(
+        {r.group for r in rows},
+        key=lambda g: (g == "continuous", int(g[2:]) if g[:2] == "K=" else 0),
+    )
     labels = {g: ("real" if g == "continuous" else g[2:]) for g in groups}
-    figs = {"continuous": grid_figure(rows, "group", order=groups, tick_labels=labels,
-                                      xlabel="ROC levels K (real: the continuous RL baseline)", note=note)}
+    figs = {
+        "continuous": grid_figure(
+            rows,
+            "group",
+            order=groups,
+            tick_labels=labels,
+            xlabel="ROC levels K (real: the continuous RL baseline)",
+            note=note,
+        )
+    }
     for g in groups:
         sel = [r for r in rows if r.group == g]
         cycles = learned_cycles(sel) if g == "K=1" else None
-        figs[f"continuous-{'real' if g == 'continuous' else 'K' + g[2:]}"] = curves_figure(sel, cycles=cycles, note=note)
+        figs[f"continuous-{'real' if g == 'continuous' else 'K' + g[2:]}"] = curves_figure(
+            sel, cycles=cycles, note=note
+        )
     return figs

@@ -21,7 +21,8 @@ school
 from __future__ import annotations
 
 import json
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -38,17 +39,25 @@ def _note(fig: Figure, note: str | None) -> None:
         fig.suptitle(note, color=NOTE_COLOR, fontsize=7)
 
 
-def scene_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+def scene_figures(
+    study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None
+) -> dict[str, Figure]:
     """The figures of a scene study by file name (none without scene rows)."""
     rows = as_run_rows(rows)
     rows = [r for r in rows if r.scene]
     if not rows:
         return {}
     if study == "wall":
-        return {"wall": wall_figure(rows, note), "wall-track": track_figure(rows, "start_height", note, heights=True)}
+        return {
+            "wall": wall_figure(rows, note),
+            "wall-track": track_figure(rows, "start_height", note, heights=True),
+        }
     if study == "school":
         return {"school": school_figure(rows, note)}
-    return {"pair": pair_figure(rows, note), "pair-track": track_figure(rows, "separation", note, heights=False)}
+    return {
+        "pair": pair_figure(rows, note),
+        "pair-track": track_figure(rows, "separation", note, heights=False),
+    }
 
 
 @_styled
@@ -59,18 +68,43 @@ def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     kinds = sorted({str(r.swimmer or "ng") for r in rows})
     for sw in kinds:  # NG (a = sphere radius) and Purcell (a = link length; issue 34)
         tag = f"{sw}, " if len(kinds) > 1 else ""
-        for d in sorted({int(r.direction) for r in rows if str(r.swimmer or "ng") == sw}, reverse=True):
-            own = [r for r in rows if r.agent == "stroke" and str(r.swimmer or "ng") == sw
-                   and r.per_cycle is not None and int(r.direction) == d]
+        for d in sorted(
+            {int(r.direction) for r in rows if str(r.swimmer or "ng") == sw}, reverse=True
+        ):
+            own = [
+                r
+                for r in rows
+                if r.agent == "stroke"
+                and str(r.swimmer or "ng") == sw
+                and r.per_cycle is not None
+                and int(r.direction) == d
+            ]
             pts = sorted((r.start_height, d * r.per_cycle) for r in own if r.start_height)
             if pts:
                 h, v = zip(*pts)
-                ax.plot(h, v, **{**STROKE_STYLE, "label": f"{tag}square stroke ({'+x' if d > 0 else '-x'}), wall",
-                                 **({"marker": "s", "ls": "-."} if sw == "purcell" and len(kinds) > 1 else {})})
+                ax.plot(
+                    h,
+                    v,
+                    **{
+                        **STROKE_STYLE,
+                        "label": f"{tag}square stroke ({'+x' if d > 0 else '-x'}), wall",
+                        **(
+                            {"marker": "s", "ls": "-."}
+                            if sw == "purcell" and len(kinds) > 1
+                            else {}
+                        ),
+                    },
+                )
             # the no-wall reference: the same solver without the wall (NG: "free"; Purcell: bulk RFT)
             free = [d * r.per_cycle for r in own if r.medium in ("free", "bulk")]
             if free:
-                ax.axhline(float(np.mean(free)), color="0.4", ls="--", lw=0.8, label=f"{tag}same stroke, no wall")
+                ax.axhline(
+                    float(np.mean(free)),
+                    color="0.4",
+                    ls="--",
+                    lw=0.8,
+                    label=f"{tag}same stroke, no wall",
+                )
     ax.set_xscale("log")
     ax.set_xlabel("starting height h/a above the wall")
     ax.set_ylabel("X/a per cycle (target direction)")
@@ -86,12 +120,25 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     ax = fig.add_subplot()
     strokes = [r for r in rows if r.agent == "stroke" and r.separation and r.per_cycle is not None]
     for i, dist in enumerate(sorted({r.separation for r in strokes})):
-        pts = sorted((int(str(r.variant).removeprefix("phase")), r.direction * r.per_cycle)
-                     for r in strokes if r.separation == dist)
+        pts = sorted(
+            (int(str(r.variant).removeprefix("phase")), r.direction * r.per_cycle)
+            for r in strokes
+            if r.separation == dist
+        )
         ph, v = zip(*pts)
-        ax.plot(ph, v, marker="o", ls="-", color=str(0.15 + 0.5 * i / max(1, len(strokes))), label=f"two strokes, D={dist:g}")
-    alone = [r.direction * r.per_cycle for r in rows if r.agent == "stroke" and not r.separation
-             and r.per_cycle is not None]
+        ax.plot(
+            ph,
+            v,
+            marker="o",
+            ls="-",
+            color=str(0.15 + 0.5 * i / max(1, len(strokes))),
+            label=f"two strokes, D={dist:g}",
+        )
+    alone = [
+        r.direction * r.per_cycle
+        for r in rows
+        if r.agent == "stroke" and not r.separation and r.per_cycle is not None
+    ]
     if alone:
         ax.axhline(float(np.mean(alone)), color="0.4", ls="--", lw=0.8, label="one swimmer alone")
     agents_at = 4.3  # the agents choose their own phase: a labelled column right of the offsets
@@ -99,8 +146,14 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
         got = [8 * r.signed_final_x / r.steps for r in rows if r.agent == agent and r.steps]
         if got:  # 8 steps per joint cycle: the whole run's mean progress per step, times 8
             st = _STYLES[agent]
-            ax.plot([agents_at], [float(np.mean(got))], marker=st["marker"], color=st["color"], ls="none",
-                    label=f"{st['label']} (mean, 8 x X/a end / steps)")
+            ax.plot(
+                [agents_at],
+                [float(np.mean(got))],
+                marker=st["marker"],
+                color=st["color"],
+                ls="none",
+                label=f"{st['label']} (mean, 8 x X/a end / steps)",
+            )
     ax.axvline(3.65, color="0.8", lw=0.6)
     ax.set_xticks([0, 1, 2, 3, agents_at], ["0", "1", "2", "3", "agents\n(own phase)"])
     ax.set_xlabel("phase offset (quarter cycles of swimmer 2 ahead)")
@@ -121,11 +174,19 @@ def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) ->
     for r in strokes:
         if r.separation:
             form = json.loads(r.scene).get("formation", "line")
-            lines.setdefault((form, r.separation), []).append((int(r.n_swimmers), r.direction * r.per_cycle))
+            lines.setdefault((form, r.separation), []).append(
+                (int(r.n_swimmers), r.direction * r.per_cycle)
+            )
     for i, ((form, dist), pts) in enumerate(sorted(lines.items())):
         n, v = zip(*sorted(pts + ([(1, float(np.mean(alone)))] if alone else [])))
-        ax.plot(n, v, marker="o" if form == "line" else "s", ls="-" if form == "line" else "--",
-                color=str(0.1 + 0.6 * i / max(1, len(lines))), label=f"{form}, D={dist:g}")
+        ax.plot(
+            n,
+            v,
+            marker="o" if form == "line" else "s",
+            ls="-" if form == "line" else "--",
+            color=str(0.1 + 0.6 * i / max(1, len(lines))),
+            label=f"{form}, D={dist:g}",
+        )
     if alone:
         ax.axhline(float(np.mean(alone)), color="0.4", ls=":", lw=0.8, label="one swimmer alone")
     ax.set_xticks(sorted({int(r.n_swimmers) for r in strokes}))
@@ -137,8 +198,9 @@ def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) ->
 
 
 @_styled
-def track_figure(rows: Sequence[Mapping[str, Any]], key: str, note: str | None = None, *,
-                 heights: bool) -> Figure:
+def track_figure(
+    rows: Sequence[Mapping[str, Any]], key: str, note: str | None = None, *, heights: bool
+) -> Figure:
     rows = as_run_rows(rows)
     panels = 2 if heights else 1
     fig = Figure(figsize=(COLUMN_IN, 1.8 * panels + 0.4))
@@ -163,6 +225,8 @@ def track_figure(rows: Sequence[Mapping[str, Any]], key: str, note: str | None =
     axes[-1].set_ylabel("X/a (target direction)")
     axes[-1].set_xlabel("step n")
     axes[0].legend(loc="best", fontsize=6)
-    axes[0].set_title(("starting heights " if heights else "distances D ") + ", ".join(f"{v:g}" for v in values))
+    axes[0].set_title(
+        ("starting heights " if heights else "distances D ") + ", ".join(f"{v:g}" for v in values)
+    )
     _note(fig, note)
     return fig

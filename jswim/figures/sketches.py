@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -26,8 +27,14 @@ def shape_points(model: SwimmerModel, d: Sequence[float]) -> np.ndarray:
     return outline(model, d)
 
 
-def draw_shape(ax: Any, model: SwimmerModel, d: Sequence[float], origin: tuple[float, float] = (0, 0),
-               scale: float = 1.0, color: str = "k") -> None:
+def draw_shape(
+    ax: Any,
+    model: SwimmerModel,
+    d: Sequence[float],
+    origin: tuple[float, float] = (0, 0),
+    scale: float = 1.0,
+    color: str = "k",
+) -> None:
     """Draw one swimmer shape (links as a polyline, spheres as circles) at ``origin``."""
     pts = shape_points(model, d) * scale + np.asarray(origin)
     if model.planar:
@@ -39,8 +46,14 @@ def draw_shape(ax: Any, model: SwimmerModel, d: Sequence[float], origin: tuple[f
             ax.add_patch(plt.Circle(p, scale, fc="white", ec=color, lw=1.0))
 
 
-def draw_cycle(ax: Any, model: SwimmerModel, start: Sequence[int], moves: Sequence[tuple[int, int]],
-               title: str | None = None, color: str = "#0072B2") -> None:
+def draw_cycle(
+    ax: Any,
+    model: SwimmerModel,
+    start: Sequence[int],
+    moves: Sequence[tuple[int, int]],
+    title: str | None = None,
+    color: str = "#0072B2",
+) -> None:
     """Sketch a stroke cycle: the start shape (in ``color``, the learner's) and the shape after each
     move, left to right, with the moves between them."""
     levels = list(start)
@@ -60,8 +73,15 @@ def draw_cycle(ax: Any, model: SwimmerModel, start: Sequence[int], moves: Sequen
         if i < len(moves):
             dof, roc = moves[i]
             # The move between two sketches, in the prompt's [DOF, ROC] notation.
-            ax.annotate(f"[{dof}, {roc}]", (i * span + span / 2, label_y), ha="center", va="center", fontsize=6,
-                        color="0.3", bbox=dict(fc="white", ec="none", pad=0.3) if not model.planar else None)
+            ax.annotate(
+                f"[{dof}, {roc}]",
+                (i * span + span / 2, label_y),
+                ha="center",
+                va="center",
+                fontsize=6,
+                color="0.3",
+                bbox=dict(fc="white", ec="none", pad=0.3) if not model.planar else None,
+            )
     ax.set_xlim(-span / 2, (len(shapes) - 0.5) * span)
     ax.set_ylim(label_y - 0.8 if model.planar else -2.0, 2.0)
     ax.set_aspect("equal")
@@ -70,7 +90,9 @@ def draw_cycle(ax: Any, model: SwimmerModel, start: Sequence[int], moves: Sequen
         ax.set_title(title, fontsize=7)
 
 
-def learned_cycles(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, int], tuple[list[int], list[tuple[int, int]], str]]:
+def learned_cycles(
+    rows: Sequence[Mapping[str, Any]],
+) -> dict[tuple[str, int], tuple[list[int], list[tuple[int, int]], str]]:
     """The stroke cycle to sketch per panel: the earliest learner's, the LLM's first if it learned one.
 
     Returns ``{(swimmer, direction): (levels at the cycle's start, moves, agent)}`` for the
@@ -88,7 +110,7 @@ def learned_cycles(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, int], t
         for dof, roc in acts[:s]:
             if roc:
                 levels[dof - 1] = 1 if roc > 0 else 0
-        out[(sw, d)] = (levels, acts[s: s + r.period], r.agent)
+        out[(sw, d)] = (levels, acts[s : s + r.period], r.agent)
     return out
 
 
@@ -96,10 +118,20 @@ def learned_cycles(rows: Sequence[Mapping[str, Any]]) -> dict[tuple[str, int], t
 def gaits_figure(model: SwimmerModel, cycles: Sequence[Any], top: int = 4) -> Figure:
     """The best closed stroke cycles of a swimmer, with their displacement per step."""
     shown = list(cycles)[:top]
-    fig, axes = plt.subplots(len(shown), 1, figsize=(PAGE_IN, 0.95 * len(shown) + 0.4), squeeze=False,
-                             layout="constrained")
+    fig, axes = plt.subplots(
+        len(shown),
+        1,
+        figsize=(PAGE_IN, 0.95 * len(shown) + 0.4),
+        squeeze=False,
+        layout="constrained",
+    )
     for ax, cyc in zip(axes[:, 0], shown):
-        draw_cycle(ax, model, cyc.start, cyc.moves,
-                   title=f"period {cyc.period}: X/a per step = {cyc.per_step:+.5f}")
+        draw_cycle(
+            ax,
+            model,
+            cyc.start,
+            cyc.moves,
+            title=f"period {cyc.period}: X/a per step = {cyc.per_step:+.5f}",
+        )
     fig.suptitle(f"best stroke cycles of the {model.label} swimmer", fontsize=8)
     return fig

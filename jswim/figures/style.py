@@ -30,10 +30,20 @@ REFERENCE_STYLE = dict(color="black", ls="-.", lw=0.8, label="signature gait fro
 NOTE_COLOR = "#B00000"
 
 RC = {
-    "font.size": 8, "axes.titlesize": 8, "axes.labelsize": 8, "xtick.labelsize": 7,
-    "ytick.labelsize": 7, "legend.fontsize": 7, "lines.linewidth": 1.3, "lines.markersize": 3.5,
-    "errorbar.capsize": 2, "axes.linewidth": 0.6, "savefig.dpi": 300, "pdf.fonttype": 42,
-    "ps.fonttype": 42, "legend.frameon": False,
+    "font.size": 8,
+    "axes.titlesize": 8,
+    "axes.labelsize": 8,
+    "xtick.labelsize": 7,
+    "ytick.labelsize": 7,
+    "legend.fontsize": 7,
+    "lines.linewidth": 1.3,
+    "lines.markersize": 3.5,
+    "errorbar.capsize": 2,
+    "axes.linewidth": 0.6,
+    "savefig.dpi": 300,
+    "pdf.fonttype": 42,
+    "ps.fonttype": 42,
+    "legend.frameon": False,
 }
 
 

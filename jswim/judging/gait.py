@@ -115,15 +115,21 @@ class Criterion:
     max_period: int | None = None
 
     def __post_init__(self) -> None:
-        if self.horizon < 1 or self.n_cycles < 1 or (self.max_period is not None and self.max_period < 1):
+        if (
+            self.horizon < 1
+            or self.n_cycles < 1
+            or (self.max_period is not None and self.max_period < 1)
+        ):
             raise ConfigError("horizon, n_cycles and max_period must be >= 1")
         if not self.min_fraction > 0:
             raise ConfigError(f"min_fraction must be > 0, got {self.min_fraction}")
 
     def describe(self) -> str:
         """One line for run metadata."""
-        return (f"{self.n_cycles} consecutive qualifying cycles (>= {self.min_fraction:g} of the best cycle's "
-                f"speed) within {self.horizon} steps, no later failure (jswim.judging.gait.judge)")
+        return (
+            f"{self.n_cycles} consecutive qualifying cycles (>= {self.min_fraction:g} of the best cycle's "
+            f"speed) within {self.horizon} steps, no later failure (jswim.judging.gait.judge)"
+        )
 
 
 #: The paper's criterion.
@@ -177,7 +183,9 @@ def default_max_period(n_dof: int, roc_levels: int = 1) -> int:
 
 
 @functools.lru_cache(maxsize=64)
-def best_cycles(model: SwimmerModel, direction: int = 1, max_len: int | None = None) -> tuple[Cycle, ...]:
+def best_cycles(
+    model: SwimmerModel, direction: int = 1, max_len: int | None = None
+) -> tuple[Cycle, ...]:
     """Every closed cycle of shape-changing moves up to ``max_len`` steps, best first.
 
     Parameters
@@ -209,11 +217,15 @@ def best_cycles(model: SwimmerModel, direction: int = 1, max_len: int | None = N
     if max_len < 1:
         raise ConfigError(f"max_len must be >= 1, got {max_len}")
     if sum(n**length for length in range(2, max_len + 1, 2)) * 2**n > _MAX_WALKS:
-        raise ConfigError(f"too many walks to enumerate for {n} DOFs up to length {max_len}; lower max_len")
+        raise ConfigError(
+            f"too many walks to enumerate for {n} DOFs up to length {max_len}; lower max_len"
+        )
     table = step_table(model)[0].astype(np.float64)
     found: list[Cycle] = []
     for length in range(2, max_len + 1, 2):  # a closed walk flips every DOF an even number of times
-        seqs = np.array(list(itertools.product(range(n), repeat=length)), np.int64).reshape(-1, length)
+        seqs = np.array(list(itertools.product(range(n), repeat=length)), np.int64).reshape(
+            -1, length
+        )
         seqs = seqs[_closed(seqs, n) & _primitive(seqs, n)]
         if not seqs.size:
             continue
@@ -223,7 +235,9 @@ def best_cycles(model: SwimmerModel, direction: int = 1, max_len: int | None = N
         seq = np.tile(seqs, (2**n, 1))
         corners, disp, rot = _walk(table, seq, c0)
         weights = n ** np.arange(length - 1, -1, -1)
-        codes = [corners[:, k] * n**length + np.roll(seq, -k, axis=1) @ weights for k in range(length)]
+        codes = [
+            corners[:, k] * n**length + np.roll(seq, -k, axis=1) @ weights for k in range(length)
+        ]
         key = np.min(np.stack(codes, 1), axis=1)
         value = direction * disp
         order = np.lexsort((-value, key))  # per class, the shift that goes furthest comes first
@@ -260,7 +274,9 @@ def _primitive(seqs: np.ndarray, n: int) -> np.ndarray:
     return keep
 
 
-def _walk(table: np.ndarray, seqs: np.ndarray, c0: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _walk(
+    table: np.ndarray, seqs: np.ndarray, c0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Corners before each step, x displacement and rotation of DOF sequences from corners ``c0``."""
     m, length = seqs.shape
     corner = np.asarray(c0, np.int64).copy()
@@ -320,7 +336,9 @@ def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Rep
         level = np.where(dof == k, lk[:-1], level)
     moved = roc == 1 - 2 * level  # +1 from lo or -1 from hi
     idx = np.where(moved, corner[:-1] * n + dof, 2**n * n)  # still -> an all-zero row
-    table = np.concatenate([step_table(model)[0].astype(np.float64).reshape(-1, 3), np.zeros((1, 3))])
+    table = np.concatenate(
+        [step_table(model)[0].astype(np.float64).reshape(-1, 3), np.zeros((1, 3))]
+    )
     x = np.zeros((steps + 1, b))
     if model.planar:
         # Orientation before each step as a unit complex number: a running product of the
@@ -345,8 +363,16 @@ def _last_true(mask: np.ndarray) -> np.ndarray:
     return (mask * idx).max(axis=0, initial=0).astype(np.int64) - 1
 
 
-def trailing_strokes(differs: Any, closed: Any, moved: np.ndarray, x: np.ndarray, direction: np.ndarray,
-             threshold: np.ndarray, max_period: int, n_cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def trailing_strokes(
+    differs: Any,
+    closed: Any,
+    moved: np.ndarray,
+    x: np.ndarray,
+    direction: np.ndarray,
+    threshold: np.ndarray,
+    max_period: int,
+    n_cycles: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The final qualifying stroke of each run: ``(start, period, displacement per step)``.
 
     Shared by :func:`judge` (action sequences on corners or the K lattice) and
@@ -438,8 +464,10 @@ def judge(
         raise ConfigError("actions must be integer action indices of shape (T,) or (runs, T)")
     n_codes = n * (2 * k_levels + 1)
     if a.size and (a.min() < 0 or a.max() >= n_codes):
-        raise ConfigError(f"action indices must lie in [0, {n_codes}) for a {n}-DOF swimmer"
-                          + (f" on {k_levels} ROC levels" if k_levels > 1 else ""))
+        raise ConfigError(
+            f"action indices must lie in [0, {n_codes}) for a {n}-DOF swimmer"
+            + (f" on {k_levels} ROC levels" if k_levels > 1 else "")
+        )
     b, steps = a.shape
     init = np.asarray(params.init if levels0 is None else levels0).astype(np.int64)
     init = np.broadcast_to(init, (b, n))
@@ -448,28 +476,47 @@ def judge(
     direction = np.broadcast_to(np.sign(np.asarray(params.direction, np.float64)), (b,))
     at = np.ascontiguousarray(a.T)  # time-major: reductions along time run over contiguous rows
     if k_levels == 1:
-        best = np.where(direction > 0, best_per_step(model, 1, max_period), best_per_step(model, -1, max_period))
+        best = np.where(
+            direction > 0, best_per_step(model, 1, max_period), best_per_step(model, -1, max_period)
+        )
         rp = replay(at, model, init)
     else:
         if levels0 is None:  # params.init holds levels: the corner's lattice positions
             init = init * k_levels
         if np.any(init > k_levels):
             raise ConfigError(f"levels0 on {k_levels} ROC levels must lie in 0..{k_levels}")
-        best = np.where(direction > 0, lattice.best_per_step(model, 1, k_levels),
-                        lattice.best_per_step(model, -1, k_levels))
+        best = np.where(
+            direction > 0,
+            lattice.best_per_step(model, 1, k_levels),
+            lattice.best_per_step(model, -1, k_levels),
+        )
         rp = lattice.replay(at, model, k_levels, init)
     threshold = c.min_fraction * best - _REL_TOL * np.abs(best)
 
     rows = np.arange(b)
     out_s, out_p, out_disp = trailing_strokes(
-        lambda p: at[:-p] != at[p:], lambda sc, p: rp.corner[sc + p, rows] == rp.corner[sc, rows],
-        rp.moved, rp.x, direction, threshold, min(max_period, steps // c.n_cycles), c.n_cycles)
+        lambda p: at[:-p] != at[p:],
+        lambda sc, p: rp.corner[sc + p, rows] == rp.corner[sc, rows],
+        rp.moved,
+        rp.x,
+        direction,
+        threshold,
+        min(max_period, steps // c.n_cycles),
+        c.n_cycles,
+    )
 
     return stroke_report(out_s, out_p, out_disp, best, c, a, max_period)
 
 
-def stroke_report(out_s: np.ndarray, out_p: np.ndarray, out_disp: np.ndarray, best: np.ndarray,
-                  criterion: Criterion, per_step_label: np.ndarray, max_period: int) -> GaitReport:
+def stroke_report(
+    out_s: np.ndarray,
+    out_p: np.ndarray,
+    out_disp: np.ndarray,
+    best: np.ndarray,
+    criterion: Criterion,
+    per_step_label: np.ndarray,
+    max_period: int,
+) -> GaitReport:
     """The :class:`GaitReport` of :func:`trailing_strokes`' output, shared with
     :func:`jswim.judging.shape_judge.judge_shapes`; ``per_step_label`` (B, T) fills ``cycle``."""
     learned = out_p > 0
@@ -480,6 +527,13 @@ def stroke_report(out_s: np.ndarray, out_p: np.ndarray, out_disp: np.ndarray, be
         sel = np.flatnonzero(out_p == p)
         cycle[sel, :p] = per_step_label[sel[:, None], out_s[sel, None] + np.arange(p)[None]]
     per_step = np.where(learned, out_disp, np.nan)
-    return GaitReport(learned, steps_to_learn, success, out_p, cycle, per_step, per_step / best,
-                      np.where(learned, out_s, -1))
-
+    return GaitReport(
+        learned,
+        steps_to_learn,
+        success,
+        out_p,
+        cycle,
+        per_step,
+        per_step / best,
+        np.where(learned, out_s, -1),
+    )

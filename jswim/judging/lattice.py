@@ -78,7 +78,9 @@ class MoveTable(NamedTuple):
     roc_levels: int
 
 
-def move(tab: MoveTable, point: np.ndarray, dof: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def move(
+    tab: MoveTable, point: np.ndarray, dof: np.ndarray, k: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Moves ``[dof + 1, k]`` from lattice points (arrays broadcast together).
 
     Returns
@@ -116,21 +118,31 @@ MAX_POINTS = 40_401
 def check_size(n_dof: int, roc_levels: int) -> None:
     """:class:`ConfigError` when the lattice has more than :data:`MAX_POINTS` points."""
     if (roc_levels + 1) ** n_dof > MAX_POINTS:
-        raise ConfigError(f"--roc-levels {roc_levels}: the {n_dof}-DOF lattice has {(roc_levels + 1) ** n_dof:,} "
-                          f"points, more than the {MAX_POINTS:,} the tabular tools (judge, lattice Q-learning, "
-                          "gait search) take; use fewer levels")
+        raise ConfigError(
+            f"--roc-levels {roc_levels}: the {n_dof}-DOF lattice has {(roc_levels + 1) ** n_dof:,} "
+            f"points, more than the {MAX_POINTS:,} the tabular tools (judge, lattice Q-learning, "
+            "gait search) take; use fewer levels"
+        )
 
 
 def _compose(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Motion ``a`` then ``b`` (SE(2): ``b``'s translation is in the frame ``a`` ends in)."""
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([a[..., 0] + c * b[..., 0] - s * b[..., 1], a[..., 1] + s * b[..., 0] + c * b[..., 1],
-                     a[..., 2] + b[..., 2]], axis=-1)
+    return np.stack(
+        [
+            a[..., 0] + c * b[..., 0] - s * b[..., 1],
+            a[..., 1] + s * b[..., 0] + c * b[..., 1],
+            a[..., 2] + b[..., 2],
+        ],
+        axis=-1,
+    )
 
 
 def _inverse(a: np.ndarray) -> np.ndarray:
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
-    return np.stack([-(c * a[..., 0] + s * a[..., 1]), s * a[..., 0] - c * a[..., 1], -a[..., 2]], axis=-1)
+    return np.stack(
+        [-(c * a[..., 0] + s * a[..., 1]), s * a[..., 0] - c * a[..., 1], -a[..., 2]], axis=-1
+    )
 
 
 @functools.lru_cache(maxsize=16)
@@ -179,8 +191,10 @@ def move_table(model: SwimmerModel, roc_levels: int) -> MoveTable:
         d0 = jnp.concatenate([d0, jnp.broadcast_to(d0[:1], (pad, n))])
         rate = jnp.concatenate([rate, jnp.broadcast_to(rate[:1], (pad, n))])
         span = jnp.full((_CHUNK,), model.duration / k, jnp.float64)
-        parts = [np.asarray(segment(d0[i:i + _CHUNK], rate[i:i + _CHUNK], span))
-                 for i in range(0, rows + pad, _CHUNK)]
+        parts = [
+            np.asarray(segment(d0[i : i + _CHUNK], rate[i : i + _CHUNK], span))
+            for i in range(0, rows + pad, _CHUNK)
+        ]
         seg = np.concatenate(parts)[:rows].reshape(m, n, 3)  # j_d -> j_d + 1 (unused at j_d = K)
     # G[p, d]: motion from j_d = 0 to p's j_d along DOF d, composed segment by segment.
     g = np.zeros((m, n, 3))
@@ -203,7 +217,9 @@ class LatticeReplay(NamedTuple):
     x: np.ndarray  # float64 (T + 1, B): exact centroid x before each step, then the final one
 
 
-def replay(actions: np.ndarray, model: SwimmerModel, roc_levels: int, points0: np.ndarray) -> LatticeReplay:
+def replay(
+    actions: np.ndarray, model: SwimmerModel, roc_levels: int, points0: np.ndarray
+) -> LatticeReplay:
     """Replay action codes without noise from lattice positions ``points0`` (B, n_dof), their start
     orientation (:func:`jswim.env.start_orientation`) and the origin.
 
@@ -291,8 +307,9 @@ def _amounts(m: int, k: int) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=64)
-def best_lattice_cycles(model: SwimmerModel, direction: int, roc_levels: int, max_len: int = 4,
-                        top: int | None = None) -> tuple[LatticeCycle, ...]:
+def best_lattice_cycles(
+    model: SwimmerModel, direction: int, roc_levels: int, max_len: int = 4, top: int | None = None
+) -> tuple[LatticeCycle, ...]:
     """Closed strokes on the ``K``-level lattice up to ``max_len`` moves, best displacement per step first.
 
     Every move changes one DOF by a nonzero ``k`` without reaching past a limit, and no two
@@ -324,14 +341,19 @@ def best_lattice_cycles(model: SwimmerModel, direction: int, roc_levels: int, ma
     n = model.n_dof
     check_direction(direction)
     if max_len < 4:
-        raise ConfigError(f"--max-len must be >= 4 (the shortest closed stroke has four moves), got {max_len}")
+        raise ConfigError(
+            f"--max-len must be >= 4 (the shortest closed stroke has four moves), got {max_len}"
+        )
     tab = move_table(model, k)
     m_points = (k + 1) ** n
     width = 2 * k + 1
     found = []  # per (length, DOF sequence): speed per step, displacement, rotation, start, codes
     for length in range(4, max_len + 1, 2):
-        dof_seqs = [s for s in itertools.product(range(n), repeat=length)
-                    if all(s[i] != s[(i + 1) % length] for i in range(length))]
+        dof_seqs = [
+            s
+            for s in itertools.product(range(n), repeat=length)
+            if all(s[i] != s[(i + 1) % length] for i in range(length))
+        ]
         for seq in dof_seqs:
             per_dof = [_amounts(seq.count(d), k) for d in range(n)]
             if sum(len(a) == 0 for a in per_dof if a.shape[1]):
@@ -339,8 +361,10 @@ def best_lattice_cycles(model: SwimmerModel, direction: int, roc_levels: int, ma
             combos = itertools.product(*[range(len(a)) for a in per_dof])
             idx = np.array(list(combos), np.int64).reshape(-1, n)
             if idx.shape[0] * m_points > MAX_WALKS:
-                raise ConfigError(f"too many strokes to enumerate up to {max_len} moves at --roc-levels {k} "
-                                  f"({idx.shape[0] * m_points:,}); lower --max-len")
+                raise ConfigError(
+                    f"too many strokes to enumerate up to {max_len} moves at --roc-levels {k} "
+                    f"({idx.shape[0] * m_points:,}); lower --max-len"
+                )
             amounts = np.zeros((idx.shape[0], length), np.int64)
             for d in range(n):
                 cols = [i for i, s in enumerate(seq) if s == d]
@@ -351,10 +375,18 @@ def best_lattice_cycles(model: SwimmerModel, direction: int, roc_levels: int, ma
             p0 = np.repeat(np.arange(m_points), codes.shape[0])
             c = np.tile(codes, (m_points, 1))
             disp, rot, ok = _walk_loops(tab, c, p0, k, n)
-            found.append((direction * disp[ok] / length, disp[ok] * direction, rot[ok], p0[ok], c[ok]))
+            found.append(
+                (direction * disp[ok] / length, disp[ok] * direction, rot[ok], p0[ok], c[ok])
+            )
     # One entry per loop up to cyclic shifts: the shift that goes furthest comes first.
-    ranked = sorted(((float(ps[i]), int(codes.shape[1]), float(v[i]), float(r[i]), int(p[i]), codes[i])
-                     for ps, v, r, p, codes in found for i in range(len(ps))), key=lambda f: (-f[0], f[1]))
+    ranked = sorted(
+        (
+            (float(ps[i]), int(codes.shape[1]), float(v[i]), float(r[i]), int(p[i]), codes[i])
+            for ps, v, r, p, codes in found
+            for i in range(len(ps))
+        ),
+        key=lambda f: (-f[0], f[1]),
+    )
     seen: set = set()
     out: list[LatticeCycle] = []
     for _, _, value, rot, p0, codes in ranked:

@@ -33,10 +33,19 @@ from typing import Any
 import numpy as np
 
 from jswim.errors import ConfigError
-from jswim.judging.gait import _REL_TOL, PAPER, Criterion, GaitReport, best_per_step, stroke_report, trailing_strokes
+from jswim.judging.gait import (
+    _REL_TOL,
+    PAPER,
+    Criterion,
+    GaitReport,
+    best_per_step,
+    stroke_report,
+    trailing_strokes,
+)
 
 #: Shape tolerance of a cycle, as a fraction of each DOF's range (a return within 0.1 % counts).
 SHAPE_TOL = 1e-3
+
 
 def default_max_period(n_dof: int) -> int:
     """Longest stroke considered for real-valued runs: ``2 * 2**n_dof`` steps."""
@@ -110,8 +119,16 @@ def judge_shapes(
         return np.max(np.abs(shapes[p:] - shapes[:-p]), axis=-1) > tol_abs
 
     # Shapes periodic up to the final one already close the loop: no separate closure test.
-    out_s, out_p, out_disp = trailing_strokes(differs, lambda sc, p: np.ones(b, bool), moved, pos, direction,
-                                              threshold, min(max_period, steps // c.n_cycles), c.n_cycles)
+    out_s, out_p, out_disp = trailing_strokes(
+        differs,
+        lambda sc, p: np.ones(b, bool),
+        moved,
+        pos,
+        direction,
+        threshold,
+        min(max_period, steps // c.n_cycles),
+        c.n_cycles,
+    )
 
     moved_dof = np.argmax(np.abs(shapes[1:] - shapes[:-1]), axis=-1).T + 1  # (B, T), 1-based
     return stroke_report(out_s, out_p, out_disp, best, c, moved_dof, max_period)

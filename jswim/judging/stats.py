@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Sequence
+from typing import NamedTuple
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -69,7 +70,11 @@ class LearnStats(NamedTuple):
 
     def label(self) -> str:
         """``"16 [13-18], 97 of 100 learned"`` (``"0 of 4 learned"`` when none did)."""
-        head = "" if self.learned == 0 else f"{_num(self.median)} [{_num(self.q25)}-{_num(self.q75)}], "
+        head = (
+            ""
+            if self.learned == 0
+            else f"{_num(self.median)} [{_num(self.q25)}-{_num(self.q75)}], "
+        )
         return f"{head}{self.learned} of {self.n} learned"
 
 

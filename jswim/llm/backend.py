@@ -141,34 +141,56 @@ class Backend:
         check_preset(self.sampling)
         check_family(self.server_family)
         if self.base_url is None and self.model is not None:
-            raise ConfigError("--model names a model on a server; give --base-url too (or --gguf for a local file)")
+            raise ConfigError(
+                "--model names a model on a server; give --base-url too (or --gguf for a local file)"
+            )
         if self.base_url is not None and self.model is None:
             raise ConfigError("--base-url needs --model (the model name on that server)")
         if self.gguf is not None:
             check_gguf(self.gguf)
         if self.base_url is not None:
             object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
-            read_api_key(self.api_key_env)  # a key no header can carry: one line now, not retries later
-        check_extra_fields(self.extra_fields)  # a core field there would bypass the cap and the identity
+            read_api_key(
+                self.api_key_env
+            )  # a key no header can carry: one line now, not retries later
+        check_extra_fields(
+            self.extra_fields
+        )  # a core field there would bypass the cap and the identity
         object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
         bad = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
         if bad:
             raise ConfigError(f"--omit-field {bad[0]}: every request needs it")
-        if self.timeout_s is not None and not (math.isfinite(self.timeout_s) and self.timeout_s > 0):
-            raise ConfigError(f"--timeout must be a finite number of seconds > 0, got {self.timeout_s}")
+        if self.timeout_s is not None and not (
+            math.isfinite(self.timeout_s) and self.timeout_s > 0
+        ):
+            raise ConfigError(
+                f"--timeout must be a finite number of seconds > 0, got {self.timeout_s}"
+            )
         if self.retries is not None and self.retries < 0:
             raise ConfigError(f"--retries must be >= 0, got {self.retries}")
-        if self.retry_for_s is not None and not (math.isfinite(self.retry_for_s) and self.retry_for_s >= 0):
-            raise ConfigError(f"--retry-for must be a finite number of seconds >= 0, got {self.retry_for_s}")
+        if self.retry_for_s is not None and not (
+            math.isfinite(self.retry_for_s) and self.retry_for_s >= 0
+        ):
+            raise ConfigError(
+                f"--retry-for must be a finite number of seconds >= 0, got {self.retry_for_s}"
+            )
         if self.constrain not in MODES:
-            raise ConfigError(f"constrain must be one of {', '.join(MODES)}, got {self.constrain!r}")
+            raise ConfigError(
+                f"constrain must be one of {', '.join(MODES)}, got {self.constrain!r}"
+            )
         check_temperature(self.temperature)
         if self.n_parallel < 1 or (self.concurrency is not None and self.concurrency < 1):
             raise ConfigError("--parallel and --concurrency must be >= 1")
-        if self.concurrency is not None and self.concurrency > MAX_CONCURRENCY:  # one client slot is made per request in flight
-            raise ConfigError(f"--concurrency must be at most {MAX_CONCURRENCY}, got {self.concurrency}")
+        if (
+            self.concurrency is not None and self.concurrency > MAX_CONCURRENCY
+        ):  # one client slot is made per request in flight
+            raise ConfigError(
+                f"--concurrency must be at most {MAX_CONCURRENCY}, got {self.concurrency}"
+            )
         if self.n_parallel > MAX_CONCURRENCY:
-            raise ConfigError(f"--parallel must be at most {MAX_CONCURRENCY}, got {self.n_parallel}")
+            raise ConfigError(
+                f"--parallel must be at most {MAX_CONCURRENCY}, got {self.n_parallel}"
+            )
         if self.cohorts < 1:
             raise ConfigError(f"--cohorts must be >= 1, got {self.cohorts}")
         for name in ("rpm", "tpm"):
@@ -196,13 +218,22 @@ class Backend:
             name = Path(self.gguf).name if self.gguf else DEFAULT_MODEL_FILE
         else:
             name = self.model
-        out = {"kind": "embedded" if self.local else "remote",
-               "model": name, "constrain": self.constrain, "temperature": self.temperature}
+        out = {
+            "kind": "embedded" if self.local else "remote",
+            "model": name,
+            "constrain": self.constrain,
+            "temperature": self.temperature,
+        }
         # What is sent changes the answers; recorded only when not the default, so folders
         # written before these settings existed keep their identity.
-        given = {"omit_fields": list(self.omit_fields) or None, "reasoning": self.reasoning,
-                 "reasoning_effort": self.reasoning_effort, "extra_fields": dict(self.extra_fields) or None,
-                 "sampling": self.sampling, "server_family": self.server_family}
+        given = {
+            "omit_fields": list(self.omit_fields) or None,
+            "reasoning": self.reasoning,
+            "reasoning_effort": self.reasoning_effort,
+            "extra_fields": dict(self.extra_fields) or None,
+            "sampling": self.sampling,
+            "server_family": self.server_family,
+        }
         out.update({k: v for k, v in given.items() if v not in (None, "auto")})
         return out
 
@@ -224,33 +255,59 @@ class Backend:
             return info.family
         return "llamacpp" if self.local else "generic"
 
-    def client_settings(self, server: LocalServer | None = None, info: ServerInfo | None = None,
-                        **changes: Any) -> ClientSettings:
+    def client_settings(
+        self, server: LocalServer | None = None, info: ServerInfo | None = None, **changes: Any
+    ) -> ClientSettings:
         """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``.
 
         ``info`` (from :meth:`preflight`) gives the server's family (sampling fields, ``auto``
         decoding form), its listed models (pricing) and its slots (default concurrency)."""
         family = self.family(info)
-        common = dict(constrain=self.constrain, temperature=self.temperature, cache_dir=self.cache_dir,
-                      omit_fields=self.omit_fields, price_local=self.price_local, reasoning=self.reasoning,
-                      reasoning_effort=self.reasoning_effort, extra_fields=self.extra_fields,
-                      sampling=sampling_fields(self.sampling, family, embedded=self.local),
-                      **({"prices": dict(self.prices)} if self.prices is not None else {}))
-        given = {"timeout_s": self.timeout_s, "max_retries": self.retries, "retry_for_s": self.retry_for_s}
-        common.update({k: v for k, v in given.items() if v is not None})  # else the settings' defaults
+        common = dict(
+            constrain=self.constrain,
+            temperature=self.temperature,
+            cache_dir=self.cache_dir,
+            omit_fields=self.omit_fields,
+            price_local=self.price_local,
+            reasoning=self.reasoning,
+            reasoning_effort=self.reasoning_effort,
+            extra_fields=self.extra_fields,
+            sampling=sampling_fields(self.sampling, family, embedded=self.local),
+            **({"prices": dict(self.prices)} if self.prices is not None else {}),
+        )
+        given = {
+            "timeout_s": self.timeout_s,
+            "max_retries": self.retries,
+            "retry_for_s": self.retry_for_s,
+        }
+        common.update(
+            {k: v for k, v in given.items() if v is not None}
+        )  # else the settings' defaults
         if self.local:
             if server is None:
-                raise ConfigError("the embedded backend needs its running server (Backend.server())")
-            s = server.client_settings(max_concurrency=max(self.concurrency or DEFAULT_CONCURRENCY, self.n_parallel),
-                                       **common)
+                raise ConfigError(
+                    "the embedded backend needs its running server (Backend.server())"
+                )
+            s = server.client_settings(
+                max_concurrency=max(self.concurrency or DEFAULT_CONCURRENCY, self.n_parallel),
+                **common,
+            )
         else:
             slots = info.slots if info is not None else None
-            s = ClientSettings(base_url=self.base_url, model=self.model, api_key_env=self.api_key_env,
-                               max_concurrency=self.concurrency or slots or DEFAULT_CONCURRENCY, server_kind=family,
-                               listed_models=info.models if info is not None else None, **common)
+            s = ClientSettings(
+                base_url=self.base_url,
+                model=self.model,
+                api_key_env=self.api_key_env,
+                max_concurrency=self.concurrency or slots or DEFAULT_CONCURRENCY,
+                server_kind=family,
+                listed_models=info.models if info is not None else None,
+                **common,
+            )
         return dataclasses.replace(s, **changes) if changes else s
 
-    def preflight(self, server: LocalServer | None = None, timeout_s: float | None = None) -> ServerInfo:
+    def preflight(
+        self, server: LocalServer | None = None, timeout_s: float | None = None
+    ) -> ServerInfo:
         """Ask the server what it is before any run (:func:`jswim.llm.probe.probe`): the remote
         server at ``base_url``, or the running embedded ``server``.
 
@@ -267,16 +324,40 @@ class Backend:
         wait = timeout_s or self.timeout_s or 5.0
         if self.local:
             if server is None:
-                raise ConfigError("the embedded backend needs its running server (Backend.server())")
-            return probe(server.base_url, api_key_env=LOCAL_KEY_ENV, timeout_s=max(wait, 10.0), family="llamacpp",
-                         local=True)
-        info = probe(self.base_url, api_key_env=self.api_key_env, timeout_s=wait, family=self.server_family,
-                     model=self.model, strict_model=self.strict_model)
-        if self.concurrency is not None and info.slots is not None and self.concurrency > info.slots:
-            info = dataclasses.replace(info, warnings=(*info.warnings, (
-                f"--concurrency {self.concurrency} on a server that serves {info.slots} request(s) at once: the "
-                f"others queue there, and their wait counts against --timeout; leave --concurrency out to send "
-                f"{info.slots}")))
+                raise ConfigError(
+                    "the embedded backend needs its running server (Backend.server())"
+                )
+            return probe(
+                server.base_url,
+                api_key_env=LOCAL_KEY_ENV,
+                timeout_s=max(wait, 10.0),
+                family="llamacpp",
+                local=True,
+            )
+        info = probe(
+            self.base_url,
+            api_key_env=self.api_key_env,
+            timeout_s=wait,
+            family=self.server_family,
+            model=self.model,
+            strict_model=self.strict_model,
+        )
+        if (
+            self.concurrency is not None
+            and info.slots is not None
+            and self.concurrency > info.slots
+        ):
+            info = dataclasses.replace(
+                info,
+                warnings=(
+                    *info.warnings,
+                    (
+                        f"--concurrency {self.concurrency} on a server that serves {info.slots} request(s) at once: the "
+                        f"others queue there, and their wait counts against --timeout; leave --concurrency out to send "
+                        f"{info.slots}"
+                    ),
+                ),
+            )
         return info
 
     def check(self, timeout_s: float | None = None) -> None:
@@ -302,8 +383,10 @@ def check_gguf(path: str) -> None:
     except OSError as exc:
         raise ConfigError(f"--gguf {path}: cannot read it ({exc.strerror})") from None
     if magic != GGUF_MAGIC:
-        raise ConfigError(f"--gguf {path} is not a GGUF model file (it does not start with the GGUF magic bytes); "
-                          "give a .gguf file, e.g. from Hugging Face, or leave --gguf out for the packaged model")
+        raise ConfigError(
+            f"--gguf {path} is not a GGUF model file (it does not start with the GGUF magic bytes); "
+            "give a .gguf file, e.g. from Hugging Face, or leave --gguf out for the packaged model"
+        )
 
 
 def check_server(base_url: str, timeout_s: float = 5.0) -> None:

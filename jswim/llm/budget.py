@@ -10,18 +10,23 @@ the rule, and why unanswered requests count.
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
-from jswim.errors import BudgetExhausted, ConfigError  # noqa: F401  (BudgetExhausted: also read from here)
+from jswim.errors import BudgetExhausted, ConfigError
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.usage import PriceTable
 
 
-def call_bound(payload: Mapping[str, Any], prices: PriceTable, model: str, default_max_tokens: int = 256) -> float:
+def call_bound(
+    payload: Mapping[str, Any], prices: PriceTable, model: str, default_max_tokens: int = 256
+) -> float:
     """USD bound of one request: estimated prompt tokens plus ``max_tokens`` of completion."""
     p_in, p_out = prices.lookup(model)
     prompt = estimate_prompt_tokens(payload.get("messages") or [])
-    completion = payload.get("max_tokens") or payload.get("max_completion_tokens") or default_max_tokens
+    completion = (
+        payload.get("max_tokens") or payload.get("max_completion_tokens") or default_max_tokens
+    )
     return (prompt * p_in + int(completion) * p_out) / 1e6
 
 
@@ -43,7 +48,9 @@ class Budget:
         For a negative or non-finite cap.
     """
 
-    def __init__(self, cap_usd: float | None, spent_usd: float = 0.0, unanswered_usd: float = 0.0) -> None:
+    def __init__(
+        self, cap_usd: float | None, spent_usd: float = 0.0, unanswered_usd: float = 0.0
+    ) -> None:
         if cap_usd is not None and not (math.isfinite(cap_usd) and cap_usd >= 0):
             raise ConfigError(f"the cost cap must be a number >= 0, got {cap_usd}")
         self.cap_usd = cap_usd
@@ -67,11 +74,16 @@ class Budget:
         BudgetExhausted
             When the cap would be passed (or was reached before).
         """
-        if self.cap_usd is not None and (self.exhausted or self.spent_usd + self.unanswered_usd + self.reserved_usd
-                                         + usd > self.cap_usd):
+        if self.cap_usd is not None and (
+            self.exhausted
+            or self.spent_usd + self.unanswered_usd + self.reserved_usd + usd > self.cap_usd
+        ):
             self.exhausted = True
-            unanswered = (f", at most ${self.unanswered_usd:.4f} for requests that got no answer"
-                          if self.unanswered_usd else "")
+            unanswered = (
+                f", at most ${self.unanswered_usd:.4f} for requests that got no answer"
+                if self.unanswered_usd
+                else ""
+            )
             raise BudgetExhausted(
                 f"stopped at the cost cap: ${self.spent_usd:.4f} spent{unanswered}, ${self.reserved_usd:.4f} in flight, "
                 f"cap ${self.cap_usd:.4f}; rerun with a higher --max-cost to continue"

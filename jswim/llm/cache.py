@@ -24,7 +24,9 @@ CACHE_VERSION = "jswim-llm-cache-v2"
 
 def request_key(payload: dict[str, Any]) -> str:
     """Hash of a request body (canonical JSON: sorted keys, no spaces)."""
-    blob = json.dumps([CACHE_VERSION, payload], sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    blob = json.dumps(
+        [CACHE_VERSION, payload], sort_keys=True, separators=(",", ":"), ensure_ascii=False
+    )
     return hashlib.sha256(blob.encode("utf-8")).hexdigest()
 
 
@@ -40,11 +42,16 @@ def check_cache(path: str | Path) -> None:
     try:
         ResponseCache(path).close()
     except sqlite3.DatabaseError as exc:  # "file is not a database", a read-only database, ...
-        raise ConfigError(f"--cache-dir {path}: not a usable jswim response cache ({exc}); "
-                          "give a folder, or a .sqlite file that jswim made") from None
+        raise ConfigError(
+            f"--cache-dir {path}: not a usable jswim response cache ({exc}); "
+            "give a folder, or a .sqlite file that jswim made"
+        ) from None
     except OSError as exc:
-        what = "a file, not a folder" if Path(path).is_file() and Path(path).suffix not in (".sqlite", ".db") else \
-            (exc.strerror or type(exc).__name__)
+        what = (
+            "a file, not a folder"
+            if Path(path).is_file() and Path(path).suffix not in (".sqlite", ".db")
+            else (exc.strerror or type(exc).__name__)
+        )
         raise ConfigError(f"--cache-dir {path}: {what}; give a writable folder") from None
 
 

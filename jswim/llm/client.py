@@ -25,23 +25,43 @@ import random
 import ssl
 import time
 from dataclasses import replace
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any
+from collections.abc import Callable, Mapping, Sequence
 
 import httpx
 
 from jswim.llm import constrain, credentials
 from jswim.llm.budget import Budget, call_bound
 from jswim.llm.cache import ResponseCache, request_key
-from jswim.llm.errors import (LLMRequestError, LLMResponseError, LLMServerError, LLMSetupError, LLMTimeoutError,
-                              no_answer)
+from jswim.llm.errors import (
+    LLMRequestError,
+    LLMResponseError,
+    LLMServerError,
+    LLMSetupError,
+    LLMTimeoutError,
+    no_answer,
+)
 from jswim.llm.pacing import Pacer
 from jswim.llm.reasoning import ReasoningState
 from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text, validation_error
-from jswim.llm.reply import (Completion, MalformedReply, assemble_sse, decode_body, looks_like_sse,  # noqa: F401
-                             parse_retry_after, read_completion)
+from jswim.llm.reply import (
+    Completion,
+    MalformedReply,
+    assemble_sse,
+    decode_body,
+    looks_like_sse,
+    parse_retry_after,
+    read_completion,
+)
 from jswim.llm.result import FAULT_KINDS, ChatResult, LiveCounts  # noqa: F401  (also read from here)
-from jswim.llm.settings import (CORE_FIELDS, MAX_TOKENS, ClientSettings, check_extra_fields,  # noqa: F401
-                                check_max_tokens, check_temperature)
+from jswim.llm.settings import (  # noqa: F401
+    CORE_FIELDS,
+    MAX_TOKENS,
+    ClientSettings,
+    check_extra_fields,
+    check_max_tokens,
+    check_temperature,
+)
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
 from jswim.llm.urls import endpoint, is_local_host, is_loopback, safe_url
@@ -60,8 +80,15 @@ RETRY_STATUSES = frozenset({408, 409, 429})
 class _Failure(Exception):
     """A retryable attempt failure (internal); ``kind`` is one of :data:`FAULT_KINDS`."""
 
-    def __init__(self, what: str, retry_after: float | None = None, bad_body: bool = False,
-                 timeout: bool = False, kind: str = "connection", unanswered: bool = False) -> None:
+    def __init__(
+        self,
+        what: str,
+        retry_after: float | None = None,
+        bad_body: bool = False,
+        timeout: bool = False,
+        kind: str = "connection",
+        unanswered: bool = False,
+    ) -> None:
         super().__init__(what)
         self.what = what
         self.retry_after = retry_after
@@ -96,7 +123,11 @@ class LLMClient:
     """
 
     def __init__(
-        self, settings: ClientSettings, *, rng: random.Random | None = None, pacer: Pacer | None = None,
+        self,
+        settings: ClientSettings,
+        *,
+        rng: random.Random | None = None,
+        pacer: Pacer | None = None,
         budget: Budget | None = None,
     ) -> None:
         self.pacer = pacer
@@ -107,12 +138,20 @@ class LLMClient:
         # one Authorization header); either way it never stays in a URL a library could print.
         self._url, self._basic = credentials.split_userinfo(endpoint(settings.base_url))
         self._where = safe_url(settings.base_url)
-        self._prices, self.unpriced = price_table(settings.prices, settings.model,
-                                                  local_host=is_local_host(settings.base_url),
-                                                  listed=settings.listed_models, price_local=settings.price_local)
+        self._prices, self.unpriced = price_table(
+            settings.prices,
+            settings.model,
+            local_host=is_local_host(settings.base_url),
+            listed=settings.listed_models,
+            price_local=settings.price_local,
+        )
         #: What a reasoning model must be sent, amended by the server's 400s (jswim.llm.reasoning).
-        self.reasoning = ReasoningState(settings.reasoning, settings.reasoning_max_tokens, settings.reasoning_effort,
-                                        openai="api.openai.com" in settings.base_url)
+        self.reasoning = ReasoningState(
+            settings.reasoning,
+            settings.reasoning_max_tokens,
+            settings.reasoning_effort,
+            openai="api.openai.com" in settings.base_url,
+        )
         self._cache: ResponseCache | None = None
         self._rng = rng or random.Random()
         self._inflight: dict[str, asyncio.Future] = {}
@@ -131,7 +170,7 @@ class LLMClient:
 
     # -- lifecycle ---------------------------------------------------------------------------
 
-    async def __aenter__(self) -> "LLMClient":
+    async def __aenter__(self) -> LLMClient:
         self._open()
         return self
 
@@ -204,12 +243,16 @@ class LLMClient:
             "temperature": s.temperature if temperature is None else temperature,
             "stream": False,
         }
-        given = {"max_tokens": s.max_tokens if max_tokens is None else max_tokens,
-                 "seed": s.seed if seed is None else seed}
+        given = {
+            "max_tokens": s.max_tokens if max_tokens is None else max_tokens,
+            "seed": s.seed if seed is None else seed,
+        }
         payload.update({k: v for k, v in given.items() if v is not None})
         payload.update(s.sampling)
         asked = constrain_mode or s.constrain
-        if asked == "auto" and self._auto_form is not None:  # the server rejected auto's first form(s)
+        if (
+            asked == "auto" and self._auto_form is not None
+        ):  # the server rejected auto's first form(s)
             asked = self._auto_form
         mode = constrain.resolve_mode(asked, s.server_kind, bool(replies))
         constrain.apply(payload, mode, replies)
@@ -270,7 +313,11 @@ class LLMClient:
         self._open()
         while True:
             payload, mode = self.build_payload(
-                messages, replies=replies, temperature=temperature, max_tokens=max_tokens, seed=seed,
+                messages,
+                replies=replies,
+                temperature=temperature,
+                max_tokens=max_tokens,
+                seed=seed,
                 constrain_mode=constrain_mode,
             )
             try:
@@ -296,13 +343,21 @@ class LLMClient:
         self._auto_form = nxt
         return True
 
-    async def _chat(self, payload: dict[str, Any], mode: str, use_cache: bool, cache_scope: str | None,
-                    cache_if: Callable[[ChatResult], bool] | None) -> ChatResult:
+    async def _chat(
+        self,
+        payload: dict[str, Any],
+        mode: str,
+        use_cache: bool,
+        cache_scope: str | None,
+        cache_if: Callable[[ChatResult], bool] | None,
+    ) -> ChatResult:
         t0 = time.perf_counter()
         deterministic = use_cache and payload.get("temperature", 0) == 0
         if not deterministic:
             return await self._send(payload, mode, t0)
-        key = request_key(payload if cache_scope is None else {**payload, "jswim_cache_scope": cache_scope})
+        key = request_key(
+            payload if cache_scope is None else {**payload, "jswim_cache_scope": cache_scope}
+        )
         if self._cache is not None:
             hit = self._cache.get(key)
             if hit is not None:
@@ -333,7 +388,9 @@ class LLMClient:
 
     @staticmethod
     def _cacheable(res: ChatResult, cache_if: Callable[[ChatResult], bool] | None) -> bool:
-        if res.truncated or not res.text.strip() or res.temperature_sent:  # sampled after all: never cached
+        if (
+            res.truncated or not res.text.strip() or res.temperature_sent
+        ):  # sampled after all: never cached
             return False
         return cache_if is None or bool(cache_if(res))
 
@@ -350,9 +407,16 @@ class LLMClient:
     def _from_cache(self, value: dict[str, Any], mode: str, latency: float) -> ChatResult:
         usage = Usage(*value["usage"])
         return ChatResult(
-            text=value["text"], usage=usage, latency_s=latency, cache_hit=True,
-            shared=False, retries=0, cost_usd=self._prices.cost(self.settings.model, usage),
-            constraint=mode, finish_reason=value.get("finish_reason"), raw=value["raw"],
+            text=value["text"],
+            usage=usage,
+            latency_s=latency,
+            cache_hit=True,
+            shared=False,
+            retries=0,
+            cost_usd=self._prices.cost(self.settings.model, usage),
+            constraint=mode,
+            finish_reason=value.get("finish_reason"),
+            raw=value["raw"],
             reasoning=value.get("reasoning", ""),
         )
 
@@ -363,7 +427,9 @@ class LLMClient:
 
     def _backoff(self, retry: int) -> float:
         s = self.settings
-        return min(s.backoff_max_s, s.backoff_base_s * 2.0**retry) * (0.5 + 0.5 * self._rng.random())
+        return min(s.backoff_max_s, s.backoff_base_s * 2.0**retry) * (
+            0.5 + 0.5 * self._rng.random()
+        )
 
     async def _send(self, payload: dict[str, Any], mode: str, t0: float) -> ChatResult:
         s = self.settings
@@ -374,7 +440,8 @@ class LLMClient:
         first_failure: float | None = None  # when the first failed attempt went out
         while True:
             tokens = estimate_prompt_tokens(payload["messages"]) + int(
-                payload.get("max_tokens") or payload.get("max_completion_tokens") or 0)
+                payload.get("max_tokens") or payload.get("max_completion_tokens") or 0
+            )
             if self.pacer is not None:
                 await self.pacer.wait(tokens)
             slot = await slots.get()
@@ -396,14 +463,18 @@ class LLMClient:
                         self.budget.release(held)
                     adaptations += 1
                     if adaptations > 3:  # a server that keeps refusing what it asked for
-                        raise self._rejection(400, "the server kept refusing the amended request", payload) from None
+                        raise self._rejection(
+                            400, "the server kept refusing the amended request", payload
+                        ) from None
                     payload = self._amend(payload)
                     continue
                 except BaseException as exc:
                     # Sent and never answered (a timeout, a cut, a Ctrl-C while waiting): the server
                     # may bill it, so its bound stays counted against the cap; anything else was
                     # refused or never arrived and costs nothing.
-                    if isinstance(exc, _Failure) and exc.unanswered or isinstance(exc, asyncio.CancelledError):
+                    if (isinstance(exc, _Failure) and exc.unanswered) or isinstance(
+                        exc, asyncio.CancelledError
+                    ):
                         bound = call_bound(payload, self._prices, s.model)
                         self.counts.unanswered += 1
                         self.counts.unanswered_usd += bound
@@ -429,16 +500,22 @@ class LLMClient:
                 left = math.inf if s.retry_for_s is None else s.retry_for_s - (now - first_failure)
                 if retries >= s.max_retries or left <= 0:
                     spent = f"{retries} retries over {now - first_failure:.0f} s"
-                    budget = (f"the budget is --retries {s.max_retries}, "
-                              f"--retry-for {s.retry_for_s if s.retry_for_s is not None else 'none'}")
+                    budget = (
+                        f"the budget is --retries {s.max_retries}, "
+                        f"--retry-for {s.retry_for_s if s.retry_for_s is not None else 'none'}"
+                    )
                     if fail.timeout:  # the last straw was a timeout: say slow, and what to raise
-                        raise LLMTimeoutError(_scrub(
-                            f"{self._where}: the server is slow: no answer within {s.timeout_s:g} s; gave up after "
-                            f"{retries + 1} attempts ({spent}; {budget}); a cold local server may still be loading "
-                            f"its model: wait for it or raise --timeout (now {s.timeout_s:g} s)"
-                        )) from None
+                        raise LLMTimeoutError(
+                            _scrub(
+                                f"{self._where}: the server is slow: no answer within {s.timeout_s:g} s; gave up after "
+                                f"{retries + 1} attempts ({spent}; {budget}); a cold local server may still be loading "
+                                f"its model: wait for it or raise --timeout (now {s.timeout_s:g} s)"
+                            )
+                        ) from None
                     msg = f"{self._where}: {fail.what}; gave up after {retries + 1} attempts ({spent}; {budget})"
-                    raise (LLMResponseError if fail.bad_body else LLMServerError)(_scrub(msg)) from None
+                    raise (LLMResponseError if fail.bad_body else LLMServerError)(
+                        _scrub(msg)
+                    ) from None
                 # A timed-out request already waited a whole timeout: send it again at once.
                 wait = 0.0 if fail.timeout else self._backoff(retries)
                 if fail.retry_after is not None:
@@ -456,12 +533,19 @@ class LLMClient:
         except httpx.TransportError as exc:
             kind, unanswered = no_answer(exc)
             if kind == "connect":
-                raise _Failure(f"could not connect within {s.timeout_s:g} s", kind="connection") from None
+                raise _Failure(
+                    f"could not connect within {s.timeout_s:g} s", kind="connection"
+                ) from None
             if kind == "timeout":
-                raise _Failure(f"no answer within {s.timeout_s:g} s (timeout)", timeout=True,
-                               unanswered=unanswered) from None
+                raise _Failure(
+                    f"no answer within {s.timeout_s:g} s (timeout)",
+                    timeout=True,
+                    unanswered=unanswered,
+                ) from None
             detail = _scrub(str(exc)) or "no detail"
-            raise _Failure(f"connection failed ({type(exc).__name__}: {detail})", unanswered=unanswered) from None
+            raise _Failure(
+                f"connection failed ({type(exc).__name__}: {detail})", unanswered=unanswered
+            ) from None
         if self.pacer is not None:
             self.pacer.observe(resp.headers)
         status = resp.status_code
@@ -471,9 +555,11 @@ class LLMClient:
             if invalid is not None:
                 raise self._rejection(status, invalid, payload, invalid=True)
             detail = server_text(resp)
-            raise _Failure(f"HTTP {status}" + (f": {detail}" if detail else ""),
-                           retry_after=parse_retry_after(resp.headers),
-                           kind="429" if status == 429 else "5xx" if status >= 500 else "408/409")
+            raise _Failure(
+                f"HTTP {status}" + (f": {detail}" if detail else ""),
+                retry_after=parse_retry_after(resp.headers),
+                kind="429" if status == 429 else "5xx" if status >= 500 else "408/409",
+            )
         if status != 200:
             said = server_text(resp)
             if status == 400 and self.reasoning.adapt(said, payload, s.model):
@@ -486,7 +572,9 @@ class LLMClient:
                 return read_completion(assemble_sse(text), streamed=True)
             return read_completion(json.loads(text))
         except MalformedReply as exc:
-            raise _Failure(f"the response is not a chat completion ({exc})", bad_body=True) from None
+            raise _Failure(
+                f"the response is not a chat completion ({exc})", bad_body=True
+            ) from None
         except ValueError:
             snippet = " ".join(text.split())[:80] or "empty"
             raise _Failure(
@@ -510,26 +598,59 @@ class LLMClient:
             try:
                 nxt = url.join(resp.headers["location"])
             except (httpx.InvalidURL, ValueError):
-                raise LLMSetupError(_scrub(f"{self._where}: HTTP {resp.status_code} to an address that does "
-                                                "not parse; give --base-url the server's address"),
-                                    resp.status_code, "") from None
+                raise LLMSetupError(
+                    _scrub(
+                        f"{self._where}: HTTP {resp.status_code} to an address that does "
+                        "not parse; give --base-url the server's address"
+                    ),
+                    resp.status_code,
+                    "",
+                ) from None
             if (nxt.scheme, nxt.host, nxt.port) != (url.scheme, url.host, url.port):
-                raise LLMSetupError(_scrub(
-                    f"{self._where}: HTTP {resp.status_code} redirects to another host ({safe_url(str(nxt.copy_with(query=None)))}); "
-                    "not followed, so the API key is not sent there: give --base-url that address if you trust it"),
-                    resp.status_code, "")
+                raise LLMSetupError(
+                    _scrub(
+                        f"{self._where}: HTTP {resp.status_code} redirects to another host ({safe_url(str(nxt.copy_with(query=None)))}); "
+                        "not followed, so the API key is not sent there: give --base-url that address if you trust it"
+                    ),
+                    resp.status_code,
+                    "",
+                )
             url = nxt
         else:
-            raise LLMSetupError(_scrub(f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
-                                            "the address they lead to"), resp.status_code, "")
-        kept = [(k, v) for k, v in resp.headers.multi_items() if k.lower() not in ("content-encoding", "content-length")]
-        return httpx.Response(resp.status_code, headers=kept, request=resp.request,
-                              content=decode_body(raw, resp.headers.get("content-encoding", "")))
+            raise LLMSetupError(
+                _scrub(
+                    f"{self._where}: more than {MAX_REDIRECTS} redirects; give --base-url "
+                    "the address they lead to"
+                ),
+                resp.status_code,
+                "",
+            )
+        kept = [
+            (k, v)
+            for k, v in resp.headers.multi_items()
+            if k.lower() not in ("content-encoding", "content-length")
+        ]
+        return httpx.Response(
+            resp.status_code,
+            headers=kept,
+            request=resp.request,
+            content=decode_body(raw, resp.headers.get("content-encoding", "")),
+        )
 
-    def _rejection(self, status: int, server: str, payload: Mapping[str, Any], invalid: bool = False) -> LLMRequestError:
+    def _rejection(
+        self, status: int, server: str, payload: Mapping[str, Any], invalid: bool = False
+    ) -> LLMRequestError:
         s = self.settings
-        err = rejection(status, server, payload, where=self._where, url=safe_url(self._url), model=s.model,
-                        api_key_env=s.api_key_env, invalid=invalid)
+        err = rejection(
+            status,
+            server,
+            payload,
+            where=self._where,
+            url=safe_url(self._url),
+            model=s.model,
+            api_key_env=s.api_key_env,
+            invalid=invalid,
+        )
         err.args = (_scrub(str(err)),)
         err.server_message = _scrub(err.server_message)
         return err
@@ -542,12 +663,16 @@ class LLMClient:
             if self.budget is not None and self.budget.cap_usd is not None:
                 # Under --max-cost a $0 call would let the cap lapse: priced as requested, and said.
                 if self.unpriced is None:
-                    self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}; priced at {s.model}'s "
-                                     "price anyway, because --max-cost needs a price (--prices FILE gives yours)")
+                    self.unpriced = (
+                        f"the server says it ran {replied!r}, not {s.model!r}; priced at {s.model}'s "
+                        "price anyway, because --max-cost needs a price (--prices FILE gives yours)"
+                    )
                 return self._prices.cost(s.model, usage)
             if self.unpriced is None:
-                self.unpriced = (f"the server says it ran {replied!r}, not {s.model!r}: its calls are not priced at "
-                                 f"{s.model}'s list price; --prices FILE gives your own prices, applied as given")
+                self.unpriced = (
+                    f"the server says it ran {replied!r}, not {s.model!r}: its calls are not priced at "
+                    f"{s.model}'s list price; --prices FILE gives your own prices, applied as given"
+                )
             return 0.0
         return self._prices.cost(s.model, usage)
 
@@ -558,16 +683,28 @@ class LLMClient:
             out.pop(name, None)
         return out
 
-    def _attempt_result(self, got: Completion, mode: str, t0: float, retries: int,
-                        payload: Mapping[str, Any] | None = None) -> ChatResult:
+    def _attempt_result(
+        self,
+        got: Completion,
+        mode: str,
+        t0: float,
+        retries: int,
+        payload: Mapping[str, Any] | None = None,
+    ) -> ChatResult:
         usage = Usage.from_response(got.usage)
         # A reply may echo a credential (a proxy quoting the request's headers): scrubbed by the
         # registry the error messages use, before the journal, the cache or a transcript see it.
         return ChatResult(
-            text=_scrub(constrain.reply_text(mode, got.answer)), usage=usage, latency_s=time.perf_counter() - t0,
-            cache_hit=False, shared=False, retries=retries,
-            cost_usd=self._cost(usage, got.model), constraint=mode,
-            finish_reason=got.finish_reason, raw=_scrub(got.content), reasoning=_scrub(got.reasoning),
+            text=_scrub(constrain.reply_text(mode, got.answer)),
+            usage=usage,
+            latency_s=time.perf_counter() - t0,
+            cache_hit=False,
+            shared=False,
+            retries=retries,
+            cost_usd=self._cost(usage, got.model),
+            constraint=mode,
+            finish_reason=got.finish_reason,
+            raw=_scrub(got.content),
+            reasoning=_scrub(got.reasoning),
             temperature_sent=(payload or {}).get("temperature"),
         )
-

@@ -15,7 +15,8 @@ Modes
 from __future__ import annotations
 
 import json
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 from jswim.errors import ConfigError
 
@@ -25,7 +26,12 @@ MODES = ("auto", "grammar", "json_schema", "json_object", "none")
 SERVER_KINDS = ("generic", "llamacpp", "llama-cpp-python", "vllm", "ollama", "openai")
 
 #: ``"auto"``'s first form per family (the others: ``"none"``).
-AUTO_FORM = {"llamacpp": "grammar", "llama-cpp-python": "grammar", "vllm": "json_schema", "ollama": "json_schema"}
+AUTO_FORM = {
+    "llamacpp": "grammar",
+    "llama-cpp-python": "grammar",
+    "vllm": "json_schema",
+    "ollama": "json_schema",
+}
 
 #: The forms ``"auto"`` falls back through when the server rejects one, in this order.
 FALLBACK = ("json_schema", "json_object", "grammar")
@@ -42,7 +48,7 @@ def resolve_mode(mode: str, server_kind: str, has_replies: bool = True) -> str:
     return mode
 
 
-def next_form(tried: "set[str] | frozenset[str]") -> str | None:
+def next_form(tried: set[str] | frozenset[str]) -> str | None:
     """The next form of :data:`FALLBACK` not yet ``tried`` (``None``: none left)."""
     return next((f for f in FALLBACK if f not in tried), None)
 
@@ -82,8 +88,10 @@ def apply(payload: dict[str, Any], mode: str, replies: Sequence[str] | None) -> 
     elif mode == "json_schema" and replies:
         payload["response_format"] = json_schema(replies)
     elif mode == "json_object" and replies:
-        payload["response_format"] = {"type": "json_object",
-                                      "schema": json_schema(replies)["json_schema"]["schema"]}
+        payload["response_format"] = {
+            "type": "json_object",
+            "schema": json_schema(replies)["json_schema"]["schema"],
+        }
     return payload
 
 

@@ -31,9 +31,16 @@ def forms(secret: str) -> set[str]:
     out = {secret, secret.strip()}
     for s in list(out):
         out |= {
-            repr(s)[1:-1], ascii(s)[1:-1], json.dumps(s)[1:-1], json.dumps(s, ensure_ascii=False)[1:-1],
-            repr(s.encode("utf-8", "surrogateescape"))[2:-1], s.encode("unicode_escape").decode("ascii"),
-            quote(s, safe=""), quote_plus(s, safe=""), quote(s), base64.b64encode(s.encode("utf-8", "replace")).decode(),
+            repr(s)[1:-1],
+            ascii(s)[1:-1],
+            json.dumps(s)[1:-1],
+            json.dumps(s, ensure_ascii=False)[1:-1],
+            repr(s.encode("utf-8", "surrogateescape"))[2:-1],
+            s.encode("unicode_escape").decode("ascii"),
+            quote(s, safe=""),
+            quote_plus(s, safe=""),
+            quote(s),
+            base64.b64encode(s.encode("utf-8", "replace")).decode(),
         }
     return {f for f in out if len(f) >= MIN_SECRET}
 
@@ -58,14 +65,28 @@ def scrub(text: str) -> str:
 
 def _bad_character(value: str) -> str | None:
     """What in ``value`` no header value may carry, said without showing the value."""
-    names = {"\r": "a carriage return (\\r)", "\n": "a line feed (\\n)", "\t": "a tab", " ": "a space",
-             "\x00": "a NUL byte"}
+    names = {
+        "\r": "a carriage return (\\r)",
+        "\n": "a line feed (\\n)",
+        "\t": "a tab",
+        " ": "a space",
+        "\x00": "a NUL byte",
+    }
     for i, ch in enumerate(value):
         if "\x21" <= ch <= "\x7e":
             continue
-        what = names.get(ch) or (f"a control character (U+{ord(ch):04X})" if ord(ch) < 0x20 or ord(ch) == 0x7F
-                                 else f"a non-ASCII character (U+{ord(ch):04X})")
-        where = "at its end" if i == len(value) - 1 else "at its start" if i == 0 else f"at position {i + 1}"
+        what = names.get(ch) or (
+            f"a control character (U+{ord(ch):04X})"
+            if ord(ch) < 0x20 or ord(ch) == 0x7F
+            else f"a non-ASCII character (U+{ord(ch):04X})"
+        )
+        where = (
+            "at its end"
+            if i == len(value) - 1
+            else "at its start"
+            if i == 0
+            else f"at position {i + 1}"
+        )
         return f"{what} {where}"
     return None
 
@@ -86,8 +107,10 @@ def read_api_key(env_name: str) -> str | None:
     bad = _bad_character(value)
     if bad:
         hint = " (a key pasted from a Windows file?)" if "\r" in value else ""
-        raise ConfigError(f"the API key in ${env_name} has {bad}{hint}, which no HTTP header can carry; "
-                          f"set ${env_name} again without it (the value is not shown)")
+        raise ConfigError(
+            f"the API key in ${env_name} has {bad}{hint}, which no HTTP header can carry; "
+            f"set ${env_name} again without it (the value is not shown)"
+        )
     return value
 
 
@@ -121,8 +144,9 @@ def split_userinfo(url: str) -> tuple[str, str | None]:
     user, _, password = userinfo.partition(":")
     pair = f"{unquote(user)}:{unquote(password)}"
     register_url(url)
-    return urlunsplit((parts.scheme, host, parts.path, parts.query, parts.fragment)), "Basic " + base64.b64encode(
-        pair.encode("utf-8")).decode("ascii")
+    return urlunsplit(
+        (parts.scheme, host, parts.path, parts.query, parts.fragment)
+    ), "Basic " + base64.b64encode(pair.encode("utf-8")).decode("ascii")
 
 
 def redact_url(url: str) -> str:

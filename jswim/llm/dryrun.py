@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import zlib
 from dataclasses import dataclass
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 from jswim.llm.result import ChatResult, LiveCounts
 from jswim.llm.settings import ClientSettings
@@ -26,9 +27,13 @@ class EstimatingClient:
 
     def __init__(self, settings: ClientSettings) -> None:
         self.settings = settings
-        self._prices, self.unpriced = price_table(settings.prices, settings.model,
-                                                  local_host=is_local_host(settings.base_url),
-                                                  listed=settings.listed_models, price_local=settings.price_local)
+        self._prices, self.unpriced = price_table(
+            settings.prices,
+            settings.model,
+            local_host=is_local_host(settings.base_url),
+            listed=settings.listed_models,
+            price_local=settings.price_local,
+        )
         self.counts = LiveCounts()
         self.n_requests = 0
         self.max_completion_tokens = 0  # sum over calls of the max_tokens each was sent with
@@ -36,12 +41,17 @@ class EstimatingClient:
         self.pacer = self.budget = None
         #: The reasoning budget every call will carry (None: a plain model), and the tokens each
         #: call is estimated to think (jswim.llm.reasoning.ESTIMATE_SHARE of it).
-        self.reasoning_budget = dry_run_budget(settings.model, settings.reasoning, settings.reasoning_max_tokens)
-        self.reasoning_per_call = (round(self.reasoning_budget * ESTIMATE_SHARE.get(settings.reasoning_effort, 0.25))
-                                   if self.reasoning_budget else 0)
+        self.reasoning_budget = dry_run_budget(
+            settings.model, settings.reasoning, settings.reasoning_max_tokens
+        )
+        self.reasoning_per_call = (
+            round(self.reasoning_budget * ESTIMATE_SHARE.get(settings.reasoning_effort, 0.25))
+            if self.reasoning_budget
+            else 0
+        )
         self.reasoning_warning = dry_run_warning(settings.model, settings.reasoning)
 
-    async def __aenter__(self) -> "EstimatingClient":
+    async def __aenter__(self) -> EstimatingClient:
         return self
 
     async def __aexit__(self, *exc: object) -> None:
@@ -51,8 +61,12 @@ class EstimatingClient:
         return None
 
     async def chat(
-        self, messages: Sequence[Mapping[str, str]], *, replies: Sequence[str] | None = None,
-        max_tokens: int | None = None, **_: Any
+        self,
+        messages: Sequence[Mapping[str, str]],
+        *,
+        replies: Sequence[str] | None = None,
+        max_tokens: int | None = None,
+        **_: Any,
     ) -> ChatResult:
         """An immediate answer: a valid reply and estimated usage (no request is sent)."""
         mt = max_tokens if max_tokens is not None else self.settings.max_tokens
@@ -70,8 +84,18 @@ class EstimatingClient:
         self.n_requests += 1
         self.counts.tokens += usage.total_tokens
         self.counts.cost_usd += cost
-        return ChatResult(text=text, usage=usage, latency_s=0.0, cache_hit=False, shared=False, retries=0,
-                          cost_usd=cost, constraint="none", finish_reason="stop", raw=text)
+        return ChatResult(
+            text=text,
+            usage=usage,
+            latency_s=0.0,
+            cache_hit=False,
+            shared=False,
+            retries=0,
+            cost_usd=cost,
+            constraint="none",
+            finish_reason="stop",
+            raw=text,
+        )
 
 
 @dataclass(frozen=True)
@@ -141,34 +165,51 @@ class Estimate:
             f"(~{per_call:.0f} per call, estimated from the rendered prompts)",
         ]
         if self.reasoning_budget:
-            out.append(f"  reasoning: {self.reasoning_tokens:,} of the completion tokens are thinking, estimated as "
-                       f"{self.reasoning_share:g} of the budget max_completion_tokens={self.reasoning_budget} per call "
-                       "(an assumption, not a measurement; priced as output)")
-        limit = (f"used its whole reasoning budget ({self.reasoning_budget} tokens)" if self.reasoning_budget
-                 else f"ran to max_tokens={self.max_tokens}")
+            out.append(
+                f"  reasoning: {self.reasoning_tokens:,} of the completion tokens are thinking, estimated as "
+                f"{self.reasoning_share:g} of the budget max_completion_tokens={self.reasoning_budget} per call "
+                "(an assumption, not a measurement; priced as output)"
+            )
+        limit = (
+            f"used its whole reasoning budget ({self.reasoning_budget} tokens)"
+            if self.reasoning_budget
+            else f"ran to max_tokens={self.max_tokens}"
+        )
         if self.price_in or self.price_out:
-            out.append(f"  cost: ${self.cost_usd:.2f} at ${self.price_in:g} / ${self.price_out:g} per 1M tokens "
-                       f"(price table of {self.prices_as_of}"
-                       + ("; reasoning tokens included" if self.reasoning_budget else "")
-                       + f"); at most ${self.cost_max_usd:.2f} if every reply {limit}")
+            out.append(
+                f"  cost: ${self.cost_usd:.2f} at ${self.price_in:g} / ${self.price_out:g} per 1M tokens "
+                f"(price table of {self.prices_as_of}"
+                + ("; reasoning tokens included" if self.reasoning_budget else "")
+                + f"); at most ${self.cost_max_usd:.2f} if every reply {limit}"
+            )
         elif self.unpriced:
             out.append(f"  cost: $0 ({self.unpriced})")
         else:
-            out.append(f"  cost: not priced: no price for {self.model!r} in the price table of {self.prices_as_of} "
-                       "(free or unknown); --prices FILE prices it")
+            out.append(
+                f"  cost: not priced: no price for {self.model!r} in the price table of {self.prices_as_of} "
+                "(free or unknown); --prices FILE prices it"
+            )
         if self.models_unasked:
             out.append(f"  note: {self.models_unasked}; priced as if it lists {self.model!r}")
         if self.cap_refusal:
             out.append(f"  --max-cost: the run would send nothing and stop: {self.cap_refusal}")
         if self.reasoning_warning:
             out.append(f"  warning: {self.reasoning_warning}")
-        out.append("  not counted: parse retries after off-format replies" + (
-            "" if self.reasoning_budget else "; a reasoning model's thinking is counted only where the dry run knows "
-            "it reasons (--reasoning on, or OpenAI's o1/o3/o4/gpt-5 models by name)"))
+        out.append(
+            "  not counted: parse retries after off-format replies"
+            + (
+                ""
+                if self.reasoning_budget
+                else "; a reasoning model's thinking is counted only where the dry run knows "
+                "it reasons (--reasoning on, or OpenAI's o1/o3/o4/gpt-5 models by name)"
+            )
+        )
         return out
 
 
-def estimate(client: EstimatingClient, calls: int, prompt_tokens: int, completion_tokens: int) -> Estimate:
+def estimate(
+    client: EstimatingClient, calls: int, prompt_tokens: int, completion_tokens: int
+) -> Estimate:
     """Totals of a dry run priced by ``client``'s price table (``completion_tokens`` with the
     reasoning tokens the client estimated; the worst case at its reasoning budget per call)."""
     s = client.settings
@@ -179,8 +220,19 @@ def estimate(client: EstimatingClient, calls: int, prompt_tokens: int, completio
     seen = sorted(client.max_tokens_seen)
     mt = None if not seen else str(seen[0]) if len(seen) == 1 else f"{seen[0]}-{seen[-1]}"
     budget = client.reasoning_budget
-    return Estimate(s.model, calls, prompt_tokens, completion_tokens, p_in, p_out, cost, cost_max, mt,
-                    unpriced=client.unpriced, reasoning_tokens=client.reasoning_per_call * calls,
-                    reasoning_budget=budget,
-                    reasoning_share=ESTIMATE_SHARE.get(s.reasoning_effort, 0.25) if budget else None,
-                    reasoning_warning=client.reasoning_warning)
+    return Estimate(
+        s.model,
+        calls,
+        prompt_tokens,
+        completion_tokens,
+        p_in,
+        p_out,
+        cost,
+        cost_max,
+        mt,
+        unpriced=client.unpriced,
+        reasoning_tokens=client.reasoning_per_call * calls,
+        reasoning_budget=budget,
+        reasoning_share=ESTIMATE_SHARE.get(s.reasoning_effort, 0.25) if budget else None,
+        reasoning_warning=client.reasoning_warning,
+    )

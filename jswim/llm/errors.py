@@ -18,8 +18,17 @@ from jswim.errors import (
     LocalModelError,
 )
 
-__all__ = ["LLMError", "LLMRequestError", "LLMResponseError", "LLMServerError", "LLMSetupError", "LLMTimeoutError",
-           "LocalModelError", "no_answer", "unreachable"]
+__all__ = [
+    "LLMError",
+    "LLMRequestError",
+    "LLMResponseError",
+    "LLMServerError",
+    "LLMSetupError",
+    "LLMTimeoutError",
+    "LocalModelError",
+    "no_answer",
+    "unreachable",
+]
 
 
 def no_answer(exc: httpx.HTTPError) -> tuple[str, bool]:
@@ -44,9 +53,15 @@ def unreachable(exc: httpx.HTTPError, where: str, url: str, timeout_s: float) ->
     got no answer: :class:`LLMTimeoutError` when it connected but took longer than ``timeout_s``."""
     kind, _ = no_answer(exc)
     if kind == "connect":
-        return LLMServerError(f"cannot reach {where} (no connection within {timeout_s:g} s); "
-                              "check --base-url or start the server")
+        return LLMServerError(
+            f"cannot reach {where} (no connection within {timeout_s:g} s); "
+            "check --base-url or start the server"
+        )
     if kind == "timeout":
-        return LLMTimeoutError(f"{url} did not answer within {timeout_s:g} s: the server is slow or still loading "
-                               "its model; wait for it or raise --timeout")
-    return LLMServerError(f"cannot reach {where} ({type(exc).__name__}); check --base-url or start the server")
+        return LLMTimeoutError(
+            f"{url} did not answer within {timeout_s:g} s: the server is slow or still loading "
+            "its model; wait for it or raise --timeout"
+        )
+    return LLMServerError(
+        f"cannot reach {where} ({type(exc).__name__}); check --base-url or start the server"
+    )

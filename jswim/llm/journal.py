@@ -13,7 +13,8 @@ import json
 import math
 import os
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 from jswim._io.jsonl import read_records, repair_tail
 from jswim.llm.result import ChatResult
@@ -47,8 +48,12 @@ def call_problem(rec: Mapping[str, Any]) -> str | None:
     if not (isinstance(usage, list) and 2 <= len(usage) <= 4 and all(_count(u) for u in usage)):
         return f"'usage' is {usage!r}, not token counts"
     cost = rec.get("cost_usd")
-    if cost is not None and not (isinstance(cost, (int, float)) and not isinstance(cost, bool)
-                                 and math.isfinite(cost) and cost >= 0):
+    if cost is not None and not (
+        isinstance(cost, (int, float))
+        and not isinstance(cost, bool)
+        and math.isfinite(cost)
+        and cost >= 0
+    ):
         return f"'cost_usd' is {cost!r}, not a price"
     for k in ("cache_hit", "shared"):
         if rec.get(k) is not None and not isinstance(rec[k], bool):
@@ -64,7 +69,12 @@ def call_problem(rec: Mapping[str, Any]) -> str | None:
 
 def call_key(messages: Sequence[Mapping[str, Any]], **params: Any) -> str:
     """Hash of what defines a call's answer: the messages and the sampling parameters."""
-    blob = json.dumps([list(map(dict, messages)), params], sort_keys=True, separators=(",", ":"), ensure_ascii=False)
+    blob = json.dumps(
+        [list(map(dict, messages)), params],
+        sort_keys=True,
+        separators=(",", ":"),
+        ensure_ascii=False,
+    )
     return hashlib.sha256(blob.encode()).hexdigest()[:32]
 
 
@@ -108,9 +118,16 @@ class CallJournal:
         if rec is None or rec.get("key") != key:
             return None
         return ChatResult(
-            text=rec["text"], usage=Usage(*rec["usage"]), latency_s=0.0, cache_hit=bool(rec.get("cache_hit")),
-            shared=bool(rec.get("shared")), retries=0, cost_usd=float(rec.get("cost_usd") or 0.0),
-            constraint=rec.get("constraint", "none"), finish_reason=rec.get("finish_reason"), raw=rec.get("raw", ""),
+            text=rec["text"],
+            usage=Usage(*rec["usage"]),
+            latency_s=0.0,
+            cache_hit=bool(rec.get("cache_hit")),
+            shared=bool(rec.get("shared")),
+            retries=0,
+            cost_usd=float(rec.get("cost_usd") or 0.0),
+            constraint=rec.get("constraint", "none"),
+            finish_reason=rec.get("finish_reason"),
+            raw=rec.get("raw", ""),
             temperature_sent=rec.get("temperature_sent"),
         )
 
@@ -118,15 +135,24 @@ class CallJournal:
         """Append one answered call (flushed, so it survives an interrupt)."""
         if self._fh is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
-            self._fh = open(self.path, "a", encoding="utf-8", opener=opener)  # owner only (jswim._io.permissions)
+            self._fh = open(
+                self.path, "a", encoding="utf-8", opener=opener
+            )  # owner only (jswim._io.permissions)
         u = res.usage
         billed = not (res.cache_hit or res.shared)
         rec = {
-            "run": run_id, "n": index, "key": key, "text": res.text, "raw": res.raw,
+            "run": run_id,
+            "n": index,
+            "key": key,
+            "text": res.text,
+            "raw": res.raw,
             "usage": [u.prompt_tokens, u.completion_tokens, u.cached_tokens, u.reasoning_tokens],
             "temperature_sent": res.temperature_sent,
-            "cost_usd": res.cost_usd if billed else 0.0, "cache_hit": res.cache_hit, "shared": res.shared,
-            "constraint": res.constraint, "finish_reason": res.finish_reason,
+            "cost_usd": res.cost_usd if billed else 0.0,
+            "cache_hit": res.cache_hit,
+            "shared": res.shared,
+            "constraint": res.constraint,
+            "finish_reason": res.finish_reason,
         }
         self._fh.write(json.dumps(rec, ensure_ascii=False) + "\n")
         self._fh.flush()

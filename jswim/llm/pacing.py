@@ -11,7 +11,7 @@ from __future__ import annotations
 import asyncio
 import re
 import time
-from typing import Callable, Mapping
+from collections.abc import Callable, Mapping
 
 from aiolimiter import AsyncLimiter
 
@@ -82,7 +82,7 @@ class Pacer:
         max_pause_s: float = 60.0,
         clock: Callable[[], float] = time.monotonic,
     ) -> None:
-        if rpm is not None and rpm <= 0 or tpm is not None and tpm <= 0:
+        if (rpm is not None and rpm <= 0) or (tpm is not None and tpm <= 0):
             raise ConfigError("rpm and tpm must be > 0")
         self.rpm, self.tpm = rpm, tpm
         self._requests = AsyncLimiter(1, 60.0 / rpm) if rpm else None

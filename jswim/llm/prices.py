@@ -11,7 +11,8 @@ import json
 import math
 import tomllib
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 from jswim.errors import ConfigError
 
@@ -26,18 +27,27 @@ def parse_prices(table: Any, where: str) -> dict[str, tuple[float, float]]:
         For anything else, naming ``where`` and the entry.
     """
     if not isinstance(table, Mapping):
-        raise ConfigError(f"{where}: prices must be a table of model = [prompt, completion] USD per 1M tokens")
+        raise ConfigError(
+            f"{where}: prices must be a table of model = [prompt, completion] USD per 1M tokens"
+        )
     out: dict[str, tuple[float, float]] = {}
     for name, value in table.items():
         if isinstance(value, Mapping):
-            value = [value.get("input", value.get("prompt")), value.get("output", value.get("completion"))]
+            value = [
+                value.get("input", value.get("prompt")),
+                value.get("output", value.get("completion")),
+            ]
         try:
             p_in, p_out = (float(v) for v in value)
         except (TypeError, ValueError):
-            raise ConfigError(f"{where}: the price of {name!r} must be [prompt, completion] USD per 1M tokens, "
-                              f"got {value!r}") from None
+            raise ConfigError(
+                f"{where}: the price of {name!r} must be [prompt, completion] USD per 1M tokens, "
+                f"got {value!r}"
+            ) from None
         if not all(math.isfinite(v) and v >= 0 for v in (p_in, p_out)):
-            raise ConfigError(f"{where}: the price of {name!r} must be two numbers >= 0, got {value!r}")
+            raise ConfigError(
+                f"{where}: the price of {name!r} must be two numbers >= 0, got {value!r}"
+            )
         out[str(name)] = (p_in, p_out)
     return out
 
@@ -56,12 +66,16 @@ def load_prices(path: str | Path) -> tuple[dict[str, tuple[float, float]], str]:
     except FileNotFoundError:
         raise ConfigError(f"--prices {path}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"--prices {path}: cannot read it ({getattr(exc, 'strerror', None) or exc})") from None
+        raise ConfigError(
+            f"--prices {path}: cannot read it ({getattr(exc, 'strerror', None) or exc})"
+        ) from None
     try:
         data = tomllib.loads(text) if p.suffix.lower() == ".toml" else json.loads(text)
     except (tomllib.TOMLDecodeError, ValueError) as exc:
-        raise ConfigError(f"--prices {path}: not valid {'TOML' if p.suffix.lower() == '.toml' else 'JSON'} "
-                          f"({str(exc).splitlines()[0]})") from None
+        raise ConfigError(
+            f"--prices {path}: not valid {'TOML' if p.suffix.lower() == '.toml' else 'JSON'} "
+            f"({str(exc).splitlines()[0]})"
+        ) from None
     if not isinstance(data, Mapping):
         raise ConfigError(f"--prices {path}: expected a table with a 'prices' table")
     table = data.get("prices", {k: v for k, v in data.items() if k != "as_of"})

@@ -11,7 +11,8 @@ environment variable is unset, empty or refused.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 from urllib.parse import urlsplit, urlunsplit
 
 import httpx
@@ -26,8 +27,16 @@ from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
 FAMILIES = ("llamacpp", "llama-cpp-python", "vllm", "ollama", "openai", "generic")
 
 #: ``/v1/models`` ``owned_by`` values that name a family.
-OWNED_BY = {"llamacpp": "llamacpp", "me": "llama-cpp-python", "vllm": "vllm", "library": "ollama", "ollama": "ollama",
-            "openai": "openai", "system": "openai", "openai-internal": "openai"}
+OWNED_BY = {
+    "llamacpp": "llamacpp",
+    "me": "llama-cpp-python",
+    "vllm": "vllm",
+    "library": "ollama",
+    "ollama": "ollama",
+    "openai": "openai",
+    "system": "openai",
+    "openai-internal": "openai",
+}
 
 #: Requests in flight for a server that serves one at a time: llama-cpp-python's server handles
 #: one request per model (a lock around the model), so more only queue there.
@@ -76,10 +85,17 @@ class ServerInfo:
 
     def metadata(self) -> dict[str, Any]:
         """A JSON-able record for the study's metadata."""
-        known = {"models": None if self.models is None else list(self.models[:20]), "total_slots": self.total_slots,
-                 "server_sampling_defaults": dict(self.settings) or None, "warnings": list(self.warnings) or None}
-        return {"family": self.family, "detected_by": self.detected_by,
-                **{k: v for k, v in known.items() if v is not None}}
+        known = {
+            "models": None if self.models is None else list(self.models[:20]),
+            "total_slots": self.total_slots,
+            "server_sampling_defaults": dict(self.settings) or None,
+            "warnings": list(self.warnings) or None,
+        }
+        return {
+            "family": self.family,
+            "detected_by": self.detected_by,
+            **{k: v for k, v in known.items() if v is not None},
+        }
 
 
 def server_root(base_url: str) -> str:
@@ -98,8 +114,12 @@ def generation_settings(props: Mapping[str, Any]) -> dict[str, Any]:
     if not isinstance(dgs, Mapping):
         return {}
     params = dgs.get("params") if isinstance(dgs.get("params"), Mapping) else dgs
-    return {k: v for k, v in sorted(params.items())
-            if isinstance(v, (int, float, bool)) or (isinstance(v, str) and len(v) <= 40 and k != "grammar")}
+    return {
+        k: v
+        for k, v in sorted(params.items())
+        if isinstance(v, (int, float, bool))
+        or (isinstance(v, str) and len(v) <= 40 and k != "grammar")
+    }
 
 
 def _get(client: httpx.Client, url: str) -> httpx.Response | None:
@@ -119,9 +139,16 @@ def _json(resp: httpx.Response | None) -> Any:
         return None
 
 
-def probe(base_url: str, *, api_key_env: str = "OPENAI_API_KEY", timeout_s: float = 5.0,
-          family: str | None = None, model: str | None = None, strict_model: bool = False,
-          local: bool = False) -> ServerInfo:
+def probe(
+    base_url: str,
+    *,
+    api_key_env: str = "OPENAI_API_KEY",
+    timeout_s: float = 5.0,
+    family: str | None = None,
+    model: str | None = None,
+    strict_model: bool = False,
+    local: bool = False,
+) -> ServerInfo:
     """Ask the server at ``base_url`` what it is (docs/servers.md).
 
     Parameters
@@ -157,7 +184,9 @@ def probe(base_url: str, *, api_key_env: str = "OPENAI_API_KEY", timeout_s: floa
     key = read_api_key(api_key_env)
     headers = {"Authorization": f"Bearer {key}"} if key else {}
     models_url = endpoint(base_url, "models")
-    with httpx.Client(timeout=timeout_s, headers=headers, trust_env=not is_loopback(base_url)) as client:
+    with httpx.Client(
+        timeout=timeout_s, headers=headers, trust_env=not is_loopback(base_url)
+    ) as client:
         try:
             listed = client.get(models_url)
         except httpx.HTTPError as exc:
@@ -165,20 +194,29 @@ def probe(base_url: str, *, api_key_env: str = "OPENAI_API_KEY", timeout_s: floa
         if listed.status_code in (401, 403):
             said = server_text(listed)
             said = f"HTTP {listed.status_code}: {said}" if said else f"HTTP {listed.status_code}"
-            raise LLMSetupError(f"{where} refused the preflight request GET /v1/models ({said}); "
-                                f"{key_hint(api_key_env)}", listed.status_code, said)
+            raise LLMSetupError(
+                f"{where} refused the preflight request GET /v1/models ({said}); "
+                f"{key_hint(api_key_env)}",
+                listed.status_code,
+                said,
+            )
         body = _json(listed)
         entries = body.get("data") if isinstance(body, Mapping) else None
-        entries = [e for e in entries if isinstance(e, Mapping)] if isinstance(entries, list) else None
+        entries = (
+            [e for e in entries if isinstance(e, Mapping)] if isinstance(entries, list) else None
+        )
         models = None
         if entries is not None:  # ids, and llama.cpp's aliases
-            names = [e.get("id") for e in entries] + [a for e in entries if isinstance(e.get("aliases"), list)
-                                                      for a in e["aliases"]]
+            names = [e.get("id") for e in entries] + [
+                a for e in entries if isinstance(e.get("aliases"), list) for a in e["aliases"]
+            ]
             models = tuple(dict.fromkeys(str(n) for n in names if n is not None))
         props: Any = None
         if family in (None, "llamacpp"):
             props = _json(_get(client, server_root(base_url) + "/props"))
-    is_props = isinstance(props, Mapping) and ("default_generation_settings" in props or "total_slots" in props)
+    is_props = isinstance(props, Mapping) and (
+        "default_generation_settings" in props or "total_slots" in props
+    )
     owned = {str(e.get("owned_by")) for e in entries or () if e.get("owned_by") is not None}
     if family is not None:
         how = "the embedded llama.cpp server" if local else "forced (--server-family)"
@@ -194,12 +232,22 @@ def probe(base_url: str, *, api_key_env: str = "OPENAI_API_KEY", timeout_s: floa
     slots = props.get("total_slots") if is_props else None
     warnings: list[str] = []
     if model is not None and models is not None and model not in models and not local:
-        shown = ", ".join(repr(m) for m in models[:5]) + (", ..." if len(models) > 5 else "") or "nothing"
-        msg = (f"{where} does not list the model {model!r} (GET /v1/models lists {shown}); a server that "
-               "accepts any name runs its own model under it: check --model")
+        shown = (
+            ", ".join(repr(m) for m in models[:5]) + (", ..." if len(models) > 5 else "")
+            or "nothing"
+        )
+        msg = (
+            f"{where} does not list the model {model!r} (GET /v1/models lists {shown}); a server that "
+            "accepts any name runs its own model under it: check --model"
+        )
         if strict_model:
             raise LLMSetupError(msg + " (--strict-model)", 404, msg)
         warnings.append(msg + "; --strict-model makes this an error")
-    return ServerInfo(family=family, detected_by=how, models=models,
-                      total_slots=slots if isinstance(slots, int) and slots > 0 else None,
-                      settings=generation_settings(props) if is_props else {}, warnings=tuple(warnings))
+    return ServerInfo(
+        family=family,
+        detected_by=how,
+        models=models,
+        total_slots=slots if isinstance(slots, int) and slots > 0 else None,
+        settings=generation_settings(props) if is_props else {},
+        warnings=tuple(warnings),
+    )

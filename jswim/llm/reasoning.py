@@ -31,7 +31,9 @@ EFFORTS = ("minimal", "low", "medium", "high")
 
 _WANTS_COMPLETION_TOKENS = re.compile(r"max_completion_tokens", re.I)
 _ONLY_TEMPERATURE = re.compile(
-    r"temperature.*?only (?:the default )?\(?\s*(\d+(?:\.\d+)?)\s*\)?(?: value)? (?:is )?supported", re.I | re.S)
+    r"temperature.*?only (?:the default )?\(?\s*(\d+(?:\.\d+)?)\s*\)?(?: value)? (?:is )?supported",
+    re.I | re.S,
+)
 
 
 #: Model names of OpenAI's reasoning models (o1, o3, o4-mini, gpt-5 and their variants): their
@@ -42,7 +44,9 @@ OPENAI_REASONING = re.compile(r"^(o[134](-|$)|gpt-5(?!-chat)(-|$|\.))", re.I)
 #: Names of open reasoning models (behind vLLM or llama.cpp, which never refuse ``max_tokens``):
 #: under ``--reasoning auto`` they are sent the paper's ``max_tokens`` and cut while thinking,
 #: so the dry run says to give ``--reasoning on``.
-OPEN_REASONING = re.compile(r"(deepseek-r1|deepseek-reasoner|qwq|qwen3|thinking|reasoner|-r1\b|magistral)", re.I)
+OPEN_REASONING = re.compile(
+    r"(deepseek-r1|deepseek-reasoner|qwq|qwen3|thinking|reasoner|-r1\b|magistral)", re.I
+)
 
 #: The dry run's estimate of the reasoning tokens per call, as a share of the budget sent, per
 #: ``reasoning_effort`` (None: the provider's default, medium). An assumption, not a measurement
@@ -68,10 +72,16 @@ def dry_run_budget(model: str, mode: str, budget: int) -> int | None:
 
 def dry_run_warning(model: str, mode: str) -> str | None:
     """A dry run's warning for an open reasoning model that ``auto`` would cut while thinking."""
-    if mode == "auto" and not OPENAI_REASONING.search(_bare(model)) and OPEN_REASONING.search(_bare(model)):
-        return (f"{model} looks like a reasoning model: --reasoning auto sends it the paper's max_tokens (an open "
-                "server never refuses it) and its replies would be cut while thinking; give --reasoning on "
-                "(priced here without thinking)")
+    if (
+        mode == "auto"
+        and not OPENAI_REASONING.search(_bare(model))
+        and OPEN_REASONING.search(_bare(model))
+    ):
+        return (
+            f"{model} looks like a reasoning model: --reasoning auto sends it the paper's max_tokens (an open "
+            "server never refuses it) and its replies would be cut while thinking; give --reasoning on "
+            "(priced here without thinking)"
+        )
     return None
 
 
@@ -85,8 +95,11 @@ def check_mode(mode: str, effort: str | None = None) -> None:
 
 def wants_completion_tokens(server_message: str, payload: dict[str, Any]) -> bool:
     """The server refused ``max_tokens`` and named ``max_completion_tokens`` instead."""
-    return "max_tokens" in payload and bool(_WANTS_COMPLETION_TOKENS.search(server_message)) \
+    return (
+        "max_tokens" in payload
+        and bool(_WANTS_COMPLETION_TOKENS.search(server_message))
         and "max_tokens" in server_message.replace("max_completion_tokens", "")
+    )
 
 
 def accepted_temperature(server_message: str, payload: dict[str, Any]) -> float | None:
@@ -135,7 +148,9 @@ class ReasoningState:
     def __post_init__(self) -> None:
         check_mode(self.mode, self.effort)
         if not 1 <= self.budget <= 1_000_000:
-            raise ConfigError(f"the reasoning budget (--max-tokens) must be between 1 and 1000000, got {self.budget}")
+            raise ConfigError(
+                f"the reasoning budget (--max-tokens) must be between 1 and 1000000, got {self.budget}"
+            )
         if self.mode == "on":
             self.active = True
             if self.openai:
@@ -162,22 +177,34 @@ class ReasoningState:
             return False
         changed = False
         if wants_completion_tokens(server_message, payload):
-            if self.token_field != "max_completion_tokens" or not self.active:  # the first of many in flight
+            if (
+                self.token_field != "max_completion_tokens" or not self.active
+            ):  # the first of many in flight
                 self.token_field, self.active = "max_completion_tokens", True
-                self.notes.append(f"{model} refused max_tokens: sent max_completion_tokens={self.budget} instead "
-                                  "(room to think; --max-tokens sets it)")
+                self.notes.append(
+                    f"{model} refused max_tokens: sent max_completion_tokens={self.budget} instead "
+                    "(room to think; --max-tokens sets it)"
+                )
             changed = True
         t = accepted_temperature(server_message, payload)
         if t is not None:
             if self.temperature != t:
                 self.temperature = t
-                self.notes.append(f"{model} accepts only temperature {t:g}: sent {t:g} instead of "
-                                  f"{payload['temperature']:g} (a deviation from the paper's temperature 0)")
+                self.notes.append(
+                    f"{model} accepts only temperature {t:g}: sent {t:g} instead of "
+                    f"{payload['temperature']:g} (a deviation from the paper's temperature 0)"
+                )
             changed = True
         return changed
 
     def describe(self) -> dict[str, Any]:
         """What was sent because of this state (recorded with the study)."""
-        return {"mode": self.mode, "active": self.active, "token_field": self.token_field,
-                "budget": self.budget if self.active else None, "temperature_sent": self.temperature,
-                "effort": self.effort, "notes": list(self.notes)}
+        return {
+            "mode": self.mode,
+            "active": self.active,
+            "token_field": self.token_field,
+            "budget": self.budget if self.active else None,
+            "temperature_sent": self.temperature,
+            "effort": self.effort,
+            "notes": list(self.notes),
+        }

@@ -14,7 +14,8 @@ import threading
 import time
 from dataclasses import dataclass
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 from jswim.llm.tokens import estimate_prompt_tokens, estimate_tokens
 
@@ -23,7 +24,9 @@ MODEL = "reference-rule"
 
 _RECORD = re.compile(
     r"^\s*\d+:\s*\(([^)]*)\)\s*\[\s*(\d+)\s*,\s*(-?\d+)\s*\]\s*->\s*\(([^)]*)\),\s*X\s*(-?\d+)\s*->\s*(-?\d+)"
-    r"(?:,\s*stuck\s*(yes|no))?", re.M)
+    r"(?:,\s*stuck\s*(yes|no))?",
+    re.M,
+)
 _PAIR = re.compile(r"\[\s*(\d+)\s*,\s*(-?\d+)\s*\]")
 _RANGE = re.compile(r"stays? in \[\s*(-?[\d.]+)\s*,\s*(-?[\d.]+)\s*\]", re.I)
 _SPLIT = re.compile(r"the changed DOF ([\d ,or]+?) and the ROC ([-\d ,or]+)", re.I)
@@ -50,9 +53,16 @@ def read_prompt(text: str) -> tuple[int, list[Record], list[tuple[int, int]]]:
     records = []
     for m in _RECORD.finditer(text):
         dx = (int(m.group(6)) - int(m.group(5))) * direction
-        records.append(Record(_shape(m.group(1)), (int(m.group(2)), int(m.group(3))), _shape(m.group(4)), dx,
-                              m.group(7) == "yes"))
-    tail = text[max((m.end() for m in _RECORD.finditer(text)), default=0):]
+        records.append(
+            Record(
+                _shape(m.group(1)),
+                (int(m.group(2)), int(m.group(3))),
+                _shape(m.group(4)),
+                dx,
+                m.group(7) == "yes",
+            )
+        )
+    tail = text[max((m.end() for m in _RECORD.finditer(text)), default=0) :]
     split = _SPLIT.search(tail)
     if split:
         dofs = [int(v) for v in re.findall(r"\d+", split.group(1))]
@@ -120,17 +130,28 @@ def completion(body: dict[str, Any]) -> dict[str, Any]:
     text = f"[{dof}, {roc}]"
     prompt, done = estimate_prompt_tokens(messages), estimate_tokens(text)
     return {
-        "id": f"reference-{time.monotonic_ns()}", "object": "chat.completion", "created": int(time.time()),
-        "model": MODEL, "system_fingerprint": "jswim-reference-rule",
-        "choices": [{"index": 0, "message": {"role": "assistant", "content": text}, "finish_reason": "stop"}],
-        "usage": {"prompt_tokens": prompt, "completion_tokens": done, "total_tokens": prompt + done},
+        "id": f"reference-{time.monotonic_ns()}",
+        "object": "chat.completion",
+        "created": int(time.time()),
+        "model": MODEL,
+        "system_fingerprint": "jswim-reference-rule",
+        "choices": [
+            {"index": 0, "message": {"role": "assistant", "content": text}, "finish_reason": "stop"}
+        ],
+        "usage": {
+            "prompt_tokens": prompt,
+            "completion_tokens": done,
+            "total_tokens": prompt + done,
+        },
     }
 
 
 class _Handler(BaseHTTPRequestHandler):
     protocol_version = "HTTP/1.1"
 
-    def log_message(self, *args: Any) -> None:  # quiet: one line per request would drown a study's output
+    def log_message(
+        self, *args: Any
+    ) -> None:  # quiet: one line per request would drown a study's output
         return None
 
     def _send(self, status: int, payload: dict[str, Any]) -> None:
@@ -141,15 +162,18 @@ class _Handler(BaseHTTPRequestHandler):
         self.end_headers()
         self.wfile.write(data)
 
-    def do_GET(self) -> None:  # noqa: N802 (http.server's naming)
+    def do_GET(self) -> None:
         if self.path.rstrip("/") in ("/v1/models", "/models"):
-            self._send(200, {"object": "list", "data": [{"id": MODEL, "object": "model", "owned_by": "jswim"}]})
+            self._send(
+                200,
+                {"object": "list", "data": [{"id": MODEL, "object": "model", "owned_by": "jswim"}]},
+            )
         elif self.path.rstrip("/") in ("/health", "/v1/health"):
             self._send(200, {"status": "ok"})
         else:
             self._send(404, {"error": {"message": f"no such endpoint: {self.path}"}})
 
-    def do_POST(self) -> None:  # noqa: N802
+    def do_POST(self) -> None:
         size = int(self.headers.get("Content-Length") or 0)
         raw = self.rfile.read(size) if size else b""
         if self.path.rstrip("/") not in ("/v1/chat/completions", "/chat/completions"):
@@ -188,8 +212,10 @@ class ReferenceServer:
         host, port = self._httpd.server_address[:2]
         return f"http://{host}:{port}/v1"
 
-    def start(self) -> "ReferenceServer":
-        self._thread = threading.Thread(target=self._httpd.serve_forever, name="jswim-reference", daemon=True)
+    def start(self) -> ReferenceServer:
+        self._thread = threading.Thread(
+            target=self._httpd.serve_forever, name="jswim-reference", daemon=True
+        )
         self._thread.start()
         return self
 
@@ -206,7 +232,7 @@ class ReferenceServer:
         finally:
             self._httpd.server_close()
 
-    def __enter__(self) -> "ReferenceServer":
+    def __enter__(self) -> ReferenceServer:
         return self.start()
 
     def __exit__(self, *exc: object) -> None:

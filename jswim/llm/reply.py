@@ -16,9 +16,10 @@ import re
 import time
 import zlib
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
-from jswim.errors import MalformedReply  # noqa: F401  (also read from here)
+from jswim.errors import MalformedReply
 
 #: Message fields in which servers put reasoning next to (or instead of) the content.
 REASONING_FIELDS = ("reasoning_content", "reasoning", "thinking")
@@ -83,16 +84,18 @@ def split_reasoning(text: str) -> tuple[str, str]:
     if _HARMONY_ANY in text:
         head, sep, tail = text.rpartition(_HARMONY_FINAL)
         if sep:
-            return _harmony_clean(head), tail.replace("<|return|>", "").replace("<|end|>", "").strip()
+            return _harmony_clean(head), tail.replace("<|return|>", "").replace(
+                "<|end|>", ""
+            ).strip()
         return _harmony_clean(text), ""
     closes = list(_CLOSE.finditer(text))
     if closes:
         last = closes[-1]
-        head, answer = text[: last.start()], text[last.end():]
+        head, answer = text[: last.start()], text[last.end() :]
         return _strip_tags(head), answer.strip()
     opened = _OPEN.search(text)
     if opened:  # never closed: the reply ended inside the reasoning
-        return _strip_tags(text[opened.end():]), text[: opened.start()].strip()
+        return _strip_tags(text[opened.end() :]), text[: opened.start()].strip()
     return "", text.strip()
 
 
@@ -166,7 +169,9 @@ def read_completion(body: Any, *, streamed: bool = False) -> Completion:
         text, part_reasoning = content_text(message.get("content"))
         if not text and isinstance(message.get("refusal"), str):
             text = message["refusal"]
-        fields = [message[k] for k in REASONING_FIELDS if isinstance(message.get(k), str) and message[k]]
+        fields = [
+            message[k] for k in REASONING_FIELDS if isinstance(message.get(k), str) and message[k]
+        ]
     elif isinstance(choice.get("text"), str):  # legacy completions shape, from some gateways
         text, part_reasoning, fields = choice["text"], "", []
     else:
@@ -176,9 +181,12 @@ def read_completion(body: Any, *, streamed: bool = False) -> Completion:
     finish = choice.get("finish_reason")
     usage = body.get("usage")
     return Completion(
-        content=text, reasoning=reasoning, answer=answer,
+        content=text,
+        reasoning=reasoning,
+        answer=answer,
         finish_reason=finish if isinstance(finish, str) else None,
-        usage=usage if isinstance(usage, Mapping) else None, streamed=streamed,
+        usage=usage if isinstance(usage, Mapping) else None,
+        streamed=streamed,
         model=body["model"] if isinstance(body.get("model"), str) and body["model"] else None,
     )
 
@@ -247,7 +255,11 @@ def assemble_sse(text: str) -> dict[str, Any]:
         raise MalformedReply("the stream carried no choices")
     message: dict[str, Any] = {"role": "assistant", "content": "".join(content)}
     message.update({k: "".join(v) for k, v in reasoning.items() if v})
-    return {"choices": [{"index": 0, "message": message, "finish_reason": finish}], "usage": usage, "model": model}
+    return {
+        "choices": [{"index": 0, "message": message, "finish_reason": finish}],
+        "usage": usage,
+        "model": model,
+    }
 
 
 def error_message(body: Any) -> str:

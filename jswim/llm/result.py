@@ -50,7 +50,9 @@ class ChatResult:
     finish_reason: str | None = None
     raw: str = ""
     reasoning: str = ""
-    temperature_sent: float | None = None  # what the request carried (a reasoning model may refuse ours)
+    temperature_sent: float | None = (
+        None  # what the request carried (a reasoning model may refuse ours)
+    )
 
     @property
     def truncated(self) -> bool:
@@ -61,17 +63,29 @@ class ChatResult:
     def cut_while_thinking(self) -> bool:
         """Cut off before any answer while the model was still reasoning (reasoning text or
         reasoning tokens, no answer text): the budget left no room to think."""
-        return self.truncated and not self.text.strip() and bool(self.reasoning or self.usage.reasoning_tokens)
+        return (
+            self.truncated
+            and not self.text.strip()
+            and bool(self.reasoning or self.usage.reasoning_tokens)
+        )
 
     def as_dict(self) -> dict[str, Any]:
         """A transcript record (the raw content only when it differs from ``text``)."""
         u = self.usage
-        out = {"text": self.text, "prompt_tokens": u.prompt_tokens, "completion_tokens": u.completion_tokens,
-               "latency_s": round(self.latency_s, 6)}
+        out = {
+            "text": self.text,
+            "prompt_tokens": u.prompt_tokens,
+            "completion_tokens": u.completion_tokens,
+            "latency_s": round(self.latency_s, 6),
+        }
         plain = ("cache_hit", "shared", "retries", "cost_usd", "constraint", "finish_reason")
         out |= {k: getattr(self, k) for k in plain}
-        optional = {"reasoning_tokens": u.reasoning_tokens or None, "temperature_sent": self.temperature_sent,
-                    "reasoning": self.reasoning or None, "raw": None if self.raw == self.text else self.raw}
+        optional = {
+            "reasoning_tokens": u.reasoning_tokens or None,
+            "temperature_sent": self.temperature_sent,
+            "reasoning": self.reasoning or None,
+            "raw": None if self.raw == self.text else self.raw,
+        }
         return out | {k: v for k, v in optional.items() if v is not None}
 
 

@@ -14,16 +14,28 @@ from jswim.errors import ConfigError
 #: The ``--sampling`` presets.
 PRESETS = ("auto", "neutral", "server")
 
-_LLAMA = (("repeat_penalty", 1.0), ("top_k", 0), ("top_p", 1.0), ("min_p", 0.0), ("presence_penalty", 0.0),
-          ("frequency_penalty", 0.0))
+_LLAMA = (
+    ("repeat_penalty", 1.0),
+    ("top_k", 0),
+    ("top_p", 1.0),
+    ("min_p", 0.0),
+    ("presence_penalty", 0.0),
+    ("frequency_penalty", 0.0),
+)
 _OPENAI_FIELDS = (("top_p", 1.0), ("presence_penalty", 0.0), ("frequency_penalty", 0.0))
 
 #: Neutral sampling fields per server family (docs/servers.md).
 NEUTRAL: dict[str, tuple[tuple[str, float], ...]] = {
     "llamacpp": _LLAMA,
     "llama-cpp-python": _LLAMA,
-    "vllm": (("repetition_penalty", 1.0), ("top_k", -1), ("top_p", 1.0), ("min_p", 0.0),
-             ("presence_penalty", 0.0), ("frequency_penalty", 0.0)),
+    "vllm": (
+        ("repetition_penalty", 1.0),
+        ("top_k", -1),
+        ("top_p", 1.0),
+        ("min_p", 0.0),
+        ("presence_penalty", 0.0),
+        ("frequency_penalty", 0.0),
+    ),
     "ollama": _OPENAI_FIELDS,
     "generic": _OPENAI_FIELDS,
     "openai": (),
@@ -43,7 +55,9 @@ def check_preset(name: str) -> str:
     return name
 
 
-def sampling_fields(preset: str, family: str, *, embedded: bool = False) -> tuple[tuple[str, float], ...]:
+def sampling_fields(
+    preset: str, family: str, *, embedded: bool = False
+) -> tuple[tuple[str, float], ...]:
     """The sampling fields every request carries under ``preset`` for a server of ``family``.
 
     Parameters
@@ -73,7 +87,9 @@ def sampling_fields(preset: str, family: str, *, embedded: bool = False) -> tupl
 def describe(preset: str, family: str, fields: tuple[tuple[str, float], ...]) -> str:
     """One line for the output: what was sent for sampling and why."""
     if not fields:
-        return (f"sampling: {preset} for a {family} server: no sampling fields sent (the server's own defaults"
-                f"{'; OpenAI has no penalties or truncation by default' if family == 'openai' else ''})")
+        return (
+            f"sampling: {preset} for a {family} server: no sampling fields sent (the server's own defaults"
+            f"{'; OpenAI has no penalties or truncation by default' if family == 'openai' else ''})"
+        )
     sent = ", ".join(f"{k}={v:g}" for k, v in fields)
     return f"sampling: {preset} for a {family} server: {sent}"

@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Mapping
+from typing import Any
+from collections.abc import Iterable, Mapping
 
 from jswim.errors import ConfigError, check_choice
 from jswim.llm import constrain
@@ -43,11 +44,15 @@ def check_max_tokens(value: int | None) -> int | None:
 #: file's ``extra``, ``--extra-field``) naming one is refused, since it would change what is sent
 #: behind the cost reservation, the study's identity and the record of what was sent.
 CORE_FIELDS = {
-    "model": "--model", "messages": "--prompt-file (the prompt template)", "max_tokens": "--max-tokens",
-    "max_completion_tokens": "--max-tokens (with --reasoning on)", "temperature": "--temperature",
-    "stream": "nothing: jswim always sends \"stream\": false (--omit-field stream leaves it out)",
+    "model": "--model",
+    "messages": "--prompt-file (the prompt template)",
+    "max_tokens": "--max-tokens",
+    "max_completion_tokens": "--max-tokens (with --reasoning on)",
+    "temperature": "--temperature",
+    "stream": 'nothing: jswim always sends "stream": false (--omit-field stream leaves it out)',
     "response_format": "--constrain",
-    "grammar": "--constrain", "reasoning_effort": "--reasoning-effort",
+    "grammar": "--constrain",
+    "reasoning_effort": "--reasoning-effort",
 }
 
 
@@ -61,7 +66,9 @@ def check_extra_fields(fields: Iterable[tuple[str, Any]], option: str = "--extra
     """
     for name, _ in fields:
         if name in CORE_FIELDS:
-            raise ConfigError(f"{option} {name}=...: jswim sets {name!r} itself; use {CORE_FIELDS[name]}")
+            raise ConfigError(
+                f"{option} {name}=...: jswim sets {name!r} itself; use {CORE_FIELDS[name]}"
+            )
 
 
 @dataclass(frozen=True)
@@ -173,15 +180,25 @@ class ClientSettings:
     def __post_init__(self) -> None:
         check_mode(self.reasoning, self.reasoning_effort)
         object.__setattr__(self, "base_url", normalize_base_url(self.base_url))
-        object.__setattr__(self, "sampling", tuple((str(k), v) for k, v in dict(self.sampling).items()))
+        object.__setattr__(
+            self, "sampling", tuple((str(k), v) for k, v in dict(self.sampling).items())
+        )
         object.__setattr__(self, "omit_fields", tuple(sorted(set(self.omit_fields))))
         required = sorted(set(self.omit_fields) & set(REQUIRED_FIELDS))
         if required:
-            raise ConfigError(f"cannot leave out the request field(s) {', '.join(required)}: every request needs them")
+            raise ConfigError(
+                f"cannot leave out the request field(s) {', '.join(required)}: every request needs them"
+            )
         check_choice(self.constrain, constrain.MODES, "constrain")
         check_choice(self.server_kind, constrain.SERVER_KINDS, "server_kind")
-        if self.max_concurrency < 1 or self.max_retries < 0 or not (math.isfinite(self.timeout_s) and self.timeout_s > 0):
-            raise ConfigError("need max_concurrency >= 1, max_retries >= 0 and a finite timeout_s > 0")
+        if (
+            self.max_concurrency < 1
+            or self.max_retries < 0
+            or not (math.isfinite(self.timeout_s) and self.timeout_s > 0)
+        ):
+            raise ConfigError(
+                "need max_concurrency >= 1, max_retries >= 0 and a finite timeout_s > 0"
+            )
         if self.retry_for_s is not None and not (self.retry_for_s >= 0):  # also NaN
             raise ConfigError(f"retry_for_s must be >= 0 seconds, got {self.retry_for_s}")
         check_temperature(self.temperature)
@@ -189,11 +206,28 @@ class ClientSettings:
 
     def metadata(self) -> dict[str, Any]:
         """Settings worth recording with a run (no secrets: only the key's variable name)."""
-        plain = ("model", "temperature", "max_tokens", "seed", "constrain", "server_kind", "max_retries",
-                 "retry_for_s", "timeout_s", "omit_fields", "reasoning", "reasoning_max_tokens", "reasoning_effort",
-                 "extra_fields", "sampling")
+        plain = (
+            "model",
+            "temperature",
+            "max_tokens",
+            "seed",
+            "constrain",
+            "server_kind",
+            "max_retries",
+            "retry_for_s",
+            "timeout_s",
+            "omit_fields",
+            "reasoning",
+            "reasoning_max_tokens",
+            "reasoning_effort",
+            "extra_fields",
+            "sampling",
+        )
         out = {"base_url": safe_url(self.base_url)} | {name: getattr(self, name) for name in plain}
         # The tuple-valued fields as JSON shapes (keys keep their places: update only replaces).
-        out.update(omit_fields=list(self.omit_fields), extra_fields=dict(self.extra_fields),
-                   sampling=dict(self.sampling))
+        out.update(
+            omit_fields=list(self.omit_fields),
+            extra_fields=dict(self.extra_fields),
+            sampling=dict(self.sampling),
+        )
         return out

@@ -8,7 +8,7 @@ The estimate counts the pieces a byte-pair tokenizer first cuts text into, scale
 from __future__ import annotations
 
 import re
-from typing import Mapping, Sequence
+from collections.abc import Mapping, Sequence
 
 #: Scale from counted pieces to tokens (docs/paid-apis.md).
 CALIBRATION = 1.06
@@ -39,4 +39,6 @@ def estimate_tokens(text: str) -> int:
 
 def estimate_prompt_tokens(messages: Sequence[Mapping[str, object]]) -> int:
     """Estimated ``prompt_tokens`` a chat-completions server reports for ``messages``."""
-    return PER_REQUEST + sum(PER_MESSAGE + estimate_tokens(str(m.get("content") or "")) for m in messages)
+    return PER_REQUEST + sum(
+        PER_MESSAGE + estimate_tokens(str(m.get("content") or "")) for m in messages
+    )

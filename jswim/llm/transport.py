@@ -15,7 +15,8 @@ import asyncio
 import contextlib
 import socket
 import ssl
-from typing import Any, AsyncIterator, Iterable
+from typing import Any
+from collections.abc import AsyncIterator, Iterable
 
 import httpcore
 import httpx
@@ -30,7 +31,9 @@ def _to_httpx(exc: Exception, request: httpx.Request) -> httpx.TransportError:
 
 
 @contextlib.asynccontextmanager
-async def _deadline(timeout: float | None, error: type[Exception], what: str) -> AsyncIterator[None]:
+async def _deadline(
+    timeout: float | None, error: type[Exception], what: str
+) -> AsyncIterator[None]:
     if timeout is None:
         yield
         return
@@ -70,28 +73,38 @@ class _Stream(httpcore.AsyncNetworkStream):
         with contextlib.suppress(OSError):
             await self._writer.wait_closed()
 
-    async def start_tls(self, ssl_context: ssl.SSLContext, server_hostname: str | None = None,
-                        timeout: float | None = None) -> httpcore.AsyncNetworkStream:
+    async def start_tls(
+        self,
+        ssl_context: ssl.SSLContext,
+        server_hostname: str | None = None,
+        timeout: float | None = None,
+    ) -> httpcore.AsyncNetworkStream:
         raise httpcore.ConnectError("LoopbackTransport serves plain http only")
 
     def get_extra_info(self, info: str) -> Any:
         # httpcore asks "is_readable" of an idle keep-alive connection: readable means the server
         # closed it (or sent something unasked), so the connection must not be reused.
         if info == "is_readable":
-            return self._reader.at_eof() or len(self._reader._buffer) > 0  # noqa: SLF001
+            return self._reader.at_eof() or len(self._reader._buffer) > 0
         if info in ("socket", "peername", "sockname"):
             return self._writer.get_extra_info(info)
         return None
 
 
 class _Backend(httpcore.AsyncNetworkBackend):
-    async def connect_tcp(self, host: str, port: int, timeout: float | None = None,
-                          local_address: str | None = None,
-                          socket_options: Iterable[Any] | None = None) -> httpcore.AsyncNetworkStream:
+    async def connect_tcp(
+        self,
+        host: str,
+        port: int,
+        timeout: float | None = None,
+        local_address: str | None = None,
+        socket_options: Iterable[Any] | None = None,
+    ) -> httpcore.AsyncNetworkStream:
         try:
             async with _deadline(timeout, httpcore.ConnectTimeout, "connect"):
                 reader, writer = await asyncio.open_connection(
-                    host, port, local_addr=(local_address, 0) if local_address else None)
+                    host, port, local_addr=(local_address, 0) if local_address else None
+                )
         except OSError as exc:
             raise httpcore.ConnectError(str(exc) or type(exc).__name__) from None
         sock = writer.get_extra_info("socket")
@@ -140,22 +153,36 @@ class LoopbackTransport(httpx.AsyncBaseTransport):
 
     async def handle_async_request(self, request: httpx.Request) -> httpx.Response:
         if request.url.scheme != "http":
-            raise httpx.UnsupportedProtocol("LoopbackTransport serves plain http only", request=request)
+            raise httpx.UnsupportedProtocol(
+                "LoopbackTransport serves plain http only", request=request
+            )
         core = httpcore.Request(
             method=request.method,
-            url=httpcore.URL(scheme=request.url.raw_scheme, host=request.url.raw_host,
-                             port=request.url.port, target=request.url.raw_path),
+            url=httpcore.URL(
+                scheme=request.url.raw_scheme,
+                host=request.url.raw_host,
+                port=request.url.port,
+                target=request.url.raw_path,
+            ),
             headers=request.headers.raw,
             content=request.stream,
             extensions=request.extensions,
         )
         try:
             response = await self._pool.handle_async_request(core)
-        except (httpcore.NetworkError, httpcore.TimeoutException, httpcore.ProtocolError,
-                httpcore.UnsupportedProtocol) as exc:
+        except (
+            httpcore.NetworkError,
+            httpcore.TimeoutException,
+            httpcore.ProtocolError,
+            httpcore.UnsupportedProtocol,
+        ) as exc:
             raise _to_httpx(exc, request) from None
-        return httpx.Response(status_code=response.status, headers=response.headers,
-                              stream=_ResponseBody(response, request), extensions=response.extensions)
+        return httpx.Response(
+            status_code=response.status,
+            headers=response.headers,
+            stream=_ResponseBody(response, request),
+            extensions=response.extensions,
+        )
 
     async def aclose(self) -> None:
         await self._pool.aclose()

@@ -45,7 +45,11 @@ def is_local_host(url: str) -> bool:
 
 def _is_local_name(host: str) -> bool:
     """A host a scheme-less URL most likely reaches over plain http (this machine, a LAN box)."""
-    if host in ("localhost", "") or host.endswith((".local", ".lan", ".internal")) or "." not in host:
+    if (
+        host in ("localhost", "")
+        or host.endswith((".local", ".lan", ".internal"))
+        or "." not in host
+    ):
         return True
     try:
         ip = ipaddress.ip_address(host)
@@ -79,7 +83,9 @@ def normalize_base_url(url: str) -> str:
     try:
         parts.port  # noqa: B018 - raises on a bad port
     except ValueError:
-        raise ConfigError(f"the server base URL {redact_url(text)!r} has a bad port; {example}") from None
+        raise ConfigError(
+            f"the server base URL {redact_url(text)!r} has a bad port; {example}"
+        ) from None
     if not parts.hostname:
         raise ConfigError(f"the server base URL {redact_url(text)!r} has no host; {example}")
     path = parts.path.rstrip("/")  # the first endpoint suffix cut off; no path at all means /v1
@@ -90,4 +96,6 @@ def normalize_base_url(url: str) -> str:
 def endpoint(base_url: str, name: str = "chat/completions") -> str:
     """``base_url`` + ``/name``, keeping a query string (``?api-version=...``) at the end."""
     parts = urlsplit(base_url)
-    return urlunsplit((parts.scheme, parts.netloc, parts.path.rstrip("/") + "/" + name, parts.query, ""))
+    return urlunsplit(
+        (parts.scheme, parts.netloc, parts.path.rstrip("/") + "/" + name, parts.query, "")
+    )

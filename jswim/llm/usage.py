@@ -9,7 +9,7 @@ not be priced: both rules are in docs/paid-apis.md.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 #: When :data:`DEFAULT_PRICES` was read off the providers' list prices (standard tier, no batch
 #: or cached-input discounts). Printed with every estimate.
@@ -43,7 +43,7 @@ class Usage:
         return self.prompt_tokens + self.completion_tokens
 
     @classmethod
-    def from_response(cls, usage: Mapping | None) -> "Usage":
+    def from_response(cls, usage: Mapping | None) -> Usage:
         """Read an OpenAI-style ``usage`` object. A count that is missing, or is not a
         non-negative whole number (``"n/a"``, ``[3]``, ``-1``, ``1.5``, NaN), counts as 0, as when
         a server sends no usage at all: the answer is still read."""
@@ -68,7 +68,9 @@ def _count(value: object) -> int:
     if isinstance(value, int):
         return value if value >= 0 else 0
     if isinstance(value, float):
-        return int(value) if value.is_integer() and 0 <= value < 2**53 else 0  # NaN and inf are not integers
+        return (
+            int(value) if value.is_integer() and 0 <= value < 2**53 else 0
+        )  # NaN and inf are not integers
     if isinstance(value, str) and value.strip().isascii() and value.strip().isdigit():
         return int(value.strip())
     return 0
@@ -108,8 +110,14 @@ class PriceTable:
 PRICE_LOCAL_OPTION = "--price-local"
 
 
-def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *, local_host: bool,
-                listed: Sequence[str] | None = None, price_local: bool = False) -> tuple[PriceTable, str | None]:
+def price_table(
+    prices: Mapping[str, tuple[float, float]] | None,
+    model: str,
+    *,
+    local_host: bool,
+    listed: Sequence[str] | None = None,
+    price_local: bool = False,
+) -> tuple[PriceTable, str | None]:
     """The table to price ``model``'s calls by, and why it is empty when it is.
 
     Parameters
@@ -137,16 +145,29 @@ def price_table(prices: Mapping[str, tuple[float, float]] | None, model: str, *,
     if table.entry(model) is None:
         return table, None  # not a priced model anyway
     if local_host and not price_local:
-        return PriceTable({}), (f"{model!r} on a local or LAN server is not priced at a cloud list price; "
-                                f"{PRICE_LOCAL_OPTION} prices it (a local gateway to a paid API)")
-    if listed is not None and model not in listed:  # also with --price-local: a server may answer any name
-        return PriceTable({}), (f"the server does not list {model!r}, so its calls are not priced at "
-                                f"{model}'s list price; --prices FILE gives your own prices, applied as given")
+        return PriceTable({}), (
+            f"{model!r} on a local or LAN server is not priced at a cloud list price; "
+            f"{PRICE_LOCAL_OPTION} prices it (a local gateway to a paid API)"
+        )
+    if (
+        listed is not None and model not in listed
+    ):  # also with --price-local: a server may answer any name
+        return PriceTable({}), (
+            f"the server does not list {model!r}, so its calls are not priced at "
+            f"{model}'s list price; --prices FILE gives your own prices, applied as given"
+        )
     return table, None
 
 
-def cap_refusal(prices: Mapping[str, tuple[float, float]] | None, model: str, cap_usd: float | None, *,
-                local_host: bool, listed: Sequence[str] | None = None, price_local: bool = False) -> str | None:
+def cap_refusal(
+    prices: Mapping[str, tuple[float, float]] | None,
+    model: str,
+    cap_usd: float | None,
+    *,
+    local_host: bool,
+    listed: Sequence[str] | None = None,
+    price_local: bool = False,
+) -> str | None:
     """Why a cost cap could not hold for ``model``'s calls (one line naming ``--prices``), or ``None``.
 
     A cap holds when the calls have a price: from the user's table, or the list price where
@@ -156,7 +177,9 @@ def cap_refusal(prices: Mapping[str, tuple[float, float]] | None, model: str, ca
     """
     if cap_usd is None:
         return None
-    table, why = price_table(prices, model, local_host=local_host, listed=listed, price_local=price_local)
+    table, why = price_table(
+        prices, model, local_host=local_host, listed=listed, price_local=price_local
+    )
     head = f"--max-cost {cap_usd:g} cannot hold, since the calls to {model!r} would cost $0"
     if why is not None:
         also = "" if "--prices" in why else "; or --prices FILE with your own prices"
@@ -167,8 +190,10 @@ def cap_refusal(prices: Mapping[str, tuple[float, float]] | None, model: str, ca
         return f"{head}: --prices has no price for {model!r}; add one to the file; nothing was sent"
     if local_host and not price_local:
         return None  # a local server's own model: free, nothing to cap
-    return (f"{head}: the built-in table of {PRICES_AS_OF} has no price for {model!r}; give --prices FILE "
-            f"with its price; nothing was sent")
+    return (
+        f"{head}: the built-in table of {PRICES_AS_OF} has no price for {model!r}; give --prices FILE "
+        f"with its price; nothing was sent"
+    )
 
 
 @dataclass
@@ -191,7 +216,7 @@ class UsageTotals:
     cost_usd: float = 0.0
     latency_s: float = 0.0
 
-    def add(self, result: "object") -> None:
+    def add(self, result: object) -> None:
         """Add one :class:`jswim.llm.client.ChatResult`."""
         self.calls += 1
         self.retries += result.retries
@@ -208,7 +233,7 @@ class UsageTotals:
             self.reasoning_tokens += result.usage.reasoning_tokens
             self.cost_usd += result.cost_usd
 
-    def merge(self, others: Iterable["UsageTotals"]) -> "UsageTotals":
+    def merge(self, others: Iterable[UsageTotals]) -> UsageTotals:
         """Sum of ``self`` and ``others`` (e.g. runs into a study), as a new object."""
         out = UsageTotals(**vars(self))
         for o in others:

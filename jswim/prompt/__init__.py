@@ -11,7 +11,7 @@ import re
 import string
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterable, Sequence
+from collections.abc import Iterable, Sequence
 
 from jswim.actions import check_action_set, check_roc_levels
 from jswim.errors import ConfigError, check_direction, check_size
@@ -49,7 +49,10 @@ DEFAULT_SENTENCES = {
     "S5": "Reply with the next action as [changed DOF, ROC], {choices}.",
 }
 
-DEFAULT_RECORD = "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}, stuck {stuck}"
+DEFAULT_RECORD = (
+    "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}, stuck {stuck}"
+)
+
 
 def _join_prose(items: Sequence[str], last: str = "and") -> str:
     if len(items) <= 1:
@@ -92,11 +95,17 @@ class SceneView:
     starts: tuple[tuple[float, float], ...] = ()
 
     def __post_init__(self) -> None:
-        if isinstance(self.swimmers, bool) or not isinstance(self.swimmers, int) or self.swimmers < 1:
+        if (
+            isinstance(self.swimmers, bool)
+            or not isinstance(self.swimmers, int)
+            or self.swimmers < 1
+        ):
             raise ConfigError(f"a scene holds 1 or more swimmers, got {self.swimmers}")
         if self.own not in (range(self.swimmers + 1) if self.swimmers > 1 else (0,)):
-            raise ConfigError(f"a per-swimmer prompt needs several swimmers and one of them, got swimmer {self.own} "
-                              f"of {self.swimmers}")
+            raise ConfigError(
+                f"a per-swimmer prompt needs several swimmers and one of them, got swimmer {self.own} "
+                f"of {self.swimmers}"
+            )
 
 
 @dataclass(frozen=True)
@@ -134,9 +143,13 @@ class SwimmerText:
         if self.n_dof < 1:
             raise ConfigError(f"n_dof must be >= 1, got {self.n_dof}")
         k = check_roc_levels(self.roc_levels)
-        if not self.rocs or any(isinstance(r, bool) or not isinstance(r, int) or abs(r) > k for r in self.rocs):
-            raise ConfigError(f"rocs must be a non-empty set of integers in -{k}..{k} (--roc-levels {k}), "
-                              f"got {self.rocs}")
+        if not self.rocs or any(
+            isinstance(r, bool) or not isinstance(r, int) or abs(r) > k for r in self.rocs
+        ):
+            raise ConfigError(
+                f"rocs must be a non-empty set of integers in -{k}..{k} (--roc-levels {k}), "
+                f"got {self.rocs}"
+            )
         object.__setattr__(self, "rocs", tuple(sorted(set(self.rocs))))
 
     def bounds(self, k: int) -> tuple[float, float]:
@@ -151,7 +164,9 @@ class SwimmerText:
 
 
 #: S2's extra sentence when ``roc_levels = K > 1`` (the paper's K = 1 prompt has none).
-ROC_SCALE_SENTENCE = "In one step a ROC of k changes the DOF by k/{roc_levels} of its range, stopping at its limits."
+ROC_SCALE_SENTENCE = (
+    "In one step a ROC of k changes the DOF by k/{roc_levels} of its range, stopping at its limits."
+)
 
 #: S5's extra sentence when ``roc_levels = K > 1``: the reply carries a whole number, as the paper
 #: advises (no decimals; the sign is the only non-digit).
@@ -244,7 +259,7 @@ class PromptTemplate:
     def sentence(self, name: str) -> str:
         return dict(self.sentences)[name]
 
-    def with_sentences(self, **texts: str) -> "PromptTemplate":
+    def with_sentences(self, **texts: str) -> PromptTemplate:
         """A copy with some sentences replaced, e.g. ``with_sentences(S4="...")``."""
         bad = set(texts) - set(SENTENCES)
         if bad:
@@ -253,7 +268,7 @@ class PromptTemplate:
         return replace(self, sentences=tuple((k, merged[k]) for k in SENTENCES))
 
     @classmethod
-    def from_text(cls, text: str) -> "PromptTemplate":
+    def from_text(cls, text: str) -> PromptTemplate:
         """Parse template text (whole layout, or ``[layout]``/``[S1]``../``[record]`` sections)."""
         header = re.compile(r"^\[(layout|record|S[1-5])\]\s*$", re.MULTILINE)
         if not header.search(text):
@@ -269,27 +284,33 @@ class PromptTemplate:
         tpl = cls()
         tpl = tpl.with_sentences(**{k: v for k, v in sections.items() if k in SENTENCES})
         return replace(
-            tpl, layout=sections.get("layout", tpl.layout), record=sections.get("record", tpl.record)
+            tpl,
+            layout=sections.get("layout", tpl.layout),
+            record=sections.get("record", tpl.record),
         )
 
     @classmethod
-    def from_file(cls, path: str | Path) -> "PromptTemplate":
+    def from_file(cls, path: str | Path) -> PromptTemplate:
         """Read a template file (format: docs/api/prompt.md); at most
         :data:`MAX_TEMPLATE_BYTES` (every request carries the whole prompt)."""
         try:
             size = Path(path).stat().st_size
             if size > MAX_TEMPLATE_BYTES:
-                raise ConfigError(f"--prompt-file {path} is {size / 1e6:.1f} MB; a prompt template may be at most "
-                                  f"{MAX_TEMPLATE_BYTES // 1000} kB (every request sends it whole)")
+                raise ConfigError(
+                    f"--prompt-file {path} is {size / 1e6:.1f} MB; a prompt template may be at most "
+                    f"{MAX_TEMPLATE_BYTES // 1000} kB (every request sends it whole)"
+                )
             text = Path(path).read_text(encoding="utf-8")
         except OSError as exc:
             raise ConfigError(f"cannot read prompt template {path}: {exc.strerror}") from None
         except UnicodeDecodeError as exc:
-            raise ConfigError(f"--prompt-file {path}: not UTF-8 text (byte {exc.start}); "
-                              "save the template as UTF-8") from None
+            raise ConfigError(
+                f"--prompt-file {path}: not UTF-8 text (byte {exc.start}); "
+                "save the template as UTF-8"
+            ) from None
         return cls.from_text(text).check(f"--prompt-file {path}")
 
-    def check(self, where: str = "the prompt template") -> "PromptTemplate":
+    def check(self, where: str = "the prompt template") -> PromptTemplate:
         """``self`` if every placeholder is known and the prompt shows the history and the allowed
         set (the paper's S3 and S5, or ``{history}`` and ``{allowed}``/``{choices}``); else
         :class:`ConfigError` naming what is wrong. Checked when a file is read, so a bad file
@@ -303,21 +324,29 @@ class PromptTemplate:
             try:
                 names = [f for _, f, _, _ in string.Formatter().parse(text) if f is not None]
             except ValueError as exc:
-                raise ConfigError(f"{where}: bad braces in the {what} ({exc}); write literal braces as {{{{ }}}}") from None
+                raise ConfigError(
+                    f"{where}: bad braces in the {what} ({exc}); write literal braces as {{{{ }}}}"
+                ) from None
             unknown = sorted({n for n in names if n not in known})
             if unknown:
-                raise ConfigError(f"{where}: unknown placeholder {{{unknown[0]}}} in the {what}; known: "
-                                  + ", ".join("{" + k + "}" for k in known))
+                raise ConfigError(
+                    f"{where}: unknown placeholder {{{unknown[0]}}} in the {what}; known: "
+                    + ", ".join("{" + k + "}" for k in known)
+                )
         shown = _fields(self.layout)
         for name in SENTENCES:
             if name in shown:
                 shown |= _fields(self.sentence(name))
         # Shown means reached from the layout, directly or through a sentence it uses.
-        for needs, put, what in ((("history",), "{S3} or {history}", "history"),
-                                 (("allowed", "choices"), "{S5} or {allowed}", "allowed set")):
+        for needs, put, what in (
+            (("history",), "{S3} or {history}", "history"),
+            (("allowed", "choices"), "{S5} or {allowed}", "allowed set"),
+        ):
             if not shown & set(needs):
-                raise ConfigError(f"{where}: the prompt never shows the {what}; put {put} in the layout "
-                                  "(or in a sentence it uses)")
+                raise ConfigError(
+                    f"{where}: the prompt never shows the {what}; put {put} in the layout "
+                    "(or in a sentence it uses)"
+                )
         return self
 
 
@@ -333,7 +362,9 @@ def _fill(template: str, values: dict[str, str], what: str) -> str:
             + ", ".join(sorted(values))
         ) from None
     except (ValueError, IndexError) as exc:
-        raise ConfigError(f"bad {what} template ({exc}); write literal braces as {{{{ }}}}") from None
+        raise ConfigError(
+            f"bad {what} template ({exc}); write literal braces as {{{{ }}}}"
+        ) from None
 
 
 def _tidy(text: str) -> str:
@@ -349,7 +380,9 @@ def normalize_mask(mask: Iterable[str] | Sequence[bool] | None) -> frozenset[str
     items = list(mask)
     if items and all(isinstance(v, (bool, int)) and not isinstance(v, str) for v in items):
         if len(items) != len(SENTENCES):
-            raise ConfigError(f"a keep-mask needs {len(SENTENCES)} flags (S1..S5), got {len(items)}")
+            raise ConfigError(
+                f"a keep-mask needs {len(SENTENCES)} flags (S1..S5), got {len(items)}"
+            )
         return frozenset(n for n, keep in zip(SENTENCES, items) if not keep)
     names = frozenset(str(v).upper() for v in items)
     bad = names - set(SENTENCES)
@@ -497,43 +530,68 @@ def scene_template(view: SceneView, base: PromptTemplate | None = None) -> Promp
         for k in range(1, n + 1) if view.wall else ():
             show("H" if n == 1 else f"H{k}", f"h{k}")
             show("tilt" if n == 1 else f"tilt{k}", f"tilt{k}")
-    s3 = ("Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, "
-          + ", ".join(legend) + ", stuck):\n{history}")
-    record = "{step}: ({dofs_before}) {action} -> ({dofs_after}), " + ", ".join(line) + ", stuck {stuck}"
+    s3 = (
+        "Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, "
+        + ", ".join(legend)
+        + ", stuck):\n{history}"
+    )
+    record = (
+        "{step}: ({dofs_before}) {action} -> ({dofs_after}), " + ", ".join(line) + ", stuck {stuck}"
+    )
     return replace(base.with_sentences(S3=s3), record=record)
 
 
 #: S2's extra sentence for a wall (one swimmer), for a pair, and for a pair above a wall.
-WALL_SENTENCE = ("The swimmer moves above a flat wall: H is its height above the wall in thousandths of its sphere "
-                 "radius and tilt its angle to the wall in radians.")
-PAIR_SENTENCE = ("D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swimmer 2, which starts {separation} "
-                 "sphere radii ahead of it on the same axis; X1 and X2 are their positions, and the movement sought is "
-                 "that of their mean.")
+WALL_SENTENCE = (
+    "The swimmer moves above a flat wall: H is its height above the wall in thousandths of its sphere "
+    "radius and tilt its angle to the wall in radians."
+)
+PAIR_SENTENCE = (
+    "D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swimmer 2, which starts {separation} "
+    "sphere radii ahead of it on the same axis; X1 and X2 are their positions, and the movement sought is "
+    "that of their mean."
+)
 #: S2's extra sentence of one swimmer's own prompt in a pair (``--pair-prompt each``): where the
 #: other starts (``{where}``: ``ahead of`` for swimmer 1, ``behind`` for swimmer 2), that it moves
 #: between this one's steps, and what ``other X`` is; with a wall, :data:`WALL_SENTENCE` follows.
-OWN_PAIR_SENTENCE = ("A second swimmer on the same axis, steered on its own, starts {separation} sphere radii {where} "
-                     "this one and moves its arms between this one's steps; other X is its position, counted from its "
-                     "own start as X is.")
+OWN_PAIR_SENTENCE = (
+    "A second swimmer on the same axis, steered on its own, starts {separation} sphere radii {where} "
+    "this one and moves its arms between this one's steps; other X is its position, counted from its "
+    "own start as X is."
+)
 #: With several swimmers above a wall (``{all}``: Both or All; ``{to}``: and, or to for three or more).
-SEVERAL_WALL_SENTENCE = ("{all} swim above a flat wall: H1 {to} H{n} are their heights above it in thousandths of the "
-                         "sphere radius, tilt1 {to} tilt{n} their angles to it in radians.")
+SEVERAL_WALL_SENTENCE = (
+    "{all} swim above a flat wall: H1 {to} H{n} are their heights above it in thousandths of the "
+    "sphere radius, tilt1 {to} tilt{n} their angles to it in radians."
+)
 
 
 #: S2's extra sentence of a school (three or more swimmers; ``{starts}``: where each starts from
 #: swimmer 1, or from this one in one swimmer's own prompt, ``--pair-prompt each``).
-SCHOOL_SENTENCE = ("Swimmer k has the arms D(2k-1) and D(2k), up to D{last} of swimmer {n}; they start with {starts} "
-                   "from swimmer 1; X1 to X{n} are their positions, and the movement sought is that of their mean.")
-OWN_SCHOOL_SENTENCE = ("This is swimmer {own} of {n}, steered on its own; the others start with {starts} from it and "
-                       "move their arms between this one's steps; Xk is swimmer k's position, counted from its own "
-                       "start as X is.")
+SCHOOL_SENTENCE = (
+    "Swimmer k has the arms D(2k-1) and D(2k), up to D{last} of swimmer {n}; they start with {starts} "
+    "from swimmer 1; X1 to X{n} are their positions, and the movement sought is that of their mean."
+)
+OWN_SCHOOL_SENTENCE = (
+    "This is swimmer {own} of {n}, steered on its own; the others start with {starts} from it and "
+    "move their arms between this one's steps; Xk is swimmer k's position, counted from its own "
+    "start as X is."
+)
 
 
 def _starts(view: SceneView) -> str:
     """``swimmer 1 at (0, 0), ... sphere radii (x, z)``: each start from swimmer ``own`` (or 1)."""
     ox, oz = view.starts[max(view.own, 1) - 1]
-    return _join_prose([f"swimmer {k} at ({x - ox:g}, {z - oz:g})" for k, (x, z) in enumerate(view.starts, 1)
-                        if k != view.own]) + " sphere radii (x, z)"
+    return (
+        _join_prose(
+            [
+                f"swimmer {k} at ({x - ox:g}, {z - oz:g})"
+                for k, (x, z) in enumerate(view.starts, 1)
+                if k != view.own
+            ]
+        )
+        + " sphere radii (x, z)"
+    )
 
 
 def scene_sentence(view: SceneView | None) -> str:
@@ -548,11 +606,19 @@ def scene_sentence(view: SceneView | None) -> str:
     elif n == 2:
         parts.append(PAIR_SENTENCE.format(separation=f"{view.separation:g}"))
     elif n > 2:
-        parts.append((OWN_SCHOOL_SENTENCE if view.own else SCHOOL_SENTENCE).format(
-            own=view.own, n=n, last=2 * n, starts=_starts(view)))
+        parts.append(
+            (OWN_SCHOOL_SENTENCE if view.own else SCHOOL_SENTENCE).format(
+                own=view.own, n=n, last=2 * n, starts=_starts(view)
+            )
+        )
     if view.wall:
-        parts.append(WALL_SENTENCE if n == 1 or view.own else
-                     SEVERAL_WALL_SENTENCE.format(all="Both" if n == 2 else "All", to="and" if n == 2 else "to", n=n))
+        parts.append(
+            WALL_SENTENCE
+            if n == 1 or view.own
+            else SEVERAL_WALL_SENTENCE.format(
+                all="Both" if n == 2 else "All", to="and" if n == 2 else "to", n=n
+            )
+        )
     return " ".join(parts)
 
 
@@ -592,7 +658,9 @@ def render_prompt(
     """
     check_direction(direction)
     shown = list(records[-cfg.n_ht :]) if cfg.n_ht > 0 else []
-    allowed = list(options) if options is not None else allowed_actions(sw, cfg.action_set, dof_values)
+    allowed = (
+        list(options) if options is not None else allowed_actions(sw, cfg.action_set, dof_values)
+    )
     values = _prompt_values(sw, cfg, direction, shown, allowed, dof_values, x, summary)
     for name in SENTENCES:
         text = "" if name in cfg.drop else _fill(cfg.template.sentence(name), values, name)
@@ -615,8 +683,16 @@ def render_prompt(
 _ROC_SENTENCES = {"S2": ROC_SCALE_SENTENCE, "S5": ROC_FORMAT_SENTENCE}
 
 
-def _prompt_values(sw: SwimmerText, cfg: PromptConfig, direction: int, shown: Sequence[HistoryRecord],
-                   allowed: Sequence[Action], dof_values: Sequence[float], x: float, summary: str) -> dict[str, str]:
+def _prompt_values(
+    sw: SwimmerText,
+    cfg: PromptConfig,
+    direction: int,
+    shown: Sequence[HistoryRecord],
+    allowed: Sequence[Action],
+    dof_values: Sequence[float],
+    x: float,
+    summary: str,
+) -> dict[str, str]:
     """The placeholders of layouts and sentences (one place: rendering and :meth:`PromptTemplate.check`)."""
     d = sw.dof_decimals
     return {
@@ -645,8 +721,12 @@ def _placeholders() -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Names a layout or sentence may use (the variables and S1..S5), and a record line's."""
     sw = SwimmerText(2, -1.0, 1.0, 3, (-1, 0, 1))  # any swimmer: only the names count
     cfg = PromptConfig()
-    rec = HistoryRecord(1, (1.0, 1.0), (-1.0, 1.0), Action(1, -1), 0.0, 0.0)  # scene names are always listed
-    prompt = tuple(_prompt_values(sw, cfg, 1, [], allowed_actions(sw), (1.0, 1.0), 0.0, "")) + SENTENCES
+    rec = HistoryRecord(
+        1, (1.0, 1.0), (-1.0, 1.0), Action(1, -1), 0.0, 0.0
+    )  # scene names are always listed
+    prompt = (
+        tuple(_prompt_values(sw, cfg, 1, [], allowed_actions(sw), (1.0, 1.0), 0.0, "")) + SENTENCES
+    )
     return prompt, tuple(_record_values(rec, sw, cfg))
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import re
 import unicodedata
-from typing import Sequence
+from collections.abc import Sequence
 
 from jswim.prompt.numbers import Action
 
@@ -15,17 +15,32 @@ _INT = r"([+-]?\s*[0-9]+)"  # ASCII digits only (see parse_reply)
 _Q = r"[\"']?"  # a JSON key's closing quote
 _PATTERNS = (
     # [1, -1]  (2,1)  [D1, -1]  {1, 1}
-    re.compile(r"[\[\(\{]\s*(?:D\s*)?" + _INT + r"\s*[,;]\s*(?:ROC\s*[:=]?\s*)?" + _INT + r"\s*[\]\)\}]", re.I),
+    re.compile(
+        r"[\[\(\{]\s*(?:D\s*)?" + _INT + r"\s*[,;]\s*(?:ROC\s*[:=]?\s*)?" + _INT + r"\s*[\]\)\}]",
+        re.I,
+    ),
     # DOF 1, ROC -1 / DOF=2 and ROC=+1 / dof: 1 roc: 0 / {"dof": 2, "roc": -1}
     # (a ROC written as a decimal or a fraction, "ROC 0.5" or "ROC 1/2", is no integer: no match)
-    re.compile(r"\bDOF" + _Q + r"\s*[:=]?\s*(?:D\s*)?" + _INT + r"\W{0,4}(?:and\s+)?ROC" + _Q + r"\s*[:=]?\s*" + _INT
-               + r"(?!\d|[./]\d)", re.I),
+    re.compile(
+        r"\bDOF"
+        + _Q
+        + r"\s*[:=]?\s*(?:D\s*)?"
+        + _INT
+        + r"\W{0,4}(?:and\s+)?ROC"
+        + _Q
+        + r"\s*[:=]?\s*"
+        + _INT
+        + r"(?!\d|[./]\d)",
+        re.I,
+    ),
 )
 # Two bare integers, "2, -1": only as the whole reply or right after an answer marker.
 _BARE = re.compile(r"(?:D\s*)?([+-]?[0-9]+)\s*(?:,|;|\s)\s*([+-]?[0-9]+)(?![0-9]|\.[0-9])")
 # Words that introduce the answer; the final answer is the first candidate after the last one.
 _MARKER = re.compile(
-    r"\b(?:final\s+answer|answer|next\s+(?:action|move)|my\s+(?:action|move|choice)|action\s*" + _Q + r"\s*(?:[:=]|is\b)"
+    r"\b(?:final\s+answer|answer|next\s+(?:action|move)|my\s+(?:action|move|choice)|action\s*"
+    + _Q
+    + r"\s*(?:[:=]|is\b)"
     r"|(?:i\s+(?:will|'ll|would|)\s*)?(?:choose|pick|select|go\s+with|take)|so|therefore|thus|hence)\b",
     re.I,
 )
@@ -37,7 +52,9 @@ _NEGATION = re.compile(
 )
 # ...unless a new clause starts in between ("[1, 1] didn't work, so [2, -1]").
 _NEW_CLAUSE = re.compile(r"\b(?:so|but|then|therefore|thus|hence|use|try|choose|pick|take)\b", re.I)
-_FILLER = re.compile(r"^[\s`'\"*>_]*(?:json|text)?[\s`'\"*:>_]*$", re.I)  # fences, quotes, bold marks
+_FILLER = re.compile(
+    r"^[\s`'\"*>_]*(?:json|text)?[\s`'\"*:>_]*$", re.I
+)  # fences, quotes, bold marks
 
 
 def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | None:
@@ -84,11 +101,16 @@ def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | 
             found.setdefault(m.start(), (m.end(), Action(dof, roc)))
     for at in [0, *markers]:  # bare pairs: the whole reply, or right after an answer word
         m = _BARE.match(text, at + len(text[at:]) - len(text[at:].lstrip(" \t\n:=*`'\"")))
-        if m and (at > 0 or _FILLER.match(text[m.end():].rstrip(".!"))) and not any(s <= m.start() < e for s, (e, _) in found.items()):
+        if (
+            m
+            and (at > 0 or _FILLER.match(text[m.end() :].rstrip(".!")))
+            and not any(s <= m.start() < e for s, (e, _) in found.items())
+        ):
             found.setdefault(m.start(), (m.end(), Action(int(m.group(1)), int(m.group(2)))))
     cands = [
-        (start, end, act) for start, (end, act) in sorted(found.items())
-        if (ok is None or act in ok) and not _rejected(text[max(0, start - 40):start])
+        (start, end, act)
+        for start, (end, act) in sorted(found.items())
+        if (ok is None or act in ok) and not _rejected(text[max(0, start - 40) : start])
     ]
     if not cands:
         return None
@@ -101,7 +123,7 @@ def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | 
     first, last = cands[0], cands[-1]
     if _FILLER.match(text[: first[0]]):
         return first[2]
-    if _FILLER.match(text[last[1]:].rstrip(".!")):
+    if _FILLER.match(text[last[1] :].rstrip(".!")):
         return last[2]
     return None
 

@@ -24,7 +24,17 @@ from jswim.results.schema import SCALAR_TYPES
 # -- reading a study into pandas ----------------------------------------------------------------
 
 #: Run columns repeated on every trajectory row, so one table answers "X/a of the LLM runs toward -x".
-TRAJECTORY_KEYS = ("run_id", "agent", "swimmer", "direction", "group", "zeta", "n_ht", "init", "variant")
+TRAJECTORY_KEYS = (
+    "run_id",
+    "agent",
+    "swimmer",
+    "direction",
+    "group",
+    "zeta",
+    "n_ht",
+    "init",
+    "variant",
+)
 
 
 @dataclass
@@ -50,8 +60,8 @@ class Study:
 
     folder: Path
     metadata: dict[str, Any]
-    runs: "pd.DataFrame"
-    trajectories: "pd.DataFrame"
+    runs: pd.DataFrame
+    trajectories: pd.DataFrame
 
     @property
     def name(self) -> str:
@@ -63,7 +73,7 @@ class Study:
         """``complete``, ``running`` (or interrupted), as recorded in ``metadata.json``."""
         return str(self.metadata.get("status", "unknown"))
 
-    def transcript(self, run_id: str) -> "pd.DataFrame":
+    def transcript(self, run_id: str) -> pd.DataFrame:
         """The LLM transcript of ``run_id`` (``transcripts/RUN.jsonl``), one row per step.
 
         Columns: ``step`` (from 1), ``prompt`` (the exact text sent), ``reply`` (the last reply
@@ -77,10 +87,12 @@ class Study:
         """
         import pandas as pd  # lazy, as in load()
 
-        return pd.DataFrame(transcript_steps(read_transcript(self.folder, run_id)), columns=TRANSCRIPT_COLUMNS)
+        return pd.DataFrame(
+            transcript_steps(read_transcript(self.folder, run_id)), columns=TRANSCRIPT_COLUMNS
+        )
 
     @property
-    def calls(self) -> "pd.DataFrame":
+    def calls(self) -> pd.DataFrame:
         """Every answered LLM call (``calls.jsonl``), one row per call, in the order answered.
 
         Columns: ``run`` (run id), ``n`` (the call's index in its run), ``key`` (hash of the
@@ -129,8 +141,21 @@ def load(folder: str | os.PathLike) -> Study:
     runs = pd.DataFrame(scalar)
     lead = [k for k in ("run_id", "agent", "swimmer", "direction", "group") if k in runs.columns]
     runs = runs[lead + [c for c in runs.columns if c not in lead]] if len(runs.columns) else runs
-    traj: dict[str, list[Any]] = {k: [] for k in (*TRAJECTORY_KEYS, "step", "x", "y", "orientation", "target_x",
-                                                  "dof", "roc", "progress", "stuck")}
+    traj: dict[str, list[Any]] = {
+        k: []
+        for k in (
+            *TRAJECTORY_KEYS,
+            "step",
+            "x",
+            "y",
+            "orientation",
+            "target_x",
+            "dof",
+            "roc",
+            "progress",
+            "stuck",
+        )
+    }
     nan = float("nan")
     for r in as_run_rows(rows):  # the runs table above keeps every column of the file, as written
         xs = r.x or []
@@ -142,23 +167,37 @@ def load(folder: str | os.PathLike) -> Study:
         traj["x"] += [float(v) for v in xs]
         traj["target_x"] += [direction * float(v) for v in xs]
         for k, vals in (("y", r.y), ("orientation", r.orientation), ("progress", r.progress)):
-            traj[k] += [float(vals[i]) if isinstance(vals, list) and i < len(vals) and vals[i] is not None else nan
-                        for i in range(n)]
+            traj[k] += [
+                float(vals[i])
+                if isinstance(vals, list) and i < len(vals) and vals[i] is not None
+                else nan
+                for i in range(n)
+            ]
         acts = r.actions or []
         traj["dof"] += [int(acts[i][0]) if i < len(acts) else None for i in range(n)]
-        traj["roc"] += [acts[i][1] if i < len(acts) else None for i in range(n)]  # real for the continuous agent
+        traj["roc"] += [
+            acts[i][1] if i < len(acts) else None for i in range(n)
+        ]  # real for the continuous agent
         stuck = r.stuck
-        traj["stuck"] += [bool(stuck[i]) if isinstance(stuck, list) and i < len(stuck) else None for i in range(n)]
+        traj["stuck"] += [
+            bool(stuck[i]) if isinstance(stuck, list) and i < len(stuck) else None for i in range(n)
+        ]
     trajectories = pd.DataFrame(traj)
     # Nullable dtypes: "not recorded" stays missing instead of turning a column into objects.
     real_roc = any(v is not None and v == v and float(v) != int(v) for v in traj["roc"])
-    for table, cols in ((trajectories, ("dof", "n_ht") + (() if real_roc else ("roc",))),
-                        (runs, ("n_ht", "steps_to_learn"))):
+    for table, cols in (
+        (trajectories, ("dof", "n_ht") + (() if real_roc else ("roc",))),
+        (runs, ("n_ht", "steps_to_learn")),
+    ):
         for k in cols:
             if k in table.columns:
-                table[k] = pd.array([None if v is None or v != v else int(v) for v in table[k]], dtype="Int64")
+                table[k] = pd.array(
+                    [None if v is None or v != v else int(v) for v in table[k]], dtype="Int64"
+                )
     if real_roc:  # real-valued ROCs (the continuous study's RL baseline): a float column
-        trajectories["roc"] = pd.array([None if v is None or v != v else float(v) for v in trajectories["roc"]],
-                                       dtype="Float64")
+        trajectories["roc"] = pd.array(
+            [None if v is None or v != v else float(v) for v in trajectories["roc"]],
+            dtype="Float64",
+        )
     trajectories["stuck"] = trajectories["stuck"].astype("boolean")
     return Study(folder, meta, runs, trajectories)

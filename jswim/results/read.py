@@ -6,7 +6,8 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Any, Iterable, Mapping
+from typing import Any
+from collections.abc import Iterable, Mapping
 
 from jswim._io.jsonl import SkippedRecord, read_records
 from jswim.errors import ResultFolderError
@@ -52,12 +53,32 @@ def read_run_rows(folder: str | os.PathLike) -> list[RunRow]:
 
 #: Fields of ``metadata.json`` by the JSON type readers expect of them.
 _META_TYPES: dict[str, tuple[type, ...]] = {
-    "study": (str,), "status": (str,), "identity": (dict,), "summary": (dict,), "llm_totals": (dict,),
-    "llm_server": (dict,), "grid": (dict,), "prompt_template": (dict,), "n_planned": (int,), "n_runs": (int,),
-    "horizon": (int,), "group_order": (list,), "llm_variants": (list,), "roc_levels": (list,),
-    "fidelity_deviations": (list,), "server": (str, type(None)), "prices_as_of": (str,), "error": (str, type(None)),
+    "study": (str,),
+    "status": (str,),
+    "identity": (dict,),
+    "summary": (dict,),
+    "llm_totals": (dict,),
+    "llm_server": (dict,),
+    "grid": (dict,),
+    "prompt_template": (dict,),
+    "n_planned": (int,),
+    "n_runs": (int,),
+    "horizon": (int,),
+    "group_order": (list,),
+    "llm_variants": (list,),
+    "roc_levels": (list,),
+    "fidelity_deviations": (list,),
+    "server": (str, type(None)),
+    "prices_as_of": (str,),
+    "error": (str, type(None)),
 }
-_JSON_NAMES = {dict: "an object", list: "a list", str: "text", int: "a whole number", type(None): "null"}
+_JSON_NAMES = {
+    dict: "an object",
+    list: "a list",
+    str: "text",
+    int: "a whole number",
+    type(None): "null",
+}
 
 
 def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
@@ -66,18 +87,26 @@ def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, A
     fields left are what a reader may compute with. ``summary.groups`` must be a list of objects."""
     import warnings
 
-
     out = dict(meta)
     for k, types in _META_TYPES.items():
         v = out.get(k)
         if k in out and not (isinstance(v, types) and not isinstance(v, bool)):
             want = " or ".join(_JSON_NAMES[t] for t in types)
-            warnings.warn(SkippedRecord(f"{path}: {k!r} is {v!r:.40}, not {want}; that field is ignored"), stacklevel=3)
+            warnings.warn(
+                SkippedRecord(f"{path}: {k!r} is {v!r:.40}, not {want}; that field is ignored"),
+                stacklevel=3,
+            )
             out.pop(k)
     groups = (out.get("summary") or {}).get("groups")
-    if groups is not None and not (isinstance(groups, list) and all(isinstance(g, dict) for g in groups)):
-        warnings.warn(SkippedRecord(f"{path}: 'summary.groups' is not a list of objects; the summary is ignored"),
-                      stacklevel=3)
+    if groups is not None and not (
+        isinstance(groups, list) and all(isinstance(g, dict) for g in groups)
+    ):
+        warnings.warn(
+            SkippedRecord(
+                f"{path}: 'summary.groups' is not a list of objects; the summary is ignored"
+            ),
+            stacklevel=3,
+        )
         out.pop("summary")
     return out
 
@@ -94,7 +123,9 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     except (OSError, ValueError) as exc:  # ValueError: bad JSON or bad UTF-8
         raise ResultFolderError(f"{path} is unreadable ({exc})") from None
     if not isinstance(meta, dict):
-        raise ResultFolderError(f"{path} is not a study's metadata (a JSON {type(meta).__name__}, not an object)")
+        raise ResultFolderError(
+            f"{path} is not a study's metadata (a JSON {type(meta).__name__}, not an object)"
+        )
     return upgrade_names(clean_metadata(meta, path))
 
 
@@ -108,11 +139,43 @@ def unfinished_note(status: str | None, done: int, planned: int | None) -> str |
 
 # -- transcripts and the call journal ------------------------------------------------------------
 
-TRANSCRIPT_COLUMNS = ("step", "prompt", "reply", "action", "failed", "attempts", "http_retries", "prompt_tokens",
-                      "completion_tokens", "cost_usd", "latency_s", "cache_hit", "x_before", "x_after", "progress",
-                      "stuck", "cleared", "n_clears", "dofs_after", "replies")
-CALL_COLUMNS = ("run", "n", "key", "text", "raw", "prompt_tokens", "completion_tokens", "cached_tokens", "cost_usd",
-                "cache_hit", "shared", "constraint", "finish_reason")
+TRANSCRIPT_COLUMNS = (
+    "step",
+    "prompt",
+    "reply",
+    "action",
+    "failed",
+    "attempts",
+    "http_retries",
+    "prompt_tokens",
+    "completion_tokens",
+    "cost_usd",
+    "latency_s",
+    "cache_hit",
+    "x_before",
+    "x_after",
+    "progress",
+    "stuck",
+    "cleared",
+    "n_clears",
+    "dofs_after",
+    "replies",
+)
+CALL_COLUMNS = (
+    "run",
+    "n",
+    "key",
+    "text",
+    "raw",
+    "prompt_tokens",
+    "completion_tokens",
+    "cached_tokens",
+    "cost_usd",
+    "cache_hit",
+    "shared",
+    "constraint",
+    "finish_reason",
+)
 
 
 def _jsonl(path: Path) -> list[dict[str, Any]]:
@@ -141,23 +204,39 @@ def transcript_steps(records: Iterable[Mapping[str, Any]]) -> list[dict[str, Any
         def total(key: str) -> float:
             return sum(float(a.get(key) or 0) for a in att)
 
-        out.append({
-            "step": r.get("step"), "prompt": r.get("prompt"), "reply": att[-1].get("text") if att else None,
-            "action": r.get("action"), "failed": bool(r.get("failed")), "attempts": len(att),
-            "http_retries": int(total("retries")), "prompt_tokens": int(total("prompt_tokens")),
-            "completion_tokens": int(total("completion_tokens")), "cost_usd": total("cost_usd"),
-            "latency_s": total("latency_s"), "cache_hit": any(bool(a.get("cache_hit")) for a in att),
-            "x_before": r.get("x_before"), "x_after": r.get("x_after"), "progress": r.get("progress"),
-            "stuck": r.get("stuck"), "cleared": bool(r.get("cleared")), "n_clears": r.get("n_clears"),
-            "dofs_after": r.get("dofs_after"), "replies": att,
-        })
+        out.append(
+            {
+                "step": r.get("step"),
+                "prompt": r.get("prompt"),
+                "reply": att[-1].get("text") if att else None,
+                "action": r.get("action"),
+                "failed": bool(r.get("failed")),
+                "attempts": len(att),
+                "http_retries": int(total("retries")),
+                "prompt_tokens": int(total("prompt_tokens")),
+                "completion_tokens": int(total("completion_tokens")),
+                "cost_usd": total("cost_usd"),
+                "latency_s": total("latency_s"),
+                "cache_hit": any(bool(a.get("cache_hit")) for a in att),
+                "x_before": r.get("x_before"),
+                "x_after": r.get("x_after"),
+                "progress": r.get("progress"),
+                "stuck": r.get("stuck"),
+                "cleared": bool(r.get("cleared")),
+                "n_clears": r.get("n_clears"),
+                "dofs_after": r.get("dofs_after"),
+                "replies": att,
+            }
+        )
     return out
 
 
 def read_calls(folder: str | os.PathLike) -> list[dict[str, Any]]:
     """The answered calls of ``calls.jsonl``, flat (``usage`` split into its three token counts)."""
     out = []
-    from jswim.llm.journal import call_problem  # lazy: the journal's rule, without httpx for other readers
+    from jswim.llm.journal import (
+        call_problem,
+    )  # lazy: the journal's rule, without httpx for other readers
 
     for _, c in read_records(Path(folder) / "calls.jsonl", call_problem):
         usage = c.get("usage") if isinstance(c.get("usage"), list) else []

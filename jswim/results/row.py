@@ -12,40 +12,109 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Iterable, Iterator
+from typing import Any
+from collections.abc import Iterable, Iterator
 
 from jswim.results.schema import upgrade_names
 
 #: The columns every row starts with, in their order.
-HEAD = ("run_id", "agent", "swimmer", "direction", "init", "zeta", "seed", "n_ht", "drop", "action_set", "group",
-        "variant", "steps", "final_x", "signed_final_x", "success", "learned", "steps_to_learn", "period",
-        "roc_levels")
+HEAD = (
+    "run_id",
+    "agent",
+    "swimmer",
+    "direction",
+    "init",
+    "zeta",
+    "seed",
+    "n_ht",
+    "drop",
+    "action_set",
+    "group",
+    "variant",
+    "steps",
+    "final_x",
+    "signed_final_x",
+    "success",
+    "learned",
+    "steps_to_learn",
+    "period",
+    "roc_levels",
+)
 #: A scene run's own columns (None in the paper's world), after :data:`HEAD`.
-SCENE = ("scene", "medium", "n_swimmers", "start_height", "separation", "fate", "mean_height", "speed", "per_cycle")
+SCENE = (
+    "scene",
+    "medium",
+    "n_swimmers",
+    "start_height",
+    "separation",
+    "fate",
+    "mean_height",
+    "speed",
+    "per_cycle",
+)
 #: A scene run's per-step, per-swimmer tracks.
 TRACKS = ("xs", "heights", "tilts", "contact")
 #: An LLM run's calls and replies (None for the other agents).
-USAGE = ("error", "failed_steps", "parse_retries", "truncated", "cut_thinking", "reasoning_tokens", "http_retries",
-         "n_clears", "calls", "billed_calls", "cache_hits", "prompt_tokens", "completion_tokens", "cached_tokens",
-         "cost_usd", "tokens_seen", "replayed_calls")
+USAGE = (
+    "error",
+    "failed_steps",
+    "parse_retries",
+    "truncated",
+    "cut_thinking",
+    "reasoning_tokens",
+    "http_retries",
+    "n_clears",
+    "calls",
+    "billed_calls",
+    "cache_hits",
+    "prompt_tokens",
+    "completion_tokens",
+    "cached_tokens",
+    "cost_usd",
+    "tokens_seen",
+    "replayed_calls",
+)
 
 #: The LLM agent's switches (:meth:`jswim.agents.variants.LLMAgentConfig.knobs` and what the
 #: driver adds); the last two are written only where set.
-SWITCHES = ("summary", "shuffle", "temperature", "order", "share_identical", "constraint", "max_tokens",
-            "pair_prompt", "temperature_sent")
+SWITCHES = (
+    "summary",
+    "shuffle",
+    "temperature",
+    "order",
+    "share_identical",
+    "constraint",
+    "max_tokens",
+    "pair_prompt",
+    "temperature_sent",
+)
 _WHERE_SET = ("pair_prompt", "temperature_sent")
 
 #: The four layouts of a row (bulk or scene world, LLM or not), as written since the columns
 #: existed; ``other`` is where columns this version does not know go. A layout's order is the
 #: in-memory order; ``runs.jsonl`` sorts its keys.
 LAYOUTS = {
-    (False, False): HEAD + ("sample", "x", "actions", "progress", "status", "y", "orientation", "other"),
-    (False, True): HEAD + ("sample", "x", "actions", "progress", "status") + USAGE
-    + ("y", "orientation", "below_x_min") + SWITCHES + ("other",),
-    (True, False): HEAD + SCENE + ("x", "y", "orientation", "actions", "progress", "status") + TRACKS
+    (False, False): HEAD
+    + ("sample", "x", "actions", "progress", "status", "y", "orientation", "other"),
+    (False, True): HEAD
+    + ("sample", "x", "actions", "progress", "status")
+    + USAGE
+    + ("y", "orientation", "below_x_min")
+    + SWITCHES
+    + ("other",),
+    (True, False): HEAD
+    + SCENE
+    + ("x", "y", "orientation", "actions", "progress", "status")
+    + TRACKS
     + ("stuck", "other"),
-    (True, True): HEAD + SCENE + ("x", "y", "orientation", "actions", "progress", "status") + USAGE
-    + ("stuck", "below_x_min") + SWITCHES + ("other",) + TRACKS,
+    (True, True): HEAD
+    + SCENE
+    + ("x", "y", "orientation", "actions", "progress", "status")
+    + USAGE
+    + ("stuck", "below_x_min")
+    + SWITCHES
+    + ("other",)
+    + TRACKS,
 }
 
 
@@ -241,8 +310,12 @@ class RunRow(Mapping):
     def columns(self) -> tuple[str, ...]:
         """The row's column names in order (its layout, the unknown columns in place)."""
         other = tuple(k for k in self.other if k not in _FIELDS)
-        return tuple(c for k in LAYOUTS[self._kind] for c in (other if k == "other" else (k,))
-                     if c not in _WHERE_SET or getattr(self, c) is not None)
+        return tuple(
+            c
+            for k in LAYOUTS[self._kind]
+            for c in (other if k == "other" else (k,))
+            if c not in _WHERE_SET or getattr(self, c) is not None
+        )
 
     @property
     def _kind(self) -> tuple[bool, bool]:
@@ -258,12 +331,18 @@ class RunRow(Mapping):
         """A row from a record (any version's: old names renamed, missing columns None, unknown
         ones kept in :attr:`other`)."""
         d = upgrade_names(dict(d))
-        return cls(**{k: d.get(k) for k in _FIELDS}, other={k: v for k, v in d.items() if k not in _FIELDS})
+        return cls(
+            **{k: d.get(k) for k in _FIELDS}, other={k: v for k, v in d.items() if k not in _FIELDS}
+        )
 
     def __getitem__(self, key: str) -> Any:
         if key in _FIELDS:
-            if key not in _IN_LAYOUT[self._kind] or (key in _WHERE_SET and getattr(self, key) is None):
-                raise KeyError(key)  # a column of another layout (a bulk row's scene), or one not set
+            if key not in _IN_LAYOUT[self._kind] or (
+                key in _WHERE_SET and getattr(self, key) is None
+            ):
+                raise KeyError(
+                    key
+                )  # a column of another layout (a bulk row's scene), or one not set
             return getattr(self, key)
         return self.other[key]
 

@@ -3,7 +3,8 @@ failed runs, the fields renamed since folders were first written."""
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 #: The study folder's durable record and its metadata.
 RUNS = "runs.jsonl"
@@ -17,6 +18,7 @@ FAILED_STATUSES = frozenset({"llm_error", "aborted"})
 def is_failed(row: Mapping[str, Any]) -> bool:
     """Whether a run record is a failed run (:data:`FAILED_STATUSES`), not a finished one."""
     return row.get("status") in FAILED_STATUSES
+
 
 #: Fields renamed since folders were first written: old name -> new name. Folders keep what they
 #: were written with; readers translate (:func:`upgrade_names`), so an old folder still resumes,
@@ -47,10 +49,35 @@ def legacy_names(obj: Any) -> Any:
 #: The fields of a run record that readers compute with, by kind: a record where one of them has
 #: another type (a hand edit) is skipped with a warning (:func:`run_problem`).
 _RUN_TEXT = ("run_id", "agent")  # run_id required
-_RUN_NUMBERS = ("final_x", "signed_final_x", "zeta", "cost_usd", "temperature", "direction", "steps", "calls",
-                "billed_calls", "cache_hits", "prompt_tokens", "completion_tokens", "cached_tokens",
-                "reasoning_tokens", "parse_retries", "http_retries", "failed_steps", "n_clears", "tokens_seen",
-                "seed", "period", "n_ht", "steps_to_learn", "truncated", "cut_thinking", "roc_levels", "max_tokens")
+_RUN_NUMBERS = (
+    "final_x",
+    "signed_final_x",
+    "zeta",
+    "cost_usd",
+    "temperature",
+    "direction",
+    "steps",
+    "calls",
+    "billed_calls",
+    "cache_hits",
+    "prompt_tokens",
+    "completion_tokens",
+    "cached_tokens",
+    "reasoning_tokens",
+    "parse_retries",
+    "http_retries",
+    "failed_steps",
+    "n_clears",
+    "tokens_seen",
+    "seed",
+    "period",
+    "n_ht",
+    "steps_to_learn",
+    "truncated",
+    "cut_thinking",
+    "roc_levels",
+    "max_tokens",
+)
 _RUN_FLAGS = ("success", "learned")
 _RUN_STRINGS = ("swimmer", "group", "status", "variant", "action_set", "error", "constraint")
 _RUN_SERIES = ("x", "y", "orientation", "progress")

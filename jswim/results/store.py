@@ -8,7 +8,8 @@ import json
 import os
 import re
 from pathlib import Path
-from typing import Any, Iterable, Iterator, Mapping
+from typing import Any
+from collections.abc import Iterable, Iterator, Mapping
 
 from jswim._io.atomic import dumps, plain_json, write_json
 from jswim._io.folderlock import HOLDER, LOCK, FolderLock
@@ -48,7 +49,9 @@ FILE_MODE = file_mode(_umask())
 
 
 @contextlib.contextmanager
-def writing(what: str | os.PathLike, hint: str = "choose a writable --out folder") -> Iterator[None]:
+def writing(
+    what: str | os.PathLike, hint: str = "choose a writable --out folder"
+) -> Iterator[None]:
     """Turn an ``OSError`` while writing ``what`` into a one-line :class:`StudyFolderError`."""
     try:
         yield
@@ -56,11 +59,13 @@ def writing(what: str | os.PathLike, hint: str = "choose a writable --out folder
         where = exc.filename or what
         cause = exc.strerror or type(exc).__name__
         if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # the folder is fine; the disk is full
-            hint = ("every finished run and answered call is kept: make room and run the same command to resume")
+            hint = "every finished run and answered call is kept: make room and run the same command to resume"
         raise StudyFolderError(f"cannot write {where}: {cause}; {hint}") from None
 
 
-def identity_differences(folder: Mapping[str, Any], now: Mapping[str, Any], prefix: str = "") -> list[str]:
+def identity_differences(
+    folder: Mapping[str, Any], now: Mapping[str, Any], prefix: str = ""
+) -> list[str]:
     """Which settings differ between a folder's identity and today's, with both values.
 
     Nested settings are named by their path (``backend.model``); e.g.
@@ -122,7 +127,9 @@ class StudyStore:
         self._reserved = False  # RESERVE is ours to free
         meta_path = self.folder / META
         if self.folder.exists() and not self.folder.is_dir():
-            raise ResultFolderError(f"--out {self.folder} is a file, not a folder; choose another path")
+            raise ResultFolderError(
+                f"--out {self.folder} is a file, not a folder; choose another path"
+            )
         with writing(self.folder):
             self.folder.mkdir(parents=True, exist_ok=True)
         try:
@@ -133,30 +140,46 @@ class StudyStore:
         except BaseException as exc:
             # A signal right after "running" was written: the caller holds no store yet to mark
             # it, so the folder would read "running" with nobody running it.
-            if isinstance(exc, KeyboardInterrupt) and getattr(self, "meta", {}).get("status") == "running":
+            if (
+                isinstance(exc, KeyboardInterrupt)
+                and getattr(self, "meta", {}).get("status") == "running"
+            ):
                 with contextlib.suppress(OSError, ResultFolderError):
                     self.set_status("interrupted")
             self.close()
             raise
 
     def _open(self, study: str, meta_path: Path, extra: Mapping[str, Any] | None) -> None:
-        for name in ("transcripts", "figures"):  # a file in the way is no full disk: said so, nothing written
+        for name in (
+            "transcripts",
+            "figures",
+        ):  # a file in the way is no full disk: said so, nothing written
             p = self.folder / name
             if (p.exists() or p.is_symlink()) and not p.is_dir():
-                raise ResultFolderError(f"{p} is a file where jswim keeps a folder; move it away and run the "
-                                        "same command (the study folder is left as it is)")
+                raise ResultFolderError(
+                    f"{p} is a file where jswim keeps a folder; move it away and run the "
+                    "same command (the study folder is left as it is)"
+                )
         with writing(self.folder):
             self._clean_temporary_files()
         if meta_path.exists():
             try:
                 meta = json.loads(meta_path.read_text())
             except (OSError, ValueError) as exc:
-                raise ResultFolderError(f"{meta_path} is unreadable ({exc}); use a new --out folder") from None
+                raise ResultFolderError(
+                    f"{meta_path} is unreadable ({exc}); use a new --out folder"
+                ) from None
             if not isinstance(meta, dict):
-                raise ResultFolderError(f"{meta_path} is not a study's metadata; use a new --out folder")
-            if not isinstance(meta.get("identity"), dict):  # nothing to compare today's settings with
-                raise ResultFolderError(f"{meta_path}: 'identity' is {meta.get('identity')!r:.40}, not the study's "
-                                        "settings (an object); the folder is left as it is: use a new --out folder")
+                raise ResultFolderError(
+                    f"{meta_path} is not a study's metadata; use a new --out folder"
+                )
+            if not isinstance(
+                meta.get("identity"), dict
+            ):  # nothing to compare today's settings with
+                raise ResultFolderError(
+                    f"{meta_path}: 'identity' is {meta.get('identity')!r:.40}, not the study's "
+                    "settings (an object); the folder is left as it is: use a new --out folder"
+                )
             meta = clean_metadata(meta, meta_path)  # derived fields of the wrong type are rewritten
             if meta.get("study") != study:
                 raise ResultFolderError(
@@ -255,7 +278,9 @@ class StudyStore:
             for p in where.iterdir():
                 if _TEMPORARY.match(p.name) and p.is_file():
                     p.unlink()
-                    self.repairs.append(f"removed {p.name}, a temporary file left by an interrupted write")
+                    self.repairs.append(
+                        f"removed {p.name}, a temporary file left by an interrupted write"
+                    )
 
     def _repair_journals(self) -> None:
         """Cut the torn last line of every append-only file (see :mod:`jswim._io.jsonl`)."""
@@ -270,11 +295,19 @@ class StudyStore:
             rel = path.relative_to(self.folder)
             what = f"{rel}: cut a torn last line ({cut} bytes, from an interrupted write)"
             if path.parent.name == "transcripts":
-                done = {r.run_id for r in read_run_rows(self.folder) if not is_failed(r)} if done is None else done
-                if path.stem in done:  # a finished run is not run again: say what its transcript lost
-                    self.repairs.append(f"{what}; the run is finished and is not redone, so the transcript lacks "
-                                        "that last record (its end or last step); runs.jsonl keeps the run's "
-                                        "result and calls.jsonl every answered call")
+                done = (
+                    {r.run_id for r in read_run_rows(self.folder) if not is_failed(r)}
+                    if done is None
+                    else done
+                )
+                if (
+                    path.stem in done
+                ):  # a finished run is not run again: say what its transcript lost
+                    self.repairs.append(
+                        f"{what}; the run is finished and is not redone, so the transcript lacks "
+                        "that last record (its end or last step); runs.jsonl keeps the run's "
+                        "result and calls.jsonl every answered call"
+                    )
                     continue
             self.repairs.append(f"{what}; what it held is redone, no answered call is lost")
 
@@ -286,7 +319,7 @@ class StudyStore:
             self._lock.release()
             self._lock = None
 
-    def __enter__(self) -> "StudyStore":
+    def __enter__(self) -> StudyStore:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -7,7 +7,8 @@ import io
 import json
 import os
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any
+from collections.abc import Iterable
 
 from jswim._io.atomic import atomic_write, dumps
 from jswim.results.row import as_run_rows
@@ -38,12 +39,18 @@ def write_tables(folder: str | os.PathLike, runs: list[dict[str, Any]]) -> None:
     traj = []
     for r in as_run_rows(runs):
         for i, x in enumerate(r.x or []):
-            traj.append({
-                "run_id": r.run_id, "step": i + 1, "x": x,
-                "y": _at(r.y, i), "orientation": _at(r.orientation, i),
-                "action": _at(r.actions, i), "progress": _at(r.progress, i),
-                "stuck": _at(r.stuck, i),
-            })
+            traj.append(
+                {
+                    "run_id": r.run_id,
+                    "step": i + 1,
+                    "x": x,
+                    "y": _at(r.y, i),
+                    "orientation": _at(r.orientation, i),
+                    "action": _at(r.actions, i),
+                    "progress": _at(r.progress, i),
+                    "stuck": _at(r.stuck, i),
+                }
+            )
     import pyarrow as pa  # lazy: ~0.3 s of import that only the tables at a session's end need
     import pyarrow.parquet as pq
 
@@ -58,13 +65,17 @@ def _arrow_type(values: Iterable[Any]) -> Any:
     (``None`` where it is not one of the plain cases: bool, int, int and float, str, all null)."""
     import pyarrow as pa
 
-    kinds = {next((t for t in (bool, int, float, str) if isinstance(v, t)), type(v)) for v in values if v is not None}
+    kinds = {
+        next((t for t in (bool, int, float, str) if isinstance(v, t)), type(v))
+        for v in values
+        if v is not None
+    }
     if not kinds:
         return pa.null()
     if kinds == {bool}:
         return pa.bool_()
     if kinds == {int}:
-        return pa.int64() if all(-2**63 <= v < 2**63 for v in values if v is not None) else None
+        return pa.int64() if all(-(2**63) <= v < 2**63 for v in values if v is not None) else None
     if kinds <= {int, float}:
         return pa.float64()
     return pa.string() if kinds == {str} else None
@@ -91,8 +102,11 @@ def arrow_table(rows: list[dict[str, Any]]) -> Any:
     schema = pa.schema(list(zip(cols, types)))
     data = "".join(dumps(r) + "\n" for r in rows).encode("utf-8")
     # One block: a line longer than the reader's block would not parse.
-    return pj.read_json(io.BytesIO(data), read_options=pj.ReadOptions(block_size=max(1 << 20, len(data) + 1)),
-                        parse_options=pj.ParseOptions(explicit_schema=schema))
+    return pj.read_json(
+        io.BytesIO(data),
+        read_options=pj.ReadOptions(block_size=max(1 << 20, len(data) + 1)),
+        parse_options=pj.ParseOptions(explicit_schema=schema),
+    )
 
 
 def _at(seq: Any, i: int) -> Any:

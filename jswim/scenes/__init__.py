@@ -19,13 +19,44 @@ One concept per module: :mod:`~jswim.scenes.scene` (``Scene``), :mod:`~jswim.sce
 
 from jswim.scenes.actions import decode_scene_action, encode_scene_action, split_action
 from jswim.scenes.params import CONTACT_GAP, SceneParams, scene_params
-from jswim.scenes.rollout import SceneRollout, batch_starts, parse_scene_moves, scene_rollout, scene_rollout_batch
+from jswim.scenes.rollout import (
+    SceneRollout,
+    batch_starts,
+    parse_scene_moves,
+    scene_rollout,
+    scene_rollout_batch,
+)
 from jswim.scenes.scene import MEDIA, Scene
 from jswim.scenes.state import SceneState, SceneStepInfo, scene_positions, scene_reset
-from jswim.scenes.stepping import integrate_move, scene_advance, scene_step, scene_step_joint, surface_gap
+from jswim.scenes.stepping import (
+    integrate_move,
+    scene_advance,
+    scene_step,
+    scene_step_joint,
+    surface_gap,
+)
 
 __all__ = [
-    "CONTACT_GAP", "MEDIA", "Scene", "SceneParams", "SceneRollout", "SceneState", "SceneStepInfo", "batch_starts", "scene_rollout_batch",
-    "decode_scene_action", "encode_scene_action", "integrate_move", "parse_scene_moves", "scene_advance",
-    "scene_params", "scene_positions", "scene_reset", "scene_rollout", "scene_step", "scene_step_joint", "split_action", "surface_gap",
+    "CONTACT_GAP",
+    "MEDIA",
+    "Scene",
+    "SceneParams",
+    "SceneRollout",
+    "SceneState",
+    "SceneStepInfo",
+    "batch_starts",
+    "decode_scene_action",
+    "encode_scene_action",
+    "integrate_move",
+    "parse_scene_moves",
+    "scene_advance",
+    "scene_params",
+    "scene_positions",
+    "scene_reset",
+    "scene_rollout",
+    "scene_rollout_batch",
+    "scene_step",
+    "scene_step_joint",
+    "split_action",
+    "surface_gap",
 ]

@@ -5,7 +5,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import jax
 import jax.numpy as jnp
@@ -74,7 +75,7 @@ class SceneParams:
     sweeps: int | None = None
     contact_gap: float = CONTACT_GAP
 
-    def replace(self, **changes: Any) -> "SceneParams":
+    def replace(self, **changes: Any) -> SceneParams:
         return dataclasses.replace(self, **changes)
 
     @property
@@ -147,25 +148,46 @@ def scene_params(
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
     if nodes is None:
         nodes = DEFAULT_NODES_FLOAT32 if dtype.itemsize <= 4 else DEFAULT_NODES
-    nodes, sweeps = _plain_int(nodes), _plain_int(sweeps)  # a NumPy integer is the int it holds (static, hashed)
+    nodes, sweeps = (
+        _plain_int(nodes),
+        _plain_int(sweeps),
+    )  # a NumPy integer is the int it holds (static, hashed)
     if isinstance(nodes, bool) or not isinstance(nodes, int) or not 1 <= nodes <= 32:
         raise ConfigError(f"nodes must be an integer in 1..32, got {nodes!r}")
-    pose_free = scene.medium == "bulk" or (scene.medium == "free" and scene.swimmers == 1 and not scene.obstacles)
+    pose_free = scene.medium == "bulk" or (
+        scene.medium == "free" and scene.swimmers == 1 and not scene.obstacles
+    )
     if sweeps is None and pose_free:
         sweeps = 1
-    if sweeps is not None and (isinstance(sweeps, bool) or not isinstance(sweeps, int) or not 1 <= sweeps <= 64):
+    if sweeps is not None and (
+        isinstance(sweeps, bool) or not isinstance(sweeps, int) or not 1 <= sweeps <= 64
+    ):
         raise ConfigError(f"sweeps must be an integer in 1..64, got {sweeps!r}")
     _check_resolution(scene, centre, obstacles, np.dtype(dtype), float(model.hi))
     as_dtype = functools.partial(jnp.asarray, dtype=dtype)
     return SceneParams(
-        zeta=z, centre0=as_dtype(centre), tilt0=as_dtype(tilt), arms0=as_dtype(arms),
-        obstacles=as_dtype(obstacles), scene=scene, lo=float(model.lo), hi=float(model.hi),
-        roc_levels=check_roc_levels(roc_levels), nodes=nodes, sweeps=sweeps, contact_gap=float(contact_gap),
+        zeta=z,
+        centre0=as_dtype(centre),
+        tilt0=as_dtype(tilt),
+        arms0=as_dtype(arms),
+        obstacles=as_dtype(obstacles),
+        scene=scene,
+        lo=float(model.lo),
+        hi=float(model.hi),
+        roc_levels=check_roc_levels(roc_levels),
+        nodes=nodes,
+        sweeps=sweeps,
+        contact_gap=float(contact_gap),
     )
 
 
-def check_start(swimmer: str, scene: Scene, init: Sequence[int] | str | None = None,
-                contact_gap: float = CONTACT_GAP, **model_kwargs: Any) -> tuple[np.ndarray, ...]:
+def check_start(
+    swimmer: str,
+    scene: Scene,
+    init: Sequence[int] | str | None = None,
+    contact_gap: float = CONTACT_GAP,
+    **model_kwargs: Any,
+) -> tuple[np.ndarray, ...]:
     """The start of ``scene`` (the one check of it, NumPy, float64, no JAX work): each swimmer's
     middle sphere ``(S, 2)``, tilt ``(S,)``, arms ``(S, 2)`` and the obstacles ``(O, 3)``, if no
     sphere starts closer than ``contact_gap`` to the wall, an obstacle or another swimmer's.
@@ -182,9 +204,13 @@ def check_start(swimmer: str, scene: Scene, init: Sequence[int] | str | None = N
         raise ConfigError(f"scene must be a jswim.scenes.Scene, got {type(scene).__name__}")
     scene.validate()
     if not isinstance(swimmer, str) or swimmer.lower() != "ng":
-        raise ConfigError(f"scenes hold NG three-sphere swimmers only (swimmer='ng'), got {swimmer!r}")
+        raise ConfigError(
+            f"scenes hold NG three-sphere swimmers only (swimmer='ng'), got {swimmer!r}"
+        )
     model = make_model("ng", **model_kwargs)
-    if not (isinstance(contact_gap, (int, float)) and math.isfinite(contact_gap) and contact_gap >= 0):
+    if not (
+        isinstance(contact_gap, (int, float)) and math.isfinite(contact_gap) and contact_gap >= 0
+    ):
         raise ConfigError(f"contact_gap must be a number >= 0, got {contact_gap!r}")
     levels = np.asarray(parse_init(init, 2), np.float64)
     if np.any(levels < 0):
@@ -208,26 +234,47 @@ def _plain_int(v: Any) -> Any:
 POSITION_RESOLUTION = 1e-4
 
 
-def _check_resolution(scene: Scene, centre: np.ndarray, obstacles: np.ndarray, dtype: np.dtype, reach: float) -> None:
+def _check_resolution(
+    scene: Scene, centre: np.ndarray, obstacles: np.ndarray, dtype: np.dtype, reach: float
+) -> None:
     """One-line error if the start does not fit the working dtype: a coordinate that overflows it,
     or a swimmer so far from x = 0 that its moves are lost to rounding (:data:`POSITION_RESOLUTION`)."""
     with np.errstate(over="ignore"):
-        fits = np.all(np.isfinite(centre.astype(dtype))) and np.all(np.isfinite(obstacles.astype(dtype)))
+        fits = np.all(np.isfinite(centre.astype(dtype))) and np.all(
+            np.isfinite(obstacles.astype(dtype))
+        )
     if not fits:
-        raise ConfigError(f"the scene's heights, separation or obstacles overflow {dtype.name}: give finite, smaller lengths")
+        raise ConfigError(
+            f"the scene's heights, separation or obstacles overflow {dtype.name}: give finite, smaller lengths"
+        )
     far = float(np.abs(centre[:, 0]).max()) + 2 * reach  # the farthest sphere's x at the start
     step = float(np.spacing(np.asarray(far, dtype)))
     if step > POSITION_RESOLUTION:
         # spacing(x) = eps 2^floor(log2 x): fine enough below the next power of two
-        limit = 2.0 ** (math.floor(math.log2(POSITION_RESOLUTION / float(np.finfo(dtype).eps))) + 1) - 2 * reach
-        more = ", or float64 from Python (scene_params(..., dtype=\"float64\") with jax_enable_x64)" if dtype.itemsize < 8 else ""
-        raise ConfigError(f"separation {scene.separation:g} a is too far for {dtype.name} positions (they are rounded "
-                          f"to {step:.2g} a there, more than {POSITION_RESOLUTION:g} a): use a separation below "
-                          f"{limit:g} a{more}")
+        limit = (
+            2.0 ** (math.floor(math.log2(POSITION_RESOLUTION / float(np.finfo(dtype).eps))) + 1)
+            - 2 * reach
+        )
+        more = (
+            ', or float64 from Python (scene_params(..., dtype="float64") with jax_enable_x64)'
+            if dtype.itemsize < 8
+            else ""
+        )
+        raise ConfigError(
+            f"separation {scene.separation:g} a is too far for {dtype.name} positions (they are rounded "
+            f"to {step:.2g} a there, more than {POSITION_RESOLUTION:g} a): use a separation below "
+            f"{limit:g} a{more}"
+        )
 
 
-def _check_start(scene: Scene, centre: np.ndarray, tilt: np.ndarray, arms: np.ndarray,
-                 obstacles: np.ndarray, gap: float) -> None:
+def _check_start(
+    scene: Scene,
+    centre: np.ndarray,
+    tilt: np.ndarray,
+    arms: np.ndarray,
+    obstacles: np.ndarray,
+    gap: float,
+) -> None:
     """One-line error if the start already has a contact (NumPy, float64)."""
     if scene.medium == "bulk":
         return
@@ -239,11 +286,14 @@ def _check_start(scene: Scene, centre: np.ndarray, tilt: np.ndarray, arms: np.nd
         low = float(pos[..., 1].min()) - 1.0
         if low < gap:
             raise ConfigError(
-                f"the swimmer starts with a sphere {low:.3g} a from the wall (needs >= {gap}); raise height or lower tilt")
+                f"the swimmer starts with a sphere {low:.3g} a from the wall (needs >= {gap}); raise height or lower tilt"
+            )
     for o in obstacles:
         g = float(np.min(np.hypot(*(pos - o[:2]).transpose(2, 0, 1))) - 1.0 - o[2])
         if g < gap:
-            raise ConfigError(f"obstacle {tuple(o.tolist())} is {g:.3g} a from a swimmer sphere at the start (needs >= {gap})")
+            raise ConfigError(
+                f"obstacle {tuple(o.tolist())} is {g:.3g} a from a swimmer sphere at the start (needs >= {gap})"
+            )
     if len(pos) >= 2:
         d = pos[:, None, :, None, :] - pos[None, :, None, :, :]  # (S, S, n, n, 2)
         dist = np.hypot(d[..., 0], d[..., 1]).min(axis=(2, 3)) + np.diag(np.full(len(pos), np.inf))
@@ -252,4 +302,6 @@ def _check_start(scene: Scene, centre: np.ndarray, tilt: np.ndarray, arms: np.nd
             g = min(g, float(np.min(pos[1:, :, 0].min(-1) - pos[:-1, :, 0].max(-1))) - 2.0)
         if g < gap:  # untilted, g grows one for one with the separation: the bound
             least = f" above {scene.separation + gap - g:.4g}" if scene.tilt == 0 else ""
-            raise ConfigError(f"the swimmers' spheres start {g:.3g} a apart (needs >= {gap}); raise separation{least}")
+            raise ConfigError(
+                f"the swimmers' spheres start {g:.3g} a apart (needs >= {gap}); raise separation{least}"
+            )

@@ -35,27 +35,51 @@ def check_scene(scene: Scene) -> Scene:
     """``scene`` if Purcell's swimmer can swim in it above a wall, else a one-line ConfigError."""
     scene.validate()
     if scene.medium != "wall":
-        raise ConfigError(f"Purcell's swimmer swims in medium 'bulk' (the paper's world) or 'wall', not "
-                          f"{scene.medium!r} (resistive force theory has no interactions to solve)")
-    bad = [name for name, off in (("swimmers", scene.swimmers != 1), ("obstacles", bool(scene.obstacles)),
-                                  ("tilt", scene.tilt != 0.0), ("mobility", scene.mobility != "point")) if off]
+        raise ConfigError(
+            f"Purcell's swimmer swims in medium 'bulk' (the paper's world) or 'wall', not "
+            f"{scene.medium!r} (resistive force theory has no interactions to solve)"
+        )
+    bad = [
+        name
+        for name, off in (
+            ("swimmers", scene.swimmers != 1),
+            ("obstacles", bool(scene.obstacles)),
+            ("tilt", scene.tilt != 0.0),
+            ("mobility", scene.mobility != "point"),
+        )
+        if off
+    ]
     if bad:
-        raise ConfigError(f"Purcell's swimmer above a wall is one swimmer in a plane parallel to it: leave "
-                          f"{', '.join(bad)} at the default")
+        raise ConfigError(
+            f"Purcell's swimmer above a wall is one swimmer in a plane parallel to it: leave "
+            f"{', '.join(bad)} at the default"
+        )
     return scene
 
 
-def model(scene: Scene, *, link_radius: float = LINK_RADIUS, d_max: float | None = None,
-          **other: Any) -> WallPurcellModel:
+def model(
+    scene: Scene, *, link_radius: float = LINK_RADIUS, d_max: float | None = None, **other: Any
+) -> WallPurcellModel:
     """The wall-corrected Purcell model of ``scene`` (height in link lengths); an option it does not
     take (``other``) is a one-line ConfigError rather than dropped."""
     if other:
-        raise ConfigError(f"Purcell's swimmer above a wall takes link_radius and d_max, not {', '.join(sorted(other))}")
+        raise ConfigError(
+            f"Purcell's swimmer above a wall takes link_radius and d_max, not {', '.join(sorted(other))}"
+        )
     return wall_model(check_scene(scene).height, link_radius, d_max=d_max)
 
 
-def rollout(moves: np.ndarray, scene: Scene, *, key: Any = 0, zeta: float = 0.0, init: Any = None,
-            link_radius: float = LINK_RADIUS, d_max: float | None = None, **other: Any) -> dict[str, np.ndarray]:
+def rollout(
+    moves: np.ndarray,
+    scene: Scene,
+    *,
+    key: Any = 0,
+    zeta: float = 0.0,
+    init: Any = None,
+    link_radius: float = LINK_RADIUS,
+    d_max: float | None = None,
+    **other: Any,
+) -> dict[str, np.ndarray]:
     """The fields of a :class:`jswim.scenes.SceneRollout` of ``moves``, float64.
 
     ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` (:func:`jswim.scenes.parse_scene_moves`).
@@ -68,15 +92,27 @@ def rollout(moves: np.ndarray, scene: Scene, *, key: Any = 0, zeta: float = 0.0,
     dof, roc = np.asarray(moves, np.float64)[:, 1:].T
     with jax.enable_x64(True):
         params = make_params(m, zeta=zeta, init=init)
-        if np.all(np.isin(roc, (-1.0, 0.0, 1.0))):  # the paper's ROCs: integer codes, the exact corner table
+        if np.all(
+            np.isin(roc, (-1.0, 0.0, 1.0))
+        ):  # the paper's ROCs: integer codes, the exact corner table
             acts = jnp.asarray(encode_action(dof + 1, roc), jnp.int32)
         else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout does)
             acts = jnp.asarray(np.eye(2)[dof.astype(int)] * roc[:, None], jnp.float64)
         t = world_rollout(SwimmerWorld(m), params, key, acts)
         pos = np.asarray(t.obs.position[:, 0], np.float64)  # (steps, 2): the centroid
-        out = {"x": pos[:, :1], "arms": np.asarray(t.obs.dofs, np.float64)[:, None, :],
-               "dx": np.asarray(t.info.displacement[:, 0, :1], np.float64), "stuck": np.asarray(t.info.stuck),
-               "y": pos[:, 1:], "orientation": np.asarray(t.obs.orientation, np.float64)}
+        out = {
+            "x": pos[:, :1],
+            "arms": np.asarray(t.obs.dofs, np.float64)[:, None, :],
+            "dx": np.asarray(t.info.displacement[:, 0, :1], np.float64),
+            "stuck": np.asarray(t.info.stuck),
+            "y": pos[:, 1:],
+            "orientation": np.asarray(t.obs.orientation, np.float64),
+        }
     steps = pos.shape[0]
-    return {**out, "z": np.full((steps, 1), m.height), "tilt": np.zeros((steps, 1)), "contact": np.zeros(steps, bool),
-            "gap": np.full(steps, m.height - m.link_radius)}
+    return {
+        **out,
+        "z": np.full((steps, 1), m.height),
+        "tilt": np.zeros((steps, 1)),
+        "contact": np.zeros(steps, bool),
+        "gap": np.full(steps, m.height - m.link_radius),
+    }

@@ -30,7 +30,9 @@ class SceneRollout(NamedTuple):
     contact: np.ndarray  # (steps,)
     gap: np.ndarray  # (steps,)
     y: np.ndarray | None = None  # (steps, S) Purcell's swimmer above a wall: in-plane y (else None)
-    orientation: np.ndarray | None = None  # (steps, S) Purcell's: its middle link's angle in the plane
+    orientation: np.ndarray | None = (
+        None  # (steps, S) Purcell's: its middle link's angle in the plane
+    )
 
 
 def parse_scene_moves(moves: Any, n_swimmers: int) -> np.ndarray:
@@ -43,7 +45,9 @@ def parse_scene_moves(moves: Any, n_swimmers: int) -> np.ndarray:
     try:
         arr = np.asarray(moves, np.float64)
     except (TypeError, ValueError):
-        raise ConfigError("scene moves must be numbers: (dof, roc) pairs or (swimmer, dof, roc) triples") from None
+        raise ConfigError(
+            "scene moves must be numbers: (dof, roc) pairs or (swimmer, dof, roc) triples"
+        ) from None
     if arr.ndim != 2 or arr.shape[1] not in (2, 3) or arr.shape[0] == 0:
         raise ConfigError(f"scene moves must have shape (steps, 2) or (steps, 3), got {arr.shape}")
     if arr.shape[1] == 2:
@@ -97,14 +101,21 @@ def scene_rollout(
         NumPy float64 arrays, one entry per step (the state after it).
     """
     if purcell_wall.is_purcell(swimmer) and params is None:
-        return SceneRollout(**purcell_wall.rollout(parse_scene_moves(moves, 1), scene, key=key, zeta=zeta, **kwargs))
+        return SceneRollout(
+            **purcell_wall.rollout(parse_scene_moves(moves, 1), scene, key=key, zeta=zeta, **kwargs)
+        )
     with jax.enable_x64(True):
         if params is None:
             params = scene_params(swimmer, scene, zeta=zeta, dtype=jnp.float64, **kwargs)
         acts = parse_scene_moves(moves, params.n_swimmers)
         k = seed_key(key) if isinstance(key, int) else key
-        out = _scan(params, k, jnp.asarray(acts[:, 0], jnp.int32), jnp.asarray(acts[:, 1], jnp.int32),
-                    jnp.asarray(acts[:, 2], params.arms0.dtype))
+        out = _scan(
+            params,
+            k,
+            jnp.asarray(acts[:, 0], jnp.int32),
+            jnp.asarray(acts[:, 1], jnp.int32),
+            jnp.asarray(acts[:, 2], params.arms0.dtype),
+        )
         return SceneRollout(*(np.asarray(v) for v in out))
 
 
@@ -115,15 +126,24 @@ def _scan(params: SceneParams, key: Array, sw: Array, dof: Array, roc: Array) ->
     def body(st: SceneState, inp: tuple[Array, ...]) -> tuple[SceneState, SceneRollout]:
         k, a, b, r = inp
         st, info = scene_step(params, st, (a, b, r), k)
-        return st, SceneRollout(st.centre[:, 0], st.centre[:, 1], st.tilt, st.arms, info.dx, info.stuck,
-                                info.contact, info.gap)
+        return st, SceneRollout(
+            st.centre[:, 0],
+            st.centre[:, 1],
+            st.tilt,
+            st.arms,
+            info.dx,
+            info.stuck,
+            info.contact,
+            info.gap,
+        )
 
     _, out = jax.lax.scan(body, scene_reset(params), (keys, sw, dof, roc))
     return out
 
 
-def batch_starts(params: SceneParams, *, height: Any = None, tilt: Any = None, separation: Any = None
-                 ) -> SceneParams:
+def batch_starts(
+    params: SceneParams, *, height: Any = None, tilt: Any = None, separation: Any = None
+) -> SceneParams:
     """``params`` with a leading batch axis of start poses: one compiled scene, many starts.
 
     ``height``, ``tilt`` and ``separation`` are 1-D arrays of one length ``B`` (or None: the
@@ -132,19 +152,29 @@ def batch_starts(params: SceneParams, *, height: Any = None, tilt: Any = None, s
     again beyond finiteness. Run with :func:`scene_rollout_batch`.
     """
     sc = params.scene
-    vals = [np.asarray(v, np.float64).reshape(-1) for v in (height, tilt, separation) if v is not None]
+    vals = [
+        np.asarray(v, np.float64).reshape(-1) for v in (height, tilt, separation) if v is not None
+    ]
     if not vals:
         raise ConfigError("batch_starts needs at least one of height, tilt, separation")
     b = len(vals[0])
     if any(len(v) != b for v in vals) or not all(np.all(np.isfinite(v)) for v in vals):
-        raise ConfigError("batch_starts: height, tilt and separation must be finite and of one length")
+        raise ConfigError(
+            "batch_starts: height, tilt and separation must be finite and of one length"
+        )
     h = np.broadcast_to(np.asarray(sc.height if height is None else height, np.float64), (b,))
     t = np.broadcast_to(np.asarray(sc.tilt if tilt is None else tilt, np.float64), (b,))
-    d = np.broadcast_to(np.asarray(sc.separation if separation is None else separation, np.float64), (b,))
+    d = np.broadcast_to(
+        np.asarray(sc.separation if separation is None else separation, np.float64), (b,)
+    )
     s = sc.swimmers
-    centre = sc.start_offsets()[None] * d[:, None, None] + np.stack([np.zeros(b), h], -1)[:, None, :]
+    centre = (
+        sc.start_offsets()[None] * d[:, None, None] + np.stack([np.zeros(b), h], -1)[:, None, :]
+    )
     dtype = params.arms0.dtype
-    return params.replace(centre0=jnp.asarray(centre, dtype), tilt0=jnp.asarray(np.repeat(t[:, None], s, 1), dtype))
+    return params.replace(
+        centre0=jnp.asarray(centre, dtype), tilt0=jnp.asarray(np.repeat(t[:, None], s, 1), dtype)
+    )
 
 
 def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0) -> SceneRollout:
@@ -155,12 +185,18 @@ def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0
         k = seed_key(key) if isinstance(key, int) else key
         b = params.centre0.shape[0]
         out = _scan_starts(
-            params, jax.random.split(k, b), jnp.asarray(acts[:, 0], jnp.int32),
-            jnp.asarray(acts[:, 1], jnp.int32), jnp.asarray(acts[:, 2], params.arms0.dtype))
+            params,
+            jax.random.split(k, b),
+            jnp.asarray(acts[:, 0], jnp.int32),
+            jnp.asarray(acts[:, 1], jnp.int32),
+            jnp.asarray(acts[:, 2], params.arms0.dtype),
+        )
         return SceneRollout(*(np.asarray(v) for v in out))
 
 
 @jax.jit
-def _scan_starts(params: SceneParams, keys: Array, sw: Array, dof: Array, roc: Array) -> SceneRollout:
+def _scan_starts(
+    params: SceneParams, keys: Array, sw: Array, dof: Array, roc: Array
+) -> SceneRollout:
     axes = params.replace(zeta=None, centre0=0, tilt0=0, arms0=None, obstacles=None)
     return jax.vmap(_scan, in_axes=(axes, 0, None, None, None))(params, keys, sw, dof, roc)

@@ -76,7 +76,9 @@ class Scene:
             v = getattr(self, name)
             if isinstance(v, numbers.Real) and not isinstance(v, (bool, int, float)):
                 object.__setattr__(self, name, float(v))
-        if isinstance(self.swimmers, numbers.Integral) and not isinstance(self.swimmers, (bool, int)):
+        if isinstance(self.swimmers, numbers.Integral) and not isinstance(
+            self.swimmers, (bool, int)
+        ):
             object.__setattr__(self, "swimmers", int(self.swimmers))
         try:
             obs = tuple(tuple(float(v) for v in o) for o in self.obstacles)
@@ -84,7 +86,7 @@ class Scene:
             return  # left as given: validate() names the problem
         object.__setattr__(self, "obstacles", obs)
 
-    def validate(self) -> "Scene":
+    def validate(self) -> Scene:
         """``self`` if every field is valid.
 
         Raises
@@ -93,40 +95,66 @@ class Scene:
             (a :class:`jswim.errors.ConfigError`) naming the first bad field, in one line.
         """
         if self.medium not in MEDIA:
-            raise ConfigError(f"scene medium must be one of {', '.join(MEDIA)}; got {self.medium!r}")
+            raise ConfigError(
+                f"scene medium must be one of {', '.join(MEDIA)}; got {self.medium!r}"
+            )
         for name in ("height", "tilt", "separation"):
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise ConfigError(f"scene {name} must be a finite number, got {v!r}")
         if self.medium == "wall" and not self.height > 1.0:
-            raise ConfigError(f"scene height must exceed 1 (a sphere radius) above the wall, got {self.height!r}")
+            raise ConfigError(
+                f"scene height must exceed 1 (a sphere radius) above the wall, got {self.height!r}"
+            )
         if not abs(self.tilt) < math.pi / 2:
             raise ConfigError(f"scene tilt must lie in (-pi/2, pi/2), got {self.tilt!r}")
         if isinstance(self.swimmers, bool) or self.swimmers not in range(1, MAX_SWIMMERS + 1):
-            raise ConfigError(f"scene swimmers must be an integer in 1..{MAX_SWIMMERS}, got {self.swimmers!r}")
+            raise ConfigError(
+                f"scene swimmers must be an integer in 1..{MAX_SWIMMERS}, got {self.swimmers!r}"
+            )
         if self.formation not in FORMATIONS:
-            raise ConfigError(f"scene formation must be one of {', '.join(FORMATIONS)}; got {self.formation!r}")
+            raise ConfigError(
+                f"scene formation must be one of {', '.join(FORMATIONS)}; got {self.formation!r}"
+            )
         if self.swimmers > 1 and not self.separation > 0:
             raise ConfigError(f"scene separation must be positive, got {self.separation!r}")
         if not isinstance(self.obstacles, tuple):
-            raise ConfigError(f"scene obstacles must be (x, z, radius) triples, got {self.obstacles!r}")
+            raise ConfigError(
+                f"scene obstacles must be (x, z, radius) triples, got {self.obstacles!r}"
+            )
         for o in self.obstacles:
             if len(o) != 3 or not all(math.isfinite(v) for v in o):
-                raise ConfigError(f"each obstacle must be three finite numbers (x, z, radius), got {o!r}")
+                raise ConfigError(
+                    f"each obstacle must be three finite numbers (x, z, radius), got {o!r}"
+                )
             if not o[2] > 0:
                 raise ConfigError(f"an obstacle's radius must be positive, got {o!r}")
             if self.medium == "wall" and not o[1] > o[2]:
                 raise ConfigError(f"obstacle {o!r} reaches the wall (its z must exceed its radius)")
         if self.obstacles and self.medium == "bulk":
-            raise ConfigError("obstacles need medium 'free' or 'wall' (the bulk formula has no hydrodynamic coupling)")
-        from jswim.swimmers.mobility import MOBILITIES  # lazy: start-up (a Scene is built before JAX loads)
+            raise ConfigError(
+                "obstacles need medium 'free' or 'wall' (the bulk formula has no hydrodynamic coupling)"
+            )
+        from jswim.swimmers.mobility import (
+            MOBILITIES,
+        )  # lazy: start-up (a Scene is built before JAX loads)
 
         if self.mobility not in MOBILITIES:
-            raise ConfigError(f"scene mobility must be one of {', '.join(MOBILITIES)}; got {self.mobility!r}")
+            raise ConfigError(
+                f"scene mobility must be one of {', '.join(MOBILITIES)}; got {self.mobility!r}"
+            )
         if self.mobility != "point" and self.medium == "bulk":
-            raise ConfigError("mobility 'rpy' needs medium 'free' or 'wall' (the bulk formula has no pair mobility)")
-        if self.mobility == "rpy" and self.medium == "wall" and any(o[2] != 1.0 for o in self.obstacles):
-            raise ConfigError("mobility 'rpy' above a wall is built for spheres of one radius: obstacles need radius 1")
+            raise ConfigError(
+                "mobility 'rpy' needs medium 'free' or 'wall' (the bulk formula has no pair mobility)"
+            )
+        if (
+            self.mobility == "rpy"
+            and self.medium == "wall"
+            and any(o[2] != 1.0 for o in self.obstacles)
+        ):
+            raise ConfigError(
+                "mobility 'rpy' above a wall is built for spheres of one radius: obstacles need radius 1"
+            )
         return self
 
     def to_dict(self) -> dict[str, Any]:
@@ -149,22 +177,29 @@ class Scene:
         return np.stack([s, zero] if self.formation == "line" else [zero, s], -1)
 
     @classmethod
-    def from_dict(cls, data: dict[str, Any]) -> "Scene":
+    def from_dict(cls, data: dict[str, Any]) -> Scene:
         """Inverse of :meth:`to_dict` (unknown keys are an error); validated."""
         if not isinstance(data, dict):
             raise ConfigError(f"a scene must be a JSON object, got {type(data).__name__}")
         names = {f.name for f in dataclasses.fields(cls)}
         extra = sorted(set(data) - names)
         if extra:
-            raise ConfigError(f"unknown scene field(s): {', '.join(extra)}; known: {', '.join(sorted(names))}")
+            raise ConfigError(
+                f"unknown scene field(s): {', '.join(extra)}; known: {', '.join(sorted(names))}"
+            )
         fields = dict(data)
         if "obstacles" in fields:
             try:
                 fields["obstacles"] = tuple(tuple(float(v) for v in o) for o in fields["obstacles"])
             except (TypeError, ValueError):
-                raise ConfigError(f"scene obstacles must be (x, z, radius) triples, got {data['obstacles']!r}") from None
+                raise ConfigError(
+                    f"scene obstacles must be (x, z, radius) triples, got {data['obstacles']!r}"
+                ) from None
         for name in ("height", "tilt", "separation"):
-            if name in fields and isinstance(fields[name], int) and not isinstance(fields[name], bool):
+            if (
+                name in fields
+                and isinstance(fields[name], int)
+                and not isinstance(fields[name], bool)
+            ):
                 fields[name] = float(fields[name])
         return cls(**fields).validate()
-

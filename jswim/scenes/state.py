@@ -46,13 +46,22 @@ def scene_reset(params: SceneParams) -> SceneState:
     """The start state of ``params`` (deterministic: scenes have no random start)."""
     arms = jnp.asarray(params.arms0)
     centre = jnp.asarray(params.centre0, arms.dtype)
-    return SceneState(arms, centre, jnp.asarray(params.tilt0, arms.dtype), jnp.zeros((), jnp.int32),
-                      jnp.zeros_like(centre))
+    return SceneState(
+        arms,
+        centre,
+        jnp.asarray(params.tilt0, arms.dtype),
+        jnp.zeros((), jnp.int32),
+        jnp.zeros_like(centre),
+    )
 
 
 def centre_low(state: SceneState) -> Array:
     """``state.centre_lo``, zeros where it is ``None``."""
-    return jnp.zeros_like(state.centre) if state.centre_lo is None else jnp.asarray(state.centre_lo, state.centre.dtype)
+    return (
+        jnp.zeros_like(state.centre)
+        if state.centre_lo is None
+        else jnp.asarray(state.centre_lo, state.centre.dtype)
+    )
 
 
 def add_displacement(state: SceneState, step: Array) -> tuple[Array, Array]:

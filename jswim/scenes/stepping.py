@@ -42,7 +42,9 @@ from jswim.scenes.state import SceneState, SceneStepInfo, add_displacement, cent
 from jswim.swimmers import bodyframe, forcefree
 
 
-def scene_step(params: SceneParams, state: SceneState, action: Any, key: Array) -> tuple[SceneState, SceneStepInfo]:
+def scene_step(
+    params: SceneParams, state: SceneState, action: Any, key: Array
+) -> tuple[SceneState, SceneStepInfo]:
     """Advance a scene by one action.
 
     Parameters
@@ -70,8 +72,9 @@ def scene_step(params: SceneParams, state: SceneState, action: Any, key: Array) 
     return scene_advance(params, state, action, y)
 
 
-def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: Array
-                  ) -> tuple[SceneState, SceneStepInfo]:
+def scene_advance(
+    params: SceneParams, state: SceneState, action: Any, y_noise: Array
+) -> tuple[SceneState, SceneStepInfo]:
     """:func:`scene_step` with given noise variables ``y_noise`` ``(S,)`` in [-1, 1]."""
     sw, dof, roc = split_action(action)
     arms = state.arms
@@ -98,7 +101,9 @@ def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: 
         pose0 = jnp.concatenate([state.centre, state.tilt[:, None]], -1)
         inc, gap = pose_change(params, pose0, arms, rates, jnp.abs(delta), centre_low(state))
         step_x, step_z, step_t = inc.T
-    contact = ~(gap >= params.contact_gap)  # NaN (a solve that broke down at contact) counts as contact
+    contact = ~(
+        gap >= params.contact_gap
+    )  # NaN (a solve that broke down at contact) counts as contact
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
     dx = jnp.where(contact, 0.0, step_x * factor)
     dz = jnp.where(contact, 0.0, step_z * factor)
@@ -114,8 +119,9 @@ def scene_advance(params: SceneParams, state: SceneState, action: Any, y_noise: 
     return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
 
 
-def scene_step_joint(params: SceneParams, state: SceneState, dofs: Any, rocs: Any, key: Array
-                     ) -> tuple[SceneState, SceneStepInfo]:
+def scene_step_joint(
+    params: SceneParams, state: SceneState, dofs: Any, rocs: Any, key: Array
+) -> tuple[SceneState, SceneStepInfo]:
     """Every swimmer moves one arm at once: swimmer ``s`` moves arm ``dofs[s]`` by
     ``rocs[s] x (d_max - d_min)`` (clipped), all along one straight path in the joint shape space
     (each arm at rate ``delta_s / T``, ``T`` the longest move). For simultaneous strokes of two
@@ -144,8 +150,13 @@ def scene_step_joint(params: SceneParams, state: SceneState, dofs: Any, rocs: An
     dz = jnp.where(contact, 0.0, step_z * factor)
     dtilt = jnp.where(contact, 0.0, step_t)
     centre, centre_lo = add_displacement(state, jnp.stack([dx, dz], -1))
-    new = SceneState(jnp.where(contact, arms, jnp.where(onehot, target[:, None], arms)),
-                     centre, state.tilt + dtilt, state.t + 1, centre_lo)
+    new = SceneState(
+        jnp.where(contact, arms, jnp.where(onehot, target[:, None], arms)),
+        centre,
+        state.tilt + dtilt,
+        state.t + 1,
+        centre_lo,
+    )
     stuck = jnp.any(rocs != 0) & jnp.all((rocs == 0) | (delta == 0))
     moved = jnp.any(delta != 0)
     return new, SceneStepInfo(dx, dz, dtilt, stuck, moved & ~contact, contact, gap)
@@ -159,16 +170,23 @@ def _bulk_displacement(arms: Array, sw: Array, dof: Array, delta: Array) -> Arra
     return jnp.where(dof == 0, move_1, move_2)
 
 
-def integrate_move(params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
-                   ) -> tuple[Array, Array]:
+def integrate_move(
+    params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
+) -> tuple[Array, Array]:
     """Poses after moving the arms at ``rates`` for ``duration``, and the smallest surface gap:
     ``pose0`` plus :func:`pose_change`."""
     inc, gap = pose_change(params, pose0, arms, rates, duration)
     return pose0 + inc, gap
 
 
-def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array,
-                centre_lo: Array | None = None) -> tuple[Array, Array]:
+def pose_change(
+    params: SceneParams,
+    pose0: Array,
+    arms: Array,
+    rates: Array,
+    duration: Array,
+    centre_lo: Array | None = None,
+) -> tuple[Array, Array]:
     """Change of every swimmer's pose over a move of the arms at ``rates`` for ``duration``, and
     the smallest surface gap.
 
@@ -200,7 +218,9 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
     obstacles = jnp.asarray(params.obstacles, pose0.dtype)
     obstacles = obstacles.at[:, 0].add(-shift)
     pose0 = pose0.at[:, 0].add(-shift)
-    if centre_lo is not None:  # the low words: offsets from swimmer 1, heights (rounded to the dtype)
+    if (
+        centre_lo is not None
+    ):  # the low words: offsets from swimmer 1, heights (rounded to the dtype)
         lo = jnp.asarray(centre_lo, pose0.dtype)
         pose0 = pose0.at[:, 0].add(lo[:, 0] - lo[0, 0]).at[:, 1].add(lo[:, 1])
         obstacles = obstacles.at[:, 0].add(-lo[0, 0])
@@ -226,19 +246,26 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         """Body-frame (along the axis, normal to it) velocities and rotation rates ``(n, S, 3)``
         at the node poses, and what the next sweep starts from."""
         if path == "response":
-            solve = lambda pose, a, r, f: bodyframe.sweep(pose[:, :2], pose[:, 2], a, rates, r, f, mob)
+            solve = lambda pose, a, r, f: bodyframe.sweep(
+                pose[:, :2], pose[:, 2], a, rates, r, f, mob
+            )
             state, xi = jax.vmap(solve)(poses, arms_t, resp, state)
             return xi, state
 
         def one(pose: Array, arms_k: Array, forces: Array) -> tuple[Array, Array]:
             if path == "by_swimmer":
-                r = forcefree.solve_by_swimmer(pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces, mob)
+                r = forcefree.solve_by_swimmer(
+                    pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces, mob
+                )
                 forces = r.forces.astype(forces.dtype)
             else:
-                r = forcefree.rigid_motion(pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall, mob)
+                r = forcefree.rigid_motion(
+                    pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall, mob
+                )
             c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
             u, w = r.velocity[:, 0], r.velocity[:, 1]
             return jnp.stack([c * u + s * w, -s * u + c * w, r.omega], -1), forces
+
         return jax.vmap(one)(poses, arms_t, state)
 
     # Sweep: the body-frame rates at the current node poses, then tilt first and position with the
@@ -253,7 +280,9 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         dtilt = duration * (y_run @ b[..., 2])  # (n, S)
         tilt = pose0[:, 2] + dtilt
         c, s = jnp.cos(tilt), jnp.sin(tilt)
-        lab = jnp.stack([c * b[..., 0] - s * b[..., 1], s * b[..., 0] + c * b[..., 1]], -1)  # (n, S, 2)
+        lab = jnp.stack(
+            [c * b[..., 0] - s * b[..., 1], s * b[..., 0] + c * b[..., 1]], -1
+        )  # (n, S, 2)
         dxz = duration * jnp.einsum("ij,jsk->isk", y_run, lab)
         new = jnp.concatenate([dxz, dtilt[..., None]], -1).astype(inc.dtype)
         return (new, state), lab, b[..., 2]
@@ -267,10 +296,14 @@ def pose_change(params: SceneParams, pose0: Array, arms: Array, rates: Array, du
         it, lab, omega = sweep(it)
     inc = it[0]
     poses = pose0 + inc
-    step = duration * jnp.concatenate([jnp.einsum("j,jsk->sk", y_end, lab), (y_end @ omega)[:, None]], -1)
+    step = duration * jnp.concatenate(
+        [jnp.einsum("j,jsk->sk", y_end, lab), (y_end @ omega)[:, None]], -1
+    )
     arms_end = arms + duration * rates
     gaps = jax.vmap(lambda p, a: surface_gap(p, a, obstacles, params.wall))(poses, arms_t)
-    return step, jnp.minimum(jnp.min(gaps), surface_gap(pose0 + step, arms_end, obstacles, params.wall))
+    return step, jnp.minimum(
+        jnp.min(gaps), surface_gap(pose0 + step, arms_end, obstacles, params.wall)
+    )
 
 
 #: Most Picard sweeps of an adaptive step (:func:`_sweep_until_converged`); 3 at least.
@@ -284,7 +317,9 @@ def picard_tolerance(dtype: Any) -> float:
     return 1e-7 if jnp.dtype(dtype).itemsize <= 4 else 1e-13
 
 
-def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> tuple[tuple[Array, Array], Array, Array]:
+def _sweep_until_converged(
+    sweep: Any, it: tuple[Array, Array], tol: float
+) -> tuple[tuple[Array, Array], Array, Array]:
     """Picard sweeps until the error estimate of the increments falls below ``tol`` times the
     largest displacement of the step, at least :data:`MIN_SWEEPS` and at most :data:`MAX_SWEEPS`.
 
@@ -295,6 +330,7 @@ def _sweep_until_converged(sweep: Any, it: tuple[Array, Array], tol: float) -> t
     the batch has converged (the others keep their values: a swimmer's result does not depend on
     its batch). Returns the iterate and the last sweep's lab-frame velocities and rotation rates.
     """
+
     def step(carry: tuple) -> tuple:
         k, it, _, _, change, _ = carry
         new, lab, omega = sweep(it)

@@ -28,10 +28,27 @@ from typing import Any
 #: Public name -> the submodule that owns it, imported on first access (PEP 562), so that
 #: ``jswim.studies.grids`` (all the command line needs to build its parser) loads alone.
 _EXPORTS = {
-    **dict.fromkeys(("AGENTS", "COMPETENCE_VARIANTS", "DEFAULT_ZETAS", "INIT_CHOICES", "SPECS", "STUDIES",
-                     "SWIM_VARIANT", "Plan", "StudyOptions", "StudySpec", "build"), "jswim.studies.grids"),
+    **dict.fromkeys(
+        (
+            "AGENTS",
+            "COMPETENCE_VARIANTS",
+            "DEFAULT_ZETAS",
+            "INIT_CHOICES",
+            "SPECS",
+            "STUDIES",
+            "SWIM_VARIANT",
+            "Plan",
+            "StudyOptions",
+            "StudySpec",
+            "build",
+        ),
+        "jswim.studies.grids",
+    ),
     **dict.fromkeys(("draw_figures", "summarize"), "jswim.studies.report"),
-    **dict.fromkeys(("ProgressFn", "StudyResult", "default_folder", "identity", "run_study"), "jswim.studies.run"),
+    **dict.fromkeys(
+        ("ProgressFn", "StudyResult", "default_folder", "identity", "run_study"),
+        "jswim.studies.run",
+    ),
     **dict.fromkeys(("Backend", "check_server"), "jswim.llm.backend"),
 }
 

@@ -31,7 +31,8 @@ from __future__ import annotations
 import dataclasses
 import functools
 import hashlib
-from typing import Any, Callable, NamedTuple, Sequence
+from typing import Any, NamedTuple
+from collections.abc import Callable, Sequence
 
 import jax
 import jax.numpy as jnp
@@ -91,8 +92,12 @@ def q_policy(q: Any, params: EnvParams, action_set: str = "all", label: str = "Q
     q = np.asarray(q, np.float64)
     n = params.model.n_dof
     if q.shape != (2**n, 3 * n):
-        raise ConfigError(f"a Q-table for a {n}-DOF swimmer has shape {(2**n, 3 * n)}, got {q.shape}")
-    return Policy("q", q=q, action_set=action_set, rocs=tuple(default_rocs(params.model)), label=label)
+        raise ConfigError(
+            f"a Q-table for a {n}-DOF swimmer has shape {(2**n, 3 * n)}, got {q.shape}"
+        )
+    return Policy(
+        "q", q=q, action_set=action_set, rocs=tuple(default_rocs(params.model)), label=label
+    )
 
 
 class EnsembleStats(NamedTuple):
@@ -113,7 +118,9 @@ class EnsembleStats(NamedTuple):
 
 def _seed_key(seed: int, zeta: float) -> Array:
     """Key of one noise level: a hash of (seed, zeta), so other levels never shift it."""
-    digest = hashlib.blake2b(repr(("ensemble", int(seed), float(zeta))).encode(), digest_size=8).digest()
+    digest = hashlib.blake2b(
+        repr(("ensemble", int(seed), float(zeta))).encode(), digest_size=8
+    ).digest()
     return jax.random.PRNGKey(int.from_bytes(digest, "little") & 0x7FFFFFFF)
 
 
@@ -138,10 +145,26 @@ class _Chunk(NamedTuple):
     hist: Array  # (R, bins + 2) int: underflow, bins, overflow
 
 
-@functools.partial(jax.jit, static_argnames=("policy_static", "size", "steps", "every", "window", "bins", "devices"))
+@functools.partial(
+    jax.jit,
+    static_argnames=("policy_static", "size", "steps", "every", "window", "bins", "devices"),
+)
 def _run_chunk(
-    key: Array, start: Array, n: Array, params: EnvParams, q: Array, lo: Array, width: Array, *,
-    policy_static: Policy, size: int, steps: int, every: int, window: int, bins: int, devices: int,
+    key: Array,
+    start: Array,
+    n: Array,
+    params: EnvParams,
+    q: Array,
+    lo: Array,
+    width: Array,
+    *,
+    policy_static: Policy,
+    size: int,
+    steps: int,
+    every: int,
+    window: int,
+    bins: int,
+    devices: int,
 ) -> _Chunk:
     dtype = jnp.result_type(float)
     idx = start + jnp.arange(size, dtype=jnp.int32)
@@ -151,8 +174,13 @@ def _run_chunk(
     policy = dataclasses.replace(policy_static, q=q)
     init = jnp.asarray(params.init, jnp.int32)
     # A random start: one fair coin per DOF and swimmer, from the same counter-based draws.
-    coins = jnp.stack([noise(jax.random.fold_in(key, 2 + k), size, start=start) > 0
-                       for k in range(init.shape[0])], axis=1).astype(jnp.int32)
+    coins = jnp.stack(
+        [
+            noise(jax.random.fold_in(key, 2 + k), size, start=start) > 0
+            for k in range(init.shape[0])
+        ],
+        axis=1,
+    ).astype(jnp.int32)
     levels = jnp.where(init[None, :] < 0, coins, init[None, :])
     zero = jnp.zeros((size,), dtype)
     state = jax.vmap(lambda lv: start_state(params.model, lv, dtype))(levels)
@@ -188,7 +216,9 @@ def _run_chunk(
         return carry, (mean, m2, xmin, xmax, fwd, hist)
 
     n_reports = steps // every
-    _, (mean, m2, xmin, xmax, fwd, hist) = jax.lax.scan(report, (state, ring, zero, zero), jnp.arange(n_reports))
+    _, (mean, m2, xmin, xmax, fwd, hist) = jax.lax.scan(
+        report, (state, ring, zero, zero), jnp.arange(n_reports)
+    )
     return _Chunk(counts, mean, m2, xmin, xmax, fwd, hist)
 
 
@@ -271,8 +301,15 @@ def run(
     size = min(-(-max(chunk, 1) // unit) * unit, -(-n // unit) * unit)
     q_arr = jnp.asarray(np.zeros((1, 1)) if policy.q is None else policy.q, jnp.result_type(float))
     static = dataclasses.replace(policy, q=None)
-    kw = dict(policy_static=static, size=size, steps=steps, every=every, window=window, bins=bins,
-              devices=sharding.device_count())
+    kw = dict(
+        policy_static=static,
+        size=size,
+        steps=steps,
+        every=every,
+        window=window,
+        bins=bins,
+        devices=sharding.device_count(),
+    )
     n_rep = steps // every
     total, done = len(zetas) * n * steps, 0
     out = []
@@ -280,8 +317,16 @@ def run(
         key = _seed_key(seed, zeta)
         p = params.replace(zeta=zeta)
         # Pilot: the first block (its own small compile) sets each reported step's histogram range.
-        pilot = _run_chunk(key, jnp.int32(0), jnp.int32(min(n, BLOCK)), p, q_arr, jnp.zeros(n_rep),
-                           jnp.ones(n_rep), **{**kw, "size": BLOCK * sharding.device_count()})
+        pilot = _run_chunk(
+            key,
+            jnp.int32(0),
+            jnp.int32(min(n, BLOCK)),
+            p,
+            q_arr,
+            jnp.zeros(n_rep),
+            jnp.ones(n_rep),
+            **{**kw, "size": BLOCK * sharding.device_count()},
+        )
         pmin, pmax = np.asarray(pilot.min, np.float64), np.asarray(pilot.max, np.float64)
         span = pmax - pmin
         pad = 0.25 * span + 1e-6 * np.maximum(1.0, np.abs(pmax) + np.abs(pmin))
@@ -289,7 +334,16 @@ def run(
         width = (span + 2 * pad) / bins
         parts = []
         for start in range(0, n, size):
-            c = _run_chunk(key, jnp.int32(start), jnp.int32(n), p, q_arr, jnp.asarray(lo), jnp.asarray(width), **kw)
+            c = _run_chunk(
+                key,
+                jnp.int32(start),
+                jnp.int32(n),
+                p,
+                q_arr,
+                jnp.asarray(lo),
+                jnp.asarray(width),
+                **kw,
+            )
             parts.append(sharding.to_host(c))
             done += min(size, n - start) * steps
             if progress is not None:
@@ -298,8 +352,16 @@ def run(
     return out
 
 
-def _combine(parts: list, zeta: float, n: int, every: int, n_rep: int, qs: tuple[float, ...],
-             lo: np.ndarray, width: np.ndarray) -> EnsembleStats:
+def _combine(
+    parts: list,
+    zeta: float,
+    n: int,
+    every: int,
+    n_rep: int,
+    qs: tuple[float, ...],
+    lo: np.ndarray,
+    width: np.ndarray,
+) -> EnsembleStats:
     """Merge per-block partial statistics (Chan et al.'s pairwise update, in float64)."""
     counts = np.concatenate([np.asarray(c.count, np.float64) for c in parts])  # (G_total,)
     means = np.concatenate([np.asarray(c.mean, np.float64) for c in parts], axis=1)  # (R, G_total)
@@ -339,7 +401,9 @@ def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all")
     return its greedy policy."""
     config = qlearning.QConfig(action_set=action_set)
     run_ = qlearning.train(seed_key(seed), params.replace(zeta=0.0), config)
-    return q_policy(np.asarray(run_.q), params, action_set, label=f"Q-policy (seed {seed}, {action_set})")
+    return q_policy(
+        np.asarray(run_.q), params, action_set, label=f"Q-policy (seed {seed}, {action_set})"
+    )
 
 
 def format_table(stats: Sequence[EnsembleStats], max_rows: int = 12) -> str:
@@ -348,14 +412,19 @@ def format_table(stats: Sequence[EnsembleStats], max_rows: int = 12) -> str:
     if not stats:
         return ""
     qs = stats[0].qs
-    head = f"{'zeta':>5} {'step':>8} {'mean X/a':>11} {'std':>9} " + " ".join(
-        f"{'q' + format(100 * q, 'g'):>9}" for q in qs) + f" {'min':>10} {'max':>10} {'forward':>8}"
+    head = (
+        f"{'zeta':>5} {'step':>8} {'mean X/a':>11} {'std':>9} "
+        + " ".join(f"{'q' + format(100 * q, 'g'):>9}" for q in qs)
+        + f" {'min':>10} {'max':>10} {'forward':>8}"
+    )
     lines = [head, "-" * len(head)]
     for s in stats:
         for r in regular_rows(s.steps, max_rows):
             qtxt = " ".join(f"{v:9.4f}" if np.isfinite(v) else f"{'-':>9}" for v in s.quantiles[r])
-            lines.append(f"{s.zeta:5g} {s.steps[r]:8d} {s.mean[r]:11.5f} {s.std[r]:9.5f} {qtxt} "
-                         f"{s.min[r]:10.4f} {s.max[r]:10.4f} {s.forward[r]:8.4f}")
+            lines.append(
+                f"{s.zeta:5g} {s.steps[r]:8d} {s.mean[r]:11.5f} {s.std[r]:9.5f} {qtxt} "
+                f"{s.min[r]:10.4f} {s.max[r]:10.4f} {s.forward[r]:8.4f}"
+            )
     return "\n".join(lines)
 
 
@@ -388,13 +457,32 @@ def to_rows(stats: Sequence[EnsembleStats]) -> list[dict[str, Any]]:
     rows = []
     for s in stats:
         for r in range(len(s.steps)):
-            row = {"zeta": s.zeta, "n": s.n, "step": int(s.steps[r]), "mean": float(s.mean[r]),
-                   "std": float(s.std[r]), "min": float(s.min[r]), "max": float(s.max[r]),
-                   "forward": float(s.forward[r]), "resolution": float(s.resolution[r])}
+            row = {
+                "zeta": s.zeta,
+                "n": s.n,
+                "step": int(s.steps[r]),
+                "mean": float(s.mean[r]),
+                "std": float(s.std[r]),
+                "min": float(s.min[r]),
+                "max": float(s.max[r]),
+                "forward": float(s.forward[r]),
+                "resolution": float(s.resolution[r]),
+            }
             row.update({f"q{format(100 * q, 'g')}": float(v) for q, v in zip(s.qs, s.quantiles[r])})
             rows.append(row)
     return rows
 
 
-__all__ = ["Policy", "EnsembleStats", "stroke_policy", "q_policy", "signature_policy", "learned_policy",
-           "run", "format_table", "regular_rows", "to_rows", "make_params"]
+__all__ = [
+    "EnsembleStats",
+    "Policy",
+    "format_table",
+    "learned_policy",
+    "make_params",
+    "q_policy",
+    "regular_rows",
+    "run",
+    "signature_policy",
+    "stroke_policy",
+    "to_rows",
+]

@@ -10,7 +10,8 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import time
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any
+from collections.abc import Callable, Iterable, Sequence
 
 import jax
 import numpy as np
@@ -59,19 +60,37 @@ def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]
 
     p0 = plans[0]
     base = env.make_params(p0.swimmer)
-    init = np.array([[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32)
-    params = qlearning.batch_params(base, len(plans), zeta=np.array([p.zeta for p in plans]),
-                                    direction=np.array([p.direction for p in plans], float), init=init)
+    init = np.array(
+        [[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32
+    )
+    params = qlearning.batch_params(
+        base,
+        len(plans),
+        zeta=np.array([p.zeta for p in plans]),
+        direction=np.array([p.direction for p in plans], float),
+        init=init,
+    )
     keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
     run = ppo.train_batch(keys, params, ppo.PPOConfig(steps=p0.steps))
     rocs, dofs0 = np.asarray(run.actions, np.float64), np.asarray(run.dofs0, np.float64)
     rep = ppo.evaluate(run, params, criterion=Criterion(horizon=horizon))
     dof = np.asarray(run.dof, np.int64)
-    moves = [[[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])] for i in range(len(plans))]
+    moves = [
+        [[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])]
+        for i in range(len(plans))
+    ]
     span = base.model.hi - base.model.lo
     corners = np.rint((dofs0 - base.model.lo) / span).astype(np.int64)  # the starts are corners
-    return judged_rows(plans, np.zeros(dof.shape, np.int64), np.asarray(run.x), corners, horizon,
-                       pose=(np.asarray(run.y), np.asarray(run.orientation)), report=rep, moves=moves)
+    return judged_rows(
+        plans,
+        np.zeros(dof.shape, np.int64),
+        np.asarray(run.x),
+        corners,
+        horizon,
+        pose=(np.asarray(run.y), np.asarray(run.orientation)),
+        report=rep,
+        moves=moves,
+    )
 
 
 def _groups(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
@@ -82,20 +101,39 @@ def _groups(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
 
 
 def _spec(p: Plan) -> LLMRunSpec:
-    return LLMRunSpec(swimmer=p.swimmer, direction=p.direction, init=p.init, zeta=p.zeta, seed=p.seed,
-                      n_steps=p.steps, n_ht=p.n_ht, drop=p.drop, run_id=p.run_id, roc_levels=p.roc_levels,
-                      scene=p.scene, pair_prompt=p.pair_prompt)
+    return LLMRunSpec(
+        swimmer=p.swimmer,
+        direction=p.direction,
+        init=p.init,
+        zeta=p.zeta,
+        seed=p.seed,
+        n_steps=p.steps,
+        n_ht=p.n_ht,
+        drop=p.drop,
+        run_id=p.run_id,
+        roc_levels=p.roc_levels,
+        scene=p.scene,
+        pair_prompt=p.pair_prompt,
+    )
 
 
-def _configs(plans: Sequence[Plan], o: StudyOptions,
-             template: PromptTemplate | None) -> list[tuple[Any, list[Plan]]]:
+def _configs(
+    plans: Sequence[Plan], o: StudyOptions, template: PromptTemplate | None
+) -> list[tuple[Any, list[Plan]]]:
     """The LLM plans by agent config: one driver per (variant, action set)."""
     out = []
-    for (variant, action_set, temp, prompt), group in _groups(plans, "variant", "action_set", "temperature",
-                                                              "prompt_file").items():
+    for (variant, action_set, temp, prompt), group in _groups(
+        plans, "variant", "action_set", "temperature", "prompt_file"
+    ).items():
         tpl = PromptTemplate.from_file(prompt) if prompt else template
-        cfg = variant_config(variant, action_set=action_set, share_identical=o.share_identical, x_min=o.x_min,
-                             max_tokens=o.max_tokens, **({"template": tpl} if tpl else {}))
+        cfg = variant_config(
+            variant,
+            action_set=action_set,
+            share_identical=o.share_identical,
+            x_min=o.x_min,
+            max_tokens=o.max_tokens,
+            **({"template": tpl} if tpl else {}),
+        )
         if temp is not None:  # a sweep's temperature (each request above 0 carries its own seed)
             cfg = dataclasses.replace(cfg, temperature=temp)
         out.append((cfg, group))
@@ -105,16 +143,29 @@ def _configs(plans: Sequence[Plan], o: StudyOptions,
 def _row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     """The judged row of one finished LLM run (a scene's has the scene's columns)."""
     if plan.scene:
-        from jswim.studies import scenes  # lazy: start-up (the scene module, for scene studies only)
+        from jswim.studies import (
+            scenes,
+        )  # lazy: start-up (the scene module, for scene studies only)
 
         return scenes.llm_row(plan, r, horizon)
     return rows.llm_row(plan, r, horizon)
 
 
-def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: StudyStore,
-             template: PromptTemplate | None, tick: ProgressFn, finished: int, total: int,
-             speed: dict[str, float], max_cost: float | None, sent: dict[str, Any] | None = None,
-             info: ServerInfo | None = None, notes: list[str] | None = None) -> tuple[int, bool]:
+def _run_llm(
+    plans: Sequence[Plan],
+    o: StudyOptions,
+    backend: Backend,
+    store: StudyStore,
+    template: PromptTemplate | None,
+    tick: ProgressFn,
+    finished: int,
+    total: int,
+    speed: dict[str, float],
+    max_cost: float | None,
+    sent: dict[str, Any] | None = None,
+    info: ServerInfo | None = None,
+    notes: list[str] | None = None,
+) -> tuple[int, bool]:
     """Run the LLM plans as per-run pipelines; returns (runs finished, stopped by the cost cap).
 
     At most ``o.chunk`` runs (default: the concurrency) are in progress at once, across all the
@@ -145,7 +196,9 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
             info += f" · ETA {left}"
         if live:
             c = live[0].counts
-            info += f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · ${budget.spent_usd:.4f}"
+            info += (
+                f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · ${budget.spent_usd:.4f}"
+            )
             if max_cost is not None:
                 info += f" of ${max_cost:g}"
             if c.cache_hits or c.shared:
@@ -182,11 +235,21 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
             window = asyncio.Semaphore(o.chunk or settings.max_concurrency)
             reporter = asyncio.ensure_future(keep_reporting())
             try:
-                await asyncio.gather(*[
-                    run_batch_async([_spec(p) for p in group], client, cfg, store.folder / "transcripts",
-                                    window=window, journal=journal, on_step=on_step, on_done=on_done)
-                    for cfg, group in _configs(plans, o, template)
-                ])
+                await asyncio.gather(
+                    *[
+                        run_batch_async(
+                            [_spec(p) for p in group],
+                            client,
+                            cfg,
+                            store.folder / "transcripts",
+                            window=window,
+                            journal=journal,
+                            on_step=on_step,
+                            on_done=on_done,
+                        )
+                        for cfg, group in _configs(plans, o, template)
+                    ]
+                )
             finally:
                 reporter.cancel()
                 await asyncio.gather(reporter, return_exceptions=True)
@@ -209,17 +272,27 @@ def _run_llm(plans: Sequence[Plan], o: StudyOptions, backend: Backend, store: St
         journal.close()
         if journal.n_calls > calls_before:
             store.changed = True  # calls were paid for: the folder's status must say how it ended
-        if live and sent is not None and (live[0].reasoning.active or live[0].reasoning.notes
-                                          or live[0].reasoning.effort):
+        if (
+            live
+            and sent is not None
+            and (live[0].reasoning.active or live[0].reasoning.notes or live[0].reasoning.effort)
+        ):
             sent.update(live[0].reasoning.describe())
         wall = time.perf_counter() - t_start
         c = live[0].counts if live else None
-        speed.update(totals, wall_s=wall, calls_per_s=totals["calls"] / wall if wall > 0 else 0.0,
-                     billed_calls_per_s=totals["billed_calls"] / wall if wall > 0 else 0.0,
-                     tokens=c.tokens if c else 0, cost_usd=budget.spent_usd - spent_before,
-                     study_cost_usd=budget.spent_usd, requests=c.requests if c else 0,
-                     retries=c.retries if c else 0, faults=dict(sorted(c.faults.items())) if c else {},
-                     unanswered=c.unanswered if c else 0, unanswered_usd=c.unanswered_usd if c else 0.0)
+        speed.update(
+            totals,
+            wall_s=wall,
+            calls_per_s=totals["calls"] / wall if wall > 0 else 0.0,
+            billed_calls_per_s=totals["billed_calls"] / wall if wall > 0 else 0.0,
+            tokens=c.tokens if c else 0,
+            cost_usd=budget.spent_usd - spent_before,
+            study_cost_usd=budget.spent_usd,
+            requests=c.requests if c else 0,
+            retries=c.retries if c else 0,
+            faults=dict(sorted(c.faults.items())) if c else {},
+            unanswered=c.unanswered if c else 0,
+            unanswered_usd=c.unanswered_usd if c else 0.0,
+        )
         store.meta["llm_totals"] = add_session(store.meta.get("llm_totals"), speed, journal.n_calls)
     return finished, budget.exhausted
-

@@ -15,14 +15,20 @@ import dataclasses
 import json
 import math
 from dataclasses import dataclass
-from typing import Callable, Iterable
+from collections.abc import Callable, Iterable
 
 from jswim.actions import ACTION_SETS, check_action_set, check_roc_levels
 from jswim.agents.defaults import paper_init
 from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.agents.protocol import derived_seed
-from jswim.agents.variants import (check_pair_prompt, init_label, pair_tag, roc_tag, run_id,
-                                   variant_action_set)
+from jswim.agents.variants import (
+    check_pair_prompt,
+    init_label,
+    pair_tag,
+    roc_tag,
+    run_id,
+    variant_action_set,
+)
 from jswim.env import all_inits
 from jswim.env.worlds import registered_worlds
 from jswim.errors import ConfigError, check_size, check_zeta
@@ -51,8 +57,15 @@ INIT_CHOICES = ("paper", "cycle", "random", "++", "+-", "-+", "--")
 SWIM_VARIANT = "paper"
 
 #: Variants the competence study runs by default (each next to the same baselines).
-COMPETENCE_VARIANTS = ("paper", "summary", "shuffle", "shape-changing", "shape-changing+summary",
-                       "shape-changing+shuffle", "shape-changing+temperature")
+COMPETENCE_VARIANTS = (
+    "paper",
+    "summary",
+    "shuffle",
+    "shape-changing",
+    "shape-changing+summary",
+    "shape-changing+shuffle",
+    "shape-changing+temperature",
+)
 
 
 @dataclass(frozen=True)
@@ -82,10 +95,14 @@ class StudyOptions:
     chunk: int | None = None  # LLM runs in progress at once (None: the client's concurrency)
     agents: tuple[str, ...] = ALL_AGENTS
     variant: str | None = None  # LLM protocol variant; None: the study's (SWIM_VARIANT or "paper")
-    share_identical: bool = False  # send identical temperature-0 requests of different runs once (runs become copies)
+    share_identical: bool = (
+        False  # send identical temperature-0 requests of different runs once (runs become copies)
+    )
     x_min: float = -2.5  # X_min of the position encoding (the paper's and the code's -2.5)
     max_tokens: int | None = None  # reply length limit; None: per swimmer (10 two DOFs, 20 more)
-    variants: tuple[str, ...] | None = None  # competence: the variants to compare (None: all default)
+    variants: tuple[str, ...] | None = (
+        None  # competence: the variants to compare (None: all default)
+    )
     # Sweeps over LLM settings, grid axes of any study (each crosses the study's LLM cells; the
     # temperature study sweeps temperatures itself). None: the backend's temperature, the one prompt.
     temperatures: tuple[float, ...] | None = None
@@ -130,17 +147,26 @@ class StudyOptions:
             raise ConfigError("--chunk must be >= 1")
         for sw in self.swimmers or ():
             if sw not in SWIMMERS + registered_worlds():
-                raise ConfigError(f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS + registered_worlds())}")
+                raise ConfigError(
+                    f"unknown swimmer {sw!r}; choose one of {', '.join(SWIMMERS + registered_worlds())}"
+                )
         for name in ([self.variant] if self.variant else []) + list(self.variants or ()):
             variant_action_set(name)  # raises for an unknown name
         for t in self.temperatures or ():
             check_temperature(t, "--temperatures")
-        for name, values in (("--temperatures", self.temperatures), ("--prompt-files", self.prompt_files)):
+        for name, values in (
+            ("--temperatures", self.temperatures),
+            ("--prompt-files", self.prompt_files),
+        ):
             if values is not None and (not values or len(set(values)) != len(values)):
-                raise ConfigError(f"{name} must list distinct values, got {','.join(map(str, values))}")
+                raise ConfigError(
+                    f"{name} must list distinct values, got {','.join(map(str, values))}"
+                )
         stems = [prompt_label(f) for f in self.prompt_files or ()]
         if len(set(stems)) != len(stems):
-            raise ConfigError("--prompt-files: two files have the same name (it names their runs); rename one")
+            raise ConfigError(
+                "--prompt-files: two files have the same name (it names their runs); rename one"
+            )
         if self.prompt_files and self.prompt_file:
             raise ConfigError("give --prompt-file or --prompt-files, not both")
         for k in (self.roc_levels, *self.roc_levels_grid):
@@ -150,20 +176,32 @@ class StudyOptions:
         for name in ("heights", "separations", "phases"):
             values = getattr(self, name)
             if not values or len(set(values)) != len(values):
-                raise ConfigError(f"--{name} needs distinct values, got {','.join(map(str, values))}")
+                raise ConfigError(
+                    f"--{name} needs distinct values, got {','.join(map(str, values))}"
+                )
         if any(not (math.isfinite(h) and h > 1.0) for h in self.heights):
-            raise ConfigError(f"--heights must be above 1 sphere radius (the middle sphere touches the wall at 1), "
-                              f"got {','.join(map(str, self.heights))}")
+            raise ConfigError(
+                f"--heights must be above 1 sphere radius (the middle sphere touches the wall at 1), "
+                f"got {','.join(map(str, self.heights))}"
+            )
         if any(not (math.isfinite(d) and d > 0) for d in self.separations):
-            raise ConfigError(f"--separations must be positive distances, got {','.join(map(str, self.separations))}")
+            raise ConfigError(
+                f"--separations must be positive distances, got {','.join(map(str, self.separations))}"
+            )
         if any(p not in (0, 1, 2, 3) for p in self.phases):
-            raise ConfigError(f"--phases are quarter cycles 0, 1, 2 or 3, got {','.join(map(str, self.phases))}")
+            raise ConfigError(
+                f"--phases are quarter cycles 0, 1, 2 or 3, got {','.join(map(str, self.phases))}"
+            )
         check_pair_prompt(self.pair_prompt)
         _check_school(self.school_sizes, self.formations)
-        for f in self.formations if max(self.school_sizes) > 1 else ():  # a pair is a line; a school each
+        for f in (
+            self.formations if max(self.school_sizes) > 1 else ()
+        ):  # a pair is a line; a school each
             for d in self.separations:
                 try:  # the scenes' own start check: the swimmers' geometry, written once
-                    check_start("ng", Scene(medium="free", swimmers=2, separation=float(d), formation=f))
+                    check_start(
+                        "ng", Scene(medium="free", swimmers=2, separation=float(d), formation=f)
+                    )
                 except ConfigError as exc:
                     raise ConfigError(f"--separations {d:g} ({f}): {exc}") from None
         bad = sorted(set(self.agents) - set(ALL_AGENTS))
@@ -191,13 +229,21 @@ class Plan:
     drop: frozenset[str] = frozenset()
     action_set: str = "all"
     group: str = ""
-    variant: str = "paper"  # LLM protocol variant (jswim.agents.variants.VARIANTS); "" for baselines
+    variant: str = (
+        "paper"  # LLM protocol variant (jswim.agents.variants.VARIANTS); "" for baselines
+    )
     temperature: float | None = None  # LLM sampling temperature of a sweep (None: the backend's)
-    prompt_file: str | None = None  # LLM prompt template of a --prompt-files sweep (None: the study's)
-    roc_levels: int = 1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
+    prompt_file: str | None = (
+        None  # LLM prompt template of a --prompt-files sweep (None: the study's)
+    )
+    roc_levels: int = (
+        1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
+    )
     sample: int = 0  # which independent repeat of this very setting (--samples; 0: the run itself)
     scene: str = ""  # canonical JSON of the run's Scene (:func:`scene_json`); "": the bulk fluid
-    pair_prompt: str = "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
+    pair_prompt: str = (
+        "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
+    )
 
 
 def sample_id(run: str, sample: int) -> str:
@@ -230,7 +276,9 @@ class Cell:
     roc_levels: int | None = None  # None: the options' roc_levels; 0 for real-valued ROCs
     scene: str = ""  # a scene (jswim.studies.scenes), canonical JSON; "": the bulk fluid
     tag: str = ""  # what names this cell's runs (a scene's height or distance, a stroke's phase)
-    stroke: str = ""  # the stroke agent's stroke (jswim.studies.scenes.stroke_codes), its plans' variant
+    stroke: str = (
+        ""  # the stroke agent's stroke (jswim.studies.scenes.stroke_codes), its plans' variant
+    )
 
 
 WITH_BASELINES = ("llm", "qlearning", "random")
@@ -250,11 +298,16 @@ def _history(o: StudyOptions) -> list[Cell]:
 
 def _ablation(o: StudyOptions) -> list[Cell]:
     drops = [frozenset()] + [frozenset({s}) for s in SENTENCES]
-    return [Cell("full" if not d else f"-{next(iter(d))}", ("llm",), n_ht=o.n_ht, drop=d) for d in drops]
+    return [
+        Cell("full" if not d else f"-{next(iter(d))}", ("llm",), n_ht=o.n_ht, drop=d) for d in drops
+    ]
 
 
 def _inits(o: StudyOptions) -> list[Cell]:
-    return [Cell(f"init {init_label(i)}", ("llm",), n_ht=o.n_ht, init=init_label(i)) for i in all_inits(2)]
+    return [
+        Cell(f"init {init_label(i)}", ("llm",), n_ht=o.n_ht, init=init_label(i))
+        for i in all_inits(2)
+    ]
 
 
 #: The temperature study's grid (the paper's "next thing to study": T = 0 was its only setting).
@@ -262,7 +315,10 @@ DEFAULT_TEMPERATURES = (0.0, 0.25, 0.5, 0.75, 1.0)
 
 
 def _temperature(o: StudyOptions) -> list[Cell]:
-    return [Cell(f"T={t:g}", ("llm",), n_ht=o.n_ht, temperature=t) for t in o.temperatures or DEFAULT_TEMPERATURES]
+    return [
+        Cell(f"T={t:g}", ("llm",), n_ht=o.n_ht, temperature=t)
+        for t in o.temperatures or DEFAULT_TEMPERATURES
+    ]
 
 
 def continuous_agent_available() -> bool:
@@ -274,14 +330,22 @@ def continuous_agent_available() -> bool:
 
 def _continuous(o: StudyOptions) -> list[Cell]:
     # Each lattice for the LLM and both tabular baselines, then the real-valued RL baseline once.
-    lattices = [Cell(f"K={k}", WITH_BASELINES, n_ht=o.n_ht, roc_levels=k) for k in o.roc_levels_grid]
-    real = [Cell("continuous", (CONTINUOUS_AGENT,), roc_levels=0)] if continuous_agent_available() else []
+    lattices = [
+        Cell(f"K={k}", WITH_BASELINES, n_ht=o.n_ht, roc_levels=k) for k in o.roc_levels_grid
+    ]
+    real = (
+        [Cell("continuous", (CONTINUOUS_AGENT,), roc_levels=0)]
+        if continuous_agent_available()
+        else []
+    )
     return lattices + real
 
 
 def _competence(o: StudyOptions) -> list[Cell]:
     llm = [Cell(v, ("llm",), n_ht=o.n_ht, variant=v) for v in o.variants or COMPETENCE_VARIANTS]
-    return llm + [Cell(s, (agent,), action_set=s) for agent in ("random", "qlearning") for s in ACTION_SETS]
+    return llm + [
+        Cell(s, (agent,), action_set=s) for agent in ("random", "qlearning") for s in ACTION_SETS
+    ]
 
 
 @dataclass(frozen=True)
@@ -294,8 +358,14 @@ class StudySpec:
     swimmers: tuple[str, ...] = ("purcell", "ng")
     directions: tuple[int, ...] = (1,)
     q_runs: int = 100  # baseline runs per cell
-    ignores: tuple[str, ...] = ("zetas", "n_hts", "roc_levels_grid")  # StudyOptions fields the study has no use for (IGNORED)
-    constrain: str | None = None  # decoding when the backend says "auto" (None: the backend's own choice)
+    ignores: tuple[str, ...] = (
+        "zetas",
+        "n_hts",
+        "roc_levels_grid",
+    )  # StudyOptions fields the study has no use for (IGNORED)
+    constrain: str | None = (
+        None  # decoding when the backend says "auto" (None: the backend's own choice)
+    )
 
 
 #: Why a study may have no use for an option (:class:`StudyOptions` field -> reason); the
@@ -317,28 +387,47 @@ SPECS: dict[str, StudySpec] = {
     # X/a against step n: LLM, Q-learning and random policy, both swimmers (Fig. 2)
     "curves": StudySpec(_single, runs=1, init="paper"),
     # the n_ht sweep, both directions, both swimmers (Fig. 3)
-    "history": StudySpec(_history, runs=1, init="paper", directions=(1, -1),
-                         ignores=("zetas", "n_ht", "q_runs", "roc_levels_grid")),
+    "history": StudySpec(
+        _history,
+        runs=1,
+        init="paper",
+        directions=(1, -1),
+        ignores=("zetas", "n_ht", "q_runs", "roc_levels_grid"),
+    ),
     # mean X/a and success rate p against zeta (Fig. 4)
     "noise": StudySpec(_noise, runs=10, ignores=("zeta", "n_hts", "roc_levels_grid")),
     # the full prompt and the prompt without each of S1..S5 (Fig. 5)
     # (free-text replies unless --constrain says otherwise: with a grammar, removing S5 removes nothing)
-    "ablation": StudySpec(_ablation, runs=10, ignores=("zetas", "n_hts", "q_runs", "roc_levels_grid"),
-                          constrain="none"),
+    "ablation": StudySpec(
+        _ablation,
+        runs=10,
+        ignores=("zetas", "n_hts", "q_runs", "roc_levels_grid"),
+        constrain="none",
+    ),
     # all four initial configurations, both directions
-    "inits": StudySpec(_inits, runs=1, directions=(1, -1),
-                       ignores=("zetas", "n_hts", "q_runs", "init", "roc_levels_grid")),
+    "inits": StudySpec(
+        _inits,
+        runs=1,
+        directions=(1, -1),
+        ignores=("zetas", "n_hts", "q_runs", "init", "roc_levels_grid"),
+    ),
     # the main job: a few LLM runs next to Q-learning and random learners
     "swim": StudySpec(_single, runs=4, init="paper", swimmers=("purcell",)),
     # every protocol variant next to random and Q-learning baselines on both action sets
     "competence": StudySpec(_competence, runs=10),
     # p and steps to learn against the sampling temperature T, both swimmers and directions
-    "temperature": StudySpec(_temperature, runs=5, init="paper", directions=(1, -1),
-                             ignores=("zetas", "n_hts", "q_runs")),
+    "temperature": StudySpec(
+        _temperature, runs=5, init="paper", directions=(1, -1), ignores=("zetas", "n_hts", "q_runs")
+    ),
     # continuous strokes (an extension): the LLM, lattice Q-learning and random at K in {1, 2, 5, 10},
     # and the real-valued RL baseline, both swimmers, both directions (README "Continuous strokes")
-    "continuous": StudySpec(_continuous, runs=2, init="paper", directions=(1, -1),
-                            ignores=("zetas", "n_hts", "roc_levels")),
+    "continuous": StudySpec(
+        _continuous,
+        runs=2,
+        init="paper",
+        directions=(1, -1),
+        ignores=("zetas", "n_hts", "roc_levels"),
+    ),
 }
 
 
@@ -367,18 +456,39 @@ def scene_cells(study: str, o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
     registered world's) is the unbounded fluid of the scene solver (group ``free``)."""
     if study == "wall":
         ref = "bulk" if swimmer == "purcell" else "free"
-        out = [Cell(ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref)]
+        out = [
+            Cell(
+                ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref
+            )
+        ]
         for h in o.heights:
-            out.append(Cell(f"h={h:g}", (STROKE_AGENT, *WITH_BASELINES), n_ht=o.n_ht, scene=wall_scene(h),
-                            stroke="square", tag=f"h{h:g}"))
+            out.append(
+                Cell(
+                    f"h={h:g}",
+                    (STROKE_AGENT, *WITH_BASELINES),
+                    n_ht=o.n_ht,
+                    scene=wall_scene(h),
+                    stroke="square",
+                    tag=f"h{h:g}",
+                )
+            )
             out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
         return out
     out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
     for d in o.separations:
         for ph in o.phases:
-            out.append(Cell(f"D={d:g}, phase {ph}", (STROKE_AGENT,), scene=pair_scene(d), stroke=f"phase{ph}",
-                            tag=f"D{d:g}-ph{ph}"))
-        out.append(Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}"))
+            out.append(
+                Cell(
+                    f"D={d:g}, phase {ph}",
+                    (STROKE_AGENT,),
+                    scene=pair_scene(d),
+                    stroke=f"phase{ph}",
+                    tag=f"D{d:g}-ph{ph}",
+                )
+            )
+        out.append(
+            Cell(f"D={d:g}", WITH_BASELINES, n_ht=o.n_ht, scene=pair_scene(d), tag=f"D{d:g}")
+        )
         out += _ppo_cells(f"D={d:g}", pair_scene(d), f"D{d:g}")
     return out
 
@@ -388,29 +498,58 @@ def school_scene(n: int, d: float, formation: str = "line") -> str:
     point-force solve (one swimmer: alone there)."""
     if n == 1:
         return pair_scene()
-    return scene_json(Scene(medium="free", swimmers=int(n), separation=float(d), formation=formation))
+    return scene_json(
+        Scene(medium="free", swimmers=int(n), separation=float(d), formation=formation)
+    )
 
 
 def school_cells(o: StudyOptions) -> list[Cell]:
     """The school study's cells: every swimmer doing the square stroke, in turn and in phase
     (stroke ``phase0``), for each formation, spacing and size (a lone swimmer once)."""
-    out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")] if 1 in o.school_sizes else []
+    out = (
+        [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
+        if 1 in o.school_sizes
+        else []
+    )
     for f in o.formations:
         for d in o.separations:
-            out += [Cell(f"{f}, D={d:g}, N={n}", (STROKE_AGENT,), scene=school_scene(n, d, f), stroke="phase0",
-                         tag=f"{f}-D{d:g}-N{n}") for n in o.school_sizes if n > 1]
+            out += [
+                Cell(
+                    f"{f}, D={d:g}, N={n}",
+                    (STROKE_AGENT,),
+                    scene=school_scene(n, d, f),
+                    stroke="phase0",
+                    tag=f"{f}-D{d:g}-N{n}",
+                )
+                for n in o.school_sizes
+                if n > 1
+            ]
     return out
 
 
 def _check_school(sizes: tuple[int, ...], formations: tuple[str, ...]) -> None:
-    from jswim.scenes.scene import FORMATIONS, MAX_SWIMMERS  # lazy: start-up (the CLI's outline loads no scenes)
+    from jswim.scenes.scene import (
+        FORMATIONS,
+        MAX_SWIMMERS,
+    )  # lazy: start-up (the CLI's outline loads no scenes)
 
-    if not sizes or len(set(sizes)) != len(sizes) or any(isinstance(n, bool) or n not in range(1, MAX_SWIMMERS + 1)
-                                                           for n in sizes):
-        raise ConfigError(f"--school-sizes needs distinct swimmer counts in 1..{MAX_SWIMMERS}, got "
-                          f"{','.join(map(str, sizes))}")
-    if not formations or len(set(formations)) != len(formations) or set(formations) - set(FORMATIONS):
-        raise ConfigError(f"--formations needs distinct values of {', '.join(FORMATIONS)}, got {','.join(formations)}")
+    if (
+        not sizes
+        or len(set(sizes)) != len(sizes)
+        or any(isinstance(n, bool) or n not in range(1, MAX_SWIMMERS + 1) for n in sizes)
+    ):
+        raise ConfigError(
+            f"--school-sizes needs distinct swimmer counts in 1..{MAX_SWIMMERS}, got "
+            f"{','.join(map(str, sizes))}"
+        )
+    if (
+        not formations
+        or len(set(formations)) != len(formations)
+        or set(formations) - set(FORMATIONS)
+    ):
+        raise ConfigError(
+            f"--formations needs distinct values of {', '.join(FORMATIONS)}, got {','.join(formations)}"
+        )
 
 
 def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
@@ -424,22 +563,43 @@ def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
 def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
     def cells(o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
         if o.roc_levels != 1:  # the scene rows read and judge K = 1 codes; PPO has real ROCs anyway
-            raise ConfigError(f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
-                              "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
-                              "[-1, 1]); leave it out")
+            raise ConfigError(
+                f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
+                "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
+                "[-1, 1]); leave it out"
+            )
         return school_cells(o) if name == "school" else scene_cells(name, o, swimmer)
+
     return cells
 
 
 # Walls and pairs (issue 19, extensions): NG swimmers only (jswim.studies.scenes, README "Walls,
 # obstacles and pairs"); --init is the paper's NG start (10, 6), the scene's start.
-SPECS["wall"] = StudySpec(_scene_cells("wall"), runs=1, init="paper", swimmers=("ng",), q_runs=10,
-                          ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
-SPECS["pair"] = StudySpec(_scene_cells("pair"), runs=1, init="paper", swimmers=("ng",), q_runs=10,
-                          ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
+SPECS["wall"] = StudySpec(
+    _scene_cells("wall"),
+    runs=1,
+    init="paper",
+    swimmers=("ng",),
+    q_runs=10,
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+)
+SPECS["pair"] = StudySpec(
+    _scene_cells("pair"),
+    runs=1,
+    init="paper",
+    swimmers=("ng",),
+    q_runs=10,
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+)
 # Schools (issue 34): N NG swimmers in a line or side by side, fixed strokes only.
-SPECS["school"] = StudySpec(_scene_cells("school"), runs=0, init="paper", swimmers=("ng",), q_runs=1,
-                            ignores=("zetas", "n_hts", "roc_levels_grid", "init"))
+SPECS["school"] = StudySpec(
+    _scene_cells("school"),
+    runs=0,
+    init="paper",
+    swimmers=("ng",),
+    q_runs=1,
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+)
 
 STUDIES = tuple(SPECS)
 
@@ -464,8 +624,10 @@ def short_steps_warning(o: StudyOptions) -> str | None:
     """
     need = PAPER.n_cycles * MIN_PERIOD
     if o.steps < need:
-        return (f"--steps {o.steps} is shorter than {PAPER.n_cycles} stroke cycles of at least {MIN_PERIOD} steps "
-                f"({need} steps): no run can meet the success criterion, so every success rate will be 0")
+        return (
+            f"--steps {o.steps} is shorter than {PAPER.n_cycles} stroke cycles of at least {MIN_PERIOD} steps "
+            f"({need} steps): no run can meet the success criterion, so every success rate will be 0"
+        )
     return None
 
 
@@ -495,8 +657,10 @@ def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | 
     if choice == "random":
         return "random"
     if len(choice) != model.n_dof or set(choice) - {"+", "-"}:
-        raise ConfigError(f"--init {choice}: {swimmer} has {model.n_dof} DOFs; give one sign per DOF, "
-                          "or paper, cycle or random")
+        raise ConfigError(
+            f"--init {choice}: {swimmer} has {model.n_dof} DOFs; give one sign per DOF, "
+            "or paper, cycle or random"
+        )
     return tuple(1 if ch == "+" else 0 for ch in choice)
 
 
@@ -522,8 +686,11 @@ def _is_pair(scene: str) -> bool:
 
 
 #: The scene studies' grids as StudyOptions gives them (a changed one on another study is refused).
-_DEFAULT_GRIDS = {f.name: f.default for f in dataclasses.fields(StudyOptions)
-                  if f.name in ("heights", "separations", "phases", "school_sizes", "formations")}
+_DEFAULT_GRIDS = {
+    f.name: f.default
+    for f in dataclasses.fields(StudyOptions)
+    if f.name in ("heights", "separations", "phases", "school_sizes", "formations")
+}
 
 
 def build(study: str, o: StudyOptions) -> list[Plan]:
@@ -537,17 +704,29 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     if study not in SPECS:
         raise ConfigError(f"unknown study {study!r}; choose one of {', '.join(STUDIES)}")
     spec = SPECS[study]
-    if o.pair_prompt != "joint" and not ("llm" in o.agents and any("llm" in c.agents and _is_pair(c.scene)
-                                                                    for c in spec.cells(o))):
+    if o.pair_prompt != "joint" and not (
+        "llm" in o.agents and any("llm" in c.agents and _is_pair(c.scene) for c in spec.cells(o))
+    ):
         # It would be dropped here, yet it names the folder (identity): refuse it, as the CLI refuses
         # an option a study has no use for.
-        raise ConfigError(f"the {study} study has no use for --pair-prompt {o.pair_prompt} (pair_prompt: only LLM "
-                          "runs on a pair of swimmers read it, as in jswim study pair with the llm agent); leave it out")
-    for name, owners in (("heights", ("wall",)), ("separations", ("pair", "school")), ("phases", ("pair",)),
-                         ("school_sizes", ("school",)), ("formations", ("school",))):
-        if study not in owners and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]:  # a scene grid another study would drop
+        raise ConfigError(
+            f"the {study} study has no use for --pair-prompt {o.pair_prompt} (pair_prompt: only LLM "
+            "runs on a pair of swimmers read it, as in jswim study pair with the llm agent); leave it out"
+        )
+    for name, owners in (
+        ("heights", ("wall",)),
+        ("separations", ("pair", "school")),
+        ("phases", ("pair",)),
+        ("school_sizes", ("school",)),
+        ("formations", ("school",)),
+    ):
+        if (
+            study not in owners and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]
+        ):  # a scene grid another study would drop
             flag, who = name.replace("_", "-"), " and ".join(f"jswim study {w}" for w in owners)
-            raise ConfigError(f"the {study} study has no use for --{flag} (only {who} reads it); leave it out")
+            raise ConfigError(
+                f"the {study} study has no use for --{flag} (only {who} reads it); leave it out"
+            )
     # Outside the competence study every LLM run uses one variant; its action set (if it sets
     # one) applies to the baselines too, so they are offered what the model is offered.
     variant = o.llm_variant(study)
@@ -562,35 +741,85 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
             for cell in spec.cells(o, sw) if study == "wall" else spec.cells(o):
                 for agent in (a for a in cell.agents if a in o.agents):
                     llm = agent == "llm"
-                    v = (cell.variant or variant) if llm else (cell.stroke if agent == STROKE_AGENT else "")
-                    action_set = variant_action_set(v, o.action_set) if llm else (cell.action_set or baseline_set)
+                    v = (
+                        (cell.variant or variant)
+                        if llm
+                        else (cell.stroke if agent == STROKE_AGENT else "")
+                    )
+                    action_set = (
+                        variant_action_set(v, o.action_set)
+                        if llm
+                        else (cell.action_set or baseline_set)
+                    )
                     if agent == CONTINUOUS_AGENT:
                         action_set = "all"  # PPO is offered every arm and every real ROC; it has no smaller set
                     # The run id names what differs from the study's own setting.
-                    tag = (v if v != "paper" else "") if llm else (action_set if action_set != o.action_set else "")
+                    tag = (
+                        (v if v != "paper" else "")
+                        if llm
+                        else (action_set if action_set != o.action_set else "")
+                    )
                     levels = o.roc_levels if cell.roc_levels is None else cell.roc_levels
                     # A pair's LLM runs under --pair-prompt each are named so (never a joint run's id).
                     pair = o.pair_prompt if llm and _is_pair(cell.scene) else "joint"
-                    tag = "-".join(t for t in (tag, pair_tag(pair), "real" if levels == 0 else roc_tag(levels),
-                                               cell.tag) if t)
+                    tag = "-".join(
+                        t
+                        for t in (
+                            tag,
+                            pair_tag(pair),
+                            "real" if levels == 0 else roc_tag(levels),
+                            cell.tag,
+                        )
+                        if t
+                    )
                     zeta = float(o.zeta if cell.zeta is None else cell.zeta)
                     n_ht = cell.n_ht if llm else None
                     drop = cell.drop if llm else frozenset()
                     for temp, prompt in _sweeps(cell, o) if llm else [(None, None)]:
                         # A sweep's setting names its runs (run id) and its rows (group).
-                        tags = "-".join(t for t in [tag, f"T{temp:g}" if temp is not None else "",
-                                                    f"p-{prompt_label(prompt)}" if prompt else ""] if t)
-                        swept = ([f"T={temp:g}"] if temp is not None and cell.temperature is None else []) + \
-                            ([f"prompt={prompt_label(prompt)}"] if prompt else [])
+                        tags = "-".join(
+                            t
+                            for t in [
+                                tag,
+                                f"T{temp:g}" if temp is not None else "",
+                                f"p-{prompt_label(prompt)}" if prompt else "",
+                            ]
+                            if t
+                        )
+                        swept = (
+                            [f"T={temp:g}"] if temp is not None and cell.temperature is None else []
+                        ) + ([f"prompt={prompt_label(prompt)}"] if prompt else [])
                         group = ", ".join(g for g in [cell.group, *swept] if g)
                         for k in range(runs.get(agent, runs["qlearning"])):
                             init = initial(cell.init or o.init or spec.init, k, sw)
-                            base = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k)
+                            base = run_id(
+                                agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k
+                            )
                             for s in range(o.samples if llm else 1):
                                 rid = sample_id(base, s)
-                                plans.append(Plan(rid, agent, sw, d, init, zeta, run_seed(o.seed, rid), o.steps,
-                                                  n_ht, drop, action_set, group, v, temp, prompt, levels, s, cell.scene,
-                                                  pair))
+                                plans.append(
+                                    Plan(
+                                        rid,
+                                        agent,
+                                        sw,
+                                        d,
+                                        init,
+                                        zeta,
+                                        run_seed(o.seed, rid),
+                                        o.steps,
+                                        n_ht,
+                                        drop,
+                                        action_set,
+                                        group,
+                                        v,
+                                        temp,
+                                        prompt,
+                                        levels,
+                                        s,
+                                        cell.scene,
+                                        pair,
+                                    )
+                                )
     ids = [p.run_id for p in plans]
     assert len(set(ids)) == len(ids), "run ids must be unique"
     return plans

@@ -16,7 +16,8 @@ from __future__ import annotations
 import hashlib
 import json
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
+from collections.abc import Mapping
 
 from jswim.errors import ConfigError
 from jswim.studies.grids import StudyOptions, prompt_label
@@ -74,7 +75,8 @@ def check(folder: str | Path, o: StudyOptions) -> dict[str, Any]:
             raise ConfigError(
                 f"--prompt-files {paths[label]}: {folder} holds runs of prompt={label} made with another text "
                 f"({was.get('file')}, sha256 {was.get('sha256')}; this file: {rec['sha256']}); rename the file to "
-                "run it as a new setting, or use another --out")
+                "run it as a new setting, or use another --out"
+            )
     if "prompt_files" in new:
         new["prompt_files"] = {**old, **new["prompt_files"]}
     return new

@@ -8,7 +8,8 @@ are summarised by :func:`jswim.judging.stats.learn_stats`, the same statistic as
 
 from __future__ import annotations
 
-from typing import Callable, NamedTuple, Sequence
+from typing import NamedTuple
+from collections.abc import Callable, Sequence
 
 import jax
 import numpy as np
@@ -39,7 +40,9 @@ class Summary(NamedTuple):
     q75: float
     mean_x_horizon: float  # mean displacement in the target direction after `horizon` steps
     mean_x_end: float  # ... and at the end of the run
-    hist: tuple[int, ...] = ()  # learners per steps-to-learn value: hist[k] learned at step k (hist[0] = 0)
+    hist: tuple[
+        int, ...
+    ] = ()  # learners per steps-to-learn value: hist[k] learned at step k (hist[0] = 0)
 
 
 class Outcomes(NamedTuple):
@@ -54,23 +57,34 @@ class Outcomes(NamedTuple):
     x_end: np.ndarray  # X after the last step
 
     @staticmethod
-    def of(run: QRun, params: EnvParams, report: GaitReport, horizon: int = PAPER.horizon) -> "Outcomes":
+    def of(
+        run: QRun, params: EnvParams, report: GaitReport, horizon: int = PAPER.horizon
+    ) -> Outcomes:
         x = np.asarray(run.x)
         h = min(horizon, x.shape[1]) - 1
         shape = report.learned.shape
         return Outcomes(
-            np.broadcast_to(np.asarray(params.direction), shape), np.broadcast_to(np.asarray(params.zeta), shape),
-            np.asarray(report.learned), np.asarray(report.success), np.asarray(report.steps_to_learn),
-            x[:, h], x[:, -1],
+            np.broadcast_to(np.asarray(params.direction), shape),
+            np.broadcast_to(np.asarray(params.zeta), shape),
+            np.asarray(report.learned),
+            np.asarray(report.success),
+            np.asarray(report.steps_to_learn),
+            x[:, h],
+            x[:, -1],
         )
 
     @staticmethod
-    def concat(parts: Sequence["Outcomes"]) -> "Outcomes":
+    def concat(parts: Sequence[Outcomes]) -> Outcomes:
         return Outcomes(*(np.concatenate(cols) for cols in zip(*parts)))
 
 
 def summarize(
-    run: QRun, params: EnvParams, report: GaitReport, *, swimmer: str, action_set: str,
+    run: QRun,
+    params: EnvParams,
+    report: GaitReport,
+    *,
+    swimmer: str,
+    action_set: str,
     horizon: int = PAPER.horizon,
 ) -> list[Summary]:
     """One :class:`Summary` per (direction, zeta) group of a batched run.
@@ -79,22 +93,34 @@ def summarize(
     over the learners that learned, and the count of those that did (never-learned learners are
     counted, not turned into numbers). ``horizon`` is where ``mean_x_horizon`` is read.
     """
-    return summarize_outcomes(Outcomes.of(run, params, report, horizon), swimmer=swimmer, action_set=action_set)
+    return summarize_outcomes(
+        Outcomes.of(run, params, report, horizon), swimmer=swimmer, action_set=action_set
+    )
 
 
 def summarize_outcomes(out: Outcomes, *, swimmer: str, action_set: str) -> list[Summary]:
     """:func:`summarize` from per-learner verdicts (e.g. gathered chunk by chunk)."""
     rows = []
-    for d, z in sorted(set(zip(out.direction.tolist(), out.zeta.tolist())), key=lambda g: (-g[0], g[1])):
+    for d, z in sorted(
+        set(zip(out.direction.tolist(), out.zeta.tolist())), key=lambda g: (-g[0], g[1])
+    ):
         sel = (out.direction == d) & (out.zeta == z)
         stl = out.steps_to_learn[sel]
         ls = learn_stats(stl.tolist())  # -1 marks never learned
         hist = np.bincount(stl[stl >= 1]) if np.any(stl >= 1) else np.zeros(1, int)
         rows.append(
             Summary(
-                swimmer, int(d), float(z), action_set, int(sel.sum()),
-                float(out.learned[sel].mean()), float(out.success[sel].mean()),
-                ls.learned, ls.q25, ls.median, ls.q75,
+                swimmer,
+                int(d),
+                float(z),
+                action_set,
+                int(sel.sum()),
+                float(out.learned[sel].mean()),
+                float(out.success[sel].mean()),
+                ls.learned,
+                ls.q25,
+                ls.median,
+                ls.q75,
                 float(np.mean(d * out.x_horizon[sel], dtype=np.float64)),
                 float(np.mean(d * out.x_end[sel], dtype=np.float64)),
                 tuple(int(v) for v in hist),
@@ -170,14 +196,18 @@ def study(
         keys = jax.random.split(sub, d_arr.size)
         parts = []
         for start, stop in sharding.chunks(d_arr.size, chunk):
-            params = batch_params(base, stop - start, direction=d_arr[start:stop], zeta=z_arr[start:stop])
+            params = batch_params(
+                base, stop - start, direction=d_arr[start:stop], zeta=z_arr[start:stop]
+            )
             run = train_batch(keys[start:stop], params, config)
             report = evaluate(run, params, criterion=criterion)
             parts.append(Outcomes.of(run, params, report, criterion.horizon))
             done += stop - start
             if progress is not None:
                 progress(done, total)
-        rows += summarize_outcomes(Outcomes.concat(parts), swimmer=swimmer, action_set=config.action_set)
+        rows += summarize_outcomes(
+            Outcomes.concat(parts), swimmer=swimmer, action_set=config.action_set
+        )
     return rows
 
 
@@ -187,8 +217,10 @@ def format_table(rows: Sequence[Summary]) -> str:
     def num(v: float) -> str:
         return "-" if not np.isfinite(v) else f"{v:g}"
 
-    head = f"{'swimmer':8} {'dir':>3} {'zeta':>4} {'actions':14} {'n':>6} {'learned':>15} {'success':>7} " \
-           f"{'q25':>5} {'median':>6} {'q75':>5} {'X@50':>7} {'X@end':>7}"
+    head = (
+        f"{'swimmer':8} {'dir':>3} {'zeta':>4} {'actions':14} {'n':>6} {'learned':>15} {'success':>7} "
+        f"{'q25':>5} {'median':>6} {'q75':>5} {'X@50':>7} {'X@end':>7}"
+    )
     lines = [head, "-" * len(head)]
     for r in rows:
         lines.append(
@@ -196,6 +228,8 @@ def format_table(rows: Sequence[Summary]) -> str:
             f"{f'{r.n_learned} of {r.n}':>15} {r.success:7.3f} {num(r.q25):>5} {num(r.median):>6} {num(r.q75):>5} "
             f"{r.mean_x_horizon:7.3f} {r.mean_x_end:7.3f}"
         )
-    lines.append("q25/median/q75: steps to learn over the learners that learned (jswim.judging.stats.learn_stats), counted "
-                 "from 1 as in the paper: the step at which the final stroke starts")
+    lines.append(
+        "q25/median/q75: steps to learn over the learners that learned (jswim.judging.stats.learn_stats), counted "
+        "from 1 as in the paper: the step at which the final stroke starts"
+    )
     return "\n".join(lines)

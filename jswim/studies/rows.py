@@ -10,7 +10,8 @@ judged row, in the bulk world and in a scene alike.
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -31,8 +32,15 @@ def signs(levels: Sequence[float]) -> str:
     return "".join("+" if v > 0 else "-" for v in levels)
 
 
-def build_row(plan: Plan, x: Sequence[float], actions: list[list[float]], verdict: Mapping[str, Any], *,
-              init: str, **columns: Any) -> RunRow:
+def build_row(
+    plan: Plan,
+    x: Sequence[float],
+    actions: list[list[float]],
+    verdict: Mapping[str, Any],
+    *,
+    init: str,
+    **columns: Any,
+) -> RunRow:
     """The row of one judged run of ``plan``.
 
     Parameters
@@ -54,23 +62,51 @@ def build_row(plan: Plan, x: Sequence[float], actions: list[list[float]], verdic
     end = x[-1] if x else 0.0
     prog = np.diff(np.concatenate([[0.0], np.asarray(x, np.float64)])) * plan.direction
     return RunRow(
-        run_id=plan.run_id, agent=plan.agent, swimmer=plan.swimmer, direction=plan.direction, init=init,
-        zeta=plan.zeta, seed=plan.seed, n_ht=plan.n_ht, drop=",".join(sorted(plan.drop)),
-        action_set=plan.action_set, group=plan.group, variant=plan.variant, steps=len(x), final_x=end,
-        signed_final_x=plan.direction * end, **verdict, roc_levels=plan.roc_levels,
-        sample=None if plan.scene else plan.sample, x=x, actions=actions, progress=[float(v) for v in prog],
-        **columns)
+        run_id=plan.run_id,
+        agent=plan.agent,
+        swimmer=plan.swimmer,
+        direction=plan.direction,
+        init=init,
+        zeta=plan.zeta,
+        seed=plan.seed,
+        n_ht=plan.n_ht,
+        drop=",".join(sorted(plan.drop)),
+        action_set=plan.action_set,
+        group=plan.group,
+        variant=plan.variant,
+        steps=len(x),
+        final_x=end,
+        signed_final_x=plan.direction * end,
+        **verdict,
+        roc_levels=plan.roc_levels,
+        sample=None if plan.scene else plan.sample,
+        x=x,
+        actions=actions,
+        progress=[float(v) for v in prog],
+        **columns,
+    )
 
 
 def verdict(rep: GaitReport, i: int) -> dict[str, Any]:
     """Run ``i``'s verdict in a judge's report (the keys :func:`build_row` takes)."""
-    return {"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
-            "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None, "period": int(rep.period[i])}
+    return {
+        "success": bool(rep.success[i]),
+        "learned": bool(rep.learned[i]),
+        "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
+        "period": int(rep.period[i]),
+    }
 
 
-def judged_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, levels0: np.ndarray, horizon: int,
-                pose: tuple[np.ndarray, np.ndarray] | None = None, report: GaitReport | None = None,
-                moves: Sequence[list[list[float]]] | None = None) -> list[RunRow]:
+def judged_rows(
+    plans: Sequence[Plan],
+    actions: np.ndarray,
+    xs: np.ndarray,
+    levels0: np.ndarray,
+    horizon: int,
+    pose: tuple[np.ndarray, np.ndarray] | None = None,
+    report: GaitReport | None = None,
+    moves: Sequence[list[list[float]]] | None = None,
+) -> list[RunRow]:
     """Rows for a batch of runs of one swimmer and ROC lattice, judged by the shared success criterion.
 
     ``levels0`` holds the starts' lattice positions (levels on the paper's K = 1). ``pose``
@@ -78,15 +114,36 @@ def judged_rows(plans: Sequence[Plan], actions: np.ndarray, xs: np.ndarray, leve
     the trajectories (an LLM run brings its own: :func:`with_llm`). The real-valued agent brings
     its own ``report`` (:func:`jswim.agents.ppo.evaluate`) and ``moves`` (``[dof, roc]`` per step)."""
     k = plans[0].roc_levels
-    params = env.make_params(plans[0].swimmer).replace(direction=np.array([p.direction for p in plans], float))
-    rep = report if report is not None else judge(actions, params, levels0=levels0,
-                                                 criterion=Criterion(horizon=horizon), roc_levels=k)
-    return [build_row(p, xs[i], moves[i] if moves is not None else
-                      [list(lattice.decode(int(a), max(k, 1))) for a in actions[i]], verdict(rep, i),
-                      init=signs(levels0[i]),
-                      **({} if pose is None else {"y": [float(v) for v in pose[0][i]],
-                                                  "orientation": [float(v) for v in pose[1][i]]}))
-            for i, p in enumerate(plans)]
+    params = env.make_params(plans[0].swimmer).replace(
+        direction=np.array([p.direction for p in plans], float)
+    )
+    rep = (
+        report
+        if report is not None
+        else judge(
+            actions, params, levels0=levels0, criterion=Criterion(horizon=horizon), roc_levels=k
+        )
+    )
+    return [
+        build_row(
+            p,
+            xs[i],
+            moves[i]
+            if moves is not None
+            else [list(lattice.decode(int(a), max(k, 1))) for a in actions[i]],
+            verdict(rep, i),
+            init=signs(levels0[i]),
+            **(
+                {}
+                if pose is None
+                else {
+                    "y": [float(v) for v in pose[0][i]],
+                    "orientation": [float(v) for v in pose[1][i]],
+                }
+            ),
+        )
+        for i, p in enumerate(plans)
+    ]
 
 
 def with_llm(row: RunRow, r: RunResult) -> RunRow:
@@ -95,14 +152,31 @@ def with_llm(row: RunRow, r: RunResult) -> RunRow:
     trajectory's y and orientation where the row has none (the bulk world's)."""
     u = r.usage
     return dataclasses.replace(
-        row, status=r.status, error=r.error, failed_steps=r.failed_steps, parse_retries=r.parse_retries,
-        truncated=r.truncated, cut_thinking=r.cut_thinking, reasoning_tokens=u.reasoning_tokens,
-        http_retries=u.retries, n_clears=r.n_clears, calls=u.calls, billed_calls=u.billed_calls,
-        cache_hits=u.cache_hits, prompt_tokens=u.prompt_tokens, completion_tokens=u.completion_tokens,
-        cached_tokens=u.cached_tokens, cost_usd=u.cost_usd, tokens_seen=r.tokens_seen,
-        replayed_calls=r.replayed_calls, below_x_min=r.below_x_min,
-        **{k: r.knobs.get(k) for k in SWITCHES}, other={k: v for k, v in r.knobs.items() if k not in _PLAN},
-        y=r.y if row.y is None else row.y, orientation=r.orientation if row.orientation is None else row.orientation)
+        row,
+        status=r.status,
+        error=r.error,
+        failed_steps=r.failed_steps,
+        parse_retries=r.parse_retries,
+        truncated=r.truncated,
+        cut_thinking=r.cut_thinking,
+        reasoning_tokens=u.reasoning_tokens,
+        http_retries=u.retries,
+        n_clears=r.n_clears,
+        calls=u.calls,
+        billed_calls=u.billed_calls,
+        cache_hits=u.cache_hits,
+        prompt_tokens=u.prompt_tokens,
+        completion_tokens=u.completion_tokens,
+        cached_tokens=u.cached_tokens,
+        cost_usd=u.cost_usd,
+        tokens_seen=r.tokens_seen,
+        replayed_calls=r.replayed_calls,
+        below_x_min=r.below_x_min,
+        **{k: r.knobs.get(k) for k in SWITCHES},
+        other={k: v for k, v in r.knobs.items() if k not in _PLAN},
+        y=r.y if row.y is None else row.y,
+        orientation=r.orientation if row.orientation is None else row.orientation,
+    )
 
 
 def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
@@ -111,4 +185,9 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
     xs = np.array([r.x], float).reshape(1, len(r.x))
     # The judge reads the start as lattice positions: a corner level times K.
-    return with_llm(judged_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon)[0], r)
+    return with_llm(
+        judged_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon)[
+            0
+        ],
+        r,
+    )

@@ -29,7 +29,8 @@ import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import jax
 import numpy as np
@@ -51,13 +52,42 @@ from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.scenes import Scene
-from jswim.results import RunRow, StudyFolderError, StudyStore, as_run_rows, is_failed, read_run_rows, read_runs, write_json, writing
-from jswim.studies.grids import (ALL_AGENTS, AGENTS, COMPETENCE_VARIANTS, CONTINUOUS_AGENT, SPECS, SWIM_VARIANT, Plan,
-                                 StudyOptions, build)
+from jswim.results import (
+    RunRow,
+    StudyFolderError,
+    StudyStore,
+    as_run_rows,
+    is_failed,
+    read_run_rows,
+    read_runs,
+    write_json,
+    writing,
+)
+from jswim.studies.grids import (
+    ALL_AGENTS,
+    AGENTS,
+    COMPETENCE_VARIANTS,
+    CONTINUOUS_AGENT,
+    SPECS,
+    SWIM_VARIANT,
+    Plan,
+    StudyOptions,
+    build,
+)
 from jswim.studies import prompt_files
+
 # The execution and the session, in their own modules; their names stay importable from here.
-from jswim.studies.execute import (STORED, ProgressFn, _configs, _groups, _lattice,  # noqa: F401
-                                   _row, _run_continuous, _run_llm, _spec)
+from jswim.studies.execute import (  # noqa: F401
+    STORED,
+    ProgressFn,
+    _configs,
+    _groups,
+    _lattice,
+    _row,
+    _run_continuous,
+    _run_llm,
+    _spec,
+)
 from jswim.studies.rows import judged_rows as _judge_rows
 from jswim.studies.session import _preflight, _record_session, add_session, cap_check  # noqa: F401
 from jswim.studies.report import draw_figures, summarize
@@ -71,25 +101,43 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     group, vectorised."""
     p0 = plans[0]
     if p0.scene:  # walls, pairs, Purcell above a wall (issues 19, 34): the stroke and the baselines on the scene
-        from jswim.studies import scenes  # lazy: start-up (the scene baselines' module, for scene studies only)
+        from jswim.studies import (
+            scenes,
+        )  # lazy: start-up (the scene baselines' module, for scene studies only)
 
         return scenes.run_baselines(plans, horizon)
     if p0.agent == CONTINUOUS_AGENT:
         return _run_continuous(plans, horizon)
-    from jswim.agents import qlearning, random_policy  # lazy: optax and their jits, for baselines only
+    from jswim.agents import (
+        qlearning,
+        random_policy,
+    )  # lazy: optax and their jits, for baselines only
 
     base = env.make_params(p0.swimmer, **_lattice(p0.roc_levels))
-    init = np.array([[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32)
-    params = qlearning.batch_params(base, len(plans), zeta=np.array([p.zeta for p in plans]),
-                                    direction=np.array([p.direction for p in plans], float), init=init)
+    init = np.array(
+        [[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32
+    )
+    params = qlearning.batch_params(
+        base,
+        len(plans),
+        zeta=np.array([p.zeta for p in plans]),
+        direction=np.array([p.direction for p in plans], float),
+        init=init,
+    )
     keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
     if p0.agent == "qlearning":
         cfg = qlearning.QConfig(steps=p0.steps, action_set=p0.action_set)
         run = qlearning.train_batch(keys, params, cfg, pose=True)
     else:
         run = random_policy.run_batch(keys, params, p0.steps, p0.action_set)
-    return _judge_rows(plans, np.asarray(run.actions), np.asarray(run.x), np.asarray(run.levels0), horizon,
-                       pose=(np.asarray(run.y), np.asarray(run.orientation)))
+    return _judge_rows(
+        plans,
+        np.asarray(run.actions),
+        np.asarray(run.x),
+        np.asarray(run.levels0),
+        horizon,
+        pose=(np.asarray(run.y), np.asarray(run.orientation)),
+    )
 
 
 @dataclass
@@ -105,24 +153,44 @@ class StudyResult:
     # resume of a finished study); the metadata summary keeps the last session that ran some.
     llm_speed: dict[str, float] = field(default_factory=dict)
     failed_runs: list[dict[str, Any]] = field(default_factory=list)  # run_id and the server's error
-    truncated: dict[str, int] = field(default_factory=dict)  # max_tokens -> LLM replies cut off there
+    truncated: dict[str, int] = field(
+        default_factory=dict
+    )  # max_tokens -> LLM replies cut off there
     stopped: str | None = None  # "cost cap" when --max-cost stopped the study before its end
     total: int = 0  # runs in the study's grid
-    reasoning: dict[str, Any] = field(default_factory=dict)  # what a reasoning model was sent (jswim.llm.reasoning)
+    reasoning: dict[str, Any] = field(
+        default_factory=dict
+    )  # what a reasoning model was sent (jswim.llm.reasoning)
     cut_thinking: int = 0  # LLM replies cut while the model was still reasoning (never executed)
-    notes: list[str] = field(default_factory=list)  # what was sent for sampling, decoding fallbacks, pricing
+    notes: list[str] = field(
+        default_factory=list
+    )  # what was sent for sampling, decoding fallbacks, pricing
 
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
 #: folder grows when they grow (and a smaller value reports the runs it names).
-GRID_SIZE = ("runs", "q_runs", "zetas", "n_hts", "temperatures", "prompt_files", "samples", "roc_levels_grid",
-             "heights", "separations", "phases", "school_sizes", "formations")
+GRID_SIZE = (
+    "runs",
+    "q_runs",
+    "zetas",
+    "n_hts",
+    "temperatures",
+    "prompt_files",
+    "samples",
+    "roc_levels_grid",
+    "heights",
+    "separations",
+    "phases",
+    "school_sizes",
+    "formations",
+)
 
 #: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
 
 #: The study's prompt template (written once per folder; its hash is in the identity).
 PROMPT_FILE = "prompt_template.json"
+
 
 def study_backend(study: str, backend: Backend | None) -> Backend | None:
     """The backend a study runs with: a study that fixes its decoding (the ablation study:
@@ -140,7 +208,10 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     opts = dataclasses.asdict(o)
     for name in ("chunk", *GRID_SIZE):
         opts.pop(name, None)
-    for name in ("variant", "variants"):  # left out when unset, so older folders keep their identity
+    for name in (
+        "variant",
+        "variants",
+    ):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
     if opts["roc_levels"] == 1:  # the paper's ROC set: as before --roc-levels existed
@@ -154,13 +225,18 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     template = PromptTemplate.from_file(o.prompt_file) if o.prompt_file else PromptTemplate()
     tpl = json.dumps(dataclasses.asdict(template), sort_keys=True)
     return {
-        "study": study, "options": opts, "seed": o.seed, "seeds": SEEDS,
+        "study": study,
+        "options": opts,
+        "seed": o.seed,
+        "seeds": SEEDS,
         "backend": backend.describe() if backend is not None and "llm" in o.agents else None,
         "prompt_template_sha256": hashlib.sha256(tpl.encode()).hexdigest()[:16],
     }
 
 
-def default_folder(study: str, o: StudyOptions, backend: Backend | None, root: str = "jswim-out") -> Path:
+def default_folder(
+    study: str, o: StudyOptions, backend: Backend | None, root: str = "jswim-out"
+) -> Path:
     """``jswim-out/<study>-<hash of the identity>``: the same settings reuse (and resume, or
     extend) the same folder."""
     ident = identity(study, o, backend)
@@ -215,45 +291,66 @@ def run_study(
     backend = study_backend(study, backend)
     plans = build(study, options)
     if not plans:
-        raise ConfigError(f"these settings give the {study} study no runs at all (--runs 0 and --q-runs 0?); "
-                          "nothing to do")
+        raise ConfigError(
+            f"these settings give the {study} study no runs at all (--runs 0 and --q-runs 0?); "
+            "nothing to do"
+        )
     ident = identity(study, options, backend)
     if study == "competence":  # the variants' switches define the runs too
         ident["variants"] = {v: VARIANTS[v] for v in options.variants or COMPETENCE_VARIANTS}
     folder = Path(out) if out is not None else default_folder(study, options, backend)
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
-    prompts = prompt_files.check(folder, options)  # an edited prompt file never resumes into old runs
-    store = StudyStore(folder, study, ident, extra={
-        **prompts,  # each prompt file's name and the hash of its bytes (jswim.studies.prompt_files)
-        "jswim_version": __version__, "jax_version": jax.__version__, "python": platform.python_version(),
-        # The template itself is in prompt_template.json, written once (below), not in every
-        # rewrite of metadata.json at each status change.
-        "prompt_template_file": PROMPT_FILE,
-        "success_criterion": Criterion(horizon=options.horizon).describe(),
-        "horizon": options.horizon,
-        "llm_variants": list(options.variants or COMPETENCE_VARIANTS) if study == "competence"
-        else [options.llm_variant(study)],
-        "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
-        # The grid's order of its groups (n_ht 1, 2, ..., 10): readers show them so, not as runs finished.
-        "group_order": list(dict.fromkeys(p.group for p in plans)),
-        # What differs from the paper's protocol in every LLM run (each transcript lists its own too),
-        # and the extensions some runs use (finer or real-valued ROCs).
-        "fidelity_deviations": list(fidelity.ALWAYS) + fidelity.study_extensions({p.roc_levels for p in plans})
-        + _scene_extensions(plans),
-        "roc_levels": sorted({p.roc_levels for p in plans}),
-        "grid": {k: getattr(options, k) for k in GRID_SIZE},
-        "server": backend.address() if backend is not None else None,
-        "prices_as_of": (backend.prices_as_of if backend is not None and backend.prices_as_of else PRICES_AS_OF),
-    })
+    prompts = prompt_files.check(
+        folder, options
+    )  # an edited prompt file never resumes into old runs
+    store = StudyStore(
+        folder,
+        study,
+        ident,
+        extra={
+            **prompts,  # each prompt file's name and the hash of its bytes (jswim.studies.prompt_files)
+            "jswim_version": __version__,
+            "jax_version": jax.__version__,
+            "python": platform.python_version(),
+            # The template itself is in prompt_template.json, written once (below), not in every
+            # rewrite of metadata.json at each status change.
+            "prompt_template_file": PROMPT_FILE,
+            "success_criterion": Criterion(horizon=options.horizon).describe(),
+            "horizon": options.horizon,
+            "llm_variants": list(options.variants or COMPETENCE_VARIANTS)
+            if study == "competence"
+            else [options.llm_variant(study)],
+            "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
+            # The grid's order of its groups (n_ht 1, 2, ..., 10): readers show them so, not as runs finished.
+            "group_order": list(dict.fromkeys(p.group for p in plans)),
+            # What differs from the paper's protocol in every LLM run (each transcript lists its own too),
+            # and the extensions some runs use (finer or real-valued ROCs).
+            "fidelity_deviations": list(fidelity.ALWAYS)
+            + fidelity.study_extensions({p.roc_levels for p in plans})
+            + _scene_extensions(plans),
+            "roc_levels": sorted({p.roc_levels for p in plans}),
+            "grid": {k: getattr(options, k) for k in GRID_SIZE},
+            "server": backend.address() if backend is not None else None,
+            "prices_as_of": (
+                backend.prices_as_of
+                if backend is not None and backend.prices_as_of
+                else PRICES_AS_OF
+            ),
+        },
+    )
     try:
         for note in store.repairs:
             warnings.warn(FolderRepaired(f"{folder}: {note}"), stacklevel=2)
         store.meta.pop("prompt_template", None)  # folders before prompt_template.json had it here
         tpl_path = folder / PROMPT_FILE
-        if not tpl_path.exists():  # the identity holds its hash: a resumed folder has this very template
+        if (
+            not tpl_path.exists()
+        ):  # the identity holds its hash: a resumed folder has this very template
             with writing(folder):
                 write_json(tpl_path, dataclasses.asdict(template or PromptTemplate()))
-        return _run_in(store, study, plans, options, backend, folder, template, progress, figures, t0, max_cost)
+        return _run_in(
+            store, study, plans, options, backend, folder, template, progress, figures, t0, max_cost
+        )
     except KeyboardInterrupt:
         _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
         raise
@@ -261,7 +358,9 @@ def run_study(
         # A session that stops before changing anything (a refused cap, a server that is not there)
         # leaves the folder's status as it was; otherwise it says stopped, and why.
         if not store.restore_status():
-            _record_status(store, "stopped", error=scrub(str(exc)))  # never a key, however the message got it
+            _record_status(
+                store, "stopped", error=scrub(str(exc))
+            )  # never a key, however the message got it
         raise
     except OSError as exc:  # a full disk or an I/O error outside the store's own writes
         msg = f"cannot write {exc.filename or folder}: {exc.strerror or exc}"
@@ -273,7 +372,9 @@ def run_study(
             hint = "a file or folder is in the way of one jswim writes: move it away and run the same command"
         else:
             hint = "fix that and run the same command to resume"
-        raise StudyFolderError(f"{msg}; every finished run and answered call is kept in {folder}: {hint}") from None
+        raise StudyFolderError(
+            f"{msg}; every finished run and answered call is kept in {folder}: {hint}"
+        ) from None
     finally:
         store.close()  # the folder's lock: the next session may start
 
@@ -284,7 +385,9 @@ def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
     if not scenes:
         return []
     ppo = any(p.scene and p.agent == CONTINUOUS_AGENT for p in plans)
-    return fidelity.scene_extensions([(Scene.from_dict(json.loads(s)), pair) for s, pair in scenes], ppo=ppo)
+    return fidelity.scene_extensions(
+        [(Scene.from_dict(json.loads(s)), pair) for s, pair in scenes], ppo=ppo
+    )
 
 
 class FolderRepaired(JswimWarning):
@@ -299,9 +402,19 @@ def _record_status(store: StudyStore, status: str, **fields: Any) -> None:
         pass
 
 
-def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: StudyOptions, backend: Backend | None,
-            folder: Path, template: PromptTemplate | None, progress: ProgressFn | None, figures: bool,
-            t0: float, max_cost: float | None = None) -> StudyResult:
+def _run_in(
+    store: StudyStore,
+    study: str,
+    plans: Sequence[Plan],
+    options: StudyOptions,
+    backend: Backend | None,
+    folder: Path,
+    template: PromptTemplate | None,
+    progress: ProgressFn | None,
+    figures: bool,
+    t0: float,
+    max_cost: float | None = None,
+) -> StudyResult:
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
     info: ServerInfo | None = None
@@ -310,10 +423,23 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     total = len(plans)
     finished = total - len(todo)
     tick = progress or (lambda phase, d, t, info="": None)
-    tick("resume" if finished else "start", finished, total, f"{finished} runs already done" if finished else "")
+    tick(
+        "resume" if finished else "start",
+        finished,
+        total,
+        f"{finished} runs already done" if finished else "",
+    )
 
-    for (agent, *_), group in _groups([p for p in todo if p.agent != "llm"], "agent", "swimmer", "action_set",
-                                      "roc_levels", "scene", "variant", "zeta").items():
+    for (agent, *_), group in _groups(
+        [p for p in todo if p.agent != "llm"],
+        "agent",
+        "swimmer",
+        "action_set",
+        "roc_levels",
+        "scene",
+        "variant",
+        "zeta",
+    ).items():
         store.add_runs(_run_baselines(group, options.horizon))
         finished += len(group)
         tick(agent, finished, total, "")
@@ -326,12 +452,27 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     if llm_plans:
         if backend is None:
             raise ConfigError("this study has LLM runs; give a backend")
-        finished, capped = _run_llm(llm_plans, options, backend, store, template, tick, finished, total, speed,
-                                    max_cost, sent, info, notes)
+        finished, capped = _run_llm(
+            llm_plans,
+            options,
+            backend,
+            store,
+            template,
+            tick,
+            finished,
+            total,
+            speed,
+            max_cost,
+            sent,
+            info,
+            notes,
+        )
 
     # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
     names = {p.run_id: i for i, p in enumerate(plans)}
-    rows = sorted((r for r in read_runs(folder) if r["run_id"] in names), key=lambda r: names[r["run_id"]])
+    rows = sorted(
+        (r for r in read_runs(folder) if r["run_id"] in names), key=lambda r: names[r["run_id"]]
+    )
     typed = as_run_rows(rows)  # StudyResult.rows stay the dicts of read_runs (users index them)
     summary = summarize(typed)
     scene_table = _scene_table(typed)
@@ -353,15 +494,35 @@ def _run_in(store: StudyStore, study: str, plans: Sequence[Plan], options: Study
     # What a reasoning model was sent (this session's, else the one that ran LLM runs).
     sent = sent or dict((store.meta.get("summary") or {}).get("reasoning") or {})
     status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
-    store.finalize(status,
-                   {"groups": summary, **scene_table, "failed_runs": failed, **replies, **({"llm_speed": speed} if speed else {}),
-                    **({"reasoning": sent} if sent else {}),
-                    **({"constrained_decoding": constraint} if constraint else {})})
+    store.finalize(
+        status,
+        {
+            "groups": summary,
+            **scene_table,
+            "failed_runs": failed,
+            **replies,
+            **({"llm_speed": speed} if speed else {}),
+            **({"reasoning": sent} if sent else {}),
+            **({"constrained_decoding": constraint} if constraint else {}),
+        },
+    )
     figs = draw_figures(study, typed, folder / "figures") if figures else []
     _write_report(folder, figures)
-    return StudyResult(folder, rows, summary, figs, time.perf_counter() - t0, session_speed, failed,
-                       dict(replies.get("truncated_at", {})), "cost cap" if capped else None, total, sent,
-                       cut_thinking, notes)
+    return StudyResult(
+        folder,
+        rows,
+        summary,
+        figs,
+        time.perf_counter() - t0,
+        session_speed,
+        failed,
+        dict(replies.get("truncated_at", {})),
+        "cost cap" if capped else None,
+        total,
+        sent,
+        cut_thinking,
+        notes,
+    )
 
 
 def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
@@ -381,14 +542,19 @@ def _write_report(folder: Path, figures: bool) -> None:
 
     try:
         write_report(folder, figures="files" if figures else "none")
-    except Exception as exc:  # noqa: BLE001 - the study's results are written; say why the page is not
-        warnings.warn(f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries",
-                      stacklevel=2)
+    except Exception as exc:
+        warnings.warn(
+            f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries",
+            stacklevel=2,
+        )
 
 
 def estimate_study(
-    study: str, options: StudyOptions = StudyOptions(), backend: Backend | None = Backend(),
-    out: str | Path | None = None, max_cost: float | None = None,
+    study: str,
+    options: StudyOptions = StudyOptions(),
+    backend: Backend | None = Backend(),
+    out: str | Path | None = None,
+    max_cost: float | None = None,
 ) -> Estimate:
     """What the study's LLM runs not yet done would cost (``--dry-run``); no chat request is sent.
 
@@ -409,17 +575,31 @@ def estimate_study(
     plans = [p for p in plans if p.run_id not in done]
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
     if backend.local:  # no server is started: the settings only name the model and the limits
-        settings = ClientSettings(base_url="http://127.0.0.1/v1", model=backend.describe()["model"],
-                                  temperature=backend.temperature)
+        settings = ClientSettings(
+            base_url="http://127.0.0.1/v1",
+            model=backend.describe()["model"],
+            temperature=backend.temperature,
+        )
     info, unasked = None, None
     if not backend.local:
         try:
             info = backend.preflight(timeout_s=min(backend.timeout_s or 5.0, 5.0))
-        except (LLMError, ConfigError) as exc:  # no server (yet), no key: price as if it lists the model
-            unasked = f"could not ask the server which models it lists ({scrub(str(exc)).split(';')[0]})"
+        except (
+            LLMError,
+            ConfigError,
+        ) as exc:  # no server (yet), no key: price as if it lists the model
+            unasked = (
+                f"could not ask the server which models it lists ({scrub(str(exc)).split(';')[0]})"
+            )
     if not backend.local:  # --max-tokens is also the reasoning budget, as in the study itself
-        settings = backend.client_settings(info=info, **({"reasoning_max_tokens": options.max_tokens}
-                                                          if options.max_tokens is not None else {}))
+        settings = backend.client_settings(
+            info=info,
+            **(
+                {"reasoning_max_tokens": options.max_tokens}
+                if options.max_tokens is not None
+                else {}
+            ),
+        )
     refusal = None
     if max_cost is not None and not backend.local:
         try:
@@ -432,12 +612,17 @@ def estimate_study(
     async def go() -> None:
         window = asyncio.Semaphore(max(len(plans), 1))  # no waiting: every run steps at once
         for cfg, group in _configs(plans, options, template):
-            results.extend(await run_batch_async([_spec(p) for p in group], client, cfg, window=window,
-                                                 transcripts=False))
+            results.extend(
+                await run_batch_async(
+                    [_spec(p) for p in group], client, cfg, window=window, transcripts=False
+                )
+            )
 
     if plans:
         run_sync(go())
     u = UsageTotals().merge(r.usage for r in results)
     est = estimate(client, u.calls, u.prompt_tokens, u.completion_tokens)
     est = dataclasses.replace(est, cap_refusal=refusal, models_unasked=unasked)
-    return dataclasses.replace(est, prices_as_of=backend.prices_as_of) if backend.prices_as_of else est
+    return (
+        dataclasses.replace(est, prices_as_of=backend.prices_as_of) if backend.prices_as_of else est
+    )

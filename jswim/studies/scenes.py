@@ -42,7 +42,8 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import jax
 import numpy as np
@@ -63,14 +64,18 @@ from jswim.studies.rows import build_row, signs, with_llm
 from jswim.studies.grids import CONTINUOUS_AGENT, STROKE_AGENT, Plan
 from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
+
 def square(start: Sequence[int], direction: int) -> tuple[int, int, int, int]:
     """The square stroke of a swimmer's first two DOFs from their start corner ``start`` (0 = lo,
     1 = hi), as codes ``(dof - 1) * 3 + roc + 1``: toward +x D2 to its other limit, D1 to its
     other limit, D2 back, D1 back; toward -x its time reverse (Purcell's from (+, +): D2 down, D1
     down, D2 up, D1 up; NG's from (10, 6): D2 up, D1 down, D2 down, D1 up)."""
     flip = [1 - 2 * int(v) for v in start[:2]]  # the ROC that leaves each DOF's start limit
-    moves = ((2, flip[1]), (1, flip[0]), (2, -flip[1]), (1, -flip[0])) if direction > 0 else \
-        ((1, flip[0]), (2, flip[1]), (1, -flip[0]), (2, -flip[1]))
+    moves = (
+        ((2, flip[1]), (1, flip[0]), (2, -flip[1]), (1, -flip[0]))
+        if direction > 0
+        else ((1, flip[0]), (2, flip[1]), (1, -flip[0]), (2, -flip[1]))
+    )
     return tuple(int(encode_action(d, r)) for d, r in moves)
 
 
@@ -85,7 +90,9 @@ FATES = ("trapped", "escaped", "gliding")
 # -- fates ---------------------------------------------------------------------------------------
 
 
-def fate(heights: Sequence[float], h0: float, contact: Sequence[bool] | None = None) -> tuple[str, float]:
+def fate(
+    heights: Sequence[float], h0: float, contact: Sequence[bool] | None = None
+) -> tuple[str, float]:
     """A wall run's fate from its height after each step (a, swimmer 1's middle sphere) and start.
 
     Over the run's second half (the last ``ceil(T / 2)`` steps):
@@ -103,8 +110,8 @@ def fate(heights: Sequence[float], h0: float, contact: Sequence[bool] | None = N
     h = np.asarray(heights, np.float64)
     if h.size == 0:
         return "gliding", float(h0)
-    late = h[h.size // 2:]
-    touched = contact is not None and bool(np.any(np.asarray(contact, bool)[h.size // 2:]))
+    late = h[h.size // 2 :]
+    touched = contact is not None and bool(np.any(np.asarray(contact, bool)[h.size // 2 :]))
     mean = float(late.mean())
     if touched or late.min() < TRAP_HEIGHT:
         return "trapped", mean
@@ -116,8 +123,14 @@ def fate(heights: Sequence[float], h0: float, contact: Sequence[bool] | None = N
 # -- strokes -------------------------------------------------------------------------------------
 
 
-def stroke_codes(variant: str, direction: int, steps: int, swimmers: int, start: Sequence[int] = (1, 0),
-                 width: int = n_actions(ARMS)) -> np.ndarray:
+def stroke_codes(
+    variant: str,
+    direction: int,
+    steps: int,
+    swimmers: int,
+    start: Sequence[int] = (1, 0),
+    width: int = n_actions(ARMS),
+) -> np.ndarray:
     """The joint codes of a stroke plan: ``"square"`` (swimmer 1 alone; the lone :func:`square` gait
     from its start corner ``start``, default NG's (10, 6)), or ``"phase<p>"`` for a pair: swimmer
     2 first makes ``p`` moves of its square (so it runs ``p`` quarter cycles ahead), then the two
@@ -143,7 +156,9 @@ def per_cycle(x: Sequence[float], variant: str, swimmers: int) -> float | None:
     """A stroke run's displacement per stroke cycle (a): over its complete cycles after the
     warm-up (a pair's cycle is 8 steps, one square of each swimmer; its ``x`` is their mean)."""
     x = np.concatenate([[0.0], np.asarray(x, np.float64)])
-    warm = int(variant.removeprefix("phase")) if swimmers == 2 and variant.startswith("phase") else 0
+    warm = (
+        int(variant.removeprefix("phase")) if swimmers == 2 and variant.startswith("phase") else 0
+    )
     period = 4 * swimmers
     n = (x.size - 1 - warm) // period
     if n < 1:
@@ -183,8 +198,14 @@ def _world(plan: Plan) -> tuple[Scene, Environment, Any]:
     paper's world for a plain bulk scene, Purcell's swimmer above a wall, or a registered world),
     toward +x (the runs set their own)."""
     scene = scene_of(plan)
-    init = plan.init if isinstance(plan.init, (tuple, list)) and all(v in (0, 1) for v in plan.init) else None
-    world, params = make(plan.swimmer, scene, zeta=plan.zeta, init=None if init is None else tuple(init))
+    init = (
+        plan.init
+        if isinstance(plan.init, (tuple, list)) and all(v in (0, 1) for v in plan.init)
+        else None
+    )
+    world, params = make(
+        plan.swimmer, scene, zeta=plan.zeta, init=None if init is None else tuple(init)
+    )
     return scene, world, params
 
 
@@ -235,19 +256,30 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     n_sw = world.n_swimmers
     judged, moves = [None] * len(plans), [None] * len(plans)
     if p0.agent == STROKE_AGENT:
-        codes = np.stack([stroke_codes(p.variant, p.direction, p.steps, n_sw, corner, world.n_actions // n_sw)
-                          for p in plans])
+        codes = np.stack(
+            [
+                stroke_codes(p.variant, p.direction, p.steps, n_sw, corner, world.n_actions // n_sw)
+                for p in plans
+            ]
+        )
         tr = worlds.play(world, task, keys, codes, params_axes=axes)
     elif p0.agent == "random":
-        run = random_policy.run_env(world, task, keys, p0.steps, p0.action_set, params_axes=axes, trace=True)
+        run = random_policy.run_env(
+            world, task, keys, p0.steps, p0.action_set, params_axes=axes, trace=True
+        )
         codes, tr = np.asarray(run.actions), run.trace
     elif p0.agent == CONTINUOUS_AGENT:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
-        run = ppo.train_env(world, keys, task, ppo.PPOConfig(steps=p0.steps), params_axes=axes, trace=True)
+        run = ppo.train_env(
+            world, keys, task, ppo.PPOConfig(steps=p0.steps), params_axes=axes, trace=True
+        )
         codes, tr = np.zeros((len(plans), 0), np.int64), run.trace
         dof, rocs = np.asarray(run.dof, np.int64), np.asarray(run.actions, np.float64)
-        moves = [[[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])] for i in range(len(plans))]
+        moves = [
+            [[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])]
+            for i in range(len(plans))
+        ]
         judged = _ppo_judged(run, plans, task, horizon, n_sw)
     else:
         config = QConfig(steps=p0.steps, action_set=p0.action_set)
@@ -256,22 +288,43 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     obs = tr.obs
     xs = np.asarray(obs.position[..., 0], np.float64) - x0
     heights, tilts = _lift(obs, scene)
-    stuck, contact = (np.asarray(v, bool).reshape(xs.shape[:2] + (-1,)).any(-1) for v in (tr.info.stuck, tr.info.contact))
+    stuck, contact = (
+        np.asarray(v, bool).reshape(xs.shape[:2] + (-1,)).any(-1)
+        for v in (tr.info.stuck, tr.info.contact)
+    )
     rows = []
     for i, p in enumerate(plans):
-        extra = {"xs": xs[i].tolist(), "heights": heights[i].tolist(), "tilts": tilts[i].tolist(),
-                 "contact": contact[i].tolist(), "stuck": stuck[i].tolist()}
-        row = scene_row(p, [int(c) for c in codes[i]], xs[i].mean(axis=-1).tolist(), extra, horizon, z0=z0,
-                        tilt0=tilt0, judged=judged[i], moves=moves[i])
+        extra = {
+            "xs": xs[i].tolist(),
+            "heights": heights[i].tolist(),
+            "tilts": tilts[i].tolist(),
+            "contact": contact[i].tolist(),
+            "stuck": stuck[i].tolist(),
+        }
+        row = scene_row(
+            p,
+            [int(c) for c in codes[i]],
+            xs[i].mean(axis=-1).tolist(),
+            extra,
+            horizon,
+            z0=z0,
+            tilt0=tilt0,
+            judged=judged[i],
+            moves=moves[i],
+        )
         if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
-            y, orientation = (np.asarray(v[i, :, 0], np.float64).tolist()
-                              for v in (obs.position[..., 1], obs.orientation))
+            y, orientation = (
+                np.asarray(v[i, :, 0], np.float64).tolist()
+                for v in (obs.position[..., 1], obs.orientation)
+            )
             row = dataclasses.replace(row, y=y, orientation=orientation)
         rows.append(row)
     return rows
 
 
-def _ppo_judged(run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: int) -> list[dict[str, Any] | None]:
+def _ppo_judged(
+    run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: int
+) -> list[dict[str, Any] | None]:
     """PPO's verdicts per plan, as :func:`_judge` judges lattice moves: the shape judge
     (:func:`jswim.agents.ppo.evaluate`) per swimmer of a scene world; the paper's swimmer in a
     world of its own (Purcell's above a wall) on its moves replayed in the bulk; a registered
@@ -287,10 +340,16 @@ def _ppo_judged(run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: 
     else:
         bulk, _ = _per_run(env.make_params(p0.swimmer, init=p0.init), [p.direction for p in plans])
         rep = ppo.evaluate(run, bulk, criterion=crit, replay=True)
-    return [{"success": bool(rep.success[i]), "learned": bool(rep.learned[i]),
-             "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
-             # a pair's period is 0, as the lattice judge of the pair rows gives it
-             "period": int(rep.period[i]) if n_sw == 1 else 0} for i in range(len(plans))]
+    return [
+        {
+            "success": bool(rep.success[i]),
+            "learned": bool(rep.learned[i]),
+            "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
+            # a pair's period is 0, as the lattice judge of the pair rows gives it
+            "period": int(rep.period[i]) if n_sw == 1 else 0,
+        }
+        for i in range(len(plans))
+    ]
 
 
 def _unjudged(plan: Plan) -> dict[str, Any] | None:
@@ -311,8 +370,10 @@ def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
         # a world that reports no height (Purcell's plane above a wall, a registered world): the
         # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)
         tracks.update(heights=[z0.tolist()] * len(result.x), tilts=[tilt0.tolist()] * len(result.x))
-    return with_llm(scene_row(plan, list(result.actions), list(result.x), tracks, horizon, z0=z0, tilt0=tilt0),
-                    result)
+    return with_llm(
+        scene_row(plan, list(result.actions), list(result.x), tracks, horizon, z0=z0, tilt0=tilt0),
+        result,
+    )
 
 
 def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dict[str, Any]:
@@ -332,14 +393,26 @@ def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dic
     ok = all(r is not None and bool(r.success[0]) for r in per)
     learned = all(r is not None and bool(r.learned[0]) for r in per)
     stl = [int(r.steps_to_learn[0]) for r in per if r is not None and r.learned[0]]
-    return {"success": ok, "learned": learned,
-            "steps_to_learn": (max(stl) if learned and stl else None),
-            "period": int(per[0].period[0]) if swimmers == 1 and per[0] is not None else 0}
+    return {
+        "success": ok,
+        "learned": learned,
+        "steps_to_learn": (max(stl) if learned and stl else None),
+        "period": int(per[0].period[0]) if swimmers == 1 and per[0] is not None else 0,
+    }
 
 
-def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any], horizon: int, *,
-              z0: np.ndarray, tilt0: np.ndarray, judged: dict[str, Any] | None = None,
-              moves: list[list[float]] | None = None) -> RunRow:
+def scene_row(
+    plan: Plan,
+    codes: list[int],
+    x: list[float],
+    extra: dict[str, Any],
+    horizon: int,
+    *,
+    z0: np.ndarray,
+    tilt0: np.ndarray,
+    judged: dict[str, Any] | None = None,
+    moves: list[list[float]] | None = None,
+) -> RunRow:
     """One row of a scene run (:func:`jswim.studies.rows.build_row`): the bulk studies' columns
     (success by :func:`_judge` on the lattice ``codes``, or the real-valued agent's own verdict
     ``judged`` and ``moves``; a registered world's runs unjudged, :func:`_unjudged`) and the scene's: the scene, its medium, start height or distance,
@@ -350,18 +423,30 @@ def scene_row(plan: Plan, codes: list[int], x: list[float], extra: dict[str, Any
     wall = scene.medium == "wall"
     sw = scene.swimmers
     h1 = [float(h[0]) for h in extra.get("heights") or []]
-    f, mean_h = fate(h1, float(z0[0]), [bool(c) for c in extra.get("contact") or []]) if wall else (None, None)
+    f, mean_h = (
+        fate(h1, float(z0[0]), [bool(c) for c in extra.get("contact") or []])
+        if wall
+        else (None, None)
+    )
     return build_row(
-        plan, x, moves if moves is not None else [list(decode_action(int(c))) for c in codes],
+        plan,
+        x,
+        moves if moves is not None else [list(decode_action(int(c))) for c in codes],
         judged if judged is not None else _unjudged(plan) or _judge(codes, plan, sw, horizon),
         init=signs(plan.init) if not isinstance(plan.init, str) else plan.init,
-        scene=plan.scene, medium=scene.medium, n_swimmers=sw, start_height=float(z0[0]) if wall else None,
-        separation=float(scene.separation) if sw > 1 else None, fate=f, mean_height=mean_h,
+        scene=plan.scene,
+        medium=scene.medium,
+        n_swimmers=sw,
+        start_height=float(z0[0]) if wall else None,
+        separation=float(scene.separation) if sw > 1 else None,
+        fate=f,
+        mean_height=mean_h,
         speed=late_speed(x, plan.direction, sw),
         per_cycle=per_cycle(x, plan.variant, sw) if plan.agent == STROKE_AGENT else None,
         y=h1 or [float(z0[0])] * len(x),
         orientation=[float(t[0]) for t in extra.get("tilts") or []] or [float(tilt0[0])] * len(x),
-        **{k: extra.get(k) for k in ("xs", "heights", "tilts", "contact", "stuck")})
+        **{k: extra.get(k) for k in ("xs", "heights", "tilts", "contact", "stuck")},
+    )
 
 
 def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -383,14 +468,21 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         pc = [(d or 1) * r.per_cycle for r in g if r.per_cycle is not None]
         hs = [r.mean_height for r in g if r.mean_height is not None]
         sp = [r.speed for r in g if r.speed is not None]
-        table.append({
-            "agent": agent, "direction": d, "group": group, "n": len(g),
-            "per_cycle": float(np.mean(pc)) if pc else None, "speed": float(np.mean(sp)) if sp else None,
-            "fates": ", ".join(f"{f} {fates.count(f)}" for f in FATES if f in fates) or None,
-            "mean_height": float(np.mean(hs)) if hs else None,
-            "start_height": g[0].start_height, "separation": g[0].separation,
-            "medium": g[0].medium,
-        })
+        table.append(
+            {
+                "agent": agent,
+                "direction": d,
+                "group": group,
+                "n": len(g),
+                "per_cycle": float(np.mean(pc)) if pc else None,
+                "speed": float(np.mean(sp)) if sp else None,
+                "fates": ", ".join(f"{f} {fates.count(f)}" for f in FATES if f in fates) or None,
+                "mean_height": float(np.mean(hs)) if hs else None,
+                "start_height": g[0].start_height,
+                "separation": g[0].separation,
+                "medium": g[0].medium,
+            }
+        )
     best: dict[tuple, float] = {}
     for t in table:
         if t["agent"] == STROKE_AGENT and t["speed"] is not None:
@@ -398,7 +490,9 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             best[k] = max(best.get(k, -np.inf), t["speed"])
     for t in table:
         b = best.get(_scene_key(t))
-        t["vs_stroke"] = t["speed"] / b if t["speed"] is not None and b is not None and b > 0 else None
+        t["vs_stroke"] = (
+            t["speed"] / b if t["speed"] is not None and b is not None and b > 0 else None
+        )
     return table
 
 
@@ -408,17 +502,46 @@ def _scene_key(t: dict[str, Any]) -> tuple:
 
 def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]]:
     """Columns and cells of :func:`scene_summary` for ``jswim study``'s output and ``jswim show``."""
+
     def fmt(v: Any, spec: str) -> str:
         return "-" if v is None else format(v, spec)
 
-    cols = [Column("agent", False), Column("dir", False), Column("group", False), Column("medium", False),
-            Column("n"), Column("X/a per cycle"), Column("X/a per step"), Column("fates", False),
-            Column("mean height"), Column("x stroke")]
-    order = sorted(summary, key=lambda s: (s.get("separation") or 0.0, s.get("start_height") or 0.0,
-                                           str(s["group"]), str(s["agent"])))
-    body = [[str(s["agent"]), "+x" if (s.get("direction") or 1) > 0 else "-x", str(s["group"]),
-             str(s.get("medium") or ""), str(s["n"]), fmt(s.get("per_cycle"), ".5f"), fmt(s.get("speed"), ".5f"),
-             s.get("fates") or "-", fmt(s.get("mean_height"), ".2f"), fmt(s.get("vs_stroke"), ".3f")] for s in order]
+    cols = [
+        Column("agent", False),
+        Column("dir", False),
+        Column("group", False),
+        Column("medium", False),
+        Column("n"),
+        Column("X/a per cycle"),
+        Column("X/a per step"),
+        Column("fates", False),
+        Column("mean height"),
+        Column("x stroke"),
+    ]
+    order = sorted(
+        summary,
+        key=lambda s: (
+            s.get("separation") or 0.0,
+            s.get("start_height") or 0.0,
+            str(s["group"]),
+            str(s["agent"]),
+        ),
+    )
+    body = [
+        [
+            str(s["agent"]),
+            "+x" if (s.get("direction") or 1) > 0 else "-x",
+            str(s["group"]),
+            str(s.get("medium") or ""),
+            str(s["n"]),
+            fmt(s.get("per_cycle"), ".5f"),
+            fmt(s.get("speed"), ".5f"),
+            s.get("fates") or "-",
+            fmt(s.get("mean_height"), ".2f"),
+            fmt(s.get("vs_stroke"), ".3f"),
+        ]
+        for s in order
+    ]
     return cols, body
 
 
@@ -426,5 +549,7 @@ def table_note(summary: Sequence[dict[str, Any]]) -> str | None:
     """A line under :func:`table` when some speeds are blank: the runs hold no whole stroke cycle."""
     if all(t.get("speed") is not None for t in summary):
         return None
-    return ("-: no whole stroke cycle in the run (4 steps alone, 8 for a pair, after a phase's warm-up moves): "
-            "no X/a per cycle, X/a per step or x stroke; give more --steps")
+    return (
+        "-: no whole stroke cycle in the run (4 steps alone, 8 for a pair, after a phase's warm-up moves): "
+        "no X/a per cycle, X/a per step or x stroke; give more --steps"
+    )

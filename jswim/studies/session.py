@@ -29,13 +29,21 @@ def cap_check(backend: Backend, info: ServerInfo | None, max_cost: float | None)
     if backend.local or max_cost is None:
         return
     s = backend.client_settings(info=info)
-    why = cap_refusal(s.prices, s.model, max_cost, local_host=is_local_host(s.base_url), listed=s.listed_models,
-                      price_local=s.price_local)
+    why = cap_refusal(
+        s.prices,
+        s.model,
+        max_cost,
+        local_host=is_local_host(s.base_url),
+        listed=s.listed_models,
+        price_local=s.price_local,
+    )
     if why is not None:
         raise ConfigError(why)
 
 
-def _preflight(store: StudyStore, backend: Backend, server: Any = None, max_cost: float | None = None) -> ServerInfo:
+def _preflight(
+    store: StudyStore, backend: Backend, server: Any = None, max_cost: float | None = None
+) -> ServerInfo:
     """The server's preflight (:meth:`Backend.preflight`), recorded in the study's metadata
     (``llm_server``); its warnings go out as :class:`~jswim.errors.JswimWarning`. A cost cap the
     calls could not reach is refused here (:func:`cap_check`), before the status says running."""
@@ -47,28 +55,35 @@ def _preflight(store: StudyStore, backend: Backend, server: Any = None, max_cost
     return info
 
 
-def _record_session(store: StudyStore, backend: Backend, info: ServerInfo, client: LLMClient,
-                    notes: list[str]) -> None:
+def _record_session(
+    store: StudyStore, backend: Backend, info: ServerInfo, client: LLMClient, notes: list[str]
+) -> None:
     """What the session sent and what the server made of it: the sampling fields (with the
     server's reported defaults, from the preflight), the decoding form ``auto`` settled on, and
     why calls were not priced; into the metadata's ``llm_server`` and the printed ``notes``."""
     s = client.settings
     record = dict(store.meta.get("llm_server") or info.metadata())
-    record.update(sampling={"preset": backend.sampling, "sent": dict(s.sampling)},
-                  max_concurrency=s.max_concurrency)
+    record.update(
+        sampling={"preset": backend.sampling, "sent": dict(s.sampling)},
+        max_concurrency=s.max_concurrency,
+    )
     notes.append(describe_sampling(backend.sampling, backend.family(info), s.sampling))
     if client.fallbacks:
         record["constrain_fallbacks"] = list(client.fallbacks)
         for f in client.fallbacks:
-            notes.append(f"constrained decoding: the server rejected {f['rejected']} ({f['server']}); "
-                         f"--constrain auto moved on to {f['next']}")
+            notes.append(
+                f"constrained decoding: the server rejected {f['rejected']} ({f['server']}); "
+                f"--constrain auto moved on to {f['next']}"
+            )
     if client.unpriced:
         record["unpriced"] = client.unpriced
         notes.append(f"cost: {client.unpriced}")
     store.set_status(store.meta.get("status", "running"), llm_server=record)
 
 
-def add_session(totals: dict[str, Any] | None, speed: dict[str, Any], answered_calls: int) -> dict[str, Any]:
+def add_session(
+    totals: dict[str, Any] | None, speed: dict[str, Any], answered_calls: int
+) -> dict[str, Any]:
     """The study's LLM totals over all its sessions, with one more session's ``speed``.
 
     ``answered_calls`` is the call journal's count (every answered call of the study, all
@@ -80,8 +95,16 @@ def add_session(totals: dict[str, Any] | None, speed: dict[str, Any], answered_c
     """
     t = dict(totals or {})
     t["sessions"] = int(t.get("sessions", 0)) + 1
-    for k in ("wall_s", "requests", "retries", "billed_calls", "replayed_calls", "tokens", "unanswered",
-              "unanswered_usd"):
+    for k in (
+        "wall_s",
+        "requests",
+        "retries",
+        "billed_calls",
+        "replayed_calls",
+        "tokens",
+        "unanswered",
+        "unanswered_usd",
+    ):
         t[k] = (t.get(k) or 0) + (speed.get(k) or 0)
     faults = dict(t.get("faults") or {})
     for k, n in (speed.get("faults") or {}).items():
@@ -90,4 +113,3 @@ def add_session(totals: dict[str, Any] | None, speed: dict[str, Any], answered_c
     t["answered_calls"] = answered_calls
     t["calls_per_s"] = answered_calls / t["wall_s"] if t["wall_s"] > 0 else 0.0
     return t
-

@@ -30,7 +30,14 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from jswim.swimmers.forcefree import _chol_solve, _cholesky, _is_zero, axial_offsets, red_black, sphere_centres
+from jswim.swimmers.forcefree import (
+    _chol_solve,
+    _cholesky,
+    _is_zero,
+    axial_offsets,
+    red_black,
+    sphere_centres,
+)
 from jswim.swimmers.mobility import OSEEN_PREFACTOR
 
 
@@ -62,8 +69,15 @@ def response(arms: Array, mobility: str = "point") -> Response:
     return Response(p, q)
 
 
-def sweep(centre: Array, tilt: Array, arms: Array, arm_rates: Array, resp: Response,
-          forces: Array, mobility: str = "point") -> tuple[Array, Array]:
+def sweep(
+    centre: Array,
+    tilt: Array,
+    arms: Array,
+    arm_rates: Array,
+    resp: Response,
+    forces: Array,
+    mobility: str = "point",
+) -> tuple[Array, Array]:
     """One block Gauss-Seidel sweep over the swimmers in the unbounded fluid (no obstacles).
 
     The swimmers are solved in two colours (:func:`jswim.swimmers.forcefree.red_black`), the even
@@ -103,7 +117,10 @@ def sweep(centre: Array, tilt: Array, arms: Array, arm_rates: Array, resp: Respo
 
     def colour(c: int, flow: Array) -> tuple[Array, tuple[Array, Array]]:
         ec, nc = e[c::2, None, :], nrm[c::2, None, :]
-        along, normal = jnp.einsum("sia,sa->si", flow, e[c::2]), jnp.einsum("sia,sa->si", flow, nrm[c::2])
+        along, normal = (
+            jnp.einsum("sia,sa->si", flow, e[c::2]),
+            jnp.einsum("sia,sa->si", flow, nrm[c::2]),
+        )
         w = jnp.stack([qdot[c::2] - along, -normal], -1).reshape(flow.shape[0], -1)  # v' - b'
 
         # The products are dots, which XLA:CPU keeps unfused: written as sums they fuse with
@@ -131,25 +148,45 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
         for j in range(i):
             inv_r = 1.0 / (q[i] - q[j])
             axial, normal = 2.0 * OSEEN_PREFACTOR * inv_r, OSEEN_PREFACTOR * inv_r
-            if mobility == "rpy":  # collinear unit spheres: (3/4)/r [(1 + 2/(3r^2)) I + (1 - 2/r^2) e e]
+            if (
+                mobility == "rpy"
+            ):  # collinear unit spheres: (3/4)/r [(1 + 2/(3r^2)) I + (1 - 2/r^2) e e]
                 inv_r3 = inv_r * inv_r * inv_r
                 axial, normal = axial - inv_r3, normal + 0.5 * inv_r3
             m[2 * i][2 * j], m[2 * i][2 * j + 1] = axial, 0.0
             m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = 0.0, normal
     low, inv_diag = _cholesky(m)
-    minv = [_chol_solve(low, inv_diag, [1.0 if r == col else 0.0 for r in range(size)]) for col in range(size)]
+    minv = [
+        _chol_solve(low, inv_diag, [1.0 if r == col else 0.0 for r in range(size)])
+        for col in range(size)
+    ]
     # G = M'^-1 K' (size x 3): the columns of K' are sums of unit columns (and q_i times them)
-    g = [[_sum(minv[2 * i][p] for i in range(n)), _sum(minv[2 * i + 1][p] for i in range(n)),
-          _sum(_mul(qs[i], minv[2 * i + 1][p]) for i in range(n))] for p in range(size)]
+    g = [
+        [
+            _sum(minv[2 * i][p] for i in range(n)),
+            _sum(minv[2 * i + 1][p] for i in range(n)),
+            _sum(_mul(qs[i], minv[2 * i + 1][p]) for i in range(n)),
+        ]
+        for p in range(size)
+    ]
     k_rows = [[1.0, 0.0, 0.0] if p % 2 == 0 else [0.0, 1.0, qs[p // 2]] for p in range(size)]
-    schur = [[_sum(_mul(k_rows[p][a], g[p][b]) for p in range(size)) for b in range(3)] for a in range(3)]
+    schur = [
+        [_sum(_mul(k_rows[p][a], g[p][b]) for p in range(size)) for b in range(3)] for a in range(3)
+    ]
     sl, sd = _cholesky(schur)
     h = [_chol_solve(sl, sd, g[p]) for p in range(size)]  # h[p] = S^-1 G^T e_p, so Q[:, p] = -h[p]
-    p_mat = [[_plus(minv[col][row], _sum(-_mul(g[row][a], h[col][a]) for a in range(3))) for col in range(size)]
-             for row in range(size)]
+    p_mat = [
+        [
+            _plus(minv[col][row], _sum(-_mul(g[row][a], h[col][a]) for a in range(3)))
+            for col in range(size)
+        ]
+        for row in range(size)
+    ]
     q_mat = [[0.0 if _is_zero(h[col][a]) else -h[col][a] for col in range(size)] for a in range(3)]
     zero = jnp.zeros((), arms.dtype)
-    as_array = lambda rows: jnp.stack([jnp.stack([zero + v for v in r]) for r in rows]).astype(arms.dtype)
+    as_array = lambda rows: jnp.stack([jnp.stack([zero + v for v in r]) for r in rows]).astype(
+        arms.dtype
+    )
     return as_array(p_mat), as_array(q_mat)
 
 

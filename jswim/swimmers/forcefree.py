@@ -28,7 +28,13 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.swimmers.mobility import mobility_matrix, pair_entries, swimmer_blocks, transposed_blocks, wall_self_factors
+from jswim.swimmers.mobility import (
+    mobility_matrix,
+    pair_entries,
+    swimmer_blocks,
+    transposed_blocks,
+    wall_self_factors,
+)
 
 
 class RigidMotion(NamedTuple):
@@ -44,7 +50,7 @@ def axial_offsets(arms: Array) -> Array:
     zero = jnp.zeros(arms.shape[:-1] + (1,), arms.dtype)
     cum = jnp.concatenate([zero, jnp.cumsum(arms, axis=-1)], axis=-1)
     m = arms.shape[-1] // 2
-    return cum - cum[..., m:m + 1]
+    return cum - cum[..., m : m + 1]
 
 
 def sphere_centres(centre: Array, tilt: Array, arms: Array) -> Array:
@@ -55,8 +61,15 @@ def sphere_centres(centre: Array, tilt: Array, arms: Array) -> Array:
     return centre[:, None, :] + q[..., None] * e[:, None, :]
 
 
-def solve(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
-          wall: bool, mobility: str = "point") -> RigidMotion:
+def solve(
+    centre: Array,
+    tilt: Array,
+    arms: Array,
+    arm_rates: Array,
+    obstacles: Array,
+    wall: bool,
+    mobility: str = "point",
+) -> RigidMotion:
     """Rigid motion of every swimmer for given arm rates.
 
     Parameters
@@ -102,8 +115,9 @@ def solve(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: 
     rel = pos_sw - centre[:, None, :]  # (S, n, 2)
     one = jnp.ones((S, n), dtype)
     zero = jnp.zeros((S, n), dtype)
-    k_own = jnp.stack([jnp.stack([one, zero, -rel[..., 1]], -1),
-                       jnp.stack([zero, one, rel[..., 0]], -1)], -2)  # (S, n, 2, 3)
+    k_own = jnp.stack(
+        [jnp.stack([one, zero, -rel[..., 1]], -1), jnp.stack([zero, one, rel[..., 0]], -1)], -2
+    )  # (S, n, 2, 3)
     owner = jnp.eye(S, dtype=dtype)  # (S, S)
     k_sw = k_own[:, :, :, None, :] * owner[:, None, None, :, None]  # (S, n, 2, S, 3)
     k_mat = jnp.concatenate([k_sw.reshape(S * n * 2, 3 * S), jnp.zeros((2 * O, 3 * S), dtype)], 0)
@@ -123,8 +137,15 @@ def solve(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: 
 UNROLLED_MAX_ROWS = 6
 
 
-def rigid_motion(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
-                 wall: bool, mobility: str = "point") -> RigidMotion:
+def rigid_motion(
+    centre: Array,
+    tilt: Array,
+    arms: Array,
+    arm_rates: Array,
+    obstacles: Array,
+    wall: bool,
+    mobility: str = "point",
+) -> RigidMotion:
     """:func:`solve`, by unrolled elimination for small scenes (``2 N <=``
     :data:`UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
     else through LAPACK. The two agree to rounding (a test checks it)."""
@@ -134,8 +155,16 @@ def rigid_motion(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obst
     return solve(centre, tilt, arms, arm_rates, obstacles, wall, mobility)
 
 
-def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, obstacles: Array,
-                   wall: bool, background: Array | None = None, mobility: str = "point") -> RigidMotion:
+def solve_unrolled(
+    centre: Array,
+    tilt: Array,
+    arms: Array,
+    arm_rates: Array,
+    obstacles: Array,
+    wall: bool,
+    background: Array | None = None,
+    mobility: str = "point",
+) -> RigidMotion:
     """:func:`solve` written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
     complement), so that under ``vmap`` every operation is elementwise over the batch and XLA
     fuses the whole solve; the sizes are static, the loops below run at trace time over matrix
@@ -167,8 +196,15 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
         m[2 * i + 1][2 * i + 1] = nor * inv_r + 0.0 * zs[i]
         m[2 * i + 1][2 * i] = 0.0 * zs[i]
         for j in range(i):
-            mxx, mxz, mzx, mzz = pair_entries(xs[i] - xs[j], zs[i], zs[j], wall, mobility,
-                                              1.0 if rad[i] is None else rad[i], 1.0 if rad[j] is None else rad[j])
+            mxx, mxz, mzx, mzz = pair_entries(
+                xs[i] - xs[j],
+                zs[i],
+                zs[j],
+                wall,
+                mobility,
+                1.0 if rad[i] is None else rad[i],
+                1.0 if rad[j] is None else rad[j],
+            )
             m[2 * i][2 * j], m[2 * i][2 * j + 1] = mxx, mxz
             m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = mzx, mzz
     chol, inv_diag = _cholesky(m)
@@ -199,7 +235,9 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
     sols = [_chol_solve(chol, inv_diag, c) for c in cols]
     sol_v = _chol_solve(chol, inv_diag, v)
     k3 = 3 * S
-    schur = [[sum(cols[a][p] * sols[b][p] for p in range(2 * N)) for b in range(k3)] for a in range(k3)]
+    schur = [
+        [sum(cols[a][p] * sols[b][p] for p in range(2 * N)) for b in range(k3)] for a in range(k3)
+    ]
     rhs = [-sum(cols[a][p] * sol_v[p] for p in range(2 * N)) for a in range(k3)]
     sc, sd = _cholesky(schur)
     xi = _chol_solve(sc, sd, rhs)
@@ -208,8 +246,15 @@ def solve_unrolled(centre: Array, tilt: Array, arms: Array, arm_rates: Array, ob
     return RigidMotion(xi_arr[:, :2], xi_arr[:, 2], jnp.stack(forces).reshape(N, 2))
 
 
-def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, wall: bool,
-                     forces: Array, mobility: str = "point") -> RigidMotion:
+def solve_by_swimmer(
+    centre: Array,
+    tilt: Array,
+    arms: Array,
+    arm_rates: Array,
+    wall: bool,
+    forces: Array,
+    mobility: str = "point",
+) -> RigidMotion:
     """One block Gauss-Seidel sweep of the coupled solve of ``S >= 2`` swimmers (no obstacles).
 
     The swimmers are solved in two colours, the even ones then the odd ones (:func:`red_black`; a
@@ -241,8 +286,11 @@ def solve_by_swimmer(centre: Array, tilt: Array, arms: Array, arm_rates: Array, 
     if wall:
         pos = pos.at[..., 1].set(jnp.maximum(pos[..., 1], 1.0))
     no_obstacles = jnp.zeros((0, 3), arms.dtype)
-    alone = jax.vmap(lambda c, t, a, r, bg: solve_unrolled(c[None], t[None], a[None], r[None], no_obstacles, wall,
-                                                            bg[None], mobility))
+    alone = jax.vmap(
+        lambda c, t, a, r, bg: solve_unrolled(
+            c[None], t[None], a[None], r[None], no_obstacles, wall, bg[None], mobility
+        )
+    )
 
     def colour(c: int, flow: Array) -> tuple[Array, tuple[Array, Array, Array]]:
         r = alone(centre[c::2], tilt[c::2], arms[c::2], arm_rates[c::2], flow)
@@ -280,12 +328,17 @@ def red_black(pos: Array, lab: Array, colour: Any, wall: bool, mobility: str = "
     """
     S = pos.shape[0]
     pe, po = pos[0::2], pos[1::2]
+
     def flow(blocks: Array, f: Array) -> Array:
         if wall:  # as sums: XLA fuses them into the (unrolled, elementwise) solves that read them
             return jnp.sum(blocks * f[None, :, None, :, None, :], axis=(1, 3, 5))
-        if blocks.shape[:2] == (1, 1):  # one swimmer per colour (a pair): no swimmer axes in the product
+        if blocks.shape[:2] == (
+            1,
+            1,
+        ):  # one swimmer per colour (a pair): no swimmer axes in the product
             return jnp.einsum("ijab,jb->ia", blocks[0, 0], f[0])[None]
         return jnp.einsum("soijab,ojb->sia", blocks, f)
+
     b_eo = swimmer_blocks(pe, po, wall, mobility)  # each pair of colours once
     flow_e = flow(b_eo, lab[1::2])
     if pe.shape[0] > 1:

@@ -51,7 +51,9 @@ OSEEN_PREFACTOR = 0.75
 MOBILITIES = ("point", "rpy")
 
 
-def rpy_entries(rx: Array, rz: Array, ai: Array = 1.0, aj: Array = 1.0) -> tuple[Array, Array, Array]:
+def rpy_entries(
+    rx: Array, rz: Array, ai: Array = 1.0, aj: Array = 1.0
+) -> tuple[Array, Array, Array]:
     """Rotne-Prager-Yamakawa pair mobility of non-overlapping spheres of radii ``ai``, ``aj``
     (units of ``a``) in the unbounded fluid, ``(M_xx, M_xz, M_zz)`` in units of ``1 / (6 pi mu a)``.
 
@@ -92,15 +94,35 @@ def rpb_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array, A
     ez2 = ez * ez
     t = zi / Rz
     tt = t * (1.0 - t)
-    a_ = -0.25 * (3.0 * (1.0 + 2.0 * tt * ez2) * iR + 2.0 * (1.0 - 3.0 * ez2) * iR3 - 2.0 * (1.0 - 5.0 * ez2) * iR5)
-    b_ = -0.25 * (3.0 * (1.0 - 6.0 * tt * ez2) * iR - 6.0 * (1.0 - 5.0 * ez2) * iR3 + 10.0 * (1.0 - 7.0 * ez2) * iR5)
+    a_ = -0.25 * (
+        3.0 * (1.0 + 2.0 * tt * ez2) * iR
+        + 2.0 * (1.0 - 3.0 * ez2) * iR3
+        - 2.0 * (1.0 - 5.0 * ez2) * iR5
+    )
+    b_ = -0.25 * (
+        3.0 * (1.0 - 6.0 * tt * ez2) * iR
+        - 6.0 * (1.0 - 5.0 * ez2) * iR3
+        + 10.0 * (1.0 - 7.0 * ez2) * iR5
+    )
     u = 1.0 - t  # the swapped pair's t
-    c_ = 0.5 * ez * (3.0 * u * (1.0 - 6.0 * t * ez2) * iR - 6.0 * (1.0 - 5.0 * ez2) * iR3 + 10.0 * (2.0 - 7.0 * ez2) * iR5)
+    c_ = (
+        0.5
+        * ez
+        * (
+            3.0 * u * (1.0 - 6.0 * t * ez2) * iR
+            - 6.0 * (1.0 - 5.0 * ez2) * iR3
+            + 10.0 * (2.0 - 7.0 * ez2) * iR5
+        )
+    )
     d_ = 0.5 * ez * (3.0 * u * iR - 10.0 * iR5)
     e_ = -(3.0 * u * u * ez2 * iR + 3.0 * ez2 * iR3 + (2.0 - 15.0 * ez2) * iR5)
     fxx, fxz, fzz = rpy_entries(rx, zi - zj)
-    return (fxx + a_ + b_ * ex * ex, fxz + b_ * ex * ez + c_ * ex, fxz + b_ * ex * ez + d_ * ex,
-            fzz + a_ + b_ * ez2 + (c_ + d_) * ez + e_)
+    return (
+        fxx + a_ + b_ * ex * ex,
+        fxz + b_ * ex * ez + c_ * ex,
+        fxz + b_ * ex * ez + d_ * ex,
+        fzz + a_ + b_ * ez2 + (c_ + d_) * ez + e_,
+    )
 
 
 def stokeslet(rx: Array, rz: Array) -> tuple[Array, Array, Array]:
@@ -142,12 +164,17 @@ def blake_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array,
     iR = 1.0 / jnp.sqrt(R2)
     iR3 = iR / R2
     iR5 = iR3 / R2
+
     # d_k f_i with f_i = h R_i / R^3 - delta_i3 / R - R_i R_3 / R^3 (R_3 = Rz):
     #   h (delta_ik / R^3 - 3 R_i R_k / R^5) + delta_i3 R_k / R^3
     #   - (delta_ik R_3 + R_i delta_3k) / R^3 + 3 R_i R_3 R_k / R^5
     def df(ri: Array, rk: Array, dik: float, di3: float, d3k: float) -> Array:
-        return (h * (dik * iR3 - 3.0 * ri * rk * iR5) + di3 * rk * iR3
-                - (dik * Rz + ri * d3k) * iR3 + 3.0 * ri * Rz * rk * iR5)
+        return (
+            h * (dik * iR3 - 3.0 * ri * rk * iR5)
+            + di3 * rk * iR3
+            - (dik * Rz + ri * d3k) * iR3
+            + 3.0 * ri * Rz * rk * iR5
+        )
 
     # 2 h m_k d_k f_i, m = (+1 for x, -1 for z).
     dxx = 2.0 * h * df(rx, rx, 1.0, 0.0, 0.0)
@@ -157,8 +184,15 @@ def blake_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array,
     return sxx - ixx + dxx, sxz - ixz + dxz, sxz - ixz + dzx, szz - izz + dzz
 
 
-def pair_entries(rx: Array, zi: Array, zj: Array, wall: bool, mobility: str = "point",
-                 ai: Array = 1.0, aj: Array = 1.0) -> tuple[Array, Array, Array, Array]:
+def pair_entries(
+    rx: Array,
+    zi: Array,
+    zj: Array,
+    wall: bool,
+    mobility: str = "point",
+    ai: Array = 1.0,
+    aj: Array = 1.0,
+) -> tuple[Array, Array, Array, Array]:
     """Mobility ``(M_xx, M_xz, M_zx, M_zz)`` of sphere ``i`` per unit force on sphere ``j``
     (units of ``1 / (6 pi mu a)``); ``rx = x_i - x_j``, heights ``zi``, ``zj``; elementwise.
 
@@ -179,7 +213,9 @@ def pair_entries(rx: Array, zi: Array, zj: Array, wall: bool, mobility: str = "p
     return c * gxx, c * gxz, c * gzx, c * gzz
 
 
-def swimmer_blocks(pa: Array, pb: Array, wall: bool, mobility: str = "point", same: bool = False) -> Array:
+def swimmer_blocks(
+    pa: Array, pb: Array, wall: bool, mobility: str = "point", same: bool = False
+) -> Array:
     """The pair blocks between two groups of swimmers' spheres, ``(A, B, n, n, 2, 2)``.
 
     Entry ``[s, o, i, j]`` is the mobility ``[[M_xx, M_xz], [M_zx, M_zz]]`` of sphere ``i`` of
@@ -192,7 +228,10 @@ def swimmer_blocks(pa: Array, pb: Array, wall: bool, mobility: str = "point", sa
     zj = jnp.broadcast_to(pb[None, :, None, :, 1], rx.shape)
     if same:
         own = np.eye(pa.shape[0], dtype=bool)[:, :, None, None]
-        rx, zj = jnp.where(own, 1.0, rx), jnp.where(own, zi + 1.0, zj)  # finite stand-ins, zeroed below
+        rx, zj = (
+            jnp.where(own, 1.0, rx),
+            jnp.where(own, zi + 1.0, zj),
+        )  # finite stand-ins, zeroed below
     mxx, mxz, mzx, mzz = pair_entries(rx, zi, zj, wall, mobility)
     blk = jnp.stack([jnp.stack([mxx, mxz], -1), jnp.stack([mzx, mzz], -1)], -2)
     return jnp.where(own[..., None, None], 0.0, blk) if same else blk

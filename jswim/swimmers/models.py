@@ -70,10 +70,7 @@ class SwimmerModel:
             return purcell.velocity(d, d_dot, 0.0)
         if self.kind == "nlink":
             return nlink.velocity(d, d_dot, 0.0, self.xi_ratio)
-        if self.kind == "ng":
-            u = ng.velocity(d, d_dot)
-        else:
-            u = nsphere.velocity(d, d_dot)
+        u = ng.velocity(d, d_dot) if self.kind == "ng" else nsphere.velocity(d, d_dot)
         zero = jnp.zeros_like(u)
         return jnp.stack([u, zero, zero])
 
@@ -139,7 +136,9 @@ def make_model(
     if not lo < hi:
         raise ConfigError(f"d_min must be smaller than d_max, got d_min={lo}, d_max={hi}")
     if not lo > 2.0:
-        raise ConfigError(f"d_min must exceed 2 (two sphere radii) so spheres do not overlap, got {lo}")
+        raise ConfigError(
+            f"d_min must exceed 2 (two sphere radii) so spheres do not overlap, got {lo}"
+        )
     return SwimmerModel(kind, n - 1, lo, hi, float(xi_ratio))
 
 

@@ -32,7 +32,7 @@ def outline(model: SwimmerModel, d: Any) -> np.ndarray:
     cum = np.concatenate([zero, np.cumsum(d, axis=-1)], axis=-1)
     if model.planar:
         m = model.n_dof // 2
-        phi = cum - cum[..., m: m + 1]  # link angles, the reference link at 0
+        phi = cum - cum[..., m : m + 1]  # link angles, the reference link at 0
         t = np.stack([np.cos(phi), np.sin(phi)], axis=-1)  # unit links
         joints = np.concatenate([np.zeros(d.shape[:-1] + (1, 2)), np.cumsum(t, axis=-2)], axis=-2)
         centres = 0.5 * (joints[..., 1:, :] + joints[..., :-1, :])

@@ -65,7 +65,9 @@ def log_corrections(height: Any, length: float = 1.0, xp: Any = np) -> tuple[Any
     return k_t, k_n
 
 
-def drag_coefficients(height: Any, link_radius: float = LINK_RADIUS, xp: Any = np) -> tuple[Any, Any]:
+def drag_coefficients(
+    height: Any, link_radius: float = LINK_RADIUS, xp: Any = np
+) -> tuple[Any, Any]:
     """``(xi_T, xi_N)`` of a link of unit length at ``height``, in units of the bulk ``xi_T``.
 
     ``(1, 2)`` (jswim's bulk) as ``height -> inf``; see the module docstring for the formulas,
@@ -96,8 +98,13 @@ class WallPurcellModel(SwimmerModel):
         return nlink.velocity(d, d_dot, 0.0, self.xi_perp, xi_par=self.xi_par)
 
 
-def wall_model(height: float, link_radius: float = LINK_RADIUS, *, d_max: float | None = None,
-               scale: tuple[float, float] | None = None) -> WallPurcellModel:
+def wall_model(
+    height: float,
+    link_radius: float = LINK_RADIUS,
+    *,
+    d_max: float | None = None,
+    scale: tuple[float, float] | None = None,
+) -> WallPurcellModel:
     """Purcell's swimmer with its plane ``height`` link lengths above a wall.
 
     Parameters
@@ -120,11 +127,15 @@ def wall_model(height: float, link_radius: float = LINK_RADIUS, *, d_max: float 
     """
     b = _number("link_radius", link_radius)
     if not 0.0 < b <= 0.1:
-        raise ConfigError(f"link_radius must lie in (0, 0.1] link lengths (a slender link), got {link_radius!r}")
+        raise ConfigError(
+            f"link_radius must lie in (0, 0.1] link lengths (a slender link), got {link_radius!r}"
+        )
     h = _number("height", height)
     if not h > MIN_GAP * b:
-        raise ConfigError(f"the swimmer's height above the wall must exceed {MIN_GAP:g} link radii "
-                          f"({MIN_GAP * b:g} link lengths), got {height!r}")
+        raise ConfigError(
+            f"the swimmer's height above the wall must exceed {MIN_GAP:g} link radii "
+            f"({MIN_GAP * b:g} link lengths), got {height!r}"
+        )
     base = make_model("purcell", d_max=d_max)
     xi_t, xi_n = (float(v) for v in drag_coefficients(h, b))
     if scale is not None:

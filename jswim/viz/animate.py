@@ -23,7 +23,8 @@ import tempfile
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -37,7 +38,13 @@ from jswim.viz.tracks import Track, fmt_action, track, view_box
 
 #: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.figures.plots.AGENT_STYLE`).
 #: Each agent's colour: the figures' (jswim.figures.plots.AGENT_STYLE), the square stroke in black.
-AGENT_COLORS = {"llm": "#0072B2", "qlearning": "#D55E00", "random": "#555555", "ppo": "#009E73", "stroke": "#000000"}
+AGENT_COLORS = {
+    "llm": "#0072B2",
+    "qlearning": "#D55E00",
+    "random": "#555555",
+    "ppo": "#009E73",
+    "stroke": "#000000",
+}
 FLUID = "#EAF3FA"
 STROKE_COLOR = "#009E73"
 
@@ -66,7 +73,7 @@ class Animation:
     @property
     def n_frames(self) -> int:
         """Frames: step 0, one per step, and a short hold on the last (1 s)."""
-        return max(t.n_steps for t in self.tracks) + 1 + int(round(self.fps))
+        return max(t.n_steps for t in self.tracks) + 1 + round(self.fps)
 
     def figure(self):
         """The figure and its update function ``draw(frame)`` (matplotlib)."""
@@ -99,15 +106,20 @@ class Animation:
         path = Path(path)
         suffix = path.suffix.lower()
         if suffix not in (".gif", ".mp4"):
-            raise ConfigError(f"{path}: an animation is written as .gif or .mp4, not {suffix or 'no suffix'!r}")
+            raise ConfigError(
+                f"{path}: an animation is written as .gif or .mp4, not {suffix or 'no suffix'!r}"
+            )
         if suffix == ".mp4":
             exe = ffmpeg_exe()
             if exe is None:
-                raise ConfigError("MP4 needs an ffmpeg: pip install 'jswim[video]' (imageio-ffmpeg ships one), "
-                                  "or write a .gif")
+                raise ConfigError(
+                    "MP4 needs an ffmpeg: pip install 'jswim[video]' (imageio-ffmpeg ships one), "
+                    "or write a .gif"
+                )
             plt.rcParams["animation.ffmpeg_path"] = exe
-            writer: Any = animation.FFMpegWriter(fps=self.fps, codec="libx264",
-                                                 extra_args=["-pix_fmt", "yuv420p", "-crf", "28"])
+            writer: Any = animation.FFMpegWriter(
+                fps=self.fps, codec="libx264", extra_args=["-pix_fmt", "yuv420p", "-crf", "28"]
+            )
         else:
             writer = animation.PillowWriter(fps=self.fps)
         fig, draw = _build(self)
@@ -173,7 +185,9 @@ def ffmpeg_exe() -> str | None:
 # -- choosing runs -------------------------------------------------------------------------------
 
 
-def pick_runs(rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 4) -> list[Mapping[str, Any]]:
+def pick_runs(
+    rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 4
+) -> list[Mapping[str, Any]]:
     """Runs worth showing side by side: one per value of ``by`` in the first panel of the study.
 
     The first panel is the first (swimmer, target direction) in the figures' order; within it
@@ -200,8 +214,15 @@ def pick_runs(rows: Sequence[Mapping[str, Any]], by: str = "agent", most: int = 
     return list(out.values())[:most]
 
 
-def build(folder_or_study: Any, run_ids: Sequence[str] | None = None, *, by: str = "agent", most: int = 4,
-          fps: float = 4.0, dpi: int = 80) -> Animation:
+def build(
+    folder_or_study: Any,
+    run_ids: Sequence[str] | None = None,
+    *,
+    by: str = "agent",
+    most: int = 4,
+    fps: float = 4.0,
+    dpi: int = 80,
+) -> Animation:
     """An :class:`Animation` of runs of a study folder (or a :class:`jswim.results.Study`).
 
     Parameters
@@ -234,19 +255,25 @@ def build(folder_or_study: Any, run_ids: Sequence[str] | None = None, *, by: str
         raise ConfigError(f"{folder} has no finished runs to animate yet")
     if not (0 < fps <= 60):
         raise ConfigError(f"--fps must lie in (0, 60], got {fps}")
-    tracks = [track(r, read_transcript(folder, r.run_id) if r.agent == "llm" else None) for r in chosen]
+    tracks = [
+        track(r, read_transcript(folder, r.run_id) if r.agent == "llm" else None) for r in chosen
+    ]
     model = (meta.get("identity", {}).get("backend") or {}).get("model")
     for t in tracks:
         if t.agent == "llm" and model and "model" not in t.row:
             t.row["model"] = model
     status = meta.get("status")
-    title = f"jswim {meta.get('study', '')} study" + (f" · LLM: {model}" if model and any(
-        t.agent == "llm" for t in tracks) else "") + ("" if status == "complete" else f" · UNFINISHED ({status})")
+    title = (
+        f"jswim {meta.get('study', '')} study"
+        + (f" · LLM: {model}" if model and any(t.agent == "llm" for t in tracks) else "")
+        + ("" if status == "complete" else f" · UNFINISHED ({status})")
+    )
     return Animation(tracks, fps=fps, title=title, dpi=dpi)
 
 
-def build_bench(folder: str | Path, part: str | None = None, *, most: int = 4, fps: float = 4.0,
-                dpi: int = 80) -> Animation:
+def build_bench(
+    folder: str | Path, part: str | None = None, *, most: int = 4, fps: float = 4.0, dpi: int = 80
+) -> Animation:
     """An :class:`Animation` of a bench folder: one run per model, the reference rule, Q-learning and
     random, from the same setting of one part (default the suite's first), left to right.
 
@@ -262,24 +289,41 @@ def build_bench(folder: str | Path, part: str | None = None, *, most: int = 4, f
     if part is None and names:
         part = names[0]
     if part not in names:
-        raise ConfigError(f"{folder}: the bench has no finished part {part!r}; its parts: {', '.join(names) or 'none'}")
+        raise ConfigError(
+            f"{folder}: the bench has no finished part {part!r}; its parts: {', '.join(names) or 'none'}"
+        )
     sources = [(label, kind, sub) for label, kind, p, sub in found if p == part]
-    rows_of = {label: [r for r in read_run_rows(sub) if r.x and (r.status or "done") == "done"]
-               for label, _, sub in sources}
+    rows_of = {
+        label: [r for r in read_run_rows(sub) if r.x and (r.status or "done") == "done"]
+        for label, _, sub in sources
+    }
     first = next((rs[0] for rs in rows_of.values() if rs), None)
     if first is None:
         raise ConfigError(f"{folder}: part {part!r} has no finished runs to animate yet")
-    same = lambda r: (r.swimmer, r.direction, r.zeta) == (first.swimmer, first.direction, first.zeta)
+    same = lambda r: (
+        (r.swimmer, r.direction, r.zeta) == (first.swimmer, first.direction, first.zeta)
+    )
     tracks = []
     for label, kind, sub in sources:
         agents = ("qlearning", "random") if kind == "baseline" else ("llm",)
         for agent in agents:
-            r = next((r for r in sorted(rows_of[label], key=lambda r: str(r.run_id))
-                      if r.agent == agent and same(r)), None)
+            r = next(
+                (
+                    r
+                    for r in sorted(rows_of[label], key=lambda r: str(r.run_id))
+                    if r.agent == agent and same(r)
+                ),
+                None,
+            )
             if r is None:
                 continue
-            if agent == "llm":  # the track's label names the model (a column of no run row: in ``other``)
-                r = dataclasses.replace(r, other={**r.other, "model": "reference rule" if kind == "reference" else label})
+            if (
+                agent == "llm"
+            ):  # the track's label names the model (a column of no run row: in ``other``)
+                r = dataclasses.replace(
+                    r,
+                    other={**r.other, "model": "reference rule" if kind == "reference" else label},
+                )
             tracks.append(track(r, read_transcript(sub, r.run_id) if agent == "llm" else None))
     if not (0 < fps <= 60):
         raise ConfigError(f"--fps must lie in (0, 60], got {fps}")
@@ -337,8 +381,15 @@ def _build(anim: Animation):
     fig.patch.set_facecolor("white")
     top = 1 - 0.35 / fig.get_figheight()
     bottom = text_h / fig.get_figheight()
-    fig.text(0.5, 1 - 0.06 / fig.get_figheight(), anim.title, ha="center", va="top", fontsize=10,
-             color="#B00000" if "UNFINISHED" in anim.title else "black")
+    fig.text(
+        0.5,
+        1 - 0.06 / fig.get_figheight(),
+        anim.title,
+        ha="center",
+        va="top",
+        fontsize=10,
+        color="#B00000" if "UNFINISHED" in anim.title else "black",
+    )
     state = []
     for i, t in enumerate(tracks):
         ax = fig.add_axes([i / n + 0.01, bottom, 1 / n - 0.02, top - bottom])
@@ -349,36 +400,64 @@ def _build(anim: Animation):
         ax.set_xticks([])
         ax.set_yticks([])
         # Scale bar: one a (link length, sphere radius); the start line is X = 0.
-        ax.plot([0.04, 0.04 + 1.0 / view_w], [0.06, 0.06], transform=ax.transAxes, color="0.25", lw=1.2)
-        ax.text(0.04 + 0.5 / view_w, 0.09, "a", transform=ax.transAxes, fontsize=8, ha="center", color="0.25")
+        ax.plot(
+            [0.04, 0.04 + 1.0 / view_w], [0.06, 0.06], transform=ax.transAxes, color="0.25", lw=1.2
+        )
+        ax.text(
+            0.04 + 0.5 / view_w,
+            0.09,
+            "a",
+            transform=ax.transAxes,
+            fontsize=8,
+            ha="center",
+            color="0.25",
+        )
         for s in ax.spines.values():
             s.set_color("0.7")
         ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
         worlds.draw_fixed(ax, t.world, (box[0], box[1]))
         # Every panel names its agent in that agent's colour (the figures' colours).
-        ax.set_title(_caption(t, tracks), fontsize=9, pad=2, color=AGENT_COLORS.get(t.agent, "black"))
-        ax.annotate("", xy=(0.97, 0.06), xytext=(0.82, 0.06), xycoords="axes fraction",
-                    arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8) if t.direction > 0
-                    else dict(arrowstyle="<-", color="0.35", lw=0.8))
-        ax.text(0.895, 0.09, "target", transform=ax.transAxes, fontsize=7, ha="center", color="0.35")
+        ax.set_title(
+            _caption(t, tracks), fontsize=9, pad=2, color=AGENT_COLORS.get(t.agent, "black")
+        )
+        ax.annotate(
+            "",
+            xy=(0.97, 0.06),
+            xytext=(0.82, 0.06),
+            xycoords="axes fraction",
+            arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8)
+            if t.direction > 0
+            else dict(arrowstyle="<-", color="0.35", lw=0.8),
+        )
+        ax.text(
+            0.895, 0.09, "target", transform=ax.transAxes, fontsize=7, ha="center", color="0.35"
+        )
         color = AGENT_COLORS.get(t.agent, "C0")
         artists = []
-        for j in range(t.n_swimmers):  # every swimmer of the world, swimmer 2 in its own edge colour
+        for j in range(
+            t.n_swimmers
+        ):  # every swimmer of the world, swimmer 2 in its own edge colour
             c_j = color if j == 0 else worlds.SECOND_SWIMMER
             (trail,) = ax.plot([], [], "-", color=c_j, lw=0.8, alpha=0.6, zorder=2)
             (stroke,) = ax.plot([], [], "-", color=STROKE_COLOR, lw=2.0, alpha=0.8, zorder=2)
             if t.model.planar:
-                (body,) = ax.plot([], [], "-", color="black", lw=2.4, solid_capstyle="round", zorder=4)
+                (body,) = ax.plot(
+                    [], [], "-", color="black", lw=2.4, solid_capstyle="round", zorder=4
+                )
                 (joints,) = ax.plot([], [], "o", color=c_j, ms=3, zorder=5)
                 spheres: list[Any] = []
             else:
                 (body,) = ax.plot([], [], "-", color="0.3", lw=0.8, zorder=3)
                 joints = None
-                spheres = [ax.add_patch(Circle((0, 0), 1.0, fc="white", ec=c_j, lw=1.2, zorder=4))
-                           for _ in range(t.bodies.shape[2])]
+                spheres = [
+                    ax.add_patch(Circle((0, 0), 1.0, fc="white", ec=c_j, lw=1.2, zorder=4))
+                    for _ in range(t.bodies.shape[2])
+                ]
             artists.append((trail, stroke, body, joints, spheres))
         (centre,) = ax.plot([], [], "+", color=color, ms=5, zorder=6)
-        txt = fig.text(i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=8.5, family="monospace")
+        txt = fig.text(
+            i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=8.5, family="monospace"
+        )
         state.append((t, ax, artists, centre, txt))
 
     def draw(frame: int):
@@ -389,7 +468,7 @@ def _build(anim: Animation):
                 trail.set_data(pos[: k + 1, 0], pos[: k + 1, 1])
                 if t.stroke is not None and k > t.stroke[0]:
                     s0 = t.stroke[0]
-                    stroke.set_data(pos[s0: k + 1, 0], pos[s0: k + 1, 1])
+                    stroke.set_data(pos[s0 : k + 1, 0], pos[s0 : k + 1, 1])
                 else:
                     stroke.set_data([], [])
                 body.set_data(pts[:, 0], pts[:, 1])
@@ -414,7 +493,10 @@ def _frame_text(t: Track, k: int) -> str:
     disp = "X/a toward " + ("+x" if t.direction > 0 else "-x")
     lines = [f"step {k:>3}/{t.n_steps}  {disp} {t.direction * t.x[k]:+.4f}"]
     if k == 0:
-        lines.append("start " + ("(" + ", ".join(f"{n} {v:.3g}" for n, v in zip(t.dof_names, t.dofs[0])) + ")"))
+        lines.append(
+            "start "
+            + ("(" + ", ".join(f"{n} {v:.3g}" for n, v in zip(t.dof_names, t.dofs[0])) + ")")
+        )
     else:
         i = k - 1
         events = []

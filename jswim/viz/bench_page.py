@@ -16,7 +16,8 @@ import html
 import io
 import json
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 from jswim.errors import ConfigError
 from jswim.results import atomic_write, writing
@@ -53,13 +54,23 @@ def part_folders(folder: Path, meta: Mapping[str, Any]) -> list[tuple[str, str, 
     parts = [p["name"] for p in (meta.get("suite") or {}).get("parts") or []]
     labels = [(m.get("name"), "llm") for m in meta.get("models") or []]
     labels += [(REFERENCE, "reference"), (BASELINES, "baseline")]
-    return [(label, kind, part, folder / label / part) for part in parts for label, kind in labels
-            if (folder / label / part / "metadata.json").exists()]
+    return [
+        (label, kind, part, folder / label / part)
+        for part in parts
+        for label, kind in labels
+        if (folder / label / part / "metadata.json").exists()
+    ]
 
 
 def _row_folder(r: Mapping[str, Any]) -> str:
 
-    label = BASELINES if r["kind"] == "baseline" else REFERENCE if r["kind"] == "reference" else r["row"]
+    label = (
+        BASELINES
+        if r["kind"] == "baseline"
+        else REFERENCE
+        if r["kind"] == "reference"
+        else r["row"]
+    )
     return f"{label}/{r['part']}"
 
 
@@ -71,38 +82,79 @@ def _cost(r: Mapping[str, Any]) -> str:
 def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
 
     order = {"llm": 0, "reference": 1, "baseline": 2}
-    key = lambda r: (r["part"], r["swimmer"] != "purcell", r["swimmer"], -int(r["direction"]), str(r["group"]),
-                     order[r["kind"]], r["row"])
-    head = ("part", "swimmer", "dir", "group", "row", "n", "success p [95% CI]",
-            "steps to learn, median [IQR] (k of n)", "X/a end toward the target [95% CI]", "fail", "tok/step",
-            "suite cost")
+    key = lambda r: (
+        r["part"],
+        r["swimmer"] != "purcell",
+        r["swimmer"],
+        -int(r["direction"]),
+        str(r["group"]),
+        order[r["kind"]],
+        r["row"],
+    )
+    head = (
+        "part",
+        "swimmer",
+        "dir",
+        "group",
+        "row",
+        "n",
+        "success p [95% CI]",
+        "steps to learn, median [IQR] (k of n)",
+        "X/a end toward the target [95% CI]",
+        "fail",
+        "tok/step",
+        "suite cost",
+    )
     numeric = {"n", "fail", "tok/step"}
-    out = ['<table class="summary" id="leaderboard"><thead><tr>'
-           + "".join(f'<th class="{"num" if h in numeric else ""}">{html.escape(h)}</th>' for h in head)
-           + "</tr></thead><tbody>"]
+    out = [
+        '<table class="summary" id="leaderboard"><thead><tr>'
+        + "".join(
+            f'<th class="{"num" if h in numeric else ""}">{html.escape(h)}</th>' for h in head
+        )
+        + "</tr></thead><tbody>"
+    ]
     for r in sorted(rows, key=key):
         target = _row_folder(r)
         page = f"{target}/{REPORT}"
         name = r["row"] + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
         if r["kind"] != "baseline" and r.get("status") not in (None, "complete"):
             name += f" [{r['status']}]"
-        link = (f'<a href="{html.escape(page)}">{html.escape(name)}</a>' if (folder / target).is_dir()
-                else html.escape(name))
+        link = (
+            f'<a href="{html.escape(page)}">{html.escape(name)}</a>'
+            if (folder / target).is_dir()
+            else html.escape(name)
+        )
         mx = r.get("mean_x")
 
-        ci = (f" [n<{MIN_BOOTSTRAP_N}]" if (r.get("n") or 0) < MIN_BOOTSTRAP_N  # no interval from 1 or 2 runs
-              else f" [{r['mean_x_lo']:+.3f}, {r['mean_x_hi']:+.3f}]" if r.get("mean_x_lo") is not None
-              and r.get("mean_x_hi") is not None else "")
-        cells = [r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x", r["group"] or "", None, str(r["n"]),
-                 f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]", _steps(r),
-                 "-" if mx is None else f"{mx:+.3f}{ci}",
-                 "-" if r.get("failed_steps") is None else str(r["failed_steps"]),
-                 "-" if r.get("tokens_per_step") is None else f"{r['tokens_per_step']:.0f}", _cost(r)]
+        ci = (
+            f" [n<{MIN_BOOTSTRAP_N}]"
+            if (r.get("n") or 0) < MIN_BOOTSTRAP_N  # no interval from 1 or 2 runs
+            else f" [{r['mean_x_lo']:+.3f}, {r['mean_x_hi']:+.3f}]"
+            if r.get("mean_x_lo") is not None and r.get("mean_x_hi") is not None
+            else ""
+        )
+        cells = [
+            r["part"],
+            r["swimmer"],
+            "+x" if r["direction"] > 0 else "-x",
+            r["group"] or "",
+            None,
+            str(r["n"]),
+            f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
+            _steps(r),
+            "-" if mx is None else f"{mx:+.3f}{ci}",
+            "-" if r.get("failed_steps") is None else str(r["failed_steps"]),
+            "-" if r.get("tokens_per_step") is None else f"{r['tokens_per_step']:.0f}",
+            _cost(r),
+        ]
         tds = []
         for h, c in zip(head, cells):
             cls = "num" if h in numeric else ""
-            tds.append(f'<td class="{cls} kind-{r["kind"]}">{link}</td>' if c is None
-                       else f'<td class="{cls}">{html.escape(str(c))}</td>')
+            tds.append(
+                f'<td class="{cls} kind-{r["kind"]}">{link}</td>'
+                if c is None
+                else f'<td class="{cls}">{html.escape(str(c))}</td>'
+            )
         out.append(f'<tr class="kind-{r["kind"]}">' + "".join(tds) + "</tr>")
     out.append("</tbody></table>")
     return "".join(out)
@@ -110,7 +162,6 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
 
 def _figure_src(rows: Sequence[Mapping[str, Any]]) -> str:
     import matplotlib.pyplot as plt
-
 
     fig = figure_object(rows)
     buf = io.BytesIO()
@@ -130,39 +181,67 @@ def bench_html(folder: str | Path) -> str:
     suite = meta.get("suite") or {}
     title = f"jswim bench {suite.get('name', '?')} (seed {suite.get('seed', '?')})"
     status = meta.get("status", "unknown")
-    models = "".join(f"<li><b>{html.escape(str(k))}</b>: {html.escape(str(v))}</li>"
-                     for k, v in (meta.get("model_status") or {}).items())
+    models = "".join(
+        f"<li><b>{html.escape(str(k))}</b>: {html.escape(str(v))}</li>"
+        for k, v in (meta.get("model_status") or {}).items()
+    )
     pages = part_folders(folder, meta)
-    links = "".join(f'<li><a href="{html.escape(f"{label}/{part}/{REPORT}")}">{html.escape(label)} · '
-                    f"{html.escape(part)}</a>" + (" (Q-learning and random, run once for every model)"
-                                                   if kind == "baseline" else " (the prompt-only reference rule)"
-                                                   if kind == "reference" else "") + "</li>"
-                    for label, kind, part, _ in pages)
+    links = "".join(
+        f'<li><a href="{html.escape(f"{label}/{part}/{REPORT}")}">{html.escape(label)} · '
+        f"{html.escape(part)}</a>"
+        + (
+            " (Q-learning and random, run once for every model)"
+            if kind == "baseline"
+            else " (the prompt-only reference rule)"
+            if kind == "reference"
+            else ""
+        )
+        + "</li>"
+        for label, kind, part, _ in pages
+    )
     miss = "".join(f"<li>{html.escape(t)}</li>" for t in missing_text(missing))
-    fig = (f'<figure><img alt="leaderboard" src="{_figure_src(rows)}"/><figcaption>leaderboard: success p and X/a '
-           "end toward the target, each with its 95% interval (Wilson; bootstrap), per row; blue: models, orange: "
-           "the reference rule (not an LLM), grey: Q-learning and random</figcaption></figure>") if rows else ""
+    fig = (
+        (
+            f'<figure><img alt="leaderboard" src="{_figure_src(rows)}"/><figcaption>leaderboard: success p and X/a '
+            "end toward the target, each with its 95% interval (Wilson; bootstrap), per row; blue: models, orange: "
+            "the reference rule (not an LLM), grey: Q-learning and random</figcaption></figure>"
+        )
+        if rows
+        else ""
+    )
     sizes = suite.get("size_overrides") or {}
     parts = [
-        "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8"/>',
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8"/>',
         '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
         f"<title>{html.escape(title)}</title><style>{_asset('report.css')}</style></head><body>",
         f"<header><h1>{html.escape(title)}</h1>",
         f'<p id="status" class="{"ok" if status == "complete" and not missing else "unfinished"}">bench '
-        f"{html.escape(str(status))}" + (f"; {len(missing)} study folder(s) gave no rows (below)" if missing else "")
+        f"{html.escape(str(status))}"
+        + (f"; {len(missing)} study folder(s) gave no rows (below)" if missing else "")
         + "</p>",
         f'<p class="meta">folder <code>{html.escape(folder.name)}</code> · page written '
-        f'{_dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")}'
-        + (f" · sizes changed from the suite's own: {html.escape(json.dumps(sizes))}" if sizes else "")
+        f"{_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}"
+        + (
+            f" · sizes changed from the suite's own: {html.escape(json.dumps(sizes))}"
+            if sizes
+            else ""
+        )
         + "</p></header>",
         '<nav><a href="#leaderboard-section">leaderboard</a> <a href="#figure">figure</a> '
         '<a href="#parts">pages</a> <a href="#definition">definition</a></nav>',
-        f'<section id="leaderboard-section"><h2>Leaderboard</h2>'
-        + (_table(rows, folder) if rows else "<p>No leaderboard yet: the same jswim bench command writes it.</p>")
-        + ('<p class="note">success p: the paper\'s criterion, 95% Wilson interval; steps to learn counted from 1 '
-           "over the runs that learned; X/a end: mean displacement after the last step, positive toward the "
-           "row's target direction; suite cost: what the model's calls cost over the whole suite. Each row links "
-           "to its study's page.</p>")
+        '<section id="leaderboard-section"><h2>Leaderboard</h2>'
+        + (
+            _table(rows, folder)
+            if rows
+            else "<p>No leaderboard yet: the same jswim bench command writes it.</p>"
+        )
+        + (
+            '<p class="note">success p: the paper\'s criterion, 95% Wilson interval; steps to learn counted from 1 '
+            "over the runs that learned; X/a end: mean displacement after the last step, positive toward the "
+            "row's target direction; suite cost: what the model's calls cost over the whole suite. Each row links "
+            "to its study's page.</p>"
+        )
         + (f'<h3>Missing rows</h3><ul id="missing">{miss}</ul>' if miss else "")
         + f"<h3>Models</h3><ul>{models}</ul></section>",
         f'<section id="figure"><h2>Figure</h2>{fig}</section>',
@@ -174,8 +253,9 @@ def bench_html(folder: str | Path) -> str:
     return "\n".join(parts)
 
 
-def write_bench_report(folder: str | Path, figures: str = "draw", out: str | Path | None = None,
-                       parts: bool = True) -> Path:
+def write_bench_report(
+    folder: str | Path, figures: str = "draw", out: str | Path | None = None, parts: bool = True
+) -> Path:
     """Write the bench's ``report.html`` (or ``out``) and, with ``parts``, every study folder's page.
 
     A model's or the reference rule's part page is drawn with the bench's baselines of that part
@@ -190,7 +270,7 @@ def write_bench_report(folder: str | Path, figures: str = "draw", out: str | Pat
     folder = Path(folder)
     meta, _ = _read(folder)
     if parts:
-        for label, kind, part, sub in part_folders(folder, meta):
+        for _label, kind, part, sub in part_folders(folder, meta):
             base = folder / BASELINES / part
             beside = [base] if kind != "baseline" and (base / "metadata.json").exists() else []
             write_report(sub, figures=figures, beside=beside)
@@ -199,4 +279,3 @@ def write_bench_report(folder: str | Path, figures: str = "draw", out: str | Pat
     with writing(path, "choose a writable --out path for the report"):
         atomic_write(path, text)
     return path
-

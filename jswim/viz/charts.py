@@ -7,17 +7,28 @@ show in their title, so a figure taken out of its folder still says what it is.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any
+from collections.abc import Sequence
 
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.figures.plots import COLUMN_IN, PAGE_IN, RC, SWIMMER_ORDER, _dir_text, _disp_label, _swimmer_label
+from jswim.figures.plots import (
+    COLUMN_IN,
+    PAGE_IN,
+    RC,
+    SWIMMER_ORDER,
+    _dir_text,
+    _disp_label,
+    _swimmer_label,
+)
 
 #: Colours of the two action sets (Okabe-Ito).
-SET_STYLE = {"all": dict(color="#D55E00", label="all six actions (the paper's)"),
-             "shape-changing": dict(color="#0072B2", label="shape-changing moves only")}
+SET_STYLE = {
+    "all": dict(color="#D55E00", label="all six actions (the paper's)"),
+    "shape-changing": dict(color="#0072B2", label="shape-changing moves only"),
+}
 
 
 def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
@@ -27,26 +38,40 @@ def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
     per steps-to-learn value, counted from 1). One outline per action set; the dashed line is
     its median, and the legend says how many learners never learned.
     """
-    keys = sorted({(r.swimmer, r.direction) for r in rows},
-                  key=lambda k: (SWIMMER_ORDER.index(k[0]) if k[0] in SWIMMER_ORDER else 9, -k[1]))
+    keys = sorted(
+        {(r.swimmer, r.direction) for r in rows},
+        key=lambda k: (SWIMMER_ORDER.index(k[0]) if k[0] in SWIMMER_ORDER else 9, -k[1]),
+    )
     swimmers = list(dict.fromkeys(k[0] for k in keys))
     dirs = sorted({k[1] for k in keys}, reverse=True)
     with plt.rc_context(RC):
-        fig, axes = plt.subplots(len(swimmers), len(dirs), squeeze=False, layout="constrained",
-                                 figsize=(COLUMN_IN if len(dirs) == 1 else PAGE_IN, 2.4 * len(swimmers) + 0.45))
+        fig, axes = plt.subplots(
+            len(swimmers),
+            len(dirs),
+            squeeze=False,
+            layout="constrained",
+            figsize=(COLUMN_IN if len(dirs) == 1 else PAGE_IN, 2.4 * len(swimmers) + 0.45),
+        )
         for i, sw in enumerate(swimmers):
             for j, d in enumerate(dirs):
                 ax = axes[i, j]
                 sel = [r for r in rows if r.swimmer == sw and r.direction == d]
                 for r in sel:
-                    style = SET_STYLE.get(r.action_set, dict(color=f"C{len(ax.lines)}", label=r.action_set))
+                    style = SET_STYLE.get(
+                        r.action_set, dict(color=f"C{len(ax.lines)}", label=r.action_set)
+                    )
                     hist = np.asarray(r.hist, float)
                     never = r.n - r.n_learned
-                    label = f"{style['label']}: median {r.median:g}, never learned {never:,} of {r.n:,}" \
-                        if r.n_learned else f"{style['label']}: never learned {never:,} of {r.n:,}"
+                    label = (
+                        f"{style['label']}: median {r.median:g}, never learned {never:,} of {r.n:,}"
+                        if r.n_learned
+                        else f"{style['label']}: never learned {never:,} of {r.n:,}"
+                    )
                     if hist.size > 1:
                         steps = np.arange(hist.size)
-                        ax.stairs(hist[1:] / max(r.n, 1), steps, color=style["color"], lw=1.2, label=label)
+                        ax.stairs(
+                            hist[1:] / max(r.n, 1), steps, color=style["color"], lw=1.2, label=label
+                        )
                     else:
                         ax.plot([], [], color=style["color"], label=label)
                     if r.n_learned:
@@ -57,8 +82,13 @@ def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
                 ax.set_xlim(left=0)
                 ax.set_ylim(bottom=0)
                 # Below the axis, never over the bars or the tick labels (constrained layout makes room).
-                ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.32), fontsize=6, frameon=False,
-                          borderaxespad=0.0)
+                ax.legend(
+                    loc="upper center",
+                    bbox_to_anchor=(0.5, -0.32),
+                    fontsize=6,
+                    frameon=False,
+                    borderaxespad=0.0,
+                )
         fig.suptitle(title, fontsize=8)
     return fig
 
@@ -78,8 +108,14 @@ def ensemble_figure(stats: Sequence[Any], title: str, direction: int = 1) -> Fig
             c = cmap(0.9 * k / max(1, len(stats) - 1))
             steps = np.concatenate([[0], s.steps])
             mean = np.concatenate([[0.0], s.mean])
-            ax.plot(steps, mean, color=c, lw=2.2 - 1.4 * k / max(1, len(stats) - 1), label=f"\u03b6 = {s.zeta:g}",
-                    zorder=3 + k)
+            ax.plot(
+                steps,
+                mean,
+                color=c,
+                lw=2.2 - 1.4 * k / max(1, len(stats) - 1),
+                label=f"\u03b6 = {s.zeta:g}",
+                zorder=3 + k,
+            )
             if len(qs) >= 2:
                 q = np.vstack([np.zeros((1, len(qs))), s.quantiles])
                 ax.plot(steps, q[:, 0], color=c, lw=0.7, ls="--")
@@ -88,8 +124,15 @@ def ensemble_figure(stats: Sequence[Any], title: str, direction: int = 1) -> Fig
         ax.axhline(0, color="0.75", lw=0.6, zorder=0)
         ax.set_xlabel("step n")
         ax.set_ylabel(_disp_label(direction))
-        ax.set_title("mean (solid)" + (f", {100 * qs[0]:g}% and {100 * qs[-1]:g}% quantiles (dashed)"
-                                       if len(qs) >= 2 else ""), fontsize=7)
+        ax.set_title(
+            "mean (solid)"
+            + (
+                f", {100 * qs[0]:g}% and {100 * qs[-1]:g}% quantiles (dashed)"
+                if len(qs) >= 2
+                else ""
+            ),
+            fontsize=7,
+        )
         ax.legend(loc="upper left", fontsize=6, ncol=2 if len(stats) > 4 else 1)
         if len(qs) >= 2:
             ax_w.set_xlabel("step n")

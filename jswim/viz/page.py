@@ -30,14 +30,26 @@ import io
 import json
 from importlib import resources
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from jswim.figures import plots
 from jswim.overview import AGENT_ORDER, SUMMARY_NOTE, grid_order, order_summary, summary_table
-from jswim.results import (RunRow, as_run_row, as_run_rows, atomic_write, dumps, is_failed, read_metadata, read_run_rows,
-                           read_transcript, unfinished_note, writing)
+from jswim.results import (
+    RunRow,
+    as_run_row,
+    as_run_rows,
+    atomic_write,
+    dumps,
+    is_failed,
+    read_metadata,
+    read_run_rows,
+    read_transcript,
+    unfinished_note,
+    writing,
+)
 from jswim.studies.report import summarize
 from jswim.viz import worlds
 from jswim.viz.tracks import Track, track
@@ -45,9 +57,37 @@ from jswim.viz.tracks import Track, track
 REPORT = "report.html"
 
 #: Index columns of the run browser (one row per run), in the order of its filters.
-INDEX_KEYS = ("run_id", "agent", "swimmer", "direction", "zeta", "n_ht", "variant", "group", "init", "action_set",
-              "status", "success", "steps_to_learn", "period", "signed_final_x", "steps", "cost_usd")
-FILTER_KEYS = ("agent", "swimmer", "direction", "zeta", "n_ht", "variant", "group", "init", "success", "status")
+INDEX_KEYS = (
+    "run_id",
+    "agent",
+    "swimmer",
+    "direction",
+    "zeta",
+    "n_ht",
+    "variant",
+    "group",
+    "init",
+    "action_set",
+    "status",
+    "success",
+    "steps_to_learn",
+    "period",
+    "signed_final_x",
+    "steps",
+    "cost_usd",
+)
+FILTER_KEYS = (
+    "agent",
+    "swimmer",
+    "direction",
+    "zeta",
+    "n_ht",
+    "variant",
+    "group",
+    "init",
+    "success",
+    "status",
+)
 
 #: Longest side of an embedded figure (pixels): the figures are drawn at 300 dpi for print.
 FIGURE_PX = 1400
@@ -60,15 +100,28 @@ def _axes_key(meta: Mapping[str, Any]) -> Any:
 
     agents = {a: i for i, a in enumerate(AGENT_ORDER)}
     groups = {g: i for i, g in enumerate(meta.get("group_order") or [])}
-    num = lambda v: float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else float("inf")
+    num = lambda v: (
+        float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else float("inf")
+    )
 
     def key(row: Mapping[str, Any]) -> tuple:
         r = as_run_row(row)
         m = re.search(r"-r(\d+)$", str(r.run_id or ""))
-        return (agents.get(r.agent, len(agents)), r.swimmer != "purcell", str(r.swimmer),
-                -int(r.direction or 1), groups.get(r.group, len(groups)), str(r.group or ""),
-                num(r.zeta), num(r.n_ht), str(r.variant or ""), str(r.init or ""),
-                int(m.group(1)) if m else 0, str(r.run_id))
+        return (
+            agents.get(r.agent, len(agents)),
+            r.swimmer != "purcell",
+            str(r.swimmer),
+            -int(r.direction or 1),
+            groups.get(r.group, len(groups)),
+            str(r.group or ""),
+            num(r.zeta),
+            num(r.n_ht),
+            str(r.variant or ""),
+            str(r.init or ""),
+            int(m.group(1)) if m else 0,
+            str(r.run_id),
+        )
+
     return key
 
 
@@ -83,22 +136,61 @@ def run_payload(t: Track) -> dict[str, Any]:
         atts = []
         for a in s.get("attempts") or []:
             if isinstance(a, dict):
-                atts.append({k: a.get(k) for k in ("text", "parsed", "prompt_tokens", "completion_tokens", "cost_usd",
-                                                   "latency_s", "retries", "cache_hit", "shared", "finish_reason",
-                                                   "constraint", "replayed") if k in a})
-        steps.append({"prompt": s.get("prompt"), "attempts": atts, "options": s.get("options"),
-                      "n_clears": s.get("n_clears"), "x_before": s.get("x_before"), "x_after": s.get("x_after")})
+                atts.append(
+                    {
+                        k: a.get(k)
+                        for k in (
+                            "text",
+                            "parsed",
+                            "prompt_tokens",
+                            "completion_tokens",
+                            "cost_usd",
+                            "latency_s",
+                            "retries",
+                            "cache_hit",
+                            "shared",
+                            "finish_reason",
+                            "constraint",
+                            "replayed",
+                        )
+                        if k in a
+                    }
+                )
+        steps.append(
+            {
+                "prompt": s.get("prompt"),
+                "attempts": atts,
+                "options": s.get("options"),
+                "n_clears": s.get("n_clears"),
+                "x_before": s.get("x_before"),
+                "x_after": s.get("x_after"),
+            }
+        )
     return {
-        "planar": bool(t.model.planar), "model": t.model.label, "n_dof": t.model.n_dof,
-        "lo": t.model.lo, "hi": t.model.hi,
-        "x": _round(t.x), "y": _round(t.y), "theta": _round(t.theta),
-        "pts": _round(t.points, 4), "dofs": _round(t.dofs, 4), "dof_names": t.dof_names,
+        "planar": bool(t.model.planar),
+        "model": t.model.label,
+        "n_dof": t.model.n_dof,
+        "lo": t.model.lo,
+        "hi": t.model.hi,
+        "x": _round(t.x),
+        "y": _round(t.y),
+        "theta": _round(t.theta),
+        "pts": _round(t.points, 4),
+        "dofs": _round(t.dofs, 4),
+        "dof_names": t.dof_names,
         # every swimmer (N + 1, S, P, 2) and its position (N + 1, S, 2); the wall and obstacles
-        "bodies": _round(t.bodies, 4), "pos": _round(t.positions, 4), **worlds.payload(t.world),
-        "actions": [list(a) for a in t.actions], "stuck": t.stuck.astype(int).tolist(),
-        "cleared": t.cleared.astype(int).tolist(), "failed": t.failed.astype(int).tolist(),
-        "stroke": list(t.stroke) if t.stroke else None, "success": t.success, "replayed": t.replayed,
-        "direction": t.direction, "steps": steps,
+        "bodies": _round(t.bodies, 4),
+        "pos": _round(t.positions, 4),
+        **worlds.payload(t.world),
+        "actions": [list(a) for a in t.actions],
+        "stuck": t.stuck.astype(int).tolist(),
+        "cleared": t.cleared.astype(int).tolist(),
+        "failed": t.failed.astype(int).tolist(),
+        "stroke": list(t.stroke) if t.stroke else None,
+        "success": t.success,
+        "replayed": t.replayed,
+        "direction": t.direction,
+        "steps": steps,
         "error": t.row.get("error"),
     }
 
@@ -119,40 +211,66 @@ def _figure_data(paths: Sequence[Path]) -> list[dict[str, str]]:
                 im.thumbnail((FIGURE_PX, FIGURE_PX), Image.LANCZOS)
             buf = io.BytesIO()
             im.save(buf, format="PNG", optimize=True)
-        out.append({"name": p.stem, "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()})
+        out.append(
+            {
+                "name": p.stem,
+                "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode(),
+            }
+        )
     return out
 
 
-def _drawn_figures(study: str, rows: Sequence[Mapping[str, Any]], note: str | None) -> list[dict[str, str]]:
+def _drawn_figures(
+    study: str, rows: Sequence[Mapping[str, Any]], note: str | None
+) -> list[dict[str, str]]:
     """The study's figures drawn in memory (no file written), as PNG data URIs."""
     import matplotlib.pyplot as plt
 
     out = []
-    for name, fig in plots.study_figures(study, [r for r in rows if not is_failed(r)], note=note).items():
+    for name, fig in plots.study_figures(
+        study, [r for r in rows if not is_failed(r)], note=note
+    ).items():
         buf = io.BytesIO()
         with plt.rc_context(plots.RC):
             fig.savefig(buf, format="png", dpi=170, bbox_inches="tight", pad_inches=0.03)
         plt.close(fig)
-        out.append({"name": name, "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()})
+        out.append(
+            {
+                "name": name,
+                "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode(),
+            }
+        )
     return out
 
 
-def _figures(folder: Path, study: str, rows: Sequence[Mapping[str, Any]], note: str | None,
-             figures: str) -> tuple[list[dict[str, str]], str]:
+def _figures(
+    folder: Path, study: str, rows: Sequence[Mapping[str, Any]], note: str | None, figures: str
+) -> tuple[list[dict[str, str]], str]:
     """Figures for the page and a line saying where they come from.
 
     ``figures``: ``"files"`` (the folder's ``figures/*.png``), ``"draw"`` (drawn now, in memory),
     ``"auto"`` (the files when they are newer than the last finished run, else drawn), ``"none"``.
     """
     if figures == "none" or not rows:
-        return [], "no figures (drawn without them; jswim report FOLDER adds them)" if rows else "no finished runs yet"
+        return (
+            [],
+            "no figures (drawn without them; jswim report FOLDER adds them)"
+            if rows
+            else "no finished runs yet",
+        )
     pngs = sorted((folder / "figures").glob("*.png")) if (folder / "figures").is_dir() else []
     runs_file = folder / "runs.jsonl"
-    fresh = bool(pngs) and runs_file.exists() and all(p.stat().st_mtime >= runs_file.stat().st_mtime for p in pngs)
+    fresh = (
+        bool(pngs)
+        and runs_file.exists()
+        and all(p.stat().st_mtime >= runs_file.stat().st_mtime for p in pngs)
+    )
     if figures == "files" or (figures == "auto" and fresh):
         if pngs:
             return _figure_data(pngs), "figures: the folder's figures/*.png"
-    return _drawn_figures(study, rows, note), "figures: drawn from the runs when this page was written"
+    return _drawn_figures(
+        study, rows, note
+    ), "figures: drawn from the runs when this page was written"
 
 
 def _status(meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]]) -> tuple[bool, str]:
@@ -170,19 +288,42 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
     if not rows:
         return "<p>No finished runs yet.</p>"
     cols, cells = summary_table(order_summary(summarize(list(rows)), rows))
-    head = "".join(f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols)
-    body = "".join("<tr>" + "".join(f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
-                                    for c, v in zip(cols, r)) + "</tr>" for r in cells)
-    return (f'<div class="table-wrap"><table class="summary" id="summary-table"><thead><tr>{head}</tr></thead>'
-            f'<tbody>{body}</tbody></table></div><p class="note">{html.escape(SUMMARY_NOTE)}</p>' + _scenes_html(rows))
+    head = "".join(
+        f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols
+    )
+    body = "".join(
+        "<tr>"
+        + "".join(
+            f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
+            for c, v in zip(cols, r)
+        )
+        + "</tr>"
+        for r in cells
+    )
+    return (
+        f'<div class="table-wrap"><table class="summary" id="summary-table"><thead><tr>{head}</tr></thead>'
+        f'<tbody>{body}</tbody></table></div><p class="note">{html.escape(SUMMARY_NOTE)}</p>'
+        + _scenes_html(rows)
+    )
 
 
 def _table_html(cols: Sequence[Any], cells: Sequence[Sequence[str]], table_id: str) -> str:
-    head = "".join(f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols)
-    body = "".join("<tr>" + "".join(f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
-                                    for c, v in zip(cols, r)) + "</tr>" for r in cells)
-    return (f'<div class="table-wrap"><table class="summary" id="{table_id}"><thead><tr>{head}</tr></thead>'
-            f'<tbody>{body}</tbody></table></div>')
+    head = "".join(
+        f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols
+    )
+    body = "".join(
+        "<tr>"
+        + "".join(
+            f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
+            for c, v in zip(cols, r)
+        )
+        + "</tr>"
+        for r in cells
+    )
+    return (
+        f'<div class="table-wrap"><table class="summary" id="{table_id}"><thead><tr>{head}</tr></thead>'
+        f"<tbody>{body}</tbody></table></div>"
+    )
 
 
 def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
@@ -191,16 +332,24 @@ def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
     rows = as_run_rows(rows)
     if not any(r.scene for r in rows):
         return ""
-    from jswim.studies.scenes import scene_summary, table, table_note  # lazy: the scene studies load JAX
+    from jswim.studies.scenes import (
+        scene_summary,
+        table,
+        table_note,
+    )  # lazy: the scene studies load JAX
 
     summary = scene_summary(rows)
     cols, cells = table(summary)
     note = table_note(summary)
-    return ('<h3>Scenes</h3>' + _table_html(cols, cells, "scenes")
-            + '<p class="note">X/a per cycle and per step: in the target direction; fates: trapped, escaped or '
-              'gliding (the wall study\'s rule); mean height: the middle sphere over the second half, in a; '
-              'x stroke: speed over the best square stroke\'s in the same scene.'
-            + (f" {html.escape(note)}" if note else "") + "</p>")
+    return (
+        "<h3>Scenes</h3>"
+        + _table_html(cols, cells, "scenes")
+        + '<p class="note">X/a per cycle and per step: in the target direction; fates: trapped, escaped or '
+        "gliding (the wall study's rule); mean height: the middle sphere over the second half, in a; "
+        "x stroke: speed over the best square stroke's in the same scene."
+        + (f" {html.escape(note)}" if note else "")
+        + "</p>"
+    )
 
 
 def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:
@@ -222,16 +371,25 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
     or grid axes the study has no use for (its :data:`jswim.studies.grids.SPECS` ``ignores``; a
     scene study's own axes only on that study) are left out; the full record stays one click away.
     """
-    from jswim.studies.grids import SPECS  # lazy: the grids load JAX, which a page of a finished folder does not need
+    from jswim.studies.grids import (
+        SPECS,
+    )  # lazy: the grids load JAX, which a page of a finished folder does not need
 
     study = str(meta.get("study", "?"))
     ident = meta.get("identity") or {}
     ignores = set(getattr(SPECS.get(study), "ignores", ()) or ())
     out: list[tuple[str, str]] = [("study", study)]
     backend = ident.get("backend") or {}
-    if backend and (meta.get("grid") or {}).get("runs") != 0:  # no model applies to a baselines-only study
-        out.append(("model", f"{backend.get('model')} ({backend.get('kind')}), temperature "
-                             f"{backend.get('temperature')}, constrain {backend.get('constrain')}"))
+    if (
+        backend and (meta.get("grid") or {}).get("runs") != 0
+    ):  # no model applies to a baselines-only study
+        out.append(
+            (
+                "model",
+                f"{backend.get('model')} ({backend.get('kind')}), temperature "
+                f"{backend.get('temperature')}, constrain {backend.get('constrain')}",
+            )
+        )
     fmt = lambda v: ", ".join(map(str, v)) if isinstance(v, (list, tuple)) else str(v)
     for k, v in sorted((ident.get("options") or {}).items()):
         if v is None or k in ignores or k in _NOT_COMPACT:
@@ -242,16 +400,27 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
             continue
         out.append((k, fmt(v)))
     if meta.get("success_criterion"):
-        out.append(("success criterion", fmt(meta["success_criterion"]) if not isinstance(
-            meta["success_criterion"], Mapping) else json.dumps(meta["success_criterion"], sort_keys=True)))
+        out.append(
+            (
+                "success criterion",
+                fmt(meta["success_criterion"])
+                if not isinstance(meta["success_criterion"], Mapping)
+                else json.dumps(meta["success_criterion"], sort_keys=True),
+            )
+        )
     return out
 
 
 def _settings_html(meta: Mapping[str, Any]) -> str:
-    rows = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>" for k, v in applicable_settings(meta))
-    return (f'<table class="settings" id="settings-table"><tbody>{rows}</tbody></table>'
-            '<details id="full-record"><summary>the full record (metadata.json, every setting recorded)</summary>'
-            f'<pre>{html.escape(json.dumps(_settings(meta), indent=2, sort_keys=True, default=str))}</pre></details>')
+    rows = "".join(
+        f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>"
+        for k, v in applicable_settings(meta)
+    )
+    return (
+        f'<table class="settings" id="settings-table"><tbody>{rows}</tbody></table>'
+        '<details id="full-record"><summary>the full record (metadata.json, every setting recorded)</summary>'
+        f"<pre>{html.escape(json.dumps(_settings(meta), indent=2, sort_keys=True, default=str))}</pre></details>"
+    )
 
 
 def _asset(name: str) -> str:
@@ -263,7 +432,9 @@ def _script_json(obj: Any) -> str:
     return dumps(obj, separators=(",", ":")).replace("</", "<\\/").replace("<!--", "<\\!--")
 
 
-def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str | Path] = ()) -> str:
+def report_html(
+    folder: str | Path, figures: str = "auto", beside: Sequence[str | Path] = ()
+) -> str:
     """The page of a study folder (see the module docstring); reads the folder only.
 
     Parameters
@@ -287,49 +458,75 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
     own = read_run_rows(folder)
     study = str(meta.get("study", "?"))
     finished, status_text = _status(meta, own)
-    note = None if finished else unfinished_note(meta.get("status"), len(own), meta.get("n_planned"))
+    note = (
+        None if finished else unfinished_note(meta.get("status"), len(own), meta.get("n_planned"))
+    )
     extra = []
     if beside:
         extra = beside_rows([Path(b) for b in beside])
-        figures = "none" if figures == "none" else "draw"  # the folder's own files lack the baselines
-    rows = sorted(grid_order(own + extra, meta), key=_axes_key(meta))  # by the study's axes, not finishing order
+        figures = (
+            "none" if figures == "none" else "draw"
+        )  # the folder's own files lack the baselines
+    rows = sorted(
+        grid_order(own + extra, meta), key=_axes_key(meta)
+    )  # by the study's axes, not finishing order
     figs, fig_source = _figures(folder, study, rows, note, figures)
     if extra:
-        fig_source += ("; with the bench's Q-learning and random runs of this part beside the model's ("
-                       + ", ".join(sorted({f"{Path(b).parent.name}/{Path(b).name}" for b in beside})) + ")")
+        fig_source += (
+            "; with the bench's Q-learning and random runs of this part beside the model's ("
+            + ", ".join(sorted({f"{Path(b).parent.name}/{Path(b).name}" for b in beside}))
+            + ")"
+        )
     backend = (meta.get("identity") or {}).get("backend") or {}
     # A study with no LLM run (--runs 0: baselines only) names no model.
-    model = backend.get("model") if any(r.agent == "llm" for r in own) or \
-        (meta.get("grid") or {}).get("runs") != 0 else None
+    model = (
+        backend.get("model")
+        if any(r.agent == "llm" for r in own) or (meta.get("grid") or {}).get("runs") != 0
+        else None
+    )
     index, blobs = [], []
     for i, r in enumerate(rows):
         entry = {k: r.get(k) for k in INDEX_KEYS}
         entry["i"] = i
         index.append(entry)
         if r.x:
-            t = track(r, read_transcript(folder, r.run_id) if r.agent == "llm" and not r.other.get("beside")
-                      else None)
+            t = track(
+                r,
+                read_transcript(folder, r.run_id)
+                if r.agent == "llm" and not r.other.get("beside")
+                else None,
+            )
             blobs.append(f'<script type="text/plain" id="run-{i}">{_blob(run_payload(t))}</script>')
         else:
-            blobs.append(f'<script type="text/plain" id="run-{i}">{_blob({"error": r.error, "x": []})}</script>')
+            blobs.append(
+                f'<script type="text/plain" id="run-{i}">{_blob({"error": r.error, "x": []})}</script>'
+            )
     data = {
-        "study": study, "model": model, "finished": finished, "status": status_text,
-        "folder": folder.name, "filters": list(FILTER_KEYS), "runs": index,
-        "written": _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "study": study,
+        "model": model,
+        "finished": finished,
+        "status": status_text,
+        "folder": folder.name,
+        "filters": list(FILTER_KEYS),
+        "runs": index,
+        "written": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
     }
     title = f"jswim {study} study" + (f" · LLM: {model}" if model else "")
     template = meta.get("prompt_template")
     figures_html = "".join(
         f'<figure><img alt="{html.escape(f["name"])}" src="{f["src"]}"/><figcaption>{html.escape(f["name"])}'
-        f" ({html.escape(title)})</figcaption></figure>" for f in figs)
+        f" ({html.escape(title)})</figcaption></figure>"
+        for f in figs
+    )
     parts = [
-        "<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8"/>',
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8"/>',
         '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
         f"<title>{html.escape(title)}</title><style>{_asset('report.css')}</style></head><body>",
-        f'<header><h1>{html.escape(title)}</h1>',
+        f"<header><h1>{html.escape(title)}</h1>",
         f'<p id="status" class="{"ok" if finished else "unfinished"}">{html.escape(status_text)}</p>',
         f'<p class="meta">folder <code>{html.escape(folder.name)}</code> · jswim {html.escape(str(meta.get("jswim_version", "?")))}'
-        f' · page written {data["written"]}</p></header>',
+        f" · page written {data['written']}</p></header>",
         '<nav><a href="#summary">summary</a> <a href="#figures">figures</a> <a href="#browser">runs</a> '
         '<a href="#settings">settings</a></nav>',
         f'<section id="summary"><h2>Summary</h2>{_summary_html(rows)}</section>',
@@ -339,8 +536,12 @@ def report_html(folder: str | Path, figures: str = "auto", beside: Sequence[str 
         '<div id="viewer"><p id="viewer-empty">Pick a run.</p></div></div></section>',
         '<section id="settings"><h2>Settings and identity</h2>',
         _settings_html(meta),
-        ("<details><summary>prompt template</summary><pre>"
-         f"{html.escape(json.dumps(template, indent=2, sort_keys=True))}</pre></details>" if template else ""),
+        (
+            "<details><summary>prompt template</summary><pre>"
+            f"{html.escape(json.dumps(template, indent=2, sort_keys=True))}</pre></details>"
+            if template
+            else ""
+        ),
         "</section>",
         f'<script type="application/json" id="report-data">{_script_json(data)}</script>',
         *blobs,
@@ -355,8 +556,12 @@ def report(folder: str | Path, figures: str = "auto", out: str | Path | None = N
     return write_report(folder, figures=figures, out=out)
 
 
-def write_report(folder: str | Path, figures: str = "auto", out: str | Path | None = None,
-                 beside: Sequence[str | Path] = ()) -> Path:
+def write_report(
+    folder: str | Path,
+    figures: str = "auto",
+    out: str | Path | None = None,
+    beside: Sequence[str | Path] = (),
+) -> Path:
     """Write ``report.html`` into ``folder`` (or to ``out``) atomically; nothing else is written.
 
     Raises
@@ -379,5 +584,9 @@ def beside_rows(folders: Sequence[Path]) -> list[RunRow]:
     """
     out: list[RunRow] = []
     for f in folders:
-        out += [dataclasses.replace(r, other={**r.other, "beside": str(f)}) for r in read_run_rows(f) if r.agent != "llm"]
+        out += [
+            dataclasses.replace(r, other={**r.other, "beside": str(f)})
+            for r in read_run_rows(f)
+            if r.agent != "llm"
+        ]
     return out

@@ -22,7 +22,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -134,8 +135,13 @@ class Track:
     @property
     def label(self) -> str:
         """``LLM``, ``Q-learning`` or ``random policy`` (the figures' names) with the model for LLM runs."""
-        name = {"llm": "LLM", "qlearning": "Q-learning", "random": "random policy", "ppo": "PPO (real ROC)",
-                "stroke": "square stroke"}.get(self.agent, self.agent)
+        name = {
+            "llm": "LLM",
+            "qlearning": "Q-learning",
+            "random": "random policy",
+            "ppo": "PPO (real ROC)",
+            "stroke": "square stroke",
+        }.get(self.agent, self.agent)
         model = self.row.get("model")
         return f"{name} ({model})" if model and self.agent == "llm" else name
 
@@ -171,8 +177,9 @@ def _levels(init: Any) -> list[float] | None:
     return None
 
 
-def _replay_dofs(model: SwimmerModel, d0: np.ndarray, actions: Sequence[tuple[int, float]],
-                 roc_levels: int = 1) -> np.ndarray:
+def _replay_dofs(
+    model: SwimmerModel, d0: np.ndarray, actions: Sequence[tuple[int, float]], roc_levels: int = 1
+) -> np.ndarray:
     """DOF values after each action; on the K-level lattice (``roc_levels`` K) a recorded ROC ``k``
     is ``k / K`` of the range."""
     out = [d0.copy()]
@@ -208,7 +215,9 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         The records of ``transcripts/RUN.jsonl`` (:func:`jswim.results.read_transcript`); its
         ``meta`` record gives the start levels, its ``step`` records the DOF values and replies.
     """
-    r0 = as_run_row(row)  # typed reads; Track.row stays a plain dict (animate labels it with the model)
+    r0 = as_run_row(
+        row
+    )  # typed reads; Track.row stays a plain dict (animate labels it with the model)
     row = dict(row)
     recs = list(transcript or [])
     meta = next((r for r in recs if r.get("type") == "meta"), {})
@@ -221,12 +230,17 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
     # DOF values: the row's own, the transcript's, or replayed from the start shape.
     dofs = r0.other.get("dofs")  # not a RunRow column: rows of hand-made or other tools' folders
     levels0 = _levels(meta.get("levels0")) or _levels(r0.init)
-    n_dof = (len(dofs[0]) if isinstance(dofs, list) and dofs and isinstance(dofs[0], list) else None) \
-        or (len(levels0) if levels0 else None) or max((a[0] for a in actions), default=2)
+    n_dof = (
+        (len(dofs[0]) if isinstance(dofs, list) and dofs and isinstance(dofs[0], list) else None)
+        or (len(levels0) if levels0 else None)
+        or max((a[0] for a in actions), default=2)
+    )
     world = world_of(r0)
     n_sw = world.n_swimmers
     if n_sw > 1 and n_dof is not None and not levels0:
-        n_dof = -(-n_dof // n_sw)  # the actions name joint DOFs: D1..D4 for a pair of 2-DOF swimmers
+        n_dof = -(
+            -n_dof // n_sw
+        )  # the actions name joint DOFs: D1..D4 for a pair of 2-DOF swimmers
     model = model_of(r0, n_dof)
     if levels0 is None:
         levels0 = [1.0] * model.n_dof
@@ -237,7 +251,9 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         arr = np.asarray(dofs, np.float64)
         d = np.concatenate([d0[None], arr[-n:]]) if len(arr) == n else arr[: n + 1]
     elif len(steps_log) >= n and all(isinstance(s.get("dofs_after"), list) for s in steps_log[:n]):
-        d = np.concatenate([d0[None], np.asarray([s["dofs_after"] for s in steps_log[:n]], np.float64)])
+        d = np.concatenate(
+            [d0[None], np.asarray([s["dofs_after"] for s in steps_log[:n]], np.float64)]
+        )
     else:
         d = _replay_dofs(model, d0, actions, int(r0.roc_levels or 1))
     theta0 = start_theta(model, d0)
@@ -276,19 +292,41 @@ def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None
         replies[i] = str(attempts[-1].get("text", "")) if attempts else None
     stroke = None
     stl = r0.steps_to_learn
-    learned = r0.success if r0.learned is None else r0.learned  # rows from before ``learned``: success
+    learned = (
+        r0.success if r0.learned is None else r0.learned
+    )  # rows from before ``learned``: success
     if learned and isinstance(stl, (int, float)) and r0.period:
         stroke = (int(stl) - 1, int(r0.period))
     return Track(
-        run_id=str(r0.run_id or ""), agent=str(r0.agent or ""), swimmer=str(r0.swimmer or ""),
-        model=model, direction=int(r0.direction or 1),
-        x=x, y=y, theta=theta, dofs=d, points=pts, actions=actions, stuck=stuck, cleared=cleared, failed=failed,
-        replies=replies, stroke=stroke, success=bool(r0.success), replayed=replayed, row=row,
-        steps_log=steps_log, world=world, bodies=bodies, positions=positions)
+        run_id=str(r0.run_id or ""),
+        agent=str(r0.agent or ""),
+        swimmer=str(r0.swimmer or ""),
+        model=model,
+        direction=int(r0.direction or 1),
+        x=x,
+        y=y,
+        theta=theta,
+        dofs=d,
+        points=pts,
+        actions=actions,
+        stuck=stuck,
+        cleared=cleared,
+        failed=failed,
+        replies=replies,
+        stroke=stroke,
+        success=bool(r0.success),
+        replayed=replayed,
+        row=row,
+        steps_log=steps_log,
+        world=world,
+        bodies=bodies,
+        positions=positions,
+    )
 
 
-def _scene_bodies(row: Mapping[str, Any], world: World, model: SwimmerModel, d: np.ndarray,
-                  n: int) -> tuple[np.ndarray, np.ndarray]:
+def _scene_bodies(
+    row: Mapping[str, Any], world: World, model: SwimmerModel, d: np.ndarray, n: int
+) -> tuple[np.ndarray, np.ndarray]:
     """Every swimmer of a scene run, (N + 1, S, P, 2), and their middle spheres, (N + 1, S, 2).
 
     A scene records per step and swimmer the x displacement from its start (``xs``), the middle
@@ -312,15 +350,21 @@ def _scene_bodies(row: Mapping[str, Any], world: World, model: SwimmerModel, d: 
     k = model.n_dof
     bodies = []
     for s in range(s_n):
-        shape = outline(model, d[:, s * k:(s + 1) * k] if d.shape[1] >= (s + 1) * k else d[:, :k])
-        if isinstance(model, SwimmerModel) and not model.planar:  # a scene places the middle sphere (not the centroid) at its position
+        shape = outline(model, d[:, s * k : (s + 1) * k] if d.shape[1] >= (s + 1) * k else d[:, :k])
+        if (
+            isinstance(model, SwimmerModel) and not model.planar
+        ):  # a scene places the middle sphere (not the centroid) at its position
             shape = shape - shape[..., 1:2, :]
         bodies.append(place(shape, px[:, s], pz[:, s], pt[:, s]))
     return np.stack(bodies, axis=1), np.stack([px, pz], axis=-1)
 
 
-def _replay_pose(row: Mapping[str, Any], model: SwimmerModel, levels0: Sequence[float],
-                 actions: Sequence[tuple[int, float]]) -> tuple[np.ndarray | None, np.ndarray | None]:
+def _replay_pose(
+    row: Mapping[str, Any],
+    model: SwimmerModel,
+    levels0: Sequence[float],
+    actions: Sequence[tuple[int, float]],
+) -> tuple[np.ndarray | None, np.ndarray | None]:
     """``y`` and orientation after each step from a noiseless replay (folders that lack them)."""
     if not model.planar:
         n = len(actions)
@@ -328,11 +372,17 @@ def _replay_pose(row: Mapping[str, Any], model: SwimmerModel, levels0: Sequence[
     try:
         from jswim import env  # lazy: JAX only for folders written before the pose was recorded
 
-        if any(float(r) not in (-1.0, 0.0, 1.0) for _, r in actions) or any(v not in (0.0, 1.0) for v in levels0):
+        if any(float(r) not in (-1.0, 0.0, 1.0) for _, r in actions) or any(
+            v not in (0.0, 1.0) for v in levels0
+        ):
             return None, None
         row = as_run_row(row)
-        r = env.rollout(str(row.swimmer), [(int(a), int(b)) for a, b in actions],
-                        init=[int(v) for v in levels0], direction=int(row.direction or 1))
+        r = env.rollout(
+            str(row.swimmer),
+            [(int(a), int(b)) for a, b in actions],
+            init=[int(v) for v in levels0],
+            direction=int(row.direction or 1),
+        )
         return np.asarray(r.y, np.float64), np.asarray(r.orientation, np.float64)
     except Exception:  # an unknown swimmer or an API that moved: no pose, not a broken page
         return None, None
@@ -342,8 +392,12 @@ def view_box(tracks: Sequence[Track], pad: float = 1.5) -> tuple[float, float, f
     """``(xmin, xmax, ymin, ymax)`` holding every body of every swimmer of ``tracks`` at every step,
     the wall and the obstacles, with ``pad`` (:func:`jswim.viz.worlds.view_box`)."""
 
-    return worlds.view_box([t.bodies for t in tracks], [t.world for t in tracks],
-                           bool(tracks) and not tracks[0].model.planar, pad)
+    return worlds.view_box(
+        [t.bodies for t in tracks],
+        [t.world for t in tracks],
+        bool(tracks) and not tracks[0].model.planar,
+        pad,
+    )
 
 
 def fmt_action(action: tuple[int, float]) -> str:

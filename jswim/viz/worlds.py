@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
-from typing import Any, Mapping, Sequence
+from typing import Any
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
@@ -57,13 +58,19 @@ class World:
     def describe(self) -> str:
         """A short line for captions: ``"wall, h = 3 a"``, ``"pair, D = 30 a"``, ``""`` for bulk."""
         bits = []
-        if self.extra.get("plane_height") is not None:  # Purcell's swimmer above a wall, drawn from above
-            bits.append(f"seen from above: its plane h = {self.extra['plane_height']:g} a above a wall")
+        if (
+            self.extra.get("plane_height") is not None
+        ):  # Purcell's swimmer above a wall, drawn from above
+            bits.append(
+                f"seen from above: its plane h = {self.extra['plane_height']:g} a above a wall"
+            )
         if self.wall:
             bits.append(f"wall, h = {self.start[0][1]:g} a")
         if self.n_swimmers > 1:
             side = len({round(st[0], 9) for st in self.start}) == 1  # all at one x: side by side
-            bits.append(f"{self.n_swimmers} swimmers{' side by side' if side else ''}, D = {self.separation:g} a")
+            bits.append(
+                f"{self.n_swimmers} swimmers{' side by side' if side else ''}, D = {self.separation:g} a"
+            )
         if self.obstacles:
             bits.append(f"{len(self.obstacles)} obstacle(s)")
         return ", ".join(bits)
@@ -104,17 +111,28 @@ def world_of(row: Mapping[str, Any]) -> World:
     except (TypeError, ValueError):
         return World()
     if from_above(row):
-        return World(medium=str(sc.get("medium", "bulk")),
-                     extra={"plane_height": float(sc.get("height", 0.0))} if sc.get("medium") == "wall" else {})
+        return World(
+            medium=str(sc.get("medium", "bulk")),
+            extra={"plane_height": float(sc.get("height", 0.0))}
+            if sc.get("medium") == "wall"
+            else {},
+        )
     n = int(sc.get("swimmers") or 1)
     h = float(sc.get("height", 0.0) or 0.0)
     tilt = float(sc.get("tilt", 0.0) or 0.0)
     d = float(sc.get("separation", 0.0) or 0.0)
     obstacles = tuple((float(o[0]), float(o[1]), float(o[2])) for o in sc.get("obstacles") or ())
-    side = sc.get("formation") == "side"  # a school side by side: each one D higher (else in a line, D ahead)
-    return World(n_swimmers=n, wall=sc.get("medium") == "wall", obstacles=obstacles,
-                 start=tuple(((0.0, h + k * d) if side else (k * d, h)) + (tilt,) for k in range(n)),
-                 medium=str(sc.get("medium", "bulk")), separation=d if n > 1 else None)
+    side = (
+        sc.get("formation") == "side"
+    )  # a school side by side: each one D higher (else in a line, D ahead)
+    return World(
+        n_swimmers=n,
+        wall=sc.get("medium") == "wall",
+        obstacles=obstacles,
+        start=tuple(((0.0, h + k * d) if side else (k * d, h)) + (tilt,) for k in range(n)),
+        medium=str(sc.get("medium", "bulk")),
+        separation=d if n > 1 else None,
+    )
 
 
 def per_swimmer(row: Mapping[str, Any], key: str, n: int, n_swimmers: int) -> np.ndarray | None:
@@ -123,14 +141,17 @@ def per_swimmer(row: Mapping[str, Any], key: str, n: int, n_swimmers: int) -> np
     if not isinstance(v, list) or len(v) < n:
         return None
     try:
-        a = np.asarray([[float(u) for u in (s if isinstance(s, list) else [s])] for s in v[:n]], np.float64)
+        a = np.asarray(
+            [[float(u) for u in (s if isinstance(s, list) else [s])] for s in v[:n]], np.float64
+        )
     except (TypeError, ValueError):
         return None
     return a if a.ndim == 2 and a.shape[1] == n_swimmers else None
 
 
-def view_box(bodies: Sequence[np.ndarray], worlds: Sequence[World], spheres: bool,
-             pad: float = 1.5) -> tuple[float, float, float, float]:
+def view_box(
+    bodies: Sequence[np.ndarray], worlds: Sequence[World], spheres: bool, pad: float = 1.5
+) -> tuple[float, float, float, float]:
     """``(xmin, xmax, ymin, ymax)`` holding every body (each (N + 1, S, P, 2)) at every step, the
     wall's line and the obstacles, with ``pad`` (``a``) around."""
     pts = np.concatenate([b.reshape(-1, 2) for b in bodies]) if bodies else np.zeros((1, 2))
@@ -162,20 +183,33 @@ def draw_fixed(ax: Any, world: World, xlim: tuple[float, float] | None = None) -
     from matplotlib.patches import Circle, Rectangle
 
     out: list[Any] = []
-    if world.extra.get("plane_height") is not None:  # the wall beneath the swimmer's plane, seen from above
+    if (
+        world.extra.get("plane_height") is not None
+    ):  # the wall beneath the swimmer's plane, seen from above
         ax.set_facecolor("#efe9e1")
     if world.wall:
         x0, x1 = xlim if xlim is not None else ax.get_xlim()
         big = max(abs(x0), abs(x1)) * 4 + 1e3  # wide enough for a view that follows the swimmer
-        out.append(ax.add_patch(Rectangle((-big, -50.0), 2 * big, 50.0, fc="#d9cfc2", ec="none", zorder=1.5,
-                                          hatch="///")))
+        out.append(
+            ax.add_patch(
+                Rectangle(
+                    (-big, -50.0), 2 * big, 50.0, fc="#d9cfc2", ec="none", zorder=1.5, hatch="///"
+                )
+            )
+        )
         out.append(ax.axhline(0.0, color=WALL_COLOR, lw=1.6, zorder=1.6))
     for ox, oy, orad in world.obstacles:
-        out.append(ax.add_patch(Circle((ox, oy), orad, fc=OBSTACLE_COLOR, ec=WALL_COLOR, lw=0.8, zorder=3)))
+        out.append(
+            ax.add_patch(Circle((ox, oy), orad, fc=OBSTACLE_COLOR, ec=WALL_COLOR, lw=0.8, zorder=3))
+        )
     return out
 
 
 def payload(world: World) -> dict[str, Any]:
     """What the page's canvas needs to draw the world's fixed parts."""
-    return {"wall": world.wall, "obstacles": [list(o) for o in world.obstacles], "n_swimmers": world.n_swimmers,
-            "world": world.describe()}
+    return {
+        "wall": world.wall,
+        "obstacles": [list(o) for o in world.obstacles],
+        "n_swimmers": world.n_swimmers,
+        "world": world.describe(),
+    }

@@ -22,7 +22,14 @@ from tests.fakeserver import Fault, FakeServer, hash_reply
 def settings(srv: FakeServer, **kw) -> ClientSettings:
     # A generous timeout: on a loaded machine a jit compile can hold the event loop for seconds,
     # and a timed-out request is retried, which would change the retry counts these tests assert.
-    return ClientSettings(base_url=srv.url, model="fake", backoff_base_s=0.001, backoff_max_s=0.01, timeout_s=120.0, **kw)
+    return ClientSettings(
+        base_url=srv.url,
+        model="fake",
+        backoff_base_s=0.001,
+        backoff_max_s=0.01,
+        timeout_s=120.0,
+        **kw,
+    )
 
 
 HI = math.pi / 3
@@ -54,8 +61,12 @@ def test_batch_counts_retries_failures_and_clears(tmp_path):
         LLMRunSpec("purcell", direction=-1, n_steps=6, n_ht=2),
         LLMRunSpec("ng", n_steps=6),
     ]
-    with FakeServer(reply=scripted, latency=0.02, faults=[Fault.server_error(500), Fault.rate_limit("0")]) as srv:
-        results = run_batch(specs, settings(srv), LLMAgentConfig(parse_retries=2), transcript_dir=tmp_path)
+    with FakeServer(
+        reply=scripted, latency=0.02, faults=[Fault.server_error(500), Fault.rate_limit("0")]
+    ) as srv:
+        results = run_batch(
+            specs, settings(srv), LLMAgentConfig(parse_retries=2), transcript_dir=tmp_path
+        )
         n_requests, max_in_flight = srv.n_requests, srv.max_in_flight
     a, b, ng = results
     assert [r.status for r in results] == ["done"] * 3 and all(r.steps == 6 for r in results)
@@ -80,7 +91,9 @@ def test_batch_counts_retries_failures_and_clears(tmp_path):
     lines = [json.loads(s) for s in (tmp_path / f"{b.run_id}.jsonl").read_text().splitlines()]
     assert [ln["type"] for ln in lines] == ["meta"] + ["step"] * 6 + ["end"]
     meta, first, end = lines[0], lines[1], lines[-1]
-    assert meta["n_ht"] == 2 and meta["client"]["model"] == "fake" and "negative x" in first["prompt"]
+    assert (
+        meta["n_ht"] == 2 and meta["client"]["model"] == "fake" and "negative x" in first["prompt"]
+    )
     assert [att["parsed"] for att in first["attempts"]] == [None, [2, 1]]
     assert first["attempts"][0]["text"].startswith("Let me think")
     assert {"prompt_tokens", "latency_s", "cache_hit", "retries"} <= set(first["attempts"][0])
@@ -90,7 +103,12 @@ def test_batch_counts_retries_failures_and_clears(tmp_path):
     assert shown == ["4", "5"]  # n_ht = 2 before the clear
 
     row = a.as_row()
-    assert row["run_id"] == a.run_id and row["steps"] == 6 and len(row["x"]) == 6 and row["init"] == "11"
+    assert (
+        row["run_id"] == a.run_id
+        and row["steps"] == 6
+        and len(row["x"]) == 6
+        and row["init"] == "11"
+    )
 
 
 def test_in_memory_transcript_and_history_window():
@@ -108,7 +126,9 @@ def test_runs_are_reproducible_and_independent_of_the_batch():
     one = LLMRunSpec(n_steps=8, zeta=1.0, seed=3)
     with FakeServer(reply=hash_reply) as srv:
         (alone,) = run_batch([one], settings(srv))
-        batch = run_batch([LLMRunSpec(n_steps=8, zeta=1.0, seed=s) for s in (1, 2, 3)], settings(srv))
+        batch = run_batch(
+            [LLMRunSpec(n_steps=8, zeta=1.0, seed=s) for s in (1, 2, 3)], settings(srv)
+        )
     assert np.allclose(alone.x, batch[2].x) and alone.actions == batch[2].actions
     assert not np.allclose(batch[0].x, batch[1].x)
 
@@ -116,7 +136,9 @@ def test_runs_are_reproducible_and_independent_of_the_batch():
 def test_results_do_not_depend_on_concurrency_or_the_deprecated_cohorts():
     # Each run is its own pipeline: one request at a time or six, the same actions and positions.
     # ``cohorts=`` (lockstep groups, gone) is still accepted and must change nothing.
-    specs = [LLMRunSpec(n_steps=6, zeta=0.5, seed=s) for s in range(5)] + [LLMRunSpec("ng", n_steps=4)]
+    specs = [LLMRunSpec(n_steps=6, zeta=0.5, seed=s) for s in range(5)] + [
+        LLMRunSpec("ng", n_steps=4)
+    ]
     with FakeServer(reply=hash_reply, latency=0.01) as srv:
         serial = run_batch(specs, settings(srv, max_concurrency=1))
         serial_peak = srv.max_in_flight
@@ -126,15 +148,20 @@ def test_results_do_not_depend_on_concurrency_or_the_deprecated_cohorts():
     assert [r.run_id for r in serial] == [r.run_id for r in wide]
     for a, b in zip(serial, wide):
         assert a.actions == b.actions and np.allclose(a.x, b.x) and a.status == b.status == "done"
-    assert len({tuple(r.actions) for r in serial}) > 1  # the runs differ, so the match is not trivial
+    assert (
+        len({tuple(r.actions) for r in serial}) > 1
+    )  # the runs differ, so the match is not trivial
 
 
 @pytest.mark.parametrize("direction", [1, -1])
 def test_progress_is_each_step_s_displacement_toward_the_target(direction):
     # progress (the clearing rule's input and the summary's numbers) must be direction * dX, as
     # read off the positions before and after each step (noise on, both swimmers, both targets).
-    specs = [LLMRunSpec(sw, direction=direction, zeta=0.5, seed=s, n_steps=6) for sw in ("purcell", "ng")
-             for s in (1, 2)]
+    specs = [
+        LLMRunSpec(sw, direction=direction, zeta=0.5, seed=s, n_steps=6)
+        for sw in ("purcell", "ng")
+        for s in (1, 2)
+    ]
     with FakeServer(reply=hash_reply) as srv:
         results = run_batch(specs, settings(srv))
     moved = 0
@@ -162,17 +189,28 @@ def test_position_below_x_min_never_ends_the_run():
 def test_server_down_raises_and_closes_transcripts(tmp_path, concurrency):
     with FakeServer(faults=[None] * 2 + [Fault.server_error(503)] * 50) as srv:
         with pytest.raises(LLMServerError, match="503"):
-            run_batch([LLMRunSpec(n_steps=5, seed=s) for s in (0, 1)],
-                      settings(srv, max_retries=2, max_concurrency=concurrency),
-                      LLMAgentConfig(share_identical=False), transcript_dir=tmp_path)
+            run_batch(
+                [LLMRunSpec(n_steps=5, seed=s) for s in (0, 1)],
+                settings(srv, max_retries=2, max_concurrency=concurrency),
+                LLMAgentConfig(share_identical=False),
+                transcript_dir=tmp_path,
+            )
     for f in tmp_path.iterdir():
         lines = [json.loads(s) for s in f.read_text().splitlines()]
-        assert lines[-1]["type"] == "end" and lines[-1]["status"] == "aborted" and lines[-1]["steps"] == 1
+        assert (
+            lines[-1]["type"] == "end"
+            and lines[-1]["status"] == "aborted"
+            and lines[-1]["steps"] == 1
+        )
 
 
 def test_shape_changing_set_reaches_the_grammar():
     with FakeServer(reply=lambda body: "[1, -1]") as srv:
-        run_batch([LLMRunSpec(n_steps=2)], settings(srv, server_kind="llamacpp"), LLMAgentConfig(action_set="shape-changing"))
+        run_batch(
+            [LLMRunSpec(n_steps=2)],
+            settings(srv, server_kind="llamacpp"),
+            LLMAgentConfig(action_set="shape-changing"),
+        )
         grammars = [r["grammar"] for r in srv.requests]
     assert grammars[0] == 'root ::= "[1, -1]" | "[2, -1]"'  # from (+, +)
     assert grammars[1] == 'root ::= "[1, 1]" | "[2, -1]"'  # after D1 went to lo
@@ -200,7 +238,9 @@ def test_runs_are_independent_unless_sharing_is_asked_for(tmp_path):
         shared = run_batch(specs, settings(srv), LLMAgentConfig(share_identical=True))
         assert srv.n_requests == 3
     assert all(r.x == shared[0].x for r in shared)
-    assert sum(r.usage.shared for r in shared) == 9 and shared[0].as_row()["share_identical"] is True
+    assert (
+        sum(r.usage.shared for r in shared) == 9 and shared[0].as_row()["share_identical"] is True
+    )
 
 
 def test_duplicate_run_ids_are_rejected():
@@ -230,7 +270,9 @@ def test_blocking_call_works_inside_a_running_event_loop():
 
 def test_summary_variant_shows_the_run_s_own_observed_means():
     with FakeServer(reply=hash_reply) as srv:
-        (res,) = run_batch([LLMRunSpec(n_steps=12, zeta=0.5, seed=3)], settings(srv), variant_config("summary"))
+        (res,) = run_batch(
+            [LLMRunSpec(n_steps=12, zeta=0.5, seed=3)], settings(srv), variant_config("summary")
+        )
     steps = steps_of(res)
     stats: dict[tuple, list[float]] = {}
     for k, st in enumerate(steps):
@@ -246,7 +288,10 @@ def test_summary_variant_shows_the_run_s_own_observed_means():
                 amount = round(abs(mean) * 1000)
                 if amount:
                     way = "toward" if mean > 0 else "away from"
-                    assert f"[{a[0]}, {a[1]}] moved X {amount} {way} +x on average in {len(seen)}" in line
+                    assert (
+                        f"[{a[0]}, {a[1]}] moved X {amount} {way} +x on average in {len(seen)}"
+                        in line
+                    )
                 else:
                     assert f"[{a[0]}, {a[1]}] left X unchanged in {len(seen)}" in line
         # What the step moved toward +x, from the positions (not the progress the driver computed).
@@ -267,9 +312,14 @@ def test_shuffle_changes_the_order_not_the_set_and_replays():
     assert all(sorted(o) == sorted(canonical) for o in orders)
     assert len(set(orders)) > 3 and orders != [canonical] * len(orders)
     assert [tuple(map(tuple, st["options"])) for st in steps_of(a)] == [
-        tuple(tuple(int(v) for v in re.findall(r"-?\d", o)) for o in order) for order in orders]
-    assert orders == [tuple(s5_options(st["prompt"])) for st in steps_of(b)]  # seeded by run and step
-    assert all("the changed DOF 1 or 2 and the ROC -1, 0 or 1." in st["prompt"] for st in steps_of(plain))
+        tuple(tuple(int(v) for v in re.findall(r"-?\d", o)) for o in order) for order in orders
+    ]
+    assert orders == [
+        tuple(s5_options(st["prompt"])) for st in steps_of(b)
+    ]  # seeded by run and step
+    assert all(
+        "the changed DOF 1 or 2 and the ROC -1, 0 or 1." in st["prompt"] for st in steps_of(plain)
+    )
     # The grammar is not shuffled: only the text is.
     grammars = {body.get("grammar") for body in bodies}
     assert len(grammars) == 1
@@ -288,9 +338,13 @@ def test_temperature_requests_carry_per_run_seeds_and_are_never_cached(tmp_path)
     assert all(body["temperature"] == 0.7 for body in bodies)
     assert sum(r.usage.cache_hits + r.usage.shared for r in first + again) == 0
     seeds = [[at["seed"] for st in steps_of(r) for at in st["attempts"]] for r in first]
-    assert all(len(set(s)) == 5 for s in seeds) and not set(seeds[0]) & set(seeds[1])  # per step, per run
+    assert all(len(set(s)) == 5 for s in seeds) and not set(seeds[0]) & set(
+        seeds[1]
+    )  # per step, per run
     assert sorted(b["seed"] for b in bodies) == sorted(seeds[0] + seeds[1])
-    assert sorted(b["seed"] for b in bodies_again) == sorted(b["seed"] for b in bodies)  # reproducible
+    assert sorted(b["seed"] for b in bodies_again) == sorted(
+        b["seed"] for b in bodies
+    )  # reproducible
     assert {r.as_row()["temperature"] for r in first} == {0.7}
     # At temperature 0 no seed is sent, and identical requests of the two runs are still sent apart.
     with FakeServer(reply=lambda body: "[1, 1]") as srv:
@@ -301,10 +355,17 @@ def test_temperature_requests_carry_per_run_seeds_and_are_never_cached(tmp_path)
 
 def test_variant_is_recorded_in_rows_and_transcripts():
     with FakeServer(reply=hash_reply) as srv:
-        (res,) = run_batch([LLMRunSpec(n_steps=3)], settings(srv), variant_config("shape-changing+summary"))
+        (res,) = run_batch(
+            [LLMRunSpec(n_steps=3)], settings(srv), variant_config("shape-changing+summary")
+        )
     row = res.as_row()
-    assert (row["variant"], row["action_set"], row["summary"], row["shuffle"], row["temperature"]) == (
-        "shape-changing+summary", "shape-changing", True, False, 0.0)
+    assert (
+        row["variant"],
+        row["action_set"],
+        row["summary"],
+        row["shuffle"],
+        row["temperature"],
+    ) == ("shape-changing+summary", "shape-changing", True, False, 0.0)
     assert row["tokens_seen"] > 0
     meta = res.transcript[0]
     assert meta["agent"]["variant"] == "shape-changing+summary" and meta["agent"]["summary"] is True

@@ -52,22 +52,41 @@ class SchoolToy(Environment):
         return ToyState(jnp.ones((self.swimmers, 2), f), jnp.zeros(self.swimmers, f))
 
     def advance(self, state, action, noise, params):
-        dof, roc = action // 3, (action % 3 - 1).astype(state.x.dtype)  # the protocol's codes, K = 1
-        f1 = jnp.clip(state.frac + roc * (jnp.arange(self.n_dof) == dof).reshape(self.swimmers, 2), 0.0, 1.0)
+        dof, roc = (
+            action // 3,
+            (action % 3 - 1).astype(state.x.dtype),
+        )  # the protocol's codes, K = 1
+        f1 = jnp.clip(
+            state.frac + roc * (jnp.arange(self.n_dof) == dof).reshape(self.swimmers, 2), 0.0, 1.0
+        )
         mid, d = (state.frac + f1) / 2, f1 - state.frac
         dx = 0.5 * (mid[:, 0] * d[:, 1] - mid[:, 1] * d[:, 0]) * (1.0 + params.zeta * noise)
         moved = jnp.any(d != 0)
-        info = StepInfo(jnp.stack([dx, 0.0 * dx], -1), params.direction * jnp.mean(dx), (roc != 0) & ~moved, moved,
-                        jnp.zeros((), bool), jnp.asarray(jnp.inf, dx.dtype))
+        info = StepInfo(
+            jnp.stack([dx, 0.0 * dx], -1),
+            params.direction * jnp.mean(dx),
+            (roc != 0) & ~moved,
+            moved,
+            jnp.zeros((), bool),
+            jnp.asarray(jnp.inf, dx.dtype),
+        )
         return ToyState(f1, state.x + dx), info
 
     def observe(self, state, params):
-        return Observation(6.0 + 4.0 * state.frac.reshape(-1), jnp.stack([state.x, 0.0 * state.x], -1),
-                           jnp.zeros(self.swimmers, state.x.dtype))
+        return Observation(
+            6.0 + 4.0 * state.frac.reshape(-1),
+            jnp.stack([state.x, 0.0 * state.x], -1),
+            jnp.zeros(self.swimmers, state.x.dtype),
+        )
 
 
 #: Swimmer 1's counter-clockwise square on NG's arms: the next move from each corner.
-SQUARE = {("10", "10"): "[1, -1]", ("6", "10"): "[2, -1]", ("6", "6"): "[1, 1]", ("10", "6"): "[2, 1]"}
+SQUARE = {
+    ("10", "10"): "[1, -1]",
+    ("6", "10"): "[2, -1]",
+    ("6", "6"): "[1, 1]",
+    ("10", "6"): "[2, 1]",
+}
 
 
 def square_reply(body):
@@ -80,16 +99,28 @@ def square_reply(body):
 
 @pytest.mark.slow  # compiles the group's start and step for two worlds (~9 s under load)
 def test_a_toy_world_of_any_size_runs_through_the_llm_agent(float32):
-    specs = [LLMRunSpec("ng", n_steps=12, seed=1, run_id="alone"), LLMRunSpec("ng", n_steps=12, seed=2, run_id="school")]
+    specs = [
+        LLMRunSpec("ng", n_steps=12, seed=1, run_id="alone"),
+        LLMRunSpec("ng", n_steps=12, seed=2, run_id="school"),
+    ]
     worlds = {"alone": SchoolToy(1), "school": SchoolToy(3)}
     with FakeServer(reply=square_reply) as srv:
         settings = ClientSettings(base_url=srv.url, model="fake", timeout_s=120.0)
-        alone, school = run_batch(specs, settings, LLMAgentConfig(),
-                                  worlds=lambda s: (worlds[s.run_id], ToyParams(direction=float(s.direction))))
+        alone, school = run_batch(
+            specs,
+            settings,
+            LLMAgentConfig(),
+            worlds=lambda s: (worlds[s.run_id], ToyParams(direction=float(s.direction))),
+        )
     # Three exact square cycles, +1 each (0.5 at the first and last move of a cycle).
     assert alone.status == school.status == "done"
     assert alone.x[:4] == [0.5, 0.5, 0.5, 1.0] and alone.x[-1] == 3.0 and sum(alone.progress) == 3.0
-    assert alone.actions[:4] == [0, 3, 2, 5]  # the protocol's codes of [1, -1], [2, -1], [1, 1], [2, 1]
+    assert alone.actions[:4] == [
+        0,
+        3,
+        2,
+        5,
+    ]  # the protocol's codes of [1, -1], [2, -1], [1, 1], [2, 1]
     # One swimmer and no wall: the paper's prompt and row, nothing added.
     steps = [t for t in alone.transcript if t["type"] == "step"]
     assert "X 4500 -> 5000" in steps[-1]["prompt"] and "X1" not in steps[-1]["prompt"]
@@ -97,7 +128,9 @@ def test_a_toy_world_of_any_size_runs_through_the_llm_agent(float32):
     # Three swimmers: joint DOFs D1..D6, each swimmer's X in the records, the mean as the reward's X.
     first, last = [t["prompt"] for t in school.transcript if t["type"] == "step"][::11]
     assert "D1, D2, D3, D4, D5 and D6" in first and "up to D6 of swimmer 3" in first
-    assert "swimmer 2 at (0, 0) and swimmer 3 at (0, 0)" in first  # the toy stacks them at the origin
+    assert (
+        "swimmer 2 at (0, 0) and swimmer 3 at (0, 0)" in first
+    )  # the toy stacks them at the origin
     assert "[changed DOF, ROC], the changed DOF 1, 2, 3, 4, 5 or 6" in first
     assert "X1 4500 -> 5000, X2 2500 -> 2500, X3 2500 -> 2500, stuck no" in last
     assert school.xs[-1] == [3.0, 0.0, 0.0] and school.x[-1] == pytest.approx(1.0)

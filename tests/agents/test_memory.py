@@ -25,7 +25,13 @@ def test_clearing_rule_three_dof_follows_the_authors_code():
     # displacements summed, rounded to 3 decimals, < 0.01 toward +x (> -0.01 toward -x).
     for name in ("purcell", "ng"):
         rule = default_clearing(make_model(name))
-        assert (rule.min_steps, rule.min_records, rule.window, rule.threshold, rule.decimals) == (6, 6, 4, 0.01, 3)
+        assert (rule.min_steps, rule.min_records, rule.window, rule.threshold, rule.decimals) == (
+            6,
+            6,
+            4,
+            0.01,
+            3,
+        )
     rule = default_clearing(make_model("purcell"))
     assert not rule.should_clear(5, 5, [0.0] * 5)  # step 5: too early
     assert rule.should_clear(6, 6, [0.0] * 6)
@@ -55,7 +61,9 @@ def test_clearing_rule_four_dof_per_swimmer():
     # The window is the run's last 40 steps, reaching back past a clear (as the code's).
     assert link.should_clear(46, 6, [0.05] + [0.0] * 45)  # step 1 has left the window
     assert not link.should_clear(40, 6, [0.05] + [0.0] * 39)  # 0.05 is not below
-    assert not link.should_clear(12, 6, [0.01] * 6 + [0.0] * 6)  # the 6 steps before the clear count
+    assert not link.should_clear(
+        12, 6, [0.01] * 6 + [0.0] * 6
+    )  # the 6 steps before the clear count
     assert sphere.should_clear(6, 6, [1.0] + [0.0098] * 5)  # the last 5 only: 0.049
     assert not sphere.should_clear(6, 6, [0.0] + [0.01] * 5)  # 0.05 is not below
 
@@ -111,7 +119,9 @@ def test_summary_sentence_reports_observed_means_without_negative_numbers():
     assert "[2, -1] moved X 5 away from +x on average in 1 try" in text
     assert "[1, -1] moved X 11 toward +x on average in 2 tries" in text
     assert "[1, 0] left X unchanged in 1 try" in text
-    assert text.index("[2, -1]") < text.index("[1, -1]") < text.index("[1, 0]")  # the options' order
+    assert (
+        text.index("[2, -1]") < text.index("[1, -1]") < text.index("[1, 0]")
+    )  # the options' order
     assert "-5" not in text and "500" not in text
     # Progress is recorded in the target direction and named after it; untried pairs are said so.
     text = render_summary(PURCELL, stats, (HI, HI), [Action(1, -1), Action(1, 1)], -1)

@@ -25,27 +25,42 @@ def test_a_slow_run_holds_no_other_run_back():
     def fast_calls(srv):
         return sum("negative x" in b["messages"][-1]["content"] for b in list(srv.requests))
 
-    specs = [LLMRunSpec(direction=1, seed=1, n_steps=4), LLMRunSpec(direction=-1, seed=2, n_steps=4)]
-    srv = FakeServer(reply=hash_reply, hold_s=20.0,
-                     hold=lambda body: "positive x" in body["messages"][-1]["content"] and fast_calls(srv) < 4)
+    specs = [
+        LLMRunSpec(direction=1, seed=1, n_steps=4),
+        LLMRunSpec(direction=-1, seed=2, n_steps=4),
+    ]
+    srv = FakeServer(
+        reply=hash_reply,
+        hold_s=20.0,
+        hold=lambda body: "positive x" in body["messages"][-1]["content"] and fast_calls(srv) < 4,
+    )
     with srv:
         done = []
 
         async def go():
             async with LLMClient(_settings(srv)) as c:
-                return await LLMDriver(specs, c, INDEPENDENT, on_done=lambda r: done.append(r.spec.direction)).run()
+                return await LLMDriver(
+                    specs, c, INDEPENDENT, on_done=lambda r: done.append(r.spec.direction)
+                ).run()
 
         results = asyncio.run(go())
-        order = ["+x" if "positive x" in b["messages"][-1]["content"] else "-x" for b in srv.requests]
+        order = [
+            "+x" if "positive x" in b["messages"][-1]["content"] else "-x" for b in srv.requests
+        ]
     assert [r.steps for r in results] == [4, 4]
     assert done == [-1, 1]
     # "+x" sent its first call, then nothing until "-x" had sent all of its four.
-    assert order.index("+x", order.index("+x") + 1) > max(i for i, o in enumerate(order) if o == "-x")
+    assert order.index("+x", order.index("+x") + 1) > max(
+        i for i, o in enumerate(order) if o == "-x"
+    )
 
 
 def test_results_do_not_depend_on_which_runs_step_together():
-    specs = [LLMRunSpec(swimmer=sw, zeta=1.0, seed=s, n_steps=6, init="random")
-             for sw in ("purcell", "ng") for s in (3, 4, 5)]
+    specs = [
+        LLMRunSpec(swimmer=sw, zeta=1.0, seed=s, n_steps=6, init="random")
+        for sw in ("purcell", "ng")
+        for s in (3, 4, 5)
+    ]
     with FakeServer(reply=hash_reply) as srv:
         together = run_batch(specs, _settings(srv), INDEPENDENT)
         alone = [run_batch([s], _settings(srv), INDEPENDENT)[0] for s in specs]
@@ -61,6 +76,7 @@ def test_results_do_not_depend_on_which_runs_step_together():
 def test_window_bounds_runs_in_progress():
     specs = [LLMRunSpec(seed=s, zeta=0.5, n_steps=3) for s in range(6)]
     with FakeServer(reply=hash_reply, latency=0.01) as srv:
+
         async def go():
             async with LLMClient(_settings(srv, max_concurrency=16)) as c:
                 return await LLMDriver(specs, c, INDEPENDENT, window=2).run()
@@ -117,7 +133,9 @@ def test_journal_stops_replaying_where_a_run_diverges(tmp_path):
 
         async def other():
             async with LLMClient(_settings(srv)) as c:
-                return await LLMDriver([LLMRunSpec(seed=2, zeta=0.5, n_steps=2)], c, INDEPENDENT, journal=j).run()
+                return await LLMDriver(
+                    [LLMRunSpec(seed=2, zeta=0.5, n_steps=2)], c, INDEPENDENT, journal=j
+                ).run()
 
         r = asyncio.run(other())[0]
         j.close()

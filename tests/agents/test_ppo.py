@@ -22,7 +22,9 @@ slow = pytest.mark.slow
 
 
 def _params(swimmer: str = "purcell", direction: int = 1) -> env.EnvParams:
-    return env.make_params(swimmer, direction=direction, init=paper_init(env.make_params(swimmer).model))
+    return env.make_params(
+        swimmer, direction=direction, init=paper_init(env.make_params(swimmer).model)
+    )
 
 
 @pytest.fixture(scope="module")
@@ -34,9 +36,16 @@ def trained():
         run = ppo.train_batch(keys, params, ppo.PPOConfig())
         again = ppo.train_batch(keys, params, ppo.PPOConfig())
         pair = ppo.train_batch(keys[:2], params, ppo.PPOConfig())
-        jaxprs = [str(jax.make_jaxpr(lambda k, p: ppo._train(k, p, ppo._structure(ppo.PPOConfig()),
-                                                               ppo._numbers(ppo.PPOConfig())))(
-            jax.random.split(jax.random.PRNGKey(0), n), env.broadcast_params(params, n))) for n in (2, 5)]
+        jaxprs = [
+            str(
+                jax.make_jaxpr(
+                    lambda k, p: ppo._train(
+                        k, p, ppo._structure(ppo.PPOConfig()), ppo._numbers(ppo.PPOConfig())
+                    )
+                )(jax.random.split(jax.random.PRNGKey(0), n), env.broadcast_params(params, n))
+            )
+            for n in (2, 5)
+        ]
         return params, keys, run, again, pair, jaxprs
 
 
@@ -54,7 +63,9 @@ def test_shapes_and_dtypes(trained):
     # DOF values stay within the limits; progress is the step's x increment toward +x.
     d = np.asarray(run.dofs)
     assert d.min() >= params.lo - 1e-6 and d.max() <= params.hi + 1e-6
-    np.testing.assert_allclose(np.cumsum(np.asarray(run.progress, np.float64), 1), np.asarray(run.x), atol=1e-5)
+    np.testing.assert_allclose(
+        np.cumsum(np.asarray(run.progress, np.float64), 1), np.asarray(run.x), atol=1e-5
+    )
 
 
 @slow
@@ -68,7 +79,11 @@ def test_actions_are_one_dof_rocs_in_range(trained):
     assert np.all(np.abs(a).sum(-1) == np.abs(moved))  # the chosen DOF carries the ROC
     # Not a degenerate policy: both DOFs, both signs, some ROCs strictly inside (-1, 1).
     assert set(np.unique(dof)) == {1, 2}
-    assert (moved > 0).any() and (moved < 0).any() and ((np.abs(moved) > 0) & (np.abs(moved) < 1)).any()
+    assert (
+        (moved > 0).any()
+        and (moved < 0).any()
+        and ((np.abs(moved) > 0) & (np.abs(moved) < 1)).any()
+    )
 
 
 @slow
@@ -158,8 +173,12 @@ def test_shape_judge_tolerance():
     # default tolerance, not at a tighter one.
     params = env.make_params("purcell", direction=-1, init=(0, 0))
     side = 0.999
-    moves = [(1, 1.0), (2, 1.0), (1, -side), (2, -side), (1, side), (2, side)] + \
-            [(1, -side), (2, -side), (1, side), (2, side)] * 10
+    moves = [(1, 1.0), (2, 1.0), (1, -side), (2, -side), (1, side), (2, side)] + [
+        (1, -side),
+        (2, -side),
+        (1, side),
+        (2, side),
+    ] * 10
     with jax.enable_x64(True):
         roll = env.rollout("purcell", moves, direction=-1, init=(0, 0))
     d0 = np.full((1, 2), params.lo)
@@ -171,8 +190,17 @@ def test_shape_judge_tolerance():
         judge_shapes(roll.dofs[None], roll.x[None], params, dofs0=d0, tol=0.0)
 
 
-@pytest.mark.parametrize("field,value", [("steps", 0), ("rollout", 1.5), ("discount", 1.0), ("clip", 0.0),
-                                         ("entropy_coef", -1.0), ("anneal_start", 2.0)])
+@pytest.mark.parametrize(
+    "field,value",
+    [
+        ("steps", 0),
+        ("rollout", 1.5),
+        ("discount", 1.0),
+        ("clip", 0.0),
+        ("entropy_coef", -1.0),
+        ("anneal_start", 2.0),
+    ],
+)
 def test_config_is_validated(field, value):
     with pytest.raises(ConfigError):
         ppo.PPOConfig(**{field: value})

@@ -18,13 +18,21 @@ def _replay_x(params, actions):
     state = scene_reset(params)
 
     def centroid(s):
-        return float(np.mean(np.asarray(s.centre[:, 0]) + (np.asarray(s.arms[:, 1]) - np.asarray(s.arms[:, 0]))
-                             * np.cos(np.asarray(s.tilt)) / 3.0))
+        return float(
+            np.mean(
+                np.asarray(s.centre[:, 0])
+                + (np.asarray(s.arms[:, 1]) - np.asarray(s.arms[:, 0]))
+                * np.cos(np.asarray(s.tilt))
+                / 3.0
+            )
+        )
 
     x0, out = centroid(state), []
     for a in actions:
         j = int(np.argmax(np.abs(a)))
-        state, _ = scene_advance(params, state, (j // 2, j % 2, float(a[j])), np.zeros(params.n_swimmers))
+        state, _ = scene_advance(
+            params, state, (j // 2, j % 2, float(a[j])), np.zeros(params.n_swimmers)
+        )
         out.append(centroid(state) - x0)
     return np.array(out)
 
@@ -36,7 +44,11 @@ def test_wall_scene_run_records_the_scene_progress():
         keys = jax.random.split(jax.random.PRNGKey(0), 3)
         config = ppo.PPOConfig(steps=STEPS)
         run = ppo.train_scene_batch(keys, params, config, direction=np.array([1, -1, 1]))
-        assert run.x.shape == (3, STEPS) and run.dofs.shape == (3, STEPS, 2) and run.actions.shape == (3, STEPS, 2)
+        assert (
+            run.x.shape == (3, STEPS)
+            and run.dofs.shape == (3, STEPS, 2)
+            and run.actions.shape == (3, STEPS, 2)
+        )
         for field in (run.x, run.progress, run.dofs, run.y, run.orientation):
             assert np.all(np.isfinite(np.asarray(field)))
         # One arm per step, within [d_min, d_max]; the swimmer's height changes near a wall.
@@ -46,9 +58,13 @@ def test_wall_scene_run_records_the_scene_progress():
         # the actions give when replayed through the scene by hand.
         x = np.asarray(run.x, np.float64)
         dx = np.diff(np.concatenate([np.zeros((3, 1)), x], axis=1), axis=1)
-        np.testing.assert_allclose(np.asarray(run.progress), dx * np.array([1, -1, 1])[:, None], atol=1e-5)
+        np.testing.assert_allclose(
+            np.asarray(run.progress), dx * np.array([1, -1, 1])[:, None], atol=1e-5
+        )
         for i in range(3):
-            np.testing.assert_allclose(x[i], _replay_x(params, np.asarray(run.actions[i])), atol=2e-4)
+            np.testing.assert_allclose(
+                x[i], _replay_x(params, np.asarray(run.actions[i])), atol=2e-4
+            )
         report = ppo.evaluate_scene(run, params, direction=np.array([1, -1, 1]))
         assert np.asarray(report.success).shape == (3,)
 
@@ -73,7 +89,16 @@ def _hand_made(codes_per_run):
         dof.append([c // 3 + 1 for c in codes])
     actions, dofs = np.array(actions), np.array(dofs)
     z = np.zeros(actions.shape[:2])
-    return ppo.PPORun(actions, np.array(dof, np.int8), z, z, dofs, np.broadcast_to([10.0, 6.0, 10.0, 6.0], dofs[:, 0].shape), z, z)
+    return ppo.PPORun(
+        actions,
+        np.array(dof, np.int8),
+        z,
+        z,
+        dofs,
+        np.broadcast_to([10.0, 6.0, 10.0, 6.0], dofs[:, 0].shape),
+        z,
+        z,
+    )
 
 
 def test_pair_judge_on_hand_made_strokes():
@@ -82,9 +107,13 @@ def test_pair_judge_on_hand_made_strokes():
     from jswim.studies import scenes
     from jswim.studies.grids import Plan
 
-    pair = scene_params("ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0))  # paper's (10, 6)
+    pair = scene_params(
+        "ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0)
+    )  # paper's (10, 6)
     both = scenes.stroke_codes("phase0", 1, 30, 2)  # two squares, alternating moves
-    late = np.r_[np.ones(6, np.int64), both[:24]]  # 6 holds of swimmer 1 ([1, 0]), then 3 squares each
+    late = np.r_[
+        np.ones(6, np.int64), both[:24]
+    ]  # 6 holds of swimmer 1 ([1, 0]), then 3 squares each
     only_one = scenes.stroke_codes("square", 1, 30, 1)  # swimmer 2 never moves
     lopsided = np.r_[scenes.stroke_codes("square", 1, 27, 1), [7, 6, 7]]  # swimmer 2: 3 moves
     runs = [both, late, only_one, lopsided, scenes.stroke_codes("phase0", -1, 30, 2)]
@@ -92,15 +121,24 @@ def test_pair_judge_on_hand_made_strokes():
     assert rep.success.tolist() == [True, True, False, False, False]
     assert rep.learned.tolist() == [True, True, False, False, False]
     assert rep.period.tolist() == [8, 8, 0, 0, 0]  # 4 own moves each
-    assert rep.steps_to_learn.tolist() == [1, 7, -1, -1, -1]  # in own moves: swimmer 1's stroke starts at its 7th
+    assert rep.steps_to_learn.tolist() == [
+        1,
+        7,
+        -1,
+        -1,
+        -1,
+    ]  # in own moves: swimmer 1's stroke starts at its 7th
     plan = Plan("r", "ppo", "ng", 1, (1, 0), 0.0, 0, 30)
     for i, codes in enumerate(runs):
         lattice = scenes._judge(list(codes), plan, 2, 50)
         assert (lattice["success"], lattice["learned"]) == (rep.success[i], rep.learned[i])
         assert lattice["steps_to_learn"] == (int(rep.steps_to_learn[i]) if rep.learned[i] else None)
     # The -x target is met by the time-reversed strokes, not by the +x ones.
-    back = ppo.evaluate_scene(_hand_made([scenes.stroke_codes("phase0", -1, 30, 2), both]), pair,
-                              direction=np.array([-1, -1]))
+    back = ppo.evaluate_scene(
+        _hand_made([scenes.stroke_codes("phase0", -1, 30, 2), both]),
+        pair,
+        direction=np.array([-1, -1]),
+    )
     assert back.success.tolist() == [True, False]
 
 
@@ -113,10 +151,17 @@ def test_a_run_from_another_world_is_judged_on_its_moves_replayed_in_the_bulk():
     from jswim import env
 
     lo, hi = -np.pi / 3, np.pi / 3
-    rocs = np.array([[0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]] * 4)  # D2 down, D1 down, D2 up, D1 up
+    rocs = np.array(
+        [[0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]] * 4
+    )  # D2 down, D1 down, D2 up, D1 up
     dofs = np.array([[hi, lo], [lo, lo], [lo, hi], [hi, hi]] * 4)
-    run = SimpleNamespace(actions=rocs[None], dofs=dofs[None], dofs0=np.array([[hi, hi]]),
-                          x=np.zeros((1, 16)), dof=np.argmax(rocs != 0, -1)[None] + 1)
+    run = SimpleNamespace(
+        actions=rocs[None],
+        dofs=dofs[None],
+        dofs0=np.array([[hi, hi]]),
+        x=np.zeros((1, 16)),
+        dof=np.argmax(rocs != 0, -1)[None] + 1,
+    )
     bulk = env.make_params("purcell", init=(1, 1))
     rep = ppo.evaluate(run, bulk, replay=True)
     assert bool(rep.success[0]) and int(rep.period[0]) == 4

@@ -15,18 +15,38 @@ LO, HI = -math.pi / 3, math.pi / 3
 ALL = [Action(d, r) for d in (1, 2) for r in (-1, 0, 1)]
 
 
-def first_request(cfg: LLMAgentConfig, spec: LLMRunSpec = LLMRunSpec(), step: int = 1, records=(), x=0.0,
-                  dofs=(HI, HI)):
+def first_request(
+    cfg: LLMAgentConfig,
+    spec: LLMRunSpec = LLMRunSpec(),
+    step: int = 1,
+    records=(),
+    x=0.0,
+    dofs=(HI, HI),
+):
     _, text, prompt = protocol.setup(spec, make_model(spec.swimmer), cfg)
-    return protocol.request(cfg, text, prompt, direction=spec.direction, seed=spec.seed, step=step,
-                            records=list(records), dofs=dofs, x=x, stats=MoveStats())
+    return protocol.request(
+        cfg,
+        text,
+        prompt,
+        direction=spec.direction,
+        seed=spec.seed,
+        step=step,
+        records=list(records),
+        dofs=dofs,
+        x=x,
+        stats=MoveStats(),
+    )
 
 
 def test_setup_takes_the_swimmer_s_agent_defaults_unless_the_spec_sets_them():
     cfg = LLMAgentConfig()
-    assert protocol.setup(LLMRunSpec("purcell"), make_model("purcell"), cfg)[0] == 3  # the authors' default
+    assert (
+        protocol.setup(LLMRunSpec("purcell"), make_model("purcell"), cfg)[0] == 3
+    )  # the authors' default
     assert protocol.setup(LLMRunSpec("ng"), make_model("ng"), cfg)[0] == 3  # paper: NG +x
-    assert protocol.setup(LLMRunSpec("ng", direction=-1), make_model("ng"), cfg)[0] == 6  # paper: NG -x
+    assert (
+        protocol.setup(LLMRunSpec("ng", direction=-1), make_model("ng"), cfg)[0] == 6
+    )  # paper: NG -x
     n_ht, text, prompt = protocol.setup(LLMRunSpec("nlink", n_ht=2), make_model("nlink"), cfg)
     assert n_ht == prompt.n_ht == 2 and text.rocs == (-1, 1) and text.n_dof == 3
     assert protocol.setup(LLMRunSpec("ng"), make_model("ng"), cfg)[1].dof_decimals == 0
@@ -35,7 +55,10 @@ def test_setup_takes_the_swimmer_s_agent_defaults_unless_the_spec_sets_them():
 def test_request_is_one_user_message_offering_every_action():
     req = first_request(LLMAgentConfig())
     # fidelity.md: a system message holding a single space, then one user message.
-    assert req.messages == [{"role": "system", "content": " "}, {"role": "user", "content": req.prompt}]
+    assert req.messages == [
+        {"role": "system", "content": " "},
+        {"role": "user", "content": req.prompt},
+    ]
     assert req.allowed == req.options == ALL
     assert req.replies == ["[1, -1]", "[1, 0]", "[1, 1]", "[2, -1]", "[2, 0]", "[2, 1]"]
     assert "Reply with the next action" in req.prompt and "none yet" in req.prompt
@@ -67,12 +90,18 @@ def test_shuffle_reorders_per_step_and_replays_but_never_changes_the_set_or_the_
 def test_read_reply_gives_an_action_a_follow_up_or_up():
     cfg = LLMAgentConfig(parse_retries=1)
     req = first_request(cfg)
-    assert protocol.read_reply(req, req.messages, "Sure: [2, 1].", 0, cfg) == protocol.Reply(Action(2, 1))
+    assert protocol.read_reply(req, req.messages, "Sure: [2, 1].", 0, cfg) == protocol.Reply(
+        Action(2, 1)
+    )
     retry = protocol.read_reply(req, req.messages, "I am not sure.", 0, cfg)
     assert retry.action is None and retry.follow_up[:2] == req.messages
     assert retry.follow_up[2] == {"role": "assistant", "content": "I am not sure."}
-    assert retry.follow_up[3]["role"] == "user" and "[1, -1], [1, 0]" in retry.follow_up[3]["content"]
-    assert protocol.read_reply(req, retry.follow_up, "still no", 1, cfg) == protocol.Reply(None)  # retries used up
+    assert (
+        retry.follow_up[3]["role"] == "user" and "[1, -1], [1, 0]" in retry.follow_up[3]["content"]
+    )
+    assert protocol.read_reply(req, retry.follow_up, "still no", 1, cfg) == protocol.Reply(
+        None
+    )  # retries used up
     # A pair outside the offered set is not an action.
     sc = first_request(variant_config("shape-changing"), dofs=(HI, LO))
     assert protocol.read_reply(sc, sc.messages, "[1, 1]", 0, cfg).action is None
@@ -80,7 +109,9 @@ def test_read_reply_gives_an_action_a_follow_up_or_up():
 
 def test_sampling_seeds_exist_only_above_temperature_zero_and_differ_per_attempt():
     assert protocol.sample_seed(1, 3, 0, 0.0) is None
-    seeds = {protocol.sample_seed(1, 3, k, 0.7) for k in range(3)} | {protocol.sample_seed(2, 3, 0, 0.7)}
+    seeds = {protocol.sample_seed(1, 3, k, 0.7) for k in range(3)} | {
+        protocol.sample_seed(2, 3, 0, 0.7)
+    }
     assert len(seeds) == 4 and all(0 <= s < 2**31 for s in seeds)
     assert protocol.sample_seed(1, 3, 0, 0.7) == protocol.sample_seed(1, 3, 0, 0.2)  # stable
 
@@ -92,7 +123,9 @@ def test_max_tokens_per_swimmer_raised_only_for_a_constrained_format():
     assert protocol.max_tokens(cfg, make_model("ng")) == 10
     assert protocol.max_tokens(cfg, make_model("nlink")) == 20
     assert protocol.max_tokens(cfg, make_model("nsphere")) == 20
-    assert protocol.max_tokens(cfg, make_model("purcell"), "json_schema") > 10  # {"action": "[1, -1]"}
+    assert (
+        protocol.max_tokens(cfg, make_model("purcell"), "json_schema") > 10
+    )  # {"action": "[1, -1]"}
     assert protocol.max_tokens(LLMAgentConfig(max_tokens=50), make_model("purcell")) == 50
 
 

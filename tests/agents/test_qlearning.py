@@ -49,12 +49,16 @@ def _greedy_actions(q: np.ndarray, levels0: np.ndarray, steps: int, action_set: 
     return out
 
 
-@pytest.mark.parametrize("swimmer, action_set", [
-    ("purcell", "all"), ("ng", "shape-changing"),
-    # each case compiles a 600-step training run (~2.5 CPU-s): two in the fast tier, one per swimmer
-    pytest.param("purcell", "shape-changing", marks=pytest.mark.slow),
-    pytest.param("ng", "all", marks=pytest.mark.slow),
-])
+@pytest.mark.parametrize(
+    "swimmer, action_set",
+    [
+        ("purcell", "all"),
+        ("ng", "shape-changing"),
+        # each case compiles a 600-step training run (~2.5 CPU-s): two in the fast tier, one per swimmer
+        pytest.param("purcell", "shape-changing", marks=pytest.mark.slow),
+        pytest.param("ng", "all", marks=pytest.mark.slow),
+    ],
+)
 def test_learned_greedy_policy_is_the_signature_cycle(swimmer, action_set):
     # 600 steps: with all six actions NG's learner needs more than 200 steps (see the docs).
     params = _batched(swimmer)
@@ -67,7 +71,7 @@ def test_learned_greedy_policy_is_the_signature_cycle(swimmer, action_set):
     for d in (1, -1):
         best = list(best_cycles(model, d)[0].actions)
         shifts = [best[k:] + best[:k] for k in range(4)]
-        for cycle in verdict.cycle[DIRECTIONS == d]:
+        for cycle in verdict.cycle[d == DIRECTIONS]:
             assert cycle.tolist() in shifts  # the square gait, run in the target direction
 
 
@@ -76,7 +80,9 @@ def test_greedy_rollout_runs_the_greedy_policy():
     run = train_batch(_keys(1), params, QConfig(action_set="all", steps=600))
     rollout = jax.vmap(lambda q, p, k: greedy_rollout(q, p, 16, "all", k))
     actions = np.asarray(rollout(run.q, params, _keys(2)))
-    np.testing.assert_array_equal(actions, _greedy_actions(np.asarray(run.q), np.asarray(run.levels0), 16, "all"))
+    np.testing.assert_array_equal(
+        actions, _greedy_actions(np.asarray(run.q), np.asarray(run.levels0), 16, "all")
+    )
 
 
 @pytest.mark.slow  # compiles a training run with argmax ties (15 s under load 8)
@@ -171,7 +177,9 @@ def test_schedules_are_optax_schedules_evaluated_at_the_step_count():
     # Learning rate 0: the table never moves. Exploration that decays linearly to 0 by step 10:
     # no random action after it.
     config = QConfig(
-        learning_rate=optax.constant_schedule(0.0), epsilon=optax.linear_schedule(1.0, 0.0, 10), q_init=0.3
+        learning_rate=optax.constant_schedule(0.0),
+        epsilon=optax.linear_schedule(1.0, 0.0, 10),
+        q_init=0.3,
     )
     run = train_batch(_keys(7), _batched("purcell"), config)
     np.testing.assert_array_equal(np.asarray(run.q), 0.3)
@@ -197,7 +205,13 @@ def test_summaries(ng_greedy_all):
 
 @pytest.mark.parametrize(
     "changes",
-    [{"action_set": "some"}, {"discount": 1.0}, {"steps": 0}, {"tie_break": "last"}, {"learning_rate": -1.0}],
+    [
+        {"action_set": "some"},
+        {"discount": 1.0},
+        {"steps": 0},
+        {"tie_break": "last"},
+        {"learning_rate": -1.0},
+    ],
 )
 def test_bad_configs_are_refused(changes):
     with pytest.raises(ConfigError):

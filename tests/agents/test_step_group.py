@@ -32,7 +32,9 @@ def test_wall_heights_are_the_middle_sphere_s_and_x_the_centroid_s(float32):
     x0 = float(state.centre[0, 0])  # arms (10, 10): the centroid is the middle sphere
     apart = []
     for t, (c, out) in enumerate(zip(codes, outs)):
-        state, _ = scene_step(task.scene, state, decode_scene_action(np.int32(c)), jax.random.fold_in(key, t))
+        state, _ = scene_step(
+            task.scene, state, decode_scene_action(np.int32(c)), jax.random.fold_in(key, t)
+        )
         z = np.asarray(state.centre[0, 1])
         assert z.dtype == np.float32 and out["heights"][0] == float(z) and out["y"] == z
         d1, d2 = np.asarray(state.arms[0], np.float64)

@@ -36,7 +36,9 @@ def test_toy_discretiser_is_the_joint_corner(float32):
 @pytest.mark.slow  # two compilations (~5 s idle, 23 s under load 14)
 def test_toy_stroke_and_random_policy(float32):
     env, params = ToyWorld(), ToyParams()
-    tr = worlds.play(env, params, _keys(0, 2), jnp.stack([jnp.tile(SQUARE, 5), jnp.tile(SQUARE[::-1], 5)]))
+    tr = worlds.play(
+        env, params, _keys(0, 2), jnp.stack([jnp.tile(SQUARE, 5), jnp.tile(SQUARE[::-1], 5)])
+    )
     # The reverse from (1, 1) first pushes two DOFs against their limit (stuck), so its first cycle
     # only closes half the square: +0.5, then +1 per cycle.
     np.testing.assert_allclose(tr.obs.position[:, -1, 0, 0], [-5.0, 4.5], atol=1e-6)
@@ -44,7 +46,9 @@ def test_toy_stroke_and_random_policy(float32):
     run = random_policy.run_env(env, params, _keys(1), 40, "shape-changing", trace=True)
     assert run.actions.shape == (B, 40) and run.x.shape == (B, 40)
     # Every offered move changes the shape: no step is stuck and every step moves.
-    assert bool(np.all(np.asarray(run.trace.info.moved))) and not bool(np.any(np.asarray(run.trace.info.stuck)))
+    assert bool(np.all(np.asarray(run.trace.info.moved))) and not bool(
+        np.any(np.asarray(run.trace.info.stuck))
+    )
     np.testing.assert_allclose(np.cumsum(run.trace.info.progress, 1), run.x, atol=1e-5)
 
 
@@ -53,7 +57,9 @@ def test_toy_q_learner_finds_the_area_rule_stroke_and_ppo_trains(float32):
     env = ToyWorld()
     directions = np.repeat([1.0, -1.0], B // 2)
     params = ToyParams(0.0, jnp.asarray(directions, jnp.float32))
-    run = qlearning.train_env(env, _keys(2), params, qlearning.QConfig(steps=120), params_axes=ToyParams(None, 0))
+    run = qlearning.train_env(
+        env, _keys(2), params, qlearning.QConfig(steps=120), params_axes=ToyParams(None, 0)
+    )
     assert run.q.shape == (B, 4, 6)
     # A learned stroke is the unit square, 4 moves for 1 a either way: over the last 40 steps,
     # 10 cycles, +10 in the target direction (-x: the clockwise square from (1, 1)).

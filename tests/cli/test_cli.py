@@ -31,7 +31,9 @@ def test_swim_writes_every_file(server, tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("JSWIM_TEST_KEY", key)
     args = ["--base-url", server.url, "--model", "fake", "--api-key-env", "JSWIM_TEST_KEY"]
     server.reset_counts()  # the module's server: count only this test's requests, in any order
-    rc = cli.main(["swim", "--steps", "8", "--runs", "2", "--q-runs", "4", "--out", str(out), *args])
+    rc = cli.main(
+        ["swim", "--steps", "8", "--runs", "2", "--q-runs", "4", "--out", str(out), *args]
+    )
     assert rc == 0
     assert server.auth_headers and set(server.auth_headers) == {f"Bearer {key}"}  # it was used
     printed = capsys.readouterr()
@@ -39,8 +41,15 @@ def test_swim_writes_every_file(server, tmp_path, capsys, monkeypatch):
     assert key not in printed.out + printed.err
     assert not any(key.encode() in p.read_bytes() for p in out.rglob("*") if p.is_file())
     assert "llm" in text and "qlearning" in text and "random" in text and str(out) in text
-    for name in ("metadata.json", "runs.jsonl", "runs.parquet", "runs.csv", "trajectories.parquet",
-                 "figures/swim.png", "figures/swim.pdf"):
+    for name in (
+        "metadata.json",
+        "runs.jsonl",
+        "runs.parquet",
+        "runs.csv",
+        "trajectories.parquet",
+        "figures/swim.png",
+        "figures/swim.pdf",
+    ):
         assert (out / name).is_file(), name
     runs = read_runs(out)
     assert sorted(r["agent"] for r in runs).count("llm") == 2 and len(runs) == 2 + 4 + 4
@@ -56,8 +65,22 @@ def test_swim_writes_every_file(server, tmp_path, capsys, monkeypatch):
 
 def test_study_noise_grid_has_every_run(server, tmp_path):
     out = tmp_path / "noise"
-    rc = cli.main(["study", "noise", "--swimmer", "purcell", "--zetas", "0,1.5", "--runs", "2", *FAST,
-                   "--out", str(out), *backend_args(server)])
+    rc = cli.main(
+        [
+            "study",
+            "noise",
+            "--swimmer",
+            "purcell",
+            "--zetas",
+            "0,1.5",
+            "--runs",
+            "2",
+            *FAST,
+            "--out",
+            str(out),
+            *backend_args(server),
+        ]
+    )
     assert rc == 0
     runs = read_runs(out)
     assert len(runs) == 2 * (2 + 4 + 4)
@@ -68,9 +91,23 @@ def test_study_noise_grid_has_every_run(server, tmp_path):
 def _table(folder):
     # Accounting that depends on which runs had identical requests in flight together (shared
     # calls bill once) and on what a resume replayed; the runs themselves must be identical.
-    drop = {"wall_s", "latency_s", "cache_hits", "billed_calls", "calls", "http_retries", "replayed_calls",
-            "prompt_tokens", "completion_tokens", "cached_tokens", "cost_usd"}
-    return sorted((tuple(sorted((k, json.dumps(v)) for k, v in r.items() if k not in drop)) for r in read_runs(folder)))
+    drop = {
+        "wall_s",
+        "latency_s",
+        "cache_hits",
+        "billed_calls",
+        "calls",
+        "http_retries",
+        "replayed_calls",
+        "prompt_tokens",
+        "completion_tokens",
+        "cached_tokens",
+        "cost_usd",
+    }
+    return sorted(
+        tuple(sorted((k, json.dumps(v)) for k, v in r.items() if k not in drop))
+        for r in read_runs(folder)
+    )
 
 
 @pytest.mark.slow  # a study interrupted and resumed end to end (21 s under load 8)
@@ -104,7 +141,18 @@ def test_error_paths_exit_2_with_one_line(server, tmp_path, capsys):
         (["swim", "--steps", "-1"], "--steps"),
         (["swim", "--noise", "-0.5"], "--noise"),
         (["swim", "--prompt-file", str(tmp_path / "none.txt")], "--prompt-file"),
-        (["swim", "--base-url", "http://127.0.0.1:9/v1", "--model", "x", "--out", str(tmp_path / "u")], "cannot reach"),
+        (
+            [
+                "swim",
+                "--base-url",
+                "http://127.0.0.1:9/v1",
+                "--model",
+                "x",
+                "--out",
+                str(tmp_path / "u"),
+            ],
+            "cannot reach",
+        ),
         (["swim", "--model", "gpt-4"], "--base-url"),
         (["swim", "--cohorts", "0"], "--cohorts"),
         (["swim", "--threads", "0"], "--threads"),
@@ -129,10 +177,38 @@ def run_cli(argv):
 
 def test_output_folder_of_another_study_is_refused(server, tmp_path, capsys):
     out = tmp_path / "f"
-    assert cli.main(["study", "curves", "--swimmer", "purcell", "--runs", "1", *FAST, "--out", str(out),
-                     *backend_args(server)]) == 0
-    rc = cli.main(["study", "ablation", "--swimmer", "purcell", "--runs", "1", "--steps", "8", "--out", str(out),
-                   *backend_args(server)])
+    assert (
+        cli.main(
+            [
+                "study",
+                "curves",
+                "--swimmer",
+                "purcell",
+                "--runs",
+                "1",
+                *FAST,
+                "--out",
+                str(out),
+                *backend_args(server),
+            ]
+        )
+        == 0
+    )
+    rc = cli.main(
+        [
+            "study",
+            "ablation",
+            "--swimmer",
+            "purcell",
+            "--runs",
+            "1",
+            "--steps",
+            "8",
+            "--out",
+            str(out),
+            *backend_args(server),
+        ]
+    )
     assert rc == 2
     assert "holds a 'curves' study" in capsys.readouterr().err
 

@@ -19,15 +19,38 @@ def server():
 
 
 def backend_args(srv):
-    return ["--base-url", srv.url, "--model", "fake"]  # no --api-key-env: a named unset variable is warned about
+    return [
+        "--base-url",
+        srv.url,
+        "--model",
+        "fake",
+    ]  # no --api-key-env: a named unset variable is warned about
 
 
 @pytest.mark.slow  # a noise study end to end (75 s under load 8)
 def test_noise_study_in_a_log_keeps_every_zeta_and_number(server, tmp_path, capsys):
     # capsys is not a terminal: the table must be whole plain text, progress plain lines
     out = tmp_path / "noise"
-    rc = cli.main(["study", "noise", "--swimmer", "both", "--zetas", "0,0.5,1,10.25", "--runs", "1", "--q-runs", "3",
-                   "--steps", "12", "--no-figures", "--out", str(out), *backend_args(server)])
+    rc = cli.main(
+        [
+            "study",
+            "noise",
+            "--swimmer",
+            "both",
+            "--zetas",
+            "0,0.5,1,10.25",
+            "--runs",
+            "1",
+            "--q-runs",
+            "3",
+            "--steps",
+            "12",
+            "--no-figures",
+            "--out",
+            str(out),
+            *backend_args(server),
+        ]
+    )
     assert rc == 0
     captured = capsys.readouterr()
     text, err = captured.out, captured.err
@@ -36,26 +59,32 @@ def test_noise_study_in_a_log_keeps_every_zeta_and_number(server, tmp_path, caps
         assert text.count(z) == 2 * 3, z  # 2 swimmers x 3 agents, each label whole
     for label in ("qlearning", "purcell", "random"):
         assert re.search(rf"^{label}|\s{label}\s", text, flags=re.M), label
-    rows = [line for line in text.splitlines() if line.startswith(("llm ", "qlearning ", "random "))]
+    rows = [
+        line for line in text.splitlines() if line.startswith(("llm ", "qlearning ", "random "))
+    ]
     assert len(rows) == 2 * 4 * 3
     for line in rows:  # every interval closes: no cell was cut
         # X/a end: its bootstrap interval, or "[n<3]" where one or two runs give none (issue 33)
-        assert re.search(r"\d\.\d\d \[\d\.\d\d,\d\.\d\d\]", line) and \
-            re.search(r"[+-]\d\.\d{3} (\[[+-]\d\.\d\d,[+-]\d\.\d\d\]|\[n<3\])", line)
+        assert re.search(r"\d\.\d\d \[\d\.\d\d,\d\.\d\d\]", line) and re.search(
+            r"[+-]\d\.\d{3} (\[[+-]\d\.\d\d,[+-]\d\.\d\d\]|\[n<3\])", line
+        )
     assert "runs (" in err and "LLM runs" in err  # dated progress lines, one per update
 
 
-@pytest.mark.parametrize("argv,option", [
-    (["study", "history", "--q-runs", "5"], "--q-runs"),
-    (["study", "ablation", "--q-runs", "5"], "--q-runs"),
-    (["study", "inits", "--q-runs", "5"], "--q-runs"),
-    (["study", "inits", "--init", "++"], "--init"),
-    (["study", "noise", "--noise", "1"], "--noise"),
-    (["study", "history", "--zetas", "0,1"], "--zetas"),
-    (["study", "curves", "--zetas", "0,1"], "--zetas"),
-    (["study", "noise", "--n-hts", "1,2"], "--n-hts"),
-    (["study", "history", "--n-ht", "3"], "--n-ht"),
-])
+@pytest.mark.parametrize(
+    "argv,option",
+    [
+        (["study", "history", "--q-runs", "5"], "--q-runs"),
+        (["study", "ablation", "--q-runs", "5"], "--q-runs"),
+        (["study", "inits", "--q-runs", "5"], "--q-runs"),
+        (["study", "inits", "--init", "++"], "--init"),
+        (["study", "noise", "--noise", "1"], "--noise"),
+        (["study", "history", "--zetas", "0,1"], "--zetas"),
+        (["study", "curves", "--zetas", "0,1"], "--zetas"),
+        (["study", "noise", "--n-hts", "1,2"], "--n-hts"),
+        (["study", "history", "--n-ht", "3"], "--n-ht"),
+    ],
+)
 def test_options_a_study_would_ignore_are_refused(argv, option, tmp_path, capsys):
     rc = cli.main([*argv, "--out", str(tmp_path / "x")])
     err = capsys.readouterr().err
@@ -65,31 +94,74 @@ def test_options_a_study_would_ignore_are_refused(argv, option, tmp_path, capsys
 
 
 def test_no_runs_at_all_is_an_error(server, tmp_path, capsys):
-    rc = cli.main(["swim", "--runs", "0", "--q-runs", "0", "--out", str(tmp_path / "x"), *backend_args(server)])
+    rc = cli.main(
+        [
+            "swim",
+            "--runs",
+            "0",
+            "--q-runs",
+            "0",
+            "--out",
+            str(tmp_path / "x"),
+            *backend_args(server),
+        ]
+    )
     err = capsys.readouterr().err
     assert rc == 2 and "no runs at all" in err and not (tmp_path / "x").exists()
 
 
 @pytest.mark.slow  # a study end to end after the warning (40 s under load 8)
 def test_short_steps_warn_that_nothing_can_succeed(server, tmp_path, capsys):
-    rc = cli.main(["swim", "--runs", "0", "--q-runs", "2", "--steps", "11", "--no-figures", "--out", str(tmp_path / "s"),
-                   *backend_args(server)])
+    rc = cli.main(
+        [
+            "swim",
+            "--runs",
+            "0",
+            "--q-runs",
+            "2",
+            "--steps",
+            "11",
+            "--no-figures",
+            "--out",
+            str(tmp_path / "s"),
+            *backend_args(server),
+        ]
+    )
     assert rc == 0
     assert "jswim: warning: --steps 11 is shorter than 3 stroke cycles" in capsys.readouterr().err
-    rc = cli.main(["swim", "--runs", "0", "--q-runs", "2", "--steps", "12", "--no-figures", "--out", str(tmp_path / "t"),
-                   *backend_args(server)])
+    rc = cli.main(
+        [
+            "swim",
+            "--runs",
+            "0",
+            "--q-runs",
+            "2",
+            "--steps",
+            "12",
+            "--no-figures",
+            "--out",
+            str(tmp_path / "t"),
+            *backend_args(server),
+        ]
+    )
     assert rc == 0 and "warning" not in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("extra,message", [
-    (["--noise", "-2"], "--noise (zeta) must be >= 0"),
-    (["--noise", "nan"], "--noise (zeta) must be >= 0"),
-    (["--learning-rate", "0"], "--learning-rate must lie in (0, 1]"),
-    (["--learning-rate", "1.5"], "--learning-rate must lie in (0, 1]"),
-    (["--lr-decay", "1.2"], "--lr-decay must lie in (0, 1]"),
-    (["--lr-min", "0.1"], "give --lr-decay too"),
-    (["--learning-rate", "0.5", "--lr-decay", "0.9", "--lr-min", "0.6"], "--lr-min must lie in [0, 0.5]"),
-])
+@pytest.mark.parametrize(
+    "extra,message",
+    [
+        (["--noise", "-2"], "--noise (zeta) must be >= 0"),
+        (["--noise", "nan"], "--noise (zeta) must be >= 0"),
+        (["--learning-rate", "0"], "--learning-rate must lie in (0, 1]"),
+        (["--learning-rate", "1.5"], "--learning-rate must lie in (0, 1]"),
+        (["--lr-decay", "1.2"], "--lr-decay must lie in (0, 1]"),
+        (["--lr-min", "0.1"], "give --lr-decay too"),
+        (
+            ["--learning-rate", "0.5", "--lr-decay", "0.9", "--lr-min", "0.6"],
+            "--lr-min must lie in [0, 0.5]",
+        ),
+    ],
+)
 def test_qlearn_validates_noise_and_learning_rate(extra, message, capsys):
     rc = cli.main(["qlearn", "--swimmer", "purcell", "--seeds", "2", "--steps", "5", *extra])
     err = capsys.readouterr().err
@@ -104,7 +176,17 @@ def _median(text: str) -> float:
 @pytest.mark.slow  # two jswim qlearn runs end to end (43 s under load 8)
 def test_qlearn_learning_rate_reaches_the_learner(capsys):
     # NG on the shape-changing set: alpha = 1 learns in ~32 steps, alpha = 0.25 in ~73 (README)
-    base = ["qlearn", "--swimmer", "ng", "--direction", "+x", "--seeds", "200", "--action-set", "shape-changing"]
+    base = [
+        "qlearn",
+        "--swimmer",
+        "ng",
+        "--direction",
+        "+x",
+        "--seeds",
+        "200",
+        "--action-set",
+        "shape-changing",
+    ]
     assert cli.main(base) == 0
     fast = _median(capsys.readouterr().out)
     assert cli.main([*base, "--learning-rate", "0.25"]) == 0
@@ -117,14 +199,35 @@ def test_qlearn_learning_rate_reaches_the_learner(capsys):
 @pytest.fixture(scope="module")
 def figures_folder(server, tmp_path_factory):
     out = tmp_path_factory.mktemp("views") / "swim"
-    assert cli.main(["swim", "--swimmer", "both", "--direction", "both", "--runs", "1", "--q-runs", "3",
-                     "--steps", "12", "--out", str(out), *backend_args(server)]) == 0
+    assert (
+        cli.main(
+            [
+                "swim",
+                "--swimmer",
+                "both",
+                "--direction",
+                "both",
+                "--runs",
+                "1",
+                "--q-runs",
+                "3",
+                "--steps",
+                "12",
+                "--out",
+                str(out),
+                *backend_args(server),
+            ]
+        )
+        == 0
+    )
     return out
 
 
 @pytest.fixture
 def folder(small_swim_study):
-    return small_swim_study  # the session's small swim study (tests/conftest.py): read, never written
+    return (
+        small_swim_study  # the session's small swim study (tests/conftest.py): read, never written
+    )
 
 
 @pytest.mark.slow  # two studies end to end, then show and compare (38 s under load 8)
@@ -133,13 +236,21 @@ def test_show_and_compare_commands(figures_folder, tmp_path, capsys):
     capsys.readouterr()
     assert cli.main(["show", str(folder)]) == 0
     text = capsys.readouterr().out
-    assert text.startswith(f"study swim in {folder}: complete") and "figures:" in text and "swim.png" in text
+    assert (
+        text.startswith(f"study swim in {folder}: complete")
+        and "figures:" in text
+        and "swim.png" in text
+    )
     assert cli.main(["compare", str(folder), str(folder)]) == 0
     text = capsys.readouterr().out
     assert text.count("[1]") == text.count("[2]") == 1 + 2 * 2 * 3  # header + one row per setting
     # each baseline printed once (the same runs in both folders), each LLM row once per study
     lines = text.splitlines()
-    assert sum(ln.startswith("qlearning") for ln in lines) == sum(ln.startswith("random") for ln in lines) == 4
+    assert (
+        sum(ln.startswith("qlearning") for ln in lines)
+        == sum(ln.startswith("random") for ln in lines)
+        == 4
+    )
     assert all("[1][2]" in ln for ln in lines if ln.startswith(("qlearning", "random")))
     assert sum(ln.startswith("llm") for ln in lines) == 2 * 4
     assert cli.main(["compare", str(folder)]) == 2
@@ -160,7 +271,11 @@ def test_plot_marks_an_unfinished_study(folder, tmp_path, capsys, monkeypatch):
 
     notes = []
     original = plots.study_figures
-    monkeypatch.setattr(plots, "study_figures", lambda study, rows, note=None: notes.append(note) or original(study, rows, note))
+    monkeypatch.setattr(
+        plots,
+        "study_figures",
+        lambda study, rows, note=None: notes.append(note) or original(study, rows, note),
+    )
     assert cli.main(["plot", str(part)]) == 0
     assert notes == ["UNFINISHED STUDY: 9 of 40 runs done (running)"]
     assert (part / "figures" / "swim.png").is_file() and (part / "figures" / "swim.pdf").is_file()
@@ -176,17 +291,37 @@ def _actions(parser):
 
 
 def test_every_option_has_help_text():
-    missing = [name for name, action in _actions(cli.build_parser()) if not (action.help or "").strip()]
+    missing = [
+        name for name, action in _actions(cli.build_parser()) if not (action.help or "").strip()
+    ]
     assert not missing, f"options without help: {missing}"
 
 
-@pytest.mark.parametrize("argv,message", [
-    (["ensemble", "--n", "99999999999999999999", "--steps", "2", "--zetas", "0"], "--n must be at most"),
-    (["ensemble", "--n", "4", "--steps", "99999999999", "--zetas", "0"], "--steps must be at most"),
-    (["ensemble", "--n", "4", "--steps", "2", "--zetas", "0", "--chunk", "99999999999"], "--chunk must be at most"),
-    (["qlearn", "--swimmer", "purcell", "--seeds", "99999999999999999999", "--steps", "5"], "--seeds must be at most"),
-    (["qlearn", "--swimmer", "purcell", "--seeds", "2", "--steps", "99999999999"], "--steps must be at most"),
-])
+@pytest.mark.parametrize(
+    "argv,message",
+    [
+        (
+            ["ensemble", "--n", "99999999999999999999", "--steps", "2", "--zetas", "0"],
+            "--n must be at most",
+        ),
+        (
+            ["ensemble", "--n", "4", "--steps", "99999999999", "--zetas", "0"],
+            "--steps must be at most",
+        ),
+        (
+            ["ensemble", "--n", "4", "--steps", "2", "--zetas", "0", "--chunk", "99999999999"],
+            "--chunk must be at most",
+        ),
+        (
+            ["qlearn", "--swimmer", "purcell", "--seeds", "99999999999999999999", "--steps", "5"],
+            "--seeds must be at most",
+        ),
+        (
+            ["qlearn", "--swimmer", "purcell", "--seeds", "2", "--steps", "99999999999"],
+            "--steps must be at most",
+        ),
+    ],
+)
 def test_huge_counts_are_one_line_errors(argv, message, capsys):
     # QA: these reached JAX/NumPy (int32 overflow, a 745 GiB allocation) and ended in a traceback
     assert cli.main(argv) == 2
@@ -196,18 +331,43 @@ def test_huge_counts_are_one_line_errors(argv, message, capsys):
 
 def test_absurd_concurrency_is_refused_before_any_run(tmp_path, capsys):
     # QA: --concurrency 10**10 built one client slot per request in flight and never returned
-    rc = cli.main(["study", "noise", "--swimmer", "purcell", "--zetas", "0", "--runs", "1", "--q-runs", "0",
-                   "--steps", "12", "--base-url", "http://127.0.0.1:9/v1", "--model", "m",
-                   "--concurrency", "10000000000", "--out", str(tmp_path / "s"), "--no-figures"])
+    rc = cli.main(
+        [
+            "study",
+            "noise",
+            "--swimmer",
+            "purcell",
+            "--zetas",
+            "0",
+            "--runs",
+            "1",
+            "--q-runs",
+            "0",
+            "--steps",
+            "12",
+            "--base-url",
+            "http://127.0.0.1:9/v1",
+            "--model",
+            "m",
+            "--concurrency",
+            "10000000000",
+            "--out",
+            str(tmp_path / "s"),
+            "--no-figures",
+        ]
+    )
     err = capsys.readouterr().err
     assert rc == 2 and "--concurrency must be at most" in err and err.count("\n") == 1
 
 
-@pytest.mark.parametrize("content,message", [
-    ("[1]", "not a study's metadata"),
-    ("\"swim\"", "not a study's metadata"),
-    (b"\xff\xfe", "is unreadable"),
-])
+@pytest.mark.parametrize(
+    "content,message",
+    [
+        ("[1]", "not a study's metadata"),
+        ('"swim"', "not a study's metadata"),
+        (b"\xff\xfe", "is unreadable"),
+    ],
+)
 def test_show_of_a_foreign_metadata_file_is_one_line(content, message, tmp_path, capsys):
     # QA: a metadata.json that is JSON but not an object (or not UTF-8) gave a traceback
     meta = tmp_path / "metadata.json"
@@ -249,4 +409,7 @@ def test_ctrl_c_before_main_handles_it_is_one_line(monkeypatch, capsys):
     with pytest.raises(SystemExit) as stop:
         cli.run()
     err = capsys.readouterr().err
-    assert stop.value.code == 130 and err == "jswim: interrupted (Ctrl-C) while starting; nothing was written\n"
+    assert (
+        stop.value.code == 130
+        and err == "jswim: interrupted (Ctrl-C) while starting; nothing was written\n"
+    )

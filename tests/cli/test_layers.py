@@ -18,16 +18,43 @@ PACKAGE = ROOT / "jswim"
 #: docs/design.md's layers, bottom first; a module may import its own layer and those below.
 #: The longest matching prefix decides.
 LAYERS = [
-    ("root", ["jswim.errors", "jswim.compile_cache", "jswim._io",
-              "jswim.folderlock", "jswim.jsonl", "jswim.permissions", "jswim.interrupts"]),  # the last four: old paths
+    (
+        "root",
+        [
+            "jswim.errors",
+            "jswim.compile_cache",
+            "jswim._io",
+            "jswim.folderlock",
+            "jswim.jsonl",
+            "jswim.permissions",
+            "jswim.interrupts",
+        ],
+    ),  # the last four: old paths
     ("physics", ["jswim.swimmers"]),
-    ("environment", ["jswim.env", "jswim.scenes", "jswim.integrate", "jswim.actions", "jswim.sharding"]),
+    (
+        "environment",
+        ["jswim.env", "jswim.scenes", "jswim.integrate", "jswim.actions", "jswim.sharding"],
+    ),
     ("prompt text", ["jswim.prompt"]),
     ("LLM I/O", ["jswim.llm"]),
-    ("judging", ["jswim.judging", "jswim.gait", "jswim.lattice", "jswim.shape_judge", "jswim.stats"]),
+    (
+        "judging",
+        ["jswim.judging", "jswim.gait", "jswim.lattice", "jswim.shape_judge", "jswim.stats"],
+    ),
     ("agents", ["jswim.agents"]),
-    ("studies", ["jswim.studies", "jswim.figures", "jswim.plots", "jswim.scene_plots", "jswim.figure_style",
-                 "jswim.results", "jswim.overview", "jswim.console"]),
+    (
+        "studies",
+        [
+            "jswim.studies",
+            "jswim.figures",
+            "jswim.plots",
+            "jswim.scene_plots",
+            "jswim.figure_style",
+            "jswim.results",
+            "jswim.overview",
+            "jswim.console",
+        ],
+    ),
     ("bench", ["jswim.bench"]),
     ("views", ["jswim.viz"]),
     ("front", ["jswim.cli", "jswim.__main__", "jswim.gym"]),
@@ -54,7 +81,7 @@ def _modules() -> dict[str, Path]:
     return out
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _graph() -> tuple[tuple[str, str, bool, bool], ...]:
     """:func:`_imports` of jswim as it is on disk (read once per session)."""
     return tuple(_imports(_modules()))
@@ -76,17 +103,23 @@ def _imports(modules: dict[str, Path]) -> list[tuple[str, str, bool, bool]]:
 
         def visit(node: ast.AST, in_function: bool) -> None:
             for child in ast.iter_child_nodes(node):
-                inside = in_function or isinstance(child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda))
+                inside = in_function or isinstance(
+                    child, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)
+                )
                 if isinstance(child, (ast.Import, ast.ImportFrom)):
                     if isinstance(child, ast.Import):
                         targets = [a.name for a in child.names]
                     else:
                         base = child.module or ""
                         if child.level:
-                            parts = name.split(".")[: len(name.split(".")) - child.level + (1 if is_pkg else 0)]
+                            parts = name.split(".")[
+                                : len(name.split(".")) - child.level + (1 if is_pkg else 0)
+                            ]
                             base = ".".join(parts + ([base] if base else []))
                         targets = [f"{base}.{a.name}" for a in child.names]
-                    marked = "# lazy:" in lines[child.lineno - 1]
+                    marked = any(
+                        "# lazy:" in ln for ln in lines[child.lineno - 1 : child.end_lineno]
+                    )
                     for t in targets:
                         if t.split(".")[0] == "jswim":
                             r = resolve(t)
@@ -105,7 +138,9 @@ def _layer(module: str) -> int:
             if module == p or module.startswith(p + "."):
                 if best is None or len(p) > best[1]:
                     best = (rank, len(p))
-    assert best is not None, f"{module} is in no layer of docs/design.md: add it to LAYERS (and the map)"
+    assert best is not None, (
+        f"{module} is in no layer of docs/design.md: add it to LAYERS (and the map)"
+    )
     return best[0]
 
 
@@ -116,13 +151,19 @@ def _cycles(edges: dict[str, set[str]]) -> list[set[str]]:
         if root in index:
             continue
         work = [(root, iter(sorted(edges.get(root, ()))))]
-        index[root] = low[root] = counter[0]; counter[0] += 1; stack.append(root); on.add(root)
+        index[root] = low[root] = counter[0]
+        counter[0] += 1
+        stack.append(root)
+        on.add(root)
         while work:
             v, it = work[-1]
             w = next(it, None)
             if w is not None:
                 if w not in index:
-                    index[w] = low[w] = counter[0]; counter[0] += 1; stack.append(w); on.add(w)
+                    index[w] = low[w] = counter[0]
+                    counter[0] += 1
+                    stack.append(w)
+                    on.add(w)
                     work.append((w, iter(sorted(edges.get(w, ())))))
                 elif w in on:
                     low[v] = min(low[v], index[w])
@@ -133,7 +174,9 @@ def _cycles(edges: dict[str, set[str]]) -> list[set[str]]:
             if low[v] == index[v]:
                 comp = set()
                 while True:
-                    w = stack.pop(); on.discard(w); comp.add(w)
+                    w = stack.pop()
+                    on.discard(w)
+                    comp.add(w)
                     if w == v:
                         break
                 if len(comp) > 1:
@@ -150,7 +193,9 @@ def test_every_module_sits_in_a_layer():
 def test_no_upward_import():
     imports = _graph()
     upward = sorted({(a, b) for a, b, _, _ in imports if _layer(b) > _layer(a)} - UPWARD_ALLOWED)
-    assert not upward, "imports up a layer (docs/design.md, Layers): " + ", ".join(f"{a} -> {b}" for a, b in upward)
+    assert not upward, "imports up a layer (docs/design.md, Layers): " + ", ".join(
+        f"{a} -> {b}" for a, b in upward
+    )
 
 
 def test_no_import_cycle():
@@ -159,14 +204,18 @@ def test_no_import_cycle():
         edges[a].add(b)
     cycles = [c for c in _cycles(edges) if c not in CYCLES_ALLOWED]
     assert not cycles, "import cycles (function-level imports included): " + "; ".join(
-        " <-> ".join(sorted(c)) for c in cycles)
+        " <-> ".join(sorted(c)) for c in cycles
+    )
 
 
 def test_function_level_imports_say_why():
     unmarked = {f"{a}->{b}" for a, b, inside, marked in _graph() if inside and not marked}
     new = sorted(unmarked - UNMARKED_ALLOWED)
-    assert not new, ("imports inside functions with no reason: move them to the top of the module, or say "
-                     "why they must wait with a '# lazy: ...' comment (e.g. '# lazy: start-up'): " + ", ".join(new))
+    assert not new, (
+        "imports inside functions with no reason: move them to the top of the module, or say "
+        "why they must wait with a '# lazy: ...' comment (e.g. '# lazy: start-up'): "
+        + ", ".join(new)
+    )
     # The list of debt only shrinks: an entry that no longer occurs is removed from it.
     assert not (UNMARKED_ALLOWED - unmarked), sorted(UNMARKED_ALLOWED - unmarked)
 

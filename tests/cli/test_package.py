@@ -13,29 +13,44 @@ from jswim import errors
 
 
 def test_top_level_names_are_the_owners_and_load_lazily():
-    code = ("import sys, jswim; assert 'jax' not in sys.modules, 'import jswim loaded jax'; "
-            "jswim.rollout; assert 'jax' in sys.modules")
+    code = (
+        "import sys, jswim; assert 'jax' not in sys.modules, 'import jswim loaded jax'; "
+        "jswim.rollout; assert 'jax' in sys.modules"
+    )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=str(Path(__file__).parents[2]))
     from jswim import env, results, studies
 
-    assert jswim.rollout is env.rollout and jswim.step_batch is env.step_batch and jswim.reset is env.reset
+    assert (
+        jswim.rollout is env.rollout
+        and jswim.step_batch is env.step_batch
+        and jswim.reset is env.reset
+    )
     assert jswim.make_params is env.make_params and jswim.step is env.step
     assert jswim.run_study is studies.run_study and jswim.load is results.load
-    assert {"rollout", "make_params", "reset", "step", "step_batch", "run_study", "load"} <= set(jswim.__all__)
+    assert {"rollout", "make_params", "reset", "step", "step_batch", "run_study", "load"} <= set(
+        jswim.__all__
+    )
     assert "Where to start" in jswim.__doc__ and "docs/design.md" in jswim.__doc__
     with pytest.raises(AttributeError):
-        jswim.no_such_name  # noqa: B018
+        jswim.no_such_name
 
 
 def test_help_starts_light():
     # `jswim --help` and `jswim` alone: the outline of the commands, without JAX, NumPy or httpx
     # (the study grids load JAX; the LLM client httpx), and `python -m jswim.cli` is the command too.
-    code = ("import sys, runpy; sys.argv = ['jswim', '--help']\n"
-            "try:\n    runpy.run_module('jswim.cli', run_name='__main__')\nexcept SystemExit as e:\n"
-            "    assert e.code == 0, e.code\n"
-            "heavy = [m for m in ('jax', 'numpy', 'httpx') if m in sys.modules]\n"
-            "assert not heavy, f'jswim --help imported {heavy}'")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=str(Path(__file__).parents[2]))
+    code = (
+        "import sys, runpy; sys.argv = ['jswim', '--help']\n"
+        "try:\n    runpy.run_module('jswim.cli', run_name='__main__')\nexcept SystemExit as e:\n"
+        "    assert e.code == 0, e.code\n"
+        "heavy = [m for m in ('jax', 'numpy', 'httpx') if m in sys.modules]\n"
+        "assert not heavy, f'jswim --help imported {heavy}'"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd=str(Path(__file__).parents[2]),
+    )
     assert out.returncode == 0, out.stderr
     assert "swim" in out.stdout and "bench" in out.stdout
 
@@ -50,18 +65,40 @@ def test_every_error_class_is_defined_in_the_tree():
     outside = []
     for path in Path(jswim.__file__).parent.rglob("*.py"):
         for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.ClassDef) and not node.name.startswith("_") and any(
-                    getattr(b, "id", getattr(b, "attr", "")).endswith(("Error", "Exception")) for b in node.bases):
+            if (
+                isinstance(node, ast.ClassDef)
+                and not node.name.startswith("_")
+                and any(
+                    getattr(b, "id", getattr(b, "attr", "")).endswith(("Error", "Exception"))
+                    for b in node.bases
+                )
+            ):
                 outside += [f"{path.name}:{node.name}"] if path.name != "errors.py" else []
     assert not outside, outside
-    assert budget.BudgetExhausted is errors.BudgetExhausted and reply.MalformedReply is errors.MalformedReply
-    assert folderlock.FolderBusyError is errors.FolderBusyError and issubclass(errors.MalformedReply, ValueError)
+    assert (
+        budget.BudgetExhausted is errors.BudgetExhausted
+        and reply.MalformedReply is errors.MalformedReply
+    )
+    assert folderlock.FolderBusyError is errors.FolderBusyError and issubclass(
+        errors.MalformedReply, ValueError
+    )
 
 
 def test_every_user_error_derives_from_the_root():
-    for cls in (errors.ConfigError, errors.PositionBelowMinimumError, errors.LLMError, errors.LLMServerError,
-                errors.LLMRequestError, errors.LLMResponseError, errors.LocalModelError, errors.ResultFolderError,
-                errors.BudgetExhausted, errors.MalformedReply, errors.FolderBusyError, errors.StudyFolderError):
+    for cls in (
+        errors.ConfigError,
+        errors.PositionBelowMinimumError,
+        errors.LLMError,
+        errors.LLMServerError,
+        errors.LLMRequestError,
+        errors.LLMResponseError,
+        errors.LocalModelError,
+        errors.ResultFolderError,
+        errors.BudgetExhausted,
+        errors.MalformedReply,
+        errors.FolderBusyError,
+        errors.StudyFolderError,
+    ):
         assert issubclass(cls, errors.JswimError)
         assert cls.__name__ in errors.__doc__  # the tree in the docstring names every class
     assert issubclass(errors.ConfigError, ValueError) and issubclass(errors.LLMError, RuntimeError)

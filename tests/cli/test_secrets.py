@@ -29,9 +29,17 @@ def encodings(secret: str) -> set[str]:
     """Written out here, independently of jswim's scrubber."""
     out = set()
     for s in {secret, secret.strip()}:
-        out |= {s, repr(s)[1:-1], json.dumps(s)[1:-1], quote(s, safe=""), quote_plus(s), quote(s),
-                s.encode("unicode_escape").decode(), base64.b64encode(s.encode()).decode(),
-                repr(s.encode("utf-8", "replace"))[2:-1]}
+        out |= {
+            s,
+            repr(s)[1:-1],
+            json.dumps(s)[1:-1],
+            quote(s, safe=""),
+            quote_plus(s),
+            quote(s),
+            s.encode("unicode_escape").decode(),
+            base64.b64encode(s.encode()).decode(),
+            repr(s.encode("utf-8", "replace"))[2:-1],
+        }
         if len(s) > 24:
             out.add(s[8:24])  # a good part of it is a leak too
     return out
@@ -55,15 +63,34 @@ def folder_text(*folders: Path) -> str:
 
 
 def swim(url: str, out: Path, *extra: str) -> list[str]:
-    return ["swim", "--base-url", url, "--model", "fake", "--runs", "2", "--q-runs", "0", "--steps", "4",
-            "--noise", "0.5", "--no-figures", "--out", str(out), *extra]
+    return [
+        "swim",
+        "--base-url",
+        url,
+        "--model",
+        "fake",
+        "--runs",
+        "2",
+        "--q-runs",
+        "0",
+        "--steps",
+        "4",
+        "--noise",
+        "0.5",
+        "--no-figures",
+        "--out",
+        str(out),
+        *extra,
+    ]
 
 
 def with_password(url: str) -> str:
     return url.replace("http://", f"http://{USER}:{PASSWORD}@")
 
 
-def test_a_study_with_a_key_and_url_credentials_writes_and_prints_neither(tmp_path, monkeypatch, capsys):
+def test_a_study_with_a_key_and_url_credentials_writes_and_prints_neither(
+    tmp_path, monkeypatch, capsys
+):
     monkeypatch.setenv("MYKEY", KEY)
     out, cache = tmp_path / "study", tmp_path / "cache"
     srv: FakeServer
@@ -74,14 +101,21 @@ def test_a_study_with_a_key_and_url_credentials_writes_and_prints_neither(tmp_pa
         # password, the key percent-encoded. The runs it hits end as llm_error, message recorded.
         if srv.n_requests >= 4:
             auth = srv.auth_headers[-1] or ""
-            return Fault("status", 400, message=(
-                f"upstream refused {auth!r} ({json.dumps(auth)}) for http://{USER}:{PASSWORD}@gateway/v1 "
-                f"and {quote(KEY, safe='')}"))
+            return Fault(
+                "status",
+                400,
+                message=(
+                    f"upstream refused {auth!r} ({json.dumps(auth)}) for http://{USER}:{PASSWORD}@gateway/v1 "
+                    f"and {quote(KEY, safe='')}"
+                ),
+            )
         return "[1, 1]"
 
     srv = FakeServer(reply=reply)
     with srv:
-        code = cli.main(swim(with_password(srv.url), out, "--api-key-env", "MYKEY", "--cache-dir", str(cache)))
+        code = cli.main(
+            swim(with_password(srv.url), out, "--api-key-env", "MYKEY", "--cache-dir", str(cache))
+        )
         sent = list(srv.auth_headers)
     printed = capsys.readouterr()
     assert sent and all(h == f"Bearer {KEY}" for h in sent)  # the key did reach the server
@@ -90,21 +124,31 @@ def test_a_study_with_a_key_and_url_credentials_writes_and_prints_neither(tmp_pa
     assert any(r["status"] == "llm_error" for r in rows)
     failed = next(r for r in rows if r["status"] == "llm_error")
     assert "upstream refused" in json.dumps(failed)  # the server's message is kept, masked
-    for where, text in (("stdout", printed.out), ("stderr", printed.err), ("folder", folder_text(out)),
-                        ("cache", folder_text(cache) if cache.exists() else "")):
+    for where, text in (
+        ("stdout", printed.out),
+        ("stderr", printed.err),
+        ("folder", folder_text(out)),
+        ("cache", folder_text(cache) if cache.exists() else ""),
+    ):
         assert not leaks(text, KEY, PASSWORD, f"{USER}:{PASSWORD}"), where
     meta = json.loads((out / "metadata.json").read_text())
     assert meta["server"] == srv.url  # the address, without the user info
 
 
-@pytest.mark.parametrize("value, what", [
-    (KEY + "\r", "carriage return"),  # pasted from a Windows file
-    (KEY + "\n", "line feed"),
-    (" " + KEY, "space"),
-    (KEY[:10] + "é" + KEY[10:], "non-ASCII"),
-    (KEY[:10] + "\x1b" + KEY[10:], "control character"),
-], ids=["cr", "lf", "space", "non-ascii", "escape"])
-def test_a_key_no_header_can_carry_is_one_line_naming_the_variable(value, what, tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize(
+    "value, what",
+    [
+        (KEY + "\r", "carriage return"),  # pasted from a Windows file
+        (KEY + "\n", "line feed"),
+        (" " + KEY, "space"),
+        (KEY[:10] + "é" + KEY[10:], "non-ASCII"),
+        (KEY[:10] + "\x1b" + KEY[10:], "control character"),
+    ],
+    ids=["cr", "lf", "space", "non-ascii", "escape"],
+)
+def test_a_key_no_header_can_carry_is_one_line_naming_the_variable(
+    value, what, tmp_path, monkeypatch, capsys
+):
     monkeypatch.setenv("MYKEY", value)
     with FakeServer() as srv:
         code = cli.main(swim(srv.url, tmp_path / "o", "--api-key-env", "MYKEY"))
@@ -116,9 +160,13 @@ def test_a_key_no_header_can_carry_is_one_line_naming_the_variable(value, what, 
     assert not (tmp_path / "o").exists()
 
 
-def test_an_unset_key_variable_is_an_error_for_a_remote_server_and_a_warning_here(tmp_path, monkeypatch, capsys):
+def test_an_unset_key_variable_is_an_error_for_a_remote_server_and_a_warning_here(
+    tmp_path, monkeypatch, capsys
+):
     monkeypatch.delenv("NO_SUCH_KEY", raising=False)
-    code = cli.main(swim("https://api.example.invalid/v1", tmp_path / "r", "--api-key-env", "NO_SUCH_KEY"))
+    code = cli.main(
+        swim("https://api.example.invalid/v1", tmp_path / "r", "--api-key-env", "NO_SUCH_KEY")
+    )
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "$NO_SUCH_KEY is not set" in err
     with FakeServer() as srv:
@@ -128,11 +176,15 @@ def test_an_unset_key_variable_is_an_error_for_a_remote_server_and_a_warning_her
     assert "warning" in err and "$NO_SUCH_KEY is not set" in err
 
 
-@pytest.mark.parametrize("url", [
-    f"ftp://{USER}:{PASSWORD}@host/v1",  # not http(s)
-    f"http://{USER}:{PASSWORD}@host:99999/v1",  # bad port
-    f"http://{USER}:{PASSWORD}@127.0.0.1:9/v1",  # nothing listens there
-], ids=["not-http", "bad-port", "nothing-listens"])  # fixed ids: the password is new every run (xdist)
+@pytest.mark.parametrize(
+    "url",
+    [
+        f"ftp://{USER}:{PASSWORD}@host/v1",  # not http(s)
+        f"http://{USER}:{PASSWORD}@host:99999/v1",  # bad port
+        f"http://{USER}:{PASSWORD}@127.0.0.1:9/v1",  # nothing listens there
+    ],
+    ids=["not-http", "bad-port", "nothing-listens"],
+)  # fixed ids: the password is new every run (xdist)
 def test_a_password_in_the_base_url_is_never_echoed(url, tmp_path, capsys):
     code = cli.main(swim(url, tmp_path / "o"))
     printed = capsys.readouterr()
@@ -141,14 +193,18 @@ def test_a_password_in_the_base_url_is_never_echoed(url, tmp_path, capsys):
     assert not leaks(folder_text(tmp_path), PASSWORD, f"{USER}:{PASSWORD}")
 
 
-def test_a_key_echoed_in_a_200_reply_is_scrubbed_before_anything_is_written(tmp_path, monkeypatch, capsys):
+def test_a_key_echoed_in_a_200_reply_is_scrubbed_before_anything_is_written(
+    tmp_path, monkeypatch, capsys
+):
     # A server (or proxy) quoting the request's credentials inside a normal answer.
     monkeypatch.setenv("MYKEY", KEY)
     out, cache = tmp_path / "study", tmp_path / "cache"
     srv: FakeServer
 
     def reply(body):
-        return f"[1, 1] (your key: {srv.auth_headers[-1]}, {json.dumps(KEY)}, {quote(KEY, safe='')})"
+        return (
+            f"[1, 1] (your key: {srv.auth_headers[-1]}, {json.dumps(KEY)}, {quote(KEY, safe='')})"
+        )
 
     srv = FakeServer(reply=reply)
     with srv:
@@ -156,9 +212,15 @@ def test_a_key_echoed_in_a_200_reply_is_scrubbed_before_anything_is_written(tmp_
     printed = capsys.readouterr()
     assert code == 0, printed.err
     calls = [json.loads(ln) for ln in (out / "calls.jsonl").read_text().splitlines()]
-    assert calls and all(c["raw"].startswith("[1, 1] (your key: Bearer") and "***" in c["raw"] for c in calls)
-    for where, text in (("stdout", printed.out), ("stderr", printed.err), ("folder", folder_text(out)),
-                        ("cache", folder_text(cache) if cache.exists() else "")):
+    assert calls and all(
+        c["raw"].startswith("[1, 1] (your key: Bearer") and "***" in c["raw"] for c in calls
+    )
+    for where, text in (
+        ("stdout", printed.out),
+        ("stderr", printed.err),
+        ("folder", folder_text(out)),
+        ("cache", folder_text(cache) if cache.exists() else ""),
+    ):
         assert not leaks(text, KEY), where
 
 
@@ -186,6 +248,8 @@ def test_a_key_nobody_named_never_goes_to_another_host(tmp_path, monkeypatch, ca
 
 def test_a_key_variable_set_to_empty_is_said_to_be_empty(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("EMPTY_KEY", "")
-    code = cli.main(swim("https://api.example.invalid/v1", tmp_path / "r", "--api-key-env", "EMPTY_KEY"))
+    code = cli.main(
+        swim("https://api.example.invalid/v1", tmp_path / "r", "--api-key-env", "EMPTY_KEY")
+    )
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "$EMPTY_KEY is set but empty" in err

@@ -16,14 +16,39 @@ from jswim import cli
 from jswim.results import read_metadata, read_runs
 from tests.fakeserver import MODES, THOUGHT, FakeServer, Fault
 
-FAST = ["--steps", "4", "--runs", "2", "--q-runs", "2", "--swimmer", "purcell", "--direction", "+x", "--no-figures"]
+FAST = [
+    "--steps",
+    "4",
+    "--runs",
+    "2",
+    "--q-runs",
+    "2",
+    "--swimmer",
+    "purcell",
+    "--direction",
+    "+x",
+    "--no-figures",
+]
 GOOD = [2, -1]  # what every mode's answer is
 NO_OP = [1, 0]  # a failed step
 
 
 def swim(url: str, out, *extra: str) -> int:
-    return cli.main(["swim", *FAST, "--out", str(out), "--base-url", url, "--model", "fake",
-                     "--api-key-env", "JSWIM_TEST_NO_KEY", *extra])
+    return cli.main(
+        [
+            "swim",
+            *FAST,
+            "--out",
+            str(out),
+            "--base-url",
+            url,
+            "--model",
+            "fake",
+            "--api-key-env",
+            "JSWIM_TEST_NO_KEY",
+            *extra,
+        ]
+    )
 
 
 def llm_rows(out):
@@ -45,8 +70,20 @@ def transcript_steps(out):
     return steps
 
 
-@pytest.mark.parametrize("name", ["plain", "think", "think-no-open-tag", "reasoning-field", "parts",
-                                  "stream-default", "stream-always", "bare-pair", "negated"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "plain",
+        "think",
+        "think-no-open-tag",
+        "reasoning-field",
+        "parts",
+        "stream-default",
+        "stream-always",
+        "bare-pair",
+        "negated",
+    ],
+)
 def test_swim_reads_the_answer(name, tmp_path, capsys):
     with FakeServer(**MODES[name]) as srv:
         assert swim(srv.url, tmp_path / "o") == 0, capsys.readouterr().err
@@ -65,7 +102,9 @@ def test_swim_cut_off_replies_go_to_the_follow_up(name, tmp_path, capsys):
         bodies = srv.requests
     out = capsys.readouterr().out
     rows = llm_rows(tmp_path / "o")
-    assert all(r["actions"] == [GOOD] * 4 and r["failed_steps"] == 0 and r["truncated"] == 4 for r in rows)
+    assert all(
+        r["actions"] == [GOOD] * 4 and r["failed_steps"] == 0 and r["truncated"] == 4 for r in rows
+    )
     assert "8 replies cut at max_tokens=10" in out  # the authors' limit for two-DOF swimmers
     # Never the same deterministic request twice in a run (no resend of an unchanged request): the
     # two runs are independent repeats from the same start, so each distinct request comes twice.
@@ -93,13 +132,32 @@ def test_swim_max_tokens_option_reaches_the_server(tmp_path):
         assert not any("max_tokens" in b for b in srv.requests[-2:])
 
 
-@pytest.mark.parametrize("name, extra, fix, words", [
-    ("reject-grammar", ["--constrain", "grammar"], ["--constrain", "none"], ["supplied: grammar", "--constrain none"]),
-    ("reject-seed", ["--temperature", "0.7"], ["--omit-field", "seed"], ["'seed' is not supported", "--omit-field seed"]),
-    ("reject-max-tokens", ["--reasoning", "off"], ["--omit-field", "max_tokens"],
-     ["max_completion_tokens", "--omit-field max_tokens"]),
-])
-def test_swim_rejected_field_is_one_line_then_the_option_works(name, extra, fix, words, tmp_path, capsys):
+@pytest.mark.parametrize(
+    "name, extra, fix, words",
+    [
+        (
+            "reject-grammar",
+            ["--constrain", "grammar"],
+            ["--constrain", "none"],
+            ["supplied: grammar", "--constrain none"],
+        ),
+        (
+            "reject-seed",
+            ["--temperature", "0.7"],
+            ["--omit-field", "seed"],
+            ["'seed' is not supported", "--omit-field seed"],
+        ),
+        (
+            "reject-max-tokens",
+            ["--reasoning", "off"],
+            ["--omit-field", "max_tokens"],
+            ["max_completion_tokens", "--omit-field max_tokens"],
+        ),
+    ],
+)
+def test_swim_rejected_field_is_one_line_then_the_option_works(
+    name, extra, fix, words, tmp_path, capsys
+):
     with FakeServer(**MODES[name]) as srv:
         assert swim(srv.url, tmp_path / "o", *extra) == 2
         line = one_line_error(capsys)
@@ -108,7 +166,9 @@ def test_swim_rejected_field_is_one_line_then_the_option_works(name, extra, fix,
         meta = read_metadata(tmp_path / "o")
         assert meta["status"] == "stopped" and words[0] in meta["error"]
         assert swim(srv.url, tmp_path / "o2", *extra, *fix) == 0
-    assert all(r["status"] == "done" and r["actions"] == [GOOD] * 4 for r in llm_rows(tmp_path / "o2"))
+    assert all(
+        r["status"] == "done" and r["actions"] == [GOOD] * 4 for r in llm_rows(tmp_path / "o2")
+    )
 
 
 def test_swim_context_400_fails_the_run_and_resume_reruns_it(tmp_path, capsys):
@@ -117,7 +177,9 @@ def test_swim_context_400_fails_the_run_and_resume_reruns_it(tmp_path, capsys):
         line = one_line_error(capsys)
         assert "2 of 2 LLM runs failed" in line and "maximum context length" in line
         rows = llm_rows(tmp_path / "o")
-        assert all(r["status"] == "llm_error" and "maximum context length" in r["error"] for r in rows)
+        assert all(
+            r["status"] == "llm_error" and "maximum context length" in r["error"] for r in rows
+        )
         assert read_metadata(tmp_path / "o")["status"] == "incomplete"
         srv.reply = MODES["plain"]["reply"]  # a healthy server (or a larger context)
         assert swim(srv.url, tmp_path / "o") == 0
@@ -138,7 +200,9 @@ def test_swim_error_at_the_first_request_fails_the_runs_in_one_line(tmp_path, ca
         assert read_metadata(tmp_path / "o")["status"] == "incomplete"
         srv.reply = MODES["plain"]["reply"]
         assert swim(srv.url, tmp_path / "o") == 0
-    assert all(r["status"] == "done" and r["actions"] == [GOOD] * 4 for r in llm_rows(tmp_path / "o"))
+    assert all(
+        r["status"] == "done" and r["actions"] == [GOOD] * 4 for r in llm_rows(tmp_path / "o")
+    )
 
 
 def test_swim_cold_server(tmp_path, capsys):
@@ -156,8 +220,10 @@ def test_swim_cold_server(tmp_path, capsys):
         assert swim(srv.url, tmp_path / "o2", "--timeout", "10") == 0
 
 
-@pytest.mark.parametrize("shape", ["127.0.0.1:{port}", "http://127.0.0.1:{port}",
-                                   "http://127.0.0.1:{port}/v1/chat/completions"])
+@pytest.mark.parametrize(
+    "shape",
+    ["127.0.0.1:{port}", "http://127.0.0.1:{port}", "http://127.0.0.1:{port}/v1/chat/completions"],
+)
 def test_swim_base_url_shapes(shape, tmp_path):
     with FakeServer(**MODES["plain"]) as srv:
         assert swim(shape.format(port=srv.port), tmp_path / "o") == 0
@@ -249,11 +315,14 @@ def test_bad_gguf_fails_before_the_baselines(tmp_path, capsys):
     assert not (tmp_path / "o" / "runs.jsonl").exists()
 
 
-@pytest.mark.parametrize("text, words", [
-    ("Go {direction}. {S5}\n{S3}\n{bogus}", ["{bogus}"]),
-    ("Go {direction}. Answer with one of {allowed}.", ["history", "{S3}"]),
-    ("Go {direction}.\n{history}", ["allowed", "{S5}"]),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("Go {direction}. {S5}\n{S3}\n{bogus}", ["{bogus}"]),
+        ("Go {direction}. Answer with one of {allowed}.", ["history", "{S3}"]),
+        ("Go {direction}.\n{history}", ["allowed", "{S5}"]),
+    ],
+)
 def test_bad_prompt_file_fails_before_the_baselines(text, words, tmp_path, capsys):
     path = tmp_path / "prompt.txt"
     path.write_text(text)

@@ -49,8 +49,13 @@ def _school_table(text: str, title: str) -> tuple[list[float], dict[int, list[fl
 
     lines = text.split(f"| {title} |", 1)[1].split("\n\n", 1)[0].splitlines()
     spacings = [float(d) for d in re.findall(r"D = ([\d.]+) a", lines[0])]
-    rows = {int(re.match(r"\| N = (\d+)", ln).group(1)): [float(c.split()[0]) for c in ln.strip("|").split("|")[1:]]
-            for ln in lines[2:] if ln.startswith("| N = ")}
+    rows = {
+        int(re.match(r"\| N = (\d+)", ln).group(1)): [
+            float(c.split()[0]) for c in ln.strip("|").split("|")[1:]
+        ]
+        for ln in lines[2:]
+        if ln.startswith("| N = ")
+    }
     return spacings, rows
 
 
@@ -76,8 +81,11 @@ def test_the_wall_tables_of_the_scenes_page_are_the_code_s():
     tables = _script("scene_tables")
     text = (ROOT / "docs" / "scenes.md").read_text()
     page = _row(text, "X per cycle (a)")  # h = 3..50, free, bulk (the paper's formula)
-    ours = [*tables.wall_cycles("point", tables.WALL_TABLE)["x"], tables.lone_cycle("point"),
-            _script("physics_tables")._square("ng")[0]]
+    ours = [
+        *tables.wall_cycles("point", tables.WALL_TABLE)["x"],
+        tables.lone_cycle("point"),
+        _script("physics_tables")._square("ng")[0],
+    ]
     assert ours == pytest.approx(page, abs=5e-9)  # the page's 8 decimals
     page = _row(text, "rpy, X per cycle (a)")  # h = 3..50, free
     ours = [*tables.wall_cycles("rpy", tables.WALL_TABLE)["x"], tables.lone_cycle("rpy")]

@@ -30,8 +30,11 @@ def test_there_are_notebooks():
 def test_notebook_is_stored_without_outputs(path):
     nb = nbformat.read(path, as_version=4)
     nbformat.validate(nb)
-    dirty = [i for i, cell in enumerate(nb.cells)
-             if cell.cell_type == "code" and (cell.outputs or cell.execution_count is not None)]
+    dirty = [
+        i
+        for i, cell in enumerate(nb.cells)
+        if cell.cell_type == "code" and (cell.outputs or cell.execution_count is not None)
+    ]
     assert not dirty, f"{path.name}: clear the outputs of cells {dirty} before committing"
 
 
@@ -44,8 +47,15 @@ def test_notebook_runs(path):
         nb, kernel_name="python3", timeout=600, resources={"metadata": {"path": str(NOTEBOOK_DIR)}}
     )
     client.execute()  # raises CellExecutionError, with the cell and its traceback, on any error
-    errors = [out for cell in nb.cells if cell.cell_type == "code" for out in cell.outputs
-              if out.output_type == "error"]
+    errors = [
+        out
+        for cell in nb.cells
+        if cell.cell_type == "code"
+        for out in cell.outputs
+        if out.output_type == "error"
+    ]
     assert not errors
     created = _listing(NOTEBOOK_DIR) - before
-    assert not created, f"{path.name} wrote {sorted(created)} next to the notebooks; use a temporary folder"
+    assert not created, (
+        f"{path.name} wrote {sorted(created)} next to the notebooks; use a temporary folder"
+    )

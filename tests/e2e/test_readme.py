@@ -12,7 +12,10 @@ from jswim.cli import build_parser
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
-PAGES = {p.relative_to(ROOT / "docs").as_posix(): p.read_text() for p in sorted((ROOT / "docs").rglob("*.md"))}
+PAGES = {
+    p.relative_to(ROOT / "docs").as_posix(): p.read_text()
+    for p in sorted((ROOT / "docs").rglob("*.md"))
+}
 DOCS = "\n".join(PAGES.values())
 
 
@@ -34,14 +37,20 @@ def test_the_square_gait_example_prints_the_reference_value():
     from jswim import env
 
     r = env.rollout("purcell", [(2, -1), (1, -1), (2, 1), (1, 1)])
-    assert abs(float(r.x[-1]) - 0.19124724) < 1e-8 and "0.19124724" in README and "0.19124724" in PAGES["physics.md"]
+    assert (
+        abs(float(r.x[-1]) - 0.19124724) < 1e-8
+        and "0.19124724" in README
+        and "0.19124724" in PAGES["physics.md"]
+    )
 
 
 def _choices(parser, dest):
     return next(a.choices for a in parser._actions if a.dest == dest)
 
 
-@pytest.mark.parametrize("name,arg", sorted(set(re.findall(r"`jswim (\w+)(?: (\w+))?", README + DOCS))))
+@pytest.mark.parametrize(
+    "name,arg", sorted(set(re.findall(r"`jswim (\w+)(?: (\w+))?", README + DOCS)))
+)
 def test_listed_commands_exist(name, arg):
     commands = _choices(build_parser(), "command")
     assert name in commands, f"the docs mention `jswim {name}`"

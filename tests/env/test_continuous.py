@@ -90,7 +90,9 @@ def _rk4_square(d_lo, d_hi, substeps=400):
     walked from (d_hi, d_hi) as (2,-), (1,-), (2,+), (1,+): plain RK4 on the closed form."""
     d = np.array([d_hi, d_hi])
     pose = np.zeros(3)
-    start = np.asarray(centroid(env.make_params("purcell").model, jnp.asarray(d), jnp.asarray(pose)))
+    start = np.asarray(
+        centroid(env.make_params("purcell").model, jnp.asarray(d), jnp.asarray(pose))
+    )
     for k, target in ((1, d_lo), (0, d_lo), (1, d_hi), (0, d_hi)):
         rate = np.zeros(2)
         rate[k] = np.sign(target - d[k])
@@ -150,7 +152,9 @@ def test_motion_table_matches_the_integrator_for_any_one_dof_move(swimmer):
     s0 = rng.uniform(size=(64, 2))
     dof = rng.integers(0, 2, 64)
     s1 = s0.copy()
-    s1[np.arange(64), dof] = np.clip(s0[np.arange(64), dof] + rng.choice([-1, 1], 64) * 10.0 ** rng.uniform(-3, 0, 64), 0, 1)
+    s1[np.arange(64), dof] = np.clip(
+        s0[np.arange(64), dof] + rng.choice([-1, 1], 64) * 10.0 ** rng.uniform(-3, 0, 64), 0, 1
+    )
     table = jax.jit(jax.vmap(lambda a, b, k: motion.move_increment(m, a, b, k)))(s0, s1, dof)
 
     def direct(a, b):
@@ -167,14 +171,19 @@ def test_motion_table_matches_the_integrator_for_any_one_dof_move(swimmer):
 
 def test_a_push_past_a_limit_moves_exactly_to_it():
     p = env.make_params("purcell")
-    (s, info), = _walk(p, [0.7, 0.2], [(1, 0.5)])
-    assert float(s.frac[0]) == 1.0 and float(s.frac_lo[0]) == 0.0 and bool(info.moved) and not bool(info.stuck)
+    ((s, info),) = _walk(p, [0.7, 0.2], [(1, 0.5)])
+    assert (
+        float(s.frac[0]) == 1.0
+        and float(s.frac_lo[0]) == 0.0
+        and bool(info.moved)
+        and not bool(info.stuck)
+    )
     assert float(env.dof_values(s, p)[0]) == p.hi
-    (exact, _), = _walk(p, [0.7, 0.2], [(1, 0.3)])
+    ((exact, _),) = _walk(p, [0.7, 0.2], [(1, 0.3)])
     assert abs(_x(s) - _x(exact)) <= 1e-15
-    (s2, info2), = _walk(p, [1.0, 0.2], [(1, 0.5)])
+    ((s2, info2),) = _walk(p, [1.0, 0.2], [(1, 0.5)])
     assert bool(info2.stuck) and not bool(info2.moved) and _x(s2) == 0.0
-    (s3, info3), = _walk(p, [0.3, 0.2], [(2, -0.9)])
+    ((s3, _info3),) = _walk(p, [0.3, 0.2], [(2, -0.9)])
     assert float(s3.frac[1]) == 0.0 and float(env.dof_values(s3, p)[1]) == p.lo
 
 
@@ -209,7 +218,9 @@ def test_noise_scales_the_continuous_displacement():
 def test_float32_positions_stay_within_1e9_of_float64_over_a_million_steps(float32):
     def run(dtype, steps=1_000_000, n=3):
         p = env.make_params("purcell", roc_levels=4)
-        codes = jnp.asarray(np.random.default_rng(2).integers(0, p.n_actions, (steps, n)), jnp.int32)
+        codes = jnp.asarray(
+            np.random.default_rng(2).integers(0, p.n_actions, (steps, n)), jnp.int32
+        )
         s0 = jax.vmap(lambda _: env.start_state(p.model, jnp.ones(2), dtype))(jnp.arange(n))
 
         def body(s, a):

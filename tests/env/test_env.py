@@ -33,8 +33,15 @@ def test_table_steps_match_the_integrator_over_random_walks():
         if d[k] != target:
             rate = np.zeros(2)
             rate[k] = roc
-            pose = integrate_stroke(model, jnp.asarray(d), jnp.asarray(rate), model.duration, pose,
-                                    method="rk4", n_sub=96)
+            pose = integrate_stroke(
+                model,
+                jnp.asarray(d),
+                jnp.asarray(rate),
+                model.duration,
+                pose,
+                method="rk4",
+                n_sub=96,
+            )
             d[k] = target
         c = centroid(model, jnp.asarray(d), pose) - c0
         assert abs(float(r.x[i]) - float(c[0])) <= 1e-9 * max(1.0, abs(float(c[0])))
@@ -132,7 +139,11 @@ def test_vmap_equals_individual_steps():
             singles[i], _ = env.step(ks[i], singles[i], actions[t, i], params)
     for i in range(b):
         for field in env.EnvState._fields:
-            np.testing.assert_allclose(np.asarray(getattr(states, field))[i], np.asarray(getattr(singles[i], field)), atol=1e-12)
+            np.testing.assert_allclose(
+                np.asarray(getattr(states, field))[i],
+                np.asarray(getattr(singles[i], field)),
+                atol=1e-12,
+            )
 
 
 def test_vmap_over_noise_levels_and_directions():
@@ -164,24 +175,33 @@ def test_batched_rollout_shapes():
     assert r.x.shape == (2, 4) and r.dofs.shape == (2, 4, 2)
 
 
-@pytest.mark.parametrize("kwargs, word", [
-    (dict(swimmer="eel"), "unknown swimmer"),
-    (dict(swimmer="ng", d_min=10, d_max=6), "d_min"),
-    (dict(swimmer="purcell", d_max=4.0), "d_max"),
-    (dict(swimmer="purcell", d_max=0.0), "d_max"),
-    (dict(swimmer="purcell", zeta=-0.1), "zeta"),
-    (dict(swimmer="purcell", direction=2), "direction"),
-    (dict(swimmer="purcell", init=(1, 2)), "init"),
-    (dict(swimmer="ng", d_min=1.5), "d_min"),
-])
+@pytest.mark.parametrize(
+    "kwargs, word",
+    [
+        (dict(swimmer="eel"), "unknown swimmer"),
+        (dict(swimmer="ng", d_min=10, d_max=6), "d_min"),
+        (dict(swimmer="purcell", d_max=4.0), "d_max"),
+        (dict(swimmer="purcell", d_max=0.0), "d_max"),
+        (dict(swimmer="purcell", zeta=-0.1), "zeta"),
+        (dict(swimmer="purcell", direction=2), "direction"),
+        (dict(swimmer="purcell", init=(1, 2)), "init"),
+        (dict(swimmer="ng", d_min=1.5), "d_min"),
+    ],
+)
 def test_bad_parameters_name_the_parameter(kwargs, word):
     with pytest.raises(ConfigError, match=word):
         env.make_params(**kwargs)
 
 
-@pytest.mark.parametrize("actions, word", [
-    ([(3, 1)], "dof"), ([(1, 2)], "roc"), ([(1,)], "pairs"), ([(1.5, 1)], "integers"),
-])
+@pytest.mark.parametrize(
+    "actions, word",
+    [
+        ([(3, 1)], "dof"),
+        ([(1, 2)], "roc"),
+        ([(1,)], "pairs"),
+        ([(1.5, 1)], "integers"),
+    ],
+)
 def test_bad_actions_are_rejected(actions, word):
     with pytest.raises(ConfigError, match=word):
         env.rollout("purcell", actions)
@@ -194,14 +214,18 @@ def test_step_batch_matches_vmapped_advance_and_carries_unit_rotation():
     states = jax.vmap(env.reset, in_axes=(0, None))(keys, params)
     singles = states
     # One compiled program, not ~75 eager dispatch compiles: the fast tier's budget.
-    vmapped_advance = jax.jit(lambda s, a, y: jax.vmap(env.advance, in_axes=(0, 0, 0, None))(s, a, y, params))
+    vmapped_advance = jax.jit(
+        lambda s, a, y: jax.vmap(env.advance, in_axes=(0, 0, 0, None))(s, a, y, params)
+    )
     for t in range(8):
         k = jax.random.PRNGKey(t)
         a = jax.random.randint(jax.random.fold_in(k, 1), (b,), 0, 6)
-        states, info = env.step_batch(k, states, a, params)
+        states, _info = env.step_batch(k, states, a, params)
         y = env.noise(k, b).astype(jnp.float64)  # the draw step_batch documents
         singles, _ = vmapped_advance(singles, a, y)
     np.testing.assert_allclose(np.asarray(states.x), np.asarray(singles.x), atol=1e-14)
     # The carried rotation is the orientation's (cos, sin): no drift from composing rotations.
     th = np.asarray(states.theta)
-    np.testing.assert_allclose(np.asarray(states.rot), np.stack([np.cos(th), np.sin(th)], -1), atol=1e-12)
+    np.testing.assert_allclose(
+        np.asarray(states.rot), np.stack([np.cos(th), np.sin(th)], -1), atol=1e-12
+    )

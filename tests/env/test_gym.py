@@ -74,8 +74,9 @@ def _purejaxrl_loop(env, params, n_envs, n_steps, key):
         logits = obs @ weights
         action = jax.random.categorical(k_act, logits)
         step_keys = jax.random.split(k_env, n_envs)
-        new_obs, state, reward, terminated, truncated, info = jax.vmap(env.step, in_axes=(0, 0, 0, None))(
-            step_keys, state, action, params)
+        new_obs, state, reward, _terminated, truncated, info = jax.vmap(
+            env.step, in_axes=(0, 0, 0, None)
+        )(step_keys, state, action, params)
         return (new_obs, state, weights), (obs, action, reward, truncated, state, info)
 
     def update(carry, k):
@@ -84,7 +85,9 @@ def _purejaxrl_loop(env, params, n_envs, n_steps, key):
 
         def loss(w):
             logp = jax.nn.log_softmax(o @ w)
-            return -jnp.mean(jnp.take_along_axis(logp, a[..., None], -1)[..., 0] * (r - jnp.mean(r)))
+            return -jnp.mean(
+                jnp.take_along_axis(logp, a[..., None], -1)[..., 0] * (r - jnp.mean(r))
+            )
 
         weights = weights - 50.0 * jax.grad(loss)(weights)
         return (obs, state, weights), traj
@@ -97,14 +100,21 @@ def _purejaxrl_loop(env, params, n_envs, n_steps, key):
 def test_gymnax_interface_in_a_purejaxrl_loop(float32):
     world, params = jswim.make("purcell")
     env = GymnaxEnv(world, max_steps=5)
-    weights, (obs, action, reward, truncated, state, info) = jax.jit(
-        _purejaxrl_loop, static_argnums=(0, 2, 3))(env, params, 4, 10, jax.random.PRNGKey(0))
-    assert weights.shape == (2, 6) and bool(jnp.all(jnp.isfinite(weights))) and bool(jnp.any(weights != 0))
+    weights, (obs, _action, reward, truncated, state, info) = jax.jit(
+        _purejaxrl_loop, static_argnums=(0, 2, 3)
+    )(env, params, 4, 10, jax.random.PRNGKey(0))
+    assert (
+        weights.shape == (2, 6)
+        and bool(jnp.all(jnp.isfinite(weights)))
+        and bool(jnp.any(weights != 0))
+    )
     assert reward.dtype == jnp.float32 and obs.dtype == jnp.float32
     # Every 5th step ends an episode and the env starts afresh: time back to 0, shape at the start.
     t = np.asarray(state.time).reshape(-1, 4)
     np.testing.assert_array_equal(t[:, 0], np.tile([1, 2, 3, 4, 0], 6))
-    np.testing.assert_array_equal(np.asarray(truncated).reshape(-1, 4)[:, 0], np.tile([0, 0, 0, 0, 1], 6).astype(bool))
+    np.testing.assert_array_equal(
+        np.asarray(truncated).reshape(-1, 4)[:, 0], np.tile([0, 0, 0, 0, 1], 6).astype(bool)
+    )
     done = np.asarray(truncated).reshape(-1, 4)
     reset_obs = np.asarray(env.reset(jax.random.PRNGKey(0), params)[0])
     # (the observation after a reset is the start shape, +/+: both DOFs at their upper limit)
@@ -123,16 +133,21 @@ def test_gymnax_wrappers_take_the_world(float32):
 
     world, params = jswim.make("ng", zeta=0.5)
     env = LogWrapper(GymnaxEnv(world, max_steps=4))
-    obs, state = jax.vmap(env.reset, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), 3), params)
+    _obs, state = jax.vmap(env.reset, in_axes=(0, None))(
+        jax.random.split(jax.random.PRNGKey(0), 3), params
+    )
 
     def body(state, k):
         keys = jax.random.split(k, 3)
         action = jnp.full((3,), SQUARE_CODES[0], jnp.int32)
-        obs, state, reward, terminated, truncated, info = jax.vmap(env.step, in_axes=(0, 0, 0, None))(
-            keys, state, action, params)
+        _obs, state, reward, _terminated, _truncated, info = jax.vmap(
+            env.step, in_axes=(0, 0, 0, None)
+        )(keys, state, action, params)
         return state, (reward, info["returned_episode"], info["returned_episode_returns"])
 
-    _, (reward, ended, returns) = jax.lax.scan(body, state, jax.random.split(jax.random.PRNGKey(1), 8))
+    _, (reward, ended, returns) = jax.lax.scan(
+        body, state, jax.random.split(jax.random.PRNGKey(1), 8)
+    )
     np.testing.assert_array_equal(np.asarray(ended)[:, 0], [0, 0, 0, 1, 0, 0, 0, 1])
     # gymnax's logger sums the world's rewards over each episode.
     np.testing.assert_allclose(np.asarray(returns)[3], np.asarray(reward)[:4].sum(0), rtol=1e-6)

@@ -53,9 +53,13 @@ def test_make_gives_the_paper_world_over_the_wall_model():
     assert isinstance(world, SwimmerWorld) and world.model == params.model
     xi_t, xi_n = wall_rft.drag_coefficients(H)
     m = params.model
-    assert (m.kind, m.height, m.xi_par, m.xi_perp) == ("purcell", H, xi_t, xi_n) and float(params.direction) == -1.0
+    assert (m.kind, m.height, m.xi_par, m.xi_perp) == ("purcell", H, xi_t, xi_n) and float(
+        params.direction
+    ) == -1.0
     assert (world.n_dof, world.n_actions, world.n_swimmers) == (2, 6, 1)
-    assert world.dof_range == pytest.approx((-np.pi / 3, np.pi / 3))  # the hinges' +-60 degrees (the paper's)
+    assert world.dof_range == pytest.approx(
+        (-np.pi / 3, np.pi / 3)
+    )  # the hinges' +-60 degrees (the paper's)
     # the plain bulk scene is still the paper's own swimmer
     assert jswim.make("purcell", scene=Scene())[1].model == make_model("purcell")
 
@@ -73,7 +77,9 @@ def test_make_float32_default_and_float64(float32, expected):
         world64, params64 = jswim.make("purcell", scene=WALL)
         t64 = jswim.rollout(world64, params64, 0, jnp.asarray(CODES * 3))
         assert t64.obs.position.dtype == jnp.float64
-        np.testing.assert_allclose(np.asarray(t64.obs.position[3::4, 0, 0]), expected * np.arange(1, 4), rtol=1e-9)
+        np.testing.assert_allclose(
+            np.asarray(t64.obs.position[3::4, 0, 0]), expected * np.arange(1, 4), rtol=1e-9
+        )
 
 
 @pytest.mark.slow  # compile-heavy: tables and programs of new models
@@ -81,7 +87,9 @@ def test_batch_with_noise_is_one_vectorised_call(float32):
     world, params = jswim.make("purcell", scene=WALL, zeta=0.5)
     t = jswim.rollout_batch(world, params, 1, jnp.tile(jnp.asarray(CODES * 2), (4, 1)))
     x = np.asarray(t.obs.position[:, -1, 0, 0])
-    assert x.shape == (4,) and np.all(np.isfinite(x)) and len(set(x.tolist())) == 4  # noise differs per member
+    assert (
+        x.shape == (4,) and np.all(np.isfinite(x)) and len(set(x.tolist())) == 4
+    )  # noise differs per member
 
 
 @pytest.mark.slow  # compile-heavy: tables and programs of new models
@@ -103,16 +111,26 @@ def test_coefficients_scaled_alike_give_the_bulk_trajectories(float32):
     w_a, p_a = jswim.make(model)
     codes = jnp.asarray([(d - 1) * 3 + r + 1 for d, r in moves])
     tb, ta = jswim.rollout(w_b, p_b, 0, codes), jswim.rollout(w_a, p_a, 0, codes)
-    np.testing.assert_allclose(np.asarray(ta.obs.position), np.asarray(tb.obs.position), rtol=0, atol=1e-7)
+    np.testing.assert_allclose(
+        np.asarray(ta.obs.position), np.asarray(tb.obs.position), rtol=0, atol=1e-7
+    )
 
 
-@pytest.mark.parametrize("scene, words", [
-    (Scene(medium="free"), "medium"), (Scene(medium="wall", swimmers=2), "swimmers"),
-    (Scene(medium="wall", tilt=0.2), "tilt"), (Scene(medium="wall", obstacles=((0.0, 20.0, 1.0),)), "obstacles"),
-    (Scene(medium="wall", mobility="rpy"), "mobility"),
-])
+@pytest.mark.parametrize(
+    "scene, words",
+    [
+        (Scene(medium="free"), "medium"),
+        (Scene(medium="wall", swimmers=2), "swimmers"),
+        (Scene(medium="wall", tilt=0.2), "tilt"),
+        (Scene(medium="wall", obstacles=((0.0, 20.0, 1.0),)), "obstacles"),
+        (Scene(medium="wall", mobility="rpy"), "mobility"),
+    ],
+)
 def test_what_is_not_built_is_refused_in_one_line(scene, words):
-    for call in (lambda: jswim.make("purcell", scene=scene), lambda: scene_rollout("purcell", SQUARE, scene)):
+    for call in (
+        lambda: jswim.make("purcell", scene=scene),
+        lambda: scene_rollout("purcell", SQUARE, scene),
+    ):
         with pytest.raises(ConfigError) as e:
             call()
         assert words in str(e.value) and "\n" not in str(e.value)

@@ -35,6 +35,7 @@ def _square_gait_x(n_cycles: int) -> tuple[float, np.dtype]:
             for a in acts:
                 st, _ = env.advance(st, a, jnp.zeros((), st.x.dtype), params)
             return st, None
+
         return jax.lax.scan(cycle, state, None, length=n_cycles)[0]
 
     state = run(env.reset(jax.random.PRNGKey(0), params))
@@ -86,7 +87,9 @@ def test_step_batch_in_float32_keeps_its_dtype_and_unit_rotation(float32):
     s = np.asarray(states.sin, np.float64) + np.asarray(states.sin_lo, np.float64)
     np.testing.assert_allclose(np.hypot(c, s), 1.0, atol=1e-13)
     th = np.asarray(states.theta, np.float64) + np.asarray(states.theta_lo, np.float64)
-    np.testing.assert_allclose(c, np.cos(th), atol=1e-6)  # theta itself is reported to float32 accuracy
+    np.testing.assert_allclose(
+        c, np.cos(th), atol=1e-6
+    )  # theta itself is reported to float32 accuracy
 
 
 def test_noise_draws_are_chunkable():
@@ -136,7 +139,9 @@ def _scaled_cases():
     out = {}
     params = env.make_params("purcell", init="random")
     b = 1001  # not a multiple of the device count: padded and cut back
-    states = jax.vmap(env.reset, in_axes=(0, None))(jax.random.split(jax.random.PRNGKey(0), b), params)
+    states = jax.vmap(env.reset, in_axes=(0, None))(
+        jax.random.split(jax.random.PRNGKey(0), b), params
+    )
     zetas = env.broadcast_params(params, b, zeta=np.linspace(0, 2, b))
     for t in range(5):
         a = jax.random.randint(jax.random.PRNGKey(10 + t), (b,), 0, 6)
@@ -144,14 +149,29 @@ def _scaled_cases():
     out["step_batch_x"], out["step_batch_lo"] = np.asarray(states.x), np.asarray(states.x_lo)
     out["step_batch_progress"] = np.asarray(info.progress)
     ng = env.make_params("ng", direction=-1)
-    run = qlearning.train_batch(jax.random.split(jax.random.PRNGKey(1), 103), ng, qlearning.QConfig(steps=30))
-    out["q_actions"], out["q_x"], out["q_table"] = (np.asarray(v) for v in (run.actions, run.x, run.q))
+    run = qlearning.train_batch(
+        jax.random.split(jax.random.PRNGKey(1), 103), ng, qlearning.QConfig(steps=30)
+    )
+    out["q_actions"], out["q_x"], out["q_table"] = (
+        np.asarray(v) for v in (run.actions, run.x, run.q)
+    )
     r = env.rollout("purcell", np.tile(np.array(SQUARE), (6, 2, 1)), zeta=0.8, key=5)
     out["rollout_x"] = r.x
     pol = ensemble.stroke_policy([env.encode_action(*m) for m in SQUARE])
-    [s] = ensemble.run(pol, env.make_params("purcell"), n=2 * ensemble.BLOCK + 10, zetas=(1.0,), steps=8,
-                       chunk=ensemble.BLOCK)
-    out["ens_mean"], out["ens_std"], out["ens_q"], out["ens_fwd"] = s.mean, s.std, s.quantiles, s.forward
+    [s] = ensemble.run(
+        pol,
+        env.make_params("purcell"),
+        n=2 * ensemble.BLOCK + 10,
+        zetas=(1.0,),
+        steps=8,
+        chunk=ensemble.BLOCK,
+    )
+    out["ens_mean"], out["ens_std"], out["ens_q"], out["ens_fwd"] = (
+        s.mean,
+        s.std,
+        s.quantiles,
+        s.forward,
+    )
     return out
 
 
@@ -172,10 +192,18 @@ def test_four_host_devices_give_the_numbers_of_one(tmp_path, float32):
     root = str(Path(__file__).resolve().parents[2])
     out = tmp_path / "sharded.npz"
     envvars = {k: v for k, v in os.environ.items() if k not in ("JAX_ENABLE_X64", "JAX_PLATFORMS")}
-    envvars["XLA_FLAGS"] = (envvars.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4").strip()
+    envvars["XLA_FLAGS"] = (
+        envvars.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=4"
+    ).strip()
     envvars["JAX_PLATFORMS"] = "cpu"
-    proc = subprocess.run([sys.executable, "-c", _CHILD.format(root=root, out=str(out))], env=envvars,
-                          capture_output=True, text=True, timeout=600, cwd=root)
+    proc = subprocess.run(
+        [sys.executable, "-c", _CHILD.format(root=root, out=str(out))],
+        env=envvars,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        cwd=root,
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     child = json.loads(proc.stdout.strip().splitlines()[-1])
     assert child["devices"] == 4
@@ -191,15 +219,33 @@ def test_ensemble_command(tmp_path, capsys):
     from jswim import cli
 
     out = tmp_path / "ens.csv"
-    rc = cli.main(["ensemble", "--n", "300", "--zetas", "0,1", "--steps", "8", "--every", "2", "--out", str(out)])
+    rc = cli.main(
+        [
+            "ensemble",
+            "--n",
+            "300",
+            "--zetas",
+            "0,1",
+            "--steps",
+            "8",
+            "--every",
+            "2",
+            "--out",
+            str(out),
+        ]
+    )
     assert rc == 0
     text = capsys.readouterr().out
     assert "signature gait" in text and "swimmer-steps" in text
     lines = out.read_text().splitlines()
     assert len(lines) == 1 + 2 * 4 and lines[0].startswith("zeta,n,step,mean,std")
-    for bad, word in ((["--n", "0"], "--n"), (["--policy", "3,1"], "dof"), (["--zetas", "-1"], "zetas"),
-                      (["--every", "9", "--steps", "8"], "every"), (["--out", str(tmp_path / "no" / "x.csv"),
-                                                                     "--n", "10", "--steps", "1"], "--out")):
+    for bad, word in (
+        (["--n", "0"], "--n"),
+        (["--policy", "3,1"], "dof"),
+        (["--zetas", "-1"], "zetas"),
+        (["--every", "9", "--steps", "8"], "every"),
+        (["--out", str(tmp_path / "no" / "x.csv"), "--n", "10", "--steps", "1"], "--out"),
+    ):
         assert cli.main(["ensemble", *bad]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and word in err, err
@@ -214,7 +260,9 @@ def test_qlearn_study_does_not_depend_on_the_chunk():
     kw = dict(swimmers=("ng",), directions=(1, -1), n_seeds=40, seed=3)
     seen = []
     whole = qlearn.study(cfg, **kw)
-    parts = qlearn.study(cfg, chunk=16, progress=lambda done, total: seen.append((done, total)), **kw)
+    parts = qlearn.study(
+        cfg, chunk=16, progress=lambda done, total: seen.append((done, total)), **kw
+    )
     assert whole == parts
     assert seen[-1] == (80, 80) and len(seen) == 5
 
@@ -229,7 +277,10 @@ def test_plain_steps_of_the_baselines_agree_with_exact_steps_over_a_training_run
         def body(st, inp):
             st, info = env.advance(st, inp[0], inp[1], params, exact=exact)
             return st, info.x
-        return np.asarray(jax.lax.scan(body, env.reset(jax.random.PRNGKey(0), params), (acts, ys))[1])
+
+        return np.asarray(
+            jax.lax.scan(body, env.reset(jax.random.PRNGKey(0), params), (acts, ys))[1]
+        )
 
     fast, exact = run(False), run(True)
     assert fast.dtype == np.float32 and np.abs(exact).max() > 0.1

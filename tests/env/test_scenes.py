@@ -11,8 +11,15 @@ from scipy.integrate import quad
 
 import jswim
 from jswim.errors import ConfigError
-from jswim.scenes import (Scene, decode_scene_action, encode_scene_action, scene_params, scene_reset,
-                          scene_rollout, scene_step)
+from jswim.scenes import (
+    Scene,
+    decode_scene_action,
+    encode_scene_action,
+    scene_params,
+    scene_reset,
+    scene_rollout,
+    scene_step,
+)
 
 SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]  # NG square stroke from (10, 10): arms 10 -> 6 -> 10
 
@@ -51,25 +58,37 @@ def collinear_square_cycle(lo=6.0, hi=10.0):
 
 
 def test_scene_json_round_trip_and_hash():
-    s = Scene(medium="wall", height=7.5, tilt=0.1, swimmers=2, separation=40, obstacles=[(1, 20, 2)])
+    s = Scene(
+        medium="wall", height=7.5, tilt=0.1, swimmers=2, separation=40, obstacles=[(1, 20, 2)]
+    )
     back = Scene.from_dict(json.loads(json.dumps(s.to_dict())))
     assert back == s and hash(back) == hash(s)
     assert isinstance(back.obstacles[0], tuple)
 
 
-@pytest.mark.parametrize("fields, word", [
-    ({"medium": "honey"}, "medium"), ({"medium": "wall", "height": 0.5}, "height"),
-    ({"tilt": 2.0}, "tilt"), ({"swimmers": 17}, "swimmers"), ({"swimmers": 0}, "swimmers"),
-    ({"formation": "circle"}, "formation"), ({"swimmers": 2, "separation": -1.0}, "separation"),
-    ({"medium": "free", "obstacles": ((0, 0, -1),)}, "radius"), ({"obstacles": ((0, 30, 1),)}, "obstacles"),
-    ({"height": float("nan")}, "height"),
-])
+@pytest.mark.parametrize(
+    "fields, word",
+    [
+        ({"medium": "honey"}, "medium"),
+        ({"medium": "wall", "height": 0.5}, "height"),
+        ({"tilt": 2.0}, "tilt"),
+        ({"swimmers": 17}, "swimmers"),
+        ({"swimmers": 0}, "swimmers"),
+        ({"formation": "circle"}, "formation"),
+        ({"swimmers": 2, "separation": -1.0}, "separation"),
+        ({"medium": "free", "obstacles": ((0, 0, -1),)}, "radius"),
+        ({"obstacles": ((0, 30, 1),)}, "obstacles"),
+        ({"height": float("nan")}, "height"),
+    ],
+)
 def test_scene_validate_one_line(fields, word):
     with pytest.raises(ValueError) as err:
         Scene(**fields).validate()
     assert word in str(err.value) and "\n" not in str(err.value)
     with pytest.raises(ConfigError):
-        Scene.from_dict(Scene(**fields).to_dict() if fields.get("obstacles") is None else {**fields})
+        Scene.from_dict(
+            Scene(**fields).to_dict() if fields.get("obstacles") is None else {**fields}
+        )
 
 
 def test_start_overlaps_refused():
@@ -83,7 +102,9 @@ def test_start_overlaps_refused():
         scene_params("ng", Scene(medium="free", swimmers=3, separation=21.0))
     with pytest.raises(ConfigError, match="separation"):
         scene_params("ng", Scene(medium="free", swimmers=4, separation=2.0, formation="side"))
-    ok = scene_params("ng", Scene(medium="wall", swimmers=3, separation=2.5, formation="side", height=3.0))
+    ok = scene_params(
+        "ng", Scene(medium="wall", swimmers=3, separation=2.5, formation="side", height=3.0)
+    )
     np.testing.assert_allclose(np.asarray(ok.centre0), [[0.0, 3.0], [0.0, 5.5], [0.0, 8.0]])
     with pytest.raises(ConfigError, match="ng"):
         scene_params("purcell", Scene())
@@ -93,8 +114,16 @@ def test_start_overlaps_refused():
 
 def test_numerics_and_numpy_numbers_checked_in_one_line():
     wall = Scene(medium="wall", height=5.0)
-    for kw in ({"nodes": 0}, {"nodes": 2.0}, {"nodes": True}, {"sweeps": 0}, {"sweeps": True}, {"sweeps": 2.5},
-               {"sweeps": 65}, {"sweeps": "3"}):
+    for kw in (
+        {"nodes": 0},
+        {"nodes": 2.0},
+        {"nodes": True},
+        {"sweeps": 0},
+        {"sweeps": True},
+        {"sweeps": 2.5},
+        {"sweeps": 65},
+        {"sweeps": "3"},
+    ):
         with pytest.raises(ConfigError) as err:
             scene_params("ng", wall, **kw)
         assert next(iter(kw)) in str(err.value) and "\n" not in str(err.value)
@@ -102,7 +131,10 @@ def test_numerics_and_numpy_numbers_checked_in_one_line():
     p = scene_params("ng", wall, nodes=np.int64(4), sweeps=np.int32(3))
     assert (p.nodes, p.sweeps) == (4, 3) and type(p.nodes) is int and type(p.sweeps) is int
     s = Scene(medium="wall", height=np.float32(5.0), swimmers=np.int64(2), separation=np.int32(30))
-    assert s == Scene(medium="wall", height=5.0, swimmers=2, separation=30.0) and type(s.swimmers) is int
+    assert (
+        s == Scene(medium="wall", height=5.0, swimmers=2, separation=30.0)
+        and type(s.swimmers) is int
+    )
 
 
 def test_start_beyond_the_dtype_refused(float32):
@@ -110,16 +142,23 @@ def test_start_beyond_the_dtype_refused(float32):
     # would move in steps of >= 1.2e-4 a (at D = 1e7 a it does not move at all): refused, one line.
     scene_params("ng", Scene(medium="free", swimmers=2, separation=1000.0))
     for d in (1010.0, 1e5, 1e12):
-        with pytest.raises(ConfigError, match="separation .* too far for float32 .* below 1004 a") as err:
+        with pytest.raises(
+            ConfigError, match="separation .* too far for float32 .* below 1004 a"
+        ) as err:
             scene_params("ng", Scene(medium="free", swimmers=2, separation=d))
         assert "\n" not in str(err.value)
-    for scene in (Scene(medium="wall", height=1e39), Scene(medium="free", obstacles=((1e39, 0.0, 1.0),))):
+    for scene in (
+        Scene(medium="wall", height=1e39),
+        Scene(medium="free", obstacles=((1e39, 0.0, 1.0),)),
+    ):
         with pytest.raises(ConfigError, match="overflow float32"):
             scene_params("ng", scene)
     with jax.enable_x64(True):  # float64 resolves 1e-4 a out to 2^39 a
         scene_params("ng", Scene(medium="free", swimmers=2, separation=1e10), dtype=jnp.float64)
         with pytest.raises(ConfigError, match="float64 positions"):
-            jswim.rollout("ng", [(1, 1, -1)], scene=Scene(medium="free", swimmers=2, separation=1e12))
+            jswim.rollout(
+                "ng", [(1, 1, -1)], scene=Scene(medium="free", swimmers=2, separation=1e12)
+            )
 
 
 def test_free_square_stroke_matches_independent_collinear_solve():
@@ -144,7 +183,9 @@ def test_bulk_is_todays_environment():
     np.testing.assert_array_equal(r.stuck, today.stuck)
     assert abs(r.x[3, 0] - 0.15626494) < 5e-9
     # two swimmers in bulk: independent, each the paper's number
-    two = scene_rollout("ng", [(2, d, k) for d, k in SQUARE] + [(1, d, k) for d, k in SQUARE], Scene(swimmers=2))
+    two = scene_rollout(
+        "ng", [(2, d, k) for d, k in SQUARE] + [(1, d, k) for d, k in SQUARE], Scene(swimmers=2)
+    )
     np.testing.assert_allclose(two.x[-1], [r.x[3, 0], 30.0 + r.x[3, 0]], atol=1e-12)
 
 
@@ -189,7 +230,9 @@ def test_noise_scales_the_displacement_not_the_tilt():
     with jax.enable_x64(True):
         y = float(jax.random.uniform(jax.random.split(key, 1)[0], (), jnp.float64, -1.0, 1.0))
     np.testing.assert_allclose(noisy.x[0, 0], clean.x[0, 0] * (1 + 0.5 * y), rtol=1e-13)
-    np.testing.assert_allclose(noisy.z[0, 0] - 6.0, (clean.z[0, 0] - 6.0) * (1 + 0.5 * y), rtol=1e-10)
+    np.testing.assert_allclose(
+        noisy.z[0, 0] - 6.0, (clean.z[0, 0] - 6.0) * (1 + 0.5 * y), rtol=1e-10
+    )
     assert noisy.tilt[0, 0] == clean.tilt[0, 0]
 
 
@@ -199,15 +242,23 @@ def test_float32_jit_vmap(float32):
     assert params.arms0.dtype == jnp.float32
     b = 4
     states = jax.tree.map(lambda v: jnp.broadcast_to(v, (b,) + v.shape), scene_reset(params))
-    acts = (jnp.array([0, 1, 0, 1], jnp.int32), jnp.array([0, 0, 1, 1], jnp.int32), jnp.array([-1.0, -1.0, -0.5, 1.0]))
+    acts = (
+        jnp.array([0, 1, 0, 1], jnp.int32),
+        jnp.array([0, 0, 1, 1], jnp.int32),
+        jnp.array([-1.0, -1.0, -0.5, 1.0]),
+    )
     keys = jax.random.split(jax.random.PRNGKey(0), b)
     step = jax.jit(jax.vmap(scene_step, in_axes=(None, 0, 0, 0)))
     new, info = step(params, states, acts, keys)
     assert new.centre.dtype == jnp.float32 and info.dx.shape == (b, 2)
     assert bool(info.stuck[3]) and not bool(info.stuck[0])
     with jax.enable_x64(True):
-        ref = scene_rollout("ng", [(1, 1, -1)], Scene(medium="wall", height=5.0, swimmers=2, separation=30.0))
-    np.testing.assert_allclose(np.asarray(new.centre[0]), np.stack([ref.x[0], ref.z[0]], -1), atol=2e-5)
+        ref = scene_rollout(
+            "ng", [(1, 1, -1)], Scene(medium="wall", height=5.0, swimmers=2, separation=30.0)
+        )
+    np.testing.assert_allclose(
+        np.asarray(new.centre[0]), np.stack([ref.x[0], ref.z[0]], -1), atol=2e-5
+    )
 
 
 @pytest.mark.slow  # compiles the free pair's body-frame path in both dtypes (47 s under load 8)
@@ -226,7 +277,9 @@ def test_float32_pair_in_the_free_fluid(float32):
     with jax.enable_x64(True):
         ref = scene_rollout("ng", moves, scene)
     np.testing.assert_allclose(np.asarray(st.centre[:, 0]), ref.x[-1], atol=2e-5)
-    assert abs(ref.x[-1, 1] - 30.0) > 0.1  # swimmer 2 swam its own cycle (and was pushed by swimmer 1's)
+    assert (
+        abs(ref.x[-1, 1] - 30.0) > 0.1
+    )  # swimmer 2 swam its own cycle (and was pushed by swimmer 1's)
     np.testing.assert_allclose(np.asarray(st.centre[:, 1]), ref.z[-1], atol=1e-6)
 
 
@@ -245,8 +298,12 @@ def test_float32_pair_separation_does_not_drift(float32):
 
         @jax.jit
         def run(st):
-            body = lambda st, a: (scene_step_joint(params, st, a[0], a[1], jax.random.PRNGKey(0))[0], None)
+            body = lambda st, a: (
+                scene_step_joint(params, st, a[0], a[1], jax.random.PRNGKey(0))[0],
+                None,
+            )
             return jax.lax.scan(body, st, (dofs, rocs))[0]
+
         st = run(scene_reset(params))
         assert st.centre.dtype == dtype
         pos = scene_positions(st)
@@ -268,7 +325,7 @@ def test_float32_one_swimmer_near_a_wall(float32):
     step = jax.jit(scene_step)
     st = scene_reset(params)
     for d, k in SQUARE:
-        st, info = step(params, st, (0, d - 1, float(k)), jax.random.PRNGKey(0))
+        st, _info = step(params, st, (0, d - 1, float(k)), jax.random.PRNGKey(0))
     assert st.centre.dtype == jnp.float32
     with jax.enable_x64(True):
         ref = scene_rollout("ng", SQUARE, Scene(medium="wall", height=4.0))

@@ -9,14 +9,23 @@ import pytest
 
 import jswim
 from jswim.errors import ConfigError
-from jswim.scenes import Scene, scene_params, scene_positions, scene_reset, scene_step, scene_step_joint
+from jswim.scenes import (
+    Scene,
+    scene_params,
+    scene_positions,
+    scene_reset,
+    scene_step,
+    scene_step_joint,
+)
 
 SQUARE = [(0, -1), (1, -1), (0, 1), (1, 1)]  # 0-based arm, ROC
 
 
 def test_formation_json_and_starts():
     line = Scene(medium="free", swimmers=4, separation=25.0)
-    assert "formation" not in line.to_dict()  # the default: earlier scenes' JSON and run ids unchanged
+    assert (
+        "formation" not in line.to_dict()
+    )  # the default: earlier scenes' JSON and run ids unchanged
     side = Scene(medium="wall", swimmers=3, separation=4.0, formation="side", height=3.0)
     back = Scene.from_dict(json.loads(json.dumps(side.to_dict())))
     assert back == side and back.to_dict()["formation"] == "side"
@@ -56,7 +65,10 @@ def test_school_study_cells():
     from jswim.studies.grids import build
     from jswim.studies.scenes import stroke_codes
 
-    plans = build("school", StudyOptions(school_sizes=(1, 3), separations=(30.0,), formations=("line", "side")))
+    plans = build(
+        "school",
+        StudyOptions(school_sizes=(1, 3), separations=(30.0,), formations=("line", "side")),
+    )
     assert [p.agent for p in plans] == ["stroke"] * 3
     scenes = [json.loads(p.scene) for p in plans]
     assert [s["swimmers"] for s in scenes] == [1, 3, 3]
@@ -91,7 +103,9 @@ def test_float32_school_positions_do_not_drift(float32):
             def body(st, a):
                 st, info = scene_step_joint(params, st, a[0], a[1], jax.random.PRNGKey(0))
                 return st, info.dx
+
             return jax.lax.scan(body, st, (dofs, rocs))
+
         st, dx = go(scene_reset(params))
         assert st.centre.dtype == dtype
         x = scene_positions(st)[:, 0]

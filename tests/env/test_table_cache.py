@@ -44,7 +44,10 @@ def test_an_unusable_folder_falls_back_to_building(tmp_path, monkeypatch):
     calls = []
     assert cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3)
     monkeypatch.setenv("JSWIM_TABLE_CACHE", "off")
-    assert cache.cache_dir() is None and cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3)
+    assert cache.cache_dir() is None and cache.cached("t", "k", _build(calls))["rows"].shape == (
+        2,
+        3,
+    )
     assert len(calls) == 2
 
 
@@ -53,7 +56,10 @@ def test_the_folder_follows_xdg_cache_home(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     assert cache.cache_dir() == tmp_path / "jswim" / "tables"
     monkeypatch.delenv("XDG_CACHE_HOME")
-    assert cache.cache_dir() == __import__("pathlib").Path(os.path.expanduser("~")) / ".cache" / "jswim" / "tables"
+    assert (
+        cache.cache_dir()
+        == __import__("pathlib").Path(os.path.expanduser("~")) / ".cache" / "jswim" / "tables"
+    )
 
 
 def test_the_key_includes_the_code_version(tmp_path, monkeypatch):

@@ -53,12 +53,20 @@ class ToyWorld(Environment):
         mid, d = (state.frac + f1) / 2, f1 - state.frac
         dx = 0.5 * (mid[0] * d[1] - mid[1] * d[0]) * (1.0 + params.zeta * noise[0])
         moved = jnp.any(d != 0)
-        info = StepInfo(jnp.stack([dx, 0.0 * dx])[None], params.direction * dx, (roc != 0) & ~moved, moved,
-                        jnp.zeros((), bool), jnp.asarray(jnp.inf, dx.dtype))
+        info = StepInfo(
+            jnp.stack([dx, 0.0 * dx])[None],
+            params.direction * dx,
+            (roc != 0) & ~moved,
+            moved,
+            jnp.zeros((), bool),
+            jnp.asarray(jnp.inf, dx.dtype),
+        )
         return ToyState(f1, state.x + dx), info
 
     def observe(self, state, params):
-        return Observation(state.frac, jnp.stack([state.x, 0.0 * state.x])[None], jnp.zeros(1, state.x.dtype))
+        return Observation(
+            state.frac, jnp.stack([state.x, 0.0 * state.x])[None], jnp.zeros(1, state.x.dtype)
+        )
 
     def features(self, state, params):
         return scaled(state.frac, 0.0, 1.0)
@@ -79,7 +87,9 @@ def test_toy_world_rollouts_follow_the_area_rule(float32):
     noisy = ToyParams(zeta=0.5)
     batch = rollout_batch(env, noisy, 1, jnp.stack([SQUARE, SQUARE[::-1]]))
     keys = jax.random.split(jax.random.PRNGKey(1), 2)
-    np.testing.assert_array_equal(batch.info.progress[1], rollout(env, noisy, keys[1], SQUARE[::-1]).info.progress)
+    np.testing.assert_array_equal(
+        batch.info.progress[1], rollout(env, noisy, keys[1], SQUARE[::-1]).info.progress
+    )
     # The reversed gait goes counter-clockwise: +1 per cycle, with noise on each step.
     assert float(jnp.sum(batch.info.progress[1])) > 0 > float(jnp.sum(batch.info.progress[0]))
 
@@ -87,10 +97,16 @@ def test_toy_world_rollouts_follow_the_area_rule(float32):
 @pytest.mark.slow
 def test_agents_take_the_toy_world(float32):
     env, params = ToyWorld(), ToyParams()
-    run = random_policy.run_env(env, params, jax.random.split(jax.random.PRNGKey(0), 8), 40, trace=True)
+    run = random_policy.run_env(
+        env, params, jax.random.split(jax.random.PRNGKey(0), 8), 40, trace=True
+    )
     assert run.actions.shape == (8, 40) and set(np.unique(run.actions).tolist()) <= set(range(6))
     # Each step's reward is the position's change (the toy has no noise here).
-    np.testing.assert_allclose(np.cumsum(run.trace.info.progress, 1), run.trace.obs.position[..., 0, 0], atol=1e-5)
-    trained = ppo.train_env(env, jax.random.split(jax.random.PRNGKey(1), 2), params, ppo.PPOConfig(steps=64))
+    np.testing.assert_allclose(
+        np.cumsum(run.trace.info.progress, 1), run.trace.obs.position[..., 0, 0], atol=1e-5
+    )
+    trained = ppo.train_env(
+        env, jax.random.split(jax.random.PRNGKey(1), 2), params, ppo.PPOConfig(steps=64)
+    )
     assert trained.x.shape == (2, 64) and trained.dofs.shape == (2, 64, 2)
     np.testing.assert_allclose(np.cumsum(trained.progress, 1), trained.x, atol=1e-5)

@@ -49,7 +49,9 @@ def _paper_steps(swimmer, actions, zeta=0.7):
     return s_new, info
 
 
-@pytest.mark.parametrize("swimmer", [pytest.param("purcell", marks=pytest.mark.slow), "ng"])  # Purcell: motion table
+@pytest.mark.parametrize(
+    "swimmer", [pytest.param("purcell", marks=pytest.mark.slow), "ng"]
+)  # Purcell: motion table
 def test_paper_world_steps_bit_equal_to_env_step_float32(float32, swimmer):
     codes = [jnp.int32(c) for c in SQUARE_CODES + [SQUARE_CODES[0]] * 2]  # the last one is stuck
     rocs = [jnp.array([0.0, -0.3]), jnp.array([0.5, 0.2])]  # real ROCs: the continuous path
@@ -64,11 +66,15 @@ def test_paper_world_steps_bit_equal_float64():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene", [
-    Scene(medium="wall", height=4.0),
-    Scene(medium="free", swimmers=2, separation=25.0),
-    Scene(medium="bulk", tilt=0.3),
-], ids=["wall", "pair", "tilted-bulk"])
+@pytest.mark.parametrize(
+    "scene",
+    [
+        Scene(medium="wall", height=4.0),
+        Scene(medium="free", swimmers=2, separation=25.0),
+        Scene(medium="bulk", tilt=0.3),
+    ],
+    ids=["wall", "pair", "tilted-bulk"],
+)
 def test_scene_world_steps_bit_equal_to_scene_step_float32(float32, scene):
     env, task = jswim.make("ng", scene, zeta=0.5)
     assert isinstance(env, SceneWorld) and env.n_swimmers == scene.swimmers
@@ -124,7 +130,9 @@ def test_progress_toward_minus_x_is_minus_the_closed_form():
                 env, params = jswim.make(swimmer, direction=direction)
                 tr = rollout(env, params, 0, jnp.array(SQUARE_CODES * 3, jnp.int32))
                 totals[direction] = float(jnp.sum(tr.info.progress))
-                np.testing.assert_array_equal(tr.info.progress, sign * tr.info.displacement[:, 0, 0])
+                np.testing.assert_array_equal(
+                    tr.info.progress, sign * tr.info.displacement[:, 0, 0]
+                )
             # This gait swims Purcell's swimmer toward +x and NG's toward -x.
             assert abs(totals["+x"]) == pytest.approx(3 * per_cycle, rel=1e-7)
             assert totals["-x"] == -totals["+x"]
@@ -151,8 +159,11 @@ def test_scene_observation_heights_are_the_middle_sphere_s_positions_the_full_ce
     # as the pair centre + centre_lo (1e4 alone is float32's nearest; its spacing there is 9.8e-4).
     env, task = jswim.make("ng", Scene(medium="wall", height=6.0))
     state = env.reset(jax.random.PRNGKey(0), task)._replace(
-        arms=jnp.array([[10.0, 6.0]], jnp.float32), tilt=jnp.array([0.3], jnp.float32),
-        centre=jnp.array([[1e4, 6.0]], jnp.float32), centre_lo=jnp.array([[1e-4, 0.0]], jnp.float32))
+        arms=jnp.array([[10.0, 6.0]], jnp.float32),
+        tilt=jnp.array([0.3], jnp.float32),
+        centre=jnp.array([[1e4, 6.0]], jnp.float32),
+        centre_lo=jnp.array([[1e-4, 0.0]], jnp.float32),
+    )
     obs = env.observe(state, task)
     # The centroid: (d2 - d1) / 3 = -4/3 a along the axis; the height H: the middle sphere's z.
     assert obs.height.dtype == jnp.float32 and float(obs.height[0]) == 6.0
@@ -160,9 +171,14 @@ def test_scene_observation_heights_are_the_middle_sphere_s_positions_the_full_ce
     assert float(obs.position[0, 0]) == pytest.approx(1e4 - 4 / 3 * math.cos(0.3), abs=1e-3)
     # Widened to float64 (as the LLM's step group reads X), the low word counts: drift-free.
     with jax.enable_x64(True):
-        wide = env.observe(jax.tree.map(lambda a: a.astype(jnp.float64) if a.dtype == jnp.float32 else a, state), task)
+        wide = env.observe(
+            jax.tree.map(lambda a: a.astype(jnp.float64) if a.dtype == jnp.float32 else a, state),
+            task,
+        )
         x = float(wide.position[0, 0])
-    assert x == pytest.approx(1e4 + float(np.float32(1e-4)) - 4 / 3 * math.cos(np.float32(0.3)), abs=1e-9)
+    assert x == pytest.approx(
+        1e4 + float(np.float32(1e-4)) - 4 / 3 * math.cos(np.float32(0.3)), abs=1e-9
+    )
     # The paper's world has no separate height (its position's y stands for it).
     env, params = jswim.make("ng")
     assert env.observe(env.reset(jax.random.PRNGKey(0), params), params).height is None
@@ -171,7 +187,14 @@ def test_scene_observation_heights_are_the_middle_sphere_s_positions_the_full_ce
 @pytest.mark.slow
 def test_vmapped_batch_equals_each_member(float32):
     env, params = jswim.make("purcell", zeta=1.0)
-    actions = jnp.array([SQUARE_CODES * 2, SQUARE_CODES[::-1] * 2, SQUARE_CODES[1:] + SQUARE_CODES + SQUARE_CODES[:1]], jnp.int32)
+    actions = jnp.array(
+        [
+            SQUARE_CODES * 2,
+            SQUARE_CODES[::-1] * 2,
+            SQUARE_CODES[1:] + SQUARE_CODES + SQUARE_CODES[:1],
+        ],
+        jnp.int32,
+    )
     batch = rollout_batch(env, params, 7, actions)
     keys = jax.random.split(jenv.seed_key(7), 3)
     for i in range(3):
@@ -180,7 +203,9 @@ def test_vmapped_batch_equals_each_member(float32):
     assert batch.info.progress.shape == (3, 8) and batch.info.progress.dtype == jnp.float32
     # Per-member direction through params_axes.
     both = jenv.broadcast_params(params, 2, zeta=0.0, direction=np.array([1.0, -1.0]))
-    tr = rollout_batch(env, both, 0, jnp.array([SQUARE_CODES] * 2, jnp.int32), params_axes=jenv.param_axes(both))
+    tr = rollout_batch(
+        env, both, 0, jnp.array([SQUARE_CODES] * 2, jnp.int32), params_axes=jenv.param_axes(both)
+    )
     np.testing.assert_array_equal(tr.info.progress[0], -tr.info.progress[1])
 
 
@@ -200,7 +225,9 @@ def test_spaces_sizes_and_make_errors():
     for bad in ({"medium": "sea"}, 3):
         with pytest.raises(ConfigError):
             jswim.make("ng", bad)
-    with pytest.raises(ConfigError):  # Purcell above a wall is built (issue 34); in "free" it is not
+    with pytest.raises(
+        ConfigError
+    ):  # Purcell above a wall is built (issue 34); in "free" it is not
         jswim.make("purcell", Scene(medium="free"))
     with pytest.raises(ConfigError):
         jswim.make("purcell", dtype="float64")
@@ -209,29 +236,77 @@ def test_spaces_sizes_and_make_errors():
 
 def test_old_names_import_from_their_old_places():
     for module, names in {
-        "jswim.env": ["EnvParams", "EnvState", "StepInfo", "Rollout", "make_params", "reset", "step", "step_batch",
-                      "advance", "rollout", "seed32", "seed_key", "encode_action", "dof_values", "position"],
+        "jswim.env": [
+            "EnvParams",
+            "EnvState",
+            "StepInfo",
+            "Rollout",
+            "make_params",
+            "reset",
+            "step",
+            "step_batch",
+            "advance",
+            "rollout",
+            "seed32",
+            "seed_key",
+            "encode_action",
+            "dof_values",
+            "position",
+        ],
         "jswim.env.rollouts": ["Rollout", "rollout", "seed32", "seed_key"],
-        "jswim.scenes": ["Scene", "SceneParams", "SceneState", "SceneStepInfo", "SceneRollout", "scene_params",
-                         "scene_reset", "scene_step", "scene_step_joint", "scene_advance", "scene_rollout",
-                         "scene_rollout_batch", "batch_starts", "decode_scene_action", "encode_scene_action"],
+        "jswim.scenes": [
+            "Scene",
+            "SceneParams",
+            "SceneState",
+            "SceneStepInfo",
+            "SceneRollout",
+            "scene_params",
+            "scene_reset",
+            "scene_step",
+            "scene_step_joint",
+            "scene_advance",
+            "scene_rollout",
+            "scene_rollout_batch",
+            "batch_starts",
+            "decode_scene_action",
+            "encode_scene_action",
+        ],
         "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make", "rollout_batch"],
         # moved by issue 30's import clean-up, still importable where they were
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
-        "jswim.studies.scenes": ["wall_scene", "pair_scene", "cells", "run_baselines", "fate", "scene_row"],
+        "jswim.studies.scenes": [
+            "wall_scene",
+            "pair_scene",
+            "cells",
+            "run_baselines",
+            "fate",
+            "scene_row",
+        ],
     }.items():
         mod = importlib.import_module(module)
         for name in names:
-            assert callable(getattr(mod, name)) or isinstance(getattr(mod, name), type), (module, name)
+            assert callable(getattr(mod, name)) or isinstance(getattr(mod, name), type), (
+                module,
+                name,
+            )
 
 
 def test_old_paths_are_the_moved_modules():
     """Issue 30 moved the loose top-level modules into packages; the old paths still import the
     same module objects (so monkeypatching either path patches both)."""
-    pairs = {"gait": "judging.gait", "lattice": "judging.lattice", "shape_judge": "judging.shape_judge",
-             "stats": "judging.stats", "folderlock": "_io.folderlock", "jsonl": "_io.jsonl",
-             "permissions": "_io.permissions", "interrupts": "_io.interrupts", "plots": "figures.plots",
-             "scene_plots": "figures.scenes", "figure_style": "figures.style"}
+    pairs = {
+        "gait": "judging.gait",
+        "lattice": "judging.lattice",
+        "shape_judge": "judging.shape_judge",
+        "stats": "judging.stats",
+        "folderlock": "_io.folderlock",
+        "jsonl": "_io.jsonl",
+        "permissions": "_io.permissions",
+        "interrupts": "_io.interrupts",
+        "plots": "figures.plots",
+        "scene_plots": "figures.scenes",
+        "figure_style": "figures.style",
+    }
     for old, new in pairs.items():
         assert importlib.import_module(f"jswim.{old}") is importlib.import_module(f"jswim.{new}")
     from jswim.gait import judge  # noqa: F401

@@ -25,7 +25,9 @@ def _runs(rows: list[list[int]]) -> np.ndarray:
 
 @pytest.mark.parametrize("swimmer, per_cycle", [("purcell", 0.19124724), ("ng", 0.15626494)])
 @pytest.mark.parametrize("direction", [1, -1])
-def test_best_cycle_is_the_square_gait_and_the_only_one_that_qualifies(swimmer, per_cycle, direction):
+def test_best_cycle_is_the_square_gait_and_the_only_one_that_qualifies(
+    swimmer, per_cycle, direction
+):
     cycles = best_cycles(make_params(swimmer).model, direction)
     best = cycles[0]
     assert best.period == 4
@@ -46,7 +48,9 @@ def test_reversed_direction_reverses_the_best_cycle():
     assert best_per_step(model, -1) == pytest.approx(best_per_step(model, 1))
 
 
-@pytest.mark.parametrize("swimmer", ["purcell", "ng", pytest.param("nlink", marks=pytest.mark.slow)])  # nlink: 3.5 CPU-s
+@pytest.mark.parametrize(
+    "swimmer", ["purcell", "ng", pytest.param("nlink", marks=pytest.mark.slow)]
+)  # nlink: 3.5 CPU-s
 def test_replay_matches_the_environment(swimmer):
     # The four-link swimmer starts turned (symmetric about x), so its replay must carry the start
     # orientation through every step, not only the first.
@@ -67,17 +71,19 @@ def test_verdicts_on_constructed_runs(swimmer, direction):
     params = make_params(swimmer, direction=direction, init=start)
     wrong = [act(d, -r) for d, r in reversed([decode_action(a) for a in cyc])]
     t = 60
-    runs = _runs([
-        (cyc * 15)[:t],                                  # 0: from the first step
-        ([HOLD] * 7 + cyc * 15)[:t],                     # 1: after 7 idle steps
-        [HOLD] * (t - 12) + cyc * 3,                     # 2: exactly three cycles, at the very end
-        [HOLD] * (t - 11) + cyc * 2 + cyc[:3],           # 3: not quite three cycles
-        (cyc * 15)[: t - 1] + [HOLD],                    # 4: fails at the last step
-        (wrong * 15)[:t],                                # 5: the cycle backwards
-        ([act(1, 1), act(1, -1)] * 30)[:t],              # 6: reciprocal, period 2
-        [HOLD] * 38 + (cyc * 6)[: t - 38],               # 7: three cycles done at step 50
-        [HOLD] * 39 + (cyc * 6)[: t - 39],               # 8: done at step 51: learned, too late
-    ])
+    runs = _runs(
+        [
+            (cyc * 15)[:t],  # 0: from the first step
+            ([HOLD] * 7 + cyc * 15)[:t],  # 1: after 7 idle steps
+            [HOLD] * (t - 12) + cyc * 3,  # 2: exactly three cycles, at the very end
+            [HOLD] * (t - 11) + cyc * 2 + cyc[:3],  # 3: not quite three cycles
+            (cyc * 15)[: t - 1] + [HOLD],  # 4: fails at the last step
+            (wrong * 15)[:t],  # 5: the cycle backwards
+            ([act(1, 1), act(1, -1)] * 30)[:t],  # 6: reciprocal, period 2
+            [HOLD] * 38 + (cyc * 6)[: t - 38],  # 7: three cycles done at step 50
+            [HOLD] * 39 + (cyc * 6)[: t - 39],  # 8: done at step 51: learned, too late
+        ]
+    )
     r = judge(runs, params)
     assert r.learned.tolist() == [True, True, True, False, False, False, False, True, True]
     # Counted from 1 as in the paper: the stroke from the first action is learned in 1 step.

@@ -36,7 +36,8 @@ def test_codes_round_trip_and_k1_codes_are_the_environment_codes():
             for r in range(-k, k + 1):
                 assert lattice.decode(lattice.encode(dof, r, k), k) == (dof, r)
     assert [lattice.encode(d, r, 1) for d in (1, 2) for r in (-1, 0, 1)] == [
-        encode_action(d, r) for d in (1, 2) for r in (-1, 0, 1)]
+        encode_action(d, r) for d in (1, 2) for r in (-1, 0, 1)
+    ]
     assert lattice.n_actions(2, 5) == 22
 
 
@@ -51,7 +52,9 @@ def test_k1_table_is_the_corner_table(name):
             target, motion, moved = lattice.move(tab, c, d, k)
             np.testing.assert_allclose(motion, inc[c, d], rtol=0, atol=1e-14)
             assert target == c ^ (1 << d) and moved
-            assert not lattice.move(tab, c, d, 0)[2] and not lattice.move(tab, c, d, -k)[2]  # hold, stuck
+            assert (
+                not lattice.move(tab, c, d, 0)[2] and not lattice.move(tab, c, d, -k)[2]
+            )  # hold, stuck
 
 
 @pytest.mark.parametrize("name", ["purcell", "ng"])
@@ -62,7 +65,9 @@ def test_rate_independence_square_in_any_number_of_moves(name, k, sub):
     rp = lattice.replay(acts, model, k, np.zeros((1, 2), np.int64))
     assert rp.corner[-1, 0] == 0  # closed
     assert abs(rp.x[-1, 0] - SQUARE[name]) < 5e-9  # the paper's value (8 digits)
-    full = lattice.replay(np.array(square(name, 1))[:, None], model, 1, np.zeros((1, 2), np.int64)).x[-1, 0]
+    full = lattice.replay(
+        np.array(square(name, 1))[:, None], model, 1, np.zeros((1, 2), np.int64)
+    ).x[-1, 0]
     assert abs(rp.x[-1, 0] - full) < 1e-12 * abs(full)
 
 
@@ -72,7 +77,10 @@ def test_reversed_loop_goes_exactly_back(name):
     k = 4
     fwd = square(name, k, 2)
     back = [lattice.encode(d, -r, k) for d, r in (lattice.decode(c, k) for c in reversed(fwd))]
-    x = [lattice.replay(np.array(s)[:, None], model, k, np.zeros((1, 2), np.int64)).x[-1, 0] for s in (fwd, back)]
+    x = [
+        lattice.replay(np.array(s)[:, None], model, k, np.zeros((1, 2), np.int64)).x[-1, 0]
+        for s in (fwd, back)
+    ]
     assert abs(x[0] + x[1]) < 1e-12 * abs(x[0])
 
 
@@ -86,10 +94,17 @@ def test_half_amplitude_square_agrees_with_rk4():
     model = make_model("purcell")
     k = 4
     moves = [(2, 2), (1, 2), (2, -2), (1, -2)]
-    got = lattice.replay(np.array([lattice.encode(d, r, k) for d, r in moves])[:, None], model, k,
-                         np.ones((1, 2), np.int64)).x[-1, 0]
-    rk4 = jax.jit(lambda d, rate, dur, pose: integrate_stroke(model, d, rate, dur, pose0=pose, n_sub=400,
-                                                                method="rk4"))
+    got = lattice.replay(
+        np.array([lattice.encode(d, r, k) for d, r in moves])[:, None],
+        model,
+        k,
+        np.ones((1, 2), np.int64),
+    ).x[-1, 0]
+    rk4 = jax.jit(
+        lambda d, rate, dur, pose: integrate_stroke(
+            model, d, rate, dur, pose0=pose, n_sub=400, method="rk4"
+        )
+    )
     with jax.enable_x64(True):
         vals = lattice.values(model, k)
         d = jnp.array([vals[1], vals[1]])
@@ -143,7 +158,10 @@ def test_judge_on_the_lattice(name):
     params = make_params(name)
     full = square(name, k) * 10
     half = square(name, k, 2) * 5
-    wrong = [lattice.encode(*(lambda d, r: (d, -r))(*lattice.decode(c, k)), k) for c in reversed(square(name, k))] * 10
+    wrong = [
+        lattice.encode(*(lambda d, r: (d, -r))(*lattice.decode(c, k)), k)
+        for c in reversed(square(name, k))
+    ] * 10
     acts = np.array([full, half[:40], wrong])
     rep = judge(acts, params, levels0=np.zeros((3, 2), np.int64), roc_levels=k)
     assert rep.learned.tolist() == [True, True, False]
@@ -177,4 +195,3 @@ def test_gait_search_finds_the_full_square():
             assert all(abs(m[1]) == k for m in best[0].moves)  # every side the whole range
             assert best[1].per_step < best[0].per_step - 1e-6
         assert lattice.best_per_step(model, -1, 2) == pytest.approx(SQUARE[name] / 4, abs=2e-9)
-

@@ -83,7 +83,13 @@ def test_plain_call(server):
 
 
 def test_retries_on_transient_faults(server):
-    server.add_faults(Fault.server_error(500), Fault.drop(), Fault.malformed(), Fault.server_error(503), Fault.rate_limit())
+    server.add_faults(
+        Fault.server_error(500),
+        Fault.drop(),
+        Fault.malformed(),
+        Fault.server_error(503),
+        Fault.rate_limit(),
+    )
     res = run(one_call(settings(server, max_retries=5)))
     assert res.text == "[2, 1]" and res.retries == 5
     assert server.n_requests == 6 and server.n_answered == 1
@@ -238,7 +244,9 @@ def test_shared_failure_reaches_every_waiter():
 
         async def burst():
             async with LLMClient(s) as c:
-                return await asyncio.gather(*[c.chat(MSG) for _ in range(4)], return_exceptions=True)
+                return await asyncio.gather(
+                    *[c.chat(MSG) for _ in range(4)], return_exceptions=True
+                )
 
         results = run(burst())
         assert all(isinstance(r, LLMServerError) for r in results)
@@ -264,7 +272,9 @@ def test_concurrency_limit_and_overlap():
         assert srv.max_in_flight == 8 and srv.n_requests == 8
         srv.reset_counts()
         assert len(run(many(2))) == 8
-        assert srv.max_in_flight == 2 and srv.n_requests == 8  # 8: no request timed out and was sent again
+        assert (
+            srv.max_in_flight == 2 and srv.n_requests == 8
+        )  # 8: no request timed out and was sent again
 
 
 def test_api_key_never_leaks(server, tmp_path, monkeypatch):
@@ -290,7 +300,9 @@ def test_no_key_no_header(server, monkeypatch):
 
 
 def test_usage_and_cost(server):
-    s = settings(server, model="gpt-4", price_local=True)  # the fake server stands in for a paid API
+    s = settings(
+        server, model="gpt-4", price_local=True
+    )  # the fake server stands in for a paid API
 
     async def calls():
         async with LLMClient(s) as c:
@@ -320,7 +332,9 @@ def test_a_local_server_is_not_priced_at_a_cloud_list_price(server):
     assert cost == 0.0 and "--price-local" in why
     cost, why = priced_calls(server, price_local=True)  # asked: a local gateway to a paid API
     assert cost == pytest.approx(2 * (3 * 30 + 2 * 60) / 1e6) and why is None
-    cost, why = priced_calls(server, prices={"gpt-4": (1.0, 1.0)})  # the user's own table applies anywhere
+    cost, why = priced_calls(
+        server, prices={"gpt-4": (1.0, 1.0)}
+    )  # the user's own table applies anywhere
     assert cost == pytest.approx(2 * 5 / 1e6) and why is None
 
 
@@ -329,7 +343,9 @@ def test_a_reply_from_another_model_is_not_priced():
     with FakeServer(served_model="/models/SmolLM2-135M-Instruct.Q4_1.gguf") as srv:
         cost, why = priced_calls(srv, price_local=True)
         assert cost == 0.0 and "SmolLM2" in why and "'gpt-4'" in why
-    with FakeServer(served_model="gpt-4-0613") as srv:  # a dated snapshot of the priced model: priced
+    with FakeServer(
+        served_model="gpt-4-0613"
+    ) as srv:  # a dated snapshot of the priced model: priced
         cost, why = priced_calls(srv, price_local=True)
         assert cost > 0 and why is None
 
@@ -353,7 +369,12 @@ def test_price_table():
     assert prices.lookup("gpt-4o-mini-2024-07-18") == prices.lookup("gpt-4o-mini")
     assert prices.lookup("SmolLM2-135M-Instruct.Q4_1") == (0.0, 0.0)
     assert PriceTable({"m": (1.0, 2.0)}).cost("m", Usage(1_000_000, 500_000)) == pytest.approx(2.0)
-    assert Usage.from_response({"prompt_tokens": 5, "prompt_tokens_details": {"cached_tokens": 4}}).cached_tokens == 4
+    assert (
+        Usage.from_response(
+            {"prompt_tokens": 5, "prompt_tokens_details": {"cached_tokens": 4}}
+        ).cached_tokens
+        == 4
+    )
     assert Usage.from_response(None) == Usage()
 
 
@@ -374,7 +395,11 @@ def test_json_schema_mode():
         fmt = srv.requests[-1]["response_format"]
         assert fmt["type"] == "json_schema"
         assert fmt["json_schema"]["schema"]["properties"]["action"]["enum"] == REPLIES
-        assert res.text == "[1, 0]" and res.raw == '{"action": "[1, 0]"}' and res.constraint == "json_schema"
+        assert (
+            res.text == "[1, 0]"
+            and res.raw == '{"action": "[1, 0]"}'
+            and res.constraint == "json_schema"
+        )
 
 
 def test_constraint_helpers():
@@ -401,7 +426,9 @@ def test_cancelled_owner_does_not_hang_sharers():
                 sharer = asyncio.ensure_future(c.chat(MSG))
                 await asyncio.sleep(0.05)
                 owner.cancel()
-                return await asyncio.wait_for(asyncio.gather(owner, sharer, return_exceptions=True), 2.0)
+                return await asyncio.wait_for(
+                    asyncio.gather(owner, sharer, return_exceptions=True), 2.0
+                )
 
         owner, sharer = run(scenario())
         assert isinstance(owner, asyncio.CancelledError)
@@ -419,14 +446,22 @@ def test_loopback_http_gets_the_asyncio_transport():
 
     assert isinstance(transport(settings("http://127.0.0.1:8080/v1")), LoopbackTransport)
     assert isinstance(transport(settings("http://localhost:8080/v1")), LoopbackTransport)
-    assert not isinstance(transport(settings("http://127.0.0.1:8080/v1", fast_transport=False)), LoopbackTransport)
+    assert not isinstance(
+        transport(settings("http://127.0.0.1:8080/v1", fast_transport=False)), LoopbackTransport
+    )
     assert not isinstance(transport(settings("https://api.openai.com/v1")), LoopbackTransport)
     assert not isinstance(transport(settings("http://10.1.2.3:8000/v1")), LoopbackTransport)
 
 
 @pytest.mark.parametrize("fast", [True, False], ids=["asyncio", "httpx-default"])
 def test_both_transports_recover_from_the_same_faults(server, fast):
-    server.add_faults(Fault.server_error(500), Fault.drop(), Fault.malformed(), Fault.delay(3.0), Fault.rate_limit())
+    server.add_faults(
+        Fault.server_error(500),
+        Fault.drop(),
+        Fault.malformed(),
+        Fault.delay(3.0),
+        Fault.rate_limit(),
+    )
     res = run(one_call(settings(server, max_retries=5, timeout_s=0.5, fast_transport=fast)))
     assert res.text == "[2, 1]" and res.retries == 5 and server.n_answered == 1
 
@@ -454,8 +489,18 @@ def test_usage_totals_bill_only_what_reached_the_server():
     from jswim.llm.client import ChatResult
 
     def result(**kw):
-        base = dict(text="[1, 1]", usage=Usage(100, 5), latency_s=0.0, cache_hit=False, shared=False, retries=0,
-                    cost_usd=0.25, constraint="none", finish_reason="stop", raw="[1, 1]")
+        base = dict(
+            text="[1, 1]",
+            usage=Usage(100, 5),
+            latency_s=0.0,
+            cache_hit=False,
+            shared=False,
+            retries=0,
+            cost_usd=0.25,
+            constraint="none",
+            finish_reason="stop",
+            raw="[1, 1]",
+        )
         return ChatResult(**{**base, **kw})
 
     t = UsageTotals()
@@ -472,8 +517,10 @@ def test_usage_totals_bill_only_what_reached_the_server():
 @pytest.mark.parametrize("status", [307, 308])
 def test_a_same_host_redirect_is_followed_with_the_key_and_the_body(status, monkeypatch):
     monkeypatch.setenv("JSWIM_TEST_KEY", SECRET)
-    with FakeServer(reply=lambda body: "[2, 1]",
-                    redirects={"/v1/chat/completions": (status, "/v2/chat/completions")}) as srv:
+    with FakeServer(
+        reply=lambda body: "[2, 1]",
+        redirects={"/v1/chat/completions": (status, "/v2/chat/completions")},
+    ) as srv:
         res = run(one_call(settings(srv, api_key_env="JSWIM_TEST_KEY")))
         assert res.text == "[2, 1]"
         assert srv.redirected == [f"Bearer {SECRET}"] and srv.auth_headers == [f"Bearer {SECRET}"]
@@ -496,7 +543,9 @@ def test_a_redirect_to_another_host_is_refused_and_the_key_never_goes_there(monk
     monkeypatch.setenv("JSWIM_TEST_KEY", SECRET)
     with FakeServer() as other:
         # Same machine, another port: another host as far as the key is concerned.
-        with FakeServer(redirects={"/v1/chat/completions": (308, other.url + "/chat/completions")}) as srv:
+        with FakeServer(
+            redirects={"/v1/chat/completions": (308, other.url + "/chat/completions")}
+        ) as srv:
             with pytest.raises(LLMSetupError, match="another host") as err:
                 run(one_call(settings(srv, api_key_env="JSWIM_TEST_KEY")))
         assert other.n_requests == 0 and other.auth_headers == []

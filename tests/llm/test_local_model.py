@@ -62,7 +62,9 @@ def test_embedded_model_constrained_replies():
             for cfg, direction, records, dofs in cases:
                 allowed = allowed_actions(sw, cfg.action_set, dofs)
                 prompt = render_prompt(sw, cfg, direction, records, dofs)
-                jobs.append(client.chat(build_messages(prompt), replies=[a.text() for a in allowed]))
+                jobs.append(
+                    client.chat(build_messages(prompt), replies=[a.text() for a in allowed])
+                )
             return await asyncio.gather(*jobs)
 
     with local.LocalServer(n_parallel=3, n_ctx_per_slot=512) as srv:
@@ -73,15 +75,26 @@ def test_embedded_model_constrained_replies():
         import httpx
 
         root = srv.base_url.rsplit("/v1", 1)[0]
-        body = {"model": srv.model_name, "messages": [{"role": "user", "content": "hi"}], "max_tokens": 1}
-        assert httpx.post(f"{srv.base_url}/chat/completions", json=body, timeout=30).status_code == 401
+        body = {
+            "model": srv.model_name,
+            "messages": [{"role": "user", "content": "hi"}],
+            "max_tokens": 1,
+        }
+        assert (
+            httpx.post(f"{srv.base_url}/chat/completions", json=body, timeout=30).status_code == 401
+        )
         assert httpx.get(f"{root}/props", timeout=30).status_code == 401
         wrong = {"Authorization": "Bearer " + "x" * 32}
-        assert httpx.post(f"{srv.base_url}/chat/completions", json=body, headers=wrong, timeout=30).status_code == 401
+        assert (
+            httpx.post(
+                f"{srv.base_url}/chat/completions", json=body, headers=wrong, timeout=30
+            ).status_code
+            == 401
+        )
         key = os.environ[local.LOCAL_KEY_ENV]
         assert len(key) >= 24
     assert not srv.running and local.LOCAL_KEY_ENV not in os.environ
-    with local.LocalServer(n_parallel=1, n_ctx_per_slot=256) as again:
+    with local.LocalServer(n_parallel=1, n_ctx_per_slot=256):
         assert os.environ[local.LOCAL_KEY_ENV] != key  # a new key per session
     for (cfg, _, _, dofs), res in zip(cases, results):
         allowed = allowed_actions(sw, cfg.action_set, dofs)

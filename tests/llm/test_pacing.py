@@ -14,6 +14,7 @@ from jswim.llm.pacing import Pacer, parse_duration
 from jswim.llm.tokens import estimate_prompt_tokens, estimate_tokens
 from jswim.llm.usage import PriceTable
 from tests.fakeserver import FakeServer, lognormal_latency
+import itertools
 
 MSG = [{"role": "user", "content": "Reply with [1, 1]."}]
 
@@ -22,10 +23,22 @@ def _settings(srv: FakeServer, **kw) -> ClientSettings:
     return ClientSettings(base_url=srv.url, model=kw.pop("model", "fake"), max_retries=0, **kw)
 
 
-@pytest.mark.parametrize("text, seconds", [
-    ("1s", 1.0), ("6m0s", 360.0), ("20ms", 0.02), ("1h2m3s", 3723.0), ("0.5", 0.5), ("12", 12.0),
-    ("2.5s", 2.5), (None, None), ("", None), ("soon", None), ("5x", None),
-])
+@pytest.mark.parametrize(
+    "text, seconds",
+    [
+        ("1s", 1.0),
+        ("6m0s", 360.0),
+        ("20ms", 0.02),
+        ("1h2m3s", 3723.0),
+        ("0.5", 0.5),
+        ("12", 12.0),
+        ("2.5s", 2.5),
+        (None, None),
+        ("", None),
+        ("soon", None),
+        ("5x", None),
+    ],
+)
 def test_parse_duration(text, seconds):
     got = parse_duration(text)
     assert got == seconds if seconds is None else math.isclose(got, seconds)
@@ -49,8 +62,13 @@ def test_headers_hold_new_requests_until_the_provider_refills():
     p.observe({"x-ratelimit-remaining-requests": "10", "x-ratelimit-reset-requests": "6s"})
     assert _hold(p, clock) == 0.0  # plenty left: no wait
     # 1 left of 60 per minute, window full in 59 s -> 1 request per second refills; 3 more needed.
-    p.observe({"x-ratelimit-remaining-requests": "1", "x-ratelimit-limit-requests": "60",
-               "x-ratelimit-reset-requests": "59s"})
+    p.observe(
+        {
+            "x-ratelimit-remaining-requests": "1",
+            "x-ratelimit-limit-requests": "60",
+            "x-ratelimit-reset-requests": "59s",
+        }
+    )
     assert math.isclose(_hold(p, clock), 3.0)
     clock.t += 10
     # Without the limit the pacer waits the whole reset time.
@@ -93,7 +111,9 @@ class VirtualClockLoop(asyncio.SelectorEventLoop):
 
         def jump(timeout=None):
             self._turns += 1
-            if self._turns > 100_000:  # a few hundred suffice here: a pacer that spins fails, not hangs
+            if (
+                self._turns > 100_000
+            ):  # a few hundred suffice here: a pacer that spins fails, not hangs
                 raise RuntimeError("the virtual-clock loop made no progress in 100,000 turns")
             if timeout:  # idle until the next timer: advance the clock instead of sleeping
                 # (by at least 0.1 us: a timer a rounding error ahead must not spin the loop)
@@ -126,7 +146,7 @@ def test_rpm_60_spaces_requests_one_second_apart_with_no_burst():
 
     released = virtual_run(go)
     assert released[0] == pytest.approx(0.0, abs=1e-9)  # the first at once
-    gaps = [b - a for a, b in zip(released, released[1:])]
+    gaps = [b - a for a, b in itertools.pairwise(released)]
     assert gaps == pytest.approx([1.0] * 5, abs=1e-5)  # then one per second: no burst of the bucket
 
 
@@ -141,7 +161,9 @@ def test_tpm_spends_its_ten_seconds_of_tokens_then_paces():
 
     t = virtual_run(go)
     assert t[:2] == pytest.approx([0.0, 0.0], abs=1e-9)  # 1000 tokens at once
-    assert [b - a for a, b in zip(t[1:], t[2:])] == pytest.approx([5.0, 5.0], abs=1e-5)  # then 500 per 5 s
+    assert [b - a for a, b in itertools.pairwise(t[1:])] == pytest.approx(
+        [5.0, 5.0], abs=1e-5
+    )  # then 500 per 5 s
 
 
 def test_retry_after_on_a_success_holds_every_next_request():
@@ -159,9 +181,13 @@ def test_retry_after_on_a_success_holds_every_next_request():
 def test_paced_client_sends_every_request():
     # End to end through the client (no timing asserted: the spacing is checked above).
     async def go(url: str) -> None:
-        async with LLMClient(ClientSettings(base_url=url, model="fake", max_concurrency=8),
-                             pacer=Pacer(rpm=600, tpm=10**6)) as c:
-            await asyncio.gather(*[c.chat([{"role": "user", "content": f"call {i}"}]) for i in range(5)])
+        async with LLMClient(
+            ClientSettings(base_url=url, model="fake", max_concurrency=8),
+            pacer=Pacer(rpm=600, tpm=10**6),
+        ) as c:
+            await asyncio.gather(
+                *[c.chat([{"role": "user", "content": f"call {i}"}]) for i in range(5)]
+            )
 
     with FakeServer() as srv:
         asyncio.run(go(srv.url))
@@ -187,7 +213,9 @@ def test_budget_refuses_past_the_cap_and_stays_closed():
 def test_call_bound_prices_prompt_and_max_tokens():
     prices = PriceTable({"m": (2.0, 10.0)})
     payload = {"messages": MSG, "max_tokens": 10}
-    assert math.isclose(call_bound(payload, prices, "m"), (estimate_prompt_tokens(MSG) * 2.0 + 10 * 10.0) / 1e6)
+    assert math.isclose(
+        call_bound(payload, prices, "m"), (estimate_prompt_tokens(MSG) * 2.0 + 10 * 10.0) / 1e6
+    )
     assert call_bound(payload, prices, "free-model") == 0.0
 
 
@@ -222,7 +250,9 @@ def test_failed_attempts_release_their_reservation():
 
     async def go(url: str) -> Budget:
         budget = Budget(1.0)
-        async with LLMClient(ClientSettings(base_url=url, model="gpt-4o", max_retries=0), budget=budget) as c:
+        async with LLMClient(
+            ClientSettings(base_url=url, model="gpt-4o", max_retries=0), budget=budget
+        ) as c:
             with pytest.raises(Exception):
                 await c.chat(MSG)
         return budget
@@ -263,8 +293,12 @@ def _protocol_prompts() -> list[str]:
 
     prompts = []
     with FakeServer(reply=hash_reply) as srv:
-        specs = [LLMRunSpec(swimmer=sw, zeta=0.5, seed=k, n_steps=12, direction=d)
-                 for sw in ("purcell", "ng") for k in range(2) for d in (1, -1)]
+        specs = [
+            LLMRunSpec(swimmer=sw, zeta=0.5, seed=k, n_steps=12, direction=d)
+            for sw in ("purcell", "ng")
+            for k in range(2)
+            for d in (1, -1)
+        ]
         for r in run_batch(specs, CS(base_url=srv.url, model="fake")):
             prompts += [rec["prompt"] for rec in r.transcript if rec.get("type") == "step"]
     return prompts

@@ -19,15 +19,29 @@ UP, DOWN = 1.0471975511965976, -1.0471975511965976
 
 def prompt(records, dofs, direction=1, swimmer="purcell", action_set="all"):
     cfg = LLMAgentConfig(action_set=action_set)
-    _, text, p = protocol.setup(LLMRunSpec(swimmer, direction=direction, n_ht=8), make_model(swimmer), cfg)
-    req = protocol.request(cfg, text, p, direction=direction, seed=0, step=len(records) + 1, records=records,
-                           dofs=dofs, x=0.0, stats=MoveStats())
+    _, text, p = protocol.setup(
+        LLMRunSpec(swimmer, direction=direction, n_ht=8), make_model(swimmer), cfg
+    )
+    req = protocol.request(
+        cfg,
+        text,
+        p,
+        direction=direction,
+        seed=0,
+        step=len(records) + 1,
+        records=records,
+        dofs=dofs,
+        x=0.0,
+        stats=MoveStats(),
+    )
     return req.messages[-1]["content"]
 
 
 def test_rule_reads_records_and_offers_from_the_text():
-    recs = [HistoryRecord(1, (UP, UP), (DOWN, UP), Action(1, -1), 0.0, 0.05),
-            HistoryRecord(2, (DOWN, UP), (UP, UP), Action(1, 1), 0.05, 0.0)]
+    recs = [
+        HistoryRecord(1, (UP, UP), (DOWN, UP), Action(1, -1), 0.0, 0.05),
+        HistoryRecord(2, (DOWN, UP), (UP, UP), Action(1, 1), 0.05, 0.0),
+    ]
     text = prompt(recs, (UP, UP), direction=-1)
     direction, records, offered = read_prompt(text)
     assert direction == -1 and [r.action for r in records] == [(1, -1), (1, 1)]
@@ -54,13 +68,35 @@ def test_server_answers_the_openai_shape_and_names_itself():
         assert [m["id"] for m in models["data"]] == [MODEL]
         body = {"model": MODEL, "messages": [{"role": "user", "content": prompt([], (UP, UP))}]}
         got = httpx.post(srv.url + "/chat/completions", json=body).json()
-        assert got["choices"][0]["message"]["content"] == "[1, -1]" and got["usage"]["prompt_tokens"] > 0
+        assert (
+            got["choices"][0]["message"]["content"] == "[1, -1]"
+            and got["usage"]["prompt_tokens"] > 0
+        )
         assert httpx.post(srv.url + "/chat/completions", content=b"[").status_code == 400
 
 
 def test_swim_against_the_reference_server_learns_purcell_at_n_ht_6(tmp_path, capsys):
     with ReferenceServer() as srv:
-        assert cli.main(["swim", "--base-url", srv.url, "--model", MODEL, "--n-ht", "6", "--runs", "1",
-                         "--q-runs", "0", "--out", str(tmp_path / "o"), "--no-figures"]) == 0
+        assert (
+            cli.main(
+                [
+                    "swim",
+                    "--base-url",
+                    srv.url,
+                    "--model",
+                    MODEL,
+                    "--n-ht",
+                    "6",
+                    "--runs",
+                    "1",
+                    "--q-runs",
+                    "0",
+                    "--out",
+                    str(tmp_path / "o"),
+                    "--no-figures",
+                ]
+            )
+            == 0
+        )
     (row,) = read_runs(tmp_path / "o")
     assert row["success"] and row["steps_to_learn"] == 6 and row["failed_steps"] == 0

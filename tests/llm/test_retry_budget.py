@@ -20,7 +20,11 @@ MSG = [{"role": "user", "content": "Say [1, 1]"}]
 
 
 def settings(url: str, **kw) -> ClientSettings:
-    return ClientSettings(base_url=url, model="fake", **{"backoff_base_s": 0.02, "backoff_max_s": 0.1, "timeout_s": 5.0, **kw})
+    return ClientSettings(
+        base_url=url,
+        model="fake",
+        **{"backoff_base_s": 0.02, "backoff_max_s": 0.1, "timeout_s": 5.0, **kw},
+    )
 
 
 async def one_call(s: ClientSettings):
@@ -49,7 +53,9 @@ def test_an_outage_shorter_than_the_budget_is_ridden_out():
         res, counts = asyncio.run(one_call(settings(srv.url, retry_for_s=30.0)))
         assert res.text == "[1, 1]" and res.retries >= 3
         assert counts.requests == srv.n_requests and counts.retries == srv.n_requests - 1
-        assert counts.faults.get("5xx", 0) + counts.faults.get("connection", 0) == srv.n_requests - 1
+        assert (
+            counts.faults.get("5xx", 0) + counts.faults.get("connection", 0) == srv.n_requests - 1
+        )
         assert counts.faults.get("connection", 0) >= 1
 
 
@@ -57,7 +63,9 @@ def test_the_default_budget_rides_out_a_minute():
     # With the default backoff (0.5 s doubling to 30 s, jitter in [0.5, 1]) the shortest sum of
     # waits of the default 20 retries exceeds a minute, and --retry-for 120 s allows it.
     s = ClientSettings(base_url="http://127.0.0.1:1/v1", model="m")
-    shortest = sum(min(s.backoff_max_s, s.backoff_base_s * 2.0**k) * 0.5 for k in range(s.max_retries))
+    shortest = sum(
+        min(s.backoff_max_s, s.backoff_base_s * 2.0**k) * 0.5 for k in range(s.max_retries)
+    )
     assert shortest > 60 and s.retry_for_s >= 60
 
 
@@ -77,12 +85,33 @@ def test_a_spent_retry_time_stops_retrying():
         assert 2 <= srv.n_requests < 10_000
 
 
-FAST = ["--steps", "12", "--runs", "2", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x",
-        "--no-figures", "--model", "fake"]
+FAST = [
+    "--steps",
+    "12",
+    "--runs",
+    "2",
+    "--q-runs",
+    "0",
+    "--swimmer",
+    "purcell",
+    "--direction",
+    "+x",
+    "--no-figures",
+    "--model",
+    "fake",
+]
 
 
 def test_a_flaky_server_never_ends_the_study_and_every_request_is_counted(tmp_path, capsys):
-    faults = [Fault.rate_limit("0"), Fault.server_error(502), None, Fault.drop(), None, None, None] * 8
+    faults = [
+        Fault.rate_limit("0"),
+        Fault.server_error(502),
+        None,
+        Fault.drop(),
+        None,
+        None,
+        None,
+    ] * 8
     with FakeServer(reply=hash_reply, faults=faults) as srv:
         assert cli.main(["swim", *FAST, "--base-url", srv.url, "--out", str(tmp_path / "F")]) == 0
         out = capsys.readouterr().out
@@ -91,10 +120,16 @@ def test_a_flaky_server_never_ends_the_study_and_every_request_is_counted(tmp_pa
     assert line.startswith(f"HTTP requests: {sent} sent (")  # ours match the server's count
     assert "429 x" in line and "5xx x" in line and "connection x" in line
     totals = read_metadata(tmp_path / "F")["llm_totals"]
-    assert totals["requests"] == sent and totals["retries"] == sent - 24 and sum(totals["faults"].values()) == sent - 24
+    assert (
+        totals["requests"] == sent
+        and totals["retries"] == sent - 24
+        and sum(totals["faults"].values()) == sent - 24
+    )
     assert cli.main(["show", str(tmp_path / "F")]) == 0
     shown = capsys.readouterr().out
-    assert f"HTTP requests: {sent} sent ({sent - 24} retries" in shown and "24 answered calls" in shown
+    assert (
+        f"HTTP requests: {sent} sent ({sent - 24} retries" in shown and "24 answered calls" in shown
+    )
 
 
 def test_a_spent_budget_stops_cleanly_and_the_same_command_resumes(tmp_path, capsys):
@@ -131,7 +166,9 @@ def test_a_server_that_hangs_then_recovers_is_ridden_out_and_every_timeout_count
     from tests.fakeserver import hangs_for
 
     with FakeServer(reply=hangs_for(0.8)) as srv:
-        res, counts = asyncio.run(one_call(settings(srv.url, timeout_s=0.2, max_retries=20, retry_for_s=30.0)))
+        res, counts = asyncio.run(
+            one_call(settings(srv.url, timeout_s=0.2, max_retries=20, retry_for_s=30.0))
+        )
         assert res.text in ("[1, -1]", "[2, -1]", "[1, 1]", "[2, 1]")
         assert res.retries >= 3 and counts.requests == srv.n_requests == res.retries + 1
     assert counts.faults == {"timeout": res.retries}
@@ -144,7 +181,9 @@ def test_timeouts_spend_the_retry_time_from_when_the_first_attempt_went_out():
     with FakeServer(reply=hangs_for(60.0)) as srv:
         t0 = time.monotonic()
         with pytest.raises(LLMServerError, match="slow.*--retry-for 0.5") as err:
-            asyncio.run(one_call(settings(srv.url, timeout_s=0.2, max_retries=10_000, retry_for_s=0.5)))
+            asyncio.run(
+                one_call(settings(srv.url, timeout_s=0.2, max_retries=10_000, retry_for_s=0.5))
+            )
         took = time.monotonic() - t0
     # 0.2 s timeouts sent back to back: the 0.5 s budget (counted from the first send) allows 3
     # (a loaded machine may fit fewer), never the 10,000 retries the count would.
@@ -169,11 +208,17 @@ def test_a_request_that_got_no_answer_counts_against_the_cost_cap():
         assert counts.unanswered == 1 and res.retries == 1 and bound > 1
         assert budget.unanswered_usd == pytest.approx(bound)  # kept against the cap, not released
         assert budget.spent_usd == pytest.approx(res.cost_usd) and budget.reserved_usd == 0
-    with FakeServer(reply=hangs_for(60.0)) as srv:  # room for one request: the unanswered one fills it
+    with FakeServer(
+        reply=hangs_for(60.0)
+    ) as srv:  # room for one request: the unanswered one fills it
         budget = Budget(cap_usd=1.5 * bound)
         with pytest.raises(BudgetExhausted, match="got no answer"):
             asyncio.run(run(srv.url, budget))
-        assert srv.n_requests == 1 and budget.spent_usd == 0 and budget.unanswered_usd == pytest.approx(bound)
+        assert (
+            srv.n_requests == 1
+            and budget.spent_usd == 0
+            and budget.unanswered_usd == pytest.approx(bound)
+        )
 
 
 def test_the_summary_and_show_say_how_many_requests_got_no_answer(tmp_path, capsys):
@@ -188,7 +233,9 @@ def test_the_summary_and_show_say_how_many_requests_got_no_answer(tmp_path, caps
     totals = read_metadata(tmp_path / "F")["llm_totals"]
     timeouts = totals["faults"]["timeout"]
     assert totals["requests"] == sent and timeouts >= 2 and totals["unanswered"] == timeouts
-    assert line.startswith(f"HTTP requests: {sent} sent ({timeouts} retries; transient faults: timeout x{timeouts}")
+    assert line.startswith(
+        f"HTTP requests: {sent} sent ({timeouts} retries; transient faults: timeout x{timeouts}"
+    )
     assert f"{timeouts} got no answer" in line and "may have been billed" in line
     assert cli.main(["show", str(tmp_path / "F")]) == 0
     assert f"{timeouts} got no answer" in capsys.readouterr().out

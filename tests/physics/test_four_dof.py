@@ -15,10 +15,21 @@ from jswim.swimmers import ng
 from tests.fakeserver import FakeServer
 
 
-@pytest.mark.parametrize("swimmer, per_step, per_cycle", [
-    ("nlink", 0.0519, None),  # README: the best four-link cycle (period 6) moves 0.0519 a per step
-    ("nsphere", 0.0674, 0.404209),  # README: 0.0674 a per step; the authors' code: 0.404209 per cycle
-])
+@pytest.mark.parametrize(
+    "swimmer, per_step, per_cycle",
+    [
+        (
+            "nlink",
+            0.0519,
+            None,
+        ),  # README: the best four-link cycle (period 6) moves 0.0519 a per step
+        (
+            "nsphere",
+            0.0674,
+            0.404209,
+        ),  # README: 0.0674 a per step; the authors' code: 0.404209 per cycle
+    ],
+)
 @pytest.mark.slow  # the gait search over three-DOF tables (35 s for both under load 8)
 def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycle):
     model = env.make_params(swimmer).model
@@ -33,7 +44,9 @@ def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycl
 
     start = [model.hi if v else model.lo for v in best.start]
     moves = [(dof - 1, roc) for dof, roc in best.moves]
-    (dx, _), _ = run_cycle(model, moves, start, method="rk4", n_sub=96)  # (the four-link cycle drifts in y)
+    (dx, _), _ = run_cycle(
+        model, moves, start, method="rk4", n_sub=96
+    )  # (the four-link cycle drifts in y)
     assert dx == pytest.approx(best.displacement, rel=1e-8)
     moves = list(best.moves)
     fwd = env.rollout(swimmer, moves * 2, init=best.start)
@@ -48,7 +61,9 @@ def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycl
 
 @pytest.mark.parametrize("swimmer", ["nlink", "nsphere"])
 # both swimmers at DOF 2 in the fast tier; DOF 1 and 3 (a compile each, ~3 s) in the slow tier
-@pytest.mark.parametrize("dof", [pytest.param(1, marks=pytest.mark.slow), 2, pytest.param(3, marks=pytest.mark.slow)])
+@pytest.mark.parametrize(
+    "dof", [pytest.param(1, marks=pytest.mark.slow), 2, pytest.param(3, marks=pytest.mark.slow)]
+)
 def test_reciprocal_stroke_goes_nowhere(swimmer, dof):
     init = (0, 1, 1)  # asymmetric, so that each half-stroke moves the body
     first = 1 if init[dof - 1] == 0 else -1

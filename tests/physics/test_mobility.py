@@ -54,7 +54,10 @@ def test_self_image_is_the_first_order_wall_correction():
     image = mobility.OSEEN_PREFACTOR * (g - s) * h
     np.testing.assert_allclose(np.diag(image), [-9 / 16, -9 / 8], atol=1e-6)
     par, nor = mobility.wall_self_factors(jnp.asarray(1 / h))
-    assert abs(float(par) - (1 - 9 / 16 / h)) < 2 / h**3 and abs(float(nor) - (1 - 9 / 8 / h)) < 1 / h**3
+    assert (
+        abs(float(par) - (1 - 9 / 16 / h)) < 2 / h**3
+        and abs(float(nor) - (1 - 9 / 8 / h)) < 1 / h**3
+    )
 
 
 @pytest.mark.parametrize("wall", [False, True])
@@ -91,7 +94,7 @@ def test_force_and_torque_free(wall):
         f = np.asarray(r.forces)
         pos = np.asarray(forcefree.sphere_centres(centre, tilt, arms))
         for s in range(2):
-            fs, rel = f[3 * s:3 * s + 3], pos[s] - np.asarray(centre[s])
+            fs, rel = f[3 * s : 3 * s + 3], pos[s] - np.asarray(centre[s])
             assert np.abs(fs.sum(0)).max() < 1e-12
             assert abs(np.sum(rel[:, 0] * fs[:, 1] - rel[:, 1] * fs[:, 0])) < 1e-12
         assert np.abs(f[6]).max() > 1e-6  # the obstacle is held: it carries a force
@@ -99,27 +102,35 @@ def test_force_and_torque_free(wall):
         radii = np.ones(7)
         radii[6] = 2.5
         allpos = np.concatenate([pos.reshape(6, 2), np.asarray(obstacles)[:, :2]])
-        v = (np.asarray(_matrix(jnp.asarray(allpos), jnp.asarray(radii), wall)) @ f.reshape(-1)).reshape(7, 2)
+        v = (
+            np.asarray(_matrix(jnp.asarray(allpos), jnp.asarray(radii), wall)) @ f.reshape(-1)
+        ).reshape(7, 2)
         assert np.abs(v[6]).max() < 1e-12
         e = np.stack([np.cos(tilt), np.sin(tilt)], -1)
         q = np.asarray(forcefree.axial_offsets(arms))
         qd = np.asarray(forcefree.axial_offsets(rates))
         for s in range(2):
             rel = pos[s] - np.asarray(centre[s])
-            want = (np.asarray(r.velocity[s]) + float(r.omega[s]) * np.stack([-rel[:, 1], rel[:, 0]], -1)
-                    + qd[s][:, None] * e[s])
-            np.testing.assert_allclose(v[3 * s:3 * s + 3], want, atol=1e-12)
+            want = (
+                np.asarray(r.velocity[s])
+                + float(r.omega[s]) * np.stack([-rel[:, 1], rel[:, 0]], -1)
+                + qd[s][:, None] * e[s]
+            )
+            np.testing.assert_allclose(v[3 * s : 3 * s + 3], want, atol=1e-12)
         assert np.allclose(np.hypot(*(pos[0, 1:] - pos[0, :-1]).T), q[0, 1:] - q[0, :-1])
 
 
 # Two cases cover a wall, a pair and obstacles in the fast tier; the other two (each ~3 s of
 # compiling a new unrolled size) run in the slow tier.
-@pytest.mark.parametrize("S, O, wall", [
-    (1, 0, True),
-    pytest.param(2, 0, True, marks=pytest.mark.slow),
-    pytest.param(1, 3, False, marks=pytest.mark.slow),
-    (2, 1, False),
-])
+@pytest.mark.parametrize(
+    "S, O, wall",
+    [
+        (1, 0, True),
+        pytest.param(2, 0, True, marks=pytest.mark.slow),
+        pytest.param(1, 3, False, marks=pytest.mark.slow),
+        (2, 1, False),
+    ],
+)
 def test_unrolled_solve_matches_lapack(S, O, wall):
     rng = np.random.default_rng(5)
     c = jnp.asarray([[0.0, 9.0], [31.0, 8.0]][:S])
@@ -155,7 +166,9 @@ def test_block_solve_by_swimmer_converges_to_the_coupled_solve(wall):
         f = np.asarray(forces).reshape(2, 3, 2)
         rel = centres - np.asarray(c)[:, None, :]
         np.testing.assert_allclose(f.sum(1), 0.0, atol=1e-13)  # force-free, each swimmer
-        np.testing.assert_allclose((rel[..., 0] * f[..., 1] - rel[..., 1] * f[..., 0]).sum(1), 0.0, atol=1e-12)
+        np.testing.assert_allclose(
+            (rel[..., 0] * f[..., 1] - rel[..., 1] * f[..., 0]).sum(1), 0.0, atol=1e-12
+        )
         errors.append(float(np.abs(np.asarray(got.velocity) - np.asarray(want.velocity)).max()))
     scale = float(np.abs(np.asarray(want.velocity)).max())
     assert errors[0] > 1e-5 * scale  # the first sweep ignores the other swimmer's forces
@@ -177,10 +190,18 @@ def test_free_fluid_response_solves_each_swimmer_exactly():
         want = forcefree.solve(c, t, a, r, jnp.zeros((0, 3)), False)
         e = np.stack([np.cos(t), np.sin(t)], -1)
         nrm = np.stack([-e[:, 1], e[:, 0]], -1)
-        want_body = np.stack([(np.asarray(want.velocity) * e).sum(-1), (np.asarray(want.velocity) * nrm).sum(-1),
-                              np.asarray(want.omega)], -1)
+        want_body = np.stack(
+            [
+                (np.asarray(want.velocity) * e).sum(-1),
+                (np.asarray(want.velocity) * nrm).sum(-1),
+                np.asarray(want.omega),
+            ],
+            -1,
+        )
         resp = bodyframe.response(a)
-        np.testing.assert_allclose(np.asarray(resp.p), np.asarray(resp.p).transpose(0, 2, 1), atol=1e-14)
+        np.testing.assert_allclose(
+            np.asarray(resp.p), np.asarray(resp.p).transpose(0, 2, 1), atol=1e-14
+        )
         forces = jnp.zeros((S, 3, 2))
         errors = []
         for _ in range(7):
@@ -194,6 +215,10 @@ def test_free_fluid_response_solves_each_swimmer_exactly():
         if S == 1:
             assert errors[0] < 1e-14 * scale
         else:
-            assert errors[0] > 1e-5 * scale and errors[2] < 1e-6 * scale and errors[-1] < 1e-13 * scale
+            assert (
+                errors[0] > 1e-5 * scale and errors[2] < 1e-6 * scale and errors[-1] < 1e-13 * scale
+            )
         lab = f[..., :1] * e[:, None, :] + f[..., 1:] * nrm[:, None, :]
-        np.testing.assert_allclose(lab.reshape(-1, 2), np.asarray(want.forces), atol=1e-12 * np.abs(lab).max())
+        np.testing.assert_allclose(
+            lab.reshape(-1, 2), np.asarray(want.forces), atol=1e-12 * np.abs(lab).max()
+        )

@@ -68,9 +68,13 @@ def test_ng_each_move_matches_closed_form():
         d = end
 
 
-@pytest.mark.parametrize("swimmer, gait, start", [
-    ("purcell", PURCELL_PLUS_X, "hi"), ("ng", NG_PLUS_X, "lo"),
-])
+@pytest.mark.parametrize(
+    "swimmer, gait, start",
+    [
+        ("purcell", PURCELL_PLUS_X, "hi"),
+        ("ng", NG_PLUS_X, "lo"),
+    ],
+)
 def test_reversed_cycle_gives_opposite_displacement(swimmer, gait, start):
     model = make_model(swimmer)
     corner = (model.hi,) * 2 if start == "hi" else (model.lo,) * 2
@@ -92,7 +96,9 @@ def test_isotropic_drag_gives_no_net_displacement():
     # link still moves and turns: the model is not trivially frozen.
     one, _ = run_cycle(model, PURCELL_PLUS_X[:1], (model.hi, model.hi))
     assert np.abs(one).max() < 1e-12
-    pose = integrate_stroke(model, jnp.array([model.hi, model.hi]), jnp.array([0.0, -1.0]), model.duration)
+    pose = integrate_stroke(
+        model, jnp.array([model.hi, model.hi]), jnp.array([0.0, -1.0]), model.duration
+    )
     assert abs(float(pose[2])) > 0.1 and float(jnp.hypot(pose[0], pose[1])) > 1e-3
 
 
@@ -102,7 +108,9 @@ def test_rotating_start_orientation_rotates_step_displacement():
     for theta in (0.3, -1.2, 2.9):
         disp, rot = run_cycle(model, [(0, -1)], (model.hi, model.hi), theta0=theta)
         c, s = math.cos(theta), math.sin(theta)
-        np.testing.assert_allclose(disp, [c * base[0] - s * base[1], s * base[0] + c * base[1]], atol=1e-13)
+        np.testing.assert_allclose(
+            disp, [c * base[0] - s * base[1], s * base[0] + c * base[1]], atol=1e-13
+        )
         assert abs(rot - rot0) < 1e-13
 
 

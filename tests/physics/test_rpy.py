@@ -30,16 +30,25 @@ def _blake3(x, y):
     def f(R, h):
         n = jnp.sqrt(R @ R)
         return h * R / n**3 - jnp.array([0.0, 0.0, 1.0]) / n - R * R[2] / n**3
+
     m = jnp.array([1.0, 1.0, -1.0])
     return _stokeslet3(x - y) - _stokeslet3(R) + 2.0 * h * jax.jacfwd(f)(R, h) * m[None, :]
 
 
 def _faxen(g, x, y, ai, aj):
     """(3/4) (1 + ai^2/6 lap_x)(1 + aj^2/6 lap_y) g(x, y), by autodiff."""
-    lap_x = lambda fun: lambda x, y: jnp.trace(jax.jacfwd(jax.jacfwd(fun, 0), 0)(x, y), axis1=-2, axis2=-1)
-    lap_y = lambda fun: lambda x, y: jnp.trace(jax.jacfwd(jax.jacfwd(fun, 1), 1)(x, y), axis1=-2, axis2=-1)
-    return 0.75 * (g(x, y) + ai**2 / 6 * lap_x(g)(x, y) + aj**2 / 6 * lap_y(g)(x, y)
-                   + ai**2 * aj**2 / 36 * lap_x(lap_y(g))(x, y))
+    lap_x = lambda fun: (
+        lambda x, y: jnp.trace(jax.jacfwd(jax.jacfwd(fun, 0), 0)(x, y), axis1=-2, axis2=-1)
+    )
+    lap_y = lambda fun: (
+        lambda x, y: jnp.trace(jax.jacfwd(jax.jacfwd(fun, 1), 1)(x, y), axis1=-2, axis2=-1)
+    )
+    return 0.75 * (
+        g(x, y)
+        + ai**2 / 6 * lap_x(g)(x, y)
+        + aj**2 / 6 * lap_y(g)(x, y)
+        + ai**2 * aj**2 / 36 * lap_x(lap_y(g))(x, y)
+    )
 
 
 def _plane(m3):
@@ -85,10 +94,15 @@ def test_the_wall_self_factors_are_the_rotne_prager_blake_self_terms():
         def f(Rv, h):
             n = jnp.sqrt(Rv @ Rv)
             return h * Rv / n**3 - jnp.array([0.0, 0.0, 1.0]) / n - Rv * Rv[2] / n**3
-        return -_stokeslet3(Rv) + 2.0 * h * jax.jacfwd(f)(Rv, h) * jnp.array([1.0, 1.0, -1.0])[None, :]
+
+        return (
+            -_stokeslet3(Rv) + 2.0 * h * jax.jacfwd(f)(Rv, h) * jnp.array([1.0, 1.0, -1.0])[None, :]
+        )
 
     with jax.enable_x64(True):
-        self_term = jax.jit(lambda x: _faxen(image_part, x, x, 1.0, 1.0))  # one compile, three heights
+        self_term = jax.jit(
+            lambda x: _faxen(image_part, x, x, 1.0, 1.0)
+        )  # one compile, three heights
         for h in (1.5, 3.0, 10.0):
             m = np.asarray(self_term(jnp.array([0.0, 0.0, h])))
             par, nor = wall_self_factors(1.0 / h)
@@ -98,7 +112,9 @@ def test_the_wall_self_factors_are_the_rotne_prager_blake_self_terms():
 def test_mobility_matrix_rpy_blocks_and_symmetry():
     rng = np.random.default_rng(3)
     with jax.enable_x64(True):
-        pos = jnp.asarray(np.stack([np.arange(4) * 3.1 + rng.uniform(0, 0.5, 4), rng.uniform(2.0, 6.0, 4)], -1))
+        pos = jnp.asarray(
+            np.stack([np.arange(4) * 3.1 + rng.uniform(0, 0.5, 4), rng.uniform(2.0, 6.0, 4)], -1)
+        )
         for wall in (False, True):
             m = np.asarray(mobility_matrix(pos, jnp.ones(4), wall, "rpy"))
             np.testing.assert_allclose(m, m.T, atol=1e-14)
@@ -127,14 +143,42 @@ def _collinear_rpy_velocity(d1, d2, d1dot, d2dot):
 
 
 def test_rpy_lone_square_stroke_matches_a_quadrature():
-    legs = [quad(lambda d: _collinear_rpy_velocity(d, 10.0, 1.0, 0.0), 10.0, 6.0, epsabs=1e-13, epsrel=1e-12)[0],
-            quad(lambda d: _collinear_rpy_velocity(6.0, d, 0.0, 1.0), 10.0, 6.0, epsabs=1e-13, epsrel=1e-12)[0],
-            quad(lambda d: _collinear_rpy_velocity(d, 6.0, 1.0, 0.0), 6.0, 10.0, epsabs=1e-13, epsrel=1e-12)[0],
-            quad(lambda d: _collinear_rpy_velocity(10.0, d, 0.0, 1.0), 6.0, 10.0, epsabs=1e-13, epsrel=1e-12)[0]]
+    legs = [
+        quad(
+            lambda d: _collinear_rpy_velocity(d, 10.0, 1.0, 0.0),
+            10.0,
+            6.0,
+            epsabs=1e-13,
+            epsrel=1e-12,
+        )[0],
+        quad(
+            lambda d: _collinear_rpy_velocity(6.0, d, 0.0, 1.0),
+            10.0,
+            6.0,
+            epsabs=1e-13,
+            epsrel=1e-12,
+        )[0],
+        quad(
+            lambda d: _collinear_rpy_velocity(d, 6.0, 1.0, 0.0),
+            6.0,
+            10.0,
+            epsabs=1e-13,
+            epsrel=1e-12,
+        )[0],
+        quad(
+            lambda d: _collinear_rpy_velocity(10.0, d, 0.0, 1.0),
+            6.0,
+            10.0,
+            epsabs=1e-13,
+            epsrel=1e-12,
+        )[0],
+    ]
     want = sum(legs)
     r = scene_rollout("ng", SQUARE, Scene(medium="free", mobility="rpy"))
     assert abs(r.x[-1, 0] - want) < 1e-8
-    assert abs(r.z[-1, 0] - 10.0) < 1e-12 and abs(r.tilt[-1, 0]) < 1e-12  # collinear: no lift, no turn
+    assert (
+        abs(r.z[-1, 0] - 10.0) < 1e-12 and abs(r.tilt[-1, 0]) < 1e-12
+    )  # collinear: no lift, no turn
     point = scene_rollout("ng", SQUARE, Scene(medium="free"))
     assert abs(point.x[-1, 0] - 0.17209143957) < 1e-10  # the point-force default unchanged
     assert abs(r.x[-1, 0] - point.x[-1, 0]) > 1e-4
@@ -144,7 +188,10 @@ def test_rpy_scene_fields():
     assert "mobility" not in Scene(medium="free").to_dict()  # earlier scenes' JSON unchanged
     s = Scene(medium="wall", mobility="rpy")
     assert Scene.from_dict(s.to_dict()) == s
-    for bad in (dict(medium="free", mobility="stokes"), dict(medium="bulk", mobility="rpy"),
-                dict(medium="wall", mobility="rpy", obstacles=((0.0, 5.0, 2.0),))):
+    for bad in (
+        dict(medium="free", mobility="stokes"),
+        dict(medium="bulk", mobility="rpy"),
+        dict(medium="wall", mobility="rpy", obstacles=((0.0, 5.0, 2.0),)),
+    ):
         with pytest.raises(ConfigError):
             Scene(**bad).validate()

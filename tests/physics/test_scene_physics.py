@@ -6,8 +6,16 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
-from jswim.scenes import (Scene, batch_starts, scene_params, scene_reset, scene_rollout, scene_rollout_batch,
-                          scene_step, scene_step_joint)
+from jswim.scenes import (
+    Scene,
+    batch_starts,
+    scene_params,
+    scene_reset,
+    scene_rollout,
+    scene_rollout_batch,
+    scene_step,
+    scene_step_joint,
+)
 
 pytestmark = pytest.mark.slow  # ~2 min on 2 loaded cores (compilations); CI runs it
 
@@ -27,10 +35,12 @@ def leading_exponent(x, y):
     """Exponent p of y ~ A x^-p (1 + B / x + C / x^2 + E / x^3): the p whose least-squares fit of
     the four amplitudes leaves the smallest relative residual (the swimmer is 20 a long, so at
     20..200 a the next orders are not negligible: a pure power fits 2.2 and 3.8 there)."""
+
     def resid(p):
         basis = np.stack([x ** (-p - j) for j in range(4)], 1) / np.abs(y)[:, None]
         coef, *_ = np.linalg.lstsq(basis, np.sign(y), rcond=None)
         return np.sum((basis @ coef - np.sign(y)) ** 2)
+
     return minimize_scalar(resid, bounds=(1.0, 6.0), method="bounded", options={"xatol": 1e-6}).x
 
 
@@ -69,16 +79,27 @@ def test_wall_corrections_decay_as_h3_and_h4(wall_cycles):
 def test_scallop_theorem_near_a_wall_and_a_neighbour():
     recip = [(1, -1), (1, 1)] * 2  # one arm back and forth: a reciprocal stroke
     wall = scene_rollout("ng", recip, Scene(medium="wall", height=4.0, tilt=0.05))
-    assert abs(wall.x[1, 0]) < 1e-10 and abs(wall.z[1, 0] - 4.0) < 1e-10 and abs(wall.tilt[1, 0] - 0.05) < 1e-10
+    assert (
+        abs(wall.x[1, 0]) < 1e-10
+        and abs(wall.z[1, 0] - 4.0) < 1e-10
+        and abs(wall.tilt[1, 0] - 0.05) < 1e-10
+    )
     assert abs(wall.x[0, 0]) > 1.0  # it did move within the cycle
-    pair = scene_rollout("ng", [(2, 1, -1), (2, 1, 1)], Scene(medium="wall", height=6.0, swimmers=2, separation=25.0), sweeps=8)
+    pair = scene_rollout(
+        "ng",
+        [(2, 1, -1), (2, 1, 1)],
+        Scene(medium="wall", height=6.0, swimmers=2, separation=25.0),
+        sweeps=8,
+    )
     np.testing.assert_allclose(pair.x[1], [0.0, 25.0], atol=1e-10)
     np.testing.assert_allclose(pair.z[1], [6.0, 6.0], atol=1e-10)
     assert abs(pair.x[0, 0]) > 1e-5  # the passive neighbour was moved, then brought back
 
 
 def test_far_obstacle_changes_nothing(lone):
-    params = scene_params("ng", Scene(medium="free", obstacles=((0.0, 40.0, 2.0),)), dtype=jnp.float64)
+    params = scene_params(
+        "ng", Scene(medium="free", obstacles=((0.0, 40.0, 2.0),)), dtype=jnp.float64
+    )
     out = {}
     for dist in (40.0, 400.0, 4000.0):
         p = params.replace(obstacles=jnp.asarray([[0.0, 10.0 + dist, 2.0]]))
@@ -90,7 +111,9 @@ def test_far_obstacle_changes_nothing(lone):
 def joint_square_cycles(separations, k, medium="free"):
     """Two coaxial swimmers doing the square stroke simultaneously, the front one ``k`` moves
     ahead; x of both middle spheres after each of three joint cycles, shape (B, 4, 2)."""
-    params = scene_params("ng", Scene(medium=medium, swimmers=2, separation=30.0), dtype=jnp.float64)
+    params = scene_params(
+        "ng", Scene(medium=medium, swimmers=2, separation=30.0), dtype=jnp.float64
+    )
     pb = batch_starts(params, separation=separations)
     axes = pb.replace(zeta=None, centre0=0, tilt0=0, arms0=None, obstacles=None)
     dofs = jnp.array([0, 1, 0, 1])
@@ -104,8 +127,13 @@ def joint_square_cycles(separations, k, medium="free"):
         xs = [st.centre[:, 0]]
         for _ in range(3):
             for j in range(4):
-                st = scene_step_joint(par, st, jnp.stack([dofs[j], dofs[(j + k) % 4]]),
-                                      jnp.stack([rocs[j], rocs[(j + k) % 4]]), key)[0]
+                st = scene_step_joint(
+                    par,
+                    st,
+                    jnp.stack([dofs[j], dofs[(j + k) % 4]]),
+                    jnp.stack([rocs[j], rocs[(j + k) % 4]]),
+                    key,
+                )[0]
             xs.append(st.centre[:, 0])
         return jnp.stack(xs)
 
@@ -123,7 +151,9 @@ def test_pair_of_square_strokes(lone):
         rel = d[:, 1] - d[:, 0]
         common = d.mean(1) - lone
         assert np.abs(rel).max() < 1e-10  # no relative drift (see README: an exact property here)
-        far = np.log(common[-2] / common[-1]) / np.log(seps[-1] / seps[-2])  # local exponent, 180..240 a
+        far = np.log(common[-2] / common[-1]) / np.log(
+            seps[-1] / seps[-2]
+        )  # local exponent, 180..240 a
         assert (2.9 < far < 3.2) if k == 0 else (2.9 < far < 3.6)
         if k == 0:
             # the independent collinear NumPy/SciPy solve gives 0.18312562 a per cycle at D = 30 a

@@ -11,12 +11,24 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from jswim.scenes import Scene, batch_starts, scene_params, scene_positions, scene_reset, scene_step_joint
+from jswim.scenes import (
+    Scene,
+    batch_starts,
+    scene_params,
+    scene_positions,
+    scene_reset,
+    scene_step_joint,
+)
 from jswim.swimmers import bodyframe, forcefree
 
 pytestmark = pytest.mark.slow  # compiles several school scenes (~1-2 min on 2 loaded cores)
 
-SQUARE = [(0, -1), (1, -1), (0, 1), (1, 1)]  # 0-based arm, ROC: from (10, 10), d1 short, d2 short, d1 long, d2 long
+SQUARE = [
+    (0, -1),
+    (1, -1),
+    (0, 1),
+    (1, 1),
+]  # 0-based arm, ROC: from (10, 10), d1 short, d2 short, d1 long, d2 long
 LONE = 0.17209143957  # a lone swimmer's cycle (tests/env/test_scenes.py: an independent collinear solve)
 
 
@@ -24,6 +36,7 @@ def collinear_school_cycle(n, spacing, lo=6.0, hi=10.0):
     """The middle spheres' displacement over one in-phase square cycle of ``n`` coaxial swimmers
     ``spacing`` apart: every sphere on the x axis, point forces (unit self mobility, Oseen 3/(2 r)
     along the line), each swimmer force-free; the middles' ODE integrated by SciPy (DOP853)."""
+
     def velocities(x_mid, arms, rates):
         q = np.array([-arms[0], 0.0, arms[1]])
         qdot = np.array([-rates[0], 0.0, rates[1]])
@@ -31,10 +44,12 @@ def collinear_school_cycle(n, spacing, lo=6.0, hi=10.0):
         r = np.abs(xs[:, None] - xs[None, :])
         m = np.eye(3 * n) + np.where(r > 0, 1.5 / np.where(r > 0, r, 1.0), 0.0)
         owner = np.repeat(np.arange(n), 3)
-        k = (owner[:, None] == np.arange(n)[None, :]).astype(float)  # sphere i moves with its swimmer
+        k = (owner[:, None] == np.arange(n)[None, :]).astype(
+            float
+        )  # sphere i moves with its swimmer
         a = np.block([[m, -k], [k.T, np.zeros((n, n))]])
         sol = np.linalg.solve(a, np.concatenate([np.tile(qdot, n), np.zeros(n)]))
-        return sol[3 * n:]
+        return sol[3 * n :]
 
     x = np.arange(n) * float(spacing)
     arms = [hi, hi]
@@ -58,13 +73,17 @@ def joint_cycles(scene, spacings, cycles=1):
     in-phase square cycles, one start per spacing (float64)."""
     n = scene.swimmers
     with jax.enable_x64(True):
-        params = batch_starts(scene_params("ng", scene, dtype=jnp.float64), separation=np.asarray(spacings, float))
+        params = batch_starts(
+            scene_params("ng", scene, dtype=jnp.float64), separation=np.asarray(spacings, float)
+        )
         dofs = jnp.asarray([[d] * n for d, _ in SQUARE] * cycles, jnp.int32)
         rocs = jnp.asarray([[float(k)] * n for _, k in SQUARE] * cycles, jnp.float64)
 
         def one(centre0, tilt0):
             p = params.replace(centre0=centre0, tilt0=tilt0)
-            body = lambda st, a: (scene_step_joint(p, st, a[0], a[1], jax.random.PRNGKey(0))[0],) * 2
+            body = lambda st, a: (
+                (scene_step_joint(p, st, a[0], a[1], jax.random.PRNGKey(0))[0],) * 2
+            )
             return jax.lax.scan(body, scene_reset(p), (dofs, rocs))[1]
 
         traj = jax.jit(jax.vmap(one))(params.centre0, params.tilt0)
@@ -136,7 +155,9 @@ def test_side_by_side_mirror_symmetry():
     # onto itself with swimmers 1 and 3 exchanged (each swimmer is symmetric about its own axis):
     # their x displacements agree, their z displacements and tilts are opposite, and the middle
     # swimmer neither rises nor turns.
-    (disp, tilt) = joint_cycles(Scene(medium="free", swimmers=3, formation="side"), [5.0, 10.0, 30.0])
+    (disp, tilt) = joint_cycles(
+        Scene(medium="free", swimmers=3, formation="side"), [5.0, 10.0, 30.0]
+    )
     np.testing.assert_allclose(disp[:, 0, 0], disp[:, 2, 0], atol=1e-13, rtol=0)
     np.testing.assert_allclose(disp[:, 0, 1], -disp[:, 2, 1], atol=1e-13, rtol=0)
     np.testing.assert_allclose(tilt[:, 0], -tilt[:, 2], atol=1e-13, rtol=0)
@@ -152,7 +173,9 @@ def test_red_black_sweeps_converge_to_the_coupled_solve_and_are_force_free():
     rng = np.random.default_rng(3)
     with jax.enable_x64(True):
         s = 5
-        centre = jnp.asarray(np.stack([np.arange(s) * 26.0 + rng.normal(0, 1, s), 12.0 + rng.normal(0, 2, s)], -1))
+        centre = jnp.asarray(
+            np.stack([np.arange(s) * 26.0 + rng.normal(0, 1, s), 12.0 + rng.normal(0, 2, s)], -1)
+        )
         tilt = jnp.asarray(rng.normal(0, 0.1, s))
         arms = jnp.asarray(rng.uniform(6, 10, (s, 2)))
         rates = jnp.asarray(rng.normal(0, 1, (s, 2)))
@@ -181,9 +204,14 @@ def test_red_black_sweeps_converge_to_the_coupled_solve_and_are_force_free():
             np.testing.assert_allclose(np.asarray(forces), np.asarray(ref.forces), atol=1e-11)
             # each swimmer force- and torque-free (about its middle sphere), so the school too
             fs = np.asarray(forces).reshape(s, 3, 2)
-            rel = np.asarray(forcefree.sphere_centres(centre, tilt, arms)) - np.asarray(centre)[:, None]
+            rel = (
+                np.asarray(forcefree.sphere_centres(centre, tilt, arms))
+                - np.asarray(centre)[:, None]
+            )
             assert np.abs(fs.sum(1)).max() < 1e-12
-            assert np.abs((rel[..., 0] * fs[..., 1] - rel[..., 1] * fs[..., 0]).sum(1)).max() < 1e-11
+            assert (
+                np.abs((rel[..., 0] * fs[..., 1] - rel[..., 1] * fs[..., 0]).sum(1)).max() < 1e-11
+            )
 
 
 def test_one_and_two_swimmers_keep_their_numbers():
@@ -198,7 +226,15 @@ def test_one_and_two_swimmers_keep_their_numbers():
     assert lone.x[-1, 0] == pytest.approx(0.17209143956404405, rel=1e-14, abs=0)
     moves = [(s, d, k) for d, k in [(1, -1), (2, -1), (1, 1), (2, 1)] for s in (1, 2)] * 2
     pair = scene_rollout("ng", moves, Scene(medium="free", swimmers=2, separation=30.0))
-    np.testing.assert_allclose(pair.x[-1], [0.34236806285915594, 30.342368062859176], rtol=1e-14, atol=0)
-    wall = scene_rollout("ng", moves, Scene(medium="wall", swimmers=2, separation=30.0, height=10.0))
-    np.testing.assert_allclose(wall.x[-1], [0.3321212518703214, 30.332091498616528], atol=0, rtol=1e-14)
-    np.testing.assert_allclose(wall.tilt[-1], [-0.002504793702242466, -0.002518806917165861], atol=0, rtol=1e-13)
+    np.testing.assert_allclose(
+        pair.x[-1], [0.34236806285915594, 30.342368062859176], rtol=1e-14, atol=0
+    )
+    wall = scene_rollout(
+        "ng", moves, Scene(medium="wall", swimmers=2, separation=30.0, height=10.0)
+    )
+    np.testing.assert_allclose(
+        wall.x[-1], [0.3321212518703214, 30.332091498616528], atol=0, rtol=1e-14
+    )
+    np.testing.assert_allclose(
+        wall.tilt[-1], [-0.002504793702242466, -0.002518806917165861], atol=0, rtol=1e-13
+    )

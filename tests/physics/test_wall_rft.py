@@ -20,6 +20,7 @@ import pytest
 
 from jswim.errors import ConfigError
 from jswim.swimmers import mobility, nlink, wall_rft
+import itertools
 
 BULK_CYCLE = 0.19124724  # DESIGN.md: Purcell's square gait at d_max = pi/3
 HEIGHTS = (1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 1000.0)
@@ -39,8 +40,12 @@ def blake_image(rho: np.ndarray, h: float) -> np.ndarray:
     r3 = big[..., 2][..., None, None]
     e3 = eye[2]
     # d/dR_k [h R_i / R^3 - delta_i3 / R - R_i R_3 / R^3], index [i, k]
-    d = (h * (eye / r**3 - 3 * rr / r**5) + e3[:, None] * big[..., None, :] / r**3
-         - (eye * r3 + big[..., :, None] * e3[None, :]) / r**3 + 3 * rr * r3 / r**5)
+    d = (
+        h * (eye / r**3 - 3 * rr / r**5)
+        + e3[:, None] * big[..., None, :] / r**3
+        - (eye * r3 + big[..., :, None] * e3[None, :]) / r**3
+        + 3 * rr * r3 / r**5
+    )
     return out + 2 * h * m * d
 
 
@@ -48,14 +53,26 @@ def test_the_tests_blake_tensor_is_jswims():
     # jswim's Blake blocks (8 pi mu G in the x-z plane): same heights, offset along x
     with jax.enable_x64(True):
         for rx, h in ((0.7, 1.3), (3.0, 0.4), (0.2, 2.0)):
-            xx, xz, zx, zz = (float(v) for v in mobility.blake_entries(*(jnp.asarray(v, jnp.float64) for v in (rx, h, h))))
-            sxx, _, szz = (float(v) for v in mobility.stokeslet(jnp.asarray(rx, jnp.float64), jnp.asarray(0.0, jnp.float64)))
+            xx, xz, zx, zz = (
+                float(v)
+                for v in mobility.blake_entries(*(jnp.asarray(v, jnp.float64) for v in (rx, h, h)))
+            )
+            sxx, _, szz = (
+                float(v)
+                for v in mobility.stokeslet(
+                    jnp.asarray(rx, jnp.float64), jnp.asarray(0.0, jnp.float64)
+                )
+            )
             img = blake_image(np.array([rx, 0.0]), h)
             assert xx == pytest.approx(sxx + img[0, 0], rel=1e-12)
             assert zz == pytest.approx(szz + img[2, 2], rel=1e-12)
-            assert xz == pytest.approx(img[0, 2], rel=1e-12) and zx == pytest.approx(img[2, 0], rel=1e-12)
+            assert xz == pytest.approx(img[0, 2], rel=1e-12) and zx == pytest.approx(
+                img[2, 0], rel=1e-12
+            )
     # the sphere's 9/16: a point force's own image at its place, -3 / (4 h) along the wall
-    np.testing.assert_allclose(np.diag(blake_image(np.zeros(2), 2.0))[:2], -3 / (4 * 2.0), rtol=1e-14)
+    np.testing.assert_allclose(
+        np.diag(blake_image(np.zeros(2), 2.0))[:2], -3 / (4 * 2.0), rtol=1e-14
+    )
 
 
 @pytest.mark.parametrize("h", [0.25, 0.6, 1.5, 4.0, 20.0])
@@ -80,7 +97,10 @@ def test_far_limit_is_de_mestre_russel():
         assert k_t * 16 * h / 3 == pytest.approx(1.0, abs=0.5 / h**2)
         assert k_n * 8 * h / 3 == pytest.approx(1.0, abs=0.5 / h**2)
     xi_t, xi_n = wall_rft.drag_coefficients(1e7)
-    assert (xi_t, xi_n) == (pytest.approx(1.0, abs=1e-7), pytest.approx(2.0, abs=1e-7))  # jswim's bulk
+    assert (xi_t, xi_n) == (
+        pytest.approx(1.0, abs=1e-7),
+        pytest.approx(2.0, abs=1e-7),
+    )  # jswim's bulk
 
 
 def test_near_limit_is_katz_blake_paveri_fontana():
@@ -98,14 +118,19 @@ def test_near_limit_is_katz_blake_paveri_fontana():
 
 def test_ratio_grows_toward_the_wall():
     r = [float(n / t) for t, n in (wall_rft.drag_coefficients(h) for h in (0.05, *HEIGHTS))]
-    assert all(a > b for a, b in zip(r, r[1:])) and r[-1] > 2.0
+    assert all(a > b for a, b in itertools.pairwise(r)) and r[-1] > 2.0
     # the far excess 2 (k_N - k_T) / L = 3 / (8 L h)
     assert r[-1] - 2.0 == pytest.approx(3 / (8 * math.log(100.0) * 1000.0), rel=1e-3)
 
 
 def test_bad_heights_and_radii_are_one_line_errors():
-    for kw in ({"height": 0.01}, {"height": float("nan")}, {"height": 2.0, "link_radius": 0.5},
-               {"height": 2.0, "link_radius": 0.0}, {"height": "x"}):
+    for kw in (
+        {"height": 0.01},
+        {"height": float("nan")},
+        {"height": 2.0, "link_radius": 0.5},
+        {"height": 2.0, "link_radius": 0.0},
+        {"height": "x"},
+    ):
         with pytest.raises(ConfigError) as e:
             wall_rft.wall_model(**kw)
         assert "\n" not in str(e.value)
@@ -135,11 +160,15 @@ def _cycle_rk4(ratio: jax.Array, n: int = 256) -> jax.Array:
         c, s = jnp.cos(p[2]), jnp.sin(p[2])
         return jnp.array([c * u[0] - s * u[1], s * u[0] + c * u[1], u[2]])
 
-    rates = jnp.array([[0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]])  # D2 down, D1 down, D2 up, D1 up
+    rates = jnp.array(
+        [[0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]]
+    )  # D2 down, D1 down, D2 up, D1 up
 
     def body(j, p):
         r = rates[j // n]
-        d0 = jnp.array([dm, dm]) + 2 * dm * jnp.sum(jnp.where(jnp.arange(4)[:, None] < j // n, rates, 0.0), 0)
+        d0 = jnp.array([dm, dm]) + 2 * dm * jnp.sum(
+            jnp.where(jnp.arange(4)[:, None] < j // n, rates, 0.0), 0
+        )
         t = (j % n) * dt
         k1 = rate(p, d0 + r * t, r)
         k2 = rate(p + 0.5 * dt * k1, d0 + r * (t + 0.5 * dt), r)

@@ -42,7 +42,13 @@ MARKERS = {
 }
 
 
-def rec(step: int, x0: float = 0.0, x1: float = 0.01, action: Action = Action(1, -1), stuck: bool = False) -> HistoryRecord:
+def rec(
+    step: int,
+    x0: float = 0.0,
+    x1: float = 0.01,
+    action: Action = Action(1, -1),
+    stuck: bool = False,
+) -> HistoryRecord:
     return HistoryRecord(step, HI, (-math.pi / 3, math.pi / 3), action, x0, x1, stuck)
 
 
@@ -50,7 +56,11 @@ def test_prompt_layer_never_imports_jax():
     import subprocess
 
     code = "import sys, jswim.prompt, jswim.llm, jswim.llm.local; assert 'jax' not in sys.modules, 'jax imported'"
-    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(__import__("pathlib").Path(__file__).parents[2]))
+    subprocess.run(
+        [sys.executable, "-c", code],
+        check=True,
+        cwd=str(__import__("pathlib").Path(__file__).parents[2]),
+    )
 
 
 def test_full_prompt_contents():
@@ -153,7 +163,9 @@ def test_any_number_of_dofs_and_roc_sets():
     one = SwimmerText(1, 0.0, 1.0, 1)
     assert "D1 stays in [0.0, 1.0]" in render_prompt(one, PromptConfig(), 1, [], (0.0,))
     uneven = SwimmerText(2, (0.0, 1.0), (2.0, 3.0), 0)
-    assert "D1 stays in [0, 2] and D2 stays in [1, 3]" in render_prompt(uneven, PromptConfig(), 1, [], (0.0, 1.0))
+    assert "D1 stays in [0, 2] and D2 stays in [1, 3]" in render_prompt(
+        uneven, PromptConfig(), 1, [], (0.0, 1.0)
+    )
 
 
 def test_shape_changing_allowed_set():
@@ -243,10 +255,14 @@ def test_template_from_text_and_file(tmp_path):
     assert text.endswith("X 2500 -> 2510, stuck no")
 
     f = tmp_path / "t.txt"
-    f.write_text("[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S3}\n")
+    f.write_text(
+        "[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S3}\n"
+    )
     with pytest.raises(ConfigError, match="never shows the allowed set"):  # no S5: refused up front
         PromptTemplate.from_file(f)
-    f.write_text("[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S5}\n{S3}\n")
+    f.write_text(
+        "[S4]\nThink ahead.\n[record]\n#{step} {action} {x_after}{stuck}\n[layout]\n{S4}\n{S5}\n{S3}\n"
+    )
     tpl = PromptTemplate.from_file(f)
     assert tpl.sentence("S1") == DEFAULT_SENTENCES["S1"]
     text = render_prompt(PURCELL, PromptConfig(template=tpl), 1, [rec(2, stuck=True)], HI)
@@ -259,27 +275,42 @@ def test_template_from_text_and_file(tmp_path):
         PromptTemplate.from_text("junk\n[S1]\nx")
     with pytest.raises(ConfigError):
         PromptTemplate.from_file(tmp_path / "missing.txt")
-    assert "{x}" in render_prompt(PURCELL, PromptConfig(template=PromptTemplate(layout="{{x}} {S4}")), 1, [], HI)
+    assert "{x}" in render_prompt(
+        PURCELL, PromptConfig(template=PromptTemplate(layout="{{x}} {S4}")), 1, [], HI
+    )
 
 
 def test_current_state_placeholder():
     tpl = PromptTemplate(layout="{current}")
-    assert render_prompt(PURCELL, PromptConfig(template=tpl), 1, [], HI, x=0.1234) == "(D1, D2) = (1.047, 1.047), X = 2623"
+    assert (
+        render_prompt(PURCELL, PromptConfig(template=tpl), 1, [], HI, x=0.1234)
+        == "(D1, D2) = (1.047, 1.047), X = 2623"
+    )
 
 
 def test_build_messages():
     assert build_messages("hi") == [{"role": "user", "content": "hi"}]
-    assert build_messages("hi", "sys") == [{"role": "system", "content": "sys"}, {"role": "user", "content": "hi"}]
+    assert build_messages("hi", "sys") == [
+        {"role": "system", "content": "sys"},
+        {"role": "user", "content": "hi"},
+    ]
 
 
 def test_per_step_text_goes_last_and_the_paper_prompt_is_unchanged():
     lo, hi = -math.pi / 3, math.pi / 3
     rec = HistoryRecord(1, (hi, hi), (lo, hi), Action(1, -1), 0.0, 0.01)
     cache = render_prompt(PURCELL, PromptConfig(order="cache"), 1, [rec], (lo, hi))
-    assert PromptConfig(order="cache").layout == CACHE_LAYOUT and cache.index("Reply with") < cache.index("1: (")
-    for cfg in (PromptConfig(action_set="shape-changing", order="cache"), PromptConfig(shuffle=True, order="cache"),
-                PromptConfig(summary=True, order="cache")):
-        text = render_prompt(PURCELL, cfg, 1, [rec], (lo, hi), summary="Observed so far: x." if cfg.summary else "")
+    assert PromptConfig(order="cache").layout == CACHE_LAYOUT and cache.index(
+        "Reply with"
+    ) < cache.index("1: (")
+    for cfg in (
+        PromptConfig(action_set="shape-changing", order="cache"),
+        PromptConfig(shuffle=True, order="cache"),
+        PromptConfig(summary=True, order="cache"),
+    ):
+        text = render_prompt(
+            PURCELL, cfg, 1, [rec], (lo, hi), summary="Observed so far: x." if cfg.summary else ""
+        )
         lines = text.splitlines()
         assert lines[-1].startswith("Reply with the next action"), text  # S5 last: per-step text
         if cfg.summary:
@@ -326,14 +357,20 @@ def test_parse_reply_takes_the_final_answer(reply, expected):
     assert parse_reply(reply, allowed_actions(PURCELL)) == expected
 
 
-@pytest.mark.parametrize("text, words", [
-    ("Go {direction}. {S5}\n{S3}\n{bogus}", "unknown placeholder {bogus} in the layout"),
-    ("[record]\n#{step} {nope}\n", "unknown placeholder {nope} in the record"),
-    ("Go {direction}. Answer with one of {allowed}.", "never shows the history"),
-    ("[S3]\nno records here\n[layout]\n{S3} {S5}", "never shows the history"),  # S3 without {history}
-    ("Go {direction}.\n{history}", "never shows the allowed set"),
-    ("Go {direction {S3} {S5}", "bad braces"),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("Go {direction}. {S5}\n{S3}\n{bogus}", "unknown placeholder {bogus} in the layout"),
+        ("[record]\n#{step} {nope}\n", "unknown placeholder {nope} in the record"),
+        ("Go {direction}. Answer with one of {allowed}.", "never shows the history"),
+        (
+            "[S3]\nno records here\n[layout]\n{S3} {S5}",
+            "never shows the history",
+        ),  # S3 without {history}
+        ("Go {direction}.\n{history}", "never shows the allowed set"),
+        ("Go {direction {S3} {S5}", "bad braces"),
+    ],
+)
 def test_template_check_refuses_what_cannot_work(text, words):
     with pytest.raises(ConfigError, match=re.escape(words)):
         PromptTemplate.from_text(text).check()

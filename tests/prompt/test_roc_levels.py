@@ -40,15 +40,20 @@ def test_k1_prompt_is_byte_identical_to_the_paper_prompt():
         "[-1.047, 1.047].\nLatest records (step: (D1, D2) before [changed DOF, ROC] -> (D1, D2) after, X before -> "
         "after, stuck):\n1: (1.047, 1.047) [1, -1] -> (-1.047, 1.047), X 2500 -> 2510, stuck no\nKeep in mind that an "
         "action can have long-term consequences. Reply with the next action as [changed DOF, ROC], the changed DOF 1 "
-        "or 2 and the ROC -1, 0 or 1.")
+        "or 2 and the ROC -1, 0 or 1."
+    )
 
 
 def test_k_levels_add_one_sentence_to_s2_and_one_to_s5():
     text = render_prompt(purcell(5), PromptConfig(), -1, [], HI, 0.0)
-    s2 = ("Only one DOF changes at a time, and D1 and D2 each stay in [-1.047, 1.047]. In one step a ROC of k "
-          "changes the DOF by k/5 of its range, stopping at its limits.")
-    s5 = ("Reply with the next action as [changed DOF, ROC], the changed DOF 1 or 2 and the ROC -5, -4, -3, -2, -1, "
-          "0, 1, 2, 3, 4 or 5. The ROC is a whole number from -5 to 5.")
+    s2 = (
+        "Only one DOF changes at a time, and D1 and D2 each stay in [-1.047, 1.047]. In one step a ROC of k "
+        "changes the DOF by k/5 of its range, stopping at its limits."
+    )
+    s5 = (
+        "Reply with the next action as [changed DOF, ROC], the changed DOF 1 or 2 and the ROC -5, -4, -3, -2, -1, "
+        "0, 1, 2, 3, 4 or 5. The ROC is a whole number from -5 to 5."
+    )
     assert s2 in text and s5 in text
     assert text.count("k/5") == 1 and text.count("whole number") == 1
     # A dropped sentence takes its extra sentence with it.
@@ -63,7 +68,9 @@ def test_four_dof_rocs_leave_out_zero_and_say_so():
     model = make_model("nsphere")
     assert default_rocs(model) == (-1, 1)
     assert default_rocs(model, 3) == (-3, -2, -1, 1, 2, 3)
-    text = render_prompt(swimmer_text(model, roc_levels=3), PromptConfig(), 1, [], (6.0, 10.0, 10.0), 0.0)
+    text = render_prompt(
+        swimmer_text(model, roc_levels=3), PromptConfig(), 1, [], (6.0, 10.0, 10.0), 0.0
+    )
     assert "The ROC is a whole number from -3 to 3, not 0." in text
 
 
@@ -73,7 +80,14 @@ def test_allowed_set_at_k_levels_and_shape_changing_moves():
     assert len(allowed_actions(sw)) == 2 * (2 * 2 + 1)
     # From D1 at its upper limit and D2 in the middle: D1 may only go down, D2 either way.
     moves = allowed_actions(sw, "shape-changing", (math.pi / 3, 0.0))
-    assert moves == [Action(1, -2), Action(1, -1), Action(2, -2), Action(2, -1), Action(2, 1), Action(2, 2)]
+    assert moves == [
+        Action(1, -2),
+        Action(1, -1),
+        Action(2, -2),
+        Action(2, -1),
+        Action(2, 1),
+        Action(2, 2),
+    ]
 
 
 @pytest.mark.parametrize("k", [2, 5, 10])
@@ -82,8 +96,18 @@ def test_parser_accepts_exactly_the_offered_integers(k):
     for roc in range(-k, k + 1):
         assert parse_reply(f"[2, {roc}]", allowed) == Action(2, roc)
         assert parse_reply(f"DOF 1, ROC {roc}", allowed) == Action(1, roc)
-    for bad in (f"[1, {k + 1}]", f"[1, -{k + 1}]", "[1, 0.5]", "[1, 1/2]", "[1, 1.0]", "DOF 1, ROC 0.5",
-                "DOF 1, ROC 1/2", f"DOF 1, ROC {k + 1}", "[3, 1]", "[1, 1.5]"):
+    for bad in (
+        f"[1, {k + 1}]",
+        f"[1, -{k + 1}]",
+        "[1, 0.5]",
+        "[1, 1/2]",
+        "[1, 1.0]",
+        "DOF 1, ROC 0.5",
+        "DOF 1, ROC 1/2",
+        f"DOF 1, ROC {k + 1}",
+        "[3, 1]",
+        "[1, 1.5]",
+    ):
         assert parse_reply(bad, allowed) is None, bad
 
 
@@ -100,11 +124,24 @@ def test_the_driver_asks_again_for_a_roc_outside_the_lattice():
 
     cfg = LLMAgentConfig()
     sw = purcell(2)
-    req = protocol.request(cfg, sw, PromptConfig(), direction=1, seed=0, step=1, records=[], dofs=HI, x=0.0,
-                           stats=__import__("jswim.agents.memory", fromlist=["MoveStats"]).MoveStats())
+    req = protocol.request(
+        cfg,
+        sw,
+        PromptConfig(),
+        direction=1,
+        seed=0,
+        step=1,
+        records=[],
+        dofs=HI,
+        x=0.0,
+        stats=__import__("jswim.agents.memory", fromlist=["MoveStats"]).MoveStats(),
+    )
     reply = protocol.read_reply(req, req.messages, "[1, 3]", 0, cfg)
     assert reply.action is None and reply.follow_up is not None
-    assert "[1, -2]" in reply.follow_up[-1]["content"] and "[1, 3]" not in reply.follow_up[-1]["content"]
+    assert (
+        "[1, -2]" in reply.follow_up[-1]["content"]
+        and "[1, 3]" not in reply.follow_up[-1]["content"]
+    )
     assert protocol.read_reply(req, req.messages, "[1, -2]", 0, cfg).action == Action(1, -2)
 
 

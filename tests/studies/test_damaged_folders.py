@@ -18,8 +18,19 @@ from jswim import cli
 from tests.fakeserver import FakeServer, hash_reply
 
 STEPS = 12
-FAST = ["--steps", str(STEPS), "--runs", "2", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x",
-        "--no-figures"]
+FAST = [
+    "--steps",
+    str(STEPS),
+    "--runs",
+    "2",
+    "--q-runs",
+    "0",
+    "--swimmer",
+    "purcell",
+    "--direction",
+    "+x",
+    "--no-figures",
+]
 
 
 def swim_args(url: str, out: Path, *extra: str) -> list[str]:
@@ -68,7 +79,9 @@ def second_run_record(folder: Path) -> dict:
 
 
 RUN_EDITS = {
-    "non-utf8": lambda rec: json.dumps(rec).replace('"llm"', '"ll\udcff"', 1).encode("utf-8", "surrogateescape"),
+    "non-utf8": lambda rec: (
+        json.dumps(rec).replace('"llm"', '"ll\udcff"', 1).encode("utf-8", "surrogateescape")
+    ),
     "empty-object": lambda rec: b"{}",
     "run-id-number": lambda rec: b'{"run_id": 5}',
     "run-id-list": lambda rec: b'{"run_id": [1]}',
@@ -77,11 +90,16 @@ RUN_EDITS = {
 
 
 @pytest.mark.parametrize("case", list(RUN_EDITS))
-def test_a_bad_runs_line_is_skipped_with_one_line_and_the_resume_pays_nothing(case, finished, srv, tmp_path,
-                                                                              capsys):
+def test_a_bad_runs_line_is_skipped_with_one_line_and_the_resume_pays_nothing(
+    case, finished, srv, tmp_path, capsys
+):
     out = copy(finished, tmp_path)
     replace_line(out / "runs.jsonl", 2, RUN_EDITS[case](second_run_record(out)))
-    for argv in (["show", str(out)], ["compare", str(out), str(out)], [*swim_args(srv.url, out), "--dry-run"]):
+    for argv in (
+        ["show", str(out)],
+        ["compare", str(out), str(out)],
+        [*swim_args(srv.url, out), "--dry-run"],
+    ):
         rc, err = run(capsys, *argv)
         assert rc == 0, err
         warned = [ln for ln in err.splitlines() if "runs.jsonl, line 2" in ln]
@@ -98,7 +116,11 @@ def test_a_bad_runs_line_is_skipped_with_one_line_and_the_resume_pays_nothing(ca
 def test_every_reader_of_a_non_utf8_runs_line_warns_and_goes_on(finished, tmp_path, capsys):
     out = copy(finished, tmp_path)
     replace_line(out / "runs.jsonl", 2, RUN_EDITS["non-utf8"](second_run_record(out)))
-    for argv in (["plot", str(out)], ["report", str(out)], ["animate", str(out), "--max", "1", "--dpi", "20"]):
+    for argv in (
+        ["plot", str(out)],
+        ["report", str(out)],
+        ["animate", str(out), "--max", "1", "--dpi", "20"],
+    ):
         rc, err = run(capsys, *argv)
         assert rc == 0, err
         assert "runs.jsonl, line 2" in err
@@ -111,7 +133,9 @@ def half_done(finished: Path, tmp_path: Path) -> Path:
     out = copy(finished, tmp_path)
     lines = (out / "runs.jsonl").read_bytes().split(b"\n")
     second = sorted(json.loads(ln)["run_id"] for ln in lines if ln)[1]
-    (out / "runs.jsonl").write_bytes(b"\n".join(ln for ln in lines if not ln or json.loads(ln)["run_id"] != second))
+    (out / "runs.jsonl").write_bytes(
+        b"\n".join(ln for ln in lines if not ln or json.loads(ln)["run_id"] != second)
+    )
     return out
 
 
@@ -127,9 +151,14 @@ def edit_call(out: Path, index: int, **fields) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-@pytest.mark.parametrize("fields", [{"text": None}, {"usage": ["x", 1, 0, 0]}, {"cost_usd": "x"}, {"n": "3"}],
-                         ids=["null-text", "usage-text", "cost-text", "index-text"])
-def test_a_journal_record_failing_validation_costs_that_one_call_only(fields, finished, srv, tmp_path, capsys):
+@pytest.mark.parametrize(
+    "fields",
+    [{"text": None}, {"usage": ["x", 1, 0, 0]}, {"cost_usd": "x"}, {"n": "3"}],
+    ids=["null-text", "usage-text", "cost-text", "index-text"],
+)
+def test_a_journal_record_failing_validation_costs_that_one_call_only(
+    fields, finished, srv, tmp_path, capsys
+):
     out = half_done(finished, tmp_path)
     edit_call(out, 3, **fields)
     srv.reset_counts()
@@ -166,8 +195,18 @@ def test_a_refused_resume_leaves_the_status_as_it_was(finished, srv, tmp_path, c
     out = half_done(finished, tmp_path)
     meta = json.loads((out / "metadata.json").read_text())
     (out / "metadata.json").write_text(json.dumps({**meta, "status": "stopped at the cost cap"}))
-    rc, err = run(capsys, *swim_args(srv.url, out, "--max-cost", "1", "--price-local", "--prices",
-                                     str(prices_without(tmp_path))))
+    rc, err = run(
+        capsys,
+        *swim_args(
+            srv.url,
+            out,
+            "--max-cost",
+            "1",
+            "--price-local",
+            "--prices",
+            str(prices_without(tmp_path)),
+        ),
+    )
     assert rc == 2 and "--prices" in err
     assert status(out) == "stopped at the cost cap"
 
@@ -189,4 +228,4 @@ def test_a_torn_transcript_of_a_finished_run_says_what_is_lost(finished, srv, tm
     assert rc == 0 and srv.n_requests == 0
     said = [ln for ln in (printed.err + printed.out).splitlines() if path.name in ln]
     assert said and "not redone" in said[0] and "redone, no answered" not in said[0], said
-    assert path.read_bytes() == data[:data[:-20].rfind(b"\n") + 1]  # cut back to whole records
+    assert path.read_bytes() == data[: data[:-20].rfind(b"\n") + 1]  # cut back to whole records

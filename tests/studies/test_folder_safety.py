@@ -27,7 +27,19 @@ from tests.fakeserver import FakeServer, hash_reply
 
 STEPS = 12
 CALLS = 2 * STEPS  # two LLM runs, one call per step (the fake server always answers a move)
-FAST = ["--steps", str(STEPS), "--runs", "2", "--q-runs", "0", "--swimmer", "purcell", "--direction", "+x", "--no-figures"]
+FAST = [
+    "--steps",
+    str(STEPS),
+    "--runs",
+    "2",
+    "--q-runs",
+    "0",
+    "--swimmer",
+    "purcell",
+    "--direction",
+    "+x",
+    "--no-figures",
+]
 
 
 def swim_args(url: str, out: Path, *extra: str) -> list[str]:
@@ -51,7 +63,9 @@ time.sleep(120)
 
 def hold_lock(folder: Path) -> subprocess.Popen:
     """A process that opens ``folder`` as a study store and keeps it (the lock) until killed."""
-    proc = subprocess.Popen([sys.executable, "-c", HOLD, str(folder)], stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", HOLD, str(folder)], stdout=subprocess.PIPE, text=True
+    )
     assert proc.stdout.readline().strip() == "held"
     return proc
 
@@ -83,7 +97,9 @@ def test_a_lock_left_by_a_killed_process_is_taken_over(tmp_path):
     proc.send_signal(signal.SIGKILL)
     proc.wait()
     info = holder(folder)
-    assert info["pid"] == proc.pid and info["alive"] is False  # the note stays; the kernel freed the lock
+    assert (
+        info["pid"] == proc.pid and info["alive"] is False
+    )  # the note stays; the kernel freed the lock
     store = StudyStore(folder, "swim", {"study": "swim"})
     assert holder(folder)["pid"] == os.getpid() and holder(folder)["alive"] is True
     with pytest.raises(FolderBusyError, match=f"pid {os.getpid()}"):  # one writer, in-process too
@@ -96,8 +112,16 @@ def test_a_lock_left_by_a_killed_process_is_taken_over(tmp_path):
 
 
 def _result(text: str) -> ChatResult:
-    return ChatResult(text=text, usage=Usage(10, 2), latency_s=0.1, cache_hit=False, shared=False, retries=0,
-                      cost_usd=0.001, constraint="none")
+    return ChatResult(
+        text=text,
+        usage=Usage(10, 2),
+        latency_s=0.1,
+        cache_hit=False,
+        shared=False,
+        retries=0,
+        cost_usd=0.001,
+        constraint="none",
+    )
 
 
 def test_a_torn_journal_line_is_cut_never_glued_onto_and_replay_skips_the_gap(tmp_path):
@@ -119,7 +143,11 @@ def test_a_torn_journal_line_is_cut_never_glued_onto_and_replay_skips_the_gap(tm
     assert j.replay("r1", 3, "k3") is None
     j.record("r1", 3, "k3", _result("[3, 1]"))
     j.close()
-    assert [json.loads(x)["n"] for x in path.read_text().splitlines()] == [0, 2, 3]  # each on its own line
+    assert [json.loads(x)["n"] for x in path.read_text().splitlines()] == [
+        0,
+        2,
+        3,
+    ]  # each on its own line
 
 
 def test_repair_tail_cuts_only_a_torn_line(tmp_path):
@@ -129,7 +157,7 @@ def test_repair_tail_cuts_only_a_torn_line(tmp_path):
     assert repair_tail(p) == 0 and p.read_bytes() == b'{"a": 1}\n{"b": 2}\n'
     p.write_bytes(b'{"a": 1}\n{"b": 2}\n{"c": ')
     assert repair_tail(p) == 6 and p.read_bytes() == b'{"a": 1}\n{"b": 2}\n'
-    p.write_bytes(b'no newline at all')
+    p.write_bytes(b"no newline at all")
     assert repair_tail(p) == 17 and p.read_bytes() == b""
 
 
@@ -146,7 +174,9 @@ def test_opening_a_folder_repairs_every_journal_and_says_so(tmp_path):
     (folder / ".runs.csv.k2j4h1x0.tmp").write_text("half a table")
     store = StudyStore(folder, "noise", {})
     assert len(store.repairs) == 4, store.repairs
-    assert any("runs.jsonl" in r for r in store.repairs) and any("calls.jsonl" in r for r in store.repairs)
+    assert any("runs.jsonl" in r for r in store.repairs) and any(
+        "calls.jsonl" in r for r in store.repairs
+    )
     assert not (folder / ".runs.csv.k2j4h1x0.tmp").exists()
     store.add_runs([{"run_id": "b", "x": [0.2]}])
     assert [r["run_id"] for r in read_runs(folder)] == ["a", "b"]
@@ -158,7 +188,9 @@ def test_opening_a_folder_repairs_every_journal_and_says_so(tmp_path):
 def test_a_folder_holding_only_jswim_temporary_files_is_fresh(tmp_path):
     folder = tmp_path / "F"
     folder.mkdir()
-    (folder / ".metadata.json.a1b2c3d4.tmp").write_text('{"stu')  # a kill during the very first write
+    (folder / ".metadata.json.a1b2c3d4.tmp").write_text(
+        '{"stu'
+    )  # a kill during the very first write
     (folder / LOCK).write_text("")
     with FakeServer(reply=hash_reply) as srv:
         assert cli.main(swim_args(srv.url, folder)) == 0
@@ -167,7 +199,9 @@ def test_a_folder_holding_only_jswim_temporary_files_is_fresh(tmp_path):
     (tmp_path / "G").mkdir()
     (tmp_path / "G" / "notes.txt").write_text("mine")
     with FakeServer(reply=hash_reply) as srv:
-        assert cli.main(swim_args(srv.url, tmp_path / "G")) == 2  # a user's own file is never taken over
+        assert (
+            cli.main(swim_args(srv.url, tmp_path / "G")) == 2
+        )  # a user's own file is never taken over
 
 
 # -- signals ------------------------------------------------------------------------------------
@@ -175,8 +209,13 @@ def test_a_folder_holding_only_jswim_temporary_files_is_fresh(tmp_path):
 
 def start_swim(url: str, out: Path) -> subprocess.Popen:
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
-    return subprocess.Popen([sys.executable, "-m", "jswim.cli", *swim_args(url, out)], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=env)
+    return subprocess.Popen(
+        [sys.executable, "-m", "jswim.cli", *swim_args(url, out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
+    )
 
 
 def wait_for_calls(out: Path, n: int, proc: subprocess.Popen, timeout: float = 120.0) -> None:
@@ -190,12 +229,17 @@ def wait_for_calls(out: Path, n: int, proc: subprocess.Popen, timeout: float = 1
     pytest.fail("the session made no calls")
 
 
-@pytest.mark.parametrize("signals, status", [
-    ((signal.SIGTERM,), 143),
-    ((signal.SIGHUP,) + (signal.SIGINT,) * 5, 129),  # repeats while it saves: still one line
-])
+@pytest.mark.parametrize(
+    "signals, status",
+    [
+        ((signal.SIGTERM,), 143),
+        ((signal.SIGHUP,) + (signal.SIGINT,) * 5, 129),  # repeats while it saves: still one line
+    ],
+)
 @pytest.mark.slow  # jswim subprocesses signalled and resumed (32 s for both under load 8)
-def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(signals, status, tmp_path, capsys):
+def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(
+    signals, status, tmp_path, capsys
+):
     out = tmp_path / "F"
     with FakeServer(reply=hash_reply, latency=0.2) as srv:
         proc = start_swim(srv.url, out)
@@ -203,7 +247,7 @@ def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(sign
         for sig in signals:
             proc.send_signal(sig)
             time.sleep(0.01)
-        stdout, err = proc.communicate(timeout=120)
+        _stdout, err = proc.communicate(timeout=120)
         no_traceback(err)
         lines = [ln for ln in err.splitlines() if ln.startswith("jswim:")]
         assert proc.returncode == status and len(lines) == 1 and "interrupted" in lines[0], err
@@ -217,7 +261,9 @@ def test_a_signal_ends_the_session_like_ctrl_c_and_the_same_command_resumes(sign
         assert len(rows) == 2 and all(r["status"] == "done" and len(r["x"]) == STEPS for r in rows)
         # No answered call is paid twice: the resume sent only the calls nobody had an answer to.
         assert srv.n_requests - sent == CALLS - answered
-        assert sum(r["replayed_calls"] for r in rows) + sum(r.get("calls", 0) for r in rows) >= CALLS
+        assert (
+            sum(r["replayed_calls"] for r in rows) + sum(r.get("calls", 0) for r in rows) >= CALLS
+        )
 
 
 # Signals at awkward moments: inside an import (a C extension half initialised raises ImportError
@@ -241,8 +287,14 @@ except KeyboardInterrupt:
 def test_a_signal_during_an_import_waits_for_the_import_to_finish(tmp_path):
     (tmp_path / "selfkill.py").write_text(
         "import os, signal, time\nos.kill(os.getpid(), signal.SIGTERM)\n"
-        "for _ in range(20):\n    time.sleep(0.01)  # bytecode runs: the handler is called in here\nDONE = True\n")
-    r = subprocess.run([sys.executable, "-c", SELF_KILL_IMPORT, str(tmp_path)], capture_output=True, text=True, timeout=60)
+        "for _ in range(20):\n    time.sleep(0.01)  # bytecode runs: the handler is called in here\nDONE = True\n"
+    )
+    r = subprocess.run(
+        [sys.executable, "-c", SELF_KILL_IMPORT, str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     no_traceback(r.stderr)
     assert r.stdout.strip() == "interrupted after the import: True SIGTERM"
 
@@ -270,12 +322,16 @@ except KeyboardInterrupt:
 
 
 def test_a_signal_inside_a_garbage_collector_callback_is_not_lost():
-    r = subprocess.run([sys.executable, "-c", SELF_KILL_GC], capture_output=True, text=True, timeout=60)
+    r = subprocess.run(
+        [sys.executable, "-c", SELF_KILL_GC], capture_output=True, text=True, timeout=60
+    )
     no_traceback(r.stderr)
     assert r.stdout.strip() == "interrupted SIGTERM"
 
 
-def test_an_interrupt_right_after_running_was_written_marks_the_folder_interrupted(tmp_path, monkeypatch):
+def test_an_interrupt_right_after_running_was_written_marks_the_folder_interrupted(
+    tmp_path, monkeypatch
+):
     from jswim.results import store as results  # StudyStore looks write_json up in its own module
 
     real = results.write_json
@@ -294,7 +350,9 @@ def test_an_interrupt_right_after_running_was_written_marks_the_folder_interrupt
 
 
 @pytest.mark.slow  # three jswim subprocesses signalled and resumed (33 s under load 8)
-def test_sigterm_at_start_up_in_the_llm_phase_and_in_the_final_writes_never_leaves_running(tmp_path):
+def test_sigterm_at_start_up_in_the_llm_phase_and_in_the_final_writes_never_leaves_running(
+    tmp_path,
+):
     # The stress of issue 22 in small: a session killed at each phase; each resume sends only the
     # calls that had no answer (answered by the server but not journaled when the process died).
     out = tmp_path / "F"
@@ -337,7 +395,11 @@ def small_disk(tmp_path):
         pytest.skip("needs root to mount a small tmpfs (CI runs as root)")
     where = tmp_path / "disk"
     where.mkdir()
-    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(where)], capture_output=True, text=True)
+    r = subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", "size=2m", "tmpfs", str(where)],
+        capture_output=True,
+        text=True,
+    )
     if r.returncode != 0:
         pytest.skip(f"cannot mount a tmpfs here ({r.stderr.strip() or r.returncode})")
     try:
@@ -388,7 +450,9 @@ def test_the_compilation_cache_stays_off_where_it_cannot_be_written(tmp_path, mo
 
     monkeypatch.delenv("JAX_COMPILATION_CACHE_DIR", raising=False)
     (tmp_path / "afile").write_text("x")
-    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "afile"))  # a file where the folder would go
+    monkeypatch.setenv(
+        "XDG_CACHE_HOME", str(tmp_path / "afile")
+    )  # a file where the folder would go
     assert compile_cache.cache_folder() == tmp_path / "afile" / "jswim" / "jax"
     assert compile_cache.enable() is None
     monkeypatch.setenv("JSWIM_COMPILATION_CACHE", "0")

@@ -13,10 +13,17 @@ from jswim.results import read_metadata
 from jswim.studies import StudyOptions, run_study
 from tests.fakeserver import FakeServer, hash_reply
 
-COLS = [console.Column("agent", False), console.Column("group", False), console.Column("n"),
-        console.Column("success p [95% CI]"), console.Column("X/a end [95% CI]")]
-ROWS = [["qlearning", "zeta=0", "10", "1.00 [0.72,1.00]", "+1.491 [+1.43,+1.56]"],
-        ["qlearning", "zeta=0.5", "10", "0.90 [0.60,0.98]", "+1.200 [+1.10,+1.30]"]]
+COLS = [
+    console.Column("agent", False),
+    console.Column("group", False),
+    console.Column("n"),
+    console.Column("success p [95% CI]"),
+    console.Column("X/a end [95% CI]"),
+]
+ROWS = [
+    ["qlearning", "zeta=0", "10", "1.00 [0.72,1.00]", "+1.491 [+1.43,+1.56]"],
+    ["qlearning", "zeta=0.5", "10", "0.90 [0.60,0.98]", "+1.200 [+1.10,+1.30]"],
+]
 
 
 def test_plain_table_keeps_every_cell_whole():
@@ -39,7 +46,15 @@ def test_narrow_terminal_wraps_columns_into_blocks_and_cuts_nothing():
 
 def test_print_table_to_a_log_is_plain_text_at_full_width():
     buf = io.StringIO()  # not a terminal
-    wide = ROWS + [["qlearning", "a-very-long-group-label-" * 6, "10", "0.10 [0.00,0.40]", "+0.001 [-0.01,+0.01]"]]
+    wide = ROWS + [
+        [
+            "qlearning",
+            "a-very-long-group-label-" * 6,
+            "10",
+            "0.10 [0.00,0.40]",
+            "+0.001 [-0.01,+0.01]",
+        ]
+    ]
     console.print_table(COLS, wide, "t", file=buf)
     assert "a-very-long-group-label-" * 6 in buf.getvalue()
     assert "\x1b[" not in buf.getvalue()  # no terminal escapes in a log
@@ -69,8 +84,13 @@ def folders(small_swim_study, tmp_path_factory):
     root = tmp_path_factory.mktemp("studies")
     with FakeServer(reply=hash_reply, latency=0.001) as srv:
         backend = srv.backend()
-        run_study("swim", StudyOptions(swimmers=("purcell",), directions=(1,), steps=8, runs=2, q_runs=3, seed=1),
-                  backend, root / "b", figures=False)
+        run_study(
+            "swim",
+            StudyOptions(swimmers=("purcell",), directions=(1,), steps=8, runs=2, q_runs=3, seed=1),
+            backend,
+            root / "b",
+            figures=False,
+        )
     return small_swim_study, root / "b"  # a: Purcell and NG toward +x and -x, 8 steps
 
 
@@ -86,7 +106,10 @@ def test_show_prints_status_table_and_cost_without_writing(folders, capsys):
     assert text.startswith(f"study swim in {a}: complete")
     assert "model: fake" in text and "LLM usage:" in text
     # A fake server on 127.0.0.1 with no list price: the one wording, with the reason (not "$0.0000").
-    assert "cost not priced (a server on this machine or the LAN, with no list price for its model); $0 counted" in text
+    assert (
+        "cost not priced (a server on this machine or the LAN, with no list price for its model); $0 counted"
+        in text
+    )
     assert "no figures yet" in text  # figures=False
     for agent in ("llm", "qlearning", "random"):
         assert f"\n{agent}" in text
@@ -99,10 +122,15 @@ def test_show_marks_an_unfinished_study(folders, tmp_path):
     meta = json.loads((a / "metadata.json").read_text())
     meta.update(status="running", n_planned=28)
     (part / "metadata.json").write_text(json.dumps(meta))
-    (part / "runs.jsonl").write_text("".join(line + "\n" for line in (a / "runs.jsonl").read_text().splitlines()[:5]))
+    (part / "runs.jsonl").write_text(
+        "".join(line + "\n" for line in (a / "runs.jsonl").read_text().splitlines()[:5])
+    )
     text = overview.show_text(part)
     # "running" with no live session holding the folder: its session died without a word
-    assert "UNFINISHED: 5 of 28 runs done (status running, but no live session holds the folder" in text
+    assert (
+        "UNFINISHED: 5 of 28 runs done (status running, but no live session holds the folder"
+        in text
+    )
 
 
 def test_compare_lists_settings_present_in_all(folders):
@@ -132,14 +160,33 @@ def test_groups_read_in_the_grids_order_not_the_order_runs_finished(tmp_path, ca
 
     out = tmp_path / "h"
     with FakeServer(reply=hash_reply) as srv:
-        args = ["study", "history", "--n-hts", "10,2,1", "--runs", "1", "--steps", "4", "--swimmer", "purcell",
-                "--direction", "+x", "--no-figures", "--out", str(out), "--base-url", srv.url, "--model", "fake"]
+        args = [
+            "study",
+            "history",
+            "--n-hts",
+            "10,2,1",
+            "--runs",
+            "1",
+            "--steps",
+            "4",
+            "--swimmer",
+            "purcell",
+            "--direction",
+            "+x",
+            "--no-figures",
+            "--out",
+            str(out),
+            "--base-url",
+            srv.url,
+            "--model",
+            "fake",
+        ]
         assert cli.main(args) == 0
         # Runs land as they finish (concurrency scrambles them): shuffle the file to say so.
         lines = (out / "runs.jsonl").read_text().splitlines()
         for seed in range(10):
             random.Random(seed).shuffle(lines)
-            if [json.loads(ln)["group"] for ln in lines][0] != "n_ht=10":
+            if next(json.loads(ln)["group"] for ln in lines) != "n_ht=10":
                 break
         (out / "runs.jsonl").write_text("\n".join(lines) + "\n")
         capsys.readouterr()
@@ -148,7 +195,13 @@ def test_groups_read_in_the_grids_order_not_the_order_runs_finished(tmp_path, ca
     assert read_metadata(out)["group_order"] == ["n_ht=10", "n_ht=2", "n_ht=1"]
 
     def groups(text):
-        return [w for ln in text.splitlines() if ln.startswith("llm") for w in ln.split() if w.startswith("n_ht=")]
+        return [
+            w
+            for ln in text.splitlines()
+            if ln.startswith("llm")
+            for w in ln.split()
+            if w.startswith("n_ht=")
+        ]
 
     assert groups(printed) == ["n_ht=10", "n_ht=2", "n_ht=1"]  # as --n-hts gave them
     assert cli.main(["show", str(out)]) == 0

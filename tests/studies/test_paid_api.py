@@ -59,9 +59,29 @@ def ledger(folder: Path) -> list[dict]:
     return [json.loads(ln) for ln in path.read_text().splitlines()] if path.exists() else []
 
 
-def swim(url: str, out: Path, *extra: str, model: str = "gpt-4o", runs: int = 3, steps: int = 12) -> list[str]:
-    return ["swim", "--base-url", url, "--model", model, "--runs", str(runs), "--q-runs", "0", "--steps", str(steps),
-            "--noise", "0.5", "--no-figures", "--out", str(out), "--price-local", *extra]
+def swim(
+    url: str, out: Path, *extra: str, model: str = "gpt-4o", runs: int = 3, steps: int = 12
+) -> list[str]:
+    return [
+        "swim",
+        "--base-url",
+        url,
+        "--model",
+        model,
+        "--runs",
+        str(runs),
+        "--q-runs",
+        "0",
+        "--steps",
+        str(steps),
+        "--noise",
+        "0.5",
+        "--no-figures",
+        "--out",
+        str(out),
+        "--price-local",
+        *extra,
+    ]
 
 
 def test_dry_run_sends_nothing_and_estimates_the_real_tokens(tmp_path, capsys):
@@ -76,7 +96,9 @@ def test_dry_run_sends_nothing_and_estimates_the_real_tokens(tmp_path, capsys):
         assert main(swim(srv.url, out)) == 0
         rows = read_runs(out)
         sent = srv.settle()
-        real_prompt = sum(o200k(str(m.get("content", ""))) for body in srv.requests for m in body["messages"])
+        real_prompt = sum(
+            o200k(str(m.get("content", ""))) for body in srv.requests for m in body["messages"]
+        )
         real_cost = billed_usd(srv, "gpt-4o")
     assert "2025-04" in printed and "$" in printed
     assert sum(r["calls"] for r in rows) == est["calls"]
@@ -90,8 +112,19 @@ def test_max_cost_stops_below_the_cap_and_a_higher_cap_finishes_without_rebillin
     runs, steps, conc = 4, 10, 2
     with priced_server(latency=0.01) as srv:
         # gpt-4 at $30/$60 per 1M: ~$0.01 per call here, so $0.05 buys a few calls of the 40.
-        code = main(swim(srv.url, out, "--max-cost", "0.05", "--concurrency", str(conc),
-                         model="gpt-4", runs=runs, steps=steps))
+        code = main(
+            swim(
+                srv.url,
+                out,
+                "--max-cost",
+                "0.05",
+                "--concurrency",
+                str(conc),
+                model="gpt-4",
+                runs=runs,
+                steps=steps,
+            )
+        )
         err = capsys.readouterr().err
         assert code == 3, err
         assert "cost cap" in err and "--max-cost" in err
@@ -103,8 +136,22 @@ def test_max_cost_stops_below_the_cap_and_a_higher_cap_finishes_without_rebillin
         meta = json.loads((out / "metadata.json").read_text())
         assert meta["status"] == "stopped at the cost cap"
         assert len(read_runs(out)) < runs
-        assert main(swim(srv.url, out, "--max-cost", "10", "--concurrency", str(conc),
-                         model="gpt-4", runs=runs, steps=steps)) == 0
+        assert (
+            main(
+                swim(
+                    srv.url,
+                    out,
+                    "--max-cost",
+                    "10",
+                    "--concurrency",
+                    str(conc),
+                    model="gpt-4",
+                    runs=runs,
+                    steps=steps,
+                )
+            )
+            == 0
+        )
         rows = read_runs(out)
     assert len(rows) == runs and all(r["status"] == "done" and r["steps"] == steps for r in rows)
     # every call the runs paid for reached the server exactly once over both sessions
@@ -125,16 +172,23 @@ def test_interrupt_and_resume_bill_each_call_once(tmp_path):
     interrupted = threading.Event()
     # The server answers 10 calls, then holds every answer until Ctrl-C was sent: the study cannot
     # finish before the interrupt however slow this (loaded) machine is.
-    srv = priced_server(latency=0.05, hold=lambda body: srv.n_answered >= 10 and not interrupted.is_set(),
-                        hold_s=300.0)
+    srv = priced_server(
+        latency=0.05,
+        hold=lambda body: srv.n_answered >= 10 and not interrupted.is_set(),
+        hold_s=300.0,
+    )
     with srv:
         cmd = [sys.executable, "-m", "jswim.cli", *swim(srv.url, out, runs=runs, steps=steps)]
         # the same precision as this test process (conftest: float64), so both sessions step alike
         env = {**os.environ, "PYTHONPATH": str(ROOT), "JAX_ENABLE_X64": "1"}
-        proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        proc = subprocess.Popen(
+            cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+        )
         while srv.n_answered < 10 and proc.poll() is None:
             time.sleep(0.02)
-        while srv.n_requests - srv.n_answered < 1 and proc.poll() is None:  # the next call is being held
+        while (
+            srv.n_requests - srv.n_answered < 1 and proc.poll() is None
+        ):  # the next call is being held
             time.sleep(0.02)
         proc.send_signal(signal.SIGINT)  # Ctrl-C in the middle of the runs
         interrupted.set()
@@ -143,7 +197,9 @@ def test_interrupt_and_resume_bill_each_call_once(tmp_path):
         before = srv.n_requests
         assert 10 <= before < runs * steps
         assert len(read_runs(out)) < runs
-        kept = len((out / "calls.jsonl").read_text().splitlines())  # the answers the client received
+        kept = len(
+            (out / "calls.jsonl").read_text().splitlines()
+        )  # the answers the client received
         assert kept >= 3
         assert main(swim(srv.url, out, runs=runs, steps=steps)) == 0
         rows = read_runs(out)
@@ -187,14 +243,22 @@ def test_more_runs_extend_a_folder_and_keep_the_existing_ones(tmp_path):
 def test_seeds_follow_the_run_not_its_place_in_the_grid():
     from jswim.studies.grids import StudyOptions, build
 
-    small = {p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2))}
-    large = {p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 0.5, 1.0), runs=3, q_runs=2))}
+    small = {
+        p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2))
+    }
+    large = {
+        p.run_id: p.seed
+        for p in build("noise", StudyOptions(zetas=(0.0, 0.5, 1.0), runs=3, q_runs=2))
+    }
     assert small.items() <= large.items()  # adding a level and a repeat changes no existing run
     swim_ids = {p.run_id: p.seed for p in build("swim", StudyOptions(runs=2))}
     curves = {p.run_id: p.seed for p in build("curves", StudyOptions(runs=2))}
     shared = set(swim_ids) & set(curves)
     assert shared and all(swim_ids[i] == curves[i] for i in shared)  # same run id, same seed
-    other = {p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2, seed=1))}
+    other = {
+        p.run_id: p.seed
+        for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2, seed=1))
+    }
     assert all(other[i] != small[i] for i in small)  # the study seed still matters
     assert len(set(large.values())) == len(large)
 
@@ -209,9 +273,21 @@ def test_the_cap_holds_over_three_sessions_and_a_higher_cap_bills_each_call_once
     out = tmp_path / "study"
     runs, steps, conc = 4, 10, 2
     with priced_server(latency=0.01) as srv:
+
         def session(cap: str) -> int:
-            return main(swim(srv.url, out, "--max-cost", cap, "--concurrency", str(conc), model="gpt-4",
-                             runs=runs, steps=steps))
+            return main(
+                swim(
+                    srv.url,
+                    out,
+                    "--max-cost",
+                    cap,
+                    "--concurrency",
+                    str(conc),
+                    model="gpt-4",
+                    runs=runs,
+                    steps=steps,
+                )
+            )
 
         one_call = 0.0
 
@@ -293,9 +369,18 @@ def test_the_journal_sums_what_every_session_paid(tmp_path):
     from jswim.llm.usage import Usage
 
     def answer(cost: float, **kw) -> ChatResult:
-        return ChatResult(text="[1, 1]", usage=Usage(100, 5), latency_s=0.0, cache_hit=kw.get("cache_hit", False),
-                          shared=kw.get("shared", False), retries=0, cost_usd=cost, constraint="none",
-                          finish_reason="stop", raw="[1, 1]")
+        return ChatResult(
+            text="[1, 1]",
+            usage=Usage(100, 5),
+            latency_s=0.0,
+            cache_hit=kw.get("cache_hit", False),
+            shared=kw.get("shared", False),
+            retries=0,
+            cost_usd=cost,
+            constraint="none",
+            finish_reason="stop",
+            raw="[1, 1]",
+        )
 
     costs = [[0.25, 0.125], [0.5], [0.0625, 1.0]]
     for k, session in enumerate(costs):
@@ -303,7 +388,9 @@ def test_the_journal_sums_what_every_session_paid(tmp_path):
         assert j.spent_usd == sum(sum(c) for c in costs[:k])  # exact in binary: powers of two
         for n, c in enumerate(session):
             j.record(f"run{k}", n, f"key{n}", answer(c))
-        j.record(f"run{k}", len(session), "cached", answer(4.0, cache_hit=True))  # not billed: no cost
+        j.record(
+            f"run{k}", len(session), "cached", answer(4.0, cache_hit=True)
+        )  # not billed: no cost
         j.close()
     assert CallJournal(tmp_path).spent_usd == 1.9375
     assert CallJournal(tmp_path).replay("run2", 1, "key1").cost_usd == 1.0
@@ -314,17 +401,31 @@ def test_the_journal_answers_only_the_very_request_it_recorded(tmp_path):
     from jswim.llm.journal import CallJournal
     from jswim.llm.usage import Usage
 
-    res = ChatResult(text="[2, -1]", usage=Usage(300, 6), latency_s=0.0, cache_hit=False, shared=False, retries=0,
-                     cost_usd=0.01, constraint="none", finish_reason="stop", raw="[2, -1]")
+    res = ChatResult(
+        text="[2, -1]",
+        usage=Usage(300, 6),
+        latency_s=0.0,
+        cache_hit=False,
+        shared=False,
+        retries=0,
+        cost_usd=0.01,
+        constraint="none",
+        finish_reason="stop",
+        raw="[2, -1]",
+    )
     j = CallJournal(tmp_path)
     j.record("run-a", 0, "request-0", res)
     j.record("run-a", 1, "request-1", res)
     j.close()
     j = CallJournal(tmp_path)
     assert j.replay("run-b", 0, "request-0") is None  # another run's call: never
-    assert j.replay("run-a", 0, "another request") is None  # the same place, a different request: sent
+    assert (
+        j.replay("run-a", 0, "another request") is None
+    )  # the same place, a different request: sent
     j = CallJournal(tmp_path)
-    assert j.replay("run-a", 0, "request-0").text == "[2, -1]"  # the very request: answered, not paid again
+    assert (
+        j.replay("run-a", 0, "request-0").text == "[2, -1]"
+    )  # the very request: answered, not paid again
     assert j.replay("run-a", 1, "request-0") is None  # the right request at the wrong index
 
 
@@ -337,12 +438,22 @@ def test_reasoning_tokens_are_billed_at_the_completion_price(tmp_path, capsys):
     out = tmp_path / "study"
     # The server lists the model it is asked for: an unlisted model is never priced.
     with FakeServer(**MODES["openai-reasoning"], models=("gpt-4o",)) as srv:
-        assert main(swim(srv.url, out, model="gpt-4o", runs=2, steps=4)) == 0, capsys.readouterr().err
-        answered = [b for b in srv.requests if "max_completion_tokens" in b and b.get("temperature") == 1]
+        assert main(swim(srv.url, out, model="gpt-4o", runs=2, steps=4)) == 0, (
+            capsys.readouterr().err
+        )
+        answered = [
+            b for b in srv.requests if "max_completion_tokens" in b and b.get("temperature") == 1
+        ]
     capsys.readouterr()
     assert len(answered) == 2 * 4
-    expected = sum(sum(count_words(str(m.get("content", ""))) for m in b["messages"]) * 2.5
-                   + (REASONING_TOKENS + count_words("[2, -1]")) * 10.0 for b in answered) / 1_000_000
+    expected = (
+        sum(
+            sum(count_words(str(m.get("content", ""))) for m in b["messages"]) * 2.5
+            + (REASONING_TOKENS + count_words("[2, -1]")) * 10.0
+            for b in answered
+        )
+        / 1_000_000
+    )
     calls = ledger(out)
     assert len(calls) == len(answered)
     assert sum(c["cost_usd"] for c in calls) == pytest.approx(expected, rel=1e-9)
@@ -361,16 +472,30 @@ def status(folder: Path) -> str | None:
     return json.loads(meta.read_text()).get("status") if meta.exists() else None
 
 
-def test_a_cap_on_a_model_the_server_does_not_list_is_refused_and_prices_file_makes_it_hold(tmp_path, capsys):
+def test_a_cap_on_a_model_the_server_does_not_list_is_refused_and_prices_file_makes_it_hold(
+    tmp_path, capsys
+):
     # The issue's case: --price-local, a server listing other names, --max-cost 0.05, 8 x 20 calls.
     # It sent all 160 requests at $0 while its dry run printed $1.23; now both apply one rule.
     out = tmp_path / "study"
     with priced_server(models=GATEWAY_MODELS, latency=0.005) as srv:
-        args = swim(srv.url, out, "--max-cost", "0.05", "--concurrency", "2", model="gpt-4", runs=8, steps=20)
+        args = swim(
+            srv.url,
+            out,
+            "--max-cost",
+            "0.05",
+            "--concurrency",
+            "2",
+            model="gpt-4",
+            runs=8,
+            steps=20,
+        )
         assert main([*args, "--dry-run"]) == 0
         dry = capsys.readouterr().out
         est = json.loads(dry.strip().splitlines()[-1])
-        assert srv.n_preflight > 0 and srv.n_requests == 0  # the dry run asked /v1/models, sent no chat
+        assert (
+            srv.n_preflight > 0 and srv.n_requests == 0
+        )  # the dry run asked /v1/models, sent no chat
         assert est["cost_usd"] == 0 and "does not list 'gpt-4'" in est["unpriced"]
         assert "--prices" in est["cap_refusal"] and "--max-cost: the run would send nothing" in dry
         assert main(args) == 2
@@ -393,10 +518,16 @@ def test_a_cap_on_a_model_the_server_does_not_list_is_refused_and_prices_file_ma
     assert status(out) == "stopped at the cost cap"
 
 
-def test_a_cap_on_calls_a_local_server_would_not_price_is_refused_before_any_request(tmp_path, capsys):
+def test_a_cap_on_calls_a_local_server_would_not_price_is_refused_before_any_request(
+    tmp_path, capsys
+):
     out = tmp_path / "study"
     with priced_server() as srv:
-        args = [a for a in swim(srv.url, out, "--max-cost", "0.05", model="gpt-4") if a != "--price-local"]
+        args = [
+            a
+            for a in swim(srv.url, out, "--max-cost", "0.05", model="gpt-4")
+            if a != "--price-local"
+        ]
         assert main([*args, "--dry-run"]) == 0
         dry = capsys.readouterr().out
         assert main(args) == 2
@@ -409,12 +540,26 @@ def test_a_cap_on_calls_a_local_server_would_not_price_is_refused_before_any_req
 
 
 def test_a_remote_gateway_listing_other_names_refuses_the_cap_and_prices_file_makes_it_hold(
-        tmp_path, capsys, monkeypatch):
+    tmp_path, capsys, monkeypatch
+):
     as_remote(monkeypatch)
     out = tmp_path / "study"
     with priced_server(models=GATEWAY_MODELS, latency=0.005) as srv:
-        args = [a for a in swim(srv.url, out, "--max-cost", "0.05", "--concurrency", "2", model="gpt-4",
-                                runs=4, steps=12) if a != "--price-local"]
+        args = [
+            a
+            for a in swim(
+                srv.url,
+                out,
+                "--max-cost",
+                "0.05",
+                "--concurrency",
+                "2",
+                model="gpt-4",
+                runs=4,
+                steps=12,
+            )
+            if a != "--price-local"
+        ]
         # The dry run asks /v1/models (free) and applies the run's rule: not priced, the cap refused.
         assert main([*args, "--dry-run"]) == 0
         dry = capsys.readouterr().out
@@ -438,8 +583,21 @@ def test_a_reply_naming_another_model_is_priced_under_a_cap(tmp_path, capsys, mo
     as_remote(monkeypatch)
     out = tmp_path / "study"
     with priced_server(served_model="openai/gpt-4-0613", latency=0.005) as srv:
-        args = [a for a in swim(srv.url, out, "--max-cost", "0.05", "--concurrency", "2", model="gpt-4",
-                                runs=4, steps=12) if a != "--price-local"]
+        args = [
+            a
+            for a in swim(
+                srv.url,
+                out,
+                "--max-cost",
+                "0.05",
+                "--concurrency",
+                "2",
+                model="gpt-4",
+                runs=4,
+                steps=12,
+            )
+            if a != "--price-local"
+        ]
         assert main(args) == 3
         assert 0 < srv.settle() < 48
     assert "priced at gpt-4's price anyway" in capsys.readouterr().out

@@ -22,10 +22,20 @@ def test_purcell_cells_run_every_agent_at_each_height():
     plans = build("wall", StudyOptions(swimmers=("purcell",), heights=(1.5, 10.0), q_runs=2))
     agents = {(p.agent, p.group) for p in plans}
     # the bulk reference stroke, and at each height every agent NG's wall cells run (issue 30)
-    assert agents == {("stroke", "bulk")} | {(a, f"h={h}") for h in ("1.5", "10")
-                                             for a in ("stroke", "llm", "qlearning", "random", "ppo")}
-    per_height = {a: sum(p.agent == a and p.group == "h=10" for p in plans) for a in ("llm", "ppo", "qlearning")}
-    assert per_height == {"llm": 1, "ppo": 2, "qlearning": 2}  # the wall study's --runs 1, --q-runs learners
+    assert agents == {("stroke", "bulk")} | {
+        (a, f"h={h}")
+        for h in ("1.5", "10")
+        for a in ("stroke", "llm", "qlearning", "random", "ppo")
+    }
+    per_height = {
+        a: sum(p.agent == a and p.group == "h=10" for p in plans)
+        for a in ("llm", "ppo", "qlearning")
+    }
+    assert per_height == {
+        "llm": 1,
+        "ppo": 2,
+        "qlearning": 2,
+    }  # the wall study's --runs 1, --q-runs learners
     ppo = [p for p in plans if p.agent == "ppo"]
     assert all(p.roc_levels == 0 and p.action_set == "all" and "-real-" in p.run_id for p in ppo)
     assert {json.loads(p.scene)["medium"] for p in plans} == {"bulk", "wall"}
@@ -38,8 +48,17 @@ def test_purcell_cells_run_every_agent_at_each_height():
 @pytest.mark.slow  # a study: tables and programs of two models
 def test_purcell_wall_study_rows_figure_and_picture(tmp_path):
     out = tmp_path / "pw"
-    run_study("wall", StudyOptions(swimmers=("purcell",), heights=(1.5,), q_runs=1, steps=16,
-                                   agents=("stroke", "qlearning", "random")), out=out)  # LLM, PPO rows: below
+    run_study(
+        "wall",
+        StudyOptions(
+            swimmers=("purcell",),
+            heights=(1.5,),
+            q_runs=1,
+            steps=16,
+            agents=("stroke", "qlearning", "random"),
+        ),
+        out=out,
+    )  # LLM, PPO rows: below
     rows = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     by = {(r["agent"], r["group"]): r for r in rows}
     assert by[("stroke", "bulk")]["per_cycle"] == pytest.approx(BULK_CYCLE, abs=1e-7)
@@ -77,22 +96,40 @@ def test_purcell_wall_llm_and_ppo_rows(tmp_path):
     h = 1.5
     out = tmp_path / "pw-agents"
     with FakeServer(reply=square_reply) as srv:
-        run_study("wall", StudyOptions(swimmers=("purcell",), heights=(h,), q_runs=1, runs=1, steps=16,
-                                       agents=("stroke", "llm", "ppo")), srv.backend(), out=out, figures=False)
+        run_study(
+            "wall",
+            StudyOptions(
+                swimmers=("purcell",),
+                heights=(h,),
+                q_runs=1,
+                runs=1,
+                steps=16,
+                agents=("stroke", "llm", "ppo"),
+            ),
+            srv.backend(),
+            out=out,
+            figures=False,
+        )
     rows = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     by = {(r["agent"], r["group"]): r for r in rows}
     assert set(by) == {("stroke", "bulk"), ("stroke", "h=1.5"), ("llm", "h=1.5"), ("ppo", "h=1.5")}
     xi_t, xi_n = wall_rft.drag_coefficients(h)
     from tests.physics.test_wall_rft import cycles  # the test-side RK4 at the wall's ratio
 
-    assert by[("stroke", "h=1.5")]["per_cycle"] == pytest.approx(float(cycles([xi_n / xi_t])[0, 0]), rel=2e-7)
+    assert by[("stroke", "h=1.5")]["per_cycle"] == pytest.approx(
+        float(cycles([xi_n / xi_t])[0, 0]), rel=2e-7
+    )
     for agent in ("llm", "ppo"):
         r = by[(agent, "h=1.5")]
         # the scene's columns; the plane is fixed, so the height is the start's throughout
-        assert r["medium"] == "wall" and json.loads(r["scene"])["height"] == h and r["n_swimmers"] == 1
+        assert (
+            r["medium"] == "wall" and json.loads(r["scene"])["height"] == h and r["n_swimmers"] == 1
+        )
         assert r["start_height"] == r["mean_height"] == h and r["fate"] == "gliding"
         assert np.all(np.asarray(r["heights"]) == h) and len(r["heights"]) == 16
-        assert isinstance(r["success"], bool)  # judged by the paper's criterion (a registered world's: None)
+        assert isinstance(
+            r["success"], bool
+        )  # judged by the paper's criterion (a registered world's: None)
     llm = by[("llm", "h=1.5")]
     # The reply followed the records' shapes: the square itself, so the LLM's run is the stroke's,
     # displacement for displacement, and a success.

@@ -61,8 +61,18 @@ def test_atomic_write_leaves_no_temporary_files(tmp_path):
 
 def test_finalize_writes_tables(tmp_path):
     store = StudyStore(tmp_path / "s", "curves", {})
-    store.add_runs([{"run_id": "a", "agent": "llm", "x": [0.1, 0.2], "actions": [[1, 1], [2, -1]],
-                     "progress": [0.1, 0.1], "stuck": [False, False]}])
+    store.add_runs(
+        [
+            {
+                "run_id": "a",
+                "agent": "llm",
+                "x": [0.1, 0.2],
+                "actions": [[1, 1], [2, -1]],
+                "progress": [0.1, 0.1],
+                "stuck": [False, False],
+            }
+        ]
+    )
     store.finalize()
     assert (tmp_path / "s" / "runs.csv").read_text().splitlines()[0] == "run_id,agent"
     import pyarrow.parquet as pq
@@ -99,31 +109,55 @@ def test_folder_written_with_old_field_names_resumes_and_reads_under_new_names(t
     # A folder from before the rename allowed -> action_set: identity, rows and metadata.
     folder = tmp_path / "old"
     folder.mkdir()
-    meta = {"study": "swim", "status": "complete",
-            "identity": {"study": "swim", "options": {"allowed": "all", "steps": 6}, "seed": 0}}
+    meta = {
+        "study": "swim",
+        "status": "complete",
+        "identity": {"study": "swim", "options": {"allowed": "all", "steps": 6}, "seed": 0},
+    }
     (folder / "metadata.json").write_text(json.dumps(meta))
-    (folder / "runs.jsonl").write_text(json.dumps({"run_id": "a", "allowed": "shape-changing"}) + "\n")
+    (folder / "runs.jsonl").write_text(
+        json.dumps({"run_id": "a", "allowed": "shape-changing"}) + "\n"
+    )
     new_identity = {"study": "swim", "options": {"action_set": "all", "steps": 6}, "seed": 0}
     store = StudyStore(folder, "swim", new_identity)  # resumes: same settings under new names
     assert store.done_ids() == {"a"}
-    assert read_runs(folder)[0]["action_set"] == "shape-changing" and "allowed" not in read_runs(folder)[0]
+    assert (
+        read_runs(folder)[0]["action_set"] == "shape-changing"
+        and "allowed" not in read_runs(folder)[0]
+    )
     assert read_metadata(folder)["identity"] == new_identity
     store.close()  # the session ends: its lock goes
     with pytest.raises(ResultFolderError, match="options"):  # a real difference is still refused
-        StudyStore(folder, "swim", {**new_identity, "options": {"action_set": "shape-changing", "steps": 6}})
+        StudyStore(
+            folder,
+            "swim",
+            {**new_identity, "options": {"action_set": "shape-changing", "steps": 6}},
+        )
 
 
 def test_name_translation_round_trips():
     old = {"options": {"allowed": "all"}, "rows": [{"allowed": "x", "k": 1}]}
-    assert upgrade_names(old) == {"options": {"action_set": "all"}, "rows": [{"action_set": "x", "k": 1}]}
+    assert upgrade_names(old) == {
+        "options": {"action_set": "all"},
+        "rows": [{"action_set": "x", "k": 1}],
+    }
     assert legacy_names(upgrade_names(old)) == old
 
 
 def test_load_returns_the_runs_as_a_dataframe(tmp_path):
     store = StudyStore(tmp_path / "s", "curves", {})
-    store.add_runs([{"run_id": "a", "agent": "llm", "success": True}, {"run_id": "b", "agent": "random", "success": False}])
+    store.add_runs(
+        [
+            {"run_id": "a", "agent": "llm", "success": True},
+            {"run_id": "b", "agent": "random", "success": False},
+        ]
+    )
     df = load(tmp_path / "s").runs
-    assert isinstance(df, pd.DataFrame) and list(df["run_id"]) == ["a", "b"] and df["success"].sum() == 1
+    assert (
+        isinstance(df, pd.DataFrame)
+        and list(df["run_id"]) == ["a", "b"]
+        and df["success"].sum() == 1
+    )
     with pytest.raises(JswimError, match="not a jswim study folder"):
         load(tmp_path)
 
@@ -141,28 +175,52 @@ def test_learn_stats_counts_never_learned_runs_instead_of_inventing_steps():
 
 def test_every_file_gets_the_same_mode(tmp_path):
     store = StudyStore(tmp_path / "s", "noise", {})
-    store.add_runs([{"run_id": "a", "x": [0.1], "actions": [1], "progress": [0.1], "stuck": [False]}])
+    store.add_runs(
+        [{"run_id": "a", "x": [0.1], "actions": [1], "progress": [0.1], "stuck": [False]}]
+    )
     store.finalize()
-    modes = {p.name: stat.S_IMODE(p.stat().st_mode) for p in (tmp_path / "s").iterdir() if p.is_file()}
-    assert {"metadata.json", "runs.jsonl", "runs.csv", "runs.parquet", "trajectories.parquet"} <= set(modes)
+    modes = {
+        p.name: stat.S_IMODE(p.stat().st_mode) for p in (tmp_path / "s").iterdir() if p.is_file()
+    }
+    assert {
+        "metadata.json",
+        "runs.jsonl",
+        "runs.csv",
+        "runs.parquet",
+        "trajectories.parquet",
+    } <= set(modes)
     assert set(modes.values()) == {results.FILE_MODE}, modes
 
 
-@pytest.mark.parametrize("umask, files, folders", [
-    (0o022, 0o600, 0o700),  # the usual umask, nobody's choice: the owner alone (was 0644 before)
-    (0o027, 0o600, 0o700),  # stricter: still the owner alone
-    (0o002, 0o664, 0o775),  # lets the group write: a shared-group setup, honoured
-    (0o007, 0o660, 0o770),
-])
-def test_study_folders_are_the_owner_s_unless_the_umask_shares_with_a_group(umask, files, folders, tmp_path):
+@pytest.mark.parametrize(
+    "umask, files, folders",
+    [
+        (
+            0o022,
+            0o600,
+            0o700,
+        ),  # the usual umask, nobody's choice: the owner alone (was 0644 before)
+        (0o027, 0o600, 0o700),  # stricter: still the owner alone
+        (0o002, 0o664, 0o775),  # lets the group write: a shared-group setup, honoured
+        (0o007, 0o660, 0o770),
+    ],
+)
+def test_study_folders_are_the_owner_s_unless_the_umask_shares_with_a_group(
+    umask, files, folders, tmp_path
+):
     from jswim._io.permissions import file_mode
 
     from jswim.studies import StudyOptions, run_study
 
     old = os.umask(umask)
     try:
-        run_study("noise", StudyOptions(agents=("random",), q_runs=2, zetas=(0.0,), steps=4), backend=None,
-                  out=tmp_path / "s", figures=False)
+        run_study(
+            "noise",
+            StudyOptions(agents=("random",), q_runs=2, zetas=(0.0,), steps=4),
+            backend=None,
+            out=tmp_path / "s",
+            figures=False,
+        )
         assert os.umask(umask) == umask  # run_study set the process's umask back
     finally:
         os.umask(old)
@@ -181,13 +239,21 @@ def test_a_rewritten_file_keeps_its_mode(tmp_path):
 
 def test_json_files_are_strict_json(tmp_path):
     store = StudyStore(tmp_path / "s", "noise", {"zetas": [0.0, float("nan")]})
-    store.add_runs([{"run_id": "a", "final_x": float("nan"), "x": [float("inf"), np.float64("nan"), 1.0],
-                     "n": np.int64(3)}])
+    store.add_runs(
+        [
+            {
+                "run_id": "a",
+                "final_x": float("nan"),
+                "x": [float("inf"), np.float64("nan"), 1.0],
+                "n": np.int64(3),
+            }
+        ]
+    )
     store.finalize(summary={"median": float("nan"), "rows": [{"mean": float("-inf")}]})
     for name in ("metadata.json", "runs.jsonl"):
         text = (tmp_path / "s" / name).read_text()
         assert "NaN" not in text and "Infinity" not in text
-        for chunk in ([text] if name.endswith(".json") else text.splitlines()):
+        for chunk in [text] if name.endswith(".json") else text.splitlines():
             json.loads(chunk, parse_constant=lambda c: pytest.fail(f"{name} has {c}"))
     meta = read_metadata(tmp_path / "s")
     assert meta["summary"] == {"median": None, "rows": [{"mean": None}]}
@@ -254,16 +320,26 @@ def test_unwritable_paths_are_one_line_errors(tmp_path, monkeypatch):
     monkeypatch.setattr(os, "replace", refuse)  # a read-only folder, as root sees it too
     with pytest.raises(StudyFolderError) as err:
         store.finalize()
-    assert str(err.value).startswith(f"cannot write {tmp_path / 's'}") and "Permission denied" in str(err.value)
+    assert str(err.value).startswith(
+        f"cannot write {tmp_path / 's'}"
+    ) and "Permission denied" in str(err.value)
     assert not [p for p in (tmp_path / "s").iterdir() if p.name.endswith(".tmp")]
 
 
-@pytest.mark.parametrize("rows", [
-    [{"run_id": "a", "n": 1, "x": 0.5, "ok": True, "note": None, "mixed": 1},
-     {"run_id": "b", "n": 2, "x": None, "ok": False, "note": None, "mixed": 2.25}],
-    [{"run_id": "a", "late": None, "n": None}, {"run_id": "b", "late": "text", "n": 3}],  # values first seen late
-    [{"run_id": "a", "odd": [1, 2]}],  # not a scalar column: pyarrow's own conversion
-])
+@pytest.mark.parametrize(
+    "rows",
+    [
+        [
+            {"run_id": "a", "n": 1, "x": 0.5, "ok": True, "note": None, "mixed": 1},
+            {"run_id": "b", "n": 2, "x": None, "ok": False, "note": None, "mixed": 2.25},
+        ],
+        [
+            {"run_id": "a", "late": None, "n": None},
+            {"run_id": "b", "late": "text", "n": 3},
+        ],  # values first seen late
+        [{"run_id": "a", "odd": [1, 2]}],  # not a scalar column: pyarrow's own conversion
+    ],
+)
 def test_tables_are_typed_as_pyarrow_s_own_conversion_types_them(rows):
     import pyarrow as pa
 
@@ -279,10 +355,14 @@ def test_writing_a_study_s_tables_does_not_import_pandas(tmp_path):
     import subprocess
     import sys
 
-    code = ("import sys; from jswim import results; "
-            f"results.write_tables({str(tmp_path)!r}, [{{'run_id': 'r', 'agent': 'llm', 'x': [0.1, 0.2], 'success': True}}]); "
-            "print('pandas' in sys.modules); "
-            "import pyarrow.parquet as pq; "  # reading a table back imports pandas itself
-            f"assert pq.read_table({str(tmp_path / 'trajectories.parquet')!r}).num_rows == 2")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    code = (
+        "import sys; from jswim import results; "
+        f"results.write_tables({str(tmp_path)!r}, [{{'run_id': 'r', 'agent': 'llm', 'x': [0.1, 0.2], 'success': True}}]); "
+        "print('pandas' in sys.modules); "
+        "import pyarrow.parquet as pq; "  # reading a table back imports pandas itself
+        f"assert pq.read_table({str(tmp_path / 'trajectories.parquet')!r}).num_rows == 2"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    ).stdout
     assert out.strip() == "False"

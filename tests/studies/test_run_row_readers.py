@@ -21,9 +21,19 @@ OLD = ROOT / "tests" / "data" / "folder-54c2edb"
 
 #: The modules that read run rows (figures, the report page, animation, show/compare, summaries, tables).
 READERS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "jswim" / "figures").glob("*.py")) + [
-    "jswim/viz/tracks.py", "jswim/viz/animate.py", "jswim/viz/page.py", "jswim/viz/worlds.py", "jswim/overview.py",
-    "jswim/studies/report.py", "jswim/studies/run.py", "jswim/studies/scenes.py", "jswim/studies/session.py",
-    "jswim/results/tables.py", "jswim/results/store.py", "jswim/results/load.py", "jswim/cli/study.py",
+    "jswim/viz/tracks.py",
+    "jswim/viz/animate.py",
+    "jswim/viz/page.py",
+    "jswim/viz/worlds.py",
+    "jswim/overview.py",
+    "jswim/studies/report.py",
+    "jswim/studies/run.py",
+    "jswim/studies/scenes.py",
+    "jswim/studies/session.py",
+    "jswim/results/tables.py",
+    "jswim/results/store.py",
+    "jswim/results/load.py",
+    "jswim/cli/study.py",
     "jswim/cli/scenes.py",
 ]
 #: The names readers give a run row.
@@ -31,8 +41,16 @@ ROW_NAMES = {"r", "row", "rows", "r0", "run", "first", "ref"}
 #: String-key reads on those names that are not run-row reads, each with its reason:
 #: (module, name, key) -> why.
 ALLOWED = {
-    ("jswim/studies/run.py", "r", "run_id"): "StudyResult.rows are read_runs' dicts, kept for users",
-    ("jswim/studies/scenes.py", "r", "run_id"): "run_baselines: the rows just built (the writer side)",
+    (
+        "jswim/studies/run.py",
+        "r",
+        "run_id",
+    ): "StudyResult.rows are read_runs' dicts, kept for users",
+    (
+        "jswim/studies/scenes.py",
+        "r",
+        "run_id",
+    ): "run_baselines: the rows just built (the writer side)",
     ("jswim/cli/study.py", "first", "run_id"): "StudyResult.failed_runs entries, not run rows",
     ("jswim/cli/study.py", "first", "error"): "StudyResult.failed_runs entries, not run rows",
 }
@@ -43,26 +61,44 @@ def _string_key_reads(path: Path) -> list[tuple[int, str, str]]:
     """``(line, name, key)`` of every ``name["key"]`` and ``name.get("field", ...)`` on a row name."""
     out = []
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-        if (isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name) and node.value.id in ROW_NAMES
-                and isinstance(node.slice, ast.Constant) and isinstance(node.slice.value, str)):
+        if (
+            isinstance(node, ast.Subscript)
+            and isinstance(node.value, ast.Name)
+            and node.value.id in ROW_NAMES
+            and isinstance(node.slice, ast.Constant)
+            and isinstance(node.slice.value, str)
+        ):
             out.append((node.lineno, node.value.id, node.slice.value))
-        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get"
-              and isinstance(node.func.value, ast.Name) and node.func.value.id in ROW_NAMES and node.args
-              and isinstance(node.args[0], ast.Constant) and node.args[0].value in FIELDS):
+        elif (
+            isinstance(node, ast.Call)
+            and isinstance(node.func, ast.Attribute)
+            and node.func.attr == "get"
+            and isinstance(node.func.value, ast.Name)
+            and node.func.value.id in ROW_NAMES
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+            and node.args[0].value in FIELDS
+        ):
             out.append((node.lineno, node.func.value.id, node.args[0].value))
     return out
 
 
 def test_reader_modules_read_run_rows_by_attribute_not_by_string_key():
-    bad = [f"{m}:{line}: {name}[{key!r}]" for m in READERS for line, name, key in _string_key_reads(ROOT / m)
-           if (m, name, key) not in ALLOWED]
+    bad = [
+        f"{m}:{line}: {name}[{key!r}]"
+        for m in READERS
+        for line, name, key in _string_key_reads(ROOT / m)
+        if (m, name, key) not in ALLOWED
+    ]
     assert not bad, "read a RunRow attribute (row.final_x), not a string key:\n" + "\n".join(bad)
 
 
 def test_the_scan_finds_string_key_reads(tmp_path):
     """The guard itself: each kind of read it must catch is caught, attribute reads are not."""
     src = tmp_path / "m.py"
-    src.write_text('a = r["final_x"]\nb = row.get("cost_usd")\nc = row.get("beside")\nd = r.final_x\ne = t["x"]\n')
+    src.write_text(
+        'a = r["final_x"]\nb = row.get("cost_usd")\nc = row.get("beside")\nd = r.final_x\ne = t["x"]\n'
+    )
     assert _string_key_reads(src) == [(1, "r", "final_x"), (2, "row", "cost_usd")]
 
 
@@ -88,13 +124,26 @@ def _old_folder(tmp_path: Path) -> Path:
     this version does not know, and a failed LLM run (no result: None fields) appended."""
     folder = tmp_path / "old"
     shutil.copytree(OLD, folder)
-    recs = [json.loads(line) for line in (OLD / "runs.jsonl").read_text().splitlines() if line.strip()]
+    recs = [
+        json.loads(line) for line in (OLD / "runs.jsonl").read_text().splitlines() if line.strip()
+    ]
     for rec in recs:
         rec["allowed"] = rec.pop("action_set")
         rec["legacy_note"] = "kept"
-    failed = {"run_id": "llm-purcell-px-i++-z0-r9", "agent": "llm", "swimmer": "purcell", "direction": 1,
-              "status": "llm_error", "error": "server gone", "x": [], "actions": [], "progress": [],
-              "final_x": None, "signed_final_x": None, "steps": 0}
+    failed = {
+        "run_id": "llm-purcell-px-i++-z0-r9",
+        "agent": "llm",
+        "swimmer": "purcell",
+        "direction": 1,
+        "status": "llm_error",
+        "error": "server gone",
+        "x": [],
+        "actions": [],
+        "progress": [],
+        "final_x": None,
+        "signed_final_x": None,
+        "steps": 0,
+    }
     (folder / "runs.jsonl").write_text("".join(json.dumps(r) + "\n" for r in recs + [failed]))
     return folder
 
@@ -105,7 +154,12 @@ def test_read_run_rows_renames_old_keys_keeps_unknown_ones_and_failed_rows(tmp_p
     assert len(rows) == 6 and {r.action_set for r in rows[:5]} == {"all"}
     assert all(r.other == {"legacy_note": "kept"} for r in rows[:5])
     last = rows[-1]
-    assert last.status == "llm_error" and last.final_x is None and last.cost_usd is None and last.learned is None
+    assert (
+        last.status == "llm_error"
+        and last.final_x is None
+        and last.cost_usd is None
+        and last.learned is None
+    )
 
 
 def test_summaries_agree_on_dict_and_typed_rows_and_match_the_file(tmp_path):
@@ -114,8 +168,12 @@ def test_summaries_agree_on_dict_and_typed_rows_and_match_the_file(tmp_path):
     folder = _old_folder(tmp_path)
     dicts, typed = read_runs(folder), read_run_rows(folder)
     by_dicts, by_typed = summarize(dicts), summarize(typed)
-    assert by_dicts == by_typed and len(by_typed) == 3  # llm, qlearning, random; the failed run left out
-    raw = [json.loads(line) for line in (OLD / "runs.jsonl").read_text().splitlines() if line.strip()]
+    assert (
+        by_dicts == by_typed and len(by_typed) == 3
+    )  # llm, qlearning, random; the failed run left out
+    raw = [
+        json.loads(line) for line in (OLD / "runs.jsonl").read_text().splitlines() if line.strip()
+    ]
     q = next(g for g in by_typed if g["agent"] == "qlearning")
     want = [r["signed_final_x"] for r in raw if r["agent"] == "qlearning"]
     assert q["n"] == len(want) == 2 and math.isclose(q["mean_x"], sum(want) / len(want))
@@ -144,4 +202,3 @@ def test_figures_page_show_and_animation_work_on_an_old_folder(tmp_path):
     a = animate.build(folder)
     assert [t.agent for t in a.tracks] == ["llm", "qlearning", "random"]
     assert a.tracks[0].row["legacy_note"] == "kept"  # the unknown column reaches the track's row
-

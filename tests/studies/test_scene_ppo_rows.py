@@ -45,23 +45,37 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
     assert calls["n"] == 1  # the strokes kept, the PPO cell trained once
     rows = {r["run_id"]: r for r in read_runs(out)}
     learners = [r for r in rows.values() if r["agent"] == "ppo"]
-    assert [r["run_id"] for r in learners] == ["ppo-ng-px-i+--z0-real-h3-r0", "ppo-ng-px-i+--z0-real-h3-r1"]
+    assert [r["run_id"] for r in learners] == [
+        "ppo-ng-px-i+--z0-real-h3-r0",
+        "ppo-ng-px-i+--z0-real-h3-r1",
+    ]
     for r in learners:
         assert r["group"] == "h=3" and r["roc_levels"] == 0 and r["start_height"] == 3.0
         assert r["fate"] in scenes.FATES and r["mean_height"] > 1.0
         assert isinstance(r["success"], bool) and isinstance(r["learned"], bool)
-        assert len(r["actions"]) == 12 and all(1 <= d <= 2 and -1 <= roc <= 1 for d, roc in r["actions"])
+        assert len(r["actions"]) == 12 and all(
+            1 <= d <= 2 and -1 <= roc <= 1 for d, roc in r["actions"]
+        )
         assert any(roc != round(roc) for _, roc in r["actions"])  # real ROCs, not the lattice's
-        assert len(r["heights"]) == len(r["contact"]) == len(r["xs"]) == 12 and r["y"] == [h[0] for h in r["heights"]]
+        assert len(r["heights"]) == len(r["contact"]) == len(r["xs"]) == 12 and r["y"] == [
+            h[0] for h in r["heights"]
+        ]
         # x is the mean of the swimmers' positions, progress its steps (the reward the learner had).
         assert r["x"] == pytest.approx([sum(v) / len(v) for v in r["xs"]], abs=1e-6)
         assert json.loads(r["scene"])["medium"] == "wall"
     meta = read_metadata(out)
-    assert fidelity.SCENE_PPO in meta["fidelity_deviations"] and fidelity.REAL_ROCS in meta["fidelity_deviations"]
+    assert (
+        fidelity.SCENE_PPO in meta["fidelity_deviations"]
+        and fidelity.REAL_ROCS in meta["fidelity_deviations"]
+    )
     table = {(s["agent"], s["group"]): s for s in meta["summary"]["scenes"]}
     assert table[("ppo", "h=3")]["n"] == 2 and table[("ppo", "h=3")]["fates"]
-    stroke_speed = next(r["speed"] for r in rows.values() if r["agent"] == "stroke" and r["group"] == "h=3")
-    assert table[("ppo", "h=3")]["vs_stroke"] == pytest.approx(sum(r["speed"] for r in learners) / 2 / stroke_speed)
+    stroke_speed = next(
+        r["speed"] for r in rows.values() if r["agent"] == "stroke" and r["group"] == "h=3"
+    )
+    assert table[("ppo", "h=3")]["vs_stroke"] == pytest.approx(
+        sum(r["speed"] for r in learners) / 2 / stroke_speed
+    )
     assert {s["group"] for s in res.summary if s["agent"] == "ppo"} == {"h=3"}
 
     # A finished study run again trains nothing and changes no row.
@@ -70,11 +84,15 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
 
     monkeypatch.setattr(ppo, "train_env", refuse)
     again = run_study("wall", StudyOptions(**WALL), None, out, figures=False)
-    assert {r["run_id"]: r["actions"] for r in again.rows} == {k: r["actions"] for k, r in rows.items()}
+    assert {r["run_id"]: r["actions"] for r in again.rows} == {
+        k: r["actions"] for k, r in rows.items()
+    }
     assert read_metadata(out)["status"] == "complete"
 
 
-@pytest.mark.parametrize("study, grid", [("wall", ["--heights", "5"]), ("pair", ["--separations", "30"])])
+@pytest.mark.parametrize(
+    "study, grid", [("wall", ["--heights", "5"]), ("pair", ["--separations", "30"])]
+)
 def test_roc_levels_are_refused_by_the_scene_studies(study, grid, tmp_path, capsys):
     # Their lattice rows are read and judged on the paper's ROCs and PPO's are real: a K would be dropped.
     out = tmp_path / "o"
@@ -86,17 +104,35 @@ def test_roc_levels_are_refused_by_the_scene_studies(study, grid, tmp_path, caps
 
 def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene():
     def row(agent, group, speed, d=30.0, direction=1):
-        return {"scene": "{}", "agent": agent, "group": group, "direction": direction, "speed": speed,
-                "separation": d, "medium": "free", "start_height": None}
+        return {
+            "scene": "{}",
+            "agent": agent,
+            "group": group,
+            "direction": direction,
+            "speed": speed,
+            "separation": d,
+            "medium": "free",
+            "start_height": None,
+        }
 
-    rows = [row("stroke", "D=30, phase 0", 0.02), row("stroke", "D=30, phase 1", 0.025),
-            row("ppo", "D=30", 0.001), row("ppo", "D=30", 0.004), row("qlearning", "D=30", 0.03),
-            row("stroke", "D=60, phase 0", 0.0215), row("random", "D=60", -0.0043, d=60.0),
-            row("ppo", "D=30", 0.01, direction=-1)]  # no -x stroke: nothing to compare with
+    rows = [
+        row("stroke", "D=30, phase 0", 0.02),
+        row("stroke", "D=30, phase 1", 0.025),
+        row("ppo", "D=30", 0.001),
+        row("ppo", "D=30", 0.004),
+        row("qlearning", "D=30", 0.03),
+        row("stroke", "D=60, phase 0", 0.0215),
+        row("random", "D=60", -0.0043, d=60.0),
+        row("ppo", "D=30", 0.01, direction=-1),
+    ]  # no -x stroke: nothing to compare with
     rows[5]["separation"] = 60.0
-    got = {(s["agent"], s["group"], s["direction"]): s["vs_stroke"] for s in scenes.scene_summary(rows)}
+    got = {
+        (s["agent"], s["group"], s["direction"]): s["vs_stroke"] for s in scenes.scene_summary(rows)
+    }
     assert got[("ppo", "D=30", 1)] == pytest.approx(0.0025 / 0.025)  # the fastest phase at that D
-    assert got[("qlearning", "D=30", 1)] == pytest.approx(1.2)  # a faster joint stroke than two squares
+    assert got[("qlearning", "D=30", 1)] == pytest.approx(
+        1.2
+    )  # a faster joint stroke than two squares
     assert got[("stroke", "D=30, phase 0", 1)] == pytest.approx(0.8)
     assert got[("random", "D=60", 1)] == pytest.approx(-0.2)
     assert got[("ppo", "D=30", -1)] is None
@@ -106,7 +142,9 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
     # Runs with no whole cycle (a pair's 6 steps) leave blanks, and the table says why.
     assert scenes.table_note(scenes.scene_summary(rows)) is None
     short = scenes.scene_summary(rows + [row("llm", "D=60", None, d=60.0)])
-    assert "no whole stroke cycle" in scenes.table_note(short) and "--steps" in scenes.table_note(short)
+    assert "no whole stroke cycle" in scenes.table_note(short) and "--steps" in scenes.table_note(
+        short
+    )
 
 
 @pytest.mark.parametrize("study, extra", [("wall", {"heights": (5.0,)}), ("continuous", {})])
@@ -115,8 +153,12 @@ def test_ppo_runs_are_offered_every_move_whatever_the_action_set(study, extra):
     # ROC, so its plans say "all" (not a set it was never held to), and the others keep the option
     from jswim.studies import grids
 
-    plans = grids.build(study, StudyOptions(action_set="shape-changing", q_runs=1, steps=8,
-                                            agents=("random", "ppo"), **extra))
+    plans = grids.build(
+        study,
+        StudyOptions(
+            action_set="shape-changing", q_runs=1, steps=8, agents=("random", "ppo"), **extra
+        ),
+    )
     by_agent = {}
     for p in plans:
         by_agent.setdefault(p.agent, set()).add(p.action_set)

@@ -18,8 +18,19 @@ from jswim.scenes import decode_scene_action
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.worlds import make
 from jswim.scenes import Scene, scene_params
-from jswim.prompt import (DEFAULT_TEMPLATE, Action, HistoryRecord, PromptConfig, SceneView, SwimmerText,
-                          allowed_actions, parse_reply, render_prompt, render_record, scene_template)
+from jswim.prompt import (
+    DEFAULT_TEMPLATE,
+    Action,
+    HistoryRecord,
+    PromptConfig,
+    SceneView,
+    SwimmerText,
+    allowed_actions,
+    parse_reply,
+    render_prompt,
+    render_record,
+    scene_template,
+)
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
 from jswim.studies import scenes
@@ -35,10 +46,25 @@ def _wall_text():
 
 def test_wall_record_shows_height_and_tilt():
     sw, cfg = _wall_text()
-    rec = HistoryRecord(2, (10.0, 6.0), (10.0, 10.0), Action(2, 1), 0.25, 0.4129, False,
-                        (0.25,), (0.4129,), (5.0, ), (4.98765, ), (0.0,), (-0.01234,))
-    assert render_record(rec, sw, cfg) == \
-        "2: (10, 6) [2, 1] -> (10, 10), X 2750 -> 2912, H 5000 -> 4987, tilt 0.000 -> -0.012, stuck no"
+    rec = HistoryRecord(
+        2,
+        (10.0, 6.0),
+        (10.0, 10.0),
+        Action(2, 1),
+        0.25,
+        0.4129,
+        False,
+        (0.25,),
+        (0.4129,),
+        (5.0,),
+        (4.98765,),
+        (0.0,),
+        (-0.01234,),
+    )
+    assert (
+        render_record(rec, sw, cfg)
+        == "2: (10, 6) [2, 1] -> (10, 10), X 2750 -> 2912, H 5000 -> 4987, tilt 0.000 -> -0.012, stuck no"
+    )
 
 
 def test_wall_prompt_literal():
@@ -52,41 +78,77 @@ def test_wall_prompt_literal():
         "Latest records (step: (D1, D2) before [changed DOF, ROC] -> (D1, D2) after, X before -> after, "
         "H before -> after, tilt before -> after, stuck):\nnone yet\n"
         "Keep in mind that an action can have long-term consequences. Reply with the next action as "
-        "[changed DOF, ROC], the changed DOF 1 or 2 and the ROC -1, 0 or 1.")
+        "[changed DOF, ROC], the changed DOF 1 or 2 and the ROC -1, 0 or 1."
+    )
 
 
 def test_pair_record_and_prompt_literal():
     v = SceneView(2, False, 30.0)
     sw = SwimmerText(4, 6.0, 10.0, 0, scene=v)
     cfg = PromptConfig(n_ht=3, template=scene_template(v))
-    rec = HistoryRecord(1, (10.0, 6.0, 10.0, 6.0), (10.0, 6.0, 10.0, 10.0), Action(4, 1), 0.0, 0.0861,
-                        False, (0.0, 0.0), (0.0, 0.1722))
-    assert render_record(rec, sw, cfg) == \
-        "1: (10, 6, 10, 6) [4, 1] -> (10, 6, 10, 10), X1 2500 -> 2500, X2 2500 -> 2672, stuck no"
+    rec = HistoryRecord(
+        1,
+        (10.0, 6.0, 10.0, 6.0),
+        (10.0, 6.0, 10.0, 10.0),
+        Action(4, 1),
+        0.0,
+        0.0861,
+        False,
+        (0.0, 0.0),
+        (0.0, 0.1722),
+    )
+    assert (
+        render_record(rec, sw, cfg)
+        == "1: (10, 6, 10, 6) [4, 1] -> (10, 6, 10, 10), X1 2500 -> 2500, X2 2500 -> 2672, stuck no"
+    )
     text = render_prompt(sw, cfg, -1, [rec], (10.0, 6.0, 10.0, 10.0), 0.0861)
-    assert ("D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swimmer 2, which starts 30 sphere radii "
-            "ahead of it on the same axis; X1 and X2 are their positions, and the movement sought is that of their "
-            "mean.\n") in text
-    assert "(step: (D1, D2, D3, D4) before [changed DOF, ROC] -> (D1, D2, D3, D4) after, X1 before -> after, " \
-           "X2 before -> after, stuck):\n1: (10, 6, 10, 6) [4, 1]" in text
+    assert (
+        "D1 and D2 are the arms of swimmer 1 and D3 and D4 those of swimmer 2, which starts 30 sphere radii "
+        "ahead of it on the same axis; X1 and X2 are their positions, and the movement sought is that of their "
+        "mean.\n"
+    ) in text
+    assert (
+        "(step: (D1, D2, D3, D4) before [changed DOF, ROC] -> (D1, D2, D3, D4) after, X1 before -> after, "
+        "X2 before -> after, stuck):\n1: (10, 6, 10, 6) [4, 1]" in text
+    )
     assert text.endswith("the changed DOF 1, 2, 3 or 4 and the ROC -1, 0 or 1.")
     assert "negative x direction" in text
 
 
 def test_pair_above_a_wall_shows_both_heights():
     v = SceneView(2, True, 40.0)
-    rec = HistoryRecord(1, (10.0,) * 4, (6.0,) + (10.0,) * 3, Action(1, -1), 0.0, -0.01, False,
-                        (0.0, 0.0), (-0.02, 0.0), (5.0, 5.5), (5.001, 5.5), (0.0, 0.1), (0.002, 0.1))
-    line = render_record(rec, SwimmerText(4, 6.0, 10.0, 0, scene=v), PromptConfig(template=scene_template(v)))
-    assert line == ("1: (10, 10, 10, 10) [1, -1] -> (6, 10, 10, 10), X1 2500 -> 2480, X2 2500 -> 2500, "
-                    "H1 5000 -> 5001, tilt1 0.000 -> 0.002, H2 5500 -> 5500, tilt2 0.100 -> 0.100, stuck no")
+    rec = HistoryRecord(
+        1,
+        (10.0,) * 4,
+        (6.0,) + (10.0,) * 3,
+        Action(1, -1),
+        0.0,
+        -0.01,
+        False,
+        (0.0, 0.0),
+        (-0.02, 0.0),
+        (5.0, 5.5),
+        (5.001, 5.5),
+        (0.0, 0.1),
+        (0.002, 0.1),
+    )
+    line = render_record(
+        rec, SwimmerText(4, 6.0, 10.0, 0, scene=v), PromptConfig(template=scene_template(v))
+    )
+    assert line == (
+        "1: (10, 10, 10, 10) [1, -1] -> (6, 10, 10, 10), X1 2500 -> 2480, X2 2500 -> 2500, "
+        "H1 5000 -> 5001, tilt1 0.000 -> 0.002, H2 5500 -> 5500, tilt2 0.100 -> 0.100, stuck no"
+    )
 
 
 def test_bulk_prompt_is_untouched_by_scenes():
     # No scene: the paper's template and record (the literal tests in test_prompt.py hold the text).
     sw = SwimmerText(2, 6.0, 10.0, 0)
     rec = HistoryRecord(1, (10.0, 6.0), (10.0, 10.0), Action(2, 1), 0.0, 0.1)
-    assert render_record(rec, sw, PromptConfig()) == "1: (10, 6) [2, 1] -> (10, 10), X 2500 -> 2600, stuck no"
+    assert (
+        render_record(rec, sw, PromptConfig())
+        == "1: (10, 6) [2, 1] -> (10, 10), X 2500 -> 2600, stuck no"
+    )
 
 
 def test_a_user_template_is_kept_for_a_scene():
@@ -107,14 +169,29 @@ def test_parser_takes_exactly_the_joint_actions():
 # -- fates, strokes, joint actions ------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("heights, contact, expected", [
-    ([5.0, 4.0, 3.0, 2.0, 1.4, 1.2], None, "trapped"),  # below 1.5 a in the second half
-    ([5.0, 4.8, 4.7, 4.7, 4.7, 4.7], [False, False, False, False, True, False], "trapped"),  # touched
-    ([5.0, 6.0, 7.5, 8.0, 9.0, 10.2], None, "escaped"),  # twice the start
-    ([5.0, 5.0, 5.1, 5.3, 5.6, 5.9], None, "escaped"),  # above the start and rising by > 10 % of it
-    ([5.0, 5.1, 4.9, 5.05, 4.95, 5.0], None, "gliding"),
-    ([20.0, 19.0, 18.0, 17.5, 17.2, 17.0], None, "gliding"),  # sinking slowly, far from the wall
-])
+@pytest.mark.parametrize(
+    "heights, contact, expected",
+    [
+        ([5.0, 4.0, 3.0, 2.0, 1.4, 1.2], None, "trapped"),  # below 1.5 a in the second half
+        (
+            [5.0, 4.8, 4.7, 4.7, 4.7, 4.7],
+            [False, False, False, False, True, False],
+            "trapped",
+        ),  # touched
+        ([5.0, 6.0, 7.5, 8.0, 9.0, 10.2], None, "escaped"),  # twice the start
+        (
+            [5.0, 5.0, 5.1, 5.3, 5.6, 5.9],
+            None,
+            "escaped",
+        ),  # above the start and rising by > 10 % of it
+        ([5.0, 5.1, 4.9, 5.05, 4.95, 5.0], None, "gliding"),
+        (
+            [20.0, 19.0, 18.0, 17.5, 17.2, 17.0],
+            None,
+            "gliding",
+        ),  # sinking slowly, far from the wall
+    ],
+)
 def test_fate_rule(heights, contact, expected):
     f, mean = scenes.fate(heights, heights[0], contact)
     assert f == expected
@@ -128,7 +205,9 @@ def test_stroke_codes_and_per_cycle():
     assert scenes.stroke_codes("phase2", 1, 8, 2).tolist() == [11, 6, 5, 9, 0, 8, 3, 11]
     x = np.arange(1, 13) * 0.25  # 0.25 per step: 1.0 per four-step cycle
     assert scenes.per_cycle(x, "square", 1) == pytest.approx(1.0)
-    assert scenes.per_cycle(np.r_[0.5, 0.5 + np.arange(1, 17) * 0.25], "phase1", 2) == pytest.approx(2.0)
+    assert scenes.per_cycle(
+        np.r_[0.5, 0.5 + np.arange(1, 17) * 0.25], "phase1", 2
+    ) == pytest.approx(2.0)
     # Speed over whole cycles of the second half: a big back-and-forth move outside them is left out.
     moves = np.tile([1.0, -0.9, 1.0, -0.9], 5)  # 0.2 per four-step cycle
     x = np.cumsum(np.r_[moves, 1.0])  # 21 steps: the last one a lone +1
@@ -138,21 +217,35 @@ def test_stroke_codes_and_per_cycle():
 
 def test_joint_decode_matches_the_scene_codes():
     sw, dof, roc = decode_scene_action(np.array([0, 5, 6, 11]))
-    assert sw.tolist() == [0, 0, 1, 1] and dof.tolist() == [0, 1, 0, 1] and roc.tolist() == [-1, 1, -1, 1]
+    assert (
+        sw.tolist() == [0, 0, 1, 1]
+        and dof.tolist() == [0, 1, 0, 1]
+        and roc.tolist() == [-1, 1, -1, 1]
+    )
 
 
 def test_scene_discretisers_are_the_joint_corner_and_the_height_bin():
     # A pair's 16 joint corners (bit i: arm i long); with a wall, times 7 height bins of swimmer 1.
-    pair, pair_task = make("ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0))  # both (10, 6)
+    pair, pair_task = make(
+        "ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0)
+    )  # both (10, 6)
     cells = worlds.cells(pair)
     state = pair.reset(None, pair_task)
     j = cells.positions(state, pair_task)
-    assert cells.n_cells == 16 and j.tolist() == [1, 0, 1, 0] and int(cells.cell(state, j, pair_task)) == 5
+    assert (
+        cells.n_cells == 16
+        and j.tolist() == [1, 0, 1, 0]
+        and int(cells.cell(state, j, pair_task)) == 5
+    )
     wall, wall_task = make("ng", Scene(medium="wall", height=5.0), init=(0, 1))
     cells = worlds.cells(wall)
-    assert isinstance(cells, worlds.WallCells) and cells.n_cells == 4 * (len(worlds.HEIGHT_EDGES) + 1)
+    assert isinstance(cells, worlds.WallCells) and cells.n_cells == 4 * (
+        len(worlds.HEIGHT_EDGES) + 1
+    )
     state = wall.reset(None, wall_task)
-    assert int(cells.cell(state, cells.positions(state, wall_task), wall_task)) == 2 * 7 + 2  # 5 a: bin (3.5, 6]
+    assert (
+        int(cells.cell(state, cells.positions(state, wall_task), wall_task)) == 2 * 7 + 2
+    )  # 5 a: bin (3.5, 6]
     # Shape-changing moves of a pair at (long, short, short, long): D1 -1, D2 +1, D3 +1, D4 -1.
     mask = worlds.cells(pair).mask(jnp.array([1, 0, 0, 1]), pair_task, "shape-changing")
     assert np.flatnonzero(mask).tolist() == [0, 5, 8, 9]
@@ -162,8 +255,13 @@ def test_scene_discretisers_are_the_joint_corner_and_the_height_bin():
 def test_q_learning_joint_state_shapes():
     sc = Scene(medium="bulk", swimmers=2, separation=30.0)
     world, task = make("ng", sc, init=(1, 0))
-    run = qlearning.train_env(world, jax.random.split(jax.random.PRNGKey(0), 3), task,
-                              qlearning.QConfig(steps=20, action_set="shape-changing"), trace=True)
+    run = qlearning.train_env(
+        world,
+        jax.random.split(jax.random.PRNGKey(0), 3),
+        task,
+        qlearning.QConfig(steps=20, action_set="shape-changing"),
+        trace=True,
+    )
     assert run.actions.shape == (3, 20) and run.trace.obs.position.shape == (3, 20, 2, 2)
     assert run.q.shape == (3, 16, 12) and np.asarray(run.actions).max() < 12
     assert np.allclose(run.x, np.asarray(run.trace.obs.position[..., 0]).mean(axis=-1))
@@ -174,8 +272,12 @@ def test_q_learning_learns_the_square_alone_in_the_bulk_scene():
     # One untilted bulk swimmer is the paper's world for jswim.make; the scene world itself here.
     world = SceneWorld(Scene(medium="bulk"))
     task = SceneTask(scene_params("ng", Scene(medium="bulk"), init=(1, 0)), 1.0)
-    run = qlearning.train_env(world, jax.random.split(jax.random.PRNGKey(1), 16), task,
-                              qlearning.QConfig(steps=120, action_set="shape-changing"))
+    run = qlearning.train_env(
+        world,
+        jax.random.split(jax.random.PRNGKey(1), 16),
+        task,
+        qlearning.QConfig(steps=120, action_set="shape-changing"),
+    )
     tail = np.asarray(run.actions)[:, -8:]
     # The +x square gait from (10, 6) as a cycle of the four shape-changing moves, in some rotation.
     cycles = {tuple(np.roll([5, 0, 3, 2], k)) for k in range(4)}
@@ -199,22 +301,34 @@ PAIR = dict(separations=(30.0,), phases=(1,), runs=1, q_runs=2, steps=12)
 def test_wall_study_end_to_end(server, tmp_path):
     out = tmp_path / "wall"
     # PPO's wall rows: tests/studies/test_scene_ppo_rows.py (its compilation is paid there once).
-    run_study("wall", StudyOptions(**WALL, agents=("stroke", "llm", "qlearning", "random")), server.backend(), out,
-              figures=True)
+    run_study(
+        "wall",
+        StudyOptions(**WALL, agents=("stroke", "llm", "qlearning", "random")),
+        server.backend(),
+        out,
+        figures=True,
+    )
     rows = read_runs(out)
-    assert {(r["agent"], r["group"]) for r in rows} == \
-        {("stroke", "free")} | {(a, "h=3") for a in ("stroke", "llm", "qlearning", "random")}
+    assert {(r["agent"], r["group"]) for r in rows} == {("stroke", "free")} | {
+        (a, "h=3") for a in ("stroke", "llm", "qlearning", "random")
+    }
     meta = read_metadata(out)
-    assert any("scene (an extension): medium 'wall'" in line for line in meta["fidelity_deviations"])
+    assert any(
+        "scene (an extension): medium 'wall'" in line for line in meta["fidelity_deviations"]
+    )
     table = meta["summary"]["scenes"]
     stroke = {r["group"]: r for r in table if r["agent"] == "stroke"}
     assert stroke["h=3"]["per_cycle"] > 0.1 and stroke["free"]["medium"] == "free"
     for r in rows:
         assert json.loads(r["scene"])["medium"] in ("wall", "free")
         if r["group"] != "free":
-            assert r["fate"] in scenes.FATES and len(r["heights"]) == 12 and r["start_height"] == 3.0
+            assert (
+                r["fate"] in scenes.FATES and len(r["heights"]) == 12 and r["start_height"] == 3.0
+            )
     llm = next(r for r in rows if r["agent"] == "llm")
-    meta_line = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0])
+    meta_line = json.loads(
+        (out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0]
+    )
     assert meta_line["scene"]["medium"] == "wall"
     step = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[1])
     assert ", H " in step["prompt"] and len(step["heights_after"]) == 1
@@ -225,8 +339,29 @@ def test_wall_study_end_to_end(server, tmp_path):
 @pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_show_prints_the_scene_table(server, tmp_path, capsys):
     out = tmp_path / "pair"
-    rc = cli.main(["study", "pair", "--separations", "30", "--phases", "2", "--runs", "1", "--q-runs", "2",
-                   "--steps", "12", "--no-figures", "--out", str(out), "--base-url", server.url, "--model", "fake"])
+    rc = cli.main(
+        [
+            "study",
+            "pair",
+            "--separations",
+            "30",
+            "--phases",
+            "2",
+            "--runs",
+            "1",
+            "--q-runs",
+            "2",
+            "--steps",
+            "12",
+            "--no-figures",
+            "--out",
+            str(out),
+            "--base-url",
+            server.url,
+            "--model",
+            "fake",
+        ]
+    )
     assert rc == 0
     printed = capsys.readouterr().out
     assert "scenes: displacement per stroke cycle" in printed and "D=30, phase 2" in printed
@@ -237,29 +372,47 @@ def test_show_prints_the_scene_table(server, tmp_path, capsys):
     llm = next(r for r in rows if r["agent"] == "llm")
     assert max(a[0] for a in llm["actions"]) <= 4 and len(llm["xs"][0]) == 2
     assert llm["separation"] == 30.0
-    assert llm["pair_prompt"] == "joint" and "-each-" not in llm["run_id"]  # the default: one joint prompt
-    meta_line = json.loads((out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0])
+    assert (
+        llm["pair_prompt"] == "joint" and "-each-" not in llm["run_id"]
+    )  # the default: one joint prompt
+    meta_line = json.loads(
+        (out / "transcripts" / f"{llm['run_id']}.jsonl").read_text().splitlines()[0]
+    )
     assert meta_line["pair_prompt"] == "joint" and "conversations" not in meta_line
     # The continuous RL baseline steers both swimmers next to the others, judged on both swimmers' moves.
     learners = [r for r in rows if r["agent"] == "ppo"]
     assert len(learners) == 2 and {r["group"] for r in learners} == {"D=30"} and "ppo" in printed
     for r in learners:
         assert isinstance(r["success"], bool) and r["fate"] is None and r["separation"] == 30.0
-        assert {d for d, _ in r["actions"]} <= {1, 2, 3, 4} and len(r["xs"][0]) == 2 and r["speed"] is not None
+        assert (
+            {d for d, _ in r["actions"]} <= {1, 2, 3, 4}
+            and len(r["xs"][0]) == 2
+            and r["speed"] is not None
+        )
 
 
 def test_scene_options_are_checked(tmp_path, capsys):
-    for argv in (["study", "wall", "--heights", "0.5"], ["study", "pair", "--phases", "5"],
-                 ["study", "pair", "--separations", "30,30"]):
+    for argv in (
+        ["study", "wall", "--heights", "0.5"],
+        ["study", "pair", "--phases", "5"],
+        ["study", "pair", "--separations", "30,30"],
+    ):
         assert cli.main(argv + ["--out", str(tmp_path / "x")]) == 2
         assert "Traceback" not in capsys.readouterr().err
     # An empty list ("," or "") is a mistake, not the defaults.
-    for argv in (["study", "wall", "--heights", ","], ["study", "pair", "--separations", ""],
-                 ["study", "pair", "--phases", ",,"]):
+    for argv in (
+        ["study", "wall", "--heights", ","],
+        ["study", "pair", "--separations", ""],
+        ["study", "pair", "--phases", ",,"],
+    ):
         with pytest.raises(SystemExit) as stop:
             cli.main(argv + ["--dry-run", "--out", str(tmp_path / "x")])
         err = capsys.readouterr().err
-        assert stop.value.code == 2 and len(err.strip().splitlines()) == 1 and "expected comma-separated" in err
+        assert (
+            stop.value.code == 2
+            and len(err.strip().splitlines()) == 1
+            and "expected comma-separated" in err
+        )
     assert not (tmp_path / "x").exists()
 
 
@@ -281,6 +434,7 @@ def test_interrupted_pair_study_resumes(server, tmp_path):
     assert read_metadata(part)["status"] == "interrupted"
     assert 0 < len(read_runs(part)) < len(whole.rows)
     again = run_study("pair", opts, server.backend(), part, figures=False)
-    key = lambda r: r["run_id"]  # noqa: E731
-    assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == \
-        [(r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)]
+    key = lambda r: r["run_id"]
+    assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == [
+        (r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)
+    ]

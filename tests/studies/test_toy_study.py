@@ -43,8 +43,10 @@ def toy_factory(scene, *, zeta=0.0, direction=1, init=None):
 
 #: The toy's square toward each target, as the next move from the shape (D1, D2) the last record
 #: ends at: counter-clockwise (+1 per cycle) toward +x, clockwise (-1) toward -x.
-TOWARD = {"positive": {"1, 1": "[1, -1]", "0, 1": "[2, -1]", "0, 0": "[1, 1]", "1, 0": "[2, 1]"},
-          "negative": {"1, 1": "[2, -1]", "1, 0": "[1, -1]", "0, 0": "[2, 1]", "0, 1": "[1, 1]"}}
+TOWARD = {
+    "positive": {"1, 1": "[1, -1]", "0, 1": "[2, -1]", "0, 0": "[1, 1]", "1, 0": "[2, 1]"},
+    "negative": {"1, 1": "[2, -1]", "1, 0": "[1, -1]", "0, 0": "[2, 1]", "0, 1": "[1, 1]"},
+}
 PROMPTS: list[str] = []
 
 
@@ -63,8 +65,15 @@ def _toy_study(tmp_path_factory, name, agents):
     """Run the wall study's cells on the toy with these agents; yields (folder, result)."""
     jswim.register_world("toy", toy_factory)
     out = tmp_path_factory.mktemp(name) / "wall"
-    o = StudyOptions(swimmers=("toy",), heights=(H,), directions=(1, -1), steps=STEPS, q_runs=1, runs=1,
-                     agents=agents)
+    o = StudyOptions(
+        swimmers=("toy",),
+        heights=(H,),
+        directions=(1, -1),
+        steps=STEPS,
+        q_runs=1,
+        runs=1,
+        agents=agents,
+    )
     try:
         with FakeServer(reply=toy_reply) as srv:
             res = run_study("wall", o, backend=srv.backend(), out=out, figures=False)
@@ -125,8 +134,12 @@ def test_toy_world_runs_a_study(toy_folder):
     rows = {r["run_id"]: r for r in res.rows}
     # per direction: the free-fluid reference stroke, and at h = 3 every agent, one run each
     assert len(rows) == 2 * 4
-    assert sorted(r["agent"] for r in rows.values() if r["direction"] == 1) == \
-        ["qlearning", "random", "stroke", "stroke"]
+    assert sorted(r["agent"] for r in rows.values() if r["direction"] == 1) == [
+        "qlearning",
+        "random",
+        "stroke",
+        "stroke",
+    ]
     strokes = [r for r in rows.values() if r["agent"] == "stroke"]
     assert len(strokes) == 4
     for r in strokes:
@@ -134,7 +147,10 @@ def test_toy_world_runs_a_study(toy_folder):
         assert r["per_cycle"] == pytest.approx(-1.0 * r["direction"], abs=1e-6)
         assert r["x"][-1] == pytest.approx(-STEPS / 4 * r["direction"], abs=1e-5)
     _check_toy_rows(rows.values())
-    assert {(t["agent"], t["group"]) for t in res.summary} >= {("stroke", f"h={H:g}"), ("qlearning", f"h={H:g}")}
+    assert {(t["agent"], t["group"]) for t in res.summary} >= {
+        ("stroke", f"h={H:g}"),
+        ("qlearning", f"h={H:g}"),
+    }
     saved = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     assert {r["run_id"] for r in saved} == set(rows)
 
@@ -159,20 +175,27 @@ def test_toy_llm_runs_read_the_toy_world(toy_learners):
         # The reply followed the shapes the records gave, so the run is the toy's square toward
         # the target: +1 per cycle by the area rule (0.5 at a cycle's first and last moves).
         assert r["failed_steps"] == 0 and r["success"] is None
-        np.testing.assert_allclose(np.asarray(r["x"]) * d, np.repeat(np.arange(1, 4), 4) - [0.5, 0.5, 0.5, 0.0] * 3,
-                                   atol=1e-6)
+        np.testing.assert_allclose(
+            np.asarray(r["x"]) * d,
+            np.repeat(np.arange(1, 4), 4) - [0.5, 0.5, 0.5, 0.0] * 3,
+            atol=1e-6,
+        )
     # The prompt is the toy's: its two DOFs over the world's range [0, 1] and records of its observed
     # shapes (the paper's swimmers' ranges are [-1.047, 1.047] and [6, 10]).
     toy = [p for p in PROMPTS if "D1 and D2 each stay in [0, 1]" in p]
     assert len(toy) == len(PROMPTS) == 2 * STEPS
-    assert any("(1, 1) [1, -1] -> (0, 1), X" in p for p in toy) and any("(1, 1) [2, -1] -> (1, 0), X" in p for p in toy)
-    first = json.loads((out / "transcripts" / f"{llm[1]['run_id']}.jsonl").read_text().splitlines()[0])
+    assert any("(1, 1) [1, -1] -> (0, 1), X" in p for p in toy) and any(
+        "(1, 1) [2, -1] -> (1, 0), X" in p for p in toy
+    )
+    first = json.loads(
+        (out / "transcripts" / f"{llm[1]['run_id']}.jsonl").read_text().splitlines()[0]
+    )
     assert first["spec"]["swimmer"] == "toy" and first["levels0"] == [1, 1]
 
 
 @pytest.mark.slow  # PPO's training compiles
 def test_toy_ppo_learns_on_the_toy_world(toy_learners):
-    out, res = toy_learners
+    _out, res = toy_learners
     for r in (r for r in res.rows if r["agent"] == "ppo"):
         assert r["success"] is None and r["period"] == 0  # no paper criterion for a new world
         # the recorded x is the area rule's on the recorded moves, replayed here from (1, 1)
@@ -187,7 +210,11 @@ def test_toy_ppo_learns_on_the_toy_world(toy_learners):
 
 def test_toy_run_pictured_from_the_protocol(toy_folder):
     out, res = toy_folder
-    row = next(r for r in res.rows if r["agent"] == "stroke" and r["group"] == f"h={H:g}" and r["direction"] == 1)
+    row = next(
+        r
+        for r in res.rows
+        if r["agent"] == "stroke" and r["group"] == f"h={H:g}" and r["direction"] == 1
+    )
     t = track(row)
     p = run_payload(t)
     # one sphere per swimmer at its observed position (above the wall at h), the DOFs in [0, 1]
@@ -209,9 +236,11 @@ def test_toy_page_in_chromium(toy_folder):
         open_report_run(b, page, run)
         drawn = b.eval("window.jswimReport.drawn()")
         # inside the sphere (half a radius right of its centre, off the centre's cross): its white fill
-        inside = b.eval("(() => { var d = window.jswimReport.data(), q = d.pos[window.jswimReport.step()][0],"
-                        "p = window.jswimReport.toCanvas(q[0] + 0.5, q[1] + 0.5), c = document.getElementById('swim');"
-                        "return Array.from(c.getContext('2d').getImageData(p[0], p[1], 1, 1).data).slice(0, 3); })()")
+        inside = b.eval(
+            "(() => { var d = window.jswimReport.data(), q = d.pos[window.jswimReport.step()][0],"
+            "p = window.jswimReport.toCanvas(q[0] + 0.5, q[1] + 0.5), c = document.getElementById('swim');"
+            "return Array.from(c.getContext('2d').getImageData(p[0], p[1], 1, 1).data).slice(0, 3); })()"
+        )
         start = b.eval("document.getElementById('step').textContent")
         b.screenshot(os.path.join(ARTIFACTS, "report-toy-world.png"))
         assert b.errors == []

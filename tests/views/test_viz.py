@@ -38,8 +38,25 @@ def swim_folder(tmp_path_factory):
     os.environ["JSWIM_TEST_SECRET_KEY"] = SECRET
     try:
         with FakeServer(reply=hash_reply, latency=0.001) as srv:
-            rc = cli.main(["swim", "--steps", "14", "--runs", "2", "--q-runs", "3", "--out", str(out),
-                           "--base-url", srv.url, "--model", "fake-model", "--api-key-env", "JSWIM_TEST_SECRET_KEY"])
+            rc = cli.main(
+                [
+                    "swim",
+                    "--steps",
+                    "14",
+                    "--runs",
+                    "2",
+                    "--q-runs",
+                    "3",
+                    "--out",
+                    str(out),
+                    "--base-url",
+                    srv.url,
+                    "--model",
+                    "fake-model",
+                    "--api-key-env",
+                    "JSWIM_TEST_SECRET_KEY",
+                ]
+            )
     finally:
         del os.environ["JSWIM_TEST_SECRET_KEY"]
     assert rc == 0
@@ -60,8 +77,12 @@ def test_outline_centroid_and_reference_link_match_the_rft_model(swimmer):
         ref_centre = 0.5 * (pts[m] + pts[m + 1])
         # centroid - reference point, from the RFT code's own link centres (independent of outline)
         np.testing.assert_allclose(-ref_centre, np.asarray(nlink.centroid_offset(d)), atol=1e-12)
-        np.testing.assert_allclose(pts[m + 1] - pts[m], [1.0, 0.0], atol=1e-12)  # reference link along +x
-        np.testing.assert_allclose(np.linalg.norm(np.diff(pts, axis=0), axis=1), 1.0, atol=1e-12)  # links of length a
+        np.testing.assert_allclose(
+            pts[m + 1] - pts[m], [1.0, 0.0], atol=1e-12
+        )  # reference link along +x
+        np.testing.assert_allclose(
+            np.linalg.norm(np.diff(pts, axis=0), axis=1), 1.0, atol=1e-12
+        )  # links of length a
         # hinge angles are the differences of consecutive link directions
         ang = np.arctan2(*np.diff(pts, axis=0)[:, ::-1].T)
         np.testing.assert_allclose(np.diff(ang), d, atol=1e-12)
@@ -80,8 +101,12 @@ def test_placed_outline_puts_the_middle_link_where_the_environment_has_it():
     for dof, roc in [(2, -1), (1, -1), (2, 1)]:
         state, _ = env.step(jax.random.PRNGKey(1), state, env.encode_action(dof, roc), params)
     x, y = env.position(state)
-    pts = place(outline(params.model, np.asarray(env.dof_values(state, params))), x, y, float(state.theta))
-    np.testing.assert_allclose(0.5 * (pts[1] + pts[2]), np.asarray(env.reference_point(state, params)), atol=1e-6)
+    pts = place(
+        outline(params.model, np.asarray(env.dof_values(state, params))), x, y, float(state.theta)
+    )
+    np.testing.assert_allclose(
+        0.5 * (pts[1] + pts[2]), np.asarray(env.reference_point(state, params)), atol=1e-6
+    )
 
 
 def test_start_orientation_is_the_environments():
@@ -89,7 +114,9 @@ def test_start_orientation_is_the_environments():
         model = make_model(swimmer)
         for levels in ([1] * model.n_dof, [0] + [1] * (model.n_dof - 1)):
             d0 = np.array([model.lo + (model.hi - model.lo) * v for v in levels])
-            assert start_theta(model, d0) == pytest.approx(float(env.start_orientation(model, np.array(levels), xp=np)))
+            assert start_theta(model, d0) == pytest.approx(
+                float(env.start_orientation(model, np.array(levels), xp=np))
+            )
 
 
 # -- tracks from a folder ---------------------------------------------------------------------------
@@ -106,7 +133,9 @@ def test_tracks_follow_the_recorded_runs(swim_folder):
         centres = 0.5 * (t.points[:, 1:] + t.points[:, :-1])
         np.testing.assert_allclose(centres.mean(axis=1), np.stack([t.x, t.y], 1), atol=1e-9)
         # DOF values: an independent noiseless rollout of the same actions from the same start
-        ro = env.rollout("purcell", [tuple(a) for a in r["actions"]], init=[1, 1], direction=r["direction"])
+        ro = env.rollout(
+            "purcell", [tuple(a) for a in r["actions"]], init=[1, 1], direction=r["direction"]
+        )
         np.testing.assert_allclose(t.dofs[1:], np.asarray(ro.dofs), atol=1e-6)
         if r["agent"] == "llm":
             assert all(isinstance(x, str) for x in t.replies) and not t.replayed
@@ -118,7 +147,11 @@ def test_tracks_follow_the_recorded_runs(swim_folder):
 def test_track_of_an_old_folder_replays_the_missing_pose(swim_folder):
     """Folders written before y/orientation were recorded, with the old field name `allowed`."""
     r = next(r for r in read_runs(swim_folder) if r["agent"] == "qlearning")
-    old = {("allowed" if k == "action_set" else k): v for k, v in r.items() if k not in ("y", "orientation")}
+    old = {
+        ("allowed" if k == "action_set" else k): v
+        for k, v in r.items()
+        if k not in ("y", "orientation")
+    }
     t_new, t_old = track(r), track(old)
     assert t_old.replayed and not t_new.replayed
     np.testing.assert_allclose(t_old.y, t_new.y, atol=1e-6)
@@ -129,16 +162,26 @@ def test_track_accepts_real_valued_rocs_and_recorded_dofs():
     """Continuous strokes: a ROC of 0.5 moves half the range and stops at the limit; a row's own
     per-step `dofs` win over the replay."""
     model = make_model("purcell")
-    row = {"run_id": "x", "agent": "random", "swimmer": "purcell", "direction": 1, "init": "--",
-           "x": [0.0, 0.01, 0.02], "y": [0.0, 0.0, 0.0], "orientation": [0.0, 0.1, 0.1],
-           "actions": [[1, 0.5], [1, 0.75], [2, -0.25]]}
+    row = {
+        "run_id": "x",
+        "agent": "random",
+        "swimmer": "purcell",
+        "direction": 1,
+        "init": "--",
+        "x": [0.0, 0.01, 0.02],
+        "y": [0.0, 0.0, 0.0],
+        "orientation": [0.0, 0.1, 0.1],
+        "actions": [[1, 0.5], [1, 0.75], [2, -0.25]],
+    }
     t = track(row)
     span = model.hi - model.lo
     np.testing.assert_allclose(t.dofs[:, 0], [model.lo, model.lo + 0.5 * span, model.hi, model.hi])
     np.testing.assert_allclose(t.dofs[:, 1], [model.lo] * 4)  # pushed past the lower limit: stays
     lattice = dict(row, roc_levels=4, actions=[[1, 1], [1, 2], [2, -3]])  # k / K of the range
-    np.testing.assert_allclose(track(lattice).dofs[:, 0], [model.lo, model.lo + span / 4, model.lo + 3 * span / 4,
-                                                             model.lo + 3 * span / 4])
+    np.testing.assert_allclose(
+        track(lattice).dofs[:, 0],
+        [model.lo, model.lo + span / 4, model.lo + 3 * span / 4, model.lo + 3 * span / 4],
+    )
     row["dofs"] = [[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]]
     np.testing.assert_allclose(track(row).dofs[1:], row["dofs"])
     assert anim_mod.Animation([t]).n_frames == 4 + 4
@@ -196,7 +239,9 @@ def test_animation_frames_differ_as_the_swimmer_moves(swim_folder):
     assert first[:8] == b"\x89PNG\r\n\x1a\n" and first != later
 
 
-@pytest.mark.skipif(anim_mod.ffmpeg_exe() is None, reason="no ffmpeg (pip install 'jswim[video]' ships one)")
+@pytest.mark.skipif(
+    anim_mod.ffmpeg_exe() is None, reason="no ffmpeg (pip install 'jswim[video]' ships one)"
+)
 def test_animation_mp4(swim_folder, tmp_path):
     path = anim_mod.build(swim_folder, ["random-purcell-px-i++-z0-r0"]).save(tmp_path / "run.mp4")
     assert path.stat().st_size > 1000 and b"ftyp" in path.read_bytes()[:64]
@@ -204,8 +249,21 @@ def test_animation_mp4(swim_folder, tmp_path):
 
 def test_animate_and_report_commands(swim_folder, tmp_path, capsys):
     out = tmp_path / "a.gif"
-    assert cli.main(["animate", str(swim_folder), "--run", "llm-purcell-px-i++-z0-r0", "--run",
-                     "random-purcell-px-i++-z0-r1", "--out", str(out)]) == 0
+    assert (
+        cli.main(
+            [
+                "animate",
+                str(swim_folder),
+                "--run",
+                "llm-purcell-px-i++-z0-r0",
+                "--run",
+                "random-purcell-px-i++-z0-r1",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert out.is_file() and "2 runs" in capsys.readouterr().out
     assert cli.main(["animate", str(swim_folder), "--run", "nope"]) == 2
     assert "no run 'nope'" in capsys.readouterr().err
@@ -247,7 +305,9 @@ def test_report_of_an_unfinished_study_says_so(swim_folder, tmp_path):
     folder = tmp_path / "unfinished"
     shutil.copytree(swim_folder, folder)
     lines = (folder / "runs.jsonl").read_text().splitlines()
-    (folder / "runs.jsonl").write_text("\n".join(lines[:5]) + "\n" + lines[5][:40])  # torn last line
+    (folder / "runs.jsonl").write_text(
+        "\n".join(lines[:5]) + "\n" + lines[5][:40]
+    )  # torn last line
     meta = json.loads((folder / "metadata.json").read_text())
     meta["status"] = "interrupted"
     (folder / "metadata.json").write_text(json.dumps(meta))
@@ -267,15 +327,20 @@ def _blob(page, i):
 def test_report_page_data_decodes(swim_folder):
     """The per-run blobs are gzip+base64 JSON with a frame per step (what the page's script reads)."""
     page = (swim_folder / "report.html").read_text()
-    index = json.loads(re.search(r'<script type="application/json" id="report-data">(.+?)</script>', page, re.S).group(1))
+    index = json.loads(
+        re.search(
+            r'<script type="application/json" id="report-data">(.+?)</script>', page, re.S
+        ).group(1)
+    )
     runs = {r["run_id"]: r for r in read_runs(swim_folder)}
     data = _blob(page, 0)
     assert len(data["pts"]) == len(runs[index["runs"][0]["run_id"]]["x"]) + 1 and data["planar"]
     # Every run once, listed by the study's axes (agent, then replicate), not in finishing order.
     ids = [r["run_id"] for r in index["runs"]]
     assert sorted(ids) == sorted(runs)
-    assert ids == ["llm-purcell-px-i++-z0-r0", "llm-purcell-px-i++-z0-r1"] + \
-        [f"qlearning-purcell-px-i++-z0-r{i}" for i in range(3)] + [f"random-purcell-px-i++-z0-r{i}" for i in range(3)]
+    assert ids == ["llm-purcell-px-i++-z0-r0", "llm-purcell-px-i++-z0-r1"] + [
+        f"qlearning-purcell-px-i++-z0-r{i}" for i in range(3)
+    ] + [f"random-purcell-px-i++-z0-r{i}" for i in range(3)]
 
 
 # -- every study and swimmer ---------------------------------------------------------------------------
@@ -294,12 +359,19 @@ def test_report_and_animation_of_every_study(study, tmp_path):
     if study == "competence":
         opts["variants"] = ("paper",)
     with FakeServer(reply=hash_reply, latency=0.0) as srv:
-        run_study(study, StudyOptions(**opts), backend=Backend(base_url=srv.url, model="fake"),
-                  out=tmp_path / study, figures=False)
+        run_study(
+            study,
+            StudyOptions(**opts),
+            backend=Backend(base_url=srv.url, model="fake"),
+            out=tmp_path / study,
+            figures=False,
+        )
     page = (tmp_path / study / "report.html").read_text()
     n = len(read_runs(tmp_path / study))
     assert page.count('<script type="text/plain" id="run-') == n and "complete" in page
-    by = {"noise": "zeta", "history": "n_ht", "ablation": "group", "inits": "init"}.get(study, "agent")
+    by = {"noise": "zeta", "history": "n_ht", "ablation": "group", "inits": "init"}.get(
+        study, "agent"
+    )
     a = anim_mod.build(tmp_path / study, by=by)
     assert len(a.tracks) >= 2
     assert a.frame_png(a.n_frames - 1)[:4] == b"\x89PNG"
@@ -308,15 +380,30 @@ def test_report_and_animation_of_every_study(study, tmp_path):
 @pytest.mark.slow  # four-DOF studies, animations and a report end to end (60 s under load 8)
 def test_four_dof_swimmers_animate_and_report(tmp_path):
     out = tmp_path / "four"
-    run_study("curves", StudyOptions(swimmers=("nlink", "nsphere"), directions=(1,), q_runs=2, steps=8,
-                                     agents=("qlearning", "random")), backend=None, out=out, figures=False)
+    run_study(
+        "curves",
+        StudyOptions(
+            swimmers=("nlink", "nsphere"),
+            directions=(1,),
+            q_runs=2,
+            steps=8,
+            agents=("qlearning", "random"),
+        ),
+        backend=None,
+        out=out,
+        figures=False,
+    )
     rows = read_runs(out)
     for r in rows:
         t = track(r)
         assert t.points.shape[1] == (5 if r["swimmer"] == "nlink" else 4)
         if r["swimmer"] == "nlink":  # five link ends, links of length a, centroid at the recorded x
-            np.testing.assert_allclose(np.linalg.norm(np.diff(t.points, axis=1), axis=2), 1.0, atol=1e-9)
-        centres = 0.5 * (t.points[:, 1:] + t.points[:, :-1]) if r["swimmer"] == "nlink" else t.points
+            np.testing.assert_allclose(
+                np.linalg.norm(np.diff(t.points, axis=1), axis=2), 1.0, atol=1e-9
+            )
+        centres = (
+            0.5 * (t.points[:, 1:] + t.points[:, :-1]) if r["swimmer"] == "nlink" else t.points
+        )
         np.testing.assert_allclose(centres.mean(axis=1)[:, 0], t.x, atol=1e-6)
     for sw in ("nlink", "nsphere"):
         ids = [r["run_id"] for r in rows if r["swimmer"] == sw][:2]
@@ -348,13 +435,26 @@ def _check_page(path, shot):
         b.pump(1.5)  # 4 steps/s
         moved = b.eval("window.jswimReport.step()")
         b.eval("window.jswimReport.pause()")
-        prompt = b.eval("(document.querySelector('pre.prompt') || {}).textContent || ''")  # of the step shown
+        prompt = b.eval(
+            "(document.querySelector('pre.prompt') || {}).textContent || ''"
+        )  # of the step shown
         b.eval("document.getElementById('browser').scrollIntoView()")
         b.screenshot(shot)
-        figures = b.eval("Array.from(document.querySelectorAll('#figures img')).filter(i => i.naturalWidth > 0).length")
+        figures = b.eval(
+            "Array.from(document.querySelectorAll('#figures img')).filter(i => i.naturalWidth > 0).length"
+        )
         foreign = [u for u in b.requests if not u.startswith(("file:", "data:"))]
-        return dict(listed=listed, steps=steps, status=status, title=title, prompt=prompt, moved=moved,
-                    figures=figures, errors=b.errors, foreign=foreign)
+        return dict(
+            listed=listed,
+            steps=steps,
+            status=status,
+            title=title,
+            prompt=prompt,
+            moved=moved,
+            figures=figures,
+            errors=b.errors,
+            foreign=foreign,
+        )
 
 
 @pytest.mark.slow  # a real browser (Chromium start, page load, screenshots)
@@ -391,7 +491,18 @@ def test_ensemble_table_rows_sit_at_regular_steps():
 
     steps = np.arange(1, 51)
     assert list(steps[regular_rows(steps, 12)]) == [5, 10, 15, 20, 25, 30, 35, 40, 45, 50]
-    assert list(steps[regular_rows(steps[:49], 10)]) == [5, 10, 15, 20, 25, 30, 35, 40, 45, 49]  # the last step
+    assert list(steps[regular_rows(steps[:49], 10)]) == [
+        5,
+        10,
+        15,
+        20,
+        25,
+        30,
+        35,
+        40,
+        45,
+        49,
+    ]  # the last step
     every10 = np.arange(10, 1001, 10)
     assert list(every10[regular_rows(every10, 12)]) == list(range(100, 1001, 100))
     assert list(regular_rows(np.arange(1, 8), 12)) == list(range(7))
@@ -399,14 +510,34 @@ def test_ensemble_table_rows_sit_at_regular_steps():
 
 def test_qlearn_out_writes_a_histogram_that_names_the_agent(tmp_path, capsys):
     out = tmp_path / "ql"
-    assert cli.main(["qlearn", "--swimmer", "purcell", "--direction", "+x", "--seeds", "48", "--steps", "60",
-                     "--action-set", "all", "--out", str(out)]) == 0
+    assert (
+        cli.main(
+            [
+                "qlearn",
+                "--swimmer",
+                "purcell",
+                "--direction",
+                "+x",
+                "--seeds",
+                "48",
+                "--steps",
+                "60",
+                "--action-set",
+                "all",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert (out / "qlearn.png").is_file() and (out / "qlearn.pdf").is_file() and "figure:" in text
     import csv
 
     rows = list(csv.DictReader((out / "qlearn.csv").open()))
-    assert len(rows) == 1 and rows[0]["swimmer"] == "purcell" and int(rows[0]["n"]) == 48  # the 48 learners of the next test: one program
+    assert (
+        len(rows) == 1 and rows[0]["swimmer"] == "purcell" and int(rows[0]["n"]) == 48
+    )  # the 48 learners of the next test: one program
     (tmp_path / "file").write_text("x")
     assert cli.main(["qlearn", "--seeds", "4", "--out", str(tmp_path / "file")]) == 2
 
@@ -429,10 +560,46 @@ def test_qlearn_histogram_counts_every_learner_that_learned():
 
 def test_ensemble_out_writes_the_table_and_a_figure(tmp_path, capsys):
     # the same small program both times (n and steps are compiled in): one compile
-    assert cli.main(["ensemble", "--n", "300", "--zetas", "0,1", "--steps", "8", "--out", str(tmp_path / "e")]) == 0
-    assert (tmp_path / "e" / "ensemble.csv").is_file() and (tmp_path / "e" / "ensemble.png").is_file()
-    assert cli.main(["ensemble", "--n", "300", "--zetas", "1", "--steps", "8", "--out", str(tmp_path / "t.csv")]) == 0
-    assert (tmp_path / "t.csv").is_file() and (tmp_path / "t.png").is_file() and (tmp_path / "t.pdf").is_file()
+    assert (
+        cli.main(
+            [
+                "ensemble",
+                "--n",
+                "300",
+                "--zetas",
+                "0,1",
+                "--steps",
+                "8",
+                "--out",
+                str(tmp_path / "e"),
+            ]
+        )
+        == 0
+    )
+    assert (tmp_path / "e" / "ensemble.csv").is_file() and (
+        tmp_path / "e" / "ensemble.png"
+    ).is_file()
+    assert (
+        cli.main(
+            [
+                "ensemble",
+                "--n",
+                "300",
+                "--zetas",
+                "1",
+                "--steps",
+                "8",
+                "--out",
+                str(tmp_path / "t.csv"),
+            ]
+        )
+        == 0
+    )
+    assert (
+        (tmp_path / "t.csv").is_file()
+        and (tmp_path / "t.png").is_file()
+        and (tmp_path / "t.pdf").is_file()
+    )
     assert "figure:" in capsys.readouterr().out
 
 
@@ -440,11 +607,15 @@ def test_report_and_animation_of_a_folder_an_earlier_version_wrote(tmp_path):
     """tests/data/folder-54c2edb: `jswim swim` of commit 54c2edb (before y, orientation, n_planned and
     the call journal were recorded)."""
     folder = tmp_path / "old"
-    shutil.copytree(os.path.join(os.path.dirname(os.path.dirname(__file__)), "data", "folder-54c2edb"), folder)
+    shutil.copytree(
+        os.path.join(os.path.dirname(os.path.dirname(__file__)), "data", "folder-54c2edb"), folder
+    )
     rows = read_runs(folder)
     assert rows and all("orientation" not in r for r in rows)
     a = anim_mod.build(folder)
-    assert [t.agent for t in a.tracks] == ["llm", "qlearning", "random"] and all(t.replayed for t in a.tracks)
+    assert [t.agent for t in a.tracks] == ["llm", "qlearning", "random"] and all(
+        t.replayed for t in a.tracks
+    )
     assert a.frame_png(5)[:4] == b"\x89PNG"
     page = write_report(folder, figures="none").read_text()
     assert "complete: 5 runs" in page and page.count('<script type="text/plain" id="run-') == 5
