@@ -1,4 +1,4 @@
-"""On-disk cache of the exact tables (the corner, lattice and motion tables).
+"""On-disk cache of the exact tables (the corner, lattice, motion and work tables).
 
 Building a table runs the float64 integrator (seconds, mostly compilation); reading it back takes
 milliseconds. Entries are keyed by the table's name, the swimmer model, its parameters and the
@@ -30,6 +30,8 @@ _SOURCES = (
     "jswim.env.tables",
     "jswim.env.motion",
     "jswim.env.state",
+    "jswim.env.work",
+    "jswim.swimmers.dissipation",
 )
 
 

@@ -1,0 +1,176 @@
+"""Loops in shape space measured exactly: each cycle's rigid motion and work from the K-lattice
+tables.
+
+A cycle of lattice steps is a product of table rows: the centroid displacement of each step
+(body frame at the step's start) rotated by the orientation reached so far, and the rotations
+added ([`jswim.env.tables.lattice_table`][jswim.env.tables.lattice_table]); its work is the sum
+of the steps' rows of [`jswim.env.work.lattice_work_table`][jswim.env.work.lattice_work_table].
+The loops themselves and the steering controller are kinematics:
+[`jswim.swimmers.turning`][jswim.swimmers.turning].
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from jswim.env.tables import lattice_table
+from jswim.env.work import lattice_work_table
+from jswim.swimmers.models import SwimmerModel
+from jswim.swimmers.turning import (
+    Loop,
+    SteeringPlan,
+    quarter_loop,
+    rectangle_loops,
+    square_gait,
+    turning_radius,
+)
+
+
+class LoopMotion(NamedTuple):
+    """One cycle of a loop: rigid motion of the centroid and work, exact (float64 tables)."""
+
+    loop: Loop
+    dx: float  # centroid displacement, body frame at the cycle's start (a)
+    dy: float
+    rotation: float  # change of orientation (rad)
+    work: float  # xi_par a^3 / tau (links) or 6 pi mu a^3 / tau (spheres)
+    steps: int
+
+    @property
+    def displacement(self) -> float:
+        """Length of the centroid's displacement per cycle."""
+        return math.hypot(self.dx, self.dy)
+
+    @property
+    def radius(self) -> float:
+        """Radius of the circle the centroid follows when the cycle is repeated."""
+        return turning_radius(self.displacement, self.rotation)
+
+
+def _check(model: SwimmerModel) -> None:
+    if model.n_dof != 2:
+        raise ValueError(f"loops in shape space are for two-DOF swimmers, not {model.label}")
+
+
+def loop_motion(model: SwimmerModel, roc_levels: int, loop: Loop) -> LoopMotion:
+    """Rigid motion and work of one cycle of ``loop`` on the K = ``roc_levels`` lattice.
+
+    Raises
+    ------
+    ValueError
+        For a swimmer that does not have two DOFs, or a loop off the lattice.
+    """
+    _check(model)
+    k = roc_levels
+    rows = lattice_table(model, k)
+    work_rows = lattice_work_table(model, k)
+    n = model.n_dof
+    x = y = theta = work = 0.0
+    levels = list(loop.start)
+    for dof, q in loop.moves():
+        end = levels[dof] + q
+        if not (min(levels) >= 0 and max(levels) <= k and 0 <= end <= k):
+            raise ValueError(f"loop {loop.vertices} leaves the K = {k} lattice")
+        shape = levels[0] + (k + 1) * levels[1]
+        row = (shape * n + dof) * (k + 1) + end
+        c, s = math.cos(theta), math.sin(theta)
+        x += c * rows[row, 0] - s * rows[row, 1]
+        y += s * rows[row, 0] + c * rows[row, 1]
+        theta += rows[row, 2]
+        work += work_rows[row]
+        levels[dof] = end
+    return LoopMotion(loop, float(x), float(y), float(theta), float(work), len(loop.moves()))
+
+
+def lattice_loops(model: SwimmerModel, roc_levels: int) -> list[LoopMotion]:
+    """Every rectangle loop of the K lattice ([`rectangle_loops`][jswim.swimmers.turning.rectangle_loops],
+    one orientation each; the reverse turns and moves the other way at the same work), measured."""
+    return [loop_motion(model, roc_levels, lp) for lp in rectangle_loops(roc_levels)]
+
+
+def steering_plan(
+    model: SwimmerModel,
+    roc_levels: int = 2,
+    turn_loop: Loop | None = None,
+    tolerance: float | None = None,
+    reverse: bool = True,
+) -> SteeringPlan:
+    """The steering controller's plan for ``model``: the square gait to swim straight, an
+    off-centre loop through the gait's start vertex (default: the quarter loop) to turn.
+
+    Parameters
+    ----------
+    model : SwimmerModel
+        A two-DOF planar swimmer.
+    roc_levels : int
+        K of the lattice the loops live on (even for the quarter loop).
+    turn_loop : Loop, optional
+        The turning loop; it must start where the square gait starts, ``(K, K)``.
+    tolerance : float, optional
+        |bearing| (rad) under which the swimmer swims straight; default twice the turning loop's
+        rotation per cycle, so that one turning cycle cannot overshoot from one side of the
+        dead band to the other.
+    reverse : bool
+        Reach targets behind by swimming backward (the reversed gait) instead of turning round.
+
+    Raises
+    ------
+    ValueError
+        For a swimmer that cannot turn in the plane, or a turning loop that does not rotate or
+        does not start at ``(K, K)``.
+    """
+    _check(model)
+    if not model.planar:
+        raise ValueError(f"{model.label} moves on a line and cannot steer")
+    gait = square_gait(roc_levels)
+    turn = quarter_loop(roc_levels) if turn_loop is None else turn_loop
+    if turn.start != gait.start:
+        raise ValueError(f"the turning loop must start at {gait.start}, got {turn.start}")
+    straight = loop_motion(model, roc_levels, gait)
+    turning = loop_motion(model, roc_levels, turn)
+    if abs(turning.rotation) < 1e-9:
+        raise ValueError(f"loop {turn.vertices} does not rotate the swimmer")
+    left, right = (turn, turn.reversed()) if turning.rotation > 0 else (turn.reversed(), turn)
+    cycles = [gait, gait.reversed(), left, right]
+    width = max(len(c.moves()) for c in cycles)
+    moves = np.zeros((4, width, 2), np.int32)
+    for i, c in enumerate(cycles):
+        moves[i, : len(c.moves())] = c.moves()
+    tol = 2.0 * abs(turning.rotation) if tolerance is None else float(tolerance)
+    return SteeringPlan(
+        moves=moves,
+        lengths=np.array([len(c.moves()) for c in cycles], np.int32),
+        heading=math.atan2(straight.dy, straight.dx),
+        turn=abs(turning.rotation),
+        tolerance=tol,
+        reverse=bool(reverse),
+    )
+
+
+def steering_budget(
+    model: SwimmerModel,
+    distance: float,
+    bearing: float,
+    roc_levels: int = 2,
+    reverse: bool = True,
+    safety: float = 1.5,
+) -> int:
+    """A step budget for the steering controller to reach a target ``distance`` away at
+    ``bearing`` (rad, from the forward heading), from the physics of its two cycles.
+
+    The estimate is the turning loop's cycles to turn through the bearing, ``|bearing| / turn``
+    (measured from the backward heading when ``reverse`` and the target is behind), plus the
+    square gait's cycles to cover the distance, ``distance / dX``, four steps each; ``safety``
+    covers what the estimate leaves out (the turning loop's own drift along its circle, and the
+    corrections the controller makes on the way). Returned as whole cycles.
+    """
+    plan = steering_plan(model, roc_levels, reverse=reverse)
+    straight = loop_motion(model, roc_levels, square_gait(roc_levels))
+    b = abs(math.remainder(bearing, 2 * math.pi))
+    if reverse and b > math.pi / 2:
+        b = math.pi - b
+    cycles = b / plan.turn + distance / straight.displacement
+    return 4 * math.ceil(safety * cycles)

@@ -1,0 +1,191 @@
+"""Turning: closed loops in a two-DOF swimmer's shape space, and a steering controller.
+
+A stroke that is a closed loop in shape space returns the swimmer to its shape moved by a rigid
+motion: a displacement and a rotation. The body's angular velocity is linear in the shape rates
+and does not depend on position or orientation, ``d theta / dt = A(d) . d_dot``, so the rotation
+over a loop is the line integral of ``A`` around it, the integral of its curl over the enclosed
+area (Stokes' theorem; the geometric view of Shapere & Wilczek, J. Fluid Mech. 198, 557, 1989;
+for Purcell's swimmer, Becker, Koehler & Stone, J. Fluid Mech. 490, 15, 2003). For Purcell's
+swimmer the curl changes sign across the centre of shape space: a loop symmetric about the
+centre (the square gait) does not rotate, and a loop off the centre does, with the sign of its
+orientation. So the swimmer steers with two kinds of cycle: off-centre loops
+to turn (one orientation each way), the square gait to go straight (one orientation each way,
+forward and backward).
+
+Everything here is kinematics on the K lattice of the environment (DOF ``k`` at ``lo + (j_k /
+K)(hi - lo)``, ``j_k`` in ``0..K``): loops as vertex lists, their moves as integer lattice steps
+``(dof, q)`` (ROC ``q / K``), and a controller that is a pure function of the bearing. The rigid
+motion of each loop is measured by the environment from its exact tables
+([`jswim.env.loops`][jswim.env.loops]).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import jax.numpy as jnp
+from jax import Array
+import itertools
+
+
+class Loop(NamedTuple):
+    """A closed lattice loop of a two-DOF swimmer: its vertices in order, the first repeated at
+    the end implicitly; consecutive vertices differ in one DOF only."""
+
+    vertices: tuple[tuple[int, int], ...]
+
+    @property
+    def start(self) -> tuple[int, int]:
+        """The vertex each cycle starts and ends on."""
+        return self.vertices[0]
+
+    def moves(self) -> tuple[tuple[int, int], ...]:
+        """The loop's lattice steps ``(dof, q)``: DOF ``dof`` (0-based) moves by ``q`` lattice
+        units (ROC ``q / K``), one step per side."""
+        out = []
+        verts = self.vertices + self.vertices[:1]
+        for a, b in itertools.pairwise(verts):
+            diff = [b[0] - a[0], b[1] - a[1]]
+            if (diff[0] != 0) == (diff[1] != 0):
+                raise ValueError(f"loop sides move one DOF at a time, got {a} -> {b}")
+            dof = 0 if diff[0] != 0 else 1
+            out.append((dof, diff[dof]))
+        return tuple(out)
+
+    def reversed(self) -> Loop:
+        """The same loop run the other way, from the same start (the time-reversed stroke)."""
+        return Loop((self.vertices[0], *self.vertices[:0:-1]))
+
+
+def rectangle(corner_a: tuple[int, int], corner_b: tuple[int, int], start: tuple[int, int]) -> Loop:
+    """The rectangle with opposite corners ``corner_a`` and ``corner_b`` (lattice points), run
+    from ``start`` (one of its corners) moving DOF 2 first.
+
+    Raises
+    ------
+    ValueError
+        If ``start`` is not a corner or the rectangle is degenerate.
+    """
+    (i0, j0), (i1, j1) = corner_a, corner_b
+    if i0 == i1 or j0 == j1:
+        raise ValueError("a rectangle loop needs distinct values in both DOFs")
+    if start[0] not in (i0, i1) or start[1] not in (j0, j1):
+        raise ValueError(f"{start} is not a corner of the rectangle {corner_a}-{corner_b}")
+    other_i = i1 if start[0] == i0 else i0
+    other_j = j1 if start[1] == j0 else j0
+    return Loop((start, (start[0], other_j), (other_i, other_j), (other_i, start[1])))
+
+
+def rectangle_loops(roc_levels: int) -> list[Loop]:
+    """Every axis-aligned rectangle on the K lattice, once, each from its corner with the largest
+    ``(j_1, j_2)`` and moving DOF 2 first (its reverse is the other orientation)."""
+    k = roc_levels
+    out = []
+    for i0 in range(k + 1):
+        for i1 in range(i0 + 1, k + 1):
+            for j0 in range(k + 1):
+                for j1 in range(j0 + 1, k + 1):
+                    out.append(rectangle((i0, j0), (i1, j1), (i1, j1)))
+    return out
+
+
+def square_gait(roc_levels: int) -> Loop:
+    """The paper's square gait on the K lattice, from ``(hi, hi)``: DOF 2 down, DOF 1 down, DOF 2
+    up, DOF 1 up (for Purcell's swimmer from the authors' start this swims toward +x)."""
+    k = roc_levels
+    return rectangle((0, 0), (k, k), (k, k))
+
+
+def quarter_loop(roc_levels: int) -> Loop:
+    """The loop around the upper-right quarter of shape space, from ``(hi, hi)``, DOF 2 first:
+    for Purcell's swimmer at ``d_max = pi / 3`` and K = 2, ``(pi/3, pi/3) -> (pi/3, 0) -> (0, 0)
+    -> (0, pi/3)``. ``roc_levels`` must be even."""
+    k = roc_levels
+    if k % 2:
+        raise ValueError(f"the quarter loop needs an even K (the centre on the lattice), got {k}")
+    return rectangle((k // 2, k // 2), (k, k), (k, k))
+
+
+class SteeringPlan(NamedTuple):
+    """What the controller needs from the physics, measured once per swimmer
+    ([`jswim.env.loops.steering_plan`][jswim.env.loops.steering_plan]).
+
+    The four cycles share their start vertex: 0 the straight gait forward, 1 the same gait
+    reversed (backward), 2 the turning loop that rotates the body by ``+turn`` per cycle, 3 its
+    reverse (``-turn``).
+    """
+
+    moves: Array  # int32 (4, P, 2): (dof, q) of each cycle's P steps (shorter cycles: q = 0 pads)
+    lengths: Array  # int32 (4,): steps per cycle
+    heading: float  # direction of the forward gait's displacement per cycle, body frame (rad)
+    turn: float  # rotation per cycle of loop 2 (rad, > 0)
+    tolerance: float  # |bearing| below which the swimmer goes straight (rad)
+    reverse: bool  # whether a target behind is reached by swimming backward
+
+
+def wrap(angle: Array) -> Array:
+    """An angle in ``(-pi, pi]``."""
+    return jnp.pi - jnp.mod(jnp.pi - angle, 2 * jnp.pi)
+
+
+def choose_cycle(plan: SteeringPlan, bearing: Array) -> Array:
+    """Which cycle to run next, given the target's bearing in the body frame at the cycle start.
+
+    ``bearing`` is the angle of the target direction from the body frame's x axis (the middle
+    link). Measured from the forward heading it is ``b``; with ``plan.reverse`` a target more than
+    90 degrees off is measured from the backward heading instead. Within ``plan.tolerance`` the
+    swimmer swims straight (cycle 0 or 1); otherwise it turns toward the target: a body rotation
+    ``+turn`` lowers ``b`` by ``turn``, so ``b > 0`` picks cycle 2 and ``b < 0`` cycle 3.
+
+    Returns
+    -------
+    int32 Array, shape ()
+    """
+    b = wrap(jnp.asarray(bearing) - plan.heading)
+    backward = jnp.asarray(plan.reverse) & (jnp.abs(b) > jnp.pi / 2)
+    b = jnp.where(backward, wrap(b - jnp.pi), b)
+    straight = jnp.where(backward, 1, 0)
+    turn = jnp.where(b > 0, 2, 3)
+    return jnp.where(jnp.abs(b) <= plan.tolerance, straight, turn).astype(jnp.int32)
+
+
+class ControllerState(NamedTuple):
+    """The controller's memory: the cycle it is running and the next step's place in it."""
+
+    cycle: Array  # int32 ()
+    phase: Array  # int32 ()
+
+
+def controller_start() -> ControllerState:
+    """A controller about to choose its first cycle."""
+    return ControllerState(jnp.zeros((), jnp.int32), jnp.zeros((), jnp.int32))
+
+
+def controller_step(
+    plan: SteeringPlan, memory: ControllerState, bearing: Array
+) -> tuple[Array, ControllerState]:
+    """The steering controller: the next lattice step ``(dof, q)`` and the updated memory.
+
+    At the start of a cycle (``phase == 0``; the swimmer is on the cycles' shared start vertex)
+    it picks a cycle with [`choose_cycle`][jswim.swimmers.turning.choose_cycle]; within a cycle
+    it plays the cycle's steps. A pure function of its arguments (``jit``, ``vmap``, ``scan``).
+
+    Returns
+    -------
+    move : int32 Array, shape (2,)
+        ``(dof, q)``: DOF (0-based) and ROC in lattice units (ROC ``q / K``).
+    memory : ControllerState
+    """
+    cycle = jnp.where(memory.phase == 0, choose_cycle(plan, bearing), memory.cycle)
+    move = jnp.asarray(plan.moves)[cycle, memory.phase]
+    phase = (memory.phase + 1) % jnp.asarray(plan.lengths)[cycle]
+    return move.astype(jnp.int32), ControllerState(cycle.astype(jnp.int32), phase.astype(jnp.int32))
+
+
+def turning_radius(displacement: float, rotation: float) -> float:
+    """Radius of the circle a swimmer repeating one cycle travels on: the chord ``displacement``
+    subtends the angle ``rotation`` (``inf`` for a cycle that does not rotate)."""
+    if rotation == 0:
+        return math.inf
+    return displacement / (2.0 * abs(math.sin(rotation / 2.0)))
