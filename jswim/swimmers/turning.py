@@ -21,12 +21,12 @@ motion of each loop is measured by the environment from its exact tables
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import NamedTuple
 
 import jax.numpy as jnp
 from jax import Array
-import itertools
 
 
 class Loop(NamedTuple):
