@@ -14,14 +14,23 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from jax import Array
+
+import jax
+import jax.numpy as jnp
 import numpy as np
 
+from jswim.env.params import EnvParams
+from jswim.env.state import reset
+from jswim.env.stepping import advance
 from jswim.env.tables import lattice_table
-from jswim.env.work import lattice_work_table
+from jswim.env.work import lattice_step_work, lattice_work_table
 from jswim.swimmers.models import SwimmerModel
 from jswim.swimmers.turning import (
     Loop,
     SteeringPlan,
+    controller_start,
+    controller_step,
     quarter_loop,
     rectangle_loops,
     square_gait,
@@ -174,3 +183,58 @@ def steering_budget(
         b = math.pi - b
     cycles = b / plan.turn + distance / straight.displacement
     return 4 * math.ceil(safety * cycles)
+
+
+class SteeringRun(NamedTuple):
+    """What the steering controller did for each target (leading axis B, then steps T)."""
+
+    steps: Array  # int32 (B,): first step that ends within the radius; 0 if none within T
+    distance: Array  # (B, T) distance from the centroid to the target after each step (a)
+    work: Array  # (B, T) work of each step (xi_par a^3 / tau)
+
+
+def steer(
+    params: EnvParams, plan: SteeringPlan, targets: Array, budget: int, radius: float
+) -> SteeringRun:
+    """Drive the swimmer of ``params`` (integer codes on its K lattice, noise off) with the
+    steering controller toward each target, for ``budget`` steps.
+
+    Parameters
+    ----------
+    params : EnvParams
+        A planar two-DOF swimmer with ``roc_levels`` the plan's K; the start is ``params.init``
+        (it must be the plan's start vertex, ``(hi, hi)``, the default).
+    plan : SteeringPlan
+        From [`steering_plan`][jswim.env.loops.steering_plan].
+    targets : Array, shape (B, 2)
+        Target points in the lab frame (the swimmer starts with its centroid at the origin and
+        its middle link along +x).
+    budget : int
+        Steps per target (static).
+    radius : float
+        Success radius around the target (a).
+    """
+    model, big_k = params.model, params.roc_levels
+    width = 2 * big_k + 1
+
+    def one(target: Array) -> tuple[Array, Array, Array]:
+        def body(carry, _):
+            state, memory = carry
+            x, y = state.x + state.x_lo, state.y + state.y_lo
+            bearing = jnp.arctan2(target[1] - y, target[0] - x) - (state.theta + state.theta_lo)
+            move, memory = controller_step(plan, memory, bearing)
+            levels = jnp.round((state.frac + state.frac_lo) * big_k).astype(jnp.int32)
+            work = lattice_step_work(model, big_k, levels, move[0], move[1])
+            code = move[0] * width + move[1] + big_k
+            state, _ = advance(state, code, jnp.zeros((), state.x.dtype), params)
+            dist = jnp.hypot(target[0] - state.x - state.x_lo, target[1] - state.y - state.y_lo)
+            return (state, memory), (dist, work.astype(state.x.dtype))
+
+        start = reset(jax.random.PRNGKey(0), params)
+        _, (dist, work) = jax.lax.scan(body, (start, controller_start()), None, length=budget)
+        inside = dist < radius
+        steps = jnp.where(jnp.any(inside), jnp.argmax(inside) + 1, 0).astype(jnp.int32)
+        return steps, dist, work
+
+    steps, dist, work = jax.jit(jax.vmap(one))(jnp.asarray(targets))
+    return SteeringRun(steps, dist, work)

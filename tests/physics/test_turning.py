@@ -3,20 +3,17 @@ controller driving the environment's Purcell swimmer to targets at every bearing
 
 import math
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jswim.env import advance, make_params, reset
-from jswim.env.loops import lattice_loops, loop_motion, steering_budget, steering_plan
+from jswim.env import make_params
+from jswim.env.loops import lattice_loops, loop_motion, steer, steering_budget, steering_plan
 from jswim.swimmers import purcell
 from jswim.swimmers.models import make_model
 from jswim.swimmers.turning import (
     Loop,
     choose_cycle,
-    controller_start,
-    controller_step,
     quarter_loop,
     rectangle,
     square_gait,
@@ -166,32 +163,6 @@ def test_choose_cycle_from_the_bearing():
     assert [int(choose_cycle(no_reverse, b)) for b in (math.pi - 0.1, -math.pi + 0.1)] == [2, 3]
 
 
-def _drive(dm, reverse, targets, budget, radius):
-    """Run the controller with the environment's K = 2 lattice steps (exact tables): the steps at
-    which each target first comes within ``radius`` (0 if never) and the final distances."""
-    params = make_params("purcell", d_max=dm, roc_levels=2)
-    plan = steering_plan(params.model, 2, reverse=reverse)
-    width = 2 * params.roc_levels + 1
-
-    def one(target):
-        def body(carry, _):
-            state, memory = carry
-            x, y = state.x + state.x_lo, state.y + state.y_lo
-            bearing = jnp.arctan2(target[1] - y, target[0] - x) - (state.theta + state.theta_lo)
-            move, memory = controller_step(plan, memory, bearing)
-            code = move[0] * width + move[1] + params.roc_levels
-            state, _ = advance(state, code, jnp.zeros((), state.x.dtype), params)
-            dist = jnp.hypot(target[0] - state.x - state.x_lo, target[1] - state.y - state.y_lo)
-            return (state, memory), dist
-
-        start = reset(jax.random.PRNGKey(0), params)
-        _, dist = jax.lax.scan(body, (start, controller_start()), None, length=budget)
-        inside = dist < radius
-        return jnp.where(jnp.any(inside), jnp.argmax(inside) + 1, 0), dist[-1]
-
-    return jax.jit(jax.vmap(one))(targets)
-
-
 BEARINGS = (0.0, 90.0, 180.0, -90.0)
 DISTANCE, RADIUS = 3.0, 0.25
 
@@ -203,10 +174,18 @@ def test_controller_reaches_targets_at_every_bearing_within_its_budget(reverse, 
         np.stack([DISTANCE * np.cos(angles), DISTANCE * np.sin(angles)], -1), jnp.float32
     )
     budgets = [steering_budget(PURCELL, DISTANCE, a, reverse=reverse) for a in angles]
-    steps, _ = _drive(math.pi / 3, reverse, targets, max(budgets), RADIUS)
-    steps = np.asarray(steps)
+    params = make_params("purcell", roc_levels=2)
+    plan = steering_plan(params.model, 2, reverse=reverse)
+    run = steer(params, plan, targets, max(budgets), RADIUS)
+    steps = np.asarray(run.steps)
     assert np.all(steps > 0), steps
     assert np.all(steps <= np.array(budgets)), (steps, budgets)
     # straight ahead takes about D / dX square-gait cycles: no turning
     gait = loop_motion(PURCELL, 2, square_gait(2))
     assert steps[0] <= 4 * math.ceil((DISTANCE - RADIUS) / gait.displacement) + 4
+    # the work is the tables': straight ahead, whole square-gait cycles of the gait's work
+    work = np.asarray(run.work, np.float64)
+    assert run.work.dtype == jnp.float32  # the working dtype
+    cycles = steps[0] // 4
+    np.testing.assert_allclose(work[0, : 4 * cycles].sum(), cycles * gait.work, rtol=1e-5)
+    assert np.all(work >= 0)
