@@ -3,7 +3,7 @@ tables.
 
 A cycle of lattice steps is a product of table rows: the centroid displacement of each step
 (body frame at the step's start) rotated by the orientation reached so far, and the rotations
-added ([`jswim.env.tables.lattice_table`][jswim.env.tables.lattice_table]); its work is the sum
+added (`jswim.env.tables.lattice_table`); its work is the sum
 of the steps' rows of [`jswim.env.work.lattice_work_table`][jswim.env.work.lattice_work_table].
 The loops themselves and the steering controller are kinematics:
 [`jswim.swimmers.turning`][jswim.swimmers.turning].

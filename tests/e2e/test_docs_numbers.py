@@ -90,3 +90,8 @@ def test_the_wall_tables_of_the_scenes_page_are_the_code_s():
     page = _row(text, "rpy, X per cycle (a)")  # h = 3..50, free
     ours = [*tables.wall_cycles("rpy", tables.WALL_TABLE)["x"], tables.lone_cycle("rpy")]
     assert ours == pytest.approx(page, abs=5e-9)
+
+
+@pytest.mark.slow  # the work and lattice tables and six controller runs (~40 s on 2 shared cores)
+def test_the_energy_and_turning_tables_of_the_physics_page_are_the_code_s():
+    assert _script("energy_tables").main(["--check"]) == 0
