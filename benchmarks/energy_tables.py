@@ -27,7 +27,7 @@ END = "<!-- energy_tables.py: end -->"
 
 #: The controller's targets: distance and success radius (link lengths), bearings (degrees).
 DISTANCE, RADIUS = 3.0, 0.25
-BEARINGS = (0, 45, 90, 135, 180, -90)
+BEARINGS = (0, 45, 90, 135, 180, -45, -90, -135)
 
 
 def lighthill(displacement: float, work: float, steps: int) -> float:

@@ -31,6 +31,7 @@ from jswim.swimmers.turning import (
     SteeringPlan,
     controller_start,
     controller_step,
+    lower_quarter_loop,
     quarter_loop,
     rectangle_loops,
     square_gait,
@@ -103,23 +104,20 @@ def lattice_loops(model: SwimmerModel, roc_levels: int) -> list[LoopMotion]:
 def steering_plan(
     model: SwimmerModel,
     roc_levels: int = 2,
-    turn_loop: Loop | None = None,
     tolerance: float | None = None,
     reverse: bool = True,
 ) -> SteeringPlan:
-    """The steering controller's plan for ``model``: the square gait to swim straight, an
-    off-centre loop through the gait's start vertex (default: the quarter loop) to turn.
+    """The steering controller's plan for ``model``: the square gait to swim straight, the two
+    quarter loops that touch it (around ``(hi, hi)`` and ``(lo, lo)``) to turn.
 
     Parameters
     ----------
     model : SwimmerModel
         A two-DOF planar swimmer.
     roc_levels : int
-        K of the lattice the loops live on (even for the quarter loop).
-    turn_loop : Loop, optional
-        The turning loop; it must start where the square gait starts, ``(K, K)``.
+        K of the lattice the loops live on (even: the quarter loops need the centre).
     tolerance : float, optional
-        |bearing| (rad) under which the swimmer swims straight; default twice the turning loop's
+        |bearing| (rad) under which the swimmer swims straight; default twice the turning loops'
         rotation per cycle, so that one turning cycle cannot overshoot from one side of the
         dead band to the other.
     reverse : bool
@@ -128,32 +126,55 @@ def steering_plan(
     Raises
     ------
     ValueError
-        For a swimmer that cannot turn in the plane, or a turning loop that does not rotate or
-        does not start at ``(K, K)``.
+        For a swimmer that cannot turn in the plane, an odd K, or loops whose measured motion
+        does not have the signs the controller relies on (each quarter loop turning one way
+        while moving forward, the other way while moving backward).
     """
     _check(model)
     if not model.planar:
         raise ValueError(f"{model.label} moves on a line and cannot steer")
-    gait = square_gait(roc_levels)
-    turn = quarter_loop(roc_levels) if turn_loop is None else turn_loop
-    if turn.start != gait.start:
-        raise ValueError(f"the turning loop must start at {gait.start}, got {turn.start}")
-    straight = loop_motion(model, roc_levels, gait)
-    turning = loop_motion(model, roc_levels, turn)
-    if abs(turning.rotation) < 1e-9:
-        raise ValueError(f"loop {turn.vertices} does not rotate the swimmer")
-    left, right = (turn, turn.reversed()) if turning.rotation > 0 else (turn.reversed(), turn)
-    cycles = [gait, gait.reversed(), left, right]
-    width = max(len(c.moves()) for c in cycles)
-    moves = np.zeros((4, width, 2), np.int32)
-    for i, c in enumerate(cycles):
-        moves[i, : len(c.moves())] = c.moves()
-    tol = 2.0 * abs(turning.rotation) if tolerance is None else float(tolerance)
+    k = roc_levels
+    gait = square_gait(k)
+    half = gait.moves()[:2], gait.moves()[2:]
+    back = gait.reversed().moves()
+    upper = loop_motion(model, k, quarter_loop(k))
+    lower = loop_motion(model, k, lower_quarter_loop(k))
+    # Orient each quarter loop so that it moves forward (+x of the body frame at its hub).
+    upper_fwd = upper.loop if upper.dx > 0 else upper.loop.reversed()
+    lower_fwd = lower.loop if lower.dx > 0 else lower.loop.reversed()
+    turn_up = loop_motion(model, k, upper_fwd).rotation
+    turn_low = loop_motion(model, k, lower_fwd).rotation
+    if not (turn_up > 0 > turn_low and math.isclose(turn_up, -turn_low, rel_tol=1e-9)):
+        raise ValueError(
+            f"{model.label}: the quarter loops do not turn opposite ways while moving forward "
+            f"({turn_up:+.3g}, {turn_low:+.3g} rad per cycle)"
+        )
+    cycles = [
+        (half[0], 0, 1),  # FORWARD_HALF from hub 0
+        (half[1], 1, 0),  # FORWARD_HALF from hub 1
+        (back[:2], 0, 1),  # BACKWARD_HALF from hub 0
+        (back[2:], 1, 0),  # BACKWARD_HALF from hub 1
+        (upper_fwd.moves(), 0, 0),  # LEFT_FORWARD
+        (upper_fwd.reversed().moves(), 0, 0),  # RIGHT_BACKWARD
+        (lower_fwd.moves(), 1, 1),  # RIGHT_FORWARD
+        (lower_fwd.reversed().moves(), 1, 1),  # LEFT_BACKWARD
+    ]
+    width = max(len(c[0]) for c in cycles)
+    moves = np.zeros((len(cycles), width, 2), np.int32)
+    for i, (mv, _, _) in enumerate(cycles):
+        moves[i, : len(mv)] = mv
+    straight_0 = loop_motion(model, k, gait)
+    straight_1 = loop_motion(model, k, Loop(((0, 0), (0, k), (k, k), (k, 0))))
+    tol = 2.0 * turn_up if tolerance is None else float(tolerance)
     return SteeringPlan(
         moves=moves,
-        lengths=np.array([len(c.moves()) for c in cycles], np.int32),
-        heading=math.atan2(straight.dy, straight.dx),
-        turn=abs(turning.rotation),
+        lengths=np.array([len(c[0]) for c in cycles], np.int32),
+        hub=np.array([c[1] for c in cycles], np.int32),
+        next_hub=np.array([c[2] for c in cycles], np.int32),
+        heading=np.array(
+            [math.atan2(straight_0.dy, straight_0.dx), math.atan2(straight_1.dy, straight_1.dx)]
+        ),
+        turn=turn_up,
         tolerance=tol,
         reverse=bool(reverse),
     )
@@ -216,6 +237,8 @@ def steer(
     """
     model, big_k = params.model, params.roc_levels
     width = 2 * big_k + 1
+    if np.asarray(params.init).tolist() != [1] * model.n_dof:
+        raise ValueError(f"the controller starts on (hi, hi), got init {params.init}")
 
     def one(target: Array) -> tuple[Array, Array, Array]:
         def body(carry, _):

@@ -8,9 +8,10 @@ area (Stokes' theorem; the geometric view of Shapere & Wilczek, J. Fluid Mech. 1
 for Purcell's swimmer, Becker, Koehler & Stone, J. Fluid Mech. 490, 15, 2003). For Purcell's
 swimmer the curl changes sign across the centre of shape space: a loop symmetric about the
 centre (the square gait) does not rotate, and a loop off the centre does, with the sign of its
-orientation. So the swimmer steers with two kinds of cycle: off-centre loops
-to turn (one orientation each way), the square gait to go straight (one orientation each way,
-forward and backward).
+orientation. So the swimmer steers with two kinds of cycle: the square gait to swim straight
+(forward, or backward when reversed), and the quarter loops to turn. The quarter loop around
+``(hi, hi)`` and its mirror image around ``(lo, lo)`` each turn one way while moving forward,
+and the other way when run backward; both touch the square gait's path.
 
 Everything here is kinematics on the K lattice of the environment (DOF ``k`` at ``lo + (j_k /
 K)(hi - lo)``, ``j_k`` in ``0..K``): loops as vertex lists, their moves as integer lattice steps
@@ -107,20 +108,46 @@ def quarter_loop(roc_levels: int) -> Loop:
     return rectangle((k // 2, k // 2), (k, k), (k, k))
 
 
+def lower_quarter_loop(roc_levels: int) -> Loop:
+    """The loop around the lower-left quarter of shape space, from ``(lo, lo)``, DOF 2 first:
+    the mirror image of [`quarter_loop`][jswim.swimmers.turning.quarter_loop] under the
+    swimmer's end-to-end symmetry. ``roc_levels`` must be even."""
+    k = roc_levels
+    if k % 2:
+        raise ValueError(f"the quarter loop needs an even K (the centre on the lattice), got {k}")
+    return rectangle((0, 0), (k // 2, k // 2), (0, 0))
+
+
+#: The steering controller's cycles (rows of [`SteeringPlan.moves`][jswim.swimmers.turning.SteeringPlan]).
+#: Two hubs: 0 is ``(hi, hi)`` (the paper's start), 1 is ``(lo, lo)``; the square gait passes
+#: through both, half a gait each way.
+FORWARD_HALF = (0, 1)  # the square gait's half from hub 0 to hub 1, and from hub 1 to hub 0
+BACKWARD_HALF = (2, 3)  # the reversed gait's halves, same hubs
+LEFT_FORWARD, RIGHT_BACKWARD = 4, 5  # the upper quarter loop at hub 0, and its reverse
+RIGHT_FORWARD, LEFT_BACKWARD = 6, 7  # the lower quarter loop at hub 1, and its reverse
+
+
 class SteeringPlan(NamedTuple):
     """What the controller needs from the physics, measured once per swimmer
     ([`jswim.env.loops.steering_plan`][jswim.env.loops.steering_plan]).
 
-    The four cycles share their start vertex: 0 the straight gait forward, 1 the same gait
-    reversed (backward), 2 the turning loop that rotates the body by ``+turn`` per cycle, 3 its
-    reverse (``-turn``).
+    Eight cycles between two hubs on the square gait's path, ``(hi, hi)`` (hub 0) and ``(lo,
+    lo)`` (hub 1): the gait's halves forward and backward (hub to hub), and at each hub the
+    quarter loop of shape space that touches it, in both orientations. Each quarter loop turns
+    the body one way while moving it forward and the other way while moving it backward, so a
+    turn either way can be made while moving along the heading: left at hub 0, right at hub 1
+    (forward), and the reverse when swimming backward. Cycle indices: the module's constants.
     """
 
-    moves: Array  # int32 (4, P, 2): (dof, q) of each cycle's P steps (shorter cycles: q = 0 pads)
-    lengths: Array  # int32 (4,): steps per cycle
-    heading: float  # direction of the forward gait's displacement per cycle, body frame (rad)
-    turn: float  # rotation per cycle of loop 2 (rad, > 0)
-    tolerance: float  # |bearing| below which the swimmer goes straight (rad)
+    moves: Array  # int32 (8, P, 2): (dof, q) of each cycle's steps (shorter cycles: q = 0 pads)
+    lengths: Array  # int32 (8,): steps per cycle
+    hub: Array  # int32 (8,): the hub each cycle starts on
+    next_hub: Array  # int32 (8,): the hub each cycle ends on
+    heading: (
+        Array  # float (2,): direction of the gait's displacement per cycle, body frame, per hub
+    )
+    turn: float  # rotation per cycle of the turning loops (rad, > 0)
+    tolerance: float  # |bearing| below which the swimmer swims straight (rad)
     reverse: bool  # whether a target behind is reached by swimming backward
 
 
@@ -129,37 +156,50 @@ def wrap(angle: Array) -> Array:
     return jnp.pi - jnp.mod(jnp.pi - angle, 2 * jnp.pi)
 
 
-def choose_cycle(plan: SteeringPlan, bearing: Array) -> Array:
-    """Which cycle to run next, given the target's bearing in the body frame at the cycle start.
+def choose_cycle(plan: SteeringPlan, hub: Array, bearing: Array) -> Array:
+    """Which cycle to run next from ``hub``, given the target's bearing in the body frame.
 
     ``bearing`` is the angle of the target direction from the body frame's x axis (the middle
-    link). Measured from the forward heading it is ``b``; with ``plan.reverse`` a target more than
-    90 degrees off is measured from the backward heading instead. Within ``plan.tolerance`` the
-    swimmer swims straight (cycle 0 or 1); otherwise it turns toward the target: a body rotation
-    ``+turn`` lowers ``b`` by ``turn``, so ``b > 0`` picks cycle 2 and ``b < 0`` cycle 3.
+    link). Measured from the forward heading at this hub it is ``b``; with ``plan.reverse`` a
+    target more than 90 degrees off is measured from the backward heading instead. Within
+    ``plan.tolerance`` the swimmer swims straight (half a gait, to the other hub). Otherwise it
+    turns toward the target: a body rotation ``+turn`` lowers ``b`` by ``turn``, so ``b > 0``
+    needs a left (positive) turn. It runs the loop that makes that turn while moving along the
+    heading when that loop is at this hub, and otherwise swims half a gait to the other hub,
+    where it is.
 
     Returns
     -------
     int32 Array, shape ()
     """
-    b = wrap(jnp.asarray(bearing) - plan.heading)
+    hub = jnp.asarray(hub, jnp.int32)
+    b = wrap(jnp.asarray(bearing) - jnp.asarray(plan.heading)[hub])
     backward = jnp.asarray(plan.reverse) & (jnp.abs(b) > jnp.pi / 2)
     b = jnp.where(backward, wrap(b - jnp.pi), b)
-    straight = jnp.where(backward, 1, 0)
-    turn = jnp.where(b > 0, 2, 3)
-    return jnp.where(jnp.abs(b) <= plan.tolerance, straight, turn).astype(jnp.int32)
+    half = jnp.where(backward, jnp.asarray(BACKWARD_HALF)[hub], jnp.asarray(FORWARD_HALF)[hub])
+    left = b > 0
+    loop = jnp.where(
+        backward,
+        jnp.where(left, LEFT_BACKWARD, RIGHT_BACKWARD),
+        jnp.where(left, LEFT_FORWARD, RIGHT_FORWARD),
+    )
+    turn = jnp.where(jnp.asarray(plan.hub)[loop] == hub, loop, half)
+    return jnp.where(jnp.abs(b) <= plan.tolerance, half, turn).astype(jnp.int32)
 
 
 class ControllerState(NamedTuple):
-    """The controller's memory: the cycle it is running and the next step's place in it."""
+    """The controller's memory: the hub it left from, the cycle it is running and the next
+    step's place in it."""
 
+    hub: Array  # int32 ()
     cycle: Array  # int32 ()
     phase: Array  # int32 ()
 
 
 def controller_start() -> ControllerState:
-    """A controller about to choose its first cycle."""
-    return ControllerState(jnp.zeros((), jnp.int32), jnp.zeros((), jnp.int32))
+    """A controller on hub 0, ``(hi, hi)``, about to choose its first cycle."""
+    zero = jnp.zeros((), jnp.int32)
+    return ControllerState(zero, zero, zero)
 
 
 def controller_step(
@@ -167,9 +207,10 @@ def controller_step(
 ) -> tuple[Array, ControllerState]:
     """The steering controller: the next lattice step ``(dof, q)`` and the updated memory.
 
-    At the start of a cycle (``phase == 0``; the swimmer is on the cycles' shared start vertex)
-    it picks a cycle with [`choose_cycle`][jswim.swimmers.turning.choose_cycle]; within a cycle
-    it plays the cycle's steps. A pure function of its arguments (``jit``, ``vmap``, ``scan``).
+    At the start of a cycle (``phase == 0``; the swimmer is on ``memory.hub``) it picks a cycle
+    with [`choose_cycle`][jswim.swimmers.turning.choose_cycle]; within a cycle it plays the
+    cycle's steps, and at its end moves to the cycle's end hub. A pure function of its
+    arguments (``jit``, ``vmap``, ``scan``).
 
     Returns
     -------
@@ -177,10 +218,14 @@ def controller_step(
         ``(dof, q)``: DOF (0-based) and ROC in lattice units (ROC ``q / K``).
     memory : ControllerState
     """
-    cycle = jnp.where(memory.phase == 0, choose_cycle(plan, bearing), memory.cycle)
+    start = memory.phase == 0
+    cycle = jnp.where(start, choose_cycle(plan, memory.hub, bearing), memory.cycle)
     move = jnp.asarray(plan.moves)[cycle, memory.phase]
     phase = (memory.phase + 1) % jnp.asarray(plan.lengths)[cycle]
-    return move.astype(jnp.int32), ControllerState(cycle.astype(jnp.int32), phase.astype(jnp.int32))
+    hub = jnp.where(phase == 0, jnp.asarray(plan.next_hub)[cycle], memory.hub)
+    return move.astype(jnp.int32), ControllerState(
+        hub.astype(jnp.int32), cycle.astype(jnp.int32), phase.astype(jnp.int32)
+    )
 
 
 def turning_radius(displacement: float, rotation: float) -> float:

@@ -155,12 +155,42 @@ def test_loop_checks():
 
 def test_choose_cycle_from_the_bearing():
     plan = steering_plan(PURCELL, 2)
-    assert plan.heading == 0.0 and plan.turn > 0
-    pick = [int(choose_cycle(plan, b)) for b in (0.0, 0.05, 0.5, -0.5, math.pi, 3.1, -3.1, 3.0)]
-    # behind: swim backward; 3.0 rad is 0.14 rad right of the backward heading, so turn right
-    assert pick == [0, 0, 2, 3, 1, 1, 1, 3]
+    np.testing.assert_allclose(plan.heading, 0.0, atol=1e-15)
+    assert plan.turn > 0
+
+    def pick(hub, bearings, p=plan):
+        return [int(choose_cycle(p, hub, b)) for b in bearings]
+
+    bearings = (0.0, 0.05, 0.5, -0.5, math.pi, 3.1, -3.1, 3.0, -3.0)
+    # hub 0, (hi, hi): straight = half a gait forward (0) or backward (2); left turns here (4);
+    # a right turn first swims half a gait to hub 1; behind: backward, 3.0 rad is 0.14 rad right
+    # of the backward heading (a negative turn while swimming backward: cycle 5, here)
+    assert pick(0, bearings) == [0, 0, 4, 0, 2, 2, 2, 5, 2]
+    # hub 1, (lo, lo): right turns here (6), left turns backward here (7)
+    assert pick(1, bearings) == [1, 1, 1, 6, 3, 3, 3, 3, 7]
     no_reverse = plan._replace(reverse=False)
-    assert [int(choose_cycle(no_reverse, b)) for b in (math.pi - 0.1, -math.pi + 0.1)] == [2, 3]
+    assert pick(0, (math.pi - 0.1, -math.pi + 0.1), no_reverse) == [4, 0]
+
+
+def test_each_turning_cycle_turns_its_way_and_moves_along_its_heading():
+    from jswim.swimmers import turning
+
+    plan = steering_plan(PURCELL, 2)
+    for cycle, sign, forward in [
+        (turning.LEFT_FORWARD, 1, True),
+        (turning.RIGHT_BACKWARD, -1, False),
+        (turning.RIGHT_FORWARD, -1, True),
+        (turning.LEFT_BACKWARD, 1, False),
+    ]:
+        hub = int(plan.hub[cycle])
+        start = (2, 2) if hub == 0 else (0, 0)
+        verts, cur = [start], list(start)
+        for dof, q in np.asarray(plan.moves[cycle][: plan.lengths[cycle]]).tolist()[:-1]:
+            cur[dof] += q
+            verts.append(tuple(cur))
+        m = loop_motion(PURCELL, 2, Loop(tuple(verts)))
+        assert np.sign(m.rotation) == sign and (m.dx > 0) == forward
+        np.testing.assert_allclose(abs(m.rotation), plan.turn, rtol=1e-12)
 
 
 BEARINGS = (0.0, 90.0, 180.0, -90.0)
