@@ -304,3 +304,37 @@ def test_step_work_float32_matches_float64(float32):
         second = stroke_work(PURCELL, d1, jnp.array([-0.5, 0.0]) * span, 0.25)
     np.testing.assert_allclose(float(w32), float(w64), rtol=1e-5)
     np.testing.assert_allclose(float(bent), float(first + second), rtol=1e-12)
+
+
+def test_wall_coefficients_scale_the_power():
+    """Above a wall the links keep RFT with their own (xi_par, xi_perp): the power is xi_par
+    times that of the ratio xi_perp / xi_par (the velocities depend on the ratio only)."""
+    from jswim.swimmers.wall_rft import wall_model
+
+    model = wall_model(0.3)
+    d, d_dot = np.array([0.4, 0.9]), np.array([-1.0, 0.5])
+    _, p_ref = rft_reference(d, d_dot, xi_perp=model.xi_perp / model.xi_par)
+    got = float(dissipation.power(model, jnp.asarray(d), jnp.asarray(d_dot)))
+    np.testing.assert_allclose(got, model.xi_par * p_ref, rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "kind",
+    ["purcell", pytest.param("nlink", marks=pytest.mark.slow)],  # slow: its K = 2 table
+)
+def test_step_work_of_a_lattice_move_is_its_table_row(kind):
+    """The float-ROC step (the stepping's path) and the lattice table agree, three-DOF too."""
+    model = make_model(kind)
+    big_k, n = 2, model.n_dof
+    table = lattice_work_table(model, big_k)
+    levels = [2, 0, 1][:n]
+    work = jax.jit(step_work, static_argnums=0)
+    for dof, end in [(0, 0), (1, 2), (n - 1, 1)]:
+        shape = sum(lv * (big_k + 1) ** m for m, lv in enumerate(levels))
+        row = (shape * n + dof) * (big_k + 1) + end
+        rocs = np.zeros(n)
+        rocs[dof] = (end - levels[dof]) / big_k
+        got = work(model, jnp.asarray(levels, float) / big_k, jnp.asarray(rocs))
+        np.testing.assert_allclose(float(got), table[row], rtol=1e-12, atol=1e-15)
+    corner = corner_work_table(model)
+    assert corner.shape == (2**n * n + 1,) and corner[-1] == 0.0 and np.all(corner[:-1] > 0)
