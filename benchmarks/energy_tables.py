@@ -84,6 +84,31 @@ def loop_rows() -> list[str]:
     return rows
 
 
+def k4_rows() -> list[str]:
+    """The K = 4 lattice's 100 rectangles, summarised: those that turn most per cycle and most per
+    unit work (one orientation each; values in multiples of pi/6)."""
+    from jswim.env.loops import lattice_loops
+    from jswim.swimmers.models import make_model
+
+    model = make_model("purcell")
+    motions = [m for m in lattice_loops(model, 4) if abs(m.rotation) > 1e-12]
+    names = {0: "-pi/3", 1: "-pi/6", 2: "0", 3: "pi/6", 4: "pi/3"}
+    rows = [
+        "| K = 4 loop, from the first vertex | rotation per cycle | displacement per cycle "
+        "| work per cycle | rotation per work |",
+        "|---|---|---|---|---|",
+    ]
+    most = sorted(motions, key=lambda m: (-abs(m.rotation), m.loop.vertices))[:2]
+    thrifty = sorted(motions, key=lambda m: (-abs(m.rotation) / m.work, m.loop.vertices))[:2]
+    for m in most + thrifty:
+        path = " -> ".join(f"({names[i]}, {names[j]})" for i, j in m.loop.vertices)
+        rows.append(
+            f"| {path} | {m.rotation:+.6f} rad | {m.displacement:.6f} a | {m.work:.5f} "
+            f"| {abs(m.rotation) / m.work:.4f} |"
+        )
+    return rows
+
+
 def controller_rows() -> list[str]:
     import jax.numpy as jnp
 
@@ -118,7 +143,7 @@ def controller_rows() -> list[str]:
 def block() -> str:
     lines = [BEGIN, ""]
     lines += gait_rows()
-    lines += ["", *loop_rows(), "", *controller_rows(), "", END]
+    lines += ["", *loop_rows(), "", *k4_rows(), "", *controller_rows(), "", END]
     return "\n".join(lines)
 
 
