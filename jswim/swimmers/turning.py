@@ -7,8 +7,8 @@ over a loop is the line integral of ``A`` around it, the integral of its curl ov
 area (Stokes' theorem; the geometric view of Shapere & Wilczek, J. Fluid Mech. 198, 557, 1989;
 for Purcell's swimmer, Becker, Koehler & Stone, J. Fluid Mech. 490, 15, 2003). For Purcell's
 swimmer the curl changes sign across the centre of shape space: a loop symmetric about the
-centre (the square gait) does not rotate, and a loop off the centre does, with the sign of its
-orientation. So the swimmer steers with two kinds of cycle: the square gait to swim straight
+centre (the square gait) does not rotate, and a loop off the centre along the diagonal ``d1 =
+d2`` does, with the sign of its orientation (the quarters on the other diagonal do not). So the swimmer steers with two kinds of cycle: the square gait to swim straight
 (forward, or backward when reversed), and the quarter loops to turn. The quarter loop around
 ``(hi, hi)`` and its mirror image around ``(lo, lo)`` each turn one way while moving forward,
 and the other way when run backward; both touch the square gait's path.
