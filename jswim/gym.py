@@ -49,31 +49,12 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from jswim.env.door import Door, DoorState, build
-from jswim.env.scene_world import SceneWorld
-from jswim.env.swimmer_world import SwimmerWorld
+from jswim.env.door import IDS, Door, DoorState, build
 from jswim.errors import ConfigError
-from jswim.swimmers.models import make_model
 
-#: The registered ids and their :func:`jswim.env.door.build` arguments.
-ENVIRONMENTS: dict[str, dict[str, Any]] = {
-    "jswim/Purcell-v0": {"swimmer": "purcell"},
-    "jswim/NG-v0": {"swimmer": "ng"},
-    "jswim/FourLink-v0": {"swimmer": "nlink"},
-    "jswim/FourSphere-v0": {"swimmer": "nsphere"},
-    "jswim/PurcellContinuous-v0": {"swimmer": "purcell", "continuous": True},
-    "jswim/NGContinuous-v0": {"swimmer": "ng", "continuous": True},
-    "jswim/PurcellWall-v0": {"swimmer": "purcell", "scene": {"medium": "wall", "height": 2.0}},
-    "jswim/NGWall-v0": {"swimmer": "ng", "scene": {"medium": "wall", "height": 5.0}},
-    "jswim/NGPair-v0": {
-        "swimmer": "ng",
-        "scene": {"medium": "free", "swimmers": 2, "separation": 30.0},
-    },
-    "jswim/NGSchool-v0": {
-        "swimmer": "ng",
-        "scene": {"medium": "free", "swimmers": 3, "separation": 30.0},
-    },
-}
+#: The registered ids (:data:`jswim.env.door.IDS` under ``jswim/``) and their
+#: :func:`jswim.env.door.build` arguments.
+ENVIRONMENTS: dict[str, dict[str, Any]] = {f"jswim/{name}": kw for name, kw in IDS.items()}
 
 #: Steps per episode of every registered id (Gymnasium's ``max_episode_steps``).
 MAX_EPISODE_STEPS = 200
@@ -135,33 +116,6 @@ def _spaces(door: Door) -> tuple[spaces.Space, spaces.Box]:
     )
     low, high = door.bounds()
     return action, spaces.Box(low, high, dtype=np.float32)
-
-
-def _frame(door: Door, env_state: Any, params: Any, t: int) -> np.ndarray:
-    """The picture of a state (:func:`jswim.viz.frame.rgb_frame`)."""
-    from jswim.viz.frame import rgb_frame  # lazy: matplotlib only when frames are asked for
-    from jswim.viz.worlds import Marker, World  # lazy: the pictures only when frames are asked for
-
-    world = door.world
-    obs = world.observe(env_state, params)
-    s = world.n_swimmers
-    if isinstance(world, SceneWorld):
-        model: Any = make_model("ng")
-        fixed = World(
-            n_swimmers=s,
-            wall=world.wall,
-            obstacles=tuple(tuple(map(float, o)) for o in world.scene.obstacles),
-        )
-    elif isinstance(world, SwimmerWorld):
-        model = world.model
-        height = getattr(model, "height", None)
-        fixed = World(extra={} if height is None else {"plane_height": float(height)})
-    else:  # a world of register_world: a marker, as the pictures draw it
-        model, fixed = Marker(type(world).__name__, world.n_dof // s), World(n_swimmers=s)
-    position = np.asarray(obs.position, np.float64)
-    dofs = np.asarray(obs.dofs, np.float64).reshape(s, -1)
-    caption = f"step {t}   x = {position[:, 0].mean():+.4f} a"
-    return rgb_frame(model, dofs, position, np.asarray(obs.orientation, np.float64), fixed, caption)
 
 
 class JswimEnv(gymnasium.Env):
@@ -237,9 +191,11 @@ class JswimEnv(gymnasium.Env):
         in a window (``"human"``); ``None`` without a render mode."""
         if self.render_mode is None or self._state is None:
             return None
-        frame = _frame(self.door, self._state.env_state, self.params, int(self._state.time))
+        from jswim.viz.frame import state_frame  # lazy: matplotlib only when frames are asked for
+
+        frame = state_frame(self.door.world, self._state.env_state, self.params, int(self._state.time))
         if self.render_mode == "human":
-            from jswim.viz.frame import show_frame  # lazy: matplotlib only for a window
+            from jswim.viz.frame import show_frame  # lazy: a window only when one is asked for
 
             show_frame(frame, RENDER_FPS, self._window)
             return None
@@ -372,8 +328,10 @@ class JswimVectorEnv(VectorEnv):
         """Env 0's state as an RGB array (``render_mode="rgb_array"``), else ``None``."""
         if self.render_mode is None or self._states is None:
             return None
+        from jswim.viz.frame import state_frame  # lazy: matplotlib only when frames are asked for
+
         first = jax.tree.map(lambda v: v[0], self._states)
-        return _frame(self.door, first.env_state, self.params, int(first.time))
+        return state_frame(self.door.world, first.env_state, self.params, int(first.time))
 
 
 def register() -> None:

@@ -64,6 +64,27 @@ MODEL_OPTIONS = (
     "contact_gap",
 )
 
+#: The worlds every door names (Gymnasium: ``jswim/<name>``; gymnax: ``<name>``) and their
+#: :func:`build` arguments.
+IDS: dict[str, dict[str, Any]] = {
+    "Purcell-v0": {"swimmer": "purcell"},
+    "NG-v0": {"swimmer": "ng"},
+    "FourLink-v0": {"swimmer": "nlink"},
+    "FourSphere-v0": {"swimmer": "nsphere"},
+    "PurcellContinuous-v0": {"swimmer": "purcell", "continuous": True},
+    "NGContinuous-v0": {"swimmer": "ng", "continuous": True},
+    "PurcellWall-v0": {"swimmer": "purcell", "scene": {"medium": "wall", "height": 2.0}},
+    "NGWall-v0": {"swimmer": "ng", "scene": {"medium": "wall", "height": 5.0}},
+    "NGPair-v0": {
+        "swimmer": "ng",
+        "scene": {"medium": "free", "swimmers": 2, "separation": 30.0},
+    },
+    "NGSchool-v0": {
+        "swimmer": "ng",
+        "scene": {"medium": "free", "swimmers": 3, "separation": 30.0},
+    },
+}
+
 
 class DoorState(NamedTuple):
     """The world's state, the step count of the episode and the position history.

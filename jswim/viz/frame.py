@@ -12,8 +12,11 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
+from jswim.env.scene_world import SceneWorld
+from jswim.env.swimmer_world import SwimmerWorld
+from jswim.swimmers.models import make_model
 from jswim.viz.tracks import outline, place
-from jswim.viz.worlds import SECOND_SWIMMER, World, draw_fixed
+from jswim.viz.worlds import SECOND_SWIMMER, Marker, World, draw_fixed
 
 #: Colour of swimmer 1's body (the others: :data:`jswim.viz.worlds.SECOND_SWIMMER`).
 BODY_COLOR = "#0072B2"
@@ -104,3 +107,28 @@ def show_frame(frame: np.ndarray, fps: float, state: dict[str, Any]) -> None:
         state["image"].set_data(frame)
     state["fig"].canvas.draw_idle()
     plt.pause(1.0 / fps)
+
+
+def state_frame(world: Any, env_state: Any, params: Any, t: int) -> np.ndarray:
+    """The picture of a world's state (:func:`rgb_frame`): the paper's swimmers by their outline
+    (above a wall, its plane seen from above), a scene's swimmers, wall and obstacles, a world of
+    :func:`jswim.register_world` as markers; the caption gives the step ``t`` and the mean x."""
+    obs = world.observe(env_state, params)
+    s = world.n_swimmers
+    if isinstance(world, SceneWorld):
+        model: Any = make_model("ng")
+        fixed = World(
+            n_swimmers=s,
+            wall=world.wall,
+            obstacles=tuple(tuple(map(float, o)) for o in world.scene.obstacles),
+        )
+    elif isinstance(world, SwimmerWorld):
+        model = world.model
+        height = getattr(model, "height", None)
+        fixed = World(extra={} if height is None else {"plane_height": float(height)})
+    else:
+        model, fixed = Marker(type(world).__name__, world.n_dof // s), World(n_swimmers=s)
+    position = np.asarray(obs.position, np.float64)
+    dofs = np.asarray(obs.dofs, np.float64).reshape(s, -1)
+    caption = f"step {t}   x = {position[:, 0].mean():+.4f} a"
+    return rgb_frame(model, dofs, position, np.asarray(obs.orientation, np.float64), fixed, caption)
