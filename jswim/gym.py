@@ -50,6 +50,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from jswim.env.door import IDS, Door, DoorState, build
+from jswim.env.randomness import noise
 from jswim.errors import ConfigError
 
 #: The registered ids (:data:`jswim.env.door.IDS` under ``jswim/``) and their
@@ -218,17 +219,23 @@ def _vector_step(
     params: Any,
 ) -> tuple:
     """Every env one step; an env whose episode ended at the previous call starts afresh
-    instead (Gymnasium's next-step autoreset: reward 0, not done, the action ignored)."""
+    instead (Gymnasium's next-step autoreset: reward 0, not done, the action ignored). The noise
+    of the batch is counter-based (:func:`jswim.env.noise`: one hash per two swimmers), and the
+    resets are computed only in the steps that have one."""
     n = done.shape[0]
     k_step, k_reset = jax.random.split(key)
-    stepped, obs, info = jax.vmap(door.step, in_axes=(0, 0, 0, None))(
-        jax.random.split(k_step, n), states, actions, params
-    )
-    fresh, obs0 = _vector_reset(door, jax.random.split(k_reset, n), params)
-    states = jax.tree.map(
-        lambda a, b: jnp.where(jnp.reshape(done, (n,) + (1,) * (a.ndim - 1)), a, b), fresh, stepped
-    )
-    obs = jnp.where(done[:, None], obs0, obs)
+    s = door.world.n_swimmers
+    dtype = door.world.dtype(states.env_state)
+    y = noise(k_step, n * s).astype(dtype).reshape(n, s)
+    stepped, obs, info = jax.vmap(door.advance, in_axes=(0, 0, 0, None))(states, actions, y, params)
+
+    def restart(carry):
+        stepped, obs = carry
+        fresh, obs0 = _vector_reset(door, jax.random.split(k_reset, n), params)
+        pick = lambda a, b: jnp.where(jnp.reshape(done, (n,) + (1,) * (a.ndim - 1)), a, b)
+        return jax.tree.map(pick, fresh, stepped), pick(obs0, obs)
+
+    states, obs = jax.lax.cond(jnp.any(done), restart, lambda c: c, (stepped, obs))
     reward = jnp.where(done, 0.0, info.progress)
     truncated = ~done & (states.time >= max_steps)
     return states, obs, reward, truncated

@@ -188,9 +188,19 @@ class Door:
     def step(
         self, key: Array, state: DoorState, action: Any, params: Any
     ) -> tuple[DoorState, Array, StepInfo]:
-        """One step: ``(state, observation, info)``; the reward is ``info.progress``."""
+        """One step, its noise drawn from ``key`` as the world's ``step`` draws it:
+        ``(state, observation, info)``; the reward is ``info.progress``."""
+        return self.advance(state, action, self.world.noise(key, state.env_state), params)
+
+    def advance(
+        self, state: DoorState, action: Any, noise: Array, params: Any
+    ) -> tuple[DoorState, Array, StepInfo]:
+        """One step for given noise variables ``(n_swimmers,)`` in [-1, 1] (the world's
+        ``advance``): ``(state, observation, info)``."""
         before = self.position(state.env_state, params)
-        env_state, info = self.world.step(key, state.env_state, self.world_action(action), params)
+        env_state, info = self.world.advance(
+            state.env_state, self.world_action(action), noise, params
+        )
         history = (
             jnp.concatenate([state.history[1:], before[None].astype(state.history.dtype)])
             if self.history
