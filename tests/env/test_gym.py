@@ -70,7 +70,7 @@ def _check(env_id, render=False):
 
 @pytest.mark.parametrize("env_id", FAST_IDS)
 def test_paper_worlds_pass_the_checkers(env_id):
-    env = _check(env_id, render=env_id == "jswim/Purcell-v0")
+    env = _check(env_id)
     assert env.action_space.n == 6 and env.observation_space.shape == (2,)
 
 
@@ -271,3 +271,18 @@ def test_jswims_ppo_learns_in_the_box_doors_world(float32):
     # and swims: the last 200 steps move it forward by most of the square gait's 9.56 a
     x = np.asarray(run.x)
     assert np.median(x[:, -1] - x[:, -201]) > 0.7 * 50 * PURCELL_CYCLE, x[:, -1] - x[:, -201]
+
+
+def test_human_render_mode_draws_in_a_window(monkeypatch):
+    import matplotlib
+
+    matplotlib.use("Agg")  # a headless window: the frames are drawn, nothing is shown
+    env = gym.make("jswim/Purcell-v0", render_mode="human")
+    shown = []
+    monkeypatch.setattr("matplotlib.pyplot.pause", lambda s: shown.append(s))
+    env.reset(seed=0)
+    assert env.step(3)[1] != 0 and env.render() is None
+    assert len(shown) == 3 and shown[0] == pytest.approx(1 / jswim.gym.RENDER_FPS)
+    import matplotlib.pyplot as plt
+
+    plt.close("all")

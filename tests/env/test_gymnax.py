@@ -105,3 +105,17 @@ def test_purejaxrl_ppo_learns_the_square_gait(float32, name):
     assert returns[0] < 0.5 * SQUARE_RETURN, returns
     assert returns[-3:].mean() > 0.99 * SQUARE_RETURN, returns
     assert returns.max() <= SQUARE_RETURN + 1e-3, returns
+
+
+@pytest.mark.slow
+def test_params_batch_over_directions(float32):
+    from jswim.gymnax import Params
+
+    env, params = jswim.gymnax.make("NG-v0")
+    batched = Params(params.world.replace(direction=jnp.array([1.0, -1.0])), 200)
+    axes = Params(params.world.replace(zeta=None, direction=0, init=None), None)
+    _obs, state = jax.vmap(env.reset, in_axes=(None, axes))(jax.random.PRNGKey(0), batched)
+    _obs, state, reward, *_ = jax.vmap(env.step, in_axes=(None, 0, None, axes))(
+        jax.random.PRNGKey(1), state, 0, batched
+    )
+    assert float(reward[0]) != 0.0 and float(reward[1]) == -float(reward[0])
