@@ -1,9 +1,9 @@
 """Gymnasium environments of jswim's worlds (optional extra: ``pip install 'jswim[gym]'``).
 
 ``import jswim.gym`` registers, under the ``jswim/`` namespace, every id of
-:data:`ENVIRONMENTS` with ``max_episode_steps=200`` (Gymnasium's ``TimeLimit``: override with
+`ENVIRONMENTS` with ``max_episode_steps=200`` (Gymnasium's ``TimeLimit``: override with
 ``gym.make(id, max_episode_steps=...)``) and a ``vector_entry_point`` on the batched JAX step
-(:class:`JswimVectorEnv`, what ``gym.make_vec(id, num_envs)`` builds):
+(`JswimVectorEnv`, what ``gym.make_vec(id, num_envs)`` builds):
 
 ==============================  ===============================================================
 ``jswim/Purcell-v0``            Purcell's three-link swimmer, the paper's world
@@ -18,11 +18,11 @@
 ``jswim/NGSchool-v0``           three NG swimmers in a line, 30 a apart
 ==============================  ===============================================================
 
-Each is a :class:`JswimEnv` over a :class:`jswim.env.door.Door`: actions are the world's integer
+Each is a `JswimEnv` over a `jswim.env.door.Door`: actions are the world's integer
 codes (``Discrete(n_actions)``) or, with ``continuous=True``, ``Box(-1, 1, (n_dof,))`` (every
 DOF at once in the paper's worlds, the DOF of largest ``|a_i|`` in scenes); the observation and
-its options (``history``, ``separation``) are :mod:`jswim.env.door`'s; the reward is
-``StepInfo.progress`` toward the target ``direction``. Any :func:`jswim.make` option goes by
+its options (``history``, ``separation``) are `jswim.env.door`'s; the reward is
+``StepInfo.progress`` toward the target ``direction``. Any `jswim.make` option goes by
 keyword; an unknown one is refused in one line naming the valid ones::
 
     import gymnasium as gym
@@ -30,7 +30,7 @@ keyword; an unknown one is refused in one line naming the valid ones::
     env = gym.make("jswim/NGWall-v0", zeta=0.5, direction="-x", render_mode="rgb_array")
     envs = gym.make_vec("jswim/Purcell-v0", num_envs=4096)   # one jitted step for all
 
-``render_mode``: ``"rgb_array"`` (frames drawn by :mod:`jswim.viz.frame`) or ``"human"`` (the
+``render_mode``: ``"rgb_array"`` (frames drawn by `jswim.viz.frame`) or ``"human"`` (the
 same frames in a matplotlib window). A forked worker (``AsyncVectorEnv``'s default context on
 Linux) is refused in one line: JAX does not survive ``fork``; pass
 ``vector_kwargs={"context": "spawn"}``, or use the vector entry point.
@@ -53,8 +53,8 @@ from jswim.env.door import IDS, Door, DoorState, build
 from jswim.env.randomness import noise
 from jswim.errors import ConfigError
 
-#: The registered ids (:data:`jswim.env.door.IDS` under ``jswim/``) and their
-#: :func:`jswim.env.door.build` arguments.
+#: The registered ids (`jswim.env.door.IDS` under ``jswim/``) and their
+#: `jswim.env.door.build` arguments.
 ENVIRONMENTS: dict[str, dict[str, Any]] = {f"jswim/{name}": kw for name, kw in IDS.items()}
 
 #: Steps per episode of every registered id (Gymnasium's ``max_episode_steps``).
@@ -125,11 +125,11 @@ class JswimEnv(gymnasium.Env):
     Parameters
     ----------
     swimmer, scene
-        As :func:`jswim.make`.
+        As `jswim.make`.
     render_mode : {"rgb_array", "human"}, optional
     **options
-        ``continuous``, ``history``, ``separation`` (:func:`jswim.env.door.build`) and
-        :func:`jswim.make`'s options (``zeta``, ``direction``, ``init``, ``roc_levels``, model
+        ``continuous``, ``history``, ``separation`` (`jswim.env.door.build`) and
+        `jswim.make`'s options (``zeta``, ``direction``, ``init``, ``roc_levels``, model
         options).
 
     Raises
@@ -220,7 +220,7 @@ def _vector_step(
 ) -> tuple:
     """Every env one step; an env whose episode ended at the previous call starts afresh
     instead (Gymnasium's next-step autoreset: reward 0, not done, the action ignored). The noise
-    of the batch is counter-based (:func:`jswim.env.noise`: one hash per two swimmers), and the
+    of the batch is counter-based (`jswim.env.noise`: one hash per two swimmers), and the
     resets are computed only in the steps that have one."""
     n = done.shape[0]
     k_step, k_reset = jax.random.split(key)
@@ -258,7 +258,7 @@ class JswimVectorEnv(VectorEnv):
     ----------
     num_envs : int
     swimmer, scene, render_mode, **options
-        As :class:`JswimEnv`; ``render_mode="rgb_array"`` draws env 0.
+        As `JswimEnv`; ``render_mode="rgb_array"`` draws env 0.
     max_episode_steps : int
     """
 
@@ -344,7 +344,7 @@ class JswimVectorEnv(VectorEnv):
 
 
 def register() -> None:
-    """Register :data:`ENVIRONMENTS` with Gymnasium (done on import; again is harmless)."""
+    """Register `ENVIRONMENTS` with Gymnasium (done on import; again is harmless)."""
     for env_id, kwargs in ENVIRONMENTS.items():
         if env_id not in gymnasium.registry:
             gymnasium.register(

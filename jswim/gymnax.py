@@ -1,7 +1,7 @@
 """gymnax environments of jswim's worlds (optional extra: ``pip install 'jswim[gymnax]'``).
 
 ``jswim.gymnax.make(name, **options) -> (env, params)`` as ``gymnax.make`` does, for every name of
-:data:`jswim.env.door.IDS` (``"Purcell-v0"``, ``"NGPair-v0"``, ...; the Gymnasium ids without
+`jswim.env.door.IDS` (``"Purcell-v0"``, ``"NGPair-v0"``, ...; the Gymnasium ids without
 ``jswim/`` are the same worlds with the same observation, bounds and actions)::
 
     import jax
@@ -13,12 +13,12 @@
     obs, state = env.reset(jax.random.PRNGKey(0), params)
     obs, state, reward, terminated, truncated, info = env.step(key, state, action, params)
 
-:class:`JswimGymnax` subclasses gymnax's ``Environment`` and answers with gymnax's own spaces
-(``Discrete``, ``Box`` with the finite bounds of :meth:`jswim.env.door.Door.bounds`), so gymnax's
+`JswimGymnax` subclasses gymnax's ``Environment`` and answers with gymnax's own spaces
+(``Discrete``, ``Box`` with the finite bounds of `jswim.env.door.Door.bounds`), so gymnax's
 wrappers (``LogWrapper``, ``FlattenObservationWrapper``, ``GymnaxToGymWrapper``,
 ``GymnaxToVectorGymWrapper``) and PureJaxRL's scripts take it as they take gymnax's own
 environments. It is a plain object (wrappers may set attributes on it). Its params,
-:class:`Params`, hold the world's params and ``max_steps_in_episode`` (200 unless
+`Params`, hold the world's params and ``max_steps_in_episode`` (200 unless
 ``make(..., max_steps_in_episode=n)``): an episode is truncated there, nothing terminates. The
 reward is ``StepInfo.progress`` (float32); ``info`` carries the swimmers' mean ``x``, ``stuck``
 and ``contact``.
@@ -47,7 +47,7 @@ class Params:
     Attributes
     ----------
     world : pytree
-        The world's params (:func:`jswim.make`'s second value; batched leaves may be vmapped).
+        The world's params (`jswim.make`'s second value; batched leaves may be vmapped).
     max_steps_in_episode : int
         Steps after which an episode is truncated.
     """
@@ -62,9 +62,9 @@ class JswimGymnax(environment.Environment):
     Parameters
     ----------
     door : Door
-        The world, its observation and its action reading (:func:`jswim.env.door.build`).
+        The world, its observation and its action reading (`jswim.env.door.build`).
     world_params : pytree
-        The world's params, the default :class:`Params`' ``world``.
+        The world's params, the default `Params`' ``world``.
     max_steps_in_episode : int
     """
 
@@ -116,7 +116,7 @@ class JswimGymnax(environment.Environment):
         return spaces.Discrete(self.door.world.n_actions)
 
     def observation_space(self, params: Params | None = None) -> spaces.Box:
-        """The observation's finite bounds (:meth:`jswim.env.door.Door.bounds`), float32."""
+        """The observation's finite bounds (`jswim.env.door.Door.bounds`), float32."""
         low, high = self.door.bounds()
         return spaces.Box(jnp.asarray(low), jnp.asarray(high), low.shape, jnp.float32)
 
@@ -136,11 +136,11 @@ def make(
     Parameters
     ----------
     name : str
-        A name of :data:`jswim.env.door.IDS` (``"jswim/"`` in front is accepted).
+        A name of `jswim.env.door.IDS` (``"jswim/"`` in front is accepted).
     max_steps_in_episode : int
         Steps per episode (truncation).
     **options
-        :func:`jswim.env.door.build`'s options over the name's own (``zeta``, ``direction``,
+        `jswim.env.door.build`'s options over the name's own (``zeta``, ``direction``,
         ``history``, ``continuous``, ...).
 
     Raises
@@ -165,5 +165,5 @@ def make(
 
 
 def registered() -> tuple[str, ...]:
-    """The names :func:`make` takes."""
+    """The names `make` takes."""
     return tuple(IDS)

@@ -1,28 +1,28 @@
-"""What the RL doors (:mod:`jswim.gym`, :mod:`jswim.gymnax`) share: a world of :func:`jswim.make`
+"""What the RL doors (`jswim.gym`, `jswim.gymnax`) share: a world of `jswim.make`
 as an episode with a step count, the observation a policy reads and the reading of a Box action.
 
-A :class:`Door` is static and hashable (one compilation per door, as a world); its functions are
+A `Door` is static and hashable (one compilation per door, as a world); its functions are
 pure JAX, so the Gymnasium door jits them for one swimmer, the vector door vmaps them over
 ``num_envs`` and the gymnax door is them. Nothing here imports Gymnasium or gymnax.
 
-Observation (float32, finite bounds :meth:`Door.bounds`), in this order:
+Observation (float32, finite bounds `Door.bounds`), in this order:
 
-1. the world's :meth:`~jswim.env.base.Environment.features`: every joint DOF scaled to [-1, 1];
+1. the world's `jswim.env.base.Environment.features`: every joint DOF scaled to [-1, 1];
    above a wall also each swimmer's ``ln(z / 10 a)`` and ``tilt / 0.5 rad``, each clipped to
-   [-:data:`EXTRA_BOUND`, :data:`EXTRA_BOUND`] (|tilt| <= 5 rad, z <= 2.2e5 a);
+   [-`EXTRA_BOUND`, `EXTRA_BOUND`] (|tilt| <= 5 rad, z <= 2.2e5 a);
 2. ``separation`` (worlds of two or more swimmers; on by default there): swimmer ``s + 1``'s
    centroid minus swimmer ``s``'s, ``(dx, dy)`` for ``s = 0 .. S - 2``, in units of the scene's
    start separation D (1.0 along the line at the start), clipped to [-10, 10];
 3. ``history = n`` (default 0): the positions the prompt's last ``n`` records give an LLM (the
    swimmers' mean centroid ``(x, y)`` after each of the ``n`` steps before the current one),
    oldest first, relative to the current position, in ``a``, clipped to
-   [-:data:`HISTORY_BOUND`, :data:`HISTORY_BOUND`]; before ``n`` steps are taken the missing
+   [-`HISTORY_BOUND`, `HISTORY_BOUND`]; before ``n`` steps are taken the missing
    records are the start position.
 
 Box actions (``continuous=True``): a vector ``a`` of ``n_dof`` entries, clipped to [-1, 1]. In the
 paper's worlds (one swimmer, bulk or above a wall as a plane) every DOF moves at once: DOF ``i``
 at ROC ``a_i`` along the path the motors follow (the integrator's diagonal stroke,
-:func:`jswim.env.make_params` ``diagonal=True``), so a Gaussian policy moves every joint at every
+`jswim.env.make_params` ``diagonal=True``), so a Gaussian policy moves every joint at every
 step. Scenes move one arm per step: the DOF of largest ``|a_i|`` at ROC ``a_i`` (ties: the first).
 """
 
@@ -48,8 +48,8 @@ SEPARATION_BOUND = 10.0
 #: Bound of a history component, in ``a`` per record.
 HISTORY_BOUND = 10.0
 
-#: The door's own options, what :func:`jswim.make` takes by name, and the model and scene options
-#: it passes on: the keywords :func:`build` accepts.
+#: The door's own options, what `jswim.make` takes by name, and the model and scene options
+#: it passes on: the keywords `build` accepts.
 DOOR_OPTIONS = ("continuous", "history", "separation")
 MAKE_OPTIONS = ("swimmer", "scene", "zeta", "direction", "init", "roc_levels", "dtype")
 MODEL_OPTIONS = (
@@ -65,7 +65,7 @@ MODEL_OPTIONS = (
 )
 
 #: The worlds every door names (Gymnasium: ``jswim/<name>``; gymnax: ``<name>``) and their
-#: :func:`build` arguments.
+#: `build` arguments.
 IDS: dict[str, dict[str, Any]] = {
     "Purcell-v0": {"swimmer": "purcell"},
     "NG-v0": {"swimmer": "ng"},
@@ -107,7 +107,7 @@ class DoorState(NamedTuple):
 
 @dataclasses.dataclass(frozen=True)
 class Door:
-    """A world as an RL environment (module docs). Build one with :func:`build`.
+    """A world as an RL environment (module docs). Build one with `build`.
 
     Attributes
     ----------
@@ -211,16 +211,16 @@ class Door:
 
 
 def build(swimmer: str = "purcell", scene: Any = None, **options: Any) -> tuple[Door, Any]:
-    """A :class:`Door` and its world's params.
+    """A `Door` and its world's params.
 
     Parameters
     ----------
     swimmer, scene
-        As :func:`jswim.make`.
+        As `jswim.make`.
     **options
         ``continuous`` (bool), ``history`` (int >= 0), ``separation`` (bool; default: on for two
-        or more swimmers), and :func:`jswim.make`'s options (:data:`MAKE_OPTIONS`,
-        :data:`MODEL_OPTIONS`).
+        or more swimmers), and `jswim.make`'s options (`MAKE_OPTIONS`,
+        `MODEL_OPTIONS`).
 
     Raises
     ------

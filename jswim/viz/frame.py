@@ -1,7 +1,7 @@
 """One picture of a world's state as an RGB array: the frames of the Gymnasium door's
-``render_mode="rgb_array"`` (:mod:`jswim.gym`). The bodies are the pictures' one outline
-(:func:`jswim.viz.tracks.outline`, placed by :func:`jswim.viz.tracks.place`), the wall and the
-obstacles :func:`jswim.viz.worlds.draw_fixed`'s, the colours the report page's."""
+``render_mode="rgb_array"`` (`jswim.gym`). The bodies are the pictures' one outline
+(`jswim.viz.tracks.outline`, placed by `jswim.viz.tracks.place`), the wall and the
+obstacles `jswim.viz.worlds.draw_fixed`'s, the colours the report page's."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from jswim.swimmers.models import make_model
 from jswim.viz.tracks import outline, place
 from jswim.viz.worlds import SECOND_SWIMMER, Marker, World, draw_fixed
 
-#: Colour of swimmer 1's body (the others: :data:`jswim.viz.worlds.SECOND_SWIMMER`).
+#: Colour of swimmer 1's body (the others: `jswim.viz.worlds.SECOND_SWIMMER`).
 BODY_COLOR = "#0072B2"
 #: Fluid background.
 FLUID = "#f4f8fb"
@@ -82,7 +82,7 @@ def draw_state(
 
 
 def rgb_frame(*args: Any, size: tuple[int, int] = (480, 360), **kwargs: Any) -> np.ndarray:
-    """:func:`draw_state` on a fresh off-screen figure, as an ``(height, width, 3)`` uint8 array
+    """`draw_state` on a fresh off-screen figure, as an ``(height, width, 3)`` uint8 array
     of ``size = (width, height)`` pixels."""
     dpi = 80
     fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
@@ -110,9 +110,9 @@ def show_frame(frame: np.ndarray, fps: float, state: dict[str, Any]) -> None:
 
 
 def state_frame(world: Any, env_state: Any, params: Any, t: int) -> np.ndarray:
-    """The picture of a world's state (:func:`rgb_frame`): the paper's swimmers by their outline
+    """The picture of a world's state (`rgb_frame`): the paper's swimmers by their outline
     (above a wall, its plane seen from above), a scene's swimmers, wall and obstacles, a world of
-    :func:`jswim.register_world` as markers; the caption gives the step ``t`` and the mean x."""
+    `jswim.register_world` as markers; the caption gives the step ``t`` and the mean x."""
     obs = world.observe(env_state, params)
     s = world.n_swimmers
     if isinstance(world, SceneWorld):
