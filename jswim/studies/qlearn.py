@@ -199,7 +199,8 @@ def study(
             params = batch_params(
                 base, stop - start, direction=d_arr[start:stop], zeta=z_arr[start:stop]
             )
-            run = train_batch(keys[start:stop], params, config)
+            # on several hosts each process holds its own block: gather them before judging
+            run = sharding.to_host(train_batch(keys[start:stop], params, config))
             report = evaluate(run, params, criterion=criterion)
             parts.append(Outcomes.of(run, params, report, criterion.horizon))
             done += stop - start

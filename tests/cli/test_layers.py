@@ -57,7 +57,7 @@ LAYERS = [
     ),
     ("bench", ["jswim.bench"]),
     ("views", ["jswim.viz"]),
-    ("front", ["jswim.cli", "jswim.__main__", "jswim.gym"]),
+    ("front", ["jswim.cli", "jswim.__main__", "jswim.gym", "jswim.gymnax"]),
 ]
 
 #: Upward imports that remain (the debt, documented): ``studies.run`` writes the report page at
