@@ -24,12 +24,8 @@ LAYERS = [
             "jswim.errors",
             "jswim.compile_cache",
             "jswim._io",
-            "jswim.folderlock",
-            "jswim.jsonl",
-            "jswim.permissions",
-            "jswim.interrupts",
         ],
-    ),  # the last four: old paths
+    ),
     ("physics", ["jswim.swimmers"]),
     (
         "environment",
@@ -39,7 +35,7 @@ LAYERS = [
     ("LLM I/O", ["jswim.llm"]),
     (
         "judging",
-        ["jswim.judging", "jswim.gait", "jswim.lattice", "jswim.shape_judge", "jswim.stats"],
+        ["jswim.judging"],
     ),
     ("agents", ["jswim.agents"]),
     (
@@ -47,9 +43,6 @@ LAYERS = [
         [
             "jswim.studies",
             "jswim.figures",
-            "jswim.plots",
-            "jswim.scene_plots",
-            "jswim.figure_style",
             "jswim.results",
             "jswim.overview",
             "jswim.console",

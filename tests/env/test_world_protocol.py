@@ -291,28 +291,6 @@ def test_old_names_import_from_their_old_places():
             )
 
 
-def test_old_paths_are_the_moved_modules():
-    """Issue 30 moved the loose top-level modules into packages; the old paths still import the
-    same module objects (so monkeypatching either path patches both)."""
-    pairs = {
-        "gait": "judging.gait",
-        "lattice": "judging.lattice",
-        "shape_judge": "judging.shape_judge",
-        "stats": "judging.stats",
-        "folderlock": "_io.folderlock",
-        "jsonl": "_io.jsonl",
-        "permissions": "_io.permissions",
-        "interrupts": "_io.interrupts",
-        "plots": "figures.plots",
-        "scene_plots": "figures.scenes",
-        "figure_style": "figures.style",
-    }
-    for old, new in pairs.items():
-        assert importlib.import_module(f"jswim.{old}") is importlib.import_module(f"jswim.{new}")
-    from jswim.gait import judge  # noqa: F401
-    from jswim.plots import save  # noqa: F401
-
-
 @pytest.mark.slow
 def test_old_rollout_with_a_scene_routes_to_the_scene_rollout():
     r = jswim.rollout("ng", SQUARE, scene=Scene(medium="wall", height=5.0))
