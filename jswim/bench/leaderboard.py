@@ -99,7 +99,8 @@ def _num(v: Any, spec: str) -> str:
     return "-" if v is None else format(v, spec)
 
 
-def _steps(r: Mapping[str, Any]) -> str:
+def steps_text(r: Mapping[str, Any]) -> str:
+    """Steps to learn of a leaderboard row: median [quartiles] (learners of runs), or ``-``."""
     if not r["learned"]:
         return f"- (0 of {r['n']})"
     if r["learned"] < MIN_QUARTILE_N:  # no IQR from fewer than 4 values
@@ -115,7 +116,7 @@ def _why_unpriced(r: Mapping[str, Any]) -> str | None:
     return None
 
 
-def _cost(r: Mapping[str, Any], short: bool = False) -> str:
+def cost_cell(r: Mapping[str, Any], short: bool = False) -> str:
     """The row's cost in the one wording of :func:`jswim.console.cost_text`, with why it is not
     priced; ``short`` (the terminal table): ``not priced ($0)``, the reasons under the table
     (:func:`unpriced_notes`)."""
@@ -184,11 +185,11 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
             + [
                 str(r["n"]),
                 f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
-                _steps(r),
+                steps_text(r),
                 f"{r['mean_x']:+.3f}",
                 _num(r["failed_steps"], "d"),
                 _num(r["tokens_per_step"], ".0f"),
-                _cost(r, short=True),
+                cost_cell(r, short=True),
             ]
         )
     return plain_table(cols, cells, width=width)

@@ -27,36 +27,19 @@ from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the reading order of tables and panels)
-from jswim.results import as_run_rows, unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
+from jswim.results import as_run_rows
 
-from jswim.figures.style import (  # noqa: F401  (the style's old home)
+from jswim.figures.style import (  # noqa: F401  (the figures' public names, importable from here)
     AGENT_STYLE,
     COLUMN_IN,
     NOTE_COLOR,
     PAGE_IN,
     RC,
     REFERENCE_STYLE,
-    _styled,
     tidy,
 )
 from jswim.figures.scenes import scene_figures
-from jswim.figures.panels import (  # noqa: F401  (every figure's name stays importable from here)
-    _by,
-    _dir_text,
-    _disp_label,
-    _frame,
-    _legend,
-    _legend_cols,
-    _mark_unfinished,
-    _order,
-    _panel_title,
-    _select,
-    _swimmer_label,
-    _width,
-    panel_keys,
-    save,
-    target_displacement,
-)
+from jswim.figures.panels import panel_keys, save, target_displacement  # noqa: F401
 from jswim.figures.sketches import (  # noqa: F401
     draw_cycle,
     draw_shape,

@@ -27,7 +27,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.figures.style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
+from jswim.figures.style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, styled
 from jswim.results import as_run_rows
 
 STROKE_STYLE = dict(color="black", ls="-", marker="o", label="square stroke")
@@ -60,7 +60,7 @@ def scene_figures(
     }
 
 
-@_styled
+@styled
 def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
@@ -113,7 +113,7 @@ def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     return fig
 
 
-@_styled
+@styled
 def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
@@ -163,7 +163,7 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     return fig
 
 
-@_styled
+@styled
 def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
@@ -197,7 +197,7 @@ def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) ->
     return fig
 
 
-@_styled
+@styled
 def track_figure(
     rows: Sequence[Mapping[str, Any]], key: str, note: str | None = None, *, heights: bool
 ) -> Figure:

@@ -47,7 +47,7 @@ RC = {
 }
 
 
-def _styled(fn):
+def styled(fn):
     """Build the figure under the paper's rc settings (sizes are fixed when artists are made)."""
 
     @functools.wraps(fn)

@@ -31,7 +31,7 @@ from jswim.judging import lattice
 
 #: Displacements within this relative margin of the threshold count as reaching it (float64
 #: composition of the same table entries in a different order differs in the last bits).
-_REL_TOL = 1e-9
+REL_TOL = 1e-9
 
 #: Largest number of (DOF sequence, start corner) pairs :func:`best_cycles` will enumerate.
 _MAX_WALKS = 4_000_000
@@ -491,7 +491,7 @@ def judge(
             lattice.best_per_step(model, -1, k_levels),
         )
         rp = lattice.replay(at, model, k_levels, init)
-    threshold = c.min_fraction * best - _REL_TOL * np.abs(best)
+    threshold = c.min_fraction * best - REL_TOL * np.abs(best)
 
     rows = np.arange(b)
     out_s, out_p, out_disp = trailing_strokes(

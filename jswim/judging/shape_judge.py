@@ -34,7 +34,7 @@ import numpy as np
 
 from jswim.errors import ConfigError
 from jswim.judging.gait import (
-    _REL_TOL,
+    REL_TOL,
     PAPER,
     Criterion,
     GaitReport,
@@ -111,7 +111,7 @@ def judge_shapes(
     tol_abs = tol * (model.hi - model.lo)
     direction = np.broadcast_to(np.sign(np.asarray(params.direction, np.float64)), (b,))
     best = np.where(direction > 0, best_per_step(model, 1), best_per_step(model, -1))
-    threshold = c.min_fraction * best - _REL_TOL * np.abs(best)
+    threshold = c.min_fraction * best - REL_TOL * np.abs(best)
 
     moved = np.max(np.abs(shapes[1:] - shapes[:-1]), axis=-1) > tol_abs  # (T, B)
 

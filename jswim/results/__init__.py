@@ -23,7 +23,7 @@ unless the umask lets the group write: :mod:`jswim._io.permissions`; a rewritten
 be written (read-only, full disk) is a :class:`StudyFolderError` naming the folder and the cause.
 """
 
-from jswim._io.atomic import _jsonable, atomic_write, dumps, plain_json, write_json  # noqa: F401  (their old place)
+from jswim._io.atomic import atomic_write, dumps, plain_json, write_json  # noqa: F401  (read from here by studies and bench)
 from jswim.results.load import TRAJECTORY_KEYS, Study, load  # noqa: F401
 from jswim.results.read import (  # noqa: F401
     CALL_COLUMNS,

@@ -31,9 +31,9 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim.swimmers.forcefree import (
-    _chol_solve,
-    _cholesky,
-    _is_zero,
+    unrolled_cholesky_solve,
+    unrolled_cholesky,
+    is_structural_zero,
     axial_offsets,
     red_black,
     sphere_centres,
@@ -155,9 +155,9 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
                 axial, normal = axial - inv_r3, normal + 0.5 * inv_r3
             m[2 * i][2 * j], m[2 * i][2 * j + 1] = axial, 0.0
             m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = 0.0, normal
-    low, inv_diag = _cholesky(m)
+    low, inv_diag = unrolled_cholesky(m)
     minv = [
-        _chol_solve(low, inv_diag, [1.0 if r == col else 0.0 for r in range(size)])
+        unrolled_cholesky_solve(low, inv_diag, [1.0 if r == col else 0.0 for r in range(size)])
         for col in range(size)
     ]
     # G = M'^-1 K' (size x 3): the columns of K' are sums of unit columns (and q_i times them)
@@ -173,8 +173,10 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
     schur = [
         [_sum(_mul(k_rows[p][a], g[p][b]) for p in range(size)) for b in range(3)] for a in range(3)
     ]
-    sl, sd = _cholesky(schur)
-    h = [_chol_solve(sl, sd, g[p]) for p in range(size)]  # h[p] = S^-1 G^T e_p, so Q[:, p] = -h[p]
+    sl, sd = unrolled_cholesky(schur)
+    h = [
+        unrolled_cholesky_solve(sl, sd, g[p]) for p in range(size)
+    ]  # h[p] = S^-1 G^T e_p, so Q[:, p] = -h[p]
     p_mat = [
         [
             _plus(minv[col][row], _sum(-_mul(g[row][a], h[col][a]) for a in range(3)))
@@ -182,7 +184,10 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
         ]
         for row in range(size)
     ]
-    q_mat = [[0.0 if _is_zero(h[col][a]) else -h[col][a] for col in range(size)] for a in range(3)]
+    q_mat = [
+        [0.0 if is_structural_zero(h[col][a]) else -h[col][a] for col in range(size)]
+        for a in range(3)
+    ]
     zero = jnp.zeros((), arms.dtype)
     as_array = lambda rows: jnp.stack([jnp.stack([zero + v for v in r]) for r in rows]).astype(
         arms.dtype
@@ -191,11 +196,11 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
 
 
 def _mul(a, b):
-    return 0.0 if _is_zero(a) or _is_zero(b) else a * b
+    return 0.0 if is_structural_zero(a) or is_structural_zero(b) else a * b
 
 
 def _plus(a, b):
-    return b if _is_zero(a) else (a if _is_zero(b) else a + b)
+    return b if is_structural_zero(a) else (a if is_structural_zero(b) else a + b)
 
 
 def _sum(values) -> object:

@@ -207,7 +207,7 @@ def solve_unrolled(
             )
             m[2 * i][2 * j], m[2 * i][2 * j + 1] = mxx, mxz
             m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = mzx, mzz
-    chol, inv_diag = _cholesky(m)
+    chol, inv_diag = unrolled_cholesky(m)
     # Right-hand sides: the rigid modes K (3 per swimmer) and the prescribed velocities v.
     zero = 0.0 * xs[0]
     cols = []
@@ -232,15 +232,15 @@ def solve_unrolled(
             if background is not None:
                 v[2 * p] = v[2 * p] - background[s, i, 0]
                 v[2 * p + 1] = v[2 * p + 1] - background[s, i, 1]
-    sols = [_chol_solve(chol, inv_diag, c) for c in cols]
-    sol_v = _chol_solve(chol, inv_diag, v)
+    sols = [unrolled_cholesky_solve(chol, inv_diag, c) for c in cols]
+    sol_v = unrolled_cholesky_solve(chol, inv_diag, v)
     k3 = 3 * S
     schur = [
         [sum(cols[a][p] * sols[b][p] for p in range(2 * N)) for b in range(k3)] for a in range(k3)
     ]
     rhs = [-sum(cols[a][p] * sol_v[p] for p in range(2 * N)) for a in range(k3)]
-    sc, sd = _cholesky(schur)
-    xi = _chol_solve(sc, sd, rhs)
+    sc, sd = unrolled_cholesky(schur)
+    xi = unrolled_cholesky_solve(sc, sd, rhs)
     forces = [sum(sols[b][p] * xi[b] for b in range(k3)) + sol_v[p] for p in range(2 * N)]
     xi_arr = jnp.stack(xi).reshape(S, 3)
     return RigidMotion(xi_arr[:, :2], xi_arr[:, 2], jnp.stack(forces).reshape(N, 2))
@@ -354,13 +354,13 @@ def red_black(pos: Array, lab: Array, colour: Any, wall: bool, mobility: str = "
     return tuple(v if S <= 2 else v[order] for v in both)
 
 
-def _is_zero(v: object) -> bool:
+def is_structural_zero(v: object) -> bool:
     """A structural zero of the unrolled solves: a Python zero (not a traced value), which the
     entry-by-entry arithmetic drops instead of multiplying through."""
     return isinstance(v, float) and v == 0.0
 
 
-def _cholesky(m: list) -> tuple[list, list]:
+def unrolled_cholesky(m: list) -> tuple[list, list]:
     """Lower Cholesky factor of a symmetric matrix given by its lower triangle (lists of
     scalars), with the reciprocals of its diagonal. Python zeros in ``m`` stay Python zeros where
     the factor keeps them (no fill-in), so a block-structured matrix costs what its blocks cost."""
@@ -371,17 +371,17 @@ def _cholesky(m: list) -> tuple[list, list]:
         for q in range(p + 1):
             acc = m[p][q]
             for k in range(q):
-                if not (_is_zero(low[p][k]) or _is_zero(low[q][k])):
+                if not (is_structural_zero(low[p][k]) or is_structural_zero(low[q][k])):
                     acc = acc - low[p][k] * low[q][k]
             if p == q:
                 inv_diag[p] = jax.lax.rsqrt(jnp.asarray(acc))
                 low[p][p] = acc * inv_diag[p]
             else:
-                low[p][q] = 0.0 if _is_zero(acc) else acc * inv_diag[q]
+                low[p][q] = 0.0 if is_structural_zero(acc) else acc * inv_diag[q]
     return low, inv_diag
 
 
-def _chol_solve(low: list, inv_diag: list, b: list) -> list:
+def unrolled_cholesky_solve(low: list, inv_diag: list, b: list) -> list:
     """``x`` with ``L L^T x = b`` (forward then back substitution, lists of scalars; Python zeros
     in ``L`` and ``b`` are skipped)."""
     size = len(b)
@@ -389,14 +389,14 @@ def _chol_solve(low: list, inv_diag: list, b: list) -> list:
     for p in range(size):
         acc = b[p]
         for k in range(p):
-            if not (_is_zero(low[p][k]) or _is_zero(y[k])):
+            if not (is_structural_zero(low[p][k]) or is_structural_zero(y[k])):
                 acc = acc - low[p][k] * y[k]
-        y[p] = 0.0 if _is_zero(acc) else acc * inv_diag[p]
+        y[p] = 0.0 if is_structural_zero(acc) else acc * inv_diag[p]
     x = [None] * size
     for p in reversed(range(size)):
         acc = y[p]
         for k in range(p + 1, size):
-            if not (_is_zero(low[k][p]) or _is_zero(x[k])):
+            if not (is_structural_zero(low[k][p]) or is_structural_zero(x[k])):
                 acc = acc - low[k][p] * x[k]
-        x[p] = 0.0 if _is_zero(acc) else acc * inv_diag[p]
+        x[p] = 0.0 if is_structural_zero(acc) else acc * inv_diag[p]
     return x

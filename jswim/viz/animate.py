@@ -33,7 +33,7 @@ from jswim.errors import ConfigError
 from jswim.figures.plots import AGENT_ORDER, RC, panel_keys
 from jswim.results import as_run_rows, read_metadata, read_run_rows, read_transcript, writing
 from jswim.viz import worlds
-from jswim.viz.bench_page import _read, part_folders
+from jswim.viz.bench_page import read_bench, part_folders
 from jswim.viz.tracks import Track, fmt_action, track, view_box
 
 #: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.figures.plots.AGENT_STYLE`).
@@ -283,7 +283,7 @@ def build_bench(
         An unknown part, or a part without finished runs.
     """
     folder = Path(folder)
-    meta, _ = _read(folder)
+    meta, _ = read_bench(folder)
     found = part_folders(folder, meta)
     names = list(dict.fromkeys(p for _, _, p, _ in found))
     if part is None and names:

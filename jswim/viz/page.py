@@ -423,7 +423,8 @@ def _settings_html(meta: Mapping[str, Any]) -> str:
     )
 
 
-def _asset(name: str) -> str:
+def asset_text(name: str) -> str:
+    """The text of one of the report's packaged assets (``report.css``, ``report.js``)."""
     return resources.files("jswim.viz").joinpath("assets", name).read_text(encoding="utf-8")
 
 
@@ -522,7 +523,7 @@ def report_html(
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8"/>',
         '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
-        f"<title>{html.escape(title)}</title><style>{_asset('report.css')}</style></head><body>",
+        f"<title>{html.escape(title)}</title><style>{asset_text('report.css')}</style></head><body>",
         f"<header><h1>{html.escape(title)}</h1>",
         f'<p id="status" class="{"ok" if finished else "unfinished"}">{html.escape(status_text)}</p>',
         f'<p class="meta">folder <code>{html.escape(folder.name)}</code> · jswim {html.escape(str(meta.get("jswim_version", "?")))}'
@@ -545,7 +546,7 @@ def report_html(
         "</section>",
         f'<script type="application/json" id="report-data">{_script_json(data)}</script>',
         *blobs,
-        f"<script>{_asset('report.js')}</script>",
+        f"<script>{asset_text('report.js')}</script>",
         "</body></html>",
     ]
     return "\n".join(parts)
