@@ -1,8 +1,7 @@
 """Atomic file writes and strict JSON: what every folder writer uses (JAX-free, no pyarrow).
 
-Moved from :mod:`jswim.results` (which re-exports every name) so that :mod:`jswim._io.folderlock`
-writes its holder file without importing the results layer (issue 30: the results <-> folderlock
-import cycle).
+It sits below :mod:`jswim.results` so that :mod:`jswim._io.folderlock` writes its holder file
+without importing the results layer (which would make an import cycle).
 """
 
 from __future__ import annotations

@@ -93,7 +93,7 @@ def study_figures(
         }
     if study == "continuous":
         return continuous_figures(rows, note=note)
-    if study in ("wall", "pair", "school"):  # walls and pairs (issue 19), schools (issue 34)
+    if study in ("wall", "pair", "school"):  # walls, pairs and schools: the scene figures
         return scene_figures(study, rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).

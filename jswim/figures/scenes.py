@@ -1,12 +1,12 @@
-"""Figures of the scene studies (issue 19): ``jswim study wall`` and ``jswim study pair``.
+"""Figures of the scene studies (extensions of the paper): ``jswim study wall`` and ``jswim study pair``.
 
 Same conventions as :mod:`jswim.figures.plots` (paper sizes, the agents' palette, ``note`` across the
 top of an unfinished study's figures); chosen by :func:`jswim.figures.plots.study_figures`.
 
 wall
     ``wall``: the square stroke's displacement per cycle against the starting height (log axis),
-    with the same stroke in the unbounded fluid of the same solver as a line (Purcell's swimmer,
-    issue 34: heights in link lengths, the bulk RFT stroke as the line; one series per swimmer); ``wall-track``:
+    with the same stroke in the unbounded fluid of the same solver as a line (Purcell's swimmer:
+    heights in link lengths, the bulk RFT stroke as the line; one series per swimmer); ``wall-track``:
     height (top) and X/a (bottom) against step for every agent at every height (one colour per
     agent, darker for lower starts).
 pair
@@ -66,7 +66,7 @@ def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     fig = Figure(figsize=(COLUMN_IN, 2.4))
     ax = fig.add_subplot()
     kinds = sorted({str(r.swimmer or "ng") for r in rows})
-    for sw in kinds:  # NG (a = sphere radius) and Purcell (a = link length; issue 34)
+    for sw in kinds:  # NG (a = sphere radius) and Purcell (a = link length)
         tag = f"{sw}, " if len(kinds) > 1 else ""
         for d in sorted(
             {int(r.direction) for r in rows if str(r.swimmer or "ng") == sw}, reverse=True

@@ -95,7 +95,7 @@ class Marker:
 
 def from_above(row: Mapping[str, Any]) -> bool:
     """Whether a scene row is drawn from above, in the swimmer's own plane: Purcell's swimmer above
-    a wall (issue 34) swims in a plane parallel to the wall, so its bends are seen only from above
+    a wall swims in a plane parallel to the wall, so its bends are seen only from above
     (its row's ``y`` and ``orientation`` are in that plane), with the wall beneath it."""
     r = as_run_row(row)
     return bool(r.scene) and str(r.swimmer or "") == "purcell"

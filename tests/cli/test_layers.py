@@ -1,4 +1,4 @@
-"""The house (issue 30): jswim's import graph, function-level imports included, follows the layers
+"""The house: jswim's import graph, function-level imports included, follows the layers
 of docs/design.md, has no cycle, and every function-level import of a jswim module says why it is
 lazy (a ``# lazy: ...`` comment: it keeps start-up light) or is on the list of today's debt.
 
@@ -61,7 +61,7 @@ UPWARD_ALLOWED = {("jswim.studies.run", "jswim.viz.page")}
 #: jswim.figures.style; keep the list for a cycle that must be lived with, with its reason).
 CYCLES_ALLOWED: list[set[str]] = []
 
-#: Function-level imports of jswim modules without a ``# lazy:`` reason, as of issue 30 (the debt:
+#: Function-level imports of jswim modules without a ``# lazy:`` reason (the debt:
 #: each either moves to the top of its module or gets its reason; the list only shrinks).
 UNMARKED_ALLOWED: set[str] = set()  # the debt is paid: every function-level import says why
 

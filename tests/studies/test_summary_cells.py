@@ -1,5 +1,5 @@
 """Summary cells at small n: no quartiles from fewer than 4 runs that learned, no bootstrap interval
-from fewer than 3 runs (issue 33's cosmetic items, as a referee reads the table)."""
+from fewer than 3 runs (as a referee reads the table)."""
 
 from __future__ import annotations
 
