@@ -17,12 +17,12 @@ from collections.abc import Sequence
 from jswim import compile_cache
 from jswim._io import interrupts
 from jswim._io.jsonl import forget_warnings
-from jswim._io.paths import path_kind  # noqa: F401  (also read from here)
 from jswim._io.permissions import private_files
 from jswim.cli import animate, bench, ensemble, folders, gaits, qlearn, report, serve, study
-from jswim.cli.base import EXIT_USAGE, MAX_COUNT, Outline, Parser, warnings_as_lines  # noqa: F401  (read from here)
-from jswim.cli.options import STUDY_HELP, default_key_env  # noqa: F401  (read from here)
+from jswim.cli.base import EXIT_USAGE, Outline, Parser, warnings_as_lines
 from jswim.errors import JswimError
+
+__all__ = ["build_parser", "main", "run"]
 from jswim.llm.credentials import scrub
 
 #: The commands in the order ``jswim --help`` lists them.

@@ -24,6 +24,7 @@ LAYERS = [
             "jswim.errors",
             "jswim.compile_cache",
             "jswim._io",
+            "jswim._exports",
         ],
     ),
     ("physics", ["jswim.swimmers"]),
