@@ -9,11 +9,11 @@
 ``jswim/NGPair-v0``           two NG swimmers 30 a apart in the unbounded fluid (a scene)
 ============================  =====================================================
 
-Each is :class:`JswimEnv` over a world of :func:`jswim.make`: actions are the world's integer
+Each is [`JswimEnv`][jswim.gym.JswimEnv] over a world of [`jswim.make`][jswim.env.worlds.make]: actions are the world's integer
 codes (``Discrete(n_actions)``; ``continuous=True``: ROC vectors in ``Box(-1, 1, (n_dof,))``),
-observations its :meth:`~jswim.env.base.Environment.features` (float32), the reward
+observations its [`features`][jswim.env.base.Environment.features] (float32), the reward
 ``StepInfo.progress`` toward the target ``direction``; an episode is truncated after
-``max_steps`` steps (200). Any :func:`jswim.make` option goes by keyword::
+``max_steps`` steps (200). Any [`jswim.make`][jswim.env.worlds.make] option goes by keyword::
 
     import gymnasium as gym
     import jswim.gym
@@ -32,7 +32,7 @@ from gymnasium import spaces
 
 from jswim.env.worlds import make
 
-#: The registered ids and their :func:`jswim.make` arguments.
+#: The registered ids and their [`jswim.make`][jswim.env.worlds.make] arguments.
 ENVIRONMENTS: dict[str, dict[str, Any]] = {
     "jswim/Purcell-v0": {"swimmer": "purcell"},
     "jswim/NG-v0": {"swimmer": "ng"},
@@ -64,7 +64,7 @@ class JswimEnv(gymnasium.Env):
     Parameters
     ----------
     swimmer, scene, **kwargs
-        As :func:`jswim.make` (``zeta``, ``direction``, ``init``, ``roc_levels``, ...).
+        As [`jswim.make`][jswim.env.worlds.make] (``zeta``, ``direction``, ``init``, ``roc_levels``, ...).
     max_steps : int
         Steps per episode (truncation).
     continuous : bool
@@ -131,7 +131,7 @@ class JswimEnv(gymnasium.Env):
 
 
 def register() -> None:
-    """Register :data:`ENVIRONMENTS` with Gymnasium (done on import; again is harmless)."""
+    """Register `ENVIRONMENTS` with Gymnasium (done on import; again is harmless)."""
     for env_id, kwargs in ENVIRONMENTS.items():
         if env_id not in gymnasium.registry:
             gymnasium.register(env_id, entry_point="jswim.gym:JswimEnv", kwargs=dict(kwargs))

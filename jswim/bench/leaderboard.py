@@ -1,7 +1,7 @@
 """The bench's leaderboard: one row per model (or baseline) and setting, from the study folders.
 
 Read only from the folders, so it is the same after a resume and can be redrawn at any time.
-Rows are written to ``leaderboard.csv`` / ``leaderboard.json`` (columns :data:`FIELDS`, ``null``
+Rows are written to ``leaderboard.csv`` / ``leaderboard.json`` (columns `FIELDS`, ``null``
 where a value does not apply); each column is described in docs/bench.md (*The leaderboard*).
 """
 
@@ -117,9 +117,9 @@ def _why_unpriced(r: Mapping[str, Any]) -> str | None:
 
 
 def cost_cell(r: Mapping[str, Any], short: bool = False) -> str:
-    """The row's cost in the one wording of :func:`jswim.console.cost_text`, with why it is not
+    """The row's cost in the one wording of `jswim.console.cost_text`, with why it is not
     priced; ``short`` (the terminal table): ``not priced ($0)``, the reasons under the table
-    (:func:`unpriced_notes`)."""
+    (`unpriced_notes`)."""
     if r["kind"] == "baseline":
         return "-"
     why = _why_unpriced(r)
@@ -240,7 +240,7 @@ def figure(folder: Path, rows: Sequence[Mapping[str, Any]]) -> list[Path]:
 
 
 def figure_object(rows: Sequence[Mapping[str, Any]]) -> Any:
-    """The leaderboard's matplotlib figure (see :func:`figure`).
+    """The leaderboard's matplotlib figure (see `figure`).
 
     With most p at 0 (short runs, weak models), success alone says nothing: X/a end, the mean
     displacement toward the target, is what separates the rows, so each setting has both panels.

@@ -1,6 +1,6 @@
 """The ``jswim`` command: one module per command (``register(sub)`` adds its parser, ``main(args)``
-runs it), argv -> options of the studies in :mod:`jswim.cli.options`, shared parts in
-:mod:`jswim.cli.base`. Every command, in one table: docs/getting-started.md. A user mistake ends
+runs it), argv -> options of the studies in `jswim.cli.options`, shared parts in
+`jswim.cli.base`. Every command, in one table: docs/getting-started.md. A user mistake ends
 with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
 """
 
@@ -153,7 +153,7 @@ def _show_warning(
 
 
 def run() -> None:
-    """Console-script wrapper: signals end a session as Ctrl-C does (:mod:`jswim._io.interrupts`)."""
+    """Console-script wrapper: signals end a session as Ctrl-C does (`jswim._io.interrupts`)."""
     interrupts.install()
     warnings.showwarning = _show_warning
     try:

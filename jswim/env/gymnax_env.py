@@ -1,4 +1,4 @@
-"""Any world of the protocol where gymnax environments go: :class:`GymnaxEnv` has gymnax's
+"""Any world of the protocol where gymnax environments go: [`GymnaxEnv`][jswim.env.gymnax_env.GymnaxEnv] has gymnax's
 ``Environment`` interface (gymnax 1.x) without importing gymnax, so gymnax's wrappers
 (``LogWrapper``, ...) and PureJaxRL-style training loops take it as they take gymnax's own.
 
@@ -6,7 +6,7 @@ gymnax's calls differ from the protocol's: ``reset(key, params) -> (obs, state)`
 ``step(key, state, action, params) -> (obs, state, reward, terminated, truncated, info)``, with
 an automatic reset when an episode ends; ``step_env``/``reset_env`` are the single transitions.
 Here an episode is ``max_steps`` steps (truncated; a swimmer's task has no natural end), the
-observation is the world's :meth:`~jswim.env.base.Environment.features`, the reward
+observation is the world's [`features`][jswim.env.base.Environment.features], the reward
 ``StepInfo.progress``; ``info`` carries the swimmers' mean x, ``stuck`` and ``contact``.
 """
 
@@ -53,7 +53,7 @@ class GymnaxEnv:
 
     @functools.partial(jax.jit, static_argnames=("self",))
     def step(self, key: Array, state: GymnaxState, action: Any, params: Any = None) -> tuple:
-        """gymnax's step: :meth:`step_env`, then a fresh episode where this one ended."""
+        """gymnax's step: `step_env`, then a fresh episode where this one ended."""
         if params is None:
             params = self.default_params
         key_step, key_reset = jax.random.split(key)

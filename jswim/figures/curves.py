@@ -72,7 +72,7 @@ def signature_reference(rows: Sequence[Mapping[str, Any]]) -> np.ndarray | None:
     """Mean target-direction X/a the runs of one panel would reach with the signature gait from step 0.
 
     The upper bound of a mean curve: every run from its own start following the swimmer's best
-    closed stroke cycle (:func:`jswim.judging.gait.best_cycles`) from the first step. ``None`` if some
+    closed stroke cycle ([`jswim.judging.gait.best_cycles`][jswim.judging.gait.best_cycles]) from the first step. ``None`` if some
     start is not on that cycle or the swimmer is unknown.
     """
     rows = as_run_rows(rows)
@@ -146,7 +146,7 @@ def curves_figure(
 
     One panel per swimmer (rows, Purcell first) and target direction (columns): the mean of each
     agent's runs (thick) over up to 20 single runs (thin), and the signature gait from step 0
-    (:func:`signature_reference`) as the upper bound. ``cycles`` (see :func:`learned_cycles`)
+    ([`signature_reference`][jswim.figures.curves.signature_reference]) as the upper bound. ``cycles`` (see [`learned_cycles`][jswim.figures.sketches.learned_cycles])
     adds a row of stroke-cycle sketches under a swimmer's panels; swimmers with nothing learned
     get none.
     """

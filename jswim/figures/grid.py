@@ -122,7 +122,7 @@ def grid_figure(
     target direction. Agents share the axes, offset sideways so their intervals never overlap.
     ``numeric`` places the values of ``key`` on a number line (noise levels), otherwise one slot
     per value in ``order``. ``learn`` adds a panel between them: the median steps to learn with
-    its interquartile range over the runs that learned (:func:`jswim.judging.stats.learn_stats`, counted
+    its interquartile range over the runs that learned ([`jswim.judging.stats.learn_stats`][jswim.judging.stats.learn_stats], counted
     from 1), each point labelled "k/n" (k of n runs learned; "0/n" on the axis where none did).
     """
     rows = as_run_rows(rows)

@@ -1,8 +1,8 @@
 """Figures of the studies (matplotlib; PNG and PDF), sized for a paper's columns.
 
 Every figure function takes the tidy run rows of a study (one dict per run, as in
-``runs.jsonl``) and returns a ``matplotlib.figure.Figure``; :func:`save` writes it as PNG and
-PDF, and :func:`study_figures` picks a study's figures. The rules every figure keeps:
+``runs.jsonl``) and returns a ``matplotlib.figure.Figure``; [`save`][jswim.figures.panels.save] writes it as PNG and
+PDF, and [`study_figures`][jswim.figures.plots.study_figures] picks a study's figures. The rules every figure keeps:
 
 - **One panel per swimmer and target direction.** Displacement is plotted in the target
   direction (``X/a`` toward +x, ``-X/a`` toward -x, as in the paper's Fig. 3), and runs with

@@ -1,7 +1,7 @@
 """Figures of the scene studies (extensions of the paper): ``jswim study wall`` and ``jswim study pair``.
 
-Same conventions as :mod:`jswim.figures.plots` (paper sizes, the agents' palette, ``note`` across the
-top of an unfinished study's figures); chosen by :func:`jswim.figures.plots.study_figures`.
+Same conventions as [`jswim.figures.plots`][jswim.figures.plots] (paper sizes, the agents' palette, ``note`` across the
+top of an unfinished study's figures); chosen by [`jswim.figures.plots.study_figures`][jswim.figures.plots.study_figures].
 
 wall
     ``wall``: the square stroke's displacement per cycle against the starting height (log axis),

@@ -23,7 +23,7 @@ from jswim.swimmers.outline import outline
 
 def shape_points(model: SwimmerModel, d: Sequence[float]) -> np.ndarray:
     """Body-frame outline of a shape: link end points ``(N+1, 2)`` or sphere centres ``(N, 2)``
-    (:func:`jswim.swimmers.outline.outline`, the pictures' one outline)."""
+    ([`jswim.swimmers.outline.outline`][jswim.swimmers.outline.outline], the pictures' one outline)."""
     return outline(model, d)
 
 

@@ -19,7 +19,7 @@ from jswim.prompt.template import (
 )
 
 
-#: Prompt orders (:attr:`PromptConfig.order`).
+#: Prompt orders (`PromptConfig.order`).
 ORDERS = ("paper", "cache")
 
 
@@ -56,21 +56,21 @@ class PromptConfig:
     x_min : float
         Lower bound of X for the integer encoding.
     drop : frozenset of str
-        Sentences to leave out (see :func:`normalize_mask`).
+        Sentences to leave out (see [`normalize_mask`][jswim.prompt.normalize_mask]).
     action_set : {"all", "shape-changing"}
-        Which actions S5 (and constrained decoding) offers (:data:`jswim.actions.ACTION_SETS`).
+        Which actions S5 (and constrained decoding) offers (`jswim.actions.ACTION_SETS`).
     template : PromptTemplate
         The text.
     system : str, optional
-        A system message (the authors' code sends a single space, :data:`PAPER_SYSTEM`).
+        A system message (the authors' code sends a single space, `PAPER_SYSTEM`).
     summary : bool
-        Add the observed-progress sentence (:func:`jswim.agents.memory.render_summary`); off in the paper.
+        Add the observed-progress sentence ([`jswim.agents.memory.render_summary`][jswim.agents.memory.render_summary]); off in the paper.
     shuffle : bool
         S5 lists the options in an order that changes per step (set by the caller through
         ``options``); in the cache order, moves S5 behind the history.
     order : {"paper", "cache"}
         Sentence order when the template keeps the default layout: the paper's S1..S5 (history
-        third), or every fixed sentence first for prefix caching (:data:`ORDERS`).
+        third), or every fixed sentence first for prefix caching (`ORDERS`).
     """
 
     n_ht: int = 3
@@ -93,7 +93,7 @@ class PromptConfig:
     @property
     def layout(self) -> str:
         """The layout used: the template's; with ``order="cache"`` and the default layout,
-        :data:`CACHE_LAYOUT`, or :data:`CACHE_LAYOUT_LATE` when S5 or the summary change from
+        `CACHE_LAYOUT`, or `CACHE_LAYOUT_LATE` when S5 or the summary change from
         step to step."""
         layout = self.template.layout
         if self.order == "cache" and layout == PAPER_LAYOUT:

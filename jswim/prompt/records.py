@@ -21,9 +21,9 @@ class HistoryRecord:
     """One executed step, as shown to the model.
 
     ``step`` is the record's index as the model sees it (from 1 after each clear; set by
-    :meth:`jswim.agents.memory.History.add`). Positions are the raw centroid ``X/a``; they are
+    [`jswim.agents.memory.History.add`][jswim.agents.memory.History.add]). Positions are the raw centroid ``X/a``; they are
     encoded as integers when rendered. ``stuck`` is the environment's flag (the move pushed a DOF
-    past its limit); the rendered flag is also on when ``|dX| <`` :data:`STUCK_DX` (holds).
+    past its limit); the rendered flag is also on when ``|dX| <`` `STUCK_DX` (holds).
     """
 
     step: int
@@ -53,7 +53,7 @@ def render_record(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> str
 
 
 def _record_values(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> dict[str, str]:
-    """The placeholders of a record line (one place: rendering and :meth:`PromptTemplate.check`)."""
+    """The placeholders of a record line (one place: rendering and [`PromptTemplate.check`][jswim.prompt.PromptTemplate.check])."""
     d = sw.dof_decimals
     return {
         "step": str(rec.step),
@@ -69,13 +69,13 @@ def _record_values(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> di
 
 def encode_height(h: float) -> int:
     """A height above the wall as the prompt shows it: thousandths of ``a``, truncated, as X is
-    (:func:`encode_position` with ``X_min = 0``: heights are positive)."""
+    ([`encode_position`][jswim.prompt.encode_position] with ``X_min = 0``: heights are positive)."""
     return encode_position(h, 0.0)
 
 
 def _scene_record_values(rec: HistoryRecord, cfg: PromptConfig) -> dict[str, str]:
     """A record's scene placeholders (empty where the record has no scene): ``x1_before`` ..
-    ``x2_after`` (encoded as X), ``h1_before`` .. ``h2_after`` (:func:`encode_height`),
+    ``x2_after`` (encoded as X), ``h1_before`` .. ``h2_after`` ([`encode_height`][jswim.prompt.encode_height]),
     ``tilt1_before`` .. ``tilt2_after`` (rad, 3 decimals), and ``h_*``/``tilt_*`` for swimmer 1;
     a school's ``x3_*``, ``h3_*``, ... likewise (names up to swimmer 2 are always known)."""
     out: dict[str, str] = {}

@@ -50,9 +50,9 @@ def render_prompt(
         Current X (for ``{current}``).
     options : sequence of Action, optional
         The allowed actions in the order S5 lists them (the shuffle variant reorders them);
-        default :func:`allowed_actions` in (dof, roc) order.
+        default [`allowed_actions`][jswim.prompt.allowed_actions] in (dof, roc) order.
     summary : str
-        The summary sentence (:func:`jswim.agents.memory.render_summary`), or empty.
+        The summary sentence ([`jswim.agents.memory.render_summary`][jswim.agents.memory.render_summary]), or empty.
 
     """
     check_direction(direction)
@@ -92,7 +92,7 @@ def _prompt_values(
     x: float,
     summary: str,
 ) -> dict[str, str]:
-    """The placeholders of layouts and sentences (one place: rendering and :meth:`PromptTemplate.check`)."""
+    """The placeholders of layouts and sentences (one place: rendering and [`PromptTemplate.check`][jswim.prompt.PromptTemplate.check])."""
     d = sw.dof_decimals
     return {
         "direction": "+x" if direction == 1 else "-x",

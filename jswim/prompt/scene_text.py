@@ -14,7 +14,7 @@ from jswim.prompt.template import DEFAULT_TEMPLATE, PromptTemplate
 @dataclass(frozen=True)
 class SceneView:
     """What the prompt shows of a world beyond the paper's lone swimmer in bulk fluid (walls,
-    pairs, schools; an extension; ``None`` on :class:`SwimmerText` is the paper's prompt, unchanged).
+    pairs, schools; an extension; ``None`` on [`SwimmerText`][jswim.prompt.SwimmerText] is the paper's prompt, unchanged).
 
     Attributes
     ----------
@@ -23,7 +23,7 @@ class SceneView:
         names the swimmer through its DOF) and every record shows each swimmer's position X1, X2, ...
     wall : bool
         A no-slip wall below: every record shows each swimmer's height H (integer-encoded as X is:
-        thousandths of ``a``, :func:`encode_height`) and tilt (rad, three decimals).
+        thousandths of ``a``, [`encode_height`][jswim.prompt.encode_height]) and tilt (rad, three decimals).
     separation : float
         The starting distance D (sphere radii) of swimmer 2 ahead of swimmer 1, said once in S2.
     own : int
@@ -71,7 +71,7 @@ PAIR_SENTENCE = (
 
 #: S2's extra sentence of one swimmer's own prompt in a pair (``--pair-prompt each``): where the
 #: other starts (``{where}``: ``ahead of`` for swimmer 1, ``behind`` for swimmer 2), that it moves
-#: between this one's steps, and what ``other X`` is; with a wall, :data:`WALL_SENTENCE` follows.
+#: between this one's steps, and what ``other X`` is; with a wall, `WALL_SENTENCE` follows.
 OWN_PAIR_SENTENCE = (
     "A second swimmer on the same axis, steered on its own, starts {separation} sphere radii {where} "
     "this one and moves its arms between this one's steps; other X is its position, counted from its "
@@ -146,7 +146,7 @@ def scene_sentence(view: SceneView | None) -> str:
 
 def scene_template(view: SceneView, base: PromptTemplate | None = None) -> PromptTemplate:
     """The default template for a scene: S3's legend and the record line gain what
-    :class:`SceneView` says each record shows. A template other than the default (a
+    [`SceneView`][jswim.prompt.SceneView] says each record shows. A template other than the default (a
     ``--prompt-file``) is returned as given: its author chose what to show."""
     base = DEFAULT_TEMPLATE if base is None else base
     if base != DEFAULT_TEMPLATE:

@@ -25,15 +25,15 @@ class SwimmerText:
         DOF range, shared by all DOFs or one value per DOF.
     dof_decimals : int
         Decimals of DOF values in text (angles 3, NG arm lengths 0 on the paper's corners; see
-        :func:`jswim.agents.defaults.dof_decimals` for finer ROC lattices).
+        `jswim.agents.defaults.dof_decimals` for finer ROC lattices).
     rocs : tuple of int
         ROCs an action may carry: ``(-1, 0, 1)`` (paper), ``(-1, 1)`` for 4-DOF swimmers; with
         ``roc_levels = K`` integers in ``-K..K`` (``k`` means ``k/K`` of the range per step).
     roc_levels : int
         ``K`` (1, the paper's set, by default). Above 1, S2 and S5 each get one sentence saying
-        what the integer ROC means (:data:`ROC_SCALE_SENTENCE`, :data:`ROC_FORMAT_SENTENCE`).
+        what the integer ROC means (`ROC_SCALE_SENTENCE`, `ROC_FORMAT_SENTENCE`).
     scene : SceneView, optional
-        A wall and/or a second swimmer (:class:`SceneView`); ``None``: the paper's bulk fluid.
+        A wall and/or a second swimmer ([`SceneView`][jswim.prompt.SceneView]); ``None``: the paper's bulk fluid.
     """
 
     n_dof: int
@@ -89,7 +89,7 @@ def allowed_actions(
     swimmer : SwimmerText
         DOF count, ranges and ROC set.
     action_set : {"all", "shape-changing"}
-        One of :data:`jswim.actions.ACTION_SETS`. ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
+        One of `jswim.actions.ACTION_SETS`. ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
         that change the shape from ``dof_values``: a positive ROC below ``hi``, a negative one above ``lo``.
     dof_values : sequence of float, optional
         Current DOF values; required for ``"shape-changing"``.

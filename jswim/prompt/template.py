@@ -135,7 +135,7 @@ class PromptTemplate:
     @classmethod
     def from_file(cls, path: str | Path) -> PromptTemplate:
         """Read a template file (format: docs/api/prompt.md); at most
-        :data:`MAX_TEMPLATE_BYTES` (every request carries the whole prompt)."""
+        `MAX_TEMPLATE_BYTES` (every request carries the whole prompt)."""
         try:
             size = Path(path).stat().st_size
             if size > MAX_TEMPLATE_BYTES:
@@ -156,7 +156,7 @@ class PromptTemplate:
     def check(self, where: str = "the prompt template") -> PromptTemplate:
         """``self`` if every placeholder is known and the prompt shows the history and the allowed
         set (the paper's S3 and S5, or ``{history}`` and ``{allowed}``/``{choices}``); else
-        :class:`ConfigError` naming what is wrong. Checked when a file is read, so a bad file
+        [`ConfigError`][jswim.errors.ConfigError] naming what is wrong. Checked when a file is read, so a bad file
         fails before any run.
         """
         prompt_names, record_names = PROMPT_FIELDS, RECORD_FIELDS

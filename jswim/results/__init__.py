@@ -15,12 +15,12 @@ the done runs; a run that was interrupted is started again from scratch (its tra
 rewritten), so no row is lost or duplicated. Every other file is derived from ``runs.jsonl`` and
 rewritten whole through a temporary file and ``os.replace``, so a kill never leaves half a file.
 
-:func:`load` reads a folder (finished or not, read-only) into pandas DataFrames.
+[`load`][jswim.results.load.load] reads a folder (finished or not, read-only) into pandas DataFrames.
 
 Files are plain: JSON without ``NaN``/``Infinity`` (non-finite numbers are written as ``null``,
 so any language's parser reads them) and the same permissions for every file (owner only, ``0600``,
-unless the umask lets the group write: :mod:`jswim._io.permissions`; a rewritten file keeps its mode). A folder that cannot
-be written (read-only, full disk) is a :class:`StudyFolderError` naming the folder and the cause.
+unless the umask lets the group write: `jswim._io.permissions`; a rewritten file keeps its mode). A folder that cannot
+be written (read-only, full disk) is a [`StudyFolderError`][jswim.errors.StudyFolderError] naming the folder and the cause.
 """
 
 from jswim._io.atomic import atomic_write, dumps, plain_json, write_json  # noqa: F401  (read from here by studies and bench)

@@ -3,7 +3,7 @@ arms alone, so one factorisation serves every pose and every sweep of a step.
 
 In the frame of swimmer ``s`` (axis ``e = (cos t, sin t)``, normal ``n = (-sin t, cos t)``) its
 spheres sit at ``q_i e`` (``q`` the cumulative arm lengths from the reference sphere), and the
-rigid modes and prescribed velocities of :mod:`jswim.swimmers.forcefree` depend on the arms only:
+rigid modes and prescribed velocities of [`jswim.swimmers.forcefree`][jswim.swimmers.forcefree] depend on the arms only:
 
 * ``K'``: sphere ``i`` moves by ``(U_e, U_n + q_i Omega)`` for a rigid motion ``xi' = (U_e, U_n, Omega)``;
 * ``v'``: sphere ``i`` moves by ``(qdot_i, 0)`` for the arm rates.
@@ -15,11 +15,11 @@ obeys ``M' F' = K' xi' + w'``, ``K'^T F' = 0``, ``w' = v' - b'``; eliminating ``
 
     ``F' = P w'``, ``xi' = Q w'``,  ``G = M'^-1 K'``, ``S = K'^T G``, ``Q = -S^-1 G^T``, ``P = M'^-1 + G Q``
 
-(``K'^T P = 0``: every ``F' = P w'`` is force- and torque-free exactly). :func:`response` builds
-``(P, Q)`` from the arms (per collocation node); :func:`sweep` then solves the swimmers one after
+(``K'^T P = 0``: every ``F' = P w'`` is force- and torque-free exactly). [`response`][jswim.swimmers.bodyframe.response] builds
+``(P, Q)`` from the arms (per collocation node); [`sweep`][jswim.swimmers.bodyframe.sweep] then solves the swimmers one after
 the other in each other's flow (block Gauss-Seidel) for the cost of that flow and two small
 products per swimmer. Above a wall ``M'`` depends on the height and tilt too, so wall scenes solve
-afresh at every pose (:func:`jswim.swimmers.forcefree.solve_by_swimmer`).
+afresh at every pose ([`jswim.swimmers.forcefree.solve_by_swimmer`][jswim.swimmers.forcefree.solve_by_swimmer]).
 """
 
 from __future__ import annotations
@@ -80,12 +80,12 @@ def sweep(
 ) -> tuple[Array, Array]:
     """One block Gauss-Seidel sweep over the swimmers in the unbounded fluid (no obstacles).
 
-    The swimmers are solved in two colours (:func:`jswim.swimmers.forcefree.red_black`), the even
+    The swimmers are solved in two colours ([`jswim.swimmers.forcefree.red_black`][jswim.swimmers.forcefree.red_black]), the even
     ones (0, 2, ...) then the odd ones, each colour at once (arrays over its swimmers): each
     swimmer alone, exactly, in the flow that the other swimmers' forces make at its spheres, the
     odd ones taking the even ones' new forces (a pair: swimmer 0, then swimmer 1 in swimmer 0's
     new flow). Repeated, it converges to the coupled
-    solve (:func:`jswim.swimmers.forcefree.solve`) by the far field: ~2e-3 per sweep at D = 30 a.
+    solve ([`jswim.swimmers.forcefree.solve`][jswim.swimmers.forcefree.solve]) by the far field: ~2e-3 per sweep at D = 30 a.
     One swimmer: one sweep is its exact solve.
 
     Parameters
@@ -93,11 +93,11 @@ def sweep(
     centre, tilt, arms, arm_rates : Array (S, 2), (S,), (S, n_dof), (S, n_dof)
         Reference-sphere centres and axis angles (units of ``a``, rad), arms and arm rates.
     resp : Response
-        :func:`response` of these arms.
+        [`response`][jswim.swimmers.bodyframe.response] of these arms.
     forces : Array (S, n, 2)
         Body-frame sphere forces ``F'`` of the previous sweep (zeros at the start).
     mobility : str
-        Static: the pair blocks between the swimmers, as for :func:`response`.
+        Static: the pair blocks between the swimmers, as for [`response`][jswim.swimmers.bodyframe.response].
 
     Returns
     -------

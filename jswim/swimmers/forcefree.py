@@ -9,7 +9,7 @@ sphere. ``O`` obstacles are spheres of given radius held fixed.
 
 Unknowns: the forces on all spheres ``F`` (2 per sphere) and each swimmer's rigid motion
 ``xi_s = (U_x, U_z, Omega)`` (``Omega = d t_s / dt``). Equations, with ``M`` the grand mobility
-(:func:`jswim.swimmers.mobility.mobility_matrix`):
+([`jswim.swimmers.mobility.mobility_matrix`][jswim.swimmers.mobility.mobility_matrix]):
 
 * ``M F = K xi + v``: a swimmer sphere moves rigidly with its swimmer plus its prescribed axial
   velocity ``v_i = qdot_i e_s``; an obstacle does not move (zero rows of ``K`` and ``v``);
@@ -87,7 +87,7 @@ def solve(
     wall : bool
         Static: a no-slip wall at z = 0 (Blake) or the unbounded fluid (Oseen).
     mobility : str
-        Static: ``"point"`` or ``"rpy"`` pair blocks (:func:`jswim.swimmers.mobility.pair_entries`).
+        Static: ``"point"`` or ``"rpy"`` pair blocks ([`jswim.swimmers.mobility.pair_entries`][jswim.swimmers.mobility.pair_entries]).
 
     Returns
     -------
@@ -133,7 +133,7 @@ def solve(
     return RigidMotion(xi[:, :2], xi[:, 2], forces.reshape(N, 2))
 
 
-#: Largest system (2 N rows) that :func:`rigid_motion` solves by unrolled elimination.
+#: Largest system (2 N rows) that [`rigid_motion`][jswim.swimmers.forcefree.rigid_motion] solves by unrolled elimination.
 UNROLLED_MAX_ROWS = 6
 
 
@@ -146,8 +146,8 @@ def rigid_motion(
     wall: bool,
     mobility: str = "point",
 ) -> RigidMotion:
-    """:func:`solve`, by unrolled elimination for small scenes (``2 N <=``
-    :data:`UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
+    """[`solve`][jswim.swimmers.forcefree.solve], by unrolled elimination for small scenes (``2 N <=``
+    `UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
     else through LAPACK. The two agree to rounding (a test checks it)."""
     n_rows = 2 * (arms.shape[0] * (arms.shape[1] + 1) + obstacles.shape[0])
     if n_rows <= UNROLLED_MAX_ROWS:
@@ -165,10 +165,10 @@ def solve_unrolled(
     background: Array | None = None,
     mobility: str = "point",
 ) -> RigidMotion:
-    """:func:`solve` written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
+    """[`solve`][jswim.swimmers.forcefree.solve] written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
     complement), so that under ``vmap`` every operation is elementwise over the batch and XLA
     fuses the whole solve; the sizes are static, the loops below run at trace time over matrix
-    entries. Same arguments and result as :func:`solve`; ``background`` ``(S, n, 2)``, if given,
+    entries. Same arguments and result as [`solve`][jswim.swimmers.forcefree.solve]; ``background`` ``(S, n, 2)``, if given,
     is an imposed flow velocity at each swimmer sphere (the spheres then move at
     ``K xi + v = M F + background``)."""
 
@@ -257,22 +257,22 @@ def solve_by_swimmer(
 ) -> RigidMotion:
     """One block Gauss-Seidel sweep of the coupled solve of ``S >= 2`` swimmers (no obstacles).
 
-    The swimmers are solved in two colours, the even ones then the odd ones (:func:`red_black`; a
+    The swimmers are solved in two colours, the even ones then the odd ones ([`red_black`][jswim.swimmers.forcefree.red_black]; a
     pair: swimmer 0, then swimmer 1), each colour at once (its one-swimmer solves vmapped: one
-    traced solve whatever ``S``). Each swimmer is solved alone (:func:`solve_unrolled`, force- and torque-free exactly)
+    traced solve whatever ``S``). Each swimmer is solved alone ([`solve_unrolled`][jswim.swimmers.forcefree.solve_unrolled], force- and torque-free exactly)
     in the flow that the other swimmers' forces make at its spheres, taking the forces of the
     swimmers already solved in this sweep and ``forces`` for the others. Repeated, it converges to
-    :func:`solve`: by the swimmers' far field, ~2e-3 per sweep at D = 30 a and ~1e-5 at 60 a
+    [`solve`][jswim.swimmers.forcefree.solve]: by the swimmers' far field, ~2e-3 per sweep at D = 30 a and ~1e-5 at 60 a
     (measured for coaxial NG swimmers, free fluid and wall). The collocation's Picard sweeps
-    (:mod:`jswim.scenes.collocation`) carry the forces from sweep to sweep, so the two iterations
+    (`jswim.scenes.collocation`) carry the forces from sweep to sweep, so the two iterations
     converge together at the cost of ``S`` one-swimmer solves per node.
 
     Parameters
     ----------
     centre, tilt, arms, arm_rates, wall
-        As in :func:`solve`.
+        As in [`solve`][jswim.swimmers.forcefree.solve].
     forces : Array (S n, 2)
-        The forces of the previous sweep (zeros at the start), ordered as :func:`solve`'s.
+        The forces of the previous sweep (zeros at the start), ordered as [`solve`][jswim.swimmers.forcefree.solve]'s.
 
     Returns
     -------
@@ -319,7 +319,7 @@ def red_black(pos: Array, lab: Array, colour: Any, wall: bool, mobility: str = "
         ``c`` in 0, 1) in the flow ``(S_c, n, 2)`` at their spheres; ``outputs`` a tuple of arrays
         with a leading axis over those swimmers.
     wall, mobility
-        Static: the pair blocks (:func:`jswim.swimmers.mobility.swimmer_blocks`).
+        Static: the pair blocks ([`jswim.swimmers.mobility.swimmer_blocks`][jswim.swimmers.mobility.swimmer_blocks]).
 
     Returns
     -------

@@ -266,12 +266,12 @@ def write_bench_report(
     """Write the bench's ``report.html`` (or ``out``) and, with ``parts``, every study folder's page.
 
     A model's or the reference rule's part page is drawn with the bench's baselines of that part
-    beside it (:func:`jswim.viz.page.report_html`'s ``beside``).
+    beside it (`jswim.viz.page.report_html`'s ``beside``).
 
     Raises
     ------
     ConfigError
-        Unreadable ``bench.json``; :class:`jswim.results.StudyFolderError` if a page cannot be written.
+        Unreadable ``bench.json``; [`jswim.results.StudyFolderError`][jswim.results.StudyFolderError] if a page cannot be written.
     """
 
     folder = Path(folder)

@@ -1,7 +1,7 @@
 """Figures of the commands that write no study folder: ``jswim qlearn`` and ``jswim ensemble``.
 
-Both follow the study figures' rules (:mod:`jswim.figures.plots`: paper sizes, 7-8 pt text, colour-blind
-safe colours, PNG and PDF through :func:`jswim.figures.plots.save`) and name the agent or stroke they
+Both follow the study figures' rules ([`jswim.figures.plots`][jswim.figures.plots]: paper sizes, 7-8 pt text, colour-blind
+safe colours, PNG and PDF through [`jswim.figures.plots.save`][jswim.figures.panels.save]) and name the agent or stroke they
 show in their title, so a figure taken out of its folder still says what it is.
 """
 
@@ -28,7 +28,7 @@ SET_STYLE = {
 def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
     """Histograms of steps to learn, one panel per swimmer (rows) and target direction (columns).
 
-    ``rows`` are :class:`jswim.studies.qlearn.Summary` with their histogram ``hist`` (learners
+    ``rows`` are `jswim.studies.qlearn.Summary` with their histogram ``hist`` (learners
     per steps-to-learn value, counted from 1). One outline per action set; the dashed line is
     its median, and the legend says how many learners never learned.
     """
@@ -90,7 +90,7 @@ def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
 def ensemble_figure(stats: Sequence[Any], title: str, direction: int = 1) -> Figure:
     """Mean target-direction X/a against step with its quantile band, one curve per noise level.
 
-    ``stats`` are :class:`jswim.studies.ensemble.EnsembleStats`. Left: the mean (solid) and the
+    ``stats`` are `jswim.studies.ensemble.EnsembleStats`. Left: the mean (solid) and the
     outermost reported quantiles (5% and 95% by default, thin dashed); right: the width of that
     band, where the noise levels part (their means coincide: the noise has mean zero).
     """
