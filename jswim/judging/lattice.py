@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jswim.errors import ConfigError, check_direction
-from jswim.actions import check_roc_levels, decode_action, encode_action, n_actions  # noqa: F401  (n_actions: its old place)
+from jswim.actions import check_roc_levels, decode_action, encode_action
 from jswim.swimmers.models import SwimmerModel
 from jswim.env import start_orientation
 from jswim.integrate import centroid, integrate_stroke
