@@ -7,7 +7,7 @@ Three JAX paths, each jitted, batched and scanned over steps (compilation exclud
 * ``integrator``: every step integrated from scratch (Chebyshev degree 16, float64,
   ~1e-14 relative per cycle), the path for strokes that do not follow the table.
 
-``--continuous`` instead times one-DOF continuous steps (issue 18) side by side in one run, noisy,
+``--continuous`` instead times one-DOF continuous steps side by side in one run, noisy,
 default dtype (float32), batch ``--batch`` (10^5): random DOF and real ROC in [-1, 1] on the
 motion table (``cont/table``) and through the integrator (``cont/integrator``, degree 24), integer
 codes on the K = 5 lattice (``lattice/K=5``), and the corner table (``corner``, the paper's codes).

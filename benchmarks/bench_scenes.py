@@ -1,4 +1,4 @@
-"""Swimmer-steps per second of the scene environment (issue 19), side by side in one run.
+"""Swimmer-steps per second of the scene environment, side by side in one run.
 
 Rows (default dtype, float32; noisy, random arm and ROC +-1 each step; jitted, vmapped over the
 batch and scanned over steps; compilation excluded):

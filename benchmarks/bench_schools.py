@@ -1,4 +1,4 @@
-"""The cost of one step of a school against N (issue 34), beside the paper's environment.
+"""The cost of one step of a school against N, beside the paper's environment.
 
 Rows (default dtype, float32; noisy, a random swimmer, arm and ROC +-1 each step, as agents
 move; jitted, vmapped over the batch, scanned over steps; compilation excluded): the env table

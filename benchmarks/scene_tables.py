@@ -13,7 +13,7 @@ Prints, for the point-force default and for ``mobility="rpy"``:
 * the relative drift per cycle of a pair above the wall (h = 10 a, D = 30 a): swimmers
   alternating (swimmer 1's move, then swimmer 2's, square strokes) and stroking together (k = 0).
 
-And (``--purcell``, alone) Purcell's swimmer above a wall (issue 34, ``docs/scenes.md``): its
+And (``--purcell``, alone) Purcell's swimmer above a wall (``docs/scenes.md``): its
 square stroke's displacement per cycle against the height of its plane, 1.5..1000 link lengths,
 with the drag ratio xi_N / xi_T and the approach to the bulk 0.19124724.
 

@@ -59,7 +59,7 @@ def main() -> None:
         small_png(anim.frame_png(33, dpi=130), IMAGES / "animation-frame.png", 1000)
         if (
             gif.stat().st_size < 450 * 1024
-        ):  # legible text (issue 33) made the frames richer: 334 KB at 64 dpi
+        ):  # legible text makes the frames richer: 334 KB at 64 dpi
             (IMAGES / "swim.gif").write_bytes(gif.read_bytes())
             print(f"docs/images/swim.gif: {gif.stat().st_size / 1024:.0f} KB")
         page = out / "report.html"

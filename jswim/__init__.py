@@ -7,16 +7,26 @@ Q-learning baseline and the paper's studies.
 
 Where to start
 --------------
-- Any world through one protocol: ``env, params = jswim.make("ng", scene)``, then
-  ``env.reset``/``env.step`` or ``jswim.rollout(env, params, key, actions)`` (:mod:`jswim.env.base`).
-- Step a swimmer: ``jswim.rollout("purcell", [(2, -1), (1, -1), (2, 1), (1, 1)])`` (one square
-  gait cycle), or the functional environment ``make_params``, ``reset``, ``step``,
-  ``step_batch`` (:mod:`jswim.env`).
-- Run a study: ``jswim.run_study("swim")`` (the ``jswim swim`` job; options in
-  :class:`jswim.studies.StudyOptions`), then ``jswim.load(folder)`` for its runs and trajectories as
+Make a world, then step it or roll a given stroke through it:
+
+    import jax, jswim
+    from jswim.env import encode_action
+
+    env, params = jswim.make("purcell")            # the paper's world; also "ng", scenes
+    square = [encode_action(dof, roc) for dof, roc in [(2, -1), (1, -1), (2, 1), (1, 1)]]
+    traj = jswim.rollout(env, params, jax.random.key(0), square)
+    float(traj.info.progress.sum())               # 0.191: X/a gained along +x in one cycle
+
+- ``jswim.make(swimmer, scene, ...)`` returns ``(env, params)`` for any world; ``env.reset``,
+  ``env.step`` and ``env.observe`` are the functional protocol (`jswim.env.base`), batched with
+  ``jax.vmap``. ``jswim.rollout(env, params, key, actions)`` runs a whole action sequence.
+- ``jswim.run_study("swim")`` runs a study (the ``jswim study swim`` job; options in
+  `jswim.studies.StudyOptions`); ``jswim.load(folder)`` reads its runs and trajectories as
   pandas DataFrames (and ``study.transcript(run_id)``, ``study.calls``).
 - See runs: ``jswim.animate(study, run_id)`` (inline in Jupyter; ``.save("runs.gif")``), and
   ``jswim.report(folder)`` writes the folder's self-contained ``report.html``.
+- The paper's functional environment is there too: ``make_params``, ``reset``, ``step``,
+  ``step_batch`` (`jswim.env`).
 - The command line: ``jswim --help``. The architecture map: ``docs/design.md``.
 
 The names above load on first use, so ``import jswim`` stays light (JAX loads with them).
@@ -31,19 +41,19 @@ __version__ = "0.1.0"
 
 #: Public name -> the module that owns it (imported on first access, PEP 562).
 _EXPORTS = {
-    "rollout": "jswim.env",
     "make": "jswim.env.worlds",
+    "rollout": "jswim.env",
+    "run_study": "jswim.studies",
+    "load": "jswim.results",
+    "animate": "jswim.viz.animate",
+    "report": "jswim.viz.page",
     "register_world": "jswim.env.worlds",
     "rollout_batch": "jswim.env.episodes",
+    "StudyOptions": "jswim.studies",
     "make_params": "jswim.env",
     "reset": "jswim.env",
     "step": "jswim.env",
     "step_batch": "jswim.env",
-    "run_study": "jswim.studies",
-    "StudyOptions": "jswim.studies",
-    "load": "jswim.results",
-    "animate": "jswim.viz.animate",
-    "report": "jswim.viz.page",
     "JswimError": "jswim.errors",
 }
 

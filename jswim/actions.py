@@ -1,9 +1,9 @@
 """Action sets and the action codec (environment layer, no JAX): which ``(DOF, ROC)`` actions an
-agent is offered, and the integer codes every world reads (:func:`encode_action`).
+agent is offered, and the integer codes every world reads ([`encode_action`][jswim.actions.encode_action]).
 
 One name for the concept everywhere (``action_set``): the LLM's S5 and grammar, the Q-learner's
 and the random policy's choices, study grids and the command line all take one of
-:data:`ACTION_SETS`. Kept apart from :mod:`jswim.env` so the text layers can read it without
+`ACTION_SETS`. Kept apart from `jswim.env` so the text layers can read it without
 importing JAX.
 """
 
@@ -23,7 +23,7 @@ ACTION_SETS = ("all", "shape-changing")
 
 
 def check_action_set(name: str) -> str:
-    """``name`` if it is one of :data:`ACTION_SETS`.
+    """``name`` if it is one of `ACTION_SETS`.
 
     Raises
     ------
@@ -35,7 +35,7 @@ def check_action_set(name: str) -> str:
 
 def check_roc_levels(k: Any, name: str = "--roc-levels") -> int:
     """``k`` as an int if it is a valid number of ROC levels K (an integer in
-    1..:data:`MAX_ROC_LEVELS`; ROC ``k`` in ``-K..K`` moves a DOF by ``k/K`` of its range).
+    1..`MAX_ROC_LEVELS`; ROC ``k`` in ``-K..K`` moves a DOF by ``k/K`` of its range).
 
     The one rule for K, shared by the CLI, the agents and the environment; ``name`` is what the
     message calls it (``--roc-levels`` on the command line, ``roc_levels`` in Python).

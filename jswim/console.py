@@ -91,7 +91,7 @@ def print_table(
     title: str | None = None,
     file: IO[str] | None = None,
 ) -> None:
-    """Print :func:`plain_table`, wrapped to the terminal's width on a terminal, whole elsewhere."""
+    """Print `plain_table`, wrapped to the terminal's width on a terminal, whole elsewhere."""
     f = file or sys.stdout
     print(plain_table(columns, rows, title, terminal_width(f)), file=f)
 
@@ -135,7 +135,7 @@ def eta(elapsed_s: float, fraction: float) -> str | None:
 class Progress:
     """Progress of a long job: a rich bar on a terminal, dated log lines elsewhere.
 
-    Use as a context manager and call :meth:`update` as often as you like; in a log it prints a
+    Use as a context manager and call `update` as often as you like; in a log it prints a
     line when the phase changes, when the job ends, and otherwise at most every ``interval``
     seconds. ``info`` (e.g. the study's step count and ETA) is printed as given.
 
@@ -211,7 +211,7 @@ class Progress:
         print(text + (f" · {info}" if info else ""), file=self.file, flush=True)
 
 
-#: Why a call is not priced, in the words every cost line uses (:func:`cost_text`).
+#: Why a call is not priced, in the words every cost line uses (`cost_text`).
 EMBEDDED_UNPRICED = "the embedded model runs on this machine"
 REFERENCE_UNPRICED = "a rule on this machine, not an LLM"
 LOCAL_UNPRICED = "a server on this machine or the LAN, with no list price for its model"

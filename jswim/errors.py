@@ -1,4 +1,4 @@
-"""Every error a user can cause, under one root, :class:`JswimError`.
+"""Every error a user can cause, under one root, [`JswimError`][jswim.errors.JswimError].
 
 Catch ``JswimError`` to handle all of them (the ``jswim`` command does, once, and turns each into
 one line on stderr with exit status 2). Each message is one line, names what to change and never
@@ -24,11 +24,11 @@ contains an API key. The tree::
 Each is defined here and also read from the module that raises it (``jswim.llm.budget``,
 ``jswim.llm.reply``, ``jswim._io.folderlock``, ``jswim.results``).
 
-:class:`JswimWarning` (a ``UserWarning``) is what does not stop the work; the command prints each as
+[`JswimWarning`][jswim.errors.JswimWarning] (a ``UserWarning``) is what does not stop the work; the command prints each as
 one ``jswim: warning:`` line.
 
-``ConfigError`` and ``ResultFolderError`` subclass :class:`ValueError` and ``LLMError``
-:class:`RuntimeError`, as they did before the root existed, so older ``except`` clauses still work.
+``ConfigError`` and ``ResultFolderError`` subclass `ValueError` and ``LLMError``
+`RuntimeError`, as they did before the root existed, so older ``except`` clauses still work.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ class ConfigError(JswimError, ValueError):
 
 
 def check_choice(value: object, choices: tuple[str, ...], what: str) -> str:
-    """``value`` if it is one of ``choices``, else a one-line :class:`ConfigError` that names
+    """``value`` if it is one of ``choices``, else a one-line [`ConfigError`][jswim.errors.ConfigError] that names
     ``what`` and every choice."""
     if value not in choices:
         raise ConfigError(f"{what} must be one of {', '.join(choices)}, got {value!r}")
@@ -69,15 +69,15 @@ def check_zeta(value: object, option: str | None = None) -> float:
 
 
 def check_direction(direction: object) -> int:
-    """The target direction, +1 or -1 (a number; :func:`jswim.env.parse_direction` also reads
+    """The target direction, +1 or -1 (a number; [`jswim.env.parse_direction`][jswim.env.params.parse_direction] also reads
     ``"+x"``/``"-x"``)."""
     if isinstance(direction, bool) or direction not in (1, -1):
         raise ConfigError(f"direction must be +1 or -1, got {direction!r}")
     return int(direction)  # type: ignore[call-overload]
 
 
-#: The one range of each study size, read by every check of it (:class:`jswim.studies.StudyOptions`,
-#: ``jswim study``, ``jswim bench``, :class:`jswim.prompt.PromptConfig`): name -> (lowest, highest).
+#: The one range of each study size, read by every check of it ([`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions],
+#: ``jswim study``, ``jswim bench``, [`jswim.prompt.PromptConfig`][jswim.prompt.PromptConfig]): name -> (lowest, highest).
 #: ``n_ht``: the paper sweeps 1 to 8 history records (its Fig. 3; the history study's default
 #: ``--n-hts``) and picks 3 and 6; 0 is the no-history ablation; 100 is far past the sweep (a run
 #: of the paper's 50 steps never holds more than 50 records).
@@ -91,7 +91,7 @@ SIZE_RANGES = {
 
 
 def check_size(name: str, value: object, option: str | None = None) -> int:
-    """``value`` as an int if it lies in :data:`SIZE_RANGES` ``[name]``: the one check of that size,
+    """``value`` as an int if it lies in `SIZE_RANGES` ``[name]``: the one check of that size,
     whose one-line message names the command-line option (``--n-ht``, ``--q-runs``, ...; ``option``
     for a grid of it, ``--n-hts``)."""
     lo, hi = SIZE_RANGES[name]
@@ -109,8 +109,8 @@ MAX_COUNT = 2**31 - 1
 
 def check_count(name: str, value: object) -> int:
     """``value`` as an int if it is a count in ``1..MAX_COUNT``: the one check of a batched command's
-    counts, from the command line (:func:`jswim.cli.base.check_counts`) and from Python
-    (:func:`jswim.studies.qlearn.study`); the message names the option ``--name``."""
+    counts, from the command line (`jswim.cli.base.check_counts`) and from Python
+    (`jswim.studies.qlearn.study`); the message names the option ``--name``."""
     if (
         isinstance(value, bool)
         or not isinstance(value, numbers.Integral)

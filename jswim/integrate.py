@@ -1,6 +1,6 @@
 """General stroke integrators along a straight path in shape space.
 
-The env applies steps from a precomputed table (see :mod:`jswim.env`); this module is the ground
+The env applies steps from a precomputed table (see `jswim.env`); this module is the ground
 truth that builds the table and handles strokes that do not follow it (any start shape, any rates,
 any duration). The pose is the reference point ``(x, y)`` and orientation ``theta``; in the lab
 frame ``d/dt (x, y) = R(theta) (u, v)`` and ``d theta / dt = omega`` with ``(u, v, omega)`` the

@@ -2,7 +2,7 @@
 
 Everything here only reads a study folder (``metadata.json`` and ``runs.jsonl``), so it works
 on an interrupted study and on a read-only folder. Tables come back as columns and rows for
-:func:`jswim.console.print_table` (or as text), so no number or label is ever cut.
+`jswim.console.print_table` (or as text), so no number or label is ever cut.
 """
 
 from __future__ import annotations
@@ -103,7 +103,7 @@ def order_summary(
     summary: Sequence[Mapping[str, Any]], rows: Sequence[Mapping[str, Any]] = ()
 ) -> list[Mapping[str, Any]]:
     """Summary rows in reading order: agent (LLM first), Purcell before NG, +x before -x, and the
-    groups in the order they first appear in ``rows`` (pass them through :func:`grid_order`: the
+    groups in the order they first appear in ``rows`` (pass them through `grid_order`: the
     order the study's grid has them; zeta 0.5 before 1)."""
     rows = as_run_rows(rows)
     first: dict[Any, int] = {}
@@ -128,7 +128,7 @@ def order_summary(
 def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], list[list[str]]]:
     """Columns and rows of a study's summary (one row per agent, swimmer, direction and group).
 
-    ``summary`` is what :func:`jswim.studies.summarize` returns. Groups, cost and ``samples``
+    ``summary`` is what [`jswim.studies.summarize`][jswim.studies.report.summarize] returns. Groups, cost and ``samples``
     (independent samples of each run pooled in the row, ``--samples``; ``n`` counts them all)
     appear only when some row has them.
     """
@@ -200,7 +200,7 @@ class StudyFolder:
 
     def status_text(self) -> str:
         """``complete`` or ``UNFINISHED: k of N runs done (status)``; a folder whose status reads
-        ``running`` says whether a live session holds it (:func:`jswim._io.folderlock.holder`)."""
+        ``running`` says whether a live session holds it (`jswim._io.folderlock.holder`)."""
         if self.finished:
             return "complete"
         of = f" of {self.planned}" if self.planned else ""
@@ -302,7 +302,7 @@ def _settings_text(options: Mapping[str, Any], skip: Sequence[str] = ()) -> str:
 
 
 def unpriced_reason(meta: Mapping[str, Any], cost_usd: float | None) -> str | None:
-    """Why a study folder's calls are not priced (:func:`jswim.console.cost_text`), from its record:
+    """Why a study folder's calls are not priced (`jswim.console.cost_text`), from its record:
     the embedded model, the reference rule, the reason the session recorded, or a local server
     whose calls cost nothing; ``None`` when they are priced."""
 

@@ -3,10 +3,10 @@
 One mesh over ``jax.devices()`` with a single axis, ``"batch"``; a batched array is placed with
 ``NamedSharding(mesh, P("batch"))`` (contiguous blocks, one per device) and jitted code follows the
 data without communication. The numbers are the same on any device count (noise is counter-based,
-:func:`jswim.env.noise`). Memory is bounded by chunks (:func:`chunks`), multiples of
-:func:`granule` so that they split evenly and keep swimmer pairs (which share one noise hash)
+[`jswim.env.noise`][jswim.env.randomness.noise]). Memory is bounded by chunks (`chunks`), multiples of
+`granule` so that they split evenly and keep swimmer pairs (which share one noise hash)
 together. One CPU, forced host devices, GPUs, several hosts (results gathered by
-:func:`to_host`): docs/performance.md, "Scaling out".
+`to_host`): docs/performance.md, "Scaling out".
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ _LIMIT: list[int | None] = [None]
 
 def devices() -> list[Any]:
     """The devices batches are spread over: ``jax.devices()``, or its first ``n`` inside
-    :func:`limit`."""
+    `limit`."""
     devs = jax.devices()
     return devs if _LIMIT[0] is None else devs[: _LIMIT[0]]
 
@@ -72,7 +72,7 @@ def batch_sharding() -> NamedSharding:
 
 
 def padded_size(n: int) -> int:
-    """``n`` rounded up to a multiple of :func:`granule`."""
+    """``n`` rounded up to a multiple of `granule`."""
     g = granule()
     return -(-n // g) * g
 
@@ -101,7 +101,7 @@ def apply_batched(
 
     Every array leaf of ``batched`` must have leading axis ``n``; ``shared`` leaves are
     replicated. On one device this is a plain call. Otherwise the batch is padded to a multiple
-    of :func:`granule`, sharded, and the outputs (leading axis ``n`` again) are cut back.
+    of `granule`, sharded, and the outputs (leading axis ``n`` again) are cut back.
     """
     if device_count() == 1:
         return fn(*shared, *batched)
@@ -115,7 +115,7 @@ def apply_batched(
 
 def chunks(n: int, chunk: int) -> Iterator[tuple[int, int]]:
     """``(start, stop)`` ranges covering ``0 .. n``; every start is a multiple of the chunk,
-    which is rounded up to a multiple of :func:`granule`."""
+    which is rounded up to a multiple of `granule`."""
     size = padded_size(max(1, chunk))
     for start in range(0, n, size):
         yield start, min(n, start + size)

@@ -1,8 +1,7 @@
 """Atomic file writes and strict JSON: what every folder writer uses (JAX-free, no pyarrow).
 
-Moved from :mod:`jswim.results` (which re-exports every name) so that :mod:`jswim._io.folderlock`
-writes its holder file without importing the results layer (issue 30: the results <-> folderlock
-import cycle).
+It sits below [`jswim.results`][jswim.results] so that `jswim._io.folderlock` writes its holder file
+without importing the results layer (which would make an import cycle).
 """
 
 from __future__ import annotations
@@ -36,14 +35,14 @@ def plain_json(obj: Any) -> Any:
 
 
 def dumps(obj: Any, **kw: Any) -> str:
-    """Strict JSON text of ``obj`` (see :func:`plain_json`); ``kw`` go to :func:`json.dumps`."""
+    """Strict JSON text of ``obj`` (see `plain_json`); ``kw`` go to `json.dumps`."""
     return json.dumps(plain_json(obj), allow_nan=False, **kw)
 
 
 def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
     """Write ``data`` to ``path`` so that readers see the old or the new file, never a part.
 
-    The file gets :func:`jswim._io.permissions.file_mode`, or the mode of the file it replaces.
+    The file gets `jswim._io.permissions.file_mode`, or the mode of the file it replaces.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -66,7 +65,7 @@ def atomic_write(path: str | os.PathLike, data: bytes | str) -> None:
 
 
 def write_json(path: str | os.PathLike, obj: Any) -> None:
-    """Atomically write ``obj`` as indented strict JSON (no NaN; see :func:`plain_json`)."""
+    """Atomically write ``obj`` as indented strict JSON (no NaN; see `plain_json`)."""
     atomic_write(path, dumps(obj, indent=2, sort_keys=True) + "\n")
 
 

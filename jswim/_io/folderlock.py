@@ -1,9 +1,9 @@
 """One writer per study folder: an exclusive OS lock held for a whole session.
 
-Two processes writing one study folder would send and journal every call twice. :class:`FolderLock`
-takes an exclusive lock on ``FOLDER/.jswim.lock`` (:mod:`filelock`) before anything in the folder
+Two processes writing one study folder would send and journal every call twice. `FolderLock`
+takes an exclusive lock on ``FOLDER/.jswim.lock`` (`filelock`) before anything in the folder
 is read or written and holds it until the session ends; ``FOLDER/.jswim.holder.json`` says who
-holds it. Readers never lock (:func:`holder` tells them whether a live session holds it). What
+holds it. Readers never lock (`holder` tells them whether a live session holds it). What
 happens to a dead holder's lock is in docs/studies.md (*One writer*).
 """
 
@@ -71,7 +71,7 @@ class FolderLock:
     Raises
     ------
     FolderBusyError
-        From :meth:`acquire`, when a live process holds the lock: the message names it.
+        From `acquire`, when a live process holds the lock: the message names it.
     """
 
     def __init__(self, folder: str | os.PathLike) -> None:

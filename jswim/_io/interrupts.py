@@ -2,7 +2,7 @@
 
 A scheduler's SIGTERM, a closed terminal's SIGHUP and Ctrl-C must each end a study the same way:
 every finished run and answered call kept, the status ``interrupted``, one line on stderr.
-:func:`install` (called by the ``jswim`` command, never on import) routes all three to one
+`install` (called by the ``jswim`` command, never on import) routes all three to one
 handler; when it acts on the first signal (never inside an import) and why later ones are only
 noted is in docs/design.md (*Study folders under kills, signals and a second writer*).
 """
@@ -78,7 +78,7 @@ def name(signum: int | None) -> str:
 
 
 def set_main_task(task: asyncio.Task | None) -> None:
-    """The task that the first signal cancels while an event loop runs (:func:`jswim.llm.sync.run_sync`)."""
+    """The task that the first signal cancels while an event loop runs (`jswim.llm.sync.run_sync`)."""
     global _main_task
     _main_task = task
 
@@ -129,7 +129,7 @@ def _retry(signum: int, frame: Any) -> None:
 
 
 def _unraisable(unraisable: Any) -> None:
-    """A :class:`KeyboardInterrupt` of ours raised where Python cannot raise (a gc callback, a
+    """A `KeyboardInterrupt` of ours raised where Python cannot raise (a gc callback, a
     ``__del__``) is delivered again soon instead of printed and lost."""
     global _undelivered
     if isinstance(unraisable.exc_value, KeyboardInterrupt) and _received is not None and _armed:

@@ -1,8 +1,8 @@
 """Append-only JSON-lines files that survive tears.
 
 A kill, a full disk or a crash can leave a journal's last line torn; every writer opens it through
-:func:`repair_tail`, which cuts the torn bytes back to the last complete line (appending after them
-would glue the next record on and lose both), and readers (:func:`read_records`) skip a line that
+`repair_tail`, which cuts the torn bytes back to the last complete line (appending after them
+would glue the next record on and lose both), and readers (`read_records`) skip a line that
 is not a record. docs/studies.md (*Torn files*) says what a session does with both.
 """
 
@@ -78,7 +78,7 @@ def read_records(
 
     A torn last line (no final newline, from a kill) is skipped silently. Any other line that is
     not UTF-8, not JSON, not a JSON object, or that ``check`` finds fault with (``check`` returns
-    why, or ``None``) is skipped with one :class:`SkippedRecord` warning naming the file and the
+    why, or ``None``) is skipped with one `SkippedRecord` warning naming the file and the
     line. A missing or unreadable file has no records.
     """
     import json

@@ -31,6 +31,6 @@ def path_kind(path: str | os.PathLike, wanted: str) -> str:
 
 def check_file(path: str | os.PathLike, option: str) -> None:
     """The one check of a file a user names (``--prompt-file``, ``--prompt-files``, ``--gguf``):
-    a :class:`ConfigError` ``OPTION PATH: what is there instead`` unless it is a regular file."""
+    a [`ConfigError`][jswim.errors.ConfigError] ``OPTION PATH: what is there instead`` unless it is a regular file."""
     if not os.path.isfile(path):
         raise ConfigError(f"{option} {path}: {path_kind(path, 'a file')}")

@@ -31,7 +31,7 @@ def file_mode(mask: int | None = None) -> int:
 
 @contextlib.contextmanager
 def private_files() -> Iterator[None]:
-    """Create files and folders under :func:`effective_umask` inside the block (process-wide)."""
+    """Create files and folders under `effective_umask` inside the block (process-wide)."""
     old = os.umask(0o077)
     os.umask(effective_umask(old))
     try:
@@ -41,5 +41,5 @@ def private_files() -> Iterator[None]:
 
 
 def opener(path: str, flags: int) -> int:
-    """``open(..., opener=opener)``: a new file gets :func:`file_mode` whatever the block it is in."""
+    """``open(..., opener=opener)``: a new file gets `file_mode` whatever the block it is in."""
     return os.open(path, flags, file_mode())

@@ -1,7 +1,7 @@
 """Per-swimmer defaults of the agents, from the paper and, where it is silent, the authors' code
 (``../shared/fidelity.md``): the ROC set offered, the history length n_ht, the clearing rule,
 the start, the reply length limit and how DOF values are written in the prompt. Physics
-(:class:`jswim.swimmers.models.SwimmerModel`) knows nothing of these; every agent reads them here.
+([`jswim.swimmers.models.SwimmerModel`][jswim.swimmers.models.SwimmerModel]) knows nothing of these; every agent reads them here.
 """
 
 from __future__ import annotations
@@ -55,7 +55,7 @@ def paper_init(model: SwimmerModel) -> tuple[int, ...]:
     Purcell (pi/3, pi/3): ``(1, 1)``; NG (10, 6): ``(1, 0)``; four-sphere (6, 10, 10):
     ``(0, 1, 1)`` (longer: the first arm short, the others long); four-link: every hinge at
     +2pi/9, ``(1, 1, 1)`` (the orientation, chain symmetric about x, is
-    :func:`jswim.env.start_orientation`'s).
+    [`jswim.env.start_orientation`][jswim.env.state.start_orientation]'s).
     """
     n = model.n_dof
     if model.kind == "ng":
@@ -93,7 +93,7 @@ def dof_decimals(model: SwimmerModel, roc_levels: int = 1) -> int:
 def swimmer_text(
     model: SwimmerModel, rocs: tuple[int, ...] | None = None, roc_levels: int = 1
 ) -> SwimmerText:
-    """What the prompt needs to know about ``model`` (``rocs`` default :func:`default_rocs`) with
+    """What the prompt needs to know about ``model`` (``rocs`` default `default_rocs`) with
     ROCs on ``roc_levels`` levels (1: the paper's)."""
     return SwimmerText(
         model.n_dof,

@@ -2,8 +2,8 @@
 
 The README's fidelity table lists every element; this module names, for one run's settings, the
 deviations that apply, so each transcript and study folder records them next to the results.
-Fixed ones (:data:`ALWAYS`) are jswim's choices where the code is plainly an artefact or the
-paper is followed over the code; the rest follow from the settings (:func:`deviations`).
+Fixed ones (`ALWAYS`) are jswim's choices where the code is plainly an artefact or the
+paper is followed over the code; the rest follow from the settings (`deviations`).
 """
 
 from __future__ import annotations
@@ -64,7 +64,7 @@ EACH_PAIR_PROMPT = (
 
 
 def each_prompt(n: int) -> str:
-    """What ``--pair-prompt each`` is for ``n`` >= 2 swimmers (:data:`EACH_PAIR_PROMPT` for a pair)."""
+    """What ``--pair-prompt each`` is for ``n`` >= 2 swimmers (`EACH_PAIR_PROMPT` for a pair)."""
     if n == 2:
         return EACH_PAIR_PROMPT
     return (
@@ -78,7 +78,7 @@ def each_prompt(n: int) -> str:
 def scene_deviation(scene: Any, pair_prompt: str = "joint") -> str:
     """The line of a run in a scene (issue 19, an extension: the paper's swimmer is alone in an
     unbounded fluid), naming the medium, the swimmers (any number) and what the prompt shows
-    (several swimmers': ``pair_prompt``, :data:`jswim.agents.variants.PAIR_PROMPTS`)."""
+    (several swimmers': ``pair_prompt``, `jswim.agents.variants.PAIR_PROMPTS`)."""
     parts = [f"scene (an extension): medium {scene.medium!r}"]
     if scene.medium == "wall":
         parts.append(
@@ -120,7 +120,7 @@ SCENE_PPO = (
 
 def scene_extensions(scenes: Any, ppo: bool = False) -> list[str]:
     """Lines for a study's metadata: one per distinct scene its runs use (none for the bulk fluid);
-    an item may be a ``(scene, pair_prompt)`` pair. :data:`SCENE_PPO` follows when the continuous RL
+    an item may be a ``(scene, pair_prompt)`` pair. `SCENE_PPO` follows when the continuous RL
     baseline runs on them (``ppo``)."""
     lines = [scene_deviation(*s) if isinstance(s, tuple) else scene_deviation(s) for s in scenes]
     return lines + ([SCENE_PPO] if ppo and lines else [])
@@ -137,7 +137,7 @@ def deviations(
     default_n_ht: int | None = None,
     roc_levels: int = 1,
 ) -> list[str]:
-    """The deviations of one run with these settings from the paper's protocol (:data:`ALWAYS` first).
+    """The deviations of one run with these settings from the paper's protocol (`ALWAYS` first).
 
     Parameters
     ----------

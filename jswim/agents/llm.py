@@ -1,27 +1,27 @@
 """The LLM agent: prompt -> chat client -> parse -> env step, for a batch of independent runs.
 
-Each run is its own pipeline: render the prompt, call the model (one :class:`jswim.llm.LLMClient`
+Each run is its own pipeline: render the prompt, call the model (one [`jswim.llm.LLMClient`][jswim.llm.client.LLMClient]
 for all runs bounds the calls in flight and paces them), parse, step, record, and on to the next
 step as soon as its own reply is back. There is no round and no barrier: real APIs have
 heavy-tailed latency, and a barrier would make every step cost the slowest of all the runs' calls.
 Stepping is shared without holding anyone back: the runs of one world keep one batched state, and
 the actions handed in during one turn of the event loop are stepped in one jitted call at the next
 turn (replies that land together, step together; a run never waits for another run's reply;
-:mod:`jswim.agents.step_batcher`).
+[`jswim.agents.step_batcher`][jswim.agents.step_batcher]).
 
-Any world serves (:class:`jswim.env.base.Environment`; ``worlds=``, default
-:func:`jswim.agents.world_view.world`); what the prompt shows beyond the paper's lone swimmer comes
-from the world and its observation (:func:`jswim.agents.world_view.view`). The protocol itself
-(prompt in, action or follow-up out) is pure and lives in :mod:`jswim.agents.protocol`; the run
-spec, the agent settings and the named variants in :mod:`jswim.agents.variants`; the history and
-its clearing rule in :mod:`jswim.agents.memory`. This module does the I/O: requests, env steps,
+Any world serves ([`jswim.env.base.Environment`][jswim.env.base.Environment]; ``worlds=``, default
+[`jswim.agents.world_view.world`][jswim.agents.world_view.world]); what the prompt shows beyond the paper's lone swimmer comes
+from the world and its observation ([`jswim.agents.world_view.view`][jswim.agents.world_view.view]). The protocol itself
+(prompt in, action or follow-up out) is pure and lives in [`jswim.agents.protocol`][jswim.agents.protocol]; the run
+spec, the agent settings and the named variants in [`jswim.agents.variants`][jswim.agents.variants]; the history and
+its clearing rule in [`jswim.agents.memory`][jswim.agents.memory]. This module does the I/O: requests, env steps,
 transcripts.
 
 A reply without a valid action is retried ``parse_retries`` times with a short corrective follow-up
 message (a new request, so temperature-0 caching does not replay the bad reply); if it still fails,
 the step executes the no-op ``[1, 0]`` and counts as a failed step. The executed step, failed or
 not, enters the history shown to the model. Randomness: run ``i``'s start and noise come from
-``PRNGKey(seed_i)`` alone (:mod:`jswim.agents.step_batcher`), whoever shares its batch.
+``PRNGKey(seed_i)`` alone ([`jswim.agents.step_batcher`][jswim.agents.step_batcher]), whoever shares its batch.
 """
 
 from __future__ import annotations
@@ -118,7 +118,7 @@ class RunResult:
         return len(self.x)
 
     def as_row(self) -> dict[str, Any]:
-        """A flat record for :meth:`jswim.results.StudyStore.add_runs`."""
+        """A flat record for [`jswim.results.StudyStore.add_runs`][jswim.results.StudyStore.add_runs]."""
         s = self.spec
         u = self.usage
         return {
@@ -219,17 +219,17 @@ def _jsonable(obj: Any) -> Any:
 
 
 class LLMDriver:
-    """Runs a batch of :class:`LLMRunSpec` against one client (use :func:`run_batch`).
+    """Runs a batch of [`LLMRunSpec`][jswim.agents.variants.LLMRunSpec] against one client (use [`run_batch`][jswim.agents.llm.run_batch]).
 
     Each run is its own pipeline (prompt, call, parse, step, record) and moves on as soon as its
     own reply is back; the client bounds the calls in flight. ``window`` bounds the runs in
     progress at once (a number, or a semaphore shared by several drivers); further runs start
     as earlier ones finish, so runs end, and are saved, in order. ``journal`` answers a resumed
-    run's calls that were already paid for (:class:`jswim.llm.journal.CallJournal`) and records
+    run's calls that were already paid for (`jswim.llm.journal.CallJournal`) and records
     new ones. ``on_step(n)`` is called after every step; ``on_done(result)`` when a run ends
     (status ``done``, ``below_x_min``, ``llm_error`` or ``budget``: stopped by the cost cap).
     ``worlds(spec) -> (env, params)`` builds each run's world (default
-    :func:`jswim.agents.world_view.world`); any :class:`jswim.env.base.Environment` serves.
+    [`jswim.agents.world_view.world`][jswim.agents.world_view.world]); any [`jswim.env.base.Environment`][jswim.env.base.Environment] serves.
     """
 
     def __init__(
@@ -666,7 +666,7 @@ async def run_batch_async(
     transcript_dir: str | Path | None = None,
     **options: Any,
 ) -> list[RunResult]:
-    """Run a batch with an open client; ``options`` go to :class:`LLMDriver` (window, journal,
+    """Run a batch with an open client; ``options`` go to [`LLMDriver`][jswim.agents.llm.LLMDriver] (window, journal,
     on_step, on_done, transcripts)."""
     return await LLMDriver(specs, client, config, transcript_dir, **options).run()
 
@@ -688,7 +688,7 @@ def run_batch(
         The runs.
     settings : ClientSettings, optional
         Server to use; ``None`` starts the embedded local model for the duration of the call
-        (``local_options`` go to :class:`jswim.llm.local.LocalServer`).
+        (``local_options`` go to `jswim.llm.local.LocalServer`).
     config : LLMAgentConfig
         Agent settings shared by the runs.
     transcript_dir : str or Path, optional
@@ -697,7 +697,7 @@ def run_batch(
     cohorts : int, optional
         Deprecated and ignored: runs no longer advance in lockstep rounds.
     worlds : callable, optional
-        ``worlds(spec) -> (env, params)``: each run's world (:class:`LLMDriver`).
+        ``worlds(spec) -> (env, params)``: each run's world ([`LLMDriver`][jswim.agents.llm.LLMDriver]).
     """
     specs = list(specs)
 

@@ -1,7 +1,7 @@
 """The run's memory: the history records since the last clear, the paper's clearing rule, and the
 observed-progress statistics behind the summary sentence (a variant; off in the paper's protocol).
 
-Text of a record line lives in :mod:`jswim.prompt` (:class:`~jswim.prompt.HistoryRecord`); this
+Text of a record line lives in [`jswim.prompt`][jswim.prompt] ([`HistoryRecord`][jswim.prompt.HistoryRecord]); this
 module decides which records the model still sees.
 """
 
@@ -19,7 +19,7 @@ from jswim.prompt import Action, HistoryRecord, SwimmerText, format_dof
 class ClearingRule:
     """The history clearing scheme (paper: "when the swimmer's displacement within the last few
     steps falls below a threshold, such as 0.01, we erase ... the entire record"; the numbers
-    are the authors' code's, per swimmer, in :func:`jswim.agents.defaults.default_clearing`).
+    are the authors' code's, per swimmer, in `jswim.agents.defaults.default_clearing`).
 
     After each step the history is erased when all of these hold:
 

@@ -3,14 +3,14 @@ a variant of the joint prompt, which stays the default).
 
 Each conversation is kept as the paper keeps a lone swimmer's (its own D1, D2 and X, its own last
 ``n_ht`` records and clearing rule; S2 and every record also name the others,
-:data:`jswim.prompt.OWN_PAIR_SENTENCE`), with the same request, parsing, follow-ups and no-op on
-failure as every LLM run (:mod:`jswim.agents.protocol`). Swimmer ``k`` of ``N`` decides at steps
+`jswim.prompt.OWN_PAIR_SENTENCE`), with the same request, parsing, follow-ups and no-op on
+failure as every LLM run ([`jswim.agents.protocol`][jswim.agents.protocol]). Swimmer ``k`` of ``N`` decides at steps
 ``k, k + N, ...``; the run's row is the joint one (joint action codes, ``x`` the swimmers' mean,
 whose progress is the reward). The prompt's text and the turns: docs/scenes.md, "Pair: one prompt
 per swimmer".
 
-Everything here is pure (no client, no environment): the driver (:mod:`jswim.agents.llm`) keeps
-one :class:`Conversation` per swimmer on a run and asks :func:`turn` whose step it is.
+Everything here is pure (no client, no environment): the driver ([`jswim.agents.llm`][jswim.agents.llm]) keeps
+one [`Conversation`][jswim.agents.pair_prompt.Conversation] per swimmer on a run and asks [`turn`][jswim.agents.pair_prompt.turn] whose step it is.
 """
 
 from __future__ import annotations
@@ -58,8 +58,8 @@ def conversations(
 ) -> list[Conversation]:
     """The conversations of a ``pair_prompt="each"`` run in a world of ``view.swimmers`` swimmers
     whose joint DOFs start at ``dofs`` (``(ARMS N,)``): each with the lone swimmer's n_ht and
-    clearing rule (:func:`protocol.setup`, :func:`protocol.clearing_rule`) and its own text and
-    template (:func:`jswim.agents.world_view.text` with ``own``)."""
+    clearing rule ([`protocol.setup`][jswim.agents.protocol.setup], [`protocol.clearing_rule`][jswim.agents.protocol.clearing_rule]) and its own text and
+    template ([`jswim.agents.world_view.text`][jswim.agents.world_view.text] with ``own``)."""
     _, base, prompt = protocol.setup(spec, model, cfg)
     out = []
     for s in range(view.swimmers):

@@ -2,7 +2,7 @@
 
 The learner sees what the Q-learner and the LLM see: the shape (each DOF's value, scaled to
 [-1, 1]). An action is a DOF and a real ROC in [-1, 1], the environment's continuous action
-(:mod:`jswim.env`): a one-hot ROC vector of shape ``(n_dof,)``. The reward of a step is its
+(`jswim.env`): a one-hot ROC vector of shape ``(n_dof,)``. The reward of a step is its
 progress in the target direction (``StepInfo.progress``, noisy when ``zeta > 0``). As for the
 Q-learner there are no episodes: one learner is one swimmer that keeps swimming for
 ``config.steps`` steps, and every step it takes is part of its record, so "steps to learn" is
@@ -26,7 +26,7 @@ distribution never quite does). ``log std`` is a learned vector per DOF. The cri
 Exploration must end for a learner to keep a stroke to the end of its run (the success
 criterion); the policy's own std and logits sharpen as it learns, and a temperature ``tau(t)``
 (default: 1 until ``anneal_start`` then down to ``anneal_end`` by the last step, see
-:class:`PPOConfig`) divides the logits and multiplies the std of the distribution that acts.
+[`PPOConfig`][jswim.agents.ppo.PPOConfig]) divides the logits and multiplies the std of the distribution that acts.
 The temperature is part of the behaviour policy, and the PPO ratio uses the same tempered
 distribution for old and new parameters, so the surrogate stays on-policy.
 
@@ -40,10 +40,10 @@ Example::
     run = train_batch(jax.random.split(jax.random.PRNGKey(0), 1000), params, PPOConfig())
     report = evaluate(run, params)   # steps to learn, success, ... per learner
 
-The same learner runs in any world of the protocol (:func:`train_env`; a wall or a pair of
-:mod:`jswim.scenes` also through :func:`train_scene_batch`), judged by :func:`evaluate`
-(:mod:`jswim.agents.ppo_judge`); the paper's world is stepped as the other baselines step it
-(:func:`jswim.agents.worlds.step`).
+The same learner runs in any world of the protocol ([`train_env`][jswim.agents.ppo.train_env]; a wall or a pair of
+`jswim.scenes` also through [`train_scene_batch`][jswim.agents.ppo.train_scene_batch]), judged by [`evaluate`][jswim.agents.ppo_judge.evaluate]
+([`jswim.agents.ppo_judge`][jswim.agents.ppo_judge]); the paper's world is stepped as the other baselines step it
+([`jswim.agents.worlds.step`][jswim.agents.worlds.step]).
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ class PPOConfig:
         Adam's step size (3e-3; 1e-2 learned less, 6e-3 no better).
     discount : float
         ``gamma`` (0.9, as the Q-learner: NG's cycle needs ``gamma > 0.743``, see
-        :class:`jswim.agents.qlearning.QConfig`).
+        [`jswim.agents.qlearning.QConfig`][jswim.agents.qlearning.QConfig]).
     gae_lambda : float
         GAE's ``lambda`` (0.5; 0.9 learned less at 200 steps).
     clip : float
@@ -200,7 +200,7 @@ def _temperature(t: Array, steps: int, start: Array, end: Array) -> Array:
 
 
 class PPORun(NamedTuple):
-    """What training recorded, per learner (leading batch axis from :func:`train_batch`).
+    """What training recorded, per learner (leading batch axis from [`train_batch`][jswim.agents.ppo.train_batch]).
 
     Attributes
     ----------
@@ -220,8 +220,8 @@ class PPORun(NamedTuple):
     y, orientation : float (steps,)
         Centroid y and orientation (rad, of the reference link) after each step.
     trace : Trajectory or None
-        With ``trace=True`` (:func:`train_env`): the world's state, observation and
-        :class:`~jswim.env.base.StepInfo` after each step (:class:`jswim.env.episodes.Trajectory`;
+        With ``trace=True`` ([`train_env`][jswim.agents.ppo.train_env]): the world's state, observation and
+        [`StepInfo`][jswim.env.base.StepInfo] after each step ([`jswim.env.episodes.Trajectory`][jswim.env.episodes.Trajectory];
         what the scene studies' rows read: every swimmer's position, height, tilt, stuck, contact).
     """
 
@@ -393,7 +393,7 @@ def _train(
 ) -> PPORun:
     """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``axes`` says, a
     ``vmap`` prefix) in the world ``world`` (default: the paper's world of ``params``): time
-    outermost. The world's step is :func:`jswim.agents.worlds.step`, its observation
+    outermost. The world's step is [`jswim.agents.worlds.step`][jswim.agents.worlds.step], its observation
     ``features``, its reward ``StepInfo.progress``.
 
     The scans run over time and every step is vmapped over learners inside them (as in
@@ -527,7 +527,7 @@ def train_batch(keys: Array, params: Any, config: PPOConfig = PPOConfig()) -> PP
         One key per learner; learner ``i`` matches ``train(keys[i], params_i, config)``.
     params : EnvParams
         Environment; ``zeta``, ``direction``, ``init`` either shared or with a leading axis of
-        size B (:func:`jswim.env.broadcast_params`).
+        size B ([`jswim.env.broadcast_params`][jswim.env.params.broadcast_params]).
     config : PPOConfig
         Hyperparameters shared by all learners (static).
 
@@ -552,13 +552,13 @@ def train_env(
     trace: bool = False,
 ) -> PPORun:
     """Train independent PPO learners, one per key, in any world of the protocol
-    (:class:`jswim.env.base.Environment`, e.g. from :func:`jswim.make`), in one jitted, vmapped call.
+    ([`jswim.env.base.Environment`][jswim.env.base.Environment], e.g. from [`jswim.make`][jswim.env.worlds.make]), in one jitted, vmapped call.
 
     The learner sees the world's ``features``, is rewarded with ``StepInfo.progress``, and acts
     with float ROC vectors (one non-zero entry). ``params`` are shared by the learners, or batched
     along B as ``params_axes`` (hashable) says. ``PPORun.x`` is the swimmers' mean x after each step,
     ``y`` and ``orientation`` swimmer 1's; ``trace`` the world's own record. In the paper's world
-    (params batched along B) the learners of :func:`train_batch`, number for number.
+    (params batched along B) the learners of [`train_batch`][jswim.agents.ppo.train_batch], number for number.
     """
     return _jitted()(
         keys,
@@ -586,9 +586,9 @@ def _jitted() -> Callable[..., PPORun]:
 def train_scene(
     key: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: int = 1
 ) -> PPORun:
-    """Train one PPO learner on a scene (:mod:`jswim.scenes`; issue 19) for ``config.steps`` steps.
+    """Train one PPO learner on a scene (`jswim.scenes`; issue 19) for ``config.steps`` steps.
 
-    :func:`train_scene_batch` for one key (unbatched fields).
+    [`train_scene_batch`][jswim.agents.ppo.train_scene_batch] for one key (unbatched fields).
     """
     run = train_scene_batch(jnp.asarray(key)[None], scene_params, config, direction)
     return jax.tree.map(lambda v: v[0], run)
@@ -597,7 +597,7 @@ def train_scene(
 def train_scene_batch(
     keys: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: Any = 1
 ) -> PPORun:
-    """:func:`train_env` on one scene of :mod:`jswim.scenes` (shared by the learners), a target
+    """[`train_env`][jswim.agents.ppo.train_env] on one scene of `jswim.scenes` (shared by the learners), a target
     direction per learner (+1 or -1, or one for all).
 
     The learner moves one arm of one swimmer per step by a real ROC; it sees the joint arms scaled

@@ -1,6 +1,6 @@
-"""Judging PPO's runs (:mod:`jswim.agents.ppo`): the success criterion for real-valued strokes
-(:func:`jswim.judging.shape_judge.judge_shapes`) on exact, noiseless displacements, for the
-paper's swimmer (:func:`evaluate`) and per swimmer on a scene (:func:`evaluate_scene`).
+"""Judging PPO's runs ([`jswim.agents.ppo`][jswim.agents.ppo]): the success criterion for real-valued strokes
+([`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]) on exact, noiseless displacements, for the
+paper's swimmer ([`evaluate`][jswim.agents.ppo_judge.evaluate]) and per swimmer on a scene ([`evaluate_scene`][jswim.agents.ppo_judge.evaluate_scene]).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def exact_x(run: Any, params: Any, *, replay: bool = False) -> np.ndarray:
     """Noiseless centroid x after each step of recorded runs, float64 (B, steps).
 
     The runs' actions replayed in ``params``'s world from their start shapes with ``zeta = 0``
-    (the judge measures exact displacements, as :func:`jswim.judging.gait.judge` does); when no
+    (the judge measures exact displacements, as [`jswim.judging.gait.judge`][jswim.judging.gait.judge] does); when no
     run had noise, the recorded ``x`` is returned as it is, unless ``replay`` (runs made in another
     world of the same swimmer, e.g. Purcell's above a wall, measured in ``params``'s).
     """
@@ -55,12 +55,12 @@ def evaluate(
     run: Any, params: Any, *, criterion: Any = None, tol: float | None = None, replay: bool = False
 ) -> Any:
     """Judge training runs with the success criterion for real-valued strokes
-    (:func:`jswim.judging.shape_judge.judge_shapes`: a cycle is a return to the same shape within ``tol``
-    of the range, default :data:`jswim.judging.shape_judge.SHAPE_TOL`), on exact displacements.
+    ([`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]: a cycle is a return to the same shape within ``tol``
+    of the range, default `jswim.judging.shape_judge.SHAPE_TOL`), on exact displacements.
 
-    A scene's runs (``params`` a :class:`~jswim.env.scene_world.SceneTask`) are judged per
-    swimmer (:func:`evaluate_scene`). ``replay``: the displacements are those of the moves
-    replayed in ``params``'s world (:func:`exact_x`), for runs trained in another world of the
+    A scene's runs (``params`` a [`SceneTask`][jswim.env.scene_world.SceneTask]) are judged per
+    swimmer ([`evaluate_scene`][jswim.agents.ppo_judge.evaluate_scene]). ``replay``: the displacements are those of the moves
+    replayed in ``params``'s world ([`exact_x`][jswim.agents.ppo_judge.exact_x]), for runs trained in another world of the
     same swimmer (Purcell's above a wall, judged on the bulk swimmer's, as the scene studies do).
 
     Returns
@@ -90,10 +90,10 @@ def evaluate_scene(
     tol: float | None = None,
 ) -> Any:
     """Judge scene runs as the scene studies judge their agents
-    (:func:`jswim.studies.scenes._judge` for lattice moves): the success criterion on each
+    (`jswim.studies.scenes._judge` for lattice moves): the success criterion on each
     swimmer's own moves, with the bulk swimmer's (noiseless, paper's formula) displacements; here
-    the shape judge for real ROCs (:func:`jswim.judging.shape_judge.judge_shapes`), each swimmer's moves
-    replayed in :mod:`jswim.env` from its start arms.
+    the shape judge for real ROCs ([`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]), each swimmer's moves
+    replayed in `jswim.env` from its start arms.
 
     One swimmer: its run judged as it is. A pair (a learner steering both swimmers): swimmer ``s``'s
     own moves (the steps whose DOF is one of its arms), in order, are its stroke; the other

@@ -2,15 +2,15 @@
 
 One decision of one run is two calls:
 
-- :func:`request`: run state and history in, the prompt, the chat messages and the offered
+- [`request`][jswim.agents.protocol.request]: run state and history in, the prompt, the chat messages and the offered
   actions out;
-- :func:`read_reply`: a reply in, the action it names out, or the follow-up messages of a retry,
-  or nothing (give up: the driver executes :data:`~jswim.agents.variants.NO_OP` and counts a
+- [`read_reply`][jswim.agents.protocol.read_reply]: a reply in, the action it names out, or the follow-up messages of a retry,
+  or nothing (give up: the driver executes `NO_OP` and counts a
   failed step).
 
-:func:`setup` fixes what a run keeps for its whole length (n_ht, the swimmer's text, the prompt
-knobs). The driver (:mod:`jswim.agents.llm`) does the I/O around these: it sends the messages,
-steps the swimmers and records the history (:mod:`jswim.agents.memory`).
+[`setup`][jswim.agents.protocol.setup] fixes what a run keeps for its whole length (n_ht, the swimmer's text, the prompt
+knobs). The driver ([`jswim.agents.llm`][jswim.agents.llm]) does the I/O around these: it sends the messages,
+steps the swimmers and records the history ([`jswim.agents.memory`][jswim.agents.memory]).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def setup(
     """What a run keeps from start to end: ``(n_ht, swimmer text, prompt knobs)``.
 
     ``n_ht`` and the ROC set come from the spec, else from the swimmer's agent defaults
-    (:mod:`jswim.agents.defaults`), on the spec's ROC lattice (``spec.roc_levels``).
+    (`jswim.agents.defaults`), on the spec's ROC lattice (``spec.roc_levels``).
     """
     n_ht = spec.n_ht if spec.n_ht is not None else default_n_ht(model, spec.direction)
     text = swimmer_text(model, spec.rocs, spec.roc_levels)
@@ -68,7 +68,7 @@ def setup(
 
 
 def clearing_rule(cfg: LLMAgentConfig, model: SwimmerModel) -> ClearingRule:
-    """The run's clearing rule: the config's, else the swimmer's (:func:`default_clearing`)."""
+    """The run's clearing rule: the config's, else the swimmer's (`default_clearing`)."""
     return cfg.clearing if cfg.clearing is not None else default_clearing(model)
 
 
@@ -79,7 +79,7 @@ CONSTRAINED_MIN_TOKENS = {"grammar": 10, "json_schema": 24, "json_object": 24}
 
 def max_tokens(cfg: LLMAgentConfig, model: SwimmerModel, constraint: str = "none") -> int:
     """Reply length limit of a request: the config's, else the swimmer's (10 two DOFs, 20 more,
-    the authors' code); raised to :data:`CONSTRAINED_MIN_TOKENS` where a constrained format
+    the authors' code); raised to `CONSTRAINED_MIN_TOKENS` where a constrained format
     (``constraint``, the resolved mode) needs more."""
     base = cfg.max_tokens if cfg.max_tokens is not None else default_max_tokens(model)
     return max(base, CONSTRAINED_MIN_TOKENS.get(constraint, 0))
@@ -132,13 +132,13 @@ def request(
     cfg : LLMAgentConfig
         Agent settings (variant switches).
     text, prompt : SwimmerText, PromptConfig
-        From :func:`setup`.
+        From [`setup`][jswim.agents.protocol.setup].
     direction : {+1, -1}
         Target direction.
     seed : int
         The run's seed (orders the shuffled options; the same run replays exactly).
     records : sequence of HistoryRecord
-        History since the last clear (:class:`jswim.agents.memory.History`).
+        History since the last clear ([`jswim.agents.memory.History`][jswim.agents.memory.History]).
     dofs : sequence of float
         Current DOF values.
     x : float

@@ -3,16 +3,16 @@
 The learner sees what the LLM sees: the state is the DOF configuration, an action a ``(DOF, ROC)``
 pair of the environment's action set, the reward the step's displacement in the target direction.
 There are no episodes: one learner is one swimmer that keeps swimming, like one LLM run, judged by
-the same code, :func:`jswim.judging.gait.judge`. The update is Q-learning as an optax problem: the
+the same code, [`jswim.judging.gait.judge`][jswim.judging.gait.judge]. The update is Q-learning as an optax problem: the
 Q-table is the parameter, the loss half the squared TD error of the visited entry,
 
     L(Q) = 1/2 (r + gamma max_a' Q(s', a') - Q(s, a))^2,   target under stop_gradient,
 
 and ``optax.sgd`` with learning rate ``alpha`` turns its gradient into the textbook update
-``Q(s, a) += alpha * TD error``. A whole run is one ``lax.scan``; :func:`train_batch` vmaps it over
+``Q(s, a) += alpha * TD error``. A whole run is one ``lax.scan``; [`train_batch`][jswim.agents.qlearning.train_batch] vmaps it over
 keys and environment parameters, so one jitted call trains e.g. 10,000 learners. On a ROC lattice
 the table is over lattice points and codes (``K = 1``: the paper's learner, number for number), and
-:func:`train_env` runs it in any world of the protocol; docs/baselines.md ("Q-learning baseline",
+[`train_env`][jswim.agents.qlearning.train_env] runs it in any world of the protocol; docs/baselines.md ("Q-learning baseline",
 "Any world") and docs/continuous.md say the rest.
 
 Example::
@@ -73,7 +73,7 @@ class QConfig:
         ``gamma`` (0.9: NG's cycle is the optimal policy only for ``gamma > 0.743``).
     epsilon : float or optax schedule
         Probability of a uniformly random action from the offered set (default
-        :data:`DEFAULT_EPSILON`, ``0.8**t``).
+        `DEFAULT_EPSILON`, ``0.8**t``).
     q_init : float
         Initial value of every table entry (0.35): mildly optimistic, so the greedy learner tries
         each action before repeating a useless one.
@@ -119,7 +119,7 @@ class QConfig:
 
 
 class QRun(NamedTuple):
-    """What training recorded, per learner (leading batch axis from :func:`train_batch`).
+    """What training recorded, per learner (leading batch axis from [`train_batch`][jswim.agents.qlearning.train_batch]).
 
     Attributes
     ----------
@@ -134,16 +134,16 @@ class QRun(NamedTuple):
         Final Q-table, rows indexed by lattice point ``sum_d j_d (K + 1)**d`` (``K = 1``: the
         corner ``sum_k level_k 2**k``), columns by action code.
     levels0 : int32 (n_dof,)
-        Initial DOF levels (drawn by :func:`jswim.env.reset` for a random start); on a ROC
+        Initial DOF levels (drawn by [`jswim.env.reset`][jswim.env.state.reset] for a random start); on a ROC
         lattice the start's lattice positions ``j`` in ``0..K`` (a corner: ``level * K``).
     y, orientation : float (steps,) or None
         Centroid y and orientation (rad, of the reference link) after each step, when asked for
         (``pose=True``; the study folders' trajectories); ``None`` otherwise, which keeps the
-        training loop's memory traffic to what learning needs. In other worlds (:func:`train_env`)
+        training loop's memory traffic to what learning needs. In other worlds ([`train_env`][jswim.agents.qlearning.train_env])
         ``x`` is the swimmers' mean x, ``y`` and ``orientation`` swimmer 1's.
     trace : Trajectory or None
-        With ``trace=True`` (:func:`train_env`): the world's state, observation and
-        :class:`~jswim.env.base.StepInfo` after each step (:class:`jswim.env.episodes.Trajectory`).
+        With ``trace=True`` ([`train_env`][jswim.agents.qlearning.train_env]): the world's state, observation and
+        [`StepInfo`][jswim.env.base.StepInfo] after each step ([`jswim.env.episodes.Trajectory`][jswim.env.episodes.Trajectory]).
     """
 
     actions: Array
@@ -177,7 +177,7 @@ def _k(params: EnvParams) -> int:
     return int(getattr(params, "roc_levels", 1))
 
 
-#: Largest action count :func:`_pick` serves from a bit-mask table (2**A rows); beyond, a scan.
+#: Largest action count `_pick` serves from a bit-mask table (2**A rows); beyond, a scan.
 _TABLE_ACTIONS = 12
 
 
@@ -399,9 +399,9 @@ def train_batch(
         One key per learner; learner ``i`` matches ``train(keys[i], params_i, config)``.
     params : EnvParams
         Environment; each of ``zeta``, ``direction``, ``init`` is either unbatched (shared) or
-        has a leading axis of size B (see :func:`batch_params`).
+        has a leading axis of size B (see `batch_params`).
     config, pose
-        As in :func:`train`, shared by all learners (static).
+        As in [`train`][jswim.agents.qlearning.train], shared by all learners (static).
 
     Returns
     -------
@@ -410,10 +410,10 @@ def train_batch(
 
     Notes
     -----
-    The learners are sharded over every device (:mod:`jswim.sharding`); the numbers do not
+    The learners are sharded over every device (`jswim.sharding`); the numbers do not
     depend on the device count. Memory: the result holds ``6 steps + 4 (2**n_dof)(3 n_dof) +
     4 n_dof`` bytes per learner in float32 (1,304 at 200 steps for the two-DOF swimmers); bound
-    it for large populations by training in chunks, as :func:`study` does.
+    it for large populations by training in chunks, as `study` does.
     """
     n = keys.shape[0]
     fn = functools.partial(_jitted("batch"), config=config, pose=pose, cells=_paper(params))
@@ -432,7 +432,7 @@ def train_env(
     trace: bool = False,
 ) -> QRun:
     """Train independent Q-learners, one per key, in any world of the protocol (e.g. from
-    :func:`jswim.make`), in one jitted call vmapped over learners.
+    [`jswim.make`][jswim.env.worlds.make]), in one jitted call vmapped over learners.
 
     Parameters
     ----------
@@ -446,15 +446,15 @@ def train_env(
         Hyperparameters (static); ``action_set`` "shape-changing" offers the moves that change
         the shape from the current lattice point.
     cells : Cells, optional
-        The discretiser (default :func:`jswim.agents.worlds.cells` of ``env``).
+        The discretiser (default [`jswim.agents.worlds.cells`][jswim.agents.worlds.cells] of ``env``).
     pose, trace : bool
         Also record swimmer 1's y and orientation; the world's state, observation and step info
-        (:attr:`QRun.trace`).
+        (`QRun.trace`).
 
     Returns
     -------
     QRun
-        Leading axis B. In the paper's world the learners of :func:`train_batch`, number for number.
+        Leading axis B. In the paper's world the learners of [`train_batch`][jswim.agents.qlearning.train_batch], number for number.
     """
     cells = worlds.cells(env) if cells is None else cells
     return _jitted("batch")(
@@ -488,7 +488,7 @@ batch_params = broadcast_params
 
 
 def evaluate(run: QRun, params: EnvParams, *, criterion: Criterion = PAPER) -> GaitReport:
-    """Judge training runs with the shared success criterion, :func:`jswim.judging.gait.judge`."""
+    """Judge training runs with the shared success criterion, [`jswim.judging.gait.judge`][jswim.judging.gait.judge]."""
     return judge(
         np.asarray(run.actions),
         params,

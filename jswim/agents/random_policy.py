@@ -27,7 +27,7 @@ class RandomRun(NamedTuple):
     """Per-run record (leading batch axis): executed actions, X after each step (the swimmers'
     mean x), start levels (lattice positions), and swimmer 1's y (its height above a wall) and
     orientation (rad) after each step; ``trace`` (``trace=True``): the world's state, observation
-    and step info after each step (:class:`jswim.env.episodes.Trajectory`)."""
+    and step info after each step ([`jswim.env.episodes.Trajectory`][jswim.env.episodes.Trajectory])."""
 
     actions: Array
     x: Array
@@ -82,11 +82,11 @@ def run_batch(
     keys : Array (B, 2)
         One key per run (start configuration when random, actions and noise).
     params : EnvParams
-        Shared or batched (see :func:`jswim.agents.qlearning.batch_params`).
+        Shared or batched (see `jswim.agents.qlearning.batch_params`).
     steps : int
         Steps per run.
     action_set : {"all", "shape-changing"}
-        Offered actions (:data:`jswim.actions.ACTION_SETS`), as in the LLM's prompt.
+        Offered actions (`jswim.actions.ACTION_SETS`), as in the LLM's prompt.
     rocs : tuple of int, optional
         ROCs offered (default: the swimmer's, e.g. (-1, 0, 1); every ``k`` in ``-K..K`` on the
         environment's ROC lattice, ``params.roc_levels``).
@@ -109,13 +109,13 @@ def run_env(
     cells: Cells | None = None,
     trace: bool = False,
 ) -> RandomRun:
-    """The random policy in any world of the protocol (:class:`jswim.env.base.Environment`, e.g.
-    from :func:`jswim.make`): every step a uniformly random code among those offered
+    """The random policy in any world of the protocol ([`jswim.env.base.Environment`][jswim.env.base.Environment], e.g.
+    from [`jswim.make`][jswim.env.worlds.make]): every step a uniformly random code among those offered
     (``action_set``, ``rocs``: by default every ROC, the swimmer's own in the paper's world), one
     run per key, one scan vmapped over runs. ``params`` are shared, or batched along the runs as
     ``params_axes`` (hashable) says; ``cells`` the world's discretiser
-    (:func:`jswim.agents.worlds.cells`), whose lattice point says which moves change the shape.
-    In the paper's world the runs of :func:`run_batch`, number for number."""
+    ([`jswim.agents.worlds.cells`][jswim.agents.worlds.cells]), whose lattice point says which moves change the shape.
+    In the paper's world the runs of [`run_batch`][jswim.agents.random_policy.run_batch], number for number."""
     check_action_set(action_set)
     cells = worlds.cells(env) if cells is None else cells
     return _jitted(

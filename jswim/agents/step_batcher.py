@@ -1,8 +1,8 @@
 """The LLM driver's one step group: the runs of one world in one batched state, stepped together.
 
 Each LLM run is its own pipeline and hands its action over when its reply lands. Runs of the same
-static :class:`jswim.env.base.Environment` (with params of one structure) share one batched state:
-:class:`StepGroup` takes the actions handed in since its last step in one jitted call, vmapped over
+static [`jswim.env.base.Environment`][jswim.env.base.Environment] (with params of one structure) share one batched state:
+[`StepGroup`][jswim.agents.step_batcher.StepGroup] takes the actions handed in since its last step in one jitted call, vmapped over
 the runs, at the next turn of the event loop (``call_soon``), so replies that land together step
 together and nobody waits for a reply that has not landed; members with no action take the no-op,
 masked out. Any world serves: the group reads the protocol alone (``reset``, ``step``, ``observe``).
@@ -95,7 +95,7 @@ def stack_params(params: Sequence[Any]) -> Any:
 
 
 def group_key(env: Environment, params: Any) -> tuple[Any, ...]:
-    """Runs with equal keys can share one :class:`StepGroup` (one world, one params structure)."""
+    """Runs with equal keys can share one [`StepGroup`][jswim.agents.step_batcher.StepGroup] (one world, one params structure)."""
     leaves, tree = jax.tree.flatten(params)
     return (env, tree, tuple(np.shape(v) for v in leaves))
 
@@ -103,7 +103,7 @@ def group_key(env: Environment, params: Any) -> tuple[Any, ...]:
 class StepGroup:
     """Runs of one world: one batched state (module docs).
 
-    A run hands its action to :meth:`submit` and awaits what it sees after the step: ``xs`` (each
+    A run hands its action to [`submit`][jswim.agents.step_batcher.StepGroup.submit] and awaits what it sees after the step: ``xs`` (each
     swimmer's x displacement from its start ``x0``, float64 ``(S,)``) and their mean ``x``,
     ``heights`` (the observation's ``height``, else each position's y) and ``tilts`` (each
     orientation), ``dofs`` (float64), ``y`` and ``orientation`` (swimmer 1's height and orientation,

@@ -1,6 +1,6 @@
 """What defines an LLM run: its spec and id, the agent's settings, and the named protocol variants.
 
-Variants of the paper's protocol (all off by default, each a field of :class:`LLMAgentConfig`
+Variants of the paper's protocol (all off by default, each a field of [`LLMAgentConfig`][jswim.agents.variants.LLMAgentConfig]
 recorded in every transcript and result row): the action set (every action, or only the moves
 that change the shape), the observed-progress summary sentence, the order of the options in S5
 shuffled per step (exposes position bias), and a per-request temperature with a seed derived
@@ -84,12 +84,12 @@ def roc_tag(roc_levels: int) -> str:
 
 #: How an LLM steers a pair of swimmers (``--pair-prompt``): ``"joint"`` (default), one conversation
 #: for both through joint DOFs D1..D4; ``"each"`` (a variant), one conversation per swimmer, each
-#: with its own D1, D2, history and clearing, the two taking turns (:mod:`jswim.agents.pair_prompt`).
+#: with its own D1, D2, history and clearing, the two taking turns ([`jswim.agents.pair_prompt`][jswim.agents.pair_prompt]).
 PAIR_PROMPTS = ("joint", "each")
 
 
 def check_pair_prompt(value: str) -> str:
-    """``value`` if it is one of :data:`PAIR_PROMPTS`.
+    """``value`` if it is one of `PAIR_PROMPTS`.
 
     Raises
     ------
@@ -117,13 +117,13 @@ class LLMRunSpec:
     Attributes
     ----------
     swimmer : str
-        ``"purcell"``, ``"ng"``, ... (see :func:`jswim.env.make_params`).
+        ``"purcell"``, ``"ng"``, ... (see [`jswim.env.make_params`][jswim.env.params.make_params]).
     swimmer_options : tuple of (str, value)
         Model options, e.g. ``(("d_max", math.pi / 4),)``.
     direction : {+1, -1}
         Target direction.
     init : tuple of int, str or None
-        Initial DOF levels (see :func:`jswim.env.parse_init`); ``None``: all at ``hi``.
+        Initial DOF levels (see [`jswim.env.parse_init`][jswim.env.params.parse_init]); ``None``: all at ``hi``.
     zeta : float
         Noise level.
     seed : int
@@ -143,9 +143,9 @@ class LLMRunSpec:
         Name of the run (transcript file name); default from the fields above.
     scene : str
         A scene (walls, obstacles, pairs; issue 19) as canonical JSON of ``Scene.to_dict()``
-        (:func:`jswim.studies.grids.scene_json`); ``""``: the paper's lone swimmer in bulk fluid.
+        ([`jswim.studies.grids.scene_json`][jswim.studies.grids.scene_json]); ``""``: the paper's lone swimmer in bulk fluid.
     pair_prompt : {"joint", "each"}
-        A pair's prompt (:data:`PAIR_PROMPTS`): one joint conversation, or one per swimmer
+        A pair's prompt (`PAIR_PROMPTS`): one joint conversation, or one per swimmer
         (``"each"`` needs a scene of two or more swimmers; named ``each`` in the default run id).
     """
 
@@ -176,7 +176,7 @@ class LLMRunSpec:
             raise ConfigError("--pair-prompt each needs a scene with two or more swimmers")
 
     def label(self) -> str:
-        """``run_id``, or one built from the fields by :func:`run_id` (seed in place of a repeat)."""
+        """``run_id``, or one built from the fields by [`run_id`][jswim.agents.variants.run_id] (seed in place of a repeat)."""
         if self.run_id:
             return self.run_id
         return run_id(
@@ -199,7 +199,7 @@ class LLMAgentConfig:
     Attributes
     ----------
     action_set : {"all", "shape-changing"}
-        Actions offered in S5 and by constrained decoding (:data:`jswim.actions.ACTION_SETS`).
+        Actions offered in S5 and by constrained decoding (`jswim.actions.ACTION_SETS`).
     x_min : float
         Lower bound of X for the integer position encoding.
     template : PromptTemplate
@@ -209,7 +209,7 @@ class LLMAgentConfig:
         sends none.
     clearing : ClearingRule or None
         History clearing scheme; ``None``: the swimmer's, as in the authors' code
-        (:func:`jswim.agents.defaults.default_clearing`).
+        (`jswim.agents.defaults.default_clearing`).
     parse_retries : int
         Extra requests after a reply without a valid action.
     retry_prompt : str
@@ -220,7 +220,7 @@ class LLMAgentConfig:
         cost saving): identical temperature-0 requests of different runs are sent once and
         shared, and the cache answers any run; runs from one start are then copies of one run.
     summary : bool
-        Add the observed-progress sentence (:func:`jswim.prompt.render_summary`).
+        Add the observed-progress sentence (`jswim.prompt.render_summary`).
     shuffle : bool
         List the allowed actions in S5 in a new random order at every step (seeded by the run's
         seed and the step); the grammar is unchanged.
@@ -229,10 +229,10 @@ class LLMAgentConfig:
         each request carries a seed derived from the run's seed, step and attempt.
     order : {"paper", "cache"}
         Sentence order: the paper's S1..S5, or the prefix-cache friendly one
-        (:class:`jswim.prompt.PromptConfig`).
+        ([`jswim.prompt.PromptConfig`][jswim.prompt.PromptConfig]).
     max_tokens : int or None
         Reply length limit; ``None``: the swimmer's (10 for two DOFs, 20 for more, the authors'
-        code), raised where a constrained format needs more (:func:`jswim.agents.protocol.max_tokens`).
+        code), raised where a constrained format needs more ([`jswim.agents.protocol.max_tokens`][jswim.agents.protocol.max_tokens]).
     variant : str
         Name of this combination of knobs (a label for tables; ``"paper"`` = the paper's).
     """
@@ -282,7 +282,7 @@ class LLMAgentConfig:
         return d
 
 
-#: Named protocol variants: the :class:`LLMAgentConfig` fields each one sets ("paper" sets none).
+#: Named protocol variants: the [`LLMAgentConfig`][jswim.agents.variants.LLMAgentConfig] fields each one sets ("paper" sets none).
 #: Every switch is honest in the sense of the project: the model always sees every allowed
 #: option (at least two), nothing is ranked or pruned by observed value, and the summary reports
 #: observed data only.

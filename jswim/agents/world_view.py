@@ -1,9 +1,9 @@
-"""What an LLM run reads of its world: the world a run spec names (:func:`world`, by
-:func:`jswim.make`, unless the driver is handed another builder, a test's toy world included),
-and the prompt's view of it (:func:`view`: from ``env.n_swimmers``, the world's ``wall``
+"""What an LLM run reads of its world: the world a run spec names ([`world`][jswim.agents.world_view.world], by
+[`jswim.make`][jswim.env.worlds.make], unless the driver is handed another builder, a test's toy world included),
+and the prompt's view of it ([`view`][jswim.agents.world_view.view]: from ``env.n_swimmers``, the world's ``wall``
 attribute and the swimmers' starts; docs/design.md, agents row). DOF ranges and the run's
-defaults are the named swimmer's (:mod:`jswim.agents.defaults`), over the world's joint DOFs; a
-registered world's come from the world (:func:`model`: its DOFs per swimmer and their range).
+defaults are the named swimmer's (`jswim.agents.defaults`), over the world's joint DOFs; a
+registered world's come from the world ([`model`][jswim.agents.world_view.model]: its DOFs per swimmer and their range).
 """
 
 from __future__ import annotations
@@ -50,10 +50,10 @@ def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
 
 
 def model(spec: LLMRunSpec, env: Environment) -> SwimmerModel:
-    """The swimmer description a run's prompt, memory and defaults read (:mod:`jswim.agents.defaults`):
-    the named paper swimmer's model (:func:`jswim.swimmers.models.make_model`, its options); for a
-    world of :func:`jswim.register_world`, one swimmer of the world itself: its DOFs per swimmer
-    over :attr:`~jswim.env.base.Environment.dof_range`, ``kind`` the world's name (no paper
+    """The swimmer description a run's prompt, memory and defaults read (`jswim.agents.defaults`):
+    the named paper swimmer's model ([`jswim.swimmers.models.make_model`][jswim.swimmers.models.make_model], its options); for a
+    world of [`jswim.register_world`][jswim.env.worlds.register_world], one swimmer of the world itself: its DOFs per swimmer
+    over [`dof_range`][jswim.env.base.Environment.dof_range], ``kind`` the world's name (no paper
     swimmer's defaults: n_ht 3, the two-DOF clearing rule for two DOFs). Only its size, range
     and kind are read; it carries no physics."""
     if spec.swimmer not in registered_worlds():
@@ -64,7 +64,7 @@ def model(spec: LLMRunSpec, env: Environment) -> SwimmerModel:
 
 def view(env: Environment, x0: Sequence[float], y0: Sequence[float]) -> SceneView | None:
     """What the prompt shows of ``env`` whose swimmers start at ``(x0, y0)`` (each ``(S,)``,
-    :attr:`jswim.env.base.Observation.position`); ``None``: nothing beyond the paper's prompt
+    `jswim.env.base.Observation.position`); ``None``: nothing beyond the paper's prompt
     (one swimmer, no wall)."""
     n, wall = int(env.n_swimmers), bool(getattr(env, "wall", False))
     if n == 1 and not wall:
@@ -79,8 +79,8 @@ def text(
     base: SwimmerText, template: PromptTemplate, n_dof: int, scene: SceneView | None, own: int = 0
 ) -> tuple[SwimmerText, PromptTemplate]:
     """The swimmer text over the world's ``n_dof`` joint DOFs (``base``: one swimmer's,
-    :func:`jswim.agents.protocol.setup`) with its view and the template the view needs
-    (:func:`jswim.prompt.scene_template`); ``own`` >= 1: swimmer ``own``'s text alone (its own DOFs)."""
+    [`jswim.agents.protocol.setup`][jswim.agents.protocol.setup]) with its view and the template the view needs
+    ([`jswim.prompt.scene_template`][jswim.prompt.scene_template]); ``own`` >= 1: swimmer ``own``'s text alone (its own DOFs)."""
     if scene is None:
         return dataclasses.replace(base, n_dof=n_dof), template
     if own:
@@ -97,7 +97,7 @@ def text(
 
 def notes(spec: LLMRunSpec) -> tuple[dict[str, Any], str | None]:
     """What a run's transcript records of the scene its spec names (``{"scene": ...}``) and its
-    fidelity line (:func:`jswim.agents.fidelity.scene_deviation`); nothing for the paper's world."""
+    fidelity line (`jswim.agents.fidelity.scene_deviation`); nothing for the paper's world."""
     if not spec.scene:
         return {}, None
     scene = json.loads(spec.scene)

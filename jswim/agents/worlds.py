@@ -1,20 +1,20 @@
 """What the baselines (Q-learning, the random policy, fixed strokes, PPO) read and do in any world
-of the protocol (:class:`jswim.env.base.Environment`): one step, the pose a run records, the
+of the protocol ([`jswim.env.base.Environment`][jswim.env.base.Environment]): one step, the pose a run records, the
 discretiser of the tabular agents, and fixed action sequences played in batches.
 
-* :func:`step`: the world's :meth:`~jswim.env.base.Environment.advance`; the paper's world
-  (:class:`~jswim.env.swimmer_world.SwimmerWorld`) is stepped with ``exact=False`` (plain
-  working-dtype arithmetic, :func:`jswim.env.advance`), the baselines' training steps since they
+* [`step`][jswim.agents.worlds.step]: the world's `advance`; the paper's world
+  ([`SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]) is stepped with ``exact=False`` (plain
+  working-dtype arithmetic, [`jswim.env.advance`][jswim.env.stepping.advance]), the baselines' training steps since they
   were written, so their numbers are unchanged.
-* :func:`pose`: the swimmers' mean x, and swimmer 1's y (the height above a wall) and orientation.
-* :class:`Cells`: a world's discretiser (state -> table row, and the actions offered there). The
+* [`pose`][jswim.agents.worlds.pose]: the swimmers' mean x, and swimmer 1's y (the height above a wall) and orientation.
+* [`Cells`][jswim.agents.worlds.Cells]: a world's discretiser (state -> table row, and the actions offered there). The
   default serves any world: each DOF's place on the K lattice read from its scaled value (the
   first ``n_dof`` entries of ``env.features``, in [-1, 1]), rows ``sum_d j_d (K + 1)**d`` (the
   joint corners at K = 1: 4 shapes alone, 16 for a pair, ``2**(2S)`` for S swimmers).
-  :class:`PaperCells`: the paper's world, the corner or lattice point of :mod:`jswim.env`'s state,
-  the swimmer's offered ROCs. :class:`WallCells`: a scene with a wall, the joint corner times a
-  height bin of swimmer 1 (:data:`HEIGHT_EDGES`). :func:`cells` picks one for a world; a world of
-  its own passes a :class:`Cells` subclass to the agents (``cells=``).
+  [`PaperCells`][jswim.agents.worlds.PaperCells]: the paper's world, the corner or lattice point of `jswim.env`'s state,
+  the swimmer's offered ROCs. [`WallCells`][jswim.agents.worlds.WallCells]: a scene with a wall, the joint corner times a
+  height bin of swimmer 1 (`HEIGHT_EDGES`). [`cells`][jswim.agents.worlds.cells] picks one for a world; a world of
+  its own passes a [`Cells`][jswim.agents.worlds.Cells] subclass to the agents (``cells=``).
 """
 
 from __future__ import annotations
@@ -90,7 +90,7 @@ def corner(j: Array, roc_levels: int = 1) -> Array:
 
 
 def positions(state: Any, roc_levels: int) -> Array:
-    """A :mod:`jswim.env` state's lattice positions ``j`` (int32, ``(n_dof,)``): its levels when
+    """A `jswim.env` state's lattice positions ``j`` (int32, ``(n_dof,)``): its levels when
     ``K = 1``, else ``round(K frac)`` (every state reached from a corner by lattice codes lies on
     the lattice)."""
     if roc_levels == 1:
@@ -111,8 +111,8 @@ def offered_mask(
     rocs: tuple[int, ...] | None = None,
     roc_levels: int = 1,
 ) -> Array:
-    """The paper's swimmer's :func:`offered`, restricted to the ROCs offered (default: the
-    swimmer's, :func:`jswim.agents.defaults.default_rocs`: all three for two DOFs, +-1 for more;
+    """The paper's swimmer's [`offered`][jswim.agents.worlds.offered], restricted to the ROCs offered (default: the
+    swimmer's, `jswim.agents.defaults.default_rocs`: all three for two DOFs, +-1 for more;
     every ``k`` in ``-K..K`` on a ROC lattice, 0 left out for more DOFs)."""
     rocs = default_rocs(model, roc_levels) if rocs is None else rocs
     return restrict(
@@ -151,8 +151,8 @@ class Cells:
 
 @dataclasses.dataclass(frozen=True)
 class PaperCells(Cells):
-    """The paper's world: the corner (or lattice point) of :mod:`jswim.env`'s state, and by
-    default the swimmer's offered ROCs (:func:`offered_mask`)."""
+    """The paper's world: the corner (or lattice point) of `jswim.env`'s state, and by
+    default the swimmer's offered ROCs ([`offered_mask`][jswim.agents.worlds.offered_mask])."""
 
     def positions(self, state: Any, params: Any) -> Array:
         return positions(state, self.env.roc_levels)
@@ -191,6 +191,6 @@ def play(
     env: Environment, params: Any, keys: Array, actions: Any, *, params_axes: Any = None
 ) -> Trajectory:
     """Fixed action sequences ``(B, T)`` codes (or ``(B, T, n_dof)`` ROC vectors), run ``i`` reset
-    with ``keys[i]`` and stepped with ``split(keys[i], T)`` as :func:`jswim.rollout` does: one
+    with ``keys[i]`` and stepped with ``split(keys[i], T)`` as [`jswim.rollout`][jswim.env.rollouts.rollout] does: one
     scan vmapped over runs (``params_axes``: ``vmap``'s axes of ``params``, hashable)."""
     return _run_batch(env, params, keys, jnp.asarray(actions), params_axes)

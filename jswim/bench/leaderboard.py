@@ -1,7 +1,7 @@
 """The bench's leaderboard: one row per model (or baseline) and setting, from the study folders.
 
 Read only from the folders, so it is the same after a resume and can be redrawn at any time.
-Rows are written to ``leaderboard.csv`` / ``leaderboard.json`` (columns :data:`FIELDS`, ``null``
+Rows are written to ``leaderboard.csv`` / ``leaderboard.json`` (columns `FIELDS`, ``null``
 where a value does not apply); each column is described in docs/bench.md (*The leaderboard*).
 """
 
@@ -99,7 +99,8 @@ def _num(v: Any, spec: str) -> str:
     return "-" if v is None else format(v, spec)
 
 
-def _steps(r: Mapping[str, Any]) -> str:
+def steps_text(r: Mapping[str, Any]) -> str:
+    """Steps to learn of a leaderboard row: median [quartiles] (learners of runs), or ``-``."""
     if not r["learned"]:
         return f"- (0 of {r['n']})"
     if r["learned"] < MIN_QUARTILE_N:  # no IQR from fewer than 4 values
@@ -115,10 +116,10 @@ def _why_unpriced(r: Mapping[str, Any]) -> str | None:
     return None
 
 
-def _cost(r: Mapping[str, Any], short: bool = False) -> str:
-    """The row's cost in the one wording of :func:`jswim.console.cost_text`, with why it is not
+def cost_cell(r: Mapping[str, Any], short: bool = False) -> str:
+    """The row's cost in the one wording of `jswim.console.cost_text`, with why it is not
     priced; ``short`` (the terminal table): ``not priced ($0)``, the reasons under the table
-    (:func:`unpriced_notes`)."""
+    (`unpriced_notes`)."""
     if r["kind"] == "baseline":
         return "-"
     why = _why_unpriced(r)
@@ -184,11 +185,11 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
             + [
                 str(r["n"]),
                 f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
-                _steps(r),
+                steps_text(r),
                 f"{r['mean_x']:+.3f}",
                 _num(r["failed_steps"], "d"),
                 _num(r["tokens_per_step"], ".0f"),
-                _cost(r, short=True),
+                cost_cell(r, short=True),
             ]
         )
     return plain_table(cols, cells, width=width)
@@ -239,7 +240,7 @@ def figure(folder: Path, rows: Sequence[Mapping[str, Any]]) -> list[Path]:
 
 
 def figure_object(rows: Sequence[Mapping[str, Any]]) -> Any:
-    """The leaderboard's matplotlib figure (see :func:`figure`).
+    """The leaderboard's matplotlib figure (see `figure`).
 
     With most p at 0 (short runs, weak models), success alone says nothing: X/a end, the mean
     displacement toward the target, is what separates the rows, so each setting has both panels.

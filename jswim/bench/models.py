@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Mapping
 
-from jswim.bench.suites import Suite, _check_name, user_suite
+from jswim.bench.suites import Suite, check_name, user_suite
 from jswim.errors import ConfigError
 from jswim.llm.prices import parse_prices
 
@@ -104,7 +104,7 @@ def model_entry(table: Any, where: str) -> ModelEntry:
                 f"{where}: a model entry needs {key} (every entry has base_url and model; name is "
                 "optional)"
             )
-    name = _check_name(table.get("name") or table["model"], "model name")
+    name = check_name(table.get("name") or table["model"], "model name")
     if name in RESERVED:
         raise ConfigError(
             f"{where}: the model name {name!r} is the bench's own row; choose another"

@@ -121,7 +121,7 @@ PAPER = Suite(
 SUITES = {"core": CORE, "paper": PAPER}
 
 
-def _check_name(name: str, what: str) -> str:
+def check_name(name: str, what: str) -> str:
     import re
 
     if not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9._-]{0,63}", str(name)):
@@ -197,7 +197,7 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
         _check_part_options(p["study"], opts, f"{where}: suite {name!r} part {i + 1}")
         parts.append(
             Part(
-                _check_name(p.get("name") or p["study"], "suite part"),
+                check_name(p.get("name") or p["study"], "suite part"),
                 p["study"],
                 tuple((k, tuple(v) if isinstance(v, list) else v) for k, v in opts.items()),
             )
@@ -208,4 +208,4 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
         seed = int(table.get("seed", 0))
     except (TypeError, ValueError):
         raise ConfigError(f"{where}: suite {name!r}: seed must be an integer") from None
-    return Suite(_check_name(name, "suite"), tuple(parts), seed, str(table.get("about", "")))
+    return Suite(check_name(name, "suite"), tuple(parts), seed, str(table.get("about", "")))

@@ -1,6 +1,6 @@
 """The ``jswim`` command: one module per command (``register(sub)`` adds its parser, ``main(args)``
-runs it), argv -> options of the studies in :mod:`jswim.cli.options`, shared parts in
-:mod:`jswim.cli.base`. Every command, in one table: docs/getting-started.md. A user mistake ends
+runs it), argv -> options of the studies in `jswim.cli.options`, shared parts in
+`jswim.cli.base`. Every command, in one table: docs/getting-started.md. A user mistake ends
 with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
 """
 
@@ -17,12 +17,12 @@ from collections.abc import Sequence
 from jswim import compile_cache
 from jswim._io import interrupts
 from jswim._io.jsonl import forget_warnings
-from jswim._io.paths import path_kind  # noqa: F401  (also read from here)
 from jswim._io.permissions import private_files
 from jswim.cli import animate, bench, ensemble, folders, gaits, qlearn, report, serve, study
-from jswim.cli.base import EXIT_USAGE, MAX_COUNT, Outline, Parser, warnings_as_lines  # noqa: F401  (read from here)
-from jswim.cli.options import STUDY_HELP, default_key_env  # noqa: F401  (read from here)
+from jswim.cli.base import EXIT_USAGE, Outline, Parser, warnings_as_lines
 from jswim.errors import JswimError
+
+__all__ = ["build_parser", "main", "run"]
 from jswim.llm.credentials import scrub
 
 #: The commands in the order ``jswim --help`` lists them.
@@ -153,7 +153,7 @@ def _show_warning(
 
 
 def run() -> None:
-    """Console-script wrapper: signals end a session as Ctrl-C does (:mod:`jswim._io.interrupts`)."""
+    """Console-script wrapper: signals end a session as Ctrl-C does (`jswim._io.interrupts`)."""
     interrupts.install()
     warnings.showwarning = _show_warning
     try:

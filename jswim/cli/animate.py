@@ -1,4 +1,4 @@
-"""``jswim animate FOLDER``: runs of a study folder as a GIF or MP4 (see :mod:`jswim.viz.animate`)."""
+"""``jswim animate FOLDER``: runs of a study folder as a GIF or MP4 (see `jswim.viz.animate`)."""
 
 from __future__ import annotations
 

@@ -105,7 +105,7 @@ def check_out_folder(out: str) -> None:
 
 def check_counts(args: argparse.Namespace, *names: str) -> None:
     """The one check of a command's counts (``--n``, ``--steps``, ``--seeds``, ``--chunk``, ...):
-    each given one ``>= 1`` and at most :data:`MAX_COUNT` (the device's int32 indices; else a deep
+    each given one ``>= 1`` and at most `MAX_COUNT` (the device's int32 indices; else a deep
     traceback)."""
     for name in names:
         if getattr(args, name) is not None:
@@ -124,7 +124,7 @@ def warn(message: str) -> None:
 
 @contextlib.contextmanager
 def warnings_as_lines() -> Iterator[None]:
-    """Inside: each :class:`~jswim.errors.JswimWarning` is one ``jswim: warning:`` line on stderr
+    """Inside: each [`JswimWarning`][jswim.errors.JswimWarning] is one ``jswim: warning:`` line on stderr
     (others as Python shows them); the hook is restored after."""
     shown = warnings.showwarning
 

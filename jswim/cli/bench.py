@@ -242,7 +242,7 @@ def _missing(
 
 
 def _unpriced(m: Any, mf: Any) -> str | None:
-    """Why a model's calls are not priced (None: they are), in :func:`jswim.console.cost_text`'s words."""
+    """Why a model's calls are not priced (None: they are), in `jswim.console.cost_text`'s words."""
     local = is_local_host(m.get("base_url"))
     table, why = price_table(
         mf.prices, m.get("model"), local_host=local, price_local=bool(m.get("price_local"))
@@ -285,7 +285,7 @@ def _rows(jobs: list[Any], models: Any, mf: Any, status: dict[str, str]) -> list
 
 def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
     """Price every model's suite in process (nothing sent, nothing written); each job's argv is read
-    as ``jswim study`` reads it (:mod:`jswim.cli.options`)."""
+    as ``jswim study`` reads it (`jswim.cli.options`)."""
     from jswim.bench import runner  # lazy: start-up (NumPy)
     from jswim.studies.run import estimate_study  # lazy: JAX loads only for commands that run
 

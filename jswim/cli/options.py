@@ -1,9 +1,9 @@
 """argv -> options, in one place: the options of ``jswim swim`` and ``jswim study NAME`` (their
-parsers, :func:`options` -> :class:`jswim.studies.StudyOptions`, :func:`backend` ->
-:class:`jswim.llm.backend.Backend`), read by those commands and by ``jswim bench --dry-run``
-(which prices each job's study command line in process through :func:`study_parser`).
+parsers, `options` -> [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions], `backend` ->
+[`jswim.llm.backend.Backend`][jswim.llm.backend.Backend]), read by those commands and by ``jswim bench --dry-run``
+(which prices each job's study command line in process through `study_parser`).
 
-A study's own options (the scene studies': ``--heights``, ...) are a table in :mod:`jswim.cli.scenes`.
+A study's own options (the scene studies': ``--heights``, ...) are a table in `jswim.cli.scenes`.
 """
 
 from __future__ import annotations
@@ -92,7 +92,7 @@ def study_parser() -> argparse.ArgumentParser:
 
 def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> None:
     """The options of ``jswim swim`` and ``jswim study NAME``; each help names the defaults of the
-    study (``spec``: its :class:`jswim.studies.grids.StudySpec`)."""
+    study (``spec``: its [`jswim.studies.grids.StudySpec`][jswim.studies.grids.StudySpec])."""
     from jswim.studies.grids import (
         DEFAULT_ZETAS,
         StudyOptions,
@@ -506,7 +506,7 @@ def default_key_env(base_url: str | None) -> str:
 
 
 def backend(args: argparse.Namespace) -> Any:
-    """The :class:`jswim.llm.backend.Backend` of a study's command line (validated there)."""
+    """The [`jswim.llm.backend.Backend`][jswim.llm.backend.Backend] of a study's command line (validated there)."""
     from jswim.llm.backend import Backend  # lazy: JAX and httpx load only for commands that run
 
     key_env = (
@@ -592,7 +592,7 @@ IGNORABLE = {
 
 
 def options(args: argparse.Namespace, study: str) -> Any:
-    """The :class:`jswim.studies.StudyOptions` of a study's command line (validated there)."""
+    """The [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions] of a study's command line (validated there)."""
     from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
 
     if args.prompt_file is not None:

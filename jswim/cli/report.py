@@ -1,4 +1,4 @@
-"""``jswim report FOLDER``: write the folder's ``report.html`` (see :mod:`jswim.viz.page`)."""
+"""``jswim report FOLDER``: write the folder's ``report.html`` (see `jswim.viz.page`)."""
 
 from __future__ import annotations
 

@@ -1,9 +1,9 @@
 """Each study's own options (today the scene studies': ``jswim study wall`` / ``jswim study pair``)
 and the scene table printed after the usual summary.
 
-:data:`OPTIONS` is the table: study -> its options, each ``(flag, argparse keywords)`` whose dest is
-the :class:`jswim.studies.StudyOptions` field it sets; :func:`register` adds them to the study's
-parser, :func:`options` reads them back. A study's new option is one row here.
+`OPTIONS` is the table: study -> its options, each ``(flag, argparse keywords)`` whose dest is
+the [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions] field it sets; `register` adds them to the study's
+parser, `options` reads them back. A study's new option is one row here.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ def _numbers(kind: type) -> Any:
 
 
 #: study -> its own options: (flag, argparse keywords); ``choices="PAIR_PROMPTS"`` is read from
-#: :mod:`jswim.agents.variants` when the parser is built (`jswim --help` never imports the agents).
+#: [`jswim.agents.variants`][jswim.agents.variants] when the parser is built (`jswim --help` never imports the agents).
 OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
     "wall": (
         (
@@ -116,7 +116,7 @@ def _dest(flag: str) -> str:
 
 
 def register(q: argparse.ArgumentParser, name: str) -> None:
-    """Add study ``name``'s own options (:data:`OPTIONS`) to its parser (nothing for other studies)."""
+    """Add study ``name``'s own options (`OPTIONS`) to its parser (nothing for other studies)."""
     if name not in OPTIONS:
         return
     from jswim.agents import (

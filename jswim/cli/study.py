@@ -1,4 +1,4 @@
-"""``jswim swim`` and ``jswim study NAME``: run a study (argv -> options in :mod:`jswim.cli.options`),
+"""``jswim swim`` and ``jswim study NAME``: run a study (argv -> options in `jswim.cli.options`),
 then print its summary, scene table, LLM calls and cost, and where the folder, page and figures are."""
 
 from __future__ import annotations

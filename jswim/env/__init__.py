@@ -17,7 +17,7 @@ API in the gymnax style::
 Batch with ``jax.vmap(step, in_axes=(0, 0, 0, None))``; ``params`` is a pytree whose ``zeta``,
 ``direction`` and ``init`` leaves may also be batched.
 
-The world protocol (one interface for this world and the scenes', :mod:`~jswim.env.base`) and
+The world protocol (one interface for this world and the scenes', [`base`][jswim.env.base]) and
 the module of each concern: docs/design.md (module map, *The world protocol*)::
 
     env, params = make("ng", Scene(medium="wall", height=5.0), direction="-x")
@@ -64,7 +64,7 @@ from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env.tables import TABLE_DEGREE, step_table
 
 #: The protocol's names that reach the scene physics, loaded on first use (PEP 562) so that
-#: ``import jswim.env`` does not import :mod:`jswim.scenes`.
+#: ``import jswim.env`` does not import `jswim.scenes`.
 _LAZY = {
     "make": "jswim.env.worlds",
     "SceneWorld": "jswim.env.scene_world",

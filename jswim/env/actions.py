@@ -1,10 +1,10 @@
 """Actions: a DOF and a rate of change ROC in [-1, 1].
 
-Two encodings reach :func:`jswim.env.step` (docs/continuous.md, "Actions"): an **integer code**
+Two encodings reach [`jswim.env.step`][jswim.env.stepping.step] (docs/continuous.md, "Actions"): an **integer code**
 ``(dof - 1) (2K + 1) + (k + K)`` (``K = params.roc_levels``; DOF ``dof`` 1-based, ROC ``k / K``;
 K = 1 gives the paper's codes), or a **float ROC vector** ``(n_dof,)``, entry ``i`` DOF ``i + 1``'s
 ROC (at most one non-zero unless ``params.diagonal``). The *action sets* offered to agents
-(``"all"`` / ``"shape-changing"``) live in :mod:`jswim.actions`.
+(``"all"`` / ``"shape-changing"``) live in [`jswim.actions`][jswim.actions].
 """
 
 from __future__ import annotations
@@ -51,7 +51,7 @@ def validate_moves(actions: Any, n_dof: int) -> np.ndarray | None:
     -------
     ndarray (..., n_dof) float64, or None
         ``None`` when every ROC is -1, 0 or 1 (the discrete world:
-        use :func:`validate_actions`); otherwise one ROC vector per pair.
+        use [`validate_actions`][jswim.env.actions.validate_actions]); otherwise one ROC vector per pair.
 
     Raises
     ------

@@ -6,24 +6,24 @@ batched). Every world answers:
 
 * ``reset(key, params) -> state`` and ``step(key, state, action, params) -> (state, StepInfo)``;
 * ``advance(state, action, noise, params)``: the step for given noise draws ``(n_swimmers,)`` in
-  [-1, 1] (what :meth:`Environment.step` draws from its key: :meth:`Environment.noise`);
+  [-1, 1] (what [`Environment.step`][jswim.env.base.Environment.step] draws from its key: [`Environment.noise`][jswim.env.base.Environment.noise]);
 * ``observe(state, params) -> Observation``: what agents may see; ``features(state, params)``:
   the same as one flat float vector (the input of a policy network);
-* ``action_space(params)`` (integer codes, :class:`Discrete`) and ``roc_space(params)`` (float
-  ROC vectors, :class:`Box`), each with ``sample(key)`` as in gymnax;
+* ``action_space(params)`` (integer codes, [`Discrete`][jswim.env.base.Discrete]) and ``roc_space(params)`` (float
+  ROC vectors, [`Box`][jswim.env.base.Box]), each with ``sample(key)`` as in gymnax;
 * the sizes ``n_dof`` (joint DOFs of every swimmer), ``n_actions``, ``n_swimmers``, and
   ``default_params``.
 
 An action is an integer code over the joint DOFs, ``(dof - 1)(2K + 1) + k + K`` (DOF 1-based,
 ROC ``k / K``; swimmer ``s`` of a scene owns DOFs ``2s + 1, 2s + 2``), or a float ROC vector of
 shape ``(n_dof,)`` in [-1, 1] (only its first non-zero entry moves unless the world allows
-diagonal strokes). One :class:`StepInfo` serves every world; ``progress`` is the reward of the
+diagonal strokes). One [`StepInfo`][jswim.env.base.StepInfo] serves every world; ``progress`` is the reward of the
 paper's task toward ``params.direction`` (+1: +x, -1: -x), a parameter of every world.
 
-Worlds: :class:`jswim.env.swimmer_world.SwimmerWorld` (the paper's swimmers alone in the fluid,
-over :mod:`jswim.env`) and :class:`jswim.env.scene_world.SceneWorld` (walls, obstacles, pairs,
-over :mod:`jswim.scenes`); :func:`jswim.env.worlds.make` builds either. A new world subclasses
-:class:`Environment` and fills in ``reset``, ``advance``, ``observe`` and the sizes (see
+Worlds: [`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld] (the paper's swimmers alone in the fluid,
+over `jswim.env`) and [`jswim.env.scene_world.SceneWorld`][jswim.env.scene_world.SceneWorld] (walls, obstacles, pairs,
+over `jswim.scenes`); [`jswim.env.worlds.make`][jswim.env.worlds.make] builds either. A new world subclasses
+[`Environment`][jswim.env.base.Environment] and fills in ``reset``, ``advance``, ``observe`` and the sizes (see
 docs/design.md, *Adding a world*).
 """
 
@@ -44,7 +44,7 @@ class StepInfo(NamedTuple):
     ----------
     displacement : Array (S, 2)
         Each swimmer's displacement ``(dx, dy)`` over the step, of the point
-        :attr:`Observation.position` reports (the paper's centroid), lab frame, units of the
+        `Observation.position` reports (the paper's centroid), lab frame, units of the
         world's length (link length or sphere radius ``a``); noisy when ``zeta > 0``. ``dy`` is
         the height change above a wall.
     progress : Array ()
@@ -82,7 +82,7 @@ class Observation(NamedTuple):
         from the wall plane.
     height : Array (S,) or None
         Each swimmer's height as its world records it (a scene's: the middle sphere's ``z``,
-        :class:`jswim.scenes.SceneState`), which the prompt's ``H`` shows; ``None``: the world has
+        [`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]), which the prompt's ``H`` shows; ``None``: the world has
         none (then ``position``'s ``y`` stands for it).
     """
 
@@ -167,10 +167,10 @@ class Environment:
 
     @property
     def dof_range(self) -> tuple[float, float]:
-        """The interval ``(lo, hi)`` each DOF of :meth:`observe` stays in, what an LLM's prompt
-        states of a world of :func:`jswim.register_world` (:func:`jswim.agents.world_view.model`);
+        """The interval ``(lo, hi)`` each DOF of [`observe`][jswim.env.scene_world.SceneWorld.observe] stays in, what an LLM's prompt
+        states of a world of [`jswim.register_world`][jswim.env.worlds.register_world] ([`jswim.agents.world_view.model`][jswim.agents.world_view.model]);
         default ``(0.0, 1.0)``: DOFs observed as their places in their ranges. The paper's
-        swimmers' ranges are their models' (:class:`~jswim.swimmers.models.SwimmerModel`
+        swimmers' ranges are their models' ([`SwimmerModel`][jswim.swimmers.models.SwimmerModel]
         ``lo``, ``hi``), which the agents read instead."""
         return (0.0, 1.0)
 
@@ -204,14 +204,14 @@ class Environment:
 
     def noise(self, key: Array, state: Any) -> Array:
         """The step's noise variables ``Y ~ U[-1, 1]``, one per swimmer ``(n_swimmers,)``; one
-        swimmer's is ``uniform(key, ())``, the draw of :func:`jswim.env.step`."""
+        swimmer's is ``uniform(key, ())``, the draw of [`jswim.env.step`][jswim.env.stepping.step]."""
         dtype = self.dtype(state)
         if self.n_swimmers == 1:
             return jax.random.uniform(key, (), dtype, -1.0, 1.0)[None]
         return jax.random.uniform(key, (self.n_swimmers,), dtype, -1.0, 1.0)
 
     def step(self, key: Array, state: Any, action: Array, params: Any) -> tuple[Any, StepInfo]:
-        """One step, its noise drawn from ``key`` (:meth:`noise`), then :meth:`advance`."""
+        """One step, its noise drawn from ``key`` ([`noise`][jswim.env.base.Environment.noise]), then `advance`."""
         return self.advance(state, action, self.noise(key, state), params)
 
     def action_space(self, params: Any = None) -> Discrete:
@@ -229,7 +229,7 @@ class Environment:
 
     @property
     def n_features(self) -> int:
-        """Length of :meth:`features`."""
+        """Length of [`features`][jswim.env.base.Environment.features]."""
         return self.n_dof
 
 

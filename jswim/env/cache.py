@@ -46,7 +46,7 @@ def cache_dir() -> Path | None:
 
 @functools.lru_cache(maxsize=1)
 def code_version() -> str:
-    """Hash of ``jswim.__version__`` and the source of the modules in :data:`_SOURCES`."""
+    """Hash of ``jswim.__version__`` and the source of the modules in `_SOURCES`."""
     import importlib.util
 
     import jswim  # lazy: the package's __init__ imports this module, so only a call can read its version

@@ -1,7 +1,7 @@
-"""One rollout for any world of the protocol (:mod:`jswim.env.base`), and its batch.
+"""One rollout for any world of the protocol ([`jswim.env.base`][jswim.env.base]), and its batch.
 
 ``rollout(env, params, key, actions)`` resets with ``key`` and steps with ``split(key, T)``, the
-keys :func:`jswim.env.rollout` and :func:`jswim.scenes.scene_rollout` use, so a world's protocol
+keys [`jswim.env.rollout`][jswim.env.rollouts.rollout] and [`jswim.scenes.scene_rollout`][jswim.scenes.rollout.scene_rollout] use, so a world's protocol
 rollout and its own rollout step through the same numbers.
 """
 
@@ -19,10 +19,10 @@ from jswim.env.randomness import seed_key
 
 
 class Trajectory(NamedTuple):
-    """What a rollout did; leading axis = steps (after a batch axis for :func:`rollout_batch`).
+    """What a rollout did; leading axis = steps (after a batch axis for [`rollout_batch`][jswim.env.episodes.rollout_batch]).
 
-    ``state`` and ``obs`` are the state after each step and its :class:`Observation`; ``info``
-    the step's :class:`StepInfo`."""
+    ``state`` and ``obs`` are the state after each step and its [`Observation`][jswim.env.base.Observation]; ``info``
+    the step's [`StepInfo`][jswim.env.base.StepInfo]."""
 
     state: Any
     obs: Observation
@@ -55,13 +55,13 @@ def rollout(env: Environment, params: Any, key: Array | int, actions: Any) -> Tr
     Parameters
     ----------
     env : Environment
-        The world (:func:`jswim.make`).
+        The world ([`jswim.make`][jswim.env.worlds.make]).
     params : pytree
         Its params (unbatched).
     key : PRNG key or int
         Reset key; step ``t`` draws its noise from ``split(key, T)[t]``.
     actions : array (T,) int or (T, n_dof) float
-        Integer action codes or float ROC vectors (:mod:`jswim.env.base`).
+        Integer action codes or float ROC vectors ([`jswim.env.base`][jswim.env.base]).
 
     Returns
     -------
@@ -81,11 +81,11 @@ def _run_batch(
 def rollout_batch(
     env: Environment, params: Any, key: Array | int, actions: Any, *, params_axes: Any = None
 ) -> Trajectory:
-    """:func:`rollout` of a batch: ``actions`` ``(B, T)`` / ``(B, T, n_dof)``, member ``i`` with
+    """[`rollout`][jswim.env.episodes.rollout] of a batch: ``actions`` ``(B, T)`` / ``(B, T, n_dof)``, member ``i`` with
     key ``split(key, B)[i]``, one vectorised scan (``vmap``, no Python loop over members).
 
     ``params_axes`` is ``vmap``'s ``in_axes`` prefix for ``params`` (``None``: shared; e.g.
-    :func:`jswim.env.param_axes` for per-member ``zeta`` or ``direction``); it must be hashable.
+    [`jswim.env.param_axes`][jswim.env.params.param_axes] for per-member ``zeta`` or ``direction``); it must be hashable.
     """
     actions = jnp.asarray(actions)
     keys = jax.random.split(_as_key(key), actions.shape[0])

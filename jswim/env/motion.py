@@ -12,7 +12,7 @@ fractions ``s`` of their ranges), let ``G_k(s, c)`` be the rigid motion from the
 
 ``Theta`` and ``W`` are smooth (analytic) in both arguments, so each is a tensor Chebyshev series
 in ``(s, c)`` built once per model in float64 from the spectral running integral of the body
-velocity along ``s`` (:func:`jswim.integrate.chebyshev_rule`); the degrees are chosen where the
+velocity along ``s`` ([`jswim.integrate.chebyshev_rule`][jswim.integrate.chebyshev_rule]); the degrees are chosen where the
 coefficients fall below ~1e-16 of the largest. A step then costs one small matrix product and
 two short series instead of an integration.
 """
@@ -43,7 +43,7 @@ class MotionTable(NamedTuple):
     ``coef[j, f, i]``: degree ``j`` in ``c`` (the held DOF), function ``f`` (``Theta, Re W, Im W``
     for planar swimmers; ``Re W`` for the sphere swimmers), degree ``i`` in ``s`` (the moving
     DOF). Moves of DOF 2 read the same table through the swimmer's end-to-end symmetry
-    (:func:`mirror`).
+    (`mirror`).
     """
 
     coef: np.ndarray  # (M + 1, F, N + 1)
@@ -63,7 +63,7 @@ def mirror(
     link swimmers the hinge angles also change sign (``d -> -d``, i.e. ``frac -> 1 - frac`` on
     the symmetric range), and the body frame turns by pi, so the move's body-frame displacement
     changes sign and its rotation does not. Checked against the integrator when the table is
-    built (:func:`motion_table`) and in the tests.
+    built (`motion_table`) and in the tests.
     """
     if model.planar:
         flip = dof != 0

@@ -35,10 +35,10 @@ class EnvParams:
     direction : float or Array
         Target direction, +1 for +e_x, -1 for -e_x (sign of the reward ``progress``).
     init : Array, int32 (n_dof,)
-        Initial DOF levels: 0 = lo, 1 = hi, -1 = drawn at random by :func:`jswim.env.reset`.
+        Initial DOF levels: 0 = lo, 1 = hi, -1 = drawn at random by [`jswim.env.reset`][jswim.env.state.reset].
     roc_levels : int
         K (static): integer action codes carry ROC ``k / K`` with ``k`` in ``-K..K``
-        (``n_dof (2K + 1)`` codes, :func:`jswim.env.encode_action`). K = 1 is the paper's
+        (``n_dof (2K + 1)`` codes, [`jswim.env.encode_action`][jswim.actions.encode_action]). K = 1 is the paper's
         ROC in {-1, 0, 1}. Float ROC vectors are accepted whatever K is.
     diagonal : bool
         Static. Whether a float ROC vector may move several DOFs at once (a diagonal stroke,
@@ -92,7 +92,7 @@ def make_params(
     swimmer : str or SwimmerModel
         ``"purcell"``, ``"ng"``, ``"nlink"`` or ``"nsphere"``; model options (``d_max``,
         ``d_min``, ``n_links``, ``n_spheres``, ``xi_ratio``) go by keyword, see
-        :func:`jswim.swimmers.models.make_model`.
+        [`jswim.swimmers.models.make_model`][jswim.swimmers.models.make_model].
     zeta : float
         Noise level, >= 0.
     direction : int or str
@@ -123,7 +123,7 @@ def make_params(
 
 def check_roc_levels(k: Any) -> int:
     """``k`` as an int if it is a valid number of ROC levels K (the rule of
-    :func:`jswim.actions.check_roc_levels`, with the message naming ``roc_levels``)."""
+    [`jswim.actions.check_roc_levels`][jswim.actions.check_roc_levels], with the message naming ``roc_levels``)."""
     return _check_roc_levels(k, "roc_levels")
 
 

@@ -45,7 +45,7 @@ def uniforms(
 
 
 def seed32(seed: int) -> int:
-    """A seed :func:`jax.random.PRNGKey` takes, from any integer: ``seed`` itself in
+    """A seed `jax.random.PRNGKey` takes, from any integer: ``seed`` itself in
     ``[0, 2**32)`` (so existing seeds keep their streams), else a 32-bit BLAKE2b hash of it
     (negative or huge seeds: ``--seed -1``, ``--seed 2**70``)."""
     seed = int(seed)

@@ -24,7 +24,7 @@ class Rollout(NamedTuple):
     """Per-step record of a rollout (state after each step); leading axes (batch, steps).
 
     ``x``, ``y`` and ``orientation`` are the full values (``hi + lo``) rounded to the working
-    dtype (float64 in :func:`rollout`)."""
+    dtype (float64 in [`rollout`][jswim.env.rollouts.rollout])."""
 
     x: Array
     y: Array
@@ -68,8 +68,8 @@ def rollout(
 ) -> Any:
     """Run a given action sequence for one swimmer or a batch.
 
-    ``rollout(env, params, key, actions)`` with a world of :func:`jswim.make` first is the
-    protocol's rollout for any world (:func:`jswim.env.episodes.rollout`).
+    ``rollout(env, params, key, actions)`` with a world of [`jswim.make`][jswim.env.worlds.make] first is the
+    protocol's rollout for any world ([`jswim.env.episodes.rollout`][jswim.env.episodes.rollout]).
 
     Parameters
     ----------
@@ -83,11 +83,11 @@ def rollout(
         Seed of the noise (only used when ``zeta > 0`` or ``init="random"``); batch members get
         independent keys split from it.
     zeta, direction, init, **model_kwargs
-        As in :func:`jswim.env.make_params` (``d_max``, ``d_min``, ...).
+        As in [`jswim.env.make_params`][jswim.env.params.make_params] (``d_max``, ``d_min``, ...).
     scene : jswim.scenes.Scene, optional
         Swim in a scene (``"ng"`` only): a wall, obstacles, two swimmers
-        (:func:`jswim.scenes.scene_rollout`, which returns a
-        :class:`jswim.scenes.SceneRollout`; ``actions`` may then be ``(swimmer, dof, roc)``
+        ([`jswim.scenes.scene_rollout`][jswim.scenes.rollout.scene_rollout], which returns a
+        [`jswim.scenes.SceneRollout`][jswim.scenes.rollout.SceneRollout]; ``actions`` may then be ``(swimmer, dof, roc)``
         triples). ``None``, or one untilted swimmer in the ``"bulk"`` medium, is exactly this
         function without a scene.
 

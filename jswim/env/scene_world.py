@@ -1,14 +1,14 @@
-"""Scenes through the protocol: NG swimmers near a wall, among obstacles, in pairs (:mod:`jswim.scenes`).
+"""Scenes through the protocol: NG swimmers near a wall, among obstacles, in pairs (`jswim.scenes`).
 
-The physics is :mod:`jswim.scenes`' own: :meth:`SceneWorld.step` of a joint action code is
-:func:`jswim.scenes.scene_step` of the code's ``(swimmer, dof, roc)`` (the same draw from the key,
+The physics is `jswim.scenes`' own: `SceneWorld.step` of a joint action code is
+[`jswim.scenes.scene_step`][jswim.scenes.stepping.scene_step] of the code's ``(swimmer, dof, roc)`` (the same draw from the key,
 the same state, bit for bit). What the world adds is the task: a target ``direction`` in its
-params (:class:`SceneTask`), the reward ``progress`` and positions of each swimmer's centroid.
+params ([`SceneTask`][jswim.env.scene_world.SceneTask]), the reward ``progress`` and positions of each swimmer's centroid.
 
 A swimmer's position is the centroid of its three spheres, the middle sphere's ``(x, z)`` plus
 ``(d2 - d1) / 3`` along its axis: the point whose velocity the paper's formula gives (the middle
 sphere jumps by more than 1 a at every move while the swimmer nets about 0.17 a per cycle). In the
-``"bulk"`` medium the state's centre already is the paper's X (:mod:`jswim.scenes.stepping`), so
+``"bulk"`` medium the state's centre already is the paper's X ([`jswim.scenes.stepping`][jswim.scenes.stepping]), so
 there the position is the centre.
 """
 
@@ -32,7 +32,7 @@ ARMS = 2
 
 
 class SceneTask(NamedTuple):
-    """A scene world's params: the scene's own (:class:`jswim.scenes.SceneParams`) and the target
+    """A scene world's params: the scene's own ([`jswim.scenes.SceneParams`][jswim.scenes.params.SceneParams]) and the target
     direction (+1: +x, -1: -x); both may be batched (``vmap`` axes as a ``SceneTask`` prefix)."""
 
     scene: SceneParams
@@ -41,7 +41,7 @@ class SceneTask(NamedTuple):
 
 @dataclasses.dataclass(frozen=True)
 class SceneWorld(Environment):
-    """A :class:`jswim.scenes.Scene` as a world; ``params`` is a :class:`SceneTask`.
+    """A [`jswim.scenes.Scene`][jswim.scenes.scene.Scene] as a world; ``params`` is a [`SceneTask`][jswim.env.scene_world.SceneTask].
 
     Swimmer ``s`` (0-based) owns joint DOFs ``2s + 1, 2s + 2`` (1-based), so a joint code is the
     paper's code over the joint DOFs (one swimmer's codes are the bulk swimmer's).
@@ -102,7 +102,7 @@ class SceneWorld(Environment):
     def advance(
         self, state: SceneState, action: Array, noise: Array, params: SceneTask
     ) -> tuple[SceneState, StepInfo]:
-        """:func:`jswim.scenes.scene_advance` of the action, with noise ``(S,)``."""
+        """[`jswim.scenes.scene_advance`][jswim.scenes.stepping.scene_advance] of the action, with noise ``(S,)``."""
         new, info = scene_advance(params.scene, state, self.move(action), noise)
         dtype = new.arms.dtype
         disp = jnp.stack([info.dx, info.dz], -1) + (self.offset(new) - self.offset(state))
@@ -119,7 +119,7 @@ class SceneWorld(Environment):
     def observe(self, state: SceneState, params: SceneTask) -> Observation:
         """Positions: each swimmer's centroid from the full pair ``centre + centre_lo`` (in the
         state's dtype the sum is ``centre``; widened to float64 it is exact, drift-free); height:
-        the middle sphere's ``z`` (:class:`jswim.scenes.SceneState`'s, what the scenes record)."""
+        the middle sphere's ``z`` ([`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]'s, what the scenes record)."""
         centre = state.centre + centre_low(state)
         return Observation(
             state.arms.reshape(-1), centre + self.offset(state), state.tilt, centre[:, 1]
@@ -137,7 +137,7 @@ class SceneWorld(Environment):
 
 
 def features(state: SceneState, params: SceneParams, wall: bool) -> Array:
-    """:meth:`SceneWorld.features` of a scene's state (also the PPO scene world's observation)."""
+    """[`SceneWorld.features`][jswim.env.scene_world.SceneWorld.features] of a scene's state (also the PPO scene world's observation)."""
     obs = scaled(state.arms.reshape(-1), params.lo, params.hi)
     if not wall:
         return obs

@@ -19,13 +19,13 @@ class EnvState(NamedTuple):
     Each DOF's value is held as its place in the range, ``frac = (d - lo) / (hi - lo)`` in
     [0, 1], so a step at ROC ``r`` moves ``frac`` by ``r`` (clipped to [0, 1]), the limits are
     exactly 0 and 1 in any dtype, and the paper's corner levels read straight off it
-    (:attr:`levels`). :func:`dof_values` gives ``d`` itself.
+    ([`levels`][jswim.env.state.EnvState.levels]). [`dof_values`][jswim.env.state.dof_values] gives ``d`` itself.
 
     Every real-valued quantity is stored as a pair ``hi + lo`` of the working dtype: the value of
     X is ``x + x_lo``, and likewise ``y``, ``theta``, ``cos``, ``sin`` and ``frac`` with their
-    ``*_lo`` words. ``x`` alone is the nearest number of the working dtype; :func:`position`
+    ``*_lo`` words. ``x`` alone is the nearest number of the working dtype; [`position`][jswim.env.state.position]
     reads the full value. A float32 pair holds ~48 significant bits and every step is computed
-    in float64 (:func:`jswim.env.advance`), so neither positions nor shapes drift: after 10^6
+    in float64 ([`jswim.env.advance`][jswim.env.stepping.advance]), so neither positions nor shapes drift: after 10^6
     square-gait steps in float32, X is within ~1e-10 relative of the closed form (plain float32
     accumulation was off by ~1 %). On the corners (the paper's discrete world) ``frac_lo`` stays
     0. Each component is its own field so that a batch keeps it contiguous, which vectorises
@@ -112,7 +112,7 @@ def start_orientation(model: SwimmerModel, levels: Any, xp: Any = jnp) -> Any:
 
 def reset(key: Array, params: EnvParams) -> EnvState:
     """Start state: centroid at the origin, DOFs at ``params.init``, orientation
-    :func:`start_orientation` (0 except for chains of more than three links)."""
+    [`start_orientation`][jswim.env.state.start_orientation] (0 except for chains of more than three links)."""
     n = params.model.n_dof
     init = jnp.asarray(params.init, jnp.int32)
     coin = jax.random.bernoulli(key, 0.5, (n,)).astype(jnp.int32)
@@ -122,10 +122,10 @@ def reset(key: Array, params: EnvParams) -> EnvState:
 
 def start_state(model: SwimmerModel, levels: Array, dtype: Any = None) -> EnvState:
     """State of one swimmer at the origin with DOF ``levels`` and the start orientation
-    (:func:`start_orientation`, computed in float64 and stored as a pair of ``dtype``).
+    ([`start_orientation`][jswim.env.state.start_orientation], computed in float64 and stored as a pair of ``dtype``).
 
     ``levels`` are corner levels (0 = lo, 1 = hi) or, for a shape off the corners, each DOF's
-    fraction of its range in [0, 1] (``frac`` of :class:`EnvState`).
+    fraction of its range in [0, 1] (``frac`` of [`EnvState`][jswim.env.state.EnvState]).
     """
     dtype = jnp.result_type(float) if dtype is None else dtype
     zero = jnp.zeros((), dtype)

@@ -7,10 +7,10 @@ shape space only, not on the rate, and the body-frame motion does not depend on 
 orientation. So:
 
 * the paper's discrete world (integer codes with K = 1: every step from corner to corner) reads
-  each step from the corner table (:func:`jswim.env.step_table`) and rotates it by the current
+  each step from the corner table (`jswim.env.step_table`) and rotates it by the current
   orientation;
 * any other step (integer codes on the K lattice, float ROC vectors) integrates its path with
-  the spectral integrator (:func:`jswim.integrate.integrate_stroke`, float64); a diagonal stroke
+  the spectral integrator ([`jswim.integrate.integrate_stroke`][jswim.integrate.integrate_stroke], float64); a diagonal stroke
   whose DOFs reach their limits at different times is integrated piece by piece along its bent
   path.
 
@@ -56,11 +56,11 @@ def step(
 ) -> tuple[EnvState, StepInfo]:
     """Advance one swimmer by one action.
 
-    ``action`` is an integer code (:func:`jswim.env.encode_action`, ROC ``k / K`` with
+    ``action`` is an integer code ([`jswim.env.encode_action`][jswim.actions.encode_action], ROC ``k / K`` with
     ``K = params.roc_levels``) or a float ROC vector of shape ``(n_dof,)`` with entries in
-    [-1, 1] (see :mod:`jswim.env.actions`). The noise variable ``Y ~ U[-1, 1]`` is drawn from
+    [-1, 1] (see [`jswim.env.actions`][jswim.env.actions]). The noise variable ``Y ~ U[-1, 1]`` is drawn from
     ``key``. Codes outside ``[0, n_actions)`` are clipped and ROCs clipped to [-1, 1]; validate
-    user input with :func:`jswim.env.validate_actions` / :func:`jswim.env.validate_moves` before it
+    user input with [`jswim.env.validate_actions`][jswim.env.actions.validate_actions] / [`jswim.env.validate_moves`][jswim.env.actions.validate_moves] before it
     reaches a jitted loop.
     """
     return advance(state, action, jax.random.uniform(key, (), state.x.dtype, -1.0, 1.0), params)
@@ -74,11 +74,11 @@ def step_batch(
     Equivalent in law to ``jax.vmap(step)`` with one key per swimmer, but it draws all the noise
     with one counter-based hash per two swimmers instead of splitting a key per swimmer: the fast
     path for large batches. Swimmer ``i`` gets ``noise(key, n)[i]`` (see
-    :func:`jswim.env.noise`), a function of the key and ``start + i`` only, so the numbers do not
+    [`jswim.env.noise`][jswim.env.randomness.noise]), a function of the key and ``start + i`` only, so the numbers do not
     depend on how the batch is split into chunks or sharded over devices.
 
     With more than one device (``jax.devices()``) the batch axis is sharded over all of them
-    (:mod:`jswim.sharding`); results are the same as on one device. Peak memory is the input and
+    (`jswim.sharding`); results are the same as on one device. Peak memory is the input and
     output states plus the infos: about ``2 (8 n_dof + 48) + 24`` bytes per swimmer in float32.
 
     Parameters
@@ -88,7 +88,7 @@ def step_batch(
     states : EnvState
         Batched states, leading axis B.
     actions : int array (B,) or float array (B, n_dof)
-        Integer codes (:func:`jswim.env.encode_action`) or float ROC vectors.
+        Integer codes ([`jswim.env.encode_action`][jswim.actions.encode_action]) or float ROC vectors.
     params : EnvParams
         Shared, or with ``zeta``/``direction``/``init`` batched along B.
     start : int
@@ -116,7 +116,7 @@ def _step_batch_jit(key: Array, start: Array, states: EnvState, actions: Array, 
 def advance(
     state: EnvState, action: Array, y_noise: Array, params: EnvParams, *, exact: bool = True
 ) -> tuple[EnvState, StepInfo]:
-    """One step with a given noise variable ``y_noise`` in [-1, 1] (the core of :func:`step`).
+    """One step with a given noise variable ``y_noise`` in [-1, 1] (the core of [`step`][jswim.env.stepping.step]).
 
     ``action`` is an integer code or a float ROC vector ``(n_dof,)``; the choice of path is
     static (by dtype and ``params.roc_levels``). Integer codes with K = 1 (the paper's world)
@@ -182,7 +182,7 @@ def _advance_lattice(
 ) -> tuple[EnvState, StepInfo]:
     """An integer code on the K lattice: ROC ``k / K``; the new shape is the lattice point
     ``round(K frac) + k`` (clipped to ``0..K``) over K, computed afresh so it never drifts. The
-    step is read from the lattice table (:func:`jswim.env.tables.lattice_table`, one gather like
+    step is read from the lattice table (`jswim.env.tables.lattice_table`, one gather like
     the corner table) when it is small enough, else integrated."""
     model = params.model
     n, big_k = model.n_dof, params.roc_levels
@@ -365,7 +365,7 @@ def _advance_plain(
     stuck: Array,
     moved: Array,
 ) -> tuple[EnvState, StepInfo]:
-    """:func:`advance` with ``exact=False``: the same step in working-dtype arithmetic."""
+    """[`advance`][jswim.env.stepping.advance] with ``exact=False``: the same step in working-dtype arithmetic."""
     dtype = state.x.dtype
     entry = jnp.asarray(_step_rows(params.model), dtype)[row]
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)

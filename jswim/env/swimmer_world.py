@@ -1,8 +1,8 @@
-"""The paper's world through the protocol: one swimmer alone in the fluid (:mod:`jswim.env`).
+"""The paper's world through the protocol: one swimmer alone in the fluid (`jswim.env`).
 
-States, actions, noise and numbers are :mod:`jswim.env`'s own: :meth:`SwimmerWorld.step` is
-:func:`jswim.env.step` (the same draw from the key, the same state, bit for bit), its info
-restated as the protocol's :class:`~jswim.env.base.StepInfo`.
+States, actions, noise and numbers are `jswim.env`'s own: `SwimmerWorld.step` is
+[`jswim.env.step`][jswim.env.stepping.step] (the same draw from the key, the same state, bit for bit), its info
+restated as the protocol's [`StepInfo`][jswim.env.base.StepInfo].
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from jswim.swimmers.models import SwimmerModel
 
 @dataclasses.dataclass(frozen=True)
 class SwimmerWorld(Environment):
-    """The paper's swimmer (Purcell, NG, longer chains); ``params`` is an :class:`EnvParams`.
+    """The paper's swimmer (Purcell, NG, longer chains); ``params`` is an [`EnvParams`][jswim.env.params.EnvParams].
 
     Attributes
     ----------
@@ -63,7 +63,7 @@ class SwimmerWorld(Environment):
     def advance(
         self, state: EnvState, action: Array, noise: Array, params: EnvParams
     ) -> tuple[EnvState, StepInfo]:
-        """:func:`jswim.env.advance` with the noise variable ``noise[0]``."""
+        """[`jswim.env.advance`][jswim.env.stepping.advance] with the noise variable ``noise[0]``."""
         new, info = advance(state, action, jnp.reshape(noise, (-1,))[0], params)
         dtype = new.x.dtype
         return new, StepInfo(

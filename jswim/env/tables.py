@@ -77,7 +77,7 @@ def _flat_table(model: SwimmerModel) -> np.ndarray:
 
 @functools.lru_cache(maxsize=64)
 def _step_rows(model: SwimmerModel) -> np.ndarray:
-    """:func:`_flat_table` (float64) plus a last row for a step that moves nothing."""
+    """`_flat_table` (float64) plus a last row for a step that moves nothing."""
     return np.concatenate([_flat_table(model), [[0.0, 0.0, 0.0, 1.0, 0.0]]])
 
 
@@ -101,7 +101,7 @@ def lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
     The K lattice holds the shapes whose DOFs sit at ``lo + (j / K)(hi - lo)``, ``j`` in
     ``0..K``. Row ``(i n + k)(K + 1) + j'`` (``i = sum_m j_m (K+1)^m`` the start shape, ``k`` the
     DOF, ``j'`` its new lattice value) holds ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` of the
-    centroid in the body frame at the start, like the corner table (:func:`step_table`; the
+    centroid in the body frame at the start, like the corner table (`step_table`; the
     lattice table at K = 1 holds the same moves). Rows for ``j' = j_k`` are the identity.
 
     Returns

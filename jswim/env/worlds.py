@@ -16,17 +16,17 @@ from jswim.scenes.params import scene_params
 from jswim.scenes.scene import Scene
 from jswim.swimmers.models import SWIMMERS, SwimmerModel
 
-#: Worlds added by name (:func:`register_world`): name -> factory.
+#: Worlds added by name ([`register_world`][jswim.env.worlds.register_world]): name -> factory.
 _REGISTERED: dict[str, Callable[..., tuple[Environment, Any]]] = {}
 
 
 def register_world(name: str, factory: Callable[..., tuple[Environment, Any]]) -> None:
     """Add a world by name: ``jswim.make(name, scene, **options)`` then returns ``factory(scene,
-    zeta=, direction=, init=, **options)`` (``scene`` a :class:`jswim.scenes.Scene` or ``None``,
+    zeta=, direction=, init=, **options)`` (``scene`` a [`jswim.scenes.Scene`][jswim.scenes.scene.Scene] or ``None``,
     ``direction`` +1 or -1, ``init`` start levels or ``None``; only the options asked for), an
-    :class:`~jswim.env.base.Environment` and its params (a NamedTuple or dataclass with a
+    [`Environment`][jswim.env.base.Environment] and its params (a NamedTuple or dataclass with a
     ``direction`` field), and a study whose runs name it as their swimmer runs it. The factory
-    raises a one-line :class:`ConfigError` for a scene or option it does not take; registering a
+    raises a one-line [`ConfigError`][jswim.errors.ConfigError] for a scene or option it does not take; registering a
     name again replaces its factory.
 
     Raises
@@ -43,12 +43,12 @@ def register_world(name: str, factory: Callable[..., tuple[Environment, Any]]) -
 
 
 def registered_worlds() -> tuple[str, ...]:
-    """The names :func:`register_world` added, in order."""
+    """The names [`register_world`][jswim.env.worlds.register_world] added, in order."""
     return tuple(_REGISTERED)
 
 
 def as_scene(scene: Any) -> Scene:
-    """``scene`` validated: a :class:`jswim.scenes.Scene` or its dict (:meth:`Scene.from_dict`)."""
+    """``scene`` validated: a [`jswim.scenes.Scene`][jswim.scenes.scene.Scene] or its dict ([`Scene.from_dict`][jswim.scenes.scene.Scene.from_dict])."""
     if isinstance(scene, dict):
         return Scene.from_dict(scene)
     if not isinstance(scene, Scene):
@@ -79,25 +79,25 @@ def make(
     Parameters
     ----------
     swimmer : str or SwimmerModel
-        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"``, or a world of :func:`register_world`
+        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"``, or a world of [`register_world`][jswim.env.worlds.register_world]
         (its factory gets the scene, zeta, direction, init and the keywords) (scenes: ``"ng"``; ``"purcell"`` above a
-        wall, :mod:`jswim.scenes.purcell_wall`: the paper's world with wall-corrected drag, its
+        wall, [`jswim.scenes.purcell_wall`][jswim.scenes.purcell_wall]: the paper's world with wall-corrected drag, its
         plane ``scene.height`` link lengths up, ``link_radius`` by keyword); model options
         (``d_max``, ``d_min``, ``n_links``, ...) by keyword.
     scene : Scene or dict, optional
         ``None``, or one untilted swimmer in the ``"bulk"`` medium: the paper's world
-        (:class:`~jswim.env.swimmer_world.SwimmerWorld`, params :class:`jswim.env.EnvParams`).
-        Anything else: a :class:`~jswim.env.scene_world.SceneWorld` (params
-        :class:`~jswim.env.scene_world.SceneTask`).
+        ([`SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld], params [`jswim.env.EnvParams`][jswim.env.params.EnvParams]).
+        Anything else: a [`SceneWorld`][jswim.env.scene_world.SceneWorld] (params
+        [`SceneTask`][jswim.env.scene_world.SceneTask]).
     zeta, direction, init, roc_levels
-        As in :func:`jswim.env.make_params` (every world has a target direction).
+        As in [`jswim.env.make_params`][jswim.env.params.make_params] (every world has a target direction).
     diagonal : bool
         The paper's world only: ROC vectors may move several DOFs at once.
     dtype : dtype, optional
         Scenes only: the working dtype of states and solves (default JAX's default float). The
         paper's world follows JAX's default float (its positions are drift-free pairs).
     **kwargs
-        More options of :func:`jswim.env.make_params` or :func:`jswim.scenes.scene_params`
+        More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.params.scene_params]
         (``nodes``, ``sweeps``, ``contact_gap``).
 
     Raises

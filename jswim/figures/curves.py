@@ -13,14 +13,14 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from jswim.figures.panels import (
-    _by,
-    _disp_label,
-    _frame,
-    _legend,
-    _mark_unfinished,
-    _order,
-    _panel_title,
-    _select,
+    group_by,
+    displacement_label,
+    legend_frame,
+    draw_legend,
+    mark_unfinished,
+    in_order,
+    panel_title,
+    panel_rows,
     panel_keys,
     target_displacement,
 )
@@ -28,7 +28,7 @@ from jswim.figures.sketches import draw_cycle
 from jswim.figures.style import (
     AGENT_STYLE,
     REFERENCE_STYLE,
-    _styled,
+    styled,
 )
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER
 from jswim.swimmers.models import SwimmerModel, make_model
@@ -72,7 +72,7 @@ def signature_reference(rows: Sequence[Mapping[str, Any]]) -> np.ndarray | None:
     """Mean target-direction X/a the runs of one panel would reach with the signature gait from step 0.
 
     The upper bound of a mean curve: every run from its own start following the swimmer's best
-    closed stroke cycle (:func:`jswim.judging.gait.best_cycles`) from the first step. ``None`` if some
+    closed stroke cycle ([`jswim.judging.gait.best_cycles`][jswim.judging.gait.best_cycles]) from the first step. ``None`` if some
     start is not on that cycle or the swimmer is unknown.
     """
     rows = as_run_rows(rows)
@@ -134,7 +134,7 @@ def _mean_curve(
     return line
 
 
-@_styled
+@styled
 def curves_figure(
     rows: Sequence[Mapping[str, Any]],
     models: Mapping[str, SwimmerModel] | None = None,
@@ -146,27 +146,27 @@ def curves_figure(
 
     One panel per swimmer (rows, Purcell first) and target direction (columns): the mean of each
     agent's runs (thick) over up to 20 single runs (thin), and the signature gait from step 0
-    (:func:`signature_reference`) as the upper bound. ``cycles`` (see :func:`learned_cycles`)
+    ([`signature_reference`][jswim.figures.curves.signature_reference]) as the upper bound. ``cycles`` (see [`learned_cycles`][jswim.figures.sketches.learned_cycles])
     adds a row of stroke-cycle sketches under a swimmer's panels; swimmers with nothing learned
     get none.
     """
     rows = as_run_rows(rows)
     keys = panel_keys(rows)
-    swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
-    dirs = _order({k[1] for k in keys}, (1, -1))
+    swimmers = in_order({k[0] for k in keys}, SWIMMER_ORDER)
+    dirs = in_order({k[1] for k in keys}, (1, -1))
     cycles = dict(cycles or {})
     sketch = {sw: any((sw, d) in cycles for d in dirs) for sw in swimmers}
     heights = [h for sw in swimmers for h in ([2.1, 0.65] if sketch[sw] else [2.1])]
     n_agents = len({r.agent for r in rows})
-    fig, grid, legend_ax, row = _frame(heights, len(dirs), n_agents + int(reference), most=2)
+    fig, grid, legend_ax, row = legend_frame(heights, len(dirs), n_agents + int(reference), most=2)
     handles: dict[str, Any] = {}
     counts: dict[str, set[int]] = defaultdict(set)
     for sw in swimmers:
         for j, d in enumerate(dirs):
             ax = fig.add_subplot(grid[row, j])
-            sel = _select(rows, sw, d)
-            by = _by(sel, "agent")
-            agents = _order(by, AGENT_ORDER)
+            sel = panel_rows(rows, sw, d)
+            by = group_by(sel, "agent")
+            agents = in_order(by, AGENT_ORDER)
             if reference:
                 ref = signature_reference(sel)
                 if ref is not None:
@@ -193,9 +193,9 @@ def curves_figure(
                 )
                 counts[agent].add(len(by[agent]))
             ax.axhline(0, color="0.75", lw=0.6, zorder=0)
-            ax.set_title(_panel_title(sw, d))
+            ax.set_title(panel_title(sw, d))
             ax.set_xlabel("step n")
-            ax.set_ylabel(_disp_label(d))
+            ax.set_ylabel(displacement_label(d))
             if not sel:
                 ax.text(0.5, 0.5, "no runs", transform=ax.transAxes, ha="center")
         row += 1
@@ -222,7 +222,7 @@ def curves_figure(
                     ax.axis("off")
             row += 1
     legend = []
-    for agent in _order([a for a in handles if a != "reference"], AGENT_ORDER):
+    for agent in in_order([a for a in handles if a != "reference"], AGENT_ORDER):
         h = handles[agent]
         n = counts[agent]
         h.set_label(
@@ -233,12 +233,12 @@ def curves_figure(
         legend.append(h)
     if "reference" in handles:
         legend.append(handles["reference"])
-    _legend(legend_ax, legend, most=2)
-    _mark_unfinished(fig, note)
+    draw_legend(legend_ax, legend, most=2)
+    mark_unfinished(fig, note)
     return fig
 
 
-@_styled
+@styled
 def history_figure(
     rows: Sequence[Mapping[str, Any]], note: str | None = None, reference: bool = True
 ) -> Figure:
@@ -250,12 +250,12 @@ def history_figure(
     """
     rows = as_run_rows(rows)
     keys = panel_keys(rows)
-    swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
-    dirs = _order({k[1] for k in keys}, (1, -1))
+    swimmers = in_order({k[0] for k in keys}, SWIMMER_ORDER)
+    dirs = in_order({k[1] for k in keys}, (1, -1))
     n_hts = sorted({r.n_ht for r in rows}, key=lambda v: (v is None, v))
     markers = "osD^vPX*<>"
     cmap = plt.get_cmap("viridis")
-    fig, grid, legend_ax, top = _frame(
+    fig, grid, legend_ax, top = legend_frame(
         [2.1] * len(swimmers), len(dirs), len(n_hts) + int(reference), most=5
     )
     axes = np.array(
@@ -269,8 +269,8 @@ def history_figure(
     for i, sw in enumerate(swimmers):
         for j, d in enumerate(dirs):
             ax = axes[i, j]
-            sel = _select(rows, sw, d)
-            by = _by(sel, "n_ht")
+            sel = panel_rows(rows, sw, d)
+            by = group_by(sel, "n_ht")
             if reference:
                 ref = signature_reference(sel)
                 if ref is not None:
@@ -301,15 +301,15 @@ def history_figure(
                 )
                 sizes.add(len(by[h]))
             ax.axhline(0, color="0.75", lw=0.6, zorder=0)
-            ax.set_title(_panel_title(sw, d))
+            ax.set_title(panel_title(sw, d))
             ax.set_xlabel("step n")
-            ax.set_ylabel(_disp_label(d))
+            ax.set_ylabel(displacement_label(d))
     legend = [handles[h] for h in n_hts if h in handles]
     if len(sizes) == 1 and (n := sizes.pop()) > 1:
         for h in legend:
             h.set_label(f"{h.get_label()} (mean of {n})")
     if "reference" in handles:
         legend.append(handles["reference"])
-    _legend(legend_ax, legend, most=5)
-    _mark_unfinished(fig, note)
+    draw_legend(legend_ax, legend, most=5)
+    mark_unfinished(fig, note)
     return fig

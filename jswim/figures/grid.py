@@ -12,20 +12,20 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from jswim.figures.panels import (
-    _by,
-    _disp_label,
-    _frame,
-    _legend,
-    _mark_unfinished,
-    _order,
-    _panel_title,
-    _select,
+    group_by,
+    displacement_label,
+    legend_frame,
+    draw_legend,
+    mark_unfinished,
+    in_order,
+    panel_title,
+    panel_rows,
     panel_keys,
 )
 from jswim.figures.style import (
     AGENT_STYLE,
     PAGE_IN,
-    _styled,
+    styled,
 )
 from jswim.results import as_run_rows
 from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
@@ -103,7 +103,7 @@ def _learn_points(
         )
 
 
-@_styled
+@styled
 def grid_figure(
     rows: Sequence[Mapping[str, Any]],
     key: str,
@@ -122,16 +122,16 @@ def grid_figure(
     target direction. Agents share the axes, offset sideways so their intervals never overlap.
     ``numeric`` places the values of ``key`` on a number line (noise levels), otherwise one slot
     per value in ``order``. ``learn`` adds a panel between them: the median steps to learn with
-    its interquartile range over the runs that learned (:func:`jswim.judging.stats.learn_stats`, counted
+    its interquartile range over the runs that learned ([`jswim.judging.stats.learn_stats`][jswim.judging.stats.learn_stats], counted
     from 1), each point labelled "k/n" (k of n runs learned; "0/n" on the axis where none did).
     """
     rows = as_run_rows(rows)
     keys = panel_keys(rows)
-    swimmers = _order({k[0] for k in keys}, SWIMMER_ORDER)
-    dirs = _order({k[1] for k in keys}, (1, -1))
+    swimmers = in_order({k[0] for k in keys}, SWIMMER_ORDER)
+    dirs = in_order({k[1] for k in keys}, (1, -1))
     values = [v for v in (order or []) if any(r.get(key) == v for r in rows)]
     values += sorted({r.get(key) for r in rows} - set(values), key=lambda v: (str(type(v)), v))
-    agents = _order({r.agent for r in rows}, AGENT_ORDER)
+    agents = in_order({r.agent for r in rows}, AGENT_ORDER)
     pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(values)}
     span = (max(pos.values()) - min(pos.values())) if len(pos) > 1 else 1.0
     step = (
@@ -145,7 +145,7 @@ def grid_figure(
     }
     n_cols = len(dirs)
     per = 3 if learn else 2  # panels per swimmer: p, (steps to learn,) X/a
-    fig, grid, legend_ax, top = _frame([1.3] * (per * len(swimmers)), n_cols, len(agents))
+    fig, grid, legend_ax, top = legend_frame([1.3] * (per * len(swimmers)), n_cols, len(agents))
     axes = np.empty((per * len(swimmers), n_cols), object)
     for j in range(n_cols):
         for i in range(per * len(swimmers)):
@@ -158,9 +158,9 @@ def grid_figure(
         for j, d in enumerate(dirs):
             ax_p, ax_x = axes[per * i, j], axes[per * i + per - 1, j]
             ax_l = axes[per * i + 1, j] if learn else None
-            sel = _select(rows, sw, d)
+            sel = panel_rows(rows, sw, d)
             for a_i, agent in enumerate(agents):
-                by = _by([r for r in sel if r.agent == agent], key)
+                by = group_by([r for r in sel if r.agent == agent], key)
                 vs = [v for v in values if v in by]
                 if not vs:
                     continue
@@ -185,9 +185,9 @@ def grid_figure(
                 counts[agent].update(len(by[v]) for v in vs)
             ax_p.set_ylim(-0.06, 1.06)
             ax_p.set_ylabel("success rate p\n(95% Wilson CI)")
-            ax_p.set_title(_panel_title(sw, d))
+            ax_p.set_title(panel_title(sw, d))
             ax_x.axhline(0, color="0.75", lw=0.6, zorder=0)
-            ax_x.set_ylabel(f"mean {_disp_label(d)}\n(95% bootstrap CI)")
+            ax_x.set_ylabel(f"mean {displacement_label(d)}\n(95% bootstrap CI)")
             lo, hi = ax_x.get_ylim()
             if (
                 hi - lo < 1e-9
@@ -231,8 +231,8 @@ def grid_figure(
                 f"{base}, n = {n.pop()}" if len(n) == 1 else f"{base}, n = {min(n)}-{max(n)}"
             )
             legend.append(h)
-    _legend(legend_ax, legend)
-    _mark_unfinished(fig, note)
+    draw_legend(legend_ax, legend)
+    mark_unfinished(fig, note)
     return fig
 
 
@@ -269,7 +269,7 @@ def inits_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> 
     )
 
 
-@_styled
+@styled
 def competence_figure(
     rows: Sequence[Mapping[str, Any]], order: Sequence[str], note: str | None = None
 ) -> Figure:
@@ -291,7 +291,7 @@ def competence_figure(
         layout="constrained",
     )
     for (ax_p, ax_x), (sw, d) in zip(axes, keys):
-        by = _by(_select(rows, sw, d), "entry")
+        by = group_by(panel_rows(rows, sw, d), "entry")
         labels = [k for k in order if k in by]
         y = np.arange(len(labels))[::-1]
         for j, k in enumerate(labels):
@@ -330,9 +330,9 @@ def competence_figure(
             ax.grid(axis="x", alpha=0.3, lw=0.5)
         ax_p.set_xlim(-0.05, 1.05)
         ax_x.axvline(0, color="0.8", lw=0.6)
-        ax_p.set_title(f"{_panel_title(sw, d)}: success rate p", fontsize=7)
-        ax_x.set_title(f"{_panel_title(sw, d)}: mean {_disp_label(d)}", fontsize=7)
+        ax_p.set_title(f"{panel_title(sw, d)}: success rate p", fontsize=7)
+        ax_x.set_title(f"{panel_title(sw, d)}: mean {displacement_label(d)}", fontsize=7)
         ax_p.set_xlabel("p (95% Wilson CI)")
-        ax_x.set_xlabel(f"mean {_disp_label(d)} after the last step (95% bootstrap CI)")
-    _mark_unfinished(fig, note)
+        ax_x.set_xlabel(f"mean {displacement_label(d)} after the last step (95% bootstrap CI)")
+    mark_unfinished(fig, note)
     return fig

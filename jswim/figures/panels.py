@@ -59,7 +59,8 @@ def save(fig: Figure, folder: str | os.PathLike, name: str, dpi: int = 300) -> l
 # -- grouping ---------------------------------------------------------------------------------
 
 
-def _order(values: Iterable[Any], order: Sequence[Any]) -> list[Any]:
+def in_order(values: Iterable[Any], order: Sequence[Any]) -> list[Any]:
+    """The distinct ``values`` in the order of ``order``; values not in it follow, sorted as text."""
     vals = set(values)
     return [v for v in order if v in vals] + sorted(vals - set(order), key=str)
 
@@ -68,44 +69,49 @@ def panel_keys(rows: Iterable[Mapping[str, Any]]) -> list[tuple[str, int]]:
     """The ``(swimmer, direction)`` panels of ``rows``: Purcell first, +x before -x."""
     rows = as_run_rows(rows)
     rows = list(rows)
-    swimmers = _order({r.swimmer for r in rows}, SWIMMER_ORDER)
-    dirs = _order({int(r.direction or 1) for r in rows}, (1, -1))
+    swimmers = in_order({r.swimmer for r in rows}, SWIMMER_ORDER)
+    dirs = in_order({int(r.direction or 1) for r in rows}, (1, -1))
     present = {(r.swimmer, int(r.direction or 1)) for r in rows}
     return [(s, d) for s in swimmers for d in dirs if (s, d) in present]
 
 
-def _by(rows: Iterable[Mapping[str, Any]], key: str) -> dict[Any, list[Mapping[str, Any]]]:
+def group_by(rows: Iterable[Mapping[str, Any]], key: str) -> dict[Any, list[Mapping[str, Any]]]:
+    """``rows`` grouped by their value of ``key`` (a missing key groups under ``None``)."""
     out: dict[Any, list[Mapping[str, Any]]] = defaultdict(list)
     for r in rows:
         out[r.get(key)].append(r)
     return dict(out)
 
 
-def _select(
+def panel_rows(
     rows: Iterable[Mapping[str, Any]], swimmer: str, direction: int
 ) -> list[Mapping[str, Any]]:
+    """The runs of ``rows`` that belong to the ``(swimmer, direction)`` panel."""
     rows = as_run_rows(rows)
     return [r for r in rows if r.swimmer == swimmer and int(r.direction or 1) == direction]
 
 
-def _dir_text(direction: int) -> str:
+def direction_text(direction: int) -> str:
+    """``+x`` or ``\u2212x`` (a true minus sign) for a target direction of +1 or -1."""
     return "+x" if direction > 0 else "\u2212x"
 
 
-def _disp_label(direction: int) -> str:
+def displacement_label(direction: int) -> str:
     """The paper's axis label: X/a toward +x, -X/a toward -x."""
     return "X/a" if direction > 0 else "\u2212X/a"
 
 
-def _swimmer_label(swimmer: str) -> str:
+def swimmer_label(swimmer: str) -> str:
+    """The swimmer model's display name; an unknown name is shown as it is."""
     try:
         return make_model(swimmer).label
     except Exception:  # an unknown name still gets a panel
         return swimmer
 
 
-def _panel_title(swimmer: str, direction: int) -> str:
-    return f"{_swimmer_label(swimmer)}, target {_dir_text(direction)}"
+def panel_title(swimmer: str, direction: int) -> str:
+    """A panel's title: the swimmer and its target direction."""
+    return f"{swimmer_label(swimmer)}, target {direction_text(direction)}"
 
 
 def target_displacement(rows: Sequence[Mapping[str, Any]]) -> np.ndarray:
@@ -122,16 +128,18 @@ def target_displacement(rows: Sequence[Mapping[str, Any]]) -> np.ndarray:
     return out
 
 
-def _mark_unfinished(fig: Figure, note: str | None) -> None:
+def mark_unfinished(fig: Figure, note: str | None) -> None:
+    """Write ``note`` (an unfinished study's line) above the figure in red; nothing if ``None``."""
     if note:
         fig.suptitle(note, color=NOTE_COLOR, fontsize=8, fontweight="bold")
 
 
-def _legend_cols(width: float, entries: int, most: int = 3) -> int:
+def legend_columns(width: float, entries: int, most: int = 3) -> int:
+    """Legend columns for a figure ``width`` inches wide: ``most`` on a page, 2 on a column."""
     return max(1, min(entries, most if width > COLUMN_IN + 0.1 else 2))
 
 
-def _frame(
+def legend_frame(
     heights: Sequence[float], n_cols: int, legend_entries: int, most: int = 3
 ) -> tuple[Figure, Any, Any, int]:
     """A figure of panel rows ``heights`` (inches) under a legend row spanning every column.
@@ -140,9 +148,9 @@ def _frame(
     collides with a suptitle), so the note of an unfinished study sits above it. Returns the
     figure, its grid, the legend's (blank) axes and the grid row of the first panel row.
     """
-    width = _width(n_cols)
+    width = figure_width(n_cols)
     lines = (
-        math.ceil(legend_entries / _legend_cols(width, legend_entries, most))
+        math.ceil(legend_entries / legend_columns(width, legend_entries, most))
         if legend_entries
         else 0
     )
@@ -160,14 +168,15 @@ def _frame(
     return fig, grid, legend_ax, 1 if lines else 0
 
 
-def _legend(legend_ax: Any, handles: Sequence[Any], most: int = 3) -> None:
+def draw_legend(legend_ax: Any, handles: Sequence[Any], most: int = 3) -> None:
+    """Draw ``handles`` as one centred legend in the legend row made by `legend_frame`."""
     if legend_ax is None or not handles:
         return
     width = legend_ax.figure.get_figwidth()
     legend_ax.legend(
         handles=list(handles),
         loc="center",
-        ncol=_legend_cols(width, len(handles), most),
+        ncol=legend_columns(width, len(handles), most),
         handlelength=2.6,
         columnspacing=1.2,
         borderaxespad=0.0,
@@ -175,5 +184,6 @@ def _legend(legend_ax: Any, handles: Sequence[Any], most: int = 3) -> None:
     )
 
 
-def _width(n_cols: int) -> float:
+def figure_width(n_cols: int) -> float:
+    """A figure's width (inches): one journal column for one panel column, else the page."""
     return COLUMN_IN if n_cols <= 1 else PAGE_IN

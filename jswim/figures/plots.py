@@ -1,8 +1,8 @@
 """Figures of the studies (matplotlib; PNG and PDF), sized for a paper's columns.
 
 Every figure function takes the tidy run rows of a study (one dict per run, as in
-``runs.jsonl``) and returns a ``matplotlib.figure.Figure``; :func:`save` writes it as PNG and
-PDF, and :func:`study_figures` picks a study's figures. The rules every figure keeps:
+``runs.jsonl``) and returns a ``matplotlib.figure.Figure``; [`save`][jswim.figures.panels.save] writes it as PNG and
+PDF, and [`study_figures`][jswim.figures.plots.study_figures] picks a study's figures. The rules every figure keeps:
 
 - **One panel per swimmer and target direction.** Displacement is plotted in the target
   direction (``X/a`` toward +x, ``-X/a`` toward -x, as in the paper's Fig. 3), and runs with
@@ -27,36 +27,19 @@ from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
 from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the reading order of tables and panels)
-from jswim.results import as_run_rows, unfinished_note, writing  # noqa: F401  (unfinished_note: its old home)
+from jswim.results import as_run_rows
 
-from jswim.figures.style import (  # noqa: F401  (the style's old home)
+from jswim.figures.style import (  # noqa: F401  (the figures' public names, importable from here)
     AGENT_STYLE,
     COLUMN_IN,
     NOTE_COLOR,
     PAGE_IN,
     RC,
     REFERENCE_STYLE,
-    _styled,
     tidy,
 )
 from jswim.figures.scenes import scene_figures
-from jswim.figures.panels import (  # noqa: F401  (every figure's name stays importable from here)
-    _by,
-    _dir_text,
-    _disp_label,
-    _frame,
-    _legend,
-    _legend_cols,
-    _mark_unfinished,
-    _order,
-    _panel_title,
-    _select,
-    _swimmer_label,
-    _width,
-    panel_keys,
-    save,
-    target_displacement,
-)
+from jswim.figures.panels import panel_keys, save, target_displacement  # noqa: F401
 from jswim.figures.sketches import (  # noqa: F401
     draw_cycle,
     draw_shape,
@@ -110,7 +93,7 @@ def study_figures(
         }
     if study == "continuous":
         return continuous_figures(rows, note=note)
-    if study in ("wall", "pair", "school"):  # walls and pairs (issue 19), schools (issue 34)
+    if study in ("wall", "pair", "school"):  # walls, pairs and schools: the scene figures
         return scene_figures(study, rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).

@@ -1,12 +1,12 @@
-"""Figures of the scene studies (issue 19): ``jswim study wall`` and ``jswim study pair``.
+"""Figures of the scene studies (extensions of the paper): ``jswim study wall`` and ``jswim study pair``.
 
-Same conventions as :mod:`jswim.figures.plots` (paper sizes, the agents' palette, ``note`` across the
-top of an unfinished study's figures); chosen by :func:`jswim.figures.plots.study_figures`.
+Same conventions as [`jswim.figures.plots`][jswim.figures.plots] (paper sizes, the agents' palette, ``note`` across the
+top of an unfinished study's figures); chosen by [`jswim.figures.plots.study_figures`][jswim.figures.plots.study_figures].
 
 wall
     ``wall``: the square stroke's displacement per cycle against the starting height (log axis),
-    with the same stroke in the unbounded fluid of the same solver as a line (Purcell's swimmer,
-    issue 34: heights in link lengths, the bulk RFT stroke as the line; one series per swimmer); ``wall-track``:
+    with the same stroke in the unbounded fluid of the same solver as a line (Purcell's swimmer:
+    heights in link lengths, the bulk RFT stroke as the line; one series per swimmer); ``wall-track``:
     height (top) and X/a (bottom) against step for every agent at every height (one colour per
     agent, darker for lower starts).
 pair
@@ -27,7 +27,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.figures.style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, _styled
+from jswim.figures.style import AGENT_STYLE, COLUMN_IN, NOTE_COLOR, styled
 from jswim.results import as_run_rows
 
 STROKE_STYLE = dict(color="black", ls="-", marker="o", label="square stroke")
@@ -60,13 +60,13 @@ def scene_figures(
     }
 
 
-@_styled
+@styled
 def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
     ax = fig.add_subplot()
     kinds = sorted({str(r.swimmer or "ng") for r in rows})
-    for sw in kinds:  # NG (a = sphere radius) and Purcell (a = link length; issue 34)
+    for sw in kinds:  # NG (a = sphere radius) and Purcell (a = link length)
         tag = f"{sw}, " if len(kinds) > 1 else ""
         for d in sorted(
             {int(r.direction) for r in rows if str(r.swimmer or "ng") == sw}, reverse=True
@@ -113,7 +113,7 @@ def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     return fig
 
 
-@_styled
+@styled
 def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
@@ -163,7 +163,7 @@ def pair_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
     return fig
 
 
-@_styled
+@styled
 def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     rows = as_run_rows(rows)
     fig = Figure(figsize=(COLUMN_IN, 2.4))
@@ -197,7 +197,7 @@ def school_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) ->
     return fig
 
 
-@_styled
+@styled
 def track_figure(
     rows: Sequence[Mapping[str, Any]], key: str, note: str | None = None, *, heights: bool
 ) -> Figure:

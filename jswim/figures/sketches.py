@@ -9,10 +9,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.figures.panels import _select, panel_keys
+from jswim.figures.panels import panel_rows, panel_keys
 from jswim.figures.style import (
     PAGE_IN,
-    _styled,
+    styled,
 )
 from jswim.swimmers.models import SwimmerModel
 from jswim.results import as_run_rows
@@ -23,7 +23,7 @@ from jswim.swimmers.outline import outline
 
 def shape_points(model: SwimmerModel, d: Sequence[float]) -> np.ndarray:
     """Body-frame outline of a shape: link end points ``(N+1, 2)`` or sphere centres ``(N, 2)``
-    (:func:`jswim.swimmers.outline.outline`, the pictures' one outline)."""
+    ([`jswim.swimmers.outline.outline`][jswim.swimmers.outline.outline], the pictures' one outline)."""
     return outline(model, d)
 
 
@@ -101,7 +101,7 @@ def learned_cycles(
     rows = as_run_rows(rows)
     out = {}
     for sw, d in panel_keys(rows):
-        ok = [r for r in _select(rows, sw, d) if r.success and r.steps_to_learn is not None]
+        ok = [r for r in panel_rows(rows, sw, d) if r.success and r.steps_to_learn is not None]
         if not ok:
             continue
         r = min(ok, key=lambda r: ({"llm": 0, "qlearning": 1}.get(r.agent, 2), r.steps_to_learn))
@@ -114,7 +114,7 @@ def learned_cycles(
     return out
 
 
-@_styled
+@styled
 def gaits_figure(model: SwimmerModel, cycles: Sequence[Any], top: int = 4) -> Figure:
     """The best closed stroke cycles of a swimmer, with their displacement per step."""
     shown = list(cycles)[:top]

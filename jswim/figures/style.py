@@ -1,8 +1,8 @@
 """The figures' shared style: the paper's journal column widths, one colour, line and marker per
 agent (Okabe-Ito, legible with the common colour-vision deficiencies and in grey), the rc settings
-every figure is built under, and :func:`tidy`, what every figure gets.
+every figure is built under, and [`tidy`][jswim.figures.style.tidy], what every figure gets.
 
-Its own module so that every figure module (:mod:`jswim.figures.plots`, :mod:`jswim.figures.scenes`) reads
+Its own module so that every figure module ([`jswim.figures.plots`][jswim.figures.plots], [`jswim.figures.scenes`][jswim.figures.scenes]) reads
 the style from below, and neither imports the other to get it.
 """
 
@@ -47,7 +47,7 @@ RC = {
 }
 
 
-def _styled(fn):
+def styled(fn):
     """Build the figure under the paper's rc settings (sizes are fixed when artists are made)."""
 
     @functools.wraps(fn)

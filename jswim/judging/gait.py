@@ -12,7 +12,7 @@ run repeat one *qualifying cycle*, at least ``n_cycles`` (3) times in a row. A c
 
 What the paper's success adds (the horizon), how steps to learn are counted, how the stroke is
 found and how displacements are replayed: docs/baselines.md, "The success criterion". The
-numbers have one owner, :class:`Criterion`.
+numbers have one owner, [`Criterion`][jswim.judging.gait.Criterion].
 """
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ from jswim.judging import lattice
 
 #: Displacements within this relative margin of the threshold count as reaching it (float64
 #: composition of the same table entries in a different order differs in the last bits).
-_REL_TOL = 1e-9
+REL_TOL = 1e-9
 
-#: Largest number of (DOF sequence, start corner) pairs :func:`best_cycles` will enumerate.
+#: Largest number of (DOF sequence, start corner) pairs [`best_cycles`][jswim.judging.gait.best_cycles] will enumerate.
 _MAX_WALKS = 4_000_000
 
 
@@ -44,7 +44,7 @@ class Cycle:
     Attributes
     ----------
     actions : tuple of int
-        Action indices (see :func:`jswim.env.encode_action`), one per step.
+        Action indices (see [`jswim.env.encode_action`][jswim.actions.encode_action]), one per step.
     start : tuple of int
         DOF levels (0 = lo, 1 = hi) the cycle starts from.
     displacement : float
@@ -101,7 +101,7 @@ class Criterion:
         Fraction of the best closed cycle's displacement per step that a cycle must reach to
         qualify (the speed threshold; 1/2).
     max_period : int or None
-        Longest cycle considered; ``None``: :func:`default_max_period` of the swimmer.
+        Longest cycle considered; ``None``: [`default_max_period`][jswim.judging.gait.default_max_period] of the swimmer.
 
     Raises
     ------
@@ -195,7 +195,7 @@ def best_cycles(
     direction : int
         +1 or -1: the target direction the displacement is measured in.
     max_len : int, optional
-        Longest period (default :func:`default_max_period`).
+        Longest period (default [`default_max_period`][jswim.judging.gait.default_max_period]).
 
     Returns
     -------
@@ -302,7 +302,7 @@ class Replay(NamedTuple):
 
 def replay(actions: np.ndarray, model: SwimmerModel, levels0: np.ndarray) -> Replay:
     """Replay action indices without noise from ``levels0``, its start orientation
-    (:func:`jswim.env.start_orientation`) and the origin.
+    ([`jswim.env.start_orientation`][jswim.env.state.start_orientation]) and the origin.
 
     Parameters
     ----------
@@ -375,8 +375,8 @@ def trailing_strokes(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The final qualifying stroke of each run: ``(start, period, displacement per step)``.
 
-    Shared by :func:`judge` (action sequences on corners or the K lattice) and
-    :func:`jswim.judging.shape_judge.judge_shapes` (shapes within a tolerance): they differ only in what
+    Shared by [`judge`][jswim.judging.gait.judge] (action sequences on corners or the K lattice) and
+    [`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes] (shapes within a tolerance): they differ only in what
     "repeats with period p" means.
 
     ``differs(p)`` (bool ``(T - p, B)``): step ``t`` and step ``t + p`` differ; ``closed(sc, p)``
@@ -422,7 +422,7 @@ def judge(
     """Find, per run, the final stroke and whether it is a qualifying cycle (see module docs).
 
     On a ``K``-level ROC lattice (``roc_levels = K > 1``) the same rules hold with lattice points
-    for corners, the threshold relative to :func:`jswim.judging.lattice.best_per_step` and cycles up
+    for corners, the threshold relative to [`jswim.judging.lattice.best_per_step`][jswim.judging.lattice.best_per_step] and cycles up
     to ``2**n_dof K`` moves (docs/continuous.md, "Judging continuous strokes").
 
     Parameters
@@ -437,9 +437,9 @@ def judge(
         Actual initial levels; required when ``params.init`` asks for a random start. On a ROC
         lattice: the start's lattice positions ``j`` in ``0..K`` (a corner is ``level * K``).
     criterion : Criterion
-        Horizon, cycle count and speed threshold (default: the paper's, :data:`PAPER`).
+        Horizon, cycle count and speed threshold (default: the paper's, `PAPER`).
     roc_levels : int
-        ``K``: ``actions`` are lattice codes (:func:`jswim.judging.lattice.encode`); 1 (default) the
+        ``K``: ``actions`` are lattice codes ([`jswim.judging.lattice.encode`][jswim.judging.lattice.encode]); 1 (default) the
         paper's action indices.
 
     Returns
@@ -491,7 +491,7 @@ def judge(
             lattice.best_per_step(model, -1, k_levels),
         )
         rp = lattice.replay(at, model, k_levels, init)
-    threshold = c.min_fraction * best - _REL_TOL * np.abs(best)
+    threshold = c.min_fraction * best - REL_TOL * np.abs(best)
 
     rows = np.arange(b)
     out_s, out_p, out_disp = trailing_strokes(
@@ -517,8 +517,8 @@ def stroke_report(
     per_step_label: np.ndarray,
     max_period: int,
 ) -> GaitReport:
-    """The :class:`GaitReport` of :func:`trailing_strokes`' output, shared with
-    :func:`jswim.judging.shape_judge.judge_shapes`; ``per_step_label`` (B, T) fills ``cycle``."""
+    """The [`GaitReport`][jswim.judging.gait.GaitReport] of [`trailing_strokes`][jswim.judging.gait.trailing_strokes]' output, shared with
+    [`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]; ``per_step_label`` (B, T) fills ``cycle``."""
     learned = out_p > 0
     steps_to_learn = np.where(learned, out_s + 1, -1)  # 1-based, the paper's count
     success = learned & (out_s + criterion.n_cycles * out_p <= criterion.horizon)

@@ -5,8 +5,8 @@ An action is a DOF and an integer ROC ``k`` in ``-K..K``, code ``(dof - 1) (2K +
 ``lo + j (hi - lo) / K``, and lattice points are indexed ``sum_d j_d (K + 1)**d`` (``K = 1``: the
 corner index). Exact motion: at zero Reynolds number a one-DOF move depends only on its path, so
 the move from ``j`` to ``j'`` is ``G(j)^-1 G(j')``, ``G`` composed from unit segments each
-integrated once in float64 (:func:`move_table`), in the centroid frame of
-:func:`jswim.env.step_table`. The judge, the gait search and the lattice baselines read it
+integrated once in float64 ([`move_table`][jswim.judging.lattice.move_table]), in the centroid frame of
+`jswim.env.step_table`. The judge, the gait search and the lattice baselines read it
 (docs/continuous.md, "Finer ROCs for the agents").
 """
 
@@ -19,25 +19,25 @@ from typing import NamedTuple
 import numpy as np
 
 from jswim.errors import ConfigError, check_direction
-from jswim.actions import check_roc_levels, decode_action, encode_action, n_actions  # noqa: F401  (n_actions: its old place)
+from jswim.actions import check_roc_levels, decode_action, encode_action
 from jswim.swimmers.models import SwimmerModel
 from jswim.env import start_orientation
 from jswim.integrate import centroid, integrate_stroke
 
-#: Unit segments integrated per compiled call of :func:`move_table`.
+#: Unit segments integrated per compiled call of [`move_table`][jswim.judging.lattice.move_table].
 _CHUNK = 128
 
-#: Largest number of (start point, move sequence) pairs :func:`best_lattice_cycles` enumerates.
+#: Largest number of (start point, move sequence) pairs [`best_lattice_cycles`][jswim.judging.lattice.best_lattice_cycles] enumerates.
 MAX_WALKS = 20_000_000
 
 
 def encode(dof: int, k: int, roc_levels: int) -> int:
-    """Code of the action ``[dof, k]`` (``dof`` 1-based, ``k`` in ``-K..K``): :func:`jswim.actions.encode_action`."""
+    """Code of the action ``[dof, k]`` (``dof`` 1-based, ``k`` in ``-K..K``): [`jswim.actions.encode_action`][jswim.actions.encode_action]."""
     return encode_action(dof, k, roc_levels)
 
 
 def decode(code: int, roc_levels: int) -> tuple[int, int]:
-    """``(dof, k)`` of an action code: :func:`jswim.actions.decode_action`."""
+    """``(dof, k)`` of an action code: [`jswim.actions.decode_action`][jswim.actions.decode_action]."""
     return decode_action(int(code), roc_levels)
 
 
@@ -62,7 +62,7 @@ def point_coords(index: np.ndarray, n_dof: int, roc_levels: int) -> np.ndarray:
 class MoveTable(NamedTuple):
     """The motions of a ``K``-level lattice, stored as ``G``: every move is ``G(j)^-1 G(j')``.
 
-    :func:`move` reads any move from it; ``(K+1)**n n`` entries instead of ``2K + 1`` times as
+    [`move`][jswim.judging.lattice.move] reads any move from it; ``(K+1)**n n`` entries instead of ``2K + 1`` times as
     many.
 
     Attributes
@@ -116,7 +116,7 @@ MAX_POINTS = 40_401
 
 
 def check_size(n_dof: int, roc_levels: int) -> None:
-    """:class:`ConfigError` when the lattice has more than :data:`MAX_POINTS` points."""
+    """[`ConfigError`][jswim.errors.ConfigError] when the lattice has more than `MAX_POINTS` points."""
     if (roc_levels + 1) ** n_dof > MAX_POINTS:
         raise ConfigError(
             f"--roc-levels {roc_levels}: the {n_dof}-DOF lattice has {(roc_levels + 1) ** n_dof:,} "
@@ -161,16 +161,16 @@ def _segment_fn(model: SwimmerModel):
 
 @functools.lru_cache(maxsize=16)
 def move_table(model: SwimmerModel, roc_levels: int) -> MoveTable:
-    """The exact :class:`MoveTable` of ``model`` on ``roc_levels`` levels (built once, float64).
+    """The exact [`MoveTable`][jswim.judging.lattice.MoveTable] of ``model`` on ``roc_levels`` levels (built once, float64).
 
     ``(K+1)**n n`` unit segments go through the integrator; ``G`` composes them, and every move
-    is read as ``G(j)^-1 G(j')`` (:func:`move`, see the module docstring). ``K = 1`` reproduces
-    :func:`jswim.env.step_table` (tested).
+    is read as ``G(j)^-1 G(j')`` ([`move`][jswim.judging.lattice.move], see the module docstring). ``K = 1`` reproduces
+    `jswim.env.step_table` (tested).
 
     Raises
     ------
     ConfigError
-        For a lattice of more than :data:`MAX_POINTS` points.
+        For a lattice of more than `MAX_POINTS` points.
     """
     import jax
     import jax.numpy as jnp
@@ -221,12 +221,12 @@ def replay(
     actions: np.ndarray, model: SwimmerModel, roc_levels: int, points0: np.ndarray
 ) -> LatticeReplay:
     """Replay action codes without noise from lattice positions ``points0`` (B, n_dof), their start
-    orientation (:func:`jswim.env.start_orientation`) and the origin.
+    orientation ([`jswim.env.start_orientation`][jswim.env.state.start_orientation]) and the origin.
 
     Parameters
     ----------
     actions : int array (T, B)
-        Executed action codes (:func:`encode`), time-major.
+        Executed action codes ([`encode`][jswim.judging.lattice.encode]), time-major.
     model : SwimmerModel
         The swimmer.
     roc_levels : int
@@ -316,8 +316,8 @@ def best_lattice_cycles(
     consecutive moves (cyclically) change the same DOF: a run of moves of one DOF walks one
     segment of shape space and equals a single move (zero Reynolds number), so merging it never
     lowers the speed per step. Every start point and every such sequence is walked exactly
-    (:func:`move_table`); one entry per loop up to cyclic shifts, shown from the shift that goes
-    furthest from orientation 0 (as :func:`jswim.judging.gait.best_cycles`).
+    ([`move_table`][jswim.judging.lattice.move_table]); one entry per loop up to cyclic shifts, shown from the shift that goes
+    furthest from orientation 0 (as [`jswim.judging.gait.best_cycles`][jswim.judging.gait.best_cycles]).
 
     Parameters
     ----------
@@ -335,7 +335,7 @@ def best_lattice_cycles(
     Raises
     ------
     ConfigError
-        For a bad direction or length, or more than :data:`MAX_WALKS` walks to enumerate.
+        For a bad direction or length, or more than `MAX_WALKS` walks to enumerate.
     """
     k = check_roc_levels(roc_levels)
     n = model.n_dof

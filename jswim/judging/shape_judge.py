@@ -1,26 +1,26 @@
 """The success criterion for real-valued strokes: cycles read from the shape, within a tolerance.
 
-:func:`jswim.judging.gait.judge` reads cycles from action indices (on the K lattice, from lattice codes):
+[`jswim.judging.gait.judge`][jswim.judging.gait.judge] reads cycles from action indices (on the K lattice, from lattice codes):
 a cycle is a repeated block of actions that returns to the same corner. An agent with real ROCs
-(:mod:`jswim.agents.ppo`) never repeats an action exactly, but it can repeat a *shape*: a push
+([`jswim.agents.ppo`][jswim.agents.ppo]) never repeats an action exactly, but it can repeat a *shape*: a push
 past a limit stops at the limit, so a policy whose ROCs saturate returns to the same corner
 exactly, and any other return is close. Here a run has learned from step ``s`` when, from ``s``
 to the end of the run,
 
 - the shape sequence is periodic with period ``p``: every shape is within ``tol`` (a fraction
-  of the range ``hi - lo``, per DOF, default :data:`SHAPE_TOL`) of the shape ``p`` steps later;
+  of the range ``hi - lo``, per DOF, default `SHAPE_TOL`) of the shape ``p`` steps later;
 - every step changes the shape by more than ``tol``;
 - the segment holds at least ``n_cycles`` periods, and every complete period moves the swimmer,
   exactly and without noise, by at least ``min_fraction`` of the best displacement per step of
   a closed stroke with the same constraints (one DOF at a time, ``|ROC| <= 1``), times ``p``.
 
-The best stroke's speed is :func:`jswim.judging.gait.best_per_step`, the full square of corner moves:
+The best stroke's speed is [`jswim.judging.gait.best_per_step`][jswim.judging.gait.best_per_step], the full square of corner moves:
 for one DOF at a time and ``|ROC| <= 1`` a step sweeps at most the whole range, and a closed
 stroke's displacement is the curvature integrated over the area it encloses, which the full
-square maximises per step among the lattice strokes measured (:func:`jswim.judging.lattice.best_per_step`
+square maximises per step among the lattice strokes measured ([`jswim.judging.lattice.best_per_step`][jswim.judging.lattice.best_per_step]
 finds the full square at every K). ``steps_to_learn``, ``success`` and the horizon are as in
-:func:`jswim.judging.gait.judge` (:class:`jswim.judging.gait.Criterion`, counted from 1). On corner-to-corner
-runs (ROC in {-1, 1}) this judge and :func:`jswim.judging.gait.judge` agree, which the tests check.
+[`jswim.judging.gait.judge`][jswim.judging.gait.judge] ([`jswim.judging.gait.Criterion`][jswim.judging.gait.Criterion], counted from 1). On corner-to-corner
+runs (ROC in {-1, 1}) this judge and [`jswim.judging.gait.judge`][jswim.judging.gait.judge] agree, which the tests check.
 
 Cycles are considered up to ``max_period`` steps (default ``2 * 2**n_dof``: a corner cycle, or a
 stroke with sides of half the range).
@@ -34,7 +34,7 @@ import numpy as np
 
 from jswim.errors import ConfigError
 from jswim.judging.gait import (
-    _REL_TOL,
+    REL_TOL,
     PAPER,
     Criterion,
     GaitReport,
@@ -77,14 +77,14 @@ def judge_shapes(
     criterion : Criterion
         Horizon, cycle count and speed threshold (default: the paper's).
     tol : float
-        Shape tolerance, a fraction of the DOF range (default :data:`SHAPE_TOL`).
+        Shape tolerance, a fraction of the DOF range (default `SHAPE_TOL`).
     max_period : int, optional
-        Longest period considered (default :func:`default_max_period`).
+        Longest period considered (default [`default_max_period`][jswim.judging.shape_judge.default_max_period]).
 
     Returns
     -------
     GaitReport
-        As :func:`jswim.judging.gait.judge`; ``cycle`` holds the stroke's DOFs moved (1-based), padded
+        As [`jswim.judging.gait.judge`][jswim.judging.gait.judge]; ``cycle`` holds the stroke's DOFs moved (1-based), padded
         with -1, since real-valued actions have no index.
 
     Raises
@@ -111,7 +111,7 @@ def judge_shapes(
     tol_abs = tol * (model.hi - model.lo)
     direction = np.broadcast_to(np.sign(np.asarray(params.direction, np.float64)), (b,))
     best = np.where(direction > 0, best_per_step(model, 1), best_per_step(model, -1))
-    threshold = c.min_fraction * best - _REL_TOL * np.abs(best)
+    threshold = c.min_fraction * best - REL_TOL * np.abs(best)
 
     moved = np.max(np.abs(shapes[1:] - shapes[:-1]), axis=-1) > tol_abs  # (T, B)
 

@@ -79,10 +79,10 @@ class LearnStats(NamedTuple):
 
 
 def learn_stats(steps_to_learn: Sequence[float | None]) -> LearnStats:
-    """:class:`LearnStats` of one group; ``None`` (or a negative value, the judge's -1, or a
+    """[`LearnStats`][jswim.judging.stats.LearnStats] of one group; ``None`` (or a negative value, the judge's -1, or a
     non-finite one) marks a run that never learned.
 
-    Values are counted as the paper counts them, from 1 (:attr:`jswim.judging.gait.GaitReport.steps_to_learn`:
+    Values are counted as the paper counts them, from 1 (`jswim.judging.gait.GaitReport.steps_to_learn`:
     the step at which the final stroke starts; 1 = the stroke from the first action).
     """
     done = [float(v) for v in steps_to_learn if v is not None and math.isfinite(v) and v >= 0]

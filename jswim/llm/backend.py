@@ -1,9 +1,9 @@
 """Where LLM requests go: a remote OpenAI-compatible server or the embedded model.
 
-:class:`Backend` is the one description of a backend that studies and the command line pass
+[`Backend`][jswim.llm.backend.Backend] is the one description of a backend that studies and the command line pass
 around, validated once here. It builds the client's settings itself; for the embedded model it
-asks the running server (:meth:`jswim.llm.local.LocalServer.client_settings`, the one place those
-settings are made), so ``jswim swim``, ``jswim study`` and :func:`jswim.agents.llm.run_batch`
+asks the running server (`jswim.llm.local.LocalServer.client_settings`, the one place those
+settings are made), so ``jswim swim``, ``jswim study`` and [`jswim.agents.llm.run_batch`][jswim.agents.llm.run_batch]
 send identical requests (same model name, retries and backoff, hence the same cache keys).
 """
 
@@ -54,7 +54,7 @@ class Backend:
     api_key_env : str
         Environment variable holding the API key (its value is never stored).
     constrain : str
-        Constrained decoding, one of :data:`jswim.llm.constrain.MODES` (:mod:`jswim.llm.constrain`).
+        Constrained decoding, one of `jswim.llm.constrain.MODES` (`jswim.llm.constrain`).
     temperature : float
         Sampling temperature (paper: 0).
     n_parallel : int
@@ -64,13 +64,13 @@ class Backend:
         machine busy with other work, fewer threads than cores keep decoding steady.
     concurrency : int or None
         Requests in flight at once. ``None``: fitted to the server (its slots where it says, else
-        :data:`DEFAULT_CONCURRENCY`; the rule per server is in docs/servers.md, *Concurrency*).
+        `DEFAULT_CONCURRENCY`; the rule per server is in docs/servers.md, *Concurrency*).
     cohorts : int
         Deprecated, no effect: runs no longer advance in lockstep rounds (each run is its own
-        pipeline; see :mod:`jswim.agents.llm`). Kept so old scripts keep working.
+        pipeline; see [`jswim.agents.llm`][jswim.agents.llm]). Kept so old scripts keep working.
     rpm, tpm : float or None
         Requests and tokens (prompt + max_tokens) per minute to pace to
-        (:class:`jswim.llm.pacing.Pacer`); the provider's rate-limit headers are read either way.
+        ([`jswim.llm.pacing.Pacer`][jswim.llm.pacing.Pacer]); the provider's rate-limit headers are read either way.
     cache_dir : str or None
         Response cache (temperature 0 only).
     timeout_s : float or None
@@ -81,25 +81,25 @@ class Backend:
     price_local : bool
         Price a local or LAN server's calls at the list prices (a local gateway), as in ClientSettings.
     reasoning : {"auto", "on", "off"}
-        Reasoning models: auto, on or off, as in :class:`~jswim.llm.settings.ClientSettings`.
+        Reasoning models: auto, on or off, as in [`ClientSettings`][jswim.llm.settings.ClientSettings].
     reasoning_effort : str or None
         ``reasoning_effort`` sent with every request when set.
     prices, prices_as_of : optional
         The user's price table (``--prices FILE``: model -> USD per 1M tokens, as pairs) and its
-        date; ``None`` uses the built-in table (:mod:`jswim.llm.usage`).
+        date; ``None`` uses the built-in table ([`jswim.llm.usage`][jswim.llm.usage]).
     extra_fields : tuple of (name, value)
         More request fields sent with every request (``--extra-field NAME=JSON``), recorded in the
         identity (they change what the model does).
     sampling : {"auto", "neutral", "server"}
-        Sampling preset (:mod:`jswim.llm.sampling`; what each sends to which server: docs/servers.md).
+        Sampling preset (`jswim.llm.sampling`; what each sends to which server: docs/servers.md).
     server_family : str or None
-        Force the server's family (:data:`jswim.llm.probe.FAMILIES`) instead of the preflight's
+        Force the server's family (`jswim.llm.probe.FAMILIES`) instead of the preflight's
         guess.
     strict_model : bool
         A model the server's ``/v1/models`` does not list is an error (default: a warning).
     retries, retry_for_s : int, float or None
         Retry budget of each call (``max_retries``, ``retry_for_s`` of
-        :class:`~jswim.llm.settings.ClientSettings`; ``None``: its defaults). Not part of the identity.
+        [`ClientSettings`][jswim.llm.settings.ClientSettings]; ``None``: its defaults). Not part of the identity.
 
     Raises
     ------
@@ -208,7 +208,7 @@ class Backend:
         """What defines the backend's answers (recorded in the study's identity).
 
         The model is the identity, the address is not: a restarted server on another port or a
-        new host name for the same model serves the same study (:meth:`address` is recorded
+        new host name for the same model serves the same study ([`address`][jswim.llm.backend.Backend.address] is recorded
         with each session instead).
         """
         if self.local:
@@ -258,9 +258,9 @@ class Backend:
     def client_settings(
         self, server: LocalServer | None = None, info: ServerInfo | None = None, **changes: Any
     ) -> ClientSettings:
-        """:class:`ClientSettings` for this backend; the embedded one needs its running ``server``.
+        """[`ClientSettings`][jswim.llm.settings.ClientSettings] for this backend; the embedded one needs its running ``server``.
 
-        ``info`` (from :meth:`preflight`) gives the server's family (sampling fields, ``auto``
+        ``info`` (from [`preflight`][jswim.llm.backend.Backend.preflight]) gives the server's family (sampling fields, ``auto``
         decoding form), its listed models (pricing) and its slots (default concurrency)."""
         family = self.family(info)
         common = dict(
@@ -308,16 +308,16 @@ class Backend:
     def preflight(
         self, server: LocalServer | None = None, timeout_s: float | None = None
     ) -> ServerInfo:
-        """Ask the server what it is before any run (:func:`jswim.llm.probe.probe`): the remote
+        """Ask the server what it is before any run (`jswim.llm.probe.probe`): the remote
         server at ``base_url``, or the running embedded ``server``.
 
         Raises
         ------
         LLMServerError, LLMTimeoutError, LLMSetupError
-            As :func:`~jswim.llm.probe.probe`: nothing answers, too slow, a refused key, or (with
+            As `probe`: nothing answers, too slow, a refused key, or (with
             ``strict_model``) a model the server does not list.
         ConfigError
-            A ``--cache-dir`` that cannot be a response cache (:func:`jswim.llm.cache.check_cache`).
+            A ``--cache-dir`` that cannot be a response cache (`jswim.llm.cache.check_cache`).
         """
         if self.cache_dir is not None:
             check_cache(self.cache_dir)
@@ -361,7 +361,7 @@ class Backend:
         return info
 
     def check(self, timeout_s: float | None = None) -> None:
-        """For a remote backend, :meth:`preflight` (waiting ``timeout_s``, default the backend's
+        """For a remote backend, [`preflight`][jswim.llm.backend.Backend.preflight] (waiting ``timeout_s``, default the backend's
         ``--timeout`` or 5 s); for both, a ``--cache-dir`` that cannot be a cache is one line."""
         if self.cache_dir is not None:
             check_cache(self.cache_dir)
@@ -374,7 +374,7 @@ GGUF_MAGIC = b"GGUF"
 
 
 def check_gguf(path: str) -> None:
-    """Raise :class:`ConfigError` unless ``path`` is a readable GGUF file (checked up front, so
+    """Raise [`ConfigError`][jswim.errors.ConfigError] unless ``path`` is a readable GGUF file (checked up front, so
     a wrong file fails before any baseline runs, not when the embedded server starts)."""
     check_file(path, "--gguf")
     try:
@@ -390,7 +390,7 @@ def check_gguf(path: str) -> None:
 
 
 def check_server(base_url: str, timeout_s: float = 5.0) -> None:
-    """Raise :class:`LLMServerError` at once when nothing answers at ``base_url``.
+    """Raise `LLMServerError` at once when nothing answers at ``base_url``.
 
     Any HTTP answer counts (even 401 or 404): only an unreachable host or port is an error here.
     """

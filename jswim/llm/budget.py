@@ -1,8 +1,8 @@
 """A spending cap for a study: calls reserve their worst cost before they go out.
 
-A study run with ``--max-cost USD`` holds one :class:`Budget`: each request reserves its bound
-(:func:`call_bound`), the answer replaces it with the call's cost, and the first reservation past
-the cap (spent, reserved and unanswered together) raises :class:`BudgetExhausted`, as every later
+A study run with ``--max-cost USD`` holds one [`Budget`][jswim.llm.budget.Budget]: each request reserves its bound
+([`call_bound`][jswim.llm.budget.call_bound]), the answer replaces it with the call's cost, and the first reservation past
+the cap (spent, reserved and unanswered together) raises [`BudgetExhausted`][jswim.errors.BudgetExhausted], as every later
 one does. ``spent_usd`` starts at what earlier sessions paid. docs/paid-apis.md (*Cap*) describes
 the rule, and why unanswered requests count.
 """

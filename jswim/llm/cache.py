@@ -1,7 +1,7 @@
 """Persistent response cache (sqlite3) for deterministic requests.
 
 Keys are SHA-256 hashes of the full request body, without the API key or the server's address;
-only replies that answered are stored (``cache_if`` of :meth:`jswim.llm.client.LLMClient.chat`).
+only replies that answered are stored (``cache_if`` of [`jswim.llm.client.LLMClient.chat`][jswim.llm.client.LLMClient.chat]).
 docs/servers.md (*Cache*) says why.
 """
 

@@ -1,11 +1,11 @@
 """Async client for OpenAI-compatible chat-completions servers, over httpx.
 
-One :class:`LLMClient` serves a whole study: many requests in flight at once (bounded by a
+One [`LLMClient`][jswim.llm.client.LLMClient] serves a whole study: many requests in flight at once (bounded by a
 semaphore), retries with backoff and jitter within one budget per call (``max_retries``,
 ``retry_for_s``), requests that got no answer counted as possibly billed, a disk cache and
 in-flight de-duplication for temperature-0 requests, and usage/cost per call. How it absorbs real
-servers' differences (streams, reasoning, content shapes, base URLs: :mod:`jswim.llm.reply`,
-:mod:`jswim.llm.urls`), what it retries and what a rejection says are in docs/servers.md; how the
+servers' differences (streams, reasoning, content shapes, base URLs: `jswim.llm.reply`,
+`jswim.llm.urls`), what it retries and what a rejection says are in docs/servers.md; how the
 API key is kept (only in the ``Authorization`` header) in docs/studies.md (*Secrets*).
 
 Example
@@ -78,7 +78,7 @@ RETRY_STATUSES = frozenset({408, 409, 429})
 
 
 class _Failure(Exception):
-    """A retryable attempt failure (internal); ``kind`` is one of :data:`FAULT_KINDS`."""
+    """A retryable attempt failure (internal); ``kind`` is one of `FAULT_KINDS`."""
 
     def __init__(
         self,
@@ -117,9 +117,9 @@ class LLMClient:
     """Async chat-completions client; use as ``async with LLMClient(settings) as client``.
 
     The client binds to the running event loop on first use; create one per ``asyncio.run``.
-    ``pacer`` (:class:`jswim.llm.pacing.Pacer`) holds requests back to rate limits; ``budget``
-    (:class:`jswim.llm.budget.Budget`) reserves each request's cost bound before it goes out and
-    raises :class:`jswim.llm.budget.BudgetExhausted` past the cap.
+    ``pacer`` ([`jswim.llm.pacing.Pacer`][jswim.llm.pacing.Pacer]) holds requests back to rate limits; ``budget``
+    ([`jswim.llm.budget.Budget`][jswim.llm.budget.Budget]) reserves each request's cost bound before it goes out and
+    raises [`jswim.llm.budget.BudgetExhausted`][jswim.errors.BudgetExhausted] past the cap.
     """
 
     def __init__(
@@ -302,10 +302,10 @@ class LLMClient:
         ------
         LLMServerError
             The server stayed unreachable or kept failing through every retry
-            (:class:`~jswim.llm.errors.LLMTimeoutError` when it kept timing out).
+            ([`LLMTimeoutError`][jswim.errors.LLMTimeoutError] when it kept timing out).
         LLMRequestError
             The server rejected the request (e.g. 400: context too long);
-            :class:`~jswim.llm.errors.LLMSetupError` when no request can succeed as configured
+            [`LLMSetupError`][jswim.errors.LLMSetupError] when no request can succeed as configured
             (404, 401/403, a rejected field). The message names the server's own error.
         LLMResponseError
             The server kept sending bodies that are not chat completions.
@@ -329,7 +329,7 @@ class LLMClient:
 
     def _fall_back(self, mode: str, exc: LLMSetupError) -> bool:
         """Under ``constrain="auto"``: after the server rejected the form ``mode``, move to the next
-        form (:data:`jswim.llm.constrain.FALLBACK`); False when the error is not about the form
+        form (`jswim.llm.constrain.FALLBACK`); False when the error is not about the form
         or no form is left."""
         if exc.field not in ("grammar", "response_format"):
             return False
@@ -583,11 +583,11 @@ class LLMClient:
             ) from None
 
     async def _post(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> httpx.Response:
-        """POST ``payload`` and read the body as it was sent (see :func:`decode_body`).
+        """POST ``payload`` and read the body as it was sent (see `decode_body`).
 
         A 307 or 308 to the same scheme, host and port is followed (at most
-        :data:`MAX_REDIRECTS`, the body and the key sent again); one to another host is refused
-        (:class:`~jswim.llm.errors.LLMSetupError`): the key never goes to a host nobody named."""
+        `MAX_REDIRECTS`, the body and the key sent again); one to another host is refused
+        ([`LLMSetupError`][jswim.errors.LLMSetupError]): the key never goes to a host nobody named."""
         headers = {**self._headers(), "Accept-Encoding": "gzip, deflate"}  # what decode_body reads
         url = httpx.URL(self._url)
         for _ in range(MAX_REDIRECTS + 1):

@@ -4,11 +4,11 @@ Modes
 -----
 ``"grammar"``      llama.cpp servers: a GBNF ``grammar`` field whose root is the alternatives.
 ``"json_schema"``  OpenAI-style ``response_format`` with a JSON schema; the reply is
-                   ``{"action": "<one of the replies>"}`` and :func:`reply_text` unwraps it.
+                   ``{"action": "<one of the replies>"}`` and `reply_text` unwraps it.
 ``"json_object"``  ``response_format`` ``{"type": "json_object", "schema": ...}``, the form
                    llama-cpp-python's server takes (it rejects ``json_schema``); same reply.
 ``"none"``         plain text, parsed afterwards.
-``"auto"``         by server family, falling back through :data:`FALLBACK` where the server
+``"auto"``         by server family, falling back through `FALLBACK` where the server
                    rejects the form (docs/servers.md, *Constrained decoding*).
 """
 
@@ -22,7 +22,7 @@ from jswim.errors import ConfigError
 
 MODES = ("auto", "grammar", "json_schema", "json_object", "none")
 
-#: Server families the client knows (:mod:`jswim.llm.probe` tells them apart).
+#: Server families the client knows (`jswim.llm.probe` tells them apart).
 SERVER_KINDS = ("generic", "llamacpp", "llama-cpp-python", "vllm", "ollama", "openai")
 
 #: ``"auto"``'s first form per family (the others: ``"none"``).
@@ -49,7 +49,7 @@ def resolve_mode(mode: str, server_kind: str, has_replies: bool = True) -> str:
 
 
 def next_form(tried: set[str] | frozenset[str]) -> str | None:
-    """The next form of :data:`FALLBACK` not yet ``tried`` (``None``: none left)."""
+    """The next form of `FALLBACK` not yet ``tried`` (``None``: none left)."""
     return next((f for f in FALLBACK if f not in tried), None)
 
 

@@ -1,7 +1,7 @@
 """API keys and URL credentials: read once, checked, and never shown in any form.
 
 A key is read from the environment variable the user names (``--api-key-env``) and checked before
-any request; every secret the process handles is registered here, and :func:`scrub` removes it
+any request; every secret the process handles is registered here, and `scrub` removes it
 from any text about to be printed or raised, in each form a library may have written it
 (docs/studies.md, *Secrets*).
 """
@@ -46,7 +46,7 @@ def forms(secret: str) -> set[str]:
 
 
 def register(secret: str | None) -> None:
-    """Remember ``secret`` so that :func:`scrub` masks it from now on (in this process)."""
+    """Remember ``secret`` so that `scrub` masks it from now on (in this process)."""
     if not secret or secret in _secrets:
         return
     _secrets.add(secret)
@@ -54,7 +54,7 @@ def register(secret: str | None) -> None:
 
 
 def scrub(text: str) -> str:
-    """``text`` with every registered secret, in every form of :func:`forms`, replaced by ``***``."""
+    """``text`` with every registered secret, in every form of `forms`, replaced by ``***``."""
     if not _forms or not text:
         return text
     for f in _forms:
@@ -92,7 +92,7 @@ def _bad_character(value: str) -> str | None:
 
 
 def read_api_key(env_name: str) -> str | None:
-    """The key in ``$env_name`` (``None`` when unset or empty), registered for :func:`scrub`.
+    """The key in ``$env_name`` (``None`` when unset or empty), registered for `scrub`.
 
     Raises
     ------

@@ -1,10 +1,10 @@
 """A stand-in client for ``--dry-run``: every call answered at once, nothing sent.
 
-The driver runs a study's LLM runs against :class:`EstimatingClient` exactly as against a server,
-so the prompts are those of a real study; usage is estimated from the text (:mod:`jswim.llm.tokens`)
+The driver runs a study's LLM runs against `EstimatingClient` exactly as against a server,
+so the prompts are those of a real study; usage is estimated from the text (`jswim.llm.tokens`)
 and priced. What the estimate leaves out (parse retries; replies longer than the bare action:
-:attr:`Estimate.cost_max_usd`) and how a reasoning model's thinking is estimated
-(:data:`jswim.llm.reasoning.ESTIMATE_SHARE`, an assumption) are in docs/paid-apis.md.
+`Estimate.cost_max_usd`) and how a reasoning model's thinking is estimated
+(`jswim.llm.reasoning.ESTIMATE_SHARE`, an assumption) are in docs/paid-apis.md.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
-"""The LLM layer's errors; they live in :mod:`jswim.errors` under the one root ``JswimError``
+"""The LLM layer's errors; they live in [`jswim.errors`][jswim.errors] under the one root ``JswimError``
 (kept as a module so ``from jswim.llm.errors import LLMServerError`` goes on working), and what an
-httpx exception means, written once: :func:`no_answer` (read by the client's retries) and
-:func:`unreachable` (the preflight's one-line error).
+httpx exception means, written once: `no_answer` (read by the client's retries) and
+`unreachable` (the preflight's one-line error).
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def no_answer(exc: httpx.HTTPError) -> tuple[str, bool]:
 
 def unreachable(exc: httpx.HTTPError, where: str, url: str, timeout_s: float) -> LLMServerError:
     """The one-line error of a preflight request (``url``, shown safe) to the server ``where`` that
-    got no answer: :class:`LLMTimeoutError` when it connected but took longer than ``timeout_s``."""
+    got no answer: [`LLMTimeoutError`][jswim.errors.LLMTimeoutError] when it connected but took longer than ``timeout_s``."""
     kind, _ = no_answer(exc)
     if kind == "connect":
         return LLMServerError(

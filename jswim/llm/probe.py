@@ -1,7 +1,7 @@
 """Preflight: what serves the base URL, which models it lists, its slots and sampling defaults.
 
-Before any run, :func:`probe` asks the server two cheap questions (``GET /v1/models`` and, where it
-may be llama.cpp, ``GET /props``) and decides its *family* (:data:`FAMILIES`: which sampling knobs
+Before any run, `probe` asks the server two cheap questions (``GET /v1/models`` and, where it
+may be llama.cpp, ``GET /props``) and decides its *family* (`FAMILIES`: which sampling knobs
 it has, which constrained-decoding forms it takes, how many requests it serves at once); how each
 family is told is tabled in docs/servers.md. ``--server-family`` overrides the guess. A 401/403 on
 ``/v1/models`` stops the study before any baseline runs, in one line that says whether the key's
@@ -44,7 +44,7 @@ SINGLE_SLOT = {"llama-cpp-python": 1}
 
 
 def check_family(name: str | None) -> str | None:
-    """``name`` if it is a known family (or ``None``), else :class:`ConfigError`."""
+    """``name`` if it is a known family (or ``None``), else [`ConfigError`][jswim.errors.ConfigError]."""
     if name is not None and name not in FAMILIES:
         raise ConfigError(f"--server-family must be one of {', '.join(FAMILIES)}, got {name!r}")
     return name
@@ -57,7 +57,7 @@ class ServerInfo:
     Attributes
     ----------
     family : str
-        One of :data:`FAMILIES`.
+        One of `FAMILIES`.
     detected_by : str
         How the family was decided, in words (recorded with the run).
     models : tuple of str or None

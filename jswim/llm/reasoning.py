@@ -2,7 +2,7 @@
 
 Reasoning models think before they answer, so the paper's 10-token reply limit cuts them off, and
 OpenAI's refuse ``max_tokens`` ("Use 'max_completion_tokens' instead") and any ``temperature`` but
-their default ("Only the default (1) value is supported"). A client's :class:`ReasoningState`
+their default ("Only the default (1) value is supported"). A client's `ReasoningState`
 starts from the ``reasoning`` setting: ``"auto"`` (default; each such 400 switches once and the
 refused request is sent again as amended, a 400 is not billed), ``"on"`` (the budget from the first
 request) or ``"off"`` (never switch). docs/servers.md (*Reasoning models need no flags*) says what
@@ -63,7 +63,7 @@ def dry_run_budget(model: str, mode: str, budget: int) -> int | None:
     """The reply budget a study's calls will carry for reasoning (``None``: the plain ``max_tokens``).
 
     ``on``: the budget from the first call. ``auto``: the budget for OpenAI's reasoning models by name
-    (:data:`OPENAI_REASONING`; their first 400 switches the client). ``off``: never.
+    (`OPENAI_REASONING`; their first 400 switches the client). ``off``: never.
     """
     if mode == "on" or (mode == "auto" and OPENAI_REASONING.search(_bare(model))):
         return budget
@@ -86,7 +86,7 @@ def dry_run_warning(model: str, mode: str) -> str | None:
 
 
 def check_mode(mode: str, effort: str | None = None) -> None:
-    """Raise :class:`ConfigError` for an unknown ``--reasoning`` or ``--reasoning-effort``."""
+    """Raise [`ConfigError`][jswim.errors.ConfigError] for an unknown ``--reasoning`` or ``--reasoning-effort``."""
     if mode not in MODES:
         raise ConfigError(f"--reasoning must be one of {', '.join(MODES)}, got {mode!r}")
     if effort is not None and effort not in EFFORTS:

@@ -1,6 +1,6 @@
 """A prompt-only reference agent behind an OpenAI-compatible server (``jswim serve reference``).
 
-It is not a language model and is never presented as one: a plain rule (:func:`decide`) that reads
+It is not a language model and is never presented as one: a plain rule ([`decide`][jswim.llm.reference.decide]) that reads
 the rendered prompt text it receives, nothing else, and answers one action. Its purpose, the rule
 step by step, what it reads of the prompt and what it measured are in docs/bench.md (*The
 reference agent*).

@@ -1,9 +1,9 @@
 """What a server's 4xx answer means, in one line: its own words, the URL tried, what to change.
 
-A rejection is recognised by what the server says, not only its status (:func:`validation_error`:
-never retried) and trimmed to the sentence that matters (:func:`essential_message`). It is about
+A rejection is recognised by what the server says, not only its status (`validation_error`:
+never retried) and trimmed to the sentence that matters (`essential_message`). It is about
 *this request* (the run fails, others go on) or *every request* of the client
-(:class:`~jswim.llm.errors.LLMSetupError`, naming the option that avoids it); jswim never drops a
+([`LLMSetupError`][jswim.errors.LLMSetupError], naming the option that avoids it); jswim never drops a
 field on its own. docs/servers.md (*Rejected fields*, *Errors per run*) has the details.
 """
 
@@ -53,7 +53,7 @@ _TRACEBACK = "Traceback (most recent call last)"
 def raw_error_text(resp: httpx.Response) -> str:
     """The error text of a response as sent (line breaks kept): the ``error.message``, the
     pydantic ``detail`` list as ``loc: msg`` items, or the body text; credentials masked
-    (:func:`jswim.llm.credentials.scrub`) before anything trims it, so no cut leaves part of a key."""
+    (`jswim.llm.credentials.scrub`) before anything trims it, so no cut leaves part of a key."""
     return scrub(_raw_error_text(resp))
 
 
@@ -164,7 +164,7 @@ def rejected_field(server_message: str, payload: Mapping[str, Any]) -> str | Non
     return None
 
 
-#: Sampling fields jswim sends under ``--sampling neutral`` (see :mod:`jswim.llm.sampling`).
+#: Sampling fields jswim sends under ``--sampling neutral`` (see `jswim.llm.sampling`).
 SAMPLING_FIELDS = (
     "repeat_penalty",
     "repetition_penalty",
@@ -208,14 +208,14 @@ def rejection(
     invalid: bool = False,
 ) -> LLMRequestError:
     """The error for a 4xx answer (not 408/409/429, which are retried), or for any answer whose
-    body is a request-validation error (``invalid``, :func:`validation_error`).
+    body is a request-validation error (``invalid``, `validation_error`).
 
     Parameters
     ----------
     status : int
         HTTP status.
     server : str
-        The server's error message (see :func:`server_text`).
+        The server's error message (see `server_text`).
     payload : mapping
         The request body sent (to find the field the server names).
     where, url : str

@@ -1,5 +1,5 @@
-"""What one chat call returned (:class:`ChatResult`) and a client's running totals
-(:class:`LiveCounts`, its transient failures by :data:`FAULT_KINDS`)."""
+"""What one chat call returned ([`ChatResult`][jswim.llm.result.ChatResult]) and a client's running totals
+([`LiveCounts`][jswim.llm.result.LiveCounts], its transient failures by `FAULT_KINDS`)."""
 
 from __future__ import annotations
 
@@ -89,7 +89,7 @@ class ChatResult:
         return out | {k: v for k, v in optional.items() if v is not None}
 
 
-#: Kinds of transient failure, as counted in :attr:`LiveCounts.faults` (and a study's summary).
+#: Kinds of transient failure, as counted in `LiveCounts.faults` (and a study's summary).
 FAULT_KINDS = ("429", "5xx", "408/409", "connection", "timeout", "bad body")
 
 

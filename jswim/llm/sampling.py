@@ -2,7 +2,7 @@
 
 "Temperature 0" is not one experiment across servers: each carries its own sampling defaults
 (llama-cpp-python's ``repeat_penalty`` 1.1 turned a ``[1, 1]`` into ``[1, 0]``), so ``--sampling
-neutral`` sends, per family, the value that turns each knob off (:data:`NEUTRAL`). The families'
+neutral`` sends, per family, the value that turns each knob off (`NEUTRAL`). The families'
 defaults, the neutral fields, the presets (``auto``, ``neutral``, ``server``) and why ``auto`` sends
 the embedded server the neutral penalties only are tabled in docs/servers.md (*Servers*).
 """
@@ -49,7 +49,7 @@ PENALTIES = ("repeat_penalty", "repetition_penalty", "presence_penalty", "freque
 
 
 def check_preset(name: str) -> str:
-    """``name`` if it is a preset, else :class:`ConfigError`."""
+    """``name`` if it is a preset, else [`ConfigError`][jswim.errors.ConfigError]."""
     if name not in PRESETS:
         raise ConfigError(f"--sampling must be one of {', '.join(PRESETS)}, got {name!r}")
     return name
@@ -64,7 +64,7 @@ def sampling_fields(
     ----------
     preset : {"auto", "neutral", "server"}
     family : str
-        A family of :data:`NEUTRAL` (unknown families are treated as ``"generic"``).
+        A family of `NEUTRAL` (unknown families are treated as ``"generic"``).
     embedded : bool
         The embedded server (``auto`` then sends the neutral penalties only).
 

@@ -1,4 +1,4 @@
-"""What an :class:`~jswim.llm.client.LLMClient` sends and how: :class:`ClientSettings` and the
+"""What an [`LLMClient`][jswim.llm.client.LLMClient] sends and how: [`ClientSettings`][jswim.llm.settings.ClientSettings] and the
 checks of the values it carries (temperature, ``--max-tokens``, extra request fields)."""
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ MAX_TOKENS = 100_000
 
 
 def check_max_tokens(value: int | None) -> int | None:
-    """``value`` if it is ``None`` (the default) or a reply length limit in 1..:data:`MAX_TOKENS`."""
+    """``value`` if it is ``None`` (the default) or a reply length limit in 1..`MAX_TOKENS`."""
     if value is not None and not 1 <= value <= MAX_TOKENS:
         raise ConfigError(f"--max-tokens must be between 1 and {MAX_TOKENS}, got {value}")
     return value
@@ -57,7 +57,7 @@ CORE_FIELDS = {
 
 
 def check_extra_fields(fields: Iterable[tuple[str, Any]], option: str = "--extra-field") -> None:
-    """Refuse an extra request field that jswim sets itself (:data:`CORE_FIELDS`).
+    """Refuse an extra request field that jswim sets itself (`CORE_FIELDS`).
 
     Raises
     ------
@@ -79,7 +79,7 @@ class ClientSettings:
     ----------
     base_url : str
         Server root including the API prefix, e.g. ``https://api.openai.com/v1``. Common other
-        shapes are accepted and normalized (see :func:`jswim.llm.urls.normalize_base_url`).
+        shapes are accepted and normalized (see `jswim.llm.urls.normalize_base_url`).
     model : str
         Model name sent with each request (also keys the cache and the price table).
     api_key_env : str
@@ -89,7 +89,7 @@ class ClientSettings:
         failure like a 5xx: sent again within the retry budget (``max_retries``, ``retry_for_s``,
         whose clock runs from when the first failed attempt went out, so the waits for answers
         that never came count); when the budget is spent on timeouts the call fails with
-        :class:`~jswim.llm.errors.LLMTimeoutError`, saying the server is slow.
+        [`LLMTimeoutError`][jswim.errors.LLMTimeoutError], saying the server is slow.
     max_concurrency : int
         Requests in flight at once.
     max_retries : int
@@ -110,15 +110,15 @@ class ClientSettings:
     seed : int or None
         Sent when given (some servers use it for sampling at temperature > 0).
     constrain : {"auto", "grammar", "json_schema", "json_object", "none"}
-        Constrained decoding; see :mod:`jswim.llm.constrain`.
+        Constrained decoding; see `jswim.llm.constrain`.
     server_kind : str
-        The server's family (:data:`jswim.llm.constrain.SERVER_KINDS`, told by
-        :func:`jswim.llm.probe.probe`); resolves ``constrain="auto"``.
+        The server's family (`jswim.llm.constrain.SERVER_KINDS`, told by
+        `jswim.llm.probe.probe`); resolves ``constrain="auto"``.
     cache_dir : str or None
         Directory of the response cache; ``None`` disables it.
     prices : mapping or None
         USD per 1M tokens by model name, applied on any host; ``None`` uses
-        :data:`jswim.llm.usage.DEFAULT_PRICES` where they apply (:func:`jswim.llm.usage.price_table`:
+        `jswim.llm.usage.DEFAULT_PRICES` where they apply ([`jswim.llm.usage.price_table`][jswim.llm.usage.price_table]:
         not on this machine or the LAN, not for a model the server does not list, not for a reply
         whose ``model`` field names another model).
     price_local : bool
@@ -127,27 +127,27 @@ class ClientSettings:
     listed_models : tuple of str or None
         The models the server's ``/v1/models`` listed at preflight (``None``: not known).
     fast_transport : bool
-        For ``http://`` servers on loopback, use :class:`jswim.llm.transport.LoopbackTransport`
+        For ``http://`` servers on loopback, use `jswim.llm.transport.LoopbackTransport`
         (asyncio streams) instead of httpx's default transport (anyio). Default True.
     omit_fields : tuple of str
         Optional request fields never sent (``"seed"``, ``"max_tokens"``, ``"stream"``, ...),
         for servers that reject them.
     reasoning : {"auto", "on", "off"}
-        Reasoning models (:mod:`jswim.llm.reasoning`): switch to ``max_completion_tokens`` and the
+        Reasoning models (`jswim.llm.reasoning`): switch to ``max_completion_tokens`` and the
         temperature the model accepts when the server's 400 asks for them (auto), use the
         reasoning budget from the start (on), or never switch (off).
     reasoning_max_tokens : int
         The reply budget once reasoning is on (default
-        :data:`jswim.llm.reasoning.REASONING_MAX_TOKENS`).
+        `jswim.llm.reasoning.REASONING_MAX_TOKENS`).
     reasoning_effort : str or None
         Sent as ``reasoning_effort`` when given (``minimal``, ``low``, ``medium``, ``high``).
     extra_fields : tuple of (name, value)
         More fields of every request body (a models file's ``extra``, ``--extra-field``); a field
-        jswim sets itself (:data:`CORE_FIELDS`: ``model``, ``messages``, ``max_tokens``,
-        ``temperature``, ``stream``, ...) is refused with :class:`~jswim.errors.ConfigError`.
+        jswim sets itself (`CORE_FIELDS`: ``model``, ``messages``, ``max_tokens``,
+        ``temperature``, ``stream``, ...) is refused with [`ConfigError`][jswim.errors.ConfigError].
     sampling : tuple of (str, float)
         Sampling fields every request carries (``(("repeat_penalty", 1.0), ...)``;
-        :func:`jswim.llm.sampling.sampling_fields`), before ``omit_fields`` are removed.
+        `jswim.llm.sampling.sampling_fields`), before ``omit_fields`` are removed.
     """
 
     base_url: str = "https://api.openai.com/v1"

@@ -13,7 +13,7 @@ T = TypeVar("T")
 
 
 async def _main(coro: Coroutine[Any, Any, T]) -> T:
-    """``coro`` as the task a signal cancels (:mod:`jswim._io.interrupts`)."""
+    """``coro`` as the task a signal cancels (`jswim._io.interrupts`)."""
     interrupts.set_main_task(asyncio.current_task())
     try:
         return await coro
@@ -24,7 +24,7 @@ async def _main(coro: Coroutine[Any, Any, T]) -> T:
 def run_sync(coro: Coroutine[Any, Any, T]) -> T:
     """Run ``coro`` to completion and return its result.
 
-    Outside an event loop this is :func:`asyncio.run`. Inside one (Jupyter, IPython, an async
+    Outside an event loop this is `asyncio.run`. Inside one (Jupyter, IPython, an async
     application) ``asyncio.run`` refuses to start a second loop in the same thread, so the
     coroutine gets its own loop in a worker thread and this call blocks until it is done. An
     httpx client is bound to the loop it was opened on, so ``coro`` must open its own client.

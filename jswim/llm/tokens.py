@@ -2,7 +2,7 @@
 
 Used for the dry run's cost estimate, for budget reservations and for tokens-per-minute pacing.
 The estimate counts the pieces a byte-pair tokenizer first cuts text into, scaled by
-:data:`CALIBRATION`; docs/paid-apis.md gives the rule and its measured accuracy.
+`CALIBRATION`; docs/paid-apis.md gives the rule and its measured accuracy.
 """
 
 from __future__ import annotations

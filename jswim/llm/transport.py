@@ -4,7 +4,7 @@ httpx reaches the network through httpcore, whose default backend on asyncio goe
 cancel scopes and checkpoints around every read and write. Against a server on loopback (the
 embedded model, a local vLLM or llama.cpp) that bookkeeping is a visible share of each request's
 CPU time, and in a lockstep round of many requests it is paid before the next round can start.
-:class:`LoopbackTransport` keeps httpcore's HTTP/1.1 connection handling and swaps only the byte
+`LoopbackTransport` keeps httpcore's HTTP/1.1 connection handling and swaps only the byte
 streams for asyncio's own. It is used for ``http://`` URLs on a loopback address; everything else
 (TLS, proxies) keeps httpx's default transport.
 """
@@ -140,7 +140,7 @@ class LoopbackTransport(httpx.AsyncBaseTransport):
     Parameters
     ----------
     limits : httpx.Limits
-        Connection limits, as for :class:`httpx.AsyncHTTPTransport`.
+        Connection limits, as for `httpx.AsyncHTTPTransport`.
     """
 
     def __init__(self, limits: httpx.Limits = httpx.Limits()) -> None:

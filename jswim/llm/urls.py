@@ -1,6 +1,6 @@
 """Server addresses: the shapes users write, made into one API root.
 
-:func:`normalize_base_url` accepts the common shapes users copy from server docs and logs (no
+`normalize_base_url` accepts the common shapes users copy from server docs and logs (no
 path, a pasted ``/v1/chat/completions``, no scheme) and returns the API root the client appends
 ``/chat/completions`` to; docs/servers.md (*Base URL*) lists them.
 """

@@ -1,8 +1,8 @@
 """Token usage and cost accounting.
 
 Prices are USD per million tokens, ``(prompt, completion)``, looked up by model name (exact, then
-the longest known prefix); models not in the table cost 0. :func:`price_table` applies the list
-prices only where they can be right, and :func:`cap_refusal` says why a capped study's calls could
+the longest known prefix); models not in the table cost 0. [`price_table`][jswim.llm.usage.price_table] applies the list
+prices only where they can be right, and [`cap_refusal`][jswim.llm.usage.cap_refusal] says why a capped study's calls could
 not be priced: both rules are in docs/paid-apis.md.
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from collections.abc import Iterable, Mapping, Sequence
 
-#: When :data:`DEFAULT_PRICES` was read off the providers' list prices (standard tier, no batch
+#: When `DEFAULT_PRICES` was read off the providers' list prices (standard tier, no batch
 #: or cached-input discounts). Printed with every estimate.
 PRICES_AS_OF = "2025-04"
 
@@ -123,11 +123,11 @@ def price_table(
     Parameters
     ----------
     prices : mapping or None
-        The user's table (always applied, on any host), or ``None`` for :data:`DEFAULT_PRICES`.
+        The user's table (always applied, on any host), or ``None`` for `DEFAULT_PRICES`.
     model : str
         The model name requests carry.
     local_host : bool
-        The server is on this machine or the LAN (:func:`jswim.llm.urls.is_local_host`).
+        The server is on this machine or the LAN (`jswim.llm.urls.is_local_host`).
     price_local : bool
         Price a local server's calls at the list prices anyway (a local gateway to a paid API);
         a model the server's ``/v1/models`` does not list stays unpriced.
@@ -171,7 +171,7 @@ def cap_refusal(
     """Why a cost cap could not hold for ``model``'s calls (one line naming ``--prices``), or ``None``.
 
     A cap holds when the calls have a price: from the user's table, or the list price where
-    :func:`price_table` applies it. A server on this machine or the LAN without
+    [`price_table`][jswim.llm.usage.price_table] applies it. A server on this machine or the LAN without
     ``--price-local`` and with no list price for the model is free, and the cap has nothing to
     bound. Anything else priced at $0 would let the cap lapse: every call would be sent.
     """
@@ -217,7 +217,7 @@ class UsageTotals:
     latency_s: float = 0.0
 
     def add(self, result: object) -> None:
-        """Add one :class:`jswim.llm.client.ChatResult`."""
+        """Add one [`jswim.llm.client.ChatResult`][jswim.llm.result.ChatResult]."""
         self.calls += 1
         self.retries += result.retries
         self.latency_s += result.latency_s

@@ -1,4 +1,4 @@
-"""The numbers of a prompt: an :class:`Action` (DOF, ROC), the integer encoding of the position
+"""The numbers of a prompt: an [`Action`][jswim.prompt.Action] (DOF, ROC), the integer encoding of the position
 X (the paper's ``(X - X_min) * 1000``, truncated) and a DOF value as the prompt shows it."""
 
 from __future__ import annotations

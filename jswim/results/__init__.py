@@ -15,17 +15,17 @@ the done runs; a run that was interrupted is started again from scratch (its tra
 rewritten), so no row is lost or duplicated. Every other file is derived from ``runs.jsonl`` and
 rewritten whole through a temporary file and ``os.replace``, so a kill never leaves half a file.
 
-:func:`load` reads a folder (finished or not, read-only) into pandas DataFrames.
+[`load`][jswim.results.load.load] reads a folder (finished or not, read-only) into pandas DataFrames.
 
 Files are plain: JSON without ``NaN``/``Infinity`` (non-finite numbers are written as ``null``,
 so any language's parser reads them) and the same permissions for every file (owner only, ``0600``,
-unless the umask lets the group write: :mod:`jswim._io.permissions`; a rewritten file keeps its mode). A folder that cannot
-be written (read-only, full disk) is a :class:`StudyFolderError` naming the folder and the cause.
+unless the umask lets the group write: `jswim._io.permissions`; a rewritten file keeps its mode). A folder that cannot
+be written (read-only, full disk) is a [`StudyFolderError`][jswim.errors.StudyFolderError] naming the folder and the cause.
 """
 
-from jswim._io.atomic import _jsonable, atomic_write, dumps, plain_json, write_json  # noqa: F401  (their old place)
-from jswim.results.load import TRAJECTORY_KEYS, Study, load  # noqa: F401
-from jswim.results.read import (  # noqa: F401
+from jswim._io.atomic import atomic_write, dumps, plain_json, write_json  # noqa: F401  (read from here by studies and bench)
+from jswim.results.load import TRAJECTORY_KEYS, Study, load
+from jswim.results.read import (
     CALL_COLUMNS,
     TRANSCRIPT_COLUMNS,
     clean_metadata,
@@ -37,8 +37,8 @@ from jswim.results.read import (  # noqa: F401
     transcript_steps,
     unfinished_note,
 )
-from jswim.results.row import RunRow, as_run_row, as_run_rows  # noqa: F401
-from jswim.results.schema import (  # noqa: F401
+from jswim.results.row import RunRow, as_run_row, as_run_rows
+from jswim.results.schema import (
     FAILED_STATUSES,
     RENAMED,
     SCALAR_TYPES,
@@ -47,7 +47,7 @@ from jswim.results.schema import (  # noqa: F401
     run_problem,
     upgrade_names,
 )
-from jswim.results.store import (  # noqa: F401
+from jswim.results.store import (
     FILE_MODE,
     META,
     RESERVE,
@@ -58,4 +58,41 @@ from jswim.results.store import (  # noqa: F401
     identity_differences,
     writing,
 )
-from jswim.results.tables import arrow_table, write_tables  # noqa: F401
+from jswim.results.tables import arrow_table, write_tables
+
+__all__ = [
+    "CALL_COLUMNS",
+    "FAILED_STATUSES",
+    "FILE_MODE",
+    "META",
+    "RENAMED",
+    "RESERVE",
+    "RESERVE_MIN_BYTES",
+    "RUNS",
+    "SCALAR_TYPES",
+    "TRAJECTORY_KEYS",
+    "TRANSCRIPT_COLUMNS",
+    "RunRow",
+    "Study",
+    "StudyFolderError",
+    "StudyStore",
+    "arrow_table",
+    "as_run_row",
+    "as_run_rows",
+    "clean_metadata",
+    "identity_differences",
+    "is_failed",
+    "legacy_names",
+    "load",
+    "read_calls",
+    "read_metadata",
+    "read_run_rows",
+    "read_runs",
+    "read_transcript",
+    "run_problem",
+    "transcript_steps",
+    "unfinished_note",
+    "upgrade_names",
+    "write_tables",
+    "writing",
+]

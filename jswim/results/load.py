@@ -1,4 +1,4 @@
-"""A study folder read into pandas (:func:`load`)."""
+"""A study folder read into pandas ([`load`][jswim.results.load.load])."""
 
 from __future__ import annotations
 
@@ -39,7 +39,7 @@ TRAJECTORY_KEYS = (
 
 @dataclass
 class Study:
-    """A study folder read into pandas (see :func:`load`).
+    """A study folder read into pandas (see [`load`][jswim.results.load.load]).
 
     Attributes
     ----------
@@ -52,7 +52,7 @@ class Study:
         ``signed_final_x``, tokens, cost, ...).
     trajectories : pandas.DataFrame
         One row per run and step ``n = 1 .. steps`` (the state after the step; X = 0 at n = 0):
-        the run's keys (:data:`TRAJECTORY_KEYS`), ``x`` and ``y`` (centroid, in ``a``),
+        the run's keys (`TRAJECTORY_KEYS`), ``x`` and ``y`` (centroid, in ``a``),
         ``orientation`` (rad; NaN in folders written before it was recorded), ``target_x``
         (``direction * x``: displacement in the target direction), ``dof`` and ``roc`` (the
         action), ``progress`` (that step's target-direction displacement) and ``stuck``.
@@ -114,7 +114,7 @@ def load(folder: str | os.PathLike) -> Study:
     Parameters
     ----------
     folder : path
-        A folder written by ``jswim swim`` / ``jswim study`` / :func:`jswim.studies.run_study`.
+        A folder written by ``jswim swim`` / ``jswim study`` / [`jswim.studies.run_study`][jswim.studies.run.run_study].
 
     Returns
     -------

@@ -16,13 +16,13 @@ from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_nam
 
 
 def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
-    """Runs of a study folder (see :class:`StudyStore`), one record per ``run_id`` in first-seen
-    order, fields under today's names (:func:`upgrade_names`).
+    """Runs of a study folder (see [`StudyStore`][jswim.results.store.StudyStore]), one record per ``run_id`` in first-seen
+    order, fields under today's names ([`upgrade_names`][jswim.results.schema.upgrade_names]).
 
-    The first record of a run wins, except that a failed run (:func:`is_failed`) is replaced by
+    The first record of a run wins, except that a failed run ([`is_failed`][jswim.results.schema.is_failed]) is replaced by
     any later record of it: the one from the resume that ran it again. A line that is no run
-    record (not UTF-8, not JSON, a field of the wrong type: :func:`run_problem`) is skipped with
-    a warning naming the file and the line (:func:`jswim._io.jsonl.read_records`); that run counts as
+    record (not UTF-8, not JSON, a field of the wrong type: [`run_problem`][jswim.results.schema.run_problem]) is skipped with
+    a warning naming the file and the line (`jswim._io.jsonl.read_records`); that run counts as
     not done, as a torn line's does.
     """
     path = Path(folder) / RUNS
@@ -35,18 +35,18 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
 
 
 def read_run_rows(folder: str | os.PathLike) -> list[RunRow]:
-    """The runs of a study folder as typed rows (:class:`RunRow`), for the package's readers.
+    """The runs of a study folder as typed rows ([`RunRow`][jswim.results.row.RunRow]), for the package's readers.
 
     Parameters
     ----------
     folder : str or os.PathLike
-        A study folder (see :class:`StudyStore`); a missing ``runs.jsonl`` reads as no runs.
+        A study folder (see [`StudyStore`][jswim.results.store.StudyStore]); a missing ``runs.jsonl`` reads as no runs.
 
     Returns
     -------
     list of RunRow
-        :func:`read_runs`'s records (same rule: first record wins, a failed one is replaced, a
-        damaged line skipped with a warning), each through :meth:`RunRow.from_dict`.
+        [`read_runs`][jswim.results.read.read_runs]'s records (same rule: first record wins, a failed one is replaced, a
+        damaged line skipped with a warning), each through [`RunRow.from_dict`][jswim.results.row.RunRow.from_dict].
     """
     return as_run_rows(read_runs(folder))
 
@@ -83,7 +83,7 @@ _JSON_NAMES = {
 
 def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
     """``meta`` without the fields of the wrong type (a hand edit: ``"summary": 5``), each dropped
-    with one :class:`~jswim._io.jsonl.SkippedRecord` warning naming the file and the field; the
+    with one `SkippedRecord` warning naming the file and the field; the
     fields left are what a reader may compute with. ``summary.groups`` must be a list of objects."""
     import warnings
 
@@ -112,9 +112,9 @@ def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, A
 
 
 def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
-    """The study's ``metadata.json`` (fields under today's names); :class:`ResultFolderError` if
+    """The study's ``metadata.json`` (fields under today's names); [`ResultFolderError`][jswim.errors.ResultFolderError] if
     the folder is not a study. A field of the wrong type is dropped with a warning
-    (:func:`clean_metadata`)."""
+    ([`clean_metadata`][jswim.results.read.clean_metadata])."""
     path = Path(folder) / META
     if not path.exists():
         raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
@@ -194,7 +194,7 @@ def read_transcript(folder: str | os.PathLike, run_id: str) -> list[dict[str, An
 
 
 def transcript_steps(records: Iterable[Mapping[str, Any]]) -> list[dict[str, Any]]:
-    """One flat dict per ``step`` record of a transcript (see :meth:`Study.transcript` for the keys)."""
+    """One flat dict per ``step`` record of a transcript (see [`Study.transcript`][jswim.results.load.Study.transcript] for the keys)."""
     out = []
     for r in records:
         if r.get("type") != "step":

@@ -1,10 +1,10 @@
-"""One run of a study as a typed row (:class:`RunRow`): its columns, their order, and reading old rows.
+"""One run of a study as a typed row ([`RunRow`][jswim.results.row.RunRow]): its columns, their order, and reading old rows.
 
-Rows are built in one place (:func:`jswim.studies.rows.build_row`) and written by
-:meth:`jswim.results.StudyStore.add_runs`; :func:`jswim.results.read_runs` gives them back as
-plain dicts, under today's names (:func:`jswim.results.schema.upgrade_names`), for users;
-the package's readers read :func:`jswim.results.read_run_rows` (typed rows) and convert rows given
-to them with :func:`as_run_rows`.
+Rows are built in one place ([`jswim.studies.rows.build_row`][jswim.studies.rows.build_row]) and written by
+[`jswim.results.StudyStore.add_runs`][jswim.results.StudyStore.add_runs]; [`jswim.results.read_runs`][jswim.results.read_runs] gives them back as
+plain dicts, under today's names ([`jswim.results.schema.upgrade_names`][jswim.results.schema.upgrade_names]), for users;
+the package's readers read [`jswim.results.read_run_rows`][jswim.results.read_run_rows] (typed rows) and convert rows given
+to them with [`as_run_rows`][jswim.results.row.as_run_rows].
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ HEAD = (
     "period",
     "roc_levels",
 )
-#: A scene run's own columns (None in the paper's world), after :data:`HEAD`.
+#: A scene run's own columns (None in the paper's world), after `HEAD`.
 SCENE = (
     "scene",
     "medium",
@@ -75,7 +75,7 @@ USAGE = (
     "replayed_calls",
 )
 
-#: The LLM agent's switches (:meth:`jswim.agents.variants.LLMAgentConfig.knobs` and what the
+#: The LLM agent's switches ([`jswim.agents.variants.LLMAgentConfig.knobs`][jswim.agents.variants.LLMAgentConfig.knobs] and what the
 #: driver adds); the last two are written only where set.
 SWITCHES = (
     "summary",
@@ -125,8 +125,8 @@ class RunRow(Mapping):
     Lengths in sphere radii ``a`` (Purcell: its link length), angles in radians, steps counted
     from 1; series hold one value per executed step (the state after it). Readers may index a
     row by column name (``row["final_x"]``, ``row.get("cost_usd")``: a read-only
-    :class:`~collections.abc.Mapping` of :meth:`to_dict`), so code written for the dict rows that
-    :func:`~jswim.results.read_runs` returns takes a fresh row as well, and users' notebooks that
+    `Mapping` of [`to_dict`][jswim.results.row.RunRow.to_dict]), so code written for the dict rows that
+    [`read_runs`][jswim.results.read_runs] returns takes a fresh row as well, and users' notebooks that
     index rows keep working; new code reads attributes.
 
     Attributes
@@ -154,7 +154,7 @@ class RunRow(Mapping):
     group : str
         The cell of the study's grid the run belongs to (``"n_ht=3"``, ``"h=3"``, ...).
     variant : str
-        LLM protocol variant (:data:`jswim.agents.variants.VARIANTS`; ``""`` for baselines).
+        LLM protocol variant (`jswim.agents.variants.VARIANTS`; ``""`` for baselines).
     steps : int
         Steps executed.
     final_x : float
@@ -162,7 +162,7 @@ class RunRow(Mapping):
     signed_final_x : float
         ``direction * final_x``: the displacement in the target direction.
     success, learned : bool
-        The study's success criterion (:func:`jswim.judging.gait.judge`), and whether the run
+        The study's success criterion ([`jswim.judging.gait.judge`][jswim.judging.gait.judge]), and whether the run
         ends on a qualifying stroke.
     steps_to_learn : int or None
         The step at which the final qualifying stroke starts (None unless learned).
@@ -177,12 +177,12 @@ class RunRow(Mapping):
     actions : list of list
         Each step's ``[dof, roc]`` (ROC in -1, 0, 1, or a real ROC for ``ppo``).
     status : str
-        ``"done"``, ``"below_x_min"``, or a failure (:data:`jswim.results.schema.FAILED_STATUSES`).
+        ``"done"``, ``"below_x_min"``, or a failure (`jswim.results.schema.FAILED_STATUSES`).
     y, orientation : list of float or None
         Centroid y (a) and orientation (rad) after each step; a scene: swimmer 1's height above
         the wall and tilt.
     scene : str or None
-        Canonical JSON of the run's :class:`jswim.scenes.Scene`; None (and every scene column
+        Canonical JSON of the run's [`jswim.scenes.Scene`][jswim.scenes.scene.Scene]; None (and every scene column
         None) in the paper's world.
     medium : str or None
         ``"wall"`` or ``"free"``.
@@ -193,7 +193,7 @@ class RunRow(Mapping):
     separation : float or None
         Distance D between the swimmers at the start (a; several swimmers).
     fate : str or None
-        A wall run's fate (:data:`jswim.studies.scenes.FATES`).
+        A wall run's fate (`jswim.studies.scenes.FATES`).
     mean_height : float or None
         Mean height of the run's second half (a; wall scenes).
     speed : float or None
@@ -218,7 +218,7 @@ class RunRow(Mapping):
     below_x_min : int or None
         First step whose x fell below ``x_min`` (LLM runs).
     summary, shuffle, share_identical : bool or None
-        The LLM agent's switches (:class:`jswim.agents.variants.LLMAgentConfig`).
+        The LLM agent's switches ([`jswim.agents.variants.LLMAgentConfig`][jswim.agents.variants.LLMAgentConfig]).
     temperature : float or None
         The sampling temperature the agent asked for.
     order : str or None
@@ -319,7 +319,7 @@ class RunRow(Mapping):
 
     @property
     def _kind(self) -> tuple[bool, bool]:
-        """(a scene's row, an LLM run's row): the key of its layout in :data:`LAYOUTS`."""
+        """(a scene's row, an LLM run's row): the key of its layout in `LAYOUTS`."""
         return self.medium is not None, self.agent == "llm"
 
     def to_dict(self) -> dict[str, Any]:
@@ -329,7 +329,7 @@ class RunRow(Mapping):
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> RunRow:
         """A row from a record (any version's: old names renamed, missing columns None, unknown
-        ones kept in :attr:`other`)."""
+        ones kept in `other`)."""
         d = upgrade_names(dict(d))
         return cls(
             **{k: d.get(k) for k in _FIELDS}, other={k: v for k, v in d.items() if k not in _FIELDS}
@@ -358,20 +358,20 @@ _IN_LAYOUT = {kind: frozenset(cols) - {"other"} for kind, cols in LAYOUTS.items(
 
 
 def as_run_row(row: Mapping[str, Any]) -> RunRow:
-    """``row`` as a :class:`RunRow`: a RunRow passes through, a dict goes through
-    :meth:`RunRow.from_dict` (old names renamed, missing columns None, unknown ones in
-    :attr:`RunRow.other`)."""
+    """``row`` as a [`RunRow`][jswim.results.row.RunRow]: a RunRow passes through, a dict goes through
+    [`RunRow.from_dict`][jswim.results.row.RunRow.from_dict] (old names renamed, missing columns None, unknown ones in
+    `RunRow.other`)."""
     return row if isinstance(row, RunRow) else RunRow.from_dict(row)
 
 
 def as_run_rows(rows: Iterable[Mapping[str, Any]]) -> list[RunRow]:
-    """``rows`` as :class:`RunRow` objects: the one entry point of readers given rows by users.
+    """``rows`` as [`RunRow`][jswim.results.row.RunRow] objects: the one entry point of readers given rows by users.
 
     Parameters
     ----------
     rows : iterable of Mapping
-        Run records: :class:`RunRow` objects (passed through unchanged) or dicts, such as
-        :func:`jswim.results.read_runs` returns or a notebook builds (:func:`as_run_row`).
+        Run records: [`RunRow`][jswim.results.row.RunRow] objects (passed through unchanged) or dicts, such as
+        [`jswim.results.read_runs`][jswim.results.read_runs] returns or a notebook builds ([`as_run_row`][jswim.results.row.as_run_row]).
 
     Returns
     -------

@@ -16,19 +16,19 @@ FAILED_STATUSES = frozenset({"llm_error", "aborted"})
 
 
 def is_failed(row: Mapping[str, Any]) -> bool:
-    """Whether a run record is a failed run (:data:`FAILED_STATUSES`), not a finished one."""
+    """Whether a run record is a failed run (`FAILED_STATUSES`), not a finished one."""
     return row.get("status") in FAILED_STATUSES
 
 
 #: Fields renamed since folders were first written: old name -> new name. Folders keep what they
-#: were written with; readers translate (:func:`upgrade_names`), so an old folder still resumes,
+#: were written with; readers translate ([`upgrade_names`][jswim.results.schema.upgrade_names]), so an old folder still resumes,
 #: summarises and plots.
 RENAMED = {"allowed": "action_set"}
 
 
 def upgrade_names(obj: Any) -> Any:
     """``obj`` (rows, metadata, an identity; nested dicts and lists) with old field names renamed
-    to new ones (:data:`RENAMED`)."""
+    to new ones (`RENAMED`)."""
     if isinstance(obj, dict):
         return {RENAMED.get(k, k): upgrade_names(v) for k, v in obj.items()}
     if isinstance(obj, list):
@@ -37,7 +37,7 @@ def upgrade_names(obj: Any) -> Any:
 
 
 def legacy_names(obj: Any) -> Any:
-    """The inverse of :func:`upgrade_names` (for hashes that must stay what they were)."""
+    """The inverse of [`upgrade_names`][jswim.results.schema.upgrade_names] (for hashes that must stay what they were)."""
     back = {new: old for old, new in RENAMED.items()}
     if isinstance(obj, dict):
         return {back.get(k, k): legacy_names(v) for k, v in obj.items()}
@@ -47,7 +47,7 @@ def legacy_names(obj: Any) -> Any:
 
 
 #: The fields of a run record that readers compute with, by kind: a record where one of them has
-#: another type (a hand edit) is skipped with a warning (:func:`run_problem`).
+#: another type (a hand edit) is skipped with a warning ([`run_problem`][jswim.results.schema.run_problem]).
 _RUN_TEXT = ("run_id", "agent")  # run_id required
 _RUN_NUMBERS = (
     "final_x",

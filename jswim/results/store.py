@@ -1,4 +1,4 @@
-"""A study's output folder, written by one session at a time (:class:`StudyStore`)."""
+"""A study's output folder, written by one session at a time ([`StudyStore`][jswim.results.store.StudyStore])."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from jswim.results.tables import write_tables
 RESERVE = ".jswim.reserve"
 RESERVE_MIN_BYTES = 64 * 1024
 
-#: Temporary files of :func:`atomic_write` (``.NAME.XXXXXXXX.tmp``, as ``mkstemp`` names them).
+#: Temporary files of `atomic_write` (``.NAME.XXXXXXXX.tmp``, as ``mkstemp`` names them).
 _TEMPORARY = re.compile(r"^\..+\.[A-Za-z0-9_]{8}\.tmp$")
 
 
@@ -44,7 +44,7 @@ def _umask() -> int:
 
 
 #: Mode of new files: ``0600`` under the usual umask, what the umask says where it lets the group
-#: write (:mod:`jswim._io.permissions`).
+#: write (`jswim._io.permissions`).
 FILE_MODE = file_mode(_umask())
 
 
@@ -52,7 +52,7 @@ FILE_MODE = file_mode(_umask())
 def writing(
     what: str | os.PathLike, hint: str = "choose a writable --out folder"
 ) -> Iterator[None]:
-    """Turn an ``OSError`` while writing ``what`` into a one-line :class:`StudyFolderError`."""
+    """Turn an ``OSError`` while writing ``what`` into a one-line [`StudyFolderError`][jswim.errors.StudyFolderError]."""
     try:
         yield
     except OSError as exc:
@@ -98,8 +98,8 @@ class StudyStore:
     ----------
     folder : path
         Created if missing. An existing folder must hold the same study with the same parameters
-        (``identity``, compared after :func:`upgrade_names`), otherwise
-        :class:`~jswim.errors.ResultFolderError` says what differs.
+        (``identity``, compared after [`upgrade_names`][jswim.results.schema.upgrade_names]), otherwise
+        [`ResultFolderError`][jswim.errors.ResultFolderError] says what differs.
     study : str
         Study name, e.g. ``"noise"``.
     identity : mapping
@@ -204,7 +204,7 @@ class StudyStore:
         else:  # new, or holding nothing but what jswim itself leaves (a kill during the first write)
             self.meta = {"study": study, "identity": self.identity, "status": "running"}
         #: The status the folder had before this session (``None``: a new folder), restored by
-        #: :meth:`restore_status` when the session stops on an error before changing anything.
+        #: [`restore_status`][jswim.results.store.StudyStore.restore_status] when the session stops on an error before changing anything.
         self.status_before = self.meta.get("status") if meta_path.exists() else None
         #: Whether this session changed the study (a run recorded, a call journaled).
         self.changed = False
@@ -283,7 +283,7 @@ class StudyStore:
                     )
 
     def _repair_journals(self) -> None:
-        """Cut the torn last line of every append-only file (see :mod:`jswim._io.jsonl`)."""
+        """Cut the torn last line of every append-only file (see `jswim._io.jsonl`)."""
         paths = [self.folder / RUNS, self.folder / "calls.jsonl"]
         if (self.folder / "transcripts").is_dir():
             paths += sorted((self.folder / "transcripts").glob("*.jsonl"))
@@ -312,7 +312,7 @@ class StudyStore:
             self.repairs.append(f"{what}; what it held is redone, no answered call is lost")
 
     def close(self) -> None:
-        """Release the folder's lock (the session is over; :meth:`set_status` first)."""
+        """Release the folder's lock (the session is over; [`set_status`][jswim.results.store.StudyStore.set_status] first)."""
         if self._reserved:
             self._free_reserve()
         if self._lock is not None:

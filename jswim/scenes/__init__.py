@@ -1,8 +1,8 @@
 """Scenes: three-sphere swimmers near a wall, among fixed obstacles and in pairs.
 
-The hydrodynamics (:mod:`jswim.swimmers.mobility`, :mod:`jswim.swimmers.forcefree`) couples all
+The hydrodynamics ([`jswim.swimmers.mobility`][jswim.swimmers.mobility], [`jswim.swimmers.forcefree`][jswim.swimmers.forcefree]) couples all
 spheres of all swimmers and obstacles through point-force mobilities; each swimmer is force- and
-torque-free and moves (x, z, tilt) in the vertical plane through its axis. A :class:`Scene` says
+torque-free and moves (x, z, tilt) in the vertical plane through its axis. A [`Scene`][jswim.scenes.scene.Scene] says
 where; the environment is functional, in the gymnax style::
 
     scene = Scene(medium="wall", height=5.0)
@@ -10,11 +10,11 @@ where; the environment is functional, in the gymnax style::
     state = scene_reset(params)
     state, info = scene_step(params, state, (0, 0, -1.0), key)   # swimmer 0, arm d1, ROC -1
 
-One concept per module: :mod:`~jswim.scenes.scene` (``Scene``), :mod:`~jswim.scenes.params`
-(``SceneParams``, ``scene_params``), :mod:`~jswim.scenes.state` (``SceneState``,
-``SceneStepInfo``, ``scene_reset``), :mod:`~jswim.scenes.actions` (codes),
-:mod:`~jswim.scenes.collocation` (the step's time integration), :mod:`~jswim.scenes.stepping`
-(``scene_step``), :mod:`~jswim.scenes.rollout` (``scene_rollout``).
+One concept per module: [`scene`][jswim.scenes.scene] (``Scene``), [`params`][jswim.scenes.params]
+(``SceneParams``, ``scene_params``), [`state`][jswim.scenes.state] (``SceneState``,
+``SceneStepInfo``, ``scene_reset``), `actions` (codes),
+`collocation` (the step's time integration), [`stepping`][jswim.scenes.stepping]
+(``scene_step``), [`rollout`][jswim.scenes.rollout] (``scene_rollout``).
 """
 
 from jswim.scenes.actions import decode_scene_action, encode_scene_action, split_action

@@ -2,7 +2,7 @@
 
 During a step the shape follows a known straight path (one arm at unit rate), and the poses
 ``y = (x, z, tilt)`` of all swimmers obey ``dy/dt = f(t, y)`` with ``f`` the force-free solve
-(:func:`jswim.swimmers.forcefree.solve`). We represent ``dy/dt`` on the step ``[0, T]`` by its
+([`jswim.swimmers.forcefree.solve`][jswim.swimmers.forcefree.solve]). We represent ``dy/dt`` on the step ``[0, T]`` by its
 interpolant through ``n`` Gauss-Legendre nodes and require ``y(t_i) = y_0 + int_0^{t_i} f``
 at every node: the collocation (implicit Runge-Kutta) method of order ``2n`` (Gauss-Legendre
 IRK; Hairer, Norsett & Wanner, Solving ODEs I, sec. II.7). Its fixed point is found by Picard
@@ -10,7 +10,7 @@ sweeps started from ``y = y_0``: each sweep costs ``n`` solves, and since ``f`` 
 pose only through the wall and the other bodies (weakly: a few per cent at h = 3 a) each sweep
 gains more than an order of magnitude. When ``f`` does not depend on the pose at all (a lone
 swimmer in the unbounded fluid) one sweep is exact and the method is Gauss quadrature. By
-default the number of sweeps is adaptive (:func:`jswim.scenes.stepping.picard_tolerance`): the
+default the number of sweeps is adaptive ([`jswim.scenes.stepping.picard_tolerance`][jswim.scenes.stepping.picard_tolerance]): the
 iteration stops once its error estimate is below the working dtype's rounding.
 """
 

@@ -21,7 +21,7 @@ from jswim.swimmers.models import make_model
 #: obstacle or another swimmer's sphere (units of a): the point-force model has no lubrication.
 CONTACT_GAP = 0.1
 
-#: Gauss-Legendre nodes per step (see :mod:`jswim.scenes.collocation`): order 12 in float64, and
+#: Gauss-Legendre nodes per step (see `jswim.scenes.collocation`): order 12 in float64, and
 #: order 8 in float32, whose quadrature error (~3e-9 of a step) is already below float32's rounding.
 DEFAULT_NODES = 6
 DEFAULT_NODES_FLOAT32 = 4
@@ -34,7 +34,7 @@ DEFAULT_NODES_FLOAT32 = 4
 )
 @dataclasses.dataclass(frozen=True)
 class SceneParams:
-    """Parameters of the scene environment (:func:`scene_params` builds them).
+    """Parameters of the scene environment ([`scene_params`][jswim.scenes.params.scene_params] builds them).
 
     Attributes
     ----------
@@ -53,13 +53,13 @@ class SceneParams:
     lo, hi : float
         Static arm limits (``d_min``, ``d_max``); ROC 1 moves an arm by ``hi - lo``.
     roc_levels : int
-        Static K of integer action codes (:func:`jswim.scenes.encode_scene_action`).
+        Static K of integer action codes (`jswim.scenes.encode_scene_action`).
     nodes : int
         Static: Gauss-Legendre nodes per step.
     sweeps : int or None
         Static: Picard sweeps per step; ``None``: adaptive (until converged to the dtype).
     contact_gap : float
-        Static: the surface gap below which a step is refused (:data:`CONTACT_GAP`).
+        Static: the surface gap below which a step is refused (`CONTACT_GAP`).
     """
 
     zeta: Any
@@ -115,7 +115,7 @@ def scene_params(
     ----------
     swimmer : str
         ``"ng"`` (the three-sphere swimmer; ``d_min``/``d_max`` by keyword as in
-        :func:`jswim.make_params`).
+        [`jswim.make_params`][jswim.env.params.make_params]).
     scene : Scene
         The scene (validated here).
     zeta : float
@@ -125,14 +125,14 @@ def scene_params(
     dtype : dtype, optional
         Working dtype of states and solves (default: JAX's default float, float32 unless x64).
     init : levels, optional
-        Start arms of every swimmer as in :func:`jswim.make_params` (default both at ``d_max``).
+        Start arms of every swimmer as in [`jswim.make_params`][jswim.env.params.make_params] (default both at ``d_max``).
     nodes : int, optional
-        Gauss-Legendre nodes per step (default :data:`DEFAULT_NODES`, 6; in float32
-        :data:`DEFAULT_NODES_FLOAT32`, 4).
+        Gauss-Legendre nodes per step (default `DEFAULT_NODES`, 6; in float32
+        `DEFAULT_NODES_FLOAT32`, 4).
     sweeps : int, optional
         Picard sweeps per step. Default: 1 where the motion does not depend on the pose (one
         swimmer in the unbounded fluid, or bulk), else adaptive: sweeps until the estimated error
-        is below the dtype's rounding (:func:`jswim.scenes.stepping.picard_tolerance`; 3 to 16
+        is below the dtype's rounding ([`jswim.scenes.stepping.picard_tolerance`][jswim.scenes.stepping.picard_tolerance]; 3 to 16
         sweeps, more near a wall or a neighbour); an integer fixes the count.
     contact_gap : float
         Surface gap (units of a) below which a step is refused.
@@ -192,7 +192,7 @@ def check_start(
     middle sphere ``(S, 2)``, tilt ``(S,)``, arms ``(S, 2)`` and the obstacles ``(O, 3)``, if no
     sphere starts closer than ``contact_gap`` to the wall, an obstacle or another swimmer's.
 
-    :func:`scene_params` calls it; :class:`jswim.studies.StudyOptions` too, so a study's
+    [`scene_params`][jswim.scenes.params.scene_params] calls it; [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions] too, so a study's
     ``--separations`` that would overlap its swimmers is refused before anything runs.
 
     Raises
@@ -238,7 +238,7 @@ def _check_resolution(
     scene: Scene, centre: np.ndarray, obstacles: np.ndarray, dtype: np.dtype, reach: float
 ) -> None:
     """One-line error if the start does not fit the working dtype: a coordinate that overflows it,
-    or a swimmer so far from x = 0 that its moves are lost to rounding (:data:`POSITION_RESOLUTION`)."""
+    or a swimmer so far from x = 0 that its moves are lost to rounding (`POSITION_RESOLUTION`)."""
     with np.errstate(over="ignore"):
         fits = np.all(np.isfinite(centre.astype(dtype))) and np.all(
             np.isfinite(obstacles.astype(dtype))

@@ -1,9 +1,9 @@
 """Purcell's swimmer in a scene: its plane parallel to a wall at ``Scene.height`` (link lengths).
 
-The links stay at that height (no force normal to the wall, :mod:`jswim.swimmers.wall_rft`), so
-the world is the paper's planar world (:class:`jswim.env.swimmer_world.SwimmerWorld`: exact
+The links stay at that height (no force normal to the wall, [`jswim.swimmers.wall_rft`][jswim.swimmers.wall_rft]), so
+the world is the paper's planar world ([`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]: exact
 corner steps, drift-free positions, JAX's default float) with wall-corrected drag coefficients.
-``jswim.make("purcell", scene=...)`` and :func:`jswim.scenes.scene_rollout` come here. What is
+``jswim.make("purcell", scene=...)`` and [`jswim.scenes.scene_rollout`][jswim.scenes.rollout.scene_rollout] come here. What is
 not built is refused in one line: a second swimmer, obstacles, a tilt, ``mobility="rpy"`` or
 medium ``"free"`` (resistive force theory has no interactions to solve; ``"bulk"`` is the paper's
 world).
@@ -80,11 +80,11 @@ def rollout(
     d_max: float | None = None,
     **other: Any,
 ) -> dict[str, np.ndarray]:
-    """The fields of a :class:`jswim.scenes.SceneRollout` of ``moves``, float64.
+    """The fields of a [`jswim.scenes.SceneRollout`][jswim.scenes.rollout.SceneRollout] of ``moves``, float64.
 
-    ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` (:func:`jswim.scenes.parse_scene_moves`).
+    ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` ([`jswim.scenes.parse_scene_moves`][jswim.scenes.rollout.parse_scene_moves]).
 
-    ``x``, ``y``: the centroid (as :func:`jswim.env.rollout`); ``z``: the plane's height (fixed);
+    ``x``, ``y``: the centroid (as [`jswim.env.rollout`][jswim.env.rollouts.rollout]); ``z``: the plane's height (fixed);
     ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
     the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
     """

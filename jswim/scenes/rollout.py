@@ -81,7 +81,7 @@ def scene_rollout(
     Parameters
     ----------
     swimmer : str
-        ``"ng"``, or ``"purcell"`` above a wall (:mod:`jswim.scenes.purcell_wall`: its plane
+        ``"ng"``, or ``"purcell"`` above a wall ([`jswim.scenes.purcell_wall`][jswim.scenes.purcell_wall]: its plane
         ``scene.height`` link lengths above the wall; ``link_radius``, ``d_max`` by keyword).
     moves : array-like (steps, 2) or (steps, 3)
         ``(dof, roc)`` (one swimmer) or ``(swimmer, dof, roc)``, 1-based as in the prompt.
@@ -91,9 +91,9 @@ def scene_rollout(
     zeta : float
         Noise level.
     params : SceneParams, optional
-        Built here from the rest by :func:`jswim.scenes.scene_params` (float64) if not given.
+        Built here from the rest by [`jswim.scenes.scene_params`][jswim.scenes.params.scene_params] (float64) if not given.
     **kwargs
-        More options of :func:`scene_params` (``init``, ``nodes``, ``sweeps``, ``d_max``, ...).
+        More options of [`scene_params`][jswim.scenes.params.scene_params] (``init``, ``nodes``, ``sweeps``, ``d_max``, ...).
 
     Returns
     -------
@@ -149,7 +149,7 @@ def batch_starts(
     ``height``, ``tilt`` and ``separation`` are 1-D arrays of one length ``B`` (or None: the
     scene's own value); the result's ``centre0`` is ``(B, S, 2)`` and ``tilt0`` ``(B, S)``, the other
     leaves are shared. ``params.scene`` (static) stays the template; the starts are not validated
-    again beyond finiteness. Run with :func:`scene_rollout_batch`.
+    again beyond finiteness. Run with [`scene_rollout_batch`][jswim.scenes.rollout.scene_rollout_batch].
     """
     sc = params.scene
     vals = [
@@ -178,7 +178,7 @@ def batch_starts(
 
 
 def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0) -> SceneRollout:
-    """:func:`scene_rollout` of the same moves from each start of :func:`batch_starts` (float64
+    """[`scene_rollout`][jswim.scenes.rollout.scene_rollout] of the same moves from each start of [`batch_starts`][jswim.scenes.rollout.batch_starts] (float64
     when ``params`` is). Leading axes of the result: (batch, steps, ...)."""
     with jax.enable_x64(True):
         acts = parse_scene_moves(moves, params.n_swimmers)

@@ -40,7 +40,7 @@ class Scene:
     tilt : float
         Initial angle of each swimmer's axis from the wall plane (positive: nose up), rad.
     swimmers : int
-        1 to :data:`MAX_SWIMMERS`. Swimmer ``s`` (0-based) starts at :meth:`start_offsets` ``[s]``
+        1 to `MAX_SWIMMERS`. Swimmer ``s`` (0-based) starts at [`start_offsets`][jswim.scenes.scene.Scene.start_offsets] ``[s]``
         times the separation from swimmer 0's middle sphere, all parallel to x.
     separation : float
         D, distance between neighbouring swimmers' middle spheres.
@@ -51,13 +51,13 @@ class Scene:
         Oseen / Blake; the default and every number of the README's tables) or ``"rpy"``
         (finite-size spheres: Rotne-Prager-Yamakawa in the unbounded fluid, Rotne-Prager-Blake
         above the wall, Swan & Brady 2007; above the wall obstacles must then have radius 1).
-        Omitted from :meth:`to_dict` when ``"point"``, so the canonical JSON of earlier scenes
+        Omitted from [`to_dict`][jswim.scenes.scene.Scene.to_dict] when ``"point"``, so the canonical JSON of earlier scenes
         (and the run ids built from it) is unchanged.
     formation : str
-        Where a school's swimmers start (:data:`FORMATIONS`): ``"line"`` (the default; coaxial,
+        Where a school's swimmers start (`FORMATIONS`): ``"line"`` (the default; coaxial,
         swimmer ``s`` at ``x = s D``, ahead in the swimming direction) or ``"side"`` (side by side,
         swimmer ``s`` at ``z = height + s D``: above a wall, each one D higher). Omitted from
-        :meth:`to_dict` when ``"line"`` (earlier scenes' JSON unchanged).
+        [`to_dict`][jswim.scenes.scene.Scene.to_dict] when ``"line"`` (earlier scenes' JSON unchanged).
     """
 
     medium: str = "bulk"
@@ -92,7 +92,7 @@ class Scene:
         Raises
         ------
         ValueError
-            (a :class:`jswim.errors.ConfigError`) naming the first bad field, in one line.
+            (a [`jswim.errors.ConfigError`][jswim.errors.ConfigError]) naming the first bad field, in one line.
         """
         if self.medium not in MEDIA:
             raise ConfigError(
@@ -178,7 +178,7 @@ class Scene:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> Scene:
-        """Inverse of :meth:`to_dict` (unknown keys are an error); validated."""
+        """Inverse of [`to_dict`][jswim.scenes.scene.Scene.to_dict] (unknown keys are an error); validated."""
         if not isinstance(data, dict):
             raise ConfigError(f"a scene must be a JSON object, got {type(data).__name__}")
         names = {f.name for f in dataclasses.fields(cls)}

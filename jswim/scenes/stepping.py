@@ -5,14 +5,14 @@ A step moves arm ``dof`` of swimmer ``swimmer`` by ``roc x (d_max - d_min)`` at 
 ``[d_min, d_max]`` (a non-zero ROC that cannot move the arm at all is ``stuck``). The other arms
 are held fixed. Then, by medium:
 
-* ``"bulk"``: the paper's formula (:mod:`jswim.swimmers.ng`): the moving swimmer advances along its
+* ``"bulk"``: the paper's formula ([`jswim.swimmers.ng`][jswim.swimmers.ng]): the moving swimmer advances along its
   axis by the closed-form displacement of the move; the others do not move; no contact.
 * ``"free"`` / ``"wall"``: all spheres of all swimmers and the obstacles are coupled through the
-  point-force mobility (:mod:`jswim.swimmers.mobility`), every swimmer force- and torque-free
-  (:mod:`jswim.swimmers.forcefree`; in the unbounded fluid without obstacles each swimmer is
-  solved through its response, :mod:`jswim.swimmers.bodyframe`, a function of its arms alone);
+  point-force mobility ([`jswim.swimmers.mobility`][jswim.swimmers.mobility]), every swimmer force- and torque-free
+  ([`jswim.swimmers.forcefree`][jswim.swimmers.forcefree]; in the unbounded fluid without obstacles each swimmer is
+  solved through its response, [`jswim.swimmers.bodyframe`][jswim.swimmers.bodyframe], a function of its arms alone);
   the poses ``(x, z, tilt)`` of all swimmers are integrated over the step by Gauss-Legendre
-  collocation (:mod:`jswim.scenes.collocation`).
+  collocation (`jswim.scenes.collocation`).
 
 Contact: if along the step (at any collocation node or at its end) a swimmer sphere's surface
 comes within ``params.contact_gap`` (0.1 a) of the wall, of an obstacle's surface or of a sphere of
@@ -20,10 +20,10 @@ another swimmer, the step is refused: the state is left as it was (shape and pos
 advances) and ``contact`` is set. The point-force model has no lubrication or contact forces, so
 motion that close is not modelled.
 
-Noise, as in the paper and :mod:`jswim.env`: swimmer ``s``'s displacement ``(dx, dz)`` over the
+Noise, as in the paper and `jswim.env`: swimmer ``s``'s displacement ``(dx, dz)`` over the
 step is multiplied by ``1 + zeta Y_s``, ``Y_s ~ U[-1, 1]`` drawn from the step's key (one per
 swimmer: ``jax.random.uniform(key, (S,))``, for one swimmer ``uniform(key, ())`` as
-:func:`jswim.env.step` draws it); the tilt change is not perturbed.
+[`jswim.env.step`][jswim.env.stepping.step] draws it); the tilt change is not perturbed.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def scene_step(
     action : (swimmer, dof, roc)
         A 3-tuple of scalars/arrays (int32, int32, float) or a float array ``(3,)``; ``swimmer``
         and ``dof`` 0-based, ``roc`` in [-1, 1] (clipped). Integer codes: decode them with
-        :func:`jswim.scenes.decode_scene_action`.
+        `jswim.scenes.decode_scene_action`.
     key : PRNG key
         The step's noise key.
 
@@ -75,7 +75,7 @@ def scene_step(
 def scene_advance(
     params: SceneParams, state: SceneState, action: Any, y_noise: Array
 ) -> tuple[SceneState, SceneStepInfo]:
-    """:func:`scene_step` with given noise variables ``y_noise`` ``(S,)`` in [-1, 1]."""
+    """[`scene_step`][jswim.scenes.stepping.scene_step] with given noise variables ``y_noise`` ``(S,)`` in [-1, 1]."""
     sw, dof, roc = split_action(action)
     arms = state.arms
     dtype = arms.dtype
@@ -126,7 +126,7 @@ def scene_step_joint(
     ``rocs[s] x (d_max - d_min)`` (clipped), all along one straight path in the joint shape space
     (each arm at rate ``delta_s / T``, ``T`` the longest move). For simultaneous strokes of two
     swimmers (a phase offset between their cycles); ``"free"`` and ``"wall"`` media. Noise, contact
-    and the info as in :func:`scene_step` (``stuck``: every non-zero ROC was stuck)."""
+    and the info as in [`scene_step`][jswim.scenes.stepping.scene_step] (``stuck``: every non-zero ROC was stuck)."""
     if params.scene.medium == "bulk":
         raise ValueError("scene_step_joint needs medium 'free' or 'wall'")
     arms = state.arms
@@ -163,7 +163,7 @@ def scene_step_joint(
 
 
 def _bulk_displacement(arms: Array, sw: Array, dof: Array, delta: Array) -> Array:
-    """The paper's displacement of one arm move (closed form of :func:`jswim.swimmers.ng.arm_move_displacement`)."""
+    """The paper's displacement of one arm move (closed form of [`jswim.swimmers.ng.arm_move_displacement`][jswim.swimmers.ng.arm_move_displacement])."""
     d1, d2 = arms[sw, 0], arms[sw, 1]
     move_1 = (-jnp.log1p(delta / (d1 + d2)) + 2.0 * delta / d2) / 6.0
     move_2 = (jnp.log1p(delta / (d1 + d2)) - 2.0 * delta / d1) / 6.0
@@ -174,7 +174,7 @@ def integrate_move(
     params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
 ) -> tuple[Array, Array]:
     """Poses after moving the arms at ``rates`` for ``duration``, and the smallest surface gap:
-    ``pose0`` plus :func:`pose_change`."""
+    ``pose0`` plus [`pose_change`][jswim.scenes.stepping.pose_change]."""
     inc, gap = pose_change(params, pose0, arms, rates, duration)
     return pose0 + inc, gap
 
@@ -199,7 +199,7 @@ def pose_change(
     duration : scalar
         Time of the move.
     centre_lo : Array (S, 2), optional
-        Low words of the positions (:class:`jswim.scenes.SceneState`): the positions are
+        Low words of the positions ([`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]): the positions are
         ``pose0[:, :2] + centre_lo``.
 
     Returns
@@ -306,7 +306,7 @@ def pose_change(
     )
 
 
-#: Most Picard sweeps of an adaptive step (:func:`_sweep_until_converged`); 3 at least.
+#: Most Picard sweeps of an adaptive step (`_sweep_until_converged`); 3 at least.
 MAX_SWEEPS = 16
 MIN_SWEEPS = 3
 
@@ -321,7 +321,7 @@ def _sweep_until_converged(
     sweep: Any, it: tuple[Array, Array], tol: float
 ) -> tuple[tuple[Array, Array], Array, Array]:
     """Picard sweeps until the error estimate of the increments falls below ``tol`` times the
-    largest displacement of the step, at least :data:`MIN_SWEEPS` and at most :data:`MAX_SWEEPS`.
+    largest displacement of the step, at least `MIN_SWEEPS` and at most `MAX_SWEEPS`.
 
     ``it`` is ``(increments, forces)``: the poses' increments at the nodes and the sphere forces
     the solves by swimmer carry from sweep to sweep. The iteration converges linearly: with ``c_k`` the largest change made by sweep ``k``

@@ -1,11 +1,11 @@
 """The paper's experiments as study grids, run in batches and stored resumably.
 
-- :mod:`jswim.studies.grids`: every study's defaults and cells as one table (:data:`SPECS`),
-  :class:`StudyOptions` and :func:`build` (study -> list of :class:`Plan`);
-- :mod:`jswim.studies.run`: :func:`run_study` (runs what a study folder lacks, stores, summarises);
-- :mod:`jswim.studies.report`: :func:`summarize` (the table) and :func:`draw_figures`;
-- :mod:`jswim.studies.qlearn`: the Q-learning steps-to-learn distributions (``jswim qlearn``);
-- :mod:`jswim.studies.ensemble`: one stroke or policy over many noisy swimmers, X/a statistics
+- [`jswim.studies.grids`][jswim.studies.grids]: every study's defaults and cells as one table (`SPECS`),
+  [`StudyOptions`][jswim.studies.grids.StudyOptions] and [`build`][jswim.studies.grids.build] (study -> list of [`Plan`][jswim.studies.grids.Plan]);
+- [`jswim.studies.run`][jswim.studies.run]: [`run_study`][jswim.studies.run.run_study] (runs what a study folder lacks, stores, summarises);
+- [`jswim.studies.report`][jswim.studies.report]: [`summarize`][jswim.studies.report.summarize] (the table) and [`draw_figures`][jswim.studies.report.draw_figures];
+- `jswim.studies.qlearn`: the Q-learning steps-to-learn distributions (``jswim qlearn``);
+- `jswim.studies.ensemble`: one stroke or policy over many noisy swimmers, X/a statistics
   per step (``jswim ensemble``).
 
 Studies (``jswim study NAME``):
@@ -16,7 +16,7 @@ Studies (``jswim study NAME``):
 ``ablation``   the full prompt and the prompt without each of S1..S5 (Fig. 5)
 ``inits``      all four initial configurations, both directions
 ``swim``       the main job: a few LLM runs next to Q-learning and random learners
-``competence`` every protocol variant (:data:`jswim.agents.variants.VARIANTS`) next to random and
+``competence`` every protocol variant (`jswim.agents.variants.VARIANTS`) next to random and
                Q-learning baselines on both action sets: how much of the swimming is the model's
 """
 

@@ -7,20 +7,20 @@ perturbed, ``(dX, dY)(1 + zeta Y)`` with ``Y ~ U[-1, 1]`` (the paper's noise). T
 swimmers that keep moving forward (``direction * (X_t - X_{t-w}) > 0`` over the last ``w``
 steps, ``w`` = the stroke's period by default).
 
-Policies: a fixed stroke repeated cyclically (:func:`stroke_policy`; the signature gait is
+Policies: a fixed stroke repeated cyclically (`stroke_policy`; the signature gait is
 ``jswim.judging.gait.best_cycles(model, direction)[0]``) or the greedy policy of a Q-table
-(:func:`q_policy`, ties broken at random per swimmer).
+(`q_policy`, ties broken at random per swimmer).
 
 Scale: swimmers are simulated ``chunk`` at a time (one jitted scan over all steps per chunk,
-sharded over every device, :mod:`jswim.sharding`), so memory is bounded by the chunk, not by
+sharded over every device, `jswim.sharding`), so memory is bounded by the chunk, not by
 ``n``: about ``52 + 4 w + 16`` bytes per swimmer of the chunk in float32 (two-DOF swimmers:
 state 52, the ring of the last ``w`` positions, noise and policy temporaries), plus per-chunk
 statistics. Nothing per swimmer is kept after its chunk.
 
 Exactness: swimmer ``i`` of noise level ``zeta`` has its noise from the counter-based
-:func:`jswim.env.noise` under a key derived from ``(seed, zeta)`` and its index, so results do not
+[`jswim.env.noise`][jswim.env.randomness.noise] under a key derived from ``(seed, zeta)`` and its index, so results do not
 depend on ``chunk`` or on the device count, and adding a noise level does not change the others.
-Mean and spread are combined in float64 from fixed blocks of :data:`BLOCK` swimmers; quantiles
+Mean and spread are combined in float64 from fixed blocks of `BLOCK` swimmers; quantiles
 come from a histogram per reported step whose range is set by a pilot run of the first block
 (``resolution`` = the bin width; a quantile that falls outside the range is NaN, the exact
 ``min``/``max`` are always reported).
@@ -63,7 +63,7 @@ BINS = 1024
 class Policy:
     """What the swimmers do: ``kind`` ``"stroke"`` (``actions`` repeated) or ``"q"`` (greedy on ``q``).
 
-    Build with :func:`stroke_policy` or :func:`q_policy`.
+    Build with `stroke_policy` or `q_policy`.
     """
 
     kind: str
@@ -249,7 +249,7 @@ def run(
     Parameters
     ----------
     policy : Policy
-        :func:`stroke_policy` or :func:`q_policy`.
+        `stroke_policy` or `q_policy`.
     params : EnvParams
         Swimmer, target direction and initial configuration (``zeta`` is taken from ``zetas``).
     n : int
@@ -266,7 +266,7 @@ def run(
     seed : int
         Seed; each noise level's key is derived from ``(seed, zeta)``.
     chunk : int
-        Swimmers simulated at once (rounded up to a multiple of :data:`BLOCK` x devices).
+        Swimmers simulated at once (rounded up to a multiple of `BLOCK` x devices).
     qs : sequence of float
         Quantiles in (0, 1).
     bins : int
@@ -397,7 +397,7 @@ def signature_policy(params: EnvParams) -> tuple[Policy, tuple[int, ...]]:
 
 
 def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all") -> Policy:
-    """Train one Q-learner (default :class:`~jswim.agents.qlearning.QConfig`, no noise) and
+    """Train one Q-learner (default [`QConfig`][jswim.agents.qlearning.QConfig], no noise) and
     return its greedy policy."""
     config = qlearning.QConfig(action_set=action_set)
     run_ = qlearning.train(seed_key(seed), params.replace(zeta=0.0), config)
@@ -408,7 +408,7 @@ def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all")
 
 def format_table(stats: Sequence[EnsembleStats], max_rows: int = 12) -> str:
     """Plain-text table: per noise level, up to ``max_rows`` reported steps at a round stride
-    (:func:`regular_rows`: every 5th of 50 steps, say) and the last step."""
+    (`regular_rows`: every 5th of 50 steps, say) and the last step."""
     if not stats:
         return ""
     qs = stats[0].qs

@@ -1,7 +1,7 @@
 """Executing a study's plans: the real-valued baseline's batch, and the LLM runs as per-run
-pipelines (:class:`jswim.agents.llm.LLMDriver`), each stored the moment it ends.
+pipelines ([`jswim.agents.llm.LLMDriver`][jswim.agents.llm.LLMDriver]), each stored the moment it ends.
 
-Every answered call is journaled first (``calls.jsonl``, :class:`jswim.llm.journal.CallJournal`),
+Every answered call is journaled first (``calls.jsonl``, `jswim.llm.journal.CallJournal`),
 so an interrupted or capped study resumes without paying for a call twice.
 """
 
@@ -53,8 +53,8 @@ def _lattice(roc_levels: int) -> dict[str, int]:
 
 
 def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """The real-valued RL baseline (:mod:`jswim.agents.ppo`) for one swimmer, judged on shapes
-    (:func:`jswim.agents.ppo.evaluate`: :func:`jswim.judging.shape_judge.judge_shapes` on displacements
+    """The real-valued RL baseline ([`jswim.agents.ppo`][jswim.agents.ppo]) for one swimmer, judged on shapes
+    ([`jswim.agents.ppo.evaluate`][jswim.agents.ppo_judge.evaluate]: [`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes] on displacements
     replayed exactly, without noise)."""
     from jswim.agents import ppo, qlearning  # lazy: optax and their jits, for the PPO baseline only
 
@@ -172,7 +172,7 @@ def _run_llm(
     study's agent configs; a run that ends is stored at once and the next one starts, so runs
     finish, and are saved, one by one. ``speed`` (filled in) gets this session's calls (made,
     billed, replayed from the journal), wall time, tokens and cost; ``sent`` what a reasoning
-    model was sent (:meth:`jswim.llm.reasoning.ReasoningState.describe`).
+    model was sent (`jswim.llm.reasoning.ReasoningState.describe`).
     """
     by_id = {p.run_id: p for p in plans}
     steps_total = sum(p.steps for p in plans)

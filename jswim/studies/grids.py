@@ -1,10 +1,10 @@
-"""Study grids: each study's defaults and axes as one table (:data:`SPECS`), and :func:`build`,
-which turns a study and its options into the list of runs (:class:`Plan`).
+"""Study grids: each study's defaults and axes as one table (`SPECS`), and [`build`][jswim.studies.grids.build],
+which turns a study and its options into the list of runs ([`Plan`][jswim.studies.grids.Plan]).
 
 A study runs, per swimmer and target direction, a list of *cells* (one group of a table or
 figure: a noise level, an n_ht, a dropped sentence, ...); a cell runs some agents, each
 ``runs`` (LLM) or ``q_runs`` (baselines) times. A run's seed is derived from the study seed
-and the run's own id (:func:`run_seed`), never from its place in the grid: adding a noise
+and the run's own id ([`run_seed`][jswim.studies.grids.run_seed]), never from its place in the grid: adding a noise
 level or a repeat changes no existing run, and the same run id with the same study seed is the
 same run in every folder.
 """
@@ -43,7 +43,7 @@ AGENTS = ("llm", "qlearning", "random")
 CONTINUOUS_AGENT = "ppo"
 #: A fixed stroke (the signature square gait, or two copies of it for a pair): the scene studies' reference.
 STROKE_AGENT = "stroke"
-#: Every agent a study may run (the default of :attr:`StudyOptions.agents`).
+#: Every agent a study may run (the default of `StudyOptions.agents`).
 ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT)
 #: ROC lattices of the continuous study (``--roc-levels``; K = 1 is the paper's set).
 DEFAULT_ROC_LEVELS = (1, 2, 5, 10)
@@ -70,7 +70,7 @@ COMPETENCE_VARIANTS = (
 
 @dataclass(frozen=True)
 class StudyOptions:
-    """Knobs of a study; ``None`` means the study's own default (:data:`SPECS`).
+    """Knobs of a study; ``None`` means the study's own default (`SPECS`).
 
     Raises
     ------
@@ -240,7 +240,7 @@ class Plan:
         1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
     )
     sample: int = 0  # which independent repeat of this very setting (--samples; 0: the run itself)
-    scene: str = ""  # canonical JSON of the run's Scene (:func:`scene_json`); "": the bulk fluid
+    scene: str = ""  # canonical JSON of the run's Scene ([`scene_json`][jswim.studies.grids.scene_json]); "": the bulk fluid
     pair_prompt: str = (
         "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
     )
@@ -322,7 +322,7 @@ def _temperature(o: StudyOptions) -> list[Cell]:
 
 
 def continuous_agent_available() -> bool:
-    """Whether the real-valued RL baseline (:mod:`jswim.agents.ppo`) is installed."""
+    """Whether the real-valued RL baseline ([`jswim.agents.ppo`][jswim.agents.ppo]) is installed."""
     import importlib.util
 
     return importlib.util.find_spec("jswim.agents.ppo") is not None
@@ -350,7 +350,7 @@ def _competence(o: StudyOptions) -> list[Cell]:
 
 @dataclass(frozen=True)
 class StudySpec:
-    """A study's defaults and its cells (what ``None`` in :class:`StudyOptions` resolves to)."""
+    """A study's defaults and its cells (what ``None`` in [`StudyOptions`][jswim.studies.grids.StudyOptions] resolves to)."""
 
     cells: Callable[[StudyOptions], list[Cell]]
     runs: int  # LLM runs per cell
@@ -368,7 +368,7 @@ class StudySpec:
     )
 
 
-#: Why a study may have no use for an option (:class:`StudyOptions` field -> reason); the
+#: Why a study may have no use for an option ([`StudyOptions`][jswim.studies.grids.StudyOptions] field -> reason); the
 #: command line refuses such an option instead of dropping it silently.
 IGNORED = {
     "zetas": "only the noise study sweeps zeta; give one level with --noise",
@@ -554,7 +554,7 @@ def _check_school(sizes: tuple[int, ...], formations: tuple[str, ...]) -> None:
 
 def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
     """The continuous RL baseline's cell next to the other agents of a group (same group name,
-    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scenes`)."""
+    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; `jswim.studies.scenes`)."""
     if not continuous_agent_available():
         return []
     return [Cell(group, (CONTINUOUS_AGENT,), scene=scene, roc_levels=0, tag=tag)]
@@ -605,8 +605,8 @@ STUDIES = tuple(SPECS)
 
 
 def ignored_options(study: str, given: Iterable[str]) -> dict[str, str]:
-    """The options in ``given`` (:class:`StudyOptions` field names) that ``study`` has no use for,
-    each with the reason (:data:`IGNORED`)."""
+    """The options in ``given`` ([`StudyOptions`][jswim.studies.grids.StudyOptions] field names) that ``study`` has no use for,
+    each with the reason (`IGNORED`)."""
     spec = SPECS.get(study)
     return {k: IGNORED[k] for k in given if spec is not None and k in spec.ignores}
 
@@ -619,8 +619,8 @@ MIN_PERIOD = 4
 def short_steps_warning(o: StudyOptions) -> str | None:
     """A warning when runs are too short for any of them to meet the success criterion.
 
-    Success needs ``n_cycles`` consecutive cycles of at least :data:`MIN_PERIOD` steps each within
-    the horizon (:class:`jswim.judging.gait.Criterion`), so a run of fewer steps fails whatever it does.
+    Success needs ``n_cycles`` consecutive cycles of at least `MIN_PERIOD` steps each within
+    the horizon ([`jswim.judging.gait.Criterion`][jswim.judging.gait.Criterion]), so a run of fewer steps fails whatever it does.
     """
     need = PAPER.n_cycles * MIN_PERIOD
     if o.steps < need:
@@ -634,7 +634,7 @@ def short_steps_warning(o: StudyOptions) -> str | None:
 def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | str:
     """Initial configuration of repeat ``k`` of ``swimmer`` (default model options).
 
-    ``paper``: the authors' start (:func:`jswim.agents.defaults.paper_init`: Purcell (+, +),
+    ``paper``: the authors' start (`jswim.agents.defaults.paper_init`: Purcell (+, +),
     NG (10, 6), four-sphere (6, 10, 10), four-link every hinge at +2pi/9); ``cycle`` goes
     through every corner of the DOF cube; ``random``; or a sign string (``"+-"``), one sign
     per DOF.
@@ -644,7 +644,7 @@ def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | 
     ConfigError
         A sign string whose length is not the swimmer's number of DOFs.
 
-    A world of :func:`jswim.register_world` starts where it starts: ``"default"``.
+    A world of [`jswim.register_world`][jswim.env.worlds.register_world] starts where it starts: ``"default"``.
     """
     if swimmer in registered_worlds():
         return "default"

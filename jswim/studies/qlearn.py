@@ -1,9 +1,9 @@
 """The Q-learning baseline's steps-to-learn distributions over many seeds (``jswim qlearn``).
 
 Many independent learners per (swimmer, direction, zeta) are trained in vectorised calls
-(:func:`jswim.agents.qlearning.train_batch`, sharded over every device) and judged by the shared
+([`jswim.agents.qlearning.train_batch`][jswim.agents.qlearning.train_batch], sharded over every device) and judged by the shared
 criterion, ``chunk`` learners at a time so that 10^6 seeds fit in bounded memory; steps to learn
-are summarised by :func:`jswim.judging.stats.learn_stats`, the same statistic as the study tables.
+are summarised by [`jswim.judging.stats.learn_stats`][jswim.judging.stats.learn_stats], the same statistic as the study tables.
 """
 
 from __future__ import annotations
@@ -87,9 +87,9 @@ def summarize(
     action_set: str,
     horizon: int = PAPER.horizon,
 ) -> list[Summary]:
-    """One :class:`Summary` per (direction, zeta) group of a batched run.
+    """One `Summary` per (direction, zeta) group of a batched run.
 
-    Steps to learn follow :func:`jswim.judging.stats.learn_stats`, as in every study table: quartiles
+    Steps to learn follow [`jswim.judging.stats.learn_stats`][jswim.judging.stats.learn_stats], as in every study table: quartiles
     over the learners that learned, and the count of those that did (never-learned learners are
     counted, not turned into numbers). ``horizon`` is where ``mean_x_horizon`` is read.
     """
@@ -99,7 +99,7 @@ def summarize(
 
 
 def summarize_outcomes(out: Outcomes, *, swimmer: str, action_set: str) -> list[Summary]:
-    """:func:`summarize` from per-learner verdicts (e.g. gathered chunk by chunk)."""
+    """[`summarize`][jswim.studies.report.summarize] from per-learner verdicts (e.g. gathered chunk by chunk)."""
     rows = []
     for d, z in sorted(
         set(zip(out.direction.tolist(), out.zeta.tolist())), key=lambda g: (-g[0], g[1])
@@ -129,7 +129,7 @@ def summarize_outcomes(out: Outcomes, *, swimmer: str, action_set: str) -> list[
     return rows
 
 
-#: Learners trained and judged at once by :func:`study`: bounds its memory (~10 kB per learner
+#: Learners trained and judged at once by `study`: bounds its memory (~10 kB per learner
 #: at 200 steps, most of it the judge's replay) whatever ``n_seeds`` is.
 STUDY_CHUNK = 65_536
 
@@ -161,7 +161,7 @@ def study(
         each chunk sharded over every device, and only their verdicts are kept).
     init : sequence of int or str, optional
         Initial configuration (default: each swimmer's paper start,
-        :func:`jswim.agents.defaults.paper_init`: Purcell (+, +), NG (10, 6)); ``"random"``
+        `jswim.agents.defaults.paper_init`: Purcell (+, +), NG (10, 6)); ``"random"``
         draws one per learner.
     seed : int
         Seed of the whole study. Learner ``i`` of a swimmer gets key ``i`` of one split, so the
@@ -169,7 +169,7 @@ def study(
     criterion : Criterion
         The success criterion (default: the paper's).
     chunk : int
-        Learners per chunk (default :data:`STUDY_CHUNK`).
+        Learners per chunk (default `STUDY_CHUNK`).
     progress : callable, optional
         ``progress(done, total)`` after every chunk, in learners over the whole study.
 
@@ -181,7 +181,7 @@ def study(
     Raises
     ------
     ConfigError
-        ``n_seeds`` or ``chunk`` not a count in ``1..2**31 - 1`` (:func:`jswim.errors.check_count`).
+        ``n_seeds`` or ``chunk`` not a count in ``1..2**31 - 1`` ([`jswim.errors.check_count`][jswim.errors.check_count]).
     """
     n_seeds, chunk = check_count("seeds", n_seeds), check_count("chunk", chunk)
     rows: list[Summary] = []

@@ -13,7 +13,7 @@ from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
 
 def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, swimmer, direction, group): success rate with 95% Wilson CI, mean X/a in the
-    target direction with a bootstrap CI, steps to learn (:func:`jswim.judging.stats.learn_stats`:
+    target direction with a bootstrap CI, steps to learn ([`jswim.judging.stats.learn_stats`][jswim.judging.stats.learn_stats]:
     quartiles over the runs that learned, and ``learned``, how many did), tokens per step.
 
     ``tokens_per_step`` counts what the model read and wrote per decision (shared and cached calls
@@ -22,7 +22,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     the intervals of such groups rest on fewer independent runs than ``n``. ``samples`` is how many
     independent samples of each run (``--samples``) the group pools (``n`` counts them all).
 
-    Failed runs (:func:`jswim.results.is_failed`: the server stopped them) are left out: they
+    Failed runs ([`jswim.results.is_failed`][jswim.results.is_failed]: the server stopped them) are left out: they
     are not results, and the study reports them apart."""
     rows = as_run_rows(rows)
     out = []
@@ -73,9 +73,9 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 def draw_figures(
     study: str, rows: Sequence[dict[str, Any]], folder: str | Path, note: str | None = None
 ) -> list[Path]:
-    """The study's figures (:func:`jswim.figures.plots.study_figures`) as PNG and PDF in ``folder``.
+    """The study's figures ([`jswim.figures.plots.study_figures`][jswim.figures.plots.study_figures]) as PNG and PDF in ``folder``.
 
-    ``note`` (see :func:`jswim.results.unfinished_note`) is written across each figure.
+    ``note`` (see [`jswim.results.unfinished_note`][jswim.results.unfinished_note]) is written across each figure.
     """
     rows = as_run_rows(rows)
     from jswim.figures import (

@@ -1,9 +1,9 @@
-"""A study's result rows (:class:`jswim.results.RunRow`), built in one place.
+"""A study's result rows ([`jswim.results.RunRow`][jswim.results.RunRow]), built in one place.
 
-:func:`build_row` is the one builder: a plan's columns, the x series and what follows from it,
-the judge's verdict and the columns a world adds (a scene's: :func:`jswim.studies.scenes.scene_row`).
-:func:`judged_rows` judges a batch of bulk runs (Q-learning, random, PPO, an LLM run) and builds
-their rows; :func:`with_llm` merges an LLM run's own fields (its calls, tokens, switches) into its
+[`build_row`][jswim.studies.rows.build_row] is the one builder: a plan's columns, the x series and what follows from it,
+the judge's verdict and the columns a world adds (a scene's: `jswim.studies.scenes.scene_row`).
+[`judged_rows`][jswim.studies.rows.judged_rows] judges a batch of bulk runs (Q-learning, random, PPO, an LLM run) and builds
+their rows; [`with_llm`][jswim.studies.rows.with_llm] merges an LLM run's own fields (its calls, tokens, switches) into its
 judged row, in the bulk world and in a scene alike.
 """
 
@@ -51,12 +51,12 @@ def build_row(
     actions : list of list
         Each step's ``[dof, roc]``.
     verdict : mapping
-        ``success``, ``learned``, ``steps_to_learn``, ``period`` (:func:`jswim.judging.gait.judge`
+        ``success``, ``learned``, ``steps_to_learn``, ``period`` ([`jswim.judging.gait.judge`][jswim.judging.gait.judge]
         or the real-valued agent's own judge).
     init : str
-        The start as the row shows it (:func:`signs`).
+        The start as the row shows it ([`signs`][jswim.studies.rows.signs]).
     **columns
-        Further :class:`~jswim.results.RunRow` columns: ``y``, ``orientation``, a scene's.
+        Further [`RunRow`][jswim.results.RunRow] columns: ``y``, ``orientation``, a scene's.
     """
     x = [float(v) for v in x]
     end = x[-1] if x else 0.0
@@ -88,7 +88,7 @@ def build_row(
 
 
 def verdict(rep: GaitReport, i: int) -> dict[str, Any]:
-    """Run ``i``'s verdict in a judge's report (the keys :func:`build_row` takes)."""
+    """Run ``i``'s verdict in a judge's report (the keys [`build_row`][jswim.studies.rows.build_row] takes)."""
     return {
         "success": bool(rep.success[i]),
         "learned": bool(rep.learned[i]),
@@ -111,8 +111,8 @@ def judged_rows(
 
     ``levels0`` holds the starts' lattice positions (levels on the paper's K = 1). ``pose``
     gives the centroid y and the orientation after each step, shape ``(runs, steps)`` each, for
-    the trajectories (an LLM run brings its own: :func:`with_llm`). The real-valued agent brings
-    its own ``report`` (:func:`jswim.agents.ppo.evaluate`) and ``moves`` (``[dof, roc]`` per step)."""
+    the trajectories (an LLM run brings its own: [`with_llm`][jswim.studies.rows.with_llm]). The real-valued agent brings
+    its own ``report`` ([`jswim.agents.ppo.evaluate`][jswim.agents.ppo_judge.evaluate]) and ``moves`` (``[dof, roc]`` per step)."""
     k = plans[0].roc_levels
     params = env.make_params(plans[0].swimmer).replace(
         direction=np.array([p.direction for p in plans], float)
@@ -148,7 +148,7 @@ def judged_rows(
 
 def with_llm(row: RunRow, r: RunResult) -> RunRow:
     """``row`` (an LLM run's judged row) with the run's own fields: its status and error, calls,
-    tokens, cost, replies cut or retried, the agent's switches (:attr:`RunResult.knobs`), and its
+    tokens, cost, replies cut or retried, the agent's switches (`RunResult.knobs`), and its
     trajectory's y and orientation where the row has none (the bulk world's)."""
     u = r.usage
     return dataclasses.replace(
@@ -181,7 +181,7 @@ def with_llm(row: RunRow, r: RunResult) -> RunRow:
 
 def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     """The judged row of one finished LLM run in the paper's world (a scene's:
-    :func:`jswim.studies.scenes.llm_row`)."""
+    `jswim.studies.scenes.llm_row`)."""
     acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
     xs = np.array([r.x], float).reshape(1, len(r.x))
     # The judge reads the start as lattice positions: a corner level times K.

@@ -1,12 +1,12 @@
 """Running a study: build its plans, run what is not done yet, store and summarise.
 
-Execution groups the plans (:mod:`jswim.studies.grids`): Q-learning and random-policy runs
-train/roll out in one vectorised call per swimmer (here and in :mod:`jswim.studies.execute`);
-LLM runs are per-run pipelines (:func:`jswim.studies.execute._run_llm`), each landing in the study
-folder (:class:`jswim.results.StudyStore`) the moment it ends, with the server's preflight and the
-cost cap of :mod:`jswim.studies.session`. Every run, whatever its agent, is judged by the same
-code, :func:`jswim.judging.gait.judge`, with the study's :class:`jswim.judging.gait.Criterion`,
-and becomes one :class:`jswim.results.RunRow` (:mod:`jswim.studies.rows`). The names of those
+Execution groups the plans ([`jswim.studies.grids`][jswim.studies.grids]): Q-learning and random-policy runs
+train/roll out in one vectorised call per swimmer (here and in [`jswim.studies.execute`][jswim.studies.execute]);
+LLM runs are per-run pipelines (`jswim.studies.execute._run_llm`), each landing in the study
+folder ([`jswim.results.StudyStore`][jswim.results.StudyStore]) the moment it ends, with the server's preflight and the
+cost cap of [`jswim.studies.session`][jswim.studies.session]. Every run, whatever its agent, is judged by the same
+code, [`jswim.judging.gait.judge`][jswim.judging.gait.judge], with the study's [`jswim.judging.gait.Criterion`][jswim.judging.gait.Criterion],
+and becomes one [`jswim.results.RunRow`][jswim.results.RunRow] ([`jswim.studies.rows`][jswim.studies.rows]). The names of those
 modules stay importable from here.
 
 A study's identity (what a folder is compared on when resumed) is what defines its runs: the
@@ -142,7 +142,7 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
 
 @dataclass
 class StudyResult:
-    """What :func:`run_study` produced."""
+    """What [`run_study`][jswim.studies.run.run_study] produced."""
 
     folder: Path
     rows: list[dict[str, Any]]
@@ -194,7 +194,7 @@ PROMPT_FILE = "prompt_template.json"
 
 def study_backend(study: str, backend: Backend | None) -> Backend | None:
     """The backend a study runs with: a study that fixes its decoding (the ablation study:
-    free text, :attr:`StudySpec.constrain`) overrides ``constrain="auto"``; an explicit
+    free text, `StudySpec.constrain`) overrides ``constrain="auto"``; an explicit
     ``--constrain`` is kept."""
     mode = SPECS[study].constrain if study in SPECS else None
     if backend is None or mode is None or backend.constrain != "auto":
@@ -259,15 +259,15 @@ def run_study(
     Parameters
     ----------
     study : str
-        One of :data:`STUDIES`.
+        One of `STUDIES`.
     options : StudyOptions
         Grid and agent knobs.
     backend : Backend or None
         LLM server (default: the embedded model); needed only when the study has LLM runs.
     out : path, optional
-        Study folder (default :func:`default_folder`). Finished runs found there are kept.
+        Study folder (default [`default_folder`][jswim.studies.run.default_folder]). Finished runs found there are kept.
     progress : callable, optional
-        ``progress(phase, done, total, info)`` (:data:`ProgressFn`): after each finished batch of
+        ``progress(phase, done, total, info)`` (`ProgressFn`): after each finished batch of
         baseline runs (runs done of all), and after each finished LLM run (phase ``"llm"``) and
         every 0.5 s while LLM requests are out (phase ``"llm-live"``), counting LLM steps done of
         all the session's LLM steps, with runs, requests in flight, tokens and cost in ``info``.
@@ -277,7 +277,7 @@ def run_study(
         Cap in USD on what the study's calls cost, over all its sessions (the call journal's
         total). Calls reserve their cost bound before they go out; at the cap no new call is
         made, runs in flight finish their call, finished runs are kept, the folder's status reads
-        ``stopped at the cost cap`` and :attr:`StudyResult.stopped` is ``"cost cap"``. The same
+        ``stopped at the cost cap`` and `StudyResult.stopped` is ``"cost cap"``. The same
         call with a higher cap goes on from there, paying no call twice.
 
     Raises
@@ -526,7 +526,7 @@ def _run_in(
 
 
 def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
-    """``{"scenes": table}`` of a study with scene runs (:func:`jswim.studies.scenes.scene_summary`), else ``{}``."""
+    """``{"scenes": table}`` of a study with scene runs (`jswim.studies.scenes.scene_summary`), else ``{}``."""
     if not any(r.scene for r in rows):
         return {}
     from jswim.studies import scenes  # lazy: start-up (the scene module, for scene studies only)
@@ -535,7 +535,7 @@ def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
 
 
 def _write_report(folder: Path, figures: bool) -> None:
-    """``report.html`` of the finished session (:mod:`jswim.viz.page`), with the figures just drawn.
+    """``report.html`` of the finished session (`jswim.viz.page`), with the figures just drawn.
 
     The runs are safe on disk by now: a page that cannot be written is a warning, not a lost study."""
     from jswim.viz.page import write_report  # lazy: the page's code loads only at the end
@@ -558,12 +558,12 @@ def estimate_study(
 ) -> Estimate:
     """What the study's LLM runs not yet done would cost (``--dry-run``); no chat request is sent.
 
-    The runs go through the real driver against :class:`jswim.llm.dryrun.EstimatingClient`, so
+    The runs go through the real driver against `jswim.llm.dryrun.EstimatingClient`, so
     the prompts are rendered from real swimmer states; the study folder is read (to skip the
     runs it has) but never written. A remote server is asked its ``/v1/models`` (free), so the
     dry run prices the calls by the very rule the run will (a model the server does not list is
     not priced at a list price); when it cannot be asked, the estimate says so. With
-    ``max_cost``, :attr:`Estimate.cap_refusal` is the line the run would refuse with, if any.
+    ``max_cost``, `Estimate.cap_refusal` is the line the run would refuse with, if any.
     """
     if backend is None:
         raise ConfigError("a dry run needs a backend (the model to price)")

@@ -5,11 +5,11 @@
     above a no-slip wall; medium ``"wall"``): the signature square stroke (agent ``stroke``), the
     LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs). Measured: the stroke's
     displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
-    same solver, medium ``"free"``: group ``free``), and every run's **fate** (:func:`fate`).
+    same solver, medium ``"free"``: group ``free``), and every run's **fate** (`fate`).
     ``--swimmer purcell`` (issue 34): Purcell's swimmer in a plane ``h`` link lengths above the
     wall runs the same five agents per height (next to the paper's bulk fluid, group ``bulk``),
     judged by the paper's criterion on its D1/D2 moves; its height is fixed, so every fate is
-    ``gliding`` at ``h``. A registered world (:func:`jswim.register_world`) runs them too, unjudged.
+    ``gliding`` at ``h``. A registered world ([`jswim.register_world`][jswim.env.worlds.register_world]) runs them too, unjudged.
 ``pair``
     Two coaxial NG swimmers started ``D`` apart (``--separations``; medium ``"free"``: the
     point-force solve, in which the swimmers feel each other; the paper's formula has no
@@ -19,20 +19,20 @@
     steering both (joint DOFs D1..D4) find a faster joint stroke.
 
 Runs, rows, resume, figures, ``show`` and ``compare`` are the study folder's
-(:mod:`jswim.studies.run`); this module gives the cells, runs the baselines and the stroke on a
+([`jswim.studies.run`][jswim.studies.run]); this module gives the cells, runs the baselines and the stroke on a
 scene, and adds the scene's columns to each row. Every run goes one way, whatever the world:
-:func:`jswim.make` builds it from the plan's swimmer and scene (a scene world, the paper's world
-for a bulk reference, Purcell's swimmer above a wall, or a world of :func:`jswim.register_world`),
-the agents that take any world run on it (:mod:`jswim.agents.worlds`, ``random_policy.run_env``,
+[`jswim.make`][jswim.env.worlds.make] builds it from the plan's swimmer and scene (a scene world, the paper's world
+for a bulk reference, Purcell's swimmer above a wall, or a world of [`jswim.register_world`][jswim.env.worlds.register_world]),
+the agents that take any world run on it ([`jswim.agents.worlds`][jswim.agents.worlds], ``random_policy.run_env``,
 ``qlearning.train_env``, ``ppo.train_env``), and the rows are read from their trace through the
-protocol (positions, :attr:`~jswim.env.base.Observation.height` and orientation, the step's
+protocol (positions, `height` and orientation, the step's
 stuck and contact).
 
 PPO's rows (agent ``ppo``, an extension): the continuous study's learner (same network,
-:class:`~jswim.agents.ppo.PPOConfig` and temperature) with the other scene agents' task and budget
+[`PPOConfig`][jswim.agents.ppo.PPOConfig] and temperature) with the other scene agents' task and budget
 (``--steps``, ``--q-runs`` learners per cell and direction, ``--noise`` the scene's); it moves one
 arm of one swimmer per step by a real ROC (for a pair it steers both). Success is the study's
-criterion in its real-valued form (:func:`jswim.agents.ppo.evaluate_scene`: the shape judge on
+criterion in its real-valued form ([`jswim.agents.ppo.evaluate_scene`][jswim.agents.ppo_judge.evaluate_scene]: the shape judge on
 each swimmer's own moves, with the bulk swimmer's noiseless displacements; a pair succeeds when
 both swimmers' own move sequences do); wall runs get their fate from the heights and contacts the
 training run recorded; the moves are ``[dof, real ROC]``.
@@ -79,7 +79,7 @@ def square(start: Sequence[int], direction: int) -> tuple[int, int, int, int]:
     return tuple(int(encode_action(d, r)) for d, r in moves)
 
 
-#: The fate rule's thresholds (:func:`fate`), in sphere radii.
+#: The fate rule's thresholds (`fate`), in sphere radii.
 TRAP_HEIGHT = 1.5  # the middle sphere within half a radius of the wall
 ESCAPE_FACTOR = 2.0  # at twice the starting height or more
 RISE_FRACTION = 0.1  # rising by 10 % of the start over the run's second half
@@ -98,9 +98,9 @@ def fate(
     Over the run's second half (the last ``ceil(T / 2)`` steps):
 
     - ``trapped``: a sphere touched the wall (``contact``) or the height fell below
-      :data:`TRAP_HEIGHT`;
-    - ``escaped``: the final height is at least :data:`ESCAPE_FACTOR` times the start, or it is above
-      the start and rose by more than :data:`RISE_FRACTION` of the start over the second half;
+      `TRAP_HEIGHT`;
+    - ``escaped``: the final height is at least `ESCAPE_FACTOR` times the start, or it is above
+      the start and rose by more than `RISE_FRACTION` of the start over the second half;
     - ``gliding`` otherwise, at the mean height of the second half (returned; for every fate).
 
     Returns
@@ -131,7 +131,7 @@ def stroke_codes(
     start: Sequence[int] = (1, 0),
     width: int = n_actions(ARMS),
 ) -> np.ndarray:
-    """The joint codes of a stroke plan: ``"square"`` (swimmer 1 alone; the lone :func:`square` gait
+    """The joint codes of a stroke plan: ``"square"`` (swimmer 1 alone; the lone `square` gait
     from its start corner ``start``, default NG's (10, 6)), or ``"phase<p>"`` for a pair: swimmer
     2 first makes ``p`` moves of its square (so it runs ``p`` quarter cycles ahead), then the two
     alternate, one move each, swimmer 1 first. Swimmer ``s``'s codes are swimmer 1's plus
@@ -189,12 +189,12 @@ def _keys(plans: Sequence[Plan]) -> jax.Array:
 
 
 def scene_of(plan: Plan) -> Scene:
-    """The :class:`jswim.scenes.Scene` of a plan (its canonical JSON)."""
+    """The [`jswim.scenes.Scene`][jswim.scenes.scene.Scene] of a plan (its canonical JSON)."""
     return Scene.from_dict(json.loads(plan.scene))
 
 
 def _world(plan: Plan) -> tuple[Scene, Environment, Any]:
-    """A plan's scene, its world and the world's params (:func:`jswim.make`: a scene world, the
+    """A plan's scene, its world and the world's params ([`jswim.make`][jswim.env.worlds.make]: a scene world, the
     paper's world for a plain bulk scene, Purcell's swimmer above a wall, or a registered world),
     toward +x (the runs set their own)."""
     scene = scene_of(plan)
@@ -211,7 +211,7 @@ def _world(plan: Plan) -> tuple[Scene, Environment, Any]:
 
 def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: the world's own
-    (:attr:`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
+    (`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
     a plane parallel to the wall, a registered world) stays at the scene's start height (0 in the
     paper's bulk fluid), untilted."""
     if obs.height is not None:
@@ -221,7 +221,7 @@ def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, ...]:
-    """Each swimmer's start x, height and tilt ``(S,)`` (:func:`_lift`), and the DOFs' start
+    """Each swimmer's start x, height and tilt ``(S,)`` (`_lift`), and the DOFs' start
     corner (the discretiser's lattice positions, ``(n_dof,)``)."""
     state = world.reset(jax.random.PRNGKey(0), params)
     obs = world.observe(state, params)
@@ -325,10 +325,10 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
 def _ppo_judged(
     run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: int
 ) -> list[dict[str, Any] | None]:
-    """PPO's verdicts per plan, as :func:`_judge` judges lattice moves: the shape judge
-    (:func:`jswim.agents.ppo.evaluate`) per swimmer of a scene world; the paper's swimmer in a
+    """PPO's verdicts per plan, as `_judge` judges lattice moves: the shape judge
+    ([`jswim.agents.ppo.evaluate`][jswim.agents.ppo_judge.evaluate]) per swimmer of a scene world; the paper's swimmer in a
     world of its own (Purcell's above a wall) on its moves replayed in the bulk; a registered
-    world unjudged (:func:`_unjudged`)."""
+    world unjudged (`_unjudged`)."""
     from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
     p0, unjudged = plans[0], [_unjudged(p) for p in plans]
@@ -353,7 +353,7 @@ def _ppo_judged(
 
 
 def _unjudged(plan: Plan) -> dict[str, Any] | None:
-    """``None`` for the paper's swimmers (:func:`scene_row` judges them); a registered world's run
+    """``None`` for the paper's swimmers (`scene_row` judges them); a registered world's run
     is not judged (the criterion's threshold is the paper swimmer's best stroke): ``None`` verdicts."""
     if plan.swimmer in SWIMMERS:
         return None
@@ -361,8 +361,8 @@ def _unjudged(plan: Plan) -> dict[str, Any] | None:
 
 
 def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
-    """The row of a finished LLM run on a scene (:func:`scene_row` and the run's own fields:
-    :func:`jswim.studies.rows.with_llm`)."""
+    """The row of a finished LLM run on a scene (`scene_row` and the run's own fields:
+    [`jswim.studies.rows.with_llm`][jswim.studies.rows.with_llm])."""
     scene, world, params = _world(plan)
     _, z0, tilt0, _ = _start(world, params, scene)
     tracks = {k: getattr(result, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
@@ -377,7 +377,7 @@ def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
 
 
 def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dict[str, Any]:
-    """The paper's success criterion (:func:`jswim.judging.gait.judge`, bulk displacements) on each
+    """The paper's success criterion ([`jswim.judging.gait.judge`][jswim.judging.gait.judge], bulk displacements) on each
     swimmer's own moves: one swimmer as in the bulk studies; a pair succeeds when both
     swimmers' move sequences do (each judged on its own moves, with the same horizon)."""
     params = env.make_params(plan.swimmer, direction=plan.direction, init=plan.init)
@@ -413,11 +413,11 @@ def scene_row(
     judged: dict[str, Any] | None = None,
     moves: list[list[float]] | None = None,
 ) -> RunRow:
-    """One row of a scene run (:func:`jswim.studies.rows.build_row`): the bulk studies' columns
-    (success by :func:`_judge` on the lattice ``codes``, or the real-valued agent's own verdict
-    ``judged`` and ``moves``; a registered world's runs unjudged, :func:`_unjudged`) and the scene's: the scene, its medium, start height or distance,
+    """One row of a scene run ([`jswim.studies.rows.build_row`][jswim.studies.rows.build_row]): the bulk studies' columns
+    (success by `_judge` on the lattice ``codes``, or the real-valued agent's own verdict
+    ``judged`` and ``moves``; a registered world's runs unjudged, `_unjudged`) and the scene's: the scene, its medium, start height or distance,
     the per-step tracks ``extra`` holds (``xs``, ``heights``, ``tilts``, ``contact``, ``stuck``),
-    ``fate``, ``mean_height``, ``speed`` (:func:`late_speed`) and, for strokes, ``per_cycle``.
+    ``fate``, ``mean_height``, ``speed`` (`late_speed`) and, for strokes, ``per_cycle``.
     ``y`` and ``orientation`` of the trajectories table are swimmer 1's height and tilt."""
     scene = scene_of(plan)
     wall = scene.medium == "wall"
@@ -501,7 +501,7 @@ def _scene_key(t: dict[str, Any]) -> tuple:
 
 
 def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]]:
-    """Columns and cells of :func:`scene_summary` for ``jswim study``'s output and ``jswim show``."""
+    """Columns and cells of `scene_summary` for ``jswim study``'s output and ``jswim show``."""
 
     def fmt(v: Any, spec: str) -> str:
         return "-" if v is None else format(v, spec)
@@ -546,7 +546,7 @@ def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]
 
 
 def table_note(summary: Sequence[dict[str, Any]]) -> str | None:
-    """A line under :func:`table` when some speeds are blank: the runs hold no whole stroke cycle."""
+    """A line under `table` when some speeds are blank: the runs hold no whole stroke cycle."""
     if all(t.get("speed") is not None for t in summary):
         return None
     return (

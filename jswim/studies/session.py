@@ -17,7 +17,7 @@ from jswim.results import StudyStore
 
 
 def cap_check(backend: Backend, info: ServerInfo | None, max_cost: float | None) -> None:
-    """Refuse a cost cap the study's calls could not reach (:func:`jswim.llm.usage.cap_refusal`),
+    """Refuse a cost cap the study's calls could not reach ([`jswim.llm.usage.cap_refusal`][jswim.llm.usage.cap_refusal]),
     by the pricing rule of the run and of its dry run alike: the server's listed models
     (``info``), the host, ``--price-local`` and ``--prices``.
 
@@ -44,9 +44,9 @@ def cap_check(backend: Backend, info: ServerInfo | None, max_cost: float | None)
 def _preflight(
     store: StudyStore, backend: Backend, server: Any = None, max_cost: float | None = None
 ) -> ServerInfo:
-    """The server's preflight (:meth:`Backend.preflight`), recorded in the study's metadata
-    (``llm_server``); its warnings go out as :class:`~jswim.errors.JswimWarning`. A cost cap the
-    calls could not reach is refused here (:func:`cap_check`), before the status says running."""
+    """The server's preflight ([`Backend.preflight`][jswim.llm.backend.Backend.preflight]), recorded in the study's metadata
+    (``llm_server``); its warnings go out as [`JswimWarning`][jswim.errors.JswimWarning]. A cost cap the
+    calls could not reach is refused here ([`cap_check`][jswim.studies.session.cap_check]), before the status says running."""
     info = backend.preflight(server)
     cap_check(backend, info, max_cost)
     store.set_status("running", llm_server=info.metadata())

@@ -3,7 +3,7 @@ arms alone, so one factorisation serves every pose and every sweep of a step.
 
 In the frame of swimmer ``s`` (axis ``e = (cos t, sin t)``, normal ``n = (-sin t, cos t)``) its
 spheres sit at ``q_i e`` (``q`` the cumulative arm lengths from the reference sphere), and the
-rigid modes and prescribed velocities of :mod:`jswim.swimmers.forcefree` depend on the arms only:
+rigid modes and prescribed velocities of [`jswim.swimmers.forcefree`][jswim.swimmers.forcefree] depend on the arms only:
 
 * ``K'``: sphere ``i`` moves by ``(U_e, U_n + q_i Omega)`` for a rigid motion ``xi' = (U_e, U_n, Omega)``;
 * ``v'``: sphere ``i`` moves by ``(qdot_i, 0)`` for the arm rates.
@@ -15,11 +15,11 @@ obeys ``M' F' = K' xi' + w'``, ``K'^T F' = 0``, ``w' = v' - b'``; eliminating ``
 
     ``F' = P w'``, ``xi' = Q w'``,  ``G = M'^-1 K'``, ``S = K'^T G``, ``Q = -S^-1 G^T``, ``P = M'^-1 + G Q``
 
-(``K'^T P = 0``: every ``F' = P w'`` is force- and torque-free exactly). :func:`response` builds
-``(P, Q)`` from the arms (per collocation node); :func:`sweep` then solves the swimmers one after
+(``K'^T P = 0``: every ``F' = P w'`` is force- and torque-free exactly). [`response`][jswim.swimmers.bodyframe.response] builds
+``(P, Q)`` from the arms (per collocation node); [`sweep`][jswim.swimmers.bodyframe.sweep] then solves the swimmers one after
 the other in each other's flow (block Gauss-Seidel) for the cost of that flow and two small
 products per swimmer. Above a wall ``M'`` depends on the height and tilt too, so wall scenes solve
-afresh at every pose (:func:`jswim.swimmers.forcefree.solve_by_swimmer`).
+afresh at every pose ([`jswim.swimmers.forcefree.solve_by_swimmer`][jswim.swimmers.forcefree.solve_by_swimmer]).
 """
 
 from __future__ import annotations
@@ -31,9 +31,9 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim.swimmers.forcefree import (
-    _chol_solve,
-    _cholesky,
-    _is_zero,
+    unrolled_cholesky_solve,
+    unrolled_cholesky,
+    is_structural_zero,
     axial_offsets,
     red_black,
     sphere_centres,
@@ -80,12 +80,12 @@ def sweep(
 ) -> tuple[Array, Array]:
     """One block Gauss-Seidel sweep over the swimmers in the unbounded fluid (no obstacles).
 
-    The swimmers are solved in two colours (:func:`jswim.swimmers.forcefree.red_black`), the even
+    The swimmers are solved in two colours ([`jswim.swimmers.forcefree.red_black`][jswim.swimmers.forcefree.red_black]), the even
     ones (0, 2, ...) then the odd ones, each colour at once (arrays over its swimmers): each
     swimmer alone, exactly, in the flow that the other swimmers' forces make at its spheres, the
     odd ones taking the even ones' new forces (a pair: swimmer 0, then swimmer 1 in swimmer 0's
     new flow). Repeated, it converges to the coupled
-    solve (:func:`jswim.swimmers.forcefree.solve`) by the far field: ~2e-3 per sweep at D = 30 a.
+    solve ([`jswim.swimmers.forcefree.solve`][jswim.swimmers.forcefree.solve]) by the far field: ~2e-3 per sweep at D = 30 a.
     One swimmer: one sweep is its exact solve.
 
     Parameters
@@ -93,11 +93,11 @@ def sweep(
     centre, tilt, arms, arm_rates : Array (S, 2), (S,), (S, n_dof), (S, n_dof)
         Reference-sphere centres and axis angles (units of ``a``, rad), arms and arm rates.
     resp : Response
-        :func:`response` of these arms.
+        [`response`][jswim.swimmers.bodyframe.response] of these arms.
     forces : Array (S, n, 2)
         Body-frame sphere forces ``F'`` of the previous sweep (zeros at the start).
     mobility : str
-        Static: the pair blocks between the swimmers, as for :func:`response`.
+        Static: the pair blocks between the swimmers, as for [`response`][jswim.swimmers.bodyframe.response].
 
     Returns
     -------
@@ -155,9 +155,9 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
                 axial, normal = axial - inv_r3, normal + 0.5 * inv_r3
             m[2 * i][2 * j], m[2 * i][2 * j + 1] = axial, 0.0
             m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = 0.0, normal
-    low, inv_diag = _cholesky(m)
+    low, inv_diag = unrolled_cholesky(m)
     minv = [
-        _chol_solve(low, inv_diag, [1.0 if r == col else 0.0 for r in range(size)])
+        unrolled_cholesky_solve(low, inv_diag, [1.0 if r == col else 0.0 for r in range(size)])
         for col in range(size)
     ]
     # G = M'^-1 K' (size x 3): the columns of K' are sums of unit columns (and q_i times them)
@@ -173,8 +173,10 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
     schur = [
         [_sum(_mul(k_rows[p][a], g[p][b]) for p in range(size)) for b in range(3)] for a in range(3)
     ]
-    sl, sd = _cholesky(schur)
-    h = [_chol_solve(sl, sd, g[p]) for p in range(size)]  # h[p] = S^-1 G^T e_p, so Q[:, p] = -h[p]
+    sl, sd = unrolled_cholesky(schur)
+    h = [
+        unrolled_cholesky_solve(sl, sd, g[p]) for p in range(size)
+    ]  # h[p] = S^-1 G^T e_p, so Q[:, p] = -h[p]
     p_mat = [
         [
             _plus(minv[col][row], _sum(-_mul(g[row][a], h[col][a]) for a in range(3)))
@@ -182,7 +184,10 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
         ]
         for row in range(size)
     ]
-    q_mat = [[0.0 if _is_zero(h[col][a]) else -h[col][a] for col in range(size)] for a in range(3)]
+    q_mat = [
+        [0.0 if is_structural_zero(h[col][a]) else -h[col][a] for col in range(size)]
+        for a in range(3)
+    ]
     zero = jnp.zeros((), arms.dtype)
     as_array = lambda rows: jnp.stack([jnp.stack([zero + v for v in r]) for r in rows]).astype(
         arms.dtype
@@ -191,11 +196,11 @@ def _one_response(arms: Array, mobility: str = "point") -> tuple[Array, Array]:
 
 
 def _mul(a, b):
-    return 0.0 if _is_zero(a) or _is_zero(b) else a * b
+    return 0.0 if is_structural_zero(a) or is_structural_zero(b) else a * b
 
 
 def _plus(a, b):
-    return b if _is_zero(a) else (a if _is_zero(b) else a + b)
+    return b if is_structural_zero(a) else (a if is_structural_zero(b) else a + b)
 
 
 def _sum(values) -> object:

@@ -37,7 +37,7 @@ term, so NG's power is within 0.4 % of that solve (second order in ``a / d``, me
 point-force model itself holds to first order in ``a / d``.
 
 **The quadratic form.** All velocities are linear in the shape rates, so ``P = d_dot^T Q(d)
-d_dot`` with ``Q`` symmetric and positive semi-definite (:func:`dissipation_matrix`): power is
+d_dot`` with ``Q`` symmetric and positive semi-definite ([`dissipation_matrix`][jswim.swimmers.dissipation.dissipation_matrix]): power is
 never negative, vanishes exactly when the shape is still (rigid motion of a force-free body
 costs nothing) and is even under time reversal ``d_dot -> -d_dot``.
 
@@ -180,7 +180,7 @@ def power(model: SwimmerModel, d: Array, d_dot: Array) -> Array:
 def dissipation_matrix(model: SwimmerModel, d: Array) -> Array:
     """The symmetric matrix ``Q(d)`` with ``power(model, d, d_dot) = d_dot^T Q d_dot``.
 
-    Shape ``(n_dof, n_dof)``, units of :func:`power` per squared rate. Built from the power at the
+    Shape ``(n_dof, n_dof)``, units of [`power`][jswim.swimmers.dissipation.power] per squared rate. Built from the power at the
     unit rates and their pairwise sums (polarisation), so it is exact for the quadratic form.
     """
     d = jnp.asarray(d)

@@ -9,7 +9,7 @@ sphere. ``O`` obstacles are spheres of given radius held fixed.
 
 Unknowns: the forces on all spheres ``F`` (2 per sphere) and each swimmer's rigid motion
 ``xi_s = (U_x, U_z, Omega)`` (``Omega = d t_s / dt``). Equations, with ``M`` the grand mobility
-(:func:`jswim.swimmers.mobility.mobility_matrix`):
+([`jswim.swimmers.mobility.mobility_matrix`][jswim.swimmers.mobility.mobility_matrix]):
 
 * ``M F = K xi + v``: a swimmer sphere moves rigidly with its swimmer plus its prescribed axial
   velocity ``v_i = qdot_i e_s``; an obstacle does not move (zero rows of ``K`` and ``v``);
@@ -87,7 +87,7 @@ def solve(
     wall : bool
         Static: a no-slip wall at z = 0 (Blake) or the unbounded fluid (Oseen).
     mobility : str
-        Static: ``"point"`` or ``"rpy"`` pair blocks (:func:`jswim.swimmers.mobility.pair_entries`).
+        Static: ``"point"`` or ``"rpy"`` pair blocks ([`jswim.swimmers.mobility.pair_entries`][jswim.swimmers.mobility.pair_entries]).
 
     Returns
     -------
@@ -133,7 +133,7 @@ def solve(
     return RigidMotion(xi[:, :2], xi[:, 2], forces.reshape(N, 2))
 
 
-#: Largest system (2 N rows) that :func:`rigid_motion` solves by unrolled elimination.
+#: Largest system (2 N rows) that [`rigid_motion`][jswim.swimmers.forcefree.rigid_motion] solves by unrolled elimination.
 UNROLLED_MAX_ROWS = 6
 
 
@@ -146,8 +146,8 @@ def rigid_motion(
     wall: bool,
     mobility: str = "point",
 ) -> RigidMotion:
-    """:func:`solve`, by unrolled elimination for small scenes (``2 N <=``
-    :data:`UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
+    """[`solve`][jswim.swimmers.forcefree.solve], by unrolled elimination for small scenes (``2 N <=``
+    `UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
     else through LAPACK. The two agree to rounding (a test checks it)."""
     n_rows = 2 * (arms.shape[0] * (arms.shape[1] + 1) + obstacles.shape[0])
     if n_rows <= UNROLLED_MAX_ROWS:
@@ -165,10 +165,10 @@ def solve_unrolled(
     background: Array | None = None,
     mobility: str = "point",
 ) -> RigidMotion:
-    """:func:`solve` written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
+    """[`solve`][jswim.swimmers.forcefree.solve] written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
     complement), so that under ``vmap`` every operation is elementwise over the batch and XLA
     fuses the whole solve; the sizes are static, the loops below run at trace time over matrix
-    entries. Same arguments and result as :func:`solve`; ``background`` ``(S, n, 2)``, if given,
+    entries. Same arguments and result as [`solve`][jswim.swimmers.forcefree.solve]; ``background`` ``(S, n, 2)``, if given,
     is an imposed flow velocity at each swimmer sphere (the spheres then move at
     ``K xi + v = M F + background``)."""
 
@@ -207,7 +207,7 @@ def solve_unrolled(
             )
             m[2 * i][2 * j], m[2 * i][2 * j + 1] = mxx, mxz
             m[2 * i + 1][2 * j], m[2 * i + 1][2 * j + 1] = mzx, mzz
-    chol, inv_diag = _cholesky(m)
+    chol, inv_diag = unrolled_cholesky(m)
     # Right-hand sides: the rigid modes K (3 per swimmer) and the prescribed velocities v.
     zero = 0.0 * xs[0]
     cols = []
@@ -232,15 +232,15 @@ def solve_unrolled(
             if background is not None:
                 v[2 * p] = v[2 * p] - background[s, i, 0]
                 v[2 * p + 1] = v[2 * p + 1] - background[s, i, 1]
-    sols = [_chol_solve(chol, inv_diag, c) for c in cols]
-    sol_v = _chol_solve(chol, inv_diag, v)
+    sols = [unrolled_cholesky_solve(chol, inv_diag, c) for c in cols]
+    sol_v = unrolled_cholesky_solve(chol, inv_diag, v)
     k3 = 3 * S
     schur = [
         [sum(cols[a][p] * sols[b][p] for p in range(2 * N)) for b in range(k3)] for a in range(k3)
     ]
     rhs = [-sum(cols[a][p] * sol_v[p] for p in range(2 * N)) for a in range(k3)]
-    sc, sd = _cholesky(schur)
-    xi = _chol_solve(sc, sd, rhs)
+    sc, sd = unrolled_cholesky(schur)
+    xi = unrolled_cholesky_solve(sc, sd, rhs)
     forces = [sum(sols[b][p] * xi[b] for b in range(k3)) + sol_v[p] for p in range(2 * N)]
     xi_arr = jnp.stack(xi).reshape(S, 3)
     return RigidMotion(xi_arr[:, :2], xi_arr[:, 2], jnp.stack(forces).reshape(N, 2))
@@ -257,22 +257,22 @@ def solve_by_swimmer(
 ) -> RigidMotion:
     """One block Gauss-Seidel sweep of the coupled solve of ``S >= 2`` swimmers (no obstacles).
 
-    The swimmers are solved in two colours, the even ones then the odd ones (:func:`red_black`; a
+    The swimmers are solved in two colours, the even ones then the odd ones ([`red_black`][jswim.swimmers.forcefree.red_black]; a
     pair: swimmer 0, then swimmer 1), each colour at once (its one-swimmer solves vmapped: one
-    traced solve whatever ``S``). Each swimmer is solved alone (:func:`solve_unrolled`, force- and torque-free exactly)
+    traced solve whatever ``S``). Each swimmer is solved alone ([`solve_unrolled`][jswim.swimmers.forcefree.solve_unrolled], force- and torque-free exactly)
     in the flow that the other swimmers' forces make at its spheres, taking the forces of the
     swimmers already solved in this sweep and ``forces`` for the others. Repeated, it converges to
-    :func:`solve`: by the swimmers' far field, ~2e-3 per sweep at D = 30 a and ~1e-5 at 60 a
+    [`solve`][jswim.swimmers.forcefree.solve]: by the swimmers' far field, ~2e-3 per sweep at D = 30 a and ~1e-5 at 60 a
     (measured for coaxial NG swimmers, free fluid and wall). The collocation's Picard sweeps
-    (:mod:`jswim.scenes.collocation`) carry the forces from sweep to sweep, so the two iterations
+    (`jswim.scenes.collocation`) carry the forces from sweep to sweep, so the two iterations
     converge together at the cost of ``S`` one-swimmer solves per node.
 
     Parameters
     ----------
     centre, tilt, arms, arm_rates, wall
-        As in :func:`solve`.
+        As in [`solve`][jswim.swimmers.forcefree.solve].
     forces : Array (S n, 2)
-        The forces of the previous sweep (zeros at the start), ordered as :func:`solve`'s.
+        The forces of the previous sweep (zeros at the start), ordered as [`solve`][jswim.swimmers.forcefree.solve]'s.
 
     Returns
     -------
@@ -319,7 +319,7 @@ def red_black(pos: Array, lab: Array, colour: Any, wall: bool, mobility: str = "
         ``c`` in 0, 1) in the flow ``(S_c, n, 2)`` at their spheres; ``outputs`` a tuple of arrays
         with a leading axis over those swimmers.
     wall, mobility
-        Static: the pair blocks (:func:`jswim.swimmers.mobility.swimmer_blocks`).
+        Static: the pair blocks ([`jswim.swimmers.mobility.swimmer_blocks`][jswim.swimmers.mobility.swimmer_blocks]).
 
     Returns
     -------
@@ -354,13 +354,13 @@ def red_black(pos: Array, lab: Array, colour: Any, wall: bool, mobility: str = "
     return tuple(v if S <= 2 else v[order] for v in both)
 
 
-def _is_zero(v: object) -> bool:
+def is_structural_zero(v: object) -> bool:
     """A structural zero of the unrolled solves: a Python zero (not a traced value), which the
     entry-by-entry arithmetic drops instead of multiplying through."""
     return isinstance(v, float) and v == 0.0
 
 
-def _cholesky(m: list) -> tuple[list, list]:
+def unrolled_cholesky(m: list) -> tuple[list, list]:
     """Lower Cholesky factor of a symmetric matrix given by its lower triangle (lists of
     scalars), with the reciprocals of its diagonal. Python zeros in ``m`` stay Python zeros where
     the factor keeps them (no fill-in), so a block-structured matrix costs what its blocks cost."""
@@ -371,17 +371,17 @@ def _cholesky(m: list) -> tuple[list, list]:
         for q in range(p + 1):
             acc = m[p][q]
             for k in range(q):
-                if not (_is_zero(low[p][k]) or _is_zero(low[q][k])):
+                if not (is_structural_zero(low[p][k]) or is_structural_zero(low[q][k])):
                     acc = acc - low[p][k] * low[q][k]
             if p == q:
                 inv_diag[p] = jax.lax.rsqrt(jnp.asarray(acc))
                 low[p][p] = acc * inv_diag[p]
             else:
-                low[p][q] = 0.0 if _is_zero(acc) else acc * inv_diag[q]
+                low[p][q] = 0.0 if is_structural_zero(acc) else acc * inv_diag[q]
     return low, inv_diag
 
 
-def _chol_solve(low: list, inv_diag: list, b: list) -> list:
+def unrolled_cholesky_solve(low: list, inv_diag: list, b: list) -> list:
     """``x`` with ``L L^T x = b`` (forward then back substitution, lists of scalars; Python zeros
     in ``L`` and ``b`` are skipped)."""
     size = len(b)
@@ -389,14 +389,14 @@ def _chol_solve(low: list, inv_diag: list, b: list) -> list:
     for p in range(size):
         acc = b[p]
         for k in range(p):
-            if not (_is_zero(low[p][k]) or _is_zero(y[k])):
+            if not (is_structural_zero(low[p][k]) or is_structural_zero(y[k])):
                 acc = acc - low[p][k] * y[k]
-        y[p] = 0.0 if _is_zero(acc) else acc * inv_diag[p]
+        y[p] = 0.0 if is_structural_zero(acc) else acc * inv_diag[p]
     x = [None] * size
     for p in reversed(range(size)):
         acc = y[p]
         for k in range(p + 1, size):
-            if not (_is_zero(low[k][p]) or _is_zero(x[k])):
+            if not (is_structural_zero(low[k][p]) or is_structural_zero(x[k])):
                 acc = acc - low[k][p] * x[k]
-        x[p] = 0.0 if _is_zero(acc) else acc * inv_diag[p]
+        x[p] = 0.0 if is_structural_zero(acc) else acc * inv_diag[p]
     return x

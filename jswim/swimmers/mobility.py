@@ -1,7 +1,7 @@
 """Point-force mobility of spheres in the vertical plane y = 0: unbounded fluid or above a wall.
 
 Units: lengths in the swimmer's sphere radius ``a`` and forces such that a free sphere of radius
-``a`` has unit mobility, ``1 / (6 pi mu a) = 1`` (the units of :mod:`jswim.swimmers.nsphere`).
+``a`` has unit mobility, ``1 / (6 pi mu a) = 1`` (the units of [`jswim.swimmers.nsphere`][jswim.swimmers.nsphere]).
 All centres lie in the plane y = 0 and all forces act in it, so by the mirror symmetry y -> -y
 every velocity lies in it too: each pair block is the (x, z) part, 2 x 2, of the 3-D tensor.
 
@@ -17,7 +17,7 @@ Pair blocks (sphere ``i`` moved by a point force on sphere ``j``):
 
   with ``S(r) = I / r + r r / r^3``, ``r = x_i - x_j``, ``R = x_i - (x_j, -h)``, ``k`` the force
   component, ``m = (1, 1, -1)`` and no sum over ``k``. The derivative is written out in
-  :func:`blake`. It vanishes for a field point on the wall and is symmetric under exchanging the
+  [`blake`][jswim.swimmers.mobility.blake]. It vanishes for a field point on the wall and is symmetric under exchanging the
   two points together with the two indices (the tests check both).
 
 Self blocks (a sphere of radius ``b`` moved by its own force): the Stokes mobility ``a / b``;
@@ -34,7 +34,7 @@ of the sphere's own force (a check in the tests). The default pair blocks are po
 Faxen/Rotne-Prager size terms): the model of Golestanian & Ajdari for the three-sphere swimmer
 and of Zargar, Najafi & Miri (Phys. Rev. E 80, 026308, 2009) near a wall; accurate to first
 order in ``a / d`` between spheres ``d`` apart. ``mobility="rpy"`` gives finite-size pair
-blocks (:func:`rpy_entries`, :func:`rpb_entries`), consistent with these self terms.
+blocks ([`rpy_entries`][jswim.swimmers.mobility.rpy_entries], [`rpb_entries`][jswim.swimmers.mobility.rpb_entries]), consistent with these self terms.
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def rpb_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array, A
 
     Blake's tensor with the Faxen operators of both spheres applied,
     ``(1 + a^2/6 lap_i)(1 + a^2/6 lap_j) G_Blake`` (Swan & Brady, Phys. Fluids 19, 113306, 2007,
-    appendix): the unbounded Rotne-Prager-Yamakawa tensor (:func:`rpy_entries`) plus a wall part
+    appendix): the unbounded Rotne-Prager-Yamakawa tensor ([`rpy_entries`][jswim.swimmers.mobility.rpy_entries]) plus a wall part
     written in the image vector ``R = x_i - (x_j, -z_j)`` (length ``R``, direction
     ``(e_x, e_z)``) and ``t = z_i / (z_i + z_j)``, as
     ``W_ab = A d_ab + B e_a e_b + C' e_a d_b3 + D' d_a3 e_b + E' d_a3 d_b3``, where ``A`` and ``B``
@@ -135,7 +135,7 @@ def stokeslet(rx: Array, rz: Array) -> tuple[Array, Array, Array]:
 
 
 def blake(rx: Array, zi: Array, zj: Array) -> Array:
-    """Blake's tensor as ``(..., 2, 2)`` (see :func:`blake_entries`)."""
+    """Blake's tensor as ``(..., 2, 2)`` (see [`blake_entries`][jswim.swimmers.mobility.blake_entries])."""
     gxx, gxz, gzx, gzz = blake_entries(rx, zi, zj)
     return jnp.stack([jnp.stack([gxx, gxz], -1), jnp.stack([gzx, gzz], -1)], -2)
 
@@ -197,8 +197,8 @@ def pair_entries(
     (units of ``1 / (6 pi mu a)``); ``rx = x_i - x_j``, heights ``zi``, ``zj``; elementwise.
 
     ``mobility`` (static): ``"point"``: Blake's tensor above the wall, else the Oseen tensor, times
-    :data:`OSEEN_PREFACTOR` (the radii do not enter); ``"rpy"``: :func:`rpb_entries` above the
-    wall (unit spheres only), else :func:`rpy_entries` with radii ``ai``, ``aj``."""
+    `OSEEN_PREFACTOR` (the radii do not enter); ``"rpy"``: [`rpb_entries`][jswim.swimmers.mobility.rpb_entries] above the
+    wall (unit spheres only), else [`rpy_entries`][jswim.swimmers.mobility.rpy_entries] with radii ``ai``, ``aj``."""
     if mobility == "rpy":
         if wall:
             return rpb_entries(rx, zi, zj)
@@ -220,7 +220,7 @@ def swimmer_blocks(
 
     Entry ``[s, o, i, j]`` is the mobility ``[[M_xx, M_xz], [M_zx, M_zz]]`` of sphere ``i`` of
     swimmer ``s`` of ``pa`` ``(A, n, 2)`` per force on sphere ``j`` of swimmer ``o`` of ``pb``
-    ``(B, n, 2)`` (:func:`pair_entries`, unit spheres). ``same`` (static): ``pa`` and ``pb`` are
+    ``(B, n, 2)`` ([`pair_entries`][jswim.swimmers.mobility.pair_entries], unit spheres). ``same`` (static): ``pa`` and ``pb`` are
     one group, and a swimmer's blocks with itself are zero (its own spheres are solved with it).
     """
     rx = pa[:, None, :, None, 0] - pb[None, :, None, :, 0]  # (A, B, n, n)
@@ -238,7 +238,7 @@ def swimmer_blocks(
 
 
 def transposed_blocks(blocks: Array) -> Array:
-    """:func:`swimmer_blocks` of ``(pb, pa)`` from that of ``(pa, pb)``: ``M_(o j, s i) = M_(s i, o j)^T``."""
+    """[`swimmer_blocks`][jswim.swimmers.mobility.swimmer_blocks] of ``(pb, pa)`` from that of ``(pa, pb)``: ``M_(o j, s i) = M_(s i, o j)^T``."""
     return jnp.transpose(blocks, (1, 0, 3, 2, 5, 4))
 
 
@@ -270,7 +270,7 @@ def mobility_matrix(pos: Array, radii: Array, wall: bool, mobility: str = "point
         Static: Blake's no-slip wall at z = 0, or the unbounded fluid.
     mobility : str
         Static: ``"point"`` (point-force pair blocks) or ``"rpy"`` (Rotne-Prager-Yamakawa /
-        -Blake, :func:`pair_entries`; above the wall unit radii only).
+        -Blake, [`pair_entries`][jswim.swimmers.mobility.pair_entries]; above the wall unit radii only).
 
     Returns
     -------

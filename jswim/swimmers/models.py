@@ -16,7 +16,7 @@ from jax import Array
 from jswim.errors import ConfigError
 from jswim.swimmers import ng, nlink, nsphere, purcell
 
-#: Names accepted by :func:`make_model`.
+#: Names accepted by [`make_model`][jswim.swimmers.models.make_model].
 SWIMMERS = ("purcell", "ng", "nlink", "nsphere")
 
 

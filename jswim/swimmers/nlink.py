@@ -62,7 +62,7 @@ def velocity(
         (no propulsion at all). With ``xi_par`` given: ``xi_perp`` itself.
     xi_par : float
         Drag along a link (default 1, the unit of ``xi_ratio``); the velocities depend only on
-        ``xi_ratio / xi_par`` (:mod:`jswim.swimmers.wall_rft` passes both).
+        ``xi_ratio / xi_par`` ([`jswim.swimmers.wall_rft`][jswim.swimmers.wall_rft] passes both).
     """
     d = jnp.asarray(d)
     d_dot = jnp.asarray(d_dot)

@@ -24,7 +24,7 @@ def outline(model: SwimmerModel, d: Any) -> np.ndarray:
     ndarray (..., P, 2), float64
         Link swimmers: the ``n_dof + 2`` link end points, the reference link (index
         ``n_dof // 2``) along +x and the centroid of the links (the mean of their centres, as
-        :func:`jswim.swimmers.nlink.centroid_offset`) at the origin. Sphere swimmers: the
+        [`jswim.swimmers.nlink.centroid_offset`][jswim.swimmers.nlink.centroid_offset]) at the origin. Sphere swimmers: the
         ``n_dof + 1`` sphere centres on the x axis, their mean at the origin.
     """
     d = np.asarray(d, np.float64)

@@ -11,7 +11,7 @@ stays at height h. To leading order in ``1 / ln(l / b)``, with ``c = 2 h``, ``S 
 
 ``k_T``, ``k_N``: the wall's image (Blake 1971) of a uniform force density, averaged over the link
 (written out here from Blake's tensor at equal heights). Returned in units of the bulk
-``xi_T = 2 pi mu / L``: ``(1, 2)`` as h -> infinity (:mod:`jswim.swimmers.nlink`, ``xi_ratio = 2``).
+``xi_T = 2 pi mu / L``: ``(1, 2)`` as h -> infinity ([`jswim.swimmers.nlink`][jswim.swimmers.nlink], ``xi_ratio = 2``).
 Far away ``k_T = 3 l / (16 h)``, ``k_N = 3 l / (8 h)`` (de Mestre & Russel, J. Eng. Math. 9, 81,
 1975, as Brennen & Winet give it, Annu. Rev. Fluid Mech. 9, 339, 1977); near the wall (b << h << l)
 ``L - k_T -> ln(h / b) + 3/2``, ``L - k_N -> ln(h / b) + 1/2`` (Katz, Blake & Paveri-Fontana, J.
@@ -82,11 +82,11 @@ def drag_coefficients(
 class WallPurcellModel(SwimmerModel):
     """Purcell's swimmer whose links have drag ``xi_par`` along and ``xi_perp`` across them.
 
-    A :class:`~jswim.swimmers.models.SwimmerModel` of kind ``"purcell"`` (prompt, defaults and
+    A [`SwimmerModel`][jswim.swimmers.models.SwimmerModel] of kind ``"purcell"`` (prompt, defaults and
     tables as the paper's swimmer), its velocities from the general resistive-force solve
-    (:func:`jswim.swimmers.nlink.velocity`) with both coefficients as given; ``xi_ratio`` is their
+    ([`jswim.swimmers.nlink.velocity`][jswim.swimmers.nlink.velocity]) with both coefficients as given; ``xi_ratio`` is their
     ratio. ``height`` and ``link_radius`` (link lengths) record where they came from
-    (:func:`wall_model`; ``inf``: not from a wall).
+    ([`wall_model`][jswim.swimmers.wall_rft.wall_model]; ``inf``: not from a wall).
     """
 
     xi_par: float = 1.0
@@ -111,7 +111,7 @@ def wall_model(
     ----------
     height : float
         Height of the swimmer's plane above the wall, in link lengths; more than
-        :data:`MIN_GAP` link radii.
+        `MIN_GAP` link radii.
     link_radius : float
         b, in link lengths, in (0, 0.1] (slender links).
     d_max : float, optional

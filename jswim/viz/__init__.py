@@ -1,11 +1,11 @@
 """Seeing runs: a swimmer's true shape per step, animations and the study folder's report page.
 
-- :mod:`jswim.viz.tracks`: what a run did, step by step, read from what a folder records (the run's
+- `jswim.viz.tracks`: what a run did, step by step, read from what a folder records (the run's
   row in ``runs.jsonl`` and its transcript): pose, DOF values, the body outline in the lab frame,
   actions, stuck and clear events, the LLM's replies, where the success criterion found the stroke.
-- :mod:`jswim.viz.animate`: runs side by side as a GIF (Pillow) or MP4 (``imageio-ffmpeg``,
-  optional), :func:`jswim.viz.animate.animate` (``jswim.animate``) for notebooks.
-- :mod:`jswim.viz.page`: ``report.html``, one self-contained page per study folder.
+- `jswim.viz.animate`: runs side by side as a GIF (Pillow) or MP4 (``imageio-ffmpeg``,
+  optional), `jswim.viz.animate.animate` (``jswim.animate``) for notebooks.
+- `jswim.viz.page`: ``report.html``, one self-contained page per study folder.
 """
 
 from __future__ import annotations

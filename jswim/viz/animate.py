@@ -33,10 +33,10 @@ from jswim.errors import ConfigError
 from jswim.figures.plots import AGENT_ORDER, RC, panel_keys
 from jswim.results import as_run_rows, read_metadata, read_run_rows, read_transcript, writing
 from jswim.viz import worlds
-from jswim.viz.bench_page import _read, part_folders
+from jswim.viz.bench_page import read_bench, part_folders
 from jswim.viz.tracks import Track, fmt_action, track, view_box
 
-#: Colours of the agents (the figures' Okabe-Ito palette, :data:`jswim.figures.plots.AGENT_STYLE`).
+#: Colours of the agents (the figures' Okabe-Ito palette, `jswim.figures.plots.AGENT_STYLE`).
 #: Each agent's colour: the figures' (jswim.figures.plots.AGENT_STYLE), the square stroke in black.
 AGENT_COLORS = {
     "llm": "#0072B2",
@@ -140,8 +140,8 @@ class Animation:
                 plt.close(fig)
         return path
 
-    #: Frames the last :meth:`save` wrote: a GIF merges identical frames (the hold on the last step
-    #: becomes one longer frame), so it may hold fewer than :attr:`n_frames`.
+    #: Frames the last `save` wrote: a GIF merges identical frames (the hold on the last step
+    #: becomes one longer frame), so it may hold fewer than `n_frames`.
     frames_written: int | None = None
 
     def to_gif_bytes(self) -> bytes:
@@ -223,13 +223,13 @@ def build(
     fps: float = 4.0,
     dpi: int = 80,
 ) -> Animation:
-    """An :class:`Animation` of runs of a study folder (or a :class:`jswim.results.Study`).
+    """An `Animation` of runs of a study folder (or a [`jswim.results.Study`][jswim.results.Study]).
 
     Parameters
     ----------
     folder_or_study : path or Study
     run_ids : sequence of str, optional
-        The runs to show, left to right; default :func:`pick_runs` (``by``, ``most``).
+        The runs to show, left to right; default `pick_runs` (``by``, ``most``).
     fps : float
         Steps per second.
 
@@ -274,7 +274,7 @@ def build(
 def build_bench(
     folder: str | Path, part: str | None = None, *, most: int = 4, fps: float = 4.0, dpi: int = 80
 ) -> Animation:
-    """An :class:`Animation` of a bench folder: one run per model, the reference rule, Q-learning and
+    """An `Animation` of a bench folder: one run per model, the reference rule, Q-learning and
     random, from the same setting of one part (default the suite's first), left to right.
 
     Raises
@@ -283,7 +283,7 @@ def build_bench(
         An unknown part, or a part without finished runs.
     """
     folder = Path(folder)
-    meta, _ = _read(folder)
+    meta, _ = read_bench(folder)
     found = part_folders(folder, meta)
     names = list(dict.fromkeys(p for _, _, p, _ in found))
     if part is None and names:
@@ -335,8 +335,8 @@ def animate(study: Any, run_ids: str | Sequence[str] | None = None, **kw: Any) -
     """Runs of a study as an animation; in Jupyter it shows inline (a GIF).
 
     ``jswim.animate(jswim.load(folder), "llm-purcell-px-i++-z0-r0")``, or with no run ids one run
-    per agent from the same start (:func:`pick_runs`). ``.save("runs.gif")`` or ``.mp4`` writes it.
-    Keywords: ``by``, ``most``, ``fps``, ``dpi`` (see :func:`build`).
+    per agent from the same start (`pick_runs`). ``.save("runs.gif")`` or ``.mp4`` writes it.
+    Keywords: ``by``, ``most``, ``fps``, ``dpi`` (see `build`).
     """
     if isinstance(run_ids, str):
         run_ids = [run_ids]

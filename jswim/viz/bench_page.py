@@ -22,10 +22,10 @@ from collections.abc import Mapping, Sequence
 from jswim.errors import ConfigError
 from jswim.results import atomic_write, writing
 from jswim.bench.runner import BASELINES, REFERENCE
-from jswim.bench.leaderboard import _cost as cost_text, _steps, figure_object, missing_text
+from jswim.bench.leaderboard import cost_cell, figure_object, missing_text, steps_text
 from jswim.overview import MIN_BOOTSTRAP_N
 from jswim.figures import plots
-from jswim.viz.page import _asset, write_report
+from jswim.viz.page import asset_text, write_report
 
 BENCH_FILE = "bench.json"
 REPORT = "report.html"
@@ -36,7 +36,14 @@ def is_bench(folder: str | Path) -> bool:
     return (Path(folder) / BENCH_FILE).is_file()
 
 
-def _read(folder: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+def read_bench(folder: Path) -> tuple[dict[str, Any], dict[str, Any]]:
+    """A bench folder's metadata and leaderboard (``{}`` where none is written yet).
+
+    Raises
+    ------
+    ConfigError
+        The bench file is missing or unreadable.
+    """
     try:
         meta = json.loads((folder / BENCH_FILE).read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
@@ -76,7 +83,7 @@ def _row_folder(r: Mapping[str, Any]) -> str:
 
 def _cost(r: Mapping[str, Any]) -> str:
 
-    return cost_text(r)
+    return cost_cell(r)
 
 
 def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
@@ -141,7 +148,7 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
             None,
             str(r["n"]),
             f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
-            _steps(r),
+            steps_text(r),
             "-" if mx is None else f"{mx:+.3f}{ci}",
             "-" if r.get("failed_steps") is None else str(r["failed_steps"]),
             "-" if r.get("tokens_per_step") is None else f"{r['tokens_per_step']:.0f}",
@@ -175,7 +182,7 @@ def bench_html(folder: str | Path) -> str:
     """The bench's page (see the module docstring); reads the folder only."""
 
     folder = Path(folder)
-    meta, board = _read(folder)
+    meta, board = read_bench(folder)
     rows = board.get("rows") or []
     missing = board.get("missing") or []
     suite = meta.get("suite") or {}
@@ -214,7 +221,7 @@ def bench_html(folder: str | Path) -> str:
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8"/>',
         '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
-        f"<title>{html.escape(title)}</title><style>{_asset('report.css')}</style></head><body>",
+        f"<title>{html.escape(title)}</title><style>{asset_text('report.css')}</style></head><body>",
         f"<header><h1>{html.escape(title)}</h1>",
         f'<p id="status" class="{"ok" if status == "complete" and not missing else "unfinished"}">bench '
         f"{html.escape(str(status))}"
@@ -259,16 +266,16 @@ def write_bench_report(
     """Write the bench's ``report.html`` (or ``out``) and, with ``parts``, every study folder's page.
 
     A model's or the reference rule's part page is drawn with the bench's baselines of that part
-    beside it (:func:`jswim.viz.page.report_html`'s ``beside``).
+    beside it (`jswim.viz.page.report_html`'s ``beside``).
 
     Raises
     ------
     ConfigError
-        Unreadable ``bench.json``; :class:`jswim.results.StudyFolderError` if a page cannot be written.
+        Unreadable ``bench.json``; [`jswim.results.StudyFolderError`][jswim.results.StudyFolderError] if a page cannot be written.
     """
 
     folder = Path(folder)
-    meta, _ = _read(folder)
+    meta, _ = read_bench(folder)
     if parts:
         for _label, kind, part, sub in part_folders(folder, meta):
             base = folder / BASELINES / part

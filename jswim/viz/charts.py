@@ -1,7 +1,7 @@
 """Figures of the commands that write no study folder: ``jswim qlearn`` and ``jswim ensemble``.
 
-Both follow the study figures' rules (:mod:`jswim.figures.plots`: paper sizes, 7-8 pt text, colour-blind
-safe colours, PNG and PDF through :func:`jswim.figures.plots.save`) and name the agent or stroke they
+Both follow the study figures' rules ([`jswim.figures.plots`][jswim.figures.plots]: paper sizes, 7-8 pt text, colour-blind
+safe colours, PNG and PDF through [`jswim.figures.plots.save`][jswim.figures.panels.save]) and name the agent or stroke they
 show in their title, so a figure taken out of its folder still says what it is.
 """
 
@@ -14,15 +14,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
-from jswim.figures.plots import (
-    COLUMN_IN,
-    PAGE_IN,
-    RC,
-    SWIMMER_ORDER,
-    _dir_text,
-    _disp_label,
-    _swimmer_label,
-)
+from jswim.figures.panels import direction_text, displacement_label, swimmer_label
+from jswim.figures.style import COLUMN_IN, PAGE_IN, RC
+from jswim.overview import SWIMMER_ORDER
 
 #: Colours of the two action sets (Okabe-Ito).
 SET_STYLE = {
@@ -34,7 +28,7 @@ SET_STYLE = {
 def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
     """Histograms of steps to learn, one panel per swimmer (rows) and target direction (columns).
 
-    ``rows`` are :class:`jswim.studies.qlearn.Summary` with their histogram ``hist`` (learners
+    ``rows`` are `jswim.studies.qlearn.Summary` with their histogram ``hist`` (learners
     per steps-to-learn value, counted from 1). One outline per action set; the dashed line is
     its median, and the legend says how many learners never learned.
     """
@@ -76,7 +70,7 @@ def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
                         ax.plot([], [], color=style["color"], label=label)
                     if r.n_learned:
                         ax.axvline(r.median, color=style["color"], ls="--", lw=0.9)
-                ax.set_title(f"{_swimmer_label(sw)}, target {_dir_text(d)}")
+                ax.set_title(f"{swimmer_label(sw)}, target {direction_text(d)}")
                 ax.set_xlabel("steps to learn (from 1: the step the final stroke starts)")
                 ax.set_ylabel("fraction of learners")
                 ax.set_xlim(left=0)
@@ -96,7 +90,7 @@ def qlearn_figure(rows: Sequence[Any], title: str) -> Figure:
 def ensemble_figure(stats: Sequence[Any], title: str, direction: int = 1) -> Figure:
     """Mean target-direction X/a against step with its quantile band, one curve per noise level.
 
-    ``stats`` are :class:`jswim.studies.ensemble.EnsembleStats`. Left: the mean (solid) and the
+    ``stats`` are `jswim.studies.ensemble.EnsembleStats`. Left: the mean (solid) and the
     outermost reported quantiles (5% and 95% by default, thin dashed); right: the width of that
     band, where the noise levels part (their means coincide: the noise has mean zero).
     """
@@ -123,7 +117,7 @@ def ensemble_figure(stats: Sequence[Any], title: str, direction: int = 1) -> Fig
                 ax_w.plot(steps, q[:, -1] - q[:, 0], color=c, lw=1.2, label=f"\u03b6 = {s.zeta:g}")
         ax.axhline(0, color="0.75", lw=0.6, zorder=0)
         ax.set_xlabel("step n")
-        ax.set_ylabel(_disp_label(direction))
+        ax.set_ylabel(displacement_label(direction))
         ax.set_title(
             "mean (solid)"
             + (
@@ -136,7 +130,7 @@ def ensemble_figure(stats: Sequence[Any], title: str, direction: int = 1) -> Fig
         ax.legend(loc="upper left", fontsize=6, ncol=2 if len(stats) > 4 else 1)
         if len(qs) >= 2:
             ax_w.set_xlabel("step n")
-            ax_w.set_ylabel(f"spread of {_disp_label(direction)}")
+            ax_w.set_ylabel(f"spread of {displacement_label(direction)}")
             ax_w.set_title(f"{100 * qs[-1]:g}% \u2212 {100 * qs[0]:g}% quantile", fontsize=7)
             ax_w.legend(loc="upper left", fontsize=6, ncol=2 if len(stats) > 4 else 1)
         else:

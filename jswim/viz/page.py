@@ -14,7 +14,7 @@ gzip-compressed JSON blob of its own, base64 in a ``<script type="text/plain">``
 by the browser (``DecompressionStream``) only when that run is opened. A prompt repeats most of
 the previous step's, so a transcript compresses ~10-30x.
 
-The page is written only from what the folder records (:mod:`jswim.viz.tracks`); a folder never
+The page is written only from what the folder records (`jswim.viz.tracks`); a folder never
 holds a secret (API keys stay in the environment), and nothing is added here. ``jswim report`` on
 an existing folder writes ``report.html`` and nothing else.
 """
@@ -130,7 +130,7 @@ def _round(a: Any, nd: int = 5) -> Any:
 
 
 def run_payload(t: Track) -> dict[str, Any]:
-    """What the page needs to draw and explain one run (see :mod:`jswim.viz.tracks`)."""
+    """What the page needs to draw and explain one run (see `jswim.viz.tracks`)."""
     steps = []
     for s in t.steps_log[: t.n_steps]:
         atts = []
@@ -368,7 +368,7 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
     """``(name, value)`` of the settings that apply to the folder's study, for the settings block.
 
     From the identity's options and the recorded grid: values left unset (``None``) and options
-    or grid axes the study has no use for (its :data:`jswim.studies.grids.SPECS` ``ignores``; a
+    or grid axes the study has no use for (its `jswim.studies.grids.SPECS` ``ignores``; a
     scene study's own axes only on that study) are left out; the full record stays one click away.
     """
     from jswim.studies.grids import (
@@ -423,7 +423,8 @@ def _settings_html(meta: Mapping[str, Any]) -> str:
     )
 
 
-def _asset(name: str) -> str:
+def asset_text(name: str) -> str:
+    """The text of one of the report's packaged assets (``report.css``, ``report.js``)."""
     return resources.files("jswim.viz").joinpath("assets", name).read_text(encoding="utf-8")
 
 
@@ -442,11 +443,11 @@ def report_html(
     folder : path
         A study folder, finished or not.
     figures : {"auto", "files", "draw", "none"}
-        Where the figures come from (see :func:`_figures`).
+        Where the figures come from (see `_figures`).
     beside : sequence of paths
         Other study folders whose baseline runs (Q-learning, random) are shown beside this
         folder's in the summary, the figures (then drawn) and the run list: a bench's model
-        part next to the bench's baselines of that part (:func:`beside_rows`).
+        part next to the bench's baselines of that part (`beside_rows`).
 
     Raises
     ------
@@ -522,7 +523,7 @@ def report_html(
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8"/>',
         '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
-        f"<title>{html.escape(title)}</title><style>{_asset('report.css')}</style></head><body>",
+        f"<title>{html.escape(title)}</title><style>{asset_text('report.css')}</style></head><body>",
         f"<header><h1>{html.escape(title)}</h1>",
         f'<p id="status" class="{"ok" if finished else "unfinished"}">{html.escape(status_text)}</p>',
         f'<p class="meta">folder <code>{html.escape(folder.name)}</code> · jswim {html.escape(str(meta.get("jswim_version", "?")))}'
@@ -545,14 +546,14 @@ def report_html(
         "</section>",
         f'<script type="application/json" id="report-data">{_script_json(data)}</script>',
         *blobs,
-        f"<script>{_asset('report.js')}</script>",
+        f"<script>{asset_text('report.js')}</script>",
         "</body></html>",
     ]
     return "\n".join(parts)
 
 
 def report(folder: str | Path, figures: str = "auto", out: str | Path | None = None) -> Path:
-    """``jswim.report(folder)``: write the folder's ``report.html`` (see :func:`write_report`)."""
+    """``jswim.report(folder)``: write the folder's ``report.html`` (see `write_report`)."""
     return write_report(folder, figures=figures, out=out)
 
 
@@ -567,7 +568,7 @@ def write_report(
     Raises
     ------
     ResultFolderError
-        Not a study folder; :class:`jswim.results.StudyFolderError` if the page cannot be written.
+        Not a study folder; [`jswim.results.StudyFolderError`][jswim.results.StudyFolderError] if the page cannot be written.
     """
     folder = Path(folder)
     text = report_html(folder, figures=figures, beside=beside)
@@ -580,7 +581,7 @@ def write_report(
 def beside_rows(folders: Sequence[Path]) -> list[RunRow]:
     """Baseline runs (Q-learning, random) of other study folders, to draw beside a model's.
 
-    Each row gains ``beside``, the folder it came from (in :attr:`RunRow.other`: no run column).
+    Each row gains ``beside``, the folder it came from (in `RunRow.other`: no run column).
     """
     out: list[RunRow] = []
     for f in folders:

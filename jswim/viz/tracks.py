@@ -11,10 +11,10 @@ the environment steps to; real-valued ROCs follow the same rule). Folders writte
 and ``orientation`` were recorded get them from a noiseless replay of the actions (exact for
 ``zeta = 0``; with noise only ``x`` is the recorded value), and the track says so (``replayed``).
 
-The body outline (:func:`outline`) is the swimmer's true shape to scale in units of ``a``: link
+The body outline (`outline`) is the swimmer's true shape to scale in units of ``a``: link
 end points for the link swimmers (links of length 1), sphere centres for the sphere swimmers
 (spheres of radius 1), placed so that its geometric centroid sits at the recorded ``(x, y)`` and
-its reference link (the middle one, :func:`jswim.env.start_orientation`) points along the recorded
+its reference link (the middle one, [`jswim.env.start_orientation`][jswim.env.state.start_orientation]) points along the recorded
 orientation.
 """
 
@@ -33,7 +33,7 @@ from jswim.swimmers.outline import outline as _outline
 from jswim.viz.worlds import Marker, World, per_swimmer, world_of
 from jswim.viz import worlds
 
-#: A step whose |dX| is below this is "stuck" (the prompt's rule, :mod:`jswim.prompt`).
+#: A step whose |dX| is below this is "stuck" (the prompt's rule, [`jswim.prompt`][jswim.prompt]).
 STUCK_TOL = 1e-6
 
 
@@ -47,7 +47,7 @@ def place(points: np.ndarray, x: Any, y: Any, theta: Any) -> np.ndarray:
 
 def start_theta(model: SwimmerModel, d0: np.ndarray) -> float:
     """Start orientation of the reference link for start shape ``d0`` (the rule of
-    :func:`jswim.env.start_orientation`: chains of more than three links start symmetric about x)."""
+    [`jswim.env.start_orientation`][jswim.env.state.start_orientation]: chains of more than three links start symmetric about x)."""
     if not model.planar or model.n_dof <= 2:
         return 0.0
     cum = np.concatenate([[0.0], np.cumsum(d0)])
@@ -68,7 +68,7 @@ class Track:
         Centroid (in ``a``) and orientation of the reference link (rad).
     dofs : ndarray (N + 1, n_dof)
     points : ndarray (N + 1, P, 2)
-        The body in the lab frame (see :func:`outline`).
+        The body in the lab frame (see `outline`).
     actions : list of (dof, roc), length N
     stuck, cleared, failed : ndarray (N,) bool
         No displacement; the LLM's history cleared after that step; the reply named no valid
@@ -106,7 +106,7 @@ class Track:
     replayed: bool = False
     row: dict[str, Any] = field(default_factory=dict, repr=False)
     steps_log: list[dict[str, Any]] = field(default_factory=list, repr=False)
-    #: The run's world (:mod:`jswim.viz.worlds`): swimmers, wall, obstacles, start poses.
+    #: The run's world (`jswim.viz.worlds`): swimmers, wall, obstacles, start poses.
     world: World = field(default_factory=World, repr=False)
     #: Every swimmer's body in the lab frame, (N + 1, S, P, 2); ``points`` is swimmer 1's.
     bodies: np.ndarray | None = field(default=None, repr=False)
@@ -152,14 +152,14 @@ class Track:
 
 def outline(model: SwimmerModel | Marker, dofs: np.ndarray) -> np.ndarray:
     """The body of ``model`` at ``dofs`` in its own frame, ``(..., P, 2)``
-    (:func:`jswim.swimmers.outline.outline`; a :class:`~jswim.viz.worlds.Marker`: one point)."""
+    ([`jswim.swimmers.outline.outline`][jswim.swimmers.outline.outline]; a `Marker`: one point)."""
     return model.outline(dofs) if isinstance(model, Marker) else _outline(model, dofs)
 
 
 def model_of(row: Mapping[str, Any], n_dof: int | None = None) -> SwimmerModel | Marker:
     """The swimmer model of a run row (the default geometry of its kind; ``n_dof`` picks the
     chain length of ``nlink``/``nsphere`` runs when their DOF count is known); a swimmer that is
-    none of the paper's (a registered world) gets a :class:`~jswim.viz.worlds.Marker`."""
+    none of the paper's (a registered world) gets a `Marker`."""
     kind = str(as_run_row(row).swimmer or "purcell")
     if kind.lower() not in SWIMMERS:
         return Marker(kind, n_dof or 2)
@@ -205,14 +205,14 @@ def _floats(seq: Any, n: int) -> np.ndarray | None:
 
 
 def track(row: Mapping[str, Any], transcript: Sequence[Mapping[str, Any]] | None = None) -> Track:
-    """The :class:`Track` of one run from its row and (LLM runs) its transcript records.
+    """The `Track` of one run from its row and (LLM runs) its transcript records.
 
     Parameters
     ----------
     row : mapping
-        A run record as in ``runs.jsonl`` (:func:`jswim.results.read_runs`).
+        A run record as in ``runs.jsonl`` ([`jswim.results.read_runs`][jswim.results.read_runs]).
     transcript : sequence of mapping, optional
-        The records of ``transcripts/RUN.jsonl`` (:func:`jswim.results.read_transcript`); its
+        The records of ``transcripts/RUN.jsonl`` ([`jswim.results.read_transcript`][jswim.results.read_transcript]); its
         ``meta`` record gives the start levels, its ``step`` records the DOF values and replies.
     """
     r0 = as_run_row(
@@ -390,7 +390,7 @@ def _replay_pose(
 
 def view_box(tracks: Sequence[Track], pad: float = 1.5) -> tuple[float, float, float, float]:
     """``(xmin, xmax, ymin, ymax)`` holding every body of every swimmer of ``tracks`` at every step,
-    the wall and the obstacles, with ``pad`` (:func:`jswim.viz.worlds.view_box`)."""
+    the wall and the obstacles, with ``pad`` (`jswim.viz.worlds.view_box`)."""
 
     return worlds.view_box(
         [t.bodies for t in tracks],

@@ -3,7 +3,7 @@
 A run row says which world it swam in: a scene row carries ``scene`` (the scene's JSON: medium,
 height, tilt, swimmers, separation, obstacles) and per-step, per-swimmer ``xs``, ``heights`` and
 ``tilts``; a row without one is the paper's bulk fluid, one swimmer starting at the origin.
-:func:`world_of` turns that record into a :class:`World`, so the report page, ``jswim animate`` and
+`world_of` turns that record into a `World`, so the report page, ``jswim animate`` and
 the figures that draw swimmers all draw the same things: every swimmer, the wall (the plane
 ``y = 0``, the scene's ``z = 0``), the obstacles, each swimmer's start pose at step 0 (for a wall
 or a pair run: the middle sphere at ``y = h``, swimmer ``k`` at ``x = k D``), and a view that holds
@@ -78,9 +78,9 @@ class World:
 
 @dataclass(frozen=True)
 class Marker:
-    """The stand-in model of a world with no outline of its own (:func:`jswim.register_world`'s):
+    """The stand-in model of a world with no outline of its own ([`jswim.register_world`][jswim.env.worlds.register_world]'s):
     each swimmer one sphere of radius 1 at its observed position, its DOFs as places in [0, 1];
-    the fields the pictures read of a :class:`jswim.swimmers.models.SwimmerModel`."""
+    the fields the pictures read of a [`jswim.swimmers.models.SwimmerModel`][jswim.swimmers.models.SwimmerModel]."""
 
     label: str
     n_dof: int
@@ -95,14 +95,14 @@ class Marker:
 
 def from_above(row: Mapping[str, Any]) -> bool:
     """Whether a scene row is drawn from above, in the swimmer's own plane: Purcell's swimmer above
-    a wall (issue 34) swims in a plane parallel to the wall, so its bends are seen only from above
+    a wall swims in a plane parallel to the wall, so its bends are seen only from above
     (its row's ``y`` and ``orientation`` are in that plane), with the wall beneath it."""
     r = as_run_row(row)
     return bool(r.scene) and str(r.swimmer or "") == "purcell"
 
 
 def world_of(row: Mapping[str, Any]) -> World:
-    """The :class:`World` a run row records (its ``scene``; none: the bulk fluid)."""
+    """The `World` a run row records (its ``scene``; none: the bulk fluid)."""
     raw = as_run_row(row).scene
     if not raw:
         return World()

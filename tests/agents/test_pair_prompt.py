@@ -1,4 +1,4 @@
-"""``--pair-prompt each`` (issue 19, a variant of the joint pair prompt): each swimmer of a pair its
+"""``--pair-prompt each`` (a variant of the joint pair prompt): each swimmer of a pair its
 own LLM conversation, the two taking turns. Its prompt text against hand-written literals, the two
 histories kept apart, the option's checks, and a pair study end to end against a fake server."""
 

@@ -1,4 +1,4 @@
-"""PPO on scenes (issue 19): jswim.agents.ppo.train_scene_batch and its world adapter."""
+"""PPO on scenes: jswim.agents.ppo.train_scene_batch and its world adapter."""
 
 from __future__ import annotations
 

@@ -64,7 +64,7 @@ def test_noise_study_in_a_log_keeps_every_zeta_and_number(server, tmp_path, caps
     ]
     assert len(rows) == 2 * 4 * 3
     for line in rows:  # every interval closes: no cell was cut
-        # X/a end: its bootstrap interval, or "[n<3]" where one or two runs give none (issue 33)
+        # X/a end: its bootstrap interval, or "[n<3]" where one or two runs give none
         assert re.search(r"\d\.\d\d \[\d\.\d\d,\d\.\d\d\]", line) and re.search(
             r"[+-]\d\.\d{3} (\[[+-]\d\.\d\d,[+-]\d\.\d\d\]|\[n<3\])", line
         )

@@ -260,7 +260,7 @@ def test_an_extra_field_jswim_does_not_set_is_sent_and_recorded(srv, tmp_path, c
     ] == {"top_k": 5}
 
 
-# -- messages that named the wrong cause (issue 32) ------------------------------------------------
+# -- messages that named the wrong cause --------------------------------------------------------
 
 
 def test_a_fifo_or_a_device_as_prompt_file_says_what_it_is(srv, tmp_path, capsys):
@@ -320,7 +320,7 @@ def test_non_utf8_bytes_are_named_by_their_option_never_shown_as_surrogates(argv
     assert "udcff" not in err
 
 
-# -- one check of each value, one message wherever it is given (issue 30) ---------------------------
+# -- one check of each value, one message wherever it is given -----------------------------------
 
 BENCH = ["bench", "--model", "base_url=http://127.0.0.1:9/v1,model=fake", "--dry-run"]
 

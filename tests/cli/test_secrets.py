@@ -240,7 +240,7 @@ def test_a_key_nobody_named_never_goes_to_another_host(tmp_path, monkeypatch, ca
         assert srv.n_requests == 0
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--api-key-env ''" in err[0]
-    from jswim.cli import default_key_env
+    from jswim.cli.options import default_key_env
 
     assert default_key_env("https://api.openai.com/v1") == "OPENAI_API_KEY"
     assert default_key_env("https://openrouter.ai/api/v1") == ""

@@ -1,4 +1,4 @@
-"""Continuous strokes (issue 18): any shape, any ROC in [-1, 1], exact against independent numbers.
+"""Continuous strokes: any shape, any ROC in [-1, 1], exact against independent numbers.
 
 Reference values: the square gaits' displacements per cycle (0.19124724 for Purcell at
 d_max = pi/3, README and the paper's Fig. 2; NG's closed form 0.15626494 for arms 6..10), a

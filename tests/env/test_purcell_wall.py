@@ -1,4 +1,4 @@
-"""Purcell's swimmer above a wall through the worlds (issue 34): make, scene_rollout, dtypes, null check.
+"""Purcell's swimmer above a wall through the worlds: make, scene_rollout, dtypes, null check.
 
 Independent numbers: the square stroke's displacement per cycle from the test-side RK4 of
 tests/physics/test_wall_rft.py (at the ratio of the wall's coefficients), and the bulk world's

@@ -285,7 +285,7 @@ def test_float32_pair_in_the_free_fluid(float32):
 
 @pytest.mark.slow
 def test_float32_pair_separation_does_not_drift(float32):
-    # issue 34: positions held as float32 pairs (two-sum). A pair at D = 30 a stroking together
+    # Positions held as float32 pairs (two-sum). A pair at D = 30 a stroking together
     # (joint square strokes) for 100 cycles keeps its separation within 1e-5 a of float64; plain
     # float32 positions were off by -8.8e-5 a (swimmer 2's x rounded alike every cycle), and the
     # true drift is zero (README's mirror-and-time-reversal argument).
@@ -333,7 +333,7 @@ def test_float32_one_swimmer_near_a_wall(float32):
     assert abs(float(st.tilt[0]) - ref.tilt[-1, 0]) < 2e-6
 
 
-# -- adaptive Picard sweeps (issue 19 speed) -----------------------------------------------------
+# -- adaptive Picard sweeps (speed) ------------------------------------------------------------
 
 NEAR_WALL = Scene(medium="wall", height=3.5)
 

@@ -225,9 +225,7 @@ def test_spaces_sizes_and_make_errors():
     for bad in ({"medium": "sea"}, 3):
         with pytest.raises(ConfigError):
             jswim.make("ng", bad)
-    with pytest.raises(
-        ConfigError
-    ):  # Purcell above a wall is built (issue 34); in "free" it is not
+    with pytest.raises(ConfigError):  # Purcell above a wall is built; in "free" it is not
         jswim.make("purcell", Scene(medium="free"))
     with pytest.raises(ConfigError):
         jswim.make("purcell", dtype="float64")
@@ -272,7 +270,7 @@ def test_old_names_import_from_their_old_places():
             "encode_scene_action",
         ],
         "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make", "rollout_batch"],
-        # moved by issue 30's import clean-up, still importable where they were
+        # also read from here by the studies and bench layers
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
         "jswim.studies.scenes": [
             "wall_scene",
@@ -289,28 +287,6 @@ def test_old_names_import_from_their_old_places():
                 module,
                 name,
             )
-
-
-def test_old_paths_are_the_moved_modules():
-    """Issue 30 moved the loose top-level modules into packages; the old paths still import the
-    same module objects (so monkeypatching either path patches both)."""
-    pairs = {
-        "gait": "judging.gait",
-        "lattice": "judging.lattice",
-        "shape_judge": "judging.shape_judge",
-        "stats": "judging.stats",
-        "folderlock": "_io.folderlock",
-        "jsonl": "_io.jsonl",
-        "permissions": "_io.permissions",
-        "interrupts": "_io.interrupts",
-        "plots": "figures.plots",
-        "scene_plots": "figures.scenes",
-        "figure_style": "figures.style",
-    }
-    for old, new in pairs.items():
-        assert importlib.import_module(f"jswim.{old}") is importlib.import_module(f"jswim.{new}")
-    from jswim.gait import judge  # noqa: F401
-    from jswim.plots import save  # noqa: F401
 
 
 @pytest.mark.slow

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from jswim.actions import n_actions
 from jswim.judging import lattice
 from jswim.env import make_params, step_table
 from jswim.judging.gait import judge
@@ -38,7 +39,7 @@ def test_codes_round_trip_and_k1_codes_are_the_environment_codes():
     assert [lattice.encode(d, r, 1) for d in (1, 2) for r in (-1, 0, 1)] == [
         encode_action(d, r) for d in (1, 2) for r in (-1, 0, 1)
     ]
-    assert lattice.n_actions(2, 5) == 22
+    assert n_actions(2, 5) == 22
 
 
 @pytest.mark.parametrize("name", ["purcell", "ng"])

@@ -511,7 +511,7 @@ def test_usage_totals_bill_only_what_reached_the_server():
     assert (t.prompt_tokens, t.completion_tokens, t.cost_usd) == (100, 5, 0.25)
 
 
-# -- redirects (issue 32) -------------------------------------------------------------------------
+# -- redirects -----------------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize("status", [307, 308])

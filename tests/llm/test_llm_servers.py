@@ -495,7 +495,7 @@ def test_preflight_says_slow_when_the_server_does_not_answer():
     assert f"http://127.0.0.1:{port}/v1/models" in str(err.value)
 
 
-# -- server families, validation errors, sampling (issue 23) --------------------------------------
+# -- server families, validation errors, sampling ----------------------------------------------
 
 
 def test_essential_message_drops_tracebacks_and_paths():

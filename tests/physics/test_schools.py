@@ -1,4 +1,4 @@
-"""Schools of N >= 3 NG swimmers (issue 34): an independent collinear solve, symmetries, the
+"""Schools of N >= 3 NG swimmers: an independent collinear solve, symmetries, the
 far-spacing limit, pairwise superposition and the force-free sums (float64).
 
 Every stroke here is the square stroke done by every swimmer at once and in phase

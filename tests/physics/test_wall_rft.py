@@ -1,4 +1,4 @@
-"""Purcell's swimmer above a wall (issue 34): the wall-corrected drag against independent numbers.
+"""Purcell's swimmer above a wall: the wall-corrected drag against independent numbers.
 
 - The closed-form link averages of Blake's image against a quadrature of Blake's tensor written
   here from Blake (1971) (itself checked against :mod:`jswim.swimmers.mobility`'s Blake blocks).

@@ -377,9 +377,8 @@ def test_template_check_refuses_what_cannot_work(text, words):
 
 
 def test_template_check_accepts_every_placeholder_the_prompt_fills():
-    from jswim.prompt import _placeholders
+    from jswim.prompt import PROMPT_FIELDS as names, RECORD_FIELDS as record
 
-    names, record = _placeholders()
     layout = " ".join("{" + n + "}" for n in names)
     assert PromptTemplate.from_text(layout).check().layout == layout
     assert PromptTemplate(record=" ".join("{" + n + "}" for n in record)).check()
@@ -388,3 +387,19 @@ def test_template_check_accepts_every_placeholder_the_prompt_fills():
     assert default.check() is default
     assert default.layout == "{S1} {S2}\n{S3}\n{S4} {S5}"
     assert default.record.startswith("{step}: ({dofs_before}) {action} -> ({dofs_after})")
+
+
+def test_the_declared_placeholders_are_the_ones_rendering_fills():
+    # PromptTemplate.check reads PROMPT_FIELDS and RECORD_FIELDS; rendering fills its own dicts.
+    from jswim.prompt import PROMPT_FIELDS, RECORD_FIELDS, SENTENCES, allowed_actions
+    from jswim.prompt.records import _record_values
+    from jswim.prompt.render import _prompt_values
+
+    sw = SwimmerText(2, -1.0, 1.0, 3, (-1, 0, 1))
+    cfg = PromptConfig()
+    rec = HistoryRecord(1, (1.0, 1.0), (-1.0, 1.0), Action(1, -1), 0.0, 0.0)
+    values = _prompt_values(sw, cfg, 1, [], allowed_actions(sw), (1.0, 1.0), 0.0, "")
+    assert (*values, *SENTENCES) == PROMPT_FIELDS
+    assert tuple(_record_values(rec, sw, cfg)) == RECORD_FIELDS
+    school = HistoryRecord(1, (1.0,), (1.0,), Action(1, 1), 0.0, 0.0, xs_before=(0.0,) * 3)
+    assert set(RECORD_FIELDS) < set(_record_values(school, sw, cfg))

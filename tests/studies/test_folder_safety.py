@@ -353,7 +353,7 @@ def test_an_interrupt_right_after_running_was_written_marks_the_folder_interrupt
 def test_sigterm_at_start_up_in_the_llm_phase_and_in_the_final_writes_never_leaves_running(
     tmp_path,
 ):
-    # The stress of issue 22 in small: a session killed at each phase; each resume sends only the
+    # A stress test in small: a session killed at each phase; each resume sends only the
     # calls that had no answer (answered by the server but not journaled when the process died).
     out = tmp_path / "F"
     with FakeServer(reply=hash_reply, latency=0.05) as srv:

@@ -462,7 +462,7 @@ def test_reasoning_tokens_are_billed_at_the_completion_price(tmp_path, capsys):
     assert sum(r["cost_usd"] for r in rows) == pytest.approx(expected, rel=1e-9)
 
 
-# -- a cap that cannot lapse: calls the price rule would not price (issue 32) -----------------------
+# -- a cap that cannot lapse: calls the price rule would not price -------------------------------
 
 from tests.fakeserver import GATEWAY_MODELS, as_remote  # noqa: E402
 

@@ -1,4 +1,4 @@
-"""``jswim study wall --swimmer purcell`` (issue 34): its cells, rows, figure and pictures."""
+"""``jswim study wall --swimmer purcell``: its cells, rows, figure and pictures."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ BULK_CYCLE = 0.19124724  # DESIGN.md
 def test_purcell_cells_run_every_agent_at_each_height():
     plans = build("wall", StudyOptions(swimmers=("purcell",), heights=(1.5, 10.0), q_runs=2))
     agents = {(p.agent, p.group) for p in plans}
-    # the bulk reference stroke, and at each height every agent NG's wall cells run (issue 30)
+    # the bulk reference stroke, and at each height every agent NG's wall cells run
     assert agents == {("stroke", "bulk")} | {
         (a, f"h={h}")
         for h in ("1.5", "10")

@@ -351,7 +351,7 @@ def test_tables_are_typed_as_pyarrow_s_own_conversion_types_them(rows):
 
 def test_writing_a_study_s_tables_does_not_import_pandas(tmp_path):
     # pyarrow imports pandas (~0.4 s) on any conversion from Python objects; the session's end
-    # must not pay it (issue 22's start-up target). A fresh interpreter, so nothing is loaded yet.
+    # must not pay it (start-up stays light). A fresh interpreter, so nothing is loaded yet.
     import subprocess
     import sys
 

@@ -1,4 +1,4 @@
-"""The package reads run rows as typed :class:`jswim.results.RunRow` attributes (issue 30).
+"""The package reads run rows as typed :class:`jswim.results.RunRow` attributes.
 
 Two guards: an AST scan that fails when a reader module goes back to reading a run row by string
 key (``r["final_x"]``, ``row.get("cost_usd")``), and the readers (figures, report page, show,

@@ -1,4 +1,4 @@
-"""The typed run row (issue 30): one builder for the bulk and the scene rows, the LLM fields merged
+"""The typed run row: one builder for the bulk and the scene rows, the LLM fields merged
 in one step, today's columns in today's order, and rows that round-trip through their dict."""
 
 from __future__ import annotations

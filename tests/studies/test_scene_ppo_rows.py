@@ -1,4 +1,4 @@
-"""The continuous RL baseline (PPO) as rows of ``jswim study wall`` / ``pair`` (issue 19): its rows
+"""The continuous RL baseline (PPO) as rows of ``jswim study wall`` / ``pair``: its rows
 with their fate and success columns, its metadata line, resume without retraining, and the one-line
 refusal of an option the scene rows cannot honour."""
 

@@ -1,4 +1,4 @@
-"""Agents and studies on scenes (issue 19, part B): the prompt's scene records, the parser on joint
+"""Agents and studies on scenes: the prompt's scene records, the parser on joint
 DOFs, the fate rule, the joint-state Q-learner, the strokes, and ``jswim study wall`` / ``pair``
 end to end against a fake server (folder, figures, show, resume)."""
 

@@ -1,9 +1,9 @@
 """Summary cells at small n: no quartiles from fewer than 4 runs that learned, no bootstrap interval
-from fewer than 3 runs (issue 33's cosmetic items, as a referee reads the table)."""
+from fewer than 3 runs (as a referee reads the table)."""
 
 from __future__ import annotations
 
-from jswim.bench.leaderboard import _steps
+from jswim.bench.leaderboard import steps_text
 from jswim.overview import SUMMARY_NOTE, _learn_cell, _x_cell
 
 
@@ -27,7 +27,7 @@ def test_steps_to_learn_print_the_median_alone_below_four_runs():
     assert _learn_cell(cell(10, 4, 17, 12, 30)) == "12/17/30"
     assert _learn_cell(cell(10, 0)) == "-"
     row = {"learned": 2, "n": 10, "steps_median": 1.5, "steps_q25": 1.25, "steps_q75": 1.75}
-    assert _steps(row) == "1.5 (2 of 10)"
+    assert steps_text(row) == "1.5 (2 of 10)"
 
 
 def test_bootstrap_interval_is_not_printed_for_one_or_two_runs_and_the_note_says_so():

@@ -13,6 +13,7 @@ from matplotlib.container import ErrorbarContainer
 from PIL import Image
 
 from jswim.figures import plots
+from jswim.results import unfinished_note
 
 SPEED = {"llm": 0.04, "qlearning": 0.02, "random": 0.0}
 
@@ -229,11 +230,9 @@ def test_competence_panels_per_direction():
 
 
 def test_unfinished_note():
-    assert plots.unfinished_note("complete", 10, 10) is None
-    assert plots.unfinished_note("complete", 10, None) is None
-    assert (
-        plots.unfinished_note("running", 4, 10) == "UNFINISHED STUDY: 4 of 10 runs done (running)"
-    )
+    assert unfinished_note("complete", 10, 10) is None
+    assert unfinished_note("complete", 10, None) is None
+    assert unfinished_note("running", 4, 10) == "UNFINISHED STUDY: 4 of 10 runs done (running)"
 
 
 def test_temperature_figure_shows_p_steps_to_learn_with_iqr_and_k_of_n():

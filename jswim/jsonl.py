@@ -1,7 +1,0 @@
-"""Old path of :mod:`jswim._io.jsonl` (moved in issue 30), kept so existing imports work."""
-
-import sys
-
-from jswim._io import jsonl as _moved
-
-sys.modules[__name__] = _moved

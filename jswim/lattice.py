@@ -1,7 +1,0 @@
-"""Old path of :mod:`jswim.judging.lattice` (moved in issue 30), kept so existing imports work."""
-
-import sys
-
-from jswim.judging import lattice as _moved
-
-sys.modules[__name__] = _moved
