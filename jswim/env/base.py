@@ -147,6 +147,12 @@ class Environment:
     def n_dof(self) -> int:
         raise NotImplementedError
 
+    def _repr_html_(self) -> str:
+        """The world's swimmers, DOFs and actions, and a small picture of its start."""
+        from jswim import reprs  # lazy: drawing loads matplotlib
+
+        return reprs.world_html(self)
+
     @property
     def n_swimmers(self) -> int:
         return 1

@@ -10,11 +10,14 @@ it, calls in flight are journaled as unanswered, and the call returns within mom
 from __future__ import annotations
 
 import asyncio
+import contextvars
+import sys
 import threading
 import time
 from typing import Any, Generic, TypeVar
 from collections.abc import Coroutine
 
+from jswim import console
 from jswim._io import interrupts
 
 T = TypeVar("T")
@@ -69,7 +72,13 @@ class _LoopThread(Generic[T]):
         self._started = threading.Event()
         self._value: T | None = None
         self._error: BaseException | None = None
-        self._thread = threading.Thread(target=self._run, name="jswim-loop", daemon=True)
+        # The worker runs in a copy of the caller's context: a kernel's output routing and the
+        # user's call site (console.CALL_SITE, where a warning from the worker points) go along.
+        context = contextvars.copy_context()
+        context.run(console.CALL_SITE.set, console.user_call_site(sys._getframe(2)))
+        self._thread = threading.Thread(
+            target=context.run, args=(self._run,), name="jswim-loop", daemon=True
+        )
 
     def _run(self) -> None:
         async def main() -> T:

@@ -26,16 +26,18 @@ import hashlib
 import json
 import platform
 import time
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from collections.abc import Sequence
 
 import jax
 import numpy as np
 
-from jswim import __version__, env
+from jswim import __version__, console, env, reprs
+
+if TYPE_CHECKING:
+    import pandas as pd
 from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS
@@ -146,7 +148,7 @@ class StudyResult:
 
     folder: Path
     rows: list[dict[str, Any]]
-    summary: list[dict[str, Any]]
+    summary: pd.DataFrame  # one row per (agent, setting); a list of dicts is turned into one
     figures: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
     # This session's LLM calls, billed calls, wall s, calls/s, cost (empty when it ran no LLM run: a
@@ -165,6 +167,15 @@ class StudyResult:
     notes: list[str] = field(
         default_factory=list
     )  # what was sent for sampling, decoding fallbacks, pricing
+
+    def __post_init__(self) -> None:
+        import pandas as pd  # the summary is a table: one row per (agent, setting)
+
+        if not isinstance(self.summary, pd.DataFrame):
+            self.summary = pd.DataFrame(list(self.summary))
+
+    __repr__ = reprs.study_result_text
+    _repr_html_ = reprs.study_result_html
 
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
@@ -250,7 +261,7 @@ def run_study(
     options: StudyOptions = StudyOptions(),
     backend: Backend | None = Backend(),
     out: str | Path | None = None,
-    progress: ProgressFn | None = None,
+    progress: ProgressFn | bool | None = None,
     figures: bool = True,
     max_cost: float | None = None,
 ) -> StudyResult:
@@ -266,7 +277,10 @@ def run_study(
         LLM server (default: the embedded model); needed only when the study has LLM runs.
     out : path, optional
         Study folder (default :func:`default_folder`). Finished runs found there are kept.
-    progress : callable, optional
+    progress : bool or callable, optional
+        ``None`` (default): one updating display in a Jupyter notebook, a bar on a terminal,
+        nothing elsewhere; ``True``: also dated lines on stderr where there is no terminal;
+        ``False``: nothing ([`study_progress`][jswim.console.study_progress]). A callable
         ``progress(phase, done, total, info)`` (:data:`ProgressFn`): after each finished batch of
         baseline runs (runs done of all), and after each finished LLM run (phase ``"llm"``) and
         every 0.5 s while LLM requests are out (phase ``"llm-live"``), counting LLM steps done of
@@ -340,7 +354,7 @@ def run_study(
     )
     try:
         for note in store.repairs:
-            warnings.warn(FolderRepaired(f"{folder}: {note}"), stacklevel=2)
+            console.warn_user(FolderRepaired(f"{folder}: {note}"))
         store.meta.pop("prompt_template", None)  # folders before prompt_template.json had it here
         tpl_path = folder / PROMPT_FILE
         if (
@@ -348,9 +362,10 @@ def run_study(
         ):  # the identity holds its hash: a resumed folder has this very template
             with writing(folder):
                 write_json(tpl_path, dataclasses.asdict(template or PromptTemplate()))
-        return _run_in(
-            store, study, plans, options, backend, folder, template, progress, figures, t0, max_cost
-        )
+        with console.study_progress(progress) as tick:
+            return _run_in(
+                store, study, plans, options, backend, folder, template, tick, figures, t0, max_cost
+            )
     except KeyboardInterrupt:
         _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
         raise
@@ -543,9 +558,8 @@ def _write_report(folder: Path, figures: bool) -> None:
     try:
         write_report(folder, figures="files" if figures else "none")
     except Exception as exc:
-        warnings.warn(
-            f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries",
-            stacklevel=2,
+        console.warn_user(
+            f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries"
         )
 
 
