@@ -5,19 +5,16 @@ narrower than the table its columns wrap into blocks that repeat the label colum
 (a pipe, ``> log.txt``, CI) it is as wide as its widest cells. Progress is a rich bar on a
 terminal and, elsewhere, one dated line per update at most every ``interval`` seconds instead of
 a redrawn bar; in a Jupyter notebook it is one display, updated in place
-(:class:`NotebookProgress`). :func:`warn_user` points a warning at the user's own line.
+(:class:`NotebookProgress`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import html
-import os
 import shutil
 import sys
 import time
-import warnings
-from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import IO, Any
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -372,60 +369,6 @@ def study_progress(progress: ProgressFn | bool | None) -> Iterator[ProgressFn | 
 
 def _last_state(bar: Progress | NotebookProgress) -> tuple[str, int, int, str, str]:
     return bar._state
-
-
-#: Where the user's call into jswim is, for warnings raised where the stack does not reach it
-#: (the worker thread of :func:`jswim.llm.sync.run_sync`): ``(filename, lineno, module globals)``.
-CALL_SITE: ContextVar[tuple[str, int, dict[str, Any]] | None] = ContextVar(
-    "jswim_call_site", default=None
-)
-_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
-_STDLIB = os.path.dirname(os.path.abspath(contextlib.__file__)) + os.sep
-#: Frames that are neither jswim's nor the user's: the event loop's and the context managers'.
-_PLUMBING = tuple(
-    _STDLIB + name
-    for name in ("asyncio" + os.sep, "concurrent" + os.sep, "contextlib.py", "warnings.py")
-)
-_THREAD_BOTTOM = _STDLIB + "threading.py"
-
-
-def user_call_site(frame: Any = None) -> tuple[str, int, dict[str, Any]] | None:
-    """``(filename, lineno, globals)`` of the innermost frame outside jswim and the event loop's
-    plumbing; ``None`` in a worker thread, whose stack ends before any user code."""
-    f = frame or sys._getframe(1)
-    while f is not None:
-        name = f.f_code.co_filename
-        path = name if name.startswith("<") else os.path.abspath(name)
-        if path == _THREAD_BOTTOM:
-            return None
-        if not path.startswith(_PACKAGE_DIR) and not path.startswith(_PLUMBING):
-            return name, f.f_lineno, f.f_globals
-        f = f.f_back
-    return None
-
-
-def warn_user(message: str | Warning, category: type[Warning] | None = None) -> None:
-    """``warnings.warn`` pointed at the user's line that called into jswim, not at jswim's own.
-
-    From a worker thread (whose stack never reaches the user's code) the call site recorded by
-    :func:`jswim.llm.sync.run_sync` is used.
-    """
-    if category is None:
-        category = type(message) if isinstance(message, Warning) else UserWarning
-    site = user_call_site(sys._getframe(1)) or CALL_SITE.get()
-    if site is None:
-        warnings.warn(message, category, stacklevel=2)
-        return
-    filename, lineno, module_globals = site
-    warnings.warn_explicit(
-        message,
-        category,
-        filename,
-        lineno,
-        module=module_globals.get("__name__", "__main__"),
-        registry=module_globals.setdefault("__warningregistry__", {}),
-        module_globals=module_globals,
-    )
 
 
 #: Why a call is not priced, in the words every cost line uses (:func:`cost_text`).

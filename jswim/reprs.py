@@ -256,39 +256,23 @@ def animation_text(anim: Any) -> str:
     )
 
 
-def world_text(env: Any) -> str:
-    """A world: its class, swimmers, DOFs and actions (its dataclass fields stay in ``repr``)."""
-    return (
-        f"{type(env).__name__}: {env.n_swimmers} swimmer(s), {env.n_dof} DOFs "
-        f"({', '.join(env.dof_names)}), K = {env.roc_levels} ROC levels, {env.n_actions} actions"
-    )
-
-
-def world_html(env: Any) -> str:
-    """A world's facts and a small picture of its start, where one can be drawn."""
+def world_html(env: Any, body: Any = None) -> str:
+    """A world's facts and, given its swimmer's ``body`` outline ``(P, 2)``, a small picture."""
     facts = {
         "swimmers": env.n_swimmers,
         "DOFs": ", ".join(env.dof_names),
         "ROC levels K": env.roc_levels,
         "actions": env.n_actions,
     }
-    return facts_html(world_text(env).split(":")[0], facts) + _world_picture(env)
+    return facts_html(type(env).__name__, facts) + (_body_picture(body) if body is not None else "")
 
 
-def _world_picture(env: Any) -> str:
-    """The world's start, drawn as the study pages draw a run's step 0 (none when it fails)."""
-    try:
-        import numpy as np
-
-        from jswim.viz.tracks import outline
-
-        model = env.model
-        d0 = np.full(model.n_dof, model.lo + 0.8 * (model.hi - model.lo))  # a bent, typical shape
-        pts = np.asarray(outline(model, d0))
-    except Exception:  # a world without a swimmer model (a registered one): facts only
-        return ""
+def _body_picture(body: Any) -> str:
+    """A swimmer's outline as a small line drawing (spheres and links as dots and lines)."""
     import matplotlib.pyplot as plt
+    import numpy as np
 
+    pts = np.asarray(body, dtype=float)
     fig, ax = plt.subplots(figsize=(3, 1.2))
     ax.plot(pts[:, 0], pts[:, 1], "o-", lw=2, ms=4)
     ax.set_aspect("equal")

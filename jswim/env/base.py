@@ -151,7 +151,13 @@ class Environment:
         """The world's swimmers, DOFs and actions, and a small picture of its start."""
         from jswim import reprs  # lazy: drawing loads matplotlib
 
-        return reprs.world_html(self)
+        model = getattr(self, "model", None)  # the paper's swimmers: draw a typical bent shape
+        body = None
+        if model is not None:
+            from jswim.swimmers.outline import outline  # lazy: only to draw
+
+            body = outline(model, jnp.full(model.n_dof, model.lo + 0.8 * (model.hi - model.lo)))
+        return reprs.world_html(self, body)
 
     @property
     def n_swimmers(self) -> int:

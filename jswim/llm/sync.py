@@ -17,8 +17,7 @@ import time
 from typing import Any, Generic, TypeVar
 from collections.abc import Coroutine
 
-from jswim import console
-from jswim._io import interrupts
+from jswim._io import callsite, interrupts
 
 T = TypeVar("T")
 
@@ -73,9 +72,9 @@ class _LoopThread(Generic[T]):
         self._value: T | None = None
         self._error: BaseException | None = None
         # The worker runs in a copy of the caller's context: a kernel's output routing and the
-        # user's call site (console.CALL_SITE, where a warning from the worker points) go along.
+        # user's call site (callsite.CALL_SITE, where a warning from the worker points) go along.
         context = contextvars.copy_context()
-        context.run(console.CALL_SITE.set, console.user_call_site(sys._getframe(2)))
+        context.run(callsite.CALL_SITE.set, callsite.user_call_site(sys._getframe(2)))
         self._thread = threading.Thread(
             target=context.run, args=(self._run,), name="jswim-loop", daemon=True
         )

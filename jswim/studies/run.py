@@ -35,6 +35,7 @@ import jax
 import numpy as np
 
 from jswim import __version__, console, env, reprs
+from jswim._io import callsite
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -354,7 +355,7 @@ def run_study(
     )
     try:
         for note in store.repairs:
-            console.warn_user(FolderRepaired(f"{folder}: {note}"))
+            callsite.warn_user(FolderRepaired(f"{folder}: {note}"))
         store.meta.pop("prompt_template", None)  # folders before prompt_template.json had it here
         tpl_path = folder / PROMPT_FILE
         if (
@@ -558,7 +559,7 @@ def _write_report(folder: Path, figures: bool) -> None:
     try:
         write_report(folder, figures="files" if figures else "none")
     except Exception as exc:
-        console.warn_user(
+        callsite.warn_user(
             f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries"
         )
 

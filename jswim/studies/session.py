@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from jswim.console import warn_user
+from jswim._io.callsite import warn_user
 from jswim.errors import ConfigError, JswimWarning
 from jswim.llm.backend import Backend
 from jswim.llm.client import LLMClient

@@ -28,8 +28,9 @@ LAYERS = [
             "jswim.jsonl",
             "jswim.permissions",
             "jswim.interrupts",
+            "jswim.reprs",
         ],
-    ),  # the last four: old paths
+    ),  # jswim.folderlock .. jswim.interrupts: old paths
     ("physics", ["jswim.swimmers"]),
     (
         "environment",
