@@ -42,7 +42,7 @@ if TYPE_CHECKING:
 from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS
-from jswim.errors import ConfigError, JswimError, JswimWarning
+from jswim.errors import ConfigError, JswimError, JswimWarning, LocalModelError
 from jswim.judging.gait import Criterion
 from jswim.llm.backend import Backend
 from jswim.llm.credentials import scrub
@@ -310,6 +310,8 @@ def run_study(
             f"these settings give the {study} study no runs at all (--runs 0 and --q-runs 0?); "
             "nothing to do"
         )
+    if backend is not None and backend.local and any(p.agent == "llm" for p in plans):
+        _check_embedded_model(study, backend)  # before the baselines, not after them
     ident = identity(study, options, backend)
     if study == "competence":  # the variants' switches define the runs too
         ident["variants"] = {v: VARIANTS[v] for v in options.variants or COMPETENCE_VARIANTS}
@@ -393,6 +395,24 @@ def run_study(
         ) from None
     finally:
         store.close()  # the folder's lock: the next session may start
+
+
+def _check_embedded_model(study: str, backend: Backend) -> None:
+    """Refuse an LLM study on the embedded model when that model cannot start, naming the ways on.
+
+    Raises
+    ------
+    LocalModelError
+        The model's package or its native library is missing; nothing was run or written.
+    """
+    try:
+        backend.server().check()
+    except LocalModelError as exc:
+        raise LocalModelError(
+            f"{exc}. The {study} study's LLM runs need a model: install it, or point the study at "
+            "a server (Backend(base_url=...); `jswim serve reference` starts a rule-based one on "
+            "this machine), or run the baselines only (StudyOptions(runs=0)); nothing was run"
+        ) from None
 
 
 def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
