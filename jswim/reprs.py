@@ -191,7 +191,8 @@ def study_text(study: Any) -> str:
     planned = study.metadata.get("n_planned")
     of = f" of {planned}" if planned else ""
     return lines(
-        f"Study {study.name}: {study.status}; {len(runs)}{of} runs ({by_agent})",
+        f"Study {study.name}: {study.status}; {len(runs)}{of} runs"
+        + (f" ({by_agent})" if by_agent else ""),
         f"trajectories: {len(study.trajectories)} steps; .runs, .trajectories, .calls, "
         ".transcript(run_id)",
         f"folder: {study.folder}",
