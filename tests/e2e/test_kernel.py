@@ -142,3 +142,26 @@ def _table(folder: Path) -> list[dict[str, Any]]:
     st = jswim.load(folder)
     runs = st.runs.sort_values("run_id").reset_index(drop=True)
     return runs[["run_id", "group", "success", "signed_final_x", "failed_steps"]].to_dict("records")
+
+
+def _ipython_blocks() -> list[tuple[str, str]]:
+    """Each ``ipython`` block of the docs pages (notebook cells: top-level ``await``)."""
+    import re
+
+    return [
+        (page.name, block)
+        for page in sorted((ROOT / "docs").glob("*.md"))
+        for block in re.findall(r"```ipython\n(.*?)```", page.read_text(), flags=re.S)
+    ]
+
+
+@pytest.mark.slow
+def test_the_docs_notebook_cells_run_in_a_kernel(kernel):
+    _, kc = kernel
+    blocks = _ipython_blocks()
+    assert blocks
+    for page, code in blocks:
+        got = _run(kc, code)
+        assert got["reply"]["status"] == "ok", (page, got["reply"])
+        shown = _of(got, "execute_result")
+        assert not shown or len(shown[0]["data"]["text/plain"]) < 400  # a short repr
