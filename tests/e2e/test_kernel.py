@@ -165,3 +165,40 @@ def test_the_docs_notebook_cells_run_in_a_kernel(kernel):
         assert got["reply"]["status"] == "ok", (page, got["reply"])
         shown = _of(got, "execute_result")
         assert not shown or len(shown[0]["data"]["text/plain"]) < 400  # a short repr
+
+
+@pytest.mark.slow
+def test_stop_in_a_kernel_stops_run_batch(kernel):
+    km, kc = kernel
+    with FakeServer(reply=hash_reply, latency=LATENCY_S) as srv:
+        setup = _run(
+            kc,
+            "from jswim.agents.llm import LLMAgentConfig, LLMRunSpec, run_batch\n"
+            "from jswim.studies import Backend\n"
+            f"settings = Backend(base_url={srv.url!r}, model='fake', "
+            "api_key_env='JSWIM_TEST_NO_KEY').client_settings()\n"
+            "specs = [LLMRunSpec(swimmer='ng', n_steps=40, seed=k) for k in range(8)]\n",
+        )
+        assert setup["reply"]["status"] == "ok", setup["reply"]
+        pressed: dict[str, float] = {}
+
+        def press_stop_mid_batch() -> None:
+            deadline = time.monotonic() + 90
+            while srv.n_requests < 16 and time.monotonic() < deadline:
+                time.sleep(0.01)
+            time.sleep(0.1)
+            pressed["n"], pressed["t"] = srv.n_requests, time.monotonic()
+            km.interrupt_kernel()
+
+        stopped = _run(
+            kc, "runs = run_batch(specs, settings, LLMAgentConfig())", on_sent=press_stop_mid_batch
+        )
+        lag = stopped["idle_at"] - pressed["t"]
+        n_back = srv.settle()
+        time.sleep(3 * LATENCY_S)
+        print(
+            f"run_batch Stop: back {lag:.2f} s after; requests {pressed['n']} at Stop, {srv.n_requests} after"
+        )
+        assert stopped["reply"]["ename"] == "KeyboardInterrupt"
+        assert lag < 3.0
+        assert srv.n_requests == n_back == pressed["n"]  # of 8 x 40 = 320
