@@ -202,8 +202,8 @@ def study_text(study: Any) -> str:
 def study_html(study: Any) -> str:
     """The study's summary (from its metadata) as a table and its figures as thumbnails."""
     head = html.escape(study_text(study).splitlines()[0])
-    summary = study.metadata.get("summary") or []
-    table = frame_html(summary) if summary else frame_html(study.runs)
+    groups = (study.metadata.get("summary") or {}).get("groups") or []  # one row per setting
+    table = frame_html(groups) if groups else frame_html(study.runs)
     figures = sorted(Path(study.folder, "figures").glob("*.png"))
     return f"<div><b>{head}</b>{table}{thumbnails_html(figures)}</div>"
 

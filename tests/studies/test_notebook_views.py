@@ -138,3 +138,26 @@ def test_world_html_draws_the_paper_swimmer_and_only_facts_otherwise():
     page = env._repr_html_()
     assert "<img" in page and "D1, D2" in page
     assert "<img" not in reprs.world_html(env)  # no outline given: facts only
+
+
+def test_a_loaded_study_shows_its_settings_table(tmp_path):
+    import json
+
+    import jswim
+
+    groups = [
+        {"agent": "llm", "group": "zeta=0", "n": 2},
+        {"agent": "llm", "group": "zeta=1", "n": 2},
+    ]
+    meta = {
+        "study": "noise",
+        "status": "interrupted",
+        "n_planned": 8,
+        "summary": {"groups": groups},
+    }
+    (tmp_path / "metadata.json").write_text(json.dumps(meta))
+    (tmp_path / "runs.jsonl").write_text("")
+    study = jswim.load(tmp_path)
+    assert repr(study).splitlines()[0] == "Study noise: interrupted; 0 of 8 runs"
+    page = study._repr_html_()
+    assert page.count("</tr>") == 1 + 2 and "zeta=1" in page
