@@ -31,13 +31,37 @@ def facts_html(title: str, facts: Mapping[str, Any]) -> str:
     return f"<div><b>{html.escape(title)}</b><table>{rows}</table></div>"
 
 
-def frame_html(frame: Any, max_rows: int = MAX_ROWS) -> str:
-    """A DataFrame (or a list of dicts) as an HTML table of at most ``max_rows`` rows."""
+#: The summary's columns an HTML repr shows, in this order (the DataFrame keeps every column).
+SUMMARY_COLUMNS = (
+    "agent",
+    "swimmer",
+    "direction",
+    "group",
+    "n",
+    "success_rate",
+    "success_lo",
+    "success_hi",
+    "mean_x",
+    "mean_x_lo",
+    "mean_x_hi",
+    "steps_to_learn_median",
+    "failed_steps",
+    "tokens_per_step",
+    "cost_usd",
+)
+
+
+def frame_html(frame: Any, max_rows: int = MAX_ROWS, columns: Sequence[str] | None = None) -> str:
+    """A DataFrame (or a list of dicts) as an HTML table of at most ``max_rows`` rows; with
+    ``columns``, only those of them it has (all of its columns when it has none)."""
     import pandas as pd  # lazy: only to draw
 
     df = frame if isinstance(frame, pd.DataFrame) else pd.DataFrame(list(frame))
     if df.empty:
         return ""
+    if columns is not None and any(c in df for c in columns):
+        df = df[[c for c in columns if c in df]]
+    df = df.map(lambda v: "-" if v is None else v)  # JSON's null, as NaN is shown
     more = len(df) - max_rows
     table = df.head(max_rows).to_html(index=False, float_format=lambda v: f"{v:.3g}", na_rep="-")
     return table + (f"<div>... and {more} more rows</div>" if more > 0 else "")
@@ -181,7 +205,8 @@ def study_result_html(res: Any) -> str:
         f"<div><code>jswim.load({html.escape(repr(str(res.folder)))})</code>: every run and "
         "trajectory as a DataFrame</div>"
     )
-    return f"<div><b>{head}</b>{frame_html(res.summary)}{thumbnails_html(res.figures)}{load}</div>"
+    table = frame_html(res.summary, columns=SUMMARY_COLUMNS)
+    return f"<div><b>{head}</b>{table}{thumbnails_html(res.figures)}{load}</div>"
 
 
 def study_text(study: Any) -> str:
@@ -203,7 +228,7 @@ def study_html(study: Any) -> str:
     """The study's summary (from its metadata) as a table and its figures as thumbnails."""
     head = html.escape(study_text(study).splitlines()[0])
     groups = (study.metadata.get("summary") or {}).get("groups") or []  # one row per setting
-    table = frame_html(groups) if groups else frame_html(study.runs)
+    table = frame_html(groups, columns=SUMMARY_COLUMNS) if groups else frame_html(study.runs)
     figures = sorted(Path(study.folder, "figures").glob("*.png"))
     return f"<div><b>{head}</b>{table}{thumbnails_html(figures)}</div>"
 
