@@ -61,8 +61,11 @@ def _run(kc: Any, code: str, timeout: float = 120.0, on_sent: Any = None) -> dic
         got["messages"].append(msg)
         if msg["msg_type"] == "status" and msg["content"]["execution_state"] == "idle":
             got["idle_at"] = time.monotonic()
-            got["reply"] = kc.get_shell_msg(timeout=10)["content"]
-            return got
+            while True:  # the reply to this request (not a late one to an earlier request)
+                reply = kc.get_shell_msg(timeout=10)
+                if reply["parent_header"].get("msg_id") == msg_id:
+                    got["reply"] = reply["content"]
+                    return got
     raise AssertionError(f"the cell did not finish within {timeout} s: {code}")
 
 
