@@ -4,17 +4,20 @@ A table is aligned plain text with every cell whole (never ``0…`` for ``0.5``)
 narrower than the table its columns wrap into blocks that repeat the label columns; anywhere else
 (a pipe, ``> log.txt``, CI) it is as wide as its widest cells. Progress is a rich bar on a
 terminal and, elsewhere, one dated line per update at most every ``interval`` seconds instead of
-a redrawn bar.
+a redrawn bar; in a Jupyter notebook it is one display, updated in place
+(`NotebookProgress`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import html
 import shutil
 import sys
 import time
 from dataclasses import dataclass
 from typing import IO, Any
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 
 
 @dataclass(frozen=True)
@@ -155,6 +158,7 @@ class Progress:
         self._last: tuple[str, float] | None = None
         self._bar: Any = None
         self._task: Any = None
+        self.state: tuple[str, int, int, str, str] = ("start", 0, 0, "", "runs")
 
     def __enter__(self) -> Progress:
         if self.terminal:
@@ -194,6 +198,7 @@ class Progress:
         unit: str = "runs",
     ) -> None:
         """Show ``label`` with ``done`` of ``total`` (counted in ``unit`` in a log) and ``info``."""
+        self.state = (label, done, total, info, unit)
         if self._bar is not None:
             self._bar.update(self._task, completed=done, total=total, description=label, info=info)
             return
@@ -209,6 +214,161 @@ class Progress:
         pct = f" ({100 * done / total:.0f}%)" if total else ""
         text = f"[{format_duration(now - self._t0):>6}] {label}: {done}/{total} {unit}{pct}"
         print(text + (f" · {info}" if info else ""), file=self.file, flush=True)
+
+
+def in_notebook() -> bool:
+    """Whether this runs in a Jupyter kernel (a notebook, JupyterLab, nbconvert, VS Code)."""
+    ipython = sys.modules.get("IPython")  # never imported here: a kernel has imported it already
+    shell = ipython.get_ipython() if ipython is not None else None
+    return shell is not None and getattr(shell, "kernel", None) is not None
+
+
+class NotebookProgress:
+    """Progress of a long job as one output of a notebook cell, updated in place.
+
+    The same interface as `Progress`. It shows an HTML bar (a plain-text line for
+    frontends without HTML) through IPython's ``display(..., display_id=True)`` and updates that
+    one output, at most every ``interval`` seconds within a phase, so a cell gets one display
+    however long the job; JupyterLab redraws it, and a notebook executed by nbconvert keeps its
+    last state. May be updated from a worker thread (the study's event loop).
+    """
+
+    def __init__(self, interval: float = 1.0) -> None:
+        self.interval = interval
+        self._t0 = time.monotonic()
+        self._last: tuple[str, float] | None = None
+        self._handle: Any = None
+        self.state: tuple[str, int, int, str, str] = ("start", 0, 0, "", "runs")
+
+    def __enter__(self) -> NotebookProgress:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        pass
+
+    def stop(self) -> None:
+        """Nothing to close: the output stays as last drawn."""
+
+    def update(
+        self,
+        label: str,
+        done: int,
+        total: int,
+        info: str = "",
+        final: bool = False,
+        unit: str = "runs",
+    ) -> None:
+        """Show ``label`` with ``done`` of ``total`` ``unit`` and ``info`` (throttled)."""
+        self.state = (label, done, total, info, unit)
+        now = time.monotonic()
+        if (
+            not final
+            and self._last is not None
+            and self._last[0] == label
+            and now - self._last[1] < self.interval
+        ):
+            return
+        self._last = (label, now)
+        view = _ProgressView(*self.state, elapsed=now - self._t0)
+        if self._handle is None:
+            from IPython.display import display  # lazy: only inside a kernel
+
+            self._handle = display(view, display_id=True)
+        else:
+            self._handle.update(view)
+
+
+@dataclass(frozen=True)
+class _ProgressView:
+    """One state of a `NotebookProgress`, drawn as HTML or as one line of text."""
+
+    label: str
+    done: int
+    total: int
+    info: str
+    unit: str
+    elapsed: float
+
+    def __repr__(self) -> str:
+        pct = f" ({100 * self.done / self.total:.0f}%)" if self.total else ""
+        text = f"[{format_duration(self.elapsed)}] {self.label}: {self.done}/{self.total} {self.unit}{pct}"
+        return text + (f" · {self.info}" if self.info else "")
+
+    def _repr_html_(self) -> str:
+        bar = (
+            f'<progress value="{self.done}" max="{self.total}" style="width:14em"></progress>'
+            if self.total
+            else '<progress style="width:14em"></progress>'
+        )
+        info = f" · {html.escape(self.info)}" if self.info else ""
+        return (
+            f'<div style="font-family:monospace">{bar} <b>{html.escape(self.label)}</b> '
+            f"{self.done}/{self.total} {html.escape(self.unit)} · "
+            f"{format_duration(self.elapsed)}{info}</div>"
+        )
+
+
+#: A study's progress phases (``jswim.studies.execute.ProgressFn``) as a person reads them.
+PHASE_LABELS = {
+    "llm": "LLM runs",
+    "llm-live": "LLM runs",
+    "qlearning": "Q-learning",
+    "random": "random policy",
+    "ppo": "continuous RL",
+    "start": "start",
+    "resume": "resume",
+}
+
+ProgressFn = Callable[[str, int, int, str], None]
+
+
+def phase_ticker(bar: Progress | NotebookProgress) -> ProgressFn:
+    """A study's ``progress(phase, done, total, info)`` callback that draws on ``bar``."""
+
+    def tick(phase: str, done: int, total: int, info: str = "") -> None:
+        bar.update(
+            PHASE_LABELS.get(phase, "runs"),
+            done,
+            total,
+            info,
+            unit="LLM steps" if phase.startswith("llm") else "runs",
+        )
+
+    return tick
+
+
+@contextlib.contextmanager
+def study_progress(progress: ProgressFn | bool | None) -> Iterator[ProgressFn | None]:
+    """The callback a study reports to, from what the caller asked for.
+
+    ``None`` (automatic): one updating display in a notebook, the bar on a terminal, nothing
+    elsewhere (a script's log stays clean); ``True``: the same, with dated lines where there is
+    no terminal; ``False``: nothing; a callable: itself, untouched. An automatic display ends
+    with the outcome: ``done``, or ``interrupted`` with what is kept.
+    """
+    if callable(progress):
+        yield progress
+        return
+    if progress is False or (
+        progress is None and not in_notebook() and not is_terminal(sys.stderr)
+    ):
+        yield None
+        return
+    bar: Progress | NotebookProgress = NotebookProgress() if in_notebook() else Progress()
+    with bar:
+        tick = phase_ticker(bar)
+        try:
+            yield tick
+        except KeyboardInterrupt:
+            _, done, total, _, unit = bar.state
+            bar.update("interrupted", done, total, "kept; the same call resumes", True, unit)
+            raise
+        _, done, total, info, unit = bar.state
+        bar.update("done", done, total, info, True, unit)
+
+
+def _last_state(bar: Progress | NotebookProgress) -> tuple[str, int, int, str, str]:
+    return bar._state
 
 
 #: Why a call is not priced, in the words every cost line uses (`cost_text`).

@@ -38,6 +38,7 @@ from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 
+from jswim import reprs
 from jswim.judging import lattice
 from jswim.agents import fidelity, pair_prompt, protocol, world_view
 from jswim.agents.step_batcher import StepGroup, group_key
@@ -116,6 +117,12 @@ class RunResult:
     @property
     def steps(self) -> int:
         return len(self.x)
+
+    def __repr__(self) -> str:
+        return reprs.run_result_text(self)
+
+    def _repr_html_(self) -> str:
+        return reprs.run_result_html(self)
 
     def as_row(self) -> dict[str, Any]:
         """A flat record for [`jswim.results.StudyStore.add_runs`][jswim.results.StudyStore.add_runs]."""

@@ -270,11 +270,23 @@ def run_jobs(
                 job.proc.send_signal(signal.SIGINT)  # each study keeps its runs and answered calls
         deadline = time.monotonic() + 30
         for job in running.values():
-            try:
-                job.proc.wait(max(0.1, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                job.proc.kill()
-                job.proc.wait()
+            wait_through_interrupts(job.proc, deadline)
         for label in running:
             result.status[label] = "interrupted"
     return result
+
+
+def wait_through_interrupts(proc: subprocess.Popen, deadline: float) -> None:
+    """Wait for an interrupted part to end (it journals its calls in flight as it stops); a
+    second interrupt (a notebook's Stop pressed again) does not cut the wait short and leave the
+    part running unseen; a part still running at ``deadline`` is killed."""
+    while True:
+        try:
+            proc.wait(max(0.1, deadline - time.monotonic()))
+            return
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+            return
+        except KeyboardInterrupt:
+            continue

@@ -20,6 +20,7 @@ from jswim.console import (
     REFERENCE_UNPRICED,
     Progress,
     cost_text,
+    phase_ticker,
     print_table,
     requests_text,
 )
@@ -68,25 +69,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
         return 0
     if (text := short_steps_warning(opts)) is not None:
         base.warn(text)
-    labels = {
-        "llm": "LLM runs",
-        "llm-live": "LLM runs",
-        "qlearning": "Q-learning",
-        "random": "random policy",
-        "ppo": "continuous RL",
-        "start": "start",
-        "resume": "resume",
-    }
     with Progress() as bar:
-
-        def tick(phase: str, done: int, total: int, info: str = "") -> None:
-            bar.update(
-                labels.get(phase, "runs"),
-                done,
-                total,
-                info,
-                unit="LLM steps" if phase.startswith("llm") else "runs",
-            )
+        tick = phase_ticker(bar)
 
         try:
             with base.warnings_as_lines():
@@ -116,7 +100,9 @@ def _run(study: str, args: argparse.Namespace) -> int:
             return base.EXIT_USAGE
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
     _print_summary(
-        result.summary, result.rows, f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s"
+        result.summary.to_dict("records"),
+        result.rows,
+        f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s",
     )
     scenes.print_table(result.rows)
     _print_reasoning(result)

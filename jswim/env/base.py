@@ -147,6 +147,18 @@ class Environment:
     def n_dof(self) -> int:
         raise NotImplementedError
 
+    def _repr_html_(self) -> str:
+        """The world's swimmers, DOFs and actions, and a small picture of its start."""
+        from jswim import reprs  # lazy: drawing loads matplotlib
+
+        model = getattr(self, "model", None)  # the paper's swimmers: draw a typical bent shape
+        body = None
+        if model is not None:
+            from jswim.swimmers.outline import outline  # lazy: only to draw
+
+            body = outline(model, jnp.full(model.n_dof, model.lo + 0.8 * (model.hi - model.lo)))
+        return reprs.world_html(self, body)
+
     @property
     def n_swimmers(self) -> int:
         return 1

@@ -14,6 +14,7 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+from jswim import reprs
 from jswim.env.base import Environment, Observation, StepInfo
 from jswim.env.randomness import seed_key
 
@@ -27,6 +28,9 @@ class Trajectory(NamedTuple):
     state: Any
     obs: Observation
     info: StepInfo
+
+    __repr__ = reprs.trajectory_text
+    _repr_html_ = reprs.trajectory_html
 
 
 def _as_key(key: Array | int) -> Array:

@@ -17,6 +17,7 @@ from jswim.env.randomness import seed32, seed_key  # noqa: F401  (seed32 re-expo
 from jswim.env.state import EnvState, dof_values, reset
 from jswim.env.stepping import step
 from jswim.errors import ConfigError
+from jswim import reprs
 from jswim.swimmers.models import SwimmerModel
 
 
@@ -32,6 +33,9 @@ class Rollout(NamedTuple):
     dofs: Array
     stuck: Array
     progress: Array
+
+    __repr__ = reprs.trajectory_text
+    _repr_html_ = reprs.trajectory_html
 
 
 @jax.jit

@@ -114,6 +114,23 @@ class LocalServer:
     def running(self) -> bool:
         return self._server is not None
 
+    def check(self) -> Path:
+        """The model file this server would load, without loading anything.
+
+        Raises
+        ------
+        LocalModelError
+            The native library (xllamacpp) or the model file is missing.
+        """
+        if importlib.util.find_spec("xllamacpp") is None:
+            raise LocalModelError(
+                "the embedded model needs xllamacpp; install with: pip install xllamacpp"
+            )
+        path = self.model_path or default_model_path()
+        if not path.is_file():
+            raise LocalModelError(f"model file {path} does not exist")
+        return path
+
     def start(self) -> LocalServer:
         """Load the model, start the server and wait until it reports healthy."""
         if self._server is not None:

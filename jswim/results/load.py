@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     import pandas as pd
+from jswim import reprs
 from jswim.results.read import (
     CALL_COLUMNS,
     TRANSCRIPT_COLUMNS,
@@ -62,6 +63,12 @@ class Study:
     metadata: dict[str, Any]
     runs: pd.DataFrame
     trajectories: pd.DataFrame
+
+    def __repr__(self) -> str:
+        return reprs.study_text(self)
+
+    def _repr_html_(self) -> str:
+        return reprs.study_html(self)
 
     @property
     def name(self) -> str:

@@ -26,20 +26,23 @@ import hashlib
 import json
 import platform
 import time
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 from collections.abc import Sequence
 
 import jax
 import numpy as np
 
-from jswim import __version__, env
+from jswim import __version__, console, env, reprs
+from jswim._io import callsite
+
+if TYPE_CHECKING:
+    import pandas as pd
 from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS
-from jswim.errors import ConfigError, JswimError, JswimWarning
+from jswim.errors import ConfigError, JswimError, JswimWarning, LocalModelError
 from jswim.judging.gait import Criterion
 from jswim.llm.backend import Backend
 from jswim.llm.credentials import scrub
@@ -146,7 +149,7 @@ class StudyResult:
 
     folder: Path
     rows: list[dict[str, Any]]
-    summary: list[dict[str, Any]]
+    summary: pd.DataFrame  # one row per (agent, setting); a list of dicts is turned into one
     figures: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
     # This session's LLM calls, billed calls, wall s, calls/s, cost (empty when it ran no LLM run: a
@@ -165,6 +168,15 @@ class StudyResult:
     notes: list[str] = field(
         default_factory=list
     )  # what was sent for sampling, decoding fallbacks, pricing
+
+    def __post_init__(self) -> None:
+        import pandas as pd  # the summary is a table: one row per (agent, setting)
+
+        if not isinstance(self.summary, pd.DataFrame):
+            self.summary = pd.DataFrame(list(self.summary))
+
+    __repr__ = reprs.study_result_text
+    _repr_html_ = reprs.study_result_html
 
 
 #: Options that say how large the grid is, not what its runs are: left out of the identity, so a
@@ -250,7 +262,7 @@ def run_study(
     options: StudyOptions = StudyOptions(),
     backend: Backend | None = Backend(),
     out: str | Path | None = None,
-    progress: ProgressFn | None = None,
+    progress: ProgressFn | bool | None = None,
     figures: bool = True,
     max_cost: float | None = None,
 ) -> StudyResult:
@@ -266,7 +278,10 @@ def run_study(
         LLM server (default: the embedded model); needed only when the study has LLM runs.
     out : path, optional
         Study folder (default [`default_folder`][jswim.studies.run.default_folder]). Finished runs found there are kept.
-    progress : callable, optional
+    progress : bool or callable, optional
+        ``None`` (default): one updating display in a Jupyter notebook, a bar on a terminal,
+        nothing elsewhere; ``True``: also dated lines on stderr where there is no terminal;
+        ``False``: nothing (`study_progress`). A callable
         ``progress(phase, done, total, info)`` (`ProgressFn`): after each finished batch of
         baseline runs (runs done of all), and after each finished LLM run (phase ``"llm"``) and
         every 0.5 s while LLM requests are out (phase ``"llm-live"``), counting LLM steps done of
@@ -295,6 +310,8 @@ def run_study(
             f"these settings give the {study} study no runs at all (--runs 0 and --q-runs 0?); "
             "nothing to do"
         )
+    if backend is not None and backend.local and any(p.agent == "llm" for p in plans):
+        _check_embedded_model(study, backend)  # before the baselines, not after them
     ident = identity(study, options, backend)
     if study == "competence":  # the variants' switches define the runs too
         ident["variants"] = {v: VARIANTS[v] for v in options.variants or COMPETENCE_VARIANTS}
@@ -340,7 +357,7 @@ def run_study(
     )
     try:
         for note in store.repairs:
-            warnings.warn(FolderRepaired(f"{folder}: {note}"), stacklevel=2)
+            callsite.warn_user(FolderRepaired(f"{folder}: {note}"))
         store.meta.pop("prompt_template", None)  # folders before prompt_template.json had it here
         tpl_path = folder / PROMPT_FILE
         if (
@@ -348,9 +365,10 @@ def run_study(
         ):  # the identity holds its hash: a resumed folder has this very template
             with writing(folder):
                 write_json(tpl_path, dataclasses.asdict(template or PromptTemplate()))
-        return _run_in(
-            store, study, plans, options, backend, folder, template, progress, figures, t0, max_cost
-        )
+        with console.study_progress(progress) as tick:
+            return _run_in(
+                store, study, plans, options, backend, folder, template, tick, figures, t0, max_cost
+            )
     except KeyboardInterrupt:
         _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
         raise
@@ -377,6 +395,24 @@ def run_study(
         ) from None
     finally:
         store.close()  # the folder's lock: the next session may start
+
+
+def _check_embedded_model(study: str, backend: Backend) -> None:
+    """Refuse an LLM study on the embedded model when that model cannot start, naming the ways on.
+
+    Raises
+    ------
+    LocalModelError
+        The model's package or its native library is missing; nothing was run or written.
+    """
+    try:
+        backend.server().check()
+    except LocalModelError as exc:
+        raise LocalModelError(
+            f"{exc}. The {study} study's LLM runs need a model: install it, or point the study at "
+            "a server (Backend(base_url=...); `jswim serve reference` starts a rule-based one on "
+            "this machine), or run the baselines only (StudyOptions(runs=0)); nothing was run"
+        ) from None
 
 
 def _scene_extensions(plans: Sequence[Plan]) -> list[str]:
@@ -543,9 +579,8 @@ def _write_report(folder: Path, figures: bool) -> None:
     try:
         write_report(folder, figures="files" if figures else "none")
     except Exception as exc:
-        warnings.warn(
-            f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries",
-            stacklevel=2,
+        callsite.warn_user(
+            f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries"
         )
 
 

@@ -3,9 +3,9 @@ each session sent and cost, recorded in the study's metadata (``llm_server``, ``
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
+from jswim._io.callsite import warn_user
 from jswim.errors import ConfigError, JswimWarning
 from jswim.llm.backend import Backend
 from jswim.llm.client import LLMClient
@@ -51,7 +51,7 @@ def _preflight(
     cap_check(backend, info, max_cost)
     store.set_status("running", llm_server=info.metadata())
     for text in info.warnings:
-        warnings.warn(text, JswimWarning, stacklevel=3)
+        warn_user(text, JswimWarning)  # at the user's call, also from the study's worker thread
     return info
 
 

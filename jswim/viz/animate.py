@@ -28,6 +28,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from jswim import reprs
 from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 from jswim.errors import ConfigError
 from jswim.figures.plots import AGENT_ORDER, RC, panel_keys
@@ -148,6 +149,9 @@ class Animation:
         with tempfile.TemporaryDirectory() as tmp:
             path = self.save(Path(tmp) / "run.gif")
             return path.read_bytes()
+
+    def __repr__(self) -> str:
+        return reprs.animation_text(self)
 
     def _repr_html_(self) -> str:  # Jupyter shows the GIF inline
         data = base64.b64encode(self.to_gif_bytes()).decode()

@@ -25,6 +25,7 @@ LAYERS = [
             "jswim.compile_cache",
             "jswim._io",
             "jswim._exports",
+            "jswim.reprs",
         ],
     ),
     ("physics", ["jswim.swimmers"]),

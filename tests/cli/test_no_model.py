@@ -236,3 +236,15 @@ def test_baselines_only_noise_page_in_chromium_shows_its_own_settings(no_model, 
     assert ids == sorted(
         ids, key=lambda i: (not i.startswith("qlearning"), "-z1-" in i, i)
     )  # by agent, zeta, r
+
+
+def test_an_llm_study_without_the_model_refuses_before_any_run(no_model, tmp_path):
+    from jswim.studies import StudyOptions, run_study
+
+    out = tmp_path / "swim"
+    with pytest.raises(LocalModelError) as got:
+        run_study("swim", StudyOptions(runs=1, q_runs=2, steps=4), out=out)
+    text = str(got.value)
+    assert "default local model is missing" in text
+    assert "Backend(base_url=" in text and "jswim serve reference" in text
+    assert not out.exists()  # not one baseline run first

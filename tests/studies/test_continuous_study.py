@@ -245,7 +245,7 @@ def test_the_real_valued_rl_cell_runs_and_is_judged(tmp_path):
     assert 0 in meta["roc_levels"] and any(
         "real-valued ROC" in d for d in meta["fidelity_deviations"]
     )
-    assert {s["group"] for s in res.summary} == {"continuous"}
+    assert {s["group"] for s in res.summary.to_dict("records")} == {"continuous"}
     # The loader keeps the real ROCs (a float column).
     from jswim.results import load
 

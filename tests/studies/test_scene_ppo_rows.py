@@ -76,7 +76,7 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
     assert table[("ppo", "h=3")]["vs_stroke"] == pytest.approx(
         sum(r["speed"] for r in learners) / 2 / stroke_speed
     )
-    assert {s["group"] for s in res.summary if s["agent"] == "ppo"} == {"h=3"}
+    assert {s["group"] for s in res.summary.to_dict("records") if s["agent"] == "ppo"} == {"h=3"}
 
     # A finished study run again trains nothing and changes no row.
     def refuse(*a, **k):

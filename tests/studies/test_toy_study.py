@@ -147,7 +147,7 @@ def test_toy_world_runs_a_study(toy_folder):
         assert r["per_cycle"] == pytest.approx(-1.0 * r["direction"], abs=1e-6)
         assert r["x"][-1] == pytest.approx(-STEPS / 4 * r["direction"], abs=1e-5)
     _check_toy_rows(rows.values())
-    assert {(t["agent"], t["group"]) for t in res.summary} >= {
+    assert {(t["agent"], t["group"]) for t in res.summary.to_dict("records")} >= {
         ("stroke", f"h={H:g}"),
         ("qlearning", f"h={H:g}"),
     }
