@@ -34,7 +34,6 @@ _EXPORTS = {
     "rollout": "jswim.env",
     "make": "jswim.env.worlds",
     "register_world": "jswim.env.worlds",
-    "rollout_batch": "jswim.env.episodes",
     "make_params": "jswim.env",
     "reset": "jswim.env",
     "step": "jswim.env",

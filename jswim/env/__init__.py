@@ -70,7 +70,6 @@ _LAZY = {
     "SceneWorld": "jswim.env.scene_world",
     "SceneTask": "jswim.env.scene_world",
     "Trajectory": "jswim.env.episodes",
-    "rollout_batch": "jswim.env.episodes",
 }
 
 

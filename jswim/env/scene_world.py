@@ -21,6 +21,7 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim.env.base import Environment, Observation, StepInfo, first_move, scaled
+from jswim.env.discretiser import Cells, WallCells
 from jswim.scenes.actions import decode_scene_action
 from jswim.scenes.params import SceneParams, scene_params
 from jswim.scenes.scene import Scene
@@ -134,6 +135,14 @@ class SceneWorld(Environment):
     @property
     def n_features(self) -> int:
         return self.n_dof + (2 * self.n_swimmers if self.wall else 0)
+
+    def cells(self) -> Cells:
+        """The joint corner; with a wall, times swimmer 1's height bin ([`WallCells`][jswim.env.discretiser.WallCells])."""
+        return WallCells(self) if self.wall else Cells(self)
+
+    def batch_params(self, params: SceneTask, n: int) -> tuple[SceneTask, SceneTask]:
+        """The scene's params shared by the runs; the direction per run where it has an axis."""
+        return params, SceneTask(None, 0 if jnp.ndim(params.direction) > 0 else None)
 
 
 def features(state: SceneState, params: SceneParams, wall: bool) -> Array:

@@ -14,7 +14,8 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim.env.base import Environment, Observation, StepInfo, scaled
-from jswim.env.params import EnvParams, make_params
+from jswim.env.discretiser import PaperCells
+from jswim.env.params import EnvParams, broadcast_params, make_params
 from jswim.env.state import EnvState, dof_values, reset
 from jswim.env.stepping import advance
 from jswim.swimmers.models import SwimmerModel
@@ -84,3 +85,32 @@ class SwimmerWorld(Environment):
     def features(self, state: EnvState, params: EnvParams) -> Array:
         """The DOFs scaled to [-1, 1] (what the PPO baseline reads)."""
         return scaled(dof_values(state, params), self.model.lo, self.model.hi)
+
+    def cells(self) -> PaperCells:
+        """The corner (or lattice point) of the state, the swimmer's offered ROCs."""
+        return PaperCells(self)
+
+    def learner_advance(
+        self, state: EnvState, action: Array, noise: Array, params: EnvParams
+    ) -> tuple[EnvState, StepInfo]:
+        """:meth:`advance` in plain working-dtype arithmetic (:func:`jswim.env.advance` with
+        ``exact=False``): the baselines' training step since they were written, so their numbers
+        stay the paper's."""
+        new, i = advance(state, action, noise[0], params, exact=False)
+        return new, StepInfo(
+            jnp.stack([i.dx, i.dy])[None],
+            i.progress,
+            i.stuck,
+            i.moved,
+            jnp.zeros((), bool),
+            jnp.asarray(jnp.inf, i.dx.dtype),
+        )
+
+    def pose(self, state: EnvState, params: EnvParams) -> tuple[Array, Array, Array]:
+        """The state's own centroid x, y and orientation (their float32 high parts)."""
+        return state.x, state.y, state.theta
+
+    def batch_params(self, params: EnvParams, n: int) -> tuple[EnvParams, int]:
+        """Every per-run leaf (``zeta``, ``direction``, ``init``) broadcast to ``n`` runs
+        (:func:`jswim.env.broadcast_params`)."""
+        return broadcast_params(params, n), 0

@@ -56,14 +56,14 @@ def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]
     """The real-valued RL baseline (:mod:`jswim.agents.ppo`) for one swimmer, judged on shapes
     (:func:`jswim.agents.ppo.evaluate`: :func:`jswim.judging.shape_judge.judge_shapes` on displacements
     replayed exactly, without noise)."""
-    from jswim.agents import ppo, qlearning  # lazy: optax and their jits, for the PPO baseline only
+    from jswim.agents import ppo  # lazy: optax and its jits, for the PPO baseline only
 
     p0 = plans[0]
-    base = env.make_params(p0.swimmer)
+    world, base = env.make(p0.swimmer)
     init = np.array(
         [[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32
     )
-    params = qlearning.batch_params(
+    params = env.broadcast_params(
         base,
         len(plans),
         zeta=np.array([p.zeta for p in plans]),
@@ -71,7 +71,7 @@ def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]
         init=init,
     )
     keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
-    run = ppo.train_batch(keys, params, ppo.PPOConfig(steps=p0.steps))
+    run = ppo.train(world, params, keys, ppo.PPOConfig(steps=p0.steps))
     rocs, dofs0 = np.asarray(run.actions, np.float64), np.asarray(run.dofs0, np.float64)
     rep = ppo.evaluate(run, params, criterion=Criterion(horizon=horizon))
     dof = np.asarray(run.dof, np.int64)

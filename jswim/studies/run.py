@@ -113,11 +113,11 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         random_policy,
     )  # lazy: optax and their jits, for baselines only
 
-    base = env.make_params(p0.swimmer, **_lattice(p0.roc_levels))
+    world, base = env.make(p0.swimmer, **_lattice(p0.roc_levels))
     init = np.array(
         [[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32
     )
-    params = qlearning.batch_params(
+    params = env.broadcast_params(
         base,
         len(plans),
         zeta=np.array([p.zeta for p in plans]),
@@ -127,9 +127,9 @@ def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
     if p0.agent == "qlearning":
         cfg = qlearning.QConfig(steps=p0.steps, action_set=p0.action_set)
-        run = qlearning.train_batch(keys, params, cfg, pose=True)
+        run = qlearning.train(world, params, keys, cfg, pose=True)
     else:
-        run = random_policy.run_batch(keys, params, p0.steps, p0.action_set)
+        run = random_policy.run(world, params, keys, p0.steps, p0.action_set)
     return _judge_rows(
         plans,
         np.asarray(run.actions),

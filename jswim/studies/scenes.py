@@ -51,7 +51,7 @@ import numpy as np
 from jswim import env
 from jswim.actions import decode_action, encode_action, n_actions
 from jswim.console import Column
-from jswim.agents import qlearning, random_policy, worlds
+from jswim.agents import qlearning, random_policy, strokes
 from jswim.agents.qlearning import QConfig
 from jswim.env.base import Environment, Observation
 from jswim.env.scene_world import ARMS, SceneTask
@@ -225,16 +225,16 @@ def _start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, .
     corner (the discretiser's lattice positions, ``(n_dof,)``)."""
     state = world.reset(jax.random.PRNGKey(0), params)
     obs = world.observe(state, params)
-    corner = np.asarray(worlds.cells(world).positions(state, params), np.int64)
+    corner = np.asarray(world.cells().positions(state, params), np.int64)
     return (np.asarray(obs.position[:, 0], np.float64), *_lift(obs, scene), corner)
 
 
-def _per_run(params: Any, directions: Sequence[int]) -> tuple[Any, Any]:
-    """``params`` with a target direction per run, and ``vmap``'s axes of them (the rest shared)."""
-    d, none = np.asarray(directions, np.float64), jax.tree.map(lambda _: None, params)
+def _per_run(params: Any, directions: Sequence[int]) -> Any:
+    """``params`` with a target direction per run (the rest shared)."""
+    d = np.asarray(directions, np.float64)
     if dataclasses.is_dataclass(params):
-        return dataclasses.replace(params, direction=d), dataclasses.replace(none, direction=0)
-    return params._replace(direction=d), none._replace(direction=0)
+        return dataclasses.replace(params, direction=d)
+    return params._replace(direction=d)
 
 
 def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
@@ -252,7 +252,7 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
     scene, world, params = _world(p0)
     x0, z0, tilt0, corner = _start(world, params, scene)
     keys = _keys(plans)
-    task, axes = _per_run(params, [p.direction for p in plans])
+    task = _per_run(params, [p.direction for p in plans])
     n_sw = world.n_swimmers
     judged, moves = [None] * len(plans), [None] * len(plans)
     if p0.agent == STROKE_AGENT:
@@ -262,18 +262,14 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
                 for p in plans
             ]
         )
-        tr = worlds.play(world, task, keys, codes, params_axes=axes)
+        tr = strokes.play(world, task, keys, codes)
     elif p0.agent == "random":
-        run = random_policy.run_env(
-            world, task, keys, p0.steps, p0.action_set, params_axes=axes, trace=True
-        )
+        run = random_policy.run(world, task, keys, p0.steps, p0.action_set, trace=True)
         codes, tr = np.asarray(run.actions), run.trace
     elif p0.agent == CONTINUOUS_AGENT:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
-        run = ppo.train_env(
-            world, keys, task, ppo.PPOConfig(steps=p0.steps), params_axes=axes, trace=True
-        )
+        run = ppo.train(world, task, keys, ppo.PPOConfig(steps=p0.steps), trace=True)
         codes, tr = np.zeros((len(plans), 0), np.int64), run.trace
         dof, rocs = np.asarray(run.dof, np.int64), np.asarray(run.actions, np.float64)
         moves = [
@@ -283,7 +279,7 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
         judged = _ppo_judged(run, plans, task, horizon, n_sw)
     else:
         config = QConfig(steps=p0.steps, action_set=p0.action_set)
-        run = qlearning.train_env(world, keys, task, config, params_axes=axes, trace=True)
+        run = qlearning.train(world, task, keys, config, trace=True)
         codes, tr = np.asarray(run.actions), run.trace
     obs = tr.obs
     xs = np.asarray(obs.position[..., 0], np.float64) - x0
@@ -338,7 +334,7 @@ def _ppo_judged(
     if isinstance(task, SceneTask):
         rep = ppo.evaluate(run, task, criterion=crit)
     else:
-        bulk, _ = _per_run(env.make_params(p0.swimmer, init=p0.init), [p.direction for p in plans])
+        bulk = _per_run(env.make_params(p0.swimmer, init=p0.init), [p.direction for p in plans])
         rep = ppo.evaluate(run, bulk, criterion=crit, replay=True)
     return [
         {

@@ -1,12 +1,14 @@
-"""PPO on scenes (issue 19): jswim.agents.ppo.train_scene_batch and its world adapter."""
+"""PPO on scenes: jswim.agents.ppo.train in a scene world, and its judge per swimmer."""
 
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from jswim.agents import ppo
+from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.scenes import Scene, scene_advance, scene_params, scene_reset
 
 STEPS = 8
@@ -43,7 +45,11 @@ def test_wall_scene_run_records_the_scene_progress():
         params = scene_params("ng", Scene(medium="wall", height=10.0))
         keys = jax.random.split(jax.random.PRNGKey(0), 3)
         config = ppo.PPOConfig(steps=STEPS)
-        run = ppo.train_scene_batch(keys, params, config, direction=np.array([1, -1, 1]))
+        world = SceneWorld(Scene(medium="wall", height=10.0))
+        task = SceneTask(params, jnp.array([1.0, -1.0, 1.0]))
+        run = ppo.train(world, task, keys, config)
+        start = world.observe(world.reset(keys[0], task), task).position
+        run = run._replace(x=run.x - jnp.mean(start[:, 0]))
         assert (
             run.x.shape == (3, STEPS)
             and run.dofs.shape == (3, STEPS, 2)

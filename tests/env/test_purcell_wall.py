@@ -85,7 +85,7 @@ def test_make_float32_default_and_float64(float32, expected):
 @pytest.mark.slow  # compile-heavy: tables and programs of new models
 def test_batch_with_noise_is_one_vectorised_call(float32):
     world, params = jswim.make("purcell", scene=WALL, zeta=0.5)
-    t = jswim.rollout_batch(world, params, 1, jnp.tile(jnp.asarray(CODES * 2), (4, 1)))
+    t = jswim.rollout(world, params, 1, jnp.tile(jnp.asarray(CODES * 2), (4, 1)))
     x = np.asarray(t.obs.position[:, -1, 0, 0])
     assert (
         x.shape == (4,) and np.all(np.isfinite(x)) and len(set(x.tolist())) == 4

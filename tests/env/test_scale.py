@@ -149,8 +149,11 @@ def _scaled_cases():
     out["step_batch_x"], out["step_batch_lo"] = np.asarray(states.x), np.asarray(states.x_lo)
     out["step_batch_progress"] = np.asarray(info.progress)
     ng = env.make_params("ng", direction=-1)
-    run = qlearning.train_batch(
-        jax.random.split(jax.random.PRNGKey(1), 103), ng, qlearning.QConfig(steps=30)
+    run = qlearning.train(
+        env.make("ng")[0],
+        ng,
+        jax.random.split(jax.random.PRNGKey(1), 103),
+        qlearning.QConfig(steps=30),
     )
     out["q_actions"], out["q_x"], out["q_table"] = (
         np.asarray(v) for v in (run.actions, run.x, run.q)

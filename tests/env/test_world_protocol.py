@@ -13,7 +13,7 @@ import pytest
 import jswim
 from jswim import env as jenv
 from jswim.env.base import Environment, StepInfo
-from jswim.env.episodes import rollout, rollout_batch
+from jswim.env.episodes import rollout
 from jswim.env.scene_world import SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
@@ -195,17 +195,15 @@ def test_vmapped_batch_equals_each_member(float32):
         ],
         jnp.int32,
     )
-    batch = rollout_batch(env, params, 7, actions)
+    batch = rollout(env, params, 7, actions)
     keys = jax.random.split(jenv.seed_key(7), 3)
     for i in range(3):
         one = rollout(env, params, keys[i], actions[i])
         _equal_trees(jax.tree.map(lambda v: v[i], batch), one)
     assert batch.info.progress.shape == (3, 8) and batch.info.progress.dtype == jnp.float32
-    # Per-member direction through params_axes.
+    # A direction per member (the world says which leaves carry the batch axis).
     both = jenv.broadcast_params(params, 2, zeta=0.0, direction=np.array([1.0, -1.0]))
-    tr = rollout_batch(
-        env, both, 0, jnp.array([SQUARE_CODES] * 2, jnp.int32), params_axes=jenv.param_axes(both)
-    )
+    tr = rollout(env, both, 0, jnp.array([SQUARE_CODES] * 2, jnp.int32))
     np.testing.assert_array_equal(tr.info.progress[0], -tr.info.progress[1])
 
 
@@ -271,7 +269,7 @@ def test_old_names_import_from_their_old_places():
             "decode_scene_action",
             "encode_scene_action",
         ],
-        "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make", "rollout_batch"],
+        "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make"],
         # moved by issue 30's import clean-up, still importable where they were
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
         "jswim.studies.scenes": [
