@@ -9,9 +9,9 @@ Where to start
 --------------
 - Any world through one protocol: ``env, params = jswim.make("ng", scene)``, then
   ``env.reset``/``env.step`` or ``jswim.rollout(env, params, key, actions)`` (:mod:`jswim.env.base`).
-- Step a swimmer: ``jswim.rollout("purcell", [(2, -1), (1, -1), (2, 1), (1, 1)])`` (one square
-  gait cycle), or the functional environment ``make_params``, ``reset``, ``step``,
-  ``step_batch`` (:mod:`jswim.env`).
+- Step a named swimmer by ``(dof, roc)`` moves: ``jswim.env.rollout("purcell", [(2, -1), (1, -1),
+  (2, 1), (1, 1)])`` (one square gait cycle, float64), or the functional environment
+  ``make_params``, ``reset``, ``step``, ``step_batch`` (:mod:`jswim.env`).
 - Run a study: ``jswim.run_study("swim")`` (the ``jswim swim`` job; options in
   :class:`jswim.studies.StudyOptions`), then ``jswim.load(folder)`` for its runs and trajectories as
   pandas DataFrames (and ``study.transcript(run_id)``, ``study.calls``).
@@ -31,7 +31,7 @@ __version__ = "0.1.0"
 
 #: Public name -> the module that owns it (imported on first access, PEP 562).
 _EXPORTS = {
-    "rollout": "jswim.env",
+    "rollout": "jswim.env.episodes",
     "make": "jswim.env.worlds",
     "register_world": "jswim.env.worlds",
     "make_params": "jswim.env",

@@ -64,7 +64,7 @@ from jswim import sharding
 from jswim.agents.qlearning import _compiler_options
 from jswim.env.base import Environment
 from jswim.env.episodes import Trajectory
-from jswim.agents.ppo_judge import evaluate, evaluate_scene, exact_x  # noqa: F401  (their old place)
+from jswim.agents.ppo_judge import evaluate, evaluate_swimmers, exact_x  # noqa: F401  (the judge, next to the learner)
 from jswim.errors import ConfigError
 
 

@@ -254,6 +254,14 @@ class Environment:
         obs = self.observe(state, params)
         return jnp.mean(obs.position[:, 0]), obs.position[0, 1], obs.orientation[0]
 
+    def judge_view(self, params: Any) -> tuple[Any, ...] | None:
+        """The judge's view of this world: for each swimmer, the paper's swimmer (an
+        [`EnvParams`][jswim.env.params.EnvParams] of the bulk fluid, its start that swimmer's)
+        whose noiseless displacements the success criterion reads that swimmer's own moves with;
+        ``None`` (the default): the criterion does not apply (its threshold is the paper
+        swimmer's best stroke)."""
+        return None
+
     def batch_params(self, params: Any, n: int) -> tuple[Any, Any]:
         """``params`` for ``n`` runs, and ``vmap``'s ``in_axes`` of them (hashable): a leaf with
         more axes than :attr:`default_params`' same leaf carries one value per run (axis 0), the

@@ -8,9 +8,11 @@ restated as the protocol's :class:`~jswim.env.base.StepInfo`.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from jswim.env.base import Environment, Observation, StepInfo, scaled
@@ -19,6 +21,13 @@ from jswim.env.params import EnvParams, broadcast_params, make_params
 from jswim.env.state import EnvState, dof_values, reset
 from jswim.env.stepping import advance
 from jswim.swimmers.models import SwimmerModel
+
+
+def _levels(init: Any) -> Any:
+    """A start of :class:`EnvParams` as ``make_params`` takes it (a random one stays random)."""
+    init = np.asarray(init)
+    levels = tuple(int(v) for v in (init[0] if init.ndim > 1 else init))
+    return "random" if any(v < 0 for v in levels) else levels
 
 
 @dataclasses.dataclass(frozen=True)
@@ -109,6 +118,13 @@ class SwimmerWorld(Environment):
     def pose(self, state: EnvState, params: EnvParams) -> tuple[Array, Array, Array]:
         """The state's own centroid x, y and orientation (their float32 high parts)."""
         return state.x, state.y, state.theta
+
+    def judge_view(self, params: EnvParams) -> tuple[EnvParams]:
+        """The paper's swimmer in the bulk fluid from this run's start: this world's own model, or
+        for a swimmer whose drag a wall corrects, the paper's swimmer of its kind."""
+        model = self.model if math.isinf(getattr(self.model, "height", math.inf)) else None
+        bulk = make_params(model or self.model.kind, init=_levels(params.init))
+        return (bulk,)
 
     def batch_params(self, params: EnvParams, n: int) -> tuple[EnvParams, int]:
         """Every per-run leaf (``zeta``, ``direction``, ``init``) broadcast to ``n`` runs

@@ -177,17 +177,3 @@ def with_llm(row: RunRow, r: RunResult) -> RunRow:
         y=r.y if row.y is None else row.y,
         orientation=r.orientation if row.orientation is None else row.orientation,
     )
-
-
-def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
-    """The judged row of one finished LLM run in the paper's world (a scene's:
-    :func:`jswim.studies.scenes.llm_row`)."""
-    acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
-    xs = np.array([r.x], float).reshape(1, len(r.x))
-    # The judge reads the start as lattice positions: a corner level times K.
-    return with_llm(
-        judged_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon)[
-            0
-        ],
-        r,
-    )

@@ -33,9 +33,8 @@ from typing import Any
 from collections.abc import Sequence
 
 import jax
-import numpy as np
 
-from jswim import __version__, env
+from jswim import __version__
 from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS
@@ -82,62 +81,14 @@ from jswim.studies.execute import (  # noqa: F401
     ProgressFn,
     _configs,
     _groups,
-    _lattice,
-    _row,
-    _run_continuous,
     _run_llm,
     _spec,
 )
-from jswim.studies.rows import judged_rows as _judge_rows
 from jswim.studies.session import _preflight, _record_session, add_session, cap_check  # noqa: F401
 from jswim.studies.report import draw_figures, summarize
 
 
 # -- execution ----------------------------------------------------------------------------------
-
-
-def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """Q-learning, random or continuous-RL runs of one (agent, swimmer, action set, ROC lattice)
-    group, vectorised."""
-    p0 = plans[0]
-    if p0.scene:  # walls, pairs, Purcell above a wall (issues 19, 34): the stroke and the baselines on the scene
-        from jswim.studies import (
-            scenes,
-        )  # lazy: start-up (the scene baselines' module, for scene studies only)
-
-        return scenes.run_baselines(plans, horizon)
-    if p0.agent == CONTINUOUS_AGENT:
-        return _run_continuous(plans, horizon)
-    from jswim.agents import (
-        qlearning,
-        random_policy,
-    )  # lazy: optax and their jits, for baselines only
-
-    world, base = env.make(p0.swimmer, **_lattice(p0.roc_levels))
-    init = np.array(
-        [[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32
-    )
-    params = env.broadcast_params(
-        base,
-        len(plans),
-        zeta=np.array([p.zeta for p in plans]),
-        direction=np.array([p.direction for p in plans], float),
-        init=init,
-    )
-    keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
-    if p0.agent == "qlearning":
-        cfg = qlearning.QConfig(steps=p0.steps, action_set=p0.action_set)
-        run = qlearning.train(world, params, keys, cfg, pose=True)
-    else:
-        run = random_policy.run(world, params, keys, p0.steps, p0.action_set)
-    return _judge_rows(
-        plans,
-        np.asarray(run.actions),
-        np.asarray(run.x),
-        np.asarray(run.levels0),
-        horizon,
-        pose=(np.asarray(run.y), np.asarray(run.orientation)),
-    )
 
 
 @dataclass
@@ -430,6 +381,8 @@ def _run_in(
         f"{finished} runs already done" if finished else "",
     )
 
+    from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
+
     for (agent, *_), group in _groups(
         [p for p in todo if p.agent != "llm"],
         "agent",
@@ -440,7 +393,7 @@ def _run_in(
         "variant",
         "zeta",
     ).items():
-        store.add_runs(_run_baselines(group, options.horizon))
+        store.add_runs(baselines.run_baselines(group, options.horizon))
         finished += len(group)
         tick(agent, finished, total, "")
 

@@ -42,8 +42,8 @@ def test_scene_rollout_per_cycle_is_the_independent_rk4(expected):
     np.testing.assert_allclose(r.gap, H - wall_rft.LINK_RADIUS)
     assert not r.contact.any() and not r.stuck.any()
     np.testing.assert_allclose(np.cumsum(r.dx[:, 0]), r.x[:, 0], atol=1e-14)
-    # jswim.rollout(..., scene=) is the same record
-    r2 = jswim.rollout("purcell", SQUARE * 3, scene=WALL)
+    # jswim.env.rollout(..., scene=) is the same record
+    r2 = jswim.env.rollout("purcell", SQUARE * 3, scene=WALL)
     np.testing.assert_array_equal(r2.x, r.x)
     assert expected > 0.19124724 + 1e-3  # the wall's ratio above 2 makes the stroke go further
 

@@ -62,7 +62,7 @@ def test_rollout_runs_in_float64_without_global_flags(float32):
     import jswim
 
     assert jnp.result_type(float) == jnp.float32  # the user's default
-    r = jswim.rollout("purcell", SQUARE * 1000)  # the top-level name notebooks use
+    r = jswim.env.rollout("purcell", SQUARE * 1000)  # the named-swimmer shortcut notebooks use
     assert r.x.dtype == np.float64
     cycles = r.x[3::4]
     np.testing.assert_allclose(np.diff(cycles), cycles[0], rtol=0, atol=1e-12)  # 1e-12 per cycle

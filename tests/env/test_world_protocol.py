@@ -103,7 +103,7 @@ def test_scene_world_steps_bit_equal_to_scene_step_float32(float32, scene):
 @pytest.mark.slow
 def test_rollout_serves_both_worlds_as_their_own_rollouts():
     # The paper's world: the old rollout (float64) and the protocol's, same key, same numbers.
-    old = jswim.rollout("ng", SQUARE * 2, key=4, zeta=0.3)
+    old = jswim.env.rollout("ng", SQUARE * 2, key=4, zeta=0.3)
     with jax.enable_x64(True):
         env, params = jswim.make("ng", zeta=0.3)
         tr = jswim.rollout(env, params, 4, jnp.array(SQUARE_CODES * 2, jnp.int32))
@@ -276,7 +276,6 @@ def test_old_names_import_from_their_old_places():
             "wall_scene",
             "pair_scene",
             "cells",
-            "run_baselines",
             "fate",
             "scene_row",
         ],
@@ -313,5 +312,5 @@ def test_old_paths_are_the_moved_modules():
 
 @pytest.mark.slow
 def test_old_rollout_with_a_scene_routes_to_the_scene_rollout():
-    r = jswim.rollout("ng", SQUARE, scene=Scene(medium="wall", height=5.0))
+    r = jswim.env.rollout("ng", SQUARE, scene=Scene(medium="wall", height=5.0))
     assert r.z.shape == (4, 1) and r.contact.shape == (4,)
