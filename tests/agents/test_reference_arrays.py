@@ -103,7 +103,7 @@ def compute_arrays() -> dict[str, np.ndarray]:
     )
     # Fixed strokes: the square gait (and its time reverse) in the paper's world, through the one
     # rollout, noiseless and noisy.
-    square = np.array([3, 1, 4, 6] * 5)
+    square = np.array([3, 0, 5, 2] * 5)  # D2 down, D1 down, D2 up, D1 up: the square from (+, +)
     for swimmer, zeta, direction in (("purcell", 0.0, 1), ("ng", 0.5, -1), ("purcell", 0.3, -1)):
         w, p = jswim.make(swimmer, zeta=zeta, direction=direction)
         tr = jswim.rollout(w, p, jax.random.PRNGKey(5), square)
