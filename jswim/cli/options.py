@@ -57,7 +57,7 @@ def add_study_commands(sub: argparse._SubParsersAction) -> list[argparse.Argumen
     )
     if base.outlined(p):
         return [p, q]
-    from jswim.studies.grids import SPECS, STUDIES  # lazy: the grids load JAX (not for --help)
+    from jswim.studies.specs import SPECS, STUDIES  # lazy: the grids load JAX (not for --help)
 
     add_run_options(p, study=False, spec=SPECS["swim"])
     names = q.add_subparsers(
@@ -92,8 +92,8 @@ def study_parser() -> argparse.ArgumentParser:
 
 def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> None:
     """The options of ``jswim swim`` and ``jswim study NAME``; each help names the defaults of the
-    study (``spec``: its :class:`jswim.studies.grids.StudySpec`)."""
-    from jswim.studies.grids import (
+    study (``spec``: its :class:`jswim.studies.specs.StudySpec`)."""
+    from jswim.studies.options import (
         DEFAULT_ZETAS,
         StudyOptions,
     )  # lazy: the grids load JAX (not for --help)
@@ -645,7 +645,7 @@ def _prompt_files(text: str) -> tuple[str, ...]:
 
 def _refuse_ignored(study: str, args: argparse.Namespace) -> None:
     """An option the study would drop silently is a mistake: say so (exit 2) instead of running."""
-    from jswim.studies.grids import ignored_options  # lazy: the grids load JAX
+    from jswim.studies.specs import ignored_options  # lazy: the grids load JAX
 
     given = [
         field for field, (dest, _) in IGNORABLE.items() if getattr(args, dest, None) is not None

@@ -1,7 +1,10 @@
 """The paper's experiments as study grids, run in batches and stored resumably.
 
-- :mod:`jswim.studies.grids`: every study's defaults and cells as one table (:data:`SPECS`),
-  :class:`StudyOptions` and :func:`build` (study -> list of :class:`Plan`);
+- :mod:`jswim.studies.options`: :class:`StudyOptions`, the knobs; :mod:`jswim.studies.specs`:
+  every study's defaults and cells as one table (:data:`SPECS`) and :func:`build` (study -> list
+  of :class:`Plan`, :mod:`jswim.studies.plans`; the scene studies' cells in
+  :mod:`jswim.studies.scene_grids`); :mod:`jswim.studies.baselines`: every non-LLM run's one
+  pipeline;
 - :mod:`jswim.studies.run`: :func:`run_study` (runs what a study folder lacks, stores, summarises);
 - :mod:`jswim.studies.report`: :func:`summarize` (the table) and :func:`draw_figures`;
 - :mod:`jswim.studies.qlearn`: the Q-learning steps-to-learn distributions (``jswim qlearn``);
@@ -26,7 +29,7 @@ import importlib
 from typing import Any
 
 #: Public name -> the submodule that owns it, imported on first access (PEP 562), so that
-#: ``jswim.studies.grids`` (all the command line needs to build its parser) loads alone.
+#: ``jswim.studies.specs`` (all the command line needs to build its parser) loads alone.
 _EXPORTS = {
     **dict.fromkeys(
         (
@@ -34,16 +37,13 @@ _EXPORTS = {
             "COMPETENCE_VARIANTS",
             "DEFAULT_ZETAS",
             "INIT_CHOICES",
-            "SPECS",
-            "STUDIES",
             "SWIM_VARIANT",
-            "Plan",
             "StudyOptions",
-            "StudySpec",
-            "build",
         ),
-        "jswim.studies.grids",
+        "jswim.studies.options",
     ),
+    **dict.fromkeys(("SPECS", "STUDIES", "StudySpec", "build"), "jswim.studies.specs"),
+    "Plan": "jswim.studies.plans",
     **dict.fromkeys(("draw_figures", "summarize"), "jswim.studies.report"),
     **dict.fromkeys(
         ("ProgressFn", "StudyResult", "default_folder", "identity", "run_study"),

@@ -30,7 +30,8 @@ from jswim.judging.gait import Criterion
 from jswim.results.row import RunRow
 from jswim.scenes import Scene
 from jswim.studies import scenes
-from jswim.studies.grids import CONTINUOUS_AGENT, STROKE_AGENT, Plan
+from jswim.studies.options import CONTINUOUS_AGENT, STROKE_AGENT
+from jswim.studies.plans import Plan
 from jswim.studies.rows import judged_rows, with_llm
 
 

@@ -26,7 +26,8 @@ from jswim.llm.probe import ServerInfo
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.results import StudyStore
-from jswim.studies.grids import Plan, StudyOptions
+from jswim.studies.plans import Plan
+from jswim.studies.options import StudyOptions
 from jswim.studies.session import _preflight, _record_session, add_session
 
 

@@ -20,7 +20,7 @@ from jswim.agents.llm import RunResult
 from jswim.judging import lattice
 from jswim.judging.gait import Criterion, GaitReport, judge
 from jswim.results.row import SWITCHES, RunRow
-from jswim.studies.grids import Plan
+from jswim.studies.plans import Plan
 
 
 #: An LLM run's switches that are columns of their own: the plan's (its value stands) and the typed ones.

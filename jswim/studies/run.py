@@ -1,6 +1,6 @@
 """Running a study: build its plans, run what is not done yet, store and summarise.
 
-Execution groups the plans (:mod:`jswim.studies.grids`): Q-learning and random-policy runs
+Execution groups the plans (:mod:`jswim.studies.specs`): Q-learning and random-policy runs
 train/roll out in one vectorised call per swimmer (here and in :mod:`jswim.studies.execute`);
 LLM runs are per-run pipelines (:func:`jswim.studies.execute._run_llm`), each landing in the study
 folder (:class:`jswim.results.StudyStore`) the moment it ends, with the server's preflight and the
@@ -62,17 +62,16 @@ from jswim.results import (
     write_json,
     writing,
 )
-from jswim.studies.grids import (
+from jswim.studies.options import (
     ALL_AGENTS,
     AGENTS,
     COMPETENCE_VARIANTS,
     CONTINUOUS_AGENT,
-    SPECS,
     SWIM_VARIANT,
-    Plan,
     StudyOptions,
-    build,
 )
+from jswim.studies.specs import SPECS, build
+from jswim.studies.plans import Plan
 from jswim.studies import prompt_files
 
 # The execution and the session, in their own modules; their names stay importable from here.
@@ -136,7 +135,7 @@ GRID_SIZE = (
     "formations",
 )
 
-#: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
+#: How run seeds are made (``jswim.studies.plans.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
 
 #: The study's prompt template (written once per folder; its hash is in the identity).

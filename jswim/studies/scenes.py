@@ -54,8 +54,9 @@ from jswim.scenes import Scene
 from jswim.swimmers.models import SWIMMERS
 from jswim.results.row import RunRow, as_run_rows
 from jswim.studies.rows import build_row, signs
-from jswim.studies.grids import STROKE_AGENT, Plan
-from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
+from jswim.studies.options import STROKE_AGENT
+from jswim.studies.plans import Plan
+from jswim.studies.scene_grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
 
 def square(start: Sequence[int], direction: int) -> tuple[int, int, int, int]:

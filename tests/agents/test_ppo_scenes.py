@@ -112,7 +112,7 @@ def test_pair_judge_on_hand_made_strokes():
     # The real-valued pair judge against the lattice one of the studies (jswim.judging.gait.judge on each
     # swimmer's own codes, an independent code path) on corner moves, where the two must agree.
     from jswim.studies import scenes
-    from jswim.studies.grids import Plan
+    from jswim.studies.plans import Plan
 
     world, task = make(
         "ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0)

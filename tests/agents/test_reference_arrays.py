@@ -116,7 +116,7 @@ def compute_arrays() -> dict[str, np.ndarray]:
 
 def _study_rows(tmp: Path) -> dict[str, Any]:
     """Rows and transcripts of small studies: LLM (fake server), Q-learning, random, PPO, stroke."""
-    from jswim.studies.grids import StudyOptions
+    from jswim.studies.options import StudyOptions
     from jswim.studies.run import run_study
     from tests.fakeserver import FakeServer, hash_reply
 

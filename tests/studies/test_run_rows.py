@@ -14,7 +14,8 @@ from jswim.judging.gait import GaitReport
 from jswim.llm.usage import UsageTotals
 from jswim.results import RunRow
 from jswim.studies import baselines, rows, scenes
-from jswim.studies.grids import Plan, wall_scene, pair_scene
+from jswim.studies.plans import Plan
+from jswim.studies.scene_grids import wall_scene, pair_scene
 
 # The documented columns (docs: RunRow), written out here.
 HEAD = [

@@ -151,9 +151,9 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
 def test_ppo_runs_are_offered_every_move_whatever_the_action_set(study, extra):
     # --action-set restricts the lattice agents' (DOF, ROC) moves; PPO picks any arm and any real
     # ROC, so its plans say "all" (not a set it was never held to), and the others keep the option
-    from jswim.studies import grids
+    from jswim.studies import specs
 
-    plans = grids.build(
+    plans = specs.build(
         study,
         StudyOptions(
             action_set="shape-changing", q_runs=1, steps=8, agents=("random", "ppo"), **extra
