@@ -400,7 +400,7 @@ def train(
         (leading axis B for a batch of keys). Memory: ``6 steps + 4 (2**n_dof)(3 n_dof) +
         4 n_dof`` bytes per learner in float32 (1,304 at 200 steps for the two-DOF swimmers);
         bound it for large populations by training in chunks, as
-        [`study`][jswim.studies.qlearn.study] does.
+        ``jswim.studies.qlearn.study`` does.
     """
     cells = env.cells() if cells is None else cells
     key = jnp.asarray(key)

@@ -94,7 +94,7 @@ def run(
     steps : int
         Steps per run.
     action_set : {"all", "shape-changing"}
-        Offered actions ([`ACTION_SETS`][jswim.actions.ACTION_SETS]), as in the LLM's prompt;
+        Offered actions (``jswim.actions.ACTION_SETS``), as in the LLM's prompt;
         the world's discretiser ([`Environment.cells`][jswim.env.base.Environment.cells]) says
         which moves change the shape.
     rocs : tuple of int, optional

@@ -7,10 +7,10 @@ Every world supplies one ([`Environment.cells`][jswim.env.base.Environment.cells
   [-1, 1]), rows ``sum_d j_d (K + 1)**d`` (the joint corners at K = 1: 4 shapes alone, 16 for a
   pair, ``2**(2S)`` for S swimmers);
 * [`PaperCells`][jswim.env.discretiser.PaperCells]: the paper's world, the corner (or lattice
-  point) of :mod:`jswim.env`'s state, and the swimmer's offered ROCs
+  point) of `jswim.env`'s state, and the swimmer's offered ROCs
   ([`offered_rocs`][jswim.actions.offered_rocs]);
 * [`WallCells`][jswim.env.discretiser.WallCells]: a scene with a wall, the joint corner times a
-  height bin of swimmer 1 ([`HEIGHT_EDGES`][jswim.env.discretiser.HEIGHT_EDGES]).
+  height bin of swimmer 1 (``HEIGHT_EDGES``).
 
 A world of its own may return a subclass of its own.
 """
@@ -52,7 +52,7 @@ def corner(j: Array, roc_levels: int = 1) -> Array:
 
 
 def positions(state: Any, roc_levels: int) -> Array:
-    """A :mod:`jswim.env` state's lattice positions ``j`` (int32, ``(n_dof,)``): its levels when
+    """A `jswim.env` state's lattice positions ``j`` (int32, ``(n_dof,)``): its levels when
     ``K = 1``, else ``round(K frac)`` (every state reached from a corner by lattice codes lies on
     the lattice)."""
     if roc_levels == 1:
@@ -111,7 +111,7 @@ class Cells:
 
 @dataclasses.dataclass(frozen=True)
 class PaperCells(Cells):
-    """The paper's world: the corner (or lattice point) of :mod:`jswim.env`'s state, and by
+    """The paper's world: the corner (or lattice point) of `jswim.env`'s state, and by
     default the swimmer's offered ROCs ([`offered_mask`][jswim.env.discretiser.offered_mask])."""
 
     def positions(self, state: Any, params: Any) -> Array:

@@ -59,7 +59,7 @@ def world(plan: Plan) -> tuple[Environment, Any]:
 
 def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
     """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: the world's own
-    (:attr:`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
+    (`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
     a plane parallel to the wall, a registered world) stays at the scene's start height (0 in the
     paper's bulk fluid), untilted."""
     if obs.height is not None:
@@ -69,7 +69,7 @@ def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
 
 
 def start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, ...]:
-    """Each swimmer's start x, height and tilt ``(S,)`` (:func:`_lift`), and the DOFs' start
+    """Each swimmer's start x, height and tilt ``(S,)`` (`_lift`), and the DOFs' start
     corner (the world's discretiser's lattice positions, ``(n_dof,)``)."""
     state = world.reset(jax.random.PRNGKey(0), params)
     obs = world.observe(state, params)

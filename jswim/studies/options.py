@@ -1,4 +1,4 @@
-"""A study's options: the knobs a user turns (:class:`StudyOptions`, each checked once, the
+"""A study's options: the knobs a user turns (`StudyOptions`, each checked once, the
 command line's option named in every error) and the agents a study may run.
 """
 
@@ -28,7 +28,7 @@ CONTINUOUS_AGENT = "ppo"
 STROKE_AGENT = "stroke"
 #: The agents of a paper study's cells that run next to the LLM.
 WITH_BASELINES = ("llm", "qlearning", "random")
-#: Every agent a study may run (the default of :attr:`StudyOptions.agents`).
+#: Every agent a study may run (the default of `StudyOptions.agents`).
 ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT)
 #: ROC lattices of the continuous study (``--roc-levels``; K = 1 is the paper's set).
 DEFAULT_ROC_LEVELS = (1, 2, 5, 10)
@@ -55,7 +55,7 @@ COMPETENCE_VARIANTS = (
 
 @dataclass(frozen=True)
 class StudyOptions:
-    """Knobs of a study; ``None`` means the study's own default (:data:`SPECS`).
+    """Knobs of a study; ``None`` means the study's own default (`SPECS`).
 
     Raises
     ------
@@ -206,7 +206,7 @@ def prompt_label(path: str) -> str:
 
 
 def continuous_agent_available() -> bool:
-    """Whether the real-valued RL baseline (:mod:`jswim.agents.ppo`) is installed."""
+    """Whether the real-valued RL baseline ([`ppo`][jswim.agents.ppo]) is installed."""
     import importlib.util
 
     return importlib.util.find_spec("jswim.agents.ppo") is not None

@@ -1,5 +1,5 @@
-"""A study's runs: one :class:`Plan` per run, the :class:`Cell` (group) it belongs to, and what
-makes a run itself: its start (:func:`initial`) and its seed (:func:`run_seed`), derived from the
+"""A study's runs: one `Plan` per run, the `Cell` (group) it belongs to, and what
+makes a run itself: its start (`initial`) and its seed (`run_seed`), derived from the
 study seed and the run's own id, never from its place in the grid, so adding a noise level or a
 repeat changes no existing run, and the same run id with the same study seed is the same run in
 every folder.
@@ -44,7 +44,7 @@ class Plan:
         1  # K of the ROC lattice (1: the paper's); the continuous agent's real ROCs: 0
     )
     sample: int = 0  # which independent repeat of this very setting (--samples; 0: the run itself)
-    scene: str = ""  # canonical JSON of the run's Scene (:func:`scene_json`); "": the bulk fluid
+    scene: str = ""  # canonical JSON of the run's Scene (`scene_json`); "": the bulk fluid
     pair_prompt: str = (
         "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
     )
@@ -81,7 +81,7 @@ class Cell:
 def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | str:
     """Initial configuration of repeat ``k`` of ``swimmer`` (default model options).
 
-    ``paper``: the authors' start (:func:`jswim.agents.defaults.paper_init`: Purcell (+, +),
+    ``paper``: the authors' start (`jswim.agents.defaults.paper_init`: Purcell (+, +),
     NG (10, 6), four-sphere (6, 10, 10), four-link every hinge at +2pi/9); ``cycle`` goes
     through every corner of the DOF cube; ``random``; or a sign string (``"+-"``), one sign
     per DOF.
@@ -91,7 +91,7 @@ def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | 
     ConfigError
         A sign string whose length is not the swimmer's number of DOFs.
 
-    A world of :func:`jswim.register_world` starts where it starts: ``"default"``.
+    A world of [`register_world`][jswim.register_world] starts where it starts: ``"default"``.
     """
     if swimmer in registered_worlds():
         return "default"

@@ -119,7 +119,7 @@ def school_cells(o: StudyOptions) -> list[Cell]:
 
 def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
     """The continuous RL baseline's cell next to the other agents of a group (same group name,
-    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; :mod:`jswim.studies.scenes`)."""
+    real ROCs: run ids ``ppo-...-real-<tag>-r<k>``; [`scenes`][jswim.studies.scenes])."""
     if not continuous_agent_available():
         return []
     return [Cell(group, (CONTINUOUS_AGENT,), scene=scene, roc_levels=0, tag=tag)]

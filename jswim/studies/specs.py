@@ -1,5 +1,5 @@
-"""Every study's defaults and cells as one table (:data:`SPECS`), and :func:`build`, which turns
-a study and its options into the list of runs (:class:`~jswim.studies.plans.Plan`).
+"""Every study's defaults and cells as one table (`SPECS`), and `build`, which turns
+a study and its options into the list of runs ([`Plan`][jswim.studies.plans.Plan]).
 
 A study runs, per swimmer and target direction, a list of *cells* (one group of a table or
 figure: a noise level, an n_ht, a dropped sentence, ...); a cell runs some agents, each
@@ -99,7 +99,7 @@ def _competence(o: StudyOptions) -> list[Cell]:
 
 @dataclass(frozen=True)
 class StudySpec:
-    """A study's defaults and its cells (what ``None`` in :class:`StudyOptions` resolves to)."""
+    """A study's defaults and its cells (what ``None`` in `StudyOptions` resolves to)."""
 
     cells: Callable[[StudyOptions], list[Cell]]
     runs: int  # LLM runs per cell
@@ -117,7 +117,7 @@ class StudySpec:
     )
 
 
-#: Why a study may have no use for an option (:class:`StudyOptions` field -> reason); the
+#: Why a study may have no use for an option (`StudyOptions` field -> reason); the
 #: command line refuses such an option instead of dropping it silently.
 IGNORED = {
     "zetas": "only the noise study sweeps zeta; give one level with --noise",
@@ -211,8 +211,8 @@ STUDIES = tuple(SPECS)
 
 
 def ignored_options(study: str, given: Iterable[str]) -> dict[str, str]:
-    """The options in ``given`` (:class:`StudyOptions` field names) that ``study`` has no use for,
-    each with the reason (:data:`IGNORED`)."""
+    """The options in ``given`` (`StudyOptions` field names) that ``study`` has no use for,
+    each with the reason (`IGNORED`)."""
     spec = SPECS.get(study)
     return {k: IGNORED[k] for k in given if spec is not None and k in spec.ignores}
 
@@ -225,8 +225,8 @@ MIN_PERIOD = 4
 def short_steps_warning(o: StudyOptions) -> str | None:
     """A warning when runs are too short for any of them to meet the success criterion.
 
-    Success needs ``n_cycles`` consecutive cycles of at least :data:`MIN_PERIOD` steps each within
-    the horizon (:class:`jswim.judging.gait.Criterion`), so a run of fewer steps fails whatever it does.
+    Success needs ``n_cycles`` consecutive cycles of at least `MIN_PERIOD` steps each within
+    the horizon ([`Criterion`][jswim.judging.gait.Criterion]), so a run of fewer steps fails whatever it does.
     """
     need = PAPER.n_cycles * MIN_PERIOD
     if o.steps < need:
