@@ -20,7 +20,7 @@ from jswim.env.randomness import seed_key
 
 
 class Trajectory(NamedTuple):
-    """What a rollout did; leading axis = steps (after a batch axis for :func:`rollout_batch`).
+    """What a rollout did; leading axis = steps (after the batch axis of a batch).
 
     ``state`` and ``obs`` are the state after each step and its :class:`Observation`; ``info``
     the step's :class:`StepInfo`."""
