@@ -8,7 +8,7 @@ of the range, >= 1/2 of the square gait's speed, 3 cycles; steps to learn by
 is reported apart; the other direction runs on the compiled program (``block_until_ready``).
 References measured in the same run and reported as ratios: the same number of continuous
 environment steps alone (random one-DOF ROCs, one jitted scan of vmapped steps), and the tabular
-Q-learner (``qlearning.train_batch``, same seeds and steps). CPU seconds (all threads of the
+Q-learner (``qlearning.train``, same seeds and steps). CPU seconds (all threads of the
 process) are printed beside wall seconds: on a loaded machine they bound what an idle one needs.
 
 The machine is shared: the load average is printed with the numbers.
@@ -29,6 +29,7 @@ import numpy as np
 
 from jswim import env
 from jswim.agents import ppo, qlearning
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.agents.defaults import paper_init
 from jswim.judging.stats import learn_stats
 
@@ -74,7 +75,7 @@ def main() -> None:
                 env.make_params(swimmer, direction=direction, init=paper_init(model)), args.seeds
             )
             keys = jax.random.split(jax.random.PRNGKey(i), args.seeds)
-            run, wall = _timed(ppo.train_batch, keys, params, cfg)
+            run, wall = _timed(ppo.train, SwimmerWorld(params.model), params, keys, cfg)
             cpu = _timed.cpu
             report = ppo.evaluate(run, params)
             ls = learn_stats(report.steps_to_learn.tolist())
@@ -100,9 +101,11 @@ def main() -> None:
                 _env_only(params, keys, u).block_until_ready()
                 _, row["env_only_s"] = _timed(_env_only, params, keys, u)
                 qcfg = qlearning.QConfig(steps=cfg.steps)
-                qlearning.train_batch(keys, params, qcfg)
-                _, row["qlearning_s"] = _timed(qlearning.train_batch, keys, params, qcfg)
-                q = qlearning.train_batch(keys, params, qcfg)
+                qlearning.train(SwimmerWorld(params.model), params, keys, qcfg)
+                _, row["qlearning_s"] = _timed(
+                    qlearning.train, SwimmerWorld(params.model), params, keys, qcfg
+                )
+                q = qlearning.train(SwimmerWorld(params.model), params, keys, qcfg)
                 row["qlearning_learned"] = learn_stats(
                     qlearning.evaluate(q, params).steps_to_learn.tolist()
                 ).label()

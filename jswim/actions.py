@@ -53,6 +53,14 @@ def check_roc_levels(k: Any, name: str = "--roc-levels") -> int:
 # -- the integer action codec of every world ---------------------------------------------------
 
 
+def offered_rocs(n_dof: int, roc_levels: int = 1) -> tuple[int, ...]:
+    """ROCs ``k`` offered to an agent: the paper's {-1, 0, 1} for two DOFs, {-1, 1} for more (the
+    published four-DOF setting). With ``roc_levels = K`` (an extension): every integer of
+    ``-K..K`` (ROC ``k`` moves the DOF by ``k/K`` of its range), 0 left out for more than two DOFs."""
+    k = check_roc_levels(roc_levels)
+    return tuple(r for r in range(-k, k + 1) if r != 0 or n_dof == 2)
+
+
 def n_actions(n_dof: int, roc_levels: int = 1) -> int:
     """Number of integer codes: ``n_dof (2K + 1)`` (``K = 1``: the paper's ``3 n_dof``)."""
     return n_dof * (2 * roc_levels + 1)

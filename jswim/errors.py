@@ -76,7 +76,7 @@ def check_direction(direction: object) -> int:
     return int(direction)  # type: ignore[call-overload]
 
 
-#: The one range of each study size, read by every check of it ([`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions],
+#: The one range of each study size, read by every check of it ([`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions],
 #: ``jswim study``, ``jswim bench``, [`jswim.prompt.PromptConfig`][jswim.prompt.PromptConfig]): name -> (lowest, highest).
 #: ``n_ht``: the paper sweeps 1 to 8 history records (its Fig. 3; the history study's default
 #: ``--n-hts``) and picks 3 and 6; 0 is the no-history ablation; 100 is far past the sweep (a run

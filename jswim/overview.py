@@ -330,7 +330,7 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     lines = [f"study {s.study} in {s.folder}: {s.status_text()}", f"model: {s.model_text()}"]
     opts = (s.meta.get("identity") or {}).get("options") or {}
     if opts:
-        from jswim.studies.grids import SPECS  # lazy: the grids load JAX
+        from jswim.studies.specs import SPECS  # lazy: the grids load JAX
 
         spec = SPECS.get(s.study)
         lines.append(f"settings: {_settings_text(opts, spec.ignores if spec else ())}")

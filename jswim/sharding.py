@@ -113,6 +113,40 @@ def apply_batched(
     return jax.tree_util.tree_map(lambda a: a[:n], out)
 
 
+def leaf_axes(tree: Any, axes: Any) -> Any:
+    """``axes`` (a ``vmap`` ``in_axes`` prefix of ``tree``: 0, None or a tree of them) spelled out
+    for every leaf of ``tree``."""
+    return jax.tree_util.tree_map(
+        lambda ax, sub: jax.tree_util.tree_map(lambda _: ax, sub),
+        axes,
+        tree,
+        is_leaf=lambda a: a is None,
+    )
+
+
+def apply_runs(fn: Callable[[Any, Any], Any], keys: Any, params: Any, axes: Any, n: int) -> Any:
+    """``fn(keys, params)`` for ``n`` runs, the runs sharded over every device.
+
+    ``keys`` has leading axis ``n``; ``params``' leaves carry it where ``axes`` (a ``vmap``
+    ``in_axes`` prefix of ``params``) says 0, and are replicated where it says None. On one device
+    this is a plain call; otherwise as `apply_batched`.
+    """
+    if device_count() == 1:
+        return fn(keys, params)
+    size = padded_size(n)
+    per_leaf = leaf_axes(params, axes)
+    leaves, treedef = jax.tree_util.tree_flatten(params)
+    ax = treedef.flatten_up_to(per_leaf)
+    run_leaves = [leaf for leaf, a in zip(leaves, ax) if a == 0]
+    keys, run_leaves = shard(pad((keys, tuple(run_leaves)), n, size))
+    it = iter(run_leaves)
+    params = treedef.unflatten([next(it) if a == 0 else leaf for leaf, a in zip(leaves, ax)])
+    out = fn(keys, params)
+    if size == n:
+        return out
+    return jax.tree_util.tree_map(lambda a: a[:n], out)
+
+
 def chunks(n: int, chunk: int) -> Iterator[tuple[int, int]]:
     """``(start, stop)`` ranges covering ``0 .. n``; every start is a multiple of the chunk,
     which is rounded up to a multiple of `granule`."""

@@ -236,7 +236,7 @@ def small_swim_study() -> Path:
     """
     from filelock import FileLock
 
-    from jswim.studies.grids import StudyOptions
+    from jswim.studies.options import StudyOptions
     from jswim.studies.run import run_study
     from tests.fakeserver import FakeServer, hash_reply
 

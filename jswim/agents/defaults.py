@@ -7,17 +7,14 @@ the start, the reply length limit and how DOF values are written in the prompt. 
 from __future__ import annotations
 
 from jswim.agents.memory import ClearingRule
-from jswim.actions import check_roc_levels
+from jswim.actions import check_roc_levels, offered_rocs
 from jswim.prompt import SwimmerText
 from jswim.swimmers.models import SwimmerModel
 
 
 def default_rocs(model: SwimmerModel, roc_levels: int = 1) -> tuple[int, ...]:
-    """ROCs offered to an agent: the paper's {-1, 0, 1} for two DOFs, {-1, 1} for more (the
-    published four-DOF setting). With ``roc_levels = K`` (an extension): every integer of
-    ``-K..K`` (ROC ``k`` moves the DOF by ``k/K`` of its range), 0 left out for more than two DOFs."""
-    k = check_roc_levels(roc_levels)
-    return tuple(r for r in range(-k, k + 1) if r != 0 or model.n_dof == 2)
+    """ROCs offered to an agent on ``model`` ([`offered_rocs`][jswim.actions.offered_rocs])."""
+    return offered_rocs(model.n_dof, roc_levels)
 
 
 def default_n_ht(model: SwimmerModel, direction: int = 1) -> int:

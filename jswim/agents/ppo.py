@@ -33,17 +33,17 @@ distribution for old and new parameters, so the surrogate stays on-policy.
 Example::
 
     import jax
-    from jswim.env import make_params, broadcast_params
-    from jswim.agents.ppo import PPOConfig, train_batch, evaluate
+    import jswim
+    from jswim.agents.ppo import PPOConfig, train, evaluate
 
-    params = broadcast_params(make_params("purcell"), 1000)
-    run = train_batch(jax.random.split(jax.random.PRNGKey(0), 1000), params, PPOConfig())
-    report = evaluate(run, params)   # steps to learn, success, ... per learner
+    env, params = jswim.make("purcell")
+    run = train(env, params, jax.random.split(jax.random.PRNGKey(0), 1000), PPOConfig())
+    report = evaluate(run, env.batch_params(params, 1000)[0])   # steps to learn, success, ...
 
-The same learner runs in any world of the protocol ([`train_env`][jswim.agents.ppo.train_env]; a wall or a pair of
-`jswim.scenes` also through [`train_scene_batch`][jswim.agents.ppo.train_scene_batch]), judged by [`evaluate`][jswim.agents.ppo_judge.evaluate]
-([`jswim.agents.ppo_judge`][jswim.agents.ppo_judge]); the paper's world is stepped as the other baselines step it
-([`jswim.agents.worlds.step`][jswim.agents.worlds.step]).
+The same learner runs in any world of the protocol (a wall or a pair of `jswim.scenes`, a
+registered world), judged by [`evaluate`][jswim.agents.ppo_judge.evaluate]; every world is
+stepped as the other baselines step it
+([`Environment.learner_advance`][jswim.env.base.Environment.learner_advance]).
 """
 
 from __future__ import annotations
@@ -61,12 +61,10 @@ from jax import Array
 
 from jswim import env as _env
 from jswim import sharding
-from jswim.agents import worlds
 from jswim.agents.qlearning import _compiler_options
 from jswim.env.base import Environment
-from jswim.env.scene_world import SceneTask, SceneWorld
-from jswim.env.swimmer_world import SwimmerWorld
-from jswim.agents.ppo_judge import evaluate, evaluate_scene, exact_x  # noqa: F401  (their old place)
+from jswim.env.episodes import Trajectory
+from jswim.agents.ppo_judge import evaluate, evaluate_swimmers, exact_x  # noqa: F401  (the judge, next to the learner)
 from jswim.errors import ConfigError
 
 
@@ -200,7 +198,7 @@ def _temperature(t: Array, steps: int, start: Array, end: Array) -> Array:
 
 
 class PPORun(NamedTuple):
-    """What training recorded, per learner (leading batch axis from [`train_batch`][jswim.agents.ppo.train_batch]).
+    """What training recorded, per learner (leading batch axis for a batch of keys).
 
     Attributes
     ----------
@@ -220,7 +218,7 @@ class PPORun(NamedTuple):
     y, orientation : float (steps,)
         Centroid y and orientation (rad, of the reference link) after each step.
     trace : Trajectory or None
-        With ``trace=True`` ([`train_env`][jswim.agents.ppo.train_env]): the world's state, observation and
+        With ``trace=True`` ([`train`][jswim.agents.ppo.train]): the world's state, observation and
         [`StepInfo`][jswim.env.base.StepInfo] after each step ([`jswim.env.episodes.Trajectory`][jswim.env.episodes.Trajectory];
         what the scene studies' rows read: every swimmer's position, height, tilt, stuck, contact).
     """
@@ -387,20 +385,18 @@ def _train(
     params: Any,
     config: PPOConfig,
     hp: dict,
-    world: Environment | None = None,
+    world: Environment,
     axes: Any = 0,
     trace: bool = False,
 ) -> PPORun:
     """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``axes`` says, a
     ``vmap`` prefix) in the world ``world`` (default: the paper's world of ``params``): time
-    outermost. The world's step is [`jswim.agents.worlds.step`][jswim.agents.worlds.step], its observation
+    outermost. The world's step is [`Environment.learner_advance`][jswim.env.base.Environment.learner_advance], its observation
     ``features``, its reward ``StepInfo.progress``.
 
     The scans run over time and every step is vmapped over learners inside them (as in
     PureJaxRL), which keeps the environment's float64 step blocks inside a plain ``vmap``.
     """
-    if world is None:
-        world = SwimmerWorld(params.model, params.roc_levels, params.diagonal)
     n = world.n_dof
     b = keys.shape[0]
     dtype = jnp.result_type(float)
@@ -434,9 +430,9 @@ def _train(
         roc = jnp.clip(u_roc, -1.0, 1.0)
         action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
         logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
-        state, info = worlds.step(world, state, action, y, p)
+        state, info = world.learner_advance(state, action, y, p)
         reward = info.progress.astype(dtype)
-        x, y_pos, theta = worlds.pose(world, state, p)
+        x, y_pos, theta = world.pose(state, p)
         record = (
             action,
             (dof + 1).astype(jnp.int8),
@@ -445,7 +441,7 @@ def _train(
             world.observe(state, p).dofs,
             y_pos,
             theta,
-            worlds.trace(world, state, info, p) if trace else None,
+            Trajectory(state, world.observe(state, p), info) if trace else None,
         )
         return state, _Batch(obs, dof, u_roc, logp, value, reward, tau), record
 
@@ -496,79 +492,57 @@ def _train(
     return PPORun(*record[:5], dofs0, *record[5:])
 
 
-def train(key: Array, params: Any, config: PPOConfig = PPOConfig()) -> PPORun:
-    """Train one PPO learner online for ``config.steps`` steps.
-
-    Parameters
-    ----------
-    key : PRNG key
-        All randomness of the run: initial shape (if random), network init, actions and the
-        environment's noise.
-    params : EnvParams
-        The environment (unbatched leaves).
-    config : PPOConfig
-        Hyperparameters (static).
-
-    Returns
-    -------
-    PPORun
-        Per-step actions, X, progress and DOF values.
-    """
-    run = train_batch(jnp.asarray(key)[None], params, config)
-    return jax.tree.map(lambda v: v[0], run)
-
-
-def train_batch(keys: Array, params: Any, config: PPOConfig = PPOConfig()) -> PPORun:
-    """Train independent learners, one per key, in one jitted, vmapped call.
-
-    Parameters
-    ----------
-    keys : PRNG keys, shape (B, 2)
-        One key per learner; learner ``i`` matches ``train(keys[i], params_i, config)``.
-    params : EnvParams
-        Environment; ``zeta``, ``direction``, ``init`` either shared or with a leading axis of
-        size B ([`jswim.env.broadcast_params`][jswim.env.params.broadcast_params]).
-    config : PPOConfig
-        Hyperparameters shared by all learners (static).
-
-    Returns
-    -------
-    PPORun
-        Fields with a leading axis of size B. Memory: ``(4 (2 n_dof + 5) + 1) steps`` bytes per
-        learner in float32 (7.2 kB at 200 steps for two DOFs), plus the networks while training.
-    """
-    n = keys.shape[0]
-    fn = functools.partial(_jitted(), config=_structure(config), hp=_numbers(config))
-    return sharding.apply_batched(fn, (), (keys, _env.broadcast_params(params, n)), n)
-
-
-def train_env(
+def train(
     env: Environment,
-    keys: Array,
     params: Any,
+    key: Array,
     config: PPOConfig = PPOConfig(),
     *,
-    params_axes: Any = None,
     trace: bool = False,
 ) -> PPORun:
-    """Train independent PPO learners, one per key, in any world of the protocol
-    ([`jswim.env.base.Environment`][jswim.env.base.Environment], e.g. from [`jswim.make`][jswim.env.worlds.make]), in one jitted, vmapped call.
+    """Train PPO learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.worlds.make]).
 
     The learner sees the world's ``features``, is rewarded with ``StepInfo.progress``, and acts
-    with float ROC vectors (one non-zero entry). ``params`` are shared by the learners, or batched
-    along B as ``params_axes`` (hashable) says. ``PPORun.x`` is the swimmers' mean x after each step,
-    ``y`` and ``orientation`` swimmer 1's; ``trace`` the world's own record. In the paper's world
-    (params batched along B) the learners of [`train_batch`][jswim.agents.ppo.train_batch], number for number.
+    with float ROC vectors (one non-zero entry).
+
+    Parameters
+    ----------
+    env : Environment
+        The world (static).
+    params : pytree
+        Its params, shared by the learners or with a value per learner in the leaves the world
+        batches ([`Environment.batch_params`][jswim.env.base.Environment.batch_params]).
+    key : PRNG key ``(2,)``, or keys ``(B, 2)``
+        All randomness of a run: initial shape (if random), network init, actions and the
+        world's noise. A batch trains ``B`` independent learners in one jitted, vmapped call,
+        sharded over every device.
+    config : PPOConfig
+        Hyperparameters (static).
+    trace : bool
+        Also record the world's state, observation and step info after each step.
+
+    Returns
+    -------
+    PPORun
+        Per-step actions, X (the swimmers' mean x), progress and DOF values; ``y`` and
+        ``orientation`` swimmer 1's (leading axis B for a batch of keys). Memory:
+        ``(4 (2 n_dof + 5) + 1) steps`` bytes per learner in float32 (7.2 kB at 200 steps for two
+        DOFs), plus the networks while training.
     """
-    return _jitted()(
-        keys,
-        params,
+    key = jnp.asarray(key)
+    if key.ndim == 1:
+        return jax.tree.map(lambda v: v[0], train(env, params, key[None], config, trace=trace))
+    n = key.shape[0]
+    params, axes = env.batch_params(params, n)
+    fn = functools.partial(
+        _jitted(),
         config=_structure(config),
         hp=_numbers(config),
         world=env,
-        axes=params_axes,
+        axes=axes,
         trace=trace,
     )
+    return sharding.apply_runs(fn, key, params, axes, n)
 
 
 @functools.lru_cache(maxsize=1)
@@ -578,45 +552,3 @@ def _jitted() -> Callable[..., PPORun]:
         static_argnames=("config", "world", "axes", "trace"),
         compiler_options=_compiler_options(),
     )
-
-
-# ----------------------------------------------------------------------------- scenes
-
-
-def train_scene(
-    key: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: int = 1
-) -> PPORun:
-    """Train one PPO learner on a scene (`jswim.scenes`; issue 19) for ``config.steps`` steps.
-
-    [`train_scene_batch`][jswim.agents.ppo.train_scene_batch] for one key (unbatched fields).
-    """
-    run = train_scene_batch(jnp.asarray(key)[None], scene_params, config, direction)
-    return jax.tree.map(lambda v: v[0], run)
-
-
-def train_scene_batch(
-    keys: Array, scene_params: Any, config: PPOConfig = PPOConfig(), direction: Any = 1
-) -> PPORun:
-    """[`train_env`][jswim.agents.ppo.train_env] on one scene of `jswim.scenes` (shared by the learners), a target
-    direction per learner (+1 or -1, or one for all).
-
-    The learner moves one arm of one swimmer per step by a real ROC; it sees the joint arms scaled
-    to [-1, 1] and, with a wall, each swimmer's height and tilt (the world's ``features``); its
-    reward is the progress of the swimmers' mean centroid x (the scene studies' X).
-
-    Returns
-    -------
-    PPORun
-        Leading axis B. ``x`` is the mean centroid x after each step relative to the start, as the
-        scene studies record it; ``y`` and ``orientation`` are swimmer 1's centroid height (a above
-        the wall) and tilt (rad); ``dofs`` the joint arms ``(B, steps, 2S)``; ``trace`` the world's
-        states, observations and step infos (every swimmer's position, height, tilt, stuck, contact).
-    """
-    world = SceneWorld(scene_params.scene, scene_params.roc_levels)
-    dtype = jnp.result_type(float)
-    task = SceneTask(
-        scene_params, jnp.broadcast_to(jnp.asarray(direction, dtype), (keys.shape[0],))
-    )
-    run = train_env(world, keys, task, config, params_axes=SceneTask(None, 0), trace=True)
-    start = world.observe(world.reset(keys[0], task), task).position
-    return run._replace(x=run.x - jnp.mean(start[:, 0]))

@@ -1,11 +1,13 @@
 """Judging PPO's runs ([`jswim.agents.ppo`][jswim.agents.ppo]): the success criterion for real-valued strokes
 ([`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]) on exact, noiseless displacements, for the
-paper's swimmer ([`evaluate`][jswim.agents.ppo_judge.evaluate]) and per swimmer on a scene ([`evaluate_scene`][jswim.agents.ppo_judge.evaluate_scene]).
+paper's swimmer ([`evaluate`][jswim.agents.ppo_judge.evaluate]) and per swimmer in any world, through the world's judge's view
+([`evaluate_swimmers`][jswim.agents.ppo_judge.evaluate_swimmers]).
 """
 
 from __future__ import annotations
 
 from typing import Any
+from collections.abc import Sequence
 
 import jax
 import jax.numpy as jnp
@@ -13,8 +15,6 @@ import numpy as np
 from jax import Array
 
 from jswim import env as _env
-from jswim.env.scene_world import SceneTask
-from jswim.errors import ConfigError
 from jswim.judging.gait import PAPER, GaitReport
 from jswim.judging.shape_judge import SHAPE_TOL, judge_shapes
 
@@ -58,18 +58,15 @@ def evaluate(
     ([`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]: a cycle is a return to the same shape within ``tol``
     of the range, default `jswim.judging.shape_judge.SHAPE_TOL`), on exact displacements.
 
-    A scene's runs (``params`` a [`SceneTask`][jswim.env.scene_world.SceneTask]) are judged per
-    swimmer ([`evaluate_scene`][jswim.agents.ppo_judge.evaluate_scene]). ``replay``: the displacements are those of the moves
-    replayed in ``params``'s world ([`exact_x`][jswim.agents.ppo_judge.exact_x]), for runs trained in another world of the
-    same swimmer (Purcell's above a wall, judged on the bulk swimmer's, as the scene studies do).
+    Runs of any other world are judged per swimmer through its judge's view
+    ([`evaluate_swimmers`][jswim.agents.ppo_judge.evaluate_swimmers]). ``replay``: the displacements are those of the moves replayed in
+    ``params``'s world ([`exact_x`][jswim.agents.ppo_judge.exact_x]), for runs trained in another world of the same swimmer.
 
     Returns
     -------
     GaitReport
         Per learner: ``learned``, ``steps_to_learn`` (from 1, -1 when never), ``success``, ...
     """
-    if isinstance(params, SceneTask):
-        return evaluate_scene(run, params.scene, params.direction, criterion=criterion, tol=tol)
     b = np.asarray(run.x).shape[0]
     return judge_shapes(
         np.asarray(run.dofs),
@@ -81,19 +78,21 @@ def evaluate(
     )
 
 
-def evaluate_scene(
+def evaluate_swimmers(
     run: Any,
-    scene_params: Any,
+    view: Sequence[Any],
     direction: Any = 1,
     *,
     criterion: Any = None,
     tol: float | None = None,
 ) -> Any:
-    """Judge scene runs as the scene studies judge their agents
-    (`jswim.studies.scenes._judge` for lattice moves): the success criterion on each
-    swimmer's own moves, with the bulk swimmer's (noiseless, paper's formula) displacements; here
-    the shape judge for real ROCs ([`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]), each swimmer's moves
-    replayed in `jswim.env` from its start arms.
+    """Judge runs as the scene studies judge their agents (lattice moves:
+    `jswim.studies.scenes._judge`): the success criterion on each swimmer's own moves, with
+    the displacements of the paper's swimmer of the world's judge's view
+    ([`Environment.judge_view`][jswim.env.base.Environment.judge_view]: noiseless, bulk fluid,
+    one per swimmer, from its start); here the shape judge for real ROCs
+    ([`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes]), each swimmer's moves replayed in
+    `jswim.env`.
 
     One swimmer: its run judged as it is. A pair (a learner steering both swimmers): swimmer ``s``'s
     own moves (the steps whose DOF is one of its arms), in order, are its stroke; the other
@@ -104,34 +103,32 @@ def evaluate_scene(
     length of the joint stroke when the swimmers alternate); ``per_step`` and ``fraction`` are the
     mean of the two swimmers' (each per own move); ``cycle`` is swimmer 1's.
 
+    Parameters
+    ----------
+    run : PPORun
+        Leading axis B.
+    view : sequence of EnvParams
+        The world's judge's view, one paper's swimmer per swimmer.
+    direction : int or array (B,)
+        Each run's target direction.
+
     Returns
     -------
     GaitReport
         One verdict per learner (leading axis B).
-
-    Raises
-    ------
-    ConfigError
-        When the scene's arm limits are not the bulk swimmer's.
     """
     criterion = PAPER if criterion is None else criterion
     tol = SHAPE_TOL if tol is None else tol
-    n_sw = int(scene_params.n_swimmers)
+    n_sw = len(view)
     actions = np.asarray(run.actions)
     dofs = np.asarray(run.dofs, np.float64)
     owner = (np.asarray(run.dof, np.int64) - 1) // 2  # the swimmer each step moved (0-based)
     b = actions.shape[0]
-    lo, hi = float(scene_params.lo), float(scene_params.hi)
-    arms0 = np.asarray(scene_params.arms0, np.float64).reshape(n_sw, 2)
     dirs = np.broadcast_to(np.asarray(direction, np.int32), (b,))
     reports = []
-    for s in range(n_sw):
-        levels = np.rint((arms0[s] - lo) / (hi - lo)).astype(np.int32)
-        bulk = _env.make_params("ng", direction=1, init=tuple(int(v) for v in levels))
-        if not (np.isclose(float(bulk.model.lo), lo) and np.isclose(float(bulk.model.hi), hi)):
-            raise ConfigError(
-                "evaluate_scene needs the scene's arm limits to be the bulk swimmer's"
-            )
+    for s, bulk in enumerate(view):
+        model = bulk.model
+        start = np.where(np.asarray(bulk.init) > 0, float(model.hi), float(model.lo))
         # The other swimmer's steps replayed as zero ROCs: no move, no displacement.
         own_actions = np.where((owner == s)[..., None], actions[..., 2 * s : 2 * s + 2], 0.0)
         x = np.asarray(
@@ -144,7 +141,7 @@ def evaluate_scene(
                     arms,
                     x,
                     _env.broadcast_params(bulk, b, direction=dirs),
-                    dofs0=arms0[s],
+                    dofs0=start,
                     criterion=criterion,
                     tol=tol,
                 )
@@ -161,7 +158,7 @@ def evaluate_scene(
                     arms[i, own][None],
                     x[i, own][None],
                     bulk.replace(direction=float(dirs[i])),
-                    dofs0=arms0[s],
+                    dofs0=start,
                     criterion=criterion,
                     tol=tol,
                 )

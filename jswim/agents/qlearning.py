@@ -9,20 +9,21 @@ Q-table is the parameter, the loss half the squared TD error of the visited entr
     L(Q) = 1/2 (r + gamma max_a' Q(s', a') - Q(s, a))^2,   target under stop_gradient,
 
 and ``optax.sgd`` with learning rate ``alpha`` turns its gradient into the textbook update
-``Q(s, a) += alpha * TD error``. A whole run is one ``lax.scan``; [`train_batch`][jswim.agents.qlearning.train_batch] vmaps it over
-keys and environment parameters, so one jitted call trains e.g. 10,000 learners. On a ROC lattice
-the table is over lattice points and codes (``K = 1``: the paper's learner, number for number), and
-[`train_env`][jswim.agents.qlearning.train_env] runs it in any world of the protocol; docs/baselines.md ("Q-learning baseline",
-"Any world") and docs/continuous.md say the rest.
+``Q(s, a) += alpha * TD error``. A whole run is one ``lax.scan``; [`train`][jswim.agents.qlearning.train] vmaps it over
+keys and the world's params, so one jitted call trains e.g. 10,000 learners, in any world of the
+protocol (the table's rows from the world's discretiser). On a ROC lattice the table is over
+lattice points and codes (``K = 1``: the paper's learner, number for number); docs/baselines.md
+("Q-learning baseline", "Any world") and docs/continuous.md say the rest.
 
 Example::
 
     import jax
-    from jswim.env import make_params
-    from jswim.agents.qlearning import QConfig, train_batch, batch_params, evaluate
+    import jswim
+    from jswim.agents.qlearning import QConfig, train, evaluate
 
-    params = batch_params(make_params("ng", direction=-1), 1000)
-    run = train_batch(jax.random.split(jax.random.PRNGKey(0), 1000), params, QConfig())
+    env, params = jswim.make("ng", direction=-1)
+    params = env.batch_params(params, 1000)[0]
+    run = train(env, params, jax.random.split(jax.random.PRNGKey(0), 1000), QConfig())
     report = evaluate(run, params)   # steps to learn, success, ... per learner
 """
 
@@ -41,11 +42,10 @@ from jax import Array
 
 from jswim import sharding
 from jswim.actions import check_action_set
-from jswim.agents import worlds
-from jswim.agents.worlds import Cells, offered, offered_mask  # noqa: F401  (offered*: their old place)
 from jswim.env import EnvParams, advance, broadcast_params, reset, uniforms
 from jswim.env.base import Environment
-from jswim.env.swimmer_world import SwimmerWorld
+from jswim.env.discretiser import Cells, corner, offered_mask, positions
+from jswim.env.episodes import Trajectory
 from jswim.errors import ConfigError
 from jswim.judging.gait import PAPER, Criterion, GaitReport, judge
 
@@ -119,7 +119,7 @@ class QConfig:
 
 
 class QRun(NamedTuple):
-    """What training recorded, per learner (leading batch axis from [`train_batch`][jswim.agents.qlearning.train_batch]).
+    """What training recorded, per learner (leading batch axis for a batch of keys).
 
     Attributes
     ----------
@@ -139,10 +139,10 @@ class QRun(NamedTuple):
     y, orientation : float (steps,) or None
         Centroid y and orientation (rad, of the reference link) after each step, when asked for
         (``pose=True``; the study folders' trajectories); ``None`` otherwise, which keeps the
-        training loop's memory traffic to what learning needs. In other worlds ([`train_env`][jswim.agents.qlearning.train_env])
+        training loop's memory traffic to what learning needs. In other worlds
         ``x`` is the swimmers' mean x, ``y`` and ``orientation`` swimmer 1's.
     trace : Trajectory or None
-        With ``trace=True`` ([`train_env`][jswim.agents.qlearning.train_env]): the world's state, observation and
+        With ``trace=True``: the world's state, observation and
         [`StepInfo`][jswim.env.base.StepInfo] after each step ([`jswim.env.episodes.Trajectory`][jswim.env.episodes.Trajectory]).
     """
 
@@ -160,8 +160,7 @@ def _schedule(value: float | optax.Schedule) -> optax.Schedule:
     return value if callable(value) else optax.constant_schedule(float(value))
 
 
-_corner = worlds.corner
-positions = worlds.positions
+_corner = corner
 
 
 def _row(q: Array, corner: Array) -> Array:
@@ -169,7 +168,7 @@ def _row(q: Array, corner: Array) -> Array:
 
 
 def _offered(levels: Array, params: EnvParams, action_set: str) -> Array:
-    return offered_mask(levels, params.model, action_set, roc_levels=_k(params))
+    return offered_mask(levels, params.model.n_dof, action_set, roc_levels=_k(params))
 
 
 def _k(params: EnvParams) -> int:
@@ -269,11 +268,10 @@ def _train_one(
     key: Array,
     params: Any,
     config: QConfig,
-    pose: bool = False,
-    cells: Cells | None = None,
+    pose: bool,
+    cells: Cells,
     trace: bool = False,
 ) -> QRun:
-    cells = _paper(params) if cells is None else cells
     env = cells.env
     dtype = jnp.result_type(float)
     k_reset, k_run = jax.random.split(key)
@@ -292,13 +290,13 @@ def _train_one(
         s = cells.cell(state, j, params)
         mask = cells.mask(j, params, config.action_set)
         action, explore = _act(_row(q, s), mask, epsilon(t), u[0], config.tie_break)
-        new, info = worlds.step(env, state, action, 2.0 * u[1:] - 1.0, params)
+        new, info = env.learner_advance(state, action, 2.0 * u[1:] - 1.0, params)
         j2 = cells.positions(new, params)
         mask2 = cells.mask(j2, params, config.action_set)
         future = jnp.max(jnp.where(mask2, _row(q, cells.cell(new, j2, params)), -jnp.inf))
-        x, y, theta = worlds.pose(env, new, params)
+        x, y, theta = env.pose(new, params)
         out = (action.astype(jnp.int8), x, explore) + ((y, theta) if pose else (None, None))
-        out += (worlds.trace(env, new, info, params) if trace else None,)
+        out += (Trajectory(new, env.observe(new, params), info) if trace else None,)
         return new, _Pending(s, action, info.progress + gamma * future), out
 
     def learn(q, opt_state, pending):
@@ -340,13 +338,6 @@ def _train_one(
     return QRun(acts, x, explored, q, cells.positions(state, params), y, theta, tr)
 
 
-def _paper(params: EnvParams) -> Cells:
-    """The discretiser of the paper's world of ``params``."""
-    return worlds.PaperCells(
-        SwimmerWorld(params.model, _k(params), bool(getattr(params, "diagonal", False)))
-    )
-
-
 @functools.lru_cache(maxsize=1)
 def _compiler_options() -> dict[str, str] | None:
     """XLA options for the training kernels, where this XLA accepts them.
@@ -365,101 +356,62 @@ def _compiler_options() -> dict[str, str] | None:
     return options
 
 
-def train(key: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool = False) -> QRun:
-    """Train one Q-learner online for ``config.steps`` steps.
-
-    Parameters
-    ----------
-    key : PRNG key
-        All randomness of the run: initial configuration (if random), exploration, tie-breaks
-        and the environment's noise.
-    params : EnvParams
-        The environment (unbatched leaves).
-    config : QConfig
-        Hyperparameters (static).
-    pose : bool
-        Also record the centroid y and the orientation after each step.
-
-    Returns
-    -------
-    QRun
-        Per-step actions, X and exploration flags; final Q-table; initial levels.
-    """
-    return _jitted("one")(key, params, config, pose, _paper(params))
-
-
-def train_batch(
-    keys: Array, params: EnvParams, config: QConfig = QConfig(), pose: bool = False
-) -> QRun:
-    """Train independent learners, one per key, in one jitted, vmapped call.
-
-    Parameters
-    ----------
-    keys : PRNG keys, shape (B, ...)
-        One key per learner; learner ``i`` matches ``train(keys[i], params_i, config)``.
-    params : EnvParams
-        Environment; each of ``zeta``, ``direction``, ``init`` is either unbatched (shared) or
-        has a leading axis of size B (see `batch_params`).
-    config, pose
-        As in [`train`][jswim.agents.qlearning.train], shared by all learners (static).
-
-    Returns
-    -------
-    QRun
-        Fields with a leading axis of size B.
-
-    Notes
-    -----
-    The learners are sharded over every device (`jswim.sharding`); the numbers do not
-    depend on the device count. Memory: the result holds ``6 steps + 4 (2**n_dof)(3 n_dof) +
-    4 n_dof`` bytes per learner in float32 (1,304 at 200 steps for the two-DOF swimmers); bound
-    it for large populations by training in chunks, as `study` does.
-    """
-    n = keys.shape[0]
-    fn = functools.partial(_jitted("batch"), config=config, pose=pose, cells=_paper(params))
-    return sharding.apply_batched(fn, (), (keys, batch_params(params, n)), n)
-
-
-def train_env(
+def train(
     env: Environment,
-    keys: Array,
     params: Any,
+    key: Array,
     config: QConfig = QConfig(),
     *,
-    params_axes: Any = None,
-    cells: Cells | None = None,
     pose: bool = False,
     trace: bool = False,
+    cells: Cells | None = None,
 ) -> QRun:
-    """Train independent Q-learners, one per key, in any world of the protocol (e.g. from
-    [`jswim.make`][jswim.env.worlds.make]), in one jitted call vmapped over learners.
+    """Train Q-learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.worlds.make]).
+
+    One key trains one learner; a batch of keys ``(B, 2)`` trains ``B`` independent learners in
+    one jitted call vmapped over learners and sharded over every device (`jswim.sharding`;
+    the numbers do not depend on the device count).
 
     Parameters
     ----------
     env : Environment
-        The world (static).
-    keys : PRNG keys, shape (B, 2)
+        The world (static); its discretiser ([`Environment.cells`][jswim.env.base.Environment.cells])
+        gives the table's rows and the codes offered in each.
     params : pytree
-        The world's params, shared, or batched along B as ``params_axes`` (``vmap``'s ``in_axes``
-        prefix, hashable: e.g. ``SceneTask(None, 0)`` for a direction per learner) says.
+        The world's params: shared by the learners, or with one value per learner in the leaves
+        the world batches ([`Environment.batch_params`][jswim.env.base.Environment.batch_params]:
+        the paper's ``zeta``, ``direction``, ``init``; a scene's direction).
+    key : PRNG key ``(2,)``, or keys ``(B, 2)``
+        All randomness of a run: initial configuration (if random), exploration, tie-breaks and
+        the world's noise.
     config : QConfig
         Hyperparameters (static); ``action_set`` "shape-changing" offers the moves that change
         the shape from the current lattice point.
-    cells : Cells, optional
-        The discretiser (default [`jswim.agents.worlds.cells`][jswim.agents.worlds.cells] of ``env``).
     pose, trace : bool
-        Also record swimmer 1's y and orientation; the world's state, observation and step info
-        (`QRun.trace`).
+        Also record swimmer 1's y and orientation after each step; the world's state,
+        observation and step info ([`QRun.trace`][jswim.agents.qlearning.QRun]).
+    cells : Cells, optional
+        A discretiser other than the world's.
 
     Returns
     -------
     QRun
-        Leading axis B. In the paper's world the learners of [`train_batch`][jswim.agents.qlearning.train_batch], number for number.
+        Per-step actions, X and exploration flags; final Q-table; initial lattice positions
+        (leading axis B for a batch of keys). Memory: ``6 steps + 4 (2**n_dof)(3 n_dof) +
+        4 n_dof`` bytes per learner in float32 (1,304 at 200 steps for the two-DOF swimmers);
+        bound it for large populations by training in chunks, as
+        ``jswim.studies.qlearn.study`` does.
     """
-    cells = worlds.cells(env) if cells is None else cells
-    return _jitted("batch")(
-        keys, params, config=config, pose=pose, cells=cells, trace=trace, axes=params_axes
+    cells = env.cells() if cells is None else cells
+    key = jnp.asarray(key)
+    if key.ndim == 1:
+        return _jitted("one")(key, params, config, pose, cells, trace)
+    n = key.shape[0]
+    params, axes = env.batch_params(params, n)
+    fn = functools.partial(
+        _jitted("batch"), config=config, pose=pose, cells=cells, trace=trace, axes=axes
     )
+    return sharding.apply_runs(fn, key, params, axes, n)
 
 
 def _batch(

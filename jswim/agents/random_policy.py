@@ -14,13 +14,12 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+from jswim import sharding
 from jswim.actions import check_action_set
-from jswim.agents import worlds
-from jswim.agents.defaults import default_rocs
-from jswim.agents.qlearning import _k, _paper, _pick
-from jswim.agents.worlds import Cells
-from jswim.env import EnvParams
+from jswim.agents.qlearning import _pick
 from jswim.env.base import Environment
+from jswim.env.discretiser import Cells
+from jswim.env.episodes import Trajectory
 
 
 class RandomRun(NamedTuple):
@@ -53,14 +52,14 @@ def _one(
     def body(state, u):
         mask = cells.mask(cells.positions(state, params), params, action_set, rocs)
         action = _pick(mask, u[0])
-        state, info = worlds.step(env, state, action, 2.0 * u[1:] - 1.0, params)
-        x, y, theta = worlds.pose(env, state, params)
+        state, info = env.learner_advance(state, action, 2.0 * u[1:] - 1.0, params)
+        x, y, theta = env.pose(state, params)
         return state, (
             action,
             x,
             y,
             theta,
-            worlds.trace(env, state, info, params) if trace else None,
+            Trajectory(state, env.observe(state, params), info) if trace else None,
         )
 
     u = jax.random.uniform(k_run, (steps, 1 + env.n_swimmers))
@@ -68,69 +67,64 @@ def _one(
     return RandomRun(acts, xs, cells.positions(state0, params), ys, thetas, tr)
 
 
-def run_batch(
-    keys: Array,
-    params: EnvParams,
-    steps: int,
-    action_set: str = "all",
-    rocs: tuple[int, ...] | None = None,
-) -> RandomRun:
-    """Run one random policy per key; ``params`` leaves may carry a leading batch axis.
-
-    Parameters
-    ----------
-    keys : Array (B, 2)
-        One key per run (start configuration when random, actions and noise).
-    params : EnvParams
-        Shared or batched (see `jswim.agents.qlearning.batch_params`).
-    steps : int
-        Steps per run.
-    action_set : {"all", "shape-changing"}
-        Offered actions (`jswim.actions.ACTION_SETS`), as in the LLM's prompt.
-    rocs : tuple of int, optional
-        ROCs offered (default: the swimmer's, e.g. (-1, 0, 1); every ``k`` in ``-K..K`` on the
-        environment's ROC lattice, ``params.roc_levels``).
-    """
-    check_action_set(action_set)
-    rocs = tuple(default_rocs(params.model, _k(params)) if rocs is None else rocs)
-    axes = 0 if jnp.ndim(params.zeta) > 0 else None
-    return _jitted(keys, params, steps, action_set, rocs, _paper(params), False, axes)
-
-
-def run_env(
+def run(
     env: Environment,
     params: Any,
-    keys: Array,
+    key: Array,
     steps: int,
     action_set: str = "all",
     *,
     rocs: tuple[int, ...] | None = None,
-    params_axes: Any = None,
-    cells: Cells | None = None,
     trace: bool = False,
+    cells: Cells | None = None,
 ) -> RandomRun:
-    """The random policy in any world of the protocol ([`jswim.env.base.Environment`][jswim.env.base.Environment], e.g.
-    from [`jswim.make`][jswim.env.worlds.make]): every step a uniformly random code among those offered
-    (``action_set``, ``rocs``: by default every ROC, the swimmer's own in the paper's world), one
-    run per key, one scan vmapped over runs. ``params`` are shared, or batched along the runs as
-    ``params_axes`` (hashable) says; ``cells`` the world's discretiser
-    ([`jswim.agents.worlds.cells`][jswim.agents.worlds.cells]), whose lattice point says which moves change the shape.
-    In the paper's world the runs of [`run_batch`][jswim.agents.random_policy.run_batch], number for number."""
+    """The random policy in any world ([`jswim.make`][jswim.env.worlds.make]): every step a uniformly random code
+    among those offered.
+
+    Parameters
+    ----------
+    env : Environment
+        The world (static).
+    params : pytree
+        Its params, shared by the runs or with a value per run in the leaves the world batches
+        ([`Environment.batch_params`][jswim.env.base.Environment.batch_params]).
+    key : PRNG key ``(2,)``, or keys ``(B, 2)``
+        One run per key (start configuration when random, actions and noise); a batch is one
+        scan vmapped over runs, sharded over every device.
+    steps : int
+        Steps per run.
+    action_set : {"all", "shape-changing"}
+        Offered actions (``jswim.actions.ACTION_SETS``), as in the LLM's prompt;
+        the world's discretiser ([`Environment.cells`][jswim.env.base.Environment.cells]) says
+        which moves change the shape.
+    rocs : tuple of int, optional
+        ROCs ``k`` offered (default: the world's; the paper's swimmer's
+        [`offered_rocs`][jswim.actions.offered_rocs]).
+    trace : bool
+        Also record the world's state, observation and step info after each step.
+    cells : Cells, optional
+        A discretiser other than the world's.
+    """
     check_action_set(action_set)
-    cells = worlds.cells(env) if cells is None else cells
-    return _jitted(
-        keys,
-        params,
-        steps,
-        action_set,
-        None if rocs is None else tuple(rocs),
-        cells,
-        trace,
-        params_axes,
+    cells = env.cells() if cells is None else cells
+    rocs = None if rocs is None else tuple(rocs)
+    key = jnp.asarray(key)
+    if key.ndim == 1:
+        return jax.tree.map(
+            lambda v: v[0],
+            run(env, params, key[None], steps, action_set, rocs=rocs, trace=trace, cells=cells),
+        )
+    n = key.shape[0]
+    params, axes = env.batch_params(params, n)
+    fn = functools.partial(
+        _jitted, steps=steps, action_set=action_set, rocs=rocs, cells=cells, trace=trace, axes=axes
     )
+    return sharding.apply_runs(fn, key, params, axes, n)
 
 
-@functools.partial(jax.jit, static_argnums=(2, 3, 4, 5, 6, 7))
+@functools.partial(
+    jax.jit, static_argnames=("steps", "action_set", "rocs", "cells", "trace", "axes")
+)
 def _jitted(
     keys: Array,
     params: Any,

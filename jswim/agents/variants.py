@@ -143,7 +143,7 @@ class LLMRunSpec:
         Name of the run (transcript file name); default from the fields above.
     scene : str
         A scene (walls, obstacles, pairs; issue 19) as canonical JSON of ``Scene.to_dict()``
-        ([`jswim.studies.grids.scene_json`][jswim.studies.grids.scene_json]); ``""``: the paper's lone swimmer in bulk fluid.
+        ([`jswim.studies.scene_grids.scene_json`][jswim.studies.scene_grids.scene_json]); ``""``: the paper's lone swimmer in bulk fluid.
     pair_prompt : {"joint", "each"}
         A pair's prompt (`PAIR_PROMPTS`): one joint conversation, or one per swimmer
         (``"each"`` needs a scene of two or more swimmers; named ``each`` in the default run id).

@@ -46,7 +46,7 @@ class Job:
 
 
 def _ignores(study: str) -> tuple[str, ...]:
-    from jswim.studies.grids import SPECS  # lazy: the grids load JAX
+    from jswim.studies.specs import SPECS  # lazy: the grids load JAX
 
     return SPECS[study].ignores
 

@@ -138,7 +138,7 @@ STUDY_AXES = ("zetas", "n_hts", "temperatures", "prompt_files")
 def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None:
     """Refuse, when the models file is read, an option the part's study would refuse at run time
     (every model's process would fail on it)."""
-    from jswim.studies.grids import ignored_options  # lazy: the grids load JAX
+    from jswim.studies.specs import ignored_options  # lazy: the grids load JAX
 
     if study == "swim":
         axis = next((k for k in opts if k in STUDY_AXES), None)
@@ -166,7 +166,7 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
     ConfigError
         For an unknown study or option (one line, naming the file).
     """
-    from jswim.studies.grids import STUDIES  # lazy: the grids load JAX
+    from jswim.studies.specs import STUDIES  # lazy: the grids load JAX
 
     if not isinstance(table, Mapping):
         raise ConfigError(f"{where}: [suites.{name}] must be a table")

@@ -58,7 +58,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(command_main=main)
     if base.outlined(p):
         return
-    from jswim.studies.grids import DEFAULT_ZETAS  # lazy: the grids load JAX (not for --help)
+    from jswim.studies.options import DEFAULT_ZETAS  # lazy: the grids load JAX (not for --help)
 
     p.add_argument(
         "--zetas",

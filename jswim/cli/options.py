@@ -1,5 +1,5 @@
 """argv -> options, in one place: the options of ``jswim swim`` and ``jswim study NAME`` (their
-parsers, `options` -> [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions], `backend` ->
+parsers, `options` -> [`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions], `backend` ->
 [`jswim.llm.backend.Backend`][jswim.llm.backend.Backend]), read by those commands and by ``jswim bench --dry-run``
 (which prices each job's study command line in process through `study_parser`).
 
@@ -57,7 +57,7 @@ def add_study_commands(sub: argparse._SubParsersAction) -> list[argparse.Argumen
     )
     if base.outlined(p):
         return [p, q]
-    from jswim.studies.grids import SPECS, STUDIES  # lazy: the grids load JAX (not for --help)
+    from jswim.studies.specs import SPECS, STUDIES  # lazy: the grids load JAX (not for --help)
 
     add_run_options(p, study=False, spec=SPECS["swim"])
     names = q.add_subparsers(
@@ -92,8 +92,8 @@ def study_parser() -> argparse.ArgumentParser:
 
 def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> None:
     """The options of ``jswim swim`` and ``jswim study NAME``; each help names the defaults of the
-    study (``spec``: its [`jswim.studies.grids.StudySpec`][jswim.studies.grids.StudySpec])."""
-    from jswim.studies.grids import (
+    study (``spec``: its [`jswim.studies.specs.StudySpec`][jswim.studies.specs.StudySpec])."""
+    from jswim.studies.options import (
         DEFAULT_ZETAS,
         StudyOptions,
     )  # lazy: the grids load JAX (not for --help)
@@ -592,7 +592,7 @@ IGNORABLE = {
 
 
 def options(args: argparse.Namespace, study: str) -> Any:
-    """The [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions] of a study's command line (validated there)."""
+    """The [`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions] of a study's command line (validated there)."""
     from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
 
     if args.prompt_file is not None:
@@ -645,7 +645,7 @@ def _prompt_files(text: str) -> tuple[str, ...]:
 
 def _refuse_ignored(study: str, args: argparse.Namespace) -> None:
     """An option the study would drop silently is a mistake: say so (exit 2) instead of running."""
-    from jswim.studies.grids import ignored_options  # lazy: the grids load JAX
+    from jswim.studies.specs import ignored_options  # lazy: the grids load JAX
 
     given = [
         field for field, (dest, _) in IGNORABLE.items() if getattr(args, dest, None) is not None

@@ -2,7 +2,7 @@
 and the scene table printed after the usual summary.
 
 `OPTIONS` is the table: study -> its options, each ``(flag, argparse keywords)`` whose dest is
-the [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions] field it sets; `register` adds them to the study's
+the [`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions] field it sets; `register` adds them to the study's
 parser, `options` reads them back. A study's new option is one row here.
 """
 

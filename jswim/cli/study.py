@@ -46,7 +46,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
         default_folder,
         run_study,
     )  # lazy: JAX loads only for commands that run
-    from jswim.studies.grids import short_steps_warning  # lazy: as above
+    from jswim.studies.specs import short_steps_warning  # lazy: as above
 
     opts, backend = options.options(args, study), options.backend(args)
     if args.max_cost is not None and not (math.isfinite(args.max_cost) and args.max_cost >= 0):

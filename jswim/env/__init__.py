@@ -48,7 +48,7 @@ from jswim.env.randomness import noise, uniforms
 from jswim.env.rollouts import Rollout, rollout, seed32, seed_key
 from jswim.env.state import (
     EnvState,
-    StepInfo,
+    MoveInfo,
     corner_values,
     dof_values,
     fractions,
@@ -59,7 +59,7 @@ from jswim.env.state import (
     start_state,
 )
 from jswim.env.stepping import advance, step, step_batch
-from jswim.env.base import Box, Discrete, Environment, Observation
+from jswim.env.base import Box, Discrete, Environment, Observation, StepInfo
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env.tables import TABLE_DEGREE, step_table
 
@@ -70,7 +70,6 @@ _LAZY = {
     "SceneWorld": "jswim.env.scene_world",
     "SceneTask": "jswim.env.scene_world",
     "Trajectory": "jswim.env.episodes",
-    "rollout_batch": "jswim.env.episodes",
 }
 
 
@@ -95,6 +94,7 @@ __all__ = [
     "TABLE_DEGREE",
     "EnvParams",
     "EnvState",
+    "MoveInfo",
     "Rollout",
     "StepInfo",
     "advance",

@@ -36,6 +36,8 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
+from jswim.env.discretiser import Cells
+
 
 class StepInfo(NamedTuple):
     """What one step of any world did (``S`` swimmers).
@@ -243,6 +245,49 @@ class Environment:
     def n_features(self) -> int:
         """Length of [`features`][jswim.env.base.Environment.features]."""
         return self.n_dof
+
+    # -- what the learners read, decided by the world ----------------------------------------
+
+    def cells(self) -> Cells:
+        """This world's discretiser for tabular learners (the default: each DOF's place on the
+        K lattice, [`Cells`][jswim.env.discretiser.Cells])."""
+        return Cells(self)
+
+    def learner_advance(
+        self, state: Any, action: Array, noise: Array, params: Any
+    ) -> tuple[Any, StepInfo]:
+        """The step the baselines (Q-learning, random, PPO) train on: `advance` (a world may
+        step its learners in plainer arithmetic, as the paper's does)."""
+        return self.advance(state, action, noise, params)
+
+    def pose(self, state: Any, params: Any) -> tuple[Array, Array, Array]:
+        """``(x, y, orientation)`` a learner's run records after each step: the swimmers' mean x,
+        swimmer 1's y (its height above a wall) and orientation."""
+        obs = self.observe(state, params)
+        return jnp.mean(obs.position[:, 0]), obs.position[0, 1], obs.orientation[0]
+
+    def judge_view(self, params: Any) -> tuple[Any, ...] | None:
+        """The judge's view of this world: for each swimmer, the paper's swimmer (an
+        [`EnvParams`][jswim.env.params.EnvParams] of the bulk fluid, its start that swimmer's)
+        whose noiseless displacements the success criterion reads that swimmer's own moves with;
+        ``None`` (the default): the criterion does not apply (its threshold is the paper
+        swimmer's best stroke)."""
+        return None
+
+    def batch_params(self, params: Any, n: int) -> tuple[Any, Any]:
+        """``params`` for ``n`` runs, and ``vmap``'s ``in_axes`` of them (hashable): a leaf with
+        more axes than `default_params`' same leaf carries one value per run (axis 0), the
+        others are shared (``None``).
+
+        Raises
+        ------
+        ValueError
+            When ``params`` does not have `default_params`' structure (a world whose params
+            differ in structure overrides this).
+        """
+        ref = self.default_params
+        axes = jax.tree.map(lambda a, r: 0 if jnp.ndim(a) > jnp.ndim(r) else None, params, ref)
+        return params, axes
 
 
 def scaled(values: Array, lo: Any, hi: Any) -> Array:

@@ -1,8 +1,8 @@
-"""One rollout for any world of the protocol ([`jswim.env.base`][jswim.env.base]), and its batch.
+"""One rollout for any world of the protocol ([`jswim.env.base`][jswim.env.base]), one run or a batch.
 
 ``rollout(env, params, key, actions)`` resets with ``key`` and steps with ``split(key, T)``, the
-keys [`jswim.env.rollout`][jswim.env.rollouts.rollout] and [`jswim.scenes.scene_rollout`][jswim.scenes.rollout.scene_rollout] use, so a world's protocol
-rollout and its own rollout step through the same numbers.
+keys the paper's world and the scenes' own stepping use, so a world's protocol rollout and its
+own physics step through the same numbers.
 """
 
 from __future__ import annotations
@@ -16,11 +16,12 @@ from jax import Array
 
 from jswim import reprs
 from jswim.env.base import Environment, Observation, StepInfo
+from jswim import sharding
 from jswim.env.randomness import seed_key
 
 
 class Trajectory(NamedTuple):
-    """What a rollout did; leading axis = steps (after a batch axis for [`rollout_batch`][jswim.env.episodes.rollout_batch]).
+    """What a rollout did; leading axis = steps (after the batch axis of a batch).
 
     ``state`` and ``obs`` are the state after each step and its [`Observation`][jswim.env.base.Observation]; ``info``
     the step's [`StepInfo`][jswim.env.base.StepInfo]."""
@@ -54,25 +55,39 @@ _run = jax.jit(_scan, static_argnums=0)
 
 
 def rollout(env: Environment, params: Any, key: Array | int, actions: Any) -> Trajectory:
-    """Run a given action sequence in any world.
+    """Run given action sequences in any world: one run, or a batch in one vectorised scan.
 
     Parameters
     ----------
     env : Environment
         The world ([`jswim.make`][jswim.env.worlds.make]).
     params : pytree
-        Its params (unbatched).
-    key : PRNG key or int
-        Reset key; step ``t`` draws its noise from ``split(key, T)[t]``.
-    actions : array (T,) int or (T, n_dof) float
-        Integer action codes or float ROC vectors ([`jswim.env.base`][jswim.env.base]).
+        Its params: shared, or for a batch with a value per run in the leaves the world batches
+        ([`Environment.batch_params`][jswim.env.base.Environment.batch_params]).
+    key : PRNG key or int, or keys ``(B, 2)``
+        Run ``i`` of a batch resets with ``keys[i]`` (one key: ``split(key, B)[i]``); a run's step
+        ``t`` draws its noise from ``split(run_key, T)[t]``.
+    actions : array (T,) or (B, T) int, or (T, n_dof) or (B, T, n_dof) float
+        Integer action codes or float ROC vectors ([`jswim.env.base`][jswim.env.base]); a leading axis ``B``
+        makes a batch, sharded over every device (`jswim.sharding`).
 
     Returns
     -------
     Trajectory
-        JAX arrays in the world's working dtype, one entry per step.
+        JAX arrays in the world's working dtype, one entry per step (after the batch axis).
     """
-    return _run(env, params, _as_key(key), jnp.asarray(actions))
+    actions = jnp.asarray(actions)
+    one = 1 if jnp.issubdtype(actions.dtype, jnp.integer) else 2
+    if actions.ndim == one:
+        return _run(env, params, _as_key(key), actions)
+    n = actions.shape[0]
+    keys = jnp.asarray(_as_key(key))
+    if keys.ndim == 1:
+        keys = jax.random.split(keys, n)
+    params, axes = env.batch_params(params, n)
+    return sharding.apply_runs(
+        lambda k, p: _run_batch(env, p, k, actions, axes), keys, params, axes, n
+    )
 
 
 @functools.partial(jax.jit, static_argnums=(0, 4))
@@ -80,17 +95,3 @@ def _run_batch(
     env: Environment, params: Any, keys: Array, actions: Array, params_axes: Any
 ) -> Trajectory:
     return jax.vmap(_scan, in_axes=(None, params_axes, 0, 0))(env, params, keys, actions)
-
-
-def rollout_batch(
-    env: Environment, params: Any, key: Array | int, actions: Any, *, params_axes: Any = None
-) -> Trajectory:
-    """[`rollout`][jswim.env.episodes.rollout] of a batch: ``actions`` ``(B, T)`` / ``(B, T, n_dof)``, member ``i`` with
-    key ``split(key, B)[i]``, one vectorised scan (``vmap``, no Python loop over members).
-
-    ``params_axes`` is ``vmap``'s ``in_axes`` prefix for ``params`` (``None``: shared; e.g.
-    [`jswim.env.param_axes`][jswim.env.params.param_axes] for per-member ``zeta`` or ``direction``); it must be hashable.
-    """
-    actions = jnp.asarray(actions)
-    keys = jax.random.split(_as_key(key), actions.shape[0])
-    return _run_batch(env, params, keys, actions, params_axes)

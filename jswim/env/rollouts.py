@@ -11,7 +11,6 @@ import numpy as np
 from jax import Array
 
 from jswim.env.actions import validate_actions, validate_moves
-from jswim.env.base import Environment
 from jswim.env.params import EnvParams, make_params
 from jswim.env.randomness import seed32, seed_key  # noqa: F401  (seed32 re-exported: its old place)
 from jswim.env.state import EnvState, dof_values, reset
@@ -62,7 +61,7 @@ def _scan(key: Array, actions: Array, params: EnvParams) -> Rollout:
 def rollout(
     swimmer: str | SwimmerModel,
     actions: Any,
-    *protocol_args: Any,
+    *,
     key: Array | int = 0,
     zeta: float = 0.0,
     direction: int | str = 1,
@@ -72,8 +71,9 @@ def rollout(
 ) -> Any:
     """Run a given action sequence for one swimmer or a batch.
 
-    ``rollout(env, params, key, actions)`` with a world of [`jswim.make`][jswim.env.worlds.make] first is the
-    protocol's rollout for any world ([`jswim.env.episodes.rollout`][jswim.env.episodes.rollout]).
+    The shortcut for a named swimmer and ``(dof, roc)`` moves, always in float64; any world of
+    [`jswim.make`][jswim.env.worlds.make] runs through the protocol's one rollout,
+    [`jswim.rollout`][jswim.env.episodes.rollout] ``(env, params, key, actions)``.
 
     Parameters
     ----------
@@ -116,17 +116,6 @@ def rollout(
     >>> rollout("purcell", [(1, -0.5), (2, -0.5)]).dofs[-1].round(4).tolist()
     [0.0, 0.0]
     """
-    if isinstance(swimmer, Environment):  # the protocol's rollout(env, params, key, actions)
-        from jswim.env.episodes import (
-            rollout as protocol_rollout,
-        )  # lazy: start-up (the protocol's modules)
-
-        return protocol_rollout(swimmer, actions, *protocol_args)
-    if protocol_args:
-        raise TypeError(
-            "rollout(swimmer, actions, *, key=..., ...) takes two positional arguments; "
-            "rollout(env, params, key, actions) takes a world"
-        )
     if scene is not None and not _is_plain_bulk(scene):
         from jswim.scenes import (
             scene_rollout,

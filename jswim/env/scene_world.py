@@ -18,9 +18,13 @@ import dataclasses
 from typing import Any, NamedTuple
 
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from jswim.env.base import Environment, Observation, StepInfo, first_move, scaled
+from jswim.env.discretiser import Cells, WallCells
+from jswim.env.params import EnvParams, make_params
+from jswim.errors import ConfigError
 from jswim.scenes.actions import decode_scene_action
 from jswim.scenes.params import SceneParams, scene_params
 from jswim.scenes.scene import Scene
@@ -134,6 +138,37 @@ class SceneWorld(Environment):
     @property
     def n_features(self) -> int:
         return self.n_dof + (2 * self.n_swimmers if self.wall else 0)
+
+    def cells(self) -> Cells:
+        """The joint corner; with a wall, times swimmer 1's height bin ([`WallCells`][jswim.env.discretiser.WallCells])."""
+        return WallCells(self) if self.wall else Cells(self)
+
+    def judge_view(self, params: SceneTask) -> tuple[EnvParams, ...]:
+        """Each swimmer's moves judged with the bulk NG swimmer's displacements, from its start
+        arms (the paper's formula, noiseless).
+
+        Raises
+        ------
+        ConfigError
+            When the scene's arm limits are not the bulk swimmer's.
+        """
+        sp = params.scene
+        lo, hi = float(sp.lo), float(sp.hi)
+        arms0 = np.asarray(sp.arms0, np.float64).reshape(self.n_swimmers, ARMS)
+        views = []
+        for arms in arms0:
+            levels = tuple(int(v) for v in np.rint((arms - lo) / (hi - lo)))
+            bulk = make_params("ng", init=levels)
+            if not (np.isclose(float(bulk.model.lo), lo) and np.isclose(float(bulk.model.hi), hi)):
+                raise ConfigError(
+                    "a scene's runs are judged only with the bulk swimmer's arm limits"
+                )
+            views.append(bulk)
+        return tuple(views)
+
+    def batch_params(self, params: SceneTask, n: int) -> tuple[SceneTask, SceneTask]:
+        """The scene's params shared by the runs; the direction per run where it has an axis."""
+        return params, SceneTask(None, 0 if jnp.ndim(params.direction) > 0 else None)
 
 
 def features(state: SceneState, params: SceneParams, wall: bool) -> Array:

@@ -61,8 +61,10 @@ class EnvState(NamedTuple):
         return (self.frac > 0.5).astype(jnp.int32)
 
 
-class StepInfo(NamedTuple):
-    """What one step did."""
+class MoveInfo(NamedTuple):
+    """What one step of the paper's functional environment did
+    ([`step`][jswim.env.stepping.step]); a world of the protocol restates it as its
+    [`StepInfo`][jswim.env.base.StepInfo]."""
 
     dx: Array  # x increment of the centroid (noisy when zeta > 0)
     dy: Array

@@ -31,7 +31,7 @@ from jswim.actions import decode_action
 from jswim.env.params import EnvParams, broadcast_params, is_batched, param_axes
 from jswim.env import motion
 from jswim.env.randomness import noise
-from jswim.env.state import EnvState, StepInfo, corner_values, narrow, wide
+from jswim.env.state import EnvState, MoveInfo, corner_values, narrow, wide
 from jswim.env.tables import (
     MAX_LATTICE_ROWS,
     _corner_index,
@@ -53,7 +53,7 @@ INTEGRATOR_DEGREE = 24
 
 def step(
     key: Array, state: EnvState, action: Array, params: EnvParams
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """Advance one swimmer by one action.
 
     ``action`` is an integer code ([`jswim.env.encode_action`][jswim.actions.encode_action], ROC ``k / K`` with
@@ -68,7 +68,7 @@ def step(
 
 def step_batch(
     key: Array, states: EnvState, actions: Array, params: EnvParams, *, start: int | Array = 0
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """Advance a batch of swimmers, drawing every swimmer's ``Y`` from the one key.
 
     Equivalent in law to ``jax.vmap(step)`` with one key per swimmer, but it draws all the noise
@@ -115,7 +115,7 @@ def _step_batch_jit(key: Array, start: Array, states: EnvState, actions: Array, 
 
 def advance(
     state: EnvState, action: Array, y_noise: Array, params: EnvParams, *, exact: bool = True
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """One step with a given noise variable ``y_noise`` in [-1, 1] (the core of [`step`][jswim.env.stepping.step]).
 
     ``action`` is an integer code or a float ROC vector ``(n_dof,)``; the choice of path is
@@ -135,7 +135,7 @@ def advance(
     arithmetic (about 2.3 x less CPU time per step in float32) and leaves the low words of the
     position as they are: for short runs where only the step's reward matters, e.g. the
     baselines' 200-step training runs (drift there stays below ~1e-5 a). Other actions ignore
-    it. ``StepInfo`` reports values rounded to the working dtype.
+    it. ``MoveInfo`` reports values rounded to the working dtype.
     """
     action = jnp.asarray(action)
     if jnp.issubdtype(action.dtype, jnp.integer) or jnp.issubdtype(action.dtype, jnp.bool_):
@@ -153,7 +153,7 @@ def advance(
 
 def _advance_corner(
     state: EnvState, action: Array, y_noise: Array, params: EnvParams, exact: bool
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """The paper's discrete step: corner to corner, read from the corner table."""
     model = params.model
     n = model.n_dof
@@ -179,7 +179,7 @@ def _advance_corner(
 
 def _advance_lattice(
     state: EnvState, action: Array, y_noise: Array, params: EnvParams
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """An integer code on the K lattice: ROC ``k / K``; the new shape is the lattice point
     ``round(K frac) + k`` (clipped to ``0..K``) over K, computed afresh so it never drifts. The
     step is read from the lattice table (`jswim.env.tables.lattice_table`, one gather like
@@ -208,7 +208,7 @@ def _advance_lattice(
 
 def _advance_rocs(
     state: EnvState, rocs: Array, y_noise: Array, params: EnvParams
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """A float ROC vector: each moving DOF at its ROC, stopping at its limit."""
     n = params.model.n_dof
     # Integer work outside the float64 block (its index types would not match the caller's).
@@ -242,7 +242,7 @@ def _advance_path(
     rocs: Array | None = None,
     dof: Array | None = None,
     method: str | None = None,
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """Move the shape from ``s0`` to ``s1`` (float64 fractions of the range), integrating the path.
 
     With ``rocs`` and ``params.diagonal`` the path is the one the motors follow:
@@ -309,7 +309,7 @@ def _apply(
     moved: Array,
     frac: Array,
     frac_lo: Array,
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """Apply a body-frame step row ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` (float64) to the
     pose, with the paper's noise on the displacement, in float64; store the result as pairs."""
     model = params.model
@@ -353,7 +353,7 @@ def _apply(
         sl,
         frac_lo.astype(dtype),
     )
-    return new, StepInfo(dxh, dyh, progress, stuck, moved, new.x)
+    return new, MoveInfo(dxh, dyh, progress, stuck, moved, new.x)
 
 
 def _advance_plain(
@@ -364,7 +364,7 @@ def _advance_plain(
     params: EnvParams,
     stuck: Array,
     moved: Array,
-) -> tuple[EnvState, StepInfo]:
+) -> tuple[EnvState, MoveInfo]:
     """[`advance`][jswim.env.stepping.advance] with ``exact=False``: the same step in working-dtype arithmetic."""
     dtype = state.x.dtype
     entry = jnp.asarray(_step_rows(params.model), dtype)[row]
@@ -389,4 +389,4 @@ def _advance_plain(
         sin_lo=zero,
     )
     progress = jnp.asarray(params.direction, dtype) * dx
-    return new, StepInfo(dx, dy, progress, stuck, moved, new.x)
+    return new, MoveInfo(dx, dy, progress, stuck, moved, new.x)

@@ -8,16 +8,26 @@ restated as the protocol's [`StepInfo`][jswim.env.base.StepInfo].
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from jswim.env.base import Environment, Observation, StepInfo, scaled
-from jswim.env.params import EnvParams, make_params
+from jswim.env.discretiser import PaperCells
+from jswim.env.params import EnvParams, broadcast_params, make_params
 from jswim.env.state import EnvState, dof_values, reset
 from jswim.env.stepping import advance
 from jswim.swimmers.models import SwimmerModel
+
+
+def _levels(init: Any) -> Any:
+    """A start of [`EnvParams`][jswim.env.params.EnvParams] as ``make_params`` takes it (a random one stays random)."""
+    init = np.asarray(init)
+    levels = tuple(int(v) for v in (init[0] if init.ndim > 1 else init))
+    return "random" if any(v < 0 for v in levels) else levels
 
 
 @dataclasses.dataclass(frozen=True)
@@ -84,3 +94,39 @@ class SwimmerWorld(Environment):
     def features(self, state: EnvState, params: EnvParams) -> Array:
         """The DOFs scaled to [-1, 1] (what the PPO baseline reads)."""
         return scaled(dof_values(state, params), self.model.lo, self.model.hi)
+
+    def cells(self) -> PaperCells:
+        """The corner (or lattice point) of the state, the swimmer's offered ROCs."""
+        return PaperCells(self)
+
+    def learner_advance(
+        self, state: EnvState, action: Array, noise: Array, params: EnvParams
+    ) -> tuple[EnvState, StepInfo]:
+        """[`advance`][jswim.env.swimmer_world.SwimmerWorld.advance] in plain working-dtype arithmetic ([`jswim.env.advance`][jswim.env.stepping.advance] with
+        ``exact=False``): the baselines' training step since they were written, so their numbers
+        stay the paper's."""
+        new, i = advance(state, action, noise[0], params, exact=False)
+        return new, StepInfo(
+            jnp.stack([i.dx, i.dy])[None],
+            i.progress,
+            i.stuck,
+            i.moved,
+            jnp.zeros((), bool),
+            jnp.asarray(jnp.inf, i.dx.dtype),
+        )
+
+    def pose(self, state: EnvState, params: EnvParams) -> tuple[Array, Array, Array]:
+        """The state's own centroid x, y and orientation (their float32 high parts)."""
+        return state.x, state.y, state.theta
+
+    def judge_view(self, params: EnvParams) -> tuple[EnvParams]:
+        """The paper's swimmer in the bulk fluid from this run's start: this world's own model, or
+        for a swimmer whose drag a wall corrects, the paper's swimmer of its kind."""
+        model = self.model if math.isinf(getattr(self.model, "height", math.inf)) else None
+        bulk = make_params(model or self.model.kind, init=_levels(params.init))
+        return (bulk,)
+
+    def batch_params(self, params: EnvParams, n: int) -> tuple[EnvParams, int]:
+        """Every per-run leaf (``zeta``, ``direction``, ``init``) broadcast to ``n`` runs
+        ([`jswim.env.broadcast_params`][jswim.env.params.broadcast_params])."""
+        return broadcast_params(params, n), 0

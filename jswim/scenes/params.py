@@ -192,7 +192,7 @@ def check_start(
     middle sphere ``(S, 2)``, tilt ``(S,)``, arms ``(S, 2)`` and the obstacles ``(O, 3)``, if no
     sphere starts closer than ``contact_gap`` to the wall, an obstacle or another swimmer's.
 
-    [`scene_params`][jswim.scenes.params.scene_params] calls it; [`jswim.studies.StudyOptions`][jswim.studies.grids.StudyOptions] too, so a study's
+    [`scene_params`][jswim.scenes.params.scene_params] calls it; [`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions] too, so a study's
     ``--separations`` that would overlap its swimmers is refused before anything runs.
 
     Raises

@@ -1,7 +1,10 @@
 """The paper's experiments as study grids, run in batches and stored resumably.
 
-- [`jswim.studies.grids`][jswim.studies.grids]: every study's defaults and cells as one table (`SPECS`),
-  [`StudyOptions`][jswim.studies.grids.StudyOptions] and [`build`][jswim.studies.grids.build] (study -> list of [`Plan`][jswim.studies.grids.Plan]);
+- [`jswim.studies.options`][jswim.studies.options]: [`StudyOptions`][jswim.studies.options.StudyOptions], the knobs; [`jswim.studies.specs`][jswim.studies.specs]:
+  every study's defaults and cells as one table (`SPECS`) and [`build`][jswim.studies.specs.build] (study -> list
+  of [`Plan`][jswim.studies.plans.Plan], [`jswim.studies.plans`][jswim.studies.plans]; the scene studies' cells in
+  [`jswim.studies.scene_grids`][jswim.studies.scene_grids]); [`jswim.studies.baselines`][jswim.studies.baselines]: every non-LLM run's one
+  pipeline;
 - [`jswim.studies.run`][jswim.studies.run]: [`run_study`][jswim.studies.run.run_study] (runs what a study folder lacks, stores, summarises);
 - [`jswim.studies.report`][jswim.studies.report]: [`summarize`][jswim.studies.report.summarize] (the table) and [`draw_figures`][jswim.studies.report.draw_figures];
 - `jswim.studies.qlearn`: the Q-learning steps-to-learn distributions (``jswim qlearn``);
@@ -26,7 +29,7 @@ import importlib
 from typing import Any
 
 #: Public name -> the submodule that owns it, imported on first access (PEP 562), so that
-#: ``jswim.studies.grids`` (all the command line needs to build its parser) loads alone.
+#: ``jswim.studies.specs`` (all the command line needs to build its parser) loads alone.
 _EXPORTS = {
     **dict.fromkeys(
         (
@@ -34,16 +37,13 @@ _EXPORTS = {
             "COMPETENCE_VARIANTS",
             "DEFAULT_ZETAS",
             "INIT_CHOICES",
-            "SPECS",
-            "STUDIES",
             "SWIM_VARIANT",
-            "Plan",
             "StudyOptions",
-            "StudySpec",
-            "build",
         ),
-        "jswim.studies.grids",
+        "jswim.studies.options",
     ),
+    **dict.fromkeys(("SPECS", "STUDIES", "StudySpec", "build"), "jswim.studies.specs"),
+    "Plan": "jswim.studies.plans",
     **dict.fromkeys(("draw_figures", "summarize"), "jswim.studies.report"),
     **dict.fromkeys(
         ("ProgressFn", "StudyResult", "default_folder", "identity", "run_study"),

@@ -1,5 +1,5 @@
-"""Executing a study's plans: the real-valued baseline's batch, and the LLM runs as per-run
-pipelines ([`jswim.agents.llm.LLMDriver`][jswim.agents.llm.LLMDriver]), each stored the moment it ends.
+"""Executing a study's LLM plans as per-run pipelines ([`LLMDriver`][jswim.agents.llm.LLMDriver]),
+each stored the moment it ends (the other agents: [`baselines`][jswim.studies.baselines]).
 
 Every answered call is journaled first (``calls.jsonl``, `jswim.llm.journal.CallJournal`),
 so an interrupted or capped study resumes without paying for a call twice.
@@ -13,14 +13,10 @@ import time
 from typing import Any
 from collections.abc import Callable, Iterable, Sequence
 
-import jax
-import numpy as np
 
-from jswim import env
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import LLMRunSpec, variant_config
 from jswim.console import eta
-from jswim.judging.gait import Criterion
 from jswim.llm.backend import Backend
 from jswim.llm.budget import Budget
 from jswim.llm.client import ClientSettings, LLMClient
@@ -29,10 +25,9 @@ from jswim.llm.pacing import Pacer
 from jswim.llm.probe import ServerInfo
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
-from jswim.results import RunRow, StudyStore
-from jswim.studies import rows
-from jswim.studies.grids import Plan, StudyOptions
-from jswim.studies.rows import judged_rows
+from jswim.results import StudyStore
+from jswim.studies.plans import Plan
+from jswim.studies.options import StudyOptions
 from jswim.studies.session import _preflight, _record_session, add_session
 
 
@@ -45,52 +40,6 @@ STORED = ("done", "below_x_min", "llm_error")
 #: ``"llm"`` and ``"llm-live"``, where the work counted is LLM steps (runs are in ``info``);
 #: ``info`` is a short status text.
 ProgressFn = Callable[[str, int, int, str], None]
-
-
-def _lattice(roc_levels: int) -> dict[str, int]:
-    """``make_params`` keywords of a ROC lattice (none for the paper's K = 1)."""
-    return {} if roc_levels == 1 else {"roc_levels": roc_levels}
-
-
-def _run_continuous(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """The real-valued RL baseline ([`jswim.agents.ppo`][jswim.agents.ppo]) for one swimmer, judged on shapes
-    ([`jswim.agents.ppo.evaluate`][jswim.agents.ppo_judge.evaluate]: [`jswim.judging.shape_judge.judge_shapes`][jswim.judging.shape_judge.judge_shapes] on displacements
-    replayed exactly, without noise)."""
-    from jswim.agents import ppo, qlearning  # lazy: optax and their jits, for the PPO baseline only
-
-    p0 = plans[0]
-    base = env.make_params(p0.swimmer)
-    init = np.array(
-        [[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32
-    )
-    params = qlearning.batch_params(
-        base,
-        len(plans),
-        zeta=np.array([p.zeta for p in plans]),
-        direction=np.array([p.direction for p in plans], float),
-        init=init,
-    )
-    keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
-    run = ppo.train_batch(keys, params, ppo.PPOConfig(steps=p0.steps))
-    rocs, dofs0 = np.asarray(run.actions, np.float64), np.asarray(run.dofs0, np.float64)
-    rep = ppo.evaluate(run, params, criterion=Criterion(horizon=horizon))
-    dof = np.asarray(run.dof, np.int64)
-    moves = [
-        [[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])]
-        for i in range(len(plans))
-    ]
-    span = base.model.hi - base.model.lo
-    corners = np.rint((dofs0 - base.model.lo) / span).astype(np.int64)  # the starts are corners
-    return judged_rows(
-        plans,
-        np.zeros(dof.shape, np.int64),
-        np.asarray(run.x),
-        corners,
-        horizon,
-        pose=(np.asarray(run.y), np.asarray(run.orientation)),
-        report=rep,
-        moves=moves,
-    )
 
 
 def _groups(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
@@ -138,17 +87,6 @@ def _configs(
             cfg = dataclasses.replace(cfg, temperature=temp)
         out.append((cfg, group))
     return out
-
-
-def _row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
-    """The judged row of one finished LLM run (a scene's has the scene's columns)."""
-    if plan.scene:
-        from jswim.studies import (
-            scenes,
-        )  # lazy: start-up (the scene module, for scene studies only)
-
-        return scenes.llm_row(plan, r, horizon)
-    return rows.llm_row(plan, r, horizon)
 
 
 def _run_llm(
@@ -217,7 +155,11 @@ def _run_llm(
         totals["billed_calls"] += r.usage.billed_calls - r.replayed_calls
         totals["replayed_calls"] += r.replayed_calls
         if r.status in STORED:
-            store.add_runs([_row(by_id[r.run_id], r, o.horizon)])
+            from jswim.studies import (
+                baselines,
+            )  # lazy: start-up (the learners' modules load JAX and optax)
+
+            store.add_runs([baselines.llm_row(by_id[r.run_id], r, o.horizon)])
             journal.forget(r.run_id)
             finished += 1
             report()

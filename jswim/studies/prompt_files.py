@@ -20,7 +20,7 @@ from typing import Any
 from collections.abc import Mapping
 
 from jswim.errors import ConfigError
-from jswim.studies.grids import StudyOptions, prompt_label
+from jswim.studies.options import StudyOptions, prompt_label
 
 
 def file_record(path: str | Path) -> dict[str, str]:

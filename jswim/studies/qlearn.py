@@ -1,7 +1,7 @@
 """The Q-learning baseline's steps-to-learn distributions over many seeds (``jswim qlearn``).
 
 Many independent learners per (swimmer, direction, zeta) are trained in vectorised calls
-([`jswim.agents.qlearning.train_batch`][jswim.agents.qlearning.train_batch], sharded over every device) and judged by the shared
+([`jswim.agents.qlearning.train`][jswim.agents.qlearning.train], sharded over every device) and judged by the shared
 criterion, ``chunk`` learners at a time so that 10^6 seeds fit in bounded memory; steps to learn
 are summarised by [`jswim.judging.stats.learn_stats`][jswim.judging.stats.learn_stats], the same statistic as the study tables.
 """
@@ -16,7 +16,8 @@ import numpy as np
 
 from jswim import sharding
 from jswim.agents.defaults import paper_init
-from jswim.agents.qlearning import QConfig, QRun, batch_params, evaluate, train_batch
+from jswim.agents.qlearning import QConfig, QRun, batch_params, evaluate, train
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env import EnvParams, make_params, seed_key
 from jswim.errors import check_count
 from jswim.judging.gait import PAPER, Criterion, GaitReport
@@ -190,6 +191,7 @@ def study(
     total, done = len(swimmers) * len(grid) * n_seeds, 0
     for swimmer in swimmers:
         base = make_params(swimmer, init=paper_init(make_model(swimmer)) if init is None else init)
+        world = SwimmerWorld(base.model)
         d_arr = np.repeat([g[0] for g in grid], n_seeds).astype(float)
         z_arr = np.repeat([g[1] for g in grid], n_seeds).astype(float)
         key, sub = jax.random.split(key)
@@ -200,7 +202,7 @@ def study(
                 base, stop - start, direction=d_arr[start:stop], zeta=z_arr[start:stop]
             )
             # on several hosts each process holds its own block: gather them before judging
-            run = sharding.to_host(train_batch(keys[start:stop], params, config))
+            run = sharding.to_host(train(world, params, keys[start:stop], config))
             report = evaluate(run, params, criterion=criterion)
             parts.append(Outcomes.of(run, params, report, criterion.horizon))
             done += stop - start

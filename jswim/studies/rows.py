@@ -20,7 +20,7 @@ from jswim.agents.llm import RunResult
 from jswim.judging import lattice
 from jswim.judging.gait import Criterion, GaitReport, judge
 from jswim.results.row import SWITCHES, RunRow
-from jswim.studies.grids import Plan
+from jswim.studies.plans import Plan
 
 
 #: An LLM run's switches that are columns of their own: the plan's (its value stands) and the typed ones.
@@ -176,18 +176,4 @@ def with_llm(row: RunRow, r: RunResult) -> RunRow:
         other={k: v for k, v in r.knobs.items() if k not in _PLAN},
         y=r.y if row.y is None else row.y,
         orientation=r.orientation if row.orientation is None else row.orientation,
-    )
-
-
-def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
-    """The judged row of one finished LLM run in the paper's world (a scene's:
-    `jswim.studies.scenes.llm_row`)."""
-    acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
-    xs = np.array([r.x], float).reshape(1, len(r.x))
-    # The judge reads the start as lattice positions: a corner level times K.
-    return with_llm(
-        judged_rows([plan], acts, xs, np.array([r.levels0], np.int64) * plan.roc_levels, horizon)[
-            0
-        ],
-        r,
     )

@@ -1,6 +1,6 @@
 """Running a study: build its plans, run what is not done yet, store and summarise.
 
-Execution groups the plans ([`jswim.studies.grids`][jswim.studies.grids]): Q-learning and random-policy runs
+Execution groups the plans ([`jswim.studies.specs`][jswim.studies.specs]): Q-learning and random-policy runs
 train/roll out in one vectorised call per swimmer (here and in [`jswim.studies.execute`][jswim.studies.execute]);
 LLM runs are per-run pipelines (`jswim.studies.execute._run_llm`), each landing in the study
 folder ([`jswim.results.StudyStore`][jswim.results.StudyStore]) the moment it ends, with the server's preflight and the
@@ -32,9 +32,8 @@ from typing import TYPE_CHECKING, Any
 from collections.abc import Sequence
 
 import jax
-import numpy as np
 
-from jswim import __version__, console, env, reprs
+from jswim import __version__, console, reprs
 from jswim._io import callsite
 
 if TYPE_CHECKING:
@@ -66,17 +65,16 @@ from jswim.results import (
     write_json,
     writing,
 )
-from jswim.studies.grids import (
+from jswim.studies.options import (
     ALL_AGENTS,
     AGENTS,
     COMPETENCE_VARIANTS,
     CONTINUOUS_AGENT,
-    SPECS,
     SWIM_VARIANT,
-    Plan,
     StudyOptions,
-    build,
 )
+from jswim.studies.specs import SPECS, build
+from jswim.studies.plans import Plan
 from jswim.studies import prompt_files
 
 # The execution and the session, in their own modules; their names stay importable from here.
@@ -85,62 +83,14 @@ from jswim.studies.execute import (  # noqa: F401
     ProgressFn,
     _configs,
     _groups,
-    _lattice,
-    _row,
-    _run_continuous,
     _run_llm,
     _spec,
 )
-from jswim.studies.rows import judged_rows as _judge_rows
 from jswim.studies.session import _preflight, _record_session, add_session, cap_check  # noqa: F401
 from jswim.studies.report import draw_figures, summarize
 
 
 # -- execution ----------------------------------------------------------------------------------
-
-
-def _run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """Q-learning, random or continuous-RL runs of one (agent, swimmer, action set, ROC lattice)
-    group, vectorised."""
-    p0 = plans[0]
-    if p0.scene:  # walls, pairs, Purcell above a wall (issues 19, 34): the stroke and the baselines on the scene
-        from jswim.studies import (
-            scenes,
-        )  # lazy: start-up (the scene baselines' module, for scene studies only)
-
-        return scenes.run_baselines(plans, horizon)
-    if p0.agent == CONTINUOUS_AGENT:
-        return _run_continuous(plans, horizon)
-    from jswim.agents import (
-        qlearning,
-        random_policy,
-    )  # lazy: optax and their jits, for baselines only
-
-    base = env.make_params(p0.swimmer, **_lattice(p0.roc_levels))
-    init = np.array(
-        [[-1] * base.n_dof if isinstance(p.init, str) else list(p.init) for p in plans], np.int32
-    )
-    params = qlearning.batch_params(
-        base,
-        len(plans),
-        zeta=np.array([p.zeta for p in plans]),
-        direction=np.array([p.direction for p in plans], float),
-        init=init,
-    )
-    keys = jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
-    if p0.agent == "qlearning":
-        cfg = qlearning.QConfig(steps=p0.steps, action_set=p0.action_set)
-        run = qlearning.train_batch(keys, params, cfg, pose=True)
-    else:
-        run = random_policy.run_batch(keys, params, p0.steps, p0.action_set)
-    return _judge_rows(
-        plans,
-        np.asarray(run.actions),
-        np.asarray(run.x),
-        np.asarray(run.levels0),
-        horizon,
-        pose=(np.asarray(run.y), np.asarray(run.orientation)),
-    )
 
 
 @dataclass
@@ -197,7 +147,7 @@ GRID_SIZE = (
     "formations",
 )
 
-#: How run seeds are made (``jswim.studies.grids.run_seed``); folders made otherwise are refused.
+#: How run seeds are made (``jswim.studies.plans.run_seed``); folders made otherwise are refused.
 SEEDS = "hash of the study seed and the run id"
 
 #: The study's prompt template (written once per folder; its hash is in the identity).
@@ -466,6 +416,8 @@ def _run_in(
         f"{finished} runs already done" if finished else "",
     )
 
+    from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
+
     for (agent, *_), group in _groups(
         [p for p in todo if p.agent != "llm"],
         "agent",
@@ -476,7 +428,7 @@ def _run_in(
         "variant",
         "zeta",
     ).items():
-        store.add_runs(_run_baselines(group, options.horizon))
+        store.add_runs(baselines.run_baselines(group, options.horizon))
         finished += len(group)
         tick(agent, finished, total, "")
 

@@ -19,20 +19,18 @@
     steering both (joint DOFs D1..D4) find a faster joint stroke.
 
 Runs, rows, resume, figures, ``show`` and ``compare`` are the study folder's
-([`jswim.studies.run`][jswim.studies.run]); this module gives the cells, runs the baselines and the stroke on a
-scene, and adds the scene's columns to each row. Every run goes one way, whatever the world:
-[`jswim.make`][jswim.env.worlds.make] builds it from the plan's swimmer and scene (a scene world, the paper's world
-for a bulk reference, Purcell's swimmer above a wall, or a world of [`jswim.register_world`][jswim.env.worlds.register_world]),
-the agents that take any world run on it ([`jswim.agents.worlds`][jswim.agents.worlds], ``random_policy.run_env``,
-``qlearning.train_env``, ``ppo.train_env``), and the rows are read from their trace through the
-protocol (positions, `height` and orientation, the step's
-stuck and contact).
+([`jswim.studies.run`][jswim.studies.run]), and every run goes the one way of every study
+([`baselines`][jswim.studies.baselines]: ``make``, the learner's one entry point, one row
+builder); this module gives the scene's strokes, its judge of lattice moves per swimmer, its
+columns (read from the runs' trace through the protocol: positions,
+`height` and orientation, the step's stuck and contact) and
+its summary table.
 
 PPO's rows (agent ``ppo``, an extension): the continuous study's learner (same network,
 [`PPOConfig`][jswim.agents.ppo.PPOConfig] and temperature) with the other scene agents' task and budget
 (``--steps``, ``--q-runs`` learners per cell and direction, ``--noise`` the scene's); it moves one
 arm of one swimmer per step by a real ROC (for a pair it steers both). Success is the study's
-criterion in its real-valued form ([`jswim.agents.ppo.evaluate_scene`][jswim.agents.ppo_judge.evaluate_scene]: the shape judge on
+criterion in its real-valued form ([`evaluate_swimmers`][jswim.agents.ppo_judge.evaluate_swimmers]: the shape judge on
 each swimmer's own moves, with the bulk swimmer's noiseless displacements; a pair succeeds when
 both swimmers' own move sequences do); wall runs get their fate from the heights and contacts the
 training run recorded; the moves are ``[dof, real ROC]``.
@@ -40,29 +38,25 @@ training run recorded; the moves are ``[dof, real ROC]``.
 
 from __future__ import annotations
 
-import dataclasses
 import json
 from typing import Any
 from collections.abc import Sequence
 
-import jax
 import numpy as np
 
 from jswim import env
 from jswim.actions import decode_action, encode_action, n_actions
 from jswim.console import Column
-from jswim.agents import qlearning, random_policy, worlds
-from jswim.agents.qlearning import QConfig
-from jswim.env.base import Environment, Observation
-from jswim.env.scene_world import ARMS, SceneTask
-from jswim.env.worlds import make
+from jswim.env.base import Environment
+from jswim.env.scene_world import ARMS
 from jswim.judging.gait import Criterion, judge
 from jswim.scenes import Scene
 from jswim.swimmers.models import SWIMMERS
 from jswim.results.row import RunRow, as_run_rows
-from jswim.studies.rows import build_row, signs, with_llm
-from jswim.studies.grids import CONTINUOUS_AGENT, STROKE_AGENT, Plan
-from jswim.studies.grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
+from jswim.studies.rows import build_row, signs
+from jswim.studies.options import STROKE_AGENT
+from jswim.studies.plans import Plan
+from jswim.studies.scene_grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
 
 def square(start: Sequence[int], direction: int) -> tuple[int, int, int, int]:
@@ -184,169 +178,31 @@ def late_speed(x: Sequence[float], direction: int, swimmers: int) -> float | Non
 # -- rows ----------------------------------------------------------------------------------------
 
 
-def _keys(plans: Sequence[Plan]) -> jax.Array:
-    return jax.vmap(jax.random.PRNGKey)(np.array([env.seed32(p.seed) for p in plans], np.uint32))
-
-
-def scene_of(plan: Plan) -> Scene:
-    """The [`jswim.scenes.Scene`][jswim.scenes.scene.Scene] of a plan (its canonical JSON)."""
-    return Scene.from_dict(json.loads(plan.scene))
-
-
-def _world(plan: Plan) -> tuple[Scene, Environment, Any]:
-    """A plan's scene, its world and the world's params ([`jswim.make`][jswim.env.worlds.make]: a scene world, the
-    paper's world for a plain bulk scene, Purcell's swimmer above a wall, or a registered world),
-    toward +x (the runs set their own)."""
-    scene = scene_of(plan)
-    init = (
-        plan.init
-        if isinstance(plan.init, (tuple, list)) and all(v in (0, 1) for v in plan.init)
-        else None
-    )
-    world, params = make(
-        plan.swimmer, scene, zeta=plan.zeta, init=None if init is None else tuple(init)
-    )
-    return scene, world, params
-
-
-def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: the world's own
-    (`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
-    a plane parallel to the wall, a registered world) stays at the scene's start height (0 in the
-    paper's bulk fluid), untilted."""
-    if obs.height is not None:
-        return np.asarray(obs.height, np.float64), np.asarray(obs.orientation, np.float64)
-    shape = np.shape(obs.orientation)
-    return np.full(shape, scene.height if scene.medium != "bulk" else 0.0), np.zeros(shape)
-
-
-def _start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, ...]:
-    """Each swimmer's start x, height and tilt ``(S,)`` (`_lift`), and the DOFs' start
-    corner (the discretiser's lattice positions, ``(n_dof,)``)."""
-    state = world.reset(jax.random.PRNGKey(0), params)
-    obs = world.observe(state, params)
-    corner = np.asarray(worlds.cells(world).positions(state, params), np.int64)
-    return (np.asarray(obs.position[:, 0], np.float64), *_lift(obs, scene), corner)
-
-
-def _per_run(params: Any, directions: Sequence[int]) -> tuple[Any, Any]:
-    """``params`` with a target direction per run, and ``vmap``'s axes of them (the rest shared)."""
-    d, none = np.asarray(directions, np.float64), jax.tree.map(lambda _: None, params)
-    if dataclasses.is_dataclass(params):
-        return dataclasses.replace(params, direction=d), dataclasses.replace(none, direction=0)
-    return params._replace(direction=d), none._replace(direction=0)
-
-
-def run_baselines(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    """The stroke, random, Q-learning or PPO runs of one (agent, scene, zeta, action set, variant)
-    group (in sub-batches by start), in the order of ``plans``."""
-    by_init: dict[Any, list[Plan]] = {}
-    for p in plans:
-        by_init.setdefault(p.init, []).append(p)
-    done = {r["run_id"]: r for g in by_init.values() for r in _run_group(g, horizon)}
-    return [done[p.run_id] for p in plans]
-
-
-def _run_group(plans: Sequence[Plan], horizon: int) -> list[dict[str, Any]]:
-    p0 = plans[0]
-    scene, world, params = _world(p0)
-    x0, z0, tilt0, corner = _start(world, params, scene)
-    keys = _keys(plans)
-    task, axes = _per_run(params, [p.direction for p in plans])
-    n_sw = world.n_swimmers
-    judged, moves = [None] * len(plans), [None] * len(plans)
-    if p0.agent == STROKE_AGENT:
-        codes = np.stack(
-            [
-                stroke_codes(p.variant, p.direction, p.steps, n_sw, corner, world.n_actions // n_sw)
-                for p in plans
-            ]
-        )
-        tr = worlds.play(world, task, keys, codes, params_axes=axes)
-    elif p0.agent == "random":
-        run = random_policy.run_env(
-            world, task, keys, p0.steps, p0.action_set, params_axes=axes, trace=True
-        )
-        codes, tr = np.asarray(run.actions), run.trace
-    elif p0.agent == CONTINUOUS_AGENT:
-        from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
-
-        run = ppo.train_env(
-            world, keys, task, ppo.PPOConfig(steps=p0.steps), params_axes=axes, trace=True
-        )
-        codes, tr = np.zeros((len(plans), 0), np.int64), run.trace
-        dof, rocs = np.asarray(run.dof, np.int64), np.asarray(run.actions, np.float64)
-        moves = [
-            [[int(d), float(rocs[i, t, d - 1])] for t, d in enumerate(dof[i])]
-            for i in range(len(plans))
-        ]
-        judged = _ppo_judged(run, plans, task, horizon, n_sw)
-    else:
-        config = QConfig(steps=p0.steps, action_set=p0.action_set)
-        run = qlearning.train_env(world, keys, task, config, params_axes=axes, trace=True)
-        codes, tr = np.asarray(run.actions), run.trace
-    obs = tr.obs
-    xs = np.asarray(obs.position[..., 0], np.float64) - x0
-    heights, tilts = _lift(obs, scene)
-    stuck, contact = (
-        np.asarray(v, bool).reshape(xs.shape[:2] + (-1,)).any(-1)
-        for v in (tr.info.stuck, tr.info.contact)
-    )
-    rows = []
-    for i, p in enumerate(plans):
-        extra = {
-            "xs": xs[i].tolist(),
-            "heights": heights[i].tolist(),
-            "tilts": tilts[i].tolist(),
-            "contact": contact[i].tolist(),
-            "stuck": stuck[i].tolist(),
-        }
-        row = scene_row(
-            p,
-            [int(c) for c in codes[i]],
-            xs[i].mean(axis=-1).tolist(),
-            extra,
-            horizon,
-            z0=z0,
-            tilt0=tilt0,
-            judged=judged[i],
-            moves=moves[i],
-        )
-        if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
-            y, orientation = (
-                np.asarray(v[i, :, 0], np.float64).tolist()
-                for v in (obs.position[..., 1], obs.orientation)
-            )
-            row = dataclasses.replace(row, y=y, orientation=orientation)
-        rows.append(row)
-    return rows
-
-
-def _ppo_judged(
-    run: Any, plans: Sequence[Plan], task: Any, horizon: int, n_sw: int
+def ppo_judged(
+    run: Any, plans: Sequence[Plan], world: Environment, task: Any, horizon: int
 ) -> list[dict[str, Any] | None]:
-    """PPO's verdicts per plan, as `_judge` judges lattice moves: the shape judge
-    ([`jswim.agents.ppo.evaluate`][jswim.agents.ppo_judge.evaluate]) per swimmer of a scene world; the paper's swimmer in a
-    world of its own (Purcell's above a wall) on its moves replayed in the bulk; a registered
-    world unjudged (`_unjudged`)."""
+    """PPO's verdicts per plan, as `_judge` judges lattice moves: the shape judge per swimmer,
+    through the world's judge's view ([`evaluate_swimmers`][jswim.agents.ppo_judge.evaluate_swimmers]:
+    each swimmer's moves replayed in the paper's bulk world); a registered world unjudged
+    (`_unjudged`)."""
     from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
-    p0, unjudged = plans[0], [_unjudged(p) for p in plans]
+    unjudged = [_unjudged(p) for p in plans]
     if unjudged[0] is not None:
         return unjudged
-    crit = Criterion(horizon=horizon)
-    if isinstance(task, SceneTask):
-        rep = ppo.evaluate(run, task, criterion=crit)
-    else:
-        bulk, _ = _per_run(env.make_params(p0.swimmer, init=p0.init), [p.direction for p in plans])
-        rep = ppo.evaluate(run, bulk, criterion=crit, replay=True)
+    rep = ppo.evaluate_swimmers(
+        run,
+        world.judge_view(task),
+        [p.direction for p in plans],
+        criterion=Criterion(horizon=horizon),
+    )
     return [
         {
             "success": bool(rep.success[i]),
             "learned": bool(rep.learned[i]),
             "steps_to_learn": int(rep.steps_to_learn[i]) if rep.learned[i] else None,
             # a pair's period is 0, as the lattice judge of the pair rows gives it
-            "period": int(rep.period[i]) if n_sw == 1 else 0,
+            "period": int(rep.period[i]) if world.n_swimmers == 1 else 0,
         }
         for i in range(len(plans))
     ]
@@ -358,22 +214,6 @@ def _unjudged(plan: Plan) -> dict[str, Any] | None:
     if plan.swimmer in SWIMMERS:
         return None
     return {"success": None, "learned": None, "steps_to_learn": None, "period": 0}
-
-
-def llm_row(plan: Plan, result: Any, horizon: int) -> RunRow:
-    """The row of a finished LLM run on a scene (`scene_row` and the run's own fields:
-    [`jswim.studies.rows.with_llm`][jswim.studies.rows.with_llm])."""
-    scene, world, params = _world(plan)
-    _, z0, tilt0, _ = _start(world, params, scene)
-    tracks = {k: getattr(result, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
-    if not tracks["heights"]:
-        # a world that reports no height (Purcell's plane above a wall, a registered world): the
-        # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)
-        tracks.update(heights=[z0.tolist()] * len(result.x), tilts=[tilt0.tolist()] * len(result.x))
-    return with_llm(
-        scene_row(plan, list(result.actions), list(result.x), tracks, horizon, z0=z0, tilt0=tilt0),
-        result,
-    )
 
 
 def _judge(codes: Sequence[int], plan: Plan, swimmers: int, horizon: int) -> dict[str, Any]:
@@ -419,7 +259,7 @@ def scene_row(
     the per-step tracks ``extra`` holds (``xs``, ``heights``, ``tilts``, ``contact``, ``stuck``),
     ``fate``, ``mean_height``, ``speed`` (`late_speed`) and, for strokes, ``per_cycle``.
     ``y`` and ``orientation`` of the trajectories table are swimmer 1's height and tilt."""
-    scene = scene_of(plan)
+    scene = Scene.from_dict(json.loads(plan.scene))
     wall = scene.medium == "wall"
     sw = scene.swimmers
     h1 = [float(h[0]) for h in extra.get("heights") or []]

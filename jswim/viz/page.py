@@ -371,7 +371,7 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
     or grid axes the study has no use for (its `jswim.studies.grids.SPECS` ``ignores``; a
     scene study's own axes only on that study) are left out; the full record stays one click away.
     """
-    from jswim.studies.grids import (
+    from jswim.studies.specs import (
         SPECS,
     )  # lazy: the grids load JAX, which a page of a finished folder does not need
 

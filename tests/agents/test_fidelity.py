@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from jswim import env
-from jswim.studies.grids import initial
+from jswim.studies.plans import initial
 from jswim.swimmers import nlink
 
 

@@ -15,7 +15,7 @@ from jswim.errors import ConfigError
 from jswim.prompt import Action, HistoryRecord, SceneView, render_prompt
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
-from jswim.studies.grids import build
+from jswim.studies.specs import build
 from jswim.studies.run import default_folder, identity
 from jswim.studies.scenes import pair_scene
 from jswim.swimmers.models import make_model

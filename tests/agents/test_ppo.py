@@ -7,6 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim import env
 
 from jswim.judging import gait
@@ -33,14 +34,19 @@ def trained():
     with jax.enable_x64(False):
         params = _params()
         keys = jax.random.split(jax.random.PRNGKey(3), B)
-        run = ppo.train_batch(keys, params, ppo.PPOConfig())
-        again = ppo.train_batch(keys, params, ppo.PPOConfig())
-        pair = ppo.train_batch(keys[:2], params, ppo.PPOConfig())
+        world = SwimmerWorld(params.model)
+        run = ppo.train(world, params, keys, ppo.PPOConfig())
+        again = ppo.train(world, params, keys, ppo.PPOConfig())
+        pair = ppo.train(world, params, keys[:2], ppo.PPOConfig())
         jaxprs = [
             str(
                 jax.make_jaxpr(
                     lambda k, p: ppo._train(
-                        k, p, ppo._structure(ppo.PPOConfig()), ppo._numbers(ppo.PPOConfig())
+                        k,
+                        p,
+                        ppo._structure(ppo.PPOConfig()),
+                        ppo._numbers(ppo.PPOConfig()),
+                        SwimmerWorld(params.model),
                     )
                 )(jax.random.split(jax.random.PRNGKey(0), n), env.broadcast_params(params, n))
             )

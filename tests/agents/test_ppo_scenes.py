@@ -1,12 +1,15 @@
-"""PPO on scenes: jswim.agents.ppo.train_scene_batch and its world adapter."""
+"""PPO on scenes: jswim.agents.ppo.train in a scene world, and its judge per swimmer."""
 
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
 from jswim.agents import ppo
+from jswim.env.worlds import make
+from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.scenes import Scene, scene_advance, scene_params, scene_reset
 
 STEPS = 8
@@ -43,7 +46,11 @@ def test_wall_scene_run_records_the_scene_progress():
         params = scene_params("ng", Scene(medium="wall", height=10.0))
         keys = jax.random.split(jax.random.PRNGKey(0), 3)
         config = ppo.PPOConfig(steps=STEPS)
-        run = ppo.train_scene_batch(keys, params, config, direction=np.array([1, -1, 1]))
+        world = SceneWorld(Scene(medium="wall", height=10.0))
+        task = SceneTask(params, jnp.array([1.0, -1.0, 1.0]))
+        run = ppo.train(world, task, keys, config)
+        start = world.observe(world.reset(keys[0], task), task).position
+        run = run._replace(x=run.x - jnp.mean(start[:, 0]))
         assert (
             run.x.shape == (3, STEPS)
             and run.dofs.shape == (3, STEPS, 2)
@@ -65,7 +72,7 @@ def test_wall_scene_run_records_the_scene_progress():
             np.testing.assert_allclose(
                 x[i], _replay_x(params, np.asarray(run.actions[i])), atol=2e-4
             )
-        report = ppo.evaluate_scene(run, params, direction=np.array([1, -1, 1]))
+        report = ppo.evaluate_swimmers(run, world.judge_view(task), np.array([1, -1, 1]))
         assert np.asarray(report.success).shape == (3,)
 
 
@@ -105,11 +112,12 @@ def test_pair_judge_on_hand_made_strokes():
     # The real-valued pair judge against the lattice one of the studies (jswim.judging.gait.judge on each
     # swimmer's own codes, an independent code path) on corner moves, where the two must agree.
     from jswim.studies import scenes
-    from jswim.studies.grids import Plan
+    from jswim.studies.plans import Plan
 
-    pair = scene_params(
+    world, task = make(
         "ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0)
     )  # paper's (10, 6)
+    pair = world.judge_view(task)
     both = scenes.stroke_codes("phase0", 1, 30, 2)  # two squares, alternating moves
     late = np.r_[
         np.ones(6, np.int64), both[:24]
@@ -117,7 +125,7 @@ def test_pair_judge_on_hand_made_strokes():
     only_one = scenes.stroke_codes("square", 1, 30, 1)  # swimmer 2 never moves
     lopsided = np.r_[scenes.stroke_codes("square", 1, 27, 1), [7, 6, 7]]  # swimmer 2: 3 moves
     runs = [both, late, only_one, lopsided, scenes.stroke_codes("phase0", -1, 30, 2)]
-    rep = ppo.evaluate_scene(_hand_made(runs), pair, direction=np.array([1, 1, 1, 1, 1]))
+    rep = ppo.evaluate_swimmers(_hand_made(runs), pair, np.array([1, 1, 1, 1, 1]))
     assert rep.success.tolist() == [True, True, False, False, False]
     assert rep.learned.tolist() == [True, True, False, False, False]
     assert rep.period.tolist() == [8, 8, 0, 0, 0]  # 4 own moves each
@@ -134,10 +142,8 @@ def test_pair_judge_on_hand_made_strokes():
         assert (lattice["success"], lattice["learned"]) == (rep.success[i], rep.learned[i])
         assert lattice["steps_to_learn"] == (int(rep.steps_to_learn[i]) if rep.learned[i] else None)
     # The -x target is met by the time-reversed strokes, not by the +x ones.
-    back = ppo.evaluate_scene(
-        _hand_made([scenes.stroke_codes("phase0", -1, 30, 2), both]),
-        pair,
-        direction=np.array([-1, -1]),
+    back = ppo.evaluate_swimmers(
+        _hand_made([scenes.stroke_codes("phase0", -1, 30, 2), both]), pair, np.array([-1, -1])
     )
     assert back.success.tolist() == [True, False]
 
@@ -168,3 +174,10 @@ def test_a_run_from_another_world_is_judged_on_its_moves_replayed_in_the_bulk():
     assert float(rep.per_step[0]) * 4 == pytest.approx(0.19124724, abs=1e-7)
     # the run's own x (here: it never moved) is what is judged without replay
     assert not bool(ppo.evaluate(run, bulk).learned[0])
+    # The world's judge's view says the same: Purcell's swimmer above a wall is judged as the bulk
+    # swimmer from the run's start.
+    world, task = make("purcell", Scene(medium="wall", height=3.0), init=(1, 1))
+    view = world.judge_view(task)
+    assert len(view) == 1 and view[0].model == bulk.model
+    again = ppo.evaluate_swimmers(run, view, 1)
+    assert bool(again.success[0]) and float(again.per_step[0]) == float(rep.per_step[0])

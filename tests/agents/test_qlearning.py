@@ -13,8 +13,8 @@ from jswim.agents.qlearning import (
     evaluate,
     greedy_rollout,
     train,
-    train_batch,
 )
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env import encode_action as act, make_params
 from jswim.errors import ConfigError
 from jswim.judging.gait import Criterion, best_cycles, judge, replay
@@ -31,6 +31,11 @@ def _keys(seed: int, n: int = B) -> jax.Array:
 
 def _batched(swimmer: str, **changes) -> object:
     return batch_params(make_params(swimmer), B, direction=DIRECTIONS, **changes)
+
+
+def _world(params) -> SwimmerWorld:
+    """The paper's world of ``params``."""
+    return SwimmerWorld(params.model, params.roc_levels)
 
 
 def _greedy_actions(q: np.ndarray, levels0: np.ndarray, steps: int, action_set: str) -> np.ndarray:
@@ -62,7 +67,7 @@ def _greedy_actions(q: np.ndarray, levels0: np.ndarray, steps: int, action_set: 
 def test_learned_greedy_policy_is_the_signature_cycle(swimmer, action_set):
     # 600 steps: with all six actions NG's learner needs more than 200 steps (see the docs).
     params = _batched(swimmer)
-    run = train_batch(_keys(1), params, QConfig(action_set=action_set, steps=600))
+    run = train(_world(params), params, _keys(1), QConfig(action_set=action_set, steps=600))
     assert evaluate(run, params).learned.all()
     actions = _greedy_actions(np.asarray(run.q), np.asarray(run.levels0), 16, action_set)
     verdict = judge(actions, params, criterion=Criterion(horizon=16))
@@ -77,7 +82,7 @@ def test_learned_greedy_policy_is_the_signature_cycle(swimmer, action_set):
 
 def test_greedy_rollout_runs_the_greedy_policy():
     params = _batched("purcell")
-    run = train_batch(_keys(1), params, QConfig(action_set="all", steps=600))
+    run = train(_world(params), params, _keys(1), QConfig(action_set="all", steps=600))
     rollout = jax.vmap(lambda q, p, k: greedy_rollout(q, p, 16, "all", k))
     actions = np.asarray(rollout(run.q, params, _keys(2)))
     np.testing.assert_array_equal(
@@ -91,7 +96,7 @@ def test_first_index_ties_repeat_the_first_action_forever():
     # It bends DOF 1 from (+, +) to its lower limit; from then on action 0 pushes against that
     # limit, earns exactly 0, leaves every value at 0, and is picked again, forever.
     params = _batched("ng")
-    run = train_batch(_keys(3), params, NEVER_EXPLORES.replace(tie_break="first"))
+    run = train(_world(params), params, _keys(3), NEVER_EXPLORES.replace(tie_break="first"))
     actions, x = np.asarray(run.actions), np.asarray(run.x)
     assert (actions == act(1, -1)).all()
     np.testing.assert_array_equal(x, np.repeat(x[:, :1], x.shape[1], axis=1))
@@ -106,7 +111,9 @@ def test_random_ties_without_exploration_trap_ng_in_a_reciprocal_stroke():
     # shortening arm 2 pays +0.096 and lengthening it again costs the least, -0.096), a
     # reciprocal stroke that goes nowhere, as the scallop theorem says.
     params = _batched("ng")
-    run = train_batch(_keys(4), params, NEVER_EXPLORES.replace(action_set="shape-changing"))
+    run = train(
+        _world(params), params, _keys(4), NEVER_EXPLORES.replace(action_set="shape-changing")
+    )
     tail, x = np.asarray(run.actions)[:, -20:], np.asarray(run.x)
     assert not evaluate(run, params).learned.any()
     assert (tail[:, 2:] == tail[:, :-2]).all() and (tail[:, 1:] != tail[:, :-1]).all()  # period 2
@@ -120,7 +127,7 @@ def test_random_ties_without_exploration_trap_ng_in_a_reciprocal_stroke():
 @pytest.fixture(scope="module")
 def ng_greedy_all():
     params = _batched("ng")
-    return train_batch(_keys(5), params, NEVER_EXPLORES), params
+    return train(_world(params), params, _keys(5), NEVER_EXPLORES), params
 
 
 @pytest.mark.slow  # compiles a training run without exploration (17 s under load 8)
@@ -148,9 +155,13 @@ def test_vmapped_learners_equal_individually_trained_ones():
     init = np.array([[1, 1], [0, 1], [-1, -1], [1, 0]])
     params = batch_params(base, 4, zeta=zeta, direction=direction, init=init)
     keys = _keys(6, 4)
-    batch = train_batch(keys, params)
+    batch = train(_world(params), params, keys)
     for i in range(4):
-        one = train(keys[i], base.replace(zeta=zeta[i], direction=direction[i], init=init[i]))
+        one = train(
+            SwimmerWorld(base.model),
+            base.replace(zeta=zeta[i], direction=direction[i], init=init[i]),
+            keys[i],
+        )
         np.testing.assert_array_equal(np.asarray(batch.actions[i]), np.asarray(one.actions))
         np.testing.assert_array_equal(np.asarray(batch.levels0[i]), np.asarray(one.levels0))
         np.testing.assert_allclose(np.asarray(batch.x[i]), np.asarray(one.x), rtol=1e-6, atol=1e-6)
@@ -165,7 +176,7 @@ def test_optax_update_is_textbook_q_learning():
 
     params = _batched("purcell", zeta=0.5)
     config = QConfig(learning_rate=optax.linear_schedule(1.0, 0.2, 100))
-    run = train_batch(_keys(9), params, config)
+    run = train(_world(params), params, _keys(9), config)
     ref = numpy_train(jax_uniforms(_keys(9), config.steps), params, config)
     np.testing.assert_array_equal(np.asarray(run.actions), ref["actions"])
     np.testing.assert_allclose(np.asarray(run.x), ref["x"], atol=1e-9)
@@ -181,7 +192,7 @@ def test_schedules_are_optax_schedules_evaluated_at_the_step_count():
         epsilon=optax.linear_schedule(1.0, 0.0, 10),
         q_init=0.3,
     )
-    run = train_batch(_keys(7), _batched("purcell"), config)
+    run = train(_world(_batched("purcell")), _batched("purcell"), _keys(7), config)
     np.testing.assert_array_equal(np.asarray(run.q), 0.3)
     explored = np.asarray(run.explored)
     assert explored[:, 0].all() and not explored[:, 10:].any()
@@ -189,7 +200,7 @@ def test_schedules_are_optax_schedules_evaluated_at_the_step_count():
 
 def test_x_is_the_environment_s_displacement_of_the_executed_actions():
     params = _batched("purcell", init=np.tile([1, 0], (B, 1)))
-    run = train_batch(_keys(8), params)
+    run = train(_world(params), params, _keys(8))
     exact = replay(np.asarray(run.actions).T, params.model, np.asarray(run.levels0)).x[1:].T
     np.testing.assert_allclose(np.asarray(run.x), exact, atol=1e-9)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import jax
 import numpy as np
 
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim import env
 
 from jswim.judging import gait
@@ -16,7 +17,7 @@ def test_random_baseline_honours_the_action_set():
     keys = jax.random.split(jax.random.PRNGKey(0), 64)
     model = params.model
     for action_set in ("shape-changing", "all"):
-        run = random_policy.run_batch(keys, params, 40, action_set)
+        run = random_policy.run(SwimmerWorld(model), params, keys, 40, action_set)
         acts = np.asarray(run.actions)
         rp = gait.replay(acts.T, model, np.asarray(run.levels0))
         rocs = np.vectorize(lambda a: env.decode_action(int(a))[1])(acts)

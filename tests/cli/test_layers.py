@@ -73,10 +73,7 @@ UNMARKED_ALLOWED: set[str] = set()  # the debt is paid: every function-level imp
 #: the list only shrinks).
 PRIVATE_IMPORTS_ALLOWED = {
     "jswim.agents.ppo -> jswim.agents.qlearning._compiler_options",
-    "jswim.agents.random_policy -> jswim.agents.qlearning._k",
-    "jswim.agents.random_policy -> jswim.agents.qlearning._paper",
     "jswim.agents.random_policy -> jswim.agents.qlearning._pick",
-    "jswim.agents.worlds -> jswim.env.episodes._run_batch",
     "jswim.env.stepping -> jswim.env.tables._corner_index",
     "jswim.env.stepping -> jswim.env.tables._step_rows",
     "jswim.env.stepping -> jswim.env.tables._still_row",
@@ -88,9 +85,6 @@ PRIVATE_IMPORTS_ALLOWED = {
     "jswim.studies.execute -> jswim.studies.session._record_session",
     "jswim.studies.run -> jswim.studies.execute._configs",
     "jswim.studies.run -> jswim.studies.execute._groups",
-    "jswim.studies.run -> jswim.studies.execute._lattice",
-    "jswim.studies.run -> jswim.studies.execute._row",
-    "jswim.studies.run -> jswim.studies.execute._run_continuous",
     "jswim.studies.run -> jswim.studies.execute._run_llm",
     "jswim.studies.run -> jswim.studies.execute._spec",
     "jswim.studies.run -> jswim.studies.session._preflight",

@@ -263,7 +263,7 @@ def test_jswims_ppo_learns_in_the_box_doors_world(float32):
     assert door.world.diagonal  # every DOF at once: the Box door's world
     n = 8
     keys = jax.random.split(jax.random.PRNGKey(0), n)
-    run = ppo.train_env(door.world, keys, params, ppo.PPOConfig(steps=2000))
+    run = ppo.train(door.world, params, keys, ppo.PPOConfig(steps=2000))
     report = ppo.evaluate(run, jax.tree.map(lambda v: v, params))
     learned = np.asarray(report.learned)
     # docs/baselines.md: at 2,000 steps the learner finds Purcell's stroke (16 of 16 seeds)

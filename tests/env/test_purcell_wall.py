@@ -42,8 +42,8 @@ def test_scene_rollout_per_cycle_is_the_independent_rk4(expected):
     np.testing.assert_allclose(r.gap, H - wall_rft.LINK_RADIUS)
     assert not r.contact.any() and not r.stuck.any()
     np.testing.assert_allclose(np.cumsum(r.dx[:, 0]), r.x[:, 0], atol=1e-14)
-    # jswim.rollout(..., scene=) is the same record
-    r2 = jswim.rollout("purcell", SQUARE * 3, scene=WALL)
+    # jswim.env.rollout(..., scene=) is the same record
+    r2 = jswim.env.rollout("purcell", SQUARE * 3, scene=WALL)
     np.testing.assert_array_equal(r2.x, r.x)
     assert expected > 0.19124724 + 1e-3  # the wall's ratio above 2 makes the stroke go further
 
@@ -85,7 +85,7 @@ def test_make_float32_default_and_float64(float32, expected):
 @pytest.mark.slow  # compile-heavy: tables and programs of new models
 def test_batch_with_noise_is_one_vectorised_call(float32):
     world, params = jswim.make("purcell", scene=WALL, zeta=0.5)
-    t = jswim.rollout_batch(world, params, 1, jnp.tile(jnp.asarray(CODES * 2), (4, 1)))
+    t = jswim.rollout(world, params, 1, jnp.tile(jnp.asarray(CODES * 2), (4, 1)))
     x = np.asarray(t.obs.position[:, -1, 0, 0])
     assert (
         x.shape == (4,) and np.all(np.isfinite(x)) and len(set(x.tolist())) == 4

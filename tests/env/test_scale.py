@@ -62,7 +62,7 @@ def test_rollout_runs_in_float64_without_global_flags(float32):
     import jswim
 
     assert jnp.result_type(float) == jnp.float32  # the user's default
-    r = jswim.rollout("purcell", SQUARE * 1000)  # the top-level name notebooks use
+    r = jswim.env.rollout("purcell", SQUARE * 1000)  # the named-swimmer shortcut notebooks use
     assert r.x.dtype == np.float64
     cycles = r.x[3::4]
     np.testing.assert_allclose(np.diff(cycles), cycles[0], rtol=0, atol=1e-12)  # 1e-12 per cycle
@@ -149,8 +149,11 @@ def _scaled_cases():
     out["step_batch_x"], out["step_batch_lo"] = np.asarray(states.x), np.asarray(states.x_lo)
     out["step_batch_progress"] = np.asarray(info.progress)
     ng = env.make_params("ng", direction=-1)
-    run = qlearning.train_batch(
-        jax.random.split(jax.random.PRNGKey(1), 103), ng, qlearning.QConfig(steps=30)
+    run = qlearning.train(
+        env.make("ng")[0],
+        ng,
+        jax.random.split(jax.random.PRNGKey(1), 103),
+        qlearning.QConfig(steps=30),
     )
     out["q_actions"], out["q_x"], out["q_table"] = (
         np.asarray(v) for v in (run.actions, run.x, run.q)

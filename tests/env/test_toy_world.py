@@ -19,7 +19,7 @@ import pytest
 
 from jswim.agents import ppo, random_policy
 from jswim.env.base import Environment, Observation, StepInfo, first_move, scaled
-from jswim.env.episodes import rollout, rollout_batch
+from jswim.env.episodes import rollout
 
 
 class ToyState(NamedTuple):
@@ -85,7 +85,7 @@ def test_toy_world_rollouts_follow_the_area_rule(float32):
     np.testing.assert_array_equal(back.info.progress, -tr.info.progress)
     # A batch, with noise: one scan over members, each as its own rollout.
     noisy = ToyParams(zeta=0.5)
-    batch = rollout_batch(env, noisy, 1, jnp.stack([SQUARE, SQUARE[::-1]]))
+    batch = rollout(env, noisy, 1, jnp.stack([SQUARE, SQUARE[::-1]]))
     keys = jax.random.split(jax.random.PRNGKey(1), 2)
     np.testing.assert_array_equal(
         batch.info.progress[1], rollout(env, noisy, keys[1], SQUARE[::-1]).info.progress
@@ -97,16 +97,14 @@ def test_toy_world_rollouts_follow_the_area_rule(float32):
 @pytest.mark.slow
 def test_agents_take_the_toy_world(float32):
     env, params = ToyWorld(), ToyParams()
-    run = random_policy.run_env(
-        env, params, jax.random.split(jax.random.PRNGKey(0), 8), 40, trace=True
-    )
+    run = random_policy.run(env, params, jax.random.split(jax.random.PRNGKey(0), 8), 40, trace=True)
     assert run.actions.shape == (8, 40) and set(np.unique(run.actions).tolist()) <= set(range(6))
     # Each step's reward is the position's change (the toy has no noise here).
     np.testing.assert_allclose(
         np.cumsum(run.trace.info.progress, 1), run.trace.obs.position[..., 0, 0], atol=1e-5
     )
-    trained = ppo.train_env(
-        env, jax.random.split(jax.random.PRNGKey(1), 2), params, ppo.PPOConfig(steps=64)
+    trained = ppo.train(
+        env, params, jax.random.split(jax.random.PRNGKey(1), 2), ppo.PPOConfig(steps=64)
     )
     assert trained.x.shape == (2, 64) and trained.dofs.shape == (2, 64, 2)
     np.testing.assert_allclose(np.cumsum(trained.progress, 1), trained.x, atol=1e-5)

@@ -13,7 +13,7 @@ import pytest
 import jswim
 from jswim import env as jenv
 from jswim.env.base import Environment, StepInfo
-from jswim.env.episodes import rollout, rollout_batch
+from jswim.env.episodes import rollout
 from jswim.env.scene_world import SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
@@ -103,7 +103,7 @@ def test_scene_world_steps_bit_equal_to_scene_step_float32(float32, scene):
 @pytest.mark.slow
 def test_rollout_serves_both_worlds_as_their_own_rollouts():
     # The paper's world: the old rollout (float64) and the protocol's, same key, same numbers.
-    old = jswim.rollout("ng", SQUARE * 2, key=4, zeta=0.3)
+    old = jswim.env.rollout("ng", SQUARE * 2, key=4, zeta=0.3)
     with jax.enable_x64(True):
         env, params = jswim.make("ng", zeta=0.3)
         tr = jswim.rollout(env, params, 4, jnp.array(SQUARE_CODES * 2, jnp.int32))
@@ -195,17 +195,15 @@ def test_vmapped_batch_equals_each_member(float32):
         ],
         jnp.int32,
     )
-    batch = rollout_batch(env, params, 7, actions)
+    batch = rollout(env, params, 7, actions)
     keys = jax.random.split(jenv.seed_key(7), 3)
     for i in range(3):
         one = rollout(env, params, keys[i], actions[i])
         _equal_trees(jax.tree.map(lambda v: v[i], batch), one)
     assert batch.info.progress.shape == (3, 8) and batch.info.progress.dtype == jnp.float32
-    # Per-member direction through params_axes.
+    # A direction per member (the world says which leaves carry the batch axis).
     both = jenv.broadcast_params(params, 2, zeta=0.0, direction=np.array([1.0, -1.0]))
-    tr = rollout_batch(
-        env, both, 0, jnp.array([SQUARE_CODES] * 2, jnp.int32), params_axes=jenv.param_axes(both)
-    )
+    tr = rollout(env, both, 0, jnp.array([SQUARE_CODES] * 2, jnp.int32))
     np.testing.assert_array_equal(tr.info.progress[0], -tr.info.progress[1])
 
 
@@ -269,14 +267,13 @@ def test_old_names_import_from_their_old_places():
             "decode_scene_action",
             "encode_scene_action",
         ],
-        "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make", "rollout_batch"],
-        # also read from here by the studies and bench layers
+        "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make"],
+        # moved by issue 30's import clean-up, still importable where they were
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
         "jswim.studies.scenes": [
             "wall_scene",
             "pair_scene",
             "cells",
-            "run_baselines",
             "fate",
             "scene_row",
         ],
@@ -291,5 +288,5 @@ def test_old_names_import_from_their_old_places():
 
 @pytest.mark.slow
 def test_old_rollout_with_a_scene_routes_to_the_scene_rollout():
-    r = jswim.rollout("ng", SQUARE, scene=Scene(medium="wall", height=5.0))
+    r = jswim.env.rollout("ng", SQUARE, scene=Scene(medium="wall", height=5.0))
     assert r.z.shape == (4, 1) and r.contact.shape == (4,)

@@ -9,6 +9,8 @@ import jax
 import numpy as np
 import pytest
 
+from jswim.env.swimmer_world import SwimmerWorld
+
 from jswim import cli, env
 from jswim.agents import qlearning
 from jswim.results import read_metadata, read_runs
@@ -27,8 +29,11 @@ def server():
 @pytest.mark.slow  # trains lattice Q-learners on K = 2 (15 s under load 8)
 def test_lattice_q_learning_learns_on_k2():
     params = qlearning.batch_params(env.make_params("purcell", roc_levels=2), 64)
-    run = qlearning.train_batch(
-        jax.random.split(jax.random.PRNGKey(0), 64), params, qlearning.QConfig(steps=200)
+    run = qlearning.train(
+        SwimmerWorld(params.model, 2),
+        params,
+        jax.random.split(jax.random.PRNGKey(0), 64),
+        qlearning.QConfig(steps=200),
     )
     assert run.q.shape == (64, 9, 10)  # 3**2 lattice points, 2 (2K + 1) actions
     rep = qlearning.evaluate(run, params)
@@ -47,7 +52,9 @@ def test_lattice_random_policy_uses_every_roc():
     from jswim.agents import random_policy
 
     params = qlearning.batch_params(env.make_params("purcell", roc_levels=5), 8)
-    run = random_policy.run_batch(jax.random.split(jax.random.PRNGKey(1), 8), params, 60)
+    run = random_policy.run(
+        SwimmerWorld(params.model, 5), params, jax.random.split(jax.random.PRNGKey(1), 8), 60
+    )
     codes = np.asarray(run.actions)
     assert codes.min() >= 0 and codes.max() < 22 and len(np.unique(codes)) > 15
     assert (

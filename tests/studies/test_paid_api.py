@@ -241,7 +241,8 @@ def test_more_runs_extend_a_folder_and_keep_the_existing_ones(tmp_path):
 
 
 def test_seeds_follow_the_run_not_its_place_in_the_grid():
-    from jswim.studies.grids import StudyOptions, build
+    from jswim.studies.options import StudyOptions
+    from jswim.studies.specs import build
 
     small = {
         p.run_id: p.seed for p in build("noise", StudyOptions(zetas=(0.0, 1.0), runs=2, q_runs=2))

@@ -8,7 +8,8 @@ import re
 import numpy as np
 import pytest
 
-from jswim.studies.grids import StudyOptions, build
+from jswim.studies.options import StudyOptions
+from jswim.studies.specs import build
 from jswim.studies.run import run_study
 from jswim.swimmers import wall_rft
 from jswim.viz import worlds

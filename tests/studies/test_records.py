@@ -10,7 +10,7 @@ import pytest
 from jswim import cli
 from jswim.llm.backend import Backend
 from jswim.studies import StudyOptions, run_study
-from jswim.studies.grids import SPECS
+from jswim.studies.specs import SPECS
 from tests.fakeserver import FakeServer, hash_reply
 
 

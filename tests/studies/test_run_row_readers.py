@@ -29,6 +29,7 @@ READERS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "jswim" / "figures").
     "jswim/studies/report.py",
     "jswim/studies/run.py",
     "jswim/studies/scenes.py",
+    "jswim/studies/baselines.py",
     "jswim/studies/session.py",
     "jswim/results/tables.py",
     "jswim/results/store.py",
@@ -46,11 +47,6 @@ ALLOWED = {
         "r",
         "run_id",
     ): "StudyResult.rows are read_runs' dicts, kept for users",
-    (
-        "jswim/studies/scenes.py",
-        "r",
-        "run_id",
-    ): "run_baselines: the rows just built (the writer side)",
     ("jswim/cli/study.py", "first", "run_id"): "StudyResult.failed_runs entries, not run rows",
     ("jswim/cli/study.py", "first", "error"): "StudyResult.failed_runs entries, not run rows",
 }

@@ -13,8 +13,9 @@ from jswim.agents.variants import LLMRunSpec
 from jswim.judging.gait import GaitReport
 from jswim.llm.usage import UsageTotals
 from jswim.results import RunRow
-from jswim.studies import rows, scenes
-from jswim.studies.grids import Plan, wall_scene, pair_scene
+from jswim.studies import baselines, rows, scenes
+from jswim.studies.plans import Plan
+from jswim.studies.scene_grids import wall_scene, pair_scene
 
 # The documented columns (docs: RunRow), written out here.
 HEAD = [
@@ -238,7 +239,7 @@ def test_bulk_llm_row_merges_the_runs_fields():
 
 @pytest.mark.parametrize("scene", [wall_scene(3.0), pair_scene(30.0)])
 def test_scene_rows_add_the_scene_columns(scene):
-    swimmers = scenes.scene_of(_plan("stroke", scene)).swimmers
+    swimmers = baselines.scene_of(_plan("stroke", scene)).swimmers
     stroke = _scene_row(_plan("stroke", scene), _tracks(swimmers))
     assert list(stroke.to_dict()) == HEAD + SCENE + [
         "x",

@@ -34,13 +34,13 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
     assert {r["agent"] for r in read_runs(out)} == {"stroke"}
 
     calls = {"n": 0}
-    train = ppo.train_env
+    train = ppo.train
 
     def counted(*a, **k):
         calls["n"] += 1
         return train(*a, **k)
 
-    monkeypatch.setattr(ppo, "train_env", counted)
+    monkeypatch.setattr(ppo, "train", counted)
     res = run_study("wall", StudyOptions(**WALL), None, out, figures=False)
     assert calls["n"] == 1  # the strokes kept, the PPO cell trained once
     rows = {r["run_id"]: r for r in read_runs(out)}
@@ -82,7 +82,7 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
     def refuse(*a, **k):
         raise AssertionError("a finished PPO run was trained again")
 
-    monkeypatch.setattr(ppo, "train_env", refuse)
+    monkeypatch.setattr(ppo, "train", refuse)
     again = run_study("wall", StudyOptions(**WALL), None, out, figures=False)
     assert {r["run_id"]: r["actions"] for r in again.rows} == {
         k: r["actions"] for k, r in rows.items()
@@ -151,9 +151,9 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
 def test_ppo_runs_are_offered_every_move_whatever_the_action_set(study, extra):
     # --action-set restricts the lattice agents' (DOF, ROC) moves; PPO picks any arm and any real
     # ROC, so its plans say "all" (not a set it was never held to), and the others keep the option
-    from jswim.studies import grids
+    from jswim.studies import specs
 
-    plans = grids.build(
+    plans = specs.build(
         study,
         StudyOptions(
             action_set="shape-changing", q_runs=1, steps=8, agents=("random", "ppo"), **extra

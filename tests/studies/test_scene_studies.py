@@ -13,7 +13,8 @@ import pytest
 from jswim import cli
 import jax.numpy as jnp
 
-from jswim.agents import qlearning, worlds
+from jswim.agents import qlearning
+from jswim.env.discretiser import HEIGHT_EDGES, WallCells
 from jswim.scenes import decode_scene_action
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.worlds import make
@@ -229,7 +230,7 @@ def test_scene_discretisers_are_the_joint_corner_and_the_height_bin():
     pair, pair_task = make(
         "ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0)
     )  # both (10, 6)
-    cells = worlds.cells(pair)
+    cells = pair.cells()
     state = pair.reset(None, pair_task)
     j = cells.positions(state, pair_task)
     assert (
@@ -238,16 +239,14 @@ def test_scene_discretisers_are_the_joint_corner_and_the_height_bin():
         and int(cells.cell(state, j, pair_task)) == 5
     )
     wall, wall_task = make("ng", Scene(medium="wall", height=5.0), init=(0, 1))
-    cells = worlds.cells(wall)
-    assert isinstance(cells, worlds.WallCells) and cells.n_cells == 4 * (
-        len(worlds.HEIGHT_EDGES) + 1
-    )
+    cells = wall.cells()
+    assert isinstance(cells, WallCells) and cells.n_cells == 4 * (len(HEIGHT_EDGES) + 1)
     state = wall.reset(None, wall_task)
     assert (
         int(cells.cell(state, cells.positions(state, wall_task), wall_task)) == 2 * 7 + 2
     )  # 5 a: bin (3.5, 6]
     # Shape-changing moves of a pair at (long, short, short, long): D1 -1, D2 +1, D3 +1, D4 -1.
-    mask = worlds.cells(pair).mask(jnp.array([1, 0, 0, 1]), pair_task, "shape-changing")
+    mask = pair.cells().mask(jnp.array([1, 0, 0, 1]), pair_task, "shape-changing")
     assert np.flatnonzero(mask).tolist() == [0, 5, 8, 9]
 
 
@@ -255,10 +254,10 @@ def test_scene_discretisers_are_the_joint_corner_and_the_height_bin():
 def test_q_learning_joint_state_shapes():
     sc = Scene(medium="bulk", swimmers=2, separation=30.0)
     world, task = make("ng", sc, init=(1, 0))
-    run = qlearning.train_env(
+    run = qlearning.train(
         world,
-        jax.random.split(jax.random.PRNGKey(0), 3),
         task,
+        jax.random.split(jax.random.PRNGKey(0), 3),
         qlearning.QConfig(steps=20, action_set="shape-changing"),
         trace=True,
     )
@@ -272,10 +271,10 @@ def test_q_learning_learns_the_square_alone_in_the_bulk_scene():
     # One untilted bulk swimmer is the paper's world for jswim.make; the scene world itself here.
     world = SceneWorld(Scene(medium="bulk"))
     task = SceneTask(scene_params("ng", Scene(medium="bulk"), init=(1, 0)), 1.0)
-    run = qlearning.train_env(
+    run = qlearning.train(
         world,
-        jax.random.split(jax.random.PRNGKey(1), 16),
         task,
+        jax.random.split(jax.random.PRNGKey(1), 16),
         qlearning.QConfig(steps=120, action_set="shape-changing"),
     )
     tail = np.asarray(run.actions)[:, -8:]

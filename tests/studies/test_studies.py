@@ -1,4 +1,4 @@
-"""Study grids (jswim.studies.grids): fast, no runs are executed."""
+"""Study grids (jswim.studies.specs, options, plans): fast, no runs are executed."""
 
 from __future__ import annotations
 
@@ -171,7 +171,7 @@ def test_any_integer_seed_gives_32_bit_run_seeds(seed):
 
 
 def test_the_continuous_study_grid():
-    from jswim.studies.grids import continuous_agent_available
+    from jswim.studies.options import continuous_agent_available
 
     plans = build("continuous", StudyOptions(runs=1, q_runs=2, roc_levels_grid=(1, 5)))
     cells = Counter((p.agent, p.group, p.roc_levels) for p in plans)

@@ -8,7 +8,8 @@ import pytest
 from jswim import cli
 from jswim.errors import ConfigError
 from jswim.results import read_metadata, read_runs
-from jswim.studies.grids import StudyOptions, build
+from jswim.studies.options import StudyOptions
+from jswim.studies.specs import build
 from tests.fakeserver import FakeServer, hash_reply
 
 FAST = [

@@ -22,7 +22,7 @@ import pytest
 import jswim
 from jswim.env import worlds as env_worlds
 from jswim.errors import ConfigError
-from jswim.studies.grids import StudyOptions
+from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
 from jswim.viz.page import run_payload, write_report
 from jswim.viz.tracks import track

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from tests.browser import browser_or_skip, open_report_run
-from jswim.studies.grids import StudyOptions
+from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
 from jswim.viz import animate as anim_mod
 from jswim.viz.page import write_report
