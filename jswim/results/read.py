@@ -4,6 +4,7 @@ Damaged records are skipped with one warning naming the file and line."""
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -97,6 +98,9 @@ def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, A
                 stacklevel=3,
             )
             out.pop(k)
+    totals = out.get("llm_totals")
+    if totals is not None:
+        out["llm_totals"] = _clean_totals(totals, path)
     groups = (out.get("summary") or {}).get("groups")
     if groups is not None and not (
         isinstance(groups, list) and all(isinstance(g, dict) for g in groups)
@@ -108,6 +112,38 @@ def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, A
             stacklevel=3,
         )
         out.pop("summary")
+    return out
+
+
+def _count_like(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
+
+
+def _clean_totals(totals: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
+    """``llm_totals`` with only numbers >= 0 (and ``faults``, a table of them): the totals are a
+    report (the money ledger is ``requests.jsonl``); a value edited into another type is dropped
+    with one warning, and readers see it as missing."""
+    import warnings
+
+    out: dict[str, Any] = {}
+    dropped = []
+    for k, v in totals.items():
+        if k == "faults":
+            if isinstance(v, dict) and all(_count_like(n) for n in v.values()):
+                out[k] = v
+            else:
+                dropped.append(k)
+        elif _count_like(v):
+            out[k] = v
+        else:
+            dropped.append(k)
+    if dropped:
+        warnings.warn(
+            SkippedRecord(
+                f"{path}: llm_totals {', '.join(map(repr, dropped))} not numbers >= 0; ignored"
+            ),
+            stacklevel=4,
+        )
     return out
 
 
