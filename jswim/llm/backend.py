@@ -146,6 +146,10 @@ class Backend:
             )
         if self.base_url is not None and self.model is None:
             raise ConfigError("--base-url needs --model (the model name on that server)")
+        if self.model is not None and (not isinstance(self.model, str) or not self.model.strip()):
+            raise ConfigError(
+                f"--model {self.model!r}: give the model's name on the server (e.g. gpt-4o)"
+            )
         if self.gguf is not None:
             check_gguf(self.gguf)
         if self.base_url is not None:

@@ -60,6 +60,10 @@ def writing(
         cause = exc.strerror or type(exc).__name__
         if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # the folder is fine; the disk is full
             hint = "every finished run and answered call is kept: make room and run the same command to resume"
+        elif exc.errno == errno.EISDIR:  # the folder is writable: something stands in the way
+            hint = "a folder stands where this file goes: move it away and run the same command to resume"
+        elif exc.errno == errno.ENOTDIR:
+            hint = "a file stands where a folder goes on this path: move it away and run the same command to resume"
         raise StudyFolderError(f"cannot write {where}: {cause}; {hint}") from None
 
 

@@ -379,6 +379,7 @@ IGNORED = {
     "init": "it runs each of the four initial configurations",
     "roc_levels_grid": "only the continuous study sweeps K; give one value with --roc-levels",
     "roc_levels": "it sweeps K over the --roc-levels list",
+    "runs": "it runs fixed strokes only, no LLM",
 }
 
 
@@ -598,7 +599,7 @@ SPECS["school"] = StudySpec(
     init="paper",
     swimmers=("ng",),
     q_runs=1,
-    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init", "runs"),
 )
 
 STUDIES = tuple(SPECS)

@@ -264,3 +264,25 @@ def test_a_bench_whose_every_model_failed_says_failed(tmp_path):
     done = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert json.loads((out / "bench.json").read_text())["status"] == "failed"
+
+
+def test_report_of_a_bench_to_another_file_writes_nothing_in_its_parts(
+    tmp_path, monkeypatch, capsys
+):
+    from jswim.bench.suites import CORE
+    from jswim.viz import bench_page
+
+    out = tmp_path / "b"
+    models = (parse_model_option("base_url=http://127.0.0.1:9/v1,model=m"),)
+    runner.open_folder(out, runner.definition(CORE, models, False, False))[1].release()
+    part = out / "m" / "curves"
+    monkeypatch.setattr(
+        bench_page, "part_folders", lambda folder, meta: [("m", "llm", "curves", part)]
+    )
+    written = []
+    monkeypatch.setattr(bench_page, "write_report", lambda sub, **kw: written.append(sub))
+    page = tmp_path / "elsewhere.html"
+    assert cli.main(["report", str(out), "--out", str(page), "--figures", "none"]) == 0
+    assert written == [] and page.exists() and not part.exists()
+    assert cli.main(["report", str(out), "--figures", "none"]) == 0
+    assert written == [part]  # without --out the parts' pages are drawn, as before

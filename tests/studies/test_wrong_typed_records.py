@@ -106,3 +106,37 @@ def test_wrong_typed_llm_totals_neither_crash_show_nor_the_resume(study, tmp_pat
     with FakeServer(reply=hash_reply) as srv:
         assert cli.main(swim(srv.url, out, runs=3)) == 0  # one more run: a session is recorded
     assert json.loads((out / "metadata.json").read_text())["status"] == "complete"
+
+
+def test_a_transcript_replaced_by_a_folder_is_named_as_such(study, tmp_path, capsys):
+    out = tmp_path / "S"
+    shutil.copytree(study, out)
+    one = sorted((out / "transcripts").iterdir())[0]
+    one.unlink()
+    one.mkdir()
+    with FakeServer(reply=hash_reply) as srv:
+        assert cli.main(swim(srv.url, out, runs=3)) == 2
+    err = capsys.readouterr().err
+    assert "a folder stands where this file goes" in err and "writable --out" not in err
+
+
+def test_school_refuses_the_options_of_an_llm(tmp_path, capsys):
+    for extra in (["--runs", "2"], ["--base-url", "http://127.0.0.1:9/v1", "--model", "m"]):
+        assert cli.main(["study", "school", *extra, "--out", str(tmp_path / "x")]) == 2
+        err = capsys.readouterr().err
+        assert "no use for" in err and "no LLM" in err and not (tmp_path / "x").exists()
+
+
+def test_an_empty_model_name_is_refused(tmp_path, capsys):
+    code = cli.main(
+        [
+            "swim",
+            "--base-url",
+            "http://127.0.0.1:9/v1",
+            "--model",
+            " ",
+            "--out",
+            str(tmp_path / "x"),
+        ]
+    )
+    assert code == 2 and "--model" in capsys.readouterr().err
