@@ -652,10 +652,13 @@ class LLMClient:
                 async for chunk in resp.aiter_raw():
                     size += len(chunk)
                     if size > MAX_BODY_BYTES:
+                        # A 200 this large was run (and may be billed): a bad body; an error
+                        # status this large is a failure like any other of its status.
                         raise _Failure(
-                            f"the response is larger than {MAX_BODY_BYTES >> 20} MiB, "
-                            "not a chat completion",
-                            bad_body=True,
+                            f"HTTP {resp.status_code}: the response is larger than "
+                            f"{MAX_BODY_BYTES >> 20} MiB, not a chat completion",
+                            bad_body=resp.status_code == 200,
+                            kind="5xx" if resp.status_code >= 500 else "connection",
                         )
                     parts.append(chunk)
                 raw = b"".join(parts)

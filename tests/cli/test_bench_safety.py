@@ -286,3 +286,29 @@ def test_report_of_a_bench_to_another_file_writes_nothing_in_its_parts(
     assert written == [] and page.exists() and not part.exists()
     assert cli.main(["report", str(out), "--figures", "none"]) == 0
     assert written == [part]  # without --out the parts' pages are drawn, as before
+
+
+def test_a_bench_folder_that_cannot_be_written_is_one_line(tmp_path, monkeypatch, capsys):
+    def refuse(path, text):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(runner, "atomic_write", refuse)  # a read-only folder (root ignores modes)
+    assert cli.main(bench_args(tmp_path / "b")) == 2
+    err = capsys.readouterr().err
+    assert "cannot write" in err and "Permission denied" in err and "Traceback" not in err
+
+
+def test_missing_rows_quote_their_own_part():
+    from jswim.bench.suites import CORE
+    from jswim.cli.bench import _missing
+
+    m = parse_model_option("base_url=http://127.0.0.1:9/v1,model=m")
+    jobs = runner.plan(
+        [m], CORE, Path("/nonexistent"), prices_file=None, reference_url=None, baselines=False
+    )
+    first, second = jobs[0], jobs[1]
+    first.rc = 2  # failed: its log is gone here, so its status speaks
+    status = {"m": "failed: cannot reach it"}
+    got = {r["part"]: r["why"] for r in _missing(jobs, [], status, {"m": first.part.name})}
+    assert got[first.part.name] == "failed: cannot reach it"
+    assert got[second.part.name].startswith(f"not run: m stopped at {first.part.name}")

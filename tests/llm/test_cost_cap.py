@@ -320,3 +320,23 @@ def test_retry_after_waits_no_longer_than_the_retry_time():
             asyncio.run(go(srv.url))
         took = time.monotonic() - t0
     assert took < 3.0 and srv.n_requests >= 1
+
+
+def test_a_body_over_the_size_limit_is_spent_at_its_reservation(monkeypatch):
+    import jswim.llm.client as client_module
+    from jswim.errors import LLMResponseError
+
+    monkeypatch.setattr(client_module, "MAX_BODY_BYTES", 64 << 10)  # 64 KiB for the test
+
+    async def go(url, budget):
+        s = settings(url, max_retries=1, prices={"fake": (1e6, 1e6)}, max_tokens=10)
+        async with LLMClient(s, budget=budget) as c:
+            await c.chat([{"role": "user", "content": "x"}])
+
+    budget = Budget(1e9)
+    with FakeServer(reply=lambda body: "[1, 1] " + "x" * (128 << 10)) as srv:
+        with pytest.raises(LLMResponseError, match="larger than"):
+            asyncio.run(go(srv.url, budget))
+        sent = srv.n_requests
+        one = bound(srv.requests[0]) / PER_TOKEN  # $1 per token here
+    assert sent == 2 and budget.spent_usd == pytest.approx(2 * one) and budget.reserved_usd == 0
