@@ -18,6 +18,7 @@ from collections.abc import Mapping
 from jswim.bench.suites import Suite, _check_name, user_suite
 from jswim.errors import ConfigError
 from jswim.llm.prices import parse_prices, read_small_text
+from jswim.llm.urls import safe_url
 
 #: Keys of a model entry -> the ``jswim study`` flag each becomes (``None``: handled apart).
 MODEL_KEYS = {
@@ -126,8 +127,6 @@ class ModelEntry:
     def describe(self) -> dict[str, Any]:
         """The entry as recorded in ``bench.json`` and the leaderboard: the base URL without
         user info, and request fields by name only (either may hold a credential)."""
-        from jswim.llm.urls import safe_url
-
         out: dict[str, Any] = {"name": self.name}
         for k, v in self.settings:
             if k == "base_url":

@@ -22,6 +22,7 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Callable, Sequence
 
+from jswim._io.folderlock import HOLDER, LOCK, FolderLock
 from jswim.bench.models import ModelEntry
 from jswim.bench.suites import Part, Suite
 from jswim.errors import ConfigError
@@ -145,8 +146,6 @@ def open_folder(out: Path, meta: dict[str, Any]) -> tuple[dict[str, Any], Any]:
     FolderBusyError
         Another jswim session holds the bench.
     """
-    from jswim._io.folderlock import HOLDER, LOCK, FolderLock
-
     if out.exists() and not out.is_dir():
         raise ConfigError(f"--out {out} is a file, not a folder; choose a folder")
     path = out / "bench.json"

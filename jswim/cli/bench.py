@@ -440,7 +440,7 @@ def show_text(folder: Path, width: int | None = None) -> str:
     (read from ``bench.json`` and ``leaderboard.json``; nothing is run or written)."""
     from jswim.bench import leaderboard  # lazy: start-up (the study folders' readers)
 
-    from jswim.bench.runner import read_record
+    from jswim.bench.runner import read_record  # lazy: start-up (the bench's readers)
 
     meta = read_record(folder / "bench.json")
     suite = meta.get("suite") if isinstance(meta.get("suite"), dict) else {}

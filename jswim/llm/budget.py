@@ -106,7 +106,7 @@ class Budget:
         ------
         BudgetExhausted
             When the cap would be passed (or was reached before).
-        LedgerError
+        StudyFolderError
             The ledger cannot be written: the request must not be sent.
         """
         usd = bound_usd * self.ratio

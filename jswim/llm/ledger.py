@@ -53,10 +53,6 @@ def ledger_problem(rec: Mapping[str, Any]) -> str | None:
     return None
 
 
-class LedgerError(StudyFolderError):
-    """The ledger cannot be written: the request it was to record is not sent."""
-
-
 class RequestLedger:
     """The money ledger of a study folder (``folder / requests.jsonl``).
 
@@ -94,7 +90,7 @@ class RequestLedger:
                 journal.open_for_append()
             except OSError as exc:
                 why = exc.strerror or type(exc).__name__
-                raise LedgerError(
+                raise StudyFolderError(
                     f"cannot write the call journal {journal.path} ({why}); nothing was sent: "
                     "make it writable or choose another --out"
                 ) from None
@@ -102,7 +98,7 @@ class RequestLedger:
             try:
                 repair_tail(self.path)
             except OSError as exc:
-                raise LedgerError(self._cannot(exc)) from None
+                raise StudyFolderError(self._cannot(exc)) from None
         self._bounds: dict[int, float] = {}
         self._next = 0
         self.spent_usd = 0.0
@@ -160,14 +156,14 @@ class RequestLedger:
             self._fh.write(json.dumps(rec) + "\n")
             self._fh.flush()
         except OSError as exc:
-            raise LedgerError(self._cannot(exc)) from None
+            raise StudyFolderError(self._cannot(exc)) from None
 
     def sent(self, bound_usd: float) -> int:
         """Write down a request about to go out; returns its number.
 
         Raises
         ------
-        LedgerError
+        StudyFolderError
             The line could not be written: the request must not be sent.
         """
         n = self._take()
@@ -194,7 +190,7 @@ class RequestLedger:
         # bound): pessimistic, never cheaper. The next request's own line fails and stops sending.
         try:
             write()
-        except LedgerError:
+        except StudyFolderError:
             pass
 
     def close(self) -> None:
