@@ -112,7 +112,7 @@ def definition(
     }
 
 
-def read_record(path: Path) -> dict[str, Any]:
+def read_record(path: Path, hint: str = "") -> dict[str, Any]:
     """A bench's JSON record (``bench.json``, ``leaderboard.json``) as an object.
 
     Raises
@@ -124,11 +124,10 @@ def read_record(path: Path) -> dict[str, Any]:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         why = getattr(exc, "strerror", None) or str(exc).splitlines()[0]
-        raise ConfigError(f"{path} is not a bench record ({why}); use another --out") from None
+        raise ConfigError(f"{path} is not a bench record ({why}){hint}") from None
     if not isinstance(data, dict):
         raise ConfigError(
-            f"{path} is not a bench record (a JSON {type(data).__name__}, not an object); "
-            "use another --out"
+            f"{path} is not a bench record (a JSON {type(data).__name__}, not an object){hint}"
         )
     return data
 
@@ -164,7 +163,7 @@ def open_folder(out: Path, meta: dict[str, Any]) -> tuple[dict[str, Any], Any]:
         ) from None
     try:
         if path.exists():
-            old = read_record(path)
+            old = read_record(path, "; use another --out")
             suite = old.get("suite")
             if suite != json.loads(dumps(meta["suite"])):  # compared as stored (tuples: lists)
                 name = suite.get("name") if isinstance(suite, dict) else suite

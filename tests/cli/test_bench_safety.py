@@ -312,3 +312,38 @@ def test_missing_rows_quote_their_own_part():
     got = {r["part"]: r["why"] for r in _missing(jobs, [], status, {"m": first.part.name})}
     assert got[first.part.name] == "failed: cannot reach it"
     assert got[second.part.name].startswith(f"not run: m stopped at {first.part.name}")
+
+
+@pytest.mark.parametrize(
+    "bench, board",
+    [
+        ("[]", None),
+        ('{"suite": 5}', None),
+        ("suite parts 5", None),
+        ("models 5", None),
+        ("status x", None),
+        (None, {"rows": [{"row": "m", "kind": "llm"}], "missing": [5]}),
+        (None, {"rows": 5}),
+    ],
+)
+def test_report_and_show_of_a_damaged_bench_are_one_line_or_a_page(tmp_path, capsys, bench, board):
+    from jswim.bench.suites import CORE
+
+    out = tmp_path / "b"
+    models = (parse_model_option("base_url=http://127.0.0.1:9/v1,model=m"),)
+    meta, lock = runner.open_folder(out, runner.definition(CORE, models, False, False))
+    lock.release()
+    edits = {
+        "suite parts 5": {**meta, "suite": {**meta["suite"], "parts": 5}},
+        "models 5": {**meta, "models": 5},
+        "status x": {**meta, "model_status": "x"},
+    }
+    if bench is not None:
+        (out / "bench.json").write_text(json.dumps(edits[bench]) if bench in edits else bench)
+    if board is not None:
+        (out / "leaderboard.json").write_text(json.dumps(board))
+    for cmd in (["report", str(out), "--figures", "none"], ["show", str(out)]):
+        code = cli.main(cmd)
+        err = capsys.readouterr().err
+        assert code in (0, 2) and "Traceback" not in err
+        assert code == 0 or len(err.strip().splitlines()) == 1
