@@ -578,9 +578,10 @@ class LLMClient:
 
     def _attempt_limit(self) -> float:
         """Longest wall time of one attempt, first byte to last: --timeout or --retry-for,
-        whichever is longer (a reply streamed for ever is cut there)."""
+        whichever is longer (ten times --timeout without a retry time); a reply streamed for
+        ever is cut there."""
         s = self.settings
-        return max(s.timeout_s, s.retry_for_s or 0.0)
+        return max(s.timeout_s, 10 * s.timeout_s if s.retry_for_s is None else s.retry_for_s)
 
     async def _attempt(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> Completion:
         s = self.settings
