@@ -53,7 +53,7 @@ class Fault:
     kind : ``"status"`` (HTTP ``status``, optional ``Retry-After``), ``"drop"`` (close the
     connection without answering), ``"delay"`` (answer normally after ``seconds``: a client
     timeout), ``"malformed"`` (200 with a body that is not JSON), ``"endless"`` (200 and a stream
-    that never ends, a piece every ``seconds``). ``message`` is the error text of
+    that never ends, a piece every ``seconds``, until ``hold_s``). ``message`` is the error text of
     a status fault; ``body``, when given, is its whole JSON body instead (e.g. FastAPI's
     ``{"detail": [...]}``).
     """
@@ -629,10 +629,14 @@ class FakeServer:
                 writer.write(head.encode("latin-1"))
                 event = {"choices": [{"index": 0, "delta": {"content": "[1, "}}]}
                 piece = f"data: {json.dumps(event)}\n\n".encode()
-                while True:  # until the client goes away (or the server stops)
+                give_up = time.monotonic() + self.hold_s  # a test that hangs fails instead
+                while time.monotonic() < give_up:  # or until the client goes away
                     writer.write(f"{len(piece):x}\r\n".encode() + piece + b"\r\n")
                     await writer.drain()
                     await asyncio.sleep(fault.seconds)
+                writer.write(b"0\r\n\r\n")
+                await writer.drain()
+                return False
             if fault.kind == "delay":
                 with self._lock:
                     self._held += 1

@@ -487,7 +487,7 @@ class LLMClient:
                         raise _Failure(
                             f"no whole answer within {self._attempt_limit():g} s (the reply kept "
                             "coming; --timeout and --retry-for bound one attempt)",
-                            timeout=True,
+                            kind="timeout",
                             unanswered=True,
                         ) from None
                 except _Adapted:
