@@ -218,13 +218,17 @@ def _run(args: argparse.Namespace, suite: Any, models: Any, mf: Any, out: Path, 
 
 def bench_status(status: dict[str, str], interrupted: bool) -> str:
     """What happened to the bench as a whole: ``interrupted``; ``complete`` when every row
-    finished; ``failed`` when none did; else ``incomplete``."""
+    finished; ``incomplete`` when some did; when none did, what stopped them all if it was
+    one thing (``stopped at the cost cap``), else ``failed``."""
     if interrupted:
         return "interrupted"
     done = [v == "complete" for v in status.values()]
     if all(done):
         return "complete"
-    return "failed" if not any(done) else "incomplete"
+    if any(done):
+        return "incomplete"
+    kinds = set(status.values())
+    return kinds.pop() if len(kinds) == 1 and "stopped at the cost cap" in kinds else "failed"
 
 
 def _sent_notes(jobs: list[Any]) -> list[str]:

@@ -347,3 +347,44 @@ def test_report_and_show_of_a_damaged_bench_are_one_line_or_a_page(tmp_path, cap
         err = capsys.readouterr().err
         assert code in (0, 2) and "Traceback" not in err
         assert code == 0 or len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.slow  # a bench of two child studies against a priced server (~20 s)
+def test_the_models_cap_holds_over_its_parts_with_unanswered_requests(tmp_path):
+    from tests.fakeserver import Fault, count_words
+
+    cap = 0.07  # the first part finishes (about $0.04), the second stops at what is left
+    n = {"seen": 0}
+
+    def reply(body):  # every third request hangs past the client's timeout: unanswered
+        n["seen"] += 1
+        return Fault.delay(1.0) if n["seen"] % 3 == 0 else hash_reply(body)
+
+    def usage(body):  # what the provider bills, answered or not
+        prompt = sum(count_words(str(m.get("content", ""))) for m in body["messages"])
+        return {"prompt_tokens": prompt, "completion_tokens": count_words(hash_reply(body))}
+
+    opts = 'options = { runs = 2, q_runs = 0, steps = 8, swimmer = "purcell", direction = "+x" }'
+    with FakeServer(reply=reply, usage=usage) as srv:
+        path = tmp_path / "models.toml"
+        path.write_text(
+            f'[[models]]\nname = "m"\nbase_url = "{srv.url}"\nmodel = "fake"\n'
+            f"max_cost = {cap}\ntimeout = 0.3\nconcurrency = 2\n"
+            "[prices]\nfake = [10.0, 10.0]\n"  # $0.01 per 1k tokens: a call is ~$0.003
+            f'[[suites.two.parts]]\nname = "a"\nstudy = "swim"\n{opts}\n'
+            f'[[suites.two.parts]]\nname = "b"\nstudy = "swim"\n{opts}\n'
+        )
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        cmd = [sys.executable, "-m", "jswim", "bench", str(path), "--suite", "two"]
+        cmd += ["--no-reference", "--no-baselines", "--out", str(tmp_path / "b")]
+        done = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
+        srv.settle()
+        bill = sum(
+            (usage(b)["prompt_tokens"] + usage(b)["completion_tokens"]) * 0.01 / 1000
+            for b in srv.requests
+        )
+    assert "Traceback" not in done.stderr
+    assert srv.n_requests > 3 and bill <= cap  # every request arrived is billed, hung ones too
+    record = json.loads((tmp_path / "b" / "bench.json").read_text())
+    assert (tmp_path / "b" / "m" / "b" / "requests.jsonl").exists()  # the second part ran
+    assert record["model_status"]["m"] == record["status"] == "stopped at the cost cap"
