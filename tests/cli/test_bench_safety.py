@@ -388,3 +388,16 @@ def test_the_models_cap_holds_over_its_parts_with_unanswered_requests(tmp_path):
     record = json.loads((tmp_path / "b" / "bench.json").read_text())
     assert (tmp_path / "b" / "m" / "b" / "requests.jsonl").exists()  # the second part ran
     assert record["model_status"]["m"] == record["status"] == "stopped at the cost cap"
+
+
+def test_a_bench_record_with_a_damaged_model_status_resumes_with_none(tmp_path):
+    from jswim.bench.suites import CORE
+
+    out = tmp_path / "b"
+    models = (parse_model_option("base_url=http://127.0.0.1:9/v1,model=m"),)
+    meta, lock = runner.open_folder(out, runner.definition(CORE, models, False, False))
+    lock.release()
+    (out / "bench.json").write_text(json.dumps({**meta, "model_status": "x"}))
+    again, lock = runner.open_folder(out, runner.definition(CORE, models, False, False))
+    lock.release()
+    assert again["model_status"] == {}
