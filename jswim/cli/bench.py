@@ -269,8 +269,13 @@ def _missing(
         stop = (stopped_at or {}).get(j.label)
         if stop is not None and stop != j.part.name and j.rc is None:
             why = f"not run: {j.label} stopped at {stop} ({why})"
-        elif j.rc not in (None, 0, 3) and j.log is not None and j.log.exists():
-            why = runner._last_error(j.log)  # this part's own error, never another part's
+        elif (
+            stop != j.part.name
+            and j.rc not in (None, 0, 3)
+            and j.log is not None
+            and j.log.exists()
+        ):  # this part failed, and its label's status speaks of another part: quote its own
+            why = f"failed: {runner._last_error(j.log)}"
         elif why in ("complete", "running"):
             why = (
                 runner._last_error(j.log)

@@ -312,6 +312,12 @@ def test_missing_rows_quote_their_own_part():
     got = {r["part"]: r["why"] for r in _missing(jobs, [], status, {"m": first.part.name})}
     assert got[first.part.name] == "failed: cannot reach it"
     assert got[second.part.name].startswith(f"not run: m stopped at {first.part.name}")
+    # A part that failed before another part stopped the model quotes its own log.
+    first.log = Path(__file__)  # stands in for its log: no 'jswim: error:' line, the last line
+    got = {r["part"]: r["why"] for r in _missing(jobs, [], status, {"m": second.part.name})}
+    assert (
+        got[first.part.name].startswith("failed: ") and "cannot reach" not in got[first.part.name]
+    )
 
 
 @pytest.mark.parametrize(
