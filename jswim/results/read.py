@@ -27,12 +27,27 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     not done, as a torn line's does.
     """
     path = Path(folder) / RUNS
+    _regular(path)
     by_id: dict[str, dict[str, Any]] = {}
     for _, row in read_records(path, run_problem):
         rid = row.get("run_id")
         if rid not in by_id or is_failed(by_id[rid]):
             by_id[rid] = upgrade_names(row)
     return list(by_id.values())
+
+
+def _regular(path: Path) -> None:
+    """Refuse a FIFO or a device where a record file belongs (reading it would hang or never end).
+
+    Raises
+    ------
+    ResultFolderError
+        ``path`` exists and is neither a regular file nor a folder.
+    """
+    if path.exists() and not (path.is_file() or path.is_dir()):
+        raise ResultFolderError(
+            f"{path} is not a regular file (a FIFO or a device); move it away to read the folder"
+        )
 
 
 def read_run_rows(folder: str | os.PathLike) -> list[RunRow]:
@@ -216,6 +231,7 @@ CALL_COLUMNS = (
 
 def _jsonl(path: Path) -> list[dict[str, Any]]:
     """The JSON objects of a JSON-lines file; torn or foreign lines are skipped, a missing file is empty."""
+    _regular(path)
     return [rec for _, rec in read_records(path)]
 
 
@@ -274,6 +290,7 @@ def read_calls(folder: str | os.PathLike) -> list[dict[str, Any]]:
         call_problem,
     )  # lazy: the journal's rule, without httpx for other readers
 
+    _regular(Path(folder) / "calls.jsonl")
     for _, c in read_records(Path(folder) / "calls.jsonl", call_problem):
         usage = c.get("usage") if isinstance(c.get("usage"), list) else []
         usage = (list(usage) + [None, None, None])[:3]

@@ -288,9 +288,16 @@ class StudyStore:
 
     def _repair_journals(self) -> None:
         """Cut the torn last line of every append-only file (see :mod:`jswim._io.jsonl`)."""
-        paths = [self.folder / RUNS, self.folder / "calls.jsonl"]
+        paths = [self.folder / RUNS, self.folder / "calls.jsonl", self.folder / "requests.jsonl"]
         if (self.folder / "transcripts").is_dir():
             paths += sorted((self.folder / "transcripts").glob("*.jsonl"))
+        for path in paths:
+            # A FIFO or a device would hang the first read or append: refused before either.
+            if path.exists() and not (path.is_file() or path.is_dir()):
+                raise StudyFolderError(
+                    f"{path} is not a regular file (a FIFO or a device); move it away and run "
+                    "the same command to resume"
+                )
         done: set[str] | None = None
         for path in paths:
             cut = repair_tail(path)

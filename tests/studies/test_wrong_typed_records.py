@@ -140,3 +140,20 @@ def test_an_empty_model_name_is_refused(tmp_path, capsys):
         ]
     )
     assert code == 2 and "--model" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["runs.jsonl", "calls.jsonl", "requests.jsonl"])
+def test_a_fifo_in_place_of_a_record_file_is_one_line_not_a_hang(study, tmp_path, capsys, name):
+    import os
+
+    out = tmp_path / "S"
+    shutil.copytree(study, out)
+    (out / name).unlink()
+    os.mkfifo(out / name)
+    with FakeServer(reply=hash_reply) as srv:
+        assert cli.main(swim(srv.url, out, runs=3)) == 2
+        assert srv.n_requests == 0
+    err = capsys.readouterr().err
+    assert "not a regular file" in err and "Traceback" not in err
+    code = cli.main(["show", str(out)])  # returns: the readers never wait on a FIFO
+    assert code == (2 if name == "runs.jsonl" else 0)
