@@ -169,6 +169,7 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     path = Path(folder) / META
     if not path.exists():
         raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
+    _regular(path)
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:  # ValueError: bad JSON or bad UTF-8

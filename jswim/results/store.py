@@ -167,6 +167,11 @@ class StudyStore:
         with writing(self.folder):
             self._clean_temporary_files()
         if meta_path.exists():
+            if not meta_path.is_file():  # a FIFO would hang the read, a device never end it
+                raise ResultFolderError(
+                    f"{meta_path} is not a regular file (a FIFO, a device or a folder); move it "
+                    "away or use a new --out folder"
+                )
             try:
                 meta = json.loads(meta_path.read_text())
             except (OSError, ValueError) as exc:

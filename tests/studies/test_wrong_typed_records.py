@@ -142,7 +142,7 @@ def test_an_empty_model_name_is_refused(tmp_path, capsys):
     assert code == 2 and "--model" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("name", ["runs.jsonl", "calls.jsonl", "requests.jsonl"])
+@pytest.mark.parametrize("name", ["runs.jsonl", "calls.jsonl", "requests.jsonl", "metadata.json"])
 def test_a_fifo_in_place_of_a_record_file_is_one_line_not_a_hang(study, tmp_path, capsys, name):
     import os
 
@@ -156,4 +156,4 @@ def test_a_fifo_in_place_of_a_record_file_is_one_line_not_a_hang(study, tmp_path
     err = capsys.readouterr().err
     assert "not a regular file" in err and "Traceback" not in err
     code = cli.main(["show", str(out)])  # returns: the readers never wait on a FIFO
-    assert code == (2 if name == "runs.jsonl" else 0)
+    assert code == (2 if name in ("runs.jsonl", "metadata.json") else 0)
