@@ -63,7 +63,7 @@ def writing(
         elif exc.errno == errno.EISDIR:  # the folder is writable: something stands in the way
             hint = "a folder stands where this file goes: move it away and run the same command to resume"
         elif exc.errno == errno.ENOTDIR:
-            hint = "a file stands where a folder goes on this path: move it away and run the same command to resume"
+            hint = "a file stands where a folder goes on this path: move it away, or choose another --out"
         raise StudyFolderError(f"cannot write {where}: {cause}; {hint}") from None
 
 

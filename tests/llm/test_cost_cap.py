@@ -248,7 +248,30 @@ def test_a_ledger_that_cannot_be_written_sends_nothing(tmp_path, capsys):
         srv.reset_counts()
         code = cli.main(swim(srv.url, out, prices, 1e9, "--runs", "3", "--steps", "2"))
         err = capsys.readouterr().err
-        assert code == 2 and "requests.jsonl" in err and "nothing was sent" in err
+        assert code == 2 and "requests.jsonl" in err and "Traceback" not in err
+        assert srv.n_requests == 0
+
+
+def test_a_ledger_line_that_cannot_be_written_stops_that_request(tmp_path, monkeypatch):
+    import jswim.llm.ledger as ledger_module
+    from jswim.errors import StudyFolderError
+    from jswim.llm.ledger import RequestLedger
+
+    ledger = RequestLedger(tmp_path)
+
+    def full_disk(*a, **kw):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(ledger_module, "open", full_disk, raising=False)
+
+    async def go(url):
+        s = settings(url, prices={"fake": (1e6, 1e6)})
+        async with LLMClient(s, budget=Budget(1e9, ledger=ledger)) as c:
+            await c.chat([{"role": "user", "content": "x"}])
+
+    with FakeServer(reply=hash_reply) as srv:
+        with pytest.raises(StudyFolderError, match="nothing was sent"):
+            asyncio.run(go(srv.url))
         assert srv.n_requests == 0
 
 
