@@ -336,9 +336,11 @@ def test_retry_after_waits_no_longer_than_the_retry_time(monkeypatch):
 
     waits: list[float] = []
     real_sleep = asyncio.sleep
+    now = [0.0]  # the pacer's clock, moved by the waits it asks for
 
     async def sleep(seconds, *a, **kw):  # the waits the client and the pacer ask for, recorded
         waits.append(seconds)
+        now[0] += seconds
         await real_sleep(0)
 
     monkeypatch.setattr(client_module.asyncio, "sleep", sleep)
@@ -346,7 +348,7 @@ def test_retry_after_waits_no_longer_than_the_retry_time(monkeypatch):
 
     async def go(url):
         s = settings(url, retry_for_s=6.0, max_retries=3)
-        async with LLMClient(s, pacer=Pacer(None, None)) as c:
+        async with LLMClient(s, pacer=Pacer(None, None, clock=lambda: now[0])) as c:
             await c.chat([{"role": "user", "content": "x"}])
 
     with FakeServer(reply=lambda body: Fault.rate_limit("3600")) as srv:
