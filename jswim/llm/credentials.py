@@ -114,7 +114,9 @@ def scrub(text: str) -> str:
 #: Request-field names whose text values are credentials (OpenAI's ``user`` is an end-user id,
 #: often set to a key or an account name).
 _CREDENTIAL_NAME = re.compile(
-    r"key|token|secret|passw|auth|credential|user|session|cookie|signature|bearer", re.I
+    r"(^|[_\-.])(api_?key|key|token|secret|passw(or)?d|auth|authorization|credentials?|user|"
+    r"session|cookie|signature|bearer)($|[_\-.])",
+    re.I,
 )
 
 

@@ -311,3 +311,20 @@ def test_a_nan_request_field_is_one_line(capsys):
     code = cli.main(swim("http://127.0.0.1:9/v1", Path("/nonexistent"), "--extra-field", "x=NaN"))
     err = capsys.readouterr().err
     assert code == 2 and "x=" in err and "Traceback" not in err
+
+
+def test_request_fields_are_masked_by_credential_name_or_key_shape_only():
+    from jswim.llm.credentials import mask_fields
+
+    fields = {
+        "user": "alice-account",
+        "api_key": "x1y2",
+        "nested": {"password": "hunter2!"},
+        "tokenizer": "llama",  # a word containing 'token' is no credential's name
+        "keep_alive": "5m",
+        "top_k": 40,
+        "opaque": "tok_3f9a8b7c6d5e4f3a2b1c",  # shaped like a key, whatever its name
+    }
+    got = mask_fields(fields)
+    assert got["user"] == got["api_key"] == got["nested"]["password"] == got["opaque"] == "***"
+    assert got["tokenizer"] == "llama" and got["keep_alive"] == "5m" and got["top_k"] == 40
