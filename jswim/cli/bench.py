@@ -453,8 +453,18 @@ def show_text(folder: Path, width: int | None = None) -> str:
 
     meta = read_record(folder / "bench.json")
     suite = meta.get("suite") if isinstance(meta.get("suite"), dict) else {}
+    status = meta.get("status")
+    if status == "running":  # as a study's show says it: is a live session still running it?
+        from jswim._io.folderlock import describe_holder, holder
+
+        info = holder(folder)
+        status = (
+            f"running now: {describe_holder(info)}"
+            if info is not None and info.get("alive") is not False
+            else "running, but no live session holds the folder (killed?); the same command resumes"
+        )
     lines = [
-        f"bench {suite.get('name')} (seed {suite.get('seed')}) in {folder}: {meta.get('status')}"
+        f"bench {suite.get('name')} (seed {suite.get('seed')}) in {folder}: {status}"
         + (
             f"; {meta['samples']} samples of every LLM run"
             if isinstance(meta.get("samples"), int) and meta["samples"] > 1

@@ -225,7 +225,7 @@ def test_each_part_gets_what_the_models_cap_leaves_exactly_and_no_secret_on_its_
 
 
 @pytest.mark.slow  # a bench of real child studies, a kill -9 and a resume (~20 s)
-def test_kill_9_of_the_bench_takes_its_children_and_the_same_command_resumes(tmp_path):
+def test_kill_9_of_the_bench_takes_its_children_and_the_same_command_resumes(tmp_path, capsys):
     out = tmp_path / "b"
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     with FakeServer(reply=hash_reply, latency=0.3) as srv:
@@ -249,6 +249,8 @@ def test_kill_9_of_the_bench_takes_its_children_and_the_same_command_resumes(tmp
                 and "Z" not in Path(f"/proc/{pid}/stat").read_text().split()[2]
             )
             assert not alive, f"child {pid} outlived the bench"
+        assert cli.main(["show", str(out)]) == 0  # bench.json still says running: show knows
+        assert "no live session holds the folder" in capsys.readouterr().out
         again = subprocess.run(cmd, env=env, cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert again.returncode == 0, again.stderr
     assert json.loads((out / "bench.json").read_text())["status"] == "complete"
