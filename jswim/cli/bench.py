@@ -455,7 +455,7 @@ def show_text(folder: Path, width: int | None = None) -> str:
     suite = meta.get("suite") if isinstance(meta.get("suite"), dict) else {}
     status = meta.get("status")
     if status == "running":  # as a study's show says it: is a live session still running it?
-        from jswim._io.folderlock import describe_holder, holder
+        from jswim._io.folderlock import describe_holder, holder  # lazy: start-up (show only)
 
         info = holder(folder)
         status = (
