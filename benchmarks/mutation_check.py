@@ -65,6 +65,8 @@ MONEY = (
     )
 )
 CLIENT = ("tests/llm/test_llm_client.py", *MONEY)
+#: The cap under servers that report oddly (tests/llm/test_cost_cap.py).
+CAP = ("tests/llm/test_cost_cap.py",)
 PACING = ("tests/llm/test_pacing.py",)
 MEMORY = ("tests/agents/test_memory.py", "tests/agents/test_llm_agent.py")
 PROTOCOL = ("tests/agents/test_protocol.py", "tests/agents/test_llm_agent.py")
@@ -181,6 +183,38 @@ MUTANTS: tuple[Mutant, ...] = (
         "(False or self.spent_usd",
         MONEY,
         "after the first refusal, smaller calls still go out",
+    ),
+    Mutant(
+        "budget-ratio-unlearned",
+        "jswim/llm/budget.py",
+        "self.ratio = max(self.ratio, actual_usd / hold.bound_usd)",
+        "self.ratio = self.ratio",
+        CAP,
+        "a provider billing 3x its reservations passes the cap with every wave in flight",
+    ),
+    Mutant(
+        "unpriceable-at-zero",
+        "jswim/llm/client.py",
+        "cost = max(cost, reserved)",
+        "cost = cost",
+        CAP,
+        "a server without usage is free: every call is sent",
+    ),
+    Mutant(
+        "bad-body-released",
+        "jswim/llm/client.py",
+        "self.budget.settle(held, bound)",
+        "self.budget.release(held)",
+        CAP,
+        "200s that are no chat completion are neither spent nor unanswered",
+    ),
+    Mutant(
+        "ledger-forgets-unanswered",
+        "jswim/llm/ledger.py",
+        "return sum(self._bounds.values())",
+        "return 0.0",
+        CAP,
+        "a resume forgets the requests that got no answer",
     ),
     Mutant(
         "price-swap",

@@ -52,7 +52,8 @@ class Fault:
 
     kind : ``"status"`` (HTTP ``status``, optional ``Retry-After``), ``"drop"`` (close the
     connection without answering), ``"delay"`` (answer normally after ``seconds``: a client
-    timeout), ``"malformed"`` (200 with a body that is not JSON). ``message`` is the error text of
+    timeout), ``"malformed"`` (200 with a body that is not JSON), ``"endless"`` (200 and a stream
+    that never ends, a piece every ``seconds``, until ``hold_s``). ``message`` is the error text of
     a status fault; ``body``, when given, is its whole JSON body instead (e.g. FastAPI's
     ``{"detail": [...]}``).
     """
@@ -83,6 +84,11 @@ class Fault:
     @classmethod
     def malformed(cls) -> Fault:
         return cls("malformed")
+
+    @classmethod
+    def endless(cls, every: float = 0.05) -> Fault:
+        """200 and an SSE stream that never ends: a content piece every ``every`` seconds."""
+        return cls("endless", seconds=every)
 
 
 @dataclass(frozen=True)
@@ -618,6 +624,19 @@ class FakeServer:
                 return await self._send(writer, fault.status, err, extra)
             if fault.kind == "malformed":
                 return await self._send(writer, 200, b'{"choices": [ {"message": ')
+            if fault.kind == "endless":
+                head = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nTransfer-Encoding: chunked\r\n\r\n"
+                writer.write(head.encode("latin-1"))
+                event = {"choices": [{"index": 0, "delta": {"content": "[1, "}}]}
+                piece = f"data: {json.dumps(event)}\n\n".encode()
+                give_up = time.monotonic() + self.hold_s  # a test that hangs fails instead
+                while time.monotonic() < give_up:  # or until the client goes away
+                    writer.write(f"{len(piece):x}\r\n".encode() + piece + b"\r\n")
+                    await writer.drain()
+                    await asyncio.sleep(fault.seconds)
+                writer.write(b"0\r\n\r\n")
+                await writer.drain()
+                return False
             if fault.kind == "delay":
                 with self._lock:
                     self._held += 1

@@ -195,6 +195,24 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
     return plain_table(cols, cells, width=width)
 
 
+def valid_rows(rows: Any) -> list[Mapping[str, Any]]:
+    """The rows of a stored ``leaderboard.json`` that the table can show (a list of objects, each
+    with its fields of the right types); a row edited or damaged into another shape is left out."""
+    if not isinstance(rows, list):
+        return []
+    out = []
+    for r in rows:
+        if not isinstance(r, Mapping):
+            continue
+        try:
+            table_text([r])
+            unpriced_notes([r])
+        except (KeyError, TypeError, ValueError, AttributeError):
+            continue
+        out.append(r)
+    return out
+
+
 def missing_text(missing: Sequence[Mapping[str, Any]]) -> list[str]:
     """One line per study folder of the bench that gave the leaderboard no row, and why."""
     return [f"missing rows: {m['row']} {m['part']} ({m['why']})" for m in missing]

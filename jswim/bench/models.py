@@ -8,6 +8,7 @@ line. docs/bench.md (*The models file*) lists every key, with an example.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -16,7 +17,8 @@ from collections.abc import Mapping
 
 from jswim.bench.suites import Suite, check_name, user_suite
 from jswim.errors import ConfigError
-from jswim.llm.prices import parse_prices
+from jswim.llm.prices import parse_prices, read_small_text
+from jswim.llm.urls import safe_url
 
 #: Keys of a model entry -> the ``jswim study`` flag each becomes (``None``: handled apart).
 MODEL_KEYS = {
@@ -38,6 +40,49 @@ MODEL_KEYS = {
     "price_local": "--price-local",
     "extra": "--extra-field",
 }
+
+#: The type each key's value must have, as TOML writes it: text, a whole number, a number
+#: (whole or not), true/false; never a bool for a number ("max_cost = true" is no $1) nor text
+#: for a bool ("price_local = 'false'" is no switch).
+TEXT_KEYS = (
+    "name",
+    "base_url",
+    "model",
+    "api_key_env",
+    "reasoning",
+    "reasoning_effort",
+    "constrain",
+)
+INT_KEYS = ("concurrency", "max_tokens")
+NUMBER_KEYS = ("rpm", "tpm", "max_cost", "temperature", "timeout")
+
+
+def _check_types(table: Mapping[str, Any], where: str) -> None:
+    """One line naming the first key whose value has the wrong type."""
+    for key, value in table.items():
+        if key in TEXT_KEYS:
+            ok, want = isinstance(value, str), "text"
+        elif key in INT_KEYS:
+            ok, want = isinstance(value, int) and not isinstance(value, bool), "a whole number"
+        elif key in NUMBER_KEYS:
+            ok = (
+                isinstance(value, (int, float))
+                and not isinstance(value, bool)
+                and math.isfinite(value)
+            )
+            want = "a number"
+        elif key == "price_local":
+            ok, want = isinstance(value, bool), "true or false"
+        elif key == "omit_fields":
+            ok = isinstance(value, list) and all(isinstance(v, str) for v in value)
+            want = "a list of field names"
+        elif key == "extra":
+            ok, want = isinstance(value, Mapping), "a table of request fields"
+        else:
+            continue
+        if not ok:
+            raise ConfigError(f"{where}: {key} must be {want}, got {value!r}")
+
 
 #: Names a user's model may not take: the bench's own rows and folders.
 RESERVED = ("baselines", "reference")
@@ -80,7 +125,16 @@ class ModelEntry:
         return out
 
     def describe(self) -> dict[str, Any]:
-        return {"name": self.name, **{k: v for k, v in self.settings if k != "name"}}
+        """The entry as recorded in ``bench.json`` and the leaderboard: the base URL without
+        user info, and request fields by name only (either may hold a credential)."""
+        out: dict[str, Any] = {"name": self.name}
+        for k, v in self.settings:
+            if k == "base_url":
+                v = safe_url(v)
+            elif k == "extra":
+                v = dict.fromkeys(v, "...")
+            out[k] = v
+        return out
 
 
 def model_entry(table: Any, where: str) -> ModelEntry:
@@ -93,11 +147,12 @@ def model_entry(table: Any, where: str) -> ModelEntry:
     """
     if not isinstance(table, Mapping):
         raise ConfigError(f"{where}: each [[models]] entry must be a table")
-    bad = sorted(set(table) - set(MODEL_KEYS))
+    bad = sorted(str(k) for k in set(table) - set(MODEL_KEYS))
     if bad:
         raise ConfigError(
             f"{where}: unknown key {bad[0]!r} in a model entry; use {', '.join(MODEL_KEYS)}"
         )
+    _check_types(table, where)
     for key in ("base_url", "model"):
         if not table.get(key):
             raise ConfigError(
@@ -148,7 +203,10 @@ def parse_model_option(text: str) -> ModelEntry:
         elif key == "omit_fields":
             table[key] = [v for v in value.split("+") if v]
         elif key == "price_local":
-            table[key] = value.lower() in ("1", "true", "yes")
+            flag = value.strip().lower()
+            if flag not in ("1", "true", "yes", "0", "false", "no"):
+                raise ConfigError(f"--model price_local={value}: expected true or false")
+            table[key] = flag in ("1", "true", "yes")
         else:
             table[key] = value.strip()
     return model_entry(table, "--model")
@@ -175,7 +233,7 @@ def load_models_file(path: str | Path) -> ModelsFile:
     p = Path(path)
     where = str(path)
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
+        data = tomllib.loads(read_small_text(p, "models file"))
     except FileNotFoundError:
         raise ConfigError(f"models file {where}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
@@ -196,7 +254,13 @@ def load_models_file(path: str | Path) -> ModelsFile:
         raise ConfigError(f"models file {where}: models must be an array of tables ([[models]])")
     models = tuple(model_entry(t, where) for t in entries)
     prices = as_of = None
+    if not isinstance(data.get("suites", {}), Mapping):
+        raise ConfigError(f"models file {where}: suites must be tables ([suites.NAME])")
     if "prices" in data:
+        if not isinstance(data["prices"], Mapping):
+            raise ConfigError(
+                f"models file {where}: prices must be a table of model = [prompt, completion]"
+            )
         raw = dict(data["prices"])
         as_of = str(raw.pop("as_of", f"the prices of {p.name}"))
         prices = parse_prices(raw, f"models file {where}")

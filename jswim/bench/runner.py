@@ -2,8 +2,11 @@
 
 Each study is a ``jswim study`` child process with the model's own flags, so every model is
 paced, bounded and capped on its own and one model's failure stops only that model; a model's
-parts run one after another. The bench folder's layout, Ctrl-C and resume are in docs/bench.md
-(*How it runs*).
+parts run one after another. The bench owns its children as a study owns its runs: the bench
+holds its folder's lock, each child's cap is what the model's ``max_cost`` leaves after its other
+parts' spent and unanswered calls (from their ledgers, passed exactly), a child dies with the
+bench (Linux: ``PR_SET_PDEATHSIG``), and a child's arguments travel in its environment, not on a
+command line. The bench folder's layout, Ctrl-C and resume are in docs/bench.md (*How it runs*).
 """
 
 from __future__ import annotations
@@ -19,12 +22,15 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Callable, Sequence
 
+from jswim._io.folderlock import HOLDER, LOCK, FolderLock
 from jswim.bench.models import ModelEntry
 from jswim.bench.suites import Part, Suite
 from jswim.errors import ConfigError
 from jswim.results import atomic_write, dumps
-from jswim.llm.journal import CallJournal
+from jswim.llm.credentials import scrub
+from jswim.llm.ledger import folder_money
 from jswim.llm.reference import MODEL
+from jswim.llm.urls import safe_url
 
 REFERENCE = "reference"
 BASELINES = "baselines"
@@ -106,37 +112,136 @@ def definition(
     }
 
 
-def open_folder(out: Path, meta: dict[str, Any]) -> dict[str, Any]:
-    """Create or resume a bench folder; refuse one made with another suite definition."""
+def read_record(path: Path, hint: str = "") -> dict[str, Any]:
+    """A bench's JSON record (``bench.json``, ``leaderboard.json``) as an object.
+
+    Raises
+    ------
+    ConfigError
+        Unreadable, not JSON, or not a JSON object (one line).
+    """
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        why = getattr(exc, "strerror", None) or str(exc).splitlines()[0]
+        raise ConfigError(f"{path} is not a bench record ({why}){hint}") from None
+    if not isinstance(data, dict):
+        raise ConfigError(
+            f"{path} is not a bench record (a JSON {type(data).__name__}, not an object){hint}"
+        )
+    return data
+
+
+def open_folder(out: Path, meta: dict[str, Any]) -> tuple[dict[str, Any], Any]:
+    """Create or resume a bench folder and lock it; refuse one made with another suite definition.
+
+    Returns the bench's record and the held `jswim._io.folderlock.FolderLock` (release it
+    when the bench ends).
+
+    Raises
+    ------
+    ConfigError
+        ``out`` is a file, or a folder that is no bench of this suite, or cannot be written.
+    FolderBusyError
+        Another jswim session holds the bench.
+    """
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {out} is a file, not a folder; choose a folder")
     path = out / "bench.json"
-    if path.exists():
-        try:
-            old = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as exc:
-            raise ConfigError(f"{path} is not a bench record ({exc}); use another --out") from None
-        if old.get("suite") != json.loads(
-            dumps(meta["suite"])
-        ):  # compared as stored (tuples become lists)
-            raise ConfigError(
-                f"{out} holds a bench of another suite definition ({old.get('suite', {}).get('name')!r}, "
-                "its parts, seed or sizes differ); use another --out to keep both"
-            )
-        meta = {**old, **meta, "model_status": old.get("model_status", {})}
-    elif out.exists() and any(out.iterdir()):
+    if (
+        out.exists()
+        and not path.exists()
+        and any(p.name not in (LOCK, HOLDER) for p in out.iterdir())
+    ):
         raise ConfigError(f"{out} is not empty and is not a bench folder; use another --out")
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        lock = FolderLock(out).acquire()  # one bench per folder, before anything is read
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot write the bench folder {out} ({exc.strerror or exc}); choose a writable --out"
+        ) from None
+    try:
+        if path.exists():
+            old = read_record(path, "; use another --out")
+            suite = old.get("suite")
+            if suite != json.loads(dumps(meta["suite"])):  # compared as stored (tuples: lists)
+                name = suite.get("name") if isinstance(suite, dict) else suite
+                raise ConfigError(
+                    f"{out} holds a bench of another suite definition ({name!r}, "
+                    "its parts, seed or sizes differ); use another --out to keep both"
+                )
+            status = old.get("model_status")
+            status = {str(k): v for k, v in (status if isinstance(status, dict) else {}).items()}
+            meta = {**old, **meta, "model_status": status}
+    except BaseException:
+        lock.release()
+        raise
     meta.setdefault("model_status", {})
-    write_meta(out, meta)
-    return meta
+    try:
+        write_meta(out, meta)
+    except BaseException:
+        lock.release()
+        raise
+    return meta, lock
 
 
 def write_meta(out: Path, meta: dict[str, Any]) -> None:
-    atomic_write(out / "bench.json", dumps(meta, indent=1))
+    """Write ``bench.json`` (one line on an unwritable folder)."""
+    try:
+        atomic_write(out / "bench.json", dumps(meta, indent=1))
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot write {out / 'bench.json'} ({exc.strerror or exc}); choose a writable --out"
+        ) from None
 
 
 def spent(folder: Path) -> float:
-    """What a study folder's answered calls cost (its call journal)."""
-    return CallJournal(folder).spent_usd if (folder / "calls.jsonl").exists() else 0.0
+    """What a study folder's calls cost (recomputed from its journal and ledger)."""
+    return folder_money(folder)[0] if folder.is_dir() else 0.0
+
+
+def committed(folder: Path) -> float:
+    """What a study folder spent plus what its unanswered requests may still be billed."""
+    if not folder.is_dir():
+        return 0.0
+    paid, unanswered = folder_money(folder)
+    return paid + unanswered
+
+
+def shown_argv(argv: Sequence[str]) -> str:
+    """A study's arguments as a log may show them: no URL user info, no request field's value."""
+    out: list[str] = []
+    hide = None
+    for a in argv:
+        if hide == "--base-url":
+            a = safe_url(a)
+        elif hide == "--extra-field":
+            a = a.partition("=")[0] + "=..."
+        out.append(scrub(a))
+        hide = a if a in ("--base-url", "--extra-field") else None
+    return " ".join(out)
+
+
+def _die_with_parent(parent: int) -> Callable[[], None]:
+    """A ``preexec_fn`` that makes the child die (SIGKILL) when the bench dies, on Linux; the
+    child's study folder is safe against a kill at any point (docs/studies.md)."""
+
+    try:  # loaded here, in the bench: the child only calls it between fork and exec
+        import ctypes
+
+        prctl = ctypes.CDLL(None, use_errno=True).prctl
+    except (OSError, AttributeError):
+        prctl = None  # not Linux: the bench's lock still keeps a second bench out
+
+    def arm() -> None:
+        if prctl is None:
+            return
+        prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        if os.getppid() != parent:  # the bench died before the line above: go with it
+            os.kill(os.getpid(), signal.SIGKILL)
+
+    return arm
 
 
 def _last_error(log: Path) -> str:
@@ -172,6 +277,7 @@ class Outcome:
 
     status: dict[str, str] = field(default_factory=dict)  # label -> complete / failed: ... / ...
     interrupted: bool = False
+    stopped_at: dict[str, str] = field(default_factory=dict)  # label -> the part that stopped it
 
 
 def run_jobs(
@@ -188,30 +294,35 @@ def run_jobs(
     result = Outcome({label: "running" for label in queues})
     running: dict[str, Job] = {}
     env = {**os.environ, "PYTHONUNBUFFERED": "1"}
+    me = os.getpid()
 
     def launch(label: str) -> None:
         job = queues[label].pop(0)
         argv = list(job.argv)
         if job.model is not None and job.model.max_cost is not None:
-            # The model's cap is over its whole suite: this part may spend what the others left.
+            # The model's cap is over its whole suite: this part may commit what the others left
+            # (their spent and unanswered calls, from their ledgers), on top of what its own
+            # folder already committed (the study counts that itself). Passed exactly: repr
+            # round-trips the float, no digit is rounded away.
             others = sum(
-                spent(j.folder) for j in jobs if j.label == label and j.folder != job.folder
+                committed(j.folder) for j in jobs if j.label == label and j.folder != job.folder
             )
             argv += [
                 "--max-cost",
-                f"{max(0.0, job.model.max_cost - others) + spent(job.folder):.6f}",
+                repr(max(0.0, job.model.max_cost - others) + committed(job.folder)),
             ]
         job.folder.parent.mkdir(parents=True, exist_ok=True)
         log = open(job.log, "a", encoding="utf-8")
-        log.write(f"$ jswim {' '.join(argv)}\n")
+        log.write(f"$ jswim {shown_argv(argv)}\n")
         log.flush()
         job.proc = subprocess.Popen(
-            [sys.executable, "-m", "jswim", *argv],
+            [sys.executable, "-m", "jswim"],
             stdout=log,
             stderr=subprocess.STDOUT,
             stdin=subprocess.DEVNULL,
-            env=env,
-            start_new_session=True,
+            env={**env, "JSWIM_BENCH_ARGV": json.dumps(argv)},
+            start_new_session=True,  # Ctrl-C reaches the bench, which stops each child in turn
+            preexec_fn=_die_with_parent(me),
         )
         log.close()
         running[label] = job
@@ -224,6 +335,7 @@ def run_jobs(
             say(f"bench: {what}: done")
         elif job.rc == 3:
             result.status[label] = "stopped at the cost cap"
+            result.stopped_at[label] = job.part.name
             say(
                 f"bench: {what}: stopped at the model's cost cap (max_cost); its other parts are skipped"
             )
@@ -235,6 +347,7 @@ def run_jobs(
             result.status[label] = "interrupted"
         else:
             result.status[label] = f"failed: {_last_error(job.log)}"
+            result.stopped_at[label] = job.part.name
             say(
                 f"bench: {label} failed at {job.part.name}: {_last_error(job.log)} (see {job.log}); "
                 "the other models go on"

@@ -179,9 +179,15 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
                 "options": table.get("options", {}),
             }
         ]
+    if not isinstance(parts_in, list):
+        raise ConfigError(f"{where}: suite {name!r}: parts must be an array of tables")
     parts = []
     for i, p in enumerate(parts_in):
-        if not isinstance(p, Mapping) or p.get("study") not in STUDIES:
+        if (
+            not isinstance(p, Mapping)
+            or not isinstance(p.get("study"), str)
+            or p["study"] not in STUDIES
+        ):
             raise ConfigError(
                 f"{where}: suite {name!r} part {i + 1}: study must be one of {', '.join(STUDIES)}"
             )

@@ -114,7 +114,6 @@ def _suite(args: argparse.Namespace, mf: Any) -> Any:
 
 def main(args: argparse.Namespace) -> int:
     from jswim.bench import (
-        leaderboard,
         runner,
     )  # lazy: start-up (NumPy and the study folders' readers)
 
@@ -123,19 +122,37 @@ def main(args: argparse.Namespace) -> int:
     out = Path(args.out or f"jswim-out/bench-{suite.name}")
     if args.dry_run:
         return _dry_run(suite, models, mf, out)
-    meta = runner.open_folder(
+    meta, lock = runner.open_folder(
         out,
         {
             **runner.definition(suite, models, not args.no_reference, not args.no_baselines),
             "status": "running",
         },
     )
+    try:
+        return _run(args, suite, models, mf, out, meta)
+    finally:
+        lock.release()
+
+
+def _run(args: argparse.Namespace, suite: Any, models: Any, mf: Any, out: Path, meta: Any) -> int:
+    """The bench in its locked folder: run the parts, write the record and the leaderboard."""
+    from jswim.bench import (
+        leaderboard,
+        runner,
+    )  # lazy: start-up (NumPy and the study folders' readers)
+
     prices_file = None
     if mf.prices is not None:
         prices_file = out / "prices.json"
-        runner.atomic_write(
-            prices_file, json.dumps({"as_of": mf.prices_as_of, "prices": mf.prices}, indent=1)
-        )
+        try:
+            runner.atomic_write(
+                prices_file, json.dumps({"as_of": mf.prices_as_of, "prices": mf.prices}, indent=1)
+            )
+        except OSError as exc:
+            raise ConfigError(
+                f"cannot write {prices_file} ({exc.strerror or exc}); choose a writable --out"
+            ) from None
     say = lambda text: print(text, file=sys.stderr, flush=True)
     say(
         f"bench {suite.name} (seed {suite.seed}) in {out}: {len(models)} model(s)"
@@ -163,10 +180,10 @@ def main(args: argparse.Namespace) -> int:
         if ref is not None:
             ref.stop()
     meta["model_status"].update(outcome.status)
-    meta["status"] = "interrupted" if outcome.interrupted else "complete"
+    meta["status"] = bench_status(outcome.status, outcome.interrupted)
     runner.write_meta(out, meta)
     rows = _rows(jobs, models, mf, outcome.status)
-    missing = _missing(jobs, rows, meta["model_status"])
+    missing = _missing(jobs, rows, meta["model_status"], outcome.stopped_at)
     paths = leaderboard.write_files(out, rows, meta, missing)
     print(
         f"bench {suite.name}: {suite.about or 'user suite'} (seed {suite.seed}"
@@ -199,6 +216,21 @@ def main(args: argparse.Namespace) -> int:
     return EXIT_SOME_FAILED if bad else 0
 
 
+def bench_status(status: dict[str, str], interrupted: bool) -> str:
+    """What happened to the bench as a whole: ``interrupted``; ``complete`` when every row
+    finished; ``incomplete`` when some did; when none did, what stopped them all if it was
+    one thing (``stopped at the cost cap``), else ``failed``."""
+    if interrupted:
+        return "interrupted"
+    done = [v == "complete" for v in status.values()]
+    if all(done):
+        return "complete"
+    if any(done):
+        return "incomplete"
+    kinds = set(status.values())
+    return kinds.pop() if len(kinds) == 1 and "stopped at the cost cap" in kinds else "failed"
+
+
 def _sent_notes(jobs: list[Any]) -> list[str]:
     """What a reasoning model was sent instead of the paper's settings, once per model (from its folders)."""
     from jswim.results import read_metadata  # lazy: start-up (NumPy)
@@ -216,10 +248,14 @@ def _sent_notes(jobs: list[Any]) -> list[str]:
 
 
 def _missing(
-    jobs: list[Any], rows: list[dict[str, Any]], status: dict[str, str]
+    jobs: list[Any],
+    rows: list[dict[str, Any]],
+    status: dict[str, str],
+    stopped_at: dict[str, str] | None = None,
 ) -> list[dict[str, Any]]:
-    """Every study folder of the bench that gave no leaderboard row, and why (its label's status,
-    else the last error its study printed, else that it has no finished run yet)."""
+    """Every study folder of the bench that gave no leaderboard row, and why: its own study's
+    last error when it ran and failed, the part that stopped its model when it was skipped, else
+    its label's status, else that it has no finished run yet."""
     from jswim.bench import runner  # lazy: start-up (NumPy)
 
     have = {
@@ -230,7 +266,17 @@ def _missing(
         if ("baseline" if j.kind == "baseline" else j.label, j.part.name) in have:
             continue
         why = status.get(j.label, "not run")
-        if why in ("complete", "running"):
+        stop = (stopped_at or {}).get(j.label)
+        if stop is not None and stop != j.part.name and j.rc is None:
+            why = f"not run: {j.label} stopped at {stop} ({why})"
+        elif (
+            stop != j.part.name
+            and j.rc not in (None, 0, 3)
+            and j.log is not None
+            and j.log.exists()
+        ):  # this part failed, and its label's status speaks of another part: quote its own
+            why = f"failed: {runner._last_error(j.log)}"
+        elif why in ("complete", "running"):
             why = (
                 runner._last_error(j.log)
                 if j.log is not None and j.log.exists()
@@ -403,29 +449,45 @@ def show_text(folder: Path, width: int | None = None) -> str:
     (read from ``bench.json`` and ``leaderboard.json``; nothing is run or written)."""
     from jswim.bench import leaderboard  # lazy: start-up (the study folders' readers)
 
-    try:
-        meta = json.loads((folder / "bench.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{folder}/bench.json is unreadable ({exc})") from None
-    suite = meta.get("suite") or {}
+    from jswim.bench.runner import read_record  # lazy: start-up (the bench's readers)
+
+    meta = read_record(folder / "bench.json")
+    suite = meta.get("suite") if isinstance(meta.get("suite"), dict) else {}
+    status = meta.get("status")
+    if status == "running":  # as a study's show says it: is a live session still running it?
+        from jswim._io.folderlock import describe_holder, holder  # lazy: start-up (show only)
+
+        info = holder(folder)
+        status = (
+            f"running now: {describe_holder(info)}"
+            if info is not None and info.get("alive") is not False
+            else "running, but no live session holds the folder (killed?); the same command resumes"
+        )
     lines = [
-        f"bench {suite.get('name')} (seed {suite.get('seed')}) in {folder}: {meta.get('status')}"
+        f"bench {suite.get('name')} (seed {suite.get('seed')}) in {folder}: {status}"
         + (
             f"; {meta['samples']} samples of every LLM run"
-            if (meta.get("samples") or 1) > 1
+            if isinstance(meta.get("samples"), int) and meta["samples"] > 1
             else ""
         )
     ]
-    lines += [f"  {name}: {status}" for name, status in (meta.get("model_status") or {}).items()]
+    status = meta.get("model_status")
+    lines += [
+        f"  {name}: {status}"
+        for name, status in (status if isinstance(status, dict) else {}).items()
+    ]
     try:
-        board = json.loads((folder / "leaderboard.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        board = read_record(folder / "leaderboard.json")
+    except ConfigError:
         board = {}
-    rows = board.get("rows") or []
+    rows = leaderboard.valid_rows(board.get("rows"))
     if rows:
         lines += ["", leaderboard.table_text(rows, width=width)] + leaderboard.unpriced_notes(rows)
     else:
         lines.append("no leaderboard yet: the same jswim bench command writes it")
-    lines += leaderboard.missing_text(board.get("missing") or [])
+    missing = board.get("missing")
+    lines += leaderboard.missing_text(
+        [m for m in missing if isinstance(m, dict)] if isinstance(missing, list) else []
+    )
     lines.append(f"each model's studies: {folder}/<model>/<part>/ (jswim show on each)")
     return "\n".join(lines)

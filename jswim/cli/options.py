@@ -588,7 +588,11 @@ IGNORABLE = {
     "n_ht": ("n_ht", "--n-ht"),
     "q_runs": ("q_runs", "--q-runs"),
     "init": ("init", "--init"),
+    "runs": ("runs", "--runs"),
 }
+
+#: The options that choose an LLM, refused by a study without LLM runs.
+LLM_OPTIONS = {"base_url": "--base-url", "model": "--model", "gguf": "--gguf"}
 
 
 def options(args: argparse.Namespace, study: str) -> Any:
@@ -654,3 +658,6 @@ def _refuse_ignored(study: str, args: argparse.Namespace) -> None:
         raise ConfigError(
             f"the {study} study has no use for {IGNORABLE[field][1]} ({why}); leave it out"
         )
+    llm = [flag for dest, flag in LLM_OPTIONS.items() if getattr(args, dest, None) is not None]
+    for _, why in ignored_options(study, ["runs"] if llm else []).items():
+        raise ConfigError(f"the {study} study has no use for {llm[0]} ({why}); leave it out")

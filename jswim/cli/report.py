@@ -49,11 +49,17 @@ def main(args: argparse.Namespace) -> int:
     if not Path(args.folder).is_dir():
         raise ConfigError(f"{args.folder}: {path_kind(args.folder, 'a study folder')}")
     if is_bench(args.folder):  # the bench's page and each of its study folders' pages
+        # With --out (a read-only bench, say) only that page is written: the parts' pages are
+        # the bench folder's own files, left as they are.
         path = write_bench_report(
-            args.folder, figures="none" if args.figures == "none" else "draw", out=args.out
+            args.folder,
+            figures="none" if args.figures == "none" else "draw",
+            out=args.out,
+            parts=args.out is None,
         )
+        also = " and each part's page" if args.out is None else ""
         print(
-            f"bench report: {path} ({path.stat().st_size / 1024:.0f} KB) and each part's page; open it in a "
+            f"bench report: {path} ({path.stat().st_size / 1024:.0f} KB){also}; open it in a "
             f"browser (file://{path.resolve()})"
         )
         return 0

@@ -113,11 +113,11 @@ def _run(study: str, args: argparse.Namespace) -> int:
 
     n_llm = sum(r.agent == "llm" for r in as_run_rows(result.rows))
     if not sp and n_llm:  # a resume with every LLM run done
-        from jswim.llm.journal import CallJournal  # lazy: httpx loads only for commands that run
+        from jswim.llm.ledger import folder_money  # lazy: httpx loads only for commands that run
 
         print(
             f"LLM calls: none this session (every LLM run was done already; nothing sent, nothing paid); the "
-            f"study's calls cost ${CallJournal(result.folder).spent_usd:.4f} ({_price_note(backend)})"
+            f"study's calls cost ${folder_money(result.folder)[0]:.4f} ({_price_note(backend)})"
         )
     if sp.get("calls"):
         print(

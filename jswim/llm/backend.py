@@ -24,7 +24,7 @@ from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.cache import check_cache
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
-from jswim.llm.credentials import read_api_key
+from jswim.llm.credentials import mask_fields, read_api_key
 from jswim.llm.errors import unreachable
 from jswim.llm.local import DEFAULT_MODEL_FILE, LOCAL_KEY_ENV, LocalServer
 from jswim.llm.probe import ServerInfo, check_family, probe
@@ -146,6 +146,10 @@ class Backend:
             )
         if self.base_url is not None and self.model is None:
             raise ConfigError("--base-url needs --model (the model name on that server)")
+        if self.model is not None and (not isinstance(self.model, str) or not self.model.strip()):
+            raise ConfigError(
+                f"--model {self.model!r}: give the model's name on the server (e.g. gpt-4o)"
+            )
         if self.gguf is not None:
             check_gguf(self.gguf)
         if self.base_url is not None:
@@ -153,6 +157,7 @@ class Backend:
             read_api_key(
                 self.api_key_env
             )  # a key no header can carry: one line now, not retries later
+        mask_fields(dict(self.extra_fields))  # registers each credential for scrub
         check_extra_fields(
             self.extra_fields
         )  # a core field there would bypass the cap and the identity
@@ -230,7 +235,8 @@ class Backend:
             "omit_fields": list(self.omit_fields) or None,
             "reasoning": self.reasoning,
             "reasoning_effort": self.reasoning_effort,
-            "extra_fields": dict(self.extra_fields) or None,
+            # A credential given as a field is recorded as *** (and scrubbed from any text).
+            "extra_fields": mask_fields(dict(self.extra_fields)) or None,
             "sampling": self.sampling,
             "server_family": self.server_family,
         }

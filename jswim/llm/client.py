@@ -31,7 +31,7 @@ from collections.abc import Callable, Mapping, Sequence
 import httpx
 
 from jswim.llm import constrain, credentials
-from jswim.llm.budget import Budget, call_bound
+from jswim.llm.budget import Budget, Hold, call_bound
 from jswim.llm.cache import ResponseCache, request_key
 from jswim.llm.errors import (
     LLMRequestError,
@@ -75,6 +75,24 @@ MAX_REDIRECTS = 5
 
 #: HTTP statuses worth retrying: timeout, conflict, rate limit (5xx are added in code).
 RETRY_STATUSES = frozenset({408, 409, 429})
+
+#: The largest response body read; a longer one is a bad body (billed at its reservation).
+MAX_BODY_BYTES = 8 << 20
+
+#: What is kept of a reply's text, raw content and reasoning: this many characters per token of
+#: ``max_tokens`` plus `KEEP_BASE` (no tokenizer's token is longer than a few dozen
+#: characters, so an honest reply is never cut; a server that sends a megabyte under
+#: ``max_tokens`` 10 fills no folder).
+KEEP_PER_TOKEN = 32
+KEEP_BASE = 1024
+
+
+def kept(text: str, max_tokens: int) -> str:
+    """``text`` cut to ``KEEP_BASE + KEEP_PER_TOKEN * max_tokens`` characters, the cut said."""
+    limit = KEEP_BASE + KEEP_PER_TOKEN * max(0, max_tokens)
+    if len(text) <= limit:
+        return text
+    return text[:limit] + f" [jswim: {len(text) - limit} more characters not kept]"
 
 
 class _Failure(Exception):
@@ -133,6 +151,9 @@ class LLMClient:
         self.pacer = pacer
         self.budget = budget
         self.settings = settings
+        if pacer is not None and settings.retry_for_s is not None:
+            # A Retry-After longer than the retry time is no reason to wait past it.
+            pacer.max_pause_s = min(pacer.max_pause_s, max(settings.retry_for_s, 0.0))
         self._key = credentials.read_api_key(settings.api_key_env)
         # User info of the base URL goes as HTTP Basic auth unless an API key is set (the key wins:
         # one Authorization header); either way it never stays in a URL a library could print.
@@ -445,7 +466,7 @@ class LLMClient:
             if self.pacer is not None:
                 await self.pacer.wait(tokens)
             slot = await slots.get()
-            held = 0.0
+            held: Hold | None = None
             try:
                 if self.budget is not None:  # reserved while in flight, settled by the answer
                     held = self.budget.reserve(call_bound(payload, self._prices, s.model))
@@ -457,9 +478,20 @@ class LLMClient:
                 self.counts.in_flight += 1
                 sent_at = time.perf_counter()
                 try:
-                    got = await self._attempt(slot.http, payload)
+                    try:
+                        async with asyncio.timeout(self._attempt_limit()):
+                            got = await self._attempt(slot.http, payload)
+                    except TimeoutError:
+                        # A reply that keeps coming (a stream that never ends): it is being
+                        # generated, so it may be billed.
+                        raise _Failure(
+                            f"no whole answer within {self._attempt_limit():g} s (the reply kept "
+                            "coming; --timeout and --retry-for bound one attempt)",
+                            kind="timeout",
+                            unanswered=True,
+                        ) from None
                 except _Adapted:
-                    if self.budget is not None:
+                    if held is not None:
                         self.budget.release(held)
                     adaptations += 1
                     if adaptations > 3:  # a server that keeps refusing what it asked for
@@ -472,23 +504,36 @@ class LLMClient:
                     # Sent and never answered (a timeout, a cut, a Ctrl-C while waiting): the server
                     # may bill it, so its bound stays counted against the cap; anything else was
                     # refused or never arrived and costs nothing.
+                    bound = held.usd if held is not None else self._bound(payload)
                     if (isinstance(exc, _Failure) and exc.unanswered) or isinstance(
                         exc, asyncio.CancelledError
                     ):
-                        bound = call_bound(payload, self._prices, s.model)
                         self.counts.unanswered += 1
                         self.counts.unanswered_usd += bound
-                        if self.budget is not None:
+                        if held is not None:
                             self.budget.unanswered(held)
-                    elif self.budget is not None:
+                    elif isinstance(exc, _Failure) and exc.bad_body:
+                        # Answered 200 with a body that is no chat completion: the server ran
+                        # the request and may bill it, so it is spent, at its reservation.
+                        self.counts.cost_usd += bound
+                        if held is not None:
+                            self.budget.settle(held, bound)
+                    elif held is not None:
                         self.budget.release(held)
                     if isinstance(exc, _Failure) and first_failure is None:
                         first_failure = sent_at
                     raise
                 finally:
                     self.counts.in_flight -= 1
-                res = self._attempt_result(got, mode, t0, retries, payload)
-                if self.budget is not None:
+                res = self._attempt_result(
+                    got,
+                    mode,
+                    t0,
+                    retries,
+                    payload,
+                    reserved=held.usd if held is not None else self._bound(payload),
+                )
+                if held is not None:
                     self.budget.settle(held, res.cost_usd)
                 self.counts.tokens += res.usage.prompt_tokens + res.usage.completion_tokens
                 self.counts.cost_usd += res.cost_usd
@@ -525,6 +570,18 @@ class LLMClient:
             finally:
                 slots.put_nowait(slot)  # free the slot before any backoff wait
             await asyncio.sleep(wait)
+
+    def _bound(self, payload: Mapping[str, Any]) -> float:
+        """A request's cost bound at this client's prices, scaled as the budget scales it."""
+        ratio = self.budget.ratio if self.budget is not None else 1.0
+        return call_bound(payload, self._prices, self.settings.model) * ratio
+
+    def _attempt_limit(self) -> float:
+        """Longest wall time of one attempt, first byte to last: --timeout or --retry-for,
+        whichever is longer (ten times --timeout without a retry time); a reply streamed for
+        ever is cut there."""
+        s = self.settings
+        return max(s.timeout_s, 10 * s.timeout_s if s.retry_for_s is None else s.retry_for_s)
 
     async def _attempt(self, http: httpx.AsyncClient, payload: dict[str, Any]) -> Completion:
         s = self.settings
@@ -592,7 +649,20 @@ class LLMClient:
         url = httpx.URL(self._url)
         for _ in range(MAX_REDIRECTS + 1):
             async with http.stream("POST", url, json=payload, headers=headers) as resp:
-                raw = b"".join([chunk async for chunk in resp.aiter_raw()])
+                parts, size = [], 0
+                async for chunk in resp.aiter_raw():
+                    size += len(chunk)
+                    if size > MAX_BODY_BYTES:
+                        # A 200 this large was run (and may be billed): a bad body; an error
+                        # status this large is a failure like any other of its status.
+                        raise _Failure(
+                            f"HTTP {resp.status_code}: the response is larger than "
+                            f"{MAX_BODY_BYTES >> 20} MiB, not a chat completion",
+                            bad_body=resp.status_code == 200,
+                            kind="5xx" if resp.status_code >= 500 else "connection",
+                        )
+                    parts.append(chunk)
+                raw = b"".join(parts)
             if resp.status_code not in (307, 308) or "location" not in resp.headers:
                 break
             try:
@@ -690,21 +760,35 @@ class LLMClient:
         t0: float,
         retries: int,
         payload: Mapping[str, Any] | None = None,
+        reserved: float = 0.0,
     ) -> ChatResult:
         usage = Usage.from_response(got.usage)
+        cost = self._cost(usage, got.model)
+        if not Usage.priceable(got.usage):
+            # No usage, or counts that are no token counts (negative, NaN, text): the call is
+            # priced at its reservation, the most it was allowed to cost, never at $0.
+            cost = max(cost, reserved)
+            if reserved > 0 and self.unpriced is None:
+                self.unpriced = (
+                    "the server sent no usable token counts; each such call is priced at its "
+                    "reservation (prompt estimate plus max_tokens), the most it could cost"
+                )
+        p = payload or {}
+        room = int(p.get("max_tokens") or p.get("max_completion_tokens") or 4096)
         # A reply may echo a credential (a proxy quoting the request's headers): scrubbed by the
-        # registry the error messages use, before the journal, the cache or a transcript see it.
+        # registry the error messages use, before the journal, the cache or a transcript see it;
+        # and cut to what max_tokens can honestly produce ([`kept`][jswim.llm.client.kept]).
         return ChatResult(
-            text=_scrub(constrain.reply_text(mode, got.answer)),
+            text=kept(_scrub(constrain.reply_text(mode, got.answer)), room),
             usage=usage,
             latency_s=time.perf_counter() - t0,
             cache_hit=False,
             shared=False,
             retries=retries,
-            cost_usd=self._cost(usage, got.model),
+            cost_usd=cost,
             constraint=mode,
             finish_reason=got.finish_reason,
-            raw=_scrub(got.content),
-            reasoning=_scrub(got.reasoning),
+            raw=kept(_scrub(got.content), room),
+            reasoning=kept(_scrub(got.reasoning), room),
             temperature_sent=(payload or {}).get("temperature"),
         )

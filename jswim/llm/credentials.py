@@ -11,6 +11,8 @@ from __future__ import annotations
 import base64
 import json
 import os
+import re
+from typing import Any
 from urllib.parse import quote, quote_plus, unquote, urlsplit, urlunsplit
 
 from jswim.errors import ConfigError
@@ -27,9 +29,12 @@ _forms: list[str] = []  # every form of every secret, longest first
 
 
 def forms(secret: str) -> set[str]:
-    """The ways ``secret`` may appear in text: raw, escaped, JSON, percent-encoded, base64."""
+    """The ways ``secret`` may appear in text: raw, escaped, JSON, percent-encoded, base64, and
+    the encodings of its base64 (a ``Basic`` header percent-encoded into an error body)."""
     out = {secret, secret.strip()}
     for s in list(out):
+        b64 = base64.b64encode(s.encode("utf-8", "replace")).decode()
+        url64 = base64.urlsafe_b64encode(s.encode("utf-8", "replace")).decode()
         out |= {
             repr(s)[1:-1],
             ascii(s)[1:-1],
@@ -40,8 +45,13 @@ def forms(secret: str) -> set[str]:
             quote(s, safe=""),
             quote_plus(s, safe=""),
             quote(s),
-            base64.b64encode(s.encode("utf-8", "replace")).decode(),
+            b64,
+            url64,
+            quote(b64, safe=""),
+            quote(url64, safe=""),
         }
+        # Unpadded base64 matches inside a padded echo whatever its padding was encoded as.
+        out |= {b64.rstrip("="), url64.rstrip("=")}
     return {f for f in out if len(f) >= MIN_SECRET}
 
 
@@ -53,14 +63,86 @@ def register(secret: str | None) -> None:
     _forms[:] = sorted(set(_forms) | forms(secret), key=len, reverse=True)
 
 
+#: The masks providers print inside a key's echo: a run of ``*``, ``.``, ``•``, ``x`` or an
+#: ellipsis between a visible head and tail (``sk-proj-****789XyZ``, ``sk-...XyZ``).
+_MASK_RUN = re.compile(r"\*{2,}|\.{3,}|…|x{4,}|•{2,}")
+
+#: The characters of a key's visible head and tail, and how far each is looked for.
+_KEY_CHARS = frozenset("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-")
+_ECHO_REACH = 64
+
+#: The shortest visible head or tail of a masked echo that is taken as the secret's own.
+MIN_ECHO = 3
+
+
+def _masked_echoes(text: str) -> str:
+    """``text`` with each masked echo that shows a registered secret's head or tail replaced
+    whole (linear in ``text``: heads and tails are read at most `_ECHO_REACH` away)."""
+    keys = [k for k in _secrets if len(k) >= 8]
+    if not keys:
+        return text
+    out, last = [], 0
+    for m in _MASK_RUN.finditer(text):
+        a = m.start()
+        while a > max(last, m.start() - _ECHO_REACH) and text[a - 1] in _KEY_CHARS:
+            a -= 1
+        b = m.end()
+        while b < min(len(text), m.end() + _ECHO_REACH) and text[b] in _KEY_CHARS:
+            b += 1
+        head, tail = text[a : m.start()], text[m.end() : b]
+        if any(
+            (len(head) >= MIN_ECHO and k.startswith(head))
+            or (len(tail) >= MIN_ECHO and k.endswith(tail))
+            for k in keys
+        ):
+            out += [text[last:a], MASK]
+            last = b
+    return "".join(out) + text[last:] if out else text
+
+
 def scrub(text: str) -> str:
-    """``text`` with every registered secret, in every form of `forms`, replaced by ``***``."""
+    """``text`` with every registered secret, in every form of `forms`, replaced by ``***``;
+    a masked echo that still shows a secret's head or tail (``sk-proj-****789XyZ``) goes whole."""
     if not _forms or not text:
         return text
     for f in _forms:
         if f in text:
             text = text.replace(f, MASK)
-    return text
+    return _masked_echoes(text)
+
+
+#: Request-field names whose text values are credentials (OpenAI's ``user`` is an end-user id,
+#: often set to a key or an account name).
+_CREDENTIAL_NAME = re.compile(
+    r"(^|[_\-.])(api_?key|key|token|secret|passw(or)?d|auth|authorization|credentials?|user|"
+    r"session|cookie|signature|bearer)($|[_\-.])",
+    re.I,
+)
+
+
+def looks_like_key(text: str) -> bool:
+    """Whether ``text`` has the shape of a key: 20 or more characters, no space, letters and
+    digits mixed (``sk-...``, a JWT, a hex token)."""
+    return (
+        len(text) >= 20
+        and not any(c.isspace() for c in text)
+        and any(c.isdigit() for c in text)
+        and any(c.isalpha() for c in text)
+    )
+
+
+def mask_fields(fields: Any, name: str = "") -> Any:
+    """Request fields as they may be written or shown: a text value under a credential's name
+    (``user``, ``api_key``, ``token``...) or shaped like a key is ``***`` (and registered for
+    `scrub`); numbers, flags and ordinary text stay as given."""
+    if isinstance(fields, dict):
+        return {k: mask_fields(v, str(k)) for k, v in fields.items()}
+    if isinstance(fields, (list, tuple)):
+        return [mask_fields(v, name) for v in fields]
+    if isinstance(fields, str) and (_CREDENTIAL_NAME.search(name) or looks_like_key(fields)):
+        register(fields)
+        return MASK
+    return fields
 
 
 def _bad_character(value: str) -> str | None:

@@ -131,13 +131,25 @@ class CallJournal:
             temperature_sent=rec.get("temperature_sent"),
         )
 
-    def record(self, run_id: str, index: int, key: str, res: ChatResult) -> None:
-        """Append one answered call (flushed, so it survives an interrupt)."""
+    def open_for_append(self) -> None:
+        """Open the journal for appending now, before any request is sent: a journal that cannot
+        be written (a read-only file, a dangling link) must stop a study before it pays a call
+        it could not keep.
+
+        Raises
+        ------
+        OSError
+            The journal cannot be opened for appending.
+        """
         if self._fh is None:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self._fh = open(
                 self.path, "a", encoding="utf-8", opener=opener
             )  # owner only (jswim._io.permissions)
+
+    def record(self, run_id: str, index: int, key: str, res: ChatResult) -> None:
+        """Append one answered call (flushed, so it survives an interrupt)."""
+        self.open_for_append()
         u = res.usage
         billed = not (res.cache_hit or res.shared)
         rec = {

@@ -9,12 +9,45 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import tomllib
 from pathlib import Path
 from typing import Any
 from collections.abc import Mapping
 
 from jswim.errors import ConfigError
+
+
+#: The largest settings file read (a price table, a models file): a few KiB in practice.
+MAX_SETTINGS_BYTES = 1 << 20
+
+
+def read_small_text(path: Path, what: str) -> str:
+    """The UTF-8 text of a small regular file.
+
+    Raises
+    ------
+    ConfigError
+        ``path`` is not a regular file (a FIFO, a device such as /dev/zero, a folder) or is
+        larger than `MAX_SETTINGS_BYTES`.
+    OSError, UnicodeDecodeError
+        It cannot be read.
+    """
+    import stat
+
+    # Opened without blocking (a FIFO with no writer would hang open()), then checked.
+    fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    with os.fdopen(fd, "rb") as fh:
+        mode = os.fstat(fh.fileno()).st_mode
+        if not stat.S_ISREG(mode):
+            kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file"
+            raise ConfigError(f"{what} {path}: {kind}; give a file")
+        data = fh.read(MAX_SETTINGS_BYTES + 1)
+    if len(data) > MAX_SETTINGS_BYTES:
+        raise ConfigError(
+            f"{what} {path}: larger than {MAX_SETTINGS_BYTES >> 10} KiB; not a settings file"
+        )
+    return data.decode("utf-8")
 
 
 def parse_prices(table: Any, where: str) -> dict[str, tuple[float, float]]:
@@ -37,13 +70,17 @@ def parse_prices(table: Any, where: str) -> dict[str, tuple[float, float]]:
                 value.get("input", value.get("prompt")),
                 value.get("output", value.get("completion")),
             ]
-        try:
-            p_in, p_out = (float(v) for v in value)
-        except (TypeError, ValueError):
+        # Two numbers, as written: no text ("12" is not [1, 2]), no true/false (not $1/$0).
+        if not (
+            isinstance(value, (list, tuple))
+            and len(value) == 2
+            and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+        ):
             raise ConfigError(
                 f"{where}: the price of {name!r} must be [prompt, completion] USD per 1M tokens, "
                 f"got {value!r}"
-            ) from None
+            )
+        p_in, p_out = float(value[0]), float(value[1])
         if not all(math.isfinite(v) and v >= 0 for v in (p_in, p_out)):
             raise ConfigError(
                 f"{where}: the price of {name!r} must be two numbers >= 0, got {value!r}"
@@ -62,7 +99,7 @@ def load_prices(path: str | Path) -> tuple[dict[str, tuple[float, float]], str]:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        text = read_small_text(p, "--prices")
     except FileNotFoundError:
         raise ConfigError(f"--prices {path}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:

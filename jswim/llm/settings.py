@@ -10,6 +10,7 @@ from collections.abc import Iterable, Mapping
 
 from jswim.errors import ConfigError, check_choice
 from jswim.llm import constrain
+from jswim.llm.credentials import mask_fields
 from jswim.llm.reasoning import REASONING_MAX_TOKENS, check_mode
 from jswim.llm.rejection import REQUIRED_FIELDS
 from jswim.llm.urls import normalize_base_url, safe_url
@@ -64,11 +65,20 @@ def check_extra_fields(fields: Iterable[tuple[str, Any]], option: str = "--extra
     ConfigError
         One line naming the field and the option that sets it.
     """
-    for name, _ in fields:
+    import json
+
+    for name, value in fields:
         if name in CORE_FIELDS:
             raise ConfigError(
                 f"{option} {name}=...: jswim sets {name!r} itself; use {CORE_FIELDS[name]}"
             )
+        try:  # what the request body will carry: strict JSON (no NaN or Infinity)
+            json.dumps(value, allow_nan=False)
+        except (TypeError, ValueError):
+            raise ConfigError(
+                f"{option} {name}=...: not a JSON value a server can read (NaN, Infinity?); "
+                "give a number, text, true/false or JSON"
+            ) from None
 
 
 @dataclass(frozen=True)
@@ -203,6 +213,7 @@ class ClientSettings:
             raise ConfigError(f"retry_for_s must be >= 0 seconds, got {self.retry_for_s}")
         check_temperature(self.temperature)
         check_extra_fields(self.extra_fields)
+        mask_fields(dict(self.extra_fields))  # registers each credential for scrub
 
     def metadata(self) -> dict[str, Any]:
         """Settings worth recording with a run (no secrets: only the key's variable name)."""
@@ -227,7 +238,7 @@ class ClientSettings:
         # The tuple-valued fields as JSON shapes (keys keep their places: update only replaces).
         out.update(
             omit_fields=list(self.omit_fields),
-            extra_fields=dict(self.extra_fields),
+            extra_fields=mask_fields(dict(self.extra_fields)),  # a credential never written
             sampling=dict(self.sampling),
         )
         return out

@@ -60,6 +60,21 @@ class Usage:
             completion += thought
         return cls(_count(usage.get("prompt_tokens")), completion, _count(cached), thought)
 
+    @staticmethod
+    def priceable(usage: object) -> bool:
+        """Whether a response's ``usage`` can price its call: an object whose ``prompt_tokens``
+        is a whole number above 0 (every request has a prompt) and whose ``completion_tokens``
+        is a whole number >= 0. No usage, a negative, NaN or text count cannot."""
+        if not isinstance(usage, Mapping):
+            return False
+        prompt, completion = usage.get("prompt_tokens"), usage.get("completion_tokens")
+        return _valid(prompt) and _count(prompt) > 0 and _valid(completion)
+
+
+def _valid(value: object) -> bool:
+    """Whether ``value`` is a token count as servers send it (0 included)."""
+    return _count(value) > 0 or (value == 0 and not isinstance(value, bool)) or value == "0"
+
 
 def _count(value: object) -> int:
     """A token count as servers send it (an int, an integral float, a digit string), else 0."""

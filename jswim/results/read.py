@@ -4,6 +4,7 @@ Damaged records are skipped with one warning naming the file and line."""
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -26,12 +27,27 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     not done, as a torn line's does.
     """
     path = Path(folder) / RUNS
+    _regular(path)
     by_id: dict[str, dict[str, Any]] = {}
     for _, row in read_records(path, run_problem):
         rid = row.get("run_id")
         if rid not in by_id or is_failed(by_id[rid]):
             by_id[rid] = upgrade_names(row)
     return list(by_id.values())
+
+
+def _regular(path: Path) -> None:
+    """Refuse a FIFO or a device where a record file belongs (reading it would hang or never end).
+
+    Raises
+    ------
+    ResultFolderError
+        ``path`` exists and is neither a regular file nor a folder.
+    """
+    if path.exists() and not (path.is_file() or path.is_dir()):
+        raise ResultFolderError(
+            f"{path} is not a regular file (a FIFO or a device); move it away to read the folder"
+        )
 
 
 def read_run_rows(folder: str | os.PathLike) -> list[RunRow]:
@@ -97,6 +113,9 @@ def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, A
                 stacklevel=3,
             )
             out.pop(k)
+    totals = out.get("llm_totals")
+    if totals is not None:
+        out["llm_totals"] = _clean_totals(totals, path)
     groups = (out.get("summary") or {}).get("groups")
     if groups is not None and not (
         isinstance(groups, list) and all(isinstance(g, dict) for g in groups)
@@ -111,6 +130,38 @@ def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, A
     return out
 
 
+def _count_like(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
+
+
+def _clean_totals(totals: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
+    """``llm_totals`` with only numbers >= 0 (and ``faults``, a table of them): the totals are a
+    report (the money ledger is ``requests.jsonl``); a value edited into another type is dropped
+    with one warning, and readers see it as missing."""
+    import warnings
+
+    out: dict[str, Any] = {}
+    dropped = []
+    for k, v in totals.items():
+        if k == "faults":
+            if isinstance(v, dict) and all(_count_like(n) for n in v.values()):
+                out[k] = v
+            else:
+                dropped.append(k)
+        elif _count_like(v):
+            out[k] = v
+        else:
+            dropped.append(k)
+    if dropped:
+        warnings.warn(
+            SkippedRecord(
+                f"{path}: llm_totals {', '.join(map(repr, dropped))} not numbers >= 0; ignored"
+            ),
+            stacklevel=4,
+        )
+    return out
+
+
 def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     """The study's ``metadata.json`` (fields under today's names); [`ResultFolderError`][jswim.errors.ResultFolderError] if
     the folder is not a study. A field of the wrong type is dropped with a warning
@@ -118,6 +169,7 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     path = Path(folder) / META
     if not path.exists():
         raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
+    _regular(path)
     try:
         meta = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:  # ValueError: bad JSON or bad UTF-8
@@ -180,6 +232,7 @@ CALL_COLUMNS = (
 
 def _jsonl(path: Path) -> list[dict[str, Any]]:
     """The JSON objects of a JSON-lines file; torn or foreign lines are skipped, a missing file is empty."""
+    _regular(path)
     return [rec for _, rec in read_records(path)]
 
 
@@ -238,6 +291,7 @@ def read_calls(folder: str | os.PathLike) -> list[dict[str, Any]]:
         call_problem,
     )  # lazy: the journal's rule, without httpx for other readers
 
+    _regular(Path(folder) / "calls.jsonl")
     for _, c in read_records(Path(folder) / "calls.jsonl", call_problem):
         usage = c.get("usage") if isinstance(c.get("usage"), list) else []
         usage = (list(usage) + [None, None, None])[:3]

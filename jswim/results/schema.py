@@ -77,10 +77,31 @@ _RUN_NUMBERS = (
     "cut_thinking",
     "roc_levels",
     "max_tokens",
+    "n_swimmers",
+    "start_height",
+    "separation",
+    "mean_height",
+    "speed",
+    "per_cycle",
 )
 _RUN_FLAGS = ("success", "learned")
-_RUN_STRINGS = ("swimmer", "group", "status", "variant", "action_set", "error", "constraint")
+_RUN_STRINGS = (
+    "swimmer",
+    "group",
+    "status",
+    "variant",
+    "action_set",
+    "error",
+    "constraint",
+    "scene",
+    "medium",
+    "fate",
+)
 _RUN_SERIES = ("x", "y", "orientation", "progress")
+#: Per step, per swimmer: numbers (``xs``, ``heights``, ``tilts``) or flags (``contact``,
+#: ``stuck``; also one flag per step).
+_RUN_TRACKS = ("xs", "heights", "tilts")
+_RUN_STEP_FLAGS = ("contact", "stuck")
 
 
 def _number(v: Any) -> bool:
@@ -111,6 +132,29 @@ def run_problem(row: Mapping[str, Any]) -> str | None:
     acts = row.get("actions")
     if acts is not None and not isinstance(acts, list):
         return "'actions' is not a list"
+    steps = len(row["x"]) if isinstance(row.get("x"), list) else None
+    for k in ("y", "orientation", "progress"):
+        v = row.get(k)
+        if v is not None and steps is not None and len(v) != steps:
+            return f"{k!r} has {len(v)} steps, 'x' {steps}"
+    for k in (*_RUN_TRACKS, *_RUN_STEP_FLAGS):
+        v = row.get(k)
+        if v is None:
+            continue
+        flags = k in _RUN_STEP_FLAGS
+        one = (
+            (lambda e: e is None or isinstance(e, bool))
+            if flags
+            else (lambda e: e is None or _number(e))
+        )
+        if not isinstance(v, list) or (steps is not None and len(v) != steps):
+            return f"{k!r} is not a list of one entry per step"
+        if flags and all(one(e) for e in v):
+            continue
+        if not all(isinstance(e, list) and all(one(x) for x in e) for e in v):
+            return f"{k!r} is not a list per step of {'flags' if flags else 'numbers'}"
+        if len({len(e) for e in v}) > 1:
+            return f"{k!r} has steps with different numbers of swimmers"
     return None
 
 

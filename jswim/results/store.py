@@ -60,6 +60,10 @@ def writing(
         cause = exc.strerror or type(exc).__name__
         if exc.errno in (errno.ENOSPC, errno.EDQUOT):  # the folder is fine; the disk is full
             hint = "every finished run and answered call is kept: make room and run the same command to resume"
+        elif exc.errno == errno.EISDIR:  # the folder is writable: something stands in the way
+            hint = "a folder stands where this file goes: move it away and run the same command to resume"
+        elif exc.errno == errno.ENOTDIR:
+            hint = "a file stands where a folder goes on this path: move it away, or choose another --out"
         raise StudyFolderError(f"cannot write {where}: {cause}; {hint}") from None
 
 
@@ -163,6 +167,11 @@ class StudyStore:
         with writing(self.folder):
             self._clean_temporary_files()
         if meta_path.exists():
+            if not meta_path.is_file():  # a FIFO would hang the read, a device never end it
+                raise ResultFolderError(
+                    f"{meta_path} is not a regular file (a FIFO, a device or a folder); move it "
+                    "away or use a new --out folder"
+                )
             try:
                 meta = json.loads(meta_path.read_text())
             except (OSError, ValueError) as exc:
@@ -284,9 +293,16 @@ class StudyStore:
 
     def _repair_journals(self) -> None:
         """Cut the torn last line of every append-only file (see `jswim._io.jsonl`)."""
-        paths = [self.folder / RUNS, self.folder / "calls.jsonl"]
+        paths = [self.folder / RUNS, self.folder / "calls.jsonl", self.folder / "requests.jsonl"]
         if (self.folder / "transcripts").is_dir():
             paths += sorted((self.folder / "transcripts").glob("*.jsonl"))
+        for path in paths:
+            # A FIFO or a device would hang the first read or append: refused before either.
+            if path.exists() and not (path.is_file() or path.is_dir()):
+                raise StudyFolderError(
+                    f"{path} is not a regular file (a FIFO or a device); move it away and run "
+                    "the same command to resume"
+                )
         done: set[str] | None = None
         for path in paths:
             cut = repair_tail(path)

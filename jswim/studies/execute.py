@@ -21,6 +21,7 @@ from jswim.llm.backend import Backend
 from jswim.llm.budget import Budget
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.journal import CallJournal
+from jswim.llm.ledger import RequestLedger
 from jswim.llm.pacing import Pacer
 from jswim.llm.probe import ServerInfo
 from jswim.llm.sync import run_sync
@@ -118,11 +119,12 @@ def _run_llm(
     t_start = time.perf_counter()
     totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
     journal = CallJournal(store.folder)
-    spent_before = journal.spent_usd
     calls_before = journal.n_calls
-    # Earlier sessions' requests that got no answer may have been billed: still under the cap.
-    unanswered_before = float((store.meta.get("llm_totals") or {}).get("unanswered_usd") or 0.0)
-    budget = Budget(max_cost, spent_usd=spent_before, unanswered_usd=unanswered_before)
+    # The ledger (requests.jsonl), not metadata.json, says what was spent and what earlier
+    # sessions sent without an answer (the server may have billed those: still under the cap).
+    ledger = RequestLedger(store.folder, journal)
+    budget = Budget(max_cost, spent_usd=journal.spent_usd, ledger=ledger)
+    spent_before = budget.spent_usd
     live: list[LLMClient] = []  # the open client, for its running counts
 
     def report(phase: str = "llm") -> None:
@@ -212,6 +214,7 @@ def _run_llm(
             run_sync(go(backend.client_settings(info=info, **room), info))
     finally:
         journal.close()
+        ledger.close()
         if journal.n_calls > calls_before:
             store.changed = True  # calls were paid for: the folder's status must say how it ended
         if (

@@ -62,8 +62,9 @@ def check(folder: str | Path, o: StudyOptions) -> dict[str, Any]:
         One line naming the file, the label and both hashes, and the two ways on.
     """
     new = records(o)
-    try:
-        meta = json.loads((Path(folder) / "metadata.json").read_text(encoding="utf-8"))
+    path = Path(folder) / "metadata.json"
+    try:  # a FIFO or a device is never read here (the store refuses it in one line)
+        meta = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
     except (OSError, ValueError):
         meta = {}
     old = meta.get("prompt_files") if isinstance(meta, Mapping) else None

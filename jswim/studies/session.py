@@ -3,6 +3,8 @@ each session sent and cost, recorded in the study's metadata (``llm_server``, ``
 
 from __future__ import annotations
 
+import math
+import warnings
 from typing import Any
 
 from jswim._io.callsite import warn_user
@@ -93,7 +95,9 @@ def add_session(
     ``unanswered`` requests sent whole that got no answer (the server may have billed them; at most
     ``unanswered_usd``).
     """
-    t = dict(totals or {})
+    # The totals are a report (the ledger is requests.jsonl): a value of the wrong type, edited
+    # or damaged, restarts from 0 instead of stopping the study.
+    t = {k: v for k, v in (totals if isinstance(totals, dict) else {}).items() if _number(v)}
     t["sessions"] = int(t.get("sessions", 0)) + 1
     for k in (
         "wall_s",
@@ -106,10 +110,16 @@ def add_session(
         "unanswered_usd",
     ):
         t[k] = (t.get(k) or 0) + (speed.get(k) or 0)
-    faults = dict(t.get("faults") or {})
+    old = (totals or {}).get("faults") if isinstance(totals, dict) else None
+    faults = {k: n for k, n in (old if isinstance(old, dict) else {}).items() if _number(n)}
     for k, n in (speed.get("faults") or {}).items():
         faults[k] = faults.get(k, 0) + n
     t["faults"] = dict(sorted(faults.items()))
     t["answered_calls"] = answered_calls
     t["calls_per_s"] = answered_calls / t["wall_s"] if t["wall_s"] > 0 else 0.0
     return t
+
+
+def _number(v: Any) -> bool:
+    """A finite number >= 0 (not a bool)."""
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0

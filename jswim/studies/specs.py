@@ -128,6 +128,7 @@ IGNORED = {
     "init": "it runs each of the four initial configurations",
     "roc_levels_grid": "only the continuous study sweeps K; give one value with --roc-levels",
     "roc_levels": "it sweeps K over the --roc-levels list",
+    "runs": "it runs fixed strokes only, no LLM",
 }
 
 
@@ -196,14 +197,14 @@ SPECS["pair"] = StudySpec(
     q_runs=10,
     ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
 )
-# Schools (issue 34): N NG swimmers in a line or side by side, fixed strokes only.
+# Schools: N NG swimmers in a line or side by side, fixed strokes only.
 SPECS["school"] = StudySpec(
     study_cells("school"),
     runs=0,
     init="paper",
     swimmers=("ng",),
     q_runs=1,
-    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init", "runs"),
 )
 
 

@@ -21,8 +21,14 @@ from collections.abc import Mapping, Sequence
 
 from jswim.errors import ConfigError
 from jswim.results import atomic_write, writing
-from jswim.bench.runner import BASELINES, REFERENCE
-from jswim.bench.leaderboard import cost_cell, figure_object, missing_text, steps_text
+from jswim.bench.runner import BASELINES, REFERENCE, read_record
+from jswim.bench.leaderboard import (
+    cost_cell,
+    figure_object,
+    missing_text,
+    steps_text,
+    valid_rows,
+)
 from jswim.overview import MIN_BOOTSTRAP_N
 from jswim.figures import plots
 from jswim.viz.page import asset_text, write_report
@@ -37,21 +43,43 @@ def is_bench(folder: str | Path) -> bool:
 
 
 def read_bench(folder: Path) -> tuple[dict[str, Any], dict[str, Any]]:
-    """A bench folder's metadata and leaderboard (``{}`` where none is written yet).
+    """``bench.json`` and ``leaderboard.json`` as the page reads them: a damaged suite is one
+    line (the page cannot say which parts exist); damaged models, statuses, rows and missing
+    rows are left out.
 
     Raises
     ------
     ConfigError
-        The bench file is missing or unreadable.
+        The bench file is missing or unreadable, or its suite is damaged.
     """
+    meta = dict(read_record(folder / BENCH_FILE))
+    suite = meta.get("suite")
+    parts = suite.get("parts") if isinstance(suite, dict) else None
+    if not (
+        isinstance(parts, list)
+        and all(isinstance(p, dict) and isinstance(p.get("name"), str) for p in parts)
+    ):
+        raise ConfigError(
+            f"{folder}/{BENCH_FILE}: 'suite' is no suite definition (its parts are missing or of "
+            "the wrong type); the same jswim bench command writes it again"
+        )
+    models = meta.get("models")
+    meta["models"] = [
+        m for m in (models if isinstance(models, list) else []) if isinstance(m, dict)
+    ]
+    if not isinstance(meta.get("model_status"), dict):
+        meta["model_status"] = {}
     try:
-        meta = json.loads((folder / BENCH_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"{folder}/{BENCH_FILE} is unreadable ({exc})") from None
-    try:
-        board = json.loads((folder / "leaderboard.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        board = dict(read_record(folder / "leaderboard.json"))
+    except ConfigError:
         board = {}
+    missing = board.get("missing")
+    board["rows"] = valid_rows(board.get("rows"))
+    board["missing"] = [
+        m
+        for m in (missing if isinstance(missing, list) else [])
+        if isinstance(m, dict) and all(k in m for k in ("row", "part", "why"))
+    ]
     return meta, board
 
 

@@ -28,6 +28,7 @@ import gzip
 import html
 import io
 import json
+import math
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -195,8 +196,19 @@ def run_payload(t: Track) -> dict[str, Any]:
     }
 
 
+def _finite(obj: Any) -> Any:
+    """``obj`` with every NaN or infinity as ``None`` (the page's JSON has no such numbers)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return obj
+
+
 def _blob(obj: Any) -> str:
-    raw = json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
+    raw = json.dumps(_finite(obj), separators=(",", ":"), allow_nan=False).encode()
     return base64.b64encode(gzip.compress(raw, compresslevel=6, mtime=0)).decode("ascii")
 
 

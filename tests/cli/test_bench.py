@@ -120,7 +120,7 @@ def test_core_bench_three_servers_down_one_interrupt_and_resume(tmp_path):
     assert "reference (rule, not an LLM)" in text and "Q-learning" in text and "random" in text
     assert (
         "missing rows: down curves (failed: cannot reach" in text
-        and "missing rows: down noise (failed" in text
+        and "missing rows: down noise (not run: down stopped at curves (failed" in text
     )
     assert "gpt-5: gpt-5 accepts only temperature 1" in text  # the deviation from T = 0, printed
     assert all((out / f"leaderboard.{ext}").exists() for ext in ("csv", "png", "pdf"))
@@ -199,11 +199,12 @@ def test_bench_samples_grow_a_folder_and_show_in_the_leaderboard(tmp_path, capsy
     models = (parse_model_option("base_url=http://127.0.0.1:9/v1,model=m"),)
     out = tmp_path / "b"
     suite = dataclasses.replace(CORE, sizes=(("runs", 1),))
-    runner.open_folder(out, runner.definition(suite, models, True, True))
+    runner.open_folder(out, runner.definition(suite, models, True, True))[1].release()
     grown = dataclasses.replace(suite, samples=3)
-    meta = runner.open_folder(
+    meta, lock = runner.open_folder(
         out, runner.definition(grown, models, True, True)
     )  # not another definition
+    lock.release()
     assert meta["samples"] == 3
     jobs = runner.plan(models, grown, out, prices_file=None, reference_url="http://127.0.0.1:1/v1")
     for j in jobs:
@@ -335,7 +336,7 @@ def test_show_on_a_bench_folder_prints_its_leaderboard(tmp_path, capsys):
 
     out = tmp_path / "b"
     models = (parse_model_option("base_url=http://127.0.0.1:9/v1,model=m"),)
-    meta = runner.open_folder(
+    meta, lock = runner.open_folder(
         out,
         {
             **runner.definition(CORE, models, True, True),
@@ -343,6 +344,7 @@ def test_show_on_a_bench_folder_prints_its_leaderboard(tmp_path, capsys):
             "model_status": {"m": "complete", "down": "failed: cannot reach it"},
         },
     )
+    lock.release()
     assert cli.main(["show", str(out)]) == 0
     assert "no leaderboard yet" in capsys.readouterr().out
     row = {

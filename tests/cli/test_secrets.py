@@ -253,3 +253,78 @@ def test_a_key_variable_set_to_empty_is_said_to_be_empty(tmp_path, monkeypatch, 
     )
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1 and "$EMPTY_KEY is set but empty" in err
+
+
+def test_a_credential_given_as_a_request_field_is_sent_but_never_written(tmp_path, capsys):
+    field_key = "sk-live-" + secrets.token_hex(12)
+    out = tmp_path / "study"
+    with FakeServer(reply=lambda body: "[1, 1]") as srv:
+        args = swim(with_password(srv.url), out, "--extra-field", f"user={field_key}")
+        args += ["--extra-field", "top_k=40"]
+        assert cli.main(args) == 0
+        got = [b.get("user") for b in srv.requests]
+    printed = capsys.readouterr()
+    assert got and all(u == field_key for u in got)  # the server still gets it
+    for where, text in (
+        ("stdout", printed.out),
+        ("stderr", printed.err),
+        ("folder", folder_text(out)),
+    ):
+        assert not leaks(text, field_key, PASSWORD), where
+    meta = json.loads((out / "metadata.json").read_text())
+    assert "top_k" in json.dumps(meta)  # ordinary fields are recorded as given
+
+
+def test_encoded_and_partial_echoes_of_a_secret_are_scrubbed(monkeypatch):
+    import asyncio
+
+    from jswim.errors import LLMRequestError
+    from jswim.llm.client import ClientSettings, LLMClient
+
+    key = "sk-proj-abcdefghijklmn789XyZ"  # 27 characters; the echo keeps 14 of them
+    monkeypatch.setenv("ECHOKEY", key)
+    basic = "Basic " + base64.b64encode(f"{USER}:{PASSWORD}".encode()).decode()
+
+    def refuse(body):
+        return Fault(
+            "status",
+            401,
+            message=f"Incorrect API key provided: sk-proj-****789XyZ. Sent: {quote(basic, safe='')}",
+        )
+
+    async def go(url: str, env: str):
+        s = ClientSettings(base_url=url, model="fake", api_key_env=env)
+        async with LLMClient(s) as c:
+            await c.chat([{"role": "user", "content": "x"}])
+
+    with FakeServer(reply=refuse) as srv:
+        with pytest.raises(LLMRequestError) as err:
+            asyncio.run(go(with_password(srv.url), "ECHOKEY"))
+    text = str(err.value)
+    assert "Incorrect API key" in text
+    assert "789XyZ" not in text and "sk-proj-" not in text
+    b64 = base64.b64encode(f"{USER}:{PASSWORD}".encode()).decode()
+    assert quote(b64, safe="") not in text and b64.rstrip("=") not in text
+
+
+def test_a_nan_request_field_is_one_line(capsys):
+    code = cli.main(swim("http://127.0.0.1:9/v1", Path("/nonexistent"), "--extra-field", "x=NaN"))
+    err = capsys.readouterr().err
+    assert code == 2 and "x=" in err and "Traceback" not in err
+
+
+def test_request_fields_are_masked_by_credential_name_or_key_shape_only():
+    from jswim.llm.credentials import mask_fields
+
+    fields = {
+        "user": "alice-account",
+        "api_key": "x1y2",
+        "nested": {"password": "hunter2!"},
+        "tokenizer": "llama",  # a word containing 'token' is no credential's name
+        "keep_alive": "5m",
+        "top_k": 40,
+        "opaque": "tok_3f9a8b7c6d5e4f3a2b1c",  # shaped like a key, whatever its name
+    }
+    got = mask_fields(fields)
+    assert got["user"] == got["api_key"] == got["nested"]["password"] == got["opaque"] == "***"
+    assert got["tokenizer"] == "llama" and got["keep_alive"] == "5m" and got["top_k"] == 40
