@@ -4,7 +4,6 @@ each session sent and cost, recorded in the study's metadata (``llm_server``, ``
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Any
 
 from jswim._io.callsite import warn_user
