@@ -29,11 +29,13 @@ import numpy as np
 from jswim.swimmers import purcell_beads, wall_rft
 from tests.physics.test_wall_rft import cycles
 
-B = 0.02  # bead radius of the tables (l / b = 50)
+B = purcell_beads.BEAD_RADIUS  # l / b = 50, local RFT's tables at the same b
 
 
 def bead_cycle(h: float, m: int, wall: bool = True) -> np.ndarray:
-    return np.asarray(purcell_beads.square_cycle(jnp.asarray(h, jnp.float64), m=m, b=B, wall=wall))
+    return np.asarray(
+        purcell_beads.square_cycle(jnp.asarray(h, jnp.float64), m=m, b=B, wall=wall, steps=16)
+    )
 
 
 def rft_cycle(h: float | None) -> float:
@@ -54,7 +56,7 @@ def main() -> None:
         bulk = bead_cycle(1.0, m, wall=False)
         near = bead_cycle(0.5, m)
         print(f"| {m} | {1 / m / B:.3g} | {bulk[0]:.6f} | {near[0]:.6f} | {near[5]:+.3e} |")
-    m = ms[-2] if not quick else ms[-1]
+    m = purcell_beads.BEADS_PER_LINK if not quick else ms[-1]
     bulk = bead_cycle(1.0, m, wall=False)
     rft_bulk = rft_cycle(None)
     heights = (0.05, 0.1, 0.25, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0, 40.0)

@@ -82,7 +82,7 @@ class StudyOptions:
     directions: tuple[int, ...] | None = None
     runs: int | None = None  # LLM runs per setting
     q_runs: int | None = None  # Q-learning and random runs per setting
-    steps: int = 50
+    steps: int | None = None  # steps per run; None: the study's own (StudySpec.steps)
     horizon: int = PAPER.horizon  # of the success criterion (jswim.judging.gait.Criterion)
     n_ht: int | None = None
     n_hts: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 7, 8)
@@ -114,7 +114,7 @@ class StudyOptions:
     roc_levels_grid: tuple[int, ...] = DEFAULT_ROC_LEVELS  # the continuous study's K values
     # The scene studies' grids (jswim.studies.scenes): starting heights above the wall (a), the
     # pair's starting distances D (a) and the phase offsets of its two square strokes (quarter cycles).
-    heights: tuple[float, ...] = (3.0, 5.0, 7.0, 10.0, 20.0, 50.0)
+    heights: tuple[float, ...] = (1.5, 2.0, 3.0, 5.0, 10.0, 50.0)
     separations: tuple[float, ...] = (30.0, 60.0)
     phases: tuple[int, ...] = (0, 1, 2, 3)
     # How the LLM steers a pair (--pair-prompt): "joint" (one conversation, D1..D4) or "each" (one
@@ -358,6 +358,7 @@ class StudySpec:
     swimmers: tuple[str, ...] = ("purcell", "ng")
     directions: tuple[int, ...] = (1,)
     q_runs: int = 100  # baseline runs per cell
+    steps: int = 50  # steps per run (the paper's horizon)
     ignores: tuple[str, ...] = (
         "zetas",
         "n_hts",
@@ -575,9 +576,14 @@ def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
 
 # Walls and pairs (issue 19, extensions): NG swimmers only (jswim.studies.scenes, README "Walls,
 # obstacles and pairs"); --init is the paper's NG start (10, 6), the scene's start.
+# Their horizon, 400 steps (100 square cycles), is set by the measured drift (docs/scenes.md, "Fates
+# above the wall"): an NG swimmer's height changes by ~0.02 a in 50 steps, so at 50 steps every run
+# reads as gliding; at 400, from tilt 0, h0 = 1.5 and 2 a touch the wall (22 and 39 cycles), h0 = 3 a
+# rises 0.7 a over the second half (escaped) and h0 = 5-50 a glide.
 SPECS["wall"] = StudySpec(
     _scene_cells("wall"),
     runs=1,
+    steps=400,
     init="paper",
     swimmers=("ng",),
     q_runs=10,
@@ -623,7 +629,7 @@ def short_steps_warning(o: StudyOptions) -> str | None:
     the horizon (:class:`jswim.judging.gait.Criterion`), so a run of fewer steps fails whatever it does.
     """
     need = PAPER.n_cycles * MIN_PERIOD
-    if o.steps < need:
+    if o.steps is not None and o.steps < need:
         return (
             f"--steps {o.steps} is shorter than {PAPER.n_cycles} stroke cycles of at least {MIN_PERIOD} steps "
             f"({need} steps): no run can meet the success criterion, so every success rate will be 0"
@@ -806,7 +812,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                                         init,
                                         zeta,
                                         run_seed(o.seed, rid),
-                                        o.steps,
+                                        spec.steps if o.steps is None else o.steps,
                                         n_ht,
                                         drop,
                                         action_set,

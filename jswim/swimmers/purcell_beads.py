@@ -12,11 +12,11 @@ enter one force- and torque-free solve of the whole swimmer, in all six rigid mo
 motion ``(U_x, U_y, Omega_z)`` and the motion out of the plane ``(U_z, Omega_x, Omega_y)``
 (heave, roll and pitch), which local resistive force theory cannot give.
 
-As ``m`` grows at fixed ``b`` the chain converges to a slender body whose drag is set by ``b``
-(the bead spacing ``1/m`` below ``b`` is converged to ~1e-3; docs/scenes.md gives the table).
-Its drag ratio ``xi_perp / xi_par`` is that of a body of finite slenderness (about 1.6 at
-``l / b = 100`` in the bulk, not local RFT's 2), so its bulk stroke differs from the paper's
-0.19124724 l per cycle: a different swimmer, compared with itself near the wall and far from it.
+As ``m`` grows at fixed ``b`` the chain converges, as ``1/m^2``, to a slender body whose drag is
+set by ``b`` (docs/scenes.md gives the table). Its drag ratio ``xi_perp / xi_par`` is that of a
+body of finite slenderness (below local RFT's 2 at ``l / b = 50``), and the links' flows act on
+each other, so its bulk stroke differs from the paper's 0.19124724 l per cycle: a different
+swimmer, compared with itself near the wall and far from it.
 
 Range: lengths ``b << l``; heights with every bead clear of the wall (``h > b``; the RPB blocks
 are a far-field series in ``b / h`` and need ``h`` a few ``b``). The swimmer's plane is held
@@ -26,21 +26,26 @@ are the leading drift out of the plane).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
+from typing import Any
 
 import jax
 import jax.numpy as jnp
 from jax import Array
 
+from jswim.errors import ConfigError
 from jswim.swimmers import nlink
 from jswim.swimmers.mobility import OSEEN_PREFACTOR, wall_self_factors
+from jswim.swimmers.models import SwimmerModel, make_model
 
-#: Default bead radius (link lengths): local RFT's link radius (jswim.swimmers.wall_rft).
-BEAD_RADIUS = 0.01
+#: Default bead radius (link lengths): l / b = 50.
+BEAD_RADIUS = 0.02
 
-#: Default beads per link: spacing 1/m = b at the default radius.
-BEADS_PER_LINK = 100
+#: Default beads per link: spacing 1/m = 0.78 b; the bulk stroke is then 1.1 % below the
+#: converged value (the error falls as 1/m^2; docs/scenes.md gives the table).
+BEADS_PER_LINK = 64
 
 
 def bead_frame(d: Array, d_dot: Array, m: int) -> tuple[Array, Array]:
@@ -197,6 +202,10 @@ def square_cycle(
     """Purcell's square stroke from ``(d_max, d_max)``: D2 down, D1 down, D2 up, D1 up, each
     side by ``steps`` RK4 steps, the plane held at ``height``.
 
+    The body rates depend on the hinge angles alone (not on the pose), so they are solved once
+    at each of the ``2 steps + 1`` RK4 nodes of a side (:func:`body_rates`, one solve at a
+    time), and the pose is then integrated from them.
+
     Returns
     -------
     Array (6,)
@@ -204,26 +213,96 @@ def square_cycle(
         plane over one cycle, and the cycle's integrals of the body-frame heave ``U_z`` and of
         the roll and pitch rates (the leading drift out of the plane per cycle).
     """
+    dtype = jnp.result_type(height)
     dm = d_max
     dt = 2.0 * dm / steps
-    rates = jnp.array([[0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]])
+    rates = jnp.array([[0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [1.0, 0.0]], dtype)
+    starts = jnp.array([[dm, dm], [dm, -dm], [-dm, -dm], [-dm, dm]], dtype)
+    frac = jnp.arange(2 * steps + 1, dtype=dtype) * (0.5 * dt)  # node times along a side
+    d_nodes = starts[:, None, :] + rates[:, None, :] * frac[None, :, None]  # (4, 2 s + 1, 2)
+    r_nodes = jnp.broadcast_to(rates[:, None, :], d_nodes.shape)
+    q = jax.lax.map(
+        lambda a: body_rates(a[0], a[1], height, m, b, wall),
+        jnp.stack([d_nodes, r_nodes], 2).reshape(-1, 2, 2),
+    ).reshape(4, 2 * steps + 1, 6)
 
-    def rate(p: Array, d: Array, r: Array) -> Array:
-        q = body_rates(d, r, height, m, b, wall)
+    def rate(p: Array, qn: Array) -> Array:
         c, s = jnp.cos(p[2]), jnp.sin(p[2])
-        return jnp.stack([c * q[0] - s * q[1], s * q[0] + c * q[1], q[2], q[3], q[4], q[5]])
+        return jnp.stack([c * qn[0] - s * qn[1], s * qn[0] + c * qn[1], qn[2], qn[3], qn[4], qn[5]])
 
-    def body(j: Array, p: Array) -> Array:
-        side = j // steps
-        r = rates[side]
-        d0 = jnp.array([dm, dm]) + 2.0 * dm * jnp.sum(
-            jnp.where(jnp.arange(4)[:, None] < side, rates, 0.0), 0
+    def body(p: Array, j: Array) -> tuple[Array, None]:
+        side, i = j // steps, j % steps
+        q0, qh, q1 = q[side, 2 * i], q[side, 2 * i + 1], q[side, 2 * i + 2]
+        k1 = rate(p, q0)
+        k2 = rate(p + 0.5 * dt * k1, qh)
+        k3 = rate(p + 0.5 * dt * k2, qh)
+        k4 = rate(p + dt * k3, q1)
+        return p + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4), None
+
+    return jax.lax.scan(body, jnp.zeros(6, dtype), jnp.arange(4 * steps))[0]
+
+
+def _planar(d: Array, d_dot: Array, height: float, m: int, b: float) -> Array:
+    """``(U_x, U_y, Omega_z)`` of :func:`body_rates`; under ``vmap`` one solve at a time
+    (``lax.map``), so a batch of poses holds one grand mobility, not one per pose."""
+
+    @jax.custom_batching.custom_vmap
+    def one(d: Array, d_dot: Array) -> Array:
+        return body_rates(d, d_dot, height, m, b, True)[:3]
+
+    @one.def_vmap
+    def _batched(axis_size: int, in_batched: Any, d: Array, d_dot: Array) -> Any:
+        d = d if in_batched[0] else jnp.broadcast_to(d, (axis_size, *d.shape))
+        d_dot = d_dot if in_batched[1] else jnp.broadcast_to(d_dot, (axis_size, *d_dot.shape))
+        return jax.lax.map(lambda a: one(a[0], a[1]), (d, d_dot)), True
+
+    return one(d, d_dot)
+
+
+@dataclasses.dataclass(frozen=True)
+class BeadPurcellModel(SwimmerModel):
+    """Purcell's swimmer of bead-chain links, its plane held ``height`` link lengths above the
+    wall: a :class:`~jswim.swimmers.models.SwimmerModel` of kind ``"purcell"`` whose in-plane
+    body velocity is :func:`body_rates`' ``(U_x, U_y, Omega_z)``. Its heave, roll and pitch are
+    left out (the plane is held; :func:`square_cycle` reports them). ``beads`` per link of radius
+    ``link_radius`` (link lengths)."""
+
+    height: float = math.inf
+    link_radius: float = BEAD_RADIUS
+    beads: int = BEADS_PER_LINK
+
+    def body_velocity(self, d: Array, d_dot: Array) -> Array:
+        return _planar(d, d_dot, self.height, self.beads, self.link_radius)
+
+
+def wall_model(
+    height: float,
+    link_radius: float = BEAD_RADIUS,
+    beads: int = BEADS_PER_LINK,
+    *,
+    d_max: float | None = None,
+) -> BeadPurcellModel:
+    """The bead model of Purcell's swimmer with its plane ``height`` link lengths above the wall.
+
+    Raises
+    ------
+    ConfigError
+        ``link_radius`` outside (0, 0.1], ``beads`` outside 4..256, or a height that does not
+        clear the beads by one radius (``height > 2 link_radius``), in one line.
+    """
+    try:
+        b, h = float(link_radius), float(height)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"height and link_radius must be numbers, got {height!r}, {link_radius!r}"
+        ) from None
+    if not 0.0 < b <= 0.1:
+        raise ConfigError(f"link_radius must lie in (0, 0.1] link lengths, got {link_radius!r}")
+    if isinstance(beads, bool) or not isinstance(beads, int) or not 4 <= beads <= 256:
+        raise ConfigError(f"beads must be an integer in 4..256 per link, got {beads!r}")
+    if not (math.isfinite(h) and h > 2.0 * b):
+        raise ConfigError(
+            f"the bead model needs the plane more than 2 bead radii ({2 * b:g} l) above the wall, got {height!r}"
         )
-        t = (j % steps) * dt
-        k1 = rate(p, d0 + r * t, r)
-        k2 = rate(p + 0.5 * dt * k1, d0 + r * (t + 0.5 * dt), r)
-        k3 = rate(p + 0.5 * dt * k2, d0 + r * (t + 0.5 * dt), r)
-        k4 = rate(p + dt * k3, d0 + r * (t + dt), r)
-        return p + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
-
-    return jax.lax.fori_loop(0, 4 * steps, body, jnp.zeros(6, jnp.result_type(height)))
+    base = make_model("purcell", d_max=d_max)
+    return BeadPurcellModel("purcell", base.n_dof, base.lo, base.hi, base.xi_ratio, h, b, beads)

@@ -1,0 +1,114 @@
+"""Regenerate docs/scenes.md's sphere-wall tables (float64): the self-mobility models and the NG
+swimmer's fates above the wall.
+
+* the self-mobility factors, ``"exact"`` against ``"rpb"`` (:func:`jswim.swimmers.mobility.wall_self_factors`);
+* the first-cycle wall table (X, tilt and height change from tilt 0) under both;
+* the fate map: start height h0 (a) against start tilt (rad, nose up), each start run for
+  ``--cycles`` square cycles under both self-mobility models. A fate is ``trapped`` when a step
+  is refused for contact (a sphere within 0.1 a of the wall: the model's wall is reached),
+  ``escaping`` when the middle sphere rose more than 2 a and still rises over the last tenth,
+  ``gliding`` otherwise (bounded height); ``.`` marks a start that already touches the wall. The
+  cycle at which contact came is printed after ``T``.
+
+Usage: ``python benchmarks/wall_fates_tables.py [--cycles N]`` (a few minutes: one compilation
+per model).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import jax
+
+jax.config.update("jax_enable_x64", True)
+
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+
+from jswim.scenes import Scene, batch_starts, scene_params, scene_rollout_batch  # noqa: E402
+from jswim.swimmers.mobility import wall_self_factors  # noqa: E402
+
+SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]
+HEIGHTS = (1.2, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0)
+TILTS = (-0.3, -0.15, -0.05, 0.0, 0.05, 0.15, 0.3)
+WALL_TABLE = (1.2, 1.5, 2.0, 3.0, 5.0, 10.0)
+
+
+def factor_table() -> None:
+    print("## Self-mobility above the wall: exact against RPB\n")
+    print(
+        "| h / a | parallel exact | parallel RPB | RPB / exact | normal exact | normal RPB | RPB / exact |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    for h in (1.01, 1.05, 1.1, 1.2, 1.5, 2.0, 3.0, 5.0, 10.0):
+        pe, ne = (float(v) for v in wall_self_factors(np.float64(1 / h), "exact"))
+        pr, nr = (float(v) for v in wall_self_factors(np.float64(1 / h), "rpb"))
+        print(
+            f"| {h:g} | {pe:.5f} | {pr:.5f} | {pr / pe:.4f} | {ne:.5f} | {nr:.5f} | {nr / ne:.4f} |"
+        )
+
+
+def first_cycle(model: str) -> dict[str, np.ndarray]:
+    p = scene_params(
+        "ng", Scene(medium="wall", height=10.0, self_mobility=model), dtype=jnp.float64
+    )
+    h = np.asarray(WALL_TABLE)
+    r = scene_rollout_batch(batch_starts(p, height=h), SQUARE)
+    return {"x": r.x[:, 3, 0], "tilt": r.tilt[:, 3, 0], "z": r.z[:, 3, 0] - h}
+
+
+def fates(model: str, cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    hh, tt = np.meshgrid(HEIGHTS, TILTS, indexing="ij")
+    valid = hh.ravel() - 10.0 * np.abs(np.sin(tt.ravel())) - 1.0 >= 0.1  # end spheres clear
+    p = scene_params(
+        "ng", Scene(medium="wall", height=10.0, self_mobility=model), dtype=jnp.float64
+    )
+    r = scene_rollout_batch(batch_starts(p, height=hh.ravel(), tilt=tt.ravel()), SQUARE * cycles)
+    z = r.z[:, :, 0]
+    contact = np.asarray(r.contact).reshape(z.shape[0], -1)
+    first = np.where(contact.any(1), contact.argmax(1) // 4, -1)
+    tail = z[:, -1] - z[:, -cycles // 10 * 4]
+    rose = z[:, -1] - hh.ravel()
+    fate = np.where(
+        ~valid, ".", np.where(first >= 0, "T", np.where((rose > 2.0) & (tail > 0), "E", "G"))
+    )
+    return fate.reshape(hh.shape), first.reshape(hh.shape), z[:, -1].reshape(hh.shape)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--cycles", type=int, default=400)
+    cycles = ap.parse_args().cycles
+    t0 = time.time()
+    factor_table()
+    for model in ("exact", "rpb"):
+        w = first_cycle(model)
+        print(f"\n## First square cycle above the wall, self_mobility={model!r}\n")
+        print("| h / a | " + " | ".join(f"{h:g}" for h in WALL_TABLE) + " |")
+        print("|---|" + "---|" * len(WALL_TABLE))
+        print("| X (a) | " + " | ".join(f"{v:.6f}" for v in w["x"]) + " |")
+        print("| tilt (rad) | " + " | ".join(f"{v:+.3e}" for v in w["tilt"]) + " |")
+        print("| height (a) | " + " | ".join(f"{v:+.3e}" for v in w["z"]) + " |")
+    for model in ("exact", "rpb"):
+        fate, first, zend = fates(model, cycles)
+        print(
+            f"\n## Fate map, {cycles} cycles, self_mobility={model!r} (T: trapped at cycle; E: escaping; G: gliding)\n"
+        )
+        print("| h0 \\ tilt0 | " + " | ".join(f"{t:+g}" for t in TILTS) + " |")
+        print("|---|" + "---|" * len(TILTS))
+        for i, h in enumerate(HEIGHTS):
+            cells = []
+            for j in range(len(TILTS)):
+                f = fate[i, j]
+                cells.append(
+                    f"T{first[i, j]}"
+                    if f == "T"
+                    else (f"{f} {zend[i, j]:.3g}" if f != "." else ".")
+                )
+            print(f"| {h:g} | " + " | ".join(cells) + " |")
+    print(f"\n({time.time() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
