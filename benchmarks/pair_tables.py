@@ -20,8 +20,8 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-import jax.numpy as jnp  # noqa: E402
-import numpy as np  # noqa: E402
+import jax.numpy as jnp
+import numpy as np
 
 from jswim.scenes import (
     Scene,
@@ -30,7 +30,7 @@ from jswim.scenes import (
     scene_reset,
     scene_step,
     scene_step_joint,
-)  # noqa: E402
+)
 
 DOFS = jnp.array([0, 1, 0, 1])
 ROCS = jnp.array([-1.0, -1.0, 1.0, 1.0])
@@ -121,7 +121,7 @@ def main() -> None:
     c3 = line_of_three(n3)
     xs = c3[::4, :, 0]
     per = np.diff(xs, axis=0)  # (cycles, 3)
-    print(f"\n## Line of three in phase, D = 30 a: X per cycle of each swimmer (a)\n")
+    print("\n## Line of three in phase, D = 30 a: X per cycle of each swimmer (a)\n")
     print("| cycle | back | middle | front | front - back | change from the last cycle |")
     print("|---|---|---|---|---|---|")
     prev = 0.0

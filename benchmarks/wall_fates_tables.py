@@ -23,11 +23,11 @@ import jax
 
 jax.config.update("jax_enable_x64", True)
 
-import jax.numpy as jnp  # noqa: E402
-import numpy as np  # noqa: E402
+import jax.numpy as jnp
+import numpy as np
 
-from jswim.scenes import Scene, batch_starts, scene_params, scene_rollout_batch  # noqa: E402
-from jswim.swimmers.mobility import wall_self_factors  # noqa: E402
+from jswim.scenes import Scene, batch_starts, scene_params, scene_rollout_batch
+from jswim.swimmers.mobility import wall_self_factors
 
 SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]
 HEIGHTS = (1.2, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0)

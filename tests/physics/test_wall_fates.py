@@ -25,7 +25,7 @@ def test_wall_study_stroke_rows_show_trapped_escaped_and_gliding():
         if p.agent == "stroke" and p.group.startswith("h=")
     ]
     assert plans and all(p.steps == SPECS["wall"].steps for p in plans)
-    rows = scenes.run_baselines(plans, 50)
+    rows = [r for p in plans for r in scenes.run_baselines([p], 50)]  # one scene per call
     fates = {r["start_height"]: r["fate"] for r in rows}
     assert set(fates.values()) == set(scenes.FATES), fates
     low = min(fates)
