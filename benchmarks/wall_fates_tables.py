@@ -5,10 +5,11 @@ swimmer's fates above the wall.
 * the first-cycle wall table (X, tilt and height change from tilt 0) under both;
 * the fate map: start height h0 (a) against start tilt (rad, nose up), each start run for
   ``--cycles`` square cycles under both self-mobility models. A fate is ``trapped`` when a step
-  is refused for contact (a sphere within 0.1 a of the wall: the model's wall is reached),
-  ``escaping`` when the middle sphere rose more than 2 a and still rises over the last tenth,
-  ``gliding`` otherwise (bounded height); ``.`` marks a start that already touches the wall. The
-  cycle at which contact came is printed after ``T``.
+  is refused for contact (a sphere within 0.1 a of the wall: the model's wall is reached; the
+  cycle it came at is printed after ``T``), ``escaping`` when the middle sphere ends above
+  :data:`ESCAPE_HEIGHT` and still rising (there the wall turns it by ~1e-6 rad a cycle),
+  ``gliding`` otherwise, printed with the range of heights over the run's second half; ``.``
+  marks a start that already touches the wall.
 
 Usage: ``python benchmarks/wall_fates_tables.py [--cycles N]`` (a few minutes: one compilation
 per model).
@@ -33,6 +34,7 @@ SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]
 HEIGHTS = (1.2, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0)
 TILTS = (-0.3, -0.15, -0.05, 0.0, 0.05, 0.15, 0.3)
 WALL_TABLE = (1.2, 1.5, 2.0, 3.0, 5.0, 10.0)
+ESCAPE_HEIGHT = 30.0
 
 
 def factor_table() -> None:
@@ -69,16 +71,23 @@ def fates(model: str, cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     contact = np.asarray(r.contact).reshape(z.shape[0], -1)
     first = np.where(contact.any(1), contact.argmax(1) // 4, -1)
     tail = z[:, -1] - z[:, -cycles // 10 * 4]
-    rose = z[:, -1] - hh.ravel()
+    late = z[:, z.shape[1] // 2 :]
     fate = np.where(
-        ~valid, ".", np.where(first >= 0, "T", np.where((rose > 2.0) & (tail > 0), "E", "G"))
+        ~valid,
+        ".",
+        np.where(first >= 0, "T", np.where((z[:, -1] > ESCAPE_HEIGHT) & (tail > 0), "E", "G")),
     )
-    return fate.reshape(hh.shape), first.reshape(hh.shape), z[:, -1].reshape(hh.shape)
+    lo, hi = late.min(1), late.max(1)
+    return (
+        fate.reshape(hh.shape),
+        first.reshape(hh.shape),
+        np.stack([lo, hi, z[:, -1]], -1).reshape(*hh.shape, 3),
+    )
 
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--cycles", type=int, default=400)
+    ap.add_argument("--cycles", type=int, default=1200)
     cycles = ap.parse_args().cycles
     t0 = time.time()
     factor_table()
@@ -93,7 +102,7 @@ def main() -> None:
     for model in ("exact", "rpb"):
         fate, first, zend = fates(model, cycles)
         print(
-            f"\n## Fate map, {cycles} cycles, self_mobility={model!r} (T: trapped at cycle; E: escaping; G: gliding)\n"
+            f"\n## Fate map, {cycles} cycles, self_mobility={model!r} (T: trapped at cycle; E: escaping, final height; G: gliding, heights over the second half)\n"
         )
         print("| h0 \\ tilt0 | " + " | ".join(f"{t:+g}" for t in TILTS) + " |")
         print("|---|" + "---|" * len(TILTS))
