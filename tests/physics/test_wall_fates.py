@@ -47,6 +47,6 @@ def test_a_nose_up_start_escapes_and_a_level_one_glides():
     up, level = z[0], z[1]
     assert up[-1] > 30.0 and up[-1] > up[-400] and not np.asarray(r.contact)[0].any()
     # the level start rises and comes back: a closed orbit, not an escape
-    assert (
-        level.max() > 9.0 and level[-1] < level.max() - 2.0 and not np.asarray(r.contact)[1].any()
-    )
+    top = int(np.argmax(level))
+    assert level[top] > 9.0 and level[top:].min() < level[top] - 5.0
+    assert not np.asarray(r.contact)[1].any()
