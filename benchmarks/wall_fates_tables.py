@@ -88,7 +88,9 @@ def fates(model: str, cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cycles", type=int, default=1200)
-    cycles = ap.parse_args().cycles
+    ap.add_argument("--models", default="exact,rpb", help="self-mobility models of the fate maps")
+    args = ap.parse_args()
+    cycles = args.cycles
     t0 = time.time()
     factor_table()
     for model in ("exact", "rpb"):
@@ -99,7 +101,7 @@ def main() -> None:
         print("| X (a) | " + " | ".join(f"{v:.6f}" for v in w["x"]) + " |")
         print("| tilt (rad) | " + " | ".join(f"{v:+.3e}" for v in w["tilt"]) + " |")
         print("| height (a) | " + " | ".join(f"{v:+.3e}" for v in w["z"]) + " |")
-    for model in ("exact", "rpb"):
+    for model in args.models.split(","):
         fate, first, zend = fates(model, cycles)
         print(
             f"\n## Fate map, {cycles} cycles, self_mobility={model!r} (T: trapped at cycle; E: escaping, final height; G: gliding, heights over the second half)\n"
@@ -110,10 +112,11 @@ def main() -> None:
             cells = []
             for j in range(len(TILTS)):
                 f = fate[i, j]
+                lo, hi, end = zend[i, j]
                 cells.append(
-                    f"T{first[i, j]}"
-                    if f == "T"
-                    else (f"{f} {zend[i, j]:.3g}" if f != "." else ".")
+                    {"T": f"T{first[i, j]}", "E": f"E {end:.3g}", ".": "."}.get(
+                        f, f"G {lo:.3g}-{hi:.3g}"
+                    )
                 )
             print(f"| {h:g} | " + " | ".join(cells) + " |")
     print(f"\n({time.time() - t0:.0f} s)")
