@@ -41,7 +41,7 @@ def test_a_nose_up_start_escapes_and_a_level_one_glides():
     p = scene_params("ng", Scene(medium="wall", height=10.0), dtype=jnp.float64)
     square = [(1, -1), (2, -1), (1, 1), (2, 1)]
     r = scene_rollout_batch(
-        batch_starts(p, height=np.array([10.0, 3.0]), tilt=np.array([0.3, 0.0])), square * 1200
+        batch_starts(p, height=np.array([15.0, 3.0]), tilt=np.array([0.3, 0.0])), square * 1200
     )
     z = r.z[:, :, 0]
     up, level = z[0], z[1]
