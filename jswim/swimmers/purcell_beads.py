@@ -12,7 +12,7 @@ enter one force- and torque-free solve of the whole swimmer, in all six rigid mo
 motion ``(U_x, U_y, Omega_z)`` and the motion out of the plane ``(U_z, Omega_x, Omega_y)``
 (heave, roll and pitch), which local resistive force theory cannot give.
 
-As ``m`` grows at fixed ``b`` the chain converges, as ``1/m^2``, to a slender body whose drag is
+As ``m`` grows at fixed ``b`` the chain converges (as ``1/m^2`` once ``1/m < b``) to a slender body whose drag is
 set by ``b`` (docs/scenes.md gives the table). Its drag ratio ``xi_perp / xi_par`` is that of a
 body of finite slenderness (below local RFT's 2 at ``l / b = 50``), and the links' flows act on
 each other, so its bulk stroke differs from the paper's 0.19124724 l per cycle: a different
@@ -43,7 +43,7 @@ from jswim.swimmers.models import SwimmerModel, make_model
 #: Default bead radius (link lengths): l / b = 50.
 BEAD_RADIUS = 0.02
 
-#: Default beads per link: spacing 1/m = 0.78 b; the bulk stroke is then 1.1 % below the
+#: Default beads per link: spacing 1/m = 0.78 b; the bulk stroke is then 1.0 % below the
 #: converged value (the error falls as 1/m^2; docs/scenes.md gives the table).
 BEADS_PER_LINK = 64
 
