@@ -32,8 +32,8 @@ from jswim.swimmers.mobility import (
     mobility_matrix,
     pair_entries,
     swimmer_blocks,
+    sphere_self_factors,
     transposed_blocks,
-    wall_self_factors,
 )
 
 
@@ -195,8 +195,7 @@ def solve_unrolled(
     m = [[None] * (2 * N) for _ in range(2 * N)]
     for i in range(N):
         if wall:
-            e_i = (1.0 / zs[i]) if rad[i] is None else rad[i] / zs[i]
-            par, nor = wall_self_factors(e_i, self_mobility)
+            par, nor = sphere_self_factors(1.0 if rad[i] is None else rad[i], zs[i], self_mobility)
         else:
             par = nor = 1.0
         inv_r = 1.0 if rad[i] is None else 1.0 / rad[i]

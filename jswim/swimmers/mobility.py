@@ -265,9 +265,16 @@ LUBRICATION_GAP = 1e-3
 #: asymptote to Faxen's series: where the two are equal (0.0321).
 PARALLEL_JOIN_GAP = 0.0321239069
 
-#: Smallest gap (h - a)/a the factors are evaluated at; closer heights are clamped to it (the
-#: scenes refuse a step at a gap of 0.1 a; the clamp only keeps a rejected trial solve finite).
+#: Smallest gap (h - a)/a the factors are evaluated at; closer heights are clamped to it.
 MIN_GAP = 1e-6
+
+#: Smallest gap (units of the radius) at which the solves evaluate the exact self-mobility
+#: (:func:`sphere_self_factors`). The scenes refuse a step whose spheres come within 0.1 a of the
+#: wall, but a refused step's trial poses may go closer: there the exact normal factor (~gap)
+#: falls below the far-field pair blocks and the grand mobility stops being positive definite
+#: (measured: a lying swimmer's smallest eigenvalue is +0.003 at a gap of 0.005 a, -0.001 at
+#: 0.001 a). Above this floor every pose keeps it positive definite; below, refused anyway.
+SOLVE_MIN_GAP = 0.01
 
 
 def wall_self_factors(e: Array, model: str = "rpb") -> tuple[Array, Array]:
@@ -305,6 +312,15 @@ def wall_self_factors(e: Array, model: str = "rpb") -> tuple[Array, Array]:
     raise ValueError(
         f"wall self-mobility model must be one of {', '.join(SELF_MOBILITIES)}, got {model!r}"
     )
+
+
+def sphere_self_factors(radius: Array, z: Array, model: str = "rpb") -> tuple[Array, Array]:
+    """:func:`wall_self_factors` of a sphere of ``radius`` centred ``z`` above the wall, as the
+    force-free solves take them: for ``"exact"`` the height is floored at
+    ``radius (1 +`` :data:`SOLVE_MIN_GAP` ``)`` (``"rpb"`` as it is)."""
+    if model == "exact":
+        z = jnp.maximum(z, radius * (1.0 + SOLVE_MIN_GAP))
+    return wall_self_factors(radius / z, model)
 
 
 def _gap(e: Array) -> Array:
@@ -452,7 +468,7 @@ def mobility_matrix(
     else:
         pair = OSEEN_PREFACTOR * oseen(rx_safe, zi - zj)
     if wall:
-        par, nor = wall_self_factors(radii / z, self_mobility)
+        par, nor = sphere_self_factors(radii, z, self_mobility)
     else:
         par = nor = jnp.ones_like(radii)
     selfs = jnp.stack([jnp.stack([par, 0.0 * par], -1), jnp.stack([0.0 * nor, nor], -1)], -2)

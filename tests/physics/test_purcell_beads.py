@@ -113,3 +113,16 @@ def test_scene_option_beads_matches_the_modules_cycle():
     )
     x = float(purcell_beads.square_cycle(jnp.asarray(1.5), m=8, b=0.02, steps=64)[0])
     assert abs(float(r.x[-1, 0]) - x) < 1e-7 and float(r.z[-1, 0]) == 1.5
+
+
+@pytest.mark.slow  # three cycles of a small chain compiled twice: ~1 min under load
+def test_far_wall_effect_falls_faster_than_one_over_h():
+    # force-free: the links' Stokeslet images cancel at O(l/h) and the in-plane dipole term by
+    # symmetry, so X(h) - X_bulk falls as h^-3 (local RFT's as h^-1)
+    cyc = lambda h, wall: float(
+        purcell_beads.square_cycle(jnp.asarray(h), m=8, b=0.02, wall=wall, steps=8)[0]
+    )
+    bulk = cyc(1.0, False)
+    d20, d40 = cyc(20.0, True) - bulk, cyc(40.0, True) - bulk
+    p = math.log(d20 / d40) / math.log(2.0)
+    assert d20 > 0 and d40 > 0 and abs(p - 3.0) < 0.05
