@@ -90,6 +90,7 @@ def test_parallel_factor_faxen_and_contact():
     assert np.all(np.diff(par) > 0)
 
 
+@pytest.mark.slow  # float32 and float64 series compiled op by op: ~8 s under load
 def test_float32_and_limits():
     with jax.enable_x64(False):
         _float32_and_limits()
@@ -109,3 +110,19 @@ def _float32_and_limits():
     assert float(p0) == 1.0 and float(n0) == 1.0
     with pytest.raises(ValueError, match="rpb, exact"):
         mobility.wall_self_factors(0.5, "faxen")
+
+
+@pytest.mark.slow  # three mobility matrices op by op: ~8 s under load
+def test_solves_keep_the_grand_mobility_positive_definite_near_contact():
+    # a lying three-sphere swimmer pushed to a 1e-3 a gap (a refused step's trial pose): the
+    # exact normal factor there (~1e-3) is below the far-field pair blocks, so the solves floor
+    # the gap at SOLVE_MIN_GAP; above the floor the matrix is positive definite as it is
+    pos = jnp.asarray([[-6.0, 1.001], [0.0, 1.001], [6.0, 1.001]])
+    for mob in ("point", "rpy"):
+        m = np.asarray(mobility.mobility_matrix(pos, jnp.ones(3), True, mob, "exact"))
+        assert np.linalg.eigvalsh(m).min() > 0
+    g = mobility.SOLVE_MIN_GAP
+    pos = pos.at[:, 1].set(1.0 + g)
+    m = np.asarray(mobility.mobility_matrix(pos, jnp.ones(3), True, "point", "exact"))
+    nor = float(mobility.wall_self_factors(np.float64(1 / (1 + g)), "exact")[1])
+    assert abs(m[1, 1] - nor) < 1e-12 and np.linalg.eigvalsh(m).min() > 0
