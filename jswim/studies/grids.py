@@ -114,7 +114,7 @@ class StudyOptions:
     roc_levels_grid: tuple[int, ...] = DEFAULT_ROC_LEVELS  # the continuous study's K values
     # The scene studies' grids (jswim.studies.scenes): starting heights above the wall (a), the
     # pair's starting distances D (a) and the phase offsets of its two square strokes (quarter cycles).
-    heights: tuple[float, ...] = (1.5, 2.0, 3.0, 5.0, 10.0, 50.0)
+    heights: tuple[float, ...] = (1.2, 1.5, 2.0, 3.0, 10.0, 50.0)
     separations: tuple[float, ...] = (30.0, 60.0)
     phases: tuple[int, ...] = (0, 1, 2, 3)
     # How the LLM steers a pair (--pair-prompt): "joint" (one conversation, D1..D4) or "each" (one
@@ -578,8 +578,8 @@ def _scene_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
 # obstacles and pairs"); --init is the paper's NG start (10, 6), the scene's start.
 # Their horizon, 400 steps (100 square cycles), is set by the measured drift (docs/scenes.md, "Fates
 # above the wall"): an NG swimmer's height changes by ~0.02 a in 50 steps, so at 50 steps every run
-# reads as gliding; at 400, from tilt 0, h0 = 1.5 and 2 a touch the wall (22 and 39 cycles), h0 = 3 a
-# rises 0.7 a over the second half (escaped) and h0 = 5-50 a glide.
+# reads as gliding; at 400, from tilt 0, h0 = 1.2 and 1.5 a touch the wall (7 and 29 cycles) and
+# h0 = 2-50 a glide (from 2-10 a on orbits of ~800-900 cycles).
 SPECS["wall"] = StudySpec(
     _scene_cells("wall"),
     runs=1,

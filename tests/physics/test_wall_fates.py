@@ -13,7 +13,7 @@ from jswim.studies.grids import SPECS, build
 
 def test_wall_study_defaults_are_long_enough_for_fates():
     assert SPECS["wall"].steps >= 400 and StudyOptions().steps is None
-    assert min(StudyOptions().heights) <= 2.0 and max(StudyOptions().heights) >= 10.0
+    assert min(StudyOptions().heights) <= 1.5 and max(StudyOptions().heights) >= 10.0
     # fates below 1.5 a rest on Brenner's normal mobility, not the RPB series
     assert Scene(medium="wall").self_mobility == "exact"
 
