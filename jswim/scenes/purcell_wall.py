@@ -28,9 +28,9 @@ from jswim.swimmers.models import SwimmerModel
 from jswim.swimmers.wall_rft import LINK_RADIUS
 from jswim.swimmers.wall_rft import wall_model as local_rft_model
 
-#: Models of Purcell's swimmer above a wall: ``"local-rft"`` (:mod:`jswim.swimmers.wall_rft`:
+#: Models of Purcell's swimmer above a wall: ``"local-rft"`` ([`jswim.swimmers.wall_rft`][jswim.swimmers.wall_rft]:
 #: each link's drag corrected by its own averaged image; range b << h, h below ~l) and
-#: ``"beads"`` (:mod:`jswim.swimmers.purcell_beads`: every link's flow and image, all heights
+#: ``"beads"`` ([`jswim.swimmers.purcell_beads`][jswim.swimmers.purcell_beads]: every link's flow and image, all heights
 #: with h > 2 b; its plane held, its heave and pitch left out).
 WALL_MODELS = ("local-rft", "beads")
 
@@ -75,7 +75,7 @@ def model(
     **other: Any,
 ) -> SwimmerModel:
     """The wall-corrected Purcell model of ``scene`` (height in link lengths): ``wall_model`` one
-    of :data:`WALL_MODELS` (``"beads"`` takes ``beads`` per link too); an option it does not take
+    of [`WALL_MODELS`][jswim.scenes.purcell_wall.WALL_MODELS] (``"beads"`` takes ``beads`` per link too); an option it does not take
     (``other``) is a one-line ConfigError rather than dropped."""
     h = check_scene(scene).height
     if wall_model == "beads":

@@ -21,20 +21,22 @@ Pair blocks (sphere ``i`` moved by a point force on sphere ``j``):
   two points together with the two indices (the tests check both).
 
 Self blocks (a sphere of radius ``b`` moved by its own force): the Stokes mobility ``a / b``;
-above the wall times the Rotne-Prager-Blake self terms (Swan & Brady, Phys. Fluids 19, 113306,
-2007: the Faxen operator applied twice to Blake's image part at the sphere's own centre):
+above the wall times the factors of [`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors]:
+``"rpb"``, the Rotne-Prager-Blake self terms (Swan & Brady, Phys. Fluids 19, 113306, 2007: the
+Faxen operator applied twice to Blake's image part at the sphere's own centre),
 
   parallel ``1 - (9/16) e + (1/8) e^3 - (1/16) e^5``, normal ``1 - (9/8) e + (1/2) e^3 - (1/8) e^5``,
-  ``e = b / h``.
+  ``e = b / h``,
 
-These are not the exact wall mobilities: Faxen's parallel series has a ``-(45/256) e^4`` term
-that is absent here (0.27 % of the parallel factor at h = 3 a), and the normal factor leaves
-Brenner's exact series beyond third order. Their first-order terms are exactly the point-force image
+a series in ``e`` (Faxen's parallel ``-(45/256) e^4`` is absent, and the normal factor leaves
+Brenner's exact series beyond third order: 3.2 times Brenner's at h = 1.1 a); or ``"exact"``,
+Brenner's series normal to the wall and near-contact asymptotics joined to Faxen's series
+parallel to it (the scenes' default). Their first-order terms are exactly the point-force image
 of the sphere's own force (a check in the tests). The default pair blocks are point forces (no
 Faxen/Rotne-Prager size terms): the model of Golestanian & Ajdari for the three-sphere swimmer
 and of Zargar, Najafi & Miri (Phys. Rev. E 80, 026308, 2009) near a wall; accurate to first
 order in ``a / d`` between spheres ``d`` apart. ``mobility="rpy"`` gives finite-size pair
-blocks (:func:`rpy_entries`, :func:`rpb_entries`), consistent with these self terms.
+blocks (:func:`rpy_entries`, :func:`rpb_entries`), consistent with the "rpb" self terms.
 """
 
 from __future__ import annotations
@@ -248,12 +250,12 @@ def oseen(rx: Array, rz: Array) -> Array:
     return jnp.stack([jnp.stack([sxx, sxz], -1), jnp.stack([sxz, szz], -1)], -2)
 
 
-#: Self-mobility models above the wall (:func:`wall_self_factors`): ``"rpb"`` (the
+#: Self-mobility models above the wall ([`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors]): ``"rpb"`` (the
 #: Rotne-Prager-Blake self terms, a series in a/h) and ``"exact"`` (Brenner's bipolar series normal
 #: to the wall; near-contact lubrication joined to Faxen's series parallel to it).
 SELF_MOBILITIES = ("rpb", "exact")
 
-#: Terms kept of Brenner's series: at the smallest gap it is summed for (:data:`LUBRICATION_GAP`,
+#: Terms kept of Brenner's series: at the smallest gap it is summed for ([`LUBRICATION_GAP`][jswim.swimmers.mobility.LUBRICATION_GAP],
 #: alpha = 0.0447) the last term is below 1e-13 of the sum.
 BRENNER_TERMS = 400
 
@@ -269,7 +271,7 @@ PARALLEL_JOIN_GAP = 0.0321239069
 MIN_GAP = 1e-6
 
 #: Smallest gap (units of the radius) at which the solves evaluate the exact self-mobility
-#: (:func:`sphere_self_factors`). The scenes refuse a step whose spheres come within 0.1 a of the
+#: ([`sphere_self_factors`][jswim.swimmers.mobility.sphere_self_factors]). The scenes refuse a step whose spheres come within 0.1 a of the
 #: wall, but a refused step's trial poses may go closer: there the exact normal factor (~gap)
 #: falls below the far-field pair blocks and the grand mobility stops being positive definite
 #: (measured: a lying swimmer's smallest eigenvalue is +0.003 at a gap of 0.005 a, -0.001 at
@@ -291,7 +293,7 @@ def wall_self_factors(e: Array, model: str = "rpb") -> tuple[Array, Array]:
         ``1 - (9/16) e + (1/8) e^3 - (1/16) e^5`` and ``1 - (9/8) e + (1/2) e^3 - (1/8) e^5``: a
         series in ``e``, within 1 % of the exact normal factor for h >= 3.2 a, 22 % high at 1.5 a,
         3.2 times too high at 1.1 a, and not zero at contact. ``"exact"``: see
-        :func:`exact_normal_factor` and :func:`exact_parallel_factor`.
+        [`exact_normal_factor`][jswim.swimmers.mobility.exact_normal_factor] and [`exact_parallel_factor`][jswim.swimmers.mobility.exact_parallel_factor].
 
     Returns
     -------
@@ -315,16 +317,16 @@ def wall_self_factors(e: Array, model: str = "rpb") -> tuple[Array, Array]:
 
 
 def sphere_self_factors(radius: Array, z: Array, model: str = "rpb") -> tuple[Array, Array]:
-    """:func:`wall_self_factors` of a sphere of ``radius`` centred ``z`` above the wall, as the
+    """[`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors] of a sphere of ``radius`` centred ``z`` above the wall, as the
     force-free solves take them: for ``"exact"`` the height is floored at
-    ``radius (1 +`` :data:`SOLVE_MIN_GAP` ``)`` (``"rpb"`` as it is)."""
+    ``radius (1 +`` [`SOLVE_MIN_GAP`][jswim.swimmers.mobility.SOLVE_MIN_GAP] ``)`` (``"rpb"`` as it is)."""
     if model == "exact":
         z = jnp.maximum(z, radius * (1.0 + SOLVE_MIN_GAP))
     return wall_self_factors(radius / z, model)
 
 
 def _gap(e: Array) -> Array:
-    """``(h - a)/a = 1/e - 1`` from ``e = a/h``, clamped to :data:`MIN_GAP` (``e = 0`` gives inf)."""
+    """``(h - a)/a = 1/e - 1`` from ``e = a/h``, clamped to [`MIN_GAP`][jswim.swimmers.mobility.MIN_GAP] (``e = 0`` gives inf)."""
     e = jnp.asarray(e)
     inv = jnp.where(e > 0, 1.0 / jnp.where(e > 0, e, 1.0), jnp.inf)
     return jnp.maximum(inv - 1.0, MIN_GAP)
@@ -366,9 +368,9 @@ def lubrication_normal_drag(gap: Array) -> Array:
 
 
 def exact_normal_factor(e: Array) -> Array:
-    """Normal self-mobility factor ``1 / lambda`` from Brenner's series (:func:`brenner_drag`,
-    :data:`BRENNER_TERMS` terms) for gaps above :data:`LUBRICATION_GAP`, Cox & Brenner's
-    asymptote below (:func:`lubrication_normal_drag`; ~ ``gap`` at contact, so a sphere never
+    """Normal self-mobility factor ``1 / lambda`` from Brenner's series ([`brenner_drag`][jswim.swimmers.mobility.brenner_drag],
+    [`BRENNER_TERMS`][jswim.swimmers.mobility.BRENNER_TERMS] terms) for gaps above [`LUBRICATION_GAP`][jswim.swimmers.mobility.LUBRICATION_GAP], Cox & Brenner's
+    asymptote below ([`lubrication_normal_drag`][jswim.swimmers.mobility.lubrication_normal_drag]; ~ ``gap`` at contact, so a sphere never
     touches the wall in finite time under a finite force), and ``1 - (9/8) e + (1/2) e^3`` for
     ``e < 1e-3`` (the series' far-field expansion, Lorentz 1907 and Brenner 1961; the next term,
     ``O(e^4)``, is below 1e-12 there). ``e = a/h``; shape kept."""
@@ -410,9 +412,9 @@ def contact_parallel_factor(gap: Array) -> Array:
 
 
 def exact_parallel_factor(e: Array) -> Array:
-    """Parallel self-mobility factor: :func:`contact_parallel_factor` below the gap
-    :data:`PARALLEL_JOIN_GAP` (0.0321 a, where the two curves cross, so the factor is
-    continuous), :func:`faxen_parallel_factor` above. Not an exact solution: O'Neill's (1964)
+    """Parallel self-mobility factor: [`contact_parallel_factor`][jswim.swimmers.mobility.contact_parallel_factor] below the gap
+    [`PARALLEL_JOIN_GAP`][jswim.swimmers.mobility.PARALLEL_JOIN_GAP] (0.0321 a, where the two curves cross, so the factor is
+    continuous), [`faxen_parallel_factor`][jswim.swimmers.mobility.faxen_parallel_factor] above. Not an exact solution: O'Neill's (1964)
     bipolar solution is not implemented; both asymptotes are least accurate near the join, where
     they differ in slope and bracket the exact value within a few per cent (docs/scenes.md gives
     the table). ``e = a/h``; shape kept."""

@@ -5,8 +5,8 @@ of ``m`` equal pieces of it. All ``3 m`` beads are coupled by the Rotne-Prager-Y
 (Rotne & Prager, J. Chem. Phys. 50, 4831, 1969, with their form for overlapping beads,
 ``r < 2 b``) plus Swan & Brady's wall part
 (Phys. Fluids 19, 113306, 2007, appendix: the Faxen operators of both beads applied to Blake's
-image system, as :func:`jswim.swimmers.mobility.rpb_entries` writes it, here in 3-D). Each bead's
-self term has the Rotne-Prager-Blake factors (:func:`jswim.swimmers.mobility.wall_self_factors`,
+image system, as [`rpb_entries`][jswim.swimmers.mobility.rpb_entries] writes it, here in 3-D). Each bead's
+self term has the Rotne-Prager-Blake factors ([`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors],
 ``"rpb"``, the terms consistent with the pair blocks). Every link's flow and every link's image
 enter one force- and torque-free solve of the whole swimmer, in all six rigid modes: the in-plane
 motion ``(U_x, U_y, Omega_z)`` and the motion out of the plane ``(U_z, Omega_x, Omega_y)``
@@ -51,7 +51,7 @@ BEADS_PER_LINK = 64
 def bead_frame(d: Array, d_dot: Array, m: int) -> tuple[Array, Array]:
     """Bead positions ``(3 m, 2)`` in the plane (middle link's centre at the origin, along x) and
     their shape velocities ``(3 m, 2)`` (the middle link held still) for hinge angles ``d`` (2,)
-    and rates ``d_dot`` (2,) (:mod:`jswim.swimmers.nlink`'s conventions)."""
+    and rates ``d_dot`` (2,) ([`jswim.swimmers.nlink`][jswim.swimmers.nlink]'s conventions)."""
     phi = nlink.link_angles(d, 0.0)
     phi_dot = nlink.link_angles(d_dot, 0.0)
     t = jnp.stack([jnp.cos(phi), jnp.sin(phi)], -1)  # (3, 2)
@@ -82,7 +82,7 @@ def rpy_blocks(r: Array, b: float) -> Array:
 def rpb_wall_blocks(rho: Array, zi: Array, zj: Array, b: float) -> Array:
     """Swan & Brady's wall part ``(..., 3, 3)`` of the RPB mobility of bead ``i`` at height ``zi``
     per force on bead ``j`` at ``zj``, in-plane offset ``rho = x_i - x_j`` (..., 2); units of
-    ``1 / (6 pi mu)``. :func:`jswim.swimmers.mobility.rpb_entries`'s ``A .. E`` in 3-D:
+    ``1 / (6 pi mu)``. [`rpb_entries`][jswim.swimmers.mobility.rpb_entries]'s ``A .. E`` in 3-D:
     ``W = A I + B e e + C e z + D z e + E z z`` (``e`` the unit image vector, ``z`` the wall
     normal), for unit beads at lengths divided by ``b``, then divided by ``b``."""
     rx, ry = rho[..., 0] / b, rho[..., 1] / b
@@ -164,7 +164,7 @@ def body_rates(
     rates ``d_dot`` at ``height`` (link lengths) above the wall; force- and torque-free.
 
     ``M F = K xi + v`` (beads move rigidly plus their shape velocity), ``K^T F = 0``; solved by
-    Cholesky of ``M`` and the 6 x 6 Schur complement (as :func:`jswim.swimmers.forcefree.solve`).
+    Cholesky of ``M`` and the 6 x 6 Schur complement (as [`solve`][jswim.swimmers.forcefree.solve]).
     ``m``, ``b``, ``wall`` static. Units: link lengths per unit time of the hinge rates.
     """
     pos, vel = bead_frame(d, d_dot, m)
@@ -203,7 +203,7 @@ def square_cycle(
     side by ``steps`` RK4 steps, the plane held at ``height``.
 
     The body rates depend on the hinge angles alone (not on the pose), so they are solved once
-    at each of the ``2 steps + 1`` RK4 nodes of a side (:func:`body_rates`, one solve at a
+    at each of the ``2 steps + 1`` RK4 nodes of a side ([`body_rates`][jswim.swimmers.purcell_beads.body_rates], one solve at a
     time), and the pose is then integrated from them.
 
     Returns
@@ -243,7 +243,7 @@ def square_cycle(
 
 
 def _planar(d: Array, d_dot: Array, height: float, m: int, b: float) -> Array:
-    """``(U_x, U_y, Omega_z)`` of :func:`body_rates`; under ``vmap`` one solve at a time
+    """``(U_x, U_y, Omega_z)`` of [`body_rates`][jswim.swimmers.purcell_beads.body_rates]; under ``vmap`` one solve at a time
     (``lax.map``), so a batch of poses holds one grand mobility, not one per pose."""
 
     @jax.custom_batching.custom_vmap
@@ -262,9 +262,9 @@ def _planar(d: Array, d_dot: Array, height: float, m: int, b: float) -> Array:
 @dataclasses.dataclass(frozen=True)
 class BeadPurcellModel(SwimmerModel):
     """Purcell's swimmer of bead-chain links, its plane held ``height`` link lengths above the
-    wall: a :class:`~jswim.swimmers.models.SwimmerModel` of kind ``"purcell"`` whose in-plane
-    body velocity is :func:`body_rates`' ``(U_x, U_y, Omega_z)``. Its heave, roll and pitch are
-    left out (the plane is held; :func:`square_cycle` reports them). ``beads`` per link of radius
+    wall: a [`SwimmerModel`][jswim.swimmers.models.SwimmerModel] of kind ``"purcell"`` whose in-plane
+    body velocity is [`body_rates`][jswim.swimmers.purcell_beads.body_rates]' ``(U_x, U_y, Omega_z)``. Its heave, roll and pitch are
+    left out (the plane is held; [`square_cycle`][jswim.swimmers.purcell_beads.square_cycle] reports them). ``beads`` per link of radius
     ``link_radius`` (link lengths)."""
 
     height: float = math.inf
