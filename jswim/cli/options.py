@@ -121,7 +121,10 @@ def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> No
         help=f"target direction: +x, -x or both (default {base.dirs_text(spec.directions)})",
     )
     g.add_argument(
-        "--steps", type=int, default=50, help="steps per run (default 50, the paper's horizon)"
+        "--steps",
+        type=int,
+        default=None,
+        help=f"steps per run (default {spec.steps}; 50 is the paper's horizon)",
     )
     g.add_argument(
         "--runs", type=int, default=None, help=f"LLM runs per setting (default {spec.runs})"

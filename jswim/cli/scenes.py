@@ -48,7 +48,7 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
                 type=_numbers(float),
                 metavar="H1,H2,...",
                 help="starting heights of the middle sphere above the wall, in sphere radii "
-                "(default 3,5,7,10,20,50); Purcell's: of its plane, in link lengths",
+                "(default 1.2,1.5,2,3,10,50); Purcell's: of its plane, in link lengths",
             ),
         ),
     ),

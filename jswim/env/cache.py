@@ -27,6 +27,8 @@ _SOURCES = (
     "jswim.swimmers.ng",
     "jswim.swimmers.nsphere",
     "jswim.swimmers.wall_rft",
+    "jswim.swimmers.purcell_beads",
+    "jswim.swimmers.mobility",
     "jswim.env.tables",
     "jswim.env.motion",
     "jswim.env.state",

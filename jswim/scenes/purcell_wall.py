@@ -23,7 +23,16 @@ from jswim.env.params import make_params
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
 from jswim.scenes.scene import Scene
-from jswim.swimmers.wall_rft import LINK_RADIUS, WallPurcellModel, wall_model
+from jswim.swimmers import purcell_beads
+from jswim.swimmers.models import SwimmerModel
+from jswim.swimmers.wall_rft import LINK_RADIUS
+from jswim.swimmers.wall_rft import wall_model as local_rft_model
+
+#: Models of Purcell's swimmer above a wall: ``"local-rft"`` ([`jswim.swimmers.wall_rft`][jswim.swimmers.wall_rft]:
+#: each link's drag corrected by its own averaged image; range b << h, h below ~l) and
+#: ``"beads"`` ([`jswim.swimmers.purcell_beads`][jswim.swimmers.purcell_beads]: every link's flow and image, all heights
+#: with h > 2 b; its plane held, its heave and pitch left out).
+WALL_MODELS = ("local-rft", "beads")
 
 
 def is_purcell(swimmer: Any) -> bool:
@@ -58,15 +67,29 @@ def check_scene(scene: Scene) -> Scene:
 
 
 def model(
-    scene: Scene, *, link_radius: float = LINK_RADIUS, d_max: float | None = None, **other: Any
-) -> WallPurcellModel:
-    """The wall-corrected Purcell model of ``scene`` (height in link lengths); an option it does not
-    take (``other``) is a one-line ConfigError rather than dropped."""
+    scene: Scene,
+    *,
+    link_radius: float = LINK_RADIUS,
+    d_max: float | None = None,
+    wall_model: str = "local-rft",
+    **other: Any,
+) -> SwimmerModel:
+    """The wall-corrected Purcell model of ``scene`` (height in link lengths): ``wall_model`` one
+    of `WALL_MODELS` (``"beads"`` takes ``beads`` per link too); an option it does not take
+    (``other``) is a one-line ConfigError rather than dropped."""
+    h = check_scene(scene).height
+    if wall_model == "beads":
+        beads = other.pop("beads", purcell_beads.BEADS_PER_LINK)
+        if not other:
+            return purcell_beads.wall_model(h, link_radius, beads, d_max=d_max)
+    if wall_model not in WALL_MODELS:
+        raise ConfigError(f"wall_model must be one of {', '.join(WALL_MODELS)}, got {wall_model!r}")
     if other:
         raise ConfigError(
-            f"Purcell's swimmer above a wall takes link_radius and d_max, not {', '.join(sorted(other))}"
+            f"Purcell's swimmer above a wall takes link_radius, d_max and wall_model (beads with "
+            f"'beads'), not {', '.join(sorted(other))}"
         )
-    return wall_model(check_scene(scene).height, link_radius, d_max=d_max)
+    return local_rft_model(h, link_radius, d_max=d_max)
 
 
 def rollout(
@@ -88,7 +111,7 @@ def rollout(
     ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
     the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
     """
-    m = model(scene, link_radius=link_radius, d_max=d_max, **other)
+    m = model(scene, link_radius=link_radius, d_max=d_max, **other)  # wall_model in other
     dof, roc = np.asarray(moves, np.float64)[:, 1:].T
     with jax.enable_x64(True):
         params = make_params(m, zeta=zeta, init=init)

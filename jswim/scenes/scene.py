@@ -58,6 +58,14 @@ class Scene:
         swimmer ``s`` at ``x = s D``, ahead in the swimming direction) or ``"side"`` (side by side,
         swimmer ``s`` at ``z = height + s D``: above a wall, each one D higher). Omitted from
         [`to_dict`][jswim.scenes.scene.Scene.to_dict] when ``"line"`` (earlier scenes' JSON unchanged).
+    self_mobility : str
+        Each sphere's own mobility above the wall (`jswim.swimmers.mobility.SELF_MOBILITIES`):
+        ``"exact"`` (the default: Brenner's series normal to the wall, near-contact asymptotics
+        joined to Faxen's series along it) or ``"rpb"`` (the Rotne-Prager-Blake series in a/h,
+        3.2 times too mobile normal to the wall at h = 1.1 a). The default because a swimmer's
+        fate (trapped, escaping) is decided near contact; see docs/scenes.md. Written by
+        [`to_dict`][jswim.scenes.scene.Scene.to_dict] for medium ``"wall"`` only (it changes nothing elsewhere), so a wall
+        scene's run id says which.
     """
 
     medium: str = "bulk"
@@ -68,6 +76,7 @@ class Scene:
     obstacles: tuple[tuple[float, float, float], ...] = ()
     mobility: str = "point"
     formation: str = "line"
+    self_mobility: str = "exact"
 
     def __post_init__(self) -> None:
         # Normalise for hashing and equality: floats and nested tuples whatever was passed; a NumPy
@@ -135,9 +144,15 @@ class Scene:
             raise ConfigError(
                 "obstacles need medium 'free' or 'wall' (the bulk formula has no hydrodynamic coupling)"
             )
-        from jswim.swimmers.mobility import (
+        from jswim.swimmers.mobility import (  # lazy: start-up (a Scene is built before JAX loads)
             MOBILITIES,
-        )  # lazy: start-up (a Scene is built before JAX loads)
+            SELF_MOBILITIES,
+        )
+
+        if self.self_mobility not in SELF_MOBILITIES:
+            raise ConfigError(
+                f"scene self_mobility must be one of {', '.join(SELF_MOBILITIES)}; got {self.self_mobility!r}"
+            )
 
         if self.mobility not in MOBILITIES:
             raise ConfigError(
@@ -165,6 +180,8 @@ class Scene:
             del out["mobility"]  # the default: earlier scenes' JSON (and run ids) unchanged
         if self.formation == "line":
             del out["formation"]  # likewise
+        if self.medium != "wall":
+            del out["self_mobility"]  # no effect without the wall
         return out
 
     def start_offsets(self) -> Any:

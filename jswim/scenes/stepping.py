@@ -233,7 +233,7 @@ def pose_change(
     # With two swimmers the solves go by block Gauss-Seidel, one sweep per Picard sweep, the
     # forces carried from sweep to sweep.
     n_nodes, n_sw, n_sph = params.nodes, pose0.shape[0], arms.shape[1] + 1
-    mob = params.scene.mobility
+    mob, selfm = params.scene.mobility, params.scene.self_mobility
     if obstacles.shape[0] == 0 and not params.wall:
         path, state = "response", jnp.zeros((n_nodes, n_sw, n_sph, 2), pose0.dtype)
         resp = jax.vmap(lambda a: bodyframe.response(a, mob))(arms_t)
@@ -255,12 +255,12 @@ def pose_change(
         def one(pose: Array, arms_k: Array, forces: Array) -> tuple[Array, Array]:
             if path == "by_swimmer":
                 r = forcefree.solve_by_swimmer(
-                    pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces, mob
+                    pose[:, :2], pose[:, 2], arms_k, rates, params.wall, forces, mob, selfm
                 )
                 forces = r.forces.astype(forces.dtype)
             else:
                 r = forcefree.rigid_motion(
-                    pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall, mob
+                    pose[:, :2], pose[:, 2], arms_k, rates, obstacles, params.wall, mob, selfm
                 )
             c, s = jnp.cos(pose[:, 2]), jnp.sin(pose[:, 2])
             u, w = r.velocity[:, 0], r.velocity[:, 1]

@@ -67,7 +67,7 @@ class StudyOptions:
     directions: tuple[int, ...] | None = None
     runs: int | None = None  # LLM runs per setting
     q_runs: int | None = None  # Q-learning and random runs per setting
-    steps: int = 50
+    steps: int | None = None  # steps per run; None: the study's own (StudySpec.steps)
     horizon: int = PAPER.horizon  # of the success criterion (jswim.judging.gait.Criterion)
     n_ht: int | None = None
     n_hts: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 7, 8)
@@ -99,7 +99,7 @@ class StudyOptions:
     roc_levels_grid: tuple[int, ...] = DEFAULT_ROC_LEVELS  # the continuous study's K values
     # The scene studies' grids (jswim.studies.scenes): starting heights above the wall (a), the
     # pair's starting distances D (a) and the phase offsets of its two square strokes (quarter cycles).
-    heights: tuple[float, ...] = (3.0, 5.0, 7.0, 10.0, 20.0, 50.0)
+    heights: tuple[float, ...] = (1.2, 1.5, 2.0, 3.0, 10.0, 50.0)
     separations: tuple[float, ...] = (30.0, 60.0)
     phases: tuple[int, ...] = (0, 1, 2, 3)
     # How the LLM steers a pair (--pair-prompt): "joint" (one conversation, D1..D4) or "each" (one

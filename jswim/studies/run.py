@@ -176,6 +176,8 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     ):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
+    if opts["steps"] is None:  # the study's own horizon, written as the number it is
+        opts["steps"] = SPECS[study].steps if study in SPECS else 50
     if opts["roc_levels"] == 1:  # the paper's ROC set: as before --roc-levels existed
         opts.pop("roc_levels")
     if opts["pair_prompt"] == "joint":  # the default: as before --pair-prompt existed

@@ -32,8 +32,8 @@ from jswim.swimmers.mobility import (
     mobility_matrix,
     pair_entries,
     swimmer_blocks,
+    sphere_self_factors,
     transposed_blocks,
-    wall_self_factors,
 )
 
 
@@ -69,6 +69,7 @@ def solve(
     obstacles: Array,
     wall: bool,
     mobility: str = "point",
+    self_mobility: str = "rpb",
 ) -> RigidMotion:
     """Rigid motion of every swimmer for given arm rates.
 
@@ -88,6 +89,9 @@ def solve(
         Static: a no-slip wall at z = 0 (Blake) or the unbounded fluid (Oseen).
     mobility : str
         Static: ``"point"`` or ``"rpy"`` pair blocks ([`jswim.swimmers.mobility.pair_entries`][jswim.swimmers.mobility.pair_entries]).
+    self_mobility : str
+        Static: the spheres' self-mobility above the wall, ``"rpb"`` or ``"exact"``
+        ([`jswim.swimmers.mobility.wall_self_factors`][jswim.swimmers.mobility.wall_self_factors]).
 
     Returns
     -------
@@ -110,7 +114,7 @@ def solve(
         # Keep the solve finite for a sphere pushed into the wall (the scene refuses such steps
         # by their surface gap; the point-force model is not valid that close anyway).
         pos = pos.at[:, 1].set(jnp.maximum(pos[:, 1], radii))
-    mob = mobility_matrix(pos, radii, wall, mobility)
+    mob = mobility_matrix(pos, radii, wall, mobility, self_mobility)
     # K: (N, 2, S, 3): rigid velocity of sphere i per unit (U_x, U_z, Omega) of swimmer s.
     rel = pos_sw - centre[:, None, :]  # (S, n, 2)
     one = jnp.ones((S, n), dtype)
@@ -145,14 +149,17 @@ def rigid_motion(
     obstacles: Array,
     wall: bool,
     mobility: str = "point",
+    self_mobility: str = "rpb",
 ) -> RigidMotion:
     """[`solve`][jswim.swimmers.forcefree.solve], by unrolled elimination for small scenes (``2 N <=``
     `UNROLLED_MAX_ROWS`: one or two swimmers, or one swimmer and up to three obstacles),
     else through LAPACK. The two agree to rounding (a test checks it)."""
     n_rows = 2 * (arms.shape[0] * (arms.shape[1] + 1) + obstacles.shape[0])
     if n_rows <= UNROLLED_MAX_ROWS:
-        return solve_unrolled(centre, tilt, arms, arm_rates, obstacles, wall, mobility=mobility)
-    return solve(centre, tilt, arms, arm_rates, obstacles, wall, mobility)
+        return solve_unrolled(
+            centre, tilt, arms, arm_rates, obstacles, wall, None, mobility, self_mobility
+        )
+    return solve(centre, tilt, arms, arm_rates, obstacles, wall, mobility, self_mobility)
 
 
 def solve_unrolled(
@@ -164,6 +171,7 @@ def solve_unrolled(
     wall: bool,
     background: Array | None = None,
     mobility: str = "point",
+    self_mobility: str = "rpb",
 ) -> RigidMotion:
     """[`solve`][jswim.swimmers.forcefree.solve] written entry by entry (Cholesky of ``M``, then of the ``3S x 3S`` Schur
     complement), so that under ``vmap`` every operation is elementwise over the batch and XLA
@@ -187,8 +195,7 @@ def solve_unrolled(
     m = [[None] * (2 * N) for _ in range(2 * N)]
     for i in range(N):
         if wall:
-            e_i = (1.0 / zs[i]) if rad[i] is None else rad[i] / zs[i]
-            par, nor = wall_self_factors(e_i)
+            par, nor = sphere_self_factors(1.0 if rad[i] is None else rad[i], zs[i], self_mobility)
         else:
             par = nor = 1.0
         inv_r = 1.0 if rad[i] is None else 1.0 / rad[i]
@@ -254,6 +261,7 @@ def solve_by_swimmer(
     wall: bool,
     forces: Array,
     mobility: str = "point",
+    self_mobility: str = "rpb",
 ) -> RigidMotion:
     """One block Gauss-Seidel sweep of the coupled solve of ``S >= 2`` swimmers (no obstacles).
 
@@ -288,7 +296,15 @@ def solve_by_swimmer(
     no_obstacles = jnp.zeros((0, 3), arms.dtype)
     alone = jax.vmap(
         lambda c, t, a, r, bg: solve_unrolled(
-            c[None], t[None], a[None], r[None], no_obstacles, wall, bg[None], mobility
+            c[None],
+            t[None],
+            a[None],
+            r[None],
+            no_obstacles,
+            wall,
+            bg[None],
+            mobility,
+            self_mobility,
         )
     )
 

@@ -21,20 +21,22 @@ Pair blocks (sphere ``i`` moved by a point force on sphere ``j``):
   two points together with the two indices (the tests check both).
 
 Self blocks (a sphere of radius ``b`` moved by its own force): the Stokes mobility ``a / b``;
-above the wall times the Rotne-Prager-Blake self terms (Swan & Brady, Phys. Fluids 19, 113306,
-2007: the Faxen operator applied twice to Blake's image part at the sphere's own centre):
+above the wall times the factors of [`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors]:
+``"rpb"``, the Rotne-Prager-Blake self terms (Swan & Brady, Phys. Fluids 19, 113306, 2007: the
+Faxen operator applied twice to Blake's image part at the sphere's own centre),
 
   parallel ``1 - (9/16) e + (1/8) e^3 - (1/16) e^5``, normal ``1 - (9/8) e + (1/2) e^3 - (1/8) e^5``,
-  ``e = b / h``.
+  ``e = b / h``,
 
-These are not the exact wall mobilities: Faxen's parallel series has a ``-(45/256) e^4`` term
-that is absent here (0.27 % of the parallel factor at h = 3 a), and the normal factor leaves
-Brenner's exact series beyond third order. Their first-order terms are exactly the point-force image
+a series in ``e`` (Faxen's parallel ``-(45/256) e^4`` is absent, and the normal factor leaves
+Brenner's exact series beyond third order: 3.2 times Brenner's at h = 1.1 a); or ``"exact"``,
+Brenner's series normal to the wall and near-contact asymptotics joined to Faxen's series
+parallel to it (the scenes' default). Their first-order terms are exactly the point-force image
 of the sphere's own force (a check in the tests). The default pair blocks are point forces (no
 Faxen/Rotne-Prager size terms): the model of Golestanian & Ajdari for the three-sphere swimmer
 and of Zargar, Najafi & Miri (Phys. Rev. E 80, 026308, 2009) near a wall; accurate to first
 order in ``a / d`` between spheres ``d`` apart. ``mobility="rpy"`` gives finite-size pair
-blocks ([`rpy_entries`][jswim.swimmers.mobility.rpy_entries], [`rpb_entries`][jswim.swimmers.mobility.rpb_entries]), consistent with these self terms.
+blocks ([`rpy_entries`][jswim.swimmers.mobility.rpy_entries], [`rpb_entries`][jswim.swimmers.mobility.rpb_entries]), consistent with the "rpb" self terms.
 """
 
 from __future__ import annotations
@@ -248,16 +250,185 @@ def oseen(rx: Array, rz: Array) -> Array:
     return jnp.stack([jnp.stack([sxx, sxz], -1), jnp.stack([sxz, szz], -1)], -2)
 
 
-def wall_self_factors(e: Array) -> tuple[Array, Array]:
-    """Wall corrections to a sphere's self-mobility, parallel and normal to the wall, at
-    ``e = radius / height``: the Rotne-Prager-Blake self terms (Swan & Brady 2007), not Faxen's or
-    Brenner's exact series (see the module docstring)."""
-    e3 = e * e * e
-    e5 = e3 * e * e
-    return 1.0 - 0.5625 * e + 0.125 * e3 - 0.0625 * e5, 1.0 - 1.125 * e + 0.5 * e3 - 0.125 * e5
+#: Self-mobility models above the wall ([`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors]): ``"rpb"`` (the
+#: Rotne-Prager-Blake self terms, a series in a/h) and ``"exact"`` (Brenner's bipolar series normal
+#: to the wall; near-contact lubrication joined to Faxen's series parallel to it).
+SELF_MOBILITIES = ("rpb", "exact")
+
+#: Terms kept of Brenner's series: at the smallest gap it is summed for (`LUBRICATION_GAP`,
+#: alpha = 0.0447) the last term is below 1e-13 of the sum.
+BRENNER_TERMS = 400
+
+#: Gap (h - a)/a below which the normal factor is Cox & Brenner's lubrication asymptote instead of
+#: Brenner's series (there they differ by 2e-6 relative).
+LUBRICATION_GAP = 1e-3
+
+#: Gap (h - a)/a at which the parallel factor switches from Goldman, Cox & Brenner's near-contact
+#: asymptote to Faxen's series: where the two are equal (0.0321).
+PARALLEL_JOIN_GAP = 0.0321239069
+
+#: Smallest gap (h - a)/a the factors are evaluated at; closer heights are clamped to it.
+MIN_GAP = 1e-6
+
+#: Smallest gap (units of the radius) at which the solves evaluate the exact self-mobility
+#: ([`sphere_self_factors`][jswim.swimmers.mobility.sphere_self_factors]). The scenes refuse a step whose spheres come within 0.1 a of the
+#: wall, but a refused step's trial poses may go closer: there the exact normal factor (~gap)
+#: falls below the far-field pair blocks and the grand mobility stops being positive definite
+#: (measured: a lying swimmer's smallest eigenvalue is +0.003 at a gap of 0.005 a, -0.001 at
+#: 0.001 a). Above this floor every pose keeps it positive definite; below, refused anyway.
+SOLVE_MIN_GAP = 0.01
 
 
-def mobility_matrix(pos: Array, radii: Array, wall: bool, mobility: str = "point") -> Array:
+def wall_self_factors(e: Array, model: str = "rpb") -> tuple[Array, Array]:
+    """Wall corrections ``(parallel, normal)`` to a torque-free sphere's self-mobility: its
+    translational mobility along and normal to a no-slip plane wall, over the bulk ``1/(6 pi mu a)``.
+
+    Parameters
+    ----------
+    e : float or Array (...)
+        ``a / h``, radius over the centre's height above the wall, in ``[0, 1)``.
+    model : str
+        Static. ``"rpb"``: the Rotne-Prager-Blake self terms (Swan & Brady, Phys. Fluids 19,
+        113306, 2007, eqs. (A1)-(A2) as this module's docstring writes them),
+        ``1 - (9/16) e + (1/8) e^3 - (1/16) e^5`` and ``1 - (9/8) e + (1/2) e^3 - (1/8) e^5``: a
+        series in ``e``, within 1 % of the exact normal factor for h >= 3.2 a, 22 % high at 1.5 a,
+        3.2 times too high at 1.1 a, and not zero at contact. ``"exact"``: see
+        [`exact_normal_factor`][jswim.swimmers.mobility.exact_normal_factor] and [`exact_parallel_factor`][jswim.swimmers.mobility.exact_parallel_factor].
+
+    Returns
+    -------
+    (parallel, normal) : Arrays of the shape of ``e``
+        Dimensionless, in (0, 1]; 1 at ``e = 0``.
+
+    Raises
+    ------
+    ValueError
+        An unknown ``model``.
+    """
+    if model == "rpb":
+        e3 = e * e * e
+        e5 = e3 * e * e
+        return 1.0 - 0.5625 * e + 0.125 * e3 - 0.0625 * e5, 1.0 - 1.125 * e + 0.5 * e3 - 0.125 * e5
+    if model == "exact":
+        return exact_parallel_factor(e), exact_normal_factor(e)
+    raise ValueError(
+        f"wall self-mobility model must be one of {', '.join(SELF_MOBILITIES)}, got {model!r}"
+    )
+
+
+def sphere_self_factors(radius: Array, z: Array, model: str = "rpb") -> tuple[Array, Array]:
+    """[`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors] of a sphere of ``radius`` centred ``z`` above the wall, as the
+    force-free solves take them: for ``"exact"`` the height is floored at
+    ``radius (1 +`` `SOLVE_MIN_GAP` ``)`` (``"rpb"`` as it is)."""
+    if model == "exact":
+        z = jnp.maximum(z, radius * (1.0 + SOLVE_MIN_GAP))
+    return wall_self_factors(radius / z, model)
+
+
+def _gap(e: Array) -> Array:
+    """``(h - a)/a = 1/e - 1`` from ``e = a/h``, clamped to `MIN_GAP` (``e = 0`` gives inf)."""
+    e = jnp.asarray(e)
+    inv = jnp.where(e > 0, 1.0 / jnp.where(e > 0, e, 1.0), jnp.inf)
+    return jnp.maximum(inv - 1.0, MIN_GAP)
+
+
+def brenner_drag(gap: Array, terms: int = BRENNER_TERMS) -> Array:
+    """Brenner's drag factor ``lambda = F / (6 pi mu a U)`` of a sphere moving normal to a no-slip
+    plane wall, at centre height ``h = a (1 + gap)`` (Brenner, Chem. Eng. Sci. 16, 242, 1961; the
+    series as Happel & Brenner, *Low Reynolds number hydrodynamics*, 1965, give it)::
+
+        lambda = (4/3) sinh(alpha) sum_{n>=1} n (n+1) / ((2n-1)(2n+3)) [
+            (2 sinh((2n+1) alpha) + (2n+1) sinh(2 alpha))
+            / (4 sinh^2((n+1/2) alpha) - (2n+1)^2 sinh^2(alpha)) - 1 ],   cosh(alpha) = h / a.
+
+    Each bracket is evaluated divided through by ``exp((2n+1) alpha)``, so no term overflows
+    (float32 included). ``terms`` terms (static). The bracket's denominator cancels to
+    ``O(alpha^4)`` near contact: in float32 the factor is good to 2e-4 down to a gap of 0.01 a
+    and loses digits below (0.5 % at 1e-3 a); float64 holds 1e-9 throughout.
+    """
+    gap = jnp.asarray(gap)
+    alpha = jnp.arccosh(1.0 + gap)
+    n = jnp.arange(1, terms + 1, dtype=alpha.dtype)
+    al = alpha[..., None]
+    k = 2.0 * n + 1.0
+    q = jnp.exp(-k * al)  # exp(-(2n+1) alpha)
+    sh = jnp.sinh(al)
+    num = 1.0 - q * q + k * jnp.sinh(2.0 * al) * q  # (2 sinh x + k sinh 2a) e^-x
+    den = 1.0 + q * q - 2.0 * q - k * k * sh * sh * q  # (4 sinh^2(x/2) - k^2 sinh^2 a) e^-x
+    coef = n * (n + 1.0) / ((2.0 * n - 1.0) * (2.0 * n + 3.0))
+    bracket = (num - den) / den
+    return (4.0 / 3.0) * jnp.sinh(alpha) * jnp.sum(coef * bracket, -1)
+
+
+def lubrication_normal_drag(gap: Array) -> Array:
+    """Cox & Brenner's near-contact drag factor normal to the wall (Chem. Eng. Sci. 22, 1753,
+    1967): ``lambda = 1/gap + (1/5) ln(1/gap) + 0.971264`` at ``gap = (h - a)/a -> 0``."""
+    gap = jnp.asarray(gap)
+    return 1.0 / gap + 0.2 * jnp.log(1.0 / gap) + 0.971264
+
+
+def exact_normal_factor(e: Array) -> Array:
+    """Normal self-mobility factor ``1 / lambda`` from Brenner's series ([`brenner_drag`][jswim.swimmers.mobility.brenner_drag],
+    `BRENNER_TERMS` terms) for gaps above `LUBRICATION_GAP`, Cox & Brenner's
+    asymptote below ([`lubrication_normal_drag`][jswim.swimmers.mobility.lubrication_normal_drag]; ~ ``gap`` at contact, so a sphere never
+    touches the wall in finite time under a finite force), and ``1 - (9/8) e + (1/2) e^3`` for
+    ``e < 1e-3`` (the series' far-field expansion, Lorentz 1907 and Brenner 1961; the next term,
+    ``O(e^4)``, is below 1e-12 there). ``e = a/h``; shape kept."""
+    e = jnp.asarray(e)
+    gap = _gap(e)
+    far = e < 1e-3
+    near = gap < LUBRICATION_GAP
+    mid_gap = jnp.where(far | near, 1.0, gap)  # a safe stand-in where the series is not used
+    series = 1.0 / brenner_drag(mid_gap)
+    lub = 1.0 / lubrication_normal_drag(jnp.minimum(gap, LUBRICATION_GAP))
+    ef = jnp.where(far, e, 0.0)
+    return jnp.where(far, 1.0 - 1.125 * ef + 0.5 * ef**3, jnp.where(near, lub, series))
+
+
+def faxen_parallel_factor(e: Array) -> Array:
+    """Faxen's series for the parallel self-mobility, ``1 - (9/16) e + (1/8) e^3 - (45/256) e^4
+    - (1/16) e^5`` (Faxen 1923, as Happel & Brenner 1965 give it; a torque-free sphere: its
+    rotation changes the translation only at ``O(e^8)``)."""
+    e = jnp.asarray(e)
+    return 1.0 - 0.5625 * e + 0.125 * e**3 - 0.17578125 * e**4 - 0.0625 * e**5
+
+
+def contact_parallel_factor(gap: Array) -> Array:
+    """Near-contact parallel self-mobility of a torque-free sphere, from Goldman, Cox & Brenner's
+    asymptotic resistances (Chem. Eng. Sci. 22, 637, 1967), ``L = ln(gap)``::
+
+        F^t = (8/15) L - 0.9588,  T^t = -(1/10) L - 0.1895,
+        F^r = (4/3) T^t (reciprocity),  T^r = (2/5) L - 0.3817,
+
+    the force ``6 pi mu a (U F^t + a Omega F^r)`` and torque ``8 pi mu a^2 (U T^t + a Omega T^r)``
+    on a sphere translating at ``U`` and rotating at ``Omega``. Torque-free:
+    ``a Omega = -U T^t / T^r``, so the factor is ``-1 / (F^t - F^r T^t / T^r)``, which tends to
+    ``-2 / ln(gap)`` at contact. Valid as ``gap -> 0`` (error O(gap ln gap))."""
+    lg = jnp.log(jnp.asarray(gap))
+    f_t = (8.0 / 15.0) * lg - 0.9588
+    t_t = -0.1 * lg - 0.1895
+    t_r = 0.4 * lg - 0.3817
+    return -1.0 / (f_t - (4.0 / 3.0) * t_t * t_t / t_r)
+
+
+def exact_parallel_factor(e: Array) -> Array:
+    """Parallel self-mobility factor: [`contact_parallel_factor`][jswim.swimmers.mobility.contact_parallel_factor] below the gap
+    `PARALLEL_JOIN_GAP` (0.0321 a, where the two curves cross, so the factor is
+    continuous), [`faxen_parallel_factor`][jswim.swimmers.mobility.faxen_parallel_factor] above. Not an exact solution: O'Neill's (1964)
+    bipolar solution is not implemented; both asymptotes are least accurate near the join, where
+    they differ in slope and bracket the exact value within a few per cent (docs/scenes.md gives
+    the table). ``e = a/h``; shape kept."""
+    e = jnp.asarray(e)
+    gap = _gap(e)
+    near = gap < PARALLEL_JOIN_GAP
+    return jnp.where(
+        near, contact_parallel_factor(jnp.minimum(gap, PARALLEL_JOIN_GAP)), faxen_parallel_factor(e)
+    )
+
+
+def mobility_matrix(
+    pos: Array, radii: Array, wall: bool, mobility: str = "point", self_mobility: str = "rpb"
+) -> Array:
     """Grand mobility of ``N`` spheres in the plane y = 0.
 
     Parameters
@@ -271,6 +442,9 @@ def mobility_matrix(pos: Array, radii: Array, wall: bool, mobility: str = "point
     mobility : str
         Static: ``"point"`` (point-force pair blocks) or ``"rpy"`` (Rotne-Prager-Yamakawa /
         -Blake, [`pair_entries`][jswim.swimmers.mobility.pair_entries]; above the wall unit radii only).
+    self_mobility : str
+        Static: the self blocks above the wall, [`wall_self_factors`][jswim.swimmers.mobility.wall_self_factors]'s ``model``
+        (``"rpb"`` or ``"exact"``).
 
     Returns
     -------
@@ -296,7 +470,7 @@ def mobility_matrix(pos: Array, radii: Array, wall: bool, mobility: str = "point
     else:
         pair = OSEEN_PREFACTOR * oseen(rx_safe, zi - zj)
     if wall:
-        par, nor = wall_self_factors(radii / z)
+        par, nor = sphere_self_factors(radii, z, self_mobility)
     else:
         par = nor = jnp.ones_like(radii)
     selfs = jnp.stack([jnp.stack([par, 0.0 * par], -1), jnp.stack([0.0 * nor, nor], -1)], -2)

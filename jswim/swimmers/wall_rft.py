@@ -1,23 +1,31 @@
-"""Resistive force theory of Purcell's swimmer above a plane wall, its plane parallel to the wall.
+"""Local resistive force theory of Purcell's swimmer above a plane wall (``wall_model="local-rft"``).
 
 Every link (length ``l = 1``, the unit of length; radius ``b``) lies in the plane z = h above a
-no-slip wall at z = 0, with drag per unit length ``xi_T`` along it and ``xi_N`` across it; by the
-link's mirror symmetries, motion in the plane gives no force normal to the wall, so the swimmer
-stays at height h. To leading order in ``1 / ln(l / b)``, with ``c = 2 h``, ``S = sqrt(l^2 + c^2)``::
+no-slip wall at z = 0, with drag per unit length ``xi_T`` along it and ``xi_N`` across it. The
+model is jswim's own construction, not one from the literature: the bulk coefficients (ratio 2)
+with each link's logarithm lowered by the wall's image (Blake 1971) of a uniform force density
+along that link alone, averaged over the link (written out here from Blake's tensor at equal
+heights). With ``c = 2 h``, ``S = sqrt(l^2 + c^2)``::
 
     xi_T = 2 pi mu / (L - k_T(h)),   xi_N = 4 pi mu / (L - k_N(h)),   L = ln(l / b),
     k_T = asinh(l / c) - 2 l / (S + c) + l (2 S + c) / (4 S (S + c))
     k_N = asinh(l / c) - l / (2 (S + c))
 
-``k_T``, ``k_N``: the wall's image (Blake 1971) of a uniform force density, averaged over the link
-(written out here from Blake's tensor at equal heights). Returned in units of the bulk
-``xi_T = 2 pi mu / L``: ``(1, 2)`` as h -> infinity ([`jswim.swimmers.nlink`][jswim.swimmers.nlink], ``xi_ratio = 2``).
-Far away ``k_T = 3 l / (16 h)``, ``k_N = 3 l / (8 h)`` (de Mestre & Russel, J. Eng. Math. 9, 81,
-1975, as Brennen & Winet give it, Annu. Rev. Fluid Mech. 9, 339, 1977); near the wall (b << h << l)
-``L - k_T -> ln(h / b) + 3/2``, ``L - k_N -> ln(h / b) + 1/2`` (Katz, Blake & Paveri-Fontana, J.
-Fluid Mech. 72, 529, 1975), so with jswim's bulk ratio 2 the near-wall ratio is
-``2 (ln(h/b) + 3/2) / (ln(h/b) + 1/2)``. Only ``xi_N / xi_T`` changes the stroke. Why, the limits'
-derivation and the range of validity: docs/scenes.md, "Purcell's swimmer near a wall".
+Returned in units of the bulk ``xi_T = 2 pi mu / L``: ``(1, 2)`` as h -> infinity
+([`jswim.swimmers.nlink`][jswim.swimmers.nlink], ``xi_ratio = 2``). Far away ``k_T -> 3 l / (16 h)`` and
+``k_N -> 3 l / (8 h)``: a link's own image slowing it, as a point force's image slows a sphere
+by ``(9/16) a / h`` (Lorentz 1907). Near the wall (b << h << l) ``L - k_T -> ln(h / b) + 3/2`` and
+``L - k_N -> ln(h / b) + 1/2``, constants that come from the averaging. Only ``xi_N / xi_T``
+changes the stroke.
+
+Range, plainly: the corrections are O(1 / ln(l / b)), the order of the terms local RFT drops (the
+other links' flows and their images), so the model is a guide for b << h below ~l, not a
+prediction; above ~l the links left out matter as much as the effect computed, and its far-field
+approach ``X - X_bulk ~ 0.0141 l^2 / h`` is an artefact of the locality: a force-free swimmer's
+link images cancel at O(l / h) and the true effect decays faster (the non-local
+[`jswim.swimmers.purcell_beads`][jswim.swimmers.purcell_beads], ``wall_model="beads"``). It keeps the swimmer's height and
+plane by construction; the non-local model pitches. docs/scenes.md, "Purcell's swimmer near a
+wall", gives both models' tables.
 """
 
 from __future__ import annotations
