@@ -380,7 +380,7 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
     """``(name, value)`` of the settings that apply to the folder's study, for the settings block.
 
     From the identity's options and the recorded grid: values left unset (``None``) and options
-    or grid axes the study has no use for (its `jswim.studies.grids.SPECS` ``ignores``; a
+    or grid axes the study has no use for (its `jswim.studies.specs.SPECS` ``ignores``; a
     scene study's own axes only on that study) are left out; the full record stays one click away.
     """
     from jswim.studies.specs import (

@@ -8,7 +8,7 @@ import pytest
 from jswim.scenes import Scene
 from jswim.studies import StudyOptions
 from jswim.studies import scenes
-from jswim.studies.grids import SPECS, build
+from jswim.studies.specs import SPECS, build
 
 
 def test_wall_study_defaults_are_long_enough_for_fates():
