@@ -59,7 +59,7 @@ from jswim.env.state import (
     start_state,
 )
 from jswim.env.stepping import advance, step, step_batch
-from jswim.env.base import Box, Discrete, Environment, Observation, StepInfo
+from jswim.env.base import Box, Discrete, Environment, Observation, Scenery, StepInfo
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env.tables import TABLE_DEGREE, step_table
 
@@ -88,6 +88,7 @@ __all__ = [
     "Discrete",
     "Environment",
     "Observation",
+    "Scenery",
     "SwimmerWorld",
     *_LAZY,
     "ROCS",

@@ -94,6 +94,30 @@ class Observation(NamedTuple):
     height: Any = None
 
 
+class Scenery(NamedTuple):
+    """What a world's pictures draw beside its swimmers' positions (the world supplies it, so a
+    picture never asks which kind of world it holds).
+
+    Attributes
+    ----------
+    model : SwimmerModel or None
+        The swimmer whose body outline is drawn from the observed DOFs; ``None``: each swimmer is
+        drawn as a marker at its position (a world of [`jswim.register_world`][jswim.env.worlds.register_world]).
+    wall : bool
+        A plane wall at ``y = 0`` (the swimmers' heights are their ``y``).
+    obstacles : tuple of (x, z, radius)
+        Fixed spheres, in ``a``.
+    plane_height : float or None
+        The height (link lengths) of a planar swimmer's plane above a wall parallel to it, drawn
+        from above; ``None``: no such wall.
+    """
+
+    model: Any = None
+    wall: bool = False
+    obstacles: tuple[tuple[float, float, float], ...] = ()
+    plane_height: float | None = None
+
+
 class Discrete:
     """``n`` integer actions ``0 .. n - 1`` (gymnax's ``spaces.Discrete`` interface)."""
 
@@ -164,6 +188,11 @@ class Environment:
     @property
     def n_swimmers(self) -> int:
         return 1
+
+    def scenery(self) -> Scenery:
+        """What this world's pictures draw ([`Scenery`][jswim.env.base.Scenery]); default: each
+        swimmer as a marker, no wall, no obstacle."""
+        return Scenery()
 
     @property
     def roc_levels(self) -> int:

@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.env.base import Environment, Observation, StepInfo, first_move, scaled
+from jswim.env.base import Environment, Observation, Scenery, StepInfo, first_move, scaled
 from jswim.env.discretiser import Cells, WallCells
 from jswim.env.params import EnvParams, make_params
 from jswim.errors import ConfigError
@@ -30,6 +30,7 @@ from jswim.scenes.params import SceneParams, scene_params
 from jswim.scenes.scene import Scene
 from jswim.scenes.state import SceneState, centre_low, scene_reset
 from jswim.scenes.stepping import scene_advance
+from jswim.swimmers.models import make_model
 
 #: Arms (DOFs) of one NG swimmer.
 ARMS = 2
@@ -69,6 +70,14 @@ class SceneWorld(Environment):
     @property
     def wall(self) -> bool:
         return self.scene.medium == "wall"
+
+    def scenery(self) -> Scenery:
+        """NG swimmers by their outline, the wall and the obstacles of the scene."""
+        return Scenery(
+            model=make_model("ng"),
+            wall=self.wall,
+            obstacles=tuple(tuple(map(float, o)) for o in self.scene.obstacles),
+        )
 
     @property
     def default_params(self) -> SceneTask:

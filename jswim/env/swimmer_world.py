@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.env.base import Environment, Observation, StepInfo, scaled
+from jswim.env.base import Environment, Observation, Scenery, StepInfo, scaled
 from jswim.env.discretiser import PaperCells
 from jswim.env.params import EnvParams, broadcast_params, make_params
 from jswim.env.state import EnvState, dof_values, reset
@@ -59,6 +59,11 @@ class SwimmerWorld(Environment):
     @property
     def dof_range(self) -> tuple[float, float]:
         return (float(self.model.lo), float(self.model.hi))
+
+    def scenery(self) -> Scenery:
+        """The swimmer by its outline; above a wall, its plane's height (seen from above)."""
+        height = getattr(self.model, "height", None)
+        return Scenery(model=self.model, plane_height=None if height is None else float(height))
 
     @property
     def default_params(self) -> EnvParams:

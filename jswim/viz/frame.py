@@ -12,9 +12,6 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle
 
-from jswim.env.scene_world import SceneWorld
-from jswim.env.swimmer_world import SwimmerWorld
-from jswim.swimmers.models import make_model
 from jswim.viz.tracks import outline, place
 from jswim.viz.worlds import SECOND_SWIMMER, Marker, World, draw_fixed
 
@@ -115,19 +112,12 @@ def state_frame(world: Any, env_state: Any, params: Any, t: int) -> np.ndarray:
     `jswim.register_world` as markers; the caption gives the step ``t`` and the mean x."""
     obs = world.observe(env_state, params)
     s = world.n_swimmers
-    if isinstance(world, SceneWorld):
-        model: Any = make_model("ng")
-        fixed = World(
-            n_swimmers=s,
-            wall=world.wall,
-            obstacles=tuple(tuple(map(float, o)) for o in world.scene.obstacles),
-        )
-    elif isinstance(world, SwimmerWorld):
-        model = world.model
-        height = getattr(model, "height", None)
-        fixed = World(extra={} if height is None else {"plane_height": float(height)})
-    else:
-        model, fixed = Marker(type(world).__name__, world.n_dof // s), World(n_swimmers=s)
+    scenery = world.scenery()
+    model: Any = scenery.model
+    if model is None:
+        model = Marker(type(world).__name__, world.n_dof // s)
+    extra = {} if scenery.plane_height is None else {"plane_height": scenery.plane_height}
+    fixed = World(n_swimmers=s, wall=scenery.wall, obstacles=scenery.obstacles, extra=extra)
     position = np.asarray(obs.position, np.float64)
     dofs = np.asarray(obs.dofs, np.float64).reshape(s, -1)
     caption = f"step {t}   x = {position[:, 0].mean():+.4f} a"
