@@ -10,6 +10,7 @@ to them with [`as_run_rows`][jswim.results.row.as_run_rows].
 from __future__ import annotations
 
 import dataclasses
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -51,6 +52,7 @@ SCENE = (
     "mean_height",
     "speed",
     "per_cycle",
+    "plane_height",
 )
 #: A scene run's per-step, per-swimmer tracks.
 TRACKS = ("xs", "heights", "tilts", "contact")
@@ -88,7 +90,7 @@ SWITCHES = (
     "pair_prompt",
     "temperature_sent",
 )
-_WHERE_SET = ("pair_prompt", "temperature_sent")
+_WHERE_SET = ("pair_prompt", "temperature_sent", "plane_height")
 
 #: The four layouts of a row (bulk or scene world, LLM or not), as written since the columns
 #: existed; ``other`` is where columns this version does not know go. A layout's order is the
@@ -200,6 +202,12 @@ class RunRow(Mapping):
         Mean progress per step over the second half, in whole stroke cycles (a per step).
     per_cycle : float or None
         A stroke run's displacement per stroke cycle (a; strokes only).
+    plane_height : float or None
+        The height (link lengths) above a wall of the plane a planar swimmer swims in, parallel
+        to the wall (the world's [`Scenery.plane_height`][jswim.env.base.Scenery]): its pictures
+        are drawn from above, in that plane, and ``y``/``orientation`` are in the plane. Written
+        only when set; rows written before the column existed get it from
+        [`from_dict`][jswim.results.row.RunRow.from_dict].
     xs, heights, tilts : list of list of float or None
         Per step, each swimmer's displacement (a), height (a) and tilt (rad).
     contact, stuck : list of bool or None
@@ -273,6 +281,7 @@ class RunRow(Mapping):
     mean_height: float | None = None
     speed: float | None = None
     per_cycle: float | None = None
+    plane_height: float | None = None
     xs: list[list[float]] | None = None
     heights: list[list[float]] | None = None
     tilts: list[list[float]] | None = None
@@ -330,7 +339,7 @@ class RunRow(Mapping):
     def from_dict(cls, d: Mapping[str, Any]) -> RunRow:
         """A row from a record (any version's: old names renamed, missing columns None, unknown
         ones kept in `other`)."""
-        d = upgrade_names(dict(d))
+        d = _with_plane_height(upgrade_names(dict(d)))
         return cls(
             **{k: d.get(k) for k in _FIELDS}, other={k: v for k, v in d.items() if k not in _FIELDS}
         )
@@ -351,6 +360,19 @@ class RunRow(Mapping):
 
     def __len__(self) -> int:
         return len(self.columns())
+
+
+def _with_plane_height(d: dict[str, Any]) -> dict[str, Any]:
+    """``d`` with ``plane_height`` for a row written before the column existed. The one place the
+    old rule lives: Purcell's swimmer was the only world in a wall scene that swims in a plane
+    parallel to the wall, at the scene's height."""
+    if "plane_height" in d or d.get("swimmer") != "purcell" or d.get("medium") != "wall":
+        return d
+    try:
+        scene = json.loads(d["scene"]) if isinstance(d.get("scene"), str) else dict(d["scene"])
+        return {**d, "plane_height": float(scene["height"])}
+    except (KeyError, TypeError, ValueError):
+        return d
 
 
 _FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}

@@ -206,6 +206,7 @@ def _scene_rows(
             tilt0=tilt0,
             judged=judged[i],
             moves=moves[i],
+            plane_height=world_.scenery().plane_height,
         )
         if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
             y, orientation = (
@@ -234,5 +235,14 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
         # a world that reports no height (Purcell's plane above a wall, a registered world): the
         # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)
         tracks.update(heights=[z0.tolist()] * len(r.x), tilts=[tilt0.tolist()] * len(r.x))
-    row = scenes.scene_row(plan, list(r.actions), list(r.x), tracks, horizon, z0=z0, tilt0=tilt0)
+    row = scenes.scene_row(
+        plan,
+        list(r.actions),
+        list(r.x),
+        tracks,
+        horizon,
+        z0=z0,
+        tilt0=tilt0,
+        plane_height=world_.scenery().plane_height,
+    )
     return with_llm(row, r)

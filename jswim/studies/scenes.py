@@ -252,12 +252,14 @@ def scene_row(
     tilt0: np.ndarray,
     judged: dict[str, Any] | None = None,
     moves: list[list[float]] | None = None,
+    plane_height: float | None = None,
 ) -> RunRow:
     """One row of a scene run ([`jswim.studies.rows.build_row`][jswim.studies.rows.build_row]): the bulk studies' columns
     (success by `_judge` on the lattice ``codes``, or the real-valued agent's own verdict
     ``judged`` and ``moves``; a registered world's runs unjudged, `_unjudged`) and the scene's: the scene, its medium, start height or distance,
     the per-step tracks ``extra`` holds (``xs``, ``heights``, ``tilts``, ``contact``, ``stuck``),
-    ``fate``, ``mean_height``, ``speed`` (`late_speed`) and, for strokes, ``per_cycle``.
+    ``fate``, ``mean_height``, ``speed`` (`late_speed`), for strokes ``per_cycle``, and the
+    world's ``plane_height`` ([`Scenery`][jswim.env.base.Scenery]: how its pictures are drawn).
     ``y`` and ``orientation`` of the trajectories table are swimmer 1's height and tilt."""
     scene = Scene.from_dict(json.loads(plan.scene))
     wall = scene.medium == "wall"
@@ -283,6 +285,7 @@ def scene_row(
         mean_height=mean_h,
         speed=late_speed(x, plan.direction, sw),
         per_cycle=per_cycle(x, plan.variant, sw) if plan.agent == STROKE_AGENT else None,
+        plane_height=plane_height,
         y=h1 or [float(z0[0])] * len(x),
         orientation=[float(t[0]) for t in extra.get("tilts") or []] or [float(tilt0[0])] * len(x),
         **{k: extra.get(k) for k in ("xs", "heights", "tilts", "contact", "stuck")},

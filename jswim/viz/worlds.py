@@ -94,16 +94,19 @@ class Marker:
 
 
 def from_above(row: Mapping[str, Any]) -> bool:
-    """Whether a scene row is drawn from above, in the swimmer's own plane: Purcell's swimmer above
-    a wall swims in a plane parallel to the wall, so its bends are seen only from above
-    (its row's ``y`` and ``orientation`` are in that plane), with the wall beneath it."""
+    """Whether a scene row is drawn in the swimmer's own plane rather than the scene's vertical
+    plane: its world recorded a plane parallel to a wall (``plane_height``, the world's
+    [`Scenery`][jswim.env.base.Scenery]; its row's ``y`` and ``orientation`` are in that plane,
+    with the wall beneath it), or its scene is the paper's bulk fluid (the paper's plane, the
+    start at the origin)."""
     r = as_run_row(row)
-    return bool(r.scene) and str(r.swimmer or "") == "purcell"
+    return bool(r.scene) and (r.plane_height is not None or r.medium == "bulk")
 
 
 def world_of(row: Mapping[str, Any]) -> World:
     """The `World` a run row records (its ``scene``; none: the bulk fluid)."""
-    raw = as_run_row(row).scene
+    r = as_run_row(row)
+    raw = r.scene
     if not raw:
         return World()
     try:
@@ -111,11 +114,10 @@ def world_of(row: Mapping[str, Any]) -> World:
     except (TypeError, ValueError):
         return World()
     if from_above(row):
+        plane = r.plane_height
         return World(
             medium=str(sc.get("medium", "bulk")),
-            extra={"plane_height": float(sc.get("height", 0.0))}
-            if sc.get("medium") == "wall"
-            else {},
+            extra={} if plane is None else {"plane_height": float(plane)},
         )
     n = int(sc.get("swimmers") or 1)
     h = float(sc.get("height", 0.0) or 0.0)

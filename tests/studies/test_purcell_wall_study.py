@@ -69,6 +69,8 @@ def test_purcell_wall_study_rows_figure_and_picture(tmp_path):
 
     assert wall["per_cycle"] == pytest.approx(float(cycles([xi_n / xi_t])[0, 0]), rel=2e-7)
     assert wall["fate"] == "gliding" and wall["start_height"] == 1.5 and wall["medium"] == "wall"
+    # the world says how it is drawn: a plane 1.5 link lengths above the wall (its Scenery)
+    assert wall["plane_height"] == 1.5 and "plane_height" not in by[("stroke", "bulk")]
     assert (out / "figures" / "wall.png").exists() and (out / "report.html").exists()
     # the picture: seen from above, in the swimmer's own plane (its y, not its height)
     t = track(wall)

@@ -144,6 +144,21 @@ def _old_folder(tmp_path: Path) -> Path:
     return folder
 
 
+def test_a_row_written_before_plane_height_gets_it_by_the_old_rule():
+    from jswim.viz.worlds import from_above, world_of
+
+    scene = json.dumps({"medium": "wall", "height": 2.5, "swimmers": 1})
+    old = {"run_id": "a", "agent": "stroke", "swimmer": "purcell", "scene": scene, "medium": "wall"}
+    assert as_run_row(old).plane_height == 2.5
+    assert from_above(old) and world_of(old).extra == {"plane_height": 2.5}
+    ng = {**old, "swimmer": "ng"}  # NG's wall scene: drawn in its vertical plane, the wall below
+    assert as_run_row(ng).plane_height is None and not from_above(ng) and world_of(ng).wall
+    # a new row says it itself, whatever its swimmer's name
+    new = {**ng, "swimmer": "mine", "plane_height": 4.0}
+    assert from_above(new) and world_of(new).extra == {"plane_height": 4.0}
+    assert "plane_height" not in as_run_row(ng).to_dict()  # written only when set
+
+
 def test_read_run_rows_renames_old_keys_keeps_unknown_ones_and_failed_rows(tmp_path):
     folder = _old_folder(tmp_path)
     rows = read_run_rows(folder)
