@@ -61,6 +61,7 @@ from jax import Array
 
 from jswim import env as _env
 from jswim import sharding
+from jswim.agents.rewards import energy_reward
 from jswim.agents.qlearning import _compiler_options
 from jswim.env.base import Environment
 from jswim.env.episodes import Trajectory
@@ -115,6 +116,11 @@ class PPOConfig:
         noise when the rewards are all 0, and drove the policy to push against a limit).
     reward_norm : bool
         Divide rewards by their running RMS over the learner's run so far (True).
+    energy_weight : float
+        ``lambda`` of the energy-aware reward ``progress - lambda x work``
+        ([`StepInfo.work`][jswim.env.base.StepInfo], in the world's work units per unit length
+        of progress). 0.0 (the default) rewards progress alone, the paper's reward, with the
+        same numbers as without the option; the world must count work (not ``nan``) when > 0.
     """
 
     steps: int = 200
@@ -133,8 +139,10 @@ class PPOConfig:
     anneal_end: float = 0.05
     normalize_advantages: bool = False
     reward_norm: bool = True
+    energy_weight: float = 0.0
 
     def __post_init__(self) -> None:
+        energy_reward(self.energy_weight)  # raises on a bad weight
         for name in ("steps", "rollout", "epochs", "hidden"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
@@ -392,7 +400,7 @@ def _train(
     """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``axes`` says, a
     ``vmap`` prefix) in the world ``world`` (default: the paper's world of ``params``): time
     outermost. The world's step is [`Environment.learner_advance`][jswim.env.base.Environment.learner_advance], its observation
-    ``features``, its reward ``StepInfo.progress``.
+    ``features``, its reward ``StepInfo.progress`` (minus ``energy_weight x StepInfo.work``).
 
     The scans run over time and every step is vmapped over learners inside them (as in
     PureJaxRL), which keeps the environment's float64 step blocks inside a plain ``vmap``.
@@ -431,13 +439,13 @@ def _train(
         action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
         logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
         state, info = world.learner_advance(state, action, y, p)
-        reward = info.progress.astype(dtype)
+        reward = energy_reward(config.energy_weight)(info).astype(dtype)
         x, y_pos, theta = world.pose(state, p)
         record = (
             action,
             (dof + 1).astype(jnp.int8),
             x,
-            reward,
+            info.progress.astype(dtype),
             world.observe(state, p).dofs,
             y_pos,
             theta,
@@ -502,7 +510,7 @@ def train(
 ) -> PPORun:
     """Train PPO learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.worlds.make]).
 
-    The learner sees the world's ``features``, is rewarded with ``StepInfo.progress``, and acts
+    The learner sees the world's ``features``, is rewarded with ``StepInfo.progress`` (minus ``config.energy_weight x StepInfo.work``), and acts
     with float ROC vectors (one non-zero entry).
 
     Parameters

@@ -41,6 +41,7 @@ import optax
 from jax import Array
 
 from jswim import sharding
+from jswim.agents.rewards import energy_reward
 from jswim.actions import check_action_set
 from jswim.env import EnvParams, advance, broadcast_params, reset, uniforms
 from jswim.env.base import Environment
@@ -86,6 +87,11 @@ class QConfig:
         ``"random"`` (uniformly among the maxima, the default) or ``"first"`` (lowest index, like
         ``argmax``: from equal values the learner repeats one useless action forever; kept to show
         that failure).
+    energy_weight : float
+        ``lambda`` of the energy-aware reward ``progress - lambda x work``
+        ([`StepInfo.work`][jswim.env.base.StepInfo], in the world's work units per unit length
+        of progress). 0.0 (the default) rewards progress alone, the paper's reward, with the
+        same numbers as without the option; the world must count work (not ``nan``) when > 0.
     """
 
     steps: int = 200
@@ -95,8 +101,10 @@ class QConfig:
     q_init: float = 0.35
     action_set: str = "all"
     tie_break: str = "random"
+    energy_weight: float = 0.0
 
     def __post_init__(self) -> None:
+        energy_reward(self.energy_weight)  # raises on a bad weight
         if not isinstance(self.steps, int) or self.steps < 1:
             raise ConfigError(f"steps must be a positive integer, got {self.steps!r}")
         if not 0.0 <= self.discount < 1.0:
@@ -283,6 +291,7 @@ def _train_one(
     opt = optax.sgd(lambda count: alpha(count - 1))
     epsilon = _schedule(config.epsilon)
     gamma = config.discount
+    reward = energy_reward(config.energy_weight)
 
     def act(state, q, t, u):
         """Choose, step the world, and form the TD target from the current table."""
@@ -297,7 +306,7 @@ def _train_one(
         x, y, theta = env.pose(new, params)
         out = (action.astype(jnp.int8), x, explore) + ((y, theta) if pose else (None, None))
         out += (Trajectory(new, env.observe(new, params), info) if trace else None,)
-        return new, _Pending(s, action, info.progress + gamma * future), out
+        return new, _Pending(s, action, reward(info) + gamma * future), out
 
     def learn(q, opt_state, pending):
         """One optax step on the squared TD error, the target held fixed (semi-gradient)."""

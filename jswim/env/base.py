@@ -30,6 +30,7 @@ docs/design.md, *Adding a world*).
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any, NamedTuple
 
 import jax
@@ -60,6 +61,15 @@ class StepInfo(NamedTuple):
         can be touched).
     gap : Array ()
         Smallest surface gap along the step (``inf`` where nothing can be touched).
+    work : Array ()
+        The work the step's strokes did on the fluid: the energy the step dissipates, all
+        swimmers together ([`jswim.env.work`][jswim.env.work]). Units: ``xi_par a^3 / tau`` for
+        link swimmers (Purcell's, longer chains; ``xi_par`` the bulk fluid's drag coefficient
+        per length, ``a`` the link length) and ``6 pi mu a^3 / tau`` for sphere swimmers (NG;
+        ``a`` the sphere radius), ``tau`` one step at ``|ROC| = 1``. It does not depend on the
+        noise ``zeta`` (the paper perturbs the displacement only). Worlds that do not count
+        energy leave the default ``nan`` (the scenes of `jswim.scenes` and any world a user
+        registers without it): a ``nan`` sum says "not counted", never "free".
     """
 
     displacement: Array
@@ -68,6 +78,7 @@ class StepInfo(NamedTuple):
     moved: Array
     contact: Array
     gap: Array
+    work: Array | float = math.nan
 
 
 class Observation(NamedTuple):

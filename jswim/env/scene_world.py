@@ -127,6 +127,8 @@ class SceneWorld(Environment):
             info.moved,
             info.contact,
             jnp.asarray(info.gap, dtype),
+            # Not counted: the sum of F.V over the scene's force-free solve is not wired in.
+            jnp.asarray(jnp.nan, dtype),
         )
 
     def observe(self, state: SceneState, params: SceneTask) -> Observation:

@@ -72,6 +72,7 @@ class MoveInfo(NamedTuple):
     stuck: Array  # the move pushed a DOF past its limit; nothing moved
     moved: Array  # the shape changed
     x: Array  # centroid x after the step
+    work: Array  # work the step's stroke did on the fluid (jswim.env.work units)
 
 
 def corner_values(model: SwimmerModel, levels: Array) -> Array:

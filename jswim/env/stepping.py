@@ -40,6 +40,7 @@ from jswim.env.tables import (
     lattice_rows,
     lattice_table,
 )
+from jswim.env.work import corner_work_table, lattice_work_table, step_work
 from jswim.integrate import centroid, integrate_stroke
 from jswim import sharding
 
@@ -171,10 +172,12 @@ def _advance_corner(
     row = jnp.where(moved, _corner_index(levels) * n + dof, _still_row(model))
     frac = (levels + onehot * moved.astype(jnp.int32) * (1 - 2 * level)).astype(state.frac.dtype)
     if not exact:
-        return _advance_plain(state, frac, row, y_noise, params, stuck, moved)
+        work = jnp.asarray(corner_work_table(model), state.x.dtype)[row]
+        return _advance_plain(state, frac, row, y_noise, params, stuck, moved, work)
     with jax.enable_x64(True):
         entry = jnp.asarray(_step_rows(model), jnp.float64)[row]
-    return _apply(state, entry, y_noise, params, stuck, moved, frac, state.frac_lo)
+        work = jnp.asarray(corner_work_table(model), jnp.float64)[row]
+    return _apply(state, entry, y_noise, params, stuck, moved, frac, state.frac_lo, work)
 
 
 def _advance_lattice(
@@ -197,13 +200,30 @@ def _advance_lattice(
     if lattice_rows(model, big_k) <= MAX_LATTICE_ROWS:
         shape = jnp.sum(j0 * (big_k + 1) ** jnp.arange(n, dtype=jnp.int32), dtype=jnp.int32)
         row = (shape * n + dof) * (big_k + 1) + jnp.sum(j1 * onehot)
+        # A push clipped at a limit moves |j1 - j0| lattice units at ROC k / K: it costs |k| /
+        # |j1 - j0| times the row's work (the row holds the move at the ROC that lands on j1).
+        step = jnp.abs(jnp.sum((j1 - j0) * onehot))
+        count = jnp.maximum(step, 1)
         with jax.enable_x64(True):
             entry = jnp.asarray(lattice_table(model, big_k), jnp.float64)[row]
             fh, fl = narrow(j1.astype(jnp.float64) / big_k, state.frac.dtype)
-        return _apply(state, entry, y_noise, params, stuck, moved, fh, fl)
+            table = jnp.asarray(lattice_work_table(model, big_k), jnp.float64)
+            scale = jnp.abs(k).astype(jnp.float64) / count.astype(jnp.float64)
+            work = jnp.where(step > 0, table[row] * scale, 0.0)
+        return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work)
     with jax.enable_x64(True):
         s0, s1 = j0.astype(jnp.float64) / big_k, j1.astype(jnp.float64) / big_k
-        return _advance_path(state, s0, s1, y_noise, params, requested=k != 0, dof=dof)
+        rocs = onehot.astype(jnp.float64) * k.astype(jnp.float64) / big_k
+        return _advance_path(
+            state,
+            s0,
+            s1,
+            y_noise,
+            params,
+            requested=k != 0,
+            dof=dof,
+            work=step_work(model, s0, rocs),
+        )
 
 
 def _advance_rocs(
@@ -228,6 +248,7 @@ def _advance_rocs(
             requested=requested,
             rocs=r,
             dof=None if params.diagonal else first,
+            work=step_work(params.model, s0, r),
         )
 
 
@@ -242,8 +263,10 @@ def _advance_path(
     rocs: Array | None = None,
     dof: Array | None = None,
     method: str | None = None,
+    work: Array,
 ) -> tuple[EnvState, MoveInfo]:
-    """Move the shape from ``s0`` to ``s1`` (float64 fractions of the range), integrating the path.
+    """Move the shape from ``s0`` to ``s1`` (float64 fractions of the range), integrating the path;
+    ``work`` is the step's work (float64, [`jswim.env.work`][jswim.env.work]).
 
     With ``rocs`` and ``params.diagonal`` the path is the one the motors follow:
     ``clip(s0 + rocs t, 0, 1)`` for ``t`` in [0, 1], straight until a DOF reaches its limit.
@@ -260,7 +283,7 @@ def _advance_path(
         else:
             entry = _segment_increment(model, s0, s1)
         fh, fl = narrow(s1, state.frac.dtype)
-    return _apply(state, entry, y_noise, params, stuck, moved, fh, fl)
+    return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work)
 
 
 def _segment_increment(model: Any, s0: Array, s1: Array) -> Array:
@@ -309,9 +332,11 @@ def _apply(
     moved: Array,
     frac: Array,
     frac_lo: Array,
+    work: Array,
 ) -> tuple[EnvState, MoveInfo]:
     """Apply a body-frame step row ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` (float64) to the
-    pose, with the paper's noise on the displacement, in float64; store the result as pairs."""
+    pose, with the paper's noise on the displacement, in float64; store the result as pairs.
+    ``work`` (float64; the noise does not touch it) is reported in the working dtype."""
     model = params.model
     dtype = state.x.dtype
     with jax.enable_x64(True):
@@ -338,6 +363,7 @@ def _apply(
         )
         dxh, dyh = dx.astype(dtype), dy.astype(dtype)
         progress = (jnp.asarray(params.direction, f64) * dx).astype(dtype)
+        work = jnp.asarray(work, f64).astype(dtype)
     new = EnvState(
         frac.astype(dtype),
         xh,
@@ -353,7 +379,7 @@ def _apply(
         sl,
         frac_lo.astype(dtype),
     )
-    return new, MoveInfo(dxh, dyh, progress, stuck, moved, new.x)
+    return new, MoveInfo(dxh, dyh, progress, stuck, moved, new.x, work)
 
 
 def _advance_plain(
@@ -364,6 +390,7 @@ def _advance_plain(
     params: EnvParams,
     stuck: Array,
     moved: Array,
+    work: Array,
 ) -> tuple[EnvState, MoveInfo]:
     """[`advance`][jswim.env.stepping.advance] with ``exact=False``: the same step in working-dtype arithmetic."""
     dtype = state.x.dtype
@@ -389,4 +416,4 @@ def _advance_plain(
         sin_lo=zero,
     )
     progress = jnp.asarray(params.direction, dtype) * dx
-    return new, MoveInfo(dx, dy, progress, stuck, moved, new.x)
+    return new, MoveInfo(dx, dy, progress, stuck, moved, new.x, work)

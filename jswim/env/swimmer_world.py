@@ -88,6 +88,7 @@ class SwimmerWorld(Environment):
             moved=info.moved,
             contact=jnp.zeros((), bool),
             gap=jnp.asarray(jnp.inf, dtype),
+            work=info.work,
         )
 
     def observe(self, state: EnvState, params: EnvParams) -> Observation:
@@ -118,6 +119,7 @@ class SwimmerWorld(Environment):
             i.moved,
             jnp.zeros((), bool),
             jnp.asarray(jnp.inf, i.dx.dtype),
+            i.work,
         )
 
     def pose(self, state: EnvState, params: EnvParams) -> tuple[Array, Array, Array]:

@@ -202,3 +202,36 @@ def lattice_step_work(
     table = jnp.asarray(lattice_work_table(model, big_k))
     scale = jnp.abs(k) / jnp.maximum(moved, 1)
     return jnp.where(moved > 0, table[row] * scale, 0.0)
+
+
+def lighthill_efficiency(displacement: float, work: float, steps: int, bodies: int) -> float:
+    """Lighthill's efficiency of a run: ``C X^2 / (N W)``.
+
+    The power of towing the rigid, straight swimmer at the run's mean speed ``U = X / (N tau)``
+    is ``C U^2``; the strokes spent ``W / (N tau)`` on average; their ratio is the efficiency
+    (Lighthill 1975; Tam & Hosoi, Phys. Rev. Lett. 98, 068105, 2007, for Purcell's swimmer).
+    ``C`` is the straight swimmer's axial drag: ``bodies x xi_par a`` for straight links,
+    ``bodies x 6 pi mu a`` for isolated spheres, so in the units of
+    [`jswim.env.work`][jswim.env.work] it is ``bodies``. One square-gait cycle (``N = 4``)
+    gives the page's ``3 dX^2 / (4 W)`` (docs/physics.md, *Energy and turning*).
+
+    Parameters
+    ----------
+    displacement : float
+        X, the run's displacement (a).
+    work : float
+        W, its total work (``xi_par a^3 / tau`` or ``6 pi mu a^3 / tau``); must be > 0.
+    steps : int
+        N, its number of steps (each lasts ``tau``).
+    bodies : int
+        Links or spheres of the swimmer (``n_dof + 1`` for a chain or a collinear sphere
+        swimmer).
+
+    Raises
+    ------
+    ValueError
+        If ``work <= 0`` or ``steps < 1``.
+    """
+    if not work > 0 or steps < 1:
+        raise ValueError(f"efficiency needs work > 0 and steps >= 1, got {work} and {steps}")
+    return bodies * displacement**2 / (steps * work)

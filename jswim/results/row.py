@@ -92,26 +92,37 @@ SWITCHES = (
 )
 _WHERE_SET = ("pair_prompt", "temperature_sent", "plane_height")
 
+#: A run's energy columns (None where its world does not count work, and in older folders).
+ENERGY = ("energy", "energy_per_distance", "efficiency")
+
 #: The four layouts of a row (bulk or scene world, LLM or not), as written since the columns
 #: existed; ``other`` is where columns this version does not know go. A layout's order is the
 #: in-memory order; ``runs.jsonl`` sorts its keys.
 LAYOUTS = {
     (False, False): HEAD
-    + ("sample", "x", "actions", "progress", "status", "y", "orientation", "other"),
+    + ("sample", "x", "actions", "progress")
+    + ENERGY
+    + ("status", "y", "orientation", "other"),
     (False, True): HEAD
-    + ("sample", "x", "actions", "progress", "status")
+    + ("sample", "x", "actions", "progress")
+    + ENERGY
+    + ("status",)
     + USAGE
     + ("y", "orientation", "below_x_min")
     + SWITCHES
     + ("other",),
     (True, False): HEAD
     + SCENE
-    + ("x", "y", "orientation", "actions", "progress", "status")
+    + ("x", "y", "orientation", "actions", "progress")
+    + ENERGY
+    + ("status",)
     + TRACKS
     + ("stuck", "other"),
     (True, True): HEAD
     + SCENE
-    + ("x", "y", "orientation", "actions", "progress", "status")
+    + ("x", "y", "orientation", "actions", "progress")
+    + ENERGY
+    + ("status",)
     + USAGE
     + ("stuck", "below_x_min")
     + SWITCHES
@@ -176,6 +187,20 @@ class RunRow(Mapping):
         Which repeat of its setting (``--samples``); paper's world only (None in scene rows).
     x, progress : list of float
         Centroid x after each step (a), and each step's displacement in the target direction (a).
+    energy : float or None
+        The run's total work on the fluid, the sum of its steps'
+        [`StepInfo.work`][jswim.env.base.StepInfo] (``xi_par a^3 / tau`` for Purcell's swimmer,
+        ``6 pi mu a^3 / tau`` for NG). None where the world does not count work (scenes) and in
+        folders written before the column existed.
+    energy_per_distance : float or None
+        ``energy / |final_x|`` (the work per unit distance along x; None when the run ends at
+        ``x = 0``).
+    efficiency : float or None
+        Lighthill's efficiency of the whole run, ``C X^2 / (N W)``: the power of towing the
+        rigid swimmer at the run's mean speed ``X / (N tau)`` over the mean power ``W / (N tau)``
+        the strokes spent, ``C`` the straight swimmer's axial drag (one unit per link or sphere;
+        [`jswim.env.work.lighthill_efficiency`][jswim.env.work.lighthill_efficiency],
+        docs/physics.md, *Energy and turning*). None when ``energy`` is None or 0.
     actions : list of list
         Each step's ``[dof, roc]`` (ROC in -1, 0, 1, or a real ROC for ``ppo``).
     status : str
@@ -312,6 +337,9 @@ class RunRow(Mapping):
     share_identical: bool | None = None
     constraint: str | None = None
     max_tokens: int | None = None
+    energy: float | None = None
+    energy_per_distance: float | None = None
+    efficiency: float | None = None
     pair_prompt: str | None = None
     temperature_sent: float | None = None
     other: Mapping[str, Any] = field(default_factory=dict)

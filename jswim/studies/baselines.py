@@ -25,6 +25,7 @@ from jswim import env
 from jswim.agents import qlearning, random_policy, strokes
 from jswim.agents.llm import RunResult
 from jswim.env.base import Environment, Observation
+from jswim.env.episodes import rollout as jswim_rollout
 from jswim.env.worlds import make
 from jswim.judging.gait import Criterion
 from jswim.results.row import RunRow
@@ -135,6 +136,7 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
         return _scene_rows(plans, world_, params, task, horizon)
     run = _learn(plans, world_, task, np.zeros(world_.n_dof, np.int64))
     pose = (np.asarray(run.y), np.asarray(run.orientation))
+    work = np.asarray(run.trace.info.work, np.float64).reshape(len(plans), -1)
     if p0.agent == CONTINUOUS_AGENT:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
@@ -152,6 +154,7 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
             pose=pose,
             report=rep,
             moves=_moves(run),
+            work=work,
         )
     return judged_rows(
         plans,
@@ -160,6 +163,7 @@ def _run_group(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
         np.asarray(run.levels0),
         horizon,
         pose=pose,
+        work=work,
     )
 
 
@@ -218,6 +222,19 @@ def _scene_rows(
     return rows
 
 
+def _replayed_work(plan: Plan, r: RunResult) -> np.ndarray | None:
+    """Each step's work of an LLM run in the paper's world ``(1, steps)``, from replaying its
+    actions from its start: the work depends on the shape's path only, not on the noise, so the
+    replay's is the run's. None when the run has no actions or they do not match its x series."""
+    if not r.actions or len(r.actions) != len(r.x) or not r.levels0:
+        return None
+    lattice = {"roc_levels": plan.roc_levels} if plan.roc_levels > 1 else {}
+    world_, params = make(plan.swimmer, init=tuple(int(v) for v in r.levels0), **lattice)
+    codes = np.asarray(r.actions, np.int32)
+    tr = jswim_rollout(world_, params, jax.random.PRNGKey(0), codes)
+    return np.asarray(tr.info.work, np.float64)[None]
+
+
 def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     """The judged row of one finished LLM run, with the run's own fields
     ([`with_llm`][jswim.studies.rows.with_llm]); a scene's has the scene's columns."""
@@ -226,7 +243,8 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
         xs = np.array([r.x], float).reshape(1, len(r.x))
         # The judge reads the start as lattice positions: a corner level times K.
         levels = np.array([r.levels0], np.int64) * plan.roc_levels
-        return with_llm(judged_rows([plan], acts, xs, levels, horizon)[0], r)
+        work = _replayed_work(plan, r)
+        return with_llm(judged_rows([plan], acts, xs, levels, horizon, work=work)[0], r)
     scene = scene_of(plan)
     world_, params = world(plan)
     _, z0, tilt0, _ = start(world_, params, scene)

@@ -17,6 +17,7 @@ import numpy as np
 
 from jswim import env
 from jswim.agents.llm import RunResult
+from jswim.env.work import lighthill_efficiency
 from jswim.judging import lattice
 from jswim.judging.gait import Criterion, GaitReport, judge
 from jswim.results.row import SWITCHES, RunRow
@@ -39,6 +40,7 @@ def build_row(
     verdict: Mapping[str, Any],
     *,
     init: str,
+    work: Sequence[float] | None = None,
     **columns: Any,
 ) -> RunRow:
     """The row of one judged run of ``plan``.
@@ -55,6 +57,9 @@ def build_row(
         or the real-valued agent's own judge).
     init : str
         The start as the row shows it ([`signs`][jswim.studies.rows.signs]).
+    work : sequence of float, optional
+        Each step's work ([`StepInfo.work`][jswim.env.base.StepInfo]); gives ``energy``,
+        ``energy_per_distance`` and ``efficiency`` ([`energy_columns`][jswim.studies.rows.energy_columns]).
     **columns
         Further [`RunRow`][jswim.results.RunRow] columns: ``y``, ``orientation``, a scene's.
     """
@@ -83,8 +88,34 @@ def build_row(
         x=x,
         actions=actions,
         progress=[float(v) for v in prog],
+        **energy_columns(plan.swimmer, end, work),
         **columns,
     )
+
+
+def energy_columns(
+    swimmer: str, displacement: float, work: Sequence[float] | None
+) -> dict[str, Any]:
+    """A run's ``energy`` (total work), ``energy_per_distance`` (``energy / |X|``) and Lighthill
+    ``efficiency`` ([`jswim.env.work.lighthill_efficiency`][jswim.env.work.lighthill_efficiency],
+    ``C`` = the swimmer's links or spheres), from its per-step work and its displacement ``X``
+    along x. All None when no work is given or any step's is not a number (a world that does not
+    count work); ``energy_per_distance`` None when ``X = 0``, ``efficiency`` None when the work is 0."""
+    none = dict.fromkeys(("energy", "energy_per_distance", "efficiency"))
+    if work is None or len(work) == 0:
+        return none
+    w = np.asarray(work, np.float64)
+    if not np.all(np.isfinite(w)):
+        return none
+    total = float(np.sum(w))
+    bodies = env.make_params(swimmer).model.n_dof + 1
+    return {
+        "energy": total,
+        "energy_per_distance": total / abs(displacement) if displacement != 0 else None,
+        "efficiency": lighthill_efficiency(displacement, total, len(w), bodies)
+        if total > 0
+        else None,
+    }
 
 
 def verdict(rep: GaitReport, i: int) -> dict[str, Any]:
@@ -106,13 +137,15 @@ def judged_rows(
     pose: tuple[np.ndarray, np.ndarray] | None = None,
     report: GaitReport | None = None,
     moves: Sequence[list[list[float]]] | None = None,
+    work: np.ndarray | None = None,
 ) -> list[RunRow]:
     """Rows for a batch of runs of one swimmer and ROC lattice, judged by the shared success criterion.
 
     ``levels0`` holds the starts' lattice positions (levels on the paper's K = 1). ``pose``
     gives the centroid y and the orientation after each step, shape ``(runs, steps)`` each, for
     the trajectories (an LLM run brings its own: [`with_llm`][jswim.studies.rows.with_llm]). The real-valued agent brings
-    its own ``report`` ([`jswim.agents.ppo.evaluate`][jswim.agents.ppo_judge.evaluate]) and ``moves`` (``[dof, roc]`` per step)."""
+    its own ``report`` ([`jswim.agents.ppo.evaluate`][jswim.agents.ppo_judge.evaluate]) and ``moves`` (``[dof, roc]`` per step).
+    ``work`` ``(runs, steps)`` is each step's work (the energy columns; None: not counted)."""
     k = plans[0].roc_levels
     params = env.make_params(plans[0].swimmer).replace(
         direction=np.array([p.direction for p in plans], float)
@@ -133,6 +166,7 @@ def judged_rows(
             else [list(lattice.decode(int(a), max(k, 1))) for a in actions[i]],
             verdict(rep, i),
             init=signs(levels0[i]),
+            work=None if work is None else work[i],
             **(
                 {}
                 if pose is None
