@@ -190,6 +190,9 @@ def test_bulk_rows_have_todays_columns_in_order():
         "x",
         "actions",
         "progress",
+        "energy",
+        "energy_per_distance",
+        "efficiency",
         "status",
         "y",
         "orientation",
@@ -215,7 +218,8 @@ def test_bulk_llm_row_merges_the_runs_fields():
     assert (
         list(row.to_dict())
         == HEAD
-        + ["sample", "x", "actions", "progress", "status"]
+        + ["sample", "x", "actions", "progress", "energy", "energy_per_distance", "efficiency"]
+        + ["status"]
         + USAGE
         + ["y", "orientation", "below_x_min"]
         + KNOB_COLUMNS
@@ -247,6 +251,9 @@ def test_scene_rows_add_the_scene_columns(scene):
         "orientation",
         "actions",
         "progress",
+        "energy",
+        "energy_per_distance",
+        "efficiency",
         "status",
         "xs",
         "heights",
@@ -270,6 +277,9 @@ def test_scene_rows_add_the_scene_columns(scene):
         "orientation",
         "actions",
         "progress",
+        "energy",
+        "energy_per_distance",
+        "efficiency",
         "status",
     ] + USAGE + ["stuck", "below_x_min"] + KNOB_COLUMNS + ["xs", "heights", "tilts", "contact"]
     assert llm.y == [3.0] * 4  # swimmer 1's height, not the run's bulk y
