@@ -193,7 +193,7 @@ def quotes(fast: bool = False) -> Iterator[Quote]:
     square = [encode_action(d, r) for d, r in [(1, -1), (2, -1), (1, 1), (2, 1)]]
     progress = float(jswim.rollout(world, params, 0, square * 3).info.progress.sum())
     for page in ("../README.md", "getting-started.md"):
-        yield Quote(page, r"# (0\.\d+) a toward \+x in 3 cycles", progress)
+        yield Quote(page, r"wall: (0\.\d+) a toward \+x in 3 cycles", progress)
     along_x, orientation0 = _four_link_x()
     yield Quote(
         "physics.md", r"the best stroke moves (0\.\d+)\s+a per 6-step cycle along x", along_x

@@ -248,7 +248,9 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     scene = scene_of(plan)
     world_, params = world(plan)
     _, z0, tilt0, _ = start(world_, params, scene)
-    tracks = {k: getattr(r, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
+    # A track the driver did not record (a world of one swimmer keeps no ``xs``, one that cannot
+    # touch anything no ``contact``) is absent from the row, not an empty list of the wrong length.
+    tracks = {k: getattr(r, k) or None for k in ("xs", "heights", "tilts", "contact", "stuck")}
     if not tracks["heights"]:
         # a world that reports no height (Purcell's plane above a wall, a registered world): the
         # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)

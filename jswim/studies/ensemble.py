@@ -45,6 +45,7 @@ from jswim.agents import qlearning
 from jswim.agents.defaults import default_rocs
 from jswim.agents.qlearning import _corner, _greedy_set, _offered, _pick
 from jswim.env import EnvParams, EnvState, advance, make_params, noise, seed_key, start_state
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError, check_zeta
 from jswim.judging import gait
 
@@ -400,7 +401,8 @@ def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all")
     """Train one Q-learner (default [`QConfig`][jswim.agents.qlearning.QConfig], no noise) and
     return its greedy policy."""
     config = qlearning.QConfig(action_set=action_set)
-    run_ = qlearning.train(seed_key(seed), params.replace(zeta=0.0), config)
+    world = SwimmerWorld(params.model, params.roc_levels, params.diagonal)
+    run_ = qlearning.train(world, params.replace(zeta=0.0), seed_key(seed), config)
     return q_policy(
         np.asarray(run_.q), params, action_set, label=f"Q-policy (seed {seed}, {action_set})"
     )
