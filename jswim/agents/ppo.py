@@ -508,7 +508,7 @@ def train(
     *,
     trace: bool = False,
 ) -> PPORun:
-    """Train PPO learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.worlds.make]).
+    """Train PPO learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.registry.make]).
 
     The learner sees the world's ``features``, is rewarded with ``StepInfo.progress`` (minus ``config.energy_weight x StepInfo.work``), and acts
     with float ROC vectors (one non-zero entry).

@@ -42,7 +42,7 @@ from jax import Array
 
 from jswim import sharding
 from jswim.agents.rewards import energy_reward
-from jswim.actions import check_action_set
+from jswim.action_codes import check_action_set
 from jswim.env import EnvParams, advance, broadcast_params, reset, uniforms
 from jswim.env.base import Environment
 from jswim.env.discretiser import Cells, corner, offered_mask, positions
@@ -375,7 +375,7 @@ def train(
     trace: bool = False,
     cells: Cells | None = None,
 ) -> QRun:
-    """Train Q-learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.worlds.make]).
+    """Train Q-learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.registry.make]).
 
     One key trains one learner; a batch of keys ``(B, 2)`` trains ``B`` independent learners in
     one jitted call vmapped over learners and sharded over every device (`jswim.sharding`;

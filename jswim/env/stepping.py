@@ -27,12 +27,12 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from jswim.actions import decode_action
+from jswim.action_codes import decode_action
 from jswim.env.params import EnvParams, broadcast_params, is_batched, param_axes
 from jswim.env import motion
 from jswim.env.randomness import noise
 from jswim.env.state import EnvState, MoveInfo, corner_values, narrow, wide
-from jswim.env.tables import (
+from jswim.env.step_tables import (
     MAX_LATTICE_ROWS,
     _corner_index,
     _step_rows,
@@ -57,11 +57,11 @@ def step(
 ) -> tuple[EnvState, MoveInfo]:
     """Advance one swimmer by one action.
 
-    ``action`` is an integer code ([`jswim.env.encode_action`][jswim.actions.encode_action], ROC ``k / K`` with
+    ``action`` is an integer code ([`jswim.env.encode_action`][jswim.action_codes.encode_action], ROC ``k / K`` with
     ``K = params.roc_levels``) or a float ROC vector of shape ``(n_dof,)`` with entries in
-    [-1, 1] (see [`jswim.env.actions`][jswim.env.actions]). The noise variable ``Y ~ U[-1, 1]`` is drawn from
+    [-1, 1] (see [`jswim.env.action_input`][jswim.env.action_input]). The noise variable ``Y ~ U[-1, 1]`` is drawn from
     ``key``. Codes outside ``[0, n_actions)`` are clipped and ROCs clipped to [-1, 1]; validate
-    user input with [`jswim.env.validate_actions`][jswim.env.actions.validate_actions] / [`jswim.env.validate_moves`][jswim.env.actions.validate_moves] before it
+    user input with [`jswim.env.validate_actions`][jswim.env.action_input.validate_actions] / [`jswim.env.validate_moves`][jswim.env.action_input.validate_moves] before it
     reaches a jitted loop.
     """
     return advance(state, action, jax.random.uniform(key, (), state.x.dtype, -1.0, 1.0), params)
@@ -89,7 +89,7 @@ def step_batch(
     states : EnvState
         Batched states, leading axis B.
     actions : int array (B,) or float array (B, n_dof)
-        Integer codes ([`jswim.env.encode_action`][jswim.actions.encode_action]) or float ROC vectors.
+        Integer codes ([`jswim.env.encode_action`][jswim.action_codes.encode_action]) or float ROC vectors.
     params : EnvParams
         Shared, or with ``zeta``/``direction``/``init`` batched along B.
     start : int
@@ -185,7 +185,7 @@ def _advance_lattice(
 ) -> tuple[EnvState, MoveInfo]:
     """An integer code on the K lattice: ROC ``k / K``; the new shape is the lattice point
     ``round(K frac) + k`` (clipped to ``0..K``) over K, computed afresh so it never drifts. The
-    step is read from the lattice table (`jswim.env.tables.lattice_table`, one gather like
+    step is read from the lattice table (`jswim.env.step_tables.lattice_table`, one gather like
     the corner table) when it is small enough, else integrated."""
     model = params.model
     n, big_k = model.n_dof, params.roc_levels

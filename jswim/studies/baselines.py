@@ -1,8 +1,8 @@
 """One pipeline for every study's runs other than the LLM's, and one row builder for the LLM's.
 
-Every plan goes the same way, whatever its world: [`make`][jswim.env.worlds.make] builds the world
+Every plan goes the same way, whatever its world: [`make`][jswim.env.registry.make] builds the world
 from the plan's swimmer, scene, noise, start and ROC lattice (the paper's world, a scene world,
-Purcell's swimmer above a wall, or a world of [`register_world`][jswim.env.worlds.register_world]);
+Purcell's swimmer above a wall, or a world of [`register_world`][jswim.env.registry.register_world]);
 the learner's one entry point runs the group's plans on it (the stroke player
 [`play`][jswim.agents.strokes.play], [`random_policy.run`][jswim.agents.random_policy.run],
 [`qlearning.train`][jswim.agents.qlearning.train], [`ppo.train`][jswim.agents.ppo.train]: one
@@ -26,11 +26,11 @@ from jswim.agents import qlearning, random_policy, strokes
 from jswim.agents.llm import RunResult
 from jswim.env.base import Environment, Observation
 from jswim.env.episodes import rollout as jswim_rollout
-from jswim.env.worlds import make
+from jswim.env.registry import make
 from jswim.judging.gait import Criterion
 from jswim.results.row import RunRow
 from jswim.scenes import Scene
-from jswim.studies import scenes
+from jswim.studies import scene_studies
 from jswim.studies.options import CONTINUOUS_AGENT, STROKE_AGENT
 from jswim.studies.plans import Plan
 from jswim.studies.rows import judged_rows, with_llm
@@ -46,7 +46,7 @@ def scene_of(plan: Plan) -> Scene | None:
 
 
 def world(plan: Plan) -> tuple[Environment, Any]:
-    """A plan's world and its params ([`make`][jswim.env.worlds.make]), toward +x (the runs set
+    """A plan's world and its params ([`make`][jswim.env.registry.make]), toward +x (the runs set
     their own direction). A corner start is the plan's; a random one is drawn at reset in the
     paper's world; a scene's other starts are the scene's own."""
     init: Any = None
@@ -103,7 +103,7 @@ def _learn(plans: Sequence[Plan], world: Environment, task: Any, corner: np.ndar
         n_sw = world.n_swimmers
         codes = np.stack(
             [
-                scenes.stroke_codes(
+                scene_studies.stroke_codes(
                     p.variant, p.direction, p.steps, n_sw, corner, world.n_actions // n_sw
                 )
                 for p in plans
@@ -181,7 +181,7 @@ def _scene_rows(
     elif p0.agent == CONTINUOUS_AGENT:
         codes, tr = np.zeros((len(plans), 0), np.int64), out.trace
         moves = _moves(out)
-        judged = scenes.ppo_judged(out, plans, world_, task, horizon)
+        judged = scene_studies.ppo_judged(out, plans, world_, task, horizon)
     else:
         codes, tr = np.asarray(out.actions), out.trace
     obs = tr.obs
@@ -200,7 +200,7 @@ def _scene_rows(
             "contact": contact[i].tolist(),
             "stuck": stuck[i].tolist(),
         }
-        row = scenes.scene_row(
+        row = scene_studies.scene_row(
             p,
             [int(c) for c in codes[i]],
             xs[i].mean(axis=-1).tolist(),
@@ -253,7 +253,7 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
         # a world that reports no height (Purcell's plane above a wall, a registered world): the
         # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)
         tracks.update(heights=[z0.tolist()] * len(r.x), tilts=[tilt0.tolist()] * len(r.x))
-    row = scenes.scene_row(
+    row = scene_studies.scene_row(
         plan,
         list(r.actions),
         list(r.x),

@@ -40,7 +40,7 @@ import numpy as np
 from jax import Array
 
 from jswim import sharding
-from jswim.actions import check_action_set
+from jswim.action_codes import check_action_set
 from jswim.agents import qlearning
 from jswim.agents.defaults import default_rocs
 from jswim.agents.qlearning import _corner, _greedy_set, _offered, _pick

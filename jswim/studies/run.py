@@ -49,7 +49,7 @@ from jswim._io.permissions import private_files
 from jswim.llm.client import ClientSettings
 from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
 from jswim.llm.probe import ServerInfo
-from jswim.llm.errors import LLMError
+from jswim.errors import LLMError
 from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
@@ -516,12 +516,14 @@ def _run_in(
 
 
 def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
-    """``{"scenes": table}`` of a study with scene runs (`jswim.studies.scenes.scene_summary`), else ``{}``."""
+    """``{"scenes": table}`` of a study with scene runs (`jswim.studies.scene_studies.scene_summary`), else ``{}``."""
     if not any(r.scene for r in rows):
         return {}
-    from jswim.studies import scenes  # lazy: start-up (the scene module, for scene studies only)
+    from jswim.studies import (
+        scene_studies,
+    )  # lazy: start-up (the scene module, for scene studies only)
 
-    return {"scenes": scenes.scene_summary([r for r in rows if not is_failed(r)])}
+    return {"scenes": scene_studies.scene_summary([r for r in rows if not is_failed(r)])}
 
 
 def _write_report(folder: Path, figures: bool) -> None:

@@ -146,5 +146,5 @@ def study_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
     return cells
 
 
-# Walls and pairs (extensions): NG swimmers only (jswim.studies.scenes, README "Walls,
+# Walls and pairs (extensions): NG swimmers only (jswim.studies.scene_studies, README "Walls,
 # obstacles and pairs"); --init is the paper's NG start (10, 6), the scene's start.

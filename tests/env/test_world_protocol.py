@@ -270,7 +270,7 @@ def test_old_names_import_from_their_old_places():
         "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make"],
         # moved by issue 30's import clean-up, still importable where they were
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
-        "jswim.studies.scenes": [
+        "jswim.studies.scene_studies": [
             "wall_scene",
             "pair_scene",
             "cells",

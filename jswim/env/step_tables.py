@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.env.cache import cached, model_key
+from jswim.env.table_cache import cached, model_key
 from jswim.env.state import corner_values
 from jswim.integrate import centroid, integrate_stroke
 from jswim.swimmers.models import SwimmerModel
