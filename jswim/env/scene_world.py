@@ -72,11 +72,12 @@ class SceneWorld(Environment):
         return self.scene.medium == "wall"
 
     def scenery(self) -> Scenery:
-        """NG swimmers by their outline, the wall and the obstacles of the scene."""
+        """NG swimmers by their outline, the wall and the obstacles of the scene, seen from the side."""
         return Scenery(
             model=make_model("ng"),
             wall=self.wall,
             obstacles=tuple(tuple(map(float, o)) for o in self.scene.obstacles),
+            side_view=True,
         )
 
     @property

@@ -58,12 +58,13 @@ def world(plan: Plan) -> tuple[Environment, Any]:
     return make(plan.swimmer, scene_of(plan), zeta=plan.zeta, init=init, **lattice)
 
 
-def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: the world's own
-    (`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
-    a plane parallel to the wall, a registered world) stays at the scene's start height (0 in the
-    paper's bulk fluid), untilted."""
-    if obs.height is not None:
+def _lift(obs: Observation, scene: Scene, side_view: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: a world seen from
+    the side ([`Scenery.side_view`][jswim.env.base.Scenery]) gives its own
+    (`Observation.height`, its orientation); one seen from above (Purcell's swimmer in a plane
+    parallel to the wall, a registered world) stays at the scene's start height (0 in the paper's
+    bulk fluid), untilted."""
+    if side_view:
         return np.asarray(obs.height, np.float64), np.asarray(obs.orientation, np.float64)
     shape = np.shape(obs.orientation)
     return np.full(shape, scene.height if scene.medium != "bulk" else 0.0), np.zeros(shape)
@@ -75,7 +76,8 @@ def start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, ..
     state = world.reset(jax.random.PRNGKey(0), params)
     obs = world.observe(state, params)
     corner = np.asarray(world.cells().positions(state, params), np.int64)
-    return (np.asarray(obs.position[:, 0], np.float64), *_lift(obs, scene), corner)
+    side_view = world.scenery().side_view
+    return (np.asarray(obs.position[:, 0], np.float64), *_lift(obs, scene, side_view), corner)
 
 
 def _per_run(params: Any, directions: Sequence[int]) -> Any:
@@ -186,7 +188,8 @@ def _scene_rows(
         codes, tr = np.asarray(out.actions), out.trace
     obs = tr.obs
     xs = np.asarray(obs.position[..., 0], np.float64) - x0
-    heights, tilts = _lift(obs, scene)
+    scenery = world_.scenery()
+    heights, tilts = _lift(obs, scene, scenery.side_view)
     stuck, contact = (
         np.asarray(v, bool).reshape(xs.shape[:2] + (-1,)).any(-1)
         for v in (tr.info.stuck, tr.info.contact)
@@ -210,9 +213,9 @@ def _scene_rows(
             tilt0=tilt0,
             judged=judged[i],
             moves=moves[i],
-            plane_height=world_.scenery().plane_height,
+            plane_height=scenery.plane_height,
         )
-        if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
+        if not scenery.side_view:  # seen from above: swimmer 1's y and orientation in its plane
             y, orientation = (
                 np.asarray(v[i, :, 0], np.float64).tolist()
                 for v in (obs.position[..., 1], obs.orientation)
@@ -250,8 +253,8 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     _, z0, tilt0, _ = start(world_, params, scene)
     tracks = {k: getattr(r, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
     if not tracks["heights"]:
-        # a world that reports no height (Purcell's plane above a wall, a registered world): the
-        # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)
+        # a run whose prompt showed no scene (one swimmer seen from above: Purcell's plane above
+        # a wall, a registered world): the start's throughout, _lift's rule (z0 is its start)
         tracks.update(heights=[z0.tolist()] * len(r.x), tilts=[tilt0.tolist()] * len(r.x))
     row = scene_studies.scene_row(
         plan,
