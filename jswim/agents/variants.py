@@ -142,7 +142,7 @@ class LLMRunSpec:
     run_id : str or None
         Name of the run (transcript file name); default from the fields above.
     scene : str
-        A scene (walls, obstacles, pairs; issue 19) as canonical JSON of ``Scene.to_dict()``
+        A scene (walls, obstacles, pairs) as canonical JSON of ``Scene.to_dict()``
         ([`jswim.studies.scene_grids.scene_json`][jswim.studies.scene_grids.scene_json]); ``""``: the paper's lone swimmer in bulk fluid.
     pair_prompt : {"joint", "each"}
         A pair's prompt (`PAIR_PROMPTS`): one joint conversation, or one per swimmer

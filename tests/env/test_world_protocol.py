@@ -270,7 +270,7 @@ def test_old_names_import_from_their_old_places():
             "encode_scene_action",
         ],
         "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make"],
-        # moved by issue 30's import clean-up, still importable where they were
+        # defined elsewhere, still importable from these modules
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
         "jswim.studies.scene_studies": [
             "wall_scene",
