@@ -16,7 +16,7 @@ from jax import Array
 
 from jswim import sharding
 from jswim.action_codes import check_action_set
-from jswim.agents.qlearning import _pick
+from jswim.agents.qlearning import pick_uniform
 from jswim.env.base import Environment
 from jswim.env.discretiser import Cells
 from jswim.env.episodes import Trajectory
@@ -51,7 +51,7 @@ def _one(
 
     def body(state, u):
         mask = cells.mask(cells.positions(state, params), params, action_set, rocs)
-        action = _pick(mask, u[0])
+        action = pick_uniform(mask, u[0])
         state, info = env.learner_advance(state, action, 2.0 * u[1:] - 1.0, params)
         x, y, theta = env.pose(state, params)
         return state, (

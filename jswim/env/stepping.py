@@ -34,9 +34,9 @@ from jswim.env.randomness import noise
 from jswim.env.state import EnvState, MoveInfo, corner_values, narrow, wide
 from jswim.env.step_tables import (
     MAX_LATTICE_ROWS,
-    _corner_index,
-    _step_rows,
-    _still_row,
+    corner_index,
+    step_rows,
+    still_row,
     lattice_rows,
     lattice_table,
 )
@@ -169,13 +169,13 @@ def _advance_corner(
     stuck = ((roc == 1) & (level == 1)) | ((roc == -1) & (level == 0))
     moved = (roc != 0) & ~stuck
     # One gather per step; the table's last row is the identity step (nothing moved).
-    row = jnp.where(moved, _corner_index(levels) * n + dof, _still_row(model))
+    row = jnp.where(moved, corner_index(levels) * n + dof, still_row(model))
     frac = (levels + onehot * moved.astype(jnp.int32) * (1 - 2 * level)).astype(state.frac.dtype)
     if not exact:
         work = jnp.asarray(corner_work_table(model), state.x.dtype)[row]
         return _advance_plain(state, frac, row, y_noise, params, stuck, moved, work)
     with jax.enable_x64(True):
-        entry = jnp.asarray(_step_rows(model), jnp.float64)[row]
+        entry = jnp.asarray(step_rows(model), jnp.float64)[row]
         work = jnp.asarray(corner_work_table(model), jnp.float64)[row]
     return _apply(state, entry, y_noise, params, stuck, moved, frac, state.frac_lo, work)
 
@@ -394,7 +394,7 @@ def _advance_plain(
 ) -> tuple[EnvState, MoveInfo]:
     """[`advance`][jswim.env.stepping.advance] with ``exact=False``: the same step in working-dtype arithmetic."""
     dtype = state.x.dtype
-    entry = jnp.asarray(_step_rows(params.model), dtype)[row]
+    entry = jnp.asarray(step_rows(params.model), dtype)[row]
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
     c, s = state.cos, state.sin
     if params.model.planar:
