@@ -39,7 +39,7 @@ class Quote(NamedTuple):
 def _square(swimmer: str, direction: int = 1, **model_kwargs) -> tuple[float, np.ndarray]:
     """The best closed cycle (the square gait) per cycle, and its per-step displacements."""
     from jswim import env
-    from jswim.actions import decode_action
+    from jswim.action_codes import decode_action
     from jswim.judging import gait
 
     model = env.make_params(swimmer, **model_kwargs).model
@@ -55,7 +55,7 @@ def _corner_mdp(swimmer: str) -> tuple[np.ndarray, np.ndarray]:
     reward ``r[s, a]`` (the step's displacement) and next corner ``nxt[s, a]``, read from the
     exact step table through ``env.rollout`` one step at a time."""
     from jswim import env
-    from jswim.actions import decode_action, n_actions
+    from jswim.action_codes import decode_action, n_actions
 
     corners = env.all_inits(2)
     index = {c: i for i, c in enumerate(corners)}

@@ -22,7 +22,7 @@ paper's task toward ``params.direction`` (+1: +x, -1: -x), a parameter of every 
 
 Worlds: [`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld] (the paper's swimmers alone in the fluid,
 over `jswim.env`) and [`jswim.env.scene_world.SceneWorld`][jswim.env.scene_world.SceneWorld] (walls, obstacles, pairs,
-over `jswim.scenes`); [`jswim.env.worlds.make`][jswim.env.worlds.make] builds either. A new world subclasses
+over `jswim.scenes`); [`jswim.env.registry.make`][jswim.env.registry.make] builds either. A new world subclasses
 [`Environment`][jswim.env.base.Environment] and fills in ``reset``, ``advance``, ``observe`` and the sizes (see
 docs/design.md, *Adding a world*).
 """
@@ -93,16 +93,19 @@ class Observation(NamedTuple):
     orientation : Array (S,)
         Each swimmer's orientation (rad): the reference link's angle, or a scene swimmer's tilt
         from the wall plane.
-    height : Array (S,) or None
-        Each swimmer's height as its world records it (a scene's: the middle sphere's ``z``,
-        [`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]), which the prompt's ``H`` shows; ``None``: the world has
-        none (then ``position``'s ``y`` stands for it).
+    height : Array (S,)
+        Each swimmer's height as its world records it, always given: a scene swimmer's middle
+        sphere's ``z`` ([`jswim.scenes.SceneState`][jswim.scenes.scene_state.SceneState]), which
+        the prompt's ``H`` shows; a swimmer in a plane seen from above (the paper's world,
+        Purcell's swimmer in a plane parallel to a wall, a registered world's), which has no
+        height of its own in the observation, its ``y`` in that plane (``position[:, 1]``).
+        [`Scenery.side_view`][jswim.env.base.Scenery] says which of the two a world's is.
     """
 
     dofs: Array
     position: Array
     orientation: Array
-    height: Any = None
+    height: Array
 
 
 class Scenery(NamedTuple):
@@ -113,7 +116,7 @@ class Scenery(NamedTuple):
     ----------
     model : SwimmerModel or None
         The swimmer whose body outline is drawn from the observed DOFs; ``None``: each swimmer is
-        drawn as a marker at its position (a world of [`jswim.register_world`][jswim.env.worlds.register_world]).
+        drawn as a marker at its position (a world of [`jswim.register_world`][jswim.env.registry.register_world]).
     wall : bool
         A plane wall at ``y = 0`` (the swimmers' heights are their ``y``).
     obstacles : tuple of (x, z, radius)
@@ -121,12 +124,18 @@ class Scenery(NamedTuple):
     plane_height : float or None
         The height (link lengths) of a planar swimmer's plane above a wall parallel to it, drawn
         from above; ``None``: no such wall.
+    side_view : bool
+        The swimmers move in a vertical plane, seen from the side (a scene's): ``position``'s
+        ``y`` and ``height`` are heights and ``orientation`` a tilt from the wall plane. ``False``
+        (the default): a plane seen from above, ``y`` lies in that plane and ``orientation`` is a
+        heading; a scene row then records the plane's height (0 without a wall) and no tilt.
     """
 
     model: Any = None
     wall: bool = False
     obstacles: tuple[tuple[float, float, float], ...] = ()
     plane_height: float | None = None
+    side_view: bool = False
 
 
 class Discrete:
@@ -222,7 +231,7 @@ class Environment:
     @property
     def dof_range(self) -> tuple[float, float]:
         """The interval ``(lo, hi)`` each DOF of [`observe`][jswim.env.scene_world.SceneWorld.observe] stays in, what an LLM's prompt
-        states of a world of [`jswim.register_world`][jswim.env.worlds.register_world] ([`jswim.agents.world_view.model`][jswim.agents.world_view.model]);
+        states of a world of [`jswim.register_world`][jswim.env.registry.register_world] ([`jswim.agents.world_view.model`][jswim.agents.world_view.model]);
         default ``(0.0, 1.0)``: DOFs observed as their places in their ranges. The paper's
         swimmers' ranges are their models' ([`SwimmerModel`][jswim.swimmers.models.SwimmerModel]
         ``lo``, ``hi``), which the agents read instead."""
