@@ -364,9 +364,7 @@ class StudyStore:
         for r in rows:
             problem = run_problem(r)
             if problem is not None:
-                raise ValueError(
-                    f"jswim built an unreadable run record {r.get('run_id')!r}: {problem}"
-                )
+                raise ValueError(f"jswim built an unreadable run record: {problem}")
         lines = "".join(dumps(r, sort_keys=True) + "\n" for r in rows)
         if not lines:
             return
