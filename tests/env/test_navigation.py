@@ -196,5 +196,5 @@ def test_gymnax_navigation_ends_its_episodes():
     env, params = jswim.gymnax.make("NavigatePurcell-v0")
     assert params.max_steps_in_episode == int(params.world.target.budget)
     obs, state = env.reset(jax.random.key(0), params)
-    obs, state, reward, done, _ = env.step_env(jax.random.key(1), state, SQUARE[0], params)
+    obs, state, _, done, _ = env.step_env(jax.random.key(1), state, SQUARE[0], params)
     assert obs.shape == (5,) and not bool(done)
