@@ -39,7 +39,7 @@ from jswim.env.base import Environment, StepInfo
 from jswim.env.targets import FixedTarget
 from jswim.env.scene_world import SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
-from jswim.env.worlds import make
+from jswim.env.registry import make
 from jswim.errors import ConfigError
 
 #: Bound of the clipped wall features (log height, scaled tilt).

@@ -386,7 +386,7 @@ def navigation_world(
     bearing_bins: int = BEARING_BINS,
     lattice: bool = False,
 ) -> tuple[NavigationWorld, NavParams]:
-    """``world`` (from [`jswim.make`][jswim.env.worlds.make]) with the task of reaching ``target``.
+    """``world`` (from [`jswim.make`][jswim.env.registry.make]) with the task of reaching ``target``.
 
     Raises
     ------
