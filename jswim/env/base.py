@@ -100,12 +100,17 @@ class Observation(NamedTuple):
         Purcell's swimmer in a plane parallel to a wall, a registered world's), which has no
         height of its own in the observation, its ``y`` in that plane (``position[:, 1]``).
         [`Scenery.side_view`][jswim.env.base.Scenery] says which of the two a world's is.
+    target : TargetView or None
+        A navigation world's current target: position, distance and bearing in the body frame
+        ([`jswim.env.navigation.TargetView`][jswim.env.navigation.TargetView]); ``None``: the
+        world has no target.
     """
 
     dofs: Array
     position: Array
     orientation: Array
     height: Array
+    target: Any = None
 
 
 class Scenery(NamedTuple):
@@ -314,6 +319,14 @@ class Environment:
         swimmer 1's y (its height above a wall) and orientation."""
         obs = self.observe(state, params)
         return jnp.mean(obs.position[:, 0]), obs.position[0, 1], obs.orientation[0]
+
+    def termination(self, state: Any, params: Any) -> tuple[Array, Array]:
+        """``(terminated, truncated)`` (bool scalars): the task's goal reached, and its step
+        budget spent without reaching it (Gymnasium's two flags). Default ``(False, False)``:
+        the paper's task (swim along x) never ends; a navigation world's does
+        ([`NavigationWorld.termination`][jswim.env.navigation.NavigationWorld.termination])."""
+        false = jnp.zeros((), bool)
+        return false, false
 
     def judge_view(self, params: Any) -> tuple[Any, ...] | None:
         """The judge's view of this world: for each swimmer, the paper's swimmer (an
