@@ -9,7 +9,12 @@ swimmer's fates above the wall.
   cycle it came at is printed after ``T``), ``escaping`` when the middle sphere ends above
   :data:`ESCAPE_HEIGHT` and still rising (there the wall turns it by ~1e-6 rad a cycle),
   ``gliding`` otherwise, printed with the range of heights over the run's second half; ``.``
-  marks a start that already touches the wall.
+  marks a start that already touches the wall;
+* the wall study's fate map: its own start (the paper's NG arms (10, 6)), stroke
+  (:func:`jswim.studies.scene_studies.stroke_codes`), dtype (float32) and fate rule
+  (:func:`jswim.studies.scene_studies.fate`) at its default horizon (``SPECS["wall"].steps``),
+  height against start tilt, with the final height, and the cycle at which each start first
+  reaches twice its height (what a longer horizon would call escaped).
 
 Usage: ``python benchmarks/wall_fates_tables.py [--cycles N]`` (a few minutes: one compilation
 per model).
@@ -27,7 +32,13 @@ jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp
 import numpy as np
 
+from jswim.action_codes import decode_action
 from jswim.scenes import Scene, batch_starts, scene_params, scene_rollout_batch
+from jswim.studies.options import StudyOptions
+from jswim.studies.plans import initial
+from jswim.studies.scene_grids import wall_start_clears
+from jswim.studies.scene_studies import fate as study_fate, stroke_codes
+from jswim.studies.specs import SPECS
 from jswim.swimmers.mobility import wall_self_factors
 
 SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]
@@ -35,6 +46,9 @@ HEIGHTS = (1.2, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0)
 TILTS = (-0.3, -0.15, -0.05, 0.0, 0.05, 0.15, 0.3)
 WALL_TABLE = (1.2, 1.5, 2.0, 3.0, 5.0, 10.0)
 ESCAPE_HEIGHT = 30.0
+STUDY_HEIGHTS = (1.2, 1.5, 2.0, 3.0, 5.0, 7.0, 10.0, 15.0, 20.0, 50.0)
+STUDY_TILTS = (-0.3, -0.15, 0.0, 0.15, 0.3, 0.5, 0.6, 0.8, 1.0)
+DOUBLING_CYCLES = 400  # how far the doubling cycle is looked for
 
 
 def factor_table() -> None:
@@ -85,13 +99,59 @@ def fates(model: str, cycles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     )
 
 
+def study_fate_map() -> None:
+    """The wall study's own runs of the square stroke over (height, tilt), float32, its fate
+    rule at its default horizon; and the first cycle each start reaches twice its height."""
+    steps = SPECS["wall"].steps
+    init = initial("paper", 0, "ng")
+    codes = stroke_codes("square", 1, 4, 1)
+    moves = [tuple(int(v) for v in decode_action(int(c))) for c in codes]
+    starts = [
+        (h, t) for h in STUDY_HEIGHTS for t in STUDY_TILTS if t == 0.0 or wall_start_clears(h, t)
+    ]
+    p = scene_params("ng", Scene(medium="wall", height=10.0), dtype=jnp.float32, init=init)
+    hh, tt = (np.array(v) for v in zip(*starts))
+    cycles = max(DOUBLING_CYCLES, steps // 4)
+    r = scene_rollout_batch(batch_starts(p, height=hh, tilt=tt), moves * cycles)
+    z = np.asarray(r.z[:, :, 0], np.float64)
+    contact = np.asarray(r.contact).reshape(z.shape[0], -1)
+    cells = {}
+    for i, (h, t) in enumerate(starts):
+        f, _ = study_fate(z[i, :steps], h, contact[i, :steps])
+        up = np.nonzero(z[i, 3::4] >= 2.0 * h)[0]
+        touched = np.nonzero(contact[i])[0]
+        twice = (
+            "-" if not up.size or (touched.size and touched[0] // 4 <= up[0]) else f"{up[0] + 1}"
+        )
+        cells[h, t] = f"{f[0].upper()} {z[i, steps - 1]:.3g} / {twice}"
+    defaults = StudyOptions()
+    print(
+        f"\n## The wall study's fates at its default horizon ({steps} steps = {steps // 4} square cycles), "
+        "float32, its start (arms 10, 6) (fate T/E/G, final height / first cycle at twice the start height, "
+        f"- none within {cycles}; . the start touches the wall; * the default grid)\n"
+    )
+    print("| h0 \\ tilt0 | " + " | ".join(f"{t:+g}" for t in STUDY_TILTS) + " |")
+    print("|---|" + "---|" * len(STUDY_TILTS))
+    for h in STUDY_HEIGHTS:
+        row = []
+        for t in STUDY_TILTS:
+            mark = "*" if h in defaults.heights and t in defaults.tilts else ""
+            row.append(cells[h, t] + mark if (h, t) in cells else ".")
+        print(f"| {h:g} | " + " | ".join(row) + " |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cycles", type=int, default=1200)
     ap.add_argument("--models", default="exact,rpb", help="self-mobility models of the fate maps")
+    ap.add_argument("--study-only", action="store_true", help="only the wall study's fate map")
     args = ap.parse_args()
     cycles = args.cycles
     t0 = time.time()
+    if args.study_only:
+        study_fate_map()
+        print(f"\n({time.time() - t0:.0f} s)")
+        return
     factor_table()
     for model in ("exact", "rpb"):
         w = first_cycle(model)
@@ -119,6 +179,7 @@ def main() -> None:
                     )
                 )
             print(f"| {h:g} | " + " | ".join(cells) + " |")
+    study_fate_map()
     print(f"\n({time.time() - t0:.0f} s)")
 
 

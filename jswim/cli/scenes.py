@@ -15,7 +15,7 @@ from collections.abc import Sequence
 from jswim.console import print_table as show
 
 STUDY_HELP = {
-    "wall": "one NG swimmer started at several heights above a no-slip wall: the square stroke's displacement per "
+    "wall": "one NG swimmer started at several heights and tilts above a no-slip wall: the square stroke's displacement per "
     "cycle against height, the fate of every run (trapped, escaped, gliding), LLM and baselines; "
     "--swimmer purcell: Purcell's swimmer in a plane parallel to the wall (stroke, Q-learning, random)",
     "pair": "two coaxial NG swimmers D apart: alone versus together, the pair's speed against the strokes' phase "
@@ -49,6 +49,16 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
                 metavar="H1,H2,...",
                 help="starting heights of the middle sphere above the wall, in sphere radii "
                 "(default 1.2,1.5,2,3,10,50); Purcell's: of its plane, in link lengths",
+            ),
+        ),
+        (
+            "--tilts",
+            dict(
+                type=_numbers(float),
+                metavar="T1,T2,...",
+                help="start tilts of the NG swimmer's axis from the wall, in rad, nose up positive "
+                "(default 0,0.8); each height runs at each tilt whose start clears the wall "
+                "(0.8 needs h > 8.3); Purcell's swimmer starts level only",
             ),
         ),
     ),

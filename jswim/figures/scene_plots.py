@@ -4,7 +4,7 @@ Same conventions as [`jswim.figures.plots`][jswim.figures.plots] (paper sizes, t
 top of an unfinished study's figures); chosen by [`jswim.figures.plots.study_figures`][jswim.figures.plots.study_figures].
 
 wall
-    ``wall``: the square stroke's displacement per cycle against the starting height (log axis),
+    ``wall``: the square stroke's displacement per cycle against the starting height (log axis; level starts),
     with the same stroke in the unbounded fluid of the same solver as a line (Purcell's swimmer:
     heights in link lengths, the bulk RFT stroke as the line; one series per swimmer); ``wall-track``:
     height (top) and X/a (bottom) against step for every agent at every height (one colour per
@@ -79,7 +79,12 @@ def wall_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> F
                 and r.per_cycle is not None
                 and int(r.direction) == d
             ]
-            pts = sorted((r.start_height, d * r.per_cycle) for r in own if r.start_height)
+            # the curve is the level starts' (a tilted start's first cycles are another stroke's)
+            pts = sorted(
+                (r.start_height, d * r.per_cycle)
+                for r in own
+                if r.start_height and not json.loads(r.scene or "{}").get("tilt")
+            )
             if pts:
                 h, v = zip(*pts)
                 ax.plot(

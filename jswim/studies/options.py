@@ -100,6 +100,10 @@ class StudyOptions:
     # The scene studies' grids (jswim.studies.scene_studies): starting heights above the wall (a), the
     # pair's starting distances D (a) and the phase offsets of its two square strokes (quarter cycles).
     heights: tuple[float, ...] = (1.2, 1.5, 2.0, 3.0, 10.0, 50.0)
+    # The wall study's start tilts (rad, nose up; NG only): each height runs at each tilt whose
+    # start clears the wall. 0.8 is the nose-up start chosen from the measured drift so that one
+    # default run escapes within the default 400 steps (h = 10 a; docs/scenes.md, "Fates above the wall").
+    tilts: tuple[float, ...] = (0.0, 0.8)
     separations: tuple[float, ...] = (30.0, 60.0)
     phases: tuple[int, ...] = (0, 1, 2, 3)
     # How the LLM steers a pair (--pair-prompt): "joint" (one conversation, D1..D4) or "each" (one
@@ -158,7 +162,7 @@ class StudyOptions:
             check_roc_levels(k)
         if not self.roc_levels_grid or len(set(self.roc_levels_grid)) != len(self.roc_levels_grid):
             raise ConfigError(f"--roc-levels needs distinct values, got {self.roc_levels_grid}")
-        for name in ("heights", "separations", "phases"):
+        for name in ("heights", "tilts", "separations", "phases"):
             values = getattr(self, name)
             if not values or len(set(values)) != len(values):
                 raise ConfigError(
@@ -168,6 +172,11 @@ class StudyOptions:
             raise ConfigError(
                 f"--heights must be above 1 sphere radius (the middle sphere touches the wall at 1), "
                 f"got {','.join(map(str, self.heights))}"
+            )
+        if any(not (math.isfinite(t) and abs(t) < math.pi / 2) for t in self.tilts):
+            raise ConfigError(
+                f"--tilts must be angles in (-pi/2, pi/2) rad (nose up positive), "
+                f"got {','.join(map(str, self.tilts))}"
             )
         if any(not (math.isfinite(d) and d > 0) for d in self.separations):
             raise ConfigError(

@@ -141,6 +141,7 @@ GRID_SIZE = (
     "samples",
     "roc_levels_grid",
     "heights",
+    "tilts",
     "separations",
     "phases",
     "school_sizes",

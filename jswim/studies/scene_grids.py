@@ -18,7 +18,8 @@ from jswim.studies.options import (
     StudyOptions,
     continuous_agent_available,
 )
-from jswim.studies.plans import Cell
+from jswim.scenes.scene_parameters import check_start
+from jswim.studies.plans import Cell, initial
 
 
 def scene_json(scene: Scene) -> str:
@@ -26,8 +27,54 @@ def scene_json(scene: Scene) -> str:
     return json.dumps(scene.to_dict(), sort_keys=True)
 
 
-def wall_scene(h: float) -> str:
-    return scene_json(Scene(medium="wall", height=float(h), swimmers=1))
+def wall_scene(h: float, tilt: float = 0.0) -> str:
+    """One swimmer started ``h`` above the wall (a), its axis ``tilt`` rad from the wall plane
+    (nose up); tilt 0 is the scene's default, so a level start's JSON, and its runs' ids, do not
+    depend on the tilt axis."""
+    return scene_json(Scene(medium="wall", height=float(h), tilt=float(tilt), swimmers=1))
+
+
+def wall_start_clears(h: float, tilt: float) -> bool:
+    """Whether NG's wall-study start (the paper's arms (10, 6)) at height ``h`` and ``tilt``
+    keeps every sphere clear of the wall by the scenes' contact gap (a steep start near the
+    wall puts its rear sphere into it: at 0.8 rad that needs h > 8.3 a)."""
+    try:
+        check_start(
+            "ng",
+            Scene(medium="wall", height=float(h), tilt=float(tilt)),
+            init=initial("paper", 0, "ng"),
+        )
+    except ConfigError:
+        return False
+    return True
+
+
+def wall_groups(o: StudyOptions, swimmer: str = "ng") -> list[tuple[str, str, str]]:
+    """The wall study's (group, scene, tag) per start: each height of ``o.heights`` at each tilt
+    of ``o.tilts`` whose start clears the wall (`wall_start_clears`); a level start is named by
+    its height alone (``h=3``, tag ``h3``), a tilted one adds its tilt (``h=10, tilt=0.8``, tag
+    ``h10-t0.8``). Only NG starts tilted: Purcell's swimmer swims in a plane parallel to the
+    wall, and a registered world's start is its own, so they run the level starts alone.
+
+    Raises
+    ------
+    ConfigError
+        When no (height, tilt) of the grid clears the wall.
+    """
+    out = []
+    for h in o.heights:
+        for t in o.tilts:
+            if t == 0.0:
+                out.append((f"h={h:g}", wall_scene(h), f"h{h:g}"))
+            elif swimmer == "ng" and wall_start_clears(h, t):
+                out.append((f"h={h:g}, tilt={t:g}", wall_scene(h, t), f"h{h:g}-t{t:g}"))
+    if not out:
+        raise ConfigError(
+            f"no start of --heights {','.join(f'{h:g}' for h in o.heights)} and --tilts "
+            f"{','.join(f'{t:g}' for t in o.tilts)} clears the wall"
+            + ("" if swimmer == "ng" else f" ({swimmer} starts level only: add 0 to --tilts)")
+        )
+    return out
 
 
 def pair_scene(d: float | None = None) -> str:
@@ -51,18 +98,18 @@ def scene_cells(study: str, o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
                 ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref
             )
         ]
-        for h in o.heights:
+        for group, scene, tag in wall_groups(o, swimmer):
             out.append(
                 Cell(
-                    f"h={h:g}",
+                    group,
                     (STROKE_AGENT, *WITH_BASELINES),
                     n_ht=o.n_ht,
-                    scene=wall_scene(h),
+                    scene=scene,
                     stroke="square",
-                    tag=f"h{h:g}",
+                    tag=tag,
                 )
             )
-            out += _ppo_cells(f"h={h:g}", wall_scene(h), f"h{h:g}")
+            out += _ppo_cells(group, scene, tag)
         return out
     out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
     for d in o.separations:

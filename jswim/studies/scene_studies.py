@@ -2,7 +2,9 @@
 
 ``wall``
     One NG swimmer started at each height ``h`` of ``--heights`` (a, the middle sphere's height
-    above a no-slip wall; medium ``"wall"``): the signature square stroke (agent ``stroke``), the
+    above a no-slip wall; medium ``"wall"``) and each tilt of ``--tilts`` whose start clears the
+    wall (rad, nose up; default level and 0.8, the nose-up start that escapes within the default
+    horizon from 10 a; `jswim.studies.scene_grids.wall_groups`): the signature square stroke (agent ``stroke``), the
     LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs). Measured: the stroke's
     displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
     same solver, medium ``"free"``: group ``free``), and every run's **fate** (`fate`).
@@ -296,7 +298,7 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per (agent, group) of a scene study: runs, mean displacement per cycle (strokes), mean
     speed per step over the second half (both in the target direction), the fates seen and the mean height of the second half,
     and ``vs_stroke``: that mean speed over the best square stroke's in the same scene and
-    direction (a wall: the stroke at that height; a pair: the fastest phase offset at that D), so
+    direction (a wall: the stroke from that height and tilt; a pair: the fastest phase offset at that D), so
     above 1 is a faster stroke than the square one (for a pair, than two copies of it)."""
     rows = as_run_rows(rows)
     out: dict[tuple, list[dict[str, Any]]] = {}
@@ -322,6 +324,7 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
                 "fates": ", ".join(f"{f} {fates.count(f)}" for f in FATES if f in fates) or None,
                 "mean_height": float(np.mean(hs)) if hs else None,
                 "start_height": g[0].start_height,
+                "start_tilt": start_tilt(g[0].scene),
                 "separation": g[0].separation,
                 "medium": g[0].medium,
             }
@@ -340,7 +343,21 @@ def scene_summary(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 def _scene_key(t: dict[str, Any]) -> tuple:
-    return (t.get("direction"), t.get("medium"), t.get("start_height"), t.get("separation"))
+    return (
+        t.get("direction"),
+        t.get("medium"),
+        t.get("start_height"),
+        t.get("start_tilt"),
+        t.get("separation"),
+    )
+
+
+def start_tilt(scene: str | None) -> float | None:
+    """A wall run's start tilt (rad, nose up) from its scene's canonical JSON; ``None`` off the wall."""
+    if not scene:
+        return None
+    data = json.loads(scene)
+    return float(data.get("tilt", 0.0)) if data.get("medium") == "wall" else None
 
 
 def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]]:
@@ -366,6 +383,7 @@ def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]
         key=lambda s: (
             s.get("separation") or 0.0,
             s.get("start_height") or 0.0,
+            s.get("start_tilt") or 0.0,
             str(s["group"]),
             str(s["agent"]),
         ),

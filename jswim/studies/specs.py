@@ -261,7 +261,7 @@ def _is_pair(scene: str) -> bool:
 _DEFAULT_GRIDS = {
     f.name: f.default
     for f in dataclasses.fields(StudyOptions)
-    if f.name in ("heights", "separations", "phases", "school_sizes", "formations")
+    if f.name in ("heights", "tilts", "separations", "phases", "school_sizes", "formations")
 }
 
 
@@ -287,6 +287,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
         )
     for name, owners in (
         ("heights", ("wall",)),
+        ("tilts", ("wall",)),
         ("separations", ("pair", "school")),
         ("phases", ("pair",)),
         ("school_sizes", ("school",)),

@@ -1,8 +1,12 @@
 """Fates above the wall. The wall study's stroke rows (the square gait from the study's own
-start, its plans and fate rule) at the default heights and horizon: trapped near the wall,
-gliding above (no tilt-0 start escapes: they glide on long orbits, docs/scenes.md); a nose-up
-start escapes; and the scene default is the exact self-mobility near contact."""
+start, its plans and fate rule) at the default heights, tilts and horizon: trapped near the
+wall, gliding above (no level start escapes: they glide on long orbits, docs/scenes.md), and
+escaped from the default nose-up start at 10 a; a nose-up start escapes over a long run too;
+and the scene default is the exact self-mobility near contact."""
 
+import json
+
+import numpy as np
 import pytest
 
 from jswim.scenes import Scene
@@ -11,14 +15,21 @@ from jswim.studies import baselines
 from jswim.studies.specs import SPECS, build
 
 
+FREE_CYCLE = (
+    0.17209144  # the square stroke per cycle in the unbounded point-force solve (docs/scenes.md)
+)
+
+
 def test_wall_study_defaults_are_long_enough_for_fates():
     assert SPECS["wall"].steps >= 400 and StudyOptions().steps is None
     assert min(StudyOptions().heights) <= 1.5 and max(StudyOptions().heights) >= 10.0
+    # level starts and one nose-up start; the tilted one runs where it clears the wall
+    assert 0.0 in StudyOptions().tilts and max(StudyOptions().tilts) > 0.5
     # fates below 1.5 a rest on Brenner's normal mobility, not the RPB series
     assert Scene(medium="wall").self_mobility == "exact"
 
 
-@pytest.mark.slow  # 400 steps of the coupled wall solve at six heights: ~1 min under load
+@pytest.mark.slow  # 400 steps of the coupled wall solve from eight starts: ~1 min under load
 def test_wall_study_stroke_rows_show_trapped_escaped_and_gliding():
     plans = [
         p
@@ -27,8 +38,20 @@ def test_wall_study_stroke_rows_show_trapped_escaped_and_gliding():
     ]
     assert plans and all(p.steps == SPECS["wall"].steps for p in plans)
     rows = [r for p in plans for r in baselines.run_baselines([p], 50)]  # one scene per call
-    fates = {r["start_height"]: r["fate"] for r in rows}
-    assert [fates[h] for h in sorted(fates)] == ["trapped"] * 2 + ["gliding"] * 4, fates
+    fates = {(r["start_height"], json.loads(r["scene"])["tilt"]): r["fate"] for r in rows}
+    level = [fates[k] for k in sorted(fates) if k[1] == 0.0]
+    assert level == ["trapped"] * 2 + ["gliding"] * 4, fates
+    tilted = {k: f for k, f in fates.items() if k[1] != 0.0}
+    # 0.8 rad clears the wall from 10 a up; from 10 a it doubles its height within the horizon
+    assert tilted == {(10.0, 0.8): "escaped", (50.0, 0.8): "gliding"}, fates
+    assert set(fates.values()) == {"trapped", "escaped", "gliding"}
+    # the escape is self-propulsion along the axis: far from the wall the swimmer rises at the
+    # free stroke's speed times sin(tilt), cycle by cycle (the wall turns it nose down slowly)
+    up = next(r for r in rows if json.loads(r["scene"])["tilt"] and r["start_height"] == 10.0)
+    z = np.array([h[0] for h in up["heights"]])
+    tilt = np.array([t[0] for t in up["tilts"]])
+    rise = FREE_CYCLE * np.sin(np.concatenate([[0.8], tilt[3::4][:-1]])).sum()
+    assert z[-1] - 10.0 == pytest.approx(rise, rel=0.05)
 
 
 @pytest.mark.slow  # 1200 square cycles from two starts: ~2 min under load

@@ -392,8 +392,44 @@ def test_show_prints_the_scene_table(server, tmp_path, capsys):
         )
 
 
+def test_wall_study_crosses_heights_with_the_tilts_that_clear_the_wall():
+    from jswim.errors import ConfigError
+    from jswim.studies.scene_grids import wall_start_clears
+    from jswim.studies.specs import build
+
+    opts = dict(agents=("stroke", "qlearning"), q_runs=1)
+    tilted = build("wall", StudyOptions(**opts))
+    level = build("wall", StudyOptions(tilts=(0.0,), **opts))
+    # the level runs are the same runs with or without the tilt axis (ids, seeds, scenes)
+    assert [p for p in tilted if json.loads(p.scene)["tilt"] == 0.0] == level
+    extra = [p for p in tilted if json.loads(p.scene)["tilt"] != 0.0]
+    assert {(p.group, p.run_id.split("-z0-")[1]) for p in extra if p.agent == "stroke"} == {
+        ("h=10, tilt=0.8", "h10-t0.8-r0"),
+        ("h=50, tilt=0.8", "h50-t0.8-r0"),
+    }
+    # the rear sphere (arm 10 a behind the middle one) of a start tilted 0.8 rad sits
+    # 10 sin(0.8) = 7.17 a below the middle sphere: it needs h >= 1.1 + 7.17 a
+    need = 1.1 + 10.0 * np.sin(0.8)
+    assert wall_start_clears(need + 0.01, 0.8) and not wall_start_clears(need - 0.01, 0.8)
+    nose_down = 1.1 + 6.0 * np.sin(0.8)  # nose down the front sphere, 6 a ahead, is the low one
+    assert wall_start_clears(nose_down + 0.01, -0.8) and not wall_start_clears(
+        nose_down - 0.01, -0.8
+    )
+    # Purcell's swimmer starts level only
+    purcell = build("wall", StudyOptions(swimmers=("purcell",), **opts))
+    assert all(json.loads(p.scene).get("tilt", 0.0) == 0.0 for p in purcell)
+    with pytest.raises(ConfigError, match="clears the wall"):
+        build("wall", StudyOptions(heights=(2.0,), tilts=(0.8,), **opts))
+    for bad in ((0.0, 2.0), (0.3, 0.3)):
+        with pytest.raises(ConfigError, match="--tilts"):
+            StudyOptions(tilts=bad)
+    with pytest.raises(ConfigError, match="--tilts"):  # a grid another study would drop
+        build("pair", StudyOptions(tilts=(0.0,)))
+
+
 def test_scene_options_are_checked(tmp_path, capsys):
     for argv in (
+        ["study", "wall", "--tilts", "1.6"],
         ["study", "wall", "--heights", "0.5"],
         ["study", "pair", "--phases", "5"],
         ["study", "pair", "--separations", "30,30"],
