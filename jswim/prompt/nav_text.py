@@ -21,7 +21,7 @@ from jswim.prompt.template import DEFAULT_TEMPLATE, PromptTemplate
 
 #: Target kinds (`NavView.kind`): a fixed point, a path of waypoints, a point moving at a
 #: constant velocity.
-NAV_KINDS = ("point", "waypoints", "moving")
+NAV_KINDS = ("fixed", "waypoints", "moving")
 
 
 @dataclass(frozen=True)
@@ -31,7 +31,7 @@ class NavView:
 
     Attributes
     ----------
-    kind : {"point", "waypoints", "moving"}
+    kind : {"fixed", "waypoints", "moving"}
         The target's kind (`NAV_KINDS`).
     radius : float
         Success radius (link lengths): the target counts as reached once the swimmer's centre is
@@ -43,8 +43,8 @@ class NavView:
         thousandths per step.
     """
 
-    kind: str = "point"
-    radius: float = 0.5
+    kind: str = "fixed"
+    radius: float = 0.25
     waypoints: int = 1
     velocity: tuple[float, float] = (0.0, 0.0)
 
