@@ -97,12 +97,17 @@ class Observation(NamedTuple):
         Each swimmer's height as its world records it (a scene's: the middle sphere's ``z``,
         [`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]), which the prompt's ``H`` shows; ``None``: the world has
         none (then ``position``'s ``y`` stands for it).
+    target : TargetView or None
+        A navigation world's current target: position, distance and bearing in the body frame
+        ([`jswim.env.navigation.TargetView`][jswim.env.navigation.TargetView]); ``None``: the
+        world has no target.
     """
 
     dofs: Array
     position: Array
     orientation: Array
     height: Any = None
+    target: Any = None
 
 
 class Scenery(NamedTuple):
@@ -305,6 +310,14 @@ class Environment:
         swimmer 1's y (its height above a wall) and orientation."""
         obs = self.observe(state, params)
         return jnp.mean(obs.position[:, 0]), obs.position[0, 1], obs.orientation[0]
+
+    def termination(self, state: Any, params: Any) -> tuple[Array, Array]:
+        """``(terminated, truncated)`` (bool scalars): the task's goal reached, and its step
+        budget spent without reaching it (Gymnasium's two flags). Default ``(False, False)``:
+        the paper's task (swim along x) never ends; a navigation world's does
+        ([`NavigationWorld.termination`][jswim.env.navigation.NavigationWorld.termination])."""
+        false = jnp.zeros((), bool)
+        return false, false
 
     def judge_view(self, params: Any) -> tuple[Any, ...] | None:
         """The judge's view of this world: for each swimmer, the paper's swimmer (an

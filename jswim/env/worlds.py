@@ -7,7 +7,7 @@ from typing import Any
 from collections.abc import Callable, Sequence
 
 from jswim.env.base import Environment
-from jswim.env.params import EnvParams, make_params, parse_direction
+from jswim.env.params import make_params, parse_direction
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
@@ -72,8 +72,9 @@ def make(
     roc_levels: int = 1,
     diagonal: bool = False,
     dtype: Any = None,
+    target: Any = None,
     **kwargs: Any,
-) -> tuple[Environment, EnvParams | SceneTask]:
+) -> tuple[Environment, Any]:
     """A world and its params.
 
     Parameters
@@ -96,6 +97,12 @@ def make(
     dtype : dtype, optional
         Scenes only: the working dtype of states and solves (default JAX's default float). The
         paper's world follows JAX's default float (its positions are drift-free pairs).
+    target : FixedTarget, Waypoints or MovingTarget, optional
+        A navigation task ([`jswim.env.targets`][jswim.env.targets]): the world becomes a
+        [`NavigationWorld`][jswim.env.navigation.NavigationWorld] around the swimmer's (params
+        [`NavParams`][jswim.env.navigation.NavParams]); with it the keywords ``bearing_bins``
+        and ``lattice`` ([`navigation_world`][jswim.env.navigation.navigation_world]). Planar
+        swimmers with ``roc_levels >= 2``, in the bulk or in a plane above a wall; docs/navigation.md.
     **kwargs
         More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.params.scene_params]
         (``nodes``, ``sweeps``, ``contact_gap``).
@@ -113,7 +120,30 @@ def make(
     >>> env, params = make("ng", Scene(medium="wall", height=5.0, swimmers=2))
     >>> env.n_swimmers, env.n_dof
     (2, 4)
+    >>> env, params = make("purcell", roc_levels=2, target=FixedTarget(3.0, bearing=90))
+    >>> env.n_features
+    5
     """
+    if target is not None:
+        from jswim.env.navigation import navigation_world  # lazy: the task's own module
+
+        nav = {k: kwargs.pop(k) for k in ("bearing_bins", "lattice") if k in kwargs}
+        if isinstance(swimmer, str) and swimmer in _REGISTERED:
+            raise ConfigError(
+                f"navigation wraps the paper's planar swimmers, not the registered world {swimmer!r}"
+            )
+        world, params = make(
+            swimmer,
+            scene,
+            zeta=zeta,
+            direction=direction,
+            init=init,
+            roc_levels=roc_levels,
+            diagonal=diagonal,
+            dtype=dtype,
+            **kwargs,
+        )
+        return navigation_world(world, params, target, **nav)
     if isinstance(swimmer, str) and swimmer in _REGISTERED:
         # only the options asked for: the factory refuses what it lacks
         given = {
