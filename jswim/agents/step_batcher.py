@@ -88,11 +88,7 @@ def _ended(env: Environment, states: Any, params: Any) -> tuple[jax.Array, jax.A
     """``(reached, ended)`` per run: the world's task succeeded (a navigation target reached),
     and it is over (reached or its budget spent; ``env.termination``); all False in a world
     whose task has no end (the paper's)."""
-    end = getattr(env, "termination", None)
-    if end is None:
-        none = jnp.zeros(jax.tree.leaves(states)[0].shape[:1], bool)
-        return none, none
-    terminated, truncated = jax.vmap(end)(states, params)
+    terminated, truncated = jax.vmap(env.termination)(states, params)
     return terminated, terminated | truncated
 
 

@@ -205,7 +205,11 @@ class LLMRunSpec:
             drop=self.drop,
             tag="-".join(
                 t
-                for t in (pair_tag(self.pair_prompt), roc_tag(self.roc_levels), target_tag(self.target))
+                for t in (
+                    pair_tag(self.pair_prompt),
+                    roc_tag(self.roc_levels),
+                    target_tag(self.target),
+                )
                 if t
             ),
             seed=self.seed,

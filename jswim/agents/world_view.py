@@ -112,7 +112,10 @@ def nav_x_min(spec: LLMRunSpec, x_min: float) -> float:
     reason; a target behind or to the right would otherwise be sent as negative numbers)."""
     t = json.loads(spec.target)
     points = t.get("points") or [
-        (t["distance"] * math.cos(math.radians(t["bearing"])), t["distance"] * math.sin(math.radians(t["bearing"])))
+        (
+            t["distance"] * math.cos(math.radians(t["bearing"])),
+            t["distance"] * math.sin(math.radians(t["bearing"])),
+        )
     ]
     drift = math.hypot(*t.get("velocity", (0.0, 0.0))) * spec.n_steps
     low = min(min(p) for p in points) - drift - NAV_MARGIN

@@ -131,13 +131,21 @@ def _wrap(angle: float) -> float:
     return math.pi - (math.pi - angle) % (2 * math.pi)
 
 
-def _nav_choice(k: int, hub: tuple[int, int], bearing: float) -> tuple[int, int]:
+#: Hysteresis (rad) of the choice between swimming forward and backward: a swimmer that came
+#: backward keeps on backward until the target is this much inside 90 degrees of its heading
+#: (and forward likewise), so that a target near 90 degrees does not set it swimming half a gait
+#: forward, half back, which undoes itself (the scallop theorem).
+NAV_HYSTERESIS = 0.35
+
+
+def _nav_choice(k: int, hub: tuple[int, int], bearing: float, was_back: bool) -> tuple[int, int]:
     """The next vertex from ``hub`` for a target at ``bearing`` (rad, from the heading): straight
     (half the square gait) within `NAV_TOLERANCE`, else the quarter loop that turns toward the
     target if it starts here, else half the gait to the other hub, where it does. A target more
-    than 90 degrees off is approached swimming backward (the reversed gait)."""
+    than 90 degrees off is approached swimming backward (the reversed gait), with
+    `NAV_HYSTERESIS` about 90 degrees (``was_back``: the last cycle ran backward)."""
     cycles = _nav_cycles(k)
-    back = abs(bearing) > math.pi / 2
+    back = abs(bearing) > math.pi / 2 + (-NAV_HYSTERESIS if was_back else NAV_HYSTERESIS)
     b = _wrap(bearing - math.pi) if back else bearing
     half = cycles[(2 if back else 0) + (hub != (k, k))]
     if abs(b) <= NAV_TOLERANCE:
@@ -189,7 +197,14 @@ def nav_decide(text: str) -> tuple[int, int] | None:
         gait = {(k, k): (k, 0), (k, 0): (0, 0), (0, 0): (0, k), (0, k): (k, k)}
         nxt = gait.get(cur)
     elif cur in ((k, k), (0, 0)):
-        nxt = _nav_choice(k, cur, bearing)
+        m = k // 2
+        was_back = (prev, cur) in (  # the last cycle ran backward: the reversed gait or loops
+            ((k, 0), (k, k)),
+            ((0, k), (0, 0)),
+            ((k, m), (k, k)),
+            ((0, m), (0, 0)),
+        )
+        nxt = _nav_choice(k, cur, bearing, was_back)
     else:
         follow = {}
         for cyc in _nav_cycles(k):
