@@ -64,6 +64,7 @@ def _spec(p: Plan) -> LLMRunSpec:
         roc_levels=p.roc_levels,
         scene=p.scene,
         pair_prompt=p.pair_prompt,
+        target=p.target,
     )
 
 

@@ -145,6 +145,8 @@ GRID_SIZE = (
     "phases",
     "school_sizes",
     "formations",
+    "distances",
+    "bearings",
 )
 
 #: How run seeds are made (``jswim.studies.plans.run_seed``); folders made otherwise are refused.
@@ -429,6 +431,7 @@ def _run_in(
         "scene",
         "variant",
         "zeta",
+        "target",
     ).items():
         store.add_runs(baselines.run_baselines(group, options.horizon))
         finished += len(group)

@@ -37,6 +37,7 @@ from jswim.studies.options import (
     prompt_label,
 )
 from jswim.studies.plans import Cell, Plan, initial, run_seed, sample_id
+from jswim.studies import navigate
 from jswim.studies.scene_grids import study_cells
 
 
@@ -214,6 +215,18 @@ SPECS["school"] = StudySpec(
 )
 
 
+# Navigation (issue 48, an extension): targets at several distances and bearings, a path and a
+# moving target; each cell's runs have the target's budget (jswim.studies.navigate).
+SPECS["navigate"] = StudySpec(
+    navigate.cells,
+    runs=1,
+    init="paper",
+    swimmers=("purcell",),
+    q_runs=1,
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+)
+
+
 STUDIES = tuple(SPECS)
 
 
@@ -261,7 +274,8 @@ def _is_pair(scene: str) -> bool:
 _DEFAULT_GRIDS = {
     f.name: f.default
     for f in dataclasses.fields(StudyOptions)
-    if f.name in ("heights", "separations", "phases", "school_sizes", "formations")
+    if f.name
+    in ("heights", "separations", "phases", "school_sizes", "formations", "distances", "bearings")
 }
 
 
@@ -291,6 +305,8 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
         ("phases", ("pair",)),
         ("school_sizes", ("school",)),
         ("formations", ("school",)),
+        ("distances", ("navigate",)),
+        ("bearings", ("navigate",)),
     ):
         if (
             study not in owners and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]
@@ -378,7 +394,9 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                                         init,
                                         zeta,
                                         run_seed(o.seed, rid),
-                                        spec.steps if o.steps is None else o.steps,
+                                        o.steps
+                                        if o.steps is not None
+                                        else cell.steps or spec.steps,
                                         n_ht,
                                         drop,
                                         action_set,
@@ -390,6 +408,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                                         s,
                                         cell.scene,
                                         pair,
+                                        cell.target,
                                     )
                                 )
     ids = [p.run_id for p in plans]
