@@ -177,6 +177,7 @@ def steering_plan(
         turn=turn_up,
         tolerance=tol,
         reverse=bool(reverse),
+        radius=loop_motion(model, k, upper_fwd).radius,
     )
 
 
@@ -245,7 +246,8 @@ def steer(
             state, memory = carry
             x, y = state.x + state.x_lo, state.y + state.y_lo
             bearing = jnp.arctan2(target[1] - y, target[0] - x) - (state.theta + state.theta_lo)
-            move, memory = controller_step(plan, memory, bearing)
+            dist = jnp.hypot(target[0] - x, target[1] - y)
+            move, memory = controller_step(plan, memory, bearing, dist, 0.5 * radius)
             levels = jnp.round((state.frac + state.frac_lo) * big_k).astype(jnp.int32)
             work = lattice_step_work(model, big_k, levels, move[0], move[1])
             code = move[0] * width + move[1] + big_k

@@ -57,9 +57,12 @@ __all__ = [
     "NavCells",
     "NavParams",
     "NavState",
+    "NavSummary",
     "NavigationWorld",
     "TargetView",
+    "energy_per_distance",
     "navigation_world",
+    "summarise",
     "wrap",
 ]
 
@@ -419,3 +422,118 @@ def navigation_world(
     env = NavigationWorld(world, len(target.points()), int(bearing_bins), bool(lattice), target)
     tp = target_params(target, world.model, world.roc_levels)
     return env, NavParams(params, tp)
+
+
+class NavSummary(NamedTuple):
+    """One episode of a navigation run (plain Python numbers).
+
+    Attributes
+    ----------
+    reached : bool
+        The target was reached (the last waypoint).
+    steps : int
+        Steps of the episode: to the target when reached, else until the budget or the end of
+        the record.
+    straight : float
+        The straight path (``a``): from the start through the waypoints in order; for a moving
+        target, from the start to where the target was when the episode ended.
+    path : float
+        Length of the centroid's path over the episode (``a``, the sum of step displacements).
+    path_ratio : float
+        ``path / straight``.
+    closed : float
+        The distance closed on the target: the episode's summed reward (``a``).
+    energy : float
+        Work done on the fluid over the episode (the world's work units, ``xi_par a^3 / tau``
+        for Purcell's swimmer); ``nan`` where not counted.
+    energy_per_distance : float
+        ``energy / closed`` (work per ``a`` closed on the target); ``nan`` when nothing was
+        closed.
+    """
+
+    reached: bool
+    steps: int
+    straight: float
+    path: float
+    path_ratio: float
+    closed: float
+    energy: float
+    energy_per_distance: float
+
+
+def energy_per_distance(work: Any, progress: Any) -> float:
+    """Work per unit of distance closed on the target: ``sum(work) / sum(progress)`` over the
+    steps given (``nan`` when the summed progress is not positive).
+
+    For a straight swim toward +x the progress is the displacement, and this is the study rows'
+    ``energy / |X|``.
+    """
+    closed = float(np.sum(np.asarray(progress, np.float64)))
+    energy = float(np.sum(np.asarray(work, np.float64)))
+    return energy / closed if closed > 0 else float("nan")
+
+
+def _straight(params: NavParams, steps: int, start: np.ndarray) -> float:
+    pts = np.asarray(params.target.points, np.float64).reshape(-1, 2)
+    v = np.asarray(params.target.velocity, np.float64).reshape(2)
+    first = pts[0] + v * steps
+    legs = np.hypot(*np.diff(pts, axis=0).T).sum() if len(pts) > 1 else 0.0
+    return float(np.hypot(*(first - start)) + legs)
+
+
+def summarise(env: NavigationWorld, params: NavParams, trajectory: Any) -> list[NavSummary]:
+    """The episodes of one run's trajectory (no batch axis; [`jswim.env.episodes.Trajectory`][jswim.env.episodes.Trajectory],
+    e.g. of [`jswim.rollout`][jswim.env.episodes.rollout], `jswim.agents.steering.run`, or a learner's
+    ``trace``).
+
+    A plain rollout holds one episode: to the step that ended it (the target reached or the
+    budget spent), or to the end of the record; later steps are left out. A learner's record
+    (its step restarts ended episodes) holds many, each ended where the state's ``episodes``
+    count rises; a last, unfinished one is included (``reached`` False, ``steps`` so far).
+
+    Returns
+    -------
+    list of NavSummary
+        In order.
+    """
+    st = trajectory.state
+    done = np.asarray(st.done)
+    episodes = np.asarray(st.episodes)
+    info = trajectory.info
+    disp = np.asarray(info.displacement, np.float64).reshape(len(done), -1, 2)[:, 0]
+    work = np.asarray(info.work, np.float64) * np.ones(len(done))
+    progress = np.asarray(info.progress, np.float64)
+    rises = np.flatnonzero(np.diff(np.concatenate([[0], episodes])) > 0)
+    if len(rises):
+        ends = list(rises)
+        reached = [bool(np.asarray(st.last_reached)[i]) for i in ends]
+        if ends[-1] < len(done) - 1:
+            ends.append(len(done) - 1)
+            reached.append(False)
+    else:
+        first = np.flatnonzero(done)
+        ends = [int(first[0]) if len(first) else len(done) - 1]
+        reached = [bool(np.asarray(st.reached)[ends[0]])]
+    out, begin = [], 0
+    origin = np.zeros(2)  # every episode starts at the swimmer's start, the origin
+    for end, ok in zip(ends, reached, strict=True):
+        sl = slice(begin, end + 1)
+        steps = end + 1 - begin
+        path = float(np.hypot(*disp[sl].T).sum())
+        straight = _straight(params, steps, origin)
+        closed = float(progress[sl].sum())
+        energy = float(work[sl].sum())
+        out.append(
+            NavSummary(
+                ok,
+                steps,
+                straight,
+                path,
+                path / straight if straight > 0 else float("nan"),
+                closed,
+                energy,
+                energy_per_distance(work[sl], progress[sl]),
+            )
+        )
+        begin = end + 1
+    return out

@@ -279,9 +279,9 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
     safety [`BUDGET_SAFETY`][jswim.env.targets.BUDGET_SAFETY]): cycles to turn through the
     bearing at the quarter loop's rotation per cycle plus cycles to cover the distance at the
     square gait's displacement per cycle. Waypoints add one such leg per waypoint (the turn
-    measured from the previous leg's direction). A moving target's budget is the fixed one for
-    its start point stretched by ``1 / (1 - |v| / v_gait)`` (the gait's mean speed ``v_gait``
-    per step), the time to close the gap on a target moving straight away.
+    measured from the previous leg's direction). A moving target's is the fixed one for the
+    point where a swimmer going straight at the square gait's mean speed ``v_gait`` would meet
+    it, stretched by ``1 / (1 - |v| / v_gait)`` for the corrections a moving bearing asks for.
 
     Raises
     ------
@@ -313,11 +313,9 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
             total += leg(math.hypot(dx, dy), direction - heading)
             start, heading = p, direction
         return total
-    d, b = math.hypot(*pts[0]), math.atan2(pts[0][1], pts[0][0])
-    fixed = leg(d, b)
     speed = math.hypot(*spec.velocity)
     if speed == 0:
-        return fixed
+        return leg(math.hypot(*pts[0]), math.atan2(pts[0][1], pts[0][0]))
     gait = loop_motion(model, k, square_gait(k))
     v_gait = gait.displacement / gait.steps
     if speed >= v_gait:
@@ -325,7 +323,12 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
             f"the target moves at {speed:.3g} a per step, not slower than the square gait's "
             f"{v_gait:.3g}: give it a budget"
         )
-    return math.ceil(fixed / (1.0 - speed / v_gait))
+    # where a swimmer at the gait's speed on a straight line meets it: |p + v t| = v_gait t
+    p, v = np.asarray(pts[0]), np.asarray(spec.velocity)
+    a, b, c = v @ v - v_gait**2, 2 * p @ v, p @ p
+    t = (-b - math.sqrt(b * b - 4 * a * c)) / (2 * a)
+    meet = p + v * t
+    return math.ceil(leg(math.hypot(*meet), math.atan2(meet[1], meet[0])) / (1 - speed / v_gait))
 
 
 def target_params(spec: Target, model: Any, roc_levels: int = 2, dtype: Any = None) -> TargetParams:

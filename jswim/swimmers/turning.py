@@ -149,6 +149,7 @@ class SteeringPlan(NamedTuple):
     turn: float  # rotation per cycle of the turning loops (rad, > 0)
     tolerance: float  # |bearing| below which the swimmer swims straight (rad)
     reverse: bool  # whether a target behind is reached by swimming backward
+    radius: float = 0.0  # radius of the turning loops' circle (a); 0: no inside rule
 
 
 def wrap(angle: Array) -> Array:
@@ -156,8 +157,15 @@ def wrap(angle: Array) -> Array:
     return jnp.pi - jnp.mod(jnp.pi - angle, 2 * jnp.pi)
 
 
-def choose_cycle(plan: SteeringPlan, hub: Array, bearing: Array) -> Array:
-    """Which cycle to run next from ``hub``, given the target's bearing in the body frame.
+def choose_cycle(
+    plan: SteeringPlan,
+    hub: Array,
+    bearing: Array,
+    distance: Array | float = jnp.inf,
+    reach: Array | float = 0.0,
+) -> Array:
+    """Which cycle to run next from ``hub``, given the target's bearing in the body frame
+    (and its distance).
 
     ``bearing`` is the angle of the target direction from the body frame's x axis (the middle
     link). Measured from the forward heading at this hub it is ``b``; with ``plan.reverse`` a
@@ -167,6 +175,14 @@ def choose_cycle(plan: SteeringPlan, hub: Array, bearing: Array) -> Array:
     needs a left (positive) turn. It runs the loop that makes that turn while moving along the
     heading when that loop is at this hub, and otherwise swims half a gait to the other hub,
     where it is.
+
+    A target that swimming straight would pass within ``reach`` of (``distance |sin b| <
+    reach``) is swum to straight. Otherwise a target inside the circle the turn would follow
+    (radius ``plan.radius``: ``distance < 2 radius |sin b|``, ``b`` from the forward heading)
+    cannot be reached by turning, which would circle round it: the swimmer swims forward, which
+    moves the target back and out of the circle, and turns after. (Targets closer than about
+    one turning diameter to the side can still trap it between the two rules:
+    docs/navigation.md.)
 
     Returns
     -------
@@ -184,7 +200,12 @@ def choose_cycle(plan: SteeringPlan, hub: Array, bearing: Array) -> Array:
         jnp.where(left, LEFT_FORWARD, RIGHT_FORWARD),
     )
     turn = jnp.where(jnp.asarray(plan.hub)[loop] == hub, loop, half)
-    return jnp.where(jnp.abs(b) <= plan.tolerance, half, turn).astype(jnp.int32)
+    distance = jnp.asarray(distance)
+    aligned = (jnp.abs(b) <= plan.tolerance) | (distance * jnp.abs(jnp.sin(b)) < reach)
+    b_forward = wrap(jnp.asarray(bearing) - jnp.asarray(plan.heading)[hub])
+    inside = ~aligned & (distance < 2.0 * plan.radius * jnp.abs(jnp.sin(b_forward)))
+    out = jnp.where(aligned, half, jnp.where(inside, jnp.asarray(FORWARD_HALF)[hub], turn))
+    return out.astype(jnp.int32)
 
 
 class ControllerState(NamedTuple):
@@ -203,7 +224,11 @@ def controller_start() -> ControllerState:
 
 
 def controller_step(
-    plan: SteeringPlan, memory: ControllerState, bearing: Array
+    plan: SteeringPlan,
+    memory: ControllerState,
+    bearing: Array,
+    distance: Array | float = jnp.inf,
+    reach: Array | float = 0.0,
 ) -> tuple[Array, ControllerState]:
     """The steering controller: the next lattice step ``(dof, q)`` and the updated memory.
 
@@ -219,7 +244,7 @@ def controller_step(
     memory : ControllerState
     """
     start = memory.phase == 0
-    cycle = jnp.where(start, choose_cycle(plan, memory.hub, bearing), memory.cycle)
+    cycle = jnp.where(start, choose_cycle(plan, memory.hub, bearing, distance, reach), memory.cycle)
     move = jnp.asarray(plan.moves)[cycle, memory.phase]
     phase = (memory.phase + 1) % jnp.asarray(plan.lengths)[cycle]
     hub = jnp.where(phase == 0, jnp.asarray(plan.next_hub)[cycle], memory.hub)
