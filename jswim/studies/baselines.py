@@ -130,6 +130,10 @@ def _moves(run: Any) -> list[list[list[float]]]:
 
 def _run_group(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
     p0 = plans[0]
+    if p0.target:  # a navigation task: its own episodes and columns (jswim.studies.navigate)
+        from jswim.studies import navigate
+
+        return navigate.baseline_rows(plans)
     world_, params = world(p0)
     task = _per_run(params, [p.direction for p in plans])
     if p0.scene:
@@ -238,6 +242,15 @@ def _replayed_work(plan: Plan, r: RunResult) -> np.ndarray | None:
 def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     """The judged row of one finished LLM run, with the run's own fields
     ([`with_llm`][jswim.studies.rows.with_llm]); a scene's has the scene's columns."""
+    if plan.target:  # a navigation run: its episode and columns (jswim.studies.navigate)
+        from jswim.judging import lattice
+        from jswim.studies import navigate
+
+        episode = navigate.llm_episode(plan, r, _replayed_work(plan, r))
+        moves = [list(lattice.decode(int(a), plan.roc_levels)) for a in r.actions]
+        init = "".join("+" if v else "-" for v in r.levels0)
+        row = navigate.nav_row(plan, r.x, r.y, r.orientation, moves, episode, init=init)
+        return with_llm(row, r)
     if not plan.scene:
         acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
         xs = np.array([r.x], float).reshape(1, len(r.x))

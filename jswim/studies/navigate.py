@@ -20,14 +20,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from jswim.env.targets import (
-    FixedTarget,
-    MovingTarget,
-    Target,
-    Waypoints,
-    default_budget,
-    target_from_dict,
-)
+from jswim.env.navigation import NavSummary
+from jswim.env.work import lighthill_efficiency
+from jswim.env.targets import FixedTarget, MovingTarget, Target, Waypoints, default_budget
 from jswim.results.row import RunRow
 from jswim.studies.options import CONTINUOUS_AGENT, CONTROLLER_AGENT
 from jswim.studies.plans import Cell, Plan
@@ -52,18 +47,20 @@ __all__ = [
 #: The agents of every navigation cell, in the rows' order.
 NAV_AGENTS = ("llm", "qlearning", CONTINUOUS_AGENT, CONTROLLER_AGENT, "random")
 
-#: The default grid: targets 2 a away, ahead, to the left and behind (the study's small default;
-#: ``--distances`` and ``--bearings`` scale it up).
-DEFAULT_DISTANCES = (2.0,)
+#: The default grid: targets 3 a away (about 16 square-gait cycles; outside the quarter loop's
+#: turning circle, radius 1.165 a, where the steering controller reaches every bearing), ahead,
+#: to the left and behind (the study's small default; ``--distances`` and ``--bearings`` scale
+#: it up).
+DEFAULT_DISTANCES = (3.0,)
 DEFAULT_BEARINGS = (0.0, 90.0, 180.0)
 
-#: The path of every navigation study: 2 a ahead, then 1.5 a to the left of that (a turn of 90
+#: The path of every navigation study: 3 a ahead, then 3 a to the left of that (a turn of 90
 #: degrees between the legs).
-PATH = Waypoints(((2.0, 0.0), (2.0, 1.5)))
+PATH = Waypoints(((3.0, 0.0), (3.0, 3.0)))
 
-#: The moving target of every navigation study: 2 a ahead, moving sideways (to +y) at 0.005 a
+#: The moving target of every navigation study: 3 a ahead, moving sideways (to +y) at 0.005 a
 #: per step, a tenth of the square gait's mean speed (0.0478 a per step).
-MOVING = MovingTarget(2.0, 0.0, (0.0, 0.005))
+MOVING = MovingTarget(3.0, 0.0, (0.0, 0.005))
 
 #: K of the navigation worlds when ``--roc-levels`` leaves the paper's K = 1 (which cannot turn):
 #: the least even K, on which the quarter loops turn.
@@ -106,32 +103,13 @@ def cells(o: Any) -> list[Cell]:
     ]
 
 
-def _straight(spec: Target, end_target: Sequence[float]) -> float:
-    """The task's straight distance: from the start through the waypoints, the last one where
-    the target was at the end (a moving target's place when caught)."""
-    pts = [tuple(p) for p in spec.points()[:-1]] + [tuple(end_target)]
-    total, here = 0.0, (0.0, 0.0)
-    for p in pts:
-        total += math.dist(here, p)
-        here = p
-    return total
-
-
-def _end_target(spec: Target, steps: int) -> tuple[float, float]:
-    """Where the last waypoint is after ``steps`` steps (a moving target has moved)."""
-    p = spec.points()[-1]
-    v = spec.velocity
-    return (p[0] + v[0] * steps, p[1] + v[1] * steps)
-
-
 def nav_row(
     plan: Plan,
     x: Sequence[float],
     y: Sequence[float],
     orientation: Sequence[float],
     actions: list[list[float]],
-    reached: bool,
-    work: Sequence[float] | None,
+    episode: NavSummary,
     init: str = "++",
     **columns: Any,
 ) -> RunRow:
@@ -141,37 +119,28 @@ def nav_row(
     ----------
     x, y, orientation : sequence of float
         The centroid (``a``, lab frame; the start is ``(0, 0)``) and heading (rad) after each
-        step, up to the step the task ended (reached or the budget spent).
+        step of the episode (up to the step it ended: the target reached or the budget spent).
     actions : list of list
         Each step's ``[dof, roc]``.
-    reached : bool
-        The target was reached (at the last step).
-    work : sequence of float, optional
-        Each step's work (``xi_par a^3 / tau``).
+    episode : NavSummary
+        The episode ([`jswim.env.navigation.summarise`][jswim.env.navigation.summarise]).
     init : str
         The start as the row shows it (signs; the controller's hub ``(hi, hi)``: ``"++"``).
     **columns
         Further columns (an LLM run's own, through `jswim.studies.rows.with_llm`).
 
     The row's success is ``reached``; ``steps_to_target`` the steps when reached;
-    ``path_length`` the sum of the steps' displacements; ``path_ratio`` that over the task's
-    straight distance (`_straight`); ``energy`` the summed work, ``energy_per_distance`` it over
-    the net displacement in the plane, ``efficiency`` Lighthill's with that displacement
-    (`jswim.studies.rows.energy_columns`).
+    ``path_length`` the centroid's path; ``path_ratio`` that over the task's straight distance
+    (None when not reached); ``energy`` the summed work, ``energy_per_distance`` it over the
+    distance closed on the target (None when none was closed); ``efficiency`` Lighthill's over
+    the net displacement ([`jswim.env.work.lighthill_efficiency`][jswim.env.work.lighthill_efficiency]).
     """
-    from jswim.studies.rows import build_row, energy_columns  # the one row builder
+    from jswim.studies.rows import build_row  # the one row builder
 
-    spec = target_from_dict(json.loads(plan.target))
-    xy = np.column_stack([np.asarray(x, np.float64), np.asarray(y, np.float64)])
-    path = np.vstack([np.zeros((1, 2)), xy]) if len(xy) else np.zeros((1, 2))
-    length = float(np.sum(np.hypot(*np.diff(path, axis=0).T))) if len(xy) else 0.0
-    steps = len(xy)
-    net = float(np.hypot(*path[-1]))
-    straight = _straight(spec, _end_target(spec, steps))
     verdict = {
-        "success": bool(reached),
-        "learned": bool(reached),
-        "steps_to_learn": steps if reached else None,
+        "success": bool(episode.reached),
+        "learned": bool(episode.reached),
+        "steps_to_learn": episode.steps if episode.reached else None,
         "period": 0,
     }
     row = build_row(
@@ -180,27 +149,27 @@ def nav_row(
         actions,
         verdict,
         init=init,
-        work=None,
         y=[float(v) for v in y],
         orientation=[float(v) for v in orientation],
         **columns,
     )
-    energy = energy_columns(plan.swimmer, net, work)
+    net = float(np.hypot(x[-1], y[-1])) if len(x) else 0.0
+    finite = math.isfinite(episode.energy)
+    per = episode.energy_per_distance
+    bodies = make_model(plan.swimmer).n_dof + 1
     return dataclasses.replace(
         row,
-        **energy,
+        energy=episode.energy if finite else None,
+        energy_per_distance=per if finite and math.isfinite(per) else None,
+        efficiency=lighthill_efficiency(net, episode.energy, episode.steps, bodies)
+        if finite and episode.energy > 0
+        else None,
         target=plan.target,
-        reached=bool(reached),
-        steps_to_target=steps if reached else None,
-        path_length=length,
-        path_ratio=length / straight if reached and straight > 0 else None,
+        reached=bool(episode.reached),
+        steps_to_target=episode.steps if episode.reached else None,
+        path_length=episode.path,
+        path_ratio=episode.path_ratio if episode.reached else None,
     )
-
-
-def cut(done: np.ndarray) -> int:
-    """Steps up to and including the first at which the task ended (all of them if it never did)."""
-    hit = np.flatnonzero(np.asarray(done, bool))
-    return int(hit[0]) + 1 if hit.size else len(done)
 
 
 def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
@@ -234,3 +203,138 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
             }
         )
     return table
+
+
+#: Episodes of the target's budget the learners (Q-learning, PPO) train for by default
+#: (``--train-episodes``); their row is their last episode that ended within the training.
+NAV_TRAIN_EPISODES = 40
+
+
+def world(plan: Plan) -> tuple[Any, Any]:
+    """A navigation plan's world and params ([`jswim.make`][jswim.env.worlds.make] with its target)."""
+    from jswim.env.targets import target_from_dict
+    from jswim.env.worlds import make
+
+    init = plan.init if isinstance(plan.init, (tuple, list)) else None
+    return make(
+        plan.swimmer,
+        zeta=plan.zeta,
+        init=tuple(int(v) for v in init) if init is not None else None,
+        roc_levels=plan.roc_levels,
+        target=target_from_dict(json.loads(plan.target)),
+    )
+
+
+def _take(tree: Any, i: int) -> Any:
+    import jax
+
+    return jax.tree.map(lambda v: v[i], tree)
+
+
+def _lattice_moves(dofs: np.ndarray, dofs0: np.ndarray, lo: float, hi: float, k: int) -> list:
+    """``[dof, roc]`` of each step from the DOFs before and after it (ROC in the lattice's
+    integer units ``q``: the DOF moved by ``q / K`` of its range)."""
+    before = np.vstack([dofs0[None], dofs[:-1]])
+    diff = (dofs - before) / (hi - lo) * k
+    out = []
+    for row in diff:
+        j = int(np.argmax(np.abs(row)))
+        out.append([j + 1, round(float(row[j]), 6)])
+    return out
+
+
+def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
+    """The rows of one (agent, target) group of navigation plans, other than the LLM's.
+
+    The steering controller ([`jswim.agents.steering.run`][jswim.agents.steering.run]) and the
+    random policy run one episode of the target's budget; Q-learning and PPO train for
+    ``plan.steps`` steps (`NAV_TRAIN_EPISODES` budgets by default), restarting each ended
+    episode (the world's learner step), and their row is their last episode that ended (the
+    one run on what they learned, still exploring as their schedules leave them). Each episode
+    is cut and measured by [`jswim.env.navigation.summarise`][jswim.env.navigation.summarise].
+    """
+    import jax
+
+    from jswim import env as jenv
+    from jswim.agents import qlearning, random_policy, steering
+    from jswim.env.navigation import summarise
+    from jswim.judging import lattice
+
+    p0 = plans[0]
+    world_, params = world(p0)
+    keys = jax.vmap(jax.random.PRNGKey)(np.array([jenv.seed32(p.seed) for p in plans], np.uint32))
+    budget = int(np.asarray(params.target.budget))
+    k = world_.roc_levels
+    lo, hi = world_.model.lo, world_.model.hi
+    codes = None
+    if p0.agent == CONTROLLER_AGENT:
+        trace = steering.run(world_, params, keys, budget)
+    elif p0.agent == "random":
+        run = random_policy.run(world_, params, keys, budget, p0.action_set, trace=True)
+        trace, codes = run.trace, np.asarray(run.actions)
+    elif p0.agent == "qlearning":
+        config = qlearning.QConfig(steps=p0.steps, action_set=p0.action_set)
+        run = qlearning.train(world_, params, keys, config, trace=True)
+        trace, codes = run.trace, np.asarray(run.actions)
+    elif p0.agent == CONTINUOUS_AGENT:
+        from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
+
+        run = ppo.train(world_, params, keys, ppo.PPOConfig(steps=p0.steps), trace=True)
+        trace = run.trace
+    else:
+        raise ValueError(f"no navigation baseline {p0.agent!r}")
+    rows = []
+    start = world_.observe(world_.reset(keys[0], params), params)
+    dofs0 = np.asarray(start.dofs, np.float64)
+    for i, plan in enumerate(plans):
+        tr = _take(trace, i)
+        episodes = summarise(world_, params, tr)
+        learner = plan.agent in ("qlearning", CONTINUOUS_AGENT)
+        ended = [j for j, e in enumerate(episodes) if e.reached or e.steps >= budget]
+        j = (ended[-1] if ended else len(episodes) - 1) if learner else 0
+        begin = sum(e.steps for e in episodes[:j])
+        sl = slice(begin, begin + episodes[j].steps)
+        disp = np.asarray(tr.info.displacement, np.float64).reshape(-1, 2)[sl]
+        xy = np.cumsum(disp, axis=0)
+        heading = np.asarray(tr.obs.orientation, np.float64).reshape(-1)[sl]
+        if codes is not None:
+            moves = [list(lattice.decode(int(c), k)) for c in codes[i][sl]]
+        else:
+            dofs = np.asarray(tr.obs.dofs, np.float64)
+            prev = dofs0 if begin == 0 else dofs[begin - 1]
+            moves = _lattice_moves(dofs[sl], prev, lo, hi, k)
+        rows.append(nav_row(plan, xy[:, 0], xy[:, 1], heading, moves, episodes[j]))
+    return rows
+
+
+def _straight(spec: Target, steps: int) -> float:
+    """The task's straight distance (`NavSummary.straight`): from the start through the
+    waypoints; a moving target's point where it was after ``steps`` steps."""
+    pts = np.asarray(spec.points(), np.float64).reshape(-1, 2)
+    first = pts[0] + np.asarray(spec.velocity, np.float64) * steps
+    legs = float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
+    return float(np.hypot(*first)) + legs
+
+
+def llm_episode(plan: Plan, r: Any, work: np.ndarray | None) -> NavSummary:
+    """An LLM run's episode ([`NavSummary`][jswim.env.navigation.NavSummary]) from its own
+    record: the run ends where the task did (the driver stops at the world's end), ``work`` is
+    each step's, replayed (the work depends on the shape's path only)."""
+    from jswim.env.navigation import energy_per_distance
+    from jswim.env.targets import target_from_dict
+
+    spec = target_from_dict(json.loads(plan.target))
+    xy = np.column_stack([np.asarray(r.x, np.float64), np.asarray(r.y, np.float64)])
+    path = float(np.hypot(*np.diff(np.vstack([np.zeros((1, 2)), xy]), axis=0).T).sum())
+    straight = _straight(spec, r.steps)
+    w = np.asarray(work, np.float64).reshape(-1) if work is not None else np.full(r.steps, np.nan)
+    return NavSummary(
+        bool(r.reached),
+        r.steps,
+        straight,
+        path,
+        path / straight if straight > 0 else float("nan"),
+        float(np.sum(r.progress)),
+        float(np.sum(w)),
+        energy_per_distance(w, r.progress),
+    )

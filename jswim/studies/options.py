@@ -113,8 +113,10 @@ class StudyOptions:
     formations: tuple[str, ...] = ("line", "side")
     # The navigation study's grid (jswim.studies.navigate): fixed targets at these distances (a)
     # crossed with these bearings (degrees from the start heading, counterclockwise).
-    distances: tuple[float, ...] = (2.0,)
+    distances: tuple[float, ...] = (3.0,)
     bearings: tuple[float, ...] = (0.0, 90.0, 180.0)
+    # Episodes of each target's budget that Q-learning and PPO train for in the navigation study.
+    train_episodes: int = 40
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
@@ -122,7 +124,7 @@ class StudyOptions:
             values = getattr(self, name)
             if values is not None and len(set(values)) < len(values):
                 object.__setattr__(self, name, tuple(dict.fromkeys(values)))
-        for name in ("steps", "runs", "q_runs", "samples", "n_ht"):
+        for name in ("steps", "runs", "q_runs", "samples", "n_ht", "train_episodes"):
             if getattr(self, name) is not None:
                 check_size(name, getattr(self, name))
         if any(not (math.isfinite(d) and d > 0.25) for d in self.distances):

@@ -468,7 +468,7 @@ def _run_in(
     )
     typed = as_run_rows(rows)  # StudyResult.rows stay the dicts of read_runs (users index them)
     summary = summarize(typed)
-    scene_table = _scene_table(typed)
+    scene_table = {**_scene_table(typed), **_nav_table(typed)}
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
@@ -525,6 +525,16 @@ def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
     from jswim.studies import scenes  # lazy: start-up (the scene module, for scene studies only)
 
     return {"scenes": scenes.scene_summary([r for r in rows if not is_failed(r)])}
+
+
+def _nav_table(rows: Sequence[RunRow]) -> dict[str, Any]:
+    """``{"navigation": table}`` of a study with navigation runs
+    (`jswim.studies.navigate.nav_summary`), else ``{}``."""
+    if not any(r.target for r in rows):
+        return {}
+    from jswim.studies import navigate  # lazy: the navigation study's module
+
+    return {"navigation": navigate.nav_summary(rows)}
 
 
 def _write_report(folder: Path, figures: bool) -> None:

@@ -378,6 +378,9 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                             [f"T={temp:g}"] if temp is not None and cell.temperature is None else []
                         ) + ([f"prompt={prompt_label(prompt)}"] if prompt else [])
                         group = ", ".join(g for g in [cell.group, *swept] if g)
+                        steps = o.steps if o.steps is not None else cell.steps or spec.steps
+                        if cell.target and agent in ("qlearning", CONTINUOUS_AGENT):
+                            steps *= o.train_episodes  # learners train over many episodes
                         for k in range(runs.get(agent, runs["qlearning"])):
                             init = initial(cell.init or o.init or spec.init, k, sw)
                             base = run_id(
@@ -394,9 +397,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                                         init,
                                         zeta,
                                         run_seed(o.seed, rid),
-                                        o.steps
-                                        if o.steps is not None
-                                        else cell.steps or spec.steps,
+                                        steps,
                                         n_ht,
                                         drop,
                                         action_set,
