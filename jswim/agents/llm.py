@@ -377,6 +377,8 @@ class LLMDriver:
         )
         world_meta, deviation = world_view.notes(spec)
         run.deviations += [deviation] if deviation else []
+        if nav is not None:
+            run.deviations.append(fidelity.navigation_deviation(spec.target))
         if env.n_swimmers > 1:
             result.knobs["pair_prompt"] = spec.pair_prompt
         if spec.pair_prompt == "each":  # one conversation per swimmer (jswim.agents.pair_prompt)

@@ -95,6 +95,10 @@ def study_figures(
         return continuous_figures(rows, note=note)
     if study in ("wall", "pair", "school"):  # walls, pairs and schools: the scene figures
         return scene_figures(study, rows, note=note)
+    if study == "navigate":  # paths in the plane, success against bearing, energy
+        from jswim.figures.navigation import nav_figures
+
+        return nav_figures(rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [

@@ -298,7 +298,8 @@ def run_study(
             # and the extensions some runs use (finer or real-valued ROCs).
             "fidelity_deviations": list(fidelity.ALWAYS)
             + fidelity.study_extensions({p.roc_levels for p in plans})
-            + _scene_extensions(plans),
+            + _scene_extensions(plans)
+            + ([fidelity.NAVIGATION] if any(p.target for p in plans) else []),
             "roc_levels": sorted({p.roc_levels for p in plans}),
             "grid": {k: getattr(options, k) for k in GRID_SIZE},
             "server": backend.address() if backend is not None else None,
