@@ -176,7 +176,11 @@ def _print_nav_table(rows: Sequence[Any]) -> None:
     def fmt(v: Any, spec: str) -> str:
         return "-" if v is None else format(v, spec)
 
-    cols = ["target", "agent", "reached", "steps", "path ratio", "energy", "energy/dist"]
+    from jswim.console import Column
+
+    cols = [Column("target", False), Column("agent", False)] + [
+        Column(h) for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
+    ]
     cells = [
         [
             r["group"],

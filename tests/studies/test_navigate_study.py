@@ -79,7 +79,7 @@ def test_the_llm_runs_go_through_the_one_pipeline_and_stop_at_the_target(study):
     # Its path ends within the success radius of the target (0, 3).
     end = np.array([llm["x"][-1], llm["y"][-1]])
     assert np.hypot(*(end - [0.0, 3.0])) < 0.25
-    recs = read_transcript(out / "transcripts" / f"{llm['run_id']}.jsonl")
+    recs = read_transcript(out, llm["run_id"])
     meta = recs[0]
     first = next(r for r in recs if r.get("type") == "step")
     assert "(X, Y) = (" in first["prompt"] and "heading" in first["prompt"]
