@@ -16,7 +16,13 @@
 ``jswim/NGWall-v0``             one NG swimmer 5 a above a no-slip wall
 ``jswim/NGPair-v0``             two NG swimmers 30 a apart in the unbounded fluid
 ``jswim/NGSchool-v0``           three NG swimmers in a line, 30 a apart
+``jswim/NavigatePurcell-v0``    Purcell (K = 2) sent to a point 3 link lengths away at 90 degrees
 ==============================  ===============================================================
+
+A navigation id (a world with a ``target``, docs/navigation.md) ends its own episodes: it
+terminates when the target is reached and truncates when its budget is spent
+([`Environment.termination`][jswim.env.base.Environment.termination]); it registers no
+``max_episode_steps``.
 
 Each is a `JswimEnv` over a `jswim.env.door.Door`: actions are the world's integer
 codes (``Discrete(n_actions)``) or, with ``continuous=True``, ``Box(-1, 1, (n_dof,))`` (every
@@ -94,6 +100,7 @@ def _reset(door: Door, key: jax.Array, params: Any) -> tuple[DoorState, jax.Arra
 
 def _step(door: Door, key: jax.Array, state: DoorState, action: Any, params: Any) -> tuple:
     state, obs, info = door.step(key, state, action, params)
+    terminated, truncated = door.world.termination(state.env_state, params)
     return (
         state,
         obs,
@@ -101,6 +108,8 @@ def _step(door: Door, key: jax.Array, state: DoorState, action: Any, params: Any
         door.position(state.env_state, params),
         info.stuck,
         info.contact,
+        terminated,
+        truncated,
     )
 
 
@@ -175,7 +184,7 @@ class JswimEnv(gymnasium.Env):
         if self._state is None:
             raise RuntimeError("call reset() before step()")
         a = np.asarray(action, np.float32) if self.door.continuous else np.int32(action)
-        self._state, obs, reward, position, stuck, contact = _step_jit(
+        self._state, obs, reward, position, stuck, contact, terminated, truncated = _step_jit(
             self.door, self._key(), self._state, a, self.params
         )
         info = {
@@ -185,7 +194,7 @@ class JswimEnv(gymnasium.Env):
         }
         if self.render_mode == "human":
             self.render()
-        return np.asarray(obs, np.float32), float(reward), False, False, info
+        return np.asarray(obs, np.float32), float(reward), bool(terminated), bool(truncated), info
 
     def render(self) -> np.ndarray | None:
         """The current state as an RGB array ``(360, 480, 3)`` uint8 (``"rgb_array"``), or shown
@@ -228,6 +237,7 @@ def _vector_step(
     dtype = door.world.dtype(states.env_state)
     y = noise(k_step, n * s).astype(dtype).reshape(n, s)
     stepped, obs, info = jax.vmap(door.advance, in_axes=(0, 0, 0, None))(states, actions, y, params)
+    ended, cut = jax.vmap(door.world.termination, in_axes=(0, None))(stepped.env_state, params)
 
     def restart(carry):
         stepped, obs = carry
@@ -237,8 +247,9 @@ def _vector_step(
 
     states, obs = jax.lax.cond(jnp.any(done), restart, lambda c: c, (stepped, obs))
     reward = jnp.where(done, 0.0, info.progress)
-    truncated = ~done & (states.time >= max_steps)
-    return states, obs, reward, truncated
+    terminated = ~done & ended
+    truncated = ~done & ~ended & (cut | (states.time >= max_steps))
+    return states, obs, reward, terminated, truncated
 
 
 _vector_reset_jit = jax.jit(_vector_reset, static_argnums=0)
@@ -251,7 +262,8 @@ class JswimVectorEnv(VectorEnv):
 
     Autoreset follows Gymnasium 1.x's default, ``AutoresetMode.NEXT_STEP``: the step after an
     episode ends resets that env (its action ignored, reward 0, neither flag set). Episodes are
-    truncated after ``max_episode_steps``; nothing terminates. ``reset(seed=s)``: env ``i``'s
+    truncated after ``max_episode_steps`` (default 200; a navigation world: its own budget), and
+    a navigation world's terminate at the target. ``reset(seed=s)``: env ``i``'s
     randomness comes from ``s`` (a list: its first entry) and ``i``.
 
     Parameters
@@ -274,11 +286,13 @@ class JswimVectorEnv(VectorEnv):
         swimmer: str = "purcell",
         scene: Any = None,
         *,
-        max_episode_steps: int = MAX_EPISODE_STEPS,
+        max_episode_steps: int | None = None,
         render_mode: str | None = None,
         **options: Any,
     ) -> None:
         _refuse_fork()
+        if max_episode_steps is None:  # a navigation world truncates at its own budget
+            max_episode_steps = 2**31 - 1 if "target" in options else MAX_EPISODE_STEPS
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
             raise ConfigError(f"num_envs must be a whole number >= 1, got {num_envs!r}")
         if (
@@ -320,15 +334,14 @@ class JswimVectorEnv(VectorEnv):
         dtype = np.float32 if self.door.continuous else np.int32
         actions = jnp.asarray(np.asarray(actions, dtype))
         self._key, k = jax.random.split(self._key)
-        self._states, obs, reward, truncated = _vector_step_jit(
+        self._states, obs, reward, terminated, truncated = _vector_step_jit(
             self.door, self.max_episode_steps, k, self._states, self._done, actions, self.params
         )
-        self._done = truncated
-        terminated = np.zeros(self.num_envs, bool)
+        self._done = terminated | truncated
         return (
             np.asarray(obs, np.float32),
             np.asarray(reward, np.float64),
-            terminated,
+            np.asarray(terminated),
             np.asarray(truncated),
             {},
         )
@@ -351,7 +364,8 @@ def register() -> None:
                 env_id,
                 entry_point="jswim.gym:JswimEnv",
                 vector_entry_point="jswim.gym:JswimVectorEnv",
-                max_episode_steps=MAX_EPISODE_STEPS,
+                # a navigation world ends its own episodes (its budget)
+                max_episode_steps=None if "target" in kwargs else MAX_EPISODE_STEPS,
                 kwargs=dict(kwargs),
             )
 

@@ -19,7 +19,8 @@ wrappers (``LogWrapper``, ``FlattenObservationWrapper``, ``GymnaxToGymWrapper``,
 ``GymnaxToVectorGymWrapper``) and PureJaxRL's scripts take it as they take gymnax's own
 environments. It is a plain object (wrappers may set attributes on it). Its params,
 `Params`, hold the world's params and ``max_steps_in_episode`` (200 unless
-``make(..., max_steps_in_episode=n)``): an episode is truncated there, nothing terminates. The
+``make(..., max_steps_in_episode=n)``): an episode is truncated there, and a navigation world's
+(``"NavigatePurcell-v0"``) also ends at its target or its budget. The
 reward is ``StepInfo.progress`` (float32); ``info`` carries the swimmers' mean ``x``, ``stuck``
 and ``contact``.
 """
@@ -96,7 +97,8 @@ class JswimGymnax(environment.Environment):
             "stuck": info.stuck,
             "contact": info.contact,
         }
-        return obs, state, info.progress.astype(jnp.float32), jnp.zeros((), bool), extra
+        done = self.is_terminated(state, params)
+        return obs, state, info.progress.astype(jnp.float32), done, extra
 
     def reset_env(self, key: Array, params: Params) -> tuple[Array, DoorState]:
         state, obs = self.door.reset(key, params.world)
@@ -107,7 +109,10 @@ class JswimGymnax(environment.Environment):
         return self.door.observation(state, params.world)
 
     def is_terminated(self, state: DoorState, params: Params) -> Array:
-        return jnp.zeros((), bool)
+        """The world's end of an episode (a navigation target reached or its budget spent;
+        never in the other worlds); gymnax adds the ``max_steps_in_episode`` truncation."""
+        terminated, truncated = self.door.world.termination(state.env_state, params.world)
+        return terminated | truncated
 
     def action_space(self, params: Params | None = None) -> spaces.Discrete | spaces.Box:
         """``Discrete(n_actions)``, or ``Box(-1, 1, (n_dof,))`` with ``continuous=True``."""
@@ -138,7 +143,7 @@ def make(
     name : str
         A name of `jswim.env.door.IDS` (``"jswim/"`` in front is accepted).
     max_steps_in_episode : int
-        Steps per episode (truncation).
+        Steps per episode (truncation); a navigation world's default is its target's budget.
     **options
         `jswim.env.door.build`'s options over the name's own (``zeta``, ``direction``,
         ``history``, ``continuous``, ...).
@@ -160,6 +165,10 @@ def make(
             f"max_steps_in_episode must be a whole number >= 1, got {max_steps_in_episode!r}"
         )
     door, world_params = build(**{**IDS[key], **options})
+    target = getattr(world_params, "target", None)
+    if target is not None and max_steps_in_episode == MAX_STEPS_IN_EPISODE:
+        # a navigation world's episodes last its budget unless told otherwise
+        max_steps_in_episode = int(target.budget)
     env = JswimGymnax(door, world_params, max_steps_in_episode)
     return env, env.default_params
 

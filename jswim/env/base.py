@@ -22,7 +22,7 @@ paper's task toward ``params.direction`` (+1: +x, -1: -x), a parameter of every 
 
 Worlds: [`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld] (the paper's swimmers alone in the fluid,
 over `jswim.env`) and [`jswim.env.scene_world.SceneWorld`][jswim.env.scene_world.SceneWorld] (walls, obstacles, pairs,
-over `jswim.scenes`); [`jswim.env.worlds.make`][jswim.env.worlds.make] builds either. A new world subclasses
+over `jswim.scenes`); [`jswim.env.registry.make`][jswim.env.registry.make] builds either. A new world subclasses
 [`Environment`][jswim.env.base.Environment] and fills in ``reset``, ``advance``, ``observe`` and the sizes (see
 docs/design.md, *Adding a world*).
 """
@@ -95,7 +95,7 @@ class Observation(NamedTuple):
         from the wall plane.
     height : Array (S,) or None
         Each swimmer's height as its world records it (a scene's: the middle sphere's ``z``,
-        [`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]), which the prompt's ``H`` shows; ``None``: the world has
+        [`jswim.scenes.SceneState`][jswim.scenes.scene_state.SceneState]), which the prompt's ``H`` shows; ``None``: the world has
         none (then ``position``'s ``y`` stands for it).
     target : TargetView or None
         A navigation world's current target: position, distance and bearing in the body frame
@@ -118,7 +118,7 @@ class Scenery(NamedTuple):
     ----------
     model : SwimmerModel or None
         The swimmer whose body outline is drawn from the observed DOFs; ``None``: each swimmer is
-        drawn as a marker at its position (a world of [`jswim.register_world`][jswim.env.worlds.register_world]).
+        drawn as a marker at its position (a world of [`jswim.register_world`][jswim.env.registry.register_world]).
     wall : bool
         A plane wall at ``y = 0`` (the swimmers' heights are their ``y``).
     obstacles : tuple of (x, z, radius)
@@ -227,7 +227,7 @@ class Environment:
     @property
     def dof_range(self) -> tuple[float, float]:
         """The interval ``(lo, hi)`` each DOF of [`observe`][jswim.env.scene_world.SceneWorld.observe] stays in, what an LLM's prompt
-        states of a world of [`jswim.register_world`][jswim.env.worlds.register_world] ([`jswim.agents.world_view.model`][jswim.agents.world_view.model]);
+        states of a world of [`jswim.register_world`][jswim.env.registry.register_world] ([`jswim.agents.world_view.model`][jswim.agents.world_view.model]);
         default ``(0.0, 1.0)``: DOFs observed as their places in their ranges. The paper's
         swimmers' ranges are their models' ([`SwimmerModel`][jswim.swimmers.models.SwimmerModel]
         ``lo``, ``hi``), which the agents read instead."""

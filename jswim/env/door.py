@@ -36,9 +36,10 @@ import numpy as np
 from jax import Array
 
 from jswim.env.base import Environment, StepInfo
+from jswim.env.targets import FixedTarget
 from jswim.env.scene_world import SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
-from jswim.env.worlds import make
+from jswim.env.registry import make
 from jswim.errors import ConfigError
 
 #: Bound of the clipped wall features (log height, scaled tilt).
@@ -51,7 +52,18 @@ HISTORY_BOUND = 10.0
 #: The door's own options, what `jswim.make` takes by name, and the model and scene options
 #: it passes on: the keywords `build` accepts.
 DOOR_OPTIONS = ("continuous", "history", "separation")
-MAKE_OPTIONS = ("swimmer", "scene", "zeta", "direction", "init", "roc_levels", "dtype")
+MAKE_OPTIONS = (
+    "swimmer",
+    "scene",
+    "zeta",
+    "direction",
+    "init",
+    "roc_levels",
+    "dtype",
+    "target",
+    "bearing_bins",
+    "lattice",
+)
 MODEL_OPTIONS = (
     "d_max",
     "d_min",
@@ -63,6 +75,11 @@ MODEL_OPTIONS = (
     "sweeps",
     "contact_gap",
 )
+
+#: The target of ``NavigatePurcell-v0``: a point 3 link lengths away at 90 degrees to the left,
+#: reached within a quarter link length (budget: the steering controller's measured default,
+#: 256 steps; docs/navigation.md).
+NAVIGATE_TARGET = FixedTarget(3.0, 90.0)
 
 #: The worlds every door names (Gymnasium: ``jswim/<name>``; gymnax: ``<name>``) and their
 #: `build` arguments.
@@ -83,6 +100,7 @@ IDS: dict[str, dict[str, Any]] = {
         "swimmer": "ng",
         "scene": {"medium": "free", "swimmers": 3, "separation": 30.0},
     },
+    "NavigatePurcell-v0": {"swimmer": "purcell", "roc_levels": 2, "target": NAVIGATE_TARGET},
 }
 
 

@@ -3,7 +3,7 @@ tables.
 
 A cycle of lattice steps is a product of table rows: the centroid displacement of each step
 (body frame at the step's start) rotated by the orientation reached so far, and the rotations
-added (`jswim.env.tables.lattice_table`); its work is the sum
+added (`jswim.env.step_tables.lattice_table`); its work is the sum
 of the steps' rows of [`jswim.env.work.lattice_work_table`][jswim.env.work.lattice_work_table].
 The loops themselves and the steering controller are kinematics:
 [`jswim.swimmers.turning`][jswim.swimmers.turning].
@@ -23,7 +23,7 @@ import numpy as np
 from jswim.env.params import EnvParams
 from jswim.env.state import reset
 from jswim.env.stepping import advance
-from jswim.env.tables import lattice_table
+from jswim.env.step_tables import lattice_table
 from jswim.env.work import lattice_step_work, lattice_work_table
 from jswim.swimmers.models import SwimmerModel
 from jswim.swimmers.turning import (

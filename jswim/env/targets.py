@@ -276,7 +276,7 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
     """Steps the steering controller is given for ``spec`` (``spec.budget`` when set).
 
     From the controller's measured physics ([`jswim.env.loops.steering_budget`][jswim.env.loops.steering_budget],
-    safety [`BUDGET_SAFETY`][jswim.env.targets.BUDGET_SAFETY]): cycles to turn through the
+    safety `BUDGET_SAFETY`): cycles to turn through the
     bearing at the quarter loop's rotation per cycle plus cycles to cover the distance at the
     square gait's displacement per cycle. Waypoints add one such leg per waypoint (the turn
     measured from the previous leg's direction). A moving target's is the fixed one for the

@@ -12,11 +12,11 @@ from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
 from jswim.scenes import purcell_wall
-from jswim.scenes.params import scene_params
+from jswim.scenes.scene_parameters import scene_params
 from jswim.scenes.scene import Scene
 from jswim.swimmers.models import SWIMMERS, SwimmerModel
 
-#: Worlds added by name ([`register_world`][jswim.env.worlds.register_world]): name -> factory.
+#: Worlds added by name ([`register_world`][jswim.env.registry.register_world]): name -> factory.
 _REGISTERED: dict[str, Callable[..., tuple[Environment, Any]]] = {}
 
 
@@ -43,7 +43,7 @@ def register_world(name: str, factory: Callable[..., tuple[Environment, Any]]) -
 
 
 def registered_worlds() -> tuple[str, ...]:
-    """The names [`register_world`][jswim.env.worlds.register_world] added, in order."""
+    """The names [`register_world`][jswim.env.registry.register_world] added, in order."""
     return tuple(_REGISTERED)
 
 
@@ -80,7 +80,7 @@ def make(
     Parameters
     ----------
     swimmer : str or SwimmerModel
-        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"``, or a world of [`register_world`][jswim.env.worlds.register_world]
+        ``"purcell"``, ``"ng"``, ``"nlink"``, ``"nsphere"``, or a world of [`register_world`][jswim.env.registry.register_world]
         (its factory gets the scene, zeta, direction, init and the keywords) (scenes: ``"ng"``; ``"purcell"`` above a
         wall, [`jswim.scenes.purcell_wall`][jswim.scenes.purcell_wall]: the paper's world with wall-corrected drag, its
         plane ``scene.height`` link lengths up, ``link_radius`` by keyword); model options
@@ -104,7 +104,7 @@ def make(
         and ``lattice`` ([`navigation_world`][jswim.env.navigation.navigation_world]). Planar
         swimmers with ``roc_levels >= 2``, in the bulk or in a plane above a wall; docs/navigation.md.
     **kwargs
-        More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.params.scene_params]
+        More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.scene_parameters.scene_params]
         (``nodes``, ``sweeps``, ``contact_gap``).
 
     Raises

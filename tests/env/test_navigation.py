@@ -107,12 +107,12 @@ def test_moving_target_moves_with_the_episode_clock(float32):
 def test_cells_cross_the_shape_with_the_bearing():
     env, params = jswim.make("purcell", roc_levels=K, target=FixedTarget(3.0, 90.0))
     cells = env.cells()
-    assert isinstance(cells, NavCells) and cells.n_cells == 9 * 12
+    assert isinstance(cells, NavCells) and cells.n_cells == 9 * 8
     state = env.reset(jax.random.key(0), params)
     j = cells.positions(state, params)
     assert j.tolist() == [2, 2]
-    # lattice point (2, 2) is row 8; 90 degrees is bin 3 of 12
-    assert int(cells.cell(state, j, params)) == 8 * 12 + 3
+    # lattice point (2, 2) is row 8; 90 degrees is bin 2 of 8
+    assert int(cells.cell(state, j, params)) == 8 * 8 + 2
 
 
 def test_lattice_option_rounds_float_rocs():
@@ -170,3 +170,31 @@ def test_default_budgets_follow_the_measured_physics():
     assert ahead == behind < fixed  # behind: swims backward, no turn
     moving = default_budget(MovingTarget(3.0, 90.0, velocity=(0.0, 0.01)), model)
     assert moving > fixed
+
+
+def test_gymnasium_id_passes_check_env_and_ends_at_the_target():
+    gymnasium = pytest.importorskip("gymnasium")
+    from gymnasium.utils.env_checker import check_env
+
+    import jswim.gym  # noqa: F401
+
+    env = gymnasium.make("jswim/NavigatePurcell-v0")
+    check_env(env.unwrapped, skip_render_check=True)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == (5,) and env.action_space.n == 10
+    # a target one square-gait cycle ahead: terminated after 4 steps of the gait
+    env = gymnasium.make("jswim/NavigatePurcell-v0", target=FixedTarget(0.2, 0.0, radius=0.05))
+    env.reset(seed=0)
+    flags = [env.step(int(a))[2] for a in SQUARE]
+    assert flags == [False, False, False, True]
+
+
+def test_gymnax_navigation_ends_its_episodes():
+    pytest.importorskip("gymnax")
+    import jswim.gymnax
+
+    env, params = jswim.gymnax.make("NavigatePurcell-v0")
+    assert params.max_steps_in_episode == int(params.world.target.budget)
+    obs, state = env.reset(jax.random.key(0), params)
+    obs, state, _, done, _ = env.step_env(jax.random.key(1), state, SQUARE[0], params)
+    assert obs.shape == (5,) and not bool(done)
