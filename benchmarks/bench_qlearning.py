@@ -29,7 +29,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim.actions import ACTION_SETS
+from jswim.action_codes import ACTION_SETS
 from jswim.agents import qlearning
 from jswim.agents.defaults import default_rocs
 from jswim.agents.qlearning import QConfig, batch_params, train

@@ -39,7 +39,7 @@ class Quote(NamedTuple):
 def _square(swimmer: str, direction: int = 1, **model_kwargs) -> tuple[float, np.ndarray]:
     """The best closed cycle (the square gait) per cycle, and its per-step displacements."""
     from jswim import env
-    from jswim.actions import decode_action
+    from jswim.action_codes import decode_action
     from jswim.judging import gait
 
     model = env.make_params(swimmer, **model_kwargs).model
@@ -55,7 +55,7 @@ def _corner_mdp(swimmer: str) -> tuple[np.ndarray, np.ndarray]:
     reward ``r[s, a]`` (the step's displacement) and next corner ``nxt[s, a]``, read from the
     exact step table through ``env.rollout`` one step at a time."""
     from jswim import env
-    from jswim.actions import decode_action, n_actions
+    from jswim.action_codes import decode_action, n_actions
 
     corners = env.all_inits(2)
     index = {c: i for i, c in enumerate(corners)}
@@ -193,7 +193,7 @@ def quotes(fast: bool = False) -> Iterator[Quote]:
     square = [encode_action(d, r) for d, r in [(1, -1), (2, -1), (1, 1), (2, 1)]]
     progress = float(jswim.rollout(world, params, 0, square * 3).info.progress.sum())
     for page in ("../README.md", "getting-started.md"):
-        yield Quote(page, r"# (0\.\d+) a toward \+x in 3 cycles", progress)
+        yield Quote(page, r"wall: (0\.\d+) a toward \+x in 3 cycles", progress)
     along_x, orientation0 = _four_link_x()
     yield Quote(
         "physics.md", r"the best stroke moves (0\.\d+)\s+a per 6-step cycle along x", along_x

@@ -45,13 +45,13 @@ __version__ = "0.1.0"
 
 #: Public name -> the module that owns it (imported on first access, PEP 562).
 _EXPORTS = {
-    "make": "jswim.env.worlds",
+    "make": "jswim.env.registry",
     "rollout": "jswim.env.episodes",
     "run_study": "jswim.studies",
     "load": "jswim.results",
     "animate": "jswim.viz.animate",
     "report": "jswim.viz.page",
-    "register_world": "jswim.env.worlds",
+    "register_world": "jswim.env.registry",
     "StudyOptions": "jswim.studies",
     "make_params": "jswim.env",
     "reset": "jswim.env",

@@ -135,6 +135,36 @@ def eta(elapsed_s: float, fraction: float) -> str | None:
     return format_duration(elapsed_s * (1 - min(fraction, 1.0)) / fraction)
 
 
+class Throttle:
+    """When a progress display redraws: on a change of phase, on the final update, and otherwise at
+    most every ``interval`` seconds (the log lines of `Progress`, the notebook output of
+    `NotebookProgress`).
+
+    Parameters
+    ----------
+    interval : float
+        Seconds between redraws within a phase.
+    """
+
+    def __init__(self, interval: float) -> None:
+        self.interval = interval
+        self.t0 = time.monotonic()
+        self._last: tuple[str, float] | None = None
+
+    def due(self, label: str, final: bool = False) -> float | None:
+        """The time (``time.monotonic``) to redraw ``label`` now, or ``None`` to skip this update."""
+        now = time.monotonic()
+        if (
+            not final
+            and self._last is not None
+            and self._last[0] == label
+            and now - self._last[1] < self.interval
+        ):
+            return None
+        self._last = (label, now)
+        return now
+
+
 class Progress:
     """Progress of a long job: a rich bar on a terminal, dated log lines elsewhere.
 
@@ -152,10 +182,8 @@ class Progress:
 
     def __init__(self, file: IO[str] | None = None, interval: float = 10.0) -> None:
         self.file = file or sys.stderr
-        self.interval = interval
+        self.throttle = Throttle(interval)
         self.terminal = is_terminal(self.file)
-        self._t0 = time.monotonic()
-        self._last: tuple[str, float] | None = None
         self._bar: Any = None
         self._task: Any = None
         self.state: tuple[str, int, int, str, str] = ("start", 0, 0, "", "runs")
@@ -202,17 +230,11 @@ class Progress:
         if self._bar is not None:
             self._bar.update(self._task, completed=done, total=total, description=label, info=info)
             return
-        now = time.monotonic()
-        if (
-            not final
-            and self._last is not None
-            and self._last[0] == label
-            and now - self._last[1] < self.interval
-        ):
+        now = self.throttle.due(label, final)
+        if now is None:
             return
-        self._last = (label, now)
         pct = f" ({100 * done / total:.0f}%)" if total else ""
-        text = f"[{format_duration(now - self._t0):>6}] {label}: {done}/{total} {unit}{pct}"
+        text = f"[{format_duration(now - self.throttle.t0):>6}] {label}: {done}/{total} {unit}{pct}"
         print(text + (f" · {info}" if info else ""), file=self.file, flush=True)
 
 
@@ -234,9 +256,7 @@ class NotebookProgress:
     """
 
     def __init__(self, interval: float = 1.0) -> None:
-        self.interval = interval
-        self._t0 = time.monotonic()
-        self._last: tuple[str, float] | None = None
+        self.throttle = Throttle(interval)
         self._handle: Any = None
         self.state: tuple[str, int, int, str, str] = ("start", 0, 0, "", "runs")
 
@@ -260,16 +280,10 @@ class NotebookProgress:
     ) -> None:
         """Show ``label`` with ``done`` of ``total`` ``unit`` and ``info`` (throttled)."""
         self.state = (label, done, total, info, unit)
-        now = time.monotonic()
-        if (
-            not final
-            and self._last is not None
-            and self._last[0] == label
-            and now - self._last[1] < self.interval
-        ):
+        now = self.throttle.due(label, final)
+        if now is None:
             return
-        self._last = (label, now)
-        view = _ProgressView(*self.state, elapsed=now - self._t0)
+        view = _ProgressView(*self.state, elapsed=now - self.throttle.t0)
         if self._handle is None:
             from IPython.display import display  # lazy: only inside a kernel
 
@@ -365,10 +379,6 @@ def study_progress(progress: ProgressFn | bool | None) -> Iterator[ProgressFn | 
             raise
         _, done, total, info, unit = bar.state
         bar.update("done", done, total, info, True, unit)
-
-
-def _last_state(bar: Progress | NotebookProgress) -> tuple[str, int, int, str, str]:
-    return bar._state
 
 
 #: Why a call is not priced, in the words every cost line uses (`cost_text`).

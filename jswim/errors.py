@@ -13,7 +13,7 @@ contains an API key. The tree::
     |   +-- LLMRequestError                 this request was rejected (4xx; retrying won't help)
     |   |   +-- LLMSetupError               every request would be: URL, key, model or a field
     |   +-- LLMResponseError                the server answered, but not with a usable completion
-    |   |   +-- MalformedReply (also ValueError)  the body is not a chat completion (jswim.llm.reply)
+    |   |   +-- MalformedReply (also ValueError)  the body is not a chat completion (jswim.llm.server_response)
     |   +-- LocalModelError                 the embedded model cannot start (package or file missing)
     |   +-- BudgetExhausted                 the cost cap is reached (jswim.llm.budget)
     +-- ResultFolderError (also ValueError) a study folder is unusable: another study, other
@@ -22,7 +22,7 @@ contains an API key. The tree::
         +-- StudyFolderError                a study or output folder cannot be written
 
 Each is defined here and also read from the module that raises it (``jswim.llm.budget``,
-``jswim.llm.reply``, ``jswim._io.folderlock``, ``jswim.results``).
+``jswim.llm.server_response``, ``jswim._io.folderlock``, ``jswim.results``).
 
 [`JswimWarning`][jswim.errors.JswimWarning] (a ``UserWarning``) is what does not stop the work; the command prints each as
 one ``jswim: warning:`` line.

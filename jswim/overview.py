@@ -362,8 +362,8 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
         lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
         if any(
             r.scene for r in s.rows
-        ):  # walls and pairs: the scene table too (jswim.studies.scenes)
-            from jswim.studies.scenes import (
+        ):  # walls and pairs: the scene table too (jswim.studies.scene_studies)
+            from jswim.studies.scene_studies import (
                 scene_summary,
                 table,
                 table_note,

@@ -7,13 +7,13 @@ the start, the reply length limit and how DOF values are written in the prompt. 
 from __future__ import annotations
 
 from jswim.agents.memory import ClearingRule
-from jswim.actions import check_roc_levels, offered_rocs
+from jswim.action_codes import check_roc_levels, offered_rocs
 from jswim.prompt import SwimmerText
 from jswim.swimmers.models import SwimmerModel
 
 
 def default_rocs(model: SwimmerModel, roc_levels: int = 1) -> tuple[int, ...]:
-    """ROCs offered to an agent on ``model`` ([`offered_rocs`][jswim.actions.offered_rocs])."""
+    """ROCs offered to an agent on ``model`` ([`offered_rocs`][jswim.action_codes.offered_rocs])."""
     return offered_rocs(model.n_dof, roc_levels)
 
 

@@ -76,7 +76,7 @@ def each_prompt(n: int) -> str:
 
 
 def scene_deviation(scene: Any, pair_prompt: str = "joint") -> str:
-    """The line of a run in a scene (issue 19, an extension: the paper's swimmer is alone in an
+    """The line of a run in a scene (an extension: the paper's swimmer is alone in an
     unbounded fluid), naming the medium, the swimmers (any number) and what the prompt shows
     (several swimmers': ``pair_prompt``, `jswim.agents.variants.PAIR_PROMPTS`)."""
     parts = [f"scene (an extension): medium {scene.medium!r}"]

@@ -1,4 +1,4 @@
-"""Each swimmer of a pair (or a school) its own LLM conversation (``--pair-prompt each``; issue 19,
+"""Each swimmer of a pair (or a school) its own LLM conversation (``--pair-prompt each``;
 a variant of the joint prompt, which stays the default).
 
 Each conversation is kept as the paper keeps a lone swimmer's (its own D1, D2 and X, its own last

@@ -62,7 +62,7 @@ from jax import Array
 from jswim import env as _env
 from jswim import sharding
 from jswim.agents.rewards import energy_reward
-from jswim.agents.qlearning import _compiler_options
+from jswim.agents.qlearning import training_compiler_options
 from jswim.env.base import Environment
 from jswim.env.episodes import Trajectory
 from jswim.agents.ppo_judge import evaluate, evaluate_swimmers, exact_x  # noqa: F401  (the judge, next to the learner)
@@ -508,7 +508,7 @@ def train(
     *,
     trace: bool = False,
 ) -> PPORun:
-    """Train PPO learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.worlds.make]).
+    """Train PPO learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.registry.make]).
 
     The learner sees the world's ``features``, is rewarded with ``StepInfo.progress`` (minus ``config.energy_weight x StepInfo.work``), and acts
     with float ROC vectors (one non-zero entry).
@@ -558,5 +558,5 @@ def _jitted() -> Callable[..., PPORun]:
     return jax.jit(
         _train,
         static_argnames=("config", "world", "axes", "trace"),
-        compiler_options=_compiler_options(),
+        compiler_options=training_compiler_options(),
     )

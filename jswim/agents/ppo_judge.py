@@ -87,7 +87,7 @@ def evaluate_swimmers(
     tol: float | None = None,
 ) -> Any:
     """Judge runs as the scene studies judge their agents (lattice moves:
-    `jswim.studies.scenes._judge`): the success criterion on each swimmer's own moves, with
+    `jswim.studies.scene_studies._judge`): the success criterion on each swimmer's own moves, with
     the displacements of the paper's swimmer of the world's judge's view
     ([`Environment.judge_view`][jswim.env.base.Environment.judge_view]: noiseless, bulk fluid,
     one per swimmer, from its start); here the shape judge for real ROCs

@@ -42,7 +42,7 @@ from jax import Array
 
 from jswim import sharding
 from jswim.agents.rewards import energy_reward
-from jswim.actions import check_action_set
+from jswim.action_codes import check_action_set
 from jswim.env import EnvParams, advance, broadcast_params, reset, uniforms
 from jswim.env.base import Environment
 from jswim.env.discretiser import Cells, corner, offered_mask, positions
@@ -175,7 +175,9 @@ def _row(q: Array, corner: Array) -> Array:
     return jax.lax.dynamic_slice_in_dim(q, corner, 1)[0]
 
 
-def _offered(levels: Array, params: EnvParams, action_set: str) -> Array:
+def offered_actions(levels: Array, params: EnvParams, action_set: str) -> Array:
+    """The mask ``(n_actions,)`` of the codes ``action_set`` offers at ``levels``, on the ROC
+    lattice of ``params`` ([`offered_mask`][jswim.env.discretiser.offered_mask])."""
     return offered_mask(levels, params.model.n_dof, action_set, roc_levels=_k(params))
 
 
@@ -184,7 +186,7 @@ def _k(params: EnvParams) -> int:
     return int(getattr(params, "roc_levels", 1))
 
 
-#: Largest action count `_pick` serves from a bit-mask table (2**A rows); beyond, a scan.
+#: Largest action count `pick_uniform` serves from a bit-mask table (2**A rows); beyond, a scan.
 _TABLE_ACTIONS = 12
 
 
@@ -198,7 +200,7 @@ def _kth_true_table(n_actions: int) -> np.ndarray:
     return table.reshape(-1)
 
 
-def _pick(mask: Array, u: Array) -> Array:
+def pick_uniform(mask: Array, u: Array) -> Array:
     """Index of a uniformly chosen True entry of ``mask`` (``u`` uniform in [0, 1)).
 
     A lookup of the k-th set bit of the mask read as an integer: on CPU a cumulative sum and an
@@ -215,7 +217,7 @@ def _pick(mask: Array, u: Array) -> Array:
     return jnp.asarray(_kth_true_table(a))[bits * a + k]
 
 
-def _greedy_set(q_row: Array, mask: Array, tie_break: str) -> Array:
+def greedy_set(q_row: Array, mask: Array, tie_break: str) -> Array:
     """Offered actions whose value equals the best offered value (or the first of them)."""
     best = jnp.max(jnp.where(mask, q_row, -jnp.inf))
     ties = mask & (q_row == best)
@@ -236,8 +238,8 @@ def _act(
     v = jnp.where(
         explore, u / jnp.maximum(epsilon, 1e-30), (u - epsilon) / jnp.maximum(1.0 - epsilon, 1e-30)
     )
-    candidates = jnp.where(explore, mask, _greedy_set(q_row, mask, tie_break))
-    return _pick(candidates, v), explore
+    candidates = jnp.where(explore, mask, greedy_set(q_row, mask, tie_break))
+    return pick_uniform(candidates, v), explore
 
 
 @jax.custom_vjp
@@ -348,7 +350,7 @@ def _train_one(
 
 
 @functools.lru_cache(maxsize=1)
-def _compiler_options() -> dict[str, str] | None:
+def training_compiler_options() -> dict[str, str] | None:
     """XLA options for the training kernels, where this XLA accepts them.
 
     XLA:CPU's experimental YNNPACK fusions turn the tiny per-learner reductions (over 4 corners
@@ -375,7 +377,7 @@ def train(
     trace: bool = False,
     cells: Cells | None = None,
 ) -> QRun:
-    """Train Q-learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.worlds.make]).
+    """Train Q-learners online for ``config.steps`` steps in any world ([`jswim.make`][jswim.env.registry.make]).
 
     One key trains one learner; a batch of keys ``(B, 2)`` trains ``B`` independent learners in
     one jitted call vmapped over learners and sharded over every device (`jswim.sharding`;
@@ -441,7 +443,7 @@ def _batch(
 def _jitted(kind: str) -> Callable[..., QRun]:
     fn = _train_one if kind == "one" else _batch
     static = ("config", "pose", "cells", "trace") + (() if kind == "one" else ("axes",))
-    return jax.jit(fn, static_argnames=static, compiler_options=_compiler_options())
+    return jax.jit(fn, static_argnames=static, compiler_options=training_compiler_options())
 
 
 # Per-learner parameters are per-swimmer parameters: one broadcasting rule (env owns it).
@@ -474,8 +476,8 @@ def greedy_rollout(
 
     def body(state, u):
         j = positions(state, big_k)
-        mask = _offered(j, params, action_set)
-        action = _pick(_greedy_set(_row(q, _corner(j, big_k)), mask, "random"), u[0])
+        mask = offered_actions(j, params, action_set)
+        action = pick_uniform(greedy_set(_row(q, _corner(j, big_k)), mask, "random"), u[0])
         state, _ = advance(state, action, 2.0 * u[1] - 1.0, params, exact=False)
         return state, action
 

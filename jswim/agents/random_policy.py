@@ -15,8 +15,8 @@ import jax.numpy as jnp
 from jax import Array
 
 from jswim import sharding
-from jswim.actions import check_action_set
-from jswim.agents.qlearning import _pick
+from jswim.action_codes import check_action_set
+from jswim.agents.qlearning import pick_uniform
 from jswim.env.base import Environment
 from jswim.env.discretiser import Cells
 from jswim.env.episodes import Trajectory
@@ -51,7 +51,7 @@ def _one(
 
     def body(state, u):
         mask = cells.mask(cells.positions(state, params), params, action_set, rocs)
-        action = _pick(mask, u[0])
+        action = pick_uniform(mask, u[0])
         state, info = env.learner_advance(state, action, 2.0 * u[1:] - 1.0, params)
         x, y, theta = env.pose(state, params)
         return state, (
@@ -78,7 +78,7 @@ def run(
     trace: bool = False,
     cells: Cells | None = None,
 ) -> RandomRun:
-    """The random policy in any world ([`jswim.make`][jswim.env.worlds.make]): every step a uniformly random code
+    """The random policy in any world ([`jswim.make`][jswim.env.registry.make]): every step a uniformly random code
     among those offered.
 
     Parameters
@@ -94,12 +94,12 @@ def run(
     steps : int
         Steps per run.
     action_set : {"all", "shape-changing"}
-        Offered actions (``jswim.actions.ACTION_SETS``), as in the LLM's prompt;
+        Offered actions (``jswim.action_codes.ACTION_SETS``), as in the LLM's prompt;
         the world's discretiser ([`Environment.cells`][jswim.env.base.Environment.cells]) says
         which moves change the shape.
     rocs : tuple of int, optional
         ROCs ``k`` offered (default: the world's; the paper's swimmer's
-        [`offered_rocs`][jswim.actions.offered_rocs]).
+        [`offered_rocs`][jswim.action_codes.offered_rocs]).
     trace : bool
         Also record the world's state, observation and step info after each step.
     cells : Cells, optional

@@ -154,9 +154,7 @@ class StepGroup:
     def _outputs(self, obs: Any, position: Any, rest: Any) -> dict[str, np.ndarray]:
         obs, position = jax.device_get((obs, position))
         xs = np.asarray(position, np.float64)[..., 0] - self.x0
-        height = (
-            obs.position[..., 1] if obs.height is None else obs.height
-        )  # a scene's: the middle sphere's
+        height = obs.height  # a scene's: the middle sphere's; seen from above: the plane's y
         out = {
             "xs": xs,
             "x": xs.mean(-1),

@@ -25,7 +25,7 @@ def play(
     Parameters
     ----------
     env : Environment
-        The world ([`make`][jswim.env.worlds.make]).
+        The world ([`make`][jswim.env.registry.make]).
     params : pytree
         Its params (for a batch: shared, or with a value per run where the world batches them).
     key : PRNG key or int, or keys ``(B, 2)``

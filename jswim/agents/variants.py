@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from typing import Any
 from collections.abc import Iterable
 
-from jswim.actions import check_action_set, check_roc_levels
+from jswim.action_codes import check_action_set, check_roc_levels
 from jswim.agents.memory import ClearingRule
 from jswim.errors import ConfigError, check_choice
 from jswim.llm.settings import check_max_tokens, check_temperature
@@ -152,7 +152,7 @@ class LLMRunSpec:
     run_id : str or None
         Name of the run (transcript file name); default from the fields above.
     scene : str
-        A scene (walls, obstacles, pairs; issue 19) as canonical JSON of ``Scene.to_dict()``
+        A scene (walls, obstacles, pairs) as canonical JSON of ``Scene.to_dict()``
         ([`jswim.studies.scene_grids.scene_json`][jswim.studies.scene_grids.scene_json]); ``""``: the paper's lone swimmer in bulk fluid.
     pair_prompt : {"joint", "each"}
         A pair's prompt (`PAIR_PROMPTS`): one joint conversation, or one per swimmer
@@ -223,7 +223,7 @@ class LLMAgentConfig:
     Attributes
     ----------
     action_set : {"all", "shape-changing"}
-        Actions offered in S5 and by constrained decoding (`jswim.actions.ACTION_SETS`).
+        Actions offered in S5 and by constrained decoding (`jswim.action_codes.ACTION_SETS`).
     x_min : float
         Lower bound of X for the integer position encoding.
     template : PromptTemplate

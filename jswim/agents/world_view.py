@@ -1,5 +1,5 @@
 """What an LLM run reads of its world: the world a run spec names ([`world`][jswim.agents.world_view.world], by
-[`jswim.make`][jswim.env.worlds.make], unless the driver is handed another builder, a test's toy world included),
+[`jswim.make`][jswim.env.registry.make], unless the driver is handed another builder, a test's toy world included),
 and the prompt's view of it ([`view`][jswim.agents.world_view.view]: from ``env.n_swimmers``, the world's ``wall``
 attribute and the swimmers' starts; docs/design.md, agents row). DOF ranges and the run's
 defaults are the named swimmer's (`jswim.agents.defaults`), over the world's joint DOFs; a
@@ -19,8 +19,8 @@ import numpy as np
 from jswim.agents.fidelity import scene_deviation
 from jswim.agents.variants import LLMRunSpec
 from jswim.env.base import Environment
+from jswim.env.registry import make, registered_worlds
 from jswim.env.targets import target_from_dict
-from jswim.env.worlds import make, registered_worlds
 from jswim.prompt import NavView, PromptTemplate, SceneView, SwimmerText, scene_template
 from jswim.scenes.scene import Scene
 from jswim.swimmers.models import SwimmerModel, make_model
@@ -63,7 +63,7 @@ def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
 def model(spec: LLMRunSpec, env: Environment) -> SwimmerModel:
     """The swimmer description a run's prompt, memory and defaults read (`jswim.agents.defaults`):
     the named paper swimmer's model ([`jswim.swimmers.models.make_model`][jswim.swimmers.models.make_model], its options); for a
-    world of [`jswim.register_world`][jswim.env.worlds.register_world], one swimmer of the world itself: its DOFs per swimmer
+    world of [`jswim.register_world`][jswim.env.registry.register_world], one swimmer of the world itself: its DOFs per swimmer
     over [`dof_range`][jswim.env.base.Environment.dof_range], ``kind`` the world's name (no paper
     swimmer's defaults: n_ht 3, the two-DOF clearing rule for two DOFs). Only its size, range
     and kind are read; it carries no physics."""

@@ -1,6 +1,6 @@
 """Every model on the same bench (``jswim bench``).
 
-- `jswim.bench.models`: the models file (TOML) and ``--model`` options;
+- `jswim.bench.models_file`: the models file (TOML) and ``--model`` options;
 - `jswim.bench.suites`: the suites (``core``, ``paper``, user-defined), their definitions;
 - `jswim.bench.runner`: every model's studies at once, each in its own folder and process;
 - `jswim.bench.leaderboard`: the leaderboard (table, CSV/JSON schema, figure).
@@ -10,10 +10,10 @@ from jswim._exports import lazy_exports
 
 #: Public name -> the module that defines it (loaded on first use).
 _HOMES = {
-    "ModelEntry": ".models",
-    "ModelsFile": ".models",
-    "load_models_file": ".models",
-    "parse_model_option": ".models",
+    "ModelEntry": ".models_file",
+    "ModelsFile": ".models_file",
+    "load_models_file": ".models_file",
+    "parse_model_option": ".models_file",
     "Suite": ".suites",
     "Part": ".suites",
     "SUITES": ".suites",

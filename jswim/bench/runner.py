@@ -23,7 +23,7 @@ from typing import Any
 from collections.abc import Callable, Sequence
 
 from jswim._io.folderlock import HOLDER, LOCK, FolderLock
-from jswim.bench.models import ModelEntry
+from jswim.bench.models_file import ModelEntry
 from jswim.bench.suites import Part, Suite
 from jswim.errors import ConfigError
 from jswim.results import atomic_write, dumps

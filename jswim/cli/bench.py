@@ -10,7 +10,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-from jswim.bench.models import ModelsFile, check_unique, load_models_file, parse_model_option
+from jswim.bench.models_file import ModelsFile, check_unique, load_models_file, parse_model_option
 from jswim.bench.suites import SUITES
 from jswim.cli import options
 from jswim.console import LOCAL_UNPRICED, Column, plain_table, terminal_width

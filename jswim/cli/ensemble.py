@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Sequence
 
-from jswim.actions import decode_action
+from jswim.action_codes import decode_action
 from jswim.cli import base
 from jswim.console import Progress
 from jswim.errors import ConfigError, check_zeta

@@ -7,7 +7,7 @@ import argparse
 from typing import Any
 from collections.abc import Callable, Sequence
 
-from jswim.actions import check_roc_levels
+from jswim.action_codes import check_roc_levels
 from jswim.cli import base
 from jswim.errors import ConfigError
 

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from urllib.parse import urlsplit
 
 from jswim._io.paths import check_file
-from jswim.actions import ACTION_SETS
+from jswim.action_codes import ACTION_SETS
 from jswim.cli import base, scenes
 from jswim.errors import ConfigError
 from jswim.llm.prices import load_prices

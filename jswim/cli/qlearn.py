@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Sequence
 
-from jswim.actions import ACTION_SETS
+from jswim.action_codes import ACTION_SETS
 from jswim.cli import base
 from jswim.console import Progress
 from jswim.errors import ConfigError, check_zeta

@@ -210,7 +210,7 @@ def print_table(rows: Sequence[dict[str, Any]]) -> None:
         _print_nav_table(rows)
     if not any(r.scene for r in rows):
         return
-    from jswim.studies.scenes import (
+    from jswim.studies.scene_studies import (
         scene_summary,
         table,
         table_note,

@@ -25,7 +25,7 @@ the module of each concern: docs/design.md (module map, *The world protocol*)::
     state, info = env.step(key, state, env.action_space(params).sample(key), params)
 """
 
-from jswim.env.actions import (
+from jswim.env.action_input import (
     ROCS,
     decode_action,
     encode_action,
@@ -61,12 +61,12 @@ from jswim.env.state import (
 from jswim.env.stepping import advance, step, step_batch
 from jswim.env.base import Box, Discrete, Environment, Observation, Scenery, StepInfo
 from jswim.env.swimmer_world import SwimmerWorld
-from jswim.env.tables import TABLE_DEGREE, step_table
+from jswim.env.step_tables import TABLE_DEGREE, step_table
 
 #: The protocol's names that reach the scene physics, loaded on first use (PEP 562) so that
 #: ``import jswim.env`` does not import `jswim.scenes`.
 _LAZY = {
-    "make": "jswim.env.worlds",
+    "make": "jswim.env.registry",
     "SceneWorld": "jswim.env.scene_world",
     "SceneTask": "jswim.env.scene_world",
     "Trajectory": "jswim.env.episodes",

@@ -93,10 +93,13 @@ class Observation(NamedTuple):
     orientation : Array (S,)
         Each swimmer's orientation (rad): the reference link's angle, or a scene swimmer's tilt
         from the wall plane.
-    height : Array (S,) or None
-        Each swimmer's height as its world records it (a scene's: the middle sphere's ``z``,
-        [`jswim.scenes.SceneState`][jswim.scenes.scene_state.SceneState]), which the prompt's ``H`` shows; ``None``: the world has
-        none (then ``position``'s ``y`` stands for it).
+    height : Array (S,)
+        Each swimmer's height as its world records it, always given: a scene swimmer's middle
+        sphere's ``z`` ([`jswim.scenes.SceneState`][jswim.scenes.scene_state.SceneState]), which
+        the prompt's ``H`` shows; a swimmer in a plane seen from above (the paper's world,
+        Purcell's swimmer in a plane parallel to a wall, a registered world's), which has no
+        height of its own in the observation, its ``y`` in that plane (``position[:, 1]``).
+        [`Scenery.side_view`][jswim.env.base.Scenery] says which of the two a world's is.
     target : TargetView or None
         A navigation world's current target: position, distance and bearing in the body frame
         ([`jswim.env.navigation.TargetView`][jswim.env.navigation.TargetView]); ``None``: the
@@ -106,7 +109,7 @@ class Observation(NamedTuple):
     dofs: Array
     position: Array
     orientation: Array
-    height: Any = None
+    height: Array
     target: Any = None
 
 
@@ -126,12 +129,18 @@ class Scenery(NamedTuple):
     plane_height : float or None
         The height (link lengths) of a planar swimmer's plane above a wall parallel to it, drawn
         from above; ``None``: no such wall.
+    side_view : bool
+        The swimmers move in a vertical plane, seen from the side (a scene's): ``position``'s
+        ``y`` and ``height`` are heights and ``orientation`` a tilt from the wall plane. ``False``
+        (the default): a plane seen from above, ``y`` lies in that plane and ``orientation`` is a
+        heading; a scene row then records the plane's height (0 without a wall) and no tilt.
     """
 
     model: Any = None
     wall: bool = False
     obstacles: tuple[tuple[float, float, float], ...] = ()
     plane_height: float | None = None
+    side_view: bool = False
 
 
 class Discrete:

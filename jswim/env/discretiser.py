@@ -8,7 +8,7 @@ Every world supplies one ([`Environment.cells`][jswim.env.base.Environment.cells
   pair, ``2**(2S)`` for S swimmers);
 * [`PaperCells`][jswim.env.discretiser.PaperCells]: the paper's world, the corner (or lattice
   point) of `jswim.env`'s state, and the swimmer's offered ROCs
-  ([`offered_rocs`][jswim.actions.offered_rocs]);
+  ([`offered_rocs`][jswim.action_codes.offered_rocs]);
 * [`WallCells`][jswim.env.discretiser.WallCells]: a scene with a wall, the joint corner times a
   height bin of swimmer 1 (``HEIGHT_EDGES``).
 
@@ -23,7 +23,7 @@ from typing import Any
 import jax.numpy as jnp
 from jax import Array
 
-from jswim.actions import offered_rocs
+from jswim.action_codes import offered_rocs
 
 #: Height-bin edges of the tabular learner's wall state (a, swimmer 1's middle sphere above the
 #: wall): about doubling, so the bins are as fine near the wall as the wall's effect is strong.
@@ -74,7 +74,7 @@ def offered_mask(
     roc_levels: int = 1,
 ) -> Array:
     """The paper's swimmer's [`offered`][jswim.env.discretiser.offered], restricted to the ROCs
-    offered (default [`offered_rocs`][jswim.actions.offered_rocs]: all three for two DOFs, +-1
+    offered (default [`offered_rocs`][jswim.action_codes.offered_rocs]: all three for two DOFs, +-1
     for more; every ``k`` in ``-K..K`` on a ROC lattice, 0 left out for more DOFs)."""
     rocs = offered_rocs(n_dof, roc_levels) if rocs is None else rocs
     return restrict(offered(levels, n_dof, action_set, roc_levels), rocs, n_dof, roc_levels)

@@ -60,7 +60,7 @@ def rollout(env: Environment, params: Any, key: Array | int, actions: Any) -> Tr
     Parameters
     ----------
     env : Environment
-        The world ([`jswim.make`][jswim.env.worlds.make]).
+        The world ([`jswim.make`][jswim.env.registry.make]).
     params : pytree
         Its params: shared, or for a batch with a value per run in the leaves the world batches
         ([`Environment.batch_params`][jswim.env.base.Environment.batch_params]).

@@ -27,7 +27,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.env.cache import cached, model_key
+from jswim.env.table_cache import cached, model_key
 from jswim.integrate import chebyshev_rule
 from jswim.swimmers.models import SwimmerModel
 

@@ -12,7 +12,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim.actions import check_roc_levels as _check_roc_levels
+from jswim.action_codes import check_roc_levels as _check_roc_levels
 from jswim.errors import ConfigError, check_zeta
 from jswim.swimmers.models import SwimmerModel, make_model
 
@@ -38,7 +38,7 @@ class EnvParams:
         Initial DOF levels: 0 = lo, 1 = hi, -1 = drawn at random by [`jswim.env.reset`][jswim.env.state.reset].
     roc_levels : int
         K (static): integer action codes carry ROC ``k / K`` with ``k`` in ``-K..K``
-        (``n_dof (2K + 1)`` codes, [`jswim.env.encode_action`][jswim.actions.encode_action]). K = 1 is the paper's
+        (``n_dof (2K + 1)`` codes, [`jswim.env.encode_action`][jswim.action_codes.encode_action]). K = 1 is the paper's
         ROC in {-1, 0, 1}. Float ROC vectors are accepted whatever K is.
     diagonal : bool
         Static. Whether a float ROC vector may move several DOFs at once (a diagonal stroke,
@@ -123,7 +123,7 @@ def make_params(
 
 def check_roc_levels(k: Any) -> int:
     """``k`` as an int if it is a valid number of ROC levels K (the rule of
-    [`jswim.actions.check_roc_levels`][jswim.actions.check_roc_levels], with the message naming ``roc_levels``)."""
+    [`jswim.action_codes.check_roc_levels`][jswim.action_codes.check_roc_levels], with the message naming ``roc_levels``)."""
     return _check_roc_levels(k, "roc_levels")
 
 

@@ -10,7 +10,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.env.actions import validate_actions, validate_moves
+from jswim.env.action_input import validate_actions, validate_moves
 from jswim.env.params import EnvParams, make_params
 from jswim.env.randomness import seed32, seed_key  # noqa: F401  (seed32 re-exported: its old place)
 from jswim.env.state import EnvState, dof_values, reset
@@ -72,7 +72,7 @@ def rollout(
     """Run a given action sequence for one swimmer or a batch.
 
     The shortcut for a named swimmer and ``(dof, roc)`` moves, always in float64; any world of
-    [`jswim.make`][jswim.env.worlds.make] runs through the protocol's one rollout,
+    [`jswim.make`][jswim.env.registry.make] runs through the protocol's one rollout,
     [`jswim.rollout`][jswim.env.episodes.rollout] ``(env, params, key, actions)``.
 
     Parameters
@@ -150,7 +150,7 @@ def rollout(
 
 def _is_plain_bulk(scene: Any) -> bool:
     """Whether ``scene`` is today's environment: one untilted swimmer in the bulk medium."""
-    from jswim.env.worlds import is_plain_bulk  # lazy: start-up (the scene modules)
+    from jswim.env.registry import is_plain_bulk  # lazy: start-up (the scene modules)
 
     return is_plain_bulk(scene)
 

@@ -1,14 +1,14 @@
 """Scenes through the protocol: NG swimmers near a wall, among obstacles, in pairs (`jswim.scenes`).
 
 The physics is `jswim.scenes`' own: `SceneWorld.step` of a joint action code is
-[`jswim.scenes.scene_step`][jswim.scenes.stepping.scene_step] of the code's ``(swimmer, dof, roc)`` (the same draw from the key,
+[`jswim.scenes.scene_step`][jswim.scenes.scene_stepping.scene_step] of the code's ``(swimmer, dof, roc)`` (the same draw from the key,
 the same state, bit for bit). What the world adds is the task: a target ``direction`` in its
 params ([`SceneTask`][jswim.env.scene_world.SceneTask]), the reward ``progress`` and positions of each swimmer's centroid.
 
 A swimmer's position is the centroid of its three spheres, the middle sphere's ``(x, z)`` plus
 ``(d2 - d1) / 3`` along its axis: the point whose velocity the paper's formula gives (the middle
 sphere jumps by more than 1 a at every move while the swimmer nets about 0.17 a per cycle). In the
-``"bulk"`` medium the state's centre already is the paper's X ([`jswim.scenes.stepping`][jswim.scenes.stepping]), so
+``"bulk"`` medium the state's centre already is the paper's X ([`jswim.scenes.scene_stepping`][jswim.scenes.scene_stepping]), so
 there the position is the centre.
 """
 
@@ -25,11 +25,11 @@ from jswim.env.base import Environment, Observation, Scenery, StepInfo, first_mo
 from jswim.env.discretiser import Cells, WallCells
 from jswim.env.params import EnvParams, make_params
 from jswim.errors import ConfigError
-from jswim.scenes.actions import decode_scene_action
-from jswim.scenes.params import SceneParams, scene_params
+from jswim.scenes.scene_actions import decode_scene_action
+from jswim.scenes.scene_parameters import SceneParams, scene_params
 from jswim.scenes.scene import Scene
-from jswim.scenes.state import SceneState, centre_low, scene_reset
-from jswim.scenes.stepping import scene_advance
+from jswim.scenes.scene_state import SceneState, centre_low, scene_reset
+from jswim.scenes.scene_stepping import scene_advance
 from jswim.swimmers.models import make_model
 
 #: Arms (DOFs) of one NG swimmer.
@@ -37,7 +37,7 @@ ARMS = 2
 
 
 class SceneTask(NamedTuple):
-    """A scene world's params: the scene's own ([`jswim.scenes.SceneParams`][jswim.scenes.params.SceneParams]) and the target
+    """A scene world's params: the scene's own ([`jswim.scenes.SceneParams`][jswim.scenes.scene_parameters.SceneParams]) and the target
     direction (+1: +x, -1: -x); both may be batched (``vmap`` axes as a ``SceneTask`` prefix)."""
 
     scene: SceneParams
@@ -72,11 +72,12 @@ class SceneWorld(Environment):
         return self.scene.medium == "wall"
 
     def scenery(self) -> Scenery:
-        """NG swimmers by their outline, the wall and the obstacles of the scene."""
+        """NG swimmers by their outline, the wall and the obstacles of the scene, seen from the side."""
         return Scenery(
             model=make_model("ng"),
             wall=self.wall,
             obstacles=tuple(tuple(map(float, o)) for o in self.scene.obstacles),
+            side_view=True,
         )
 
     @property
@@ -115,7 +116,7 @@ class SceneWorld(Environment):
     def advance(
         self, state: SceneState, action: Array, noise: Array, params: SceneTask
     ) -> tuple[SceneState, StepInfo]:
-        """[`jswim.scenes.scene_advance`][jswim.scenes.stepping.scene_advance] of the action, with noise ``(S,)``."""
+        """[`jswim.scenes.scene_advance`][jswim.scenes.scene_stepping.scene_advance] of the action, with noise ``(S,)``."""
         new, info = scene_advance(params.scene, state, self.move(action), noise)
         dtype = new.arms.dtype
         disp = jnp.stack([info.dx, info.dz], -1) + (self.offset(new) - self.offset(state))
@@ -134,7 +135,7 @@ class SceneWorld(Environment):
     def observe(self, state: SceneState, params: SceneTask) -> Observation:
         """Positions: each swimmer's centroid from the full pair ``centre + centre_lo`` (in the
         state's dtype the sum is ``centre``; widened to float64 it is exact, drift-free); height:
-        the middle sphere's ``z`` ([`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]'s, what the scenes record)."""
+        the middle sphere's ``z`` ([`jswim.scenes.SceneState`][jswim.scenes.scene_state.SceneState]'s, what the scenes record)."""
         centre = state.centre + centre_low(state)
         return Observation(
             state.arms.reshape(-1), centre + self.offset(state), state.tilt, centre[:, 1]

@@ -27,16 +27,16 @@ import jax
 import jax.numpy as jnp
 from jax import Array
 
-from jswim.actions import decode_action
+from jswim.action_codes import decode_action
 from jswim.env.params import EnvParams, broadcast_params, is_batched, param_axes
 from jswim.env import motion
 from jswim.env.randomness import noise
 from jswim.env.state import EnvState, MoveInfo, corner_values, narrow, wide
-from jswim.env.tables import (
+from jswim.env.step_tables import (
     MAX_LATTICE_ROWS,
-    _corner_index,
-    _step_rows,
-    _still_row,
+    corner_index,
+    step_rows,
+    still_row,
     lattice_rows,
     lattice_table,
 )
@@ -57,11 +57,11 @@ def step(
 ) -> tuple[EnvState, MoveInfo]:
     """Advance one swimmer by one action.
 
-    ``action`` is an integer code ([`jswim.env.encode_action`][jswim.actions.encode_action], ROC ``k / K`` with
+    ``action`` is an integer code ([`jswim.env.encode_action`][jswim.action_codes.encode_action], ROC ``k / K`` with
     ``K = params.roc_levels``) or a float ROC vector of shape ``(n_dof,)`` with entries in
-    [-1, 1] (see [`jswim.env.actions`][jswim.env.actions]). The noise variable ``Y ~ U[-1, 1]`` is drawn from
+    [-1, 1] (see [`jswim.env.action_input`][jswim.env.action_input]). The noise variable ``Y ~ U[-1, 1]`` is drawn from
     ``key``. Codes outside ``[0, n_actions)`` are clipped and ROCs clipped to [-1, 1]; validate
-    user input with [`jswim.env.validate_actions`][jswim.env.actions.validate_actions] / [`jswim.env.validate_moves`][jswim.env.actions.validate_moves] before it
+    user input with [`jswim.env.validate_actions`][jswim.env.action_input.validate_actions] / [`jswim.env.validate_moves`][jswim.env.action_input.validate_moves] before it
     reaches a jitted loop.
     """
     return advance(state, action, jax.random.uniform(key, (), state.x.dtype, -1.0, 1.0), params)
@@ -89,7 +89,7 @@ def step_batch(
     states : EnvState
         Batched states, leading axis B.
     actions : int array (B,) or float array (B, n_dof)
-        Integer codes ([`jswim.env.encode_action`][jswim.actions.encode_action]) or float ROC vectors.
+        Integer codes ([`jswim.env.encode_action`][jswim.action_codes.encode_action]) or float ROC vectors.
     params : EnvParams
         Shared, or with ``zeta``/``direction``/``init`` batched along B.
     start : int
@@ -169,13 +169,13 @@ def _advance_corner(
     stuck = ((roc == 1) & (level == 1)) | ((roc == -1) & (level == 0))
     moved = (roc != 0) & ~stuck
     # One gather per step; the table's last row is the identity step (nothing moved).
-    row = jnp.where(moved, _corner_index(levels) * n + dof, _still_row(model))
+    row = jnp.where(moved, corner_index(levels) * n + dof, still_row(model))
     frac = (levels + onehot * moved.astype(jnp.int32) * (1 - 2 * level)).astype(state.frac.dtype)
     if not exact:
         work = jnp.asarray(corner_work_table(model), state.x.dtype)[row]
         return _advance_plain(state, frac, row, y_noise, params, stuck, moved, work)
     with jax.enable_x64(True):
-        entry = jnp.asarray(_step_rows(model), jnp.float64)[row]
+        entry = jnp.asarray(step_rows(model), jnp.float64)[row]
         work = jnp.asarray(corner_work_table(model), jnp.float64)[row]
     return _apply(state, entry, y_noise, params, stuck, moved, frac, state.frac_lo, work)
 
@@ -185,7 +185,7 @@ def _advance_lattice(
 ) -> tuple[EnvState, MoveInfo]:
     """An integer code on the K lattice: ROC ``k / K``; the new shape is the lattice point
     ``round(K frac) + k`` (clipped to ``0..K``) over K, computed afresh so it never drifts. The
-    step is read from the lattice table (`jswim.env.tables.lattice_table`, one gather like
+    step is read from the lattice table (`jswim.env.step_tables.lattice_table`, one gather like
     the corner table) when it is small enough, else integrated."""
     model = params.model
     n, big_k = model.n_dof, params.roc_levels
@@ -394,7 +394,7 @@ def _advance_plain(
 ) -> tuple[EnvState, MoveInfo]:
     """[`advance`][jswim.env.stepping.advance] with ``exact=False``: the same step in working-dtype arithmetic."""
     dtype = state.x.dtype
-    entry = jnp.asarray(_step_rows(params.model), dtype)[row]
+    entry = jnp.asarray(step_rows(params.model), dtype)[row]
     factor = 1.0 + jnp.asarray(params.zeta, dtype) * jnp.asarray(y_noise, dtype)
     c, s = state.cos, state.sin
     if params.model.planar:

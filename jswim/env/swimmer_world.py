@@ -92,9 +92,14 @@ class SwimmerWorld(Environment):
         )
 
     def observe(self, state: EnvState, params: EnvParams) -> Observation:
+        """One swimmer's DOFs, centroid and orientation; its height is its ``y`` in its plane
+        (seen from above: the observation has no other)."""
         position = jnp.stack([state.x + state.x_lo, state.y + state.y_lo])[None]
         return Observation(
-            dof_values(state, params), position, (state.theta + state.theta_lo)[None]
+            dof_values(state, params),
+            position,
+            (state.theta + state.theta_lo)[None],
+            position[:, 1],
         )
 
     def features(self, state: EnvState, params: EnvParams) -> Array:

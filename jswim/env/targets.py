@@ -29,6 +29,7 @@ import numpy as np
 from jax import Array
 
 from jswim.errors import ConfigError
+from jswim.swimmers.turning import square_gait
 
 __all__ = [
     "BUDGET_SAFETY",
@@ -292,7 +293,6 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
     if spec.budget is not None:
         return spec.budget
     from jswim.env.loops import loop_motion, steering_budget  # lazy: loads the lattice tables
-    from jswim.swimmers.turning import square_gait
 
     if not (model.planar and model.n_dof == 2):
         raise ConfigError(

@@ -17,7 +17,7 @@ Units: work in ``xi_par a^3 / tau`` (link swimmers; ``xi_par`` of the bulk fluid
 length) or ``6 pi mu a^3 / tau`` (sphere swimmers, ``a`` the sphere radius), ``tau`` the duration
 of one step.
 
-Tables, like the step tables of `jswim.env.tables` and indexed the same way:
+Tables, like the step tables of `jswim.env.step_tables` and indexed the same way:
 [`corner_work_table`][jswim.env.work.corner_work_table] (the paper's world, K = 1) and
 [`lattice_work_table`][jswim.env.work.lattice_work_table] (the K lattice).
 """
@@ -31,9 +31,9 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.env.cache import cached, model_key
+from jswim.env.table_cache import cached, model_key
 from jswim.env.state import corner_values
-from jswim.env.tables import TABLE_DEGREE
+from jswim.env.step_tables import TABLE_DEGREE
 from jswim.integrate import chebyshev_rule
 from jswim.swimmers.dissipation import power
 from jswim.swimmers.models import SwimmerModel
@@ -136,7 +136,7 @@ def lattice_work_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
     """Work of every one-DOF move on the K lattice at the ROC that lands on its end, float64.
 
     Row ``(i n + k)(K + 1) + j'`` (``i = sum_m j_m (K+1)^m`` the start shape, ``k`` the DOF,
-    ``j'`` its new lattice value) as in `jswim.env.tables.lattice_table`:
+    ``j'`` its new lattice value) as in `jswim.env.step_tables.lattice_table`:
     the move ``j_k -> j'`` at ``|ROC| = |j' - j_k| / K``, which takes the whole step. A push
     clipped at a limit (requested ``|ROC| = |q| / K`` larger than ``|j' - j_k| / K``) moves faster
     and stops early: its work is the row times ``|q| / |j' - j_k|``

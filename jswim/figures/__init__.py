@@ -21,7 +21,7 @@ _HOMES = {
     "draw_cycle": ".sketches",
     "draw_shape": ".sketches",
     "learned_cycles": ".sketches",
-    "scene_figures": ".scenes",
+    "scene_figures": ".scene_plots",
     "RC": ".style",
     "AGENT_STYLE": ".style",
     "COLUMN_IN": ".style",

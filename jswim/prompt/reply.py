@@ -61,7 +61,7 @@ def parse_reply(text: str, allowed: Sequence[Action] | None = None) -> Action | 
     """The final answer of a reply, or ``None`` when it names no valid action unambiguously.
 
     ``text`` is the answer part of a reply (reasoning already split off by the client; see
-    `jswim.llm.reply`). Accepted forms: ``[1, -1]``, ``[1,-1]``, ``(2, 1)``, ``[D1, -1]``,
+    `jswim.llm.server_response`). Accepted forms: ``[1, -1]``, ``[1,-1]``, ``(2, 1)``, ``[D1, -1]``,
     ``DOF 1, ROC -1``, ``{"dof": 1, "roc": -1}``, and two bare integers ``1, -1`` when they are
     the whole reply or follow an answer word; code fences, JSON wrappers
     (``{"action": "[1, -1]"}``) and prose may surround them. Which candidate is the answer:

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from jswim.actions import check_action_set, check_roc_levels
+from jswim.action_codes import check_action_set, check_roc_levels
 from jswim.errors import ConfigError
 from jswim.prompt.numbers import Action
 from jswim.prompt.nav_text import NavView
@@ -94,7 +94,7 @@ def allowed_actions(
     swimmer : SwimmerText
         DOF count, ranges and ROC set.
     action_set : {"all", "shape-changing"}
-        One of `jswim.actions.ACTION_SETS`. ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
+        One of `jswim.action_codes.ACTION_SETS`. ``"all"``: every (dof, roc) pair (the paper's setting). ``"shape-changing"``: only moves
         that change the shape from ``dof_values``: a positive ROC below ``hi``, a negative one above ``lo``.
     dof_values : sequence of float, optional
         Current DOF values; required for ``"shape-changing"``.

@@ -225,7 +225,7 @@ class RunRow(Mapping):
     separation : float or None
         Distance D between the swimmers at the start (a; several swimmers).
     fate : str or None
-        A wall run's fate (`jswim.studies.scenes.FATES`).
+        A wall run's fate (`jswim.studies.scene_studies.FATES`).
     mean_height : float or None
         Mean height of the run's second half (a; wall scenes).
     speed : float or None

@@ -17,7 +17,7 @@ from jswim._io.jsonl import repair_tail
 from jswim._io.permissions import file_mode, opener
 from jswim.errors import ResultFolderError, StudyFolderError
 from jswim.results.read import clean_metadata, read_run_rows, read_runs
-from jswim.results.schema import META, RUNS, is_failed, upgrade_names
+from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_names
 from jswim.results.tables import write_tables
 
 #: Room kept on the study's disk while a session runs, freed to record its status when the disk
@@ -352,8 +352,20 @@ class StudyStore:
         return {r.run_id for r in read_run_rows(self.folder) if not is_failed(r)}
 
     def add_runs(self, rows: Iterable[Mapping[str, Any]]) -> None:
-        """Append finished runs durably (one write and fsync for the batch)."""
-        lines = "".join(dumps(dict(r), sort_keys=True) + "\n" for r in rows)
+        """Append finished runs durably (one write and fsync for the batch).
+
+        Raises
+        ------
+        ValueError
+            For a row its readers would skip (`run_problem`): a bug in the row's builder, caught
+            before the line is written rather than skipped silently when the folder is read.
+        """
+        rows = [dict(r) for r in rows]
+        for r in rows:
+            problem = run_problem(r)
+            if problem is not None:
+                raise ValueError(f"jswim built an unreadable run record: {problem}")
+        lines = "".join(dumps(r, sort_keys=True) + "\n" for r in rows)
         if not lines:
             return
         path = self.folder / RUNS

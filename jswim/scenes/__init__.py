@@ -10,15 +10,16 @@ where; the environment is functional, in the gymnax style::
     state = scene_reset(params)
     state, info = scene_step(params, state, (0, 0, -1.0), key)   # swimmer 0, arm d1, ROC -1
 
-One concept per module: [`scene`][jswim.scenes.scene] (``Scene``), [`params`][jswim.scenes.params]
-(``SceneParams``, ``scene_params``), [`state`][jswim.scenes.state] (``SceneState``,
-``SceneStepInfo``, ``scene_reset``), `actions` (codes),
-`collocation` (the step's time integration), [`stepping`][jswim.scenes.stepping]
-(``scene_step``), [`rollout`][jswim.scenes.rollout] (``scene_rollout``).
+One concept per module: [`scene`][jswim.scenes.scene] (``Scene``),
+[`scene_parameters`][jswim.scenes.scene_parameters] (``SceneParams``, ``scene_params``),
+[`scene_state`][jswim.scenes.scene_state] (``SceneState``, ``SceneStepInfo``, ``scene_reset``),
+`scene_actions` (codes), `collocation` (the step's time integration),
+[`scene_stepping`][jswim.scenes.scene_stepping] (``scene_step``),
+[`rollout`][jswim.scenes.rollout] (``scene_rollout``).
 """
 
-from jswim.scenes.actions import decode_scene_action, encode_scene_action, split_action
-from jswim.scenes.params import CONTACT_GAP, SceneParams, scene_params
+from jswim.scenes.scene_actions import decode_scene_action, encode_scene_action, split_action
+from jswim.scenes.scene_parameters import CONTACT_GAP, SceneParams, scene_params
 from jswim.scenes.rollout import (
     SceneRollout,
     batch_starts,
@@ -27,8 +28,8 @@ from jswim.scenes.rollout import (
     scene_rollout_batch,
 )
 from jswim.scenes.scene import MEDIA, Scene
-from jswim.scenes.state import SceneState, SceneStepInfo, scene_positions, scene_reset
-from jswim.scenes.stepping import (
+from jswim.scenes.scene_state import SceneState, SceneStepInfo, scene_positions, scene_reset
+from jswim.scenes.scene_stepping import (
     integrate_move,
     scene_advance,
     scene_step,

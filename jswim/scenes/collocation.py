@@ -10,7 +10,7 @@ sweeps started from ``y = y_0``: each sweep costs ``n`` solves, and since ``f`` 
 pose only through the wall and the other bodies (weakly: a few per cent at h = 3 a) each sweep
 gains more than an order of magnitude. When ``f`` does not depend on the pose at all (a lone
 swimmer in the unbounded fluid) one sweep is exact and the method is Gauss quadrature. By
-default the number of sweeps is adaptive ([`jswim.scenes.stepping.picard_tolerance`][jswim.scenes.stepping.picard_tolerance]): the
+default the number of sweeps is adaptive ([`jswim.scenes.scene_stepping.picard_tolerance`][jswim.scenes.scene_stepping.picard_tolerance]): the
 iteration stops once its error estimate is below the working dtype's rounding.
 """
 

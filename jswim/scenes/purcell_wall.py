@@ -17,7 +17,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim.actions import encode_action
+from jswim.action_codes import encode_action
 from jswim.env.episodes import rollout as world_rollout
 from jswim.env.params import make_params
 from jswim.env.swimmer_world import SwimmerWorld

@@ -12,10 +12,10 @@ from jax import Array
 from jswim.env.randomness import seed_key
 from jswim.errors import ConfigError
 from jswim.scenes import purcell_wall
-from jswim.scenes.params import SceneParams, scene_params
+from jswim.scenes.scene_parameters import SceneParams, scene_params
 from jswim.scenes.scene import Scene
-from jswim.scenes.state import SceneState, scene_reset
-from jswim.scenes.stepping import scene_step
+from jswim.scenes.scene_state import SceneState, scene_reset
+from jswim.scenes.scene_stepping import scene_step
 
 
 class SceneRollout(NamedTuple):
@@ -91,9 +91,9 @@ def scene_rollout(
     zeta : float
         Noise level.
     params : SceneParams, optional
-        Built here from the rest by [`jswim.scenes.scene_params`][jswim.scenes.params.scene_params] (float64) if not given.
+        Built here from the rest by [`jswim.scenes.scene_params`][jswim.scenes.scene_parameters.scene_params] (float64) if not given.
     **kwargs
-        More options of [`scene_params`][jswim.scenes.params.scene_params] (``init``, ``nodes``, ``sweeps``, ``d_max``, ...).
+        More options of [`scene_params`][jswim.scenes.scene_parameters.scene_params] (``init``, ``nodes``, ``sweeps``, ``d_max``, ...).
 
     Returns
     -------

@@ -1,8 +1,8 @@
 """One pipeline for every study's runs other than the LLM's, and one row builder for the LLM's.
 
-Every plan goes the same way, whatever its world: [`make`][jswim.env.worlds.make] builds the world
+Every plan goes the same way, whatever its world: [`make`][jswim.env.registry.make] builds the world
 from the plan's swimmer, scene, noise, start and ROC lattice (the paper's world, a scene world,
-Purcell's swimmer above a wall, or a world of [`register_world`][jswim.env.worlds.register_world]);
+Purcell's swimmer above a wall, or a world of [`register_world`][jswim.env.registry.register_world]);
 the learner's one entry point runs the group's plans on it (the stroke player
 [`play`][jswim.agents.strokes.play], [`random_policy.run`][jswim.agents.random_policy.run],
 [`qlearning.train`][jswim.agents.qlearning.train], [`ppo.train`][jswim.agents.ppo.train]: one
@@ -26,11 +26,11 @@ from jswim.agents import qlearning, random_policy, strokes
 from jswim.agents.llm import RunResult
 from jswim.env.base import Environment, Observation
 from jswim.env.episodes import rollout as jswim_rollout
-from jswim.env.worlds import make
+from jswim.env.registry import make
 from jswim.judging.gait import Criterion
 from jswim.results.row import RunRow
 from jswim.scenes import Scene
-from jswim.studies import scenes
+from jswim.studies import scene_studies
 from jswim.studies.options import CONTINUOUS_AGENT, STROKE_AGENT
 from jswim.studies.plans import Plan
 from jswim.studies.rows import judged_rows, with_llm
@@ -46,7 +46,7 @@ def scene_of(plan: Plan) -> Scene | None:
 
 
 def world(plan: Plan) -> tuple[Environment, Any]:
-    """A plan's world and its params ([`make`][jswim.env.worlds.make]), toward +x (the runs set
+    """A plan's world and its params ([`make`][jswim.env.registry.make]), toward +x (the runs set
     their own direction). A corner start is the plan's; a random one is drawn at reset in the
     paper's world; a scene's other starts are the scene's own."""
     init: Any = None
@@ -58,12 +58,13 @@ def world(plan: Plan) -> tuple[Environment, Any]:
     return make(plan.swimmer, scene_of(plan), zeta=plan.zeta, init=init, **lattice)
 
 
-def _lift(obs: Observation, scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: the world's own
-    (`Observation.height`, its orientation); a world that reports none (Purcell's swimmer in
-    a plane parallel to the wall, a registered world) stays at the scene's start height (0 in the
-    paper's bulk fluid), untilted."""
-    if obs.height is not None:
+def _lift(obs: Observation, scene: Scene, side_view: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Each swimmer's height and tilt ``(..., S)`` as a scene row records them: a world seen from
+    the side ([`Scenery.side_view`][jswim.env.base.Scenery]) gives its own
+    (`Observation.height`, its orientation); one seen from above (Purcell's swimmer in a plane
+    parallel to the wall, a registered world) stays at the scene's start height (0 in the paper's
+    bulk fluid), untilted."""
+    if side_view:
         return np.asarray(obs.height, np.float64), np.asarray(obs.orientation, np.float64)
     shape = np.shape(obs.orientation)
     return np.full(shape, scene.height if scene.medium != "bulk" else 0.0), np.zeros(shape)
@@ -75,7 +76,8 @@ def start(world: Environment, params: Any, scene: Scene) -> tuple[np.ndarray, ..
     state = world.reset(jax.random.PRNGKey(0), params)
     obs = world.observe(state, params)
     corner = np.asarray(world.cells().positions(state, params), np.int64)
-    return (np.asarray(obs.position[:, 0], np.float64), *_lift(obs, scene), corner)
+    side_view = world.scenery().side_view
+    return (np.asarray(obs.position[:, 0], np.float64), *_lift(obs, scene, side_view), corner)
 
 
 def _per_run(params: Any, directions: Sequence[int]) -> Any:
@@ -103,7 +105,7 @@ def _learn(plans: Sequence[Plan], world: Environment, task: Any, corner: np.ndar
         n_sw = world.n_swimmers
         codes = np.stack(
             [
-                scenes.stroke_codes(
+                scene_studies.stroke_codes(
                     p.variant, p.direction, p.steps, n_sw, corner, world.n_actions // n_sw
                 )
                 for p in plans
@@ -185,12 +187,13 @@ def _scene_rows(
     elif p0.agent == CONTINUOUS_AGENT:
         codes, tr = np.zeros((len(plans), 0), np.int64), out.trace
         moves = _moves(out)
-        judged = scenes.ppo_judged(out, plans, world_, task, horizon)
+        judged = scene_studies.ppo_judged(out, plans, world_, task, horizon)
     else:
         codes, tr = np.asarray(out.actions), out.trace
     obs = tr.obs
     xs = np.asarray(obs.position[..., 0], np.float64) - x0
-    heights, tilts = _lift(obs, scene)
+    scenery = world_.scenery()
+    heights, tilts = _lift(obs, scene, scenery.side_view)
     stuck, contact = (
         np.asarray(v, bool).reshape(xs.shape[:2] + (-1,)).any(-1)
         for v in (tr.info.stuck, tr.info.contact)
@@ -204,7 +207,7 @@ def _scene_rows(
             "contact": contact[i].tolist(),
             "stuck": stuck[i].tolist(),
         }
-        row = scenes.scene_row(
+        row = scene_studies.scene_row(
             p,
             [int(c) for c in codes[i]],
             xs[i].mean(axis=-1).tolist(),
@@ -214,9 +217,9 @@ def _scene_rows(
             tilt0=tilt0,
             judged=judged[i],
             moves=moves[i],
-            plane_height=world_.scenery().plane_height,
+            plane_height=scenery.plane_height,
         )
-        if obs.height is None:  # seen from above: swimmer 1's y and orientation in its plane
+        if not scenery.side_view:  # seen from above: swimmer 1's y and orientation in its plane
             y, orientation = (
                 np.asarray(v[i, :, 0], np.float64).tolist()
                 for v in (obs.position[..., 1], obs.orientation)
@@ -261,12 +264,14 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     scene = scene_of(plan)
     world_, params = world(plan)
     _, z0, tilt0, _ = start(world_, params, scene)
-    tracks = {k: getattr(r, k) for k in ("xs", "heights", "tilts", "contact", "stuck")}
+    # A track the driver did not record (a world of one swimmer keeps no ``xs``, one that cannot
+    # touch anything no ``contact``) is absent from the row, not an empty list of the wrong length.
+    tracks = {k: getattr(r, k) or None for k in ("xs", "heights", "tilts", "contact", "stuck")}
     if not tracks["heights"]:
-        # a world that reports no height (Purcell's plane above a wall, a registered world): the
-        # start's throughout, the rule _lift gives the baselines' rows (z0 is _lift's start)
+        # a run whose prompt showed no scene (one swimmer seen from above: Purcell's plane above
+        # a wall, a registered world): the start's throughout, _lift's rule (z0 is its start)
         tracks.update(heights=[z0.tolist()] * len(r.x), tilts=[tilt0.tolist()] * len(r.x))
-    row = scenes.scene_row(
+    row = scene_studies.scene_row(
         plan,
         list(r.actions),
         list(r.x),

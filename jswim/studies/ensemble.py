@@ -40,11 +40,13 @@ import numpy as np
 from jax import Array
 
 from jswim import sharding
-from jswim.actions import check_action_set
+from jswim.action_codes import check_action_set
 from jswim.agents import qlearning
 from jswim.agents.defaults import default_rocs
-from jswim.agents.qlearning import _corner, _greedy_set, _offered, _pick
+from jswim.agents.qlearning import greedy_set, offered_actions, pick_uniform
 from jswim.env import EnvParams, EnvState, advance, make_params, noise, seed_key, start_state
+from jswim.env.swimmer_world import SwimmerWorld
+from jswim.env.discretiser import corner
 from jswim.errors import ConfigError, check_zeta
 from jswim.judging import gait
 
@@ -128,9 +130,9 @@ def _policy_action(policy: Policy, params: EnvParams, t: Array, state: EnvState,
     if policy.kind == "stroke":
         return jnp.asarray(policy.actions, jnp.int32)[t % len(policy.actions)]
     q = jnp.asarray(policy.q, state.x.dtype)
-    row = jax.lax.dynamic_slice_in_dim(q, _corner(state.levels), 1)[0]
-    mask = _offered(state.levels, params, policy.action_set)
-    return _pick(_greedy_set(row, mask, "random"), u)
+    row = jax.lax.dynamic_slice_in_dim(q, corner(state.levels), 1)[0]
+    mask = offered_actions(state.levels, params, policy.action_set)
+    return pick_uniform(greedy_set(row, mask, "random"), u)
 
 
 class _Chunk(NamedTuple):
@@ -400,7 +402,8 @@ def learned_policy(params: EnvParams, *, seed: int = 0, action_set: str = "all")
     """Train one Q-learner (default [`QConfig`][jswim.agents.qlearning.QConfig], no noise) and
     return its greedy policy."""
     config = qlearning.QConfig(action_set=action_set)
-    run_ = qlearning.train(seed_key(seed), params.replace(zeta=0.0), config)
+    world = SwimmerWorld(params.model, params.roc_levels, params.diagonal)
+    run_ = qlearning.train(world, params.replace(zeta=0.0), seed_key(seed), config)
     return q_policy(
         np.asarray(run_.q), params, action_set, label=f"Q-policy (seed {seed}, {action_set})"
     )

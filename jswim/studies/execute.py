@@ -29,7 +29,7 @@ from jswim.prompt import PromptTemplate
 from jswim.results import StudyStore
 from jswim.studies.plans import Plan
 from jswim.studies.options import StudyOptions
-from jswim.studies.session import _preflight, _record_session, add_session
+from jswim.studies.session import preflight, record_session, add_session
 
 
 #: Statuses of an LLM run that are stored; one stopped by the cost cap or an interrupt is not, and
@@ -43,14 +43,16 @@ STORED = ("done", "below_x_min", "llm_error")
 ProgressFn = Callable[[str, int, int, str], None]
 
 
-def _groups(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
+def group_plans(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
+    """``plans`` grouped by the values of their fields ``keys``, in first-seen order."""
     out: dict[tuple, list[Plan]] = {}
     for p in plans:
         out.setdefault(tuple(getattr(p, k) for k in keys), []).append(p)
     return out
 
 
-def _spec(p: Plan) -> LLMRunSpec:
+def run_spec(p: Plan) -> LLMRunSpec:
+    """The LLM run a plan asks for (its swimmer, start, noise, seed, steps, memory, scene)."""
     return LLMRunSpec(
         swimmer=p.swimmer,
         direction=p.direction,
@@ -68,12 +70,12 @@ def _spec(p: Plan) -> LLMRunSpec:
     )
 
 
-def _configs(
+def llm_configs(
     plans: Sequence[Plan], o: StudyOptions, template: PromptTemplate | None
 ) -> list[tuple[Any, list[Plan]]]:
     """The LLM plans by agent config: one driver per (variant, action set)."""
     out = []
-    for (variant, action_set, temp, prompt), group in _groups(
+    for (variant, action_set, temp, prompt), group in group_plans(
         plans, "variant", "action_set", "temperature", "prompt_file"
     ).items():
         tpl = PromptTemplate.from_file(prompt) if prompt else template
@@ -91,7 +93,7 @@ def _configs(
     return out
 
 
-def _run_llm(
+def run_llm(
     plans: Sequence[Plan],
     o: StudyOptions,
     backend: Backend,
@@ -176,14 +178,14 @@ def _run_llm(
         pacer = Pacer(backend.rpm, backend.tpm, margin=settings.max_concurrency)
         async with LLMClient(settings, pacer=pacer, budget=budget) as client:
             live.append(client)
-            _record_session(store, backend, info, client, notes if notes is not None else [])
+            record_session(store, backend, info, client, notes if notes is not None else [])
             window = asyncio.Semaphore(o.chunk or settings.max_concurrency)
             reporter = asyncio.ensure_future(keep_reporting())
             try:
                 await asyncio.gather(
                     *[
                         run_batch_async(
-                            [_spec(p) for p in group],
+                            [run_spec(p) for p in group],
                             client,
                             cfg,
                             store.folder / "transcripts",
@@ -192,7 +194,7 @@ def _run_llm(
                             on_step=on_step,
                             on_done=on_done,
                         )
-                        for cfg, group in _configs(plans, o, template)
+                        for cfg, group in llm_configs(plans, o, template)
                     ]
                 )
             finally:
@@ -200,18 +202,18 @@ def _run_llm(
                 await asyncio.gather(reporter, return_exceptions=True)
                 if notes is not None:  # fallbacks and pricing are known once calls were answered
                     notes.clear()
-                _record_session(store, backend, info, client, notes if notes is not None else [])
+                record_session(store, backend, info, client, notes if notes is not None else [])
 
     # --max-tokens is also the reasoning budget, once reasoning is on (jswim.llm.reasoning).
     room = {"reasoning_max_tokens": o.max_tokens} if o.max_tokens is not None else {}
     try:
         if backend.local:
             with backend.server() as srv:
-                info = _preflight(store, backend, srv)
+                info = preflight(store, backend, srv)
                 t_start = time.perf_counter()  # the model's loading time is not LLM work
                 run_sync(go(backend.client_settings(srv, info, **room), info))
         else:
-            info = info or _preflight(store, backend, max_cost=max_cost)
+            info = info or preflight(store, backend, max_cost=max_cost)
             run_sync(go(backend.client_settings(info=info, **room), info))
     finally:
         journal.close()

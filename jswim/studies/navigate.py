@@ -211,9 +211,9 @@ NAV_TRAIN_EPISODES = 40
 
 
 def world(plan: Plan) -> tuple[Any, Any]:
-    """A navigation plan's world and params ([`jswim.make`][jswim.env.worlds.make] with its target)."""
+    """A navigation plan's world and params ([`jswim.make`][jswim.env.registry.make] with its target)."""
     from jswim.env.targets import target_from_dict
-    from jswim.env.worlds import make
+    from jswim.env.registry import make
 
     init = plan.init if isinstance(plan.init, (tuple, list)) else None
     return make(

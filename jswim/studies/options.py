@@ -7,17 +7,17 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from jswim.actions import check_action_set, check_roc_levels
+from jswim.action_codes import check_action_set, check_roc_levels
 from jswim.llm.settings import check_max_tokens, check_temperature
 from jswim.agents.variants import (
     check_pair_prompt,
     variant_action_set,
 )
-from jswim.env.worlds import registered_worlds
+from jswim.env.registry import registered_worlds
 from jswim.errors import ConfigError, check_size, check_zeta
 from jswim.judging.gait import PAPER
 from jswim.scenes import Scene
-from jswim.scenes.params import check_start
+from jswim.scenes.scene_parameters import check_start
 from jswim.swimmers.models import SWIMMERS
 
 
@@ -100,7 +100,7 @@ class StudyOptions:
     samples: int = 1
     roc_levels: int = 1  # K of the ROC lattice (--roc-levels; 1 = the paper's -1, 0, 1)
     roc_levels_grid: tuple[int, ...] = DEFAULT_ROC_LEVELS  # the continuous study's K values
-    # The scene studies' grids (jswim.studies.scenes): starting heights above the wall (a), the
+    # The scene studies' grids (jswim.studies.scene_studies): starting heights above the wall (a), the
     # pair's starting distances D (a) and the phase offsets of its two square strokes (quarter cycles).
     heights: tuple[float, ...] = (1.2, 1.5, 2.0, 3.0, 10.0, 50.0)
     separations: tuple[float, ...] = (30.0, 60.0)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 from jswim.agents.defaults import paper_init
 from jswim.agents.protocol import derived_seed
 from jswim.env import all_inits
-from jswim.env.worlds import registered_worlds
+from jswim.env.registry import registered_worlds
 from jswim.errors import ConfigError
 from jswim.swimmers.models import make_model
 
@@ -72,11 +72,9 @@ class Cell:
     action_set: str | None = None  # baselines only; None: the LLM variant's action set
     temperature: float | None = None  # LLM runs only (the temperature study)
     roc_levels: int | None = None  # None: the options' roc_levels; 0 for real-valued ROCs
-    scene: str = ""  # a scene (jswim.studies.scenes), canonical JSON; "": the bulk fluid
+    scene: str = ""  # a scene (jswim.studies.scene_studies), canonical JSON; "": the bulk fluid
     tag: str = ""  # what names this cell's runs (a scene's height or distance, a stroke's phase)
-    stroke: str = (
-        ""  # the stroke agent's stroke (jswim.studies.scenes.stroke_codes), its plans' variant
-    )
+    stroke: str = ""  # the stroke agent's stroke (jswim.studies.scene_studies.stroke_codes), its plans' variant
     target: str = ""  # a navigation target (jswim.studies.navigate), canonical JSON; "": none
     steps: int | None = None  # the cell's own steps per run (a target's budget); None: the study's
 
@@ -94,7 +92,7 @@ def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | 
     ConfigError
         A sign string whose length is not the swimmer's number of DOFs.
 
-    A world of [`register_world`][jswim.env.worlds.register_world] starts where it starts: ``"default"``.
+    A world of [`register_world`][jswim.env.registry.register_world] starts where it starts: ``"default"``.
     """
     if swimmer in registered_worlds():
         return "default"

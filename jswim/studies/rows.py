@@ -1,7 +1,7 @@
 """A study's result rows ([`jswim.results.RunRow`][jswim.results.RunRow]), built in one place.
 
 [`build_row`][jswim.studies.rows.build_row] is the one builder: a plan's columns, the x series and what follows from it,
-the judge's verdict and the columns a world adds (a scene's: `jswim.studies.scenes.scene_row`).
+the judge's verdict and the columns a world adds (a scene's: `jswim.studies.scene_studies.scene_row`).
 [`judged_rows`][jswim.studies.rows.judged_rows] judges a batch of bulk runs (Q-learning, random, PPO, an LLM run) and builds
 their rows; [`with_llm`][jswim.studies.rows.with_llm] merges an LLM run's own fields (its calls, tokens, switches) into its
 judged row, in the bulk world and in a scene alike.

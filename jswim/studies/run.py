@@ -2,7 +2,7 @@
 
 Execution groups the plans ([`jswim.studies.specs`][jswim.studies.specs]): Q-learning and random-policy runs
 train/roll out in one vectorised call per swimmer (here and in [`jswim.studies.execute`][jswim.studies.execute]);
-LLM runs are per-run pipelines (`jswim.studies.execute._run_llm`), each landing in the study
+LLM runs are per-run pipelines (`jswim.studies.execute.run_llm`), each landing in the study
 folder ([`jswim.results.StudyStore`][jswim.results.StudyStore]) the moment it ends, with the server's preflight and the
 cost cap of [`jswim.studies.session`][jswim.studies.session]. Every run, whatever its agent, is judged by the same
 code, [`jswim.judging.gait.judge`][jswim.judging.gait.judge], with the study's [`jswim.judging.gait.Criterion`][jswim.judging.gait.Criterion],
@@ -49,7 +49,7 @@ from jswim._io.permissions import private_files
 from jswim.llm.client import ClientSettings
 from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
 from jswim.llm.probe import ServerInfo
-from jswim.llm.errors import LLMError
+from jswim.errors import LLMError
 from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
@@ -81,12 +81,12 @@ from jswim.studies import prompt_files
 from jswim.studies.execute import (  # noqa: F401
     STORED,
     ProgressFn,
-    _configs,
-    _groups,
-    _run_llm,
-    _spec,
+    llm_configs,
+    group_plans,
+    run_llm,
+    run_spec,
 )
-from jswim.studies.session import _preflight, _record_session, add_session, cap_check  # noqa: F401
+from jswim.studies.session import preflight, record_session, add_session, cap_check  # noqa: F401
 from jswim.studies.report import draw_figures, summarize
 
 
@@ -410,7 +410,7 @@ def _run_in(
     todo = [p for p in plans if p.run_id not in done]
     info: ServerInfo | None = None
     if backend is not None and not backend.local and any(p.agent == "llm" for p in todo):
-        info = _preflight(store, backend, max_cost=max_cost)  # fail before the baselines, not after
+        info = preflight(store, backend, max_cost=max_cost)  # fail before the baselines, not after
     total = len(plans)
     finished = total - len(todo)
     tick = progress or (lambda phase, d, t, info="": None)
@@ -423,7 +423,7 @@ def _run_in(
 
     from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
 
-    for (agent, *_), group in _groups(
+    for (agent, *_), group in group_plans(
         [p for p in todo if p.agent != "llm"],
         "agent",
         "swimmer",
@@ -446,7 +446,7 @@ def _run_in(
     if llm_plans:
         if backend is None:
             raise ConfigError("this study has LLM runs; give a backend")
-        finished, capped = _run_llm(
+        finished, capped = run_llm(
             llm_plans,
             options,
             backend,
@@ -520,12 +520,14 @@ def _run_in(
 
 
 def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
-    """``{"scenes": table}`` of a study with scene runs (`jswim.studies.scenes.scene_summary`), else ``{}``."""
+    """``{"scenes": table}`` of a study with scene runs (`jswim.studies.scene_studies.scene_summary`), else ``{}``."""
     if not any(r.scene for r in rows):
         return {}
-    from jswim.studies import scenes  # lazy: start-up (the scene module, for scene studies only)
+    from jswim.studies import (
+        scene_studies,
+    )  # lazy: start-up (the scene module, for scene studies only)
 
-    return {"scenes": scenes.scene_summary([r for r in rows if not is_failed(r)])}
+    return {"scenes": scene_studies.scene_summary([r for r in rows if not is_failed(r)])}
 
 
 def _nav_table(rows: Sequence[RunRow]) -> dict[str, Any]:
@@ -614,10 +616,10 @@ def estimate_study(
 
     async def go() -> None:
         window = asyncio.Semaphore(max(len(plans), 1))  # no waiting: every run steps at once
-        for cfg, group in _configs(plans, options, template):
+        for cfg, group in llm_configs(plans, options, template):
             results.extend(
                 await run_batch_async(
-                    [_spec(p) for p in group], client, cfg, window=window, transcripts=False
+                    [run_spec(p) for p in group], client, cfg, window=window, transcripts=False
                 )
             )
 

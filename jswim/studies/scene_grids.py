@@ -41,7 +41,7 @@ def pair_scene(d: float | None = None) -> str:
 def scene_cells(study: str, o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
     """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids. Every swimmer's
     wall cells run the same agents at each height: the stroke, the LLM, Q-learning, random and
-    PPO. Only the reference differs: Purcell's swimmer above a wall (issue 34) swims in a plane
+    PPO. Only the reference differs: Purcell's swimmer above a wall swims in a plane
     parallel to it, so its reference is the paper's bulk fluid (group ``bulk``); NG's (and a
     registered world's) is the unbounded fluid of the scene solver (group ``free``)."""
     if study == "wall":
@@ -146,5 +146,5 @@ def study_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
     return cells
 
 
-# Walls and pairs (extensions): NG swimmers only (jswim.studies.scenes, README "Walls,
+# Walls and pairs (extensions): NG swimmers only (jswim.studies.scene_studies, README "Walls,
 # obstacles and pairs"); --init is the paper's NG start (10, 6), the scene's start.

@@ -42,7 +42,7 @@ def cap_check(backend: Backend, info: ServerInfo | None, max_cost: float | None)
         raise ConfigError(why)
 
 
-def _preflight(
+def preflight(
     store: StudyStore, backend: Backend, server: Any = None, max_cost: float | None = None
 ) -> ServerInfo:
     """The server's preflight ([`Backend.preflight`][jswim.llm.backend.Backend.preflight]), recorded in the study's metadata
@@ -56,7 +56,7 @@ def _preflight(
     return info
 
 
-def _record_session(
+def record_session(
     store: StudyStore, backend: Backend, info: ServerInfo, client: LLMClient, notes: list[str]
 ) -> None:
     """What the session sent and what the server made of it: the sampling fields (with the

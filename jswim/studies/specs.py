@@ -13,7 +13,7 @@ import json
 from dataclasses import dataclass
 from collections.abc import Callable, Iterable
 
-from jswim.actions import ACTION_SETS
+from jswim.action_codes import ACTION_SETS
 from jswim.agents.variants import (
     init_label,
     pair_tag,

@@ -344,7 +344,7 @@ def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
     rows = as_run_rows(rows)
     if not any(r.scene for r in rows):
         return ""
-    from jswim.studies.scenes import (
+    from jswim.studies.scene_studies import (
         scene_summary,
         table,
         table_note,

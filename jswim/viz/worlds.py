@@ -99,7 +99,7 @@ class World:
 
 @dataclass(frozen=True)
 class Marker:
-    """The stand-in model of a world with no outline of its own ([`jswim.register_world`][jswim.env.worlds.register_world]'s):
+    """The stand-in model of a world with no outline of its own ([`jswim.register_world`][jswim.env.registry.register_world]'s):
     each swimmer one sphere of radius 1 at its observed position, its DOFs as places in [0, 1];
     the fields the pictures read of a [`jswim.swimmers.models.SwimmerModel`][jswim.swimmers.models.SwimmerModel]."""
 

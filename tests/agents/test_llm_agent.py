@@ -15,7 +15,7 @@ from jswim.env import encode_action
 from jswim.errors import ConfigError
 from jswim.studies import COMPETENCE_VARIANTS, StudyOptions
 from jswim.llm import ClientSettings
-from jswim.llm.errors import LLMServerError
+from jswim.errors import LLMServerError
 from tests.fakeserver import Fault, FakeServer, hash_reply
 
 

@@ -73,10 +73,12 @@ class SchoolToy(Environment):
         return ToyState(f1, state.x + dx), info
 
     def observe(self, state, params):
+        position = jnp.stack([state.x, 0.0 * state.x], -1)
         return Observation(
             6.0 + 4.0 * state.frac.reshape(-1),
-            jnp.stack([state.x, 0.0 * state.x], -1),
+            position,
             jnp.zeros(self.swimmers, state.x.dtype),
+            position[:, 1],
         )
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from jswim.agents import ppo
-from jswim.env.worlds import make
+from jswim.env.registry import make
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.scenes import Scene, scene_advance, scene_params, scene_reset
 
@@ -111,20 +111,22 @@ def _hand_made(codes_per_run):
 def test_pair_judge_on_hand_made_strokes():
     # The real-valued pair judge against the lattice one of the studies (jswim.judging.gait.judge on each
     # swimmer's own codes, an independent code path) on corner moves, where the two must agree.
-    from jswim.studies import scenes
+    from jswim.studies import scene_studies
     from jswim.studies.plans import Plan
 
     world, task = make(
         "ng", Scene(medium="free", swimmers=2, separation=30.0), init=(1, 0)
     )  # paper's (10, 6)
     pair = world.judge_view(task)
-    both = scenes.stroke_codes("phase0", 1, 30, 2)  # two squares, alternating moves
+    both = scene_studies.stroke_codes("phase0", 1, 30, 2)  # two squares, alternating moves
     late = np.r_[
         np.ones(6, np.int64), both[:24]
     ]  # 6 holds of swimmer 1 ([1, 0]), then 3 squares each
-    only_one = scenes.stroke_codes("square", 1, 30, 1)  # swimmer 2 never moves
-    lopsided = np.r_[scenes.stroke_codes("square", 1, 27, 1), [7, 6, 7]]  # swimmer 2: 3 moves
-    runs = [both, late, only_one, lopsided, scenes.stroke_codes("phase0", -1, 30, 2)]
+    only_one = scene_studies.stroke_codes("square", 1, 30, 1)  # swimmer 2 never moves
+    lopsided = np.r_[
+        scene_studies.stroke_codes("square", 1, 27, 1), [7, 6, 7]
+    ]  # swimmer 2: 3 moves
+    runs = [both, late, only_one, lopsided, scene_studies.stroke_codes("phase0", -1, 30, 2)]
     rep = ppo.evaluate_swimmers(_hand_made(runs), pair, np.array([1, 1, 1, 1, 1]))
     assert rep.success.tolist() == [True, True, False, False, False]
     assert rep.learned.tolist() == [True, True, False, False, False]
@@ -138,12 +140,14 @@ def test_pair_judge_on_hand_made_strokes():
     ]  # in own moves: swimmer 1's stroke starts at its 7th
     plan = Plan("r", "ppo", "ng", 1, (1, 0), 0.0, 0, 30)
     for i, codes in enumerate(runs):
-        lattice = scenes._judge(list(codes), plan, 2, 50)
+        lattice = scene_studies._judge(list(codes), plan, 2, 50)
         assert (lattice["success"], lattice["learned"]) == (rep.success[i], rep.learned[i])
         assert lattice["steps_to_learn"] == (int(rep.steps_to_learn[i]) if rep.learned[i] else None)
     # The -x target is met by the time-reversed strokes, not by the +x ones.
     back = ppo.evaluate_swimmers(
-        _hand_made([scenes.stroke_codes("phase0", -1, 30, 2), both]), pair, np.array([-1, -1])
+        _hand_made([scene_studies.stroke_codes("phase0", -1, 30, 2), both]),
+        pair,
+        np.array([-1, -1]),
     )
     assert back.success.tolist() == [True, False]
 

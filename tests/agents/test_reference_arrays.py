@@ -5,7 +5,9 @@ strokes; noise, both directions, ROC lattices K = 1 and 2) and every row and tra
 studies (LLM runs against the fake server, Q-learning, random, PPO, the stroke on a wall) were
 recorded with the code before the learners' entry points were merged (``tests/data/reference/``,
 written by ``python -m tests.agents.test_reference_arrays record``). The test computes them again
-through today's entry points and asks for the same numbers.
+through today's entry points and asks for the same numbers. The wall study's rows were recorded
+again when the scenes' default self-mobility became the exact one (docs/scenes.md says by how
+much they moved); the code was otherwise the same.
 
 On the machine that recorded them the arrays are bit-identical (the comparison is exact there).
 Another CPU may round a float a few ulp apart (docs/performance.md: the bulk swimmer's x was 1 ulp

@@ -17,7 +17,7 @@ import pytest
 
 from jswim import cli
 from jswim.bench.leaderboard import FIELDS
-from jswim.bench.models import load_models_file, parse_model_option
+from jswim.bench.models_file import load_models_file, parse_model_option
 from jswim.errors import ConfigError
 from tests.fakeserver import FakeServer, hash_reply, reasoning_model
 

@@ -16,7 +16,7 @@ import pytest
 
 from jswim import cli
 from jswim.bench import runner
-from jswim.bench.models import parse_model_option
+from jswim.bench.models_file import parse_model_option
 from tests.fakeserver import FakeServer, hash_reply
 
 ROOT = Path(__file__).resolve().parents[2]

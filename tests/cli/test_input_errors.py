@@ -13,7 +13,7 @@ import sqlite3
 import pytest
 
 from jswim import cli
-from jswim.llm.cache import ResponseCache, check_cache
+from jswim.llm.response_cache import ResponseCache, check_cache
 from jswim.errors import ConfigError
 from jswim.prompt import MAX_TEMPLATE_BYTES
 from jswim.results import read_runs

@@ -61,7 +61,7 @@ def test_every_error_class_is_defined_in_the_tree():
     import ast
 
     from jswim._io import folderlock
-    from jswim.llm import budget, reply
+    from jswim.llm import budget, server_response
 
     outside = []
     for path in Path(jswim.__file__).parent.rglob("*.py"):
@@ -78,7 +78,7 @@ def test_every_error_class_is_defined_in_the_tree():
     assert not outside, outside
     assert (
         budget.BudgetExhausted is errors.BudgetExhausted
-        and reply.MalformedReply is errors.MalformedReply
+        and server_response.MalformedReply is errors.MalformedReply
     )
     assert folderlock.FolderBusyError is errors.FolderBusyError and issubclass(
         errors.MalformedReply, ValueError

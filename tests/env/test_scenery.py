@@ -15,11 +15,12 @@ from jswim.viz.frame import state_frame
 def test_each_world_supplies_its_scenery():
     env, _ = jswim.make("purcell")
     s = env.scenery()
-    assert s.model is env.model and not s.wall and s.plane_height is None
+    assert s.model is env.model and not s.wall and s.plane_height is None and not s.side_view
 
     env, _ = jswim.make("ng", Scene(medium="wall", height=5.0))
     s = env.scenery()
     assert s.wall and s.model is not None and s.model.kind == "ng" and s.obstacles == ()
+    assert s.side_view  # heights and tilts in the vertical plane
 
     assert Environment.scenery(env) == Scenery()  # the default: markers, no wall
 

@@ -344,7 +344,7 @@ NEAR_WALL = Scene(medium="wall", height=3.5)
 
 def _pose_change(scene, dtype, x0=0.0, **kw):
     """One D1 lengthening 6 -> 10 from arms (6, 10), tilt 0.3, at x0: (dx, dz, dtilt), float64."""
-    from jswim.scenes.stepping import pose_change
+    from jswim.scenes.scene_stepping import pose_change
 
     p = scene_params("ng", scene, dtype=dtype, **kw)
     pose0 = jnp.asarray([[x0, scene.height, 0.3]], dtype)

@@ -63,7 +63,7 @@ def test_school_world_through_the_protocol():
 def test_school_study_cells():
     from jswim.studies import StudyOptions
     from jswim.studies.specs import build
-    from jswim.studies.scenes import stroke_codes
+    from jswim.studies.scene_studies import stroke_codes
 
     plans = build(
         "school",

@@ -4,7 +4,7 @@ import os
 
 import numpy as np
 
-from jswim.env import cache
+from jswim.env import table_cache
 
 
 def _build(calls):
@@ -18,23 +18,23 @@ def _build(calls):
 def test_a_table_is_built_once_then_read_back(tmp_path, monkeypatch):
     monkeypatch.setenv("JSWIM_TABLE_CACHE", str(tmp_path))
     calls = []
-    a = cache.cached("t", "model-a", _build(calls))
-    b = cache.cached("t", "model-a", _build(calls))
+    a = table_cache.cached("t", "model-a", _build(calls))
+    b = table_cache.cached("t", "model-a", _build(calls))
     np.testing.assert_array_equal(a["rows"], b["rows"])
     assert len(calls) == 1 and len(list(tmp_path.glob("t-*.npz"))) == 1
-    cache.cached("t", "model-b", _build(calls))  # another key: another entry
+    table_cache.cached("t", "model-b", _build(calls))  # another key: another entry
     assert len(calls) == 2 and not list(tmp_path.glob(".*.tmp"))
 
 
 def test_a_corrupt_or_foreign_entry_is_rebuilt(tmp_path, monkeypatch):
     monkeypatch.setenv("JSWIM_TABLE_CACHE", str(tmp_path))
     calls = []
-    cache.cached("t", "k", _build(calls))
+    table_cache.cached("t", "k", _build(calls))
     (entry,) = tmp_path.glob("t-*.npz")
     entry.write_bytes(entry.read_bytes()[:40])  # torn
-    assert cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3) and len(calls) == 2
+    assert table_cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3) and len(calls) == 2
     np.savez(entry, rows=np.array([np.nan]))  # valid file, not a table
-    assert cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3) and len(calls) == 3
+    assert table_cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3) and len(calls) == 3
 
 
 def test_an_unusable_folder_falls_back_to_building(tmp_path, monkeypatch):
@@ -42,9 +42,11 @@ def test_an_unusable_folder_falls_back_to_building(tmp_path, monkeypatch):
     blocker.write_text("not a folder")
     monkeypatch.setenv("JSWIM_TABLE_CACHE", str(blocker / "sub"))
     calls = []
-    assert cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3)
+    assert table_cache.cached("t", "k", _build(calls))["rows"].shape == (2, 3)
     monkeypatch.setenv("JSWIM_TABLE_CACHE", "off")
-    assert cache.cache_dir() is None and cache.cached("t", "k", _build(calls))["rows"].shape == (
+    assert table_cache.cache_dir() is None and table_cache.cached("t", "k", _build(calls))[
+        "rows"
+    ].shape == (
         2,
         3,
     )
@@ -54,10 +56,10 @@ def test_an_unusable_folder_falls_back_to_building(tmp_path, monkeypatch):
 def test_the_folder_follows_xdg_cache_home(tmp_path, monkeypatch):
     monkeypatch.delenv("JSWIM_TABLE_CACHE", raising=False)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
-    assert cache.cache_dir() == tmp_path / "jswim" / "tables"
+    assert table_cache.cache_dir() == tmp_path / "jswim" / "tables"
     monkeypatch.delenv("XDG_CACHE_HOME")
     assert (
-        cache.cache_dir()
+        table_cache.cache_dir()
         == __import__("pathlib").Path(os.path.expanduser("~")) / ".cache" / "jswim" / "tables"
     )
 
@@ -65,7 +67,7 @@ def test_the_folder_follows_xdg_cache_home(tmp_path, monkeypatch):
 def test_the_key_includes_the_code_version(tmp_path, monkeypatch):
     monkeypatch.setenv("JSWIM_TABLE_CACHE", str(tmp_path))
     calls = []
-    cache.cached("t", "k", _build(calls))
-    monkeypatch.setattr(cache, "code_version", lambda: "another-version")
-    cache.cached("t", "k", _build(calls))
+    table_cache.cached("t", "k", _build(calls))
+    monkeypatch.setattr(table_cache, "code_version", lambda: "another-version")
+    table_cache.cached("t", "k", _build(calls))
     assert len(calls) == 2

@@ -64,9 +64,8 @@ class ToyWorld(Environment):
         return ToyState(f1, state.x + dx), info
 
     def observe(self, state, params):
-        return Observation(
-            state.frac, jnp.stack([state.x, 0.0 * state.x])[None], jnp.zeros(1, state.x.dtype)
-        )
+        position = jnp.stack([state.x, 0.0 * state.x])[None]
+        return Observation(state.frac, position, jnp.zeros(1, state.x.dtype), position[:, 1])
 
     def features(self, state, params):
         return scaled(state.frac, 0.0, 1.0)

@@ -179,9 +179,11 @@ def test_scene_observation_heights_are_the_middle_sphere_s_positions_the_full_ce
     assert x == pytest.approx(
         1e4 + float(np.float32(1e-4)) - 4 / 3 * math.cos(np.float32(0.3)), abs=1e-9
     )
-    # The paper's world has no separate height (its position's y stands for it).
+    # The paper's world is seen from above: its height is its position's y, always given.
     env, params = jswim.make("ng")
-    assert env.observe(env.reset(jax.random.PRNGKey(0), params), params).height is None
+    obs = env.observe(env.reset(jax.random.PRNGKey(0), params), params)
+    assert obs.height.shape == (1,) and float(obs.height[0]) == float(obs.position[0, 1])
+    assert not env.scenery().side_view
 
 
 @pytest.mark.slow
@@ -268,9 +270,9 @@ def test_old_names_import_from_their_old_places():
             "encode_scene_action",
         ],
         "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make"],
-        # moved by issue 30's import clean-up, still importable where they were
+        # defined elsewhere, still importable from these modules
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
-        "jswim.studies.scenes": [
+        "jswim.studies.scene_studies": [
             "wall_scene",
             "pair_scene",
             "cells",

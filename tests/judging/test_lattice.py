@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from jswim.actions import n_actions
+from jswim.action_codes import n_actions
 from jswim.judging import lattice
 from jswim.env import make_params, step_table
 from jswim.judging.gait import judge

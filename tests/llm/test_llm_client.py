@@ -11,9 +11,9 @@ import httpx
 import pytest
 
 from jswim.llm import constrain
-from jswim.llm.cache import ResponseCache, request_key
+from jswim.llm.response_cache import ResponseCache, request_key
 from jswim.llm.client import ClientSettings, LLMClient, parse_retry_after, safe_url
-from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMServerError
+from jswim.errors import LLMRequestError, LLMResponseError, LLMServerError
 from jswim.llm.usage import PriceTable, Usage, UsageTotals
 from tests.fakeserver import Fault, FakeServer
 
@@ -529,7 +529,7 @@ def test_a_same_host_redirect_is_followed_with_the_key_and_the_body(status, monk
 
 def test_a_redirect_loop_stops_at_the_limit():
     from jswim.llm.client import MAX_REDIRECTS
-    from jswim.llm.errors import LLMSetupError
+    from jswim.errors import LLMSetupError
 
     with FakeServer(redirects={"/v1/chat/completions": (307, "/v1/chat/completions")}) as srv:
         with pytest.raises(LLMSetupError, match=f"more than {MAX_REDIRECTS} redirects"):
@@ -538,7 +538,7 @@ def test_a_redirect_loop_stops_at_the_limit():
 
 
 def test_a_redirect_to_another_host_is_refused_and_the_key_never_goes_there(monkeypatch):
-    from jswim.llm.errors import LLMSetupError
+    from jswim.errors import LLMSetupError
 
     monkeypatch.setenv("JSWIM_TEST_KEY", SECRET)
     with FakeServer() as other:

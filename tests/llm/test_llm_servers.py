@@ -14,10 +14,10 @@ import pytest
 
 from jswim.errors import ConfigError
 from jswim.llm.reasoning import REASONING_MAX_TOKENS
-from jswim.llm.cache import ResponseCache
+from jswim.llm.response_cache import ResponseCache
 from jswim.llm.client import ClientSettings, LLMClient
-from jswim.llm.errors import LLMRequestError, LLMResponseError, LLMSetupError, LLMTimeoutError
-from jswim.llm.reply import (
+from jswim.errors import LLMRequestError, LLMResponseError, LLMSetupError, LLMTimeoutError
+from jswim.llm.server_response import (
     MalformedReply,
     assemble_sse,
     content_text,

@@ -11,7 +11,7 @@ import pytest
 
 from jswim.llm import local
 from jswim.llm.client import LLMClient
-from jswim.llm.errors import LocalModelError
+from jswim.errors import LocalModelError
 from jswim.prompt import (
     Action,
     HistoryRecord,

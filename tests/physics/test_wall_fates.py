@@ -7,7 +7,7 @@ import pytest
 
 from jswim.scenes import Scene
 from jswim.studies import StudyOptions
-from jswim.studies import scenes
+from jswim.studies import baselines
 from jswim.studies.specs import SPECS, build
 
 
@@ -26,7 +26,7 @@ def test_wall_study_stroke_rows_show_trapped_escaped_and_gliding():
         if p.agent == "stroke" and p.group.startswith("h=")
     ]
     assert plans and all(p.steps == SPECS["wall"].steps for p in plans)
-    rows = [r for p in plans for r in scenes.run_baselines([p], 50)]  # one scene per call
+    rows = [r for p in plans for r in baselines.run_baselines([p], 50)]  # one scene per call
     fates = {r["start_height"]: r["fate"] for r in rows}
     assert [fates[h] for h in sorted(fates)] == ["trapped"] * 2 + ["gliding"] * 4, fates
 

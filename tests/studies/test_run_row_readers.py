@@ -28,7 +28,7 @@ READERS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "jswim" / "figures").
     "jswim/overview.py",
     "jswim/studies/report.py",
     "jswim/studies/run.py",
-    "jswim/studies/scenes.py",
+    "jswim/studies/scene_studies.py",
     "jswim/studies/baselines.py",
     "jswim/studies/session.py",
     "jswim/results/tables.py",

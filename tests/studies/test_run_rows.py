@@ -13,7 +13,7 @@ from jswim.agents.variants import LLMRunSpec
 from jswim.judging.gait import GaitReport
 from jswim.llm.usage import UsageTotals
 from jswim.results import RunRow
-from jswim.studies import baselines, rows, scenes
+from jswim.studies import baselines, rows, scene_studies
 from jswim.studies.plans import Plan
 from jswim.studies.scene_grids import wall_scene, pair_scene
 
@@ -151,7 +151,7 @@ def _result(plan: Plan, swimmers: int = 1) -> RunResult:
 
 def _scene_row(plan: Plan, tracks: dict, z0: float = 3.0) -> RunRow:
     # The verdict given, as the real-valued agent gives its own: the lattice judge is tested elsewhere.
-    return scenes.scene_row(
+    return scene_studies.scene_row(
         plan,
         [5, 0, 3, 2],
         list(X),

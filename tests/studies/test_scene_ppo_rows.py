@@ -12,7 +12,7 @@ from jswim import cli
 from jswim.agents import fidelity, ppo
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
-from jswim.studies import scenes
+from jswim.studies import scene_studies
 
 WALL = dict(heights=(3.0,), q_runs=2, steps=12, agents=("stroke", "ppo"))
 
@@ -51,7 +51,7 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
     ]
     for r in learners:
         assert r["group"] == "h=3" and r["roc_levels"] == 0 and r["start_height"] == 3.0
-        assert r["fate"] in scenes.FATES and r["mean_height"] > 1.0
+        assert r["fate"] in scene_studies.FATES and r["mean_height"] > 1.0
         assert isinstance(r["success"], bool) and isinstance(r["learned"], bool)
         assert len(r["actions"]) == 12 and all(
             1 <= d <= 2 and -1 <= roc <= 1 for d, roc in r["actions"]
@@ -127,7 +127,8 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
     ]  # no -x stroke: nothing to compare with
     rows[5]["separation"] = 60.0
     got = {
-        (s["agent"], s["group"], s["direction"]): s["vs_stroke"] for s in scenes.scene_summary(rows)
+        (s["agent"], s["group"], s["direction"]): s["vs_stroke"]
+        for s in scene_studies.scene_summary(rows)
     }
     assert got[("ppo", "D=30", 1)] == pytest.approx(0.0025 / 0.025)  # the fastest phase at that D
     assert got[("qlearning", "D=30", 1)] == pytest.approx(
@@ -138,13 +139,13 @@ def test_the_scene_table_compares_every_agent_with_the_best_stroke_of_its_scene(
     assert got[("ppo", "D=30", -1)] is None
     # Per cycle, like speed, reads in the target direction: a -x stroke going -0.17 a per cycle is +0.17.
     back = [dict(row("stroke", "alone", 0.043, d=None, direction=-1), per_cycle=-0.172)]
-    assert scenes.scene_summary(back)[0]["per_cycle"] == pytest.approx(0.172)
+    assert scene_studies.scene_summary(back)[0]["per_cycle"] == pytest.approx(0.172)
     # Runs with no whole cycle (a pair's 6 steps) leave blanks, and the table says why.
-    assert scenes.table_note(scenes.scene_summary(rows)) is None
-    short = scenes.scene_summary(rows + [row("llm", "D=60", None, d=60.0)])
-    assert "no whole stroke cycle" in scenes.table_note(short) and "--steps" in scenes.table_note(
+    assert scene_studies.table_note(scene_studies.scene_summary(rows)) is None
+    short = scene_studies.scene_summary(rows + [row("llm", "D=60", None, d=60.0)])
+    assert "no whole stroke cycle" in scene_studies.table_note(
         short
-    )
+    ) and "--steps" in scene_studies.table_note(short)
 
 
 @pytest.mark.parametrize("study, extra", [("wall", {"heights": (5.0,)}), ("continuous", {})])

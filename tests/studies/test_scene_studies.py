@@ -17,7 +17,7 @@ from jswim.agents import qlearning
 from jswim.env.discretiser import HEIGHT_EDGES, WallCells
 from jswim.scenes import decode_scene_action
 from jswim.env.scene_world import SceneTask, SceneWorld
-from jswim.env.worlds import make
+from jswim.env.registry import make
 from jswim.scenes import Scene, scene_params
 from jswim.prompt import (
     DEFAULT_TEMPLATE,
@@ -34,7 +34,7 @@ from jswim.prompt import (
 )
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
-from jswim.studies import scenes
+from jswim.studies import scene_studies
 from tests.fakeserver import FakeServer, scene_reply
 
 # -- prompt ---------------------------------------------------------------------------------------
@@ -194,26 +194,26 @@ def test_parser_takes_exactly_the_joint_actions():
     ],
 )
 def test_fate_rule(heights, contact, expected):
-    f, mean = scenes.fate(heights, heights[0], contact)
+    f, mean = scene_studies.fate(heights, heights[0], contact)
     assert f == expected
     assert mean == pytest.approx(np.mean(heights[3:]))
 
 
 def test_stroke_codes_and_per_cycle():
-    assert scenes.stroke_codes("square", 1, 6, 1).tolist() == [5, 0, 3, 2, 5, 0]
-    assert scenes.stroke_codes("square", -1, 4, 1).tolist() == [0, 5, 2, 3]
+    assert scene_studies.stroke_codes("square", 1, 6, 1).tolist() == [5, 0, 3, 2, 5, 0]
+    assert scene_studies.stroke_codes("square", -1, 4, 1).tolist() == [0, 5, 2, 3]
     # Swimmer 2 (codes + 6) two moves ahead, then alternating, swimmer 1 first.
-    assert scenes.stroke_codes("phase2", 1, 8, 2).tolist() == [11, 6, 5, 9, 0, 8, 3, 11]
+    assert scene_studies.stroke_codes("phase2", 1, 8, 2).tolist() == [11, 6, 5, 9, 0, 8, 3, 11]
     x = np.arange(1, 13) * 0.25  # 0.25 per step: 1.0 per four-step cycle
-    assert scenes.per_cycle(x, "square", 1) == pytest.approx(1.0)
-    assert scenes.per_cycle(
+    assert scene_studies.per_cycle(x, "square", 1) == pytest.approx(1.0)
+    assert scene_studies.per_cycle(
         np.r_[0.5, 0.5 + np.arange(1, 17) * 0.25], "phase1", 2
     ) == pytest.approx(2.0)
     # Speed over whole cycles of the second half: a big back-and-forth move outside them is left out.
     moves = np.tile([1.0, -0.9, 1.0, -0.9], 5)  # 0.2 per four-step cycle
     x = np.cumsum(np.r_[moves, 1.0])  # 21 steps: the last one a lone +1
-    assert scenes.late_speed(x[:-1], 1, 1) == pytest.approx(0.05)
-    assert scenes.late_speed(x, 1, 1) == pytest.approx((x[-1] - x[-9]) / 8)
+    assert scene_studies.late_speed(x[:-1], 1, 1) == pytest.approx(0.05)
+    assert scene_studies.late_speed(x, 1, 1) == pytest.approx((x[-1] - x[-9]) / 8)
 
 
 def test_joint_decode_matches_the_scene_codes():
@@ -322,7 +322,9 @@ def test_wall_study_end_to_end(server, tmp_path):
         assert json.loads(r["scene"])["medium"] in ("wall", "free")
         if r["group"] != "free":
             assert (
-                r["fate"] in scenes.FATES and len(r["heights"]) == 12 and r["start_height"] == 3.0
+                r["fate"] in scene_studies.FATES
+                and len(r["heights"]) == 12
+                and r["start_height"] == 3.0
             )
     llm = next(r for r in rows if r["agent"] == "llm")
     meta_line = json.loads(

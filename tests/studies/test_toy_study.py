@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import jswim
-from jswim.env import worlds as env_worlds
+from jswim.env import registry
 from jswim.errors import ConfigError
 from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
@@ -79,7 +79,7 @@ def _toy_study(tmp_path_factory, name, agents):
             res = run_study("wall", o, backend=srv.backend(), out=out, figures=False)
         yield out, res
     finally:
-        env_worlds._REGISTERED.pop("toy", None)
+        registry._REGISTERED.pop("toy", None)
 
 
 @pytest.fixture(scope="module")
@@ -113,7 +113,7 @@ def _check_toy_rows(rows):
 def test_register_world_and_make(toy_folder):
     env, params = jswim.make("toy", direction="-x")
     assert isinstance(env, ToyWorld) and params.direction == -1.0
-    assert "toy" in env_worlds.registered_worlds()
+    assert "toy" in registry.registered_worlds()
     with pytest.raises(ConfigError, match="new name"):
         jswim.register_world("ng", toy_factory)
     with pytest.raises(ConfigError, match="unknown swimmer 'nope'"):
@@ -121,7 +121,7 @@ def test_register_world_and_make(toy_folder):
 
 
 def test_square_stroke_from_the_start_corner():
-    from jswim.studies.scenes import square
+    from jswim.studies.scene_studies import square
 
     # Purcell's square from (+, +) (D2 down, D1 down, D2 up, D1 up), NG's from (10, 6) (D2 up, D1
     # down, D2 down, D1 up); toward -x each one's time reverse. Codes (dof - 1) * 3 + roc + 1.

@@ -2,7 +2,7 @@
 
 import json
 
-from jswim.figures.scenes import scene_figures
+from jswim.figures.scene_plots import scene_figures
 from jswim.viz.worlds import world_of
 
 

@@ -4,7 +4,7 @@ Two encodings reach [`jswim.env.step`][jswim.env.stepping.step] (docs/continuous
 ``(dof - 1) (2K + 1) + (k + K)`` (``K = params.roc_levels``; DOF ``dof`` 1-based, ROC ``k / K``;
 K = 1 gives the paper's codes), or a **float ROC vector** ``(n_dof,)``, entry ``i`` DOF ``i + 1``'s
 ROC (at most one non-zero unless ``params.diagonal``). The *action sets* offered to agents
-(``"all"`` / ``"shape-changing"``) live in [`jswim.actions`][jswim.actions].
+(``"all"`` / ``"shape-changing"``) live in [`jswim.action_codes`][jswim.action_codes].
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from jswim.actions import decode_action, encode_action, n_actions  # noqa: F401  (the one codec, JAX-free)
+from jswim.action_codes import decode_action, encode_action, n_actions  # noqa: F401  (the one codec, JAX-free)
 from jswim.errors import ConfigError
 
 #: Rates of change an action may carry in the paper's discrete world (K = 1).
@@ -51,7 +51,7 @@ def validate_moves(actions: Any, n_dof: int) -> np.ndarray | None:
     -------
     ndarray (..., n_dof) float64, or None
         ``None`` when every ROC is -1, 0 or 1 (the discrete world:
-        use [`validate_actions`][jswim.env.actions.validate_actions]); otherwise one ROC vector per pair.
+        use [`validate_actions`][jswim.env.action_input.validate_actions]); otherwise one ROC vector per pair.
 
     Raises
     ------

@@ -14,7 +14,7 @@ from typing import Any
 import jax.numpy as jnp
 from jax import Array
 
-from jswim.actions import decode_action, encode_action
+from jswim.action_codes import decode_action, encode_action
 
 
 def encode_scene_action(swimmer: Any, dof: Any, k: Any, roc_levels: int = 1) -> Any:

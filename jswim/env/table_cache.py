@@ -29,7 +29,7 @@ _SOURCES = (
     "jswim.swimmers.wall_rft",
     "jswim.swimmers.purcell_beads",
     "jswim.swimmers.mobility",
-    "jswim.env.tables",
+    "jswim.env.step_tables",
     "jswim.env.motion",
     "jswim.env.state",
     "jswim.env.work",

@@ -7,7 +7,7 @@ from typing import Any, NamedTuple
 import jax.numpy as jnp
 from jax import Array
 
-from jswim.scenes.params import SceneParams
+from jswim.scenes.scene_parameters import SceneParams
 
 
 class SceneState(NamedTuple):
@@ -15,7 +15,7 @@ class SceneState(NamedTuple):
 
     ``S`` is the number of swimmers. Positions are in sphere radii ``a``, in the working dtype.
     Each position is held as a pair ``centre + centre_lo`` of that dtype (``centre`` alone is the
-    nearest number of the dtype; [`scene_positions`][jswim.scenes.state.scene_positions] reads the full value): every step's
+    nearest number of the dtype; [`scene_positions`][jswim.scenes.scene_state.scene_positions] reads the full value): every step's
     displacement is added by an exact two-sum, so in float32 the positions do not drift. Plain
     float32 accumulation rounds swimmer 2's x at D = 30 a (spacing 1.9e-6 a) by the same amount
     every cycle: a false relative drift of 8.6e-5 a after 100 square cycles of a pair, where the
@@ -30,7 +30,7 @@ class SceneState(NamedTuple):
 
 
 class SceneStepInfo(NamedTuple):
-    """What one [`jswim.scenes.scene_step`][jswim.scenes.stepping.scene_step] did (``S`` swimmers)."""
+    """What one [`jswim.scenes.scene_step`][jswim.scenes.scene_stepping.scene_step] did (``S`` swimmers)."""
 
     dx: Array  # (S,) displacement of each middle sphere along x (noisy when zeta > 0)
     dz: Array  # (S,) along z

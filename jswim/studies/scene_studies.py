@@ -1,4 +1,4 @@
-"""The scene studies (issue 19, extensions): ``jswim study wall`` and ``jswim study pair``.
+"""The scene studies (extensions of the paper): ``jswim study wall`` and ``jswim study pair``.
 
 ``wall``
     One NG swimmer started at each height ``h`` of ``--heights`` (a, the middle sphere's height
@@ -6,10 +6,10 @@
     LLM, Q-learning on (shape, height bin), the random policy and PPO (real ROCs). Measured: the stroke's
     displacement per cycle against ``h`` (next to the same stroke in the unbounded fluid of the
     same solver, medium ``"free"``: group ``free``), and every run's **fate** (`fate`).
-    ``--swimmer purcell`` (issue 34): Purcell's swimmer in a plane ``h`` link lengths above the
+    ``--swimmer purcell``: Purcell's swimmer in a plane ``h`` link lengths above the
     wall runs the same five agents per height (next to the paper's bulk fluid, group ``bulk``),
     judged by the paper's criterion on its D1/D2 moves; its height is fixed, so every fate is
-    ``gliding`` at ``h``. A registered world ([`jswim.register_world`][jswim.env.worlds.register_world]) runs them too, unjudged.
+    ``gliding`` at ``h``. A registered world ([`jswim.register_world`][jswim.env.registry.register_world]) runs them too, unjudged.
 ``pair``
     Two coaxial NG swimmers started ``D`` apart (``--separations``; medium ``"free"``: the
     point-force solve, in which the swimmers feel each other; the paper's formula has no
@@ -45,7 +45,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from jswim import env
-from jswim.actions import decode_action, encode_action, n_actions
+from jswim.action_codes import decode_action, encode_action, n_actions
 from jswim.console import Column
 from jswim.env.base import Environment
 from jswim.env.scene_world import ARMS

@@ -34,7 +34,7 @@ DEFAULT_NODES_FLOAT32 = 4
 )
 @dataclasses.dataclass(frozen=True)
 class SceneParams:
-    """Parameters of the scene environment ([`scene_params`][jswim.scenes.params.scene_params] builds them).
+    """Parameters of the scene environment ([`scene_params`][jswim.scenes.scene_parameters.scene_params] builds them).
 
     Attributes
     ----------
@@ -132,7 +132,7 @@ def scene_params(
     sweeps : int, optional
         Picard sweeps per step. Default: 1 where the motion does not depend on the pose (one
         swimmer in the unbounded fluid, or bulk), else adaptive: sweeps until the estimated error
-        is below the dtype's rounding ([`jswim.scenes.stepping.picard_tolerance`][jswim.scenes.stepping.picard_tolerance]; 3 to 16
+        is below the dtype's rounding ([`jswim.scenes.scene_stepping.picard_tolerance`][jswim.scenes.scene_stepping.picard_tolerance]; 3 to 16
         sweeps, more near a wall or a neighbour); an integer fixes the count.
     contact_gap : float
         Surface gap (units of a) below which a step is refused.
@@ -192,7 +192,7 @@ def check_start(
     middle sphere ``(S, 2)``, tilt ``(S,)``, arms ``(S, 2)`` and the obstacles ``(O, 3)``, if no
     sphere starts closer than ``contact_gap`` to the wall, an obstacle or another swimmer's.
 
-    [`scene_params`][jswim.scenes.params.scene_params] calls it; [`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions] too, so a study's
+    [`scene_params`][jswim.scenes.scene_parameters.scene_params] calls it; [`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions] too, so a study's
     ``--separations`` that would overlap its swimmers is refused before anything runs.
 
     Raises

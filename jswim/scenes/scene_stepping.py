@@ -35,10 +35,10 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.scenes.actions import split_action
+from jswim.scenes.scene_actions import split_action
 from jswim.scenes.collocation import gauss_rule
-from jswim.scenes.params import SceneParams
-from jswim.scenes.state import SceneState, SceneStepInfo, add_displacement, centre_low
+from jswim.scenes.scene_parameters import SceneParams
+from jswim.scenes.scene_state import SceneState, SceneStepInfo, add_displacement, centre_low
 from jswim.swimmers import bodyframe, forcefree
 
 
@@ -75,7 +75,7 @@ def scene_step(
 def scene_advance(
     params: SceneParams, state: SceneState, action: Any, y_noise: Array
 ) -> tuple[SceneState, SceneStepInfo]:
-    """[`scene_step`][jswim.scenes.stepping.scene_step] with given noise variables ``y_noise`` ``(S,)`` in [-1, 1]."""
+    """[`scene_step`][jswim.scenes.scene_stepping.scene_step] with given noise variables ``y_noise`` ``(S,)`` in [-1, 1]."""
     sw, dof, roc = split_action(action)
     arms = state.arms
     dtype = arms.dtype
@@ -126,7 +126,7 @@ def scene_step_joint(
     ``rocs[s] x (d_max - d_min)`` (clipped), all along one straight path in the joint shape space
     (each arm at rate ``delta_s / T``, ``T`` the longest move). For simultaneous strokes of two
     swimmers (a phase offset between their cycles); ``"free"`` and ``"wall"`` media. Noise, contact
-    and the info as in [`scene_step`][jswim.scenes.stepping.scene_step] (``stuck``: every non-zero ROC was stuck)."""
+    and the info as in [`scene_step`][jswim.scenes.scene_stepping.scene_step] (``stuck``: every non-zero ROC was stuck)."""
     if params.scene.medium == "bulk":
         raise ValueError("scene_step_joint needs medium 'free' or 'wall'")
     arms = state.arms
@@ -174,7 +174,7 @@ def integrate_move(
     params: SceneParams, pose0: Array, arms: Array, rates: Array, duration: Array
 ) -> tuple[Array, Array]:
     """Poses after moving the arms at ``rates`` for ``duration``, and the smallest surface gap:
-    ``pose0`` plus [`pose_change`][jswim.scenes.stepping.pose_change]."""
+    ``pose0`` plus [`pose_change`][jswim.scenes.scene_stepping.pose_change]."""
     inc, gap = pose_change(params, pose0, arms, rates, duration)
     return pose0 + inc, gap
 
@@ -199,7 +199,7 @@ def pose_change(
     duration : scalar
         Time of the move.
     centre_lo : Array (S, 2), optional
-        Low words of the positions ([`jswim.scenes.SceneState`][jswim.scenes.state.SceneState]): the positions are
+        Low words of the positions ([`jswim.scenes.SceneState`][jswim.scenes.scene_state.SceneState]): the positions are
         ``pose0[:, :2] + centre_lo``.
 
     Returns

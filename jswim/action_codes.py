@@ -1,5 +1,5 @@
 """Action sets and the action codec (environment layer, no JAX): which ``(DOF, ROC)`` actions an
-agent is offered, and the integer codes every world reads ([`encode_action`][jswim.actions.encode_action]).
+agent is offered, and the integer codes every world reads ([`encode_action`][jswim.action_codes.encode_action]).
 
 One name for the concept everywhere (``action_set``): the LLM's S5 and grammar, the Q-learner's
 and the random policy's choices, study grids and the command line all take one of

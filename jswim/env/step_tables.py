@@ -12,7 +12,7 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.env.cache import cached, model_key
+from jswim.env.table_cache import cached, model_key
 from jswim.env.state import corner_values
 from jswim.integrate import centroid, integrate_stroke
 from jswim.swimmers.models import SwimmerModel
@@ -62,7 +62,9 @@ def _build_step_table(model: SwimmerModel) -> tuple[np.ndarray, np.ndarray]:
         return np.asarray(inc).reshape(2**n, n, 3), np.asarray(offs)
 
 
-def _corner_index(levels: Array) -> Array:
+def corner_index(levels: Array) -> Array:
+    """The corner of the DOF cube at ``levels`` (0/1 per DOF, last axis) as a binary number, DOF 1
+    the lowest bit: the corner table's row block (int32)."""
     return jnp.sum(
         levels * (2 ** jnp.arange(levels.shape[-1], dtype=jnp.int32)), axis=-1, dtype=jnp.int32
     )
@@ -76,12 +78,14 @@ def _flat_table(model: SwimmerModel) -> np.ndarray:
 
 
 @functools.lru_cache(maxsize=64)
-def _step_rows(model: SwimmerModel) -> np.ndarray:
-    """`_flat_table` (float64) plus a last row for a step that moves nothing."""
+def step_rows(model: SwimmerModel) -> np.ndarray:
+    """The corner table as rows ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` (float64), indexed by
+    ``corner * n_dof + dof``, plus a last row for a step that moves nothing (`still_row`)."""
     return np.concatenate([_flat_table(model), [[0.0, 0.0, 0.0, 1.0, 0.0]]])
 
 
-def _still_row(model: SwimmerModel) -> int:
+def still_row(model: SwimmerModel) -> int:
+    """The index of `step_rows`' last row, the step that moves nothing (``2**n_dof * n_dof``)."""
     return 2**model.n_dof * model.n_dof
 
 

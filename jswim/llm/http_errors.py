@@ -1,34 +1,15 @@
-"""The LLM layer's errors; they live in [`jswim.errors`][jswim.errors] under the one root ``JswimError``
-(kept as a module so ``from jswim.llm.errors import LLMServerError`` goes on working), and what an
-httpx exception means, written once: `no_answer` (read by the client's retries) and
-`unreachable` (the preflight's one-line error).
+"""What an httpx exception means, written once: `no_answer` (what a request that got no HTTP
+answer met, read by the client's retries) and `unreachable` (the preflight's one-line error). The
+LLM layer's error classes live in [`jswim.errors`][jswim.errors], under the one root ``JswimError``.
 """
 
 from __future__ import annotations
 
 import httpx
 
-from jswim.errors import (
-    LLMError,
-    LLMRequestError,
-    LLMResponseError,
-    LLMServerError,
-    LLMSetupError,
-    LLMTimeoutError,
-    LocalModelError,
-)
+from jswim.errors import LLMServerError, LLMTimeoutError
 
-__all__ = [
-    "LLMError",
-    "LLMRequestError",
-    "LLMResponseError",
-    "LLMServerError",
-    "LLMSetupError",
-    "LLMTimeoutError",
-    "LocalModelError",
-    "no_answer",
-    "unreachable",
-]
+__all__ = ["no_answer", "unreachable"]
 
 
 def no_answer(exc: httpx.HTTPError) -> tuple[str, bool]:
