@@ -12,6 +12,7 @@ import argparse
 from typing import Any
 from collections.abc import Sequence
 
+from jswim.console import Column
 from jswim.console import print_table as show
 
 STUDY_HELP = {
@@ -175,8 +176,6 @@ def _print_nav_table(rows: Sequence[Any]) -> None:
 
     def fmt(v: Any, spec: str) -> str:
         return "-" if v is None else format(v, spec)
-
-    from jswim.console import Column
 
     cols = [Column("target", False), Column("agent", False)] + [
         Column(h) for h in ("reached", "steps", "path ratio", "energy", "energy/dist")

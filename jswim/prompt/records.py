@@ -90,8 +90,10 @@ def _nav_record_values(rec: HistoryRecord, cfg: PromptConfig) -> dict[str, str]:
     ``heading_after`` (rad in ``(-pi, pi]``, three decimals)."""
     out = {}
     for when in ("before", "after"):
-        y, h = getattr(rec, f"y_{when}"), getattr(rec, f"heading_{when}")
+        y = getattr(rec, f"y_{when}")
         out[f"y_{when}"] = "" if y is None else str(encode_position(y, cfg.x_min))
+    for when in ("before", "after"):
+        h = getattr(rec, f"heading_{when}")
         out[f"heading_{when}"] = "" if h is None else format_dof(wrap_angle(h), 3)
     return out
 

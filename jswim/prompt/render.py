@@ -72,8 +72,9 @@ def render_prompt(
     allowed = (
         list(options) if options is not None else allowed_actions(sw, cfg.action_set, dof_values)
     )
-    values = _prompt_values(sw, cfg, direction, shown, allowed, dof_values, x, summary)
-    values.update(_nav_values(sw, cfg, target, waypoint))
+    values = _prompt_values(
+        sw, cfg, direction, shown, allowed, dof_values, x, summary, target=target, waypoint=waypoint
+    )
     for name in SENTENCES:
         text = "" if name in cfg.drop else fill(cfg.template.sentence(name), values, name)
         if text and sw.roc_levels > 1 and name in _ROC_SENTENCES:
@@ -106,6 +107,9 @@ def _prompt_values(
     dof_values: Sequence[float],
     x: float,
     summary: str,
+    *,
+    target: tuple[float, float] | None = None,
+    waypoint: int = 1,
 ) -> dict[str, str]:
     """The placeholders of layouts and sentences (one place: rendering and [`PromptTemplate.check`][jswim.prompt.PromptTemplate.check])."""
     d = sw.dof_decimals
@@ -128,6 +132,7 @@ def _prompt_values(
         "summary": summary,
         "roc_levels": str(sw.roc_levels),
         "except_zero": "" if 0 in sw.rocs else ", not 0",
+        **_nav_values(sw, cfg, target, waypoint),
     }
 
 

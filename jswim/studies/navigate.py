@@ -18,11 +18,23 @@ import math
 from typing import Any
 from collections.abc import Sequence
 
+import jax
 import numpy as np
 
-from jswim.env.navigation import NavSummary
+from jswim import env as jenv
+from jswim.env.navigation import NavSummary, energy_per_distance, summarise
+from jswim.env.registry import make
+from jswim.env.targets import (
+    FixedTarget,
+    MovingTarget,
+    Target,
+    Waypoints,
+    default_budget,
+    target_from_dict,
+)
 from jswim.env.work import lighthill_efficiency
-from jswim.env.targets import FixedTarget, MovingTarget, Target, Waypoints, default_budget
+from jswim.judging import lattice
+from jswim.results import as_run_rows, is_failed
 from jswim.results.row import RunRow
 from jswim.studies.options import CONTINUOUS_AGENT, CONTROLLER_AGENT
 from jswim.studies.plans import Cell, Plan
@@ -135,7 +147,7 @@ def nav_row(
     distance closed on the target (None when none was closed); ``efficiency`` Lighthill's over
     the net displacement ([`jswim.env.work.lighthill_efficiency`][jswim.env.work.lighthill_efficiency]).
     """
-    from jswim.studies.rows import build_row  # the one row builder
+    from jswim.studies.rows import build_row  # lazy: start-up (rows load the LLM driver)
 
     verdict = {
         "success": bool(episode.reached),
@@ -175,8 +187,6 @@ def nav_row(
 def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
     """The study's table: per (agent, target group), runs, successes, the mean steps to the
     target over the runs that reached it, the mean path ratio, energy and energy per distance."""
-    from jswim.results import as_run_rows, is_failed
-
     out: dict[tuple[str, str], list[RunRow]] = {}
     for r in as_run_rows(rows):
         if r.target is None or is_failed(r):
@@ -212,9 +222,6 @@ NAV_TRAIN_EPISODES = 40
 
 def world(plan: Plan) -> tuple[Any, Any]:
     """A navigation plan's world and params ([`jswim.make`][jswim.env.registry.make] with its target)."""
-    from jswim.env.targets import target_from_dict
-    from jswim.env.registry import make
-
     init = plan.init if isinstance(plan.init, (tuple, list)) else None
     return make(
         plan.swimmer,
@@ -226,8 +233,6 @@ def world(plan: Plan) -> tuple[Any, Any]:
 
 
 def _take(tree: Any, i: int) -> Any:
-    import jax
-
     return jax.tree.map(lambda v: v[i], tree)
 
 
@@ -253,12 +258,11 @@ def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
     one run on what they learned, still exploring as their schedules leave them). Each episode
     is cut and measured by [`jswim.env.navigation.summarise`][jswim.env.navigation.summarise].
     """
-    import jax
-
-    from jswim import env as jenv
-    from jswim.agents import qlearning, random_policy, steering
-    from jswim.env.navigation import summarise
-    from jswim.judging import lattice
+    from jswim.agents import (  # lazy: start-up (the learners load optax)
+        qlearning,
+        random_policy,
+        steering,
+    )
 
     p0 = plans[0]
     world_, params = world(p0)
@@ -320,9 +324,6 @@ def llm_episode(plan: Plan, r: Any, work: np.ndarray | None) -> NavSummary:
     """An LLM run's episode ([`NavSummary`][jswim.env.navigation.NavSummary]) from its own
     record: the run ends where the task did (the driver stops at the world's end), ``work`` is
     each step's, replayed (the work depends on the shape's path only)."""
-    from jswim.env.navigation import energy_per_distance
-    from jswim.env.targets import target_from_dict
-
     spec = target_from_dict(json.loads(plan.target))
     xy = np.column_stack([np.asarray(r.x, np.float64), np.asarray(r.y, np.float64)])
     path = float(np.hypot(*np.diff(np.vstack([np.zeros((1, 2)), xy]), axis=0).T).sum())
