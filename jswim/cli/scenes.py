@@ -135,7 +135,7 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
             dict(
                 type=int,
                 metavar="N",
-                help="episodes of each target's budget that Q-learning and PPO train for (default 40)",
+                help="episodes of each target's budget that Q-learning and PPO train for (default 400)",
             ),
         ),
     ),

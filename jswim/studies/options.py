@@ -116,7 +116,7 @@ class StudyOptions:
     distances: tuple[float, ...] = (3.0,)
     bearings: tuple[float, ...] = (0.0, 90.0, 180.0)
     # Episodes of each target's budget that Q-learning and PPO train for in the navigation study.
-    train_episodes: int = 40
+    train_episodes: int = 400
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
