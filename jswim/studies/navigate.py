@@ -151,10 +151,12 @@ def nav_row(
     """
     from jswim.studies.rows import build_row  # lazy: start-up (rows load the LLM driver)
 
+    steps, reached = int(episode.steps), bool(episode.reached)  # plain numbers: the record's
+
     verdict = {
-        "success": bool(episode.reached),
-        "learned": bool(episode.reached),
-        "steps_to_learn": episode.steps if episode.reached else None,
+        "success": reached,
+        "learned": reached,
+        "steps_to_learn": steps if reached else None,
         "period": 0,
     }
     row = build_row(
@@ -173,16 +175,16 @@ def nav_row(
     bodies = make_model(plan.swimmer).n_dof + 1
     return dataclasses.replace(
         row,
-        energy=episode.energy if finite else None,
-        energy_per_distance=per if finite and math.isfinite(per) else None,
-        efficiency=lighthill_efficiency(net, episode.energy, episode.steps, bodies)
+        energy=float(episode.energy) if finite else None,
+        energy_per_distance=float(per) if finite and math.isfinite(per) else None,
+        efficiency=float(lighthill_efficiency(net, episode.energy, steps, bodies))
         if finite and episode.energy > 0
         else None,
         target=plan.target,
-        reached=bool(episode.reached),
-        steps_to_target=episode.steps if episode.reached else None,
-        path_length=episode.path,
-        path_ratio=episode.path_ratio if episode.reached else None,
+        reached=reached,
+        steps_to_target=steps if reached else None,
+        path_length=float(episode.path),
+        path_ratio=float(episode.path_ratio) if reached else None,
     )
 
 

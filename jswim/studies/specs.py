@@ -30,6 +30,7 @@ from jswim.prompt import SENTENCES
 from jswim.studies.options import (
     COMPETENCE_VARIANTS,
     CONTINUOUS_AGENT,
+    CONTROLLER_AGENT,
     STROKE_AGENT,
     WITH_BASELINES,
     StudyOptions,
@@ -323,6 +324,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     runs["qlearning"] = runs["random"] = spec.q_runs if o.q_runs is None else o.q_runs
     # A stroke is deterministic without noise: one run says it all (--q-runs of them under noise).
     runs[STROKE_AGENT] = runs["qlearning"] if o.zeta > 0 else min(1, runs["qlearning"])
+    runs[CONTROLLER_AGENT] = runs[STROKE_AGENT]  # the steering controller is deterministic too
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:
