@@ -129,6 +129,12 @@ def nav_row(
 ) -> RunRow:
     """The row of one navigation run of ``plan``, whatever its agent.
 
+    The row's success is ``reached``; ``steps_to_target`` the steps when reached;
+    ``path_length`` the centroid's path; ``path_ratio`` that over the task's straight distance
+    (None when not reached); ``energy`` the summed work, ``energy_per_distance`` it over the
+    distance closed on the target (None when none was closed); ``efficiency`` Lighthill's over
+    the net displacement ([`jswim.env.work.lighthill_efficiency`][jswim.env.work.lighthill_efficiency]).
+
     Parameters
     ----------
     x, y, orientation : sequence of float
@@ -143,11 +149,6 @@ def nav_row(
     **columns
         Further columns (an LLM run's own, through `jswim.studies.rows.with_llm`).
 
-    The row's success is ``reached``; ``steps_to_target`` the steps when reached;
-    ``path_length`` the centroid's path; ``path_ratio`` that over the task's straight distance
-    (None when not reached); ``energy`` the summed work, ``energy_per_distance`` it over the
-    distance closed on the target (None when none was closed); ``efficiency`` Lighthill's over
-    the net displacement ([`jswim.env.work.lighthill_efficiency`][jswim.env.work.lighthill_efficiency]).
     """
     from jswim.studies.rows import build_row  # lazy: start-up (rows load the LLM driver)
 

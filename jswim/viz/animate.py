@@ -508,6 +508,12 @@ def _frame_text(t: Track, k: int) -> str:
     # The page's convention: X/a toward the target direction, labelled with it.
     disp = "X/a toward " + ("+x" if t.direction > 0 else "-x")
     lines = [f"step {k:>3}/{t.n_steps}  {disp} {t.direction * t.x[k]:+.4f}"]
+    if t.world.targets:  # navigation: where it is and how far the target (the current waypoint's)
+        here = np.array([t.x[k], t.y[k]])
+        gap = min(np.hypot(gx - here[0], gy - here[1]) for gx, gy, _ in t.world.target_at(k))
+        lines = [
+            f"step {k:>3}/{t.n_steps}  (x, y) ({here[0]:+.3f}, {here[1]:+.3f})  nearest target {gap:.3f} a"
+        ]
     if k == 0:
         lines.append(
             "start "
