@@ -91,9 +91,9 @@ class World:
         if len(self.targets) > 1:
             bits.append(f"path of {len(self.targets)} waypoints")
         elif self.targets:
-            x, y, _ = self.targets[0]
+            x, y = (round(v, 6) + 0.0 for v in self.targets[0][:2])  # 1.8e-16 -> 0
             moving = "moving target from" if any(self.target_velocity) else "target at"
-            bits.append(f"{moving} ({x:.3g}, {y:.3g}) a")
+            bits.append(f"{moving} ({x:g}, {y:g}) a")
         return ", ".join(bits)
 
 

@@ -149,7 +149,9 @@
       d.stroke[1] + "): cycles at steps " + cycles(d).map(function (c) { return c[0] + "\u2013" + c[1]; }).join(", ") :
       "the success criterion found no qualifying stroke";
     var who = (NAMES[r.agent] || r.agent) + (r.agent === "llm" && D.model ? " (" + D.model + ")" : "");
-    var bits = [who, d.model + " swimmer", "target " + fmt("direction", r.direction)];
+    var nav = (d.targets || []).length > 0;  // a navigation run: its target, not a direction
+    if (nav) stroke = r.success ? "target reached" : "target not reached";
+    var bits = [who, d.model + " swimmer", nav ? d.world : "target " + fmt("direction", r.direction)];
     if (r.zeta !== null && r.zeta !== undefined) bits.push("\u03b6 = " + r.zeta);
     if (r.init) bits.push("start " + r.init);
     if (r.n_ht !== null && r.n_ht !== undefined) bits.push("n_ht " + r.n_ht);
@@ -313,7 +315,7 @@
         ctx.fillText("reply: " + (t.length > 60 ? t.slice(0, 57) + "..." : t), 10, 54);
       }
     }
-    ctx.fillText("target " + (d.direction > 0 ? "\u2192" : "\u2190"), W - 90, H - 12);
+    if (!(d.targets || []).length) ctx.fillText("target " + (d.direction > 0 ? "\u2192" : "\u2190"), W - 90, H - 12);
   }
 
   function dofList(d, k) {
