@@ -182,15 +182,15 @@ def _print_nav_table(rows: Sequence[Any]) -> None:
     ]
     cells = [
         [
-            r["group"],
-            r["agent"],
-            f"{r['reached']}/{r['n']}",
-            fmt(r["steps_to_target"], ".0f"),
-            fmt(r["path_ratio"], ".2f"),
-            fmt(r["energy"], ".1f"),
-            fmt(r["energy_per_distance"], ".1f"),
+            g["group"],
+            g["agent"],
+            f"{g['reached']}/{g['n']}",
+            fmt(g["steps_to_target"], ".0f"),
+            fmt(g["path_ratio"], ".2f"),
+            fmt(g["energy"], ".1f"),
+            fmt(g["energy_per_distance"], ".1f"),
         ]
-        for r in nav_summary(rows)
+        for g in nav_summary(rows)
     ]
     show(
         cols,

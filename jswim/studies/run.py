@@ -172,12 +172,16 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     opts = dataclasses.asdict(o)
     for name in ("chunk", *GRID_SIZE):
         opts.pop(name, None)
+    if study != "navigate":  # the navigation study's own knob: other folders keep their identity
+        opts.pop("train_episodes", None)
     for name in (
         "variant",
         "variants",
     ):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
+    if opts["steps"] is None and study == "navigate":  # each target has its own budget
+        opts["steps"] = "each target's budget"
     if opts["steps"] is None:  # the study's own horizon, written as the number it is
         opts["steps"] = SPECS[study].steps if study in SPECS else 50
     if opts["roc_levels"] == 1:  # the paper's ROC set: as before --roc-levels existed
