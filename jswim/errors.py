@@ -87,6 +87,7 @@ SIZE_RANGES = {
     "q_runs": (0, 100_000),
     "samples": (1, 10_000),
     "n_ht": (0, 100),
+    "train_episodes": (1, 10_000),
 }
 
 

@@ -126,6 +126,23 @@ def scene_extensions(scenes: Any, ppo: bool = False) -> list[str]:
     return lines + ([SCENE_PPO] if ppo and lines else [])
 
 
+#: The line of a navigation run (issue 48, an extension: the paper's task is swimming along x).
+NAVIGATION = (
+    "navigation task (an extension; docs/navigation.md): S1 names the target's position (X, Y), "
+    "encoded as X is, with one X_min for both, lowered to a whole number of link lengths below "
+    "every place the target can be; S2 adds what X, Y and the heading are and the success radius "
+    "(a moving target: its velocity; a path: its number of waypoints); records give X, Y and the "
+    "heading (rad) before and after each step; the run ends when the target is reached or at its "
+    "step budget; the progress the clearing rule reads is the decrease of the distance to the target"
+)
+
+
+def navigation_deviation(target: str) -> str:
+    """The line of a run with a navigation target (canonical JSON of its spec): `NAVIGATION`
+    and the target."""
+    return f"{NAVIGATION}; target {target}"
+
+
 def deviations(
     cfg: LLMAgentConfig,
     *,

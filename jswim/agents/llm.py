@@ -29,6 +29,7 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import json
+import math
 import os
 import warnings
 from dataclasses import dataclass, field
@@ -59,7 +60,7 @@ from jswim.llm.journal import CallJournal, call_key
 from jswim.llm.local import LocalServer
 from jswim.llm.sync import run_sync
 from jswim.llm.usage import UsageTotals
-from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText
+from jswim.prompt import Action, HistoryRecord, PromptConfig, SwimmerText, nav_template
 
 
 #: Shown once (Python's default warning filter) when a position falls below x_min.
@@ -113,6 +114,10 @@ class RunResult:
     heights: list[list[float]] = field(default_factory=list)
     tilts: list[list[float]] = field(default_factory=list)
     contact: list[bool] = field(default_factory=list)
+    # A navigation task (spec.target): whether the target was reached, and the current target's
+    # (x, y) after each step (a moving target's track, a path's waypoint in turn).
+    reached: bool | None = None
+    targets: list[list[float]] = field(default_factory=list)
 
     @property
     def steps(self) -> int:
@@ -169,6 +174,11 @@ class RunResult:
             "below_x_min": self.below_x_min,
             **self.knobs,
             **(
+                {"target": s.target, "reached": self.reached, "targets": self.targets}
+                if s.target
+                else {}
+            ),
+            **(
                 {
                     "scene": s.scene,
                     "xs": self.xs,
@@ -209,12 +219,27 @@ class _Run:
     convs: list[pair_prompt.Conversation] = field(
         default_factory=list
     )  # --pair-prompt each: one per swimmer
+    # A navigation task: the centre's y, the heading, the current target and its waypoint number.
+    y: float = 0.0
+    heading: float = 0.0
+    target: tuple[float, float] | None = None
+    waypoint: int = 1
+    waypoints: tuple[tuple[float, float], ...] = ()
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
             self.sink.write(json.dumps(record, default=_jsonable) + "\n")
         elif self.result.transcript is not None:
             self.result.transcript.append(record)
+
+
+def _waypoint(run: _Run) -> int:
+    """Which waypoint of a path the current target is (1-based; 1 for a point or a moving
+    target): the path's point nearest the target the world reports."""
+    if len(run.waypoints) < 2 or run.target is None:
+        return 1
+    d = [math.dist(p, run.target) for p in run.waypoints]
+    return int(np.argmin(d)) + 1
 
 
 def _jsonable(obj: Any) -> Any:
@@ -304,6 +329,14 @@ class LLMDriver:
         view = world_view.view(env, group.x0[pos], start["heights"])  # None: the paper's prompt
         text, template = world_view.text(base, prompt.template, env.n_dof, view)
         prompt = dataclasses.replace(prompt, template=template)
+        nav = world_view.nav_view(spec)  # None: the paper's task along +x or -x
+        if nav is not None:
+            text = dataclasses.replace(text, nav=nav)
+            prompt = dataclasses.replace(
+                prompt,
+                template=nav_template(prompt.template),
+                x_min=world_view.nav_x_min(spec, prompt.x_min),
+            )
         levels0 = [int(v) for v in group.levels0[pos]]
         result = RunResult(
             run_id,
@@ -322,6 +355,12 @@ class LLMDriver:
             History(protocol.clearing_rule(cfg, model)),
             np.array(start["dofs"], np.float64),
         )
+        if nav is not None:
+            run.y, run.heading = float(start["y"]), float(start["orientation"])
+            run.waypoints = tuple(tuple(p) for p in json.loads(spec.target).get("points") or ())
+            run.target = tuple(float(v) for v in start["target"])
+            run.waypoint = _waypoint(run)
+            result.reached = False
         settings = self.client.settings
         constraint = constrain.resolve_mode(settings.constrain, settings.server_kind)
         run.max_tokens = protocol.max_tokens(cfg, model, constraint)
@@ -338,6 +377,8 @@ class LLMDriver:
         )
         world_meta, deviation = world_view.notes(spec)
         run.deviations += [deviation] if deviation else []
+        if nav is not None:
+            run.deviations.append(fidelity.navigation_deviation(spec.target))
         if env.n_swimmers > 1:
             result.knobs["pair_prompt"] = spec.pair_prompt
         if spec.pair_prompt == "each":  # one conversation per swimmer (jswim.agents.pair_prompt)
@@ -439,6 +480,8 @@ class LLMDriver:
             dofs=mind.dofs,
             x=mind.x,
             stats=mind.stats,
+            target=run.target,
+            waypoint=run.waypoint,
         )
         temperature = cfg.sampling_temperature(self.client.settings.temperature)
         messages = req.messages
@@ -575,6 +618,20 @@ class LLMDriver:
             res.heights.append(list(now["heights"]))
             res.tilts.append(list(now["tilts"]))
             res.contact.append(bool(out["contact"]))
+        nav = {}
+        if run.target is not None:  # a navigation task: y and heading, the target's next place
+            y_after, heading_after = float(out["y"]), float(out["orientation"])
+            nav = {
+                "y_before": run.y,
+                "y_after": y_after,
+                "heading_before": run.heading,
+                "heading_after": heading_after,
+            }
+            run.y, run.heading = y_after, heading_after
+            run.target = tuple(float(v) for v in out["target"])
+            run.waypoint = _waypoint(run)
+            res.targets.append(list(run.target))
+            res.reached = bool(out["reached"])
         rec = HistoryRecord(
             res.steps + 1,
             tuple(run.dofs),
@@ -584,6 +641,7 @@ class LLMDriver:
             x_after,
             bool(out["stuck"]),
             **scene,
+            **nav,
         )
         if run.convs:  # each swimmer's own record, progress and clearing (jswim.agents.pair_prompt)
             cleared = pair_prompt.record(run.convs, rec, res.spec.direction)
@@ -618,6 +676,16 @@ class LLMDriver:
                 "n_clears": n_clears,
                 **(
                     {
+                        "y_after": rec.y_after,
+                        "heading_after": rec.heading_after,
+                        "target": list(run.target),
+                        "reached": res.reached,
+                    }
+                    if nav
+                    else {}
+                ),
+                **(
+                    {
                         "xs_after": list(rec.xs_after),
                         "heights_after": list(rec.heights_after),
                         "tilts_after": list(rec.tilts_after),
@@ -632,7 +700,7 @@ class LLMDriver:
             # Sent as a negative number, as the authors' code does; the run goes on.
             res.below_x_min = res.steps
             warnings.warn(BELOW_X_MIN_WARNING.format(x_min=run.prompt.x_min), stacklevel=2)
-        if res.steps >= res.spec.n_steps:
+        if res.steps >= res.spec.n_steps or bool(out.get("ended", False)):
             self._finish(run, "done")
 
     def _finish(self, run: _Run, status: str, error: str | None = None) -> None:

@@ -124,6 +124,8 @@ def request(
     dofs: Sequence[float],
     x: float,
     stats: MoveStats,
+    target: tuple[float, float] | None = None,
+    waypoint: int = 1,
 ) -> Request:
     """The request of decision ``step`` (1-based) of a run.
 
@@ -145,7 +147,10 @@ def request(
         Current X.
     stats : MoveStats
         Observed progress so far (read only by the summary variant).
-
+    target : tuple of float, optional
+        A navigation task's target now (``text.nav`` set), ``(x, y)``.
+    waypoint : int
+        Which waypoint of a path it is (1-based).
     """
     allowed = allowed_actions(text, cfg.action_set, dofs)
     options = list(allowed)
@@ -153,7 +158,16 @@ def request(
         random.Random(derived_seed(seed, step, "shuffle")).shuffle(options)
     summary = render_summary(text, stats, dofs, options, direction) if cfg.summary else ""
     body = render_prompt(
-        text, prompt, direction, records, dofs, x, options=options, summary=summary
+        text,
+        prompt,
+        direction,
+        records,
+        dofs,
+        x,
+        options=options,
+        summary=summary,
+        target=target,
+        waypoint=waypoint,
     )
     return Request(body, build_messages(body, cfg.system), allowed, options)
 

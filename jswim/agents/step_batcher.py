@@ -80,7 +80,16 @@ def _advance(
         jnp.any(info.contact.reshape(mask.shape + (-1,)), -1),
         obs,
         position,
+        _ended(env, new, params),
     )
+
+
+def _ended(env: Environment, states: Any, params: Any) -> tuple[jax.Array, jax.Array]:
+    """``(reached, ended)`` per run: the world's task succeeded (a navigation target reached),
+    and it is over (reached or its budget spent; ``env.termination``); all False in a world
+    whose task has no end (the paper's)."""
+    terminated, truncated = jax.vmap(env.termination)(states, params)
+    return terminated, terminated | truncated
 
 
 def stack_params(params: Sequence[Any]) -> Any:
@@ -107,8 +116,10 @@ class StepGroup:
     swimmer's x displacement from its start ``x0``, float64 ``(S,)``) and their mean ``x``,
     ``heights`` (the observation's ``height``, else each position's y) and ``tilts`` (each
     orientation), ``dofs`` (float64), ``y`` and ``orientation`` (swimmer 1's height and orientation,
-    the world's dtype), ``progress`` (the reward), ``stuck``
-    and ``contact``. ``start`` holds the same (but the step's) before the first step, with a batch
+    the world's dtype), ``progress`` (the reward), ``stuck``, ``contact``, ``reached`` and ``ended`` (the
+    world's task succeeded, and it is over: ``env.termination``, a navigation target reached or its budget spent;
+    always False in the paper's world); a navigation world's also ``target`` (the current
+    target's ``(x, y)``) and ``distance``. ``start`` holds the same (but the step's) before the first step, with a batch
     axis; ``levels0`` each start as corner levels of ``[lo, hi]``; ``n_steps`` the env calls made
     (for benchmarks: steps per call = the batching achieved).
     """
@@ -153,10 +164,18 @@ class StepGroup:
             "y": np.asarray(height[:, 0]),
             "orientation": np.asarray(obs.orientation[:, 0]),
         }
+        target = getattr(obs, "target", None)
+        if target is not None:  # a navigation task: the current target, lab frame
+            out["target"] = np.asarray(target.position, np.float64)
+            out["distance"] = np.asarray(target.distance, np.float64)
         if rest is not None:
-            progress, stuck, contact = jax.device_get(rest)
+            progress, stuck, contact, (reached, ended) = jax.device_get(rest)
             out.update(
-                progress=np.asarray(progress), stuck=np.asarray(stuck), contact=np.asarray(contact)
+                progress=np.asarray(progress),
+                stuck=np.asarray(stuck),
+                contact=np.asarray(contact),
+                reached=np.asarray(reached),
+                ended=np.asarray(ended),
             )
         return out
 
@@ -171,11 +190,11 @@ class StepGroup:
 
     def _step(self, codes: np.ndarray, mask: np.ndarray) -> Callable[[int], dict[str, Any]]:
         """Advance the members in ``mask`` by ``codes`` (int32 ``(n,)``); each member's outputs by position."""
-        self.states, progress, stuck, contact, obs, position = _advance(
+        self.states, progress, stuck, contact, obs, position, ended = _advance(
             self.env, self.step_keys, self.t, self.states, codes, self.params, mask
         )
         self.t = self.t + mask.astype(np.int32)
-        out = self._outputs(obs, position, (progress, stuck, contact))
+        out = self._outputs(obs, position, (progress, stuck, contact, ended))
         return lambda pos: {k: v[pos] for k, v in out.items()}
 
     def _flush(self) -> None:

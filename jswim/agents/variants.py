@@ -12,6 +12,7 @@ ranked or pruned by observed value.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 from dataclasses import dataclass
 from typing import Any
@@ -82,6 +83,15 @@ def roc_tag(roc_levels: int) -> str:
     return "" if roc_levels == 1 else f"K{roc_levels}"
 
 
+def target_tag(target: str) -> str:
+    """The run-id tag of a navigation target (canonical JSON, ``""``: none): its kind and a
+    short hash of the spec, e.g. ``nav-fixed-3f2a9c1b``."""
+    if not target:
+        return ""
+    digest = hashlib.sha256(target.encode()).hexdigest()[:8]
+    return f"nav-{json.loads(target).get('kind', 'target')}-{digest}"
+
+
 #: How an LLM steers a pair of swimmers (``--pair-prompt``): ``"joint"`` (default), one conversation
 #: for both through joint DOFs D1..D4; ``"each"`` (a variant), one conversation per swimmer, each
 #: with its own D1, D2, history and clearing, the two taking turns ([`jswim.agents.pair_prompt`][jswim.agents.pair_prompt]).
@@ -147,6 +157,11 @@ class LLMRunSpec:
     pair_prompt : {"joint", "each"}
         A pair's prompt (`PAIR_PROMPTS`): one joint conversation, or one per swimmer
         (``"each"`` needs a scene of two or more swimmers; named ``each`` in the default run id).
+    target : str
+        A navigation task (an extension; docs/navigation.md) as canonical JSON of the target
+        spec's ``to_dict()`` ([`jswim.env.targets`][jswim.env.targets]); ``""``: the paper's
+        task along ``direction``. The run ends when the target is reached or after ``n_steps``
+        (the target's budget in a study), whichever is first.
     """
 
     swimmer: str = "purcell"
@@ -163,6 +178,7 @@ class LLMRunSpec:
     roc_levels: int = 1
     scene: str = ""
     pair_prompt: str = "joint"
+    target: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drop", normalize_mask(self.drop))
@@ -187,7 +203,15 @@ class LLMRunSpec:
             self.zeta,
             n_ht=self.n_ht,
             drop=self.drop,
-            tag="-".join(t for t in (pair_tag(self.pair_prompt), roc_tag(self.roc_levels)) if t),
+            tag="-".join(
+                t
+                for t in (
+                    pair_tag(self.pair_prompt),
+                    roc_tag(self.roc_levels),
+                    target_tag(self.target),
+                )
+                if t
+            ),
             seed=self.seed,
         )
 

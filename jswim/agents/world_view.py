@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from typing import Any
 from collections.abc import Sequence
 
@@ -19,7 +20,8 @@ from jswim.agents.fidelity import scene_deviation
 from jswim.agents.variants import LLMRunSpec
 from jswim.env.base import Environment
 from jswim.env.registry import make, registered_worlds
-from jswim.prompt import PromptTemplate, SceneView, SwimmerText, scene_template
+from jswim.env.targets import target_from_dict
+from jswim.prompt import NavView, PromptTemplate, SceneView, SwimmerText, scene_template
 from jswim.scenes.scene import Scene
 from jswim.swimmers.models import SwimmerModel, make_model
 
@@ -27,6 +29,15 @@ from jswim.swimmers.models import SwimmerModel, make_model
 def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
     """The world and params of ``spec``: its swimmer in its scene (``spec.scene``, canonical JSON;
     ``""``: the paper's world), noise level, direction, start and ROC lattice."""
+    if spec.target:  # a navigation task (docs/navigation.md): the swimmer's world and the target
+        return make(
+            spec.swimmer,
+            zeta=spec.zeta,
+            init=spec.init,
+            roc_levels=spec.roc_levels,
+            target=target_from_dict(json.loads(spec.target)),
+            **dict(spec.swimmer_options),
+        )
     if not spec.scene:
         return make(
             spec.swimmer,
@@ -73,6 +84,42 @@ def view(env: Environment, x0: Sequence[float], y0: Sequence[float]) -> SceneVie
         (round(float(x0[k] - x0[0]), 9), round(float(y0[k] - y0[0]), 9)) for k in range(n)
     )
     return SceneView(n, wall, starts[1][0] if n > 1 else 0.0, starts=starts if n > 2 else ())
+
+
+def nav_view(spec: LLMRunSpec) -> NavView | None:
+    """What the prompt shows of the navigation task ``spec.target`` names (its kind, success
+    radius, waypoints and velocity; the target's position each step comes from the world's
+    observation); ``None`` for the paper's task."""
+    if not spec.target:
+        return None
+    t = json.loads(spec.target)
+    return NavView(
+        kind=t["kind"],
+        radius=float(t["radius"]),
+        waypoints=len(t.get("points") or [()]),
+        velocity=tuple(float(v) for v in t.get("velocity", (0.0, 0.0))),
+    )
+
+
+#: Link lengths kept between the farthest place a navigation task's target can be and ``X_min``.
+NAV_MARGIN = 2.0
+
+
+def nav_x_min(spec: LLMRunSpec, x_min: float) -> float:
+    """``X_min`` of a navigation run: ``x_min``, lowered to a whole number of link lengths below
+    every place the target can be within ``spec.n_steps`` (minus `NAV_MARGIN`), so that X and
+    Y stay positive while the swimmer heads for it (the paper picks ``X_min`` for the same
+    reason; a target behind or to the right would otherwise be sent as negative numbers)."""
+    t = json.loads(spec.target)
+    points = t.get("points") or [
+        (
+            t["distance"] * math.cos(math.radians(t["bearing"])),
+            t["distance"] * math.sin(math.radians(t["bearing"])),
+        )
+    ]
+    drift = math.hypot(*t.get("velocity", (0.0, 0.0))) * spec.n_steps
+    low = min(min(p) for p in points) - drift - NAV_MARGIN
+    return min(float(x_min), float(math.floor(min(low, 0.0 - NAV_MARGIN))))
 
 
 def text(

@@ -45,7 +45,12 @@ FIELDS = (
     "unpriced",
 )
 
-_LABELS = {"qlearning": "Q-learning", "random": "random"}
+_LABELS = {
+    "qlearning": "Q-learning",
+    "random": "random",
+    "ppo": "PPO",
+    "controller": "steering controller",
+}
 
 
 def folder_rows(

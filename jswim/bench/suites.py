@@ -3,7 +3,8 @@
 A suite's definition (parts, options, seed, sizes) is recorded in the bench folder
 (``bench.json``), so two labs running ``core`` get comparable rows; a folder made with another
 definition is refused, not mixed. The suites ``core`` and ``paper`` (their parts, sizes and
-cost) are described in docs/bench.md (*Suites*).
+cost) are described in docs/bench.md (*Suites*); ``navigate`` runs the navigation study
+(docs/navigation.md).
 """
 
 from __future__ import annotations
@@ -34,6 +35,9 @@ PART_OPTIONS = {
     "temperatures": "--temperatures",
     "prompt_files": "--prompt-files",
     "samples": "--samples",
+    "distances": "--distances",
+    "bearings": "--bearings",
+    "train_episodes": "--train-episodes",
 }
 
 #: Sizes a bench command may override for every part (``--runs``, ``--q-runs``, ``--steps``);
@@ -118,7 +122,15 @@ PAPER = Suite(
     about="every figure of the paper, each study at its own defaults",
 )
 
-SUITES = {"core": CORE, "paper": PAPER}
+NAVIGATE = Suite(
+    "navigate",
+    (Part("navigate", "navigate", (("runs", 1),)),),
+    seed=0,
+    about="navigation (an extension): targets 3 a away at 0, 90 and 180 degrees, a path and a moving "
+    "target; success = the target reached within its budget, steps to it",
+)
+
+SUITES = {"core": CORE, "paper": PAPER, "navigate": NAVIGATE}
 
 
 def check_name(name: str, what: str) -> str:

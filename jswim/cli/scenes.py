@@ -12,6 +12,7 @@ import argparse
 from typing import Any
 from collections.abc import Sequence
 
+from jswim.console import Column
 from jswim.console import print_table as show
 
 STUDY_HELP = {
@@ -22,6 +23,9 @@ STUDY_HELP = {
     "offset and D, and whether an agent steering both finds a faster joint stroke",
     "school": "schools of N NG swimmers in a line or side by side D apart, every one doing the square stroke in "
     "turn: the school's speed against N and D, beside a lone swimmer's",
+    "navigate": "Purcell's swimmer steered to targets at several distances and bearings, along a path and after "
+    "a moving target (K = 2 unless --roc-levels): the LLM, Q-learning, PPO, the steering controller and random; "
+    "success, steps to the target, path over straight distance, energy and energy per distance",
 }
 
 
@@ -118,6 +122,33 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
             ),
         ),
     ),
+    "navigate": (
+        (
+            "--distances",
+            dict(
+                type=_numbers(float),
+                metavar="D1,D2,...",
+                help="distances of the fixed targets, in link lengths (default 3)",
+            ),
+        ),
+        (
+            "--bearings",
+            dict(
+                type=_numbers(float),
+                metavar="B1,B2,...",
+                help="bearings of the fixed targets, degrees counterclockwise from the start heading "
+                "(default 0,90,180)",
+            ),
+        ),
+        (
+            "--train-episodes",
+            dict(
+                type=int,
+                metavar="N",
+                help="episodes of each target's budget that Q-learning and PPO train for (default 400)",
+            ),
+        ),
+    ),
 }
 
 
@@ -133,7 +164,7 @@ def register(q: argparse.ArgumentParser, name: str) -> None:
         variants,
     )  # lazy: start-up (`jswim --help` imports this module, not the agents)
 
-    g = q.add_argument_group("scene")
+    g = q.add_argument_group("navigation" if name == "navigate" else "scene")
     for flag, kw in OPTIONS[name]:
         if isinstance(kw.get("choices"), str):
             kw = {**kw, "choices": getattr(variants, kw["choices"])}
@@ -149,11 +180,43 @@ def options(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+def _print_nav_table(rows: Sequence[Any]) -> None:
+    """The navigation table (`jswim.studies.navigate.nav_summary`)."""
+    from jswim.studies.navigate import nav_summary  # lazy: JAX loads only for a study
+
+    def fmt(v: Any, spec: str) -> str:
+        return "-" if v is None else format(v, spec)
+
+    cols = [Column("target", False), Column("agent", False)] + [
+        Column(h) for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
+    ]
+    cells = [
+        [
+            g["group"],
+            g["agent"],
+            f"{g['reached']}/{g['n']}",
+            fmt(g["steps_to_target"], ".0f"),
+            fmt(g["path_ratio"], ".2f"),
+            fmt(g["energy"], ".1f"),
+            fmt(g["energy_per_distance"], ".1f"),
+        ]
+        for g in nav_summary(rows)
+    ]
+    show(
+        cols,
+        cells,
+        "navigation: targets reached, mean steps to the target and path over straight distance "
+        "(runs that reached it), energy (xi_par a^3/tau) and energy per a closed",
+    )
+
+
 def print_table(rows: Sequence[dict[str, Any]]) -> None:
     """The scene table of a study's rows (nothing when it has no scene runs)."""
     from jswim.results import as_run_rows  # lazy: start-up (results loads NumPy)
 
     rows = as_run_rows(rows)
+    if any(r.target for r in rows):
+        _print_nav_table(rows)
     if not any(r.scene for r in rows):
         return
     from jswim.studies.scene_studies import (

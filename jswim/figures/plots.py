@@ -39,6 +39,7 @@ from jswim.figures.style import (  # noqa: F401  (the figures' public names, imp
     tidy,
 )
 from jswim.figures.scene_plots import scene_figures
+from jswim.figures.navigation import nav_figures
 from jswim.figures.panels import panel_keys, save, target_displacement  # noqa: F401
 from jswim.figures.sketches import (  # noqa: F401
     draw_cycle,
@@ -95,6 +96,8 @@ def study_figures(
         return continuous_figures(rows, note=note)
     if study in ("wall", "pair", "school"):  # walls, pairs and schools: the scene figures
         return scene_figures(study, rows, note=note)
+    if study == "navigate":  # paths in the plane, success against bearing, energy
+        return nav_figures(rows, note=note)
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [

@@ -9,6 +9,7 @@ reference agent*).
 from __future__ import annotations
 
 import json
+import math
 import re
 import threading
 import time
@@ -92,9 +93,138 @@ def _blocked(action: tuple[int, int], here: str | None, text: str) -> bool:
     return (roc < 0 and value <= lo) or (roc > 0 and value >= hi)
 
 
+# -- navigation (an extension; docs/navigation.md) -------------------------------------------------
+
+_TARGET = re.compile(r"\(X, Y\) = \((-?\d+), (-?\d+)\)")
+_NAV_RECORD = re.compile(
+    r"^\s*\d+:\s*\(([^)]*)\)\s*\[\s*(\d+)\s*,\s*(-?\d+)\s*\]\s*->\s*\(([^)]*)\),\s*X\s*(-?\d+)\s*->\s*"
+    r"(-?\d+),\s*Y\s*(-?\d+)\s*->\s*(-?\d+),\s*heading\s*(-?[\d.]+)\s*->\s*(-?[\d.]+)",
+    re.M,
+)
+_LEVELS = re.compile(r"k/(\d+) of its range")
+
+#: |bearing| (rad) under which the navigation rule swims straight: twice the quarter loop's
+#: rotation per cycle for Purcell's swimmer at d_max = pi/3 (0.0584 rad, jswim.env.loops), so one
+#: turning cycle cannot carry the bearing from one side of the dead band to the other.
+NAV_TOLERANCE = 0.117
+
+
+def _nav_cycles(k: int) -> list[tuple[tuple[int, int], ...]]:
+    """The rule's cycles on the K lattice as closed vertex lists, each from its hub ``(K, K)``
+    or ``(0, 0)``: the square gait's halves forward and backward, and the quarter loops that
+    touch it, both ways (the steering controller's cycles, jswim.swimmers.turning)."""
+    m = k // 2
+    hi, lo = (k, k), (0, 0)
+    return [
+        (hi, (k, 0), lo),  # forward half from (K, K)
+        (lo, (0, k), hi),  # forward half from (0, 0)
+        (hi, (0, k), lo),  # backward half from (K, K)
+        (lo, (k, 0), hi),  # backward half from (0, 0)
+        (hi, (k, m), (m, m), (m, k), hi),  # upper quarter loop: left while moving forward
+        (hi, (m, k), (m, m), (k, m), hi),  # its reverse: right while moving backward
+        (lo, (0, m), (m, m), (m, 0), lo),  # lower quarter loop: right while moving forward
+        (lo, (m, 0), (m, m), (0, m), lo),  # its reverse: left while moving backward
+    ]
+
+
+def _wrap(angle: float) -> float:
+    return math.pi - (math.pi - angle) % (2 * math.pi)
+
+
+#: Hysteresis (rad) of the choice between swimming forward and backward: a swimmer that came
+#: backward keeps on backward until the target is this much inside 90 degrees of its heading
+#: (and forward likewise), so that a target near 90 degrees does not set it swimming half a gait
+#: forward, half back, which undoes itself (the scallop theorem).
+NAV_HYSTERESIS = 0.35
+
+
+def _nav_choice(k: int, hub: tuple[int, int], bearing: float, was_back: bool) -> tuple[int, int]:
+    """The next vertex from ``hub`` for a target at ``bearing`` (rad, from the heading): straight
+    (half the square gait) within `NAV_TOLERANCE`, else the quarter loop that turns toward the
+    target if it starts here, else half the gait to the other hub, where it does. A target more
+    than 90 degrees off is approached swimming backward (the reversed gait), with
+    `NAV_HYSTERESIS` about 90 degrees (``was_back``: the last cycle ran backward)."""
+    cycles = _nav_cycles(k)
+    back = abs(bearing) > math.pi / 2 + (-NAV_HYSTERESIS if was_back else NAV_HYSTERESIS)
+    b = _wrap(bearing - math.pi) if back else bearing
+    half = cycles[(2 if back else 0) + (hub != (k, k))]
+    if abs(b) <= NAV_TOLERANCE:
+        return half[1]
+    left = b > 0
+    loop = cycles[(7 if left else 5) if back else (4 if left else 6)]
+    return loop[1] if loop[0] == hub else half[1]
+
+
+def nav_decide(text: str) -> tuple[int, int] | None:
+    """The navigation rule's action for a navigation prompt, ``None`` for any other prompt.
+
+    It steers as the steering controller does, from the prompt alone: the target's (X, Y) from
+    S1, the latest record's X, Y, heading and DOFs, K from S2 (K = 1 has no quarter loop: the
+    square gait only, toward +x of the body). On a hub of the square gait, ``(hi, hi)`` or
+    ``(lo, lo)``, it chooses the next cycle from the target's bearing (`_nav_choice`); between
+    hubs it plays on the cycle its last move belongs to (every move of the eight cycles is in
+    one cycle only); off the cycles (another agent's shape) it moves each DOF to ``hi``.
+    """
+    target = _TARGET.search(text)
+    if target is None or "heading" not in text:
+        return None
+    records = list(_NAV_RECORD.finditer(text))
+    levels = _LEVELS.search(text)
+    k = int(levels.group(1)) if levels else 1
+    k_turn = None if k % 2 else k  # odd K: no quarter loop, the square gait from (hi, hi)
+    if not records:
+        return (2, -k)  # the gait's first move from the authors' start (hi, hi)
+    last = records[-1]
+    rng = _RANGE.search(text)
+    lo, hi = (float(rng.group(1)), float(rng.group(2))) if rng else (-1.0, 1.0)
+
+    def level(values: str) -> tuple[int, int] | None:
+        try:
+            v = [float(u) for u in values.split(",")]
+        except ValueError:
+            return None
+        j = [round((u - lo) / (hi - lo) * k) for u in v[:2]]
+        return (j[0], j[1]) if len(v) == 2 else None
+
+    cur, prev = level(last.group(4)), level(last.group(1))
+    if cur is None or prev is None:
+        return None
+    x, y = int(last.group(6)), int(last.group(8))
+    heading = float(last.group(10))
+    tx, ty = int(target.group(1)), int(target.group(2))
+    bearing = _wrap(math.atan2(ty - y, tx - x) - heading)
+    if k_turn is None:
+        gait = {(k, k): (k, 0), (k, 0): (0, 0), (0, 0): (0, k), (0, k): (k, k)}
+        nxt = gait.get(cur)
+    elif cur in ((k, k), (0, 0)):
+        m = k // 2
+        was_back = (prev, cur) in (  # the last cycle ran backward: the reversed gait or loops
+            ((k, 0), (k, k)),
+            ((0, k), (0, 0)),
+            ((k, m), (k, k)),
+            ((0, m), (0, 0)),
+        )
+        nxt = _nav_choice(k, cur, bearing, was_back)
+    else:
+        follow = {}
+        for cyc in _nav_cycles(k):
+            for a, b, c in zip(cyc, cyc[1:], cyc[2:]):
+                follow[(a, b)] = c
+        nxt = follow.get((prev, cur))
+    if nxt is None:  # off the cycles: each DOF to hi, D1 first
+        dof = 0 if cur[0] != k else 1
+        return (dof + 1, k - cur[dof])
+    dof = 0 if nxt[0] != cur[0] else 1
+    return (dof + 1, nxt[dof] - cur[dof])
+
+
 def decide(text: str) -> tuple[int, int]:
-    """The reference rule's action for a rendered prompt (docs/bench.md)."""
+    """The reference rule's action for a rendered prompt (docs/bench.md; a navigation prompt:
+    [`nav_decide`][jswim.llm.reference.nav_decide])."""
     _, records, offered = read_prompt(text)
+    nav = nav_decide(text)
+    if nav is not None and nav in offered:
+        return nav
     here = records[-1].after if records else None
     from_here = [r for r in records if r.before == here]
     if from_here:

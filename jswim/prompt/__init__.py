@@ -6,6 +6,7 @@ Text only: this package never imports JAX. One concept a module:
 - `jswim.prompt.config`: `PromptConfig` (n_ht, X_min, the sentence mask, the allowed set);
 - `jswim.prompt.swimmer_text`: `SwimmerText`, `allowed_actions`, the finer-ROC sentences;
 - `jswim.prompt.scene_text`: `SceneView`, S2's scene sentences, `scene_template`;
+- `jswim.prompt.nav_text`: `NavView`, a navigation task's S1, S2 sentence and records;
 - `jswim.prompt.records`: `HistoryRecord` and its line in S3;
 - `jswim.prompt.render`: `render_prompt`, `build_messages`;
 - `jswim.prompt.numbers`: `Action`, the integer encoding of X, DOF values in text;
@@ -18,6 +19,7 @@ docs/api/prompt.md. Every public name is importable from `jswim.prompt`.
 """
 
 from jswim.prompt.config import ORDERS, PAPER_SYSTEM, PromptConfig, normalize_mask
+from jswim.prompt.nav_text import NAV_KINDS, NavView, nav_sentence, nav_template, target_phrase
 from jswim.prompt.numbers import Action, encode_position, format_dof
 from jswim.prompt.records import STUCK_DX, HistoryRecord, encode_height, render_record
 from jswim.prompt.render import build_messages, render_prompt
@@ -60,6 +62,7 @@ __all__ = [
     "DEFAULT_SENTENCES",
     "DEFAULT_TEMPLATE",
     "MAX_TEMPLATE_BYTES",
+    "NAV_KINDS",
     "ORDERS",
     "OWN_PAIR_SENTENCE",
     "OWN_SCHOOL_SENTENCE",
@@ -77,6 +80,7 @@ __all__ = [
     "WALL_SENTENCE",
     "Action",
     "HistoryRecord",
+    "NavView",
     "PromptConfig",
     "PromptTemplate",
     "SceneView",
@@ -86,10 +90,13 @@ __all__ = [
     "encode_height",
     "encode_position",
     "format_dof",
+    "nav_sentence",
+    "nav_template",
     "normalize_mask",
     "parse_reply",
     "render_prompt",
     "render_record",
     "scene_sentence",
     "scene_template",
+    "target_phrase",
 ]

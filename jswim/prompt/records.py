@@ -4,6 +4,7 @@ line in S3, with the integer encoding of positions and heights.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from jswim.prompt.config import PromptConfig
@@ -19,6 +20,9 @@ STUCK_DX = 1e-6
 @dataclass(frozen=True)
 class HistoryRecord:
     """One executed step, as shown to the model.
+
+    A navigation task's record also holds the centre's ``y`` and the heading (``None``
+    elsewhere); then the stuck flag reads the displacement in the plane.
 
     ``step`` is the record's index as the model sees it (from 1 after each clear; set by
     [`jswim.agents.memory.History.add`][jswim.agents.memory.History.add]). Positions are the raw centroid ``X/a``; they are
@@ -41,10 +45,22 @@ class HistoryRecord:
     heights_after: tuple[float, ...] = ()
     tilts_before: tuple[float, ...] = ()
     tilts_after: tuple[float, ...] = ()
+    # Navigation (an extension): the centre's y and the heading (rad), before and after the step.
+    y_before: float | None = None
+    y_after: float | None = None
+    heading_before: float | None = None
+    heading_after: float | None = None
 
     @property
     def dx(self) -> float:
         return self.x_after - self.x_before
+
+    @property
+    def moved(self) -> float:
+        """How far the centre moved: ``|dX|``, or ``|(dX, dY)|`` where the record has Y."""
+        if self.y_before is None or self.y_after is None:
+            return abs(self.dx)
+        return math.hypot(self.dx, self.y_after - self.y_before)
 
 
 def render_record(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> str:
@@ -62,9 +78,29 @@ def _record_values(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> di
         "action": rec.action.text(),
         "x_before": str(encode_position(rec.x_before, cfg.x_min)),
         "x_after": str(encode_position(rec.x_after, cfg.x_min)),
-        "stuck": "yes" if rec.stuck or abs(rec.dx) < STUCK_DX else "no",
+        "stuck": "yes" if rec.stuck or rec.moved < STUCK_DX else "no",
         **_scene_record_values(rec, cfg),
+        **_nav_record_values(rec, cfg),
     }
+
+
+def _nav_record_values(rec: HistoryRecord, cfg: PromptConfig) -> dict[str, str]:
+    """A record's navigation placeholders (empty where the record has none): ``y_before``,
+    ``y_after`` (encoded as X, with the same ``X_min``) and ``heading_before``,
+    ``heading_after`` (rad in ``(-pi, pi]``, three decimals)."""
+    out = {}
+    for when in ("before", "after"):
+        y = getattr(rec, f"y_{when}")
+        out[f"y_{when}"] = "" if y is None else str(encode_position(y, cfg.x_min))
+    for when in ("before", "after"):
+        h = getattr(rec, f"heading_{when}")
+        out[f"heading_{when}"] = "" if h is None else format_dof(wrap_angle(h), 3)
+    return out
+
+
+def wrap_angle(angle: float) -> float:
+    """``angle`` (rad) in ``(-pi, pi]``."""
+    return math.pi - math.fmod(math.fmod(math.pi - angle, 2 * math.pi) + 2 * math.pi, 2 * math.pi)
 
 
 def encode_height(h: float) -> int:

@@ -6,8 +6,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from jswim.errors import check_direction
+from jswim.errors import ConfigError, check_direction
 from jswim.prompt.config import PromptConfig
+from jswim.prompt.nav_text import nav_sentence, target_phrase
 from jswim.prompt.numbers import Action, encode_position, format_dof
 from jswim.prompt.prose import fill, join_prose, placeholder_names, tidy_lines
 from jswim.prompt.records import HistoryRecord, render_record
@@ -31,6 +32,8 @@ def render_prompt(
     *,
     options: Sequence[Action] | None = None,
     summary: str = "",
+    target: tuple[float, float] | None = None,
+    waypoint: int = 1,
 ) -> str:
     """The prompt text for the next decision.
 
@@ -53,20 +56,33 @@ def render_prompt(
         default [`allowed_actions`][jswim.prompt.allowed_actions] in (dof, roc) order.
     summary : str
         The summary sentence ([`jswim.agents.memory.render_summary`][jswim.agents.memory.render_summary]), or empty.
+    target : tuple of float, optional
+        A navigation task's target now, ``(x, y)`` in link lengths (``sw.nav`` set): S1 names
+        it, encoded as X is.
+    waypoint : int
+        Which waypoint of a path the target is (1-based).
 
+    Raises
+    ------
+    ConfigError
+        A navigation task (``sw.nav``) without a ``target``.
     """
     check_direction(direction)
     shown = list(records[-cfg.n_ht :]) if cfg.n_ht > 0 else []
     allowed = (
         list(options) if options is not None else allowed_actions(sw, cfg.action_set, dof_values)
     )
-    values = _prompt_values(sw, cfg, direction, shown, allowed, dof_values, x, summary)
+    values = _prompt_values(
+        sw, cfg, direction, shown, allowed, dof_values, x, summary, target=target, waypoint=waypoint
+    )
     for name in SENTENCES:
         text = "" if name in cfg.drop else fill(cfg.template.sentence(name), values, name)
         if text and sw.roc_levels > 1 and name in _ROC_SENTENCES:
             text += " " + _ROC_SENTENCES[name].format_map(values)
         if text and name == "S2" and sw.scene is not None:
             text += " " + scene_sentence(sw.scene)
+        if text and name == "S2" and sw.nav is not None:
+            text += " " + nav_sentence(sw.nav)
         values[name] = text
     layout = cfg.layout
     if summary and "summary" not in placeholder_names(layout):
@@ -91,6 +107,9 @@ def _prompt_values(
     dof_values: Sequence[float],
     x: float,
     summary: str,
+    *,
+    target: tuple[float, float] | None = None,
+    waypoint: int = 1,
 ) -> dict[str, str]:
     """The placeholders of layouts and sentences (one place: rendering and [`PromptTemplate.check`][jswim.prompt.PromptTemplate.check])."""
     d = sw.dof_decimals
@@ -113,6 +132,24 @@ def _prompt_values(
         "summary": summary,
         "roc_levels": str(sw.roc_levels),
         "except_zero": "" if 0 in sw.rocs else ", not 0",
+        **_nav_values(sw, cfg, target, waypoint),
+    }
+
+
+def _nav_values(
+    sw: SwimmerText, cfg: PromptConfig, target: tuple[float, float] | None, waypoint: int
+) -> dict[str, str]:
+    """A navigation task's placeholders: ``target`` (S1's phrase), ``target_x``, ``target_y``
+    (encoded as X) and ``waypoint``; empty strings for the paper's task."""
+    if sw.nav is None:
+        return dict.fromkeys(("target", "target_x", "target_y", "waypoint"), "")
+    if target is None:
+        raise ConfigError("a navigation prompt needs the target's position")
+    return {
+        "target": target_phrase(sw.nav, target, cfg.x_min, waypoint),
+        "target_x": str(encode_position(target[0], cfg.x_min)),
+        "target_y": str(encode_position(target[1], cfg.x_min)),
+        "waypoint": str(waypoint),
     }
 
 

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 from jswim.action_codes import check_action_set, check_roc_levels
 from jswim.errors import ConfigError
 from jswim.prompt.numbers import Action
+from jswim.prompt.nav_text import NavView
 from jswim.prompt.scene_text import SceneView
 
 
@@ -34,6 +35,9 @@ class SwimmerText:
         what the integer ROC means (`ROC_SCALE_SENTENCE`, `ROC_FORMAT_SENTENCE`).
     scene : SceneView, optional
         A wall and/or a second swimmer ([`SceneView`][jswim.prompt.SceneView]); ``None``: the paper's bulk fluid.
+    nav : NavView, optional
+        A navigation task ([`NavView`][jswim.prompt.NavView]: S1 names the target, records give X,
+        Y and the heading); ``None``: the paper's task along +x or -x.
     """
 
     n_dof: int
@@ -43,6 +47,7 @@ class SwimmerText:
     rocs: tuple[int, ...] = (-1, 0, 1)
     roc_levels: int = 1
     scene: SceneView | None = None
+    nav: NavView | None = None
 
     def __post_init__(self) -> None:
         if self.n_dof < 1:

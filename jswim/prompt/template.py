@@ -67,12 +67,17 @@ PROMPT_FIELDS = (
     "summary",
     "roc_levels",
     "except_zero",
+    "target",
+    "target_x",
+    "target_y",
+    "waypoint",
     *SENTENCES,
 )
 
 #: Placeholders a record line may use ([`render_record`][jswim.prompt.render_record]): the
 #: paper's, then each swimmer's position, height and tilt in a scene (names up to swimmer 2 are
-#: always known), and swimmer 1's height and tilt under their short names.
+#: always known), swimmer 1's height and tilt under their short names, and a navigation task's Y
+#: (encoded as X) and heading (rad).
 RECORD_FIELDS = (
     "step",
     "dofs_before",
@@ -83,6 +88,7 @@ RECORD_FIELDS = (
     "stuck",
     *(f"{n}{k}_{when}" for k in (1, 2) for when in ("before", "after") for n in ("x", "h", "tilt")),
     *(f"{n}_{when}" for when in ("before", "after") for n in ("h", "tilt")),
+    *(f"{n}_{when}" for n in ("y", "heading") for when in ("before", "after")),
 )
 
 

@@ -90,7 +90,10 @@ SWITCHES = (
     "pair_prompt",
     "temperature_sent",
 )
-_WHERE_SET = ("pair_prompt", "temperature_sent", "plane_height")
+#: A navigation run's columns (docs/navigation.md): written only where set (a navigation task).
+NAV = ("target", "reached", "steps_to_target", "path_length", "path_ratio")
+
+_WHERE_SET = ("pair_prompt", "temperature_sent", "plane_height") + NAV
 
 #: A run's energy columns (None where its world does not count work, and in older folders).
 ENERGY = ("energy", "energy_per_distance", "efficiency")
@@ -102,10 +105,12 @@ LAYOUTS = {
     (False, False): HEAD
     + ("sample", "x", "actions", "progress")
     + ENERGY
+    + NAV
     + ("status", "y", "orientation", "other"),
     (False, True): HEAD
     + ("sample", "x", "actions", "progress")
     + ENERGY
+    + NAV
     + ("status",)
     + USAGE
     + ("y", "orientation", "below_x_min")
@@ -266,6 +271,20 @@ class RunRow(Mapping):
     temperature_sent : float or None
         The temperature the requests carried where the server's model refused the agent's;
         written only where set.
+    target : str or None
+        A navigation run's target (canonical JSON of the spec's ``to_dict()``,
+        [`jswim.env.targets`][jswim.env.targets]); this and the next four are written only for
+        navigation runs (docs/navigation.md).
+    reached : bool or None
+        The target (a path's last waypoint) was reached within the budget: the run's success.
+    steps_to_target : int or None
+        Steps until it was reached (None: not reached).
+    path_length : float or None
+        Length of the centroid's path over the run (``a``, the sum of its steps' displacements).
+    path_ratio : float or None
+        ``path_length`` over the straight distance of the task (the polyline from the start
+        through the waypoints, the last one where the target was when reached); None when not
+        reached.
     other : Mapping
         Any column this version does not know (a folder written by another one), in its order.
     """
@@ -342,6 +361,11 @@ class RunRow(Mapping):
     efficiency: float | None = None
     pair_prompt: str | None = None
     temperature_sent: float | None = None
+    target: str | None = None
+    reached: bool | None = None
+    steps_to_target: int | None = None
+    path_length: float | None = None
+    path_ratio: float | None = None
     other: Mapping[str, Any] = field(default_factory=dict)
 
     def columns(self) -> tuple[str, ...]:

@@ -27,11 +27,13 @@ from jswim.agents.llm import RunResult
 from jswim.env.base import Environment, Observation
 from jswim.env.episodes import rollout as jswim_rollout
 from jswim.env.registry import make
+from jswim.judging import lattice
 from jswim.judging.gait import Criterion
 from jswim.results.row import RunRow
 from jswim.scenes import Scene
 from jswim.studies import scene_studies
 from jswim.studies.options import CONTINUOUS_AGENT, STROKE_AGENT
+from jswim.studies import navigate
 from jswim.studies.plans import Plan
 from jswim.studies.rows import judged_rows, with_llm
 
@@ -132,6 +134,8 @@ def _moves(run: Any) -> list[list[list[float]]]:
 
 def _run_group(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
     p0 = plans[0]
+    if p0.target:  # a navigation task: its own episodes and columns (jswim.studies.navigate)
+        return navigate.baseline_rows(plans)
     world_, params = world(p0)
     task = _per_run(params, [p.direction for p in plans])
     if p0.scene:
@@ -241,6 +245,12 @@ def _replayed_work(plan: Plan, r: RunResult) -> np.ndarray | None:
 def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     """The judged row of one finished LLM run, with the run's own fields
     ([`with_llm`][jswim.studies.rows.with_llm]); a scene's has the scene's columns."""
+    if plan.target:  # a navigation run: its episode and columns (jswim.studies.navigate)
+        episode = navigate.llm_episode(plan, r, _replayed_work(plan, r))
+        moves = [list(lattice.decode(int(a), plan.roc_levels)) for a in r.actions]
+        init = "".join("+" if v else "-" for v in r.levels0)
+        row = navigate.nav_row(plan, r.x, r.y, r.orientation, moves, episode, init=init)
+        return with_llm(row, r)
     if not plan.scene:
         acts = np.array([r.actions], np.int64).reshape(1, len(r.actions))
         xs = np.array([r.x], float).reshape(1, len(r.x))

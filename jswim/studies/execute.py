@@ -66,6 +66,7 @@ def run_spec(p: Plan) -> LLMRunSpec:
         roc_levels=p.roc_levels,
         scene=p.scene,
         pair_prompt=p.pair_prompt,
+        target=p.target,
     )
 
 

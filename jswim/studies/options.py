@@ -26,10 +26,13 @@ AGENTS = ("llm", "qlearning", "random")
 CONTINUOUS_AGENT = "ppo"
 #: A fixed stroke (the signature square gait, or two copies of it for a pair): the scene studies' reference.
 STROKE_AGENT = "stroke"
+#: The steering controller (turn with an off-centre loop, then the square gait): the navigation
+#: study's reference stroke (jswim.agents.steering).
+CONTROLLER_AGENT = "controller"
 #: The agents of a paper study's cells that run next to the LLM.
 WITH_BASELINES = ("llm", "qlearning", "random")
 #: Every agent a study may run (the default of `StudyOptions.agents`).
-ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT)
+ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT, CONTROLLER_AGENT)
 #: ROC lattices of the continuous study (``--roc-levels``; K = 1 is the paper's set).
 DEFAULT_ROC_LEVELS = (1, 2, 5, 10)
 DEFAULT_ZETAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
@@ -112,6 +115,12 @@ class StudyOptions:
     # The school study's grids: the school sizes N and the formations (spacings: --separations).
     school_sizes: tuple[int, ...] = (1, 2, 3, 4, 5)
     formations: tuple[str, ...] = ("line", "side")
+    # The navigation study's grid (jswim.studies.navigate): fixed targets at these distances (a)
+    # crossed with these bearings (degrees from the start heading, counterclockwise).
+    distances: tuple[float, ...] = (3.0,)
+    bearings: tuple[float, ...] = (0.0, 90.0, 180.0)
+    # Episodes of each target's budget that Q-learning and PPO train for in the navigation study.
+    train_episodes: int = 400
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
@@ -119,9 +128,16 @@ class StudyOptions:
             values = getattr(self, name)
             if values is not None and len(set(values)) < len(values):
                 object.__setattr__(self, name, tuple(dict.fromkeys(values)))
-        for name in ("steps", "runs", "q_runs", "samples", "n_ht"):
+        for name in ("steps", "runs", "q_runs", "samples", "n_ht", "train_episodes"):
             if getattr(self, name) is not None:
                 check_size(name, getattr(self, name))
+        if any(not (math.isfinite(d) and d > 0.25) for d in self.distances):
+            raise ConfigError(
+                "--distances must be finite and beyond the success radius 0.25 a, got "
+                + ",".join(map(str, self.distances))
+            )
+        if any(not math.isfinite(b) for b in self.bearings):
+            raise ConfigError(f"--bearings must be finite, got {','.join(map(str, self.bearings))}")
         for h in self.n_hts:
             check_size("n_ht", h, "--n-hts")
         if self.init is not None and self.init not in INIT_CHOICES:

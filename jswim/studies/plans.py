@@ -48,6 +48,7 @@ class Plan:
     pair_prompt: str = (
         "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
     )
+    target: str = ""  # a navigation target (canonical JSON of its spec); "": the paper's task
 
 
 def sample_id(run: str, sample: int) -> str:
@@ -74,6 +75,8 @@ class Cell:
     scene: str = ""  # a scene (jswim.studies.scene_studies), canonical JSON; "": the bulk fluid
     tag: str = ""  # what names this cell's runs (a scene's height or distance, a stroke's phase)
     stroke: str = ""  # the stroke agent's stroke (jswim.studies.scene_studies.stroke_codes), its plans' variant
+    target: str = ""  # a navigation target (jswim.studies.navigate), canonical JSON; "": none
+    steps: int | None = None  # the cell's own steps per run (a target's budget); None: the study's
 
 
 def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | str:

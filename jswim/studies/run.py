@@ -146,6 +146,8 @@ GRID_SIZE = (
     "phases",
     "school_sizes",
     "formations",
+    "distances",
+    "bearings",
 )
 
 #: How run seeds are made (``jswim.studies.plans.run_seed``); folders made otherwise are refused.
@@ -171,12 +173,16 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     opts = dataclasses.asdict(o)
     for name in ("chunk", *GRID_SIZE):
         opts.pop(name, None)
+    if study != "navigate":  # the navigation study's own knob: other folders keep their identity
+        opts.pop("train_episodes", None)
     for name in (
         "variant",
         "variants",
     ):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
+    if opts["steps"] is None and study == "navigate":  # each target has its own budget
+        opts["steps"] = "each target's budget"
     if opts["steps"] is None:  # the study's own horizon, written as the number it is
         opts["steps"] = SPECS[study].steps if study in SPECS else 50
     if opts["roc_levels"] == 1:  # the paper's ROC set: as before --roc-levels existed
@@ -297,7 +303,8 @@ def run_study(
             # and the extensions some runs use (finer or real-valued ROCs).
             "fidelity_deviations": list(fidelity.ALWAYS)
             + fidelity.study_extensions({p.roc_levels for p in plans})
-            + _scene_extensions(plans),
+            + _scene_extensions(plans)
+            + ([fidelity.NAVIGATION] if any(p.target for p in plans) else []),
             "roc_levels": sorted({p.roc_levels for p in plans}),
             "grid": {k: getattr(options, k) for k in GRID_SIZE},
             "server": backend.address() if backend is not None else None,
@@ -430,6 +437,7 @@ def _run_in(
         "scene",
         "variant",
         "zeta",
+        "target",
     ).items():
         store.add_runs(baselines.run_baselines(group, options.horizon))
         finished += len(group)
@@ -466,7 +474,7 @@ def _run_in(
     )
     typed = as_run_rows(rows)  # StudyResult.rows stay the dicts of read_runs (users index them)
     summary = summarize(typed)
-    scene_table = _scene_table(typed)
+    scene_table = {**_scene_table(typed), **_nav_table(typed)}
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
@@ -525,6 +533,16 @@ def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
     )  # lazy: start-up (the scene module, for scene studies only)
 
     return {"scenes": scene_studies.scene_summary([r for r in rows if not is_failed(r)])}
+
+
+def _nav_table(rows: Sequence[RunRow]) -> dict[str, Any]:
+    """``{"navigation": table}`` of a study with navigation runs
+    (`jswim.studies.navigate.nav_summary`), else ``{}``."""
+    if not any(r.target for r in rows):
+        return {}
+    from jswim.studies import navigate  # lazy: the navigation study's module
+
+    return {"navigation": navigate.nav_summary(rows)}
 
 
 def _write_report(folder: Path, figures: bool) -> None:

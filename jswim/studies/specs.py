@@ -30,6 +30,7 @@ from jswim.prompt import SENTENCES
 from jswim.studies.options import (
     COMPETENCE_VARIANTS,
     CONTINUOUS_AGENT,
+    CONTROLLER_AGENT,
     STROKE_AGENT,
     WITH_BASELINES,
     StudyOptions,
@@ -37,6 +38,7 @@ from jswim.studies.options import (
     prompt_label,
 )
 from jswim.studies.plans import Cell, Plan, initial, run_seed, sample_id
+from jswim.studies import navigate
 from jswim.studies.scene_grids import study_cells
 
 
@@ -214,6 +216,18 @@ SPECS["school"] = StudySpec(
 )
 
 
+# Navigation (issue 48, an extension): targets at several distances and bearings, a path and a
+# moving target; each cell's runs have the target's budget (jswim.studies.navigate).
+SPECS["navigate"] = StudySpec(
+    navigate.cells,
+    runs=1,
+    init="paper",
+    swimmers=("purcell",),
+    q_runs=1,
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+)
+
+
 STUDIES = tuple(SPECS)
 
 
@@ -261,7 +275,17 @@ def _is_pair(scene: str) -> bool:
 _DEFAULT_GRIDS = {
     f.name: f.default
     for f in dataclasses.fields(StudyOptions)
-    if f.name in ("heights", "tilts", "separations", "phases", "school_sizes", "formations")
+    if f.name
+    in (
+        "heights",
+        "tilts",
+        "separations",
+        "phases",
+        "school_sizes",
+        "formations",
+        "distances",
+        "bearings",
+    )
 }
 
 
@@ -292,6 +316,8 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
         ("phases", ("pair",)),
         ("school_sizes", ("school",)),
         ("formations", ("school",)),
+        ("distances", ("navigate",)),
+        ("bearings", ("navigate",)),
     ):
         if (
             study not in owners and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]
@@ -308,6 +334,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     runs["qlearning"] = runs["random"] = spec.q_runs if o.q_runs is None else o.q_runs
     # A stroke is deterministic without noise: one run says it all (--q-runs of them under noise).
     runs[STROKE_AGENT] = runs["qlearning"] if o.zeta > 0 else min(1, runs["qlearning"])
+    runs[CONTROLLER_AGENT] = runs[STROKE_AGENT]  # the steering controller is deterministic too
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:
@@ -363,6 +390,12 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                             [f"T={temp:g}"] if temp is not None and cell.temperature is None else []
                         ) + ([f"prompt={prompt_label(prompt)}"] if prompt else [])
                         group = ", ".join(g for g in [cell.group, *swept] if g)
+                        steps = o.steps if o.steps is not None else cell.steps or spec.steps
+                        if cell.target and agent in ("qlearning", CONTINUOUS_AGENT):
+                            # learners train over many episodes (PPO a quarter: its step costs
+                            # ~50 Q-learning steps on a CPU; jswim.studies.navigate)
+                            share = navigate.PPO_SHARE if agent == CONTINUOUS_AGENT else 1
+                            steps *= max(1, o.train_episodes // share)
                         for k in range(runs.get(agent, runs["qlearning"])):
                             init = initial(cell.init or o.init or spec.init, k, sw)
                             base = run_id(
@@ -379,7 +412,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                                         init,
                                         zeta,
                                         run_seed(o.seed, rid),
-                                        spec.steps if o.steps is None else o.steps,
+                                        steps,
                                         n_ht,
                                         drop,
                                         action_set,
@@ -391,6 +424,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                                         s,
                                         cell.scene,
                                         pair,
+                                        cell.target,
                                     )
                                 )
     ids = [p.run_id for p in plans]

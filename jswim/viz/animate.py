@@ -420,22 +420,30 @@ def _build(anim: Animation):
             s.set_color("0.7")
         ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
         worlds.draw_fixed(ax, t.world, (box[0], box[1]))
+        goal = worlds.draw_targets(ax, t.world, 0)  # a navigation task's targets (else none)
         # Every panel names its agent in that agent's colour (the figures' colours).
         ax.set_title(
             _caption(t, tracks), fontsize=9, pad=2, color=AGENT_COLORS.get(t.agent, "black")
         )
-        ax.annotate(
-            "",
-            xy=(0.97, 0.06),
-            xytext=(0.82, 0.06),
-            xycoords="axes fraction",
-            arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8)
-            if t.direction > 0
-            else dict(arrowstyle="<-", color="0.35", lw=0.8),
-        )
-        ax.text(
-            0.895, 0.09, "target", transform=ax.transAxes, fontsize=7, ha="center", color="0.35"
-        )
+        if not t.world.targets:  # the paper's task: the target direction (navigation: drawn)
+            ax.annotate(
+                "",
+                xy=(0.97, 0.06),
+                xytext=(0.82, 0.06),
+                xycoords="axes fraction",
+                arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8)
+                if t.direction > 0
+                else dict(arrowstyle="<-", color="0.35", lw=0.8),
+            )
+            ax.text(
+                0.895,
+                0.09,
+                "target",
+                transform=ax.transAxes,
+                fontsize=7,
+                ha="center",
+                color="0.35",
+            )
         color = AGENT_COLORS.get(t.agent, "C0")
         artists = []
         for j in range(
@@ -462,11 +470,15 @@ def _build(anim: Animation):
         txt = fig.text(
             i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=8.5, family="monospace"
         )
-        state.append((t, ax, artists, centre, txt))
+        state.append((t, ax, artists, centre, txt, goal))
 
     def draw(frame: int):
-        for t, ax, artists, centre, txt in state:
+        for t, ax, artists, centre, txt, goal in state:
             k = min(frame, t.n_steps)
+            if any(t.world.target_velocity):  # a moving target: where it is at this step
+                for a in goal:
+                    a.remove()
+                goal[:] = worlds.draw_targets(ax, t.world, k)
             for j, (trail, stroke, body, joints, spheres) in enumerate(artists):
                 pts, pos = t.bodies[k, j], t.positions[:, j]
                 trail.set_data(pos[: k + 1, 0], pos[: k + 1, 1])
@@ -496,6 +508,12 @@ def _frame_text(t: Track, k: int) -> str:
     # The page's convention: X/a toward the target direction, labelled with it.
     disp = "X/a toward " + ("+x" if t.direction > 0 else "-x")
     lines = [f"step {k:>3}/{t.n_steps}  {disp} {t.direction * t.x[k]:+.4f}"]
+    if t.world.targets:  # navigation: where it is and how far the target (the current waypoint's)
+        here = np.array([t.x[k], t.y[k]])
+        gap = min(np.hypot(gx - here[0], gy - here[1]) for gx, gy, _ in t.world.target_at(k))
+        lines = [
+            f"step {k:>3}/{t.n_steps}  (x, y) ({here[0]:+.3f}, {here[1]:+.3f})  nearest target {gap:.3f} a"
+        ]
     if k == 0:
         lines.append(
             "start "

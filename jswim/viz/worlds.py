@@ -14,7 +14,8 @@ the same way by another environment is drawn the same way.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
 from typing import Any
 from collections.abc import Mapping, Sequence
 
@@ -45,6 +46,12 @@ class World:
         axis angle in rad.
     medium : str
         ``"bulk"`` (the paper's formula), ``"free"`` or ``"wall"``.
+    targets : tuple of (x, y, radius)
+        A navigation task's waypoints (one for a fixed or moving target) with the success radius,
+        in ``a`` (docs/navigation.md); empty for the paper's task.
+    target_velocity : tuple of float
+        A moving target's velocity (``a`` per step): at step ``k`` it is at its start plus ``k``
+        times this (`target_at`).
     """
 
     n_swimmers: int = 1
@@ -54,6 +61,14 @@ class World:
     medium: str = "bulk"
     separation: float | None = None
     extra: dict[str, Any] = field(default_factory=dict, compare=False)
+    targets: tuple[tuple[float, float, float], ...] = ()
+    target_velocity: tuple[float, float] = (0.0, 0.0)
+
+    def target_at(self, step: int) -> list[tuple[float, float, float]]:
+        """The targets at step ``step``: the waypoints, a moving target moved ``step`` times
+        its velocity."""
+        vx, vy = self.target_velocity
+        return [(x + vx * step, y + vy * step, r) for x, y, r in self.targets]
 
     def describe(self) -> str:
         """A short line for captions: ``"wall, h = 3 a"``, ``"pair, D = 30 a"``, ``""`` for bulk."""
@@ -73,6 +88,12 @@ class World:
             )
         if self.obstacles:
             bits.append(f"{len(self.obstacles)} obstacle(s)")
+        if len(self.targets) > 1:
+            bits.append(f"path of {len(self.targets)} waypoints")
+        elif self.targets:
+            x, y = (round(v, 6) + 0.0 for v in self.targets[0][:2])  # 1.8e-16 -> 0
+            moving = "moving target from" if any(self.target_velocity) else "target at"
+            bits.append(f"{moving} ({x:g}, {y:g}) a")
         return ", ".join(bits)
 
 
@@ -104,7 +125,27 @@ def from_above(row: Mapping[str, Any]) -> bool:
 
 
 def world_of(row: Mapping[str, Any]) -> World:
-    """The `World` a run row records (its ``scene``; none: the bulk fluid)."""
+    """The `World` a run row records (its ``scene``; none: the bulk fluid), with its navigation
+    target (its ``target``) where it has one."""
+    world = _scene_world(row)
+    raw = as_run_row(row).target
+    if not raw:
+        return world
+    try:
+        t = json.loads(raw)
+        radius = float(t.get("radius", 0.25))
+        if t.get("points"):
+            pts = [(float(p[0]), float(p[1])) for p in t["points"]]
+        else:
+            b = math.radians(float(t.get("bearing", 0.0)))
+            pts = [(float(t["distance"]) * math.cos(b), float(t["distance"]) * math.sin(b))]
+        v = tuple(float(u) for u in (t.get("velocity") or (0.0, 0.0)))
+    except (TypeError, ValueError, KeyError):
+        return world
+    return replace(world, targets=tuple((x, y, radius) for x, y in pts), target_velocity=v)
+
+
+def _scene_world(row: Mapping[str, Any]) -> World:
     r = as_run_row(row)
     raw = r.scene
     if not raw:
@@ -166,6 +207,10 @@ def view_box(
         for ox, oy, orad in w.obstacles:
             lo = np.minimum(lo, [ox - orad - pad, oy - orad - pad])
             hi = np.maximum(hi, [ox + orad + pad, oy + orad + pad])
+        n = len(bodies[0]) if bodies else 0
+        for ox, oy, orad in w.target_at(0) + w.target_at(n):
+            lo = np.minimum(lo, [ox - orad - pad / 2, oy - orad - pad / 2])
+            hi = np.maximum(hi, [ox + orad + pad / 2, oy + orad + pad / 2])
     return float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
 
 
@@ -207,9 +252,32 @@ def draw_fixed(ax: Any, world: World, xlim: tuple[float, float] | None = None) -
     return out
 
 
+def draw_targets(ax: Any, world: World, step: int = 0) -> list[Any]:
+    """Draw a navigation task's targets at step ``step`` (each waypoint a cross in a circle of
+    the success radius, numbered along a path); returns the artists (a moving target's are
+    redrawn each frame)."""
+    from matplotlib.patches import Circle
+
+    out: list[Any] = []
+    pts = world.target_at(step)
+    for k, (x, y, r) in enumerate(pts, 1):
+        out.append(ax.add_patch(Circle((x, y), r, fc="none", ec=TARGET_COLOR, lw=1.0, zorder=3)))
+        out += ax.plot([x], [y], marker="x", color=TARGET_COLOR, ms=5, zorder=3)
+        if len(pts) > 1:
+            out.append(ax.annotate(str(k), (x, y), xytext=(4, 4), textcoords="offset points"))
+    return out
+
+
+#: The colour of navigation targets (the report page's too).
+TARGET_COLOR = "#B00000"
+
+
 def payload(world: World) -> dict[str, Any]:
-    """What the page's canvas needs to draw the world's fixed parts."""
+    """What the page's canvas needs to draw the world's fixed parts (and a navigation task's
+    targets: ``targets`` as (x, y, radius), ``target_v`` a moving target's velocity)."""
     return {
+        "targets": [list(t) for t in world.targets],
+        "target_v": list(world.target_velocity),
         "wall": world.wall,
         "obstacles": [list(o) for o in world.obstacles],
         "n_swimmers": world.n_swimmers,

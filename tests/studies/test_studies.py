@@ -48,6 +48,7 @@ def test_the_table_holds_each_study_s_defaults():
             "wall",
             "pair",
             "school",
+            "navigate",
         }
     )
     for study, spec in SPECS.items():
@@ -56,8 +57,10 @@ def test_the_table_holds_each_study_s_defaults():
         assert {p.direction for p in plans} == set(spec.directions)
         per_cell = Counter((p.agent, p.swimmer, p.direction, p.group) for p in plans)
         assert {n for (a, *_), n in per_cell.items() if a == "llm"} <= {spec.runs}
-        assert {n for (a, *_), n in per_cell.items() if a not in ("llm", "stroke")} <= {spec.q_runs}
-        assert {n for (a, *_), n in per_cell.items() if a == "stroke"} <= {
+        assert {
+            n for (a, *_), n in per_cell.items() if a not in ("llm", "stroke", "controller")
+        } <= {spec.q_runs}
+        assert {n for (a, *_), n in per_cell.items() if a in ("stroke", "controller")} <= {
             1
         }  # deterministic without noise
     # Options override the table.

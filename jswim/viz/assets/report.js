@@ -123,6 +123,12 @@
     (d.obstacles || []).forEach(function (o) {
       x0 = Math.min(x0, o[0] - o[2]); x1 = Math.max(x1, o[0] + o[2]); y0 = Math.min(y0, o[1] - o[2]); y1 = Math.max(y1, o[1] + o[2]);
     });
+    (d.targets || []).forEach(function (g) {
+      var v = d.target_v || [0, 0], n = d.x.length;
+      [[g[0], g[1]], [g[0] + v[0] * n, g[1] + v[1] * n]].forEach(function (q) {
+        x0 = Math.min(x0, q[0] - g[2]); x1 = Math.max(x1, q[0] + g[2]); y0 = Math.min(y0, q[1] - g[2]); y1 = Math.max(y1, q[1] + g[2]);
+      });
+    });
     d.box = [x0 - 1, x1 + 1, y0 - 1, y1 + 1];
     // A long run is followed by a window that always holds the whole swimmer (an NG swimmer at arms
     // (10, 10) is 22 a long), never a fixed 16 a; a pair far apart is shown whole.
@@ -143,7 +149,9 @@
       d.stroke[1] + "): cycles at steps " + cycles(d).map(function (c) { return c[0] + "\u2013" + c[1]; }).join(", ") :
       "the success criterion found no qualifying stroke";
     var who = (NAMES[r.agent] || r.agent) + (r.agent === "llm" && D.model ? " (" + D.model + ")" : "");
-    var bits = [who, d.model + " swimmer", "target " + fmt("direction", r.direction)];
+    var nav = (d.targets || []).length > 0;  // a navigation run: its target, not a direction
+    if (nav) stroke = r.success ? "target reached" : "target not reached";
+    var bits = [who, d.model + " swimmer", nav ? d.world : "target " + fmt("direction", r.direction)];
     if (r.zeta !== null && r.zeta !== undefined) bits.push("\u03b6 = " + r.zeta);
     if (r.init) bits.push("start " + r.init);
     if (r.n_ht !== null && r.n_ht !== undefined) bits.push("n_ht " + r.n_ht);
@@ -244,6 +252,14 @@
       ctx.beginPath(); ctx.arc(X(o[0]), Y(o[1]), o[2] * s, 0, 2 * Math.PI);
       ctx.fillStyle = "#9a8c7a"; ctx.fill(); ctx.strokeStyle = "#6b5b45"; ctx.lineWidth = 1; ctx.stroke();
     });
+    (d.targets || []).forEach(function (g, n) {  // a navigation task's targets (a moving one: at step k)
+      var v = d.target_v || [0, 0], gx = g[0] + v[0] * k, gy = g[1] + v[1] * k;
+      ctx.beginPath(); ctx.arc(X(gx), Y(gy), g[2] * s, 0, 2 * Math.PI);
+      ctx.strokeStyle = "#B00000"; ctx.lineWidth = 1.5; ctx.stroke();
+      ctx.beginPath(); ctx.moveTo(X(gx) - 5, Y(gy) - 5); ctx.lineTo(X(gx) + 5, Y(gy) + 5);
+      ctx.moveTo(X(gx) - 5, Y(gy) + 5); ctx.lineTo(X(gx) + 5, Y(gy) - 5); ctx.stroke();
+      if (d.targets.length > 1) { ctx.fillStyle = "#B00000"; ctx.font = "11px sans-serif"; ctx.fillText(String(n + 1), X(gx) + 6, Y(gy) - 6); }
+    });
     var color = COLORS[r.agent] || "#333";
     var swColors = [color, "#CC79A7", "#56B4E9", "#F0E442"];
     for (var j = 0; j < d.bodies[k].length; j++) {
@@ -299,7 +315,7 @@
         ctx.fillText("reply: " + (t.length > 60 ? t.slice(0, 57) + "..." : t), 10, 54);
       }
     }
-    ctx.fillText("target " + (d.direction > 0 ? "\u2192" : "\u2190"), W - 90, H - 12);
+    if (!(d.targets || []).length) ctx.fillText("target " + (d.direction > 0 ? "\u2192" : "\u2190"), W - 90, H - 12);
   }
 
   function dofList(d, k) {

@@ -1,0 +1,371 @@
+"""The navigation study (``jswim study navigate``; docs/navigation.md): Purcell's swimmer sent to
+targets at several distances and bearings, along a path and after a moving target, by the LLM,
+Q-learning, PPO, the steering controller and the random policy.
+
+Its cells are targets ([`cells`][jswim.studies.navigate.cells]); every run of a cell has the
+target's step budget ([`jswim.env.targets.default_budget`][jswim.env.targets.default_budget]:
+measured for the steering controller, with a safety factor). Every run, whatever its agent,
+becomes one row through [`nav_row`][jswim.studies.navigate.nav_row] (success = the target
+reached, steps to it, path length over the straight distance, energy and energy per distance);
+[`nav_summary`][jswim.studies.navigate.nav_summary] is the study's table.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from typing import Any
+from collections.abc import Sequence
+
+import jax
+import numpy as np
+
+from jswim import env as jenv
+from jswim.env.navigation import NavSummary, energy_per_distance, summarise
+from jswim.env.registry import make
+from jswim.env.targets import (
+    FixedTarget,
+    MovingTarget,
+    Target,
+    Waypoints,
+    default_budget,
+    target_from_dict,
+)
+from jswim.env.work import lighthill_efficiency
+from jswim.judging import lattice
+from jswim.results import as_run_rows, is_failed
+from jswim.results.row import RunRow
+from jswim.studies.options import CONTINUOUS_AGENT, CONTROLLER_AGENT
+from jswim.studies.plans import Cell, Plan
+from jswim.swimmers.models import make_model
+
+__all__ = [
+    "CONTROLLER_AGENT",
+    "DEFAULT_BEARINGS",
+    "DEFAULT_DISTANCES",
+    "MOVING",
+    "NAV_AGENTS",
+    "NAV_ROC_LEVELS",
+    "NAV_TRAIN_EPISODES",
+    "PATH",
+    "PPO_SHARE",
+    "cells",
+    "nav_row",
+    "nav_summary",
+    "target_json",
+    "targets",
+]
+
+
+#: The agents of every navigation cell, in the rows' order.
+NAV_AGENTS = ("llm", "qlearning", CONTINUOUS_AGENT, CONTROLLER_AGENT, "random")
+
+#: The default grid: targets 3 a away (about 16 square-gait cycles; outside the quarter loop's
+#: turning circle, radius 1.165 a, where the steering controller reaches every bearing), ahead,
+#: to the left and behind (the study's small default; ``--distances`` and ``--bearings`` scale
+#: it up).
+DEFAULT_DISTANCES = (3.0,)
+DEFAULT_BEARINGS = (0.0, 90.0, 180.0)
+
+#: The path of every navigation study: 3 a ahead, then 3 a to the left of that (a turn of 90
+#: degrees between the legs).
+PATH = Waypoints(((3.0, 0.0), (3.0, 3.0)))
+
+#: The moving target of every navigation study: 3 a ahead, moving sideways (to +y) at 0.005 a
+#: per step, a tenth of the square gait's mean speed (0.0478 a per step).
+MOVING = MovingTarget(3.0, 0.0, (0.0, 0.005))
+
+#: K of the navigation worlds when ``--roc-levels`` leaves the paper's K = 1 (which cannot turn):
+#: the least even K, on which the quarter loops turn.
+NAV_ROC_LEVELS = 2
+
+
+def target_json(spec: Target) -> str:
+    """A target as canonical JSON (a plan's and a row's ``target``)."""
+    return json.dumps(spec.to_dict(), sort_keys=True)
+
+
+def targets(distances: Sequence[float], bearings: Sequence[float]) -> list[tuple[str, str, Target]]:
+    """``(group, tag, spec)`` of every target of the grid: the fixed points (every distance
+    crossed with every bearing), then `PATH` and `MOVING`."""
+    out: list[tuple[str, str, Target]] = []
+    for d in distances:
+        for b in bearings:
+            out.append((f"fixed d={d:g} b={b:g}", f"d{d:g}b{b:g}", FixedTarget(d, b)))
+    out.append(("path", "path", PATH))
+    out.append(("moving", "moving", MOVING))
+    return out
+
+
+def cells(o: Any) -> list[Cell]:
+    """The navigation study's cells for options ``o``: one per target, with its budget as the
+    runs' steps (`--steps` overrides it) on the K lattice of ``--roc-levels`` (2 where it is 1)."""
+    k = o.roc_levels if o.roc_levels > 1 else NAV_ROC_LEVELS
+    model = make_model("purcell")
+    return [
+        Cell(
+            group,
+            NAV_AGENTS,
+            n_ht=o.n_ht,
+            roc_levels=k,
+            tag=tag,
+            target=target_json(spec),
+            steps=default_budget(spec, model, k),
+        )
+        for group, tag, spec in targets(o.distances, o.bearings)
+    ]
+
+
+def nav_row(
+    plan: Plan,
+    x: Sequence[float],
+    y: Sequence[float],
+    orientation: Sequence[float],
+    actions: list[list[float]],
+    episode: NavSummary,
+    init: str = "++",
+    **columns: Any,
+) -> RunRow:
+    """The row of one navigation run of ``plan``, whatever its agent.
+
+    The row's success is ``reached``; ``steps_to_target`` the steps when reached;
+    ``path_length`` the centroid's path; ``path_ratio`` that over the task's straight distance
+    (None when not reached); ``energy`` the summed work, ``energy_per_distance`` it over the
+    distance closed on the target (None when none was closed); ``efficiency`` Lighthill's over
+    the net displacement ([`jswim.env.work.lighthill_efficiency`][jswim.env.work.lighthill_efficiency]).
+
+    Parameters
+    ----------
+    x, y, orientation : sequence of float
+        The centroid (``a``, lab frame; the start is ``(0, 0)``) and heading (rad) after each
+        step of the episode (up to the step it ended: the target reached or the budget spent).
+    actions : list of list
+        Each step's ``[dof, roc]``.
+    episode : NavSummary
+        The episode ([`jswim.env.navigation.summarise`][jswim.env.navigation.summarise]).
+    init : str
+        The start as the row shows it (signs; the controller's hub ``(hi, hi)``: ``"++"``).
+    **columns
+        Further columns (an LLM run's own, through `jswim.studies.rows.with_llm`).
+
+    """
+    from jswim.studies.rows import build_row  # lazy: start-up (rows load the LLM driver)
+
+    steps, reached = int(episode.steps), bool(episode.reached)  # plain numbers: the record's
+
+    verdict = {
+        "success": reached,
+        "learned": reached,
+        "steps_to_learn": steps if reached else None,
+        "period": 0,
+    }
+    row = build_row(
+        plan,
+        x,
+        actions,
+        verdict,
+        init=init,
+        y=[float(v) for v in y],
+        orientation=[float(v) for v in orientation],
+        **columns,
+    )
+    net = float(np.hypot(x[-1], y[-1])) if len(x) else 0.0
+    finite = math.isfinite(episode.energy)
+    per = episode.energy_per_distance
+    bodies = make_model(plan.swimmer).n_dof + 1
+    return dataclasses.replace(
+        row,
+        energy=float(episode.energy) if finite else None,
+        energy_per_distance=float(per) if finite and math.isfinite(per) else None,
+        efficiency=float(lighthill_efficiency(net, episode.energy, steps, bodies))
+        if finite and episode.energy > 0
+        else None,
+        target=plan.target,
+        reached=reached,
+        steps_to_target=steps if reached else None,
+        path_length=float(episode.path),
+        path_ratio=float(episode.path_ratio) if reached else None,
+    )
+
+
+def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
+    """The study's table: per (agent, target group), runs, successes, the mean steps to the
+    target over the runs that reached it, the mean path ratio, energy and energy per distance."""
+    out: dict[tuple[str, str], list[RunRow]] = {}
+    for r in as_run_rows(rows):
+        if r.target is None or is_failed(r):
+            continue
+        out.setdefault((r.agent, r.group), []).append(r)
+
+    def mean(vals: list[Any]) -> float | None:
+        vals = [float(v) for v in vals if v is not None]
+        return float(np.mean(vals)) if vals else None
+
+    table = []
+    for (agent, group), g in sorted(out.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+        table.append(
+            {
+                "group": group,
+                "agent": agent,
+                "n": len(g),
+                "reached": sum(bool(r.reached) for r in g),
+                "success_rate": sum(bool(r.reached) for r in g) / len(g),
+                "steps_to_target": mean([r.steps_to_target for r in g]),
+                "path_ratio": mean([r.path_ratio for r in g]),
+                "energy": mean([r.energy for r in g]),
+                "energy_per_distance": mean([r.energy_per_distance for r in g]),
+            }
+        )
+    return table
+
+
+#: Episodes of the target's budget the learners train for by default (``--train-episodes``):
+#: Q-learning reaches a target 3 a away at 90 degrees in 3 of 4 seeds after 400 (102,400 steps,
+#: 12 s for 4 learners on the shared CPU; none after 100); their row is their last episode that
+#: ended within the training.
+NAV_TRAIN_EPISODES = 400
+
+#: PPO trains for ``train_episodes / PPO_SHARE`` episodes: its step costs about 50 Q-learning
+#: steps on a CPU (100 K steps: 45 s for one learner), and it did not reach the 90-degree target
+#: at 400 episodes either (docs/navigation.md).
+PPO_SHARE = 4
+
+
+def nav_qconfig(steps: int, action_set: str = "all") -> Any:
+    """Q-learning's settings for navigation (docs/navigation.md, *Baselines*): one continuing
+    run of ``steps`` steps through many episodes, exploration falling linearly from 0.5 to 0 at
+    80 % of it (the last episodes are greedy), discount 0.95, learning rate 0.2, table at 0."""
+    import optax  # lazy: start-up (optax loads with the learners only)
+
+    from jswim.agents.qlearning import QConfig  # lazy: start-up (the learners load optax)
+
+    return QConfig(
+        steps=steps,
+        action_set=action_set,
+        epsilon=optax.linear_schedule(0.5, 0.0, int(0.8 * steps)),
+        discount=0.95,
+        learning_rate=0.2,
+        q_init=0.0,
+    )
+
+
+def world(plan: Plan) -> tuple[Any, Any]:
+    """A navigation plan's world and params ([`jswim.make`][jswim.env.registry.make] with its target)."""
+    init = plan.init if isinstance(plan.init, (tuple, list)) else None
+    return make(
+        plan.swimmer,
+        zeta=plan.zeta,
+        init=tuple(int(v) for v in init) if init is not None else None,
+        roc_levels=plan.roc_levels,
+        target=target_from_dict(json.loads(plan.target)),
+    )
+
+
+def _take(tree: Any, i: int) -> Any:
+    return jax.tree.map(lambda v: v[i], tree)
+
+
+def _lattice_moves(dofs: np.ndarray, dofs0: np.ndarray, lo: float, hi: float, k: int) -> list:
+    """``[dof, roc]`` of each step from the DOFs before and after it (ROC in the lattice's
+    integer units ``q``: the DOF moved by ``q / K`` of its range)."""
+    before = np.vstack([dofs0[None], dofs[:-1]])
+    diff = (dofs - before) / (hi - lo) * k
+    out = []
+    for row in diff:
+        j = int(np.argmax(np.abs(row)))
+        out.append([j + 1, round(float(row[j]), 6)])
+    return out
+
+
+def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
+    """The rows of one (agent, target) group of navigation plans, other than the LLM's.
+
+    The steering controller ([`jswim.agents.steering.run`][jswim.agents.steering.run]) and the
+    random policy run one episode of the target's budget; Q-learning and PPO train for
+    ``plan.steps`` steps (`NAV_TRAIN_EPISODES` budgets by default), restarting each ended
+    episode (the world's learner step), and their row is their last episode that ended (the
+    one run on what they learned, still exploring as their schedules leave them). Each episode
+    is cut and measured by [`jswim.env.navigation.summarise`][jswim.env.navigation.summarise].
+    """
+    from jswim.agents import (  # lazy: start-up (the learners load optax)
+        qlearning,
+        random_policy,
+        steering,
+    )
+
+    p0 = plans[0]
+    world_, params = world(p0)
+    keys = jax.vmap(jax.random.PRNGKey)(np.array([jenv.seed32(p.seed) for p in plans], np.uint32))
+    budget = int(np.asarray(params.target.budget))
+    k = world_.roc_levels
+    lo, hi = world_.model.lo, world_.model.hi
+    codes = None
+    if p0.agent == CONTROLLER_AGENT:
+        trace = steering.run(world_, params, keys, budget)
+    elif p0.agent == "random":
+        run = random_policy.run(world_, params, keys, budget, p0.action_set, trace=True)
+        trace, codes = run.trace, np.asarray(run.actions)
+    elif p0.agent == "qlearning":
+        config = nav_qconfig(p0.steps, p0.action_set)
+        run = qlearning.train(world_, params, keys, config, trace=True)
+        trace, codes = run.trace, np.asarray(run.actions)
+    elif p0.agent == CONTINUOUS_AGENT:
+        from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
+
+        run = ppo.train(world_, params, keys, ppo.PPOConfig(steps=p0.steps), trace=True)
+        trace = run.trace
+    else:
+        raise ValueError(f"no navigation baseline {p0.agent!r}")
+    rows = []
+    start = world_.observe(world_.reset(keys[0], params), params)
+    dofs0 = np.asarray(start.dofs, np.float64)
+    for i, plan in enumerate(plans):
+        tr = _take(trace, i)
+        episodes = summarise(world_, params, tr)
+        learner = plan.agent in ("qlearning", CONTINUOUS_AGENT)
+        ended = [j for j, e in enumerate(episodes) if e.reached or e.steps >= budget]
+        j = (ended[-1] if ended else len(episodes) - 1) if learner else 0
+        begin = sum(e.steps for e in episodes[:j])
+        sl = slice(begin, begin + episodes[j].steps)
+        disp = np.asarray(tr.info.displacement, np.float64).reshape(-1, 2)[sl]
+        xy = np.cumsum(disp, axis=0)
+        heading = np.asarray(tr.obs.orientation, np.float64).reshape(-1)[sl]
+        if codes is not None:
+            moves = [list(lattice.decode(int(c), k)) for c in codes[i][sl]]
+        else:
+            dofs = np.asarray(tr.obs.dofs, np.float64)
+            prev = dofs0 if begin == 0 else dofs[begin - 1]
+            moves = _lattice_moves(dofs[sl], prev, lo, hi, k)
+        rows.append(nav_row(plan, xy[:, 0], xy[:, 1], heading, moves, episodes[j]))
+    return rows
+
+
+def _straight(spec: Target, steps: int) -> float:
+    """The task's straight distance (`NavSummary.straight`): from the start through the
+    waypoints; a moving target's point where it was after ``steps`` steps."""
+    pts = np.asarray(spec.points(), np.float64).reshape(-1, 2)
+    first = pts[0] + np.asarray(spec.velocity, np.float64) * steps
+    legs = float(np.hypot(*np.diff(pts, axis=0).T).sum()) if len(pts) > 1 else 0.0
+    return float(np.hypot(*first)) + legs
+
+
+def llm_episode(plan: Plan, r: Any, work: np.ndarray | None) -> NavSummary:
+    """An LLM run's episode ([`NavSummary`][jswim.env.navigation.NavSummary]) from its own
+    record: the run ends where the task did (the driver stops at the world's end), ``work`` is
+    each step's, replayed (the work depends on the shape's path only)."""
+    spec = target_from_dict(json.loads(plan.target))
+    xy = np.column_stack([np.asarray(r.x, np.float64), np.asarray(r.y, np.float64)])
+    path = float(np.hypot(*np.diff(np.vstack([np.zeros((1, 2)), xy]), axis=0).T).sum())
+    straight = _straight(spec, r.steps)
+    w = np.asarray(work, np.float64).reshape(-1) if work is not None else np.full(r.steps, np.nan)
+    return NavSummary(
+        bool(r.reached),
+        r.steps,
+        straight,
+        path,
+        path / straight if straight > 0 else float("nan"),
+        float(np.sum(r.progress)),
+        float(np.sum(w)),
+        energy_per_distance(w, r.progress),
+    )
