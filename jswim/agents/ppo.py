@@ -121,6 +121,18 @@ class PPOConfig:
         ([`StepInfo.work`][jswim.env.base.StepInfo], in the world's work units per unit length
         of progress). 0.0 (the default) rewards progress alone, the paper's reward, with the
         same numbers as without the option; the world must count work (not ``nan``) when > 0.
+    max_std : float or None
+        Upper bound on the ROC's std before the clip (static; None, the default: unbounded).
+        The entropy bonus is the Gaussian's before the clip, so an unbounded std can grow
+        while every push lands on a limit (a deterministic, often stuck, action); on K >= 2
+        levels, where the half moves matter, that froze navigation learners
+        (docs/navigation.md).
+    envs : int
+        Swimmers per learner (static; 1, the default: one swimmer, the paper's learner). Each
+        update pools ``envs x rollout`` steps under one policy; the run's record (and
+        ``trace``) is the first swimmer's. With one swimmer a rollout's advantages on a task
+        whose random moves earn about nothing are mostly noise, and navigation learners drifted
+        into doing nothing (docs/navigation.md).
     """
 
     steps: int = 200
@@ -140,10 +152,12 @@ class PPOConfig:
     normalize_advantages: bool = False
     reward_norm: bool = True
     energy_weight: float = 0.0
+    max_std: float | None = None
+    envs: int = 1
 
     def __post_init__(self) -> None:
         energy_reward(self.energy_weight)  # raises on a bad weight
-        for name in ("steps", "rollout", "epochs", "hidden"):
+        for name in ("steps", "rollout", "epochs", "hidden", "envs"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ConfigError(f"{name} must be a positive integer, got {value!r}")
@@ -159,6 +173,12 @@ class PPOConfig:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
                 raise ConfigError(f"{name} must be a positive number, got {value!r}")
+        if self.max_std is not None and not (
+            isinstance(self.max_std, (int, float))
+            and math.isfinite(self.max_std)
+            and self.max_std > 0
+        ):
+            raise ConfigError(f"max_std must be None or a positive number, got {self.max_std!r}")
         for name in ("value_coef", "entropy_coef"):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and math.isfinite(value) and value >= 0):
@@ -297,12 +317,17 @@ def _mlp(layers: list[tuple[Array, Array]], x: Array) -> Array:
     return x @ w + b
 
 
-def policy(net: dict[str, Any], obs: Array) -> tuple[Array, Array, Array, Array]:
+def policy(
+    net: dict[str, Any], obs: Array, max_std: float | None = None
+) -> tuple[Array, Array, Array, Array]:
     """``(dof logits, ROC means, ROC log-stds, value)`` for observations ``obs`` (..., n_obs)."""
     out = _mlp(net["actor"], obs)
     n = out.shape[-1] // 2
     value = _mlp(net["critic"], obs)[..., 0]
-    return out[..., :n], out[..., n:], jnp.broadcast_to(net["log_std"], out[..., n:].shape), value
+    log_std = net["log_std"]
+    if max_std is not None:
+        log_std = jnp.minimum(log_std, math.log(max_std))
+    return out[..., :n], out[..., n:], jnp.broadcast_to(log_std, out[..., n:].shape), value
 
 
 def _log_prob(
@@ -372,7 +397,7 @@ def _gae(reward: Array, value: Array, last_value: Array, gamma: float, lam: floa
 def _loss(
     net: dict[str, Any], batch: _Batch, adv: Array, target: Array, config: PPOConfig, hp: dict
 ) -> Array:
-    logits, mean, log_std, value = policy(net, batch.obs)
+    logits, mean, log_std, value = policy(net, batch.obs, config.max_std)
     logp = _log_prob(logits, mean, log_std, batch.dof, batch.u, batch.tau)
     ratio = jnp.exp(logp - batch.logp)
     a = (adv - adv.mean()) / (adv.std() + 1e-8) if config.normalize_advantages else adv
@@ -407,10 +432,18 @@ def _train(
     """
     n = world.n_dof
     b = keys.shape[0]
+    e = config.envs
     dtype = jnp.result_type(float)
     split = jax.vmap(lambda k: jax.random.split(k, 3))(keys)
-    states = jax.vmap(world.reset, in_axes=(0, axes))(split[:, 0], params)
-    dofs0 = jax.vmap(lambda st, p: world.observe(st, p).dofs, in_axes=(0, axes))(states, params)
+    # With several swimmers per learner (envs > 1) every per-swimmer function is vmapped once
+    # more over them (axis 1 after the learners'); the learner's net and params are shared.
+    per_env = (lambda f, *a: f) if e == 1 else (lambda f, axes: jax.vmap(f, in_axes=axes))
+    split_e = jax.vmap(lambda k: jax.random.split(k, e))
+    reset_keys = split[:, 0] if e == 1 else split_e(split[:, 0])
+    reset = per_env(world.reset, (0, None))
+    states = jax.vmap(reset, in_axes=(0, axes))(reset_keys, params)
+    first = states if e == 1 else jax.tree.map(lambda v: v[:, 0], states)
+    dofs0 = jax.vmap(lambda st, p: world.observe(st, p).dofs, in_axes=(0, axes))(first, params)
     nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features))(
         split[:, 1]
     )
@@ -419,10 +452,9 @@ def _train(
     total = n_updates * config.rollout
     # One draw per learner for the whole run: the DOF's uniform, the ROC's normal, the noise Y.
     width = 2 + world.n_swimmers
-    u = jax.vmap(lambda k: _env.uniforms(k, (total, width), dtype))(
-        split[:, 2]
-    )  # (B, total, 2 + noise)
-    u = jnp.moveaxis(u, 0, 1).reshape(n_updates, config.rollout, b, width)
+    shape = (total, width) if e == 1 else (total, e, width)
+    u = jax.vmap(lambda k: _env.uniforms(k, shape, dtype))(split[:, 2])  # (B, total, [E,] width)
+    u = jnp.moveaxis(u, 0, 1).reshape((n_updates, config.rollout, b) + shape[1:])
     z = jax.scipy.special.ndtri(jnp.clip(u[..., 1], 1e-7, 1.0 - 1e-7))
     inputs = (
         jnp.arange(total).reshape(n_updates, config.rollout),
@@ -433,7 +465,7 @@ def _train(
 
     def act_one(state, net, p, tau, u_dof, z_roc, y):
         obs = world.features(state, p)
-        logits, mean, log_std, value = policy(net, obs)
+        logits, mean, log_std, value = policy(net, obs, config.max_std)
         dof, u_roc = _sample(logits, mean, log_std, tau, u_dof, z_roc)
         roc = jnp.clip(u_roc, -1.0, 1.0)
         action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
@@ -453,11 +485,18 @@ def _train(
         )
         return state, _Batch(obs, dof, u_roc, logp, value, reward, tau), record
 
+    def act_learner(state, net, p, tau, u_dof, z_roc, y):
+        state, batch, record = per_env(act_one, (0, None, None, None, 0, 0, 0))(
+            state, net, p, tau, u_dof, z_roc, y
+        )
+        # The record is the learner's first swimmer's (its run, as with one swimmer).
+        return state, batch, record if e == 1 else jax.tree.map(lambda v: v[0], record)
+
     def act(carry, inp):
         states, nets = carry
         t, u_dof, z_roc, y = inp
         tau = _temperature(t, config.steps, hp["anneal_start"], hp["anneal_end"])
-        states, batch, record = jax.vmap(act_one, in_axes=(0, 0, axes, None, 0, 0, 0))(
+        states, batch, record = jax.vmap(act_learner, in_axes=(0, 0, axes, None, 0, 0, 0))(
             states, nets, params, tau, u_dof, z_roc, y
         )
         return (states, nets), (batch, record)
@@ -467,8 +506,9 @@ def _train(
             # Rewards in units of their running RMS (this learner's, so far): one set of
             # hyperparameters for swimmers whose steps differ in size.
             r2 = r2 + jnp.sum(batch.reward**2)
-            batch = batch._replace(reward=batch.reward / (jnp.sqrt(r2 / t_end) + 1e-8))
-        last_value = policy(net, last_obs)[3]
+            count = t_end if e == 1 else t_end * e
+            batch = batch._replace(reward=batch.reward / (jnp.sqrt(r2 / count) + 1e-8))
+        last_value = policy(net, last_obs, config.max_std)[3]
         adv = _gae(batch.reward, batch.value, last_value, hp["discount"], hp["gae_lambda"])
         target = adv + batch.value
 
@@ -484,7 +524,8 @@ def _train(
     def update(carry, inp):
         states, nets, opt_states, r2 = carry
         (states, _), (batch, record) = jax.lax.scan(act, (states, nets), inp)
-        last_obs = jax.vmap(world.features, in_axes=(0, axes))(states, params)
+        features = per_env(world.features, (0, None))
+        last_obs = jax.vmap(features, in_axes=(0, axes))(states, params)
         t_end = (inp[0][-1] + 1).astype(dtype)
         nets, opt_states, r2 = jax.vmap(learn_one, in_axes=(0, 0, 0, 1, 0, None))(
             nets, opt_states, r2, batch, last_obs, t_end
