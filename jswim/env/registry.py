@@ -128,6 +128,10 @@ def make(
         from jswim.env.navigation import navigation_world  # lazy: the task's own module
 
         nav = {k: kwargs.pop(k) for k in ("bearing_bins", "lattice") if k in kwargs}
+        if parse_direction(direction) != 1:
+            raise ConfigError(
+                "a navigation world swims to its target: direction does not apply (leave it out)"
+            )
         if isinstance(swimmer, str) and swimmer in _REGISTERED:
             raise ConfigError(
                 f"navigation wraps the paper's planar swimmers, not the registered world {swimmer!r}"

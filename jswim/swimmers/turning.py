@@ -176,8 +176,8 @@ def choose_cycle(
     heading when that loop is at this hub, and otherwise swims half a gait to the other hub,
     where it is.
 
-    A target that swimming straight would pass within ``reach`` of (``distance |sin b| <
-    reach``) is swum to straight. Otherwise a target inside the circle the turn would follow
+    A target ahead (``cos b > 0``) that swimming straight would pass within ``reach`` of
+    (``distance |sin b| < reach``) is swum to straight. Otherwise a target inside the circle the turn would follow
     (radius ``plan.radius``: ``distance < 2 radius |sin b|``, ``b`` from the forward heading)
     cannot be reached by turning, which would circle round it: the swimmer swims forward, which
     moves the target back and out of the circle, and turns after. (Targets closer than about
@@ -201,7 +201,10 @@ def choose_cycle(
     )
     turn = jnp.where(jnp.asarray(plan.hub)[loop] == hub, loop, half)
     distance = jnp.asarray(distance)
-    aligned = (jnp.abs(b) <= plan.tolerance) | (distance * jnp.abs(jnp.sin(b)) < reach)
+    # passing within reach counts only for a target ahead: one straight behind (sin b = 0) is
+    # passed by swimming away from it
+    passes = (distance * jnp.abs(jnp.sin(b)) < reach) & (jnp.cos(b) > 0)
+    aligned = (jnp.abs(b) <= plan.tolerance) | passes
     b_forward = wrap(jnp.asarray(bearing) - jnp.asarray(plan.heading)[hub])
     inside = ~aligned & (distance < 2.0 * plan.radius * jnp.abs(jnp.sin(b_forward)))
     out = jnp.where(aligned, half, jnp.where(inside, jnp.asarray(FORWARD_HALF)[hub], turn))

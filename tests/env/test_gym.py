@@ -58,6 +58,10 @@ def _check(env_id, render=False):
         obs, _ = env.reset(seed=0)
         assert env.observation_space.contains(obs)
         env.step(env.action_space.sample())
+    if "target" in jswim.gym.ENVIRONMENTS[env_id]:  # a target, not a direction: -x is refused
+        with pytest.raises(ConfigError, match="direction does not apply"):
+            gym.make(env_id, direction="-x")
+        return env
     # The reward is progress toward the target direction: -x mirrors +x, step by step.
     rewards = {}
     for direction in ("+x", "-x"):
