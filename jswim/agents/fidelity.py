@@ -126,7 +126,7 @@ def scene_extensions(scenes: Any, ppo: bool = False) -> list[str]:
     return lines + ([SCENE_PPO] if ppo and lines else [])
 
 
-#: The line of a navigation run (issue 48, an extension: the paper's task is swimming along x).
+#: The line of a navigation run (an extension: the paper's task is swimming along x).
 NAVIGATION = (
     "navigation task (an extension; docs/navigation.md): S1 names the target's position (X, Y), "
     "encoded as X is, with one X_min for both, lowered to a whole number of link lengths below "

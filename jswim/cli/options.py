@@ -124,7 +124,11 @@ def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> No
         "--steps",
         type=int,
         default=None,
-        help=f"steps per run (default {spec.steps}; 50 is the paper's horizon)",
+        help=(
+            f"steps per run (default: {spec.steps_text})"
+            if spec.steps_text
+            else f"steps per run (default {spec.steps}; 50 is the paper's horizon)"
+        ),
     )
     g.add_argument(
         "--runs", type=int, default=None, help=f"LLM runs per setting (default {spec.runs})"
@@ -592,6 +596,7 @@ IGNORABLE = {
     "q_runs": ("q_runs", "--q-runs"),
     "init": ("init", "--init"),
     "runs": ("runs", "--runs"),
+    "directions": ("direction", "--direction"),
 }
 
 #: The options that choose an LLM, refused by a study without LLM runs.

@@ -110,6 +110,7 @@ class StudySpec:
     directions: tuple[int, ...] = (1,)
     q_runs: int = 100  # baseline runs per cell
     steps: int = 50  # steps per run (the paper's horizon)
+    steps_text: str | None = None  # --steps' default in words, where the cells set their own
     ignores: tuple[str, ...] = (
         "zetas",
         "n_hts",
@@ -132,6 +133,7 @@ IGNORED = {
     "roc_levels_grid": "only the continuous study sweeps K; give one value with --roc-levels",
     "roc_levels": "it sweeps K over the --roc-levels list",
     "runs": "it runs fixed strokes only, no LLM",
+    "directions": "its runs swim to targets, not along a direction",
 }
 
 
@@ -216,7 +218,7 @@ SPECS["school"] = StudySpec(
 )
 
 
-# Navigation (issue 48, an extension): targets at several distances and bearings, a path and a
+# Navigation (an extension): targets at several distances and bearings, a path and a
 # moving target; each cell's runs have the target's budget (jswim.studies.navigate).
 SPECS["navigate"] = StudySpec(
     navigate.cells,
@@ -224,7 +226,8 @@ SPECS["navigate"] = StudySpec(
     init="paper",
     swimmers=("purcell",),
     q_runs=1,
-    ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init", "directions"),
+    steps_text="each target's step budget; a smaller value caps it",
 )
 
 

@@ -83,6 +83,8 @@ def test_noise_study_in_a_log_keeps_every_zeta_and_number(server, tmp_path, caps
         (["study", "curves", "--zetas", "0,1"], "--zetas"),
         (["study", "noise", "--n-hts", "1,2"], "--n-hts"),
         (["study", "history", "--n-ht", "3"], "--n-ht"),
+        (["study", "navigate", "--direction=-x"], "--direction"),
+        (["study", "navigate", "--direction", "both"], "--direction"),
     ],
 )
 def test_options_a_study_would_ignore_are_refused(argv, option, tmp_path, capsys):
