@@ -74,6 +74,7 @@ INDEX_KEYS = (
     "steps_to_learn",
     "period",
     "signed_final_x",
+    "steps_to_target",
     "steps",
     "cost_usd",
 )

@@ -23,6 +23,11 @@
   // One sign convention for every number on the page: X/a toward the run's target direction
   // (a -x run that swims to x = -0.62 a reads +0.62), always labelled with that direction.
   function toward(d) { return "X/a toward " + fmt("direction", d.direction); }
+  // Where a run is at step k: X/a toward its direction, or (a navigation run) its (x, y) in the plane.
+  function place(d, k) {
+    if ((d.targets || []).length) return "(x, y)/a = (" + signed(d.x[k], 3) + ", " + signed(d.y[k], 3) + ")";
+    return toward(d) + " = " + signed(d.direction * d.x[k], 4);
+  }
 
   // -- filters and the run list ------------------------------------------------------------------
   function values(key) {
@@ -158,7 +163,8 @@
     if (r.variant) bits.push("variant " + r.variant);
     if (r.group) bits.push("group " + r.group);
     var html = '<h3 id="run-title">' + esc(r.run_id) + "</h3><p>" + esc(bits.join(" \u00b7 ")) + "<br/>success: " +
-      (r.success ? "yes" : "no") + " \u00b7 X/a end toward " + fmt("direction", r.direction) + " " + signed(r.signed_final_x || 0, 4) +
+      (r.success ? "yes" : "no") + (nav ? (r.steps_to_target ? " \u00b7 " + r.steps_to_target + " steps to the target" : "") :
+      " \u00b7 X/a end toward " + fmt("direction", r.direction) + " " + signed(r.signed_final_x || 0, 4)) +
       " \u00b7 " + esc(stroke) + (d.replayed ? ' \u00b7 <span class="error">y and orientation replayed (not recorded in this folder)</span>' : "") +
       '</p><canvas class="swim" id="swim" width="900" height="340"></canvas>' +
       '<div class="controls"><button id="b-first" title="first step">|\u25c0</button>' +
@@ -301,7 +307,7 @@
     ctx.strokeStyle = "#333"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(12, H - 14); ctx.lineTo(12 + s, H - 14); ctx.stroke();
     ctx.fillStyle = "#333"; ctx.font = "12px sans-serif"; ctx.fillText("a", 12 + s / 2 - 3, H - 20);
     ctx.font = "13px monospace";
-    ctx.fillText("step " + k + "/" + d.actions.length + "   " + toward(d) + " = " + signed(d.direction * d.x[k], 4), 10, 18);
+    ctx.fillText("step " + k + "/" + d.actions.length + "   " + place(d, k), 10, 18);
     if (k > 0) {
       var ev = [];
       if (d.stuck[k - 1]) ev.push("stuck");
@@ -325,7 +331,7 @@
   function stepHtml(d, k) {
     if (k === 0) {
       return "<h3>Start</h3><p>" + (d.world ? esc(d.world) + " \u00b7 " : "") + "DOF values (" + dofList(d, 0) +
-        "), " + toward(d) + " = 0. Press \u25b6 or step through the run.</p>";
+        "), " + place(d, 0) + ". Press \u25b6 or step through the run.</p>";
     }
     var i = k - 1, tags = [];
     if (d.stuck[i]) tags.push('<span class="tag stuck">stuck</span>');
@@ -336,8 +342,9 @@
         " (the criterion's qualifying cycles)</span>");
     }
     var h = "<h3>Step " + k + ": action " + action(d.actions[i]) + "</h3><p>" + tags.join("") +
-      " " + toward(d) + " " + signed(d.direction * d.x[i], 4) + " \u2192 " + signed(d.direction * d.x[k], 4) +
-      " (this step " + signed(d.direction * (d.x[k] - d.x[i]), 4) + ") \u00b7 DOF values (" +
+      " " + ((d.targets || []).length ? place(d, i) + " \u2192 " + place(d, k).replace("(x, y)/a = ", "") :
+      toward(d) + " " + signed(d.direction * d.x[i], 4) + " \u2192 " + signed(d.direction * d.x[k], 4) +
+      " (this step " + signed(d.direction * (d.x[k] - d.x[i]), 4) + ")") + " \u00b7 DOF values (" +
       dofList(d, k) + ")</p>";
     var step = d.steps[i];
     if (!step) return h;
