@@ -39,7 +39,7 @@ from jswim.figures.style import (  # noqa: F401  (the figures' public names, imp
     tidy,
 )
 from jswim.figures.scene_plots import scene_figures
-from jswim.figures.navigation import nav_figures
+from jswim.figures.navigation_plots import nav_figures
 from jswim.figures.panels import panel_keys, save, target_displacement  # noqa: F401
 from jswim.figures.sketches import (  # noqa: F401
     draw_cycle,
