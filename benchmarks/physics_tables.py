@@ -45,7 +45,7 @@ def _square(swimmer: str, direction: int = 1, **model_kwargs) -> tuple[float, np
     model = env.make_params(swimmer, **model_kwargs).model
     best = gait.best_cycles(model, direction)[0]
     moves = [decode_action(int(a)) for a in best.actions]
-    x = np.asarray(env.rollout(swimmer, moves, init=best.start, **model_kwargs).x, np.float64)
+    x = np.asarray(env.rollout_moves(swimmer, moves, init=best.start, **model_kwargs).x, np.float64)
     return best.displacement, np.diff(np.concatenate([[0.0], x]))
 
 
@@ -64,7 +64,7 @@ def _corner_mdp(swimmer: str) -> tuple[np.ndarray, np.ndarray]:
     for s, c in enumerate(corners):
         for a in range(acts):
             dof, roc = decode_action(a)
-            ro = env.rollout(swimmer, [(dof, roc)], init=c)
+            ro = env.rollout_moves(swimmer, [(dof, roc)], init=c)
             r[s, a] = float(np.asarray(ro.x)[0])
             lv = list(c)
             lv[dof - 1] = min(1, max(0, lv[dof - 1] + roc))
@@ -112,7 +112,7 @@ def _four_link_x() -> tuple[float, float]:
     from jswim import env
 
     cycle = [(3, -1), (2, -1), (1, -1), (3, 1), (2, 1), (1, 1)]
-    r = env.rollout("nlink", cycle, init=(1, 1, 1))
+    r = env.rollout_moves("nlink", cycle, init=(1, 1, 1))
     x, y = float(np.asarray(r.x)[-1]), float(np.asarray(r.y)[-1])
     return x, x * math.cos(math.pi / 9) - y * math.sin(math.pi / 9)
 

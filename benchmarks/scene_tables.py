@@ -66,7 +66,7 @@ def lone_cycle(mobility: str) -> float:
 
 def wall_cycles(mobility: str, heights: list[float]) -> dict[str, np.ndarray]:
     """X, tilt and height change over the first square cycle from each start height, tilt 0
-    (what ``jswim.env.rollout(..., scene=Scene(medium="wall", height=h))`` gives)."""
+    (what ``jswim.env.rollout_moves(..., scene=Scene(medium="wall", height=h))`` gives)."""
     params = scene_params(
         "ng", Scene(medium="wall", height=10.0, mobility=mobility), dtype=jnp.float64
     )
@@ -135,10 +135,10 @@ PURCELL_HEIGHTS = [1.5, 2.0, 3.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0, 1000.0]
 
 def purcell_wall_table() -> None:
     """Purcell's square stroke per cycle above a wall, through ``scene_rollout`` (float64)."""
-    from jswim.env import rollout
+    from jswim.env import rollout_moves
     from jswim.swimmers.wall_rft import LINK_RADIUS, drag_coefficients
 
-    bulk = float(rollout("purcell", PURCELL_SQUARE).x[-1])
+    bulk = float(rollout_moves("purcell", PURCELL_SQUARE).x[-1])
     per, ratio = [], []
     for h in PURCELL_HEIGHTS:
         per.append(

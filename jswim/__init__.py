@@ -20,7 +20,7 @@ Make a world, then step it or roll a given stroke through it:
 - ``jswim.make(swimmer, scene, ...)`` returns ``(env, params)`` for any world; ``env.reset``,
   ``env.step`` and ``env.observe`` are the functional protocol (`jswim.env.base`), batched with
   ``jax.vmap``. ``jswim.rollout(env, params, key, actions)`` runs a whole action sequence (a
-  batch of keys runs a batch); ``jswim.env.rollout("purcell", [(dof, roc), ...])`` is the
+  batch of keys runs a batch); ``jswim.env.rollout_moves("purcell", [(dof, roc), ...])`` is the
   named-swimmer shortcut.
 - ``jswim.run_study("noise", backend=Backend(base_url=URL, model=NAME))`` runs a study against
   a server (`jswim.studies.Backend`; options in `jswim.studies.StudyOptions`; without a backend

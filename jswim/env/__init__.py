@@ -45,7 +45,7 @@ from jswim.env.params import (
     parse_init,
 )
 from jswim.env.randomness import noise, uniforms
-from jswim.env.rollouts import Rollout, rollout, seed32, seed_key
+from jswim.env.rollouts import Rollout, rollout_moves, seed32, seed_key
 from jswim.env.state import (
     EnvState,
     MoveInfo,
@@ -117,7 +117,7 @@ __all__ = [
     "reference_point",
     "reset",
     "roc_vector",
-    "rollout",
+    "rollout_moves",
     "seed32",
     "seed_key",
     "start_orientation",

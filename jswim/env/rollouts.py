@@ -24,7 +24,7 @@ class Rollout(NamedTuple):
     """Per-step record of a rollout (state after each step); leading axes (batch, steps).
 
     ``x``, ``y`` and ``orientation`` are the full values (``hi + lo``) rounded to the working
-    dtype (float64 in [`rollout`][jswim.env.rollouts.rollout])."""
+    dtype (float64 in [`rollout_moves`][jswim.env.rollouts.rollout_moves])."""
 
     x: Array
     y: Array
@@ -58,7 +58,7 @@ def _scan(key: Array, actions: Array, params: EnvParams) -> Rollout:
     return out
 
 
-def rollout(
+def rollout_moves(
     swimmer: str | SwimmerModel,
     actions: Any,
     *,
@@ -110,10 +110,10 @@ def rollout(
 
     Examples
     --------
-    >>> r = rollout("purcell", [(1, -1), (2, -1), (1, 1), (2, 1)])
+    >>> r = rollout_moves("purcell", [(1, -1), (2, -1), (1, 1), (2, 1)])
     >>> r.x.shape
     (4,)
-    >>> rollout("purcell", [(1, -0.5), (2, -0.5)]).dofs[-1].round(4).tolist()
+    >>> rollout_moves("purcell", [(1, -0.5), (2, -0.5)]).dofs[-1].round(4).tolist()
     [0.0, 0.0]
     """
     if scene is not None and not _is_plain_bulk(scene):

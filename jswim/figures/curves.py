@@ -64,7 +64,7 @@ def _signature_path(
     k = corners.index(tuple(init))
     moves = list(cyc.moves[k:] + cyc.moves[:k])
     actions = (moves * (steps // len(moves) + 1))[:steps]
-    r = env.rollout(swimmer, actions, init=list(init), direction=direction)
+    r = env.rollout_moves(swimmer, actions, init=list(init), direction=direction)
     return (0.0, *(float(direction * v) for v in np.asarray(r.x)))
 
 

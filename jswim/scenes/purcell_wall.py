@@ -107,7 +107,7 @@ def rollout(
 
     ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` ([`jswim.scenes.parse_scene_moves`][jswim.scenes.rollout.parse_scene_moves]).
 
-    ``x``, ``y``: the centroid (as [`jswim.env.rollout`][jswim.env.rollouts.rollout]); ``z``: the plane's height (fixed);
+    ``x``, ``y``: the centroid (as [`jswim.env.rollout_moves`][jswim.env.rollouts.rollout_moves]); ``z``: the plane's height (fixed);
     ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
     the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
     """
@@ -119,7 +119,7 @@ def rollout(
             np.isin(roc, (-1.0, 0.0, 1.0))
         ):  # the paper's ROCs: integer codes, the exact corner table
             acts = jnp.asarray(encode_action(dof + 1, roc), jnp.int32)
-        else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout does)
+        else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout_moves does)
             acts = jnp.asarray(np.eye(2)[dof.astype(int)] * roc[:, None], jnp.float64)
         t = world_rollout(SwimmerWorld(m), params, key, acts)
         pos = np.asarray(t.obs.position[:, 0], np.float64)  # (steps, 2): the centroid

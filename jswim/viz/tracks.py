@@ -377,7 +377,7 @@ def _replay_pose(
         ):
             return None, None
         row = as_run_row(row)
-        r = env.rollout(
+        r = env.rollout_moves(
             str(row.swimmer),
             [(int(a), int(b)) for a, b in actions],
             init=[int(v) for v in levels0],

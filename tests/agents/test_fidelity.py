@@ -45,7 +45,7 @@ def test_start_orientation_middle_link_along_x_and_four_link_chain_symmetric_abo
     # fidelity.md: the best four-link stroke goes 0.3134 per 6-step cycle along x from this start
     # (0.2945 if the middle link started along x instead).
     cycle = [(3, -1), (2, -1), (1, -1), (3, 1), (2, 1), (1, 1)]
-    x = np.asarray(env.rollout("nlink", cycle * 2, init=(1, 1, 1)).x)
+    x = np.asarray(env.rollout_moves("nlink", cycle * 2, init=(1, 1, 1)).x)
     assert x[5] == pytest.approx(0.3134, abs=5e-4) and x[11] == pytest.approx(2 * 0.3134, abs=1e-3)
 
 

@@ -78,8 +78,8 @@ def test_history_keeps_a_run_that_swims_toward_its_target_and_clears_one_that_sw
     model = make_model("purcell")
     best = gait.best_cycles(model, direction)[0]
     moves = list(best.moves) * 3
-    toward = env.rollout("purcell", moves, direction=direction, init=best.start)
-    away = env.rollout("purcell", moves, direction=-direction, init=best.start)
+    toward = env.rollout_moves("purcell", moves, direction=direction, init=best.start)
+    away = env.rollout_moves("purcell", moves, direction=-direction, init=best.start)
     dx = np.diff(np.concatenate([[0.0], np.asarray(toward.x, np.float64)]))
     assert direction * dx.sum() > 0.5  # the cycle swims toward the target (3 cycles of ~0.19)
     np.testing.assert_allclose(toward.progress, direction * dx, atol=1e-12)

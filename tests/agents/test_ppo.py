@@ -165,7 +165,7 @@ def test_shape_judge_agrees_with_the_discrete_judge_on_corner_runs():
     length = min(len(r) for r in runs)
     runs = [r[:length] for r in runs]
     with jax.enable_x64(True):
-        roll = env.rollout("purcell", np.array(runs), direction=-1, init=(0, 0))
+        roll = env.rollout_moves("purcell", np.array(runs), direction=-1, init=(0, 0))
     discrete = gait.judge(env.validate_actions(np.array(runs), 2), params)
     shapes = judge_shapes(roll.dofs, roll.x, params, dofs0=np.full((len(runs), 2), params.lo))
     assert shapes.learned[:4].all() and not shapes.learned[4]
@@ -186,7 +186,7 @@ def test_shape_judge_tolerance():
         (2, side),
     ] * 10
     with jax.enable_x64(True):
-        roll = env.rollout("purcell", moves, direction=-1, init=(0, 0))
+        roll = env.rollout_moves("purcell", moves, direction=-1, init=(0, 0))
     d0 = np.full((1, 2), params.lo)
     loose = judge_shapes(roll.dofs[None], roll.x[None], params, dofs0=d0)
     tight = judge_shapes(roll.dofs[None], roll.x[None], params, dofs0=d0, tol=1e-5)

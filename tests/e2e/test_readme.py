@@ -53,7 +53,7 @@ def _imported_packages(code):
 def test_the_square_gait_example_prints_the_reference_value():
     from jswim import env
 
-    r = env.rollout("purcell", [(2, -1), (1, -1), (2, 1), (1, 1)])
+    r = env.rollout_moves("purcell", [(2, -1), (1, -1), (2, 1), (1, 1)])
     assert (
         abs(float(r.x[-1]) - 0.19124724) < 1e-8
         and "0.19124724" in README

@@ -58,7 +58,7 @@ def test_lattice_codes_give_the_square_gaits_at_any_k():
     for big_k in (2, 5):
         p = env.make_params("purcell", roc_levels=big_k)
         seq = [(2, -1)] * big_k + [(1, -1)] * big_k + [(2, 1)] * big_k + [(1, 1)] * big_k
-        r = env.rollout("purcell", [(d, k / big_k) for d, k in seq])
+        r = env.rollout_moves("purcell", [(d, k / big_k) for d, k in seq])
         assert abs(float(r.x[-1]) - PURCELL_CYCLE) < 5e-9
         step = jax.jit(lambda s, a: env.advance(s, a, jnp.zeros(()), p))
         s = env.start_state(p.model, jnp.ones(2))
@@ -262,12 +262,12 @@ def test_real_rocs_in_float32_keep_the_shape_exact(float32):
 
 
 def test_rollout_takes_real_rocs_and_refuses_bad_ones():
-    r = env.rollout("purcell", [(1, -0.5), (2, -0.5), (1, 0.25)])
+    r = env.rollout_moves("purcell", [(1, -0.5), (2, -0.5), (1, 0.25)])
     np.testing.assert_allclose(r.dofs[-1], [-math.pi / 3 + 0.75 * 2 * math.pi / 3, 0.0], atol=1e-15)
     assert list(r.stuck) == [False, False, False]
     for bad, word in (([(1, 1.5)], "roc"), ([(3, 0.5)], "dof"), ([(1, float("nan"))], "finite")):
         with pytest.raises(ConfigError, match=word):
-            env.rollout("purcell", bad)
+            env.rollout_moves("purcell", bad)
 
 
 def test_integer_codes_and_params():

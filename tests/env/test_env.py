@@ -23,7 +23,7 @@ def test_table_steps_match_the_integrator_over_random_walks():
     model = params.model
     rng = np.random.default_rng(3)
     acts = [(int(rng.integers(1, 3)), int(rng.choice([-1, 1]))) for _ in range(12)]
-    r = env.rollout("purcell", acts)
+    r = env.rollout_moves("purcell", acts)
     d = np.array([model.hi, model.hi])
     pose = jnp.zeros(3)
     c0 = centroid(model, jnp.asarray(d), pose)  # the env starts with its centroid at the origin
@@ -51,35 +51,35 @@ def test_table_steps_match_the_integrator_over_random_walks():
 
 @pytest.mark.parametrize("d_max, ref", [(math.pi / 4, 0.12660803), (math.pi / 3, 0.19124724)])
 def test_purcell_cycle_reference(d_max, ref):
-    r = env.rollout("purcell", PURCELL_PLUS_X * 3, d_max=d_max)
+    r = env.rollout_moves("purcell", PURCELL_PLUS_X * 3, d_max=d_max)
     x = np.asarray(r.x)
     np.testing.assert_allclose(x[3::4], ref * np.arange(1, 4), atol=2e-8)
     np.testing.assert_allclose(np.asarray(r.orientation)[3::4], 0.0, atol=1e-12)
-    back = env.rollout("purcell", [(d, -s) for d, s in reversed(PURCELL_PLUS_X)], d_max=d_max)
+    back = env.rollout_moves("purcell", [(d, -s) for d, s in reversed(PURCELL_PLUS_X)], d_max=d_max)
     assert float(back.x[-1]) == pytest.approx(-float(x[3]), abs=1e-13)
 
 
 def test_ng_cycle_reference_both_directions():
     exact = ng.square_cycle_displacement(6.0, 10.0)
-    r = env.rollout("ng", NG_PLUS_X, init=(0, 0))
+    r = env.rollout_moves("ng", NG_PLUS_X, init=(0, 0))
     assert abs(float(r.x[-1]) - exact) <= 1e-8 * exact
-    back = env.rollout("ng", [(1, 1), (2, 1), (1, -1), (2, -1)][::-1], init=(0, 0))
+    back = env.rollout_moves("ng", [(1, 1), (2, 1), (1, -1), (2, -1)][::-1], init=(0, 0))
     # The reverse traversal of the loop from the same corner.
-    rev = env.rollout("ng", [(2, 1), (1, 1), (2, -1), (1, -1)], init=(0, 0))
+    rev = env.rollout_moves("ng", [(2, 1), (1, 1), (2, -1), (1, -1)], init=(0, 0))
     assert abs(float(rev.x[-1]) + exact) <= 1e-8 * exact
     assert back.stuck.any()  # starting with ROC -1 at the lower limit is stuck
 
 
 def test_stuck_and_hold_moves():
-    r = env.rollout("purcell", [(1, 1), (2, 0), (1, -1)], init=(1, 1))
+    r = env.rollout_moves("purcell", [(1, 1), (2, 0), (1, -1)], init=(1, 1))
     assert list(np.asarray(r.stuck)) == [True, False, False]
     assert float(r.x[0]) == 0.0 and float(r.x[1]) == 0.0 and float(r.x[2]) != 0.0
     np.testing.assert_allclose(np.asarray(r.dofs[-1]), [-math.pi / 3, math.pi / 3])
 
 
 def test_direction_sets_the_sign_of_progress():
-    plus = env.rollout("ng", NG_PLUS_X, init=(0, 0), direction="+x")
-    minus = env.rollout("ng", NG_PLUS_X, init=(0, 0), direction=-1)
+    plus = env.rollout_moves("ng", NG_PLUS_X, init=(0, 0), direction="+x")
+    minus = env.rollout_moves("ng", NG_PLUS_X, init=(0, 0), direction=-1)
     np.testing.assert_allclose(np.asarray(plus.progress), -np.asarray(minus.progress))
     np.testing.assert_allclose(np.asarray(plus.x), np.asarray(minus.x))
 
@@ -100,8 +100,8 @@ def test_all_four_initial_configurations_reachable_through_reset():
 
 def test_noise_zero_reproduces_noiseless_and_mean_is_unbiased():
     acts = PURCELL_PLUS_X * 2
-    clean = env.rollout("purcell", acts)
-    zero = env.rollout("purcell", acts, zeta=0.0, key=7)
+    clean = env.rollout_moves("purcell", acts)
+    zero = env.rollout_moves("purcell", acts, zeta=0.0, key=7)
     np.testing.assert_array_equal(np.asarray(clean.x), np.asarray(zero.x))
 
     params = env.make_params("purcell", zeta=2.0)
@@ -171,7 +171,7 @@ def test_middle_link_centre_is_exposed():
 
 def test_batched_rollout_shapes():
     acts = np.array([PURCELL_PLUS_X, PURCELL_PLUS_X[::-1]])
-    r = env.rollout("purcell", acts, zeta=0.5, key=3)
+    r = env.rollout_moves("purcell", acts, zeta=0.5, key=3)
     assert r.x.shape == (2, 4) and r.dofs.shape == (2, 4, 2)
 
 
@@ -204,7 +204,7 @@ def test_bad_parameters_name_the_parameter(kwargs, word):
 )
 def test_bad_actions_are_rejected(actions, word):
     with pytest.raises(ConfigError, match=word):
-        env.rollout("purcell", actions)
+        env.rollout_moves("purcell", actions)
 
 
 def test_step_batch_matches_vmapped_advance_and_carries_unit_rotation():

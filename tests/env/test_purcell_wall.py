@@ -42,8 +42,8 @@ def test_scene_rollout_per_cycle_is_the_independent_rk4(expected):
     np.testing.assert_allclose(r.gap, H - wall_rft.LINK_RADIUS)
     assert not r.contact.any() and not r.stuck.any()
     np.testing.assert_allclose(np.cumsum(r.dx[:, 0]), r.x[:, 0], atol=1e-14)
-    # jswim.env.rollout(..., scene=) is the same record
-    r2 = jswim.env.rollout("purcell", SQUARE * 3, scene=WALL)
+    # jswim.env.rollout_moves(..., scene=) is the same record
+    r2 = jswim.env.rollout_moves("purcell", SQUARE * 3, scene=WALL)
     np.testing.assert_array_equal(r2.x, r.x)
     assert expected > 0.19124724 + 1e-3  # the wall's ratio above 2 makes the stroke go further
 
@@ -101,8 +101,8 @@ def test_coefficients_scaled_alike_give_the_bulk_trajectories(float32):
     model = wall_rft.WallPurcellModel("purcell", 2, base.lo, base.hi, 2.0, c, 2.0 * c)
     rng = np.random.default_rng(0)
     moves = [(int(d), int(r)) for d, r in zip(rng.integers(1, 3, 40), rng.integers(-1, 2, 40))]
-    bulk = env.rollout("purcell", moves)
-    alike = env.rollout(model, moves)
+    bulk = env.rollout_moves("purcell", moves)
+    alike = env.rollout_moves(model, moves)
     for f in ("x", "y", "orientation"):
         np.testing.assert_allclose(getattr(alike, f), getattr(bulk, f), rtol=0, atol=1e-12)
     assert np.abs(bulk.x).max() > 0.05  # the moves do move it

@@ -48,7 +48,7 @@ def test_positions_do_not_drift_in_float32(float32):
     The reference is the per-cycle value times 250,000: 0.19124724 (DESIGN.md, 8 digits) refined
     by the float64 rollout, which must agree with it to 5e-9 a per cycle.
     """
-    per_cycle = float(env.rollout("purcell", SQUARE).x[-1])
+    per_cycle = float(env.rollout_moves("purcell", SQUARE).x[-1])
     assert abs(per_cycle - PURCELL_CYCLE) < 5e-9
     x, dtype = _square_gait_x(250_000)
     assert dtype == np.float32
@@ -62,16 +62,18 @@ def test_rollout_runs_in_float64_without_global_flags(float32):
     import jswim
 
     assert jnp.result_type(float) == jnp.float32  # the user's default
-    r = jswim.env.rollout("purcell", SQUARE * 1000)  # the named-swimmer shortcut notebooks use
+    r = jswim.env.rollout_moves(
+        "purcell", SQUARE * 1000
+    )  # the named-swimmer shortcut notebooks use
     assert r.x.dtype == np.float64
     cycles = r.x[3::4]
     np.testing.assert_allclose(np.diff(cycles), cycles[0], rtol=0, atol=1e-12)  # 1e-12 per cycle
     assert abs(cycles[0] - PURCELL_CYCLE) < 5e-9
     assert abs(cycles[-1] / 1000 - cycles[0]) < 1e-12
     # A reciprocal stroke goes nowhere (scallop theorem): 0 to 1e-12 per cycle.
-    back_forth = env.rollout("purcell", [(1, -1), (1, 1)] * 1000)
+    back_forth = env.rollout_moves("purcell", [(1, -1), (1, 1)] * 1000)
     assert abs(back_forth.x[-1]) < 1e-12 * 1000 and np.abs(back_forth.x[1::2]).max() < 1e-12 * 1000
-    batch = env.rollout("ng", np.array([[(1, 1), (2, 1), (1, -1), (2, -1)]] * 3), init=(0, 0))
+    batch = env.rollout_moves("ng", np.array([[(1, 1), (2, 1), (1, -1), (2, -1)]] * 3), init=(0, 0))
     assert batch.x.dtype == np.float64 and batch.x.shape == (3, 4)
 
 
@@ -112,7 +114,7 @@ def test_ensemble_matches_the_closed_form_and_ignores_the_chunk_size(float32):
     b = ensemble.run(policy, params, n=n, zetas=(1.5,), steps=steps, chunk=4 * ensemble.BLOCK)
     for field in ("mean", "std", "quantiles", "min", "max", "forward"):
         np.testing.assert_array_equal(getattr(a[1], field), getattr(b[0], field))
-    clean = env.rollout("purcell", SQUARE * 3)
+    clean = env.rollout_moves("purcell", SQUARE * 3)
     dx = np.diff(np.concatenate([[0.0], clean.x]))
     np.testing.assert_allclose(a[0].mean, clean.x, atol=1e-6)
     assert np.all(a[0].std < 1e-6) and np.all(a[0].forward == 1.0)
@@ -158,7 +160,7 @@ def _scaled_cases():
     out["q_actions"], out["q_x"], out["q_table"] = (
         np.asarray(v) for v in (run.actions, run.x, run.q)
     )
-    r = env.rollout("purcell", np.tile(np.array(SQUARE), (6, 2, 1)), zeta=0.8, key=5)
+    r = env.rollout_moves("purcell", np.tile(np.array(SQUARE), (6, 2, 1)), zeta=0.8, key=5)
     out["rollout_x"] = r.x
     pol = ensemble.stroke_policy([env.encode_action(*m) for m in SQUARE])
     [s] = ensemble.run(

@@ -156,7 +156,7 @@ def test_start_beyond_the_dtype_refused(float32):
     with jax.enable_x64(True):  # float64 resolves 1e-4 a out to 2^39 a
         scene_params("ng", Scene(medium="free", swimmers=2, separation=1e10), dtype=jnp.float64)
         with pytest.raises(ConfigError, match="float64 positions"):
-            jswim.env.rollout(
+            jswim.env.rollout_moves(
                 "ng", [(1, 1, -1)], scene=Scene(medium="free", swimmers=2, separation=1e12)
             )
 
@@ -174,8 +174,8 @@ def test_free_square_stroke_matches_independent_collinear_solve():
 
 def test_bulk_is_todays_environment():
     moves = SQUARE * 3 + [(1, -0.5), (2, 0.3), (1, 1), (2, -1), (2, 1), (1, 0)]
-    today = jswim.env.rollout("ng", moves)
-    same = jswim.env.rollout("ng", moves, scene=Scene())
+    today = jswim.env.rollout_moves("ng", moves)
+    same = jswim.env.rollout_moves("ng", moves, scene=Scene())
     np.testing.assert_array_equal(today.x, same.x)
     r = scene_rollout("ng", moves, Scene())
     np.testing.assert_allclose(r.x[:, 0], today.x, rtol=0, atol=1e-12)
@@ -190,10 +190,10 @@ def test_bulk_is_todays_environment():
 
 
 def test_rollout_routes_scenes():
-    r = jswim.env.rollout("ng", SQUARE, scene=Scene(medium="free"))
+    r = jswim.env.rollout_moves("ng", SQUARE, scene=Scene(medium="free"))
     assert r.x.shape == (4, 1) and abs(r.x[-1, 0] - 0.1720914) < 1e-7
     with pytest.raises(ConfigError):
-        jswim.env.rollout("ng", SQUARE, scene="wall")
+        jswim.env.rollout_moves("ng", SQUARE, scene="wall")
     with pytest.raises(ConfigError, match="triples"):
         scene_rollout("ng", SQUARE, Scene(swimmers=2))
 

@@ -103,7 +103,7 @@ def test_scene_world_steps_bit_equal_to_scene_step_float32(float32, scene):
 @pytest.mark.slow
 def test_rollout_serves_both_worlds_as_their_own_rollouts():
     # The paper's world: the old rollout (float64) and the protocol's, same key, same numbers.
-    old = jswim.env.rollout("ng", SQUARE * 2, key=4, zeta=0.3)
+    old = jswim.env.rollout_moves("ng", SQUARE * 2, key=4, zeta=0.3)
     with jax.enable_x64(True):
         env, params = jswim.make("ng", zeta=0.3)
         tr = jswim.rollout(env, params, 4, jnp.array(SQUARE_CODES * 2, jnp.int32))
@@ -244,14 +244,14 @@ def test_old_names_import_from_their_old_places():
             "step",
             "step_batch",
             "advance",
-            "rollout",
+            "rollout_moves",
             "seed32",
             "seed_key",
             "encode_action",
             "dof_values",
             "position",
         ],
-        "jswim.env.rollouts": ["Rollout", "rollout", "seed32", "seed_key"],
+        "jswim.env.rollouts": ["Rollout", "rollout_moves", "seed32", "seed_key"],
         "jswim.scenes": [
             "Scene",
             "SceneParams",
@@ -290,5 +290,5 @@ def test_old_names_import_from_their_old_places():
 
 @pytest.mark.slow
 def test_old_rollout_with_a_scene_routes_to_the_scene_rollout():
-    r = jswim.env.rollout("ng", SQUARE, scene=Scene(medium="wall", height=5.0))
+    r = jswim.env.rollout_moves("ng", SQUARE, scene=Scene(medium="wall", height=5.0))
     assert r.z.shape == (4, 1) and r.contact.shape == (4,)

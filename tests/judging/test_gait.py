@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from jswim.env import decode_action, encode_action as act, make_params, rollout
+from jswim.env import decode_action, encode_action as act, make_params, rollout_moves
 from jswim.errors import ConfigError
 from jswim.judging.gait import best_cycles, best_per_step, judge, replay
 
@@ -58,7 +58,7 @@ def test_replay_matches_the_environment(swimmer):
     actions = np.random.default_rng(1).integers(0, 3 * n, (6, 40))
     for init in [(1,) * n, (1, 0) + (1,) * (n - 2)]:
         moves = [[decode_action(int(a)) for a in row] for row in actions]
-        env = rollout(swimmer, moves, init=init)
+        env = rollout_moves(swimmer, moves, init=init)
         rp = replay(actions.T, make_params(swimmer).model, np.tile(init, (6, 1)))
         np.testing.assert_allclose(rp.x[1:].T, np.asarray(env.x), atol=1e-6)
         assert np.array_equal(~rp.moved.T & (actions % 3 != 1), np.asarray(env.stuck))

@@ -49,11 +49,11 @@ def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycl
     )  # (the four-link cycle drifts in y)
     assert dx == pytest.approx(best.displacement, rel=1e-8)
     moves = list(best.moves)
-    fwd = env.rollout(swimmer, moves * 2, init=best.start)
+    fwd = env.rollout_moves(swimmer, moves * 2, init=best.start)
     assert float(fwd.x[-1]) == pytest.approx(2 * best.displacement, rel=1e-6)
     # Reversed: the same loop backwards, from the corner where the forward cycle ends (= starts).
     back = [(dof, -roc) for dof, roc in reversed(moves)]
-    rev = env.rollout(swimmer, back, init=best.start)
+    rev = env.rollout_moves(swimmer, back, init=best.start)
     assert float(rev.x[-1]) == pytest.approx(-best.displacement, rel=1e-6)
     # The best -x cycle is as fast as the best +x one (mirror symmetry of the stroke set).
     assert gait.best_cycles(model, -1)[0].per_step == pytest.approx(best.per_step, rel=1e-9)
@@ -67,7 +67,7 @@ def test_best_cycle_swims_and_its_reverse_swims_back(swimmer, per_step, per_cycl
 def test_reciprocal_stroke_goes_nowhere(swimmer, dof):
     init = (0, 1, 1)  # asymmetric, so that each half-stroke moves the body
     first = 1 if init[dof - 1] == 0 else -1
-    r = env.rollout(swimmer, [(dof, first), (dof, -first)] * 3, init=init)
+    r = env.rollout_moves(swimmer, [(dof, first), (dof, -first)] * 3, init=init)
     assert abs(float(r.x[-1])) < 1e-12 and abs(float(r.y[-1])) < 1e-12
     assert abs(float(r.x[0])) > 1e-4  # each half-stroke does move the body
 
@@ -89,9 +89,9 @@ def test_three_link_case_equals_purcell_and_three_sphere_cycle_equals_ng():
     three = env.step_table(env.make_params("nlink", n_links=3, d_max=np.pi / 3).model)[0]
     np.testing.assert_allclose(three, purcell, atol=1e-12)
     cyc = [(1, 1), (2, 1), (1, -1), (2, -1)]
-    r = env.rollout("nsphere", cyc * 2, n_spheres=3, init=(0, 0))
+    r = env.rollout_moves("nsphere", cyc * 2, n_spheres=3, init=(0, 0))
     assert float(r.x[3]) == pytest.approx(ng.square_cycle_displacement(6, 10), rel=1e-9)
-    assert float(r.x[0]) != pytest.approx(float(env.rollout("ng", cyc, init=(0, 0)).x[0]))
+    assert float(r.x[0]) != pytest.approx(float(env.rollout_moves("ng", cyc, init=(0, 0)).x[0]))
 
 
 def test_llm_run_on_a_three_dof_swimmer_uses_the_general_path(tmp_path):

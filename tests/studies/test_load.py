@@ -52,7 +52,7 @@ def test_load_returns_runs_and_trajectories(folders):
         for a in ("llm", "qlearning", "random")
     ]:
         tr = t[t.run_id == r["run_id"]].sort_values("step")
-        ref = env.rollout(
+        ref = env.rollout_moves(
             "purcell",
             r["actions"],
             init=[int(c == "+") for c in r["init"]],

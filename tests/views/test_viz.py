@@ -133,7 +133,7 @@ def test_tracks_follow_the_recorded_runs(swim_folder):
         centres = 0.5 * (t.points[:, 1:] + t.points[:, :-1])
         np.testing.assert_allclose(centres.mean(axis=1), np.stack([t.x, t.y], 1), atol=1e-9)
         # DOF values: an independent noiseless rollout of the same actions from the same start
-        ro = env.rollout(
+        ro = env.rollout_moves(
             "purcell", [tuple(a) for a in r["actions"]], init=[1, 1], direction=r["direction"]
         )
         np.testing.assert_allclose(t.dofs[1:], np.asarray(ro.dofs), atol=1e-6)
