@@ -388,7 +388,8 @@ class LLMDriver:
         run.meta = {
             "type": "meta",
             "run_id": run_id,
-            "spec": dataclasses.asdict(spec),
+            # a run without a target (the paper's task) keeps the transcript it always had
+            "spec": {k: v for k, v in dataclasses.asdict(spec).items() if k != "target" or v},
             "n_ht": n_ht,
             "rocs": list(text.rocs),
             "levels0": result.levels0,
