@@ -119,17 +119,32 @@ def lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
     )["rows"]
 
 
-def _build_lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
-    n, big_k = model.n_dof, roc_levels
+def lattice_moves(n_dof: int, roc_levels: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every move of the K lattice in table-row order: its start and end levels.
+
+    Row ``(i (n_dof (K + 1)) + dof (K + 1) + j)`` moves DOF ``dof`` of lattice point ``i`` to
+    level ``j``; point ``i`` has level ``j_m`` of DOF ``m`` at digit ``m`` of ``i`` in base
+    ``K + 1`` (``i = sum_m j_m (K + 1)^m``).
+
+    Returns
+    -------
+    start, end : int ndarrays, shape (lattice_rows, n_dof)
+        Levels ``0..K`` before and after the move.
+    """
+    n, big_k = n_dof, roc_levels
     shapes = np.stack(np.meshgrid(*[np.arange(big_k + 1)] * n, indexing="ij"), -1)[
         ..., ::-1
     ].reshape(-1, n)
-    # shapes[i] has digit m (base K+1) of i at position m: i = sum_m j_m (K+1)^m.
     start = np.repeat(shapes, n * (big_k + 1), axis=0)
     dof = np.tile(np.repeat(np.arange(n), big_k + 1), len(shapes))
-    target = np.tile(np.arange(big_k + 1), len(shapes) * n)
     end = start.copy()
-    end[np.arange(len(end)), dof] = target
+    end[np.arange(len(end)), dof] = np.tile(np.arange(big_k + 1), len(shapes) * n)
+    return start, end
+
+
+def _build_lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
+    big_k = roc_levels
+    start, end = lattice_moves(model.n_dof, roc_levels)
     span = model.hi - model.lo
     with jax.ensure_compile_time_eval(), jax.enable_x64(True):
 

@@ -33,7 +33,7 @@ from jax import Array
 
 from jswim.env.table_cache import cached, model_key
 from jswim.env.state import corner_values
-from jswim.env.step_tables import TABLE_DEGREE
+from jswim.env.step_tables import TABLE_DEGREE, lattice_moves
 from jswim.integrate import chebyshev_rule
 from jswim.swimmers.dissipation import power
 from jswim.swimmers.models import SwimmerModel
@@ -154,14 +154,8 @@ def lattice_work_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
 
 
 def _build_lattice_work(model: SwimmerModel, roc_levels: int) -> np.ndarray:
-    n, big_k = model.n_dof, roc_levels
-    shapes = np.stack(np.meshgrid(*[np.arange(big_k + 1)] * n, indexing="ij"), -1)[
-        ..., ::-1
-    ].reshape(-1, n)
-    start = np.repeat(shapes, n * (big_k + 1), axis=0)
-    dof = np.tile(np.repeat(np.arange(n), big_k + 1), len(shapes))
-    end = start.copy()
-    end[np.arange(len(end)), dof] = np.tile(np.arange(big_k + 1), len(shapes) * n)
+    big_k = roc_levels
+    start, end = lattice_moves(model.n_dof, roc_levels)
     span = model.hi - model.lo
     with jax.ensure_compile_time_eval(), jax.enable_x64(True):
 

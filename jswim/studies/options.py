@@ -55,6 +55,19 @@ COMPETENCE_VARIANTS = (
     "shape-changing+temperature",
 )
 
+#: The scene studies' grids (`StudyOptions` fields): each read by one study only, and each a
+#: size of the grid (a folder grows when one grows).
+SCENE_GRIDS = (
+    "heights",
+    "tilts",
+    "separations",
+    "phases",
+    "school_sizes",
+    "formations",
+    "distances",
+    "bearings",
+)
+
 
 @dataclass(frozen=True)
 class StudyOptions:

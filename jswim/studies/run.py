@@ -70,6 +70,7 @@ from jswim.studies.options import (
     AGENTS,
     COMPETENCE_VARIANTS,
     CONTINUOUS_AGENT,
+    SCENE_GRIDS,
     SWIM_VARIANT,
     StudyOptions,
 )
@@ -140,14 +141,7 @@ GRID_SIZE = (
     "prompt_files",
     "samples",
     "roc_levels_grid",
-    "heights",
-    "tilts",
-    "separations",
-    "phases",
-    "school_sizes",
-    "formations",
-    "distances",
-    "bearings",
+    *SCENE_GRIDS,
 )
 
 #: How run seeds are made (``jswim.studies.plans.run_seed``); folders made otherwise are refused.

@@ -31,6 +31,7 @@ from jswim.studies.options import (
     COMPETENCE_VARIANTS,
     CONTINUOUS_AGENT,
     CONTROLLER_AGENT,
+    SCENE_GRIDS,
     STROKE_AGENT,
     WITH_BASELINES,
     StudyOptions,
@@ -276,19 +277,7 @@ def _is_pair(scene: str) -> bool:
 
 #: The scene studies' grids as StudyOptions gives them (a changed one on another study is refused).
 _DEFAULT_GRIDS = {
-    f.name: f.default
-    for f in dataclasses.fields(StudyOptions)
-    if f.name
-    in (
-        "heights",
-        "tilts",
-        "separations",
-        "phases",
-        "school_sizes",
-        "formations",
-        "distances",
-        "bearings",
-    )
+    f.name: f.default for f in dataclasses.fields(StudyOptions) if f.name in SCENE_GRIDS
 }
 
 
