@@ -231,14 +231,15 @@ NAV_TRAIN_EPISODES = 400
 #: PPO trains for ``train_episodes / PPO_SHARE`` episodes (of its first swimmer; it pools 16,
 #: [`nav_ppo_config`][jswim.studies.navigate.nav_ppo_config]): 200 at the default, 51,200 steps
 #: at 90 degrees, about 15 s for one learner on the shared CPU; it reached the 90-degree target
-#: in 9 of 16 seeds after 40,000 steps (docs/navigation.md).
+#: in 13 of 16 seeds after 40,000 steps (docs/navigation.md).
 PPO_SHARE = 2
 
 
 def nav_ppo_config(steps: int) -> Any:
     """PPO's settings for navigation (docs/navigation.md, *Baselines*): a categorical policy
     over the K-level action codes, 16 swimmers pooled per learner, rollouts of 64, discount
-    0.99, GAE lambda 0.95, advantages standardised, rewards not rescaled, ``steps`` steps."""
+    0.99, GAE lambda 0.95, advantages standardised, rewards not rescaled, entropy weight 0.08,
+    ``steps`` steps."""
     from jswim.agents.ppo import PPOConfig  # lazy: start-up (the learners load optax)
 
     return PPOConfig(
@@ -249,7 +250,7 @@ def nav_ppo_config(steps: int) -> Any:
         gae_lambda=0.95,
         normalize_advantages=True,
         reward_norm=False,
-        entropy_coef=0.03,
+        entropy_coef=0.08,
         policy="categorical",
     )
 

@@ -116,7 +116,7 @@ def test_ppo_reaches_a_target_at_90_degrees():
     run = ppo_train(env, params, jax.random.split(jax.random.PRNGKey(0), 8), NAV_PPO, trace=True)
     last = [_last_ended(env, params, run.trace, i) for i in range(8)]
     ok = [r for r in last if r.reached]
-    # measured: 5 of 8 learners end at the target (seeds 0 and 1), 9 of 16 (seed 0); the ones
-    # that miss keep a slow sideways gait that closes 1.44 a, or stop 0.2 a short
-    assert len(ok) >= 3, [r.steps for r in last]
+    # measured (seed 0): 6 of 8 learners end their last 10 episodes at the target, 13 of 16;
+    # with the default rescaled rewards 1 of 8 (the rest keep a slow sideways gait)
+    assert len(ok) >= 4, [r.steps for r in last]
     assert np.isfinite([r.energy_per_distance for r in ok]).all()
