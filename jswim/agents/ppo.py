@@ -22,6 +22,8 @@ Policy (plain JAX, no framework): two small tanh MLPs on the scaled shape. The a
 the usual treatment of bounded actions in PPO: the clip is part of the environment's reading of
 the action, so a policy can reach a limit exactly and return to the same shape, which a squashed
 distribution never quite does). ``log std`` is a learned vector per DOF. The critic gives V.
+With ``PPOConfig(policy="categorical")`` the actor instead gives one logit per integer action
+code of the world (``env.n_actions``) and acts with the code (a discrete PPO, opt-in).
 
 Exploration must end for a learner to keep a stroke to the end of its run (the success
 criterion); the policy's own std and logits sharpen as it learns, and a temperature ``tau(t)``
@@ -66,7 +68,10 @@ from jswim.agents.qlearning import training_compiler_options
 from jswim.env.base import Environment
 from jswim.env.episodes import Trajectory
 from jswim.agents.ppo_judge import evaluate, evaluate_swimmers, exact_x  # noqa: F401  (the judge, next to the learner)
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_choice
+
+#: The actor heads of `PPOConfig.policy`.
+POLICIES = ("gaussian", "categorical")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -133,6 +138,14 @@ class PPOConfig:
         ``trace``) is the first swimmer's. With one swimmer a rollout's advantages on a task
         whose random moves earn about nothing are mostly noise, and navigation learners drifted
         into doing nothing (docs/navigation.md).
+    policy : str
+        The actor's head (static). ``"gaussian"`` (the default, the paper's continuous learner):
+        a categorical DOF and a Gaussian ROC clipped to [-1, 1], as above. ``"categorical"``:
+        one categorical over the world's integer action codes (``env.n_actions``, the
+        Q-learner's actions: every DOF and ROC ``k / K``), tempered by ``tau(t)`` as the DOF's
+        logits are; ``init_std``, ``max_std`` are then unused. On K levels a Gaussian rounded
+        to the lattice pushed navigation learners against their limits; the categorical
+        reaches the 90-degree target (docs/navigation.md).
     """
 
     steps: int = 200
@@ -154,9 +167,11 @@ class PPOConfig:
     energy_weight: float = 0.0
     max_std: float | None = None
     envs: int = 1
+    policy: str = "gaussian"
 
     def __post_init__(self) -> None:
         energy_reward(self.energy_weight)  # raises on a bad weight
+        check_choice(self.policy, POLICIES, "PPO policy")
         for name in ("steps", "rollout", "epochs", "hidden", "envs"):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
@@ -278,11 +293,13 @@ def init_policy(
     hidden: int = 32,
     init_std: float | Array = 1.0,
     n_obs: int | None = None,
+    n_logits: int | None = None,
 ) -> dict[str, Any]:
     """Initial network parameters: Gaussian weights of std ``gain / sqrt(fan_in)``, gains as in
     PureJaxRL (sqrt 2 for hidden layers, 0.01 for the actor's head so the first policy is near
     uniform over DOFs with ROC mean ~0, 1 for the critic's head), zero biases. ``n_obs`` is the
-    observation's length (default ``n_dof``: the shape alone).
+    observation's length (default ``n_dof``: the shape alone). ``n_logits``: the actor's
+    outputs (default ``2 n_dof``: DOF logits and ROC means; a categorical policy's action count).
 
     Returns
     -------
@@ -299,7 +316,7 @@ def init_policy(
     actor = [
         _dense(ka[0], n_in, h, root2, dtype),
         _dense(ka[1], h, h, root2, dtype),
-        _dense(ka[2], h, 2 * n_dof, 0.01, dtype),
+        _dense(ka[2], h, 2 * n_dof if n_logits is None else n_logits, 0.01, dtype),
     ]
     critic = [
         _dense(kc[0], n_in, h, root2, dtype),
@@ -363,6 +380,23 @@ def _sample(
     return dof, m + jnp.exp(ls) * tau * z
 
 
+def _code_log_prob(logits: Array, code: Array, tau: Array) -> Array:
+    """Log-probability of action code ``code`` under the tempered categorical ``logits / tau``."""
+    logp = jax.nn.log_softmax(logits / tau[..., None])
+    return jnp.take_along_axis(logp, code[..., None], -1)[..., 0]
+
+
+def _code_entropy(logits: Array, tau: Array) -> Array:
+    logp = jax.nn.log_softmax(logits / tau[..., None])
+    return -jnp.sum(jnp.exp(logp) * logp, -1)
+
+
+def _sample_code(logits: Array, tau: Array, u: Array) -> Array:
+    """An action code: the inverse CDF of the tempered categorical at the uniform ``u``."""
+    cdf = jnp.cumsum(jax.nn.softmax(logits / tau), -1)
+    return jnp.minimum(jnp.sum(cdf < u, dtype=jnp.int32), logits.shape[-1] - 1)
+
+
 # ----------------------------------------------------------------------------- training
 
 
@@ -370,7 +404,7 @@ class _Batch(NamedTuple):
     """One rollout, time-major (rollout,)."""
 
     obs: Array
-    dof: Array
+    dof: Array  # the DOF (gaussian) or the action code (categorical)
     u: Array
     logp: Array
     value: Array
@@ -397,13 +431,19 @@ def _gae(reward: Array, value: Array, last_value: Array, gamma: float, lam: floa
 def _loss(
     net: dict[str, Any], batch: _Batch, adv: Array, target: Array, config: PPOConfig, hp: dict
 ) -> Array:
-    logits, mean, log_std, value = policy(net, batch.obs, config.max_std)
-    logp = _log_prob(logits, mean, log_std, batch.dof, batch.u, batch.tau)
+    if config.policy == "categorical":
+        logits = _mlp(net["actor"], batch.obs)
+        value = _mlp(net["critic"], batch.obs)[..., 0]
+        logp = _code_log_prob(logits, batch.dof, batch.tau)
+        entropy = jnp.mean(_code_entropy(logits, batch.tau))
+    else:
+        logits, mean, log_std, value = policy(net, batch.obs, config.max_std)
+        logp = _log_prob(logits, mean, log_std, batch.dof, batch.u, batch.tau)
+        entropy = jnp.mean(_entropy(logits, log_std, batch.tau))
     ratio = jnp.exp(logp - batch.logp)
     a = (adv - adv.mean()) / (adv.std() + 1e-8) if config.normalize_advantages else adv
     surrogate = jnp.minimum(ratio * a, jnp.clip(ratio, 1.0 - hp["clip"], 1.0 + hp["clip"]) * a)
     value_loss = 0.5 * jnp.mean((value - target) ** 2)
-    entropy = jnp.mean(_entropy(logits, log_std, batch.tau))
     return -jnp.mean(surrogate) + hp["value_coef"] * value_loss - hp["entropy_coef"] * entropy
 
 
@@ -444,9 +484,11 @@ def _train(
     states = jax.vmap(reset, in_axes=(0, axes))(reset_keys, params)
     first = states if e == 1 else jax.tree.map(lambda v: v[:, 0], states)
     dofs0 = jax.vmap(lambda st, p: world.observe(st, p).dofs, in_axes=(0, axes))(first, params)
-    nets = jax.vmap(lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features))(
-        split[:, 1]
-    )
+    categorical = config.policy == "categorical"
+    n_logits = world.n_actions if categorical else None
+    nets = jax.vmap(
+        lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features, n_logits)
+    )(split[:, 1])
     opt = _optimizer(hp)
     n_updates = -(-config.steps // config.rollout)
     total = n_updates * config.rollout
@@ -465,12 +507,26 @@ def _train(
 
     def act_one(state, net, p, tau, u_dof, z_roc, y):
         obs = world.features(state, p)
-        logits, mean, log_std, value = policy(net, obs, config.max_std)
-        dof, u_roc = _sample(logits, mean, log_std, tau, u_dof, z_roc)
-        roc = jnp.clip(u_roc, -1.0, 1.0)
-        action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
-        logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
-        state, info = world.learner_advance(state, action, y, p)
+        if categorical:
+            # One categorical over the integer codes; the record is the code's ROC vector.
+            logits = _mlp(net["actor"], obs)
+            value = _mlp(net["critic"], obs)[..., 0]
+            code = _sample_code(logits, tau, u_dof)
+            logp = _code_log_prob(logits, code, tau)
+            state, info = world.learner_advance(state, code, y, p)
+            k = world.roc_levels
+            dof, u_roc = code // (2 * k + 1), jnp.zeros((), dtype)
+            roc = (code % (2 * k + 1) - k).astype(dtype) / k
+            action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
+            batch_act = code
+        else:
+            logits, mean, log_std, value = policy(net, obs, config.max_std)
+            dof, u_roc = _sample(logits, mean, log_std, tau, u_dof, z_roc)
+            roc = jnp.clip(u_roc, -1.0, 1.0)
+            action = jnp.where(jnp.arange(n) == dof, roc, 0.0).astype(dtype)
+            logp = _log_prob(logits, mean, log_std, dof, u_roc, tau)
+            state, info = world.learner_advance(state, action, y, p)
+            batch_act = dof
         reward = energy_reward(config.energy_weight)(info).astype(dtype)
         x, y_pos, theta = world.pose(state, p)
         record = (
@@ -483,7 +539,7 @@ def _train(
             theta,
             Trajectory(state, world.observe(state, p), info) if trace else None,
         )
-        return state, _Batch(obs, dof, u_roc, logp, value, reward, tau), record
+        return state, _Batch(obs, batch_act, u_roc, logp, value, reward, tau), record
 
     def act_learner(state, net, p, tau, u_dof, z_roc, y):
         state, batch, record = per_env(act_one, (0, None, None, None, 0, 0, 0))(
@@ -508,7 +564,7 @@ def _train(
             r2 = r2 + jnp.sum(batch.reward**2)
             count = t_end if e == 1 else t_end * e
             batch = batch._replace(reward=batch.reward / (jnp.sqrt(r2 / count) + 1e-8))
-        last_value = policy(net, last_obs, config.max_std)[3]
+        last_value = _mlp(net["critic"], last_obs)[..., 0]
         adv = _gae(batch.reward, batch.value, last_value, hp["discount"], hp["gae_lambda"])
         target = adv + batch.value
 

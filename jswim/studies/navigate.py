@@ -51,6 +51,8 @@ __all__ = [
     "PATH",
     "PPO_SHARE",
     "cells",
+    "nav_ppo_config",
+    "nav_qconfig",
     "nav_row",
     "nav_summary",
     "target_json",
@@ -226,10 +228,31 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
 #: ended within the training.
 NAV_TRAIN_EPISODES = 400
 
-#: PPO trains for ``train_episodes / PPO_SHARE`` episodes: its step costs about 50 Q-learning
-#: steps on a CPU (100 K steps: 45 s for one learner), and it did not reach the 90-degree target
-#: at 400 episodes either (docs/navigation.md).
-PPO_SHARE = 4
+#: PPO trains for ``train_episodes / PPO_SHARE`` episodes (of its first swimmer; it pools 16,
+#: [`nav_ppo_config`][jswim.studies.navigate.nav_ppo_config]): 200 at the default, 51,200 steps
+#: at 90 degrees, about 15 s for one learner on the shared CPU; it reached the 90-degree target
+#: in 13 of 16 seeds after 40,000 steps (docs/navigation.md).
+PPO_SHARE = 2
+
+
+def nav_ppo_config(steps: int) -> Any:
+    """PPO's settings for navigation (docs/navigation.md, *Baselines*): a categorical policy
+    over the K-level action codes, 16 swimmers pooled per learner, rollouts of 64, discount
+    0.99, GAE lambda 0.95, advantages standardised, rewards not rescaled, entropy weight 0.08,
+    ``steps`` steps."""
+    from jswim.agents.ppo import PPOConfig  # lazy: start-up (the learners load optax)
+
+    return PPOConfig(
+        steps=steps,
+        rollout=64,
+        envs=16,
+        discount=0.99,
+        gae_lambda=0.95,
+        normalize_advantages=True,
+        reward_norm=False,
+        entropy_coef=0.08,
+        policy="categorical",
+    )
 
 
 def nav_qconfig(steps: int, action_set: str = "all") -> Any:
@@ -313,7 +336,7 @@ def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
     elif p0.agent == CONTINUOUS_AGENT:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
-        run = ppo.train(world_, params, keys, ppo.PPOConfig(steps=p0.steps), trace=True)
+        run = ppo.train(world_, params, keys, nav_ppo_config(p0.steps), trace=True)
         trace = run.trace
     else:
         raise ValueError(f"no navigation baseline {p0.agent!r}")

@@ -384,8 +384,8 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
                         group = ", ".join(g for g in [cell.group, *swept] if g)
                         steps = o.steps if o.steps is not None else cell.steps or spec.steps
                         if cell.target and agent in ("qlearning", CONTINUOUS_AGENT):
-                            # learners train over many episodes (PPO a quarter: its step costs
-                            # ~50 Q-learning steps on a CPU; jswim.studies.navigate)
+                            # learners train over many episodes (PPO a half: each of its steps
+                            # moves 16 swimmers; jswim.studies.navigate)
                             share = navigate.PPO_SHARE if agent == CONTINUOUS_AGENT else 1
                             steps *= max(1, o.train_episodes // share)
                         for k in range(runs.get(agent, runs["qlearning"])):

@@ -14,6 +14,7 @@ from jswim.agents.qlearning import QConfig, train
 from jswim.env.navigation import summarise
 from jswim.env.targets import FixedTarget
 from jswim.errors import ConfigError
+from jswim.studies.navigate import nav_ppo_config
 
 TARGET = FixedTarget(3.0, 90.0)
 #: Q-learning for navigation (docs/navigation.md, "Baselines"): many episodes in one continuing
@@ -87,31 +88,35 @@ def test_ppo_pools_swimmers_per_learner_and_caps_the_std():
         PPOConfig(envs=0)
 
 
-#: PPO for navigation (docs/navigation.md, "Baselines"): 16 swimmers per learner pooled in each
-#: update, the ROC's std capped at 0.5, a long horizon (gamma 0.99, GAE lambda 0.95).
-NAV_PPO = PPOConfig(
-    steps=10_000,
-    rollout=64,
-    envs=16,
-    discount=0.99,
-    gae_lambda=0.95,
-    init_std=0.5,
-    max_std=0.5,
-    normalize_advantages=True,
-    entropy_coef=0.03,
-)
+#: PPO for navigation (docs/navigation.md, "Baselines"): a categorical policy over the K-level
+#: action codes, 16 swimmers pooled per learner, rewards not rescaled; the study's settings.
+NAV_PPO = nav_ppo_config(40_000)
 
 
-@pytest.mark.slow  # ~60 s: 4 learners x 16 swimmers x 10,000 steps
-def test_ppo_with_pooled_swimmers_closes_on_a_target_at_90_degrees():
-    env, params = jswim.make("purcell", roc_levels=2, target=TARGET, lattice=True)
-    run = ppo_train(env, params, jax.random.split(jax.random.PRNGKey(0), 4), NAV_PPO, trace=True)
-    budget = int(params.target.budget)
-    closed = []
-    for i in range(4):
-        runs = summarise(env, params, jax.tree.map(lambda v: v[i], run.trace))
-        ended = [r for r in runs if r.reached or r.steps == budget]
-        closed.append(np.mean([r.closed for r in ended[-10:]]))
-    # measured (seed 0): 1.70, 2.71, 2.73, 1.85 a of the 2.75 a to the success radius; one
-    # swimmer per learner (envs=1, 100,000 steps) closes 0.00-0.05 a: it learns to do nothing
-    assert sum(c > 1.5 for c in closed) >= 3, closed
+def test_ppo_categorical_policy_acts_with_the_action_codes():
+    env, params = jswim.make("purcell", roc_levels=2, target=FixedTarget(3.0, 90.0, budget=16))
+    cfg = PPOConfig(steps=32, rollout=8, envs=2, policy="categorical")
+    run = ppo_train(env, params, jax.random.split(jax.random.PRNGKey(0), 2), cfg, trace=True)
+    assert np.asarray(run.trace.state.episodes[:, -1]).tolist() == [2, 2]
+    rocs = np.asarray(run.actions)
+    # one DOF moved per step, by a ROC k / K of the lattice, the DOF the record names
+    assert ((rocs != 0).sum(-1) <= 1).all()
+    assert np.allclose(rocs * 2 % 1, 0)
+    moved = np.abs(rocs).argmax(-1) + 1
+    nz = (rocs != 0).any(-1)
+    assert (moved[nz] == np.asarray(run.dof)[nz]).all()
+    assert np.allclose(np.asarray(run.trace.state.swimmer.frac) * 2 % 1, 0)
+    with pytest.raises(ConfigError):
+        PPOConfig(policy="beta")
+
+
+@pytest.mark.slow  # ~35 s: 8 learners x 16 swimmers x 40,000 steps
+def test_ppo_reaches_a_target_at_90_degrees():
+    env, params = jswim.make("purcell", roc_levels=2, target=TARGET)
+    run = ppo_train(env, params, jax.random.split(jax.random.PRNGKey(0), 8), NAV_PPO, trace=True)
+    last = [_last_ended(env, params, run.trace, i) for i in range(8)]
+    ok = [r for r in last if r.reached]
+    # measured (seed 0): 6 of 8 learners end their last 10 episodes at the target, 13 of 16;
+    # with the default rescaled rewards 1 of 8 (the rest keep a slow sideways gait)
+    assert len(ok) >= 4, [r.steps for r in last]
+    assert np.isfinite([r.energy_per_distance for r in ok]).all()
