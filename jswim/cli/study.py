@@ -67,7 +67,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
         print("\n".join(est.lines()))
         print(json.dumps(est.as_dict(), sort_keys=True))  # the same, for scripts
         return 0
-    if (text := short_steps_warning(opts)) is not None:
+    if (text := short_steps_warning(opts, study)) is not None:
         base.warn(text)
     with Progress() as bar:
         tick = phase_ticker(bar)

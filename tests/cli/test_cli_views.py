@@ -415,3 +415,13 @@ def test_ctrl_c_before_main_handles_it_is_one_line(monkeypatch, capsys):
         stop.value.code == 130
         and err == "jswim: interrupted (Ctrl-C) while starting; nothing was written\n"
     )
+
+
+def test_short_runs_warn_only_where_the_paper_criterion_judges_them():
+    from jswim.studies import StudyOptions
+    from jswim.studies.specs import short_steps_warning
+
+    short = StudyOptions(steps=8)
+    assert "no run can meet the success criterion" in short_steps_warning(short, "curves")
+    assert short_steps_warning(short, "navigate") is None  # success there is reaching the target
+    assert short_steps_warning(StudyOptions(steps=50), "curves") is None
