@@ -43,7 +43,6 @@ def main() -> None:
                 StudyOptions(runs=args.runs, q_runs=args.q_runs, steps=50),
                 backend=Backend(base_url=srv.url, model="fake"),
                 out=out,
-                figures=False,
             )
         print(
             f"study: {len(res.rows)} runs ({sum(r['agent'] == 'llm' for r in res.rows)} LLM) in "

@@ -28,7 +28,8 @@ Make a world, then step it or roll a given stroke through it:
   when that is missing); ``jswim.load(folder)`` reads its runs and trajectories as pandas
   DataFrames (and ``study.transcript(run_id)``, ``study.calls``).
 - See runs: ``jswim.animate(study, run_id)`` (inline in Jupyter; ``.save("runs.gif")``), and
-  ``jswim.report(folder)`` writes the folder's self-contained ``report.html``.
+  ``jswim.report(folder)`` draws the folder's figures and writes its self-contained
+  ``report.html`` (a study ends at its folder: this is the publish step after it).
 - The paper's functional environment is there too: ``make_params``, ``reset``, ``step``,
   ``step_batch`` (`jswim.env`).
 - The command line: ``jswim --help``. The architecture map: ``docs/design.md``.
@@ -50,7 +51,7 @@ _EXPORTS = {
     "run_study": "jswim.studies",
     "load": "jswim.results",
     "animate": "jswim.viz.animate",
-    "report": "jswim.viz.page",
+    "report": "jswim.viz.publish",
     "register_world": "jswim.env.registry",
     "StudyOptions": "jswim.studies",
     "make_params": "jswim.env",

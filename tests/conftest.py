@@ -238,6 +238,7 @@ def small_swim_study() -> Path:
 
     from jswim.studies.options import StudyOptions
     from jswim.studies.run import run_study
+    from jswim.viz.publish import report
     from tests.fakeserver import FakeServer, hash_reply
 
     home = _ROOT / "studies"
@@ -250,7 +251,8 @@ def small_swim_study() -> Path:
                 opts = StudyOptions(
                     swimmers=("purcell", "ng"), directions=(1, -1), steps=8, runs=1, q_runs=3
                 )
-                run_study("swim", opts, srv.backend(), folder, figures=False)
+                run_study("swim", opts, srv.backend(), folder)
+            report(folder, figures=False)  # the publish step: the page, without figures
             built.touch()
     return folder
 

@@ -185,6 +185,10 @@ def _run(args: argparse.Namespace, suite: Any, models: Any, mf: Any, out: Path, 
     rows = _rows(jobs, models, mf, outcome.status)
     missing = _missing(jobs, rows, meta["model_status"], outcome.stopped_at)
     paths = leaderboard.write_files(out, rows, meta, missing)
+    if rows:  # the pictures layer draws what the bench computed
+        from jswim.figures.leaderboard import figure  # lazy: matplotlib, only for a bench with rows
+
+        paths += figure(out, rows)
     print(
         f"bench {suite.name}: {suite.about or 'user suite'} (seed {suite.seed}"
         + (f"; sizes changed: {dict(suite.sizes)}" if suite.sizes else "")

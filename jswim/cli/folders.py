@@ -42,9 +42,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def plot(args: argparse.Namespace) -> int:
-    from jswim.overview import StudyFolder  # lazy: JAX loads only for commands that run
+    from jswim.studies.overview import StudyFolder  # lazy: JAX loads only for commands that run
     from jswim.results import unfinished_note  # lazy: as above
-    from jswim.studies.report import draw_figures  # lazy: as above
+    from jswim.figures.plots import draw_figures  # lazy: matplotlib, for this command only
 
     study = StudyFolder(args.folder)
     if not study.rows:
@@ -63,7 +63,7 @@ def plot(args: argparse.Namespace) -> int:
 
 
 def show(args: argparse.Namespace) -> int:
-    from jswim.overview import show_text  # lazy: start-up (the study folders' readers load NumPy)
+    from jswim.studies.overview import show_text  # lazy: start-up (the study folders' readers load NumPy)
 
     folder = Path(args.folder)
     if (folder / "bench.json").is_file() and not (
@@ -76,7 +76,7 @@ def show(args: argparse.Namespace) -> int:
 
 
 def compare(args: argparse.Namespace) -> int:
-    from jswim.overview import (
+    from jswim.studies.overview import (
         compare_text,
     )  # lazy: start-up (the study folders' readers load NumPy)
 

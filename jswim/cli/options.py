@@ -443,7 +443,11 @@ def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> No
         metavar="FOLDER",
         help="output folder (default jswim-out/<study>-<hash of the settings>; rerun to resume)",
     )
-    p.add_argument("--no-figures", action="store_true", help="skip the figures")
+    p.add_argument(
+        "--no-figures",
+        action="store_true",
+        help="skip the publish step: no figures and no report.html (jswim plot / jswim report FOLDER draw them later)",
+    )
     p.add_argument(
         "--chunk",
         type=int,

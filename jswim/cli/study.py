@@ -1,5 +1,6 @@
 """``jswim swim`` and ``jswim study NAME``: run a study (argv -> options in `jswim.cli.options`),
-then print its summary, scene table, LLM calls and cost, and where the folder, page and figures are."""
+publish it (figures and report.html, `jswim.viz.publish`; ``--no-figures`` skips that), then print
+its summary, scene table, LLM calls and cost, and where the folder, page and figures are."""
 
 from __future__ import annotations
 
@@ -41,6 +42,23 @@ def main(args: argparse.Namespace) -> int:
 EXIT_COST_CAP = 3
 
 
+def _publish(folder: Path) -> list[Path]:
+    """The publish step (`jswim.viz.publish.report`): the folder's figures and ``report.html``.
+
+    The runs are safe on disk by now: a page or figure that cannot be written is a warning, not a
+    lost study; the figure files are returned (none when it failed)."""
+    from jswim.viz.publish import report  # lazy: matplotlib, which --no-figures never loads
+
+    try:
+        with base.warnings_as_lines():
+            return report(folder).figures
+    except Exception as exc:
+        base.warn(
+            f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries"
+        )
+        return []
+
+
 def _run(study: str, args: argparse.Namespace) -> int:
     from jswim.studies import (
         default_folder,
@@ -80,7 +98,6 @@ def _run(study: str, args: argparse.Namespace) -> int:
                     backend,
                     out,
                     progress=tick,
-                    figures=not args.no_figures,
                     max_cost=args.max_cost,
                 )
         except KeyboardInterrupt:
@@ -99,6 +116,8 @@ def _run(study: str, args: argparse.Namespace) -> int:
             print(f"jswim: error: {exc}. {_kept(out)}", file=sys.stderr)
             return base.EXIT_USAGE
         bar.update("done", len(result.rows), len(result.rows), f"{result.wall_s:.1f} s", final=True)
+    if not args.no_figures:  # the study ended at its folder; the pictures are drawn from it
+        result.figures = _publish(result.folder)
     _print_summary(
         result.summary.to_dict("records"),
         result.rows,
@@ -250,7 +269,7 @@ def _print_summary(
     from jswim.agents.fidelity import (
         describe_constraint,
     )  # lazy: JAX loads only for commands that run
-    from jswim.overview import SUMMARY_NOTE, order_summary, summary_table  # lazy: as above
+    from jswim.studies.overview import SUMMARY_NOTE, order_summary, summary_table  # lazy: as above
 
     cols, cells = summary_table(order_summary(summary, rows))
     print_table(cols, cells, title)

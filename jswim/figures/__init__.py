@@ -7,6 +7,7 @@ from jswim._exports import lazy_exports
 #: Public name -> the module that defines it (loaded on first use).
 _HOMES = {
     "study_figures": ".plots",
+    "draw_figures": ".plots",
     "save": ".panels",
     "panel_keys": ".panels",
     "target_displacement": ".panels",

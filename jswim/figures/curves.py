@@ -30,7 +30,7 @@ from jswim.figures.style import (
     REFERENCE_STYLE,
     styled,
 )
-from jswim.overview import AGENT_ORDER, SWIMMER_ORDER
+from jswim.results.orders import AGENT_ORDER, SWIMMER_ORDER
 from jswim.swimmers.models import SwimmerModel, make_model
 from jswim.results import as_run_rows
 
@@ -48,7 +48,7 @@ def _signature_path(
     """
     from jswim import (
         env,
-    )  # lazy: JAX only when a reference line is drawn (jswim.overview imports plots)
+    )  # lazy: JAX only when a reference line is drawn
     from jswim.judging import gait  # lazy: as above
 
     model = make_model(swimmer)

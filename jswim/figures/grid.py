@@ -29,7 +29,7 @@ from jswim.figures.style import (
 )
 from jswim.results import as_run_rows
 from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
-from jswim.overview import AGENT_ORDER, SWIMMER_ORDER
+from jswim.results.orders import AGENT_ORDER, SWIMMER_ORDER
 
 # -- statistics against a grid (noise levels, sentences removed, starts) ------------------------
 

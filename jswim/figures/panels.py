@@ -20,7 +20,7 @@ from jswim.figures.style import (
     PAGE_IN,
     RC,
 )
-from jswim.overview import SWIMMER_ORDER
+from jswim.results.orders import SWIMMER_ORDER
 from jswim.results import as_run_rows, writing
 from jswim.swimmers.models import make_model
 

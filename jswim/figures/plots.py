@@ -20,14 +20,14 @@ radius) against the execution step ``n``.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 from collections.abc import Mapping, Sequence
 
 from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
-from jswim.overview import AGENT_ORDER, SWIMMER_ORDER  # noqa: F401  (the reading order of tables and panels)
-from jswim.results import as_run_rows
+from jswim.results import as_run_rows, is_failed
 
 from jswim.figures.style import (  # noqa: F401  (the figures' public names, importable from here)
     AGENT_STYLE,
@@ -140,3 +140,31 @@ def continuous_figures(
             sel, cycles=cycles, note=note
         )
     return figs
+
+
+def draw_figures(
+    study: str, rows: Sequence[Mapping[str, Any]], folder: str | Path, note: str | None = None
+) -> list[Path]:
+    """The study's figures (`study_figures`) as PNG and PDF in ``folder``.
+
+    Parameters
+    ----------
+    study : str
+        The study's name (``metadata.json``'s ``study``): it picks the figures.
+    rows : sequence of mappings
+        The study's run rows (``runs.jsonl``); failed runs (`jswim.results.is_failed`) are left out.
+    folder : path
+        Where the files go (created if missing), usually ``FOLDER/figures``.
+    note : str, optional
+        Written across each figure in red (`jswim.results.unfinished_note`).
+
+    Returns
+    -------
+    list of Path
+        The files written, a PNG and a PDF per figure.
+    """
+    typed = [r for r in as_run_rows(rows) if not is_failed(r)]  # failed runs are not results
+    paths: list[Path] = []
+    for name, fig in study_figures(study, typed, note=note).items():
+        paths += save(fig, folder, name)
+    return paths

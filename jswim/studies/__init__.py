@@ -5,8 +5,11 @@
   of [`Plan`][jswim.studies.plans.Plan], [`jswim.studies.plans`][jswim.studies.plans]; the scene studies' cells in
   [`jswim.studies.scene_grids`][jswim.studies.scene_grids]); [`jswim.studies.baselines`][jswim.studies.baselines]: every non-LLM run's one
   pipeline;
-- [`jswim.studies.run`][jswim.studies.run]: [`run_study`][jswim.studies.run.run_study] (runs what a study folder lacks, stores, summarises);
-- [`jswim.studies.report`][jswim.studies.report]: [`summarize`][jswim.studies.report.summarize] (the table) and [`draw_figures`][jswim.studies.report.draw_figures];
+- [`jswim.studies.run`][jswim.studies.run]: [`run_study`][jswim.studies.run.run_study] (runs what a study folder lacks, stores, summarises; draws nothing);
+- [`jswim.studies.report`][jswim.studies.report]: [`summarize`][jswim.studies.report.summarize] (the table);
+- `jswim.studies.overview`: reading a folder back (`StudyFolder`, the summary table, ``jswim show``
+  and ``jswim compare``). A study ends at its folder: figures and ``report.html`` are drawn from
+  it by `jswim.viz.publish`;
 - `jswim.studies.qlearn`: the Q-learning steps-to-learn distributions (``jswim qlearn``);
 - `jswim.studies.ensemble`: one stroke or policy over many noisy swimmers, X/a statistics
   per step (``jswim ensemble``).
@@ -44,7 +47,7 @@ _EXPORTS = {
     ),
     **dict.fromkeys(("SPECS", "STUDIES", "StudySpec", "build"), "jswim.studies.specs"),
     "Plan": "jswim.studies.plans",
-    **dict.fromkeys(("draw_figures", "summarize"), "jswim.studies.report"),
+    "summarize": "jswim.studies.report",
     **dict.fromkeys(
         ("ProgressFn", "StudyResult", "default_folder", "identity", "run_study"),
         "jswim.studies.run",

@@ -1,9 +1,11 @@
-"""Study reports: the summary table of a study's runs and its figures."""
+"""The summary of a study's runs: one row per agent, swimmer, direction and group.
+
+The figures and the report page are drawn from the folder by the pictures layer
+(`jswim.viz.publish`); nothing here draws."""
 
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Any
 from collections.abc import Sequence
 
@@ -68,22 +70,3 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             }
         )
     return out
-
-
-def draw_figures(
-    study: str, rows: Sequence[dict[str, Any]], folder: str | Path, note: str | None = None
-) -> list[Path]:
-    """The study's figures ([`jswim.figures.plots.study_figures`][jswim.figures.plots.study_figures]) as PNG and PDF in ``folder``.
-
-    ``note`` (see [`jswim.results.unfinished_note`][jswim.results.unfinished_note]) is written across each figure.
-    """
-    rows = as_run_rows(rows)
-    from jswim.figures import (
-        plots,
-    )  # lazy: matplotlib is ~0.5 s of import that --no-figures never needs
-
-    paths: list[Path] = []
-    rows = [r for r in rows if not is_failed(r)]  # failed runs are not results
-    for name, fig in plots.study_figures(study, rows, note=note).items():
-        paths += plots.save(fig, folder, name)
-    return paths

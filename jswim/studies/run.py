@@ -88,7 +88,7 @@ from jswim.studies.execute import (  # noqa: F401
     run_spec,
 )
 from jswim.studies.session import preflight, record_session, add_session, cap_check  # noqa: F401
-from jswim.studies.report import draw_figures, summarize
+from jswim.studies.report import summarize
 
 
 # -- execution ----------------------------------------------------------------------------------
@@ -101,6 +101,8 @@ class StudyResult:
     folder: Path
     rows: list[dict[str, Any]]
     summary: pd.DataFrame  # one row per (agent, setting); a list of dicts is turned into one
+    # The figure files: empty from run_study (a study ends at its folder); the publish step
+    # (jswim.report, jswim.viz.publish) draws them and the CLI and notebooks fill this in.
     figures: list[Path] = field(default_factory=list)
     wall_s: float = 0.0
     # This session's LLM calls, billed calls, wall s, calls/s, cost (empty when it ran no LLM run: a
@@ -216,10 +218,13 @@ def run_study(
     backend: Backend | None = Backend(),
     out: str | Path | None = None,
     progress: ProgressFn | bool | None = None,
-    figures: bool = True,
     max_cost: float | None = None,
 ) -> StudyResult:
-    """Run (or resume, or extend) a study and write its folder.
+    """Run (or resume, or extend) a study and write its folder; draw nothing.
+
+    A study ends at its folder: its figures and ``report.html`` are the publish step after it,
+    ``jswim.report(folder)`` (`jswim.viz.publish.report`), which ``jswim study`` and ``jswim swim``
+    call unless ``--no-figures``.
 
     Parameters
     ----------
@@ -239,8 +244,6 @@ def run_study(
         baseline runs (runs done of all), and after each finished LLM run (phase ``"llm"``) and
         every 0.5 s while LLM requests are out (phase ``"llm-live"``), counting LLM steps done of
         all the session's LLM steps, with runs, requests in flight, tokens and cost in ``info``.
-    figures : bool
-        Also draw the study's figures into ``out/figures``.
     max_cost : float, optional
         Cap in USD on what the study's calls cost, over all its sessions (the call journal's
         total). Calls reserve their cost bound before they go out; at the cap no new call is
@@ -321,7 +324,7 @@ def run_study(
                 write_json(tpl_path, dataclasses.asdict(template or PromptTemplate()))
         with console.study_progress(progress) as tick:
             return _run_in(
-                store, study, plans, options, backend, folder, template, tick, figures, t0, max_cost
+                store, study, plans, options, backend, folder, template, tick, t0, max_cost
             )
     except KeyboardInterrupt:
         _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
@@ -401,7 +404,6 @@ def _run_in(
     folder: Path,
     template: PromptTemplate | None,
     progress: ProgressFn | None,
-    figures: bool,
     t0: float,
     max_cost: float | None = None,
 ) -> StudyResult:
@@ -499,13 +501,11 @@ def _run_in(
             **({"constrained_decoding": constraint} if constraint else {}),
         },
     )
-    figs = draw_figures(study, typed, folder / "figures") if figures else []
-    _write_report(folder, figures)
     return StudyResult(
         folder,
         rows,
         summary,
-        figs,
+        [],
         time.perf_counter() - t0,
         session_speed,
         failed,
@@ -537,20 +537,6 @@ def _nav_table(rows: Sequence[RunRow]) -> dict[str, Any]:
     from jswim.studies import navigate  # lazy: the navigation study's module
 
     return {"navigation": navigate.nav_summary(rows)}
-
-
-def _write_report(folder: Path, figures: bool) -> None:
-    """``report.html`` of the finished session (`jswim.viz.page`), with the figures just drawn.
-
-    The runs are safe on disk by now: a page that cannot be written is a warning, not a lost study."""
-    from jswim.viz.page import write_report  # lazy: the page's code loads only at the end
-
-    try:
-        write_report(folder, figures="files" if figures else "none")
-    except Exception as exc:
-        callsite.warn_user(
-            f"report.html not written ({type(exc).__name__}: {exc}); jswim report {folder} retries"
-        )
 
 
 def estimate_study(

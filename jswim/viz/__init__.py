@@ -6,6 +6,8 @@
 - `jswim.viz.animate`: runs side by side as a GIF (Pillow) or MP4 (``imageio-ffmpeg``,
   optional), `jswim.viz.animate.animate` (``jswim.animate``) for notebooks.
 - `jswim.viz.page`: ``report.html``, one self-contained page per study folder.
+- `jswim.viz.publish`: `report` (``jswim.report``), the publish step after a study: its figures and
+  its page, drawn from the folder.
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ _EXPORTS = {
     "Track": "jswim.viz.tracks",
     "outline": "jswim.viz.tracks",
     "write_report": "jswim.viz.page",
+    "report": "jswim.viz.publish",
+    "Published": "jswim.viz.publish",
 }
 
 __all__ = list(_EXPORTS)

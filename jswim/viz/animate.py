@@ -31,7 +31,8 @@ import numpy as np
 from jswim import reprs
 from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 from jswim.errors import ConfigError
-from jswim.figures.plots import AGENT_ORDER, RC, panel_keys
+from jswim.figures.plots import RC, panel_keys
+from jswim.results.orders import AGENT_ORDER
 from jswim.results import as_run_rows, read_metadata, read_run_rows, read_transcript, writing
 from jswim.viz import worlds
 from jswim.viz.bench_page import read_bench, part_folders

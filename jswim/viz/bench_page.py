@@ -24,13 +24,13 @@ from jswim.results import atomic_write, writing
 from jswim.bench.runner import BASELINES, REFERENCE, read_record
 from jswim.bench.leaderboard import (
     cost_cell,
-    figure_object,
     missing_text,
     steps_text,
     valid_rows,
 )
-from jswim.overview import MIN_BOOTSTRAP_N
+from jswim.results.orders import MIN_BOOTSTRAP_N
 from jswim.figures import plots
+from jswim.figures.leaderboard import figure_object
 from jswim.viz.page import asset_text, write_report
 
 BENCH_FILE = "bench.json"

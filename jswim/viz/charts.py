@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 
 from jswim.figures.panels import direction_text, displacement_label, swimmer_label
 from jswim.figures.style import COLUMN_IN, PAGE_IN, RC
-from jswim.overview import SWIMMER_ORDER
+from jswim.results.orders import SWIMMER_ORDER
 
 #: Colours of the two action sets (Okabe-Ito).
 SET_STYLE = {

@@ -37,7 +37,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from jswim.figures import plots
-from jswim.overview import AGENT_ORDER, SUMMARY_NOTE, grid_order, order_summary, summary_table
+from jswim.results.orders import AGENT_ORDER
+from jswim.studies.overview import SUMMARY_NOTE, grid_order, order_summary, summary_table
 from jswim.results import (
     RunRow,
     as_run_row,
@@ -563,11 +564,6 @@ def report_html(
         "</body></html>",
     ]
     return "\n".join(parts)
-
-
-def report(folder: str | Path, figures: str = "auto", out: str | Path | None = None) -> Path:
-    """``jswim.report(folder)``: write the folder's ``report.html`` (see `write_report`)."""
-    return write_report(folder, figures=figures, out=out)
 
 
 def write_report(

@@ -210,7 +210,6 @@ def test_each_is_refused_where_no_llm_run_steers_a_pair(tmp_path):
                 StudyOptions(**grid, **extra, pair_prompt="each"),
                 None,
                 tmp_path / study,
-                figures=False,
             )
         assert "\n" not in str(err.value)
         assert not (tmp_path / study).exists()
@@ -272,10 +271,10 @@ def test_each_pair_study_end_to_end_and_resume(tmp_path, monkeypatch):
     with FakeServer(reply=scene_reply) as srv:
         monkeypatch.setattr(client_module.LLMClient, "chat", chat)
         with pytest.raises(KeyboardInterrupt):
-            run_study("pair", opts, srv.backend(), out, figures=False)
+            run_study("pair", opts, srv.backend(), out)
         monkeypatch.setattr(client_module.LLMClient, "chat", real_chat)
         assert srv.settle() == 5 and read_runs(out) == []
-        run_study("pair", opts, srv.backend(), out, figures=False)
+        run_study("pair", opts, srv.backend(), out)
         sent = srv.settle()
         (row,) = read_runs(out)
         # The five answered calls were replayed from the journal, not asked again.
@@ -307,7 +306,7 @@ def test_each_pair_study_end_to_end_and_resume(tmp_path, monkeypatch):
         meta = read_metadata(out)
         assert any("--pair-prompt each" in line for line in meta["fidelity_deviations"])
         # Resumed once more: nothing is asked again.
-        again = run_study("pair", opts, srv.backend(), out, figures=False)
+        again = run_study("pair", opts, srv.backend(), out)
         assert srv.settle() == sent and [r["actions"] for r in again.rows] == [row["actions"]]
 
 

@@ -156,7 +156,7 @@ def _study_rows(tmp: Path) -> dict[str, Any]:
     with FakeServer(reply=hash_reply) as srv:
         for name, o in studies.items():
             folder = tmp / name
-            run_study(name, o, backend=srv.backend(), out=folder, figures=False)
+            run_study(name, o, backend=srv.backend(), out=folder)
             rows = [json.loads(line) for line in (folder / "runs.jsonl").read_text().splitlines()]
             transcripts = {
                 p.name: [_stable(json.loads(line)) for line in p.read_text().splitlines()]

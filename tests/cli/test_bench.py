@@ -17,6 +17,7 @@ import pytest
 
 from jswim import cli
 from jswim.bench.leaderboard import FIELDS
+from jswim.figures import leaderboard as leaderboard_figure
 from jswim.bench.models_file import load_models_file, parse_model_option
 from jswim.errors import ConfigError
 from tests.fakeserver import FakeServer, hash_reply, reasoning_model
@@ -294,7 +295,7 @@ def test_leaderboard_figure_draws_rows_at_p_0_and_1_for_any_n(tmp_path):
                     "success_hi": hi,
                 }
             )
-    paths = leaderboard.figure(tmp_path, rows)
+    paths = leaderboard_figure.figure(tmp_path, rows)
     assert any(p.suffix == ".png" and p.stat().st_size > 0 for p in paths)
 
 
@@ -405,7 +406,7 @@ def test_leaderboard_figure_draws_x_a_beside_success_and_labels_every_panel():
                     "mean_x_hi": mx + 0.05,
                 }
             )
-    fig = leaderboard.figure_object(rows)
+    fig = leaderboard_figure.figure_object(rows)
     fig.canvas.draw()
     shown = [ax for ax in fig.axes if ax.axison]
     assert len(shown) == 2 * 3  # success p and X/a per setting

@@ -114,7 +114,7 @@ def _table(folder):
 def test_interrupted_study_resumes_to_the_same_table(server, tmp_path):
     opts = StudyOptions(swimmers=("purcell",), zetas=(0.0, 2.0), runs=3, q_runs=3, steps=6, chunk=2)
     backend = Backend(base_url=server.url, model="fake", api_key_env="JSWIM_TEST_NO_KEY")
-    full = run_study("noise", opts, backend, tmp_path / "full", figures=False)
+    full = run_study("noise", opts, backend, tmp_path / "full")
 
     calls = {"n": 0}
 
@@ -127,10 +127,10 @@ def test_interrupted_study_resumes_to_the_same_table(server, tmp_path):
 
     part = tmp_path / "part"
     with pytest.raises(KeyboardInterrupt):
-        run_study("noise", opts, backend, part, progress=interrupt, figures=False)
+        run_study("noise", opts, backend, part, progress=interrupt)
     n_partial = len(read_runs(part))
     assert 0 < n_partial < len(full.rows)
-    resumed = run_study("noise", opts, backend, part, figures=False)
+    resumed = run_study("noise", opts, backend, part)
     assert len(resumed.rows) == len(full.rows)
     assert _table(part) == _table(tmp_path / "full")
 

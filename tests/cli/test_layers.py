@@ -1,6 +1,7 @@
 """The house: jswim's import graph, function-level imports included, follows the layers
-of docs/design.md, has no cycle, and every function-level import of a jswim module says why it is
-lazy (a ``# lazy: ...`` comment: it keeps start-up light) or is on the list of today's debt.
+of docs/design.md (data flows one way: physics -> runs -> the folder -> pictures), has no cycle
+between modules nor between packages, and every function-level import of a jswim module says why
+it is lazy (a ``# lazy: ...`` comment: it keeps start-up light) or is on the list of today's debt.
 
 Read from the source with ``ast`` (nothing is imported). An import of ``jswim`` itself (the
 package root, e.g. for ``__version__``) is not an edge: every module's parent package is loaded
@@ -40,24 +41,21 @@ LAYERS = [
         ["jswim.judging"],
     ),
     ("agents", ["jswim.agents"]),
-    (
-        "studies",
-        [
-            "jswim.studies",
-            "jswim.figures",
-            "jswim.results",
-            "jswim.overview",
-            "jswim.console",
-        ],
-    ),
-    ("bench", ["jswim.bench"]),
-    ("views", ["jswim.viz"]),
+    # plan, run, write the folder; read it back (tables, show, compare): a study ends at its folder
+    ("studies", ["jswim.studies", "jswim.results", "jswim.console"]),
+    ("bench", ["jswim.bench"]),  # runs suites of studies, computes the leaderboard from folders
+    ("pictures", ["jswim.figures", "jswim.viz"]),  # read folders, draw (jswim.viz.publish)
     ("front", ["jswim.cli", "jswim.__main__", "jswim.gym", "jswim.gymnax"]),
 ]
 
-#: Upward imports that remain (the debt, documented): ``studies.run`` writes the report page at
-#: the end of a study (docs/design.md: "the one call up a layer").
-UPWARD_ALLOWED = {("jswim.studies.run", "jswim.viz.page")}
+#: Upward imports that remain (none: the study no longer draws; jswim.viz.publish does, after it).
+UPWARD_ALLOWED: set[tuple[str, str]] = set()
+
+#: Cycles between packages (``jswim.env`` <-> ``jswim.scenes`` counts even when no two modules
+#: form a cycle) that remain, each with its reason.
+PACKAGE_CYCLES_ALLOWED: list[set[str]] = [
+    {"jswim.env", "jswim.scenes"},  # removed when env/scenes lands (issue 52, the "surface" branch)
+]
 
 #: Import cycles that remain (none: plots <-> scene_plots went when the style moved to
 #: jswim.figures.style; keep the list for a cycle that must be lived with, with its reason).
@@ -209,6 +207,75 @@ def test_no_import_cycle():
     )
 
 
+def _package(module: str) -> str:
+    """The package a module belongs to: ``jswim.env.registry`` -> ``jswim.env``; a root module
+    (``jswim.gym``) is its own."""
+    return ".".join(module.split(".")[:2])
+
+
+def _package_edges(imports) -> dict[str, set[str]]:
+    """Package -> the packages it imports, function-level imports included (the root ``jswim``
+    is no edge: see the module docstring)."""
+    edges: dict[str, set[str]] = defaultdict(set)
+    for a, b, _, _ in imports:
+        pa, pb = _package(a), _package(b)
+        if pa != pb and "jswim" not in (pa, pb):
+            edges[pa].add(pb)
+    return edges
+
+
+def test_no_package_cycle():
+    """One way down between packages too: studies never reach the pictures, lazily or not."""
+    cycles = [c for c in _cycles(_package_edges(_graph())) if c not in PACKAGE_CYCLES_ALLOWED]
+    assert not cycles, "package-level import cycles (function-level imports included): " + "; ".join(
+        " <-> ".join(sorted(c)) for c in cycles
+    )
+
+
+def test_studies_import_nothing_that_draws():
+    """A study ends at its folder: nothing under jswim/studies/ (nor bench, nor results) imports
+    jswim.figures or jswim.viz, at the top or inside a function."""
+    drawing = sorted(
+        f"{a} -> {b}"
+        for a, b, _, _ in _graph()
+        if _package(a) in ("jswim.studies", "jswim.results", "jswim.bench", "jswim.console")
+        and _package(b) in ("jswim.figures", "jswim.viz")
+    )
+    assert not drawing, drawing
+
+
+def test_the_package_checker_sees_a_cycle_made_of_function_level_imports(tmp_path):
+    # Two packages whose modules form no module-level cycle, tied both ways by imports inside
+    # functions: the package graph has the cycle, and the checker reads those imports.
+    root = tmp_path / "jswim"
+    for pkg in ("a", "b"):
+        (root / pkg).mkdir(parents=True)
+        (root / pkg / "__init__.py").write_text("")
+    (root / "a" / "x.py").write_text("def f():\n    from jswim.b import y  # lazy: test\n")
+    (root / "b" / "y.py").write_text("")
+    (root / "b" / "z.py").write_text("def g():\n    import jswim.a.w\n")
+    (root / "a" / "w.py").write_text("")
+    (root / "c.py").write_text("from jswim.a import x\n")
+    modules = {
+        ".".join(p.relative_to(tmp_path).with_suffix("").parts).removesuffix(".__init__"): p
+        for p in root.rglob("*.py")
+    }
+    imports = _imports(modules)
+    assert {(a, b, inside) for a, b, inside, _ in imports} == {
+        ("jswim.a.x", "jswim.b.y", True),
+        ("jswim.b.z", "jswim.a.w", True),
+        ("jswim.c", "jswim.a.x", False),
+    }
+    module_edges = defaultdict(set)
+    for a, b, _, _ in imports:
+        module_edges[a].add(b)
+    assert _cycles(module_edges) == []  # no two modules import each other
+    edges = _package_edges(imports)
+    assert edges == {"jswim.a": {"jswim.b"}, "jswim.b": {"jswim.a"}, "jswim.c": {"jswim.a"}}
+    assert _cycles(edges) == [{"jswim.a", "jswim.b"}]
+    assert _package("jswim.gym") == "jswim.gym" and _package("jswim.viz.page") == "jswim.viz"
+
+
 def test_function_level_imports_say_why():
     unmarked = {f"{a}->{b}" for a, b, inside, marked in _graph() if inside and not marked}
     new = sorted(unmarked - UNMARKED_ALLOWED)
@@ -225,6 +292,9 @@ def test_the_checker_sees_a_cycle_and_an_upward_import():
     # The checker itself: a made-up graph with a cycle, and a made-up upward edge.
     assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [{"a", "b", "c"}]
     assert _layer("jswim.agents.llm") > _layer("jswim.env.base") > _layer("jswim.swimmers.ng")
+    # the flow: studies (and results) below the bench, both below the pictures
+    assert _layer("jswim.viz.page") == _layer("jswim.figures.plots") > _layer("jswim.bench.runner")
+    assert _layer("jswim.bench.runner") > _layer("jswim.studies.run") == _layer("jswim.results")
 
 
 def _private_imports(modules: dict[str, Path]) -> set[str]:

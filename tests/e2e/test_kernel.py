@@ -85,7 +85,7 @@ def test_stop_in_a_kernel_stops_the_study_and_a_rerun_resumes(kernel, tmp_path):
             f"opts = {OPTS}\n",
         )
         assert setup["reply"]["status"] == "ok", setup["reply"]
-        cell = f"res = run_study('noise', opts, backend, {str(out)!r}, figures=False)"
+        cell = f"res = run_study('noise', opts, backend, {str(out)!r})"
         pressed: dict[str, float] = {}
 
         def press_stop_mid_study() -> None:
@@ -124,7 +124,7 @@ def test_stop_in_a_kernel_stops_the_study_and_a_rerun_resumes(kernel, tmp_path):
         # The same study, uninterrupted, in the same kernel (the same XLA build and flags).
         whole = _run(
             kc,
-            f"run_study('noise', opts, backend, {str(tmp_path / 'whole')!r}, figures=False, progress=False)\n",
+            f"run_study('noise', opts, backend, {str(tmp_path / 'whole')!r}, progress=False)\n",
         )
         assert whole["reply"]["status"] == "ok", whole["reply"]
     text = shown["text/plain"]

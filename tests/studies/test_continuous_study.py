@@ -15,6 +15,7 @@ from jswim import cli, env
 from jswim.agents import qlearning
 from jswim.results import read_metadata, read_runs
 from jswim.studies import Backend, StudyOptions, run_study
+from jswim.viz.publish import report
 from tests.fakeserver import FakeServer, lattice_reply
 
 TINY = dict(swimmers=("ng",), directions=(1,), runs=1, q_runs=2, steps=12, roc_levels_grid=(1, 2))
@@ -70,8 +71,8 @@ def test_continuous_study_end_to_end(server, tmp_path):
         StudyOptions(**TINY, agents=("llm", "qlearning", "random")),
         server.backend(),
         out,
-        figures=True,
     )
+    res.figures = report(out).figures  # the publish step, as jswim study runs it
     rows = read_runs(out)
     groups = {(r["agent"], r["group"]) for r in rows}
     assert groups == {(a, g) for a in ("llm", "qlearning", "random") for g in ("K=1", "K=2")}
@@ -118,7 +119,7 @@ def test_continuous_study_end_to_end(server, tmp_path):
 @pytest.mark.slow  # three continuous studies end to end with every agent (12 s CPU)
 def test_interrupted_continuous_study_resumes(server, tmp_path):
     opts = StudyOptions(**TINY, agents=("llm", "qlearning", "random"))
-    whole = run_study("continuous", opts, server.backend(), tmp_path / "whole", figures=False)
+    whole = run_study("continuous", opts, server.backend(), tmp_path / "whole")
     seen = {"n": 0}
 
     def interrupt(phase, done, total, info=""):
@@ -129,11 +130,11 @@ def test_interrupted_continuous_study_resumes(server, tmp_path):
 
     part = tmp_path / "part"
     with pytest.raises(KeyboardInterrupt):
-        run_study("continuous", opts, server.backend(), part, progress=interrupt, figures=False)
+        run_study("continuous", opts, server.backend(), part, progress=interrupt)
     assert read_metadata(part)["status"] == "interrupted"
     n_before = len(read_runs(part))
     assert 0 < n_before < len(whole.rows)
-    again = run_study("continuous", opts, server.backend(), part, figures=False)
+    again = run_study("continuous", opts, server.backend(), part)
     key = lambda r: r["run_id"]
     assert [(r["run_id"], r["actions"], r["success"]) for r in sorted(again.rows, key=key)] == [
         (r["run_id"], r["actions"], r["success"]) for r in sorted(whole.rows, key=key)
@@ -215,7 +216,7 @@ def test_continuous_study_on_the_embedded_model(tmp_path):
         roc_levels_grid=(1, 2),
         agents=("llm", "qlearning", "random"),
     )
-    run_study("continuous", opts, Backend(n_parallel=2), out, figures=False)
+    run_study("continuous", opts, Backend(n_parallel=2), out)
     llm = [r for r in read_runs(out) if r["agent"] == "llm"]
     assert sorted(r["roc_levels"] for r in llm) == [1, 2] and all(
         r["status"] == "done" for r in llm
@@ -235,7 +236,7 @@ def test_the_real_valued_rl_cell_runs_and_is_judged(tmp_path):
         roc_levels_grid=(1,),
         agents=("ppo",),
     )
-    res = run_study("continuous", opts, None, out, figures=False)
+    res = run_study("continuous", opts, None, out)
     rows = read_runs(out)
     assert (
         len(rows) == 4

@@ -7,7 +7,8 @@ import json
 
 import pytest
 
-from jswim import console, overview
+from jswim import console
+from jswim.studies import overview
 from jswim.errors import ConfigError, ResultFolderError
 from jswim.results import read_metadata
 from jswim.studies import StudyOptions, run_study
@@ -89,7 +90,6 @@ def folders(small_swim_study, tmp_path_factory):
             StudyOptions(swimmers=("purcell",), directions=(1,), steps=8, runs=2, q_runs=3, seed=1),
             backend,
             root / "b",
-            figures=False,
         )
     return small_swim_study, root / "b"  # a: Purcell and NG toward +x and -x, 8 steps
 
@@ -110,7 +110,7 @@ def test_show_prints_status_table_and_cost_without_writing(folders, capsys):
         "cost not priced (a server on this machine or the LAN, with no list price for its model); $0 counted"
         in text
     )
-    assert "no figures yet" in text  # figures=False
+    assert "no figures yet" in text  # run_study draws nothing
     for agent in ("llm", "qlearning", "random"):
         assert f"\n{agent}" in text
 

@@ -13,6 +13,7 @@ from jswim.studies.specs import build
 from jswim.studies.run import run_study
 from jswim.swimmers import wall_rft
 from jswim.viz import worlds
+from jswim.viz.publish import report
 from jswim.viz.tracks import track
 from tests.fakeserver import FakeServer
 
@@ -60,6 +61,7 @@ def test_purcell_wall_study_rows_figure_and_picture(tmp_path):
         ),
         out=out,
     )  # LLM, PPO rows: below
+    report(out)  # the publish step: the figures and report.html, drawn from the folder
     rows = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     by = {(r["agent"], r["group"]): r for r in rows}
     assert by[("stroke", "bulk")]["per_cycle"] == pytest.approx(BULK_CYCLE, abs=1e-7)
@@ -111,7 +113,6 @@ def test_purcell_wall_llm_and_ppo_rows(tmp_path):
             ),
             srv.backend(),
             out=out,
-            figures=False,
         )
     rows = [json.loads(line) for line in (out / "runs.jsonl").read_text().splitlines()]
     by = {(r["agent"], r["group"]): r for r in rows}

@@ -22,7 +22,6 @@ def test_the_transcript_records_the_max_tokens_the_server_received(tmp_path):
             opts,
             Backend(base_url=srv.url, model="fake", api_key_env=""),
             tmp_path / "o",
-            figures=False,
         )
         sent = {b.get("max_tokens") for b in srv.requests}
     (path,) = (tmp_path / "o" / "transcripts").glob("*.jsonl")
@@ -41,7 +40,6 @@ def test_progress_counts_llm_steps_as_the_work(tmp_path):
             opts,
             Backend(base_url=srv.url, model="fake", api_key_env=""),
             tmp_path / "o",
-            figures=False,
             progress=lambda phase, done, total, info: seen.append((phase, done, total)),
         )
     llm = [(d, t) for phase, d, t in seen if phase.startswith("llm")]
@@ -68,7 +66,7 @@ def test_each_study_help_shows_its_own_defaults(study, capsys):
 
 
 def test_show_reports_decoding_as_the_runs_recorded_it(tmp_path):
-    from jswim.overview import show_text
+    from jswim.studies.overview import show_text
     from jswim.results import StudyStore
 
     ident = {

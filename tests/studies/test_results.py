@@ -219,7 +219,6 @@ def test_study_folders_are_the_owner_s_unless_the_umask_shares_with_a_group(
             StudyOptions(agents=("random",), q_runs=2, zetas=(0.0,), steps=4),
             backend=None,
             out=tmp_path / "s",
-            figures=False,
         )
         assert os.umask(umask) == umask  # run_study set the process's umask back
     finally:

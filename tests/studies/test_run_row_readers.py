@@ -25,7 +25,7 @@ READERS = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "jswim" / "figures").
     "jswim/viz/animate.py",
     "jswim/viz/page.py",
     "jswim/viz/worlds.py",
-    "jswim/overview.py",
+    "jswim/studies/overview.py",
     "jswim/studies/report.py",
     "jswim/studies/run.py",
     "jswim/studies/scene_studies.py",
@@ -194,7 +194,7 @@ def test_summaries_agree_on_dict_and_typed_rows_and_match_the_file(tmp_path):
 
 def test_figures_page_show_and_animation_work_on_an_old_folder(tmp_path):
     from jswim.figures.plots import study_figures
-    from jswim.overview import StudyFolder, show_text
+    from jswim.studies.overview import StudyFolder, show_text
     from jswim.viz import animate
     from jswim.viz.page import write_report
 

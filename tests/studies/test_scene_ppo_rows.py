@@ -29,7 +29,7 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
                 raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        run_study("wall", StudyOptions(**WALL), None, out, progress=interrupt, figures=False)
+        run_study("wall", StudyOptions(**WALL), None, out, progress=interrupt)
     assert read_metadata(out)["status"] == "interrupted"
     assert {r["agent"] for r in read_runs(out)} == {"stroke"}
 
@@ -41,7 +41,7 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
         return train(*a, **k)
 
     monkeypatch.setattr(ppo, "train", counted)
-    res = run_study("wall", StudyOptions(**WALL), None, out, figures=False)
+    res = run_study("wall", StudyOptions(**WALL), None, out)
     assert calls["n"] == 1  # the strokes kept, the PPO cell trained once
     rows = {r["run_id"]: r for r in read_runs(out)}
     learners = [r for r in rows.values() if r["agent"] == "ppo"]
@@ -83,7 +83,7 @@ def test_wall_ppo_rows_resume_without_retraining(tmp_path, monkeypatch, float32)
         raise AssertionError("a finished PPO run was trained again")
 
     monkeypatch.setattr(ppo, "train", refuse)
-    again = run_study("wall", StudyOptions(**WALL), None, out, figures=False)
+    again = run_study("wall", StudyOptions(**WALL), None, out)
     assert {r["run_id"]: r["actions"] for r in again.rows} == {
         k: r["actions"] for k, r in rows.items()
     }

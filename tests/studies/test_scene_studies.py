@@ -35,6 +35,7 @@ from jswim.prompt import (
 from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
 from jswim.studies import scene_studies
+from jswim.viz.publish import report
 from tests.fakeserver import FakeServer, scene_reply
 
 # -- prompt ---------------------------------------------------------------------------------------
@@ -305,8 +306,8 @@ def test_wall_study_end_to_end(server, tmp_path):
         StudyOptions(**WALL, agents=("stroke", "llm", "qlearning", "random")),
         server.backend(),
         out,
-        figures=True,
     )
+    report(out)  # the publish step: figures and report.html from the folder
     rows = read_runs(out)
     assert {(r["agent"], r["group"]) for r in rows} == {("stroke", "free")} | {
         (a, "h=3") for a in ("stroke", "llm", "qlearning", "random")
@@ -456,7 +457,7 @@ def test_scene_options_are_checked(tmp_path, capsys):
 @pytest.mark.slow  # the scene solver compiles once per scene and agent (~20 s each under load)
 def test_interrupted_pair_study_resumes(server, tmp_path):
     opts = StudyOptions(**PAIR)
-    whole = run_study("pair", opts, server.backend(), tmp_path / "whole", figures=False)
+    whole = run_study("pair", opts, server.backend(), tmp_path / "whole")
     seen = {"n": 0}
 
     def interrupt(phase, done, total, info=""):
@@ -467,10 +468,10 @@ def test_interrupted_pair_study_resumes(server, tmp_path):
 
     part = tmp_path / "part"
     with pytest.raises(KeyboardInterrupt):
-        run_study("pair", opts, server.backend(), part, progress=interrupt, figures=False)
+        run_study("pair", opts, server.backend(), part, progress=interrupt)
     assert read_metadata(part)["status"] == "interrupted"
     assert 0 < len(read_runs(part)) < len(whole.rows)
-    again = run_study("pair", opts, server.backend(), part, figures=False)
+    again = run_study("pair", opts, server.backend(), part)
     key = lambda r: r["run_id"]
     assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == [
         (r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)

@@ -86,7 +86,6 @@ def test_study_reports_llm_calls_per_second(tmp_path):
             StudyOptions(swimmers=("ng",), runs=1, q_runs=0, steps=4, variants=("paper",)),
             srv.backend(),
             tmp_path / "c",
-            figures=False,
         )
     sp = res.llm_speed
     assert sp["calls"] == 4 and sp["billed_calls"] == 4 and sp["calls_per_s"] > 0

@@ -4,7 +4,7 @@ from fewer than 3 runs (as a referee reads the table)."""
 from __future__ import annotations
 
 from jswim.bench.leaderboard import steps_text
-from jswim.overview import SUMMARY_NOTE, _learn_cell, _x_cell
+from jswim.studies.overview import SUMMARY_NOTE, _learn_cell, _x_cell
 
 
 def cell(n, learned, med=1.5, q25=1.25, q75=1.75):

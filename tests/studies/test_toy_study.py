@@ -25,6 +25,7 @@ from jswim.errors import ConfigError
 from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
 from jswim.viz.page import run_payload, write_report
+from jswim.viz.publish import report
 from jswim.viz.tracks import track
 from tests.browser import browser_or_skip, open_report_run
 from tests.env.test_toy_world import ToyParams, ToyWorld
@@ -76,7 +77,8 @@ def _toy_study(tmp_path_factory, name, agents):
     )
     try:
         with FakeServer(reply=toy_reply) as srv:
-            res = run_study("wall", o, backend=srv.backend(), out=out, figures=False)
+            res = run_study("wall", o, backend=srv.backend(), out=out)
+        report(out, figures=False)  # the page alone (the publish step without figures)
         yield out, res
     finally:
         registry._REGISTERED.pop("toy", None)

@@ -24,6 +24,7 @@ from jswim.swimmers import nlink
 from jswim.swimmers.models import make_model
 from jswim.viz import animate as anim_mod
 from jswim.viz.page import report_html, write_report
+from jswim.viz.publish import report
 from jswim.viz.tracks import outline, place, start_theta, track
 from tests.fakeserver import FakeServer, hash_reply
 
@@ -364,8 +365,8 @@ def test_report_and_animation_of_every_study(study, tmp_path):
             StudyOptions(**opts),
             backend=Backend(base_url=srv.url, model="fake"),
             out=tmp_path / study,
-            figures=False,
         )
+    report(tmp_path / study, figures=False)  # the publish step: the page alone
     page = (tmp_path / study / "report.html").read_text()
     n = len(read_runs(tmp_path / study))
     assert page.count('<script type="text/plain" id="run-') == n and "complete" in page
@@ -391,7 +392,6 @@ def test_four_dof_swimmers_animate_and_report(tmp_path):
         ),
         backend=None,
         out=out,
-        figures=False,
     )
     rows = read_runs(out)
     for r in rows:

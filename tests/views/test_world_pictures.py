@@ -35,14 +35,12 @@ def scenes(tmp_path_factory):
         StudyOptions(heights=(H,), runs=0, q_runs=1, steps=8, agents=("random",)),
         backend=None,
         out=root / "wall",
-        figures=False,
     )
     run_study(
         "pair",
         StudyOptions(separations=(D,), phases=(0,), runs=0, q_runs=1, steps=8, agents=("random",)),
         backend=None,
         out=root / "pair",
-        figures=False,
     )
     return root
 
@@ -56,7 +54,6 @@ def far_ng(tmp_path_factory):
         StudyOptions(swimmers=("ng",), directions=(1,), q_runs=1, steps=6, agents=("random",)),
         backend=None,
         out=out,
-        figures=False,
     )
     r = dict(rows(out)[0])
     n = 20

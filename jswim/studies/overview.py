@@ -1,5 +1,8 @@
 """Reading finished studies back: the summary table, ``jswim show`` and ``jswim compare``.
 
+(Moved from ``jswim.overview``: it reads folders that studies write, below the pictures that use
+its tables; the shared orderings are `jswim.results.orders`.)
+
 Everything here only reads a study folder (``metadata.json`` and ``runs.jsonl``), so it works
 on an interrupted study and on a read-only folder. Tables come back as columns and rows for
 `jswim.console.print_table` (or as text), so no number or label is ever cut.
@@ -19,13 +22,10 @@ from jswim.errors import ConfigError, ResultFolderError
 from jswim._io.folderlock import describe_holder, holder
 from jswim.results import RunRow, as_run_rows, read_metadata, read_run_rows
 from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED
+from jswim.results.orders import AGENT_ORDER, MIN_BOOTSTRAP_N, MIN_QUARTILE_N, SWIMMER_ORDER
+from jswim.studies.report import summarize
 
 SETTING = ("agent", "swimmer", "direction", "group")
-
-#: Fewest runs that learned for which quartiles of the steps to learn are printed (below: the median).
-MIN_QUARTILE_N = 4
-#: Fewest runs for which a bootstrap interval of X/a end is printed (two runs resample to three values).
-MIN_BOOTSTRAP_N = 3
 
 SUMMARY_NOTE = (
     "X/a end: mean displacement in the target direction after the last step, its 95% bootstrap interval "
@@ -69,11 +69,6 @@ def _learn_cell(s: Mapping[str, Any]) -> str:
         _fmt(s[k], "g")
         for k in ("steps_to_learn_q25", "steps_to_learn_median", "steps_to_learn_q75")
     )
-
-
-#: Reading order of agents and swimmers in tables and figure panels (jswim.figures.plots reads them here).
-SWIMMER_ORDER = ("purcell", "ng", "nlink", "nsphere")
-AGENT_ORDER = ("llm", "qlearning", "random", "ppo")
 
 
 def _cost_cell(v: Any) -> str:
@@ -174,8 +169,6 @@ class StudyFolder:
     """A study folder read once: metadata, finished runs and their summary (read-only)."""
 
     def __init__(self, folder: str | Path) -> None:
-        from jswim.studies import summarize  # lazy: start-up (the studies load JAX)
-
         self.folder = Path(folder)
         if not self.folder.is_dir():
             raise ResultFolderError(f"{folder}: {path_kind(folder, 'a study folder')}")
