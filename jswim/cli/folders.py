@@ -63,7 +63,9 @@ def plot(args: argparse.Namespace) -> int:
 
 
 def show(args: argparse.Namespace) -> int:
-    from jswim.studies.overview import show_text  # lazy: start-up (the study folders' readers load NumPy)
+    from jswim.studies.overview import (
+        show_text,
+    )  # lazy: start-up (the study folders' readers load NumPy)
 
     folder = Path(args.folder)
     if (folder / "bench.json").is_file() and not (

@@ -59,6 +59,10 @@ def report(folder: str | Path, figures: bool = True, out: str | Path | None = No
         rows = read_run_rows(folder)
         # A folder that did not finish says so across each figure, as `jswim plot` draws it.
         note = unfinished_note(meta.get("status"), len(rows), meta.get("n_planned"))
-        drawn = draw_figures(str(meta.get("study", "?")), rows, folder / "figures", note=note) if rows else []
+        drawn = (
+            draw_figures(str(meta.get("study", "?")), rows, folder / "figures", note=note)
+            if rows
+            else []
+        )
     page = write_report(folder, figures="files" if figures else "none", out=out)
     return Published(drawn, page)

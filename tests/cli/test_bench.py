@@ -269,7 +269,6 @@ def test_bench_samples_grow_a_folder_and_show_in_the_leaderboard(tmp_path, capsy
 
 
 def test_leaderboard_figure_draws_rows_at_p_0_and_1_for_any_n(tmp_path):
-    from jswim.bench import leaderboard
     from jswim.judging.stats import wilson_interval
 
     rows = []
@@ -379,7 +378,6 @@ def test_show_on_a_bench_folder_prints_its_leaderboard(tmp_path, capsys):
 
 
 def test_leaderboard_figure_draws_x_a_beside_success_and_labels_every_panel():
-    from jswim.bench import leaderboard
 
     rows = []
     for part, sw, d in (("curves", "purcell", 1), ("curves", "purcell", -1), ("curves", "ng", 1)):

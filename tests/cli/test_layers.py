@@ -227,8 +227,9 @@ def _package_edges(imports) -> dict[str, set[str]]:
 def test_no_package_cycle():
     """One way down between packages too: studies never reach the pictures, lazily or not."""
     cycles = [c for c in _cycles(_package_edges(_graph())) if c not in PACKAGE_CYCLES_ALLOWED]
-    assert not cycles, "package-level import cycles (function-level imports included): " + "; ".join(
-        " <-> ".join(sorted(c)) for c in cycles
+    assert not cycles, (
+        "package-level import cycles (function-level imports included): "
+        + "; ".join(" <-> ".join(sorted(c)) for c in cycles)
     )
 
 
