@@ -148,7 +148,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if sp.get("requests") is not None and (sp.get("calls") or sp.get("requests")):
         print(f"HTTP requests: {requests_text(sp)}")
     print(f"results: {result.folder}")
-    if (result.folder / "report.html").is_file():
+    if not args.no_figures and (result.folder / "report.html").is_file():  # not an old page
         print(f"report:  {result.folder / 'report.html'} (open it in a browser)")
     for f in result.figures:
         if f.suffix == ".png":
