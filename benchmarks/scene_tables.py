@@ -30,13 +30,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jswim.env import scene_rollout, scene_rollout_batch
 from jswim.scenes import (
     Scene,
     batch_starts,
     scene_params,
     scene_reset,
-    scene_rollout,
-    scene_rollout_batch,
     scene_step,
     scene_step_joint,
 )

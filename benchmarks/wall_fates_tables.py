@@ -33,7 +33,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim.action_codes import decode_action
-from jswim.scenes import Scene, batch_starts, scene_params, scene_rollout_batch
+from jswim.env import scene_rollout_batch
+from jswim.scenes import Scene, batch_starts, scene_params
 from jswim.studies.options import StudyOptions
 from jswim.studies.plans import initial
 from jswim.studies.scene_grids import wall_start_clears

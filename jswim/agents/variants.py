@@ -133,7 +133,7 @@ class LLMRunSpec:
     direction : {+1, -1}
         Target direction.
     init : tuple of int, str or None
-        Initial DOF levels (see [`jswim.env.parse_init`][jswim.env.params.parse_init]); ``None``: all at ``hi``.
+        Initial DOF levels (see [`jswim.env.parse_init`][jswim.start_levels.parse_init]); ``None``: all at ``hi``.
     zeta : float
         Noise level.
     seed : int

@@ -35,16 +35,15 @@ from jswim.env.action_input import (
 )
 from jswim.env.params import (
     EnvParams,
-    all_inits,
     broadcast_params,
     check_roc_levels,
     is_batched,
     make_params,
     param_axes,
     parse_direction,
-    parse_init,
 )
 from jswim.env.randomness import noise, uniforms
+from jswim.start_levels import all_inits, parse_init
 from jswim.env.rollouts import Rollout, rollout_moves, seed32, seed_key
 from jswim.env.state import (
     EnvState,
@@ -70,6 +69,10 @@ _LAZY = {
     "SceneWorld": "jswim.env.scene_world",
     "SceneTask": "jswim.env.scene_world",
     "Trajectory": "jswim.env.episodes",
+    "SceneRollout": "jswim.env.scene_rollouts",
+    "parse_scene_moves": "jswim.env.scene_rollouts",
+    "scene_rollout": "jswim.env.scene_rollouts",
+    "scene_rollout_batch": "jswim.env.scene_rollouts",
 }
 
 

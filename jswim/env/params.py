@@ -14,6 +14,7 @@ import numpy as np
 
 from jswim.action_codes import check_roc_levels as _check_roc_levels
 from jswim.errors import ConfigError, check_zeta
+from jswim.start_levels import parse_init
 from jswim.swimmers.models import SwimmerModel, make_model
 
 
@@ -135,36 +136,6 @@ def parse_direction(direction: int | str) -> int:
     if not isinstance(direction, (str, bool)) and direction in (1, -1):
         return int(direction)
     raise ConfigError(f"direction must be +1 ('+x') or -1 ('-x'), got {direction!r}")
-
-
-def parse_init(init: Sequence[int] | str | None, n_dof: int) -> tuple[int, ...]:
-    """Initial levels as a tuple of 0/1 (or -1 for random) of length ``n_dof``."""
-    if init is None:
-        return (1,) * n_dof
-    if isinstance(init, str):
-        text = init.strip().lower()
-        if text == "random":
-            return (-1,) * n_dof
-        if text and all(ch in "+-" for ch in text):
-            init = tuple(1 if ch == "+" else 0 for ch in text)
-        else:
-            raise ConfigError(
-                f"init must be levels like (1, 0), a sign string like '+-', or 'random'; got {init!r}"
-            )
-    try:
-        levels = tuple(int(v) for v in init)
-    except (TypeError, ValueError):
-        raise ConfigError(f"init must be a sequence of 0/1 levels, got {init!r}") from None
-    if len(levels) != n_dof or any(v not in (0, 1, -1) for v in levels):
-        raise ConfigError(
-            f"init must give {n_dof} levels, each 0 (lo), 1 (hi) or -1 (random); got {init!r}"
-        )
-    return levels
-
-
-def all_inits(n_dof: int) -> list[tuple[int, ...]]:
-    """Every corner of the DOF cube, e.g. the four initial configurations of a 2-DOF swimmer."""
-    return [tuple((c >> k) & 1 for k in range(n_dof)) for c in range(2**n_dof)][::-1]
 
 
 def is_batched(params: EnvParams) -> bool:

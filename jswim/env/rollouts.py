@@ -90,8 +90,8 @@ def rollout_moves(
         As in [`jswim.env.make_params`][jswim.env.params.make_params] (``d_max``, ``d_min``, ...).
     scene : jswim.scenes.Scene, optional
         Swim in a scene (``"ng"`` only): a wall, obstacles, two swimmers
-        ([`jswim.scenes.scene_rollout`][jswim.scenes.rollout.scene_rollout], which returns a
-        [`jswim.scenes.SceneRollout`][jswim.scenes.rollout.SceneRollout]; ``actions`` may then be ``(swimmer, dof, roc)``
+        ([`jswim.env.scene_rollout`][jswim.env.scene_rollouts.scene_rollout], which returns a
+        [`jswim.env.SceneRollout`][jswim.env.scene_rollouts.SceneRollout]; ``actions`` may then be ``(swimmer, dof, roc)``
         triples). ``None``, or one untilted swimmer in the ``"bulk"`` medium, is exactly this
         function without a scene.
 
@@ -117,9 +117,7 @@ def rollout_moves(
     [0.0, 0.0]
     """
     if scene is not None and not _is_plain_bulk(scene):
-        from jswim.scenes import (
-            scene_rollout,
-        )  # lazy: start-up (the scene physics loads for a scene)
+        from jswim.env.scene_rollouts import scene_rollout  # lazy: start-up (the scene physics)
 
         if direction not in (1, "+x", "+", "x", "+1", "1"):
             raise ConfigError(

@@ -15,18 +15,15 @@ One concept per module: [`scene`][jswim.scenes.scene] (``Scene``),
 [`scene_state`][jswim.scenes.scene_state] (``SceneState``, ``SceneStepInfo``, ``scene_reset``),
 `scene_actions` (codes), `collocation` (the step's time integration),
 [`scene_stepping`][jswim.scenes.scene_stepping] (``scene_step``),
-[`rollout`][jswim.scenes.rollout] (``scene_rollout``).
+[`purcell_wall`][jswim.scenes.purcell_wall] (Purcell's swimmer above a wall, a model).
+
+The scene physics sits below the worlds and imports nothing from `jswim.env`; a scene's
+rollouts (``scene_rollout``, ``scene_rollout_batch``) and its world (``SceneWorld``) are in
+`jswim.env`.
 """
 
 from jswim.scenes.scene_actions import decode_scene_action, encode_scene_action, split_action
-from jswim.scenes.scene_parameters import CONTACT_GAP, SceneParams, scene_params
-from jswim.scenes.rollout import (
-    SceneRollout,
-    batch_starts,
-    parse_scene_moves,
-    scene_rollout,
-    scene_rollout_batch,
-)
+from jswim.scenes.scene_parameters import CONTACT_GAP, SceneParams, batch_starts, scene_params
 from jswim.scenes.scene import MEDIA, Scene
 from jswim.scenes.scene_state import SceneState, SceneStepInfo, scene_positions, scene_reset
 from jswim.scenes.scene_stepping import (
@@ -42,20 +39,16 @@ __all__ = [
     "MEDIA",
     "Scene",
     "SceneParams",
-    "SceneRollout",
     "SceneState",
     "SceneStepInfo",
     "batch_starts",
     "decode_scene_action",
     "encode_scene_action",
     "integrate_move",
-    "parse_scene_moves",
     "scene_advance",
     "scene_params",
     "scene_positions",
     "scene_reset",
-    "scene_rollout",
-    "scene_rollout_batch",
     "scene_step",
     "scene_step_joint",
     "split_action",

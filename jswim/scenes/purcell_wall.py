@@ -3,7 +3,9 @@
 The links stay at that height (no force normal to the wall, [`jswim.swimmers.wall_rft`][jswim.swimmers.wall_rft]), so
 the world is the paper's planar world ([`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]: exact
 corner steps, drift-free positions, JAX's default float) with wall-corrected drag coefficients.
-``jswim.make("purcell", scene=...)`` and [`jswim.scenes.scene_rollout`][jswim.scenes.rollout.scene_rollout] come here. What is
+This module is the model (the scene physics, below the worlds): ``jswim.make("purcell",
+scene=...)`` and [`jswim.env.scene_rollout`][jswim.env.scene_rollouts.scene_rollout] build
+their world from [`model`][jswim.scenes.purcell_wall.model]. What is
 not built is refused in one line: a second swimmer, obstacles, a tilt, ``mobility="rpy"`` or
 medium ``"free"`` (resistive force theory has no interactions to solve; ``"bulk"`` is the paper's
 world).
@@ -13,14 +15,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import jax
-import jax.numpy as jnp
-import numpy as np
-
-from jswim.action_codes import encode_action
-from jswim.env.episodes import rollout as world_rollout
-from jswim.env.params import make_params
-from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
 from jswim.scenes.scene import Scene
 from jswim.swimmers import purcell_beads
@@ -90,52 +84,3 @@ def model(
             f"'beads'), not {', '.join(sorted(other))}"
         )
     return local_rft_model(h, link_radius, d_max=d_max)
-
-
-def rollout(
-    moves: np.ndarray,
-    scene: Scene,
-    *,
-    key: Any = 0,
-    zeta: float = 0.0,
-    init: Any = None,
-    link_radius: float = LINK_RADIUS,
-    d_max: float | None = None,
-    **other: Any,
-) -> dict[str, np.ndarray]:
-    """The fields of a [`jswim.scenes.SceneRollout`][jswim.scenes.rollout.SceneRollout] of ``moves``, float64.
-
-    ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` ([`jswim.scenes.parse_scene_moves`][jswim.scenes.rollout.parse_scene_moves]).
-
-    ``x``, ``y``: the centroid (as [`jswim.env.rollout_moves`][jswim.env.rollouts.rollout_moves]); ``z``: the plane's height (fixed);
-    ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
-    the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
-    """
-    m = model(scene, link_radius=link_radius, d_max=d_max, **other)  # wall_model in other
-    dof, roc = np.asarray(moves, np.float64)[:, 1:].T
-    with jax.enable_x64(True):
-        params = make_params(m, zeta=zeta, init=init)
-        if np.all(
-            np.isin(roc, (-1.0, 0.0, 1.0))
-        ):  # the paper's ROCs: integer codes, the exact corner table
-            acts = jnp.asarray(encode_action(dof + 1, roc), jnp.int32)
-        else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout_moves does)
-            acts = jnp.asarray(np.eye(2)[dof.astype(int)] * roc[:, None], jnp.float64)
-        t = world_rollout(SwimmerWorld(m), params, key, acts)
-        pos = np.asarray(t.obs.position[:, 0], np.float64)  # (steps, 2): the centroid
-        out = {
-            "x": pos[:, :1],
-            "arms": np.asarray(t.obs.dofs, np.float64)[:, None, :],
-            "dx": np.asarray(t.info.displacement[:, 0, :1], np.float64),
-            "stuck": np.asarray(t.info.stuck),
-            "y": pos[:, 1:],
-            "orientation": np.asarray(t.obs.orientation, np.float64),
-        }
-    steps = pos.shape[0]
-    return {
-        **out,
-        "z": np.full((steps, 1), m.height),
-        "tilt": np.zeros((steps, 1)),
-        "contact": np.zeros(steps, bool),
-        "gap": np.full(steps, m.height - m.link_radius),
-    }

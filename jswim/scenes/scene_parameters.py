@@ -12,9 +12,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jswim.env.params import check_roc_levels, parse_init
+from jswim.action_codes import check_roc_levels
 from jswim.errors import ConfigError, check_zeta
 from jswim.scenes.scene import Scene
+from jswim.start_levels import parse_init
 from jswim.swimmers.models import make_model
 
 #: A step is refused when a sphere's surface would come closer than this to the wall, an
@@ -174,10 +175,46 @@ def scene_params(
         scene=scene,
         lo=float(model.lo),
         hi=float(model.hi),
-        roc_levels=check_roc_levels(roc_levels),
+        roc_levels=check_roc_levels(roc_levels, "roc_levels"),
         nodes=nodes,
         sweeps=sweeps,
         contact_gap=float(contact_gap),
+    )
+
+
+def batch_starts(
+    params: SceneParams, *, height: Any = None, tilt: Any = None, separation: Any = None
+) -> SceneParams:
+    """``params`` with a leading batch axis of start poses: one compiled scene, many starts.
+
+    ``height``, ``tilt`` and ``separation`` are 1-D arrays of one length ``B`` (or None: the
+    scene's own value); the result's ``centre0`` is ``(B, S, 2)`` and ``tilt0`` ``(B, S)``, the other
+    leaves are shared. ``params.scene`` (static) stays the template; the starts are not validated
+    again beyond finiteness. Run with [`jswim.env.scene_rollout_batch`][jswim.env.scene_rollouts.scene_rollout_batch].
+    """
+    sc = params.scene
+    vals = [
+        np.asarray(v, np.float64).reshape(-1) for v in (height, tilt, separation) if v is not None
+    ]
+    if not vals:
+        raise ConfigError("batch_starts needs at least one of height, tilt, separation")
+    b = len(vals[0])
+    if any(len(v) != b for v in vals) or not all(np.all(np.isfinite(v)) for v in vals):
+        raise ConfigError(
+            "batch_starts: height, tilt and separation must be finite and of one length"
+        )
+    h = np.broadcast_to(np.asarray(sc.height if height is None else height, np.float64), (b,))
+    t = np.broadcast_to(np.asarray(sc.tilt if tilt is None else tilt, np.float64), (b,))
+    d = np.broadcast_to(
+        np.asarray(sc.separation if separation is None else separation, np.float64), (b,)
+    )
+    s = sc.swimmers
+    centre = (
+        sc.start_offsets()[None] * d[:, None, None] + np.stack([np.zeros(b), h], -1)[:, None, :]
+    )
+    dtype = params.arms0.dtype
+    return params.replace(
+        centre0=jnp.asarray(centre, dtype), tilt0=jnp.asarray(np.repeat(t[:, None], s, 1), dtype)
     )
 
 

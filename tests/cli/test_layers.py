@@ -32,7 +32,14 @@ LAYERS = [
     ("physics", ["jswim.swimmers"]),
     (
         "environment",
-        ["jswim.env", "jswim.scenes", "jswim.integrate", "jswim.action_codes", "jswim.sharding"],
+        [
+            "jswim.env",
+            "jswim.scenes",
+            "jswim.integrate",
+            "jswim.action_codes",
+            "jswim.start_levels",
+            "jswim.sharding",
+        ],
     ),
     ("prompt text", ["jswim.prompt"]),
     ("LLM I/O", ["jswim.llm"]),

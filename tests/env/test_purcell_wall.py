@@ -14,7 +14,8 @@ import jswim
 from jswim import env
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
-from jswim.scenes import Scene, scene_rollout
+from jswim.env import scene_rollout
+from jswim.scenes import Scene
 from jswim.swimmers import wall_rft
 from jswim.swimmers.models import make_model
 from tests.physics.test_wall_rft import cycles

@@ -10,6 +10,7 @@ import pytest
 from scipy.integrate import quad
 
 import jswim
+from jswim.env import scene_rollout
 from jswim.errors import ConfigError
 from jswim.scenes import (
     Scene,
@@ -17,7 +18,6 @@ from jswim.scenes import (
     encode_scene_action,
     scene_params,
     scene_reset,
-    scene_rollout,
     scene_step,
 )
 

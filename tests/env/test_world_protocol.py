@@ -17,7 +17,8 @@ from jswim.env.episodes import rollout
 from jswim.env.scene_world import SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
-from jswim.scenes import Scene, decode_scene_action, scene_reset, scene_rollout, scene_step
+from jswim.env import scene_rollout
+from jswim.scenes import Scene, decode_scene_action, scene_reset, scene_step
 
 #: The square gait (DOF 2 down, DOF 1 down, DOF 2 up, DOF 1 up) as (dof, roc) and as codes.
 SQUARE = [(2, -1), (1, -1), (2, 1), (1, 1)]
@@ -252,19 +253,17 @@ def test_old_names_import_from_their_old_places():
             "position",
         ],
         "jswim.env.rollouts": ["Rollout", "rollout_moves", "seed32", "seed_key"],
+        "jswim.env.scene_rollouts": ["SceneRollout", "scene_rollout", "scene_rollout_batch"],
         "jswim.scenes": [
             "Scene",
             "SceneParams",
             "SceneState",
             "SceneStepInfo",
-            "SceneRollout",
             "scene_params",
             "scene_reset",
             "scene_step",
             "scene_step_joint",
             "scene_advance",
-            "scene_rollout",
-            "scene_rollout_batch",
             "batch_starts",
             "decode_scene_action",
             "encode_scene_action",

@@ -101,7 +101,8 @@ def test_bad_options_are_one_line_errors():
 
 @pytest.mark.slow  # the motion table's 1681 bead solves and the cycle's compile: ~1 min
 def test_scene_option_beads_matches_the_modules_cycle():
-    from jswim.scenes import Scene, scene_rollout
+    from jswim.env import scene_rollout
+    from jswim.scenes import Scene
 
     r = scene_rollout(
         "purcell",

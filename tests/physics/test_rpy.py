@@ -9,7 +9,8 @@ import pytest
 from scipy.integrate import quad
 
 from jswim.errors import ConfigError
-from jswim.scenes import Scene, scene_rollout
+from jswim.env import scene_rollout
+from jswim.scenes import Scene
 from jswim.swimmers.mobility import mobility_matrix, rpb_entries, rpy_entries, wall_self_factors
 
 SQUARE = [(1, -1), (2, -1), (1, 1), (2, 1)]

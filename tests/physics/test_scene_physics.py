@@ -6,13 +6,12 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
+from jswim.env import scene_rollout, scene_rollout_batch
 from jswim.scenes import (
     Scene,
     batch_starts,
     scene_params,
     scene_reset,
-    scene_rollout,
-    scene_rollout_batch,
     scene_step,
     scene_step_joint,
 )

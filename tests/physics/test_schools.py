@@ -220,7 +220,7 @@ def test_one_and_two_swimmers_keep_their_numbers():
     # fluid (a pair alternating square cycles, 30 a apart, float64), to a few ulp: XLA's CPU code
     # (vector width, fused multiply-adds) differs between processors, and so do the last bits
     # (the lone swimmer's x is 0.1720914395640445, 1 ulp off, on an AMD EPYC)
-    from jswim.scenes import scene_rollout
+    from jswim.env import scene_rollout
 
     lone = scene_rollout("ng", [(1, -1), (2, -1), (1, 1), (2, 1)], Scene(medium="free"))
     assert lone.x[-1, 0] == pytest.approx(0.17209143956404405, rel=1e-14, abs=0)

@@ -59,7 +59,8 @@ def test_a_nose_up_start_escapes_and_a_level_one_glides():
     import jax.numpy as jnp
     import numpy as np
 
-    from jswim.scenes import batch_starts, scene_params, scene_rollout_batch
+    from jswim.env import scene_rollout_batch
+    from jswim.scenes import batch_starts, scene_params
 
     p = scene_params("ng", Scene(medium="wall", height=10.0), dtype=jnp.float64)
     square = [(1, -1), (2, -1), (1, 1), (2, 1)]

@@ -1,4 +1,10 @@
-"""``scene_rollout``: a given sequence of moves in a scene, per-step records, float64."""
+"""``scene_rollout``: a given sequence of moves in a scene, per-step records, float64.
+
+The scene physics ([`jswim.scenes`][jswim.scenes]) sits below the worlds; its rollouts live here,
+beside the paper's world's ([`jswim.env.rollouts`][jswim.env.rollouts]), because Purcell's
+swimmer above a wall rolls out through the paper's world
+([`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]).
+"""
 
 from __future__ import annotations
 
@@ -9,13 +15,18 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from jswim.action_codes import encode_action
+from jswim.env.episodes import rollout as world_rollout
+from jswim.env.params import make_params
 from jswim.env.randomness import seed_key
+from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
 from jswim.scenes import purcell_wall
 from jswim.scenes.scene_parameters import SceneParams, scene_params
 from jswim.scenes.scene import Scene
 from jswim.scenes.scene_state import SceneState, scene_reset
 from jswim.scenes.scene_stepping import scene_step
+from jswim.swimmers.wall_rft import LINK_RADIUS
 
 
 class SceneRollout(NamedTuple):
@@ -102,7 +113,9 @@ def scene_rollout(
     """
     if purcell_wall.is_purcell(swimmer) and params is None:
         return SceneRollout(
-            **purcell_wall.rollout(parse_scene_moves(moves, 1), scene, key=key, zeta=zeta, **kwargs)
+            **_purcell_wall_rollout(
+                parse_scene_moves(moves, 1), scene, key=key, zeta=zeta, **kwargs
+            )
         )
     with jax.enable_x64(True):
         if params is None:
@@ -117,6 +130,58 @@ def scene_rollout(
             jnp.asarray(acts[:, 2], params.arms0.dtype),
         )
         return SceneRollout(*(np.asarray(v) for v in out))
+
+
+def _purcell_wall_rollout(
+    moves: np.ndarray,
+    scene: Scene,
+    *,
+    key: Any = 0,
+    zeta: float = 0.0,
+    init: Any = None,
+    link_radius: float = LINK_RADIUS,
+    d_max: float | None = None,
+    **other: Any,
+) -> dict[str, np.ndarray]:
+    """The fields of a `SceneRollout` of ``moves`` by Purcell's swimmer above a wall, float64.
+
+    ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` (`parse_scene_moves`); the model
+    is [`jswim.scenes.purcell_wall.model`][jswim.scenes.purcell_wall.model] of ``scene``.
+
+    ``x``, ``y``: the centroid (as [`jswim.env.rollout_moves`][jswim.env.rollouts.rollout_moves]); ``z``: the plane's height (fixed);
+    ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
+    the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
+    """
+    m = purcell_wall.model(
+        scene, link_radius=link_radius, d_max=d_max, **other
+    )  # wall_model in other
+    dof, roc = np.asarray(moves, np.float64)[:, 1:].T
+    with jax.enable_x64(True):
+        params = make_params(m, zeta=zeta, init=init)
+        if np.all(
+            np.isin(roc, (-1.0, 0.0, 1.0))
+        ):  # the paper's ROCs: integer codes, the exact corner table
+            acts = jnp.asarray(encode_action(dof + 1, roc), jnp.int32)
+        else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout_moves does)
+            acts = jnp.asarray(np.eye(2)[dof.astype(int)] * roc[:, None], jnp.float64)
+        t = world_rollout(SwimmerWorld(m), params, key, acts)
+        pos = np.asarray(t.obs.position[:, 0], np.float64)  # (steps, 2): the centroid
+        out = {
+            "x": pos[:, :1],
+            "arms": np.asarray(t.obs.dofs, np.float64)[:, None, :],
+            "dx": np.asarray(t.info.displacement[:, 0, :1], np.float64),
+            "stuck": np.asarray(t.info.stuck),
+            "y": pos[:, 1:],
+            "orientation": np.asarray(t.obs.orientation, np.float64),
+        }
+    steps = pos.shape[0]
+    return {
+        **out,
+        "z": np.full((steps, 1), m.height),
+        "tilt": np.zeros((steps, 1)),
+        "contact": np.zeros(steps, bool),
+        "gap": np.full(steps, m.height - m.link_radius),
+    }
 
 
 @jax.jit
@@ -141,44 +206,8 @@ def _scan(params: SceneParams, key: Array, sw: Array, dof: Array, roc: Array) ->
     return out
 
 
-def batch_starts(
-    params: SceneParams, *, height: Any = None, tilt: Any = None, separation: Any = None
-) -> SceneParams:
-    """``params`` with a leading batch axis of start poses: one compiled scene, many starts.
-
-    ``height``, ``tilt`` and ``separation`` are 1-D arrays of one length ``B`` (or None: the
-    scene's own value); the result's ``centre0`` is ``(B, S, 2)`` and ``tilt0`` ``(B, S)``, the other
-    leaves are shared. ``params.scene`` (static) stays the template; the starts are not validated
-    again beyond finiteness. Run with [`scene_rollout_batch`][jswim.scenes.rollout.scene_rollout_batch].
-    """
-    sc = params.scene
-    vals = [
-        np.asarray(v, np.float64).reshape(-1) for v in (height, tilt, separation) if v is not None
-    ]
-    if not vals:
-        raise ConfigError("batch_starts needs at least one of height, tilt, separation")
-    b = len(vals[0])
-    if any(len(v) != b for v in vals) or not all(np.all(np.isfinite(v)) for v in vals):
-        raise ConfigError(
-            "batch_starts: height, tilt and separation must be finite and of one length"
-        )
-    h = np.broadcast_to(np.asarray(sc.height if height is None else height, np.float64), (b,))
-    t = np.broadcast_to(np.asarray(sc.tilt if tilt is None else tilt, np.float64), (b,))
-    d = np.broadcast_to(
-        np.asarray(sc.separation if separation is None else separation, np.float64), (b,)
-    )
-    s = sc.swimmers
-    centre = (
-        sc.start_offsets()[None] * d[:, None, None] + np.stack([np.zeros(b), h], -1)[:, None, :]
-    )
-    dtype = params.arms0.dtype
-    return params.replace(
-        centre0=jnp.asarray(centre, dtype), tilt0=jnp.asarray(np.repeat(t[:, None], s, 1), dtype)
-    )
-
-
 def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0) -> SceneRollout:
-    """[`scene_rollout`][jswim.scenes.rollout.scene_rollout] of the same moves from each start of [`batch_starts`][jswim.scenes.rollout.batch_starts] (float64
+    """[`scene_rollout`][jswim.env.scene_rollouts.scene_rollout] of the same moves from each start of [`jswim.scenes.batch_starts`][jswim.scenes.scene_parameters.batch_starts] (float64
     when ``params`` is). Leading axes of the result: (batch, steps, ...)."""
     with jax.enable_x64(True):
         acts = parse_scene_moves(moves, params.n_swimmers)
