@@ -31,12 +31,16 @@ STUDY_HELP = {
 
 def _numbers(kind: type) -> Any:
     def parse(text: str) -> tuple:
-        try:
-            values = tuple(kind(v.strip()) for v in text.split(",") if v.strip())
+        items = [v.strip() for v in text.split(",")]
+        try:  # an empty item ("3,,6", "3,") is refused, not dropped; "" is not the defaults
+            values = tuple(kind(v) for v in items) if all(items) else ()
         except ValueError:
             values = ()
-        if not values:  # "" or "," would otherwise fall back to the defaults silently
-            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}")
+        if not values:
+            what = "names" if kind is str else "numbers"
+            raise argparse.ArgumentTypeError(
+                f"expected comma-separated {what} without empty items, got {text!r}"
+            )
         return values
 
     return parse
