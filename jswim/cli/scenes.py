@@ -185,33 +185,12 @@ def options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _print_nav_table(rows: Sequence[Any]) -> None:
-    """The navigation table (`jswim.studies.navigate.nav_summary`)."""
-    from jswim.studies.navigate import nav_summary  # lazy: JAX loads only for a study
+    """The navigation table (`jswim.overview.nav_table`) and its note."""
+    from jswim.overview import nav_table  # lazy: JAX loads only for a study
 
-    def fmt(v: Any, spec: str) -> str:
-        return "-" if v is None else format(v, spec)
-
-    cols = [Column("target", False), Column("agent", False)] + [
-        Column(h) for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
-    ]
-    cells = [
-        [
-            g["group"],
-            g["agent"],
-            f"{g['reached']}/{g['n']}",
-            fmt(g["steps_to_target"], ".0f"),
-            fmt(g["path_ratio"], ".2f"),
-            fmt(g["energy"], ".1f"),
-            fmt(g["energy_per_distance"], ".1f"),
-        ]
-        for g in nav_summary(rows)
-    ]
-    show(
-        cols,
-        cells,
-        "navigation: targets reached, mean steps to the target and path over straight distance "
-        "(runs that reached it), energy (xi_par a^3/tau) and energy per a closed",
-    )
+    cols, cells, note = nav_table(rows)
+    show(cols, cells, "navigation: targets reached, steps to the target, path ratio, energy")
+    print(note)
 
 
 def print_table(rows: Sequence[dict[str, Any]]) -> None:

@@ -274,11 +274,19 @@ def _print_summary(
     from jswim.agents.fidelity import (
         describe_constraint,
     )  # lazy: JAX loads only for commands that run
-    from jswim.overview import SUMMARY_NOTE, order_summary, summary_table  # lazy: as above
+    from jswim.overview import (
+        SUMMARY_NOTE,
+        is_navigation,
+        order_summary,
+        summary_table,
+    )  # lazy: as above
 
-    cols, cells = summary_table(order_summary(summary, rows))
-    print_table(cols, cells, title)
-    print(SUMMARY_NOTE)
+    if is_navigation(rows):  # its own table follows (jswim.cli.scenes.print_table)
+        print(title)
+    else:
+        cols, cells = summary_table(order_summary(summary, rows))
+        print_table(cols, cells, title)
+        print(SUMMARY_NOTE)
     from jswim.results import as_run_rows  # lazy: as above
 
     llm = [r for r in as_run_rows(rows) if r.agent == "llm"]
