@@ -62,8 +62,14 @@ def outlined(p: argparse.ArgumentParser) -> bool:
 
 
 def _listed(text: str, kind: type, what: str) -> tuple[Any, ...]:
+    """``A,B,...`` as ``kind`` values; an empty item (``3,,6``, ``3,``) is refused, not dropped."""
+    items = [v.strip() for v in text.split(",")]
+    if not text.strip() or not all(items):
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated {what} without empty items, got {text!r}"
+        )
     try:
-        return tuple(kind(v) for v in text.split(",") if v.strip())
+        return tuple(kind(v) for v in items)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated {what}, got {text!r}") from None
 

@@ -630,6 +630,11 @@ def options(args: argparse.Namespace, study: str) -> Any:
             raise ConfigError(
                 "--roc-levels takes one K here (a list only for the continuous study)"
             )
+        elif study == "navigate" and args.roc_levels[0] < 2:
+            raise ConfigError(
+                f"--roc-levels {args.roc_levels[0]}: the navigate study steers on K >= 2 levels (the corner "
+                "world, K = 1, cannot turn); leave it out for K = 2, or give 2 or more"
+            )
         else:
             kw["roc_levels"] = args.roc_levels[0]
     names = tuple(v.strip() for v in (args.variant or "").split(",") if v.strip())

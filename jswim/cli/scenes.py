@@ -12,7 +12,6 @@ import argparse
 from typing import Any
 from collections.abc import Sequence
 
-from jswim.console import Column
 from jswim.console import print_table as show
 
 STUDY_HELP = {
@@ -31,12 +30,16 @@ STUDY_HELP = {
 
 def _numbers(kind: type) -> Any:
     def parse(text: str) -> tuple:
-        try:
-            values = tuple(kind(v.strip()) for v in text.split(",") if v.strip())
+        items = [v.strip() for v in text.split(",")]
+        try:  # an empty item ("3,,6", "3,") is refused, not dropped; "" is not the defaults
+            values = tuple(kind(v) for v in items) if all(items) else ()
         except ValueError:
             values = ()
-        if not values:  # "" or "," would otherwise fall back to the defaults silently
-            raise argparse.ArgumentTypeError(f"expected comma-separated numbers, got {text!r}")
+        if not values:
+            what = "names" if kind is str else "numbers"
+            raise argparse.ArgumentTypeError(
+                f"expected comma-separated {what} without empty items, got {text!r}"
+            )
         return values
 
     return parse
@@ -181,33 +184,12 @@ def options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _print_nav_table(rows: Sequence[Any]) -> None:
-    """The navigation table (`jswim.studies.navigate.nav_summary`)."""
-    from jswim.studies.navigate import nav_summary  # lazy: JAX loads only for a study
+    """The navigation table (`jswim.studies.overview.nav_table`) and its note."""
+    from jswim.studies.overview import nav_table  # lazy: JAX loads only for a study
 
-    def fmt(v: Any, spec: str) -> str:
-        return "-" if v is None else format(v, spec)
-
-    cols = [Column("target", False), Column("agent", False)] + [
-        Column(h) for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
-    ]
-    cells = [
-        [
-            g["group"],
-            g["agent"],
-            f"{g['reached']}/{g['n']}",
-            fmt(g["steps_to_target"], ".0f"),
-            fmt(g["path_ratio"], ".2f"),
-            fmt(g["energy"], ".1f"),
-            fmt(g["energy_per_distance"], ".1f"),
-        ]
-        for g in nav_summary(rows)
-    ]
-    show(
-        cols,
-        cells,
-        "navigation: targets reached, mean steps to the target and path over straight distance "
-        "(runs that reached it), energy (xi_par a^3/tau) and energy per a closed",
-    )
+    cols, cells, note = nav_table(rows)
+    show(cols, cells, "navigation: targets reached, steps to the target, path ratio, energy")
+    print(note)
 
 
 def print_table(rows: Sequence[dict[str, Any]]) -> None:

@@ -85,7 +85,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
         print("\n".join(est.lines()))
         print(json.dumps(est.as_dict(), sort_keys=True))  # the same, for scripts
         return 0
-    if (text := short_steps_warning(opts, study)) is not None:
+    if (text := short_steps_warning(opts, study) or _short_navigation(opts, study)) is not None:
         base.warn(text)
     with Progress() as bar:
         tick = phase_ticker(bar)
@@ -171,6 +171,30 @@ def _run(study: str, args: argparse.Namespace) -> int:
         )
         return base.EXIT_USAGE
     return 0
+
+
+def _short_navigation(opts: Any, study: str) -> str | None:
+    """A warning when ``--steps`` of a navigation study is below what the steering controller
+    is estimated to need for the nearest of its targets (its budget over `BUDGET_SAFETY`): few
+    runs, if any, can reach a target then."""
+    if study != "navigate" or opts.steps is None:
+        return None
+    from jswim.env.targets import BUDGET_SAFETY, default_budget  # lazy: JAX loads for a run
+    from jswim.studies.navigate import NAV_ROC_LEVELS, targets  # lazy: as above
+    from jswim.swimmers.models import make_model  # lazy: as above
+
+    k = max(opts.roc_levels, NAV_ROC_LEVELS)
+    model = make_model("purcell")
+    need = min(
+        math.ceil(default_budget(spec, model, k) / BUDGET_SAFETY)
+        for _, _, spec in targets(opts.distances, opts.bearings)
+    )
+    if opts.steps >= need:
+        return None
+    return (
+        f"--steps {opts.steps} is shorter than the ~{need} steps the steering controller needs for "
+        "the nearest target: few runs, if any, will reach a target"
+    )
 
 
 def _print_reasoning(result: Any) -> None:
@@ -269,11 +293,19 @@ def _print_summary(
     from jswim.agents.fidelity import (
         describe_constraint,
     )  # lazy: JAX loads only for commands that run
-    from jswim.studies.overview import SUMMARY_NOTE, order_summary, summary_table  # lazy: as above
+    from jswim.studies.overview import (
+        SUMMARY_NOTE,
+        is_navigation,
+        order_summary,
+        summary_table,
+    )  # lazy: as above
 
-    cols, cells = summary_table(order_summary(summary, rows))
-    print_table(cols, cells, title)
-    print(SUMMARY_NOTE)
+    if is_navigation(rows):  # its own table follows (jswim.cli.scenes.print_table)
+        print(title)
+    else:
+        cols, cells = summary_table(order_summary(summary, rows))
+        print_table(cols, cells, title)
+        print(SUMMARY_NOTE)
     from jswim.results import as_run_rows  # lazy: as above
 
     llm = [r for r in as_run_rows(rows) if r.agent == "llm"]

@@ -22,13 +22,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import numbers
 from typing import Any, NamedTuple
 
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.errors import ConfigError
+from jswim.errors import MAX_COUNT, ConfigError
 from jswim.swimmers.turning import square_gait
 
 __all__ = [
@@ -53,25 +54,44 @@ DEFAULT_RADIUS = 0.25
 #: ("Budgets") gives the measured steps it covers.
 BUDGET_SAFETY = 1.5
 
+#: Largest budget (steps): the worlds count steps in int32.
+MAX_BUDGET = MAX_COUNT
 
-def _number(value: Any, what: str, positive: bool = False) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ConfigError(f"{what} must be a number, got {value!r}") from None
+#: Largest distance of a target or waypoint from the start, radius and speed (``a``, ``a`` per
+#: step): float32 positions there resolve about 1e-3 a (eps 1.2e-7 times 1e4), ten times finer
+#: than one step's displacement (~0.01 a); farther out a float32 world would blur its steps.
+MAX_DISTANCE = 1.0e4
+
+#: Bearings are degrees within one turn either way.
+MAX_BEARING = 360.0
+
+
+def _number(value: Any, what: str, positive: bool = False, limit: float | None = None) -> float:
+    """``value`` as a float: a real number (not a string, not a bool), finite, ``> 0`` where
+    ``positive``, ``|v| <= limit`` where given."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ConfigError(f"{what} must be a number, got {value!r}")
+    v = float(value)
     if not math.isfinite(v) or (positive and v <= 0):
         raise ConfigError(
             f"{what} must be a finite number{' > 0' if positive else ''}, got {value!r}"
         )
+    if limit is not None and abs(v) > limit:
+        raise ConfigError(f"{what} must be within -{limit:g}..{limit:g}, got {value!r}")
     return v
 
 
 def _check_common(radius: Any, budget: Any) -> tuple[float, int | None]:
-    r = _number(radius, "radius", positive=True)
+    r = _number(radius, "radius", positive=True, limit=MAX_DISTANCE)
     if budget is not None and (
-        isinstance(budget, bool) or not isinstance(budget, (int, np.integer)) or budget < 1
+        isinstance(budget, (bool, np.bool_))
+        or not isinstance(budget, (int, np.integer))
+        or not 1 <= budget <= MAX_BUDGET
     ):
-        raise ConfigError(f"budget must be a whole number of steps >= 1 or None, got {budget!r}")
+        raise ConfigError(
+            f"budget must be a whole number of steps in 1..{MAX_BUDGET:,} (int32) or None, "
+            f"got {budget!r}"
+        )
     return r, None if budget is None else int(budget)
 
 
@@ -100,11 +120,11 @@ class FixedTarget:
 
     def __post_init__(self) -> None:
         r, b = _check_common(self.radius, self.budget)
-        d = _number(self.distance, "distance", positive=True)
+        d = _number(self.distance, "distance", positive=True, limit=MAX_DISTANCE)
         if d <= r:
             raise ConfigError(f"distance {d} must exceed the success radius {r}")
         object.__setattr__(self, "distance", d)
-        object.__setattr__(self, "bearing", _number(self.bearing, "bearing"))
+        object.__setattr__(self, "bearing", _number(self.bearing, "bearing", limit=MAX_BEARING))
         object.__setattr__(self, "radius", r)
         object.__setattr__(self, "budget", b)
 
@@ -143,7 +163,10 @@ class Waypoints:
         r, b = _check_common(self.radius, self.budget)
         try:
             pts = tuple(
-                (_number(p[0], "a waypoint's x"), _number(p[1], "a waypoint's y"))
+                (
+                    _number(p[0], "a waypoint's x", limit=MAX_DISTANCE),
+                    _number(p[1], "a waypoint's y", limit=MAX_DISTANCE),
+                )
                 for p in self.points_xy
             )
             ok = all(len(p) == 2 for p in self.points_xy)
@@ -199,18 +222,21 @@ class MovingTarget:
 
     def __post_init__(self) -> None:
         r, b = _check_common(self.radius, self.budget)
-        d = _number(self.distance, "distance", positive=True)
+        d = _number(self.distance, "distance", positive=True, limit=MAX_DISTANCE)
         if d <= r:
             raise ConfigError(f"distance {d} must exceed the success radius {r}")
         try:
-            v = (_number(self.velocity[0], "velocity x"), _number(self.velocity[1], "velocity y"))
+            v = (
+                _number(self.velocity[0], "velocity x", limit=MAX_DISTANCE),
+                _number(self.velocity[1], "velocity y", limit=MAX_DISTANCE),
+            )
             ok = len(self.velocity) == 2
         except (TypeError, IndexError):
             ok = False
         if not ok:
             raise ConfigError(f"velocity must be (vx, vy) in a per step, got {self.velocity!r}")
         object.__setattr__(self, "distance", d)
-        object.__setattr__(self, "bearing", _number(self.bearing, "bearing"))
+        object.__setattr__(self, "bearing", _number(self.bearing, "bearing", limit=MAX_BEARING))
         object.__setattr__(self, "velocity", v)
         object.__setattr__(self, "radius", r)
         object.__setattr__(self, "budget", b)
@@ -288,10 +314,21 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
     ------
     ConfigError
         No budget given for a swimmer without the controller (not a two-DOF planar swimmer),
-        or a moving target at least as fast as the square gait.
+        a moving target at least as fast as the square gait, or a budget past `MAX_BUDGET`.
     """
     if spec.budget is not None:
         return spec.budget
+    n = _measured_budget(spec, model, roc_levels)
+    if n > MAX_BUDGET:
+        raise ConfigError(
+            f"the target needs {n:,} steps, more than a world counts (int32, {MAX_BUDGET:,}); "
+            "bring it closer"
+        )
+    return n
+
+
+def _measured_budget(spec: Target, model: Any, roc_levels: int) -> int:
+    """`default_budget` of a spec without its own budget (unbounded)."""
     from jswim.env.loops import loop_motion, steering_budget  # lazy: loads the lattice tables
 
     if not (model.planar and model.n_dof == 2):

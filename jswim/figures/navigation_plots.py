@@ -38,8 +38,16 @@ __all__ = [
 ]
 
 #: The steering controller's line (the reference stroke of navigation).
-CONTROLLER_STYLE = dict(color="black", ls="-", marker="o", label="steering controller")
-_STYLES = {**AGENT_STYLE, "controller": CONTROLLER_STYLE}
+CONTROLLER_STYLE = dict(color="black", ls="-", marker="x", label="steering controller")
+#: Navigation's PPO is the categorical learner over the K-level action codes
+#: ([`jswim.studies.navigate.nav_ppo_config`][jswim.studies.navigate.nav_ppo_config]), not the
+#: continuous study's real-ROC one.
+NAV_PPO_STYLE = {**AGENT_STYLE["ppo"], "label": "PPO (categorical, K-level codes)"}
+_STYLES = {**AGENT_STYLE, "ppo": NAV_PPO_STYLE, "controller": CONTROLLER_STYLE}
+
+#: Bearing offset between neighbouring agents' points in the bearing figure (degrees), so that
+#: agents with the same success rate stay visible side by side.
+BEARING_DODGE = 3.0
 _ORDER = ("llm", "qlearning", "ppo", "controller", "random")
 
 
@@ -135,8 +143,10 @@ def bearing_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -
     distances = sorted({_bearing(r)[0] for r in rows})
     fig = Figure(figsize=(COLUMN_IN * min(len(distances), 2) or COLUMN_IN, 2.4))
     axes = fig.subplots(1, max(len(distances), 1), squeeze=False)[0]
+    agents = [a for a in _ORDER if any(r.agent == a for r in rows)]
     for ax, d in zip(axes, distances):
-        for agent in [a for a in _ORDER if any(r.agent == a for r in rows)]:
+        for i, agent in enumerate(agents):
+            shift = (i - (len(agents) - 1) / 2) * BEARING_DODGE
             by: dict[float, list[bool]] = {}
             for r in rows:
                 dist, b = _bearing(r)
@@ -145,15 +155,16 @@ def bearing_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -
             bs = sorted(by)
             st = _style(agent)
             ax.plot(
-                bs,
+                [b + shift for b in bs],
                 [np.mean(by[b]) for b in bs],
                 color=st["color"],
                 ls=st["ls"],
                 marker=st["marker"],
+                mfc="none" if i % 2 else st["color"],
                 label=st["label"],
             )
         ax.set_title(f"targets {d:g} a away")
-        ax.set_xlabel("bearing (degrees)")
+        ax.set_xlabel(f"bearing (degrees; agents {BEARING_DODGE:g} degrees apart)")
         ax.set_ylabel("success rate")
         ax.set_ylim(-0.05, 1.05)
     if distances:

@@ -21,6 +21,7 @@ from jswim.swimmers import purcell_beads
 from jswim.swimmers.models import SwimmerModel
 from jswim.swimmers.wall_rft import LINK_RADIUS
 from jswim.swimmers.wall_rft import wall_model as local_rft_model
+from jswim.scenes.ranges import warn_out_of_range
 
 #: Models of Purcell's swimmer above a wall: ``"local-rft"`` ([`jswim.swimmers.wall_rft`][jswim.swimmers.wall_rft]:
 #: each link's drag corrected by its own averaged image; range b << h, h below ~l) and
@@ -72,6 +73,7 @@ def model(
     of `WALL_MODELS` (``"beads"`` takes ``beads`` per link too); an option it does not take
     (``other``) is a one-line ConfigError rather than dropped."""
     h = check_scene(scene).height
+    warn_out_of_range("purcell", scene, wall_model)
     if wall_model == "beads":
         beads = other.pop("beads", purcell_beads.BEADS_PER_LINK)
         if not other:

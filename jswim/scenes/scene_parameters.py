@@ -14,6 +14,7 @@ import numpy as np
 
 from jswim.action_codes import check_roc_levels
 from jswim.errors import ConfigError, check_zeta
+from jswim.scenes.ranges import warn_out_of_range
 from jswim.scenes.scene import Scene
 from jswim.start_levels import parse_init
 from jswim.swimmers.models import make_model
@@ -144,6 +145,7 @@ def scene_params(
         Bad swimmer, scene, zeta or start (spheres overlapping or touching the wall at the start).
     """
     centre, tilt, arms, obstacles = check_start(swimmer, scene, init, contact_gap, **model_kwargs)
+    warn_out_of_range(swimmer, scene)
     model = make_model("ng", **model_kwargs)
     z = check_zeta(zeta)
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)

@@ -14,6 +14,7 @@ from jswim.agents.variants import (
     variant_action_set,
 )
 from jswim.env.registry import registered_worlds
+from jswim.env.targets import MAX_BEARING, MAX_DISTANCE
 from jswim.errors import ConfigError, check_size, check_zeta
 from jswim.judging.gait import PAPER
 from jswim.scenes import Scene
@@ -144,13 +145,16 @@ class StudyOptions:
         for name in ("steps", "runs", "q_runs", "samples", "n_ht", "train_episodes"):
             if getattr(self, name) is not None:
                 check_size(name, getattr(self, name))
-        if any(not (math.isfinite(d) and d > 0.25) for d in self.distances):
+        if any(not (math.isfinite(d) and 0.25 < d <= MAX_DISTANCE) for d in self.distances):
             raise ConfigError(
-                "--distances must be finite and beyond the success radius 0.25 a, got "
-                + ",".join(map(str, self.distances))
+                f"--distances must be beyond the success radius 0.25 a and at most {MAX_DISTANCE:g} a, "
+                "got " + ",".join(map(str, self.distances))
             )
-        if any(not math.isfinite(b) for b in self.bearings):
-            raise ConfigError(f"--bearings must be finite, got {','.join(map(str, self.bearings))}")
+        if any(not (math.isfinite(b) and abs(b) <= MAX_BEARING) for b in self.bearings):
+            raise ConfigError(
+                f"--bearings must be degrees in -{MAX_BEARING:g}..{MAX_BEARING:g}, "
+                f"got {','.join(map(str, self.bearings))}"
+            )
         for h in self.n_hts:
             check_size("n_ht", h, "--n-hts")
         if self.init is not None and self.init not in INIT_CHOICES:

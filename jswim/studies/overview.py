@@ -165,6 +165,44 @@ def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], l
     return cols, rows
 
 
+def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
+    """Columns, rows and note of a navigation study's table (one row per target and agent):
+    reached, mean steps to the target and path ratio (runs that reached it), energy and energy
+    per distance closed (`jswim.studies.navigate.nav_summary`); the console, ``jswim show`` and
+    the report page print it, each from here."""
+    from jswim.studies.navigate import nav_summary  # lazy: the navigation study loads JAX
+
+    cols = [Column("target", False), Column("agent", False)] + [
+        Column(h) for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
+    ]
+    cells = [
+        [
+            g["group"],
+            g["agent"],
+            f"{g['reached']}/{g['n']}",
+            _fmt(g["steps_to_target"], ".0f"),
+            _fmt(g["path_ratio"], ".2f"),
+            _fmt(g["energy"], ".1f"),
+            _fmt(g["energy_per_distance"], ".1f"),
+        ]
+        for g in nav_summary(rows)
+    ]
+    note = (
+        "reached: runs whose centroid came within the target's radius of it (a path: of its last "
+        "waypoint; a moving target: of where it is then) within the target's step budget, the "
+        "navigation success rule; steps and path ratio (path length over the straight distance): "
+        "means over the runs that reached it; energy: the swimmer's dissipation over the run "
+        "(xi_par a^3/tau); energy/dist: energy per a closed. controller: the steering controller "
+        "(the reference stroke); ppo: PPO with a categorical policy over the K-level action codes."
+    )
+    return cols, cells, note
+
+
+def is_navigation(rows: Sequence[Any]) -> bool:
+    """Whether ``rows`` are a navigation study's (its runs swim to targets)."""
+    return any(r.target for r in as_run_rows(rows))
+
+
 class StudyFolder:
     """A study folder read once: metadata, finished runs and their summary (read-only)."""
 
@@ -350,7 +388,10 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
                 f"({speed.get('calls_per_s', 0):.2f} calls/s)"
             )
     lines.append("")
-    if s.summary:
+    if s.summary and is_navigation(s.rows):  # targets: the navigation table, not the swim one
+        cols, rows, note = nav_table(s.rows)
+        lines += [plain_table(cols, rows, title="navigation", width=width), note]
+    elif s.summary:
         cols, rows = summary_table(s.summary)
         lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
         if any(
@@ -388,6 +429,8 @@ def compare_table(
     if len(folders) < 2:
         raise ConfigError("compare needs at least two study folders")
     studies = [StudyFolder(f) for f in folders]
+    if all(is_navigation(st.rows) for st in studies):
+        return _nav_compare(studies)
     keyed = [{tuple(s.get(k) for k in SETTING): s for s in st.summary} for st in studies]
     common = set(keyed[0]).intersection(*keyed[1:])
     every = set().union(*keyed)
@@ -434,6 +477,24 @@ def compare_table(
     return studies, cols, rows, len(every - common)
 
 
+def _nav_compare(
+    studies: Sequence[StudyFolder],
+) -> tuple[list[StudyFolder], list[Column], list[list[str]], int]:
+    """`compare_table` of navigation studies: per (target, agent) present in all of them, the
+    navigation table's columns, one row per study."""
+    tables = [{(c[0], c[1]): c for c in nav_table(st.rows)[1]} for st in studies]
+    cols, _, _ = nav_table([])
+    common = set(tables[0]).intersection(*tables[1:])
+    every = set().union(*tables)
+    rows = [
+        [*key, f"[{i + 1}]", *t[key][2:]]
+        for key in tables[0]
+        if key in common
+        for i, t in enumerate(tables)
+    ]
+    return list(studies), cols[:2] + [Column("study", False)] + cols[2:], rows, len(every - common)
+
+
 def compare_text(folders: Sequence[str | Path], width: int | None = None) -> str:
     """What ``jswim compare FOLDER...`` prints."""
     studies, cols, rows, left_out = compare_table(folders)
@@ -445,7 +506,11 @@ def compare_text(folders: Sequence[str | Path], width: int | None = None) -> str
     if rows:
         lines.append(plain_table(cols, rows, width=width))
     else:
-        lines.append("no setting (agent, swimmer, direction, group) is present in every study")
+        lines.append(
+            "no target and agent is present in every study"
+            if all(is_navigation(s.rows) for s in studies)
+            else "no setting (agent, swimmer, direction, group) is present in every study"
+        )
     if left_out:
         lines.append(f"{left_out} setting(s) not present in every study are left out")
     return "\n".join(lines)

@@ -38,7 +38,14 @@ import numpy as np
 
 from jswim.figures import plots
 from jswim.results.orders import AGENT_ORDER
-from jswim.studies.overview import SUMMARY_NOTE, grid_order, order_summary, summary_table
+from jswim.studies.overview import (
+    SUMMARY_NOTE,
+    grid_order,
+    is_navigation,
+    nav_table,
+    order_summary,
+    summary_table,
+)
 from jswim.results import (
     RunRow,
     as_run_row,
@@ -301,6 +308,11 @@ def _status(meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]]) -> tuple
 def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
     if not rows:
         return "<p>No finished runs yet.</p>"
+    if is_navigation(rows):  # targets: reached, steps, path ratio, energy (as the console)
+        cols, cells, note = nav_table(rows)
+        return (
+            _table_html(cols, cells, "summary-table") + f'<p class="note">{html.escape(note)}</p>'
+        )
     cols, cells = summary_table(order_summary(summarize(list(rows)), rows))
     head = "".join(
         f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols
@@ -318,6 +330,30 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
         f'<div class="table-wrap"><table class="summary" id="summary-table"><thead><tr>{head}</tr></thead>'
         f'<tbody>{body}</tbody></table></div><p class="note">{html.escape(SUMMARY_NOTE)}</p>'
         + _scenes_html(rows)
+    )
+
+
+def range_notes_of(rows: Sequence[Mapping[str, Any]]) -> list[str]:
+    """The physics models ``rows`` used outside their stated range (`jswim.scenes.ranges`), each
+    once: the lines a run warned of, for the page."""
+    from jswim.scenes import Scene  # lazy: the scenes load JAX
+    from jswim.scenes.ranges import range_notes  # lazy: as above
+
+    notes: dict[str, None] = {}
+    for swimmer, scene in {(r.swimmer, r.scene) for r in as_run_rows(rows) if r.scene}:
+        try:
+            sc = Scene.from_dict(json.loads(scene))
+        except (ValueError, TypeError):  # a damaged row: its page still draws
+            continue
+        notes.update(dict.fromkeys(range_notes(str(swimmer), sc)))
+    return list(notes)
+
+
+def _ranges_html(rows: Sequence[Mapping[str, Any]]) -> str:
+    notes = range_notes_of(rows)
+    return "".join(
+        f'<p class="note range" id="model-range-{i}">outside the model\'s range: {html.escape(n)}</p>'
+        for i, n in enumerate(notes)
     )
 
 
@@ -373,17 +409,37 @@ def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:
 
 
 #: Grid axes that belong to some studies only (the others' folders record their defaults too).
-_OWN_AXES = {"heights": ("wall",), "separations": ("pair",), "phases": ("pair",)}
+_OWN_AXES = {
+    "heights": ("wall",),
+    "tilts": ("wall",),
+    "separations": ("pair", "school"),
+    "phases": ("pair",),
+    "pair_prompt": ("pair",),
+    "formations": ("school",),
+    "school_sizes": ("school",),
+    "distances": ("navigate",),
+    "bearings": ("navigate",),
+    "train_episodes": ("navigate",),
+}
+#: A setting's value as a study reads it, where that differs from the number recorded.
+_READ_AS = {
+    ("navigate", "x_min"): "{v}, lowered per target to a whole a below every place the target "
+    "can be (docs/navigation.md)",
+}
 #: Settings shown in the full record only (the compact block shows what defines this study).
 _NOT_COMPACT = ("horizon", "share_identical")
 
 
-def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
+def applicable_settings(
+    meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]] | None = None
+) -> list[tuple[str, str]]:
     """``(name, value)`` of the settings that apply to the folder's study, for the settings block.
 
     From the identity's options and the recorded grid: values left unset (``None``) and options
     or grid axes the study has no use for (its `jswim.studies.specs.SPECS` ``ignores``; a
-    scene study's own axes only on that study) are left out; the full record stays one click away.
+    scene or navigation study's own axes only on that study) are left out; the full record
+    stays one click away. ``agents`` are those that ran (``rows``, where given), the success
+    rule the study's own (a navigation study's: the target reached within its budget).
     """
     from jswim.studies.specs import (
         SPECS,
@@ -405,15 +461,37 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
             )
         )
     fmt = lambda v: ", ".join(map(str, v)) if isinstance(v, (list, tuple)) else str(v)
+    ran = _agents_ran(rows)
+
+    def own(k: str) -> bool:
+        return k not in ignores and (k not in _OWN_AXES or study in _OWN_AXES[k])
+
     for k, v in sorted((ident.get("options") or {}).items()):
-        if v is None or k in ignores or k in _NOT_COMPACT:
+        if v is None or not own(k) or k in _NOT_COMPACT:
             continue
-        out.append((k, fmt(v)))
+        if k == "agents" and ran:
+            v = ran
+        out.append((k, _READ_AS.get((study, k), "{v}").format(v=fmt(v))))
+    levels = meta.get("roc_levels")
+    if isinstance(levels, list) and levels and levels != [1]:  # the paper's K = 1 goes unsaid
+        out.append(("roc_levels", fmt(levels)))
     for k, v in sorted((meta.get("grid") or {}).items()):
-        if v is None or k in ignores or (k in _OWN_AXES and study not in _OWN_AXES[k]):
+        if v is None or not own(k):
             continue
         out.append((k, fmt(v)))
-    if meta.get("success_criterion"):
+    spec = SPECS.get(study)
+    if spec is not None and not spec.judged:  # navigation: success is the target reached
+        from jswim.env.targets import BUDGET_SAFETY  # lazy: as SPECS
+
+        out.append(
+            (
+                "success rule",
+                "the target reached: the centroid within the target's radius of it (a path: its "
+                "last waypoint; a moving target: where it is then) within the target's step budget "
+                f"(the steering controller's estimated steps times {BUDGET_SAFETY:g}, unless --steps)",
+            )
+        )
+    elif meta.get("success_criterion"):
         out.append(
             (
                 "success criterion",
@@ -425,10 +503,17 @@ def applicable_settings(meta: Mapping[str, Any]) -> list[tuple[str, str]]:
     return out
 
 
-def _settings_html(meta: Mapping[str, Any]) -> str:
+def _agents_ran(rows: Sequence[Mapping[str, Any]] | None) -> list[str]:
+    """The agents of ``rows`` in the page's order (`AGENT_ORDER`, then as they come)."""
+    names = list(dict.fromkeys(r.agent for r in as_run_rows(rows or ())))
+    known = [a for a in AGENT_ORDER if a in names]
+    return known + [a for a in names if a not in known]
+
+
+def _settings_html(meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]] = ()) -> str:
     rows = "".join(
         f"<tr><th>{html.escape(k)}</th><td>{html.escape(v)}</td></tr>"
-        for k, v in applicable_settings(meta)
+        for k, v in applicable_settings(meta, rows)
     )
     return (
         f'<table class="settings" id="settings-table"><tbody>{rows}</tbody></table>'
@@ -544,13 +629,13 @@ def report_html(
         f" · page written {data['written']}</p></header>",
         '<nav><a href="#summary">summary</a> <a href="#figures">figures</a> <a href="#browser">runs</a> '
         '<a href="#settings">settings</a></nav>',
-        f'<section id="summary"><h2>Summary</h2>{_summary_html(rows)}</section>',
+        f'<section id="summary"><h2>Summary</h2>{_ranges_html(rows)}{_summary_html(rows)}</section>',
         f'<section id="figures"><h2>Figures</h2><p class="note">{html.escape(fig_source)}</p>{figures_html}</section>',
         '<section id="browser"><h2>Runs</h2><div id="filters"></div><p id="run-count"></p>'
         '<div class="browser"><div id="run-list-wrap"><table id="run-list"></table></div>'
         '<div id="viewer"><p id="viewer-empty">Pick a run.</p></div></div></section>',
         '<section id="settings"><h2>Settings and identity</h2>',
-        _settings_html(meta),
+        _settings_html(meta, rows),
         (
             "<details><summary>prompt template</summary><pre>"
             f"{html.escape(json.dumps(template, indent=2, sort_keys=True))}</pre></details>"
