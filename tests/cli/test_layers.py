@@ -59,10 +59,8 @@ LAYERS = [
 UPWARD_ALLOWED: set[tuple[str, str]] = set()
 
 #: Cycles between packages (``jswim.env`` <-> ``jswim.scenes`` counts even when no two modules
-#: form a cycle) that remain, each with its reason.
-PACKAGE_CYCLES_ALLOWED: list[set[str]] = [
-    {"jswim.env", "jswim.scenes"},  # removed when env/scenes lands (issue 52, the "surface" branch)
-]
+#: form a cycle) that remain, each with its reason (none: scene physics sits below the worlds).
+PACKAGE_CYCLES_ALLOWED: list[set[str]] = []
 
 #: Import cycles that remain (none: plots <-> scene_plots went when the style moved to
 #: jswim.figures.style; keep the list for a cycle that must be lived with, with its reason).
