@@ -7,7 +7,7 @@ from typing import Any
 from collections.abc import Callable, Sequence
 
 from jswim.env.base import Environment
-from jswim.env.params import make_params, parse_direction
+from jswim.env.params import EnvParams, make_params, parse_direction
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.errors import ConfigError
@@ -124,67 +124,84 @@ def make(
     >>> env.n_features
     5
     """
+    options = {
+        "zeta": zeta,
+        "direction": direction,
+        "init": init,
+        "roc_levels": roc_levels,
+        "diagonal": diagonal,
+        "dtype": dtype,
+    }
     if target is not None:
-        from jswim.env.navigation import navigation_world  # lazy: the task's own module
-
-        nav = {k: kwargs.pop(k) for k in ("bearing_bins", "lattice") if k in kwargs}
-        if parse_direction(direction) != 1:
-            raise ConfigError(
-                "a navigation world swims to its target: direction does not apply (leave it out)"
-            )
-        if isinstance(swimmer, str) and swimmer in _REGISTERED:
-            raise ConfigError(
-                f"navigation wraps the paper's planar swimmers, not the registered world {swimmer!r}"
-            )
-        world, params = make(
-            swimmer,
-            scene,
-            zeta=zeta,
-            direction=direction,
-            init=init,
-            roc_levels=roc_levels,
-            diagonal=diagonal,
-            dtype=dtype,
-            **kwargs,
-        )
-        return navigation_world(world, params, target, **nav)
+        return _navigation_world(swimmer, scene, target, options, kwargs)
     if isinstance(swimmer, str) and swimmer in _REGISTERED:
-        # only the options asked for: the factory refuses what it lacks
-        given = {
-            **({"roc_levels": roc_levels} if roc_levels != 1 else {}),
-            **({"diagonal": True} if diagonal else {}),
-            **({"dtype": dtype} if dtype is not None else {}),
-        }
-        return _REGISTERED[swimmer](
-            None if scene is None else as_scene(scene),
-            zeta=zeta,
-            direction=parse_direction(direction),
-            init=init,
-            **given,
-            **kwargs,
-        )
+        return _registered_world(swimmer, scene, options, kwargs)
     if scene is not None and purcell_wall.is_purcell(swimmer) and not is_plain_bulk(scene):
         # Purcell's swimmer above a wall: the paper's planar world with wall-corrected drag
         swimmer, scene, kwargs = purcell_wall.model(as_scene(scene), **kwargs), None, {}
     if scene is None or is_plain_bulk(scene):
-        if dtype is not None:
-            raise ConfigError(
-                "dtype is a scene option; the paper's world follows JAX's default float"
-            )
-        params = make_params(
-            swimmer,
-            zeta=zeta,
-            direction=direction,
-            init=init,
-            roc_levels=roc_levels,
-            diagonal=diagonal,
-            **kwargs,
+        return _paper_world(swimmer, options, kwargs)
+    return _scene_world(swimmer, as_scene(scene), options, kwargs)
+
+
+def _navigation_world(
+    swimmer: Any, scene: Any, target: Any, options: dict[str, Any], kwargs: dict[str, Any]
+) -> tuple[Environment, Any]:
+    """``make(..., target=target)``: the world of the rest, wrapped in a navigation task."""
+    from jswim.env.navigation import navigation_world  # lazy: the task's own module
+
+    nav = {k: kwargs.pop(k) for k in ("bearing_bins", "lattice") if k in kwargs}
+    if parse_direction(options["direction"]) != 1:
+        raise ConfigError(
+            "a navigation world swims to its target: direction does not apply (leave it out)"
         )
-        return SwimmerWorld(params.model, params.roc_levels, params.diagonal), params
-    if diagonal:
-        raise ConfigError("diagonal strokes are not offered in scenes (one arm moves per step)")
-    scene = as_scene(scene)
-    sp = scene_params(
-        swimmer, scene, zeta=zeta, roc_levels=roc_levels, dtype=dtype, init=init, **kwargs
+    if isinstance(swimmer, str) and swimmer in _REGISTERED:
+        raise ConfigError(
+            f"navigation wraps the paper's planar swimmers, not the registered world {swimmer!r}"
+        )
+    world, params = make(swimmer, scene, **options, **kwargs)
+    return navigation_world(world, params, target, **nav)
+
+
+def _registered_world(
+    name: str, scene: Any, options: dict[str, Any], kwargs: dict[str, Any]
+) -> tuple[Environment, Any]:
+    """A world of [`register_world`][jswim.env.registry.register_world]: its factory gets the
+    scene, zeta, direction, init, only the other options given (it refuses what it lacks), and
+    the keywords."""
+    given = {
+        **({"roc_levels": options["roc_levels"]} if options["roc_levels"] != 1 else {}),
+        **({"diagonal": True} if options["diagonal"] else {}),
+        **({"dtype": options["dtype"]} if options["dtype"] is not None else {}),
+    }
+    return _REGISTERED[name](
+        None if scene is None else as_scene(scene),
+        zeta=options["zeta"],
+        direction=parse_direction(options["direction"]),
+        init=options["init"],
+        **given,
+        **kwargs,
     )
-    return SceneWorld(scene, sp.roc_levels), SceneTask(sp, float(parse_direction(direction)))
+
+
+def _paper_world(
+    swimmer: str | SwimmerModel, options: dict[str, Any], kwargs: dict[str, Any]
+) -> tuple[SwimmerWorld, EnvParams]:
+    """The paper's world (a plain bulk scene, or Purcell's wall model) and its ``EnvParams``."""
+    options = dict(options)
+    if options.pop("dtype") is not None:
+        raise ConfigError("dtype is a scene option; the paper's world follows JAX's default float")
+    params = make_params(swimmer, **options, **kwargs)
+    return SwimmerWorld(params.model, params.roc_levels, params.diagonal), params
+
+
+def _scene_world(
+    swimmer: Any, scene: Scene, options: dict[str, Any], kwargs: dict[str, Any]
+) -> tuple[SceneWorld, SceneTask]:
+    """A scene's world (walls, obstacles, pairs, schools) and its ``SceneTask``."""
+    options = dict(options)
+    if options.pop("diagonal"):
+        raise ConfigError("diagonal strokes are not offered in scenes (one arm moves per step)")
+    direction = float(parse_direction(options.pop("direction")))
+    sp = scene_params(swimmer, scene, **options, **kwargs)
+    return SceneWorld(scene, sp.roc_levels), SceneTask(sp, direction)

@@ -214,25 +214,61 @@ def pose_change(
     nodes, y_run, y_end = (jnp.asarray(v, pose0.dtype) for v in gauss_rule(params.nodes))
     t = nodes * duration
     arms_t = arms[None] + t[:, None, None] * rates[None]  # (n, S, 2)
+    pose0, obstacles = _solve_frame(params, pose0, centre_lo)
+    body_rates, state = _node_solver(params, pose0, arms_t, rates, obstacles)
+    sweep = _picard_sweep(body_rates, pose0, duration, y_run)
+    it = (jnp.zeros((params.nodes, pose0.shape[0], 3), pose0.dtype), state)
+    if params.sweeps is None:
+        it, lab, omega = _sweep_until_converged(sweep, it, picard_tolerance(pose0.dtype))
+    else:
+        if params.sweeps > 1:  # a loop, not unrolled: the solve is large straight-line code
+            it = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], it)
+        it, lab, omega = sweep(it)
+    inc = it[0]
+    poses = pose0 + inc
+    step = duration * jnp.concatenate(
+        [jnp.einsum("j,jsk->sk", y_end, lab), (y_end @ omega)[:, None]], -1
+    )
+    arms_end = arms + duration * rates
+    gaps = jax.vmap(lambda p, a: surface_gap(p, a, obstacles, params.wall))(poses, arms_t)
+    return step, jnp.minimum(
+        jnp.min(gaps), surface_gap(pose0 + step, arms_end, obstacles, params.wall)
+    )
+
+
+def _solve_frame(params: SceneParams, pose0: Array, centre_lo: Array | None) -> tuple[Array, Array]:
+    """``pose0`` and the obstacles in the solve's coordinates: x from swimmer 1's start (the
+    physics is invariant under translations along the wall), the low words of the positions
+    (``centre_lo``) added in: offsets from swimmer 1, heights (rounded to the dtype)."""
     shift = pose0[0, 0]
     obstacles = jnp.asarray(params.obstacles, pose0.dtype)
     obstacles = obstacles.at[:, 0].add(-shift)
     pose0 = pose0.at[:, 0].add(-shift)
-    if (
-        centre_lo is not None
-    ):  # the low words: offsets from swimmer 1, heights (rounded to the dtype)
+    if centre_lo is not None:
         lo = jnp.asarray(centre_lo, pose0.dtype)
         pose0 = pose0.at[:, 0].add(lo[:, 0] - lo[0, 0]).at[:, 1].add(lo[:, 1])
         obstacles = obstacles.at[:, 0].add(-lo[0, 0])
+    return pose0, obstacles
 
-    # How each node's force-free solve is done (all agree to rounding; tests check it):
-    # * unbounded fluid, no obstacles: each swimmer through its response to the flow at its
-    #   spheres, a function of the arms alone, built once per node (jswim.swimmers.bodyframe);
-    # * above the wall, two swimmers: each swimmer solved afresh at its pose in the other's flow;
-    # * otherwise (one swimmer above the wall, obstacles): one solve of all spheres.
-    # With two swimmers the solves go by block Gauss-Seidel, one sweep per Picard sweep, the
-    # forces carried from sweep to sweep.
-    n_nodes, n_sw, n_sph = params.nodes, pose0.shape[0], arms.shape[1] + 1
+
+def _node_solver(
+    params: SceneParams, pose0: Array, arms_t: Array, rates: Array, obstacles: Array
+) -> tuple[Any, Array]:
+    """``body_rates(poses, state) -> (rates (n, S, 3), state)`` at the collocation nodes, and the
+    ``state`` the first sweep starts from.
+
+    How each node's force-free solve is done (all agree to rounding; tests check it):
+
+    * unbounded fluid, no obstacles: each swimmer through its response to the flow at its
+      spheres, a function of the arms alone, built once per node (`jswim.swimmers.bodyframe`);
+    * above the wall, two swimmers: each swimmer solved afresh at its pose in the other's flow;
+    * otherwise (one swimmer above the wall, obstacles): one solve of all spheres.
+
+    With two swimmers the solves go by block Gauss-Seidel, one sweep per Picard sweep, the
+    forces carried from sweep to sweep (the ``state``). The rates are body-frame: along the
+    axis, normal to it, and the rotation rate.
+    """
+    n_nodes, n_sw, n_sph = params.nodes, pose0.shape[0], arms_t.shape[2] + 1
     mob, selfm = params.scene.mobility, params.scene.self_mobility
     if obstacles.shape[0] == 0 and not params.wall:
         path, state = "response", jnp.zeros((n_nodes, n_sw, n_sph, 2), pose0.dtype)
@@ -243,8 +279,6 @@ def pose_change(
         path, state = "coupled", jnp.zeros((n_nodes,), pose0.dtype)
 
     def body_rates(poses: Array, state: Array) -> tuple[Array, Array]:
-        """Body-frame (along the axis, normal to it) velocities and rotation rates ``(n, S, 3)``
-        at the node poses, and what the next sweep starts from."""
         if path == "response":
             solve = lambda pose, a, r, f: bodyframe.sweep(
                 pose[:, :2], pose[:, 2], a, rates, r, f, mob
@@ -268,11 +302,17 @@ def pose_change(
 
         return jax.vmap(one)(poses, arms_t, state)
 
-    # Sweep: the body-frame rates at the current node poses, then tilt first and position with the
-    # new tilt, so that the strong dependence (the rotation of the swimming direction) is exact
-    # within a sweep and only the weak one (wall and neighbours) is iterated. The sweeps carry the
-    # poses' increments from pose0, not the poses: in float32 far from the origin the absolute x
-    # could not resolve the small differences between sweeps that the stopping rule reads.
+    return body_rates, state
+
+
+def _picard_sweep(body_rates: Any, pose0: Array, duration: Array, y_run: Array) -> Any:
+    """One Picard sweep ``(inc, state) -> ((inc, state), lab, omega)``: the body-frame rates at
+    the current node poses, then tilt first and position with the new tilt, so that the strong
+    dependence (the rotation of the swimming direction) is exact within a sweep and only the
+    weak one (wall and neighbours) is iterated. The sweeps carry the poses' increments from
+    ``pose0``, not the poses: in float32 far from the origin the absolute x could not resolve
+    the small differences between sweeps that the stopping rule reads."""
+
     def sweep(it: tuple[Array, Array]) -> tuple[tuple[Array, Array], Array, Array]:
         inc, state = it
         b, state = body_rates(pose0 + inc, state)
@@ -287,23 +327,7 @@ def pose_change(
         new = jnp.concatenate([dxz, dtilt[..., None]], -1).astype(inc.dtype)
         return (new, state), lab, b[..., 2]
 
-    it = (jnp.zeros((n_nodes, n_sw, 3), pose0.dtype), state)
-    if params.sweeps is None:
-        it, lab, omega = _sweep_until_converged(sweep, it, picard_tolerance(pose0.dtype))
-    else:
-        if params.sweeps > 1:  # a loop, not unrolled: the solve is large straight-line code
-            it = jax.lax.fori_loop(0, params.sweeps - 1, lambda _, p: sweep(p)[0], it)
-        it, lab, omega = sweep(it)
-    inc = it[0]
-    poses = pose0 + inc
-    step = duration * jnp.concatenate(
-        [jnp.einsum("j,jsk->sk", y_end, lab), (y_end @ omega)[:, None]], -1
-    )
-    arms_end = arms + duration * rates
-    gaps = jax.vmap(lambda p, a: surface_gap(p, a, obstacles, params.wall))(poses, arms_t)
-    return step, jnp.minimum(
-        jnp.min(gaps), surface_gap(pose0 + step, arms_end, obstacles, params.wall)
-    )
+    return sweep
 
 
 #: Most Picard sweeps of an adaptive step (`_sweep_until_converged`); 3 at least.
