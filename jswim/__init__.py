@@ -61,6 +61,23 @@ _EXPORTS = {
     "JswimError": "jswim.errors",
 }
 
+#: Subpackages reachable as attributes after ``import jswim`` (``jswim.env.rollout_moves``),
+#: imported on first access so that ``import jswim`` stays light.
+_SUBPACKAGES = (
+    "agents",
+    "bench",
+    "env",
+    "figures",
+    "judging",
+    "llm",
+    "prompt",
+    "results",
+    "scenes",
+    "studies",
+    "swimmers",
+    "viz",
+)
+
 __all__ = [*_EXPORTS, "__version__"]
 
 
@@ -69,8 +86,10 @@ def __getattr__(name: str) -> Any:
         value = getattr(importlib.import_module(_EXPORTS[name]), name)
         globals()[name] = value  # later look-ups skip this function
         return value
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"jswim.{name}")  # lazy: start-up
     raise AttributeError(f"module 'jswim' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+    return sorted(set(globals()) | set(_EXPORTS) | set(_SUBPACKAGES))

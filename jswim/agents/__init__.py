@@ -1,0 +1,45 @@
+"""The agents: one entry point each, on any world of the protocol.
+
+The learners and drivers are modules, loaded on first use so that ``import jswim.agents`` stays
+light (JAX loads with the first of them):
+
+- `jswim.agents.llm`: the LLM driver (prompt -> client -> parse -> step);
+- `jswim.agents.qlearning`: tabular Q-learning (``qlearning.train``);
+- `jswim.agents.ppo`: PPO (``ppo.train``);
+- `jswim.agents.random_policy`: the random policy (``random_policy.run``);
+- `jswim.agents.strokes`: fixed strokes (``strokes.play``);
+- `jswim.agents.steering`: the navigation controller (``steering.run``).
+
+The other modules (``defaults``, ``fidelity``, ``memory``, ``pair_prompt``, ``ppo_judge``,
+``protocol``, ``rewards``, ``step_batcher``, ``variants``, ``world_view``) are their parts.
+"""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+__all__ = ["llm", "ppo", "qlearning", "random_policy", "steering", "strokes"]
+
+_PARTS = (
+    "defaults",
+    "fidelity",
+    "memory",
+    "pair_prompt",
+    "ppo_judge",
+    "protocol",
+    "rewards",
+    "step_batcher",
+    "variants",
+    "world_view",
+)
+
+
+def __getattr__(name: str) -> ModuleType:
+    if name in __all__ or name in _PARTS:
+        return importlib.import_module(f"{__name__}.{name}")  # lazy: start-up
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__) | set(_PARTS))

@@ -36,6 +36,20 @@ def test_top_level_names_are_the_owners_and_load_lazily():
         jswim.no_such_name
 
 
+def test_subpackages_resolve_after_import_jswim_alone():
+    # the names the docs use (jswim.env.rollout_moves, jswim.agents.qlearning.train) resolve in a
+    # fresh interpreter after `import jswim` alone, and nothing heavy loads before they are used
+    code = (
+        "import sys, jswim; assert 'jax' not in sys.modules; "
+        "assert 'env' in dir(jswim) and 'qlearning' in dir(jswim.agents); "
+        "jswim.env.rollout_moves; jswim.agents.qlearning.train; jswim.scenes.Scene; "
+        "jswim.agents.steering.run; jswim.agents.ppo.train; jswim.results.load"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, cwd=str(Path(__file__).parents[2]))
+    with pytest.raises(AttributeError):
+        jswim.agents.no_such_agent
+
+
 def test_help_starts_light():
     # `jswim --help` and `jswim` alone: the outline of the commands, without JAX, NumPy or httpx
     # (the study grids load JAX; the LLM client httpx), and `python -m jswim.cli` is the command too.
@@ -115,6 +129,7 @@ def test_every_user_error_derives_from_the_root():
 CURATED = (
     "jswim",
     "jswim._io",
+    "jswim.agents",
     "jswim.bench",
     "jswim.cli",
     "jswim.env",
