@@ -244,7 +244,9 @@ def _die_with_parent(parent: int) -> Callable[[], None]:
     return arm
 
 
-def _last_error(log: Path) -> str:
+def last_error(log: Path) -> str:
+    """The last ``jswim: error:`` line of a part's log (without its prefix), else its last
+    non-empty line, else ``"no output"``: what a failed part says to the bench's reader."""
     try:
         lines = log.read_text(encoding="utf-8", errors="replace").splitlines()
     except OSError:
@@ -340,16 +342,16 @@ def run_jobs(
                 f"bench: {what}: stopped at the model's cost cap (max_cost); its other parts are skipped"
             )
             queues[label].clear()
-        elif job.rc == 2 and "LLM runs failed" in _last_error(job.log):
+        elif job.rc == 2 and "LLM runs failed" in last_error(job.log):
             result.status[label] = "incomplete"
-            say(f"bench: {what}: some runs failed ({_last_error(job.log)})")
+            say(f"bench: {what}: some runs failed ({last_error(job.log)})")
         elif job.rc == 130:
             result.status[label] = "interrupted"
         else:
-            result.status[label] = f"failed: {_last_error(job.log)}"
+            result.status[label] = f"failed: {last_error(job.log)}"
             result.stopped_at[label] = job.part.name
             say(
-                f"bench: {label} failed at {job.part.name}: {_last_error(job.log)} (see {job.log}); "
+                f"bench: {label} failed at {job.part.name}: {last_error(job.log)} (see {job.log}); "
                 "the other models go on"
             )
             queues[label].clear()

@@ -279,10 +279,10 @@ def _missing(
             and j.log is not None
             and j.log.exists()
         ):  # this part failed, and its label's status speaks of another part: quote its own
-            why = f"failed: {runner._last_error(j.log)}"
+            why = f"failed: {runner.last_error(j.log)}"
         elif why in ("complete", "running"):
             why = (
-                runner._last_error(j.log)
+                runner.last_error(j.log)
                 if j.log is not None and j.log.exists()
                 else "no finished run yet"
             )

@@ -343,3 +343,46 @@ def test_the_private_import_checker_sees_one(tmp_path):
     (pkg / "c.py").write_text("from . import a\nfrom .a import _helper as h\n")
     modules = {f"jswim.{p.stem}": p for p in pkg.glob("*.py")}
     assert _private_imports(modules) == {"jswim.b -> jswim.a._helper", "jswim.c -> jswim.a._helper"}
+
+
+def _private_module_reads(modules: dict[str, Path]) -> set[str]:
+    """``"reader -> module._name"`` for every read of an underscore attribute of a jswim module
+    the reader imported by name (``from jswim.bench import runner; runner._helper(...)``)."""
+    found = set()
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text())
+        bound: dict[str, str] = {}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                for a in node.names:
+                    if a.name.startswith("jswim.") and a.name in modules:
+                        bound[a.asname or a.name] = a.name
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("jswim"):
+                for a in node.names:
+                    full = f"{node.module}.{a.name}"
+                    if full in modules:
+                        bound[a.asname or a.name] = full
+        for node in ast.walk(tree):
+            if (
+                isinstance(node, ast.Attribute)
+                and isinstance(node.value, ast.Name)
+                and node.value.id in bound
+                and node.attr.startswith("_")
+                and not node.attr.startswith("__")
+            ):
+                found.add(f"{name} -> {bound[node.value.id]}.{node.attr}")
+    return found
+
+
+def test_no_module_reads_another_modules_private_attributes():
+    found = sorted(_private_module_reads(_modules()))
+    assert not found, "reads of another module's underscore names: " + ", ".join(found)
+
+
+def test_the_private_read_checker_sees_one(tmp_path):
+    pkg = tmp_path / "jswim"
+    pkg.mkdir()
+    (pkg / "a.py").write_text("def _helper():\n    pass\n")
+    (pkg / "b.py").write_text("from jswim import a\na._helper()\na.__name__\n")
+    modules = {f"jswim.{p.stem}": p for p in pkg.glob("*.py")}
+    assert _private_module_reads(modules) == {"jswim.b -> jswim.a._helper"}
