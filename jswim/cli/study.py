@@ -65,10 +65,10 @@ def _run(study: str, args: argparse.Namespace) -> int:
         run_study,
     )  # lazy: JAX loads only for commands that run
     from jswim.studies.specs import short_steps_warning  # lazy: as above
+    from jswim.studies.session import check_max_cost  # lazy: as above
 
     opts, backend = options.options(args, study), options.backend(args)
-    if args.max_cost is not None and not (math.isfinite(args.max_cost) and args.max_cost >= 0):
-        raise ConfigError(f"--max-cost must be a number of dollars >= 0, got {args.max_cost}")
+    check_max_cost(args.max_cost)
     out = Path(args.out) if args.out else default_folder(study, opts, backend)
     try:
         out.stat()

@@ -87,7 +87,7 @@ from jswim.studies.execute import (  # noqa: F401
     run_llm,
     run_spec,
 )
-from jswim.studies.session import preflight, record_session, add_session, cap_check  # noqa: F401
+from jswim.studies.session import preflight, record_session, add_session, cap_check, check_max_cost  # noqa: F401
 from jswim.studies.report import summarize
 
 
@@ -254,10 +254,10 @@ def run_study(
     Raises
     ------
     ConfigError
-        For a negative cap or an LLM study without a backend.
+        For a cap that is not a finite number of dollars >= 0 (`check_max_cost`) or an LLM
+        study without a backend.
     """
-    if max_cost is not None and not (max_cost >= 0):
-        raise ConfigError(f"--max-cost must be a number of dollars >= 0, got {max_cost}")
+    max_cost = check_max_cost(max_cost)
     t0 = time.perf_counter()
     backend = study_backend(study, backend)
     plans = build(study, options)

@@ -17,6 +17,32 @@ from jswim.llm.usage import cap_refusal
 from jswim.results import StudyStore
 
 
+def check_max_cost(max_cost: Any) -> float | None:
+    """The one validation of a study's cost cap (``--max-cost``, ``run_study(max_cost=...)``).
+
+    Parameters
+    ----------
+    max_cost : float or None
+        Dollars; ``None`` sets no cap.
+
+    Returns
+    -------
+    float or None
+        The cap as a float.
+
+    Raises
+    ------
+    ConfigError
+        One line where the cap is not a finite number of dollars >= 0 (a string, a bool, NaN,
+        infinity: no cap is ``None``).
+    """
+    if max_cost is None:
+        return None
+    if not _number(max_cost):
+        raise ConfigError(f"--max-cost must be a finite number of dollars >= 0, got {max_cost!r}")
+    return float(max_cost)
+
+
 def cap_check(backend: Backend, info: ServerInfo | None, max_cost: float | None) -> None:
     """Refuse a cost cap the study's calls could not reach ([`jswim.llm.usage.cap_refusal`][jswim.llm.usage.cap_refusal]),
     by the pricing rule of the run and of its dry run alike: the server's listed models
