@@ -287,17 +287,7 @@ def run(
         On a non-positive ``n``/``steps``/``every``/``chunk``, ``every > steps``, a negative
         noise level or a quantile outside (0, 1).
     """
-    if n < 1 or steps < 1 or every < 1 or chunk < 1 or bins < 1:
-        raise ConfigError("n, steps, every, chunk and bins must be >= 1")
-    check_every(every, steps)
-    zetas = [check_zeta(z) for z in zetas]
-    if not zetas:
-        raise ConfigError("give at least one noise level zeta")
-    if any(not 0.0 < q < 1.0 for q in qs):
-        raise ConfigError(f"quantiles must lie in (0, 1), got {list(qs)}")
-    window = policy.period if window is None else int(window)
-    if window < 1:
-        raise ConfigError(f"window must be >= 1, got {window}")
+    zetas, window = _checked(policy, n, zetas, steps, every, window, chunk, qs, bins)
     steps = steps // every * every
     unit = BLOCK * sharding.device_count()
     size = min(-(-max(chunk, 1) // unit) * unit, -(-n // unit) * unit)
@@ -352,6 +342,32 @@ def run(
                 progress(done, total)
         out.append(_combine(parts, zeta, n, every, n_rep, tuple(qs), lo, width))
     return out
+
+
+def _checked(
+    policy: Policy,
+    n: int,
+    zetas: Sequence[float],
+    steps: int,
+    every: int,
+    window: int | None,
+    chunk: int,
+    qs: Sequence[float],
+    bins: int,
+) -> tuple[list[float], int]:
+    """`run`'s arguments checked (its ``Raises``): the noise levels and the judging window."""
+    if n < 1 or steps < 1 or every < 1 or chunk < 1 or bins < 1:
+        raise ConfigError("n, steps, every, chunk and bins must be >= 1")
+    check_every(every, steps)
+    zetas = [check_zeta(z) for z in zetas]
+    if not zetas:
+        raise ConfigError("give at least one noise level zeta")
+    if any(not 0.0 < q < 1.0 for q in qs):
+        raise ConfigError(f"quantiles must lie in (0, 1), got {list(qs)}")
+    window = policy.period if window is None else int(window)
+    if window < 1:
+        raise ConfigError(f"window must be >= 1, got {window}")
+    return zetas, window
 
 
 def _combine(
