@@ -477,15 +477,7 @@ def _run_in(
     llm = [r for r in typed if r.agent == "llm"]
     constraint = sorted({r.constraint for r in llm if r.constraint})
     failed = [{"run_id": r.run_id, "error": r.error} for r in typed if is_failed(r)]
-    cut: dict[str, int] = {}  # max_tokens -> replies cut off there (the limit is per swimmer)
-    for r in llm:
-        if r.truncated:
-            cut[str(r.max_tokens)] = cut.get(str(r.max_tokens), 0) + r.truncated
-    replies = {"truncated_replies": sum(cut.values()), "truncated_at": cut} if llm else {}
-    cut_thinking = sum(r.cut_thinking or 0 for r in llm)
-    if llm:
-        replies["cut_while_thinking"] = cut_thinking
-        replies["reasoning_tokens"] = sum(r.reasoning_tokens or 0 for r in llm)
+    replies, cut_thinking = _reply_tallies(llm)
     # What a reasoning model was sent (this session's, else the one that ran LLM runs).
     sent = sent or dict((store.meta.get("summary") or {}).get("reasoning") or {})
     status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
@@ -502,20 +494,39 @@ def _run_in(
         },
     )
     return StudyResult(
-        folder,
-        rows,
-        summary,
-        [],
-        time.perf_counter() - t0,
-        session_speed,
-        failed,
-        dict(replies.get("truncated_at", {})),
-        "cost cap" if capped else None,
-        total,
-        sent,
-        cut_thinking,
-        notes,
+        folder=folder,
+        rows=rows,
+        summary=summary,
+        figures=[],
+        wall_s=time.perf_counter() - t0,
+        llm_speed=session_speed,
+        failed_runs=failed,
+        truncated=dict(replies.get("truncated_at", {})),
+        stopped="cost cap" if capped else None,
+        total=total,
+        reasoning=sent,
+        cut_thinking=cut_thinking,
+        notes=notes,
     )
+
+
+def _reply_tallies(llm: Sequence[RunRow]) -> tuple[dict[str, Any], int]:
+    """The LLM rows' reply tallies for the folder's summary (replies cut at ``max_tokens``, per
+    limit; cut while thinking; reasoning tokens), and the count cut while thinking."""
+    if not llm:
+        return {}, 0
+    cut: dict[str, int] = {}  # max_tokens -> replies cut off there (the limit is per swimmer)
+    for r in llm:
+        if r.truncated:
+            cut[str(r.max_tokens)] = cut.get(str(r.max_tokens), 0) + r.truncated
+    cut_thinking = sum(r.cut_thinking or 0 for r in llm)
+    replies = {
+        "truncated_replies": sum(cut.values()),
+        "truncated_at": cut,
+        "cut_while_thinking": cut_thinking,
+        "reasoning_tokens": sum(r.reasoning_tokens or 0 for r in llm),
+    }
+    return replies, cut_thinking
 
 
 def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
