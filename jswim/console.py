@@ -322,7 +322,7 @@ class _ProgressView:
         )
 
 
-#: A study's progress phases (``jswim.studies.execute.ProgressFn``) as a person reads them.
+#: A study's progress phases (``jswim.studies.session.ProgressFn``) as a person reads them.
 PHASE_LABELS = {
     "llm": "LLM runs",
     "llm-live": "LLM runs",

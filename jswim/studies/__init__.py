@@ -49,9 +49,10 @@ _EXPORTS = {
     "Plan": "jswim.studies.plans",
     "summarize": "jswim.studies.report",
     **dict.fromkeys(
-        ("ProgressFn", "StudyResult", "default_folder", "identity", "run_study"),
+        ("StudyResult", "default_folder", "identity", "run_study"),
         "jswim.studies.run",
     ),
+    **dict.fromkeys(("ProgressFn", "StudySession"), "jswim.studies.session"),
     **dict.fromkeys(("Backend", "check_server"), "jswim.llm.backend"),
 }
 

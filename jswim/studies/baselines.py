@@ -90,7 +90,7 @@ def _per_run(params: Any, directions: Sequence[int]) -> Any:
     return params._replace(direction=d)
 
 
-def run_baselines(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
+def baseline_rows(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
     """The rows of one (agent, swimmer, scene, zeta, action set, ROC lattice, variant) group of
     plans, run in sub-batches by start, in the order of ``plans``."""
     by_init: dict[Any, list[Plan]] = {}

@@ -1,5 +1,6 @@
-"""Executing a study's LLM plans as per-run pipelines ([`LLMDriver`][jswim.agents.llm.LLMDriver]),
-each stored the moment it ends (the other agents: [`baselines`][jswim.studies.baselines]).
+"""Executing a study's plans in one `StudySession`: the baselines in vectorised groups
+([`baselines`][jswim.studies.baselines]), the LLM plans as per-run pipelines
+([`LLMDriver`][jswim.agents.llm.LLMDriver]); each run is stored the moment it ends.
 
 Every answered call is journaled first (``calls.jsonl``, `jswim.llm.journal.CallJournal`),
 so an interrupted or capped study resumes without paying for a call twice.
@@ -10,14 +11,15 @@ from __future__ import annotations
 import asyncio
 import dataclasses
 import time
+from dataclasses import dataclass, field
 from typing import Any
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 
 
 from jswim.agents.llm import RunResult, run_batch_async
+from jswim.errors import ConfigError
 from jswim.agents.variants import LLMRunSpec, variant_config
 from jswim.console import eta
-from jswim.llm.backend import Backend
 from jswim.llm.budget import Budget
 from jswim.llm.client import ClientSettings, LLMClient
 from jswim.llm.journal import CallJournal
@@ -26,21 +28,14 @@ from jswim.llm.pacing import Pacer
 from jswim.llm.probe import ServerInfo
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
-from jswim.results import StudyStore
 from jswim.studies.plans import Plan
 from jswim.studies.options import StudyOptions
-from jswim.studies.session import preflight, record_session, add_session
+from jswim.studies.session import StudySession, add_session, preflight, record_session
 
 
 #: Statuses of an LLM run that are stored; one stopped by the cost cap or an interrupt is not, and
 #: starts again on resume (its paid calls replayed from the journal).
 STORED = ("done", "below_x_min", "llm_error")
-
-
-#: ``progress(phase, done, total, info)``: runs done of the study's runs, except in the phases
-#: ``"llm"`` and ``"llm-live"``, where the work counted is LLM steps (runs are in ``info``);
-#: ``info`` is a short status text.
-ProgressFn = Callable[[str, int, int, str], None]
 
 
 def group_plans(plans: Iterable[Plan], *keys: str) -> dict[tuple, list[Plan]]:
@@ -93,94 +88,178 @@ def llm_configs(
     return out
 
 
-def run_llm(
-    plans: Sequence[Plan],
-    o: StudyOptions,
-    backend: Backend,
-    store: StudyStore,
-    template: PromptTemplate | None,
-    tick: ProgressFn,
-    finished: int,
-    total: int,
-    speed: dict[str, float],
-    max_cost: float | None,
-    sent: dict[str, Any] | None = None,
-    info: ServerInfo | None = None,
-    notes: list[str] | None = None,
-) -> tuple[int, bool]:
-    """Run the LLM plans as per-run pipelines; returns (runs finished, stopped by the cost cap).
+#: The fields a plan's baseline group shares: one vectorised call per group.
+BASELINE_GROUP = (
+    "agent",
+    "swimmer",
+    "action_set",
+    "roc_levels",
+    "scene",
+    "variant",
+    "zeta",
+    "target",
+)
 
-    At most ``o.chunk`` runs (default: the concurrency) are in progress at once, across all the
-    study's agent configs; a run that ends is stored at once and the next one starts, so runs
-    finish, and are saved, one by one. ``speed`` (filled in) gets this session's calls (made,
-    billed, replayed from the journal), wall time, tokens and cost; ``sent`` what a reasoning
-    model was sent (`jswim.llm.reasoning.ReasoningState.describe`).
+
+def run_baselines(session: StudySession, plans: Sequence[Plan]) -> int:
+    """Run the baseline plans (Q-learning, random, PPO, controllers) in vectorised groups.
+
+    Parameters
+    ----------
+    session : StudySession
+        Each group's rows go into ``session.store`` the moment the group ends, and
+        ``session.finished`` moves on.
+    plans : sequence of Plan
+        The baseline plans still to run (no ``"llm"`` agent).
+
+    Returns
+    -------
+    int
+        The runs this call finished.
     """
-    by_id = {p.run_id: p for p in plans}
-    steps_total = sum(p.steps for p in plans)
-    steps_done = 0
-    t_start = time.perf_counter()
-    totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
-    journal = CallJournal(store.folder)
-    calls_before = journal.n_calls
-    # The ledger (requests.jsonl), not metadata.json, says what was spent and what earlier
-    # sessions sent without an answer (the server may have billed those: still under the cap).
-    ledger = RequestLedger(store.folder, journal)
-    budget = Budget(max_cost, spent_usd=journal.spent_usd, ledger=ledger)
-    spent_before = budget.spent_usd
-    live: list[LLMClient] = []  # the open client, for its running counts
+    from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
 
-    def report(phase: str = "llm") -> None:
-        elapsed = time.perf_counter() - t_start
-        rate = steps_done / max(elapsed, 1e-9)
-        info = f"runs {finished}/{total} · {rate:.1f} steps/s"
-        left = eta(elapsed, steps_done / steps_total if steps_total else 0.0)
-        if left is not None and steps_done < steps_total:
+    n = 0
+    for (agent, *_), group in group_plans(plans, *BASELINE_GROUP).items():
+        session.store.add_runs(baselines.baseline_rows(group, session.options.horizon))
+        session.finished += len(group)
+        n += len(group)
+        session.tick(agent)
+    return n
+
+
+@dataclass
+class LLMOutcome:
+    """What one session's LLM runs came to ([`run_llm`][jswim.studies.execute.run_llm]).
+
+    Attributes
+    ----------
+    finished : int
+        LLM runs this session stored.
+    capped : bool
+        The cost cap stopped the session before every plan ran.
+    speed : dict
+        This session's calls (made, billed, replayed from the journal), wall time (s), calls/s,
+        tokens, cost (USD), requests, retries, faults and unanswered requests.
+    sent : dict
+        What a reasoning model was sent (`jswim.llm.reasoning.ReasoningState.describe`); empty
+        for other models.
+    notes : list of str
+        What was sent for sampling, the decoding fallbacks, why calls were not priced.
+    """
+
+    finished: int = 0
+    capped: bool = False
+    speed: dict[str, Any] = field(default_factory=dict)
+    sent: dict[str, Any] = field(default_factory=dict)
+    notes: list[str] = field(default_factory=list)
+
+
+def run_llm(session: StudySession, plans: Sequence[Plan]) -> LLMOutcome:
+    """Run the LLM plans as per-run pipelines, each stored the moment it ends.
+
+    At most ``options.chunk`` runs (default: the concurrency) are in progress at once, across all
+    the study's agent configs; a run that ends is stored at once and the next one starts, so runs
+    finish, and are saved, one by one. Every answered call is journaled first, so a capped or
+    interrupted session resumes without paying a call twice.
+
+    Parameters
+    ----------
+    session : StudySession
+        The study's store, options, backend (required), template, progress and cost cap;
+        ``session.finished`` moves on with each stored run.
+    plans : sequence of Plan
+        The LLM plans still to run.
+
+    Returns
+    -------
+    LLMOutcome
+        Runs stored, whether the cap stopped the session, its speed, what was sent, notes.
+
+    Raises
+    ------
+    ConfigError
+        No backend, or a cost cap the calls could not reach.
+    LLMError
+        The server cannot be used (refused, unreachable, no such model).
+    """
+    return _LLMSession(session, plans).run()
+
+
+class _LLMSession:
+    """The running counts of one session's LLM runs and the callbacks that move them."""
+
+    def __init__(self, session: StudySession, plans: Sequence[Plan]) -> None:
+        if session.backend is None:
+            raise ConfigError("this study has LLM runs; give a backend")
+        self.s, self.plans = session, plans
+        self.by_id = {p.run_id: p for p in plans}
+        self.steps_total = sum(p.steps for p in plans)
+        self.steps_done = 0
+        self.t_start = time.perf_counter()
+        self.totals = {"calls": 0, "billed_calls": 0, "replayed_calls": 0}
+        self.journal = CallJournal(session.store.folder)
+        self.calls_before = self.journal.n_calls
+        # The ledger (requests.jsonl), not metadata.json, says what was spent and what earlier
+        # sessions sent without an answer (the server may have billed those: still under the cap).
+        self.ledger = RequestLedger(session.store.folder, self.journal)
+        self.budget = Budget(session.max_cost, spent_usd=self.journal.spent_usd, ledger=self.ledger)
+        self.spent_before = self.budget.spent_usd
+        self.client: LLMClient | None = None  # the open client, for its running counts
+        self.out = LLMOutcome()
+
+    def report(self, phase: str = "llm") -> None:
+        """Tick the session's progress: LLM steps done, runs, speed, requests, tokens, cost."""
+        elapsed = time.perf_counter() - self.t_start
+        done, total = self.steps_done, self.steps_total
+        info = f"runs {self.s.finished}/{self.s.total} · {done / max(elapsed, 1e-9):.1f} steps/s"
+        left = eta(elapsed, done / total if total else 0.0)
+        if left is not None and done < total:
             info += f" · ETA {left}"
-        if live:
-            c = live[0].counts
-            info += (
-                f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · ${budget.spent_usd:.4f}"
-            )
-            if max_cost is not None:
-                info += f" of ${max_cost:g}"
+        if self.client is not None:
+            c = self.client.counts
+            info += f" · {c.in_flight} in flight · {c.tokens / 1000:.1f}k tok · ${self.budget.spent_usd:.4f}"
+            if self.s.max_cost is not None:
+                info += f" of ${self.s.max_cost:g}"
             if c.cache_hits or c.shared:
                 info += f" · {c.cache_hits} cached · {c.shared} shared"
         # The LLM steps are the work (a baseline run takes milliseconds, an LLM step a request):
         # the bar counts them, so it never reads 99% before the first LLM step.
-        tick(phase, steps_done, steps_total, info)
+        self.s.tick(phase, done, info, total=total)
 
-    def on_step(n: int) -> None:
-        nonlocal steps_done
-        steps_done += n
+    def on_step(self, n: int) -> None:
+        self.steps_done += n
 
-    def on_done(r: RunResult) -> None:
-        nonlocal finished
-        totals["calls"] += r.usage.calls
-        totals["billed_calls"] += r.usage.billed_calls - r.replayed_calls
-        totals["replayed_calls"] += r.replayed_calls
+    def on_done(self, r: RunResult) -> None:
+        """Count a run's calls; store it (and forget its journal lines) when it is one to keep."""
+        self.totals["calls"] += r.usage.calls
+        self.totals["billed_calls"] += r.usage.billed_calls - r.replayed_calls
+        self.totals["replayed_calls"] += r.replayed_calls
         if r.status in STORED:
-            from jswim.studies import (
-                baselines,
-            )  # lazy: start-up (the learners' modules load JAX and optax)
+            from jswim.studies import baselines  # lazy: start-up (the learners load JAX, optax)
 
-            store.add_runs([baselines.llm_row(by_id[r.run_id], r, o.horizon)])
-            journal.forget(r.run_id)
-            finished += 1
-            report()
+            self.s.store.add_runs(
+                [baselines.llm_row(self.by_id[r.run_id], r, self.s.options.horizon)]
+            )
+            self.journal.forget(r.run_id)
+            self.s.finished += 1
+            self.out.finished += 1
+            self.report()
 
-    async def keep_reporting() -> None:
+    async def keep_reporting(self) -> None:
         while True:  # a slow model takes seconds per call: show the requests in flight meanwhile
             await asyncio.sleep(0.5)
-            report("llm-live")
+            self.report("llm-live")
 
-    async def go(settings: ClientSettings, info: ServerInfo) -> None:
+    async def go(self, settings: ClientSettings, info: ServerInfo) -> None:
+        """Every plan through one client, at most ``chunk`` runs at once."""
+        s, backend = self.s, self.s.backend
         pacer = Pacer(backend.rpm, backend.tpm, margin=settings.max_concurrency)
-        async with LLMClient(settings, pacer=pacer, budget=budget) as client:
-            live.append(client)
-            record_session(store, backend, info, client, notes if notes is not None else [])
-            window = asyncio.Semaphore(o.chunk or settings.max_concurrency)
-            reporter = asyncio.ensure_future(keep_reporting())
+        async with LLMClient(settings, pacer=pacer, budget=self.budget) as client:
+            self.client = client
+            record_session(s.store, backend, info, client, self.out.notes)
+            window = asyncio.Semaphore(s.options.chunk or settings.max_concurrency)
+            reporter = asyncio.ensure_future(self.keep_reporting())
             try:
                 await asyncio.gather(
                     *[
@@ -188,59 +267,73 @@ def run_llm(
                             [run_spec(p) for p in group],
                             client,
                             cfg,
-                            store.folder / "transcripts",
+                            s.store.folder / "transcripts",
                             window=window,
-                            journal=journal,
-                            on_step=on_step,
-                            on_done=on_done,
+                            journal=self.journal,
+                            on_step=self.on_step,
+                            on_done=self.on_done,
                         )
-                        for cfg, group in llm_configs(plans, o, template)
+                        for cfg, group in llm_configs(self.plans, s.options, s.template)
                     ]
                 )
             finally:
                 reporter.cancel()
                 await asyncio.gather(reporter, return_exceptions=True)
-                if notes is not None:  # fallbacks and pricing are known once calls were answered
-                    notes.clear()
-                record_session(store, backend, info, client, notes if notes is not None else [])
+                self.out.notes.clear()  # fallbacks and pricing are known once calls were answered
+                record_session(s.store, backend, info, client, self.out.notes)
 
-    # --max-tokens is also the reasoning budget, once reasoning is on (jswim.llm.reasoning).
-    room = {"reasoning_max_tokens": o.max_tokens} if o.max_tokens is not None else {}
-    try:
-        if backend.local:
-            with backend.server() as srv:
-                info = preflight(store, backend, srv)
-                t_start = time.perf_counter()  # the model's loading time is not LLM work
-                run_sync(go(backend.client_settings(srv, info, **room), info))
-        else:
-            info = info or preflight(store, backend, max_cost=max_cost)
-            run_sync(go(backend.client_settings(info=info, **room), info))
-    finally:
-        journal.close()
-        ledger.close()
-        if journal.n_calls > calls_before:
-            store.changed = True  # calls were paid for: the folder's status must say how it ended
-        if (
-            live
-            and sent is not None
-            and (live[0].reasoning.active or live[0].reasoning.notes or live[0].reasoning.effort)
-        ):
-            sent.update(live[0].reasoning.describe())
-        wall = time.perf_counter() - t_start
-        c = live[0].counts if live else None
-        speed.update(
-            totals,
-            wall_s=wall,
-            calls_per_s=totals["calls"] / wall if wall > 0 else 0.0,
-            billed_calls_per_s=totals["billed_calls"] / wall if wall > 0 else 0.0,
-            tokens=c.tokens if c else 0,
-            cost_usd=budget.spent_usd - spent_before,
-            study_cost_usd=budget.spent_usd,
-            requests=c.requests if c else 0,
-            retries=c.retries if c else 0,
-            faults=dict(sorted(c.faults.items())) if c else {},
-            unanswered=c.unanswered if c else 0,
-            unanswered_usd=c.unanswered_usd if c else 0.0,
+    def run(self) -> LLMOutcome:
+        """Start the server or preflight it, run every plan, and settle the session's accounts."""
+        s, backend = self.s, self.s.backend
+        # --max-tokens is also the reasoning budget, once reasoning is on (jswim.llm.reasoning).
+        mt = s.options.max_tokens
+        room = {"reasoning_max_tokens": mt} if mt is not None else {}
+        try:
+            if backend.local:
+                with backend.server() as srv:
+                    info = preflight(s.store, backend, srv)
+                    self.t_start = time.perf_counter()  # the model's loading time is not LLM work
+                    run_sync(self.go(backend.client_settings(srv, info, **room), info))
+            else:
+                info = s.server or preflight(s.store, backend, max_cost=s.max_cost)
+                run_sync(self.go(backend.client_settings(info=info, **room), info))
+        finally:
+            self.settle()
+        self.out.capped = self.budget.exhausted
+        return self.out
+
+    def settle(self) -> None:
+        """Close the journal and ledger; this session's speed and what it sent, into the metadata."""
+        self.journal.close()
+        self.ledger.close()
+        if self.journal.n_calls > self.calls_before:
+            self.s.store.changed = (
+                True  # calls were paid for: the folder's status must say how it ended
+            )
+        r = self.client.reasoning if self.client is not None else None
+        if r is not None and (r.active or r.notes or r.effort):
+            self.out.sent.update(r.describe())
+        self.out.speed.update(self.speed())
+        meta = self.s.store.meta
+        meta["llm_totals"] = add_session(
+            meta.get("llm_totals"), self.out.speed, self.journal.n_calls
         )
-        store.meta["llm_totals"] = add_session(store.meta.get("llm_totals"), speed, journal.n_calls)
-    return finished, budget.exhausted
+
+    def speed(self) -> dict[str, Any]:
+        """This session's calls, wall time, rates, tokens, cost and the client's fault counts."""
+        wall = time.perf_counter() - self.t_start
+        c, t = (self.client.counts if self.client is not None else None), self.totals
+        return {
+            **t,
+            "wall_s": wall,
+            "calls_per_s": t["calls"] / wall if wall > 0 else 0.0,
+            "billed_calls_per_s": t["billed_calls"] / wall if wall > 0 else 0.0,
+            "tokens": c.tokens if c else 0,
+            "cost_usd": self.budget.spent_usd - self.spent_before,
+            "study_cost_usd": self.budget.spent_usd,
+            "requests": c.requests if c else 0,
+            "retries": c.retries if c else 0,
+            "faults": dict(sorted(c.faults.items())) if c else {},
+            "unanswered": c.unanswered if c else 0,
+            "unanswered_usd": c.unanswered_usd if c else 0.0,
+        }

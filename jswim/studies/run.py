@@ -6,8 +6,7 @@ LLM runs are per-run pipelines (`jswim.studies.execute.run_llm`), each landing i
 folder ([`jswim.results.StudyStore`][jswim.results.StudyStore]) the moment it ends, with the server's preflight and the
 cost cap of [`jswim.studies.session`][jswim.studies.session]. Every run, whatever its agent, is judged by the same
 code, [`jswim.judging.gait.judge`][jswim.judging.gait.judge], with the study's [`jswim.judging.gait.Criterion`][jswim.judging.gait.Criterion],
-and becomes one [`jswim.results.RunRow`][jswim.results.RunRow] ([`jswim.studies.rows`][jswim.studies.rows]). The names of those
-modules stay importable from here.
+and becomes one [`jswim.results.RunRow`][jswim.results.RunRow] ([`jswim.studies.rows`][jswim.studies.rows]).
 
 A study's identity (what a folder is compared on when resumed) is what defines its runs: the
 grid's settings, the seed, the model and its sampling, the prompt template. Not in it: the
@@ -48,7 +47,6 @@ from jswim.llm.credentials import scrub
 from jswim._io.permissions import private_files
 from jswim.llm.client import ClientSettings
 from jswim.llm.dryrun import Estimate, EstimatingClient, estimate
-from jswim.llm.probe import ServerInfo
 from jswim.errors import LLMError
 from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
@@ -78,16 +76,15 @@ from jswim.studies.specs import SPECS, build
 from jswim.studies.plans import Plan
 from jswim.studies import prompt_files
 
-# The execution and the session, in their own modules; their names stay importable from here.
-from jswim.studies.execute import (  # noqa: F401
-    STORED,
+from jswim.studies.execute import LLMOutcome, llm_configs, run_baselines, run_llm, run_spec
+from jswim.studies.session import (
     ProgressFn,
-    llm_configs,
-    group_plans,
-    run_llm,
-    run_spec,
+    StudySession,
+    no_progress,
+    cap_check,
+    check_max_cost,
+    preflight,
 )
-from jswim.studies.session import preflight, record_session, add_session, cap_check, check_max_cost  # noqa: F401
 from jswim.studies.report import summarize
 
 
@@ -409,59 +406,33 @@ def _run_in(
 ) -> StudyResult:
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
-    info: ServerInfo | None = None
-    if backend is not None and not backend.local and any(p.agent == "llm" for p in todo):
-        info = preflight(store, backend, max_cost=max_cost)  # fail before the baselines, not after
-    total = len(plans)
-    finished = total - len(todo)
-    tick = progress or (lambda phase, d, t, info="": None)
-    tick(
-        "resume" if finished else "start",
-        finished,
-        total,
-        f"{finished} runs already done" if finished else "",
+    session = StudySession(
+        store,
+        options,
+        backend,
+        template,
+        total=len(plans),
+        finished=len(plans) - len(todo),
+        progress=progress or no_progress,
+        max_cost=max_cost,
     )
-
-    from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
-
-    for (agent, *_), group in group_plans(
-        [p for p in todo if p.agent != "llm"],
-        "agent",
-        "swimmer",
-        "action_set",
-        "roc_levels",
-        "scene",
-        "variant",
-        "zeta",
-        "target",
-    ).items():
-        store.add_runs(baselines.run_baselines(group, options.horizon))
-        finished += len(group)
-        tick(agent, finished, total, "")
-
+    if backend is not None and not backend.local and any(p.agent == "llm" for p in todo):
+        # fail before the baselines, not after
+        session.server = preflight(store, backend, max_cost=max_cost)
+    finished = session.finished
+    session.tick(
+        "resume" if finished else "start", info=f"{finished} runs already done" if finished else ""
+    )
+    run_baselines(session, [p for p in todo if p.agent != "llm"])
     llm_plans = [p for p in todo if p.agent == "llm"]
-    speed: dict[str, float] = {}
-    sent: dict[str, Any] = {}
-    notes: list[str] = []
-    capped = False
-    if llm_plans:
-        if backend is None:
-            raise ConfigError("this study has LLM runs; give a backend")
-        finished, capped = run_llm(
-            llm_plans,
-            options,
-            backend,
-            store,
-            template,
-            tick,
-            finished,
-            total,
-            speed,
-            max_cost,
-            sent,
-            info,
-            notes,
-        )
+    outcome = run_llm(session, llm_plans) if llm_plans else LLMOutcome()
+    speed, sent, notes, capped, total = (
+        outcome.speed,
+        outcome.sent,
+        outcome.notes,
+        outcome.capped,
+        session.total,
+    )
 
     # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
     names = {p.run_id: i for i, p in enumerate(plans)}

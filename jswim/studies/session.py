@@ -1,9 +1,13 @@
-"""A study's LLM session: the server's preflight, the cost cap checked before any call, and what
-each session sent and cost, recorded in the study's metadata (``llm_server``, ``llm_totals``)."""
+"""A study's session: what one sitting of `run_study` works with (`StudySession`: the folder's
+store, the options, the backend, the progress and the cap), the server's preflight, the cost cap
+checked before any call, and what each session sent and cost, recorded in the study's metadata
+(``llm_server``, ``llm_totals``)."""
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 from jswim._io.callsite import warn_user
@@ -14,7 +18,70 @@ from jswim.llm.probe import ServerInfo
 from jswim.llm.sampling import describe as describe_sampling
 from jswim.llm.urls import is_local_host
 from jswim.llm.usage import cap_refusal
+from jswim.prompt import PromptTemplate
 from jswim.results import StudyStore
+from jswim.studies.options import StudyOptions
+
+#: ``progress(phase, done, total, info)``: runs done of the study's runs, except in the phases
+#: ``"llm"`` and ``"llm-live"``, where the work counted is LLM steps (runs are in ``info``);
+#: ``info`` is a short status text.
+ProgressFn = Callable[[str, int, int, str], None]
+
+
+def no_progress(phase: str, done: int, total: int, info: str = "") -> None:
+    """A `ProgressFn` that shows nothing (the default of `StudySession`)."""
+
+
+@dataclass
+class StudySession:
+    """One sitting of a study: what its runners share, in place of loose arguments.
+
+    `run_study` makes one per call; `jswim.studies.execute.run_baselines` and
+    `jswim.studies.execute.run_llm` take it, store each run the moment it ends and move
+    ``finished`` on; what they measured comes back as their return value.
+
+    Attributes
+    ----------
+    store : StudyStore
+        The study folder's one writer.
+    options : StudyOptions
+        The grid and agent knobs.
+    backend : Backend or None
+        The LLM server (``None``: a study without LLM runs).
+    template : PromptTemplate or None
+        The prompt template of ``--prompt-file`` (``None``: the variant's own).
+    total : int
+        Runs in the study's grid.
+    finished : int
+        Runs done so far, this session's and earlier sessions' (moved on by the runners).
+    progress : ProgressFn
+        Called after each stored batch of runs (`ProgressFn`).
+    max_cost : float or None
+        Cap in USD over all the study's sessions (`check_max_cost`).
+    server : ServerInfo or None
+        The server's preflight, once made (a remote server's is made before the baselines run).
+    """
+
+    store: StudyStore
+    options: StudyOptions
+    backend: Backend | None
+    template: PromptTemplate | None = None
+    total: int = 0
+    finished: int = 0
+    progress: ProgressFn = field(default=no_progress)
+    max_cost: float | None = None
+    server: ServerInfo | None = None
+
+    def tick(
+        self, phase: str, done: int | None = None, info: str = "", total: int | None = None
+    ) -> None:
+        """Report progress: ``done`` of ``total`` (default: runs finished of the grid's runs)."""
+        self.progress(
+            phase,
+            self.finished if done is None else done,
+            self.total if total is None else total,
+            info,
+        )
 
 
 def check_max_cost(max_cost: Any) -> float | None:

@@ -37,7 +37,7 @@ def test_wall_study_stroke_rows_show_trapped_escaped_and_gliding():
         if p.agent == "stroke" and p.group.startswith("h=")
     ]
     assert plans and all(p.steps == SPECS["wall"].steps for p in plans)
-    rows = [r for p in plans for r in baselines.run_baselines([p], 50)]  # one scene per call
+    rows = [r for p in plans for r in baselines.baseline_rows([p], 50)]  # one scene per call
     fates = {(r["start_height"], json.loads(r["scene"])["tilt"]): r["fate"] for r in rows}
     level = [fates[k] for k in sorted(fates) if k[1] == 0.0]
     assert level == ["trapped"] * 2 + ["gliding"] * 4, fates

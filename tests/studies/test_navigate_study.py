@@ -17,6 +17,7 @@ from jswim.results import read_runs, read_transcript
 from jswim.studies.navigate import nav_summary
 from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
+from jswim.viz.publish import report
 from tests.browser import browser_or_skip, open_report_run
 from tests.fakeserver import FakeServer
 
@@ -40,6 +41,7 @@ def study(tmp_path_factory):
             out=out,
             progress=False,
         )
+    res.figures = report(out).figures  # the publish step, as jswim study runs it
     return out, res
 
 
