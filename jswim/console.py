@@ -328,7 +328,9 @@ PHASE_LABELS = {
     "llm-live": "LLM runs",
     "qlearning": "Q-learning",
     "random": "random policy",
-    "ppo": "continuous RL",
+    "ppo": "PPO",  # real-valued in the continuous and scene studies, categorical in navigation
+    "controller": "steering controller",
+    "stroke": "fixed strokes",
     "start": "start",
     "resume": "resume",
 }

@@ -23,7 +23,8 @@ from jswim.swimmers.models import SWIMMERS
 
 
 AGENTS = ("llm", "qlearning", "random")
-#: The continuous-action RL baseline (real ROCs; only the continuous study runs it).
+#: The PPO baseline: real-valued ROCs in the continuous and scene studies, categorical over the
+#: K-level codes in navigation.
 CONTINUOUS_AGENT = "ppo"
 #: A fixed stroke (the signature square gait, or two copies of it for a pair): the scene studies' reference.
 STROKE_AGENT = "stroke"

@@ -277,37 +277,7 @@ def run_study(
         folder,
         study,
         ident,
-        extra={
-            **prompts,  # each prompt file's name and the hash of its bytes (jswim.studies.prompt_files)
-            "jswim_version": __version__,
-            "jax_version": jax.__version__,
-            "python": platform.python_version(),
-            # The template itself is in prompt_template.json, written once (below), not in every
-            # rewrite of metadata.json at each status change.
-            "prompt_template_file": PROMPT_FILE,
-            "success_criterion": Criterion(horizon=options.horizon).describe(),
-            "horizon": options.horizon,
-            "llm_variants": list(options.variants or COMPETENCE_VARIANTS)
-            if study == "competence"
-            else [options.llm_variant(study)],
-            "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
-            # The grid's order of its groups (n_ht 1, 2, ..., 10): readers show them so, not as runs finished.
-            "group_order": list(dict.fromkeys(p.group for p in plans)),
-            # What differs from the paper's protocol in every LLM run (each transcript lists its own too),
-            # and the extensions some runs use (finer or real-valued ROCs).
-            "fidelity_deviations": list(fidelity.ALWAYS)
-            + fidelity.study_extensions({p.roc_levels for p in plans})
-            + _scene_extensions(plans)
-            + ([fidelity.NAVIGATION] if any(p.target for p in plans) else []),
-            "roc_levels": sorted({p.roc_levels for p in plans}),
-            "grid": {k: getattr(options, k) for k in GRID_SIZE},
-            "server": backend.address() if backend is not None else None,
-            "prices_as_of": (
-                backend.prices_as_of
-                if backend is not None and backend.prices_as_of
-                else PRICES_AS_OF
-            ),
-        },
+        extra=_folder_metadata(study, options, backend, plans, prompts),
     )
     try:
         for note in store.repairs:
@@ -335,20 +305,67 @@ def run_study(
             )  # never a key, however the message got it
         raise
     except OSError as exc:  # a full disk or an I/O error outside the store's own writes
-        msg = f"cannot write {exc.filename or folder}: {exc.strerror or exc}"
-        if not store.restore_status():
-            _record_status(store, "stopped", error=msg)
-        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
-            hint = "make room and run the same command to resume"
-        elif exc.errno in (errno.EEXIST, errno.ENOTDIR, errno.EISDIR):
-            hint = "a file or folder is in the way of one jswim writes: move it away and run the same command"
-        else:
-            hint = "fix that and run the same command to resume"
-        raise StudyFolderError(
-            f"{msg}; every finished run and answered call is kept in {folder}: {hint}"
-        ) from None
+        raise _folder_error(store, exc) from None
     finally:
         store.close()  # the folder's lock: the next session may start
+
+
+def _folder_metadata(
+    study: str,
+    options: StudyOptions,
+    backend: Backend | None,
+    plans: Sequence[Plan],
+    prompts: dict[str, Any],
+) -> dict[str, Any]:
+    """What a study's ``metadata.json`` records beside its identity: versions, the success rule,
+    the grid and its order, the fidelity deviations and extensions, the server and prices."""
+    return {
+        **prompts,  # each prompt file's name and the hash of its bytes (jswim.studies.prompt_files)
+        "jswim_version": __version__,
+        "jax_version": jax.__version__,
+        "python": platform.python_version(),
+        # The template itself is in prompt_template.json, written once (below), not in every
+        # rewrite of metadata.json at each status change.
+        "prompt_template_file": PROMPT_FILE,
+        "success_criterion": Criterion(horizon=options.horizon).describe(),
+        "horizon": options.horizon,
+        "llm_variants": list(options.variants or COMPETENCE_VARIANTS)
+        if study == "competence"
+        else [options.llm_variant(study)],
+        "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
+        # The grid's order of its groups (n_ht 1, 2, ..., 10): readers show them so, not as runs finished.
+        "group_order": list(dict.fromkeys(p.group for p in plans)),
+        # What differs from the paper's protocol in every LLM run (each transcript lists its own too),
+        # and the extensions some runs use (finer or real-valued ROCs).
+        "fidelity_deviations": list(fidelity.ALWAYS)
+        + fidelity.study_extensions({p.roc_levels for p in plans})
+        + _scene_extensions(plans)
+        + ([fidelity.NAVIGATION] if any(p.target for p in plans) else []),
+        "roc_levels": sorted({p.roc_levels for p in plans}),
+        "grid": {k: getattr(options, k) for k in GRID_SIZE},
+        "server": backend.address() if backend is not None else None,
+        "prices_as_of": (
+            backend.prices_as_of if backend is not None and backend.prices_as_of else PRICES_AS_OF
+        ),
+    }
+
+
+def _folder_error(store: StudyStore, exc: OSError) -> StudyFolderError:
+    """The one-line error of a study stopped by an I/O error (a full disk, a file in the way),
+    its status recorded where the session had changed the folder."""
+    folder = store.folder
+    msg = f"cannot write {exc.filename or folder}: {exc.strerror or exc}"
+    if not store.restore_status():
+        _record_status(store, "stopped", error=msg)
+    if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+        hint = "make room and run the same command to resume"
+    elif exc.errno in (errno.EEXIST, errno.ENOTDIR, errno.EISDIR):
+        hint = "a file or folder is in the way of one jswim writes: move it away and run the same command"
+    else:
+        hint = "fix that and run the same command to resume"
+    return StudyFolderError(
+        f"{msg}; every finished run and answered call is kept in {folder}: {hint}"
+    )
 
 
 def _check_embedded_model(study: str, backend: Backend) -> None:

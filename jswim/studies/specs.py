@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from dataclasses import dataclass
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 
 from jswim.action_codes import ACTION_SETS
 from jswim.agents.variants import (
@@ -29,6 +29,7 @@ from jswim.prompt import SENTENCES
 
 from jswim.studies.options import (
     COMPETENCE_VARIANTS,
+    DEFAULT_ROC_LEVELS,
     CONTINUOUS_AGENT,
     CONTROLLER_AGENT,
     SCENE_GRIDS,
@@ -121,6 +122,9 @@ class StudySpec:
     constrain: str | None = (
         None  # decoding when the backend says "auto" (None: the backend's own choice)
     )
+    # An option's help in this study's own words (flag -> text), where the general wording
+    # (jswim.cli.run_options.FLAGS) would name another default or offer what the study refuses.
+    option_help: Mapping[str, str] = dataclasses.field(default_factory=dict)
 
 
 #: Why a study may have no use for an option (`StudyOptions` field -> reason); the
@@ -184,6 +188,11 @@ SPECS: dict[str, StudySpec] = {
         init="paper",
         directions=(1, -1),
         ignores=("zetas", "n_hts", "roc_levels"),
+        option_help={
+            "--roc-levels": "the ROC levels K to compare (an extension): a reply's ROC k in -K..K "
+            "moves the DOF by k/K of its range, for the LLM and the lattice baselines alike "
+            f"(default {','.join(map(str, DEFAULT_ROC_LEVELS))}; 1 is the paper's -1, 0, 1)"
+        },
     ),
 }
 
@@ -234,6 +243,17 @@ SPECS["navigate"] = StudySpec(
         "of Q-learning and PPO, while the controller and the random policy keep the budget"
     ),
     judged=False,
+    option_help={
+        "--swimmer": "purcell only (the default): navigation needs a swimmer that turns in its "
+        "plane; sphere swimmers move on a line",
+        "--roc-levels": "ROC on K levels, K >= 2 (an extension): a reply's ROC k in -K..K moves "
+        f"the DOF by k/K of its range (default {navigate.NAV_ROC_LEVELS}; the paper's K = 1 corner world "
+        "cannot turn, and is refused)",
+        "--n-ht": "history records in the prompt (default 3, Purcell's)",
+        "--x-min": "X_min of the position encoding (X - X_min) * 1000 (default -2.5, the paper's); "
+        "each run lowers it to a whole number of link lengths below every place its target can "
+        "be, so that no position is sent as a negative number",
+    },
 )
 
 
@@ -292,14 +312,49 @@ _DEFAULT_GRIDS = {
 def build(study: str, o: StudyOptions) -> list[Plan]:
     """The runs of ``study`` for options ``o``, in a fixed order (seeds follow it).
 
+    Parameters
+    ----------
+    study : str
+        One of `STUDIES`.
+    o : StudyOptions
+        The grid and agent knobs (``None`` fields resolve to the study's `StudySpec`).
+
+    Returns
+    -------
+    list of Plan
+        One per run, each with a unique run id; its seed comes from the study seed and the id.
+
     Raises
     ------
     ConfigError
-        For an unknown study.
+        For an unknown study, or an option the study has no use for.
     """
     if study not in SPECS:
         raise ConfigError(f"unknown study {study!r}; choose one of {', '.join(STUDIES)}")
     spec = SPECS[study]
+    _check_grids(study, spec, o)
+    # Outside the competence study every LLM run uses one variant; its action set (if it sets
+    # one) applies to the baselines too, so they are offered what the model is offered.
+    variant = o.llm_variant(study)
+    baseline_set = variant_action_set(variant, o.action_set)
+    runs = {"llm": spec.runs if o.runs is None else o.runs}
+    runs["qlearning"] = runs["random"] = spec.q_runs if o.q_runs is None else o.q_runs
+    # A stroke is deterministic without noise: one run says it all (--q-runs of them under noise).
+    runs[STROKE_AGENT] = runs["qlearning"] if o.zeta > 0 else min(1, runs["qlearning"])
+    runs[CONTROLLER_AGENT] = runs[STROKE_AGENT]  # the steering controller is deterministic too
+    plans: list[Plan] = []
+    for sw in o.swimmers or spec.swimmers:
+        for d in o.directions or spec.directions:
+            for cell in spec.cells(o, sw) if study == "wall" else spec.cells(o):
+                for agent in (a for a in cell.agents if a in o.agents):
+                    plans += _agent_plans(spec, o, cell, agent, sw, d, variant, baseline_set, runs)
+    ids = [p.run_id for p in plans]
+    assert len(set(ids)) == len(ids), "run ids must be unique"
+    return plans
+
+
+def _check_grids(study: str, spec: StudySpec, o: StudyOptions) -> None:
+    """Refuse an option that ``study`` would drop (it would still name the folder)."""
     if o.pair_prompt != "joint" and not (
         "llm" in o.agents and any("llm" in c.agents and _is_pair(c.scene) for c in spec.cells(o))
     ):
@@ -326,107 +381,93 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
             raise ConfigError(
                 f"the {study} study has no use for --{flag} (only {who} reads it); leave it out"
             )
-    # Outside the competence study every LLM run uses one variant; its action set (if it sets
-    # one) applies to the baselines too, so they are offered what the model is offered.
-    variant = o.llm_variant(study)
-    baseline_set = variant_action_set(variant, o.action_set)
-    runs = {"llm": spec.runs if o.runs is None else o.runs}
-    runs["qlearning"] = runs["random"] = spec.q_runs if o.q_runs is None else o.q_runs
-    # A stroke is deterministic without noise: one run says it all (--q-runs of them under noise).
-    runs[STROKE_AGENT] = runs["qlearning"] if o.zeta > 0 else min(1, runs["qlearning"])
-    runs[CONTROLLER_AGENT] = runs[STROKE_AGENT]  # the steering controller is deterministic too
-    plans: list[Plan] = []
-    for sw in o.swimmers or spec.swimmers:
-        for d in o.directions or spec.directions:
-            for cell in spec.cells(o, sw) if study == "wall" else spec.cells(o):
-                for agent in (a for a in cell.agents if a in o.agents):
-                    llm = agent == "llm"
-                    v = (
-                        (cell.variant or variant)
-                        if llm
-                        else (cell.stroke if agent == STROKE_AGENT else "")
+
+
+def _agent_plans(
+    spec: StudySpec,
+    o: StudyOptions,
+    cell: Cell,
+    agent: str,
+    sw: str,
+    d: int,
+    variant: str,
+    baseline_set: str,
+    runs: dict[str, int],
+) -> list[Plan]:
+    """The plans of one agent in one cell, for swimmer ``sw`` toward direction ``d``: its
+    repeats, the LLM's sweeps (temperatures, prompt files) and samples."""
+    out: list[Plan] = []
+    llm = agent == "llm"
+    v = (cell.variant or variant) if llm else (cell.stroke if agent == STROKE_AGENT else "")
+    action_set = variant_action_set(v, o.action_set) if llm else (cell.action_set or baseline_set)
+    if agent == CONTINUOUS_AGENT:
+        action_set = "all"  # PPO is offered every arm and every real ROC; it has no smaller set
+    # The run id names what differs from the study's own setting.
+    tag = (v if v != "paper" else "") if llm else (action_set if action_set != o.action_set else "")
+    levels = o.roc_levels if cell.roc_levels is None else cell.roc_levels
+    # A pair's LLM runs under --pair-prompt each are named so (never a joint run's id).
+    pair = o.pair_prompt if llm and _is_pair(cell.scene) else "joint"
+    tag = "-".join(
+        t
+        for t in (
+            tag,
+            pair_tag(pair),
+            "real" if levels == 0 else roc_tag(levels),
+            cell.tag,
+        )
+        if t
+    )
+    zeta = float(o.zeta if cell.zeta is None else cell.zeta)
+    n_ht = cell.n_ht if llm else None
+    drop = cell.drop if llm else frozenset()
+    for temp, prompt in _sweeps(cell, o) if llm else [(None, None)]:
+        # A sweep's setting names its runs (run id) and its rows (group).
+        tags = "-".join(
+            t
+            for t in [
+                tag,
+                f"T{temp:g}" if temp is not None else "",
+                f"p-{prompt_label(prompt)}" if prompt else "",
+            ]
+            if t
+        )
+        swept = ([f"T={temp:g}"] if temp is not None and cell.temperature is None else []) + (
+            [f"prompt={prompt_label(prompt)}"] if prompt else []
+        )
+        group = ", ".join(g for g in [cell.group, *swept] if g)
+        steps = o.steps if o.steps is not None else cell.steps or spec.steps
+        if cell.target and agent in ("qlearning", CONTINUOUS_AGENT):
+            # learners train over many episodes (PPO a half: each of its steps
+            # moves 16 swimmers; jswim.studies.navigate)
+            share = navigate.PPO_SHARE if agent == CONTINUOUS_AGENT else 1
+            steps *= max(1, o.train_episodes // share)
+        for k in range(runs.get(agent, runs["qlearning"])):
+            init = initial(cell.init or o.init or spec.init, k, sw)
+            base = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k)
+            for s in range(o.samples if llm else 1):
+                rid = sample_id(base, s)
+                out.append(
+                    Plan(
+                        rid,
+                        agent,
+                        sw,
+                        d,
+                        init,
+                        zeta,
+                        run_seed(o.seed, rid),
+                        steps,
+                        n_ht,
+                        drop,
+                        action_set,
+                        group,
+                        v,
+                        temp,
+                        prompt,
+                        levels,
+                        s,
+                        cell.scene,
+                        pair,
+                        cell.target,
                     )
-                    action_set = (
-                        variant_action_set(v, o.action_set)
-                        if llm
-                        else (cell.action_set or baseline_set)
-                    )
-                    if agent == CONTINUOUS_AGENT:
-                        action_set = "all"  # PPO is offered every arm and every real ROC; it has no smaller set
-                    # The run id names what differs from the study's own setting.
-                    tag = (
-                        (v if v != "paper" else "")
-                        if llm
-                        else (action_set if action_set != o.action_set else "")
-                    )
-                    levels = o.roc_levels if cell.roc_levels is None else cell.roc_levels
-                    # A pair's LLM runs under --pair-prompt each are named so (never a joint run's id).
-                    pair = o.pair_prompt if llm and _is_pair(cell.scene) else "joint"
-                    tag = "-".join(
-                        t
-                        for t in (
-                            tag,
-                            pair_tag(pair),
-                            "real" if levels == 0 else roc_tag(levels),
-                            cell.tag,
-                        )
-                        if t
-                    )
-                    zeta = float(o.zeta if cell.zeta is None else cell.zeta)
-                    n_ht = cell.n_ht if llm else None
-                    drop = cell.drop if llm else frozenset()
-                    for temp, prompt in _sweeps(cell, o) if llm else [(None, None)]:
-                        # A sweep's setting names its runs (run id) and its rows (group).
-                        tags = "-".join(
-                            t
-                            for t in [
-                                tag,
-                                f"T{temp:g}" if temp is not None else "",
-                                f"p-{prompt_label(prompt)}" if prompt else "",
-                            ]
-                            if t
-                        )
-                        swept = (
-                            [f"T={temp:g}"] if temp is not None and cell.temperature is None else []
-                        ) + ([f"prompt={prompt_label(prompt)}"] if prompt else [])
-                        group = ", ".join(g for g in [cell.group, *swept] if g)
-                        steps = o.steps if o.steps is not None else cell.steps or spec.steps
-                        if cell.target and agent in ("qlearning", CONTINUOUS_AGENT):
-                            # learners train over many episodes (PPO a half: each of its steps
-                            # moves 16 swimmers; jswim.studies.navigate)
-                            share = navigate.PPO_SHARE if agent == CONTINUOUS_AGENT else 1
-                            steps *= max(1, o.train_episodes // share)
-                        for k in range(runs.get(agent, runs["qlearning"])):
-                            init = initial(cell.init or o.init or spec.init, k, sw)
-                            base = run_id(
-                                agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k
-                            )
-                            for s in range(o.samples if llm else 1):
-                                rid = sample_id(base, s)
-                                plans.append(
-                                    Plan(
-                                        rid,
-                                        agent,
-                                        sw,
-                                        d,
-                                        init,
-                                        zeta,
-                                        run_seed(o.seed, rid),
-                                        steps,
-                                        n_ht,
-                                        drop,
-                                        action_set,
-                                        group,
-                                        v,
-                                        temp,
-                                        prompt,
-                                        levels,
-                                        s,
-                                        cell.scene,
-                                        pair,
-                                        cell.target,
-                                    )
-                                )
-    ids = [p.run_id for p in plans]
-    assert len(set(ids)) == len(ids), "run ids must be unique"
-    return plans
+                )
+    return out

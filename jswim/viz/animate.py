@@ -364,8 +364,8 @@ def _caption(t: Track, others: Sequence[Track]) -> str:
 
 
 def _build(anim: Animation):
+    """The figure of ``anim`` (one panel per track, its lines under it) and ``draw(frame)``."""
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Circle
 
     tracks = anim.tracks
     box = view_box(tracks)
@@ -380,7 +380,12 @@ def _build(anim: Animation):
     n = len(tracks)
     panel_w = float(np.clip(1.1 + view_w * 0.28, 3.0, 4.2))
     panel_h = panel_w * view_h / view_w
-    text_h = 0.85  # three lines of 8.5 pt: legible (>= 9 px) at the default 80 dpi
+    # The lines under each panel, wrapped to its width, and room for the most any frame has:
+    # a caption never runs into the next panel or off the figure's foot.
+    columns = _text_columns(panel_w * (1 - 0.015 * n))  # from i/n + 0.015 to the next panel
+    texts = [[_frame_text(t, k, columns) for k in range(t.n_steps + 1)] for t in tracks]
+    n_lines = max(text.count("\n") + 1 for per in texts for text in per)
+    text_h = max(0.85, n_lines * LINE_IN + 0.2)  # lines of 8.5 pt: >= 9 px at the default 80 dpi
     with plt.rc_context(RC):
         fig = plt.figure(figsize=(panel_w * n, panel_h + text_h + 0.35))
     fig.patch.set_facecolor("white")
@@ -398,83 +403,21 @@ def _build(anim: Animation):
     state = []
     for i, t in enumerate(tracks):
         ax = fig.add_axes([i / n + 0.01, bottom, 1 / n - 0.02, top - bottom])
-        ax.set_facecolor(FLUID)
-        ax.set_xlim(box[0], box[0] + view_w)
-        ax.set_ylim(box[2], box[2] + view_h)
-        ax.set_aspect("equal", adjustable="box")
-        ax.set_xticks([])
-        ax.set_yticks([])
-        # Scale bar: one a (link length, sphere radius); the start line is X = 0.
-        ax.plot(
-            [0.04, 0.04 + 1.0 / view_w], [0.06, 0.06], transform=ax.transAxes, color="0.25", lw=1.2
-        )
-        ax.text(
-            0.04 + 0.5 / view_w,
-            0.09,
-            "a",
-            transform=ax.transAxes,
-            fontsize=8,
-            ha="center",
-            color="0.25",
-        )
-        for s in ax.spines.values():
-            s.set_color("0.7")
-        ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
-        worlds.draw_fixed(ax, t.world, (box[0], box[1]))
-        goal = worlds.draw_targets(ax, t.world, 0)  # a navigation task's targets (else none)
-        # Every panel names its agent in that agent's colour (the figures' colours).
-        ax.set_title(
-            _caption(t, tracks), fontsize=9, pad=2, color=AGENT_COLORS.get(t.agent, "black")
-        )
-        if not t.world.targets:  # the paper's task: the target direction (navigation: drawn)
-            ax.annotate(
-                "",
-                xy=(0.97, 0.06),
-                xytext=(0.82, 0.06),
-                xycoords="axes fraction",
-                arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8)
-                if t.direction > 0
-                else dict(arrowstyle="<-", color="0.35", lw=0.8),
-            )
-            ax.text(
-                0.895,
-                0.09,
-                "target",
-                transform=ax.transAxes,
-                fontsize=7,
-                ha="center",
-                color="0.35",
-            )
-        color = AGENT_COLORS.get(t.agent, "C0")
-        artists = []
-        for j in range(
-            t.n_swimmers
-        ):  # every swimmer of the world, swimmer 2 in its own edge colour
-            c_j = color if j == 0 else worlds.SECOND_SWIMMER
-            (trail,) = ax.plot([], [], "-", color=c_j, lw=0.8, alpha=0.6, zorder=2)
-            (stroke,) = ax.plot([], [], "-", color=STROKE_COLOR, lw=2.0, alpha=0.8, zorder=2)
-            if t.model.planar:
-                (body,) = ax.plot(
-                    [], [], "-", color="black", lw=2.4, solid_capstyle="round", zorder=4
-                )
-                (joints,) = ax.plot([], [], "o", color=c_j, ms=3, zorder=5)
-                spheres: list[Any] = []
-            else:
-                (body,) = ax.plot([], [], "-", color="0.3", lw=0.8, zorder=3)
-                joints = None
-                spheres = [
-                    ax.add_patch(Circle((0, 0), 1.0, fc="white", ec=c_j, lw=1.2, zorder=4))
-                    for _ in range(t.bodies.shape[2])
-                ]
-            artists.append((trail, stroke, body, joints, spheres))
-        (centre,) = ax.plot([], [], "+", color=color, ms=5, zorder=6)
+        goal = _panel(ax, t, tracks, box, view_w, view_h, panel_w)
+        artists, centre = _swimmer_artists(ax, t)
         txt = fig.text(
-            i / n + 0.015, bottom - 0.03, "", ha="left", va="top", fontsize=8.5, family="monospace"
+            i / n + 0.015,
+            bottom - 0.03,
+            "",
+            ha="left",
+            va="top",
+            fontsize=TEXT_PT,
+            family="monospace",
         )
-        state.append((t, ax, artists, centre, txt, goal))
+        state.append((t, ax, artists, centre, txt, goal, texts[i]))
 
     def draw(frame: int):
-        for t, ax, artists, centre, txt, goal in state:
+        for t, ax, artists, centre, txt, goal, text in state:
             k = min(frame, t.n_steps)
             if any(t.world.target_velocity):  # a moving target: where it is at this step
                 for a in goal:
@@ -497,15 +440,126 @@ def _build(anim: Animation):
             if follow:
                 x0 = float(np.clip(t.positions[k, 0, 0] - view_w / 2, box[0], box[1] - view_w))
                 ax.set_xlim(x0, x0 + view_w)
-            txt.set_text(_frame_text(t, k))
+            txt.set_text(text[k])
         return []
 
     draw(0)
     return fig, draw
 
 
-def _frame_text(t: Track, k: int) -> str:
-    """The lines under a panel at step ``k``."""
+def _panel(
+    ax: Any,
+    t: Track,
+    tracks: Sequence[Track],
+    box: Sequence[float],
+    view_w: float,
+    view_h: float,
+    panel_w: float,
+) -> list[Any]:
+    """Draw the still parts of ``t``'s panel (the fluid, a scale bar of one a, the world's walls
+    and targets, the caption, the target direction); the targets' artists (a moving target's
+    are drawn again each frame)."""
+    ax.set_facecolor(FLUID)
+    ax.set_xlim(box[0], box[0] + view_w)
+    ax.set_ylim(box[2], box[2] + view_h)
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    # Scale bar: one a (link length, sphere radius); the start line is X = 0.
+    ax.plot([0.04, 0.04 + 1.0 / view_w], [0.06, 0.06], transform=ax.transAxes, color="0.25", lw=1.2)
+    ax.text(
+        0.04 + 0.5 / view_w,
+        0.09,
+        "a",
+        transform=ax.transAxes,
+        fontsize=8,
+        ha="center",
+        color="0.25",
+    )
+    for s in ax.spines.values():
+        s.set_color("0.7")
+    ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
+    worlds.draw_fixed(ax, t.world, (box[0], box[1]))
+    goal = worlds.draw_targets(ax, t.world, 0)  # a navigation task's targets (else none)
+    # Every panel names its agent in that agent's colour (the figures' colours).
+    ax.set_title(
+        textwrap.shorten(
+            _caption(t, tracks), _text_columns(panel_w, TITLE_PT, 0.5), placeholder="..."
+        ),
+        fontsize=TITLE_PT,
+        pad=2,
+        color=AGENT_COLORS.get(t.agent, "black"),
+    )
+    if not t.world.targets:  # the paper's task: the target direction (navigation: drawn)
+        ax.annotate(
+            "",
+            xy=(0.97, 0.06),
+            xytext=(0.82, 0.06),
+            xycoords="axes fraction",
+            arrowprops=dict(arrowstyle="->", color="0.35", lw=0.8)
+            if t.direction > 0
+            else dict(arrowstyle="<-", color="0.35", lw=0.8),
+        )
+        ax.text(
+            0.895,
+            0.09,
+            "target",
+            transform=ax.transAxes,
+            fontsize=7,
+            ha="center",
+            color="0.35",
+        )
+    return goal
+
+
+def _swimmer_artists(ax: Any, t: Track) -> tuple[list[tuple[Any, ...]], Any]:
+    """The moving artists of ``t``'s swimmers, empty until drawn: per swimmer (trail, stroke,
+    body, joints, spheres), then the first swimmer's centroid marker."""
+    from matplotlib.patches import Circle
+
+    color = AGENT_COLORS.get(t.agent, "C0")
+    artists = []
+    for j in range(t.n_swimmers):  # every swimmer of the world, swimmer 2 in its own edge colour
+        c_j = color if j == 0 else worlds.SECOND_SWIMMER
+        (trail,) = ax.plot([], [], "-", color=c_j, lw=0.8, alpha=0.6, zorder=2)
+        (stroke,) = ax.plot([], [], "-", color=STROKE_COLOR, lw=2.0, alpha=0.8, zorder=2)
+        if t.model.planar:
+            (body,) = ax.plot([], [], "-", color="black", lw=2.4, solid_capstyle="round", zorder=4)
+            (joints,) = ax.plot([], [], "o", color=c_j, ms=3, zorder=5)
+            spheres: list[Any] = []
+        else:
+            (body,) = ax.plot([], [], "-", color="0.3", lw=0.8, zorder=3)
+            joints = None
+            spheres = [
+                ax.add_patch(Circle((0, 0), 1.0, fc="white", ec=c_j, lw=1.2, zorder=4))
+                for _ in range(t.bodies.shape[2])
+            ]
+        artists.append((trail, stroke, body, joints, spheres))
+    (centre,) = ax.plot([], [], "+", color=color, ms=5, zorder=6)
+    return artists, centre
+
+
+#: The panel texts' sizes (pt), and a line's height (in) at the text's size.
+TEXT_PT, TITLE_PT = 8.5, 9.0
+LINE_IN = TEXT_PT * 1.2 / 72
+
+
+def _text_columns(panel_in: float, size_pt: float = TEXT_PT, em: float = 0.6) -> int:
+    """Characters that fit across a panel ``panel_in`` inches wide at ``size_pt`` (a monospace
+    character is 0.6 em wide; ``em`` 0.5 is an average proportional one), with a margin."""
+    return max(20, int((panel_in - 0.12) * 72 / (em * size_pt)))
+
+
+def _frame_text(t: Track, k: int, width: int = 10**6) -> str:
+    """The lines under a panel at step ``k``, each wrapped to ``width`` characters."""
+    return "\n".join(
+        "\n".join(textwrap.wrap(line, width, subsequent_indent="  ") or [""])
+        for line in _frame_lines(t, k)
+    )
+
+
+def _frame_lines(t: Track, k: int) -> list[str]:
+    """The lines under a panel at step ``k``, unwrapped."""
     # The page's convention: X/a toward the target direction, labelled with it.
     disp = "X/a toward " + ("+x" if t.direction > 0 else "-x")
     lines = [f"step {k:>3}/{t.n_steps}  {disp} {t.direction * t.x[k]:+.4f}"]
@@ -513,7 +567,8 @@ def _frame_text(t: Track, k: int) -> str:
         here = np.array([t.x[k], t.y[k]])
         gap = min(np.hypot(gx - here[0], gy - here[1]) for gx, gy, _ in t.world.target_at(k))
         lines = [
-            f"step {k:>3}/{t.n_steps}  (x, y) ({here[0]:+.3f}, {here[1]:+.3f})  nearest target {gap:.3f} a"
+            f"step {k:>3}/{t.n_steps}  nearest target {gap:.3f} a",
+            f"(x, y) = ({here[0]:+.3f}, {here[1]:+.3f}) a",
         ]
     if k == 0:
         lines.append(
@@ -538,4 +593,4 @@ def _frame_text(t: Track, k: int) -> str:
             lines.append("reply: " + textwrap.shorten(reply, 38, placeholder="..."))
     if t.replayed:
         lines.append("(pose replayed: not in this folder)")
-    return "\n".join(lines)
+    return lines

@@ -425,3 +425,13 @@ def test_short_runs_warn_only_where_the_paper_criterion_judges_them():
     assert "no run can meet the success criterion" in short_steps_warning(short, "curves")
     assert short_steps_warning(short, "navigate") is None  # success there is reaching the target
     assert short_steps_warning(StudyOptions(steps=50), "curves") is None
+
+
+def test_every_agent_s_progress_line_names_it_as_it_runs():
+    # A study's progress names each phase by the agent that runs (PPO is categorical in the
+    # navigation study, real-valued elsewhere: "PPO", not "continuous RL"; no agent is "runs").
+    from jswim.console import PHASE_LABELS
+    from jswim.studies.options import ALL_AGENTS
+
+    assert all(agent in PHASE_LABELS for agent in ALL_AGENTS), set(ALL_AGENTS) - set(PHASE_LABELS)
+    assert PHASE_LABELS["ppo"] == "PPO" and PHASE_LABELS["controller"] == "steering controller"

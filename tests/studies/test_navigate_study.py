@@ -20,6 +20,7 @@ from jswim.studies.run import run_study
 from jswim.viz.publish import report
 from tests.browser import browser_or_skip, open_report_run
 from tests.fakeserver import FakeServer
+from tests.views.fitting import captions_outside_their_panel
 
 ARTIFACTS = os.environ.get("JSWIM_TEST_ARTIFACTS", "test-artifacts")
 
@@ -106,6 +107,14 @@ def test_figures_and_animation_draw_the_plane_and_the_targets(study, tmp_path):
     # The moving target is redrawn where it is: its world moves it 0.005 a per step in y.
     track = anim.tracks[0]
     assert track.world.target_at(10)[0][1] == pytest.approx(0.05)
+    # Two panels (the LLM and the controller after one target): the captions, with the
+    # position and the distance to the nearest target, never run into each other or off the foot.
+    two = build(
+        out,
+        run_ids=[by(rows, "llm", "moving")["run_id"], by(rows, "controller", "moving")["run_id"]],
+    )
+    frames = sorted({0, 1, two.n_frames // 2, two.n_frames - 1})
+    assert captions_outside_their_panel(two, frames) == []
 
 
 def test_report_page_draws_the_target_in_chromium(study):

@@ -23,6 +23,7 @@ from jswim.studies import Backend, StudyOptions, run_study
 from jswim.swimmers import nlink
 from jswim.swimmers.models import make_model
 from jswim.viz import animate as anim_mod
+from tests.views.fitting import captions_outside_their_panel
 from jswim.viz.page import report_html, write_report
 from jswim.viz.publish import report
 from jswim.viz.tracks import outline, place, start_theta, track
@@ -238,6 +239,21 @@ def test_animation_frames_differ_as_the_swimmer_moves(swim_folder):
     a = anim_mod.build(swim_folder, ["qlearning-purcell-px-i++-z0-r0"])
     first, later = a.frame_png(0), a.frame_png(6)
     assert first[:8] == b"\x89PNG\r\n\x1a\n" and first != later
+
+
+def test_animation_captions_stay_in_their_panels(swim_folder):
+    # four panels side by side, each with the LLM's reply and the step's events under it
+    a = anim_mod.build(swim_folder, most=4)
+    assert len(a.tracks) >= 3
+    assert captions_outside_their_panel(a, range(0, a.n_frames, 3)) == []
+    # The longest lines a step can have: every event at once and a long reply (wrapped, not cut
+    # off at the next panel)
+    t = a.tracks[0]
+    t.stuck[:], t.cleared[:], t.failed[:] = True, True, True
+    t.replies[:] = ["I shall now rotate the first link by one level, then hold " * 3] * len(
+        t.replies
+    )
+    assert captions_outside_their_panel(a, [1, a.n_frames - 1]) == []
 
 
 @pytest.mark.skipif(
