@@ -453,57 +453,31 @@ def _optimizer(hp: dict) -> optax.GradientTransformation:
     )
 
 
-def _train(
-    keys: Array,
-    params: Any,
-    config: PPOConfig,
-    hp: dict,
-    world: Environment,
-    axes: Any = 0,
-    trace: bool = False,
-) -> PPORun:
-    """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``axes`` says, a
-    ``vmap`` prefix) in the world ``world`` (default: the paper's world of ``params``): time
-    outermost. The world's step is [`Environment.learner_advance`][jswim.env.base.Environment.learner_advance], its observation
-    ``features``, its reward ``StepInfo.progress`` (minus ``energy_weight x StepInfo.work``).
-
-    The scans run over time and every step is vmapped over learners inside them (as in
-    PureJaxRL), which keeps the environment's float64 step blocks inside a plain ``vmap``.
-    """
-    n = world.n_dof
-    b = keys.shape[0]
-    e = config.envs
-    dtype = jnp.result_type(float)
-    split = jax.vmap(lambda k: jax.random.split(k, 3))(keys)
-    # With several swimmers per learner (envs > 1) every per-swimmer function is vmapped once
-    # more over them (axis 1 after the learners'); the learner's net and params are shared.
-    per_env = (lambda f, *a: f) if e == 1 else (lambda f, axes: jax.vmap(f, in_axes=axes))
-    split_e = jax.vmap(lambda k: jax.random.split(k, e))
-    reset_keys = split[:, 0] if e == 1 else split_e(split[:, 0])
-    reset = per_env(world.reset, (0, None))
-    states = jax.vmap(reset, in_axes=(0, axes))(reset_keys, params)
-    first = states if e == 1 else jax.tree.map(lambda v: v[:, 0], states)
-    dofs0 = jax.vmap(lambda st, p: world.observe(st, p).dofs, in_axes=(0, axes))(first, params)
-    categorical = config.policy == "categorical"
-    n_logits = world.n_actions if categorical else None
-    nets = jax.vmap(
-        lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features, n_logits)
-    )(split[:, 1])
-    opt = _optimizer(hp)
+def _draws(keys: Array, config: PPOConfig, world: Environment, dtype: Any) -> tuple:
+    """Every random number of a run, drawn up front: one draw per learner (``keys`` (B, 2)) for
+    the whole run, the DOF's uniform, the ROC's normal and the noise Y, laid out as the scans
+    read them: ``(t, u_dof, z_roc, y)``, each (n_updates, rollout, B, [E,] ...)."""
+    b, e = keys.shape[0], config.envs
     n_updates = -(-config.steps // config.rollout)
     total = n_updates * config.rollout
-    # One draw per learner for the whole run: the DOF's uniform, the ROC's normal, the noise Y.
     width = 2 + world.n_swimmers
     shape = (total, width) if e == 1 else (total, e, width)
-    u = jax.vmap(lambda k: _env.uniforms(k, shape, dtype))(split[:, 2])  # (B, total, [E,] width)
+    u = jax.vmap(lambda k: _env.uniforms(k, shape, dtype))(keys)  # (B, total, [E,] width)
     u = jnp.moveaxis(u, 0, 1).reshape((n_updates, config.rollout, b) + shape[1:])
     z = jax.scipy.special.ndtri(jnp.clip(u[..., 1], 1e-7, 1.0 - 1e-7))
-    inputs = (
+    return (
         jnp.arange(total).reshape(n_updates, config.rollout),
         u[..., 0],
         z,
         2.0 * u[..., 2:] - 1.0,
     )
+
+
+def _act_one(world: Environment, config: PPOConfig, trace: bool, dtype: Any) -> Callable:
+    """One swimmer's step under its learner's policy: ``(state, net, p, tau, u_dof, z_roc, y) ->
+    (state, _Batch, record)``, the record being what `PPORun` keeps of the step."""
+    n = world.n_dof
+    categorical = config.policy == "categorical"
 
     def act_one(state, net, p, tau, u_dof, z_roc, y):
         obs = world.features(state, p)
@@ -541,21 +515,14 @@ def _train(
         )
         return state, _Batch(obs, batch_act, u_roc, logp, value, reward, tau), record
 
-    def act_learner(state, net, p, tau, u_dof, z_roc, y):
-        state, batch, record = per_env(act_one, (0, None, None, None, 0, 0, 0))(
-            state, net, p, tau, u_dof, z_roc, y
-        )
-        # The record is the learner's first swimmer's (its run, as with one swimmer).
-        return state, batch, record if e == 1 else jax.tree.map(lambda v: v[0], record)
+    return act_one
 
-    def act(carry, inp):
-        states, nets = carry
-        t, u_dof, z_roc, y = inp
-        tau = _temperature(t, config.steps, hp["anneal_start"], hp["anneal_end"])
-        states, batch, record = jax.vmap(act_learner, in_axes=(0, 0, axes, None, 0, 0, 0))(
-            states, nets, params, tau, u_dof, z_roc, y
-        )
-        return (states, nets), (batch, record)
+
+def _learn_one(config: PPOConfig, hp: dict, opt: Any) -> Callable:
+    """One learner's update from its rollout: ``(net, opt_state, r2, batch, last_obs, t_end) ->
+    (net, opt_state, r2)`` (GAE, then ``epochs`` full-batch gradient steps; ``r2`` the running
+    sum of squared rewards when ``reward_norm``)."""
+    e = config.envs
 
     def learn_one(net, opt_state, r2, batch, last_obs, t_end):
         if config.reward_norm:
@@ -576,6 +543,66 @@ def _train(
 
         (net, opt_state), _ = jax.lax.scan(epoch, (net, opt_state), None, length=config.epochs)
         return net, opt_state, r2
+
+    return learn_one
+
+
+def _train(
+    keys: Array,
+    params: Any,
+    config: PPOConfig,
+    hp: dict,
+    world: Environment,
+    axes: Any = 0,
+    trace: bool = False,
+) -> PPORun:
+    """Train ``B`` learners (``keys`` (B, 2), ``params`` batched along B as ``axes`` says, a
+    ``vmap`` prefix) in the world ``world`` (default: the paper's world of ``params``): time
+    outermost. The world's step is [`Environment.learner_advance`][jswim.env.base.Environment.learner_advance], its observation
+    ``features``, its reward ``StepInfo.progress`` (minus ``energy_weight x StepInfo.work``).
+
+    The scans run over time and every step is vmapped over learners inside them (as in
+    PureJaxRL), which keeps the environment's float64 step blocks inside a plain ``vmap``.
+    """
+    n = world.n_dof
+    b = keys.shape[0]
+    e = config.envs
+    dtype = jnp.result_type(float)
+    split = jax.vmap(lambda k: jax.random.split(k, 3))(keys)
+    # With several swimmers per learner (envs > 1) every per-swimmer function is vmapped once
+    # more over them (axis 1 after the learners'); the learner's net and params are shared.
+    per_env = (lambda f, *a: f) if e == 1 else (lambda f, axes: jax.vmap(f, in_axes=axes))
+    split_e = jax.vmap(lambda k: jax.random.split(k, e))
+    reset_keys = split[:, 0] if e == 1 else split_e(split[:, 0])
+    reset = per_env(world.reset, (0, None))
+    states = jax.vmap(reset, in_axes=(0, axes))(reset_keys, params)
+    first = states if e == 1 else jax.tree.map(lambda v: v[:, 0], states)
+    dofs0 = jax.vmap(lambda st, p: world.observe(st, p).dofs, in_axes=(0, axes))(first, params)
+    n_logits = world.n_actions if config.policy == "categorical" else None
+    nets = jax.vmap(
+        lambda k: init_policy(k, n, config.hidden, hp["init_std"], world.n_features, n_logits)
+    )(split[:, 1])
+    opt = _optimizer(hp)
+    inputs = _draws(split[:, 2], config, world, dtype)
+    total = inputs[0].size
+    act_one = _act_one(world, config, trace, dtype)
+    learn_one = _learn_one(config, hp, opt)
+
+    def act_learner(state, net, p, tau, u_dof, z_roc, y):
+        state, batch, record = per_env(act_one, (0, None, None, None, 0, 0, 0))(
+            state, net, p, tau, u_dof, z_roc, y
+        )
+        # The record is the learner's first swimmer's (its run, as with one swimmer).
+        return state, batch, record if e == 1 else jax.tree.map(lambda v: v[0], record)
+
+    def act(carry, inp):
+        states, nets = carry
+        t, u_dof, z_roc, y = inp
+        tau = _temperature(t, config.steps, hp["anneal_start"], hp["anneal_end"])
+        states, batch, record = jax.vmap(act_learner, in_axes=(0, 0, axes, None, 0, 0, 0))(
+            states, nets, params, tau, u_dof, z_roc, y
+        )
+        return (states, nets), (batch, record)
 
     def update(carry, inp):
         states, nets, opt_states, r2 = carry
@@ -633,6 +660,11 @@ def train(
         ``orientation`` swimmer 1's (leading axis B for a batch of keys). Memory:
         ``(4 (2 n_dof + 5) + 1) steps`` bytes per learner in float32 (7.2 kB at 200 steps for two
         DOFs), plus the networks while training.
+
+    Raises
+    ------
+    ConfigError
+        From `PPOConfig` when it is built: a bad policy, count, rate or weight.
     """
     key = jnp.asarray(key)
     if key.ndim == 1:

@@ -412,6 +412,11 @@ def train(
         4 n_dof`` bytes per learner in float32 (1,304 at 200 steps for the two-DOF swimmers);
         bound it for large populations by training in chunks, as
         ``jswim.studies.qlearn.study`` does.
+
+    Raises
+    ------
+    ConfigError
+        From `QConfig` when it is built: a bad step count, rates, action set or tie-break.
     """
     cells = env.cells() if cells is None else cells
     key = jnp.asarray(key)

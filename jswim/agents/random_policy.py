@@ -104,6 +104,17 @@ def run(
         Also record the world's state, observation and step info after each step.
     cells : Cells, optional
         A discretiser other than the world's.
+
+    Returns
+    -------
+    RandomRun
+        Per-step executed actions and X (the swimmers' mean x), start levels, swimmer 1's y and
+        orientation (leading axis B for a batch of keys).
+
+    Raises
+    ------
+    ConfigError
+        An unknown ``action_set``.
     """
     check_action_set(action_set)
     cells = env.cells() if cells is None else cells

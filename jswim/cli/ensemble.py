@@ -226,7 +226,7 @@ def ensemble_figure_files(
     stats: Sequence[Any], title: str, direction: int, folder: Path, stem: str
 ) -> list[Path]:
     """The ensemble figure as ``STEM.png`` and ``STEM.pdf`` in ``folder``."""
-    from jswim.figures import plots  # lazy: matplotlib only when asked
+    from jswim.figures.panels import save  # lazy: matplotlib only when asked
     from jswim.viz.charts import ensemble_figure  # lazy: as above
 
-    return plots.save(ensemble_figure(stats, title, direction), folder, stem)
+    return save(ensemble_figure(stats, title, direction), folder, stem)

@@ -75,10 +75,13 @@ def main(args: argparse.Namespace) -> int:
             "simple: no shape visited twice per period; the others add detours that go back and forth"
         )
         if args.out:
-            from jswim.figures import plots  # lazy: matplotlib only when a figure is asked for
+            from jswim.figures.panels import (
+                save,
+            )  # lazy: matplotlib only when a figure is asked for
+            from jswim.figures.sketches import gaits_figure  # lazy: as above
 
-            paths = plots.save(
-                plots.gaits_figure(model, cycles),
+            paths = save(
+                gaits_figure(model, cycles),
                 args.out,
                 f"gaits-{args.swimmer}-{'px' if d > 0 else 'mx'}",
             )

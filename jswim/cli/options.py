@@ -48,13 +48,12 @@ def add_study_commands(sub: argparse._SubParsersAction) -> list[argparse.Argumen
     )
     q = sub.add_parser(
         "study",
-        help="run one of the paper's studies",
-        description="Run a study grid (resumable). curves: Fig. 2; history: the n_ht sweep "
-        "(Fig. 3); noise: mean X/a and success vs zeta (Fig. 4); ablation: S1..S5 "
-        "removed (Fig. 5); inits: the four initial configurations; competence: "
-        "every protocol variant next to random and Q-learning baselines; continuous: "
-        "finer ROCs (--roc-levels) for the LLM and lattice Q-learning, and a "
-        "real-valued RL baseline.",
+        help="run a study: the paper's figures and their extensions",
+        description="Run a study grid into its folder (resumable: finished runs are kept), then "
+        "draw its figures and report page from the folder. The paper's figures are curves "
+        "(Fig. 2), history (the n_ht sweep, Fig. 3), noise (Fig. 4) and ablation (Fig. 5); the "
+        "others extend them. Each NAME below says what it measures; `jswim study NAME --help` "
+        "gives its options and defaults.",
     )
     if base.outlined(p):
         return [p, q]
@@ -65,8 +64,7 @@ def add_study_commands(sub: argparse._SubParsersAction) -> list[argparse.Argumen
         dest="name",
         metavar="NAME",
         parser_class=base.Parser,
-        help="curves, history, noise, ablation, inits, competence, temperature, continuous, "
-        "wall or pair",
+        help=", ".join(s for s in STUDIES if s != "swim"),
     )
     names.required = True
     out = [p]

@@ -168,7 +168,7 @@ def _learning_rate(args: argparse.Namespace) -> Any:
 
 def qlearn_outputs(rows: Sequence[Any], args: argparse.Namespace) -> list[Path]:
     """``qlearn.png``/``.pdf`` (histograms) and ``qlearn.csv`` (the table) in ``args.out``."""
-    from jswim.figures import plots  # lazy: matplotlib only when asked
+    from jswim.figures.panels import save  # lazy: matplotlib only when asked
     from jswim.results import atomic_write, writing  # lazy: start-up (NumPy)
     from jswim.viz.charts import qlearn_figure  # lazy: matplotlib only when asked
 
@@ -183,7 +183,7 @@ def qlearn_outputs(rows: Sequence[Any], args: argparse.Namespace) -> list[Path]:
         f"Q-learning baseline (tabular, {rate}, {args.steps} training steps, \u03b6 = {args.noise:g}, seed "
         f"{args.seed}): steps to learn over {args.seeds:,} learners per setting"
     )
-    paths = plots.save(qlearn_figure(rows, title), out, "qlearn")
+    paths = save(qlearn_figure(rows, title), out, "qlearn")
     buf = io.StringIO()
     fields = [f for f in rows[0]._fields if f != "hist"] if rows else []
     w = csv.writer(buf)

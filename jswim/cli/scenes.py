@@ -202,6 +202,7 @@ def print_table(rows: Sequence[dict[str, Any]]) -> None:
     if not any(r.scene for r in rows):
         return
     from jswim.studies.scene_studies import (
+        columns_note,
         scene_summary,
         table,
         table_note,
@@ -209,6 +210,7 @@ def print_table(rows: Sequence[dict[str, Any]]) -> None:
 
     summary = scene_summary(rows)
     cols, cells = table(summary)
-    show(cols, cells, "scenes: displacement per stroke cycle, speed per step (second half), fates")
+    show(cols, cells, "scenes: displacement per stroke cycle, speed per step (second half)")
+    print(columns_note(cols))
     if note := table_note(summary):
         print(note)

@@ -11,6 +11,7 @@ The loops themselves and the steering controller are kinematics:
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import NamedTuple
 
@@ -198,13 +199,22 @@ def steering_budget(
     covers what the estimate leaves out (the turning loop's own drift along its circle, and the
     corrections the controller makes on the way). Returned as whole cycles.
     """
-    plan = steering_plan(model, roc_levels, reverse=reverse)
-    straight = loop_motion(model, roc_levels, square_gait(roc_levels))
+    turn, displacement = _steering_rates(model, roc_levels, reverse)
     b = abs(math.remainder(bearing, 2 * math.pi))
     if reverse and b > math.pi / 2:
         b = math.pi - b
-    cycles = b / plan.turn + distance / straight.displacement
+    cycles = b / turn + distance / displacement
     return 4 * math.ceil(safety * cycles)
+
+
+@functools.lru_cache(maxsize=32)
+def _steering_rates(model: SwimmerModel, roc_levels: int, reverse: bool) -> tuple[float, float]:
+    """The turning loop's rotation per cycle (rad) and the square gait's displacement per cycle
+    (a): the two numbers a budget needs, measured once per swimmer and K (a study's cells and the
+    worlds made for its runs ask for the same ones)."""
+    plan = steering_plan(model, roc_levels, reverse=reverse)
+    straight = loop_motion(model, roc_levels, square_gait(roc_levels))
+    return plan.turn, straight.displacement
 
 
 class SteeringRun(NamedTuple):

@@ -107,6 +107,14 @@ def make(
         More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.scene_parameters.scene_params]
         (``nodes``, ``sweeps``, ``contact_gap``).
 
+    Returns
+    -------
+    env : Environment
+        The world (static, hashable: jit and vmap take it as a static argument).
+    params : EnvParams, SceneParams or NavParams
+        Its parameters (a pytree of arrays; `Environment.batch_params` stacks them along a
+        leading axis).
+
     Raises
     ------
     ConfigError

@@ -105,6 +105,19 @@ class FixedTarget:
     """A fixed point ``distance`` (``a``) away at ``bearing`` (degrees from the start heading,
     counterclockwise; 180 is straight behind).
 
+    Parameters
+    ----------
+    distance : float
+        From the start's centroid (``a``), above ``radius`` and at most `MAX_DISTANCE`.
+    bearing : float
+        Degrees from the start heading, counterclockwise, within one turn (`MAX_BEARING`).
+    radius : float
+        Success radius (``a``, default `DEFAULT_RADIUS`): the target is reached when the
+        centroid comes within it.
+    budget : int, optional
+        Steps per episode (at most `MAX_BUDGET`); default: measured for the steering controller
+        ([`default_budget`][jswim.env.targets.default_budget]).
+
     Raises
     ------
     ConfigError
@@ -145,6 +158,17 @@ class FixedTarget:
 class Waypoints:
     """Points ``((x, y), ...)`` (``a``, lab frame: x along the start heading) visited in order;
     each is reached within ``radius``, and the task is over at the last one.
+
+    Parameters
+    ----------
+    points_xy : tuple of (float, float)
+        The waypoints (``a``, lab frame), in the order they are visited.
+    radius : float
+        Success radius (``a``, default `DEFAULT_RADIUS`): the target is reached when the
+        centroid comes within it.
+    budget : int, optional
+        Steps per episode (at most `MAX_BUDGET`); default: measured for the steering controller
+        ([`default_budget`][jswim.env.targets.default_budget]).
 
     Raises
     ------
@@ -205,6 +229,20 @@ class MovingTarget:
     """A point starting ``distance`` (``a``) away at ``bearing`` (degrees) and moving at the
     constant ``velocity`` ``(vx, vy)`` (``a`` per step, lab frame).
 
+    Parameters
+    ----------
+    distance, bearing : float
+        Where it starts, as for `FixedTarget`.
+    velocity : (float, float)
+        ``(vx, vy)``, ``a`` per step, lab frame; slower than the square gait's mean speed when
+        the budget is left to `default_budget`.
+    radius : float
+        Success radius (``a``, default `DEFAULT_RADIUS`): the target is reached when the
+        centroid comes within it.
+    budget : int, optional
+        Steps per episode (at most `MAX_BUDGET`); default: measured for the steering controller
+        ([`default_budget`][jswim.env.targets.default_budget]).
+
     Raises
     ------
     ConfigError
@@ -259,6 +297,17 @@ _KINDS = {"fixed": FixedTarget, "waypoints": Waypoints, "moving": MovingTarget}
 def target_from_dict(data: dict[str, Any]) -> Target:
     """A spec from its ``to_dict`` (as a study row stores it).
 
+    Parameters
+    ----------
+    data : dict
+        ``{"kind": "fixed" | "waypoints" | "moving", ...fields}``; a waypoints spec's points
+        under ``points`` or ``points_xy``.
+
+    Returns
+    -------
+    FixedTarget, Waypoints or MovingTarget
+        The spec, checked as its constructor checks it.
+
     Raises
     ------
     ConfigError
@@ -309,6 +358,20 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
     measured from the previous leg's direction). A moving target's is the fixed one for the
     point where a swimmer going straight at the square gait's mean speed ``v_gait`` would meet
     it, stretched by ``1 / (1 - |v| / v_gait)`` for the corrections a moving bearing asks for.
+
+    Parameters
+    ----------
+    spec : FixedTarget, Waypoints or MovingTarget
+        The task.
+    model : SwimmerModel
+        The swimmer.
+    roc_levels : int
+        K of its lattice (an odd K is measured on K = 2: the quarter loops need a centre).
+
+    Returns
+    -------
+    int
+        Steps, whole cycles of four (at most `MAX_BUDGET`).
 
     Raises
     ------
@@ -369,7 +432,29 @@ def _measured_budget(spec: Target, model: Any, roc_levels: int) -> int:
 
 
 def target_params(spec: Target, model: Any, roc_levels: int = 2, dtype: Any = None) -> TargetParams:
-    """The arrays of ``spec`` for ``model`` (budget: [`default_budget`][jswim.env.targets.default_budget])."""
+    """The arrays of ``spec`` for ``model`` (budget: [`default_budget`][jswim.env.targets.default_budget]).
+
+    Parameters
+    ----------
+    spec : FixedTarget, Waypoints or MovingTarget
+        The task.
+    model : SwimmerModel
+        The swimmer the budget is measured for.
+    roc_levels : int
+        K of the lattice the world steps on (the controller's budget is measured there).
+    dtype : dtype, optional
+        Of the float leaves; default JAX's default float (float32 unless x64 is on).
+
+    Returns
+    -------
+    TargetParams
+        ``points`` (P, 2), ``velocity`` (2,), ``radius`` () in ``dtype``, ``budget`` () int32.
+
+    Raises
+    ------
+    ConfigError
+        As `default_budget`.
+    """
     dtype = jnp.result_type(float) if dtype is None else dtype
     return TargetParams(
         points=jnp.asarray(spec.points(), dtype),

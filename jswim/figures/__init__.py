@@ -22,12 +22,16 @@ _HOMES = {
     "draw_cycle": ".sketches",
     "draw_shape": ".sketches",
     "learned_cycles": ".sketches",
+    "shape_points": ".sketches",
+    "signature_reference": ".curves",
     "scene_figures": ".scene_plots",
     "RC": ".style",
     "AGENT_STYLE": ".style",
     "COLUMN_IN": ".style",
     "PAGE_IN": ".style",
     "tidy": ".style",
+    "REFERENCE_STYLE": ".style",
+    "NOTE_COLOR": ".style",
 }
 
 __all__ = list(_HOMES)

@@ -132,17 +132,7 @@ def grid_figure(
     values = [v for v in (order or []) if any(r.get(key) == v for r in rows)]
     values += sorted({r.get(key) for r in rows} - set(values), key=lambda v: (str(type(v)), v))
     agents = in_order({r.agent for r in rows}, AGENT_ORDER)
-    pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(values)}
-    span = (max(pos.values()) - min(pos.values())) if len(pos) > 1 else 1.0
-    step = (
-        span / max(1, len(pos) - 1)
-        if not numeric
-        else min(np.diff(sorted(pos.values())), default=span)
-    )
-    width = 0.5 * step  # the agents' points of one value spread over half the gap to the next
-    offsets = {
-        a: (i - (len(agents) - 1) / 2) * width / max(1, len(agents)) for i, a in enumerate(agents)
-    }
+    pos, offsets = _positions(values, agents, numeric)
     n_cols = len(dirs)
     per = 3 if learn else 2  # panels per swimmer: p, (steps to learn,) X/a
     fig, grid, legend_ax, top = legend_frame([1.3] * (per * len(swimmers)), n_cols, len(agents))
@@ -183,57 +173,101 @@ def grid_figure(
                         style,
                     )
                 counts[agent].update(len(by[v]) for v in vs)
-            ax_p.set_ylim(-0.06, 1.06)
-            ax_p.set_ylabel("success rate p\n(95% Wilson CI)")
-            ax_p.set_title(panel_title(sw, d))
-            ax_x.axhline(0, color="0.75", lw=0.6, zorder=0)
-            ax_x.set_ylabel(f"mean {displacement_label(d)}\n(95% bootstrap CI)")
-            lo, hi = ax_x.get_ylim()
-            if (
-                hi - lo < 1e-9
-            ):  # all X/a equal (a swimmer that never moved): not an axis of 1e-17 rounding
-                ax_x.set_ylim(lo - 0.05, hi + 0.05)
-            if ax_l is not None:
-                ax_l.set_ylabel("steps to learn\n(median, IQR)")
-                ax_l.text(
-                    0.99,
-                    0.97,
-                    "k/n: runs that learned",
-                    transform=ax_l.transAxes,
-                    ha="right",
-                    va="top",
-                    fontsize=5,
-                    color="0.4",
-                )
-            for ax in (ax_p, ax_x) + ((ax_l,) if ax_l is not None else ()):
-                ax.grid(axis="y", alpha=0.25, lw=0.5)
+            _label_panels(ax_p, ax_x, ax_l, sw, d)
     for ax in axes[-1]:
-        ax.set_xlabel(xlabel)
-        if not numeric:
-            labels = [(tick_labels or {}).get(v, str(v)) for v in values]
-            rotate = sum(len(t) for t in labels) > (40 if n_cols == 1 else 30)
-            ax.set_xticks(
-                [pos[v] for v in values],
-                labels,
-                rotation=30 if rotate else 0,
-                ha="right" if rotate else "center",
-            )
-            ax.set_xlim(-0.6, len(values) - 0.4)
-        else:
-            ax.set_xticks([pos[v] for v in values], [f"{v:g}" for v in values])
+        _x_axis(ax, values, pos, numeric, xlabel, tick_labels, n_cols)
+    draw_legend(legend_ax, _legend_handles(agents, handles, counts))
+    mark_unfinished(fig, note)
+    return fig
+
+
+def _positions(
+    values: Sequence[Any], agents: Sequence[str], numeric: bool
+) -> tuple[dict[Any, float], dict[str, float]]:
+    """Each value's place on the x axis (its number, or its slot) and each agent's sideways
+    offset: the agents' points of one value spread over half the gap to the next value."""
+    pos = {v: (float(v) if numeric else float(i)) for i, v in enumerate(values)}
+    span = (max(pos.values()) - min(pos.values())) if len(pos) > 1 else 1.0
+    step = (
+        span / max(1, len(pos) - 1)
+        if not numeric
+        else min(np.diff(sorted(pos.values())), default=span)
+    )
+    width = 0.5 * step
+    offsets = {
+        a: (i - (len(agents) - 1) / 2) * width / max(1, len(agents)) for i, a in enumerate(agents)
+    }
+    return pos, offsets
+
+
+def _label_panels(ax_p: Any, ax_x: Any, ax_l: Any | None, swimmer: str, direction: int) -> None:
+    """Titles, axis labels, limits and grids of one swimmer-direction column's panels."""
+    ax_p.set_ylim(-0.06, 1.06)
+    ax_p.set_ylabel("success rate p\n(95% Wilson CI)")
+    ax_p.set_title(panel_title(swimmer, direction))
+    ax_x.axhline(0, color="0.75", lw=0.6, zorder=0)
+    ax_x.set_ylabel(f"mean {displacement_label(direction)}\n(95% bootstrap CI)")
+    lo, hi = ax_x.get_ylim()
+    if hi - lo < 1e-9:  # all X/a equal (a swimmer that never moved): not an axis of 1e-17 rounding
+        ax_x.set_ylim(lo - 0.05, hi + 0.05)
+    if ax_l is not None:
+        ax_l.set_ylabel("steps to learn\n(median, IQR)")
+        ax_l.text(
+            0.99,
+            0.97,
+            "k/n: runs that learned",
+            transform=ax_l.transAxes,
+            ha="right",
+            va="top",
+            fontsize=5,
+            color="0.4",
+        )
+    for ax in (ax_p, ax_x) + ((ax_l,) if ax_l is not None else ()):
+        ax.grid(axis="y", alpha=0.25, lw=0.5)
+
+
+def _x_axis(
+    ax: Any,
+    values: Sequence[Any],
+    pos: Mapping[Any, float],
+    numeric: bool,
+    xlabel: str,
+    tick_labels: Mapping[Any, str] | None,
+    n_cols: int,
+) -> None:
+    """The bottom panel's x label and ticks: numbers on a number line, else one labelled slot per
+    value (rotated when the labels would collide)."""
+    ax.set_xlabel(xlabel)
+    if numeric:
+        ax.set_xticks([pos[v] for v in values], [f"{v:g}" for v in values])
+        return
+    labels = [(tick_labels or {}).get(v, str(v)) for v in values]
+    rotate = sum(len(t) for t in labels) > (40 if n_cols == 1 else 30)
+    ax.set_xticks(
+        [pos[v] for v in values],
+        labels,
+        rotation=30 if rotate else 0,
+        ha="right" if rotate else "center",
+    )
+    ax.set_xlim(-0.6, len(values) - 0.4)
+
+
+def _legend_handles(
+    agents: Sequence[str], handles: Mapping[str, Any], counts: Mapping[str, set[int]]
+) -> list[Any]:
+    """One legend entry per agent drawn, labelled with its runs per point ("n = 20", or a range
+    where points differ)."""
     legend = []
     for agent in agents:
         if agent in handles:
             h = handles[agent]
-            n = counts[agent]
+            n = set(counts[agent])
             base = AGENT_STYLE.get(agent, {}).get("label", agent)
             h.set_label(
                 f"{base}, n = {n.pop()}" if len(n) == 1 else f"{base}, n = {min(n)}-{max(n)}"
             )
             legend.append(h)
-    draw_legend(legend_ax, legend)
-    mark_unfinished(fig, note)
-    return fig
+    return legend
 
 
 def noise_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:

@@ -29,26 +29,11 @@ from matplotlib.figure import Figure
 from jswim.agents.variants import VARIANTS
 from jswim.results import as_run_rows, is_failed
 
-from jswim.figures.style import (  # noqa: F401  (the figures' public names, importable from here)
-    AGENT_STYLE,
-    COLUMN_IN,
-    NOTE_COLOR,
-    PAGE_IN,
-    RC,
-    REFERENCE_STYLE,
-    tidy,
-)
 from jswim.figures.scene_plots import scene_figures
 from jswim.figures.navigation_plots import nav_figures
-from jswim.figures.panels import panel_keys, save, target_displacement  # noqa: F401
-from jswim.figures.sketches import (  # noqa: F401
-    draw_cycle,
-    draw_shape,
-    gaits_figure,
-    learned_cycles,
-    shape_points,
-)
-from jswim.figures.curves import curves_figure, history_figure, signature_reference  # noqa: F401
+from jswim.figures.panels import save
+from jswim.figures.sketches import learned_cycles
+from jswim.figures.curves import curves_figure, history_figure
 from jswim.figures.grid import (
     ablation_figure,
     competence_figure,
@@ -129,7 +114,7 @@ def continuous_figures(
             "group",
             order=groups,
             tick_labels=labels,
-            xlabel="ROC levels K (real: the continuous RL baseline)",
+            xlabel="ROC levels K (real: PPO on real-valued ROCs)",
             note=note,
         )
     }

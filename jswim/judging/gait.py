@@ -124,11 +124,15 @@ class Criterion:
         if not self.min_fraction > 0:
             raise ConfigError(f"min_fraction must be > 0, got {self.min_fraction}")
 
-    def describe(self) -> str:
-        """One line for run metadata."""
+    def describe(self, steps: int | None = None) -> str:
+        """One line for run metadata; ``steps``, the runs' length, is said where it is shorter
+        than the horizon (the cycles must then be complete within the run)."""
+        within = f"within {self.horizon} steps"
+        if steps is not None and steps < self.horizon:
+            within += f" (these runs have {steps})"
         return (
             f"{self.n_cycles} consecutive qualifying cycles (>= {self.min_fraction:g} of the best cycle's "
-            f"speed) within {self.horizon} steps, no later failure (jswim.judging.gait.judge)"
+            f"speed) {within}, no later failure (jswim.judging.gait.judge)"
         )
 
 

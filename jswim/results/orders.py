@@ -9,6 +9,9 @@ that no picture imports the code that runs a study.
 SWIMMER_ORDER = ("purcell", "ng", "nlink", "nsphere")
 #: Reading order of agents in tables and figure panels (the LLM first; others follow, by name).
 AGENT_ORDER = ("llm", "qlearning", "random", "ppo")
+#: The agent that plays a fixed stroke (the scene studies' reference): it learns nothing, so its
+#: rows say "fixed" where the others count the runs that learned.
+STROKE_AGENT = "stroke"
 
 #: Fewest runs that learned for which quartiles of the steps to learn are printed (below: the
 #: median alone; quartiles of two values are interpolation, not data).
@@ -17,4 +20,4 @@ MIN_QUARTILE_N = 4
 #: values).
 MIN_BOOTSTRAP_N = 3
 
-__all__ = ["AGENT_ORDER", "MIN_BOOTSTRAP_N", "MIN_QUARTILE_N", "SWIMMER_ORDER"]
+__all__ = ["AGENT_ORDER", "MIN_BOOTSTRAP_N", "MIN_QUARTILE_N", "STROKE_AGENT", "SWIMMER_ORDER"]

@@ -17,6 +17,7 @@ from jswim.env.registry import registered_worlds
 from jswim.env.targets import MAX_BEARING, MAX_DISTANCE
 from jswim.errors import ConfigError, check_size, check_zeta
 from jswim.judging.gait import PAPER
+from jswim.results.orders import STROKE_AGENT
 from jswim.scenes import Scene
 from jswim.scenes.scene_parameters import check_start
 from jswim.swimmers.models import SWIMMERS
@@ -27,7 +28,6 @@ AGENTS = ("llm", "qlearning", "random")
 #: K-level codes in navigation.
 CONTINUOUS_AGENT = "ppo"
 #: A fixed stroke (the signature square gait, or two copies of it for a pair): the scene studies' reference.
-STROKE_AGENT = "stroke"
 #: The steering controller (turn with an off-centre loop, then the square gait): the navigation
 #: study's reference stroke (jswim.agents.steering).
 CONTROLLER_AGENT = "controller"

@@ -22,7 +22,13 @@ from jswim.errors import ConfigError, ResultFolderError
 from jswim._io.folderlock import describe_holder, holder
 from jswim.results import RunRow, as_run_rows, read_metadata, read_run_rows
 from jswim.console import EMBEDDED_UNPRICED, LOCAL_UNPRICED, REFERENCE_UNPRICED
-from jswim.results.orders import AGENT_ORDER, MIN_BOOTSTRAP_N, MIN_QUARTILE_N, SWIMMER_ORDER
+from jswim.results.orders import (
+    AGENT_ORDER,
+    MIN_BOOTSTRAP_N,
+    MIN_QUARTILE_N,
+    STROKE_AGENT,
+    SWIMMER_ORDER,
+)
 from jswim.studies.report import summarize
 
 SETTING = ("agent", "swimmer", "direction", "group")
@@ -32,14 +38,19 @@ SUMMARY_NOTE = (
     f"over the runs (none below {MIN_BOOTSTRAP_N} runs: [n<{MIN_BOOTSTRAP_N}]; rough below 10); learn: the "
     "step at which the final qualifying stroke starts, counted from 1 as in the paper (1 = the stroke from "
     f"the first action), quartiles over the runs that learned (the median alone below {MIN_QUARTILE_N}: "
-    "'med 1.5'; learned: how many did); fail: LLM steps without a valid action."
+    "'med 1.5'; learned: how many did; a fixed stroke learns nothing: 'fixed'); fail: LLM steps "
+    "without a valid action."
 )
 
 
 def _fmt(v: Any, spec: str = ".3f") -> str:
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "-"
-    return format(v, spec) if isinstance(v, float) else str(v)
+    if not isinstance(v, float):
+        return str(v)
+    text = format(v, spec)
+    # A value that rounds to zero reads as zero, not "-0.000" (a sign the digits cannot show).
+    return format(0.0, spec) if float(text) == 0.0 else text
 
 
 def _dir(d: Any) -> str:
@@ -147,6 +158,7 @@ def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], l
     cols += [Column("cost $")] if cost else []
     rows = []
     for s in summary:
+        fixed = s["agent"] == STROKE_AGENT  # plays its stroke from the first step: nothing to learn
         row = [str(s["agent"]), str(s["swimmer"]), _dir(s["direction"])] + (
             [str(s.get("group") or "")] if groups else []
         )
@@ -155,8 +167,8 @@ def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], l
             str(s["n"]),
             _p_cell(s),
             _x_cell(s),
-            _learn_cell(s),
-            f"{s.get('learned') or 0} of {s['n']}",
+            "-" if fixed else _learn_cell(s),
+            "fixed" if fixed else f"{s.get('learned') or 0} of {s['n']}",
             str(s["failed_steps"]) if s["agent"] == "llm" else "-",
             _fmt(s.get("tokens_per_step"), ".0f"),
         ]
@@ -398,13 +410,16 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
             r.scene for r in s.rows
         ):  # walls and pairs: the scene table too (jswim.studies.scene_studies)
             from jswim.studies.scene_studies import (
+                columns_note,
                 scene_summary,
                 table,
                 table_note,
             )  # lazy: only for a scene study
 
             scene_rows = scene_summary(s.rows)
-            lines += ["", plain_table(*table(scene_rows), title="scenes", width=width)]
+            scene_cols, scene_cells = table(scene_rows)
+            lines += ["", plain_table(scene_cols, scene_cells, title="scenes", width=width)]
+            lines += [columns_note(scene_cols)]
             lines += [note] if (note := table_note(scene_rows)) else []
     else:
         lines.append("no finished runs yet")

@@ -248,6 +248,14 @@ def run_study(
         ``stopped at the cost cap`` and `StudyResult.stopped` is ``"cost cap"``. The same
         call with a higher cap goes on from there, paying no call twice.
 
+    Returns
+    -------
+    StudyResult
+        The folder, its rows (one dict per run, every run the grid names that the folder
+        holds), the summary table, this session's LLM speed and failures, and ``stopped`` when
+        the cost cap ended it. ``figures`` is empty: the folder is the study's end, and the
+        publish step ([`jswim.report`][jswim.viz.publish.report]) draws from it.
+
     Raises
     ------
     ConfigError
@@ -327,7 +335,9 @@ def _folder_metadata(
         # The template itself is in prompt_template.json, written once (below), not in every
         # rewrite of metadata.json at each status change.
         "prompt_template_file": PROMPT_FILE,
-        "success_criterion": Criterion(horizon=options.horizon).describe(),
+        "success_criterion": Criterion(horizon=options.horizon).describe(
+            max((p.steps for p in plans), default=None)
+        ),
         "horizon": options.horizon,
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS)
         if study == "competence"

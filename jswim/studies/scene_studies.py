@@ -58,7 +58,6 @@ from jswim.results.row import RunRow, as_run_rows
 from jswim.studies.rows import build_row, signs
 from jswim.studies.options import STROKE_AGENT
 from jswim.studies.plans import Plan
-from jswim.studies.scene_grids import pair_scene, scene_cells as cells, wall_scene  # noqa: F401  (their old place)
 
 
 def square(start: Sequence[int], direction: int) -> tuple[int, int, int, int]:
@@ -360,8 +359,27 @@ def start_tilt(scene: str | None) -> float | None:
     return float(data.get("tilt", 0.0)) if data.get("medium") == "wall" else None
 
 
+#: What each of `table`'s measured columns means (`columns_note` lists those a table shows).
+_COLUMN_NOTES = {
+    "X/a per cycle": "X/a per cycle and per step: in the target direction",
+    "fates": "fates: trapped, escaped or gliding (the wall study's rule)",
+    "mean height": "mean height: the middle sphere over the second half, in a",
+    "x stroke": "x stroke: speed over the best square stroke's in the same scene",
+}
+#: Columns that only a scene above a wall fills (a pair's or school's rows leave them out).
+_WALL_COLUMNS = ("fates", "mean height")
+
+
+def columns_note(cols: Sequence[Any]) -> str:
+    """The line under `table` that says what its columns are, naming only those it shows."""
+    headers = {c.header for c in cols}
+    return "; ".join(t for h, t in _COLUMN_NOTES.items() if h in headers) + "."
+
+
 def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]]:
-    """Columns and cells of `scene_summary` for ``jswim study``'s output and ``jswim show``."""
+    """Columns and cells of `scene_summary` for ``jswim study``'s output, ``jswim show`` and the
+    report page. The wall's columns (fates, mean height) appear only when some row is above a
+    wall."""
 
     def fmt(v: Any, spec: str) -> str:
         return "-" if v is None else format(v, spec)
@@ -403,6 +421,10 @@ def table(summary: Sequence[dict[str, Any]]) -> tuple[list[Any], list[list[str]]
         ]
         for s in order
     ]
+    if not any(s.get("fates") or s.get("mean_height") is not None for s in summary):
+        keep = [i for i, c in enumerate(cols) if c.header not in _WALL_COLUMNS]
+        cols = [cols[i] for i in keep]
+        body = [[row[i] for i in keep] for row in body]
     return cols, body
 
 

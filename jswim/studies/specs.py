@@ -178,7 +178,11 @@ SPECS: dict[str, StudySpec] = {
     "competence": StudySpec(_competence, runs=10),
     # p and steps to learn against the sampling temperature T, both swimmers and directions
     "temperature": StudySpec(
-        _temperature, runs=5, init="paper", directions=(1, -1), ignores=("zetas", "n_hts", "q_runs")
+        _temperature,
+        runs=5,
+        init="paper",
+        directions=(1, -1),
+        ignores=("zetas", "n_hts", "q_runs", "roc_levels_grid"),
     ),
     # continuous strokes (an extension): the LLM, lattice Q-learning and random at K in {1, 2, 5, 10},
     # and the real-valued RL baseline, both swimmers, both directions (README "Continuous strokes")

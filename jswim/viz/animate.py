@@ -31,15 +31,16 @@ import numpy as np
 from jswim import reprs
 from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 from jswim.errors import ConfigError
-from jswim.figures.plots import RC, panel_keys
+from jswim.figures.panels import panel_keys
+from jswim.figures.style import RC
 from jswim.results.orders import AGENT_ORDER
 from jswim.results import as_run_rows, read_metadata, read_run_rows, read_transcript, writing
 from jswim.viz import worlds
 from jswim.viz.bench_page import read_bench, part_folders
 from jswim.viz.tracks import Track, fmt_action, track, view_box
 
-#: Colours of the agents (the figures' Okabe-Ito palette, `jswim.figures.plots.AGENT_STYLE`).
-#: Each agent's colour: the figures' (jswim.figures.plots.AGENT_STYLE), the square stroke in black.
+#: Colours of the agents (the figures' Okabe-Ito palette, `jswim.figures.style.AGENT_STYLE`).
+#: Each agent's colour: the figures' (jswim.figures.style.AGENT_STYLE), the square stroke in black.
 AGENT_COLORS = {
     "llm": "#0072B2",
     "qlearning": "#D55E00",

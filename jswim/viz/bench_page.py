@@ -29,7 +29,7 @@ from jswim.bench.leaderboard import (
     valid_rows,
 )
 from jswim.results.orders import MIN_BOOTSTRAP_N
-from jswim.figures import plots
+from jswim.figures.style import RC
 from jswim.figures.leaderboard import figure_object
 from jswim.viz.page import asset_text, write_report
 
@@ -200,7 +200,7 @@ def _figure_src(rows: Sequence[Mapping[str, Any]]) -> str:
 
     fig = figure_object(rows)
     buf = io.BytesIO()
-    with plt.rc_context(plots.RC):
+    with plt.rc_context(RC):
         fig.savefig(buf, format="png", dpi=150, bbox_inches="tight", pad_inches=0.03)
     plt.close(fig)
     return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()

@@ -1,7 +1,7 @@
 """Figures of the commands that write no study folder: ``jswim qlearn`` and ``jswim ensemble``.
 
 Both follow the study figures' rules ([`jswim.figures.plots`][jswim.figures.plots]: paper sizes, 7-8 pt text, colour-blind
-safe colours, PNG and PDF through [`jswim.figures.plots.save`][jswim.figures.panels.save]) and name the agent or stroke they
+safe colours, PNG and PDF through [`jswim.figures.save`][jswim.figures.panels.save]) and name the agent or stroke they
 show in their title, so a figure taken out of its folder still says what it is.
 """
 

@@ -37,6 +37,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from jswim.figures import plots
+from jswim.figures.style import RC
 from jswim.results.orders import AGENT_ORDER
 from jswim.studies.overview import (
     SUMMARY_NOTE,
@@ -252,7 +253,7 @@ def _drawn_figures(
         study, [r for r in rows if not is_failed(r)], note=note
     ).items():
         buf = io.BytesIO()
-        with plt.rc_context(plots.RC):
+        with plt.rc_context(RC):
             fig.savefig(buf, format="png", dpi=170, bbox_inches="tight", pad_inches=0.03)
         plt.close(fig)
         out.append(
@@ -383,6 +384,7 @@ def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
     if not any(r.scene for r in rows):
         return ""
     from jswim.studies.scene_studies import (
+        columns_note,
         scene_summary,
         table,
         table_note,
@@ -394,9 +396,7 @@ def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
     return (
         "<h3>Scenes</h3>"
         + _table_html(cols, cells, "scenes")
-        + '<p class="note">X/a per cycle and per step: in the target direction; fates: trapped, escaped or '
-        "gliding (the wall study's rule); mean height: the middle sphere over the second half, in a; "
-        "x stroke: speed over the best square stroke's in the same scene."
+        + f'<p class="note">{html.escape(columns_note(cols))}'
         + (f" {html.escape(note)}" if note else "")
         + "</p>"
     )
@@ -425,7 +425,15 @@ _OWN_AXES = {
 _READ_AS = {
     ("navigate", "x_min"): "{v}, lowered per target to a whole a below every place the target "
     "can be (docs/navigation.md)",
+    # The competence grid sets each group's moves: the baselines run on both sets, and a
+    # shape-changing variant offers its own whatever --action-set says.
+    ("competence", "action_set"): "{v} for the LLM variants without shape-changing in their "
+    "name; the shape-changing variants offer the moves that change the shape; the baselines run "
+    "on both sets (their group names the set)",
 }
+#: Settings that shape what an LLM is sent or the moves a learner is offered: nothing to say of a
+#: study of fixed strokes alone.
+_AGENT_SETTINGS = ("action_set", "x_min", "n_ht", "constrain", "max_tokens", "temperature")
 #: Settings shown in the full record only (the compact block shows what defines this study).
 _NOT_COMPACT = ("horizon", "share_identical")
 
@@ -442,6 +450,7 @@ def applicable_settings(
     rule the study's own (a navigation study's: the target reached within its budget).
     """
     from jswim.studies.specs import (
+        DEFAULT_TEMPERATURES,
         SPECS,
     )  # lazy: the grids load JAX, which a page of a finished folder does not need
 
@@ -450,16 +459,26 @@ def applicable_settings(
     ignores = set(getattr(SPECS.get(study), "ignores", ()) or ())
     out: list[tuple[str, str]] = [("study", study)]
     backend = ident.get("backend") or {}
+    # A study of fixed strokes alone (the school: it ignores --runs) has no LLM and no learner:
+    # no model, and none of the settings that shape a prompt or the moves on offer.
+    strokes_only = "runs" in ignores
     if (
-        backend and (meta.get("grid") or {}).get("runs") != 0
+        backend and (meta.get("grid") or {}).get("runs") != 0 and not strokes_only
     ):  # no model applies to a baselines-only study
+        # A sweep sets each run's temperature: the backend's own is not what the runs used.
+        swept = (meta.get("grid") or {}).get("temperatures") or (
+            DEFAULT_TEMPERATURES if study == "temperature" else None
+        )
+        temperature = "per run (temperatures below)" if swept else backend.get("temperature")
         out.append(
             (
                 "model",
-                f"{backend.get('model')} ({backend.get('kind')}), temperature "
-                f"{backend.get('temperature')}, constrain {backend.get('constrain')}",
+                f"{backend.get('model')} ({backend.get('kind')}), temperature {temperature}, "
+                f"constrain {backend.get('constrain')}",
             )
         )
+        if swept and not (meta.get("grid") or {}).get("temperatures"):
+            out.append(("temperatures", ", ".join(f"{t:g}" for t in swept)))
     fmt = lambda v: ", ".join(map(str, v)) if isinstance(v, (list, tuple)) else str(v)
     ran = _agents_ran(rows)
 
@@ -467,16 +486,22 @@ def applicable_settings(
         return k not in ignores and (k not in _OWN_AXES or study in _OWN_AXES[k])
 
     for k, v in sorted((ident.get("options") or {}).items()):
-        if v is None or not own(k) or k in _NOT_COMPACT:
+        if v is None or not own(k) or k in _NOT_COMPACT or (strokes_only and k in _AGENT_SETTINGS):
             continue
         if k == "agents" and ran:
             v = ran
         out.append((k, _READ_AS.get((study, k), "{v}").format(v=fmt(v))))
+    variants = meta.get("llm_variants")
+    if study == "competence" and isinstance(variants, list) and variants:
+        out.append(("llm_variants", fmt(variants)))
     levels = meta.get("roc_levels")
-    if isinstance(levels, list) and levels and levels != [1]:  # the paper's K = 1 goes unsaid
-        out.append(("roc_levels", fmt(levels)))
+    said_levels = isinstance(levels, list) and bool(levels) and levels != [1]
+    if said_levels:  # the paper's K = 1 goes unsaid; K = 0 is the real-valued ROCs of PPO
+        lattice = ", ".join(str(k) for k in levels if k)
+        real = "real-valued ROCs (PPO)" if 0 in levels else ""
+        out.append(("roc_levels", "; ".join(t for t in (lattice, real) if t)))
     for k, v in sorted((meta.get("grid") or {}).items()):
-        if v is None or not own(k):
+        if v is None or not own(k) or (k == "roc_levels_grid" and said_levels):
             continue
         out.append((k, fmt(v)))
     spec = SPECS.get(study)
@@ -501,6 +526,18 @@ def applicable_settings(
             )
         )
     return out
+
+
+def _names_a_model(meta: Mapping[str, Any], rows: Sequence[Any]) -> bool:
+    """Whether the page names an LLM: some run is the LLM's, or the grid plans LLM runs (not
+    ``--runs 0``, not a study of fixed strokes alone)."""
+    if any(r.agent == "llm" for r in rows):
+        return True
+    from jswim.studies.specs import SPECS  # lazy: as in applicable_settings
+
+    spec = SPECS.get(str(meta.get("study")))
+    strokes_only = spec is not None and "runs" in spec.ignores
+    return (meta.get("grid") or {}).get("runs") != 0 and not strokes_only
 
 
 def _agents_ran(rows: Sequence[Mapping[str, Any]] | None) -> list[str]:
@@ -579,11 +616,7 @@ def report_html(
         )
     backend = (meta.get("identity") or {}).get("backend") or {}
     # A study with no LLM run (--runs 0: baselines only) names no model.
-    model = (
-        backend.get("model")
-        if any(r.agent == "llm" for r in own) or (meta.get("grid") or {}).get("runs") != 0
-        else None
-    )
+    model = backend.get("model") if _names_a_model(meta, own) else None
     index, blobs = [], []
     for i, r in enumerate(rows):
         entry = {k: r.get(k) for k in INDEX_KEYS}

@@ -17,7 +17,7 @@ from jswim.results import read_metadata, read_runs
 from jswim.studies import StudyOptions, run_study
 from jswim.studies.specs import build
 from jswim.studies.run import default_folder, identity
-from jswim.studies.scene_studies import pair_scene
+from jswim.studies.scene_grids import pair_scene
 from jswim.swimmers.models import make_model
 from tests.fakeserver import FakeServer, scene_reply
 

@@ -87,3 +87,12 @@ def test_an_unlisted_option_is_still_refused_in_one_line(argv, says, capsys, tmp
     err = capsys.readouterr().err
     lines = [ln for ln in err.splitlines() if "error:" in ln]
     assert rc == 2 and len(lines) == 1 and says in lines[0] and "Traceback" not in err
+
+
+def test_jswim_study_help_names_every_study(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["study", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    names = [s for s in STUDIES if s != "swim"]
+    assert {"school", "navigate"} <= set(names)  # the two the listing used to leave out
+    assert "NAME " + ", ".join(names) in text

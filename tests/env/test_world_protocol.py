@@ -271,13 +271,8 @@ def test_old_names_import_from_their_old_places():
         "jswim": ["rollout", "make_params", "reset", "step", "step_batch", "make"],
         # defined elsewhere, still importable from these modules
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
-        "jswim.studies.scene_studies": [
-            "wall_scene",
-            "pair_scene",
-            "cells",
-            "fate",
-            "scene_row",
-        ],
+        "jswim.studies.scene_studies": ["fate", "scene_row"],
+        "jswim.studies.scene_grids": ["wall_scene", "pair_scene", "scene_cells"],
     }.items():
         mod = importlib.import_module(module)
         for name in names:

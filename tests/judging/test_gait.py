@@ -169,3 +169,11 @@ def test_runs_without_steps_are_judged_not_learned(swimmer):
     r = judge(np.zeros((2, 0), np.int64), make_params(swimmer))
     assert r.learned.tolist() == [False, False] and r.success.tolist() == [False, False]
     assert r.steps_to_learn.tolist() == [-1, -1]
+
+
+def test_the_criterion_says_when_runs_are_shorter_than_its_horizon():
+    from jswim.judging.gait import Criterion
+
+    assert "within 50 steps," in Criterion().describe()
+    assert "within 50 steps," in Criterion().describe(steps=60)
+    assert "within 50 steps (these runs have 20)," in Criterion().describe(steps=20)

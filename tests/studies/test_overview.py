@@ -212,3 +212,24 @@ def test_groups_read_in_the_grids_order_not_the_order_runs_finished(tmp_path, ca
     (out / "metadata.json").write_text(json.dumps(meta))
     assert cli.main(["show", str(out)]) == 0
     assert groups(capsys.readouterr().out) == ["n_ht=1", "n_ht=2", "n_ht=10"]
+
+
+def test_a_fixed_stroke_s_row_says_fixed_not_how_many_learned():
+    from jswim.studies.overview import summary_table
+
+    base = dict(
+        swimmer="ng", direction=1, n=1, success_rate=1.0, success_lo=0.21, success_hi=1.0,
+        mean_x=0.8, learned=1, steps_to_learn_median=1.0, failed_steps=0, tokens_per_step=None,
+    )  # fmt: skip
+    cols, rows = summary_table([dict(base, agent="stroke"), dict(base, agent="qlearning")])
+    at = {c.header: i for i, c in enumerate(cols)}
+    learned, learn = at["learned"], at["learn q25/med/q75"]
+    assert rows[0][learned] == "fixed" and rows[0][learn] == "-"
+    assert rows[1][learned] == "1 of 1" and rows[1][learn] == "med 1"
+
+
+def test_a_mean_that_rounds_to_zero_is_printed_without_a_minus_sign():
+    from jswim.studies.overview import _fmt
+
+    assert _fmt(-1e-9, "+.3f") == "+0.000" and _fmt(-0.0004, ".3f") == "0.000"
+    assert _fmt(-0.0006, "+.3f") == "-0.001"

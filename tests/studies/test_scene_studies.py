@@ -476,3 +476,20 @@ def test_interrupted_pair_study_resumes(server, tmp_path):
     assert [(r["run_id"], r["actions"], r["x"]) for r in sorted(again.rows, key=key)] == [
         (r["run_id"], r["actions"], r["x"]) for r in sorted(whole.rows, key=key)
     ]
+
+
+def test_a_pair_s_scene_table_has_no_wall_columns_and_its_note_names_only_its_own():
+    from jswim.studies.scene_studies import columns_note, table
+
+    row = dict(agent="stroke", direction=1, group="D=30", medium="free", n=1, per_cycle=0.17,
+               speed=0.02, vs_stroke=1.0, separation=30.0)  # fmt: skip
+    cols, cells = table([row])
+    headers = [c.header for c in cols]
+    assert "fates" not in headers and "mean height" not in headers
+    assert len(cells[0]) == len(headers)
+    note = columns_note(cols)
+    assert "fates" not in note and "mean height" not in note and "x stroke" in note
+    wall = dict(row, medium="wall", fates="trapped 1", mean_height=1.2, start_height=1.2)
+    cols, _ = table([wall])
+    assert {"fates", "mean height"} <= {c.header for c in cols}
+    assert "fates: trapped, escaped or gliding" in columns_note(cols)

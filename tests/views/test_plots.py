@@ -12,6 +12,7 @@ import pytest
 from matplotlib.container import ErrorbarContainer
 from PIL import Image
 
+from jswim import figures
 from jswim.figures import plots
 from jswim.results import unfinished_note
 
@@ -65,7 +66,7 @@ def _labelled_lines(ax):
 
 
 def _saved_width_in(fig, tmp_path, name):
-    paths = plots.save(fig, tmp_path, name, dpi=100)
+    paths = figures.save(fig, tmp_path, name, dpi=100)
     assert [p.suffix for p in paths] == [".png", ".pdf"] and all(
         p.stat().st_size > 0 for p in paths
     )
@@ -74,7 +75,7 @@ def _saved_width_in(fig, tmp_path, name):
 
 def test_curves_plot_target_direction_per_panel(tmp_path):
     rows = _rows()
-    fig = plots.curves_figure(rows, cycles=plots.learned_cycles(rows))
+    fig = figures.curves_figure(rows, cycles=figures.learned_cycles(rows))
     panels = [ax for ax in fig.axes if ax.get_xlabel() == "step n"]
     titles = [ax.get_title() for ax in panels]
     assert titles == [
@@ -91,33 +92,35 @@ def test_curves_plot_target_direction_per_panel(tmp_path):
         assert sorted(
             ln.get_label().split(",")[0]
             for ln in lines
-            if ln.get_label() != plots.REFERENCE_STYLE["label"]
+            if ln.get_label() != figures.REFERENCE_STYLE["label"]
         ) == ["LLM", "Q-learning", "random policy"]
         llm = next(ln for ln in lines if ln.get_label().startswith("LLM"))
         expected = SPEED["llm"] * np.mean([1.0, 1.1, 1.2]) * 12
         assert llm.get_ydata()[-1] == pytest.approx(expected)  # positive toward -x too
     ref = next(
-        ln for ln in _labelled_lines(panels[0]) if ln.get_label() == plots.REFERENCE_STYLE["label"]
+        ln
+        for ln in _labelled_lines(panels[0])
+        if ln.get_label() == figures.REFERENCE_STYLE["label"]
     )
     # Purcell's square gait from (+,+): 0.19124724 a per 4-step cycle (DESIGN.md), 3 cycles in 12 steps
     assert ref.get_ydata()[12] == pytest.approx(3 * 0.19124724, rel=1e-6)
     sketches = [ax for ax in fig.axes if ax.get_title().startswith("stroke cycle learned by LLM")]
     assert len(sketches) == 4
-    assert _saved_width_in(fig, tmp_path, "curves") <= plots.PAGE_IN + 0.05
+    assert _saved_width_in(fig, tmp_path, "curves") <= figures.PAGE_IN + 0.05
 
 
 def test_curves_single_panel_fits_one_column_and_has_no_blank_sketch_row(tmp_path):
     rows = [
         r for r in _rows(agents=("random",)) if r["swimmer"] == "purcell" and r["direction"] == 1
     ]
-    fig = plots.curves_figure(
-        rows, cycles=plots.learned_cycles(rows), note="UNFINISHED STUDY: 3 of 9 runs"
+    fig = figures.curves_figure(
+        rows, cycles=figures.learned_cycles(rows), note="UNFINISHED STUDY: 3 of 9 runs"
     )
-    assert fig.get_size_inches()[0] == plots.COLUMN_IN
-    assert not plots.learned_cycles(rows)
+    assert fig.get_size_inches()[0] == figures.COLUMN_IN
+    assert not figures.learned_cycles(rows)
     assert len([ax for ax in fig.axes if ax.axison]) == 1  # no empty row for a cycle nobody learned
     assert fig._suptitle is not None and "UNFINISHED" in fig._suptitle.get_text()
-    assert _saved_width_in(fig, tmp_path, "one") <= plots.COLUMN_IN + 0.05
+    assert _saved_width_in(fig, tmp_path, "one") <= figures.COLUMN_IN + 0.05
 
 
 def test_history_has_one_series_per_n_ht_and_none_hidden():
@@ -127,7 +130,7 @@ def test_history_has_one_series_per_n_ht_and_none_hidden():
             {**r, "n_ht": h, "run_id": f"{r['run_id']}-h{h}"}
             for r in _rows(agents=("llm",), runs=1)
         ]
-    fig = plots.history_figure(rows)
+    fig = figures.history_figure(rows)
     panels = [ax for ax in fig.axes if ax.get_xlabel() == "step n"]
     assert len(panels) == 4
     for ax in panels:
@@ -155,7 +158,7 @@ def test_grid_figures_show_p_and_mean_per_agent_and_direction(kind, tmp_path):
             for z in (0.0, 0.5, 3.0)
             for r in _rows()
         ]
-        fig = plots.noise_figure(rows)
+        fig = figures.noise_figure(rows)
         n_values, agents = 3, 3
     elif kind == "ablation":
         rows = [
@@ -163,7 +166,7 @@ def test_grid_figures_show_p_and_mean_per_agent_and_direction(kind, tmp_path):
             for g in ("full", "-S1", "-S3")
             for r in _rows(agents=("llm",))
         ]
-        fig = plots.ablation_figure(rows)
+        fig = figures.ablation_figure(rows)
         n_values, agents = 3, 1
     else:
         rows = [
@@ -171,7 +174,7 @@ def test_grid_figures_show_p_and_mean_per_agent_and_direction(kind, tmp_path):
             for g in ("++", "-+")
             for r in _rows(agents=("llm",))
         ]
-        fig = plots.inits_figure(rows)
+        fig = figures.inits_figure(rows)
         n_values, agents = 2, 1
     p_axes = [ax for ax in fig.axes if ax.get_ylabel().startswith("success rate p")]
     x_axes = [ax for ax in fig.axes if ax.get_ylabel().startswith("mean")]
@@ -206,14 +209,14 @@ def test_grid_figures_show_p_and_mean_per_agent_and_direction(kind, tmp_path):
             "\u2212S1",
             "\u2212S3",
         ]
-    assert _saved_width_in(fig, tmp_path, kind) <= plots.PAGE_IN + 0.05
+    assert _saved_width_in(fig, tmp_path, kind) <= figures.PAGE_IN + 0.05
 
 
 def test_noise_figure_for_one_direction_fits_one_column(tmp_path):
     rows = [{**r, "zeta": z} for z in (0.0, 1.0) for r in _rows(directions=(1,))]
-    fig = plots.noise_figure(rows)
-    assert fig.get_size_inches()[0] == plots.COLUMN_IN
-    assert _saved_width_in(fig, tmp_path, "noise1") <= plots.COLUMN_IN + 0.05
+    fig = figures.noise_figure(rows)
+    assert fig.get_size_inches()[0] == figures.COLUMN_IN
+    assert _saved_width_in(fig, tmp_path, "noise1") <= figures.COLUMN_IN + 0.05
 
 
 def test_competence_panels_per_direction():
@@ -221,7 +224,7 @@ def test_competence_panels_per_direction():
         {**r, "entry": r["agent"] if r["agent"] == "llm" else f"{r['agent']} (all)"}
         for r in _rows()
     ]
-    fig = plots.competence_figure(rows, ["llm", "qlearning (all)", "random (all)"])
+    fig = figures.competence_figure(rows, ["llm", "qlearning (all)", "random (all)"])
     titles = [ax.get_title() for ax in fig.axes]
     assert sum("success rate p" in t for t in titles) == 4
     assert any("target \u2212x: mean \u2212X/a" in t for t in titles)
@@ -256,7 +259,7 @@ def test_temperature_figure_shows_p_steps_to_learn_with_iqr_and_k_of_n():
                             "group": f"T={t:g}",
                         }
                     )
-    fig = plots.study_figures("temperature", rows)["temperature"]
+    fig = figures.study_figures("temperature", rows)["temperature"]
     learn = [ax for ax in fig.axes if ax.get_ylabel().startswith("steps to learn")]
     assert len(learn) == 4  # both swimmers and both directions
     for ax in learn:
@@ -273,7 +276,7 @@ def test_temperature_figure_shows_p_steps_to_learn_with_iqr_and_k_of_n():
     assert sum(ax.get_ylabel().startswith("success rate") for ax in fig.axes) == 4
     # X/a equal everywhere, up to rounding (-8e-17 where a swimmer never moved): a readable axis.
     rows = [{**r, "signed_final_x": -8.3e-17 * (1 + i % 2)} for i, r in enumerate(rows)]
-    fig = plots.study_figures("temperature", rows)["temperature"]
+    fig = figures.study_figures("temperature", rows)["temperature"]
     for ax in (ax for ax in fig.axes if ax.get_ylabel().startswith("mean")):
         lo, hi = ax.get_ylim()
         assert hi - lo >= 0.1
@@ -287,7 +290,7 @@ def test_continuous_figures_returns_one_grid_and_a_curve_per_lattice(monkeypatch
     )
     monkeypatch.setattr(plots, "learned_cycles", lambda rows: {})
     rows = [{"group": g} for g in ("K=1", "K=2", "K=2", "continuous")]
-    figs = plots.study_figures("continuous", rows)
+    figs = figures.study_figures("continuous", rows)
     assert figs == {
         "continuous": ("grid", "group"),
         "continuous-K1": ("curves", 1),

@@ -45,6 +45,9 @@
     }
     return true;
   }
+  // The paper's symbols keep their own spelling (n_ht, not "n ht").
+  var FILTER_LABELS = { n_ht: "n_ht", zeta: "\u03b6" };
+
   function buildFilters() {
     var box = document.getElementById("filters"), shown = [];
     D.filters.forEach(function (key) {
@@ -53,7 +56,7 @@
       if (shown.some(function (k) { return sameSplit(k, key); })) return;
       shown.push(key);
       var label = document.createElement("label");
-      label.textContent = key.replace("_", " ");
+      label.textContent = FILTER_LABELS[key] || key.replace("_", " ");
       var sel = document.createElement("select");
       sel.id = "filter-" + key;
       sel.innerHTML = '<option value="">all</option>' + vals.map(function (v) {
