@@ -377,13 +377,6 @@ class StudyStore:
                 fh.flush()
                 os.fsync(fh.fileno())
 
-    def transcript_path(self, run_id: str) -> Path:
-        """Where the LLM transcript of ``run_id`` goes."""
-        path = self.folder / "transcripts" / f"{run_id}.jsonl"
-        with writing(path.parent):
-            path.parent.mkdir(parents=True, exist_ok=True)
-        return path
-
     # -- derived files ----------------------------------------------------------------------
 
     def finalize(self, status: str = "complete", summary: Mapping[str, Any] | None = None) -> None:

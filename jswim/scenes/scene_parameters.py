@@ -145,8 +145,8 @@ def scene_params(
         Bad swimmer, scene, zeta or start (spheres overlapping or touching the wall at the start).
     """
     centre, tilt, arms, obstacles = check_start(swimmer, scene, init, contact_gap, **model_kwargs)
-    warn_out_of_range(swimmer, scene)
     model = make_model("ng", **model_kwargs)
+    warn_out_of_range(swimmer, scene, d_max=model.hi)
     z = check_zeta(zeta)
     dtype = jnp.result_type(float) if dtype is None else jnp.dtype(dtype)
     if nodes is None:

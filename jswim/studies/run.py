@@ -52,6 +52,7 @@ from jswim.llm.usage import PRICES_AS_OF, UsageTotals
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.scenes import Scene
+from jswim.scenes.ranges import range_notes
 from jswim.results import (
     RunRow,
     StudyFolderError,
@@ -318,6 +319,14 @@ def run_study(
         store.close()  # the folder's lock: the next session may start
 
 
+def _range_notes(plans: Sequence[Plan]) -> list[str]:
+    """Each stated-range rule some plan's scene breaks (`jswim.scenes.ranges.range_notes`), once."""
+    notes: dict[str, None] = {}
+    for swimmer, scene in {(p.swimmer, p.scene) for p in plans if p.scene}:
+        notes.update(dict.fromkeys(range_notes(swimmer, Scene.from_dict(json.loads(scene)))))
+    return list(notes)
+
+
 def _folder_metadata(
     study: str,
     options: StudyOptions,
@@ -352,6 +361,9 @@ def _folder_metadata(
         + _scene_extensions(plans)
         + ([fidelity.NAVIGATION] if any(p.target for p in plans) else []),
         "roc_levels": sorted({p.roc_levels for p in plans}),
+        # The physics models its scenes use outside their stated range (jswim.scenes.ranges),
+        # as the runs warned of them once and as the page lists them.
+        "model_range_notes": _range_notes(plans),
         "grid": {k: getattr(options, k) for k in GRID_SIZE},
         "server": backend.address() if backend is not None else None,
         "prices_as_of": (

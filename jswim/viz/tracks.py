@@ -20,7 +20,6 @@ orientation.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 from collections.abc import Mapping, Sequence
@@ -405,7 +404,3 @@ def fmt_action(action: tuple[int, float]) -> str:
     dof, roc = action
     r = int(roc) if float(roc).is_integer() else roc
     return f"[{dof}, {r:g}]" if isinstance(r, float) else f"[{dof}, {r}]"
-
-
-def is_number(v: Any) -> bool:
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
