@@ -51,7 +51,9 @@ def test_point_forces_between_close_swimmers_are_out_of_range():
     side = Scene(medium="free", swimmers=2, separation=4.0, formation="side")
     (note,) = range_notes("ng", side)
     assert "mobility='rpy'" in note
-    assert range_notes("ng", Scene(medium="free", swimmers=2, separation=5.0, formation="side")) == ()
+    assert (
+        range_notes("ng", Scene(medium="free", swimmers=2, separation=5.0, formation="side")) == ()
+    )
     assert len(range_notes("ng", Scene(medium="free", swimmers=3, separation=24.0))) == 1
     assert range_notes("ng", Scene(medium="free", swimmers=3, separation=30.0)) == ()  # the study's
     rpy = Scene(medium="free", swimmers=2, separation=4.0, formation="side", mobility="rpy")
