@@ -57,6 +57,7 @@ __all__ = [
     "nav_summary",
     "target_json",
     "targets",
+    "with_budgets",
 ]
 
 
@@ -101,21 +102,39 @@ def targets(distances: Sequence[float], bearings: Sequence[float]) -> list[tuple
 
 
 def cells(o: Any) -> list[Cell]:
-    """The navigation study's cells for options ``o``: one per target, with its budget as the
-    runs' steps (`--steps` overrides it) on the K lattice of ``--roc-levels`` (2 where it is 1)."""
+    """The navigation study's cells for options ``o``: one per target, on the K lattice of
+    ``--roc-levels`` (2 where it is 1). Their runs' steps are the target's budget (`--steps`
+    overrides it), which the world measures: planning leaves them to `with_budgets`."""
     k = o.roc_levels if o.roc_levels > 1 else NAV_ROC_LEVELS
-    model = make_model("purcell")
     return [
-        Cell(
-            group,
-            NAV_AGENTS,
-            n_ht=o.n_ht,
-            roc_levels=k,
-            tag=tag,
-            target=target_json(spec),
-            steps=default_budget(spec, model, k),
-        )
+        Cell(group, NAV_AGENTS, n_ht=o.n_ht, roc_levels=k, tag=tag, target=target_json(spec))
         for group, tag, spec in targets(o.distances, o.bearings)
+    ]
+
+
+def with_budgets(plans: Sequence[Plan]) -> list[Plan]:
+    """``plans`` with every navigation run's steps filled in: ``episodes`` of its target's budget,
+    as the world of the run measures it when it is made ([`default_budget`][jswim.env.targets.default_budget],
+    the steering controller's physics, measured once per swimmer and K). Plans with their steps
+    set are returned as they are.
+
+    Raises
+    ------
+    ConfigError
+        As `default_budget` (a target that needs more steps than a world counts).
+    """
+    budgets: dict[tuple[str, str, int], int] = {}
+
+    def budget(p: Plan) -> int:
+        key = (p.swimmer, p.target, p.roc_levels)
+        if key not in budgets:
+            spec = target_from_dict(json.loads(p.target))
+            budgets[key] = default_budget(spec, make_model(p.swimmer), p.roc_levels)
+        return budgets[key]
+
+    return [
+        p if p.steps is not None else dataclasses.replace(p, steps=budget(p) * p.episodes)
+        for p in plans
     ]
 
 

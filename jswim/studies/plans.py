@@ -28,7 +28,10 @@ class Plan:
     init: tuple[int, ...] | str
     zeta: float
     seed: int
-    steps: int
+    # Steps of the run; None: ``episodes`` of its navigation target's budget, which the world
+    # measures when it is made (`jswim.studies.navigate.with_budgets` fills it in before the
+    # runs start: planning computes no physics).
+    steps: int | None
     n_ht: int | None = None
     drop: frozenset[str] = frozenset()
     action_set: str = "all"
@@ -49,6 +52,7 @@ class Plan:
         "joint"  # an LLM run on a pair: one joint conversation or one per swimmer ("each")
     )
     target: str = ""  # a navigation target (canonical JSON of its spec); "": the paper's task
+    episodes: int = 1  # budgets a navigation learner trains for (steps None: of its target's)
 
 
 def sample_id(run: str, sample: int) -> str:
@@ -76,7 +80,7 @@ class Cell:
     tag: str = ""  # what names this cell's runs (a scene's height or distance, a stroke's phase)
     stroke: str = ""  # the stroke agent's stroke (jswim.studies.scene_studies.stroke_codes), its plans' variant
     target: str = ""  # a navigation target (jswim.studies.navigate), canonical JSON; "": none
-    steps: int | None = None  # the cell's own steps per run (a target's budget); None: the study's
+    steps: int | None = None  # the cell's own steps per run; None: the study's (a target's budget)
 
 
 def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | str:

@@ -74,6 +74,7 @@ from jswim.studies.options import (
     StudyOptions,
 )
 from jswim.studies.specs import SPECS, build
+from jswim.studies.navigate import with_budgets
 from jswim.studies.plans import Plan
 from jswim.studies import prompt_files
 
@@ -266,7 +267,7 @@ def run_study(
     max_cost = check_max_cost(max_cost)
     t0 = time.perf_counter()
     backend = study_backend(study, backend)
-    plans = build(study, options)
+    plans = with_budgets(build(study, options))
     if not plans:
         raise ConfigError(
             f"these settings give the {study} study no runs at all (--runs 0 and --q-runs 0?); "
@@ -579,7 +580,7 @@ def estimate_study(
     if backend is None:
         raise ConfigError("a dry run needs a backend (the model to price)")
     backend = study_backend(study, backend)
-    plans = [p for p in build(study, options) if p.agent == "llm"]
+    plans = with_budgets([p for p in build(study, options) if p.agent == "llm"])
     folder = Path(out) if out is not None else default_folder(study, options, backend)
     prompt_files.check(folder, options)  # the same refusal as the study itself
     done = {r.run_id for r in read_run_rows(folder)}

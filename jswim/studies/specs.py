@@ -440,11 +440,15 @@ def _agent_plans(
         )
         group = ", ".join(g for g in [cell.group, *swept] if g)
         steps = o.steps if o.steps is not None else cell.steps or spec.steps
+        episodes = 1
+        if cell.target and o.steps is None:
+            steps = None  # the target's budget: its world measures it (navigate.with_budgets)
         if cell.target and agent in ("qlearning", CONTINUOUS_AGENT):
             # learners train over many episodes (PPO a half: each of its steps
             # moves 16 swimmers; jswim.studies.navigate)
             share = navigate.PPO_SHARE if agent == CONTINUOUS_AGENT else 1
-            steps *= max(1, o.train_episodes // share)
+            episodes = max(1, o.train_episodes // share)
+            steps = None if steps is None else steps * episodes
         for k in range(runs.get(agent, runs["qlearning"])):
             init = initial(cell.init or o.init or spec.init, k, sw)
             base = run_id(agent, sw, d, init, zeta, n_ht=n_ht, drop=drop, tag=tags, repeat=k)
@@ -472,6 +476,7 @@ def _agent_plans(
                         cell.scene,
                         pair,
                         cell.target,
+                        episodes=episodes,
                     )
                 )
     return out
