@@ -14,6 +14,17 @@ from typing import Any
 
 from jswim.errors import ConfigError, check_choice
 
+__all__ = [
+    "ACTION_SETS",
+    "MAX_ROC_LEVELS",
+    "check_action_set",
+    "check_roc_levels",
+    "decode_action",
+    "encode_action",
+    "n_actions",
+    "offered_rocs",
+]
+
 #: Largest number of ROC levels K (``--roc-levels``, ``make_params(roc_levels=K)``).
 MAX_ROC_LEVELS = 1000
 

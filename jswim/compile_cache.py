@@ -14,6 +14,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+__all__ = ["MIN_COMPILE_S", "cache_folder", "enable"]
+
 #: Compilations shorter than this (seconds) are not worth a disk entry.
 MIN_COMPILE_S = 0.05
 

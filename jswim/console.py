@@ -19,6 +19,28 @@ from dataclasses import dataclass
 from typing import IO, Any
 from collections.abc import Callable, Iterator, Mapping, Sequence
 
+__all__ = [
+    "EMBEDDED_UNPRICED",
+    "LOCAL_UNPRICED",
+    "PHASE_LABELS",
+    "REFERENCE_UNPRICED",
+    "Column",
+    "NotebookProgress",
+    "Progress",
+    "Throttle",
+    "cost_text",
+    "eta",
+    "format_duration",
+    "in_notebook",
+    "is_terminal",
+    "phase_ticker",
+    "plain_table",
+    "print_table",
+    "requests_text",
+    "study_progress",
+    "terminal_width",
+]
+
 
 @dataclass(frozen=True)
 class Column:

@@ -36,6 +36,32 @@ from __future__ import annotations
 import math
 import numbers
 
+__all__ = [
+    "MAX_COUNT",
+    "SIZE_RANGES",
+    "BudgetExhausted",
+    "ConfigError",
+    "FolderBusyError",
+    "JswimError",
+    "JswimWarning",
+    "LLMError",
+    "LLMRequestError",
+    "LLMResponseError",
+    "LLMServerError",
+    "LLMSetupError",
+    "LLMTimeoutError",
+    "LocalModelError",
+    "MalformedReply",
+    "PositionBelowMinimumError",
+    "ResultFolderError",
+    "StudyFolderError",
+    "check_choice",
+    "check_count",
+    "check_direction",
+    "check_size",
+    "check_zeta",
+]
+
 
 class JswimError(Exception):
     """Root of every error a user of jswim can cause (see the module docstring for the tree)."""

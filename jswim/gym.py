@@ -59,6 +59,15 @@ from jswim.env.door import IDS, Door, DoorState, build
 from jswim.env.randomness import noise
 from jswim.errors import ConfigError
 
+__all__ = [
+    "ENVIRONMENTS",
+    "MAX_EPISODE_STEPS",
+    "RENDER_FPS",
+    "JswimEnv",
+    "JswimVectorEnv",
+    "register",
+]
+
 #: The registered ids (`jswim.env.door.IDS` under ``jswim/``) and their
 #: `jswim.env.door.build` arguments.
 ENVIRONMENTS: dict[str, dict[str, Any]] = {f"jswim/{name}": kw for name, kw in IDS.items()}

@@ -37,6 +37,8 @@ from jax import Array
 from jswim.env.door import IDS, Door, DoorState, build
 from jswim.errors import ConfigError
 
+__all__ = ["MAX_STEPS_IN_EPISODE", "JswimGymnax", "Params", "make", "registered"]
+
 #: Steps per episode unless ``make(..., max_steps_in_episode=n)``.
 MAX_STEPS_IN_EPISODE = 200
 

@@ -27,6 +27,8 @@ from jax import Array
 from jswim.errors import ConfigError
 from jswim.swimmers.models import SwimmerModel
 
+__all__ = ["centroid", "chebyshev_rule", "integrate_stroke", "pose_rate"]
+
 
 def pose_rate(model: SwimmerModel, d: Array, d_dot: Array, theta: Array) -> Array:
     """Lab-frame rate of the pose ``(x, y, theta)`` of the reference point."""

@@ -15,6 +15,28 @@ from pathlib import Path
 from typing import Any
 from collections.abc import Iterable, Mapping, Sequence
 
+__all__ = [
+    "MAX_ROWS",
+    "SUMMARY_COLUMNS",
+    "THUMB_PX",
+    "animation_text",
+    "count_text",
+    "facts_html",
+    "figure_png",
+    "frame_html",
+    "lines",
+    "run_result_html",
+    "run_result_text",
+    "study_html",
+    "study_result_html",
+    "study_result_text",
+    "study_text",
+    "thumbnails_html",
+    "trajectory_html",
+    "trajectory_text",
+    "world_html",
+]
+
 #: Summary rows shown in an HTML repr (the DataFrame itself holds them all).
 MAX_ROWS = 20
 #: Width of a figure thumbnail, in CSS pixels (a click opens nothing; the file is named below it).

@@ -21,6 +21,24 @@ import jax.numpy as jnp
 import numpy as np
 from jax.sharding import Mesh, NamedSharding, PartitionSpec
 
+__all__ = [
+    "AXIS",
+    "apply_batched",
+    "apply_runs",
+    "batch_sharding",
+    "chunks",
+    "device_count",
+    "devices",
+    "granule",
+    "leaf_axes",
+    "limit",
+    "mesh",
+    "pad",
+    "padded_size",
+    "shard",
+    "to_host",
+]
+
 #: Name of the mesh axis that carries swimmers or learners.
 AXIS = "batch"
 
