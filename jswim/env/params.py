@@ -21,7 +21,7 @@ from jswim.swimmers.models import SwimmerModel, make_model
 @functools.partial(
     jax.tree_util.register_dataclass,
     data_fields=["zeta", "direction", "init"],
-    meta_fields=["model", "roc_levels", "diagonal"],
+    meta_fields=["model", "roc_levels", "diagonal", "flow"],
 )
 @dataclasses.dataclass(frozen=True)
 class EnvParams:
@@ -45,6 +45,11 @@ class EnvParams:
         Static. Whether a float ROC vector may move several DOFs at once (a diagonal stroke,
         through the integrator). Off: only its first non-zero entry moves (S2 of the paper:
         one DOF at a time).
+    flow : Flow or None
+        Static. The background flow the swimmer moves in (`jswim.env.flows`); ``None``, the
+        default, is still fluid (the paper's world, every number as without it). Each step lasts
+        one unit of time ``tau``, so a `Uniform` flow adds exactly ``u`` to every step's
+        displacement (Galilean invariance), after the paper's noise on the stroke's own.
     """
 
     model: SwimmerModel
@@ -53,6 +58,7 @@ class EnvParams:
     init: Any = None
     roc_levels: int = 1
     diagonal: bool = False
+    flow: Any = None
 
     def replace(self, **changes: Any) -> EnvParams:
         """A copy with some fields changed (fields may be traced arrays)."""
@@ -84,6 +90,7 @@ def make_params(
     init: Sequence[int] | str | None = None,
     roc_levels: int = 1,
     diagonal: bool = False,
+    flow: Any = None,
     **model_kwargs: Any,
 ) -> EnvParams:
     """Validated environment parameters with the paper's defaults.
@@ -105,6 +112,9 @@ def make_params(
         K >= 1: integer action codes mean ROC ``k / K``, ``k`` in ``-K..K`` (1: the paper's).
     diagonal : bool
         Allow float ROC vectors that move several DOFs at once (default False).
+    flow : Flow, optional
+        A background flow (`jswim.env.flows`; planar swimmers). Steps take `Uniform` flows for
+        now; the other flows' body response is `jswim.swimmers.flow_response`.
 
     Raises
     ------
@@ -112,6 +122,7 @@ def make_params(
         For any invalid value.
     """
     model = swimmer if isinstance(swimmer, SwimmerModel) else make_model(swimmer, **model_kwargs)
+    check_flow(flow, model)
     return EnvParams(
         model=model,
         zeta=check_zeta(zeta),
@@ -119,7 +130,37 @@ def make_params(
         init=np.asarray(parse_init(init, model.n_dof), np.int32),
         roc_levels=check_roc_levels(roc_levels),
         diagonal=bool(diagonal),
+        flow=flow,
     )
+
+
+def check_flow(flow: Any, model: SwimmerModel) -> None:
+    """Refuse what a world cannot step in: a flow that is not a `jswim.env.flows` flow, a
+    swimmer that moves on a line, or (for now) a flow that is not uniform.
+
+    Raises
+    ------
+    ConfigError
+        Any of these, in one line.
+    """
+    if flow is None:
+        return
+    from jswim.env.flows import Flow, Uniform  # lazy: the flows load only where one is given
+
+    if not isinstance(flow, Flow):
+        raise ConfigError(
+            f"flow must be a jswim.env.flows flow (Uniform, Shear, Poiseuille, TaylorGreen), "
+            f"got {flow!r}"
+        )
+    if not model.planar:
+        raise ConfigError(
+            f"{model.label} moves on a line; a background flow needs a planar swimmer"
+        )
+    if not isinstance(flow, Uniform):
+        raise ConfigError(
+            f"a world steps in Uniform flows only so far; {type(flow).__name__}'s body response is "
+            "jswim.swimmers.flow_response.flow_velocity (docs/physics.md, Background flows)"
+        )
 
 
 def check_roc_levels(k: Any) -> int:

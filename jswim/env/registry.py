@@ -73,6 +73,7 @@ def make(
     diagonal: bool = False,
     dtype: Any = None,
     target: Any = None,
+    flow: Any = None,
     **kwargs: Any,
 ) -> tuple[Environment, Any]:
     """A world and its params.
@@ -103,6 +104,10 @@ def make(
         [`NavParams`][jswim.env.navigation.NavParams]); with it the keywords ``bearing_bins``
         and ``lattice`` ([`navigation_world`][jswim.env.navigation.navigation_world]). Planar
         swimmers with ``roc_levels >= 2``, in the bulk or in a plane above a wall; docs/navigation.md.
+    flow : Flow, optional
+        A background flow ([`jswim.env.flows`][jswim.env.flows]) for a planar swimmer in the
+        bulk, with or without a target; ``None`` (the default) is still fluid, every number as
+        before. Worlds step in `Uniform` flows so far (docs/physics.md, Background flows).
     **kwargs
         More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.scene_parameters.scene_params]
         (``nodes``, ``sweeps``, ``contact_gap``).
@@ -140,6 +145,15 @@ def make(
         "diagonal": diagonal,
         "dtype": dtype,
     }
+    if flow is not None:
+        if scene is not None and not is_plain_bulk(scene):
+            raise ConfigError(
+                "a background flow is offered in the bulk only so far (above a wall a uniform "
+                "stream breaks the no-slip condition; shear is the flow there)"
+            )
+        if isinstance(swimmer, str) and swimmer in _REGISTERED:
+            raise ConfigError(f"the registered world {swimmer!r} takes no background flow")
+        kwargs = {**kwargs, "flow": flow}
     if target is not None:
         return _navigation_world(swimmer, scene, target, options, kwargs)
     if isinstance(swimmer, str) and swimmer in _REGISTERED:

@@ -356,6 +356,9 @@ def _apply(
             c, s = c * entry[3] - s * entry[4], s * entry[3] + c * entry[4]
         else:
             dx, dy = entry[0] * factor, jnp.zeros((), f64)
+        if params.flow is not None:  # a uniform stream carries the body one u per step (tau = 1)
+            dx = dx + jnp.asarray(params.flow.u[0], f64)
+            dy = dy + jnp.asarray(params.flow.u[1], f64)
         x, y, theta = x + dx, y + dy, theta + entry[2]
 
         (xh, xl), (yh, yl), (th, tl), (ch, cl), (sh, sl) = (
@@ -403,6 +406,11 @@ def _advance_plain(
         c, s = c * entry[3] - s * entry[4], s * entry[3] + c * entry[4]
     else:
         dx, dy = entry[0] * factor, jnp.zeros((), dtype)
+    if params.flow is not None:
+        dx, dy = (
+            dx + jnp.asarray(params.flow.u[0], dtype),
+            dy + jnp.asarray(params.flow.u[1], dtype),
+        )
     zero = jnp.zeros((), dtype)
     new = state._replace(
         frac=frac,
