@@ -49,7 +49,8 @@ class EnvParams:
         Static. The background flow the swimmer moves in (`jswim.env.flows`); ``None``, the
         default, is still fluid (the paper's world, every number as without it). Each step lasts
         one unit of time ``tau``, so a `Uniform` flow adds exactly ``u`` to every step's
-        displacement (Galilean invariance), after the paper's noise on the stroke's own.
+        displacement (Galilean invariance), after the paper's noise on the stroke's own; any
+        other flow is integrated through the step (`jswim.env.stepping.flow_step`).
     """
 
     model: SwimmerModel
@@ -113,8 +114,9 @@ def make_params(
     diagonal : bool
         Allow float ROC vectors that move several DOFs at once (default False).
     flow : Flow, optional
-        A background flow (`jswim.env.flows`; planar swimmers). Steps take `Uniform` flows for
-        now; the other flows' body response is `jswim.swimmers.flow_response`.
+        A background flow (`jswim.env.flows`; planar swimmers). A `Uniform` flow adds ``u`` to
+        each step's table displacement; the others integrate each step through the flow
+        ([`flow_step`][jswim.env.stepping.flow_step]).
 
     Raises
     ------
@@ -122,7 +124,7 @@ def make_params(
         For any invalid value.
     """
     model = swimmer if isinstance(swimmer, SwimmerModel) else make_model(swimmer, **model_kwargs)
-    check_flow(flow, model)
+    check_flow(flow, model, diagonal)
     return EnvParams(
         model=model,
         zeta=check_zeta(zeta),
@@ -134,9 +136,9 @@ def make_params(
     )
 
 
-def check_flow(flow: Any, model: SwimmerModel) -> None:
+def check_flow(flow: Any, model: SwimmerModel, diagonal: bool = False) -> None:
     """Refuse what a world cannot step in: a flow that is not a `jswim.env.flows` flow, a
-    swimmer that moves on a line, or (for now) a flow that is not uniform.
+    swimmer that moves on a line, or diagonal strokes in a flow that is not uniform.
 
     Raises
     ------
@@ -156,10 +158,10 @@ def check_flow(flow: Any, model: SwimmerModel) -> None:
         raise ConfigError(
             f"{model.label} moves on a line; a background flow needs a planar swimmer"
         )
-    if not isinstance(flow, Uniform):
+    if diagonal and not isinstance(flow, Uniform):
         raise ConfigError(
-            f"a world steps in Uniform flows only so far; {type(flow).__name__}'s body response is "
-            "jswim.swimmers.flow_response.flow_velocity (docs/physics.md, Background flows)"
+            f"diagonal strokes are not offered in a {type(flow).__name__} flow (its steps are "
+            "integrated along one DOF's move at a time)"
         )
 
 

@@ -107,7 +107,7 @@ def make(
     flow : Flow, optional
         A background flow ([`jswim.env.flows`][jswim.env.flows]) for a planar swimmer in the
         bulk, with or without a target; ``None`` (the default) is still fluid, every number as
-        before. Worlds step in `Uniform` flows so far (docs/physics.md, Background flows).
+        before (docs/physics.md, Background flows).
     **kwargs
         More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.scene_parameters.scene_params]
         (``nodes``, ``sweeps``, ``contact_gap``).

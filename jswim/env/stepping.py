@@ -41,7 +41,9 @@ from jswim.env.step_tables import (
     lattice_table,
 )
 from jswim.env.work import corner_work_table, lattice_work_table, step_work
+from jswim.env.flows import Uniform
 from jswim.integrate import centroid, integrate_stroke
+from jswim.swimmers.flow_response import flow_velocity
 from jswim import sharding
 
 #: How one-DOF moves off the corner table are computed: ``"table"`` (the motion table, for
@@ -50,6 +52,9 @@ STEP_METHOD = "table"
 
 #: Chebyshev degree of the integrator path for steps off the corner table (~1e-15 relative).
 INTEGRATOR_DEGREE = 24
+
+#: RK4 pieces of a step integrated through a non-uniform flow (`flow_step`).
+FLOW_SUBSTEPS = 16
 
 
 def step(
@@ -171,7 +176,7 @@ def _advance_corner(
     # One gather per step; the table's last row is the identity step (nothing moved).
     row = jnp.where(moved, corner_index(levels) * n + dof, still_row(model))
     frac = (levels + onehot * moved.astype(jnp.int32) * (1 - 2 * level)).astype(state.frac.dtype)
-    if not exact:
+    if not exact and not _moving_fluid(params):  # a non-uniform flow is integrated: exact path
         work = jnp.asarray(corner_work_table(model), state.x.dtype)[row]
         return _advance_plain(state, frac, row, y_noise, params, stuck, moved, work)
     with jax.enable_x64(True):
@@ -350,16 +355,24 @@ def _apply(
         )
         c, s = wide(state.cos, state.cos_lo), wide(state.sin, state.sin_lo)
         if model.planar:
-            dx = (c * entry[0] - s * entry[1]) * factor
-            dy = (s * entry[0] + c * entry[1]) * factor
+            dx0, dy0 = c * entry[0] - s * entry[1], s * entry[0] + c * entry[1]
             # Compose rotations as unit complex numbers: no sin/cos per step.
             c, s = c * entry[3] - s * entry[4], s * entry[3] + c * entry[4]
         else:
-            dx, dy = entry[0] * factor, jnp.zeros((), f64)
-        if params.flow is not None:  # a uniform stream carries the body one u per step (tau = 1)
+            dx0, dy0 = entry[0], jnp.zeros((), f64)
+        dx, dy = dx0 * factor, dy0 * factor
+        turn = entry[2]
+        if _moving_fluid(params):
+            # The step through the flow, integrated; the paper's noise stays on the stroke's own
+            # displacement (the still-fluid one: dX (1 + zeta Y) there, as without a flow).
+            s0, s1 = wide(state.frac, state.frac_lo), wide(frac, frac_lo).astype(f64)
+            fx, fy, turn = flow_step(model, params.flow, s0, s1, jnp.stack([x, y, theta]))
+            dx, dy = fx + (factor - 1.0) * dx0, fy + (factor - 1.0) * dy0
+            c, s = jnp.cos(theta + turn), jnp.sin(theta + turn)
+        elif params.flow is not None:  # a uniform stream carries the body one u per step (tau = 1)
             dx = dx + jnp.asarray(params.flow.u[0], f64)
             dy = dy + jnp.asarray(params.flow.u[1], f64)
-        x, y, theta = x + dx, y + dy, theta + entry[2]
+        x, y, theta = x + dx, y + dy, theta + turn
 
         (xh, xl), (yh, yl), (th, tl), (ch, cl), (sh, sl) = (
             narrow(v, dtype) for v in (x, y, theta, c, s)
@@ -383,6 +396,55 @@ def _apply(
         frac_lo.astype(dtype),
     )
     return new, MoveInfo(dxh, dyh, progress, stuck, moved, new.x, work)
+
+
+def _moving_fluid(params: EnvParams) -> bool:
+    """Whether the step must be integrated through the flow (any flow but a uniform one)."""
+    return params.flow is not None and not isinstance(params.flow, Uniform)
+
+
+def flow_step(
+    model: Any, flow: Any, s0: Array, s1: Array, pose: Array, substeps: int | None = None
+) -> Array:
+    """Lab-frame change ``(dx, dy, dtheta)`` of the centroid's place and the orientation over one
+    step (one ``tau``) in which the shape moves straight from ``s0`` to ``s1`` (fractions of the
+    range, float64) through ``flow``, from the centroid pose ``pose`` (x, y, theta).
+
+    The pose obeys ``d/dt (x_ref, theta) = R(theta) u_body(d, d_dot) + U_flow(d, x_ref, theta)``:
+    the still-fluid velocity plus the flow's rigid response
+    (`jswim.swimmers.flow_response.flow_velocity`), integrated by classical RK4 in
+    ``substeps`` pieces (default `FLOW_SUBSTEPS`; tested against a finer integration)."""
+    span = model.hi - model.lo
+    d_dot = (s1 - s0) * span
+    d0 = corner_values(model, s0)
+
+    def shape(t: Array) -> Array:
+        return d0 + d_dot * t
+
+    n = FLOW_SUBSTEPS if substeps is None else substeps
+    h = 1.0 / n
+    # The still-fluid body-frame velocity depends on the shape alone: one evaluation at each of
+    # the 2n + 1 times the RK stages visit (t = j h / 2), shared by the stages that meet there.
+    times = jnp.arange(2 * n + 1, dtype=s0.dtype) * (h / 2)
+    body = jax.vmap(lambda t: model.body_velocity(shape(t), d_dot))(times)  # (2n + 1, 3)
+
+    def rate(j: int, ref: Array) -> Array:
+        u, v, omega = body[j]
+        c, s = jnp.cos(ref[2]), jnp.sin(ref[2])
+        still = jnp.stack([c * u - s * v, s * u + c * v, omega])
+        return still + flow_velocity(shape(times[j]), ref, flow.velocity, model.xi_ratio)
+
+    off0 = model.centroid_offset(d0)
+    c0, s_0 = jnp.cos(pose[2]), jnp.sin(pose[2])
+    ref = pose - jnp.stack([c0 * off0[0] - s_0 * off0[1], s_0 * off0[0] + c0 * off0[1], 0.0])
+    for i in range(n):  # static: unrolled, inside the jitted step
+        k1 = rate(2 * i, ref)
+        k2 = rate(2 * i + 1, ref + h / 2 * k1)
+        k3 = rate(2 * i + 1, ref + h / 2 * k2)
+        k4 = rate(2 * i + 2, ref + h * k3)
+        ref = ref + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    end = centroid(model, shape(jnp.ones((), s0.dtype)), ref)
+    return jnp.stack([end[0] - pose[0], end[1] - pose[1], ref[2] - pose[2]])
 
 
 def _advance_plain(
