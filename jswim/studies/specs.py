@@ -359,6 +359,12 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
 
 def _check_grids(study: str, spec: StudySpec, o: StudyOptions) -> None:
     """Refuse an option that ``study`` would drop (it would still name the folder)."""
+    others = [sw for sw in o.swimmers or () if sw != "purcell"]
+    if study == "navigate" and others:
+        raise ConfigError(
+            f"the navigate study steers Purcell's swimmer only (--swimmer {others[0]}: the steering "
+            "controller, the targets' budgets and the turning loops are Purcell's); leave --swimmer out"
+        )
     if o.pair_prompt != "joint" and not (
         "llm" in o.agents and any("llm" in c.agents and _is_pair(c.scene) for c in spec.cells(o))
     ):

@@ -96,3 +96,10 @@ def test_jswim_study_help_names_every_study(capsys):
     names = [s for s in STUDIES if s != "swim"]
     assert {"school", "navigate"} <= set(names)  # the two the listing used to leave out
     assert "NAME " + ", ".join(names) in text
+
+
+@pytest.mark.parametrize("swimmer", ["ng", "both"])
+def test_navigate_refuses_a_swimmer_it_cannot_steer_in_one_line(swimmer, capsys, tmp_path):
+    assert cli.main(["study", "navigate", "--swimmer", swimmer, "--out", str(tmp_path / "f")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "steers Purcell's swimmer only" in err
