@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim.action_codes import check_roc_levels as _check_roc_levels
+from jswim.env.flows import Flow, Uniform
 from jswim.errors import ConfigError, check_zeta
 from jswim.start_levels import parse_init
 from jswim.swimmers.models import SwimmerModel, make_model
@@ -147,8 +148,6 @@ def check_flow(flow: Any, model: SwimmerModel, diagonal: bool = False) -> None:
     """
     if flow is None:
         return
-    from jswim.env.flows import Flow, Uniform  # lazy: the flows load only where one is given
-
     if not isinstance(flow, Flow):
         raise ConfigError(
             f"flow must be a jswim.env.flows flow (Uniform, Shear, Poiseuille, TaylorGreen), "

@@ -459,12 +459,10 @@ def applicable_settings(
     ignores = set(getattr(SPECS.get(study), "ignores", ()) or ())
     out: list[tuple[str, str]] = [("study", study)]
     backend = ident.get("backend") or {}
-    # A study of fixed strokes alone (the school: it ignores --runs) has no LLM and no learner:
-    # no model, and none of the settings that shape a prompt or the moves on offer.
-    strokes_only = "runs" in ignores
-    if (
-        backend and (meta.get("grid") or {}).get("runs") != 0 and not strokes_only
-    ):  # no model applies to a baselines-only study
+    # A study of fixed strokes alone has no LLM and no learner: no model, and none of the
+    # settings that shape a prompt or the moves on offer.
+    strokes_only = _strokes_only(study)
+    if backend and _names_a_model(meta, as_run_rows(rows or ())):
         # A sweep sets each run's temperature: the backend's own is not what the runs used.
         swept = (meta.get("grid") or {}).get("temperatures") or (
             DEFAULT_TEMPERATURES if study == "temperature" else None
@@ -528,16 +526,20 @@ def applicable_settings(
     return out
 
 
-def _names_a_model(meta: Mapping[str, Any], rows: Sequence[Any]) -> bool:
-    """Whether the page names an LLM: some run is the LLM's, or the grid plans LLM runs (not
-    ``--runs 0``, not a study of fixed strokes alone)."""
-    if any(r.agent == "llm" for r in rows):
-        return True
+def _strokes_only(study: str) -> bool:
+    """Whether ``study`` runs fixed strokes alone (the school: it has no use for ``--runs``)."""
     from jswim.studies.specs import SPECS  # lazy: as in applicable_settings
 
-    spec = SPECS.get(str(meta.get("study")))
-    strokes_only = spec is not None and "runs" in spec.ignores
-    return (meta.get("grid") or {}).get("runs") != 0 and not strokes_only
+    spec = SPECS.get(study)
+    return spec is not None and "runs" in spec.ignores
+
+
+def _names_a_model(meta: Mapping[str, Any], rows: Sequence[Any]) -> bool:
+    """Whether the page names an LLM: some run is the LLM's, or the grid plans LLM runs (not
+    ``--runs 0``, not a study of fixed strokes alone). The title and the settings ask it alike."""
+    if any(r.agent == "llm" for r in rows):
+        return True
+    return (meta.get("grid") or {}).get("runs") != 0 and not _strokes_only(str(meta.get("study")))
 
 
 def _agents_ran(rows: Sequence[Mapping[str, Any]] | None) -> list[str]:
