@@ -352,6 +352,7 @@ PHASE_LABELS = {
     "random": "random policy",
     "ppo": "PPO",  # real-valued in the continuous and scene studies, categorical in navigation
     "controller": "steering controller",
+    "zermelo": "Zermelo's optimal path",
     "stroke": "fixed strokes",
     "start": "start",
     "resume": "resume",

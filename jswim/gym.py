@@ -5,19 +5,21 @@
 ``gym.make(id, max_episode_steps=...)``) and a ``vector_entry_point`` on the batched JAX step
 (`JswimVectorEnv`, what ``gym.make_vec(id, num_envs)`` builds):
 
-==============================  ===============================================================
-``jswim/Purcell-v0``            Purcell's three-link swimmer, the paper's world
-``jswim/NG-v0``                 Najafi-Golestanian's three-sphere swimmer, the paper's world
-``jswim/FourLink-v0``           the four-link swimmer (three hinges)
-``jswim/FourSphere-v0``         the four-sphere swimmer (three arms)
-``jswim/PurcellContinuous-v0``  Purcell with Box actions (every joint at its ROC each step)
-``jswim/NGContinuous-v0``       NG with Box actions
-``jswim/PurcellWall-v0``        Purcell's swimmer in a plane 2 link lengths above a no-slip wall
-``jswim/NGWall-v0``             one NG swimmer 5 a above a no-slip wall
-``jswim/NGPair-v0``             two NG swimmers 30 a apart in the unbounded fluid
-``jswim/NGSchool-v0``           three NG swimmers in a line, 30 a apart
-``jswim/NavigatePurcell-v0``    Purcell (K = 2) sent to a point 3 link lengths away at 90 degrees
-==============================  ===============================================================
+==================================  ===============================================================
+``jswim/Purcell-v0``                Purcell's three-link swimmer, the paper's world
+``jswim/NG-v0``                     Najafi-Golestanian's three-sphere swimmer, the paper's world
+``jswim/FourLink-v0``               the four-link swimmer (three hinges)
+``jswim/FourSphere-v0``             the four-sphere swimmer (three arms)
+``jswim/PurcellContinuous-v0``      Purcell with Box actions (every joint at its ROC each step)
+``jswim/NGContinuous-v0``           NG with Box actions
+``jswim/PurcellWall-v0``            Purcell's swimmer in a plane 2 link lengths above a no-slip wall
+``jswim/NGWall-v0``                 one NG swimmer 5 a above a no-slip wall
+``jswim/NGPair-v0``                 two NG swimmers 30 a apart in the unbounded fluid
+``jswim/NGSchool-v0``               three NG swimmers in a line, 30 a apart
+``jswim/NavigatePurcell-v0``        Purcell (K = 2) sent to a point 3 link lengths away at 90 degrees
+``jswim/NavigatePurcellFlow-v0``    Purcell (K = 2) sent 3 link lengths straight ahead across a uniform
+                                    stream of half its swimming speed (`jswim.env.door.NAVIGATE_FLOW`)
+==================================  ===============================================================
 
 A navigation id (a world with a ``target``, docs/navigation.md) ends its own episodes: it
 terminates when the target is reached and truncates when its budget is spent
@@ -28,8 +30,9 @@ Each is a `JswimEnv` over a `jswim.env.door.Door`: actions are the world's integ
 codes (``Discrete(n_actions)``) or, with ``continuous=True``, ``Box(-1, 1, (n_dof,))`` (every
 DOF at once in the paper's worlds, the DOF of largest ``|a_i|`` in scenes); the observation and
 its options (``history``, ``separation``) are `jswim.env.door`'s; the reward is
-``StepInfo.progress`` toward the target ``direction``. Any `jswim.make` option goes by
-keyword; an unknown one is refused in one line naming the valid ones::
+``StepInfo.progress`` toward the target ``direction`` (a navigation id: toward its target). Any
+`jswim.make` option goes by keyword (``flow=`` a `jswim.env.flows` flow among them); an unknown
+one is refused in one line naming the valid ones::
 
     import gymnasium as gym
     import jswim.gym
@@ -147,8 +150,8 @@ class JswimEnv(gymnasium.Env):
     render_mode : {"rgb_array", "human"}, optional
     **options
         ``continuous``, ``history``, ``separation`` (`jswim.env.door.build`) and
-        `jswim.make`'s options (``zeta``, ``direction``, ``init``, ``roc_levels``, model
-        options).
+        `jswim.make`'s options (``zeta``, ``direction``, ``init``, ``roc_levels``, ``target``,
+        ``flow``, model options).
 
     Raises
     ------

@@ -20,7 +20,8 @@ wrappers (``LogWrapper``, ``FlattenObservationWrapper``, ``GymnaxToGymWrapper``,
 environments. It is a plain object (wrappers may set attributes on it). Its params,
 `Params`, hold the world's params and ``max_steps_in_episode`` (200 unless
 ``make(..., max_steps_in_episode=n)``): an episode is truncated there, and a navigation world's
-(``"NavigatePurcell-v0"``) also ends at its target or its budget. The
+(``"NavigatePurcell-v0"``; ``"NavigatePurcellFlow-v0"`` in a uniform cross-stream) also ends at
+its target or its budget. The
 reward is ``StepInfo.progress`` (float32); ``info`` carries the swimmers' mean ``x``, ``stuck``
 and ``contact``.
 """

@@ -8,7 +8,9 @@ light (JAX loads with the first of them):
 - `jswim.agents.ppo`: PPO (``ppo.train``);
 - `jswim.agents.random_policy`: the random policy (``random_policy.run``);
 - `jswim.agents.strokes`: fixed strokes (``strokes.play``);
-- `jswim.agents.steering`: the navigation controller (``steering.run``).
+- `jswim.agents.steering`: the navigation controller (``steering.run``);
+- `jswim.agents.zermelo`: Zermelo's time-optimal path through a flow (``zermelo.zermelo``), the
+  navigation study's yardstick.
 
 The other modules (``defaults``, ``fidelity``, ``memory``, ``pair_prompt``, ``ppo_judge``,
 ``protocol``, ``rewards``, ``step_batcher``, ``variants``, ``world_view``) are their parts.
@@ -19,7 +21,7 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-__all__ = ["llm", "ppo", "qlearning", "random_policy", "steering", "strokes"]
+__all__ = ["llm", "ppo", "qlearning", "random_policy", "steering", "strokes", "zermelo"]
 
 _PARTS = (
     "defaults",

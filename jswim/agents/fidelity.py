@@ -137,6 +137,21 @@ NAVIGATION = (
 )
 
 
+#: A navigation task in a background flow (an extension; docs/navigation.md, *Flows*).
+FLOW = (
+    "background flow (an extension; docs/navigation.md): the swimmer moves through a steady "
+    "planar flow (resistive force theory for its links against the local fluid velocity); S2 says "
+    "the fluid flows; each record gives the local flow (X, Y) at the centre before the step, in "
+    "thousandths of a link length per step, truncated as the positions are; X_min is lowered below "
+    "where the flow could carry the swimmer within the budget"
+)
+
+
+def flow_deviation(flow: str) -> str:
+    """The line of a run in a background flow (canonical JSON of the flow): `FLOW` and the flow."""
+    return f"{FLOW}; flow {flow}"
+
+
 def navigation_deviation(target: str) -> str:
     """The line of a run with a navigation target (canonical JSON of its spec): `NAVIGATION`
     and the target."""

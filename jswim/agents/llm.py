@@ -225,6 +225,7 @@ class _Run:
     target: tuple[float, float] | None = None
     waypoint: int = 1
     waypoints: tuple[tuple[float, float], ...] = ()
+    flow: tuple[float, float] | None = None  # in a flow: the local flow (lab frame) now
 
     def log(self, record: dict[str, Any]) -> None:
         if self.sink is not None:
@@ -334,7 +335,7 @@ class LLMDriver:
             text = dataclasses.replace(text, nav=nav)
             prompt = dataclasses.replace(
                 prompt,
-                template=nav_template(prompt.template),
+                template=nav_template(prompt.template, flow=nav.flow),
                 x_min=world_view.nav_x_min(spec, prompt.x_min),
             )
         levels0 = [int(v) for v in group.levels0[pos]]
@@ -357,6 +358,7 @@ class LLMDriver:
         )
         if nav is not None:
             run.y, run.heading = float(start["y"]), float(start["orientation"])
+            run.flow = tuple(float(v) for v in start["flow"]) if nav.flow else None
             run.waypoints = tuple(tuple(p) for p in json.loads(spec.target).get("points") or ())
             run.target = tuple(float(v) for v in start["target"])
             run.waypoint = _waypoint(run)
@@ -379,6 +381,8 @@ class LLMDriver:
         run.deviations += [deviation] if deviation else []
         if nav is not None:
             run.deviations.append(fidelity.navigation_deviation(spec.target))
+            if spec.flow:
+                run.deviations.append(fidelity.flow_deviation(spec.flow))
         if env.n_swimmers > 1:
             result.knobs["pair_prompt"] = spec.pair_prompt
         if spec.pair_prompt == "each":  # one conversation per swimmer (jswim.agents.pair_prompt)
@@ -389,7 +393,11 @@ class LLMDriver:
             "type": "meta",
             "run_id": run_id,
             # a run without a target (the paper's task) keeps the transcript it always had
-            "spec": {k: v for k, v in dataclasses.asdict(spec).items() if k != "target" or v},
+            "spec": {
+                k: v
+                for k, v in dataclasses.asdict(spec).items()
+                if k not in ("target", "flow") or v
+            },
             "n_ht": n_ht,
             "rocs": list(text.rocs),
             "levels0": result.levels0,
@@ -627,8 +635,11 @@ class LLMDriver:
                 "y_after": y_after,
                 "heading_before": run.heading,
                 "heading_after": heading_after,
+                "flow": run.flow,
             }
             run.y, run.heading = y_after, heading_after
+            if run.flow is not None:  # the flow where the swimmer now is: the next record's
+                run.flow = tuple(float(v) for v in out["flow"])
             run.target = tuple(float(v) for v in out["target"])
             run.waypoint = _waypoint(run)
             res.targets.append(list(run.target))

@@ -1,5 +1,7 @@
 """The steering controller as an agent of a navigation world: turn with an off-centre loop until
-the target's bearing is small, then swim the square gait.
+the target's bearing is small, then swim the square gait. In a background flow it steers the
+crab angle ([`crab_bearing`][jswim.agents.steering.crab_bearing]): the heading whose swimming
+velocity plus the local flow points at the target.
 
 The controller is kinematics written from the physics ([`jswim.swimmers.turning`][jswim.swimmers.turning]); its
 cycles and their measured rotation come from the exact tables ([`jswim.env.loops.steering_plan`][jswim.env.loops.steering_plan]).
@@ -29,11 +31,12 @@ from jax import Array
 
 from jswim import sharding
 from jswim.env.episodes import Trajectory
+from jswim.env.flows import SWIM_SPEED
 from jswim.env.loops import steering_plan
 from jswim.errors import ConfigError
 from jswim.swimmers.turning import ControllerState, SteeringPlan, controller_start, controller_step
 
-__all__ = ["Controller", "controller", "run"]
+__all__ = ["Controller", "controller", "crab_bearing", "run"]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -96,6 +99,27 @@ def controller(env: Any, reverse: bool = True) -> Controller:
     return Controller(plan_k, env.roc_levels if even else 0, bool(reverse), plan)
 
 
+def crab_bearing(bearing: Array, flow: Array, speed: float = SWIM_SPEED) -> Array:
+    """The heading (rad, body frame, as ``bearing``) that makes a swimmer of speed ``speed``
+    move straight at a target at ``bearing`` through the local flow ``flow`` (``(2,)``, body
+    frame, ``a / tau``): the crab angle of Zermelo's problem in a locally uniform flow.
+
+    The ground velocity ``speed e + u`` points along ``d = (cos bearing, sin bearing)`` when
+    ``e = (s d - u) / speed`` with ``s = u.d + sqrt(speed^2 - (d x u)^2)`` (the larger ground
+    speed). Where no heading holds the course (``|d x u| > speed`` or ``s <= 0``: a cross or
+    head flow faster than the swimmer), it aims at ``speed d - u`` (upstream of the target, to
+    lose the least ground). In still fluid it returns ``bearing``.
+    """
+    d = jnp.stack([jnp.cos(bearing), jnp.sin(bearing)])
+    along = d[0] * flow[0] + d[1] * flow[1]
+    cross = d[0] * flow[1] - d[1] * flow[0]
+    disc = speed**2 - cross**2
+    s = along + jnp.sqrt(jnp.maximum(disc, 0.0))
+    holds = (disc >= 0) & (s > 0)
+    aim = jnp.where(holds, s, speed) * d - flow
+    return jnp.arctan2(aim[1], aim[0])
+
+
 def _one(key: Array, params: Any, env: Any, ctrl: Controller, steps: int) -> Trajectory:
     state = env.reset(key, params)
     keys = jax.random.split(key, steps)
@@ -104,7 +128,10 @@ def _one(key: Array, params: Any, env: Any, ctrl: Controller, steps: int) -> Tra
         st, memory = carry
         view = env.target_view(st, params)
         reach = 0.5 * params.target.radius
-        action, memory = ctrl.act(memory, view.bearing, view.distance, reach, env.n_dof)
+        bearing = view.bearing
+        if getattr(env, "flow", None) is not None:  # steer the course, not the heading
+            bearing = crab_bearing(bearing, env.body_flow(st, params).astype(bearing.dtype))
+        action, memory = ctrl.act(memory, bearing, view.distance, reach, env.n_dof)
         st, info = env.step(k, st, action, params)
         return (st, memory), Trajectory(st, env.observe(st, params), info)
 

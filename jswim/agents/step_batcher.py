@@ -168,6 +168,7 @@ class StepGroup:
         if target is not None:  # a navigation task: the current target, lab frame
             out["target"] = np.asarray(target.position, np.float64)
             out["distance"] = np.asarray(target.distance, np.float64)
+            out["flow"] = np.asarray(target.flow, np.float64)  # the local flow, lab frame
         if rest is not None:
             progress, stuck, contact, (reached, ended) = jax.device_get(rest)
             out.update(

@@ -162,6 +162,10 @@ class LLMRunSpec:
         spec's ``to_dict()`` ([`jswim.env.targets`][jswim.env.targets]); ``""``: the paper's
         task along ``direction``. The run ends when the target is reached or after ``n_steps``
         (the target's budget in a study), whichever is first.
+    flow : str
+        A navigation task's background flow (an extension; canonical JSON of the flow's
+        ``to_dict()``, [`jswim.env.flows`][jswim.env.flows]); ``""``: still fluid. The records
+        then show the local flow (docs/navigation.md, *Flows*).
     """
 
     swimmer: str = "purcell"
@@ -179,6 +183,7 @@ class LLMRunSpec:
     scene: str = ""
     pair_prompt: str = "joint"
     target: str = ""
+    flow: str = ""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "drop", normalize_mask(self.drop))

@@ -20,6 +20,7 @@ from jswim.agents.fidelity import scene_deviation
 from jswim.agents.variants import LLMRunSpec
 from jswim.env.base import Environment
 from jswim.env.registry import make, registered_worlds
+from jswim.env.flows import FLOW_LENGTH, Shear, flow_from_dict
 from jswim.env.targets import target_from_dict
 from jswim.prompt import NavView, PromptTemplate, SceneView, SwimmerText, scene_template
 from jswim.scenes.scene import Scene
@@ -36,6 +37,7 @@ def world(spec: LLMRunSpec) -> tuple[Environment, Any]:
             init=spec.init,
             roc_levels=spec.roc_levels,
             target=target_from_dict(json.loads(spec.target)),
+            flow=flow_from_dict(json.loads(spec.flow)) if spec.flow else None,
             **dict(spec.swimmer_options),
         )
     if not spec.scene:
@@ -98,6 +100,7 @@ def nav_view(spec: LLMRunSpec) -> NavView | None:
         radius=float(t["radius"]),
         waypoints=len(t.get("points") or [()]),
         velocity=tuple(float(v) for v in t.get("velocity", (0.0, 0.0))),
+        flow=bool(spec.flow),
     )
 
 
@@ -109,7 +112,9 @@ def nav_x_min(spec: LLMRunSpec, x_min: float) -> float:
     """``X_min`` of a navigation run: ``x_min``, lowered to a whole number of link lengths below
     every place the target can be within ``spec.n_steps`` (minus `NAV_MARGIN`), so that X and
     Y stay positive while the swimmer heads for it (the paper picks ``X_min`` for the same
-    reason; a target behind or to the right would otherwise be sent as negative numbers)."""
+    reason; a target behind or to the right would otherwise be sent as negative numbers). In a
+    flow, also below where the flow could carry the swimmer in ``spec.n_steps`` (its speed on
+    the study's scale, `jswim.env.flows.FLOW_LENGTH`, every step)."""
     t = json.loads(spec.target)
     points = t.get("points") or [
         (
@@ -118,6 +123,10 @@ def nav_x_min(spec: LLMRunSpec, x_min: float) -> float:
         )
     ]
     drift = math.hypot(*t.get("velocity", (0.0, 0.0))) * spec.n_steps
+    if spec.flow:
+        flow = flow_from_dict(json.loads(spec.flow))
+        scale = FLOW_LENGTH if isinstance(flow, Shear) else 1.0
+        drift += flow.speed * scale * spec.n_steps
     low = min(min(p) for p in points) - drift - NAV_MARGIN
     return min(float(x_min), float(math.floor(min(low, 0.0 - NAV_MARGIN))))
 

@@ -50,6 +50,7 @@ _LABELS = {
     "random": "random",
     "ppo": "PPO",
     "controller": "steering controller",
+    "zermelo": "Zermelo (optimal path)",
 }
 
 

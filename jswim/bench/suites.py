@@ -4,7 +4,7 @@ A suite's definition (parts, options, seed, sizes) is recorded in the bench fold
 (``bench.json``), so two labs running ``core`` get comparable rows; a folder made with another
 definition is refused, not mixed. The suites ``core`` and ``paper`` (their parts, sizes and
 cost) are described in docs/bench.md (*Suites*); ``navigate`` runs the navigation study
-(docs/navigation.md).
+(docs/navigation.md), ``navigate-flow`` the same in a background flow (``--flow uniform``).
 """
 
 from __future__ import annotations
@@ -37,6 +37,8 @@ PART_OPTIONS = {
     "samples": "--samples",
     "distances": "--distances",
     "bearings": "--bearings",
+    "flow": "--flow",
+    "flows": "--flows",
     "train_episodes": "--train-episodes",
 }
 
@@ -130,7 +132,24 @@ NAVIGATE = Suite(
     "target; success = the target reached within its budget, steps to it",
 )
 
-SUITES = {"core": CORE, "paper": PAPER, "navigate": NAVIGATE}
+NAVIGATE_FLOW = Suite(
+    "navigate-flow",
+    (
+        Part(
+            "navigate-flow",
+            "navigate",
+            # the speeds written out (the study's defaults today): the recorded definition then
+            # stays this suite's if the study's defaults move
+            (("runs", 1), ("flow", "uniform"), ("flows", (0.0, 0.5, 0.9))),
+        ),
+    ),
+    seed=0,
+    about="navigation in a uniform stream across the start heading at 0, 0.5 and 0.9 of the "
+    "swimming speed: navigate's targets at each; success = the target reached within its budget, "
+    "steps to it; Zermelo's time-optimal steerer as the yardstick",
+)
+
+SUITES = {"core": CORE, "paper": PAPER, "navigate": NAVIGATE, "navigate-flow": NAVIGATE_FLOW}
 
 
 def check_name(name: str, what: str) -> str:
@@ -145,11 +164,14 @@ def check_name(name: str, what: str) -> str:
 
 #: Grid axes only ``jswim study`` takes (``jswim swim`` refuses them).
 STUDY_AXES = ("zetas", "n_hts", "temperatures", "prompt_files")
+#: Options only the navigation study reads (any other study refuses them when it runs).
+NAVIGATE_ONLY = ("distances", "bearings", "flow", "flows")
 
 
 def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None:
     """Refuse, when the models file is read, an option the part's study would refuse at run time
     (every model's process would fail on it)."""
+    from jswim.env.flows import FLOWS  # lazy: JAX
     from jswim.studies.specs import ignored_options  # lazy: the grids load JAX
 
     if study == "swim":
@@ -159,6 +181,19 @@ def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None
                 f"{where}: jswim swim takes no {PART_OPTIONS[axis]} (a study's grid axis); use a "
                 'study, e.g. study = "curves"'
             )
+    if study != "navigate":
+        only = next((k for k in opts if k in NAVIGATE_ONLY), None)
+        if only is not None:
+            raise ConfigError(
+                f"{where}: the {study} study has no use for {only} (only the navigate study "
+                "reads it); leave it out"
+            )
+    elif "flow" in opts and (not isinstance(opts["flow"], str) or opts["flow"] not in FLOWS):
+        raise ConfigError(f"{where}: flow must be one of {', '.join(FLOWS)}, got {opts['flow']!r}")
+    elif "flows" in opts and not opts.get("flow"):
+        raise ConfigError(
+            f'{where}: flows sets the speeds of a flow: give its kind too (flow = "uniform")'
+        )
     fields = {"noise": "zeta"}
     for name, why in ignored_options(study, [fields.get(k, k) for k in opts]).items():
         option = next(k for k in opts if fields.get(k, k) == name)

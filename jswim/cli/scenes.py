@@ -23,8 +23,10 @@ STUDY_HELP = {
     "school": "schools of N NG swimmers in a line or side by side D apart, every one doing the square stroke in "
     "turn: the school's speed against N and D, beside a lone swimmer's",
     "navigate": "Purcell's swimmer steered to targets at several distances and bearings, along a path and after "
-    "a moving target (K = 2 unless --roc-levels): the LLM, Q-learning, PPO, the steering controller and random; "
-    "success, steps to the target, path over straight distance, energy and energy per distance",
+    "a moving target (K = 2 unless --roc-levels), in still fluid or a background flow (--flow): the LLM, "
+    "Q-learning, PPO, the steering controller and random (and Zermelo's optimal steerer in a flow); "
+    "success, steps to the target, path over straight distance, energy and energy per distance, and in a "
+    "flow each agent's time over Zermelo's",
 }
 
 
@@ -141,6 +143,25 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
                 metavar="B1,B2,...",
                 help="bearings of the fixed targets, degrees counterclockwise from the start heading "
                 "(default 0,90,180)",
+            ),
+        ),
+        (
+            "--flow",
+            dict(
+                choices=("uniform", "shear", "poiseuille", "taylor-green"),
+                metavar="KIND",
+                help="a background flow (an extension): uniform (across the start heading), shear "
+                "(u = rate y), poiseuille (a channel along x) or taylor-green (vortex cells); "
+                "Zermelo's optimal steerer joins the agents and every row gets its time ratio to it",
+            ),
+        ),
+        (
+            "--flows",
+            dict(
+                type=_numbers(float),
+                metavar="F1,F2,...",
+                help="the flow's speeds, fractions of the swimming speed 0.0478 a per step "
+                "(default 0,0.5,0.9; past 1 some targets are unreachable and the rows say so)",
             ),
         ),
         (

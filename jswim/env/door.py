@@ -8,8 +8,15 @@ pure JAX, so the Gymnasium door jits them for one swimmer, the vector door vmaps
 Observation (float32, finite bounds `Door.bounds`), in this order:
 
 1. the world's `jswim.env.base.Environment.features`: every joint DOF scaled to [-1, 1];
-   above a wall also each swimmer's ``ln(z / 10 a)`` and ``tilt / 0.5 rad``, each clipped to
-   [-`EXTRA_BOUND`, `EXTRA_BOUND`] (|tilt| <= 5 rad, z <= 2.2e5 a);
+   above a wall also each swimmer's ``ln(z / 10 a)`` and ``tilt / 0.5 rad``; with a ``target``
+   the target's ``cos(bearing)``, ``sin(bearing)`` and ``distance / 4 a``
+   (`jswim.env.navigation.DISTANCE_SCALE`), and with
+   a ``flow`` as well the local flow in the body frame over `jswim.env.flows.SWIM_SPEED`
+   (along the middle link, then across it; its size at most ``flow.speed / SWIM_SPEED`` in a
+   uniform stream or Taylor-Green cells, growing with ``|y|`` in shear and Poiseuille flow).
+   Each entry past the DOFs is clipped to [-`EXTRA_BOUND`, `EXTRA_BOUND`] (|tilt| <= 5 rad,
+   z <= 2.2e5 a, a flow of at most 10 swimming speeds; a swimmer in a faster one is carried
+   along whatever it does). Without a target a flow moves the swimmer but adds no entries;
 2. ``separation`` (worlds of two or more swimmers; on by default there): swimmer ``s + 1``'s
    centroid minus swimmer ``s``'s, ``(dx, dy)`` for ``s = 0 .. S - 2``, in units of the scene's
    start separation D (1.0 along the line at the start), clipped to [-10, 10];
@@ -36,6 +43,7 @@ import numpy as np
 from jax import Array
 
 from jswim.env.base import Environment, StepInfo
+from jswim.env.flows import Uniform, study_flow
 from jswim.env.targets import FixedTarget
 from jswim.env.scene_world import SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
@@ -63,6 +71,7 @@ MAKE_OPTIONS = (
     "target",
     "bearing_bins",
     "lattice",
+    "flow",
 )
 MODEL_OPTIONS = (
     "d_max",
@@ -80,6 +89,20 @@ MODEL_OPTIONS = (
 #: reached within a quarter link length (budget: the steering controller's measured default,
 #: 256 steps; docs/navigation.md).
 NAVIGATE_TARGET = FixedTarget(3.0, 90.0)
+
+#: The flow of ``NavigatePurcellFlow-v0``: a uniform stream of half the swimming speed across
+#: the start heading, ``u = (0, 0.5 SWIM_SPEED)`` (the navigation study's ``--flow uniform``
+#: at 0.5; `jswim.env.flows.study_flow`).
+NAVIGATE_FLOW = study_flow("uniform", 0.5)
+#: The target of ``NavigatePurcellFlow-v0``: 3 link lengths straight ahead, across the stream.
+#: Cross-stream rather than ``NAVIGATE_TARGET``'s 90 degrees: that one lies downstream, where
+#: the stream alone carries a swimmer that does nothing to it (there in 116 steps, inside its
+#: 256), while here the stream alone never reaches it and the square gait straight ahead passes
+#: 1.35 a from it: the policy must head ~30 degrees into the stream (Zermelo's crab),
+#: which is what the flow entries of the observation are for. Budget: the navigation study's rule
+#: in a flow (`jswim.studies.navigate.with_budgets`), 4 x Zermelo's least time of 65.6 steps
+#: (the still-fluid budget straight ahead is 96); tests/env/test_flow_door.py recomputes it.
+NAVIGATE_FLOW_TARGET = FixedTarget(3.0, 0.0, budget=263)
 
 #: The worlds every door names (Gymnasium: ``jswim/<name>``; gymnax: ``<name>``) and their
 #: `build` arguments.
@@ -101,6 +124,12 @@ IDS: dict[str, dict[str, Any]] = {
         "scene": {"medium": "free", "swimmers": 3, "separation": 30.0},
     },
     "NavigatePurcell-v0": {"swimmer": "purcell", "roc_levels": 2, "target": NAVIGATE_TARGET},
+    "NavigatePurcellFlow-v0": {
+        "swimmer": "purcell",
+        "roc_levels": 2,
+        "target": NAVIGATE_FLOW_TARGET,
+        "flow": NAVIGATE_FLOW,
+    },
 }
 
 
@@ -238,12 +267,15 @@ def build(swimmer: str = "purcell", scene: Any = None, **options: Any) -> tuple[
     **options
         ``continuous`` (bool), ``history`` (int >= 0), ``separation`` (bool; default: on for two
         or more swimmers), and `jswim.make`'s options (`MAKE_OPTIONS`,
-        `MODEL_OPTIONS`).
+        `MODEL_OPTIONS`), ``flow`` among them (a `jswim.env.flows` flow: planar swimmers in the
+        bulk, as `jswim.make` takes it).
 
     Raises
     ------
     ConfigError
-        An unknown keyword (one line naming the valid ones) or an invalid value.
+        An unknown keyword (one line naming the valid ones) or an invalid value; a flow
+        `jswim.make` refuses (a sphere swimmer, a scene, a registered world, not a flow), or
+        ``continuous=True`` in a flow other than `jswim.env.flows.Uniform` without a target.
     """
     unknown = sorted(set(options) - set(DOOR_OPTIONS + MAKE_OPTIONS + MODEL_OPTIONS))
     if unknown:
@@ -258,6 +290,18 @@ def build(swimmer: str = "purcell", scene: Any = None, **options: Any) -> tuple[
         raise ConfigError(f"history must be a whole number of records >= 0, got {history!r}")
     separation = options.pop("separation", None)
     world, params = make(swimmer, scene, **options)
+    flow = options.get("flow")
+    if (
+        continuous
+        and isinstance(world, SwimmerWorld)
+        and not isinstance(flow, (Uniform, type(None)))
+    ):
+        # make's own refusal would name the diagonal strokes, which the caller never asked for
+        raise ConfigError(
+            f"continuous=True moves every joint at once, which a {type(flow).__name__} flow does "
+            "not offer (its steps are integrated along one DOF's move at a time); use a Uniform "
+            "flow, a target (one DOF a step) or leave continuous off"
+        )
     if continuous and isinstance(world, SwimmerWorld):
         world, params = make(swimmer, scene, diagonal=True, **options)
     if separation is None:

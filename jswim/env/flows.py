@@ -1,11 +1,11 @@
 """Background flows in the plane: what the fluid does where the swimmer is not.
 
 Each flow is a static, hashable dataclass (a world can hold it as a static field and JAX can take
-it as a static argument) whose ``velocity(x)`` and ``gradient(x)`` are plain JAX functions of the
-position, so they jit and vmap with the step that calls them. Positions are in link lengths ``a``
-(the paper's unit), velocities in ``a / tau`` (``tau``: a hinge sweeping its range at |ROC| = 1);
-for scale, the paper's square stroke moves Purcell's swimmer 0.191 a per cycle of four steps,
-0.048 a per step (docs/physics.md gives flow speeds as multiples of it).
+it as a static argument) whose ``velocity(x)``, ``gradient(x)`` and ``hessian(x)`` are plain JAX
+functions of the position, so they jit and vmap with the step that calls them. Positions are in
+link lengths ``a`` (the paper's unit), velocities in ``a / tau`` (``tau``: a hinge sweeping its
+range at |ROC| = 1); for scale, the paper's square stroke moves Purcell's swimmer 0.191 a per
+cycle of four steps, 0.048 a per step (docs/physics.md gives flow speeds as multiples of it).
 
 The flows are steady solutions of the Stokes equations in the plane (the Taylor-Green cells with a
 body force that keeps them steady); the swimmer is taken not to disturb them beyond its own drag
@@ -16,6 +16,7 @@ body force that keeps them steady); the swimmer is taken not to disturb them bey
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 from typing import Any
 
@@ -24,7 +25,29 @@ from jax import Array
 
 from jswim.errors import ConfigError
 
-__all__ = ["FLOWS", "Flow", "Poiseuille", "Shear", "TaylorGreen", "Uniform", "flow_from_dict"]
+__all__ = [
+    "FLOWS",
+    "FLOW_LENGTH",
+    "SWIM_SPEED",
+    "Flow",
+    "Poiseuille",
+    "Shear",
+    "TaylorGreen",
+    "Uniform",
+    "flow_from_dict",
+    "flow_json",
+    "study_flow",
+]
+
+#: The swimming speed ``v`` flows are measured against (``a / tau``): the paper's square stroke
+#: moves Purcell's swimmer 0.19124724 a per cycle of four steps (the exact tables;
+#: tests/physics check it), whichever way it is played.
+SWIM_SPEED = 0.19124724 / 4
+
+#: The length (``a``) a study's flows vary over: the default target distance. A shear reaches
+#: ``fraction * SWIM_SPEED`` this far across, a Poiseuille channel is twice it wide each side,
+#: a Taylor-Green cell twice it square (`study_flow`).
+FLOW_LENGTH = 3.0
 
 
 def _finite(value: Any, name: str, positive: bool = False) -> float:
@@ -39,8 +62,10 @@ def _finite(value: Any, name: str, positive: bool = False) -> float:
 
 
 class Flow:
-    """What every flow offers: ``velocity`` (..., 2) and ``gradient`` (..., 2, 2) at positions
-    (..., 2), the largest speed it reaches (``speed``, ``a / tau``) and ``to_dict``."""
+    """What every flow offers: ``velocity`` (..., 2), ``gradient`` (..., 2, 2;
+    ``[..., i, j] = du_i / dx_j``, ``1 / tau``) and ``hessian`` (..., 2, 2, 2;
+    ``[..., i, j, k] = d^2 u_i / dx_j dx_k``, ``1 / (a tau)``) at positions (..., 2), the largest
+    speed it reaches (``speed``, ``a / tau``) and ``to_dict``."""
 
     kind = ""
 
@@ -48,6 +73,9 @@ class Flow:
         raise NotImplementedError
 
     def gradient(self, x: Array) -> Array:  # pragma: no cover - each flow defines it
+        raise NotImplementedError
+
+    def hessian(self, x: Array) -> Array:  # pragma: no cover - each flow defines it
         raise NotImplementedError
 
     @property
@@ -85,6 +113,10 @@ class Uniform(Flow):
         x = jnp.asarray(x)
         return jnp.zeros(x.shape + (2,), x.dtype)
 
+    def hessian(self, x: Array) -> Array:
+        x = jnp.asarray(x)
+        return jnp.zeros(x.shape + (2, 2), x.dtype)
+
     @property
     def speed(self) -> float:
         return math.hypot(*self.u)
@@ -116,6 +148,10 @@ class Shear(Flow):
         x = jnp.asarray(x)
         g = jnp.asarray([[0.0, self.rate], [0.0, 0.0]], x.dtype)
         return jnp.broadcast_to(g, x.shape + (2,))
+
+    def hessian(self, x: Array) -> Array:
+        x = jnp.asarray(x)
+        return jnp.zeros(x.shape + (2, 2), x.dtype)  # linear in position
 
     @property
     def speed(self) -> float:
@@ -154,6 +190,12 @@ class Poiseuille(Flow):
         return jnp.stack(
             [jnp.stack([zero, dudy], axis=-1), jnp.stack([zero, zero], axis=-1)], axis=-2
         )
+
+    def hessian(self, x: Array) -> Array:
+        x = jnp.asarray(x)
+        # quadratic in y: the one entry d^2 u_x / dy^2 = -2 u_max / h^2, the same everywhere
+        h = jnp.zeros((2, 2, 2), x.dtype).at[0, 1, 1].set(-2.0 * self.u_max / self.half_width**2)
+        return jnp.broadcast_to(h, x.shape[:-1] + (2, 2, 2))
 
     @property
     def speed(self) -> float:
@@ -208,6 +250,21 @@ class TaylorGreen(Flow):
             axis=-2,
         )
 
+    def hessian(self, x: Array) -> Array:
+        x = jnp.asarray(x)
+        k = self.k
+        sx, cx = jnp.sin(k * x[..., 0]), jnp.cos(k * x[..., 0])
+        sy, cy = jnp.sin(k * x[..., 1]), jnp.cos(k * x[..., 1])
+        a = self.u0 * k * k
+        p, q = sx * cy, cx * sy  # u = u0 (p, -q); each second derivative is -k^2 of p or q
+
+        def sym(diag: Array, off: Array) -> Array:
+            return jnp.stack(
+                [jnp.stack([diag, off], axis=-1), jnp.stack([off, diag], axis=-1)], axis=-2
+            )
+
+        return a * jnp.stack([-sym(p, q), sym(q, p)], axis=-3)
+
     @property
     def speed(self) -> float:
         return abs(self.u0)
@@ -215,6 +272,43 @@ class TaylorGreen(Flow):
 
 #: Every flow by its ``kind``.
 FLOWS = {f.kind: f for f in (Uniform, Shear, Poiseuille, TaylorGreen)}
+
+
+def study_flow(kind: str, fraction: float, length: float = FLOW_LENGTH) -> Flow:
+    """The flow of kind ``kind`` whose speed is ``fraction`` of `SWIM_SPEED` (a study's
+    ``--flow KIND --flows F,...``), laid out on the scale ``length`` (``a``) of its targets.
+
+    * ``uniform``: a stream across the swimmer's start heading, ``u = (0, f v)``;
+    * ``shear``: ``u = (rate y, 0)`` with ``rate = f v / length`` (``f v`` at ``|y| = length``);
+    * ``poiseuille``: ``u_max = f v`` on the centre line ``y = 0`` (the start), walls at
+      ``y = +-2 length``;
+    * ``taylor-green``: ``u0 = f v``, cells ``2 length`` square; the start ``(0, 0)`` is a
+      stagnation point between four cells.
+
+    Raises
+    ------
+    ConfigError
+        An unknown kind, or a fraction or length that is not a finite number (length > 0).
+    """
+    f = _finite(fraction, "fraction")
+    length = _finite(length, "length", positive=True)
+    if f < 0:
+        raise ConfigError(f"flow fraction must be >= 0, got {fraction!r}")
+    speed = f * SWIM_SPEED
+    if kind == "uniform":
+        return Uniform((0.0, speed))
+    if kind == "shear":
+        return Shear(speed / length)
+    if kind == "poiseuille":
+        return Poiseuille(speed, 2 * length)
+    if kind == "taylor-green":
+        return TaylorGreen(speed, 2 * length)
+    raise ConfigError(f"flow kind must be one of {', '.join(FLOWS)}, got {kind!r}")
+
+
+def flow_json(flow: Flow | None) -> str:
+    """A flow as canonical JSON (a plan's and a row's ``flow``); ``""`` for still fluid."""
+    return "" if flow is None else json.dumps(flow.to_dict(), sort_keys=True)
 
 
 def flow_from_dict(data: dict[str, Any]) -> Flow:

@@ -38,6 +38,7 @@ from jax import Array
 
 from jswim.env.base import Environment, Observation, Scenery, StepInfo, scaled
 from jswim.env.discretiser import Cells, corner, offered_mask, positions
+from jswim.env.flows import SWIM_SPEED
 from jswim.env.params import EnvParams, broadcast_params
 from jswim.env.state import EnvState, dof_values
 from jswim.env.swimmer_world import SwimmerWorld
@@ -54,6 +55,8 @@ from jswim.errors import ConfigError
 __all__ = [
     "BEARING_BINS",
     "DISTANCE_SCALE",
+    "FLOW_BINS",
+    "FLOW_CALM",
     "NavCells",
     "NavParams",
     "NavState",
@@ -69,6 +72,14 @@ __all__ = [
 #: Bearing bins of the tabular learners' state (45 degrees each, one centred on straight ahead):
 #: measured best of 4, 6, 8 and 12 for Q-learning at 90 degrees (docs/navigation.md).
 BEARING_BINS = 8
+
+#: Bins of the local flow in the tabular learners' state, in a world with a flow: calm (slower
+#: than `FLOW_CALM` of the swimming speed), then the flow's direction in the body frame in four
+#: quadrants (from ahead, left, behind, right).
+FLOW_BINS = 5
+
+#: Below this fraction of the swimming speed the local flow counts as calm (`FLOW_BINS`).
+FLOW_CALM = 0.1
 
 #: Length (``a``) the distance feature is divided by (``features``): about a typical target
 #: distance, so the feature is of order 1.
@@ -93,11 +104,15 @@ class TargetView(NamedTuple):
         Angle (rad, in ``(-pi, pi]``) of the direction to the target from the body frame's x
         axis (the middle link, ``Observation.orientation``), counterclockwise positive: 0 is
         ahead of the middle link, ``+-pi`` behind.
+    flow : Array (2,)
+        The background flow's velocity at the centroid, lab frame (``a / tau``); zeros in
+        still fluid ([`jswim.env.flows`][jswim.env.flows]).
     """
 
     position: Array
     distance: Array
     bearing: Array
+    flow: Array
 
 
 class NavParams(NamedTuple):
@@ -170,6 +185,10 @@ class NavigationWorld(Environment):
         The spec ``make`` was given (it builds ``default_params``). Not part of the world's
         identity: worlds that differ only in it share their compilations (every number a step
         reads is in ``params``).
+    flow : Flow or None
+        The swimmer's background flow (static; its params' ``flow``,
+        [`jswim.env.flows`][jswim.env.flows]): what the observation's ``target.flow``, the
+        features and the cells read. ``None``: still fluid.
     """
 
     inner: SwimmerWorld
@@ -177,6 +196,7 @@ class NavigationWorld(Environment):
     bearing_bins: int = BEARING_BINS
     lattice: bool = False
     target: Any = dataclasses.field(default=None, compare=False)
+    flow: Any = None
 
     # -- sizes and names: the swimmer's ---------------------------------------------------
 
@@ -236,7 +256,19 @@ class NavigationWorld(Environment):
         target = self.target_position(state.t, state.index, params).astype(obs.position.dtype)
         rel = target - obs.position[0]
         bearing = wrap(jnp.arctan2(rel[1], rel[0]) - obs.orientation[0])
-        return TargetView(target, jnp.hypot(rel[0], rel[1]), bearing)
+        if self.flow is None:
+            flow = jnp.zeros_like(rel)
+        else:
+            flow = self.flow.velocity(obs.position[0]).astype(rel.dtype)
+        return TargetView(target, jnp.hypot(rel[0], rel[1]), bearing, flow)
+
+    def body_flow(self, state: NavState, params: NavParams) -> Array:
+        """The local flow in the body frame (``a / tau``, ``(2,)``: along the middle link, then
+        to its left); zeros in still fluid."""
+        obs = self.inner.observe(state.swimmer, params.swimmer)
+        u = self._view(state, obs, params).flow
+        c, s = jnp.cos(obs.orientation[0]), jnp.sin(obs.orientation[0])
+        return jnp.stack([c * u[0] + s * u[1], -s * u[0] + c * u[1]])
 
     def termination(self, state: NavState, params: NavParams) -> tuple[Array, Array]:
         """``(terminated, truncated)``: the target reached; the budget spent without reaching it."""
@@ -314,17 +346,19 @@ class NavigationWorld(Environment):
 
     def features(self, state: NavState, params: NavParams) -> Array:
         """The DOFs scaled to [-1, 1], then the target's ``cos(bearing)``, ``sin(bearing)`` and
-        ``distance / DISTANCE_SCALE`` (what PPO reads)."""
+        ``distance / DISTANCE_SCALE`` (what PPO reads); in a flow, then the local flow in the
+        body frame over the swimming speed (`body_flow` / `jswim.env.flows.SWIM_SPEED`)."""
         view = self.target_view(state, params)
         dofs = scaled(dof_values(state.swimmer, params.swimmer), self.model.lo, self.model.hi)
-        extra = jnp.stack(
-            [jnp.cos(view.bearing), jnp.sin(view.bearing), view.distance / DISTANCE_SCALE]
-        )
-        return jnp.concatenate([dofs, extra.astype(dofs.dtype)])
+        extra = [jnp.cos(view.bearing), jnp.sin(view.bearing), view.distance / DISTANCE_SCALE]
+        if self.flow is not None:
+            u = self.body_flow(state, params) / SWIM_SPEED
+            extra += [u[0], u[1]]
+        return jnp.concatenate([dofs, jnp.stack(extra).astype(dofs.dtype)])
 
     @property
     def n_features(self) -> int:
-        return self.n_dof + 3
+        return self.n_dof + 3 + (2 if self.flow is not None else 0)
 
     def cells(self) -> NavCells:
         """The lattice point crossed with the target's bearing bin ([`NavCells`][jswim.env.navigation.NavCells])."""
@@ -351,12 +385,17 @@ class NavigationWorld(Environment):
 @dataclasses.dataclass(frozen=True)
 class NavCells(Cells):
     """The tabular learners' state in a navigation world: the lattice point times the bearing
-    bin (``bearing_bins`` bins, bin 0 centred on straight ahead, counterclockwise); the codes
-    offered are the swimmer's ([`offered_mask`][jswim.env.discretiser.offered_mask])."""
+    bin (``bearing_bins`` bins, bin 0 centred on straight ahead, counterclockwise), times, in a
+    flow, the local flow's bin (`flow_bin`); the codes offered are the swimmer's
+    ([`offered_mask`][jswim.env.discretiser.offered_mask])."""
+
+    @property
+    def flow_bins(self) -> int:
+        return FLOW_BINS if self.env.flow is not None else 1
 
     @property
     def n_cells(self) -> int:
-        return super().n_cells * self.env.bearing_bins
+        return super().n_cells * self.env.bearing_bins * self.flow_bins
 
     def positions(self, state: NavState, params: NavParams) -> Array:
         return positions(state.swimmer, self.env.roc_levels)
@@ -367,10 +406,22 @@ class NavCells(Cells):
         b = self.env.target_view(state, params).bearing
         return (jnp.round(b * (n / (2 * jnp.pi))).astype(jnp.int32)) % n
 
+    def flow_bin(self, state: NavState, params: NavParams) -> Array:
+        """The bin of the local flow, int32 in ``0 .. FLOW_BINS - 1``: 0 calm (slower than
+        `FLOW_CALM` of the swimming speed), 1-4 its direction in the body frame (from ahead,
+        left, behind, right: quadrants centred on those); 0 always in still fluid."""
+        if self.env.flow is None:
+            return jnp.zeros((), jnp.int32)
+        u = self.env.body_flow(state, params)
+        quadrant = jnp.round(jnp.arctan2(u[1], u[0]) * (2 / jnp.pi)).astype(jnp.int32) % 4
+        calm = jnp.hypot(u[0], u[1]) < FLOW_CALM * SWIM_SPEED
+        return jnp.where(calm, 0, 1 + quadrant)
+
     def cell(self, state: NavState, j: Array, params: NavParams) -> Array:
-        return corner(j, self.env.roc_levels) * self.env.bearing_bins + self.bearing_bin(
+        place = corner(j, self.env.roc_levels) * self.env.bearing_bins + self.bearing_bin(
             state, params
         )
+        return place * self.flow_bins + self.flow_bin(state, params)
 
     def mask(
         self, j: Array, params: NavParams, action_set: str, rocs: tuple[int, ...] | None = None
@@ -420,7 +471,9 @@ def navigation_world(
         or bearing_bins < 1
     ):
         raise ConfigError(f"bearing_bins must be a whole number >= 1, got {bearing_bins!r}")
-    env = NavigationWorld(world, len(target.points()), int(bearing_bins), bool(lattice), target)
+    env = NavigationWorld(
+        world, len(target.points()), int(bearing_bins), bool(lattice), target, params.flow
+    )
     tp = target_params(target, world.model, world.roc_levels)
     return env, NavParams(params, tp)
 

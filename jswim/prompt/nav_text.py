@@ -41,12 +41,16 @@ class NavView:
     velocity : tuple of float
         A moving target's velocity ``(vx, vy)`` in link lengths per step; said in S2 in
         thousandths per step.
+    flow : bool
+        The fluid flows (an extension, docs/navigation.md *Flows*): S2 says so (`FLOW_SENTENCE`)
+        and each record gives the local flow before the step (`NAV_FLOW_RECORD`).
     """
 
     kind: str = "fixed"
     radius: float = 0.25
     waypoints: int = 1
     velocity: tuple[float, float] = (0.0, 0.0)
+    flow: bool = False
 
     def __post_init__(self) -> None:
         if self.kind not in NAV_KINDS:
@@ -78,6 +82,12 @@ PATH_SENTENCE = (
     "The path has {waypoints} waypoints; when one is reached, the next becomes the target."
 )
 
+#: What S2 adds in a background flow.
+FLOW_SENTENCE = (
+    "The fluid flows and carries the swimmer: each record's flow (X, Y) is the fluid's velocity "
+    "at the swimmer's centre before the step, in thousandths of a link length per step."
+)
+
 #: S3 and the record line of the navigation template.
 NAV_S3 = (
     "Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, X before "
@@ -86,6 +96,17 @@ NAV_S3 = (
 NAV_RECORD = (
     "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}, Y {y_before} -> "
     "{y_after}, heading {heading_before} -> {heading_after}, stuck {stuck}"
+)
+
+
+#: S3 and the record line of the navigation template in a flow: the records gain the local flow.
+NAV_FLOW_S3 = (
+    "Latest records (step: ({dof_names}) before [changed DOF, ROC] -> ({dof_names}) after, X before "
+    "-> after, Y before -> after, heading before -> after, flow (X, Y), stuck):\n{history}"
+)
+NAV_FLOW_RECORD = (
+    "{step}: ({dofs_before}) {action} -> ({dofs_after}), X {x_before} -> {x_after}, Y {y_before} -> "
+    "{y_after}, heading {heading_before} -> {heading_after}, flow ({flow_x}, {flow_y}), stuck {stuck}"
 )
 
 
@@ -102,7 +123,7 @@ def target_phrase(
     return f"the target at {at}"
 
 
-def _per_step(v: float) -> str:
+def per_step(v: float) -> str:
     """A velocity component in thousandths per step, signed, truncated as positions are."""
     return str(math.trunc(v * 1000))
 
@@ -114,26 +135,33 @@ def nav_sentence(view: NavView | None) -> str:
     parts = [NAV_SENTENCE.format(radius=math.trunc(view.radius * 1000))]
     if view.kind == "moving":
         parts.append(
-            MOVING_SENTENCE.format(vx=_per_step(view.velocity[0]), vy=_per_step(view.velocity[1]))
+            MOVING_SENTENCE.format(vx=per_step(view.velocity[0]), vy=per_step(view.velocity[1]))
         )
+    if view.flow:
+        parts.append(FLOW_SENTENCE)
     if view.kind == "waypoints":
         parts.append(PATH_SENTENCE.format(waypoints=view.waypoints))
     return " ".join(parts)
 
 
-def nav_template(base: PromptTemplate | None = None) -> PromptTemplate:
+def nav_template(base: PromptTemplate | None = None, flow: bool = False) -> PromptTemplate:
     """The default template of a navigation task: S1 names the target (`NAV_S1`), S3's legend
-    and the record line give X, Y and the heading (`NAV_S3`, `NAV_RECORD`). A template other
-    than the default (a ``--prompt-file``) is returned as given: its author chose the text (its
-    S1 may name ``{target}``, its records ``{y_before}`` .. ``{heading_after}``)."""
+    and the record line give X, Y and the heading (`NAV_S3`, `NAV_RECORD`; in a flow also the
+    local flow, `NAV_FLOW_S3`, `NAV_FLOW_RECORD`). A template other than the default (a
+    ``--prompt-file``) is returned as given: its author chose the text (its S1 may name
+    ``{target}``, its records ``{y_before}`` .. ``{heading_after}``, ``{flow_x}``, ``{flow_y}``)."""
     base = DEFAULT_TEMPLATE if base is None else base
     if base != DEFAULT_TEMPLATE:
         return base
-    return replace(base.with_sentences(S1=NAV_S1, S3=NAV_S3), record=NAV_RECORD)
+    s3, record = (NAV_FLOW_S3, NAV_FLOW_RECORD) if flow else (NAV_S3, NAV_RECORD)
+    return replace(base.with_sentences(S1=NAV_S1, S3=s3), record=record)
 
 
 __all__ = [
+    "FLOW_SENTENCE",
     "MOVING_SENTENCE",
+    "NAV_FLOW_RECORD",
+    "NAV_FLOW_S3",
     "NAV_KINDS",
     "NAV_RECORD",
     "NAV_S1",
@@ -143,5 +171,6 @@ __all__ = [
     "NavView",
     "nav_sentence",
     "nav_template",
+    "per_step",
     "target_phrase",
 ]

@@ -8,6 +8,7 @@ import math
 from dataclasses import dataclass
 
 from jswim.prompt.config import PromptConfig
+from jswim.prompt.nav_text import per_step
 from jswim.prompt.numbers import Action, encode_position, format_dof
 from jswim.prompt.prose import fill
 from jswim.prompt.swimmer_text import SwimmerText
@@ -50,6 +51,9 @@ class HistoryRecord:
     y_after: float | None = None
     heading_before: float | None = None
     heading_after: float | None = None
+    # Navigation in a background flow (an extension): the flow's (ux, uy) at the centre before
+    # the step (a / step, lab frame).
+    flow: tuple[float, float] | None = None
 
     @property
     def dx(self) -> float:
@@ -87,7 +91,9 @@ def _record_values(rec: HistoryRecord, sw: SwimmerText, cfg: PromptConfig) -> di
 def _nav_record_values(rec: HistoryRecord, cfg: PromptConfig) -> dict[str, str]:
     """A record's navigation placeholders (empty where the record has none): ``y_before``,
     ``y_after`` (encoded as X, with the same ``X_min``) and ``heading_before``,
-    ``heading_after`` (rad in ``(-pi, pi]``, three decimals)."""
+    ``heading_after`` (rad in ``(-pi, pi]``, three decimals); in a flow ``flow_x``,
+    ``flow_y`` (thousandths of a link length per step, truncated, signed:
+    [`per_step`][jswim.prompt.nav_text.per_step])."""
     out = {}
     for when in ("before", "after"):
         y = getattr(rec, f"y_{when}")
@@ -95,6 +101,8 @@ def _nav_record_values(rec: HistoryRecord, cfg: PromptConfig) -> dict[str, str]:
     for when in ("before", "after"):
         h = getattr(rec, f"heading_{when}")
         out[f"heading_{when}"] = "" if h is None else format_dof(wrap_angle(h), 3)
+    for k, name in enumerate(("flow_x", "flow_y")):
+        out[name] = "" if rec.flow is None else per_step(rec.flow[k])
     return out
 
 

@@ -77,7 +77,8 @@ PROMPT_FIELDS = (
 #: Placeholders a record line may use ([`render_record`][jswim.prompt.render_record]): the
 #: paper's, then each swimmer's position, height and tilt in a scene (names up to swimmer 2 are
 #: always known), swimmer 1's height and tilt under their short names, and a navigation task's Y
-#: (encoded as X) and heading (rad).
+#: (encoded as X) and heading (rad), and in a flow the local flow before the step (thousandths
+#: per step).
 RECORD_FIELDS = (
     "step",
     "dofs_before",
@@ -89,6 +90,8 @@ RECORD_FIELDS = (
     *(f"{n}{k}_{when}" for k in (1, 2) for when in ("before", "after") for n in ("x", "h", "tilt")),
     *(f"{n}_{when}" for when in ("before", "after") for n in ("h", "tilt")),
     *(f"{n}_{when}" for n in ("y", "heading") for when in ("before", "after")),
+    "flow_x",
+    "flow_y",
 )
 
 

@@ -92,8 +92,10 @@ SWITCHES = (
 )
 #: A navigation run's columns (docs/navigation.md): written only where set (a navigation task).
 NAV = ("target", "reached", "steps_to_target", "path_length", "path_ratio")
+#: A navigation run in a background flow (docs/navigation.md, *Flows*): written only where set.
+FLOW = ("flow", "flow_fraction", "reachable", "zermelo_steps", "time_ratio")
 
-_WHERE_SET = ("pair_prompt", "temperature_sent", "plane_height") + NAV
+_WHERE_SET = ("pair_prompt", "temperature_sent", "plane_height") + NAV + FLOW
 
 #: A run's energy columns (None where its world does not count work, and in older folders).
 ENERGY = ("energy", "energy_per_distance", "efficiency")
@@ -106,11 +108,13 @@ LAYOUTS = {
     + ("sample", "x", "actions", "progress")
     + ENERGY
     + NAV
+    + FLOW
     + ("status", "y", "orientation", "other"),
     (False, True): HEAD
     + ("sample", "x", "actions", "progress")
     + ENERGY
     + NAV
+    + FLOW
     + ("status",)
     + USAGE
     + ("y", "orientation", "below_x_min")
@@ -285,6 +289,20 @@ class RunRow(Mapping):
         ``path_length`` over the straight distance of the task (the polyline from the start
         through the waypoints, the last one where the target was when reached); None when not
         reached.
+    flow : str or None
+        A navigation run's background flow (canonical JSON of the flow's ``to_dict()``,
+        [`jswim.env.flows`][jswim.env.flows]); this and the next four are written only for runs
+        in a flow.
+    flow_fraction : float or None
+        The flow's speed over the swimming speed
+        ([`jswim.env.flows.SWIM_SPEED`][jswim.env.flows.SWIM_SPEED]).
+    reachable : bool or None
+        Zermelo's point steerer with the swimming speed reaches the target in this flow
+        ([`jswim.agents.zermelo`][jswim.agents.zermelo]); False: no agent can, the row says so.
+    zermelo_steps : float or None
+        Zermelo's least time to the target (steps, ``tau``); None when unreachable.
+    time_ratio : float or None
+        ``steps_to_target / zermelo_steps`` (None: not reached, or unreachable).
     other : Mapping
         Any column this version does not know (a folder written by another one), in its order.
     """
@@ -366,6 +384,11 @@ class RunRow(Mapping):
     steps_to_target: int | None = None
     path_length: float | None = None
     path_ratio: float | None = None
+    flow: str | None = None
+    flow_fraction: float | None = None
+    reachable: bool | None = None
+    zermelo_steps: float | None = None
+    time_ratio: float | None = None
     other: Mapping[str, Any] = field(default_factory=dict)
 
     def columns(self) -> tuple[str, ...]:

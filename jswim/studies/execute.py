@@ -62,6 +62,7 @@ def run_spec(p: Plan) -> LLMRunSpec:
         scene=p.scene,
         pair_prompt=p.pair_prompt,
         target=p.target,
+        flow=p.flow,
     )
 
 
@@ -98,6 +99,7 @@ BASELINE_GROUP = (
     "variant",
     "zeta",
     "target",
+    "flow",
 )
 
 

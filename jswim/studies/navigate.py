@@ -13,6 +13,7 @@ reached, steps to it, path length over the straight distance, energy and energy 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 import math
 from typing import Any
@@ -22,6 +23,7 @@ import jax
 import numpy as np
 
 from jswim import env as jenv
+from jswim.env.flows import SWIM_SPEED, Flow, Uniform, flow_from_dict, flow_json, study_flow
 from jswim.env.navigation import NavSummary, energy_per_distance, summarise
 from jswim.env.registry import make
 from jswim.env.targets import (
@@ -36,7 +38,7 @@ from jswim.env.work import lighthill_efficiency
 from jswim.judging import lattice
 from jswim.results import as_run_rows, is_failed
 from jswim.results.row import RunRow
-from jswim.studies.options import CONTINUOUS_AGENT, CONTROLLER_AGENT
+from jswim.studies.options import CONTINUOUS_AGENT, CONTROLLER_AGENT, ZERMELO_AGENT
 from jswim.studies.plans import Cell, Plan
 from jswim.swimmers.models import make_model
 
@@ -44,6 +46,7 @@ __all__ = [
     "CONTROLLER_AGENT",
     "DEFAULT_BEARINGS",
     "DEFAULT_DISTANCES",
+    "FLOW_BUDGET_FACTOR",
     "MOVING",
     "NAV_AGENTS",
     "NAV_ROC_LEVELS",
@@ -51,13 +54,18 @@ __all__ = [
     "PATH",
     "PPO_SHARE",
     "cells",
+    "flow_columns",
+    "flow_grid",
     "nav_ppo_config",
     "nav_qconfig",
     "nav_row",
     "nav_summary",
+    "plan_flow",
     "target_json",
     "targets",
     "with_budgets",
+    "zermelo_path",
+    "zermelo_rows",
 ]
 
 
@@ -101,41 +109,106 @@ def targets(distances: Sequence[float], bearings: Sequence[float]) -> list[tuple
     return out
 
 
+def flow_grid(o: Any) -> list[tuple[str, str, float | None, str]]:
+    """``(group suffix, tag, fraction, flow JSON)`` of each flow speed of options ``o``: one
+    still-fluid entry without ``--flow``; else each of ``--flows`` (fractions of the swimming
+    speed, [`jswim.env.flows.study_flow`][jswim.env.flows.study_flow]; a fraction of 0 is still
+    fluid, written as a uniform stream of speed 0 so its rows carry the flow's columns)."""
+    if not o.flow:
+        return [("", "", None, "")]
+    out = []
+    for f in o.flows:
+        flow = study_flow(o.flow, f) if f > 0 else Uniform((0.0, 0.0))
+        out.append((f", {o.flow} {f:g}v", f"{o.flow}{f:g}", float(f), flow_json(flow)))
+    return out
+
+
 def cells(o: Any) -> list[Cell]:
-    """The navigation study's cells for options ``o``: one per target, on the K lattice of
-    ``--roc-levels`` (2 where it is 1). Their runs' steps are the target's budget (`--steps`
-    overrides it), which the world measures: planning leaves them to `with_budgets`."""
+    """The navigation study's cells for options ``o``: one per target (and, with ``--flow``,
+    per flow speed: `flow_grid`), on the K lattice of ``--roc-levels`` (2 where it is 1). Their
+    runs' steps are the target's budget (`--steps` overrides it), which the world measures:
+    planning leaves them to `with_budgets`. In a flow Zermelo's steerer joins the agents."""
     k = o.roc_levels if o.roc_levels > 1 else NAV_ROC_LEVELS
     return [
-        Cell(group, NAV_AGENTS, n_ht=o.n_ht, roc_levels=k, tag=tag, target=target_json(spec))
+        Cell(
+            group + suffix,
+            NAV_AGENTS + ((ZERMELO_AGENT,) if flow else ()),
+            n_ht=o.n_ht,
+            roc_levels=k,
+            tag="-".join(t for t in (tag, ftag) if t),
+            target=target_json(spec),
+            flow=flow,
+            flow_fraction=fraction,
+        )
+        for suffix, ftag, fraction, flow in flow_grid(o)
         for group, tag, spec in targets(o.distances, o.bearings)
     ]
+
+
+def plan_flow(plan: Any) -> Flow | None:
+    """A plan's (or row's) background flow (``None``: still fluid)."""
+    return flow_from_dict(json.loads(plan.flow)) if plan.flow else None
+
+
+def zermelo_path(target: str, flow: str) -> Any:
+    """Zermelo's optimal path ([`jswim.agents.zermelo.zermelo`][jswim.agents.zermelo.zermelo]) to
+    ``target`` through ``flow`` (both canonical JSON; ``""``: still fluid) at the swimming
+    speed, computed once per process per target and flow (the target's budget aside)."""
+    spec = target_from_dict(json.loads(target))
+    return _zermelo(target_json(dataclasses.replace(spec, budget=None)), flow)
+
+
+@functools.lru_cache(maxsize=256)
+def _zermelo(target: str, flow: str) -> Any:
+    from jswim.agents.zermelo import zermelo  # lazy: start-up (the shooting method's JAX)
+
+    spec = target_from_dict(json.loads(target))
+    return zermelo(flow_from_dict(json.loads(flow)) if flow else None, spec, SWIM_SPEED)
+
+
+#: In a flow a target's budget is at least this many times Zermelo's least time (the steering
+#: controller's still-fluid budget is measured without the flow).
+FLOW_BUDGET_FACTOR = 4
 
 
 def with_budgets(plans: Sequence[Plan]) -> list[Plan]:
     """``plans`` with every navigation run's steps filled in: ``episodes`` of its target's budget,
     as the world of the run measures it when it is made ([`default_budget`][jswim.env.targets.default_budget],
-    the steering controller's physics, measured once per swimmer and K). Plans with their steps
-    set are returned as they are.
+    the steering controller's physics, measured once per swimmer and K); in a flow at least
+    `FLOW_BUDGET_FACTOR` times Zermelo's least time (a target Zermelo cannot reach, and a flow
+    of speed 0, keep the still-fluid budget: the former's rows say unreachable). Plans with
+    their steps set are returned as they are.
 
     Raises
     ------
     ConfigError
         As `default_budget` (a target that needs more steps than a world counts).
     """
-    budgets: dict[tuple[str, str, int], int] = {}
+    budgets: dict[tuple[str, str, int, str], int] = {}
 
     def budget(p: Plan) -> int:
-        key = (p.swimmer, p.target, p.roc_levels)
+        key = (p.swimmer, p.target, p.roc_levels, p.flow)
         if key not in budgets:
             spec = target_from_dict(json.loads(p.target))
-            budgets[key] = default_budget(spec, make_model(p.swimmer), p.roc_levels)
+            if spec.budget is not None:  # set by the spec (or filled in below): the world's
+                budgets[key] = spec.budget
+                return spec.budget
+            still = default_budget(spec, make_model(p.swimmer), p.roc_levels)
+            moving = p.flow and flow_from_dict(json.loads(p.flow)).speed > 0
+            best = zermelo_path(p.target, p.flow).steps if moving else None
+            budgets[key] = (
+                still if best is None else max(still, math.ceil(FLOW_BUDGET_FACTOR * best))
+            )
         return budgets[key]
 
-    return [
-        p if p.steps is not None else dataclasses.replace(p, steps=budget(p) * p.episodes)
-        for p in plans
-    ]
+    def filled(p: Plan) -> Plan:
+        if p.flow and target_from_dict(json.loads(p.target)).budget is None:
+            # the world counts its own budget: in a flow the spec carries it (the row's target)
+            spec = dataclasses.replace(target_from_dict(json.loads(p.target)), budget=budget(p))
+            p = dataclasses.replace(p, target=target_json(spec))
+        return p if p.steps is not None else dataclasses.replace(p, steps=budget(p) * p.episodes)
+
+    return [filled(p) for p in plans]
 
 
 def nav_row(
@@ -197,6 +270,7 @@ def nav_row(
     bodies = make_model(plan.swimmer).n_dof + 1
     return dataclasses.replace(
         row,
+        **flow_columns(plan, steps if reached else None),
         energy=float(episode.energy) if finite else None,
         energy_per_distance=float(per) if finite and math.isfinite(per) else None,
         efficiency=float(lighthill_efficiency(net, episode.energy, steps, bodies))
@@ -208,6 +282,72 @@ def nav_row(
         path_length=float(episode.path),
         path_ratio=float(episode.path_ratio) if reached else None,
     )
+
+
+def flow_columns(plan: Plan, steps_to_target: float | None) -> dict[str, Any]:
+    """A navigation row's flow columns (`jswim.results.row.FLOW`; none in still fluid): the
+    flow, its speed fraction, whether Zermelo reaches the target, his least time and the run's
+    time over it."""
+    if not plan.flow:
+        return {}
+    best = zermelo_path(plan.target, plan.flow).steps
+    return {
+        "flow": plan.flow,
+        "flow_fraction": plan.flow_fraction,
+        "reachable": best is not None,
+        "zermelo_steps": None if best is None else round(float(best), 6),
+        "time_ratio": None
+        if best is None or steps_to_target is None or best <= 0
+        else round(float(steps_to_target) / float(best), 6),
+    }
+
+
+def zermelo_rows(plans: Sequence[Plan]) -> list[RunRow]:
+    """The rows of Zermelo's point steerer ([`jswim.agents.zermelo`][jswim.agents.zermelo]):
+    the optimal path sampled each step, reached where the target is reachable within the
+    plan's steps (its budget, or ``--steps``), its steps the least time rounded up (the path
+    cut at the plan's steps where it is longer); no strokes (``actions`` empty), no energy (a
+    point does no modelled work)."""
+    from jswim.studies.rows import build_row  # lazy: start-up (rows load the LLM driver)
+
+    out = []
+    for plan in plans:
+        best = zermelo_path(plan.target, plan.flow)
+        limit = plan.steps if plan.steps is not None else None
+        xy = np.asarray(best.xy, np.float64).reshape(-1, 2)[1:][:limit]
+        steps = len(xy)
+        reached = best.steps is not None and (limit is None or best.steps <= limit)
+        verdict = {
+            "success": reached,
+            "learned": reached,
+            "steps_to_learn": steps if reached else None,
+            "period": 0,
+        }
+        heading = np.asarray(best.heading, np.float64).reshape(-1)[1:][:limit]
+        row = build_row(
+            plan,
+            [float(v) for v in xy[:, 0]],
+            [],
+            verdict,
+            init="",
+            y=[float(v) for v in xy[:, 1]],
+            orientation=[float(v) for v in heading],
+        )
+        path = float(np.hypot(*np.diff(np.vstack([[0.0, 0.0], xy]), axis=0).T).sum())
+        straight = _straight(target_from_dict(json.loads(plan.target)), steps)
+        cols = flow_columns(plan, best.steps if reached else None)
+        out.append(
+            dataclasses.replace(
+                row,
+                **cols,
+                target=plan.target,
+                reached=reached,
+                steps_to_target=steps if reached else None,
+                path_length=path,
+                path_ratio=path / straight if reached and straight > 0 else None,
+            )
+        )
+    return out
 
 
 def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
@@ -224,7 +364,13 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
         return float(np.mean(vals)) if vals else None
 
     table = []
-    for (agent, group), g in sorted(out.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+
+    def order(kv: tuple[tuple[str, str], list[RunRow]]) -> tuple:
+        # by flow speed (the grid's order, not the group's text), then target, then agent
+        (agent, group), g = kv
+        return (g[0].flow_fraction if g[0].flow_fraction is not None else -1.0, group, agent)
+
+    for (agent, group), g in sorted(out.items(), key=order):
         table.append(
             {
                 "group": group,
@@ -236,6 +382,16 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
                 "path_ratio": mean([r.path_ratio for r in g]),
                 "energy": mean([r.energy for r in g]),
                 "energy_per_distance": mean([r.energy_per_distance for r in g]),
+                **(
+                    {
+                        "flow_fraction": g[0].flow_fraction,
+                        "reachable": bool(g[0].reachable),
+                        "zermelo_steps": g[0].zermelo_steps,
+                        "time_ratio": mean([r.time_ratio for r in g]),
+                    }
+                    if g[0].flow
+                    else {}
+                ),
             }
         )
     return table
@@ -301,6 +457,7 @@ def world(plan: Plan) -> tuple[Any, Any]:
         init=tuple(int(v) for v in init) if init is not None else None,
         roc_levels=plan.roc_levels,
         target=target_from_dict(json.loads(plan.target)),
+        flow=plan_flow(plan),
     )
 
 
@@ -337,6 +494,8 @@ def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
     )
 
     p0 = plans[0]
+    if p0.agent == ZERMELO_AGENT:
+        return zermelo_rows(plans)
     world_, params = world(p0)
     keys = jax.vmap(jax.random.PRNGKey)(np.array([jenv.seed32(p.seed) for p in plans], np.uint32))
     budget = int(np.asarray(params.target.budget))

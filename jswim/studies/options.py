@@ -14,6 +14,7 @@ from jswim.agents.variants import (
     variant_action_set,
 )
 from jswim.env.registry import registered_worlds
+from jswim.env.flows import FLOWS
 from jswim.env.targets import MAX_BEARING, MAX_DISTANCE
 from jswim.errors import ConfigError, check_size, check_zeta
 from jswim.judging.gait import PAPER
@@ -31,10 +32,17 @@ CONTINUOUS_AGENT = "ppo"
 #: The steering controller (turn with an off-centre loop, then the square gait): the navigation
 #: study's reference stroke (jswim.agents.steering).
 CONTROLLER_AGENT = "controller"
+#: Zermelo's point steerer (jswim.agents.zermelo): the time-optimal path through a flow at the
+#: swimming speed, the navigation study's yardstick in a flow (its rows' time ratios).
+ZERMELO_AGENT = "zermelo"
 #: The agents of a paper study's cells that run next to the LLM.
 WITH_BASELINES = ("llm", "qlearning", "random")
 #: Every agent a study may run (the default of `StudyOptions.agents`).
-ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT, CONTROLLER_AGENT)
+ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT, CONTROLLER_AGENT, ZERMELO_AGENT)
+#: The navigation study's flow speeds (``--flows``), fractions of the swimming speed, and the
+#: largest it takes.
+DEFAULT_FLOWS = (0.0, 0.5, 0.9)
+MAX_FLOW = 2.0
 #: ROC lattices of the continuous study (``--roc-levels``; K = 1 is the paper's set).
 DEFAULT_ROC_LEVELS = (1, 2, 5, 10)
 DEFAULT_ZETAS = (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0)
@@ -68,6 +76,7 @@ SCENE_GRIDS = (
     "formations",
     "distances",
     "bearings",
+    "flows",
 )
 
 
@@ -134,6 +143,10 @@ class StudyOptions:
     # crossed with these bearings (degrees from the start heading, counterclockwise).
     distances: tuple[float, ...] = (3.0,)
     bearings: tuple[float, ...] = (0.0, 90.0, 180.0)
+    # The navigation study in a background flow (jswim.env.flows.study_flow): its kind ("": still
+    # fluid) and its speeds, fractions of the swimming speed (a grid: each target at each).
+    flow: str = ""
+    flows: tuple[float, ...] = DEFAULT_FLOWS
     # Episodes of each target's budget that Q-learning and PPO train for in the navigation study.
     train_episodes: int = 400
 
@@ -156,6 +169,7 @@ class StudyOptions:
                 f"--bearings must be degrees in -{MAX_BEARING:g}..{MAX_BEARING:g}, "
                 f"got {','.join(map(str, self.bearings))}"
             )
+        self._check_flows()
         for h in self.n_hts:
             check_size("n_ht", h, "--n-hts")
         if self.init is not None and self.init not in INIT_CHOICES:
@@ -235,6 +249,25 @@ class StudyOptions:
         bad = sorted(set(self.agents) - set(ALL_AGENTS))
         if bad:
             raise ConfigError(f"unknown agents {bad}; choose from {', '.join(ALL_AGENTS)}")
+
+    def _check_flows(self) -> None:
+        if self.flow and self.flow not in FLOWS:
+            raise ConfigError(f"--flow must be one of {', '.join(FLOWS)}, got {self.flow!r}")
+        if (
+            any(
+                isinstance(f, bool) or not isinstance(f, (int, float)) or not 0 <= f <= MAX_FLOW
+                for f in self.flows
+            )
+            or not self.flows
+        ):
+            raise ConfigError(
+                f"--flows must be fractions of the swimming speed in 0..{MAX_FLOW:g}, "
+                f"got {','.join(map(str, self.flows))}"
+            )
+        if len(set(self.flows)) < len(self.flows):
+            object.__setattr__(self, "flows", tuple(dict.fromkeys(self.flows)))
+        if not self.flow and tuple(self.flows) != DEFAULT_FLOWS:
+            raise ConfigError("--flows sets the speeds of a flow: give its kind with --flow KIND")
 
     def llm_variant(self, study: str) -> str:
         """The protocol variant of the study's LLM runs (outside the competence study)."""

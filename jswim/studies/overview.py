@@ -184,8 +184,12 @@ def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
     the report page print it, each from here."""
     from jswim.studies.navigate import nav_summary  # lazy: the navigation study loads JAX
 
+    summary = nav_summary(rows)
+    flow = any("time_ratio" in g for g in summary)
     cols = [Column("target", False), Column("agent", False)] + [
-        Column(h) for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
+        Column(h)
+        for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
+        + (("Zermelo", "time ratio") if flow else ())
     ]
     cells = [
         [
@@ -197,7 +201,8 @@ def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
             _fmt(g["energy"], ".1f"),
             _fmt(g["energy_per_distance"], ".1f"),
         ]
-        for g in nav_summary(rows)
+        + (_flow_cells(g) if flow else [])
+        for g in summary
     ]
     note = (
         "reached: runs whose centroid came within the target's radius of it (a path: of its last "
@@ -207,7 +212,23 @@ def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
         "(xi_par a^3/tau); energy/dist: energy per a closed. controller: the steering controller "
         "(the reference stroke); ppo: PPO with a categorical policy over the K-level action codes."
     )
+    if flow:
+        note += (
+            " In a flow (the group's speed, a fraction of the swimming speed v = 0.0478 a per "
+            "step): Zermelo: the least time (steps) of a point steering at speed v through the "
+            "flow (zermelo: its path); time ratio: steps over it, mean over the runs that reached "
+            "the target; 'unreachable': no heading reaches it, for any agent."
+        )
     return cols, cells, note
+
+
+def _flow_cells(g: dict[str, Any]) -> list[str]:
+    """A navigation summary row's Zermelo and time-ratio cells ("-" in still fluid)."""
+    if "time_ratio" not in g:
+        return ["-", "-"]
+    if not g["reachable"]:
+        return ["unreachable", "unreachable"]
+    return [_fmt(g["zermelo_steps"], ".1f"), _fmt(g["time_ratio"], ".2f")]
 
 
 def is_navigation(rows: Sequence[Any]) -> bool:

@@ -53,6 +53,8 @@ class Plan:
     )
     target: str = ""  # a navigation target (canonical JSON of its spec); "": the paper's task
     episodes: int = 1  # budgets a navigation learner trains for (steps None: of its target's)
+    flow: str = ""  # a navigation run's background flow (canonical JSON, flow_json); "": still
+    flow_fraction: float | None = None  # that flow's speed over the swimming speed (--flows)
 
 
 def sample_id(run: str, sample: int) -> str:
@@ -81,6 +83,8 @@ class Cell:
     stroke: str = ""  # the stroke agent's stroke (jswim.studies.scene_studies.stroke_codes), its plans' variant
     target: str = ""  # a navigation target (jswim.studies.navigate), canonical JSON; "": none
     steps: int | None = None  # the cell's own steps per run; None: the study's (a target's budget)
+    flow: str = ""  # a navigation cell's background flow (canonical JSON); "": still fluid
+    flow_fraction: float | None = None  # its speed over the swimming speed (--flows)
 
 
 def initial(choice: str, k: int, swimmer: str = "purcell") -> tuple[int, ...] | str:

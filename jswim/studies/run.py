@@ -184,6 +184,8 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
         opts.pop("roc_levels")
     if opts["pair_prompt"] == "joint":  # the default: as before --pair-prompt existed
         opts.pop("pair_prompt")
+    if not opts["flow"]:  # still fluid: as before --flow existed
+        opts.pop("flow")
     if tuple(o.agents) == ALL_AGENTS:  # the default, written as before the continuous agent existed
         opts["agents"] = AGENTS
     if study == "swim" and o.variant is None and SWIM_VARIANT != "paper":
@@ -360,7 +362,8 @@ def _folder_metadata(
         "fidelity_deviations": list(fidelity.ALWAYS)
         + fidelity.study_extensions({p.roc_levels for p in plans})
         + _scene_extensions(plans)
-        + ([fidelity.NAVIGATION] if any(p.target for p in plans) else []),
+        + ([fidelity.NAVIGATION] if any(p.target for p in plans) else [])
+        + ([fidelity.FLOW] if any(p.flow for p in plans) else []),
         "roc_levels": sorted({p.roc_levels for p in plans}),
         # The physics models its scenes use outside their stated range (jswim.scenes.ranges),
         # as the runs warned of them once and as the page lists them.

@@ -32,6 +32,7 @@ from jswim.studies.options import (
     DEFAULT_ROC_LEVELS,
     CONTINUOUS_AGENT,
     CONTROLLER_AGENT,
+    ZERMELO_AGENT,
     SCENE_GRIDS,
     STROKE_AGENT,
     WITH_BASELINES,
@@ -346,6 +347,7 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     # A stroke is deterministic without noise: one run says it all (--q-runs of them under noise).
     runs[STROKE_AGENT] = runs["qlearning"] if o.zeta > 0 else min(1, runs["qlearning"])
     runs[CONTROLLER_AGENT] = runs[STROKE_AGENT]  # the steering controller is deterministic too
+    runs[ZERMELO_AGENT] = min(1, runs["qlearning"])  # an optimal path: one says it all
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:
@@ -374,6 +376,10 @@ def _check_grids(study: str, spec: StudySpec, o: StudyOptions) -> None:
             f"the {study} study has no use for --pair-prompt {o.pair_prompt} (pair_prompt: only LLM "
             "runs on a pair of swimmers read it, as in jswim study pair with the llm agent); leave it out"
         )
+    if study != "navigate" and o.flow:
+        raise ConfigError(
+            f"the {study} study has no use for --flow (only jswim study navigate reads it); leave it out"
+        )
     for name, owners in (
         ("heights", ("wall",)),
         ("tilts", ("wall",)),
@@ -383,6 +389,7 @@ def _check_grids(study: str, spec: StudySpec, o: StudyOptions) -> None:
         ("formations", ("school",)),
         ("distances", ("navigate",)),
         ("bearings", ("navigate",)),
+        ("flows", ("navigate",)),
     ):
         if (
             study not in owners and tuple(getattr(o, name)) != _DEFAULT_GRIDS[name]
@@ -483,6 +490,8 @@ def _agent_plans(
                         pair,
                         cell.target,
                         episodes=episodes,
+                        flow=cell.flow,
+                        flow_fraction=cell.flow_fraction,
                     )
                 )
     return out

@@ -1,0 +1,110 @@
+"""The navigation study in a flow: budgets grow with Zermelo's least time, every row carries its
+flow, whether the target is reachable, Zermelo's time and its own ratio to it, and an unreachable
+target says so instead of timing out silently. Zermelo's times here are checked against the
+uniform stream's closed form written out in the test."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from jswim.env.flows import SWIM_SPEED as V
+from jswim.env.targets import target_from_dict
+from jswim.studies import navigate
+from jswim.studies.options import StudyOptions
+from jswim.studies.specs import build
+
+R = 0.25  # the success radius
+
+
+def _plans(fraction, bearing, agents=("controller", "zermelo")):
+    o = StudyOptions(flow="uniform", flows=(fraction,), bearings=(bearing,), agents=agents)
+    return [p for p in build("navigate", o) if p.group.startswith("fixed")]
+
+
+def _crab_time(fraction: float, bearing: float) -> float | None:
+    """A uniform stream u = (0, f v) and a target 3 a away: the least T with
+    |P - u T| = v T + r (a straight crab path), the smaller positive root."""
+    px, py = 3 * math.cos(math.radians(bearing)), 3 * math.sin(math.radians(bearing))
+    u = fraction * V
+    a = u * u - V * V
+    b = -2 * (py * u + V * R)
+    c = px * px + py * py - R * R
+    if abs(a) < 1e-15:
+        return -c / b
+    disc = b * b - 4 * a * c
+    if disc < 0:
+        return None
+    roots = [(-b - math.sqrt(disc)) / (2 * a), (-b + math.sqrt(disc)) / (2 * a)]
+    pos = [t for t in roots if t > 0]
+    return min(pos) if pos else None
+
+
+@pytest.mark.parametrize("fraction, bearing", [(0.9, 0.0), (0.5, 90.0), (0.5, 180.0)])
+def test_the_budget_is_at_least_four_zermelo_times(fraction, bearing):
+    best = _crab_time(fraction, bearing)
+    plans = navigate.with_budgets(_plans(fraction, bearing))
+    got = navigate.zermelo_path(plans[0].target, plans[0].flow).steps
+    assert got == pytest.approx(best, rel=1e-6)
+    budget = target_from_dict(json.loads(plans[0].target)).budget
+    assert budget >= math.ceil(navigate.FLOW_BUDGET_FACTOR * best)
+    assert all(p.steps == budget for p in plans)
+
+
+def test_an_unreachable_target_says_so():
+    # a cross stream of 1.2 v and a target straight ahead: no heading reaches it
+    assert _crab_time(1.2, 0.0) is None
+    plans = navigate.with_budgets(_plans(1.2, 0.0))
+    assert navigate.zermelo_path(plans[0].target, plans[0].flow).steps is None
+    rows = {p.agent: r for p in plans for r in navigate.baseline_rows([p])}
+    for r in rows.values():
+        assert r.reachable is False and r.zermelo_steps is None and r.time_ratio is None
+        assert r.flow_fraction == 1.2 and json.loads(r.flow)["kind"] == "uniform"
+    assert rows["zermelo"].reached is False and rows["controller"].reached is False
+
+
+def test_every_row_carries_its_time_ratio():
+    plans = navigate.with_budgets(_plans(0.5, 90.0))
+    rows = {p.agent: r for p in plans for r in navigate.baseline_rows([p])}
+    best = _crab_time(0.5, 90.0)
+    ctrl, zer = rows["controller"], rows["zermelo"]
+    assert ctrl.reached and ctrl.reachable
+    assert ctrl.zermelo_steps == pytest.approx(best, rel=1e-5)
+    assert ctrl.time_ratio == pytest.approx(ctrl.steps_to_target / best, rel=1e-5)
+    assert ctrl.time_ratio >= 1.0  # nothing beats the point steerer of the same speed here
+    # Zermelo's own row: its path ends within the radius, after ceil(T) steps
+    assert zer.reached and zer.steps_to_target == math.ceil(best) and zer.actions == []
+    assert math.hypot(zer.x[-1], zer.y[-1] - 3.0) < R + 1e-6
+    assert zer.time_ratio == pytest.approx(1.0)
+    table = {(g["agent"], g["group"]): g for g in navigate.nav_summary(list(rows.values()))}
+    g = table[("controller", ctrl.group)]
+    assert g["flow_fraction"] == 0.5 and g["reachable"] and g["time_ratio"] == ctrl.time_ratio
+
+
+def test_the_llm_sees_the_local_flow_in_its_records(tmp_path):
+    from jswim.llm.backend import Backend
+    from jswim.llm.reference import completion
+    from jswim.results import read_runs, read_transcript
+    from jswim.studies.run import run_study
+    from tests.fakeserver import FakeServer
+
+    def rule(body: dict) -> str:
+        return completion(body)["choices"][0]["message"]["content"]
+
+    out = tmp_path / "nav-flow"
+    opts = StudyOptions(
+        flow="uniform", flows=(0.5,), bearings=(90.0,), agents=("llm", "zermelo"), steps=6
+    )
+    with FakeServer(reply=rule) as srv:
+        run_study("navigate", opts, Backend(base_url=srv.url, model="fake"), out, progress=False)
+    rows = read_runs(out)
+    llm = next(r for r in rows if r["agent"] == "llm" and r["group"].startswith("fixed"))
+    assert llm["flow_fraction"] == 0.5 and llm["reachable"] is True
+    steps = [r for r in read_transcript(out, llm["run_id"]) if r.get("type") == "step"]
+    # u = (0, 0.5 v) = (0, 0.0239) a per step everywhere: "flow (0, 23)" in every record shown
+    assert "The fluid flows and carries the swimmer" in steps[1]["prompt"]
+    assert "flow (0, 23), stuck" in steps[1]["prompt"]
+    meta = json.loads((out / "metadata.json").read_text())
+    assert any(d.startswith("background flow") for d in meta["fidelity_deviations"])
