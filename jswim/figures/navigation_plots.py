@@ -9,10 +9,15 @@ palette, ``note`` across the top of an unfinished study's figures); chosen by
     target(s) with their success radius (a moving target's track as a dotted line from its
     start to where it was at the longest run's end).
 ``navigate-bearing``
-    Success rate against the fixed targets' bearing, one line per agent (one panel per distance).
+    Success rate against the fixed targets' bearing, one line per agent (one panel per distance,
+    and in a background flow per flow speed).
 ``navigate-energy``
     Energy per link length closed on the target, per agent and target (bars; the runs that closed
     any distance), and steps to the target below.
+
+A study in a background flow (``--flow``) adds the flow figures of
+`jswim.figures.flow_plots`; Zermelo's least-time path is drawn
+dashed (`ZERMELO_STYLE`) wherever a path is.
 """
 
 from __future__ import annotations
@@ -30,6 +35,9 @@ from jswim.results import as_run_rows
 
 __all__ = [
     "CONTROLLER_STYLE",
+    "ZERMELO_STYLE",
+    "agent_order",
+    "agent_style",
     "bearing_figure",
     "energy_figure",
     "nav_figures",
@@ -43,7 +51,15 @@ CONTROLLER_STYLE = dict(color="black", ls="-", marker="x", label="steering contr
 #: ([`jswim.studies.navigate.nav_ppo_config`][jswim.studies.navigate.nav_ppo_config]), not the
 #: continuous study's real-ROC one.
 NAV_PPO_STYLE = {**AGENT_STYLE["ppo"], "label": "PPO (categorical, K-level codes)"}
-_STYLES = {**AGENT_STYLE, "ppo": NAV_PPO_STYLE, "controller": CONTROLLER_STYLE}
+#: Zermelo's optimal point steerer (in a flow, docs/navigation.md): the least-time reference,
+#: dashed so that an agent's path drawn on it stays visible.
+ZERMELO_STYLE = dict(color="#CC79A7", ls="--", marker="+", label="Zermelo (least time)")
+_STYLES = {
+    **AGENT_STYLE,
+    "ppo": NAV_PPO_STYLE,
+    "controller": CONTROLLER_STYLE,
+    "zermelo": ZERMELO_STYLE,
+}
 
 #: Bearing offset between neighbouring agents' points in the bearing figure (degrees), so that
 #: agents with the same success rate stay visible side by side.
@@ -51,8 +67,17 @@ BEARING_DODGE = 3.0
 _ORDER = ("llm", "qlearning", "ppo", "controller", "random")
 
 
-def _style(agent: str) -> dict[str, Any]:
+def agent_style(agent: str) -> dict[str, Any]:
+    """An agent's colour, line, marker and label in the navigation figures."""
     return _STYLES.get(agent, dict(color="#999999", ls="-", marker=".", label=agent))
+
+
+_style = agent_style
+
+
+def agent_order(agent: str) -> int:
+    """An agent's place in the navigation figures' order (Zermelo's reference last)."""
+    return _ORDER.index(agent) if agent in _ORDER else 9 + (agent == "zermelo")
 
 
 def _note(fig: Figure, note: str | None) -> None:
@@ -97,7 +122,7 @@ def paths_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> 
         longest = max(len(r.x) for r in g)
         pts, track = target_points(g[0].target, longest)
         radius = float(json.loads(g[0].target).get("radius", 0.25))
-        for r in sorted(g, key=lambda r: _ORDER.index(r.agent) if r.agent in _ORDER else 9):
+        for r in sorted(g, key=lambda r: agent_order(r.agent)):
             st = _style(r.agent)
             xs = np.concatenate([[0.0], np.asarray(r.x, float)])
             ys = np.concatenate([[0.0], np.asarray(r.y or [0.0] * len(r.x), float)])
@@ -129,6 +154,17 @@ def _circle(xy: tuple[float, float], radius: float, **kw: Any) -> Any:
     return Circle(xy, radius, **kw)
 
 
+def _flow_of(r: Any) -> tuple[float, str]:
+    """``(speed fraction, title suffix)`` of a row's background flow; ``(0, "")`` in still fluid."""
+    if not r.flow:
+        return 0.0, ""
+    f = float(r.flow_fraction or 0.0)
+    if not f:  # the study's still-fluid reference (recorded as a uniform stream of speed 0)
+        return f, "\nstill fluid"
+    kind = str(json.loads(r.flow).get("kind", "flow"))
+    return f, f"\n{kind} {f:g} v"
+
+
 def _bearing(r: Any) -> tuple[float, float] | None:
     t = json.loads(r.target)
     if t.get("kind") != "fixed":
@@ -140,17 +176,28 @@ def _bearing(r: Any) -> tuple[float, float] | None:
 def bearing_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     """Success rate against the fixed targets' bearing, per agent (one panel per distance)."""
     rows = [r for r in as_run_rows(rows) if r.target and _bearing(r) is not None]
-    distances = sorted({_bearing(r)[0] for r in rows})
-    fig = Figure(figsize=(COLUMN_IN * min(len(distances), 2) or COLUMN_IN, 2.4))
-    axes = fig.subplots(1, max(len(distances), 1), squeeze=False)[0]
+    # One panel per distance (and, in a flow, per flow speed: rates in different flows are
+    # never averaged together).
+    panels = sorted({(_bearing(r)[0], _flow_of(r)) for r in rows}, key=lambda k: (k[0], k[1][0]))
+    n = max(len(panels), 1)
+    if n <= 2:  # one or two distances in still fluid: a column each
+        fig = Figure(figsize=(COLUMN_IN * n, 2.4))
+        axes = fig.subplots(1, n, squeeze=False)[0]
+    else:  # several flow speeds: three to a row across the page
+        nrows = math.ceil(n / 3)
+        fig = Figure(figsize=(PAGE_IN, 2.4 * nrows))
+        axes = list(fig.subplots(nrows, 3, squeeze=False).ravel())
+        for ax in axes[n:]:
+            ax.set_visible(False)
+        fig.subplots_adjust(hspace=0.6, wspace=0.35)
     agents = [a for a in _ORDER if any(r.agent == a for r in rows)]
-    for ax, d in zip(axes, distances):
+    for ax, (d, flow) in zip(axes, panels):
         for i, agent in enumerate(agents):
             shift = (i - (len(agents) - 1) / 2) * BEARING_DODGE
             by: dict[float, list[bool]] = {}
             for r in rows:
                 dist, b = _bearing(r)
-                if r.agent == agent and dist == d:
+                if r.agent == agent and dist == d and _flow_of(r) == flow:
                     by.setdefault(b, []).append(bool(r.reached))
             bs = sorted(by)
             st = _style(agent)
@@ -163,11 +210,15 @@ def bearing_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -
                 mfc="none" if i % 2 else st["color"],
                 label=st["label"],
             )
-        ax.set_title(f"targets {d:g} a away")
-        ax.set_xlabel(f"bearing (degrees; agents {BEARING_DODGE:g} degrees apart)")
+        ax.set_title(f"targets {d:g} a away" + flow[1])
+        ax.set_xlabel(
+            f"bearing (degrees; agents {BEARING_DODGE:g} degrees apart)"
+            if n <= 2
+            else f"bearing (deg; agents {BEARING_DODGE:g} apart)"
+        )
         ax.set_ylabel("success rate")
         ax.set_ylim(-0.05, 1.05)
-    if distances:
+    if panels:
         axes[0].legend(fontsize=6)
     _note(fig, note)
     return fig

@@ -31,6 +31,7 @@ from jswim.results import as_run_rows, is_failed
 
 from jswim.figures.scene_plots import scene_figures
 from jswim.figures.navigation_plots import nav_figures
+from jswim.figures.flow_plots import flow_figures
 from jswim.figures.panels import save
 from jswim.figures.sketches import learned_cycles
 from jswim.figures.curves import curves_figure, history_figure
@@ -82,7 +83,8 @@ def study_figures(
     if study in ("wall", "pair", "school"):  # walls, pairs and schools: the scene figures
         return scene_figures(study, rows, note=note)
     if study == "navigate":  # paths in the plane, success against bearing, energy
-        return nav_figures(rows, note=note)
+        # In a background flow, also the paths over its streamlines and rates against its speed.
+        return {**nav_figures(rows, note=note), **flow_figures(rows, note=note)}
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [

@@ -2,7 +2,8 @@
 
 Each panel is one run: its body to scale (links of length ``a``, spheres of radius ``a``) at the
 recorded pose after each step, the centroid's trail (the steps of the stroke the success
-criterion found drawn thick), the start line, and under it the step counter, the action
+criterion found drawn thick), the start line, a navigation run's background flow as streamlines
+under the swimmer (named at the panel's top right), and under it the step counter, the action
 ``[DOF, ROC]``, ``X/a``, the events of the step (stuck, history cleared, a failed reply, which cycle
 of the stroke) and, for LLM runs, the reply the model gave. One frame per step: the states between
 two recorded steps are not drawn (nothing is invented between them). Panels share one scale and
@@ -31,6 +32,7 @@ import numpy as np
 from jswim import reprs
 from jswim._io.permissions import file_mode  # the study folders' rule (owner-only under umask 022)
 from jswim.errors import ConfigError
+from jswim.figures.flow_plots import draw_flow, flow_label
 from jswim.figures.panels import panel_keys
 from jswim.figures.style import RC
 from jswim.results.orders import AGENT_ORDER
@@ -47,6 +49,7 @@ AGENT_COLORS = {
     "random": "#555555",
     "ppo": "#009E73",
     "stroke": "#000000",
+    "zermelo": "#CC79A7",
 }
 FLUID = "#EAF3FA"
 STROKE_COLOR = "#009E73"
@@ -480,6 +483,24 @@ def _panel(
     for s in ax.spines.values():
         s.set_color("0.7")
     ax.axvline(0, color="0.55", lw=0.6, ls=":", zorder=1)
+    flow = t.world.flow_object()
+    if t.world.flow:  # a background flow: its streamlines under the swimmer, over the whole view
+        view = (box[0], max(box[1], box[0] + view_w), box[2], box[2] + view_h)  # a follow's too
+        for a in draw_flow(ax, flow, view, density=0.6, arrowsize=1.0):
+            a.set_gid("flow")
+        ax.text(
+            0.97,
+            0.95,
+            "flow: " + flow_label(flow, t.world.flow_fraction),
+            transform=ax.transAxes,
+            ha="right",
+            va="top",
+            fontsize=7,
+            color="#4d7aa3",
+            gid="flow-label",
+            bbox=dict(fc=FLUID, ec="none", alpha=0.85, pad=1.0),
+            zorder=7,
+        )
     worlds.draw_fixed(ax, t.world, (box[0], box[1]))
     goal = worlds.draw_targets(ax, t.world, 0)  # a navigation task's targets (else none)
     # Every panel names its agent in that agent's colour (the figures' colours).

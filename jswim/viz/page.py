@@ -36,7 +36,11 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from jswim.console import Column
+from jswim.env.flows import SWIM_SPEED, study_flow
+from jswim.errors import ConfigError
 from jswim.figures import plots
+from jswim.figures.flow_plots import flow_text
 from jswim.figures.style import RC
 from jswim.results.orders import AGENT_ORDER
 from jswim.studies.overview import (
@@ -192,7 +196,13 @@ def run_payload(t: Track) -> dict[str, Any]:
         # every swimmer (N + 1, S, P, 2) and its position (N + 1, S, 2); the wall and obstacles
         "bodies": _round(t.bodies, 4),
         "pos": _round(t.positions, 4),
-        **worlds.payload(t.world),
+        # in a flow, its arrows over the run's view (still fluid: no "flow" key, as before)
+        **worlds.payload(
+            t.world,
+            worlds.view_box([t.bodies], [t.world], not t.model.planar, pad=1.0)
+            if t.world.flow
+            else None,
+        ),
         "actions": [list(a) for a in t.actions],
         "stuck": t.stuck.astype(int).tolist(),
         "cleared": t.cleared.astype(int).tolist(),
@@ -310,7 +320,7 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
     if not rows:
         return "<p>No finished runs yet.</p>"
     if is_navigation(rows):  # targets: reached, steps, path ratio, energy (as the console)
-        cols, cells, note = nav_table(rows)
+        cols, cells, note = with_flow_columns(*nav_table(rows), rows)
         return (
             _table_html(cols, cells, "summary-table") + f'<p class="note">{html.escape(note)}</p>'
         )
@@ -332,6 +342,54 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
         f'<tbody>{body}</tbody></table></div><p class="note">{html.escape(SUMMARY_NOTE)}</p>'
         + _scenes_html(rows)
     )
+
+
+#: The navigation table's columns of a study in a background flow (`with_flow_columns`), each
+#: with the other names it may already have there and its line of the table's note.
+FLOW_COLUMNS = {
+    "flow speed": ((), "flow speed: the flow's, in units of the swimming speed v"),
+    "reachable": (
+        (),
+        "reachable: Zermelo's optimal point steerer at speed v reaches the target (no: no agent can)",
+    ),
+    "Zermelo steps": (("zermelo",), "Zermelo steps: his least time to the target"),
+    "time ratio": (
+        (),
+        "time ratio: steps to the target over Zermelo's, mean over the runs that reached it "
+        "(1 is optimal)",
+    ),
+}
+
+
+def with_flow_columns(
+    cols: Sequence[Any], cells: Sequence[Sequence[str]], note: str, rows: Sequence[Any]
+) -> tuple[list[Any], list[list[str]], str]:
+    """The navigation table (`nav_table`'s) with the flow's columns (`FLOW_COLUMNS`) where its
+    rows ran in a flow and the table lacks them; unchanged in still fluid."""
+    from jswim.studies.navigate import nav_summary  # lazy: the navigation study loads JAX
+
+    have = {c.header.lower() for c in cols}
+    new = [h for h, (aliases, _) in FLOW_COLUMNS.items() if not ({h.lower(), *aliases} & have)]
+    if not new or not any(r.flow for r in as_run_rows(rows) if r.target):
+        return list(cols), [list(c) for c in cells], note
+    by = {(g["group"], g["agent"]): g for g in nav_summary(rows)}
+
+    def fmt(v: Any, spec: str) -> str:
+        return "-" if v is None or not math.isfinite(float(v)) else format(float(v), spec)
+
+    def values(g: Mapping[str, Any]) -> dict[str, str]:
+        if "flow_fraction" not in g:
+            return dict.fromkeys(FLOW_COLUMNS, "-")
+        return {
+            "flow speed": f"{fmt(g['flow_fraction'], 'g')} v",
+            "reachable": "yes" if g["reachable"] else "no",
+            "Zermelo steps": fmt(g["zermelo_steps"], ".0f"),
+            "time ratio": fmt(g["time_ratio"], ".2f"),
+        }
+
+    out = [list(c) + [values(by.get((c[0], c[1]), {}))[h] for h in new] for c in cells]
+    said = "; ".join(FLOW_COLUMNS[h][1] for h in new)
+    return list(cols) + [Column(h, h != "reachable") for h in new], out, f"{note} {said}."
 
 
 def range_notes_of(rows: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -420,6 +478,8 @@ _OWN_AXES = {
     "distances": ("navigate",),
     "bearings": ("navigate",),
     "train_episodes": ("navigate",),
+    "flow": ("navigate",),
+    "flows": ("navigate",),
 }
 #: A setting's value as a study reads it, where that differs from the number recorded.
 _READ_AS = {
@@ -483,11 +543,16 @@ def applicable_settings(
     def own(k: str) -> bool:
         return k not in ignores and (k not in _OWN_AXES or study in _OWN_AXES[k])
 
+    grid = meta.get("grid") or {}
     for k, v in sorted((ident.get("options") or {}).items()):
         if v is None or not own(k) or k in _NOT_COMPACT or (strokes_only and k in _AGENT_SETTINGS):
             continue
         if k == "agents" and ran:
             v = ran
+        if k == "flow":  # named with its speeds and layout; still fluid ("") goes unsaid
+            if v:
+                out.append(("flow", study_flow_text(str(v), grid.get("flows") or ())))
+            continue
         out.append((k, _READ_AS.get((study, k), "{v}").format(v=fmt(v))))
     variants = meta.get("llm_variants")
     if study == "competence" and isinstance(variants, list) and variants:
@@ -498,8 +563,10 @@ def applicable_settings(
         lattice = ", ".join(str(k) for k in levels if k)
         real = "real-valued ROCs (PPO)" if 0 in levels else ""
         out.append(("roc_levels", "; ".join(t for t in (lattice, real) if t)))
-    for k, v in sorted((meta.get("grid") or {}).items()):
+    for k, v in sorted(grid.items()):
         if v is None or not own(k) or (k == "roc_levels_grid" and said_levels):
+            continue
+        if k == "flows":  # the flow's line says them (and still fluid has none)
             continue
         out.append((k, fmt(v)))
     spec = SPECS.get(study)
@@ -524,6 +591,21 @@ def applicable_settings(
             )
         )
     return out
+
+
+def study_flow_text(kind: str, fractions: Sequence[float]) -> str:
+    """The settings' line of a study's background flow: its kind, its speeds in units of the
+    swimming speed and what it is at the fastest (`jswim.env.flows.study_flow`)."""
+    speeds = ", ".join(f"{float(f):g}" for f in fractions) or "?"
+    text = f"{kind} at {speeds} times the swimming speed v = {SWIM_SPEED:.4f} a/step"
+    try:
+        fastest = study_flow(kind, max((float(f) for f in fractions), default=1.0) or 1.0)
+    except ConfigError:  # a kind this version does not know: its name is all there is to say
+        return text
+    return (
+        f"{text}; at {fastest.speed / SWIM_SPEED:g} v: {flow_text(fastest).split('; ')[0]}. "
+        "Zermelo's optimal point steerer joins the agents as the least-time reference"
+    )
 
 
 def _strokes_only(study: str) -> bool:

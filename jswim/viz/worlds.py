@@ -21,6 +21,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from jswim.env.flows import Flow
+from jswim.figures.flow_plots import flow_label, flow_of, flow_text
 from jswim.results.row import as_run_row
 
 #: Colours of the world's fixed parts (shared by the page's canvas and matplotlib).
@@ -52,6 +54,11 @@ class World:
     target_velocity : tuple of float
         A moving target's velocity (``a`` per step): at step ``k`` it is at its start plus ``k``
         times this (`target_at`).
+    flow : str
+        A navigation run's background flow, the row's ``flow`` (canonical JSON,
+        [`jswim.env.flows`][jswim.env.flows]); ``""`` in still fluid.
+    flow_fraction : float or None
+        Its speed over the swimming speed (the row's ``flow_fraction``).
     """
 
     n_swimmers: int = 1
@@ -63,6 +70,12 @@ class World:
     extra: dict[str, Any] = field(default_factory=dict, compare=False)
     targets: tuple[tuple[float, float, float], ...] = ()
     target_velocity: tuple[float, float] = (0.0, 0.0)
+    flow: str = ""
+    flow_fraction: float | None = None
+
+    def flow_object(self) -> Flow | None:
+        """The background flow (`jswim.figures.flow_plots.flow_of`); ``None`` in still fluid."""
+        return flow_of(self.flow)
 
     def target_at(self, step: int) -> list[tuple[float, float, float]]:
         """The targets at step ``step``: the waypoints, a moving target moved ``step`` times
@@ -94,6 +107,8 @@ class World:
             x, y = (round(v, 6) + 0.0 for v in self.targets[0][:2])  # 1.8e-16 -> 0
             moving = "moving target from" if any(self.target_velocity) else "target at"
             bits.append(f"{moving} ({x:g}, {y:g}) a")
+        if self.flow:
+            bits.append(f"flow: {flow_label(self.flow_object(), self.flow_fraction)}")
         return ", ".join(bits)
 
 
@@ -128,7 +143,10 @@ def world_of(row: Mapping[str, Any]) -> World:
     """The `World` a run row records (its ``scene``; none: the bulk fluid), with its navigation
     target (its ``target``) where it has one."""
     world = _scene_world(row)
-    raw = as_run_row(row).target
+    r = as_run_row(row)
+    raw = r.target
+    if r.flow:  # a navigation run in a background flow (drawn under its track)
+        world = replace(world, flow=str(r.flow), flow_fraction=r.flow_fraction)
     if not raw:
         return world
     try:
@@ -270,16 +288,64 @@ def draw_targets(ax: Any, world: World, step: int = 0) -> list[Any]:
 
 #: The colour of navigation targets (the report page's too).
 TARGET_COLOR = "#B00000"
+#: Width over height of the report page's run canvas (``report.js``: 900 x 340 pixels).
+CANVAS_ASPECT = 900 / 340
 
 
-def payload(world: World) -> dict[str, Any]:
+def payload(
+    world: World, box: Sequence[float] | None = None, aspect: float = CANVAS_ASPECT
+) -> dict[str, Any]:
     """What the page's canvas needs to draw the world's fixed parts (and a navigation task's
-    targets: ``targets`` as (x, y, radius), ``target_v`` a moving target's velocity)."""
-    return {
+    targets: ``targets`` as (x, y, radius), ``target_v`` a moving target's velocity); in a
+    background flow also ``flow`` (`flow_arrows` over ``box``, the run's view)."""
+    out = {
         "targets": [list(t) for t in world.targets],
         "target_v": list(world.target_velocity),
         "wall": world.wall,
         "obstacles": [list(o) for o in world.obstacles],
         "n_swimmers": world.n_swimmers,
         "world": world.describe(),
+    }
+    if world.flow and box is not None:
+        out["flow"] = flow_arrows(world, box, aspect)
+    return out
+
+
+def flow_arrows(
+    world: World,
+    box: Sequence[float],
+    aspect: float = CANVAS_ASPECT,
+    rows: int = 9,
+    most: int = 900,
+) -> dict[str, Any]:
+    """The page's picture of a run's background flow: its velocity at the points of a square
+    lattice (``arrows``: ``[x, y, ux, uy]``, ``a`` and ``a / step``) over ``box`` widened to the
+    canvas's shape (``aspect``, width over height: the canvas shows more than the box along one
+    side), about ``rows`` across its height and at most ``most`` points; its lattice ``spacing``,
+    the fastest speed on it (``max``), a short ``label`` and the ``legend`` line under the canvas.
+    """
+    flow = world.flow_object()
+    label = flow_label(flow, world.flow_fraction)
+    legend = "background flow: " + flow_text(flow)
+    if flow is None or not flow.speed:
+        return {"label": label, "legend": legend, "arrows": [], "spacing": 1.0, "max": 0.0}
+    x0, x1, y0, y1 = (float(v) for v in box)
+    w, h = x1 - x0, y1 - y0
+    w, h = max(w, h * aspect), max(h, w / aspect)
+    cx, cy = (x0 + x1) / 2, (y0 + y1) / 2
+    step = max(h / rows, 1e-6)
+    while (w / step + 2) * (h / step + 2) > most:
+        step *= 1.25
+    # On multiples of the spacing: the arrows sit still when the view follows a swimmer.
+    xs = np.arange(math.floor((cx - w / 2) / step), math.ceil((cx + w / 2) / step) + 1) * step
+    ys = np.arange(math.floor((cy - h / 2) / step), math.ceil((cy + h / 2) / step) + 1) * step
+    X, Y = np.meshgrid(xs, ys)
+    uv = np.asarray(flow.velocity(np.stack([X, Y], axis=-1)), np.float64)
+    arrows = np.stack([X, Y, uv[..., 0], uv[..., 1]], axis=-1).reshape(-1, 4)
+    return {
+        "label": label,
+        "legend": legend + f"; arrows: its velocity on a {step:.3g} a lattice",
+        "arrows": np.round(arrows, 5).tolist(),
+        "spacing": float(step),
+        "max": float(np.hypot(uv[..., 0], uv[..., 1]).max()),
     }

@@ -3,8 +3,10 @@
   "use strict";
   var D = JSON.parse(document.getElementById("report-data").textContent);
   var runs = D.runs;
-  var COLORS = { llm: "#0072B2", qlearning: "#D55E00", random: "#555555", ppo: "#009E73", stroke: "#000000" };
-  var NAMES = { llm: "LLM", qlearning: "Q-learning", random: "random policy", ppo: "PPO (real ROC)", stroke: "square stroke" };
+  var COLORS = { llm: "#0072B2", qlearning: "#D55E00", random: "#555555", ppo: "#009E73", stroke: "#000000", zermelo: "#CC79A7" };
+  var NAMES = { llm: "LLM", qlearning: "Q-learning", random: "random policy", ppo: "PPO (real ROC)", stroke: "square stroke",
+    zermelo: "Zermelo (least-time point steerer)" };
+  var FLOW = "#7EA6C8";  // a background flow's arrows (jswim.figures.flow_plots.FLOW_COLOR)
   var LIST_MAX = 400;
   var st = { filters: {}, sel: null, data: null, k: 0, timer: null, fps: 4, loading: 0 };
 
@@ -170,6 +172,8 @@
       " \u00b7 X/a end toward " + fmt("direction", r.direction) + " " + signed(r.signed_final_x || 0, 4)) +
       " \u00b7 " + esc(stroke) + (d.replayed ? ' \u00b7 <span class="error">y and orientation replayed (not recorded in this folder)</span>' : "") +
       '</p><canvas class="swim" id="swim" width="900" height="340"></canvas>' +
+      (d.flow ? '<p class="legend note" id="flow-legend"><span class="flow-key" style="width:16px;height:3px;background:' + FLOW +
+        '"></span>' + esc(d.flow.legend) + "</p>" : "") +
       '<div class="controls"><button id="b-first" title="first step">|\u25c0</button>' +
       '<button id="b-back" title="step back (\u2190)">\u25c0</button>' +
       '<button id="b-play" title="play / pause (space)">\u25b6</button>' +
@@ -252,6 +256,7 @@
     for (var gy = Math.ceil(b[2]); gy <= b[3]; gy++) { ctx.beginPath(); ctx.moveTo(0, Y(gy)); ctx.lineTo(W, Y(gy)); ctx.stroke(); }
     ctx.setLineDash([4, 4]); ctx.strokeStyle = "#888"; ctx.beginPath(); ctx.moveTo(X(0), 0); ctx.lineTo(X(0), H); ctx.stroke();
     ctx.setLineDash([]);
+    st.flowDrawn = d.flow ? drawFlow(ctx, d.flow, X, Y, s, W, H) : 0;
     if (d.wall) {  // the no-slip wall: the plane y = 0, the fluid above it
       ctx.fillStyle = "#d9cfc2"; ctx.fillRect(0, Y(0), W, H - Y(0));
       ctx.strokeStyle = "#6b5b45"; ctx.lineWidth = 2; ctx.beginPath(); ctx.moveTo(0, Y(0)); ctx.lineTo(W, Y(0)); ctx.stroke();
@@ -327,6 +332,31 @@
     if (!(d.targets || []).length) ctx.fillText("target " + (d.direction > 0 ? "\u2192" : "\u2190"), W - 90, H - 12);
   }
 
+  // A background flow under the track: an arrow of its velocity at each lattice point in view,
+  // the fastest 0.8 of the lattice spacing long; returns how many were drawn.
+  function drawFlow(ctx, f, X, Y, s, W, H) {
+    if (f.label) { ctx.fillStyle = "#4d7aa3"; ctx.font = "12px sans-serif"; ctx.fillText("flow: " + f.label, W - 170, 18); }
+    if (!f.arrows || !f.arrows.length || !(f.max > 0)) return 0;
+    var n = 0, L = 0.8 * f.spacing / f.max;
+    ctx.save();
+    ctx.strokeStyle = FLOW; ctx.fillStyle = FLOW; ctx.lineWidth = 1.2;
+    f.arrows.forEach(function (q) {
+      var ax = X(q[0] - q[2] * L / 2), ay = Y(q[1] - q[3] * L / 2);
+      var bx = X(q[0] + q[2] * L / 2), by = Y(q[1] + q[3] * L / 2);
+      var len = Math.hypot(bx - ax, by - ay);
+      if (len < 2 || Math.max(ax, bx) < 0 || Math.min(ax, bx) > W || Math.max(ay, by) < 0 || Math.min(ay, by) > H) return;
+      var ux = (bx - ax) / len, uy = (by - ay) / len, hd = Math.min(6, 0.4 * len);
+      ctx.beginPath(); ctx.moveTo(ax, ay); ctx.lineTo(bx, by); ctx.stroke();
+      ctx.beginPath(); ctx.moveTo(bx, by);
+      ctx.lineTo(bx - hd * ux - 0.5 * hd * uy, by - hd * uy + 0.5 * hd * ux);
+      ctx.lineTo(bx - hd * ux + 0.5 * hd * uy, by - hd * uy - 0.5 * hd * ux);
+      ctx.closePath(); ctx.fill();
+      n++;
+    });
+    ctx.restore();
+    return n;
+  }
+
   function dofList(d, k) {
     var names = d.dof_names || [];
     return d.dofs[k].map(function (v, i) { return (names[i] ? names[i] + " " : "") + num(v, 3); }).join(", ");
@@ -388,6 +418,7 @@
   window.jswimReport = {
     opened: opened, select: select, play: play, pause: pause,
     step: function () { return st.k; }, drawn: function () { return st.drawn || 0; },
+    flowArrows: function () { return st.flowDrawn || 0; },
     data: function () { return st.data; },
     toCanvas: function (x, y) { return [st.X(x), st.Y(y)]; }, steps: function () { return st.data && st.data.actions ? st.data.actions.length : 0; },
     listed: function () { return document.querySelectorAll("#run-list tbody tr").length; },
