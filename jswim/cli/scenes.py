@@ -160,7 +160,7 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
             dict(
                 type=_numbers(float),
                 metavar="F1,F2,...",
-                help="the flow's speeds, fractions of the swimming speed 0.0478 a per step "
+                help="the flow's speeds, fractions of the swimming speed 0.0478 a per step, at most 2 "
                 "(default 0,0.5,0.9; past 1 some targets are unreachable and the rows say so)",
             ),
         ),
@@ -200,7 +200,7 @@ def options(args: argparse.Namespace) -> dict[str, Any]:
     return {
         d: getattr(args, d)
         for d in {_dest(f) for rows in OPTIONS.values() for f, _ in rows}
-        if getattr(args, d, None)
+        if getattr(args, d, None) is not None
     }
 
 

@@ -414,7 +414,7 @@ def flow_success_figure(rows: Sequence[Mapping[str, Any]], note: str | None = No
         top.set_ylim(-0.05, 1.05)
         top.set_title(name)
         bottom.set_ylim(bottom=0.0)
-        bottom.set_xlabel("flow speed / swimming speed")
+        bottom.set_xlabel("flow / swim speed")
         if j == 0:
             top.set_ylabel("success rate")
             bottom.set_ylabel("steps / Zermelo's least\n(runs that reached it)")
@@ -457,7 +457,7 @@ def flow_energy_figure(rows: Sequence[Mapping[str, Any]], note: str | None = Non
         hatched |= _hatch_unreachable(ax, fractions, _unreachable(sel))
         _xlim(ax, fractions)
         ax.set_title(name)
-        ax.set_xlabel("flow speed / swimming speed")
+        ax.set_xlabel("flow / swim speed")
         if j == 0:
             ax.set_ylabel("energy per a closed\n(xi_par a^2 / tau)")
     _legend(fig, axes, hatched)

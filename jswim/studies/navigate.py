@@ -304,26 +304,25 @@ def flow_columns(plan: Plan, steps_to_target: float | None) -> dict[str, Any]:
 
 def zermelo_rows(plans: Sequence[Plan]) -> list[RunRow]:
     """The rows of Zermelo's point steerer ([`jswim.agents.zermelo`][jswim.agents.zermelo]):
-    the optimal path sampled each step, reached where the target is reachable within the
-    plan's steps (its budget, or ``--steps``), its steps the least time rounded up (the path
-    cut at the plan's steps where it is longer); no strokes (``actions`` empty), no energy (a
-    point does no modelled work)."""
+    the optimal path sampled each step, reached where the target is reachable, its steps the
+    least time rounded up; no strokes (``actions`` empty), no energy (a point does no modelled
+    work). The yardstick is never cut: ``--steps`` shortens the agents' runs, not his (a
+    budget is at least four of his times in a flow)."""
     from jswim.studies.rows import build_row  # lazy: start-up (rows load the LLM driver)
 
     out = []
     for plan in plans:
         best = zermelo_path(plan.target, plan.flow)
-        limit = plan.steps if plan.steps is not None else None
-        xy = np.asarray(best.xy, np.float64).reshape(-1, 2)[1:][:limit]
+        xy = np.asarray(best.xy, np.float64).reshape(-1, 2)[1:]
         steps = len(xy)
-        reached = best.steps is not None and (limit is None or best.steps <= limit)
+        reached = best.steps is not None
         verdict = {
             "success": reached,
             "learned": reached,
             "steps_to_learn": steps if reached else None,
             "period": 0,
         }
-        heading = np.asarray(best.heading, np.float64).reshape(-1)[1:][:limit]
+        heading = np.asarray(best.heading, np.float64).reshape(-1)[1:]
         row = build_row(
             plan,
             [float(v) for v in xy[:, 0]],

@@ -152,7 +152,15 @@ class StudyOptions:
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
-        for name in ("swimmers", "directions", "zetas", "n_hts", "variants"):
+        for name in (
+            "swimmers",
+            "directions",
+            "zetas",
+            "n_hts",
+            "variants",
+            "distances",
+            "bearings",
+        ):
             values = getattr(self, name)
             if values is not None and len(set(values)) < len(values):
                 object.__setattr__(self, name, tuple(dict.fromkeys(values)))

@@ -435,6 +435,8 @@ def _build(anim: Animation):
                     stroke.set_data(pos[s0 : k + 1, 0], pos[s0 : k + 1, 1])
                 else:
                     stroke.set_data([], [])
+                if t.agent == "zermelo":  # a point's path: no body (jswim.agents.zermelo)
+                    pts = pts[:0]
                 body.set_data(pts[:, 0], pts[:, 1])
                 if joints is not None:
                     joints.set_data(pts[1:-1, 0], pts[1:-1, 1])
@@ -609,7 +611,10 @@ def _frame_lines(t: Track, k: int) -> list[str]:
         if t.in_stroke(k):
             s0, p = t.stroke  # type: ignore[misc]
             events.append(f"stroke cycle {(i - s0) // p + 1} (criterion)")
-        lines.append(f"action {fmt_action(t.actions[i])}  " + "  ".join(events))
+        if t.agent == "zermelo":  # a point steering at the swimming speed: no strokes
+            lines.append("a point steering at the swimming speed")
+        else:
+            lines.append(f"action {fmt_action(t.actions[i])}  " + "  ".join(events))
         if t.replies[i] is not None:
             reply = " ".join(str(t.replies[i]).split())
             lines.append("reply: " + textwrap.shorten(reply, 38, placeholder="..."))

@@ -184,6 +184,9 @@ def run_payload(t: Track) -> dict[str, Any]:
     return {
         "planar": bool(t.model.planar),
         "model": t.model.label,
+        "label": t.label,
+        # Zermelo's row is a point's path: no body, no strokes (jswim.agents.zermelo)
+        "point": t.agent == "zermelo",
         "n_dof": t.model.n_dof,
         "lo": t.model.lo,
         "hi": t.model.hi,

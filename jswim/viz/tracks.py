@@ -138,8 +138,10 @@ class Track:
             "llm": "LLM",
             "qlearning": "Q-learning",
             "random": "random policy",
-            "ppo": "PPO (real ROC)",
+            "ppo": "PPO (real ROC)" if not self.row.get("roc_levels") else "PPO (categorical)",
             "stroke": "square stroke",
+            "controller": "steering controller",
+            "zermelo": "Zermelo (least-time point steerer)",
         }.get(self.agent, self.agent)
         model = self.row.get("model")
         return f"{name} ({model})" if model and self.agent == "llm" else name

@@ -35,6 +35,7 @@ def refused(capsys, tmp_path, *args: str) -> str:
         (["--flow", "uniform", "--flows", "inf"], "--flows"),
         (["--flow", "uniform", "--flows", "0,,1"], "empty items"),
         (["--flow", "uniform", "--flows", "fast"], "--flows"),
+        (["--train-episodes", "0"], "--train-episodes"),  # a zero was dropped for the default
     ],
 )
 def test_navigate_refuses_bad_flows_in_one_line(capsys, tmp_path, args, says):
@@ -69,3 +70,13 @@ def test_a_flow_grid_crosses_every_target_with_every_speed_and_adds_zermelo():
     assert {p.flow for p in plans if p.flow_fraction == 0.0} == {
         '{"kind": "uniform", "u": [0.0, 0.0]}'
     }
+
+
+def test_a_target_given_twice_is_one_target():
+    # --bearings 90,90 and --distances 3,3.0 ended in an assertion traceback (duplicate run ids)
+    once = build("navigate", StudyOptions(bearings=(90.0,)))
+    assert [p.run_id for p in build("navigate", StudyOptions(bearings=(90.0, 90.0)))] == [
+        p.run_id for p in once
+    ]
+    twice = StudyOptions(distances=(3.0, 3), bearings=(0.0, 0))
+    assert twice.distances == (3.0,) and twice.bearings == (0.0,)

@@ -83,6 +83,15 @@ def test_every_row_carries_its_time_ratio():
     assert g["flow_fraction"] == 0.5 and g["reachable"] and g["time_ratio"] == ctrl.time_ratio
 
 
+def test_zermelo_is_never_cut_by_steps():
+    # --steps shortens the agents' runs, not the yardstick's (38.3 steps here, --steps 30)
+    o = StudyOptions(flow="uniform", flows=(0.5,), bearings=(90.0,), agents=("zermelo",), steps=30)
+    plans = [p for p in build("navigate", o) if p.group.startswith("fixed")]
+    (row,) = navigate.baseline_rows(navigate.with_budgets(plans))
+    assert row.reached and row.steps_to_target == math.ceil(_crab_time(0.5, 90.0)) > 30
+    assert row.time_ratio == pytest.approx(1.0)
+
+
 def test_the_llm_sees_the_local_flow_in_its_records(tmp_path):
     from jswim.llm.backend import Backend
     from jswim.llm.reference import completion

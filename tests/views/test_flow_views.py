@@ -239,7 +239,7 @@ def test_energy_against_flow_speed_per_agent(flow_figs):
     assert len(fig.axes) == len(BEARINGS)
     for ax in fig.axes:
         assert {ln.get_label() for ln in ax.get_lines()} == {"steering controller", "random policy"}
-        assert ax.get_yscale() == "log" and ax.get_xlabel() == "flow speed / swimming speed"
+        assert ax.get_yscale() == "log" and ax.get_xlabel() == "flow / swim speed"
         controller = next(ln for ln in ax.get_lines() if ln.get_label() == "steering controller")
         assert np.allclose(controller.get_ydata(), [20.0 / (1 + f) for f in FRACTIONS])
     assert any(t.get_text() == "unreachable" for t in fig.axes[1].texts)

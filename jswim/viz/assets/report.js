@@ -3,9 +3,9 @@
   "use strict";
   var D = JSON.parse(document.getElementById("report-data").textContent);
   var runs = D.runs;
-  var COLORS = { llm: "#0072B2", qlearning: "#D55E00", random: "#555555", ppo: "#009E73", stroke: "#000000", zermelo: "#CC79A7" };
+  var COLORS = { llm: "#0072B2", qlearning: "#D55E00", random: "#555555", ppo: "#009E73", stroke: "#000000", controller: "#000000", zermelo: "#CC79A7" };
   var NAMES = { llm: "LLM", qlearning: "Q-learning", random: "random policy", ppo: "PPO (real ROC)", stroke: "square stroke",
-    zermelo: "Zermelo (least-time point steerer)" };
+    controller: "steering controller", zermelo: "Zermelo (least-time point steerer)" };
   var FLOW = "#7EA6C8";  // a background flow's arrows (jswim.figures.flow_plots.FLOW_COLOR)
   var LIST_MAX = 400;
   var st = { filters: {}, sel: null, data: null, k: 0, timer: null, fps: 4, loading: 0 };
@@ -158,10 +158,12 @@
     var stroke = d.stroke ? "the success criterion found the stroke from step " + (d.stroke[0] + 1) + " (period " +
       d.stroke[1] + "): cycles at steps " + cycles(d).map(function (c) { return c[0] + "\u2013" + c[1]; }).join(", ") :
       "the success criterion found no qualifying stroke";
-    var who = (NAMES[r.agent] || r.agent) + (r.agent === "llm" && D.model ? " (" + D.model + ")" : "");
+    var name = r.agent === "llm" ? NAMES.llm : d.label || NAMES[r.agent];
+    var who = (name || r.agent) + (r.agent === "llm" && D.model ? " (" + D.model + ")" : "");
     var nav = (d.targets || []).length > 0;  // a navigation run: its target, not a direction
     if (nav) stroke = r.success ? "target reached" : "target not reached";
-    var bits = [who, d.model + " swimmer", nav ? d.world : "target " + fmt("direction", r.direction)];
+    var bits = [who, d.point ? "a point steering at the swimming speed (no body, no strokes)" : d.model + " swimmer",
+      nav ? d.world : "target " + fmt("direction", r.direction)];
     if (r.zeta !== null && r.zeta !== undefined) bits.push("\u03b6 = " + r.zeta);
     if (r.init) bits.push("start " + r.init);
     if (r.n_ht !== null && r.n_ht !== undefined) bits.push("n_ht " + r.n_ht);
@@ -292,7 +294,7 @@
     }
     ctx.globalAlpha = 1;
     st.drawn = d.bodies[k].length;
-    for (j = 0; j < d.bodies[k].length; j++) { drawBody(d.bodies[k][j], swColors[j % swColors.length]); }
+    for (j = 0; j < d.bodies[k].length && !d.point; j++) { drawBody(d.bodies[k][j], swColors[j % swColors.length]); }
     function drawBody(p, color) {
     if (d.planar) {
       ctx.strokeStyle = "#111"; ctx.lineWidth = Math.max(3, 0.09 * s); ctx.lineCap = "round"; ctx.lineJoin = "round";
@@ -318,11 +320,11 @@
     ctx.fillText("step " + k + "/" + d.actions.length + "   " + place(d, k), 10, 18);
     if (k > 0) {
       var ev = [];
-      if (d.stuck[k - 1]) ev.push("stuck");
+      if (d.stuck[k - 1] && !d.point) ev.push("stuck");
       if (d.cleared[k - 1]) ev.push("history cleared");
       if (d.failed[k - 1]) ev.push("no valid reply");
       if (d.stroke && k - 1 >= d.stroke[0]) ev.push("stroke cycle " + (Math.floor((k - 1 - d.stroke[0]) / d.stroke[1]) + 1));
-      ctx.fillText("action " + action(d.actions[k - 1]) + "  " + ev.join(", "), 10, 36);
+      if (!d.point) ctx.fillText("action " + action(d.actions[k - 1]) + "  " + ev.join(", "), 10, 36);
       var step = d.steps[k - 1];
       if (step && step.attempts && step.attempts.length) {
         var t = String(step.attempts[step.attempts.length - 1].text || "").replace(/\s+/g, " ");
