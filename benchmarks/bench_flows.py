@@ -4,11 +4,15 @@ measured side by side in one run.
 The world is ``jswim.make("purcell", roc_levels=2, target=FixedTarget(3.0, 90.0), flow=...)``;
 ``--batch`` swimmers (4,096) step together for ``--steps`` random K = 2 codes in one jitted scan
 (``env.step`` vmapped, default dtype, compilation excluded; best of three). Still fluid reads each
-step from the exact lattice table; a uniform flow adds ``u`` to it; the other flows integrate every
-step (RK4, `jswim.env.stepping.FLOW_SUBSTEPS` pieces). The ratio is each flow's rate over the
-still-fluid rate of this run.
+step from the exact lattice table; a uniform flow adds ``u`` to it; the other flows add what the
+flow tables give for the step's row (`jswim.env.flow_steps`: one flow evaluation and small
+contractions; "taylor-green 6" is the study's cell of 6 a, whose rows hold more harmonics). ``--reference`` also times those flows through the RK4 reference the tables
+replace (`jswim.env.flow_steps.Integrated`: 16 pieces per step, each evaluating the body's RFT
+response; minutes to compile). The ratio is each world's rate over the still-fluid rate of this
+run.
 
-Usage: ``python benchmarks/bench_flows.py [--batch 4096] [--steps 50] [--json out.json]``
+Usage: ``python benchmarks/bench_flows.py [--batch 4096] [--steps 50] [--reference]
+[--json out.json]``
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import jax
 import jax.numpy as jnp
 
 import jswim
+from jswim.env.flow_steps import Integrated
 from jswim.env.flows import Poiseuille, Shear, TaylorGreen, Uniform
 from jswim.env.targets import FixedTarget
 
@@ -31,6 +36,8 @@ FLOWS = {
     "shear": Shear(0.005),
     "poiseuille": Poiseuille(0.024, 10.0),
     "taylor-green": TaylorGreen(0.024, 20.0),
+    # the study flow (`study_flow("taylor-green", 0.9)`): cells of 6 a need 7 harmonics, not 5
+    "taylor-green 6": TaylorGreen(0.043, 6.0),
 }
 
 
@@ -62,12 +69,18 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--batch", type=int, default=4096)
     ap.add_argument("--steps", type=int, default=50)
+    ap.add_argument("--reference", action="store_true", help="also time the RK4 reference")
     ap.add_argument("--json", default=None)
     args = ap.parse_args()
-    rates = {name: rate(flow, args.batch, args.steps) for name, flow in FLOWS.items()}
-    print(f"{'world':<14} {'swimmer-steps/s':>16} {'x still':>8}")
+    worlds = dict(FLOWS)
+    if args.reference:
+        worlds.update(
+            {f"{k} (rk4)": Integrated(f) for k, f in FLOWS.items() if k not in ("still", "uniform")}
+        )
+    rates = {name: rate(flow, args.batch, args.steps) for name, flow in worlds.items()}
+    print(f"{'world':<20} {'swimmer-steps/s':>16} {'x still':>8}")
     for name, r in rates.items():
-        print(f"{name:<14} {r:16.3g} {r / rates['still']:8.3f}")
+        print(f"{name:<20} {r:16.3g} {r / rates['still']:8.3f}")
     if args.json:
         out = {
             "batch": args.batch,

@@ -18,6 +18,7 @@ import argparse
 import math
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -63,6 +64,12 @@ def gait_rows() -> list[str]:
     return rows
 
 
+def _tie(value: float) -> float:
+    """A sort key that mirror-image loops share: their equal values differ in the last bit from
+    one CPU to another, which would reorder the table's rows."""
+    return round(value, 10)
+
+
 def loop_rows() -> list[str]:
     from jswim.env.loops import lattice_loops
     from jswim.swimmers.models import make_model
@@ -74,7 +81,10 @@ def loop_rows() -> list[str]:
         "| work per cycle | turning radius |",
         "|---|---|---|---|---|",
     ]
-    for m in sorted(lattice_loops(model, 2), key=lambda m: (-abs(m.rotation), m.work)):
+    for m in sorted(
+        lattice_loops(model, 2),
+        key=lambda m: (-_tie(abs(m.rotation)), _tie(m.work), m.loop.vertices),
+    ):
         path = " -> ".join(f"({names[i]}, {names[j]})" for i, j in m.loop.vertices)
         radius = "straight" if abs(m.rotation) < 1e-12 else f"{m.radius:.3f} a"
         rotation = 0.0 if abs(m.rotation) < 1e-12 else m.rotation
@@ -98,8 +108,13 @@ def k4_rows() -> list[str]:
         "| work per cycle | rotation per work |",
         "|---|---|---|---|---|",
     ]
-    most = sorted(motions, key=lambda m: (-abs(m.rotation), m.loop.vertices))[:2]
-    thrifty = sorted(motions, key=lambda m: (-abs(m.rotation) / m.work, m.loop.vertices))[:2]
+
+    def first_each_way(key: Any) -> list[Any]:  # the first clockwise loop, then anticlockwise
+        ranked = sorted(motions, key=lambda m: (key(m), m.loop.vertices))
+        return [next(m for m in ranked if (m.rotation > 0) == sign) for sign in (False, True)]
+
+    most = first_each_way(lambda m: -_tie(abs(m.rotation)))
+    thrifty = first_each_way(lambda m: -_tie(abs(m.rotation) / m.work))
     for m in most + thrifty:
         path = " -> ".join(f"({names[i]}, {names[j]})" for i, j in m.loop.vertices)
         rows.append(

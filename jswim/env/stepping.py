@@ -17,6 +17,14 @@ orientation. So:
 Noise follows the paper: the step's centroid displacement becomes ``(dX, dY) (1 + zeta Y)`` with
 ``Y ~ U[-1, 1]`` drawn from the step's key (the rotation is not perturbed; the paper perturbs the
 displacement only).
+
+In a background flow (``params.flow``) a `Uniform` stream adds ``u`` to the table step (exact);
+any other flow adds what [`jswim.env.flow_tables`][jswim.env.flow_tables] reads for the step's
+table row ([`jswim.env.flow_steps`][jswim.env.flow_steps]: one flow evaluation, second order
+in the flow), and steps off the tables, or in an
+[`Integrated`][jswim.env.flow_steps.Integrated] flow, are integrated through it
+([`flow_step`][jswim.env.stepping.flow_step], RK4: the reference the tables are measured
+against).
 """
 
 from __future__ import annotations
@@ -42,6 +50,8 @@ from jswim.env.step_tables import (
 )
 from jswim.env.work import corner_work_table, lattice_work_table, step_work
 from jswim.env.flows import Uniform
+from jswim.env.flow_steps import Integrated, flow_increment, tabulated
+from jswim.env.flow_tables import corner_flow_row, flow_table, gather_row
 from jswim.integrate import centroid, integrate_stroke
 from jswim.swimmers.flow_response import flow_velocity
 from jswim import sharding
@@ -53,7 +63,7 @@ STEP_METHOD = "table"
 #: Chebyshev degree of the integrator path for steps off the corner table (~1e-15 relative).
 INTEGRATOR_DEGREE = 24
 
-#: RK4 pieces of a step integrated through a non-uniform flow (`flow_step`).
+#: RK4 pieces of a step integrated through a non-uniform flow (`flow_step`, the reference).
 FLOW_SUBSTEPS = 16
 
 
@@ -176,13 +186,15 @@ def _advance_corner(
     # One gather per step; the table's last row is the identity step (nothing moved).
     row = jnp.where(moved, corner_index(levels) * n + dof, still_row(model))
     frac = (levels + onehot * moved.astype(jnp.int32) * (1 - 2 * level)).astype(state.frac.dtype)
-    if not exact and not _moving_fluid(params):  # a non-uniform flow is integrated: exact path
+    if not exact and not _moving_fluid(params):  # a non-uniform flow: the float64 path
         work = jnp.asarray(corner_work_table(model), state.x.dtype)[row]
         return _advance_plain(state, frac, row, y_noise, params, stuck, moved, work)
+    flow_index = corner_flow_row(corner_index(levels), dof, moved, n)
     with jax.enable_x64(True):
         entry = jnp.asarray(step_rows(model), jnp.float64)[row]
         work = jnp.asarray(corner_work_table(model), jnp.float64)[row]
-    return _apply(state, entry, y_noise, params, stuck, moved, frac, state.frac_lo, work)
+        flow_row = _flow_row(params, None, flow_index)
+    return _apply(state, entry, y_noise, params, stuck, moved, frac, state.frac_lo, work, flow_row)
 
 
 def _advance_lattice(
@@ -215,7 +227,8 @@ def _advance_lattice(
             table = jnp.asarray(lattice_work_table(model, big_k), jnp.float64)
             scale = jnp.abs(k).astype(jnp.float64) / count.astype(jnp.float64)
             work = jnp.where(step > 0, table[row] * scale, 0.0)
-        return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work)
+            flow_row = _flow_row(params, big_k, row)
+        return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work, flow_row)
     with jax.enable_x64(True):
         s0, s1 = j0.astype(jnp.float64) / big_k, j1.astype(jnp.float64) / big_k
         rocs = onehot.astype(jnp.float64) * k.astype(jnp.float64) / big_k
@@ -338,10 +351,13 @@ def _apply(
     frac: Array,
     frac_lo: Array,
     work: Array,
+    flow_row: tuple[Array, ...] | None = None,
 ) -> tuple[EnvState, MoveInfo]:
     """Apply a body-frame step row ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` (float64) to the
     pose, with the paper's noise on the displacement, in float64; store the result as pairs.
-    ``work`` (float64; the noise does not touch it) is reported in the working dtype."""
+    ``work`` (float64; the noise does not touch it) is reported in the working dtype. In a
+    non-uniform flow ``flow_row`` (float64, `jswim.env.flow_tables.flow_table`) is the step's row,
+    or None to integrate the step (`flow_step`)."""
     model = params.model
     dtype = state.x.dtype
     with jax.enable_x64(True):
@@ -353,20 +369,29 @@ def _apply(
             wide(state.y, state.y_lo),
             wide(state.theta, state.theta_lo),
         )
-        c, s = wide(state.cos, state.cos_lo), wide(state.sin, state.sin_lo)
+        c0, s0 = wide(state.cos, state.cos_lo), wide(state.sin, state.sin_lo)
         if model.planar:
-            dx0, dy0 = c * entry[0] - s * entry[1], s * entry[0] + c * entry[1]
+            dx0, dy0 = c0 * entry[0] - s0 * entry[1], s0 * entry[0] + c0 * entry[1]
             # Compose rotations as unit complex numbers: no sin/cos per step.
-            c, s = c * entry[3] - s * entry[4], s * entry[3] + c * entry[4]
+            c, s = c0 * entry[3] - s0 * entry[4], s0 * entry[3] + c0 * entry[4]
         else:
+            c, s = c0, s0
             dx0, dy0 = entry[0], jnp.zeros((), f64)
         dx, dy = dx0 * factor, dy0 * factor
         turn = entry[2]
-        if _moving_fluid(params):
-            # The step through the flow, integrated; the paper's noise stays on the stroke's own
-            # displacement (the still-fluid one: dX (1 + zeta Y) there, as without a flow).
-            s0, s1 = wide(state.frac, state.frac_lo), wide(frac, frac_lo).astype(f64)
-            fx, fy, turn = flow_step(model, params.flow, s0, s1, jnp.stack([x, y, theta]))
+        # In a moving fluid the paper's noise stays on the stroke's own (still-fluid)
+        # displacement: dX (1 + zeta Y) there, as without a flow, plus what the flow adds.
+        if _moving_fluid(params) and flow_row is not None:
+            fx, fy, extra, ce, se = flow_increment(params.flow, flow_row, entry[:2], x, y, c0, s0)
+            dx, dy = dx + c0 * fx - s0 * fy, dy + s0 * fx + c0 * fy
+            turn = turn + extra
+            c, s = c * ce - s * se, s * ce + c * se
+        elif _moving_fluid(params):  # integrated through the flow: the reference
+            flow, n_sub = params.flow, None
+            if isinstance(flow, Integrated):
+                flow, n_sub = flow.flow, flow.substeps
+            a, b = wide(state.frac, state.frac_lo), wide(frac, frac_lo).astype(f64)
+            fx, fy, turn = flow_step(model, flow, a, b, jnp.stack([x, y, theta]), n_sub)
             dx, dy = fx + (factor - 1.0) * dx0, fy + (factor - 1.0) * dy0
             c, s = jnp.cos(theta + turn), jnp.sin(theta + turn)
         elif params.flow is not None:  # a uniform stream carries the body one u per step (tau = 1)
@@ -399,8 +424,17 @@ def _apply(
 
 
 def _moving_fluid(params: EnvParams) -> bool:
-    """Whether the step must be integrated through the flow (any flow but a uniform one)."""
+    """Whether the step goes through a non-uniform flow (any flow but a uniform one)."""
     return params.flow is not None and not isinstance(params.flow, Uniform)
+
+
+def _flow_row(params: EnvParams, roc_levels: int | None, index: Array) -> tuple[Array, ...] | None:
+    """The step's `jswim.env.flow_tables.flow_table` row (float64; the corner world's with
+    ``roc_levels=None``), or None: still fluid, a uniform flow, or a flow the tables do not model
+    (an `Integrated` one, a flow without a ``hessian``), whose steps are integrated."""
+    if not _moving_fluid(params) or not tabulated(params.flow):
+        return None
+    return gather_row(flow_table(params.model, params.flow, roc_levels), index)
 
 
 def flow_step(
@@ -413,7 +447,9 @@ def flow_step(
     The pose obeys ``d/dt (x_ref, theta) = R(theta) u_body(d, d_dot) + U_flow(d, x_ref, theta)``:
     the still-fluid velocity plus the flow's rigid response
     (`jswim.swimmers.flow_response.flow_velocity`), integrated by classical RK4 in
-    ``substeps`` pieces (default `FLOW_SUBSTEPS`; tested against a finer integration)."""
+    ``substeps`` pieces (default `FLOW_SUBSTEPS`; tested against a finer integration). The
+    reference the flow tables (`jswim.env.flow_steps`) are measured against; worlds use it for
+    steps off the tables and for `jswim.env.flow_steps.Integrated` flows."""
     span = model.hi - model.lo
     d_dot = (s1 - s0) * span
     d0 = corner_values(model, s0)

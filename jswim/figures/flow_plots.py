@@ -368,17 +368,40 @@ def _legend(fig: Figure, axes: np.ndarray, hatched: bool) -> None:
     fig.legend(seen.values(), seen.keys(), loc="lower center", ncol=min(len(seen), 3), fontsize=6)
 
 
+def _target_panels(
+    rows: Sequence[Mapping[str, Any]], nrows: int, height: float
+) -> tuple[Figure, np.ndarray, list[str], list[float], list[tuple[str, list[Any]]]]:
+    """One column of panels per target: the figure, its axes, the agents that steer, the flow
+    speeds (fractions of v) and each target's name and rows."""
+    rows = flow_rows(rows)
+    targets = _targets(rows)
+    fig, axes = _columns_figure(len(targets), nrows, height)
+    fractions = sorted({float(r.flow_fraction or 0.0) for r in rows})
+    cells = [(name, [r for r in rows if _target_name(r) == name]) for name in targets]
+    return fig, axes, _agents(rows), fractions, cells
+
+
+def _line(st: Mapping[str, Any], i: int) -> dict[str, Any]:
+    """An agent's line and markers (every other agent's hollow, so that coinciding ones show)."""
+    return dict(
+        color=st["color"], ls=st["ls"], marker=st["marker"], mfc="none" if i % 2 else st["color"]
+    )
+
+
+def _finish_axis(ax: Any, fractions: Sequence[float], sel: Sequence[Any]) -> bool:
+    """Hatch the speeds where the target is unreachable and set the speed axis; whether any was
+    hatched."""
+    hatched = _hatch_unreachable(ax, fractions, _unreachable(sel))
+    _xlim(ax, fractions)
+    return hatched
+
+
 @styled
 def flow_success_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     """Success rate and time over Zermelo's against the flow speed, per agent (module docs)."""
-    rows = flow_rows(rows)
-    targets = _targets(rows)
-    agents = _agents(rows)
-    fig, axes = _columns_figure(len(targets), 2, 4.4)
-    fractions = sorted({float(r.flow_fraction or 0.0) for r in rows})
+    fig, axes, agents, fractions, cells = _target_panels(rows, 2, 4.4)
     hatched = False
-    for j, name in enumerate(targets):
-        sel = [r for r in rows if _target_name(r) == name]
+    for j, (name, sel) in enumerate(cells):
         span = (max(fractions) - min(fractions)) or 1.0
         top, bottom = axes[0, j], axes[1, j]
         for i, agent in enumerate(agents):
@@ -389,28 +412,20 @@ def flow_success_figure(rows: Sequence[Mapping[str, Any]], note: str | None = No
             top.plot(
                 [f + shift for f in fs],
                 rate,
-                color=st["color"],
-                ls=st["ls"],
-                marker=st["marker"],
-                mfc="none" if i % 2 else st["color"],
+                **_line(st, i),
                 label=st["label"],
             )
             fs, ratio = _per_fraction(sel, agent, lambda r: r.time_ratio)
             bottom.plot(
                 [f + shift for f in fs],
                 ratio,
-                color=st["color"],
-                ls=st["ls"],
-                marker=st["marker"],
-                mfc="none" if i % 2 else st["color"],
+                **_line(st, i),
             )
         bottom.axhline(
             1.0, color=ZERMELO_STYLE["color"], ls="--", lw=0.9, label="Zermelo (least time)"
         )
-        bad = _unreachable(sel)
         for ax in (top, bottom):
-            hatched |= _hatch_unreachable(ax, fractions, bad)
-            _xlim(ax, fractions)
+            hatched |= _finish_axis(ax, fractions, sel)
         top.set_ylim(-0.05, 1.05)
         top.set_title(name)
         bottom.set_ylim(bottom=0.0)
@@ -427,15 +442,10 @@ def flow_success_figure(rows: Sequence[Mapping[str, Any]], note: str | None = No
 @styled
 def flow_energy_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     """Energy per ``a`` closed against the flow speed, per agent (module docs)."""
-    rows = flow_rows(rows)
-    targets = _targets(rows)
-    agents = _agents(rows)
-    fig, axes = _columns_figure(len(targets), 1, 2.6)
-    fractions = sorted({float(r.flow_fraction or 0.0) for r in rows})
+    fig, axes, agents, fractions, cells = _target_panels(rows, 1, 2.6)
     hatched = False
-    for j, name in enumerate(targets):
+    for j, (name, sel) in enumerate(cells):
         ax = axes[0, j]
-        sel = [r for r in rows if _target_name(r) == name]
         drawn = False
         for i, agent in enumerate(agents):
             st = agent_style(agent)
@@ -446,16 +456,12 @@ def flow_energy_figure(rows: Sequence[Mapping[str, Any]], note: str | None = Non
             ax.plot(
                 fs,
                 e,
-                color=st["color"],
-                ls=st["ls"],
-                marker=st["marker"],
-                mfc="none" if i % 2 else st["color"],
+                **_line(st, i),
                 label=st["label"],
             )
         if drawn:
             ax.set_yscale("log")
-        hatched |= _hatch_unreachable(ax, fractions, _unreachable(sel))
-        _xlim(ax, fractions)
+        hatched |= _finish_axis(ax, fractions, sel)
         ax.set_title(name)
         ax.set_xlabel("flow / swim speed")
         if j == 0:

@@ -517,9 +517,11 @@ def _nav_compare(
     studies: Sequence[StudyFolder],
 ) -> tuple[list[StudyFolder], list[Column], list[list[str]], int]:
     """`compare_table` of navigation studies: per (target, agent) present in all of them, the
-    navigation table's columns, one row per study."""
-    tables = [{(c[0], c[1]): c for c in nav_table(st.rows)[1]} for st in studies]
-    cols, _, _ = nav_table([])
+    navigation table's columns, one row per study (a still-fluid study beside one in a flow: its
+    Zermelo and time-ratio cells are "-")."""
+    built = [nav_table(st.rows) for st in studies]
+    cols = max((b[0] for b in built), key=len)
+    tables = [{(c[0], c[1]): c + ["-"] * (len(cols) - len(c)) for c in b[1]} for b in built]
     common = set(tables[0]).intersection(*tables[1:])
     every = set().union(*tables)
     rows = [

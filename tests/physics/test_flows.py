@@ -1,7 +1,7 @@
 """Background flows and the rigid motion they give a link swimmer, checked as a referee would:
 Galilean invariance, Jeffery's slender-body tumbling in shear (closed form, and integrated over
-time), Poiseuille's local shear, and a small passive body keeping to a Taylor-Green streamline.
-In float64 and in the default float32."""
+time), Poiseuille's local shear, and a small passive body keeping to a Taylor-Green streamline;
+each flow's gradient and hessian against its velocity. In float64 and in the default float32."""
 
 from __future__ import annotations
 
@@ -131,6 +131,32 @@ def test_flow_gradients_are_the_velocity_s_jacobian():
         np.testing.assert_allclose(np.asarray(flow.gradient(x)), np.asarray(jac), atol=1e-14)
         div = jnp.trace(flow.gradient(x), axis1=-2, axis2=-1)
         np.testing.assert_allclose(np.asarray(div), 0.0, atol=1e-14)  # incompressible
+
+
+@pytest.mark.parametrize(
+    "flow",
+    [Uniform((0.1, 0.2)), Shear(0.3), Poiseuille(0.05, 1.5), TaylorGreen(0.04, 7.0)],
+    ids=str,
+)
+def test_flow_hessians_are_the_gradient_s_derivative_by_finite_differences(flow):
+    # central differences of the gradient (error ~ h^2 |d^3 u|) and forward-mode AD agree
+    x = jnp.asarray([[0.3, -1.2], [2.0, 0.7], [-4.1, 3.3]])
+    h = 1e-5
+    fd = jnp.stack(
+        [
+            (flow.gradient(x + h * jnp.eye(2)[k]) - flow.gradient(x - h * jnp.eye(2)[k])) / (2 * h)
+            for k in range(2)
+        ],
+        axis=-1,
+    )
+    hess = flow.hessian(x)
+    assert hess.shape == (3, 2, 2, 2) and hess.dtype == x.dtype
+    np.testing.assert_allclose(np.asarray(hess), np.asarray(fd), rtol=0, atol=1e-10)
+    jac = jax.vmap(jax.jacfwd(flow.gradient))(x)
+    np.testing.assert_allclose(np.asarray(hess), np.asarray(jac), rtol=0, atol=1e-15)
+    np.testing.assert_array_equal(np.asarray(hess), np.asarray(jnp.swapaxes(hess, -1, -2)))
+    # incompressible: the divergence's gradient vanishes too
+    np.testing.assert_allclose(np.asarray(jnp.einsum("...iik->...k", hess)), 0.0, atol=1e-15)
 
 
 def test_flows_are_hashable_round_trip_and_refuse_bad_fields():

@@ -117,3 +117,20 @@ def test_the_llm_sees_the_local_flow_in_its_records(tmp_path):
     assert "flow (0, 23), stuck" in steps[1]["prompt"]
     meta = json.loads((out / "metadata.json").read_text())
     assert any(d.startswith("background flow") for d in meta["fidelity_deviations"])
+
+
+def test_compare_sets_flow_studies_side_by_side_with_their_zermelo_columns(tmp_path):
+    from jswim.studies.overview import compare_text
+    from jswim.studies.run import run_study
+
+    opts = StudyOptions(
+        flow="uniform", flows=(0.5,), bearings=(90.0,), agents=("controller", "zermelo")
+    )
+    for name in ("a", "b"):
+        run_study("navigate", opts, None, tmp_path / name, progress=False)
+    text = compare_text([tmp_path / "a", tmp_path / "b"])
+    header = next(line for line in text.splitlines() if "time ratio" in line)
+    assert "Zermelo" in header and "study" in header
+    zermelo = next(line for line in text.splitlines() if " zermelo " in f" {line} ")
+    # Zermelo's own row: its least time (38.3 steps here) and a time ratio of 1
+    assert f"{_crab_time(0.5, 90.0):.1f}" in zermelo and "1.00" in zermelo
