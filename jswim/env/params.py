@@ -115,9 +115,11 @@ def make_params(
     diagonal : bool
         Allow float ROC vectors that move several DOFs at once (default False).
     flow : Flow, optional
-        A background flow (`jswim.env.flows`; planar swimmers). A `Uniform` flow adds ``u`` to
-        each step's table displacement; the others integrate each step through the flow
-        ([`flow_step`][jswim.env.stepping.flow_step]).
+        A background flow (`jswim.env.flows`; planar swimmers, or a stream along the line of a
+        line swimmer: `check_flow`). A `Uniform` flow adds ``u`` to each step's table
+        displacement; the others add what the flow tables give for the step
+        (`jswim.env.flow_steps`), or integrate it ([`flow_step`][jswim.env.stepping.flow_step])
+        in an `jswim.env.flow_steps.Integrated` flow or off the tables.
 
     Raises
     ------
@@ -139,7 +141,12 @@ def make_params(
 
 def check_flow(flow: Any, model: SwimmerModel, diagonal: bool = False) -> None:
     """Refuse what a world cannot step in: a flow that is not a `jswim.env.flows` flow, a
-    swimmer that moves on a line, or diagonal strokes in a flow that is not uniform.
+    swimmer that moves on a line in any flow but a uniform stream along its line, or diagonal
+    strokes in a flow that is not uniform.
+
+    A stream along the line carries every sphere, and so the force-free body, at ``u`` whatever
+    the mobility (Galilean invariance): exact. Any other flow would carry the body off its line
+    or turn it, which a line world does not model.
 
     Raises
     ------
@@ -153,9 +160,10 @@ def check_flow(flow: Any, model: SwimmerModel, diagonal: bool = False) -> None:
             f"flow must be a jswim.env.flows flow (Uniform, Shear, Poiseuille, TaylorGreen), "
             f"got {flow!r}"
         )
-    if not model.planar:
+    if not model.planar and not (isinstance(flow, Uniform) and float(flow.u[1]) == 0.0):
         raise ConfigError(
-            f"{model.label} moves on a line; a background flow needs a planar swimmer"
+            f"{model.label} moves on a line: it takes a Uniform((ux, 0)) stream along it, not "
+            f"{flow!r} (a planar swimmer takes any flow)"
         )
     if diagonal and not isinstance(flow, Uniform):
         raise ConfigError(

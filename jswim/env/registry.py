@@ -105,8 +105,9 @@ def make(
         and ``lattice`` ([`navigation_world`][jswim.env.navigation.navigation_world]). Planar
         swimmers with ``roc_levels >= 2``, in the bulk or in a plane above a wall; docs/navigation.md.
     flow : Flow, optional
-        A background flow ([`jswim.env.flows`][jswim.env.flows]) for a planar swimmer in the
-        bulk, with or without a target; ``None`` (the default) is still fluid, every number as
+        A background flow ([`jswim.env.flows`][jswim.env.flows]) in the bulk: any flow for a
+        planar swimmer, with or without a target; a stream along its line,
+        ``Uniform((ux, 0))``, for a swimmer that moves on a line; ``None`` (the default) is still fluid, every number as
         before (docs/physics.md, Background flows).
     **kwargs
         More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.scene_parameters.scene_params]
