@@ -299,7 +299,7 @@ def build(swimmer: str = "purcell", scene: Any = None, **options: Any) -> tuple[
         # make's own refusal would name the diagonal strokes, which the caller never asked for
         raise ConfigError(
             f"continuous=True moves every joint at once, which a {type(flow).__name__} flow does "
-            "not offer (its steps are integrated along one DOF's move at a time); use a Uniform "
+            "not offer (its steps follow one DOF's move at a time); use a Uniform "
             "flow, a target (one DOF a step) or leave continuous off"
         )
     if continuous and isinstance(world, SwimmerWorld):

@@ -10,6 +10,7 @@ from jswim.env.base import Environment
 from jswim.env.params import EnvParams, make_params, parse_direction
 from jswim.env.scene_world import SceneTask, SceneWorld
 from jswim.env.swimmer_world import SwimmerWorld
+from jswim.env.flows import Uniform
 from jswim.errors import ConfigError
 from jswim.scenes import purcell_wall
 from jswim.scenes.scene_parameters import scene_params
@@ -107,7 +108,8 @@ def make(
     flow : Flow, optional
         A background flow ([`jswim.env.flows`][jswim.env.flows]) in the bulk: any flow for a
         planar swimmer, with or without a target; a stream along its line,
-        ``Uniform((ux, 0))``, for a swimmer that moves on a line; ``None`` (the default) is still fluid, every number as
+        ``Uniform((ux, 0))``, for a swimmer that moves on a line; above a wall, Purcell's plane
+        only, the wall's shear there, a `Uniform` stream (`_check_wall_flow`); ``None`` (the default) is still fluid, every number as
         before (docs/physics.md, Background flows).
     **kwargs
         More options of [`jswim.env.make_params`][jswim.env.params.make_params] or [`jswim.scenes.scene_params`][jswim.scenes.scene_parameters.scene_params]
@@ -148,10 +150,7 @@ def make(
     }
     if flow is not None:
         if scene is not None and not is_plain_bulk(scene):
-            raise ConfigError(
-                "a background flow is offered in the bulk only so far (above a wall a uniform "
-                "stream breaks the no-slip condition; shear is the flow there)"
-            )
+            _check_wall_flow(swimmer, as_scene(scene), flow)
         if isinstance(swimmer, str) and swimmer in _REGISTERED:
             raise ConfigError(f"the registered world {swimmer!r} takes no background flow")
         kwargs = {**kwargs, "flow": flow}
@@ -161,10 +160,33 @@ def make(
         return _registered_world(swimmer, scene, options, kwargs)
     if scene is not None and purcell_wall.is_purcell(swimmer) and not is_plain_bulk(scene):
         # Purcell's swimmer above a wall: the paper's planar world with wall-corrected drag
-        swimmer, scene, kwargs = purcell_wall.model(as_scene(scene), **kwargs), None, {}
+        kept = {"flow": kwargs.pop("flow")} if "flow" in kwargs else {}
+        swimmer, scene, kwargs = purcell_wall.model(as_scene(scene), **kwargs), None, kept
     if scene is None or is_plain_bulk(scene):
         return _paper_world(swimmer, options, kwargs)
     return _scene_world(swimmer, as_scene(scene), options, kwargs)
+
+
+def _check_wall_flow(swimmer: Any, scene: Scene, flow: Any) -> None:
+    """Refuse a flow where a scene cannot take it, in one line.
+
+    Above a wall the flow that keeps no-slip is the wall's own shear, ``(rate z, 0)``. Purcell's
+    swimmer swims in a plane at height ``h`` parallel to the wall, where that flow is a uniform
+    stream ``rate h``: a `Uniform` flow, exact in both wall models (the drag of every element is
+    against its velocity relative to the undisturbed flow, which no-slip leaves unchanged). The
+    sphere scenes' steps last as long as their arm moves (only the path matters in still fluid),
+    which a flow, needing the step's time, cannot use.
+    """
+    if not (purcell_wall.is_purcell(swimmer) and scene.medium == "wall"):
+        raise ConfigError(
+            "a background flow is offered in the bulk and in Purcell's plane above a wall so far, "
+            f"not in a {scene.medium!r} sphere scene (its steps have no fixed duration)"
+        )
+    if not isinstance(flow, Uniform):
+        raise ConfigError(
+            "above a wall the flow that keeps no-slip is the wall's shear (rate z, 0): in "
+            f"Purcell's plane at height h a uniform stream, Uniform((rate * h, 0)), not {flow!r}"
+        )
 
 
 def _navigation_world(

@@ -158,7 +158,7 @@ def test_the_gymnax_name_gives_the_same_world_bounds_and_budget():
     "options, says",
     [
         ({"swimmer": "ng"}, "moves on a line"),
-        ({"scene": {"medium": "wall", "height": 2.0}}, "in the bulk only"),
+        ({"scene": {"medium": "wall", "height": 2.0}, "flow": Shear(0.01)}, "keeps no-slip"),
         ({"flow": (0.0, 0.02)}, "flow must be a jswim.env.flows flow"),
         ({"flow": {"kind": "uniform", "u": [0.0, 0.02]}}, "flow must be a jswim.env.flows flow"),
     ],

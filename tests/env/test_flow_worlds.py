@@ -75,6 +75,26 @@ def test_a_batch_of_swimmers_drifts_together():
     np.testing.assert_allclose(drift, np.broadcast_to(12 * np.asarray(U), (64, 2)), atol=1e-12)
 
 
+@pytest.mark.parametrize("wall_model", ["local-rft", "beads"])
+def test_the_wall_s_shear_in_purcell_s_plane_adds_exactly_u_t(wall_model):
+    # u = (rate z, 0) keeps no-slip; in the plane at height h it is the stream (rate h, 0), and
+    # every element's drag is against its velocity relative to it: the body moves at it.
+    rate, h = 0.004, 2.0
+    scene = Scene(medium="wall", height=h)
+    options, actions = CASES["corner table, noise"]
+    moved = _positions(
+        *jswim.make(
+            "purcell", scene, flow=Uniform((rate * h, 0.0)), wall_model=wall_model, **options
+        ),
+        actions,
+    )
+    still = _positions(*jswim.make("purcell", scene, wall_model=wall_model, **options), actions)
+    t = np.arange(1, len(actions) + 1)
+    want = np.stack([rate * h * t, np.zeros(len(t))], -1)
+    np.testing.assert_allclose(moved[0] - still[0], want, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(moved[1], still[1])
+
+
 def _line_drift(swimmer: str, ux: float = -0.013) -> tuple[np.ndarray, np.ndarray]:
     """A line swimmer's 12 noisy steps in a stream ``(ux, 0)`` less the same in still fluid, and
     ``u t``."""
@@ -109,10 +129,17 @@ def test_a_stream_along_a_line_swimmer_in_the_default_float32(float32):
         (lambda: jswim.make("nsphere", flow=Shear(0.01)), "takes a Uniform"),
         (lambda: jswim.make("purcell", flow=(0.02, 0.0)), "jswim.env.flows flow"),
         (
-            lambda: jswim.make("purcell", Scene(medium="wall", height=2.0), flow=Uniform(U)),
-            "bulk only",
+            lambda: jswim.make("purcell", Scene(medium="wall", height=2.0), flow=Shear(0.01)),
+            "keeps no-slip",
         ),
-        (lambda: jswim.make("ng", Scene(medium="free", swimmers=2), flow=Uniform(U)), "bulk only"),
+        (
+            lambda: jswim.make("ng", Scene(medium="free", swimmers=2), flow=Uniform(U)),
+            "sphere scene",
+        ),
+        (
+            lambda: jswim.make("ng", Scene(medium="wall", height=5.0), flow=Uniform((0.01, 0.0))),
+            "sphere scene",
+        ),
     ],
 )
 def test_what_does_not_step_in_a_flow_is_refused_in_one_line(call, says):
