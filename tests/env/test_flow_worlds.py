@@ -75,7 +75,10 @@ def test_a_batch_of_swimmers_drifts_together():
     np.testing.assert_allclose(drift, np.broadcast_to(12 * np.asarray(U), (64, 2)), atol=1e-12)
 
 
-@pytest.mark.parametrize("wall_model", ["local-rft", "beads"])
+@pytest.mark.parametrize(
+    "wall_model",
+    ["local-rft", pytest.param("beads", marks=pytest.mark.slow)],  # beads: a minute of tables
+)
 def test_the_wall_s_shear_in_purcell_s_plane_adds_exactly_u_t(wall_model):
     # u = (rate z, 0) keeps no-slip; in the plane at height h it is the stream (rate h, 0), and
     # every element's drag is against its velocity relative to it: the body moves at it.
