@@ -167,8 +167,8 @@ def check_flow(flow: Any, model: SwimmerModel, diagonal: bool = False) -> None:
         )
     if diagonal and not isinstance(flow, Uniform):
         raise ConfigError(
-            f"diagonal strokes are not offered in a {type(flow).__name__} flow (its steps are "
-            "integrated along one DOF's move at a time)"
+            f"diagonal strokes are not offered in a {type(flow).__name__} flow (its steps follow "
+            "one DOF's move at a time through the flow tables)"
         )
 
 
