@@ -161,7 +161,8 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
                 type=_numbers(float),
                 metavar="F1,F2,...",
                 help="the flow's speeds, fractions of the swimming speed 0.0478 a per step, at most 2 "
-                "(default 0,0.5,0.9; past 1 some targets are unreachable and the rows say so)",
+                "(default 0,0.5,0.9; past 1 some targets are unreachable and the rows say so); "
+                "a grid size: more speeds on an existing folder add their runs to it",
             ),
         ),
         (

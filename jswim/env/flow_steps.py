@@ -83,6 +83,10 @@ class Integrated(Flow):
     def speed(self) -> float:
         return self.flow.speed
 
+    @property
+    def max_gradient(self) -> float:
+        return self.flow.max_gradient
+
     def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "flow": self.flow.to_dict(), "substeps": self.substeps}
 

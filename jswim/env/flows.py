@@ -82,6 +82,12 @@ class Flow:
     def speed(self) -> float:  # pragma: no cover - each flow defines it
         raise NotImplementedError
 
+    @property
+    def max_gradient(self) -> float:  # pragma: no cover - each flow defines it
+        """The largest entry of the velocity gradient a swimmer meets (``1 / tau``): how fast the
+        flow turns and strains a body (Poiseuille: at the channel's walls)."""
+        raise NotImplementedError
+
     def to_dict(self) -> dict[str, Any]:
         """The flow as plain JSON values (``kind`` first); `flow_from_dict` reads it."""
         return {"kind": self.kind, **dataclasses.asdict(self)}
@@ -121,6 +127,10 @@ class Uniform(Flow):
     def speed(self) -> float:
         return math.hypot(*self.u)
 
+    @property
+    def max_gradient(self) -> float:
+        return 0.0
+
 
 @dataclasses.dataclass(frozen=True)
 class Shear(Flow):
@@ -155,6 +165,10 @@ class Shear(Flow):
 
     @property
     def speed(self) -> float:
+        return abs(self.rate)
+
+    @property
+    def max_gradient(self) -> float:
         return abs(self.rate)
 
 
@@ -200,6 +214,10 @@ class Poiseuille(Flow):
     @property
     def speed(self) -> float:
         return abs(self.u_max)
+
+    @property
+    def max_gradient(self) -> float:
+        return 2.0 * abs(self.u_max) / self.half_width
 
 
 @dataclasses.dataclass(frozen=True)
@@ -269,6 +287,10 @@ class TaylorGreen(Flow):
     def speed(self) -> float:
         return abs(self.u0)
 
+    @property
+    def max_gradient(self) -> float:
+        return abs(self.u0) * math.pi / self.cell
+
 
 #: Every flow by its ``kind``.
 FLOWS = {f.kind: f for f in (Uniform, Shear, Poiseuille, TaylorGreen)}
@@ -323,9 +345,9 @@ def flow_from_dict(data: dict[str, Any]) -> Flow:
     kind = data.pop("kind", None)
     if kind not in FLOWS:
         raise ConfigError(f"flow kind must be one of {', '.join(FLOWS)}, got {kind!r}")
-    if kind == "uniform" and "u" in data:
-        data["u"] = tuple(data["u"])
     try:
+        if kind == "uniform" and "u" in data:
+            data["u"] = tuple(data["u"])
         return FLOWS[kind](**data)
     except TypeError as exc:
         raise ConfigError(f"bad {kind} flow fields: {exc}") from None

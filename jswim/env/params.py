@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import warnings
 from typing import Any
 from collections.abc import Sequence
 
@@ -14,6 +15,7 @@ import numpy as np
 
 from jswim.action_codes import check_roc_levels as _check_roc_levels
 from jswim.env.flows import Flow, Uniform
+from jswim.scenes.ranges import ModelRangeWarning
 from jswim.errors import ConfigError, check_zeta
 from jswim.start_levels import parse_init
 from jswim.swimmers.models import SwimmerModel, make_model
@@ -139,6 +141,12 @@ def make_params(
     )
 
 
+#: A flow whose velocity gradient (`jswim.env.flows.Flow.max_gradient`) passes this (``1 / tau``)
+#: turns the body by more than ~0.1 rad a step, beyond what the flow tables model (their error is
+#: third order in it: docs/physics.md, "Background flows"); it warns.
+MAX_TABLE_GRADIENT = 0.1
+
+
 def check_flow(flow: Any, model: SwimmerModel, diagonal: bool = False) -> None:
     """Refuse what a world cannot step in: a flow that is not a `jswim.env.flows` flow, a
     swimmer that moves on a line in any flow but a uniform stream along its line, or diagonal
@@ -165,10 +173,18 @@ def check_flow(flow: Any, model: SwimmerModel, diagonal: bool = False) -> None:
             f"{model.label} moves on a line: it takes a Uniform((ux, 0)) stream along it, not "
             f"{flow!r} (a planar swimmer takes any flow)"
         )
+    if flow.kind != "integrated" and flow.max_gradient > MAX_TABLE_GRADIENT:
+        warnings.warn(
+            f"{flow!r} has a velocity gradient of {flow.max_gradient:.3g} per step, beyond the "
+            f"flow tables' range (up to {MAX_TABLE_GRADIENT}; docs/physics.md): wrap it in "
+            "jswim.env.flow_steps.Integrated to step through the RK4 reference",
+            ModelRangeWarning,
+            stacklevel=3,
+        )
     if diagonal and not isinstance(flow, Uniform):
         raise ConfigError(
-            f"diagonal strokes are not offered in a {type(flow).__name__} flow (its steps follow "
-            "one DOF's move at a time through the flow tables)"
+            f"diagonal strokes are offered in a uniform flow only, not in {flow!r} (its steps "
+            "follow one DOF's move at a time)"
         )
 
 

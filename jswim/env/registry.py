@@ -177,7 +177,9 @@ def _check_wall_flow(swimmer: Any, scene: Scene, flow: Any) -> None:
     sphere scenes' steps last as long as their arm moves (only the path matters in still fluid),
     which a flow, needing the step's time, cannot use.
     """
-    if not (purcell_wall.is_purcell(swimmer) and scene.medium == "wall"):
+    if purcell_wall.is_purcell(swimmer) and scene.medium != "wall":
+        return  # not a scene Purcell's swimmer swims in: make's own refusal says why
+    if not purcell_wall.is_purcell(swimmer):
         raise ConfigError(
             "a background flow is offered in the bulk and in Purcell's plane above a wall so far, "
             f"not in a {scene.medium!r} sphere scene (its steps have no fixed duration)"

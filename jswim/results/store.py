@@ -84,9 +84,9 @@ def identity_differences(
         if isinstance(a, Mapping) and isinstance(b, Mapping):
             out += identity_differences(a, b, name + ".")
         elif a is _MISSING:
-            out.append(f"{name}: {b!r} now, not set in the folder (made by another jswim version)")
+            out.append(f"{name}: {b!r} now, not set in the folder")
         elif b is _MISSING:
-            out.append(f"{name}: not set now, {a!r} in the folder (made by another jswim version)")
+            out.append(f"{name}: not set now, {a!r} in the folder")
         else:
             out.append(f"{name}: {b!r} now, {a!r} in the folder")
     return out

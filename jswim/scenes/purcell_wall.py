@@ -38,6 +38,12 @@ def is_purcell(swimmer: Any) -> bool:
 def check_scene(scene: Scene) -> Scene:
     """``scene`` if Purcell's swimmer can swim in it above a wall, else a one-line ConfigError."""
     scene.validate()
+    if scene.medium == "bulk":
+        raise ConfigError(
+            "Purcell's swimmer swims alone and untilted in medium 'bulk' (the paper's world): "
+            "leave swimmers and tilt at the default (resistive force theory has no interactions "
+            "to solve)"
+        )
     if scene.medium != "wall":
         raise ConfigError(
             f"Purcell's swimmer swims in medium 'bulk' (the paper's world) or 'wall', not "

@@ -20,7 +20,15 @@ import pytest
 import jswim
 from jswim.env.flow_steps import Integrated, flow_increment, sincos, small_sincos, tabulated
 from jswim.env.flow_tables import _moves, flow_table, step_flow_map, step_wave_map
-from jswim.env.flows import Flow, Poiseuille, Shear, TaylorGreen, Uniform, study_flow
+from jswim.env.flows import (
+    Flow,
+    Poiseuille,
+    Shear,
+    TaylorGreen,
+    Uniform,
+    flow_from_dict,
+    study_flow,
+)
 from jswim.env.step_tables import lattice_table, step_rows
 from jswim.env.stepping import FLOW_SUBSTEPS, flow_step
 from jswim.env.targets import FixedTarget
@@ -128,6 +136,15 @@ def test_a_stream_along_a_line_swimmer_in_the_default_float32(float32):
     "call, says",
     [
         (lambda: jswim.make("purcell", diagonal=True, flow=Shear(0.1)), "diagonal strokes"),
+        (
+            lambda: jswim.make("purcell", diagonal=True, flow=Integrated(Shear(0.1))),
+            "uniform flow only, not in Integrated",
+        ),
+        (
+            lambda: jswim.make("purcell", Scene(medium="bulk", swimmers=2), flow=Uniform(U)),
+            "swims alone",
+        ),
+        (lambda: flow_from_dict({"kind": "uniform", "u": 3}), "bad uniform flow fields"),
         (lambda: jswim.make("ng", flow=Uniform(U)), "moves on a line"),
         (lambda: jswim.make("nsphere", flow=Shear(0.01)), "takes a Uniform"),
         (lambda: jswim.make("purcell", flow=(0.02, 0.0)), "jswim.env.flows flow"),
@@ -527,3 +544,19 @@ def test_integrated_flows_are_hashable_move_the_fluid_alike_and_refuse_bad_field
     ):
         with pytest.raises(ConfigError):
             bad()
+
+
+def test_a_flow_beyond_the_tables_range_warns_and_its_integrated_form_does_not():
+    import warnings
+
+    from jswim.scenes.ranges import ModelRangeWarning
+
+    # TaylorGreen(0.5, 2): gradient u0 pi / cell = 0.79 per step (the study's fastest: 0.023)
+    for flow in (Shear(1.0), Poiseuille(0.3, 3.0), TaylorGreen(0.5, 2.0)):
+        with pytest.warns(ModelRangeWarning, match="Integrated"):
+            jswim.make("purcell", flow=flow)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        jswim.make("purcell", flow=Integrated(Shear(1.0)))
+        for kind in ("shear", "poiseuille", "taylor-green"):
+            jswim.make("purcell", flow=study_flow(kind, 2.0))  # the largest --flows speed
