@@ -203,17 +203,26 @@ def test_a_straight_swimmer_held_in_shear_tumbles_on_jeffery_s_orbit(integrated,
     )
 
 
-def test_a_still_flow_through_the_tables_is_the_exact_table():
+# The fast tier keeps one zero flow; the others compile their own tables (the slow tier).
+@pytest.mark.parametrize(
+    "flow",
+    [
+        Shear(0.0),
+        pytest.param(Poiseuille(0.0, 3.0), marks=pytest.mark.slow),
+        pytest.param(TaylorGreen(0.0, 6.0), marks=pytest.mark.slow),
+    ],
+    ids=["shear", "poiseuille", "taylor-green"],
+)
+def test_a_still_flow_through_the_tables_is_the_exact_table(flow):
     # Bit for bit on the lattice, which steps in float64 pairs with or without a flow. The corner
     # world's still-fluid step works in the session's dtype and its flow step in float64 pairs,
     # so they may part by an ulp (1.7e-18 a after 8 steps here, depending on what ran before).
     for case, atol in (("corner table, noise", 1e-16), ("K = 2 lattice", 0.0)):
         options, actions = CASES[case]
         still = _positions(*jswim.make("purcell", **options), actions)
-        for flow in (Shear(0.0), Poiseuille(0.0, 3.0), TaylorGreen(0.0, 6.0)):
-            zero = _positions(*jswim.make("purcell", flow=flow, **options), actions)
-            np.testing.assert_allclose(zero[0], still[0], rtol=0, atol=atol)
-            np.testing.assert_allclose(zero[1], still[1], rtol=0, atol=atol)
+        zero = _positions(*jswim.make("purcell", flow=flow, **options), actions)
+        np.testing.assert_allclose(zero[0], still[0], rtol=0, atol=atol)
+        np.testing.assert_allclose(zero[1], still[1], rtol=0, atol=atol)
 
 
 @pytest.mark.slow  # compiles the flow-integrated step (16 RK4 pieces, unrolled)
@@ -225,13 +234,21 @@ def test_a_still_flow_integrated_step_by_step_is_the_exact_table():
     np.testing.assert_allclose(zero[1], still[1], rtol=0, atol=1e-6)
 
 
-def test_the_flow_step_has_converged():
-    model = MODEL
+# Taylor-Green, the flow whose gradient varies most along a link, stays in the fast tier.
+@pytest.mark.parametrize(
+    "flow",
+    [
+        pytest.param(Shear(0.05), marks=pytest.mark.slow),
+        pytest.param(Poiseuille(0.03, 4.0), marks=pytest.mark.slow),
+        TaylorGreen(0.04, 10.0),
+    ],
+    ids=["shear", "poiseuille", "taylor-green"],
+)
+def test_the_flow_step_has_converged(flow):
     s0, s1, pose = jnp.asarray([1.0, 1.0]), jnp.asarray([0.0, 1.0]), jnp.asarray([0.3, 0.7, 0.2])
-    for flow in (Shear(0.05), Poiseuille(0.03, 4.0), TaylorGreen(0.04, 10.0)):
-        coarse = flow_step(model, flow, s0, s1, pose)
-        fine = flow_step(model, flow, s0, s1, pose, substeps=4 * FLOW_SUBSTEPS)
-        np.testing.assert_allclose(np.asarray(coarse), np.asarray(fine), rtol=0, atol=1e-7)
+    coarse = flow_step(MODEL, flow, s0, s1, pose)
+    fine = flow_step(MODEL, flow, s0, s1, pose, substeps=4 * FLOW_SUBSTEPS)
+    np.testing.assert_allclose(np.asarray(coarse), np.asarray(fine), rtol=0, atol=1e-7)
 
 
 NAV = dict(roc_levels=2, target=FixedTarget(3.0, 90.0))
@@ -469,6 +486,7 @@ def test_the_first_order_map_carries_uniform_and_rigidly_rotating_fluid_rigidly(
     np.testing.assert_allclose(np.asarray(o1), np.asarray(rotated), rtol=0, atol=1e-14)
 
 
+@pytest.mark.slow  # compiles the degree-48 quadrature of every row
 def test_the_rows_quadratures_have_converged():
     s0, s1 = jnp.asarray([1.0, 0.5]), jnp.asarray([0.0, 0.5])
     coarse, fine = step_flow_map(MODEL, s0, s1), step_flow_map(MODEL, s0, s1, degree=48)
