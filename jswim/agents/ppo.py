@@ -69,6 +69,7 @@ from jswim.env.base import Environment
 from jswim.env.episodes import Trajectory
 from jswim.agents.ppo_judge import evaluate, evaluate_swimmers, exact_x  # noqa: F401  (the judge, next to the learner)
 from jswim.errors import ConfigError, check_choice
+from jswim.reals import plain
 
 #: The actor heads of `PPOConfig.policy`.
 POLICIES = ("gaussian", "categorical")
@@ -170,6 +171,10 @@ class PPOConfig:
     policy: str = "gaussian"
 
     def __post_init__(self) -> None:
+        # A NumPy number (np.float32(0.1), a value read from an array) is the plain Python number
+        # it holds: configs are hashed into jit's cache.
+        for field in dataclasses.fields(self):
+            object.__setattr__(self, field.name, plain(getattr(self, field.name)))
         energy_reward(self.energy_weight)  # raises on a bad weight
         check_choice(self.policy, POLICIES, "PPO policy")
         for name in ("steps", "rollout", "epochs", "hidden", "envs"):

@@ -48,6 +48,7 @@ from jswim.env.base import Environment
 from jswim.env.discretiser import Cells, corner, offered_mask, positions
 from jswim.env.episodes import Trajectory
 from jswim.errors import ConfigError
+from jswim.reals import plain
 from jswim.judging.gait import PAPER, Criterion, GaitReport, judge
 
 #: Exploration rate ``0.8**t``: 1 at the start (nothing is known yet), below 1 % after 21 steps,
@@ -104,6 +105,10 @@ class QConfig:
     energy_weight: float = 0.0
 
     def __post_init__(self) -> None:
+        # A NumPy number (np.float32(0.1), a value read from an array) is the plain Python number
+        # it holds: configs are hashed into jit's cache.
+        for field in dataclasses.fields(self):
+            object.__setattr__(self, field.name, plain(getattr(self, field.name)))
         energy_reward(self.energy_weight)  # raises on a bad weight
         if not isinstance(self.steps, int) or self.steps < 1:
             raise ConfigError(f"steps must be a positive integer, got {self.steps!r}")

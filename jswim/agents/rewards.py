@@ -15,6 +15,7 @@ from jax import Array
 
 from jswim.env.base import StepInfo
 from jswim.errors import ConfigError
+from jswim.reals import is_real
 
 
 def energy_reward(weight: float) -> Callable[[StepInfo], Array]:
@@ -29,7 +30,7 @@ def energy_reward(weight: float) -> Callable[[StepInfo], Array]:
     ValueError
         If ``weight`` is negative or not finite (a [`ConfigError`][jswim.errors.ConfigError]).
     """
-    if not (isinstance(weight, (int, float)) and math.isfinite(weight) and weight >= 0):
+    if not (is_real(weight) and math.isfinite(weight) and weight >= 0):
         raise ConfigError(f"energy_weight must be a finite number >= 0, got {weight!r}")
     if weight == 0:
         return lambda info: info.progress

@@ -21,9 +21,11 @@ import math
 from typing import Any
 
 import jax.numpy as jnp
+import numpy as np
 from jax import Array
 
 from jswim.errors import ConfigError
+from jswim.reals import is_real
 
 __all__ = [
     "FLOWS",
@@ -51,7 +53,7 @@ FLOW_LENGTH = 3.0
 
 
 def _finite(value: Any, name: str, positive: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if not is_real(value):
         raise ConfigError(f"flow {name} must be a number, got {value!r}")
     v = float(value)
     if not math.isfinite(v) or (positive and not v > 0):
@@ -107,9 +109,12 @@ class Uniform(Flow):
     kind = "uniform"
 
     def __post_init__(self) -> None:
-        if not isinstance(self.u, (tuple, list)) or len(self.u) != 2:
+        u = self.u
+        if getattr(u, "shape", None) == (2,):  # a NumPy or JAX vector
+            u = list(np.asarray(u))
+        if not isinstance(u, (tuple, list)) or len(u) != 2:
             raise ConfigError(f"Uniform flow u must be (ux, uy), got {self.u!r}")
-        object.__setattr__(self, "u", tuple(_finite(c, "u") for c in self.u))
+        object.__setattr__(self, "u", tuple(_finite(c, "u") for c in u))
 
     def velocity(self, x: Array) -> Array:
         x = jnp.asarray(x)

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import numbers
 from typing import Any
 
 from jswim.errors import ConfigError
+from jswim.reals import plain
 
 #: Media: the paper's first-order formula, the point-force solve without and with a wall.
 MEDIA = ("bulk", "free", "wall")
@@ -81,14 +81,8 @@ class Scene:
     def __post_init__(self) -> None:
         # Normalise for hashing and equality: floats and nested tuples whatever was passed; a NumPy
         # number (np.float32(5.0), a value read from an array) is the plain float it holds.
-        for name in ("height", "tilt", "separation"):
-            v = getattr(self, name)
-            if isinstance(v, numbers.Real) and not isinstance(v, (bool, int, float)):
-                object.__setattr__(self, name, float(v))
-        if isinstance(self.swimmers, numbers.Integral) and not isinstance(
-            self.swimmers, (bool, int)
-        ):
-            object.__setattr__(self, "swimmers", int(self.swimmers))
+        for name in ("height", "tilt", "separation", "swimmers"):
+            object.__setattr__(self, name, plain(getattr(self, name)))
         try:
             obs = tuple(tuple(float(v) for v in o) for o in self.obstacles)
         except (TypeError, ValueError):

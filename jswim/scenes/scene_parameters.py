@@ -14,6 +14,7 @@ import numpy as np
 
 from jswim.action_codes import check_roc_levels
 from jswim.errors import ConfigError, check_zeta
+from jswim.reals import is_real
 from jswim.scenes.ranges import warn_out_of_range
 from jswim.scenes.scene import Scene
 from jswim.start_levels import parse_init
@@ -247,9 +248,7 @@ def check_start(
             f"scenes hold NG three-sphere swimmers only (swimmer='ng'), got {swimmer!r}"
         )
     model = make_model("ng", **model_kwargs)
-    if not (
-        isinstance(contact_gap, (int, float)) and math.isfinite(contact_gap) and contact_gap >= 0
-    ):
+    if not (is_real(contact_gap) and math.isfinite(contact_gap) and contact_gap >= 0):
         raise ConfigError(f"contact_gap must be a number >= 0, got {contact_gap!r}")
     levels = np.asarray(parse_init(init, 2), np.float64)
     if np.any(levels < 0):

@@ -397,7 +397,13 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
         from jswim.studies.specs import SPECS  # lazy: the grids load JAX
 
         spec = SPECS.get(s.study)
-        lines.append(f"settings: {_settings_text(opts, spec.ignores if spec else ())}")
+        settings = _settings_text(opts, spec.ignores if spec else ())
+        if opts.get("flow"):  # still fluid ("") goes unsaid, as on the page
+            speeds = ",".join(
+                f"{float(f):g}" for f in (s.meta.get("grid") or {}).get("flows") or ()
+            )
+            settings += f"; flow {opts['flow']} at {speeds or '?'} v (the swimming speed)"
+        lines.append(f"settings: {settings}")
     lines.append(
         f"runs: {len(s.rows)} (" + ", ".join(f"{a} {n}" for a, n in sorted(agents.items())) + ")"
     )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -54,3 +55,20 @@ def test_ppo_with_an_energy_price_records_progress_not_the_priced_reward():
     run = ppo.train(world, params, keys, ppo.PPOConfig(steps=16, energy_weight=1.0), trace=True)
     np.testing.assert_array_equal(np.asarray(run.progress), np.asarray(run.trace.info.progress))
     assert np.all(np.isfinite(np.asarray(run.trace.info.work)))
+
+
+@pytest.mark.parametrize(
+    "number", [np.float32(0.25), jnp.float32(0.25), np.array(0.25)], ids=["np", "jnp", "0-d"]
+)
+def test_a_learners_config_holds_a_numpy_number_as_the_plain_number(number):
+    # Configs are static (hashed into jit's cache): one config, one compilation, whatever the
+    # array type of the number it was given; integers stay integers, floats are not rounded.
+    for config in (qlearning.QConfig, ppo.PPOConfig):
+        made = config(energy_weight=number, steps=np.int64(40), learning_rate=number)
+        same = config(energy_weight=0.25, steps=40, learning_rate=0.25)
+        assert made == same and hash(made) == hash(same)
+        assert type(made.steps) is int and type(made.energy_weight) is float
+    with pytest.raises(ConfigError, match="steps"):
+        qlearning.QConfig(steps=np.float64(40.0))  # a whole float is not a step count
+    with pytest.raises(ConfigError, match="energy_weight"):
+        ppo.PPOConfig(energy_weight=np.bool_(True))

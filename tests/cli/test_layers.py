@@ -27,6 +27,7 @@ LAYERS = [
             "jswim._io",
             "jswim._exports",
             "jswim.reprs",
+            "jswim.reals",
         ],
     ),
     ("physics", ["jswim.swimmers"]),

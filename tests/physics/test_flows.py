@@ -5,6 +5,7 @@ each flow's gradient and hessian against its velocity. In float64 and in the def
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax
@@ -176,3 +177,33 @@ def test_flows_are_hashable_round_trip_and_refuse_bad_fields():
     ):
         with pytest.raises(ConfigError):
             bad()
+
+
+@pytest.mark.parametrize(
+    "number",
+    [np.float32(0.01), np.float64(0.01), np.float16(0.01), jnp.float32(0.01), np.array(0.01)],
+    ids=["np.float32", "np.float64", "np.float16", "jnp.float32", "0-d array"],
+)
+def test_a_flow_takes_the_real_numbers_users_hold_as_the_float_they_hold(number):
+    # The flow is the one made from the plain float (same hash: one jit compilation), and its
+    # numbers are Python floats, whatever the array type.
+    plain = float(number)
+    for made, same in (
+        (Shear(number), Shear(plain)),
+        (Uniform((number, 0)), Uniform((plain, 0.0))),
+        (Uniform(np.array([number, 0.0], np.asarray(number).dtype)), Uniform((plain, 0.0))),
+        (Poiseuille(number, np.int64(4)), Poiseuille(plain, 4.0)),
+        (TaylorGreen(number, jnp.int32(6)), TaylorGreen(plain, 6.0)),
+    ):
+        assert made == same and hash(made) == hash(same)
+        assert all(type(v) is float for v in jax.tree_util.tree_leaves(dataclasses.astuple(made)))
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [np.bool_(True), 1j, np.complex64(1), np.array([0.01, 0.02]), "0.01", None, np.float32("nan")],
+    ids=["np.bool_", "complex", "np.complex64", "vector", "str", "None", "nan"],
+)
+def test_a_flow_refuses_what_is_not_one_finite_real_number(bad):
+    with pytest.raises(ConfigError, match="flow rate must be a"):
+        Shear(bad)

@@ -120,7 +120,7 @@ def test_the_llm_sees_the_local_flow_in_its_records(tmp_path):
 
 
 def test_compare_sets_flow_studies_side_by_side_with_their_zermelo_columns(tmp_path):
-    from jswim.studies.overview import compare_text
+    from jswim.studies.overview import compare_text, show_text
     from jswim.studies.run import run_study
 
     opts = StudyOptions(
@@ -134,3 +134,6 @@ def test_compare_sets_flow_studies_side_by_side_with_their_zermelo_columns(tmp_p
     zermelo = next(line for line in text.splitlines() if " zermelo " in f" {line} ")
     # Zermelo's own row: its least time (38.3 steps here) and a time ratio of 1
     assert f"{_crab_time(0.5, 90.0):.1f}" in zermelo and "1.00" in zermelo
+    # `jswim show` names the flow among the settings, as the page does
+    settings = next(line for line in show_text(tmp_path / "a").splitlines() if "settings" in line)
+    assert settings.endswith("flow uniform at 0.5 v (the swimming speed)")
