@@ -16,26 +16,26 @@ import numpy as np
 __all__ = ["is_integer", "is_real", "plain"]
 
 
+def _scalar(value: Any, kind: type, dtype_kinds: str) -> bool:
+    # A bool is an Integral to Python; a JAX 0-d array is no numbers.* instance, so its dtype says.
+    if isinstance(value, (bool, np.bool_)):
+        return False
+    if isinstance(value, kind):
+        return True
+    dtype, shape = getattr(value, "dtype", None), getattr(value, "shape", None)
+    return shape == () and dtype is not None and np.dtype(dtype).kind in dtype_kinds
+
+
 def is_real(value: Any) -> bool:
     """Whether ``value`` is a real scalar: an int or float of Python or NumPy, or a 0-d integer or
     floating array (NumPy, JAX); not a bool, a complex, a string or an array with a shape."""
-    if isinstance(value, (bool, np.bool_)):
-        return False
-    if isinstance(value, numbers.Real):
-        return True
-    dtype, shape = getattr(value, "dtype", None), getattr(value, "shape", None)
-    return shape == () and dtype is not None and np.dtype(dtype).kind in "iuf"
+    return _scalar(value, numbers.Real, "iuf")
 
 
 def is_integer(value: Any) -> bool:
     """Whether ``value`` is an integer scalar (Python's or NumPy's, or a 0-d integer array); not a
     bool and not a float that happens to be whole."""
-    if isinstance(value, (bool, np.bool_)):
-        return False
-    if isinstance(value, numbers.Integral):
-        return True
-    dtype, shape = getattr(value, "dtype", None), getattr(value, "shape", None)
-    return shape == () and dtype is not None and np.dtype(dtype).kind in "iu"
+    return _scalar(value, numbers.Integral, "iu")
 
 
 def plain(value: Any) -> Any:
