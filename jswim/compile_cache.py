@@ -2,7 +2,8 @@
 
 Every ``jswim`` process compiles the same jitted paths (the environment step, the baselines'
 training loops, the judge); compiled once, they are kept on disk in the user's cache folder
-(``$XDG_CACHE_HOME/jswim/jax``, else ``~/.cache/jswim/jax``) and loaded by later processes in
+(``$XDG_CACHE_HOME/jswim/jax`` when that is an absolute path, else ``~/.cache/jswim/jax``; with
+``$HOME`` empty or relative, nowhere: `jswim._io.xdg`) and loaded by later processes in
 milliseconds. JAX keys each entry by the computation, its shapes, the JAX version and the
 device, so a stale entry is never used. A folder that cannot be made or written leaves the
 cache off (compilation as before, nothing else changes); ``JSWIM_COMPILATION_CACHE=0`` turns
@@ -14,16 +15,19 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from jswim._io import xdg
+
 __all__ = ["MIN_COMPILE_S", "cache_folder", "enable"]
 
 #: Compilations shorter than this (seconds) are not worth a disk entry.
 MIN_COMPILE_S = 0.05
 
 
-def cache_folder() -> Path:
-    """Where the compiled programs go: ``$XDG_CACHE_HOME/jswim/jax`` or ``~/.cache/jswim/jax``."""
-    root = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(root) / "jswim" / "jax"
+def cache_folder() -> Path | None:
+    """Where the compiled programs go: ``$XDG_CACHE_HOME/jswim/jax`` (an absolute one) or
+    ``~/.cache/jswim/jax``; None without a usable home (``$HOME`` empty or relative)."""
+    root = xdg.cache_home()
+    return None if root is None else root / "jswim" / "jax"
 
 
 def enable() -> Path | None:
@@ -33,6 +37,8 @@ def enable() -> Path | None:
     if os.environ.get("JAX_COMPILATION_CACHE_DIR"):
         return Path(os.environ["JAX_COMPILATION_CACHE_DIR"])  # the user's own; JAX reads it itself
     where = cache_folder()
+    if where is None:  # no home to keep it in: compile as before (never /.cache)
+        return None
     try:
         where.mkdir(parents=True, exist_ok=True)
     except OSError:

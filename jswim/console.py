@@ -352,7 +352,9 @@ PHASE_LABELS = {
     "random": "random policy",
     "ppo": "PPO",  # real-valued in the continuous and scene studies, categorical in navigation
     "controller": "steering controller",
-    "zermelo": "Zermelo's optimal path",
+    "zermelo": "Zermelo's point path",
+    "optimal": "the swimmer's optimum",
+    "mpc": "model-predictive agent",
     "stroke": "fixed strokes",
     "start": "start",
     "resume": "resume",

@@ -1,6 +1,6 @@
 """The bottom layer for folder I/O, JAX-free: atomic writes and strict JSON (`atomic`), JSON
 lines (`jsonl`), the one-writer folder lock (`folderlock`), file modes (`permissions`), signals
-(`interrupts`) and path kinds (`paths`).
+(`interrupts`), path kinds (`paths`) and the XDG cache folder (`xdg`).
 """
 
 from jswim._exports import lazy_exports

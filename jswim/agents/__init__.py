@@ -9,8 +9,11 @@ light (JAX loads with the first of them):
 - `jswim.agents.random_policy`: the random policy (``random_policy.run``);
 - `jswim.agents.strokes`: fixed strokes (``strokes.play``);
 - `jswim.agents.steering`: the navigation controller (``steering.run``);
-- `jswim.agents.zermelo`: Zermelo's time-optimal path through a flow (``zermelo.zermelo``), the
-  navigation study's yardstick.
+- `jswim.agents.zermelo`: Zermelo's time-optimal path of a point through a flow
+  (``zermelo.zermelo``);
+- `jswim.agents.optimal`: the swimmer's own optimum (``optimal.solve``), the navigation study's
+  yardstick;
+- `jswim.agents.mpc`: the model-predictive agent (``mpc.run``).
 
 The other modules (``defaults``, ``fidelity``, ``memory``, ``pair_prompt``, ``ppo_judge``,
 ``protocol``, ``rewards``, ``step_batcher``, ``variants``, ``world_view``) are their parts.
@@ -21,9 +24,20 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-__all__ = ["llm", "ppo", "qlearning", "random_policy", "steering", "strokes", "zermelo"]
+__all__ = [
+    "llm",
+    "mpc",
+    "optimal",
+    "ppo",
+    "qlearning",
+    "random_policy",
+    "steering",
+    "strokes",
+    "zermelo",
+]
 
 _PARTS = (
+    "cost_to_go",
     "defaults",
     "fidelity",
     "memory",

@@ -1,7 +1,13 @@
 """The steering controller as an agent of a navigation world: turn with an off-centre loop until
 the target's bearing is small, then swim the square gait. In a background flow it steers the
 crab angle ([`crab_bearing`][jswim.agents.steering.crab_bearing]): the heading whose swimming
-velocity plus the local flow points at the target.
+velocity plus the flow (averaged along the line to the target) points at the target, at the
+speed it keeps while its loops cancel the flow's turn
+(`Controller.speed`); and it feeds the flow's turn of
+its heading forward into its choice of cycle
+([`flow_rotation`][jswim.agents.steering.flow_rotation],
+[`choose_cycle`][jswim.swimmers.turning.choose_cycle]). In still fluid neither acts: every
+number is as without them.
 
 The controller is kinematics written from the physics ([`jswim.swimmers.turning`][jswim.swimmers.turning]); its
 cycles and their measured rotation come from the exact tables ([`jswim.env.loops.steering_plan`][jswim.env.loops.steering_plan]).
@@ -22,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import math
 from typing import Any
 
 import jax
@@ -36,7 +43,15 @@ from jswim.env.loops import steering_plan
 from jswim.errors import ConfigError
 from jswim.swimmers.turning import ControllerState, SteeringPlan, controller_start, controller_step
 
-__all__ = ["Controller", "controller", "crab_bearing", "run"]
+__all__ = [
+    "COURSE_SAMPLES",
+    "JEFFERY",
+    "Controller",
+    "controller",
+    "crab_bearing",
+    "flow_rotation",
+    "run",
+]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -58,17 +73,34 @@ class Controller:
     reverse: bool
     plan: Any = dataclasses.field(compare=False, hash=False)
 
+    def speed(self, rotation: Array) -> Array:
+        """The swimmer's mean speed through the water (``a / tau``) while it holds a heading
+        against the flow's turn ``rotation`` (rad per step): the turning loops cancel it, a share
+        ``4 |rotation| / turn`` of the steps (all of them where the flow beats the loops), at
+        their own speed, and the square gait swims the rest at `SWIM_SPEED`. The crab angle
+        steers with it: a swimmer that spends half its steps turning is slower than the gait."""
+        share = jnp.minimum(1.0, 4.0 * jnp.abs(rotation) / self.plan.turn)
+        loop = 2.0 * self.plan.radius * math.sin(self.plan.turn / 2) / 4.0  # chord per step
+        return SWIM_SPEED * (1.0 - share) + loop * share
+
     def start(self) -> ControllerState:
         """The memory of a controller at the start, hub 0 = ``(hi, hi)``."""
         return controller_start()
 
     def act(
-        self, memory: ControllerState, bearing: Array, distance: Array, reach: Array, n_dof: int
+        self,
+        memory: ControllerState,
+        bearing: Array,
+        distance: Array,
+        reach: Array,
+        n_dof: int,
+        rotation: Array | float = 0.0,
     ) -> tuple[Array, ControllerState]:
         """The world's action for the target's ``bearing`` (rad, body frame) and ``distance``
         (``a``), swimming straight when that passes within ``reach`` (``a``, half the success
-        radius) of it, and the new memory."""
-        move, memory = controller_step(self.plan, memory, bearing, distance, reach)
+        radius) of it, and the new memory; ``rotation``: the flow's turn of the body (rad per
+        step, [`flow_rotation`][jswim.agents.steering.flow_rotation]), 0 in still fluid."""
+        move, memory = controller_step(self.plan, memory, bearing, distance, reach, rotation)
         if self.world_k:
             return move[0] * (2 * self.world_k + 1) + move[1] + self.world_k, memory
         roc = move[1].astype(jnp.result_type(float)) / self.plan_k
@@ -120,6 +152,39 @@ def crab_bearing(bearing: Array, flow: Array, speed: float = SWIM_SPEED) -> Arra
     return jnp.arctan2(aim[1], aim[0])
 
 
+#: Jeffery's shape factor the feed-forward uses: the square gait's, averaged over its stroke
+#: (docs/physics.md, Poiseuille: upstream swinging).
+JEFFERY = 0.83753
+
+
+def flow_rotation(gradient: Array, heading: Array, shape: float = JEFFERY) -> Array:
+    """The rate (rad per step, counterclockwise) at which a flow with velocity gradient
+    ``gradient`` (``(2, 2)``, ``[i, j] = du_i / dx_j``, ``1 / tau``) turns a body headed at
+    ``heading`` (rad, lab frame): half the vorticity plus ``shape`` times the strain's turn of
+    the heading, Jeffery's ``omega / 2 + B p_perp . E p`` (one step lasts one ``tau``). ``shape
+    = 0``: half the vorticity alone. Zero in a uniform stream and in still fluid."""
+    g = jnp.asarray(gradient)
+    spin = 0.5 * (g[1, 0] - g[0, 1])
+    c, s = jnp.cos(heading), jnp.sin(heading)
+    strain = (g[1, 1] - g[0, 0]) * s * c + 0.5 * (g[0, 1] + g[1, 0]) * (c * c - s * s)
+    return spin + shape * strain
+
+
+#: Points along the line to the target whose mean flow the crab angle steers against.
+COURSE_SAMPLES = 8
+
+
+def _course_flow(flow: Any, position: Array, target: Array, heading: Array) -> Array:
+    """The flow averaged over the straight line from ``position`` to ``target`` (midpoints of
+    `COURSE_SAMPLES` pieces), in the body frame of ``heading``: what the swimmer will cross, so
+    that it turns upstream early rather than when it is already in the strong flow (its turns
+    are slow, about 0.015 rad per step)."""
+    frac = (jnp.arange(COURSE_SAMPLES) + 0.5) / COURSE_SAMPLES
+    u = jnp.mean(flow.velocity(position + frac[:, None] * (target - position)), axis=0)
+    c, s = jnp.cos(heading), jnp.sin(heading)
+    return jnp.stack([c * u[0] + s * u[1], -s * u[0] + c * u[1]])
+
+
 def _one(key: Array, params: Any, env: Any, ctrl: Controller, steps: int) -> Trajectory:
     state = env.reset(key, params)
     keys = jax.random.split(key, steps)
@@ -129,9 +194,15 @@ def _one(key: Array, params: Any, env: Any, ctrl: Controller, steps: int) -> Tra
         view = env.target_view(st, params)
         reach = 0.5 * params.target.radius
         bearing = view.bearing
+        rotation = 0.0  # still fluid: no feed-forward, every number as before
         if getattr(env, "flow", None) is not None:  # steer the course, not the heading
-            bearing = crab_bearing(bearing, env.body_flow(st, params).astype(bearing.dtype))
-        action, memory = ctrl.act(memory, bearing, view.distance, reach, env.n_dof)
+            obs = env.inner.observe(st.swimmer, params.swimmer)
+            rotation = flow_rotation(env.flow.gradient(obs.position[0]), obs.orientation[0]).astype(
+                bearing.dtype
+            )
+            flow = _course_flow(env.flow, obs.position[0], view.position, obs.orientation[0])
+            bearing = crab_bearing(bearing, flow.astype(bearing.dtype), ctrl.speed(rotation))
+        action, memory = ctrl.act(memory, bearing, view.distance, reach, env.n_dof, rotation)
         st, info = env.step(k, st, action, params)
         return (st, memory), Trajectory(st, env.observe(st, params), info)
 

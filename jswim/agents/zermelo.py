@@ -49,8 +49,8 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array, lax
 
-from jswim.env.flows import SWIM_SPEED, Flow, Uniform
-from jswim.env.targets import FixedTarget, MovingTarget, Waypoints
+from jswim.env.flows import MAX_FLOW_SPEED, SWIM_SPEED, Flow, Uniform
+from jswim.env.targets import MAX_DISTANCE, FixedTarget, MovingTarget, Waypoints
 from jswim.errors import ConfigError
 
 __all__ = [
@@ -58,6 +58,7 @@ __all__ = [
     "HORIZON_FACTOR",
     "HORIZON_STEPS",
     "MAX_HORIZON",
+    "MAX_RK4_STEPS",
     "REFINE_ROUNDS",
     "ZermeloPath",
     "heading_rate",
@@ -90,6 +91,15 @@ STRAIGHT_LINE_CAP = 40.0
 
 #: Largest horizon (steps) a call accepts: every step of it is one RK4 step of the whole batch.
 MAX_HORIZON = 100_000.0
+
+#: Largest number of RK4 steps of the batch a leg's horizon may take, ``horizon * substeps``
+#: (the substeps per step: `STEP_RATE`): a bound on every call's work, so that a strong flow
+#: is refused in one line instead of integrating for minutes (a shear of 100 a step took 142 s,
+#: one of 1e6 never ended). It is `MAX_HORIZON` at one RK4 step a step, so every horizon a flow
+#: of gradient below `STEP_RATE` takes (the study's flows up to 1 v) stays open; a leg does at
+#: most three times this many (the scan and its two refinements; an unreachable target, one),
+#: each ~0.3 ms on a busy CPU core (measured 2026-12-07: 1e4 steps a round in 2.8 s).
+MAX_RK4_STEPS = 100_000
 
 #: The RK4 step is ``min(1, STEP_RATE / |grad u|)`` steps, ``|grad u|`` the largest gradient
 #: met on the straight line to the target: at ``h |grad u| <= 0.05`` RK4's error per step is
@@ -144,10 +154,14 @@ class ZermeloPath:
 def _number(value: Any, what: str, positive: bool = False, nonneg: bool = False) -> float:
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
         raise ConfigError(f"{what} must be a number, got {value!r}")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int past float's range
+        v = math.inf
     if not math.isfinite(v) or (positive and v <= 0) or (nonneg and v < 0):
         limit = " > 0" if positive else " >= 0" if nonneg else ""
-        raise ConfigError(f"{what} must be a finite number{limit}, got {value!r}")
+        shown = repr(value) if len(repr(value)) <= 40 else f"{repr(value)[:24]}..."
+        raise ConfigError(f"{what} must be a finite number{limit}, got {shown}")
     return v
 
 
@@ -404,7 +418,9 @@ def _shoot(
         centres, best, half = carry
         first = i == 0
         grid = jnp.where(first, coarse, centres[:, None] + half * offsets[None, :])
-        t = _first_hits(flow, speed, x0, grid.ravel(), centre, w, r, horizon, h).reshape(k, m)
+        # no extremal of the scan hit: nothing to refine, and the refinements take no step
+        until = jnp.where(first | jnp.any(jnp.isfinite(best)), horizon, 0.0)
+        t = _first_hits(flow, speed, x0, grid.ravel(), centre, w, r, until, h).reshape(k, m)
         # round 0: the least few local minima on the circle
         flat = t.ravel()
         is_min = jnp.isfinite(flat) & (flat <= jnp.roll(flat, 1)) & (flat <= jnp.roll(flat, -1))
@@ -504,8 +520,11 @@ def zermelo(
     ------
     ConfigError
         A flow that is not a `jswim.env.flows` flow or None, a target that is not a target spec,
-        a speed not finite and > 0, a start not two finite numbers, a horizon not finite and > 0
-        or past `MAX_HORIZON`, an unknown method or ``closed`` for a non-uniform flow.
+        a speed not finite and > 0 or past `jswim.env.flows.MAX_FLOW_SPEED`, a start not two
+        finite numbers within `jswim.env.targets.MAX_DISTANCE`, a horizon not finite and > 0
+        or past `MAX_HORIZON`, an unknown method or ``closed`` for a non-uniform flow; a leg
+        whose horizon would take more than `MAX_RK4_STEPS` RK4 steps (a strong flow), or whose
+        flow has no finite gradient, before it is integrated.
     """
     if flow is not None and not isinstance(flow, Flow):
         raise ConfigError(f"flow must be a jswim.env.flows flow or None, got {flow!r}")
@@ -514,7 +533,17 @@ def zermelo(
             f"target must be a FixedTarget, Waypoints or MovingTarget spec, got {target!r}"
         )
     v = _number(speed, "speed", positive=True)
+    if v > MAX_FLOW_SPEED:  # the flows' own range, for the steerer's speed
+        raise ConfigError(
+            f"speed must be at most {MAX_FLOW_SPEED:.4g} a per step (1000 times the swimming "
+            f"speed: jswim.env.flows.MAX_FLOW_SPEED), got {speed!r}"
+        )
     x = np.asarray(_pair(start, "start"), np.float64)
+    if np.abs(x).max() > MAX_DISTANCE:  # the targets' own range, for where it starts
+        raise ConfigError(
+            f"start must be within -{MAX_DISTANCE:g}..{MAX_DISTANCE:g} a in x and y "
+            f"(jswim.env.targets.MAX_DISTANCE), got {start!r}"
+        )
     if horizon is not None:
         horizon = _number(horizon, "horizon", positive=True)
         if horizon > MAX_HORIZON:
@@ -579,12 +608,22 @@ def _shooting_leg(
     line = _line_samples(x0, x0 + rel)
     grad = np.asarray(flow.gradient(jnp.asarray(line)))
     rate = float(np.max(np.linalg.norm(grad, axis=(-2, -1))))
-    sub = max(_MIN_SUBSTEPS, math.ceil(rate / STEP_RATE))
-    h = 1.0 / sub  # whole steps are whole numbers of RK4 steps
+    if not math.isfinite(rate):  # a flow of no jswim.env.flows range (they keep it finite)
+        raise ConfigError(f"{flow!r} has no finite velocity gradient on the way to the target")
     if left is None:
         left = _default_horizon(flow, rel, w, r, v, line)
     if left <= 0:
         return _Leg(t0, x0, None, heading, None)
+    # the work bound: every RK4 step of the horizon, before any is taken
+    sub = max(_MIN_SUBSTEPS, math.ceil(min(rate / STEP_RATE, 2.0 * MAX_RK4_STEPS)))
+    if sub * math.ceil(left) > MAX_RK4_STEPS:
+        raise ConfigError(
+            f"zermelo: {flow!r} has a velocity gradient of {rate:.3g} per step on the way to "
+            f"the target ({math.hypot(*rel):.3g} a away), {sub} RK4 steps a step over a horizon "
+            f"of {left:,.0f} steps: past the {MAX_RK4_STEPS:,} RK4 steps a leg may take "
+            "(MAX_RK4_STEPS); give a weaker flow, a nearer target or a shorter horizon"
+        )
+    h = 1.0 / sub  # whole steps are whole numbers of RK4 steps
     centre = x0 + rel  # the target's centre at the leg's start; it moves at w
     static, leaves = _flow_parts(flow)
     h0, steps = _shoot(

@@ -1,7 +1,9 @@
 """The ``jswim`` command: one module per command (``register(sub)`` adds its parser, ``main(args)``
 runs it), argv -> options of the studies in `jswim.cli.options`, shared parts in
 `jswim.cli.base`. Every command, in one table: docs/getting-started.md. A user mistake ends
-with one line on stderr and exit status 2; Ctrl-C keeps every finished run.
+with one line on stderr and exit status 2; a command that reads folders (``reads_folder``:
+show, compare, plot, report, animate) and had to skip a record or field of one shows the rest,
+says each in one line and exits 2 too. Ctrl-C keeps every finished run.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from collections.abc import Sequence
 
 from jswim import compile_cache
 from jswim._io import interrupts
-from jswim._io.jsonl import forget_warnings
+from jswim._io.jsonl import SkippedRecord, forget_warnings
 from jswim._io.permissions import private_files
 from jswim.cli import animate, bench, ensemble, folders, gaits, qlearn, report, serve, study
 from jswim.cli.base import EXIT_USAGE, Outline, Parser, warnings_as_lines
@@ -107,8 +109,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     # Folders, figures and caches: owner only under the usual umask; every jswim warning (a
     # skipped record of a damaged folder, ...) one line, whatever the command.
     forget_warnings()
-    with private_files(), warnings_as_lines():
-        return _main(args)
+    with private_files(), warnings_as_lines() as said:
+        status = _main(args)
+    if (
+        status == 0
+        and getattr(args, "reads_folder", False)
+        and any(issubclass(c, SkippedRecord) for c in said)
+    ):
+        # A reader showed what it could of a folder with a record or field it had to skip (a
+        # hand edit, a foreign writer, damage; each said in one line naming the file and the
+        # field): the output is not the whole folder, and a script must be able to tell.
+        return EXIT_USAGE
+    return status
 
 
 def _main(args: argparse.Namespace) -> int:

@@ -56,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="FILE.gif or FILE.mp4 (default FOLDER/animations/runs.gif; MP4 needs "
         "pip install 'jswim[video]')",
     )
-    p.set_defaults(command_main=main)
+    p.set_defaults(command_main=main, reads_folder=True)
 
 
 def main(args: argparse.Namespace) -> int:

@@ -129,12 +129,15 @@ def warn(message: str) -> None:
 
 
 @contextlib.contextmanager
-def warnings_as_lines() -> Iterator[None]:
+def warnings_as_lines() -> Iterator[list[type[Warning]]]:
     """Inside: each [`JswimWarning`][jswim.errors.JswimWarning] is one ``jswim: warning:`` line on stderr
-    (others as Python shows them); the hook is restored after."""
+    (others as Python shows them); the hook is restored after. Yields the list of the categories
+    said, in order (the command's exit status may depend on them: `jswim.cli.main`)."""
     shown = warnings.showwarning
+    said: list[type[Warning]] = []
 
     def one_line(message, category, filename, lineno, file=None, line=None):
+        said.append(category)
         if issubclass(category, JswimWarning):
             warn(str(message))
         else:
@@ -142,4 +145,4 @@ def warnings_as_lines() -> Iterator[None]:
 
     with warnings.catch_warnings():
         warnings.showwarning = one_line
-        yield
+        yield said

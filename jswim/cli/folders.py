@@ -19,7 +19,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "figures say so).",
     )
     p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
-    p.set_defaults(command_main=plot)
+    p.set_defaults(command_main=plot, reads_folder=True)
     p = sub.add_parser(
         "show",
         help="a study folder: status, settings, cost, summary table, figures",
@@ -28,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "Only reads, so it works on interrupted and read-only folders.",
     )
     p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
-    p.set_defaults(command_main=show)
+    p.set_defaults(command_main=show, reads_folder=True)
     p = sub.add_parser(
         "compare",
         help="studies side by side (e.g. two models on the same grid)",
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "one row per study. Only reads.",
     )
     p.add_argument("folders", nargs="+", metavar="FOLDER", help="two or more study folders")
-    p.set_defaults(command_main=compare)
+    p.set_defaults(command_main=compare, reads_folder=True)
 
 
 def plot(args: argparse.Namespace) -> int:

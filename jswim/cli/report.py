@@ -36,7 +36,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="FILE.html",
         help="write the page here instead (e.g. for a read-only folder)",
     )
-    p.set_defaults(command_main=main)
+    p.set_defaults(command_main=main, reads_folder=True)
 
 
 def main(args: argparse.Namespace) -> int:

@@ -207,8 +207,11 @@ def options(args: argparse.Namespace) -> dict[str, Any]:
 
 def _print_nav_table(rows: Sequence[Any]) -> None:
     """The navigation table (`jswim.studies.overview.nav_table`) and its note."""
-    from jswim.studies.overview import nav_table  # lazy: JAX loads only for a study
+    from jswim.studies.overview import nav_overview_table, nav_table  # lazy: JAX, for a study
 
+    cols, cells, note = nav_overview_table(rows)
+    show(cols, cells, "agents x flows: success, time over the swimmer's optimum, energy")
+    print(note)
     cols, cells, note = nav_table(rows)
     show(cols, cells, "navigation: targets reached, steps to the target, path ratio, energy")
     print(note)

@@ -136,14 +136,13 @@ def _run(study: str, args: argparse.Namespace) -> int:
 
         print(
             f"LLM calls: none this session (every LLM run was done already; nothing sent, nothing paid); the "
-            f"study's calls cost ${folder_money(result.folder)[0]:.4f} ({_price_note(backend)})"
+            f"study's calls: {_cost_clause(None, folder_money(result.folder)[0], backend)}"
         )
     if sp.get("calls"):
         print(
             f"LLM calls: {sp['calls']:.0f} ({sp.get('billed_calls', 0):.0f} sent, "
             f"{sp.get('replayed_calls', 0):.0f} replayed from earlier sessions), {sp.get('tokens', 0):,.0f} tokens, "
-            f"${sp.get('cost_usd', 0):.4f} this session, ${sp.get('study_cost_usd', 0):.4f} for the study "
-            f"({_price_note(backend)})"
+            + _cost_clause(sp.get("cost_usd", 0), sp.get("study_cost_usd", 0), backend)
         )
     if sp.get("requests") is not None and (sp.get("calls") or sp.get("requests")):
         print(f"HTTP requests: {requests_text(sp)}")
@@ -231,8 +230,10 @@ def _print_reasoning(result: Any) -> None:
         )
 
 
-def _price_note(backend: Any) -> str:
-    """Where a cost line's prices come from, or why the model has none (never a silent $0)."""
+def _price_note(backend: Any) -> tuple[str | None, str]:
+    """Where a cost line's prices come from, or why the model has none (never a silent $0):
+    ``(why not priced, None)`` or ``(None, where the prices come from)``. The user's ``--prices``
+    price any model they name, the reference rule included (the client bills by them)."""
     from jswim.llm.reference import (
         MODEL as REFERENCE_MODEL,
     )  # lazy: start-up (the reference rule loads only for a run)
@@ -242,9 +243,7 @@ def _price_note(backend: Any) -> str:
     )  # lazy: httpx loads only for commands that run
 
     if backend is None or backend.local:
-        return cost_text(None, EMBEDDED_UNPRICED)
-    if backend.model == REFERENCE_MODEL:
-        return cost_text(None, REFERENCE_UNPRICED)
+        return EMBEDDED_UNPRICED, ""
     table, why = price_table(
         dict(backend.prices) if backend.prices is not None else None,
         backend.model,
@@ -252,19 +251,37 @@ def _price_note(backend: Any) -> str:
         price_local=backend.price_local,
     )
     if why:
-        return cost_text(None, why)
+        return why, ""
     if table.entry(backend.model) is None:
+        if backend.model == REFERENCE_MODEL:
+            return REFERENCE_UNPRICED, ""
         if is_local_host(backend.base_url) and backend.prices is None:
-            return cost_text(None, LOCAL_UNPRICED)
-        return cost_text(
-            None,
+            return LOCAL_UNPRICED, ""
+        return (
             f"no price for {backend.model!r} in the "
             f"{'price table ' + backend.prices_as_of if backend.prices else 'built-in price table of ' + PRICES_AS_OF}"
-            "; --prices FILE prices it",
-        )
-    return f"prices of {backend.prices_as_of or PRICES_AS_OF}" + (
+            "; --prices FILE prices it"
+        ), ""
+    return None, f"prices of {backend.prices_as_of or PRICES_AS_OF}" + (
         "" if backend.prices else " (built-in list prices)"
     )
+
+
+def _cost_clause(session_usd: float | None, study_usd: float, backend: Any) -> str:
+    """The dollars of a study's cost line, true to how its calls were priced: ``$a this
+    session, $b for the study (prices of ...)``; calls with no price say why, with no dollar
+    figure (``not priced (WHY); $0 counted``), and dollars that earlier sessions were billed
+    under their prices are named as theirs (``session_usd`` ``None``: no call this session)."""
+    why, source = _price_note(backend)
+    this = "" if session_usd is None else f"${session_usd:.4f} this session, "
+    if why is None:
+        return f"{this}${study_usd:.4f} for the study ({source})"
+    if not study_usd and not session_usd:
+        return cost_text(None, why)
+    if session_usd:  # billed after all (a price the client found): the dollars are the ledger's
+        return f"{this}${study_usd:.4f} for the study"
+    now = "" if session_usd is None else f"this session's calls {cost_text(None, why)}; "
+    return f"{now}${study_usd:.4f} for the study, billed in earlier sessions under their prices"
 
 
 def _kept(out: Path) -> str:

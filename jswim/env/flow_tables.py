@@ -3,7 +3,8 @@
 The drag is linear (resistive force theory), so a body's rigid velocity in a flow is its
 still-fluid one plus the flow's response, which is linear in the flow
 (`jswim.swimmers.flow_response.flow_velocity`). Over one step (one ``tau``) the shape moves
-straight between two table shapes, so the still-fluid path of the body, ``p(t), phi(t)`` in the
+straight between two table shapes (in the whole step, or, pushed past a limit, in its first part
+and then held), so the still-fluid path of the body, ``p(t), phi(t)`` in the
 body frame at the step's start, is the same for every step of a table row. To first order in the
 flow the step's extra change of the pose (reference point, orientation) is the flow's response
 along that path, each instant's turn carried through the rest of the stroke,
@@ -24,9 +25,10 @@ a linear functional of the flow near the body. A row holds it in one of two form
   a Taylor model is off by ``~(L / cell)^2`` (10 % of the flow's turn in a cell of 6 a).
 
 `jswim.env.flow_steps` applies a row (one flow evaluation and small contractions per step, and a
-corrector for the second order). Rows follow the step tables: `flow_table` for the K lattice (the
-lattice table's order) and the paper's corner world (`corner_flow_row`: one hold row per corner,
-since a held shape still feels the flow).
+corrector for the second order). Rows follow the step tables: `flow_table` for the K lattice (one
+row per push, `lattice_flow_row`: a push past a limit moves at its ROC until the limit, then
+holds, the path `jswim.env.work` charges) and the paper's corner world (`corner_flow_row`: one
+hold row per corner, since a held shape still feels the flow).
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ __all__ = [
     "flow_form",
     "flow_table",
     "gather_row",
+    "lattice_flow_row",
     "step_flow_map",
     "step_wave_map",
 ]
@@ -106,10 +109,17 @@ def flow_form(flow: Flow) -> tuple[Any, ...]:
 # --- one row (float64, traceable) ----------------------------------------------------------
 
 
-def _still_path(model: SwimmerModel, s0: Array, s1: Array, degree: int) -> dict[str, Array]:
-    """The still-fluid path of the straight move ``s0 -> s1`` in unit time on Chebyshev-Lobatto
-    nodes (the integrator's two nested quadratures): shapes ``d``, reference poses and centroids
-    in the start frame, centroid offsets and the Clenshaw-Curtis weights ``w``."""
+def _still_path(
+    model: SwimmerModel, s0: Array, s1: Array, degree: int, duration: Array | float = 1.0
+) -> dict[str, Array]:
+    """The still-fluid path of the straight move ``s0 -> s1`` on Chebyshev-Lobatto nodes (the
+    integrator's two nested quadratures): shapes ``d``, reference poses and centroids in the
+    start frame, centroid offsets and the time weights ``w`` of the step.
+
+    The move takes the first ``duration`` of the step (in ``tau``, in (0, 1]) and the shape then
+    holds ``s1``: a push clipped at a limit, fast then held. At zero Reynolds number the path
+    does not depend on the rate, so only the weights change: the Clenshaw-Curtis weights of the
+    move times ``duration``, plus ``1 - duration`` on the last node (the held end shape)."""
     f64 = jnp.float64
     span = model.hi - model.lo
     d0, d_dot = corner_values(model, s0), (s1 - s0) * span
@@ -123,7 +133,10 @@ def _still_path(model: SwimmerModel, s0: Array, s1: Array, degree: int) -> dict[
     py = running @ (s * body[:, 0] + c * body[:, 1])
     off = jax.vmap(model.centroid_offset)(d)
     cx, cy = px + c * off[:, 0] - s * off[:, 1], py + s * off[:, 0] + c * off[:, 1]
-    return dict(w=running[-1], d=d, poses=jnp.stack([px, py, phi], -1), cx=cx, cy=cy, off=off)
+    duration = jnp.asarray(duration, f64)
+    last = jnp.zeros(len(nodes), f64).at[-1].set(1.0)  # the last Lobatto node is t = 1
+    w = duration * running[-1] + (1.0 - duration) * last
+    return dict(w=w, d=d, poses=jnp.stack([px, py, phi], -1), cx=cx, cy=cy, off=off)
 
 
 def _first_order(
@@ -159,10 +172,16 @@ def _poly(coef: Array, x: Array, e: Array) -> Array:
 
 
 def step_flow_map(
-    model: SwimmerModel, s0: Array, s1: Array, degree: int = FLOW_TABLE_DEGREE
+    model: SwimmerModel,
+    s0: Array,
+    s1: Array,
+    degree: int = FLOW_TABLE_DEGREE,
+    duration: Array | float = 1.0,
 ) -> tuple[Array, Array, Array, Array]:
-    """The first-order map of the straight move ``s0 -> s1`` (fractions of the range) in one unit
-    of time for polynomial flows; float64, traceable (call under ``jax.enable_x64``).
+    """The first-order map of one step (one unit of time) that moves the shape straight from
+    ``s0`` to ``s1`` (fractions of the range) in its first ``duration`` and then holds ``s1``
+    (``duration`` 1: the move takes the whole step; less: a push clipped at a limit) for
+    polynomial flows; float64, traceable (call under ``jax.enable_x64``).
 
     Returns
     -------
@@ -176,7 +195,7 @@ def step_flow_map(
         end centroid offset ``R(phi(1)) offset(d1)`` (``a``, start frame).
     """
     f64 = jnp.float64
-    path = _still_path(model, jnp.asarray(s0, f64), jnp.asarray(s1, f64), degree)
+    path = _still_path(model, jnp.asarray(s0, f64), jnp.asarray(s1, f64), degree, duration)
     e, e_c, o1 = _frame(path)
     tmat = jax.jacfwd(lambda coef: _first_order(model, path, lambda x: _poly(coef, x, e)))(
         jnp.zeros(14, f64)
@@ -191,8 +210,10 @@ def step_wave_map(
     wavenumber: float,
     angles: int = WAVE_ANGLES,
     degree: int = FLOW_TABLE_DEGREE,
+    duration: Array | float = 1.0,
 ) -> tuple[Array, Array, Array, Array]:
-    """The first-order response of the move ``s0 -> s1`` to a transverse plane wave, the
+    """The first-order response of the step of `step_flow_map` (the move ``s0 -> s1`` in its
+    first ``duration``, then held) to a transverse plane wave, the
     start-frame flow ``t(alpha) exp(i K k(alpha) . (x - e))`` (``k = (cos, sin)``,
     ``t = (-sin, cos)``, ``K = wavenumber`` in ``1 / a``), by its Fourier harmonics in
     ``alpha``; float64, traceable (call under ``jax.enable_x64``).
@@ -206,7 +227,7 @@ def step_wave_map(
         As in `step_flow_map`.
     """
     f64 = jnp.float64
-    path = _still_path(model, jnp.asarray(s0, f64), jnp.asarray(s1, f64), degree)
+    path = _still_path(model, jnp.asarray(s0, f64), jnp.asarray(s1, f64), degree, duration)
     e, e_c, o1 = _frame(path)
 
     def response(alpha: Array) -> Array:
@@ -238,45 +259,62 @@ def _source_key() -> str:
     return h.hexdigest()
 
 
-def _moves(model: SwimmerModel, roc_levels: int | None) -> tuple[np.ndarray, np.ndarray]:
-    """Start and end fractions of every row: the lattice table's order, or the corner rows
-    (`corner_flow_row`)."""
-    if roc_levels is not None:
-        start, end = lattice_moves(model.n_dof, roc_levels)
-        return start / roc_levels, end / roc_levels
+def _moves(
+    model: SwimmerModel, roc_levels: int | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Start and end fractions of every row and the part of the step the move takes: the
+    lattice pushes (`lattice_flow_row`), or the corner rows (`corner_flow_row`, all 1)."""
     n = model.n_dof
+    if roc_levels is not None:
+        big_k = roc_levels
+        shapes = lattice_moves(n, big_k)[0][:: n * (big_k + 1)]  # every lattice point, in order
+        start = np.repeat(shapes, n * (2 * big_k + 1), axis=0)
+        dof = np.tile(np.repeat(np.arange(n), 2 * big_k + 1), len(shapes))
+        push = np.tile(np.arange(-big_k, big_k + 1), len(shapes) * n)
+        rows = np.arange(len(start))
+        end = start.copy()
+        end[rows, dof] = np.clip(start[rows, dof] + push, 0, big_k)
+        moved = np.abs(end[rows, dof] - start[rows, dof])
+        # fast, then held: the DOF moves at its ROC push / K until it meets the limit
+        duration = np.where(moved > 0, moved / np.maximum(np.abs(push), 1), 1.0)
+        return start / big_k, end / big_k, duration
     corners = np.array([[(c >> k) & 1 for k in range(n)] for c in range(2**n)], np.float64)
     start = np.repeat(corners, n + 1, axis=0)
     end = start.copy()
     for k in range(n):
         end[k :: n + 1, k] = 1.0 - end[k :: n + 1, k]
-    return start, end
+    return start, end, np.ones(len(start))
 
 
-def _build(fn: Callable[[Array, Array], Array], start: np.ndarray, end: np.ndarray) -> np.ndarray:
+def _build(
+    fn: Callable[[Array, Array, Array], Array],
+    start: np.ndarray,
+    end: np.ndarray,
+    duration: np.ndarray,
+) -> np.ndarray:
     # Evaluate now even when first called while tracing a step (the table is a constant).
     with jax.ensure_compile_time_eval(), jax.enable_x64(True):
-        rows = jax.jit(jax.vmap(fn))(jnp.asarray(start, jnp.float64), jnp.asarray(end, jnp.float64))
+        rows = jax.jit(jax.vmap(fn))(*(jnp.asarray(v, jnp.float64) for v in (start, end, duration)))
         return np.asarray(rows)
 
 
-def _polynomial_rows(model: SwimmerModel, keep: tuple[int, ...], start, end) -> np.ndarray:
-    def row(a: Array, b: Array) -> Array:
-        tmat, e, e_c, o1 = step_flow_map(model, a, b)
+def _polynomial_rows(model: SwimmerModel, keep: tuple[int, ...], moves) -> np.ndarray:
+    def row(a: Array, b: Array, t: Array) -> Array:
+        tmat, e, e_c, o1 = step_flow_map(model, a, b, duration=t)
         lin = (tmat @ jnp.asarray(EMBED, jnp.float64))[:, list(keep)]
         return jnp.concatenate([lin.reshape(-1), e, e_c, o1])
 
-    return _build(row, start, end)
+    return _build(row, *moves)
 
 
-def _wave_rows(model: SwimmerModel, wavenumber: float, start, end) -> np.ndarray:
-    def row(a: Array, b: Array) -> Array:
-        m, e, e_c, o1 = step_wave_map(model, a, b, wavenumber)
+def _wave_rows(model: SwimmerModel, wavenumber: float, moves) -> np.ndarray:
+    def row(a: Array, b: Array, t: Array) -> Array:
+        m, e, e_c, o1 = step_wave_map(model, a, b, wavenumber, duration=t)
         # m_0 is imaginary (m_0 = -conj(m_0)): Im m_0, then Re and Im of m_1, m_2, ...
         parts = [jnp.imag(m[0])] + [jnp.concatenate([jnp.real(mn), jnp.imag(mn)]) for mn in m[1:]]
         return jnp.concatenate(parts + [e, e_c, o1])
 
-    rows = _build(row, start, end)
+    rows = _build(row, *moves)
     size = np.abs(rows[:, :-6]).max(axis=0)
     per = [size[:3].max()] + [
         size[3 + 6 * i : 9 + 6 * i].max() for i in range(WAVE_ANGLES // 2 - 1)
@@ -293,8 +331,10 @@ def flow_table(model: SwimmerModel, flow: Flow, roc_levels: int | None = None) -
 
     ``roc_levels=None``: the paper's corner world, row ``corner * (n_dof + 1) + k`` moving DOF
     ``k`` to its other level and row ``corner * (n_dof + 1) + n_dof`` holding the corner's shape
-    (`corner_flow_row`). Else the K lattice, in the lattice table's row order
-    (`jswim.env.step_tables.lattice_table`; its identity rows hold their shape).
+    (`corner_flow_row`). Else the K lattice: one row per lattice point, DOF and push ``q`` in
+    ``-K..K`` (`lattice_flow_row`), since a push past a limit is not the move that lands on the
+    limit in the whole step: the DOF moves at the ROC ``q / K`` until it meets the limit, then
+    holds (the path whose work `jswim.env.work` charges), and a flow acts on the held shape too.
 
     Returns
     -------
@@ -305,19 +345,31 @@ def flow_table(model: SwimmerModel, flow: Flow, roc_levels: int | None = None) -
         `WAVE_CUTOFF`), then ``e``, ``e - c0``, ``o1`` (`step_wave_map`).
     """
     form = flow_form(flow)
-    start, end = _moves(model, roc_levels)
+    moves = _moves(model, roc_levels)
     key = f"{model_key(model)}|K={roc_levels}|{form}|deg={FLOW_TABLE_DEGREE}|{_source_key()}"
     if form[0] == "waves":
         key += f"|cut={WAVE_CUTOFF}"
-        return cached("flow", key, lambda: {"rows": _wave_rows(model, form[1], start, end)})["rows"]
+        shape = {"rows": (len(moves[0]), None)}  # the harmonics kept depend on the model
+        rows = cached("flow", key, lambda: {"rows": _wave_rows(model, form[1], moves)}, shape)
+        return rows["rows"]
     keep = KEEP[form[0]]
-    return cached("flow", key, lambda: {"rows": _polynomial_rows(model, keep, start, end)})["rows"]
+    shape = {"rows": (len(moves[0]), 3 * len(keep) + 6)}
+    rows = cached("flow", key, lambda: {"rows": _polynomial_rows(model, keep, moves)}, shape)
+    return rows["rows"]
 
 
 def corner_flow_row(corner: Array, dof: Array, moved: Array, n_dof: int) -> Array:
     """The corner `flow_table` row (int32) of a corner step: DOF ``dof`` (0-based) moved to its
     other level, or the corner's hold row."""
     return corner * (n_dof + 1) + jnp.where(moved, dof, n_dof).astype(jnp.int32)
+
+
+def lattice_flow_row(shape: Array, dof: Array, push: Array, n_dof: int, roc_levels: int) -> Array:
+    """The K-lattice `flow_table` row (int32) of the push of DOF ``dof`` (0-based) by ``push``
+    lattice units (the ROC ``push / K``, in ``-K..K``) from lattice point ``shape``
+    (``sum_m j_m (K + 1)^m``): ``(shape n_dof + dof)(2 K + 1) + push + K``."""
+    width = 2 * roc_levels + 1
+    return ((shape * n_dof + dof) * width + push + roc_levels).astype(jnp.int32)
 
 
 def gather_row(table: np.ndarray, index: Array) -> tuple[Array, ...]:

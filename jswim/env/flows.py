@@ -30,6 +30,10 @@ from jswim.reals import is_real
 __all__ = [
     "FLOWS",
     "FLOW_LENGTH",
+    "MAX_FLOW_LENGTH",
+    "MAX_FLOW_RATE",
+    "MAX_FLOW_SPEED",
+    "MIN_FLOW_LENGTH",
     "SWIM_SPEED",
     "Flow",
     "Poiseuille",
@@ -52,15 +56,90 @@ SWIM_SPEED = 0.19124724 / 4
 FLOW_LENGTH = 3.0
 
 
-def _finite(value: Any, name: str, positive: bool = False) -> float:
+# The ranges a flow's numbers are taken in: each flow refuses a number outside them with a
+# `ConfigError` naming the range (docs/physics.md, "Background flows", "Ranges"). They keep every
+# step's arithmetic finite, in float64 and in the default float32, through the tables and the
+# RK4 reference, far beyond the study's flows (at most 2 v, gradients up to 0.05 a step).
+
+#: Largest flow speed (``a / tau``): ``|u|`` of `Uniform`, ``|u_max|``, ``|u0|``; 1000 times the
+#: swimming speed, 47.8 a a step. The swimmer's own step is then a thousandth of its drift, about
+#: what a float32 position resolves within the targets' range (`jswim.env.targets.MAX_DISTANCE`,
+#: 1e4 a: ~1e-3 a); faster, it is a tracer whose stroke the numbers no longer see.
+#: ``Uniform((1e300, 0))`` was inf in float32, then NaN.
+MAX_FLOW_SPEED = 1000.0 * SWIM_SPEED
+
+#: Largest velocity gradient (``1 / tau``): ``|rate|`` of `Shear` and `Flow.max_gradient` of every
+#: flow, a radian of turn a step at most. Ten times the tables' range
+#: (`jswim.env.params.MAX_TABLE_GRADIENT`, which warns): a table step's turn is still a rotation
+#: (`jswim.env.flow_steps.small_sincos` is exact to 1e-16 below a radian; a few radians turn into
+#: growth, then NaN: a shear of 10 a step was NaN within 400 steps); the RK4 reference turns
+#: 1/16 rad a piece, and Zermelo's steerer takes at most 20 RK4 steps a step
+#: (`jswim.agents.zermelo.STEP_RATE`).
+MAX_FLOW_RATE = 1.0
+
+#: Smallest ``half_width`` and ``cell`` (``a``): a link. Narrower, a channel cannot hold the
+#: three-link body, and a Taylor-Green cell outruns the wave tables' harmonics (``J_n(K L)``,
+#: ``K = sqrt(2) pi / cell``, at the body's reach ``L ~ 1.5 a`` falls below their cutoff by
+#: ``n ~ 17`` of the 31 kept at a cell of 1 a, by ``n ~ 27`` at 0.5 a). At 1e-300 a, ``h^2``
+#: was 0: a division by zero.
+MIN_FLOW_LENGTH = 1.0
+
+#: Largest ``half_width`` and ``cell`` (``a``): 100 times the farthest target. A wider channel is
+#: uniform to 1e-4 over any task, a wider cell's gradient below 1.5e-4 a step; ``1 / h^2`` stays
+#: a normal float32 (``h^2`` overflowed at 1e300).
+MAX_FLOW_LENGTH = 1.0e6
+
+
+def _shown(value: Any) -> str:
+    """``repr(value)``, shortened (an int of 400 digits is one line, not a screenful)."""
+    text = repr(value)
+    return text if len(text) <= 40 else f"{text[:24]}... ({len(text)} characters)"
+
+
+def _finite(
+    value: Any, name: str, low: float = -math.inf, high: float = math.inf, unit: str = ""
+) -> float:
+    """``value`` as a float: a real number (`jswim.reals.is_real`), finite, in ``low..high``
+    (the message names the range, ``unit`` after it)."""
     if not is_real(value):
-        raise ConfigError(f"flow {name} must be a number, got {value!r}")
-    v = float(value)
-    if not math.isfinite(v) or (positive and not v > 0):
-        raise ConfigError(
-            f"flow {name} must be a finite{' positive' if positive else ''} number, got {value!r}"
-        )
+        raise ConfigError(f"flow {name} must be a number, got {_shown(value)}")
+    try:
+        v = float(value)
+    except (OverflowError, ValueError):  # an int past float's range (10**400)
+        v = math.nan
+    if not (math.isfinite(v) and low <= v <= high):
+        within = "" if math.isinf(low) and math.isinf(high) else f" within {low:.4g}..{high:.4g}"
+        raise ConfigError(f"flow {name} must be a finite number{within}{unit}, got {_shown(value)}")
     return v
+
+
+def _speed(value: Any, name: str) -> float:
+    return _finite(
+        value,
+        name,
+        -MAX_FLOW_SPEED,
+        MAX_FLOW_SPEED,
+        " a per step (1000 times the swimming speed: MAX_FLOW_SPEED)",
+    )
+
+
+def _rate(value: Any, name: str) -> float:
+    unit = " per step (MAX_FLOW_RATE: a radian of turn a step)"
+    return _finite(value, name, -MAX_FLOW_RATE, MAX_FLOW_RATE, unit)
+
+
+def _length(value: Any, name: str) -> float:
+    unit = " a (MIN_FLOW_LENGTH..MAX_FLOW_LENGTH: a link to a million)"
+    return _finite(value, name, MIN_FLOW_LENGTH, MAX_FLOW_LENGTH, unit)
+
+
+def _gradient(flow: Flow, formula: str) -> None:
+    """Refuse a flow whose largest gradient passes `MAX_FLOW_RATE`."""
+    if flow.max_gradient > MAX_FLOW_RATE:
+        raise ConfigError(
+            f"{flow!r} has a velocity gradient {formula} = {flow.max_gradient:.4g} per step; it "
+            f"must be at most {MAX_FLOW_RATE:g} (MAX_FLOW_RATE: a radian of turn a step)"
+        )
 
 
 class Flow:
@@ -102,7 +181,7 @@ class Uniform(Flow):
     Raises
     ------
     ConfigError
-        ``u`` not two finite numbers.
+        ``u`` not two finite numbers, or faster than `MAX_FLOW_SPEED`.
     """
 
     u: tuple[float, float] = (0.0, 0.0)
@@ -113,8 +192,14 @@ class Uniform(Flow):
         if getattr(u, "shape", None) == (2,):  # a NumPy or JAX vector
             u = list(np.asarray(u))
         if not isinstance(u, (tuple, list)) or len(u) != 2:
-            raise ConfigError(f"Uniform flow u must be (ux, uy), got {self.u!r}")
-        object.__setattr__(self, "u", tuple(_finite(c, "u") for c in u))
+            raise ConfigError(f"Uniform flow u must be (ux, uy), got {_shown(self.u)}")
+        u = tuple(_speed(c, "u") for c in u)
+        if math.hypot(*u) > MAX_FLOW_SPEED:
+            raise ConfigError(
+                f"flow u must have a speed |u| of at most {MAX_FLOW_SPEED:.4g} a per step (1000 "
+                f"times the swimming speed: MAX_FLOW_SPEED), got {_shown(self.u)}"
+            )
+        object.__setattr__(self, "u", u)
 
     def velocity(self, x: Array) -> Array:
         x = jnp.asarray(x)
@@ -146,14 +231,14 @@ class Shear(Flow):
     Raises
     ------
     ConfigError
-        ``rate`` not a finite number.
+        ``rate`` not a finite number within ``+-MAX_FLOW_RATE``.
     """
 
     rate: float = 0.0
     kind = "shear"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "rate", _finite(self.rate, "rate"))
+        object.__setattr__(self, "rate", _rate(self.rate, "rate"))
 
     def velocity(self, x: Array) -> Array:
         x = jnp.asarray(x)
@@ -186,7 +271,9 @@ class Poiseuille(Flow):
     Raises
     ------
     ConfigError
-        ``u_max`` not a finite number, ``half_width`` not a finite positive one.
+        ``u_max`` not a finite number within ``+-MAX_FLOW_SPEED``, ``half_width`` not one in
+        ``MIN_FLOW_LENGTH..MAX_FLOW_LENGTH``, or a wall shear ``2 |u_max| / half_width`` past
+        `MAX_FLOW_RATE`.
     """
 
     u_max: float = 0.0
@@ -194,8 +281,9 @@ class Poiseuille(Flow):
     kind = "poiseuille"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "u_max", _finite(self.u_max, "u_max"))
-        object.__setattr__(self, "half_width", _finite(self.half_width, "half_width", True))
+        object.__setattr__(self, "u_max", _speed(self.u_max, "u_max"))
+        object.__setattr__(self, "half_width", _length(self.half_width, "half_width"))
+        _gradient(self, "2 |u_max| / half_width")
 
     def velocity(self, x: Array) -> Array:
         x = jnp.asarray(x)
@@ -234,7 +322,9 @@ class TaylorGreen(Flow):
     Raises
     ------
     ConfigError
-        ``u0`` not a finite number, ``cell`` not a finite positive one.
+        ``u0`` not a finite number within ``+-MAX_FLOW_SPEED``, ``cell`` not one in
+        ``MIN_FLOW_LENGTH..MAX_FLOW_LENGTH``, or a gradient ``pi |u0| / cell`` past
+        `MAX_FLOW_RATE`.
     """
 
     u0: float = 0.0
@@ -242,8 +332,9 @@ class TaylorGreen(Flow):
     kind = "taylor-green"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "u0", _finite(self.u0, "u0"))
-        object.__setattr__(self, "cell", _finite(self.cell, "cell", True))
+        object.__setattr__(self, "u0", _speed(self.u0, "u0"))
+        object.__setattr__(self, "cell", _length(self.cell, "cell"))
+        _gradient(self, "pi |u0| / cell")
 
     @property
     def k(self) -> float:
@@ -315,22 +406,29 @@ def study_flow(kind: str, fraction: float, length: float = FLOW_LENGTH) -> Flow:
     Raises
     ------
     ConfigError
-        An unknown kind, or a fraction or length that is not a finite number (length > 0).
+        An unknown kind, a fraction or length that is not a finite number (fraction >= 0,
+        length > 0), or a flow outside the flows' ranges (`MAX_FLOW_SPEED`, `MAX_FLOW_RATE`,
+        `MIN_FLOW_LENGTH`, `MAX_FLOW_LENGTH`).
     """
+    if not isinstance(kind, str) or kind not in FLOWS:
+        raise ConfigError(f"flow kind must be one of {', '.join(FLOWS)}, got {_shown(kind)}")
     f = _finite(fraction, "fraction")
-    length = _finite(length, "length", positive=True)
+    length = _finite(length, "length")
     if f < 0:
-        raise ConfigError(f"flow fraction must be >= 0, got {fraction!r}")
+        raise ConfigError(f"flow fraction must be >= 0, got {_shown(fraction)}")
+    if not length > 0:
+        raise ConfigError(f"flow length must be > 0, got {_shown(length)}")
     speed = f * SWIM_SPEED
-    if kind == "uniform":
-        return Uniform((0.0, speed))
-    if kind == "shear":
-        return Shear(speed / length)
-    if kind == "poiseuille":
-        return Poiseuille(speed, 2 * length)
-    if kind == "taylor-green":
+    try:
+        if kind == "uniform":
+            return Uniform((0.0, speed))
+        if kind == "shear":
+            return Shear(speed / length)
+        if kind == "poiseuille":
+            return Poiseuille(speed, 2 * length)
         return TaylorGreen(speed, 2 * length)
-    raise ConfigError(f"flow kind must be one of {', '.join(FLOWS)}, got {kind!r}")
+    except ConfigError as exc:  # say which of the caller's numbers made it
+        raise ConfigError(f"{kind} flow at {f:g} v on {length:g} a: {exc}") from None
 
 
 def flow_json(flow: Flow | None) -> str:
@@ -339,20 +437,30 @@ def flow_json(flow: Flow | None) -> str:
 
 
 def flow_from_dict(data: dict[str, Any]) -> Flow:
-    """A flow from its ``to_dict``.
+    """A flow from its ``to_dict``: ``kind`` and every field of that kind, nothing else (a
+    record that lacks one was not written by ``to_dict``, and a default would silently be still
+    fluid), each checked as the flow's constructor checks it.
 
     Raises
     ------
     ConfigError
-        An unknown kind or a bad field.
+        Not a mapping, a missing, unknown or extra field, an unknown kind, or a field's value
+        the flow refuses; one line naming the field.
     """
-    data = dict(data)
-    kind = data.pop("kind", None)
-    if kind not in FLOWS:
-        raise ConfigError(f"flow kind must be one of {', '.join(FLOWS)}, got {kind!r}")
-    try:
-        if kind == "uniform" and "u" in data:
-            data["u"] = tuple(data["u"])
-        return FLOWS[kind](**data)
-    except TypeError as exc:
-        raise ConfigError(f"bad {kind} flow fields: {exc}") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"a flow must be a mapping with its kind and fields, got {_shown(data)}")
+    if "kind" not in data:
+        raise ConfigError(f"flow field 'kind' is missing (one of {', '.join(FLOWS)})")
+    kind = data["kind"]
+    if not isinstance(kind, str) or kind not in FLOWS:
+        raise ConfigError(f"flow kind must be one of {', '.join(FLOWS)}, got {_shown(kind)}")
+    cls = FLOWS[kind]
+    names = [f.name for f in dataclasses.fields(cls)]
+    fields = ", ".join(names)
+    extra = [k for k in data if k != "kind" and k not in names]
+    if extra:
+        raise ConfigError(f"{kind} flow has no field {_shown(extra[0])} (its fields: {fields})")
+    missing = [n for n in names if n not in data]
+    if missing:
+        raise ConfigError(f"{kind} flow field {missing[0]!r} is missing (its fields: {fields})")
+    return cls(**{n: data[n] for n in names})  # the constructor checks each value, by name

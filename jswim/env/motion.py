@@ -109,7 +109,11 @@ def motion_table(model: SwimmerModel) -> MotionTable:
     if not supported(model):
         raise ValueError(f"motion tables serve two-DOF swimmers, not {model.label}")
     key = f"{model_key(model)}|deg={BUILD_DEGREE}|cut={CUTOFF}"
-    return MotionTable(cached("motion", key, lambda: {"coef": _build_motion_table(model)})["coef"])
+    # (c degree, function, s degree), the degrees cut where the coefficients fall below CUTOFF
+    shape = {"coef": (None, 3 if model.planar else 1, None)}
+    return MotionTable(
+        cached("motion", key, lambda: {"coef": _build_motion_table(model)}, shape)["coef"]
+    )
 
 
 def _build_motion_table(model: SwimmerModel) -> np.ndarray:

@@ -48,6 +48,8 @@ from jswim.env.targets import (
     Target,
     TargetParams,
     Waypoints,
+    budget_source,
+    default_budget,
     target_params,
 )
 from jswim.errors import ConfigError
@@ -224,7 +226,24 @@ class NavigationWorld(Environment):
         if self.target is None:
             raise ConfigError("this navigation world was built without a target spec")
         swimmer = self.inner.default_params
-        return NavParams(swimmer, target_params(self.target, self.model, self.roc_levels))
+        tp = target_params(self.target, self.model, self.roc_levels, flow=self.flow)
+        return NavParams(swimmer, tp)
+
+    def __repr__(self) -> str:
+        """The fields, then the target's budget and the rule that gave it (a target in a flow
+        has a flow budget: [`jswim.env.targets.flow_budget`][jswim.env.targets.flow_budget])."""
+        fields = ", ".join(
+            f"{f.name}={getattr(self, f.name)!r}" for f in dataclasses.fields(self) if f.repr
+        )
+        text = f"{type(self).__name__}({fields}"
+        if self.target is not None:
+            try:
+                n = default_budget(self.target, self.model, self.roc_levels, self.flow)
+                why = budget_source(self.target, self.model, self.roc_levels, self.flow)
+                text += f", budget={n} steps ({why})"
+            except ConfigError:  # a spec without a budget the world cannot measure
+                pass
+        return text + ")"
 
     def dtype(self, state: NavState) -> Any:
         return state.swimmer.x.dtype
@@ -474,7 +493,7 @@ def navigation_world(
     env = NavigationWorld(
         world, len(target.points()), int(bearing_bins), bool(lattice), target, params.flow
     )
-    tp = target_params(target, world.model, world.roc_levels)
+    tp = target_params(target, world.model, world.roc_levels, flow=params.flow)
     return env, NavParams(params, tp)
 
 

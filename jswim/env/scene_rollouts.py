@@ -1,6 +1,6 @@
 """``scene_rollout``: a given sequence of moves in a scene, per-step records, float64.
 
-The scene physics ([`jswim.scenes`][jswim.scenes]) sits below the worlds; its rollouts live here,
+The scene physics (`jswim.scenes`) sits below the worlds; its rollouts live here,
 beside the paper's world's ([`jswim.env.rollouts`][jswim.env.rollouts]), because Purcell's
 swimmer above a wall rolls out through the paper's world
 ([`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]).

@@ -34,8 +34,12 @@ def step_table(model: SwimmerModel) -> tuple[np.ndarray, np.ndarray]:
     offsets : ndarray, shape (2**n_dof, 2)
         Centroid minus reference point, body frame, per corner.
     """
+    n = model.n_dof
     out = cached(
-        "corner", model_key(model), lambda: dict(zip(("inc", "offs"), _build_step_table(model)))
+        "corner",
+        model_key(model),
+        lambda: dict(zip(("inc", "offs"), _build_step_table(model))),
+        {"inc": (2**n, n, 3), "offs": (2**n, 2)},
     )
     return out["inc"], out["offs"]
 
@@ -116,6 +120,7 @@ def lattice_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
         "lattice",
         f"{model_key(model)}|K={roc_levels}|deg={TABLE_DEGREE}",
         lambda: {"rows": _build_lattice_table(model, roc_levels)},
+        {"rows": (lattice_rows(model, roc_levels), 5)},
     )["rows"]
 
 

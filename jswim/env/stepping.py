@@ -1,7 +1,8 @@
 """Stepping: one action moves one DOF at a rate of change ROC in [-1, 1] for one step.
 
 A step moves the DOF by ``ROC x (hi - lo)``, stopping at a limit: a push past a limit moves only
-up to it, and a move that cannot change the shape at all (ROC +1 at ``hi``, -1 at ``lo``) is
+up to it (at its ROC, then the shape holds for the rest of the step, which a flow still acts on
+and the work does not count), and a move that cannot change the shape at all (ROC +1 at ``hi``, -1 at ``lo``) is
 flagged ``stuck``; ROC 0 holds still. At zero Reynolds number the motion depends on the path in
 shape space only, not on the rate, and the body-frame motion does not depend on the
 orientation. So:
@@ -51,7 +52,7 @@ from jswim.env.step_tables import (
 from jswim.env.work import corner_work_table, lattice_work_table, step_work
 from jswim.env.flows import Uniform
 from jswim.env.flow_steps import Integrated, flow_increment, tabulated
-from jswim.env.flow_tables import corner_flow_row, flow_table, gather_row
+from jswim.env.flow_tables import corner_flow_row, flow_table, gather_row, lattice_flow_row
 from jswim.integrate import centroid, integrate_stroke
 from jswim.swimmers.flow_response import flow_velocity
 from jswim import sharding
@@ -217,18 +218,21 @@ def _advance_lattice(
     if lattice_rows(model, big_k) <= MAX_LATTICE_ROWS:
         shape = jnp.sum(j0 * (big_k + 1) ** jnp.arange(n, dtype=jnp.int32), dtype=jnp.int32)
         row = (shape * n + dof) * (big_k + 1) + jnp.sum(j1 * onehot)
-        # A push clipped at a limit moves |j1 - j0| lattice units at ROC k / K: it costs |k| /
-        # |j1 - j0| times the row's work (the row holds the move at the ROC that lands on j1).
+        # A push clipped at a limit moves |j1 - j0| lattice units at ROC k / K, then holds: it
+        # costs |k| / |j1 - j0| times the row's work (the row holds the move at the ROC that
+        # lands on j1), and in a flow it has its own row (the held part feels the flow too).
         step = jnp.abs(jnp.sum((j1 - j0) * onehot))
         count = jnp.maximum(step, 1)
+        flow_index = lattice_flow_row(shape, dof, k, n, big_k)
         with jax.enable_x64(True):
             entry = jnp.asarray(lattice_table(model, big_k), jnp.float64)[row]
             fh, fl = narrow(j1.astype(jnp.float64) / big_k, state.frac.dtype)
             table = jnp.asarray(lattice_work_table(model, big_k), jnp.float64)
             scale = jnp.abs(k).astype(jnp.float64) / count.astype(jnp.float64)
             work = jnp.where(step > 0, table[row] * scale, 0.0)
-            flow_row = _flow_row(params, big_k, row)
-        return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work, flow_row)
+            flow_row = _flow_row(params, big_k, flow_index)
+            duration = jnp.where(step > 0, 1.0 / jnp.where(step > 0, scale, 1.0), 1.0)
+        return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work, flow_row, duration)
     with jax.enable_x64(True):
         s0, s1 = j0.astype(jnp.float64) / big_k, j1.astype(jnp.float64) / big_k
         rocs = onehot.astype(jnp.float64) * k.astype(jnp.float64) / big_k
@@ -241,6 +245,7 @@ def _advance_lattice(
             requested=k != 0,
             dof=dof,
             work=step_work(model, s0, rocs),
+            duration=_move_time(s0, s1, rocs),
         )
 
 
@@ -267,7 +272,17 @@ def _advance_rocs(
             rocs=r,
             dof=None if params.diagonal else first,
             work=step_work(params.model, s0, r),
+            duration=None if params.diagonal else _move_time(s0, s1, r),
         )
+
+
+def _move_time(s0: Array, s1: Array, rocs: Array) -> Array:
+    """The part of the step (``tau``) a one-DOF move ``s0 -> s1`` at ROCs ``rocs`` takes: 1, or
+    less for a push past a limit, which moves at its ROC until the limit and then holds (float64;
+    1 for a step that moves nothing)."""
+    moved = jnp.sum(jnp.abs(s1 - s0))
+    rate = jnp.sum(jnp.abs(rocs))
+    return jnp.where(moved > 0, jnp.minimum(moved / jnp.where(moved > 0, rate, 1.0), 1.0), 1.0)
 
 
 def _advance_path(
@@ -282,9 +297,11 @@ def _advance_path(
     dof: Array | None = None,
     method: str | None = None,
     work: Array,
+    duration: Array | None = None,
 ) -> tuple[EnvState, MoveInfo]:
     """Move the shape from ``s0`` to ``s1`` (float64 fractions of the range), integrating the path;
-    ``work`` is the step's work (float64, [`jswim.env.work`][jswim.env.work]).
+    ``work`` is the step's work (float64, [`jswim.env.work`][jswim.env.work]); ``duration``
+    the part of the step a one-DOF move takes before it holds (`flow_step`; None: all of it).
 
     With ``rocs`` and ``params.diagonal`` the path is the one the motors follow:
     ``clip(s0 + rocs t, 0, 1)`` for ``t`` in [0, 1], straight until a DOF reaches its limit.
@@ -301,7 +318,7 @@ def _advance_path(
         else:
             entry = _segment_increment(model, s0, s1)
         fh, fl = narrow(s1, state.frac.dtype)
-    return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work)
+    return _apply(state, entry, y_noise, params, stuck, moved, fh, fl, work, None, duration)
 
 
 def _segment_increment(model: Any, s0: Array, s1: Array) -> Array:
@@ -352,12 +369,14 @@ def _apply(
     frac_lo: Array,
     work: Array,
     flow_row: tuple[Array, ...] | None = None,
+    duration: Array | float | None = None,
 ) -> tuple[EnvState, MoveInfo]:
     """Apply a body-frame step row ``(dx, dy, dtheta, cos dtheta, sin dtheta)`` (float64) to the
     pose, with the paper's noise on the displacement, in float64; store the result as pairs.
     ``work`` (float64; the noise does not touch it) is reported in the working dtype. In a
     non-uniform flow ``flow_row`` (float64, `jswim.env.flow_tables.flow_table`) is the step's row,
-    or None to integrate the step (`flow_step`)."""
+    or None to integrate the step (`flow_step`, the move taking the first ``duration`` of the
+    step, then held; None: the whole step)."""
     model = params.model
     dtype = state.x.dtype
     with jax.enable_x64(True):
@@ -391,7 +410,8 @@ def _apply(
             if isinstance(flow, Integrated):
                 flow, n_sub = flow.flow, flow.substeps
             a, b = wide(state.frac, state.frac_lo), wide(frac, frac_lo).astype(f64)
-            fx, fy, turn = flow_step(model, flow, a, b, jnp.stack([x, y, theta]), n_sub)
+            pose = jnp.stack([x, y, theta])
+            fx, fy, turn = flow_step(model, flow, a, b, pose, n_sub, duration=duration)
             dx, dy = fx + (factor - 1.0) * dx0, fy + (factor - 1.0) * dy0
             c, s = jnp.cos(theta + turn), jnp.sin(theta + turn)
         elif params.flow is not None:  # a uniform stream carries the body one u per step (tau = 1)
@@ -438,49 +458,82 @@ def _flow_row(params: EnvParams, roc_levels: int | None, index: Array) -> tuple[
 
 
 def flow_step(
-    model: Any, flow: Any, s0: Array, s1: Array, pose: Array, substeps: int | None = None
+    model: Any,
+    flow: Any,
+    s0: Array,
+    s1: Array,
+    pose: Array,
+    substeps: int | None = None,
+    *,
+    duration: Array | float | None = None,
 ) -> Array:
     """Lab-frame change ``(dx, dy, dtheta)`` of the centroid's place and the orientation over one
     step (one ``tau``) in which the shape moves straight from ``s0`` to ``s1`` (fractions of the
     range, float64) through ``flow``, from the centroid pose ``pose`` (x, y, theta).
 
+    The move takes the whole step (``duration`` None), or its first ``duration`` (``tau``, in
+    (0, 1]) after which the shape holds ``s1``: a one-DOF push past a limit moves at its ROC until
+    the limit, then holds (the motors' path, whose work `jswim.env.work` charges).
+
     The pose obeys ``d/dt (x_ref, theta) = R(theta) u_body(d, d_dot) + U_flow(d, x_ref, theta)``:
     the still-fluid velocity plus the flow's rigid response
     (`jswim.swimmers.flow_response.flow_velocity`), integrated by classical RK4 in
-    ``substeps`` pieces (default `FLOW_SUBSTEPS`; tested against a finer integration). The
-    reference the flow tables (`jswim.env.flow_steps`) are measured against; worlds use it for
-    steps off the tables and for `jswim.env.flow_steps.Integrated` flows."""
+    ``substeps`` pieces (default `FLOW_SUBSTEPS`; tested against a finer integration), as many
+    again for the held part when ``duration`` is given (the kink in the shape's path falls on a
+    piece's end, so RK4 keeps its order). The reference the flow tables
+    (`jswim.env.flow_steps`) are measured against; worlds use it for steps off the tables and for
+    `jswim.env.flow_steps.Integrated` flows."""
     span = model.hi - model.lo
-    d_dot = (s1 - s0) * span
+    d_move = (s1 - s0) * span
     d0 = corner_values(model, s0)
-
-    def shape(t: Array) -> Array:
-        return d0 + d_dot * t
-
     n = FLOW_SUBSTEPS if substeps is None else substeps
-    h = 1.0 / n
-    # The still-fluid body-frame velocity depends on the shape alone: one evaluation at each of
-    # the 2n + 1 times the RK stages visit (t = j h / 2), shared by the stages that meet there.
-    times = jnp.arange(2 * n + 1, dtype=s0.dtype) * (h / 2)
-    body = jax.vmap(lambda t: model.body_velocity(shape(t), d_dot))(times)  # (2n + 1, 3)
-
-    def rate(j: int, ref: Array) -> Array:
-        u, v, omega = body[j]
-        c, s = jnp.cos(ref[2]), jnp.sin(ref[2])
-        still = jnp.stack([c * u - s * v, s * u + c * v, omega])
-        return still + flow_velocity(shape(times[j]), ref, flow.velocity, model.xi_ratio)
-
     off0 = model.centroid_offset(d0)
     c0, s_0 = jnp.cos(pose[2]), jnp.sin(pose[2])
     ref = pose - jnp.stack([c0 * off0[0] - s_0 * off0[1], s_0 * off0[0] + c0 * off0[1], 0.0])
+    if duration is None:
+        ref = _rk4_piece(model, flow, d0, d_move, 1.0, ref, n)
+    else:
+        t_move = jnp.asarray(duration, s0.dtype)
+        ref = _rk4_piece(model, flow, d0, d_move / t_move, t_move, ref, n)
+        ref = _rk4_piece(model, flow, d0 + d_move, None, 1.0 - t_move, ref, n)
+    end = centroid(model, d0 + d_move, ref)
+    return jnp.stack([end[0] - pose[0], end[1] - pose[1], ref[2] - pose[2]])
+
+
+def _rk4_piece(
+    model: Any,
+    flow: Any,
+    d0: Array,
+    d_dot: Array | None,
+    length: Array | float,
+    ref: Array,
+    n: int,
+) -> Array:
+    """The reference pose ``ref`` (x, y, theta) after ``length`` (``tau``) of the straight shape
+    path ``d0 + d_dot t`` (``d_dot`` None: the shape held at ``d0``) through ``flow``: classical
+    RK4 in ``n`` equal pieces (`flow_step`)."""
+    h = length / n
+    # The still-fluid body-frame velocity depends on the shape alone: one evaluation at each of
+    # the 2n + 1 times the RK stages visit (t = j h / 2), shared by the stages that meet there.
+    times = jnp.arange(2 * n + 1, dtype=d0.dtype) * (h / 2)
+    if d_dot is not None:
+        body = jax.vmap(lambda t: model.body_velocity(d0 + d_dot * t, d_dot))(times)  # (2n+1, 3)
+
+    def rate(j: int, ref: Array) -> Array:
+        if d_dot is None:  # a held shape moves only with the fluid
+            return flow_velocity(d0, ref, flow.velocity, model.xi_ratio)
+        u, v, omega = body[j]
+        c, s = jnp.cos(ref[2]), jnp.sin(ref[2])
+        still = jnp.stack([c * u - s * v, s * u + c * v, omega])
+        return still + flow_velocity(d0 + d_dot * times[j], ref, flow.velocity, model.xi_ratio)
+
     for i in range(n):  # static: unrolled, inside the jitted step
         k1 = rate(2 * i, ref)
         k2 = rate(2 * i + 1, ref + h / 2 * k1)
         k3 = rate(2 * i + 1, ref + h / 2 * k2)
         k4 = rate(2 * i + 2, ref + h * k3)
         ref = ref + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    end = centroid(model, shape(jnp.ones((), s0.dtype)), ref)
-    return jnp.stack([end[0] - pose[0], end[1] - pose[1], ref[2] - pose[2]])
+    return ref
 
 
 def _advance_plain(

@@ -29,18 +29,23 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from jswim.env.flows import SWIM_SPEED
 from jswim.errors import MAX_COUNT, ConfigError
 from jswim.swimmers.turning import square_gait
 
 __all__ = [
     "BUDGET_SAFETY",
     "DEFAULT_RADIUS",
+    "FLOW_BUDGET_FACTOR",
     "FixedTarget",
     "MovingTarget",
     "Target",
     "TargetParams",
     "Waypoints",
+    "budget_source",
+    "course_time",
     "default_budget",
+    "flow_budget",
     "target_from_dict",
     "target_params",
 ]
@@ -53,6 +58,13 @@ DEFAULT_RADIUS = 0.25
 #: ([`jswim.env.loops.steering_budget`][jswim.env.loops.steering_budget]); docs/navigation.md
 #: ("Budgets") gives the measured steps it covers.
 BUDGET_SAFETY = 1.5
+
+#: In a moving flow a target's budget is at least this many times a least time of a point
+#: swimmer (the steering controller's still-fluid budget does not see the flow): `flow_budget`.
+FLOW_BUDGET_FACTOR = 4
+
+#: Points of the midpoint rule along each straight leg of `course_time`.
+COURSE_POINTS = 64
 
 #: Largest budget (steps): the worlds count steps in int32.
 MAX_BUDGET = MAX_COUNT
@@ -348,7 +360,118 @@ class TargetParams(NamedTuple):
     budget: Array
 
 
-def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
+def flow_budget(still: int, least_time: float | None) -> int:
+    """The budget rule in a moving flow, one for the worlds and the studies: the still-fluid
+    budget ``still`` (steps), raised to `FLOW_BUDGET_FACTOR` times ``least_time`` (steps, a
+    point swimmer's time to the target through the flow) where that is larger; ``least_time``
+    ``None`` (no time known: the target unreachable for a point) keeps ``still``.
+
+    The navigation study ([`with_budgets`][jswim.studies.navigate.with_budgets]) passes
+    Zermelo's least time; a world made in Python passes `course_time`, which is never below it
+    (Zermelo lives above the worlds). At most `MAX_BUDGET`.
+
+    Raises
+    ------
+    ConfigError
+        A budget past `MAX_BUDGET`.
+    """
+    n = still if least_time is None else max(still, math.ceil(FLOW_BUDGET_FACTOR * least_time))
+    if n > MAX_BUDGET:
+        raise ConfigError(
+            f"the target needs {n:,} steps in this flow, more than a world counts (int32, "
+            f"{MAX_BUDGET:,}); bring it closer or give it a budget"
+        )
+    return n
+
+
+def _leg_time(
+    start: np.ndarray, end: np.ndarray, radius: float, flow: Any, speed: float
+) -> float | None:
+    """Steps along the straight segment from ``start`` toward ``end``, up to ``radius`` short of
+    it, at the crab heading (None where the flow somewhere on it is too fast across or against
+    it for ``speed`` to hold the line)."""
+    span = end - start
+    full = float(np.hypot(*span))
+    if full <= radius:
+        return 0.0
+    d = span / full
+    length = full - radius
+    frac = (np.arange(COURSE_POINTS) + 0.5) / COURSE_POINTS
+    u = np.asarray(flow.velocity(start + (frac * length)[:, None] * d), np.float64)
+    along = u @ d
+    cross = d[0] * u[:, 1] - d[1] * u[:, 0]
+    disc = speed**2 - cross**2
+    ground = along + np.sqrt(np.maximum(disc, 0.0))
+    if np.any(disc <= 0) or np.any(ground <= 0):
+        return None
+    return float(np.mean(1.0 / ground) * length)
+
+
+def course_time(spec: Target, flow: Any, speed: float | None = None) -> float | None:
+    """Steps a point swimmer of speed ``speed`` (``a / tau``, default the square gait's
+    `jswim.env.flows.SWIM_SPEED`; one step lasts one ``tau``) takes to ``spec`` through ``flow``
+    on straight lines at the crab heading (Zermelo's heading in a locally uniform flow) until it
+    is within the success radius: from the start through the waypoints in order (each leg from
+    the previous waypoint); for a moving target, to where it is met (iterated).
+
+    For a fixed or moving target a path a point can follow, so never shorter than Zermelo's least
+    time ([`jswim.agents.zermelo`][jswim.agents.zermelo]), which it equals in still fluid
+    (``(distance - radius) / speed``). A cheap estimate the worlds can make (midpoint rule,
+    `COURSE_POINTS` per leg, float64): `flow_budget`'s least time for a world made in Python.
+
+    Returns
+    -------
+    float or None
+        Steps; None where the flow on a leg is too fast for the line to be held (a cross or head
+        flow faster than the swimmer), or a moving target that is not met.
+    """
+    v = SWIM_SPEED if speed is None else float(speed)
+    pts = [np.asarray(p, np.float64) for p in spec.points()]
+    start = np.zeros(2)
+    if spec.kind == "moving":
+        vel = np.asarray(spec.velocity, np.float64)
+        t = 0.0
+        for _ in range(50):  # fixed point of t = time(p + vel t): contracts for |vel| < v
+            nxt = _leg_time(start, pts[0] + vel * t, spec.radius, flow, v)
+            if nxt is None or nxt > MAX_BUDGET:
+                return None
+            if abs(nxt - t) < 1e-9 * max(1.0, nxt):
+                return nxt
+            t = nxt
+        return t
+    total = 0.0
+    for p in pts:
+        leg = _leg_time(start, p, spec.radius, flow, v)
+        if leg is None:
+            return None
+        total, start = total + leg, p
+    return total
+
+
+def budget_source(spec: Target, model: Any, roc_levels: int = 2, flow: Any = None) -> str:
+    """Which rule gave ``spec``'s budget in a world with ``flow``, in words (the repr of a
+    navigation world says it): the spec's own, the steering controller's still-fluid estimate,
+    or `flow_budget` with `course_time`."""
+    if spec.budget is not None:
+        return "the target's own"
+    if flow is None or not flow.speed > 0:
+        return "the steering controller's still-fluid estimate"
+    t = course_time(spec, flow)
+    if t is None:
+        return (
+            "the steering controller's still-fluid estimate: the flow is too fast for a straight "
+            "course (give the target a budget)"
+        )
+    still = default_budget(spec, model, roc_levels)
+    if flow_budget(still, t) == still:
+        return (
+            f"the steering controller's still-fluid estimate, above {FLOW_BUDGET_FACTOR} x "
+            f"{t:.1f} steps of the straight course through the flow"
+        )
+    return f"{FLOW_BUDGET_FACTOR} x {t:.1f} steps of the straight course through the flow"
+
+
+def default_budget(spec: Target, model: Any, roc_levels: int = 2, flow: Any = None) -> int:
     """Steps the steering controller is given for ``spec`` (``spec.budget`` when set).
 
     From the controller's measured physics ([`jswim.env.loops.steering_budget`][jswim.env.loops.steering_budget],
@@ -359,6 +482,9 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
     point where a swimmer going straight at the square gait's mean speed ``v_gait`` would meet
     it, stretched by ``1 / (1 - |v| / v_gait)`` for the corrections a moving bearing asks for.
 
+    In a flow that moves (``flow.speed > 0``) the budget follows `flow_budget`: at least
+    `FLOW_BUDGET_FACTOR` times `course_time`, the straight crab course's steps through it.
+
     Parameters
     ----------
     spec : FixedTarget, Waypoints or MovingTarget
@@ -367,11 +493,13 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
         The swimmer.
     roc_levels : int
         K of its lattice (an odd K is measured on K = 2: the quarter loops need a centre).
+    flow : Flow, optional
+        The world's background flow ([`jswim.env.flows`][jswim.env.flows]); None: still fluid.
 
     Returns
     -------
     int
-        Steps, whole cycles of four (at most `MAX_BUDGET`).
+        Steps, whole cycles of four (at most `MAX_BUDGET`); in a flow, whole steps.
 
     Raises
     ------
@@ -387,6 +515,8 @@ def default_budget(spec: Target, model: Any, roc_levels: int = 2) -> int:
             f"the target needs {n:,} steps, more than a world counts (int32, {MAX_BUDGET:,}); "
             "bring it closer"
         )
+    if flow is not None and flow.speed > 0:
+        return flow_budget(n, course_time(spec, flow))
     return n
 
 
@@ -431,7 +561,9 @@ def _measured_budget(spec: Target, model: Any, roc_levels: int) -> int:
     return math.ceil(leg(math.hypot(*meet), math.atan2(meet[1], meet[0])) / (1 - speed / v_gait))
 
 
-def target_params(spec: Target, model: Any, roc_levels: int = 2, dtype: Any = None) -> TargetParams:
+def target_params(
+    spec: Target, model: Any, roc_levels: int = 2, dtype: Any = None, flow: Any = None
+) -> TargetParams:
     """The arrays of ``spec`` for ``model`` (budget: [`default_budget`][jswim.env.targets.default_budget]).
 
     Parameters
@@ -444,6 +576,8 @@ def target_params(spec: Target, model: Any, roc_levels: int = 2, dtype: Any = No
         K of the lattice the world steps on (the controller's budget is measured there).
     dtype : dtype, optional
         Of the float leaves; default JAX's default float (float32 unless x64 is on).
+    flow : Flow, optional
+        The world's background flow (its budget: `default_budget`); None: still fluid.
 
     Returns
     -------
@@ -460,5 +594,5 @@ def target_params(spec: Target, model: Any, roc_levels: int = 2, dtype: Any = No
         points=jnp.asarray(spec.points(), dtype),
         velocity=jnp.asarray(spec.velocity, dtype),
         radius=jnp.asarray(spec.radius, dtype),
-        budget=jnp.asarray(default_budget(spec, model, roc_levels), jnp.int32),
+        budget=jnp.asarray(default_budget(spec, model, roc_levels, flow), jnp.int32),
     )

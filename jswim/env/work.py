@@ -33,7 +33,7 @@ from jax import Array
 
 from jswim.env.table_cache import cached, model_key
 from jswim.env.state import corner_values
-from jswim.env.step_tables import TABLE_DEGREE, lattice_moves
+from jswim.env.step_tables import TABLE_DEGREE, lattice_moves, lattice_rows
 from jswim.integrate import chebyshev_rule
 from jswim.swimmers.dissipation import power
 from jswim.swimmers.models import SwimmerModel
@@ -150,6 +150,7 @@ def lattice_work_table(model: SwimmerModel, roc_levels: int) -> np.ndarray:
         "work",
         f"{model_key(model)}|K={roc_levels}|deg={TABLE_DEGREE}",
         lambda: {"rows": _build_lattice_work(model, roc_levels)},
+        {"rows": (lattice_rows(model, roc_levels),)},
     )["rows"]
 
 

@@ -3,19 +3,32 @@ docs/navigation.md, *Pictures in a flow*), and the flow drawn under a picture.
 
 Drawn only where the rows carry a flow (`flow_rows`): a still-fluid folder's figures are the
 ones [`jswim.figures.navigation_plots`][jswim.figures.navigation_plots] draws, and no more.
+In order of importance (`jswim.figures.navigation_plots.NAV_FIGURE_ORDER`); every panel's
+title names the flow (``uniform flow``), one panel per target (its group without the flow):
 
+``navigate-flow-ratio``
+    The result: steps to the target over the swimmer's own least time (``time_ratio``, the
+    agent ``optimal``'s steps; 1 is optimal) against the flow speed in units of the swimming
+    speed, the median over the runs that reached it with its bootstrap 95 % interval, one series
+    per agent; Zermelo's point (no turning limit, the flow taken at its centre) as its own
+    dashed line, his least time over the swimmer's (below 1: he turns at once). A folder
+    written before the optimum draws the ratio to Zermelo's time instead, and says so.
+``navigate-flow-success``
+    Success rate against the flow speed with Wilson 95 % intervals, one series per agent.
+    Flow speeds where Zermelo cannot reach the target are hatched and labelled
+    ``unreachable``: no agent can, so a 0 there is not a failure to learn.
+``navigate-flow-energy``
+    Energy per ``a`` closed on the target (the mean over the cell's runs) against the flow
+    speed, one series per agent (the same hatching).
 ``navigate-flow-paths``
     One panel per target (rows) and flow speed (columns): the flow's streamlines under every
     agent's path in its colour, Zermelo's least-time path dashed, the start and the targets with
     their success radius; a target no steerer can reach says so in its panel.
-``navigate-flow-success``
-    Success rate (top) and steps to the target over Zermelo's least time (below, the runs that
-    reached it; 1 is optimal) against the flow speed in units of the swimming speed, one line
-    per agent, one column per target. Flow speeds where Zermelo cannot reach the target are
-    hatched and labelled ``unreachable``: no agent can, so a 0 there is not a failure to learn.
-``navigate-flow-energy``
-    Energy per ``a`` closed on the target against the flow speed, one line per agent, one
-    column per target (the same hatching).
+
+Every series shows its runs per cell in the legend (``n=16``) and joins two flow speeds by a
+line only where both cells hold at least
+`jswim.figures.navigation_plots.MIN_LINE_RUNS` runs
+([`draw_series`][jswim.figures.navigation_plots.draw_series]).
 
 `flow_of`, `flow_text`, `flow_field` and `draw_flow` are the pictures' one reading of a row's
 flow: the report page's arrows and ``jswim animate``'s streamlines come from them too.
@@ -37,7 +50,19 @@ from matplotlib.patches import Patch
 from jswim.env.flows import SWIM_SPEED, Flow, Poiseuille, Shear, TaylorGreen, Uniform
 from jswim.env.flows import flow_from_dict
 from jswim.errors import ConfigError
-from jswim.figures.navigation_plots import ZERMELO_STYLE, agent_order, agent_style, target_points
+from jswim.figures.navigation_plots import (
+    OPTIMUM_STYLE,
+    ZERMELO_STYLE,
+    agent_order,
+    agent_style,
+    draw_series,
+    has_optimum,
+    n_text,
+    ratio_axes,
+    ratio_cell,
+    success_cell,
+    target_points,
+)
 from jswim.figures.style import COLUMN_IN, NOTE_COLOR, PAGE_IN, styled
 from jswim.results import as_run_rows
 
@@ -48,8 +73,10 @@ __all__ = [
     "flow_field",
     "flow_figures",
     "flow_label",
+    "flow_name",
     "flow_of",
     "flow_paths_figure",
+    "flow_ratio_figure",
     "flow_rows",
     "flow_success_figure",
     "flow_text",
@@ -332,60 +359,11 @@ def _hatch_unreachable(ax: Any, fractions: Sequence[float], bad: set[float]) -> 
     return bool(bad)
 
 
-def _agents(rows: Sequence[Any]) -> list[str]:
-    """The agents that steer (Zermelo is the reference line, not a line of his own)."""
-    names = {r.agent for r in rows if r.agent != "zermelo"}
+def _agents(rows: Sequence[Any], skip: tuple[str, ...] = ("zermelo",)) -> list[str]:
+    """The agents that steer, in the figures' order (Zermelo is the reference line, not a
+    series of his own; ``skip`` leaves others out too)."""
+    names = {r.agent for r in rows if r.agent not in skip}
     return sorted(names, key=agent_order)
-
-
-def _per_fraction(rows: Sequence[Any], agent: str, value: Any) -> tuple[list[float], list[float]]:
-    """``(fractions, means)`` of ``value(row)`` (None: left out) over the agent's rows."""
-    by: dict[float, list[float]] = {}
-    for r in rows:
-        if r.agent == agent:
-            v = value(r)
-            by.setdefault(float(r.flow_fraction or 0.0), [])
-            if v is not None and math.isfinite(v):
-                by[float(r.flow_fraction or 0.0)].append(float(v))
-    fs = sorted(by)
-    return fs, [float(np.mean(by[f])) if by[f] else np.nan for f in fs]
-
-
-def _columns_figure(n: int, nrows: int, height: float) -> tuple[Figure, np.ndarray]:
-    fig = Figure(figsize=(PAGE_IN if n > 1 else COLUMN_IN, height))
-    return fig, fig.subplots(nrows, n, squeeze=False, sharex="col")
-
-
-def _legend(fig: Figure, axes: np.ndarray, hatched: bool) -> None:
-    seen: dict[str, Any] = {}
-    for ax in axes.flat:
-        for h, lab in zip(*ax.get_legend_handles_labels()):
-            seen.setdefault(lab, h)
-    if hatched:
-        seen["unreachable (Zermelo cannot reach the target)"] = Patch(
-            facecolor="none", edgecolor=UNREACHABLE_COLOR, hatch="///", alpha=0.6
-        )
-    fig.legend(seen.values(), seen.keys(), loc="lower center", ncol=min(len(seen), 3), fontsize=6)
-
-
-def _target_panels(
-    rows: Sequence[Mapping[str, Any]], nrows: int, height: float
-) -> tuple[Figure, np.ndarray, list[str], list[float], list[tuple[str, list[Any]]]]:
-    """One column of panels per target: the figure, its axes, the agents that steer, the flow
-    speeds (fractions of v) and each target's name and rows."""
-    rows = flow_rows(rows)
-    targets = _targets(rows)
-    fig, axes = _columns_figure(len(targets), nrows, height)
-    fractions = sorted({float(r.flow_fraction or 0.0) for r in rows})
-    cells = [(name, [r for r in rows if _target_name(r) == name]) for name in targets]
-    return fig, axes, _agents(rows), fractions, cells
-
-
-def _line(st: Mapping[str, Any], i: int) -> dict[str, Any]:
-    """An agent's line and markers (every other agent's hollow, so that coinciding ones show)."""
-    return dict(
-        color=st["color"], ls=st["ls"], marker=st["marker"], mfc="none" if i % 2 else st["color"]
-    )
 
 
 def _finish_axis(ax: Any, fractions: Sequence[float], sel: Sequence[Any]) -> bool:
@@ -396,89 +374,220 @@ def _finish_axis(ax: Any, fractions: Sequence[float], sel: Sequence[Any]) -> boo
     return hatched
 
 
+def flow_name(rows: Sequence[Any]) -> str:
+    """The study's flow for a title: ``"uniform flow"`` (the kinds of the rows that ran in a
+    moving fluid; ``"still fluid"`` where none did: its reference of speed 0 is recorded as a
+    uniform stream of 0)."""
+    kinds = []
+    for r in rows:
+        f = flow_of(r.flow) if float(r.flow_fraction or 0.0) else None
+        if f is not None and f.speed and f.kind not in kinds:
+            kinds.append(f.kind)
+    return " and ".join(kinds) + " flow" if kinds else "still fluid"
+
+
+def _cells(
+    rows: Sequence[Any], agent: str, fractions: Sequence[float], cell: Any
+) -> list[tuple[float, float, float, int]]:
+    """``cell(runs)`` (`success_cell`, `ratio_cell`, ...) of the agent's runs at each flow
+    speed; a speed without runs is ``(nan, nan, nan, 0)``."""
+    out = []
+    for f in fractions:
+        runs = [r for r in rows if r.agent == agent and float(r.flow_fraction or 0.0) == f]
+        out.append(cell(runs) if runs else (math.nan, math.nan, math.nan, 0))
+    return out
+
+
+def _mean_cell(value: Any) -> Any:
+    """A cell of the mean of ``value(row)`` over the runs where it is finite (no interval)."""
+
+    def cell(runs: Sequence[Any]) -> tuple[float, float, float, int]:
+        vs = [float(v) for v in map(value, runs) if v is not None and math.isfinite(v)]
+        m = float(np.mean(vs)) if vs else math.nan
+        return (m, m, m, len(runs))
+
+    return cell
+
+
+def _zermelo_ratio(rows: Sequence[Any], fractions: Sequence[float]) -> list[float]:
+    """Zermelo's least time over the swimmer's own at each flow speed (nan where either is
+    missing): the same for every row of a cell, read from the first that has both."""
+    out = []
+    for f in fractions:
+        both = [
+            r.zermelo_steps / r.optimal_steps
+            for r in rows
+            if float(r.flow_fraction or 0.0) == f and r.zermelo_steps and r.optimal_steps
+        ]
+        out.append(float(both[0]) if both else math.nan)
+    return out
+
+
+def _panel_grid(n: int, row_in: float, legend_in: float) -> tuple[Figure, np.ndarray]:
+    """``n`` panels three to a row (the extra ones hidden), ``legend_in`` inches below them for
+    the legend."""
+    cols = min(max(n, 1), 3)
+    nrows = math.ceil(max(n, 1) / cols)
+    height = row_in * nrows + legend_in + 0.4  # and the title's
+    fig = Figure(figsize=(PAGE_IN if cols > 1 else COLUMN_IN, height))
+    axes = fig.subplots(nrows, cols, squeeze=False)
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    fig.subplots_adjust(
+        bottom=(legend_in + 0.35) / height, top=1 - 0.75 / height, hspace=0.75, wspace=0.3
+    )
+    return fig, axes
+
+
+def _legend(fig: Figure, entries: Mapping[str, Any], hatched: bool, ncol: int = 3) -> None:
+    seen = dict(entries)
+    if hatched:
+        seen["unreachable (Zermelo cannot reach the target)"] = Patch(
+            facecolor="none", edgecolor=UNREACHABLE_COLOR, hatch="///", alpha=0.6
+        )
+    fig.legend(
+        seen.values(), seen.keys(), loc="lower center", ncol=min(len(seen), ncol), fontsize=6
+    )
+
+
+def _series_panels(
+    rows: Sequence[Mapping[str, Any]],
+    cell: Any,
+    *,
+    skip: tuple[str, ...] = ("zermelo",),
+    bars: bool = True,
+    row_in: float = 2.1,
+) -> tuple[Figure, list[tuple[Any, list[Any]]], list[float], dict[str, Any], bool]:
+    """One panel per target, each agent's series of ``cell`` against the flow speed (agents a
+    little apart along it, so that equal values stay visible side by side), the unreachable
+    speeds hatched and the panel titled with its target and flow. Returns the figure, each
+    panel's axes and rows, the flow speeds, the legend's entries (each agent with its runs per
+    cell) and whether any speed was hatched."""
+    rows = flow_rows(rows)
+    agents = _agents(rows, skip)
+    fractions = sorted({float(r.flow_fraction or 0.0) for r in rows})
+    targets = _targets(rows)
+    legend_in = 0.25 + 0.14 * math.ceil((len(agents) + 3) / 3)
+    fig, axes = _panel_grid(len(targets), row_in, legend_in)
+    span = (max(fractions) - min(fractions)) or 1.0
+    flow = flow_name(rows)
+    panels, runs_of, handles, hatched = [], {a: [] for a in agents}, {}, False
+    for ax, name in zip(axes.flat, targets):
+        sel = [r for r in rows if _target_name(r) == name]
+        for i, agent in enumerate(agents):
+            shift = (i - (len(agents) - 1) / 2) * 0.022 * span
+            cells = _cells(sel, agent, fractions, cell)
+            xs = [f + shift for f in fractions]
+            h = draw_series(ax, xs, cells, agent_style(agent), bool(i % 2), agent, bars)
+            handles.setdefault(agent, h)
+            runs_of[agent] += [
+                len([r for r in sel if r.agent == agent and float(r.flow_fraction or 0) == f])
+                for f in fractions
+            ]
+        hatched |= _finish_axis(ax, fractions, sel)
+        ax.set_title(f"{name}\n{flow}")
+        ax.set_xlabel("flow / swim speed")
+        panels.append((ax, sel))
+    for ax in axes[:, 0]:
+        ax.set_ylabel(" ")  # filled by the caller
+    entries = {
+        f"{agent_style(a)['label']} ({n_text(runs_of[a])})": handles[a]
+        for a in agents
+        if a in handles
+    }
+    return fig, panels, fractions, entries, hatched
+
+
+@styled
+def flow_ratio_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
+    """Time over the swimmer's own optimum against the flow speed, per agent, with bootstrap
+    95 % intervals and Zermelo's point's ratio as its own line (module docs)."""
+    rows = flow_rows(rows)
+    own = has_optimum(rows)
+    field = "time_ratio" if own else "zermelo_ratio"  # an older folder: Zermelo's yardstick
+    # Zermelo is his own line, the optimum the line at 1; an agent that never reached the
+    # target has no ratio (the success figure shows it).
+    none = tuple({r.agent for r in rows} - {r.agent for r in rows if getattr(r, field)})
+    fig, panels, fractions, entries, hatched = _series_panels(
+        rows, lambda runs: ratio_cell(runs, field), skip=("zermelo", "optimal", *none)
+    )
+    for ax, sel in panels:
+        ax.axhline(1.0, color=OPTIMUM_STYLE["color"], lw=0.9, zorder=1)
+        if own:
+            ax.plot(
+                fractions,
+                _zermelo_ratio(sel, fractions),
+                color=ZERMELO_STYLE["color"],
+                ls="--",
+                marker=ZERMELO_STYLE["marker"],
+                lw=0.9,
+                zorder=2,
+                gid="zermelo-ratio",
+            )
+    ratio_axes([ax for ax, _ in panels])
+    who = "the swimmer's own least time" if own else "Zermelo's point's least time"
+    for ax, _ in panels[::3]:
+        ax.set_ylabel(
+            "steps / swimmer's least\n(median, 95% interval)"
+            if own
+            else "steps / Zermelo's least\n(median, 95% interval)"
+        )
+    one = OPTIMUM_STYLE["label"] if own else f"{ZERMELO_STYLE['label']} (older folder: no optimum)"
+    entries[f"{one} = 1"] = Line2D([], [], color=OPTIMUM_STYLE["color"], lw=0.9)
+    if own:  # his time over the swimmer's: below 1, he turns at once and feels the flow at a point
+        entries[ZERMELO_STYLE["label"]] = Line2D(
+            [], [], color=ZERMELO_STYLE["color"], ls="--", marker=ZERMELO_STYLE["marker"], lw=0.9
+        )
+    _legend(fig, entries, hatched, ncol=2)
+    _title(fig, f"Time to the target over {who} (runs that reached it)", note)
+    return fig
+
+
 @styled
 def flow_success_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
-    """Success rate and time over Zermelo's against the flow speed, per agent (module docs)."""
-    fig, axes, agents, fractions, cells = _target_panels(rows, 2, 4.4)
-    hatched = False
-    for j, (name, sel) in enumerate(cells):
-        span = (max(fractions) - min(fractions)) or 1.0
-        top, bottom = axes[0, j], axes[1, j]
-        for i, agent in enumerate(agents):
-            st = agent_style(agent)
-            # Agents a little apart along x, so that equal rates stay visible side by side.
-            shift = (i - (len(agents) - 1) / 2) * 0.012 * span
-            fs, rate = _per_fraction(sel, agent, lambda r: float(bool(r.reached)))
-            top.plot(
-                [f + shift for f in fs],
-                rate,
-                **_line(st, i),
-                label=st["label"],
-            )
-            fs, ratio = _per_fraction(sel, agent, lambda r: r.time_ratio)
-            bottom.plot(
-                [f + shift for f in fs],
-                ratio,
-                **_line(st, i),
-            )
-        bottom.axhline(
-            1.0, color=ZERMELO_STYLE["color"], ls="--", lw=0.9, label="Zermelo (least time)"
-        )
-        for ax in (top, bottom):
-            hatched |= _finish_axis(ax, fractions, sel)
-        top.set_ylim(-0.05, 1.05)
-        top.set_title(name)
-        bottom.set_ylim(bottom=0.0)
-        bottom.set_xlabel("flow / swim speed")
-        if j == 0:
-            top.set_ylabel("success rate")
-            bottom.set_ylabel("steps / Zermelo's least\n(runs that reached it)")
-    _legend(fig, axes, hatched)
-    fig.subplots_adjust(bottom=0.2, hspace=0.25, wspace=0.3)
-    _note(fig, note)
+    """Success rate against the flow speed with Wilson 95 % intervals, per agent (module docs)."""
+    fig, panels, _, entries, hatched = _series_panels(rows, success_cell)
+    for ax, _sel in panels:
+        ax.set_ylim(-0.05, 1.05)
+    for ax, _ in panels[::3]:
+        ax.set_ylabel("success rate\n(Wilson 95% interval)")
+    _legend(fig, entries, hatched)
+    _title(fig, "Success rate (runs that reached the target in its budget)", note)
     return fig
 
 
 @styled
 def flow_energy_figure(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> Figure:
     """Energy per ``a`` closed against the flow speed, per agent (module docs)."""
-    fig, axes, agents, fractions, cells = _target_panels(rows, 1, 2.6)
-    hatched = False
-    for j, (name, sel) in enumerate(cells):
-        ax = axes[0, j]
-        drawn = False
-        for i, agent in enumerate(agents):
-            st = agent_style(agent)
-            fs, e = _per_fraction(sel, agent, lambda r: r.energy_per_distance)
-            if all(not np.isfinite(v) for v in e):
-                continue
-            drawn = True
-            ax.plot(
-                fs,
-                e,
-                **_line(st, i),
-                label=st["label"],
-            )
-        if drawn:
+    fig, panels, _, entries, hatched = _series_panels(
+        rows, _mean_cell(lambda r: r.energy_per_distance), bars=False
+    )
+    for ax, _sel in panels:
+        if any(ln.get_gid() and ln.get_gid().startswith("points:") for ln in ax.get_lines()):
             ax.set_yscale("log")
-        hatched |= _finish_axis(ax, fractions, sel)
-        ax.set_title(name)
-        ax.set_xlabel("flow / swim speed")
-        if j == 0:
-            ax.set_ylabel("energy per a closed\n(xi_par a^2 / tau)")
-    _legend(fig, axes, hatched)
-    fig.subplots_adjust(bottom=0.36, wspace=0.3)
-    _note(fig, note)
+    for ax, _ in panels[::3]:
+        ax.set_ylabel("energy per a closed\n(xi_par a^2 / tau)")
+    _legend(fig, entries, hatched)
+    _title(fig, "Energy per a closed on the target (mean of the cell's runs)", note)
     return fig
 
 
+def _title(fig: Figure, title: str, note: str | None) -> None:
+    """The figure's title, with an unfinished study's note under it in red."""
+    fig.suptitle(title, fontsize=8, y=0.995, va="top")
+    if note:
+        fig.text(0.5, 0.955, note, color=NOTE_COLOR, fontsize=7, ha="center", va="top")
+
+
 def flow_figures(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
-    """The flow figures by file name; none where no row ran in a flow (a still-fluid folder)."""
+    """The flow figures by file name, in the order of importance; none where no row ran in a
+    flow (a still-fluid folder)."""
     rows = flow_rows(rows)
     if not rows:
         return {}
     return {
-        "navigate-flow-paths": flow_paths_figure(rows, note),
+        "navigate-flow-ratio": flow_ratio_figure(rows, note),
         "navigate-flow-success": flow_success_figure(rows, note),
         "navigate-flow-energy": flow_energy_figure(rows, note),
+        "navigate-flow-paths": flow_paths_figure(rows, note),
     }

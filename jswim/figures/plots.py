@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 from matplotlib.figure import Figure
 
@@ -30,7 +30,7 @@ from jswim.agents.variants import VARIANTS
 from jswim.results import as_run_rows, is_failed
 
 from jswim.figures.scene_plots import scene_figures
-from jswim.figures.navigation_plots import nav_figures
+from jswim.figures.navigation_plots import NAV_FIGURE_ORDER, nav_figures
 from jswim.figures.flow_plots import flow_figures
 from jswim.figures.panels import save
 from jswim.figures.sketches import learned_cycles
@@ -45,6 +45,17 @@ from jswim.figures.grid import (
 
 
 # -- a study's figures ------------------------------------------------------------------------
+
+#: A study's figures in order of importance, where that is not the order of their names (the
+#: folder's files are listed by name): `figure_order`.
+FIGURE_ORDER: dict[str, tuple[str, ...]] = {"navigate": NAV_FIGURE_ORDER}
+
+
+def figure_order(study: str, names: Iterable[str]) -> list[str]:
+    """``names`` (a study's figures, without extension) in the order the page and ``jswim
+    plot`` show them: `FIGURE_ORDER`'s first, then any other by name."""
+    order = {n: i for i, n in enumerate(FIGURE_ORDER.get(study, ()))}
+    return sorted(names, key=lambda n: (order.get(n, len(order)), n))
 
 
 def study_figures(
@@ -82,9 +93,10 @@ def study_figures(
         return continuous_figures(rows, note=note)
     if study in ("wall", "pair", "school"):  # walls, pairs and schools: the scene figures
         return scene_figures(study, rows, note=note)
-    if study == "navigate":  # paths in the plane, success against bearing, energy
-        # In a background flow, also the paths over its streamlines and rates against its speed.
-        return {**nav_figures(rows, note=note), **flow_figures(rows, note=note)}
+    if study == "navigate":  # the ratio to the optimum, success, energy, then the paths
+        # In a background flow, each against the flow speed, and the paths over its streamlines.
+        figs = {**nav_figures(rows, note=note), **flow_figures(rows, note=note)}
+        return {name: figs[name] for name in figure_order(study, figs)}
     if study == "competence":
         # One entry per LLM variant, then one per baseline (agent, action set).
         entries = [

@@ -45,6 +45,26 @@ def mean_interval(
     return (m, float(np.quantile(boots, a)), float(np.quantile(boots, 1 - a)))
 
 
+def median_interval(
+    values: Sequence[float], level: float = 0.95, n_boot: int = 2000, seed: int = 0
+) -> tuple[float, float, float]:
+    """Median and a percentile-bootstrap interval (approximate; coarse for small samples).
+
+    Returns ``(median, lo, hi)``; with fewer than two finite values the interval is the median
+    itself, nan with none.
+    """
+    x = _finite(values)
+    if x.size == 0:
+        return (math.nan, math.nan, math.nan)
+    m = float(np.median(x))
+    if x.size < 2:
+        return (m, m, m)
+    rng = np.random.default_rng(seed)
+    boots = np.median(x[rng.integers(0, x.size, (n_boot, x.size))], axis=1)
+    a = (1 - level) / 2
+    return (m, float(np.quantile(boots, a)), float(np.quantile(boots, 1 - a)))
+
+
 def quartiles(values: Sequence[float]) -> tuple[float, float, float]:
     """25th, 50th and 75th percentiles of the finite values (nan if none)."""
     x = _finite(values)

@@ -99,8 +99,9 @@ class Budget:
             return None
         return self.cap_usd - self.spent_usd - self.unanswered_usd - self.reserved_usd
 
-    def reserve(self, bound_usd: float) -> Hold:
-        """Reserve a request's bound (times `ratio`) before it goes out, and write it down.
+    def reserve(self, bound_usd: float, retry: bool = False) -> Hold:
+        """Reserve a request's bound (times `ratio`) before it goes out, and write it down
+        (``retry``: the request is a retry, as the ledger counts them).
 
         Raises
         ------
@@ -124,34 +125,39 @@ class Budget:
                 f"stopped at the cost cap: ${self.spent_usd:.4f} spent{unanswered}, ${self.reserved_usd:.4f} in flight, "
                 f"cap ${self.cap_usd:.4f}; rerun with a higher --max-cost to continue"
             )
-        n = self.ledger.sent(usd) if self.ledger is not None else None
+        n = self.ledger.sent(usd, retry) if self.ledger is not None else None
         self.reserved_usd += usd
         return Hold(usd, bound_usd, n)
 
     def _drop(self, hold: Hold) -> None:
         self.reserved_usd = max(0.0, self.reserved_usd - hold.usd)
 
-    def settle(self, hold: Hold, actual_usd: float) -> None:
+    def settle(self, hold: Hold, actual_usd: float, fault: str | None = None) -> None:
         """Replace a reservation by the call's actual cost; a bill above the bound raises the
-        ratio later reservations are scaled by."""
+        ratio later reservations are scaled by (``fault``: the transient fault that came with
+        the bill, ``"bad body"``, for the ledger)."""
         self._drop(hold)
         self.spent_usd += actual_usd
         if hold.bound_usd > 0:
             self.ratio = max(self.ratio, actual_usd / hold.bound_usd)
         if self.ledger is not None and hold.n is not None:
-            self.ledger.billed(hold.n, actual_usd)
+            self.ledger.billed(hold.n, actual_usd, fault)
 
-    def release(self, hold: Hold) -> None:
-        """Drop a reservation whose call was not billed (refused, or never delivered)."""
+    def release(self, hold: Hold, fault: str | None = None) -> None:
+        """Drop a reservation whose call was not billed (refused, or never delivered;
+        ``fault``: the transient fault's kind, for the ledger)."""
         self._drop(hold)
         if self.ledger is not None and hold.n is not None:
-            self.ledger.released(hold.n)
+            self.ledger.released(hold.n, fault)
 
-    def unanswered(self, hold: Hold) -> None:
+    def unanswered(self, hold: Hold, fault: str | None = None) -> None:
         """Keep a reservation whose request went out and got no answer: the server may bill it
-        (the ledger already says so: a sent line with no outcome)."""
+        (the ledger already says so: a sent line with no outcome; ``fault``, the timeout or cut
+        that left it unanswered, is noted there; an interrupt notes nothing)."""
         self._drop(hold)
         self.unanswered_usd += hold.usd
+        if self.ledger is not None and hold.n is not None and fault is not None:
+            self.ledger.no_answer(hold.n, fault)
 
 
 def _usd(v: Any) -> float:

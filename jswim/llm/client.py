@@ -469,7 +469,9 @@ class LLMClient:
             held: Hold | None = None
             try:
                 if self.budget is not None:  # reserved while in flight, settled by the answer
-                    held = self.budget.reserve(call_bound(payload, self._prices, s.model))
+                    held = self.budget.reserve(
+                        call_bound(payload, self._prices, s.model), retry=retries > 0
+                    )
                 if slot.http is None:
                     slot.http = self._http_client()
                 self.n_requests += 1
@@ -505,21 +507,22 @@ class LLMClient:
                     # may bill it, so its bound stays counted against the cap; anything else was
                     # refused or never arrived and costs nothing.
                     bound = held.usd if held is not None else self._bound(payload)
+                    fault = exc.kind if isinstance(exc, _Failure) else None  # for the ledger
                     if (isinstance(exc, _Failure) and exc.unanswered) or isinstance(
                         exc, asyncio.CancelledError
                     ):
                         self.counts.unanswered += 1
                         self.counts.unanswered_usd += bound
                         if held is not None:
-                            self.budget.unanswered(held)
+                            self.budget.unanswered(held, fault)
                     elif isinstance(exc, _Failure) and exc.bad_body:
                         # Answered 200 with a body that is no chat completion: the server ran
                         # the request and may bill it, so it is spent, at its reservation.
                         self.counts.cost_usd += bound
                         if held is not None:
-                            self.budget.settle(held, bound)
+                            self.budget.settle(held, bound, fault)
                     elif held is not None:
-                        self.budget.release(held)
+                        self.budget.release(held, fault)
                     if isinstance(exc, _Failure) and first_failure is None:
                         first_failure = sent_at
                     raise

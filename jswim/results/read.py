@@ -87,6 +87,8 @@ _META_TYPES: dict[str, tuple[type, ...]] = {
     "server": (str, type(None)),
     "prices_as_of": (str,),
     "error": (str, type(None)),
+    "success_criterion": (str,),
+    "model_range_notes": (list,),
 }
 _JSON_NAMES = {
     dict: "an object",
@@ -97,10 +99,107 @@ _JSON_NAMES = {
 }
 
 
+def _numbers(v: Any) -> bool:
+    return isinstance(v, list) and all(_real(e) for e in v)
+
+
+def _texts(v: Any) -> bool:
+    return isinstance(v, list) and all(isinstance(e, str) for e in v)
+
+
+def _real(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _whole(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+_NUMBERS = (_numbers, "a list of numbers")
+_TEXTS = (_texts, "a list of texts")
+_OBJECT = (lambda v: isinstance(v, dict), "an object")
+#: Fields inside the objects of ``metadata.json`` that readers compute with (dotted paths; null
+#: is always accepted, as a field left unset): what each must be. The top-level field itself is
+#: checked by `_META_TYPES` first.
+_META_NESTED: dict[str, tuple[Any, str]] = {
+    **{
+        f"grid.{k}": _NUMBERS
+        for k in (
+            "flows",
+            "bearings",
+            "distances",
+            "zetas",
+            "heights",
+            "n_hts",
+            "roc_levels_grid",
+            "separations",
+            "tilts",
+            "phases",
+            "school_sizes",
+            "temperatures",
+        )
+    },
+    "grid.formations": _TEXTS,
+    "grid.prompt_files": _TEXTS,
+    **{f"grid.{k}": (_whole, "a whole number") for k in ("runs", "q_runs", "samples")},
+    "identity.options": _OBJECT,
+    "identity.backend": _OBJECT,
+    "identity.options.flow": (lambda v: isinstance(v, str), "text"),
+    "identity.options.agents": _TEXTS,
+    **{
+        f"identity.backend.{k}": (lambda v: isinstance(v, str), "text")
+        for k in ("kind", "model", "base_url", "constrain")
+    },
+    "identity.backend.temperature": (_real, "a number"),
+    "summary.reasoning": _OBJECT,
+    "summary.llm_speed": _OBJECT,
+    "summary.navigation": (lambda v: isinstance(v, list), "a list"),
+    **{
+        f"summary.llm_speed.{k}": (_real, "a number")
+        for k in ("wall_s", "calls_per_s", "billed_calls_per_s", "cost_usd", "study_cost_usd")
+    },
+    "llm_server.unpriced": (lambda v: isinstance(v, str), "text"),
+}
+
+
+def _drop_nested(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
+    """``meta`` without the nested fields of `_META_NESTED` that have the wrong type, each
+    dropped with one `SkippedRecord` warning naming the file and the field's dotted path (the
+    objects above it copied, never changed in place)."""
+    import warnings
+
+    for dotted, (ok, want) in _META_NESTED.items():
+        *parents, leaf = dotted.split(".")
+        node: Any = meta
+        for k in parents:
+            node = node.get(k) if isinstance(node, dict) else None
+        if not isinstance(node, dict) or node.get(leaf) is None or ok(node[leaf]):
+            continue
+        warnings.warn(
+            SkippedRecord(
+                f"{path}: {dotted!r} is {_shown(node[leaf])}, not {want}; that field is ignored"
+            ),
+            stacklevel=4,
+        )
+        meta = dict(meta)
+        holder = meta
+        for k in parents:  # copy the path down to the field, so the caller's dicts stay as read
+            holder[k] = dict(holder[k])
+            holder = holder[k]
+        holder.pop(leaf)
+    return meta
+
+
+def _shown(v: Any) -> str:
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, Any]:
-    """``meta`` without the fields of the wrong type (a hand edit: ``"summary": 5``), each dropped
-    with one `SkippedRecord` warning naming the file and the field; the
-    fields left are what a reader may compute with. ``summary.groups`` must be a list of objects."""
+    """``meta`` without the fields of the wrong type (a hand edit: ``"summary": 5``,
+    ``"grid": {"flows": ["fast"]}``), each dropped with one `SkippedRecord` warning naming the
+    file and the field (a nested one by its dotted path, ``'grid.flows'``); the fields left are
+    what a reader may compute with. ``summary.groups`` must be a list of objects."""
     import warnings
 
     out = dict(meta)
@@ -109,10 +208,11 @@ def clean_metadata(meta: dict[str, Any], path: str | os.PathLike) -> dict[str, A
         if k in out and not (isinstance(v, types) and not isinstance(v, bool)):
             want = " or ".join(_JSON_NAMES[t] for t in types)
             warnings.warn(
-                SkippedRecord(f"{path}: {k!r} is {v!r:.40}, not {want}; that field is ignored"),
+                SkippedRecord(f"{path}: {k!r} is {_shown(v)}, not {want}; that field is ignored"),
                 stacklevel=3,
             )
             out.pop(k)
+    out = _drop_nested(out, path)
     totals = out.get("llm_totals")
     if totals is not None:
         out["llm_totals"] = _clean_totals(totals, path)
@@ -175,9 +275,10 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
     except (OSError, ValueError) as exc:  # ValueError: bad JSON or bad UTF-8
         raise ResultFolderError(f"{path} is unreadable ({exc})") from None
     if not isinstance(meta, dict):
-        raise ResultFolderError(
-            f"{path} is not a study's metadata (a JSON {type(meta).__name__}, not an object)"
+        kind = {list: "list", str: "text", bool: "true or false", type(None): "null"}.get(
+            type(meta), "number"
         )
+        raise ResultFolderError(f"{path} is not a study's metadata (a JSON {kind}, not an object)")
     return upgrade_names(clean_metadata(meta, path))
 
 

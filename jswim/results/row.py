@@ -93,7 +93,15 @@ SWITCHES = (
 #: A navigation run's columns (docs/navigation.md): written only where set (a navigation task).
 NAV = ("target", "reached", "steps_to_target", "path_length", "path_ratio")
 #: A navigation run in a background flow (docs/navigation.md, *Flows*): written only where set.
-FLOW = ("flow", "flow_fraction", "reachable", "zermelo_steps", "time_ratio")
+FLOW = (
+    "flow",
+    "flow_fraction",
+    "reachable",
+    "zermelo_steps",
+    "zermelo_ratio",
+    "optimal_steps",
+    "time_ratio",
+)
 
 _WHERE_SET = ("pair_prompt", "temperature_sent", "plane_height") + NAV + FLOW
 
@@ -295,14 +303,21 @@ class RunRow(Mapping):
         in a flow.
     flow_fraction : float or None
         The flow's speed over the swimming speed
-        ([`jswim.env.flows.SWIM_SPEED`][jswim.env.flows.SWIM_SPEED]).
+        (`SWIM_SPEED` in [`jswim.env.flows`][jswim.env.flows]).
     reachable : bool or None
         Zermelo's point steerer with the swimming speed reaches the target in this flow
         ([`jswim.agents.zermelo`][jswim.agents.zermelo]); False: no agent can, the row says so.
     zermelo_steps : float or None
         Zermelo's least time to the target (steps, ``tau``); None when unreachable.
+    zermelo_ratio : float or None
+        ``steps_to_target / zermelo_steps`` (None: not reached, or unreachable). A folder of an
+        earlier jswim, whose ``time_ratio`` was this, is read with it here.
+    optimal_steps : int or None
+        The swimmer's own least time to the target (steps, the least-time sequence of the world's
+        actions, [`jswim.agents.optimal`][jswim.agents.optimal]); written for every navigation
+        run, in still fluid too; None where the search found none within the budget.
     time_ratio : float or None
-        ``steps_to_target / zermelo_steps`` (None: not reached, or unreachable).
+        ``steps_to_target / optimal_steps`` (None: not reached, or no optimum).
     other : Mapping
         Any column this version does not know (a folder written by another one), in its order.
     """
@@ -388,6 +403,8 @@ class RunRow(Mapping):
     flow_fraction: float | None = None
     reachable: bool | None = None
     zermelo_steps: float | None = None
+    zermelo_ratio: float | None = None
+    optimal_steps: int | None = None
     time_ratio: float | None = None
     other: Mapping[str, Any] = field(default_factory=dict)
 
@@ -413,8 +430,14 @@ class RunRow(Mapping):
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> RunRow:
         """A row from a record (any version's: old names renamed, missing columns None, unknown
-        ones kept in `other`)."""
-        d = _with_plane_height(upgrade_names(dict(d)))
+        ones kept in `other`; a missing or null ``group`` or ``agent`` reads as ``""``, ``x`` as
+        ``[]``, ``steps`` as the length of ``x``)."""
+        d = _with_zermelo_ratio(_with_plane_height(upgrade_names(dict(d))))
+        # The columns every reader sorts, sums or draws by, where a record lacks them (a hand
+        # edit, a foreign writer): no cell ("", a study without a grid), no agent, no steps.
+        x = d.get("x") if isinstance(d.get("x"), list) else []
+        unset = {"group": "", "agent": "", "x": x, "steps": len(x)}
+        d.update({k: v for k, v in unset.items() if d.get(k) is None})
         return cls(
             **{k: d.get(k) for k in _FIELDS}, other={k: v for k, v in d.items() if k not in _FIELDS}
         )
@@ -448,6 +471,14 @@ def _with_plane_height(d: dict[str, Any]) -> dict[str, Any]:
         return {**d, "plane_height": float(scene["height"])}
     except (KeyError, TypeError, ValueError):
         return d
+
+
+def _with_zermelo_ratio(d: dict[str, Any]) -> dict[str, Any]:
+    """``d`` with its ratio to Zermelo named ``zermelo_ratio``: before the swimmer's own optimum
+    (``optimal_steps``) was written, ``time_ratio`` was the ratio to Zermelo's time."""
+    if "optimal_steps" in d or "time_ratio" not in d or "zermelo_steps" not in d:
+        return d
+    return {**{k: v for k, v in d.items() if k != "time_ratio"}, "zermelo_ratio": d["time_ratio"]}
 
 
 _FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}

@@ -3,8 +3,12 @@ failed runs, the fields renamed since folders were first written."""
 
 from __future__ import annotations
 
+import functools
+import json
 from typing import Any
 from collections.abc import Mapping
+
+from jswim.errors import JswimError
 
 #: The study folder's durable record and its metadata.
 RUNS = "runs.jsonl"
@@ -47,18 +51,22 @@ def legacy_names(obj: Any) -> Any:
 
 
 #: The fields of a run record that readers compute with, by kind: a record where one of them has
-#: another type (a hand edit) is skipped with a warning ([`run_problem`][jswim.results.schema.run_problem]).
-_RUN_TEXT = ("run_id", "agent")  # run_id required
+#: another type (a hand edit, a foreign writer) is skipped with a warning naming the field
+#: ([`run_problem`][jswim.results.schema.run_problem]). Every reader reads rows through it, so a field
+#: listed here is one no reader needs to check again.
+_RUN_TEXT = ("run_id", "agent")  # names; run_id required (a missing agent reads as "": RunRow)
 _RUN_NUMBERS = (
     "final_x",
     "signed_final_x",
     "zeta",
     "cost_usd",
     "temperature",
+    "temperature_sent",
     "direction",
     "steps",
     "calls",
     "billed_calls",
+    "replayed_calls",
     "cache_hits",
     "prompt_tokens",
     "completion_tokens",
@@ -67,9 +75,11 @@ _RUN_NUMBERS = (
     "parse_retries",
     "http_retries",
     "failed_steps",
+    "below_x_min",
     "n_clears",
     "tokens_seen",
     "seed",
+    "sample",
     "period",
     "n_ht",
     "steps_to_learn",
@@ -83,19 +93,34 @@ _RUN_NUMBERS = (
     "mean_height",
     "speed",
     "per_cycle",
+    "plane_height",
+    "energy",
+    "energy_per_distance",
+    "efficiency",
+    "steps_to_target",
+    "path_length",
+    "path_ratio",
+    "flow_fraction",
+    "zermelo_steps",
+    "time_ratio",
 )
-_RUN_FLAGS = ("success", "learned")
+_RUN_FLAGS = ("success", "learned", "reached", "reachable", "summary", "shuffle", "share_identical")
 _RUN_STRINGS = (
     "swimmer",
-    "group",
     "status",
     "variant",
     "action_set",
+    "init",
+    "drop",
     "error",
     "constraint",
+    "order",
+    "pair_prompt",
     "scene",
     "medium",
     "fate",
+    "target",
+    "flow",
 )
 _RUN_SERIES = ("x", "y", "orientation", "progress")
 #: Per step, per swimmer: numbers (``xs``, ``heights``, ``tilts``) or flags (``contact``,
@@ -109,29 +134,39 @@ def _number(v: Any) -> bool:
 
 
 def run_problem(row: Mapping[str, Any]) -> str | None:
-    """What makes ``row`` no run record readers can use (a field of the wrong type), or ``None``."""
+    """What makes ``row`` no run record readers can use, or ``None``: no ``run_id`` (or a ``flow``
+    without its ``flow_fraction``), a field of the wrong type, series of different lengths, or a
+    ``scene``, ``target`` or ``flow`` that is not the JSON text of one
+    ([`json_field_problem`][jswim.results.schema.json_field_problem]). The answer names the field."""
     row = upgrade_names(dict(row))
+    if "run_id" not in row:
+        return "no 'run_id'"
     for k in _RUN_TEXT:
-        if k == "run_id" and "run_id" not in row:
-            return "no 'run_id'"
         if k in row and (not isinstance(row[k], str) or not row[k]):
-            return f"{k!r} is {row[k]!r}, not a name"
+            return f"{k!r} is {_shown(row[k])}, not a name"
     for k in _RUN_NUMBERS:
         if row.get(k) is not None and not _number(row[k]):
-            return f"{k!r} is {row[k]!r}, not a number"
+            return f"{k!r} is {_shown(row[k])}, not a number"
     for k in _RUN_FLAGS:
         if row.get(k) is not None and not isinstance(row[k], bool):
-            return f"{k!r} is {row[k]!r}, not true or false"
+            return f"{k!r} is {_shown(row[k])}, not true or false"
     for k in _RUN_STRINGS:
         if row.get(k) is not None and not isinstance(row[k], str):
-            return f"{k!r} is {row[k]!r}, not text"
+            return f"{k!r} is {_shown(row[k])}, not text"
+    if row.get("flow") and row.get("flow_fraction") is None:  # a flow's rows are by its speed
+        return "'flow' without its 'flow_fraction'"
+    if row.get("group") is not None and not isinstance(row["group"], str):
+        return f"'group' is {_shown(row['group'])}, not text"
     for k in _RUN_SERIES:
         v = row.get(k)
         if v is not None and not (isinstance(v, list) and all(e is None or _number(e) for e in v)):
             return f"{k!r} is not a list of numbers"
     acts = row.get("actions")
-    if acts is not None and not isinstance(acts, list):
-        return "'actions' is not a list"
+    if acts is not None and not (
+        isinstance(acts, list)
+        and all(isinstance(a, list) and len(a) == 2 and all(map(_number, a)) for a in acts)
+    ):
+        return "'actions' is not a list of [dof, roc] pairs of numbers"
     steps = len(row["x"]) if isinstance(row.get("x"), list) else None
     for k in ("y", "orientation", "progress"):
         v = row.get(k)
@@ -155,6 +190,65 @@ def run_problem(row: Mapping[str, Any]) -> str | None:
             return f"{k!r} is not a list per step of {'flags' if flags else 'numbers'}"
         if len({len(e) for e in v}) > 1:
             return f"{k!r} has steps with different numbers of swimmers"
+    for k in ("scene", "target", "flow"):
+        if row.get(k):  # "" or absent: none (the bulk fluid, no target, still fluid)
+            why = json_field_problem(k, row[k])
+            if why:
+                return why
+    return None
+
+
+def _shown(v: Any) -> str:
+    """``v`` as a message shows it: its repr, cut to 40 characters."""
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+_SCENE_NUMBERS = ("height", "tilt", "separation", "swimmers")
+
+
+@functools.lru_cache(maxsize=256)
+def json_field_problem(field: str, text: str) -> str | None:
+    """What makes ``text`` no value of a row's ``scene``, ``target`` or ``flow`` column, or ``None``.
+
+    Each is the canonical JSON of an object: a target and a flow are read by the parsers that
+    build them ([`jswim.env.targets.target_from_dict`][jswim.env.targets.target_from_dict],
+    [`jswim.env.flows.flow_from_dict`][jswim.env.flows.flow_from_dict]; imported only for a row
+    that has one, as they load JAX); a scene must hold the fields its pictures read as numbers
+    (``height``, ``tilt``, ``separation``, ``swimmers``; ``obstacles`` as (x, z, radius)
+    triples). Cached per text: a folder repeats a few values over many rows.
+    """
+    try:
+        data = json.loads(text)
+    except ValueError:
+        return f"{field!r} is {_shown(text)}, not the JSON text of a {field}"
+    if not isinstance(data, dict):
+        return f"{field!r} is {_shown(text)}, not the JSON text of a {field} (an object)"
+    if field == "scene":
+        for k in _SCENE_NUMBERS:
+            if data.get(k) is not None and not _number(data[k]):
+                return f"'scene' field {k!r} is {_shown(data[k])}, not a number"
+        obstacles = data.get("obstacles") or []
+        if not (
+            isinstance(obstacles, list)
+            and all(isinstance(o, list) and len(o) == 3 and all(map(_number, o)) for o in obstacles)
+        ):
+            return "'scene' field 'obstacles' is not a list of (x, z, radius) triples"
+        return None
+    if field == "target":
+        from jswim.env.targets import target_from_dict  # lazy: loads JAX
+
+        parse: Any = target_from_dict
+    else:
+        from jswim.env.flows import flow_from_dict  # lazy: loads JAX
+
+        parse = flow_from_dict
+    try:
+        parse(data)
+    except JswimError as exc:  # the parser's one line names the field inside
+        return f"{field!r} is no {field} this version reads ({exc})"
+    except Exception as exc:  # foreign data: any failure to parse it is "unreadable"
+        return f"{field!r} is no {field} this version reads ({type(exc).__name__})"
     return None
 
 

@@ -9,7 +9,7 @@ import os
 import re
 from pathlib import Path
 from typing import Any
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 
 from jswim._io.atomic import dumps, plain_json, write_json
 from jswim._io.folderlock import HOLDER, LOCK, FolderLock
@@ -109,8 +109,11 @@ class StudyStore:
     identity : mapping
         Everything that defines the study's runs (grid, seed, backend, model, prompt template).
         Stored in ``metadata.json`` and compared on resume.
-    extra : mapping, optional
-        More metadata that may change between sessions (versions, host); not compared.
+    extra : mapping or callable, optional
+        More metadata that may change between sessions (versions, host); not compared. A
+        callable is given the folder's metadata as it was before this session (``None`` for a
+        new folder) and returns the mapping: what a session records of the folder may depend on
+        what the folder already held (a resume never narrows its grid).
     """
 
     def __init__(
@@ -118,7 +121,9 @@ class StudyStore:
         folder: str | os.PathLike,
         study: str,
         identity: Mapping[str, Any],
-        extra: Mapping[str, Any] | None = None,
+        extra: Mapping[str, Any]
+        | Callable[[dict[str, Any] | None], Mapping[str, Any]]
+        | None = None,
         lock: bool = True,
     ) -> None:
         self.folder = Path(folder)
@@ -153,7 +158,7 @@ class StudyStore:
             self.close()
             raise
 
-    def _open(self, study: str, meta_path: Path, extra: Mapping[str, Any] | None) -> None:
+    def _open(self, study: str, meta_path: Path, extra: Any) -> None:
         for name in (
             "transcripts",
             "figures",
@@ -189,19 +194,22 @@ class StudyStore:
                     f"{meta_path}: 'identity' is {meta.get('identity')!r:.40}, not the study's "
                     "settings (an object); the folder is left as it is: use a new --out folder"
                 )
-            meta = clean_metadata(meta, meta_path)  # derived fields of the wrong type are rewritten
+            # The study and its settings as the file holds them (a hand edit of either, a field
+            # of the wrong type included, is a difference named in one line), then the derived
+            # fields, of which those of the wrong type are dropped with a warning and rewritten.
             if meta.get("study") != study:
                 raise ResultFolderError(
                     f"{self.folder} holds a '{meta.get('study')}' study, not '{study}'; "
                     "use a new --out folder"
                 )
-            old = upgrade_names(meta.get("identity", {}))
+            old = upgrade_names(meta["identity"])
             if old != self.identity:
                 diff = identity_differences(old, self.identity)
                 raise ResultFolderError(
                     f"{self.folder} holds a '{study}' study with different settings: {'; '.join(diff[:4])}"
                     f"{'; ...' if len(diff) > 4 else ''}. Use a new --out folder, or the folder's settings to resume"
                 )
+            meta = clean_metadata(meta, meta_path)
             self.meta = meta
             self.meta["identity"] = self.identity  # rewritten under today's names
             with writing(self.folder):
@@ -217,6 +225,8 @@ class StudyStore:
         self.status_before = self.meta.get("status") if meta_path.exists() else None
         #: Whether this session changed the study (a run recorded, a call journaled).
         self.changed = False
+        if callable(extra):  # what the folder held before decides what this session records
+            extra = extra(dict(self.meta) if meta_path.exists() else None)
         self.meta.update(dict(extra or {}))
         self.meta["status"] = "running"
         # The room to record how the session ends exists before "running" is written: a disk too

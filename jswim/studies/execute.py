@@ -30,7 +30,7 @@ from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
 from jswim.studies.plans import Plan
 from jswim.studies.options import StudyOptions
-from jswim.studies.session import StudySession, add_session, preflight, record_session
+from jswim.studies.session import StudySession, preflight, record_session, study_totals
 
 
 #: Statuses of an LLM run that are stored; one stopped by the cost cap or an interrupt is not, and
@@ -256,6 +256,11 @@ class _LLMSession:
     async def go(self, settings: ClientSettings, info: ServerInfo) -> None:
         """Every plan through one client, at most ``chunk`` runs at once."""
         s, backend = self.s, self.s.backend
+        # The session is written down before its first request: a kill -9 later still leaves it
+        # counted (its requests, its time to its last line). A folder an older jswim began keeps
+        # what its metadata said of the sessions before.
+        named = any(c.number for c in self.ledger.sessions)
+        self.ledger.begin_session(None if named else s.store.meta.get("llm_totals"))
         pacer = Pacer(backend.rpm, backend.tpm, margin=settings.max_concurrency)
         async with LLMClient(settings, pacer=pacer, budget=self.budget) as client:
             self.client = client
@@ -307,6 +312,7 @@ class _LLMSession:
     def settle(self) -> None:
         """Close the journal and ledger; this session's speed and what it sent, into the metadata."""
         self.journal.close()
+        self.ledger.end_session()
         self.ledger.close()
         if self.journal.n_calls > self.calls_before:
             self.s.store.changed = (
@@ -317,9 +323,7 @@ class _LLMSession:
             self.out.sent.update(r.describe())
         self.out.speed.update(self.speed())
         meta = self.s.store.meta
-        meta["llm_totals"] = add_session(
-            meta.get("llm_totals"), self.out.speed, self.journal.n_calls
-        )
+        meta["llm_totals"] = study_totals(self.ledger, self.journal.n_calls)
 
     def speed(self) -> dict[str, Any]:
         """This session's calls, wall time, rates, tokens, cost and the client's fault counts."""

@@ -20,25 +20,36 @@ from typing import Any
 from collections.abc import Sequence
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from jswim import env as jenv
 from jswim.env.flows import SWIM_SPEED, Flow, Uniform, flow_from_dict, flow_json, study_flow
 from jswim.env.navigation import NavSummary, energy_per_distance, summarise
+from jswim.env.episodes import rollout
 from jswim.env.registry import make
 from jswim.env.targets import (
+    FLOW_BUDGET_FACTOR,
     FixedTarget,
     MovingTarget,
     Target,
     Waypoints,
     default_budget,
+    flow_budget,
     target_from_dict,
 )
 from jswim.env.work import lighthill_efficiency
 from jswim.judging import lattice
+from jswim.judging.stats import median_interval, wilson_interval
 from jswim.results import as_run_rows, is_failed
 from jswim.results.row import RunRow
-from jswim.studies.options import CONTINUOUS_AGENT, CONTROLLER_AGENT, ZERMELO_AGENT
+from jswim.studies.options import (
+    CONTINUOUS_AGENT,
+    CONTROLLER_AGENT,
+    MPC_AGENT,
+    OPTIMAL_AGENT,
+    ZERMELO_AGENT,
+)
 from jswim.studies.plans import Cell, Plan
 from jswim.swimmers.models import make_model
 
@@ -56,12 +67,14 @@ __all__ = [
     "cells",
     "flow_columns",
     "flow_grid",
+    "nav_overview",
     "nav_ppo_config",
     "nav_qconfig",
     "nav_row",
     "nav_summary",
     "plan_flow",
     "target_json",
+    "target_kind",
     "targets",
     "with_budgets",
     "zermelo_path",
@@ -70,7 +83,15 @@ __all__ = [
 
 
 #: The agents of every navigation cell, in the rows' order.
-NAV_AGENTS = ("llm", "qlearning", CONTINUOUS_AGENT, CONTROLLER_AGENT, "random")
+NAV_AGENTS = (
+    "llm",
+    "qlearning",
+    CONTINUOUS_AGENT,
+    CONTROLLER_AGENT,
+    MPC_AGENT,
+    OPTIMAL_AGENT,
+    "random",
+)
 
 #: The default grid: targets 3 a away (about 16 square-gait cycles; outside the quarter loop's
 #: turning circle, radius 1.165 a, where the steering controller reaches every bearing), ahead,
@@ -158,6 +179,33 @@ def zermelo_path(target: str, flow: str) -> Any:
     return _zermelo(target_json(dataclasses.replace(spec, budget=None)), flow)
 
 
+def optimal_path(plan: Any) -> Any:
+    """The swimmer's own optimum ([`jswim.agents.optimal.solve`][jswim.agents.optimal.solve])
+    for a plan's (or row's) world: its target with the study's budget, flow, K lattice and start,
+    computed once per process per world."""
+    init = plan.init if isinstance(plan.init, (tuple, list)) else None
+    return _optimal(
+        plan.target,
+        plan.flow,
+        plan.roc_levels,
+        tuple(int(v) for v in init) if init is not None else None,
+    )
+
+
+@functools.lru_cache(maxsize=256)
+def _optimal(target: str, flow: str, roc_levels: int, init: tuple[int, ...] | None) -> Any:
+    from jswim.agents import optimal  # lazy: start-up (the search's JAX)
+
+    env, params = make(
+        "purcell",
+        init=init,
+        roc_levels=roc_levels,
+        target=target_from_dict(json.loads(target)),
+        flow=flow_from_dict(json.loads(flow)) if flow else None,
+    )
+    return optimal.solve(env, params, key=0)
+
+
 @functools.lru_cache(maxsize=256)
 def _zermelo(target: str, flow: str) -> Any:
     from jswim.agents.zermelo import zermelo  # lazy: start-up (the shooting method's JAX)
@@ -166,18 +214,15 @@ def _zermelo(target: str, flow: str) -> Any:
     return zermelo(flow_from_dict(json.loads(flow)) if flow else None, spec, SWIM_SPEED)
 
 
-#: In a flow a target's budget is at least this many times Zermelo's least time (the steering
-#: controller's still-fluid budget is measured without the flow).
-FLOW_BUDGET_FACTOR = 4
-
-
 def with_budgets(plans: Sequence[Plan]) -> list[Plan]:
     """``plans`` with every navigation run's steps filled in: ``episodes`` of its target's budget,
     as the world of the run measures it when it is made ([`default_budget`][jswim.env.targets.default_budget],
-    the steering controller's physics, measured once per swimmer and K); in a flow at least
-    `FLOW_BUDGET_FACTOR` times Zermelo's least time (a target Zermelo cannot reach, and a flow
-    of speed 0, keep the still-fluid budget: the former's rows say unreachable). Plans with
-    their steps set are returned as they are.
+    the steering controller's physics, measured once per swimmer and K); in a flow the worlds'
+    rule ([`jswim.env.targets.flow_budget`][jswim.env.targets.flow_budget]: at least
+    `FLOW_BUDGET_FACTOR` times a least time) with Zermelo's least time (a target Zermelo cannot
+    reach, and a flow of speed 0, keep the still-fluid budget: the former's rows say
+    unreachable). A world made in Python passes the straight crab course's time instead, never
+    below Zermelo's. Plans with their steps set are returned as they are.
 
     Raises
     ------
@@ -196,9 +241,7 @@ def with_budgets(plans: Sequence[Plan]) -> list[Plan]:
             still = default_budget(spec, make_model(p.swimmer), p.roc_levels)
             moving = p.flow and flow_from_dict(json.loads(p.flow)).speed > 0
             best = zermelo_path(p.target, p.flow).steps if moving else None
-            budgets[key] = (
-                still if best is None else max(still, math.ceil(FLOW_BUDGET_FACTOR * best))
-            )
+            budgets[key] = flow_budget(still, best)  # the worlds' rule, with Zermelo's time
         return budgets[key]
 
     def filled(p: Plan) -> Plan:
@@ -285,20 +328,28 @@ def nav_row(
 
 
 def flow_columns(plan: Plan, steps_to_target: float | None) -> dict[str, Any]:
-    """A navigation row's flow columns (`jswim.results.row.FLOW`; none in still fluid): the
-    flow, its speed fraction, whether Zermelo reaches the target, his least time and the run's
-    time over it."""
+    """A navigation row's yardstick columns (`jswim.results.row.FLOW`): the swimmer's own least
+    time to the target (`optimal_path`) and the run's time over it; in a flow also the flow, its
+    speed fraction, whether Zermelo's point reaches the target, his least time and the run's
+    time over his."""
+
+    def ratio(best: float | None) -> float | None:
+        if best is None or steps_to_target is None or best <= 0:
+            return None
+        return round(float(steps_to_target) / float(best), 6)
+
+    own = optimal_path(plan).steps
+    out: dict[str, Any] = {"optimal_steps": own, "time_ratio": ratio(own)}
     if not plan.flow:
-        return {}
+        return out
     best = zermelo_path(plan.target, plan.flow).steps
     return {
         "flow": plan.flow,
         "flow_fraction": plan.flow_fraction,
         "reachable": best is not None,
         "zermelo_steps": None if best is None else round(float(best), 6),
-        "time_ratio": None
-        if best is None or steps_to_target is None or best <= 0
-        else round(float(steps_to_target) / float(best), 6),
+        "zermelo_ratio": ratio(best),
+        **out,
     }
 
 
@@ -350,8 +401,11 @@ def zermelo_rows(plans: Sequence[Plan]) -> list[RunRow]:
 
 
 def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
-    """The study's table: per (agent, target group), runs, successes, the mean steps to the
-    target over the runs that reached it, the mean path ratio, energy and energy per distance."""
+    """The study's table: per (agent, target group), runs, successes (with their Wilson 95 %
+    interval), the mean steps to the target over the runs that reached it, the mean path ratio,
+    energy and energy per distance, the swimmer's own least time (``optimal_steps``) and the
+    median time ratio to it over the runs that reached the target (with a bootstrap 95 %
+    interval); in a flow, Zermelo's time and the mean ratio to it."""
     out: dict[tuple[str, str], list[RunRow]] = {}
     for r in as_run_rows(rows):
         if r.target is None or is_failed(r):
@@ -370,27 +424,88 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
         return (g[0].flow_fraction if g[0].flow_fraction is not None else -1.0, group, agent)
 
     for (agent, group), g in sorted(out.items(), key=order):
+        reached = sum(bool(r.reached) for r in g)
+        lo, hi = wilson_interval(reached, len(g))
+        ratio, ratio_lo, ratio_hi = median_interval([r.time_ratio for r in g if r.reached])
         table.append(
             {
                 "group": group,
                 "agent": agent,
                 "n": len(g),
-                "reached": sum(bool(r.reached) for r in g),
-                "success_rate": sum(bool(r.reached) for r in g) / len(g),
+                "reached": reached,
+                "success_rate": reached / len(g),
+                "success_ci": (lo, hi),
                 "steps_to_target": mean([r.steps_to_target for r in g]),
                 "path_ratio": mean([r.path_ratio for r in g]),
                 "energy": mean([r.energy for r in g]),
                 "energy_per_distance": mean([r.energy_per_distance for r in g]),
+                "optimal_steps": g[0].optimal_steps,
+                "time_ratio": None if math.isnan(ratio) else ratio,
+                "time_ratio_ci": None if math.isnan(ratio) else (ratio_lo, ratio_hi),
                 **(
                     {
                         "flow_fraction": g[0].flow_fraction,
                         "reachable": bool(g[0].reachable),
                         "zermelo_steps": g[0].zermelo_steps,
-                        "time_ratio": mean([r.time_ratio for r in g]),
+                        "zermelo_ratio": mean([r.zermelo_ratio for r in g]),
                     }
                     if g[0].flow
                     else {}
                 ),
+            }
+        )
+    return table
+
+
+def target_kind(group: str) -> str:
+    """A navigation group's target kind: ``fixed d=3 b=90``, ``path`` or ``moving`` (the group
+    without its flow)."""
+    return group.split(",")[0].strip()
+
+
+def nav_overview(rows: Sequence[Any]) -> list[dict[str, Any]]:
+    """The study's first table: per (agent, flow, flow speed, target kind), runs, successes
+    with their Wilson 95 % interval, the median time ratio to the swimmer's own optimum over the
+    runs that reached the target with its bootstrap 95 % interval, and the median energy per
+    distance closed. Zermelo's point is left out (a yardstick, not an agent).
+
+    Returns
+    -------
+    list of dict
+        Keys ``agent``, ``flow`` (kind, ``""`` in still fluid), ``flow_fraction`` (None in still
+        fluid), ``target``, ``n``, ``reached``, ``success_ci``, ``time_ratio``,
+        ``time_ratio_ci`` (None where no run reached), ``n_ratio`` (the runs behind it) and
+        ``energy_per_distance``; ordered by flow, speed, target, then agent (the study's order).
+    """
+    out: dict[tuple[str, str, float, str], list[RunRow]] = {}
+    for r in as_run_rows(rows):
+        if r.target is None or is_failed(r) or r.agent == ZERMELO_AGENT:
+            continue
+        kind = json.loads(r.flow).get("kind", "") if r.flow else ""
+        fraction = -1.0 if r.flow_fraction is None else float(r.flow_fraction)
+        out.setdefault((kind, fraction, target_kind(r.group), r.agent), []).append(r)
+    order = {a: i for i, a in enumerate(NAV_AGENTS)}
+    table = []
+    for (kind, fraction, target, agent), g in sorted(
+        out.items(), key=lambda kv: (*kv[0][:3], order.get(kv[0][3], len(order)), kv[0][3])
+    ):
+        reached = sum(bool(r.reached) for r in g)
+        ratios = [r.time_ratio for r in g if r.reached and r.time_ratio is not None]
+        ratio, lo, hi = median_interval(ratios)
+        per = [r.energy_per_distance for r in g if r.energy_per_distance is not None]
+        table.append(
+            {
+                "agent": agent,
+                "flow": kind,
+                "flow_fraction": None if fraction < 0 else fraction,
+                "target": target,
+                "n": len(g),
+                "reached": reached,
+                "success_ci": wilson_interval(reached, len(g)),
+                "time_ratio": None if math.isnan(ratio) else ratio,
+                "time_ratio_ci": None if math.isnan(ratio) else (lo, hi),
+                "n_ratio": len(ratios),
+                "energy_per_distance": float(np.median(per)) if per else None,
             }
         )
     return table
@@ -510,6 +625,11 @@ def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
         config = nav_qconfig(p0.steps, p0.action_set)
         run = qlearning.train(world_, params, keys, config, trace=True)
         trace, codes = run.trace, np.asarray(run.actions)
+    elif p0.agent in (OPTIMAL_AGENT, MPC_AGENT):
+        codes = np.stack(
+            [_planned(world_, params, p, keys[i], budget) for i, p in enumerate(plans)]
+        )
+        trace = rollout(world_, params, keys, jnp.asarray(codes))
     elif p0.agent == CONTINUOUS_AGENT:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
@@ -539,6 +659,20 @@ def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
             moves = _lattice_moves(dofs[sl], prev, lo, hi, k)
         rows.append(nav_row(plan, xy[:, 0], xy[:, 1], heading, moves, episodes[j]))
     return rows
+
+
+def _planned(env: Any, params: Any, plan: Plan, key: Any, budget: int) -> np.ndarray:
+    """The codes of an optimal or mpc run, ``(budget,)``: the optimum's sequence (then no moves:
+    the episode has ended) or the model-predictive agent's, replayed like every agent's."""
+    idle = env.roc_levels  # (DOF 1, ROC 0)
+    if plan.agent == MPC_AGENT:
+        from jswim.agents import mpc  # lazy: start-up (the search's JAX)
+
+        return mpc.run(env, params, key, budget)
+    best = optimal_path(plan).actions
+    out = np.full(budget, idle, np.int32)
+    out[: min(len(best), budget)] = best[:budget]
+    return out
 
 
 def _straight(spec: Target, steps: int) -> float:

@@ -35,10 +35,22 @@ CONTROLLER_AGENT = "controller"
 #: Zermelo's point steerer (jswim.agents.zermelo): the time-optimal path through a flow at the
 #: swimming speed, the navigation study's yardstick in a flow (its rows' time ratios).
 ZERMELO_AGENT = "zermelo"
+#: The swimmer's own optimum (jswim.agents.optimal): the least-time sequence of the world's own
+#: actions, the navigation study's yardstick (its rows' time ratios).
+OPTIMAL_AGENT = "optimal"
+#: The model-predictive agent (jswim.agents.mpc): the optimum re-planned from its own state.
+MPC_AGENT = "mpc"
 #: The agents of a paper study's cells that run next to the LLM.
 WITH_BASELINES = ("llm", "qlearning", "random")
 #: Every agent a study may run (the default of `StudyOptions.agents`).
-ALL_AGENTS = AGENTS + (CONTINUOUS_AGENT, STROKE_AGENT, CONTROLLER_AGENT, ZERMELO_AGENT)
+ALL_AGENTS = AGENTS + (
+    CONTINUOUS_AGENT,
+    STROKE_AGENT,
+    CONTROLLER_AGENT,
+    ZERMELO_AGENT,
+    OPTIMAL_AGENT,
+    MPC_AGENT,
+)
 #: The navigation study's flow speeds (``--flows``), fractions of the swimming speed, and the
 #: largest it takes.
 DEFAULT_FLOWS = (0.0, 0.5, 0.9)

@@ -185,21 +185,31 @@ def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
     from jswim.studies.navigate import nav_summary  # lazy: the navigation study loads JAX
 
     summary = nav_summary(rows)
-    flow = any("time_ratio" in g for g in summary)
+    flow = any("zermelo_steps" in g for g in summary)
     cols = [Column("target", False), Column("agent", False)] + [
         Column(h)
-        for h in ("reached", "steps", "path ratio", "energy", "energy/dist")
-        + (("Zermelo", "time ratio") if flow else ())
+        for h in (
+            "reached [95% CI]",
+            "steps",
+            "path ratio",
+            "energy",
+            "energy/dist",
+            "optimal",
+            "time ratio [95% CI]",
+        )
+        + (("Zermelo", "Zermelo ratio") if flow else ())
     ]
     cells = [
         [
             g["group"],
             g["agent"],
-            f"{g['reached']}/{g['n']}",
+            f"{g['reached']}/{g['n']} {_interval(g['success_ci'], '.2f')}",
             _fmt(g["steps_to_target"], ".0f"),
             _fmt(g["path_ratio"], ".2f"),
             _fmt(g["energy"], ".1f"),
             _fmt(g["energy_per_distance"], ".1f"),
+            _fmt(g["optimal_steps"], ".0f"),
+            _ratio_cell(g),
         ]
         + (_flow_cells(g) if flow else [])
         for g in summary
@@ -207,28 +217,90 @@ def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
     note = (
         "reached: runs whose centroid came within the target's radius of it (a path: of its last "
         "waypoint; a moving target: of where it is then) within the target's step budget, the "
-        "navigation success rule; steps and path ratio (path length over the straight distance): "
-        "means over the runs that reached it; energy: the swimmer's dissipation over the run "
-        "(xi_par a^3/tau); energy/dist: energy per a closed. controller: the steering controller "
-        "(the reference stroke); ppo: PPO with a categorical policy over the K-level action codes."
+        "navigation success rule, with its Wilson 95% interval; steps and path ratio (path length "
+        "over the straight distance): means over the runs that reached it; energy: the swimmer's "
+        "dissipation over the run (xi_par a^3/tau); energy/dist: energy per a closed. optimal: "
+        "the swimmer's own least time (steps; the least-time sequence of the world's own actions, "
+        "jswim.agents.optimal; its row replays it); time ratio: steps over it, median over the "
+        "runs that reached the target with a bootstrap 95% interval (n < 2: the value alone; 1 "
+        "is the optimum). controller: the steering controller (the reference stroke); mpc: the "
+        "optimum re-planned from the swimmer's own state; ppo: PPO with a categorical policy over "
+        "the K-level action codes."
     )
     if flow:
         note += (
             " In a flow (the group's speed, a fraction of the swimming speed v = 0.0478 a per "
-            "step): Zermelo: the least time (steps) of a point steering at speed v through the "
-            "flow (zermelo: its path); time ratio: steps over it, mean over the runs that reached "
-            "the target; 'unreachable': no heading reaches it, for any agent."
+            "step): Zermelo: the least time (steps) of a point with no turning limit steering at "
+            "speed v through the flow taken at its centre (zermelo: its path); it is no bound on "
+            "the swimmer (docs/zermelo.md); Zermelo ratio: steps over it, mean over the runs that "
+            "reached the target; 'unreachable': no heading reaches it, for any agent."
         )
     return cols, cells, note
 
 
+def nav_overview_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
+    """Columns, rows and note of a navigation study's first table, agent x flow x target kind
+    (`jswim.studies.navigate.nav_overview`): success with its interval, the median time ratio
+    to the swimmer's own optimum with its interval, energy per distance; the console,
+    ``jswim show`` and the report page print it first, each from here."""
+    from jswim.studies.navigate import nav_overview  # lazy: the navigation study loads JAX
+
+    table = nav_overview(rows)
+    cols = [Column("flow", False), Column("target", False), Column("agent", False)] + [
+        Column(h) for h in ("n", "success [95% CI]", "time ratio [95% CI]", "energy/dist")
+    ]
+    cells = []
+    for g in table:
+        flow = "still" if not g["flow"] else f"{g['flow']} {g['flow_fraction']:g}v"
+        ratio = "-"
+        if g["time_ratio"] is not None:
+            ci = _interval(g["time_ratio_ci"], ".2f") if g["n_ratio"] >= 2 else ""
+            ratio = f"{_fmt(g['time_ratio'], '.2f')} {ci}".strip()
+        cells.append(
+            [
+                flow,
+                g["target"],
+                g["agent"],
+                str(g["n"]),
+                f"{g['reached'] / g['n']:.2f} {_interval(g['success_ci'], '.2f')}",
+                ratio,
+                _fmt(g["energy_per_distance"], ".1f"),
+            ]
+        )
+    note = (
+        "The result at a glance: success (the share of runs that reached the target within its "
+        "budget, Wilson 95% interval); time ratio: steps to the target over the swimmer's own "
+        "least time (the optimal agent's: the least-time sequence of the world's own actions), "
+        "median over the runs that reached it with a bootstrap 95% interval (one run: the value "
+        "alone; 1 is the optimum); energy/dist: median energy (xi_par a^3/tau) per a closed. n: "
+        "runs of the cell (learners: one seed each; deterministic agents: one run per start)."
+    )
+    return cols, cells, note
+
+
+def _interval(ci: Any, spec: str) -> str:
+    """``[lo-hi]`` of an interval (empty where there is none)."""
+    if ci is None or any(v is None or not math.isfinite(float(v)) for v in ci):
+        return ""
+    return f"[{format(float(ci[0]), spec)}-{format(float(ci[1]), spec)}]"
+
+
+def _ratio_cell(g: dict[str, Any]) -> str:
+    """The median time ratio to the optimum with its interval (only where n >= 2)."""
+    if g["time_ratio"] is None:
+        return "-"
+    reached = g["reached"]
+    ci = _interval(g["time_ratio_ci"], ".2f") if reached >= 2 else ""
+    return f"{_fmt(g['time_ratio'], '.2f')} {ci}".strip()
+
+
 def _flow_cells(g: dict[str, Any]) -> list[str]:
-    """A navigation summary row's Zermelo and time-ratio cells ("-" in still fluid)."""
-    if "time_ratio" not in g:
+    """A navigation summary row's Zermelo cells ("-" in still fluid)."""
+    if "zermelo_steps" not in g:
         return ["-", "-"]
     if not g["reachable"]:
         return ["unreachable", "unreachable"]
-    return [_fmt(g["zermelo_steps"], ".1f"), _fmt(g["time_ratio"], ".2f")]
+    return [_fmt(g["zermelo_steps"], ".1f"), _fmt(g["zermelo_ratio"], ".2f")]
 
 
 def is_navigation(rows: Sequence[Any]) -> bool:
@@ -373,9 +445,8 @@ def unpriced_reason(meta: Mapping[str, Any], cost_usd: float | None) -> str | No
     backend = (meta.get("identity") or {}).get("backend") or {}
     if backend.get("kind") == "embedded":
         return EMBEDDED_UNPRICED
-    if (
-        backend.get("model") == "reference-rule"
-    ):  # jswim.llm.reference.MODEL (not imported: no httpx here)
+    if backend.get("model") == "reference-rule" and not cost_usd:
+        # jswim.llm.reference.MODEL (not imported: no httpx here); priced only by --prices
         return REFERENCE_UNPRICED
     why = (meta.get("llm_server") or {}).get("unpriced")
     if why:
@@ -384,6 +455,15 @@ def unpriced_reason(meta: Mapping[str, Any], cost_usd: float | None) -> str | No
     if not cost_usd and any(h in server for h in ("//127.", "//localhost", "//[::1]", "//0.0.0.0")):
         return LOCAL_UNPRICED
     return None
+
+
+def _llm_totals(s: StudyFolder) -> Mapping[str, Any]:
+    """The study's LLM totals, recomputed from its ledger (`jswim.llm.ledger.folder_totals`:
+    every session, a killed one included); ``metadata.json``'s report where there is no ledger."""
+    from jswim.llm.ledger import folder_totals  # lazy: only show reads the ledger
+
+    recorded = s.meta.get("llm_totals")
+    return folder_totals(s.folder, recorded) or recorded or {}
 
 
 def show_text(folder: str | Path, width: int | None = None) -> str:
@@ -412,11 +492,17 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
             f"LLM usage: {u['calls']:,} calls, {u['prompt_tokens']:,} prompt + {u['completion_tokens']:,} "
             f"completion tokens, cost {cost_text(u['cost_usd'], unpriced_reason(s.meta, u['cost_usd']), 'estimate from the price table')}"
         )
-    totals = s.meta.get("llm_totals") or {}
+    totals = _llm_totals(s)
     if totals.get("sessions"):  # the study's own numbers, over all its sessions (one source each)
+        cut = totals.get("not_ended") or 0
         lines.append(
-            f"LLM wall time: {totals.get('wall_s', 0):.1f} s over {totals['sessions']} session(s) for "
-            f"{totals.get('answered_calls', 0):,} answered calls ({totals.get('calls_per_s', 0):.2f} calls/s)"
+            f"LLM wall time: {totals.get('wall_s', 0):.1f} s over {totals['sessions']} session(s)"
+            + (
+                f" ({cut:.0f} of them not ended: killed, or running now; timed to their last request)"
+                if cut
+                else ""
+            )
+            + f" for {totals.get('answered_calls', 0):,} answered calls ({totals.get('calls_per_s', 0):.2f} calls/s)"
         )
         lines.append(f"HTTP requests: {requests_text(totals)}")
     else:  # folders written before the study's totals were kept: the last session's
@@ -427,7 +513,9 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
                 f"({speed.get('calls_per_s', 0):.2f} calls/s)"
             )
     lines.append("")
-    if s.summary and is_navigation(s.rows):  # targets: the navigation table, not the swim one
+    if s.summary and is_navigation(s.rows):  # targets: the navigation tables, not the swim one
+        cols, rows, note = nav_overview_table(s.rows)
+        lines += [plain_table(cols, rows, title="agents x flows", width=width), note, ""]
         cols, rows, note = nav_table(s.rows)
         lines += [plain_table(cols, rows, title="navigation", width=width), note]
     elif s.summary:
@@ -539,13 +627,64 @@ def _nav_compare(
     return list(studies), cols[:2] + [Column("study", False)] + cols[2:], rows, len(every - common)
 
 
+def setting_differences(studies: Sequence[StudyFolder]) -> list[str]:
+    """Every setting whose value differs between ``studies`` (their identities, the success
+    criterion's horizon), each with every study's value: ``steps: [1] 12, [2] 20``. A setting
+    one study does not record reads ``not set``."""
+    flats = []
+    for st in studies:
+        flat = _flatten(st.meta.get("identity") or {})
+        if "horizon" in st.meta:
+            flat["horizon"] = st.meta["horizon"]
+        flats.append(flat)
+    out = []
+    for key in sorted(set().union(*flats)):
+        values = [f.get(key, _UNSET) for f in flats]
+        if all(v == values[0] for v in values[1:]):
+            continue
+        name = key.removeprefix("options.")
+        out.append(
+            f"{name}: " + ", ".join(f"[{i + 1}] {_setting_value(v)}" for i, v in enumerate(values))
+        )
+    return out
+
+
+_UNSET = object()
+
+
+def _flatten(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested settings by their dotted path (``backend.model``)."""
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        if isinstance(v, Mapping):
+            out.update(_flatten(v, f"{prefix}{k}."))
+        else:
+            out[f"{prefix}{k}"] = v
+    return out
+
+
+def _setting_value(v: Any) -> str:
+    if v is _UNSET or v is None:
+        return "not set"
+    if isinstance(v, (list, tuple)):
+        return ",".join(map(str, v)) or "none"
+    return str(v)
+
+
 def compare_text(folders: Sequence[str | Path], width: int | None = None) -> str:
-    """What ``jswim compare FOLDER...`` prints."""
+    """What ``jswim compare FOLDER...`` prints: each study, every setting that differs between
+    them (their rows are lined up by setting regardless: the note says what else differs), the
+    table and what was left out."""
     studies, cols, rows, left_out = compare_table(folders)
     lines = [
         f"[{i + 1}] {s.label()}: study {s.study}, {s.status_text()}, {len(s.rows)} runs"
         for i, s in enumerate(studies)
     ]
+    differ = setting_differences(studies)
+    if differ:
+        lines.append(
+            "settings that differ (the rows below are lined up regardless): " + "; ".join(differ)
+        )
     lines.append("")
     if rows:
         lines.append(plain_table(cols, rows, width=width))

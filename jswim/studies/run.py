@@ -41,7 +41,6 @@ from jswim.agents import fidelity
 from jswim.agents.llm import RunResult, run_batch_async
 from jswim.agents.variants import VARIANTS
 from jswim.errors import ConfigError, JswimError, JswimWarning, LocalModelError
-from jswim.judging.gait import Criterion
 from jswim.llm.backend import Backend
 from jswim.llm.credentials import scrub
 from jswim._io.permissions import private_files
@@ -77,6 +76,7 @@ from jswim.studies.specs import SPECS, build
 from jswim.studies.navigate import with_budgets
 from jswim.studies.plans import Plan
 from jswim.studies import prompt_files
+from jswim.studies.success import success_rule
 
 from jswim.studies.execute import LLMOutcome, llm_configs, run_baselines, run_llm, run_spec
 from jswim.studies.session import (
@@ -285,11 +285,13 @@ def run_study(
     prompts = prompt_files.check(
         folder, options
     )  # an edited prompt file never resumes into old runs
+    # What the folder records is what it holds: this session's grid and every earlier one.
+    record = FolderRecord(study, options, backend, plans, prompts)
     store = StudyStore(
         folder,
         study,
         ident,
-        extra=_folder_metadata(study, options, backend, plans, prompts),
+        extra=record,
     )
     try:
         for note in store.repairs:
@@ -303,7 +305,17 @@ def run_study(
                 write_json(tpl_path, dataclasses.asdict(template or PromptTemplate()))
         with console.study_progress(progress) as tick:
             return _run_in(
-                store, study, plans, options, backend, folder, template, tick, t0, max_cost
+                store,
+                study,
+                plans,
+                options,
+                backend,
+                folder,
+                template,
+                tick,
+                t0,
+                max_cost,
+                held=record.plans,
             )
     except KeyboardInterrupt:
         _record_status(store, "interrupted")  # finished runs are kept; the same command resumes
@@ -330,6 +342,119 @@ def _range_notes(plans: Sequence[Plan]) -> list[str]:
     return list(notes)
 
 
+class FolderRecord:
+    """What a session records of its folder in ``metadata.json`` (``StudyStore(extra=...)``):
+    `_folder_metadata` of every run the folder holds or plans, never only this session's grid.
+
+    A grid-size option (`GRID_SIZE`: ``--flows``, ``--distances``, ``--zetas``, ``--runs``, ...)
+    may be smaller on a resume than in the folder: the session runs what it names, and the
+    record keeps the union. ``grids`` lists each distinct grid a session ran; ``grid`` holds,
+    per option, the union of their values (a list's values in order, sorted where each list
+    was; the largest count); ``n_planned``, ``group_order`` and the rest are those of the runs
+    of every grid (by run id: no grid crossed with another).
+
+    Attributes
+    ----------
+    plans : list of Plan
+        The runs of every grid the folder records, this session's first as given (set when
+        the store calls it).
+    """
+
+    def __init__(
+        self,
+        study: str,
+        options: StudyOptions,
+        backend: Backend | None,
+        plans: Sequence[Plan],
+        prompts: dict[str, Any],
+    ) -> None:
+        self.study, self.options, self.backend, self.prompts = study, options, backend, prompts
+        self.plans: list[Plan] = list(plans)
+
+    def __call__(self, before: dict[str, Any] | None) -> dict[str, Any]:
+        now = _plain({k: getattr(self.options, k) for k in GRID_SIZE})
+        grids = [g for g in _grids(before) if g != now] + [now]
+        ids = {p.run_id for p in self.plans}
+        kept = []
+        for g in grids[:-1]:
+            built = _grid_plans(self.study, self.options, g)
+            if built is None:  # a hand edit: it names no run, and is not carried on
+                continue
+            kept.append(g)
+            for p in built:
+                if p.run_id not in ids:
+                    ids.add(p.run_id)
+                    self.plans.append(p)
+        grids = kept + [now]
+        meta = _folder_metadata(self.study, self.options, self.backend, self.plans, self.prompts)
+        meta["grid"] = _union(grids, self.study)
+        meta["grids"] = grids
+        return meta
+
+
+def _plain(value: Any) -> Any:
+    """``value`` as JSON holds it (tuples as lists)."""
+    return json.loads(json.dumps(value))
+
+
+def _grids(before: dict[str, Any] | None) -> list[dict[str, Any]]:
+    """The grids a folder's metadata records: ``grids``, or the one ``grid`` of a folder an
+    older jswim wrote (none for a new folder)."""
+    if not before:
+        return []
+    grids = before.get("grids")
+    if isinstance(grids, list) and grids and all(isinstance(g, dict) for g in grids):
+        return [_plain(g) for g in grids]
+    return [_plain(before["grid"])] if isinstance(before.get("grid"), dict) else []
+
+
+def _grid_plans(study: str, options: StudyOptions, grid: dict[str, Any]) -> list[Plan] | None:
+    """The runs ``options`` name with an earlier session's ``grid`` (its values as lists);
+    ``None`` where the recorded grid is no grid these options take (a hand edit)."""
+    given = {k: tuple(v) if isinstance(v, list) else v for k, v in grid.items() if k in GRID_SIZE}
+    try:
+        return build(study, dataclasses.replace(options, **given))
+    except (ConfigError, TypeError, ValueError):
+        return None
+
+
+def _union(grids: Sequence[dict[str, Any]], study: str) -> dict[str, Any]:
+    """Per grid option, what the folder holds over ``grids``: the values of its lists in order
+    of first appearance (sorted where every list was), the largest count (``None``, the study's
+    own, read as its number where a count is also given)."""
+    spec = SPECS.get(study)
+    own = {"runs": spec.runs, "q_runs": spec.q_runs} if spec is not None else {}
+    out: dict[str, Any] = {}
+    for k in dict.fromkeys(k for g in grids for k in g):
+        values = [g.get(k) for g in grids if k in g]
+        lists = [v for v in values if isinstance(v, list)]
+        counts = [v for v in values if isinstance(v, int) and not isinstance(v, bool)]
+        if lists:
+            merged = list(dict.fromkeys(_key(x) for v in lists for x in v))
+            items = {_key(x): x for v in reversed(lists) for x in v}
+            union = [items[x] for x in merged]
+            if all(v == sorted(v, key=_order) for v in lists):
+                union.sort(key=_order)
+            out[k] = union
+        elif counts:
+            out[k] = max(counts + [own[k] for v in values if v is None and k in own])
+        else:
+            out[k] = values[-1]
+    return out
+
+
+def _key(x: Any) -> str:
+    """A grid value's identity in a union (``0`` and ``0.0`` are one flow speed)."""
+    return repr(float(x)) if isinstance(x, (int, float)) and not isinstance(x, bool) else repr(x)
+
+
+def _order(x: Any) -> tuple:
+    """Numbers by value, before any text (a sort that never compares a number with a text)."""
+    if isinstance(x, (int, float)) and not isinstance(x, bool):
+        return (0, float(x), "")
+    return (1, 0.0, str(x))
+
+
 def _folder_metadata(
     study: str,
     options: StudyOptions,
@@ -347,9 +472,8 @@ def _folder_metadata(
         # The template itself is in prompt_template.json, written once (below), not in every
         # rewrite of metadata.json at each status change.
         "prompt_template_file": PROMPT_FILE,
-        "success_criterion": Criterion(horizon=options.horizon).describe(
-            max((p.steps for p in plans), default=None)
-        ),
+        # The rule this study's runs are judged by (a navigation run: its target reached).
+        "success_criterion": success_rule(study, plans, options.horizon, options.steps),
         "horizon": options.horizon,
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS)
         if study == "competence"
@@ -446,6 +570,7 @@ def _run_in(
     progress: ProgressFn | None,
     t0: float,
     max_cost: float | None = None,
+    held: Sequence[Plan] = (),
 ) -> StudyResult:
     done = store.done_ids()
     todo = [p for p in plans if p.run_id not in done]
@@ -477,31 +602,44 @@ def _run_in(
         session.total,
     )
 
-    # The study is the runs its grid names now (a folder may hold more, from a larger --runs).
+    # The study is the runs its grid names now (a folder may hold more, from a larger --runs);
+    # the folder's record sums up every run it holds of the grids it records (FolderRecord).
     names = {p.run_id: i for i, p in enumerate(plans)}
-    rows = sorted(
-        (r for r in read_runs(folder) if r["run_id"] in names), key=lambda r: names[r["run_id"]]
-    )
+    stored = read_runs(folder)
+    rows = sorted((r for r in stored if r["run_id"] in names), key=lambda r: names[r["run_id"]])
     typed = as_run_rows(rows)  # StudyResult.rows stay the dicts of read_runs (users index them)
     summary = summarize(typed)
-    scene_table = {**_scene_table(typed), **_nav_table(typed)}
+    everything = {p.run_id: i for i, p in enumerate([*plans, *held])}
+    if len(everything) > len(names):
+        kept = sorted(
+            (r for r in stored if r["run_id"] in everything),
+            key=lambda r: everything[r["run_id"]],
+        )
+        kept_typed = as_run_rows(kept)
+        folder_summary = summarize(kept_typed)
+    else:
+        kept_typed, folder_summary = typed, summary
+    scene_table = {**_scene_table(kept_typed), **_nav_table(kept_typed)}
     # LLM speed of the session that ran LLM runs (a resume with none to run keeps the earlier one).
     session_speed = dict(speed)
     speed = speed or dict((store.meta.get("summary") or {}).get("llm_speed") or {})
     llm = [r for r in typed if r.agent == "llm"]
-    constraint = sorted({r.constraint for r in llm if r.constraint})
+    held_llm = [r for r in kept_typed if r.agent == "llm"]
+    constraint = sorted({r.constraint for r in held_llm if r.constraint})
     failed = [{"run_id": r.run_id, "error": r.error} for r in typed if is_failed(r)]
+    held_failed = [{"run_id": r.run_id, "error": r.error} for r in kept_typed if is_failed(r)]
     replies, cut_thinking = _reply_tallies(llm)
+    held_replies = replies if kept_typed is typed else _reply_tallies(held_llm)[0]
     # What a reasoning model was sent (this session's, else the one that ran LLM runs).
     sent = sent or dict((store.meta.get("summary") or {}).get("reasoning") or {})
-    status = "stopped at the cost cap" if capped else "incomplete" if failed else "complete"
+    status = "stopped at the cost cap" if capped else "incomplete" if held_failed else "complete"
     store.finalize(
         status,
         {
-            "groups": summary,
+            "groups": folder_summary,
             **scene_table,
-            "failed_runs": failed,
-            **replies,
+            "failed_runs": held_failed,
+            **held_replies,
             **({"llm_speed": speed} if speed else {}),
             **({"reasoning": sent} if sent else {}),
             **({"constrained_decoding": constraint} if constraint else {}),

@@ -14,6 +14,7 @@ from jswim._io.callsite import warn_user
 from jswim.errors import ConfigError, JswimWarning
 from jswim.llm.backend import Backend
 from jswim.llm.client import LLMClient
+from jswim.llm.ledger import RequestLedger
 from jswim.llm.probe import ServerInfo
 from jswim.llm.sampling import describe as describe_sampling
 from jswim.llm.urls import is_local_host
@@ -175,38 +176,20 @@ def record_session(
     store.set_status(store.meta.get("status", "running"), llm_server=record)
 
 
-def add_session(
-    totals: dict[str, Any] | None, speed: dict[str, Any], answered_calls: int
-) -> dict[str, Any]:
-    """The study's LLM totals over all its sessions, with one more session's ``speed``.
+def study_totals(ledger: RequestLedger, answered_calls: int) -> dict[str, Any]:
+    """The study's LLM totals over all its sessions, recomputed from its ledger (``llm_totals``).
 
-    ``answered_calls`` is the call journal's count (every answered call of the study, all
-    sessions, finished runs or not), so calls per second divide the study's calls by the study's
-    LLM wall time, never one session's by another's. ``requests`` are HTTP requests sent (what
-    the server counts: first attempts and retries), ``faults`` transient failures by kind,
-    ``unanswered`` requests sent whole that got no answer (the server may have billed them; at most
-    ``unanswered_usd``).
+    Every session the ledger names is counted, one killed without a word included (kill -9: its
+    requests and its time to its last line; ``not_ended`` says how many). ``answered_calls`` is
+    the call journal's count (every answered call of the study, all sessions, finished runs or
+    not), so calls per second divide the study's calls by the study's LLM wall time.
+    ``requests`` are HTTP requests sent (what the server counts: first attempts and retries),
+    ``faults`` transient failures by kind, ``unanswered`` requests sent with no answer in the
+    ledger (the server may have billed them; at most ``unanswered_usd``): a kill's requests in
+    flight included. [`jswim.llm.ledger.RequestLedger.totals`][jswim.llm.ledger.RequestLedger.totals]
+    counts them; ``metadata.json`` holds the result as a report, never as the ledger.
     """
-    # The totals are a report (the ledger is requests.jsonl): a value of the wrong type, edited
-    # or damaged, restarts from 0 instead of stopping the study.
-    t = {k: v for k, v in (totals if isinstance(totals, dict) else {}).items() if _number(v)}
-    t["sessions"] = int(t.get("sessions", 0)) + 1
-    for k in (
-        "wall_s",
-        "requests",
-        "retries",
-        "billed_calls",
-        "replayed_calls",
-        "tokens",
-        "unanswered",
-        "unanswered_usd",
-    ):
-        t[k] = (t.get(k) or 0) + (speed.get(k) or 0)
-    old = (totals or {}).get("faults") if isinstance(totals, dict) else None
-    faults = {k: n for k, n in (old if isinstance(old, dict) else {}).items() if _number(n)}
-    for k, n in (speed.get("faults") or {}).items():
-        faults[k] = faults.get(k, 0) + n
-    t["faults"] = dict(sorted(faults.items()))
+    t = ledger.totals()
     t["answered_calls"] = answered_calls
     t["calls_per_s"] = answered_calls / t["wall_s"] if t["wall_s"] > 0 else 0.0
     return t

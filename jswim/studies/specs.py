@@ -32,6 +32,8 @@ from jswim.studies.options import (
     DEFAULT_ROC_LEVELS,
     CONTINUOUS_AGENT,
     CONTROLLER_AGENT,
+    MPC_AGENT,
+    OPTIMAL_AGENT,
     ZERMELO_AGENT,
     SCENE_GRIDS,
     STROKE_AGENT,
@@ -236,12 +238,15 @@ SPECS["school"] = StudySpec(
 
 # Navigation (an extension): targets at several distances and bearings, a path and a
 # moving target; each cell's runs have the target's budget (jswim.studies.navigate).
+#: Seeds of the navigation study's learners and random policy per cell (``--q-runs``): 16,
+#: trained together (vmapped), so that a cell's success and time ratio carry an interval.
+NAV_SEEDS = 16
 SPECS["navigate"] = StudySpec(
     navigate.cells,
     runs=1,
     init="paper",
     swimmers=("purcell",),
-    q_runs=1,
+    q_runs=NAV_SEEDS,
     ignores=("zetas", "n_hts", "roc_levels_grid", "init", "directions"),
     steps_text=(
         "each target's step budget; it is the length of an LLM run and of each training episode "
@@ -348,6 +353,8 @@ def build(study: str, o: StudyOptions) -> list[Plan]:
     runs[STROKE_AGENT] = runs["qlearning"] if o.zeta > 0 else min(1, runs["qlearning"])
     runs[CONTROLLER_AGENT] = runs[STROKE_AGENT]  # the steering controller is deterministic too
     runs[ZERMELO_AGENT] = min(1, runs["qlearning"])  # an optimal path: one says it all
+    runs[OPTIMAL_AGENT] = min(1, runs["qlearning"])  # the swimmer's optimum: one sequence
+    runs[MPC_AGENT] = runs[STROKE_AGENT]  # re-plans from its state: one run unless noisy
     plans: list[Plan] = []
     for sw in o.swimmers or spec.swimmers:
         for d in o.directions or spec.directions:

@@ -152,6 +152,11 @@ class SteeringPlan(NamedTuple):
     radius: float = 0.0  # radius of the turning loops' circle (a); 0: no inside rule
 
 
+#: Steps ahead the controller predicts the flow's turn of its heading (the feed-forward of
+#: `choose_cycle`): the half gait it runs when swimming straight.
+FEED_STEPS = 2.0
+
+
 def wrap(angle: Array) -> Array:
     """An angle in ``(-pi, pi]``."""
     return jnp.pi - jnp.mod(jnp.pi - angle, 2 * jnp.pi)
@@ -163,6 +168,7 @@ def choose_cycle(
     bearing: Array,
     distance: Array | float = jnp.inf,
     reach: Array | float = 0.0,
+    rotation: Array | float = 0.0,
 ) -> Array:
     """Which cycle to run next from ``hub``, given the target's bearing in the body frame
     (and its distance).
@@ -177,23 +183,38 @@ def choose_cycle(
     where it is.
 
     A target ahead (``cos b > 0``) that swimming straight would pass within ``reach`` of
-    (``distance |sin b| < reach``) is swum to straight. Otherwise a target inside the circle the turn would follow
+    (``distance |sin b| < reach``) is swum to straight. Otherwise a target inside the circle
+    the turn would follow
     (radius ``plan.radius``: ``distance < 2 radius |sin b|``, ``b`` from the forward heading)
     cannot be reached by turning, which would circle round it: the swimmer swims forward, which
     moves the target back and out of the circle, and turns after. (Targets closer than about
     one turning diameter to the side can still trap it between the two rules:
     docs/navigation.md.)
 
+    In a background flow that turns the body by ``rotation`` (rad per step, counterclockwise;
+    ``0`` in still fluid, where every choice is as without it) the bearing is predicted
+    `FEED_STEPS` steps ahead, ``b - FEED_STEPS rotation`` (a feed-forward: the flow's turn is
+    cancelled before it shows), and a turn the flow beats (``turn + 4 rotation <= 0`` for a left
+    turn, ``turn - 4 rotation <= 0`` for a right one) is made the other way round, with the
+    flow. docs/navigation.md gives where the flow's rotation beats the turning loops.
+
     Returns
     -------
     int32 Array, shape ()
     """
     hub = jnp.asarray(hub, jnp.int32)
-    b = wrap(jnp.asarray(bearing) - jnp.asarray(plan.heading)[hub])
+    omega = jnp.asarray(rotation)
+    # feed-forward: the flow turns the body by omega per step, so the bearing a cycle from now
+    # is lower by omega times its steps (exactly b in still fluid, omega = 0)
+    b = wrap(jnp.asarray(bearing) - jnp.asarray(plan.heading)[hub] - FEED_STEPS * omega)
     backward = jnp.asarray(plan.reverse) & (jnp.abs(b) > jnp.pi / 2)
     b = jnp.where(backward, wrap(b - jnp.pi), b)
     half = jnp.where(backward, jnp.asarray(BACKWARD_HALF)[hub], jnp.asarray(FORWARD_HALF)[hub])
-    left = b > 0
+    # the turning loops' rotation per cycle with the flow's added: left plan.turn + 4 omega,
+    # right plan.turn - 4 omega (magnitudes); a turn the flow beats (<= 0) cannot be made, and
+    # the swimmer turns the other way, with the flow
+    cycle = 4.0  # steps of a turning loop
+    left = jnp.where(b > 0, plan.turn + cycle * omega > 0, plan.turn - cycle * omega <= 0)
     loop = jnp.where(
         backward,
         jnp.where(left, LEFT_BACKWARD, RIGHT_BACKWARD),
@@ -205,7 +226,7 @@ def choose_cycle(
     # passed by swimming away from it
     passes = (distance * jnp.abs(jnp.sin(b)) < reach) & (jnp.cos(b) > 0)
     aligned = (jnp.abs(b) <= plan.tolerance) | passes
-    b_forward = wrap(jnp.asarray(bearing) - jnp.asarray(plan.heading)[hub])
+    b_forward = wrap(jnp.asarray(bearing) - jnp.asarray(plan.heading)[hub] - FEED_STEPS * omega)
     inside = ~aligned & (distance < 2.0 * plan.radius * jnp.abs(jnp.sin(b_forward)))
     out = jnp.where(aligned, half, jnp.where(inside, jnp.asarray(FORWARD_HALF)[hub], turn))
     return out.astype(jnp.int32)
@@ -232,6 +253,7 @@ def controller_step(
     bearing: Array,
     distance: Array | float = jnp.inf,
     reach: Array | float = 0.0,
+    rotation: Array | float = 0.0,
 ) -> tuple[Array, ControllerState]:
     """The steering controller: the next lattice step ``(dof, q)`` and the updated memory.
 
@@ -247,7 +269,9 @@ def controller_step(
     memory : ControllerState
     """
     start = memory.phase == 0
-    cycle = jnp.where(start, choose_cycle(plan, memory.hub, bearing, distance, reach), memory.cycle)
+    cycle = jnp.where(
+        start, choose_cycle(plan, memory.hub, bearing, distance, reach, rotation), memory.cycle
+    )
     move = jnp.asarray(plan.moves)[cycle, memory.phase]
     phase = (memory.phase + 1) % jnp.asarray(plan.lengths)[cycle]
     hub = jnp.where(phase == 0, jnp.asarray(plan.next_hub)[cycle], memory.hub)

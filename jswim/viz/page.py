@@ -47,6 +47,7 @@ from jswim.studies.overview import (
     SUMMARY_NOTE,
     grid_order,
     is_navigation,
+    nav_overview_table,
     nav_table,
     order_summary,
     summary_table,
@@ -294,6 +295,9 @@ def _figures(
             else "no finished runs yet",
         )
     pngs = sorted((folder / "figures").glob("*.png")) if (folder / "figures").is_dir() else []
+    # In the study's order of importance (the navigation study's ratio first), not by name.
+    by_name = {p.stem: p for p in pngs}
+    pngs = [by_name[n] for n in plots.figure_order(study, by_name)]
     runs_file = folder / "runs.jsonl"
     fresh = (
         bool(pngs)
@@ -323,9 +327,14 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
     if not rows:
         return "<p>No finished runs yet.</p>"
     if is_navigation(rows):  # targets: reached, steps, path ratio, energy (as the console)
+        # the result at a glance first (agent x flow x target kind), then every target's row
+        first, first_cells, first_note = nav_overview_table(rows)
         cols, cells, note = with_flow_columns(*nav_table(rows), rows)
         return (
-            _table_html(cols, cells, "summary-table") + f'<p class="note">{html.escape(note)}</p>'
+            _table_html(first, first_cells, "overview-table")
+            + f'<p class="note">{html.escape(first_note)}</p>'
+            + _table_html(cols, cells, "summary-table")
+            + f'<p class="note">{html.escape(note)}</p>'
         )
     cols, cells = summary_table(order_summary(summarize(list(rows)), rows))
     head = "".join(
@@ -357,9 +366,9 @@ FLOW_COLUMNS = {
     ),
     "Zermelo steps": (("zermelo",), "Zermelo steps: his least time to the target"),
     "time ratio": (
-        (),
-        "time ratio: steps to the target over Zermelo's, mean over the runs that reached it "
-        "(1 is optimal)",
+        ("time ratio [95% ci]",),
+        "time ratio: steps to the target over the swimmer's own optimum, median over the runs "
+        "that reached it (1 is optimal)",
     ),
 }
 

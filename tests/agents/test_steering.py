@@ -85,3 +85,65 @@ def test_controller_refusals():
         steering.run(env, params, 0)
     with pytest.raises(ConfigError, match="navigation world"):
         steering.controller(jswim.make("purcell", roc_levels=2)[0])
+
+
+# -- in a flow: the feed-forward of the flow's turn (issue 60) ------------------------------
+
+
+def test_flow_rotation_is_jeffery_s_turn_and_zero_where_the_flow_does_not_turn(float32):
+    from jswim.env.flows import Shear, Uniform
+
+    rate = 0.01
+    g = Shear(rate).gradient(jnp.zeros(2))
+    for phi in (0.0, 0.4, math.pi / 2, 2.0):
+        # Jeffery: -(rate / 2)(1 - B cos 2 phi); half the vorticity alone with shape 0
+        want = -(rate / 2) * (1 - steering.JEFFERY * math.cos(2 * phi))
+        assert float(steering.flow_rotation(g, phi)) == pytest.approx(want, rel=1e-5)
+        assert float(steering.flow_rotation(g, phi, 0.0)) == pytest.approx(-rate / 2, rel=1e-6)
+    assert float(steering.flow_rotation(Uniform((0.3, -0.2)).gradient(jnp.zeros(2)), 1.0)) == 0.0
+
+
+def test_the_feed_forward_is_exactly_nothing_in_still_fluid_and_turns_with_a_strong_flow():
+    from jswim.swimmers.turning import LEFT_FORWARD, RIGHT_FORWARD, choose_cycle
+
+    env, _ = jswim.make("purcell", roc_levels=2, target=FixedTarget(3.0, 90.0))
+    ctrl = steering.controller(env)
+    plan = ctrl.plan
+    bearings = jnp.linspace(-jnp.pi, jnp.pi, 721)
+    for hub in (0, 1):
+        for dist in (0.5, 3.0):
+            base = jax.vmap(lambda b, h=hub, d=dist: choose_cycle(plan, h, b, d, 0.125))(bearings)
+            fed = jax.vmap(lambda b, h=hub, d=dist: choose_cycle(plan, h, b, d, 0.125, 0.0))(
+                bearings
+            )
+            np.testing.assert_array_equal(base, fed)
+    assert float(ctrl.speed(jnp.float32(0.0))) == np.float32(steering.SWIM_SPEED)
+    # a target to the left; a clockwise flow turn slower than the loops: still a left turn
+    weak = -0.5 * plan.turn / 4
+    assert int(choose_cycle(plan, 0, 0.5, 3.0, 0.0, weak)) == LEFT_FORWARD
+    # faster than the loops turn (per step): the left turn cannot be made, it turns right
+    strong = -1.5 * plan.turn / 4
+    assert int(choose_cycle(plan, 1, 0.5, 3.0, 0.0, strong)) == RIGHT_FORWARD
+    # the feed-forward: a bearing just inside the dead band leaves it when the flow turns away
+    edge = 0.9 * plan.tolerance
+    assert int(choose_cycle(plan, 0, edge, 3.0, 0.0)) != LEFT_FORWARD
+    assert int(choose_cycle(plan, 0, edge, 3.0, 0.0, weak)) == LEFT_FORWARD
+    # holding a heading against the flow's turn slows it: the loops' share of the steps
+    assert float(ctrl.speed(weak)) < steering.SWIM_SPEED
+
+
+@pytest.mark.slow  # two flow worlds' scans compile (~20 s each on a loaded CI core)
+@pytest.mark.parametrize("fraction", [0.25, 0.5])
+def test_controller_reaches_the_90_degree_target_in_shear(float32, fraction):
+    from jswim.env.flows import study_flow
+
+    # the study's budget there (4 x Zermelo's least time is below the still-fluid 256)
+    env, params = jswim.make(
+        "purcell",
+        roc_levels=2,
+        target=FixedTarget(3.0, 90.0, budget=256),
+        flow=study_flow("shear", fraction),
+    )
+    run = summarise(env, params, steering.run(env, params, 0))[0]
+    assert run.reached, run.steps
+    assert run.steps <= 160  # 141 and 125 steps measured (float32)

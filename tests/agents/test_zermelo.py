@@ -4,12 +4,14 @@ computations), the shear's closed-form extremal solved here by Newton, the Taylo
 mirror symmetries, and constant-heading paths integrated here in NumPy."""
 
 import math
+import time
 
 import numpy as np
 import pytest
 
+import jswim.agents.zermelo as zermelo_module
 from jswim.agents.zermelo import ZermeloPath, uniform_time, zermelo
-from jswim.env.flows import SWIM_SPEED, Shear, TaylorGreen, Uniform, study_flow
+from jswim.env.flows import SWIM_SPEED, Poiseuille, Shear, TaylorGreen, Uniform, study_flow
 from jswim.env.targets import FixedTarget, MovingTarget, Waypoints
 from jswim.errors import ConfigError
 
@@ -306,6 +308,10 @@ def test_taylor_green_weak_flow_tends_to_still_fluid():
         ({"flow": "shear"}, "flow"),
         ({"start": (0.0,)}, "start"),
         ({"start": (0.0, float("nan"))}, "start"),
+        ({"start": (1e300, 0.0)}, "start"),  # past the targets' range (1e4 a)
+        ({"start": (0.0, -2e4)}, "start"),
+        ({"speed": 10**400}, "speed"),  # an int past float's range: OverflowError
+        ({"speed": 48.0}, "speed"),  # past the flows' range (1000 v)
         ({"horizon": 0}, "horizon"),
         ({"horizon": 1e9}, "horizon"),
         ({"method": "guess"}, "method"),
@@ -324,3 +330,54 @@ def test_bad_closed_form_input():
         uniform_time((0.0, 0.0), (3.0, 0.0), R, 0.0)
     with pytest.raises(ConfigError, match="radius"):
         uniform_time((0.0, 0.0), (3.0, 0.0), -1.0, V)
+
+
+# ---------------------------------------------------------------- the work bound (issue 61)
+
+
+def _past_the_ranges(cls, **fields):
+    """A flow made past the constructor's checks: what ``Shear(100)`` was before they existed."""
+    flow = object.__new__(cls)
+    for name, value in fields.items():
+        object.__setattr__(flow, name, value)
+    return flow
+
+
+@pytest.mark.parametrize(
+    ("flow", "start", "says"),
+    [
+        # the issue's: 142 s, and unfinished after 240 s
+        (_past_the_ranges(Shear, rate=100.0), (0.0, 0.0), "MAX_RK4_STEPS"),
+        (_past_the_ranges(Shear, rate=1e6), (0.0, 0.0), "MAX_RK4_STEPS"),
+        # a channel in range, the way to the target far outside it (gradient 2e3 a step there)
+        (Poiseuille(0.5, 1.0), (0.0, 2e3), "MAX_RK4_STEPS"),
+        # the issue's "cannot convert float NaN to integer"
+        (_past_the_ranges(Poiseuille, u_max=1.0, half_width=1e-300), (0.0, 0.0), "finite"),
+    ],
+    ids=["shear 100", "shear 1e6", "off the channel", "nan"],
+)
+def test_a_flow_past_its_range_is_refused_at_once_in_one_line(flow, start, says):
+    t0 = time.perf_counter()
+    with pytest.raises(ConfigError, match=says) as info:
+        zermelo(flow, FixedTarget(3.0, 90.0), start=start)
+    assert "\n" not in str(info.value)
+    assert time.perf_counter() - t0 < 5.0  # before any integration (measured 0.1 to 0.4 s)
+
+
+def test_the_issue_s_shear_is_refused_where_it_is_made():
+    with pytest.raises(ConfigError, match="rate"):
+        zermelo(Shear(100), FixedTarget(3.0, 90.0))
+
+
+def test_a_leg_takes_at_most_max_rk4_steps(monkeypatch):
+    # Shear(0.1): 2 RK4 steps a step over the default horizon, 4 x 57.5 + 64 = 294 steps
+    flow, spec = Shear(0.1), FixedTarget(3.0, 90.0)
+    monkeypatch.setattr(zermelo_module, "MAX_RK4_STEPS", 587)
+    with pytest.raises(ConfigError, match="2 RK4 steps a step over a horizon of 294 steps"):
+        zermelo(flow, spec)
+    with pytest.raises(ConfigError, match="MAX_RK4_STEPS"):  # a horizon given counts alike
+        zermelo(flow, spec, horizon=400.0)
+    monkeypatch.setattr(zermelo_module, "MAX_RK4_STEPS", 590)
+    bounded = zermelo(flow, spec)
+    monkeypatch.undo()
+    assert bounded.steps == zermelo(flow, spec).steps and bounded.reachable

@@ -33,6 +33,9 @@ def refused(capsys, tmp_path, *args: str) -> str:
         (["--flow", "shear", "--flows", "3"], "--flows"),  # past the largest fraction
         (["--flow", "uniform", "--flows", "nan"], "--flows"),
         (["--flow", "uniform", "--flows", "inf"], "--flows"),
+        (["--flow", "shear", "--flows", "1e300"], "--flows"),  # huge: a NaN world (issue 61)
+        (["--flow", "poiseuille", "--flows", "0.5,1e400"], "--flows"),  # inf after parsing
+        (["--flow", "taylor-green", "--flows", "2.000001"], "--flows"),
         (["--flow", "uniform", "--flows", "0,,1"], "empty items"),
         (["--flow", "uniform", "--flows", "fast"], "--flows"),
         (["--train-episodes", "0"], "--train-episodes"),  # a zero was dropped for the default
@@ -51,7 +54,10 @@ def test_another_study_refuses_a_flow():
 
 def test_still_fluid_keeps_its_runs_and_its_identity():
     plain = build("navigate", StudyOptions())
-    assert len(plain) == 25 and not any(p.flow or p.agent == "zermelo" for p in plain)
+    # five targets, each: one LLM run, 16 seeds of Q-learning, PPO and the random policy, and
+    # one run each of the controller, mpc and the optimum
+    assert len(plain) == 5 * (1 + 3 * 16 + 3)
+    assert not any(p.flow or p.agent == "zermelo" for p in plain)
     ident = identity("navigate", StudyOptions(), None)["options"]
     assert "flow" not in ident and "flows" not in ident
     # a flow changes the identity; its speeds are a grid size (the folder grows with them)
@@ -80,3 +86,14 @@ def test_a_target_given_twice_is_one_target():
     ]
     twice = StudyOptions(distances=(3.0, 3), bearings=(0.0, 0))
     assert twice.distances == (3.0,) and twice.bearings == (0.0,)
+
+
+def test_a_flow_past_zermelo_s_work_bound_is_one_line(capsys, tmp_path):
+    # Taylor-Green at 2 v needs 2 RK4 steps a step; a target 1000 a away, a horizon of 83,704
+    # steps: 167,408 RK4 steps, past MAX_RK4_STEPS (it took minutes; now refused when planned)
+    line = refused(
+        capsys,
+        tmp_path,
+        *("study", "navigate", "--flow", "taylor-green", "--flows", "2", "--distances", "1000"),
+    )
+    assert "MAX_RK4_STEPS" in line and "1e+03 a away" in line

@@ -1,14 +1,17 @@
 """The built docs site: no page shows a raw Sphinx role, and the API pages list public names.
 
-Builds the site once with mkdocs (the ``docs`` extra; skipped without it), reads every built
-page's text and, where Chromium is installed, looks at one API page in the browser as a reader
-would (its rendered text and its cross-reference links).
+Builds the site once with mkdocs (the ``docs`` extra; skipped without it), with no warning,
+reads every built page's text and, where Chromium is installed, looks at one API page in the
+browser as a reader would (its rendered text and its cross-reference links). CI's docs step
+(``.ci/docs``) fails on a broken cross-reference.
 """
 
 from __future__ import annotations
 
 import html
+import os
 import re
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -35,12 +38,17 @@ def site(tmp_path_factory) -> Path:
     pytest.importorskip("mkdocs", reason="the docs extra: pip install -e '.[docs]'")
     pytest.importorskip("mkdocstrings", reason="the docs extra: pip install -e '.[docs]'")
     out = tmp_path_factory.mktemp("site")
-    subprocess.run(
-        [sys.executable, "-m", "mkdocs", "build", "--strict", "--quiet", "--site-dir", str(out)],
+    # no --quiet: it drops warnings before --strict counts them
+    built = subprocess.run(
+        [sys.executable, "-m", "mkdocs", "build", "--strict", "--site-dir", str(out)],
         cwd=ROOT,
-        check=True,
-        env={**__import__("os").environ, "NO_MKDOCS_2_WARNING": "1"},
+        capture_output=True,
+        text=True,
+        env={**os.environ, "NO_MKDOCS_2_WARNING": "1"},
     )
+    log = built.stdout + built.stderr
+    warned = [line for line in log.splitlines() if line.startswith(("WARNING", "ERROR"))]
+    assert built.returncode == 0 and not warned, "\n".join(warned) or log[-2000:]
     return out
 
 
@@ -82,3 +90,25 @@ def test_an_api_page_in_the_browser_shows_links_not_roles(site):
             "[...document.querySelectorAll('a.autorefs')].map(a => a.getAttribute('href'))"
         )
         assert links and all(h and "#jswim." in h for h in links), links[:5]
+
+
+def test_ci_docs_step_fails_on_a_broken_reference(tmp_path):
+    # .ci/docs on a copy of the sources: it passes, then fails once a docstring links to a name
+    # the API pages do not hold, naming it (a build with --quiet passed both ways)
+    pytest.importorskip("mkdocstrings", reason="the docs extra: pip install -e '.[docs]'")
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for part in ("jswim", "docs", ".ci"):
+        shutil.copytree(ROOT / part, tmp_path / part, ignore=ignore)
+    shutil.copy(ROOT / "mkdocs.yml", tmp_path)
+    step = ["bash", str(tmp_path / ".ci" / "docs"), sys.executable, "-m", "mkdocs"]
+    passed = subprocess.run(step, capture_output=True, text=True, timeout=300)
+    assert passed.returncode == 0, passed.stdout + passed.stderr
+    assert "INFO" not in passed.stdout  # the INFO lines are left out
+    row = tmp_path / "jswim" / "results" / "row.py"
+    text = row.read_text(encoding="utf-8")
+    good = "[`jswim.env.flows`][jswim.env.flows]"
+    assert good in text
+    row.write_text(text.replace(good, "[`jswim.env.flows`][jswim.env.no_such_name]", 1))
+    failed = subprocess.run(step, capture_output=True, text=True, timeout=300)
+    assert failed.returncode != 0, failed.stdout
+    assert "jswim.env.no_such_name" in failed.stdout and "WARNING" in failed.stdout

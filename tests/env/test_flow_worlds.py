@@ -144,7 +144,7 @@ def test_a_stream_along_a_line_swimmer_in_the_default_float32(float32):
             lambda: jswim.make("purcell", Scene(medium="bulk", swimmers=2), flow=Uniform(U)),
             "swims alone",
         ),
-        (lambda: flow_from_dict({"kind": "uniform", "u": 3}), "bad uniform flow fields"),
+        (lambda: flow_from_dict({"kind": "uniform", "u": 3}), "Uniform flow u must be"),
         (lambda: jswim.make("ng", flow=Uniform(U)), "moves on a line"),
         (lambda: jswim.make("nsphere", flow=Shear(0.01)), "takes a Uniform"),
         (lambda: jswim.make("purcell", flow=(0.02, 0.0)), "jswim.env.flows flow"),
@@ -318,7 +318,15 @@ STEP_TOL = {
 def _still_entries(roc_levels):
     """The still-fluid table row of every flow row (`_moves` order)."""
     if roc_levels is not None:
-        return np.asarray(lattice_table(MODEL, roc_levels))
+        start, end, _ = _moves(MODEL, roc_levels)
+        j0, j1 = np.rint(start * roc_levels), np.rint(end * roc_levels)
+        n, width = MODEL.n_dof, roc_levels + 1
+        dof = np.tile(
+            np.repeat(np.arange(n), 2 * roc_levels + 1), len(start) // (n * (2 * roc_levels + 1))
+        )
+        shape = (j0 * width ** np.arange(n)).sum(axis=1)
+        row = (shape * n + dof) * width + j1[np.arange(len(j1)), dof]
+        return np.asarray(lattice_table(MODEL, roc_levels))[row.astype(int)]
     inc = np.asarray(step_rows(MODEL))[:-1].reshape(-1, MODEL.n_dof, 5)
     hold = np.array([[0.0, 0.0, 0.0, 1.0, 0.0]])
     return np.concatenate([np.concatenate([c, hold]) for c in inc])
@@ -326,8 +334,8 @@ def _still_entries(roc_levels):
 
 def _step_errors(flow, roc_levels, reps=4, seed=0, reference=None):
     """Largest centroid and orientation errors of table steps against RK4 (lab frame)."""
-    start, end = _moves(MODEL, roc_levels)
-    s0, s1 = np.tile(start, (reps, 1)), np.tile(end, (reps, 1))
+    start, end, duration = _moves(MODEL, roc_levels)
+    s0, s1, t = np.tile(start, (reps, 1)), np.tile(end, (reps, 1)), np.tile(duration, reps)
     entries = jnp.asarray(np.tile(_still_entries(roc_levels), (reps, 1)))
     rows = jnp.asarray(np.tile(flow_table(MODEL, flow, roc_levels), (reps, 1)))
     rng = np.random.default_rng(seed)
@@ -335,9 +343,9 @@ def _step_errors(flow, roc_levels, reps=4, seed=0, reference=None):
     poses = np.stack(
         [rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), rng.uniform(-np.pi, np.pi, n)], -1
     )
-    ref = jax.jit(jax.vmap(lambda a, b, p: flow_step(MODEL, reference or flow, a, b, p)))(
-        s0, s1, poses
-    )
+    ref = jax.jit(
+        jax.vmap(lambda a, b, p, t: flow_step(MODEL, reference or flow, a, b, p, duration=t))
+    )(s0, s1, poses, t)
 
     def table(row, entry, p):
         c, s = jnp.cos(p[2]), jnp.sin(p[2])
@@ -371,7 +379,7 @@ def test_the_corrector_is_second_order_and_exact_to_it_for_a_held_shape():
     # about 4 (what the response's change within the stroke leaves of the second order).
     def errors(scale):
         flow = TaylorGreen(0.9 * scale * jswim.env.flows.SWIM_SPEED, 10.0)
-        start, end = _moves(MODEL, 2)
+        start, end, _ = _moves(MODEL, 2)
         hold = np.all(start == end, axis=1)
         out = {}
         for label, pick in (("hold", hold), ("move", ~hold)):
@@ -384,16 +392,18 @@ def test_the_corrector_is_second_order_and_exact_to_it_for_a_held_shape():
 
 
 def _masked_error(flow, pick):
-    start, end = _moves(MODEL, 2)
+    start, end, duration = _moves(MODEL, 2)
     rows = jnp.asarray(flow_table(MODEL, flow, 2)[pick])
     entries = jnp.asarray(_still_entries(2)[pick])
-    s0, s1 = start[pick], end[pick]
+    s0, s1, t = start[pick], end[pick], duration[pick]
     rng = np.random.default_rng(7)
     n = len(s0)
     poses = np.stack(
         [rng.uniform(-5, 5, n), rng.uniform(-5, 5, n), rng.uniform(-np.pi, np.pi, n)], -1
     )
-    ref = jax.vmap(lambda a, b, p: flow_step(MODEL, flow, a, b, p, 32))(s0, s1, poses)
+    ref = jax.vmap(lambda a, b, p, t: flow_step(MODEL, flow, a, b, p, 32, duration=t))(
+        s0, s1, poses, t
+    )
 
     def table(row, entry, p):
         c, s = jnp.cos(p[2]), jnp.sin(p[2])

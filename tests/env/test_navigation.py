@@ -198,3 +198,56 @@ def test_gymnax_navigation_ends_its_episodes():
     obs, state = env.reset(jax.random.key(0), params)
     obs, state, _, done, _ = env.step_env(jax.random.key(1), state, SQUARE[0], params)
     assert obs.shape == (5,) and not bool(done)
+
+
+# -- budgets in a flow: the worlds' rule is the study's (issue 60) ---------------------------
+
+
+def test_a_world_in_a_flow_gets_the_flow_budget_and_says_so(float32):
+    """Poiseuille at 0.5 v, target 3 a upstream: the still-fluid 96 steps are short of
+    Zermelo's 115; the world's budget is 4 x its straight crab course (115.0 steps, where the
+    head flow is half the swimming speed), the study's 461 (4 x Zermelo's 115.2)."""
+    from jswim.env.flows import SWIM_SPEED, Uniform, study_flow
+    from jswim.env.targets import FLOW_BUDGET_FACTOR, course_time, flow_budget
+
+    spec = FixedTarget(3.0, 180.0)
+    flow = study_flow("poiseuille", 0.5)
+    env, params = jswim.make("purcell", roc_levels=K, target=spec)
+    assert int(params.target.budget) == 96  # still fluid: unchanged
+    env, params = jswim.make("purcell", roc_levels=K, target=spec, flow=flow)
+    t = course_time(spec, flow)
+    assert t == pytest.approx(2.75 / (0.5 * SWIM_SPEED), rel=1e-6)  # on the centre line
+    assert int(params.target.budget) == int(env.default_params.target.budget) == 461
+    assert int(params.target.budget) == flow_budget(96, t) == math.ceil(FLOW_BUDGET_FACTOR * t)
+    assert "budget=461 steps (4 x 115.0 steps of the straight course" in repr(env)
+    # a budget given is kept; a flow of speed 0 and a target within the still budget keep it
+    given = jswim.make(
+        "purcell", roc_levels=K, target=FixedTarget(3.0, 180.0, budget=50), flow=flow
+    )
+    assert int(given[1].target.budget) == 50 and "the target's own" in repr(given[0])
+    calm = jswim.make("purcell", roc_levels=K, target=spec, flow=Uniform((0.0, 0.0)))
+    assert int(calm[1].target.budget) == 96
+    # in still fluid the course is the straight line: (distance - radius) / speed
+    assert course_time(spec, Uniform((0.0, 0.0))) == pytest.approx(2.75 / SWIM_SPEED)
+    # a head flow faster than the swimmer: no course; the still budget, and the repr says why
+    fast = Uniform((1.5 * SWIM_SPEED, 0.0))
+    assert course_time(spec, fast) is None
+    env, params = jswim.make("purcell", roc_levels=K, target=spec, flow=fast)
+    assert int(params.target.budget) == 96 and "too fast" in repr(env)
+
+
+def test_the_world_s_course_is_never_shorter_than_zermelo_s_least_time():
+    from jswim.env.flows import flow_json, study_flow
+    from jswim.env.targets import course_time
+    from jswim.studies.navigate import MOVING, target_json, zermelo_path
+
+    for kind, spec in (
+        ("poiseuille", FixedTarget(3.0, 180.0)),
+        ("shear", FixedTarget(3.0, 90.0)),
+        ("uniform", FixedTarget(3.0, 0.0)),
+        ("taylor-green", MOVING),
+    ):
+        flow = study_flow(kind, 0.5)
+        best = zermelo_path(target_json(spec), flow_json(flow)).steps
+        t = course_time(spec, flow)
+        assert best - 1e-6 <= t <= 1.15 * best, (kind, best, t)

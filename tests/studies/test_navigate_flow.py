@@ -60,7 +60,7 @@ def test_an_unreachable_target_says_so():
     assert navigate.zermelo_path(plans[0].target, plans[0].flow).steps is None
     rows = {p.agent: r for p in plans for r in navigate.baseline_rows([p])}
     for r in rows.values():
-        assert r.reachable is False and r.zermelo_steps is None and r.time_ratio is None
+        assert r.reachable is False and r.zermelo_steps is None and r.zermelo_ratio is None
         assert r.flow_fraction == 1.2 and json.loads(r.flow)["kind"] == "uniform"
     assert rows["zermelo"].reached is False and rows["controller"].reached is False
 
@@ -72,15 +72,20 @@ def test_every_row_carries_its_time_ratio():
     ctrl, zer = rows["controller"], rows["zermelo"]
     assert ctrl.reached and ctrl.reachable
     assert ctrl.zermelo_steps == pytest.approx(best, rel=1e-5)
-    assert ctrl.time_ratio == pytest.approx(ctrl.steps_to_target / best, rel=1e-5)
-    assert ctrl.time_ratio >= 1.0  # nothing beats the point steerer of the same speed here
+    assert ctrl.zermelo_ratio == pytest.approx(ctrl.steps_to_target / best, rel=1e-5)
+    assert ctrl.zermelo_ratio >= 1.0  # nothing beats the point steerer of the same speed here
+    # the row's own time ratio is to the swimmer's optimum, which no agent beats
+    assert ctrl.optimal_steps is not None
+    assert ctrl.time_ratio == pytest.approx(ctrl.steps_to_target / ctrl.optimal_steps, rel=1e-5)
+    assert ctrl.time_ratio >= 1.0
     # Zermelo's own row: its path ends within the radius, after ceil(T) steps
     assert zer.reached and zer.steps_to_target == math.ceil(best) and zer.actions == []
     assert math.hypot(zer.x[-1], zer.y[-1] - 3.0) < R + 1e-6
-    assert zer.time_ratio == pytest.approx(1.0)
+    assert zer.zermelo_ratio == pytest.approx(1.0)
     table = {(g["agent"], g["group"]): g for g in navigate.nav_summary(list(rows.values()))}
     g = table[("controller", ctrl.group)]
     assert g["flow_fraction"] == 0.5 and g["reachable"] and g["time_ratio"] == ctrl.time_ratio
+    assert g["zermelo_ratio"] == ctrl.zermelo_ratio
 
 
 def test_zermelo_is_never_cut_by_steps():
@@ -89,7 +94,7 @@ def test_zermelo_is_never_cut_by_steps():
     plans = [p for p in build("navigate", o) if p.group.startswith("fixed")]
     (row,) = navigate.baseline_rows(navigate.with_budgets(plans))
     assert row.reached and row.steps_to_target == math.ceil(_crab_time(0.5, 90.0)) > 30
-    assert row.time_ratio == pytest.approx(1.0)
+    assert row.zermelo_ratio == pytest.approx(1.0)
 
 
 def test_the_llm_sees_the_local_flow_in_its_records(tmp_path):
@@ -137,3 +142,33 @@ def test_compare_sets_flow_studies_side_by_side_with_their_zermelo_columns(tmp_p
     # `jswim show` names the flow among the settings, as the page does
     settings = next(line for line in show_text(tmp_path / "a").splitlines() if "settings" in line)
     assert settings.endswith("flow uniform at 0.5 v (the swimming speed)")
+
+
+@pytest.mark.slow  # a study with the optimum and mpc: minutes
+def test_no_agent_beats_the_swimmers_optimum_in_any_cell(tmp_path):
+    from jswim.results import as_run_rows, read_runs
+    from jswim.studies.run import run_study
+
+    opts = StudyOptions(
+        flow="shear",
+        flows=(0.0, 0.5),
+        bearings=(90.0,),
+        agents=("controller", "optimal", "mpc", "random", "qlearning"),
+        q_runs=2,
+        train_episodes=20,
+    )
+    run_study("navigate", opts, None, tmp_path / "f", progress=False)
+    rows = as_run_rows(read_runs(tmp_path / "f"))
+    cells: dict[str, list] = {}
+    for r in rows:
+        cells.setdefault(r.group, []).append(r)
+    assert len(cells) == 6  # three targets at two flow speeds
+    for group, g in cells.items():
+        (best,) = [r for r in g if r.agent == "optimal"]
+        # the optimum's row is its replayed sequence: reached exactly at its own steps
+        assert best.reached and best.steps_to_target == best.optimal_steps, group
+        for r in g:
+            assert r.optimal_steps == best.optimal_steps
+            if r.reached:
+                assert r.steps_to_target >= best.steps_to_target, (group, r.agent)
+                assert r.time_ratio == pytest.approx(r.steps_to_target / best.optimal_steps)

@@ -13,7 +13,7 @@ import pytest
 
 from jswim.llm.backend import Backend
 from jswim.llm.reference import completion
-from jswim.results import read_runs, read_transcript
+from jswim.results import read_metadata, read_runs, read_transcript
 from jswim.studies.navigate import nav_summary
 from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
@@ -70,6 +70,9 @@ def test_every_agent_has_a_row_per_target_with_the_navigation_columns(study):
     assert set(table["agent"]) == agents
     nav = {(r["agent"], r["group"]): r for r in nav_summary(rows)}
     assert nav[("controller", "fixed d=3 b=0")]["success_rate"] == 1.0
+    # The folder records the rule these rows were judged by, not the swim study's (issue 61).
+    rule = read_metadata(out)["success_criterion"]
+    assert rule.startswith("the target reached") and "qualifying cycles" not in rule
 
 
 def test_the_llm_runs_go_through_the_one_pipeline_and_stop_at_the_target(study):

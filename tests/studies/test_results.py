@@ -176,7 +176,7 @@ def test_learn_stats_counts_never_learned_runs_instead_of_inventing_steps():
 def test_every_file_gets_the_same_mode(tmp_path):
     store = StudyStore(tmp_path / "s", "noise", {})
     store.add_runs(
-        [{"run_id": "a", "x": [0.1], "actions": [1], "progress": [0.1], "stuck": [False]}]
+        [{"run_id": "a", "x": [0.1], "actions": [[1, 1]], "progress": [0.1], "stuck": [False]}]
     )
     store.finalize()
     modes = {

@@ -136,6 +136,7 @@ def _old_folder(tmp_path: Path) -> Path:
         "agent": "llm",
         "swimmer": "purcell",
         "direction": 1,
+        "group": "",  # every row has its cell (the row readers skip one without: issue 61)
         "status": "llm_error",
         "error": "server gone",
         "x": [],

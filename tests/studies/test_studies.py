@@ -58,11 +58,15 @@ def test_the_table_holds_each_study_s_defaults():
         per_cell = Counter((p.agent, p.swimmer, p.direction, p.group) for p in plans)
         assert {n for (a, *_), n in per_cell.items() if a == "llm"} <= {spec.runs}
         assert {
-            n for (a, *_), n in per_cell.items() if a not in ("llm", "stroke", "controller")
+            n
+            for (a, *_), n in per_cell.items()
+            if a not in ("llm", "stroke", "controller", "optimal", "mpc", "zermelo")
         } <= {spec.q_runs}
-        assert {n for (a, *_), n in per_cell.items() if a in ("stroke", "controller")} <= {
-            1
-        }  # deterministic without noise
+        assert {
+            n
+            for (a, *_), n in per_cell.items()
+            if a in ("stroke", "controller", "optimal", "mpc", "zermelo")
+        } <= {1}  # deterministic without noise
     # Options override the table.
     plans = build("noise", StudyOptions(swimmers=("ng",), runs=2, q_runs=0, zetas=(0.0, 1.0)))
     assert Counter(p.group for p in plans) == {"zeta=0": 2, "zeta=1": 2} and {

@@ -58,9 +58,11 @@ CASES = {
 
 @pytest.mark.parametrize("field, value", CASES.values(), ids=CASES.keys())
 def test_a_scene_field_of_the_wrong_type_is_no_run_record(field, value):
-    row = {"run_id": "r", "agent": "llm", "x": [0.1, 0.2, 0.3, 0.4], field: value}
+    row = {"run_id": "r", "agent": "llm", "group": "", "steps": 4, "x": [0.1, 0.2, 0.3, 0.4]}
+    row[field] = value
     assert run_problem(row) is not None
-    good = {"run_id": "r", "agent": "llm", "x": [0.1, 0.2], "heights": [[1.0], [2.0]]}
+    good = {"run_id": "r", "agent": "llm", "group": "", "steps": 2, "x": [0.1, 0.2]}
+    good["heights"] = [[1.0], [2.0]]
     assert run_problem({**good, "contact": [False, True], "n_swimmers": 1}) is None
     assert run_problem({**good, "contact": [[False], [True]]}) is None
 
@@ -71,7 +73,7 @@ def test_show_report_plot_and_resume_skip_a_wrong_typed_record(
 ):
     out = edited(study, tmp_path, lambda r: r.update({field: value}))
     for cmd in (["show", str(out)], ["report", str(out)], ["plot", str(out)]):
-        assert cli.main(cmd) == 0, cmd
+        assert cli.main(cmd) == 2, cmd  # the rest shown; 2: not the whole folder (issue 61)
         err = capsys.readouterr().err
         assert "skipped" in err and "Traceback" not in err
     with FakeServer(reply=hash_reply) as srv:
@@ -101,8 +103,9 @@ def test_wrong_typed_llm_totals_neither_crash_show_nor_the_resume(study, tmp_pat
     else:
         meta["llm_totals"] = totals
     (out / "metadata.json").write_text(json.dumps(meta))
-    assert cli.main(["show", str(out)]) == 0
-    assert "Traceback" not in capsys.readouterr().err
+    assert cli.main(["show", str(out)]) == 2  # the rest shown, the totals' fields said
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "llm_totals" in err
     with FakeServer(reply=hash_reply) as srv:
         assert cli.main(swim(srv.url, out, runs=3)) == 0  # one more run: a session is recorded
     assert json.loads((out / "metadata.json").read_text())["status"] == "complete"

@@ -1,0 +1,94 @@
+"""The swimmer's own optimum: wall time of `jswim.agents.optimal.solve` for one target in each flow.
+
+    python benchmarks/bench_optimal.py                 # the four flows at 0.5 v, 90-degree target
+    python benchmarks/bench_optimal.py --fraction 0.9 --bearing 180
+    python benchmarks/bench_optimal.py --study         # + a navigate study with and without
+                                                       #   the optimal and mpc rows
+
+Each line: the flow, the optimum's steps and lower bound, the steering controller's steps, the
+model-predictive agent's steps (``--mpc``), and the seconds each took (the first solve includes
+compiling the still-fluid time to go and the search; the table says which). ``--study`` runs
+``jswim study navigate`` on one flow speed twice in this process's machine, once without and once
+with the ``optimal`` and ``mpc`` agents, and prints the ratio of their wall times (the issue's
+budget: at most 1.5).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import tempfile
+import time
+
+import jswim
+from jswim.agents import mpc, optimal, steering
+from jswim.env.flows import study_flow
+from jswim.env.navigation import summarise
+from jswim.env.targets import FixedTarget
+
+FLOWS = ("uniform", "shear", "poiseuille", "taylor-green")
+
+
+def _solve_all(fraction: float, bearing: float, with_mpc: bool) -> float:
+    total = 0.0
+    print(f"target 3 a at {bearing:g} degrees, flows at {fraction:g} v, K = 2, float32")
+    print(f"{'flow':14s} {'optimal':>7s} {'lower':>5s} {'ctrl':>5s} {'mpc':>5s} {'solve s':>8s}")
+    for kind in FLOWS:
+        env, params = jswim.make(
+            "purcell",
+            roc_levels=2,
+            target=FixedTarget(3.0, bearing),
+            flow=study_flow(kind, fraction),
+        )
+        t = time.perf_counter()
+        best = optimal.solve(env, params)
+        dt = time.perf_counter() - t
+        total += dt
+        ctrl = summarise(env, params, steering.run(env, params, 0))[0]
+        m = "-"
+        if with_mpc:
+            ep = summarise(env, params, jswim.rollout(env, params, 0, mpc.run(env, params, 0)))[0]
+            m = str(ep.steps) if ep.reached else "n"
+        print(
+            f"{kind:14s} {best.steps if best.steps else 'n':>7} {best.lower:>5d} "
+            f"{ctrl.steps if ctrl.reached else 'n':>5} {m:>5s} {dt:8.1f}"
+        )
+    print(f"all four: {total:.1f} s (the issue's budget: 60 s on 2 cores)")
+    return total
+
+
+def _study(fraction: float) -> None:
+    from jswim.studies.options import ALL_AGENTS, MPC_AGENT, OPTIMAL_AGENT, StudyOptions
+    from jswim.studies.run import run_study
+
+    walls = {}
+    for name, agents in (
+        ("without", tuple(a for a in ALL_AGENTS if a not in (OPTIMAL_AGENT, MPC_AGENT, "llm"))),
+        ("with", tuple(a for a in ALL_AGENTS if a != "llm")),
+    ):
+        out = tempfile.mkdtemp(prefix="bench-optimal-")
+        opts = StudyOptions(flow="shear", flows=(fraction,), bearings=(90.0,), agents=agents)
+        t = time.perf_counter()
+        run_study("navigate", opts, None, out, progress=False)
+        walls[name] = time.perf_counter() - t
+        shutil.rmtree(out, ignore_errors=True)
+        print(
+            f"navigate study, shear {fraction:g} v, 3 targets, {name} optimal/mpc: {walls[name]:.0f} s"
+        )
+    print(f"with / without: {walls['with'] / walls['without']:.2f}")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--fraction", type=float, default=0.5)
+    ap.add_argument("--bearing", type=float, default=90.0)
+    ap.add_argument("--mpc", action="store_true", help="also run the model-predictive agent")
+    ap.add_argument("--study", action="store_true", help="also time a study with and without")
+    args = ap.parse_args()
+    _solve_all(args.fraction, args.bearing, args.mpc)
+    if args.study:
+        _study(args.fraction)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,121 @@
+"""A model-predictive agent: the swimmer's optimum re-planned from where it is.
+
+Every ``replan`` steps the agent searches, from its own state, the least-time sequence over a
+receding horizon with the world's own step at zeta 0 (the beam of
+[`jswim.agents.optimal`][jswim.agents.optimal], ranked by its estimated time to go beyond the
+horizon), warm-started with what is left of its previous plan (kept in the beam, so a new plan
+is never worse than the old one by the model's reckoning), and plays the plan's first steps in
+the world, noise included. In a noiseless world it follows the optimum's kind of path; under
+noise (zeta > 0) it is the strongest agent that reacts to what happens.
+
+Example::
+
+    env, params = jswim.make("purcell", roc_levels=2, target=FixedTarget(3.0, 90.0))
+    actions = mpc.run(env, params, 0)          # (budget,) codes, replayable
+    traj = jswim.rollout(env, params, 0, actions)
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import Array
+
+from jswim.agents import optimal
+from jswim.env.navigation import NavigationWorld
+from jswim.errors import ConfigError
+
+__all__ = ["HORIZON", "REPLAN", "run"]
+
+#: Steps the agent looks ahead: about twelve square-gait cycles (a turn of 0.7 rad).
+HORIZON = 48
+
+#: Steps played between plans: one stroke cycle.
+REPLAN = 4
+
+#: States its beam keeps per layer.
+BEAM = 256
+
+
+@functools.partial(jax.jit, static_argnames="env")
+def _step(env: NavigationWorld, key: Array, state: Any, action: Array, params: Any) -> Any:
+    return env.step(key, state, action, params)[0]
+
+
+def _positive(value: Any, what: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ConfigError(f"{what} must be a whole number >= 1, got {value!r}")
+    return int(value)
+
+
+def run(
+    env: NavigationWorld,
+    params: Any,
+    key: Array | int,
+    steps: int | None = None,
+    *,
+    horizon: int = HORIZON,
+    replan: int = REPLAN,
+    beam: int = BEAM,
+) -> np.ndarray:
+    """The agent's actions in one run of navigation world ``env`` (module docs).
+
+    Parameters
+    ----------
+    env : NavigationWorld
+        On a K >= 2 lattice (integer codes); any zeta.
+    params : NavParams
+        Its params (one target).
+    key : PRNG key or int
+        The run's key: the start (``env.reset``) and each step's noise (``split(key, steps)``,
+        as [`jswim.rollout`][jswim.env.episodes.rollout] draws them).
+    steps : int, optional
+        Steps of the run; default the target's budget.
+    horizon, replan, beam : int
+        Steps planned ahead, steps played between plans, states kept per layer.
+
+    Returns
+    -------
+    ndarray (steps,) int32
+        The codes played; after the episode ended, the plan's no-op (DOF 1, ROC 0). Replayed with
+        ``jswim.rollout(env, params, key, actions)`` they give the run.
+
+    Raises
+    ------
+    ConfigError
+        As [`optimal.solve`][jswim.agents.optimal.solve] (zeta aside); a size below 1.
+    """
+    horizon = _positive(horizon, "horizon")
+    replan = _positive(replan, "replan")
+    beam = _positive(beam, "beam")
+    model = params._replace(swimmer=params.swimmer.replace(zeta=0.0))
+    optimal.check_world(env, model)
+    key = jax.random.PRNGKey(key) if isinstance(key, (int, np.integer)) else key
+    budget = int(params.target.budget)
+    steps = budget if steps is None else _positive(steps, "steps")
+    keys = jax.random.split(key, steps)
+    idle = env.roc_levels  # code of (DOF 1, ROC 0): no move
+    h = optimal.heuristic(env, model)
+    state = env.reset(key, params)
+    played: list[int] = []
+    plan = np.zeros(0, np.int64)
+    for t in range(steps):
+        if bool(state.done):
+            played.extend([idle] * (steps - t))
+            break
+        if t % replan == 0 or not len(plan):
+            ahead = min(horizon, budget - int(state.t))
+            found = optimal.search(
+                env, model, state, h, beam=beam, steps=max(ahead, 1), incumbents=[plan]
+            )
+            plan = np.asarray(found[0][0], np.int64)
+            if not len(plan):
+                plan = np.asarray([idle], np.int64)
+        a, plan = int(plan[0]), plan[1:]
+        state = _step(env, keys[t], state, jnp.int32(a), params)
+        played.append(a)
+    return np.asarray(played, np.int32)
