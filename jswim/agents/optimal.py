@@ -336,6 +336,18 @@ def _controller(env: NavigationWorld, params: Any, key: Array, steps: int) -> li
     return [dof * (2 * k + 1) + roc + k]
 
 
+def _closed_loop(env: NavigationWorld, params: Any, key: Array, steps: int) -> np.ndarray:
+    """The model-predictive agent's codes ([`jswim.agents.mpc`][jswim.agents.mpc]), cut where it
+    reached the target: its short horizon finds what the long beam's estimate misses (in a
+    stream along the target's line, drifting beats turning: 80 steps where the beam alone found
+    107)."""
+    from jswim.agents import mpc  # lazy: mpc re-plans with this module's search
+
+    codes = mpc.run(env, params, key, steps).astype(np.int64)
+    reached = np.asarray(rollout(env, params, key, jnp.asarray(codes)).state.reached)
+    return codes[: int(np.argmax(reached)) + 1] if reached.any() else codes[:0]
+
+
 def _dp(env: NavigationWorld, params: Any, key: Array, h: Any, steps: int) -> np.ndarray:
     """The closed-loop policy of the time to go, ``steps`` steps (fewer: the target reached)."""
     state = env.reset(key, params)
@@ -386,8 +398,9 @@ def solve(
         Steps searched; default the target's budget.
     incumbent : array (T,) int, optional
         A sequence kept in the beam at every layer it covers (``"beam"``): the answer is then
-        never longer than it (a warm start). Default: the ``"dp"`` method's sequence and,
-        where it steers the world and reaches the target, the steering controller's.
+        never longer than it (a warm start). Default: the ``"dp"`` method's sequence, the
+        model-predictive agent's ([`jswim.agents.mpc`][jswim.agents.mpc]) and, where it steers
+        the world and reaches the target, the steering controller's.
 
     Returns
     -------
@@ -415,7 +428,11 @@ def solve(
         return OptimalResult(len(actions) if ok else None, actions, low, method)
     start = env.reset(key, params)
     if incumbent is None:  # known good sequences seed the beam: it is never worse than them
-        seeds = [_dp(env, params, key, h, steps), *_controller(env, params, key, steps)]
+        seeds = [
+            _dp(env, params, key, h, steps),
+            *_controller(env, params, key, steps),
+            _closed_loop(env, params, key, steps),
+        ]
     else:
         seeds = [np.asarray(incumbent, np.int64).reshape(-1)]
     plans = search(env, params, start, h, beam=int(beam), steps=steps, incumbents=seeds)
