@@ -17,11 +17,8 @@ Example::
 
 from __future__ import annotations
 
-import functools
 from typing import Any
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
@@ -31,21 +28,9 @@ from jswim.errors import ConfigError
 
 __all__ = ["HORIZON", "REPLAN", "run"]
 
-#: Steps the agent looks ahead: six square-gait cycles. Measured (K = 2, target 3 a at 90
-#: degrees, still fluid and the four flows at 0.5 v): 24 ahead, 8 played, 128 kept reach in 80,
-#: 105, 222, 127 and 115 steps in 15 s; 48, 4 and 256 in 105, 105, 215, 126 and 113 in 73 s.
-HORIZON = 24
-
-#: Steps played between plans: two stroke cycles.
-REPLAN = 8
-
-#: States its beam keeps per layer.
-BEAM = 128
-
-
-@functools.partial(jax.jit, static_argnames="env")
-def _step(env: NavigationWorld, key: Array, state: Any, action: Array, params: Any) -> Any:
-    return env.step(key, state, action, params)[0]
+#: Steps looked ahead, steps played between plans and states kept per layer (measured beside
+#: ``HORIZON`` in `jswim.agents.optimal`).
+HORIZON, REPLAN, BEAM = optimal.HORIZON, optimal.REPLAN, optimal.BEAM
 
 
 def _positive(value: Any, what: str) -> int:
@@ -94,30 +79,7 @@ def run(
     horizon = _positive(horizon, "horizon")
     replan = _positive(replan, "replan")
     beam = _positive(beam, "beam")
-    model = params._replace(swimmer=params.swimmer.replace(zeta=0.0))
-    optimal.check_world(env, model)
-    key = jax.random.PRNGKey(key) if isinstance(key, (int, np.integer)) else key
-    budget = int(params.target.budget)
-    steps = budget if steps is None else _positive(steps, "steps")
-    keys = jax.random.split(key, steps)
-    idle = env.roc_levels  # code of (DOF 1, ROC 0): no move
-    h = optimal.heuristic(env, model)
-    state = env.reset(key, params)
-    played: list[int] = []
-    plan = np.zeros(0, np.int64)
-    for t in range(steps):
-        if bool(state.done):
-            played.extend([idle] * (steps - t))
-            break
-        if t % replan == 0 or not len(plan):
-            ahead = min(horizon, budget - int(state.t))
-            found = optimal.search(
-                env, model, state, h, beam=beam, steps=max(ahead, 1), incumbents=[plan]
-            )
-            plan = np.asarray(found[0][0], np.int64)
-            if not len(plan):
-                plan = np.asarray([idle], np.int64)
-        a, plan = int(plan[0]), plan[1:]
-        state = _step(env, keys[t], state, jnp.int32(a), params)
-        played.append(a)
-    return np.asarray(played, np.int32)
+    optimal.check_world(env, params._replace(swimmer=params.swimmer.replace(zeta=0.0)))
+    if steps is not None:
+        steps = _positive(steps, "steps")
+    return optimal.receding(env, params, key, steps, horizon=horizon, replan=replan, beam=beam)
