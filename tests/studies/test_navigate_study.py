@@ -24,7 +24,7 @@ from tests.views.fitting import captions_outside_their_panel
 
 ARTIFACTS = os.environ.get("JSWIM_TEST_ARTIFACTS", "test-artifacts")
 
-pytestmark = pytest.mark.slow  # compiles the navigation world for five agents (~1-2 CPU-min)
+pytestmark = pytest.mark.slow  # compiles the navigation world for seven agents (~2-4 CPU-min)
 
 
 def rule(body: dict) -> str:
@@ -54,7 +54,7 @@ def test_every_agent_has_a_row_per_target_with_the_navigation_columns(study):
     out, res = study
     rows = read_runs(out)
     groups = ["fixed d=3 b=0", "fixed d=3 b=90", "path", "moving"]
-    agents = {"llm", "qlearning", "ppo", "controller", "random"}
+    agents = {"llm", "qlearning", "ppo", "controller", "mpc", "optimal", "random"}
     assert {(r["agent"], r["group"]) for r in rows} == {(a, g) for a in agents for g in groups}
     for r in rows:
         t = json.loads(r["target"])
@@ -65,6 +65,12 @@ def test_every_agent_has_a_row_per_target_with_the_navigation_columns(study):
             assert r["steps_to_target"] == r["steps"] and r["path_ratio"] >= 0.9
     # The controller (the reference stroke) reaches every target; the random policy none.
     assert all(by(rows, "controller", g)["reached"] for g in groups)
+    # The swimmer's own optimum reaches every target, and no agent does it in fewer steps.
+    for g in groups:
+        best = by(rows, "optimal", g)
+        assert best["reached"] and best["steps_to_target"] == best["optimal_steps"]
+        steps = [r["steps_to_target"] for r in rows if r["group"] == g and r["reached"]]
+        assert min(steps) == best["steps_to_target"]
     assert not any(by(rows, "random", g)["reached"] for g in groups)
     table = res.summary  # the usual summary has success = reached
     assert set(table["agent"]) == agents
