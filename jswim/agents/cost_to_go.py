@@ -47,7 +47,11 @@ class CostToGo(NamedTuple):
     cell : float
         Grid spacing (``a``).
     speed : float
-        The fastest mean speed over a stroke (``a`` per step): the slope used outside the grid.
+        The square gait's mean speed (``a`` per step): the slope used outside the grid.
+
+    Calling it, ``ctg(shape, p)``, gives the steps to go from lattice shape ``shape`` (int,
+    ``(...)``) with the target at body-frame ``p`` (``(..., 2)``, ``a``): bilinear inside the
+    grid, beyond it the edge's value plus the distance past it at ``speed``.
     """
 
     values: Array
@@ -56,9 +60,8 @@ class CostToGo(NamedTuple):
     speed: float
 
     def __call__(self, shape: Array, p: Array) -> Array:
-        """Steps to go from lattice shape ``shape`` (int, ``(...)``) with the target at
-        body-frame ``p`` (``(..., 2)``, ``a``); beyond the grid, the edge's value plus the
-        distance past it at `speed`."""
+        # the class docs' call: bilinear inside the grid, the edge's value plus the distance
+        # past it at `speed` outside
         n = self.values.shape[-1]
         g = (p + self.half) / self.cell
         gc = jnp.clip(g, 0.0, n - 1.000001)

@@ -230,8 +230,8 @@ class NavigationWorld(Environment):
         return NavParams(swimmer, tp)
 
     def __repr__(self) -> str:
-        """The fields, then the target's budget and the rule that gave it (a target in a flow
-        has a flow budget: [`jswim.env.targets.flow_budget`][jswim.env.targets.flow_budget])."""
+        # the fields, then the target's budget and the rule that gave it (a target in a flow
+        # has a flow budget: jswim.env.targets.flow_budget)
         fields = ", ".join(
             f"{f.name}={getattr(self, f.name)!r}" for f in dataclasses.fields(self) if f.repr
         )
