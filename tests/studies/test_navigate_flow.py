@@ -53,6 +53,7 @@ def test_the_budget_is_at_least_four_zermelo_times(fraction, bearing):
     assert all(p.steps == budget for p in plans)
 
 
+@pytest.mark.slow  # every row's yardstick: the swimmer's optimum is searched (~10-50 s)
 def test_an_unreachable_target_says_so():
     # a cross stream of 1.2 v and a target straight ahead: no heading reaches it
     assert _crab_time(1.2, 0.0) is None
@@ -65,6 +66,7 @@ def test_an_unreachable_target_says_so():
     assert rows["zermelo"].reached is False and rows["controller"].reached is False
 
 
+@pytest.mark.slow  # every row's yardstick: the swimmer's optimum is searched (~10-50 s)
 def test_every_row_carries_its_time_ratio():
     plans = navigate.with_budgets(_plans(0.5, 90.0))
     rows = {p.agent: r for p in plans for r in navigate.baseline_rows([p])}
@@ -88,6 +90,7 @@ def test_every_row_carries_its_time_ratio():
     assert g["zermelo_ratio"] == ctrl.zermelo_ratio
 
 
+@pytest.mark.slow  # every row's yardstick: the swimmer's optimum is searched (~10-50 s)
 def test_zermelo_is_never_cut_by_steps():
     # --steps shortens the agents' runs, not the yardstick's (38.3 steps here, --steps 30)
     o = StudyOptions(flow="uniform", flows=(0.5,), bearings=(90.0,), agents=("zermelo",), steps=30)
@@ -97,6 +100,7 @@ def test_zermelo_is_never_cut_by_steps():
     assert row.zermelo_ratio == pytest.approx(1.0)
 
 
+@pytest.mark.slow  # every row's yardstick: the swimmer's optimum is searched (~10-50 s)
 def test_the_llm_sees_the_local_flow_in_its_records(tmp_path):
     from jswim.llm.backend import Backend
     from jswim.llm.reference import completion
@@ -124,6 +128,7 @@ def test_the_llm_sees_the_local_flow_in_its_records(tmp_path):
     assert any(d.startswith("background flow") for d in meta["fidelity_deviations"])
 
 
+@pytest.mark.slow  # every row's yardstick: the swimmer's optimum is searched (~10-50 s)
 def test_compare_sets_flow_studies_side_by_side_with_their_zermelo_columns(tmp_path):
     from jswim.studies.overview import compare_text, show_text
     from jswim.studies.run import run_study
