@@ -80,6 +80,30 @@ class CostToGo(NamedTuple):
         return inside + past / self.speed
 
 
+@functools.partial(jax.jit, static_argnames=("inner", "n_actions"))
+def _steps(inner: Any, n_actions: int, still: Any, shapes: Array) -> tuple[Array, Array]:
+    """Every action's step from every lattice shape (rows of ``shapes``: per-DOF positions),
+    from the origin at heading 0; compiled once per world (``lattice_moves`` is called by both
+    the time to go and the lower bound of each solve)."""
+    k = inner.roc_levels
+
+    def one(levels: Array) -> tuple[Array, Array]:
+        st = start_state(inner.model, levels / k)
+        st = st._replace(theta=jnp.zeros_like(st.theta), cos=jnp.ones_like(st.cos))
+        st = st._replace(sin=jnp.zeros_like(st.sin), theta_lo=jnp.zeros_like(st.theta_lo))
+        st = st._replace(cos_lo=jnp.zeros_like(st.cos_lo), sin_lo=jnp.zeros_like(st.sin_lo))
+        noise = jnp.zeros((), st.x.dtype)
+
+        def act(a: Array) -> tuple[Array, Array]:
+            new, _ = inner.advance(st, a, noise, still)
+            d = jnp.stack([new.x + new.x_lo, new.y + new.y_lo, new.theta + new.theta_lo])
+            return d, jnp.round((new.frac + new.frac_lo) * k).astype(jnp.int32)
+
+        return jax.vmap(act)(jnp.arange(n_actions))
+
+    return jax.vmap(one)(shapes)
+
+
 def lattice_moves(env: Any, params: Any) -> tuple[np.ndarray, np.ndarray]:
     """Each (lattice shape, action code)'s still-fluid step, from the world's own step.
 
@@ -97,24 +121,7 @@ def lattice_moves(env: Any, params: Any) -> tuple[np.ndarray, np.ndarray]:
     order = np.argsort(index)
     shapes = shapes[order]
     still = params.swimmer.replace(flow=None, zeta=0.0)
-    inner = env.inner
-
-    @jax.jit
-    def one(levels: Array) -> tuple[Array, Array]:
-        st = start_state(inner.model, levels / k)
-        st = st._replace(theta=jnp.zeros_like(st.theta), cos=jnp.ones_like(st.cos))
-        st = st._replace(sin=jnp.zeros_like(st.sin), theta_lo=jnp.zeros_like(st.theta_lo))
-        st = st._replace(cos_lo=jnp.zeros_like(st.cos_lo), sin_lo=jnp.zeros_like(st.sin_lo))
-        noise = jnp.zeros((), st.x.dtype)
-
-        def act(a: Array) -> tuple[Array, Array]:
-            new, _ = inner.advance(st, a, noise, still)
-            d = jnp.stack([new.x + new.x_lo, new.y + new.y_lo, new.theta + new.theta_lo])
-            return d, jnp.round((new.frac + new.frac_lo) * k).astype(jnp.int32)
-
-        return jax.vmap(act)(jnp.arange(env.n_actions))
-
-    d, j = jax.vmap(one)(jnp.asarray(shapes, jnp.result_type(float)))
+    d, j = _steps(env.inner, env.n_actions, still, jnp.asarray(shapes, jnp.result_type(float)))
     after = (np.asarray(j) * (k + 1) ** np.arange(n)).sum(-1)
     return np.asarray(d, np.float64), after
 

@@ -46,7 +46,7 @@ from jswim.agents.cost_to_go import lattice_moves, still_cost_to_go
 from jswim.env.discretiser import corner, positions
 from jswim.env.episodes import rollout
 from jswim.env.navigation import NavigationWorld, wrap
-from jswim.errors import ConfigError
+from jswim.errors import ConfigError, check_choice
 
 __all__ = [
     "BEAM",
@@ -477,8 +477,7 @@ def solve(
         unknown method or a beam below 1.
     """
     check_world(env, params)
-    if method not in METHODS:
-        raise ConfigError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    check_choice(method, METHODS, "method")
     if isinstance(beam, bool) or not isinstance(beam, (int, np.integer)) or beam < 1:
         raise ConfigError(f"beam must be a whole number >= 1, got {beam!r}")
     key = jax.random.PRNGKey(key) if isinstance(key, (int, np.integer)) else key
