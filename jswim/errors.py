@@ -114,6 +114,7 @@ SIZE_RANGES = {
     "samples": (1, 10_000),
     "n_ht": (0, 100),
     "train_episodes": (1, 10_000),
+    "starts": (1, 1_000),
 }
 
 

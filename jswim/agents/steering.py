@@ -83,9 +83,30 @@ class Controller:
         loop = 2.0 * self.plan.radius * math.sin(self.plan.turn / 2) / 4.0  # chord per step
         return SWIM_SPEED * (1.0 - share) + loop * share
 
-    def start(self) -> ControllerState:
-        """The memory of a controller at the start, hub 0 = ``(hi, hi)``."""
-        return controller_start()
+    def start(self, levels: Array | None = None) -> ControllerState:
+        """The memory of a controller at the start: on hub 1 where the shape starts at ``(lo,
+        lo)``, else on hub 0 = ``(hi, hi)`` (``levels``: the start's corner levels, int32
+        ``(2,)``; None: hub 0)."""
+        memory = controller_start()
+        if levels is None:
+            return memory
+        return memory._replace(hub=jnp.all(jnp.asarray(levels) == 0).astype(jnp.int32))
+
+    def to_hub(self, levels: Array, n_dof: int) -> tuple[Array, Array]:
+        """``(needed, action)``: from a start on neither hub, ``(hi, lo)`` or ``(lo, hi)``, the
+        one step that moves the DOF at ``lo`` to ``hi``, onto hub 0; ``needed`` False on a
+        hub. ``levels``: the start's corner levels, int32 ``(2,)``."""
+        levels = jnp.asarray(levels)
+        move = jnp.stack([jnp.argmin(levels), jnp.asarray(self.plan_k)]).astype(jnp.int32)
+        return levels[0] != levels[1], self.encode(move, n_dof)
+
+    def encode(self, move: Array, n_dof: int) -> Array:
+        """The world's action for a lattice move ``(dof, q)`` (ROC ``q / plan_k``): an integer
+        code on the world's K lattice, else a float ROC vector ``(n_dof,)``."""
+        if self.world_k:
+            return move[0] * (2 * self.world_k + 1) + move[1] + self.world_k
+        roc = move[1].astype(jnp.result_type(float)) / self.plan_k
+        return jnp.where(jnp.arange(n_dof) == move[0], roc, 0.0)
 
     def act(
         self,
@@ -101,10 +122,7 @@ class Controller:
         radius) of it, and the new memory; ``rotation``: the flow's turn of the body (rad per
         step, [`flow_rotation`][jswim.agents.steering.flow_rotation]), 0 in still fluid."""
         move, memory = controller_step(self.plan, memory, bearing, distance, reach, rotation)
-        if self.world_k:
-            return move[0] * (2 * self.world_k + 1) + move[1] + self.world_k, memory
-        roc = move[1].astype(jnp.result_type(float)) / self.plan_k
-        return jnp.where(jnp.arange(n_dof) == move[0], roc, 0.0), memory
+        return self.encode(move, n_dof), memory
 
 
 def controller(env: Any, reverse: bool = True) -> Controller:
@@ -188,6 +206,8 @@ def _course_flow(flow: Any, position: Array, target: Array, heading: Array) -> A
 def _one(key: Array, params: Any, env: Any, ctrl: Controller, steps: int) -> Trajectory:
     state = env.reset(key, params)
     keys = jax.random.split(key, steps)
+    levels = state.swimmer.levels
+    off_hub, first = ctrl.to_hub(levels, env.n_dof)  # a start on neither hub: one step onto hub 0
 
     def body(carry, k):
         st, memory = carry
@@ -202,11 +222,14 @@ def _one(key: Array, params: Any, env: Any, ctrl: Controller, steps: int) -> Tra
             )
             flow = _course_flow(env.flow, obs.position[0], view.position, obs.orientation[0])
             bearing = crab_bearing(bearing, flow.astype(bearing.dtype), ctrl.speed(rotation))
-        action, memory = ctrl.act(memory, bearing, view.distance, reach, env.n_dof, rotation)
+        action, chosen = ctrl.act(memory, bearing, view.distance, reach, env.n_dof, rotation)
+        prelude = off_hub & (st.t == 0)
+        action = jnp.where(prelude, first, action)
+        memory = jax.tree.map(lambda a, b: jnp.where(prelude, a, b), memory, chosen)
         st, info = env.step(k, st, action, params)
         return (st, memory), Trajectory(st, env.observe(st, params), info)
 
-    return jax.lax.scan(body, (state, ctrl.start()), keys)[1]
+    return jax.lax.scan(body, (state, ctrl.start(levels)), keys)[1]
 
 
 @functools.partial(jax.jit, static_argnames=("env", "ctrl", "steps", "axes"))
@@ -229,8 +252,9 @@ def run(
     Parameters
     ----------
     env : NavigationWorld
-        From ``jswim.make(..., target=spec)``; the swimmer must start at ``(hi, hi)`` (the
-        default ``init``), the controller's hub 0.
+        From ``jswim.make(..., target=spec)``; the swimmer may start on any corner of its
+        shape square (``init``): on ``(hi, hi)`` or ``(lo, lo)`` the controller starts on that
+        hub, from ``(hi, lo)`` or ``(lo, hi)`` its first step moves onto ``(hi, hi)``.
     params : NavParams
         Shared, or with a value per run where the world batches them (e.g. one target per run).
     key : PRNG key or int, or keys ``(B, 2)``
@@ -251,14 +275,9 @@ def run(
     Raises
     ------
     ConfigError
-        As [`controller`][jswim.agents.steering.controller]; a start other than ``(hi, hi)``.
+        As [`controller`][jswim.agents.steering.controller].
     """
     ctrl = controller(env, reverse)
-    init = np.asarray(params.swimmer.init)
-    if not np.all(init == 1):
-        raise ConfigError(
-            f"the steering controller starts on (hi, hi) (init '++'), got init {init.tolist()}"
-        )
     steps = int(np.max(np.asarray(params.target.budget))) if steps is None else int(steps)
     keys = jnp.asarray(jax.random.key_data(key) if _typed(key) else key)
     if keys.ndim == 0:

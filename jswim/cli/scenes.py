@@ -24,9 +24,10 @@ STUDY_HELP = {
     "turn: the school's speed against N and D, beside a lone swimmer's",
     "navigate": "Purcell's swimmer steered to targets at several distances and bearings, along a path and after "
     "a moving target (K = 2 unless --roc-levels), in still fluid or a background flow (--flow): the LLM, "
-    "Q-learning, PPO, the steering controller and random (and Zermelo's optimal steerer in a flow); "
-    "success, steps to the target, path over straight distance, energy and energy per distance, and in a "
-    "flow each agent's time over Zermelo's",
+    "Q-learning, PPO, the steering controller, the model-predictive agent (mpc) and random, measured "
+    "against the swimmer's own optimum (optimal: its least-time strokes; and Zermelo's point steerer in "
+    "a flow); success, steps to the target, time over the optimum's, path over straight distance, "
+    "energy and energy per distance",
 }
 
 
@@ -152,7 +153,9 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
                 metavar="KIND",
                 help="a background flow (an extension): uniform (across the start heading), shear "
                 "(u = rate y), poiseuille (a channel along x) or taylor-green (vortex cells); "
-                "Zermelo's optimal steerer joins the agents and every row gets its time ratio to it",
+                "Zermelo's point steerer (no turning limit, the flow at its centre) joins the "
+                "agents as a yardstick, and every row gets its time over his beside its time over "
+                "the swimmer's own optimum",
             ),
         ),
         (
@@ -163,6 +166,18 @@ OPTIONS: dict[str, tuple[tuple[str, dict[str, Any]], ...]] = {
                 help="the flow's speeds, fractions of the swimming speed 0.0478 a per step, at most 2 "
                 "(default 0,0.5,0.9; past 1 some targets are unreachable and the rows say so); "
                 "a grid size: more speeds on an existing folder add their runs to it",
+            ),
+        ),
+        (
+            "--starts",
+            dict(
+                type=int,
+                metavar="N",
+                help="seeded starts of every agent, the same for each (start 0 the study's own, "
+                "(hi, hi) headed along +x; the others a heading within 45 degrees of +x and a "
+                "corner of the shape square, drawn from --seed); each multiplies every agent's "
+                "runs, pooled into the cell's row (default 1); a grid size: more starts on an "
+                "existing folder add their runs to it",
             ),
         ),
         (

@@ -40,7 +40,7 @@ from jswim.env.base import Environment, Observation, Scenery, StepInfo, scaled
 from jswim.env.discretiser import Cells, corner, offered_mask, positions
 from jswim.env.flows import SWIM_SPEED
 from jswim.env.params import EnvParams, broadcast_params
-from jswim.env.state import EnvState, dof_values
+from jswim.env.state import EnvState, dof_values, turned
 from jswim.env.swimmer_world import SwimmerWorld
 from jswim.env.targets import (
     FixedTarget,
@@ -251,7 +251,8 @@ class NavigationWorld(Environment):
     # -- the task ----------------------------------------------------------------------------
 
     def _start(self, key: Array, params: NavParams) -> EnvState:
-        return self.inner.reset(key, params.swimmer)
+        # the swimmer's start, turned to the target spec's start heading (0: as it is)
+        return turned(self.inner.reset(key, params.swimmer), params.target.heading)
 
     def reset(self, key: Array, params: NavParams) -> NavState:
         zero = jnp.zeros((), jnp.int32)
@@ -394,7 +395,7 @@ class NavigationWorld(Environment):
         """The swimmer's leaves broadcast to ``n`` runs (as the swimmer world's); a target leaf
         with a leading axis more than the default's is per run."""
         swimmer = broadcast_params(params.swimmer, n)
-        ref = (2, 1, 0, 0)
+        ref = (2, 1, 0, 0, 0)
         axes = TargetParams(
             *(0 if jnp.ndim(v) > r else None for v, r in zip(params.target, ref, strict=True))
         )

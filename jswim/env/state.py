@@ -144,6 +144,21 @@ def start_state(model: SwimmerModel, levels: Array, dtype: Any = None) -> EnvSta
     )
 
 
+def turned(state: EnvState, angle: Array | float) -> EnvState:
+    """``state`` turned about its centroid by ``angle`` (rad, counterclockwise; the shape and
+    the centroid unchanged), its orientation and its cosine and sine recomputed in float64 and
+    stored as pairs of the state's dtype. ``angle = 0`` returns ``state`` as it is, bit for bit."""
+    dtype = state.x.dtype
+    with jax.enable_x64(True):
+        theta = wide(state.theta, state.theta_lo) + jnp.asarray(angle, jnp.float64)
+        (th, tl), (ch, cl), (sh, sl) = (
+            narrow(v, dtype) for v in (theta, jnp.cos(theta), jnp.sin(theta))
+        )
+    new = state._replace(theta=th, theta_lo=tl, cos=ch, cos_lo=cl, sin=sh, sin_lo=sl)
+    same = jnp.asarray(angle) == 0
+    return jax.tree.map(lambda a, b: jnp.where(same, a, b), state, new)
+
+
 def narrow(v: Array, dtype: Any) -> tuple[Array, Array]:
     """A float64 value as a pair ``(hi, lo)`` of ``dtype`` (``lo = 0`` when ``dtype`` is float64)."""
     hi = v.astype(dtype)

@@ -2,8 +2,8 @@
 
 Three kinds, each with a success radius and a step budget (``a``: the swimmer's length unit,
 link lengths for Purcell's swimmer; angles in degrees, counterclockwise positive, from the
-start heading, which is the lab's +x: the paper's swimmer starts with its middle link along
-+x and its square gait swims that way):
+lab's +x, which is the default start heading: the paper's swimmer starts with its middle link
+along +x and its square gait swims that way):
 
 * [`FixedTarget`][jswim.env.targets.FixedTarget]: a point ``distance`` away at ``bearing``
   (180: straight behind);
@@ -16,6 +16,11 @@ Every kind compiles to the same arrays ([`TargetParams`][jswim.env.targets.Targe
 waypoints ``(P, 2)`` and a velocity; the target at step ``t`` of an episode, while waypoint
 ``i`` is current, is ``points[i] + velocity t``. A budget left ``None`` is set from the
 steering controller's measured physics ([`default_budget`][jswim.env.targets.default_budget]).
+
+Every kind also carries the swimmer's ``start_heading`` (degrees from the lab's +x, default 0):
+the navigation world turns the swimmer about its centroid by it at every start (a seeded start
+of `jswim study navigate --starts`); the target stays where the spec puts it, so a target at
+bearing 90 is 90 - ``start_heading`` degrees off the swimmer's nose.
 """
 
 from __future__ import annotations
@@ -107,6 +112,20 @@ def _check_common(radius: Any, budget: Any) -> tuple[float, int | None]:
     return r, None if budget is None else int(budget)
 
 
+def _check_heading(spec: Any) -> None:
+    object.__setattr__(
+        spec, "start_heading", _number(spec.start_heading, "start_heading", limit=MAX_BEARING)
+    )
+
+
+def _without_default_heading(data: dict[str, Any]) -> dict[str, Any]:
+    # the default start leaves no key: every spec's JSON (a row's target, a run's identity) is
+    # as it was before start headings existed
+    if data.get("start_heading") == 0.0:
+        data.pop("start_heading")
+    return data
+
+
 def _polar(distance: float, bearing: float) -> tuple[float, float]:
     b = math.radians(bearing)
     return distance * math.cos(b), distance * math.sin(b)
@@ -129,6 +148,9 @@ class FixedTarget:
     budget : int, optional
         Steps per episode (at most `MAX_BUDGET`); default: measured for the steering controller
         ([`default_budget`][jswim.env.targets.default_budget]).
+    start_heading : float
+        The swimmer's heading at the start (degrees from the lab's +x, counterclockwise, within
+        one turn; default 0, the paper's start): the world turns it about its centroid.
 
     Raises
     ------
@@ -140,11 +162,13 @@ class FixedTarget:
     bearing: float = 0.0
     radius: float = DEFAULT_RADIUS
     budget: int | None = None
+    start_heading: float = 0.0
 
     kind = "fixed"
 
     def __post_init__(self) -> None:
         r, b = _check_common(self.radius, self.budget)
+        _check_heading(self)
         d = _number(self.distance, "distance", positive=True, limit=MAX_DISTANCE)
         if d <= r:
             raise ConfigError(f"distance {d} must exceed the success radius {r}")
@@ -163,7 +187,7 @@ class FixedTarget:
 
     def to_dict(self) -> dict[str, Any]:
         """The spec as plain JSON values (``kind`` first); [`target_from_dict`][jswim.env.targets.target_from_dict] reads it."""
-        return {"kind": self.kind, **dataclasses.asdict(self)}
+        return _without_default_heading({"kind": self.kind, **dataclasses.asdict(self)})
 
 
 @dataclasses.dataclass(frozen=True)
@@ -181,6 +205,9 @@ class Waypoints:
     budget : int, optional
         Steps per episode (at most `MAX_BUDGET`); default: measured for the steering controller
         ([`default_budget`][jswim.env.targets.default_budget]).
+    start_heading : float
+        The swimmer's heading at the start (degrees from the lab's +x, counterclockwise, within
+        one turn; default 0, the paper's start): the world turns it about its centroid.
 
     Raises
     ------
@@ -192,11 +219,13 @@ class Waypoints:
     points_xy: tuple[tuple[float, float], ...]
     radius: float = DEFAULT_RADIUS
     budget: int | None = None
+    start_heading: float = 0.0
 
     kind = "waypoints"
 
     def __post_init__(self) -> None:
         r, b = _check_common(self.radius, self.budget)
+        _check_heading(self)
         try:
             pts = tuple(
                 (
@@ -228,12 +257,15 @@ class Waypoints:
         return (0.0, 0.0)
 
     def to_dict(self) -> dict[str, Any]:
-        return {
-            "kind": self.kind,
-            "points": [list(p) for p in self.points_xy],
-            "radius": self.radius,
-            "budget": self.budget,
-        }
+        return _without_default_heading(
+            {
+                "kind": self.kind,
+                "points": [list(p) for p in self.points_xy],
+                "radius": self.radius,
+                "budget": self.budget,
+                "start_heading": self.start_heading,
+            }
+        )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -254,6 +286,9 @@ class MovingTarget:
     budget : int, optional
         Steps per episode (at most `MAX_BUDGET`); default: measured for the steering controller
         ([`default_budget`][jswim.env.targets.default_budget]).
+    start_heading : float
+        The swimmer's heading at the start (degrees from the lab's +x, counterclockwise, within
+        one turn; default 0, the paper's start): the world turns it about its centroid.
 
     Raises
     ------
@@ -267,11 +302,13 @@ class MovingTarget:
     velocity: tuple[float, float] = (0.0, 0.0)
     radius: float = DEFAULT_RADIUS
     budget: int | None = None
+    start_heading: float = 0.0
 
     kind = "moving"
 
     def __post_init__(self) -> None:
         r, b = _check_common(self.radius, self.budget)
+        _check_heading(self)
         d = _number(self.distance, "distance", positive=True, limit=MAX_DISTANCE)
         if d <= r:
             raise ConfigError(f"distance {d} must exceed the success radius {r}")
@@ -297,7 +334,7 @@ class MovingTarget:
     def to_dict(self) -> dict[str, Any]:
         out = {"kind": self.kind, **dataclasses.asdict(self)}
         out["velocity"] = list(self.velocity)
-        return out
+        return _without_default_heading(out)
 
 
 #: Any target spec.
@@ -352,12 +389,15 @@ class TargetParams(NamedTuple):
         Success radius (``a``).
     budget : Array () int32
         Steps per episode.
+    heading : Array ()
+        The swimmer's start heading (rad, from the lab's +x; ``start_heading`` of the spec).
     """
 
     points: Array
     velocity: Array
     radius: Array
     budget: Array
+    heading: Array
 
 
 def flow_budget(still: int, least_time: float | None) -> int:
@@ -535,8 +575,9 @@ def _measured_budget(spec: Target, model: Any, roc_levels: int) -> int:
         return steering_budget(model, distance, bearing, k, safety=BUDGET_SAFETY)
 
     pts = spec.points()
+    nose = math.radians(spec.start_heading)  # every turn is measured from the swimmer's heading
     if spec.kind == "waypoints":
-        total, start, heading = 0, (0.0, 0.0), 0.0
+        total, start, heading = 0, (0.0, 0.0), nose
         for p in pts:
             dx, dy = p[0] - start[0], p[1] - start[1]
             direction = math.atan2(dy, dx)
@@ -545,7 +586,7 @@ def _measured_budget(spec: Target, model: Any, roc_levels: int) -> int:
         return total
     speed = math.hypot(*spec.velocity)
     if speed == 0:
-        return leg(math.hypot(*pts[0]), math.atan2(pts[0][1], pts[0][0]))
+        return leg(math.hypot(*pts[0]), math.atan2(pts[0][1], pts[0][0]) - nose)
     gait = loop_motion(model, k, square_gait(k))
     v_gait = gait.displacement / gait.steps
     if speed >= v_gait:
@@ -558,7 +599,9 @@ def _measured_budget(spec: Target, model: Any, roc_levels: int) -> int:
     a, b, c = v @ v - v_gait**2, 2 * p @ v, p @ p
     t = (-b - math.sqrt(b * b - 4 * a * c)) / (2 * a)
     meet = p + v * t
-    return math.ceil(leg(math.hypot(*meet), math.atan2(meet[1], meet[0])) / (1 - speed / v_gait))
+    return math.ceil(
+        leg(math.hypot(*meet), math.atan2(meet[1], meet[0]) - nose) / (1 - speed / v_gait)
+    )
 
 
 def target_params(
@@ -582,7 +625,8 @@ def target_params(
     Returns
     -------
     TargetParams
-        ``points`` (P, 2), ``velocity`` (2,), ``radius`` () in ``dtype``, ``budget`` () int32.
+        ``points`` (P, 2), ``velocity`` (2,), ``radius`` () and ``heading`` () in ``dtype``,
+        ``budget`` () int32.
 
     Raises
     ------
@@ -595,4 +639,5 @@ def target_params(
         velocity=jnp.asarray(spec.velocity, dtype),
         radius=jnp.asarray(spec.radius, dtype),
         budget=jnp.asarray(default_budget(spec, model, roc_levels, flow), jnp.int32),
+        heading=jnp.asarray(math.radians(spec.start_heading), dtype),
     )

@@ -40,6 +40,8 @@ from jswim.env.targets import (
 )
 from jswim.env.work import lighthill_efficiency
 from jswim.judging import lattice
+from jswim.agents.protocol import derived_seed
+from jswim.agents.variants import init_label
 from jswim.judging.stats import median_interval, wilson_interval
 from jswim.results import as_run_rows, is_failed
 from jswim.results.row import RunRow
@@ -64,6 +66,7 @@ __all__ = [
     "NAV_TRAIN_EPISODES",
     "PATH",
     "PPO_SHARE",
+    "START_SPREAD",
     "cells",
     "flow_columns",
     "flow_grid",
@@ -73,8 +76,10 @@ __all__ = [
     "nav_row",
     "nav_summary",
     "plan_flow",
+    "seeded_start",
     "target_json",
     "target_kind",
+    "target_order",
     "targets",
     "with_budgets",
     "zermelo_path",
@@ -144,26 +149,52 @@ def flow_grid(o: Any) -> list[tuple[str, str, float | None, str]]:
     return out
 
 
+#: Seeded starts (``--starts``) turn the swimmer by up to this many degrees either way from the
+#: lab's +x: a target ahead stays ahead (within 45 degrees), one at 90 degrees to the side.
+START_SPREAD = 45.0
+
+
+def seeded_start(seed: int, index: int) -> tuple[float, str]:
+    """Start ``index`` of a study seeded ``seed``: ``(start heading, shape)``, the heading in
+    degrees from the lab's +x (uniform within `START_SPREAD` either way, to 0.01 degree) and the
+    shape a corner of the shape square as signs (``"+-"``: DOF 1 at ``hi``, DOF 2 at ``lo``;
+    each corner equally likely). Start 0 is the study's own: ``(0.0, "++")``. The same for every
+    agent, cell and flow of the study (`cells`)."""
+    if index == 0:
+        return 0.0, "++"
+    rng = np.random.default_rng(derived_seed("navigation-start", int(seed), int(index)))
+    heading = round(float(rng.uniform(-START_SPREAD, START_SPREAD)), 2)
+    return heading, "".join("+" if b else "-" for b in rng.integers(0, 2, 2))
+
+
 def cells(o: Any) -> list[Cell]:
     """The navigation study's cells for options ``o``: one per target (and, with ``--flow``,
-    per flow speed: `flow_grid`), on the K lattice of ``--roc-levels`` (2 where it is 1). Their
-    runs' steps are the target's budget (`--steps` overrides it), which the world measures:
-    planning leaves them to `with_budgets`. In a flow Zermelo's steerer joins the agents."""
+    per flow speed: `flow_grid`; with ``--starts N``, per seeded start, `seeded_start`: the
+    same group, so that its rows pool the starts), on the K lattice of ``--roc-levels`` (2
+    where it is 1). Their runs' steps are the target's budget (`--steps` overrides it), which
+    the world measures: planning leaves them to `with_budgets`. In a flow Zermelo's steerer
+    joins the agents of the first start (a point has no heading or shape to start from)."""
     k = o.roc_levels if o.roc_levels > 1 else NAV_ROC_LEVELS
-    return [
-        Cell(
-            group + suffix,
-            NAV_AGENTS + ((ZERMELO_AGENT,) if flow else ()),
-            n_ht=o.n_ht,
-            roc_levels=k,
-            tag="-".join(t for t in (tag, ftag) if t),
-            target=target_json(spec),
-            flow=flow,
-            flow_fraction=fraction,
-        )
-        for suffix, ftag, fraction, flow in flow_grid(o)
-        for group, tag, spec in targets(o.distances, o.bearings)
-    ]
+    out = []
+    for index in range(o.starts):
+        heading, shape = seeded_start(o.seed, index)
+        for suffix, ftag, fraction, flow in flow_grid(o):
+            for group, tag, spec in targets(o.distances, o.bearings):
+                yardstick = (ZERMELO_AGENT,) if flow and index == 0 else ()
+                out.append(
+                    Cell(
+                        group + suffix,
+                        NAV_AGENTS + yardstick,
+                        n_ht=o.n_ht,
+                        init=shape if index else None,  # None: the study's (hi, hi)
+                        roc_levels=k,
+                        tag="-".join(t for t in (tag, ftag, f"s{index}" if index else "") if t),
+                        target=target_json(dataclasses.replace(spec, start_heading=heading)),
+                        flow=flow,
+                        flow_fraction=fraction,
+                    )
+                )
+    return out
 
 
 def plan_flow(plan: Any) -> Flow | None:
@@ -175,8 +206,8 @@ def zermelo_path(target: str, flow: str) -> Any:
     """Zermelo's optimal path ([`jswim.agents.zermelo.zermelo`][jswim.agents.zermelo.zermelo]) to
     ``target`` through ``flow`` (both canonical JSON; ``""``: still fluid) at the swimming
     speed, computed once per process per target and flow (the target's budget aside)."""
-    spec = target_from_dict(json.loads(target))
-    return _zermelo(target_json(dataclasses.replace(spec, budget=None)), flow)
+    spec = target_from_dict(json.loads(target))  # a point: no budget, no start heading
+    return _zermelo(target_json(dataclasses.replace(spec, budget=None, start_heading=0.0)), flow)
 
 
 def optimal_path(plan: Any) -> Any:
@@ -261,7 +292,7 @@ def nav_row(
     orientation: Sequence[float],
     actions: list[list[float]],
     episode: NavSummary,
-    init: str = "++",
+    init: str | None = None,
     **columns: Any,
 ) -> RunRow:
     """The row of one navigation run of ``plan``, whatever its agent.
@@ -281,8 +312,9 @@ def nav_row(
         Each step's ``[dof, roc]``.
     episode : NavSummary
         The episode ([`jswim.env.navigation.summarise`][jswim.env.navigation.summarise]).
-    init : str
-        The start as the row shows it (signs; the controller's hub ``(hi, hi)``: ``"++"``).
+    init : str, optional
+        The start's shape as the row shows it (signs, ``"+-"``); default the plan's (the
+        study's own start ``(hi, hi)``: ``"++"``).
     **columns
         Further columns (an LLM run's own, through `jswim.studies.rows.with_llm`).
 
@@ -290,6 +322,8 @@ def nav_row(
     from jswim.studies.rows import build_row  # lazy: start-up (rows load the LLM driver)
 
     steps, reached = int(episode.steps), bool(episode.reached)  # plain numbers: the record's
+    if init is None:
+        init = init_label(plan.init) if isinstance(plan.init, (tuple, list)) else "++"
 
     verdict = {
         "success": reached,
@@ -421,7 +455,8 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
     def order(kv: tuple[tuple[str, str], list[RunRow]]) -> tuple:
         # by flow speed (the grid's order, not the group's text), then target, then agent
         (agent, group), g = kv
-        return (g[0].flow_fraction if g[0].flow_fraction is not None else -1.0, group, agent)
+        fraction = g[0].flow_fraction if g[0].flow_fraction is not None else -1.0
+        return (fraction, target_order(group), agent)
 
     for (agent, group), g in sorted(out.items(), key=order):
         reached = sum(bool(r.reached) for r in g)
@@ -439,7 +474,7 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
                 "path_ratio": mean([r.path_ratio for r in g]),
                 "energy": mean([r.energy for r in g]),
                 "energy_per_distance": mean([r.energy_per_distance for r in g]),
-                "optimal_steps": g[0].optimal_steps,
+                "optimal_steps": _median([r.optimal_steps for r in g]),
                 "time_ratio": None if math.isnan(ratio) else ratio,
                 "time_ratio_ci": None if math.isnan(ratio) else (ratio_lo, ratio_hi),
                 **(
@@ -455,6 +490,25 @@ def nav_summary(rows: Sequence[Any]) -> list[dict[str, Any]]:
             }
         )
     return table
+
+
+def target_order(group: str) -> tuple:
+    """A sort key of navigation groups in the study's order: the fixed targets by distance, then
+    bearing (numbers, not text: 90 before 180), then the path, then the moving target."""
+    kind = target_kind(group)
+    if kind.startswith("fixed"):
+        try:
+            d, b = (float(part.split("=")[1]) for part in kind.split()[1:3])
+            return (0, d, b, kind)
+        except (IndexError, ValueError):  # a group written otherwise: after the grid's
+            return (0, math.inf, math.inf, kind)
+    return ({"path": 1, "moving": 2}.get(kind, 3), 0.0, 0.0, kind)
+
+
+def _median(vals: list[Any]) -> float | None:
+    # a cell's optimum: one value per start (the median of the starts' with --starts)
+    vals = [float(v) for v in vals if v is not None]
+    return float(np.median(vals)) if vals else None
 
 
 def target_kind(group: str) -> str:
@@ -487,7 +541,13 @@ def nav_overview(rows: Sequence[Any]) -> list[dict[str, Any]]:
     order = {a: i for i, a in enumerate(NAV_AGENTS)}
     table = []
     for (kind, fraction, target, agent), g in sorted(
-        out.items(), key=lambda kv: (*kv[0][:3], order.get(kv[0][3], len(order)), kv[0][3])
+        out.items(),
+        key=lambda kv: (
+            *kv[0][:2],
+            target_order(kv[0][2]),
+            order.get(kv[0][3], len(order)),
+            kv[0][3],
+        ),
     ):
         reached = sum(bool(r.reached) for r in g)
         ratios = [r.time_ratio for r in g if r.reached and r.time_ratio is not None]

@@ -161,6 +161,9 @@ class StudyOptions:
     flows: tuple[float, ...] = DEFAULT_FLOWS
     # Episodes of each target's budget that Q-learning and PPO train for in the navigation study.
     train_episodes: int = 400
+    # Seeded starts of every navigation agent (heading and shape; jswim.studies.navigate.seeded_start),
+    # the same for every agent: start 0 is the study's own, (hi, hi) headed along +x.
+    starts: int = 1
 
     def __post_init__(self) -> None:
         # A value given twice (--zetas 0,0.0,1, --swimmer purcell,purcell) names one setting once.
@@ -176,7 +179,7 @@ class StudyOptions:
             values = getattr(self, name)
             if values is not None and len(set(values)) < len(values):
                 object.__setattr__(self, name, tuple(dict.fromkeys(values)))
-        for name in ("steps", "runs", "q_runs", "samples", "n_ht", "train_episodes"):
+        for name in ("steps", "runs", "q_runs", "samples", "n_ht", "train_episodes", "starts"):
             if getattr(self, name) is not None:
                 check_size(name, getattr(self, name))
         if any(not (math.isfinite(d) and 0.25 < d <= MAX_DISTANCE) for d in self.distances):

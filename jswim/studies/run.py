@@ -142,6 +142,7 @@ GRID_SIZE = (
     "prompt_files",
     "samples",
     "roc_levels_grid",
+    "starts",
     *SCENE_GRIDS,
 )
 

@@ -383,6 +383,10 @@ def _check_grids(study: str, spec: StudySpec, o: StudyOptions) -> None:
             f"the {study} study has no use for --pair-prompt {o.pair_prompt} (pair_prompt: only LLM "
             "runs on a pair of swimmers read it, as in jswim study pair with the llm agent); leave it out"
         )
+    if study != "navigate" and o.starts != 1:
+        raise ConfigError(
+            f"the {study} study has no use for --starts (only jswim study navigate reads it); leave it out"
+        )
     if study != "navigate" and o.flow:
         raise ConfigError(
             f"the {study} study has no use for --flow (only jswim study navigate reads it); leave it out"

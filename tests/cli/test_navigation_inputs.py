@@ -40,6 +40,10 @@ def refused(capsys, tmp_path, *args: str) -> str:
         (["--distances", "3,,6"], "empty items"),
         (["--bearings", "0,,90"], "empty items"),
         (["--distances", "abc"], "--distances"),
+        (["--starts", "0"], "--starts"),
+        (["--starts", "-2"], "--starts"),
+        (["--starts", "99999999999"], "--starts"),
+        (["--starts", "2.5"], "--starts"),
     ],
 )
 def test_navigate_refuses_in_one_line(capsys, tmp_path, args, says):
@@ -83,3 +87,9 @@ def test_targets_keep_what_is_valid():
     t = FixedTarget(3, 90, budget=MAX_COUNT)
     assert (t.distance, t.bearing, t.budget) == (3.0, 90.0, MAX_COUNT)
     assert isinstance(t.distance, float)
+
+
+@pytest.mark.parametrize("study", ["curves", "noise", "wall"])
+def test_other_studies_refuse_seeded_starts(capsys, tmp_path, study):
+    line = refused(capsys, tmp_path, "study", study, "--starts", "3")
+    assert "--starts" in line
