@@ -24,19 +24,12 @@ from jax import Array
 
 from jswim.agents import optimal
 from jswim.env.navigation import NavigationWorld
-from jswim.errors import ConfigError
 
 __all__ = ["HORIZON", "REPLAN", "run"]
 
 #: Steps looked ahead, steps played between plans and states kept per layer (measured beside
 #: ``HORIZON`` in `jswim.agents.optimal`).
 HORIZON, REPLAN, BEAM = optimal.HORIZON, optimal.REPLAN, optimal.BEAM
-
-
-def _positive(value: Any, what: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ConfigError(f"{what} must be a whole number >= 1, got {value!r}")
-    return int(value)
 
 
 def run(
@@ -76,10 +69,10 @@ def run(
     ConfigError
         As [`optimal.solve`][jswim.agents.optimal.solve] (zeta aside); a size below 1.
     """
-    horizon = _positive(horizon, "horizon")
-    replan = _positive(replan, "replan")
-    beam = _positive(beam, "beam")
+    horizon = optimal.check_whole(horizon, "horizon")
+    replan = optimal.check_whole(replan, "replan")
+    beam = optimal.check_whole(beam, "beam")
     optimal.check_world(env, params._replace(swimmer=params.swimmer.replace(zeta=0.0)))
     if steps is not None:
-        steps = _positive(steps, "steps")
+        steps = optimal.check_whole(steps, "steps")
     return optimal.receding(env, params, key, steps, horizon=horizon, replan=replan, beam=beam)

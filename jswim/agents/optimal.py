@@ -54,6 +54,7 @@ __all__ = [
     "METHODS",
     "REPLAN",
     "OptimalResult",
+    "check_whole",
     "check_world",
     "heuristic",
     "lower_bound",
@@ -250,6 +251,13 @@ def _merge_keys(cell: np.ndarray) -> np.ndarray:
     )
 
 
+@jax.jit
+def _select(cand: Any, idx: Array) -> Any:
+    """The kept candidates ``idx`` (flat row-major indices of ``(width, n_actions)``) as the
+    next frontier: one compiled gather (leaf by leaf outside ``jit`` it was most of a solve)."""
+    return jax.tree.map(lambda v: v.reshape((-1,) + v.shape[2:])[idx], cand)
+
+
 def _take(tree: Any, idx: Array) -> Any:
     return jax.tree.map(lambda v: v[idx], tree)
 
@@ -298,9 +306,7 @@ def _beam(
         n = len(kept)
         idx = np.zeros(width, np.int64)
         idx[:n] = kept
-        frontier = jax.tree.map(
-            lambda v: v.reshape((width * n_act,) + v.shape[2:])[jnp.asarray(idx)], cand
-        )
+        frontier = _select(cand, jnp.asarray(idx))
         alive = np.arange(width) < n
         layers.append((idx // n_act, idx % n_act))
     return layers, [], score, steps
@@ -412,26 +418,40 @@ def _closed_loop(env: NavigationWorld, params: Any, key: Array, steps: int) -> n
     return codes[: int(np.argmax(reached)) + 1] if reached.any() else codes[:0]
 
 
+@functools.partial(jax.jit, static_argnames=("env", "h"))
+def _greedy(env: NavigationWorld, h: Any, params: Any, noise: Array, st: Any) -> tuple[Any, Array]:
+    """One step of the time to go's closed-loop policy: the action whose next state has the
+    least estimate (a reached one first). Compiled once per world and time to go."""
+    nxt = jax.vmap(lambda a: env.advance(st, a, noise, params)[0])(jnp.arange(env.n_actions))
+    est = jax.vmap(lambda s: h(s, params))(nxt)
+    best = jnp.argmin(jnp.where(nxt.reached, -1.0, est))
+    return _take(nxt, best), best
+
+
 def _dp(env: NavigationWorld, params: Any, key: Array, h: Any, steps: int) -> np.ndarray:
     """The closed-loop policy of the time to go, ``steps`` steps (fewer: the target reached)."""
     state = env.reset(key, params)
     noise = jnp.zeros_like(env.noise(jax.random.PRNGKey(0), state))
-    n_act = env.n_actions
-
-    @jax.jit
-    def act(st: Any) -> tuple[Any, Array]:
-        nxt = jax.vmap(lambda a: env.advance(st, a, noise, params)[0])(jnp.arange(n_act))
-        est = jax.vmap(lambda s: h(s, params))(nxt)
-        best = jnp.argmin(jnp.where(nxt.reached, -1.0, est))
-        return _take(nxt, best), best
-
     actions = []
     for _ in range(steps):
-        state, a = act(state)
+        state, a = _greedy(env, h, params, noise, state)
         actions.append(int(a))
         if bool(state.reached):
             break
     return np.asarray(actions, np.int32)
+
+
+def check_whole(value: Any, what: str) -> int:
+    """``value`` as an int if it is a whole number ``>= 1`` (a beam, horizon or step count).
+
+    Raises
+    ------
+    ConfigError
+        Anything else (a bool, a float, zero, a negative number), in one line naming ``what``.
+    """
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ConfigError(f"{what} must be a whole number >= 1, got {value!r}")
+    return int(value)
 
 
 def solve(
@@ -478,8 +498,7 @@ def solve(
     """
     check_world(env, params)
     check_choice(method, METHODS, "method")
-    if isinstance(beam, bool) or not isinstance(beam, (int, np.integer)) or beam < 1:
-        raise ConfigError(f"beam must be a whole number >= 1, got {beam!r}")
+    check_whole(beam, "beam")
     key = jax.random.PRNGKey(key) if isinstance(key, (int, np.integer)) else key
     budget = int(params.target.budget)
     steps = budget if max_steps is None else min(int(max_steps), budget)
