@@ -492,6 +492,7 @@ _OWN_AXES = {
     "train_episodes": ("navigate",),
     "flow": ("navigate",),
     "flows": ("navigate",),
+    "starts": ("navigate",),
 }
 #: A setting's value as a study reads it, where that differs from the number recorded.
 _READ_AS = {

@@ -51,3 +51,10 @@ def test_a_temperature_sweep_s_page_does_not_give_the_backend_s_temperature_as_t
     assert "temperature per run" in settings["model"] and "temperature 0.0" not in settings["model"]
     assert settings["temperatures"] == "0, 0.25, 0.5, 0.75, 1"
     assert "roc_levels_grid" not in settings  # only the continuous study sweeps K
+
+
+def test_seeded_starts_show_on_a_navigation_page_only():
+    nav = dict(applicable_settings(_meta("navigate", grid={"starts": 4, "distances": [3.0]})))
+    assert nav["starts"] == "4"
+    curves = dict(applicable_settings(_meta("curves", grid={"starts": 1})))
+    assert "starts" not in curves
