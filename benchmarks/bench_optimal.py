@@ -31,9 +31,13 @@ from jswim.env.targets import FixedTarget
 FLOWS = ("uniform", "shear", "poiseuille", "taylor-green")
 
 
-def _solve_all(fraction: float, bearing: float, with_mpc: bool) -> float:
+def _solve_all(
+    fraction: float, bearing: float, with_mpc: bool, beam: int = optimal.BEAM_WIDTH
+) -> float:
     total = 0.0
-    print(f"target 3 a at {bearing:g} degrees, flows at {fraction:g} v, K = 2, float32")
+    print(
+        f"target 3 a at {bearing:g} degrees, flows at {fraction:g} v, K = 2, float32, beam {beam}"
+    )
     print(f"{'flow':14s} {'optimal':>7s} {'lower':>5s} {'ctrl':>5s} {'mpc':>5s} {'solve s':>8s}")
     for kind in FLOWS:
         env, params = jswim.make(
@@ -43,7 +47,7 @@ def _solve_all(fraction: float, bearing: float, with_mpc: bool) -> float:
             flow=study_flow(kind, fraction),
         )
         t = time.perf_counter()
-        best = optimal.solve(env, params)
+        best = optimal.solve(env, params, beam=beam)
         dt = time.perf_counter() - t
         total += dt
         ctrl = summarise(env, params, steering.run(env, params, 0))[0]
@@ -102,8 +106,9 @@ def main() -> None:
     ap.add_argument("--bearing", type=float, default=90.0)
     ap.add_argument("--mpc", action="store_true", help="also run the model-predictive agent")
     ap.add_argument("--study", action="store_true", help="also time a study with and without")
+    ap.add_argument("--beam", type=int, default=optimal.BEAM_WIDTH, help="the optimum's beam width")
     args = ap.parse_args()
-    _solve_all(args.fraction, args.bearing, args.mpc)
+    _solve_all(args.fraction, args.bearing, args.mpc, args.beam)
     if args.study:
         _study(args.fraction)
 

@@ -134,3 +134,26 @@ def test_the_lower_bound_holds():
     s = max(math.hypot(*m[:2]) for m in lattice_moves(env, params)[0].reshape(-1, 3).tolist())
     assert res.lower == math.ceil((D - R) / s)
     assert res.lower <= res.steps
+
+
+def _codes(moves, k=2):
+    """Integer codes of ``[dof (1-based), q]`` moves, as study rows write them."""
+    return np.asarray([(d - 1) * (2 * k + 1) + q + k for d, q in moves], np.int32)
+
+
+@pytest.mark.slow  # a search in a strong stream compiles and runs for tens of seconds
+def test_a_stream_carrying_the_swimmer_does_not_beat_the_optimum():
+    # The study's uniform 0.9 v cell at 90 degrees: PPO found a sideways stroke riding the
+    # stream to the target in 57 steps, one fewer than a 2,048-state beam's answer (58). The
+    # sequence is PPO's, replayed here as an independent upper bound on the least time.
+    from jswim.env.flows import study_flow
+
+    stroke = [(2, -2), (1, 1), (2, 1), (1, -2), (2, 1), (1, 1)]
+    ppo = _codes([(1, -1)] + stroke * 9 + [(2, -2), (2, 2)])
+    spec = FixedTarget(D, 90.0)
+    env, params = jswim.make("purcell", roc_levels=2, target=spec, flow=study_flow("uniform", 0.9))
+    run = summarise(env, params, jswim.rollout(env, params, 0, ppo))[0]
+    assert run.reached and run.steps == 57
+    best = optimal.solve(env, params)
+    _replayed(env, params, best)
+    assert best.steps <= run.steps
