@@ -126,6 +126,28 @@ def lattice_moves(env: Any, params: Any) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(d, np.float64), after
 
 
+@functools.partial(jax.jit, static_argnames=("half", "cell", "speed"))
+def _sweeps(
+    v: Array,
+    hit: Array,
+    nxt: Array,
+    q: Array,
+    inside: Array,
+    half: float,
+    cell: float,
+    speed: float,
+) -> Array:
+    """Twenty sweeps of the value iteration (the grids are arguments, not constants: XLA folded
+    them for seconds when they were closed over)."""
+
+    def sweep(_: int, v: Array) -> Array:
+        model = CostToGo(v, half, cell, speed)
+        cand = jnp.where(hit, 1.0, 1.0 + model(nxt, q))  # (S, A, N, N)
+        return jnp.where(inside[None], 0.0, jnp.minimum(v, jnp.min(cand, axis=1)))
+
+    return jax.lax.fori_loop(0, 20, sweep, v)
+
+
 @functools.lru_cache(maxsize=16)
 def _solve(
     moves_key: bytes, after_key: bytes, shape: tuple[int, int], radius: float, half: float
@@ -149,18 +171,11 @@ def _solve(
     speed = SWIM_SPEED  # beyond the grid: the square gait's mean speed
     inside = jnp.hypot(p[..., 0], p[..., 1]) < radius
 
-    def sweep(_: int, v: Array) -> Array:
-        model = CostToGo(v, half, cell, speed)
-        cand = jnp.where(hit, 1.0, 1.0 + model(nxt, q))  # (S, A, N, N)
-        return jnp.where(inside[None], 0.0, jnp.minimum(v, jnp.min(cand, axis=1)))
-
-    block = jax.jit(lambda v: jax.lax.fori_loop(0, 20, sweep, v))
-
     v = jnp.full((shape[0], n, n), _FAR, jnp.float32)
     # each sweep carries the values one step further out; the slowest way to any grid point
     # (turning while crossing it) takes a few hundred steps: sweep until a block changes nothing
     for _ in range(100):
-        new = block(v)
+        new = _sweeps(v, hit, nxt, q, inside, half=half, cell=cell, speed=speed)
         done = bool(jnp.max(jnp.abs(new - v)) < 1e-3)
         v = new
         if done:
