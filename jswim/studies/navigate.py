@@ -528,7 +528,9 @@ def nav_overview(rows: Sequence[Any]) -> list[dict[str, Any]]:
     list of dict
         Keys ``agent``, ``flow`` (kind, ``""`` in still fluid), ``flow_fraction`` (None in still
         fluid), ``target``, ``n``, ``reached``, ``success_ci``, ``time_ratio``,
-        ``time_ratio_ci`` (None where no run reached), ``n_ratio`` (the runs behind it) and
+        ``time_ratio_ci`` (None where no run reached), ``n_ratio`` (the runs behind it),
+        ``n_below`` (of those, the runs shorter than the optimum: the search's answer is an upper
+        bound, and a run below it shows where it is not the least time) and
         ``energy_per_distance``; ordered by flow, speed, target, then agent (the study's order).
     """
     out: dict[tuple[str, str, float, str], list[RunRow]] = {}
@@ -565,6 +567,7 @@ def nav_overview(rows: Sequence[Any]) -> list[dict[str, Any]]:
                 "time_ratio": None if math.isnan(ratio) else ratio,
                 "time_ratio_ci": None if math.isnan(ratio) else (lo, hi),
                 "n_ratio": len(ratios),
+                "n_below": sum(r < 1.0 for r in ratios),  # runs shorter than the search's optimum
                 "energy_per_distance": float(np.median(per)) if per else None,
             }
         )

@@ -251,7 +251,7 @@ def nav_overview_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str
     ]
     cells = []
     for g in table:
-        flow = "still" if not g["flow"] else f"{g['flow']} {g['flow_fraction']:g}v"
+        flow = _flow_label(g)
         ratio = "-"
         if g["time_ratio"] is not None:
             ci = _interval(g["time_ratio_ci"], ".2f") if g["n_ratio"] >= 2 else ""
@@ -275,7 +275,23 @@ def nav_overview_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str
         "alone; 1 is the optimum); energy/dist: median energy (xi_par a^3/tau) per a closed. n: "
         "runs of the cell (learners: one seed each; deterministic agents: one run per start)."
     )
+    below = [g for g in table if g.get("n_below")]
+    if below:  # the optimum is a search's shortest sequence: say where a run beat it
+        where = "; ".join(
+            f"{g['agent']} {g['n_below']}/{g['n_ratio']} in {_flow_label(g)} {g['target']}"
+            for g in below[:4]
+        )
+        more = f" and {len(below) - 4} more" if len(below) > 4 else ""
+        note += (
+            " The optimum is the shortest sequence the search found, an upper bound on the least "
+            f"time, and some runs were shorter (time ratio below 1): {where}{more}."
+        )
     return cols, cells, note
+
+
+def _flow_label(g: dict[str, Any]) -> str:
+    """An overview row's flow as the table shows it: ``still`` or ``shear 0.5v``."""
+    return "still" if not g["flow"] else f"{g['flow']} {g['flow_fraction']:g}v"
 
 
 def _interval(ci: Any, spec: str) -> str:
