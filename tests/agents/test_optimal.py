@@ -105,7 +105,12 @@ def test_the_two_methods_agree_within_a_cycle(x64, bearing, u):
         beam = optimal.solve(env, params, method="beam")
         dp = optimal.solve(env, params, method="dp")
         assert beam.steps is not None and dp.steps is not None
-        assert abs(beam.steps - dp.steps) <= CYCLE, (beam.steps, dp.steps)
+        # the beam is seeded with the dp sequence: never longer; in still fluid, where the dp
+        # policy's time to go is exact on its grid, they agree within a cycle (in a cross
+        # stream the still-fluid policy drifts: the beam is shorter by more than a cycle)
+        assert beam.steps <= dp.steps, (beam.steps, dp.steps)
+        if not u:
+            assert dp.steps - beam.steps <= CYCLE, (beam.steps, dp.steps)
         # a turn of 90 degrees costs the swimmer: far above the straight line's time
         if bearing == 90.0:
             assert beam.steps > 1.5 * (D - R) / _v()
