@@ -2,6 +2,8 @@
 
     python benchmarks/bench_optimal.py                 # the four flows at 0.5 v, 90-degree target
     python benchmarks/bench_optimal.py --fraction 0.9 --bearing 180
+    python benchmarks/bench_optimal.py --compile-cache # twice: the second loads the compiled
+                                                       #   programs (the jswim command's cache)
     python benchmarks/bench_optimal.py --study         # + a navigate study with and without
                                                        #   the optimal and mpc rows
 
@@ -23,6 +25,7 @@ import tempfile
 import time
 
 import jswim
+from jswim import compile_cache
 from jswim.agents import mpc, optimal, steering
 from jswim.env.flows import study_flow
 from jswim.env.navigation import summarise
@@ -107,7 +110,15 @@ def main() -> None:
     ap.add_argument("--mpc", action="store_true", help="also run the model-predictive agent")
     ap.add_argument("--study", action="store_true", help="also time a study with and without")
     ap.add_argument("--beam", type=int, default=optimal.BEAM_WIDTH, help="the optimum's beam width")
+    ap.add_argument(
+        "--compile-cache",
+        action="store_true",
+        help="keep compiled programs on disk as the jswim command does (jswim.compile_cache): "
+        "run twice, the second run loads what the first compiled",
+    )
     args = ap.parse_args()
+    if args.compile_cache:
+        print(f"compile cache: {compile_cache.enable()}")
     _solve_all(args.fraction, args.bearing, args.mpc, args.beam)
     if args.study:
         _study(args.fraction)

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from typing import Any, NamedTuple
 
 import jax
@@ -321,10 +322,19 @@ def _path(layers: list[tuple[np.ndarray, np.ndarray]], row: int, action: int) ->
     return np.asarray(out[::-1], np.int32)
 
 
-def _verified(env: Any, params: Any, key: Array, actions: np.ndarray) -> bool:
-    """Whether the actions reach the target exactly at their last step, replayed."""
-    reached = np.asarray(rollout(env, params, key, jnp.asarray(actions)).state.reached)
-    return bool(reached[-1]) and not (len(reached) > 1 and bool(reached[-2]))
+def _verified(env: Any, params: Any, key: Array, actions: np.ndarray, length: int) -> bool:
+    """Whether the actions reach the target exactly at their last step, replayed.
+
+    The replay is padded with no-moves to ``length`` steps (the search's), so every replay of a
+    solve, the model-predictive seed's included, runs one compiled rollout (compiling one per
+    sequence length was a tenth of a solve)."""
+    n = len(actions)
+    if n == 0 or n > length:
+        return False
+    padded = np.full(length, env.roc_levels, np.int32)  # (DOF 1, ROC 0): no move
+    padded[:n] = actions
+    reached = np.asarray(rollout(env, params, key, jnp.asarray(padded)).state.reached)
+    return bool(reached[n - 1]) and not (n > 1 and bool(reached[n - 2]))
 
 
 def _controller(env: NavigationWorld, params: Any, key: Array, steps: int) -> list[np.ndarray]:
@@ -421,7 +431,8 @@ def _closed_loop(env: NavigationWorld, params: Any, key: Array, steps: int) -> n
     107)."""
     codes = receding(env, params, key, steps, horizon=HORIZON, replan=REPLAN, beam=BEAM)
     codes = codes.astype(np.int64)
-    reached = np.asarray(rollout(env, params, key, jnp.asarray(codes)).state.reached)
+    # int32 and the search's length: the same compiled rollout as `_verified`'s
+    reached = np.asarray(rollout(env, params, key, jnp.asarray(codes, jnp.int32)).state.reached)
     return codes[: int(np.argmax(reached)) + 1] if reached.any() else codes[:0]
 
 
@@ -448,6 +459,25 @@ def _dp(env: NavigationWorld, params: Any, key: Array, h: Any, steps: int) -> np
     return np.asarray(actions, np.int32)
 
 
+def _codes(sequence: Any, n_actions: int) -> np.ndarray:
+    """An incumbent as the world's action codes, ``(T,)`` int64.
+
+    Raises
+    ------
+    ConfigError
+        Not a sequence of whole numbers in ``0 .. n_actions - 1``.
+    """
+    q = np.asarray(sequence)
+    if q.ndim != 1 or (q.size and (not np.issubdtype(q.dtype, np.integer))):
+        raise ConfigError(
+            f"an incumbent is a sequence of whole action codes, got a {q.dtype} array of "
+            f"shape {q.shape}"
+        )
+    if q.size and (q.min() < 0 or q.max() >= n_actions):
+        raise ConfigError(f"an incumbent's codes must lie in 0..{n_actions - 1}")
+    return q.astype(np.int64)
+
+
 def check_whole(value: Any, what: str) -> int:
     """``value`` as an int if it is a whole number ``>= 1`` (a beam, horizon or step count).
 
@@ -469,7 +499,7 @@ def solve(
     method: str = "beam",
     beam: int = BEAM_WIDTH,
     max_steps: int | None = None,
-    incumbent: Any = None,
+    incumbents: Sequence[Any] = (),
 ) -> OptimalResult:
     """The least-time action sequence from the world's start to its target (module docs).
 
@@ -487,11 +517,13 @@ def solve(
         States kept per layer (``"beam"``): more is slower and closer to the optimum.
     max_steps : int, optional
         Steps searched; default the target's budget.
-    incumbent : array (T,) int, optional
-        A sequence kept in the beam at every layer it covers (``"beam"``): the answer is then
-        never longer than it (a warm start). Default: the ``"dp"`` method's sequence, the
-        model-predictive agent's ([`jswim.agents.mpc`][jswim.agents.mpc]) and, where it steers
-        the world and reaches the target, the steering controller's.
+    incumbents : sequence of array (T,) int
+        Sequences kept in the beam at every layer they cover (``"beam"``), beside its own
+        seeds (the ``"dp"`` method's sequence, the model-predictive agent's
+        ([`jswim.agents.mpc`][jswim.agents.mpc]) and, where it steers the world and reaches
+        the target, the steering controller's): the answer is never longer than any of them
+        that reaches the target, and the beam branches off them. A study passes every run of
+        the cell that reached the target (`jswim.studies.navigate.optimal_path`).
 
     Returns
     -------
@@ -501,11 +533,13 @@ def solve(
     ------
     ConfigError
         Not a navigation world on a K >= 2 lattice, a noisy world, a batch of targets, an
-        unknown method or a beam below 1.
+        unknown method, a beam below 1, or an incumbent that is not a sequence of the world's
+        action codes.
     """
     check_world(env, params)
     check_choice(method, METHODS, "method")
     check_whole(beam, "beam")
+    given = [_codes(q, env.n_actions) for q in incumbents]
     key = jax.random.PRNGKey(key) if isinstance(key, (int, np.integer)) else key
     budget = int(params.target.budget)
     steps = budget if max_steps is None else min(int(max_steps), budget)
@@ -513,22 +547,21 @@ def solve(
     low = lower_bound(env, params, key)
     if method == "dp":
         actions = _dp(env, params, key, h, steps)
-        ok = len(actions) and _verified(env, params, key, actions)
+        ok = _verified(env, params, key, actions, steps)
         return OptimalResult(len(actions) if ok else None, actions, low, method)
     start = env.reset(key, params)
-    if incumbent is None:  # known good sequences seed the beam: it is never worse than them
-        seeds = [
-            _dp(env, params, key, h, steps),
-            *_controller(env, params, key, steps),
-            _closed_loop(env, params, key, steps),
-        ]
-    else:
-        seeds = [np.asarray(incumbent, np.int64).reshape(-1)]
+    # known good sequences seed the beam: it is never worse than them
+    seeds = [q[:steps] for q in given]
+    seeds += [
+        _dp(env, params, key, h, steps),
+        *_controller(env, params, key, steps),
+        _closed_loop(env, params, key, steps),
+    ]
     plans = search(env, params, start, h, beam=int(beam), steps=steps, incumbents=seeds)
     # the world's rollout decides: a state a hair inside the radius in the batched step may be
     # a hair outside in the scan (float32); the first of the layer's hits that replays is kept
     for actions, reached in plans:
-        if reached and _verified(env, params, key, actions):
+        if reached and _verified(env, params, key, actions, steps):
             return OptimalResult(len(actions), actions, low, method)
     return OptimalResult(None, plans[-1][0], low, method)
 

@@ -28,6 +28,7 @@ from jswim.llm.pacing import Pacer
 from jswim.llm.probe import ServerInfo
 from jswim.llm.sync import run_sync
 from jswim.prompt import PromptTemplate
+from jswim.results import as_run_rows
 from jswim.studies.plans import Plan
 from jswim.studies.options import StudyOptions
 from jswim.studies.session import StudySession, preflight, record_session, study_totals
@@ -121,13 +122,38 @@ def run_baselines(session: StudySession, plans: Sequence[Plan]) -> int:
     """
     from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
 
-    n = 0
-    for (agent, *_), group in group_plans(plans, *BASELINE_GROUP).items():
-        session.store.add_runs(baselines.baseline_rows(group, session.options.horizon))
+    groups = list(group_plans(plans, *BASELINE_GROUP).values())
+
+    def run(group: list[Plan]) -> list[Any]:
+        rows = baselines.baseline_rows(group, session.options.horizon)
         session.finished += len(group)
-        n += len(group)
-        session.tick(agent)
-    return n
+        session.tick(group[0].agent)
+        return rows
+
+    for group in [g for g in groups if not g[0].target]:
+        session.store.add_runs(run(group))
+    navigation = [g for g in groups if g[0].target]
+    if not navigation and not any(r.get("target") for r in session.store.load_runs()):
+        return len(plans)
+    from jswim.studies import navigate  # lazy: start-up (navigation loads the worlds)
+
+    # a navigation cell's optimum is seeded with every run of the cell that reached the target
+    # (the folder's and this session's): its other agents run first, their rows wait for it
+    navigate.seed_optimum(as_run_rows(session.store.load_runs()))
+    cells: dict[tuple, list[list[Plan]]] = {}
+    for g in navigation:
+        cells.setdefault(navigate.plan_cell(g[0]), []).append(g)
+    for cell in cells.values():
+        agents = [g for g in cell if g[0].agent not in navigate.YARDSTICKS]
+        with navigate.optimum_pending([g[0] for g in cell]):
+            built = [(g, run(g)) for g in agents]
+        navigate.seed_optimum([r for _, rows in built for r in rows])
+        for g, rows in built:
+            session.store.add_runs(navigate.with_optimum(g, rows))
+        for g in cell:
+            if g[0].agent in navigate.YARDSTICKS:
+                session.store.add_runs(run(g))
+    return len(plans)
 
 
 @dataclass

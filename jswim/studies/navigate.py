@@ -12,6 +12,7 @@ reached, steps to it, path length over the straight distance, energy and energy 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import json
@@ -60,6 +61,7 @@ __all__ = [
     "DEFAULT_BEARINGS",
     "DEFAULT_DISTANCES",
     "FLOW_BUDGET_FACTOR",
+    "MAX_SEEDS",
     "MOVING",
     "NAV_AGENTS",
     "NAV_ROC_LEVELS",
@@ -67,6 +69,7 @@ __all__ = [
     "PATH",
     "PPO_SHARE",
     "START_SPREAD",
+    "YARDSTICKS",
     "cells",
     "flow_columns",
     "flow_grid",
@@ -75,13 +78,19 @@ __all__ = [
     "nav_qconfig",
     "nav_row",
     "nav_summary",
+    "optimal_path",
+    "optimum_pending",
+    "plan_cell",
     "plan_flow",
+    "row_cell",
+    "seed_optimum",
     "seeded_start",
     "target_json",
     "target_kind",
     "target_order",
     "targets",
     "with_budgets",
+    "with_optimum",
     "zermelo_path",
     "zermelo_rows",
 ]
@@ -212,19 +221,31 @@ def zermelo_path(target: str, flow: str) -> Any:
 
 def optimal_path(plan: Any) -> Any:
     """The swimmer's own optimum ([`jswim.agents.optimal.solve`][jswim.agents.optimal.solve])
-    for a plan's (or row's) world: its target with the study's budget, flow, K lattice and start,
-    computed once per process per world."""
+    for a plan's world (its target with the study's budget, flow, K lattice and start), its
+    beam seeded with every run of the cell that reached the target (`seed_optimum`): never
+    longer than any of them. Computed once per process per world and seeds; while the cell's
+    runs are still running (`optimum_pending`), an optimum not yet searched (``steps`` None)."""
+    cell = plan_cell(plan)
+    if cell in _PENDING:
+        return _NOT_YET
     init = plan.init if isinstance(plan.init, (tuple, list)) else None
     return _optimal(
         plan.target,
         plan.flow,
         plan.roc_levels,
         tuple(int(v) for v in init) if init is not None else None,
+        _SEEDS.get(cell, ()),
     )
 
 
 @functools.lru_cache(maxsize=256)
-def _optimal(target: str, flow: str, roc_levels: int, init: tuple[int, ...] | None) -> Any:
+def _optimal(
+    target: str,
+    flow: str,
+    roc_levels: int,
+    init: tuple[int, ...] | None,
+    seeds: tuple[tuple[int, ...], ...] = (),
+) -> Any:
     from jswim.agents import optimal  # lazy: start-up (the search's JAX)
 
     env, params = make(
@@ -234,7 +255,91 @@ def _optimal(target: str, flow: str, roc_levels: int, init: tuple[int, ...] | No
         target=target_from_dict(json.loads(target)),
         flow=flow_from_dict(json.loads(flow)) if flow else None,
     )
-    return optimal.solve(env, params, key=0)
+    return optimal.solve(env, params, key=0, incumbents=[np.asarray(q, np.int64) for q in seeds])
+
+
+class _NotYet:
+    """The optimum of a cell whose runs are still running: nothing yet (`optimum_pending`)."""
+
+    steps = None
+    actions = np.zeros(0, np.int32)
+
+
+_NOT_YET = _NotYet()
+
+#: Each cell's runs that reached its target, as action codes (`seed_optimum`), by `plan_cell`.
+_SEEDS: dict[tuple[str, str, int, str], tuple[tuple[int, ...], ...]] = {}
+
+#: Cells whose optimum waits for their runs (`optimum_pending`).
+_PENDING: set[tuple[str, str, int, str]] = set()
+
+#: Most runs a cell's optimum is seeded with (the shortest first): each holds a row of its beam.
+MAX_SEEDS = 64
+
+#: The agents whose rows are measured against the optimum but do not seed it: the optimum
+#: itself, the model-predictive agent (its own seed already) and Zermelo's point (no strokes).
+YARDSTICKS = (OPTIMAL_AGENT, MPC_AGENT, ZERMELO_AGENT)
+
+
+def plan_cell(plan: Any) -> tuple[str, str, int, str]:
+    """A navigation plan's cell: its world (target, flow, K, start shape's label)."""
+    init = init_label(plan.init) if isinstance(plan.init, (tuple, list)) else "++"
+    return (plan.target or "", plan.flow or "", int(plan.roc_levels), init)
+
+
+def row_cell(row: Any) -> tuple[str, str, int, str]:
+    """A navigation row's cell (`plan_cell` of its plan)."""
+    return (row.target or "", row.flow or "", int(row.roc_levels), row.init or "++")
+
+
+def _row_codes(row: Any) -> tuple[int, ...] | None:
+    """The action codes of a row's run up to the step it reached the target (None: a move
+    off the K lattice, which no code names)."""
+    k = int(row.roc_levels)
+    out = []
+    for dof, roc in row.actions[: row.steps_to_target]:
+        step = round(float(roc))
+        if float(roc) != step or abs(step) > k:
+            return None
+        out.append(int(lattice.encode(int(dof), step, k)))
+    return tuple(out)
+
+
+def seed_optimum(rows: Sequence[Any]) -> None:
+    """Add the runs of ``rows`` that reached their target (the yardsticks' aside, `YARDSTICKS`)
+    to their cells' seeds: the optimum of each cell is then searched from them as well, and
+    never longer than any (the search alone missed the least time in strong flows: in shear
+    at 0.9 v, 148 steps where PPO reached the 90-degree target in 99; docs/navigation.md)."""
+    for row in rows:
+        if row.agent in YARDSTICKS or not row.reached or not row.steps_to_target:
+            continue
+        q = _row_codes(row)
+        if q:
+            cell = row_cell(row)
+            _SEEDS[cell] = tuple(sorted({*_SEEDS.get(cell, ()), q}, key=lambda c: (len(c), c)))[
+                :MAX_SEEDS
+            ]
+
+
+@contextlib.contextmanager
+def optimum_pending(plans: Sequence[Any]) -> Any:
+    """Within: the rows of ``plans``' cells carry no optimum (``optimal_steps`` None), so no
+    search runs before the cell's runs can seed it; `with_optimum` fills them in after."""
+    cells = {plan_cell(p) for p in plans} - _PENDING
+    _PENDING.update(cells)
+    try:
+        yield
+    finally:
+        _PENDING.difference_update(cells)
+
+
+def with_optimum(plans: Sequence[Any], rows: Sequence[RunRow]) -> list[RunRow]:
+    """``rows`` (one per plan of ``plans``) with their optimum columns (`flow_columns`) from the
+    cells' seeded optimum."""
+    return [
+        dataclasses.replace(r, **flow_columns(p, r.steps_to_target if r.reached else None))
+        for p, r in zip(plans, rows, strict=True)
+    ]
 
 
 @functools.lru_cache(maxsize=256)

@@ -128,7 +128,7 @@ def test_the_optimum_beats_the_controller_and_mpc_follows_it():
     run = summarise(env, params, jswim.rollout(env, params, 0, played))[0]
     assert run.reached and best.steps <= run.steps <= best.steps + CYCLE
     # the incumbent stays in the beam: the answer is never longer than a given sequence
-    again = optimal.solve(env, params, beam=8, incumbent=played[: run.steps])
+    again = optimal.solve(env, params, beam=8, incumbents=[played[: run.steps]])
     assert again.steps is not None and again.steps <= run.steps
 
 
