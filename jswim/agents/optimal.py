@@ -11,9 +11,12 @@ finds it with the world's own step (its tables, flow, budget and target rule, on
   the least estimated time to go: the still-fluid value iteration of
   [`jswim.agents.cost_to_go`][jswim.agents.cost_to_go], with the target moved by the local flow
   (and its own velocity) over that time. The first layer in which a state reaches the target is
-  the answer. Merging and the beam make it a search for the optimum, not a proof of it: the
+  the answer. Known sequences stay in the beam at every layer (the ``"dp"`` method's, the
+  model-predictive agent's, the steering controller's and any ``incumbents`` given; a study
+  gives every run of the cell that reached the target), so the answer is never longer than
+  any of them. Merging and the beam make it a search for the optimum, not a proof of it: the
   answer is an upper bound on the least time, exact where the beam never drops a state that
-  lies on an optimal path.
+  lies on an optimal path, and in strong flows far from it (docs/navigation.md).
 * ``"dp"``: the still-fluid value iteration's closed-loop policy (each step the action with the
   least estimated time to go), run through the world: a second, independent answer, the
   optimum of the still-fluid model where the flow is still.

@@ -24,6 +24,7 @@ import numpy as np
 from jswim import env
 from jswim.agents import qlearning, random_policy, strokes
 from jswim.agents.llm import RunResult
+from jswim.agents.variants import init_label
 from jswim.env.base import Environment, Observation
 from jswim.env.episodes import rollout as jswim_rollout
 from jswim.env.registry import make
@@ -248,7 +249,7 @@ def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     if plan.target:  # a navigation run: its episode and columns (jswim.studies.navigate)
         episode = navigate.llm_episode(plan, r, _replayed_work(plan, r))
         moves = [list(lattice.decode(int(a), plan.roc_levels)) for a in r.actions]
-        init = "".join("+" if v else "-" for v in r.levels0)
+        init = init_label(tuple(int(bool(v)) for v in r.levels0))  # the run's own start
         row = navigate.nav_row(plan, r.x, r.y, r.orientation, moves, episode, init=init)
         return with_llm(row, r)
     if not plan.scene:

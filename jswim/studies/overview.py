@@ -283,8 +283,9 @@ def nav_overview_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str
         )
         more = f" and {len(below) - 4} more" if len(below) > 4 else ""
         note += (
-            " The optimum is the shortest sequence the search found, an upper bound on the least "
-            f"time, and some runs were shorter (time ratio below 1): {where}{more}."
+            " The optimum is the shortest sequence the search found (seeded with the cell's runs "
+            "known when it was searched), an upper bound on the least time, and some runs were "
+            f"shorter (time ratio below 1; an LLM run, or one added later): {where}{more}."
         )
     return cols, cells, note
 
