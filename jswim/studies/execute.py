@@ -111,7 +111,10 @@ def run_baselines(session: StudySession, plans: Sequence[Plan]) -> int:
     ----------
     session : StudySession
         Each group's rows go into ``session.store`` the moment the group ends, and
-        ``session.finished`` moves on.
+        ``session.finished`` moves on; a navigation cell's rows wait for the cell's optimum,
+        which is searched once the cell's other agents ran, seeded with their runs and the
+        folder's (`jswim.studies.navigate.seed_optimum`), and go in together (a session stopped
+        inside a cell runs that cell's baselines again).
     plans : sequence of Plan
         The baseline plans still to run (no ``"llm"`` agent).
 
