@@ -142,6 +142,7 @@ def run_baselines(session: StudySession, plans: Sequence[Plan]) -> int:
 
     # a navigation cell's optimum is seeded with every run of the cell that reached the target
     # (the folder's and this session's): its other agents run first, their rows wait for it
+    navigate.clear_seeds()  # this study's runs only: not an earlier study's in this process
     navigate.seed_optimum(as_run_rows(session.store.load_runs()))
     cells: dict[tuple, list[list[Plan]]] = {}
     for g in navigation:

@@ -71,6 +71,7 @@ __all__ = [
     "START_SPREAD",
     "YARDSTICKS",
     "cells",
+    "clear_seeds",
     "flow_columns",
     "flow_grid",
     "nav_overview",
@@ -319,6 +320,12 @@ def seed_optimum(rows: Sequence[Any]) -> None:
             _SEEDS[cell] = tuple(sorted({*_SEEDS.get(cell, ()), q}, key=lambda c: (len(c), c)))[
                 :MAX_SEEDS
             ]
+
+
+def clear_seeds() -> None:
+    """Forget every cell's seeds: a study session starts from its own folder's runs only, so an
+    earlier study in the same process (a notebook's) never seeds this one's optimum."""
+    _SEEDS.clear()
 
 
 @contextlib.contextmanager

@@ -59,6 +59,13 @@ def test_a_cells_reached_runs_become_its_seeds_as_action_codes():
     assert navigate._SEEDS[cell] == (tuple(lattice.encode(d, k, 2) for d, k in moves),)
 
 
+def test_a_new_session_forgets_an_earlier_studys_seeds():
+    navigate.seed_optimum([_row("qlearning", [[1, 1], [2, 1]])])
+    assert navigate._SEEDS
+    navigate.clear_seeds()
+    assert navigate._SEEDS == {}
+
+
 def test_only_runs_that_reached_and_are_not_yardsticks_seed_it():
     moves = [[1, 1], [2, 1]]
     navigate.seed_optimum(
