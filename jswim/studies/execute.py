@@ -136,14 +136,15 @@ def run_baselines(session: StudySession, plans: Sequence[Plan]) -> int:
     for group in [g for g in groups if not g[0].target]:
         session.store.add_runs(run(group))
     navigation = [g for g in groups if g[0].target]
-    if not navigation and not any(r.get("target") for r in session.store.load_runs()):
+    stored = session.store.load_runs()
+    if not navigation and not any(r.get("target") for r in stored):
         return len(plans)
     from jswim.studies import navigate  # lazy: start-up (navigation loads the worlds)
 
     # a navigation cell's optimum is seeded with every run of the cell that reached the target
     # (the folder's and this session's): its other agents run first, their rows wait for it
     navigate.clear_seeds()  # this study's runs only: not an earlier study's in this process
-    navigate.seed_optimum(as_run_rows(session.store.load_runs()))
+    navigate.seed_optimum(as_run_rows(stored))
     cells: dict[tuple, list[list[Plan]]] = {}
     for g in navigation:
         cells.setdefault(navigate.plan_cell(g[0]), []).append(g)

@@ -86,6 +86,7 @@ __all__ = [
     "row_cell",
     "seed_optimum",
     "seeded_start",
+    "start_label",
     "target_json",
     "target_kind",
     "target_order",
@@ -282,10 +283,15 @@ MAX_SEEDS = 64
 YARDSTICKS = (OPTIMAL_AGENT, MPC_AGENT, ZERMELO_AGENT)
 
 
+def start_label(plan: Any) -> str:
+    """A navigation plan's start shape as its rows show it: signs (``"+-"``); the study's own
+    start ``(hi, hi)`` where the plan names none: ``"++"``."""
+    return init_label(plan.init) if isinstance(plan.init, (tuple, list)) else "++"
+
+
 def plan_cell(plan: Any) -> tuple[str, str, int, str]:
     """A navigation plan's cell: its world (target, flow, K, start shape's label)."""
-    init = init_label(plan.init) if isinstance(plan.init, (tuple, list)) else "++"
-    return (plan.target or "", plan.flow or "", int(plan.roc_levels), init)
+    return (plan.target or "", plan.flow or "", int(plan.roc_levels), start_label(plan))
 
 
 def row_cell(row: Any) -> tuple[str, str, int, str]:
@@ -435,7 +441,7 @@ def nav_row(
 
     steps, reached = int(episode.steps), bool(episode.reached)  # plain numbers: the record's
     if init is None:
-        init = init_label(plan.init) if isinstance(plan.init, (tuple, list)) else "++"
+        init = start_label(plan)
 
     verdict = {
         "success": reached,
