@@ -12,6 +12,7 @@ from collections.abc import Iterable, Mapping
 
 from jswim._io.jsonl import SkippedRecord, read_records
 from jswim.errors import ResultFolderError
+from jswim.results.optimum import with_cell_optimum
 from jswim.results.row import RunRow, as_run_rows
 from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_names
 
@@ -24,7 +25,8 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     any later record of it: the one from the resume that ran it again. A line that is no run
     record (not UTF-8, not JSON, a field of the wrong type: [`run_problem`][jswim.results.schema.run_problem]) is skipped with
     a warning naming the file and the line (`jswim._io.jsonl.read_records`); that run counts as
-    not done, as a torn line's does.
+    not done, as a torn line's does. A navigation row's optimum columns are its cell's
+    ``optimal`` row's ([`with_cell_optimum`][jswim.results.optimum.with_cell_optimum]).
     """
     path = Path(folder) / RUNS
     _regular(path)
@@ -33,7 +35,7 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
         rid = row.get("run_id")
         if rid not in by_id or is_failed(by_id[rid]):
             by_id[rid] = upgrade_names(row)
-    return list(by_id.values())
+    return with_cell_optimum(list(by_id.values()))
 
 
 def _regular(path: Path) -> None:

@@ -17,6 +17,7 @@ from typing import Any
 from collections.abc import Iterable, Iterator
 
 from jswim.results.schema import upgrade_names
+from jswim.results.optimum import with_cell_optimum
 
 #: The columns every row starts with, in their order.
 HEAD = (
@@ -314,10 +315,13 @@ class RunRow(Mapping):
         earlier jswim, whose ``time_ratio`` was this, is read with it here.
     optimal_steps : int or None
         The swimmer's own least time to the target (steps, the least-time sequence of the world's
-        actions, [`jswim.agents.optimal`][jswim.agents.optimal]); written for every navigation
-        run, in still fluid too; None where the search found none within the budget.
+        actions, [`jswim.agents.optimal`][jswim.agents.optimal]), in still fluid too; None where
+        the search found none within the budget. Written on the cell's ``optimal`` row; every
+        other row of the cell reads it from there
+        ([`with_cell_optimum`][jswim.results.optimum.with_cell_optimum]).
     time_ratio : float or None
-        ``steps_to_target / optimal_steps`` (None: not reached, or no optimum).
+        ``steps_to_target / optimal_steps`` (None: not reached, or no optimum), read as
+        ``optimal_steps`` is.
     other : Mapping
         Any column this version does not know (a folder written by another one), in its order.
     """
@@ -504,6 +508,8 @@ def as_run_rows(rows: Iterable[Mapping[str, Any]]) -> list[RunRow]:
     Returns
     -------
     list of RunRow
-        One row per record, in order.
+        One row per record, in order; a navigation row's optimum columns are its cell's
+        ``optimal`` row's where ``rows`` hold it
+        ([`with_cell_optimum`][jswim.results.optimum.with_cell_optimum]).
     """
-    return [as_run_row(r) for r in rows]
+    return with_cell_optimum([as_run_row(r) for r in rows])

@@ -111,54 +111,57 @@ def run_baselines(session: StudySession, plans: Sequence[Plan]) -> int:
     ----------
     session : StudySession
         Each group's rows go into ``session.store`` the moment the group ends, and
-        ``session.finished`` moves on; a navigation cell's rows wait for the cell's optimum,
-        which is searched once the cell's other agents ran, seeded with their runs and the
-        folder's (`jswim.studies.navigate.seed_optimum`), and go in together (a session stopped
-        inside a cell runs that cell's baselines again).
+        ``session.finished`` moves on.
     plans : sequence of Plan
-        The baseline plans still to run (no ``"llm"`` agent).
+        The baseline plans still to run (no ``"llm"`` agent; the ``"optimal"`` agent's go to
+        `run_optimum`, after the LLM's).
 
     Returns
     -------
     int
         The runs this call finished.
     """
-    from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
+    for group in group_plans(plans, *BASELINE_GROUP).values():
+        session.store.add_runs(_run_group(session, group))
+    return len(plans)
 
-    groups = list(group_plans(plans, *BASELINE_GROUP).values())
 
-    def run(group: list[Plan]) -> list[Any]:
-        rows = baselines.baseline_rows(group, session.options.horizon)
-        session.finished += len(group)
-        session.tick(group[0].agent)
-        return rows
+def run_optimum(session: StudySession, plans: Sequence[Plan]) -> int:
+    """Run the navigation cells' optimum (the ``"optimal"`` agent), the study's last runs.
 
-    for group in [g for g in groups if not g[0].target]:
-        session.store.add_runs(run(group))
-    navigation = [g for g in groups if g[0].target]
-    stored = session.store.load_runs()
-    if not navigation and not any(r.get("target") for r in stored):
-        return len(plans)
+    Each cell's search is seeded with every run of the cell the folder holds that reached the
+    target, the LLM's included (`jswim.studies.navigate.seed_optimum`), so it is never longer
+    than any of them; the cell's other rows read their ratio to it when the folder is read
+    ([`jswim.results.optimum.with_cell_optimum`][jswim.results.optimum.with_cell_optimum]).
+
+    Parameters
+    ----------
+    session : StudySession
+        As `run_baselines`.
+    plans : sequence of Plan
+        The ``"optimal"`` plans still to run.
+
+    Returns
+    -------
+    int
+        The runs this call finished.
+    """
+    if not plans:
+        return 0
     from jswim.studies import navigate  # lazy: start-up (navigation loads the worlds)
 
-    # a navigation cell's optimum is seeded with every run of the cell that reached the target
-    # (the folder's and this session's): its other agents run first, their rows wait for it
     navigate.clear_seeds()  # this study's runs only: not an earlier study's in this process
-    navigate.seed_optimum(as_run_rows(stored))
-    cells: dict[tuple, list[list[Plan]]] = {}
-    for g in navigation:
-        cells.setdefault(navigate.plan_cell(g[0]), []).append(g)
-    for cell in cells.values():
-        agents = [g for g in cell if g[0].agent not in navigate.YARDSTICKS]
-        with navigate.optimum_pending([g[0] for g in cell]):
-            built = [(g, run(g)) for g in agents]
-        navigate.seed_optimum([r for _, rows in built for r in rows])
-        for g, rows in built:
-            session.store.add_runs(navigate.with_optimum(g, rows))
-        for g in cell:
-            if g[0].agent in navigate.YARDSTICKS:
-                session.store.add_runs(run(g))
-    return len(plans)
+    navigate.seed_optimum(as_run_rows(session.store.load_runs()))
+    return run_baselines(session, plans)
+
+
+def _run_group(session: StudySession, group: list[Plan]) -> list[Any]:
+    from jswim.studies import baselines  # lazy: start-up (the learners' modules load optax)
+
+    rows = baselines.baseline_rows(group, session.options.horizon)
+    session.finished += len(group)
+    session.tick(group[0].agent)
+    return rows
 
 
 @dataclass

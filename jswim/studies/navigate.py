@@ -12,7 +12,6 @@ reached, steps to it, path length over the straight distance, energy and energy 
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import functools
 import json
@@ -45,6 +44,7 @@ from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import init_label
 from jswim.judging.stats import median_interval, wilson_interval
 from jswim.results import as_run_rows, is_failed
+from jswim.results.optimum import cell_key
 from jswim.results.row import RunRow
 from jswim.studies.options import (
     CONTINUOUS_AGENT,
@@ -80,10 +80,8 @@ __all__ = [
     "nav_row",
     "nav_summary",
     "optimal_path",
-    "optimum_pending",
     "plan_cell",
     "plan_flow",
-    "row_cell",
     "seed_optimum",
     "seeded_start",
     "start_label",
@@ -92,7 +90,6 @@ __all__ = [
     "target_order",
     "targets",
     "with_budgets",
-    "with_optimum",
     "zermelo_path",
     "zermelo_rows",
 ]
@@ -225,11 +222,8 @@ def optimal_path(plan: Any) -> Any:
     """The swimmer's own optimum ([`jswim.agents.optimal.solve`][jswim.agents.optimal.solve])
     for a plan's world (its target with the study's budget, flow, K lattice and start), its
     beam seeded with every run of the cell that reached the target (`seed_optimum`): never
-    longer than any of them. Computed once per process per world and seeds; while the cell's
-    runs are still running (`optimum_pending`), an optimum not yet searched (``steps`` None)."""
+    longer than any of them. Computed once per process per world and seeds."""
     cell = plan_cell(plan)
-    if cell in _PENDING:
-        return _NOT_YET
     init = plan.init if isinstance(plan.init, (tuple, list)) else None
     return _optimal(
         plan.target,
@@ -260,20 +254,8 @@ def _optimal(
     return optimal.solve(env, params, key=0, incumbents=[np.asarray(q, np.int64) for q in seeds])
 
 
-class _NotYet:
-    """The optimum of a cell whose runs are still running: nothing yet (`optimum_pending`)."""
-
-    steps = None
-    actions = np.zeros(0, np.int32)
-
-
-_NOT_YET = _NotYet()
-
 #: Each cell's runs that reached its target, as action codes (`seed_optimum`), by `plan_cell`.
 _SEEDS: dict[tuple[str, str, int, str], tuple[tuple[int, ...], ...]] = {}
-
-#: Cells whose optimum waits for their runs (`optimum_pending`).
-_PENDING: set[tuple[str, str, int, str]] = set()
 
 #: Most runs a cell's optimum is seeded with (the shortest first): each holds a row of its beam.
 MAX_SEEDS = 64
@@ -292,11 +274,6 @@ def start_label(plan: Any) -> str:
 def plan_cell(plan: Any) -> tuple[str, str, int, str]:
     """A navigation plan's cell: its world (target, flow, K, start shape's label)."""
     return (plan.target or "", plan.flow or "", int(plan.roc_levels), start_label(plan))
-
-
-def row_cell(row: Any) -> tuple[str, str, int, str]:
-    """A navigation row's cell (`plan_cell` of its plan)."""
-    return (row.target or "", row.flow or "", int(row.roc_levels), row.init or "++")
 
 
 def _row_codes(row: Any) -> tuple[int, ...] | None:
@@ -322,7 +299,7 @@ def seed_optimum(rows: Sequence[Any]) -> None:
             continue
         q = _row_codes(row)
         if q:
-            cell = row_cell(row)
+            cell = cell_key(row)
             _SEEDS[cell] = tuple(sorted({*_SEEDS.get(cell, ()), q}, key=lambda c: (len(c), c)))[
                 :MAX_SEEDS
             ]
@@ -332,27 +309,6 @@ def clear_seeds() -> None:
     """Forget every cell's seeds: a study session starts from its own folder's runs only, so an
     earlier study in the same process (a notebook's) never seeds this one's optimum."""
     _SEEDS.clear()
-
-
-@contextlib.contextmanager
-def optimum_pending(plans: Sequence[Any]) -> Any:
-    """Within: the rows of ``plans``' cells carry no optimum (``optimal_steps`` None), so no
-    search runs before the cell's runs can seed it; `with_optimum` fills them in after."""
-    cells = {plan_cell(p) for p in plans} - _PENDING
-    _PENDING.update(cells)
-    try:
-        yield
-    finally:
-        _PENDING.difference_update(cells)
-
-
-def with_optimum(plans: Sequence[Any], rows: Sequence[RunRow]) -> list[RunRow]:
-    """``rows`` (one per plan of ``plans``) with their optimum columns (`flow_columns`) from the
-    cells' seeded optimum."""
-    return [
-        dataclasses.replace(r, **flow_columns(p, r.steps_to_target if r.reached else None))
-        for p, r in zip(plans, rows, strict=True)
-    ]
 
 
 @functools.lru_cache(maxsize=256)
@@ -480,17 +436,20 @@ def nav_row(
 
 
 def flow_columns(plan: Plan, steps_to_target: float | None) -> dict[str, Any]:
-    """A navigation row's yardstick columns (`jswim.results.row.FLOW`): the swimmer's own least
-    time to the target (`optimal_path`) and the run's time over it; in a flow also the flow, its
-    speed fraction, whether Zermelo's point reaches the target, his least time and the run's
-    time over his."""
+    """A navigation row's yardstick columns (`jswim.results.row.FLOW`): on the ``optimal``
+    agent's row the swimmer's own least time to the target (`optimal_path`) and the run's time
+    over it (every other row of the cell reads them from that row when the folder is read,
+    [`jswim.results.optimum.with_cell_optimum`][jswim.results.optimum.with_cell_optimum]: the
+    optimum is searched after them, seeded with them); in a flow also the flow, its speed
+    fraction, whether Zermelo's point reaches the target, his least time and the run's time
+    over his."""
 
     def ratio(best: float | None) -> float | None:
         if best is None or steps_to_target is None or best <= 0:
             return None
         return round(float(steps_to_target) / float(best), 6)
 
-    own = optimal_path(plan).steps
+    own = optimal_path(plan).steps if plan.agent == OPTIMAL_AGENT else None
     out: dict[str, Any] = {"optimal_steps": own, "time_ratio": ratio(own)}
     if not plan.flow:
         return out

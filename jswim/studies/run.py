@@ -68,6 +68,7 @@ from jswim.studies.options import (
     AGENTS,
     COMPETENCE_VARIANTS,
     CONTINUOUS_AGENT,
+    OPTIMAL_AGENT,
     SCENE_GRIDS,
     SWIM_VARIANT,
     StudyOptions,
@@ -78,7 +79,14 @@ from jswim.studies.plans import Plan
 from jswim.studies import prompt_files
 from jswim.studies.success import success_rule
 
-from jswim.studies.execute import LLMOutcome, llm_configs, run_baselines, run_llm, run_spec
+from jswim.studies.execute import (
+    LLMOutcome,
+    llm_configs,
+    run_baselines,
+    run_llm,
+    run_optimum,
+    run_spec,
+)
 from jswim.studies.session import (
     ProgressFn,
     StudySession,
@@ -592,9 +600,11 @@ def _run_in(
     session.tick(
         "resume" if finished else "start", info=f"{finished} runs already done" if finished else ""
     )
-    run_baselines(session, [p for p in todo if p.agent != "llm"])
+    # a navigation cell's optimum goes last: every other run of the cell seeds its search
+    run_baselines(session, [p for p in todo if p.agent not in ("llm", OPTIMAL_AGENT)])
     llm_plans = [p for p in todo if p.agent == "llm"]
     outcome = run_llm(session, llm_plans) if llm_plans else LLMOutcome()
+    run_optimum(session, [p for p in todo if p.agent == OPTIMAL_AGENT])
     speed, sent, notes, capped, total = (
         outcome.speed,
         outcome.sent,

@@ -100,17 +100,22 @@ def test_an_incumbent_that_is_not_action_codes_is_refused_in_one_line():
         assert "\n" not in str(err.value)
 
 
-@pytest.mark.slow  # a small study with the optimum: about a minute
+@pytest.mark.slow  # a small study with the optimum: about a minute each
+@pytest.mark.parametrize("agent", ["controller", "llm"])
 def test_no_run_of_a_cell_beats_its_optimum_even_where_the_search_alone_would_miss(
-    tmp_path, monkeypatch
+    agent, tmp_path, monkeypatch
 ):
     """A search crippled to a beam of one, no estimate of the time to go and no seeds of its
     own never reaches the target; seeded with the cell's runs, the cell's optimum is never
-    longer than any run."""
+    longer than any run. The LLM's runs (a fake server answering with the reference rule) come
+    after the baselines: the optimum is searched after them."""
     import jax.numpy as jnp
 
+    from jswim.llm.backend import Backend
+    from jswim.llm.reference import completion
     from jswim.results import as_run_rows, read_runs
     from jswim.studies.run import run_study
+    from tests.fakeserver import FakeServer
 
     def blind(state, params):
         return jnp.zeros((), jnp.float32)
@@ -122,8 +127,10 @@ def test_no_run_of_a_cell_beats_its_optimum_even_where_the_search_alone_would_mi
     solve = optimal.solve
     monkeypatch.setattr(optimal, "solve", lambda *a, **k: solve(*a, **{**k, "beam": 1}))
     navigate._optimal.cache_clear()
-    opts = StudyOptions(bearings=(90.0,), agents=("controller", "optimal"))
-    run_study("navigate", opts, None, tmp_path / "f", progress=False)
+    opts = StudyOptions(bearings=(90.0,), agents=(agent, "optimal"))
+    with FakeServer(reply=lambda body: completion(body)["choices"][0]["message"]["content"]) as srv:
+        backend = Backend(base_url=srv.url, model="fake") if agent == "llm" else None
+        run_study("navigate", opts, backend, tmp_path / "f", progress=False)
     rows = as_run_rows(read_runs(tmp_path / "f"))
     navigate._optimal.cache_clear()
     cells: dict[str, list] = {}
@@ -132,7 +139,7 @@ def test_no_run_of_a_cell_beats_its_optimum_even_where_the_search_alone_would_mi
     assert len(cells) == 3
     for group, g in cells.items():
         (best,) = [r for r in g if r.agent == "optimal"]
-        (ctrl,) = [r for r in g if r.agent == "controller"]
+        (ctrl,) = [r for r in g if r.agent == agent]
         assert ctrl.reached, group
         assert best.reached and best.steps_to_target <= ctrl.steps_to_target, group
         assert ctrl.optimal_steps == best.steps_to_target == best.optimal_steps, group
