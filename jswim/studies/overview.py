@@ -285,7 +285,8 @@ def nav_overview_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str
         note += (
             " The optimum is the shortest sequence the search found (seeded with the cell's runs "
             "known when it was searched), an upper bound on the least time, and some runs were "
-            f"shorter (time ratio below 1; an LLM run, or one added later): {where}{more}."
+            f"shorter (time ratio below 1; a run added to the folder after it, or a noisy run): "
+            f"{where}{more}."
         )
     return cols, cells, note
 
