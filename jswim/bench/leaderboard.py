@@ -105,6 +105,24 @@ def _num(v: Any, spec: str) -> str:
     return "-" if v is None else format(v, spec)
 
 
+#: The order of a row's kind within its setting: models, then the reference rule, then baselines.
+_KIND_ORDER = {"llm": 0, "reference": 1, "baseline": 2}
+
+
+def row_key(r: Mapping[str, Any]) -> tuple:
+    """Sort key of leaderboard rows, for the table and the page: by part, Purcell's swimmer
+    first, +x before -x, group, then models, the reference rule and baselines, each by name."""
+    return (
+        r["part"],
+        r["swimmer"] != "purcell",
+        r["swimmer"],
+        -int(r["direction"]),
+        str(r["group"]),
+        _KIND_ORDER[r["kind"]],
+        r["row"],
+    )
+
+
 def steps_text(r: Mapping[str, Any]) -> str:
     """Steps to learn of a leaderboard row: median [quartiles] (learners of runs), or ``-``."""
     if not r["learned"]:
@@ -163,18 +181,8 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
             "suite $",
         )
     ]
-    order = {"llm": 0, "reference": 1, "baseline": 2}
-    key = lambda r: (
-        r["part"],
-        r["swimmer"] != "purcell",
-        r["swimmer"],
-        -int(r["direction"]),
-        str(r["group"]),
-        order[r["kind"]],
-        r["row"],
-    )
     cells = []
-    for r in sorted(rows, key=key):
+    for r in sorted(rows, key=row_key):
         cells.append(
             [r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x"]
             + ([r["group"]] if groups else [])

@@ -10,31 +10,21 @@ study folders), like the leaderboard itself.
 
 from __future__ import annotations
 
-import base64
-import datetime as _dt
 import html
-import io
 import json
 from pathlib import Path
 from typing import Any
 from collections.abc import Mapping, Sequence
 
 from jswim.errors import ConfigError
-from jswim.results import atomic_write, writing
 from jswim.bench.runner import BASELINES, REFERENCE, read_record
-from jswim.bench.leaderboard import (
-    cost_cell,
-    missing_text,
-    steps_text,
-    valid_rows,
-)
+from jswim.bench.leaderboard import cost_cell, missing_text, row_key, steps_text, valid_rows
 from jswim.results.orders import MIN_BOOTSTRAP_N
-from jswim.figures.style import RC
 from jswim.figures.leaderboard import figure_object
-from jswim.viz.page import asset_text, write_report
+from jswim.viz.page import write_report
+from jswim.viz.skeleton import REPORT, figure_src, page_html, write_page, written
 
 BENCH_FILE = "bench.json"
-REPORT = "report.html"
 
 
 def is_bench(folder: str | Path) -> bool:
@@ -109,23 +99,8 @@ def _row_folder(r: Mapping[str, Any]) -> str:
     return f"{label}/{r['part']}"
 
 
-def _cost(r: Mapping[str, Any]) -> str:
-
-    return cost_cell(r)
-
-
 def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
 
-    order = {"llm": 0, "reference": 1, "baseline": 2}
-    key = lambda r: (
-        r["part"],
-        r["swimmer"] != "purcell",
-        r["swimmer"],
-        -int(r["direction"]),
-        str(r["group"]),
-        order[r["kind"]],
-        r["row"],
-    )
     head = (
         "part",
         "swimmer",
@@ -148,7 +123,7 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
         )
         + "</tr></thead><tbody>"
     ]
-    for r in sorted(rows, key=key):
+    for r in sorted(rows, key=row_key):
         target = _row_folder(r)
         page = f"{target}/{REPORT}"
         name = r["row"] + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
@@ -180,7 +155,7 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
             "-" if mx is None else f"{mx:+.3f}{ci}",
             "-" if r.get("failed_steps") is None else str(r["failed_steps"]),
             "-" if r.get("tokens_per_step") is None else f"{r['tokens_per_step']:.0f}",
-            _cost(r),
+            cost_cell(r),
         ]
         tds = []
         for h, c in zip(head, cells):
@@ -193,17 +168,6 @@ def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
         out.append(f'<tr class="kind-{r["kind"]}">' + "".join(tds) + "</tr>")
     out.append("</tbody></table>")
     return "".join(out)
-
-
-def _figure_src(rows: Sequence[Mapping[str, Any]]) -> str:
-    import matplotlib.pyplot as plt
-
-    fig = figure_object(rows)
-    buf = io.BytesIO()
-    with plt.rc_context(RC):
-        fig.savefig(buf, format="png", dpi=150, bbox_inches="tight", pad_inches=0.03)
-    plt.close(fig)
-    return "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode()
 
 
 def bench_html(folder: str | Path) -> str:
@@ -237,7 +201,7 @@ def bench_html(folder: str | Path) -> str:
     miss = "".join(f"<li>{html.escape(t)}</li>" for t in missing_text(missing))
     fig = (
         (
-            f'<figure><img alt="leaderboard" src="{_figure_src(rows)}"/><figcaption>leaderboard: success p and X/a '
+            f'<figure><img alt="leaderboard" src="{figure_src(figure_object(rows), dpi=150)}"/><figcaption>leaderboard: success p and X/a '
             "end toward the target, each with its 95% interval (Wilson; bootstrap), per row; blue: models, orange: "
             "the reference rule (not an LLM), grey: Q-learning and random</figcaption></figure>"
         )
@@ -245,26 +209,7 @@ def bench_html(folder: str | Path) -> str:
         else ""
     )
     sizes = suite.get("size_overrides") or {}
-    parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8"/>',
-        '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
-        f"<title>{html.escape(title)}</title><style>{asset_text('report.css')}</style></head><body>",
-        f"<header><h1>{html.escape(title)}</h1>",
-        f'<p id="status" class="{"ok" if status == "complete" and not missing else "unfinished"}">bench '
-        f"{html.escape(str(status))}"
-        + (f"; {len(missing)} study folder(s) gave no rows (below)" if missing else "")
-        + "</p>",
-        f'<p class="meta">folder <code>{html.escape(folder.name)}</code> · page written '
-        f"{_dt.datetime.now(_dt.UTC).strftime('%Y-%m-%d %H:%M UTC')}"
-        + (
-            f" · sizes changed from the suite's own: {html.escape(json.dumps(sizes))}"
-            if sizes
-            else ""
-        )
-        + "</p></header>",
-        '<nav><a href="#leaderboard-section">leaderboard</a> <a href="#figure">figure</a> '
-        '<a href="#parts">pages</a> <a href="#definition">definition</a></nav>',
+    body = [
         '<section id="leaderboard-section"><h2>Leaderboard</h2>'
         + (
             _table(rows, folder)
@@ -283,9 +228,23 @@ def bench_html(folder: str | Path) -> str:
         f'<section id="parts"><h2>Each part\'s page</h2><ul>{links}</ul></section>',
         '<section id="definition"><h2>Definition</h2><details><summary>bench.json (the full record)</summary>'
         f"<pre>{html.escape(json.dumps(meta, indent=2, sort_keys=True, default=str))}</pre></details></section>",
-        "</body></html>",
     ]
-    return "\n".join(parts)
+    said = f"; {len(missing)} study folder(s) gave no rows (below)" if missing else ""
+    resized = f"sizes changed from the suite's own: {html.escape(json.dumps(sizes))}"
+    return page_html(
+        title,
+        finished=status == "complete" and not missing,
+        status=f"bench {status}{said}",
+        folder=folder.name,
+        meta=[f"page written {written()}"] + ([resized] if sizes else []),
+        nav=[
+            ("leaderboard-section", "leaderboard"),
+            ("figure", "figure"),
+            ("parts", "pages"),
+            ("definition", "definition"),
+        ],
+        body=body,
+    )
 
 
 def write_bench_report(
@@ -309,8 +268,4 @@ def write_bench_report(
             base = folder / BASELINES / part
             beside = [base] if kind != "baseline" and (base / "metadata.json").exists() else []
             write_report(sub, figures=figures, beside=beside)
-    text = bench_html(folder)
-    path = Path(out) if out is not None else folder / REPORT
-    with writing(path, "choose a writable --out path for the report"):
-        atomic_write(path, text)
-    return path
+    return write_page(bench_html(folder), folder, out)

@@ -23,13 +23,11 @@ from __future__ import annotations
 
 import base64
 import dataclasses
-import datetime as _dt
 import gzip
 import html
 import io
 import json
 import math
-from importlib import resources
 from pathlib import Path
 from typing import Any
 from collections.abc import Mapping, Sequence
@@ -41,7 +39,6 @@ from jswim.env.flows import SWIM_SPEED, study_flow
 from jswim.errors import ConfigError
 from jswim.figures import plots
 from jswim.figures.flow_plots import flow_text
-from jswim.figures.style import RC
 from jswim.results.orders import AGENT_ORDER
 from jswim.studies.overview import (
     SUMMARY_NOTE,
@@ -56,20 +53,17 @@ from jswim.results import (
     RunRow,
     as_run_row,
     as_run_rows,
-    atomic_write,
     dumps,
     is_failed,
     read_metadata,
     read_run_rows,
     read_transcript,
     unfinished_note,
-    writing,
 )
 from jswim.studies.report import summarize
 from jswim.viz import worlds
+from jswim.viz.skeleton import figure_src, page_html, png_src, write_page, written
 from jswim.viz.tracks import Track, track
-
-REPORT = "report.html"
 
 #: Index columns of the run browser (one row per run), in the order of its filters.
 INDEX_KEYS = (
@@ -247,12 +241,7 @@ def _figure_data(paths: Sequence[Path]) -> list[dict[str, str]]:
                 im.thumbnail((FIGURE_PX, FIGURE_PX), Image.LANCZOS)
             buf = io.BytesIO()
             im.save(buf, format="PNG", optimize=True)
-        out.append(
-            {
-                "name": p.stem,
-                "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode(),
-            }
-        )
+        out.append({"name": p.stem, "src": png_src(buf.getvalue())})
     return out
 
 
@@ -260,23 +249,8 @@ def _drawn_figures(
     study: str, rows: Sequence[Mapping[str, Any]], note: str | None
 ) -> list[dict[str, str]]:
     """The study's figures drawn in memory (no file written), as PNG data URIs."""
-    import matplotlib.pyplot as plt
-
-    out = []
-    for name, fig in plots.study_figures(
-        study, [r for r in rows if not is_failed(r)], note=note
-    ).items():
-        buf = io.BytesIO()
-        with plt.rc_context(RC):
-            fig.savefig(buf, format="png", dpi=170, bbox_inches="tight", pad_inches=0.03)
-        plt.close(fig)
-        out.append(
-            {
-                "name": name,
-                "src": "data:image/png;base64," + base64.b64encode(buf.getvalue()).decode(),
-            }
-        )
-    return out
+    figs = plots.study_figures(study, [r for r in rows if not is_failed(r)], note=note)
+    return [{"name": name, "src": figure_src(fig, dpi=170)} for name, fig in figs.items()]
 
 
 def _figures(
@@ -656,11 +630,6 @@ def _settings_html(meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]] = 
     )
 
 
-def asset_text(name: str) -> str:
-    """The text of one of the report's packaged assets (``report.css``, ``report.js``)."""
-    return resources.files("jswim.viz").joinpath("assets", name).read_text(encoding="utf-8")
-
-
 def _script_json(obj: Any) -> str:
     """JSON safe inside ``<script>``: no ``</`` can end the element early."""
     return dumps(obj, separators=(",", ":")).replace("</", "<\\/").replace("<!--", "<\\!--")
@@ -739,7 +708,7 @@ def report_html(
         "folder": folder.name,
         "filters": list(FILTER_KEYS),
         "runs": index,
-        "written": _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC"),
+        "written": written(),
     }
     title = f"jswim {study} study" + (f" · LLM: {model}" if model else "")
     template = meta.get("prompt_template")
@@ -748,17 +717,7 @@ def report_html(
         f" ({html.escape(title)})</figcaption></figure>"
         for f in figs
     )
-    parts = [
-        "<!DOCTYPE html>",
-        '<html lang="en"><head><meta charset="utf-8"/>',
-        '<meta name="viewport" content="width=device-width, initial-scale=1"/>',
-        f"<title>{html.escape(title)}</title><style>{asset_text('report.css')}</style></head><body>",
-        f"<header><h1>{html.escape(title)}</h1>",
-        f'<p id="status" class="{"ok" if finished else "unfinished"}">{html.escape(status_text)}</p>',
-        f'<p class="meta">folder <code>{html.escape(folder.name)}</code> · jswim {html.escape(str(meta.get("jswim_version", "?")))}'
-        f" · page written {data['written']}</p></header>",
-        '<nav><a href="#summary">summary</a> <a href="#figures">figures</a> <a href="#browser">runs</a> '
-        '<a href="#settings">settings</a></nav>',
+    body = [
         f'<section id="summary"><h2>Summary</h2>{_ranges_html(rows)}{_summary_html(rows)}</section>',
         f'<section id="figures"><h2>Figures</h2><p class="note">{html.escape(fig_source)}</p>{figures_html}</section>',
         '<section id="browser"><h2>Runs</h2><div id="filters"></div><p id="run-count"></p>'
@@ -775,10 +734,25 @@ def report_html(
         "</section>",
         f'<script type="application/json" id="report-data">{_script_json(data)}</script>',
         *blobs,
-        f"<script>{asset_text('report.js')}</script>",
-        "</body></html>",
     ]
-    return "\n".join(parts)
+    return page_html(
+        title,
+        finished=finished,
+        status=status_text,
+        folder=folder.name,
+        meta=[
+            f"jswim {html.escape(str(meta.get('jswim_version', '?')))}",
+            f"page written {data['written']}",
+        ],
+        nav=[
+            ("summary", "summary"),
+            ("figures", "figures"),
+            ("browser", "runs"),
+            ("settings", "settings"),
+        ],
+        body=body,
+        script=True,
+    )
 
 
 def write_report(
@@ -794,12 +768,7 @@ def write_report(
     ResultFolderError
         Not a study folder; [`jswim.results.StudyFolderError`][jswim.results.StudyFolderError] if the page cannot be written.
     """
-    folder = Path(folder)
-    text = report_html(folder, figures=figures, beside=beside)
-    path = Path(out) if out is not None else folder / REPORT
-    with writing(path, "choose a writable --out path for the report"):
-        atomic_write(path, text)
-    return path
+    return write_page(report_html(folder, figures=figures, beside=beside), Path(folder), out)
 
 
 def beside_rows(folders: Sequence[Path]) -> list[RunRow]:
