@@ -39,8 +39,7 @@ The names above load on first use, so ``import jswim`` stays light (JAX loads wi
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from jswim._exports import lazy_exports
 
 __version__ = "0.1.0"
 
@@ -80,16 +79,4 @@ _SUBPACKAGES = (
 
 __all__ = [*_EXPORTS, "__version__"]
 
-
-def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name]), name)
-        globals()[name] = value  # later look-ups skip this function
-        return value
-    if name in _SUBPACKAGES:
-        return importlib.import_module(f"jswim.{name}")  # lazy: start-up
-    raise AttributeError(f"module 'jswim' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS) | set(_SUBPACKAGES))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, _SUBPACKAGES)

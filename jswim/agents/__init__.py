@@ -21,8 +21,7 @@ The other modules (``defaults``, ``fidelity``, ``memory``, ``pair_prompt``, ``pp
 
 from __future__ import annotations
 
-import importlib
-from types import ModuleType
+from jswim._exports import lazy_exports
 
 __all__ = [
     "llm",
@@ -50,12 +49,4 @@ _PARTS = (
     "world_view",
 )
 
-
-def __getattr__(name: str) -> ModuleType:
-    if name in __all__ or name in _PARTS:
-        return importlib.import_module(f"{__name__}.{name}")  # lazy: start-up
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__) | set(_PARTS))
+__getattr__, __dir__ = lazy_exports(__name__, {}, (*__all__, *_PARTS))

@@ -25,6 +25,7 @@ the module of each concern: docs/design.md (module map, *The world protocol*)::
     state, info = env.step(key, state, env.action_space(params).sample(key), params)
 """
 
+from jswim._exports import lazy_exports
 from jswim.env.action_input import (
     ROCS,
     decode_action,
@@ -75,15 +76,7 @@ _LAZY = {
     "scene_rollout_batch": "jswim.env.scene_rollouts",
 }
 
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        import importlib
-
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'jswim.env' has no attribute {name!r}")
+__getattr__, __dir__ = lazy_exports(__name__, _LAZY)
 
 
 __all__ = [

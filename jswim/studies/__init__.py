@@ -28,8 +28,7 @@ Studies (``jswim study NAME``):
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from jswim._exports import lazy_exports
 
 #: Public name -> the submodule that owns it, imported on first access (PEP 562), so that
 #: ``jswim.studies.specs`` (all the command line needs to build its parser) loads alone.
@@ -58,14 +57,4 @@ _EXPORTS = {
 
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(_EXPORTS[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'jswim.studies' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

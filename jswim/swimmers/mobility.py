@@ -72,6 +72,61 @@ def rpy_entries(
     return iso + rr * rx * rx, rr * rx * rz, iso + rr * rz * rz
 
 
+def rpb_wall_coefficients(
+    ez: Array, t: Array, ir: Array, ir3: Array, ir5: Array
+) -> tuple[Array, Array, Array, Array, Array]:
+    """Swan & Brady's wall coefficients ``(A, B, C, D, E)`` of the Rotne-Prager-Blake mobility of
+    two unit spheres (Phys. Fluids 19, 113306, 2007, appendix), in units of ``1 / (6 pi mu a)``.
+
+    The wall part of the mobility of sphere ``i`` per force on sphere ``j`` is
+    ``W_ab = A d_ab + B e_a e_b + C e_a d_b3 + D d_a3 e_b + E d_a3 d_b3``, with ``e`` the unit
+    image vector ``R = x_i - (x_j, -z_j)`` and ``d_a3`` the wall normal. ``A`` and ``B`` are
+    symmetric in the two spheres; ``C``, ``D``, ``E`` are the paper's for the swapped pair
+    (``t -> 1 - t``). Used by [`rpb_entries`][jswim.swimmers.mobility.rpb_entries] (the plane)
+    and `jswim.swimmers.purcell_beads.rpb_wall_blocks` (3-D).
+
+    Parameters
+    ----------
+    ez : Array
+        The image vector's normal component ``(z_i + z_j) / R``.
+    t : Array
+        ``z_i / (z_i + z_j)``.
+    ir, ir3, ir5 : Array
+        ``1 / R``, ``1 / R^3``, ``1 / R^5``. Given by the caller: each rounds ``1 / R^5`` its own
+        way, and keeps its numbers.
+
+    Returns
+    -------
+    tuple of Array
+        ``(A, B, C, D, E)``, elementwise.
+    """
+    ez2 = ez * ez
+    tt = t * (1.0 - t)
+    u = 1.0 - t  # the swapped pair's t
+    a_ = -0.25 * (
+        3.0 * (1.0 + 2.0 * tt * ez2) * ir
+        + 2.0 * (1.0 - 3.0 * ez2) * ir3
+        - 2.0 * (1.0 - 5.0 * ez2) * ir5
+    )
+    b_ = -0.25 * (
+        3.0 * (1.0 - 6.0 * tt * ez2) * ir
+        - 6.0 * (1.0 - 5.0 * ez2) * ir3
+        + 10.0 * (1.0 - 7.0 * ez2) * ir5
+    )
+    c_ = (
+        0.5
+        * ez
+        * (
+            3.0 * u * (1.0 - 6.0 * t * ez2) * ir
+            - 6.0 * (1.0 - 5.0 * ez2) * ir3
+            + 10.0 * (2.0 - 7.0 * ez2) * ir5
+        )
+    )
+    d_ = 0.5 * ez * (3.0 * u * ir - 10.0 * ir5)
+    e_ = -(3.0 * u * u * ez2 * ir + 3.0 * ez2 * ir3 + (2.0 - 15.0 * ez2) * ir5)
+    return a_, b_, c_, d_, e_
+
+
 def rpb_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array, Array]:
     """Rotne-Prager-Blake pair mobility of two unit spheres (radius ``a``) above the no-slip wall
     at z = 0, ``(M_xx, M_xz, M_zx, M_zz)`` of sphere ``i`` at height ``zi`` per unit force on
@@ -79,45 +134,19 @@ def rpb_entries(rx: Array, zi: Array, zj: Array) -> tuple[Array, Array, Array, A
 
     Blake's tensor with the Faxen operators of both spheres applied,
     ``(1 + a^2/6 lap_i)(1 + a^2/6 lap_j) G_Blake`` (Swan & Brady, Phys. Fluids 19, 113306, 2007,
-    appendix): the unbounded Rotne-Prager-Yamakawa tensor ([`rpy_entries`][jswim.swimmers.mobility.rpy_entries]) plus a wall part
-    written in the image vector ``R = x_i - (x_j, -z_j)`` (length ``R``, direction
-    ``(e_x, e_z)``) and ``t = z_i / (z_i + z_j)``, as
-    ``W_ab = A d_ab + B e_a e_b + C' e_a d_b3 + D' d_a3 e_b + E' d_a3 d_b3``, where ``A`` and ``B``
-    are symmetric in the two spheres and ``C'``, ``D'``, ``E'`` are ``C``, ``D``, ``E`` of the
-    swapped pair (``t -> 1 - t``). Non-overlapping spheres not touching the wall. A test checks it
-    against the Faxen operators applied numerically to Blake's image system.
+    appendix): the unbounded Rotne-Prager-Yamakawa tensor ([`rpy_entries`][jswim.swimmers.mobility.rpy_entries]) plus the
+    wall part of [`rpb_wall_coefficients`][jswim.swimmers.mobility.rpb_wall_coefficients] in the
+    image vector ``R = x_i - (x_j, -z_j)`` (direction ``(e_x, e_z)``). Non-overlapping spheres
+    not touching the wall. A test checks it against the Faxen operators applied numerically to
+    Blake's image system.
     """
     Rz = zi + zj
     R2 = rx * rx + Rz * Rz
     iR = 1.0 / jnp.sqrt(R2)
     iR3 = iR / R2
-    iR5 = iR3 / R2
     ex, ez = rx * iR, Rz * iR
     ez2 = ez * ez
-    t = zi / Rz
-    tt = t * (1.0 - t)
-    a_ = -0.25 * (
-        3.0 * (1.0 + 2.0 * tt * ez2) * iR
-        + 2.0 * (1.0 - 3.0 * ez2) * iR3
-        - 2.0 * (1.0 - 5.0 * ez2) * iR5
-    )
-    b_ = -0.25 * (
-        3.0 * (1.0 - 6.0 * tt * ez2) * iR
-        - 6.0 * (1.0 - 5.0 * ez2) * iR3
-        + 10.0 * (1.0 - 7.0 * ez2) * iR5
-    )
-    u = 1.0 - t  # the swapped pair's t
-    c_ = (
-        0.5
-        * ez
-        * (
-            3.0 * u * (1.0 - 6.0 * t * ez2) * iR
-            - 6.0 * (1.0 - 5.0 * ez2) * iR3
-            + 10.0 * (2.0 - 7.0 * ez2) * iR5
-        )
-    )
-    d_ = 0.5 * ez * (3.0 * u * iR - 10.0 * iR5)
-    e_ = -(3.0 * u * u * ez2 * iR + 3.0 * ez2 * iR3 + (2.0 - 15.0 * ez2) * iR5)
+    a_, b_, c_, d_, e_ = rpb_wall_coefficients(ez, zi / Rz, iR, iR3, iR3 / R2)
     fxx, fxz, fzz = rpy_entries(rx, zi - zj)
     return (
         fxx + a_ + b_ * ex * ex,

@@ -37,7 +37,7 @@ from jax import Array
 
 from jswim.errors import ConfigError
 from jswim.swimmers import nlink
-from jswim.swimmers.mobility import OSEEN_PREFACTOR, wall_self_factors
+from jswim.swimmers.mobility import OSEEN_PREFACTOR, rpb_wall_coefficients, wall_self_factors
 from jswim.swimmers.models import SwimmerModel, make_model
 
 #: Default bead radius (link lengths): l / b = 50.
@@ -82,7 +82,7 @@ def rpy_blocks(r: Array, b: float) -> Array:
 def rpb_wall_blocks(rho: Array, zi: Array, zj: Array, b: float) -> Array:
     """Swan & Brady's wall part ``(..., 3, 3)`` of the RPB mobility of bead ``i`` at height ``zi``
     per force on bead ``j`` at ``zj``, in-plane offset ``rho = x_i - x_j`` (..., 2); units of
-    ``1 / (6 pi mu)``. [`rpb_entries`][jswim.swimmers.mobility.rpb_entries]'s ``A .. E`` in 3-D:
+    ``1 / (6 pi mu)``: [`rpb_wall_coefficients`][jswim.swimmers.mobility.rpb_wall_coefficients] in 3-D,
     ``W = A I + B e e + C e z + D z e + E z z`` (``e`` the unit image vector, ``z`` the wall
     normal), for unit beads at lengths divided by ``b``, then divided by ``b``."""
     rx, ry = rho[..., 0] / b, rho[..., 1] / b
@@ -90,33 +90,8 @@ def rpb_wall_blocks(rho: Array, zi: Array, zj: Array, b: float) -> Array:
     rz = zi + zj
     r2 = rx * rx + ry * ry + rz * rz
     ir = 1.0 / jnp.sqrt(r2)
-    ir3, ir5 = ir / r2, ir / (r2 * r2)
     ex, ey, ez = rx * ir, ry * ir, rz * ir
-    ez2 = ez * ez
-    t = zi / rz
-    tt = t * (1.0 - t)
-    u = 1.0 - t
-    a_ = -0.25 * (
-        3.0 * (1.0 + 2.0 * tt * ez2) * ir
-        + 2.0 * (1.0 - 3.0 * ez2) * ir3
-        - 2.0 * (1.0 - 5.0 * ez2) * ir5
-    )
-    b_ = -0.25 * (
-        3.0 * (1.0 - 6.0 * tt * ez2) * ir
-        - 6.0 * (1.0 - 5.0 * ez2) * ir3
-        + 10.0 * (1.0 - 7.0 * ez2) * ir5
-    )
-    c_ = (
-        0.5
-        * ez
-        * (
-            3.0 * u * (1.0 - 6.0 * t * ez2) * ir
-            - 6.0 * (1.0 - 5.0 * ez2) * ir3
-            + 10.0 * (2.0 - 7.0 * ez2) * ir5
-        )
-    )
-    d_ = 0.5 * ez * (3.0 * u * ir - 10.0 * ir5)
-    e_ = -(3.0 * u * u * ez2 * ir + 3.0 * ez2 * ir3 + (2.0 - 15.0 * ez2) * ir5)
+    a_, b_, c_, d_, e_ = rpb_wall_coefficients(ez, zi / rz, ir, ir / r2, ir / (r2 * r2))
     ev = jnp.stack([ex, ey, ez], -1)
     zhat = jnp.zeros_like(ev).at[..., 2].set(1.0)
     eye = jnp.eye(3, dtype=ev.dtype)

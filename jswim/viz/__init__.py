@@ -12,9 +12,9 @@
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from jswim._exports import lazy_exports
 
+#: Public name -> the module that defines it (loaded on first use).
 _EXPORTS = {
     "track": "jswim.viz.tracks",
     "Track": "jswim.viz.tracks",
@@ -26,8 +26,4 @@ _EXPORTS = {
 
 __all__ = list(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    if name in _EXPORTS:
-        return getattr(importlib.import_module(_EXPORTS[name]), name)
-    raise AttributeError(f"module 'jswim.viz' has no attribute {name!r}")
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

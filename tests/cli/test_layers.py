@@ -137,6 +137,8 @@ def _imports(modules: dict[str, Path]) -> list[tuple[str, str, bool, bool]]:
 
 
 def _layer(module: str) -> int:
+    if module == "jswim":
+        return len(LAYERS) - 1  # jswim/__init__.py is in the front layer (a prefix would hold all)
     best = None
     for rank, (_, prefixes) in enumerate(LAYERS):
         for p in prefixes:
