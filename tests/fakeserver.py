@@ -978,10 +978,9 @@ GATEWAY_MODELS = ("openai/gpt-4", "openai/gpt-4o", "meta-llama/llama-3-70b")
 def as_remote(monkeypatch: Any) -> None:
     """Make jswim take the fake server (on loopback) for a remote host: a gateway off this
     machine, where the list prices apply (:func:`jswim.llm.urls.is_local_host` answers False)."""
-    import jswim.llm.client
-    import jswim.llm.dryrun
+    import jswim.llm.settings
     import jswim.llm.urls
     import jswim.studies.session
 
-    for module in (jswim.llm.urls, jswim.llm.client, jswim.llm.dryrun, jswim.studies.session):
+    for module in (jswim.llm.urls, jswim.llm.settings, jswim.studies.session):
         monkeypatch.setattr(module, "is_local_host", lambda url: False)

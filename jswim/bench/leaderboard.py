@@ -14,7 +14,7 @@ from typing import Any
 from collections.abc import Mapping, Sequence
 
 from jswim.console import REFERENCE_UNPRICED, Column, cost_text, plain_table
-from jswim.results.orders import MIN_QUARTILE_N
+from jswim.results.orders import MIN_BOOTSTRAP_N, MIN_QUARTILE_N
 from jswim.results import atomic_write, dumps, read_runs
 from jswim.studies.report import summarize
 
@@ -140,16 +140,54 @@ def _why_unpriced(r: Mapping[str, Any]) -> str | None:
     return None
 
 
-def cost_cell(r: Mapping[str, Any], short: bool = False) -> str:
-    """The row's cost in the one wording of `jswim.console.cost_text`, with why it is not
-    priced; ``short`` (the terminal table): ``not priced ($0)``, the reasons under the table
-    (`unpriced_notes`)."""
+def cells(r: Mapping[str, Any], short: bool = False) -> dict[str, str]:
+    """A row's cells by column, in the one wording of the bench page and the terminal table
+    (each titles and lays out the columns its own way; a missing value is ``-``).
+
+    Parameters
+    ----------
+    r : mapping
+        A leaderboard row (`FIELDS`); a key the terminal table reads that it lacks raises
+        (`valid_rows` drops such rows).
+    short : bool
+        The terminal table's cells: X/a end without its interval, and ``not priced ($0)`` for
+        a cost not priced (the reasons go under the table, `unpriced_notes`).
+
+    Returns
+    -------
+    dict
+        ``part``, ``swimmer``, ``dir``, ``group``, ``row``, ``samples``, ``n``, ``success``,
+        ``steps``, ``mean_x``, ``fail``, ``tok/step`` and ``cost``, as text.
+    """
+    name = r["row"] + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
+    if r["kind"] != "baseline" and r["status"] not in (None, "complete"):
+        name += f" [{r['status']}]"
+    mean_x = f"{r['mean_x']:+.3f}"
+    if not short and (r.get("n") or 0) < MIN_BOOTSTRAP_N:  # no interval from 1 or 2 runs
+        mean_x += f" [n<{MIN_BOOTSTRAP_N}]"
+    elif not short and r.get("mean_x_lo") is not None and r.get("mean_x_hi") is not None:
+        mean_x += f" [{r['mean_x_lo']:+.3f}, {r['mean_x_hi']:+.3f}]"
     if r["kind"] == "baseline":
-        return "-"
-    why = _why_unpriced(r)
-    if why is not None:
-        return "not priced ($0)" if short else cost_text(None, why)
-    return cost_text(r["suite_cost_usd"])
+        cost = "-"
+    elif (why := _why_unpriced(r)) is None:
+        cost = cost_text(r["suite_cost_usd"])
+    else:
+        cost = "not priced ($0)" if short else cost_text(None, why)
+    return {
+        "part": r["part"],
+        "swimmer": r["swimmer"],
+        "dir": "+x" if r["direction"] > 0 else "-x",
+        "group": r["group"] or "",
+        "row": name,
+        "samples": str(r.get("samples") or 1),
+        "n": str(r["n"]),
+        "success": f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
+        "steps": steps_text(r),
+        "mean_x": mean_x,
+        "fail": _num(r["failed_steps"], "d"),
+        "tok/step": _num(r["tokens_per_step"], ".0f"),
+        "cost": cost,
+    }
 
 
 def unpriced_notes(rows: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -181,32 +219,12 @@ def table_text(rows: Sequence[Mapping[str, Any]], width: int | None = None) -> s
             "suite $",
         )
     ]
-    cells = []
-    for r in sorted(rows, key=row_key):
-        cells.append(
-            [r["part"], r["swimmer"], "+x" if r["direction"] > 0 else "-x"]
-            + ([r["group"]] if groups else [])
-            + [
-                r["row"]
-                + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
-                + (
-                    ""
-                    if r["status"] == "complete" or r["kind"] == "baseline"
-                    else f" [{r['status']}]"
-                )
-            ]
-            + [str(r.get("samples") or 1)] * samples
-            + [
-                str(r["n"]),
-                f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
-                steps_text(r),
-                f"{r['mean_x']:+.3f}",
-                _num(r["failed_steps"], "d"),
-                _num(r["tokens_per_step"], ".0f"),
-                cost_cell(r, short=True),
-            ]
-        )
-    return plain_table(cols, cells, width=width)
+    keys = ["part", "swimmer", "dir"] + ["group"] * groups + ["row"] + ["samples"] * samples
+    keys += ["n", "success", "steps", "mean_x", "fail", "tok/step", "cost"]
+    lines = [
+        [c[k] for k in keys] for c in (cells(r, short=True) for r in sorted(rows, key=row_key))
+    ]
+    return plain_table(cols, lines, width=width)
 
 
 def valid_rows(rows: Any) -> list[Mapping[str, Any]]:

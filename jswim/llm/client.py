@@ -64,8 +64,8 @@ from jswim.llm.settings import (  # noqa: F401
 )
 from jswim.llm.tokens import estimate_prompt_tokens
 from jswim.llm.transport import LoopbackTransport
-from jswim.llm.urls import endpoint, is_local_host, is_loopback, safe_url
-from jswim.llm.usage import Usage, price_table
+from jswim.llm.urls import endpoint, is_loopback, safe_url
+from jswim.llm.usage import Usage
 
 #: The key and URL credentials taken out of a text, in any encoding.
 _scrub = credentials.scrub
@@ -159,13 +159,7 @@ class LLMClient:
         # one Authorization header); either way it never stays in a URL a library could print.
         self._url, self._basic = credentials.split_userinfo(endpoint(settings.base_url))
         self._where = safe_url(settings.base_url)
-        self._prices, self.unpriced = price_table(
-            settings.prices,
-            settings.model,
-            local_host=is_local_host(settings.base_url),
-            listed=settings.listed_models,
-            price_local=settings.price_local,
-        )
+        self._prices, self.unpriced = settings.price_table()
         #: What a reasoning model must be sent, amended by the server's 400s (jswim.llm.reasoning).
         self.reasoning = ReasoningState(
             settings.reasoning,

@@ -18,8 +18,7 @@ from jswim.llm.result import ChatResult, LiveCounts
 from jswim.llm.settings import ClientSettings
 from jswim.llm.reasoning import ESTIMATE_SHARE, dry_run_budget, dry_run_warning
 from jswim.llm.tokens import estimate_prompt_tokens, estimate_tokens
-from jswim.llm.urls import is_local_host
-from jswim.llm.usage import PRICES_AS_OF, Usage, price_table
+from jswim.llm.usage import PRICES_AS_OF, Usage
 
 
 class EstimatingClient:
@@ -27,13 +26,7 @@ class EstimatingClient:
 
     def __init__(self, settings: ClientSettings) -> None:
         self.settings = settings
-        self._prices, self.unpriced = price_table(
-            settings.prices,
-            settings.model,
-            local_host=is_local_host(settings.base_url),
-            listed=settings.listed_models,
-            price_local=settings.price_local,
-        )
+        self._prices, self.unpriced = settings.price_table()
         self.counts = LiveCounts()
         self.n_requests = 0
         self.max_completion_tokens = 0  # sum over calls of the max_tokens each was sent with

@@ -13,7 +13,8 @@ from jswim.llm import constrain
 from jswim.llm.credentials import mask_fields
 from jswim.llm.reasoning import REASONING_MAX_TOKENS, check_mode
 from jswim.llm.rejection import REQUIRED_FIELDS
-from jswim.llm.urls import normalize_base_url, safe_url
+from jswim.llm.urls import is_local_host, normalize_base_url, safe_url
+from jswim.llm.usage import PriceTable, price_table
 
 
 def check_temperature(value: float, name: str = "temperature") -> float:
@@ -214,6 +215,20 @@ class ClientSettings:
         check_temperature(self.temperature)
         check_extra_fields(self.extra_fields)
         mask_fields(dict(self.extra_fields))  # registers each credential for scrub
+
+    def price_table(self) -> tuple[PriceTable, str | None]:
+        """The table these calls are priced by, and why it is empty when it is.
+
+        The one pricing rule of the client and of its dry run
+        ([`jswim.llm.usage.price_table`][jswim.llm.usage.price_table] on this host, model and list).
+        """
+        return price_table(
+            self.prices,
+            self.model,
+            local_host=is_local_host(self.base_url),
+            listed=self.listed_models,
+            price_local=self.price_local,
+        )
 
     def metadata(self) -> dict[str, Any]:
         """Settings worth recording with a run (no secrets: only the key's variable name)."""

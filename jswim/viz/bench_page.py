@@ -18,8 +18,7 @@ from collections.abc import Mapping, Sequence
 
 from jswim.errors import ConfigError
 from jswim.bench.runner import BASELINES, REFERENCE, read_record
-from jswim.bench.leaderboard import cost_cell, missing_text, row_key, steps_text, valid_rows
-from jswim.results.orders import MIN_BOOTSTRAP_N
+from jswim.bench.leaderboard import cells, missing_text, row_key, valid_rows
 from jswim.figures.leaderboard import figure_object
 from jswim.viz.page import write_report
 from jswim.viz.skeleton import REPORT, figure_src, page_html, write_page, written
@@ -101,70 +100,44 @@ def _row_folder(r: Mapping[str, Any]) -> str:
 
 def _table(rows: Sequence[Mapping[str, Any]], folder: Path) -> str:
 
-    head = (
-        "part",
-        "swimmer",
-        "dir",
-        "group",
-        "row",
-        "n",
-        "success p [95% CI]",
-        "steps to learn, median [IQR] (k of n)",
-        "X/a end toward the target [95% CI]",
-        "fail",
-        "tok/step",
-        "suite cost",
-    )
+    # The page's titles of leaderboard.cells' columns.
+    head = {
+        "part": "part",
+        "swimmer": "swimmer",
+        "dir": "dir",
+        "group": "group",
+        "row": "row",
+        "n": "n",
+        "success": "success p [95% CI]",
+        "steps": "steps to learn, median [IQR] (k of n)",
+        "mean_x": "X/a end toward the target [95% CI]",
+        "fail": "fail",
+        "tok/step": "tok/step",
+        "cost": "suite cost",
+    }
     numeric = {"n", "fail", "tok/step"}
     out = [
         '<table class="summary" id="leaderboard"><thead><tr>'
         + "".join(
-            f'<th class="{"num" if h in numeric else ""}">{html.escape(h)}</th>' for h in head
+            f'<th class="{"num" if k in numeric else ""}">{html.escape(h)}</th>'
+            for k, h in head.items()
         )
         + "</tr></thead><tbody>"
     ]
     for r in sorted(rows, key=row_key):
         target = _row_folder(r)
-        page = f"{target}/{REPORT}"
-        name = r["row"] + (" (rule, not an LLM)" if r["kind"] == "reference" else "")
-        if r["kind"] != "baseline" and r.get("status") not in (None, "complete"):
-            name += f" [{r['status']}]"
+        c = cells(r)
         link = (
-            f'<a href="{html.escape(page)}">{html.escape(name)}</a>'
+            f'<a href="{html.escape(f"{target}/{REPORT}")}">{html.escape(c["row"])}</a>'
             if (folder / target).is_dir()
-            else html.escape(name)
+            else html.escape(c["row"])
         )
-        mx = r.get("mean_x")
-
-        ci = (
-            f" [n<{MIN_BOOTSTRAP_N}]"
-            if (r.get("n") or 0) < MIN_BOOTSTRAP_N  # no interval from 1 or 2 runs
-            else f" [{r['mean_x_lo']:+.3f}, {r['mean_x_hi']:+.3f}]"
-            if r.get("mean_x_lo") is not None and r.get("mean_x_hi") is not None
-            else ""
-        )
-        cells = [
-            r["part"],
-            r["swimmer"],
-            "+x" if r["direction"] > 0 else "-x",
-            r["group"] or "",
-            None,
-            str(r["n"]),
-            f"{r['success']:.2f} [{r['success_lo']:.2f}, {r['success_hi']:.2f}]",
-            steps_text(r),
-            "-" if mx is None else f"{mx:+.3f}{ci}",
-            "-" if r.get("failed_steps") is None else str(r["failed_steps"]),
-            "-" if r.get("tokens_per_step") is None else f"{r['tokens_per_step']:.0f}",
-            cost_cell(r),
+        tds = [
+            f'<td class="{"num" if k in numeric else ""}'
+            + (f' kind-{r["kind"]}">{link}' if k == "row" else f'">{html.escape(c[k])}')
+            + "</td>"
+            for k in head
         ]
-        tds = []
-        for h, c in zip(head, cells):
-            cls = "num" if h in numeric else ""
-            tds.append(
-                f'<td class="{cls} kind-{r["kind"]}">{link}</td>'
-                if c is None
-                else f'<td class="{cls}">{html.escape(str(c))}</td>'
-            )
         out.append(f'<tr class="kind-{r["kind"]}">' + "".join(tds) + "</tr>")
     out.append("</tbody></table>")
     return "".join(out)

@@ -311,21 +311,9 @@ def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
             + f'<p class="note">{html.escape(note)}</p>'
         )
     cols, cells = summary_table(order_summary(summarize(list(rows)), rows))
-    head = "".join(
-        f'<th class="{"num" if c.numeric else ""}">{html.escape(c.header)}</th>' for c in cols
-    )
-    body = "".join(
-        "<tr>"
-        + "".join(
-            f'<td class="{"num" if c.numeric else ""}">{html.escape(v)}</td>'
-            for c, v in zip(cols, r)
-        )
-        + "</tr>"
-        for r in cells
-    )
     return (
-        f'<div class="table-wrap"><table class="summary" id="summary-table"><thead><tr>{head}</tr></thead>'
-        f'<tbody>{body}</tbody></table></div><p class="note">{html.escape(SUMMARY_NOTE)}</p>'
+        _table_html(cols, cells, "summary-table")
+        + f'<p class="note">{html.escape(SUMMARY_NOTE)}</p>'
         + _scenes_html(rows)
     )
 
