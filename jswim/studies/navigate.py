@@ -39,6 +39,7 @@ from jswim.env.targets import (
     target_from_dict,
 )
 from jswim.env.work import lighthill_efficiency
+from jswim.action_codes import encode_action
 from jswim.judging import lattice
 from jswim.agents.protocol import derived_seed
 from jswim.agents.variants import init_label
@@ -774,7 +775,7 @@ def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
         from jswim.agents import ppo  # lazy: start-up (optax's PPO, for PPO runs only)
 
         run = ppo.train(world_, params, keys, nav_ppo_config(p0.steps), trace=True)
-        trace = run.trace
+        trace, codes = run.trace, _ppo_codes(run, k)
     else:
         raise ValueError(f"no navigation baseline {p0.agent!r}")
     rows = []
@@ -799,6 +800,16 @@ def baseline_rows(plans: Sequence[Plan]) -> list[RunRow]:
             moves = _lattice_moves(dofs[sl], prev, lo, hi, k)
         rows.append(nav_row(plan, xy[:, 0], xy[:, 1], heading, moves, episodes[j]))
     return rows
+
+
+def _ppo_codes(run: Any, k: int) -> np.ndarray:
+    """The action codes a categorical PPO ran, ``(learners, steps)``, from its record (the
+    chosen DOF and that DOF's ROC): the moves it asked for. Read back from the DOFs' change
+    instead, a push clipped at the shape's limit reads as a shorter move, which in a flow is
+    another step (it moves fast, then holds): the row's actions would not replay its run."""
+    dof = np.asarray(run.dof, np.int64)
+    roc = np.take_along_axis(np.asarray(run.actions, np.float64), dof[..., None] - 1, -1)[..., 0]
+    return np.asarray(encode_action(dof, np.rint(roc * k).astype(np.int64), k), np.int32)
 
 
 def _planned(env: Any, params: Any, plan: Plan, key: Any, budget: int) -> np.ndarray:

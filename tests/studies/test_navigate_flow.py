@@ -181,3 +181,39 @@ def test_no_agent_beats_the_swimmers_optimum_in_any_cell(tmp_path):
             if r.reached:
                 assert r.steps_to_target >= best.steps_to_target, (group, r.agent)
                 assert r.time_ratio == pytest.approx(r.steps_to_target / best.optimal_steps)
+
+
+@pytest.mark.slow  # trains the learners briefly and replays every row (~1-2 min)
+def test_every_rows_actions_replay_its_path_in_a_rotating_flow():
+    """A row's actions, replayed through the world from its start, give its recorded path (they
+    seed the cell's optimum): in Taylor-Green at 0.9 v pushes are clipped at the shape's limits,
+    and such a push is another step than the shorter move the DOFs' change reads as."""
+    import jax.numpy as jnp
+    import numpy as np
+
+    import jswim
+    from jswim.env.flows import flow_from_dict
+
+    o = StudyOptions(
+        flow="taylor-green",
+        flows=(0.9,),
+        agents=("qlearning", "ppo", "controller", "random"),
+        q_runs=4,
+        train_episodes=4,
+    )
+    plans = [p for p in navigate.with_budgets(build("navigate", o)) if p.group.startswith("path")]
+    rows = [r for p in plans for r in navigate.baseline_rows([p])]
+    assert {r.agent for r in rows} == {"qlearning", "ppo", "controller", "random"}
+    env, params = jswim.make(
+        "purcell",
+        roc_levels=2,
+        target=target_from_dict(json.loads(rows[0].target)),
+        flow=flow_from_dict(json.loads(rows[0].flow)),
+    )
+    for r in rows:
+        codes = [(dof - 1) * 5 + int(round(roc)) + 2 for dof, roc in r.actions]
+        assert all(float(roc) == round(float(roc)) for _, roc in r.actions), r.run_id
+        trace = jswim.rollout(env, params, 0, jnp.asarray(codes, jnp.int32))
+        xy = np.cumsum(np.asarray(trace.info.displacement, np.float64).reshape(-1, 2), axis=0)
+        dev = np.hypot(xy[:, 0] - np.asarray(r.x), xy[:, 1] - np.asarray(r.y)).max()
+        assert dev < 1e-4, (r.run_id, dev)
