@@ -192,6 +192,7 @@ def test_every_rows_actions_replay_its_path_in_a_rotating_flow():
     import numpy as np
 
     import jswim
+    from jswim.action_codes import encode_action
     from jswim.env.flows import flow_from_dict
 
     o = StudyOptions(
@@ -211,7 +212,7 @@ def test_every_rows_actions_replay_its_path_in_a_rotating_flow():
         flow=flow_from_dict(json.loads(rows[0].flow)),
     )
     for r in rows:
-        codes = [(dof - 1) * 5 + round(roc) + 2 for dof, roc in r.actions]
+        codes = [encode_action(dof, round(roc), 2) for dof, roc in r.actions]
         assert all(float(roc) == round(float(roc)) for _, roc in r.actions), r.run_id
         trace = jswim.rollout(env, params, 0, jnp.asarray(codes, jnp.int32))
         xy = np.cumsum(np.asarray(trace.info.displacement, np.float64).reshape(-1, 2), axis=0)
