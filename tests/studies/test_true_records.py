@@ -32,6 +32,14 @@ def no_outcome(folder: Path) -> int:
     return len(sent - done)
 
 
+def wait_in_flight(srv: FakeServer, proc, timeout: float = 60.0) -> None:
+    """Return once the server is answering a request of ``proc``'s (its latency holds it open)."""
+    t0 = time.monotonic()
+    while srv.in_flight < 1:
+        assert proc.poll() is None and time.monotonic() - t0 < timeout, "no request in flight"
+        time.sleep(0.002)
+
+
 # -- (a) the study's totals come from the ledger -------------------------------------------------
 
 
@@ -81,6 +89,7 @@ def test_show_counts_every_session_after_kill_9_and_a_resume(tmp_path, capsys):
             journaled = len((out / "calls.jsonl").read_text().splitlines()) if k else 0
             proc = start_swim(srv.url, out)
             wait_for_calls(out, journaled + 3, proc)
+            wait_in_flight(srv, proc)  # killed while the server holds a request (0.2 s each)
             proc.send_signal(signal.SIGKILL)
             proc.communicate(timeout=60)
             time.sleep(0.3)  # the dead process's requests land at the server
