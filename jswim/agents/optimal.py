@@ -526,7 +526,7 @@ def solve(
         ([`jswim.agents.mpc`][jswim.agents.mpc]) and, where it steers the world and reaches
         the target, the steering controller's): the answer is never longer than any of them
         that reaches the target, and the beam branches off them. A study passes every run of
-        the cell that reached the target (`jswim.studies.navigate.optimal_path`).
+        the cell that reached the target (`jswim.studies.kinds.navigate.optimal_path`).
 
     Returns
     -------

@@ -52,9 +52,9 @@ class Job:
 
 
 def _ignores(study: str) -> tuple[str, ...]:
-    from jswim.studies.specs import SPECS  # lazy: the grids load JAX
+    from jswim.studies.study import get  # lazy: the study kinds load JAX
 
-    return SPECS[study].ignores
+    return get(study).ignores
 
 
 def part_args(part: Part, suite: Suite) -> list[str]:

@@ -65,7 +65,10 @@ class Part:
         opts.update({k: v for k, v in (sizes or {}).items() if v is not None})
         if samples is not None:
             opts["samples"] = samples
-        out = ["swim"] if self.study == "swim" else ["study", self.study]
+        from jswim.studies.study import get  # lazy: the study kinds load JAX
+
+        command = get(self.study).command  # "study" (jswim study NAME) or its own ("swim")
+        out = ["study", self.study] if command == "study" else [command]
         for key, value in opts.items():
             flag = PART_OPTIONS[key]
             if isinstance(value, (list, tuple)):
@@ -164,31 +167,30 @@ def check_name(name: str, what: str) -> str:
 
 #: Grid axes only ``jswim study`` takes (``jswim swim`` refuses them).
 STUDY_AXES = ("zetas", "n_hts", "temperatures", "prompt_files")
-#: Options only the navigation study reads (any other study refuses them when it runs).
-NAVIGATE_ONLY = ("distances", "bearings", "flow", "flows")
 
 
 def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None:
     """Refuse, when the models file is read, an option the part's study would refuse at run time
     (every model's process would fail on it)."""
     from jswim.env.flows import FLOWS  # lazy: JAX
-    from jswim.studies.specs import ignored_options  # lazy: the grids load JAX
+    from jswim.studies.specs import ignored_options, own_options  # lazy: the kinds load JAX
+    from jswim.studies.study import get, names  # lazy: as above
 
-    if study == "swim":
+    spec = get(study)
+    if spec.command != "study":
         axis = next((k for k in opts if k in STUDY_AXES), None)
         if axis is not None:
             raise ConfigError(
-                f"{where}: jswim swim takes no {PART_OPTIONS[axis]} (a study's grid axis); use a "
-                'study, e.g. study = "curves"'
+                f"{where}: jswim {spec.command} takes no {PART_OPTIONS[axis]} (a study's grid "
+                'axis); use a study, e.g. study = "curves"'
             )
-    if study != "navigate":
-        only = next((k for k in opts if k in NAVIGATE_ONLY), None)
-        if only is not None:
-            raise ConfigError(
-                f"{where}: the {study} study has no use for {only} (only the navigate study "
-                "reads it); leave it out"
-            )
-    elif "flow" in opts and (not isinstance(opts["flow"], str) or opts["flow"] not in FLOWS):
+    only = next((k for k in opts if k in own_options() and k not in spec.own_options), None)
+    if only is not None:
+        who = " and ".join(f"the {n} study" for n in names() if only in get(n).own_options)
+        raise ConfigError(
+            f"{where}: the {study} study has no use for {only} (only {who} reads it); leave it out"
+        )
+    if "flow" in opts and (not isinstance(opts["flow"], str) or opts["flow"] not in FLOWS):
         raise ConfigError(f"{where}: flow must be one of {', '.join(FLOWS)}, got {opts['flow']!r}")
     elif "flows" in opts and not opts.get("flow"):
         raise ConfigError(
@@ -213,7 +215,9 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
     ConfigError
         For an unknown study or option (one line, naming the file).
     """
-    from jswim.studies.specs import STUDIES  # lazy: the grids load JAX
+    from jswim.studies.study import names  # lazy: the study kinds load JAX
+
+    studies = names()
 
     if not isinstance(table, Mapping):
         raise ConfigError(f"{where}: [suites.{name}] must be a table")
@@ -233,10 +237,10 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
         if (
             not isinstance(p, Mapping)
             or not isinstance(p.get("study"), str)
-            or p["study"] not in STUDIES
+            or p["study"] not in studies
         ):
             raise ConfigError(
-                f"{where}: suite {name!r} part {i + 1}: study must be one of {', '.join(STUDIES)}"
+                f"{where}: suite {name!r} part {i + 1}: study must be one of {', '.join(studies)}"
             )
         opts = p.get("options") or {}
         if not isinstance(opts, Mapping):

@@ -351,7 +351,7 @@ def _dry_run(suite: Any, models: Any, mf: Any, out: Path) -> int:
         parser = options.study_parser()
         for j in jobs:
             args = parser.parse_args(j.argv)
-            study = "swim" if args.command == "swim" else args.name
+            study = args.name  # jswim swim's parser sets its study's name
             est = estimate_study(
                 study, options.options(args, study), options.backend(args), j.folder
             )

@@ -4,7 +4,7 @@ parsers, `options` -> [`jswim.studies.StudyOptions`][jswim.studies.options.Study
 (which prices each job's study command line in process through `study_parser`).
 
 The options themselves are a table in `jswim.cli.run_options`; a study's own options (the scene
-studies': ``--heights``, ...) are a table in `jswim.cli.scenes`.
+studies': ``--heights``, ...) are declared by the study (`jswim.studies.study.Study.flags`).
 """
 
 from __future__ import annotations
@@ -17,25 +17,11 @@ from collections.abc import Sequence
 from urllib.parse import urlsplit
 
 from jswim._io.paths import check_file
-from jswim.cli import base, scenes
+from jswim.cli import base
 from jswim.cli.run_options import add_run_options
 from jswim.errors import ConfigError
 from jswim.llm.prices import load_prices
 from jswim.llm.urls import is_loopback, normalize_base_url
-
-#: One line per study, for ``jswim study NAME --help``.
-STUDY_HELP = {
-    "curves": "X/a against step n for the LLM, Q-learning and random policy (Fig. 2)",
-    "history": "the n_ht sweep of the history length (Fig. 3)",
-    "noise": "mean X/a and success rate p against the noise level zeta (Fig. 4)",
-    "ablation": "the prompt without each of its sentences S1..S5, free-text replies (Fig. 5)",
-    "inits": "the four initial configurations",
-    "competence": "every protocol variant next to random and Q-learning baselines",
-    "temperature": "the LLM runs over a grid of sampling temperatures",
-    **scenes.STUDY_HELP,
-    "continuous": "finer ROCs (K in 1, 2, 5, 10) for the LLM, lattice Q-learning and random policy, and the "
-    "real-valued PPO baseline",
-}
 
 
 def add_study_commands(sub: argparse._SubParsersAction) -> list[argparse.ArgumentParser]:
@@ -57,28 +43,47 @@ def add_study_commands(sub: argparse._SubParsersAction) -> list[argparse.Argumen
     )
     if base.outlined(p):
         return [p, q]
-    from jswim.studies.specs import SPECS, STUDIES  # lazy: the grids load JAX (not for --help)
+    from jswim.studies.study import get, names  # lazy: the study kinds load JAX (not for --help)
 
-    add_run_options(p, study=False, spec=SPECS["swim"])
-    names = q.add_subparsers(
+    studies = [get(n) for n in names()]
+    main = next(st for st in studies if st.command == "swim")
+    add_run_options(p, study=False, spec=main)
+    p.set_defaults(name=main.name)
+    nested = [st for st in studies if st.command == "study"]
+    sub_names = q.add_subparsers(
         dest="name",
         metavar="NAME",
         parser_class=base.Parser,
-        help=", ".join(s for s in STUDIES if s != "swim"),
+        help=", ".join(st.name for st in nested),
     )
-    names.required = True
+    sub_names.required = True
     out = [p]
-    for name in (s for s in STUDIES if s != "swim"):
-        s = names.add_parser(
-            name,
-            help=STUDY_HELP.get(name, name),
-            description=f"The {name} study: {STUDY_HELP.get(name, name)}. Every default below is "
-            "this study's.",
+    for st in nested:
+        s = sub_names.add_parser(
+            st.name,
+            help=st.help,
+            description=f"The {st.name} study: {st.help}. Every default below is this study's.",
         )
-        add_run_options(s, study=True, spec=SPECS[name])
-        scenes.register(s, name)
+        add_run_options(s, study=True, spec=st)
+        add_own_options(s, st)
         out.append(s)
     return out
+
+
+def add_own_options(parser: argparse.ArgumentParser, study: Any) -> None:
+    """Add ``study``'s own options (`jswim.studies.study.Study.flags`) to its parser, as a group."""
+    if not study.flags:
+        return
+    group = parser.add_argument_group(f"{study.name} options")
+    for flag, kw in study.flags:
+        group.add_argument(flag, default=None, **kw)
+
+
+def _own_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The StudyOptions keywords of the study's own options given (`add_own_options`)."""
+    from jswim.studies.specs import own_options  # lazy: as in add_study_commands
+
+    return {d: getattr(args, d) for d in own_options() if getattr(args, d, None) is not None}
 
 
 def study_parser() -> argparse.ArgumentParser:
@@ -176,7 +181,7 @@ def backend(args: argparse.Namespace) -> Any:
     )
 
 
-#: StudyOptions field <- argparse dest, each passed on when given (a study's own options: scenes.OPTIONS).
+#: StudyOptions field <- argparse dest, each passed on when given (a study's own options: Study.flags).
 PASSED = {
     "swimmers": "swimmer",
     "directions": "direction",
@@ -227,29 +232,38 @@ def options(args: argparse.Namespace, study: str) -> Any:
         kw["samples"] = args.samples
     if getattr(args, "prompt_files", None):
         kw["prompt_files"] = _prompt_files(args.prompt_files)
+    from jswim.studies.study import get, names as study_names  # lazy: as in add_study_commands
+
+    spec = get(study)
     if args.roc_levels is not None:
-        if study == "continuous":
+        k = args.roc_levels[0]
+        if "roc_levels_grid" not in spec.ignores:
             kw["roc_levels_grid"] = args.roc_levels
         elif len(args.roc_levels) != 1:
+            grids = [n for n in study_names() if "roc_levels_grid" not in get(n).ignores]
+            raise ConfigError(f"--roc-levels takes one K here (a list only for {_studies(grids)})")
+        elif k < spec.min_roc_levels:
+            m = spec.min_roc_levels
             raise ConfigError(
-                "--roc-levels takes one K here (a list only for the continuous study)"
-            )
-        elif study == "navigate" and args.roc_levels[0] < 2:
-            raise ConfigError(
-                f"--roc-levels {args.roc_levels[0]}: the navigate study steers on K >= 2 levels (the corner "
-                "world, K = 1, cannot turn); leave it out for K = 2, or give 2 or more"
+                f"--roc-levels {k}: the {study} study steers on K >= {m} levels "
+                f"({spec.roc_levels_why}); leave it out for K = {m}, or give {m} or more"
             )
         else:
-            kw["roc_levels"] = args.roc_levels[0]
+            kw["roc_levels"] = k
     names = tuple(v.strip() for v in (args.variant or "").split(",") if v.strip())
-    if study == "competence" and names:
+    if spec.variants_grid and names:
         kw["variants"] = names
     elif len(names) > 1:
-        raise ConfigError("--variant takes one name here (a list only for the competence study)")
+        grids = [n for n in study_names() if get(n).variants_grid]
+        raise ConfigError(f"--variant takes one name here (a list only for {_studies(grids)})")
     elif names:
         kw["variant"] = names[0]
-    kw.update(scenes.options(args))
+    kw.update(_own_options(args))
     return StudyOptions(**kw)
+
+
+def _studies(names: Sequence[str]) -> str:
+    return " and ".join(f"the {n} study" for n in names)
 
 
 def _prompt_files(text: str) -> tuple[str, ...]:

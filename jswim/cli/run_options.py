@@ -1,11 +1,11 @@
 """The options of ``jswim swim`` and ``jswim study NAME``, as a table.
 
 Each option is one `Flag`: its names, its argparse keywords, its group, and its help, either text
-or a function of the study's [`StudySpec`][jswim.studies.specs.StudySpec] (so that every default
+or a function of the study's [`Study`][jswim.studies.study.Study] (so that every default
 the help names is that study's). An option tied to a `StudyOptions` field (``Flag.field``) is left
 out of the help of a study that has no use for it (the study refuses it,
 `jswim.cli.options.options`), and a study may word an option's help its own way
-(``StudySpec.option_help``). `add_run_options` adds the table to a parser.
+(``Study.option_help``). `add_run_options` adds the table to a parser.
 """
 
 from __future__ import annotations
@@ -37,12 +37,12 @@ class Flag:
     names : tuple of str
         Its flags (the first is the one shown; the others are old names).
     help : str or callable
-        Its help, or a function of the study's `StudySpec` that returns it.
+        Its help, or a function of the study's `Study` that returns it.
     group : str
         The help group it is listed in (`RUNS`, `BACKEND`, `OUTPUT`, `COST`).
     field : str or None
         The `StudyOptions` field it sets, where a study may have no use for it: a study whose
-        ``StudySpec.ignores`` names the field refuses the option and does not show it.
+        ``Study.ignores`` names the field refuses the option and does not show it.
     study_only : bool
         Only ``jswim study NAME`` has it (the grid axes), not ``jswim swim``.
     kwargs : mapping
@@ -456,8 +456,8 @@ def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> No
         The parser of ``jswim swim`` or of ``jswim study NAME``.
     study : bool
         ``jswim study NAME`` (adds the grid axes, ``Flag.study_only``).
-    spec : StudySpec
-        The study's defaults ([`jswim.studies.specs.StudySpec`][jswim.studies.specs.StudySpec]).
+    spec : Study
+        The study's defaults ([`jswim.studies.study.Study`][jswim.studies.study.Study]).
     """
     groups: dict[str, Any] = {}
     for flag in FLAGS:

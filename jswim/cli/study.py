@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import signal
 import sys
 from pathlib import Path
@@ -35,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def main(args: argparse.Namespace) -> int:
-    return _run("swim" if args.command == "swim" else args.name, args)
+    return _run(args.name, args)  # jswim swim's parser sets its study's name
 
 
 #: Exit status of a study stopped by ``--max-cost`` (cleanly: rerun with a higher cap to go on).
@@ -85,7 +84,7 @@ def _run(study: str, args: argparse.Namespace) -> int:
         print("\n".join(est.lines()))
         print(json.dumps(est.as_dict(), sort_keys=True))  # the same, for scripts
         return 0
-    if (text := short_steps_warning(opts, study) or _short_navigation(opts, study)) is not None:
+    if (text := short_steps_warning(opts, study)) is not None:
         base.warn(text)
     with Progress() as bar:
         tick = phase_ticker(bar)
@@ -170,30 +169,6 @@ def _run(study: str, args: argparse.Namespace) -> int:
         )
         return base.EXIT_USAGE
     return 0
-
-
-def _short_navigation(opts: Any, study: str) -> str | None:
-    """A warning when ``--steps`` of a navigation study is below what the steering controller
-    is estimated to need for the nearest of its targets (its budget over `BUDGET_SAFETY`): few
-    runs, if any, can reach a target then."""
-    if study != "navigate" or opts.steps is None:
-        return None
-    from jswim.env.targets import BUDGET_SAFETY, default_budget  # lazy: JAX loads for a run
-    from jswim.studies.navigate import NAV_ROC_LEVELS, targets  # lazy: as above
-    from jswim.swimmers.models import make_model  # lazy: as above
-
-    k = max(opts.roc_levels, NAV_ROC_LEVELS)
-    model = make_model("purcell")
-    need = min(
-        math.ceil(default_budget(spec, model, k) / BUDGET_SAFETY)
-        for _, _, spec in targets(opts.distances, opts.bearings)
-    )
-    if opts.steps >= need:
-        return None
-    return (
-        f"--steps {opts.steps} is shorter than the ~{need} steps the steering controller needs for "
-        "the nearest target: few runs, if any, will reach a target"
-    )
 
 
 def _print_reasoning(result: Any) -> None:

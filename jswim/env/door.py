@@ -100,7 +100,7 @@ NAVIGATE_FLOW = study_flow("uniform", 0.5)
 #: 256), while here the stream alone never reaches it and the square gait straight ahead passes
 #: 1.35 a from it: the policy must head ~30 degrees into the stream (Zermelo's crab),
 #: which is what the flow entries of the observation are for. Budget: the navigation study's rule
-#: in a flow (`jswim.studies.navigate.with_budgets`), 4 x Zermelo's least time of 65.6 steps
+#: in a flow (`jswim.studies.kinds.navigate.with_budgets`), 4 x Zermelo's least time of 65.6 steps
 #: (the still-fluid budget straight ahead is 96); tests/env/test_flow_door.py recomputes it.
 NAVIGATE_FLOW_TARGET = FixedTarget(3.0, 0.0, budget=263)
 

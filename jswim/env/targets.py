@@ -406,7 +406,7 @@ def flow_budget(still: int, least_time: float | None) -> int:
     point swimmer's time to the target through the flow) where that is larger; ``least_time``
     ``None`` (no time known: the target unreachable for a point) keeps ``still``.
 
-    The navigation study ([`with_budgets`][jswim.studies.navigate.with_budgets]) passes
+    The navigation study ([`with_budgets`][jswim.studies.kinds.navigate.with_budgets]) passes
     Zermelo's least time; a world made in Python passes `course_time`, which is never below it
     (Zermelo lives above the worlds). At most `MAX_BUDGET`.
 

@@ -3,7 +3,7 @@ docs/navigation.md, *Pictures in a flow*), and the flow drawn under a picture.
 
 Drawn only where the rows carry a flow (`flow_rows`): a still-fluid folder's figures are the
 ones [`jswim.figures.navigation_plots`][jswim.figures.navigation_plots] draws, and no more.
-In order of importance (`jswim.figures.navigation_plots.NAV_FIGURE_ORDER`); every panel's
+In order of importance (`jswim.studies.kinds.navigate.FIGURE_ORDER`); every panel's
 title names the flow (``uniform flow``), one panel per target (its group without the flow):
 
 ``navigate-flow-ratio``

@@ -4,7 +4,7 @@ Same conventions as [`jswim.figures.plots`][jswim.figures.plots] (paper sizes, t
 palette, ``note`` across the top of an unfinished study's figures); chosen by
 [`jswim.figures.plots.study_figures`][jswim.figures.plots.study_figures].
 
-The figures, in the order of `NAV_FIGURE_ORDER` (the page's and `jswim plot`'s order: the
+The figures, in the order of `jswim.studies.kinds.navigate.FIGURE_ORDER` (the page's and `jswim plot`'s order: the
 result first):
 
 ``navigate-ratio``
@@ -48,7 +48,6 @@ from jswim.results import as_run_rows
 __all__ = [
     "CONTROLLER_STYLE",
     "MIN_LINE_RUNS",
-    "NAV_FIGURE_ORDER",
     "OPTIMUM_STYLE",
     "ZERMELO_STYLE",
     "agent_order",
@@ -70,7 +69,7 @@ __all__ = [
 #: The steering controller's line (the reference stroke of navigation).
 CONTROLLER_STYLE = dict(color="black", ls="-", marker="x", label="steering controller")
 #: Navigation's PPO is the categorical learner over the K-level action codes
-#: ([`jswim.studies.navigate.nav_ppo_config`][jswim.studies.navigate.nav_ppo_config]), not the
+#: ([`jswim.studies.kinds.navigate.nav_ppo_config`][jswim.studies.kinds.navigate.nav_ppo_config]), not the
 #: continuous study's real-ROC one.
 NAV_PPO_STYLE = {**AGENT_STYLE["ppo"], "label": "PPO (categorical, K-level codes)"}
 #: Zermelo's optimal point steerer (in a flow, docs/navigation.md): a point with no turning
@@ -102,20 +101,6 @@ _STYLES = {
 #: agents with the same success rate stay visible side by side.
 BEARING_DODGE = 3.0
 _ORDER = ("llm", "qlearning", "ppo", "controller", "mpc", "optimal", "random")
-
-#: The navigation study's figures in order of importance (the page and the folder list them so):
-#: the time ratio to the swimmer's own optimum, success, energy, then the paths. A study in a
-#: flow draws the ``navigate-flow-*`` ones (`jswim.figures.flow_plots`) beside the others.
-NAV_FIGURE_ORDER = (
-    "navigate-flow-ratio",
-    "navigate-ratio",
-    "navigate-flow-success",
-    "navigate-bearing",
-    "navigate-flow-energy",
-    "navigate-energy",
-    "navigate-flow-paths",
-    "navigate-paths",
-)
 
 #: Fewest runs in a cell for its series' line to join it to a neighbouring cell: fewer, and the
 #: cell is a marker with its interval alone (one run going 0 to 1 is no trend).
@@ -152,7 +137,7 @@ def success_cell(rows: Sequence[Any]) -> tuple[float, float, float, int]:
 def ratio_cell(rows: Sequence[Any], field: str = "time_ratio") -> tuple[float, float, float, int]:
     """``(median, lo, hi, n)`` of a cell's time ratios (``field``) over its runs that reached
     the target: the median, its bootstrap 95 % interval and how many runs it is of (nan with
-    none; the median alone with one), as the study's table (`jswim.studies.navigate.nav_summary`)."""
+    none; the median alone with one), as the study's table (`jswim.studies.kinds.navigate.nav_summary`)."""
     vals = [getattr(r, field) for r in rows if r.reached and getattr(r, field) is not None]
     m, lo, hi = median_interval(vals)
     return (m, lo, hi, len(vals))
@@ -467,7 +452,7 @@ def has_optimum(rows: Sequence[Any]) -> bool:
 
 
 def nav_figures(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
-    """The navigation study's figures by file name, in `NAV_FIGURE_ORDER` (none without
+    """The navigation study's figures by file name, in `jswim.studies.kinds.navigate.FIGURE_ORDER` (none without
     navigation rows). The still-fluid ratio figure is for a study without a flow (a flow's is
     `jswim.figures.flow_plots.flow_ratio_figure`) whose rows carry the optimum."""
     rows = [r for r in as_run_rows(rows) if r.target]

@@ -22,15 +22,16 @@ from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 
 from matplotlib.figure import Figure
 
 from jswim.agents.variants import VARIANTS
 from jswim.results import as_run_rows, is_failed
+from jswim.results.row import RunRow
 
-from jswim.figures.scene_plots import scene_figures
-from jswim.figures.navigation_plots import NAV_FIGURE_ORDER, nav_figures
+from jswim.figures.scene_plots import pair_figures, school_figures, wall_figures
+from jswim.figures.navigation_plots import nav_figures
 from jswim.figures.flow_plots import flow_figures
 from jswim.figures.panels import save
 from jswim.figures.sketches import learned_cycles
@@ -46,66 +47,85 @@ from jswim.figures.grid import (
 
 # -- a study's figures ------------------------------------------------------------------------
 
-#: A study's figures in order of importance, where that is not the order of their names (the
-#: folder's files are listed by name): `figure_order`.
-FIGURE_ORDER: dict[str, tuple[str, ...]] = {"navigate": NAV_FIGURE_ORDER}
+#: A figure set's builder: ``(study, rows, note) -> {file name: Figure}``.
+FigureSet = Callable[[str, list[RunRow], Any], dict[str, Figure]]
+
+
+def _temperature(study: str, rows: list[RunRow], note: str | None) -> dict[str, Figure]:
+    """p, steps to learn and X/a against the sampling temperature T."""
+    fig = grid_figure(
+        rows, "temperature", xlabel="sampling temperature T", numeric=True, note=note, learn=True
+    )
+    return {"temperature": fig}
+
+
+def _competence(study: str, rows: list[RunRow], note: str | None) -> dict[str, Figure]:
+    """One entry per LLM variant, then one per baseline (agent, action set)."""
+    entries = [
+        {**r, "entry": r.group if r.agent == "llm" else f"{r.agent} ({r.group})"} for r in rows
+    ]
+    order = [v for v in VARIANTS if any(e["entry"] == v for e in entries)]
+    order += sorted({e["entry"] for e in entries} - set(order))
+    return {"competence": competence_figure(entries, order, note=note)}
+
+
+#: Every figure set a study may declare (`jswim.studies.study.Study.figures`), by name.
+FIGURE_SETS: dict[str, FigureSet] = {
+    # X/a against step n, under the study's own name (curves.png, swim.png)
+    "curves": lambda study, rows, note: {
+        study: curves_figure(rows, cycles=learned_cycles(rows), note=note)
+    },
+    "history": lambda study, rows, note: {"history": history_figure(rows, note=note)},
+    "noise": lambda study, rows, note: {"noise": noise_figure(rows, note=note)},
+    "ablation": lambda study, rows, note: {"ablation": ablation_figure(rows, note=note)},
+    "inits": lambda study, rows, note: {"inits": inits_figure(rows, note=note)},
+    "temperature": _temperature,
+    "competence": _competence,
+    "continuous": lambda study, rows, note: continuous_figures(rows, note=note),
+    "wall": lambda study, rows, note: wall_figures(rows, note=note),
+    "pair": lambda study, rows, note: pair_figures(rows, note=note),
+    "school": lambda study, rows, note: school_figures(rows, note=note),
+    # the ratio to the optimum, success, energy, then the paths
+    "navigation": lambda study, rows, note: nav_figures(rows, note=note),
+    # in a background flow, each against the flow speed, and the paths over its streamlines
+    "flow": lambda study, rows, note: flow_figures(rows, note=note),
+}
+
+
+def _study(study: str) -> Any:
+    from jswim.studies.study import get, names  # lazy: the study kinds load JAX
+
+    return get(study) if study in names() else None
 
 
 def figure_order(study: str, names: Iterable[str]) -> list[str]:
     """``names`` (a study's figures, without extension) in the order the page and ``jswim
-    plot`` show them: `FIGURE_ORDER`'s first, then any other by name."""
-    order = {n: i for i, n in enumerate(FIGURE_ORDER.get(study, ()))}
+    plot`` show them: the study's `jswim.studies.study.Study.figure_order` first, then any
+    other by name."""
+    spec = _study(study)
+    order = {n: i for i, n in enumerate(spec.figure_order if spec else ())}
     return sorted(names, key=lambda n: (order.get(n, len(order)), n))
 
 
 def study_figures(
     study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None
 ) -> dict[str, Figure]:
-    """The figures of ``study`` from its run rows, by file name (without extension).
+    """The figures of ``study`` from its run rows, by file name (without extension): its figure
+    sets (`jswim.studies.study.Study.figures`, `FIGURE_SETS`), in its ``figure_order`` where
+    it gives one; none for a study this version does not know.
 
     ``note`` (e.g. ``"unfinished: 12 of 40 runs"``) is written across the top of each.
     """
     rows = as_run_rows(rows)
-    if not rows:
+    spec = _study(study)
+    if not rows or spec is None:
         return {}
-    if study in ("curves", "swim"):
-        return {study: curves_figure(rows, cycles=learned_cycles(rows), note=note)}
-    if study == "history":
-        return {"history": history_figure(rows, note=note)}
-    if study == "noise":
-        return {"noise": noise_figure(rows, note=note)}
-    if study == "ablation":
-        return {"ablation": ablation_figure(rows, note=note)}
-    if study == "inits":
-        return {"inits": inits_figure(rows, note=note)}
-    if study == "temperature":  # p, steps to learn and X/a against the sampling temperature T
-        return {
-            "temperature": grid_figure(
-                rows,
-                "temperature",
-                xlabel="sampling temperature T",
-                numeric=True,
-                note=note,
-                learn=True,
-            )
-        }
-    if study == "continuous":
-        return continuous_figures(rows, note=note)
-    if study in ("wall", "pair", "school"):  # walls, pairs and schools: the scene figures
-        return scene_figures(study, rows, note=note)
-    if study == "navigate":  # the ratio to the optimum, success, energy, then the paths
-        # In a background flow, each against the flow speed, and the paths over its streamlines.
-        figs = {**nav_figures(rows, note=note), **flow_figures(rows, note=note)}
+    figs: dict[str, Figure] = {}
+    for name in spec.figures:
+        figs.update(FIGURE_SETS[name](study, rows, note))
+    if spec.figure_order:
         return {name: figs[name] for name in figure_order(study, figs)}
-    if study == "competence":
-        # One entry per LLM variant, then one per baseline (agent, action set).
-        entries = [
-            {**r, "entry": r.group if r.agent == "llm" else f"{r.agent} ({r.group})"} for r in rows
-        ]
-        order = [v for v in VARIANTS if any(e["entry"] == v for e in entries)]
-        order += sorted({e["entry"] for e in entries} - set(order))
-        return {"competence": competence_figure(entries, order, note=note)}
-    return {}
+    return figs
 
 
 def continuous_figures(

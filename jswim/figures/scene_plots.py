@@ -39,25 +39,36 @@ def _note(fig: Figure, note: str | None) -> None:
         fig.suptitle(note, color=NOTE_COLOR, fontsize=7)
 
 
-def scene_figures(
-    study: str, rows: Sequence[Mapping[str, Any]], note: str | None = None
-) -> dict[str, Figure]:
-    """The figures of a scene study by file name (none without scene rows)."""
-    rows = as_run_rows(rows)
-    rows = [r for r in rows if r.scene]
+def _scene_rows(rows: Sequence[Mapping[str, Any]]) -> list[Any]:
+    return [r for r in as_run_rows(rows) if r.scene]
+
+
+def wall_figures(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+    """The wall study's figures by file name (none without scene rows)."""
+    rows = _scene_rows(rows)
     if not rows:
         return {}
-    if study == "wall":
-        return {
-            "wall": wall_figure(rows, note),
-            "wall-track": track_figure(rows, "start_height", note, heights=True),
-        }
-    if study == "school":
-        return {"school": school_figure(rows, note)}
+    return {
+        "wall": wall_figure(rows, note),
+        "wall-track": track_figure(rows, "start_height", note, heights=True),
+    }
+
+
+def pair_figures(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+    """The pair study's figures by file name (none without scene rows)."""
+    rows = _scene_rows(rows)
+    if not rows:
+        return {}
     return {
         "pair": pair_figure(rows, note),
         "pair-track": track_figure(rows, "separation", note, heights=False),
     }
+
+
+def school_figures(rows: Sequence[Mapping[str, Any]], note: str | None = None) -> dict[str, Figure]:
+    """The school study's figure (none without scene rows)."""
+    rows = _scene_rows(rows)
+    return {"school": school_figure(rows, note)} if rows else {}
 
 
 @styled

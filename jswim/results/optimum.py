@@ -2,7 +2,7 @@
 
 The swimmer's own least time to a target (``optimal_steps``) is one fact per cell (a world:
 target, flow, K lattice, start shape), found by the ``optimal`` agent's search after every other
-run of the cell, which seeds it (`jswim.studies.navigate.seed_optimum`). The other rows of the
+run of the cell, which seeds it (`jswim.studies.kinds.navigate.seed_optimum`). The other rows of the
 cell are written before it is known; their ``optimal_steps`` and ``time_ratio`` are read from
 the cell's ``optimal`` row ([`with_cell_optimum`][jswim.results.optimum.with_cell_optimum]),
 so every row of a cell is measured against the same optimum.

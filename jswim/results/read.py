@@ -28,6 +28,12 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     not done, as a torn line's does. A navigation row's optimum columns are its cell's
     ``optimal`` row's ([`with_cell_optimum`][jswim.results.optimum.with_cell_optimum]).
     """
+    return with_cell_optimum(_records(folder))
+
+
+def _records(folder: str | os.PathLike) -> list[dict[str, Any]]:
+    """`read_runs` before the cell's optimum is read into its rows (`read_run_rows` does that
+    once, on the typed rows)."""
     path = Path(folder) / RUNS
     _regular(path)
     by_id: dict[str, dict[str, Any]] = {}
@@ -35,7 +41,7 @@ def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
         rid = row.get("run_id")
         if rid not in by_id or is_failed(by_id[rid]):
             by_id[rid] = upgrade_names(row)
-    return with_cell_optimum(list(by_id.values()))
+    return list(by_id.values())
 
 
 def _regular(path: Path) -> None:
@@ -66,7 +72,7 @@ def read_run_rows(folder: str | os.PathLike) -> list[RunRow]:
         [`read_runs`][jswim.results.read.read_runs]'s records (same rule: first record wins, a failed one is replaced, a
         damaged line skipped with a warning), each through [`RunRow.from_dict`][jswim.results.row.RunRow.from_dict].
     """
-    return as_run_rows(read_runs(folder))
+    return as_run_rows(_records(folder))  # as_run_rows reads each cell's optimum, once
 
 
 #: Fields of ``metadata.json`` by the JSON type readers expect of them.

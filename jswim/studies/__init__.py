@@ -1,8 +1,12 @@
 """The paper's experiments as study grids, run in batches and stored resumably.
 
+- [`jswim.studies.study`][jswim.studies.study]: a study kind as one object
+  ([`Study`][jswim.studies.study.Study]: its defaults, cells, options, success rule and figures)
+  and the registry, [`get`][jswim.studies.study.get] and [`names`][jswim.studies.study.names];
+  each kind is one module of [`jswim.studies.kinds`][jswim.studies.kinds];
 - [`jswim.studies.options`][jswim.studies.options]: [`StudyOptions`][jswim.studies.options.StudyOptions], the knobs; [`jswim.studies.specs`][jswim.studies.specs]:
-  every study's defaults and cells as one table (`SPECS`) and [`build`][jswim.studies.specs.build] (study -> list
-  of [`Plan`][jswim.studies.plans.Plan], [`jswim.studies.plans`][jswim.studies.plans]; the scene studies' cells in
+  [`build`][jswim.studies.specs.build] (study -> list of [`Plan`][jswim.studies.plans.Plan],
+  [`jswim.studies.plans`][jswim.studies.plans]; the scene studies' cells in
   [`jswim.studies.scene_grids`][jswim.studies.scene_grids]); [`jswim.studies.baselines`][jswim.studies.baselines]: every non-LLM run's one
   pipeline;
 - [`jswim.studies.run`][jswim.studies.run]: [`run_study`][jswim.studies.run.run_study] (runs what a study folder lacks, stores, summarises; draws nothing);
@@ -14,16 +18,8 @@
 - `jswim.studies.ensemble`: one stroke or policy over many noisy swimmers, X/a statistics
   per step (``jswim ensemble``).
 
-Studies (``jswim study NAME``):
-
-``curves``     X/a against step n: LLM, Q-learning and random policy, both swimmers (Fig. 2)
-``history``    the n_ht sweep, both directions, both swimmers (Fig. 3)
-``noise``      mean X/a and success rate p against zeta (Fig. 4)
-``ablation``   the full prompt and the prompt without each of S1..S5 (Fig. 5)
-``inits``      all four initial configurations, both directions
-``swim``       the main job: a few LLM runs next to Q-learning and random learners
-``competence`` every protocol variant (`jswim.agents.variants.VARIANTS`) next to random and
-               Q-learning baselines on both action sets: how much of the swimming is the model's
+Studies (``jswim study NAME``, ``jswim swim``): `jswim.studies.names()`, each one module of
+`jswim.studies.kinds` that says what it measures.
 """
 
 from __future__ import annotations
@@ -44,7 +40,8 @@ _EXPORTS = {
         ),
         "jswim.studies.options",
     ),
-    **dict.fromkeys(("SPECS", "STUDIES", "StudySpec", "build"), "jswim.studies.specs"),
+    "build": "jswim.studies.specs",
+    **dict.fromkeys(("Study", "get", "names"), "jswim.studies.study"),
     "Plan": "jswim.studies.plans",
     "summarize": "jswim.studies.report",
     **dict.fromkeys(

@@ -34,7 +34,7 @@ from jswim.results.row import RunRow
 from jswim.scenes import Scene
 from jswim.studies import scene_studies
 from jswim.studies.options import CONTINUOUS_AGENT, STROKE_AGENT
-from jswim.studies import navigate
+from jswim.studies.kinds import navigate
 from jswim.studies.plans import Plan
 from jswim.studies.rows import judged_rows, with_llm
 
@@ -135,7 +135,7 @@ def _moves(run: Any) -> list[list[list[float]]]:
 
 def _run_group(plans: Sequence[Plan], horizon: int) -> list[RunRow]:
     p0 = plans[0]
-    if p0.target:  # a navigation task: its own episodes and columns (jswim.studies.navigate)
+    if p0.target:  # a navigation task: its own episodes and columns (jswim.studies.kinds.navigate)
         return navigate.baseline_rows(plans)
     world_, params = world(p0)
     task = _per_run(params, [p.direction for p in plans])
@@ -246,7 +246,7 @@ def _replayed_work(plan: Plan, r: RunResult) -> np.ndarray | None:
 def llm_row(plan: Plan, r: RunResult, horizon: int) -> RunRow:
     """The judged row of one finished LLM run, with the run's own fields
     ([`with_llm`][jswim.studies.rows.with_llm]); a scene's has the scene's columns."""
-    if plan.target:  # a navigation run: its episode and columns (jswim.studies.navigate)
+    if plan.target:  # a navigation run: its episode and columns (jswim.studies.kinds.navigate)
         episode = navigate.llm_episode(plan, r, _replayed_work(plan, r))
         moves = [list(lattice.decode(int(a), plan.roc_levels)) for a in r.actions]
         init = init_label(tuple(int(bool(v)) for v in r.levels0))  # the run's own start

@@ -130,7 +130,7 @@ def run_optimum(session: StudySession, plans: Sequence[Plan]) -> int:
     """Run the navigation cells' optimum (the ``"optimal"`` agent), the study's last runs.
 
     Each cell's search is seeded with every run of the cell the folder holds that reached the
-    target, the LLM's included (`jswim.studies.navigate.seed_optimum`), so it is never longer
+    target, the LLM's included (`jswim.studies.kinds.navigate.seed_optimum`), so it is never longer
     than any of them; the cell's other rows read their ratio to it when the folder is read
     ([`jswim.results.optimum.with_cell_optimum`][jswim.results.optimum.with_cell_optimum]).
 
@@ -148,7 +148,7 @@ def run_optimum(session: StudySession, plans: Sequence[Plan]) -> int:
     """
     if not plans:
         return 0
-    from jswim.studies import navigate  # lazy: start-up (navigation loads the worlds)
+    from jswim.studies.kinds import navigate  # lazy: start-up (navigation loads the worlds)
 
     navigate.clear_seeds()  # this study's runs only: not an earlier study's in this process
     navigate.seed_optimum(as_run_rows(session.store.load_runs()))

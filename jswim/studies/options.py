@@ -28,6 +28,11 @@ AGENTS = ("llm", "qlearning", "random")
 #: The PPO baseline: real-valued ROCs in the continuous and scene studies, categorical over the
 #: K-level codes in navigation.
 CONTINUOUS_AGENT = "ppo"
+#: PPO trains for ``train_episodes / PPO_SHARE`` episodes (of its first swimmer; it pools 16,
+#: `jswim.studies.kinds.navigate.nav_ppo_config`): 200 at the default, 51,200 steps
+#: at 90 degrees, about 15 s for one learner on the shared CPU; it reached the 90-degree target
+#: in 13 of 16 seeds after 40,000 steps (docs/navigation.md).
+PPO_SHARE = 2
 #: A fixed stroke (the signature square gait, or two copies of it for a pair): the scene studies' reference.
 #: The steering controller (turn with an off-centre loop, then the square gait): the navigation
 #: study's reference stroke (jswim.agents.steering).
@@ -94,7 +99,7 @@ SCENE_GRIDS = (
 
 @dataclass(frozen=True)
 class StudyOptions:
-    """Knobs of a study; ``None`` means the study's own default (`SPECS`).
+    """Knobs of a study; ``None`` means the study's own default (`jswim.studies.study.Study`).
 
     Raises
     ------
@@ -106,7 +111,7 @@ class StudyOptions:
     directions: tuple[int, ...] | None = None
     runs: int | None = None  # LLM runs per setting
     q_runs: int | None = None  # Q-learning and random runs per setting
-    steps: int | None = None  # steps per run; None: the study's own (StudySpec.steps)
+    steps: int | None = None  # steps per run; None: the study's own (Study.steps)
     horizon: int = PAPER.horizon  # of the success criterion (jswim.judging.gait.Criterion)
     n_ht: int | None = None
     n_hts: tuple[int, ...] = (1, 2, 3, 4, 5, 6, 7, 8)
@@ -118,7 +123,7 @@ class StudyOptions:
     prompt_file: str | None = None
     chunk: int | None = None  # LLM runs in progress at once (None: the client's concurrency)
     agents: tuple[str, ...] = ALL_AGENTS
-    variant: str | None = None  # LLM protocol variant; None: the study's (SWIM_VARIANT or "paper")
+    variant: str | None = None  # LLM protocol variant; None: the study's (Study.variant)
     share_identical: bool = (
         False  # send identical temperature-0 requests of different runs once (runs become copies)
     )
@@ -151,7 +156,7 @@ class StudyOptions:
     # The school study's grids: the school sizes N and the formations (spacings: --separations).
     school_sizes: tuple[int, ...] = (1, 2, 3, 4, 5)
     formations: tuple[str, ...] = ("line", "side")
-    # The navigation study's grid (jswim.studies.navigate): fixed targets at these distances (a)
+    # The navigation study's grid (jswim.studies.kinds.navigate): fixed targets at these distances (a)
     # crossed with these bearings (degrees from the start heading, counterclockwise).
     distances: tuple[float, ...] = (3.0,)
     bearings: tuple[float, ...] = (0.0, 90.0, 180.0)
@@ -161,7 +166,7 @@ class StudyOptions:
     flows: tuple[float, ...] = DEFAULT_FLOWS
     # Episodes of each target's budget that Q-learning and PPO train for in the navigation study.
     train_episodes: int = 400
-    # Seeded starts of every navigation agent (heading and shape; jswim.studies.navigate.seeded_start),
+    # Seeded starts of every navigation agent (heading and shape; jswim.studies.kinds.navigate.seeded_start),
     # the same for every agent: start 0 is the study's own, (hi, hi) headed along +x.
     starts: int = 1
 
@@ -291,10 +296,6 @@ class StudyOptions:
             object.__setattr__(self, "flows", tuple(dict.fromkeys(self.flows)))
         if not self.flow and tuple(self.flows) != DEFAULT_FLOWS:
             raise ConfigError("--flows sets the speeds of a flow: give its kind with --flow KIND")
-
-    def llm_variant(self, study: str) -> str:
-        """The protocol variant of the study's LLM runs (outside the competence study)."""
-        return self.variant or (SWIM_VARIANT if study == "swim" else "paper")
 
 
 def prompt_label(path: str) -> str:

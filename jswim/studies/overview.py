@@ -180,9 +180,9 @@ def summary_table(summary: Sequence[Mapping[str, Any]]) -> tuple[list[Column], l
 def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
     """Columns, rows and note of a navigation study's table (one row per target and agent):
     reached, mean steps to the target and path ratio (runs that reached it), energy and energy
-    per distance closed (`jswim.studies.navigate.nav_summary`); the console, ``jswim show`` and
+    per distance closed (`jswim.studies.kinds.navigate.nav_summary`); the console, ``jswim show`` and
     the report page print it, each from here."""
-    from jswim.studies.navigate import nav_summary  # lazy: the navigation study loads JAX
+    from jswim.studies.kinds.navigate import nav_summary  # lazy: the navigation study loads JAX
 
     summary = nav_summary(rows)
     flow = any("zermelo_steps" in g for g in summary)
@@ -240,10 +240,10 @@ def nav_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
 
 def nav_overview_table(rows: Sequence[Any]) -> tuple[list[Column], list[list[str]], str]:
     """Columns, rows and note of a navigation study's first table, agent x flow x target kind
-    (`jswim.studies.navigate.nav_overview`): success with its interval, the median time ratio
+    (`jswim.studies.kinds.navigate.nav_overview`): success with its interval, the median time ratio
     to the swimmer's own optimum with its interval, energy per distance; the console,
     ``jswim show`` and the report page print it first, each from here."""
-    from jswim.studies.navigate import nav_overview  # lazy: the navigation study loads JAX
+    from jswim.studies.kinds.navigate import nav_overview  # lazy: the navigation study loads JAX
 
     table = nav_overview(rows)
     cols = [Column("flow", False), Column("target", False), Column("agent", False)] + [
@@ -492,10 +492,10 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     lines = [f"study {s.study} in {s.folder}: {s.status_text()}", f"model: {s.model_text()}"]
     opts = (s.meta.get("identity") or {}).get("options") or {}
     if opts:
-        from jswim.studies.specs import SPECS  # lazy: the grids load JAX
+        from jswim.studies.study import get, names  # lazy: the study kinds load JAX
 
-        spec = SPECS.get(s.study)
-        settings = _settings_text(opts, spec.ignores if spec else ())
+        ignores = get(s.study).ignores if s.study in names() else ()
+        settings = _settings_text(opts, ignores)
         if opts.get("flow"):  # still fluid ("") goes unsaid, as on the page
             speeds = ",".join(
                 f"{float(f):g}" for f in (s.meta.get("grid") or {}).get("flows") or ()

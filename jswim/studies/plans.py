@@ -29,7 +29,7 @@ class Plan:
     zeta: float
     seed: int
     # Steps of the run; None: ``episodes`` of its navigation target's budget, which the world
-    # measures when it is made (`jswim.studies.navigate.with_budgets` fills it in before the
+    # measures when it is made (`jswim.studies.kinds.navigate.with_budgets` fills it in before the
     # runs start: planning computes no physics).
     steps: int | None
     n_ht: int | None = None
@@ -81,7 +81,7 @@ class Cell:
     scene: str = ""  # a scene (jswim.studies.scene_studies), canonical JSON; "": the bulk fluid
     tag: str = ""  # what names this cell's runs (a scene's height or distance, a stroke's phase)
     stroke: str = ""  # the stroke agent's stroke (jswim.studies.scene_studies.stroke_codes), its plans' variant
-    target: str = ""  # a navigation target (jswim.studies.navigate), canonical JSON; "": none
+    target: str = ""  # a navigation target (jswim.studies.kinds.navigate), canonical JSON; "": none
     steps: int | None = None  # the cell's own steps per run; None: the study's (a target's budget)
     flow: str = ""  # a navigation cell's background flow (canonical JSON); "": still fluid
     flow_fraction: float | None = None  # its speed over the swimming speed (--flows)

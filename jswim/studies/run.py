@@ -70,14 +70,13 @@ from jswim.studies.options import (
     CONTINUOUS_AGENT,
     OPTIMAL_AGENT,
     SCENE_GRIDS,
-    SWIM_VARIANT,
     StudyOptions,
 )
-from jswim.studies.specs import SPECS, build
-from jswim.studies.navigate import with_budgets
+from jswim.studies.specs import build
+from jswim.studies.study import get
+from jswim.studies.kinds.navigate import with_budgets
 from jswim.studies.plans import Plan
 from jswim.studies import prompt_files
-from jswim.studies.success import success_rule
 
 from jswim.studies.execute import (
     LLMOutcome,
@@ -163,9 +162,9 @@ PROMPT_FILE = "prompt_template.json"
 
 def study_backend(study: str, backend: Backend | None) -> Backend | None:
     """The backend a study runs with: a study that fixes its decoding (the ablation study:
-    free text, `StudySpec.constrain`) overrides ``constrain="auto"``; an explicit
+    free text, `jswim.studies.study.Study.constrain`) overrides ``constrain="auto"``; an explicit
     ``--constrain`` is kept."""
-    mode = SPECS[study].constrain if study in SPECS else None
+    mode = get(study).constrain
     if backend is None or mode is None or backend.constrain != "auto":
         return backend
     return dataclasses.replace(backend, constrain=mode)
@@ -177,7 +176,8 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     opts = dataclasses.asdict(o)
     for name in ("chunk", *GRID_SIZE):
         opts.pop(name, None)
-    if study != "navigate":  # the navigation study's own knob: other folders keep their identity
+    spec = get(study)
+    if "train_episodes" not in spec.own_options:  # others' folders keep their identity
         opts.pop("train_episodes", None)
     for name in (
         "variant",
@@ -185,10 +185,10 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
     ):  # left out when unset, so older folders keep their identity
         if opts[name] is None:
             opts.pop(name)
-    if opts["steps"] is None and study == "navigate":  # each target has its own budget
+    if opts["steps"] is None and spec.own_budgets:  # each target has its own budget
         opts["steps"] = "each target's budget"
     if opts["steps"] is None:  # the study's own horizon, written as the number it is
-        opts["steps"] = SPECS[study].steps if study in SPECS else 50
+        opts["steps"] = spec.steps
     if opts["roc_levels"] == 1:  # the paper's ROC set: as before --roc-levels existed
         opts.pop("roc_levels")
     if opts["pair_prompt"] == "joint":  # the default: as before --pair-prompt existed
@@ -197,8 +197,8 @@ def identity(study: str, o: StudyOptions, backend: Backend | None) -> dict[str, 
         opts.pop("flow")
     if tuple(o.agents) == ALL_AGENTS:  # the default, written as before the continuous agent existed
         opts["agents"] = AGENTS
-    if study == "swim" and o.variant is None and SWIM_VARIANT != "paper":
-        opts["variant"] = SWIM_VARIANT
+    if o.variant is None and spec.variant != "paper":  # a study's own default variant
+        opts["variant"] = spec.variant
     template = PromptTemplate.from_file(o.prompt_file) if o.prompt_file else PromptTemplate()
     tpl = json.dumps(dataclasses.asdict(template), sort_keys=True)
     return {
@@ -239,7 +239,7 @@ def run_study(
     Parameters
     ----------
     study : str
-        One of `STUDIES`.
+        One of `jswim.studies.names()`.
     options : StudyOptions
         Grid and agent knobs.
     backend : Backend or None
@@ -287,7 +287,7 @@ def run_study(
     if backend is not None and backend.local and any(p.agent == "llm" for p in plans):
         _check_embedded_model(study, backend)  # before the baselines, not after them
     ident = identity(study, options, backend)
-    if study == "competence":  # the variants' switches define the runs too
+    if get(study).variants_grid:  # the variants' switches define the runs too
         ident["variants"] = {v: VARIANTS[v] for v in options.variants or COMPETENCE_VARIANTS}
     folder = Path(out) if out is not None else default_folder(study, options, backend)
     template = PromptTemplate.from_file(options.prompt_file) if options.prompt_file else None
@@ -431,8 +431,8 @@ def _union(grids: Sequence[dict[str, Any]], study: str) -> dict[str, Any]:
     """Per grid option, what the folder holds over ``grids``: the values of its lists in order
     of first appearance (sorted where every list was), the largest count (``None``, the study's
     own, read as its number where a count is also given)."""
-    spec = SPECS.get(study)
-    own = {"runs": spec.runs, "q_runs": spec.q_runs} if spec is not None else {}
+    spec = get(study)
+    own = {"runs": spec.runs, "q_runs": spec.q_runs}
     out: dict[str, Any] = {}
     for k in dict.fromkeys(k for g in grids for k in g):
         values = [g.get(k) for g in grids if k in g]
@@ -482,11 +482,11 @@ def _folder_metadata(
         # rewrite of metadata.json at each status change.
         "prompt_template_file": PROMPT_FILE,
         # The rule this study's runs are judged by (a navigation run: its target reached).
-        "success_criterion": success_rule(study, plans, options.horizon, options.steps),
+        "success_criterion": get(study).success(plans, options.horizon, options.steps),
         "horizon": options.horizon,
         "llm_variants": list(options.variants or COMPETENCE_VARIANTS)
-        if study == "competence"
-        else [options.llm_variant(study)],
+        if get(study).variants_grid
+        else [options.variant or get(study).variant],
         "n_planned": len(plans),  # so that a reader can tell an unfinished study (jswim show)
         # The grid's order of its groups (n_ht 1, 2, ..., 10): readers show them so, not as runs finished.
         "group_order": list(dict.fromkeys(p.group for p in plans)),
@@ -705,10 +705,10 @@ def _scene_table(rows: Sequence[RunRow]) -> dict[str, Any]:
 
 def _nav_table(rows: Sequence[RunRow]) -> dict[str, Any]:
     """``{"navigation": table}`` of a study with navigation runs
-    (`jswim.studies.navigate.nav_summary`), else ``{}``."""
+    (`jswim.studies.kinds.navigate.nav_summary`), else ``{}``."""
     if not any(r.target for r in rows):
         return {}
-    from jswim.studies import navigate  # lazy: the navigation study's module
+    from jswim.studies.kinds import navigate  # lazy: the navigation study's module
 
     return {"navigation": navigate.nav_summary(rows)}
 

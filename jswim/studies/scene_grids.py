@@ -5,7 +5,6 @@ and run ids carry) and each scene study's cells.
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
 
 from jswim.errors import ConfigError
 from jswim.scenes import Scene
@@ -85,32 +84,36 @@ def pair_scene(d: float | None = None) -> str:
     return scene_json(Scene(medium="free", swimmers=2, separation=float(d)))
 
 
-def scene_cells(study: str, o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
-    """The cells of ``study`` (``"wall"`` or ``"pair"``) for the options' grids. Every swimmer's
-    wall cells run the same agents at each height: the stroke, the LLM, Q-learning, random and
-    PPO. Only the reference differs: Purcell's swimmer above a wall swims in a plane
-    parallel to it, so its reference is the paper's bulk fluid (group ``bulk``); NG's (and a
-    registered world's) is the unbounded fluid of the scene solver (group ``free``)."""
-    if study == "wall":
-        ref = "bulk" if swimmer == "purcell" else "free"
-        out = [
+def wall_cells(o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
+    """The wall study's cells for the options' grids. Every swimmer's wall cells run the same
+    agents at each height: the stroke, the LLM, Q-learning, random and PPO. Only the reference
+    differs: Purcell's swimmer above a wall swims in a plane parallel to it, so its reference is
+    the paper's bulk fluid (group ``bulk``); NG's (and a registered world's) is the unbounded
+    fluid of the scene solver (group ``free``)."""
+    check_lattice("wall", o)
+    ref = "bulk" if swimmer == "purcell" else "free"
+    out = [
+        Cell(ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref)
+    ]
+    for group, scene, tag in wall_groups(o, swimmer):
+        out.append(
             Cell(
-                ref, (STROKE_AGENT,), scene=scene_json(Scene(medium=ref)), stroke="square", tag=ref
+                group,
+                (STROKE_AGENT, *WITH_BASELINES),
+                n_ht=o.n_ht,
+                scene=scene,
+                stroke="square",
+                tag=tag,
             )
-        ]
-        for group, scene, tag in wall_groups(o, swimmer):
-            out.append(
-                Cell(
-                    group,
-                    (STROKE_AGENT, *WITH_BASELINES),
-                    n_ht=o.n_ht,
-                    scene=scene,
-                    stroke="square",
-                    tag=tag,
-                )
-            )
-            out += _ppo_cells(group, scene, tag)
-        return out
+        )
+        out += _ppo_cells(group, scene, tag)
+    return out
+
+
+def pair_cells(o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
+    """The pair study's cells: one swimmer alone, then at each separation D the two square
+    strokes at each phase offset, and the agents steering both."""
+    check_lattice("pair", o)
     out = [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
     for d in o.separations:
         for ph in o.phases:
@@ -140,9 +143,10 @@ def school_scene(n: int, d: float, formation: str = "line") -> str:
     )
 
 
-def school_cells(o: StudyOptions) -> list[Cell]:
+def school_cells(o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
     """The school study's cells: every swimmer doing the square stroke, in turn and in phase
     (stroke ``phase0``), for each formation, spacing and size (a lone swimmer once)."""
+    check_lattice("school", o)
     out = (
         [Cell("alone", (STROKE_AGENT,), scene=pair_scene(), stroke="square", tag="alone")]
         if 1 in o.school_sizes
@@ -172,26 +176,18 @@ def _ppo_cells(group: str, scene: str, tag: str) -> list[Cell]:
     return [Cell(group, (CONTINUOUS_AGENT,), scene=scene, roc_levels=0, tag=tag)]
 
 
-def study_cells(name: str) -> Callable[[StudyOptions], list[Cell]]:
-    """The cell builder of the scene study ``name`` (``"wall"``, ``"pair"`` or ``"school"``).
+def check_lattice(study: str, o: StudyOptions) -> None:
+    """Refuse ``--roc-levels`` other than 1: the scene rows read and judge K = 1 codes (PPO has
+    real ROCs anyway).
 
     Raises
     ------
     ConfigError
-        When the options ask for ``--roc-levels`` other than 1 (the scene rows read K = 1 codes).
+        One line naming ``study``.
     """
-
-    def cells(o: StudyOptions, swimmer: str = "ng") -> list[Cell]:
-        if o.roc_levels != 1:  # the scene rows read and judge K = 1 codes; PPO has real ROCs anyway
-            raise ConfigError(
-                f"the {name} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
-                "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
-                "[-1, 1]); leave it out"
-            )
-        return school_cells(o) if name == "school" else scene_cells(name, o, swimmer)
-
-    return cells
-
-
-# Walls and pairs (extensions): NG swimmers only (jswim.studies.scene_studies, README "Walls,
-# obstacles and pairs"); --init is the paper's NG start (10, 6), the scene's start.
+    if o.roc_levels != 1:
+        raise ConfigError(
+            f"the {study} study has no use for --roc-levels {o.roc_levels} (its LLM, Q-learning, "
+            "random and stroke runs use the paper's ROCs -1, 0, 1 and its PPO runs real ROCs in "
+            "[-1, 1]); leave it out"
+        )

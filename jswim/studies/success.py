@@ -1,17 +1,25 @@
-"""Each study kind's success rule in one line: what its rows' ``success`` means, as the code that
-judges them has it. A folder's ``metadata.json`` records it (``success_criterion``) and its page
-shows it, so the record names the rule its runs were judged by, not another study's.
+"""The success rules study kinds declare (`jswim.studies.study.Study.success`), each in one line:
+what a study's rows' ``success`` means, as the code that judges them has it. A folder's
+``metadata.json`` records it (``success_criterion``) and its page shows it, so the record names
+the rule its runs were judged by, not another study's.
 
-- The paper's studies (swim, curves, noise, history, ablation, inits, competence, temperature):
-  the gait criterion ([`jswim.judging.gait.judge`][jswim.judging.gait.judge], with the study's
+- `gait_rule` (the paper's studies): the gait criterion
+  ([`jswim.judging.gait.judge`][jswim.judging.gait.judge], with the study's
   [`Criterion`][jswim.judging.gait.Criterion]).
-- ``continuous``: the same on each cell's K lattice, and for PPO's real-valued runs with cycles
-  read from the shape ([`jswim.judging.shape_judge`][jswim.judging.shape_judge]).
-- ``wall``, ``pair``, ``school``: the gait criterion on each swimmer's own moves, with the bulk
-  fluid's displacements (`jswim.studies.scene_studies`); a pair or
-  a school succeeds when every swimmer does; the wall's fate is measured beside it, not judged.
-- ``navigate``: the target reached within its step budget
-  ([`jswim.studies.navigate.nav_row`][jswim.studies.navigate.nav_row]); no gait is judged.
+- `lattice_rule` (``continuous``): the same on each cell's K lattice, and for PPO's real-valued
+  runs with cycles read from the shape ([`jswim.judging.shape_judge`][jswim.judging.shape_judge]).
+- `scene_rule` and `wall_rule` (``pair``, ``school``, ``wall``): the gait criterion on each
+  swimmer's own moves, with the bulk fluid's displacements (`jswim.studies.scene_studies`); a
+  pair or a school succeeds when every swimmer does; the wall's fate is measured beside it, not
+  judged.
+- `navigation_rule` (``navigate``): the target reached within its step budget
+  ([`jswim.studies.kinds.navigate.nav_row`][jswim.studies.kinds.navigate.nav_row]); no gait is
+  judged.
+
+Each takes ``(plans, horizon, steps)``: the runs the folder plans (their agents, scenes, targets,
+flows and lengths), the gait criterion's horizon (`StudyOptions.horizon`) and ``--steps`` as given
+(``None``: the study's own lengths; a navigation target's budget); each returns the rule, naming
+the code that applies it.
 """
 
 from __future__ import annotations
@@ -19,73 +27,64 @@ from __future__ import annotations
 import json
 from collections.abc import Sequence
 
-from jswim.env.targets import BUDGET_SAFETY, target_from_dict
+from jswim.env.targets import BUDGET_SAFETY, FLOW_BUDGET_FACTOR, target_from_dict
 from jswim.judging.gait import Criterion
 from jswim.judging.shape_judge import SHAPE_TOL
 from jswim.studies.options import CONTINUOUS_AGENT
 from jswim.studies.plans import Plan
-from jswim.studies.specs import SPECS
 from jswim.swimmers.models import SWIMMERS
 
-#: The studies whose runs move in a scene (a wall, other swimmers), judged per swimmer.
-SCENE_STUDIES = ("wall", "pair", "school")
+__all__ = ["gait_rule", "lattice_rule", "navigation_rule", "scene_rule", "wall_rule"]
 
 
-def success_rule(study: str, plans: Sequence[Plan], horizon: int, steps: int | None) -> str:
-    """The one line that says what ``success`` means in ``study``'s rows.
-
-    Parameters
-    ----------
-    study : str
-        One of `jswim.studies.specs.STUDIES`.
-    plans : sequence of Plan
-        The runs the folder plans (their agents, scenes, targets, flows and lengths).
-    horizon : int
-        Steps of the gait criterion's horizon (`StudyOptions.horizon`).
-    steps : int or None
-        ``--steps`` as given (``None``: the study's own lengths; a navigation target's budget).
-
-    Returns
-    -------
-    str
-        The rule, naming the code that applies it.
-    """
-    spec = SPECS.get(study)
-    if spec is not None and not spec.judged:
-        return _navigation_rule(plans, steps)
+def _gait(plans: Sequence[Plan], horizon: int) -> str:
     lengths = [p.steps for p in plans if p.steps is not None]
-    gait = Criterion(horizon=horizon).describe(max(lengths, default=None))
-    ppo = any(p.agent == CONTINUOUS_AGENT for p in plans)
-    real = (
+    return Criterion(horizon=horizon).describe(max(lengths, default=None))
+
+
+def _real(plans: Sequence[Plan]) -> str:
+    if not any(p.agent == CONTINUOUS_AGENT for p in plans):
+        return ""
+    return (
         f"; PPO's real-valued runs: the same, with a cycle a return to the same shape within "
         f"{SHAPE_TOL:g} of each DOF's range (jswim.judging.shape_judge)"
-        if ppo
-        else ""
     )
-    unjudged = (
-        "; a registered world's runs are not judged (the threshold is a paper swimmer's best stroke)"
-        if any(p.swimmer not in SWIMMERS for p in plans)
-        else ""
+
+
+def _unjudged(plans: Sequence[Plan]) -> str:
+    if all(p.swimmer in SWIMMERS for p in plans):
+        return ""
+    return "; a registered world's runs are not judged (the threshold is a paper swimmer's best stroke)"
+
+
+def gait_rule(plans: Sequence[Plan], horizon: int, steps: int | None = None) -> str:
+    """The paper's criterion: a stroke found (`jswim.judging.gait.judge`)."""
+    return f"{_gait(plans, horizon)}{_real(plans)}{_unjudged(plans)}"
+
+
+def lattice_rule(plans: Sequence[Plan], horizon: int, steps: int | None = None) -> str:
+    """The paper's criterion on each cell's ROC lattice K (the continuous study)."""
+    levels = sorted({p.roc_levels for p in plans if p.roc_levels})
+    on = ", ".join(f"K={k}" for k in levels)
+    return f"{_gait(plans, horizon)}, on each cell's ROC lattice ({on}){_real(plans)}{_unjudged(plans)}"
+
+
+def scene_rule(
+    plans: Sequence[Plan], horizon: int, steps: int | None = None, fate: str = ""
+) -> str:
+    """The paper's criterion on each swimmer's own moves in a scene (a pair, a school)."""
+    many = max((_swimmers(p.scene) for p in plans), default=1)
+    who = "; a pair or a school succeeds when every one of its swimmers does" if many > 1 else ""
+    return (
+        f"{_gait(plans, horizon)}, on each swimmer's own moves with the bulk fluid's displacements "
+        f"(jswim.studies.scene_studies){who}{_real(plans)}{fate}{_unjudged(plans)}"
     )
-    if study in SCENE_STUDIES:
-        many = max((_swimmers(p.scene) for p in plans), default=1)
-        who = (
-            "; a pair or a school succeeds when every one of its swimmers does" if many > 1 else ""
-        )
-        fate = (
-            "; the fate (trapped, escaped, gliding) is measured beside it, not judged"
-            if study == "wall"
-            else ""
-        )
-        return (
-            f"{gait}, on each swimmer's own moves with the bulk fluid's displacements "
-            f"(jswim.studies.scene_studies){who}{real}{fate}{unjudged}"
-        )
-    if study == "continuous":
-        levels = sorted({p.roc_levels for p in plans if p.roc_levels})
-        on = ", ".join(f"K={k}" for k in levels)
-        return f"{gait}, on each cell's ROC lattice ({on}){real}{unjudged}"
-    return f"{gait}{real}{unjudged}"
+
+
+def wall_rule(plans: Sequence[Plan], horizon: int, steps: int | None = None) -> str:
+    """`scene_rule` above a wall, whose fate is measured beside success."""
+    fate = "; the fate (trapped, escaped, gliding) is measured beside it, not judged"
+    return scene_rule(plans, horizon, steps, fate)
 
 
 def _swimmers(scene: str) -> int:
@@ -96,10 +95,8 @@ def _swimmers(scene: str) -> int:
     return n if isinstance(n, int) and not isinstance(n, bool) else 1
 
 
-def _navigation_rule(plans: Sequence[Plan], steps: int | None) -> str:
+def navigation_rule(plans: Sequence[Plan], horizon: int, steps: int | None = None) -> str:
     """The navigation study's rule: the target reached within its budget."""
-    from jswim.studies.navigate import FLOW_BUDGET_FACTOR  # lazy: the navigation module loads JAX
-
     radii = sorted({target_from_dict(json.loads(p.target)).radius for p in plans if p.target})
     within = ", ".join(f"{r:g}" for r in radii) or "?"
     if steps is not None:
@@ -112,5 +109,5 @@ def _navigation_rule(plans: Sequence[Plan], steps: int | None) -> str:
         f"the target reached: the swimmer's centroid within the target's radius ({within} a) of "
         "it (a path: of its last waypoint; a moving target: of where it is then) within the "
         f"target's step budget ({budget}); Q-learning and PPO: their last training episode that "
-        "ended; no gait is judged (jswim.studies.navigate.nav_row)"
+        "ended; no gait is judged (jswim.studies.kinds.navigate.nav_row)"
     )

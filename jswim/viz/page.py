@@ -340,7 +340,7 @@ def with_flow_columns(
 ) -> tuple[list[Any], list[list[str]], str]:
     """The navigation table (`nav_table`'s) with the flow's columns (`FLOW_COLUMNS`) where its
     rows ran in a flow and the table lacks them; unchanged in still fluid."""
-    from jswim.studies.navigate import nav_summary  # lazy: the navigation study loads JAX
+    from jswim.studies.kinds.navigate import nav_summary  # lazy: the navigation study loads JAX
 
     have = {c.header.lower() for c in cols}
     new = [h for h, (aliases, _) in FLOW_COLUMNS.items() if not ({h.lower(), *aliases} & have)]
@@ -440,32 +440,6 @@ def _settings(meta: Mapping[str, Any]) -> dict[str, Any]:
     return {k: v for k, v in meta.items() if k not in ("summary", "prompt_template")}
 
 
-#: Grid axes that belong to some studies only (the others' folders record their defaults too).
-_OWN_AXES = {
-    "heights": ("wall",),
-    "tilts": ("wall",),
-    "separations": ("pair", "school"),
-    "phases": ("pair",),
-    "pair_prompt": ("pair",),
-    "formations": ("school",),
-    "school_sizes": ("school",),
-    "distances": ("navigate",),
-    "bearings": ("navigate",),
-    "train_episodes": ("navigate",),
-    "flow": ("navigate",),
-    "flows": ("navigate",),
-    "starts": ("navigate",),
-}
-#: A setting's value as a study reads it, where that differs from the number recorded.
-_READ_AS = {
-    ("navigate", "x_min"): "{v}, lowered per target to a whole a below every place the target "
-    "can be (docs/navigation.md)",
-    # The competence grid sets each group's moves: the baselines run on both sets, and a
-    # shape-changing variant offers its own whatever --action-set says.
-    ("competence", "action_set"): "{v} for the LLM variants without shape-changing in their "
-    "name; the shape-changing variants offer the moves that change the shape; the baselines run "
-    "on both sets (their group names the set)",
-}
 #: Settings that shape what an LLM is sent or the moves a learner is offered: nothing to say of a
 #: study of fixed strokes alone.
 _AGENT_SETTINGS = ("action_set", "x_min", "n_ht", "constrain", "max_tokens", "temperature")
@@ -479,19 +453,18 @@ def applicable_settings(
     """``(name, value)`` of the settings that apply to the folder's study, for the settings block.
 
     From the identity's options and the recorded grid: values left unset (``None``) and options
-    or grid axes the study has no use for (its `jswim.studies.specs.SPECS` ``ignores``; a
-    scene or navigation study's own axes only on that study) are left out; the full record
+    or grid axes the study has no use for (its `jswim.studies.study.Study.ignores`; a
+    study's own options only on that study) are left out; the full record
     stays one click away. ``agents`` are those that ran (``rows``, where given), the success
     rule the study's own (a navigation study's: the target reached within its budget).
     """
-    from jswim.studies.specs import (
-        DEFAULT_TEMPERATURES,
-        SPECS,
-    )  # lazy: the grids load JAX, which a page of a finished folder does not need
+    from jswim.studies.specs import own_options  # lazy: the study kinds load JAX
 
     study = str(meta.get("study", "?"))
+    spec = _study(study)
     ident = meta.get("identity") or {}
-    ignores = set(getattr(SPECS.get(study), "ignores", ()) or ())
+    ignores = set(spec.ignores if spec else ())
+    owned = set(own_options())
     out: list[tuple[str, str]] = [("study", study)]
     backend = ident.get("backend") or {}
     # A study of fixed strokes alone has no LLM and no learner: no model, and none of the
@@ -500,7 +473,7 @@ def applicable_settings(
     if backend and _names_a_model(meta, as_run_rows(rows or ())):
         # A sweep sets each run's temperature: the backend's own is not what the runs used.
         swept = (meta.get("grid") or {}).get("temperatures") or (
-            DEFAULT_TEMPERATURES if study == "temperature" else None
+            spec.temperatures if spec else None
         )
         temperature = "per run (temperatures below)" if swept else backend.get("temperature")
         out.append(
@@ -516,7 +489,7 @@ def applicable_settings(
     ran = _agents_ran(rows)
 
     def own(k: str) -> bool:
-        return k not in ignores and (k not in _OWN_AXES or study in _OWN_AXES[k])
+        return k not in ignores and (k not in owned or (spec is not None and k in spec.own_options))
 
     grid = meta.get("grid") or {}
     for k, v in sorted((ident.get("options") or {}).items()):
@@ -528,9 +501,10 @@ def applicable_settings(
             if v:
                 out.append(("flow", study_flow_text(str(v), grid.get("flows") or ())))
             continue
-        out.append((k, _READ_AS.get((study, k), "{v}").format(v=fmt(v))))
+        notes = spec.setting_notes if spec else {}
+        out.append((k, notes.get(k, "{v}").format(v=fmt(v))))
     variants = meta.get("llm_variants")
-    if study == "competence" and isinstance(variants, list) and variants:
+    if spec is not None and spec.variants_grid and isinstance(variants, list) and variants:
         out.append(("llm_variants", fmt(variants)))
     levels = meta.get("roc_levels")
     said_levels = isinstance(levels, list) and bool(levels) and levels != [1]
@@ -544,9 +518,8 @@ def applicable_settings(
         if k == "flows":  # the flow's line says them (and still fluid has none)
             continue
         out.append((k, fmt(v)))
-    spec = SPECS.get(study)
     if spec is not None and not spec.judged:  # navigation: success is the target reached
-        from jswim.env.targets import BUDGET_SAFETY  # lazy: as SPECS
+        from jswim.env.targets import BUDGET_SAFETY  # lazy: as own_options
 
         out.append(
             (
@@ -583,12 +556,18 @@ def study_flow_text(kind: str, fractions: Sequence[float]) -> str:
     )
 
 
+def _study(name: str) -> Any:
+    """The study kind ``name`` (`jswim.studies.study.get`), ``None`` for one this version does
+    not know (a folder of a later jswim)."""
+    from jswim.studies.study import get, names  # lazy: as in applicable_settings
+
+    return get(name) if name in names() else None
+
+
 def _strokes_only(study: str) -> bool:
     """Whether ``study`` runs fixed strokes alone (the school: it has no use for ``--runs``)."""
-    from jswim.studies.specs import SPECS  # lazy: as in applicable_settings
-
-    spec = SPECS.get(study)
-    return spec is not None and "runs" in spec.ignores
+    spec = _study(study)
+    return spec is not None and spec.strokes_only
 
 
 def _names_a_model(meta: Mapping[str, Any], rows: Sequence[Any]) -> bool:

@@ -14,7 +14,7 @@ from jswim.agents.qlearning import QConfig, train
 from jswim.env.navigation import summarise
 from jswim.env.targets import FixedTarget
 from jswim.errors import ConfigError
-from jswim.studies.navigate import nav_ppo_config
+from jswim.studies.kinds.navigate import nav_ppo_config
 
 TARGET = FixedTarget(3.0, 90.0)
 #: Q-learning for navigation (docs/navigation.md, "Baselines"): many episodes in one continuing

@@ -194,10 +194,10 @@ def test_bad_value_is_one_line(tmp_path, capsys):
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1 and "--pair-prompt" in err
-    from jswim.cli import scenes as scene_options
+    from jswim.cli import options as cli_options
 
     args = cli.build_parser().parse_args(["study", "pair", "--pair-prompt", "each"])
-    assert StudyOptions(**scene_options.options(args)).pair_prompt == "each"
+    assert cli_options.options(args, "pair").pair_prompt == "each"
 
 
 def test_each_is_refused_where_no_llm_run_steers_a_pair(tmp_path):

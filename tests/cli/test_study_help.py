@@ -10,8 +10,8 @@ import pytest
 
 from jswim import cli
 from jswim.cli.options import IGNORABLE
-from jswim.studies.navigate import NAV_ROC_LEVELS
-from jswim.studies.specs import SPECS, STUDIES
+from jswim.studies.kinds.navigate import NAV_ROC_LEVELS
+from jswim.studies import get, names
 
 
 def study_parser(name: str) -> argparse.ArgumentParser:
@@ -32,19 +32,19 @@ def flag_help(parser: argparse.ArgumentParser, flag: str) -> str | None:
     raise AssertionError(f"{flag} is not an option")
 
 
-@pytest.mark.parametrize("study", [s for s in STUDIES if s != "swim"])
+@pytest.mark.parametrize("study", [s for s in names() if get(s).command == "study"])
 def test_an_option_the_study_refuses_is_not_in_its_help(study, capsys):
     parser = study_parser(study)
     usage = parser.format_usage()
-    refused = [flag for field, (_, flag) in IGNORABLE.items() if field in SPECS[study].ignores]
+    refused = [flag for field, (_, flag) in IGNORABLE.items() if field in get(study).ignores]
     for flag in refused:
         assert flag_help(parser, flag) is None, f"jswim study {study} --help offers {flag}"
         assert f"[{flag} " not in usage, f"jswim study {study}'s usage line offers {flag}"
 
 
-@pytest.mark.parametrize("study", [s for s in STUDIES if s != "swim"])
+@pytest.mark.parametrize("study", [s for s in names() if get(s).command == "study"])
 def test_the_counts_help_names_this_study_s_defaults(study):
-    parser, spec = study_parser(study), SPECS[study]
+    parser, spec = study_parser(study), get(study)
     runs, q_runs = flag_help(parser, "--runs"), flag_help(parser, "--q-runs")
     if runs is not None:
         assert f"(default {spec.runs})" in runs
@@ -93,9 +93,9 @@ def test_jswim_study_help_names_every_study(capsys):
     with pytest.raises(SystemExit):
         cli.main(["study", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    names = [s for s in STUDIES if s != "swim"]
-    assert {"school", "navigate"} <= set(names)  # the two the listing used to leave out
-    assert "NAME " + ", ".join(names) in text
+    nested = [s for s in names() if get(s).command == "study"]
+    assert {"school", "navigate"} <= set(nested)  # the two the listing used to leave out
+    assert "NAME " + ", ".join(nested) in text
 
 
 @pytest.mark.parametrize("swimmer", ["ng", "both"])

@@ -43,7 +43,7 @@ def test_the_id_is_purcell_k2_in_half_the_swimming_speed_across_its_heading():
 def test_the_budget_is_the_navigation_studys_rule_in_this_flow():
     from jswim.env.flows import flow_json
     from jswim.env.targets import default_budget
-    from jswim.studies.navigate import FLOW_BUDGET_FACTOR, target_json, zermelo_path
+    from jswim.studies.kinds.navigate import FLOW_BUDGET_FACTOR, target_json, zermelo_path
     from jswim.swimmers.models import make_model
 
     still = FixedTarget(3.0, 0.0)

@@ -239,7 +239,7 @@ def test_a_world_in_a_flow_gets_the_flow_budget_and_says_so(float32):
 def test_the_world_s_course_is_never_shorter_than_zermelo_s_least_time():
     from jswim.env.flows import flow_json, study_flow
     from jswim.env.targets import course_time
-    from jswim.studies.navigate import MOVING, target_json, zermelo_path
+    from jswim.studies.kinds.navigate import MOVING, target_json, zermelo_path
 
     for kind, spec in (
         ("poiseuille", FixedTarget(3.0, 180.0)),

@@ -272,7 +272,13 @@ def test_old_names_import_from_their_old_places():
         # defined elsewhere, still importable from these modules
         "jswim.results": ["atomic_write", "write_json", "dumps", "plain_json"],
         "jswim.studies.scene_studies": ["fate", "scene_row"],
-        "jswim.studies.scene_grids": ["wall_scene", "pair_scene", "scene_cells"],
+        "jswim.studies.scene_grids": [
+            "wall_scene",
+            "pair_scene",
+            "wall_cells",
+            "pair_cells",
+            "school_cells",
+        ],
     }.items():
         mod = importlib.import_module(module)
         for name in names:

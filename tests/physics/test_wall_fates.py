@@ -12,7 +12,8 @@ import pytest
 from jswim.scenes import Scene
 from jswim.studies import StudyOptions
 from jswim.studies import baselines
-from jswim.studies.specs import SPECS, build
+from jswim.studies import get
+from jswim.studies.specs import build
 
 
 FREE_CYCLE = (
@@ -21,7 +22,7 @@ FREE_CYCLE = (
 
 
 def test_wall_study_defaults_are_long_enough_for_fates():
-    assert SPECS["wall"].steps >= 400 and StudyOptions().steps is None
+    assert get("wall").steps >= 400 and StudyOptions().steps is None
     assert min(StudyOptions().heights) <= 1.5 and max(StudyOptions().heights) >= 10.0
     # level starts and one nose-up start; the tilted one runs where it clears the wall
     assert 0.0 in StudyOptions().tilts and max(StudyOptions().tilts) > 0.5
@@ -36,7 +37,7 @@ def test_wall_study_stroke_rows_show_trapped_escaped_and_gliding():
         for p in build("wall", StudyOptions(agents=("stroke",)))
         if p.agent == "stroke" and p.group.startswith("h=")
     ]
-    assert plans and all(p.steps == SPECS["wall"].steps for p in plans)
+    assert plans and all(p.steps == get("wall").steps for p in plans)
     rows = [r for p in plans for r in baselines.baseline_rows([p], 50)]  # one scene per call
     fates = {(r["start_height"], json.loads(r["scene"])["tilt"]): r["fate"] for r in rows}
     level = [fates[k] for k in sorted(fates) if k[1] == 0.0]

@@ -5,7 +5,7 @@ the search's optimum (its answer is an upper bound on the least time, not a proo
 from __future__ import annotations
 
 from jswim.results.row import RunRow
-from jswim.studies.navigate import nav_overview
+from jswim.studies.kinds.navigate import nav_overview
 from jswim.studies.overview import nav_overview_table
 
 

@@ -13,7 +13,7 @@ import pytest
 from jswim.env.flows import SWIM_SPEED as V
 from jswim.env.targets import target_from_dict
 from jswim.results import as_run_rows
-from jswim.studies import navigate
+from jswim.studies.kinds import navigate
 from jswim.studies.options import StudyOptions
 from jswim.studies.specs import build
 

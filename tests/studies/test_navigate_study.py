@@ -14,7 +14,7 @@ import pytest
 from jswim.llm.backend import Backend
 from jswim.llm.reference import completion
 from jswim.results import read_metadata, read_runs, read_transcript
-from jswim.studies.navigate import nav_summary
+from jswim.studies.kinds.navigate import nav_summary
 from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
 from jswim.viz.publish import report

@@ -8,8 +8,8 @@ import json
 import sys
 
 from jswim.env.targets import default_budget, target_from_dict
-from jswim.studies import navigate
-from jswim.studies.options import StudyOptions
+from jswim.studies.kinds import navigate
+from jswim.studies.options import PPO_SHARE, StudyOptions
 from jswim.studies.specs import build
 from jswim.swimmers.models import make_model
 
@@ -45,7 +45,7 @@ def test_with_budgets_gives_each_run_its_target_s_budget_times_its_episodes():
     for p in plans:
         budget = default_budget(target_from_dict(json.loads(p.target)), model, p.roc_levels)
         learner = p.agent in ("qlearning", "ppo")
-        share = navigate.PPO_SHARE if p.agent == "ppo" else 1
+        share = PPO_SHARE if p.agent == "ppo" else 1
         episodes = max(1, o.train_episodes // share) if learner else 1
         assert p.steps == budget * episodes, p.run_id
     assert {p.agent for p in plans if p.episodes > 1} == {"qlearning", "ppo"}

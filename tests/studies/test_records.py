@@ -10,7 +10,7 @@ import pytest
 from jswim import cli
 from jswim.llm.backend import Backend
 from jswim.studies import StudyOptions, run_study
-from jswim.studies.specs import SPECS
+from jswim.studies import get
 from tests.fakeserver import FakeServer, hash_reply
 
 
@@ -54,7 +54,7 @@ def test_each_study_help_shows_its_own_defaults(study, capsys):
     with pytest.raises(SystemExit):
         cli.main(["study", study, "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    spec = SPECS[study]
+    spec = get(study)
     assert f"LLM runs per setting (default {spec.runs})" in text
     assert f"default {','.join(spec.swimmers)})" in text
     if "zetas" not in spec.ignores:

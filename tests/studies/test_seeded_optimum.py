@@ -14,7 +14,7 @@ from jswim.agents import optimal
 from jswim.errors import ConfigError
 from jswim.judging import lattice
 from jswim.results.row import RunRow
-from jswim.studies import navigate
+from jswim.studies.kinds import navigate
 from jswim.studies.options import StudyOptions
 
 

@@ -10,8 +10,8 @@ from collections import defaultdict
 import pytest
 
 from jswim.results import as_run_rows, read_runs
-from jswim.studies import navigate
-from jswim.studies.navigate import START_SPREAD, nav_overview, seeded_start
+from jswim.studies.kinds import navigate
+from jswim.studies.kinds.navigate import START_SPREAD, nav_overview, seeded_start
 from jswim.studies.options import StudyOptions
 from jswim.studies.run import run_study
 from jswim.studies.specs import build

@@ -9,7 +9,7 @@ import pytest
 from jswim import cli, env
 from jswim.agents.variants import VARIANTS, LLMRunSpec, run_id
 from jswim.errors import ConfigError
-from jswim.studies import COMPETENCE_VARIANTS, SPECS, STUDIES, StudyOptions, build
+from jswim.studies import COMPETENCE_VARIANTS, StudyOptions, build, get, names
 
 
 @pytest.mark.parametrize(
@@ -32,26 +32,22 @@ def test_default_grid_sizes(study, total):
 
 
 def test_the_table_holds_each_study_s_defaults():
-    assert (
-        set(STUDIES)
-        == set(SPECS)
-        == {
-            "curves",
-            "history",
-            "noise",
-            "ablation",
-            "inits",
-            "swim",
-            "competence",
-            "temperature",
-            "continuous",
-            "wall",
-            "pair",
-            "school",
-            "navigate",
-        }
-    )
-    for study, spec in SPECS.items():
+    assert set(names()) == {
+        "curves",
+        "history",
+        "noise",
+        "ablation",
+        "inits",
+        "swim",
+        "competence",
+        "temperature",
+        "continuous",
+        "wall",
+        "pair",
+        "school",
+        "navigate",
+    }
+    for study, spec in ((n, get(n)) for n in names()):
         plans = build(study, StudyOptions())
         assert {p.swimmer for p in plans} == set(spec.swimmers)
         assert {p.direction for p in plans} == set(spec.directions)
@@ -162,7 +158,7 @@ def test_competence_grid():
         ("random", "shape-changing", ""),
     }
     assert {p.variant for p in build("ablation", StudyOptions(runs=1))} == {"paper"}
-    assert StudyOptions().llm_variant("ablation") == "paper"
+    assert get("ablation").variant == "paper"
 
 
 @pytest.mark.parametrize("seed", [4295, -1, 2**70])

@@ -151,10 +151,10 @@ RULES = {
 @pytest.mark.parametrize("study", sorted(RULES))
 def test_each_study_kind_records_the_rule_its_runs_are_judged_by(study):
     from jswim.studies.run import _folder_metadata
-    from jswim.studies.specs import STUDIES, build
+    from jswim.studies import build, names
     from jswim.studies.options import StudyOptions
 
-    assert set(RULES) == set(STUDIES)  # a new study kind needs its rule here
+    assert set(RULES) == set(names())  # a new study kind needs its rule here
     plans = build(study, StudyOptions())
     rule = _folder_metadata(study, StudyOptions(), None, plans, {})["success_criterion"]
     names, not_names = RULES[study]
@@ -167,13 +167,14 @@ def test_each_study_kind_records_the_rule_its_runs_are_judged_by(study):
 def test_a_navigation_rule_names_the_budget_it_ran_under():
     from jswim.studies.options import StudyOptions
     from jswim.studies.specs import build
-    from jswim.studies.success import success_rule
+    from jswim.studies.study import get
 
+    rule_of = get("navigate").success
     o = StudyOptions(flow="shear", flows=(0.0, 0.5), steps=30)
-    rule = success_rule("navigate", build("navigate", o), o.horizon, o.steps)
+    rule = rule_of(build("navigate", o), o.horizon, o.steps)
     assert "step budget (--steps 30)" in rule and "Zermelo" not in rule
     o = StudyOptions(flow="shear", flows=(0.0, 0.5))
-    rule = success_rule("navigate", build("navigate", o), o.horizon, o.steps)
+    rule = rule_of(build("navigate", o), o.horizon, o.steps)
     assert "at least 4 times Zermelo's least time" in rule
 
 

@@ -4,7 +4,7 @@ the flow's streamlines with Zermelo's dashed, unreachable targets are marked, th
 settings and run canvas show the flow, and ``jswim animate`` draws it under the swimmer. A
 still-fluid folder lists exactly what it listed before. Screenshots go to test-artifacts/.
 
-The folders are written by hand (rows as the study writes them, `jswim.studies.navigate`): a
+The folders are written by hand (rows as the study writes them, `jswim.studies.kinds.navigate`): a
 study in a flow takes minutes on this machine, a figure of its rows seconds.
 """
 

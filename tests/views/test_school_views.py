@@ -2,7 +2,7 @@
 
 import json
 
-from jswim.figures.scene_plots import scene_figures
+from jswim.figures.scene_plots import school_figures
 from jswim.viz.worlds import world_of
 
 
@@ -38,7 +38,7 @@ def test_school_figure_and_world():
         _row(3, 30.0, "line", 0.1705),
         _row(3, 30.0, "side", 0.1716),
     ]
-    figs = scene_figures("school", rows)
+    figs = school_figures(rows)
     assert list(figs) == ["school"]
     ax = figs["school"].axes[0]
     labels = [t.get_text() for t in ax.get_legend().get_texts()]

@@ -2,12 +2,12 @@
 targets at several distances and bearings, along a path and after a moving target, by the LLM,
 Q-learning, PPO, the steering controller and the random policy.
 
-Its cells are targets ([`cells`][jswim.studies.navigate.cells]); every run of a cell has the
+Its cells are targets ([`cells`][jswim.studies.kinds.navigate.cells]); every run of a cell has the
 target's step budget ([`jswim.env.targets.default_budget`][jswim.env.targets.default_budget]:
 measured for the steering controller, with a safety factor). Every run, whatever its agent,
-becomes one row through [`nav_row`][jswim.studies.navigate.nav_row] (success = the target
+becomes one row through [`nav_row`][jswim.studies.kinds.navigate.nav_row] (success = the target
 reached, steps to it, path length over the straight distance, energy and energy per distance);
-[`nav_summary`][jswim.studies.navigate.nav_summary] is the study's table.
+[`nav_summary`][jswim.studies.kinds.navigate.nav_summary] is the study's table.
 """
 
 from __future__ import annotations
@@ -24,11 +24,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from jswim import env as jenv
-from jswim.env.flows import SWIM_SPEED, Flow, Uniform, flow_from_dict, flow_json, study_flow
+from jswim.env.flows import FLOWS, SWIM_SPEED, Flow, Uniform, flow_from_dict, flow_json, study_flow
 from jswim.env.navigation import NavSummary, energy_per_distance, summarise
 from jswim.env.episodes import rollout
 from jswim.env.registry import make
 from jswim.env.targets import (
+    BUDGET_SAFETY,
     FLOW_BUDGET_FACTOR,
     FixedTarget,
     MovingTarget,
@@ -53,8 +54,11 @@ from jswim.studies.options import (
     MPC_AGENT,
     OPTIMAL_AGENT,
     ZERMELO_AGENT,
+    StudyOptions,
 )
 from jswim.studies.plans import Cell, Plan
+from jswim.studies.study import Study, listed
+from jswim.studies.success import navigation_rule
 from jswim.swimmers.models import make_model
 
 __all__ = [
@@ -68,7 +72,6 @@ __all__ = [
     "NAV_ROC_LEVELS",
     "NAV_TRAIN_EPISODES",
     "PATH",
-    "PPO_SHARE",
     "START_SPREAD",
     "YARDSTICKS",
     "cells",
@@ -176,7 +179,7 @@ def seeded_start(seed: int, index: int) -> tuple[float, str]:
     return heading, "".join("+" if b else "-" for b in rng.integers(0, 2, 2))
 
 
-def cells(o: Any) -> list[Cell]:
+def cells(o: Any, swimmer: str = "purcell") -> list[Cell]:
     """The navigation study's cells for options ``o``: one per target (and, with ``--flow``,
     per flow speed: `flow_grid`; with ``--starts N``, per seeded start, `seeded_start`: the
     same group, so that its rows pool the starts), on the K lattice of ``--roc-levels`` (2
@@ -658,12 +661,6 @@ def nav_overview(rows: Sequence[Any]) -> list[dict[str, Any]]:
 #: ended within the training.
 NAV_TRAIN_EPISODES = 400
 
-#: PPO trains for ``train_episodes / PPO_SHARE`` episodes (of its first swimmer; it pools 16,
-#: [`nav_ppo_config`][jswim.studies.navigate.nav_ppo_config]): 200 at the default, 51,200 steps
-#: at 90 degrees, about 15 s for one learner on the shared CPU; it reached the 90-degree target
-#: in 13 of 16 seeds after 40,000 steps (docs/navigation.md).
-PPO_SHARE = 2
-
 
 def nav_ppo_config(steps: int) -> Any:
     """PPO's settings for navigation (docs/navigation.md, *Baselines*): a categorical policy
@@ -854,3 +851,150 @@ def llm_episode(plan: Plan, r: Any, work: np.ndarray | None) -> NavSummary:
         float(np.sum(w)),
         energy_per_distance(w, r.progress),
     )
+
+
+def short_steps_warning(o: StudyOptions) -> str | None:
+    """A warning when ``--steps`` is below what the steering controller is estimated to need for
+    the nearest target (its budget over `BUDGET_SAFETY`): few runs, if any, can reach a target
+    then. ``None`` without ``--steps`` (each target's own budget) or when it is long enough."""
+    if o.steps is None:
+        return None
+    k = max(o.roc_levels, NAV_ROC_LEVELS)
+    model = make_model("purcell")
+    need = min(
+        math.ceil(default_budget(spec, model, k) / BUDGET_SAFETY)
+        for _, _, spec in targets(o.distances, o.bearings)
+    )
+    if o.steps >= need:
+        return None
+    return (
+        f"--steps {o.steps} is shorter than the ~{need} steps the steering controller needs for "
+        "the nearest target: few runs, if any, will reach a target"
+    )
+
+
+#: Seeds of the navigation study's learners and random policy per cell (``--q-runs``): 16,
+#: trained together (vmapped), so that a cell's success and time ratio carry an interval.
+NAV_SEEDS = 16
+
+#: The navigation study's figures in order of importance (the page and the folder list them so):
+#: the time ratio to the swimmer's own optimum, success, energy, then the paths. A study in a
+#: flow draws the ``navigate-flow-*`` ones (`jswim.figures.flow_plots`) beside the others.
+FIGURE_ORDER = (
+    "navigate-flow-ratio",
+    "navigate-ratio",
+    "navigate-flow-success",
+    "navigate-bearing",
+    "navigate-flow-energy",
+    "navigate-energy",
+    "navigate-flow-paths",
+    "navigate-paths",
+)
+
+STUDY = Study(
+    name="navigate",
+    help="Purcell's swimmer steered to targets at several distances and bearings, along a path "
+    "and after a moving target (K = 2 unless --roc-levels), in still fluid or a background flow "
+    "(--flow): the LLM, Q-learning, PPO, the steering controller, the model-predictive agent "
+    "(mpc) and random, measured against the swimmer's own optimum (optimal: its least-time "
+    "strokes; and Zermelo's point steerer in a flow); success, steps to the target, time over the "
+    "optimum's, path over straight distance, energy and energy per distance",
+    cells=cells,
+    runs=1,
+    init="paper",
+    swimmers=("purcell",),
+    swimmers_why="Purcell's swimmer only (--swimmer {swimmer}: the steering controller, the "
+    "targets' budgets and the turning loops are Purcell's)",
+    q_runs=NAV_SEEDS,
+    ignores=("zetas", "n_hts", "roc_levels_grid", "init", "directions"),
+    steps_text=(
+        "each target's step budget; it is the length of an LLM run and of each training episode "
+        "of Q-learning and PPO, while the controller and the random policy keep the budget"
+    ),
+    judged=False,
+    own_budgets=True,
+    min_roc_levels=2,
+    roc_levels_why="the corner world, K = 1, cannot turn",
+    success=navigation_rule,
+    short_steps=short_steps_warning,
+    order=13,
+    figures=("navigation", "flow"),
+    figure_order=FIGURE_ORDER,
+    option_help={
+        "--swimmer": "purcell only (the default): navigation needs a swimmer that turns in its "
+        "plane; sphere swimmers move on a line",
+        "--roc-levels": "ROC on K levels, K >= 2 (an extension): a reply's ROC k in -K..K moves "
+        f"the DOF by k/K of its range (default {NAV_ROC_LEVELS}; the paper's K = 1 corner world "
+        "cannot turn, and is refused)",
+        "--n-ht": "history records in the prompt (default 3, Purcell's)",
+        "--x-min": "X_min of the position encoding (X - X_min) * 1000 (default -2.5, the paper's); "
+        "each run lowers it to a whole number of link lengths below every place its target can "
+        "be, so that no position is sent as a negative number",
+    },
+    setting_notes={
+        "x_min": "{v}, lowered per target to a whole a below every place the target can be "
+        "(docs/navigation.md)"
+    },
+    flags=(
+        (
+            "--distances",
+            dict(
+                type=listed(float),
+                metavar="D1,D2,...",
+                help="distances of the fixed targets, in link lengths (default 3)",
+            ),
+        ),
+        (
+            "--bearings",
+            dict(
+                type=listed(float),
+                metavar="B1,B2,...",
+                help="bearings of the fixed targets, degrees counterclockwise from the start "
+                "heading (default 0,90,180)",
+            ),
+        ),
+        (
+            "--flow",
+            dict(
+                choices=tuple(FLOWS),
+                metavar="KIND",
+                help="a background flow (an extension): uniform (across the start heading), shear "
+                "(u = rate y), poiseuille (a channel along x) or taylor-green (vortex cells); "
+                "Zermelo's point steerer (no turning limit, the flow at its centre) joins the "
+                "agents as a yardstick, and every row gets its time over his beside its time over "
+                "the swimmer's own optimum",
+            ),
+        ),
+        (
+            "--flows",
+            dict(
+                type=listed(float),
+                metavar="F1,F2,...",
+                help="the flow's speeds, fractions of the swimming speed 0.0478 a per step, at "
+                "most 2 (default 0,0.5,0.9; past 1 some targets are unreachable and the rows say "
+                "so); a grid size: more speeds on an existing folder add their runs to it",
+            ),
+        ),
+        (
+            "--starts",
+            dict(
+                type=int,
+                metavar="N",
+                help="seeded starts of every agent, the same for each (start 0 the study's own, "
+                "(hi, hi) headed along +x; the others a heading within 45 degrees of +x and a "
+                "corner of the shape square, drawn from --seed); each multiplies every agent's "
+                "runs, pooled into the cell's row (default 1); a grid size: more starts on an "
+                "existing folder add their runs to it",
+            ),
+        ),
+        (
+            "--train-episodes",
+            dict(
+                type=int,
+                metavar="N",
+                help="episodes of each target's budget that Q-learning and PPO train for "
+                "(default 400)",
+            ),
+        ),
+    ),
+)
