@@ -13,7 +13,7 @@ from typing import Any
 from collections.abc import Sequence
 
 from jswim._io import interrupts
-from jswim.cli import base, options, scenes
+from jswim.cli import base, options
 from jswim.console import (
     EMBEDDED_UNPRICED,
     LOCAL_UNPRICED,
@@ -118,11 +118,11 @@ def _run(study: str, args: argparse.Namespace) -> int:
     if not args.no_figures:  # the study ended at its folder; the pictures are drawn from it
         result.figures = _publish(result.folder)
     _print_summary(
+        study,
         result.summary.to_dict("records"),
         result.rows,
         f"{study}: {len(result.rows)} runs in {result.wall_s:.1f} s",
     )
-    scenes.print_table(result.rows)
     _print_reasoning(result)
     for note in result.notes:
         print(note)
@@ -280,24 +280,22 @@ def _kept(out: Path) -> str:
 
 
 def _print_summary(
-    summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], title: str
+    study: str, summary: Sequence[dict[str, Any]], rows: Sequence[dict[str, Any]], title: str
 ) -> None:
+    """The study's tables (`jswim.studies.overview.study_tables`), the run's ``title`` over the
+    first (or above them, where the first has its own caption), then the LLM runs' notes."""
     from jswim.agents.fidelity import (
         describe_constraint,
     )  # lazy: JAX loads only for commands that run
-    from jswim.studies.overview import (
-        SUMMARY_NOTE,
-        is_navigation,
-        order_summary,
-        summary_table,
-    )  # lazy: as above
+    from jswim.studies.overview import study_tables  # lazy: as above
 
-    if is_navigation(rows):  # its own table follows (jswim.cli.scenes.print_table)
+    tables = study_tables(study, rows, summary)
+    if not tables or tables[0].caption:
         print(title)
-    else:
-        cols, cells = summary_table(order_summary(summary, rows))
-        print_table(cols, cells, title)
-        print(SUMMARY_NOTE)
+    for t in tables:
+        print_table(t.columns, t.cells, t.caption or title)
+        for note in t.notes:
+            print(note)
     from jswim.results import as_run_rows  # lazy: as above
 
     llm = [r for r in as_run_rows(rows) if r.agent == "llm"]

@@ -14,7 +14,8 @@ import math
 from collections import Counter
 from pathlib import Path
 from typing import Any
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 from jswim._io.paths import path_kind
 from jswim.console import Column, cost_text, plain_table, requests_text
@@ -326,6 +327,166 @@ def is_navigation(rows: Sequence[Any]) -> bool:
     return any(r.target for r in as_run_rows(rows))
 
 
+# -- a study's tables ---------------------------------------------------------------------------
+# What the console prints after a run, ``jswim show`` prints and the report page shows, each from
+# `study_tables`: a study names its tables (`jswim.studies.study.Study.tables`, names of `TABLES`).
+
+
+@dataclass(frozen=True)
+class Table:
+    """One table of a study.
+
+    Attributes
+    ----------
+    key : str
+        Its id on the report page (``summary-table``, ``overview-table``, ``scenes``).
+    title : str
+        Its title in ``jswim show`` and, where set, its heading on the page (``""``: none).
+    caption : str
+        Its title on the console after a run (``""``: the run's own line).
+    columns, cells
+        Its columns (`jswim.console.Column`) and rows of text.
+    notes : tuple of str
+        What its columns mean, a line each.
+    heading : bool
+        The page shows ``title`` above it.
+    """
+
+    key: str
+    title: str
+    caption: str
+    columns: list[Column]
+    cells: list[list[str]]
+    notes: tuple[str, ...]
+    heading: bool = False
+
+
+def _runs(rows: Sequence[Any], summary: Sequence[Mapping[str, Any]] | None) -> Table | None:
+    """Success, X/a and steps to learn per agent, swimmer, direction and group."""
+    cols, cells = summary_table(
+        order_summary(summarize(list(rows)) if summary is None else summary, rows)
+    )
+    return Table("summary-table", "", "", cols, cells, (SUMMARY_NOTE,))
+
+
+def _scenes(rows: Sequence[Any], summary: Any = None) -> Table | None:
+    """A scene study's own table (per cycle, per step, fates, mean height); none without scenes."""
+    if not any(r.scene for r in rows):
+        return None
+    from jswim.studies.scene_studies import (
+        columns_note,
+        scene_summary,
+        table,
+        table_note,
+    )  # lazy: the scene studies load JAX
+
+    scenes = scene_summary(rows)
+    cols, cells = table(scenes)
+    notes = (columns_note(cols), *([note] if (note := table_note(scenes)) else []))
+    caption = "scenes: displacement per stroke cycle, speed per step (second half)"
+    return Table("scenes", "scenes", caption, cols, cells, notes, heading=True)
+
+
+def _overview(rows: Sequence[Any], summary: Any = None) -> Table | None:
+    """The navigation study's first table: agent x flow x target kind."""
+    cols, cells, note = nav_overview_table(rows)
+    caption = "agents x flows: success, time over the swimmer's optimum, energy"
+    return Table("overview-table", "agents x flows", caption, cols, cells, (note,))
+
+
+def _navigation(rows: Sequence[Any], summary: Any = None) -> Table | None:
+    """Every target's row: reached, steps, path ratio, energy (and the flow's columns)."""
+    cols, cells, note = with_flow_columns(*nav_table(rows), rows)
+    caption = "navigation: targets reached, steps to the target, path ratio, energy"
+    return Table("summary-table", "navigation", caption, cols, cells, (note,))
+
+
+#: Every table a study may name (`jswim.studies.study.Study.tables`):
+#: ``(rows, summary) -> Table or None``.
+TABLES: dict[str, Callable[[Sequence[Any], Any], Table | None]] = {
+    "runs": _runs,
+    "scenes": _scenes,
+    "agents x flows": _overview,
+    "navigation": _navigation,
+}
+
+
+def study_tables(
+    study: str, rows: Sequence[Any], summary: Sequence[Mapping[str, Any]] | None = None
+) -> list[Table]:
+    """The tables of ``study``'s ``rows``, its summary first (none without rows).
+
+    Parameters
+    ----------
+    study : str
+        The study's name (`jswim.studies.names`); one this version does not know gets the
+        navigation tables where its rows swim to targets, else the runs and scene tables.
+    rows : sequence of dict or RunRow
+        Its finished runs.
+    summary : sequence of dict, optional
+        `jswim.studies.report.summarize`'s rows where already made (else made from ``rows``).
+    """
+    from jswim.studies.study import get, names  # lazy: the study kinds load JAX
+
+    rows = as_run_rows(rows)
+    if not rows:
+        return []
+    if study in names():
+        kinds = get(study).tables
+    else:
+        kinds = ("agents x flows", "navigation") if is_navigation(rows) else ("runs", "scenes")
+    return [t for k in kinds if (t := TABLES[k](rows, summary)) is not None]
+
+
+#: The navigation table's columns of a study in a background flow (`with_flow_columns`), each
+#: with the other names it may already have there and its line of the table's note.
+FLOW_COLUMNS = {
+    "flow speed": ((), "flow speed: the flow's, in units of the swimming speed v"),
+    "reachable": (
+        (),
+        "reachable: Zermelo's optimal point steerer at speed v reaches the target (no: no agent can)",
+    ),
+    "Zermelo steps": (("zermelo",), "Zermelo steps: his least time to the target"),
+    "time ratio": (
+        ("time ratio [95% ci]",),
+        "time ratio: steps to the target over the swimmer's own optimum, median over the runs "
+        "that reached it (1 is optimal)",
+    ),
+}
+
+
+def with_flow_columns(
+    cols: Sequence[Any], cells: Sequence[Sequence[str]], note: str, rows: Sequence[Any]
+) -> tuple[list[Any], list[list[str]], str]:
+    """The navigation table (`jswim.studies.overview.nav_table`'s) with the flow's columns
+    (`FLOW_COLUMNS`) where its rows ran in a flow and the table lacks them; unchanged in still
+    fluid."""
+    from jswim.studies.kinds.navigate import nav_summary  # lazy: the navigation study loads JAX
+
+    have = {c.header.lower() for c in cols}
+    new = [h for h, (aliases, _) in FLOW_COLUMNS.items() if not ({h.lower(), *aliases} & have)]
+    if not new or not any(r.flow for r in as_run_rows(rows) if r.target):
+        return list(cols), [list(c) for c in cells], note
+    by = {(g["group"], g["agent"]): g for g in nav_summary(rows)}
+
+    def fmt(v: Any, spec: str) -> str:
+        return "-" if v is None or not math.isfinite(float(v)) else format(float(v), spec)
+
+    def values(g: Mapping[str, Any]) -> dict[str, str]:
+        if "flow_fraction" not in g:
+            return dict.fromkeys(FLOW_COLUMNS, "-")
+        return {
+            "flow speed": f"{fmt(g['flow_fraction'], 'g')} v",
+            "reachable": "yes" if g["reachable"] else "no",
+            "Zermelo steps": fmt(g["zermelo_steps"], ".0f"),
+            "time ratio": fmt(g["time_ratio"], ".2f"),
+        }
+
+    out = [list(c) + [values(by.get((c[0], c[1]), {}))[h] for h in new] for c in cells]
+    said = "; ".join(FLOW_COLUMNS[h][1] for h in new)
+    return list(cols) + [Column(h, h != "reachable") for h in new], out, f"{note} {said}."
+
+
 class StudyFolder:
     """A study folder read once: metadata, finished runs and their summary (read-only)."""
 
@@ -368,8 +529,11 @@ class StudyFolder:
         return f"UNFINISHED: {len(self.rows)}{of} runs done (status {status})"
 
     def model_text(self) -> str:
+        from jswim.studies.study import get, names  # lazy: the study kinds load JAX
+
         b = (self.meta.get("identity") or {}).get("backend")
-        if not b:
+        strokes = self.study in names() and get(self.study).strokes_only  # a school: no LLM
+        if not b or (strokes and not any(r.agent == "llm" for r in self.rows)):
             return "no LLM runs"
         # The address is not the identity (it may change between sessions): the latest session's.
         where = (
@@ -531,30 +695,10 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
                 f"({speed.get('calls_per_s', 0):.2f} calls/s)"
             )
     lines.append("")
-    if s.summary and is_navigation(s.rows):  # targets: the navigation tables, not the swim one
-        cols, rows, note = nav_overview_table(s.rows)
-        lines += [plain_table(cols, rows, title="agents x flows", width=width), note, ""]
-        cols, rows, note = nav_table(s.rows)
-        lines += [plain_table(cols, rows, title="navigation", width=width), note]
-    elif s.summary:
-        cols, rows = summary_table(s.summary)
-        lines += [plain_table(cols, rows, width=width), SUMMARY_NOTE]
-        if any(
-            r.scene for r in s.rows
-        ):  # walls and pairs: the scene table too (jswim.studies.scene_studies)
-            from jswim.studies.scene_studies import (
-                columns_note,
-                scene_summary,
-                table,
-                table_note,
-            )  # lazy: only for a scene study
-
-            scene_rows = scene_summary(s.rows)
-            scene_cols, scene_cells = table(scene_rows)
-            lines += ["", plain_table(scene_cols, scene_cells, title="scenes", width=width)]
-            lines += [columns_note(scene_cols)]
-            lines += [note] if (note := table_note(scene_rows)) else []
-    else:
+    for i, t in enumerate(study_tables(s.study, s.rows, s.summary)):
+        lines += [""] if i else []
+        lines += [plain_table(t.columns, t.cells, title=t.title or None, width=width), *t.notes]
+    if not s.rows:
         lines.append("no finished runs yet")
     lines.append("")
     figs = s.figures()

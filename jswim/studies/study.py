@@ -111,6 +111,9 @@ class Study:
         The fewest ROC levels K it steers with, and ``roc_levels_why`` why.
     temperatures : tuple of float
         The sampling temperatures its cells sweep when ``--temperatures`` is not given.
+    tables : tuple of str
+        Its tables (`jswim.studies.overview.TABLES`), its summary first: the console's after a
+        run, ``jswim show``'s and the report page's.
     figures : tuple of str
         Its figure sets (`jswim.figures.registry`), in order of importance.
     figure_order : tuple of str
@@ -146,6 +149,7 @@ class Study:
     min_roc_levels: int = 1
     roc_levels_why: str = ""
     temperatures: tuple[float, ...] = ()
+    tables: tuple[str, ...] = ("runs",)
     figures: tuple[str, ...] = ()
     figure_order: tuple[str, ...] = ()
     setting_notes: Mapping[str, str] = dataclasses.field(default_factory=dict)

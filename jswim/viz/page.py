@@ -34,20 +34,13 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from jswim.console import Column
 from jswim.env.flows import SWIM_SPEED, study_flow
 from jswim.errors import ConfigError
 from jswim.figures import plots
 from jswim.figures.flow_plots import flow_text
 from jswim.results.orders import AGENT_ORDER
 from jswim.studies.overview import (
-    SUMMARY_NOTE,
     grid_order,
-    is_navigation,
-    nav_overview_table,
-    nav_table,
-    order_summary,
-    summary_table,
 )
 from jswim.results import (
     RunRow,
@@ -60,7 +53,6 @@ from jswim.results import (
     read_transcript,
     unfinished_note,
 )
-from jswim.studies.report import summarize
 from jswim.viz import worlds
 from jswim.viz.skeleton import figure_src, page_html, png_src, write_page, written
 from jswim.viz.tracks import Track, track
@@ -297,73 +289,19 @@ def _status(meta: Mapping[str, Any], rows: Sequence[Mapping[str, Any]]) -> tuple
     return False, f"UNFINISHED STUDY: {done}{of} runs done (status {status})"
 
 
-def _summary_html(rows: Sequence[Mapping[str, Any]]) -> str:
-    if not rows:
+def _summary_html(study: str, rows: Sequence[Mapping[str, Any]]) -> str:
+    """The study's tables (`jswim.studies.tables.study_tables`), its summary first."""
+    from jswim.studies.overview import study_tables  # lazy: the tables load the study kinds (JAX)
+
+    tables = study_tables(study, rows)
+    if not tables:
         return "<p>No finished runs yet.</p>"
-    if is_navigation(rows):  # targets: reached, steps, path ratio, energy (as the console)
-        # the result at a glance first (agent x flow x target kind), then every target's row
-        first, first_cells, first_note = nav_overview_table(rows)
-        cols, cells, note = with_flow_columns(*nav_table(rows), rows)
-        return (
-            _table_html(first, first_cells, "overview-table")
-            + f'<p class="note">{html.escape(first_note)}</p>'
-            + _table_html(cols, cells, "summary-table")
-            + f'<p class="note">{html.escape(note)}</p>'
-        )
-    cols, cells = summary_table(order_summary(summarize(list(rows)), rows))
-    return (
-        _table_html(cols, cells, "summary-table")
-        + f'<p class="note">{html.escape(SUMMARY_NOTE)}</p>'
-        + _scenes_html(rows)
+    return "".join(
+        (f"<h3>{html.escape(t.title.capitalize())}</h3>" if t.heading else "")
+        + _table_html(t.columns, t.cells, t.key)
+        + f'<p class="note">{html.escape(" ".join(t.notes))}</p>'
+        for t in tables
     )
-
-
-#: The navigation table's columns of a study in a background flow (`with_flow_columns`), each
-#: with the other names it may already have there and its line of the table's note.
-FLOW_COLUMNS = {
-    "flow speed": ((), "flow speed: the flow's, in units of the swimming speed v"),
-    "reachable": (
-        (),
-        "reachable: Zermelo's optimal point steerer at speed v reaches the target (no: no agent can)",
-    ),
-    "Zermelo steps": (("zermelo",), "Zermelo steps: his least time to the target"),
-    "time ratio": (
-        ("time ratio [95% ci]",),
-        "time ratio: steps to the target over the swimmer's own optimum, median over the runs "
-        "that reached it (1 is optimal)",
-    ),
-}
-
-
-def with_flow_columns(
-    cols: Sequence[Any], cells: Sequence[Sequence[str]], note: str, rows: Sequence[Any]
-) -> tuple[list[Any], list[list[str]], str]:
-    """The navigation table (`nav_table`'s) with the flow's columns (`FLOW_COLUMNS`) where its
-    rows ran in a flow and the table lacks them; unchanged in still fluid."""
-    from jswim.studies.kinds.navigate import nav_summary  # lazy: the navigation study loads JAX
-
-    have = {c.header.lower() for c in cols}
-    new = [h for h, (aliases, _) in FLOW_COLUMNS.items() if not ({h.lower(), *aliases} & have)]
-    if not new or not any(r.flow for r in as_run_rows(rows) if r.target):
-        return list(cols), [list(c) for c in cells], note
-    by = {(g["group"], g["agent"]): g for g in nav_summary(rows)}
-
-    def fmt(v: Any, spec: str) -> str:
-        return "-" if v is None or not math.isfinite(float(v)) else format(float(v), spec)
-
-    def values(g: Mapping[str, Any]) -> dict[str, str]:
-        if "flow_fraction" not in g:
-            return dict.fromkeys(FLOW_COLUMNS, "-")
-        return {
-            "flow speed": f"{fmt(g['flow_fraction'], 'g')} v",
-            "reachable": "yes" if g["reachable"] else "no",
-            "Zermelo steps": fmt(g["zermelo_steps"], ".0f"),
-            "time ratio": fmt(g["time_ratio"], ".2f"),
-        }
-
-    out = [list(c) + [values(by.get((c[0], c[1]), {}))[h] for h in new] for c in cells]
-    said = "; ".join(FLOW_COLUMNS[h][1] for h in new)
-    return list(cols) + [Column(h, h != "reachable") for h in new], out, f"{note} {said}."
 
 
 def range_notes_of(rows: Sequence[Mapping[str, Any]]) -> list[str]:
@@ -406,31 +344,6 @@ def _table_html(cols: Sequence[Any], cells: Sequence[Sequence[str]], table_id: s
     return (
         f'<div class="table-wrap"><table class="summary" id="{table_id}"><thead><tr>{head}</tr></thead>'
         f"<tbody>{body}</tbody></table></div>"
-    )
-
-
-def _scenes_html(rows: Sequence[Mapping[str, Any]]) -> str:
-    """A wall or pair study's own table (per cycle, per step, fates, mean height), as ``jswim show``
-    prints it; nothing for other studies."""
-    rows = as_run_rows(rows)
-    if not any(r.scene for r in rows):
-        return ""
-    from jswim.studies.scene_studies import (
-        columns_note,
-        scene_summary,
-        table,
-        table_note,
-    )  # lazy: the scene studies load JAX
-
-    summary = scene_summary(rows)
-    cols, cells = table(summary)
-    note = table_note(summary)
-    return (
-        "<h3>Scenes</h3>"
-        + _table_html(cols, cells, "scenes")
-        + f'<p class="note">{html.escape(columns_note(cols))}'
-        + (f" {html.escape(note)}" if note else "")
-        + "</p>"
     )
 
 
@@ -685,7 +598,7 @@ def report_html(
         for f in figs
     )
     body = [
-        f'<section id="summary"><h2>Summary</h2>{_ranges_html(rows)}{_summary_html(rows)}</section>',
+        f'<section id="summary"><h2>Summary</h2>{_ranges_html(rows)}{_summary_html(study, rows)}</section>',
         f'<section id="figures"><h2>Figures</h2><p class="note">{html.escape(fig_source)}</p>{figures_html}</section>',
         '<section id="browser"><h2>Runs</h2><div id="filters"></div><p id="run-count"></p>'
         '<div class="browser"><div id="run-list-wrap"><table id="run-list"></table></div>'

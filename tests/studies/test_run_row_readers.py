@@ -40,7 +40,6 @@ READERS = sorted(
     "jswim/results/store.py",
     "jswim/results/load.py",
     "jswim/cli/study.py",
-    "jswim/cli/scenes.py",
 ]
 #: The names readers give a run row.
 ROW_NAMES = {"r", "row", "rows", "r0", "run", "first", "ref"}

@@ -5,6 +5,8 @@ command line to its folder's figures."""
 from __future__ import annotations
 
 import ast
+import dataclasses
+import json
 import pkgutil
 import textwrap
 from pathlib import Path
@@ -118,3 +120,34 @@ def test_one_file_adds_a_study(tmp_path, monkeypatch, capsys):
     with pytest.raises(SystemExit):
         cli.main(["study", "tiny", "--help"])
     assert "The tiny study: two history lengths" in " ".join(capsys.readouterr().out.split())
+
+
+def _school_row(n: int) -> dict:
+    scene = {"medium": "free", "swimmers": n, "separation": 30.0, "obstacles": []}
+    return {
+        "run_id": f"stroke-ng-N{n}",
+        "agent": "stroke",
+        "swimmer": "ng",
+        "group": f"line, D=30, N={n}",
+        "scene": json.dumps(scene),
+        "n_swimmers": n,
+        "per_cycle": 0.17,
+        "direction": 1,
+        "x": [0.1, 0.2],
+        "steps": 2,
+        "signed_final_x": 0.2,
+    }
+
+
+def test_the_tables_are_the_ones_the_study_names_its_summary_first(monkeypatch):
+    from jswim.studies.overview import study_tables
+
+    rows = [_school_row(1), _school_row(2)]
+    assert [t.key for t in study_tables("school", rows)] == ["summary-table", "scenes"]
+    assert [t.key for t in study_tables("curves", rows)] == ["summary-table"]  # no scene table
+    # a study of a later jswim: the tables its rows call for
+    assert [t.key for t in study_tables("from-the-future", rows)] == ["summary-table", "scenes"]
+    school = dataclasses.replace(get("school"), tables=("scenes",))
+    monkeypatch.setitem(study._load(), "school", school)
+    assert [t.title for t in study_tables("school", rows)] == ["scenes"]
+    assert study_tables("school", []) == []

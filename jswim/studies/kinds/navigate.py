@@ -918,6 +918,7 @@ STUDY = Study(
     success=navigation_rule,
     short_steps=short_steps_warning,
     order=13,
+    tables=("agents x flows", "navigation"),
     figures=("navigation", "flow"),
     figure_order=FIGURE_ORDER,
     option_help={

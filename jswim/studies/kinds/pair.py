@@ -20,6 +20,7 @@ STUDY = Study(
     ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
     success=scene_rule,
     order=11,
+    tables=("runs", "scenes"),
     figures=("pair",),
     flags=(
         (

@@ -19,6 +19,7 @@ STUDY = Study(
     ignores=("zetas", "n_hts", "roc_levels_grid", "init", "runs"),
     success=scene_rule,
     order=12,
+    tables=("runs", "scenes"),
     figures=("school",),
     flags=(
         (

@@ -28,6 +28,7 @@ STUDY = Study(
     ignores=("zetas", "n_hts", "roc_levels_grid", "init"),
     success=wall_rule,
     order=10,
+    tables=("runs", "scenes"),
     figures=("wall",),
     flags=(
         (
