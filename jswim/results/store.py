@@ -17,7 +17,8 @@ from jswim._io.jsonl import repair_tail
 from jswim._io.permissions import file_mode, opener
 from jswim.errors import ResultFolderError, StudyFolderError
 from jswim.results.read import clean_metadata, read_run_rows, read_runs
-from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_names
+from jswim.results.migrate import migrate_metadata
+from jswim.results.schema import META, RUNS, is_failed, run_problem
 from jswim.results.tables import write_tables
 
 #: Room kept on the study's disk while a session runs, freed to record its status when the disk
@@ -102,7 +103,7 @@ class StudyStore:
     ----------
     folder : path
         Created if missing. An existing folder must hold the same study with the same parameters
-        (``identity``, compared after [`upgrade_names`][jswim.results.schema.upgrade_names]), otherwise
+        (``identity``, compared in today's form: [`migrate_metadata`][jswim.results.migrate.migrate_metadata]), otherwise
         [`ResultFolderError`][jswim.errors.ResultFolderError] says what differs.
     study : str
         Study name, e.g. ``"noise"``.
@@ -202,15 +203,14 @@ class StudyStore:
                     f"{self.folder} holds a '{meta.get('study')}' study, not '{study}'; "
                     "use a new --out folder"
                 )
-            old = upgrade_names(meta["identity"])
+            old = migrate_metadata(meta)["identity"]
             if old != self.identity:
                 diff = identity_differences(old, self.identity)
                 raise ResultFolderError(
                     f"{self.folder} holds a '{study}' study with different settings: {'; '.join(diff[:4])}"
                     f"{'; ...' if len(diff) > 4 else ''}. Use a new --out folder, or the folder's settings to resume"
                 )
-            meta = clean_metadata(meta, meta_path)
-            self.meta = meta
+            self.meta = migrate_metadata(clean_metadata(meta, meta_path))
             self.meta["identity"] = self.identity  # rewritten under today's names
             with writing(self.folder):
                 self._repair_journals()
