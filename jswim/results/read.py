@@ -272,10 +272,11 @@ def _clean_totals(totals: dict[str, Any], path: str | os.PathLike) -> dict[str, 
     return out
 
 
-def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
+def read_metadata(folder: str | os.PathLike, as_written: bool = False) -> dict[str, Any]:
     """The study's ``metadata.json`` in today's form ([`migrate_metadata`][jswim.results.migrate.migrate_metadata]); [`ResultFolderError`][jswim.errors.ResultFolderError] if
     the folder is not a study. A field of the wrong type is dropped with a warning
-    ([`clean_metadata`][jswim.results.read.clean_metadata])."""
+    ([`clean_metadata`][jswim.results.read.clean_metadata]); ``as_written``: the object as the
+    file holds it, neither checked nor migrated (what ``jswim migrate`` rewrites)."""
     path = Path(folder) / META
     if not path.exists():
         raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
@@ -289,7 +290,7 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
             type(meta), "number"
         )
         raise ResultFolderError(f"{path} is not a study's metadata (a JSON {kind}, not an object)")
-    return migrate_metadata(clean_metadata(meta, path))
+    return meta if as_written else migrate_metadata(clean_metadata(meta, path))
 
 
 def unfinished_note(status: str | None, done: int, planned: int | None) -> str | None:

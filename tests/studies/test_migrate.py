@@ -135,3 +135,66 @@ def test_todays_rows_written_and_read_back_are_unchanged(tmp_path):
     with StudyStore(tmp_path / "s", "swim", {"a": 1}) as s:
         s.add_runs([plain, nav])
     assert read_runs(tmp_path / "s") == [plain, nav]
+
+
+# -- jswim migrate FOLDER: the folder stored in today's form, read the same ----------------------
+
+
+def _everything(folder):
+    """What the readers give of a folder, the rows' key order included (metadata.json is
+    written with sorted keys, today as before)."""
+    return (
+        [list(r.items()) for r in read_runs(folder)],
+        [list(r.to_dict().items()) for r in read_run_rows(folder)],
+        read_metadata(folder),
+    )
+
+
+def test_jswim_migrate_stores_an_old_folder_in_todays_form_and_it_reads_the_same(tmp_path, capsys):
+    from jswim import cli
+
+    folder, identity = _old_folder(tmp_path)
+    with open(folder / "runs.jsonl", "a") as fh:  # a skipped line and a torn one: kept as they are
+        fh.write('{"run_id": "bad", "allowed": 5}\n{"run_id": "to')
+    paid = {"calls.jsonl": b'{"run": "w", "n": 0}\n', "requests.jsonl": b'{"session": 1}\n'}
+    for name, data in paid.items():
+        (folder / name).write_bytes(data)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        before = _everything(folder)
+        assert cli.main(["migrate", str(folder)]) == 0
+        after = _everything(folder)
+    assert after == before
+    out = capsys.readouterr().out
+    assert "metadata.json: rewritten" in out and "runs.jsonl: 2 run records rewritten" in out
+    text = (folder / "runs.jsonl").read_text()
+    assert text.endswith('{"run_id": "bad", "allowed": 5}\n{"run_id": "to')
+    stored = [json.loads(line) for line in text.splitlines()[:2]]
+    assert stored[0]["action_set"] == "all" and stored[0]["plane_height"] == 2.5
+    assert stored[1]["zermelo_ratio"] == 2.0 and "time_ratio" not in stored[1]
+    meta = json.loads((folder / "metadata.json").read_text())
+    assert meta["identity"]["options"] == {"action_set": "all", "steps": 2}
+    assert meta["grids"] == [{"runs": 1}]
+    assert {n: (folder / n).read_bytes() for n in paid} == paid  # the paid calls untouched
+    today = {**identity, "options": {"action_set": "all", "steps": 2}}
+    with StudyStore(folder, "swim", today) as s:  # the same settings resume it
+        assert s.done_ids() == {"w", "f"}
+    assert cli.main(["migrate", str(folder)]) == 0  # the store rewrote only its status
+    assert "already in today's form" in capsys.readouterr().out
+
+
+def test_jswim_migrate_refuses_bad_input_in_one_line(tmp_path, capsys):
+    from jswim import cli
+    from jswim._io.folderlock import FolderLock
+
+    assert cli.main(["migrate", str(tmp_path / "nothing")]) == 2
+    folder, _ = _old_folder(tmp_path)
+    with FolderLock(folder):  # a live session holds it
+        assert cli.main(["migrate", str(folder)]) == 2
+    (tmp_path / "list").mkdir()
+    (tmp_path / "list" / "metadata.json").write_text("[]")
+    assert cli.main(["migrate", str(tmp_path / "list")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and all(line.startswith("jswim: error: ") for line in err), err
+    assert "not a jswim study folder" in err[0] and "in use by another" in err[1]
+    assert "allowed" in (folder / "runs.jsonl").read_text()  # nothing rewritten while held
