@@ -73,8 +73,11 @@ def forget_warnings() -> None:
 def read_records(
     path: str | os.PathLike,
     check: Callable[[dict[str, Any]], str | None] | None = None,
+    convert: Callable[[dict[str, Any]], dict[str, Any]] | None = None,
 ) -> Iterator[tuple[int, dict[str, Any]]]:
-    """``(line number, record)`` for every readable record of the JSON-lines file ``path``.
+    """``(line number, record)`` for every readable record of the JSON-lines file ``path``
+    (through ``convert`` where given: an earlier version's record in today's form; ``check``
+    sees the record as the file holds it, so its message names the file's fields).
 
     A torn last line (no final newline, from a kill) is skipped silently. Any other line that is
     not UTF-8, not JSON, not a JSON object, or that ``check`` finds fault with (``check`` returns
@@ -110,7 +113,7 @@ def read_records(
         if why is None and check is not None:
             why = check(rec)
         if why is None:
-            yield n, rec
+            yield n, (convert(rec) if convert is not None else rec)
             continue
         key = (str(Path(path).resolve()), n, raw[:64])
         if key not in _warned:

@@ -98,7 +98,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_USAGE
-    if args.command not in ("show", "compare"):
+    if args.command not in ("show", "compare", "migrate"):
         compile_cache.enable()  # compiled programs kept on disk: later sessions start in seconds
     # The command only writes figure files; never open a window. Through the environment, so
     # matplotlib (~0.5 s) is imported only by commands that draw (`--no-figures` never does).

@@ -1,5 +1,6 @@
-"""``jswim plot``, ``jswim show`` and ``jswim compare``: a study folder's figures redrawn, and its
-status, settings, cost and tables read (never written) by the last two."""
+"""``jswim plot``, ``jswim show``, ``jswim compare`` and ``jswim migrate``: a study folder's
+figures redrawn, its status, settings, cost and tables read (never written) by show and compare,
+and an earlier version's folder rewritten in today's form by migrate."""
 
 from __future__ import annotations
 
@@ -39,6 +40,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("folders", nargs="+", metavar="FOLDER", help="two or more study folders")
     p.set_defaults(command_main=compare, reads_folder=True)
+    p = sub.add_parser(
+        "migrate",
+        help="rewrite a study folder an earlier jswim wrote in today's form",
+        description="Rewrite FOLDER's metadata.json and runs.jsonl in today's form, each file "
+        "atomically, under the folder's lock. Every jswim reads an earlier folder as it is; this "
+        "only stores it in today's form. Its runs, answered calls and money ledger stay usable: "
+        "the same command resumes it.",
+    )
+    p.add_argument("folder", help="a study folder written by jswim swim / jswim study")
+    p.set_defaults(command_main=migrate)
 
 
 def plot(args: argparse.Namespace) -> int:
@@ -83,4 +94,13 @@ def compare(args: argparse.Namespace) -> int:
     )  # lazy: start-up (the study folders' readers load NumPy)
 
     print(compare_text(args.folders, width=terminal_width()))
+    return 0
+
+
+def migrate(args: argparse.Namespace) -> int:
+    from jswim.results.store import migrate_folder  # lazy: start-up, as for the readers above
+
+    done = migrate_folder(args.folder)
+    for line in done or [f"{args.folder} is already in today's form; nothing rewritten"]:
+        print(line)
     return 0

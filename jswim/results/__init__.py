@@ -16,6 +16,8 @@ rewritten), so no row is lost or duplicated. Every other file is derived from ``
 rewritten whole through a temporary file and ``os.replace``, so a kill never leaves half a file.
 
 [`load`][jswim.results.load.load] reads a folder (finished or not, read-only) into pandas DataFrames.
+A folder an earlier jswim wrote is read in today's form: its records are migrated as they come
+off disk, in one module ([`jswim.results.migrate`][jswim.results.migrate]).
 
 Files are plain: JSON without ``NaN``/``Infinity`` (non-finite numbers are written as ``null``,
 so any language's parser reads them) and the same permissions for every file (owner only, ``0600``,
@@ -37,16 +39,9 @@ from jswim.results.read import (
     transcript_steps,
     unfinished_note,
 )
+from jswim.results.migrate import RENAMED
 from jswim.results.row import RunRow, as_run_row, as_run_rows
-from jswim.results.schema import (
-    FAILED_STATUSES,
-    RENAMED,
-    SCALAR_TYPES,
-    is_failed,
-    legacy_names,
-    run_problem,
-    upgrade_names,
-)
+from jswim.results.schema import FAILED_STATUSES, SCALAR_TYPES, is_failed, run_problem
 from jswim.results.store import (
     FILE_MODE,
     META,
@@ -82,7 +77,6 @@ __all__ = [
     "clean_metadata",
     "identity_differences",
     "is_failed",
-    "legacy_names",
     "load",
     "read_calls",
     "read_metadata",
@@ -92,7 +86,6 @@ __all__ = [
     "run_problem",
     "transcript_steps",
     "unfinished_note",
-    "upgrade_names",
     "write_tables",
     "writing",
 ]

@@ -14,12 +14,14 @@ from jswim._io.jsonl import SkippedRecord, read_records
 from jswim.errors import ResultFolderError
 from jswim.results.optimum import with_cell_optimum
 from jswim.results.row import RunRow, as_run_rows
-from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_names
+from jswim.results.migrate import migrate_metadata, migrate_row
+from jswim.results.schema import META, RUNS, is_failed, run_problem
 
 
 def read_runs(folder: str | os.PathLike) -> list[dict[str, Any]]:
     """Runs of a study folder (see [`StudyStore`][jswim.results.store.StudyStore]), one record per ``run_id`` in first-seen
-    order, fields under today's names ([`upgrade_names`][jswim.results.schema.upgrade_names]).
+    order, in today's form (an earlier version's record migrated as it is read:
+    [`migrate_row`][jswim.results.migrate.migrate_row]).
 
     The first record of a run wins, except that a failed run ([`is_failed`][jswim.results.schema.is_failed]) is replaced by
     any later record of it: the one from the resume that ran it again. A line that is no run
@@ -37,10 +39,10 @@ def _records(folder: str | os.PathLike) -> list[dict[str, Any]]:
     path = Path(folder) / RUNS
     _regular(path)
     by_id: dict[str, dict[str, Any]] = {}
-    for _, row in read_records(path, run_problem):
+    for _, row in read_records(path, run_problem, migrate_row):
         rid = row.get("run_id")
         if rid not in by_id or is_failed(by_id[rid]):
-            by_id[rid] = upgrade_names(row)
+            by_id[rid] = row
     return list(by_id.values())
 
 
@@ -270,10 +272,11 @@ def _clean_totals(totals: dict[str, Any], path: str | os.PathLike) -> dict[str, 
     return out
 
 
-def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
-    """The study's ``metadata.json`` (fields under today's names); [`ResultFolderError`][jswim.errors.ResultFolderError] if
+def read_metadata(folder: str | os.PathLike, as_written: bool = False) -> dict[str, Any]:
+    """The study's ``metadata.json`` in today's form ([`migrate_metadata`][jswim.results.migrate.migrate_metadata]); [`ResultFolderError`][jswim.errors.ResultFolderError] if
     the folder is not a study. A field of the wrong type is dropped with a warning
-    ([`clean_metadata`][jswim.results.read.clean_metadata])."""
+    ([`clean_metadata`][jswim.results.read.clean_metadata]); ``as_written``: the object as the
+    file holds it, neither checked nor migrated (what ``jswim migrate`` rewrites)."""
     path = Path(folder) / META
     if not path.exists():
         raise ResultFolderError(f"{folder} is not a jswim study folder (no {META})")
@@ -287,7 +290,7 @@ def read_metadata(folder: str | os.PathLike) -> dict[str, Any]:
             type(meta), "number"
         )
         raise ResultFolderError(f"{path} is not a study's metadata (a JSON {kind}, not an object)")
-    return upgrade_names(clean_metadata(meta, path))
+    return meta if as_written else migrate_metadata(clean_metadata(meta, path))
 
 
 def unfinished_note(status: str | None, done: int, planned: int | None) -> str | None:

@@ -1,8 +1,8 @@
-"""One run of a study as a typed row ([`RunRow`][jswim.results.row.RunRow]): its columns, their order, and reading old rows.
+"""One run of a study as a typed row ([`RunRow`][jswim.results.row.RunRow]): its columns and their order.
 
 Rows are built in one place ([`jswim.studies.rows.build_row`][jswim.studies.rows.build_row]) and written by
 [`jswim.results.StudyStore.add_runs`][jswim.results.StudyStore.add_runs]; [`jswim.results.read_runs`][jswim.results.read_runs] gives them back as
-plain dicts, under today's names ([`jswim.results.schema.upgrade_names`][jswim.results.schema.upgrade_names]), for users;
+plain dicts, in today's form ([`jswim.results.migrate.migrate_row`][jswim.results.migrate.migrate_row]), for users;
 the package's readers read [`jswim.results.read_run_rows`][jswim.results.read_run_rows] (typed rows) and convert rows given
 to them with [`as_run_rows`][jswim.results.row.as_run_rows].
 """
@@ -10,13 +10,12 @@ to them with [`as_run_rows`][jswim.results.row.as_run_rows].
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 from collections.abc import Iterable, Iterator
 
-from jswim.results.schema import upgrade_names
+from jswim.results.migrate import migrate_row
 from jswim.results.optimum import with_cell_optimum
 
 #: The columns every row starts with, in their order.
@@ -249,8 +248,8 @@ class RunRow(Mapping):
         The height (link lengths) above a wall of the plane a planar swimmer swims in, parallel
         to the wall (the world's [`Scenery.plane_height`][jswim.env.base.Scenery]): its pictures
         are drawn from above, in that plane, and ``y``/``orientation`` are in the plane. Written
-        only when set; rows written before the column existed get it from
-        [`from_dict`][jswim.results.row.RunRow.from_dict].
+        only when set; rows written before the column existed get it by the old rule
+        ([`migrate_row`][jswim.results.migrate.migrate_row]).
     xs, heights, tilts : list of list of float or None
         Per step, each swimmer's displacement (a), height (a) and tilt (rad).
     contact, stuck : list of bool or None
@@ -311,8 +310,8 @@ class RunRow(Mapping):
     zermelo_steps : float or None
         Zermelo's least time to the target (steps, ``tau``); None when unreachable.
     zermelo_ratio : float or None
-        ``steps_to_target / zermelo_steps`` (None: not reached, or unreachable). A folder of an
-        earlier jswim, whose ``time_ratio`` was this, is read with it here.
+        ``steps_to_target / zermelo_steps`` (None: not reached, or unreachable). An earlier
+        jswim's ``time_ratio`` was this ([`migrate_row`][jswim.results.migrate.migrate_row]).
     optimal_steps : int or None
         The swimmer's own least time to the target (steps, the least-time sequence of the world's
         actions, [`jswim.agents.optimal`][jswim.agents.optimal]), in still fluid too; None where
@@ -433,10 +432,11 @@ class RunRow(Mapping):
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any]) -> RunRow:
-        """A row from a record (any version's: old names renamed, missing columns None, unknown
-        ones kept in `other`; a missing or null ``group`` or ``agent`` reads as ``""``, ``x`` as
+        """A row from a record (any version's, in today's form by
+        [`migrate_row`][jswim.results.migrate.migrate_row]: missing columns None, unknown ones
+        kept in `other`; a missing or null ``group`` or ``agent`` reads as ``""``, ``x`` as
         ``[]``, ``steps`` as the length of ``x``)."""
-        d = _with_zermelo_ratio(_with_plane_height(upgrade_names(dict(d))))
+        d = migrate_row(d)
         # The columns every reader sorts, sums or draws by, where a record lacks them (a hand
         # edit, a foreign writer): no cell ("", a study without a grid), no agent, no steps.
         x = d.get("x") if isinstance(d.get("x"), list) else []
@@ -464,34 +464,13 @@ class RunRow(Mapping):
         return len(self.columns())
 
 
-def _with_plane_height(d: dict[str, Any]) -> dict[str, Any]:
-    """``d`` with ``plane_height`` for a row written before the column existed. The one place the
-    old rule lives: Purcell's swimmer was the only world in a wall scene that swims in a plane
-    parallel to the wall, at the scene's height."""
-    if "plane_height" in d or d.get("swimmer") != "purcell" or d.get("medium") != "wall":
-        return d
-    try:
-        scene = json.loads(d["scene"]) if isinstance(d.get("scene"), str) else dict(d["scene"])
-        return {**d, "plane_height": float(scene["height"])}
-    except (KeyError, TypeError, ValueError):
-        return d
-
-
-def _with_zermelo_ratio(d: dict[str, Any]) -> dict[str, Any]:
-    """``d`` with its ratio to Zermelo named ``zermelo_ratio``: before the swimmer's own optimum
-    (``optimal_steps``) was written, ``time_ratio`` was the ratio to Zermelo's time."""
-    if "optimal_steps" in d or "time_ratio" not in d or "zermelo_steps" not in d:
-        return d
-    return {**{k: v for k, v in d.items() if k != "time_ratio"}, "zermelo_ratio": d["time_ratio"]}
-
-
 _FIELDS = frozenset(f.name for f in dataclasses.fields(RunRow)) - {"other"}
 _IN_LAYOUT = {kind: frozenset(cols) - {"other"} for kind, cols in LAYOUTS.items()}
 
 
 def as_run_row(row: Mapping[str, Any]) -> RunRow:
     """``row`` as a [`RunRow`][jswim.results.row.RunRow]: a RunRow passes through, a dict goes through
-    [`RunRow.from_dict`][jswim.results.row.RunRow.from_dict] (old names renamed, missing columns None, unknown ones in
+    [`RunRow.from_dict`][jswim.results.row.RunRow.from_dict] (an earlier version's record migrated, missing columns None, unknown ones in
     `RunRow.other`)."""
     return row if isinstance(row, RunRow) else RunRow.from_dict(row)
 

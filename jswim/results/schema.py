@@ -1,5 +1,6 @@
 """What a run record holds: the fields readers compute with and their kinds, the statuses of
-failed runs, the fields renamed since folders were first written."""
+failed runs (today's form: an earlier version's record is translated first,
+`jswim.results.migrate`)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from typing import Any
 from collections.abc import Mapping
 
 from jswim.errors import JswimError
+from jswim.results.migrate import RENAMED
 
 #: The study folder's durable record and its metadata.
 RUNS = "runs.jsonl"
@@ -22,32 +24,6 @@ FAILED_STATUSES = frozenset({"llm_error", "aborted"})
 def is_failed(row: Mapping[str, Any]) -> bool:
     """Whether a run record is a failed run (`FAILED_STATUSES`), not a finished one."""
     return row.get("status") in FAILED_STATUSES
-
-
-#: Fields renamed since folders were first written: old name -> new name. Folders keep what they
-#: were written with; readers translate ([`upgrade_names`][jswim.results.schema.upgrade_names]), so an old folder still resumes,
-#: summarises and plots.
-RENAMED = {"allowed": "action_set"}
-
-
-def upgrade_names(obj: Any) -> Any:
-    """``obj`` (rows, metadata, an identity; nested dicts and lists) with old field names renamed
-    to new ones (`RENAMED`)."""
-    if isinstance(obj, dict):
-        return {RENAMED.get(k, k): upgrade_names(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [upgrade_names(v) for v in obj]
-    return obj
-
-
-def legacy_names(obj: Any) -> Any:
-    """The inverse of [`upgrade_names`][jswim.results.schema.upgrade_names] (for hashes that must stay what they were)."""
-    back = {new: old for old, new in RENAMED.items()}
-    if isinstance(obj, dict):
-        return {back.get(k, k): legacy_names(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [legacy_names(v) for v in obj]
-    return obj
 
 
 #: The fields of a run record that readers compute with, by kind: a record where one of them has
@@ -103,6 +79,7 @@ _RUN_NUMBERS = (
     "flow_fraction",
     "zermelo_steps",
     "time_ratio",
+    "zermelo_ratio",
 )
 _RUN_FLAGS = ("success", "learned", "reached", "reachable", "summary", "shuffle", "share_identical")
 _RUN_STRINGS = (
@@ -123,6 +100,12 @@ _RUN_STRINGS = (
     "flow",
 )
 _RUN_SERIES = ("x", "y", "orientation", "progress")
+# Rows are checked as the file holds them (the message names its field): a renamed field is
+# checked under its earlier names too (`jswim.results.migrate.RENAMED`).
+_RUN_NUMBERS, _RUN_FLAGS, _RUN_STRINGS = (
+    (*kind, *(old for old, new in RENAMED.items() if new in kind))
+    for kind in (_RUN_NUMBERS, _RUN_FLAGS, _RUN_STRINGS)
+)
 #: Per step, per swimmer: numbers (``xs``, ``heights``, ``tilts``) or flags (``contact``,
 #: ``stuck``; also one flag per step).
 _RUN_TRACKS = ("xs", "heights", "tilts")
@@ -137,8 +120,9 @@ def run_problem(row: Mapping[str, Any]) -> str | None:
     """What makes ``row`` no run record readers can use, or ``None``: no ``run_id`` (or a ``flow``
     without its ``flow_fraction``), a field of the wrong type, series of different lengths, or a
     ``scene``, ``target`` or ``flow`` that is not the JSON text of one
-    ([`json_field_problem`][jswim.results.schema.json_field_problem]). The answer names the field."""
-    row = upgrade_names(dict(row))
+    ([`json_field_problem`][jswim.results.schema.json_field_problem]). The answer names the field.
+    ``row`` is checked as the file holds it, before
+    [`migrate_row`][jswim.results.migrate.migrate_row]: a renamed field under either name."""
     if "run_id" not in row:
         return "no 'run_id'"
     for k in _RUN_TEXT:

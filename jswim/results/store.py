@@ -7,17 +7,19 @@ import errno
 import json
 import os
 import re
+import warnings
 from pathlib import Path
 from typing import Any
 from collections.abc import Callable, Iterable, Iterator, Mapping
 
-from jswim._io.atomic import dumps, plain_json, write_json
+from jswim._io.atomic import atomic_write, dumps, plain_json, write_json
 from jswim._io.folderlock import HOLDER, LOCK, FolderLock
 from jswim._io.jsonl import repair_tail
 from jswim._io.permissions import file_mode, opener
 from jswim.errors import ResultFolderError, StudyFolderError
-from jswim.results.read import clean_metadata, read_run_rows, read_runs
-from jswim.results.schema import META, RUNS, is_failed, run_problem, upgrade_names
+from jswim.results.read import clean_metadata, read_metadata, read_run_rows, read_runs
+from jswim.results.migrate import migrate_metadata, migrate_row
+from jswim.results.schema import META, RUNS, is_failed, run_problem
 from jswim.results.tables import write_tables
 
 #: Room kept on the study's disk while a session runs, freed to record its status when the disk
@@ -102,7 +104,7 @@ class StudyStore:
     ----------
     folder : path
         Created if missing. An existing folder must hold the same study with the same parameters
-        (``identity``, compared after [`upgrade_names`][jswim.results.schema.upgrade_names]), otherwise
+        (``identity``, compared in today's form: [`migrate_metadata`][jswim.results.migrate.migrate_metadata]), otherwise
         [`ResultFolderError`][jswim.errors.ResultFolderError] says what differs.
     study : str
         Study name, e.g. ``"noise"``.
@@ -202,15 +204,14 @@ class StudyStore:
                     f"{self.folder} holds a '{meta.get('study')}' study, not '{study}'; "
                     "use a new --out folder"
                 )
-            old = upgrade_names(meta["identity"])
+            old = migrate_metadata(meta)["identity"]
             if old != self.identity:
                 diff = identity_differences(old, self.identity)
                 raise ResultFolderError(
                     f"{self.folder} holds a '{study}' study with different settings: {'; '.join(diff[:4])}"
                     f"{'; ...' if len(diff) > 4 else ''}. Use a new --out folder, or the folder's settings to resume"
                 )
-            meta = clean_metadata(meta, meta_path)
-            self.meta = meta
+            self.meta = migrate_metadata(clean_metadata(meta, meta_path))
             self.meta["identity"] = self.identity  # rewritten under today's names
             with writing(self.folder):
                 self._repair_journals()
@@ -413,3 +414,69 @@ class StudyStore:
                 raise
             with writing(self.folder):
                 write_json(self.folder / META, self.meta)
+
+
+def migrate_folder(folder: str | os.PathLike) -> list[str]:
+    """Rewrite a study folder an earlier jswim wrote in today's form (``jswim migrate FOLDER``).
+
+    Under the folder's lock, ``metadata.json`` and the records of ``runs.jsonl`` are rewritten
+    through [`jswim.results.migrate`][jswim.results.migrate], each file atomically; the folder
+    reads the same before and after (readers migrate as they read). A line readers skip (damaged,
+    hand-edited) and a torn last line are kept as they are; the call journal, the money ledger
+    and the transcripts are not touched, so every paid call still answers a resume.
+
+    Parameters
+    ----------
+    folder : path
+        A study folder.
+
+    Returns
+    -------
+    list of str
+        One sentence per file rewritten (empty: the folder is already in today's form).
+
+    Raises
+    ------
+    ResultFolderError
+        Not a study folder, or its metadata or runs cannot be read.
+    FolderBusyError
+        A live session holds the folder.
+    StudyFolderError
+        The folder cannot be written.
+    """
+    folder = Path(folder)
+    meta = read_metadata(folder, as_written=True)
+    done = []
+    with writing(folder), FolderLock(folder):
+        new = migrate_metadata(meta)
+        if new.get("grids") != meta.get("grids"):  # derived as a reader does: from the kept grid
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # the readers say what they drop, not this
+                kept = migrate_metadata(clean_metadata(meta, folder / META)).get("grids")
+            if kept is None:
+                new.pop("grids", None)
+            else:
+                new["grids"] = kept
+        if new != meta:
+            write_json(folder / META, new)
+            done.append(f"{META}: rewritten in today's form")
+        path = folder / RUNS
+        if path.exists() and not path.is_file():  # a FIFO would hang the read
+            raise ResultFolderError(f"{path} is not a regular file; move it away to migrate")
+        try:
+            lines = path.read_bytes().split(b"\n") if path.exists() else [b""]
+        except OSError as exc:
+            raise ResultFolderError(f"{path} is unreadable ({exc.strerror or exc})") from None
+        tail, n = lines.pop(), 0  # tail: b"" after the last newline, else a torn line, kept
+        for i, raw in enumerate(lines):
+            try:
+                rec = json.loads(raw)
+            except ValueError:
+                continue
+            if isinstance(rec, dict) and run_problem(rec) is None and migrate_row(rec) != rec:
+                # In the migrated key order: the rows read back as they were read before.
+                lines[i], n = dumps(migrate_row(rec)).encode(), n + 1
+        if n:
+            atomic_write(path, b"\n".join([*lines, tail]))
+            done.append(f"{RUNS}: {n} run record{'s' * (n != 1)} rewritten in today's form")
+    return done

@@ -407,14 +407,9 @@ def _plain(value: Any) -> Any:
 
 
 def _grids(before: dict[str, Any] | None) -> list[dict[str, Any]]:
-    """The grids a folder's metadata records: ``grids``, or the one ``grid`` of a folder an
-    older jswim wrote (none for a new folder)."""
-    if not before:
-        return []
-    grids = before.get("grids")
-    if isinstance(grids, list) and grids and all(isinstance(g, dict) for g in grids):
-        return [_plain(g) for g in grids]
-    return [_plain(before["grid"])] if isinstance(before.get("grid"), dict) else []
+    """The grids a folder's metadata records (``grids``, today's form:
+    `jswim.results.migrate.migrate_metadata`; none for a new folder)."""
+    return [_plain(g) for g in (before or {}).get("grids") or ()]
 
 
 def _grid_plans(study: str, options: StudyOptions, grid: dict[str, Any]) -> list[Plan] | None:

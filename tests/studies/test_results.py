@@ -16,11 +16,9 @@ from jswim.results import (
     StudyFolderError,
     StudyStore,
     atomic_write,
-    legacy_names,
     load,
     read_metadata,
     read_runs,
-    upgrade_names,
 )
 from jswim.judging.stats import learn_stats, mean_interval, wilson_interval
 
@@ -133,15 +131,6 @@ def test_folder_written_with_old_field_names_resumes_and_reads_under_new_names(t
             "swim",
             {**new_identity, "options": {"action_set": "shape-changing", "steps": 6}},
         )
-
-
-def test_name_translation_round_trips():
-    old = {"options": {"allowed": "all"}, "rows": [{"allowed": "x", "k": 1}]}
-    assert upgrade_names(old) == {
-        "options": {"action_set": "all"},
-        "rows": [{"action_set": "x", "k": 1}],
-    }
-    assert legacy_names(upgrade_names(old)) == old
 
 
 def test_load_returns_the_runs_as_a_dataframe(tmp_path):
