@@ -9,38 +9,31 @@ cost) are described in docs/bench.md (*Suites*); ``navigate`` runs the navigatio
 
 from __future__ import annotations
 
+import functools
+import types
 from dataclasses import dataclass, field
 from typing import Any
 from collections.abc import Mapping
 
 from jswim.errors import ConfigError
+from jswim.studies.flags import FLAGS
 
-#: Study options a suite part may set (StudyOptions through the command line; name -> flag).
-PART_OPTIONS = {
-    "swimmer": "--swimmer",
-    "direction": "--direction",
-    "steps": "--steps",
-    "runs": "--runs",
-    "q_runs": "--q-runs",
-    "n_ht": "--n-ht",
-    "noise": "--noise",
-    "init": "--init",
-    "action_set": "--action-set",
-    "variant": "--variant",
-    "prompt_file": "--prompt-file",
-    "x_min": "--x-min",
-    "zetas": "--zetas",
-    "n_hts": "--n-hts",
-    "seed": "--seed",
-    "temperatures": "--temperatures",
-    "prompt_files": "--prompt-files",
-    "samples": "--samples",
-    "distances": "--distances",
-    "bearings": "--bearings",
-    "flow": "--flow",
-    "flows": "--flows",
-    "train_episodes": "--train-episodes",
-}
+
+@functools.cache
+def part_options() -> Mapping[str, str]:
+    """The options a suite part may set (a models file's ``options`` keys) -> the flag each becomes.
+
+    Read from the options' one definition: each run option a part may set
+    (`jswim.studies.flags.Flag.part`) under its argparse dest (``noise`` -> ``--noise``), and
+    every study's own options (`jswim.studies.study.Study.flags`) under their field.
+    """
+    from jswim.studies.study import get, names  # lazy: the study kinds load JAX
+
+    out = {f.dest: f.names[0] for f in FLAGS if f.part}
+    for study in map(get, names()):
+        out.update(zip(study.own_options, (flag for flag, _ in study.flags)))
+    return types.MappingProxyType(out)  # cached: read-only
+
 
 #: Sizes a bench command may override for every part (``--runs``, ``--q-runs``, ``--steps``);
 #: recorded in the definition (rows then say they are not the suite's own sizes).
@@ -70,7 +63,7 @@ class Part:
         command = get(self.study).command  # "study" (jswim study NAME) or its own ("swim")
         out = ["study", self.study] if command == "study" else [command]
         for key, value in opts.items():
-            flag = PART_OPTIONS[key]
+            flag = part_options()[key]
             if isinstance(value, (list, tuple)):
                 value = ",".join(str(v) for v in value)
             out += [flag, str(value)]
@@ -165,10 +158,6 @@ def check_name(name: str, what: str) -> str:
     return str(name)
 
 
-#: Grid axes only ``jswim study`` takes (``jswim swim`` refuses them).
-STUDY_AXES = ("zetas", "n_hts", "temperatures", "prompt_files")
-
-
 def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None:
     """Refuse, when the models file is read, an option the part's study would refuse at run time
     (every model's process would fail on it)."""
@@ -178,10 +167,12 @@ def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None
 
     spec = get(study)
     if spec.command != "study":
-        axis = next((k for k in opts if k in STUDY_AXES), None)
+        # a grid axis: only ``jswim study`` takes it
+        axes = {f.dest: f.names[0] for f in FLAGS if f.study_only}
+        axis = next((k for k in opts if k in axes), None)
         if axis is not None:
             raise ConfigError(
-                f"{where}: jswim {spec.command} takes no {PART_OPTIONS[axis]} (a study's grid "
+                f"{where}: jswim {spec.command} takes no {axes[axis]} (a study's grid "
                 'axis); use a study, e.g. study = "curves"'
             )
     only = next((k for k in opts if k in own_options() and k not in spec.own_options), None)
@@ -196,7 +187,7 @@ def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None
         raise ConfigError(
             f'{where}: flows sets the speeds of a flow: give its kind too (flow = "uniform")'
         )
-    fields = {"noise": "zeta"}
+    fields = {f.dest: f.field for f in FLAGS if f.part and f.field}  # a key -> the field it sets
     for name, why in ignored_options(study, [fields.get(k, k) for k in opts]).items():
         option = next(k for k in opts if fields.get(k, k) == name)
         raise ConfigError(
@@ -245,11 +236,11 @@ def user_suite(name: str, table: Any, where: str) -> Suite:
         opts = p.get("options") or {}
         if not isinstance(opts, Mapping):
             raise ConfigError(f"{where}: suite {name!r} part {i + 1}: options must be a table")
-        bad = sorted(set(opts) - set(PART_OPTIONS))
+        bad = sorted(set(opts) - set(part_options()))
         if bad:
             raise ConfigError(
                 f"{where}: suite {name!r}: unknown option {bad[0]!r}; choose from "
-                f"{', '.join(sorted(PART_OPTIONS))}"
+                f"{', '.join(sorted(part_options()))}"
             )
         _check_part_options(p["study"], opts, f"{where}: suite {name!r} part {i + 1}")
         parts.append(

@@ -1,5 +1,5 @@
 """What every ``jswim`` command shares: the parser that reports a mistake in one line (exit 2),
-the outline parser of ``jswim --help``, the option types and checks, and warnings as one line."""
+the outline parser of ``jswim --help``, the checks of counts and folders, and warnings as one line."""
 
 from __future__ import annotations
 
@@ -10,14 +10,12 @@ import time
 import warnings
 from pathlib import Path
 from typing import Any
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
 
 from jswim.console import eta as _eta_text
 from jswim.errors import MAX_COUNT, ConfigError, JswimWarning, check_count  # noqa: F401  (MAX_COUNT read from here)
 
 EXIT_USAGE = 2
-#: The swimmers a command line names.
-SWIMMERS = ("purcell", "ng", "nlink", "nsphere")
 
 
 class Parser(argparse.ArgumentParser):
@@ -59,48 +57,6 @@ class Outline(Parser):
 def outlined(p: argparse.ArgumentParser) -> bool:
     """Whether ``p`` is an outline (``jswim --help``): its command adds no options, imports nothing."""
     return isinstance(p, Outline)
-
-
-def _listed(text: str, kind: type, what: str) -> tuple[Any, ...]:
-    """``A,B,...`` as ``kind`` values; an empty item (``3,,6``, ``3,``) is refused, not dropped."""
-    items = [v.strip() for v in text.split(",")]
-    if not text.strip() or not all(items):
-        raise argparse.ArgumentTypeError(
-            f"expected comma-separated {what} without empty items, got {text!r}"
-        )
-    try:
-        return tuple(kind(v) for v in items)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected comma-separated {what}, got {text!r}") from None
-
-
-def floats(text: str) -> tuple[float, ...]:
-    return _listed(text, float, "numbers")
-
-
-def ints(text: str) -> tuple[int, ...]:
-    return _listed(text, int, "integers")
-
-
-def direction(text: str) -> tuple[int, ...]:
-    table = {"+x": (1,), "-x": (-1,), "both": (1, -1), "+1": (1,), "-1": (-1,), "1": (1,)}
-    if text not in table:
-        raise argparse.ArgumentTypeError(f"direction must be +x, -x or both, got {text!r}")
-    return table[text]
-
-
-def swimmers(text: str) -> tuple[str, ...]:
-    out = ("purcell", "ng") if text == "both" else tuple(v.strip().lower() for v in text.split(","))
-    for v in out:
-        if v not in SWIMMERS:
-            raise argparse.ArgumentTypeError(
-                f"unknown swimmer {v!r}; choose purcell, ng, both (or nlink, nsphere)"
-            )
-    return out
-
-
-def dirs_text(directions: Sequence[int]) -> str:
-    return "both" if set(directions) == {1, -1} else ("+x" if directions[0] > 0 else "-x")
 
 
 def check_out_folder(out: str) -> None:

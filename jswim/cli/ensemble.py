@@ -12,6 +12,7 @@ from collections.abc import Sequence
 
 from jswim.action_codes import decode_action
 from jswim.cli import base
+from jswim.studies import flags
 from jswim.console import Progress
 from jswim.errors import ConfigError, check_zeta
 
@@ -28,12 +29,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--swimmer",
         default="purcell",
-        choices=base.SWIMMERS,
+        choices=flags.SWIMMERS,
         help="purcell, ng, nlink or nsphere (default purcell)",
     )
     p.add_argument(
         "--direction",
-        type=base.direction,
+        type=flags.direction,
         default=(1,),
         metavar="DIR",
         help="+x or -x (default +x)",
@@ -62,7 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p.add_argument(
         "--zetas",
-        type=base.floats,
+        type=flags.floats,
         default=DEFAULT_ZETAS,
         metavar="Z1,Z2,...",
         help="noise levels (default the paper's 0,0.5,...,3)",

@@ -8,7 +8,7 @@ from typing import Any
 from collections.abc import Callable, Sequence
 
 from jswim.action_codes import check_roc_levels
-from jswim.cli import base
+from jswim.studies import flags
 from jswim.errors import ConfigError
 
 
@@ -20,12 +20,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         "each exactly and rank them by displacement per step.",
     )
     p.add_argument(
-        "swimmer", choices=base.SWIMMERS, help="purcell, ng, nlink (N links) or nsphere (N spheres)"
+        "swimmer",
+        choices=flags.SWIMMERS,
+        help="purcell, ng, nlink (N links) or nsphere (N spheres)",
     )
     p.add_argument("--n", type=int, default=None, help="links/spheres of nlink/nsphere (default 4)")
     p.add_argument(
         "--direction",
-        type=base.direction,
+        type=flags.direction,
         default=(1,),
         metavar="DIR",
         help="rank by displacement toward +x, -x or both (default +x)",

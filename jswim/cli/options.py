@@ -3,8 +3,9 @@ parsers, `options` -> [`jswim.studies.StudyOptions`][jswim.studies.options.Study
 [`jswim.llm.backend.Backend`][jswim.llm.backend.Backend]), read by those commands and by ``jswim bench --dry-run``
 (which prices each job's study command line in process through `study_parser`).
 
-The options themselves are a table in `jswim.cli.run_options`; a study's own options (the scene
-studies': ``--heights``, ...) are declared by the study (`jswim.studies.study.Study.flags`).
+Each option is defined once: the run options in `jswim.studies.flags.FLAGS` (its flags, help,
+type and the `StudyOptions` field it sets), a study's own options (the scene studies'
+``--heights``, ...) with the study (`jswim.studies.study.Study.flags`); this module only reads them.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from urllib.parse import urlsplit
 
 from jswim._io.paths import check_file
 from jswim.cli import base
-from jswim.cli.run_options import add_run_options
+from jswim.studies.flags import FLAGS, Flag
 from jswim.errors import ConfigError
 from jswim.llm.prices import load_prices
 from jswim.llm.urls import is_loopback, normalize_base_url
@@ -68,6 +69,41 @@ def add_study_commands(sub: argparse._SubParsersAction) -> list[argparse.Argumen
         add_own_options(s, st)
         out.append(s)
     return out
+
+
+def help_text(flag: Flag, spec: Any) -> str:
+    """``flag``'s help for the study of ``spec``: the study's own wording where it has one,
+    hidden (``argparse.SUPPRESS``) where the study has no use for the option."""
+    if flag.field is not None and flag.field in spec.ignores:
+        return argparse.SUPPRESS  # the study refuses it (options): not offered
+    own = spec.option_help.get(flag.names[0])
+    if own is not None:
+        return own
+    return flag.help(spec) if callable(flag.help) else flag.help
+
+
+def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> None:
+    """Add `jswim.studies.flags.FLAGS` to ``p``, each help naming the defaults of ``spec``'s study.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The parser of ``jswim swim`` or of ``jswim study NAME``.
+    study : bool
+        ``jswim study NAME`` (adds the grid axes, ``Flag.study_only``).
+    spec : Study
+        The study's defaults ([`jswim.studies.study.Study`][jswim.studies.study.Study]).
+    """
+    groups: dict[str, Any] = {}
+    for flag in FLAGS:
+        if flag.study_only and not study:
+            continue
+        if flag.group not in groups:
+            groups[flag.group] = p.add_argument_group(flag.group) if flag.group else p
+        kwargs = dict(flag.kwargs)
+        if kwargs.get("action") != "store_true":  # store_true's own default (False) stays
+            kwargs.setdefault("default", None)
+        groups[flag.group].add_argument(*flag.names, help=help_text(flag, spec), **kwargs)
 
 
 def add_own_options(parser: argparse.ArgumentParser, study: Any) -> None:
@@ -181,41 +217,6 @@ def backend(args: argparse.Namespace) -> Any:
     )
 
 
-#: StudyOptions field <- argparse dest, each passed on when given (a study's own options: Study.flags).
-PASSED = {
-    "swimmers": "swimmer",
-    "directions": "direction",
-    "runs": "runs",
-    "q_runs": "q_runs",
-    "steps": "steps",
-    "n_ht": "n_ht",
-    "init": "init",
-    "seed": "seed",
-    "action_set": "action_set",
-    "prompt_file": "prompt_file",
-    "chunk": "chunk",
-    "share_identical": "share_identical",
-    "x_min": "x_min",
-    "max_tokens": "max_tokens",
-}
-#: Grid axes of ``jswim study``, passed on when given and not empty.
-GRIDS = {"zetas": "zetas", "n_hts": "n_hts", "temperatures": "temperatures"}
-#: Options some studies have no use for (refused there): StudyOptions field -> (dest, option).
-IGNORABLE = {
-    "zetas": ("zetas", "--zetas"),
-    "n_hts": ("n_hts", "--n-hts"),
-    "zeta": ("noise", "--noise"),
-    "n_ht": ("n_ht", "--n-ht"),
-    "q_runs": ("q_runs", "--q-runs"),
-    "init": ("init", "--init"),
-    "runs": ("runs", "--runs"),
-    "directions": ("direction", "--direction"),
-}
-
-#: The options that choose an LLM, refused by a study without LLM runs.
-LLM_OPTIONS = {"base_url": "--base-url", "model": "--model", "gguf": "--gguf"}
-
-
 def options(args: argparse.Namespace, study: str) -> Any:
     """The [`jswim.studies.StudyOptions`][jswim.studies.options.StudyOptions] of a study's command line (validated there)."""
     from jswim.studies import StudyOptions  # lazy: JAX loads only for commands that run
@@ -223,15 +224,11 @@ def options(args: argparse.Namespace, study: str) -> Any:
     if args.prompt_file is not None:
         check_file(args.prompt_file, "--prompt-file")
     _refuse_ignored(study, args)
-    kw: dict[str, Any] = {field: getattr(args, dest) for field, dest in PASSED.items()}
-    kw["zeta"] = 0.0 if args.noise is None else args.noise
-    kw.update(
-        {field: getattr(args, dest) for field, dest in GRIDS.items() if getattr(args, dest, None)}
-    )
-    if getattr(args, "samples", None) is not None:
-        kw["samples"] = args.samples
-    if getattr(args, "prompt_files", None):
-        kw["prompt_files"] = _prompt_files(args.prompt_files)
+    kw: dict[str, Any] = {}
+    for flag in FLAGS:  # each option that names its field: passed on when given
+        value = getattr(args, flag.dest, None)
+        if flag.field is not None and value is not None:
+            kw[flag.field] = value if flag.convert is None else flag.convert(value)
     from jswim.studies.study import get, names as study_names  # lazy: as in add_study_commands
 
     spec = get(study)
@@ -266,33 +263,16 @@ def _studies(names: Sequence[str]) -> str:
     return " and ".join(f"the {n} study" for n in names)
 
 
-def _prompt_files(text: str) -> tuple[str, ...]:
-    """``--prompt-files A,B``: each a readable template, checked before anything runs."""
-    from jswim.prompt import (
-        PromptTemplate,
-    )  # lazy: start-up (the prompt text is read only for a run)
-
-    files = tuple(f.strip() for f in text.split(",") if f.strip())
-    for f in files:
-        check_file(f, "--prompt-files")
-        try:
-            PromptTemplate.from_file(f)
-        except ConfigError as exc:  # named as the option the user gave
-            raise ConfigError(str(exc).replace("--prompt-file ", "--prompt-files ", 1)) from None
-    return files
-
-
 def _refuse_ignored(study: str, args: argparse.Namespace) -> None:
     """An option the study would drop silently is a mistake: say so (exit 2) instead of running."""
-    from jswim.studies.specs import ignored_options  # lazy: the grids load JAX
+    from jswim.studies.specs import IGNORED, ignored_options  # lazy: the grids load JAX
 
-    given = [
-        field for field, (dest, _) in IGNORABLE.items() if getattr(args, dest, None) is not None
-    ]
-    for field, why in ignored_options(study, given).items():
+    given = {f.field: f for f in FLAGS if f.field and getattr(args, f.dest, None) is not None}
+    # in IGNORED's order: a grid axis (--zetas) is named before the one value it sweeps (--noise)
+    for field, why in ignored_options(study, [k for k in IGNORED if k in given]).items():
         raise ConfigError(
-            f"the {study} study has no use for {IGNORABLE[field][1]} ({why}); leave it out"
+            f"the {study} study has no use for {given[field].names[0]} ({why}); leave it out"
         )
-    llm = [flag for dest, flag in LLM_OPTIONS.items() if getattr(args, dest, None) is not None]
+    llm = [f.names[0] for f in FLAGS if f.llm and getattr(args, f.dest, None) is not None]
     for _, why in ignored_options(study, ["runs"] if llm else []).items():
         raise ConfigError(f"the {study} study has no use for {llm[0]} ({why}); leave it out")

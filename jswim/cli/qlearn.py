@@ -14,6 +14,7 @@ from collections.abc import Sequence
 
 from jswim.action_codes import ACTION_SETS
 from jswim.cli import base
+from jswim.studies import flags
 from jswim.console import Progress
 from jswim.errors import ConfigError, check_zeta
 
@@ -26,14 +27,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--swimmer",
-        type=base.swimmers,
+        type=flags.swimmers,
         default=("purcell", "ng"),
         metavar="NAME",
         help="purcell, ng, both, or a comma-separated list (default both)",
     )
     p.add_argument(
         "--direction",
-        type=base.direction,
+        type=flags.direction,
         default=(1, -1),
         metavar="DIR",
         help="target direction: +x, -x or both (default both)",

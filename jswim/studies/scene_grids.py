@@ -19,6 +19,15 @@ from jswim.studies.options import (
 )
 from jswim.scenes.scene_parameters import check_start
 from jswim.studies.plans import Cell, initial
+from jswim.studies.study import listed
+
+_DISTANCES = listed(float)
+
+
+def separations_flag(help: str) -> tuple[str, dict]:
+    """``--separations`` (`StudyOptions.separations`), one option of the pair and the school
+    studies: the same parsing in both, the help each study's own."""
+    return "--separations", dict(type=_DISTANCES, metavar="D1,D2,...", help=help)
 
 
 def scene_json(scene: Scene) -> str:

@@ -91,7 +91,7 @@ class Study:
         (`jswim.studies.specs.IGNORED` says why).
     flags : tuple
         Its own command-line options (`Flags`: ``(flag, argparse keywords)``, each flag's dest a
-        `StudyOptions` field only this study reads): another study refuses them, and the page
+        `StudyOptions` field no run option sets): a study without them refuses them, and the page
         shows them for this one only (`own_options`).
     constrain : str or None
         Decoding when the backend says ``"auto"`` (the ablation's free text: ``"none"``).

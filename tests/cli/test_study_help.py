@@ -9,9 +9,9 @@ import argparse
 import pytest
 
 from jswim import cli
-from jswim.cli.options import IGNORABLE
 from jswim.studies.kinds.navigate import NAV_ROC_LEVELS
 from jswim.studies import get, names
+from jswim.studies.flags import FLAGS
 
 
 def study_parser(name: str) -> argparse.ArgumentParser:
@@ -36,7 +36,7 @@ def flag_help(parser: argparse.ArgumentParser, flag: str) -> str | None:
 def test_an_option_the_study_refuses_is_not_in_its_help(study, capsys):
     parser = study_parser(study)
     usage = parser.format_usage()
-    refused = [flag for field, (_, flag) in IGNORABLE.items() if field in get(study).ignores]
+    refused = [f.names[0] for f in FLAGS if f.field in get(study).ignores]
     for flag in refused:
         assert flag_help(parser, flag) is None, f"jswim study {study} --help offers {flag}"
         assert f"[{flag} " not in usage, f"jswim study {study}'s usage line offers {flag}"

@@ -4,7 +4,7 @@ swimmers D apart, alone versus together."""
 from __future__ import annotations
 
 from jswim.agents.variants import PAIR_PROMPTS
-from jswim.studies.scene_grids import pair_cells
+from jswim.studies.scene_grids import pair_cells, separations_flag
 from jswim.studies.study import Study, listed
 from jswim.studies.success import scene_rule
 
@@ -23,14 +23,9 @@ STUDY = Study(
     tables=("runs", "scenes"),
     figures=("pair",),
     flags=(
-        (
-            "--separations",
-            dict(
-                type=listed(float),
-                metavar="D1,D2,...",
-                help="starting distances D between the two swimmers' centres, in sphere radii "
-                "(default 30,60)",
-            ),
+        separations_flag(
+            "starting distances D between the two swimmers' centres, in sphere radii "
+            "(default 30,60)"
         ),
         (
             "--phases",

@@ -3,7 +3,7 @@ every one doing the square stroke; fixed strokes only."""
 
 from __future__ import annotations
 
-from jswim.studies.scene_grids import school_cells
+from jswim.studies.scene_grids import school_cells, separations_flag
 from jswim.studies.study import Study, listed
 from jswim.studies.success import scene_rule
 
@@ -30,14 +30,9 @@ STUDY = Study(
                 help="numbers of swimmers N (default 1,2,3,4,5)",
             ),
         ),
-        (
-            "--separations",
-            dict(
-                type=listed(float),
-                metavar="D1,D2,...",
-                help="distances D between neighbouring swimmers' centres, in sphere radii "
-                "(default 30,60; one that would overlap the swimmers is refused, naming the least D)",
-            ),
+        separations_flag(
+            "distances D between neighbouring swimmers' centres, in sphere radii "
+            "(default 30,60; one that would overlap the swimmers is refused, naming the least D)"
         ),
         (
             "--formations",

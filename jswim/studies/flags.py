@@ -1,23 +1,27 @@
-"""The options of ``jswim swim`` and ``jswim study NAME``, as a table.
+"""The options of ``jswim swim`` and ``jswim study NAME``, each defined once, as a table.
 
-Each option is one `Flag`: its names, its argparse keywords, its group, and its help, either text
-or a function of the study's [`Study`][jswim.studies.study.Study] (so that every default
-the help names is that study's). An option tied to a `StudyOptions` field (``Flag.field``) is left
-out of the help of a study that has no use for it (the study refuses it,
-`jswim.cli.options.options`), and a study may word an option's help its own way
-(``Study.option_help``). `add_run_options` adds the table to a parser.
+Each option is one `Flag`: its names, its argparse keywords, its group, its help (text or a
+function of the study's [`Study`][jswim.studies.study.Study], so that every default the help
+names is that study's), the [`StudyOptions`][jswim.studies.options.StudyOptions] field it sets
+(``Flag.field``) and whether a bench suite part may set it (``Flag.part``). Every other view of
+the options is read from this table: the parsers (`jswim.cli.options.add_run_options`), argv ->
+`StudyOptions` and the refusals of an option a study has no use for
+(`jswim.cli.options.options`), the keys of a bench suite's options
+(`jswim.bench.suites.part_options`). A study's own options (the scene studies' ``--heights``,
+...) are declared with the study (`jswim.studies.study.Study.flags`).
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from jswim._io.paths import check_file
 from jswim.action_codes import ACTION_SETS
-from jswim.cli import base
+from jswim.errors import ConfigError
 
 #: The groups of the options, in the order ``--help`` lists them (``""``: the parser's own).
 RUNS, BACKEND, OUTPUT, COST = (
@@ -41,10 +45,18 @@ class Flag:
     group : str
         The help group it is listed in (`RUNS`, `BACKEND`, `OUTPUT`, `COST`).
     field : str or None
-        The `StudyOptions` field it sets, where a study may have no use for it: a study whose
-        ``Study.ignores`` names the field refuses the option and does not show it.
+        The `StudyOptions` field it sets, its value passed on when given (``None``: read apart,
+        or not a study option). A study whose ``Study.ignores`` names the field refuses the
+        option and does not show it.
+    convert : callable or None
+        The field's value from the given one, checking it (where argparse's ``type`` would word
+        an error otherwise, or too early).
     study_only : bool
         Only ``jswim study NAME`` has it (the grid axes), not ``jswim swim``.
+    part : bool
+        A bench suite part may set it, under `dest` (a models file's ``options`` key).
+    llm : bool
+        It chooses an LLM: a study without LLM runs refuses it.
     kwargs : mapping
         The rest of ``ArgumentParser.add_argument``'s keywords (``default=None`` unless given).
     """
@@ -53,14 +65,90 @@ class Flag:
     help: str | Callable[[Any], str]
     group: str = RUNS
     field: str | None = None
+    convert: Callable[[Any], Any] | None = None
     study_only: bool = False
+    part: bool = False
+    llm: bool = False
     kwargs: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+
+    @property
+    def dest(self) -> str:
+        """Its argparse ``dest``, as argparse names it (``--q-runs`` -> ``q_runs``)."""
+        return self.kwargs.get("dest") or self.names[0].lstrip("-").replace("-", "_")
+
+
+_META = ("group", "field", "convert", "study_only", "part", "llm")
 
 
 def _flag(*names: str, help: str | Callable[[Any], str], **kw: Any) -> Flag:
-    """A `Flag` from ``add_argument``-like keywords (``group``, ``field``, ``study_only`` aside)."""
-    meta = {k: kw.pop(k) for k in ("group", "field", "study_only") if k in kw}
+    """A `Flag` from ``add_argument``-like keywords (`Flag`'s own attributes aside)."""
+    meta = {k: kw.pop(k) for k in _META if k in kw}
     return Flag(names, help, kwargs=kw, **meta)
+
+
+#: The swimmers ``--swimmer`` takes (``both``: purcell and ng).
+SWIMMERS = ("purcell", "ng", "nlink", "nsphere")
+
+
+def _listed(text: str, kind: type, what: str) -> tuple[Any, ...]:
+    """``A,B,...`` as ``kind`` values; an empty item (``3,,6``, ``3,``) is refused, not dropped."""
+    items = [v.strip() for v in text.split(",")]
+    if not text.strip() or not all(items):
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated {what} without empty items, got {text!r}"
+        )
+    try:
+        return tuple(kind(v) for v in items)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated {what}, got {text!r}") from None
+
+
+def floats(text: str) -> tuple[float, ...]:
+    """An argparse ``type``: ``"0,0.5"`` -> ``(0.0, 0.5)``."""
+    return _listed(text, float, "numbers")
+
+
+def ints(text: str) -> tuple[int, ...]:
+    """An argparse ``type``: ``"3,6"`` -> ``(3, 6)``."""
+    return _listed(text, int, "integers")
+
+
+def direction(text: str) -> tuple[int, ...]:
+    """An argparse ``type``: ``+x``, ``-x`` or ``both`` -> the target directions."""
+    table = {"+x": (1,), "-x": (-1,), "both": (1, -1), "+1": (1,), "-1": (-1,), "1": (1,)}
+    if text not in table:
+        raise argparse.ArgumentTypeError(f"direction must be +x, -x or both, got {text!r}")
+    return table[text]
+
+
+def swimmers(text: str) -> tuple[str, ...]:
+    """An argparse ``type``: ``purcell,ng`` or ``both`` -> the swimmers (`SWIMMERS`)."""
+    out = ("purcell", "ng") if text == "both" else tuple(v.strip().lower() for v in text.split(","))
+    for v in out:
+        if v not in SWIMMERS:
+            raise argparse.ArgumentTypeError(
+                f"unknown swimmer {v!r}; choose purcell, ng, both (or nlink, nsphere)"
+            )
+    return out
+
+
+def dirs_text(directions: Sequence[int]) -> str:
+    """Target directions as ``--direction`` takes them (``(1, -1)`` -> ``both``)."""
+    return "both" if set(directions) == {1, -1} else ("+x" if directions[0] > 0 else "-x")
+
+
+def prompt_file_list(text: str) -> tuple[str, ...]:
+    """``--prompt-files A,B``: each a readable template, checked before anything runs."""
+    from jswim.prompt import PromptTemplate  # lazy: the prompt text is read only for a run
+
+    files = tuple(f.strip() for f in text.split(",") if f.strip())
+    for f in files:
+        check_file(f, "--prompt-files")
+        try:
+            PromptTemplate.from_file(f)
+        except ConfigError as exc:  # named as the option the user gave
+            raise ConfigError(str(exc).replace("--prompt-file ", "--prompt-files ", 1)) from None
+    return files
 
 
 def _steps_help(spec: Any) -> str:
@@ -98,23 +186,31 @@ def _constrain_help(spec: Any) -> str:
 _RUN_FLAGS = [
     _flag(
         "--swimmer",
-        type=base.swimmers,
+        field="swimmers",
+        part=True,
+        type=swimmers,
         metavar="NAME",
         help=lambda s: f"purcell, ng or both (or nlink, nsphere; default {','.join(s.swimmers)})",
     ),
     _flag(
         "--direction",
+        part=True,
         field="directions",
-        type=base.direction,
+        type=direction,
         metavar="DIR",
-        help=lambda s: f"target direction: +x, -x or both (default {base.dirs_text(s.directions)})",
+        help=lambda s: f"target direction: +x, -x or both (default {dirs_text(s.directions)})",
     ),
-    _flag("--steps", type=int, help=_steps_help),
+    _flag("--steps", field="steps", part=True, type=int, help=_steps_help),
     _flag(
-        "--runs", field="runs", type=int, help=lambda s: f"LLM runs per setting (default {s.runs})"
+        "--runs",
+        part=True,
+        field="runs",
+        type=int,
+        help=lambda s: f"LLM runs per setting (default {s.runs})",
     ),
     _flag(
         "--q-runs",
+        part=True,
         field="q_runs",
         type=int,
         help=lambda s: (
@@ -124,6 +220,7 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--n-ht",
+        part=True,
         field="n_ht",
         type=int,
         help="history records in the prompt (default: per swimmer, 3 Purcell, 3/6 NG for +x/-x, "
@@ -131,6 +228,7 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--noise",
+        part=True,
         field="zeta",
         type=float,
         metavar="ZETA",
@@ -139,6 +237,7 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--init",
+        part=True,
         field="init",
         choices=("paper", "cycle", "random", "++", "+-", "-+", "--"),
         help=lambda s: (
@@ -150,6 +249,8 @@ _RUN_FLAGS = [
     _flag(
         "--action-set",
         "--allowed",
+        field="action_set",
+        part=True,
         dest="action_set",
         default="all",
         choices=ACTION_SETS,
@@ -158,31 +259,44 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--variant",
+        part=True,
         metavar="NAME[,NAME...]",
         help="LLM protocol variant (jswim.agents.variants.VARIANTS; default: the study's, paper "
         "for the paper's studies); the competence study takes a comma-separated list to compare",
     ),
     _flag(
         "--roc-levels",
-        type=base.ints,
+        type=ints,
         metavar="K",
         help="ROC on K levels (an extension): a reply's ROC k in -K..K moves the DOF by k/K of its "
         "range, for the LLM and the baselines alike (default 1, the paper's -1, 0, 1)",
     ),
-    _flag("--seed", type=int, default=0, help="seed of the study (noise, random starts, learners)"),
+    _flag(
+        "--seed",
+        field="seed",
+        part=True,
+        type=int,
+        default=0,
+        help="seed of the study (noise, random starts, learners)",
+    ),
     _flag(
         "--prompt-file",
+        field="prompt_file",
+        part=True,
         metavar="FILE",
         help="replace the prompt template with this file (see jswim.prompt for placeholders)",
     ),
     _flag(
         "--share-identical",
+        field="share_identical",
         action="store_true",
         help="send identical temperature-0 requests of different runs once and share the reply "
         "(cheaper; the runs are then copies of one run, not the paper's independent repeats)",
     ),
     _flag(
         "--x-min",
+        field="x_min",
+        part=True,
         type=float,
         default=-2.5,
         metavar="X",
@@ -191,6 +305,7 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--max-tokens",
+        field="max_tokens",
         type=int,
         metavar="N",
         help="reply length limit (default per swimmer: 10 two DOFs, 20 four-DOF, as the authors' "
@@ -199,25 +314,28 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--zetas",
+        part=True,
         field="zetas",
         study_only=True,
-        type=base.floats,
+        type=floats,
         metavar="Z1,Z2,...",
         help=_zetas_help,
     ),
     _flag(
         "--n-hts",
+        part=True,
         field="n_hts",
         study_only=True,
-        type=base.ints,
+        type=ints,
         metavar="N1,N2,...",
         help=_n_hts_help,
     ),
     _flag(
         "--temperatures",
+        part=True,
         field="temperatures",
         study_only=True,
-        type=base.floats,
+        type=floats,
         metavar="T1,T2,...",
         help="sampling temperatures as a grid axis of the study's LLM runs (each run above 0 "
         "sends its own seed); the temperature study's grid (default 0,0.25,0.5,0.75,1); extends "
@@ -225,6 +343,8 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--prompt-files",
+        convert=prompt_file_list,
+        part=True,
         field="prompt_files",
         study_only=True,
         metavar="A,B,...",
@@ -233,6 +353,8 @@ _RUN_FLAGS = [
     ),
     _flag(
         "--samples",
+        field="samples",
+        part=True,
         type=int,
         metavar="N",
         help="independent samples of each LLM run's very setting (same start; each its own run id "
@@ -242,9 +364,11 @@ _RUN_FLAGS = [
 ]
 
 _BACKEND_FLAGS = [
-    _flag("--base-url", help="an OpenAI-compatible server, e.g. http://localhost:8080/v1"),
-    _flag("--model", help="model name on that server (required with --base-url)"),
-    _flag("--gguf", metavar="FILE", help="another GGUF model for the embedded server"),
+    _flag(
+        "--base-url", llm=True, help="an OpenAI-compatible server, e.g. http://localhost:8080/v1"
+    ),
+    _flag("--model", llm=True, help="model name on that server (required with --base-url)"),
+    _flag("--gguf", llm=True, metavar="FILE", help="another GGUF model for the embedded server"),
     _flag(
         "--api-key-env",
         metavar="VAR",
@@ -388,6 +512,7 @@ _OUTPUT_FLAGS = [
     ),
     _flag(
         "--chunk",
+        field="chunk",
         type=int,
         metavar="N",
         help="LLM runs in progress at once; each run is saved as it ends (default: --concurrency)",
@@ -434,38 +559,3 @@ FLAGS: tuple[Flag, ...] = (
     *_in(OUTPUT, _OUTPUT_FLAGS),
     *_in(COST, _COST_FLAGS),
 )
-
-
-def help_text(flag: Flag, spec: Any) -> str:
-    """``flag``'s help for the study of ``spec``: the study's own wording where it has one,
-    hidden (``argparse.SUPPRESS``) where the study has no use for the option."""
-    if flag.field is not None and flag.field in spec.ignores:
-        return argparse.SUPPRESS  # the study refuses it (jswim.cli.options.options): not offered
-    own = spec.option_help.get(flag.names[0])
-    if own is not None:
-        return own
-    return flag.help(spec) if callable(flag.help) else flag.help
-
-
-def add_run_options(p: argparse.ArgumentParser, *, study: bool, spec: Any) -> None:
-    """Add `FLAGS` to ``p``, each help naming the defaults of the study of ``spec``.
-
-    Parameters
-    ----------
-    p : argparse.ArgumentParser
-        The parser of ``jswim swim`` or of ``jswim study NAME``.
-    study : bool
-        ``jswim study NAME`` (adds the grid axes, ``Flag.study_only``).
-    spec : Study
-        The study's defaults ([`jswim.studies.study.Study`][jswim.studies.study.Study]).
-    """
-    groups: dict[str, Any] = {}
-    for flag in FLAGS:
-        if flag.study_only and not study:
-            continue
-        if flag.group not in groups:
-            groups[flag.group] = p.add_argument_group(flag.group) if flag.group else p
-        kwargs = dict(flag.kwargs)
-        if kwargs.get("action") != "store_true":  # store_true's own default (False) stays
-            kwargs.setdefault("default", None)
-        groups[flag.group].add_argument(*flag.names, help=help_text(flag, spec), **kwargs)
