@@ -1,20 +1,23 @@
-"""Rollouts: a given action sequence for one swimmer or a batch, always in float64."""
+"""Rollouts of ``(dof, roc)`` moves for one swimmer or a batch, always in float64.
+
+A shortcut of the protocol's one rollout ([`jswim.env.episodes.rollout`][jswim.env.episodes.rollout]): the moves
+become action codes (or ROC vectors), the paper's world
+([`SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]) runs them, and each step keeps the
+fields of a [`Rollout`][jswim.env.rollouts.Rollout].
+"""
 
 from __future__ import annotations
 
 from typing import Any, NamedTuple
 from collections.abc import Sequence
 
-import jax
-import jax.numpy as jnp
-import numpy as np
 from jax import Array
 
-from jswim.env.action_input import validate_actions, validate_moves
+from jswim.env.base import Environment, StepInfo
 from jswim.env.params import EnvParams, make_params
-from jswim.env.randomness import seed32, seed_key  # noqa: F401  (seed32 re-exported: its old place)
-from jswim.env.state import EnvState, dof_values, reset
-from jswim.env.stepping import step
+from jswim.env.randomness import seed32, seed_key  # noqa: F401  (re-exported: their old place)
+from jswim.env.state import EnvState
+from jswim.env.swimmer_world import moves_rollout
 from jswim.errors import ConfigError
 from jswim import reprs
 from jswim.swimmers.models import SwimmerModel
@@ -37,25 +40,17 @@ class Rollout(NamedTuple):
     _repr_html_ = reprs.trajectory_html
 
 
-@jax.jit
-def _scan(key: Array, actions: Array, params: EnvParams) -> Rollout:
-    state = reset(key, params)
-    keys = jax.random.split(key, actions.shape[0])
-
-    def body(st: EnvState, inp: tuple[Array, Array]) -> tuple[EnvState, Rollout]:
-        k, a = inp
-        st, info = step(k, st, a, params)
-        return st, Rollout(
-            st.x + st.x_lo,
-            st.y + st.y_lo,
-            st.theta + st.theta_lo,
-            dof_values(st, params),
-            info.stuck,
-            info.progress,
-        )
-
-    _, out = jax.lax.scan(body, state, (keys, actions))
-    return out
+def _record(env: Environment, params: EnvParams, state: EnvState, info: StepInfo) -> Rollout:
+    """A `Rollout`'s entry of one step: the full (``hi + lo``) pose after it."""
+    obs = env.observe(state, params)
+    return Rollout(
+        obs.position[0, 0],
+        obs.position[0, 1],
+        obs.orientation[0],
+        obs.dofs,
+        info.stuck,
+        info.progress,
+    )
 
 
 def rollout_moves(
@@ -125,25 +120,7 @@ def rollout_moves(
             )
         return scene_rollout(swimmer, actions, scene, key=key, zeta=zeta, init=init, **model_kwargs)
     params = make_params(swimmer, zeta=zeta, direction=direction, init=init, **model_kwargs)
-    moves = validate_moves(actions, params.n_dof)
-    idx = validate_actions(actions, params.n_dof) if moves is None else moves
-    batch_ndim = idx.ndim - (0 if moves is None else 1)
-    if batch_ndim not in (1, 2):
-        raise ConfigError("actions must have shape (steps, 2) or (batch, steps, 2)")
-    # float64 whatever the global setting: this is the path physicists check numbers with.
-    from jswim import sharding  # lazy: start-up (device mesh helpers)
-
-    with jax.enable_x64(True):
-        if isinstance(key, int):
-            key = seed_key(key)
-        if batch_ndim == 1:
-            out = _scan(key, jnp.asarray(idx), params)
-        else:
-            keys = jax.random.split(key, idx.shape[0])
-            out = sharding.apply_batched(
-                _scan_batch, (params,), (keys, jnp.asarray(idx)), idx.shape[0]
-            )
-        return Rollout(*(np.asarray(v) for v in out))
+    return moves_rollout(params, actions, key, _record)
 
 
 def _is_plain_bulk(scene: Any) -> bool:
@@ -151,8 +128,3 @@ def _is_plain_bulk(scene: Any) -> bool:
     from jswim.env.registry import is_plain_bulk  # lazy: start-up (the scene modules)
 
     return is_plain_bulk(scene)
-
-
-@jax.jit
-def _scan_batch(params: EnvParams, keys: Array, actions: Array) -> Rollout:
-    return jax.vmap(_scan, in_axes=(0, 0, None))(keys, actions, params)

@@ -1,13 +1,17 @@
 """``scene_rollout``: a given sequence of moves in a scene, per-step records, float64.
 
-The scene physics (`jswim.scenes`) sits below the worlds; its rollouts live here,
-beside the paper's world's ([`jswim.env.rollouts`][jswim.env.rollouts]), because Purcell's
-swimmer above a wall rolls out through the paper's world
-([`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]).
+The scene physics (`jswim.scenes`) sits below the worlds; its rollouts live here, beside the
+paper's world's ([`jswim.env.rollouts`][jswim.env.rollouts]), and run the protocol's one rollout
+([`jswim.env.episodes.rollout`][jswim.env.episodes.rollout]): Purcell's swimmer above a wall in
+the paper's world ([`jswim.env.swimmer_world.SwimmerWorld`][jswim.env.swimmer_world.SwimmerWorld]),
+NG swimmers through `SceneMoves`, the scene's own step of ``(swimmer, dof, roc)`` moves (a
+record keeps the middle sphere's own step ``dx``, which the protocol's
+[`StepInfo`][jswim.env.base.StepInfo] does not carry).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, NamedTuple
 
 import jax
@@ -15,17 +19,16 @@ import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
-from jswim.action_codes import encode_action
-from jswim.env.episodes import rollout as world_rollout
-from jswim.env.params import make_params
-from jswim.env.randomness import seed_key
-from jswim.env.swimmer_world import SwimmerWorld
+from jswim.env.base import Environment, StepInfo
+from jswim.env.episodes import rollout
+from jswim.env.params import EnvParams, make_params
+from jswim.env.swimmer_world import moves_rollout
 from jswim.errors import ConfigError
 from jswim.scenes import purcell_wall
 from jswim.scenes.scene_parameters import SceneParams, scene_params
 from jswim.scenes.scene import Scene
-from jswim.scenes.scene_state import SceneState, scene_reset
-from jswim.scenes.scene_stepping import scene_step
+from jswim.scenes.scene_state import SceneState, SceneStepInfo, scene_reset
+from jswim.scenes.scene_stepping import scene_advance
 from jswim.swimmers.wall_rft import LINK_RADIUS
 
 
@@ -112,22 +115,19 @@ def scene_rollout(
         NumPy float64 arrays, one entry per step (the state after it).
     """
     if purcell_wall.is_purcell(swimmer) and params is None:
-        return SceneRollout(
-            **_purcell_wall_rollout(
-                parse_scene_moves(moves, 1), scene, key=key, zeta=zeta, **kwargs
-            )
+        return _purcell_wall_rollout(
+            parse_scene_moves(moves, 1), scene, key=key, zeta=zeta, **kwargs
         )
     with jax.enable_x64(True):
         if params is None:
             params = scene_params(swimmer, scene, zeta=zeta, dtype=jnp.float64, **kwargs)
         acts = parse_scene_moves(moves, params.n_swimmers)
-        k = seed_key(key) if isinstance(key, int) else key
-        out = _scan(
+        out = rollout(
+            SceneMoves(params.n_swimmers),
             params,
-            k,
-            jnp.asarray(acts[:, 0], jnp.int32),
-            jnp.asarray(acts[:, 1], jnp.int32),
-            jnp.asarray(acts[:, 2], params.arms0.dtype),
+            key,
+            jnp.asarray(acts, params.arms0.dtype),
+            record=_scene_record,
         )
         return SceneRollout(*(np.asarray(v) for v in out))
 
@@ -142,68 +142,117 @@ def _purcell_wall_rollout(
     link_radius: float = LINK_RADIUS,
     d_max: float | None = None,
     **other: Any,
-) -> dict[str, np.ndarray]:
-    """The fields of a `SceneRollout` of ``moves`` by Purcell's swimmer above a wall, float64.
+) -> SceneRollout:
+    """The `SceneRollout` of ``moves`` by Purcell's swimmer above a wall, float64.
 
     ``moves``: ``(steps, 3)`` 0-based ``(swimmer, dof, roc)`` (`parse_scene_moves`); the model
-    is [`jswim.scenes.purcell_wall.model`][jswim.scenes.purcell_wall.model] of ``scene``.
+    is [`jswim.scenes.purcell_wall.model`][jswim.scenes.purcell_wall.model] of ``scene``, run in
+    the paper's world as [`jswim.env.rollout_moves`][jswim.env.rollouts.rollout_moves] runs it.
 
-    ``x``, ``y``: the centroid (as [`jswim.env.rollout_moves`][jswim.env.rollouts.rollout_moves]); ``z``: the plane's height (fixed);
-    ``tilt``: 0 (the links stay parallel to the wall); ``orientation``: the middle link's angle in
-    the plane; ``arms``: the hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
+    ``x``, ``y``: the centroid; ``z``: the plane's height (fixed); ``tilt``: 0 (the links stay
+    parallel to the wall); ``orientation``: the middle link's angle in the plane; ``arms``: the
+    hinge angles; ``gap``: the links' surface above the wall, ``h - b``.
     """
     m = purcell_wall.model(
         scene, link_radius=link_radius, d_max=d_max, **other
     )  # wall_model in other
-    dof, roc = np.asarray(moves, np.float64)[:, 1:].T
     with jax.enable_x64(True):
         params = make_params(m, zeta=zeta, init=init)
-        if np.all(
-            np.isin(roc, (-1.0, 0.0, 1.0))
-        ):  # the paper's ROCs: integer codes, the exact corner table
-            acts = jnp.asarray(encode_action(dof + 1, roc), jnp.int32)
-        else:  # real ROCs: ROC vectors, the integrator (as jswim.env.rollout_moves does)
-            acts = jnp.asarray(np.eye(2)[dof.astype(int)] * roc[:, None], jnp.float64)
-        t = world_rollout(SwimmerWorld(m), params, key, acts)
-        pos = np.asarray(t.obs.position[:, 0], np.float64)  # (steps, 2): the centroid
-        out = {
-            "x": pos[:, :1],
-            "arms": np.asarray(t.obs.dofs, np.float64)[:, None, :],
-            "dx": np.asarray(t.info.displacement[:, 0, :1], np.float64),
-            "stuck": np.asarray(t.info.stuck),
-            "y": pos[:, 1:],
-            "orientation": np.asarray(t.obs.orientation, np.float64),
-        }
-    steps = pos.shape[0]
-    return {
-        **out,
-        "z": np.full((steps, 1), m.height),
-        "tilt": np.zeros((steps, 1)),
-        "contact": np.zeros(steps, bool),
-        "gap": np.full(steps, m.height - m.link_radius),
-    }
+    pairs = np.asarray(moves, np.float64)[:, 1:] + np.array([1.0, 0.0])  # (dof 1-based, roc)
+    t = moves_rollout(params, pairs, key, record=_wall_record)
+    steps = t.x.shape[0]
+    return SceneRollout(
+        x=t.x,
+        z=np.full((steps, 1), m.height),
+        tilt=np.zeros((steps, 1)),
+        arms=t.arms,
+        dx=t.dx,
+        stuck=t.stuck,
+        contact=np.zeros(steps, bool),
+        gap=np.full(steps, m.height - m.link_radius),
+        y=t.y,
+        orientation=t.orientation,
+    )
 
 
-@jax.jit
-def _scan(params: SceneParams, key: Array, sw: Array, dof: Array, roc: Array) -> SceneRollout:
-    keys = jax.random.split(key, sw.shape[0])
+class _WallStep(NamedTuple):
+    x: Array
+    y: Array
+    orientation: Array
+    arms: Array
+    dx: Array
+    stuck: Array
 
-    def body(st: SceneState, inp: tuple[Array, ...]) -> tuple[SceneState, SceneRollout]:
-        k, a, b, r = inp
-        st, info = scene_step(params, st, (a, b, r), k)
-        return st, SceneRollout(
-            st.centre[:, 0],
-            st.centre[:, 1],
-            st.tilt,
-            st.arms,
-            info.dx,
-            info.stuck,
-            info.contact,
-            info.gap,
-        )
 
-    _, out = jax.lax.scan(body, scene_reset(params), (keys, sw, dof, roc))
-    return out
+def _wall_record(env: Environment, params: EnvParams, state: Any, info: StepInfo) -> _WallStep:
+    """Purcell's step above a wall, shaped as a one-swimmer `SceneRollout`'s entries."""
+    obs = env.observe(state, params)
+    pos = obs.position[0]  # the centroid
+    return _WallStep(
+        pos[:1], pos[1:], obs.orientation, obs.dofs[None, :], info.displacement[0, :1], info.stuck
+    )
+
+
+@dataclasses.dataclass(frozen=True)
+class SceneMoves(Environment):
+    """A scene's own physics stepped by ``(swimmer, dof, roc)`` moves: what
+    [`scene_rollout`][jswim.env.scene_rollouts.scene_rollout] runs through the protocol's one
+    rollout. ``params`` is a [`SceneParams`][jswim.scenes.scene_parameters.SceneParams] (with a
+    leading batch axis of starts from [`jswim.scenes.batch_starts`][jswim.scenes.scene_parameters.batch_starts]);
+    an action is a float row ``(3,)``: 0-based swimmer and DOF, then the ROC (`parse_scene_moves`).
+
+    The step is [`jswim.scenes.scene_step`][jswim.scenes.scene_stepping.scene_step] of the move, bit for bit (the
+    same noise draw from the key). Its info is the scene's own
+    [`SceneStepInfo`][jswim.scenes.scene_state.SceneStepInfo], not the protocol's
+    ``StepInfo``, and it observes nothing: a world for records of the scene's state
+    (`SceneRollout`), not for agents ([`SceneWorld`][jswim.env.scene_world.SceneWorld] is theirs).
+    """
+
+    swimmers: int = 1
+
+    @property
+    def n_swimmers(self) -> int:
+        return self.swimmers
+
+    @property
+    def n_dof(self) -> int:
+        return 2 * self.swimmers
+
+    def reset(self, key: Array, params: SceneParams) -> SceneState:
+        return scene_reset(params)
+
+    def dtype(self, state: SceneState) -> Any:
+        return state.arms.dtype
+
+    def advance(  # type: ignore[override]  (the scene's own info)
+        self, state: SceneState, action: Array, noise: Array, params: SceneParams
+    ) -> tuple[SceneState, SceneStepInfo]:
+        return scene_advance(params, state, action, noise)
+
+    def batch_params(self, params: SceneParams, n: int) -> tuple[SceneParams, SceneParams]:
+        """Start poses per run where ``params`` has them (``centre0`` ``(B, S, 2)``, ``tilt0``
+        ``(B, S)``: `batch_starts`), the rest shared."""
+        if jnp.ndim(params.centre0) == 2:
+            return params, params.replace(
+                zeta=None, centre0=None, tilt0=None, arms0=None, obstacles=None
+            )
+        return params, params.replace(zeta=None, centre0=0, tilt0=0, arms0=None, obstacles=None)
+
+
+def _scene_record(
+    env: Environment, params: SceneParams, state: SceneState, info: SceneStepInfo
+) -> SceneRollout:
+    """A `SceneRollout`'s entry of one step: the scene's state after it and its own info."""
+    return SceneRollout(
+        state.centre[:, 0],
+        state.centre[:, 1],
+        state.tilt,
+        state.arms,
+        info.dx,
+        info.stuck,
+        info.contact,
+        info.gap,
+    )
 
 
 def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0) -> SceneRollout:
@@ -211,21 +260,12 @@ def scene_rollout_batch(params: SceneParams, moves: Any, *, key: Array | int = 0
     when ``params`` is). Leading axes of the result: (batch, steps, ...)."""
     with jax.enable_x64(True):
         acts = parse_scene_moves(moves, params.n_swimmers)
-        k = seed_key(key) if isinstance(key, int) else key
         b = params.centre0.shape[0]
-        out = _scan_starts(
+        out = rollout(
+            SceneMoves(params.n_swimmers),
             params,
-            jax.random.split(k, b),
-            jnp.asarray(acts[:, 0], jnp.int32),
-            jnp.asarray(acts[:, 1], jnp.int32),
-            jnp.asarray(acts[:, 2], params.arms0.dtype),
+            key,
+            jnp.broadcast_to(jnp.asarray(acts, params.arms0.dtype), (b, *acts.shape)),
+            record=_scene_record,
         )
         return SceneRollout(*(np.asarray(v) for v in out))
-
-
-@jax.jit
-def _scan_starts(
-    params: SceneParams, keys: Array, sw: Array, dof: Array, roc: Array
-) -> SceneRollout:
-    axes = params.replace(zeta=None, centre0=0, tilt0=0, arms0=None, obstacles=None)
-    return jax.vmap(_scan, in_axes=(axes, 0, None, None, None))(params, keys, sw, dof, roc)

@@ -11,15 +11,19 @@ import dataclasses
 import math
 from typing import Any
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jax import Array
 
+from jswim.env.action_input import validate_actions, validate_moves
 from jswim.env.base import Environment, Observation, Scenery, StepInfo, scaled
 from jswim.env.discretiser import PaperCells
+from jswim.env.episodes import Record, rollout
 from jswim.env.params import EnvParams, broadcast_params, make_params
 from jswim.env.state import EnvState, dof_values, reset
 from jswim.env.stepping import advance
+from jswim.errors import ConfigError
 from jswim.swimmers.models import SwimmerModel
 
 
@@ -142,3 +146,37 @@ class SwimmerWorld(Environment):
         """Every per-run leaf (``zeta``, ``direction``, ``init``) broadcast to ``n`` runs
         ([`jswim.env.broadcast_params`][jswim.env.params.broadcast_params])."""
         return broadcast_params(params, n), 0
+
+
+def moves_rollout(params: EnvParams, actions: Any, key: Array | int, record: Record) -> Any:
+    """``(dof, roc)`` moves run by the protocol's one rollout in the paper's world, float64.
+
+    Parameters
+    ----------
+    params : EnvParams
+        The world's params (their swimmer, noise, direction and start).
+    actions : array-like, shape (steps, 2) or (batch, steps, 2)
+        ``(dof, roc)`` pairs (as [`rollout_moves`][jswim.env.rollouts.rollout_moves]): ROCs all in
+        {-1, 0, 1} become K = 1 action codes, any other ROC vectors.
+    key : PRNG key or int
+        Seed; a batch's runs reset with ``split(key, batch)``.
+    record : callable
+        What each step keeps ([`jswim.env.episodes.rollout`][jswim.env.episodes.rollout]): a
+        [`Rollout`][jswim.env.rollouts.Rollout]'s fields for
+        [`rollout_moves`][jswim.env.rollouts.rollout_moves].
+
+    Returns
+    -------
+    NamedTuple
+        ``record``'s fields as NumPy arrays (float64 floats), leading axes (batch, steps).
+    """
+    moves = validate_moves(actions, params.n_dof)
+    idx = validate_actions(actions, params.n_dof) if moves is None else moves
+    batch_ndim = idx.ndim - (0 if moves is None else 1)
+    if batch_ndim not in (1, 2):
+        raise ConfigError("actions must have shape (steps, 2) or (batch, steps, 2)")
+    # float64 whatever the global setting: this is the path physicists check numbers with.
+    with jax.enable_x64(True):
+        world = SwimmerWorld(params.model, params.roc_levels, params.diagonal)
+        out = rollout(world, params, key, jnp.asarray(idx), record=record)
+        return type(out)(*(np.asarray(v) for v in out))
