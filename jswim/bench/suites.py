@@ -162,8 +162,8 @@ def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None
     """Refuse, when the models file is read, an option the part's study would refuse at run time
     (every model's process would fail on it)."""
     from jswim.env.flows import FLOWS  # lazy: JAX
-    from jswim.studies.specs import ignored_options, own_options  # lazy: the kinds load JAX
-    from jswim.studies.study import get, names  # lazy: as above
+    from jswim.studies.specs import ignored_options, own_options, owners  # lazy: kinds load JAX
+    from jswim.studies.study import get  # lazy: as above
 
     spec = get(study)
     if spec.command != "study":
@@ -177,7 +177,7 @@ def _check_part_options(study: str, opts: Mapping[str, Any], where: str) -> None
             )
     only = next((k for k in opts if k in own_options() and k not in spec.own_options), None)
     if only is not None:
-        who = " and ".join(f"the {n} study" for n in names() if only in get(n).own_options)
+        who = " and ".join(f"the {n} study" for n in owners(only))
         raise ConfigError(
             f"{where}: the {study} study has no use for {only} (only {who} reads it); leave it out"
         )

@@ -92,17 +92,13 @@ FIGURE_SETS: dict[str, FigureSet] = {
 }
 
 
-def _study(study: str) -> Any:
-    from jswim.studies.study import get, names  # lazy: the study kinds load JAX
-
-    return get(study) if study in names() else None
-
-
 def figure_order(study: str, names: Iterable[str]) -> list[str]:
     """``names`` (a study's figures, without extension) in the order the page and ``jswim
     plot`` show them: the study's `jswim.studies.study.Study.figure_order` first, then any
     other by name."""
-    spec = _study(study)
+    from jswim.studies.study import find  # lazy: the study kinds load JAX
+
+    spec = find(study)
     order = {n: i for i, n in enumerate(spec.figure_order if spec else ())}
     return sorted(names, key=lambda n: (order.get(n, len(order)), n))
 
@@ -116,8 +112,10 @@ def study_figures(
 
     ``note`` (e.g. ``"unfinished: 12 of 40 runs"``) is written across the top of each.
     """
+    from jswim.studies.study import find  # lazy: the study kinds load JAX
+
     rows = as_run_rows(rows)
-    spec = _study(study)
+    spec = find(study)
     if not rows or spec is None:
         return {}
     figs: dict[str, Figure] = {}

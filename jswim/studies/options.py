@@ -82,8 +82,8 @@ COMPETENCE_VARIANTS = (
     "shape-changing+temperature",
 )
 
-#: The scene studies' grids (`StudyOptions` fields): each read by one study only, and each a
-#: size of the grid (a folder grows when one grows).
+#: The scene and navigation studies' grids (`StudyOptions` fields, each some study's own
+#: option, `jswim.studies.study.Study.flags`): sizes of the grid (a folder grows when one grows).
 SCENE_GRIDS = (
     "heights",
     "tilts",

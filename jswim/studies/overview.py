@@ -426,13 +426,14 @@ def study_tables(
     summary : sequence of dict, optional
         `jswim.studies.report.summarize`'s rows where already made (else made from ``rows``).
     """
-    from jswim.studies.study import get, names  # lazy: the study kinds load JAX
+    from jswim.studies.study import find  # lazy: the study kinds load JAX
 
     rows = as_run_rows(rows)
     if not rows:
         return []
-    if study in names():
-        kinds = get(study).tables
+    spec = find(study)
+    if spec is not None:
+        kinds = spec.tables
     else:
         kinds = ("agents x flows", "navigation") if is_navigation(rows) else ("runs", "scenes")
     return [t for k in kinds if (t := TABLES[k](rows, summary)) is not None]
@@ -529,10 +530,11 @@ class StudyFolder:
         return f"UNFINISHED: {len(self.rows)}{of} runs done (status {status})"
 
     def model_text(self) -> str:
-        from jswim.studies.study import get, names  # lazy: the study kinds load JAX
+        from jswim.studies.study import find  # lazy: the study kinds load JAX
 
         b = (self.meta.get("identity") or {}).get("backend")
-        strokes = self.study in names() and get(self.study).strokes_only  # a school: no LLM
+        spec = find(self.study)
+        strokes = spec is not None and spec.strokes_only  # a school: no LLM
         if not b or (strokes and not any(r.agent == "llm" for r in self.rows)):
             return "no LLM runs"
         # The address is not the identity (it may change between sessions): the latest session's.
@@ -656,9 +658,10 @@ def show_text(folder: str | Path, width: int | None = None) -> str:
     lines = [f"study {s.study} in {s.folder}: {s.status_text()}", f"model: {s.model_text()}"]
     opts = (s.meta.get("identity") or {}).get("options") or {}
     if opts:
-        from jswim.studies.study import get, names  # lazy: the study kinds load JAX
+        from jswim.studies.study import find  # lazy: the study kinds load JAX
 
-        ignores = get(s.study).ignores if s.study in names() else ()
+        spec = find(s.study)
+        ignores = spec.ignores if spec is not None else ()
         settings = _settings_text(opts, ignores)
         if opts.get("flow"):  # still fluid ("") goes unsaid, as on the page
             speeds = ",".join(

@@ -173,7 +173,7 @@ def _check_grids(spec: Study, o: StudyOptions) -> None:
         value, default = getattr(o, name), getattr(defaults, name)
         if (tuple(value) if isinstance(value, (list, tuple)) else value) != default:
             flag = name.replace("_", "-")
-            who = " and ".join(f"jswim study {s}" for s in names() if name in get(s).own_options)
+            who = " and ".join(f"jswim study {s}" for s in owners(name))
             raise ConfigError(
                 f"the {spec.name} study has no use for --{flag} (only {who} reads it); leave it out"
             )
@@ -182,6 +182,11 @@ def _check_grids(spec: Study, o: StudyOptions) -> None:
 def own_options() -> tuple[str, ...]:
     """Every `StudyOptions` field some study has as its own (`jswim.studies.study.Study.flags`)."""
     return tuple(dict.fromkeys(f for s in names() for f in get(s).own_options))
+
+
+def owners(field: str) -> tuple[str, ...]:
+    """The studies that have ``field`` (a `StudyOptions` field) as their own, in listing order."""
+    return tuple(s for s in names() if field in get(s).own_options)
 
 
 def _agent_plans(

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from jswim.studies.options import StudyOptions
     from jswim.studies.plans import Cell, Plan
 
-__all__ = ["Study", "get", "listed", "names"]
+__all__ = ["Study", "find", "get", "listed", "names"]
 
 #: A study's success rule in words, from its plans, the judge's horizon and ``--steps``.
 RuleFn = Callable[["Sequence[Plan]", "int | None", "int | None"], str]
@@ -186,6 +186,12 @@ def _load() -> dict[str, Study]:
 def names() -> tuple[str, ...]:
     """Every study kind's name, in listing order (``swim`` included: ``jswim swim``)."""
     return tuple(_load())
+
+
+def find(name: str) -> Study | None:
+    """The study kind ``name``, ``None`` for one this version does not know (a folder written
+    by a later jswim)."""
+    return _load().get(name)
 
 
 def get(name: str) -> Study:

@@ -372,9 +372,10 @@ def applicable_settings(
     rule the study's own (a navigation study's: the target reached within its budget).
     """
     from jswim.studies.specs import own_options  # lazy: the study kinds load JAX
+    from jswim.studies.study import find  # lazy: as above
 
     study = str(meta.get("study", "?"))
-    spec = _study(study)
+    spec = find(study)
     ident = meta.get("identity") or {}
     ignores = set(spec.ignores if spec else ())
     owned = set(own_options())
@@ -469,17 +470,11 @@ def study_flow_text(kind: str, fractions: Sequence[float]) -> str:
     )
 
 
-def _study(name: str) -> Any:
-    """The study kind ``name`` (`jswim.studies.study.get`), ``None`` for one this version does
-    not know (a folder of a later jswim)."""
-    from jswim.studies.study import get, names  # lazy: as in applicable_settings
-
-    return get(name) if name in names() else None
-
-
 def _strokes_only(study: str) -> bool:
     """Whether ``study`` runs fixed strokes alone (the school: it has no use for ``--runs``)."""
-    spec = _study(study)
+    from jswim.studies.study import find  # lazy: the study kinds load JAX
+
+    spec = find(study)
     return spec is not None and spec.strokes_only
 
 
